@@ -1,0 +1,34 @@
+"""jaxlens: differentiable lens design in JAX.
+
+Units: mm for lengths, µm for wavelengths, degrees for user-facing angles. Light travels
+toward +z and surface 1's vertex is at z = 0. See ``jaxlens.lens`` and ``jaxlens.surfaces``
+for the sign conventions.
+"""
+
+from . import paraxial as paraxial
+from . import sampling as sampling
+from .lens import Lens as Lens
+from .lens import Sensor as Sensor
+from .materials import AbstractMaterial as AbstractMaterial
+from .materials import Air as Air
+from .materials import ModelGlass as ModelGlass
+from .materials import Schott as Schott
+from .materials import Sellmeier as Sellmeier
+from .materials import Tabulated as Tabulated
+from .paraxial import ParaxialData as ParaxialData
+from .paraxial import bfl as bfl
+from .paraxial import efl as efl
+from .paraxial import paraxial_data as paraxial_data
+from .rays import Rays as Rays
+from .surfaces import AbstractSurface as AbstractSurface
+from .surfaces import Conic as Conic
+from .surfaces import EvenAsphere as EvenAsphere
+from .surfaces import Hybrid as Hybrid
+from .surfaces import Plane as Plane
+from .surfaces import Sphere as Sphere
+from .surfaces import Standard as Standard
+from .surfaces import Stop as Stop
+from .trace import trace as trace
+from .trace import trace_path as trace_path
+
+__version__ = "0.1.0"

@@ -1,0 +1,122 @@
+"""The ``Lens`` pytree: a sequential optical system.
+
+Conventions:
+    Lengths in mm, angles in degrees, wavelengths in µm. Light travels toward +z.
+    ``surfaces[0]`` is Zemax surface 1; its vertex is at z = 0. ``thickness[i]`` is the
+    vertex-to-vertex distance from ``surfaces[i]`` to the next surface, and the last
+    entry is the distance to the image surface. ``materials[i]`` is the medium *after*
+    ``surfaces[i]`` (so ``materials[-1]`` is image space). ``stop`` is the 0-based index
+    of the aperture stop in ``surfaces``. ``object_distance`` is measured from the
+    object to surface 1's vertex (``inf`` for an object at infinity). ``epd`` is the
+    entrance pupil diameter, ``fields`` the field angles in degrees (y direction), and
+    ``wavelengths`` the system wavelengths with ``primary`` the index of the primary one.
+
+The structure (surface kinds, counts, polynomial orders, stop index) is static; every
+number is an array so ``jax.grad`` reaches it.
+"""
+
+from __future__ import annotations
+
+import equinox as eqx
+import jax
+import jax.numpy as jnp
+from jaxtyping import Array, Float
+
+from .materials import AbstractMaterial, Air
+from .surfaces import AbstractSurface, Standard
+
+
+class Sensor(eqx.Module):
+    """A rectangular pixel sensor centred on the axis at the image surface.
+
+    Args:
+        resolution: (rows, columns), static.
+        pixel_size: pixel pitch in mm (square pixels).
+    """
+
+    resolution: tuple[int, int] = eqx.field(static=True)
+    pixel_size: Float[Array, ""] = eqx.field(converter=jnp.asarray)
+
+    @property
+    def size(self) -> tuple[Array, Array]:
+        """(height, width) in mm."""
+        return self.resolution[0] * self.pixel_size, self.resolution[1] * self.pixel_size
+
+    @property
+    def half_diagonal(self) -> Array:
+        h, w = self.size
+        return 0.5 * jnp.sqrt(h * h + w * w)
+
+
+class Lens(eqx.Module):
+    """A sequential lens: surfaces, the gaps and media between them, and the system data."""
+
+    surfaces: tuple[AbstractSurface, ...]
+    thickness: Float[Array, " n"] = eqx.field(converter=jnp.asarray)
+    materials: tuple[AbstractMaterial, ...]
+    stop: int = eqx.field(static=True, default=0)
+    epd: Float[Array, ""] = eqx.field(converter=jnp.asarray, default=1.0)
+    fields: Float[Array, " f"] = eqx.field(converter=jnp.asarray, default=(0.0,))
+    wavelengths: Float[Array, " w"] = eqx.field(converter=jnp.asarray, default=(0.5875618,))
+    primary: int = eqx.field(static=True, default=0)
+    object_distance: Float[Array, ""] = eqx.field(converter=jnp.asarray, default=jnp.inf)
+    object_material: AbstractMaterial = Air()
+    image: AbstractSurface = Standard()
+    sensor: Sensor | None = None
+    name: str = eqx.field(static=True, default="")
+
+    def __check_init__(self):
+        n = len(self.surfaces)
+        if self.thickness.shape != (n,) and self.thickness.ndim == 1:
+            raise ValueError(f"Lens: {n} surfaces need {n} thicknesses, got {self.thickness.shape}")
+        if len(self.materials) != n:
+            raise ValueError(f"Lens: {n} surfaces need {n} materials, got {len(self.materials)}")
+        if not 0 <= self.stop < n:
+            raise ValueError(f"Lens: stop index {self.stop} outside 0..{n - 1}")
+        if not 0 <= self.primary < self.wavelengths.shape[-1]:
+            raise ValueError(f"Lens: primary index {self.primary} outside the wavelengths")
+
+    @property
+    def num_surfaces(self) -> int:
+        return len(self.surfaces)
+
+    def vertex_z(self) -> Float[Array, " n"]:
+        """Global z of every surface vertex (surface 1 at 0)."""
+        t = self.thickness
+        return jnp.concatenate([jnp.zeros_like(t[..., :1]), jnp.cumsum(t[..., :-1], axis=-1)], -1)
+
+    def image_z(self) -> Float[Array, ""]:
+        """Global z of the image surface vertex."""
+        return jnp.sum(self.thickness, axis=-1)
+
+    def total_track(self) -> Float[Array, ""]:
+        """Surface 1 vertex to image surface vertex (mm)."""
+        return self.image_z()
+
+    @property
+    def primary_wavelength(self) -> Array:
+        return self.wavelengths[self.primary]
+
+    @property
+    def object_at_infinity(self) -> bool:
+        """Static check: True if the object distance is infinite (concrete values only)."""
+        try:
+            return bool(jnp.isinf(self.object_distance))
+        except jax.errors.ConcretizationTypeError:
+            return False
+
+    def indices(self, wavelength) -> list[Array]:
+        """Refractive index before surface 1 and after each surface: n+1 arrays."""
+        return [self.object_material.index(wavelength)] + [
+            m.index(wavelength) for m in self.materials
+        ]
+
+    def astype(self, dtype) -> Lens:
+        """Cast every floating array in the lens to ``dtype``."""
+
+        def cast(x):
+            if eqx.is_array(x) and jnp.issubdtype(x.dtype, jnp.floating):
+                return x.astype(dtype)
+            return x
+
+        return jax.tree_util.tree_map(cast, self)

@@ -1,0 +1,199 @@
+"""Paraxial (first-order) optics by a y–nu trace.
+
+Conventions:
+    Lengths in mm. A paraxial ray is (y, nu): height and reduced angle n·u, with u the
+    slope dy/dz. Surfaces refract with their paraxial curvature c + 2·a_1, so the
+    r² term of an even asphere counts (Zemax does this; optiland and rayoptics do not).
+    ``efl`` is 1/power, the image-space focal length of a system in air; ``bfl`` is
+    measured from the last surface vertex to the paraxial focus; pupil positions are
+    global z (surface 1 at 0); ``exit_pupil_z`` is also global. Everything is a pure
+    jnp function, so it is differentiable and jittable.
+"""
+
+from __future__ import annotations
+
+import equinox as eqx
+import jax.numpy as jnp
+from jaxtyping import Array, Float
+
+from .lens import Lens
+
+
+def _transfer(y, nu, d, n):
+    return y + d * nu / n, nu
+
+
+def _refract(y, nu, c, n1, n2):
+    return y, nu - y * c * (n2 - n1)
+
+
+def system_matrix(lens: Lens, wavelength=None, start: int = 0, end: int | None = None):
+    """ABCD matrix in (y, nu) from just before ``surfaces[start]`` to just after ``surfaces[end]``.
+
+    Returns the four entries (A, B, C, D) with [y', nu'] = [[A, B], [C, D]] [y, nu].
+    """
+    wl = lens.primary_wavelength if wavelength is None else wavelength
+    n = lens.indices(wl)
+    end = lens.num_surfaces - 1 if end is None else end
+    one = jnp.ones_like(lens.thickness[0])
+    a, b, c, d = one, 0 * one, 0 * one, one
+    for i in range(start, end + 1):
+        if i > start:
+            t = lens.thickness[i - 1] / n[i]
+            a, b = a + t * c, b + t * d
+        p = lens.surfaces[i].paraxial_curvature * (n[i + 1] - n[i])
+        c, d = c - p * a, d - p * b
+    return a, b, c, d
+
+
+class ParaxialData(eqx.Module):
+    """First-order properties of a lens at one wavelength (mm; see module docstring)."""
+
+    efl: Float[Array, ""]
+    bfl: Float[Array, ""]
+    front_focal_length: Float[Array, ""]
+    rear_focal_length: Float[Array, ""]
+    entrance_pupil_z: Float[Array, ""]
+    entrance_pupil_diameter: Float[Array, ""]
+    exit_pupil_z: Float[Array, ""]
+    exit_pupil_diameter: Float[Array, ""]
+    fnum: Float[Array, ""]
+    working_fnum: Float[Array, ""]
+    image_z: Float[Array, ""]
+    paraxial_image_z: Float[Array, ""]
+    total_track: Float[Array, ""]
+    stop_semi_diameter: Float[Array, ""]
+
+
+def entrance_pupil_z(lens: Lens, wavelength=None) -> Array:
+    """Global z of the paraxial entrance pupil (image of the stop in object space)."""
+    wl = lens.primary_wavelength if wavelength is None else wavelength
+    n0 = lens.object_material.index(wl)
+    if lens.stop == 0:
+        return jnp.zeros_like(lens.thickness[0])
+    # Matrix from surface 1 to just before the stop: after surfaces[stop-1], then transfer.
+    a, b, c, d = system_matrix(lens, wl, 0, lens.stop - 1)
+    ns = lens.indices(wl)[lens.stop]
+    t = lens.thickness[lens.stop - 1] / ns
+    a, b = a + t * c, b + t * d
+    # Chief ray reaches the stop centre: a*y0 + b*nu0 = 0 with y0 = -z_ep*u0, nu0 = n0*u0.
+    return b * n0 / a
+
+
+def entrance_pupil_magnification(lens: Lens, wavelength=None) -> Array:
+    """Paraxial magnification from the entrance pupil to the stop (stop height / EP height)."""
+    wl = lens.primary_wavelength if wavelength is None else wavelength
+    if lens.stop == 0:
+        return jnp.ones_like(lens.thickness[0])
+    a, _, c, _ = system_matrix(lens, wl, 0, lens.stop - 1)
+    t = lens.thickness[lens.stop - 1] / lens.indices(wl)[lens.stop]
+    # Imaging EP -> stop has B = 0, so the magnification is the A entry.
+    return a + t * c
+
+
+def marginal_ray(lens: Lens, wavelength=None):
+    """Paraxial marginal ray (y, nu) after every surface, for the lens's EPD and object."""
+    wl = lens.primary_wavelength if wavelength is None else wavelength
+    n = lens.indices(wl)
+    zep = entrance_pupil_z(lens, wl)
+    h = 0.5 * lens.epd
+    if lens.object_at_infinity:
+        y, nu = h, 0.0 * h
+    else:
+        u = h / (lens.object_distance + zep)
+        y, nu = lens.object_distance * u, n[0] * u
+    return _trace_ray(lens, y, nu, n)
+
+
+def _trace_ray(lens: Lens, y, nu, n):
+    ys, nus = [], []
+    for i, s in enumerate(lens.surfaces):
+        if i > 0:
+            y, nu = _transfer(y, nu, lens.thickness[i - 1], n[i])
+        y, nu = _refract(y, nu, s.paraxial_curvature, n[i], n[i + 1])
+        ys.append(y)
+        nus.append(nu)
+    return jnp.stack(ys), jnp.stack(nus)
+
+
+def chief_ray(lens: Lens, field_deg, wavelength=None):
+    """Paraxial chief ray (y, nu) after every surface for a field angle (degrees)."""
+    wl = lens.primary_wavelength if wavelength is None else wavelength
+    n = lens.indices(wl)
+    zep = entrance_pupil_z(lens, wl)
+    u = jnp.tan(jnp.deg2rad(jnp.asarray(field_deg)))
+    return _trace_ray(lens, -zep * u, n[0] * u, n)
+
+
+def efl(lens: Lens, wavelength=None) -> Array:
+    """Effective focal length 1/power (mm) at ``wavelength`` (default: primary)."""
+    _, _, c, _ = system_matrix(lens, wavelength)
+    return -1.0 / c
+
+
+def bfl(lens: Lens, wavelength=None) -> Array:
+    """Back focal length: last vertex to the paraxial focus of an object at infinity (mm)."""
+    a, _, c, _ = system_matrix(lens, wavelength)
+    wl = lens.primary_wavelength if wavelength is None else wavelength
+    n_img = lens.materials[-1].index(wl)
+    return -a * n_img / c
+
+
+def image_height(lens: Lens, field_deg, wavelength=None) -> Array:
+    """Paraxial chief-ray height on the image surface (mm)."""
+    wl = lens.primary_wavelength if wavelength is None else wavelength
+    y, nu = chief_ray(lens, field_deg, wl)
+    n_img = lens.materials[-1].index(wl)
+    return y[-1] + lens.thickness[-1] * nu[-1] / n_img
+
+
+def paraxial_data(lens: Lens, wavelength=None) -> ParaxialData:
+    """All first-order data at one wavelength (default: primary)."""
+    wl = lens.primary_wavelength if wavelength is None else wavelength
+    n = lens.indices(wl)
+    n0, n_img = n[0], n[-1]
+    a, b, c, d = system_matrix(lens, wl)
+    power = -c
+    f = 1.0 / power
+    back = -a * n_img / c
+    zs = lens.vertex_z()
+    z_last = zs[-1]
+    zep = entrance_pupil_z(lens, wl)
+    epd = lens.epd
+    # Stop semi-diameter from the marginal ray height at the stop.
+    ym, num = marginal_ray(lens, wl)
+    stop_sd = jnp.abs(ym[lens.stop])
+    # Exit pupil: image of the stop through the surfaces after it.
+    if lens.stop == lens.num_surfaces - 1:
+        xp_z = zs[lens.stop]
+        xp_mag = jnp.ones_like(f)
+    else:
+        a2, b2, c2, d2 = system_matrix(lens, wl, lens.stop + 1, lens.num_surfaces - 1)
+        t = lens.thickness[lens.stop] / n[lens.stop + 1]
+        # From the stop plane (after refraction at the stop surface) to after the last surface.
+        a2, b2 = a2, b2 + t * a2
+        d2 = d2 + t * c2
+        # Ray from stop centre, nu=1: y=b2, nu=d2 after the last surface; crosses axis at:
+        xp_z = z_last - b2 * n_img / d2
+        # Magnification stop -> exit pupil: ray from stop edge parallel to chief ray.
+        xp_mag = a2 - c2 * b2 / d2
+    xpd = 2.0 * stop_sd * jnp.abs(xp_mag)
+    fnum = f / epd
+    working = 1.0 / (2.0 * jnp.abs(num[-1]))
+    paraxial_image_z = z_last - ym[-1] * n_img / num[-1]
+    return ParaxialData(
+        efl=f,
+        bfl=back,
+        front_focal_length=n0 * f,
+        rear_focal_length=n_img * f,
+        entrance_pupil_z=zep,
+        entrance_pupil_diameter=epd,
+        exit_pupil_z=xp_z,
+        exit_pupil_diameter=xpd,
+        fnum=fnum,
+        working_fnum=working,
+        image_z=lens.image_z(),
+        paraxial_image_z=paraxial_image_z,
+        total_track=lens.total_track(),
+        stop_semi_diameter=stop_sd,
+    )

@@ -1,0 +1,93 @@
+"""The ``Rays`` pytree: a batch of rays with a validity mask and optical path length.
+
+Conventions:
+    Global coordinates in mm, surface 1's vertex at z = 0, light travelling toward +z.
+    ``direction`` holds unit direction cosines (L, M, N). ``wavelength`` is in µm,
+    a scalar or one value per ray. ``opl`` is the optical path length in mm
+    accumulated since the ray was launched (Σ n·distance). Invalid rays stay in the
+    arrays with finite values; shapes never change.
+"""
+
+from __future__ import annotations
+
+import equinox as eqx
+import jax.numpy as jnp
+from jaxtyping import Array, ArrayLike, Bool, Float
+
+
+class Rays(eqx.Module):
+    """A batch of rays.
+
+    Args:
+        origin: ``[*batch, 3]`` points on the rays (mm).
+        direction: ``[*batch, 3]`` unit directions.
+        wavelength: µm, a scalar or ``[*batch]``.
+        valid: ``[*batch]`` bool mask; defaults to all True.
+        opl: ``[*batch]`` optical path length (mm); defaults to 0.
+    """
+
+    origin: Float[Array, "*batch 3"]
+    direction: Float[Array, "*batch 3"]
+    wavelength: Float[Array, "*#batch"]
+    valid: Bool[Array, "*batch"]
+    opl: Float[Array, "*batch"]
+
+    def __init__(
+        self,
+        origin: Float[ArrayLike, "*batch 3"],
+        direction: Float[ArrayLike, "*batch 3"],
+        wavelength: Float[ArrayLike, "*#batch"],
+        valid: Bool[ArrayLike, "*batch"] | None = None,
+        opl: Float[ArrayLike, "*batch"] | None = None,
+    ):
+        origin = jnp.asarray(origin)
+        direction = jnp.asarray(direction)
+        if origin.shape[-1:] != (3,) or direction.shape != origin.shape:
+            raise ValueError(
+                f"Rays: origin and direction must both be [..., 3] of the same shape, got "
+                f"{origin.shape} and {direction.shape}"
+            )
+        dtype = jnp.result_type(origin, direction)
+        if not jnp.issubdtype(dtype, jnp.floating):
+            dtype = jnp.result_type(float)
+        batch = origin.shape[:-1]
+        self.origin = origin.astype(dtype)
+        self.direction = direction.astype(dtype)
+        self.wavelength = jnp.asarray(wavelength, dtype=dtype)
+        self.valid = (
+            jnp.ones(batch, bool) if valid is None else jnp.broadcast_to(jnp.asarray(valid), batch)
+        )
+        self.opl = jnp.zeros(batch, dtype) if opl is None else jnp.asarray(opl, dtype)
+
+    @property
+    def dtype(self):
+        return self.origin.dtype
+
+    @property
+    def shape(self) -> tuple[int, ...]:
+        return self.origin.shape[:-1]
+
+    def __getitem__(self, idx) -> Rays:
+        w = self.wavelength if self.wavelength.ndim == 0 else self.wavelength[idx]
+        return Rays(self.origin[idx], self.direction[idx], w, self.valid[idx], self.opl[idx])
+
+    def reshape(self, *shape: int) -> Rays:
+        w = self.wavelength if self.wavelength.ndim == 0 else self.wavelength.reshape(shape)
+        return Rays(
+            self.origin.reshape(*shape, 3),
+            self.direction.reshape(*shape, 3),
+            w,
+            self.valid.reshape(shape),
+            self.opl.reshape(shape),
+        )
+
+    def propagate_to_z(self, z) -> Rays:
+        """Move each ray along its line to the plane z (mm); valid if N > 0.
+
+        The optical path is not updated: the medium is not known here.
+        """
+        ok = self.direction[..., 2] > 0
+        n = jnp.where(ok, self.direction[..., 2], 1.0)
+        t = (z - self.origin[..., 2]) / n
+        o = self.origin + t[..., None] * self.direction
+        return Rays(o, self.direction, self.wavelength, self.valid & ok, self.opl)

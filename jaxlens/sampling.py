@@ -1,0 +1,231 @@
+"""Ray sources: pupil sampling patterns and object-space ray bundles.
+
+Conventions:
+    Normalised pupil coordinates (Px, Py) lie in the unit disc. Field angles are in
+    degrees: ``field = (θx, θy)`` or a scalar θy. A collimated beam at field (θx, θy)
+    travels along (tan θx, tan θy, 1)/norm, which is (0, sin θ, cos θ) for a y field.
+    Rays are aimed at the paraxial entrance pupil: the ray through pupil point
+    (Px, Py) passes through (Px·EPD/2, Py·EPD/2, z_EP). With ``aim="real"`` the launch
+    points are corrected by Newton's method so that the rays cross the real stop at
+    (Px, Py)·(stop semi-diameter).
+"""
+
+from __future__ import annotations
+
+import math
+
+import jax
+import jax.numpy as jnp
+import numpy as np
+from jaxtyping import Array, Float
+
+from . import paraxial
+from .lens import Lens
+from .rays import Rays
+
+
+def pupil_grid(n: int = 21, dtype=None) -> Float[Array, "m 2"]:
+    """Square grid of n×n points over [−1, 1]², kept inside the unit disc (r² ≤ 1 + 1e-12)."""
+    u = np.linspace(-1.0, 1.0, n) if n > 1 else np.zeros(1)
+    px, py = np.meshgrid(u, u, indexing="xy")
+    keep = px**2 + py**2 <= 1.0 + 1e-12
+    pts = np.stack([px[keep], py[keep]], axis=-1)
+    return jnp.asarray(pts, dtype=dtype)
+
+
+def pupil_hexapolar(rings: int = 6, dtype=None) -> Float[Array, "m 2"]:
+    """Hexapolar pattern: the centre plus ring i (1..rings) of 6·i equally spaced points."""
+    pts = [(0.0, 0.0)]
+    for i in range(1, rings + 1):
+        r = i / rings
+        for j in range(6 * i):
+            a = 2 * math.pi * j / (6 * i)
+            pts.append((r * math.sin(a), r * math.cos(a)))
+    return jnp.asarray(np.array(pts), dtype=dtype)
+
+
+def pupil_random(key, n: int, dtype=None) -> Float[Array, "n 2"]:
+    """n points uniform over the unit disc."""
+    k1, k2 = jax.random.split(key)
+    dt = dtype or jnp.result_type(float)
+    r = jnp.sqrt(jax.random.uniform(k1, (n,), dt))
+    a = jax.random.uniform(k2, (n,), dt, 0.0, 2 * jnp.pi)
+    return jnp.stack([r * jnp.cos(a), r * jnp.sin(a)], -1)
+
+
+def pupil_stratified(key, n_side: int, dtype=None) -> Float[Array, "m 2"]:
+    """Jittered (stratified) samples: one random point per cell of an n_side² polar grid."""
+    dt = dtype or jnp.result_type(float)
+    i, j = jnp.meshgrid(jnp.arange(n_side), jnp.arange(n_side), indexing="ij")
+    u = jax.random.uniform(key, (2, n_side, n_side), dt)
+    r = jnp.sqrt((i + u[0]) / n_side)
+    a = 2 * jnp.pi * (j + u[1]) / n_side
+    return jnp.stack([r * jnp.cos(a), r * jnp.sin(a)], -1).reshape(-1, 2)
+
+
+def pupil_samples(scheme: str, n: int, key=None, dtype=None) -> Float[Array, "m 2"]:
+    """Pupil points by scheme name: "grid" (n per side), "hexapolar" (n rings),
+    "random" (n points) or "stratified" (n per side)."""
+    if scheme == "grid":
+        return pupil_grid(n, dtype)
+    if scheme == "hexapolar":
+        return pupil_hexapolar(n, dtype)
+    if scheme in ("random", "stratified"):
+        key = jax.random.PRNGKey(0) if key is None else key
+        fn = pupil_random if scheme == "random" else pupil_stratified
+        return fn(key, n, dtype)
+    raise ValueError(
+        f"pupil_samples: unknown scheme {scheme!r}; use grid, hexapolar, random or stratified"
+    )
+
+
+def _field_xy(field) -> Array:
+    f = jnp.asarray(field)
+    if f.ndim == 0 or f.shape[-1] != 2:
+        f = jnp.stack([jnp.zeros_like(f), f], -1)
+    return jnp.deg2rad(f)
+
+
+def field_direction(field) -> Float[Array, "*b 3"]:
+    """Unit direction of a collimated beam at field (θx, θy) or θy (degrees)."""
+    th = _field_xy(field)
+    v = jnp.concatenate([jnp.tan(th), jnp.ones_like(th[..., :1])], -1)
+    return v / jnp.linalg.norm(v, axis=-1, keepdims=True)
+
+
+def collimated(
+    lens: Lens,
+    field,
+    pupil: Float[Array, "m 2"],
+    wavelength=None,
+    *,
+    aim: str = "paraxial",
+) -> Rays:
+    """A collimated beam for an object at infinity, sampled over the entrance pupil.
+
+    Args:
+        lens: the lens (its EPD and paraxial entrance pupil are used).
+        field: field angle in degrees, θy or (θx, θy).
+        pupil: ``[m, 2]`` normalised pupil points.
+        wavelength: µm (default: the lens's primary wavelength).
+        aim: "paraxial" or "real" (aim at the real stop).
+
+    Returns:
+        ``[m]`` rays launched on the entrance-pupil plane.
+    """
+    wl = lens.primary_wavelength if wavelength is None else jnp.asarray(wavelength)
+    d = field_direction(field)
+    zep = paraxial.entrance_pupil_z(lens, lens.primary_wavelength)
+    h = 0.5 * lens.epd
+    xy = pupil * h
+    origin = jnp.concatenate([xy, jnp.broadcast_to(zep, xy.shape[:-1])[..., None]], -1)
+    direction = jnp.broadcast_to(d, origin.shape).astype(origin.dtype)
+    rays = Rays(origin, direction, wl)
+    if aim == "real":
+        rays = aim_at_stop(lens, rays, pupil, point_source=False)
+    elif aim != "paraxial":
+        raise ValueError(f"collimated: aim must be 'paraxial' or 'real', got {aim!r}")
+    return rays
+
+
+def point_source(
+    lens: Lens,
+    point: Float[Array, "3"],
+    pupil: Float[Array, "m 2"],
+    wavelength=None,
+    *,
+    aim: str = "paraxial",
+) -> Rays:
+    """Rays from an object point (global mm, z < 0) through the paraxial entrance pupil.
+
+    The entrance pupil diameter is the lens's EPD.
+    """
+    wl = lens.primary_wavelength if wavelength is None else jnp.asarray(wavelength)
+    point = jnp.asarray(point)
+    zep = paraxial.entrance_pupil_z(lens, lens.primary_wavelength)
+    xy = pupil * (0.5 * lens.epd)
+    target = jnp.concatenate([xy, jnp.broadcast_to(zep, xy.shape[:-1])[..., None]], -1)
+    v = target - point
+    d = v / jnp.linalg.norm(v, axis=-1, keepdims=True)
+    origin = jnp.broadcast_to(point, target.shape).astype(target.dtype)
+    rays = Rays(origin, d, wl)
+    if aim == "real":
+        rays = aim_at_stop(lens, rays, pupil, point_source=True)
+    elif aim != "paraxial":
+        raise ValueError(f"point_source: aim must be 'paraxial' or 'real', got {aim!r}")
+    return rays
+
+
+def object_point(lens: Lens, field, depth) -> Array:
+    """The object point (global mm) at a field angle (deg) and distance ``depth`` in front of
+    surface 1 (mm, positive)."""
+    th = _field_xy(field)
+    depth = jnp.asarray(depth)
+    z = -depth
+    zep = paraxial.entrance_pupil_z(lens, lens.primary_wavelength)
+    xy = jnp.tan(th) * (zep - z)
+    return jnp.concatenate([-xy, z[..., None] * jnp.ones_like(xy[..., :1])], -1)
+
+
+def field_rays(lens: Lens, field, pupil, wavelength=None, *, depth=None, aim="paraxial") -> Rays:
+    """Rays for a field angle at infinity (``depth=None``/inf) or from a finite depth (mm).
+
+    The chief ray of a finite-depth field point makes the angle θ with the axis at the
+    entrance pupil, as for an object at infinity.
+    """
+    if depth is None or (not isinstance(depth, jax.core.Tracer) and np.isinf(np.asarray(depth))):
+        return collimated(lens, field, pupil, wavelength, aim=aim)
+    return point_source(lens, object_point(lens, field, depth), pupil, wavelength, aim=aim)
+
+
+def aim_at_stop(
+    lens: Lens, rays: Rays, pupil: Float[Array, "m 2"], *, point_source: bool, iters: int = 4
+) -> Rays:
+    """Shift launch points so that each ray crosses the real stop at pupil·(stop radius).
+
+    Newton's method on the 2D launch offset in the plane of the ray origins, with the
+    Jacobian from forward-mode autodiff of a partial trace to the stop. The direction is
+    kept for collimated beams; for a point source the origin is kept and the direction
+    re-aimed through the shifted entrance-pupil point.
+    """
+    from .trace import trace_path
+
+    stop_r = paraxial.paraxial_data(lens).stop_semi_diameter
+    target = pupil * stop_r
+    point_src = point_source
+
+    def launch(uv, o, d):
+        if point_src:
+            # Re-aim the direction through the shifted EP point.
+            zep = paraxial.entrance_pupil_z(lens)
+            p = jnp.array([uv[0], uv[1], zep])
+            v = p - o
+            return o, v / jnp.linalg.norm(v)
+        return o + jnp.array([uv[0], uv[1], 0.0]), d
+
+    def at_stop(uv, o, d, w):
+        o2, d2 = launch(uv, o, d)
+        r = trace_path(lens, Rays(o2[None], d2[None], w), upto=lens.stop)[-1]
+        return r.origin[0, :2]
+
+    def solve(o, d, tgt, w, uv0):
+        def body(_, uv):
+            f = at_stop(uv, o, d, w) - tgt
+            jac = jax.jacfwd(at_stop)(uv, o, d, w)
+            det = jac[0, 0] * jac[1, 1] - jac[0, 1] * jac[1, 0]
+            det = jnp.where(det == 0, 1.0, det)
+            inv = jnp.array([[jac[1, 1], -jac[0, 1]], [-jac[1, 0], jac[0, 0]]]) / det
+            return uv - inv @ f
+
+        return jax.lax.fori_loop(0, iters, body, uv0)
+
+    zep = paraxial.entrance_pupil_z(lens)
+    if point_src:
+        dz = zep - rays.origin[..., 2]
+        uv0 = rays.origin[..., :2] + rays.direction[..., :2] / rays.direction[..., 2:] * dz[..., None]
+    else:
+        uv0 = jnp.zeros_like(rays.origin[..., :2])
+    w = jnp.broadcast_to(rays.wavelength, rays.shape)
+    uv = jax.vmap(solve)(rays.origin, rays.direction, target, w, uv0)
+    o, d = jax.vmap(launch)(uv, rays.origin, rays.direction)
+    return Rays(o, d, rays.wavelength)

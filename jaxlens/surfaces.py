@@ -1,0 +1,180 @@
+"""Refracting surface shapes.
+
+Conventions:
+    Lengths in mm. Each surface is described in its local frame: the vertex at the
+    origin, the optical axis along +z. The sag is
+
+        z(x, y) = c r² / (1 + sqrt(1 − (1+k) c² r²)) + Σ_{i=1..m} a_i r^{2i}
+                  + Σ_{j=1..p} (b_j x^{2j+1} + d_j y^{2j+1})
+
+    (the odd series starts at the cubic: a linear term would only tilt the surface)
+
+    with r² = x² + y², curvature c = 1/R (c = 0 is flat), conic constant k (k = 0
+    sphere, k = −1 paraboloid). The even series starts at a_1 r² (Zemax EVENASPH
+    PARM1 = A2). The odd terms are the hybrid surface of Yang et al. (2024).
+
+    ``semi_diameter`` is the clear-aperture radius; rays beyond it are clipped. It is
+    ``inf`` (no clipping) unless a file or the user sets it.
+
+All surfaces are final ``eqx.Module``s; numbers are arrays so ``jax.grad`` reaches
+them, and the number of polynomial terms is static (a shape), so a surface with no
+odd terms evaluates none.
+"""
+
+from __future__ import annotations
+
+import equinox as eqx
+import jax.numpy as jnp
+from jaxtyping import Array, Float
+
+
+def _safe_sqrt(x):
+    """sqrt with a finite gradient where x <= 0 (the "double where" guard)."""
+    ok = x > 0
+    return jnp.where(ok, jnp.sqrt(jnp.where(ok, x, 1.0)), 0.0)
+
+
+class AbstractSurface(eqx.Module):
+    """A rotationally symmetric base conic plus optional polynomial terms."""
+
+    c: eqx.AbstractVar[Float[Array, ""]]
+    k: eqx.AbstractVar[Float[Array, ""]]
+    semi_diameter: eqx.AbstractVar[Float[Array, ""]]
+
+    # Polynomial terms; zero-length arrays mean "none" and cost nothing.
+    def even_coeffs(self) -> Float[Array, " m"]:
+        return jnp.zeros((0,), jnp.result_type(self.c))
+
+    def odd_coeffs(self) -> tuple[Float[Array, " p"], Float[Array, " p"]]:
+        z = jnp.zeros((0,), jnp.result_type(self.c))
+        return z, z
+
+    # --- geometry -----------------------------------------------------------------
+    def conic_sag(self, r2):
+        """Sag of the base conic, and whether r² lies inside its domain."""
+        arg = 1.0 - (1.0 + self.k) * self.c**2 * r2
+        inside = arg > 0
+        root = _safe_sqrt(arg)
+        return self.c * r2 / (1.0 + root), inside
+
+    def sag(self, x, y):
+        """Sag z(x, y) in mm; returns (sag, inside_domain)."""
+        r2 = x * x + y * y
+        z, inside = self.conic_sag(r2)
+        a = self.even_coeffs()
+        if a.shape[0]:
+            z = z + r2 * jnp.polyval(a[::-1], r2)
+        bx, by = self.odd_coeffs()
+        if bx.shape[0]:
+            x2, y2 = x * x, y * y
+            z = z + x * x2 * jnp.polyval(bx[::-1], x2) + y * y2 * jnp.polyval(by[::-1], y2)
+        return z, inside
+
+    def sag_and_grad(self, x, y):
+        """Sag and its partial derivatives (dz/dx, dz/dy), finite at r = 0 and c = 0."""
+        r2 = x * x + y * y
+        arg = 1.0 - (1.0 + self.k) * self.c**2 * r2
+        inside = arg > 0
+        root = _safe_sqrt(arg)
+        z = self.c * r2 / (1.0 + root)
+        # dz/dr / r for the conic: c / sqrt(arg); guarded outside the domain.
+        dr_over_r = self.c / jnp.where(inside, root, 1.0)
+        a = self.even_coeffs()
+        if a.shape[0]:
+            z = z + r2 * jnp.polyval(a[::-1], r2)
+            i = jnp.arange(1, a.shape[0] + 1, dtype=a.dtype)
+            dr_over_r = dr_over_r + jnp.polyval((2 * i * a)[::-1], r2)
+        gx = x * dr_over_r
+        gy = y * dr_over_r
+        bx, by = self.odd_coeffs()
+        if bx.shape[0]:
+            x2, y2 = x * x, y * y
+            z = z + x * x2 * jnp.polyval(bx[::-1], x2) + y * y2 * jnp.polyval(by[::-1], y2)
+            j = jnp.arange(bx.shape[0], dtype=bx.dtype)
+            gx = gx + x2 * jnp.polyval(((2 * j + 3) * bx)[::-1], x2)
+            gy = gy + y2 * jnp.polyval(((2 * j + 3) * by)[::-1], y2)
+        return z, gx, gy, inside
+
+    @property
+    def has_polynomial(self) -> bool:
+        """True if the surface needs Newton refinement beyond the closed-form conic."""
+        bx, _ = self.odd_coeffs()
+        return bool(self.even_coeffs().shape[0] or bx.shape[0])
+
+    @property
+    def paraxial_curvature(self) -> Array:
+        """c + 2·a_1: the curvature the paraxial trace sees (includes the r² term)."""
+        a = self.even_coeffs()
+        return self.c + 2.0 * a[0] if a.shape[0] else self.c
+
+
+_inf = lambda: jnp.asarray(jnp.inf)  # noqa: E731
+
+
+class Standard(AbstractSurface):
+    """Plane, sphere or conic (Zemax STANDARD)."""
+
+    c: Float[Array, ""] = eqx.field(converter=jnp.asarray, default=0.0)
+    k: Float[Array, ""] = eqx.field(converter=jnp.asarray, default=0.0)
+    semi_diameter: Float[Array, ""] = eqx.field(converter=jnp.asarray, default_factory=_inf)
+
+
+class EvenAsphere(AbstractSurface):
+    """Conic plus an even series a_1 r² + a_2 r⁴ + … (Zemax EVENASPH, PARM1 = a_1)."""
+
+    c: Float[Array, ""] = eqx.field(converter=jnp.asarray, default=0.0)
+    k: Float[Array, ""] = eqx.field(converter=jnp.asarray, default=0.0)
+    coeffs: Float[Array, " m"] = eqx.field(converter=jnp.asarray, default=(0.0,) * 8)
+    semi_diameter: Float[Array, ""] = eqx.field(converter=jnp.asarray, default_factory=_inf)
+
+    def even_coeffs(self):
+        return self.coeffs
+
+
+class Hybrid(AbstractSurface):
+    """Even asphere plus the odd polynomial Σ_j (b_j x^{2j+1} + d_j y^{2j+1}), j = 1…p.
+
+    ``odd_x[0]`` multiplies x³ (the cubic phase-plate term), ``odd_x[1]`` x⁵, and so on.
+
+    This is the paper's hybrid surface for end-to-end design (no rotational symmetry).
+    """
+
+    c: Float[Array, ""] = eqx.field(converter=jnp.asarray, default=0.0)
+    k: Float[Array, ""] = eqx.field(converter=jnp.asarray, default=0.0)
+    coeffs: Float[Array, " m"] = eqx.field(converter=jnp.asarray, default=(0.0,) * 8)
+    odd_x: Float[Array, " p"] = eqx.field(converter=jnp.asarray, default=(0.0,) * 4)
+    odd_y: Float[Array, " p"] = eqx.field(converter=jnp.asarray, default=(0.0,) * 4)
+    semi_diameter: Float[Array, ""] = eqx.field(converter=jnp.asarray, default_factory=_inf)
+
+    def __check_init__(self):
+        if self.odd_x.shape != self.odd_y.shape:
+            raise ValueError(
+                f"Hybrid: odd_x and odd_y need the same length, got {self.odd_x.shape} "
+                f"and {self.odd_y.shape}"
+            )
+
+    def even_coeffs(self):
+        return self.coeffs
+
+    def odd_coeffs(self):
+        return self.odd_x, self.odd_y
+
+
+def Plane(semi_diameter=jnp.inf) -> Standard:
+    """A flat surface (c = 0)."""
+    return Standard(c=0.0, k=0.0, semi_diameter=semi_diameter)
+
+
+def Sphere(c, semi_diameter=jnp.inf) -> Standard:
+    """A sphere of curvature c = 1/R (1/mm)."""
+    return Standard(c=c, k=0.0, semi_diameter=semi_diameter)
+
+
+def Conic(c, k, semi_diameter=jnp.inf) -> Standard:
+    """A conic of curvature c and conic constant k."""
+    return Standard(c=c, k=k, semi_diameter=semi_diameter)
+
+
+def Stop(semi_diameter=jnp.inf) -> Standard:
+    """A flat circular aperture stop of the given radius (mark it with ``Lens.stop``)."""
+    return Standard(c=0.0, k=0.0, semi_diameter=semi_diameter)

@@ -1,0 +1,25 @@
+"""Test configuration: float64 for accuracy tests, strict rank promotion."""
+
+import os
+
+os.environ.setdefault("XLA_FLAGS", "--xla_force_host_platform_device_count=4")
+
+import jax  # noqa: E402
+
+jax.config.update("jax_enable_x64", True)
+
+import pathlib  # noqa: E402
+
+import pytest  # noqa: E402
+
+REFCASES = pathlib.Path(__file__).resolve().parents[2] / "shared" / "refcases"
+
+
+@pytest.fixture(scope="session")
+def refcase_dir():
+    """Folder of reference cases from independent tracers (skips if absent)."""
+    for p in (pathlib.Path(os.environ.get("JAXLENS_REFCASES", "")), REFCASES,
+              pathlib.Path(__file__).parent / "refcases"):
+        if p and p.is_dir() and any(p.glob("*.json")):
+            return p
+    pytest.skip("no reference cases found")
