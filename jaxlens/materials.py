@@ -107,3 +107,131 @@ def abbe_number(material: AbstractMaterial) -> Array:
     """Vd = (nd − 1)/(nF − nC)."""
     n = material.index(jnp.asarray([LAMBDA_D, LAMBDA_F, LAMBDA_C]))
     return (n[0] - 1.0) / (n[1] - n[2])
+
+
+# Further Zemax glass-catalog dispersion formulas (wavelength λ in µm). ``Schott`` is formula
+# 1 and ``Sellmeier`` covers formulas 2 (Sellmeier 1, three terms), 6 (Sellmeier 3, four
+# terms) and 11 (Sellmeier 5, five terms).
+
+
+class Herzberger(AbstractMaterial):
+    """Herzberger formula (Zemax formula 3).
+
+    n = A + B L + C L² + D λ² + E λ⁴ + F λ⁶ with L = 1/(λ² − 0.028), λ in µm; ``coeffs`` is
+    (A, B, C, D, E, F).
+    """
+
+    coeffs: Float[Array, " 6"] = eqx.field(converter=jnp.asarray)
+    name: str = eqx.field(static=True, default="")
+
+    def index(self, wavelength):
+        w2 = jnp.asarray(wavelength) ** 2
+        a = self.coeffs
+        big_l = 1.0 / (w2 - 0.028)
+        return a[0] + a[1] * big_l + a[2] * big_l**2 + a[3] * w2 + a[4] * w2**2 + a[5] * w2**3
+
+
+class Sellmeier2(AbstractMaterial):
+    """Sellmeier 2 formula (Zemax formula 4).
+
+    n² − 1 = A + B1 λ²/(λ² − λ1²) + B2/(λ² − λ2²), λ, λ1 and λ2 in µm; ``coeffs`` is
+    (A, B1, λ1, B2, λ2).
+    """
+
+    coeffs: Float[Array, " 5"] = eqx.field(converter=jnp.asarray)
+    name: str = eqx.field(static=True, default="")
+
+    def index(self, wavelength):
+        w2 = jnp.asarray(wavelength) ** 2
+        a, b1, l1, b2, l2 = (self.coeffs[i] for i in range(5))
+        return jnp.sqrt(1.0 + a + b1 * w2 / (w2 - l1**2) + b2 / (w2 - l2**2))
+
+
+class Conrady(AbstractMaterial):
+    """Conrady formula (Zemax formula 5): n = n0 + A/λ + B/λ^3.5, λ in µm; ``coeffs`` is
+    (n0, A, B)."""
+
+    coeffs: Float[Array, " 3"] = eqx.field(converter=jnp.asarray)
+    name: str = eqx.field(static=True, default="")
+
+    def index(self, wavelength):
+        w = jnp.asarray(wavelength)
+        return self.coeffs[0] + self.coeffs[1] / w + self.coeffs[2] / w**3.5
+
+
+class Handbook1(AbstractMaterial):
+    """Handbook of Optics 1 formula (Zemax formula 7).
+
+    n² = A + B/(λ² − C) − D λ², λ in µm; ``coeffs`` is (A, B, C, D).
+    """
+
+    coeffs: Float[Array, " 4"] = eqx.field(converter=jnp.asarray)
+    name: str = eqx.field(static=True, default="")
+
+    def index(self, wavelength):
+        w2 = jnp.asarray(wavelength) ** 2
+        a = self.coeffs
+        return jnp.sqrt(a[0] + a[1] / (w2 - a[2]) - a[3] * w2)
+
+
+class Handbook2(AbstractMaterial):
+    """Handbook of Optics 2 formula (Zemax formula 8).
+
+    n² = A + B λ²/(λ² − C) − D λ², λ in µm; ``coeffs`` is (A, B, C, D).
+    """
+
+    coeffs: Float[Array, " 4"] = eqx.field(converter=jnp.asarray)
+    name: str = eqx.field(static=True, default="")
+
+    def index(self, wavelength):
+        w2 = jnp.asarray(wavelength) ** 2
+        a = self.coeffs
+        return jnp.sqrt(a[0] + a[1] * w2 / (w2 - a[2]) - a[3] * w2)
+
+
+class Sellmeier4(AbstractMaterial):
+    """Sellmeier 4 formula (Zemax formula 9).
+
+    n² = A + B λ²/(λ² − C) + D λ²/(λ² − E), λ in µm; ``coeffs`` is (A, B, C, D, E).
+    """
+
+    coeffs: Float[Array, " 5"] = eqx.field(converter=jnp.asarray)
+    name: str = eqx.field(static=True, default="")
+
+    def index(self, wavelength):
+        w2 = jnp.asarray(wavelength) ** 2
+        a = self.coeffs
+        return jnp.sqrt(a[0] + a[1] * w2 / (w2 - a[2]) + a[3] * w2 / (w2 - a[4]))
+
+
+EXTENDED_POWERS = (0, 2, -2, -4, -6, -8, -10, -12)
+"""Powers of λ (µm) in Zemax's Extended formula (10)."""
+EXTENDED2_POWERS = (0, 2, -2, -4, -6, -8, 4, 6)
+"""Powers of λ (µm) in Zemax's Extended 2 formula (12)."""
+EXTENDED3_POWERS = (0, 2, 4, -2, -4, -6, -8, -10, -12)
+"""Powers of λ (µm) in Zemax's Extended 3 formula (13)."""
+
+
+class Laurent(AbstractMaterial):
+    """Power series in λ for n²: n² = Σ_k a_k λ^p_k, λ in µm.
+
+    With ``powers`` set to ``EXTENDED_POWERS``, ``EXTENDED2_POWERS`` or ``EXTENDED3_POWERS``
+    this is Zemax's Extended (10), Extended 2 (12) or Extended 3 (13) formula, the
+    coefficients in catalog order.
+    """
+
+    coeffs: Float[Array, " k"] = eqx.field(converter=jnp.asarray)
+    powers: tuple[int, ...] = eqx.field(static=True, default=EXTENDED_POWERS)
+    name: str = eqx.field(static=True, default="")
+
+    def __check_init__(self):
+        if self.coeffs.shape != (len(self.powers),):
+            raise ValueError(
+                f"Laurent needs one coefficient per power: {len(self.powers)} powers, "
+                f"coefficients of shape {self.coeffs.shape}"
+            )
+
+    def index(self, wavelength):
+        w = jnp.asarray(wavelength)[..., None]
+        p = jnp.asarray(self.powers, dtype=self.coeffs.dtype)
+        return jnp.sqrt(jnp.sum(self.coeffs * w**p, axis=-1))

@@ -41,8 +41,13 @@ def _where_nonzero(x):
     return jnp.where(x == 0, 1.0, x)
 
 
-def _conic_root(surface: AbstractSurface, o, d):
-    """Closed-form intersection with the base conic; returns (t, hit)."""
+def _conic_root(surface: AbstractSurface, o, d, t_min):
+    """Closed-form intersection with the base conic; returns (t, hit).
+
+    Of the two roots of c(x² + y²) + c(1+k)z² − 2z = 0, only those on the sheet through
+    the vertex (1 − c(1+k)z ≥ 0) and with t ≥ t_min count; the first of them along the
+    ray is taken.
+    """
     c, k = surface.c, surface.k
     ox, oy, oz = o[..., 0], o[..., 1], o[..., 2]
     dx, dy, dz = d[..., 0], d[..., 1], d[..., 2]
@@ -50,12 +55,20 @@ def _conic_root(surface: AbstractSurface, o, d):
     b = c * (ox * dx + oy * dy + (1 + k) * oz * dz) - dz
     cc = c * (ox * ox + oy * oy + (1 + k) * oz * oz) - 2 * oz
     disc = b * b - a * cc
-    hit = disc >= 0
-    root = jnp.sqrt(jnp.where(hit, disc, 0.0))
-    # The root that stays finite as c -> 0 is the sheet through the vertex.
+    real = disc >= 0
+    root = jnp.sqrt(jnp.where(real, disc, 0.0))
+    # Stable pair of roots: t1 = cc/q stays finite as c -> 0, t2 = q/a.
     q = -b + jnp.where(b <= 0, root, -root)
-    hit = hit & (q != 0)
-    return cc / _where_nonzero(q), hit
+    t1 = cc / _where_nonzero(q)
+    t2 = jnp.where(a != 0, q / _where_nonzero(a), jnp.inf)
+
+    def usable(t, exists):
+        z = oz + t * dz
+        return exists & real & jnp.isfinite(t) & (t >= t_min) & (1 - c * (1 + k) * z >= 0)
+
+    u1, u2 = usable(t1, q != 0), usable(t2, a != 0)
+    t = jnp.where(u1 & u2, jnp.minimum(t1, t2), jnp.where(u1, t1, t2))
+    return jnp.where(u1 | u2, t, 0.0), u1 | u2
 
 
 def _residual(surface: AbstractSurface, o, d, t):
@@ -66,8 +79,13 @@ def _residual(surface: AbstractSurface, o, d, t):
     return f, df, inside
 
 
-def intersect(surface: AbstractSurface, o, d, newton_iters: int = DEFAULT_NEWTON_ITERS):
+def intersect(
+    surface: AbstractSurface, o, d, newton_iters: int = DEFAULT_NEWTON_ITERS, *, first=False
+):
     """Intersect rays (local frame, vertex at the origin) with a surface.
+
+    The first intersection along the ray is taken; with ``first=False`` only t ≥ 0
+    (up to rounding) counts, with ``first=True`` (object space) the whole line does.
 
     Returns:
         t: ray parameter of the intersection, ``[*batch]``.
@@ -75,7 +93,8 @@ def intersect(surface: AbstractSurface, o, d, newton_iters: int = DEFAULT_NEWTON
     """
     o_s, d_s = jax.lax.stop_gradient((o, d))
     surf_s = jax.lax.stop_gradient(surface)
-    t0, hit = _conic_root(surf_s, o_s, d_s)
+    t_min = -jnp.inf if first else -1e3 * jnp.finfo(o.dtype).eps * (1 + jnp.abs(o_s[..., 2]))
+    t0, hit = _conic_root(surf_s, o_s, d_s, t_min)
     if surface.has_polynomial:
         # Rays that miss the base conic start Newton from the vertex plane.
         plane_t = -o_s[..., 2] / _where_nonzero(d_s[..., 2])
@@ -130,9 +149,9 @@ def _step(surface, z_vertex, rays: Rays, n_before, n_after, *, first, refracts, 
     """Move rays to one surface and refract them there."""
     shift = jnp.stack([jnp.zeros_like(z_vertex), jnp.zeros_like(z_vertex), z_vertex])
     o_local = rays.origin - shift
-    t, ok = intersect(surface, o_local, rays.direction, newton_iters)
+    t, ok = intersect(surface, o_local, rays.direction, newton_iters, first=first)
     if not first:
-        ok = ok & (t >= -jnp.finfo(t.dtype).eps * 1e3)
+        ok = ok & (t >= -1e3 * jnp.finfo(t.dtype).eps * (1 + jnp.abs(o_local[..., 2])))
     p_local = o_local + t[..., None] * rays.direction
     r2 = p_local[..., 0] ** 2 + p_local[..., 1] ** 2
     ok = ok & (r2 <= surface.semi_diameter**2)
