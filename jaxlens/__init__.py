@@ -7,6 +7,7 @@ for the sign conventions.
 
 from . import paraxial as paraxial
 from . import sampling as sampling
+from . import zoo as zoo
 from .lens import Lens as Lens
 from .lens import Sensor as Sensor
 from .materials import AbstractMaterial as AbstractMaterial
