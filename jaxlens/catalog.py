@@ -1,0 +1,517 @@
+"""Glass catalogs: a Zemax AGF reader and name lookup in the catalogs shipped with jaxlens.
+
+The package ships these catalogs in ``jaxlens/data/glass`` (each file names its public
+source in its ``!`` header lines):
+
+* ``SCHOTT``: the SCHOTT catalog, status April 2013 (preferred, inquiry and obsolete glasses).
+* ``CDGM``: the CDGM (H-K9L, H-ZF…, H-LAK…, H-ZLAF…) catalog, January 2014.
+* ``PLASTICS``: molding plastics: PMMA, POLYCARB, POLYSTYR, SAN, COC, ZEONEX 330R/480R/E48R,
+  OKP4 and OKP4HT.
+* ``MISC``: fused silica, CaF₂, quartz, water and a few legacy glasses.
+
+Lookups are case-insensitive. Catalogs registered with :func:`register_catalog` are
+searched first (latest first), then the shipped ones in the order above, so ``"F2"`` is
+SCHOTT's F2; pass ``catalogs=["CDGM"]`` to get CDGM's. ``"AIR"`` and ``""`` give
+:class:`~jaxlens.materials.Air`. Wavelengths are in µm, as everywhere in jaxlens.
+
+Example:
+    >>> from jaxlens.catalog import get_material, glass_info
+    >>> bk7 = get_material("n-bk7")
+    >>> glass_info("N-BK7")
+    ('SCHOTT', 1.5168, 64.17)
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import difflib
+import functools
+import os
+from collections.abc import Iterable, Mapping
+from importlib.resources import files
+
+import equinox as eqx
+import jax.numpy as jnp
+import numpy as np
+
+from .materials import (
+    EXTENDED2_POWERS,
+    EXTENDED3_POWERS,
+    EXTENDED_POWERS,
+    LAMBDA_C,
+    LAMBDA_D,
+    LAMBDA_F,
+    AbstractMaterial,
+    Air,
+    Conrady,
+    Handbook1,
+    Handbook2,
+    Herzberger,
+    Laurent,
+    Schott,
+    Sellmeier,
+    Sellmeier2,
+    Sellmeier4,
+)
+
+__all__ = [
+    "CatalogMaterial",
+    "GlassRecord",
+    "SHIPPED_CATALOGS",
+    "catalog_names",
+    "get_material",
+    "glass_info",
+    "load_agf",
+    "parse_agf",
+    "register_catalog",
+]
+
+SHIPPED_CATALOGS = ("SCHOTT", "CDGM", "PLASTICS", "MISC")
+"""Shipped catalogs in search order (files ``jaxlens/data/glass/<NAME>.agf``)."""
+
+FORMULA_NAMES = {
+    1: "Schott",
+    2: "Sellmeier 1",
+    3: "Herzberger",
+    4: "Sellmeier 2",
+    5: "Conrady",
+    6: "Sellmeier 3",
+    7: "Handbook of Optics 1",
+    8: "Handbook of Optics 2",
+    9: "Sellmeier 4",
+    10: "Extended",
+    11: "Sellmeier 5",
+    12: "Extended 2",
+    13: "Extended 3",
+}
+"""Zemax dispersion formula numbers understood by :func:`load_agf`."""
+
+_ALIASES = {
+    "PC": ("PLASTICS", "POLYCARB"),
+    "POLYCARBONATE": ("PLASTICS", "POLYCARB"),
+    "PS": ("PLASTICS", "POLYSTYR"),
+    "POLYSTYRENE": ("PLASTICS", "POLYSTYR"),
+    "ZEONEX E48R": ("PLASTICS", "E48R"),
+    "ZEONEX-E48R": ("PLASTICS", "E48R"),
+    "ZEONEX_E48R": ("PLASTICS", "E48R"),
+    "COP-E48R": ("PLASTICS", "E48R"),
+    "COC-E48R": ("PLASTICS", "E48R"),
+    "FUSED SILICA": ("MISC", "F_SILICA"),
+    "FUSED_SILICA": ("MISC", "F_SILICA"),
+    "FUSEDSILICA": ("MISC", "F_SILICA"),
+    "BK7": ("SCHOTT", "N-BK7"),
+    "SK16": ("SCHOTT", "N-SK16"),
+}
+"""Unambiguous alternative names, used only when the name itself is in no catalog. BK7 and
+SK16 are SCHOTT's lead-containing predecessors of N-BK7 and N-SK16 (practically the same
+nd and Vd); the shipped 2013 catalog has only the N- glasses."""
+
+
+@dataclasses.dataclass(frozen=True)
+class GlassRecord:
+    """One glass of an AGF file: its NM, CD and LD records, not yet turned into a material.
+
+    Attributes:
+        name: Glass name as written in the catalog.
+        formula: Zemax dispersion formula number (see ``FORMULA_NAMES``).
+        coefficients: Dispersion coefficients from the CD record, in catalog order.
+        nd: Catalog index at the d line (587.5618 nm).
+        vd: Catalog Abbe number Vd.
+        catalog: Catalog name (upper case), e.g. ``"SCHOTT"``.
+        wavelength_range: (min, max) wavelength of validity in µm from the LD record, or None.
+        status: Zemax status code from the NM record (0 standard, 1 preferred, 2 obsolete,
+            3 special, 4 melt), or None when absent.
+        glass_code: The NM record's MIL / glass code field, verbatim.
+    """
+
+    name: str
+    formula: int
+    coefficients: tuple[float, ...]
+    nd: float
+    vd: float
+    catalog: str = ""
+    wavelength_range: tuple[float, float] | None = None
+    status: int | None = None
+    glass_code: str = ""
+
+    def to_material(self) -> CatalogMaterial:
+        """The dispersion model of this record, wrapped with its catalog metadata."""
+        return CatalogMaterial(
+            model=_dispersion_model(self.formula, self.coefficients, self.name),
+            name=self.name,
+            catalog=self.catalog,
+            catalog_nd=self.nd,
+            catalog_vd=self.vd,
+            formula=self.formula,
+            wavelength_range=self.wavelength_range,
+        )
+
+
+class CatalogMaterial(AbstractMaterial):
+    """A catalog glass: a dispersion model plus the catalog's static metadata.
+
+    ``index`` is the wrapped model's index, so gradients flow to its coefficients.
+    ``catalog_nd`` and ``catalog_vd`` are the NM-record values (what a Zemax GLAS line
+    needs); they are metadata and do not follow an optimised model.
+
+    Attributes:
+        model: The dispersion formula with the catalog coefficients.
+        name: Glass name as written in the catalog.
+        catalog: Catalog name, e.g. ``"SCHOTT"``.
+        catalog_nd: Catalog nd, or None when unknown.
+        catalog_vd: Catalog Vd, or None when unknown.
+        formula: Zemax dispersion formula number.
+        wavelength_range: (min, max) wavelength of validity in µm, or None.
+    """
+
+    model: AbstractMaterial
+    name: str = eqx.field(static=True)
+    catalog: str = eqx.field(static=True, default="")
+    catalog_nd: float | None = eqx.field(static=True, default=None)
+    catalog_vd: float | None = eqx.field(static=True, default=None)
+    formula: int = eqx.field(static=True, default=0)
+    wavelength_range: tuple[float, float] | None = eqx.field(static=True, default=None)
+
+    def index(self, wavelength):
+        return self.model.index(wavelength)
+
+
+# ---------------------------------------------------------------------------- dispersion
+
+
+def _padded(coefficients: tuple[float, ...], count: int) -> np.ndarray:
+    """The first ``count`` coefficients, zero-padded (AGF files drop trailing zeros)."""
+    out = np.zeros(count)
+    used = coefficients[:count]
+    out[: len(used)] = used
+    return out
+
+
+def _sellmeier_terms(coefficients: tuple[float, ...], terms: int, name: str) -> Sellmeier:
+    """Sellmeier 1/3/5: coefficients K1, L1, K2, L2, … as B = K, C = L."""
+    c = _padded(coefficients, 2 * terms)
+    return Sellmeier(B=c[0::2], C=c[1::2], name=name)
+
+
+_BUILDERS = {
+    1: lambda c, n: Schott(_padded(c, 6), name=n),
+    2: lambda c, n: _sellmeier_terms(c, 3, n),
+    3: lambda c, n: Herzberger(_padded(c, 6), name=n),
+    4: lambda c, n: Sellmeier2(_padded(c, 5), name=n),
+    5: lambda c, n: Conrady(_padded(c, 3), name=n),
+    6: lambda c, n: _sellmeier_terms(c, 4, n),
+    7: lambda c, n: Handbook1(_padded(c, 4), name=n),
+    8: lambda c, n: Handbook2(_padded(c, 4), name=n),
+    9: lambda c, n: Sellmeier4(_padded(c, 5), name=n),
+    10: lambda c, n: Laurent(_padded(c, 8), powers=EXTENDED_POWERS, name=n),
+    11: lambda c, n: _sellmeier_terms(c, 5, n),
+    12: lambda c, n: Laurent(_padded(c, 8), powers=EXTENDED2_POWERS, name=n),
+    13: lambda c, n: Laurent(_padded(c, 9), powers=EXTENDED3_POWERS, name=n),
+}
+
+
+def _dispersion_model(formula: int, coefficients: tuple[float, ...], name: str):
+    """The material for a Zemax formula number and its CD coefficients."""
+    return _BUILDERS[formula](coefficients, name)
+
+
+# ---------------------------------------------------------------------------- AGF reader
+
+
+def _decode(raw: bytes) -> str:
+    """Text of an AGF file: UTF-16 (BOM or NUL-interleaved), UTF-8, else latin-1."""
+    if raw.startswith((b"\xff\xfe", b"\xfe\xff")):
+        return raw.decode("utf-16")
+    if raw.startswith(b"\xef\xbb\xbf"):
+        return raw[3:].decode("utf-8")
+    head = raw[:200]
+    if head and head.count(b"\x00") > len(head) // 4:
+        return raw.decode("utf-16-le" if head[1:2] == b"\x00" else "utf-16-be")
+    try:
+        return raw.decode("utf-8")
+    except UnicodeDecodeError:
+        return raw.decode("latin-1")
+
+
+def _floats(tokens: list[str], where: str, what: str) -> tuple[float, ...]:
+    try:
+        return tuple(float(t) for t in tokens)
+    except ValueError:
+        raise ValueError(f"{where}: {what} must be numbers, got {' '.join(tokens)!r}") from None
+
+
+def _optional_int(tokens: list[str], i: int) -> int | None:
+    try:
+        return int(float(tokens[i]))
+    except (IndexError, ValueError):
+        return None
+
+
+@dataclasses.dataclass
+class _Pending:
+    """A glass whose NM record has been read and whose CD record may still come."""
+
+    fields: dict
+    line: int
+    coefficients: tuple[float, ...] | None = None
+    wavelength_range: tuple[float, float] | None = None
+
+
+def _parse_nm(tokens: list[str], where: str) -> dict:
+    """Fields of an NM record: name, formula, MIL code, nd, Vd[, exclude, status, …]."""
+    if len(tokens) < 6:
+        raise ValueError(f"{where}: NM needs name, formula, MIL code, nd and Vd, got {tokens!r}")
+    name = tokens[1]
+    try:
+        formula = int(float(tokens[2]))
+    except ValueError:
+        raise ValueError(f"{where}: formula number of {name} is {tokens[2]!r}") from None
+    if formula not in FORMULA_NAMES:
+        raise ValueError(f"{where}: {name} uses unsupported dispersion formula {formula}")
+    nd, vd = _floats(tokens[4:6], where, f"nd and Vd of {name}")
+    return dict(name=name, formula=formula, nd=nd, vd=vd, glass_code=tokens[3],
+                status=_optional_int(tokens, 7))
+
+
+def _finish(pending: _Pending | None, source: str, catalog: str) -> list[GlassRecord]:
+    """The record of a finished glass (none before the first NM); no CD record is an error."""
+    if pending is None:
+        return []
+    if pending.coefficients is None:
+        name = pending.fields["name"]
+        raise ValueError(f"{source}:{pending.line}: glass {name} has no CD record")
+    return [GlassRecord(coefficients=pending.coefficients, catalog=catalog,
+                        wavelength_range=pending.wavelength_range, **pending.fields)]
+
+
+def parse_agf(text: str, source: str = "<string>", catalog: str = "") -> list[GlassRecord]:
+    """Glass records of AGF text.
+
+    Reads NM, CD and LD records; CC, GC, ED, TD, OD, MD, IT, ``!`` comments and other
+    records are skipped.
+
+    Args:
+        text: AGF file contents.
+        source: File name used in error messages.
+        catalog: Catalog name stored in the records.
+
+    Returns:
+        The records in file order.
+
+    Raises:
+        ValueError: On a malformed NM, CD or LD record, a CD/LD record before any NM, an
+            unsupported formula or a glass without CD record; the message names ``source``
+            and the line number.
+    """
+    records: list[GlassRecord] = []
+    pending: _Pending | None = None
+    for lineno, line in enumerate(text.splitlines(), start=1):
+        tokens = line.split()
+        if not tokens or tokens[0].startswith("!"):
+            continue
+        key, where = tokens[0].upper(), f"{source}:{lineno}"
+        if key == "NM":
+            records += _finish(pending, source, catalog)
+            pending = _Pending(fields=_parse_nm(tokens, where), line=lineno)
+        elif key in ("CD", "LD") and pending is None:
+            raise ValueError(f"{where}: {key} record before any NM record")
+        elif key == "CD":
+            pending.coefficients = _floats(tokens[1:], where, "CD coefficients")
+        elif key == "LD":
+            bounds = _floats(tokens[1:], where, "LD wavelengths")
+            if len(bounds) != 2:
+                raise ValueError(f"{where}: LD needs min and max wavelength, got {tokens[1:]!r}")
+            pending.wavelength_range = (bounds[0], bounds[1])
+    return records + _finish(pending, source, catalog)
+
+
+def _read_records(path: str | os.PathLike, catalog: str | None = None) -> list[GlassRecord]:
+    """Records of an AGF file; the catalog name defaults to the upper-case file stem."""
+    path = os.fspath(path)
+    name = catalog or os.path.splitext(os.path.basename(path))[0].upper()
+    with open(path, "rb") as f:
+        return parse_agf(_decode(f.read()), source=path, catalog=name)
+
+
+def load_agf(path: str | os.PathLike) -> dict[str, CatalogMaterial]:
+    """Materials of a Zemax AGF glass catalog.
+
+    The encoding is detected: UTF-16 (with or without BOM), UTF-8 or latin-1. When a name
+    occurs twice, the later record wins.
+
+    Args:
+        path: The ``.agf`` file.
+
+    Returns:
+        Glass name (as written in the file) → :class:`CatalogMaterial`, in file order. Each
+        material has ``catalog`` set to the upper-case file stem, ``catalog_nd`` and
+        ``catalog_vd`` from its NM record and ``wavelength_range`` (µm) from its LD record.
+
+    Raises:
+        ValueError: If the file is malformed; the message names the file and the line.
+    """
+    return {r.name: r.to_material() for r in _read_records(path)}
+
+
+# ---------------------------------------------------------------------------- registry
+
+_user_catalogs: list[tuple[str, dict[str, GlassRecord | AbstractMaterial]]] = []
+
+
+def _glass_dir():
+    return files("jaxlens") / "data" / "glass"
+
+
+@functools.cache
+def _shipped() -> tuple[tuple[str, dict[str, GlassRecord]], ...]:
+    """Shipped catalogs, parsed once: (name, UPPER glass name → record), in search order."""
+    folder = _glass_dir()
+    paths = {p.name.rsplit(".", 1)[0].upper(): p for p in folder.iterdir()
+             if p.name.lower().endswith(".agf")}
+    order = [c for c in SHIPPED_CATALOGS if c in paths] + sorted(set(paths) - set(SHIPPED_CATALOGS))
+    out = []
+    for cat in order:
+        text = _decode(paths[cat].read_bytes())
+        records = parse_agf(text, source=f"jaxlens/data/glass/{paths[cat].name}", catalog=cat)
+        out.append((cat, {r.name.upper(): r for r in records}))
+    return tuple(out)
+
+
+def register_catalog(source: str | os.PathLike | Mapping[str, AbstractMaterial],
+                     name: str | None = None) -> str:
+    """Add a catalog to the lookup of :func:`get_material`, ahead of the shipped ones.
+
+    Args:
+        source: An AGF file, or a mapping glass name → material.
+        name: Catalog name; defaults to the file stem for a file and ``"USER"`` for a
+            mapping. Registering a name again replaces that catalog.
+
+    Returns:
+        The catalog name (upper case) under which it was registered.
+
+    Raises:
+        ValueError: If the AGF file is malformed.
+    """
+    if isinstance(source, Mapping):
+        cat = (name or "USER").upper()
+        entries: dict = {str(k).upper(): v for k, v in source.items()}
+    else:
+        records = _read_records(source, catalog=name.upper() if name else None)
+        cat = records[0].catalog if records else (name or "USER").upper()
+        entries = {r.name.upper(): r for r in records}
+    _user_catalogs[:] = [(c, e) for c, e in _user_catalogs if c != cat]
+    _user_catalogs.insert(0, (cat, entries))
+    return cat
+
+
+def _search_order(catalogs: str | Iterable[str] | None):
+    """(catalog, entries) pairs to search, user catalogs first."""
+    everything = list(_user_catalogs) + list(_shipped())
+    if catalogs is None:
+        return everything
+    wanted = [catalogs.upper()] if isinstance(catalogs, str) else [c.upper() for c in catalogs]
+    by_name = {}
+    for cat, entries in everything:
+        by_name.setdefault(cat, entries)
+    unknown = [c for c in wanted if c not in by_name]
+    if unknown:
+        raise ValueError(f"Unknown catalog(s) {unknown}; available: {sorted(by_name)}")
+    return [(c, by_name[c]) for c in wanted]
+
+
+def _find(name: str, catalogs) -> tuple[str, GlassRecord | AbstractMaterial] | None:
+    """(catalog, entry) of a glass name or alias, or None."""
+    order = _search_order(catalogs)
+    key = name.strip().upper()
+    for cat, entries in order:
+        if key in entries:
+            return cat, entries[key]
+    alias = _ALIASES.get(key)
+    if alias is not None:
+        for cat, entries in order:
+            if cat == alias[0] and alias[1] in entries:
+                return cat, entries[alias[1]]
+    return None
+
+
+def _unknown(name: str, catalogs) -> ValueError:
+    upper = {n.upper(): n for n in catalog_names(catalogs=catalogs)}
+    close = difflib.get_close_matches(name.strip().upper(), list(upper), n=5, cutoff=0.0)
+    hint = ", ".join(upper[c] for c in close) if close else "none"
+    return ValueError(f"Unknown material {name!r}. Closest catalog matches: {hint}")
+
+
+def get_material(name: str, catalogs: str | Iterable[str] | None = None) -> AbstractMaterial:
+    """A material by name from the registered and shipped catalogs.
+
+    Args:
+        name: Glass name, case-insensitive (``"N-BK7"``, ``"h-k9l"``, ``"E48R"``), an
+            alias (``"PC"``, ``"PS"``, ``"BK7"``…), or ``"AIR"``/``""`` for air.
+        catalogs: Catalog name(s) to search, in order (e.g. ``"CDGM"``); default: all, user
+            catalogs first, then ``SHIPPED_CATALOGS``.
+
+    Returns:
+        A :class:`CatalogMaterial` for AGF glasses, :class:`~jaxlens.materials.Air` for air,
+        or the registered object for catalogs given as mappings.
+
+    Raises:
+        ValueError: If the name is in no searched catalog; the message lists the 5 closest
+            catalog names.
+    """
+    if name.strip().upper() in ("", "AIR"):
+        return Air()
+    found = _find(name, catalogs)
+    if found is None:
+        raise _unknown(name, catalogs)
+    entry = found[1]
+    return entry.to_material() if isinstance(entry, GlassRecord) else entry
+
+
+def catalog_names(catalog: str | None = None,
+                  catalogs: str | Iterable[str] | None = None) -> list[str]:
+    """Names of the available glasses.
+
+    Args:
+        catalog: Only this catalog (shortcut for ``catalogs=[catalog]``).
+        catalogs: Catalogs to list, in order; default: all, in search order.
+
+    Returns:
+        Glass names as written in their catalogs, in search order; a name found in an
+        earlier catalog is not repeated.
+    """
+    seen: dict[str, str] = {}
+    for _, entries in _search_order(catalog if catalog is not None else catalogs):
+        for key, entry in entries.items():
+            seen.setdefault(key, entry.name if entry.name else key)
+    return list(seen.values())
+
+
+def _nd_vd(entry: GlassRecord | AbstractMaterial) -> tuple[float, float]:
+    """Catalog nd and Vd, or values computed from the index for plain materials."""
+    if isinstance(entry, GlassRecord):
+        return entry.nd, entry.vd
+    if isinstance(entry, CatalogMaterial) and entry.catalog_nd is not None:
+        return entry.catalog_nd, entry.catalog_vd
+    n = np.asarray(entry.index(jnp.asarray([LAMBDA_D, LAMBDA_F, LAMBDA_C])), dtype=float)
+    return float(n[0]), float((n[0] - 1.0) / (n[1] - n[2]))
+
+
+def glass_info(name: str, catalogs: str | Iterable[str] | None = None) -> tuple[str, float, float]:
+    """Catalog, nd and Vd of a glass.
+
+    Args:
+        name: As for :func:`get_material` (not air).
+        catalogs: As for :func:`get_material`.
+
+    Returns:
+        (catalog name, nd, Vd); nd and Vd are the catalog's NM-record values, or computed at
+        the d, F and C lines for materials registered as objects without catalog data.
+
+    Raises:
+        ValueError: If the name is in no searched catalog.
+    """
+    found = _find(name, catalogs)
+    if found is None:
+        raise _unknown(name, catalogs)
+    nd, vd = _nd_vd(found[1])
+    return found[0], nd, vd

@@ -1,0 +1,303 @@
+"""Glass catalogs: shipped data against catalog nd/Vd, AGF reader, name lookup."""
+
+import equinox as eqx
+import jax
+import jax.numpy as jnp
+import numpy as np
+import pytest
+
+from jaxlens import catalog
+from jaxlens.catalog import (
+    CatalogMaterial,
+    catalog_names,
+    get_material,
+    glass_info,
+    load_agf,
+    register_catalog,
+)
+from jaxlens.materials import (
+    EXTENDED2_POWERS,
+    EXTENDED3_POWERS,
+    EXTENDED_POWERS,
+    LAMBDA_C,
+    LAMBDA_D,
+    LAMBDA_F,
+    Air,
+    Conrady,
+    Handbook1,
+    Handbook2,
+    Herzberger,
+    Laurent,
+    ModelGlass,
+    Schott,
+    Sellmeier,
+    Sellmeier2,
+    Sellmeier4,
+    abbe_number,
+)
+
+DFC = jnp.asarray([LAMBDA_D, LAMBDA_F, LAMBDA_C])
+
+# Real catalog rows (SCHOTT N-BK7, CDGM H-K9L, Zemax MISC BASF5, HIKARI Q-LASFH19S) with the
+# records a reader must skip; formulas 2, 1, 5 and 13.
+SMALL_AGF = "\n".join([
+    "CC Test catalogue, Glas für Tests",
+    "! a comment line",
+    "NM N-BK7 2 517642.251 1.5168 64.17 0 1",
+    "GC",
+    "ED 7.100000 8.300000 2.510000 -0.000900 0",
+    "CD 1.039612120E+00 6.000698670E-03 2.317923440E-01 2.001791440E-02 "
+    "1.010469450E+00 1.035606530E+02 0 0",
+    "TD 1.860000E-06 1.310000E-08 -1.370000E-11 4.340000E-07 "
+    "6.270000E-10 1.700000E-01 2.0E+01",
+    "OD 1.0000 1.0000 0.0000 1.0000 2.3000 2.3000",
+    "LD 3.00000E-01 2.50000E+00",
+    "IT 3.00000E-01 5.00000E-02 2.50000E+01",
+    "NM H-K9L 1 517642 1.51680 64.20 0 1 0",
+    "CD 2.271969406E+000 -9.917218687E-003 1.036975245E-002 "
+    "3.119037979E-004 -2.645821452E-005 1.647508475E-006",
+    "LD 3.65000000E-001 1.71100000E+000",
+    "NM BASF5 5 0 1.603233 42.504788 0 0 0",
+    "CD 1.574103270E+000 1.397861490E-002 8.300451100E-004 0 0 0 0 0 0 0",
+    "LD 3.34000000E-001 2.32500000E+000",
+    "NM Q-LASFH19S 13 1 1.820980 42.656702 0 0 1",
+    "CD 3.225663110E+000 -1.267191580E-002 -1.225842450E-004 3.069002630E-002 6.499585110E-004 "
+    "1.062999400E-005 1.207741490E-006 0 0 0",
+    "LD 3.65015000E-001 2.05809000E+000",
+    "",
+])
+
+
+def _nd_vd(material):
+    n = np.asarray(material.index(DFC))
+    return float(n[0]), float((n[0] - 1.0) / (n[1] - n[2]))
+
+
+@pytest.fixture
+def fresh_registry(monkeypatch):
+    """Isolate tests that register catalogs from the module-level registry."""
+    monkeypatch.setattr(catalog, "_user_catalogs", [])
+
+
+# ---------------------------------------------------------------------------- shipped data
+
+
+def test_shipped_catalogs_and_required_glasses():
+    counts = {c: len(catalog_names(catalog=c)) for c in catalog.SHIPPED_CATALOGS}
+    assert counts == {"SCHOTT": 155, "CDGM": 205, "PLASTICS": 11, "MISC": 13}
+    schott = set(catalog_names(catalog="SCHOTT"))
+    for name in ["N-BK7", "N-SF11", "N-SK16", "F2", "F5", "N-SSK2", "N-SK2", "N-LAK9",
+                 "N-LAK14", "N-LAK22", "N-LASF9", "N-LASF44", "N-SF5", "N-SF6", "N-F2",
+                 "N-BAF10", "N-BAK1", "N-KF9"]:
+        assert name in schott, name
+    cdgm = set(catalog_names(catalog="CDGM"))
+    for name in ["H-K9L", "H-ZF52A", "H-ZF7LA", "H-LAK51A", "H-ZLAF52", "H-BAK7"]:
+        assert name in cdgm, name
+    plastics = set(catalog_names(catalog="PLASTICS"))
+    assert {"PMMA", "POLYCARB", "POLYSTYR", "COC", "E48R", "OKP4", "OKP4HT"} <= plastics
+
+
+def test_every_shipped_glass_reproduces_its_catalog_nd_and_vd():
+    # Unnamed models share one compilation per formula class (names are static fields).
+    index_dfc = jax.jit(lambda model: model.index(DFC))
+    failures = []
+    for cat, entries in catalog._shipped():
+        for r in entries.values():
+            n = np.asarray(index_dfc(catalog._dispersion_model(r.formula, r.coefficients, "")))
+            nd, vd = n[0], (n[0] - 1.0) / (n[1] - n[2])
+            if abs(nd - r.nd) > 1e-4 or abs(vd - r.vd) > 0.3:
+                failures.append(f"{cat} {r.name}: nd {nd:.6f} vs {r.nd}, Vd {vd:.3f} vs {r.vd}")
+    assert not failures, "\n".join(failures)
+
+
+@pytest.mark.parametrize("wavelength, published", [
+    (0.4046561, 1.53024), (0.4358343, 1.52668), (0.4861327, 1.52238), (0.5460740, 1.51872),
+    (0.5875618, 1.51680), (0.6328000, 1.51509), (0.6562725, 1.51432), (1.0600000, 1.50669),
+    (1.5296000, 1.50091),
+])
+def test_n_bk7_matches_schott_data_sheet(wavelength, published):
+    assert float(get_material("N-BK7").index(wavelength)) == pytest.approx(published, abs=1e-5)
+
+
+@pytest.mark.parametrize("name, nd, vd, tol_nd, tol_vd", [
+    ("N-BK7", 1.51680, 64.17, 2e-5, 0.05),
+    ("F2", 1.62004, 36.37, 2e-5, 0.05),
+    ("N-SF11", 1.78472, 25.68, 2e-5, 0.05),
+    ("PMMA", 1.4917, 57.4, 5e-4, 0.3),
+    ("PC", 1.585, 30.0, 1e-3, 0.3),
+    ("E48R", 1.531, 56.0, 1e-3, 0.3),
+    ("OKP4", 1.607, 27.0, 1e-3, 0.3),
+    ("OKP4HT", 1.632, 23.0, 1e-3, 0.3),
+])
+def test_key_glasses(name, nd, vd, tol_nd, tol_vd):
+    got_nd, got_vd = _nd_vd(get_material(name))
+    assert got_nd == pytest.approx(nd, abs=tol_nd)
+    assert got_vd == pytest.approx(vd, abs=tol_vd)
+
+
+def test_shipped_catalogs_are_parsed_once():
+    assert catalog._shipped() is catalog._shipped()
+
+
+# ---------------------------------------------------------------------------- lookup
+
+
+@pytest.mark.parametrize("query, name, cat", [
+    ("n-bk7", "N-BK7", "SCHOTT"), (" N-SF11 ", "N-SF11", "SCHOTT"), ("h-k9l", "H-K9L", "CDGM"),
+    ("E48R", "E48R", "PLASTICS"), ("zeonex_e48r", "E48R", "PLASTICS"),
+    ("PC", "POLYCARB", "PLASTICS"), ("polycarbonate", "POLYCARB", "PLASTICS"),
+    ("PS", "POLYSTYR", "PLASTICS"), ("BK7", "N-BK7", "SCHOTT"), ("SK16", "N-SK16", "SCHOTT"),
+])
+def test_names_and_aliases(query, name, cat):
+    material = get_material(query)
+    assert isinstance(material, CatalogMaterial)
+    assert (material.name, material.catalog) == (name, cat)
+    assert glass_info(query)[0] == cat
+
+
+@pytest.mark.parametrize("query", ["AIR", "air", "", "  "])
+def test_air(query):
+    assert isinstance(get_material(query), Air)
+
+
+def test_catalog_order_and_filter():
+    assert glass_info("F2") == ("SCHOTT", 1.62004, 36.37)
+    assert glass_info("F2", catalogs="CDGM") == ("CDGM", 1.61293, 36.96)
+    assert get_material("F2", catalogs=["cdgm", "schott"]).catalog == "CDGM"
+    with pytest.raises(ValueError, match="Unknown catalog"):
+        get_material("F2", catalogs="NOPE")
+    with pytest.raises(ValueError, match="Closest catalog matches"):
+        get_material("N-BK7", catalogs="CDGM")
+
+
+def test_unknown_glass_lists_close_matches():
+    with pytest.raises(ValueError) as err:
+        get_material("N-BK8")
+    message = str(err.value)
+    assert "N-BK8" in message and "N-BK7" in message
+    suggestions = message.split("Closest catalog matches:")[1].split(",")
+    assert 3 <= len(suggestions) <= 5
+    with pytest.raises(ValueError, match="N-BK7"):
+        glass_info("n-bk8")
+
+
+def test_catalog_material_metadata_jit_and_grad():
+    glass = get_material("N-SF11")
+    assert (glass.catalog_nd, glass.catalog_vd, glass.formula) == (1.78472, 25.68, 2)
+    assert glass.wavelength_range == (0.37, 2.5)
+    index = jax.jit(lambda m, w: m.index(w))(glass, jnp.asarray([0.5, 0.6]))
+    assert index.shape == (2,)
+    grad = eqx.filter_grad(lambda m: m.index(0.55))(glass)
+    assert np.all(np.isfinite(grad.model.B)) and float(jnp.abs(grad.model.B).sum()) > 0
+
+
+# ---------------------------------------------------------------------------- AGF reader
+
+
+@pytest.mark.parametrize("encoding", ["utf-16", "utf-16-le", "utf-8", "latin-1"])
+def test_load_agf_round_trip(tmp_path, encoding):
+    path = tmp_path / "testcat.agf"
+    path.write_bytes(SMALL_AGF.encode(encoding))
+    glasses = load_agf(path)
+    assert list(glasses) == ["N-BK7", "H-K9L", "BASF5", "Q-LASFH19S"]
+    expected = {"N-BK7": (1.5168, 64.17, 2, (0.3, 2.5)),
+                "H-K9L": (1.5168, 64.20, 1, (0.365, 1.711)),
+                "BASF5": (1.603233, 42.504788, 5, (0.334, 2.325)),
+                "Q-LASFH19S": (1.82098, 42.656702, 13, (0.365015, 2.05809))}
+    for name, (nd, vd, formula, band) in expected.items():
+        glass = glasses[name]
+        assert (glass.name, glass.catalog, glass.formula) == (name, "TESTCAT", formula)
+        assert (glass.catalog_nd, glass.catalog_vd, glass.wavelength_range) == (nd, vd, band)
+        got_nd, got_vd = _nd_vd(glass)
+        assert got_nd == pytest.approx(nd, abs=2e-5)
+        assert got_vd == pytest.approx(vd, abs=0.05)
+
+
+@pytest.mark.parametrize("text, line, match", [
+    ("CC x\nNM G 2 0 1.5 60 0 1\nCD 1.0 abc 0.2\n", 3, "CD coefficients"),
+    ("CC x\nCD 1 2 3\n", 2, "before any NM"),
+    ("CC x\n\nNM G 2 0 1.5\nCD 1 0.01\n", 3, "NM needs"),
+    ("NM G 99 0 1.5 60 0 1\nCD 1 0.01\n", 1, "unsupported dispersion formula 99"),
+    ("NM G two 0 1.5 60\nCD 1 0.01\n", 1, "formula number"),
+    ("NM G 2 0 x 60\nCD 1 0.01\n", 1, "nd and Vd"),
+    ("NM G 2 0 1.5 60 0 1\nCD 1 0.01\nLD 0.4\n", 3, "LD needs"),
+    ("NM G 2 0 1.5 60 0 1\nGC\nNM H 2 0 1.5 60 0 1\nCD 1 0.01\n", 1, "G has no CD"),
+    ("NM G 2 0 1.5 60 0 1\nCD 1 0.01\nNM H 2 0 1.5 60 0 1\n", 3, "H has no CD"),
+])
+def test_malformed_agf_names_file_and_line(tmp_path, text, line, match):
+    path = tmp_path / "broken.agf"
+    path.write_text(text, encoding="utf-16")
+    with pytest.raises(ValueError, match=match) as err:
+        load_agf(path)
+    assert f"broken.agf:{line}:" in str(err.value)
+
+
+def test_register_catalog_file_and_mapping(tmp_path, fresh_registry):
+    path = tmp_path / "mine.agf"
+    path.write_text(SMALL_AGF.replace("N-BK7", "MY-BK7"), encoding="utf-16")
+    assert register_catalog(path) == "MINE"
+    assert glass_info("my-bk7") == ("MINE", 1.5168, 64.17)
+    assert "MY-BK7" in catalog_names(catalog="MINE")
+    assert get_material("H-K9L").catalog == "MINE"  # registered catalogs come first
+    model = ModelGlass(1.6, 40.0, name="Model-1")
+    assert register_catalog({"Model-1": model}, name="designs") == "DESIGNS"
+    assert get_material("model-1") is model
+    cat, nd, vd = glass_info("MODEL-1")
+    assert cat == "DESIGNS"
+    assert nd == pytest.approx(1.6, abs=1e-12) and vd == pytest.approx(40.0, abs=1e-9)
+
+
+# ---------------------------------------------------------------------------- formulas
+
+
+@pytest.mark.parametrize("nd, vd", [(1.5168, 64.17), (1.7, 30.0), (1.4917, 57.4)])
+def test_model_glass_is_exact_at_d_line(nd, vd):
+    assert float(ModelGlass(nd, vd).index(0.5875618)) == nd
+    assert float(abbe_number(ModelGlass(nd, vd))) == pytest.approx(vd, rel=1e-12)
+
+
+@jax.jit
+def _formula_indices(w):
+    """Indices of every formula class at ``w`` (µm), compiled once."""
+    schott = [2.27, -9.9e-3, 1.04e-2, 3.1e-4, -2.6e-5, 1.6e-6]
+    ext3 = [schott[0], schott[1], 0.0, *schott[2:], 0.0, 0.0]
+    return {
+        "schott": Schott(schott).index(w),
+        "extended": Laurent(schott + [0.0, 0.0], EXTENDED_POWERS).index(w),
+        "extended2": Laurent(schott + [0.0, 0.0], EXTENDED2_POWERS).index(w),
+        "extended3": Laurent(ext3, EXTENDED3_POWERS).index(w),
+        "sellmeier1term": Sellmeier([1.04], [6.0e-3]).index(w),
+        "sellmeier2term": Sellmeier([1.04, 0.23], [6.0e-3, 2.0e-2]).index(w),
+        "sellmeier4": Sellmeier4([1.0, 1.04, 6.0e-3, 0.23, 2.0e-2]).index(w),
+        "handbook2": Handbook2([1.0, 1.04, 6.0e-3, 0.0]).index(w),
+        "sellmeier2_as_1term": Sellmeier2([0.0, 1.04, 6.0e-3**0.5, 0.0, 3.0]).index(w),
+        "sellmeier2": Sellmeier2([0.1, 1.0, 0.08, 0.02, 0.15]).index(w),
+        "handbook1": Handbook1([2.3, 0.01, 0.02, 0.01]).index(w),
+        "herzberger": Herzberger([1.5, 5e-3, 1e-4, -2e-3, 1e-5, -1e-7]).index(w),
+        "conrady": Conrady([1.57, 0.014, 8.3e-4]).index(w),
+    }
+
+
+def test_formula_classes_agree_with_each_other_and_their_definitions():
+    w = np.linspace(0.4, 1.0, 7)
+    w2 = w**2
+    n = {k: np.asarray(v) for k, v in _formula_indices(jnp.asarray(w)).items()}
+    for key in ["extended", "extended2", "extended3"]:
+        np.testing.assert_allclose(n[key], n["schott"], err_msg=key)
+    np.testing.assert_allclose(n["sellmeier4"], n["sellmeier2term"])
+    np.testing.assert_allclose(n["handbook2"], n["sellmeier1term"])
+    np.testing.assert_allclose(n["sellmeier2_as_1term"], n["sellmeier1term"])
+    np.testing.assert_allclose(
+        n["sellmeier2"], np.sqrt(1.1 + w2 / (w2 - 0.08**2) + 0.02 / (w2 - 0.15**2)))
+    np.testing.assert_allclose(n["handbook1"], np.sqrt(2.3 + 0.01 / (w2 - 0.02) - 0.01 * w2))
+    h = [1.5, 5e-3, 1e-4, -2e-3, 1e-5, -1e-7]
+    big_l = 1 / (w2 - 0.028)
+    np.testing.assert_allclose(
+        n["herzberger"],
+        h[0] + h[1] * big_l + h[2] * big_l**2 + h[3] * w2 + h[4] * w2**2 + h[5] * w2**3)
+    np.testing.assert_allclose(n["conrady"], 1.57 + 0.014 / w + 8.3e-4 / w**3.5)
+
+
+def test_laurent_checks_its_coefficient_count():
+    with pytest.raises(ValueError, match="one coefficient per power"):
+        Laurent([1.0, 2.0], EXTENDED_POWERS)
