@@ -5,9 +5,17 @@ toward +z and surface 1's vertex is at z = 0. See ``jaxlens.lens`` and ``jaxlens
 for the sign conventions.
 """
 
+from . import analysis as analysis
+from . import catalog as catalog
 from . import paraxial as paraxial
 from . import sampling as sampling
 from . import zoo as zoo
+from .catalog import CatalogMaterial as CatalogMaterial
+from .catalog import catalog_names as catalog_names
+from .catalog import get_material as get_material
+from .catalog import glass_info as glass_info
+from .catalog import load_agf as load_agf
+from .catalog import register_catalog as register_catalog
 from .lens import Lens as Lens
 from .lens import Sensor as Sensor
 from .materials import AbstractMaterial as AbstractMaterial

@@ -20,10 +20,20 @@ from __future__ import annotations
 import equinox as eqx
 import jax
 import jax.numpy as jnp
+import numpy as np
 from jaxtyping import Array, Float
 
 from .materials import AbstractMaterial, Air
 from .surfaces import AbstractSurface, Standard
+
+
+def _distance(x):
+    """None (or inf) means an object at infinity; that is static structure, not a number."""
+    if x is None:
+        return None
+    if not isinstance(x, jax.core.Tracer) and bool(np.isinf(np.asarray(x))):
+        return None
+    return jnp.asarray(x)
 
 
 class Sensor(eqx.Module):
@@ -59,7 +69,7 @@ class Lens(eqx.Module):
     fields: Float[Array, " f"] = eqx.field(converter=jnp.asarray, default=(0.0,))
     wavelengths: Float[Array, " w"] = eqx.field(converter=jnp.asarray, default=(0.5875618,))
     primary: int = eqx.field(static=True, default=0)
-    object_distance: Float[Array, ""] = eqx.field(converter=jnp.asarray, default=jnp.inf)
+    object_distance: Float[Array, ""] | None = eqx.field(converter=_distance, default=None)
     object_material: AbstractMaterial = Air()
     image: AbstractSurface = Standard()
     sensor: Sensor | None = None
@@ -99,11 +109,8 @@ class Lens(eqx.Module):
 
     @property
     def object_at_infinity(self) -> bool:
-        """Static check: True if the object distance is infinite (concrete values only)."""
-        try:
-            return bool(jnp.isinf(self.object_distance))
-        except jax.errors.ConcretizationTypeError:
-            return False
+        """True if the object is at infinity (static)."""
+        return self.object_distance is None
 
     def indices(self, wavelength) -> list[Array]:
         """Refractive index before surface 1 and after each surface: n+1 arrays."""
