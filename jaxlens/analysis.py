@@ -31,6 +31,7 @@ def _fields_array(fields) -> Array:
     return f.reshape(-1) if f.ndim <= 1 else f.reshape(-1, 2)
 
 
+@eqx.filter_jit
 def spot_rays(
     lens: Lens,
     field,
@@ -72,6 +73,7 @@ def _centroid(p, w):
     return jnp.sum(w[..., None] * p, axis=-2) / jnp.maximum(jnp.sum(w, axis=-1), 1.0)[..., None]
 
 
+@eqx.filter_jit
 def rms_spot(
     lens: Lens,
     fields=None,
@@ -138,6 +140,7 @@ class Distortion(eqx.Module):
     percent_paraxial: Float[Array, " F"]
 
 
+@eqx.filter_jit
 def distortion(lens: Lens, fields=None, wavelength=None) -> Distortion:
     """Distortion of the real chief ray (y fields, degrees) at ``wavelength`` (default primary).
 
@@ -158,6 +161,7 @@ def distortion(lens: Lens, fields=None, wavelength=None) -> Distortion:
     return Distortion(fields, y, ftan, ypar, pct(y, ftan), pct(y, ypar))
 
 
+@eqx.filter_jit
 def clear_semi_diameters(lens: Lens, fields=None, n_rim: int = 64) -> Float[Array, " n"]:
     """Clear semi-diameter of every surface (mm).
 

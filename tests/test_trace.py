@@ -1,0 +1,247 @@
+"""Ray tracing: reference cases, analytic answers, gradients, degenerate geometry."""
+
+import jax
+import jax.numpy as jnp
+import numpy as np
+import pytest
+from helpers import refcase_lens, refcase_rays
+
+import jaxlens as jl
+from jaxlens import analysis, paraxial
+
+CASES = ["cooke_triplet", "double_gauss"]
+
+
+@pytest.mark.parametrize("case", CASES)
+def test_refcase_intercepts_float64(refcase_dir, case):
+    lens, d = refcase_lens(refcase_dir / f"{case}.json")
+    rays, ref = refcase_rays(d)
+    out = jl.trace(lens, rays)
+    assert bool(out.valid.all())
+    assert np.abs(np.asarray(out.origin) - ref[:, :3]).max() < 1e-9
+    assert np.abs(np.asarray(out.direction) - ref[:, 3:]).max() < 1e-12
+
+
+@pytest.mark.parametrize("case", CASES)
+def test_refcase_intercepts_float32(refcase_dir, case):
+    lens, d = refcase_lens(refcase_dir / f"{case}.json")
+    rays, ref = refcase_rays(d, jnp.float32)
+    out = jl.trace(lens, rays)
+    assert out.origin.dtype == jnp.float32
+    assert np.abs(np.asarray(out.origin, np.float64) - ref[:, :3]).max() < 1e-4
+
+
+@pytest.mark.parametrize("case", CASES)
+def test_refcase_paraxial(refcase_dir, case):
+    lens, d = refcase_lens(refcase_dir / f"{case}.json")
+    p = jl.paraxial_data(lens)
+    ref = d["paraxial"]
+    assert float(p.efl) == pytest.approx(ref["EFL"], rel=1e-10)
+    assert float(p.bfl) == pytest.approx(ref["BFL"], rel=1e-10)
+    assert float(p.entrance_pupil_z) == pytest.approx(ref["entrance_pupil_z"], rel=1e-10)
+    xpl = float(p.exit_pupil_z - p.image_z)
+    assert xpl == pytest.approx(ref["exit_pupil_optiland_XPL"], rel=1e-9)
+    assert float(p.fnum) == pytest.approx(ref["FNO"], rel=1e-10)
+    for f, h in ref["paraxial_image_height_ftan"].items():
+        assert float(p.efl * np.tan(np.deg2rad(float(f)))) == pytest.approx(h, rel=1e-10, abs=1e-12)
+
+
+@pytest.mark.parametrize("case", CASES)
+def test_refcase_rms_and_distortion(refcase_dir, case):
+    lens, d = refcase_lens(refcase_dir / f"{case}.json")
+    fields = [f["field_angle_deg"] for f in d["rms_spot"]]
+    wl_keys = list(d["rms_spot"][0]["per_wavelength"])
+    for ref_kind in ("centroid", "chief"):
+        r = analysis.rms_spot(lens, fields, reference=ref_kind)
+        for i, f in enumerate(d["rms_spot"]):
+            for j, k in enumerate(wl_keys):
+                want = f["per_wavelength"][k][f"rms_vs_{ref_kind}"]
+                assert float(r.per_wavelength[i, j]) == pytest.approx(want, rel=1e-9)
+            want = f["polychromatic_equal_weights"][f"rms_vs_{ref_kind}"]
+            assert float(r.polychromatic[i]) == pytest.approx(want, rel=1e-9)
+        assert np.all(np.asarray(r.valid_fraction) == 1.0)
+    dist = analysis.distortion(lens, [x["field_angle_deg"] for x in d["distortion"]])
+    for i, x in enumerate(d["distortion"]):
+        assert float(dist.chief_height[i]) == pytest.approx(x["chief_ray_y_real"], abs=1e-9)
+        assert float(dist.percent_ftan[i]) == pytest.approx(x["distortion_pct_ftan"], abs=1e-9)
+        assert float(dist.percent_paraxial[i]) == pytest.approx(
+            x["distortion_pct_vs_paraxial_chief_at_image"], abs=1e-9
+        )
+
+
+def test_snell_at_a_plane():
+    n2 = 1.5
+    lens = jl.Lens((jl.Plane(),), jnp.array([10.0]), (jl.ModelGlass(n2, 50.0),))
+    th = np.deg2rad(30.0)
+    rays = jl.Rays(jnp.array([[0.0, 0.0, -1.0]]), jnp.array([[0.0, np.sin(th), np.cos(th)]]),
+                   0.5875618)
+    out = jl.trace(lens, rays)
+    assert float(out.direction[0, 1]) == pytest.approx(np.sin(th) / n2, rel=1e-14)
+    # Optical path: 1 mm in air at an angle, then 10 mm along z in glass.
+    t_glass = 10.0 / np.sqrt(1 - (np.sin(th) / n2) ** 2)
+    assert float(out.opl[0]) == pytest.approx(1 / np.cos(th) + n2 * t_glass, rel=1e-13)
+
+
+def test_thick_lens_focal_length():
+    n, r1, r2, t = 1.6, 30.0, -45.0, 6.0
+    lens = jl.Lens((jl.Sphere(1 / r1), jl.Sphere(1 / r2)), jnp.array([t, 50.0]),
+                   (jl.ModelGlass(n, 40.0), jl.Air()))
+    power = (n - 1) * (1 / r1 - 1 / r2 + (n - 1) * t / (n * r1 * r2))
+    assert float(jl.efl(lens)) == pytest.approx(1 / power, rel=1e-13)
+    # A paraxial real ray crosses the axis at the BFL.
+    rays = jl.Rays(jnp.array([[0.0, 1e-5, -1.0]]), jnp.array([[0.0, 0.0, 1.0]]), 0.5875618)
+    last = jl.trace_path(lens, rays)[-2]
+    z_cross = last.origin[0, 2] - last.origin[0, 1] * last.direction[0, 2] / last.direction[0, 1]
+    assert float(z_cross - t) == pytest.approx(float(jl.bfl(lens)), rel=1e-8)
+
+
+def test_tir_miss_clip_backward_flags():
+    glass = jl.ModelGlass(1.5, 60.0)
+    # TIR at the second (flat) surface for a steep ray inside glass.
+    lens = jl.Lens((jl.Plane(), jl.Conic(0.05, 0.0, semi_diameter=3.0)), jnp.array([5.0, 10.0]),
+                   (glass, jl.Air()))
+    o = jnp.array([[0.0, 0.0, -1.0], [0.0, 2.9, -1.0], [0.0, 3.5, -1.0], [0.0, 30.0, -1.0]])
+    dirs = jnp.array([[0.0, 0.0, 1.0]] * 4)
+    out = jl.trace(lens, jl.Rays(o, dirs, 0.55))
+    assert list(np.asarray(out.valid)) == [True, True, False, False]
+    assert bool(jnp.all(jnp.isfinite(out.origin)))
+    tir = jl.Lens((jl.Plane(), jl.Plane()), jnp.array([5.0, 10.0]), (jl.ModelGlass(1.0, 60.0),
+                                                                    jl.ModelGlass(1.0, 60.0)))
+    s = np.sin(np.deg2rad(80.0))
+    inside = jl.Lens((jl.Plane(),), jnp.array([5.0]), (jl.Air(),), object_material=glass)
+    out = jl.trace(inside, jl.Rays(jnp.array([[0.0, 0.0, -1.0]]),
+                                   jnp.array([[0.0, s, np.sqrt(1 - s * s)]]), 0.55))
+    assert not bool(out.valid[0])
+    del tir
+
+
+# --- gradients ------------------------------------------------------------------------
+
+
+def _asphere_lens():
+    """A three-element lens with conics and asphere terms (every parameter kind)."""
+    g1, g2 = jl.ModelGlass(1.62, 60.3), jl.ModelGlass(1.62, 36.4)
+    s = (
+        jl.EvenAsphere(c=1 / 22.0, k=-0.3, coeffs=jnp.array([1e-4, -2e-6, 1e-8])),
+        jl.Standard(c=-1 / 435.0, k=0.0),
+        jl.EvenAsphere(c=-1 / 22.2, k=0.5, coeffs=jnp.array([0.0, 3e-6, -1e-8])),
+        jl.Standard(c=1 / 20.3, k=0.0),
+        jl.Hybrid(c=1 / 79.7, k=1.0, coeffs=jnp.array([0.0, 1e-6]), odd_x=jnp.array([1e-6]),
+                  odd_y=jnp.array([2e-6])),
+        jl.Standard(c=-1 / 18.4, k=0.0),
+    )
+    t = jnp.array([3.26, 6.01, 1.0, 4.75, 2.95, 42.2])
+    mats = (g1, jl.Air(), g2, jl.Air(), g1, jl.Air())
+    return jl.Lens(s, t, mats, stop=2, epd=10.0, fields=jnp.array([0.0, 14.0]),
+                   wavelengths=jnp.array([0.4861327, 0.5875618, 0.6562725]), primary=1)
+
+
+def _params(lens):
+    return eqx_filter(lens)
+
+
+def eqx_filter(lens):
+    import equinox as eqx
+
+    return eqx.partition(lens, eqx.is_inexact_array)
+
+
+def _rms(lens):
+    r = analysis.rms_spot(lens, jnp.array([0.0, 14.0]), pupil=jl.sampling.pupil_grid(7))
+    return jnp.sum(r.polychromatic)
+
+
+def _leaves_to_check(lens):
+    """(name, getter) for every curvature, conic, asphere coefficient and thickness."""
+    out = []
+    for i, s in enumerate(lens.surfaces):
+        out.append((f"c{i}", lambda L, i=i: L.surfaces[i].c, None))
+        out.append((f"k{i}", lambda L, i=i: L.surfaces[i].k, None))
+        if hasattr(s, "coeffs"):
+            for j in range(s.coeffs.shape[0]):
+                out.append((f"a{i}_{j}", lambda L, i=i: L.surfaces[i].coeffs, j))
+        if isinstance(s, jl.Hybrid):
+            out.append((f"ox{i}", lambda L, i=i: L.surfaces[i].odd_x, 0))
+    for j in range(lens.thickness.shape[0]):
+        out.append((f"t{j}", lambda L: L.thickness, j))
+    return out
+
+
+def _fd_check(fn, lens, rel=1e-6):
+    import equinox as eqx
+
+    grads = jax.grad(fn)(lens)
+    for name, get, j in _leaves_to_check(lens):
+        g = get(grads) if j is None else get(grads)[j]
+        x = get(lens) if j is None else get(lens)[j]
+        h = 1e-6 * max(1.0, abs(float(x))) if j is None or "t" in name else 1e-6 * 10.0 ** (
+            -2 * (j + 1)
+        )
+        if name.startswith("ox"):
+            h = 1e-9
+
+        def shifted(dx, get=get, j=j):
+            new = get(lens) + dx if j is None else get(lens).at[j].add(dx)
+            return float(fn(eqx.tree_at(get, lens, new)))
+
+        fd = (shifted(h) - shifted(-h)) / (2 * h)
+        assert float(g) == pytest.approx(fd, rel=rel, abs=1e-9 * max(1.0, abs(fd))), name
+
+
+def test_rms_gradient_matches_finite_differences():
+    _fd_check(jax.jit(_rms), _asphere_lens())
+
+
+def test_efl_gradient_matches_finite_differences():
+    _fd_check(jax.jit(lambda L: paraxial.efl(L)), _asphere_lens())
+
+
+def test_gradients_finite_in_degenerate_cases():
+    """c = 0, k = -1, on-axis rays, grazing rays and TIR rays give finite gradients."""
+    glass = jl.ModelGlass(1.5, 60.0)
+    lens = jl.Lens((jl.Conic(0.0, -1.0), jl.Conic(-0.02, -1.0)), jnp.array([4.0, 40.0]),
+                   (glass, jl.Air()), epd=8.0)
+    s = np.sin(np.deg2rad(89.9))
+    o = jnp.array([[0.0, 0.0, -1.0], [0.0, 1.0, -1.0], [0.0, 0.0, -1.0], [0.0, 3.0, -1.0]])
+    d = jnp.array([[0.0, 0.0, 1.0], [0.0, 0.0, 1.0], [0.0, s, np.sqrt(1 - s * s)],
+                   [0.0, 0.999, np.sqrt(1 - 0.999**2)]])
+
+    def loss(L):
+        out = jl.trace(L, jl.Rays(o, d, 0.55))
+        return jnp.sum(jnp.where(out.valid[:, None], out.origin, 0.0) ** 2) + jnp.sum(out.opl)
+
+    g = jax.grad(loss)(lens)
+    leaves = jax.tree_util.tree_leaves(g)
+    assert all(bool(jnp.all(jnp.isfinite(x))) for x in leaves)
+
+
+def test_jit_vmap_grad_consistency():
+    lens = _asphere_lens()
+    pupil = jl.sampling.pupil_grid(5)
+    rays = jl.sampling.collimated(lens, 10.0, pupil)
+    rays = jl.Rays(rays.origin, rays.direction, jnp.full(rays.shape, 0.55))
+    a = jl.trace(lens, rays)
+    b = jax.vmap(lambda r: jl.trace(lens, r))(rays.reshape(-1, 1)).reshape(-1)
+    np.testing.assert_allclose(np.asarray(a.origin), np.asarray(b.origin), rtol=0, atol=1e-12)
+    c = jax.jit(jl.trace)(lens, rays[:7])
+    np.testing.assert_allclose(np.asarray(a.origin[:7]), np.asarray(c.origin), atol=1e-12)
+
+
+def test_real_aiming_hits_stop():
+    lens = _asphere_lens()
+    pupil = jnp.array([[0.0, 1.0], [0.0, -1.0], [1.0, 0.0], [0.0, 0.0]])
+    rays = jl.sampling.collimated(lens, 14.0, pupil, aim="real")
+    at_stop = jl.trace_path(lens, rays, upto=lens.stop)[-1]
+    r_stop = jl.paraxial_data(lens).stop_semi_diameter
+    np.testing.assert_allclose(np.asarray(at_stop.origin[:, :2]), np.asarray(pupil * r_stop),
+                               atol=1e-9)
+
+
+def test_self_intersection_flags_overlap():
+    good = _asphere_lens()
+    assert bool(analysis.self_intersection(good).ok)
+    bad = jl.Lens((jl.Sphere(0.2), jl.Sphere(-0.2)), jnp.array([1.0, 20.0]),
+                  (jl.ModelGlass(1.5, 60.0), jl.Air()), epd=6.0)
+    check = analysis.self_intersection(bad, semi_diameters=jnp.array([3.0, 3.0]))
+    assert not bool(check.ok)
+    assert "after surfaces 1" in check.summary()
