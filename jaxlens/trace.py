@@ -8,8 +8,9 @@ Conventions:
     a ray that would have to travel backward (t < 0) is invalid.
 
 Intersections:
-    The base conic is intersected in closed form (the numerically stable root of the
-    quadratic). Surfaces with polynomial terms then take ``newton_iters`` Newton steps
+    Planes, spheres and conics are intersected in closed form (the numerically stable
+    roots of the quadratic), which is exact and differentiable as it stands. Surfaces
+    with polynomial terms start from that root and take ``newton_iters`` Newton steps
     on F(t) = z(t) − sag(x(t), y(t)). Those iterations carry no gradient. One last
     Newton step is taken with gradients switched on and the derivative F'(t) held
     fixed; at the converged root its derivative is exactly the implicit-function
@@ -44,27 +45,28 @@ def _where_nonzero(x):
 def _conic_root(surface: AbstractSurface, o, d, t_min):
     """Closed-form intersection with the base conic; returns (t, hit).
 
-    Of the two roots of c(x² + y²) + c(1+k)z² − 2z = 0, only those on the sheet through
-    the vertex (1 − c(1+k)z ≥ 0) and with t ≥ t_min count; the first of them along the
-    ray is taken.
+    ``o`` and ``d`` are (x, y, z) tuples of arrays in the surface's local frame. Of the
+    two roots of c(x² + y²) + c(1+k)z² − 2z = 0, only those on the sheet through the
+    vertex (1 − c(1+k)z ≥ 0) and with t ≥ t_min count; the first along the ray is taken.
     """
     c, k = surface.c, surface.k
-    ox, oy, oz = o[..., 0], o[..., 1], o[..., 2]
-    dx, dy, dz = d[..., 0], d[..., 1], d[..., 2]
-    a = c * (dx * dx + dy * dy + (1 + k) * dz * dz)
-    b = c * (ox * dx + oy * dy + (1 + k) * oz * dz) - dz
-    cc = c * (ox * ox + oy * oy + (1 + k) * oz * oz) - 2 * oz
+    ox, oy, oz = o
+    dx, dy, dz = d
+    ck = c * (1 + k)
+    a = c * (dx * dx + dy * dy) + ck * dz * dz
+    b = c * (ox * dx + oy * dy) + ck * oz * dz - dz
+    cc = c * (ox * ox + oy * oy) + ck * oz * oz - 2 * oz
     disc = b * b - a * cc
     real = disc >= 0
-    root = jnp.sqrt(jnp.where(real, disc, 0.0))
+    pos = disc > 0
+    root = jnp.where(pos, jnp.sqrt(jnp.where(pos, disc, 1.0)), 0.0)
     # Stable pair of roots: t1 = cc/q stays finite as c -> 0, t2 = q/a.
     q = -b + jnp.where(b <= 0, root, -root)
     t1 = cc / _where_nonzero(q)
     t2 = jnp.where(a != 0, q / _where_nonzero(a), jnp.inf)
 
     def usable(t, exists):
-        z = oz + t * dz
-        return exists & real & jnp.isfinite(t) & (t >= t_min) & (1 - c * (1 + k) * z >= 0)
+        return exists & real & (t >= t_min) & (ck * (oz + t * dz) <= 1)
 
     u1, u2 = usable(t1, q != 0), usable(t2, a != 0)
     t = jnp.where(u1 & u2, jnp.minimum(t1, t2), jnp.where(u1, t1, t2))
@@ -72,105 +74,118 @@ def _conic_root(surface: AbstractSurface, o, d, t_min):
 
 
 def _residual(surface: AbstractSurface, o, d, t):
-    p = o + t[..., None] * d
-    z, gx, gy, inside = surface.sag_and_grad(p[..., 0], p[..., 1])
-    f = p[..., 2] - z
-    df = d[..., 2] - gx * d[..., 0] - gy * d[..., 1]
-    return f, df, inside
+    px, py, pz = (oi + t * di for oi, di in zip(o, d, strict=True))
+    z, gx, gy, inside = surface.sag_and_grad(px, py)
+    return pz - z, d[2] - gx * d[0] - gy * d[1], inside
 
 
 def intersect(
     surface: AbstractSurface, o, d, newton_iters: int = DEFAULT_NEWTON_ITERS, *, first=False
 ):
-    """Intersect rays (local frame, vertex at the origin) with a surface.
+    """Intersect rays with a surface in its local frame (vertex at the origin).
 
     The first intersection along the ray is taken; with ``first=False`` only t ≥ 0
     (up to rounding) counts, with ``first=True`` (object space) the whole line does.
+
+    Args:
+        surface: the surface.
+        o, d: (x, y, z) tuples of ``[*batch]`` arrays: ray points and unit directions.
+        newton_iters: Newton iterations for surfaces with polynomial terms.
+        first: whether this is the first surface (object space).
 
     Returns:
         t: ray parameter of the intersection, ``[*batch]``.
         ok: ``[*batch]`` bool, True where a valid intersection was found.
     """
+    eps = jnp.finfo(o[2].dtype).eps
+    t_min = -jnp.inf if first else -1e3 * jax.lax.stop_gradient(eps * (1 + jnp.abs(o[2])))
+    if not surface.has_polynomial:
+        # Conics: the closed form is exact and differentiable as it stands.
+        return _conic_root(surface, o, d, t_min)
     o_s, d_s = jax.lax.stop_gradient((o, d))
     surf_s = jax.lax.stop_gradient(surface)
-    t_min = -jnp.inf if first else -1e3 * jnp.finfo(o.dtype).eps * (1 + jnp.abs(o_s[..., 2]))
     t0, hit = _conic_root(surf_s, o_s, d_s, t_min)
-    if surface.has_polynomial:
-        # Rays that miss the base conic start Newton from the vertex plane.
-        plane_t = -o_s[..., 2] / _where_nonzero(d_s[..., 2])
-        t0 = jnp.where(hit, t0, plane_t)
+    # Rays that miss the base conic start Newton from the vertex plane.
+    plane_t = -o_s[2] / _where_nonzero(d_s[2])
+    t0 = jnp.where(hit, t0, plane_t)
 
-        def step(_, t):
-            f, df, _ = _residual(surf_s, o_s, d_s, t)
-            return t - f / _where_nonzero(df)
+    def step(_, t):
+        f, df, _ = _residual(surf_s, o_s, d_s, t)
+        return t - f / _where_nonzero(df)
 
-        t0 = jax.lax.fori_loop(0, newton_iters, step, t0)
+    t0 = jax.lax.fori_loop(0, newton_iters, step, t0)
     # One differentiable step with F' held fixed: the implicit-function gradient.
     f0, df0, _ = _residual(surf_s, o_s, d_s, t0)
     df0 = jax.lax.stop_gradient(_where_nonzero(df0))
     f, _, inside = _residual(surface, o, d, t0)
     t = t0 - f / df0
-    eps = jnp.finfo(t.dtype).eps
-    scale = 1.0 + jnp.abs(o_s[..., 2]) + jnp.abs(t0)
-    converged = jnp.abs(f0) <= 64 * jnp.sqrt(eps) * scale
-    ok = inside & converged & (df0 != 0) & jnp.isfinite(t0)
-    if not surface.has_polynomial:
-        ok = ok & hit
+    scale = 1.0 + jnp.abs(o_s[2]) + jnp.abs(t0)
+    ok = inside & (jnp.abs(f0) <= 64 * jnp.sqrt(eps) * scale) & jnp.isfinite(t0)
     return jnp.where(ok, t, 0.0), ok
 
 
 def refract(d, normal, mu):
-    """Vector Snell's law.
+    """Vector Snell's law on (x, y, z) tuples of arrays.
 
     Args:
-        d: unit incident directions ``[*b, 3]``.
-        normal: unit surface normals ``[*b, 3]`` (either orientation).
-        mu: n_before / n_after, ``[*b]``.
+        d: unit incident directions.
+        normal: unit surface normals (either orientation).
+        mu: n_before / n_after.
 
     Returns:
         (refracted unit directions, ok) with ok False on total internal reflection.
     """
-    cos_i = jnp.sum(d * normal, axis=-1)
+    cos_i = d[0] * normal[0] + d[1] * normal[1] + d[2] * normal[2]
     k = 1.0 - mu * mu * (1.0 - cos_i * cos_i)
     ok = k >= 0
     root = jnp.sqrt(jnp.where(ok, k, 1.0))
-    root = jnp.where(cos_i < 0, -root, root)
-    out = mu[..., None] * d + (root - mu * cos_i)[..., None] * normal
-    return jnp.where(ok[..., None], out, d), ok
+    g = jnp.where(cos_i < 0, -root, root) - mu * cos_i
+    out = tuple(jnp.where(ok, mu * di + g * ni, di) for di, ni in zip(d, normal, strict=True))
+    return out, ok
 
 
 def _surface_normal(surface: AbstractSurface, x, y):
     _, gx, gy, _ = surface.sag_and_grad(x, y)
-    n = jnp.stack([-gx, -gy, jnp.ones_like(gx)], axis=-1)
-    return n / jnp.sqrt(1.0 + gx * gx + gy * gy)[..., None]
+    inv = jax.lax.rsqrt(1.0 + gx * gx + gy * gy)
+    return -gx * inv, -gy * inv, inv
 
 
-def _step(surface, z_vertex, rays: Rays, n_before, n_after, *, first, refracts, newton_iters):
+class _State(eqx.Module):
+    """Rays as separate x, y, z component arrays (vectorises better than [N, 3])."""
+
+    p: tuple
+    d: tuple
+    valid: jax.Array
+    opl: jax.Array
+
+
+def _step(surface, z_vertex, st: _State, n_before, n_after, *, first, refracts, newton_iters):
     """Move rays to one surface and refract them there."""
-    shift = jnp.stack([jnp.zeros_like(z_vertex), jnp.zeros_like(z_vertex), z_vertex])
-    o_local = rays.origin - shift
-    t, ok = intersect(surface, o_local, rays.direction, newton_iters, first=first)
+    o_local = (st.p[0], st.p[1], st.p[2] - z_vertex)
+    t, ok = intersect(surface, o_local, st.d, newton_iters, first=first)
     if not first:
-        ok = ok & (t >= -1e3 * jnp.finfo(t.dtype).eps * (1 + jnp.abs(o_local[..., 2])))
-    p_local = o_local + t[..., None] * rays.direction
-    r2 = p_local[..., 0] ** 2 + p_local[..., 1] ** 2
-    ok = ok & (r2 <= surface.semi_diameter**2)
-    d = rays.direction
+        ok = ok & (t >= -1e3 * jnp.finfo(t.dtype).eps * (1 + jnp.abs(o_local[2])))
+    x, y, z = (oi + t * di for oi, di in zip(o_local, st.d, strict=True))
+    ok = ok & (x * x + y * y <= surface.semi_diameter**2)
+    d = st.d
     if refracts:
-        normal = _surface_normal(surface, p_local[..., 0], p_local[..., 1])
-        d_new, no_tir = refract(d, normal, n_before / n_after)
+        d, no_tir = refract(d, _surface_normal(surface, x, y), n_before / n_after)
         ok = ok & no_tir
-    else:
-        d_new = d
-    valid = rays.valid & ok
-    origin = jnp.where(valid[..., None], p_local + shift, rays.origin)
-    direction = jnp.where(valid[..., None], d_new, rays.direction)
-    opl = rays.opl + jnp.where(valid, n_before * t, 0.0)
-    return Rays(origin, direction, rays.wavelength, valid, opl)
+    valid = st.valid & ok
+    keep = lambda new, old: jnp.where(valid, new, old)  # noqa: E731
+    p = (keep(x, st.p[0]), keep(y, st.p[1]), keep(z + z_vertex, st.p[2]))
+    d = tuple(keep(a, b) for a, b in zip(d, st.d, strict=True))
+    return _State(p, d, valid, st.opl + jnp.where(valid, n_before * t, 0.0))
 
 
-def _broadcast_index(n, shape):
-    return jnp.broadcast_to(n, shape)
+def _to_state(rays: Rays) -> _State:
+    o, d = rays.origin, rays.direction
+    return _State((o[..., 0], o[..., 1], o[..., 2]), (d[..., 0], d[..., 1], d[..., 2]),
+                  rays.valid, rays.opl)
+
+
+def _to_rays(st: _State, wavelength) -> Rays:
+    return Rays(jnp.stack(st.p, -1), jnp.stack(st.d, -1), wavelength, st.valid, st.opl)
 
 
 def trace_path(
@@ -192,37 +207,24 @@ def trace_path(
         A list with the rays at each surface (after refraction) and, last, at the
         image surface (when ``upto`` is None).
     """
+    return [_to_rays(st, rays.wavelength) for st in _trace_states(lens, rays, newton_iters, upto)]
+
+
+def _trace_states(lens: Lens, rays: Rays, newton_iters: int, upto: int | None) -> list[_State]:
     lens = lens.astype(rays.dtype)
     zs = lens.vertex_z()
     idx = lens.indices(rays.wavelength)
-    shape = rays.shape
+    st = _to_state(rays)
     out = []
     last = lens.num_surfaces - 1 if upto is None else upto
     for i in range(last + 1):
-        rays = _step(
-            lens.surfaces[i],
-            zs[i],
-            rays,
-            _broadcast_index(idx[i], shape),
-            _broadcast_index(idx[i + 1], shape),
-            first=i == 0,
-            refracts=True,
-            newton_iters=newton_iters,
-        )
-        out.append(rays)
+        st = _step(lens.surfaces[i], zs[i], st, idx[i], idx[i + 1], first=i == 0,
+                   refracts=True, newton_iters=newton_iters)
+        out.append(st)
     if upto is None:
-        n_img = _broadcast_index(idx[-1], shape)
-        rays = _step(
-            lens.image,
-            lens.image_z(),
-            rays,
-            n_img,
-            n_img,
-            first=False,
-            refracts=False,
-            newton_iters=newton_iters,
-        )
-        out.append(rays)
+        st = _step(lens.image, lens.image_z(), st, idx[-1], idx[-1], first=False,
+                   refracts=False, newton_iters=newton_iters)
+        out.append(st)
     return out
 
 
@@ -251,4 +253,4 @@ def trace(lens: Lens, rays: Rays, *, newton_iters: int = DEFAULT_NEWTON_ITERS) -
         >>> bool(jaxlens.trace(lens, rays).valid[0])
         True
     """
-    return trace_path(lens, rays, newton_iters=newton_iters)[-1]
+    return _to_rays(_trace_states(lens, rays, newton_iters, None)[-1], rays.wavelength)
