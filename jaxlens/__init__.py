@@ -16,6 +16,8 @@ from .catalog import get_material as get_material
 from .catalog import glass_info as glass_info
 from .catalog import load_agf as load_agf
 from .catalog import register_catalog as register_catalog
+from .files import load as load
+from .files import save as save
 from .lens import Lens as Lens
 from .lens import Sensor as Sensor
 from .materials import AbstractMaterial as AbstractMaterial

@@ -1,0 +1,67 @@
+"""Lens files by extension: ``load(path)`` and ``save(lens, path)``.
+
+``.json`` is jaxlens's own format (``jaxlens.lensfile``, documented in
+``docs/lens-format.md``); ``.zmx`` is Zemax OpticStudio's sequential format
+(``jaxlens.zmx``). Lengths are in mm and wavelengths in µm once loaded.
+"""
+
+from __future__ import annotations
+
+import os
+
+from .lens import Lens
+from .lensfile import load_json, save_json
+from .zmx import load_zmx, save_zmx
+
+_EXTENSIONS = (".json", ".zmx")
+
+
+def _ext(path: str, what: str) -> str:
+    ext = os.path.splitext(path)[1].lower()
+    if ext not in _EXTENSIONS:
+        raise ValueError(f"{what}: {path!r} has extension {ext!r}; use one of {_EXTENSIONS}")
+    return ext
+
+
+def load(path: str | os.PathLike, *, dtype=None) -> Lens:
+    """Read a lens file (``.json`` or ``.zmx``).
+
+    Args:
+        path: the file.
+        dtype: cast every floating array to this dtype (default: JAX's default float,
+            float64 when ``jax_enable_x64`` is on; numbers are read as float64).
+
+    Returns:
+        The ``Lens``.
+
+    Raises:
+        ValueError: an unknown extension, or a malformed file (the message names the
+            file and, for ``.zmx`` and JSON syntax errors, the line), or an unknown glass
+            (the message lists the closest catalog names).
+    """
+    path = os.fspath(path)
+    ext = _ext(path, "load")
+    lens = load_json(path) if ext == ".json" else load_zmx(path)
+    return lens if dtype is None else lens.astype(dtype)
+
+
+def save(lens: Lens, path: str | os.PathLike, **options) -> list[str]:
+    """Write a lens file (``.json`` or ``.zmx``); ``load(save(...))`` gives the same lens.
+
+    Args:
+        lens: the lens.
+        path: the file; the extension picks the format.
+        **options: format options (``.zmx``: ``model_glass="blank"|"agf"``, see
+            ``jaxlens.zmx.save_zmx``).
+
+    Returns:
+        The paths written: the file itself, and for ``.zmx`` any ``.AGF`` glass catalogs
+        written beside it for glasses that Zemax's own catalogs do not hold.
+    """
+    path = os.fspath(path)
+    if _ext(path, "save") == ".json":
+        if options:
+            raise ValueError(f"save: .json takes no options, got {sorted(options)}")
+        save_json(lens, path)
+        return [path]
+    return [path] + save_zmx(lens, path, **options)

@@ -1,0 +1,381 @@
+"""Lens report: system data and per-field chief ray, distortion and RMS spot.
+
+``python -m jaxlens report LENS [--json] [--fields DEG ...] [--wavelengths UM ...]``
+
+Conventions (also written into the JSON output under ``units``):
+    Lengths and heights in mm, angles in degrees, wavelengths in µm, distortion in %.
+    RMS spot radii are in µm in ``rms_spot`` and in mm in ``rms_spot_mm``; they use the
+    21×21 square grid over the unit entrance pupil kept inside the disc (317 rays,
+    aimed at the paraxial entrance pupil), about the centroid of each wavelength's
+    spot. ``distortion`` is 100·(y_chief − EFL·tanθ)/(EFL·tanθ) (f-tanθ distortion) and
+    ``distortion_paraxial`` uses the paraxial chief-ray height on the image surface as
+    the reference. The chief ray is the primary-wavelength ray through the centre of the
+    paraxial entrance pupil. Pupil positions are global z (surface 1's vertex at 0).
+"""
+
+from __future__ import annotations
+
+import argparse
+import dataclasses
+import json
+import math
+import sys
+
+import equinox as eqx
+import jax
+import jax.numpy as jnp
+import numpy as np
+
+from . import analysis, paraxial, sampling
+from .files import load
+from .lens import Lens
+from .lensfile import nm_to_um
+from .materials import Air, ModelGlass, Tabulated
+from .surfaces import EvenAsphere, Hybrid
+
+UNITS = {
+    "length": "mm",
+    "angle": "deg",
+    "wavelength": "um",
+    "distortion": "%",
+    "rms_spot": "um",
+    "rms_spot_mm": "mm",
+}
+
+
+def _pct(a, b):
+    nz = b != 0
+    return jnp.where(nz, 100.0 * (a - b) / jnp.where(nz, b, 1.0), 0.0)
+
+
+def _rms(p, w):
+    """Centroid and RMS radius of points p [..., M, 2] with weights w [..., M]."""
+    total = jnp.maximum(jnp.sum(w, axis=-1), 1.0)
+    cen = jnp.sum(w[..., None] * p, axis=-2) / total[..., None]
+    d2 = jnp.sum((p - cen[..., None, :]) ** 2, axis=-1)
+    return cen, jnp.sqrt(jnp.sum(w * d2, axis=-1) / total)
+
+
+class _Result(eqx.Module):
+    paraxial: paraxial.ParaxialData
+    chief_height: jax.Array  # [F] mm, real chief ray (primary wavelength)
+    chief_valid: jax.Array  # [F]
+    f_tan: jax.Array  # [F] mm
+    paraxial_height: jax.Array  # [F] mm
+    rms: jax.Array  # [F, W] mm
+    rms_poly: jax.Array  # [F] mm
+    valid_fraction: jax.Array  # [F, W]
+
+
+@eqx.filter_jit
+def _compute(lens: Lens) -> _Result:
+    """Everything the report needs from one traced ray set.
+
+    The rays are ``analysis.spot_rays`` on the 21×21 grid for every field and
+    wavelength; the chief ray is the grid's centre point at the primary wavelength (the
+    same ray as ``analysis.chief_ray``). The RMS radii and distortions follow the
+    definitions of ``analysis.rms_spot`` and ``analysis.distortion``; tracing once
+    instead of three times (spots, their chief rays, distortion) cuts compile time.
+    """
+    pd = paraxial.paraxial_data(lens)
+    with jax.ensure_compile_time_eval():
+        pupil = sampling.pupil_grid(21, lens.epd.dtype)
+        centre = int(np.argmin(np.sum(np.asarray(pupil) ** 2, axis=-1)))
+    depth = None if lens.object_at_infinity else lens.object_distance
+
+    def field(f):
+        def wave(w):
+            r = analysis.spot_rays(lens, f, w, pupil=pupil, depth=depth)
+            return r.origin[..., :2], r.valid
+
+        return jax.vmap(wave)(lens.wavelengths)
+
+    p, valid = jax.vmap(field)(lens.fields)  # [F, W, M, 2], [F, W, M]
+    w = valid.astype(p.dtype)
+    _, rms = _rms(p, w)
+    F = p.shape[0]
+    _, poly = _rms(p.reshape(F, -1, 2), w.reshape(F, -1))
+    chief = p[:, lens.primary, centre, 1]
+    ftan = pd.efl * jnp.tan(jnp.deg2rad(lens.fields))
+    ypar = jax.vmap(lambda th: paraxial.image_height(lens, th))(lens.fields)
+    return _Result(
+        pd, chief, valid[:, lens.primary, centre], ftan, ypar, rms, poly, jnp.mean(w, axis=-1)
+    )
+
+
+def with_fields_and_wavelengths(lens: Lens, fields=None, wavelengths=None) -> Lens:
+    """The lens with other field angles (deg) and wavelengths (µm; values > 100 are nm).
+
+    With new wavelengths the primary is the one closest to the lens's primary wavelength.
+    """
+    dtype = lens.thickness.dtype
+    if fields is not None:
+        f = jnp.asarray(np.atleast_1d(np.asarray(fields, np.float64)), dtype)
+        lens = eqx.tree_at(lambda l: l.fields, lens, f)
+    if wavelengths is not None:
+        w = np.atleast_1d(np.asarray(wavelengths, np.float64))
+        w = np.where(w > 100.0, nm_to_um(w), w)
+        if w.size == 0 or np.any(w <= 0):
+            raise ValueError(f"report: wavelengths must be positive, got {wavelengths}")
+        primary = int(np.argmin(np.abs(w - float(lens.primary_wavelength))))
+        lens = dataclasses.replace(lens, wavelengths=jnp.asarray(w, dtype), primary=primary)
+    return lens
+
+
+def _f(x) -> float | None:
+    v = float(x)
+    return v if math.isfinite(v) else None
+
+
+def report_data(lens: Lens, *, fields=None, wavelengths=None) -> dict:
+    """The report as a JSON-ready dict (see the module docstring for units).
+
+    Args:
+        lens: the lens.
+        fields: field angles in degrees (y); default the lens's fields.
+        wavelengths: µm; default the lens's wavelengths.
+    """
+    lens = with_fields_and_wavelengths(lens, fields, wavelengths)
+    if np.asarray(lens.fields).ndim != 1:
+        raise ValueError("report: only y field angles are supported (fields of shape [F])")
+    res = _compute(lens)
+    pd = res.paraxial
+    wl = np.atleast_1d(np.asarray(lens.wavelengths, np.float64))
+    angles = np.asarray(lens.fields, np.float64)
+    fmax = float(np.max(np.abs(angles)))
+    per = np.asarray(res.rms, np.float64)
+    ok = np.asarray(res.chief_valid)
+    chief = np.where(ok, np.asarray(res.chief_height, np.float64), np.nan)
+    d_ftan = np.where(ok, np.asarray(_pct(res.chief_height, res.f_tan)), np.nan)
+    d_par = np.where(ok, np.asarray(_pct(res.chief_height, res.paraxial_height)), np.nan)
+    out_fields = []
+    for i, a in enumerate(angles):
+        frac = np.asarray(res.valid_fraction[i], np.float64)
+        out_fields.append(
+            {
+                "angle": float(a),
+                "chief_ray_height": _f(chief[i]),
+                "paraxial_image_height": _f(res.paraxial_height[i]),
+                "f_tan_theta": _f(res.f_tan[i]),
+                "distortion": _f(d_ftan[i]),
+                "distortion_paraxial": _f(d_par[i]),
+                "rms_spot": [
+                    _f(1000.0 * v) if n > 0 else None for v, n in zip(per[i], frac, strict=True)
+                ],
+                "rms_spot_mm": [
+                    _f(v) if n > 0 else None for v, n in zip(per[i], frac, strict=True)
+                ],
+                "rms_spot_polychromatic": _f(1000.0 * res.rms_poly[i]) if frac.any() else None,
+                "valid_fraction": [float(v) for v in frac],
+            }
+        )
+    imax = int(np.argmax(np.abs(angles)))
+    return {
+        "name": lens.name,
+        "units": UNITS,
+        "efl": _f(pd.efl),
+        "bfl": _f(pd.bfl),
+        "fnum": _f(pd.fnum),
+        "working_fnum": _f(pd.working_fnum),
+        "epd": _f(lens.epd),
+        "total_track": _f(pd.total_track),
+        "fov": 2.0 * fmax,
+        "max_field": fmax,
+        "image_height": _f(res.paraxial_height[imax]),
+        "real_image_height": _f(chief[imax]),
+        "entrance_pupil": {
+            "z": _f(pd.entrance_pupil_z),
+            "diameter": _f(pd.entrance_pupil_diameter),
+        },
+        "exit_pupil": {
+            "z": _f(pd.exit_pupil_z),
+            "diameter": _f(pd.exit_pupil_diameter),
+            "from_image": _f(pd.exit_pupil_z - pd.image_z),
+        },
+        "image_z": _f(pd.image_z),
+        "paraxial_image_z": _f(pd.paraxial_image_z),
+        "stop_surface": lens.stop + 1,
+        "object_distance": None if lens.object_distance is None else _f(lens.object_distance),
+        "wavelengths": [float(w) for w in wl],
+        "primary_wavelength": float(wl[lens.primary]),
+        "fields": out_fields,
+    }
+
+
+# ---------------------------------------------------------------------------- text
+
+
+def _material_label(m) -> str:
+    if isinstance(m, Air):
+        return ""
+    if isinstance(m, ModelGlass):
+        return f"{float(m.nd):.4f},{float(m.vd):.2f}"
+    name = getattr(m, "name", "")
+    if isinstance(m, Tabulated):
+        return name or "TABLE"
+    return name or type(m).__name__
+
+
+def _num(v: float, width: int = 12, prec: int = 6) -> str:
+    if v is None or not math.isfinite(v):
+        return f"{'Infinity':>{width}}"
+    return f"{v:>{width}.{prec}f}"
+
+
+def _surface_table(lens: Lens) -> list[str]:
+    head = (
+        f"  {'Surf':<5}{'Type':<10}{'Radius':>13}{'Thickness':>13}  {'Glass':<16}"
+        f"{'Semi-dia':>10}{'Conic':>11}  Aspheric"
+    )
+    lines = [head]
+
+    def row(label, s, t, glass):
+        c = float(s.c) if s is not None else 0.0
+        r = math.inf if c == 0 else 1.0 / c
+        typ = (
+            "HYBRID"
+            if isinstance(s, Hybrid)
+            else "EVENASPH"
+            if isinstance(s, EvenAsphere)
+            else "STANDARD"
+        )
+        sd = float(s.semi_diameter) if s is not None else math.inf
+        k = float(s.k) if s is not None else 0.0
+        asph = ""
+        if isinstance(s, EvenAsphere | Hybrid):
+            a = np.asarray(s.coeffs)
+            asph = " ".join(f"A{2 * (i + 1)}={v:.4g}" for i, v in enumerate(a) if v != 0)
+            if isinstance(s, Hybrid):
+                asph += " " + " ".join(
+                    f"{ax}{2 * i + 3}={v:.4g}"
+                    for ax, arr in (("X", s.odd_x), ("Y", s.odd_y))
+                    for i, v in enumerate(np.asarray(arr))
+                    if v != 0
+                )
+        sd_txt = f"{sd:>10.4f}" if math.isfinite(sd) else f"{'-':>10}"
+        lines.append(
+            f"  {label:<5}{typ:<10}{_num(r, 13, 6)}{_num(t, 13, 6)}  {glass:<16}"
+            f"{sd_txt}{k:>11.4g}  {asph.strip()}"
+        )
+
+    dist = math.inf if lens.object_distance is None else float(lens.object_distance)
+    row("OBJ", None, dist, _material_label(lens.object_material))
+    for i, s in enumerate(lens.surfaces):
+        label = "STO" if i == lens.stop else str(i + 1)
+        row(label, s, float(lens.thickness[i]), _material_label(lens.materials[i]))
+    row("IMA", lens.image, None, "")
+    return lines
+
+
+def format_report(data: dict, lens: Lens | None = None) -> str:
+    """The human-readable report (Zemax-like prescription and field tables)."""
+    L = []
+    title = data.get("name") or "(unnamed lens)"
+    L.append(f"jaxlens lens report: {title}")
+    if data.get("file"):
+        L.append(f"File: {data['file']}")
+    L.append("")
+    L.append("SYSTEM DATA")
+    ep, xp = data["entrance_pupil"], data["exit_pupil"]
+    wl = data["wavelengths"]
+    rows = [
+        ("Effective focal length", data["efl"], "mm"),
+        ("Back focal length", data["bfl"], "mm"),
+        ("Image space F/#", data["fnum"], ""),
+        ("Paraxial working F/#", data["working_fnum"], ""),
+        ("Entrance pupil diameter", data["epd"], "mm"),
+        ("Entrance pupil position (z)", ep["z"], "mm"),
+        ("Exit pupil diameter", xp["diameter"], "mm"),
+        ("Exit pupil position (from image)", xp["from_image"], "mm"),
+        ("Full field of view", data["fov"], "deg"),
+        ("Paraxial image height", data["image_height"], "mm"),
+        ("Real chief-ray image height", data["real_image_height"], "mm"),
+        ("Total track", data["total_track"], "mm"),
+        ("Object distance", data["object_distance"], "mm"),
+    ]
+    for label, v, unit in rows:
+        L.append(f"  {label:<34}: {_num(v, 14, 6)} {unit}".rstrip())
+    L.append(f"  {'Stop surface':<34}: {data['stop_surface']:>14d}")
+    wtxt = ", ".join(
+        f"{w:.6f}" + (" (primary)" if w == data["primary_wavelength"] else "") for w in wl
+    )
+    L.append(f"  {'Wavelengths (um)':<34}: {wtxt}")
+    if lens is not None:
+        L.append("")
+        L.append("SURFACE DATA (radius, thickness, semi-diameter in mm; glass: name or nd,Vd)")
+        L += _surface_table(lens)
+    L.append("")
+    L.append(
+        "FIELDS (heights in mm, distortion in %, RMS spot radius about the centroid in um,"
+        " 21x21 pupil grid)"
+    )
+    spot_heads = "".join(f"{f'RMS {1000 * w:.1f}nm':>15}" for w in wl)
+    L.append(
+        f"  {'Field':>5}{'Angle':>9}{'Chief y':>13}{'Parax y':>13}{'Dist f-tan':>12}"
+        f"{'Dist parax':>12}{spot_heads}{'RMS poly':>12}"
+    )
+    for i, f in enumerate(data["fields"]):
+        spots = "".join(_num(v, 15, 4) for v in f["rms_spot"])
+        L.append(
+            f"  {i + 1:>5}{f['angle']:>9.3f}{_num(f['chief_ray_height'], 13, 6)}"
+            f"{_num(f['paraxial_image_height'], 13, 6)}{_num(f['distortion'], 12, 5)}"
+            f"{_num(f['distortion_paraxial'], 12, 5)}{spots}"
+            f"{_num(f['rms_spot_polychromatic'], 12, 4)}"
+        )
+        lost = [
+            f"{100 * (1 - v):.1f}% at {w:.4f} um"
+            for w, v in zip(wl, f["valid_fraction"], strict=True)
+            if v < 1
+        ]
+        if lost:
+            L.append(f"        field {i + 1}: rays clipped or failed: " + ", ".join(lost))
+    return "\n".join(L) + "\n"
+
+
+# ---------------------------------------------------------------------------- CLI
+
+
+def register(subparsers) -> None:
+    """Add the ``report`` subcommand to an argparse subparsers object."""
+    p = subparsers.add_parser(
+        "report",
+        help="print system data, distortion and RMS spots of a lens file",
+        description="Paraxial system data and, per field, the real chief-ray height, "
+        "distortion and RMS spot radius per wavelength of a .json or .zmx lens.",
+    )
+    p.add_argument("lens", help="lens file (.json or .zmx)")
+    p.add_argument("--json", action="store_true", help="print a JSON object instead of tables")
+    p.add_argument(
+        "--fields",
+        type=float,
+        nargs="+",
+        metavar="DEG",
+        help="field angles in degrees (default: the lens's fields)",
+    )
+    p.add_argument(
+        "--wavelengths",
+        type=float,
+        nargs="+",
+        metavar="UM",
+        help="wavelengths in um (values above 100 are read as nm; default: the lens's wavelengths)",
+    )
+    p.set_defaults(func=run)
+
+
+def run(args: argparse.Namespace) -> int:
+    """Run the ``report`` subcommand; returns the exit status."""
+    try:
+        lens = load(args.lens)
+        data = report_data(lens, fields=args.fields, wavelengths=args.wavelengths)
+    except (ValueError, OSError) as e:
+        print(f"jaxlens report: error: {e}", file=sys.stderr)
+        return 2
+    data["file"] = args.lens
+    if args.json:
+        print(json.dumps(data, indent=2, allow_nan=False))
+    else:
+        print(
+            format_report(data, with_fields_and_wavelengths(lens, args.fields, args.wavelengths)),
+            end="",
+        )
+    return 0

@@ -1,0 +1,110 @@
+"""The report CLI: ``python -m jaxlens report LENS [--json]``, run in-process (one compile)."""
+
+import json
+import subprocess
+import sys
+
+import pytest
+
+from jaxlens.__main__ import main
+
+
+@pytest.fixture(scope="module")
+def cooke(refcase_dir):
+    path = refcase_dir / "cooke_triplet.json"
+    if not path.exists():
+        pytest.skip("no cooke_triplet reference case")
+    return path, json.loads(path.read_text())
+
+
+def _run(capsys, *argv):
+    code = main(["report", *map(str, argv)])
+    out = capsys.readouterr()
+    return code, out.out, out.err
+
+
+def test_report_json_matches_reference(cooke, capsys):
+    path, ref = cooke
+    code, out, _ = _run(capsys, path, "--json")
+    assert code == 0
+    data = json.loads(out)
+    assert {"efl", "bfl", "fnum", "epd", "total_track", "fields"} <= set(data)
+    assert data["units"]["length"] == "mm" and data["units"]["distortion"] == "%"
+    assert data["units"]["rms_spot"] == "um" and data["units"]["rms_spot_mm"] == "mm"
+    assert data["efl"] == pytest.approx(ref["paraxial"]["EFL"], rel=1e-10)
+    assert data["bfl"] == pytest.approx(ref["paraxial"]["BFL"], rel=1e-10)
+    assert data["epd"] == ref["aperture"]["EPD"]
+    assert data["fnum"] == pytest.approx(ref["paraxial"]["EFL"] / ref["aperture"]["EPD"])
+    assert data["total_track"] == pytest.approx(ref["surfaces"][-1]["z_vertex"], rel=1e-14)
+    assert data["fov"] == 2 * max(ref["fields"]["values"])
+    assert [f["angle"] for f in data["fields"]] == ref["fields"]["values"]
+    for f, spot in zip(data["fields"], ref["rms_spot"], strict=True):
+        want = [v["rms_vs_centroid"] for v in spot["per_wavelength"].values()]
+        assert f["rms_spot_mm"] == pytest.approx(want, rel=1e-9)
+        assert f["rms_spot"] == pytest.approx([1000 * v for v in want], rel=1e-9)
+        assert f["valid_fraction"] == [1.0, 1.0, 1.0]
+    by_angle = {f["angle"]: f for f in data["fields"]}
+    for d in ref["distortion"]:
+        f = by_angle[d["field_angle_deg"]]
+        assert f["chief_ray_height"] == pytest.approx(d["chief_ray_y_real"], abs=1e-9)
+        assert f["distortion"] == pytest.approx(d["distortion_pct_ftan"], abs=1e-9)
+        assert f["distortion_paraxial"] == pytest.approx(
+            d["distortion_pct_vs_paraxial_chief_at_image"], abs=1e-9
+        )
+    assert by_angle[0.0]["chief_ray_height"] == 0.0 and by_angle[0.0]["distortion"] == 0.0
+
+
+def test_report_text_and_options(cooke, capsys):
+    path, ref = cooke
+    code, out, _ = _run(capsys, path)
+    assert code == 0
+    for head in (
+        "SYSTEM DATA",
+        "SURFACE DATA",
+        "FIELDS",
+        "Effective focal length",
+        "Back focal length",
+        "Total track",
+        "Entrance pupil diameter",
+    ):
+        assert head in out
+    assert f"{ref['paraxial']['EFL']:.6f}" in out
+    rows = [ln.split() for ln in out.splitlines() if ln.strip().startswith(("OBJ", "STO", "IMA"))]
+    assert [r[0] for r in rows] == ["OBJ", "STO", "IMA"]
+    # Same shapes as the lens's own fields and wavelengths: no recompilation.
+    code, out, _ = _run(
+        capsys, path, "--json", "--fields", 0, 7, 10, "--wavelengths", 486.1327, 0.5875618, 656.2725
+    )
+    assert code == 0
+    data = json.loads(out)
+    assert [f["angle"] for f in data["fields"]] == [0.0, 7.0, 10.0]
+    assert data["wavelengths"] == [0.4861327, 0.5875618, 0.6562725]
+    assert data["primary_wavelength"] == 0.5875618
+    assert 0 < data["fields"][1]["chief_ray_height"] < data["fields"][2]["chief_ray_height"]
+
+
+def test_report_errors_are_messages(tmp_path, capsys):
+    bad = tmp_path / "bad.zmx"
+    bad.write_text("UNIT MM\nENPD 10\nSURF 0\nSURF 1\n  CURV 0.1\n  DISZ 2\n  GLAS N-BK8\nSURF 2\n")
+    code, out, err = _run(capsys, bad)
+    assert code == 2 and out == ""
+    assert f"{bad}:7" in err and "N-BK7" in err
+
+
+def test_cli_subprocess_smoke(tmp_path):
+    missing = tmp_path / "missing.zmx"
+    run = subprocess.run(
+        [sys.executable, "-m", "jaxlens", "report", str(missing), "--json"],
+        capture_output=True,
+        text=True,
+        timeout=120,
+    )
+    assert run.returncode == 2
+    assert "missing.zmx" in run.stderr and "Traceback" not in run.stderr
+    run = subprocess.run(
+        [sys.executable, "-m", "jaxlens", "report", "--help"],
+        capture_output=True,
+        text=True,
+        timeout=120,
+    )
+    assert run.returncode == 0 and "--wavelengths" in run.stdout

@@ -1,0 +1,345 @@
+"""Zemax .zmx files: round trips, encodings, glasses and AGF catalogs, the hybrid surface,
+and errors that name the line."""
+
+import dataclasses
+import math
+import pathlib
+import re
+
+import numpy as np
+import pytest
+from test_lensfile import assert_same_lens, every_kind_of_lens
+
+import jaxlens
+from jaxlens import zmx
+from jaxlens.catalog import load_agf
+from jaxlens.materials import ModelGlass, Tabulated
+from jaxlens.surfaces import EvenAsphere, Hybrid
+
+DATA = pathlib.Path(jaxlens.__file__).parent / "data" / "lenses"
+
+# A hand-written file in the layout OpticStudio saves (tokens after the values, automatic
+# semi-diameters, HIDE/MIRR/SLAB/POPS lines that jaxlens ignores).
+COOKE_ZMX = """VERS 190513 80 123457 L123457
+MODE SEQ
+NAME Cooke triplet
+PFIL 0 0 0
+LANG 0
+UNIT MM X W X CM MR CPMM
+ENPD 1.0E+1
+ENVD 2.0E+1 1 0
+GFAC 0 0
+GCAT SCHOTT
+RAIM 0 0 1 1 0 0 0 0 0
+FTYP 0 0 3 3 0 0 0
+ROPD 2
+PICB 1
+XFLN 0 0 0 0 0 0 0 0 0 0 0 0
+YFLN 0 1.4E+1 2.0E+1 0 0 0 0 0 0 0 0 0
+FWGN 1 1 1 1 1 1 1 1 1 1 1 1
+WAVM 1 4.861327E-1 1
+WAVM 2 5.875618E-1 1
+WAVM 3 6.562725E-1 1
+WAVM 4 5.5E-1 1
+PWAV 2
+GLRS 1 0
+SURF 0
+  TYPE STANDARD
+  CURV 0.0 0 0 0 0 ""
+  HIDE 0 0 0 0 0 0 0 0 0 0
+  MIRR 2 0
+  SLAB 1
+  DISZ INFINITY
+  DIAM 0 0 0 0 1 ""
+  POPS 0 0 0 0 0 0 0 0 1 1 1 1 0 0 0 0
+SURF 1
+  TYPE STANDARD
+  CURV 4.542648427630386E-002 0 0 0 0 ""
+  HIDE 0 0 0 0 0 0 0 0 0 0
+  MIRR 2 0
+  SLAB 2
+  DISZ 3.25896
+  GLAS N-SK16 0 0 1.62041 6.033E+001 0 0 0 0 0 0
+  DIAM 8.557578525439 0 0 0 1 ""
+SURF 2
+  TYPE STANDARD
+  CURV -2.294838879821215E-003 0 0 0 0 ""
+  DISZ 6.00755
+  DIAM 7.99 0 0 0 1 ""
+SURF 3
+  TYPE STANDARD
+  CURV -4.501811528959253E-002 0 0 0 0 ""
+  DISZ 0.99997
+  GLAS F2 0 0 1.62004 3.637E+001 0 0 0 0 0 0
+  DIAM 4.0 0 0 0 1 ""
+SURF 4
+  STOP
+  TYPE STANDARD
+  CURV 4.928069891858434E-002 0 0 0 0 ""
+  DISZ 4.75041
+  DIAM 3.87 0 0 0 1 ""
+SURF 5
+  TYPE STANDARD
+  CURV 1.254963380168567E-002 0 0 0 0 ""
+  DISZ 2.95208
+  GLAS N-SK16 0 0 1.62041 6.033E+001 0 0 0 0 0 0
+  DIAM 7.5 0 0 0 1 ""
+SURF 6
+  TYPE STANDARD
+  CURV -5.436162330330578E-002 0 0 0 0 ""
+  DISZ 42.20778
+  DIAM 7.9 0 0 0 1 ""
+SURF 7
+  TYPE STANDARD
+  CURV 0.0 0 0 0 0 ""
+  DISZ 0
+  DIAM 18.2 0 0 0 1 ""
+"""
+
+
+def test_reads_zemax_layout_utf16_and_utf8(tmp_path):
+    ref = jaxlens.load(DATA / "cooke_triplet.json")
+    for enc, bom in (
+        ("utf-16", b""),
+        ("utf-8", b""),
+        ("utf-8", b"\xef\xbb\xbf"),
+        ("utf-16-le", b"\xff\xfe"),
+    ):
+        p = tmp_path / f"cooke_{enc}_{len(bom)}.zmx"
+        p.write_bytes(bom + COOKE_ZMX.replace("\n", "\r\n").encode(enc))
+        lens = jaxlens.load(p)
+        assert lens.name == "Cooke triplet"
+        assert lens.stop == 3 and lens.primary == 1
+        np.testing.assert_array_equal(
+            np.asarray(lens.wavelengths), [0.4861327, 0.5875618, 0.6562725]
+        )
+        np.testing.assert_array_equal(np.asarray(lens.fields), [0.0, 14.0, 20.0])
+        assert [m.name for m in lens.materials] == ["N-SK16", "air", "F2", "air", "N-SK16", "air"]
+        # Automatic semi-diameters (solve flag 0) do not clip.
+        assert all(math.isinf(float(s.semi_diameter)) for s in lens.surfaces)
+        assert float(jaxlens.efl(lens)) == pytest.approx(float(jaxlens.efl(ref)), rel=1e-14)
+
+
+def test_round_trips_lose_nothing(tmp_path):
+    lens = every_kind_of_lens(tmp_path)
+    p1, p2 = tmp_path / "a" / "lens.zmx", tmp_path / "b" / "lens.zmx"
+    p1.parent.mkdir()
+    p2.parent.mkdir()
+    written = jaxlens.save(lens, p1)
+    one = jaxlens.load(p1)
+    assert_same_lens(lens, one)  # Lens -> zmx -> Lens
+    jaxlens.save(one, p2)
+    two = jaxlens.load(p2)
+    assert_same_lens(one, two)  # zmx -> Lens -> zmx -> Lens
+    assert p1.read_text() == p2.read_text()
+    for w in written[1:]:
+        other = p2.parent / pathlib.Path(w).name
+        assert pathlib.Path(w).read_text() == other.read_text()
+    # The sample file too.
+    sample = jaxlens.load(DATA / "cooke_triplet.zmx")
+    jaxlens.save(sample, tmp_path / "c.zmx")
+    assert_same_lens(sample, jaxlens.load(tmp_path / "c.zmx"))
+
+
+def test_glas_lines_and_gcat(tmp_path):
+    lens = every_kind_of_lens(tmp_path)
+    text, _ = zmx.dumps(lens, "mylens.zmx")
+    glas = [ln.strip() for ln in text.splitlines() if ln.strip().startswith("GLAS")]
+    assert "GLAS N-BK7 0 0 1.5168 6.417E+001 0 0 0 0 0 0" in glas
+    assert "GLAS E48R 0 0 1.53117 5.6E+001 0 0 0 0 0 0" in glas
+    assert "GLAS ___BLANK 1 0 1.55 5.0E+001 0 0 0 0 0 0" in glas
+    for g in glas:
+        t = g.split()
+        assert len(t) == 12 and t[2:4] in (["0", "0"], ["1", "0"]) and t[6:] == ["0"] * 6
+        assert re.fullmatch(r"-?\d\.\d+E[+-]\d{3}", t[5])
+    gcat = next(ln for ln in text.splitlines() if ln.startswith("GCAT")).split()[1:]
+    # Side catalogs first (Zemax searches in order), then Zemax's own.
+    assert set(gcat[:3]) == {"MYLENS", "PLASTICS", "MYCAT"} and gcat[3:] == ["SCHOTT", "ZEON"]
+
+
+def test_agf_for_glasses_zemax_does_not_ship(tmp_path):
+    lens = every_kind_of_lens(tmp_path)
+    out = tmp_path / "out"
+    out.mkdir()
+    written = jaxlens.save(lens, out / "mylens.zmx")
+    names = sorted(pathlib.Path(w).name for w in written[1:])
+    assert names == ["MYCAT.AGF", "MYLENS.AGF", "PLASTICS.AGF"]
+    cat = load_agf(out / "MYLENS.AGF")  # valid AGF for the catalog reader (and Zemax)
+    assert set(cat) == {"TAB_1", "HAND_MADE"}
+    # Zemax sees a Schott series through the table's points.
+    tab = lens.materials[6]
+    wl = np.asarray(tab.wavelengths)
+    np.testing.assert_allclose(
+        np.asarray(cat["TAB_1"].index(wl)), np.asarray(tab.indices), rtol=0, atol=1e-12
+    )
+    assert cat["TAB_1"].formula == 1
+    text = (out / "MYLENS.AGF").read_text()
+    assert re.search(r'^GC jaxlens \{"wavelengths_um":\[0\.45,0\.55,0\.65\]', text, re.M)
+    # OKP4's shipped data is a model dispersion: written exactly, not referenced.
+    okp4 = load_agf(out / "PLASTICS.AGF")["OKP4"]
+    assert_same_lens(okp4, lens.materials[4])
+    # model_glass="agf": the jaxlens model dispersion exactly, as a Schott series.
+    jaxlens.save(lens, out / "m.zmx", model_glass="agf")
+    mg = load_agf(out / "M.AGF")
+    model = next(v for v in mg.values() if v.catalog_nd == 1.55)
+    w = np.linspace(0.4, 0.8, 9)
+    np.testing.assert_allclose(
+        np.asarray(model.index(w)), np.asarray(ModelGlass(1.55, 50.0).index(w)), rtol=0, atol=2e-15
+    )
+    assert_same_lens(jaxlens.load(out / "m.zmx"), lens)
+
+
+def _xpoly_sag(lines, x, y):
+    xdat = {}
+    for ln in lines:
+        t = ln.split()
+        if t[0] == "XDAT":
+            xdat[int(t[1])] = float(t[2])
+    c = float(next(ln for ln in lines if ln.startswith("CURV")).split()[1])
+    k = float(next(ln for ln in lines if ln.startswith("CONI")).split()[1])
+    r2 = x * x + y * y
+    z = c * r2 / (1 + np.sqrt(1 - (1 + k) * c * c * r2))
+    norm = xdat[2]
+    for j in range(1, int(xdat[1]) + 1):
+        d = int((math.isqrt(8 * j + 1) - 1) // 2)
+        ny = j - d * (d + 1) // 2
+        z = z + xdat[j + 2] * (x / norm) ** (d - ny) * (y / norm) ** ny
+    return z
+
+
+def test_hybrid_is_zemax_extended_polynomial():
+    s = Hybrid(
+        c=0.02,
+        k=-1.5,
+        coeffs=[1e-3, 2e-5, -3e-7, 1e-9, 2e-11],
+        odd_x=[1e-4, 2e-6],
+        odd_y=[-3e-5, 4e-7],
+        semi_diameter=5.0,
+    )
+    lines = zmx._surface_lines(s)
+    assert lines[0] == "TYPE XPOLYNOM"
+    rng = np.random.default_rng(0)
+    x, y = rng.uniform(-4, 4, (2, 200))
+    np.testing.assert_allclose(
+        _xpoly_sag(lines, x, y), np.asarray(s.sag(x, y)[0]), rtol=1e-13, atol=1e-15
+    )
+    # Zemax's ordering: x, y, x², xy, y², x³, x²y, ...
+    assert [zmx._term_powers(j) for j in range(1, 8)] == [
+        (1, 0),
+        (0, 1),
+        (2, 0),
+        (1, 1),
+        (0, 2),
+        (3, 0),
+        (2, 1),
+    ]
+
+
+def _minimal(surface1_lines, head="ENPD 10\nWAVM 1 0.55 1\n", extra=""):
+    return (
+        f"UNIT MM\n{head}SURF 0\n  DISZ INFINITY\nSURF 1\n{surface1_lines}"
+        f"  DISZ 5\n  GLAS N-BK7\nSURF 2\n  CURV -0.02\n  DISZ 45\n{extra}SURF 3\n"
+    )
+
+
+def test_even_asphere_parm1_is_a2_and_units(tmp_path):
+    lens = zmx.loads(_minimal("  TYPE EVENASPH\n  CURV 0.02\n  PARM 1 1E-3\n  PARM 3 2E-7\n"))
+    s = lens.surfaces[0]
+    assert isinstance(s, EvenAsphere)
+    np.testing.assert_array_equal(np.asarray(s.coeffs), [1e-3, 0.0, 2e-7])
+    assert float(s.paraxial_curvature) == 0.02 + 2e-3
+    cm = zmx.loads(
+        _minimal("  TYPE EVENASPH\n  CURV 0.2\n  PARM 2 1E-3\n").replace("UNIT MM", "UNIT CM")
+    )
+    assert float(cm.surfaces[0].c) == pytest.approx(0.02, rel=1e-15)
+    assert float(cm.thickness[0]) == 50.0 and float(cm.epd) == 100.0
+    assert float(cm.surfaces[0].coeffs[1]) == pytest.approx(1e-3 * 10.0**-3, rel=1e-15)
+
+
+def test_apertures():
+    lens = zmx.loads(_minimal("  STOP\n  CURV 0.02\n", head="FNUM 4 0\nWAVM 1 0.55 1\n"))
+    assert float(lens.epd) == pytest.approx(float(jaxlens.efl(lens)) / 4, rel=1e-15)
+    lens = zmx.loads(
+        _minimal('  STOP\n  CURV 0.02\n  DIAM 3 1 0 0 1 ""\n', head="FLOA\nWAVM 1 0.55 1\n")
+    )
+    assert float(lens.epd) == pytest.approx(6.0, rel=1e-15)
+    assert float(lens.surfaces[0].semi_diameter) == 3.0  # fixed semi-diameter clips
+
+
+BAD = [
+    ("  CURV abc\n", "", 7, r"curvature is not a number"),
+    ("  CURV 1e999\n", "", 7, r"curvature must be finite"),
+    ("  CURV nan\n", "", 7, r"curvature must be finite"),
+    ("  TYPE COORDBRK\n", "", 7, r"surface type COORDBRK is not supported"),
+    ("  PARM x 1\n", "", 7, r"PARM index is not a number"),
+    ("", "  DISZ INFINITY\n", 12, r"only the object surface may have an infinite thickness"),
+    ("  TYPE EVENASPH\n  PARM 9 1e-3\n", "", 8, r"PARM 1\.\.8"),
+    ("  GLAS\n", "", 7, r"GLAS needs a glass name"),
+    ("", "  GLAS ___BLANK 1 0 abc 50\n", 12, r"model glass nd is not a number"),
+    ("  @@@ garbage\n", "", 7, r"not a Zemax keyword line"),
+    ("  STOP\nSURF 1\n", "", 8, r"expected 2"),
+    (
+        "  TYPE XPOLYNOM\n  XDAT 1 4\n  XDAT 2 1\n  XDAT 6 1e-3\n",
+        "",
+        10,
+        r"x\^1 y\^1 .* does not fit the hybrid surface",
+    ),
+]
+
+
+@pytest.mark.parametrize(("lines", "extra", "lineno", "match"), BAD)
+def test_malformed_names_file_and_line(tmp_path, lines, extra, lineno, match):
+    p = tmp_path / "bad.zmx"
+    text = _minimal(lines, extra=extra)
+    p.write_bytes(text.encode("utf-16"))
+    with pytest.raises(ValueError, match=match) as e:
+        jaxlens.load(p)
+    msg = str(e.value)
+    assert msg.startswith(f"{p}:{lineno}: ")
+    bad_line = text.splitlines()[lineno - 1].strip()
+    assert repr(bad_line) in msg
+
+
+def test_other_bad_files(tmp_path):
+    cases = {
+        "empty.zmx": b"",
+        "nosurf.zmx": b"UNIT MM\nENPD 10\n",
+        "binary.zmx": bytes(range(256)) * 4,
+        "noap.zmx": _minimal("  CURV 0.02\n", head="WAVM 1 0.55 1\n").encode(),
+        "units.zmx": _minimal("  CURV 0.02\n").replace("UNIT MM", "UNIT FURLONG").encode(),
+        "fields.zmx": _minimal("  CURV 0.02\n", head="ENPD 10\nFTYP 1 0 1 1\nYFLN 3\n").encode(),
+    }
+    for name, raw in cases.items():
+        (tmp_path / name).write_bytes(raw)
+        with pytest.raises(ValueError, match=re.escape(str(tmp_path / name))):
+            jaxlens.load(tmp_path / name)
+
+
+def test_unknown_glass_lists_close_matches(tmp_path):
+    p = tmp_path / "glass.zmx"
+    p.write_text(_minimal("  CURV 0.02\n").replace("GLAS N-BK7", "GLAS N-BK8 0 0 1.5 60"))
+    with pytest.raises(ValueError) as e:
+        jaxlens.load(p)
+    msg = str(e.value)
+    assert msg.startswith(f"{p}:9: glass 'N-BK8'") and "N-BK7" in msg
+
+
+def test_model_glass_and_tabulated_read_back_exactly(tmp_path):
+    lens = zmx.loads(
+        _minimal("  CURV 0.02\n").replace(
+            "GLAS N-BK7", "GLAS ___BLANK 1 0 1.5168 6.417E+001 0 0 0 0 0 0"
+        )
+    )
+    m = lens.materials[0]
+    assert isinstance(m, ModelGlass) and float(m.index(0.5875618)) == 1.5168
+    assert float(m.vd) == 64.17
+    lens = jaxlens.load(DATA / "cooke_triplet.json")
+    tables = tuple(
+        m
+        if m.name == "air"
+        else Tabulated(lens.wavelengths, m.index(lens.wavelengths), name=m.name)
+        for m in lens.materials
+    )
+    lens = dataclasses.replace(lens, materials=tables)
+    jaxlens.save(lens, tmp_path / "t.zmx")
+    assert_same_lens(lens, jaxlens.load(tmp_path / "t.zmx"))
