@@ -39,7 +39,8 @@ class AbstractSurface(eqx.Module):
 
     c: eqx.AbstractVar[Float[Array, ""]]
     k: eqx.AbstractVar[Float[Array, ""]]
-    semi_diameter: eqx.AbstractVar[Float[Array, ""]]
+    # Every subclass also has ``semi_diameter`` as its last field (not an AbstractVar
+    # here, so that it stays last in the positional order).
 
     # Polynomial terms; zero-length arrays mean "none" and cost nothing.
     def even_coeffs(self) -> Float[Array, " m"]:
