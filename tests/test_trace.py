@@ -245,3 +245,26 @@ def test_self_intersection_flags_overlap():
     check = analysis.self_intersection(bad, semi_diameters=jnp.array([3.0, 3.0]))
     assert not bool(check.ok)
     assert "after surfaces 1" in check.summary()
+
+
+def test_finite_object_images_at_gaussian_conjugate():
+    """A weak singlet images a point at 200 mm where the Gaussian thick-lens formula says."""
+    n, r1, r2, t = 1.5, 100.0, -100.0, 2.0
+    glass = jl.ModelGlass(n, 60.0)
+    probe = jl.Lens((jl.Sphere(1 / r1), jl.Sphere(1 / r2)), jnp.array([t, 100.0]),
+                    (glass, jl.Air()), epd=1.0, object_distance=200.0)
+    f = float(jl.efl(probe))
+    a, b, c, d = (float(x) for x in paraxial.system_matrix(probe))
+    # Image distance after the last vertex for an object 200 mm before the first.
+    s_obj = 200.0
+    y_img_dist = -(a * s_obj + b) / (c * s_obj + d)
+    p = jl.paraxial_data(probe)
+    assert float(p.paraxial_image_z) - t == pytest.approx(y_img_dist, rel=1e-12)
+    assert f == pytest.approx(1 / ((n - 1) * (2 / r1 - (n - 1) * t / (n * r1 * r1))), rel=1e-12)
+    lens = jl.Lens(probe.surfaces, jnp.array([t, y_img_dist]), probe.materials, epd=1.0,
+                   object_distance=200.0)
+    pupil = jnp.array([[0.0, 0.05], [0.05, 0.0], [0.0, -0.05]])
+    rays = jl.sampling.point_source(lens, jnp.array([0.0, 0.0, -200.0]), pupil)
+    out = jl.trace(lens, rays)
+    # Near-paraxial rays meet on the axis at the paraxial image (third-order residual).
+    assert np.abs(np.asarray(out.origin[:, :2])).max() < 1e-6
