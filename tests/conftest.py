@@ -18,8 +18,9 @@ REFCASES = pathlib.Path(__file__).resolve().parents[2] / "shared" / "refcases"
 @pytest.fixture(scope="session")
 def refcase_dir():
     """Folder of reference cases from independent tracers (skips if absent)."""
-    for p in (pathlib.Path(os.environ.get("JAXLENS_REFCASES", "")), REFCASES,
-              pathlib.Path(__file__).parent / "refcases"):
-        if p and p.is_dir() and any(p.glob("*.json")):
+    env = os.environ.get("JAXLENS_REFCASES")
+    shipped = pathlib.Path(__file__).parent / "refcases"
+    for p in ([pathlib.Path(env)] if env else []) + [REFCASES, shipped]:
+        if p.is_dir() and any(p.glob("*.json")):
             return p
     pytest.skip("no reference cases found")
