@@ -15,12 +15,21 @@ import pytest  # noqa: E402
 REFCASES = pathlib.Path(__file__).resolve().parents[2] / "shared" / "refcases"
 
 
-@pytest.fixture(scope="session")
-def refcase_dir():
-    """Folder of reference cases from independent tracers (skips if absent)."""
+def find_refcase_dir():
+    """Folder of reference cases from independent tracers: $JAXLENS_REFCASES, then
+    ../shared/refcases beside the checkout, then the copy shipped in tests/refcases."""
     env = os.environ.get("JAXLENS_REFCASES")
     shipped = pathlib.Path(__file__).parent / "refcases"
     for p in ([pathlib.Path(env)] if env else []) + [REFCASES, shipped]:
         if p.is_dir() and any(p.glob("*.json")):
             return p
-    pytest.skip("no reference cases found")
+    return None
+
+
+@pytest.fixture(scope="session")
+def refcase_dir():
+    """Folder of reference cases (skips if absent)."""
+    p = find_refcase_dir()
+    if p is None:
+        pytest.skip("no reference cases found")
+    return p
