@@ -26,6 +26,7 @@ import dataclasses
 import json
 import math
 import os
+import re
 from decimal import Decimal
 from typing import Any
 
@@ -45,9 +46,19 @@ FORMAT = "jaxlens.lens/1"
 
 _SUPPORTED_FORMATS = ("jaxlens.lens/1",)
 _AIR_NAMES = ("", "air", "vacuum")
-_STANDARD_TYPES = ("standard", "sphere", "spherical", "plane", "flat", "conic", "stop")
-_EVENASPH_TYPES = ("evenasph", "even_asphere", "evenasphere", "asphere", "aspheric", "asph")
-_HYBRID_TYPES = ("hybrid",)
+_STANDARD_TYPES = (
+    "standard",
+    "sphere",
+    "spherical",
+    "plane",
+    "planar",
+    "flat",
+    "conic",
+    "conicoid",
+    "stop",
+    "aperture",
+    "aperturestop",
+)
 
 
 # --------------------------------------------------------------------------------------
@@ -76,6 +87,12 @@ def _num(value: Any, where: str, *, finite: bool = True) -> float:
     if math.isnan(v) or (finite and math.isinf(v)):
         raise ValueError(f"{where}: expected a finite number, got {value!r}")
     return v
+
+
+def _text(value: Any, where: str) -> str:
+    if not isinstance(value, str):
+        raise ValueError(f"{where}: expected a string, got {value!r}")
+    return value
 
 
 def _nums(value: Any, where: str, *, finite: bool = True) -> np.ndarray:
@@ -363,7 +380,10 @@ def _curvature(d: dict, where: str) -> float:
 
 def surface_from_dict(d: dict, where: str, *, kind: str | None = None) -> AbstractSurface:
     """A surface from its JSON object; ``kind`` overrides the ``type`` key."""
-    kind = (kind or d.get("type") or "standard").strip().lower()
+    raw = _text(kind or d.get("type") or "standard", f"{where}: type")
+    kind = re.sub(r"[^a-z0-9]", "", raw.lower())  # "Even Asphere" == "even_asphere"
+    if "odd" in kind and "hybrid" not in kind:
+        raise ValueError(f"{where}: surface type {raw!r} (radial odd powers) is not supported")
     c = _curvature(d, where)
     k = _num(d.get("conic", 0.0), f"{where}: conic")
     sd = d.get("semi_diameter")
@@ -374,7 +394,7 @@ def surface_from_dict(d: dict, where: str, *, kind: str | None = None) -> Abstra
     if coeffs.ndim != 1:
         raise ValueError(f"{where}: even_asphere_coeffs must be a flat list")
     has_odd = "odd_x" in d or "odd_y" in d
-    if kind in _HYBRID_TYPES or has_odd:
+    if "hybrid" in kind or has_odd:
         ox = _nums(d.get("odd_x", []), f"{where}: odd_x")
         oy = _nums(d.get("odd_y", []), f"{where}: odd_y")
         p = max(ox.size, oy.size)
@@ -388,13 +408,11 @@ def surface_from_dict(d: dict, where: str, *, kind: str | None = None) -> Abstra
             odd_y=_arr(oy),
             semi_diameter=_arr(sd),
         )
-    if kind in _EVENASPH_TYPES or (kind in _STANDARD_TYPES and coeffs.size):
+    if "asph" in kind or (kind in _STANDARD_TYPES and coeffs.size):
         return EvenAsphere(c=_arr(c), k=_arr(k), coeffs=_arr(coeffs), semi_diameter=_arr(sd))
     if kind in _STANDARD_TYPES:
         return Standard(c=_arr(c), k=_arr(k), semi_diameter=_arr(sd))
-    raise ValueError(
-        f"{where}: unknown surface type {d.get('type')!r}; use standard, evenasph or hybrid"
-    )
+    raise ValueError(f"{where}: unknown surface type {raw!r}; use standard, evenasph or hybrid")
 
 
 def surface_to_dict(s: AbstractSurface) -> dict:
@@ -503,7 +521,7 @@ def _wavelengths_of(d: dict, where: str) -> tuple[np.ndarray, int]:
 def _fields_of(d: dict, where: str) -> np.ndarray:
     f = d.get("fields", [0.0])
     if isinstance(f, dict):
-        ftype = f.get("type", "angle_deg_y")
+        ftype = _text(f.get("type", "angle_deg_y"), f"{where}: fields.type")
         if ftype not in ("angle_deg_y", "angle_deg", "angle", "angle_deg_xy"):
             raise ValueError(f"{where}: field type {ftype!r} is not supported (angles in deg)")
         f = f.get("values", [0.0])
@@ -561,14 +579,17 @@ def lens_from_dict(d: dict, *, source: str = "<lens>") -> Lens:
         where = f"{source}: surface {i}"
         if not isinstance(s, dict):
             raise ValueError(f"{where}: must be an object, got {s!r}")
-        if s.get("type", "").lower() in ("object", "image"):
+        if _text(s.get("type", ""), f"{where}: type").lower() in ("object", "image"):
             raise ValueError(f"{where}: an {s['type']} surface can only be first/last")
         surfaces.append(surface_from_dict(s, where))
         if "thickness" not in s:
             raise ValueError(f"{where}: missing 'thickness'")
         thick.append(_num(s["thickness"], f"{where}: thickness"))
         mats.append(material_from_spec(s.get("material"), where, n_table=s.get("n")))
-        if s.get("is_stop", False) is True:
+        is_stop = s.get("is_stop", False)
+        if not isinstance(is_stop, bool):
+            raise ValueError(f"{where}: is_stop must be true or false, got {is_stop!r}")
+        if is_stop:
             stops.append(j)
     if len(stops) > 1:
         raise ValueError(
@@ -592,7 +613,7 @@ def lens_from_dict(d: dict, *, source: str = "<lens>") -> Lens:
 
     image = Standard()
     if img is not None:
-        shape = img.get("shape", "standard")
+        shape = _text(img.get("shape", "standard"), f"{source}: image surface shape")
         image = surface_from_dict(img, f"{source}: image surface", kind=shape)
 
     wl, primary = _wavelengths_of(d, source)
@@ -603,7 +624,7 @@ def lens_from_dict(d: dict, *, source: str = "<lens>") -> Lens:
         try:
             res = tuple(int(v) for v in sd["resolution"])
             pix = _num(sd["pixel_size"], f"{source}: sensor.pixel_size")
-        except (KeyError, TypeError):
+        except (KeyError, TypeError, ValueError, OverflowError):
             raise ValueError(
                 f"{source}: sensor needs resolution [rows, cols] and pixel_size (mm)"
             ) from None

@@ -109,6 +109,7 @@ _SENSOR_COMMENT = re.compile(r"jaxlens sensor rows=(\d+) cols=(\d+) pixel=(\S+)"
 _MARKER = "jaxlens "
 _KEYWORD = re.compile(r"^[A-Z][A-Z0-9_]{1,9}$")
 _MAX_XPOLY_DEGREE = 20
+_MAX_XDAT_TERMS = 230  # Zemax's extended polynomial: all terms up to degree 20
 
 
 # ---------------------------------------------------------------------------- numbers
@@ -341,8 +342,8 @@ def _xdat_terms(s: _Surf, unit: float, what: str):
     if 1 not in s.xdat or 2 not in s.xdat:
         raise where.error(f"{what} needs XDAT 1 (number of terms) and XDAT 2 (norm radius)")
     n_val, n_line = s.xdat[1]
-    if n_val != int(n_val) or n_val < 0:
-        raise n_line.error("XDAT 1 must be a non-negative integer number of terms")
+    if n_val != int(n_val) or not 0 <= n_val <= _MAX_XDAT_TERMS:
+        raise n_line.error(f"XDAT 1 must be a whole number of terms, 0..{_MAX_XDAT_TERMS}")
     norm, norm_line = s.xdat[2]
     if not norm > 0:
         raise norm_line.error("the normalisation radius (XDAT 2) must be > 0")
@@ -943,7 +944,7 @@ def dumps(lens: Lens, path: str = "lens.zmx", *, model_glass: str = "blank"):
     head = [
         "VERS 190513 80 123457 L123457",
         "MODE SEQ",
-        f"NAME {lens.name}".rstrip(),
+        f"NAME {' '.join(lens.name.split())}".rstrip(),
         "UNIT MM X W X CM MR CPMM",
         f"ENPD {_z(lens.epd)}",
         "ENVD 2.0E+1 1 0",

@@ -291,3 +291,70 @@ def test_saved_lens_is_differentiable(tmp_path):
     lens2 = eqx.tree_at(lambda l: l.thickness, lens, lens.thickness * 1.01)
     jaxlens.save(lens2, tmp_path / "l.json")
     assert_same_lens(lens2, jaxlens.load(tmp_path / "l.json"))
+
+
+def test_refcase_style_held_out_features():
+    """Aspheres to A12 with conics, plastics, a curved image, image space not air."""
+    n = {"486.1327": 1.5, "587.5618": 1.49, "656.2725": 1.485}
+    d = {
+        "wavelengths_nm": [486.1327, 587.5618, 656.2725],
+        "primary_wavelength_nm": 587.5618,
+        "aperture": {"EPD": 2.0},
+        "fields": {"type": "angle_deg_y", "values": [0.0, 20.0]},
+        "surfaces": [
+            {
+                "index": 0,
+                "type": "object",
+                "radius": "inf",
+                "thickness": "inf",
+                "n": {k: 1.0 for k in n},
+                "material": "air",
+            },
+            {
+                "index": 1,
+                "type": "Even Asphere",
+                "radius": 2.5,
+                "curvature": 0.4,
+                "thickness": 1.0,
+                "conic": -12.5,
+                "material": "E48R",
+                "n": n,
+                "is_stop": True,
+                "even_asphere_coeffs": [1e-3, -2e-3, 3e-4, -4e-5, 5e-6, -6e-7],
+                "semi_diameter_real_rays": 1.0,
+            },
+            {
+                "index": 2,
+                "type": "sphere",
+                "radius": -4.0,
+                "curvature": -0.25,
+                "thickness": 3.0,
+                "conic": 0.0,
+                "even_asphere_coeffs": [],
+                "material": "OIL",
+                "n": {k: v + 0.02 for k, v in n.items()},
+            },
+            {
+                "index": 3,
+                "type": "image",
+                "radius": -30.0,
+                "curvature": -1 / 30.0,
+                "material": "air",
+                "n": {k: 1.0 for k in n},
+                "z_vertex": 4.0,
+            },
+        ],
+    }
+    lens = lensfile.lens_from_dict(d)
+    s = lens.surfaces[0]
+    assert isinstance(s, EvenAsphere) and float(s.k) == -12.5 and s.coeffs.shape == (6,)
+    assert float(s.paraxial_curvature) == 0.4 + 2e-3
+    assert isinstance(lens.surfaces[1], Standard)
+    assert isinstance(lens.materials[1], Tabulated) and lens.materials[1].name == "OIL"
+    assert float(lens.materials[1].index(0.5875618)) == 1.51  # image space is the oil
+    assert float(lens.image.c) == -1 / 30.0
+    assert isinstance(lens.object_material, Air)
+    assert np.isfinite(float(jaxlens.efl(lens)))
+    d["surfaces"][1]["type"] = "odd_asphere"
+    with pytest.raises(ValueError, match="not supported"):
+        lensfile.lens_from_dict(d)
