@@ -144,10 +144,17 @@ def refract(d, normal, mu):
     return out, ok
 
 
-def _surface_normal(surface: AbstractSurface, x, y):
-    _, gx, gy, _ = surface.sag_and_grad(x, y)
-    inv = jax.lax.rsqrt(1.0 + gx * gx + gy * gy)
-    return -gx * inv, -gy * inv, inv
+def _surface_normal(surface: AbstractSurface, x, y, z):
+    """Unit normal (+z at the vertex) at a point (local frame) on the surface."""
+    if surface.has_polynomial:
+        _, gx, gy, _ = surface.sag_and_grad(x, y)
+        nx, ny, nz = -gx, -gy, jnp.ones_like(gx)
+    else:
+        # Gradient of the implicit conic c(x² + y²) + c(1+k)z² − 2z: no square root needed.
+        c = surface.c
+        nx, ny, nz = -c * x, -c * y, 1.0 - c * (1.0 + surface.k) * z
+    inv = jax.lax.rsqrt(nx * nx + ny * ny + nz * nz)
+    return nx * inv, ny * inv, nz * inv
 
 
 class _State(eqx.Module):
@@ -166,10 +173,12 @@ def _step(surface, z_vertex, st: _State, n_before, n_after, *, first, refracts, 
     if not first:
         ok = ok & (t >= -1e3 * jnp.finfo(t.dtype).eps * (1 + jnp.abs(o_local[2])))
     x, y, z = (oi + t * di for oi, di in zip(o_local, st.d, strict=True))
-    ok = ok & (x * x + y * y <= surface.semi_diameter**2)
+    # A ray exactly on the rim stays in despite rounding.
+    rim = surface.semi_diameter**2 * (1 + 64 * jnp.finfo(x.dtype).eps)
+    ok = ok & (x * x + y * y <= rim)
     d = st.d
     if refracts:
-        d, no_tir = refract(d, _surface_normal(surface, x, y), n_before / n_after)
+        d, no_tir = refract(d, _surface_normal(surface, x, y, z), n_before / n_after)
         ok = ok & no_tir
     valid = st.valid & ok
     keep = lambda new, old: jnp.where(valid, new, old)  # noqa: E731
