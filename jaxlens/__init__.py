@@ -7,7 +7,13 @@ for the sign conventions.
 
 from . import analysis as analysis
 from . import catalog as catalog
+from . import distortion_relax as distortion_relax
+from . import images as images
 from . import paraxial as paraxial
+from . import psf as psf  # callable: jaxlens.psf(...) is jaxlens.psf.psf(...)
+from . import radiometry as radiometry
+from . import render as render  # callable: jaxlens.render(...) is jaxlens.render.render(...)
+from . import reverse as reverse
 from . import sampling as sampling
 from . import zoo as zoo
 from .catalog import CatalogMaterial as CatalogMaterial

@@ -1,0 +1,289 @@
+"""Distortion relaxation: let the network, not the lens, undo distortion.
+
+Yang, Fu and Heidrich (Nat. Commun. 2024, Methods) relax the distortion requirement of the
+lens: distortion moves image points without blurring them, so it costs no information and
+can be corrected after capture. Instead of penalising it through the image loss, the
+object is pre-warped by the lens's own distortion, so that the simulated image lines up
+with the undistorted scene, and an optional alignment penalty with weight α keeps the
+distortion from growing without bound.
+
+Conventions:
+    Sensor positions in mm on the image surface, in the frame of ``render``: the ideal
+    (distortion-free) image of the field (θx, θy) is ``K·(tanθx, tanθy)`` with
+    ``K = psf.image_scale(lens)``. The distortion map D sends an ideal position v to the
+    position where the real chief ray (through the centre of the stop, primary
+    wavelength) of that field lands. Grids span the sensor corner to corner
+    (``psf.sensor_grid``: row 0 / column 0 is the top-left pixel of the rendered image).
+
+Pre-warp:
+    A scene is shown at ideal positions. The simulated image at u shows the object whose
+    real image is u, the object at D⁻¹(u). Rendering the pre-warped object
+    ``scene'(v) = scene(D(v))`` therefore shows ``scene(u)`` at u: the distortion is gone
+    from the simulated image (blur and vignetting remain).
+"""
+
+from __future__ import annotations
+
+import math
+
+import equinox as eqx
+import jax
+import jax.numpy as jnp
+from jaxtyping import Array, Float
+
+from . import paraxial
+from .lens import Lens, Sensor
+from .psf import _chief_point, _static_depth, apertured, ideal_to_field, image_scale, sensor_grid
+from .rays import Rays
+from .reverse import trace_backward
+from .trace import DEFAULT_NEWTON_ITERS
+
+__all__ = [
+    "DistortionMap",
+    "distortion_map",
+    "inverse_distortion_map",
+    "prewarp",
+    "alignment_penalty",
+    "relaxed_render",
+]
+
+
+class DistortionMap(eqx.Module):
+    """Ideal and real chief-ray image positions on a grid (mm), ``[gr, gc, 2]`` each."""
+
+    ideal: Float[Array, "gr gc 2"]
+    real: Float[Array, "gr gc 2"]
+
+
+def _sensor(lens: Lens, sensor):
+    sensor = lens.sensor if sensor is None else sensor
+    if sensor is None:
+        raise ValueError("distortion_relax: the lens has no sensor; pass sensor=Sensor(...)")
+    return sensor
+
+
+def _forward_map(lens, ideal, depth, newton_iters):
+    fields = ideal_to_field(lens, ideal.reshape(-1, 2))
+    real = jax.vmap(lambda f: _chief_point(lens, f, depth, newton_iters))(fields)
+    return real.reshape(ideal.shape)
+
+
+def distortion_map(
+    lens: Lens,
+    *,
+    grid: tuple[int, int] = (17, 17),
+    depth=math.inf,
+    sensor: Sensor | None = None,
+    newton_iters: int = DEFAULT_NEWTON_ITERS,
+) -> DistortionMap:
+    """The distortion map D on a grid of ideal positions spanning the sensor.
+
+    Args:
+        lens: the lens.
+        grid: (rows, cols) of the grid.
+        depth: object distance in mm in front of surface 1 (``inf`` for infinity).
+        sensor: default ``lens.sensor``.
+        newton_iters: Newton iterations for aspheric surfaces.
+
+    Returns:
+        A :class:`DistortionMap` (differentiable with respect to the lens).
+    """
+    s = _sensor(lens, sensor)
+    depth = _static_depth(depth)
+    lens = apertured(lens)
+    ideal = sensor_grid(s.resolution, s.pixel_size, grid).astype(lens.epd.dtype)
+    return DistortionMap(ideal, _forward_map(lens, ideal, depth, newton_iters))
+
+
+def inverse_distortion_map(
+    lens: Lens,
+    *,
+    resolution,
+    pixel_size,
+    grid: tuple[int, int] = (17, 17),
+    depth=None,
+    newton_iters: int = DEFAULT_NEWTON_ITERS,
+    iters: int = 6,
+) -> Float[Array, "gr gc 2"]:
+    """D⁻¹ on a grid of sensor points: the ideal position whose chief ray lands there.
+
+    Each sensor point sends a ray backward through the lens, aimed by Newton's method (with
+    a forward-mode Jacobian) at the centre of the stop; where it leaves into object space
+    gives the field, hence the ideal position.
+
+    Args:
+        lens: the lens.
+        resolution, pixel_size: the sensor (rows, cols) and pitch (mm).
+        grid: (rows, cols) of sensor points, corner to corner.
+        depth: None for infinity, else the object distance in mm (an array).
+        newton_iters: Newton iterations for aspheric surfaces.
+        iters: aiming iterations.
+
+    Returns:
+        ``[gr, gc, 2]`` ideal positions (mm).
+    """
+    dtype = lens.epd.dtype
+    pts = sensor_grid(resolution, pixel_size, grid).astype(dtype)
+    k_scale = image_scale(lens)
+    pd = paraxial.paraxial_data(lens)
+    zep = pd.entrance_pupil_z
+    z_img = lens.image_z()
+    xp = pd.exit_pupil_z
+    wl = lens.primary_wavelength
+
+    def origin_of(xy):
+        z, _ = lens.image.sag(xy[0], xy[1])
+        return jnp.stack([xy[0], xy[1], z_img + z])
+
+    def ray(lm, o):
+        n = jnp.sqrt(jnp.clip(1.0 - jnp.sum(lm * lm), 1e-12, None))
+        return Rays(o[None], jnp.concatenate([lm, -n[None]])[None], wl)
+
+    def at_stop(lm, o):
+        out = trace_backward(lens, ray(lm, o), newton_iters=newton_iters, upto=lens.stop)
+        return out.origin[0, :2]
+
+    def solve(xy):
+        o = origin_of(xy)
+        sgn = jnp.where(z_img >= xp, 1.0, -1.0)
+        to_xp = jnp.stack([-o[0], -o[1], xp - o[2]]) * sgn
+        lm0 = jax.lax.stop_gradient(to_xp[:2] / jnp.linalg.norm(to_xp))
+
+        def body(_, lm):
+            f = at_stop(lm, o)
+            jac = jax.jacfwd(at_stop)(lm, o)
+            det = jac[0, 0] * jac[1, 1] - jac[0, 1] * jac[1, 0]
+            det = jnp.where(det == 0, 1.0, det)
+            inv = jnp.array([[jac[1, 1], -jac[0, 1]], [-jac[1, 0], jac[0, 0]]]) / det
+            step = inv @ f
+            # Keep steps modest so that the ray stays inside the lens.
+            norm = jnp.sqrt(jnp.sum(step * step))
+            step = step * jnp.minimum(1.0, 0.2 / jnp.where(norm > 0, norm, 1.0))
+            return lm - step
+
+        lm = jax.lax.fori_loop(0, iters, body, lm0)
+        out = trace_backward(lens, ray(lm, o), newton_iters=newton_iters)
+        d = out.direction[0]
+        bz = jnp.where(d[2] < 0, d[2], -1.0)
+        if depth is None:
+            t = d[:2] / bz
+        else:
+            s = (-depth - out.origin[0, 2]) / bz
+            p = out.origin[0, :2] + s * d[:2]
+            t = -p / (zep + depth)
+        return k_scale * t
+
+    return jax.vmap(jax.vmap(solve))(pts)
+
+
+def _ideal_of_pixels(shape, resolution, pixel_size, dtype):
+    hs, ws = shape
+    h, w = resolution
+    pr, pc = pixel_size * h / hs, pixel_size * w / ws
+    r = jnp.arange(hs, dtype=dtype)
+    c = jnp.arange(ws, dtype=dtype)
+    rr, cc = jnp.meshgrid(r, c, indexing="ij")
+    return -(cc - 0.5 * (ws - 1)) * pc, (rr - 0.5 * (hs - 1)) * pr, pr, pc
+
+
+def prewarp(
+    lens: Lens,
+    scene: Float[Array, "H W C"],
+    *,
+    depth=math.inf,
+    sensor: Sensor | None = None,
+    grid: tuple[int, int] = (17, 17),
+    newton_iters: int = DEFAULT_NEWTON_ITERS,
+) -> Float[Array, "H W C"]:
+    """Pre-warp a scene by the lens's distortion: ``scene'(v) = scene(D(v))``.
+
+    Rendering the result with ``jaxlens.render`` gives an image aligned with ``scene``.
+    D is computed on ``grid`` and interpolated bilinearly; positions beyond the grid
+    extend its edge values. Differentiable with respect to the lens and the scene.
+
+    Args:
+        lens: the lens.
+        scene: ``[H, W, C]`` linear image with the sensor's aspect ratio.
+        depth: object distance in mm (``inf`` for infinity).
+        sensor: default ``lens.sensor``.
+        grid: grid of the distortion map.
+        newton_iters: Newton iterations for aspheric surfaces.
+
+    Returns:
+        The pre-warped scene, same shape.
+    """
+    from .render import _grid_coords, bilinear
+
+    s = _sensor(lens, sensor)
+    scene = jnp.asarray(scene)
+    if scene.ndim != 3:
+        raise ValueError(f"prewarp: scene must be [H, W, C], got {scene.shape}")
+    dmap = distortion_map(lens, grid=grid, depth=depth, sensor=s, newton_iters=newton_iters)
+    dtype = scene.dtype
+    real = dmap.real.astype(dtype)
+    hs, ws = scene.shape[:2]
+    x, y, pr, pc = _ideal_of_pixels((hs, ws), s.resolution, s.pixel_size, dtype)
+    # Fractional sensor-pixel coordinates of the ideal positions, then grid coordinates.
+    h, w = s.resolution
+    rows = y / s.pixel_size + 0.5 * (h - 1)
+    cols = -x / s.pixel_size + 0.5 * (w - 1)
+    gy, gx = _grid_coords(s.resolution, grid, rows, cols)
+    dv = bilinear(real, gy, gx)  # [H, W, 2]
+    r_sc = 0.5 * (hs - 1) + dv[..., 1] / pr
+    c_sc = 0.5 * (ws - 1) - dv[..., 0] / pc
+    return bilinear(scene, r_sc, c_sc)
+
+
+def alignment_penalty(
+    lens: Lens,
+    *,
+    alpha,
+    grid: tuple[int, int] = (9, 9),
+    depth=math.inf,
+    sensor: Sensor | None = None,
+    newton_iters: int = DEFAULT_NEWTON_ITERS,
+) -> Float[Array, ""]:
+    """α times the mean squared chief-ray displacement |D(v) − v|², in pixels².
+
+    Args:
+        lens: the lens.
+        alpha: weight α (0 turns the penalty off).
+        grid: grid of ideal positions over the sensor.
+        depth: object distance in mm (``inf`` for infinity).
+        sensor: default ``lens.sensor`` (its pitch sets the unit).
+        newton_iters: Newton iterations for aspheric surfaces.
+    """
+    s = _sensor(lens, sensor)
+    d = distortion_map(lens, grid=grid, depth=depth, sensor=s, newton_iters=newton_iters)
+    err = jnp.sum((d.real - d.ideal) ** 2, -1) / s.pixel_size**2
+    return jnp.asarray(alpha) * jnp.mean(err)
+
+
+def relaxed_render(
+    lens: Lens,
+    scene,
+    *,
+    spp: int,
+    key,
+    alpha=0.0,
+    depth=math.inf,
+    grid: tuple[int, int] = (17, 17),
+    **render_kwargs,
+):
+    """Render the pre-warped scene and return ``(image, alignment_penalty)``.
+
+    The image lines up with ``scene``, so an image loss against ``scene`` sees blur but not
+    distortion; add the penalty (weight ``alpha``) to the loss to keep distortion bounded.
+
+    Args:
+        lens, scene, spp, key, depth, render_kwargs: as :func:`jaxlens.render`.
+        alpha: weight of :func:`alignment_penalty`.
+        grid: grid of the distortion map.
+    """
+    from .render import render
+
+    sensor = render_kwargs.get("sensor")
+    warped = prewarp(lens, scene, depth=depth, sensor=sensor, grid=grid)
+    img = render(lens, warped, spp=spp, key=key, depth=depth, **render_kwargs)
+    pen = alignment_penalty(lens, alpha=alpha, depth=depth, sensor=sensor)
+    return img, pen

@@ -1,0 +1,285 @@
+"""Image files and test scenes: OpenEXR (float, linear) and PNG, skimage scenes, PSNR/SSIM.
+
+Conventions:
+    Images are numpy arrays ``[H, W]`` or ``[H, W, C]``, row 0 at the top. EXR files hold
+    linear light as 32-bit floats. PNG files hold display-referred sRGB-encoded 8- or 16-bit
+    values: ``read_png`` decodes them to linear light in [0, 1] unless ``linear=False``,
+    and ``write_png`` encodes linear values with the sRGB curve (clipping to [0, 1]).
+    Built-in scenes come from ``skimage.data`` (shipped with scikit-image, nothing is
+    downloaded) and are returned linear.
+
+This module works on the host (numpy, files); it is not jittable.
+"""
+
+from __future__ import annotations
+
+import os
+import pathlib
+
+import numpy as np
+
+__all__ = [
+    "read_exr",
+    "write_exr",
+    "read_png",
+    "write_png",
+    "srgb_to_linear",
+    "linear_to_srgb",
+    "to_linear",
+    "scene",
+    "SCENES",
+    "psnr",
+    "ssim",
+    "write_psf_stack",
+    "read_psf_stack",
+]
+
+SCENES = ("astronaut", "chelsea", "coffee", "rocket", "camera", "immunohistochemistry",
+          "hubble_deep_field", "colorwheel")
+"""Names of the built-in scenes (functions of ``skimage.data`` bundled with scikit-image)."""
+
+
+def srgb_to_linear(v):
+    """Decode sRGB values in [0, 1] to linear light (IEC 61966-2-1)."""
+    v = np.asarray(v, np.float64)
+    return np.where(v <= 0.04045, v / 12.92, ((v + 0.055) / 1.055) ** 2.4)
+
+
+def linear_to_srgb(v):
+    """Encode linear light in [0, 1] with the sRGB curve (values are clipped first)."""
+    v = np.clip(np.asarray(v, np.float64), 0.0, 1.0)
+    return np.where(v <= 0.0031308, 12.92 * v, 1.055 * v ** (1 / 2.4) - 0.055)
+
+
+def to_linear(img) -> np.ndarray:
+    """An integer sRGB image (uint8/uint16) or a float image in [0, 1] as linear float32."""
+    a = np.asarray(img)
+    if np.issubdtype(a.dtype, np.integer):
+        a = a.astype(np.float64) / np.iinfo(a.dtype).max
+        return srgb_to_linear(a).astype(np.float32)
+    return np.asarray(a, np.float32)
+
+
+def _check_readable(path, caller):
+    p = pathlib.Path(os.fspath(path))
+    if not p.exists():
+        raise FileNotFoundError(f"{caller}: no such file: {p}")
+    if not p.is_file():
+        raise ValueError(f"{caller}: not a file: {p}")
+    return p
+
+
+def read_exr(path, *, channels=None) -> np.ndarray:
+    """Read an OpenEXR image as float32 linear values.
+
+    Args:
+        path: the file.
+        channels: channel names to read in order (default: R, G, B if present, else every
+            channel in sorted order).
+
+    Returns:
+        ``[H, W, C]`` float32 (``[H, W]`` for a single channel).
+
+    Raises:
+        FileNotFoundError: the file does not exist.
+        ValueError: the file is not a readable OpenEXR image, or lacks a requested channel.
+    """
+    import OpenEXR
+
+    p = _check_readable(path, "read_exr")
+    try:
+        with OpenEXR.File(str(p), separate_channels=True) as f:
+            chans = {k: np.asarray(v.pixels) for k, v in f.channels().items()}
+    except Exception as e:  # OpenEXR raises RuntimeError with a terse message
+        raise ValueError(f"read_exr: {p} is not a readable OpenEXR file ({e})") from None
+    if channels is None:
+        channels = [c for c in ("R", "G", "B") if c in chans] or sorted(chans)
+    missing = [c for c in channels if c not in chans]
+    if missing:
+        raise ValueError(f"read_exr: {p} has no channel(s) {missing}; it has {sorted(chans)}")
+    arr = np.stack([chans[c].astype(np.float32) for c in channels], -1)
+    return arr[..., 0] if arr.shape[-1] == 1 else arr
+
+
+def write_exr(path, img, *, channels=None) -> None:
+    """Write a float image to OpenEXR (32-bit float, ZIP compression).
+
+    Args:
+        path: the file.
+        img: ``[H, W]`` or ``[H, W, C]`` linear values.
+        channels: channel names (default Y for one channel, R, G, B for three, else
+            C0, C1, ...).
+    """
+    a = np.asarray(img, np.float32)
+    if a.ndim == 2:
+        a = a[..., None]
+    if a.ndim != 3:
+        raise ValueError(f"write_exr: image must be [H, W] or [H, W, C], got {a.shape}")
+    c = a.shape[-1]
+    if channels is None:
+        channels = ("Y",) if c == 1 else ("R", "G", "B") if c == 3 else tuple(
+            f"C{i}" for i in range(c))
+    if len(channels) != c:
+        raise ValueError(f"write_exr: {c} channels need {c} names, got {channels}")
+    data = {name: np.ascontiguousarray(a[..., i]) for i, name in enumerate(channels)}
+    _write_channels(path, data)
+
+
+def _write_channels(path, data):
+    import OpenEXR
+
+    header = {"compression": OpenEXR.ZIP_COMPRESSION, "type": OpenEXR.scanlineimage}
+    with OpenEXR.File(header, data) as f:
+        f.write(str(os.fspath(path)))
+
+
+def read_png(path, *, linear: bool = True) -> np.ndarray:
+    """Read a PNG (or any format skimage.io reads) as float32.
+
+    Args:
+        path: the file.
+        linear: decode sRGB to linear light (default); False returns the encoded values in
+            [0, 1].
+
+    Returns:
+        ``[H, W, C]`` or ``[H, W]`` float32 in [0, 1] (an alpha channel is dropped).
+
+    Raises:
+        FileNotFoundError, ValueError: missing or unreadable file.
+    """
+    from skimage import io
+
+    p = _check_readable(path, "read_png")
+    try:
+        a = io.imread(str(p))
+    except Exception as e:
+        raise ValueError(f"read_png: {p} is not a readable image ({e})") from None
+    if a.ndim == 3 and a.shape[-1] == 4:
+        a = a[..., :3]
+    if np.issubdtype(a.dtype, np.integer):
+        v = a.astype(np.float64) / np.iinfo(a.dtype).max
+    else:
+        v = a.astype(np.float64)
+    return (srgb_to_linear(v) if linear else v).astype(np.float32)
+
+
+def write_png(path, img, *, linear: bool = True, bits: int = 8) -> None:
+    """Write an image to PNG.
+
+    Args:
+        path: the file.
+        img: ``[H, W]`` or ``[H, W, 3]`` values in [0, 1] (clipped).
+        linear: the values are linear light and get the sRGB curve (default); False writes
+            them as they are.
+        bits: 8 or 16.
+    """
+    from skimage import io
+
+    if bits not in (8, 16):
+        raise ValueError(f"write_png: bits must be 8 or 16, got {bits}")
+    a = np.asarray(img, np.float64)
+    v = linear_to_srgb(a) if linear else np.clip(a, 0.0, 1.0)
+    dt = np.uint8 if bits == 8 else np.uint16
+    io.imsave(str(os.fspath(path)), np.round(v * np.iinfo(dt).max).astype(dt),
+              check_contrast=False)
+
+
+def scene(name: str = "astronaut", size: tuple[int, int] | None = None) -> np.ndarray:
+    """A built-in test scene from ``skimage.data``, linear float32 ``[H, W, 3]``.
+
+    Args:
+        name: one of ``SCENES``.
+        size: (rows, cols) to resize to (anti-aliased); default the native size.
+
+    Returns:
+        The scene in linear light, values in [0, 1]; grey images are repeated to 3 channels.
+    """
+    import skimage.data
+    import skimage.transform
+
+    if name not in SCENES:
+        raise ValueError(f"scene: unknown scene {name!r}; choose from {SCENES}")
+    a = getattr(skimage.data, name)()
+    if a.ndim == 2:
+        a = np.repeat(a[..., None], 3, -1)
+    a = a[..., :3]
+    lin = to_linear(a)
+    if size is not None:
+        lin = skimage.transform.resize(lin, tuple(size), order=1, anti_aliasing=True,
+                                       preserve_range=True).astype(np.float32)
+    return lin
+
+
+def _data_range(a, b, data_range):
+    if data_range is not None:
+        return float(data_range)
+    return float(max(np.max(a), np.max(b)) - min(np.min(a), np.min(b), 0.0)) or 1.0
+
+
+def psnr(reference, test, *, data_range=None) -> float:
+    """Peak signal-to-noise ratio (dB), ``skimage.metrics.peak_signal_noise_ratio``.
+
+    ``data_range`` defaults to the span of the two images (1 for [0, 1] images).
+    """
+    from skimage.metrics import peak_signal_noise_ratio
+
+    a, b = np.asarray(reference, np.float64), np.asarray(test, np.float64)
+    if a.shape != b.shape:
+        raise ValueError(f"psnr: shapes differ: {a.shape} and {b.shape}")
+    return float(peak_signal_noise_ratio(a, b, data_range=_data_range(a, b, data_range)))
+
+
+def ssim(reference, test, *, data_range=None) -> float:
+    """Structural similarity, ``skimage.metrics.structural_similarity`` (channels last)."""
+    from skimage.metrics import structural_similarity
+
+    a, b = np.asarray(reference, np.float64), np.asarray(test, np.float64)
+    if a.shape != b.shape:
+        raise ValueError(f"ssim: shapes differ: {a.shape} and {b.shape}")
+    kw = {"channel_axis": -1} if a.ndim == 3 else {}
+    return float(structural_similarity(a, b, data_range=_data_range(a, b, data_range), **kw))
+
+
+def write_psf_stack(path, psfs, *, names=None) -> None:
+    """Save a stack of PSFs to one EXR file, one layer per PSF.
+
+    Args:
+        path: the file.
+        psfs: ``[N, k, k]`` (one channel, written as ``psfNNN.Y``) or ``[N, C, k, k]``
+            (C = 3 written as ``psfNNN.R/G/B``, else ``psfNNN.C0``...). A PSF map
+            ``[rows, cols, ...]`` can be flattened first.
+        names: layer names (default ``psf000``, ``psf001``, ...).
+    """
+    a = np.asarray(psfs, np.float32)
+    if a.ndim == 3:
+        a = a[:, None]
+    if a.ndim != 4:
+        raise ValueError(f"write_psf_stack: psfs must be [N, k, k] or [N, C, k, k], got {a.shape}")
+    n, c = a.shape[:2]
+    names = [f"psf{i:03d}" for i in range(n)] if names is None else list(names)
+    if len(names) != n:
+        raise ValueError(f"write_psf_stack: {n} PSFs need {n} names, got {len(names)}")
+    chans = ("Y",) if c == 1 else ("R", "G", "B") if c == 3 else tuple(f"C{i}" for i in range(c))
+    data = {f"{names[i]}.{ch}": np.ascontiguousarray(a[i, j])
+            for i in range(n) for j, ch in enumerate(chans)}
+    _write_channels(path, data)
+
+
+def read_psf_stack(path) -> tuple[np.ndarray, list[str]]:
+    """Read a PSF stack written by :func:`write_psf_stack`: ``([N, C, k, k], names)``."""
+    import OpenEXR
+
+    p = _check_readable(path, "read_psf_stack")
+    try:
+        with OpenEXR.File(str(p), separate_channels=True) as f:
+            chans = {k: np.asarray(v.pixels, np.float32) for k, v in f.channels().items()}
+    except Exception as e:
+        raise ValueError(f"read_psf_stack: {p} is not a readable OpenEXR file ({e})") from None
+    layers: dict[str, dict[str, np.ndarray]] = {}
+    for key, val in chans.items():
+        layer, _, ch = key.rpartition(".")
+        layers.setdefault(layer, {})[ch] = val
+    names = sorted(layers)
+    order = lambda chs: [c for c in ("R", "G", "B") if c in chs] or sorted(chs)  # noqa: E731
+    stack = np.stack([np.stack([layers[n][c] for c in order(layers[n])]) for n in names])
+    return stack, names

@@ -1,0 +1,750 @@
+"""Point spread functions: geometric (ray splatting) and coherent (wave optics), PSF maps, MTF.
+
+``jaxlens.psf`` is both this module and its main function: the module is callable, so
+``jaxlens.psf(lens, field, ...)`` computes a PSF while ``jaxlens.psf.mtf``,
+``jaxlens.psf.psf_map`` and ``from jaxlens.psf import mtf`` reach the rest.
+
+Conventions:
+    Lengths in mm, wavelengths in µm, field angles in degrees (θy, or (θx, θy)). An object
+    at infinity is given by ``depth=inf``; a finite depth is the distance in mm from the
+    object point to surface 1's vertex. The object point of a field at finite depth is
+    placed so that its chief ray makes the field angle at the entrance pupil (as
+    ``sampling.object_point``).
+
+    A PSF is a ``[kernel_size, kernel_size]`` array of the energy per sensor pixel of side
+    ``pixel_size`` (mm), normalised so that it sums to 1 when no energy falls outside the
+    kernel (``truncated`` is the fraction that does). It is sampled in the orientation of
+    ``jaxlens.render``'s output, which reads the sensor out rotated by 180° (as a camera
+    does, so that a lens renders its scene upright): the pixel ``[i, j]`` is centred on the
+    sensor point ``ref + (−(j − c)·p, (i − c)·p)`` with ``c = (kernel_size − 1)/2``, so
+    convolving a rendered-orientation image with the kernel applies the PSF.
+
+    ``center`` picks the reference point ``ref`` on the image surface: "chief" (the real
+    chief ray through the centre of the stop, at the lens's primary wavelength), "centroid"
+    (the energy centroid over all requested wavelengths) or "ideal" (the distortion-free
+    image point ``K·tanθ``, ``K = image_scale(lens)``). One reference serves every
+    wavelength, so lateral colour shows as a shift between the channels.
+
+Models:
+    geometric: rays from the object point fill an overfilled entrance pupil (the aperture
+    stop clips them), are traced to the image surface and splatted bilinearly onto the
+    pixel grid. Bilinear splatting is piecewise linear in the ray positions, so the PSF is
+    differentiable with respect to the lens.
+
+    coherent: the field on the sensor is the ray-based Debye (angular-spectrum) integral.
+    Each traced ray stands for a plane wave with its image-space direction d_j and the
+    phase k·(OPL_j + n·d_j·(q − x_j)) at a sensor point q, where x_j is where the ray lands
+    and OPL_j its optical path from the incoming wavefront (this is the angle eikonal, the
+    optical path to the exit-pupil reference sphere). The amplitudes are
+    sqrt(flux_j·ΔΩ_j), with ΔΩ_j the solid angle (in direction-cosine space) that the
+    ray's pupil cell maps to, from forward-mode derivatives of the trace, so that energy is
+    conserved (Parseval) and non-aplanatic pupils are apodised correctly. The sum is
+    separable in x and y and evaluated as two matrix products. The pupil sampling must
+    resolve the wavefront: the kernel must be smaller than the alias period λ/(n·ΔL) of
+    the direction-cosine sampling, which ``max_truncation`` checks as well.
+"""
+
+from __future__ import annotations
+
+import math
+import sys
+import types
+
+import equinox as eqx
+import jax
+import jax.numpy as jnp
+import numpy as np
+from jaxtyping import Array, ArrayLike, Float
+
+from . import paraxial, sampling
+from .lens import Lens
+from .materials import LAMBDA_C, LAMBDA_D, LAMBDA_F
+from .rays import Rays
+from .reverse import trace_scan
+from .trace import DEFAULT_NEWTON_ITERS
+
+
+def trace(lens, rays, *, newton_iters=DEFAULT_NEWTON_ITERS):
+    """Trace to the image surface with the scanned tracer (fast to compile)."""
+    return trace_scan(lens, rays, newton_iters=newton_iters)
+
+__all__ = [
+    "RGB_WAVELENGTHS",
+    "PSFResult",
+    "PSFMap",
+    "psf",
+    "psf_info",
+    "psf_rgb",
+    "psf_map",
+    "mtf",
+    "image_scale",
+    "ideal_to_field",
+    "field_to_ideal",
+    "sensor_grid",
+    "apertured",
+]
+
+RGB_WAVELENGTHS = (LAMBDA_C, LAMBDA_D, LAMBDA_F)
+"""Default (R, G, B) wavelengths in µm: the C, d and F lines."""
+
+MODELS = ("geometric", "coherent")
+CENTERS = ("chief", "centroid", "ideal")
+
+
+# --------------------------------------------------------------------------------------
+# Geometry shared with render, radiometry and distortion_relax
+# --------------------------------------------------------------------------------------
+def apertured(lens: Lens) -> Lens:
+    """The lens with an unbounded stop given the paraxial stop radius from the EPD.
+
+    Overfilled beams rely on the stop to clip them; a stop with ``semi_diameter = inf``
+    gets the radius that the entrance pupil diameter implies.
+    """
+    sd = lens.surfaces[lens.stop].semi_diameter
+    finite = jnp.isfinite(sd)
+    stop_r = paraxial.paraxial_data(lens).stop_semi_diameter
+    new = jnp.where(finite, sd, stop_r)
+    return eqx.tree_at(lambda m: m.surfaces[m.stop].semi_diameter, lens, new)
+
+
+def image_scale(lens: Lens, wavelength=None) -> Float[Array, ""]:
+    """K (mm): the paraxial chief-ray height on the image surface per unit tanθ.
+
+    The distortion-free image of the field (θx, θy) lies at ``K·(tanθx, tanθy)``; for a lens
+    focused at infinity K is the focal length. The paraxial chief ray is linear in tanθ, so
+    one ray at 45° gives K.
+    """
+    return paraxial.image_height(lens, 45.0, wavelength) / jnp.tan(jnp.deg2rad(45.0))
+
+
+def field_to_ideal(lens: Lens, field, wavelength=None) -> Float[Array, "*b 2"]:
+    """Distortion-free image position (mm) of a field (degrees, θy or (θx, θy))."""
+    th = sampling._field_xy(field)
+    return image_scale(lens, wavelength) * jnp.tan(th)
+
+
+def ideal_to_field(lens: Lens, xy, wavelength=None) -> Float[Array, "*b 2"]:
+    """Field (θx, θy) in degrees whose distortion-free image lies at ``xy`` (mm)."""
+    return jnp.rad2deg(jnp.arctan(jnp.asarray(xy) / image_scale(lens, wavelength)))
+
+
+def sensor_grid(resolution, pixel_size, grid) -> Float[Array, "gr gc 2"]:
+    """Sensor points (x, y) in mm of a ``grid = (rows, cols)`` in rendered orientation.
+
+    Row 0 / column 0 are the top-left corner pixel centres of ``render``'s output, the last
+    row / column the opposite corner; a grid of 1 gives the centre. Sensor x grows to the
+    left of the rendered image and y downward (the 180° readout, see the module docstring).
+    """
+    rows, cols = resolution
+    gr, gc = grid
+    p = jnp.asarray(pixel_size)
+    r = jnp.linspace(0.0, rows - 1.0, gr) if gr > 1 else jnp.full((1,), 0.5 * (rows - 1))
+    c = jnp.linspace(0.0, cols - 1.0, gc) if gc > 1 else jnp.full((1,), 0.5 * (cols - 1))
+    y = (r - 0.5 * (rows - 1)) * p
+    x = -(c - 0.5 * (cols - 1)) * p
+    xx, yy = jnp.meshgrid(x, y, indexing="xy")
+    return jnp.stack([xx, yy], -1)
+
+
+def _static_depth(depth):
+    """None for an object at infinity (a concrete inf), else the depth as an array."""
+    if depth is None:
+        return None
+    if isinstance(depth, jax.core.Tracer):
+        return depth
+    if np.all(np.isinf(np.asarray(depth))):
+        return None
+    d = np.asarray(depth)
+    if np.any(d <= 0):
+        raise ValueError(f"depth must be positive (mm from the object to surface 1), got {depth}")
+    return jnp.asarray(depth)
+
+
+def _pupil_cells(n: int, overfill: float, dtype, key=None):
+    """Cell-centred n×n grid over the disc of radius ``overfill`` (normalised pupil units).
+
+    Returns the points ``[n*n, 2]``, a mask ``[n*n]`` (inside the disc) and the cell side.
+    With a key, each point is jittered uniformly inside its cell (stratified sampling).
+    """
+    g = (np.arange(n) + 0.5) / n * 2.0 - 1.0
+    px, py = np.meshgrid(g, g, indexing="xy")
+    pts = jnp.asarray(np.stack([px.ravel(), py.ravel()], -1), dtype)
+    cell = 2.0 / n
+    if key is not None:
+        pts = pts + (jax.random.uniform(key, pts.shape, dtype) - 0.5) * cell
+    mask = jnp.sum(pts * pts, -1) <= 1.0
+    return pts * overfill, mask, cell * overfill
+
+
+def _launch(lens: Lens, field, depth, pupil, wavelength) -> Rays:
+    return sampling.field_rays(lens, field, pupil, wavelength, depth=depth)
+
+
+def _flux(rays: Rays, depth) -> Array:
+    """Relative flux of each launched ray: 1 for a plane wave, cos⁴ for a point source."""
+    if depth is None:
+        return jnp.ones(rays.shape, rays.dtype)
+    return rays.direction[..., 2] ** 4
+
+
+def chief_ray(lens: Lens, field, depth=None, wavelength=None, *,
+              newton_iters: int = DEFAULT_NEWTON_ITERS, iters: int = 5) -> Rays:
+    """The real chief ray of a field: aimed by Newton's method at the centre of the stop.
+
+    Args:
+        lens: the lens.
+        field: degrees, θy or (θx, θy).
+        depth: None for infinity, else the object distance in mm.
+        wavelength: µm (default primary).
+        newton_iters: Newton iterations for aspheric surfaces.
+        iters: aiming iterations.
+
+    Returns:
+        One ray (shape ``[1]``) in object space, launched from the entrance-pupil plane
+        (infinity) or from the object point.
+    """
+    wl = lens.primary_wavelength if wavelength is None else jnp.asarray(wavelength)
+    zep = paraxial.entrance_pupil_z(lens)
+    if depth is None:
+        d0 = sampling.field_direction(field).astype(lens.epd.dtype)
+        p0 = None
+    else:
+        p0 = sampling.object_point(lens, field, depth)
+
+    def launch(uv):
+        q = jnp.concatenate([uv, zep[None]])
+        if p0 is None:
+            return Rays(q[None], d0[None], wl)
+        v = q - p0
+        return Rays(p0[None], (v / jnp.linalg.norm(v))[None], wl)
+
+    def at_stop(uv):
+        return trace_scan(lens, launch(uv), newton_iters=newton_iters, upto=lens.stop).origin[0, :2]
+
+    def body(_, uv):
+        f = at_stop(uv)
+        jac = jax.jacfwd(at_stop)(uv)
+        det = jac[0, 0] * jac[1, 1] - jac[0, 1] * jac[1, 0]
+        det = jnp.where(det == 0, 1.0, det)
+        inv = jnp.array([[jac[1, 1], -jac[0, 1]], [-jac[1, 0], jac[0, 0]]]) / det
+        return uv - inv @ f
+
+    uv = jax.lax.fori_loop(0, iters, body, jnp.zeros(2, lens.epd.dtype))
+    return launch(uv)
+
+
+def _chief_point(lens, field, depth, newton_iters) -> Array:
+    """Image-surface (x, y) of the real chief ray (through the stop centre), primary λ."""
+    rays = chief_ray(lens, field, depth, newton_iters=newton_iters)
+    return trace(lens, rays, newton_iters=newton_iters).origin[0, :2]
+
+
+def _reference(lens, field, depth, center, newton_iters, pos=None, w=None) -> Array:
+    if center == "chief":
+        return _chief_point(lens, field, depth, newton_iters)
+    if center == "ideal":
+        return field_to_ideal(lens, field)
+    # centroid over all wavelengths; pos [W, M, 2], w [W, M]
+    tot = jnp.maximum(jnp.sum(w), jnp.finfo(w.dtype).tiny)
+    return jnp.sum(w[..., None] * pos, axis=(0, 1)) / tot
+
+
+# --------------------------------------------------------------------------------------
+# Geometric PSF
+# --------------------------------------------------------------------------------------
+def splat(pos, weight, kernel_size: int, pixel_size) -> Float[Array, "k k"]:
+    """Bilinear splat of weighted points (sensor offsets in mm from the reference) onto the
+    kernel grid (rendered orientation, see the module docstring); points outside are dropped.
+    """
+    k = kernel_size
+    c = 0.5 * (k - 1)
+    col = c - pos[..., 0] / pixel_size
+    row = c + pos[..., 1] / pixel_size
+    i0 = jax.lax.stop_gradient(jnp.floor(row))
+    j0 = jax.lax.stop_gradient(jnp.floor(col))
+    fr, fc = row - i0, col - j0
+    i0 = i0.astype(jnp.int32)
+    j0 = j0.astype(jnp.int32)
+    out = jnp.zeros((k * k,), weight.dtype)
+    for di, dj, wgt in (
+        (0, 0, (1 - fr) * (1 - fc)),
+        (0, 1, (1 - fr) * fc),
+        (1, 0, fr * (1 - fc)),
+        (1, 1, fr * fc),
+    ):
+        ii, jj = i0 + di, j0 + dj
+        inside = (ii >= 0) & (ii < k) & (jj >= 0) & (jj < k)
+        flat = jnp.where(inside, ii * k + jj, 0)
+        out = out.at[flat.reshape(-1)].add(jnp.where(inside, wgt * weight, 0.0).reshape(-1))
+    return out.reshape(k, k)
+
+
+def _trace_beam(lens, field, depth, wl, pupil, mask, newton_iters):
+    rays = _launch(lens, field, depth, pupil, wl)
+    out = trace(lens, rays, newton_iters=newton_iters)
+    w = jnp.where(out.valid & mask, _flux(rays, depth), 0.0)
+    return rays, out, w
+
+
+def _geometric(lens, field, depth, wls, *, kernel_size, pixel_size, center, pupil, overfill,
+               key, newton_iters):
+    dtype = lens.epd.dtype
+    pts, mask, _ = _pupil_cells(pupil, overfill, dtype, key)
+
+    def one(wl):
+        _, out, w = _trace_beam(lens, field, depth, wl, pts, mask, newton_iters)
+        return out.origin[..., :2], w
+
+    pos, w = jax.vmap(one)(wls)  # [W, M, 2], [W, M]
+    ref = _reference(lens, field, depth, center, newton_iters, pos, w)
+    total = jnp.maximum(jnp.sum(w, -1), jnp.finfo(dtype).tiny)  # [W]
+    kern = jax.vmap(lambda p, ww: splat(p - ref, ww, kernel_size, pixel_size))(pos, w)
+    kern = kern / total[:, None, None]
+    nan = jnp.full(wls.shape, jnp.nan, dtype)
+    return kern, 1.0 - jnp.sum(kern, (-1, -2)), ref, nan, jnp.zeros(wls.shape, bool)
+
+
+# --------------------------------------------------------------------------------------
+# Coherent PSF
+# --------------------------------------------------------------------------------------
+def _coherent(lens, field, depth, wls, *, kernel_size, pixel_size, center, pupil, overfill,
+              newton_iters):
+    dtype = lens.epd.dtype
+    pts, mask, cell = _pupil_cells(pupil, overfill, dtype, None)
+    k = kernel_size
+    c = 0.5 * (k - 1)
+    idx = jnp.arange(k, dtype=dtype)
+    dx_cols = -(idx - c) * pixel_size  # sensor x offset of each column
+    dy_rows = (idx - c) * pixel_size  # sensor y offset of each row
+
+    def beam(uv, wl):
+        rays = _launch(lens, field, depth, uv, wl)
+        out = trace(lens, rays, newton_iters=newton_iters)
+        return out.direction[..., :2], (rays, out)
+
+    def one(wl):
+        ex = jnp.zeros_like(pts).at[:, 0].set(1.0)
+        ey = jnp.zeros_like(pts).at[:, 1].set(1.0)
+        lm, dlm_du, (rays, out) = jax.jvp(lambda uv: beam(uv, wl), (pts,), (ex,),
+                                          has_aux=True)
+        _, dlm_dv = jax.jvp(lambda uv: beam(uv, wl)[0], (pts,), (ey,))
+        det = jnp.abs(dlm_du[:, 0] * dlm_dv[:, 1] - dlm_du[:, 1] * dlm_dv[:, 0])
+        d_omega = det * cell * cell
+        flux = jnp.where(out.valid & mask, _flux(rays, depth), 0.0)
+        # Optical path from the incoming wavefront: a plane wave adds n0·d·origin.
+        opl = out.opl
+        if depth is None:
+            n0 = lens.object_material.index(wl)
+            opl = opl + n0 * jnp.sum(rays.direction * rays.origin, -1)
+        n_img = lens.materials[-1].index(wl)
+        return out.origin[..., :2], lm, opl, flux, d_omega, n_img
+
+    pos, lm, opl, flux, d_omega, n_img = jax.vmap(one)(wls)
+    ref = _reference(lens, field, depth, center, newton_iters, pos, flux)
+
+    def field_at(pos, lm, opl, flux, d_omega, n_img, wl):
+        lam = wl * 1e-3  # mm
+        kw = 2.0 * jnp.pi / lam
+        amp = jnp.sqrt(jnp.where(flux > 0, flux * d_omega, 0.0))
+        tot = jnp.maximum(jnp.sum(flux), jnp.finfo(dtype).tiny)
+        opl0 = jax.lax.stop_gradient(jnp.sum(flux * opl) / tot)
+        rel = pos - ref
+        psi = kw * ((opl - opl0) - n_img * jnp.sum(lm * rel, -1))
+        coef = amp * jnp.exp(1j * psi)
+        ex = jnp.exp(1j * kw * n_img * lm[:, 0:1] * dx_cols[None, :])  # [M, k]
+        ey = jnp.exp(1j * kw * n_img * lm[:, 1:2] * dy_rows[None, :])  # [M, k]
+        u = (ey * coef[:, None]).T @ ex  # [rows, cols]
+        scale = (pixel_size * n_img / lam) ** 2 / tot
+        inten = (u.real**2 + u.imag**2) * scale
+        ideal_peak = jnp.sum(amp) ** 2 * scale
+        strehl = jnp.max(inten) / jnp.maximum(ideal_peak, jnp.finfo(dtype).tiny)
+        # Alias period of the plane-wave sum along each axis, against the kernel width.
+        dl = jnp.sqrt(jnp.max(jnp.where(flux > 0, d_omega, 0.0)))
+        aliased = k * pixel_size * n_img * dl >= lam
+        return inten, strehl, aliased
+
+    kern, strehl, aliased = jax.vmap(field_at)(pos, lm, opl, flux, d_omega, n_img, wls)
+    return kern, 1.0 - jnp.sum(kern, (-1, -2)), ref, strehl, aliased
+
+
+# --------------------------------------------------------------------------------------
+# Public API
+# --------------------------------------------------------------------------------------
+class PSFResult(eqx.Module):
+    """A PSF with its diagnostics.
+
+    Attributes:
+        psf: ``[*W, k, k]`` energy per pixel (leading axis when several wavelengths).
+        truncated: ``[*W]`` fraction of the energy outside the kernel.
+        center: ``[2]`` reference point (x, y) on the image surface, mm.
+        strehl: ``[*W]`` peak of the coherent PSF on the kernel grid over the peak of the
+            unaberrated PSF with the same pupil (NaN for the geometric model).
+        aliased: ``[*W]`` True where the kernel is wider than the alias period of the
+            coherent pupil sampling (always False for the geometric model).
+    """
+
+    psf: Float[Array, "*w k k"]
+    truncated: Float[Array, "*w"]
+    center: Float[Array, " 2"]
+    strehl: Float[Array, "*w"]
+    aliased: Array
+
+
+@eqx.filter_jit
+def _psf_impl(lens, field, depth, wls, pixel_size, key, *, kernel_size, model, center, pupil,
+              overfill, newton_iters):
+    dtype = jnp.result_type(pixel_size)
+    lens = apertured(lens.astype(dtype))
+    kw = dict(kernel_size=kernel_size, pixel_size=pixel_size, center=center, pupil=pupil,
+              overfill=overfill, newton_iters=newton_iters)
+    if model == "geometric":
+        return _geometric(lens, field, depth, wls, key=key, **kw)
+    return _coherent(lens, field, depth, wls, **kw)
+
+
+def _prepare(lens, field, depth, wavelength, kernel_size, pixel_size, model, center, pupil,
+             caller):
+    if model not in MODELS:
+        raise ValueError(f"{caller}: model must be one of {MODELS}, got {model!r}")
+    if center not in CENTERS:
+        raise ValueError(f"{caller}: center must be one of {CENTERS}, got {center!r}")
+    if not isinstance(kernel_size, int) or kernel_size < 1:
+        raise ValueError(f"{caller}: kernel_size must be a positive int, got {kernel_size!r}")
+    if not isinstance(pupil, int) or pupil < 2:
+        raise ValueError(f"{caller}: pupil (rays per side) must be an int >= 2, got {pupil!r}")
+    if pixel_size is None:
+        if lens.sensor is None:
+            raise ValueError(f"{caller}: give pixel_size (mm); the lens has no sensor")
+        pixel_size = lens.sensor.pixel_size
+    dtype = jnp.result_type(float)
+    pixel_size = jnp.asarray(pixel_size, dtype)
+    if not isinstance(pixel_size, jax.core.Tracer) and not bool(pixel_size > 0):
+        raise ValueError(f"{caller}: pixel_size must be positive (mm), got {pixel_size}")
+    wl = lens.primary_wavelength if wavelength is None else wavelength
+    wl = jnp.asarray(wl, dtype)
+    if wl.ndim > 1:
+        raise ValueError(f"{caller}: wavelength must be a scalar or 1-D (µm), got {wl.shape}")
+    field = jnp.asarray(field, dtype)
+    if field.ndim > 1 or (field.ndim == 1 and field.shape[0] != 2):
+        raise ValueError(f"{caller}: field must be θy or (θx, θy) in degrees, got {field.shape}")
+    return field, _static_depth(depth), wl, pixel_size
+
+
+def psf_info(
+    lens: Lens,
+    field: Float[ArrayLike, " *2"],
+    *,
+    depth=math.inf,
+    wavelength: Float[ArrayLike, "*w"] | None = None,
+    kernel_size: int = 31,
+    pixel_size=None,
+    model: str = "geometric",
+    center: str = "chief",
+    pupil: int = 64,
+    overfill: float = 1.25,
+    key=None,
+    max_truncation: float | None = None,
+    newton_iters: int = DEFAULT_NEWTON_ITERS,
+) -> PSFResult:
+    """A PSF with its diagnostics (truncation, reference point, Strehl ratio).
+
+    Args: as :func:`psf`.
+
+    Returns:
+        A :class:`PSFResult`.
+    """
+    field, depth, wl, pixel_size = _prepare(lens, field, depth, wavelength, kernel_size,
+                                            pixel_size, model, center, pupil, "psf")
+    wls = jnp.atleast_1d(wl)
+    kern, trunc, ref, strehl, aliased = _psf_impl(
+        lens, field, depth, wls, pixel_size, key, kernel_size=kernel_size, model=model,
+        center=center, pupil=pupil, overfill=float(overfill), newton_iters=newton_iters)
+    if max_truncation is not None:
+        kern = eqx.error_if(
+            kern, jnp.any(trunc > max_truncation),
+            f"psf: more than {max_truncation:g} of the PSF energy falls outside the "
+            f"{kernel_size}x{kernel_size} kernel; enlarge kernel_size or pixel_size",
+        )
+        kern = eqx.error_if(
+            kern, jnp.any(aliased),
+            "psf: the coherent kernel is wider than the alias period of the pupil sampling; "
+            "raise pupil (rays per side) or shrink the kernel",
+        )
+    if wl.ndim == 0:
+        kern, trunc, strehl, aliased = kern[0], trunc[0], strehl[0], aliased[0]
+    return PSFResult(kern, trunc, ref, strehl, aliased)
+
+
+def psf(
+    lens: Lens,
+    field: Float[ArrayLike, " *2"],
+    *,
+    depth=math.inf,
+    wavelength: Float[ArrayLike, "*w"] | None = None,
+    kernel_size: int = 31,
+    pixel_size=None,
+    model: str = "geometric",
+    center: str = "chief",
+    pupil: int = 64,
+    overfill: float = 1.25,
+    key=None,
+    max_truncation: float | None = 0.05,
+    newton_iters: int = DEFAULT_NEWTON_ITERS,
+) -> Float[Array, "*w k k"]:
+    """The PSF of a point at ``field`` and ``depth`` on the sensor, as energy per pixel.
+
+    Args:
+        lens: the lens.
+        field: field angle in degrees, θy or (θx, θy).
+        depth: object distance in mm in front of surface 1; ``inf`` for an object at infinity.
+        wavelength: µm, a scalar or ``[W]`` (an RGB PSF is ``RGB_WAVELENGTHS``); default the
+            primary wavelength.
+        kernel_size: kernel side in pixels (odd keeps the reference on a pixel centre).
+        pixel_size: pixel pitch in mm; default the lens's sensor pitch.
+        model: "geometric" (ray splatting) or "coherent" (wave optics).
+        center: "chief", "centroid" or "ideal" (see the module docstring).
+        pupil: rays per side of the square pupil grid (about 0.62·pupil² rays are launched
+            after the disc cut).
+        overfill: radius of the launched beam over the paraxial entrance pupil radius; the
+            stop clips it.
+        key: PRNG key to jitter the geometric pupil grid (stratified sampling); None for the
+            regular grid.
+        max_truncation: raise (``eqx.error_if``) when more than this fraction of the energy
+            falls outside the kernel, or when a coherent kernel aliases; None to skip.
+        newton_iters: Newton iterations for aspheric surfaces.
+
+    Returns:
+        ``[k, k]``, or ``[W, k, k]`` for several wavelengths; see ``psf_info`` for the
+        diagnostics.
+
+    Example:
+        >>> import jax, jax.numpy as jnp, jaxlens
+        >>> lens = jaxlens.zoo.cooke_triplet()
+        >>> k = jaxlens.psf(lens, 0.0, wavelength=0.5876, kernel_size=15, pixel_size=0.005)
+        >>> k.shape, bool(abs(k.sum() - 1) < 1e-3)
+        ((15, 15), True)
+    """
+    return psf_info(
+        lens, field, depth=depth, wavelength=wavelength, kernel_size=kernel_size,
+        pixel_size=pixel_size, model=model, center=center, pupil=pupil, overfill=overfill,
+        key=key, max_truncation=max_truncation, newton_iters=newton_iters,
+    ).psf
+
+
+def psf_rgb(lens: Lens, field, *, wavelengths=RGB_WAVELENGTHS, **kwargs) -> Float[Array, "3 k k"]:
+    """RGB PSF: ``psf`` at three wavelengths (default the C, d, F lines), ``[3, k, k]``."""
+    return psf(lens, field, wavelength=jnp.asarray(wavelengths), **kwargs)
+
+
+class PSFMap(eqx.Module):
+    """PSFs over a grid of sensor positions.
+
+    Attributes:
+        psf: ``[gr, gc, *W, k, k]``.
+        truncated: ``[gr, gc, *W]``.
+        sensor_xy: ``[gr, gc, 2]`` distortion-free image points (mm) of the grid fields.
+        field: ``[gr, gc, 2]`` field angles (θx, θy), degrees.
+        center: ``[gr, gc, 2]`` reference points of the PSFs (mm).
+    """
+
+    psf: Array
+    truncated: Array
+    sensor_xy: Array
+    field: Array
+    center: Array
+
+
+def psf_map(
+    lens: Lens,
+    *,
+    grid: tuple[int, int] = (5, 5),
+    depth=math.inf,
+    wavelength=None,
+    kernel_size: int = 31,
+    pixel_size=None,
+    model: str = "geometric",
+    center: str = "chief",
+    pupil: int = 64,
+    overfill: float = 1.25,
+    sensor=None,
+    newton_iters: int = DEFAULT_NEWTON_ITERS,
+) -> PSFMap:
+    """PSFs at a ``grid = (rows, cols)`` of fields whose ideal images span the sensor.
+
+    Grid row 0 / column 0 is the top-left corner of the rendered image (``sensor_grid``).
+
+    Args:
+        lens: the lens.
+        grid: (rows, cols) of PSFs.
+        sensor: a ``Sensor`` (default ``lens.sensor``) that sets the extent and, unless
+            ``pixel_size`` is given, the pitch.
+        others: as :func:`psf`.
+
+    Returns:
+        A :class:`PSFMap`.
+    """
+    sensor = lens.sensor if sensor is None else sensor
+    if sensor is None:
+        raise ValueError("psf_map: the lens has no sensor; pass sensor=Sensor(...)")
+    pixel_size = sensor.pixel_size if pixel_size is None else pixel_size
+    xy = sensor_grid(sensor.resolution, sensor.pixel_size, grid)
+    fields = ideal_to_field(lens, xy)
+    _, depth, wl, pixel_size = _prepare(lens, 0.0, depth, wavelength, kernel_size, pixel_size,
+                                        model, center, pupil, "psf_map")
+    wls = jnp.atleast_1d(wl)
+
+    def one(f):
+        return _psf_impl(lens, f, depth, wls, pixel_size, None, kernel_size=kernel_size,
+                         model=model, center=center, pupil=pupil, overfill=float(overfill),
+                         newton_iters=newton_iters)
+
+    kern, trunc, ref, _, _ = jax.vmap(one)(fields.reshape(-1, 2))
+    g = tuple(grid)
+    if wl.ndim == 0:
+        kern, trunc = kern[:, 0], trunc[:, 0]
+    return PSFMap(kern.reshape(g + kern.shape[1:]), trunc.reshape(g + trunc.shape[1:]), xy,
+                  fields, ref.reshape(g + (2,)))
+
+
+# --------------------------------------------------------------------------------------
+# MTF
+# --------------------------------------------------------------------------------------
+def _diffraction_mtf(nu, lam_mm, fnum):
+    s = jnp.clip(nu * lam_mm * fnum, 0.0, 1.0)
+    root = jnp.sqrt(jnp.where(s < 1, 1.0 - s * s, 1.0))
+    return jnp.where(s < 1, (2 / jnp.pi) * (jnp.arccos(s) - s * root), 0.0)
+
+
+def _directions(field):
+    """Unit tangential (radial) and sagittal directions in the sensor plane."""
+    t = jnp.tan(sampling._field_xy(field))
+    r = jnp.sqrt(jnp.sum(t * t))
+    on_axis = r == 0
+    e_t = jnp.where(on_axis, jnp.array([0.0, 1.0], t.dtype), t / jnp.where(on_axis, 1.0, r))
+    e_s = jnp.stack([e_t[1], -e_t[0]])
+    return e_t, e_s
+
+
+@eqx.filter_jit
+def _mtf_impl(lens, field, depth, wls, freqs, pixel_size, *, model, pupil, overfill,
+              kernel_size, diffraction, newton_iters):
+    dtype = freqs.dtype
+    lens = apertured(lens.astype(dtype))
+    e_t, e_s = _directions(field)
+    fnum = paraxial.paraxial_data(lens).working_fnum
+    nw = wls.shape[0]
+    if model == "geometric":
+        pts, mask, _ = _pupil_cells(pupil, overfill, dtype)
+
+        def otf(wl):
+            _, out, w = _trace_beam(lens, field, depth, wl, pts, mask, newton_iters)
+            return out.origin[..., :2], w
+
+        pos, w = jax.vmap(otf)(wls)  # [W, M, 2]
+        tot = jnp.maximum(jnp.sum(w, -1, keepdims=True), jnp.finfo(dtype).tiny)
+        ref = jnp.sum(w[..., None] * pos, (0, 1)) / jnp.maximum(jnp.sum(w), 1e-30)
+        rel = pos - ref
+        wn = w / tot
+
+        def along(e):
+            proj = rel @ e  # [W, M]
+            ph = -2 * jnp.pi * freqs[None, :, None] * proj[:, None, :]  # [W, F, M]
+            o = jnp.sum(wn[:, None, :] * jnp.exp(1j * ph), -1)  # [W, F]
+            if diffraction:
+                o = o * jax.vmap(lambda wl: _diffraction_mtf(freqs, wl * 1e-3, fnum))(wls)
+            return jnp.abs(jnp.sum(o, 0) / nw)
+
+        return along(e_t), along(e_s)
+    kern, _, _, _, _ = _coherent(lens, field, depth, wls, kernel_size=kernel_size,
+                                 pixel_size=pixel_size, center="centroid", pupil=pupil,
+                                 overfill=overfill, newton_iters=newton_iters)
+    k = kernel_size
+    c = 0.5 * (k - 1)
+    idx = jnp.arange(k, dtype=dtype)
+    qx = jnp.broadcast_to(-(idx - c)[None, :] * pixel_size, (k, k))
+    qy = jnp.broadcast_to((idx - c)[:, None] * pixel_size, (k, k))
+    q = jnp.stack([qx, qy], -1).reshape(-1, 2)
+    wgt = kern.reshape(nw, -1)
+    wgt = wgt / jnp.maximum(jnp.sum(wgt, -1, keepdims=True), 1e-30)
+
+    def along(e):
+        ph = -2 * jnp.pi * freqs[:, None] * (q @ e)[None, :]  # [F, P]
+        o = wgt @ jnp.exp(1j * ph).T  # [W, F]
+        return jnp.abs(jnp.sum(o, 0) / nw)
+
+    return along(e_t), along(e_s)
+
+
+def mtf(
+    lens: Lens,
+    field,
+    *,
+    wavelengths=None,
+    depth=math.inf,
+    frequencies=None,
+    model: str = "geometric",
+    pupil: int = 64,
+    overfill: float = 1.25,
+    diffraction: bool = True,
+    kernel_size: int = 64,
+    pixel_size=None,
+    newton_iters: int = DEFAULT_NEWTON_ITERS,
+):
+    """Tangential and sagittal MTF of one field, polychromatic with equal weights.
+
+    The optical transfer function is the Fourier transform of the PSF. The geometric model
+    evaluates it exactly from the traced ray positions (the Fourier transform of the ray
+    density, no pixel grid), optionally times the diffraction-limited MTF of a circular
+    pupil at the paraxial working F-number (``diffraction=True``, the usual geometric-MTF
+    approximation). The coherent model transforms the wave-optics intensity PSF computed
+    on a ``kernel_size`` grid of ``pixel_size`` (default λ_min·F#/4). Tangential means
+    along the image-plane radius of the field point (y on axis); sagittal is perpendicular.
+
+    Args:
+        lens: the lens.
+        field: field angle in degrees, θy or (θx, θy).
+        wavelengths: µm, ``[W]``; default ``lens.wavelengths``.
+        depth: object distance in mm (``inf`` for infinity).
+        frequencies: spatial frequencies in cycles/mm; default 33 points from 0 to the
+            sensor's Nyquist frequency, or to the diffraction cut-off 1/(λ·F#) without a
+            sensor.
+        model: "geometric" or "coherent".
+        pupil, overfill, newton_iters: pupil sampling as in :func:`psf`.
+        diffraction: scale the geometric MTF by the diffraction limit.
+        kernel_size, pixel_size: PSF grid of the coherent model.
+
+    Returns:
+        ``(frequencies [F] cycles/mm, mtf_tangential [F], mtf_sagittal [F])``.
+    """
+    if model not in MODELS:
+        raise ValueError(f"mtf: model must be one of {MODELS}, got {model!r}")
+    dtype = jnp.result_type(float)
+    wls = jnp.atleast_1d(jnp.asarray(lens.wavelengths if wavelengths is None else wavelengths,
+                                     dtype))
+    fnum = paraxial.paraxial_data(lens.astype(dtype)).working_fnum
+    lam_min = jnp.min(wls) * 1e-3
+    if frequencies is None:
+        if lens.sensor is not None:
+            top = 0.5 / lens.sensor.pixel_size
+        else:
+            top = 1.0 / (lam_min * fnum)
+        frequencies = jnp.linspace(0.0, 1.0, 33, dtype=dtype) * top
+    freqs = jnp.atleast_1d(jnp.asarray(frequencies, dtype))
+    pix = lam_min * fnum / 4.0 if pixel_size is None else jnp.asarray(pixel_size, dtype)
+    field, depth, _, pix = _prepare(lens, field, depth, None, kernel_size, pix, model,
+                                    "centroid", pupil, "mtf")
+    t, s = _mtf_impl(lens, field, depth, wls, freqs, pix, model=model, pupil=pupil,
+                     overfill=float(overfill), kernel_size=kernel_size,
+                     diffraction=bool(diffraction), newton_iters=newton_iters)
+    return freqs, t, s
+
+
+# --------------------------------------------------------------------------------------
+# Make the module callable: ``jaxlens.psf(...)`` is :func:`psf`.
+# --------------------------------------------------------------------------------------
+class _CallableModule(types.ModuleType):
+    def __call__(self, *args, **kwargs):
+        return psf(*args, **kwargs)
+
+
+sys.modules[__name__].__class__ = _CallableModule

@@ -1,0 +1,518 @@
+"""Image simulation: ``render(lens, scene, ...)`` by backward ray tracing or by PSF convolution.
+
+``jaxlens.render`` is both this module and its main function: the module is callable, so
+``jaxlens.render(lens, scene, ...)`` renders while ``jaxlens.render.bilinear`` and
+``from jaxlens.render import render`` reach the rest (as for ``jaxlens.psf``).
+
+Conventions:
+    Lengths in mm, wavelengths in µm. ``scene`` is a linear-light ``[H, W, 3]`` float image
+    of the object. It fills the sensor's field of view as a distortion-free lens would image
+    it: the scene point shown at sensor position u (mm) is the object point of field
+    tanθ = u / K, with K = ``psf.image_scale(lens)`` (the paraxial chief-ray height per unit
+    tanθ; the focal length for a lens focused at infinity). At a finite ``depth`` the object
+    plane lies ``depth`` mm in front of surface 1 and the same field angles are measured at
+    the entrance pupil, so the scene spans the same angles. Scene pixels are looked up with
+    bilinear interpolation; beyond the scene's border its edge pixels extend.
+
+    The output is ``[rows, cols, 3]`` for the sensor (``lens.sensor`` or the ``sensor``
+    argument), read out rotated by 180° as a camera does, so that a lens renders its scene
+    upright: output pixel (r, c) is centred on the sensor point
+    x = −(c − (cols−1)/2)·p, y = (r − (rows−1)/2)·p. The scene must have the sensor's
+    aspect ratio (any resolution).
+
+Radiometry:
+    With ``relative_illumination=True`` a pixel is the sensor irradiance relative to the
+    on-axis irradiance of a uniform scene of value 1: vignetting, the cos⁴ law, pupil
+    aberrations and distortion all show, so a uniform white scene renders to the lens's
+    relative-illumination curve (``radiometry.relative_illumination`` computes it
+    independently by forward tracing). With ``False`` each pixel averages the scene over
+    the rays that pass (no falloff), as in DeepLens.
+
+Methods:
+    "ray": backward tracing. Each pixel sends ``spp`` rays per wavelength from random points
+    inside the pixel, uniformly over a disc in image-space direction-cosine space (L, M)
+    that covers the exit pupil as seen from that pixel. Uniform samples in (L, M) are
+    uniform in projected solid angle, so the irradiance estimate is
+    L_scene·(π R²)·(valid fraction) with no further weights. The discs are found once per
+    call on a coarse grid of sensor points by tracing (``footprint_grid``), without
+    gradients, and interpolated conservatively. spp samples are stratified when spp is a
+    perfect square. The same samples serve the three channels.
+
+    "psf": the scene is first warped by the lens's distortion (real chief rays), then each
+    ``patch × patch`` tile is convolved with the RGB geometric PSF of its centre field
+    (centred on the chief ray, from ``spp·kernel_size²`` jittered pupil rays per channel),
+    and multiplied by the relative-illumination map (``radiometry``, on a 9 × 9 grid,
+    interpolated).
+
+Memory and scale-out:
+    The sensor is cut into ``patch × patch`` tiles computed one after another by
+    ``lax.map``. With ``checkpoint=True`` each tile is a ``jax.checkpoint``: the backward
+    pass recomputes the tile's rays from the same PRNG key (``fold_in(key, tile index)``)
+    instead of storing them, so the memory of a gradient grows with the tile, not with the
+    image or spp. With ``mesh`` the tiles are sharded over the mesh's devices with
+    ``jax.shard_map``; every tile draws the same random numbers as in a single-device
+    render, so the result is the same.
+"""
+
+from __future__ import annotations
+
+import math
+import sys
+import types
+
+import equinox as eqx
+import jax
+import jax.numpy as jnp
+import numpy as np
+from jax.sharding import Mesh, PartitionSpec
+from jaxtyping import Array, Float
+
+from . import paraxial
+from .lens import Lens, Sensor
+from .psf import (
+    RGB_WAVELENGTHS,
+    _geometric,
+    _static_depth,
+    apertured,
+    ideal_to_field,
+    image_scale,
+    sensor_grid,
+)
+from .radiometry import _ri_impl, box_search
+from .rays import Rays
+from .reverse import trace_backward
+from .trace import DEFAULT_NEWTON_ITERS
+
+__all__ = ["render", "METHODS", "bilinear", "pixel_positions"]
+
+METHODS = ("ray", "psf")
+
+
+# --------------------------------------------------------------------------------------
+# Small helpers
+# --------------------------------------------------------------------------------------
+def bilinear(img: Float[Array, "H W *C"], row, col) -> Array:
+    """Bilinear lookup of ``img`` at fractional (row, col); edge pixels extend outward.
+
+    Differentiable with respect to the image and the coordinates.
+    """
+    h, w = img.shape[0], img.shape[1]
+    r = jnp.clip(row, 0.0, h - 1.0)
+    c = jnp.clip(col, 0.0, w - 1.0)
+    r0 = jnp.clip(jnp.floor(jax.lax.stop_gradient(r)), 0, max(h - 2, 0)).astype(jnp.int32)
+    c0 = jnp.clip(jnp.floor(jax.lax.stop_gradient(c)), 0, max(w - 2, 0)).astype(jnp.int32)
+    fr = (r - r0)[..., None] if img.ndim == 3 else r - r0
+    fc = (c - c0)[..., None] if img.ndim == 3 else c - c0
+    r1 = jnp.minimum(r0 + 1, h - 1)
+    c1 = jnp.minimum(c0 + 1, w - 1)
+    top = img[r0, c0] * (1 - fc) + img[r0, c1] * fc
+    bot = img[r1, c0] * (1 - fc) + img[r1, c1] * fc
+    return top * (1 - fr) + bot * fr
+
+
+def pixel_positions(resolution, pixel_size, rows, cols):
+    """Sensor (x, y) in mm of fractional pixel coordinates (rendered orientation)."""
+    h, w = resolution
+    return -(cols - 0.5 * (w - 1)) * pixel_size, (rows - 0.5 * (h - 1)) * pixel_size
+
+
+def _scene_coords(scene_shape, resolution, pixel_size, x, y):
+    """Fractional scene (row, col) shown at ideal sensor position (x, y)."""
+    hs, ws = scene_shape
+    h, w = resolution
+    pr = pixel_size * h / hs
+    pc = pixel_size * w / ws
+    return 0.5 * (hs - 1) + y / pr, 0.5 * (ws - 1) - x / pc
+
+
+def _interp_grid(grid_vals, gy, gx):
+    """Bilinear interpolation on a regular grid given fractional grid coordinates."""
+    return bilinear(grid_vals, gy, gx)
+
+
+def _grid_coords(resolution, grid, rows, cols):
+    """Fractional coordinates on a ``grid`` spanning corner to corner pixel centres."""
+    h, w = resolution
+    gr, gc = grid
+    gy = rows * (gr - 1) / max(h - 1, 1) if gr > 1 else jnp.zeros_like(rows)
+    gx = cols * (gc - 1) / max(w - 1, 1) if gc > 1 else jnp.zeros_like(cols)
+    return gy, gx
+
+
+# --------------------------------------------------------------------------------------
+# Exit-pupil footprints seen from the sensor
+# --------------------------------------------------------------------------------------
+def _sensor_origin(lens: Lens, x, y):
+    z, _ = lens.image.sag(x, y)
+    return jnp.stack([x, y, lens.image_z() + z], -1)
+
+
+def _backward_valid(lens, origin, lm, wl, newton_iters):
+    n = jnp.sqrt(jnp.clip(1.0 - jnp.sum(lm * lm, -1), 1e-12, None))
+    d = jnp.concatenate([lm, -n[..., None]], -1)
+    o = jnp.broadcast_to(origin, d.shape)
+    ok = jnp.sum(lm * lm, -1) < 1.0
+    return trace_backward(lens, Rays(o, d, wl, ok), newton_iters=newton_iters).valid
+
+
+def _footprint(lens, origin, wl, lm0, half, n_grid, newton_iters):
+    """Disc (centre, radius) in (L, M) covering the valid backward directions from a point."""
+    fn = lambda pts: _backward_valid(lens, origin, pts, wl, newton_iters)  # noqa: E731
+    fine, area, anyv = box_search(fn, lm0, half, n_grid, n_grid)
+    v = jax.lax.stop_gradient(fn(fine))
+    big = jnp.asarray(1e30, fine.dtype)
+    lo = jnp.min(jnp.where(v[:, None], fine, big), 0)
+    hi = jnp.max(jnp.where(v[:, None], fine, -big), 0)
+    anyf = jnp.any(v)
+    cen = jnp.where(anyf, 0.5 * (lo + hi), lm0)
+    dist = jnp.sqrt(jnp.sum((fine - cen) ** 2, -1))
+    cell = jnp.sqrt(area)
+    rad = jnp.max(jnp.where(v, dist, 0.0)) + cell
+    rad = jnp.where(anyf, rad, cell)
+    return cen, rad, jnp.sum(v) * area
+
+
+def _footprints(lens, wls, resolution, pixel_size, grid, n_grid, newton_iters):
+    """Footprint discs on a grid of sensor points (union over wavelengths), the margin for
+    interpolating them, and the on-axis projected solid angle per wavelength. No gradients."""
+    lens = jax.lax.stop_gradient(lens)
+    pd = paraxial.paraxial_data(lens)
+    z_img = lens.image_z()
+    xp = pd.exit_pupil_z
+    n_img = lens.materials[-1].index(lens.primary_wavelength)
+    u = 1.0 / (2.0 * pd.working_fnum * n_img)
+    half = jnp.minimum(3.0 * u + 0.05, 0.95)
+    pts = sensor_grid(resolution, pixel_size, grid)  # [gr, gc, 2]
+
+    def guess(xy):
+        origin = _sensor_origin(lens, xy[0], xy[1])
+        sgn = jnp.where(z_img >= xp, 1.0, -1.0)
+        far = ~jnp.isfinite(xp) | (jnp.abs(z_img - xp) > 1e6)
+        to_xp = jnp.stack([-origin[0], -origin[1], jnp.where(far, -1.0, xp - origin[2])])
+        v = jnp.where(far, jnp.array([0.0, 0.0, -1.0], origin.dtype), sgn * to_xp)
+        v = v / jnp.linalg.norm(v)
+        return origin, v[:2]
+
+    def at_point(xy):
+        origin, lm0 = guess(xy)
+        cen, rad, _ = jax.vmap(
+            lambda wl: _footprint(lens, origin, wl, lm0, half, n_grid, newton_iters))(wls)
+        c = jnp.mean(cen, 0)
+        r = jnp.max(jnp.sqrt(jnp.sum((cen - c) ** 2, -1)) + rad)
+        return c, r
+
+    cen, rad = jax.vmap(jax.vmap(at_point))(pts)
+    # Margin for bilinear interpolation between grid points: the discrete Laplacian of the
+    # centres and radii bounds (about 4x) the interpolation error of a smooth map.
+    vals = jnp.concatenate([cen, rad[..., None]], -1)
+    pad = jnp.pad(vals, ((1, 1), (1, 1), (0, 0)), mode="edge")
+    lap = (pad[:-2, 1:-1] + pad[2:, 1:-1] + pad[1:-1, :-2] + pad[1:-1, 2:]) / 4 - vals
+    margin = jnp.max(jnp.sqrt(jnp.sum(lap[..., :2] ** 2, -1)) + jnp.abs(lap[..., 2]))
+    origin0, lm00 = guess(jnp.zeros(2, pixel_size.dtype))
+    _, _, e0 = jax.vmap(
+        lambda wl: _footprint(lens, origin0, wl, lm00, half, 4 * n_grid, newton_iters))(wls)
+    return cen, rad, margin, e0
+
+
+# --------------------------------------------------------------------------------------
+# Tiling, checkpointing and sharding
+# --------------------------------------------------------------------------------------
+def _run_tiles(tile_fn, n_tiles, args, *, checkpoint, mesh):
+    """Map ``tile_fn(index, *args)`` over tile indices, checkpointed and optionally sharded."""
+    body = jax.checkpoint(tile_fn) if checkpoint else tile_fn
+
+    def local(idx, *a):
+        return jax.lax.map(lambda i: body(i, *a), idx)
+
+    idx = jnp.arange(n_tiles, dtype=jnp.int32)
+    if mesh is None:
+        return local(idx, *args)
+    ndev = mesh.size
+    pad = (-n_tiles) % ndev
+    idx = jnp.concatenate([idx, idx[:pad]]) if pad else idx
+    axes = tuple(mesh.axis_names)
+    spec = PartitionSpec(axes)
+    rep = PartitionSpec()
+    out = jax.shard_map(local, mesh=mesh, in_specs=(spec,) + (rep,) * len(args),
+                        out_specs=spec)(idx, *args)
+    return out[:n_tiles]
+
+
+def _assemble(tiles, n_ty, n_tx, patch, resolution):
+    t = tiles.reshape(n_ty, n_tx, patch, patch, tiles.shape[-1])
+    img = t.transpose(0, 2, 1, 3, 4).reshape(n_ty * patch, n_tx * patch, tiles.shape[-1])
+    return img[: resolution[0], : resolution[1]]
+
+
+def _unit_disc(key, shape, spp, dtype):
+    """``[*shape, spp, 2]`` uniform points in the unit disc, stratified if spp is a square."""
+    n = math.isqrt(spp)
+    u = jax.random.uniform(key, shape + (spp, 2), dtype)
+    if n * n == spp:
+        s = jnp.arange(spp)
+        i, j = (s // n).astype(dtype), (s % n).astype(dtype)
+        r = jnp.sqrt((i + u[..., 0]) / n)
+        a = 2 * jnp.pi * (j + u[..., 1]) / n
+    else:
+        r = jnp.sqrt(u[..., 0])
+        a = 2 * jnp.pi * u[..., 1]
+    return jnp.stack([r * jnp.cos(a), r * jnp.sin(a)], -1)
+
+
+# --------------------------------------------------------------------------------------
+# Backward ray tracing
+# --------------------------------------------------------------------------------------
+@eqx.filter_jit
+def _render_ray(lens, scene, key, depth, wls, pixel_size, *, resolution, spp, patch,
+                checkpoint, mesh, ri, footprint_grid, newton_iters):
+    dtype = scene.dtype
+    pixel_size = pixel_size.astype(dtype)
+    lens = apertured(lens.astype(dtype))
+    wls = wls.astype(dtype)
+    k_scale = image_scale(lens)
+    zep = paraxial.entrance_pupil_z(lens)
+    grid = (footprint_grid, footprint_grid)
+    fp_cen, fp_rad, fp_margin, e0 = _footprints(lens, wls, resolution, pixel_size, grid, 32,
+                                                newton_iters)
+    h, w = resolution
+    n_ty, n_tx = -(-h // patch), -(-w // patch)
+    local_r = jnp.arange(patch, dtype=dtype)
+    nc = scene.shape[-1]
+    params, static = eqx.partition(lens, eqx.is_array)
+
+    def tile_fn(t, params, scene, key, fp_cen, fp_rad, fp_margin, e0, k_scale, zep, wls,
+                depth):
+        lens = eqx.combine(params, static)
+        ty, tx = t // n_tx, t % n_tx
+        tkey = jax.random.fold_in(key, t)
+        k1, k2 = jax.random.split(tkey)
+        rows = (ty * patch).astype(dtype) + local_r
+        cols = (tx * patch).astype(dtype) + local_r
+        rr, cc = jnp.meshgrid(rows, cols, indexing="ij")  # [P, P]
+        # Samples: a position inside the pixel and a direction over its footprint disc.
+        jit = jax.random.uniform(k1, (patch, patch, spp, 2), dtype) - 0.5
+        sr, sc = rr[..., None] + jit[..., 0], cc[..., None] + jit[..., 1]  # [P, P, S]
+        x, y = pixel_positions(resolution, pixel_size, sr, sc)
+        # Footprint disc at each sample point: bilinear in the grid, grown by the margin
+        # that covers the interpolation error.
+        gy, gx = _grid_coords(resolution, grid, sr, sc)
+        cen = _interp_grid(fp_cen, gy, gx)  # [P, P, S, 2]
+        rad = jnp.minimum(_interp_grid(fp_rad, gy, gx) + fp_margin, 0.999)
+        disc = _unit_disc(k2, (patch, patch), spp, dtype)
+        lm = cen + rad[..., None] * disc  # [P, P, S, 2]
+        inside = jnp.sum(lm * lm, -1) < 1.0
+        nz = jnp.sqrt(jnp.where(inside, 1.0 - jnp.sum(lm * lm, -1), 1.0))
+        d = jnp.concatenate([lm, -nz[..., None]], -1)
+        o = _sensor_origin(lens, x, y)
+
+        def channel(wl, img):
+            out = trace_backward(lens, Rays(o, d, wl, inside), newton_iters=newton_iters)
+            bz = out.direction[..., 2]
+            ok = out.valid & (bz < 0)
+            bz = jnp.where(ok, bz, -1.0)
+            if depth is None:
+                tx_, ty_ = out.direction[..., 0] / bz, out.direction[..., 1] / bz
+            else:
+                s = (-depth - out.origin[..., 2]) / bz
+                xo = out.origin[..., 0] + s * out.direction[..., 0]
+                yo = out.origin[..., 1] + s * out.direction[..., 1]
+                tx_, ty_ = -xo / (zep + depth), -yo / (zep + depth)
+            r_sc, c_sc = _scene_coords(scene.shape[:2], resolution, pixel_size,
+                                       k_scale * tx_, k_scale * ty_)
+            val = bilinear(img, r_sc, c_sc)
+            okf = ok.astype(dtype)
+            if ri:
+                okf = okf * (jnp.pi * rad * rad)
+            return jnp.sum(okf * val, -1), jnp.sum(okf, -1)
+
+        sums, counts = jax.vmap(channel, in_axes=(0, 2), out_axes=-1)(wls, scene)
+        if ri:
+            return sums / (spp * e0)
+        return sums / jnp.maximum(counts, jnp.finfo(dtype).tiny)
+
+    args = (params, scene, key, fp_cen, fp_rad, fp_margin, e0, k_scale, zep, wls, depth)
+    tiles = _run_tiles(tile_fn, n_ty * n_tx, args, checkpoint=checkpoint, mesh=mesh)
+    return _assemble(tiles, n_ty, n_tx, patch, resolution)[..., :nc]
+
+
+# --------------------------------------------------------------------------------------
+# Patch-wise PSF convolution
+# --------------------------------------------------------------------------------------
+def _conv_rgb(window, kern):
+    """Valid convolution of a ``[P+k-1, P+k-1, C]`` window with ``[C, k, k]`` kernels."""
+    x = window.transpose(2, 0, 1)[None]  # [1, C, H, W]
+    f = kern[:, None, ::-1, ::-1]  # correlation with the flipped kernel = convolution
+    y = jax.lax.conv_general_dilated(x, f, (1, 1), "VALID",
+                                     feature_group_count=kern.shape[0])
+    return y[0].transpose(1, 2, 0)
+
+
+@eqx.filter_jit
+def _render_psf(lens, scene, key, depth, wls, pixel_size, *, resolution, spp, patch,
+                checkpoint, mesh, ri, kernel_size, newton_iters):
+    from .distortion_relax import inverse_distortion_map
+
+    dtype = scene.dtype
+    pixel_size = pixel_size.astype(dtype)
+    lens = apertured(lens.astype(dtype))
+    wls = wls.astype(dtype)
+    h, w = resolution
+    # 1. Distortion: the sensor pixel u shows the scene at the ideal point D^-1(u).
+    inv = inverse_distortion_map(lens, resolution=resolution, pixel_size=pixel_size,
+                                 grid=(17, 17), depth=depth, newton_iters=newton_iters)
+    rr, cc = jnp.meshgrid(jnp.arange(h, dtype=dtype), jnp.arange(w, dtype=dtype), indexing="ij")
+    gy, gx = _grid_coords(resolution, (17, 17), rr, cc)
+    ideal = _interp_grid(inv, gy, gx)  # [h, w, 2]
+    r_sc, c_sc = _scene_coords(scene.shape[:2], resolution, pixel_size, ideal[..., 0],
+                               ideal[..., 1])
+    warped = bilinear(scene, r_sc, c_sc)  # [h, w, C]
+    # 2. Relative illumination on a coarse grid of sensor points.
+    if ri:
+        g_ri = 9
+        inv9 = inverse_distortion_map(lens, resolution=resolution, pixel_size=pixel_size,
+                                      grid=(g_ri, g_ri), depth=depth, newton_iters=newton_iters)
+        fields = ideal_to_field(lens, inv9).reshape(-1, 2)
+        ri_vals, _, _ = _ri_impl(lens, fields, depth, lens.primary_wavelength, n_coarse=16,
+                                 n_fine=48, newton_iters=newton_iters)
+        ri_map = ri_vals.reshape(g_ri, g_ri)
+        gy9, gx9 = _grid_coords(resolution, (g_ri, g_ri), rr, cc)
+        warped = warped * _interp_grid(ri_map, gy9, gx9)[..., None]
+    # 3. Tiles with a halo of half a kernel.
+    n_ty, n_tx = -(-h // patch), -(-w // patch)
+    half = kernel_size // 2
+    ph, pw = n_ty * patch - h, n_tx * patch - w
+    padded = jnp.pad(warped, ((half, half + ph), (half, half + pw), (0, 0)), mode="edge")
+    pupil = max(2, math.isqrt(spp * kernel_size * kernel_size))
+    nc = scene.shape[-1]
+    params, static = eqx.partition(lens, eqx.is_array)
+
+    def tile_fn(t, params, padded, key, wls, depth, inv):
+        lens = eqx.combine(params, static)
+        ty, tx = t // n_tx, t % n_tx
+        r0, c0 = ty * patch, tx * patch
+        win = jax.lax.dynamic_slice(padded, (r0, c0, 0),
+                                    (patch + 2 * half, patch + 2 * half, nc))
+        rc = (r0 + 0.5 * (patch - 1)).astype(dtype)
+        cc0 = (c0 + 0.5 * (patch - 1)).astype(dtype)
+        gy, gx = _grid_coords(resolution, (17, 17), jnp.minimum(rc, h - 1.0),
+                              jnp.minimum(cc0, w - 1.0))
+        field = ideal_to_field(lens, _interp_grid(inv, gy, gx))
+        kern, _, _, _, _ = _geometric(lens, field, depth, wls, kernel_size=kernel_size,
+                                      pixel_size=pixel_size, center="chief", pupil=pupil,
+                                      overfill=1.25, key=jax.random.fold_in(key, t),
+                                      newton_iters=newton_iters)
+        kern = kern / jnp.maximum(jnp.sum(kern, (-1, -2), keepdims=True), 1e-30)
+        return _conv_rgb(win, kern[:nc])
+
+    args = (params, padded, key, wls, depth, inv)
+    tiles = _run_tiles(tile_fn, n_ty * n_tx, args, checkpoint=checkpoint, mesh=mesh)
+    return _assemble(tiles, n_ty, n_tx, patch, resolution)
+
+
+# --------------------------------------------------------------------------------------
+# Public entry point
+# --------------------------------------------------------------------------------------
+def render(
+    lens: Lens,
+    scene: Float[Array, "H W 3"],
+    *,
+    spp: int,
+    key,
+    depth=math.inf,
+    method: str = "ray",
+    wavelengths=RGB_WAVELENGTHS,
+    sensor: Sensor | None = None,
+    patch: int = 64,
+    checkpoint: bool = True,
+    mesh: Mesh | None = None,
+    relative_illumination: bool = True,
+    kernel_size: int = 31,
+    footprint_grid: int = 9,
+    newton_iters: int = DEFAULT_NEWTON_ITERS,
+) -> Float[Array, "rows cols 3"]:
+    """Simulate the sensor image of a scene through a lens (see the module docstring).
+
+    Pure and jittable (the options after ``*`` other than ``key`` and ``depth`` are static),
+    differentiable with respect to the lens and the scene.
+
+    Args:
+        lens: the lens.
+        scene: ``[H, W, C]`` linear float image (C = 3 for RGB, one wavelength per channel),
+            with the sensor's aspect ratio.
+        spp: rays per pixel per wavelength (method "ray"); for "psf", rays per kernel pixel
+            in each patch's PSF (spp·kernel_size² per channel).
+        key: PRNG key (``jax.random.PRNGKey``); the same key gives the same image.
+        depth: object distance in mm in front of surface 1, ``inf`` for infinity.
+        method: "ray" (backward tracing) or "psf" (patch-wise PSF convolution).
+        wavelengths: one wavelength (µm) per channel, default the C, d, F lines for R, G, B.
+        sensor: the sensor; default ``lens.sensor``.
+        patch: tile side in pixels (memory of a gradient grows with patch²·spp).
+        checkpoint: recompute each tile in the backward pass (``jax.checkpoint``).
+        mesh: a ``jax.sharding.Mesh`` to spread the tiles over its devices.
+        relative_illumination: include vignetting and the cos⁴ falloff (see Radiometry).
+        kernel_size: PSF kernel side in pixels (method "psf").
+        footprint_grid: sensor grid (per side) for the exit-pupil discs (method "ray").
+        newton_iters: Newton iterations for aspheric surfaces.
+
+    Returns:
+        ``[rows, cols, C]`` sensor image in the scene's dtype.
+
+    Raises:
+        ValueError: for a scene that is not ``[H, W, C]`` float with C matching the
+            wavelengths, an aspect ratio unlike the sensor's, a non-positive spp, a missing
+            sensor, an unknown method or a non-positive depth.
+    """
+    if method not in METHODS:
+        raise ValueError(f"render: method must be one of {METHODS}, got {method!r}")
+    if not isinstance(spp, (int, np.integer)) or isinstance(spp, bool) or spp <= 0:
+        raise ValueError(f"render: spp must be a positive int, got {spp!r}")
+    if not isinstance(patch, int) or patch < 1:
+        raise ValueError(f"render: patch must be a positive int, got {patch!r}")
+    sensor = lens.sensor if sensor is None else sensor
+    if sensor is None:
+        raise ValueError("render: the lens has no sensor; pass sensor=jaxlens.Sensor(...)")
+    scene = jnp.asarray(scene)
+    wls = jnp.atleast_1d(jnp.asarray(wavelengths, jnp.result_type(float)))
+    if scene.ndim != 3:
+        raise ValueError(f"render: scene must be [H, W, C], got shape {scene.shape}")
+    if not jnp.issubdtype(scene.dtype, jnp.floating):
+        raise ValueError(
+            f"render: scene must be a linear float image, got dtype {scene.dtype} "
+            "(convert with jaxlens.images.to_linear)"
+        )
+    if wls.ndim != 1 or wls.shape[0] != scene.shape[-1]:
+        raise ValueError(
+            f"render: {scene.shape[-1]} scene channels need as many wavelengths, got "
+            f"{wls.shape}"
+        )
+    rows, cols = sensor.resolution
+    hs, ws = scene.shape[:2]
+    if abs(hs * cols - ws * rows) >= max(rows, cols):
+        raise ValueError(
+            f"render: scene of {hs}x{ws} pixels does not match the {rows}x{cols} sensor "
+            "(the aspect ratios differ; resize or crop the scene)"
+        )
+    depth = _static_depth(depth)
+    key = jnp.asarray(key) if not isinstance(key, jax.Array) else key
+    common = dict(resolution=(int(rows), int(cols)), spp=int(spp), patch=int(patch),
+                  checkpoint=bool(checkpoint), mesh=mesh, ri=bool(relative_illumination),
+                  newton_iters=int(newton_iters))
+    pixel_size = jnp.asarray(sensor.pixel_size)
+    if depth is not None:
+        depth = jnp.asarray(depth, scene.dtype)
+    if method == "ray":
+        return _render_ray(lens, scene, key, depth, wls, pixel_size,
+                           footprint_grid=int(footprint_grid), **common)
+    return _render_psf(lens, scene, key, depth, wls, pixel_size, kernel_size=int(kernel_size),
+                       **common)
+
+
+# --------------------------------------------------------------------------------------
+# Make the module callable: ``jaxlens.render(...)`` is :func:`render`.
+# --------------------------------------------------------------------------------------
+class _CallableModule(types.ModuleType):
+    def __call__(self, *args, **kwargs):
+        return render(*args, **kwargs)
+
+
+sys.modules[__name__].__class__ = _CallableModule
