@@ -101,22 +101,31 @@ def rms_spot(
         raise ValueError(f"rms_spot: reference must be 'centroid' or 'chief', got {reference!r}")
     fields = lens.fields if fields is None else fields
     fields = _fields_array(fields)
-    wls = lens.wavelengths if wavelengths is None else jnp.atleast_1d(jnp.asarray(wavelengths))
+    # With the lens's own wavelengths the chief ray is one more pupil point (the centre)
+    # of the primary-wavelength trace, so one trace serves both.
+    own_wavelengths = wavelengths is None
+    wls = lens.wavelengths if own_wavelengths else jnp.atleast_1d(jnp.asarray(wavelengths))
     pupil = pupil_grid(21, lens.epd.dtype) if pupil is None else pupil
+    m = pupil.shape[0]
+    pupil_ext = jnp.concatenate([pupil, jnp.zeros((1, 2), pupil.dtype)])
     if depth is None and not lens.object_at_infinity:
         depth = lens.object_distance
     primary = lens.primary_wavelength
 
     def per_field(field):
         def per_wl(wl):
-            r = spot_rays(lens, field, wl, pupil=pupil, depth=depth, newton_iters=newton_iters)
+            r = spot_rays(lens, field, wl, pupil=pupil_ext, depth=depth, newton_iters=newton_iters)
             return r.origin[..., :2], r.valid.astype(r.origin.dtype)
 
-        p, w = jax.vmap(per_wl)(wls)  # [W, M, 2], [W, M]
-        chief = spot_rays(
-            lens, field, primary, pupil=jnp.zeros((1, 2), pupil.dtype), depth=depth,
-            newton_iters=newton_iters,
-        ).origin[0, :2]
+        p_ext, w_ext = jax.vmap(per_wl)(wls)  # [W, M+1, 2], [W, M+1]
+        p, w = p_ext[:, :m], w_ext[:, :m]
+        if own_wavelengths:
+            chief = p_ext[lens.primary, m]
+        else:
+            chief = spot_rays(
+                lens, field, primary, pupil=jnp.zeros((1, 2), pupil.dtype), depth=depth,
+                newton_iters=newton_iters,
+            ).origin[0, :2]
         cen = _centroid(p, w)  # [W, 2]
         ref = cen if reference == "centroid" else jnp.broadcast_to(chief, cen.shape)
         per = _weighted_rms(p, ref[:, None, :], w)
