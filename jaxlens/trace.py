@@ -27,6 +27,8 @@ Validity:
 
 from __future__ import annotations
 
+import functools
+
 import equinox as eqx
 import jax
 import jax.numpy as jnp
@@ -219,17 +221,62 @@ def trace_path(
     return [_to_rays(st, rays.wavelength) for st in _trace_states(lens, rays, newton_iters, upto)]
 
 
-def _trace_states(lens: Lens, rays: Rays, newton_iters: int, upto: int | None) -> list[_State]:
+def _same_kind(a, b) -> bool:
+    """Same surface type and the same array shapes: such surfaces can share one scan body."""
+    la, ta = jax.tree_util.tree_flatten(a)
+    lb, tb = jax.tree_util.tree_flatten(b)
+    return ta == tb and all(x.shape == y.shape and x.dtype == y.dtype for x, y in zip(la, lb))
+
+
+def _runs(surfaces, start: int, stop: int) -> list[tuple[int, int]]:
+    """Split surfaces[start:stop] into maximal runs of the same kind."""
+    runs, i = [], start
+    while i < stop:
+        j = i + 1
+        while j < stop and _same_kind(surfaces[j], surfaces[i]):
+            j += 1
+        runs.append((i, j))
+        i = j
+    return runs
+
+
+def _trace_states(
+    lens: Lens, rays: Rays, newton_iters: int, upto: int | None, keep_path: bool = True
+) -> list[_State]:
+    """Trace and return the states after each surface (only the last unless keep_path).
+
+    Runs of surfaces of the same kind (a stack of even aspheres, say) are traced with
+    one ``lax.scan``, so the compiled program, and above all its gradient, does not grow
+    with the number of surfaces. Surface 1 is traced on its own (object-space rules).
+    """
     lens = lens.astype(rays.dtype)
     zs = lens.vertex_z()
     idx = lens.indices(rays.wavelength)
+    shape = rays.shape
     st = _to_state(rays)
-    out = []
+    step = functools.partial(_step, refracts=True, newton_iters=newton_iters)
     last = lens.num_surfaces - 1 if upto is None else upto
-    for i in range(last + 1):
-        st = _step(lens.surfaces[i], zs[i], st, idx[i], idx[i + 1], first=i == 0,
-                   refracts=True, newton_iters=newton_iters)
-        out.append(st)
+    st = step(lens.surfaces[0], zs[0], st, idx[0], idx[1], first=True)
+    out = [st]
+    for i, j in _runs(lens.surfaces, 1, last + 1):
+        if j - i == 1:
+            st = step(lens.surfaces[i], zs[i], st, idx[i], idx[i + 1], first=False)
+            out.append(st)
+            continue
+        stacked = jax.tree_util.tree_map(lambda *x: jnp.stack(x), *lens.surfaces[i:j])
+        n_in = jnp.stack([jnp.broadcast_to(n, shape) for n in idx[i:j]])
+        n_out = jnp.stack([jnp.broadcast_to(n, shape) for n in idx[i + 1 : j + 1]])
+
+        def body(carry, xs):
+            surface, z, n1, n2 = xs
+            new = step(surface, z, carry, n1, n2, first=False)
+            return new, (new if keep_path else None)
+
+        st, path = jax.lax.scan(body, st, (stacked, zs[i:j], n_in, n_out))
+        if keep_path:
+            out += [jax.tree_util.tree_map(lambda x, k=k: x[k], path) for k in range(j - i)]
+        else:
+            out.append(st)
     if upto is None:
         st = _step(lens.image, lens.image_z(), st, idx[-1], idx[-1], first=False,
                    refracts=False, newton_iters=newton_iters)
@@ -262,4 +309,5 @@ def trace(lens: Lens, rays: Rays, *, newton_iters: int = DEFAULT_NEWTON_ITERS) -
         >>> bool(jaxlens.trace(lens, rays).valid[0])
         True
     """
-    return _to_rays(_trace_states(lens, rays, newton_iters, None)[-1], rays.wavelength)
+    states = _trace_states(lens, rays, newton_iters, None, keep_path=False)
+    return _to_rays(states[-1], rays.wavelength)

@@ -124,16 +124,19 @@ def test_tir_miss_clip_backward_flags():
 
 
 def _asphere_lens():
-    """A three-element lens with conics and asphere terms (every parameter kind)."""
+    """A three-element lens with conics, asphere and odd terms (every parameter kind).
+
+    Surfaces 2-6 share one kind, so the trace scans over them (short compile times).
+    """
     g1, g2 = jl.ModelGlass(1.62, 60.3), jl.ModelGlass(1.62, 36.4)
     s = (
-        jl.EvenAsphere(c=1 / 22.0, k=-0.3, coeffs=jnp.array([1e-4, -2e-6, 1e-8])),
-        jl.Standard(c=-1 / 435.0, k=0.0),
+        jl.Hybrid(c=1 / 22.0, k=-0.3, coeffs=jnp.array([1e-4, -2e-6, 1e-8]),
+                  odd_x=jnp.array([1e-6]), odd_y=jnp.array([2e-6])),
+        jl.EvenAsphere(c=-1 / 435.0, k=0.0, coeffs=jnp.array([0.0, 1e-6, 0.0])),
         jl.EvenAsphere(c=-1 / 22.2, k=0.5, coeffs=jnp.array([0.0, 3e-6, -1e-8])),
-        jl.Standard(c=1 / 20.3, k=0.0),
-        jl.Hybrid(c=1 / 79.7, k=1.0, coeffs=jnp.array([0.0, 1e-6]), odd_x=jnp.array([1e-6]),
-                  odd_y=jnp.array([2e-6])),
-        jl.Standard(c=-1 / 18.4, k=0.0),
+        jl.EvenAsphere(c=1 / 20.3, k=0.0, coeffs=jnp.array([0.0, 0.0, 0.0])),
+        jl.EvenAsphere(c=1 / 79.7, k=1.0, coeffs=jnp.array([0.0, 1e-6, 0.0])),
+        jl.EvenAsphere(c=-1 / 18.4, k=0.0, coeffs=jnp.array([1e-5, 0.0, 0.0])),
     )
     t = jnp.array([3.26, 6.01, 1.0, 4.75, 2.95, 42.2])
     mats = (g1, jl.Air(), g2, jl.Air(), g1, jl.Air())
