@@ -252,7 +252,7 @@ def _trace_states(
     lens = lens.astype(rays.dtype)
     zs = lens.vertex_z()
     idx = lens.indices(rays.wavelength)
-    shape = rays.shape
+    shape = jnp.shape(rays.wavelength)  # indices are per wavelength, not per ray
     st = _to_state(rays)
     step = functools.partial(_step, refracts=True, newton_iters=newton_iters)
     last = lens.num_surfaces - 1 if upto is None else upto
