@@ -1,0 +1,1 @@
+"""jaxlens benchmark suite: ``python -m benchmarks [--smoke | --full]`` (see ``run.py``)."""

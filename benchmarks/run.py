@@ -1,0 +1,124 @@
+"""Run the jaxlens benchmark suite.
+
+Usage::
+
+    python -m benchmarks            # 1e3..1e6 rays, every study (tens of minutes on 2 cores)
+    python -m benchmarks --full     # adds 1e7 rays to the throughput benchmark
+    python -m benchmarks --smoke    # seconds: checks that the suite works (CI); no timings kept
+    python -m benchmarks --only throughput skipping
+
+Writes, into ``--out`` (default ``benchmarks/results/``; ``--smoke`` writes to a temporary
+folder unless ``--out`` is given): ``<benchmark>.json`` (machine, versions, command and rows),
+``README.md`` (markdown tables) and ``<benchmark>.png`` plots. Every JSON file states the
+machine (CPU model, cores, memory), the versions (python, jax, jaxlib, equinox, numpy,
+jaxlens, optiland) and the load average, because other work on a 2-core machine changes the
+numbers; the rows also carry the load at the time of each measurement.
+
+The render benchmarks (``benchmarks/render_speed.py``, ``benchmarks/render_memory.py``) belong
+to the render module. When present and exposing ``run(smoke: bool) -> dict`` (and optionally
+``markdown(result) -> str``), they run here too, under ``--only render_speed render_memory`` or
+by default; their own result files are theirs to write.
+"""
+
+from __future__ import annotations
+
+import argparse
+import importlib
+import os
+import pathlib
+import shlex
+import sys
+import tempfile
+import time
+
+import jax
+
+from . import common
+
+CORE = ("throughput", "pareto", "skipping")
+OPTIONAL = ("render_speed", "render_memory")
+
+
+def main(argv: list[str] | None = None) -> dict:
+    p = argparse.ArgumentParser(prog="python -m benchmarks", description=__doc__.split("\n")[0])
+    p.add_argument("--smoke", action="store_true", help="tiny sizes; checks the suite works")
+    p.add_argument("--full", action="store_true", help="include 1e7 rays in the throughput run")
+    p.add_argument("--only", nargs="+", choices=CORE + OPTIONAL, help="run only these")
+    p.add_argument("--out", type=pathlib.Path, default=None, help="output folder")
+    p.add_argument("--no-plots", action="store_true", help="skip the matplotlib figures")
+    args = p.parse_args(argv)
+
+    jax.config.update("jax_enable_x64", True)  # float64 runs next to float32
+    out = args.out
+    if out is None:
+        out = (
+            pathlib.Path(tempfile.mkdtemp(prefix="jaxlens-bench-"))
+            if args.smoke
+            else common.RESULTS
+        )
+    out.mkdir(parents=True, exist_ok=True)
+    command = "python -m benchmarks " + " ".join(shlex.quote(a) for a in (argv or sys.argv[1:]))
+    machine = common.machine_info()
+    print(
+        f"jaxlens benchmarks -> {out}\n  {machine['cpu_model']}, {machine['logical_cores']} "
+        f"cores, jax {machine['jax']}, load {machine['load_average_at_start']}"
+    )
+
+    selected = args.only or (CORE + OPTIONAL)
+    sections, results = [], {}
+    for name in selected:
+        try:
+            mod = importlib.import_module(f"{__package__}.{name}")
+        except ModuleNotFoundError:
+            if name in OPTIONAL:
+                continue
+            raise
+        if not hasattr(mod, "run"):
+            continue
+        print(f"[{name}]")
+        t0 = time.perf_counter()
+        kwargs = {"smoke": args.smoke}
+        if name == "throughput":
+            kwargs["full"] = args.full
+        res = mod.run(**kwargs)
+        wall = time.perf_counter() - t0
+        results[name] = res
+        if name in CORE:
+            payload = {
+                "benchmark": name,
+                "command": command,
+                "machine": machine,
+                "load_average_at_end": os.getloadavg(),
+                "wall_s": wall,
+                **res,
+            }
+            common.write_json(name, payload, out)
+            if not args.no_plots and hasattr(mod, "plot"):
+                mod.plot(res, out / f"{name}.png")
+        if hasattr(mod, "markdown"):
+            sections.append(mod.markdown(res))
+        print(f"  ({wall:.0f} s)")
+
+    header = [
+        "# jaxlens benchmark results",
+        "",
+        f"Made by `{command}` at git commit {machine['git_commit']}.",
+        "",
+        f"Machine: {machine['cpu_model']}, {machine['logical_cores']} logical cores "
+        f"({machine.get('affinity_cores')} usable), {machine.get('memory_gib')} GiB; "
+        f"{machine['platform']}. Versions: python {machine['python']}, jax {machine['jax']}, "
+        f"jaxlib {machine['jaxlib']}, equinox {machine['equinox']}, numpy {machine['numpy']}, "
+        f"jaxlens {machine['jaxlens']}, optiland {machine['optiland'] or 'not installed'}. "
+        f"1-minute load average at the start: {machine['load_average_at_start'][0]:.2f} "
+        "(each row records its own).",
+        "",
+    ]
+    if args.only is None or set(args.only) >= set(CORE):
+        (out / "README.md").write_text("\n".join(header + sections) + "\n")
+    else:
+        (out / f"README_{'_'.join(args.only)}.md").write_text("\n".join(header + sections) + "\n")
+    return results
+
+
+if __name__ == "__main__":
+    main()

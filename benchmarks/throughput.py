@@ -1,0 +1,274 @@
+"""Throughput: ray·surfaces per second of the forward trace and of forward + gradient.
+
+For each sample lens (``jaxlens.zoo``: Cooke triplet, 6 surfaces; double Gauss, 11; the
+6-element cellphone asphere lens, 13 including its stop), each dtype and each ray count, the
+same random rays (uniform over the entrance pupil at 70 % of the largest field, primary
+wavelength) are traced:
+
+* ``forward``: ``jaxlens.trace(lens, rays)``, every output leaf blocked on.
+* ``forward+grad``: value and gradient, with respect to every array of the lens, of the mean
+  squared spot radius about the centroid of the valid rays (the RMS-spot loss of lens design).
+
+ray·surfaces/s = rays × lens surfaces (the image surface not counted) / best run time.
+``engine = "jaxlens"`` is ``jaxlens.trace``; ``engine = "prototype"`` is the structure-of-arrays,
+chunked variant in ``benchmarks/fast_trace.py`` proposed for ``jaxlens/trace.py``; ``engine =
+"optiland"`` is optiland's numpy trace (float64 only) of the same rays in the same run, with
+``ratio_vs_optiland`` on every jaxlens row of the same lens and ray count. The image
+intercepts of every engine are compared with ``jaxlens.trace`` (``max_dev_mm``).
+"""
+
+from __future__ import annotations
+
+import equinox as eqx
+import jax
+import jax.numpy as jnp
+import numpy as np
+
+import jaxlens
+from jaxlens import sampling, zoo
+
+from . import common, optiland_ref
+from .fast_trace import rays_to_state, trace_soa_chunked
+
+LENSES = ("cooke_triplet", "double_gauss", "cellphone6")
+
+
+def make_rays(lens: jaxlens.Lens, n: int, dtype, seed: int = 0) -> jaxlens.Rays:
+    """``n`` rays uniform over the pupil at 70 % of the largest field, primary wavelength."""
+    lens64 = lens.astype(jnp.float64)
+    pupil = 0.999 * sampling.pupil_random(jax.random.PRNGKey(seed), n, jnp.float64)
+    field = 0.7 * float(lens.fields[-1])
+    r = sampling.collimated(lens64, field, pupil)
+    return jaxlens.Rays(
+        r.origin.astype(dtype), r.direction.astype(dtype), jnp.asarray(r.wavelength, dtype)
+    )
+
+
+def _spot_loss_from(xy, valid):
+    w = valid.astype(xy.dtype)
+    nv = jnp.maximum(jnp.sum(w), 1.0)
+    c = jnp.sum(w[:, None] * xy, 0) / nv
+    return jnp.sum(w * jnp.sum((xy - c) ** 2, -1)) / nv
+
+
+@eqx.filter_jit
+def forward(lens, rays):
+    return jaxlens.trace(lens, rays)
+
+
+@eqx.filter_jit
+def forward_grad(lens, rays):
+    def loss(lens):
+        out = jaxlens.trace(lens, rays)
+        return _spot_loss_from(out.origin[:, :2], out.valid)
+
+    return eqx.filter_value_and_grad(loss)(lens)
+
+
+@eqx.filter_jit
+def proto_forward(lens, state, wavelength):
+    return trace_soa_chunked(lens, state, wavelength, closed_form=True)
+
+
+@eqx.filter_jit
+def proto_forward_grad(lens, state, wavelength):
+    def loss(lens):
+        out = trace_soa_chunked(lens, state, wavelength, closed_form=True)
+        return _spot_loss_from(jnp.stack([out[0], out[1]], -1), out[6])
+
+    return eqx.filter_value_and_grad(loss)(lens)
+
+
+def run(
+    smoke: bool = False,
+    full: bool = False,
+    lenses=LENSES,
+    counts=None,
+    with_optiland: bool = True,
+    with_prototype: bool = True,
+) -> dict:
+    """Run the throughput benchmark and return its result dictionary."""
+    if counts is None:
+        counts = [1_000, 10_000] if smoke else [1_000, 10_000, 100_000, 1_000_000]
+        if full:
+            counts = counts + [10_000_000]
+    if smoke:
+        lenses = lenses[:1]
+    have_optiland = with_optiland and optiland_ref.available()
+    rows = []
+    for name in lenses:
+        lens = zoo.ZOO[name]()
+        ns = lens.num_surfaces
+        op = (
+            optiland_ref.build_optic(lens, float(lens.primary_wavelength))
+            if have_optiland
+            else None
+        )
+        for n in counts:
+            ref64 = None
+            opt_rate = None
+            if op is not None:
+                r64 = make_rays(lens, n, jnp.float64)
+                o, d = np.asarray(r64.origin), np.asarray(r64.direction)
+                wl = float(lens.primary_wavelength)
+                t = common.time_python(
+                    optiland_ref.trace, op, o, d, wl, repeats=1 if n >= 1_000_000 else 3
+                )
+                ref64 = forward(lens, r64)
+                dev = float(
+                    np.max(
+                        np.abs(
+                            optiland_ref.intercepts(optiland_ref.trace(op, o, d, wl))
+                            - np.asarray(ref64.origin)
+                        )[np.asarray(ref64.valid)]
+                    )
+                )
+                opt_rate = n * ns / t["run_s"]
+                rows.append(
+                    dict(
+                        lens=name,
+                        surfaces=ns,
+                        engine="optiland",
+                        dtype="float64",
+                        mode="forward",
+                        rays=n,
+                        rate=opt_rate,
+                        max_dev_mm=dev,
+                        **t,
+                    )
+                )
+                print(
+                    f"  {name:14s} optiland  float64 forward      {n:>9d}  {opt_rate:.3g}"
+                )
+            for dtype in (jnp.float32, jnp.float64):
+                rays = make_rays(lens, n, dtype)
+                dname = jnp.dtype(dtype).name
+                reps = 3 if n >= 1_000_000 else 5
+                engines = [
+                    ("jaxlens", "forward", forward, (lens, rays)),
+                    ("jaxlens", "forward+grad", forward_grad, (lens, rays)),
+                ]
+                if with_prototype:
+                    st = rays_to_state(rays)
+                    engines += [
+                        ("prototype", "forward", proto_forward, (lens, st, rays.wavelength)),
+                        (
+                            "prototype",
+                            "forward+grad",
+                            proto_forward_grad,
+                            (lens, st, rays.wavelength),
+                        ),
+                    ]
+                for engine, mode, fn, args in engines:
+                    t = common.time_jitted(
+                        fn, *args, repeats=reps, min_total_s=0.2 if n >= 1_000_000 else 0.5
+                    )
+                    rate = n * ns / t["run_s"]
+                    row = dict(
+                        lens=name,
+                        surfaces=ns,
+                        engine=engine,
+                        dtype=dname,
+                        mode=mode,
+                        rays=n,
+                        rate=rate,
+                        **t,
+                    )
+                    if mode == "forward" and ref64 is not None:
+                        out = fn(*args)
+                        y = out.origin if engine == "jaxlens" else jnp.stack(out[:3], -1)
+                        ok = np.asarray(ref64.valid)
+                        row["max_dev_mm"] = float(
+                            np.max(np.abs(np.asarray(y, np.float64) - np.asarray(ref64.origin))[ok])
+                        )
+                    if opt_rate is not None and mode == "forward":
+                        row["ratio_vs_optiland"] = rate / opt_rate
+                    rows.append(row)
+                    extra = (
+                        f"  {row['ratio_vs_optiland']:.2f}x optiland"
+                        if "ratio_vs_optiland" in row
+                        else ""
+                    )
+                    print(
+                        f"  {name:14s} {engine:9s} {dname} {mode:12s} {n:>9d}  {rate:.3g} "
+                        f"ray·surf/s (compile {t['compile_s']:.2f} s, load "
+                        f"{t['load_before']:.1f}){extra}"
+                    )
+    return {
+        "rows": rows,
+        "optiland": have_optiland,
+        "definition": "rate = rays × lens surfaces (image surface not counted) / best run "
+        "time; forward+grad = value and gradient of the mean squared spot "
+        "radius w.r.t. every lens array",
+    }
+
+
+def markdown(res: dict) -> str:
+    """Markdown tables of a throughput result."""
+    rows = res["rows"]
+    out = ["### Throughput (ray·surfaces/s, best run; compile time apart)", ""]
+    header = [
+        "lens",
+        "engine",
+        "dtype",
+        "mode",
+        "rays",
+        "ray·surf/s",
+        "run s",
+        "compile s",
+        "vs optiland",
+        "load",
+    ]
+    body = []
+    for r in rows:
+        body.append(
+            [
+                r["lens"],
+                r["engine"],
+                r["dtype"],
+                r["mode"],
+                f"{r['rays']:.0e}",
+                float(r["rate"]),
+                float(r["run_s"]),
+                float(r["compile_s"]),
+                f"{r['ratio_vs_optiland']:.2f}x" if "ratio_vs_optiland" in r else "–",
+                f"{r['load_before']:.1f}",
+            ]
+        )
+    out.append(common.md_table(header, body))
+    return "\n".join(out)
+
+
+def plot(res: dict, path) -> None:
+    """Rate against ray count, one panel per lens."""
+    import matplotlib
+
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+
+    rows = res["rows"]
+    lenses = sorted({r["lens"] for r in rows}, key=LENSES.index)
+    fig, axes = plt.subplots(1, len(lenses), figsize=(5 * len(lenses), 4), squeeze=False)
+    for ax, name in zip(axes[0], lenses, strict=True):
+        keys = sorted({(r["engine"], r["dtype"], r["mode"]) for r in rows if r["lens"] == name})
+        for key in keys:
+            sel = [
+                r for r in rows if r["lens"] == name and (r["engine"], r["dtype"], r["mode"]) == key
+            ]
+            sel.sort(key=lambda r: r["rays"])
+            style = {"jaxlens": "-", "prototype": "--", "optiland": ":"}[key[0]]
+            ax.loglog(
+                [r["rays"] for r in sel],
+                [r["rate"] for r in sel],
+                style,
+                marker="o",
+                label=" ".join(key),
+            )
+        ax.axhline(1e8, color="k", lw=0.5)
+        ax.set_title(name)
+        ax.set_xlabel("rays")
+        ax.set_ylabel("ray·surfaces/s")
+        ax.legend(fontsize=6)
+    fig.tight_layout()
+    fig.savefig(path, dpi=110)
+    plt.close(fig)

@@ -1,0 +1,74 @@
+"""The benchmark suite still runs (``python -m benchmarks --smoke``); timings are not checked.
+
+Runs in-process on tiny sizes (one lens, 1e3/1e4 rays), writes into a temporary folder and
+checks that every result file exists and holds sane, finite numbers, and that every shortcut
+in the skipping benchmark gives the same answer as the full computation.
+"""
+
+import json
+import math
+import pathlib
+import sys
+
+import pytest
+
+ROOT = pathlib.Path(__file__).resolve().parents[1]
+
+
+@pytest.fixture(scope="module")
+def smoke_results(tmp_path_factory):
+    if str(ROOT) not in sys.path:
+        sys.path.insert(0, str(ROOT))
+    from benchmarks import throughput
+    from benchmarks.run import main
+
+    out = tmp_path_factory.mktemp("bench")
+    # optiland (if installed) is exercised by the full suite; the smoke run stays fast.
+    original = throughput.run
+
+    def quick(**kw):
+        return original(with_optiland=False, **kw)
+
+    throughput.run = quick
+    try:
+        res = main(["--smoke", "--out", str(out), "--no-plots", "--only", "throughput",
+                    "pareto", "skipping"])
+    finally:
+        throughput.run = original
+    return out, res
+
+
+def test_files_written(smoke_results):
+    out, _ = smoke_results
+    for name in ("throughput", "pareto", "skipping"):
+        data = json.loads((out / f"{name}.json").read_text())
+        assert data["machine"]["cpu_model"]
+        assert data["machine"]["jax"]
+        assert "--smoke" in data["command"]
+    assert (out / "README.md").read_text().startswith("# jaxlens benchmark results")
+
+
+def test_throughput_rows(smoke_results):
+    _, res = smoke_results
+    rows = res["throughput"]["rows"]
+    modes = {(r["engine"], r["dtype"], r["mode"]) for r in rows}
+    assert ("jaxlens", "float32", "forward") in modes
+    assert ("jaxlens", "float64", "forward+grad") in modes
+    for r in rows:
+        assert r["rate"] > 0 and math.isfinite(r["rate"])
+        assert r["compile_s"] >= r["run_s"] * 0.0 and r["run_s"] > 0
+
+
+def test_pareto_recommends(smoke_results):
+    _, res = smoke_results
+    p = res["pareto"]
+    assert p["rms_spot"]["recommendation"]["equal_weight"] is not None
+    assert "float64" in p["newton"]["recommendation"]
+    for r in p["dtype"]["rows"]:
+        assert r["max_intercept_dev_mm"] < 1e-3
+
+
+def test_shortcuts_give_the_same_answer(smoke_results):
+    _, res = smoke_results
+    for r in res["skipping"]["rows"]:
+        assert r["same_answer"], r
