@@ -1,0 +1,320 @@
+"""The curriculum: stages along the paper's sine path, and the plain Python design loop.
+
+The paper (Yang, Fu & Heidrich 2024) raises the difficulty of the design task step by step:
+stage ``i`` of ``N`` targets
+
+    t_i = t_a + (t_b − t_a) · sin(i / (2N) · π),   i = 0 … N,
+
+for both the FoV (degrees, full diagonal) and the F-number, so the first stages move fast
+and the last ones slowly, and then a final fine-tuning stage works at the full spec. With
+``N = 3`` (four stages) from 47.5°/F2.8 to 80.8°/F2.0 the F-numbers are the paper's
+2.8 → 2.4 → 2.1 → 2.0; the FoVs are 47.5 → 64.2 → 76.3 → 80.8 (the paper lists 62.8° and
+74.1° in between: its code interpolates the image height and divides by the lens's evolving
+focal length, which no fixed formula reproduces).
+
+The design loop (:func:`run`) is a Python loop over stages and steps; every step is one
+jitted, seed-vmapped solver update. The host reads the losses only every ``log_every`` steps
+(no sync per step). A non-finite loss stops the run with a ``FloatingPointError`` that names
+the stage, the step and the seed.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import math
+import time
+from collections.abc import Callable, Sequence
+
+import equinox as eqx
+import jax
+import jax.numpy as jnp
+import numpy as np
+import optax
+
+from .losses import StageArgs
+from .mask import field_weights
+from .spec import DesignSpec
+
+
+def sine_path(start: float, end: float, n: int) -> np.ndarray:
+    """The paper's schedule t_i = start + (end − start)·sin(i/(2n)·π), i = 0 … n."""
+    if n < 1:
+        return np.array([float(end)])
+    i = np.arange(n + 1)
+    return start + (end - start) * np.sin(i / (2 * n) * np.pi)
+
+
+@dataclasses.dataclass(frozen=True)
+class Stage:
+    """One design stage.
+
+    Attributes:
+        name: a label for logs.
+        fov: full diagonal FoV (degrees).
+        fnum: F-number (EPD = spec focal length / fnum).
+        steps: solver steps.
+        solver: ``"adam"``, ``"lm"`` or ``"lbfgsb"``.
+        beta: spot reference blend (0 ideal image point, 1 centroid).
+        pin: weight of the full-field image-height pin (with the centroid reference).
+        mask: use the re-weighting mask.
+        regularize: use the three regularizers.
+        lr: learning-rate multiplier for this stage (Adam).
+        loss: ``"ray"`` (RMS spot) or ``"image"`` (rendered scene).
+    """
+
+    name: str
+    fov: float
+    fnum: float
+    steps: int
+    solver: str = "adam"
+    beta: float = 0.0
+    pin: float = 0.0
+    mask: bool = False
+    regularize: bool = True
+    lr: float = 1.0
+    loss: str = "ray"
+
+
+def paper_stages(
+    spec: DesignSpec,
+    *,
+    n: int = 3,
+    steps: int = 300,
+    final_steps: int = 600,
+    polish_steps: int = 0,
+    curriculum: bool = True,
+    regularize: bool = True,
+    mask: bool = True,
+    pin: float = 1.0,
+    solver: str = "adam",
+    polish: str = "lm",
+    reference: str = "ideal",
+    final_loss: str = "ray",
+) -> list[Stage]:
+    """The paper's stages: ``n + 1`` curriculum stages, then fine-tuning (and a polish).
+
+    Without ``curriculum`` the same number of steps is spent at the full spec. The
+    curriculum stages use the ideal-image reference; fine-tuning and the polish use the
+    centroid reference with the image-height pin (distortion relaxes). The mask, if on,
+    applies to fine-tuning and the polish (the paper's final stage).
+
+    Args:
+        spec: the design spec (start and target FoV/F#).
+        n: the sine path's N (``n + 1`` stages from the start to the target).
+        steps: solver steps per curriculum stage.
+        final_steps: fine-tuning steps at the full spec.
+        polish_steps: steps of the ``polish`` solver after fine-tuning (0: none).
+        curriculum: follow the sine path (else stay at the full spec).
+        regularize: switch the regularizers on.
+        mask: switch the re-weighting mask on (final stages).
+        pin: weight of the image-height pin in the final stages.
+        solver: solver of the curriculum and fine-tuning stages.
+        polish: solver of the polish stage.
+        final_loss: loss of the fine-tuning stage (``"ray"`` or ``"image"``).
+        reference: spot reference of the curriculum stages, ``"ideal"`` (the distortion-free
+            image point, as the paper's code) or ``"centroid"`` (with the image-height pin).
+    """
+    if curriculum:
+        fovs = sine_path(spec.fov_start, spec.fov, n)
+        fnums = sine_path(spec.fnum_start, spec.fnum, n)
+    else:
+        fovs = np.full(n + 1, spec.fov)
+        fnums = np.full(n + 1, spec.fnum)
+    if reference not in ("ideal", "centroid"):
+        raise ValueError(f"paper_stages: reference must be 'ideal' or 'centroid', got "
+                         f"{reference!r}")
+    beta = 0.0 if reference == "ideal" else 1.0
+    stages = [
+        Stage(f"stage{i} {fov:.1f}°/F{fnum:.2f}", float(fov), float(fnum), steps, solver,
+              beta=beta, pin=pin * beta, regularize=regularize)
+        for i, (fov, fnum) in enumerate(zip(fovs, fnums, strict=True))
+    ]
+    if final_steps:
+        stages.append(Stage(f"fine-tune {spec.fov:.1f}°/F{spec.fnum:.2f}", spec.fov, spec.fnum,
+                            final_steps, solver, beta=1.0, pin=pin, mask=mask,
+                            regularize=regularize, loss=final_loss))
+    if polish_steps:
+        stages.append(Stage(f"polish ({polish})", spec.fov, spec.fnum, polish_steps, polish,
+                            beta=1.0, pin=pin, mask=mask, regularize=regularize))
+    return stages
+
+
+def stage_args(spec: DesignSpec, stage: Stage, weights, reg_weights, dtype) -> StageArgs:
+    """``StageArgs`` of a stage for a batch of designs (``weights``: ``[B, K]``)."""
+    b = weights.shape[0]
+
+    def full(x):
+        return jnp.full((b,), x, dtype)
+
+    rw = jnp.asarray(reg_weights, dtype) * (1.0 if stage.regularize else 0.0)
+    return StageArgs(
+        tan_max=full(math.tan(math.radians(0.5 * stage.fov))),
+        epd=full(spec.focal_length / stage.fnum),
+        focal=full(spec.focal_length),
+        beta=full(stage.beta),
+        pin=full(stage.pin),
+        spot_scale=full(1.0),
+        field_weights=jnp.asarray(weights, dtype),
+        reg_weights=jnp.broadcast_to(rw, (b, 3)),
+    )
+
+
+def _over_seeds(fn, mesh, n_batched: int, n_replicated: int):
+    """Apply ``fn`` to every device's block of seeds with ``shard_map`` (no communication).
+
+    ``fn(*batched, *replicated)`` is already vmapped over the seeds of its block.
+    """
+    if mesh is None or mesh.size == 1:
+        return fn
+    from jax.sharding import PartitionSpec as P
+
+    specs = (P("seeds"),) * n_batched + (P(),) * n_replicated
+    return jax.shard_map(fn, mesh=mesh, in_specs=specs, out_specs=P("seeds"), check_vma=False)
+
+
+@eqx.filter_jit
+def _vinit(solver, params, args, mesh=None):
+    dyn, static = eqx.partition(solver, eqx.is_array)
+
+    def local(params, args, dyn):
+        return jax.vmap(eqx.combine(dyn, static).init)(params, args)
+
+    return _over_seeds(local, mesh, 2, 1)(params, args, dyn)
+
+
+@eqx.filter_jit
+def _vstep(solver, params, state, args, lr_scale, mesh=None):
+    dyn, static = eqx.partition(solver, eqx.is_array)
+
+    def local(params, state, args, dyn, lr):
+        step = eqx.combine(dyn, static).step
+        return jax.vmap(step, in_axes=(0, 0, 0, None))(params, state, args, lr)
+
+    return _over_seeds(local, mesh, 3, 2)(params, state, args, dyn, lr_scale)
+
+
+@eqx.filter_jit
+def _vrms(objective, params, args, mesh=None):
+    dyn, static = eqx.partition(objective, eqx.is_array)
+
+    def local(params, args, dyn):
+        return jax.vmap(eqx.combine(dyn, static).field_rms)(params, args)
+
+    return _over_seeds(local, mesh, 2, 1)(params, args, dyn)
+
+
+@eqx.filter_jit
+def _reweight(rms, area, mask, irls):
+    w = field_weights(rms, area, mask=mask, irls=irls)
+    ms = jnp.sum(w * rms**2, -1)
+    return w, 1.0 / jnp.maximum(ms, 1e-12)
+
+
+@dataclasses.dataclass
+class History:
+    """Per-step loss (sum of squares) and spot RMS (mm) of every design, per stage."""
+
+    stages: list[str] = dataclasses.field(default_factory=list)
+    loss: list[np.ndarray] = dataclasses.field(default_factory=list)  # [steps, B] per stage
+    spot_rms: list[np.ndarray] = dataclasses.field(default_factory=list)  # [steps, B]
+    seconds: list[float] = dataclasses.field(default_factory=list)
+
+
+def run(
+    spec: DesignSpec,
+    stages: Sequence[Stage],
+    params,
+    objective,
+    make_solver: Callable[[str, float, object], object],
+    *,
+    reg_weights=(40.0, 1000.0, 40.0),
+    epoch: int = 50,
+    irls: bool = True,
+    log_every: int = 25,
+    warmup: float = 0.05,
+    end_lr: float = 0.05,
+    progress: bool = True,
+    seeds: Sequence[int] | None = None,
+    callback: Callable | None = None,
+    mesh=None,
+):
+    """Run the stages on a batch of designs; returns ``(params, History)``.
+
+    Args:
+        spec: the design spec.
+        stages: the stages to run in order.
+        params: ``LensParams`` with a leading seed axis (may be sharded).
+        objective: the ``Objective`` (``objective(params, args) -> (residuals, aux)``), or a
+            dict of objectives by ``Stage.loss`` (``"ray"`` must be there).
+        make_solver: ``(solver_name, stage_lr, objective) -> solver``.
+        reg_weights: weights of the obliquity, spacing and slope regularizers.
+        epoch: steps between re-weightings (mask and 1/RMS field weights).
+        irls: re-weight fields by 1/RMS so the loss tracks the mean RMS.
+        log_every: steps between host reads (progress, finiteness check).
+        warmup, end_lr: Adam schedule per stage: linear warm-up over this fraction of the
+            stage, then cosine decay to ``end_lr`` × the peak.
+        progress: show a tqdm bar with stage, loss and RMS.
+        seeds: seed labels for error messages.
+        mesh: a one-axis ``("seeds",)`` device mesh; each device then updates its block of
+            seeds independently (``shard_map``), with no cross-device communication.
+        callback: called as ``callback(stage_index, stage, params)`` after every stage.
+
+    Raises:
+        FloatingPointError: a loss became non-finite (names stage, step and seed).
+    """
+    from tqdm.auto import tqdm
+
+    dtype = params.c.dtype
+    b = params.c.shape[0]
+    seeds = list(range(b)) if seeds is None else list(seeds)
+    objectives = objective if isinstance(objective, dict) else {"ray": objective}
+    objective = objectives["ray"]
+    area = objective.sampling.area
+    total = sum(s.steps for s in stages)
+    bar = tqdm(total=total, disable=not progress, dynamic_ncols=True, leave=True)
+    hist = History()
+    ones = jnp.broadcast_to(area, (b, area.shape[0]))
+    for si, stage in enumerate(stages):
+        t0 = time.perf_counter()
+        if stage.loss not in objectives:
+            raise ValueError(f"run: stage {stage.name!r} needs a {stage.loss!r} objective")
+        solver = make_solver(stage.solver, stage.lr, objectives[stage.loss])
+        args = stage_args(spec, stage, ones, reg_weights, dtype)
+        sched = optax.warmup_cosine_decay_schedule(
+            0.0, 1.0, max(1, int(warmup * stage.steps)), max(2, stage.steps), end_lr)
+        state = None
+        losses, rmss = [], []
+        done = 0
+        for step in range(stage.steps):
+            if step % epoch == 0:
+                rms = _vrms(objective, params, args, mesh)
+                w, scale = _reweight(rms, area, stage.mask, irls)
+                args = eqx.tree_at(lambda a: (a.field_weights, a.spot_scale), args, (w, scale))
+                if state is None or stage.solver not in ("adam", "lm"):
+                    state = _vinit(solver, params, args, mesh)
+            lr = jnp.asarray(float(sched(step)), dtype)
+            params, state, aux = _vstep(solver, params, state, args, lr, mesh)
+            losses.append(aux.loss)
+            rmss.append(jnp.sqrt(aux.spot))
+            if (step + 1) % log_every == 0 or step + 1 == stage.steps:
+                lo = np.asarray(jnp.stack(losses[done:]))
+                ro = np.asarray(jnp.stack(rmss[done:]))
+                bad = ~np.isfinite(lo)
+                if bad.any():
+                    k, j = np.argwhere(bad)[0]
+                    bar.close()
+                    raise FloatingPointError(
+                        f"non-finite loss in stage {si} ({stage.name}) at step {done + k} "
+                        f"for seed {seeds[j]}")
+                bar.set_description(f"{stage.name}")
+                bar.set_postfix(loss=f"{np.min(lo[-1]):.3g}", rms_um=f"{1e3 * np.min(ro[-1]):.2f}")
+                bar.update(len(lo))
+                done = step + 1
+        hist.stages.append(stage.name)
+        hist.loss.append(np.asarray(jnp.stack(losses)) if losses else np.zeros((0, b)))
+        hist.spot_rms.append(np.asarray(jnp.stack(rmss)) if rmss else np.zeros((0, b)))
+        hist.seconds.append(time.perf_counter() - t0)
+        if callback is not None:
+            callback(si, stage, params)
+    bar.close()
+    return params, hist

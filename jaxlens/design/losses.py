@@ -1,0 +1,326 @@
+"""Design losses: the fast ray-based RMS spot loss and the image-based loss.
+
+Conventions:
+    Lengths in mm (spot errors too), field angles in degrees, wavelengths in µm. The object
+    is at infinity. A design stage is described by :class:`StageArgs`: the stage's half
+    diagonal field (as ``tan_max = tan(half FoV)``), its entrance pupil diameter, the spot
+    reference blend ``beta`` and per-field weights.
+
+Ray loss:
+    The lens is rotationally symmetric, so the loss traces fields along +y only: K fields at
+    image-height fractions ``u_k`` of the stage's field (``tan θ_k = u_k · tan_max``), each
+    weighted by the share of the 16 × 16 evaluation grid at that radius (so the loss is the
+    radial stand-in of the 256-field mean), at every design wavelength, over the half pupil
+    x ≥ 0 (points on x = 0 count once, the others twice: the spot is symmetric in x). Per
+    field the
+    polychromatic mean square spot error is
+
+        MS_k = Σ_{w,p} v·ω_p |p − ref_k|² / Σ_{w,p} v·ω_p,
+
+    with v the ray's validity and ω_p the pupil weight. The reference blends the ideal
+    (distortion-free, pinhole) image point (0, f·tan θ_k), f the spec's focal length, and
+    the polychromatic centroid: ``ref = beta·centroid + (1 − beta)·ideal``. With the
+    centroid reference, ``pin`` adds the squared miss of the full-field centroid height from
+    the sensor's (stage) half diagonal, so the field still fills the sensor while
+    distortion relaxes. The loss is Σ_k w_k·MS_k (w_k normalised to sum 1), and its
+    residual form (for least squares) has the same sum of squares.
+"""
+
+from __future__ import annotations
+
+import math
+
+import equinox as eqx
+import jax
+import jax.numpy as jnp
+import numpy as np
+from jaxtyping import Array, Float
+
+from .. import paraxial
+from ..lens import Lens
+from ..rays import Rays
+from ..sampling import pupil_hexapolar
+from .fasttrace import stacked_surfaces, trace_path_scan
+
+
+class StageArgs(eqx.Module):
+    """Per-stage (and per-epoch) inputs of the losses, all arrays so stages share one compile.
+
+    Attributes:
+        tan_max: tan of the stage's half diagonal field.
+        epd: entrance pupil diameter of the stage, mm.
+        focal: the spec focal length f (mm) that sets the ideal image points.
+        beta: spot reference blend, 0 = ideal image point, 1 = centroid.
+        pin: weight of the full-field image-height pin (used with the centroid reference).
+        spot_scale: factor (1/mm²) on the spot and pin terms; the design loop sets it to the
+            inverse of the weighted mean square spot error at the start of each epoch, so the
+            spot term is about 1 and the regularizer weights keep one meaning all run long.
+        field_weights: ``[K]`` weight of each loss field (area × mask × re-weighting).
+        reg_weights: ``[3]`` weights of the obliquity, spacing and slope regularizers.
+    """
+
+    tan_max: Float[Array, ""]
+    epd: Float[Array, ""]
+    focal: Float[Array, ""]
+    beta: Float[Array, ""]
+    pin: Float[Array, ""]
+    spot_scale: Float[Array, ""]
+    field_weights: Float[Array, " K"]
+    reg_weights: Float[Array, " 3"]
+
+
+def radial_area_weights(fracs, sensor_size, n: int = 16) -> np.ndarray:
+    """Share of the evaluation fields nearest to each radial field fraction (sums to 1).
+
+    The evaluation grid is ``n × n`` points ``linspace(−1, 1, n)`` over the sensor rectangle
+    (``jaxlens.design.evaluate``); each point votes for the loss field whose fraction of the
+    half diagonal is nearest to its own radius. With the default ``n = 16`` the loss is
+    the radial stand-in of the 256-field mean.
+
+    Args:
+        fracs: increasing field fractions in [0, 1] of the half diagonal.
+        sensor_size: (height, width) in mm.
+        n: evaluation grid per side.
+
+    Returns:
+        ``[K]`` weights.
+    """
+    fracs = np.asarray(fracs, float)
+    h, w = sensor_size
+    y, x = np.meshgrid(np.linspace(-1, 1, n) * h / 2, np.linspace(-1, 1, n) * w / 2)
+    r = np.hypot(x, y).ravel() / math.hypot(h / 2, w / 2)
+    edges = np.concatenate([[-np.inf], 0.5 * (fracs[1:] + fracs[:-1]), [np.inf]])
+    counts = np.histogram(r, bins=edges)[0].astype(float)
+    return counts / counts.sum()
+
+
+def half_pupil(rings: int) -> tuple[np.ndarray, np.ndarray]:
+    """Hexapolar points of the half pupil x ≥ 0 and their weights (1 on x = 0, else 2)."""
+    p = np.asarray(pupil_hexapolar(rings))
+    keep = p[:, 0] >= -1e-9
+    p = p[keep]
+    on_axis = np.abs(p[:, 0]) < 1e-9
+    p[on_axis, 0] = 0.0
+    return p, np.where(on_axis, 1.0, 2.0)
+
+
+class RayLoss(eqx.Module):
+    """Sampling of the ray-based spot loss (static sizes, array values).
+
+    Attributes:
+        fracs: ``[K]`` field fractions of the stage's half diagonal.
+        area: ``[K]`` sensor-area weight of each field.
+        pupil: ``[P, 2]`` unit-pupil points (half pupil).
+        pupil_weights: ``[P]``.
+        wavelengths: ``[W]`` µm.
+    """
+
+    fracs: Float[Array, " K"]
+    area: Float[Array, " K"]
+    pupil: Float[Array, "P 2"]
+    pupil_weights: Float[Array, " P"]
+    wavelengths: Float[Array, " W"]
+
+    @staticmethod
+    def make(n_fields: int, rings: int, wavelengths, sensor_size, dtype=None) -> RayLoss:
+        """K fields from 0 to 1 (equal steps), a ``rings``-ring hexapolar half pupil."""
+        dtype = dtype or jnp.result_type(float)
+        fracs = np.linspace(0.0, 1.0, n_fields)
+        p, pw = half_pupil(rings)
+        return RayLoss(
+            fracs=jnp.asarray(fracs, dtype),
+            area=jnp.asarray(radial_area_weights(fracs, sensor_size), dtype),
+            pupil=jnp.asarray(p, dtype),
+            pupil_weights=jnp.asarray(pw, dtype),
+            wavelengths=jnp.asarray(wavelengths, dtype),
+        )
+
+    @property
+    def n_fields(self) -> int:
+        return self.fracs.shape[0]
+
+
+def launch(lens: Lens, sampling: RayLoss, args: StageArgs) -> Rays:
+    """Collimated rays ``[K, W, P]`` at the stage's fields, aimed at the paraxial entrance pupil."""
+    dtype = sampling.pupil.dtype
+    tan = sampling.fracs * args.tan_max  # [K]
+    direction = jnp.stack([jnp.zeros_like(tan), tan, jnp.ones_like(tan)], -1)
+    direction = direction / jnp.linalg.norm(direction, axis=-1, keepdims=True)
+    zep = paraxial.entrance_pupil_z(lens)
+    xy = sampling.pupil * (0.5 * args.epd)  # [P, 2]
+    # Shift the launch plane so every beam's centre ray passes the entrance pupil centre.
+    origin = jnp.concatenate([xy, jnp.broadcast_to(zep, xy.shape[:1])[:, None]], -1)
+    K, W, P = sampling.n_fields, sampling.wavelengths.shape[0], xy.shape[0]
+    o = jnp.broadcast_to(origin[None, None], (K, W, P, 3)).astype(dtype)
+    d = jnp.broadcast_to(direction[:, None, None, :], (K, W, P, 3)).astype(dtype)
+    wl = jnp.broadcast_to(sampling.wavelengths[None, :, None], (K, W, P)).astype(dtype)
+    return Rays(o, d, wl)
+
+
+class SpotResult(eqx.Module):
+    """Spot errors of one lens: residuals and per-field statistics."""
+
+    residuals: Float[Array, "K W P 2"]  # weighted so that Σ residuals² = the spot loss
+    ms: Float[Array, " K"]  # mean square spot error per field (mm²)
+    valid_fraction: Float[Array, " K"]
+    centroid_y: Float[Array, " K"]
+    pin: Float[Array, ""]  # weighted pin residual
+
+
+def spot_errors(path: Rays, sampling: RayLoss, args: StageArgs) -> SpotResult:
+    """Spot residuals on the image surface from a traced path (see module docstring)."""
+    img = jax.tree.map(lambda x: x[-1] if x.ndim else x, path)
+    p = img.origin[..., :2]  # [K, W, P, 2]
+    v = img.valid.astype(p.dtype) * sampling.pupil_weights  # [K, W, P]
+    vsum = jnp.sum(v, axis=(1, 2))  # [K]
+    safe = jnp.maximum(vsum, 1e-12)
+    cen = jnp.sum(v[..., None] * p, axis=(1, 2)) / safe[:, None]  # [K, 2]
+    tan = sampling.fracs * args.tan_max
+    ideal = jnp.stack([jnp.zeros_like(tan), args.focal * tan], -1)
+    ref = args.beta * cen + (1.0 - args.beta) * ideal
+    err = p - ref[:, None, None, :]
+    ms = jnp.sum(v * jnp.sum(err**2, -1), axis=(1, 2)) / safe
+    w = args.field_weights / jnp.maximum(jnp.sum(args.field_weights), 1e-12)
+    scale = jnp.sqrt(args.spot_scale * w / safe)[:, None, None] * jnp.sqrt(v)
+    residuals = err * scale[..., None]
+    height = args.focal * args.tan_max  # stage half diagonal on the sensor
+    pin = jnp.sqrt(args.pin * args.spot_scale) * (cen[-1, 1] - height)
+    frac = jnp.sum(img.valid.astype(p.dtype) * sampling.pupil_weights, axis=(1, 2)) / (
+        sampling.wavelengths.shape[0] * jnp.sum(sampling.pupil_weights))
+    return SpotResult(residuals, ms, frac, cen[:, 1], pin)
+
+
+def trace_stage(lens: Lens, sampling: RayLoss, args: StageArgs) -> Rays:
+    """Trace the loss rays; stacked ``[n + 1, K, W, P]`` after every surface and the image."""
+    return trace_path_scan(lens, launch(lens, sampling, args))
+
+
+class Aux(eqx.Module):
+    """Diagnostics returned with the design residuals."""
+
+    loss: Float[Array, ""]  # total sum of squares
+    spot: Float[Array, ""]  # sensor-area mean of the per-field mean square spot error (mm²)
+    rms: Float[Array, " K"]  # RMS spot error per loss field (mm)
+    valid_fraction: Float[Array, " K"]
+    regs: Float[Array, " 3"]  # unweighted obliquity, spacing, slope penalties
+
+
+def design_residuals(params, pmap, sampling: RayLoss, args: StageArgs, gap_bounds):
+    """All residuals of a design (spot, pin and the three weighted regularizers).
+
+    Args:
+        params: ``LensParams`` of one design.
+        pmap: the ``Parameterization``.
+        sampling: the ray-loss sampling.
+        args: the stage inputs.
+        gap_bounds: ``[n]`` spacing bounds (mm), see ``design.init.gap_bounds``.
+
+    Returns:
+        ``(residuals [R], Aux)``; the design loss is ``Σ residuals²``.
+    """
+    from . import regularizers as reg
+
+    lens = pmap.to_lens(params)
+    rays = launch(lens, sampling, args)
+    path = trace_path_scan(lens, rays)
+    spot = spot_errors(path, sampling, args)
+    stack = stacked_surfaces(lens)
+    radii = reg.clear_radii(path)
+    h_obl = reg.obliquity(stack, lens.stop, rays, path)
+    h_gap = reg.spacing(lens, stack, radii, jnp.asarray(gap_bounds, radii.dtype))
+    h_slope = reg.slope(stack, lens.stop, radii)
+    w = jnp.sqrt(args.reg_weights)
+    res = jnp.concatenate([
+        spot.residuals.reshape(-1), spot.pin[None], w[0] * h_obl, w[1] * h_gap, w[2] * h_slope,
+    ])
+    regs = jnp.stack([jnp.sum(h_obl**2), jnp.sum(h_gap**2), jnp.sum(h_slope**2)])
+    total = jnp.sum(res**2)
+    aux = Aux(total, jnp.sum(sampling.area * spot.ms), jnp.sqrt(spot.ms), spot.valid_fraction,
+              regs)
+    return res, aux
+
+
+def design_loss(params, pmap, sampling: RayLoss, args: StageArgs, gap_bounds):
+    """Scalar design loss Σ residuals² and its ``Aux``."""
+    res, aux = design_residuals(params, pmap, sampling, args, gap_bounds)
+    return aux.loss, aux
+
+
+class Objective(eqx.Module):
+    """The design objective as a pytree: ``objective(params, args) -> (residuals, Aux)``.
+
+    Attributes:
+        pmap: the ``Parameterization``.
+        sampling: the ray-loss sampling.
+        gap_bounds: ``[n]`` spacing bounds (mm).
+    """
+
+    pmap: object
+    sampling: RayLoss
+    gap_bounds: Float[Array, " n"]
+
+    def __call__(self, params, args: StageArgs):
+        return design_residuals(params, self.pmap, self.sampling, args, self.gap_bounds)
+
+    def field_rms(self, params, args: StageArgs) -> Float[Array, " K"]:
+        """RMS spot error per loss field (mm) at the current parameters."""
+        return self(params, args)[1].rms
+
+
+class ImageObjective(eqx.Module):
+    """The paper's image-based loss: render a scene through the lens, compare with the scene.
+
+    The scene (linear RGB, the sensor's aspect) is rendered by backward ray tracing
+    (``jaxlens.render``, ``relative_illumination=False``) after the distortion relaxation of
+    ``jaxlens.distortion_relax.relaxed_render``: the object is pre-warped by the lens's own
+    distortion, so the loss sees blur and not distortion, and the alignment penalty (weight
+    ``alpha``, in pixels²) keeps distortion bounded. The residuals are the pixel
+    differences scaled by ``sqrt(weight / n_pixels)``, the penalty's square root, and the
+    ray objective's regularizer residuals (so the regularizers act as with the ray loss).
+    The stop's semi-diameter is set to the stage's EPD/2, as rendering needs a real
+    aperture. The mask and the per-epoch field weights still come from the ray loss
+    (``field_rms``).
+
+    Attributes:
+        ray: the ray ``Objective`` (parameterisation, sampling, regularizers).
+        scene: ``[H, W, 3]`` linear scene.
+        sensor: the sensor to render on.
+        spp: rays per pixel and wavelength.
+        alpha: distortion alignment penalty weight.
+        weight: weight of the mean squared pixel error.
+    """
+
+    ray: Objective
+    scene: Float[Array, "H W 3"]
+    sensor: object
+    spp: int = eqx.field(static=True, default=4)
+    alpha: float = eqx.field(static=True, default=1e-4)
+    weight: float = eqx.field(static=True, default=1e3)
+
+    @property
+    def sampling(self) -> RayLoss:
+        return self.ray.sampling
+
+    def field_rms(self, params, args: StageArgs):
+        return self.ray.field_rms(params, args)
+
+    def __call__(self, params, args: StageArgs):
+        from ..distortion_relax import relaxed_render
+
+        res_ray, aux = self.ray(params, args)
+        s = self.ray.sampling
+        n_spot = s.n_fields * s.wavelengths.shape[0] * s.pupil.shape[0] * 2 + 1
+        regs = res_ray[n_spot:]
+        lens = self.ray.pmap.to_lens(params)
+        stop = eqx.tree_at(lambda x: x.semi_diameter, lens.surfaces[lens.stop], 0.5 * args.epd)
+        surfaces = tuple(stop if i == lens.stop else x for i, x in enumerate(lens.surfaces))
+        lens = eqx.tree_at(lambda x: (x.surfaces, x.epd), lens, (surfaces, args.epd))
+        img, pen = relaxed_render(lens, self.scene, spp=self.spp, key=jax.random.PRNGKey(0),
+                                  alpha=self.alpha, sensor=self.sensor,
+                                  relative_illumination=False)
+        d = (img - self.scene).reshape(-1)
+        d = d * jnp.sqrt(self.weight / d.shape[0])
+        ok = pen > 0
+        root = jnp.where(ok, jnp.sqrt(jnp.where(ok, pen, 1.0)), 0.0)
+        res = jnp.concatenate([d.astype(regs.dtype), root[None].astype(regs.dtype), regs])
+        return res, eqx.tree_at(lambda a: a.loss, aux, jnp.sum(res**2))

@@ -1,0 +1,55 @@
+"""The paper's re-weighting mask over the field, and per-field loss weights.
+
+Before each epoch an RMS spot error grid is computed from rays at infinity (for a
+rotationally symmetric lens, the loss's radial fields stand for the grid). The grid is
+normalised by its (area-weighted) mean, and fields below ``threshold`` × the mean (0.8 in
+the paper) are dropped, so the next epoch works on the fields that are worse than average,
+each in proportion to its error.
+"""
+
+from __future__ import annotations
+
+import jax.numpy as jnp
+from jaxtyping import Array, Float
+
+MASK_THRESHOLD = 0.8
+
+
+def reweighting_mask(
+    rms: Float[Array, "*b K"], area: Float[Array, " K"] | None = None, *,
+    threshold: float = MASK_THRESHOLD,
+) -> Float[Array, "*b K"]:
+    """Normalised RMS error per field with the fields below ``threshold`` dropped.
+
+    Args:
+        rms: RMS spot error per field (any unit), batch axes first.
+        area: optional share of the sensor area of each field, for the mean.
+        threshold: fields whose normalised error is below this get weight 0.
+
+    Returns:
+        ``rms / mean(rms)`` where that is ≥ ``threshold``, else 0. A field grid with a zero
+        mean (a perfect lens) gives all ones.
+    """
+    w = jnp.ones_like(rms) if area is None else jnp.broadcast_to(area, rms.shape)
+    mean = jnp.sum(w * rms, -1, keepdims=True) / jnp.sum(w, -1, keepdims=True)
+    ok = mean > 0
+    norm = jnp.where(ok, rms / jnp.where(ok, mean, 1.0), 1.0)
+    return jnp.where(norm >= threshold, norm, 0.0)
+
+
+def field_weights(
+    rms: Float[Array, "*b K"], area: Float[Array, " K"], *, mask: bool, irls: bool,
+    floor: float = 1e-4,
+) -> Float[Array, "*b K"]:
+    """Loss weight of every field: sensor area × (mask) × (1/RMS re-weighting).
+
+    With ``irls`` the weights are divided by each field's current RMS (floored at
+    ``floor``, mm), so that Σ w_k·MS_k approximates the area-weighted mean RMS (the
+    evaluation metric) rather than the mean square. The result is normalised to sum 1.
+    """
+    w = jnp.broadcast_to(area, rms.shape)
+    if mask:
+        w = w * reweighting_mask(rms, area)
+    if irls:
+        w = w / jnp.maximum(rms, floor)
+    return w / jnp.maximum(jnp.sum(w, -1, keepdims=True), 1e-30)

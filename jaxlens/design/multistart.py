@@ -1,0 +1,231 @@
+"""Multi-start design: many seeds designed together (vmapped), sharded over devices.
+
+The random starts are stacked on a leading seed axis and placed on a one-axis device mesh
+(``jax.sharding``), so every jitted, vmapped solver update runs the seeds of each device in
+parallel (on a CPU, ``XLA_FLAGS=--xla_force_host_platform_device_count=N`` gives N devices,
+one per core). The seed count is padded to a multiple of the device count with copies of the
+last seed, and the copies are dropped afterwards. On a cluster, ``jax.distributed.initialize``
+before calling :func:`design` makes ``jax.devices()`` span every host, and the same mesh
+shards the seeds across them.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+from collections.abc import Sequence
+
+import jax
+import jax.numpy as jnp
+import numpy as np
+from jax.sharding import Mesh, NamedSharding, PartitionSpec
+
+from .curriculum import History, Stage, paper_stages, run
+from .init import gap_bounds, parameterization, random_starts
+from .losses import ImageObjective, Objective, RayLoss
+from .params import LensParams
+from .solvers import LBFGSB, Adam, DampedLeastSquares, LevenbergMarquardt
+from .spec import DesignSpec
+
+
+@dataclasses.dataclass(frozen=True)
+class DesignConfig:
+    """How to design: sampling, schedule, learning rates, switches.
+
+    Attributes:
+        n_fields: radial loss fields K (0 … full field).
+        rings: hexapolar rings of the (half) pupil sampling.
+        curriculum_n: the sine path's N (N + 1 curriculum stages).
+        steps: solver steps per curriculum stage.
+        final_steps: fine-tuning steps at the full spec.
+        polish_steps: polish steps (Levenberg–Marquardt by default).
+        curriculum, regularize, mask: the paper's three switches.
+        solver: solver of the curriculum and fine-tuning (``adam``, ``lm``, ``lbfgsb``).
+        polish: solver of the polish stage.
+        lr_c, lr_a, lr_d, lr_k: Adam learning rates of scaled curvatures, scaled aspheric
+            coefficients, gaps (mm) and conics.
+        reg_weights: obliquity, spacing and slope regularizer weights (the spot term is
+            normalised to about 1 at every epoch start).
+        pin: weight of the image-height pin in the final stages.
+        reference: spot reference of the curriculum stages (``"ideal"`` or ``"centroid"``).
+        epoch: steps between re-weightings.
+        irls: re-weight fields by 1/RMS.
+        log_every: steps between host reads.
+        float64: design in float64 (default float32).
+        image_pixels, image_spp: sensor pixels per side and rays per pixel of the
+            image-based loss.
+    """
+
+    n_fields: int = 9
+    rings: int = 4
+    curriculum_n: int = 3
+    steps: int = 300
+    final_steps: int = 600
+    polish_steps: int = 40
+    curriculum: bool = True
+    regularize: bool = True
+    mask: bool = True
+    solver: str = "adam"
+    polish: str = "lm"
+    lr_c: float = 5e-3
+    lr_a: float = 1e-3
+    lr_d: float = 2e-3
+    lr_k: float = 0.0
+    reg_weights: tuple[float, float, float] = (40.0, 1000.0, 40.0)
+    pin: float = 1.0
+    reference: str = "ideal"
+    epoch: int = 50
+    irls: bool = True
+    log_every: int = 25
+    float64: bool = False
+    image_pixels: int = 64
+    image_spp: int = 4
+
+    def scaled(self, factor: float) -> DesignConfig:
+        """The same recipe with every step count scaled by ``factor`` (at least 1 step)."""
+        def sc(n):
+            return max(1, round(n * factor)) if n else 0
+
+        return dataclasses.replace(self, steps=sc(self.steps), final_steps=sc(self.final_steps),
+                                   polish_steps=sc(self.polish_steps))
+
+    def stages(self, spec: DesignSpec) -> list[Stage]:
+        return paper_stages(
+            spec, n=self.curriculum_n, steps=self.steps, final_steps=self.final_steps,
+            polish_steps=self.polish_steps, curriculum=self.curriculum,
+            regularize=self.regularize, mask=self.mask, pin=self.pin, solver=self.solver,
+            polish=self.polish, reference=self.reference)
+
+
+@dataclasses.dataclass
+class DesignResult:
+    """Designed parameters (leading seed axis), their lenses, and the run history."""
+
+    spec: DesignSpec
+    config: DesignConfig
+    seeds: list[int]
+    params: LensParams
+    pmap: object
+    history: History
+
+    def lens(self, i: int, dtype=jnp.float64):
+        """The i-th design as a ``Lens`` (cast to ``dtype``)."""
+        p = jax.tree.map(lambda x: jnp.asarray(np.asarray(x)[i]), self.params)
+        return self.pmap.to_lens(p).astype(dtype)
+
+
+def seed_mesh(devices=None) -> Mesh:
+    """A one-axis mesh ``("seeds",)`` over ``devices`` (default: every device)."""
+    return Mesh(np.array(jax.devices() if devices is None else list(devices)), ("seeds",))
+
+
+def shard_seeds(tree, mesh: Mesh | None = None):
+    """Place a pytree with a leading seed axis on the mesh (seed axis split over devices)."""
+    mesh = seed_mesh() if mesh is None else mesh
+    sharding = NamedSharding(mesh, PartitionSpec("seeds"))
+    return jax.tree.map(lambda x: jax.device_put(x, sharding), tree)
+
+
+def _image_objective(objective: Objective, spec: DesignSpec, config: DesignConfig):
+    from skimage import data, transform
+
+    from ..lens import Sensor
+
+    n = config.image_pixels
+    img = data.astronaut().astype(np.float64) / 255.0
+    s = min(img.shape[:2])
+    img = transform.resize(img[:s, :s], (n, n, 3), anti_aliasing=True) ** 2.2
+    dtype = objective.gap_bounds.dtype
+    sensor = Sensor(resolution=(n, n), pixel_size=jnp.asarray(spec.sensor_size[0] / n, dtype))
+    return ImageObjective(objective, jnp.asarray(img, dtype), sensor, spp=config.image_spp)
+
+
+def make_solver_factory(config: DesignConfig, spec: DesignSpec, dtype):
+    """``(name, stage_lr, objective) -> solver`` for the curriculum loop."""
+    m = spec.asphere_terms
+    lower_d = jnp.asarray(np.minimum(gap_bounds(spec)[:-1], 0.05), dtype)
+    free = LensParams(c=True, a=True, k=config.lr_k > 0, d=True)
+    s = spec.num_surfaces - 1
+
+    def make(name: str, lr: float, objective):
+        if name == "adam":
+            lrs = LensParams(
+                c=jnp.asarray(config.lr_c * lr, dtype), a=jnp.full((m,), config.lr_a * lr, dtype),
+                k=jnp.asarray(config.lr_k * lr, dtype), d=jnp.asarray(config.lr_d * lr, dtype))
+            return Adam(objective, lrs, free=free)
+        if name == "lm":
+            return DampedLeastSquares(objective, free=free)
+        if name == "lm-optx":
+            return LevenbergMarquardt(objective, free=free)
+        if name == "lbfgsb":
+            inf = jnp.asarray(jnp.inf, dtype)
+            lower = LensParams(c=jnp.full((s,), -inf), a=jnp.full((s, m), -inf),
+                               k=jnp.full((s,), -inf), d=lower_d)
+            upper = LensParams(c=jnp.full((s,), inf), a=jnp.full((s, m), inf),
+                               k=jnp.full((s,), inf),
+                               d=jnp.full(lower_d.shape, spec.total_track, dtype))
+            return LBFGSB(objective, lower, upper, free=free)
+        raise ValueError(f"design: unknown solver {name!r}; use adam, lm, lm-optx or lbfgsb")
+
+    return make
+
+
+def design(
+    spec: DesignSpec,
+    seeds: Sequence[int],
+    config: DesignConfig = DesignConfig(),
+    *,
+    progress: bool = True,
+    shard: bool = True,
+    devices=None,
+    callback=None,
+    image_loss: bool = False,
+) -> DesignResult:
+    """Design ``len(seeds)`` lenses from random starts, all at once.
+
+    Args:
+        spec: the design spec (validated on construction).
+        seeds: integer seeds of the random starts.
+        config: the recipe.
+        progress: show a progress bar.
+        shard: shard the seeds over the devices.
+        devices: the devices to shard over (default ``jax.devices()``).
+        callback: passed to :func:`jaxlens.design.curriculum.run`.
+        image_loss: fine-tune with the image-based loss (``ImageObjective``: a scikit-image
+            test scene rendered at ``config.image_pixels`` per side) instead of the ray loss.
+
+    Returns:
+        A :class:`DesignResult`.
+    """
+    seeds = [int(s) for s in seeds]
+    if not seeds:
+        raise ValueError("design: need at least one seed")
+    dtype = jnp.float64 if config.float64 else jnp.float32
+    if config.float64 and not jax.config.jax_enable_x64:
+        raise ValueError("design: float64 needs jax_enable_x64")
+    pmap = parameterization(spec, dtype)
+    sampling = RayLoss.make(config.n_fields, config.rings, spec.wavelengths, spec.sensor_size,
+                            dtype)
+    objective = Objective(pmap, sampling, jnp.asarray(gap_bounds(spec), dtype))
+    devices = list(jax.devices() if devices is None else devices)
+    n_dev = min(len(devices), len(seeds)) if shard else 1
+    padded = seeds + [seeds[-1]] * (-len(seeds) % n_dev)
+    params = random_starts(spec, padded, dtype)
+    mesh = None
+    if n_dev > 1:
+        mesh = seed_mesh(devices[:n_dev])
+        params = shard_seeds(params, mesh)
+    make = make_solver_factory(config, spec, dtype)
+    objectives = {"ray": objective}
+    stages = config.stages(spec)
+    if image_loss:
+        objectives["image"] = _image_objective(objective, spec, config)
+        stages = [dataclasses.replace(s, loss="image") if s.name.startswith("fine-tune") else s
+                  for s in stages]
+    params, hist = run(
+        spec, stages, params, objectives, make, reg_weights=config.reg_weights,
+        epoch=config.epoch, irls=config.irls, log_every=config.log_every, progress=progress,
+        seeds=padded, callback=callback, mesh=mesh)
+    params = jax.tree.map(lambda x: np.asarray(x)[: len(seeds)], params)
+    hist.loss = [h[:, : len(seeds)] for h in hist.loss]
+    hist.spot_rms = [h[:, : len(seeds)] for h in hist.spot_rms]
+    return DesignResult(spec, config, seeds, params, pmap, hist)

@@ -1,0 +1,82 @@
+"""The design variables of a lens, scaled to order 1, and their map back to a ``Lens``.
+
+Conventions:
+    Each optical surface ``s`` (every surface but the stop) has a normalisation radius
+    ``r_s`` (mm, about its expected clear semi-diameter). The optimiser sees
+
+    * ``c``: curvature times ``r_s`` (dimensionless; 1 is a hemisphere of radius ``r_s``);
+    * ``a[:, j]``: the even aspheric coefficient of r^(2j+4) times ``r_s^(2j+3)`` (the sag the
+      term adds at ``r_s``, in units of ``r_s``). The r² term (Zemax PARM1) is held at zero:
+      it duplicates the curvature;
+    * ``k``: the conic constant (unscaled; optional);
+    * ``d``: the gaps in mm (stop to first surface and every surface to the next), all but the
+      last one. The last gap (to the sensor) is ``total_track − Σ d``, so the track is fixed.
+
+    Units are those of ``jaxlens.lens``: mm, light toward +z, surface 1 at z = 0.
+"""
+
+from __future__ import annotations
+
+import equinox as eqx
+import jax.numpy as jnp
+from jaxtyping import Array, Float
+
+from ..lens import Lens
+from ..surfaces import EvenAsphere
+
+
+class LensParams(eqx.Module):
+    """Scaled design variables for S optical surfaces and G free gaps (leading axes batch)."""
+
+    c: Float[Array, "*b S"]
+    a: Float[Array, "*b S m"]
+    k: Float[Array, "*b S"]
+    d: Float[Array, "*b G"]
+
+
+class Parameterization(eqx.Module):
+    """Maps ``LensParams`` to a ``Lens`` built on a template (structure, media, system data).
+
+    Args:
+        template: a lens whose optical surfaces are ``EvenAsphere`` with ``1 + m`` coefficients.
+        r_norm: normalisation radius of every optical surface, mm ``[S]``.
+        total_track: the fixed first-vertex-to-sensor distance, mm.
+        optical: indices of the optical (non-stop) surfaces, static.
+    """
+
+    template: Lens
+    r_norm: Float[Array, " S"] = eqx.field(converter=jnp.asarray)
+    total_track: Float[Array, ""] = eqx.field(converter=jnp.asarray)
+    optical: tuple[int, ...] = eqx.field(static=True)
+
+    @property
+    def n_terms(self) -> int:
+        return self.template.surfaces[self.optical[0]].coeffs.shape[0] - 1
+
+    def to_lens(self, p: LensParams) -> Lens:
+        """The lens for one set of parameters (unbatched)."""
+        surfaces = list(self.template.surfaces)
+        r = self.r_norm.astype(p.c.dtype)
+        powers = 2 * jnp.arange(self.n_terms, dtype=p.c.dtype) + 3  # r_s^(2j+3)
+        for j, i in enumerate(self.optical):
+            s = surfaces[i]
+            c = p.c[j] / r[j]
+            a = p.a[j] / r[j] ** powers
+            coeffs = jnp.concatenate([jnp.zeros((1,), p.c.dtype), a])
+            surfaces[i] = EvenAsphere(c=c, k=p.k[j], coeffs=coeffs, semi_diameter=s.semi_diameter)
+        last = self.total_track.astype(p.d.dtype) - jnp.sum(p.d)
+        thickness = jnp.concatenate([p.d, last[None]])
+        return eqx.tree_at(
+            lambda lens: (lens.surfaces, lens.thickness),
+            self.template,
+            (tuple(surfaces), thickness),
+        )
+
+    def from_lens(self, lens: Lens) -> LensParams:
+        """Scaled parameters of a lens with this structure (inverse of ``to_lens``)."""
+        r = self.r_norm
+        powers = 2 * jnp.arange(self.n_terms, dtype=r.dtype) + 3
+        c = jnp.stack([lens.surfaces[i].c for i in self.optical]) * r
+        a = jnp.stack([lens.surfaces[i].coeffs[1:] for i in self.optical]) * r[:, None] ** powers
+        k = jnp.stack([lens.surfaces[i].k for i in self.optical])
+        return LensParams(c=c, a=a, k=k, d=lens.thickness[:-1])

@@ -1,0 +1,452 @@
+"""Ab initio curriculum design of a classical lens, and the paper's Table 1 ablation.
+
+``python -m jaxlens.experiments.classical`` with no arguments designs the paper's classical
+lens (Yang, Fu & Heidrich, Nat. Commun. 15, 6572 (2024)): six plastic aspheric elements,
+the stop first, an 80.8° diagonal field of view at F/2.0 on a 7.66 mm sensor diagonal,
+from random, nearly flat starts. It writes an output folder (``--out``, default
+``runs/classical``) with the best design as JSON and Zemax ``.zmx`` (plus ``.AGF`` catalogs
+for glasses Zemax does not ship), every seed's design as JSON, figures (layout with rays,
+spot diagrams, RMS map over the sensor, MTF curves, design progress, a rendered test
+scene) and ``summary.json``, whose headline it also prints.
+
+Convention (the paper's): f = (sensor half-diagonal)/tan(half FoV) = 3.83/tan(40.4°) ≈
+4.50 mm and EPD = f/F# ≈ 2.25 mm. Distortion is free to move the paraxial EFL; the summary
+reports the paraxial EFL and F-number too. The RMS statistics use 256 fields, a 16 × 16
+grid over the whole (square) sensor, corners included (see ``jaxlens.design.evaluate``).
+
+Recipe (default): multi-start (seeds vmapped and sharded over the CPU cores), Adam in an
+order-1 parameter space through the curriculum (FoV and F-number along the paper's sine
+path, ideal-image reference), fine-tuning at the full spec with the centroid reference,
+the image-height pin, the re-weighting mask and 1/RMS field weights, then a
+Levenberg–Marquardt polish on the spot residuals; the three regularizers throughout.
+
+``--ablation`` runs the Table 1 columns (baseline; +curriculum; +regularization; +both;
++both+mask) over 20 random starts each and writes ``table1.md``, ``table1.json``, the full
+method's designs as ``designs/seed_<n>.zmx`` and the exact command into ``--ablation-out``
+(default ``experiments/classical``).
+
+Examples:
+    python -m jaxlens.experiments.classical
+    python -m jaxlens.experiments.classical --seeds 8 --steps 2 --out runs/long
+    python -m jaxlens.experiments.classical --smoke --out /tmp/smoke
+    python -m jaxlens.experiments.classical --ablation --steps 0.5
+"""
+
+from __future__ import annotations
+
+import argparse
+import dataclasses
+import json
+import os
+import shlex
+import sys
+import time
+
+ABLATION_COLUMNS = (
+    ("baseline", dict(curriculum=False, regularize=False, mask=False)),
+    ("+curriculum", dict(curriculum=True, regularize=False, mask=False)),
+    ("+regularization", dict(curriculum=False, regularize=True, mask=False)),
+    ("+both", dict(curriculum=True, regularize=True, mask=False)),
+    ("+both+mask", dict(curriculum=True, regularize=True, mask=True)),
+)
+
+PAPER_TABLE1_FULL = {"valid_percent": 100.0, "rms_mean_um": 15.74, "rms_min_um": 12.50}
+
+CONVENTION = (
+    "f = (sensor half-diagonal)/tan(half FoV); EPD = f/F#; fields: 16x16 grid over the whole "
+    "sensor rectangle (linspace(-1, 1, 16) per side, corners included), field angle tan(theta) "
+    "= sensor position / f; RMS = polychromatic (F, d, C pooled) RMS radius about the centroid, "
+    "21x21 pupil grid; valid = no self-intersection over the clear apertures and >= 99% of "
+    "the rays of every field reach the sensor")
+
+
+def _ensure_devices(n: int, argv: list[str]) -> None:
+    """Re-run this module with ``n`` XLA host devices (one per core) if not set up yet.
+
+    jaxlens initialises the JAX backend on import, so the device count must be in
+    ``XLA_FLAGS`` before the process starts.
+    """
+    flags = os.environ.get("XLA_FLAGS", "")
+    if n <= 1 or "xla_force_host_platform_device_count" in flags:
+        return
+    if os.environ.get("JAXLENS_NO_REEXEC"):
+        return
+    env = dict(os.environ)
+    env["XLA_FLAGS"] = (flags + f" --xla_force_host_platform_device_count={n}").strip()
+    env["JAXLENS_NO_REEXEC"] = "1"
+    sys.stdout.flush()
+    os.execve(sys.executable, [sys.executable, "-m", "jaxlens.experiments.classical", *argv],
+              env)
+
+
+def build_parser() -> argparse.ArgumentParser:
+    p = argparse.ArgumentParser(
+        prog="python -m jaxlens.experiments.classical",
+        description="Ab initio curriculum design of the paper's classical lens (Table 1).")
+    g = p.add_argument_group("design spec")
+    g.add_argument("--fov", type=float, default=80.8, help="full diagonal FoV, degrees")
+    g.add_argument("--fnum", type=float, default=2.0, help="F-number (EPD = f/F#)")
+    g.add_argument("--sensor-diagonal", type=float, default=7.66, help="mm")
+    g.add_argument("--elements", type=int, default=6, help="number of lens elements")
+    g.add_argument("--materials", default=None,
+                   help="comma-separated catalog names, one per element "
+                        "(default E48R,OKP4 alternating)")
+    g.add_argument("--track", type=float, default=7.0, help="total track, mm (fixed)")
+    g.add_argument("--bfl", type=float, default=0.8,
+                   help="minimum last-surface-to-sensor clearance, mm")
+    g.add_argument("--stop", type=int, default=0, help="elements in front of the stop")
+    g.add_argument("--fov-start", type=float, default=47.5, help="curriculum start FoV")
+    g.add_argument("--fnum-start", type=float, default=2.8, help="curriculum start F#")
+    g.add_argument("--asphere-terms", type=int, default=6, help="even terms r^4 … per surface")
+    r = p.add_argument_group("recipe")
+    r.add_argument("--seeds", type=int, default=4, help="number of random starts")
+    r.add_argument("--seed-list", default=None, help="explicit comma-separated seeds")
+    r.add_argument("--first-seed", type=int, default=0, help="first seed of --seeds")
+    r.add_argument("--steps", type=float, default=1.0, help="scale every stage's step count")
+    r.add_argument("--solver", default="adam", choices=("adam", "lm", "lbfgsb"),
+                   help="solver of the curriculum and fine-tuning stages")
+    r.add_argument("--polish", default="lm", choices=("lm", "lm-optx", "lbfgsb", "none"),
+                   help="polish solver after fine-tuning (lm: damped least squares with a "
+                        "jacfwd Jacobian; lm-optx: optimistix LevenbergMarquardt)")
+    r.add_argument("--loss", default="ray", choices=("ray", "image"),
+                   help="fine-tuning loss: ray-based RMS spot, or image-based through "
+                        "jaxlens.render with distortion relaxation")
+    r.add_argument("--no-curriculum", action="store_true", help="stay at the full spec")
+    r.add_argument("--no-regularize", action="store_true", help="switch the regularizers off")
+    r.add_argument("--no-mask", action="store_true", help="switch the re-weighting mask off")
+    r.add_argument("--float64", action="store_true", help="design in float64")
+    r.add_argument("--devices", type=int, default=os.cpu_count() or 1,
+                   help="XLA host devices to shard seeds over (default: CPU cores)")
+    o = p.add_argument_group("output")
+    o.add_argument("--out", default="runs/classical", help="output folder")
+    o.add_argument("--no-plots", action="store_true", help="skip figures and rendering")
+    o.add_argument("--no-render", action="store_true", help="skip the rendered test scene")
+    o.add_argument("--smoke", action="store_true",
+                   help="a few steps, one seed, coarse sampling (CI check of the pipeline)")
+    o.add_argument("--quiet", action="store_true", help="no progress bar")
+    a = p.add_argument_group("ablation (Table 1)")
+    a.add_argument("--ablation", action="store_true", help="run the Table 1 columns")
+    a.add_argument("--ablation-seeds", type=int, default=20, help="random starts per column")
+    a.add_argument("--ablation-out", default="experiments/classical", help="results folder")
+    a.add_argument("--columns", default=None,
+                   help="comma-separated subset of columns (default: all five)")
+    return p
+
+
+def spec_from_args(args):
+    from jaxlens.design.spec import DesignSpec
+
+    kw = dict(fov=args.fov, fnum=args.fnum, sensor_diagonal=args.sensor_diagonal,
+              n_elements=args.elements, total_track=args.track, bfl=args.bfl, stop=args.stop,
+              fov_start=min(args.fov_start, args.fov), fnum_start=max(args.fnum_start, args.fnum),
+              asphere_terms=args.asphere_terms)
+    if args.materials:
+        kw["materials"] = tuple(m.strip() for m in args.materials.split(",") if m.strip())
+    elif args.elements != 6:
+        kw["materials"] = tuple(("E48R", "OKP4")[i % 2] for i in range(args.elements))
+    return DesignSpec(**kw)
+
+
+def config_from_args(args):
+    from jaxlens.design.multistart import DesignConfig
+
+    cfg = DesignConfig(
+        curriculum=not args.no_curriculum, regularize=not args.no_regularize,
+        mask=not args.no_mask, solver=args.solver,
+        polish="lm" if args.polish == "none" else args.polish, float64=args.float64)
+    if args.polish == "none":
+        cfg = dataclasses.replace(cfg, polish_steps=0)
+    if args.smoke:
+        cfg = dataclasses.replace(cfg, n_fields=5, rings=2, steps=6, final_steps=6,
+                                  polish_steps=0, epoch=6, log_every=3)
+    elif args.steps != 1.0:
+        cfg = cfg.scaled(args.steps)
+    return cfg
+
+
+def _seeds(args) -> list[int]:
+    if args.seed_list:
+        return [int(s) for s in args.seed_list.split(",") if s.strip()]
+    n = 1 if args.smoke else args.seeds
+    return list(range(args.first_seed, args.first_seed + n))
+
+
+def finished_lens(result, i: int, spec):
+    """Design i as a float64 lens with clear semi-diameters set for export."""
+    import equinox as eqx
+    import jax.numpy as jnp
+
+    from jaxlens import analysis
+
+    lens = result.lens(i)
+    sd = analysis.clear_semi_diameters(lens)
+    surfaces = []
+    for j, s in enumerate(lens.surfaces):
+        r = 0.5 * spec.epd * (1 + 1e-9) if j == lens.stop else float(sd[j]) * 1.0
+        surfaces.append(eqx.tree_at(lambda x: x.semi_diameter, s, jnp.asarray(r)))
+    return eqx.tree_at(lambda x: x.surfaces, lens, tuple(surfaces))
+
+
+def _scene(shape):
+    """A test scene from scikit-image (no download), resized to ``shape`` (rows, cols)."""
+    import numpy as np
+    from skimage import data, transform
+
+    img = data.astronaut().astype(np.float64) / 255.0
+    h, w = img.shape[:2]
+    s = min(h, w)
+    img = img[(h - s) // 2:(h - s) // 2 + s, (w - s) // 2:(w - s) // 2 + s]
+    img = transform.resize(img, (shape[0], shape[1], 3), anti_aliasing=True)
+    return (img**2.2).astype(np.float32)  # sRGB-ish to linear
+
+
+def write_design_outputs(lens, ev, spec, out, *, history=None, plots=True, render=True,
+                         smoke=False, log=print) -> dict:
+    """Lens files, figures and the rendered scene of one design; returns the file list."""
+    import jax
+    import jax.numpy as jnp
+    import numpy as np
+
+    import jaxlens
+    from jaxlens import plot
+
+    files = {}
+    os.makedirs(out, exist_ok=True)
+    files["lens_json"] = jaxlens.save(lens, os.path.join(out, "lens.json"))
+    files["lens_zmx"] = jaxlens.save(lens, os.path.join(out, "lens.zmx"))
+    if not plots:
+        return files
+    t0 = time.perf_counter()
+    figs = {
+        "layout": lambda: plot.plot_layout(lens, title=f"{lens.name}: {spec.fov}°, "
+                                           f"F/{spec.fnum}"),
+        "spots": lambda: plot.plot_spots(lens, rings=4 if smoke else 12),
+        "rms_map": lambda: plot.plot_rms_map(ev.rms_um, spec.sensor_size),
+        "mtf": lambda: plot.plot_mtf(
+            lens, frequencies=np.linspace(0, 250, 6 if smoke else 26)),
+    }
+    if history is not None:
+        figs["progress"] = lambda: plot.plot_progress(history)
+    for name, make in figs.items():
+        files[name] = plot.save(make(), os.path.join(out, f"{name}.png"))
+    if render:
+        rows = 64 if smoke else 256
+        sensor = jaxlens.Sensor(resolution=(rows, rows),
+                                pixel_size=jnp.asarray(spec.sensor_size[0] / rows))
+        scene = _scene((rows, rows))
+        img = jaxlens.render(lens.astype(jnp.float32), jnp.asarray(scene),
+                             spp=4 if smoke else 32, key=jax.random.PRNGKey(0),
+                             sensor=sensor, relative_illumination=False)
+        img = np.asarray(img) ** (1 / 2.2)
+        both = np.concatenate([scene ** (1 / 2.2), np.clip(img, 0, 1)], axis=1)
+        files["render"] = plot.save(plot.plot_image(both, title="scene | rendered through "
+                                                    "the design (with its distortion)"),
+                                    os.path.join(out, "render.png"))
+    log(f"figures and render: {time.perf_counter() - t0:.1f} s")
+    return files
+
+
+def run_design(args, argv) -> dict:
+    import jax
+    import numpy as np
+
+    from jaxlens.design import evaluate, multistart
+
+    t_start = time.perf_counter()
+    spec = spec_from_args(args)
+    config = config_from_args(args)
+    seeds = _seeds(args)
+    out = args.out
+    os.makedirs(out, exist_ok=True)
+    log = print
+    log(f"design: {spec.n_elements} elements {spec.materials}, {spec.fov}° FoV, F/{spec.fnum},"
+        f" sensor diagonal {spec.sensor_diagonal} mm -> f = {spec.focal_length:.4f} mm, "
+        f"EPD = {spec.epd:.4f} mm; seeds {seeds} on {len(jax.devices())} device(s)")
+    if args.loss == "image":
+        config = dataclasses.replace(config, polish_steps=0)
+        log("image-based loss: fine-tuning renders the test scene through the lens")
+    t0 = time.perf_counter()
+    result = multistart.design(spec, seeds, config, progress=not args.quiet,
+                               devices=jax.devices()[: max(1, args.devices)],
+                               image_loss=args.loss == "image")
+    t_design = time.perf_counter() - t0
+    t0 = time.perf_counter()
+    evals = [evaluate.evaluate(result.lens(i), spec, n=4 if args.smoke else 16)
+             for i in range(len(seeds))]
+    t_eval = time.perf_counter() - t0
+    os.makedirs(os.path.join(out, "seeds"), exist_ok=True)
+    import jaxlens
+
+    for i, s in enumerate(seeds):
+        jaxlens.save(finished_lens(result, i, spec), os.path.join(out, "seeds", f"seed_{s}.json"))
+    order = sorted(range(len(seeds)), key=lambda i: (not evals[i].valid, evals[i].rms_mean_um))
+    best = order[0]
+    lens = finished_lens(result, best, spec)
+    files = write_design_outputs(lens, evals[best], spec, out, history=result.history,
+                                 plots=not args.no_plots, render=not args.no_render,
+                                 smoke=args.smoke, log=log)
+    loss_first = [float(np.nanmean(h[0])) for h in result.history.loss if len(h)]
+    rms_hist = [h for h in result.history.spot_rms if len(h)]
+    ev = evals[best]
+    summary = {
+        "command": "python -m jaxlens.experiments.classical " + shlex.join(argv),
+        "convention": CONVENTION,
+        "spec": dataclasses.asdict(spec),
+        "nominal_focal_length_mm": spec.focal_length,
+        "epd_mm": spec.epd,
+        "config": dataclasses.asdict(config),
+        "seeds": seeds,
+        "best_seed": seeds[best],
+        "best": {**ev.summary(), "rms_min_um": float(np.min(ev.rms_um)),
+                 "rms_median_um": float(np.median(ev.rms_um)), "n_fields": int(ev.rms_um.size)},
+        "per_seed": [{"seed": s, **e.summary(), "rms_min_um": float(np.min(e.rms_um))}
+                     for s, e in zip(seeds, evals, strict=True)],
+        "valid_designs": int(sum(e.valid for e in evals)),
+        "loss_first_step": loss_first[0] if loss_first else None,
+        "spot_rms_first_um": float(np.min(rms_hist[0][0]) * 1e3) if rms_hist else None,
+        "spot_rms_last_um": float(np.min(rms_hist[-1][-1]) * 1e3) if rms_hist else None,
+        "stage_seconds": dict(zip(result.history.stages, result.history.seconds, strict=True)),
+        "seconds": {"design": t_design, "evaluation": t_eval,
+                    "total": time.perf_counter() - t_start},
+        "devices": len(jax.devices()),
+        "files": {k: (v if isinstance(v, str) else list(v)) for k, v in files.items()},
+    }
+    with open(os.path.join(out, "summary.json"), "w") as f:
+        json.dump(summary, f, indent=2, default=float)
+    b = summary["best"]
+    log(f"best seed {seeds[best]}: {b['n_fields']}-field RMS mean {b['rms_mean_um']:.2f} µm, "
+        f"min {b['rms_min_um']:.2f} µm, max {b['rms_max_um']:.2f} µm; "
+        f"{'valid' if ev.valid else 'INVALID'} ({ev.geometry}; min ray fraction "
+        f"{b['min_valid_fraction']:.3f})")
+    log(f"paraxial EFL {ev.efl:.4f} mm (nominal f {spec.focal_length:.4f}), paraxial F/"
+        f"{ev.fnum:.3f} (nominal F/{spec.fnum}), BFL {ev.bfl:.3f} mm, track "
+        f"{ev.total_track:.3f} mm, distortion at {spec.half_fov}° {ev.distortion_percent:.1f} %")
+    log(f"{summary['valid_designs']}/{len(seeds)} seeds valid; per seed mean RMS (µm): " +
+        ", ".join(f"{s}:{e.rms_mean_um:.2f}{'' if e.valid else '(invalid)'}"
+                  for s, e in zip(seeds, evals, strict=True)))
+    log(f"wall time {summary['seconds']['total']:.1f} s (design {t_design:.1f} s); "
+        f"outputs in {out}")
+    return summary
+
+
+def run_ablation(args, argv) -> dict:
+    import jax
+    import numpy as np
+
+    import jaxlens
+    from jaxlens.design import evaluate, multistart
+
+    spec = spec_from_args(args)
+    base = config_from_args(args)
+    seeds = list(range(args.first_seed, args.first_seed + args.ablation_seeds))
+    out = args.ablation_out
+    os.makedirs(os.path.join(out, "designs"), exist_ok=True)
+    wanted = None if not args.columns else {c.strip() for c in args.columns.split(",")}
+    json_path = os.path.join(out, "table1.json")
+    table = {"command": "python -m jaxlens.experiments.classical " + shlex.join(argv),
+             "convention": CONVENTION, "spec": dataclasses.asdict(spec),
+             "devices": len(jax.devices()), "paper_full_method": PAPER_TABLE1_FULL,
+             "columns": {}}
+    if wanted is not None and os.path.exists(json_path):
+        with open(json_path) as f:
+            table["columns"] = json.load(f).get("columns", {})
+    for name, switches in ABLATION_COLUMNS:
+        if wanted is not None and name not in wanted:
+            continue
+        cfg = dataclasses.replace(base, **switches)
+        print(f"== {name}: {switches}, {len(seeds)} seeds", flush=True)
+        t0 = time.perf_counter()
+        res = multistart.design(spec, seeds, cfg, progress=not args.quiet,
+                                devices=jax.devices()[: max(1, args.devices)])
+        wall = time.perf_counter() - t0
+        evs = [evaluate.evaluate(res.lens(i), spec) for i in range(len(seeds))]
+        no_si = [not e.self_intersection for e in evs]
+        valid = [e.valid for e in evs]
+        rms = [e.rms_mean_um for e, v in zip(evs, valid, strict=True) if v]
+        col = {
+            "switches": switches, "config": dataclasses.asdict(cfg), "seeds": seeds,
+            "no_self_intersection_percent": 100.0 * float(np.mean(no_si)),
+            "valid_percent": 100.0 * float(np.mean(valid)),
+            "rms_mean_um": float(np.mean(rms)) if rms else None,
+            "rms_min_um": float(np.min(rms)) if rms else None,
+            "rms_max_um": float(np.max(rms)) if rms else None,
+            "wall_seconds": wall, "seconds_per_design": wall / len(seeds),
+            "per_seed": [{"seed": s, **e.summary()} for s, e in zip(seeds, evs, strict=True)],
+        }
+        table["columns"][name] = col
+        if name == "+both+mask":
+            for i, s in enumerate(seeds):
+                jaxlens.save(finished_lens(res, i, spec),
+                             os.path.join(out, "designs", f"seed_{s}.zmx"))
+        print(f"{name}: no self-intersection {col['no_self_intersection_percent']:.0f} %, valid "
+              f"{col['valid_percent']:.0f} %, RMS mean {col['rms_mean_um']} µm, min "
+              f"{col['rms_min_um']} µm, {col['seconds_per_design']:.1f} s/design", flush=True)
+        with open(json_path, "w") as f:
+            json.dump(table, f, indent=2, default=float)
+        _write_table_md(table, os.path.join(out, "table1.md"))
+    with open(os.path.join(out, "command.txt"), "w") as f:
+        f.write(table["command"] + "\n")
+    return table
+
+
+def _fmt(x, nd=2):
+    return "–" if x is None else f"{x:.{nd}f}"
+
+
+def _write_table_md(table: dict, path: str) -> None:
+    cols = [c for c, _ in ABLATION_COLUMNS if c in table["columns"]]
+    lines = [
+        "# Table 1 (jaxlens): ablation of the curriculum design",
+        "",
+        f"Command: `{table['command']}`",
+        "",
+        f"Convention: {table['convention']}.",
+        "",
+        "| | " + " | ".join(cols) + " | paper (+both+mask) |",
+        "|---|" + "---|" * (len(cols) + 1),
+    ]
+    c = table["columns"]
+    p = table["paper_full_method"]
+    rows = [
+        ("designs without self-intersection (%)", "no_self_intersection_percent", 0,
+         _fmt(p["valid_percent"], 0)),
+        ("valid designs (%) (no self-intersection, ≥ 99 % rays reach the sensor)",
+         "valid_percent", 0, "–"),
+        ("average RMS spot of valid designs, 256 fields (µm)", "rms_mean_um", 2,
+         _fmt(p["rms_mean_um"])),
+        ("minimum RMS spot of valid designs, 256 fields (µm)", "rms_min_um", 2,
+         _fmt(p["rms_min_um"])),
+        ("wall time per design (s)", "seconds_per_design", 1, "–"),
+    ]
+    for label, key, nd, paper in rows:
+        lines.append(f"| {label} | " + " | ".join(_fmt(c[k].get(key), nd) for k in cols) +
+                     f" | {paper} |")
+    seeds = sorted({s for k in cols for s in c[k]["seeds"]})
+    lines += ["", f"Seeds: {seeds[0]}–{seeds[-1]} ({len(seeds)} random starts per column), "
+              f"{table['devices']} XLA CPU device(s).", ""]
+    with open(path, "w") as f:
+        f.write("\n".join(lines))
+
+
+def main(argv: list[str] | None = None) -> int:
+    argv = sys.argv[1:] if argv is None else list(argv)
+    args = build_parser().parse_args(argv)
+    # Validate the spec before anything heavy (and before re-executing).
+    try:
+        spec_from_args(args)
+    except ValueError as e:
+        print(f"error: {e}", file=sys.stderr)
+        return 2
+    _ensure_devices(args.devices, argv)
+    import jax
+
+    jax.config.update("jax_enable_x64", True)
+    if args.ablation:
+        run_ablation(args, argv)
+    else:
+        run_design(args, argv)
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())

@@ -1,0 +1,265 @@
+"""Figures: lens layout with rays, spot diagrams, RMS map, MTF curves, design progress.
+
+Every function builds a ``matplotlib.figure.Figure`` with the Agg canvas (no pyplot, no
+display needed) and returns it; ``save(fig, path)`` writes it. Conventions: lengths in mm
+(spot coordinates in µm), field angles in degrees, wavelengths in µm, light toward +z
+(left to right in layouts), the meridional plane is y–z.
+"""
+
+from __future__ import annotations
+
+import math
+import os
+from collections.abc import Sequence
+
+import numpy as np
+from matplotlib.backends.backend_agg import FigureCanvasAgg
+from matplotlib.figure import Figure
+
+_WL_COLORS = {0.4861327: "tab:blue", 0.5875618: "tab:green", 0.6562725: "tab:red"}
+_FIELD_COLORS = ("tab:blue", "tab:green", "tab:red", "tab:purple", "tab:orange", "tab:brown")
+
+
+def _figure(w: float, h: float) -> Figure:
+    fig = Figure(figsize=(w, h), dpi=110)
+    FigureCanvasAgg(fig)
+    return fig
+
+
+def save(fig: Figure, path: str | os.PathLike) -> str:
+    """Write a figure (format from the extension) and return the path."""
+    path = os.fspath(path)
+    fig.savefig(path, bbox_inches="tight")
+    return path
+
+
+def _wl_color(w: float, i: int) -> str:
+    for k, c in _WL_COLORS.items():
+        if abs(k - w) < 1e-3:
+            return c
+    return _FIELD_COLORS[i % len(_FIELD_COLORS)]
+
+
+def _profile(surface, r):
+    import jax.numpy as jnp
+
+    z, _ = surface.sag(jnp.zeros_like(r), r)
+    return np.asarray(z)
+
+
+def plot_layout(lens, fields: Sequence[float] | None = None, *, n_rays: int = 9,
+                semi_diameters=None, title: str | None = None) -> Figure:
+    """Meridional section of the lens with ray fans.
+
+    Args:
+        lens: the lens.
+        fields: y field angles (deg) of the ray fans; default 0, 70 % and 100 % of the
+            lens's largest field.
+        n_rays: rays per fan across the entrance pupil (primary wavelength).
+        semi_diameters: surface semi-diameters to draw (default
+            ``analysis.clear_semi_diameters``).
+        title: figure title.
+    """
+    import jax.numpy as jnp
+
+    from . import analysis, sampling
+    from .trace import trace_path
+
+    lens = lens.astype(jnp.float64)
+    fmax = float(np.max(np.abs(np.asarray(lens.fields))))
+    fields = [0.0, 0.7 * fmax, fmax] if fields is None else list(fields)
+    sd = np.asarray(analysis.clear_semi_diameters(lens)) if semi_diameters is None else \
+        np.asarray(semi_diameters)
+    zs = np.asarray(lens.vertex_z())
+    z_img = float(lens.image_z())
+    fig = _figure(8, 4.5)
+    ax = fig.add_subplot(1, 1, 1)
+    # Rays.
+    u = np.linspace(-1.0, 1.0, n_rays)
+    pupil = jnp.asarray(np.stack([np.zeros_like(u), u], -1))
+    for i, f in enumerate(fields):
+        rays = sampling.collimated(lens, f, pupil)
+        path = trace_path(lens, rays)
+        start = np.asarray(rays.origin)
+        d0 = np.asarray(rays.direction)
+        # Start the drawn rays a little in front of the first surface.
+        t0 = (-0.5 - start[:, 2]) / d0[:, 2]
+        pts = [start + t0[:, None] * d0] + [np.asarray(p.origin) for p in path]
+        valid = np.asarray(path[-1].valid)
+        ys = np.stack([p[:, 1] for p in pts])
+        zz = np.stack([p[:, 2] for p in pts])
+        color = _FIELD_COLORS[i % len(_FIELD_COLORS)]
+        for j in range(n_rays):
+            ax.plot(zz[:, j], ys[:, j], color=color, lw=0.6, alpha=0.9 if valid[j] else 0.25,
+                    ls="-" if valid[j] else ":")
+        ax.plot([], [], color=color, lw=1, label=f"{f:.1f}°")
+    # Surfaces and element edges.
+    n_air = [float(np.asarray(m.index(0.5875618))) for m in lens.materials]
+    prev = None
+    for i, s in enumerate(lens.surfaces):
+        if i == lens.stop:
+            r = sd[i]
+            ax.plot([zs[i], zs[i]], [r, r + 0.25 * r], color="k", lw=2)
+            ax.plot([zs[i], zs[i]], [-r, -r - 0.25 * r], color="k", lw=2)
+            prev = None
+            continue
+        r = np.linspace(-sd[i], sd[i], 101)
+        z = zs[i] + _profile(s, jnp.asarray(r))
+        ax.plot(z, r, color="k", lw=1)
+        glass_after = abs(n_air[i] - 1.0) > 1e-6
+        if prev is not None:
+            j, zj = prev
+            rr = max(sd[i], sd[j])
+            for sign in (1, -1):
+                zj_edge = zs[j] + float(_profile(lens.surfaces[j], jnp.asarray([sd[j]]))[0])
+                zi_edge = zs[i] + float(_profile(s, jnp.asarray([sd[i]]))[0])
+                ax.plot([zj_edge, zj_edge, zi_edge], [sign * sd[j], sign * rr, sign * rr],
+                        color="k", lw=1)
+                ax.plot([zi_edge, zi_edge], [sign * sd[i], sign * rr], color="k", lw=1)
+        prev = (i, zs[i]) if glass_after else None
+    h = float(np.max(sd)) * 1.1
+    if lens.sensor is not None:
+        h = max(h, float(np.asarray(lens.sensor.half_diagonal)))
+    ax.plot([z_img, z_img], [-h, h], color="k", lw=2)
+    ax.set_aspect("equal")
+    ax.set_xlabel("z (mm)")
+    ax.set_ylabel("y (mm)")
+    ax.legend(loc="upper left", fontsize=8, title="field", title_fontsize=8)
+    ax.set_title(title or (lens.name or "lens"))
+    return fig
+
+
+def plot_spots(lens, fields: Sequence[float] | None = None, *, wavelengths=None,
+               rings: int = 12, title: str | None = None) -> Figure:
+    """Spot diagrams (µm about the polychromatic centroid) for y fields (deg)."""
+    import jax.numpy as jnp
+
+    from . import analysis, sampling
+
+    lens = lens.astype(jnp.float64)
+    fmax = float(np.max(np.abs(np.asarray(lens.fields))))
+    fields = list(np.linspace(0, fmax, 5)) if fields is None else list(fields)
+    wls = np.asarray(lens.wavelengths if wavelengths is None else wavelengths)
+    pupil = sampling.pupil_hexapolar(rings, jnp.float64)
+    fig = _figure(2.6 * len(fields), 2.9)
+    spots = []
+    for f in fields:
+        pts = []
+        for w in wls:
+            r = analysis.spot_rays(lens, f, float(w), pupil=pupil)
+            p = np.asarray(r.origin[:, :2])[np.asarray(r.valid)]
+            pts.append(p)
+        allp = np.concatenate(pts) if any(len(p) for p in pts) else np.zeros((1, 2))
+        c = allp.mean(0)
+        rms = math.sqrt(np.mean(np.sum((allp - c) ** 2, -1))) * 1e3
+        spots.append((pts, c, rms))
+    lim = max(max(np.max(np.abs(np.concatenate(p) - c)) if len(np.concatenate(p)) else 0
+                  for p, c, _ in spots) * 1e3, 1.0) * 1.05
+    for k, (f, (pts, c, rms)) in enumerate(zip(fields, spots, strict=True)):
+        ax = fig.add_subplot(1, len(fields), k + 1)
+        for i, (w, p) in enumerate(zip(wls, pts, strict=True)):
+            if len(p):
+                ax.scatter((p[:, 0] - c[0]) * 1e3, (p[:, 1] - c[1]) * 1e3, s=1.5,
+                           color=_wl_color(float(w), i), label=f"{w:.3f} µm")
+        ax.set_xlim(-lim, lim)
+        ax.set_ylim(-lim, lim)
+        ax.set_aspect("equal")
+        ax.set_title(f"{f:.1f}°  RMS {rms:.2f} µm", fontsize=8)
+        ax.tick_params(labelsize=7)
+        if k == 0:
+            ax.set_ylabel("µm")
+    fig.suptitle(title or "spot diagrams (about the polychromatic centroid)", fontsize=9)
+    return fig
+
+
+def plot_rms_map(rms_um, sensor_size, *, title: str | None = None) -> Figure:
+    """RMS spot radius over the sensor from an n × n field grid (µm).
+
+    Args:
+        rms_um: ``[n, n]`` (rows along y from −h/2 to h/2) or ``[n²]`` values.
+        sensor_size: (height, width) in mm.
+        title: figure title.
+    """
+    v = np.asarray(rms_um, float)
+    n = int(round(math.sqrt(v.size)))
+    v = v.reshape(n, n)
+    h, w = sensor_size
+    fig = _figure(5, 4.2)
+    ax = fig.add_subplot(1, 1, 1)
+    im = ax.imshow(v, origin="lower", extent=(-w / 2, w / 2, -h / 2, h / 2), cmap="viridis",
+                   interpolation="nearest")
+    fig.colorbar(im, ax=ax, label="RMS spot radius (µm)")
+    ax.set_xlabel("x on sensor (mm)")
+    ax.set_ylabel("y on sensor (mm)")
+    ax.set_title(title or f"RMS over {v.size} fields: mean {v.mean():.2f} µm, "
+                 f"max {v.max():.2f} µm", fontsize=9)
+    return fig
+
+
+def plot_mtf(lens, fields: Sequence[float] | None = None, *, frequencies=None,
+             title: str | None = None) -> Figure:
+    """Tangential (solid) and sagittal (dashed) polychromatic MTF (``jaxlens.psf.mtf``,
+    geometric × diffraction limit) for y fields (deg)."""
+    import jax.numpy as jnp
+
+    from .psf import mtf
+
+    lens = lens.astype(jnp.float64)
+    fmax = float(np.max(np.abs(np.asarray(lens.fields))))
+    fields = [0.0, 0.5 * fmax, 0.7 * fmax, fmax] if fields is None else list(fields)
+    fig = _figure(6, 4.2)
+    ax = fig.add_subplot(1, 1, 1)
+    for i, f in enumerate(fields):
+        res = mtf(lens, f, frequencies=frequencies)
+        freq, tan, sag = (np.asarray(x) for x in _mtf_parts(res))
+        c = _FIELD_COLORS[i % len(_FIELD_COLORS)]
+        ax.plot(freq, tan, color=c, label=f"{f:.1f}° T")
+        ax.plot(freq, sag, color=c, ls="--", label=f"{f:.1f}° S")
+    ax.set_ylim(0, 1.02)
+    ax.set_xlabel("spatial frequency (cycles/mm)")
+    ax.set_ylabel("MTF")
+    ax.grid(alpha=0.3)
+    ax.legend(fontsize=7, ncol=2)
+    ax.set_title(title or "MTF (geometric × diffraction limit)", fontsize=9)
+    return fig
+
+
+def _mtf_parts(res):
+    """(frequencies, tangential, sagittal) from ``psf.mtf``'s result."""
+    if isinstance(res, tuple):
+        return res[0], res[1], res[2]
+    return res.frequencies, res.tangential, res.sagittal
+
+
+def plot_progress(history, *, title: str | None = None) -> Figure:
+    """Spot RMS (µm, log scale) of every design over the steps, stages marked."""
+    fig = _figure(7, 4)
+    ax = fig.add_subplot(1, 1, 1)
+    offset = 0
+    for name, r in zip(history.stages, history.spot_rms, strict=True):
+        r = np.asarray(r)
+        if r.size == 0:
+            continue
+        steps = offset + np.arange(r.shape[0])
+        ax.plot(steps, r * 1e3, lw=0.8)
+        ax.axvline(offset, color="k", lw=0.5, alpha=0.4)
+        ax.text(offset, 1.0, name, rotation=90, fontsize=6, va="top",
+                transform=ax.get_xaxis_transform())
+        offset += r.shape[0]
+    ax.set_yscale("log")
+    ax.set_xlabel("step")
+    ax.set_ylabel("loss-field spot RMS (µm)")
+    ax.grid(alpha=0.3, which="both")
+    ax.set_title(title or "design progress (one line per seed)", fontsize=9)
+    return fig
+
+
+def plot_image(img, *, title: str | None = None) -> Figure:
+    """Show an ``[H, W, 3]`` image in [0, 1]."""
+    fig = _figure(5, 5)
+    ax = fig.add_subplot(1, 1, 1)
+    ax.imshow(np.clip(np.asarray(img, float), 0, 1))
+    ax.set_axis_off()
+    if title:
+        ax.set_title(title, fontsize=9)
+    return fig

@@ -1,0 +1,27 @@
+"""CI smoke run of ``python -m jaxlens.experiments.classical``: one seed, a few steps."""
+
+import json
+import math
+import os
+
+from jaxlens.experiments import classical
+
+
+def test_classical_smoke(tmp_path):
+    out = str(tmp_path / "run")
+    assert classical.main(["--smoke", "--out", out, "--quiet", "--devices", "1"]) == 0
+    for name in ("lens.json", "lens.zmx", "layout.png", "spots.png", "rms_map.png", "mtf.png",
+                 "progress.png", "render.png", "summary.json", "seeds/seed_0.json"):
+        path = os.path.join(out, name)
+        assert os.path.isfile(path) and os.path.getsize(path) > 0, name
+    with open(os.path.join(out, "summary.json")) as f:
+        s = json.load(f)
+    # The loss falls: the spot RMS of the loss fields at the last step is below the first.
+    assert s["spot_rms_last_um"] < s["spot_rms_first_um"]
+    assert s["best"]["n_fields"] == 16
+    assert abs(s["nominal_focal_length_mm"] - 3.83 / math.tan(math.radians(40.4))) < 1e-9
+    assert abs(s["epd_mm"] - s["nominal_focal_length_mm"] / 2.0) < 1e-9
+    assert "convention" in s and s["best"]["efl"] > 0
+    with open(os.path.join(out, "lens.zmx"), encoding="latin-1") as f:
+        zmx = f.read()
+    assert "GLAS" in zmx
