@@ -89,7 +89,7 @@ def run(
 ) -> dict:
     """Run the throughput benchmark and return its result dictionary."""
     if counts is None:
-        counts = [1_000, 10_000] if smoke else [1_000, 10_000, 100_000, 1_000_000]
+        counts = [1_000] if smoke else [1_000, 10_000, 100_000, 1_000_000]
         if full:
             counts = counts + [10_000_000]
     if smoke:
@@ -137,18 +137,15 @@ def run(
                         **t,
                     )
                 )
-                print(
-                    f"  {name:14s} optiland  float64 forward      {n:>9d}  {opt_rate:.3g}"
-                )
+                print(f"  {name:14s} optiland  float64 forward      {n:>9d}  {opt_rate:.3g}")
             for dtype in (jnp.float32, jnp.float64):
                 rays = make_rays(lens, n, dtype)
                 dname = jnp.dtype(dtype).name
                 reps = 3 if n >= 1_000_000 else 5
-                engines = [
-                    ("jaxlens", "forward", forward, (lens, rays)),
-                    ("jaxlens", "forward+grad", forward_grad, (lens, rays)),
-                ]
-                if with_prototype:
+                engines = [("jaxlens", "forward", forward, (lens, rays))]
+                if not smoke or dtype == jnp.float64:
+                    engines.append(("jaxlens", "forward+grad", forward_grad, (lens, rays)))
+                if with_prototype and not smoke:
                     st = rays_to_state(rays)
                     engines += [
                         ("prototype", "forward", proto_forward, (lens, st, rays.wavelength)),
