@@ -1,0 +1,326 @@
+"""The lenses of the EDoF experiment: the classical start, the hybrid EDoF lens, the cubic plate.
+
+Conventions:
+    Lengths in mm, wavelengths in µm, angles in degrees. Light travels toward +z and
+    surface 1's vertex is at z = 0. Object depths in this package are measured from the
+    aperture stop (``stop_z``); ``object_depth`` converts them to the distance from
+    surface 1 that ``jaxlens.psf`` and ``jaxlens.render`` take (the same for a stop-first
+    lens).
+
+The classical lens (``classical_lens``) is the shipped prescription
+``jaxlens/data/lenses/edof_classical.json``: a 4-element plastic aspheric lens with the stop
+first, paraxial EFL 5.55 mm, EPD 2.60 mm (F/2.1), a 68.8° diagonal field on a 7.20 mm sensor
+diagonal (1024 × 1024 pixels of 4.97 µm), focused at 20 cm. ``jaxlens.edof.design`` made it.
+
+The EDoF lens replaces the first lens surface by a ``Hybrid`` surface (even asphere plus the
+odd polynomial Σ_j b_j x^{2j+1} + d_j y^{2j+1}). The cubic-plate baseline is a thin cubic
+phase plate at the aperture: the sag a·(x³ + y³) added to that same surface, which sits
+0.01 mm behind the stop, with nothing else changed. All three lenses thus share one
+structure (and one compiled training step); the classical lens has all odd terms at zero.
+
+The trainable parameters live apart from the lens (``HybridParams``, ``CubicParams``), scaled
+to order 1: a curvature times the normalisation radius R, and each polynomial coefficient as
+the sag (in units of ``SAG_SCALE``) that its term adds at R. ``apply`` writes them back.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import importlib.resources
+import math
+
+import equinox as eqx
+import jax
+import jax.numpy as jnp
+import numpy as np
+from jaxtyping import Array, Float
+
+from ..lens import Lens, Sensor
+from ..surfaces import EvenAsphere, Hybrid
+
+CLASSICAL_FILE = "edof_classical.json"
+"""File name of the classical starting lens under ``jaxlens/data/lenses``."""
+
+DEPTHS_M = (0.1, 0.15, 0.2, 0.3, 0.5, 1.0, 3.0, 10.0)
+"""The paper's 8 training depths (m, from the aperture stop)."""
+
+TEST_DEPTHS_M = (0.1, 0.2, 10.0)
+"""The depths of the paper's Table 2 (m)."""
+
+WAVELENGTHS_RGB = (0.656, 0.587, 0.486)
+"""One wavelength per colour channel (µm): R, G, B."""
+
+FOCUS_DEPTH = 200.0
+"""The classical lens is focused at 20 cm (mm from the stop)."""
+
+SPEC = {
+    "efl_mm": 5.55,
+    "epd_mm": 2.60,
+    "fnum": 5.55 / 2.60,
+    "fov_deg": 68.8,
+    "image_height_mm": 7.20,
+    "pixel_size_mm": 0.00497,
+    "sensor_pixels": (1024, 1024),
+    "focus_mm": FOCUS_DEPTH,
+}
+"""The paper's specification of the EDoF lens (full-resolution sensor)."""
+
+SAG_SCALE = 0.01
+"""Sag unit (mm) of the scaled polynomial parameters and of the focus shift."""
+
+
+def _load(path):
+    try:
+        from .. import load
+    except ImportError:  # pragma: no cover - the files module ships with jaxlens
+        from ..lensfile import load_json as load
+    return load(path)
+
+
+def classical_lens(*, binning: int = 1) -> Lens:
+    """The classical starting lens (stop first, focused at 20 cm), with its sensor.
+
+    Args:
+        binning: sensor pixel binning; the sensor keeps its size (5.09 mm square) with
+            ``1024 // binning`` pixels of ``4.97 µm · binning`` per side.
+
+    Returns:
+        The lens, loaded from ``jaxlens/data/lenses/edof_classical.json``.
+    """
+    ref = importlib.resources.files("jaxlens") / "data" / "lenses" / CLASSICAL_FILE
+    with importlib.resources.as_file(ref) as path:
+        lens = _load(path)
+    return with_binning(lens, binning)
+
+
+def with_binning(lens: Lens, binning: int) -> Lens:
+    """The lens with the paper's 7.20 mm-diagonal sensor binned ``binning`` × ``binning``."""
+    if binning < 1 or SPEC["sensor_pixels"][0] % binning:
+        raise ValueError(f"with_binning: binning must divide 1024, got {binning}")
+    n = SPEC["sensor_pixels"][0] // binning
+    sensor = Sensor((n, n), jnp.asarray(SPEC["pixel_size_mm"] * binning, lens.epd.dtype))
+    return eqx.tree_at(lambda m: m.sensor, lens, sensor, is_leaf=lambda x: x is None)
+
+
+def stop_z(lens: Lens) -> Array:
+    """Global z of the aperture stop (mm)."""
+    return lens.vertex_z()[lens.stop]
+
+
+def object_depth(lens: Lens, depth) -> Array:
+    """Object distance from surface 1 (mm) of an object ``depth`` mm in front of the stop."""
+    return jnp.asarray(depth) + stop_z(lens)
+
+
+def first_lens_surface(lens: Lens) -> int:
+    """Index of the first refracting surface after the stop."""
+    return lens.stop + 1
+
+
+def to_hybrid(lens: Lens, *, n_odd: int = 3, cubic: float = 0.0, index: int | None = None) -> Lens:
+    """Replace a surface (default: the first after the stop) by a ``Hybrid`` surface.
+
+    The even part (c, k, even coefficients, semi-diameter) is kept; the odd polynomial has
+    ``n_odd`` terms per axis (x³, x⁵, …), all zero except the cubic terms, set to ``cubic``
+    (mm⁻²) on both axes.
+    """
+    i = first_lens_surface(lens) if index is None else index
+    s = lens.surfaces[i]
+    coeffs = s.even_coeffs()
+    dtype = jnp.result_type(s.c)
+    odd = jnp.zeros((n_odd,), dtype).at[0].set(cubic)
+    hyb = Hybrid(c=s.c, k=s.k, coeffs=coeffs, odd_x=odd, odd_y=odd, semi_diameter=s.semi_diameter)
+    surfaces = lens.surfaces[:i] + (hyb,) + lens.surfaces[i + 1 :]
+    return eqx.tree_at(lambda m: m.surfaces, lens, surfaces)
+
+
+def cubic_strength_guess(lens: Lens, *, depths_m=DEPTHS_M, ratio: float = 1.5) -> float:
+    """A cubic phase-plate strength a (mm⁻², sag a·(x³ + y³)) from the defocus to hide.
+
+    The defocus wavefront at the pupil edge of an object at distance z (stop-first lens
+    focused at ``FOCUS_DEPTH``) is W = ½·(1/z − 1/z_f)·R² with R the entrance-pupil radius.
+    The plate's path difference at the pupil edge along x, (n − 1)·a·R³ with n the index of
+    the first lens element, is set to ``ratio`` times the largest |W| over the depths (the
+    Dowski–Cathey rule of thumb: the cubic term must dominate the defocus it hides).
+    """
+    r = 0.5 * float(lens.epd)
+    w = max(abs(0.5 * (1.0 / (1e3 * d) - 1.0 / FOCUS_DEPTH) * r * r) for d in depths_m)
+    n = float(lens.materials[first_lens_surface(lens)].index(0.5876))
+    return ratio * w / ((n - 1.0) * r**3)
+
+
+# --------------------------------------------------------------------------------------
+# Trainable parameters, scaled to order 1
+# --------------------------------------------------------------------------------------
+class HybridParams(eqx.Module):
+    """Scaled parameters of a hybrid surface and of the sensor position.
+
+    Attributes:
+        c: curvature × R.
+        k: conic constant.
+        even: even coefficients from r⁴ on, each as its sag at R over ``SAG_SCALE``
+            (the r² coefficient stays at its value: it duplicates the curvature).
+        odd_x, odd_y: odd coefficients (x³, x⁵, …), each as its sag at R over ``SAG_SCALE``.
+        focus: sensor shift along z over ``SAG_SCALE`` (mm).
+        radius: normalisation radius R (mm).
+        index: index of the hybrid surface (static).
+    """
+
+    c: Float[Array, ""]
+    k: Float[Array, ""]
+    even: Float[Array, " m"]
+    odd_x: Float[Array, " p"]
+    odd_y: Float[Array, " p"]
+    focus: Float[Array, ""]
+    radius: Float[Array, ""] = eqx.field(converter=jnp.asarray)
+    index: int = eqx.field(static=True)
+
+    @classmethod
+    def from_lens(cls, lens: Lens, *, index: int | None = None, radius=None) -> HybridParams:
+        """Parameters that reproduce ``lens`` (whose surface ``index`` is a ``Hybrid``)."""
+        i = first_lens_surface(lens) if index is None else index
+        s = lens.surfaces[i]
+        if not isinstance(s, Hybrid):
+            raise ValueError(f"HybridParams: surface {i} is a {type(s).__name__}, not Hybrid")
+        r = jnp.asarray(0.5 * lens.epd if radius is None else radius)
+        m = s.coeffs.shape[0]
+        ev_pow = 2 * jnp.arange(2, m + 1)  # r^4, r^6, ...
+        od_pow = 2 * jnp.arange(s.odd_x.shape[0]) + 3  # x^3, x^5, ...
+        return cls(
+            c=s.c * r,
+            k=s.k,
+            even=s.coeffs[1:] * r**ev_pow / SAG_SCALE,
+            odd_x=s.odd_x * r**od_pow / SAG_SCALE,
+            odd_y=s.odd_y * r**od_pow / SAG_SCALE,
+            focus=jnp.zeros_like(s.c),
+            radius=r,
+            index=i,
+        )
+
+    def apply(self, lens: Lens) -> Lens:
+        """Write the parameters into ``lens`` (the lens they were taken from)."""
+        s = lens.surfaces[self.index]
+        r = jax.lax.stop_gradient(self.radius).astype(self.c.dtype)
+        ev_pow = 2 * jnp.arange(2, self.even.shape[0] + 2)
+        od_pow = 2 * jnp.arange(self.odd_x.shape[0]) + 3
+        coeffs = jnp.concatenate([s.coeffs[:1].astype(self.even.dtype),
+                                  self.even * SAG_SCALE / r**ev_pow])
+        new = Hybrid(c=self.c / r, k=self.k, coeffs=coeffs,
+                     odd_x=self.odd_x * SAG_SCALE / r**od_pow,
+                     odd_y=self.odd_y * SAG_SCALE / r**od_pow,
+                     semi_diameter=s.semi_diameter)
+        t = lens.thickness
+        t = t.at[-1].add(self.focus * SAG_SCALE)
+        return eqx.tree_at(lambda m: (m.surfaces[self.index], m.thickness), lens, (new, t))
+
+
+class CubicParams(eqx.Module):
+    """The cubic phase plate at the aperture: one strength and the sensor shift.
+
+    The plate's sag a·(x³ + y³) is carried by the odd terms of the (``Hybrid``) first lens
+    surface, which sits just behind the stop, so the plate is a thin cubic phase element at
+    the aperture. ``strength`` is the sag of a·x³ at R over ``SAG_SCALE``; the higher odd
+    terms stay zero and the even part of the surface stays as it is.
+    """
+
+    strength: Float[Array, ""]
+    focus: Float[Array, ""]
+    radius: Float[Array, ""] = eqx.field(converter=jnp.asarray)
+    index: int = eqx.field(static=True)
+
+    @classmethod
+    def from_lens(cls, lens: Lens, *, index: int | None = None) -> CubicParams:
+        """Parameters of a lens whose first lens surface is a ``Hybrid`` (``to_hybrid``)."""
+        i = first_lens_surface(lens) if index is None else index
+        s = lens.surfaces[i]
+        if not isinstance(s, Hybrid):
+            raise ValueError(f"CubicParams: surface {i} is a {type(s).__name__}, not Hybrid")
+        r = jnp.asarray(0.5 * lens.epd)
+        return cls(strength=s.odd_x[0] * r**3 / SAG_SCALE, focus=jnp.zeros_like(s.c),
+                   radius=r, index=i)
+
+    def apply(self, lens: Lens) -> Lens:
+        """Write the plate into ``lens`` (the lens it was taken from)."""
+        s = lens.surfaces[self.index]
+        r = jax.lax.stop_gradient(self.radius).astype(self.strength.dtype)
+        a = self.strength * SAG_SCALE / r**3
+        odd = jnp.zeros(s.odd_x.shape, a.dtype).at[0].set(a)
+        new = Hybrid(c=s.c, k=s.k, coeffs=s.coeffs, odd_x=odd, odd_y=odd,
+                     semi_diameter=s.semi_diameter)
+        t = lens.thickness.at[-1].add(self.focus * SAG_SCALE)
+        return eqx.tree_at(lambda m: (m.surfaces[self.index], m.thickness), lens, (new, t))
+
+
+# --------------------------------------------------------------------------------------
+# Manufacturing and registration errors
+# --------------------------------------------------------------------------------------
+@dataclasses.dataclass(frozen=True)
+class Tolerances:
+    """Standard deviations of the random lens perturbations of the second training stage.
+
+    Attributes:
+        curvature: relative error of every curvature (e.g. 0.005 = 0.5 %).
+        thickness: error of every gap and centre thickness (mm).
+        sensor: error of the sensor position (mm), the focus registration.
+        odd: relative error of the odd (non-symmetric) coefficients.
+        asphere: relative error of the even aspheric coefficients.
+    """
+
+    curvature: float = 0.005
+    thickness: float = 0.01
+    sensor: float = 0.005
+    odd: float = 0.02
+    asphere: float = 0.01
+
+
+def perturb(lens: Lens, key, tol: Tolerances = Tolerances()) -> Lens:
+    """A random copy of the lens with manufacturing and registration errors (``tol``).
+
+    Curvatures, even and odd coefficients get relative Gaussian errors, every thickness an
+    absolute one, and the sensor (last gap) its own; the stop and the system data are kept.
+    """
+    keys = jax.random.split(key, 4 * len(lens.surfaces) + 2)
+    surfaces = []
+    for i, s in enumerate(lens.surfaces):
+        k1, k2, k3, k4 = keys[4 * i : 4 * i + 4]
+        new = s
+        if i != lens.stop:
+            new = eqx.tree_at(lambda x: x.c, new,
+                              s.c * (1 + tol.curvature * jax.random.normal(k1, s.c.shape,
+                                                                            s.c.dtype)))
+        if isinstance(s, EvenAsphere | Hybrid) and s.coeffs.shape[0]:
+            n = jax.random.normal(k2, s.coeffs.shape, s.coeffs.dtype)
+            new = eqx.tree_at(lambda x: x.coeffs, new, s.coeffs * (1 + tol.asphere * n))
+        if isinstance(s, Hybrid) and s.odd_x.shape[0]:
+            nx = jax.random.normal(k3, s.odd_x.shape, s.odd_x.dtype)
+            ny = jax.random.normal(k4, s.odd_y.shape, s.odd_y.dtype)
+            new = eqx.tree_at(lambda x: (x.odd_x, x.odd_y), new,
+                              (s.odd_x * (1 + tol.odd * nx), s.odd_y * (1 + tol.odd * ny)))
+        surfaces.append(new)
+    t = lens.thickness
+    dt = tol.thickness * jax.random.normal(keys[-2], t.shape, t.dtype)
+    dt = dt.at[-1].set(tol.sensor * jax.random.normal(keys[-1], (), t.dtype))
+    return eqx.tree_at(lambda m: (m.surfaces, m.thickness), lens,
+                       (tuple(surfaces), jnp.maximum(t + dt, 0.05 * t)))
+
+
+def odd_profile(lens: Lens, *, index: int | None = None, n: int = 101, radius=None):
+    """Height (mm) of the odd polynomial of a hybrid surface over its aperture.
+
+    Returns:
+        ``(x [n] mm, height [n, n] mm)`` with ``height[i, j]`` at (x[j], y[i]); NaN outside
+        the disc of ``radius`` (default the entrance-pupil radius).
+    """
+    i = first_lens_surface(lens) if index is None else index
+    s = lens.surfaces[i]
+    if not isinstance(s, Hybrid):
+        raise ValueError(f"odd_profile: surface {i} is not a Hybrid surface")
+    r = float(0.5 * lens.epd if radius is None else radius)
+    x = np.linspace(-r, r, n)
+    xx, yy = np.meshgrid(x, x, indexing="xy")
+    bx, by = np.asarray(s.odd_x, float), np.asarray(s.odd_y, float)
+    h = np.zeros_like(xx)
+    for j in range(bx.shape[0]):
+        h += bx[j] * xx ** (2 * j + 3) + by[j] * yy ** (2 * j + 3)
+    h[xx**2 + yy**2 > r * r] = math.nan
+    return x, h

@@ -1,0 +1,333 @@
+"""Joint training of a lens and a reconstruction network, and the evaluation of Table 2.
+
+Stage 1 trains the network together with the lens's free parameters (``HybridParams`` or
+``CubicParams``; none for the classical lens) on simulated patches with the paper's loss
+(``losses.edof_loss``). Every batch draws two distinct depths of the 8 training depths and
+renders all its patches at both, with the three wavelengths of ``WAVELENGTHS_RGB``. Stage 2
+freezes the lens and refines the network on patches rendered through randomly perturbed
+copies of it (``lenses.perturb``: manufacturing and registration errors), one copy per
+patch, with ``L_rec`` alone.
+
+Each step is one jitted function (``eqx.filter_jit``); the Python loop over steps syncs
+with the host only every ``log_every`` steps. Gaussian read noise of standard deviation
+``noise`` is added to the simulations before the network sees them.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import math
+from collections.abc import Callable
+
+import equinox as eqx
+import jax
+import jax.numpy as jnp
+import numpy as np
+import optax
+
+from ..lens import Lens
+from ..nets import NAFNet
+from .lenses import DEPTHS_M, Tolerances, perturb
+from .losses import edof_loss, l_rec
+from .optics import render_image, simulate_patch
+
+
+@dataclasses.dataclass(frozen=True)
+class Config:
+    """Options of the EDoF experiment (defaults: the CPU-scale run).
+
+    Attributes:
+        binning: sensor pixel binning of the paper's 1024² sensor of 4.97 µm pixels.
+        patch: training patch side (pixels).
+        kernel_size: PSF kernel side (pixels).
+        batch: patches per batch (each rendered at two depths).
+        pupil: rays per side of the pupil grid of a training PSF.
+        steps: stage-1 steps (joint lens and network).
+        steps2: stage-2 steps (network on perturbed lenses).
+        lr_net, lr_lens: Adam learning rates (the lens parameters are scaled to order 1).
+        w_sim, w_raw: ω1 and ω2 of the loss.
+        noise: standard deviation of the Gaussian read noise (image range [0, 1]).
+        width, enc_blocks, middle_blocks, dec_blocks: the NAFNet.
+        n_odd: odd terms per axis of the hybrid surface (x³, x⁵, …).
+        cubic_ratio: initial cubic strength, as a multiple of the defocus it hides
+            (``lenses.cubic_strength_guess``); the hybrid starts at half of the plate's.
+        eval_spp: rays per kernel pixel of the evaluation renders.
+        seed: random seed.
+        log_every: host sync / progress-bar refresh interval (steps).
+    """
+
+    binning: int = 2
+    patch: int = 64
+    kernel_size: int = 41
+    batch: int = 4
+    pupil: int = 48
+    steps: int = 400
+    steps2: int = 100
+    lr_net: float = 1e-3
+    lr_lens: float = 2e-2
+    w_sim: float = 0.1
+    w_raw: float = 0.1
+    noise: float = 0.01
+    width: int = 16
+    enc_blocks: tuple[int, ...] = (1, 1, 1)
+    middle_blocks: int = 1
+    dec_blocks: tuple[int, ...] = (1, 1, 1)
+    n_odd: int = 3
+    cubic_ratio: float = 1.5
+    eval_spp: int = 2
+    seed: int = 0
+    log_every: int = 10
+    tolerances: Tolerances = dataclasses.field(default_factory=Tolerances)
+
+    @property
+    def window(self) -> int:
+        return self.patch + self.kernel_size - 1
+
+
+def make_net(cfg: Config, key, dtype=jnp.float32) -> NAFNet:
+    """The reconstruction network of the configuration."""
+    return NAFNet(width=cfg.width, enc_blocks=cfg.enc_blocks, middle_blocks=cfg.middle_blocks,
+                  dec_blocks=cfg.dec_blocks, key=key, dtype=dtype)
+
+
+def _labels(trainable):
+    net, params = trainable
+    return (jax.tree_util.tree_map(lambda _: "net", net),
+            jax.tree_util.tree_map(lambda _: "lens", params))
+
+
+def make_optimizer(cfg: Config, steps: int, *, lens: bool = True):
+    """Adam with a cosine-decayed rate for the network (and a constant one for the lens)."""
+    sched = optax.warmup_cosine_decay_schedule(0.0, cfg.lr_net, max(1, min(20, steps // 10)),
+                                               max(steps, 1), cfg.lr_net * 0.05)
+    net_opt = optax.chain(optax.clip_by_global_norm(1.0), optax.adam(sched))
+    if not lens:
+        return net_opt
+    return optax.multi_transform({"net": net_opt, "lens": optax.adam(cfg.lr_lens)}, _labels)
+
+
+def _simulate_batch(lens, windows, xy, depths, key, cfg: Config):
+    """``[2, B, P, P, 3]`` patches at the two depths (one PSF per patch and depth)."""
+    b = windows.shape[0]
+    keys = jax.random.split(key, 2 * b).reshape(2, b, -1)
+    pix = cfg.binning * 0.00497
+
+    def one(window, p, d, k):
+        return simulate_patch(lens, window, p, d, k, kernel_size=cfg.kernel_size,
+                              pixel_size=pix, pupil=cfg.pupil)
+
+    per_depth = jax.vmap(one, in_axes=(0, 0, None, 0))
+    return jax.vmap(per_depth, in_axes=(None, None, 0, 0))(windows, xy, depths, keys)
+
+
+def _gt(windows, cfg: Config):
+    h = cfg.kernel_size // 2
+    return windows[:, h : h + cfg.patch, h : h + cfg.patch]
+
+
+def _reconstruct(net, sims, key, noise):
+    noisy = sims + noise * jax.random.normal(key, sims.shape, sims.dtype)
+    flat = noisy.reshape((-1,) + sims.shape[2:])
+    return jax.vmap(net)(flat).reshape(sims.shape)
+
+
+@eqx.filter_jit
+def stage1_step(net, params, opt_state, base_lens, windows, xy, depths, key, lens_on, *,
+                cfg: Config, optimizer):
+    """One joint step; returns (net, params, opt_state, loss, parts).
+
+    ``lens_on`` (0 or 1, an array) gates the lens gradients, so the classical lens (0)
+    shares the compiled step with the hybrid lens (1).
+    """
+    k_sim, k_noise = jax.random.split(key)
+
+    def loss_fn(trainable):
+        net, params = trainable
+        lens = params.apply(base_lens)
+        sims = _simulate_batch(lens, windows, xy, depths, k_sim, cfg)
+        recs = _reconstruct(net, sims, k_noise, cfg.noise)
+        return edof_loss(recs, sims, _gt(windows, cfg), w_sim=cfg.w_sim, w_raw=cfg.w_raw)
+
+    trainable = (net, params)
+    (loss, parts), grads = eqx.filter_value_and_grad(loss_fn, has_aux=True)(trainable)
+    g_net, g_lens = grads
+    g_lens = jax.tree_util.tree_map(lambda g: g * lens_on.astype(g.dtype), g_lens)
+    grads = (g_net, g_lens)
+    updates, opt_state = optimizer.update(grads, opt_state, eqx.filter(trainable,
+                                                                      eqx.is_inexact_array))
+    net, params = eqx.apply_updates(trainable, updates)
+    return net, params, opt_state, loss, parts
+
+
+@eqx.filter_jit
+def stage2_step(net, opt_state, lens, windows, xy, depths, key, *, cfg: Config, optimizer):
+    """One network-only step on perturbed copies of a frozen lens (one per patch)."""
+    k_pert, k_sim, k_noise = jax.random.split(key, 3)
+    b = windows.shape[0]
+    lenses = jax.vmap(lambda k: perturb(lens, k, cfg.tolerances))(jax.random.split(k_pert, b))
+    pix = cfg.binning * 0.00497
+    keys = jax.random.split(k_sim, 2 * b).reshape(2, b, -1)
+
+    def one(ln, window, p, d, k):
+        return simulate_patch(ln, window, p, d, k, kernel_size=cfg.kernel_size,
+                              pixel_size=pix, pupil=cfg.pupil)
+
+    per_depth = jax.vmap(one, in_axes=(0, 0, 0, None, 0))
+    sims = jax.vmap(per_depth, in_axes=(None, None, None, 0, 0))(lenses, windows, xy, depths,
+                                                               keys)
+    sims = jax.lax.stop_gradient(sims)
+
+    def loss_fn(net):
+        recs = _reconstruct(net, sims, k_noise, cfg.noise)
+        return l_rec(recs, _gt(windows, cfg))
+
+    loss, grads = eqx.filter_value_and_grad(loss_fn)(net)
+    updates, opt_state = optimizer.update(grads, opt_state, eqx.filter(net, eqx.is_inexact_array))
+    return eqx.apply_updates(net, updates), opt_state, loss
+
+
+class BatchSource:
+    """Host-side batches: scene windows, sensor positions and the depth pair."""
+
+    def __init__(self, sampler, lens: Lens, cfg: Config, seed: int):
+        self.sampler = sampler
+        self.cfg = cfg
+        self.rng = np.random.default_rng(seed)
+        h, w = lens.sensor.size
+        self.half = 0.5 * np.array([float(w), float(h)])
+        self.depths = 1e3 * np.asarray(DEPTHS_M)
+
+    def __call__(self, dtype=np.float32):
+        cfg = self.cfg
+        windows = self.sampler.sample(cfg.batch)
+        xy = self.rng.uniform(-1.0, 1.0, (cfg.batch, 2)) * self.half
+        pair = self.rng.choice(len(self.depths), 2, replace=False)
+        return (jnp.asarray(windows, dtype), jnp.asarray(xy, dtype),
+                jnp.asarray(self.depths[pair], dtype))
+
+
+def train(
+    name: str,
+    base_lens: Lens,
+    params,
+    net: NAFNet,
+    source: BatchSource,
+    cfg: Config,
+    *,
+    lens_on: bool,
+    key,
+    progress: Callable | None = None,
+):
+    """Stage 1 then stage 2 for one lens; returns ``(net, params, history)``.
+
+    ``history`` holds the loss parts every ``log_every`` steps of stage 1 (``stage1``, a
+    list of dicts with ``step``, ``loss``, ``rec``, ``sim``, ``raw``) and the L_rec of
+    stage 2 (``stage2``).
+    """
+    dtype = base_lens.epd.dtype
+    opt1 = make_optimizer(cfg, cfg.steps)
+    trainable = eqx.filter((net, params), eqx.is_inexact_array)
+    state = opt1.init(trainable)
+    on = jnp.asarray(1.0 if lens_on else 0.0, dtype)
+    hist: dict[str, list] = {"stage1": [], "stage2": []}
+    acc = []
+    bar = progress(total=cfg.steps + cfg.steps2, desc=f"{name}") if progress else None
+    for step in range(cfg.steps):
+        key, sub = jax.random.split(key)
+        windows, xy, depths = source()
+        net, params, state, loss, parts = stage1_step(
+            net, params, state, base_lens, windows, xy, depths, sub, on, cfg=cfg,
+            optimizer=opt1)
+        acc.append((loss, parts))
+        if (step + 1) % cfg.log_every == 0 or step + 1 == cfg.steps:
+            vals = jax.device_get(acc)
+            acc = []
+            rec = {"step": step + 1, "loss": float(np.mean([v[0] for v in vals]))}
+            for k in ("rec", "sim", "raw"):
+                rec[k] = float(np.mean([v[1][k] for v in vals]))
+            if not math.isfinite(rec["loss"]):
+                raise FloatingPointError(f"train[{name}]: non-finite loss at stage 1 step "
+                                         f"{step + 1}")
+            hist["stage1"].append(rec)
+            if bar is not None:
+                bar.set_postfix(stage=1, loss=f"{rec['loss']:.4f}", rec=f"{rec['rec']:.4f}")
+                bar.update(len(vals))
+    lens = jax.lax.stop_gradient(params.apply(base_lens))
+    opt2 = make_optimizer(dataclasses.replace(cfg, lr_net=cfg.lr_net * 0.3), cfg.steps2,
+                          lens=False)
+    state2 = opt2.init(eqx.filter(net, eqx.is_inexact_array))
+    acc = []
+    for step in range(cfg.steps2):
+        key, sub = jax.random.split(key)
+        windows, xy, depths = source()
+        net, state2, loss = stage2_step(net, state2, lens, windows, xy, depths, sub, cfg=cfg,
+                                        optimizer=opt2)
+        acc.append(loss)
+        if (step + 1) % cfg.log_every == 0 or step + 1 == cfg.steps2:
+            vals = jax.device_get(acc)
+            acc = []
+            rec = {"step": step + 1, "rec": float(np.mean(vals))}
+            if not math.isfinite(rec["rec"]):
+                raise FloatingPointError(f"train[{name}]: non-finite loss at stage 2 step "
+                                         f"{step + 1}")
+            hist["stage2"].append(rec)
+            if bar is not None:
+                bar.set_postfix(stage=2, rec=f"{rec['rec']:.4f}")
+                bar.update(len(vals))
+    if bar is not None:
+        bar.close()
+    return net, params, hist
+
+
+# --------------------------------------------------------------------------------------
+# Evaluation (Table 2)
+# --------------------------------------------------------------------------------------
+@eqx.filter_jit
+def _restore(net, img):
+    return jnp.clip(net(img), 0.0, 1.0)
+
+
+def evaluate(lens: Lens, net: NAFNet, images, depths_m, cfg: Config, *, key, keep=None):
+    """PSNR and SSIM of simulation and reconstruction on whole test images.
+
+    Args:
+        lens: the (trained) lens with its sensor.
+        net: the network.
+        images: test scenes ``[S, S, 3]`` at the sensor resolution.
+        depths_m: depths (m from the stop).
+        key: PRNG key for the renders and the noise (the same for every lens).
+        keep: index of a test image whose images to return.
+
+    Returns:
+        ``(metrics, examples)``: metrics[str(depth)] = {"sim": {"psnr", "ssim"},
+        "rec": {...}} averaged over the images; examples[str(depth)] = (sim, rec) of the
+        kept image (NumPy, clipped to [0, 1]).
+    """
+    from skimage.metrics import peak_signal_noise_ratio, structural_similarity
+
+    metrics, examples = {}, {}
+    for d in depths_m:
+        vals = {"sim": {"psnr": [], "ssim": []}, "rec": {"psnr": [], "ssim": []}}
+        for i, img in enumerate(images):
+            k_r, k_n = jax.random.split(jax.random.fold_in(key, i))
+            scene = jnp.asarray(img, lens.epd.dtype)
+            sim = render_image(lens, scene, 1e3 * d, k_r, kernel_size=cfg.kernel_size,
+                               spp=cfg.eval_spp)
+            sim = sim + cfg.noise * jax.random.normal(k_n, sim.shape, sim.dtype)
+            rec = np.asarray(_restore(net, sim), np.float64)
+            sim = np.clip(np.asarray(sim, np.float64), 0.0, 1.0)
+            gt = np.asarray(img, np.float64)
+            for tag, x in (("sim", sim), ("rec", rec)):
+                vals[tag]["psnr"].append(peak_signal_noise_ratio(gt, x, data_range=1.0))
+                vals[tag]["ssim"].append(structural_similarity(gt, x, data_range=1.0,
+                                                               channel_axis=-1))
+            if keep is not None and i == keep:
+                examples[_depth_key(d)] = (sim, rec)
+        metrics[_depth_key(d)] = {t: {m: float(np.mean(v)) for m, v in vals[t].items()}
+                                  for t in vals}
+    return metrics, examples
+
+
+def _depth_key(d) -> str:
+    """'0.1', '0.2', '10' for depths in m."""
+    return f"{float(d):g}"
