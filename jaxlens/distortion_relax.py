@@ -33,7 +33,16 @@ from jaxtyping import Array, Float
 
 from . import paraxial
 from .lens import Lens, Sensor
-from .psf import _chief_point, _static_depth, apertured, ideal_to_field, image_scale, sensor_grid
+from .psf import (
+    _chief_point,
+    _static_depth,
+    apertured,
+    ideal_to_field,
+    image_scale,
+    newton_2d,
+    sensor_grid,
+    unclipped,
+)
 from .rays import Rays
 from .reverse import trace_backward
 from .trace import DEFAULT_NEWTON_ITERS
@@ -62,6 +71,7 @@ def _sensor(lens: Lens, sensor):
     return sensor
 
 
+@eqx.filter_jit
 def _forward_map(lens, ideal, depth, newton_iters):
     fields = ideal_to_field(lens, ideal.reshape(-1, 2))
     real = jax.vmap(lambda f: _chief_point(lens, f, depth, newton_iters))(fields)
@@ -108,8 +118,8 @@ def inverse_distortion_map(
     """D⁻¹ on a grid of sensor points: the ideal position whose chief ray lands there.
 
     Each sensor point sends a ray backward through the lens, aimed by Newton's method (with
-    a forward-mode Jacobian) at the centre of the stop; where it leaves into object space
-    gives the field, hence the ideal position.
+    a forward-mode Jacobian, apertures ignored) at the centre of the stop; where it leaves
+    into object space gives the field, hence the ideal position.
 
     Args:
         lens: the lens.
@@ -120,8 +130,15 @@ def inverse_distortion_map(
         iters: aiming iterations.
 
     Returns:
-        ``[gr, gc, 2]`` ideal positions (mm).
+        ``[gr, gc, 2]`` ideal positions (mm), differentiable with respect to the lens.
     """
+    return _inverse_map(lens, jnp.asarray(pixel_size), depth, resolution=tuple(resolution),
+                        grid=tuple(grid), newton_iters=newton_iters, iters=iters)
+
+
+
+@eqx.filter_jit
+def _inverse_map(lens, pixel_size, depth, *, resolution, grid, newton_iters, iters):
     dtype = lens.epd.dtype
     pts = sensor_grid(resolution, pixel_size, grid).astype(dtype)
     k_scale = image_scale(lens)
@@ -139,9 +156,7 @@ def inverse_distortion_map(
         n = jnp.sqrt(jnp.clip(1.0 - jnp.sum(lm * lm), 1e-12, None))
         return Rays(o[None], jnp.concatenate([lm, -n[None]])[None], wl)
 
-    def at_stop(lm, o):
-        out = trace_backward(lens, ray(lm, o), newton_iters=newton_iters, upto=lens.stop)
-        return out.origin[0, :2]
+    aim_lens = unclipped(lens)
 
     def solve(xy):
         o = origin_of(xy)
@@ -149,19 +164,12 @@ def inverse_distortion_map(
         to_xp = jnp.stack([-o[0], -o[1], xp - o[2]]) * sgn
         lm0 = jax.lax.stop_gradient(to_xp[:2] / jnp.linalg.norm(to_xp))
 
-        def body(_, lm):
-            f = at_stop(lm, o)
-            jac = jax.jacfwd(at_stop)(lm, o)
-            det = jac[0, 0] * jac[1, 1] - jac[0, 1] * jac[1, 0]
-            det = jnp.where(det == 0, 1.0, det)
-            inv = jnp.array([[jac[1, 1], -jac[0, 1]], [-jac[1, 0], jac[0, 0]]]) / det
-            step = inv @ f
-            # Keep steps modest so that the ray stays inside the lens.
-            norm = jnp.sqrt(jnp.sum(step * step))
-            step = step * jnp.minimum(1.0, 0.2 / jnp.where(norm > 0, norm, 1.0))
-            return lm - step
+        def at_stop(lm, aim_lens):
+            out = trace_backward(aim_lens, ray(lm, o), newton_iters=newton_iters,
+                                 upto=lens.stop)
+            return out.origin[0, :2]
 
-        lm = jax.lax.fori_loop(0, iters, body, lm0)
+        lm = newton_2d(at_stop, lm0, aim_lens, iters)
         out = trace_backward(lens, ray(lm, o), newton_iters=newton_iters)
         d = out.direction[0]
         bz = jnp.where(d[2] < 0, d[2], -1.0)
@@ -212,22 +220,27 @@ def prewarp(
     Returns:
         The pre-warped scene, same shape.
     """
-    from .render import _grid_coords, bilinear
-
     s = _sensor(lens, sensor)
     scene = jnp.asarray(scene)
     if scene.ndim != 3:
         raise ValueError(f"prewarp: scene must be [H, W, C], got {scene.shape}")
     dmap = distortion_map(lens, grid=grid, depth=depth, sensor=s, newton_iters=newton_iters)
+    return _prewarp(scene, dmap.real.astype(scene.dtype), jnp.asarray(s.pixel_size),
+                    resolution=tuple(s.resolution), grid=tuple(grid))
+
+
+@eqx.filter_jit
+def _prewarp(scene, real, pixel_size, *, resolution, grid):
+    from .render import _grid_coords, bilinear
+
     dtype = scene.dtype
-    real = dmap.real.astype(dtype)
     hs, ws = scene.shape[:2]
-    x, y, pr, pc = _ideal_of_pixels((hs, ws), s.resolution, s.pixel_size, dtype)
+    x, y, pr, pc = _ideal_of_pixels((hs, ws), resolution, pixel_size, dtype)
     # Fractional sensor-pixel coordinates of the ideal positions, then grid coordinates.
-    h, w = s.resolution
-    rows = y / s.pixel_size + 0.5 * (h - 1)
-    cols = -x / s.pixel_size + 0.5 * (w - 1)
-    gy, gx = _grid_coords(s.resolution, grid, rows, cols)
+    h, w = resolution
+    rows = y / pixel_size + 0.5 * (h - 1)
+    cols = -x / pixel_size + 0.5 * (w - 1)
+    gy, gx = _grid_coords(resolution, grid, rows, cols)
     dv = bilinear(real, gy, gx)  # [H, W, 2]
     r_sc = 0.5 * (hs - 1) + dv[..., 1] / pr
     c_sc = 0.5 * (ws - 1) - dv[..., 0] / pc

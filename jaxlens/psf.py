@@ -98,13 +98,26 @@ def apertured(lens: Lens) -> Lens:
     """The lens with an unbounded stop given the paraxial stop radius from the EPD.
 
     Overfilled beams rely on the stop to clip them; a stop with ``semi_diameter = inf``
-    gets the radius that the entrance pupil diameter implies.
+    gets the radius that the entrance pupil diameter implies. A lens whose stop is bounded
+    (a concrete value, checked outside jit) is returned as it is, at no cost.
     """
     sd = lens.surfaces[lens.stop].semi_diameter
+    if not isinstance(sd, jax.core.Tracer) and bool(np.all(np.isfinite(np.asarray(sd)))):
+        return lens
     finite = jnp.isfinite(sd)
     stop_r = paraxial.paraxial_data(lens).stop_semi_diameter
     new = jnp.where(finite, sd, stop_r)
     return eqx.tree_at(lambda m: m.surfaces[m.stop].semi_diameter, lens, new)
+
+
+def unclipped(lens: Lens) -> Lens:
+    """The lens with every semi-diameter set to inf, for aiming rays (an aperture that clips
+    an intermediate Newton iterate would otherwise stop it where it was clipped)."""
+    surfaces = tuple(
+        eqx.tree_at(lambda s: s.semi_diameter, s, jnp.full_like(s.semi_diameter, jnp.inf))
+        for s in lens.surfaces
+    )
+    return eqx.tree_at(lambda m: m.surfaces, lens, surfaces)
 
 
 def image_scale(lens: Lens, wavelength=None) -> Float[Array, ""]:
@@ -218,19 +231,42 @@ def chief_ray(lens: Lens, field, depth=None, wavelength=None, *,
         v = q - p0
         return Rays(p0[None], (v / jnp.linalg.norm(v))[None], wl)
 
-    def at_stop(uv):
-        return trace_scan(lens, launch(uv), newton_iters=newton_iters, upto=lens.stop).origin[0, :2]
+    aim_lens = unclipped(lens)
 
-    def body(_, uv):
-        f = at_stop(uv)
-        jac = jax.jacfwd(at_stop)(uv)
+    def at_stop(uv, aim_lens):
+        return trace_scan(aim_lens, launch(uv), newton_iters=newton_iters,
+                          upto=lens.stop).origin[0, :2]
+
+    uv = newton_2d(at_stop, jnp.zeros(2, lens.epd.dtype), aim_lens, iters)
+    return launch(uv)
+
+
+def newton_2d(fn, x0, params, iters: int):
+    """Solve fn(x, params) = 0 for x in R² by Newton's method with an implicit gradient.
+
+    The iterations run without gradients; one last step with the Jacobian held fixed gives
+    the implicit-function derivative dx/dparams = −J⁻¹·∂fn/∂params, so reverse mode never
+    unrolls the loop.
+    """
+
+    def inv_step(x, p):
+        f = fn(x, p)
+        jac = jax.jacfwd(fn)(x, p)
         det = jac[0, 0] * jac[1, 1] - jac[0, 1] * jac[1, 0]
         det = jnp.where(det == 0, 1.0, det)
         inv = jnp.array([[jac[1, 1], -jac[0, 1]], [-jac[1, 0], jac[0, 0]]]) / det
-        return uv - inv @ f
+        return f, inv
 
-    uv = jax.lax.fori_loop(0, iters, body, jnp.zeros(2, lens.epd.dtype))
-    return launch(uv)
+    p_s = jax.lax.stop_gradient(params)
+
+    def body(_, x):
+        f, inv = inv_step(x, p_s)
+        return x - inv @ f
+
+    x = jax.lax.fori_loop(0, iters, body, jax.lax.stop_gradient(x0))
+    x = jax.lax.stop_gradient(x)
+    _, inv = jax.lax.stop_gradient(inv_step(x, p_s))
+    return x - inv @ fn(x, params)
 
 
 def _chief_point(lens, field, depth, newton_iters) -> Array:
@@ -240,6 +276,8 @@ def _chief_point(lens, field, depth, newton_iters) -> Array:
 
 
 def _reference(lens, field, depth, center, newton_iters, pos=None, w=None) -> Array:
+    if not isinstance(center, str):
+        return center  # a given point (x, y), mm
     if center == "chief":
         return _chief_point(lens, field, depth, newton_iters)
     if center == "ideal":
@@ -252,30 +290,45 @@ def _reference(lens, field, depth, center, newton_iters, pos=None, w=None) -> Ar
 # --------------------------------------------------------------------------------------
 # Geometric PSF
 # --------------------------------------------------------------------------------------
-def splat(pos, weight, kernel_size: int, pixel_size) -> Float[Array, "k k"]:
-    """Bilinear splat of weighted points (sensor offsets in mm from the reference) onto the
-    kernel grid (rendered orientation, see the module docstring); points outside are dropped.
+def splat(pos, weight, kernel_size: int, pixel_size, order: int = 1) -> Float[Array, "k k"]:
+    """Splat weighted points (sensor offsets in mm from the reference) onto the kernel grid.
+
+    The grid is in rendered orientation (see the module docstring); points outside it are
+    dropped. ``order=1`` splats bilinearly (a tent of one pixel); ``order=2`` with the
+    quadratic B-spline (a tent convolved with a one-pixel box), which also integrates the
+    PSF over the pixel's area as ``render`` does. Both are piecewise polynomial in the
+    positions, hence differentiable.
     """
     k = kernel_size
     c = 0.5 * (k - 1)
     col = c - pos[..., 0] / pixel_size
     row = c + pos[..., 1] / pixel_size
-    i0 = jax.lax.stop_gradient(jnp.floor(row))
-    j0 = jax.lax.stop_gradient(jnp.floor(col))
-    fr, fc = row - i0, col - j0
+    if order == 1:
+        i0 = jax.lax.stop_gradient(jnp.floor(row))
+        j0 = jax.lax.stop_gradient(jnp.floor(col))
+        fr, fc = row - i0, col - j0
+        wr = ((0, 1 - fr), (1, fr))
+        wc = ((0, 1 - fc), (1, fc))
+    elif order == 2:
+        i0 = jax.lax.stop_gradient(jnp.round(row))
+        j0 = jax.lax.stop_gradient(jnp.round(col))
+        fr, fc = row - i0, col - j0
+
+        def b2(f):
+            return ((-1, 0.5 * (0.5 - f) ** 2), (0, 0.75 - f * f), (1, 0.5 * (0.5 + f) ** 2))
+
+        wr, wc = b2(fr), b2(fc)
+    else:
+        raise ValueError(f"splat: order must be 1 or 2, got {order}")
     i0 = i0.astype(jnp.int32)
     j0 = j0.astype(jnp.int32)
     out = jnp.zeros((k * k,), weight.dtype)
-    for di, dj, wgt in (
-        (0, 0, (1 - fr) * (1 - fc)),
-        (0, 1, (1 - fr) * fc),
-        (1, 0, fr * (1 - fc)),
-        (1, 1, fr * fc),
-    ):
-        ii, jj = i0 + di, j0 + dj
-        inside = (ii >= 0) & (ii < k) & (jj >= 0) & (jj < k)
-        flat = jnp.where(inside, ii * k + jj, 0)
-        out = out.at[flat.reshape(-1)].add(jnp.where(inside, wgt * weight, 0.0).reshape(-1))
+    for di, a in wr:
+        for dj, b in wc:
+            ii, jj = i0 + di, j0 + dj
+            inside = (ii >= 0) & (ii < k) & (jj >= 0) & (jj < k)
+            flat = jnp.where(inside, ii * k + jj, 0)
+            out = out.at[flat.reshape(-1)].add(jnp.where(inside, a * b * weight, 0.0).reshape(-1))
     return out.reshape(k, k)
 
 
@@ -287,7 +340,7 @@ def _trace_beam(lens, field, depth, wl, pupil, mask, newton_iters):
 
 
 def _geometric(lens, field, depth, wls, *, kernel_size, pixel_size, center, pupil, overfill,
-               key, newton_iters):
+               key, newton_iters, order=1):
     dtype = lens.epd.dtype
     pts, mask, _ = _pupil_cells(pupil, overfill, dtype, key)
 
@@ -298,7 +351,7 @@ def _geometric(lens, field, depth, wls, *, kernel_size, pixel_size, center, pupi
     pos, w = jax.vmap(one)(wls)  # [W, M, 2], [W, M]
     ref = _reference(lens, field, depth, center, newton_iters, pos, w)
     total = jnp.maximum(jnp.sum(w, -1), jnp.finfo(dtype).tiny)  # [W]
-    kern = jax.vmap(lambda p, ww: splat(p - ref, ww, kernel_size, pixel_size))(pos, w)
+    kern = jax.vmap(lambda p, ww: splat(p - ref, ww, kernel_size, pixel_size, order))(pos, w)
     kern = kern / total[:, None, None]
     nan = jnp.full(wls.shape, jnp.nan, dtype)
     return kern, 1.0 - jnp.sum(kern, (-1, -2)), ref, nan, jnp.zeros(wls.shape, bool)
@@ -394,7 +447,7 @@ class PSFResult(eqx.Module):
 def _psf_impl(lens, field, depth, wls, pixel_size, key, *, kernel_size, model, center, pupil,
               overfill, newton_iters):
     dtype = jnp.result_type(pixel_size)
-    lens = apertured(lens.astype(dtype))
+    lens = lens.astype(dtype)
     kw = dict(kernel_size=kernel_size, pixel_size=pixel_size, center=center, pupil=pupil,
               overfill=overfill, newton_iters=newton_iters)
     if model == "geometric":
@@ -457,7 +510,7 @@ def psf_info(
                                             pixel_size, model, center, pupil, "psf")
     wls = jnp.atleast_1d(wl)
     kern, trunc, ref, strehl, aliased = _psf_impl(
-        lens, field, depth, wls, pixel_size, key, kernel_size=kernel_size, model=model,
+        apertured(lens), field, depth, wls, pixel_size, key, kernel_size=kernel_size, model=model,
         center=center, pupil=pupil, overfill=float(overfill), newton_iters=newton_iters)
     if max_truncation is not None:
         kern = eqx.error_if(
@@ -592,6 +645,7 @@ def psf_map(
     _, depth, wl, pixel_size = _prepare(lens, 0.0, depth, wavelength, kernel_size, pixel_size,
                                         model, center, pupil, "psf_map")
     wls = jnp.atleast_1d(wl)
+    lens = apertured(lens)
 
     def one(f):
         return _psf_impl(lens, f, depth, wls, pixel_size, None, kernel_size=kernel_size,
@@ -629,7 +683,7 @@ def _directions(field):
 def _mtf_impl(lens, field, depth, wls, freqs, pixel_size, *, model, pupil, overfill,
               kernel_size, diffraction, newton_iters):
     dtype = freqs.dtype
-    lens = apertured(lens.astype(dtype))
+    lens = lens.astype(dtype)
     e_t, e_s = _directions(field)
     fnum = paraxial.paraxial_data(lens).working_fnum
     nw = wls.shape[0]
@@ -733,7 +787,7 @@ def mtf(
     pix = lam_min * fnum / 4.0 if pixel_size is None else jnp.asarray(pixel_size, dtype)
     field, depth, _, pix = _prepare(lens, field, depth, None, kernel_size, pix, model,
                                     "centroid", pupil, "mtf")
-    t, s = _mtf_impl(lens, field, depth, wls, freqs, pix, model=model, pupil=pupil,
+    t, s = _mtf_impl(apertured(lens), field, depth, wls, freqs, pix, model=model, pupil=pupil,
                      overfill=float(overfill), kernel_size=kernel_size,
                      diffraction=bool(diffraction), newton_iters=newton_iters)
     return freqs, t, s

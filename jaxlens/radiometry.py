@@ -22,9 +22,10 @@ Method:
     fixed. Vignetting, the cos⁴ law, pupil aberrations and distortion all enter. The
     relative illumination is E divided by its value on axis.
 
-    The valid part of the pupil is found in two stages: a coarse grid over a disc three times
-    the paraxial entrance pupil, then a fine grid over the bounding box of the valid coarse
-    cells (one cell of margin), so the count of valid fine cells measures the area.
+    The valid part of the pupil (its area A) is found by ``star_region``: a coarse grid over a
+    square three times the paraxial entrance pupil locates it, and bisection along 128
+    directions finds its boundary. The centroid uses a ``pupil × pupil`` grid over the
+    region's bounding box.
 """
 
 from __future__ import annotations
@@ -44,7 +45,7 @@ from .rays import Rays
 from .reverse import trace_scan as trace
 from .trace import DEFAULT_NEWTON_ITERS
 
-__all__ = ["RelativeIllumination", "relative_illumination", "box_search"]
+__all__ = ["RelativeIllumination", "relative_illumination", "star_region"]
 
 
 def _cells(n: int, dtype):
@@ -53,36 +54,49 @@ def _cells(n: int, dtype):
     return jnp.asarray(np.stack([px.ravel(), py.ravel()], -1), dtype)
 
 
-def box_search(valid_fn, center, half, n_coarse: int, n_fine: int):
-    """Find the region where ``valid_fn`` holds, in two grid stages (no gradient).
+def star_region(valid_fn, center, half, *, n_coarse: int = 24, n_dirs: int = 128,
+                iters: int = 24):
+    """Find the region where ``valid_fn`` holds, as a star-shaped polygon (no gradient).
+
+    A coarse square grid of ``n_coarse²`` cells over ``center ± half`` locates the region
+    and its centroid c0; then, along ``n_dirs`` directions from c0, bisection finds the
+    boundary radius r_k. The area is the sum of sectors ½·Δφ·r_k·r_{k+1}, exact for a
+    disc and accurate to O(Δφ²) for smooth convex regions (pupils, vignetted pupils).
 
     Args:
         valid_fn: maps points ``[M, 2]`` to a bool mask ``[M]``.
-        center: ``[2]`` centre of the coarse square search.
+        center: ``[2]`` centre of the coarse search.
         half: half side of the coarse square.
-        n_coarse, n_fine: cells per side of the two grids.
+        n_coarse, n_dirs, iters: grid cells per side, directions, bisection steps.
 
     Returns:
-        ``(points [n_fine², 2], cell_area, any_valid)``: the cell centres of a fine grid over
-        the bounding box of the valid coarse cells grown by one coarse cell (the whole coarse
-        square if none is valid).
+        ``(c0 [2], boundary [n_dirs, 2], area, any_valid)``.
     """
     center = jax.lax.stop_gradient(center)
     half = jax.lax.stop_gradient(half)
     dtype = center.dtype
     coarse = center + half * _cells(n_coarse, dtype)
     v = jax.lax.stop_gradient(valid_fn(coarse))
-    cell = 2.0 * half / n_coarse
-    big = jnp.asarray(jnp.finfo(dtype).max, dtype)
-    lo = jnp.min(jnp.where(v[:, None], coarse, big), 0) - cell
-    hi = jnp.max(jnp.where(v[:, None], coarse, -big), 0) + cell
     anyv = jnp.any(v)
-    lo = jnp.where(anyv, lo, center - half)
-    hi = jnp.where(anyv, hi, center + half)
-    mid, span = 0.5 * (lo + hi), 0.5 * (hi - lo)
-    fine = mid + span * _cells(n_fine, dtype)
-    area = jnp.prod(2.0 * span) / (n_fine * n_fine)
-    return fine, area, anyv
+    wv = v.astype(dtype)
+    c0 = jnp.sum(wv[:, None] * coarse, 0) / jnp.maximum(jnp.sum(wv), 1.0)
+    c0 = jnp.where(anyv, c0, center)
+    cell = 2.0 * half / n_coarse
+    rmax = jnp.max(jnp.where(v, jnp.sqrt(jnp.sum((coarse - c0) ** 2, -1)), 0.0)) + 2.0 * cell
+    ang = 2.0 * jnp.pi * jnp.arange(n_dirs, dtype=dtype) / n_dirs
+    u = jnp.stack([jnp.cos(ang), jnp.sin(ang)], -1)
+
+    def body(_, lohi):
+        lo, hi = lohi
+        mid = 0.5 * (lo + hi)
+        ok = jax.lax.stop_gradient(valid_fn(c0 + mid[:, None] * u))
+        return jnp.where(ok, mid, lo), jnp.where(ok, hi, mid)
+
+    zeros = jnp.zeros((n_dirs,), dtype)
+    r, _ = jax.lax.fori_loop(0, iters, body, (zeros, zeros + rmax))
+    r = jnp.where(anyv, r, 0.0)
+    area = 0.5 * (2.0 * jnp.pi / n_dirs) * jnp.sum(r * jnp.roll(r, -1))
+    return c0, c0 + r[:, None] * u, area, anyv
 
 
 class RelativeIllumination(eqx.Module):
@@ -123,8 +137,12 @@ def _irradiance(lens: Lens, t, depth, wl, n_coarse, n_fine, newton_iters):
     def valid_fn(pts):
         return trace(lens, launch(t, pts), newton_iters=newton_iters).valid
 
-    # The beam through the entrance-pupil centre is near the chief ray.
-    fine, area, _ = box_search(valid_fn, jnp.zeros(2, t.dtype), 3.0 * r_ep, n_coarse, n_fine)
+    # The part of the entrance-pupil plane whose rays reach the sensor (its area exactly,
+    # as a polygon), then a grid over its bounding box for the centroid.
+    _, poly, area, _ = star_region(valid_fn, jnp.zeros(2, t.dtype), 3.0 * r_ep,
+                                   n_coarse=n_coarse)
+    lo, hi = jnp.min(poly, 0), jnp.max(poly, 0)
+    fine = 0.5 * (lo + hi) + 0.5 * (hi - lo) * _cells(n_fine, t.dtype)
 
     def centroid(s):
         rays = launch(s, fine)
@@ -134,24 +152,26 @@ def _irradiance(lens: Lens, t, depth, wl, n_coarse, n_fine, newton_iters):
             w = w * rays.direction[..., 2] ** 4
         tot = jnp.maximum(jnp.sum(w), jnp.finfo(t.dtype).tiny)
         cen = jnp.sum(w[:, None] * out.origin[:, :2], 0) / tot
-        return cen, (jnp.sum(w), rays.direction)
+        mean_cos4 = tot / jnp.maximum(jnp.sum(out.valid), 1)
+        return cen, (mean_cos4, rays.direction[0, 2])
 
-    jac, (wsum, dirs) = jax.jacfwd(centroid, has_aux=True)(t)
-    cen, _ = centroid(t)
+    eye = jnp.eye(2, dtype=t.dtype)
+    cen, jac, (mean_cos4, dz) = jax.vmap(
+        lambda v: jax.jvp(centroid, (t,), (v,), has_aux=True), out_axes=(None, 1, None)
+    )(eye)
     det = jnp.abs(jac[0, 0] * jac[1, 1] - jac[0, 1] * jac[1, 0])
     det = jnp.where(det > 0, det, jnp.inf)
     if depth is None:
-        cos4 = dirs[0, 2] ** 4
-        e = wsum * area * cos4 / det
+        e = area * dz**4 / det
     else:
-        e = wsum * area / (zep + depth) ** 2 / det
+        e = area * mean_cos4 / (zep + depth) ** 2 / det
     return e, cen
 
 
 @eqx.filter_jit
 def _ri_impl(lens, fields, depth, wl, *, n_coarse, n_fine, newton_iters):
     dtype = fields.dtype
-    lens = apertured(lens.astype(dtype))
+    lens = lens.astype(dtype)
     th = jnp.deg2rad(fields)
     if depth is None:
         s = jnp.tan(th)
@@ -162,9 +182,9 @@ def _ri_impl(lens, fields, depth, wl, *, n_coarse, n_fine, newton_iters):
     def one(si):
         return _irradiance(lens, si, depth, wl, n_coarse, n_fine, newton_iters)
 
-    e, cen = jax.vmap(one)(s)
-    e0, _ = one(jnp.zeros(2, dtype))
-    return e / e0, e, cen
+    # The axis joins the batch, so everything compiles once.
+    e, cen = jax.vmap(one)(jnp.concatenate([jnp.zeros((1, 2), dtype), s]))
+    return e[1:] / e[0], e[1:], cen[1:]
 
 
 def relative_illumination(
@@ -183,8 +203,8 @@ def relative_illumination(
         fields: ``[F]`` θy or ``[F, 2]`` (θx, θy), degrees.
         depth: object distance in mm in front of surface 1, ``inf`` for infinity.
         wavelength: µm (default the primary wavelength).
-        pupil: cells per side of the fine pupil grid (the coarse grid has a third of that,
-            at least 16).
+        pupil: cells per side of the pupil grid for the centroids (the search grid has a
+            third of that, at least 16).
         newton_iters: Newton iterations for aspheric surfaces.
 
     Returns:
@@ -200,6 +220,7 @@ def relative_illumination(
     if f.ndim != 2 or f.shape[-1] != 2:
         raise ValueError(f"relative_illumination: fields must be [F] or [F, 2], got {f.shape}")
     wl = jnp.asarray(lens.primary_wavelength if wavelength is None else wavelength, dtype)
-    ri, e, cen = _ri_impl(lens, f, _static_depth(depth), wl, n_coarse=max(16, pupil // 3),
-                          n_fine=int(pupil), newton_iters=newton_iters)
+    ri, e, cen = _ri_impl(apertured(lens), f, _static_depth(depth), wl,
+                          n_coarse=max(16, pupil // 3), n_fine=int(pupil),
+                          newton_iters=newton_iters)
     return RelativeIllumination(f, cen, ri, e)

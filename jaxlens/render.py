@@ -34,15 +34,28 @@ Methods:
     that covers the exit pupil as seen from that pixel. Uniform samples in (L, M) are
     uniform in projected solid angle, so the irradiance estimate is
     L_scene·(π R²)·(valid fraction) with no further weights. The discs are found once per
-    call on a coarse grid of sensor points by tracing (``footprint_grid``), without
-    gradients, and interpolated conservatively. spp samples are stratified when spp is a
-    perfect square. The same samples serve the three channels.
+    call on a coarse grid of sensor points by tracing (``footprint_grid``; a search grid,
+    then bisection of the boundary along 128 directions), without gradients, and
+    interpolated with a margin for the interpolation error. The on-axis irradiance that
+    normalises the image is the area of the on-axis footprint. spp samples are stratified
+    when spp is a perfect square. The same samples serve the three channels.
 
-    "psf": the scene is first warped by the lens's distortion (real chief rays), then each
-    ``patch × patch`` tile is convolved with the RGB geometric PSF of its centre field
-    (centred on the chief ray, from ``spp·kernel_size²`` jittered pupil rays per channel),
-    and multiplied by the relative-illumination map (``radiometry``, on a 9 × 9 grid,
-    interpolated).
+    "psf": the scene is first warped by the lens's distortion (real chief rays, D⁻¹ on a
+    17 × 17 grid), then each ``patch × patch`` tile is convolved with the RGB geometric PSF
+    of its centre field (centred on the chief ray, from ``spp·kernel_size²`` jittered pupil
+    rays per channel, splatted with the quadratic B-spline so that it is integrated over
+    the pixel as in the "ray" method), and multiplied by the relative-illumination map
+    (``radiometry``, on a 9 × 9 grid, interpolated). For a scene at the sensor's resolution
+    the two methods then compute the same image, up to Monte-Carlo noise and the
+    piecewise-constant PSF.
+
+Gradients:
+    ``render`` is differentiable with respect to the lens and the scene. The gradient is
+    that of the Monte-Carlo estimate with its samples held fixed (the same PRNG key): it
+    follows where each ray lands in the scene. The sampling footprints and the on-axis
+    normalisation are held fixed (``footprints`` lets a caller fix them explicitly, as a
+    finite-difference check must), and a ray crossing an aperture edge changes the image
+    in a jump that carries no gradient (as in DeepLens).
 
 Memory and scale-out:
     The sensor is cut into ``patch × patch`` tiles computed one after another by
@@ -68,6 +81,7 @@ from jax.sharding import Mesh, PartitionSpec
 from jaxtyping import Array, Float
 
 from . import paraxial
+from .distortion_relax import inverse_distortion_map
 from .lens import Lens, Sensor
 from .psf import (
     RGB_WAVELENGTHS,
@@ -78,12 +92,12 @@ from .psf import (
     image_scale,
     sensor_grid,
 )
-from .radiometry import _ri_impl, box_search
+from .radiometry import _ri_impl, star_region
 from .rays import Rays
 from .reverse import trace_backward
 from .trace import DEFAULT_NEWTON_ITERS
 
-__all__ = ["render", "METHODS", "bilinear", "pixel_positions"]
+__all__ = ["render", "footprints", "Footprints", "METHODS", "bilinear", "pixel_positions"]
 
 METHODS = ("ray", "psf")
 
@@ -155,34 +169,35 @@ def _backward_valid(lens, origin, lm, wl, newton_iters):
     return trace_backward(lens, Rays(o, d, wl, ok), newton_iters=newton_iters).valid
 
 
-def _footprint(lens, origin, wl, lm0, half, n_grid, newton_iters):
-    """Disc (centre, radius) in (L, M) covering the valid backward directions from a point."""
+def _footprint(lens, origin, wl, lm0, half, newton_iters):
+    """Disc (centre, radius) in (L, M) covering the valid backward directions from a point,
+    and the area of the valid region (the projected solid angle)."""
     fn = lambda pts: _backward_valid(lens, origin, pts, wl, newton_iters)  # noqa: E731
-    fine, area, anyv = box_search(fn, lm0, half, n_grid, n_grid)
-    v = jax.lax.stop_gradient(fn(fine))
-    big = jnp.asarray(1e30, fine.dtype)
-    lo = jnp.min(jnp.where(v[:, None], fine, big), 0)
-    hi = jnp.max(jnp.where(v[:, None], fine, -big), 0)
-    anyf = jnp.any(v)
-    cen = jnp.where(anyf, 0.5 * (lo + hi), lm0)
-    dist = jnp.sqrt(jnp.sum((fine - cen) ** 2, -1))
-    cell = jnp.sqrt(area)
-    rad = jnp.max(jnp.where(v, dist, 0.0)) + cell
-    rad = jnp.where(anyf, rad, cell)
-    return cen, rad, jnp.sum(v) * area
+    c0, poly, area, anyv = star_region(fn, lm0, half)
+    cen = jnp.mean(poly, 0)
+    rad = jnp.max(jnp.sqrt(jnp.sum((poly - cen) ** 2, -1)))
+    # The boundary between the polygon's vertices bulges by at most r·(1 − cos(π/128)).
+    rad = jnp.where(anyv, 1.001 * rad + 1e-6, 1e-3)
+    return jnp.where(anyv, cen, lm0), rad, area
 
 
-def _footprints(lens, wls, resolution, pixel_size, grid, n_grid, newton_iters):
-    """Footprint discs on a grid of sensor points (union over wavelengths), the margin for
-    interpolating them, and the on-axis projected solid angle per wavelength. No gradients."""
+@eqx.filter_jit
+def _footprints(lens, wls, pts, *, newton_iters):
+    """Footprint discs at a grid of sensor points ``pts [g, g, 2]`` (union over wavelengths),
+    the margin for interpolating them, and the on-axis projected solid angle per wavelength.
+    No gradients. The grid has odd sides, so that its centre point is the sensor centre.
+
+    A jitted function of its own: it depends on the lens and the grid only, so one compiled
+    program serves renders of every sensor size, scene and spp.
+    """
     lens = jax.lax.stop_gradient(lens)
+    grid = pts.shape[:2]
     pd = paraxial.paraxial_data(lens)
     z_img = lens.image_z()
     xp = pd.exit_pupil_z
     n_img = lens.materials[-1].index(lens.primary_wavelength)
     u = 1.0 / (2.0 * pd.working_fnum * n_img)
     half = jnp.minimum(3.0 * u + 0.05, 0.95)
-    pts = sensor_grid(resolution, pixel_size, grid)  # [gr, gc, 2]
 
     def guess(xy):
         origin = _sensor_origin(lens, xy[0], xy[1])
@@ -195,23 +210,75 @@ def _footprints(lens, wls, resolution, pixel_size, grid, n_grid, newton_iters):
 
     def at_point(xy):
         origin, lm0 = guess(xy)
-        cen, rad, _ = jax.vmap(
-            lambda wl: _footprint(lens, origin, wl, lm0, half, n_grid, newton_iters))(wls)
+        cen, rad, area = jax.vmap(
+            lambda wl: _footprint(lens, origin, wl, lm0, half, newton_iters))(wls)
         c = jnp.mean(cen, 0)
         r = jnp.max(jnp.sqrt(jnp.sum((cen - c) ** 2, -1)) + rad)
-        return c, r
+        return c, r, area
 
-    cen, rad = jax.vmap(jax.vmap(at_point))(pts)
+    cen, rad, area = jax.vmap(jax.vmap(at_point))(pts)
+    e0 = area[grid[0] // 2, grid[1] // 2]
     # Margin for bilinear interpolation between grid points: the discrete Laplacian of the
     # centres and radii bounds (about 4x) the interpolation error of a smooth map.
     vals = jnp.concatenate([cen, rad[..., None]], -1)
     pad = jnp.pad(vals, ((1, 1), (1, 1), (0, 0)), mode="edge")
     lap = (pad[:-2, 1:-1] + pad[2:, 1:-1] + pad[1:-1, :-2] + pad[1:-1, 2:]) / 4 - vals
     margin = jnp.max(jnp.sqrt(jnp.sum(lap[..., :2] ** 2, -1)) + jnp.abs(lap[..., 2]))
-    origin0, lm00 = guess(jnp.zeros(2, pixel_size.dtype))
-    _, _, e0 = jax.vmap(
-        lambda wl: _footprint(lens, origin0, wl, lm00, half, 4 * n_grid, newton_iters))(wls)
     return cen, rad, margin, e0
+
+
+class Footprints(eqx.Module):
+    """Exit-pupil footprints seen from a grid of sensor points (method "ray").
+
+    Attributes:
+        center: ``[g, g, 2]`` disc centres in image-space direction cosines (L, M).
+        radius: ``[g, g]`` disc radii (union over the wavelengths).
+        margin: scalar added to interpolated radii between grid points.
+        e0: ``[W]`` on-axis projected solid angle per wavelength (the normalisation).
+    """
+
+    center: Float[Array, "g g 2"]
+    radius: Float[Array, "g g"]
+    margin: Float[Array, ""]
+    e0: Float[Array, " w"]
+
+
+def footprints(
+    lens: Lens,
+    *,
+    sensor: Sensor | None = None,
+    wavelengths=RGB_WAVELENGTHS,
+    grid: int = 9,
+    dtype=None,
+    newton_iters: int = DEFAULT_NEWTON_ITERS,
+) -> Footprints:
+    """The sampling footprints that ``render(method="ray")`` computes for a lens and sensor.
+
+    Pass them to ``render(..., footprints=...)`` to reuse them (for example across the steps
+    of an optimisation where the lens changes little), or to hold them fixed while
+    differentiating. They carry no gradient.
+
+    Args:
+        lens: the lens.
+        sensor: default ``lens.sensor``.
+        wavelengths: one per channel (µm).
+        grid: points per side (made odd, so that the sensor centre is one).
+        dtype: float dtype (default the default float dtype).
+        newton_iters: Newton iterations for aspheric surfaces.
+    """
+    sensor = lens.sensor if sensor is None else sensor
+    if sensor is None:
+        raise ValueError("footprints: the lens has no sensor; pass sensor=jaxlens.Sensor(...)")
+    dtype = jnp.result_type(float) if dtype is None else dtype
+    g = int(grid) + 1 - int(grid) % 2
+    pts = sensor_grid(sensor.resolution, jnp.asarray(sensor.pixel_size), (g, g)).astype(dtype)
+    wls = jnp.atleast_1d(jnp.asarray(wavelengths, dtype))
+    cen, rad, margin, e0 = _footprints(apertured(lens).astype(dtype), wls, pts,
+                                       newton_iters=newton_iters)
+    return Footprints(cen, rad, margin, e0)
+
+
+_compute_footprints = footprints  # render's argument of the same name shadows it
 
 
 # --------------------------------------------------------------------------------------
@@ -263,17 +330,18 @@ def _unit_disc(key, shape, spp, dtype):
 # Backward ray tracing
 # --------------------------------------------------------------------------------------
 @eqx.filter_jit
-def _render_ray(lens, scene, key, depth, wls, pixel_size, *, resolution, spp, patch,
-                checkpoint, mesh, ri, footprint_grid, newton_iters):
+def _render_ray(lens, scene, key, depth, wls, pixel_size, footprints, *, resolution, spp, patch,
+                checkpoint, mesh, ri, newton_iters):
     dtype = scene.dtype
     pixel_size = pixel_size.astype(dtype)
-    lens = apertured(lens.astype(dtype))
+    lens = lens.astype(dtype)
     wls = wls.astype(dtype)
     k_scale = image_scale(lens)
     zep = paraxial.entrance_pupil_z(lens)
-    grid = (footprint_grid, footprint_grid)
-    fp_cen, fp_rad, fp_margin, e0 = _footprints(lens, wls, resolution, pixel_size, grid, 32,
-                                                newton_iters)
+    fp_cen, fp_rad, fp_margin, e0 = jax.lax.stop_gradient(
+        (footprints.center, footprints.radius, footprints.margin, footprints.e0))
+    fp_cen, fp_rad, fp_margin, e0 = (a.astype(dtype) for a in (fp_cen, fp_rad, fp_margin, e0))
+    grid = fp_cen.shape[:2]
     h, w = resolution
     n_ty, n_tx = -(-h // patch), -(-w // patch)
     local_r = jnp.arange(patch, dtype=dtype)
@@ -347,36 +415,42 @@ def _conv_rgb(window, kern):
     return y[0].transpose(1, 2, 0)
 
 
-@eqx.filter_jit
-def _render_psf(lens, scene, key, depth, wls, pixel_size, *, resolution, spp, patch,
-                checkpoint, mesh, ri, kernel_size, newton_iters):
-    from .distortion_relax import inverse_distortion_map
+def _psf_setup(lens, depth, pixel_size, *, resolution, ri, newton_iters):
+    """D⁻¹ on a 17 × 17 sensor grid and the relative illumination on its 9 × 9 subgrid.
 
-    dtype = scene.dtype
-    pixel_size = pixel_size.astype(dtype)
-    lens = apertured(lens.astype(dtype))
-    wls = wls.astype(dtype)
-    h, w = resolution
-    # 1. Distortion: the sensor pixel u shows the scene at the ideal point D^-1(u).
+    Not jitted itself: its two parts are, and their compiled programs are shared with
+    ``inverse_distortion_map`` and ``relative_illumination`` calls of the same shapes.
+    """
     inv = inverse_distortion_map(lens, resolution=resolution, pixel_size=pixel_size,
                                  grid=(17, 17), depth=depth, newton_iters=newton_iters)
+    if not ri:
+        return inv, None
+    fields = ideal_to_field(lens, inv[::2, ::2]).reshape(-1, 2)
+    ri_vals, _, _ = _ri_impl(lens, fields, depth, lens.primary_wavelength, n_coarse=16,
+                             n_fine=48, newton_iters=newton_iters)
+    return inv, ri_vals.reshape(9, 9)
+
+
+@eqx.filter_jit
+def _render_psf(lens, scene, key, depth, wls, pixel_size, inv, ri_map, *, resolution, spp,
+                patch, checkpoint, mesh, kernel_size, newton_iters):
+    dtype = scene.dtype
+    pixel_size = pixel_size.astype(dtype)
+    lens = lens.astype(dtype)
+    wls = wls.astype(dtype)
+    inv = inv.astype(dtype)
+    h, w = resolution
+    # 1. Distortion: the sensor pixel u shows the scene at the ideal point D^-1(u).
     rr, cc = jnp.meshgrid(jnp.arange(h, dtype=dtype), jnp.arange(w, dtype=dtype), indexing="ij")
     gy, gx = _grid_coords(resolution, (17, 17), rr, cc)
     ideal = _interp_grid(inv, gy, gx)  # [h, w, 2]
     r_sc, c_sc = _scene_coords(scene.shape[:2], resolution, pixel_size, ideal[..., 0],
                                ideal[..., 1])
     warped = bilinear(scene, r_sc, c_sc)  # [h, w, C]
-    # 2. Relative illumination on a coarse grid of sensor points.
-    if ri:
-        g_ri = 9
-        inv9 = inverse_distortion_map(lens, resolution=resolution, pixel_size=pixel_size,
-                                      grid=(g_ri, g_ri), depth=depth, newton_iters=newton_iters)
-        fields = ideal_to_field(lens, inv9).reshape(-1, 2)
-        ri_vals, _, _ = _ri_impl(lens, fields, depth, lens.primary_wavelength, n_coarse=16,
-                                 n_fine=48, newton_iters=newton_iters)
-        ri_map = ri_vals.reshape(g_ri, g_ri)
-        gy9, gx9 = _grid_coords(resolution, (g_ri, g_ri), rr, cc)
-        warped = warped * _interp_grid(ri_map, gy9, gx9)[..., None]
+    # 2. Relative illumination, interpolated from the 9 × 9 grid.
+    if ri_map is not None:
+        gy9, gx9 = _grid_coords(resolution, (9, 9), rr, cc)
+        warped = warped * _interp_grid(ri_map.astype(dtype), gy9, gx9)[..., None]
     # 3. Tiles with a halo of half a kernel.
     n_ty, n_tx = -(-h // patch), -(-w // patch)
     half = kernel_size // 2
@@ -390,17 +464,18 @@ def _render_psf(lens, scene, key, depth, wls, pixel_size, *, resolution, spp, pa
         lens = eqx.combine(params, static)
         ty, tx = t // n_tx, t % n_tx
         r0, c0 = ty * patch, tx * patch
-        win = jax.lax.dynamic_slice(padded, (r0, c0, 0),
+        win = jax.lax.dynamic_slice(padded, (r0, c0, jnp.zeros((), r0.dtype)),
                                     (patch + 2 * half, patch + 2 * half, nc))
-        rc = (r0 + 0.5 * (patch - 1)).astype(dtype)
-        cc0 = (c0 + 0.5 * (patch - 1)).astype(dtype)
-        gy, gx = _grid_coords(resolution, (17, 17), jnp.minimum(rc, h - 1.0),
-                              jnp.minimum(cc0, w - 1.0))
+        # The tile centre (kept on the sensor) and the field whose chief ray lands there.
+        rc = jnp.minimum((r0 + 0.5 * (patch - 1)).astype(dtype), h - 1.0)
+        ccen = jnp.minimum((c0 + 0.5 * (patch - 1)).astype(dtype), w - 1.0)
+        gy, gx = _grid_coords(resolution, (17, 17), rc, ccen)
         field = ideal_to_field(lens, _interp_grid(inv, gy, gx))
+        ref = jnp.stack(pixel_positions(resolution, pixel_size, rc, ccen))
         kern, _, _, _, _ = _geometric(lens, field, depth, wls, kernel_size=kernel_size,
-                                      pixel_size=pixel_size, center="chief", pupil=pupil,
+                                      pixel_size=pixel_size, center=ref, pupil=pupil,
                                       overfill=1.25, key=jax.random.fold_in(key, t),
-                                      newton_iters=newton_iters)
+                                      newton_iters=newton_iters, order=2)
         kern = kern / jnp.maximum(jnp.sum(kern, (-1, -2), keepdims=True), 1e-30)
         return _conv_rgb(win, kern[:nc])
 
@@ -428,6 +503,7 @@ def render(
     relative_illumination: bool = True,
     kernel_size: int = 31,
     footprint_grid: int = 9,
+    footprints: Footprints | None = None,
     newton_iters: int = DEFAULT_NEWTON_ITERS,
 ) -> Float[Array, "rows cols 3"]:
     """Simulate the sensor image of a scene through a lens (see the module docstring).
@@ -452,6 +528,8 @@ def render(
         relative_illumination: include vignetting and the cos⁴ falloff (see Radiometry).
         kernel_size: PSF kernel side in pixels (method "psf").
         footprint_grid: sensor grid (per side) for the exit-pupil discs (method "ray").
+        footprints: precomputed :func:`footprints` for this sensor and these wavelengths
+            (method "ray"); default computed from the lens.
         newton_iters: Newton iterations for aspheric surfaces.
 
     Returns:
@@ -493,6 +571,7 @@ def render(
             "(the aspect ratios differ; resize or crop the scene)"
         )
     depth = _static_depth(depth)
+    lens = apertured(lens)
     key = jnp.asarray(key) if not isinstance(key, jax.Array) else key
     common = dict(resolution=(int(rows), int(cols)), spp=int(spp), patch=int(patch),
                   checkpoint=bool(checkpoint), mesh=mesh, ri=bool(relative_illumination),
@@ -501,10 +580,21 @@ def render(
     if depth is not None:
         depth = jnp.asarray(depth, scene.dtype)
     if method == "ray":
-        return _render_ray(lens, scene, key, depth, wls, pixel_size,
-                           footprint_grid=int(footprint_grid), **common)
-    return _render_psf(lens, scene, key, depth, wls, pixel_size, kernel_size=int(kernel_size),
-                       **common)
+        if footprints is None:
+            footprints = _compute_footprints(
+                lens, sensor=sensor, wavelengths=wls, grid=footprint_grid, dtype=scene.dtype,
+                newton_iters=common["newton_iters"])
+        elif footprints.e0.shape != wls.shape:
+            raise ValueError(
+                f"render: footprints for {footprints.e0.shape[0]} wavelengths, the scene has "
+                f"{wls.shape[0]} channels"
+            )
+        return _render_ray(lens, scene, key, depth, wls, pixel_size, footprints, **common)
+    ri = common.pop("ri")
+    inv, ri_map = _psf_setup(lens, depth, pixel_size, resolution=common["resolution"], ri=ri,
+                             newton_iters=common["newton_iters"])
+    return _render_psf(lens, scene, key, depth, wls, pixel_size, inv, ri_map,
+                       kernel_size=int(kernel_size), **common)
 
 
 # --------------------------------------------------------------------------------------
