@@ -100,13 +100,19 @@ def block(x):
 
 
 def time_jitted(
-    fn: Callable, *args, repeats: int = 5, min_total_s: float = 0.5, max_repeats: int = 50
+    fn: Callable,
+    *args,
+    repeats: int = 5,
+    min_total_s: float = 0.5,
+    max_repeats: int = 50,
+    warmup: bool = True,
 ) -> dict[str, float]:
     """Time an already-jitted function.
 
     The first call (trace + compile + one run) is reported as ``compile_s``; a second call
     warms caches. Then the function runs at least ``repeats`` times and until
-    ``min_total_s`` seconds have passed (at most ``max_repeats`` runs).
+    ``min_total_s`` seconds have passed (at most ``max_repeats`` runs). ``warmup=False``
+    skips the second call (for the largest sizes, where the first call already warmed up).
 
     Returns:
         ``compile_s`` (first call), ``run_s`` (best run), ``median_s``, ``repeats``,
@@ -117,7 +123,8 @@ def time_jitted(
     t0 = time.perf_counter()
     block(fn(*args))
     compile_s = time.perf_counter() - t0
-    block(fn(*args))  # warm-up
+    if warmup:
+        block(fn(*args))  # a second call warms caches and allocator pools
     runs, cpus = [], []
     total = 0.0
     while len(runs) < max_repeats and (len(runs) < repeats or total < min_total_s):
