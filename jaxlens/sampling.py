@@ -122,7 +122,7 @@ def collimated(
     direction = jnp.broadcast_to(d, origin.shape).astype(origin.dtype)
     rays = Rays(origin, direction, wl)
     if aim == "real":
-        rays = aim_at_stop(lens, rays, pupil, point_source=False)
+        rays = aim_at_stop(lens, rays, pupil)
     elif aim != "paraxial":
         raise ValueError(f"collimated: aim must be 'paraxial' or 'real', got {aim!r}")
     return rays
@@ -138,7 +138,8 @@ def point_source(
 ) -> Rays:
     """Rays from an object point (global mm, z < 0) through the paraxial entrance pupil.
 
-    The entrance pupil diameter is the lens's EPD.
+    The entrance pupil diameter is the lens's EPD. The rays are launched at their
+    entrance-pupil points, with ``opl`` already holding the path from the object point.
     """
     wl = lens.primary_wavelength if wavelength is None else jnp.asarray(wavelength)
     point = jnp.asarray(point)
@@ -146,11 +147,13 @@ def point_source(
     xy = pupil * (0.5 * lens.epd)
     target = jnp.concatenate([xy, jnp.broadcast_to(zep, xy.shape[:-1])[..., None]], -1)
     v = target - point
-    d = v / jnp.linalg.norm(v, axis=-1, keepdims=True)
-    origin = jnp.broadcast_to(point, target.shape).astype(target.dtype)
-    rays = Rays(origin, d, wl)
+    dist = jnp.linalg.norm(v, axis=-1, keepdims=True)
+    # Launch on the entrance-pupil plane (near the lens, so float32 keeps its digits for a
+    # distant object); the optical path starts at the object point.
+    n_obj = lens.object_material.index(wl)
+    rays = Rays(target, v / dist, wl, opl=n_obj * dist[..., 0])
     if aim == "real":
-        rays = aim_at_stop(lens, rays, pupil, point_source=True)
+        rays = aim_at_stop(lens, rays, pupil, source_point=point)
     elif aim != "paraxial":
         raise ValueError(f"point_source: aim must be 'paraxial' or 'real', got {aim!r}")
     return rays
@@ -179,39 +182,42 @@ def field_rays(lens: Lens, field, pupil, wavelength=None, *, depth=None, aim="pa
 
 
 def aim_at_stop(
-    lens: Lens, rays: Rays, pupil: Float[Array, "m 2"], *, point_source: bool, iters: int = 4
+    lens: Lens,
+    rays: Rays,
+    pupil: Float[Array, "m 2"],
+    *,
+    source_point: Float[Array, "3"] | None = None,
+    iters: int = 4,
 ) -> Rays:
-    """Shift launch points so that each ray crosses the real stop at pupil·(stop radius).
+    """Move launch points so that each ray crosses the real stop at pupil·(stop radius).
 
-    Newton's method on the 2D launch offset in the plane of the ray origins, with the
-    Jacobian from forward-mode autodiff of a partial trace to the stop. The direction is
-    kept for collimated beams; for a point source the origin is kept and the direction
-    re-aimed through the shifted entrance-pupil point.
+    Newton's method on the 2D launch point in the entrance-pupil plane, with the Jacobian
+    from forward-mode autodiff of a partial trace to the stop. A collimated beam keeps its
+    direction; rays from ``source_point`` (a finite object) are re-aimed from that point.
     """
     from .trace import trace_path
 
     stop_r = paraxial.paraxial_data(lens).stop_semi_diameter
     target = pupil * stop_r
-    point_src = point_source
+    zep = paraxial.entrance_pupil_z(lens)
+    n_obj = lens.object_material.index(rays.wavelength)
 
-    def launch(uv, o, d):
-        if point_src:
-            # Re-aim the direction through the shifted EP point.
-            zep = paraxial.entrance_pupil_z(lens)
-            p = jnp.array([uv[0], uv[1], zep])
-            v = p - o
-            return o, v / jnp.linalg.norm(v)
-        return o + jnp.array([uv[0], uv[1], 0.0]), d
+    def launch(uv, d):
+        p = jnp.stack([uv[0], uv[1], zep])
+        if source_point is None:
+            return p, d
+        v = p - source_point
+        return p, v / jnp.linalg.norm(v)
 
-    def at_stop(uv, o, d, w):
-        o2, d2 = launch(uv, o, d)
+    def at_stop(uv, d, w):
+        o2, d2 = launch(uv, d)
         r = trace_path(lens, Rays(o2[None], d2[None], w), upto=lens.stop)[-1]
         return r.origin[0, :2]
 
-    def solve(o, d, tgt, w, uv0):
+    def solve(uv0, d, tgt, w):
         def body(_, uv):
-            f = at_stop(uv, o, d, w) - tgt
-            jac = jax.jacfwd(at_stop)(uv, o, d, w)
+            f = at_stop(uv, d, w) - tgt
+            jac = jax.jacfwd(at_stop)(uv, d, w)
             det = jac[0, 0] * jac[1, 1] - jac[0, 1] * jac[1, 0]
             det = jnp.where(det == 0, 1.0, det)
             inv = jnp.array([[jac[1, 1], -jac[0, 1]], [-jac[1, 0], jac[0, 0]]]) / det
@@ -219,13 +225,12 @@ def aim_at_stop(
 
         return jax.lax.fori_loop(0, iters, body, uv0)
 
-    zep = paraxial.entrance_pupil_z(lens)
-    if point_src:
-        dz = zep - rays.origin[..., 2]
-        uv0 = rays.origin[..., :2] + rays.direction[..., :2] / rays.direction[..., 2:] * dz[..., None]
-    else:
-        uv0 = jnp.zeros_like(rays.origin[..., :2])
+    # Start from each ray's crossing of the entrance-pupil plane.
+    start = rays.propagate_to_z(zep).origin[..., :2]
     w = jnp.broadcast_to(rays.wavelength, rays.shape)
-    uv = jax.vmap(solve)(rays.origin, rays.direction, target, w, uv0)
-    o, d = jax.vmap(launch)(uv, rays.origin, rays.direction)
-    return Rays(o, d, rays.wavelength)
+    uv = jax.vmap(solve)(start, rays.direction, target, w)
+    o, d = jax.vmap(launch)(uv, rays.direction)
+    opl = None
+    if source_point is not None:
+        opl = n_obj * jnp.linalg.norm(o - source_point, axis=-1)
+    return Rays(o, d, rays.wavelength, opl=opl)

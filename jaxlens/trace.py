@@ -40,16 +40,32 @@ from .surfaces import AbstractSurface
 DEFAULT_NEWTON_ITERS = 6
 
 
+# No lens needs a ray parameter beyond this (mm); larger roots are treated as misses, which
+# also keeps every division below bounded, so gradients stay finite.
+T_MAX = 1e12
+
+
 def _where_nonzero(x):
     return jnp.where(x == 0, 1.0, x)
+
+
+def _bounded_div(num, den):
+    """num/den where |num/den| < T_MAX (tested without dividing), else 0; and that flag.
+
+    Guarding by size, not only by zero, keeps the unselected branch's derivative
+    (−num/den²) finite, so a tiny denominator never puts NaN into a gradient.
+    """
+    ok = jnp.abs(num) < T_MAX * jnp.abs(den)
+    return jnp.where(ok, num / jnp.where(ok, den, 1.0), 0.0), ok
 
 
 def _conic_root(surface: AbstractSurface, o, d, t_min):
     """Closed-form intersection with the base conic; returns (t, hit).
 
-    ``o`` and ``d`` are (x, y, z) tuples of arrays in the surface's local frame. Of the
-    two roots of c(x² + y²) + c(1+k)z² − 2z = 0, only those on the sheet through the
-    vertex (1 − c(1+k)z ≥ 0) and with t ≥ t_min count; the first along the ray is taken.
+    ``o`` and ``d`` are (x, y, z) tuples of arrays in the surface's local frame, with ``o``
+    near the vertex plane (see ``intersect``). Of the two roots of
+    c(x² + y²) + c(1+k)z² − 2z = 0, only those on the sheet through the vertex
+    (1 − c(1+k)z ≥ 0) and with t_min ≤ t count; the first along the ray is taken.
     """
     c, k = surface.c, surface.k
     ox, oy, oz = o
@@ -64,13 +80,13 @@ def _conic_root(surface: AbstractSurface, o, d, t_min):
     root = jnp.where(pos, jnp.sqrt(jnp.where(pos, disc, 1.0)), 0.0)
     # Stable pair of roots: t1 = cc/q stays finite as c -> 0, t2 = q/a.
     q = -b + jnp.where(b <= 0, root, -root)
-    t1 = cc / _where_nonzero(q)
-    t2 = jnp.where(a != 0, q / _where_nonzero(a), jnp.inf)
+    t1, ok1 = _bounded_div(cc, q)
+    t2, ok2 = _bounded_div(q, a)
 
-    def usable(t, exists):
-        return exists & real & (t >= t_min) & (ck * (oz + t * dz) <= 1)
+    def usable(t, bounded):
+        return bounded & real & (t >= t_min) & (ck * (oz + t * dz) <= 1)
 
-    u1, u2 = usable(t1, q != 0), usable(t2, a != 0)
+    u1, u2 = usable(t1, ok1), usable(t2, ok2)
     t = jnp.where(u1 & u2, jnp.minimum(t1, t2), jnp.where(u1, t1, t2))
     return jnp.where(u1 | u2, t, 0.0), u1 | u2
 
@@ -88,6 +104,9 @@ def intersect(
 
     The first intersection along the ray is taken; with ``first=False`` only t ≥ 0
     (up to rounding) counts, with ``first=True`` (object space) the whole line does.
+    Each ray is first carried along its line to the vertex plane, so the quadratic is
+    solved from a point near the surface: a distant origin (an object at 10 m) then loses
+    no digits to cancellation.
 
     Args:
         surface: the surface.
@@ -96,34 +115,42 @@ def intersect(
         first: whether this is the first surface (object space).
 
     Returns:
-        t: ray parameter of the intersection, ``[*batch]``.
+        t: ray parameter of the intersection (from ``o``), ``[*batch]``.
         ok: ``[*batch]`` bool, True where a valid intersection was found.
     """
     eps = jnp.finfo(o[2].dtype).eps
     t_min = -jnp.inf if first else -1e3 * jax.lax.stop_gradient(eps * (1 + jnp.abs(o[2])))
+    t_plane, _ = _bounded_div(-o[2], d[2])  # 0 for rays parallel to the plane
+    o = tuple(oi + t_plane * di for oi, di in zip(o, d, strict=True))
+    t_min = t_min - t_plane
     if not surface.has_polynomial:
         # Conics: the closed form is exact and differentiable as it stands.
-        return _conic_root(surface, o, d, t_min)
+        t, ok = _conic_root(surface, o, d, t_min)
+        return jnp.where(ok, t + t_plane, 0.0), ok
     o_s, d_s = jax.lax.stop_gradient((o, d))
     surf_s = jax.lax.stop_gradient(surface)
     t0, hit = _conic_root(surf_s, o_s, d_s, t_min)
-    # Rays that miss the base conic start Newton from the vertex plane.
-    plane_t = -o_s[2] / _where_nonzero(d_s[2])
-    t0 = jnp.where(hit, t0, plane_t)
+    # Rays that miss the base conic start Newton from the vertex plane (t = 0 now).
+    t0 = jnp.where(hit, t0, 0.0)
 
     def step(_, t):
         f, df, _ = _residual(surf_s, o_s, d_s, t)
-        return t - f / _where_nonzero(df)
+        dt, _ = _bounded_div(f, df)
+        return t - dt
 
     t0 = jax.lax.fori_loop(0, newton_iters, step, t0)
-    # One differentiable step with F' held fixed: the implicit-function gradient.
     f0, df0, _ = _residual(surf_s, o_s, d_s, t0)
-    df0 = jax.lax.stop_gradient(_where_nonzero(df0))
+    scale = 1.0 + jnp.abs(t0)
+    ok = (jnp.abs(f0) <= 64 * jnp.sqrt(eps) * scale) & jnp.isfinite(f0) & (df0 != 0)
+    ok = ok & (t0 >= t_min)
+    # Flagged rays take the last step at a harmless point, so their gradient stays finite.
+    t0 = jnp.where(ok, t0, 0.0)
+    df0 = jax.lax.stop_gradient(jnp.where(ok, df0, 1.0))
+    # One differentiable step with F' held fixed: the implicit-function gradient.
     f, _, inside = _residual(surface, o, d, t0)
     t = t0 - f / df0
-    scale = 1.0 + jnp.abs(o_s[2]) + jnp.abs(t0)
-    ok = inside & (jnp.abs(f0) <= 64 * jnp.sqrt(eps) * scale) & jnp.isfinite(t0)
-    return jnp.where(ok, t, 0.0), ok
+    ok = ok & inside
+    return jnp.where(ok, t + t_plane, 0.0), ok
 
 
 def refract(d, normal, mu):

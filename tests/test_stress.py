@@ -151,15 +151,11 @@ class TestDegenerate:
         fd = (float(y_sum(jnp.asarray(h))) - float(y_sum(jnp.asarray(-h)))) / (2 * h)
         assert np.isfinite(g) and g == pytest.approx(fd, rel=1e-6, abs=1e-9)
 
-    @pytest.mark.xfail(strict=True, reason="core bug (notes/bugs.md #1): NaN gradient when a "
-                       "denominator in _conic_root is tiny but not zero")
     def test_gradient_finite_for_tiny_curvature(self):
         o, d = axial_rays(np.linspace(-4, 4, 8), angle_deg=10.0)
         for c in (1e-160, 1e-300):
             run_checked(lens_a(c1=c, c2=0.0), o, d, what=f"c={c}")
 
-    @pytest.mark.xfail(strict=True, reason="core bug (notes/bugs.md #1): NaN gradient when a "
-                       "denominator in _conic_root is tiny but not zero")
     def test_gradient_finite_for_ray_almost_perpendicular_to_axis(self):
         o = np.zeros((8, 3))
         o[:, 2] = -5.0
@@ -270,8 +266,6 @@ class TestAspheres:
             assert sag_residual(lens.surfaces[0], path[0].origin)[ok].max(initial=0) < 1e-9
             assert ok[7:9].all()  # near the axis the asphere is tame
 
-    @pytest.mark.xfail(strict=True, reason="core bug (notes/bugs.md #2): a flagged asphere "
-                       "ray started from a far conic root gives NaN gradients")
     def test_gradient_finite_for_flagged_asphere_ray(self):
         o = np.tile([0.0, -0.5, -5.0], (16, 1))
         d = np.tile([0.9, -0.3, 0.3], (16, 1))
@@ -295,14 +289,8 @@ class TestAspheres:
 N_RANDOM_RAYS = 32
 
 
-# Curvatures with 0 < |c| < 1e-40 are left out of the random lenses until bugs #1 and #2
-# (notes/bugs.md; the xfail tests above and below) are fixed; then drop this filter.
-_TINY = 1e-40
-
-
 def _curvature():
-    return st.one_of(st.floats(-0.15, 0.15).filter(lambda c: c == 0.0 or abs(c) > _TINY),
-                     st.sampled_from([0.0, 1e-12, -1e-12, 1e-30]))
+    return st.one_of(st.floats(-0.15, 0.15), st.sampled_from([0.0, 1e-12, -1e-12, 1e-30, 1e-300]))
 
 
 def _conic():
@@ -329,7 +317,7 @@ def random_lens(draw):
         materials=(air, ModelGlass(n1, v1), ModelGlass(n2, v2), air),
         stop=0,
         epd=4.0,
-        image=Standard(draw(st.floats(-0.05, 0.05).filter(lambda c: c == 0.0 or abs(c) > _TINY)),
+        image=Standard(draw(st.floats(-0.05, 0.05)),
                        0.0, INF),
     )
 
@@ -427,14 +415,18 @@ def test_float32_within_bound_of_float64(name):
     assert dd < F32_DIRECTION, f"{name}: float32 directions off by {dd:.3g}"
 
 
-@pytest.mark.xfail(strict=True, reason="core bug (notes/bugs.md #3): the conic root loses "
-                   "precision for rays that start far from the surface")
 def test_far_object_point_source_precision():
-    """A point source 10 m away traced from the object point, against the same rays moved
-    (in float64) to z = −1 mm first: float32 within the intercept bound."""
+    """A point source 1 m away traced from the object point, against the same rays moved
+    (in float64) to z = −1 mm first: float32 within the intercept bound.
+
+    (At 10 m the float32 origin itself is only good to |o|·eps ≈ 1e-3 mm along the ray, so
+    the bound cannot hold there; ``sampling.point_source`` launches rays on the entrance
+    pupil for that reason, and float64 agrees to 3e-13 mm at 10 m.)"""
     lens = zoo.cooke_triplet()
-    r = sampling.point_source(lens, sampling.object_point(lens, 14.0, 1e4),
+    r = sampling.point_source(lens, sampling.object_point(lens, 14.0, 1e3),
                               0.999 * sampling.pupil_grid(7))
+    point = sampling.object_point(lens, 14.0, 1e3)
+    r = jaxlens.Rays(jnp.broadcast_to(point, r.origin.shape), r.direction, r.wavelength)
     t = (-1.0 - r.origin[:, 2]) / r.direction[:, 2]
     near = r.origin + t[:, None] * r.direction
     f32 = jnp.float32

@@ -276,3 +276,24 @@ def test_finite_object_images_at_gaussian_conjugate():
     out = jl.trace(lens, rays)
     # Near-paraxial rays meet on the axis at the paraxial image (third-order residual).
     assert np.abs(np.asarray(out.origin[:, :2])).max() < 1e-6
+
+
+def test_real_aiming_from_a_finite_object():
+    lens = eqx_tree_at_object(_asphere_lens(), 500.0)
+    pupil = jnp.array([[0.0, 1.0], [0.0, -1.0], [1.0, 0.0]])
+    point = jl.sampling.object_point(lens, 10.0, 500.0)
+    rays = jl.sampling.point_source(lens, point, pupil, aim="real")
+    at_stop = jl.trace_path(lens, rays, upto=lens.stop)[-1]
+    r_stop = jl.paraxial_data(lens).stop_semi_diameter
+    np.testing.assert_allclose(np.asarray(at_stop.origin[:, :2]), np.asarray(pupil * r_stop),
+                               atol=1e-9)
+    # Every ray still comes from the object point, and opl starts there.
+    back = rays.origin - (rays.opl[:, None]) * rays.direction
+    np.testing.assert_allclose(np.asarray(back), np.broadcast_to(np.asarray(point), back.shape),
+                               atol=1e-9)
+
+
+def eqx_tree_at_object(lens, distance):
+    return jl.Lens(lens.surfaces, lens.thickness, lens.materials, stop=lens.stop, epd=lens.epd,
+                   fields=lens.fields, wavelengths=lens.wavelengths, primary=lens.primary,
+                   object_distance=distance)
