@@ -15,6 +15,8 @@ from __future__ import annotations
 
 import os
 import pathlib
+import struct
+import zlib
 
 import numpy as np
 
@@ -134,7 +136,7 @@ def _write_channels(path, data):
 
 
 def read_png(path, *, linear: bool = True) -> np.ndarray:
-    """Read a PNG (or any format skimage.io reads) as float32.
+    """Read a PNG file (8 or 16 bits per channel) as float32.
 
     Args:
         path: the file.
@@ -150,8 +152,13 @@ def read_png(path, *, linear: bool = True) -> np.ndarray:
     from skimage import io
 
     p = _check_readable(path, "read_png")
+    with open(p, "rb") as f:
+        if f.read(8) != b"\x89PNG\r\n\x1a\n":
+            raise ValueError(f"read_png: {p} is not a readable image (no PNG signature)")
     try:
-        a = io.imread(str(p))
+        a = _read_png16(p)
+        if a is None:
+            a = io.imread(str(p))
     except Exception as e:
         raise ValueError(f"read_png: {p} is not a readable image ({e})") from None
     if a.ndim == 3 and a.shape[-1] == 4:
@@ -164,24 +171,101 @@ def read_png(path, *, linear: bool = True) -> np.ndarray:
 
 
 def write_png(path, img, *, linear: bool = True, bits: int = 8) -> None:
-    """Write an image to PNG.
+    """Write an image to PNG (8 or 16 bits per channel, grey, grey+alpha, RGB or RGBA).
 
     Args:
         path: the file.
-        img: ``[H, W]`` or ``[H, W, 3]`` values in [0, 1] (clipped).
+        img: ``[H, W]`` or ``[H, W, C]`` (C = 1…4) values in [0, 1] (clipped).
         linear: the values are linear light and get the sRGB curve (default); False writes
             them as they are.
         bits: 8 or 16.
     """
-    from skimage import io
-
     if bits not in (8, 16):
         raise ValueError(f"write_png: bits must be 8 or 16, got {bits}")
     a = np.asarray(img, np.float64)
+    if a.ndim == 3 and a.shape[-1] == 1:
+        a = a[..., 0]
+    if a.ndim not in (2, 3) or (a.ndim == 3 and a.shape[-1] > 4):
+        raise ValueError(f"write_png: image must be [H, W] or [H, W, C<=4], got {a.shape}")
     v = linear_to_srgb(a) if linear else np.clip(a, 0.0, 1.0)
-    dt = np.uint8 if bits == 8 else np.uint16
-    io.imsave(str(os.fspath(path)), np.round(v * np.iinfo(dt).max).astype(dt),
-              check_contrast=False)
+    top = 2**bits - 1
+    q = np.round(v * top).astype(">u2" if bits == 16 else np.uint8)
+    h, w = q.shape[:2]
+    c = 1 if q.ndim == 2 else q.shape[-1]
+    color_type = {1: 0, 2: 4, 3: 2, 4: 6}[c]
+    rows = q.reshape(h, -1).view(np.uint8).reshape(h, -1)
+    data = b"".join(b"\x00" + r.tobytes() for r in rows)  # filter type 0 on every row
+
+    def chunk(tag, payload):
+        crc = zlib.crc32(tag + payload) & 0xFFFFFFFF
+        return struct.pack(">I", len(payload)) + tag + payload + struct.pack(">I", crc)
+
+    ihdr = struct.pack(">IIBBBBB", w, h, bits, color_type, 0, 0, 0)
+    png = (b"\x89PNG\r\n\x1a\n" + chunk(b"IHDR", ihdr) + chunk(b"IDAT", zlib.compress(data, 6))
+           + chunk(b"IEND", b""))
+    pathlib.Path(os.fspath(path)).write_bytes(png)
+
+
+def _unfilter(raw: bytes, h: int, stride: int, bpp: int) -> np.ndarray:
+    """Undo the PNG row filters (types 0–4) of a non-interlaced image."""
+    buf = np.frombuffer(raw, np.uint8).reshape(h, stride + 1)
+    out = np.zeros((h, stride), np.uint8)
+    prior = np.zeros(stride, np.int32)
+    for y in range(h):
+        ftype, row = buf[y, 0], buf[y, 1:].astype(np.int32)
+        if ftype == 0:
+            cur = row
+        elif ftype == 1:  # Sub: running sum along each byte lane
+            cur = np.concatenate([np.cumsum(row[k::bpp]) for k in range(bpp)])
+            cur = cur.reshape(bpp, -1).T.reshape(-1) if stride % bpp == 0 else cur
+        elif ftype == 2:
+            cur = row + prior
+        elif ftype in (3, 4):
+            cur = np.zeros(stride, np.int32)
+            for i in range(0, stride, bpp):
+                left = cur[i - bpp : i] if i else np.zeros(bpp, np.int32)
+                up = prior[i : i + bpp]
+                if ftype == 3:
+                    pred = (left + up) // 2
+                else:
+                    ul = prior[i - bpp : i] if i else np.zeros(bpp, np.int32)
+                    p = left + up - ul
+                    pa, pb, pc = np.abs(p - left), np.abs(p - up), np.abs(p - ul)
+                    pred = np.where((pa <= pb) & (pa <= pc), left, np.where(pb <= pc, up, ul))
+                cur[i : i + bpp] = (row[i : i + bpp] + pred) & 0xFF
+        else:
+            raise ValueError(f"unknown PNG filter type {ftype}")
+        cur = cur & 0xFF
+        out[y] = cur
+        prior = cur.astype(np.int32)
+    return out
+
+
+def _read_png16(p: pathlib.Path):
+    """Decode a non-interlaced 16-bit PNG (imageio/Pillow reduce 16-bit colour to 8 bits)."""
+    data = p.read_bytes()
+    if data[:8] != b"\x89PNG\r\n\x1a\n":
+        return None
+    pos, idat, hdr = 8, [], None
+    while pos + 8 <= len(data):
+        n, tag = struct.unpack(">I4s", data[pos : pos + 8])
+        payload = data[pos + 8 : pos + 8 + n]
+        if tag == b"IHDR":
+            hdr = struct.unpack(">IIBBBBB", payload)
+        elif tag == b"IDAT":
+            idat.append(payload)
+        pos += 12 + n
+    if hdr is None:
+        return None
+    w, h, bits, color_type, _, _, interlace = hdr
+    channels = {0: 1, 2: 3, 4: 2, 6: 4}.get(color_type)
+    if bits != 16 or channels is None or interlace:
+        return None
+    raw = zlib.decompress(b"".join(idat))
+    bpp = 2 * channels
+    rows = _unfilter(raw, h, w * bpp, bpp)
+    a = rows.reshape(h, w * channels * 2).view(">u2").reshape(h, w, channels).astype(np.uint16)
+    return a[..., 0] if channels == 1 else a
 
 
 def scene(name: str = "astronaut", size: tuple[int, int] | None = None) -> np.ndarray:
@@ -226,6 +310,8 @@ def psnr(reference, test, *, data_range=None) -> float:
     a, b = np.asarray(reference, np.float64), np.asarray(test, np.float64)
     if a.shape != b.shape:
         raise ValueError(f"psnr: shapes differ: {a.shape} and {b.shape}")
+    if np.array_equal(a, b):
+        return float("inf")
     return float(peak_signal_noise_ratio(a, b, data_range=_data_range(a, b, data_range)))
 
 

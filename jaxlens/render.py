@@ -546,6 +546,8 @@ def render(
         raise ValueError(f"render: spp must be a positive int, got {spp!r}")
     if not isinstance(patch, int) or patch < 1:
         raise ValueError(f"render: patch must be a positive int, got {patch!r}")
+    if mesh is not None and not isinstance(mesh, Mesh):
+        raise ValueError(f"render: mesh must be a jax.sharding.Mesh or None, got {mesh!r}")
     sensor = lens.sensor if sensor is None else sensor
     if sensor is None:
         raise ValueError("render: the lens has no sensor; pass sensor=jaxlens.Sensor(...)")
