@@ -27,15 +27,32 @@ from collections.abc import Sequence
 import equinox as eqx
 import jax
 import jax.numpy as jnp
+import numpy as np
 from jaxtyping import Array, Float, PRNGKeyArray
 
 _DIMS = ("NHWC", "HWIO", "NHWC")
 
 
-def _uniform(key, shape, fan_in, dtype):
-    """He-uniform-like init as in PyTorch's default conv init (bound 1/sqrt(fan_in))."""
+def _generator(key) -> np.random.Generator:
+    """A NumPy generator seeded from a JAX PRNG key (or the generator itself).
+
+    Parameters are drawn on the host: a network has dozens of differently shaped arrays,
+    and drawing each with ``jax.random`` would compile one small program per shape.
+    """
+    if isinstance(key, np.random.Generator):
+        return key
+    if isinstance(key, jax.core.Tracer):
+        raise ValueError("NAFNet: parameters are drawn on the host; build the network "
+                         "outside jit/eval_shape (it takes well under a second)")
+    data = np.asarray(jax.random.key_data(key) if jax.dtypes.issubdtype(
+        key.dtype, jax.dtypes.prng_key) else key, np.uint32)
+    return np.random.default_rng(data.ravel().tolist())
+
+
+def _uniform(gen: np.random.Generator, shape, fan_in, dtype):
+    """Uniform init with bound 1/sqrt(fan_in), as PyTorch's default for convolutions."""
     bound = 1.0 / math.sqrt(fan_in)
-    return jax.random.uniform(key, shape, dtype, -bound, bound)
+    return jnp.asarray(gen.uniform(-bound, bound, shape), dtype)
 
 
 class Conv(eqx.Module):
@@ -54,10 +71,10 @@ class Conv(eqx.Module):
 
     def __init__(self, c_in: int, c_out: int, kernel: int, *, stride: int = 1, key, dtype=None):
         dtype = dtype or jnp.result_type(float)
-        kw, kb = jax.random.split(key)
+        gen = _generator(key)
         fan_in = c_in * kernel * kernel
-        self.weight = _uniform(kw, (kernel, kernel, c_in, c_out), fan_in, dtype)
-        self.bias = _uniform(kb, (c_out,), fan_in, dtype)
+        self.weight = _uniform(gen, (kernel, kernel, c_in, c_out), fan_in, dtype)
+        self.bias = _uniform(gen, (c_out,), fan_in, dtype)
         self.stride = stride
 
     def __call__(self, x: Float[Array, "H W ci"]) -> Float[Array, "h w co"]:
@@ -77,9 +94,9 @@ class Pointwise(eqx.Module):
 
     def __init__(self, c_in: int, c_out: int, *, key, dtype=None):
         dtype = dtype or jnp.result_type(float)
-        kw, kb = jax.random.split(key)
-        self.weight = _uniform(kw, (c_in, c_out), c_in, dtype)
-        self.bias = _uniform(kb, (c_out,), c_in, dtype)
+        gen = _generator(key)
+        self.weight = _uniform(gen, (c_in, c_out), c_in, dtype)
+        self.bias = _uniform(gen, (c_out,), c_in, dtype)
 
     def __call__(self, x: Float[Array, "*s ci"]) -> Float[Array, "*s co"]:
         return x @ self.weight.astype(x.dtype) + self.bias.astype(x.dtype)
@@ -93,9 +110,9 @@ class Depthwise(eqx.Module):
 
     def __init__(self, channels: int, *, key, dtype=None):
         dtype = dtype or jnp.result_type(float)
-        kw, kb = jax.random.split(key)
-        self.weight = _uniform(kw, (3, 3, channels), 9, dtype)
-        self.bias = _uniform(kb, (channels,), 9, dtype)
+        gen = _generator(key)
+        self.weight = _uniform(gen, (3, 3, channels), 9, dtype)
+        self.bias = _uniform(gen, (channels,), 9, dtype)
 
     def __call__(self, x: Float[Array, "H W c"]) -> Float[Array, "H W c"]:
         h, w, _ = x.shape
@@ -151,7 +168,7 @@ class NAFBlock(eqx.Module):
 
     def __init__(self, channels: int, *, dw_expand: int = 2, ffn_expand: int = 2, key, dtype=None):
         dtype = dtype or jnp.result_type(float)
-        k = jax.random.split(key, 6)
+        k = [_generator(key)] * 6
         c, dw_c, ffn_c = channels, channels * dw_expand, channels * ffn_expand
         self.norm1 = LayerNorm2d(c, dtype=dtype)
         self.expand = Pointwise(c, dw_c, key=k[0], dtype=dtype)
@@ -234,7 +251,7 @@ class NAFNet(eqx.Module):
         enc_blocks: Sequence[int] = (1, 1, 1),
         middle_blocks: int = 1,
         dec_blocks: Sequence[int] = (1, 1, 1),
-        key: PRNGKeyArray,
+        key: PRNGKeyArray | np.random.Generator,
         dtype=None,
     ):
         if in_channels != out_channels:
@@ -250,8 +267,8 @@ class NAFNet(eqx.Module):
         if width < 1 or any(n < 0 for n in (*enc_blocks, *dec_blocks, middle_blocks)):
             raise ValueError(f"NAFNet: width must be >= 1 and block counts >= 0, got {width}")
         dtype = dtype or jnp.result_type(float)
-        keys = iter(jax.random.split(key, 4 + 2 * len(enc_blocks) + sum(enc_blocks)
-                                     + sum(dec_blocks) + middle_blocks))
+        gen = _generator(key)
+        keys = iter(lambda: gen, None)  # one host generator, drawn from in order
         self.intro = Conv(in_channels, width, 3, key=next(keys), dtype=dtype)
         encoders, downs = [], []
         c = width
@@ -300,6 +317,8 @@ class NAFNet(eqx.Module):
 
 
 def num_parameters(model: eqx.Module) -> int:
-    """Number of scalar parameters (inexact array leaves) in a model."""
-    leaves = jax.tree_util.tree_leaves(eqx.filter(model, eqx.is_inexact_array))
-    return int(sum(x.size for x in leaves))
+    """Number of scalar parameters (floating-point array leaves) of a model, or of its
+    ``eqx.filter_eval_shape`` skeleton."""
+    leaves = jax.tree_util.tree_leaves(model)
+    return int(sum(x.size for x in leaves
+                   if hasattr(x, "dtype") and jnp.issubdtype(x.dtype, jnp.inexact)))

@@ -241,7 +241,9 @@ def plot_progress(history, *, title: str | None = None) -> Figure:
         if r.size == 0:
             continue
         steps = offset + np.arange(r.shape[0])
-        ax.plot(steps, r * 1e3, lw=0.8)
+        r = r.reshape(r.shape[0], -1)
+        for j in range(r.shape[1]):
+            ax.plot(steps, r[:, j] * 1e3, lw=0.8, color=f"C{j % 10}")
         ax.axvline(offset, color="k", lw=0.5, alpha=0.4)
         ax.text(offset, 1.0, name, rotation=90, fontsize=6, va="top",
                 transform=ax.get_xaxis_transform())

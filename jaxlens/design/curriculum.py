@@ -159,6 +159,12 @@ def stage_args(spec: DesignSpec, stage: Stage, weights, reg_weights, dtype) -> S
     )
 
 
+def _seed_sharding(mesh):
+    from jax.sharding import NamedSharding, PartitionSpec
+
+    return NamedSharding(mesh, PartitionSpec("seeds"))
+
+
 def _over_seeds(fn, mesh, n_batched: int, n_replicated: int):
     """Apply ``fn`` to every device's block of seeds with ``shard_map`` (no communication).
 
@@ -255,8 +261,10 @@ def run(
             stage, then cosine decay to ``end_lr`` × the peak.
         progress: show a tqdm bar with stage, loss and RMS.
         seeds: seed labels for error messages.
-        mesh: a one-axis ``("seeds",)`` device mesh; each device then updates its block of
-            seeds independently (``shard_map``), with no cross-device communication.
+        mesh: a one-axis ``("seeds",)`` device mesh; in Adam stages each device then updates
+            its block of seeds independently (``shard_map``, no cross-device communication);
+            least-squares and L-BFGS-B stages run on the mesh's first device (their dense
+            linear algebra can deadlock XLA's CPU runtime when host devices run it at once).
         callback: called as ``callback(stage_index, stage, params)`` after every stage.
 
     Raises:
@@ -279,6 +287,15 @@ def run(
         if stage.loss not in objectives:
             raise ValueError(f"run: stage {stage.name!r} needs a {stage.loss!r} objective")
         solver = make_solver(stage.solver, stage.lr, objectives[stage.loss])
+        # Least-squares and quasi-Newton stages run on one device: their dense linear algebra
+        # can deadlock XLA's CPU runtime when several host devices run it at once.
+        smesh = mesh if stage.solver == "adam" else None
+        if mesh is not None:
+            target = mesh.devices.flat[0] if smesh is None else None
+            if target is not None:
+                params = jax.device_put(params, target)
+            else:
+                params = jax.device_put(params, _seed_sharding(mesh))
         args = stage_args(spec, stage, ones, reg_weights, dtype)
         sched = optax.warmup_cosine_decay_schedule(
             0.0, 1.0, max(1, int(warmup * stage.steps)), max(2, stage.steps), end_lr)
@@ -287,13 +304,13 @@ def run(
         done = 0
         for step in range(stage.steps):
             if step % epoch == 0:
-                rms = _vrms(objective, params, args, mesh)
+                rms = _vrms(objective, params, args, smesh)
                 w, scale = _reweight(rms, area, stage.mask, irls)
                 args = eqx.tree_at(lambda a: (a.field_weights, a.spot_scale), args, (w, scale))
                 if state is None or stage.solver not in ("adam", "lm"):
-                    state = _vinit(solver, params, args, mesh)
+                    state = _vinit(solver, params, args, smesh)
             lr = jnp.asarray(float(sched(step)), dtype)
-            params, state, aux = _vstep(solver, params, state, args, lr, mesh)
+            params, state, aux = _vstep(solver, params, state, args, lr, smesh)
             losses.append(aux.loss)
             rmss.append(jnp.sqrt(aux.spot))
             if (step + 1) % log_every == 0 or step + 1 == stage.steps:

@@ -12,18 +12,19 @@ Ray loss:
     weighted by the share of the 16 × 16 evaluation grid at that radius (so the loss is the
     radial stand-in of the 256-field mean), at every design wavelength, over the half pupil
     x ≥ 0 (points on x = 0 count once, the others twice: the spot is symmetric in x). Per
-    field the
-    polychromatic mean square spot error is
+    field the polychromatic mean square spot error is
 
-        MS_k = Σ_{w,p} v·ω_p |p − ref_k|² / Σ_{w,p} v·ω_p,
+        MS_k = Σ_{w,p} ω_p e²_{wp} / Σ_{w,p} ω_p,
 
-    with v the ray's validity and ω_p the pupil weight. The reference blends the ideal
-    (distortion-free, pinhole) image point (0, f·tan θ_k), f the spec's focal length, and
-    the polychromatic centroid: ``ref = beta·centroid + (1 − beta)·ideal``. With the
-    centroid reference, ``pin`` adds the squared miss of the full-field centroid height from
-    the sensor's (stage) half diagonal, so the field still fills the sensor while
-    distortion relaxes. The loss is Σ_k w_k·MS_k (w_k normalised to sum 1), and its
-    residual form (for least squares) has the same sum of squares.
+    with ω_p the pupil weight and e = |p − ref_k| for a ray that reaches the image, or a
+    fixed EPD/2 for a ray that fails (so vignetting or losing rays never pays). The
+    reference blends the ideal (distortion-free, pinhole) image point (0, f·tan θ_k), f the
+    spec's focal length, and the polychromatic centroid:
+    ``ref = beta·centroid + (1 − beta)·ideal``. With the centroid reference, ``pin`` adds
+    the squared miss of the full-field centroid height from the sensor's (stage) half
+    diagonal, so the field still fills the sensor while distortion relaxes. The loss is
+    ``spot_scale · Σ_k w_k·MS_k`` (w_k normalised to sum 1) plus the pin and the weighted
+    regularizers; its residual form (for least squares) has the same sum of squares.
 """
 
 from __future__ import annotations
@@ -171,22 +172,27 @@ def spot_errors(path: Rays, sampling: RayLoss, args: StageArgs) -> SpotResult:
     """Spot residuals on the image surface from a traced path (see module docstring)."""
     img = jax.tree.map(lambda x: x[-1] if x.ndim else x, path)
     p = img.origin[..., :2]  # [K, W, P, 2]
-    v = img.valid.astype(p.dtype) * sampling.pupil_weights  # [K, W, P]
-    vsum = jnp.sum(v, axis=(1, 2))  # [K]
-    safe = jnp.maximum(vsum, 1e-12)
+    valid = img.valid
+    pw = jnp.broadcast_to(sampling.pupil_weights, valid.shape).astype(p.dtype)
+    v = valid.astype(p.dtype) * pw  # [K, W, P]
+    safe = jnp.maximum(jnp.sum(v, axis=(1, 2)), 1e-12)  # [K]
+    total = jnp.sum(pw, axis=(1, 2))  # [K]
     cen = jnp.sum(v[..., None] * p, axis=(1, 2)) / safe[:, None]  # [K, 2]
     tan = sampling.fracs * args.tan_max
     ideal = jnp.stack([jnp.zeros_like(tan), args.focal * tan], -1)
     ref = args.beta * cen + (1.0 - args.beta) * ideal
-    err = p - ref[:, None, None, :]
-    ms = jnp.sum(v * jnp.sum(err**2, -1), axis=(1, 2)) / safe
+    err = jnp.where(valid[..., None], p - ref[:, None, None, :], 0.0)
+    # A ray that fails is charged a fixed error of half the entrance pupil diameter, so that
+    # losing rays never lowers the loss (it carries no gradient).
+    miss = 0.5 * args.epd
+    err = jnp.where(valid[..., None], err, jnp.stack([miss, 0.0 * miss]).astype(p.dtype))
+    ms = jnp.sum(pw * jnp.sum(err**2, -1), axis=(1, 2)) / total
     w = args.field_weights / jnp.maximum(jnp.sum(args.field_weights), 1e-12)
-    scale = jnp.sqrt(args.spot_scale * w / safe)[:, None, None] * jnp.sqrt(v)
+    scale = jnp.sqrt(args.spot_scale * w / total)[:, None, None] * jnp.sqrt(pw)
     residuals = err * scale[..., None]
     height = args.focal * args.tan_max  # stage half diagonal on the sensor
     pin = jnp.sqrt(args.pin * args.spot_scale) * (cen[-1, 1] - height)
-    frac = jnp.sum(img.valid.astype(p.dtype) * sampling.pupil_weights, axis=(1, 2)) / (
-        sampling.wavelengths.shape[0] * jnp.sum(sampling.pupil_weights))
+    frac = jnp.sum(v, axis=(1, 2)) / total
     return SpotResult(residuals, ms, frac, cen[:, 1], pin)
 
 

@@ -58,9 +58,9 @@ class DesignConfig:
     n_fields: int = 9
     rings: int = 4
     curriculum_n: int = 3
-    steps: int = 300
-    final_steps: int = 600
-    polish_steps: int = 40
+    steps: int = 450
+    final_steps: int = 1200
+    polish_steps: int = 80
     curriculum: bool = True
     regularize: bool = True
     mask: bool = True

@@ -18,9 +18,10 @@ phase plate at the aperture: the sag a·(x³ + y³) added to that same surface, 
 0.01 mm behind the stop, with nothing else changed. All three lenses thus share one
 structure (and one compiled training step); the classical lens has all odd terms at zero.
 
-The trainable parameters live apart from the lens (``HybridParams``, ``CubicParams``), scaled
-to order 1: a curvature times the normalisation radius R, and each polynomial coefficient as
-the sag (in units of ``SAG_SCALE``) that its term adds at R. ``apply`` writes them back.
+The trainable parameters live apart from the lens (``HybridParams``, with ``gates`` saying
+which of them each lens may change), scaled to order 1: a curvature times the normalisation
+radius R, and each polynomial coefficient as the sag (in units of ``SAG_SCALE``) that its
+term adds at R. ``apply`` writes them back.
 """
 
 from __future__ import annotations
@@ -214,41 +215,43 @@ class HybridParams(eqx.Module):
         return eqx.tree_at(lambda m: (m.surfaces[self.index], m.thickness), lens, (new, t))
 
 
-class CubicParams(eqx.Module):
-    """The cubic phase plate at the aperture: one strength and the sensor shift.
+def gates(params: HybridParams, kind: str) -> tuple[HybridParams, Array]:
+    """Which parameters a lens may change: a gate pytree (1 trainable, 0 frozen) and a tie.
 
-    The plate's sag a·(x³ + y³) is carried by the odd terms of the (``Hybrid``) first lens
-    surface, which sits just behind the stop, so the plate is a thin cubic phase element at
-    the aperture. ``strength`` is the sag of a·x³ at R over ``SAG_SCALE``; the higher odd
-    terms stay zero and the even part of the surface stays as it is.
+    ``kind`` is "classical" (nothing moves), "hybrid" (everything moves) or "cubic" (the
+    cubic phase plate at the aperture: only the x³ and y³ terms, tied to one strength a of
+    the sag a·(x³ + y³), and the sensor position move). The classical lens and the cubic
+    plate are thus the same ``HybridParams`` (and share one compiled training step); a lens
+    starts as ``to_hybrid(classical, cubic=a)``. With ``tie = 1`` the gradients of the x³
+    and y³ coefficients are replaced by their mean (``apply_gates``), so Adam moves them
+    together.
     """
+    ones = jax.tree_util.tree_map(jnp.ones_like, params)
+    zeros = jax.tree_util.tree_map(jnp.zeros_like, params)
+    dtype = params.c.dtype
+    if kind == "hybrid":
+        gate, tie = ones, 0.0
+    elif kind == "classical":
+        gate, tie = zeros, 0.0
+    elif kind == "cubic":
+        first = jnp.zeros_like(params.odd_x).at[0].set(1.0)
+        gate = eqx.tree_at(lambda p: (p.odd_x, p.odd_y, p.focus), zeros,
+                           (first, first, jnp.ones_like(params.focus)))
+        tie = 1.0
+    else:
+        raise ValueError(f"gates: kind must be classical, cubic or hybrid, got {kind!r}")
+    gate = eqx.tree_at(lambda p: p.radius, gate, jnp.zeros_like(params.radius))
+    return gate, jnp.asarray(tie, dtype)
 
-    strength: Float[Array, ""]
-    focus: Float[Array, ""]
-    radius: Float[Array, ""] = eqx.field(converter=jnp.asarray)
-    index: int = eqx.field(static=True)
 
-    @classmethod
-    def from_lens(cls, lens: Lens, *, index: int | None = None) -> CubicParams:
-        """Parameters of a lens whose first lens surface is a ``Hybrid`` (``to_hybrid``)."""
-        i = first_lens_surface(lens) if index is None else index
-        s = lens.surfaces[i]
-        if not isinstance(s, Hybrid):
-            raise ValueError(f"CubicParams: surface {i} is a {type(s).__name__}, not Hybrid")
-        r = jnp.asarray(0.5 * lens.epd)
-        return cls(strength=s.odd_x[0] * r**3 / SAG_SCALE, focus=jnp.zeros_like(s.c),
-                   radius=r, index=i)
-
-    def apply(self, lens: Lens) -> Lens:
-        """Write the plate into ``lens`` (the lens it was taken from)."""
-        s = lens.surfaces[self.index]
-        r = jax.lax.stop_gradient(self.radius).astype(self.strength.dtype)
-        a = self.strength * SAG_SCALE / r**3
-        odd = jnp.zeros(s.odd_x.shape, a.dtype).at[0].set(a)
-        new = Hybrid(c=s.c, k=s.k, coeffs=s.coeffs, odd_x=odd, odd_y=odd,
-                     semi_diameter=s.semi_diameter)
-        t = lens.thickness.at[-1].add(self.focus * SAG_SCALE)
-        return eqx.tree_at(lambda m: (m.surfaces[self.index], m.thickness), lens, (new, t))
+def apply_gates(grads: HybridParams, gate: HybridParams, tie) -> HybridParams:
+    """Gradients masked by ``gate``, with the cubic x³/y³ pair averaged where ``tie`` is 1."""
+    gx, gy = grads.odd_x, grads.odd_y
+    mean = 0.5 * (gx[0] + gy[0])
+    gx = gx.at[0].set((1 - tie) * gx[0] + tie * mean)
+    gy = gy.at[0].set((1 - tie) * gy[0] + tie * mean)
+    grads = eqx.tree_at(lambda p: (p.odd_x, p.odd_y), grads, (gx, gy))
+    return jax.tree_util.tree_map(lambda g, m: g * m.astype(g.dtype), grads, gate)
 
 
 # --------------------------------------------------------------------------------------

@@ -19,6 +19,7 @@ pre-warped scene (``jaxlens.distortion_relax.relaxed_render``).
 
 from __future__ import annotations
 
+import equinox as eqx
 import jax
 import jax.numpy as jnp
 import numpy as np
@@ -152,18 +153,20 @@ def render_image(lens: Lens, scene, depth, key, *, kernel_size: int, spp: int = 
 # --------------------------------------------------------------------------------------
 # PSF analysis
 # --------------------------------------------------------------------------------------
+@eqx.filter_jit
+def _psf_points(lens, pts, depth, *, kernel_size, pixel_size, pupil):
+    return jax.vmap(lambda p: rgb_psf(lens, p, depth, kernel_size=kernel_size,
+                                      pixel_size=pixel_size, pupil=pupil))(pts)
+
+
 def psf_stack(lens: Lens, points, depths_mm, *, kernel_size: int, pixel_size: float,
               pupil: int = 128) -> np.ndarray:
     """RGB PSFs ``[D, F, 3, k, k]`` at ``depths_mm`` (from the stop) and sensor ``points``
     ``[F, 2]`` (mm), without jitter."""
     pts = jnp.asarray(points, lens.epd.dtype)
-
-    @jax.jit
-    def one_depth(lens, d):
-        return jax.vmap(lambda p: rgb_psf(lens, p, d, kernel_size=kernel_size,
-                                          pixel_size=pixel_size, pupil=pupil))(pts)
-
-    return np.stack([np.asarray(one_depth(lens, jnp.asarray(d, pts.dtype)))
+    return np.stack([np.asarray(_psf_points(lens, pts, jnp.asarray(d, pts.dtype),
+                                            kernel_size=kernel_size, pixel_size=pixel_size,
+                                            pupil=pupil))
                      for d in depths_mm])
 
 

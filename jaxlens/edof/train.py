@@ -16,6 +16,7 @@ with the host only every ``log_every`` steps. Gaussian read noise of standard de
 from __future__ import annotations
 
 import dataclasses
+import functools
 import math
 from collections.abc import Callable
 
@@ -27,7 +28,7 @@ import optax
 
 from ..lens import Lens
 from ..nets import NAFNet
-from .lenses import DEPTHS_M, Tolerances, perturb
+from .lenses import DEPTHS_M, Tolerances, apply_gates, gates, perturb
 from .losses import edof_loss, l_rec
 from .optics import render_image, simulate_patch
 
@@ -96,8 +97,13 @@ def _labels(trainable):
             jax.tree_util.tree_map(lambda _: "lens", params))
 
 
+@functools.lru_cache(maxsize=16)
 def make_optimizer(cfg: Config, steps: int, *, lens: bool = True):
-    """Adam with a cosine-decayed rate for the network (and a constant one for the lens)."""
+    """Adam with a cosine-decayed rate for the network (and a constant one for the lens).
+
+    Cached, so that equal configurations give the same (hashable) optimizer and the jitted
+    steps, which take it as a static argument, compile once.
+    """
     sched = optax.warmup_cosine_decay_schedule(0.0, cfg.lr_net, max(1, min(20, steps // 10)),
                                                max(steps, 1), cfg.lr_net * 0.05)
     net_opt = optax.chain(optax.clip_by_global_norm(1.0), optax.adam(sched))
@@ -132,12 +138,12 @@ def _reconstruct(net, sims, key, noise):
 
 
 @eqx.filter_jit
-def stage1_step(net, params, opt_state, base_lens, windows, xy, depths, key, lens_on, *,
+def stage1_step(net, params, opt_state, base_lens, windows, xy, depths, key, gate, tie, *,
                 cfg: Config, optimizer):
     """One joint step; returns (net, params, opt_state, loss, parts).
 
-    ``lens_on`` (0 or 1, an array) gates the lens gradients, so the classical lens (0)
-    shares the compiled step with the hybrid lens (1).
+    ``gate`` and ``tie`` (``lenses.gates``, arrays) say which lens parameters move, so the
+    classical, cubic-plate and hybrid lenses share one compiled step.
     """
     k_sim, k_noise = jax.random.split(key)
 
@@ -151,8 +157,7 @@ def stage1_step(net, params, opt_state, base_lens, windows, xy, depths, key, len
     trainable = (net, params)
     (loss, parts), grads = eqx.filter_value_and_grad(loss_fn, has_aux=True)(trainable)
     g_net, g_lens = grads
-    g_lens = jax.tree_util.tree_map(lambda g: g * lens_on.astype(g.dtype), g_lens)
-    grads = (g_net, g_lens)
+    grads = (g_net, apply_gates(g_lens, gate, tie))
     updates, opt_state = optimizer.update(grads, opt_state, eqx.filter(trainable,
                                                                       eqx.is_inexact_array))
     net, params = eqx.apply_updates(trainable, updates)
@@ -214,21 +219,23 @@ def train(
     source: BatchSource,
     cfg: Config,
     *,
-    lens_on: bool,
+    kind: str,
     key,
     progress: Callable | None = None,
 ):
     """Stage 1 then stage 2 for one lens; returns ``(net, params, history)``.
 
+    ``kind`` ("classical", "cubic" or "hybrid") selects the free lens parameters
+    (``lenses.gates``).
+
     ``history`` holds the loss parts every ``log_every`` steps of stage 1 (``stage1``, a
     list of dicts with ``step``, ``loss``, ``rec``, ``sim``, ``raw``) and the L_rec of
     stage 2 (``stage2``).
     """
-    dtype = base_lens.epd.dtype
     opt1 = make_optimizer(cfg, cfg.steps)
     trainable = eqx.filter((net, params), eqx.is_inexact_array)
     state = opt1.init(trainable)
-    on = jnp.asarray(1.0 if lens_on else 0.0, dtype)
+    gate, tie = gates(params, kind)
     hist: dict[str, list] = {"stage1": [], "stage2": []}
     acc = []
     bar = progress(total=cfg.steps + cfg.steps2, desc=f"{name}") if progress else None
@@ -236,7 +243,7 @@ def train(
         key, sub = jax.random.split(key)
         windows, xy, depths = source()
         net, params, state, loss, parts = stage1_step(
-            net, params, state, base_lens, windows, xy, depths, sub, on, cfg=cfg,
+            net, params, state, base_lens, windows, xy, depths, sub, gate, tie, cfg=cfg,
             optimizer=opt1)
         acc.append((loss, parts))
         if (step + 1) % cfg.log_every == 0 or step + 1 == cfg.steps:

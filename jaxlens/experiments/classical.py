@@ -103,6 +103,8 @@ def build_parser() -> argparse.ArgumentParser:
     r.add_argument("--seed-list", default=None, help="explicit comma-separated seeds")
     r.add_argument("--first-seed", type=int, default=0, help="first seed of --seeds")
     r.add_argument("--steps", type=float, default=1.0, help="scale every stage's step count")
+    r.add_argument("--polish-steps", type=int, default=None,
+                   help="polish iterations (overrides the --steps scaling of the polish)")
     r.add_argument("--solver", default="adam", choices=("adam", "lm", "lbfgsb"),
                    help="solver of the curriculum and fine-tuning stages")
     r.add_argument("--polish", default="lm", choices=("lm", "lm-optx", "lbfgsb", "none"),
@@ -161,6 +163,8 @@ def config_from_args(args):
                                   polish_steps=0, epoch=6, log_every=3)
     elif args.steps != 1.0:
         cfg = cfg.scaled(args.steps)
+    if args.polish_steps is not None and not args.smoke and args.polish != "none":
+        cfg = dataclasses.replace(cfg, polish_steps=args.polish_steps)
     return cfg
 
 

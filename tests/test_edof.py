@@ -1,0 +1,184 @@
+"""The EDoF experiment: losses, lens parameters, patch convolution, PSF measures, smoke run."""
+
+import json
+import os
+
+import jax
+import jax.numpy as jnp
+import numpy as np
+import pytest
+
+from jaxlens.edof import lenses as L
+from jaxlens.edof import losses as LS
+from jaxlens.edof import optics as O
+from jaxlens.surfaces import Hybrid
+
+
+@pytest.fixture(scope="module")
+def classical():
+    return L.classical_lens(binning=8)
+
+
+# --- losses ------------------------------------------------------------------------------
+def test_losses_on_known_values():
+    gt = jnp.zeros((2, 4, 4, 3))
+    sim = jnp.stack([jnp.full_like(gt, 0.1), jnp.full_like(gt, 0.3)])
+    rec = jnp.stack([jnp.full_like(gt, -0.2), jnp.full_like(gt, 0.2)])
+    assert float(LS.l_sim(sim)) == pytest.approx(0.2)
+    assert float(LS.l_raw(sim, gt)) == pytest.approx(0.2)
+    assert float(LS.l_rec(rec, gt)) == pytest.approx(0.2)
+    total, parts = LS.edof_loss(rec, sim, gt, w_sim=0.5, w_raw=0.25)
+    assert float(total) == pytest.approx(0.2 + 0.5 * 0.2 + 0.25 * 0.2)
+    assert set(parts) == {"rec", "sim", "raw"}
+    # Simulations that agree across depths cost nothing in L_sim.
+    assert float(LS.l_sim(jnp.stack([sim[0], sim[0]]))) == 0.0
+
+
+def test_loss_shape_errors():
+    gt = jnp.zeros((2, 4, 4, 3))
+    with pytest.raises(ValueError, match="edof_loss"):
+        LS.edof_loss(jnp.zeros((3, 2, 4, 4, 3)), jnp.zeros((3, 2, 4, 4, 3)), gt, w_sim=1,
+                     w_raw=1)
+
+
+# --- lenses and parameters -----------------------------------------------------------------
+def test_classical_lens_meets_the_spec(classical):
+    from jaxlens import paraxial
+
+    pd = paraxial.paraxial_data(classical)
+    assert classical.stop == 0
+    assert float(classical.epd) == pytest.approx(2.60)
+    assert float(pd.efl) == pytest.approx(5.55, rel=0.05)
+    assert classical.sensor.resolution == (128, 128)
+    assert float(classical.sensor.pixel_size) == pytest.approx(8 * 0.00497)
+
+
+def test_hybrid_params_round_trip_and_odd_terms(classical):
+    hyb = L.to_hybrid(classical, n_odd=3, cubic=0.004)
+    s = hyb.surfaces[1]
+    assert isinstance(s, Hybrid)
+    # With zero odd terms the hybrid surface has the sag of the original asphere.
+    flat = L.to_hybrid(classical, n_odd=3)
+    x, y = jnp.array([0.3, -0.7, 1.1]), jnp.array([0.5, 0.2, -0.4])
+    np.testing.assert_allclose(flat.surfaces[1].sag(x, y)[0], classical.surfaces[1].sag(x, y)[0],
+                               rtol=1e-12, atol=1e-15)
+    p = L.HybridParams.from_lens(hyb)
+    back = p.apply(hyb)
+    for a, b in zip(jax.tree_util.tree_leaves(back), jax.tree_util.tree_leaves(hyb), strict=True):
+        np.testing.assert_allclose(np.asarray(a), np.asarray(b), rtol=1e-12, atol=1e-15)
+    # Scaled odd parameter = sag at R over SAG_SCALE.
+    r = 0.5 * float(hyb.epd)
+    assert float(p.odd_x[0]) == pytest.approx(0.004 * r**3 / L.SAG_SCALE)
+    # The odd profile is the analytic cubic a·(x³ + y³).
+    xs, h = L.odd_profile(hyb, n=21)
+    xx, yy = np.meshgrid(xs, xs)
+    inside = ~np.isnan(h)
+    np.testing.assert_allclose(h[inside], 0.004 * (xx**3 + yy**3)[inside], rtol=1e-9, atol=1e-15)
+
+
+def test_gates_select_and_tie_parameters(classical):
+    p = L.HybridParams.from_lens(L.to_hybrid(classical, n_odd=3, cubic=0.003))
+    g = jax.tree_util.tree_map(lambda v: jnp.ones_like(v) * 2.0, p)
+    g = g.__class__(c=g.c, k=g.k, even=g.even, odd_x=jnp.array([1.0, 2.0, 3.0]),
+                    odd_y=jnp.array([3.0, 4.0, 5.0]), focus=g.focus, radius=g.radius,
+                    index=g.index)
+    gate, tie = L.gates(p, "classical")
+    out = L.apply_gates(g, gate, tie)
+    assert all(float(jnp.sum(jnp.abs(v))) == 0 for v in jax.tree_util.tree_leaves(out))
+    gate, tie = L.gates(p, "cubic")
+    out = L.apply_gates(g, gate, tie)
+    np.testing.assert_allclose(out.odd_x, [2.0, 0.0, 0.0])
+    np.testing.assert_allclose(out.odd_y, [2.0, 0.0, 0.0])
+    assert float(out.c) == 0 and float(out.focus) == 2.0 and float(out.radius) == 0
+    gate, tie = L.gates(p, "hybrid")
+    out = L.apply_gates(g, gate, tie)
+    np.testing.assert_allclose(out.odd_x, [1.0, 2.0, 3.0])
+    assert float(out.radius) == 0
+    with pytest.raises(ValueError, match="kind"):
+        L.gates(p, "other")
+
+
+def test_cubic_strength_guess_matches_formula(classical):
+    a = L.cubic_strength_guess(classical, depths_m=(0.1,), ratio=2.0)
+    r = 1.3
+    w = 0.5 * (1 / 100.0 - 1 / 200.0) * r * r
+    n = float(classical.materials[1].index(0.5876))
+    assert a == pytest.approx(2.0 * w / ((n - 1) * r**3))
+
+
+def test_perturb_changes_lens_and_zero_tolerance_keeps_it(classical):
+    lens = L.to_hybrid(classical, n_odd=2, cubic=0.003)
+    same = L.perturb(lens, jax.random.PRNGKey(0), L.Tolerances(0, 0, 0, 0, 0))
+    for a, b in zip(jax.tree_util.tree_leaves(same), jax.tree_util.tree_leaves(lens), strict=True):
+        np.testing.assert_allclose(np.asarray(a), np.asarray(b))
+    moved = L.perturb(lens, jax.random.PRNGKey(0))
+    dt = np.asarray(moved.thickness - lens.thickness)
+    assert 0 < np.max(np.abs(dt)) < 0.1
+    assert float(moved.surfaces[0].c) == 0.0  # the stop stays flat
+
+
+# --- image formation helpers -----------------------------------------------------------------
+def test_conv_valid_is_a_true_convolution():
+    rng = np.random.default_rng(0)
+    win = rng.random((9, 9, 2))
+    ker = rng.random((2, 3, 3))
+    out = np.asarray(O.conv_valid(jnp.asarray(win), jnp.asarray(ker)))
+    ref = np.zeros((7, 7, 2))
+    for c in range(2):
+        for i in range(7):
+            for j in range(7):
+                # y[n] = Σ_m x[n − m] k[m], in 'valid' coordinates.
+                ref[i, j, c] = np.sum(win[i : i + 3, j : j + 3, c] * ker[c, ::-1, ::-1])
+    np.testing.assert_allclose(out, ref, rtol=1e-10)
+
+
+def test_pupil_disc_fills_the_disc_evenly():
+    p = np.asarray(O.pupil_disc(16))
+    r = np.hypot(p[:, 0], p[:, 1])
+    assert p.shape == (256, 2) and r.max() < 1.0
+    # Equal-area cells: half the points inside radius 1/sqrt(2).
+    assert np.mean(r < 2**-0.5) == pytest.approx(0.5, abs=1 / 16)
+
+
+def test_psf_depth_variation_measure():
+    rng = np.random.default_rng(1)
+    p = rng.random((1, 2, 3, 5, 5))
+    p /= p.sum(axis=(-1, -2), keepdims=True)
+    same = O.psf_depth_variation(np.concatenate([p, p, p]))
+    assert same["l1"] == pytest.approx(0.0, abs=1e-12)
+    assert same["ncc"] == pytest.approx(1.0)
+    a = np.zeros((1, 1, 1, 5, 5))
+    b = np.zeros((1, 1, 1, 5, 5))
+    a[..., 0, 0] = 1.0
+    b[..., 4, 4] = 1.0
+    apart = O.psf_depth_variation(np.concatenate([a, b]))
+    assert apart["l1"] == pytest.approx(2.0)
+    assert apart["ncc"] < 0
+
+
+# --- the experiment, end to end ------------------------------------------------------------------
+def test_smoke_run_writes_outputs_and_loss_falls(tmp_path):
+    from jaxlens.experiments import edof
+
+    out = tmp_path / "edof"
+    summary = edof.run(["--smoke", "--quiet", "--lenses", "classical,hybrid", "--out",
+                        str(out), "--record", str(tmp_path / "rec")])
+    for name in ("table2.json", "table2.md", "summary.json", "command.txt", "loss.png",
+                 "psf_grid_hybrid.png", "mtf_by_depth.png", "odd_profile.png",
+                 "reconstructions.png", "lenses/hybrid.json", "lenses/hybrid.zmx",
+                 "nets/hybrid.eqx"):
+        assert (out / name).is_file(), name
+        assert os.path.getsize(out / name) > 0
+    table = json.loads((out / "table2.json").read_text())
+    assert set(table) == {"classical", "hybrid"}
+    for row in table.values():
+        assert set(row) == {"0.1", "0.2", "10"}
+        for d in row.values():
+            assert set(d) == {"sim", "rec"}
+            assert all(np.isfinite(d[t][m]) for t in d for m in ("psnr", "ssim"))
+    for name in ("classical", "hybrid"):
+        h = summary["history"][name]["stage1"]
+        assert h[-1]["loss"] < h[0]["loss"], name
+    assert (tmp_path / "rec" / "table2.md").is_file()
+    v = summary["psf_depth_variation"]
+    assert 0 <= v["hybrid"]["l1"] <= 2 and 0 <= v["classical"]["l1"] <= 2
