@@ -15,15 +15,16 @@ jaxlens, optiland) and the load average, because other work on a 2-core machine 
 numbers; the rows also carry the load at the time of each measurement.
 
 The render benchmarks (``benchmarks/render_speed.py``, ``benchmarks/render_memory.py``) belong
-to the render module. When present and exposing ``run(smoke: bool) -> dict`` (and optionally
-``markdown(result) -> str``), they run here too, under ``--only render_speed render_memory`` or
-by default; their own result files are theirs to write.
+to the render module. They run here too (not in ``--smoke``), by default or under ``--only
+render_speed render_memory``: through ``run(smoke) -> dict`` where they define it, else through
+their ``main([])``, which writes their own result files.
 """
 
 from __future__ import annotations
 
 import argparse
 import importlib
+import json
 import os
 import pathlib
 import shlex
@@ -35,7 +36,7 @@ import jax
 
 from . import common
 
-CORE = ("throughput", "pareto", "skipping")
+CORE = ("throughput", "pareto", "skipping", "imaging")
 OPTIONAL = ("render_speed", "render_memory")
 
 
@@ -65,7 +66,7 @@ def main(argv: list[str] | None = None) -> dict:
     )
 
     selected = args.only or (CORE + OPTIONAL)
-    sections, results = [], {}
+    results = {}
     for name in selected:
         try:
             mod = importlib.import_module(f"{__package__}.{name}")
@@ -74,6 +75,10 @@ def main(argv: list[str] | None = None) -> dict:
                 continue
             raise
         if not hasattr(mod, "run"):
+            # The render benchmarks expose main(argv) and write their own result files.
+            if name in OPTIONAL and hasattr(mod, "main") and not args.smoke:
+                print(f"[{name}] (writes its own results)")
+                mod.main([])
             continue
         print(f"[{name}]")
         t0 = time.perf_counter()
@@ -95,29 +100,42 @@ def main(argv: list[str] | None = None) -> dict:
             common.write_json(name, payload, out)
             if not args.no_plots and hasattr(mod, "plot"):
                 mod.plot(res, out / f"{name}.png")
-        if hasattr(mod, "markdown"):
-            sections.append(mod.markdown(res))
         print(f"  ({wall:.0f} s)")
 
-    header = [
-        "# jaxlens benchmark results",
-        "",
-        f"Made by `{command}` at git commit {machine['git_commit']}.",
-        "",
-        f"Machine: {machine['cpu_model']}, {machine['logical_cores']} logical cores "
-        f"({machine.get('affinity_cores')} usable), {machine.get('memory_gib')} GiB; "
-        f"{machine['platform']}. Versions: python {machine['python']}, jax {machine['jax']}, "
-        f"jaxlib {machine['jaxlib']}, equinox {machine['equinox']}, numpy {machine['numpy']}, "
-        f"jaxlens {machine['jaxlens']}, optiland {machine['optiland'] or 'not installed'}. "
-        f"1-minute load average at the start: {machine['load_average_at_start'][0]:.2f} "
-        "(each row records its own).",
-        "",
-    ]
-    if args.only is None or set(args.only) >= set(CORE):
-        (out / "README.md").write_text("\n".join(header + sections) + "\n")
-    else:
-        (out / f"README_{'_'.join(args.only)}.md").write_text("\n".join(header + sections) + "\n")
+    write_readme(out)
     return results
+
+
+def write_readme(out: pathlib.Path) -> None:
+    """(Re)write ``out/README.md`` from every benchmark JSON in ``out``.
+
+    Each section states the command that made it, the git commit and the machine, so results
+    of separate runs (``--only``) can sit side by side.
+    """
+    parts = ["# jaxlens benchmark results", ""]
+    for name in CORE:
+        path = out / f"{name}.json"
+        if not path.exists():
+            continue
+        data = json.loads(path.read_text())
+        m = data["machine"]
+        mod = importlib.import_module(f"{__package__}.{name}")
+        load = m["load_average_at_start"]
+        parts += [
+            f"## {name}",
+            "",
+            f"Made by `{data['command']}` at git commit {m['git_commit']} on "
+            f"{m['cpu_model']}, {m['logical_cores']} logical cores, {m.get('memory_gib')} GiB "
+            f"({m['platform']}); python {m['python']}, jax {m['jax']}, jaxlib {m['jaxlib']}, "
+            f"equinox {m['equinox']}, numpy {m['numpy']}, jaxlens {m['jaxlens']}, optiland "
+            f"{m['optiland'] or 'not installed'}. 1-minute load average at the start "
+            f"{load[0]:.1f} (2 cores; other work shared the machine; every row records its "
+            f"own load), wall time {data['wall_s']:.0f} s.",
+            "",
+            mod.markdown(data),
+            "",
+        ]
+    (out / "README.md").write_text("\n".join(parts) + "\n")
 
 
 if __name__ == "__main__":

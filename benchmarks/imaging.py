@@ -1,0 +1,212 @@
+"""Run time against error for image formation: PSF kernel size and pupil sampling, render spp.
+
+The render *speed* and *memory* benchmarks belong to the render module
+(``benchmarks/render_speed.py``, ``benchmarks/render_memory.py``); this module gives the
+time-against-error curves that end in recommended defaults, on the 6-element phone lens
+(``jaxlens.zoo.cellphone6``, the lens the renders use), primary wavelength, at the lens's
+sensor pitch (5.29 µm):
+
+* ``psf_kernel``: geometric PSF (``jaxlens.psf``) at 0, 70 % and 100 % of the field against
+  ``kernel_size``. Error = the energy fraction outside the kernel (``truncated``), worst field.
+  Time = one ``jaxlens.psf`` call. Recommended: the smallest kernel losing ≤ 1 % everywhere.
+* ``psf_pupil``: the same PSF, at the recommended kernel, against the pupil sampling (rays per
+  side); error = L1 distance to a 512-per-side reference (sum over the kernel of |Δ|, i.e. the
+  fraction of energy misplaced), worst field. Recommended: the smallest pupil with L1 ≤ 2 %.
+* ``render_spp``: ``jaxlens.render`` (method "ray") of the skimage ``astronaut`` scene on a
+  192 × 192 sensor of the lens's full sensor side against spp; error = RMS difference from a
+  256-spp render (another seed) over the RMS of that render.
+  Recommended: the smallest spp with error ≤ 2 %.
+
+The smoke run skips this module's heavy parts (it runs one tiny PSF point).
+"""
+
+from __future__ import annotations
+
+import math
+import time
+
+import jax
+import jax.numpy as jnp
+import numpy as np
+
+import jaxlens
+from jaxlens import zoo
+
+from . import common
+
+KERNELS = (5, 7, 9, 11, 13, 15, 21, 31, 41)
+PUPILS = (8, 16, 24, 32, 48, 64, 96, 128, 192, 256)
+SPPS = (1, 2, 4, 8, 16, 32, 64)
+
+
+def _psf(lens, field, kernel, pupil):
+    return jaxlens.psf.psf_info(
+        lens,
+        field,
+        kernel_size=kernel,
+        pupil=pupil,
+        model="geometric",
+        center="chief",
+        max_truncation=None,
+    )
+
+
+def psf_study(smoke: bool = False) -> dict:
+    lens = zoo.cellphone6()
+    fmax = float(lens.fields[-1])
+    fields = [0.0, 0.7 * fmax, fmax]
+    kernels = (7, 11) if smoke else KERNELS
+    rows_k = []
+    for k in kernels:
+        trunc = []
+        t0 = time.perf_counter()
+        for f in fields:
+            r = _psf(lens, f, k, 64)
+            trunc.append(float(r.truncated))
+        first = time.perf_counter() - t0  # includes the compilation for this kernel size
+        t = common.time_jitted(
+            lambda f, k=k: _psf(lens, f, k, 64).psf,
+            jnp.asarray(fields[-1]),
+            repeats=3,
+            min_total_s=0.2,
+        )
+        rows_k.append(
+            dict(
+                kernel_size=k,
+                truncated_worst=max(trunc),
+                truncated=trunc,
+                time_s=t["run_s"],
+                compile_s=first,
+            )
+        )
+    rec_k = next((r["kernel_size"] for r in rows_k if r["truncated_worst"] <= 0.01), None)
+    out = {"fields": fields, "kernel": rows_k, "recommended_kernel_size": rec_k}
+    if smoke:
+        return out
+    k = rec_k or KERNELS[-1]
+    refs = [np.asarray(_psf(lens, f, k, 512).psf) for f in fields]
+    rows_p = []
+    for p in PUPILS:
+        t0 = time.perf_counter()
+        errs = [
+            float(np.abs(np.asarray(_psf(lens, f, k, p).psf) - ref).sum())
+            for f, ref in zip(fields, refs, strict=True)
+        ]
+        first = time.perf_counter() - t0  # includes the compilation for this pupil size
+        t = common.time_jitted(
+            lambda f, p=p: _psf(lens, f, k, p).psf,
+            jnp.asarray(fields[-1]),
+            repeats=3,
+            min_total_s=0.2,
+        )
+        rows_p.append(
+            dict(
+                pupil=p,
+                rays=int(round(math.pi / 4 * p * p)),
+                l1_worst=max(errs),
+                l1=errs,
+                time_s=t["run_s"],
+                compile_s=first,
+            )
+        )
+    out["pupil"] = rows_p
+    out["pupil_kernel_size"] = k
+    out["recommended_pupil"] = next((r["pupil"] for r in rows_p if r["l1_worst"] <= 0.02), None)
+    return out
+
+
+def render_study(size: int = 192, ref_spp: int = 256) -> dict:
+    from jaxlens import images
+
+    lens = zoo.cellphone6()
+    side = float(lens.sensor.pixel_size) * lens.sensor.resolution[1]
+    sensor = jaxlens.Sensor((size, size), side / size)
+    scene = jnp.asarray(images.scene("astronaut", (size, size)))
+    fp = jaxlens.render.footprints(lens, sensor=sensor, dtype=jnp.float32)
+    key = jax.random.PRNGKey(0)
+
+    def go(spp, key=key):
+        return jaxlens.render(lens, scene, spp=spp, key=key, sensor=sensor, footprints=fp)
+
+    ref = np.asarray(go(ref_spp, jax.random.PRNGKey(123)), np.float64)
+    scale = float(np.sqrt(np.mean(ref**2)))
+    rows = []
+    for spp in SPPS:
+        t = common.time_jitted(go, spp, repeats=2, min_total_s=0.0)
+        img = np.asarray(go(spp), np.float64)
+        err = float(np.sqrt(np.mean((img - ref) ** 2)) / scale)
+        rows.append(
+            dict(
+                spp=spp,
+                rel_rmse=err,
+                time_s=t["run_s"],
+                compile_s=t["compile_s"],
+                load=t["load_before"],
+            )
+        )
+        print(f"    spp {spp:3d}: rel. RMSE {err:.3e}, {t['run_s']:.2f} s")
+    rec = next((r["spp"] for r in rows if r["rel_rmse"] <= 0.02), None)
+    return {
+        "size": size,
+        "reference_spp": ref_spp,
+        "rows": rows,
+        "recommended_spp": rec,
+        "note": f"the {ref_spp}-spp reference has its own noise, about "
+        f"{1 / math.sqrt(ref_spp):.1%} of the 1-spp noise",
+    }
+
+
+def run(smoke: bool = False) -> dict:
+    print("  PSF error against kernel size and pupil sampling")
+    psf = psf_study(smoke)
+    print(f"    -> kernel {psf['recommended_kernel_size']}, pupil {psf.get('recommended_pupil')}")
+    res = {"psf": psf}
+    if not smoke:
+        print("  render error against spp")
+        res["render"] = render_study()
+        print(f"    -> spp {res['render']['recommended_spp']}")
+    return res
+
+
+def markdown(res: dict) -> str:
+    psf = res["psf"]
+    out = ["### PSF error against kernel size (cellphone6, geometric, worst of 3 fields)", ""]
+    out.append(
+        common.md_table(
+            ["kernel", "energy outside", "time s"],
+            [
+                [r["kernel_size"], float(r["truncated_worst"]), float(r["time_s"])]
+                for r in psf["kernel"]
+            ],
+        )
+    )
+    out += ["", f"Recommended kernel_size (≤ 1 % outside): {psf['recommended_kernel_size']}", ""]
+    if "pupil" in psf:
+        out += [f"### PSF error against pupil sampling (kernel {psf['pupil_kernel_size']})", ""]
+        out.append(
+            common.md_table(
+                ["rays per side", "rays", "L1 error", "time s"],
+                [
+                    [r["pupil"], r["rays"], float(r["l1_worst"]), float(r["time_s"])]
+                    for r in psf["pupil"]
+                ],
+            )
+        )
+        out += ["", f"Recommended pupil (L1 ≤ 2 %): {psf['recommended_pupil']}", ""]
+    if "render" in res:
+        r = res["render"]
+        out += [
+            f"### Render error against spp ({r['size']}², reference {r['reference_spp']} spp)",
+            "",
+        ]
+        out.append(
+            common.md_table(
+                ["spp", "rel. RMSE", "time s", "compile s"],
+                [
+                    [x["spp"], float(x["rel_rmse"]), float(x["time_s"]), float(x["compile_s"])]
+                    for x in r["rows"]
+                ],
+            )
+        )
+        out += ["", f"Recommended spp (≤ 2 %): {r['recommended_spp']} ({r['note']})", ""]
+    return "\n".join(out)
