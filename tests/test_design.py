@@ -298,3 +298,17 @@ def test_run_stops_on_nonfinite_loss():
     with pytest.raises(FloatingPointError, match=r"stage 0 \(warm\) at step 0 for seed 7"):
         curriculum.run(SPEC, stages, params, obj, make, progress=False, log_every=2,
                        seeds=[7, 8])
+
+
+def test_run_drops_nonfinite_designs():
+    p0, obj = _toy(nan=True)
+    params = jax.tree.map(lambda x: jnp.stack([x, x]), p0)
+    stages = [curriculum.Stage("bad", 80.8, 2.0, 3)]
+    lrs = LensParams(c=jnp.asarray(0.01), a=jnp.asarray(0.01), k=jnp.asarray(0.0),
+                     d=jnp.asarray(0.01))
+    out, hist = curriculum.run(SPEC, stages, params, obj,
+                               lambda name, lr, o: solvers.Adam(o, lrs), progress=False,
+                               log_every=3, seeds=[3, 4], on_nonfinite="drop")
+    assert sorted(hist.failed) == [3, 4] and "step 0" in hist.failed[3]
+    for x, y in zip(jax.tree.leaves(out), jax.tree.leaves(params), strict=True):
+        np.testing.assert_array_equal(x, y)  # frozen at the last finite parameters

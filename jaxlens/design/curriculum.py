@@ -189,14 +189,29 @@ def _vinit(solver, params, args, mesh=None):
 
 
 @eqx.filter_jit
-def _vstep(solver, params, state, args, lr_scale, mesh=None):
+def _vstep(solver, params, state, args, lr_scale, alive, mesh=None):
     dyn, static = eqx.partition(solver, eqx.is_array)
 
-    def local(params, state, args, dyn, lr):
+    def local(params, state, args, alive, dyn, lr):
         step = eqx.combine(dyn, static).step
-        return jax.vmap(step, in_axes=(0, 0, 0, None))(params, state, args, lr)
+        new_p, new_s, aux = jax.vmap(step, in_axes=(0, 0, 0, None))(params, state, args, lr)
+        # A design whose loss or update is not finite keeps its last finite state and is
+        # marked dead (it never poisons the others, and stays frozen).
+        ok = jnp.isfinite(aux.loss)
+        for leaf in jax.tree.leaves(new_p):
+            ok = ok & jnp.all(jnp.isfinite(leaf.reshape(leaf.shape[0], -1)), -1)
+        ok = ok & alive
 
-    return _over_seeds(local, mesh, 3, 2)(params, state, args, dyn, lr_scale)
+        def keep(new, old):
+            m = ok.reshape(ok.shape + (1,) * (new.ndim - 1))
+            return jnp.where(m, new, old)
+
+        new_p = jax.tree.map(keep, new_p, params)
+        new_s = jax.tree.map(lambda n, o: keep(n, o) if eqx.is_array(n) and n.ndim and
+                             n.shape[0] == ok.shape[0] else n, new_s, state)
+        return new_p, new_s, aux, ok
+
+    return _over_seeds(local, mesh, 4, 2)(params, state, args, alive, dyn, lr_scale)
 
 
 @eqx.filter_jit
@@ -224,6 +239,7 @@ class History:
     loss: list[np.ndarray] = dataclasses.field(default_factory=list)  # [steps, B] per stage
     spot_rms: list[np.ndarray] = dataclasses.field(default_factory=list)  # [steps, B]
     seconds: list[float] = dataclasses.field(default_factory=list)
+    failed: dict = dataclasses.field(default_factory=dict)  # seed -> message (non-finite)
 
 
 def run(
@@ -243,6 +259,7 @@ def run(
     seeds: Sequence[int] | None = None,
     callback: Callable | None = None,
     mesh=None,
+    on_nonfinite: str = "raise",
 ):
     """Run the stages on a batch of designs; returns ``(params, History)``.
 
@@ -266,9 +283,14 @@ def run(
             least-squares and L-BFGS-B stages run on the mesh's first device (their dense
             linear algebra can deadlock XLA's CPU runtime when host devices run it at once).
         callback: called as ``callback(stage_index, stage, params)`` after every stage.
+        on_nonfinite: ``"raise"`` stops the run when a loss (or an update) becomes
+            non-finite; ``"drop"`` freezes that design at its last finite parameters, keeps
+            going with the others and records it in ``History.failed`` (for multi-start
+            studies, where a failed start is a result, not an error).
 
     Raises:
-        FloatingPointError: a loss became non-finite (names stage, step and seed).
+        FloatingPointError: a loss became non-finite (names stage, step and seed), with
+            ``on_nonfinite="raise"``.
     """
     from tqdm.auto import tqdm
 
@@ -282,6 +304,10 @@ def run(
     bar = tqdm(total=total, disable=not progress, dynamic_ncols=True, leave=True)
     hist = History()
     ones = jnp.broadcast_to(area, (b, area.shape[0]))
+    if on_nonfinite not in ("raise", "drop"):
+        raise ValueError(f"run: on_nonfinite must be 'raise' or 'drop', got {on_nonfinite!r}")
+    alive = jnp.ones((b,), bool)
+    dead = np.zeros(b, bool)
     for si, stage in enumerate(stages):
         t0 = time.perf_counter()
         if stage.loss not in objectives:
@@ -293,14 +319,14 @@ def run(
         if mesh is not None:
             target = mesh.devices.flat[0] if smesh is None else None
             if target is not None:
-                params = jax.device_put(params, target)
+                    params, alive = jax.device_put((params, alive), target)
             else:
-                params = jax.device_put(params, _seed_sharding(mesh))
+                params, alive = jax.device_put((params, alive), _seed_sharding(mesh))
         args = stage_args(spec, stage, ones, reg_weights, dtype)
         sched = optax.warmup_cosine_decay_schedule(
             0.0, 1.0, max(1, int(warmup * stage.steps)), max(2, stage.steps), end_lr)
         state = None
-        losses, rmss = [], []
+        losses, rmss, oks = [], [], []
         done = 0
         for step in range(stage.steps):
             if step % epoch == 0:
@@ -310,21 +336,31 @@ def run(
                 if state is None or stage.solver not in ("adam", "lm"):
                     state = _vinit(solver, params, args, smesh)
             lr = jnp.asarray(float(sched(step)), dtype)
-            params, state, aux = _vstep(solver, params, state, args, lr, smesh)
+            params, state, aux, alive = _vstep(solver, params, state, args, lr, alive, smesh)
             losses.append(aux.loss)
             rmss.append(jnp.sqrt(aux.spot))
+            oks.append(alive)
             if (step + 1) % log_every == 0 or step + 1 == stage.steps:
                 lo = np.asarray(jnp.stack(losses[done:]))
                 ro = np.asarray(jnp.stack(rmss[done:]))
-                bad = ~np.isfinite(lo)
-                if bad.any():
-                    k, j = np.argwhere(bad)[0]
-                    bar.close()
-                    raise FloatingPointError(
-                        f"non-finite loss in stage {si} ({stage.name}) at step {done + k} "
-                        f"for seed {seeds[j]}")
+                ok = np.asarray(jnp.stack(oks[done:]))
+                newly = ~ok & ~dead[None]
+                if newly.any():
+                    for j in np.flatnonzero(newly.any(0)):
+                        k = int(np.argmax(newly[:, j]))
+                        msg = (f"non-finite loss or update in stage {si} ({stage.name}) at "
+                               f"step {done + k} for seed {seeds[j]}")
+                        if on_nonfinite == "raise":
+                            bar.close()
+                            raise FloatingPointError(msg)
+                        hist.failed[seeds[j]] = msg
+                        bar.write(msg + "; that design is frozen and counted as failed")
+                    dead |= newly.any(0)
                 bar.set_description(f"{stage.name}")
-                bar.set_postfix(loss=f"{np.min(lo[-1]):.3g}", rms_um=f"{1e3 * np.min(ro[-1]):.2f}")
+                live = ~dead
+                if live.any():
+                    bar.set_postfix(loss=f"{np.nanmin(lo[-1][live]):.3g}",
+                                    rms_um=f"{1e3 * np.nanmin(ro[-1][live]):.2f}")
                 bar.update(len(lo))
                 done = step + 1
         hist.stages.append(stage.name)

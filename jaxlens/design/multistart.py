@@ -179,6 +179,7 @@ def design(
     devices=None,
     callback=None,
     image_loss: bool = False,
+    on_nonfinite: str = "raise",
 ) -> DesignResult:
     """Design ``len(seeds)`` lenses from random starts, all at once.
 
@@ -190,6 +191,8 @@ def design(
         shard: shard the seeds over the devices.
         devices: the devices to shard over (default ``jax.devices()``).
         callback: passed to :func:`jaxlens.design.curriculum.run`.
+        on_nonfinite: ``"raise"`` or ``"drop"`` (see :func:`jaxlens.design.curriculum.run`);
+            dropped seeds are listed in ``result.history.failed``.
         image_loss: fine-tune with the image-based loss (``ImageObjective``: a scikit-image
             test scene rendered at ``config.image_pixels`` per side) instead of the ray loss.
 
@@ -224,7 +227,7 @@ def design(
     params, hist = run(
         spec, stages, params, objectives, make, reg_weights=config.reg_weights,
         epoch=config.epoch, irls=config.irls, log_every=config.log_every, progress=progress,
-        seeds=padded, callback=callback, mesh=mesh)
+        seeds=padded, callback=callback, mesh=mesh, on_nonfinite=on_nonfinite)
     params = jax.tree.map(lambda x: np.asarray(x)[: len(seeds)], params)
     hist.loss = [h[:, : len(seeds)] for h in hist.loss]
     hist.spot_rms = [h[:, : len(seeds)] for h in hist.spot_rms]

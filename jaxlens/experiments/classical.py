@@ -361,10 +361,17 @@ def run_ablation(args, argv) -> dict:
         print(f"== {name}: {switches}, {len(seeds)} seeds", flush=True)
         t0 = time.perf_counter()
         res = multistart.design(spec, seeds, cfg, progress=not args.quiet,
-                                devices=jax.devices()[: max(1, args.devices)])
+                                devices=jax.devices()[: max(1, args.devices)],
+                                on_nonfinite="drop")
         wall = time.perf_counter() - t0
         evs = [evaluate.evaluate(res.lens(i), spec) for i in range(len(seeds))]
-        no_si = [not e.self_intersection for e in evs]
+        failed = res.history.failed
+        for s, e in zip(seeds, evs, strict=True):
+            if s in failed:  # a start that went non-finite is a failed design
+                e.valid = False
+                e.geometry = f"{failed[s]}; frozen there ({e.geometry})"
+        no_si = [not e.self_intersection and s not in failed
+                 for s, e in zip(seeds, evs, strict=True)]
         valid = [e.valid for e in evs]
         rms = [e.rms_mean_um for e, v in zip(evs, valid, strict=True) if v]
         col = {
@@ -374,6 +381,7 @@ def run_ablation(args, argv) -> dict:
             "rms_mean_um": float(np.mean(rms)) if rms else None,
             "rms_min_um": float(np.min(rms)) if rms else None,
             "rms_max_um": float(np.max(rms)) if rms else None,
+            "non_finite_seeds": {str(k): v for k, v in failed.items()},
             "wall_seconds": wall, "seconds_per_design": wall / len(seeds),
             "per_seed": [{"seed": s, **e.summary()} for s, e in zip(seeds, evs, strict=True)],
         }
