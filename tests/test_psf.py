@@ -175,17 +175,19 @@ def test_psf_map_orientation_and_rgb():
     centre PSF is on axis and symmetric, and RGB maps stack three wavelengths."""
     lens = jaxlens.zoo.cooke_triplet()
     m = P.psf_map(lens, grid=(3, 3), kernel_size=15, pixel_size=0.01, pupil=24,
-                  wavelength=jnp.asarray(P.RGB_WAVELENGTHS))
+                  wavelength=jnp.asarray(P.RGB_WAVELENGTHS), center="ideal")
     assert m.psf.shape == (3, 3, 3, 15, 15)
     np.testing.assert_allclose(m.psf[0, 0], m.psf[2, 2][..., ::-1, ::-1], atol=1e-9)
     np.testing.assert_allclose(m.psf[0, 2], m.psf[2, 0][..., ::-1, ::-1], atol=1e-9)
     np.testing.assert_allclose(m.psf[1, 1], m.psf[1, 1][..., ::-1, ::-1], atol=1e-9)
     np.testing.assert_allclose(m.field[1, 1], 0.0, atol=1e-12)
-    # Top-left of the rendered image is sensor (+x, −y): the chief ray lands there.
+    # Top-left of the rendered image is sensor (+x, −y): the ideal image point lies there.
     assert float(m.center[0, 0, 0]) > 0 and float(m.center[0, 0, 1]) < 0
+    np.testing.assert_allclose(m.center, m.sensor_xy, atol=1e-12)
     np.testing.assert_allclose(m.psf.sum((-1, -2)) + m.truncated, 1.0, atol=1e-12)
     np.testing.assert_allclose(m.truncated[1, 1], 0.0, atol=1e-12)
     # Lateral colour: the corner PSF centroids differ between red and blue.
     i = np.arange(15) - 7
-    cx = [(np.asarray(m.psf[0, 0, c]) * i[None, :]).sum() for c in (0, 2)]
+    cx = [(np.asarray(m.psf[0, 0, c]) * i[None, :]).sum() / np.asarray(m.psf[0, 0, c]).sum()
+          for c in (0, 2)]
     assert abs(cx[0] - cx[1]) > 0.05

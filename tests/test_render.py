@@ -181,6 +181,7 @@ def test_distortion_relaxation_aligns_the_image():
     assert float(pen) > 0
 
 
+@pytest.mark.slow
 def test_distortion_maps_are_inverse(cooke):
     """Forward chief rays (object side, aimed at the stop) and backward chief rays (sensor
     side, aimed at the stop) give inverse maps (grid as render(method="psf") uses)."""
