@@ -142,7 +142,7 @@ def _image_objective(objective: Objective, spec: DesignSpec, config: DesignConfi
 def make_solver_factory(config: DesignConfig, spec: DesignSpec, dtype):
     """``(name, stage_lr, objective) -> solver`` for the curriculum loop."""
     m = spec.asphere_terms
-    lower_d = jnp.asarray(np.minimum(gap_bounds(spec)[:-1], 0.05), dtype)
+    lower_d = jnp.asarray(gap_bounds(spec)[:-1], dtype)  # element / air / stop minimums
     free = LensParams(c=True, a=True, k=config.lr_k > 0, d=True)
     s = spec.num_surfaces - 1
 

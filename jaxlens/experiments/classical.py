@@ -250,6 +250,14 @@ def write_design_outputs(lens, ev, spec, out, *, history=None, plots=True, rende
     return files
 
 
+def _mean_or_none(x):
+    return float(sum(x) / len(x)) if x else None
+
+
+def _min_or_none(x):
+    return float(min(x)) if x else None
+
+
 def run_design(args, argv) -> dict:
     import jax
     import numpy as np
@@ -306,6 +314,8 @@ def run_design(args, argv) -> dict:
         "per_seed": [{"seed": s, **e.summary(), "rms_min_um": float(np.min(e.rms_um))}
                      for s, e in zip(seeds, evals, strict=True)],
         "valid_designs": int(sum(e.valid for e in evals)),
+        "valid_designs_rms_mean_um": _mean_or_none([e.rms_mean_um for e in evals if e.valid]),
+        "valid_designs_rms_min_um": _min_or_none([e.rms_mean_um for e in evals if e.valid]),
         "loss_first_step": loss_first[0] if loss_first else None,
         "spot_rms_first_um": float(np.min(rms_hist[0][0]) * 1e3) if rms_hist else None,
         "spot_rms_last_um": float(np.min(rms_hist[-1][-1]) * 1e3) if rms_hist else None,
@@ -325,7 +335,10 @@ def run_design(args, argv) -> dict:
     log(f"paraxial EFL {ev.efl:.4f} mm (nominal f {spec.focal_length:.4f}), paraxial F/"
         f"{ev.fnum:.3f} (nominal F/{spec.fnum}), BFL {ev.bfl:.3f} mm, track "
         f"{ev.total_track:.3f} mm, distortion at {spec.half_fov}° {ev.distortion_percent:.1f} %")
-    log(f"{summary['valid_designs']}/{len(seeds)} seeds valid; per seed mean RMS (µm): " +
+    avg = _fmt(summary["valid_designs_rms_mean_um"])
+    low = _fmt(summary["valid_designs_rms_min_um"])
+    log(f"{summary['valid_designs']}/{len(seeds)} seeds valid (their average RMS {avg} µm, "
+        f"best {low} µm); per seed mean RMS (µm): " +
         ", ".join(f"{s}:{e.rms_mean_um:.2f}{'' if e.valid else '(invalid)'}"
                   for s, e in zip(seeds, evals, strict=True)))
     log(f"wall time {summary['seconds']['total']:.1f} s (design {t_design:.1f} s); "
@@ -345,17 +358,15 @@ def run_ablation(args, argv) -> dict:
     seeds = list(range(args.first_seed, args.first_seed + args.ablation_seeds))
     out = args.ablation_out
     os.makedirs(os.path.join(out, "designs"), exist_ok=True)
-    wanted = None if not args.columns else {c.strip() for c in args.columns.split(",")}
-    json_path = os.path.join(out, "table1.json")
-    table = {"command": "python -m jaxlens.experiments.classical " + shlex.join(argv),
-             "convention": CONVENTION, "spec": dataclasses.asdict(spec),
-             "devices": len(jax.devices()), "paper_full_method": PAPER_TABLE1_FULL,
-             "columns": {}}
-    if wanted is not None and os.path.exists(json_path):
-        with open(json_path) as f:
-            table["columns"] = json.load(f).get("columns", {})
+    os.makedirs(os.path.join(out, "columns"), exist_ok=True)
+    names = [c for c, _ in ABLATION_COLUMNS]
+    wanted = names if not args.columns else [c.strip() for c in args.columns.split(",")]
+    unknown = [c for c in wanted if c not in names]
+    if unknown:
+        raise ValueError(f"--columns: unknown column(s) {unknown}; use {names}")
+    command = "python -m jaxlens.experiments.classical " + shlex.join(argv)
     for name, switches in ABLATION_COLUMNS:
-        if wanted is not None and name not in wanted:
+        if name not in wanted:
             continue
         cfg = dataclasses.replace(base, **switches)
         print(f"== {name}: {switches}, {len(seeds)} seeds", flush=True)
@@ -375,7 +386,8 @@ def run_ablation(args, argv) -> dict:
         valid = [e.valid for e in evs]
         rms = [e.rms_mean_um for e, v in zip(evs, valid, strict=True) if v]
         col = {
-            "switches": switches, "config": dataclasses.asdict(cfg), "seeds": seeds,
+            "command": command, "switches": switches, "config": dataclasses.asdict(cfg),
+            "seeds": seeds, "devices": len(jax.devices()),
             "no_self_intersection_percent": 100.0 * float(np.mean(no_si)),
             "valid_percent": 100.0 * float(np.mean(valid)),
             "rms_mean_um": float(np.mean(rms)) if rms else None,
@@ -383,9 +395,9 @@ def run_ablation(args, argv) -> dict:
             "rms_max_um": float(np.max(rms)) if rms else None,
             "non_finite_seeds": {str(k): v for k, v in failed.items()},
             "wall_seconds": wall, "seconds_per_design": wall / len(seeds),
+            "stage_seconds": dict(zip(res.history.stages, res.history.seconds, strict=True)),
             "per_seed": [{"seed": s, **e.summary()} for s, e in zip(seeds, evs, strict=True)],
         }
-        table["columns"][name] = col
         if name == "+both+mask":
             for i, s in enumerate(seeds):
                 jaxlens.save(finished_lens(res, i, spec),
@@ -393,11 +405,35 @@ def run_ablation(args, argv) -> dict:
         print(f"{name}: no self-intersection {col['no_self_intersection_percent']:.0f} %, valid "
               f"{col['valid_percent']:.0f} %, RMS mean {col['rms_mean_um']} µm, min "
               f"{col['rms_min_um']} µm, {col['seconds_per_design']:.1f} s/design", flush=True)
-        with open(json_path, "w") as f:
-            json.dump(table, f, indent=2, default=float)
-        _write_table_md(table, os.path.join(out, "table1.md"))
+        fname = name.replace("+", "plus_").strip("_") or "baseline"
+        with open(os.path.join(out, "columns", f"{fname}.json"), "w") as f:
+            json.dump(col, f, indent=2, default=float)
+        build_table(out, spec)
+    return build_table(out, spec)
+
+
+def build_table(out: str, spec) -> dict:
+    """Collect ``columns/*.json`` into ``table1.json``, ``table1.md`` and ``command.txt``.
+
+    Columns may come from separate processes (``--columns`` subsets run side by side).
+    """
+    cols = {}
+    folder = os.path.join(out, "columns")
+    for fn in sorted(os.listdir(folder)) if os.path.isdir(folder) else []:
+        if fn.endswith(".json"):
+            with open(os.path.join(folder, fn)) as f:
+                col = json.load(f)
+            name = next((n for n, sw in ABLATION_COLUMNS if sw == col["switches"]), fn[:-5])
+            cols[name] = col
+    commands = sorted({c["command"] for c in cols.values()})
+    table = {"commands": commands, "convention": CONVENTION, "spec": dataclasses.asdict(spec),
+             "paper_full_method": PAPER_TABLE1_FULL,
+             "columns": {n: cols[n] for n, _ in ABLATION_COLUMNS if n in cols}}
+    with open(os.path.join(out, "table1.json"), "w") as f:
+        json.dump(table, f, indent=2, default=float)
+    _write_table_md(table, os.path.join(out, "table1.md"))
     with open(os.path.join(out, "command.txt"), "w") as f:
-        f.write(table["command"] + "\n")
+        f.write("\n".join(commands) + "\n")
     return table
 
 
@@ -410,7 +446,7 @@ def _write_table_md(table: dict, path: str) -> None:
     lines = [
         "# Table 1 (jaxlens): ablation of the curriculum design",
         "",
-        f"Command: `{table['command']}`",
+        "Commands: " + "; ".join(f"`{c}`" for c in table["commands"]),
         "",
         f"Convention: {table['convention']}.",
         "",
@@ -434,8 +470,10 @@ def _write_table_md(table: dict, path: str) -> None:
         lines.append(f"| {label} | " + " | ".join(_fmt(c[k].get(key), nd) for k in cols) +
                      f" | {paper} |")
     seeds = sorted({s for k in cols for s in c[k]["seeds"]})
+    devices = sorted({c[k].get("devices", 1) for k in cols})
     lines += ["", f"Seeds: {seeds[0]}–{seeds[-1]} ({len(seeds)} random starts per column), "
-              f"{table['devices']} XLA CPU device(s).", ""]
+              f"{'/'.join(map(str, devices))} XLA CPU device(s). Wall time per design = the "
+              "column's wall time (all seeds designed together) / seeds.", ""]
     with open(path, "w") as f:
         f.write("\n".join(lines))
 
