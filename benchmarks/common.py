@@ -218,6 +218,8 @@ def md_table(header: list[str], rows: list[list]) -> str:
     lines = ["| " + " | ".join(header) + " |", "|" + "---|" * len(header)]
     for r in rows:
         lines.append(
-            "| " + " | ".join(fmt(v) if isinstance(v, float) else str(v) for v in r) + " |"
+            "| "
+            + " | ".join(fmt(v) if isinstance(v, float) or v is None else str(v) for v in r)
+            + " |"
         )
     return "\n".join(lines)
