@@ -276,12 +276,16 @@ class Tolerances:
     asphere: float = 0.01
 
 
-def perturb(lens: Lens, key, tol: Tolerances = Tolerances()) -> Lens:
+def perturb(lens: Lens, key, tol: Tolerances = Tolerances(), *, scale=1.0) -> Lens:
     """A random copy of the lens with manufacturing and registration errors (``tol``).
 
     Curvatures, even and odd coefficients get relative Gaussian errors, every thickness an
     absolute one, and the sensor (last gap) its own; the stop and the system data are kept.
+    ``scale`` (a number or an array) multiplies every standard deviation (0: no change).
     """
+    dt = lens.thickness.dtype
+    tol = Tolerances(*(jnp.asarray(scale, dt) * jnp.asarray(v, dt)
+                       for v in dataclasses.astuple(tol)))
     keys = jax.random.split(key, 4 * len(lens.surfaces) + 2)
     surfaces = []
     for i, s in enumerate(lens.surfaces):

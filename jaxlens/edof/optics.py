@@ -13,8 +13,8 @@ scene window of ``(P + k − 1)²`` pixels convolved ("valid") with the RGB PSF 
 position (``rgb_psf``: geometric, the model of ``jaxlens.psf``, jittered pupil samples).
 Each patch is a ``jax.checkpoint``, so the backward pass re-traces its rays instead of
 storing them and the memory of a gradient grows with the patch, as in ``jaxlens.render``.
-Whole test images go through ``jaxlens.render`` (method "psf", checkpointed tiles) on the
-pre-warped scene (``jaxlens.distortion_relax.relaxed_render``).
+Whole test images are rendered tile by tile with the same model (``render_tiled``);
+``render_library`` renders them through ``jaxlens.render`` as a cross-check.
 """
 
 from __future__ import annotations
@@ -28,6 +28,7 @@ from jaxtyping import Array, Float
 from .. import psf as _psf
 from .. import sampling
 from ..lens import Lens
+from ..render import pixel_positions
 from ..trace import trace
 from .lenses import DEPTHS_M, WAVELENGTHS_RGB, object_depth
 
@@ -69,8 +70,9 @@ def rgb_psf(
     The rays leave the object point for ``pupil²`` points of the entrance-pupil disc
     (``pupil_disc``, jittered by ``key``), aimed at the paraxial entrance pupil (exact for a
     stop-first lens, whose entrance pupil is the stop), weighted by cos⁴ of their launch
-    angle and splatted bilinearly (``jaxlens.psf.splat``) around the chief ray of the
-    primary wavelength. Each channel is normalised to unit sum over the kernel.
+    angle and splatted bilinearly (``jaxlens.psf.splat``) around the chief ray of the middle
+    channel (green, 587 nm), so lateral colour shows as a shift between the channels. Each
+    channel is normalised to unit sum over the kernel.
 
     Only rays inside the pupil are launched: none fails at the stop, so no ray is carried
     invalid through the lens (where a stale far-away ray can make the gradient NaN).
@@ -78,19 +80,19 @@ def rgb_psf(
     dtype = lens.epd.dtype
     field = field_of(lens, xy)
     obj = sampling.object_point(lens, field, object_depth(lens, depth))
-    pts = pupil_disc(pupil, key, dtype)
-    chief = trace(lens, sampling.point_source(lens, obj, jnp.zeros((1, 2), dtype),
-                                              lens.primary_wavelength))
-    ref = chief.origin[0, :2]
+    # The chief ray rides along as the first ray of every channel (one trace to compile).
+    pts = jnp.concatenate([jnp.zeros((1, 2), dtype), pupil_disc(pupil, key, dtype)])
 
     def one(wl):
         rays = sampling.point_source(lens, obj, pts, wl)
         out = trace(lens, rays)
-        w = jnp.where(out.valid, rays.direction[:, 2] ** 4, 0.0)
-        k = _psf.splat(out.origin[:, :2] - ref, w, kernel_size, pixel_size)
-        return k / jnp.maximum(jnp.sum(k), 1e-12)
+        w = jnp.where(out.valid, rays.direction[:, 2] ** 4, 0.0).at[0].set(0.0)
+        return out.origin[:, :2], w
 
-    return jax.vmap(one)(jnp.asarray(wavelengths, dtype))
+    pos, w = jax.vmap(one)(jnp.asarray(wavelengths, dtype))  # [C, 1 + m, 2], [C, 1 + m]
+    ref = pos[len(wavelengths) // 2, 0]  # chief ray of the middle (green) channel
+    k = jax.vmap(lambda p, ww: _psf.splat(p - ref, ww, kernel_size, pixel_size))(pos, w)
+    return k / jnp.maximum(jnp.sum(k, axis=(-1, -2), keepdims=True), 1e-12)
 
 
 def conv_valid(window: Float[Array, "N N C"], kern: Float[Array, "C k k"]) -> Array:
@@ -133,14 +135,49 @@ def simulate_patch(
     return jax.checkpoint(run)(lens, window, xy, depth, key)
 
 
-def render_image(lens: Lens, scene, depth, key, *, kernel_size: int, spp: int = 1,
-                 patch: int = 64):
-    """Whole-sensor image of ``scene`` at ``depth`` (mm from the stop), aligned with it.
+@eqx.filter_jit
+def render_tiled(lens: Lens, scene: Float[Array, "S S 3"], depth, *, kernel_size: int,
+                 pixel_size: float, patch: int, pupil: int) -> Float[Array, "S S 3"]:
+    """Whole-sensor image of ``scene`` at ``depth`` (mm from the stop), tile by tile.
 
-    ``jaxlens.distortion_relax.relaxed_render`` with method "psf", checkpointed tiles and
-    no relative-illumination falloff (a shift-invariant network cannot undo shading that
-    depends on the position in the frame; the paper's simulation leaves it out too).
+    The sensor is cut into ``patch × patch`` tiles (the training patch size); each tile is
+    its scene window convolved with the RGB PSF of its centre (``rgb_psf``, ``pupil²`` rays
+    per channel, no jitter), exactly the training model. The scene is edge-padded by half a
+    kernel. This is ``jaxlens.render``'s "psf" method without its distortion warp and
+    relative-illumination shading: the PSFs are centred on the chief ray, so the image stays
+    aligned with the scene (the paper's distortion relaxation), and a shift-invariant
+    network could not undo shading that depends on the position in the frame.
     """
+    res = lens.sensor.resolution
+    if scene.shape[:2] != tuple(res):
+        raise ValueError(f"render_tiled: scene {scene.shape[:2]} must match the sensor {res}")
+    h = kernel_size // 2
+    n_ty, n_tx = -(-res[0] // patch), -(-res[1] // patch)
+    ph, pw = n_ty * patch - res[0], n_tx * patch - res[1]
+    padded = jnp.pad(scene, ((h, h + ph), (h, h + pw), (0, 0)), mode="edge")
+    win = patch + 2 * h
+
+    def tile(t):
+        ty, tx = t // n_tx, t % n_tx
+        r0, c0 = ty * patch, tx * patch
+        window = jax.lax.dynamic_slice(padded, (r0, c0, 0), (win, win, scene.shape[-1]))
+        rc = (r0 + 0.5 * (patch - 1)).astype(scene.dtype)
+        cc = (c0 + 0.5 * (patch - 1)).astype(scene.dtype)
+        x, y = pixel_positions(res, pixel_size, rc, cc)
+        kern = rgb_psf(lens, jnp.stack([x, y]), depth, kernel_size=kernel_size,
+                       pixel_size=pixel_size, pupil=pupil)
+        return conv_valid(window, kern)
+
+    tiles = jax.lax.map(tile, jnp.arange(n_ty * n_tx))
+    img = tiles.reshape(n_ty, n_tx, patch, patch, -1).transpose(0, 2, 1, 3, 4)
+    return img.reshape(n_ty * patch, n_tx * patch, -1)[: res[0], : res[1]]
+
+
+def render_library(lens: Lens, scene, depth, key, *, kernel_size: int, spp: int = 1,
+                   patch: int = 64):
+    """The same image through ``jaxlens.render`` (method "psf", checkpointed tiles) on the
+    pre-warped scene (``jaxlens.distortion_relax.relaxed_render``), without shading: a
+    cross-check of ``render_tiled`` by an independent code path."""
     from ..distortion_relax import relaxed_render
 
     img, _ = relaxed_render(

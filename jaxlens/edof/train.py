@@ -1,16 +1,18 @@
 """Joint training of a lens and a reconstruction network, and the evaluation of Table 2.
 
-Stage 1 trains the network together with the lens's free parameters (``HybridParams`` or
-``CubicParams``; none for the classical lens) on simulated patches with the paper's loss
+Stage 1 trains the network together with the lens's free parameters (``HybridParams`` gated
+by ``lenses.gates``: all for the hybrid lens, the tied cubic strength for the cubic plate,
+none for the classical lens) on simulated patches with the paper's loss
 (``losses.edof_loss``). Every batch draws two distinct depths of the 8 training depths and
 renders all its patches at both, with the three wavelengths of ``WAVELENGTHS_RGB``. Stage 2
 freezes the lens and refines the network on patches rendered through randomly perturbed
 copies of it (``lenses.perturb``: manufacturing and registration errors), one copy per
 patch, with ``L_rec`` alone.
 
-Each step is one jitted function (``eqx.filter_jit``); the Python loop over steps syncs
-with the host only every ``log_every`` steps. Gaussian read noise of standard deviation
-``noise`` is added to the simulations before the network sees them.
+Each step is one jitted function (``train_step``, shared by both stages and all three
+lenses); the Python loop over steps syncs with the host only every ``log_every`` steps.
+Gaussian read noise of standard deviation ``noise`` is added to the simulations before the
+network sees them.
 """
 
 from __future__ import annotations
@@ -29,8 +31,11 @@ import optax
 from ..lens import Lens
 from ..nets import NAFNet
 from .lenses import DEPTHS_M, Tolerances, apply_gates, gates, perturb
-from .losses import edof_loss, l_rec
-from .optics import render_image, simulate_patch
+from .losses import edof_loss
+from .optics import render_tiled, simulate_patch
+
+STAGE2_LR_SCALE = 0.3
+"""Stage 2's network learning rate relative to stage 1's."""
 
 
 @dataclasses.dataclass(frozen=True)
@@ -52,7 +57,7 @@ class Config:
         n_odd: odd terms per axis of the hybrid surface (x³, x⁵, …).
         cubic_ratio: initial cubic strength, as a multiple of the defocus it hides
             (``lenses.cubic_strength_guess``); the hybrid starts at half of the plate's.
-        eval_spp: rays per kernel pixel of the evaluation renders.
+        eval_pupil: pupil samples per side of the evaluation PSFs.
         seed: random seed.
         log_every: host sync / progress-bar refresh interval (steps).
     """
@@ -61,7 +66,7 @@ class Config:
     patch: int = 64
     kernel_size: int = 41
     batch: int = 4
-    pupil: int = 48
+    pupil: int = 32
     steps: int = 400
     steps2: int = 100
     lr_net: float = 1e-3
@@ -75,7 +80,7 @@ class Config:
     dec_blocks: tuple[int, ...] = (1, 1, 1)
     n_odd: int = 3
     cubic_ratio: float = 1.5
-    eval_spp: int = 2
+    eval_pupil: int = 64
     seed: int = 0
     log_every: int = 10
     tolerances: Tolerances = dataclasses.field(default_factory=Tolerances)
@@ -112,18 +117,30 @@ def make_optimizer(cfg: Config, steps: int, *, lens: bool = True):
     return optax.multi_transform({"net": net_opt, "lens": optax.adam(cfg.lr_lens)}, _labels)
 
 
-def _simulate_batch(lens, windows, xy, depths, key, cfg: Config):
-    """``[2, B, P, P, 3]`` patches at the two depths (one PSF per patch and depth)."""
+def _simulate_batch(lens, windows, xy, depths, key, cfg: Config, perturbation=None):
+    """``[2, B, P, P, 3]`` patches at the two depths (one PSF per patch and depth).
+
+    With ``perturbation`` (an array scale of ``cfg.tolerances``), every patch is rendered
+    through its own randomly perturbed copy of the lens (``lenses.perturb``).
+    """
     b = windows.shape[0]
-    keys = jax.random.split(key, 2 * b).reshape(2, b, -1)
+    k_sim, k_pert = jax.random.split(key)
+    keys = jax.random.split(k_sim, 2 * b).reshape(2, b, -1)
     pix = cfg.binning * 0.00497
 
-    def one(window, p, d, k):
-        return simulate_patch(lens, window, p, d, k, kernel_size=cfg.kernel_size,
+    def one(ln, window, p, d, k):
+        return simulate_patch(ln, window, p, d, k, kernel_size=cfg.kernel_size,
                               pixel_size=pix, pupil=cfg.pupil)
 
-    per_depth = jax.vmap(one, in_axes=(0, 0, None, 0))
-    return jax.vmap(per_depth, in_axes=(None, None, 0, 0))(windows, xy, depths, keys)
+    if perturbation is None:
+        per_depth = jax.vmap(one, in_axes=(None, 0, 0, None, 0))
+        return jax.vmap(per_depth, in_axes=(None, None, None, 0, 0))(lens, windows, xy, depths,
+                                                                   keys)
+    lenses = jax.vmap(lambda k: perturb(lens, k, cfg.tolerances, scale=perturbation))(
+        jax.random.split(k_pert, b))
+    per_depth = jax.vmap(one, in_axes=(0, 0, 0, None, 0))
+    return jax.vmap(per_depth, in_axes=(None, None, None, 0, 0))(lenses, windows, xy, depths,
+                                                               keys)
 
 
 def _gt(windows, cfg: Config):
@@ -138,19 +155,22 @@ def _reconstruct(net, sims, key, noise):
 
 
 @eqx.filter_jit
-def stage1_step(net, params, opt_state, base_lens, windows, xy, depths, key, gate, tie, *,
-                cfg: Config, optimizer):
-    """One joint step; returns (net, params, opt_state, loss, parts).
+def train_step(net, params, opt_state, base_lens, windows, xy, depths, key, gate, tie,
+               perturbation, net_scale, *, cfg: Config, optimizer):
+    """One training step of either stage; returns (net, params, opt_state, loss, parts).
 
-    ``gate`` and ``tie`` (``lenses.gates``, arrays) say which lens parameters move, so the
-    classical, cubic-plate and hybrid lenses share one compiled step.
+    Stage 1 (joint): ``gate`` and ``tie`` (``lenses.gates``) say which lens parameters move,
+    ``perturbation = 0``. Stage 2: ``gate`` all zero (the lens is frozen, so L_sim and L_raw
+    do not reach the network and only L_rec trains it) and ``perturbation = 1`` (each patch
+    through a randomly perturbed lens). ``net_scale`` scales the network's updates. All of
+    these are arrays, so the three lenses and both stages share one compiled step.
     """
     k_sim, k_noise = jax.random.split(key)
 
     def loss_fn(trainable):
         net, params = trainable
         lens = params.apply(base_lens)
-        sims = _simulate_batch(lens, windows, xy, depths, k_sim, cfg)
+        sims = _simulate_batch(lens, windows, xy, depths, k_sim, cfg, perturbation)
         recs = _reconstruct(net, sims, k_noise, cfg.noise)
         return edof_loss(recs, sims, _gt(windows, cfg), w_sim=cfg.w_sim, w_raw=cfg.w_raw)
 
@@ -160,35 +180,10 @@ def stage1_step(net, params, opt_state, base_lens, windows, xy, depths, key, gat
     grads = (g_net, apply_gates(g_lens, gate, tie))
     updates, opt_state = optimizer.update(grads, opt_state, eqx.filter(trainable,
                                                                       eqx.is_inexact_array))
-    net, params = eqx.apply_updates(trainable, updates)
+    u_net, u_lens = updates
+    u_net = jax.tree_util.tree_map(lambda u: u * net_scale.astype(u.dtype), u_net)
+    net, params = eqx.apply_updates(trainable, (u_net, u_lens))
     return net, params, opt_state, loss, parts
-
-
-@eqx.filter_jit
-def stage2_step(net, opt_state, lens, windows, xy, depths, key, *, cfg: Config, optimizer):
-    """One network-only step on perturbed copies of a frozen lens (one per patch)."""
-    k_pert, k_sim, k_noise = jax.random.split(key, 3)
-    b = windows.shape[0]
-    lenses = jax.vmap(lambda k: perturb(lens, k, cfg.tolerances))(jax.random.split(k_pert, b))
-    pix = cfg.binning * 0.00497
-    keys = jax.random.split(k_sim, 2 * b).reshape(2, b, -1)
-
-    def one(ln, window, p, d, k):
-        return simulate_patch(ln, window, p, d, k, kernel_size=cfg.kernel_size,
-                              pixel_size=pix, pupil=cfg.pupil)
-
-    per_depth = jax.vmap(one, in_axes=(0, 0, 0, None, 0))
-    sims = jax.vmap(per_depth, in_axes=(None, None, None, 0, 0))(lenses, windows, xy, depths,
-                                                               keys)
-    sims = jax.lax.stop_gradient(sims)
-
-    def loss_fn(net):
-        recs = _reconstruct(net, sims, k_noise, cfg.noise)
-        return l_rec(recs, _gt(windows, cfg))
-
-    loss, grads = eqx.filter_value_and_grad(loss_fn)(net)
-    updates, opt_state = optimizer.update(grads, opt_state, eqx.filter(net, eqx.is_inexact_array))
-    return eqx.apply_updates(net, updates), opt_state, loss
 
 
 class BatchSource:
@@ -226,60 +221,46 @@ def train(
     """Stage 1 then stage 2 for one lens; returns ``(net, params, history)``.
 
     ``kind`` ("classical", "cubic" or "hybrid") selects the free lens parameters
-    (``lenses.gates``).
-
-    ``history`` holds the loss parts every ``log_every`` steps of stage 1 (``stage1``, a
-    list of dicts with ``step``, ``loss``, ``rec``, ``sim``, ``raw``) and the L_rec of
-    stage 2 (``stage2``).
+    (``lenses.gates``). Stage 2 restarts the network's Adam state with its learning rate
+    scaled by ``STAGE2_LR_SCALE``. ``history`` holds the loss parts every ``log_every``
+    steps (``stage1``: dicts with ``step``, ``loss``, ``rec``, ``sim``, ``raw``; ``stage2``:
+    dicts with ``step`` and ``rec``).
     """
-    opt1 = make_optimizer(cfg, cfg.steps)
-    trainable = eqx.filter((net, params), eqx.is_inexact_array)
-    state = opt1.init(trainable)
+    dtype = params.c.dtype
+    opt = make_optimizer(cfg, max(cfg.steps, cfg.steps2))
     gate, tie = gates(params, kind)
+    frozen, _ = gates(params, "classical")
+    stages = (
+        (1, cfg.steps, gate, tie, 0.0, 1.0),
+        (2, cfg.steps2, frozen, jnp.zeros((), dtype), 1.0, STAGE2_LR_SCALE),
+    )
     hist: dict[str, list] = {"stage1": [], "stage2": []}
-    acc = []
-    bar = progress(total=cfg.steps + cfg.steps2, desc=f"{name}") if progress else None
-    for step in range(cfg.steps):
-        key, sub = jax.random.split(key)
-        windows, xy, depths = source()
-        net, params, state, loss, parts = stage1_step(
-            net, params, state, base_lens, windows, xy, depths, sub, gate, tie, cfg=cfg,
-            optimizer=opt1)
-        acc.append((loss, parts))
-        if (step + 1) % cfg.log_every == 0 or step + 1 == cfg.steps:
+    bar = progress(total=cfg.steps + cfg.steps2, desc=name) if progress else None
+    for stage, steps, g, t, pert, scale in stages:
+        state = opt.init(eqx.filter((net, params), eqx.is_inexact_array))
+        pert, scale = jnp.asarray(pert, dtype), jnp.asarray(scale, dtype)
+        acc = []
+        for step in range(steps):
+            key, sub = jax.random.split(key)
+            windows, xy, depths = source()
+            net, params, state, loss, parts = train_step(
+                net, params, state, base_lens, windows, xy, depths, sub, g, t, pert, scale,
+                cfg=cfg, optimizer=opt)
+            acc.append((loss, parts))
+            if (step + 1) % cfg.log_every and step + 1 != steps:
+                continue
             vals = jax.device_get(acc)
             acc = []
             rec = {"step": step + 1, "loss": float(np.mean([v[0] for v in vals]))}
             for k in ("rec", "sim", "raw"):
                 rec[k] = float(np.mean([v[1][k] for v in vals]))
             if not math.isfinite(rec["loss"]):
-                raise FloatingPointError(f"train[{name}]: non-finite loss at stage 1 step "
-                                         f"{step + 1}")
-            hist["stage1"].append(rec)
+                raise FloatingPointError(f"train[{name}]: non-finite loss at stage {stage} "
+                                         f"step {step + 1}")
+            hist[f"stage{stage}"].append(rec if stage == 1 else
+                                         {"step": rec["step"], "rec": rec["rec"]})
             if bar is not None:
-                bar.set_postfix(stage=1, loss=f"{rec['loss']:.4f}", rec=f"{rec['rec']:.4f}")
-                bar.update(len(vals))
-    lens = jax.lax.stop_gradient(params.apply(base_lens))
-    opt2 = make_optimizer(dataclasses.replace(cfg, lr_net=cfg.lr_net * 0.3), cfg.steps2,
-                          lens=False)
-    state2 = opt2.init(eqx.filter(net, eqx.is_inexact_array))
-    acc = []
-    for step in range(cfg.steps2):
-        key, sub = jax.random.split(key)
-        windows, xy, depths = source()
-        net, state2, loss = stage2_step(net, state2, lens, windows, xy, depths, sub, cfg=cfg,
-                                        optimizer=opt2)
-        acc.append(loss)
-        if (step + 1) % cfg.log_every == 0 or step + 1 == cfg.steps2:
-            vals = jax.device_get(acc)
-            acc = []
-            rec = {"step": step + 1, "rec": float(np.mean(vals))}
-            if not math.isfinite(rec["rec"]):
-                raise FloatingPointError(f"train[{name}]: non-finite loss at stage 2 step "
-                                         f"{step + 1}")
-            hist["stage2"].append(rec)
-            if bar is not None:
-                bar.set_postfix(stage=2, rec=f"{rec['rec']:.4f}")
+                bar.set_postfix(stage=stage, loss=f"{rec['loss']:.4f}", rec=f"{rec['rec']:.4f}")
                 bar.update(len(vals))
     if bar is not None:
         bar.close()
@@ -297,12 +278,16 @@ def _restore(net, img):
 def evaluate(lens: Lens, net: NAFNet, images, depths_m, cfg: Config, *, key, keep=None):
     """PSNR and SSIM of simulation and reconstruction on whole test images.
 
+    Each test image fills the sensor; it is rendered tile by tile (``optics.render_tiled``:
+    one RGB PSF per ``patch × patch`` tile, the training model on the whole frame), read
+    noise is added, and the network restores the whole frame at once.
+
     Args:
         lens: the (trained) lens with its sensor.
         net: the network.
         images: test scenes ``[S, S, 3]`` at the sensor resolution.
         depths_m: depths (m from the stop).
-        key: PRNG key for the renders and the noise (the same for every lens).
+        key: PRNG key for the noise (the same for every lens).
         keep: index of a test image whose images to return.
 
     Returns:
@@ -312,15 +297,17 @@ def evaluate(lens: Lens, net: NAFNet, images, depths_m, cfg: Config, *, key, kee
     """
     from skimage.metrics import peak_signal_noise_ratio, structural_similarity
 
+    pix = cfg.binning * 0.00497
     metrics, examples = {}, {}
     for d in depths_m:
         vals = {"sim": {"psnr": [], "ssim": []}, "rec": {"psnr": [], "ssim": []}}
         for i, img in enumerate(images):
-            k_r, k_n = jax.random.split(jax.random.fold_in(key, i))
             scene = jnp.asarray(img, lens.epd.dtype)
-            sim = render_image(lens, scene, 1e3 * d, k_r, kernel_size=cfg.kernel_size,
-                               spp=cfg.eval_spp)
-            sim = sim + cfg.noise * jax.random.normal(k_n, sim.shape, sim.dtype)
+            sim = render_tiled(lens, scene, jnp.asarray(1e3 * d, scene.dtype),
+                               kernel_size=cfg.kernel_size, pixel_size=pix, patch=cfg.patch,
+                               pupil=cfg.eval_pupil)
+            noise = jax.random.normal(jax.random.fold_in(key, i), sim.shape, sim.dtype)
+            sim = sim + cfg.noise * noise
             rec = np.asarray(_restore(net, sim), np.float64)
             sim = np.clip(np.asarray(sim, np.float64), 0.0, 1.0)
             gt = np.asarray(img, np.float64)
