@@ -9,6 +9,7 @@ from . import analysis as analysis
 from . import catalog as catalog
 from . import distortion_relax as distortion_relax
 from . import images as images
+from . import nets as nets
 from . import paraxial as paraxial
 from . import psf as psf  # callable: jaxlens.psf(...) is jaxlens.psf.psf(...)
 from . import radiometry as radiometry
