@@ -47,6 +47,8 @@ def main(argv: list[str] | None = None) -> dict:
     p.add_argument("--only", nargs="+", choices=CORE + OPTIONAL, help="run only these")
     p.add_argument("--out", type=pathlib.Path, default=None, help="output folder")
     p.add_argument("--no-plots", action="store_true", help="skip the matplotlib figures")
+    p.add_argument("--lenses", nargs="+", help="throughput: only these zoo lenses")
+    p.add_argument("--counts", nargs="+", type=int, help="throughput: only these ray counts")
     args = p.parse_args(argv)
 
     jax.config.update("jax_enable_x64", True)  # float64 runs next to float32
@@ -85,6 +87,10 @@ def main(argv: list[str] | None = None) -> dict:
         kwargs = {"smoke": args.smoke}
         if name == "throughput":
             kwargs["full"] = args.full
+            if args.lenses:
+                kwargs["lenses"] = tuple(args.lenses)
+            if args.counts:
+                kwargs["counts"] = list(args.counts)
         res = mod.run(**kwargs)
         wall = time.perf_counter() - t0
         results[name] = res
