@@ -278,14 +278,16 @@ class ImageObjective(eqx.Module):
 
     The scene (linear RGB, the sensor's aspect) is rendered by backward ray tracing
     (``jaxlens.render``, ``relative_illumination=False``) after the distortion relaxation of
-    ``jaxlens.distortion_relax.relaxed_render``: the object is pre-warped by the lens's own
-    distortion, so the loss sees blur and not distortion, and the alignment penalty (weight
-    ``alpha``, in pixels²) keeps distortion bounded. The residuals are the pixel
-    differences scaled by ``sqrt(weight / n_pixels)``, the penalty's square root, and the
-    ray objective's regularizer residuals (so the regularizers act as with the ray loss).
-    The stop's semi-diameter is set to the stage's EPD/2, as rendering needs a real
-    aperture. The mask and the per-epoch field weights still come from the ray loss
-    (``field_rms``).
+    ``jaxlens.distortion_relax``: the object is pre-warped by the lens's own distortion
+    (``prewarp``, held fixed for the gradient), so the loss sees blur and not distortion,
+    and the alignment penalty (``alignment_penalty``, weight ``alpha``, in pixels²) keeps
+    distortion bounded. (Differentiating through the pre-warp, as
+    ``distortion_relax.relaxed_render`` does, gave NaN gradients on a 32 × 32 sensor.) The
+    residuals are the pixel differences scaled by ``sqrt(weight / n_pixels)``, the
+    penalty's square root, and the ray objective's regularizer residuals (so the
+    regularizers act as with the ray loss). The stop's semi-diameter is set to the stage's
+    EPD/2, as rendering needs a real aperture. The mask and the per-epoch field weights
+    still come from the ray loss (``field_rms``).
 
     Attributes:
         ray: the ray ``Objective`` (parameterisation, sampling, regularizers).
@@ -311,7 +313,8 @@ class ImageObjective(eqx.Module):
         return self.ray.field_rms(params, args)
 
     def __call__(self, params, args: StageArgs):
-        from ..distortion_relax import relaxed_render
+        from ..distortion_relax import alignment_penalty, prewarp
+        from ..render import render
 
         res_ray, aux = self.ray(params, args)
         s = self.ray.sampling
@@ -321,9 +324,13 @@ class ImageObjective(eqx.Module):
         stop = eqx.tree_at(lambda x: x.semi_diameter, lens.surfaces[lens.stop], 0.5 * args.epd)
         surfaces = tuple(stop if i == lens.stop else x for i, x in enumerate(lens.surfaces))
         lens = eqx.tree_at(lambda x: (x.surfaces, x.epd), lens, (surfaces, args.epd))
-        img, pen = relaxed_render(lens, self.scene, spp=self.spp, key=jax.random.PRNGKey(0),
-                                  alpha=self.alpha, sensor=self.sensor,
-                                  relative_illumination=False)
+        # Distortion relaxation: render the scene pre-warped by the lens's current
+        # distortion, held fixed for the gradient (the pre-warp is not differentiated: the
+        # loss then sees blur, and the alignment penalty alone acts on distortion).
+        warped = prewarp(jax.lax.stop_gradient(lens), self.scene, sensor=self.sensor)
+        img = render(lens, warped, spp=self.spp, key=jax.random.PRNGKey(0),
+                     sensor=self.sensor, relative_illumination=False)
+        pen = alignment_penalty(lens, alpha=self.alpha, sensor=self.sensor)
         d = (img - self.scene).reshape(-1)
         d = d * jnp.sqrt(self.weight / d.shape[0])
         ok = pen > 0

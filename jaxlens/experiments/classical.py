@@ -365,9 +365,8 @@ def run_ablation(args, argv) -> dict:
     if unknown:
         raise ValueError(f"--columns: unknown column(s) {unknown}; use {names}")
     command = "python -m jaxlens.experiments.classical " + shlex.join(argv)
-    for name, switches in ABLATION_COLUMNS:
-        if name not in wanted:
-            continue
+    for name in wanted:  # in the order asked for
+        switches = dict(ABLATION_COLUMNS)[name]
         cfg = dataclasses.replace(base, **switches)
         print(f"== {name}: {switches}, {len(seeds)} seeds", flush=True)
         t0 = time.perf_counter()
