@@ -42,10 +42,14 @@ def _generator(key) -> np.random.Generator:
     if isinstance(key, np.random.Generator):
         return key
     if isinstance(key, jax.core.Tracer):
-        raise ValueError("NAFNet: parameters are drawn on the host; build the network "
-                         "outside jit/eval_shape (it takes well under a second)")
-    data = np.asarray(jax.random.key_data(key) if jax.dtypes.issubdtype(
-        key.dtype, jax.dtypes.prng_key) else key, np.uint32)
+        raise ValueError(
+            "NAFNet: parameters are drawn on the host; build the network "
+            "outside jit/eval_shape (it takes well under a second)"
+        )
+    data = np.asarray(
+        jax.random.key_data(key) if jax.dtypes.issubdtype(key.dtype, jax.dtypes.prng_key) else key,
+        np.uint32,
+    )
     return np.random.default_rng(data.ravel().tolist())
 
 
@@ -320,5 +324,6 @@ def num_parameters(model: eqx.Module) -> int:
     """Number of scalar parameters (floating-point array leaves) of a model, or of its
     ``eqx.filter_eval_shape`` skeleton."""
     leaves = jax.tree_util.tree_leaves(model)
-    return int(sum(x.size for x in leaves
-                   if hasattr(x, "dtype") and jnp.issubdtype(x.dtype, jnp.inexact)))
+    return int(
+        sum(x.size for x in leaves if hasattr(x, "dtype") and jnp.issubdtype(x.dtype, jnp.inexact))
+    )

@@ -37,8 +37,7 @@ def test_losses_on_known_values():
 def test_loss_shape_errors():
     gt = jnp.zeros((2, 4, 4, 3))
     with pytest.raises(ValueError, match="edof_loss"):
-        LS.edof_loss(jnp.zeros((3, 2, 4, 4, 3)), jnp.zeros((3, 2, 4, 4, 3)), gt, w_sim=1,
-                     w_raw=1)
+        LS.edof_loss(jnp.zeros((3, 2, 4, 4, 3)), jnp.zeros((3, 2, 4, 4, 3)), gt, w_sim=1, w_raw=1)
 
 
 # --- lenses and parameters -----------------------------------------------------------------
@@ -54,8 +53,10 @@ def test_classical_lens_meets_the_spec(classical):
     assert classical.sensor.resolution == (128, 128)
     assert float(classical.sensor.pixel_size) == pytest.approx(8 * 0.00497)
     # Focused at 20 cm: the on-axis spot there beats those at 10 cm and 10 m.
-    rms = [float(rms_spot(classical, jnp.array([0.0]), jnp.array([0.5876]),
-                          depth=d).polychromatic[0]) for d in (100.0, 200.0, 1e4)]
+    rms = [
+        float(rms_spot(classical, jnp.array([0.0]), jnp.array([0.5876]), depth=d).polychromatic[0])
+        for d in (100.0, 200.0, 1e4)
+    ]
     assert rms[1] < 0.5 * min(rms[0], rms[2])
 
 
@@ -66,8 +67,9 @@ def test_hybrid_params_round_trip_and_odd_terms(classical):
     # With zero odd terms the hybrid surface has the sag of the original asphere.
     flat = L.to_hybrid(classical, n_odd=3)
     x, y = jnp.array([0.3, -0.7, 1.1]), jnp.array([0.5, 0.2, -0.4])
-    np.testing.assert_allclose(flat.surfaces[1].sag(x, y)[0], classical.surfaces[1].sag(x, y)[0],
-                               rtol=1e-12, atol=1e-15)
+    np.testing.assert_allclose(
+        flat.surfaces[1].sag(x, y)[0], classical.surfaces[1].sag(x, y)[0], rtol=1e-12, atol=1e-15
+    )
     p = L.HybridParams.from_lens(hyb)
     back = p.apply(hyb)
     for a, b in zip(jax.tree_util.tree_leaves(back), jax.tree_util.tree_leaves(hyb), strict=True):
@@ -85,9 +87,16 @@ def test_hybrid_params_round_trip_and_odd_terms(classical):
 def test_gates_select_and_tie_parameters(classical):
     p = L.HybridParams.from_lens(L.to_hybrid(classical, n_odd=3, cubic=0.003))
     g = jax.tree_util.tree_map(lambda v: jnp.ones_like(v) * 2.0, p)
-    g = g.__class__(c=g.c, k=g.k, even=g.even, odd_x=jnp.array([1.0, 2.0, 3.0]),
-                    odd_y=jnp.array([3.0, 4.0, 5.0]), focus=g.focus, radius=g.radius,
-                    index=g.index)
+    g = g.__class__(
+        c=g.c,
+        k=g.k,
+        even=g.even,
+        odd_x=jnp.array([1.0, 2.0, 3.0]),
+        odd_y=jnp.array([3.0, 4.0, 5.0]),
+        focus=g.focus,
+        radius=g.radius,
+        index=g.index,
+    )
     gate, tie = L.gates(p, "classical")
     out = L.apply_gates(g, gate, tie)
     assert all(float(jnp.sum(jnp.abs(v))) == 0 for v in jax.tree_util.tree_leaves(out))
@@ -167,12 +176,32 @@ def test_smoke_run_writes_outputs_and_loss_falls(tmp_path):
     from jaxlens.experiments import edof
 
     out = tmp_path / "edof"
-    summary = edof.run(["--smoke", "--quiet", "--lenses", "classical,hybrid", "--out",
-                        str(out), "--record", str(tmp_path / "rec")])
-    for name in ("table2.json", "table2.md", "summary.json", "command.txt", "loss.png",
-                 "psf_grid_hybrid.png", "mtf_by_depth.png", "odd_profile.png",
-                 "reconstructions.png", "lenses/hybrid.json", "lenses/hybrid.zmx",
-                 "nets/hybrid.eqx"):
+    summary = edof.run(
+        [
+            "--smoke",
+            "--quiet",
+            "--lenses",
+            "classical,hybrid",
+            "--out",
+            str(out),
+            "--record",
+            str(tmp_path / "rec"),
+        ]
+    )
+    for name in (
+        "table2.json",
+        "table2.md",
+        "summary.json",
+        "command.txt",
+        "loss.png",
+        "psf_grid_hybrid.png",
+        "mtf_by_depth.png",
+        "odd_profile.png",
+        "reconstructions.png",
+        "lenses/hybrid.json",
+        "lenses/hybrid.zmx",
+        "nets/hybrid.eqx",
+    ):
         assert (out / name).is_file(), name
         assert os.path.getsize(out / name) > 0
     table = json.loads((out / "table2.json").read_text())

@@ -22,8 +22,9 @@ KEY = jax.random.PRNGKey(0)
 
 @pytest.fixture(scope="module")
 def small_net():
-    return NAFNet(width=4, enc_blocks=(1, 1), middle_blocks=1, dec_blocks=(1, 1), key=KEY,
-                  dtype=jnp.float32)
+    return NAFNet(
+        width=4, enc_blocks=(1, 1), middle_blocks=1, dec_blocks=(1, 1), key=KEY, dtype=jnp.float32
+    )
 
 
 @eqx.filter_jit
@@ -82,16 +83,23 @@ def test_layernorm2d_normalises_each_pixel_over_channels():
 
 def test_simple_gate_multiplies_the_two_halves():
     x = jnp.arange(12.0).reshape(1, 2, 6)
-    np.testing.assert_array_equal(np.asarray(simple_gate(x)),
-                                  np.asarray(x[..., :3] * x[..., 3:]))
+    np.testing.assert_array_equal(np.asarray(simple_gate(x)), np.asarray(x[..., :3] * x[..., 3:]))
 
 
 def test_depthwise_matches_grouped_convolution():
     dw = Depthwise(3, key=KEY)
     x = jax.random.normal(KEY, (6, 5, 3))
-    ref = jax.lax.conv_general_dilated(
-        x[None], dw.weight[:, :, None, :], (1, 1), "SAME",
-        dimension_numbers=("NHWC", "HWIO", "NHWC"), feature_group_count=3)[0] + dw.bias
+    ref = (
+        jax.lax.conv_general_dilated(
+            x[None],
+            dw.weight[:, :, None, :],
+            (1, 1),
+            "SAME",
+            dimension_numbers=("NHWC", "HWIO", "NHWC"),
+            feature_group_count=3,
+        )[0]
+        + dw.bias
+    )
     np.testing.assert_allclose(np.asarray(dw(x)), np.asarray(ref), rtol=1e-5, atol=1e-6)
 
 
@@ -107,5 +115,6 @@ def test_strided_conv_halves_and_pixel_shuffle_doubles():
     for a in range(2):
         for b in range(2):
             for ch in range(2):
-                np.testing.assert_array_equal(np.asarray(z[a::2, b::2, ch]),
-                                              np.asarray(y[..., 4 * ch + 2 * a + b]))
+                np.testing.assert_array_equal(
+                    np.asarray(z[a::2, b::2, ch]), np.asarray(y[..., 4 * ch + 2 * a + b])
+                )

@@ -29,17 +29,31 @@ from ..lens import Lens, Sensor
 from .lenses import FOCUS_DEPTH, SPEC, WAVELENGTHS_RGB
 
 
-def classical_spec(*, n_elements: int = 4, materials=("E48R", "OKP4", "E48R", "E48R"),
-                   total_track: float = 6.6, bfl: float = 0.8):
+def classical_spec(
+    *,
+    n_elements: int = 4,
+    materials=("E48R", "OKP4", "E48R", "E48R"),
+    total_track: float = 6.6,
+    bfl: float = 0.8,
+):
     """The ``DesignSpec`` of the classical lens (see the module docstring)."""
     from ..design.spec import DesignSpec
 
     half = 0.5 * SPEC["fov_deg"]
     f = 0.5 * SPEC["image_height_mm"] / math.tan(math.radians(half))
-    return DesignSpec(fov=SPEC["fov_deg"], fnum=f / SPEC["epd_mm"],
-                      sensor_diagonal=SPEC["image_height_mm"], n_elements=n_elements,
-                      materials=tuple(materials), total_track=total_track, bfl=bfl, stop=0,
-                      fov_start=40.0, fnum_start=2.8, name="edof_classical")
+    return DesignSpec(
+        fov=SPEC["fov_deg"],
+        fnum=f / SPEC["epd_mm"],
+        sensor_diagonal=SPEC["image_height_mm"],
+        n_elements=n_elements,
+        materials=tuple(materials),
+        total_track=total_track,
+        bfl=bfl,
+        stop=0,
+        fov_start=40.0,
+        fnum_start=2.8,
+        name="edof_classical",
+    )
 
 
 def _mean_rms(lens: Lens, depth_mm: float, fields) -> float:
@@ -49,8 +63,9 @@ def _mean_rms(lens: Lens, depth_mm: float, fields) -> float:
     return float(jnp.sqrt(jnp.mean(r.polychromatic**2)))
 
 
-def refocus(lens: Lens, depth_mm: float = FOCUS_DEPTH, *, span: float = 0.3, n: int = 61,
-            fields=None) -> tuple[Lens, float]:
+def refocus(
+    lens: Lens, depth_mm: float = FOCUS_DEPTH, *, span: float = 0.3, n: int = 61, fields=None
+) -> tuple[Lens, float]:
     """Move the sensor to the best focus for an object ``depth_mm`` in front of surface 1.
 
     A grid search over the last gap (±``span`` mm, ``n`` points), then a parabola through the
@@ -80,19 +95,23 @@ def finish(lens: Lens, name: str = "edof_classical") -> Lens:
     lens = lens.astype(jnp.float64)
     n = SPEC["sensor_pixels"]
     out = Lens(
-        surfaces=lens.surfaces, thickness=lens.thickness, materials=lens.materials,
-        stop=lens.stop, epd=SPEC["epd_mm"],
+        surfaces=lens.surfaces,
+        thickness=lens.thickness,
+        materials=lens.materials,
+        stop=lens.stop,
+        epd=SPEC["epd_mm"],
         fields=jnp.asarray([0.0, 12.0, 24.0, 0.5 * SPEC["fov_deg"]]),
-        wavelengths=jnp.asarray(sorted(WAVELENGTHS_RGB)), primary=1,
-        object_distance=FOCUS_DEPTH, image=lens.image,
+        wavelengths=jnp.asarray(sorted(WAVELENGTHS_RGB)),
+        primary=1,
+        object_distance=FOCUS_DEPTH,
+        image=lens.image,
         sensor=Sensor(tuple(n), jnp.asarray(SPEC["pixel_size_mm"])),
         name=name,
     )
     return refocus(out)[0]
 
 
-def design_classical(*, seeds=(0, 1, 2, 3), scale: float = 1.0, progress: bool = True,
-                     spec=None):
+def design_classical(*, seeds=(0, 1, 2, 3), scale: float = 1.0, progress: bool = True, spec=None):
     """Design the classical lens with the curriculum; returns ``(lens, info)``.
 
     Args:
@@ -118,11 +137,17 @@ def design_classical(*, seeds=(0, 1, 2, 3), scale: float = 1.0, progress: bool =
     info = {
         "seed": res.seeds[best],
         "evaluation_at_infinity": evals[best].summary(),
-        "rms_at_20cm_um": 1e3 * _mean_rms(lens, FOCUS_DEPTH,
-                                          np.linspace(0.0, 0.5 * SPEC["fov_deg"], 7)),
-        "spec": {"fov": spec.fov, "fnum": spec.fnum, "sensor_diagonal": spec.sensor_diagonal,
-                 "n_elements": spec.n_elements, "materials": list(spec.materials),
-                 "total_track": spec.total_track, "bfl": spec.bfl},
+        "rms_at_20cm_um": 1e3
+        * _mean_rms(lens, FOCUS_DEPTH, np.linspace(0.0, 0.5 * SPEC["fov_deg"], 7)),
+        "spec": {
+            "fov": spec.fov,
+            "fnum": spec.fnum,
+            "sensor_diagonal": spec.sensor_diagonal,
+            "n_elements": spec.n_elements,
+            "materials": list(spec.materials),
+            "total_track": spec.total_track,
+            "bfl": spec.bfl,
+        },
         "recipe_scale": scale,
     }
     return lens, info
@@ -134,18 +159,28 @@ def main(argv=None) -> None:
 
     from .. import save
 
-    here = os.path.join(os.path.dirname(os.path.dirname(__file__)), "data", "lenses",
-                        "edof_classical.json")
-    p = argparse.ArgumentParser(prog="python -m jaxlens.edof.design", description=__doc__,
-                                formatter_class=argparse.RawDescriptionHelpFormatter)
+    here = os.path.join(
+        os.path.dirname(os.path.dirname(__file__)), "data", "lenses", "edof_classical.json"
+    )
+    p = argparse.ArgumentParser(
+        prog="python -m jaxlens.edof.design",
+        description=__doc__,
+        formatter_class=argparse.RawDescriptionHelpFormatter,
+    )
     p.add_argument("--out", default=here, help="output JSON (default: the shipped lens)")
     p.add_argument("--seeds", type=int, default=4, help="random starts (default 4)")
     p.add_argument("--scale", type=float, default=1.0, help="step-count multiplier")
+    p.add_argument(
+        "--record",
+        default=os.path.join("experiments", "edof", "classical_design.json"),
+        help="where to write the design record (seed, RMS, geometry, spec)",
+    )
     p.add_argument("--quiet", action="store_true")
     a = p.parse_args(argv)
     lens, info = design_classical(seeds=range(a.seeds), scale=a.scale, progress=not a.quiet)
     save(lens, a.out)
-    with open(os.path.splitext(a.out)[0] + ".design.json", "w") as f:
+    os.makedirs(os.path.dirname(a.record) or ".", exist_ok=True)
+    with open(a.record, "w") as f:
         json.dump(info, f, indent=2, default=float)
     print(json.dumps(info, indent=2, default=float))
 

@@ -204,12 +204,17 @@ class HybridParams(eqx.Module):
         r = jax.lax.stop_gradient(self.radius).astype(self.c.dtype)
         ev_pow = 2 * jnp.arange(2, self.even.shape[0] + 2)
         od_pow = 2 * jnp.arange(self.odd_x.shape[0]) + 3
-        coeffs = jnp.concatenate([s.coeffs[:1].astype(self.even.dtype),
-                                  self.even * SAG_SCALE / r**ev_pow])
-        new = Hybrid(c=self.c / r, k=self.k, coeffs=coeffs,
-                     odd_x=self.odd_x * SAG_SCALE / r**od_pow,
-                     odd_y=self.odd_y * SAG_SCALE / r**od_pow,
-                     semi_diameter=s.semi_diameter)
+        coeffs = jnp.concatenate(
+            [s.coeffs[:1].astype(self.even.dtype), self.even * SAG_SCALE / r**ev_pow]
+        )
+        new = Hybrid(
+            c=self.c / r,
+            k=self.k,
+            coeffs=coeffs,
+            odd_x=self.odd_x * SAG_SCALE / r**od_pow,
+            odd_y=self.odd_y * SAG_SCALE / r**od_pow,
+            semi_diameter=s.semi_diameter,
+        )
         t = lens.thickness
         t = t.at[-1].add(self.focus * SAG_SCALE)
         return eqx.tree_at(lambda m: (m.surfaces[self.index], m.thickness), lens, (new, t))
@@ -235,8 +240,11 @@ def gates(params: HybridParams, kind: str) -> tuple[HybridParams, Array]:
         gate, tie = zeros, 0.0
     elif kind == "cubic":
         first = jnp.zeros_like(params.odd_x).at[0].set(1.0)
-        gate = eqx.tree_at(lambda p: (p.odd_x, p.odd_y, p.focus), zeros,
-                           (first, first, jnp.ones_like(params.focus)))
+        gate = eqx.tree_at(
+            lambda p: (p.odd_x, p.odd_y, p.focus),
+            zeros,
+            (first, first, jnp.ones_like(params.focus)),
+        )
         tie = 1.0
     else:
         raise ValueError(f"gates: kind must be classical, cubic or hybrid, got {kind!r}")
@@ -284,31 +292,38 @@ def perturb(lens: Lens, key, tol: Tolerances = Tolerances(), *, scale=1.0) -> Le
     ``scale`` (a number or an array) multiplies every standard deviation (0: no change).
     """
     dt = lens.thickness.dtype
-    tol = Tolerances(*(jnp.asarray(scale, dt) * jnp.asarray(v, dt)
-                       for v in dataclasses.astuple(tol)))
+    tol = Tolerances(
+        *(jnp.asarray(scale, dt) * jnp.asarray(v, dt) for v in dataclasses.astuple(tol))
+    )
     keys = jax.random.split(key, 4 * len(lens.surfaces) + 2)
     surfaces = []
     for i, s in enumerate(lens.surfaces):
         k1, k2, k3, k4 = keys[4 * i : 4 * i + 4]
         new = s
         if i != lens.stop:
-            new = eqx.tree_at(lambda x: x.c, new,
-                              s.c * (1 + tol.curvature * jax.random.normal(k1, s.c.shape,
-                                                                            s.c.dtype)))
+            new = eqx.tree_at(
+                lambda x: x.c,
+                new,
+                s.c * (1 + tol.curvature * jax.random.normal(k1, s.c.shape, s.c.dtype)),
+            )
         if isinstance(s, EvenAsphere | Hybrid) and s.coeffs.shape[0]:
             n = jax.random.normal(k2, s.coeffs.shape, s.coeffs.dtype)
             new = eqx.tree_at(lambda x: x.coeffs, new, s.coeffs * (1 + tol.asphere * n))
         if isinstance(s, Hybrid) and s.odd_x.shape[0]:
             nx = jax.random.normal(k3, s.odd_x.shape, s.odd_x.dtype)
             ny = jax.random.normal(k4, s.odd_y.shape, s.odd_y.dtype)
-            new = eqx.tree_at(lambda x: (x.odd_x, x.odd_y), new,
-                              (s.odd_x * (1 + tol.odd * nx), s.odd_y * (1 + tol.odd * ny)))
+            new = eqx.tree_at(
+                lambda x: (x.odd_x, x.odd_y),
+                new,
+                (s.odd_x * (1 + tol.odd * nx), s.odd_y * (1 + tol.odd * ny)),
+            )
         surfaces.append(new)
     t = lens.thickness
     dt = tol.thickness * jax.random.normal(keys[-2], t.shape, t.dtype)
     dt = dt.at[-1].set(tol.sensor * jax.random.normal(keys[-1], (), t.dtype))
-    return eqx.tree_at(lambda m: (m.surfaces, m.thickness), lens,
-                       (tuple(surfaces), jnp.maximum(t + dt, 0.05 * t)))
+    return eqx.tree_at(
+        lambda m: (m.surfaces, m.thickness), lens, (tuple(surfaces), jnp.maximum(t + dt, 0.05 * t))
+    )
 
 
 def odd_profile(lens: Lens, *, index: int | None = None, n: int = 101, radius=None):

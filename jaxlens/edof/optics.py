@@ -46,8 +46,11 @@ def pupil_disc(n_side: int, key=None, dtype=None) -> Float[Array, "m 2"]:
     """
     dt = dtype or jnp.result_type(float)
     i, j = jnp.meshgrid(jnp.arange(n_side), jnp.arange(n_side), indexing="ij")
-    u = (jnp.full((2, n_side, n_side), 0.5, dt) if key is None
-         else jax.random.uniform(key, (2, n_side, n_side), dt))
+    u = (
+        jnp.full((2, n_side, n_side), 0.5, dt)
+        if key is None
+        else jax.random.uniform(key, (2, n_side, n_side), dt)
+    )
     r = jnp.sqrt((i + u[0]) / n_side) * (1.0 - 1e-4)
     a = 2 * jnp.pi * (j + u[1]) / n_side
     return jnp.stack([r * jnp.cos(a), r * jnp.sin(a)], -1).reshape(-1, 2)
@@ -106,8 +109,9 @@ def conv_valid(window: Float[Array, "N N C"], kern: Float[Array, "C k k"]) -> Ar
     k = kern.shape[-1]
     kk = jnp.zeros((n0, n1, kern.shape[0]), window.dtype)
     kk = kk.at[:k, :k].set(jnp.transpose(kern, (1, 2, 0)).astype(window.dtype))
-    y = jnp.fft.irfft2(jnp.fft.rfft2(window, axes=(0, 1)) * jnp.fft.rfft2(kk, axes=(0, 1)),
-                       s=(n0, n1), axes=(0, 1))
+    y = jnp.fft.irfft2(
+        jnp.fft.rfft2(window, axes=(0, 1)) * jnp.fft.rfft2(kk, axes=(0, 1)), s=(n0, n1), axes=(0, 1)
+    )
     return y[k - 1 :, k - 1 :].astype(window.dtype)
 
 
@@ -128,16 +132,25 @@ def simulate_patch(
     """
 
     def run(lens, window, xy, depth, key):
-        kern = rgb_psf(lens, xy, depth, kernel_size=kernel_size, pixel_size=pixel_size,
-                       pupil=pupil, key=key)
+        kern = rgb_psf(
+            lens, xy, depth, kernel_size=kernel_size, pixel_size=pixel_size, pupil=pupil, key=key
+        )
         return conv_valid(window, kern)
 
     return jax.checkpoint(run)(lens, window, xy, depth, key)
 
 
 @eqx.filter_jit
-def render_tiled(lens: Lens, scene: Float[Array, "S S 3"], depth, *, kernel_size: int,
-                 pixel_size: float, patch: int, pupil: int) -> Float[Array, "S S 3"]:
+def render_tiled(
+    lens: Lens,
+    scene: Float[Array, "S S 3"],
+    depth,
+    *,
+    kernel_size: int,
+    pixel_size: float,
+    patch: int,
+    pupil: int,
+) -> Float[Array, "S S 3"]:
     """Whole-sensor image of ``scene`` at ``depth`` (mm from the stop), tile by tile.
 
     The sensor is cut into ``patch × patch`` tiles (the training patch size); each tile is
@@ -164,8 +177,14 @@ def render_tiled(lens: Lens, scene: Float[Array, "S S 3"], depth, *, kernel_size
         rc = (r0 + 0.5 * (patch - 1)).astype(scene.dtype)
         cc = (c0 + 0.5 * (patch - 1)).astype(scene.dtype)
         x, y = pixel_positions(res, pixel_size, rc, cc)
-        kern = rgb_psf(lens, jnp.stack([x, y]), depth, kernel_size=kernel_size,
-                       pixel_size=pixel_size, pupil=pupil)
+        kern = rgb_psf(
+            lens,
+            jnp.stack([x, y]),
+            depth,
+            kernel_size=kernel_size,
+            pixel_size=pixel_size,
+            pupil=pupil,
+        )
         return conv_valid(window, kern)
 
     tiles = jax.lax.map(tile, jnp.arange(n_ty * n_tx))
@@ -173,16 +192,25 @@ def render_tiled(lens: Lens, scene: Float[Array, "S S 3"], depth, *, kernel_size
     return img.reshape(n_ty * patch, n_tx * patch, -1)[: res[0], : res[1]]
 
 
-def render_library(lens: Lens, scene, depth, key, *, kernel_size: int, spp: int = 1,
-                   patch: int = 64):
+def render_library(
+    lens: Lens, scene, depth, key, *, kernel_size: int, spp: int = 1, patch: int = 64
+):
     """The same image through ``jaxlens.render`` (method "psf", checkpointed tiles) on the
     pre-warped scene (``jaxlens.distortion_relax.relaxed_render``), without shading: a
     cross-check of ``render_tiled`` by an independent code path."""
     from ..distortion_relax import relaxed_render
 
     img, _ = relaxed_render(
-        lens, scene, spp=spp, key=key, depth=object_depth(lens, depth), method="psf",
-        kernel_size=kernel_size, patch=patch, checkpoint=True, relative_illumination=False,
+        lens,
+        scene,
+        spp=spp,
+        key=key,
+        depth=object_depth(lens, depth),
+        method="psf",
+        kernel_size=kernel_size,
+        patch=patch,
+        checkpoint=True,
+        relative_illumination=False,
     )
     return img
 
@@ -192,19 +220,34 @@ def render_library(lens: Lens, scene, depth, key, *, kernel_size: int, spp: int 
 # --------------------------------------------------------------------------------------
 @eqx.filter_jit
 def _psf_points(lens, pts, depth, *, kernel_size, pixel_size, pupil):
-    return jax.vmap(lambda p: rgb_psf(lens, p, depth, kernel_size=kernel_size,
-                                      pixel_size=pixel_size, pupil=pupil))(pts)
+    return jax.vmap(
+        lambda p: rgb_psf(
+            lens, p, depth, kernel_size=kernel_size, pixel_size=pixel_size, pupil=pupil
+        )
+    )(pts)
 
 
-def psf_stack(lens: Lens, points, depths_mm, *, kernel_size: int, pixel_size: float,
-              pupil: int = 128) -> np.ndarray:
+def psf_stack(
+    lens: Lens, points, depths_mm, *, kernel_size: int, pixel_size: float, pupil: int = 128
+) -> np.ndarray:
     """RGB PSFs ``[D, F, 3, k, k]`` at ``depths_mm`` (from the stop) and sensor ``points``
     ``[F, 2]`` (mm), without jitter."""
     pts = jnp.asarray(points, lens.epd.dtype)
-    return np.stack([np.asarray(_psf_points(lens, pts, jnp.asarray(d, pts.dtype),
-                                            kernel_size=kernel_size, pixel_size=pixel_size,
-                                            pupil=pupil))
-                     for d in depths_mm])
+    return np.stack(
+        [
+            np.asarray(
+                _psf_points(
+                    lens,
+                    pts,
+                    jnp.asarray(d, pts.dtype),
+                    kernel_size=kernel_size,
+                    pixel_size=pixel_size,
+                    pupil=pupil,
+                )
+            )
+            for d in depths_mm
+        ]
+    )
 
 
 def psf_depth_variation(stack: np.ndarray) -> dict:
@@ -264,9 +307,14 @@ def mtf_by_depth(lens: Lens, xy, depths_mm, *, frequencies, pupil: int = 96):
     field = np.asarray(field_of(lens, jnp.asarray(xy, lens.epd.dtype)))
     tan, sag = [], []
     for d in depths_mm:
-        f, t, s = _psf.mtf(lens, field, wavelengths=jnp.asarray(WAVELENGTHS_RGB),
-                           depth=float(object_depth(lens, d)),
-                           frequencies=jnp.asarray(frequencies), pupil=pupil)
+        f, t, s = _psf.mtf(
+            lens,
+            field,
+            wavelengths=jnp.asarray(WAVELENGTHS_RGB),
+            depth=float(object_depth(lens, d)),
+            frequencies=jnp.asarray(frequencies),
+            pupil=pupil,
+        )
         tan.append(np.asarray(t))
         sag.append(np.asarray(s))
     return np.asarray(f), np.stack(tan), np.stack(sag)

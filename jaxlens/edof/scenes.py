@@ -73,8 +73,9 @@ def skimage_image(name: str) -> np.ndarray:
     return _to_float_rgb(fn())
 
 
-def load_images(names=None, *, folder: str | os.PathLike | None = None,
-                max_side: int | None = 512) -> list[np.ndarray]:
+def load_images(
+    names=None, *, folder: str | os.PathLike | None = None, max_side: int | None = 512
+) -> list[np.ndarray]:
     """Images by ``skimage.data`` name, or every image file in ``folder``.
 
     Returns:

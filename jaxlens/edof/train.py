@@ -30,7 +30,7 @@ import optax
 
 from ..lens import Lens
 from ..nets import NAFNet
-from .lenses import DEPTHS_M, Tolerances, apply_gates, gates, perturb
+from .lenses import DEPTHS_M, SPEC, Tolerances, apply_gates, gates, perturb
 from .losses import edof_loss
 from .optics import render_tiled, simulate_patch
 
@@ -87,33 +87,46 @@ class Config:
 
     @property
     def window(self) -> int:
+        """Side of a training scene window: the patch plus a kernel's margin (pixels)."""
         return self.patch + self.kernel_size - 1
+
+    @property
+    def pixel_size(self) -> float:
+        """Binned pixel pitch (mm)."""
+        return self.binning * SPEC["pixel_size_mm"]
 
 
 def make_net(cfg: Config, key, dtype=jnp.float32) -> NAFNet:
     """The reconstruction network of the configuration."""
-    return NAFNet(width=cfg.width, enc_blocks=cfg.enc_blocks, middle_blocks=cfg.middle_blocks,
-                  dec_blocks=cfg.dec_blocks, key=key, dtype=dtype)
+    return NAFNet(
+        width=cfg.width,
+        enc_blocks=cfg.enc_blocks,
+        middle_blocks=cfg.middle_blocks,
+        dec_blocks=cfg.dec_blocks,
+        key=key,
+        dtype=dtype,
+    )
 
 
 def _labels(trainable):
     net, params = trainable
-    return (jax.tree_util.tree_map(lambda _: "net", net),
-            jax.tree_util.tree_map(lambda _: "lens", params))
+    return (
+        jax.tree_util.tree_map(lambda _: "net", net),
+        jax.tree_util.tree_map(lambda _: "lens", params),
+    )
 
 
 @functools.lru_cache(maxsize=16)
-def make_optimizer(cfg: Config, steps: int, *, lens: bool = True):
-    """Adam with a cosine-decayed rate for the network (and a constant one for the lens).
+def make_optimizer(cfg: Config, steps: int):
+    """Adam with a cosine-decayed rate for the network and a constant one for the lens.
 
     Cached, so that equal configurations give the same (hashable) optimizer and the jitted
     steps, which take it as a static argument, compile once.
     """
-    sched = optax.warmup_cosine_decay_schedule(0.0, cfg.lr_net, max(1, min(20, steps // 10)),
-                                               max(steps, 1), cfg.lr_net * 0.05)
+    sched = optax.warmup_cosine_decay_schedule(
+        0.0, cfg.lr_net, max(1, min(20, steps // 10)), max(steps, 1), cfg.lr_net * 0.05
+    )
     net_opt = optax.chain(optax.clip_by_global_norm(1.0), optax.adam(sched))
-    if not lens:
-        return net_opt
     return optax.multi_transform({"net": net_opt, "lens": optax.adam(cfg.lr_lens)}, _labels)
 
 
@@ -126,21 +139,29 @@ def _simulate_batch(lens, windows, xy, depths, key, cfg: Config, perturbation=No
     b = windows.shape[0]
     k_sim, k_pert = jax.random.split(key)
     keys = jax.random.split(k_sim, 2 * b).reshape(2, b, -1)
-    pix = cfg.binning * 0.00497
 
     def one(ln, window, p, d, k):
-        return simulate_patch(ln, window, p, d, k, kernel_size=cfg.kernel_size,
-                              pixel_size=pix, pupil=cfg.pupil)
+        return simulate_patch(
+            ln,
+            window,
+            p,
+            d,
+            k,
+            kernel_size=cfg.kernel_size,
+            pixel_size=cfg.pixel_size,
+            pupil=cfg.pupil,
+        )
 
     if perturbation is None:
         per_depth = jax.vmap(one, in_axes=(None, 0, 0, None, 0))
-        return jax.vmap(per_depth, in_axes=(None, None, None, 0, 0))(lens, windows, xy, depths,
-                                                                   keys)
+        return jax.vmap(per_depth, in_axes=(None, None, None, 0, 0))(
+            lens, windows, xy, depths, keys
+        )
     lenses = jax.vmap(lambda k: perturb(lens, k, cfg.tolerances, scale=perturbation))(
-        jax.random.split(k_pert, b))
+        jax.random.split(k_pert, b)
+    )
     per_depth = jax.vmap(one, in_axes=(0, 0, 0, None, 0))
-    return jax.vmap(per_depth, in_axes=(None, None, None, 0, 0))(lenses, windows, xy, depths,
-                                                               keys)
+    return jax.vmap(per_depth, in_axes=(None, None, None, 0, 0))(lenses, windows, xy, depths, keys)
 
 
 def _gt(windows, cfg: Config):
@@ -155,8 +176,23 @@ def _reconstruct(net, sims, key, noise):
 
 
 @eqx.filter_jit
-def train_step(net, params, opt_state, base_lens, windows, xy, depths, key, gate, tie,
-               perturbation, net_scale, *, cfg: Config, optimizer):
+def train_step(
+    net,
+    params,
+    opt_state,
+    base_lens,
+    windows,
+    xy,
+    depths,
+    key,
+    gate,
+    tie,
+    perturbation,
+    net_scale,
+    *,
+    cfg: Config,
+    optimizer,
+):
     """One training step of either stage; returns (net, params, opt_state, loss, parts).
 
     Stage 1 (joint): ``gate`` and ``tie`` (``lenses.gates``) say which lens parameters move,
@@ -178,8 +214,9 @@ def train_step(net, params, opt_state, base_lens, windows, xy, depths, key, gate
     (loss, parts), grads = eqx.filter_value_and_grad(loss_fn, has_aux=True)(trainable)
     g_net, g_lens = grads
     grads = (g_net, apply_gates(g_lens, gate, tie))
-    updates, opt_state = optimizer.update(grads, opt_state, eqx.filter(trainable,
-                                                                      eqx.is_inexact_array))
+    updates, opt_state = optimizer.update(
+        grads, opt_state, eqx.filter(trainable, eqx.is_inexact_array)
+    )
     u_net, u_lens = updates
     u_net = jax.tree_util.tree_map(lambda u: u * net_scale.astype(u.dtype), u_net)
     net, params = eqx.apply_updates(trainable, (u_net, u_lens))
@@ -202,8 +239,11 @@ class BatchSource:
         windows = self.sampler.sample(cfg.batch)
         xy = self.rng.uniform(-1.0, 1.0, (cfg.batch, 2)) * self.half
         pair = self.rng.choice(len(self.depths), 2, replace=False)
-        return (jnp.asarray(windows, dtype), jnp.asarray(xy, dtype),
-                jnp.asarray(self.depths[pair], dtype))
+        return (
+            jnp.asarray(windows, dtype),
+            jnp.asarray(xy, dtype),
+            jnp.asarray(self.depths[pair], dtype),
+        )
 
 
 def train(
@@ -244,8 +284,21 @@ def train(
             key, sub = jax.random.split(key)
             windows, xy, depths = source()
             net, params, state, loss, parts = train_step(
-                net, params, state, base_lens, windows, xy, depths, sub, g, t, pert, scale,
-                cfg=cfg, optimizer=opt)
+                net,
+                params,
+                state,
+                base_lens,
+                windows,
+                xy,
+                depths,
+                sub,
+                g,
+                t,
+                pert,
+                scale,
+                cfg=cfg,
+                optimizer=opt,
+            )
             acc.append((loss, parts))
             if (step + 1) % cfg.log_every and step + 1 != steps:
                 continue
@@ -255,10 +308,12 @@ def train(
             for k in ("rec", "sim", "raw"):
                 rec[k] = float(np.mean([v[1][k] for v in vals]))
             if not math.isfinite(rec["loss"]):
-                raise FloatingPointError(f"train[{name}]: non-finite loss at stage {stage} "
-                                         f"step {step + 1}")
-            hist[f"stage{stage}"].append(rec if stage == 1 else
-                                         {"step": rec["step"], "rec": rec["rec"]})
+                raise FloatingPointError(
+                    f"train[{name}]: non-finite loss at stage {stage} step {step + 1}"
+                )
+            hist[f"stage{stage}"].append(
+                rec if stage == 1 else {"step": rec["step"], "rec": rec["rec"]}
+            )
             if bar is not None:
                 bar.set_postfix(stage=stage, loss=f"{rec['loss']:.4f}", rec=f"{rec['rec']:.4f}")
                 bar.update(len(vals))
@@ -295,30 +350,35 @@ def evaluate(lens: Lens, net: NAFNet, images, depths_m, cfg: Config, *, key, kee
         "rec": {...}} averaged over the images; examples[str(depth)] = (sim, rec) of the
         kept image (NumPy, clipped to [0, 1]).
     """
-    from skimage.metrics import peak_signal_noise_ratio, structural_similarity
+    from ..images import psnr, ssim
 
-    pix = cfg.binning * 0.00497
     metrics, examples = {}, {}
     for d in depths_m:
         vals = {"sim": {"psnr": [], "ssim": []}, "rec": {"psnr": [], "ssim": []}}
         for i, img in enumerate(images):
             scene = jnp.asarray(img, lens.epd.dtype)
-            sim = render_tiled(lens, scene, jnp.asarray(1e3 * d, scene.dtype),
-                               kernel_size=cfg.kernel_size, pixel_size=pix, patch=cfg.patch,
-                               pupil=cfg.eval_pupil)
+            sim = render_tiled(
+                lens,
+                scene,
+                jnp.asarray(1e3 * d, scene.dtype),
+                kernel_size=cfg.kernel_size,
+                pixel_size=cfg.pixel_size,
+                patch=cfg.patch,
+                pupil=cfg.eval_pupil,
+            )
             noise = jax.random.normal(jax.random.fold_in(key, i), sim.shape, sim.dtype)
             sim = sim + cfg.noise * noise
             rec = np.asarray(_restore(net, sim), np.float64)
             sim = np.clip(np.asarray(sim, np.float64), 0.0, 1.0)
             gt = np.asarray(img, np.float64)
             for tag, x in (("sim", sim), ("rec", rec)):
-                vals[tag]["psnr"].append(peak_signal_noise_ratio(gt, x, data_range=1.0))
-                vals[tag]["ssim"].append(structural_similarity(gt, x, data_range=1.0,
-                                                               channel_axis=-1))
+                vals[tag]["psnr"].append(psnr(gt, x, data_range=1.0))
+                vals[tag]["ssim"].append(ssim(gt, x, data_range=1.0))
             if keep is not None and i == keep:
                 examples[_depth_key(d)] = (sim, rec)
-        metrics[_depth_key(d)] = {t: {m: float(np.mean(v)) for m, v in vals[t].items()}
-                                  for t in vals}
+        metrics[_depth_key(d)] = {
+            t: {m: float(np.mean(v)) for m, v in vals[t].items()} for t in vals
+        }
     return metrics, examples
 
 

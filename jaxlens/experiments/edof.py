@@ -53,14 +53,20 @@ def _ints(text: str) -> tuple[int, ...]:
 
 
 def build_parser() -> argparse.ArgumentParser:
-    p = argparse.ArgumentParser(prog="python -m jaxlens.experiments.edof",
-                                description=__doc__.split("\n\n")[0],
-                                formatter_class=argparse.RawDescriptionHelpFormatter)
+    p = argparse.ArgumentParser(
+        prog="python -m jaxlens.experiments.edof",
+        description=__doc__.split("\n\n")[0],
+        formatter_class=argparse.RawDescriptionHelpFormatter,
+    )
     p.add_argument("--out", default="runs/edof", help="output folder (default runs/edof)")
-    p.add_argument("--record", default=None,
-                   help="also copy tables, summary and figures to this folder")
-    p.add_argument("--lenses", default=",".join(LENS_NAMES),
-                   help="lenses to train, from classical,cubic,hybrid")
+    p.add_argument(
+        "--record", default=None, help="also copy tables, summary and figures to this folder"
+    )
+    p.add_argument(
+        "--lenses",
+        default=",".join(LENS_NAMES),
+        help="lenses to train, from classical,cubic,hybrid",
+    )
     p.add_argument("--smoke", action="store_true", help="tiny, seconds-scale run (tests)")
     p.add_argument("--paper", action="store_true", help="the paper's scale (GPU)")
     g = p.add_argument_group("training (defaults: CPU scale)")
@@ -83,8 +89,11 @@ def build_parser() -> argparse.ArgumentParser:
     g.add_argument("--n-odd", type=int, help="odd terms per axis of the hybrid surface (3)")
     g.add_argument("--seed", type=int, default=0)
     d = p.add_argument_group("data")
-    d.add_argument("--train-dir", default=None, help="folder of training images "
-                   "(default: skimage.data, see jaxlens.edof.scenes)")
+    d.add_argument(
+        "--train-dir",
+        default=None,
+        help="folder of training images (default: skimage.data, see jaxlens.edof.scenes)",
+    )
     d.add_argument("--test-dir", default=None, help="folder of held-out test images")
     d.add_argument("--test-images", type=int, default=None, help="use only the first N tests")
     p.add_argument("--quiet", action="store_true", help="no progress bars")
@@ -95,22 +104,60 @@ def config_from_args(a):
     from jaxlens.edof.train import Config
 
     if a.paper:
-        cfg = Config(binning=1, patch=256, kernel_size=81, batch=8, pupil=96, steps=20000,
-                     steps2=5000, width=32, enc_blocks=(1, 1, 1, 28), middle_blocks=1,
-                     dec_blocks=(1, 1, 1, 1), eval_pupil=128, log_every=50)
+        cfg = Config(
+            binning=1,
+            patch=256,
+            kernel_size=81,
+            batch=8,
+            pupil=96,
+            steps=20000,
+            steps2=5000,
+            width=32,
+            enc_blocks=(1, 1, 1, 28),
+            middle_blocks=1,
+            dec_blocks=(1, 1, 1, 1),
+            eval_pupil=128,
+            log_every=50,
+        )
     elif a.smoke:
-        cfg = Config(binning=16, patch=16, kernel_size=9, batch=2, pupil=8, steps=8, steps2=2,
-                     width=4, enc_blocks=(1,), middle_blocks=1, dec_blocks=(1,), eval_pupil=12,
-                     lr_net=3e-3, log_every=2)
+        cfg = Config(
+            binning=16,
+            patch=16,
+            kernel_size=9,
+            batch=2,
+            pupil=8,
+            steps=8,
+            steps2=2,
+            width=4,
+            enc_blocks=(1,),
+            middle_blocks=1,
+            dec_blocks=(1,),
+            eval_pupil=12,
+            lr_net=3e-3,
+            log_every=2,
+        )
     else:
         cfg = Config()
-    over = {"steps": a.steps, "steps2": a.steps2, "batch": a.batch, "patch": a.patch,
-            "kernel_size": a.kernel, "binning": a.binning, "pupil": a.pupil,
-            "lr_net": a.lr_net, "lr_lens": a.lr_lens, "w_sim": a.w_sim, "w_raw": a.w_raw,
-            "noise": a.noise, "width": a.width, "enc_blocks": a.enc, "middle_blocks": a.middle,
-            "dec_blocks": a.dec, "n_odd": a.n_odd}
-    cfg = dataclasses.replace(cfg, seed=a.seed, **{k: v for k, v in over.items()
-                                                  if v is not None})
+    over = {
+        "steps": a.steps,
+        "steps2": a.steps2,
+        "batch": a.batch,
+        "patch": a.patch,
+        "kernel_size": a.kernel,
+        "binning": a.binning,
+        "pupil": a.pupil,
+        "lr_net": a.lr_net,
+        "lr_lens": a.lr_lens,
+        "w_sim": a.w_sim,
+        "w_raw": a.w_raw,
+        "noise": a.noise,
+        "width": a.width,
+        "enc_blocks": a.enc,
+        "middle_blocks": a.middle,
+        "dec_blocks": a.dec,
+        "n_odd": a.n_odd,
+    }
+    cfg = dataclasses.replace(cfg, seed=a.seed, **{k: v for k, v in over.items() if v is not None})
     if cfg.kernel_size % 2 == 0:
         raise ValueError(f"edof: --kernel must be odd, got {cfg.kernel_size}")
     if len(cfg.enc_blocks) != len(cfg.dec_blocks):
@@ -147,6 +194,7 @@ def run(argv=None) -> dict:
         f.write(command + "\n")
     progress = None if a.quiet else tqdm
     t_all = time.perf_counter()
+    cpu_all = time.process_time()
     timings = {}
     dtype = jnp.float32
 
@@ -161,10 +209,14 @@ def run(argv=None) -> dict:
     # Scenes.
     t0 = time.perf_counter()
     max_side = 2 * size if not a.smoke else 4 * cfg.window
-    train_imgs = S.load_images(None if a.train_dir else S.TRAIN_IMAGES, folder=a.train_dir,
-                               max_side=max(max_side, cfg.window))
-    test_raw = S.load_images(None if a.test_dir else S.TEST_IMAGES, folder=a.test_dir,
-                             max_side=None)
+    train_imgs = S.load_images(
+        None if a.train_dir else S.TRAIN_IMAGES,
+        folder=a.train_dir,
+        max_side=max(max_side, cfg.window),
+    )
+    test_raw = S.load_images(
+        None if a.test_dir else S.TEST_IMAGES, folder=a.test_dir, max_side=None
+    )
     if a.test_images:
         test_raw = test_raw[: a.test_images]
     if a.smoke:
@@ -183,8 +235,17 @@ def run(argv=None) -> dict:
         sampler = S.PatchSampler(train_imgs, cfg.window, seed=cfg.seed + 17)
         source = T.BatchSource(sampler, lens0, cfg, seed=cfg.seed + 29)
         t0 = time.perf_counter()
-        net, params, hist = T.train(name, lens0, params, net, source, cfg, kind=name,
-                                    key=jax.random.fold_in(k_train, i), progress=progress)
+        net, params, hist = T.train(
+            name,
+            lens0,
+            params,
+            net,
+            source,
+            cfg,
+            kind=name,
+            key=jax.random.fold_in(k_train, i),
+            progress=progress,
+        )
         timings[f"train_{name}_s"] = time.perf_counter() - t0
         lens = params.apply(lens0)
         trained[name] = (lens, net, params)
@@ -211,11 +272,18 @@ def run(argv=None) -> dict:
         scene = jnp.asarray(tests[0], dtype)
         consistency = {}
         for d in (0.1, 0.2):
-            mine = O.render_tiled(lens, scene, jnp.asarray(1e3 * d, dtype),
-                                  kernel_size=cfg.kernel_size, pixel_size=pix, patch=cfg.patch,
-                                  pupil=cfg.eval_pupil)
-            lib = O.render_library(lens, scene, 1e3 * d, k_eval, kernel_size=cfg.kernel_size,
-                                   spp=4, patch=cfg.patch)
+            mine = O.render_tiled(
+                lens,
+                scene,
+                jnp.asarray(1e3 * d, dtype),
+                kernel_size=cfg.kernel_size,
+                pixel_size=pix,
+                patch=cfg.patch,
+                pupil=cfg.eval_pupil,
+            )
+            lib = O.render_library(
+                lens, scene, 1e3 * d, k_eval, kernel_size=cfg.kernel_size, spp=4, patch=cfg.patch
+            )
             err = float(jnp.mean((mine - lib) ** 2))
             consistency[f"{d:g}"] = {"psnr_db": float(10 * np.log10(1.0 / max(err, 1e-20)))}
         timings["render_crosscheck_s"] = time.perf_counter() - t0
@@ -228,22 +296,27 @@ def run(argv=None) -> dict:
     stacks, variation = {}, {}
     for name in names:
         lens = trained[name][0]
-        stacks[name] = O.psf_stack(lens, pts, dmm, kernel_size=cfg.kernel_size,
-                                   pixel_size=pix, pupil=pupil_a)
+        stacks[name] = O.psf_stack(
+            lens, pts, dmm, kernel_size=cfg.kernel_size, pixel_size=pix, pupil=pupil_a
+        )
         variation[name] = O.psf_depth_variation(stacks[name])
     freqs = np.linspace(0.0, 0.5 / pix, 9 if a.smoke else 26)
     mtfs = {}
     for name in names:
         lens = trained[name][0]
-        mtfs[name] = {f"{frac:g}": O.mtf_by_depth(lens, p, dmm, frequencies=freqs,
-                                                  pupil=24 if a.smoke else 96)
-                      for frac, p in ((0.0, pts[0]), (0.7, 0.7 * pts[2]))}
+        mtfs[name] = {
+            f"{frac:g}": O.mtf_by_depth(
+                lens, p, dmm, frequencies=freqs, pupil=24 if a.smoke else 96
+            )
+            for frac, p in ((0.0, pts[0]), (0.7, 0.7 * pts[2]))
+        }
     timings["psf_analysis_s"] = time.perf_counter() - t0
 
     # Files.
     t0 = time.perf_counter()
-    files = write_figures(out, names, trained, stacks, mtfs, examples, tests, histories, cfg,
-                          smoke=a.smoke)
+    files = write_figures(
+        out, names, trained, stacks, mtfs, examples, tests, histories, cfg, smoke=a.smoke
+    )
     table_md = table2_markdown(table, variation, command, cfg)
     with open(os.path.join(out, "table2.json"), "w") as f:
         json.dump(table, f, indent=2)
@@ -251,6 +324,7 @@ def run(argv=None) -> dict:
         f.write(table_md)
     timings["figures_s"] = time.perf_counter() - t0
     timings["total_s"] = time.perf_counter() - t_all
+    timings["process_cpu_s"] = time.process_time() - cpu_all
     summary = {
         "command": command,
         "config": dataclasses.asdict(cfg),
@@ -288,7 +362,8 @@ def checks(table: dict, variation: dict) -> dict:
         out["within_0.5db_at_0.2m"] = bool(abs(d.get("0.2", 1e9)) <= 0.5 or d["0.2"] > 0)
     if "hybrid" in variation and "classical" in variation:
         out["psf_l1_hybrid_below_classical"] = bool(
-            variation["hybrid"]["l1"] < variation["classical"]["l1"])
+            variation["hybrid"]["l1"] < variation["classical"]["l1"]
+        )
     return out
 
 
@@ -312,23 +387,32 @@ def table2_markdown(table: dict, variation: dict, command: str, cfg) -> str:
             for t in ("sim", "rec"):
                 cells.append(f"{row[d][t]['psnr']:.2f} / {row[d][t]['ssim']:.3f}")
         lines.append(f"| {name} | " + " | ".join(cells) + " |")
-    lines += ["", "PSF variation with depth (8 training depths, 3 fields along the diagonal, "
-              "RGB): mean L1 distance Σ|p_i − p_j| over depth pairs (0 = identical, 2 = "
-              "disjoint) and mean normalised cross-correlation (1 = identical).", "",
-              "| lens | L1 | NCC |", "|---|---|---|"]
+    lines += [
+        "",
+        "PSF variation with depth (8 training depths, 3 fields along the diagonal, "
+        "RGB): mean L1 distance Σ|p_i − p_j| over depth pairs (0 = identical, 2 = "
+        "disjoint) and mean normalised cross-correlation (1 = identical).",
+        "",
+        "| lens | L1 | NCC |",
+        "|---|---|---|",
+    ]
     for name, v in variation.items():
         lines.append(f"| {name} | {v['l1']:.3f} | {v['ncc']:.3f} |")
     c = checks(table, variation)
     if "rec_psnr_gain_hybrid_vs_classical_db" in c:
         g = c["rec_psnr_gain_hybrid_vs_classical_db"]
-        lines += ["", "Reconstruction PSNR gain of the hybrid lens over the classical lens: "
-                  + ", ".join(f"{d} m: {v:+.2f} dB" for d, v in g.items())
-                  + " (the paper reports +1.2 dB at 10 cm and +2.4 dB at 10 m)."]
+        lines += [
+            "",
+            "Reconstruction PSNR gain of the hybrid lens over the classical lens: "
+            + ", ".join(f"{d} m: {v:+.2f} dB" for d, v in g.items())
+            + " (the paper reports +1.2 dB at 10 cm and +2.4 dB at 10 m).",
+        ]
     return "\n".join(lines) + "\n"
 
 
-def write_figures(out, names, trained, stacks, mtfs, examples, tests, histories, cfg, *,
-                  smoke=False) -> dict:
+def write_figures(
+    out, names, trained, stacks, mtfs, examples, tests, histories, cfg, *, smoke=False
+) -> dict:
     """PSF grids, MTF curves, odd-polynomial profile, reconstructions and loss curves."""
     import matplotlib
 
@@ -344,8 +428,9 @@ def write_figures(out, names, trained, stacks, mtfs, examples, tests, histories,
     fracs = (0.0, 0.5, 1.0)
     for name in names:
         st = stacks[name]  # [D, F, 3, k, k]
-        fig, axes = plt.subplots(len(depths), len(fracs), figsize=(1.6 * len(fracs) + 1,
-                                                                   1.5 * len(depths)))
+        fig, axes = plt.subplots(
+            len(depths), len(fracs), figsize=(1.6 * len(fracs) + 1, 1.5 * len(depths))
+        )
         for i, d in enumerate(depths):
             for j, fr in enumerate(fracs):
                 ax = axes[i, j]
@@ -370,8 +455,9 @@ def write_figures(out, names, trained, stacks, mtfs, examples, tests, histories,
         for i, (frac, (f, tan, sag)) in enumerate(mtfs[name].items()):
             ax = axes[i, j]
             for k, d in enumerate(depths):
-                ax.plot(f, 0.5 * (tan[k] + sag[k]), color=cmap(k / (len(depths) - 1)),
-                        label=f"{d:g} m")
+                ax.plot(
+                    f, 0.5 * (tan[k] + sag[k]), color=cmap(k / (len(depths) - 1)), label=f"{d:g} m"
+                )
             ax.set_ylim(0, 1.02)
             ax.set_title(f"{name}, field {frac}", fontsize=9)
             ax.set_xlabel("cycles/mm")
@@ -389,8 +475,9 @@ def write_figures(out, names, trained, stacks, mtfs, examples, tests, histories,
         fig, axes = plt.subplots(2, len(odd), figsize=(4.2 * len(odd), 7), squeeze=False)
         for j, name in enumerate(odd):
             x, h = L.odd_profile(trained[name][0])
-            im = axes[0, j].imshow(1e3 * h, extent=(x[0], x[-1], x[0], x[-1]), origin="lower",
-                                   cmap="RdBu_r")
+            im = axes[0, j].imshow(
+                1e3 * h, extent=(x[0], x[-1], x[0], x[-1]), origin="lower", cmap="RdBu_r"
+            )
             fig.colorbar(im, ax=axes[0, j], label="µm")
             axes[0, j].set_title(f"{name}: odd-polynomial height", fontsize=9)
             axes[0, j].set_xlabel("x (mm)")
@@ -414,9 +501,12 @@ def write_figures(out, names, trained, stacks, mtfs, examples, tests, histories,
         y0 = (s - c) // 2
         crop = lambda im: np.clip(im[y0 : y0 + c, y0 : y0 + c], 0, 1)  # noqa: E731
         keys = list(next(iter(examples.values())).keys())
-        fig, axes = plt.subplots(len(names), 1 + 2 * len(keys),
-                                 figsize=(1.9 * (1 + 2 * len(keys)), 2.0 * len(names)),
-                                 squeeze=False)
+        fig, axes = plt.subplots(
+            len(names),
+            1 + 2 * len(keys),
+            figsize=(1.9 * (1 + 2 * len(keys)), 2.0 * len(names)),
+            squeeze=False,
+        )
         for i, name in enumerate(names):
             axes[i, 0].imshow(crop(gt))
             axes[i, 0].set_ylabel(name)
