@@ -286,7 +286,8 @@ def run(
         on_nonfinite: ``"raise"`` stops the run when a loss (or an update) becomes
             non-finite; ``"drop"`` freezes that design at its last finite parameters, keeps
             going with the others and records it in ``History.failed`` (for multi-start
-            studies, where a failed start is a result, not an error).
+            studies, where a failed start is a result, not an error); the run still stops
+            once every design has failed.
 
     Raises:
         FloatingPointError: a loss became non-finite (names stage, step and seed), with
@@ -356,6 +357,10 @@ def run(
                         hist.failed[seeds[j]] = msg
                         bar.write(msg + "; that design is frozen and counted as failed")
                     dead |= newly.any(0)
+                    if dead.all():
+                        bar.close()
+                        raise FloatingPointError(
+                            "every design went non-finite: " + "; ".join(hist.failed.values()))
                 bar.set_description(f"{stage.name}")
                 live = ~dead
                 if live.any():

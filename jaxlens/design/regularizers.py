@@ -19,6 +19,12 @@ Conventions:
     Each penalty is a mean over its samples per surface (or gap), summed over surfaces, so a
     bound violated by v everywhere on one surface costs v², independent of the sampling
     density.
+
+    The spacing and slope hinges grow logarithmically beyond ``HINGE_SCALE`` (``h ↦
+    H·log(1 + h/H)``): a random start's high-order asphere evaluated out at the larger clear
+    radius of a pair can violate a bound by 1e19 mm, whose square overflows float32 and
+    made the whole design loss infinite. Small violations (h ≪ H) are unchanged to first
+    order, and the gradient never vanishes.
 """
 
 from __future__ import annotations
@@ -32,6 +38,13 @@ from ..rays import Rays
 
 OBLIQUITY_BOUND = 0.7
 SLOPE_BOUND = 0.5
+HINGE_SCALE = 1.0  # mm for spacing, dimensionless for slope
+
+
+def _soft_hinge(excess):
+    """``relu(excess)``, growing as ``H·log(1 + excess/H)`` beyond ``H`` (no overflow)."""
+    h = jax.nn.relu(excess)
+    return HINGE_SCALE * jnp.log1p(h / HINGE_SCALE)
 
 
 def clear_radii(path: Rays) -> Float[Array, " n"]:
@@ -103,7 +116,7 @@ def spacing(lens: Lens, stack, radii, bounds, *, n_radial: int = 16):
     z_img = _sag_r(lens.image, r[-1])
     z_next = jnp.concatenate([z_next_lens, z_img[None]])
     gap = zs[1:, None] + z_next - zs[:-1, None] - z_this
-    h = jax.nn.relu(bounds[:, None] - gap).reshape(-1)
+    h = _soft_hinge(bounds[:, None] - gap).reshape(-1)
     return h / jnp.sqrt(n_radial)
 
 
@@ -117,6 +130,6 @@ def slope(stack, stop: int, radii, *, bound: float = SLOPE_BOUND, n_radial: int 
         return gy
 
     g = jax.vmap(grad_r)(stack, r)
-    h = jax.nn.relu(jnp.abs(g) - bound)
+    h = _soft_hinge(jnp.abs(g) - bound)
     h = jnp.delete(h, stop, axis=0, assume_unique_indices=True).reshape(-1)
     return h / jnp.sqrt(n_radial)

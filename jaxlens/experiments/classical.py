@@ -116,7 +116,9 @@ def build_parser() -> argparse.ArgumentParser:
     r.add_argument("--no-curriculum", action="store_true", help="stay at the full spec")
     r.add_argument("--no-regularize", action="store_true", help="switch the regularizers off")
     r.add_argument("--no-mask", action="store_true", help="switch the re-weighting mask off")
-    r.add_argument("--float64", action="store_true", help="design in float64")
+    r.add_argument("--float32", action="store_true",
+                   help="design in float32 (default float64: near-TIR rays rounded to valid in "
+                        "float32 can overflow the gradient and lose a start)")
     r.add_argument("--devices", type=int, default=os.cpu_count() or 1,
                    help="XLA host devices to shard seeds over (default: CPU cores)")
     o = p.add_argument_group("output")
@@ -155,7 +157,7 @@ def config_from_args(args):
     cfg = DesignConfig(
         curriculum=not args.no_curriculum, regularize=not args.no_regularize,
         mask=not args.no_mask, solver=args.solver,
-        polish="lm" if args.polish == "none" else args.polish, float64=args.float64)
+        polish="lm" if args.polish == "none" else args.polish, float64=not args.float32)
     if args.polish == "none":
         cfg = dataclasses.replace(cfg, polish_steps=0)
     if args.smoke:
@@ -280,7 +282,7 @@ def run_design(args, argv) -> dict:
     t0 = time.perf_counter()
     result = multistart.design(spec, seeds, config, progress=not args.quiet,
                                devices=jax.devices()[: max(1, args.devices)],
-                               image_loss=args.loss == "image")
+                               image_loss=args.loss == "image", on_nonfinite="drop")
     t_design = time.perf_counter() - t0
     t0 = time.perf_counter()
     evals = [evaluate.evaluate(result.lens(i), spec, n=4 if args.smoke else 16)
@@ -291,7 +293,10 @@ def run_design(args, argv) -> dict:
 
     for i, s in enumerate(seeds):
         jaxlens.save(finished_lens(result, i, spec), os.path.join(out, "seeds", f"seed_{s}.json"))
-    order = sorted(range(len(seeds)), key=lambda i: (not evals[i].valid, evals[i].rms_mean_um))
+    failed = result.history.failed
+    # A start that went non-finite is frozen at its last finite state; it never wins.
+    order = sorted(range(len(seeds)), key=lambda i: (seeds[i] in failed, not evals[i].valid,
+                                                     evals[i].rms_mean_um))
     best = order[0]
     lens = finished_lens(result, best, spec)
     files = write_design_outputs(lens, evals[best], spec, out, history=result.history,
