@@ -73,7 +73,7 @@ class Sellmeier(AbstractMaterial):
 class Schott(AbstractMaterial):
     """Schott formula n² = a0 + a1 λ² + a2 λ⁻² + a3 λ⁻⁴ + a4 λ⁻⁶ + a5 λ⁻⁸ (Zemax formula 1)."""
 
-    coeffs: Float[Array, "6"] = eqx.field(converter=jnp.asarray)
+    coeffs: Float[Array, 6] = eqx.field(converter=jnp.asarray)
     name: str = eqx.field(static=True, default="")
 
     def index(self, wavelength):

@@ -130,7 +130,7 @@ def collimated(
 
 def point_source(
     lens: Lens,
-    point: Float[Array, "3"],
+    point: Float[Array, 3],
     pupil: Float[Array, "m 2"],
     wavelength=None,
     *,
@@ -186,7 +186,7 @@ def aim_at_stop(
     rays: Rays,
     pupil: Float[Array, "m 2"],
     *,
-    source_point: Float[Array, "3"] | None = None,
+    source_point: Float[Array, 3] | None = None,
     iters: int = 4,
 ) -> Rays:
     """Move launch points so that each ray crosses the real stop at pupil·(stop radius).

@@ -252,7 +252,9 @@ def _same_kind(a, b) -> bool:
     """Same surface type and the same array shapes: such surfaces can share one scan body."""
     la, ta = jax.tree_util.tree_flatten(a)
     lb, tb = jax.tree_util.tree_flatten(b)
-    return ta == tb and all(x.shape == y.shape and x.dtype == y.dtype for x, y in zip(la, lb))
+    if ta != tb:
+        return False
+    return all(x.shape == y.shape and x.dtype == y.dtype for x, y in zip(la, lb, strict=True))
 
 
 def _runs(surfaces, start: int, stop: int) -> list[tuple[int, int]]:

@@ -204,8 +204,9 @@ def cellphone6(*, clip: bool = True) -> Lens:
     source's material table lists them. Total track 6.939 mm, square sensor of side
     5.416 mm (7.66 mm diagonal). First-order data (A2 included): paraxial EFL 5.105 mm,
     F/2.34; the source's metadata quotes f = 4.35 mm and F/2.0, an edge-of-field figure
-    (the real chief ray at 40° lands at 3.70 mm, 13 % barrel distortion against f·tanθ). The source's surface radii ("r") are its clear apertures
-    and are used as semi-diameters.
+    (the real chief ray at 40° lands at 3.70 mm, 13 % barrel distortion against f·tanθ).
+    The source's surface radii ("r") are its clear apertures and are used as
+    semi-diameters.
 
     Args:
         clip: use the source's clear apertures as semi-diameters; ``False`` leaves every

@@ -30,8 +30,8 @@ def _normal(c, k, a, ox, oy, x, y, h=1e-6):
 
 def _reference_trace(surfs, zs, ns, p, d):
     for (c, k, a, ox, oy), z0, (n1, n2) in zip(surfs, zs, ns, strict=True):
-        f = lambda t: p[2] + t * d[2] - z0 - _sag(c, k, a, ox, oy, p[0] + t * d[0],  # noqa: E731
-                                                   p[1] + t * d[1])
+        f = lambda t: p[2] + t * d[2] - z0 - _sag(c, k, a, ox, oy, p[0] + t * d[0],  # noqa: E731, B023
+                                                   p[1] + t * d[1])  # noqa: B023
         lo, hi = (z0 - 5 - p[2]) / d[2], (z0 + 5 - p[2]) / d[2]
         for _ in range(200):
             mid = 0.5 * (lo + hi)

@@ -4,12 +4,11 @@ import jax
 import jax.numpy as jnp
 import numpy as np
 import pytest
+from conftest import find_refcase_dir
 from helpers import refcase_lens, refcase_rays
 
 import jaxlens as jl
 from jaxlens import analysis, paraxial
-
-from conftest import find_refcase_dir
 
 # Every case in the folder is checked, so held-out cases dropped there run too.
 CASES = sorted(p.stem for p in find_refcase_dir().glob("*.json"))
