@@ -180,8 +180,10 @@ def _outcome(run: dict, cap_gib: float) -> str:
     if run.get("exceeded_cap"):
         return f"stopped when its RSS passed the {cap_gib:g} GiB cap"
     if run.get("failed_allocation_bytes"):
-        return (f"out of memory: XLA could not allocate one buffer of "
-                f"{run['failed_allocation_bytes'] / 1e9:.1f} GB")
+        return (
+            f"out of memory: XLA could not allocate one buffer of "
+            f"{run['failed_allocation_bytes'] / 1e9:.1f} GB"
+        )
     return "failed"
 
 
@@ -229,9 +231,9 @@ def main(argv=None) -> None:
         "no_checkpoint_failed_allocation_bytes": main_plain.get("failed_allocation_bytes"),
         "checkpoint_fits_4GB": bool(main_ck.get("peak_rss_bytes", 1 << 62) < 4 * 10**9),
         "note": "peak RSS includes XLA compilation and the Python process (about 1 GB); "
-                "without checkpointing the gradient stores every ray's residuals, about "
-                "2.3 kB per ray (128² and 256² runs), so 1024² x 16 spp x 3 colours "
-                "(50 M rays) would need about 120 GB",
+        "without checkpointing the gradient stores every ray's residuals, about "
+        "2.3 kB per ray (128² and 256² runs), so 1024² x 16 spp x 3 colours "
+        "(50 M rays) would need about 120 GB",
         "runs": runs,
         "machine": machine_info(),
     }

@@ -63,8 +63,9 @@ def main(argv=None) -> None:
 
     @jax.jit
     def fwd(scene, key):
-        return jaxlens.render(lens, scene, spp=spp, key=key, sensor=sensor, patch=args.patch,
-                              footprints=fp)
+        return jaxlens.render(
+            lens, scene, spp=spp, key=key, sensor=sensor, patch=args.patch, footprints=fp
+        )
 
     t0 = time.perf_counter()
     compiled = fwd.lower(scene, key).compile()
@@ -79,7 +80,7 @@ def main(argv=None) -> None:
     best, med = min(times), statistics.median(times)
     result = {
         "benchmark": "forward jaxlens.render(method='ray'), RGB float32, "
-                     "jaxlens.zoo.cellphone6 (13 surfaces, 12 even aspheres)",
+        "jaxlens.zoo.cellphone6 (13 surfaces, 12 even aspheres)",
         "command": "python -m benchmarks.render_speed",
         "size": size,
         "spp": spp,

@@ -6,10 +6,14 @@ Usage::
     python -m benchmarks --full     # adds 1e7 rays to the throughput benchmark
     python -m benchmarks --smoke    # seconds: checks that the suite works (CI); no timings kept
     python -m benchmarks --only throughput skipping
+    python -m benchmarks --only throughput --lenses cooke_triplet --counts 100000 1000000 \
+        --tag headline          # a quick rerun, written beside the full results
 
 Writes, into ``--out`` (default ``benchmarks/results/``; ``--smoke`` writes to a temporary
 folder unless ``--out`` is given): ``<benchmark>.json`` (machine, versions, command and rows),
-``README.md`` (markdown tables) and ``<benchmark>.png`` plots. Every JSON file states the
+``README.md`` (markdown tables) and ``<benchmark>.png`` plots; ``--tag NAME`` writes
+``<benchmark>_NAME.json`` / ``.png`` instead, so that a partial rerun (fewer lenses or ray
+counts) sits beside the full results without overwriting them. Every JSON file states the
 machine (CPU model, cores, memory), the versions (python, jax, jaxlib, equinox, numpy,
 jaxlens, optiland) and the load average, because other work on a 2-core machine changes the
 numbers; the rows also carry the load at the time of each measurement.
@@ -27,6 +31,7 @@ import importlib
 import json
 import os
 import pathlib
+import re
 import shlex
 import sys
 import tempfile
@@ -49,7 +54,15 @@ def main(argv: list[str] | None = None) -> dict:
     p.add_argument("--no-plots", action="store_true", help="skip the matplotlib figures")
     p.add_argument("--lenses", nargs="+", help="throughput: only these zoo lenses")
     p.add_argument("--counts", nargs="+", type=int, help="throughput: only these ray counts")
+    p.add_argument(
+        "--tag",
+        default=None,
+        help="write <benchmark>_<tag>.json/.png instead of <benchmark>.json (a partial rerun "
+        "beside the full results)",
+    )
     args = p.parse_args(argv)
+    if args.tag is not None and not re.fullmatch(r"[A-Za-z0-9_-]+", args.tag):
+        p.error("--tag: letters, digits, '_' and '-' only")
 
     jax.config.update("jax_enable_x64", True)  # float64 runs next to float32
     out = args.out
@@ -103,9 +116,10 @@ def main(argv: list[str] | None = None) -> dict:
                 "wall_s": wall,
                 **res,
             }
-            common.write_json(name, payload, out)
+            stem = f"{name}_{args.tag}" if args.tag else name
+            common.write_json(stem, payload, out)
             if not args.no_plots and hasattr(mod, "plot"):
-                mod.plot(res, out / f"{name}.png")
+                mod.plot(res, out / f"{stem}.png")
         print(f"  ({wall:.0f} s)")
 
     write_readme(out)
@@ -115,33 +129,56 @@ def main(argv: list[str] | None = None) -> dict:
 def write_readme(out: pathlib.Path) -> None:
     """(Re)write ``out/README.md`` from every benchmark JSON in ``out``.
 
-    Each section states the command that made it, the git commit and the machine, so results
-    of separate runs (``--only``) can sit side by side.
+    It opens with the headline figures and the recommended defaults beside the library's
+    (``benchmarks/summary.py``). Each section states the command that made it, the git commit
+    and the machine, so results of separate runs (``--only``, ``--tag``) can sit side by side.
     """
+    from . import summary
+
     parts = ["# jaxlens benchmark results", ""]
-    for name in CORE:
-        path = out / f"{name}.json"
-        if not path.exists():
-            continue
-        data = json.loads(path.read_text())
-        m = data["machine"]
-        mod = importlib.import_module(f"{__package__}.{name}")
-        load = m["load_average_at_start"]
+    head = summary.headline(out)
+    if head:
+        parts += ["## Headline", "", head]
+    table = summary.defaults_table(out)
+    if table:
         parts += [
-            f"## {name}",
+            "## Recommended defaults against the library's",
             "",
-            f"Made by `{data['command']}` at git commit {m['git_commit']} on "
-            f"{m['cpu_model']}, {m['logical_cores']} logical cores, {m.get('memory_gib')} GiB "
-            f"({m['platform']}); python {m['python']}, jax {m['jax']}, jaxlib {m['jaxlib']}, "
-            f"equinox {m['equinox']}, numpy {m['numpy']}, jaxlens {m['jaxlens']}, optiland "
-            f"{m['optiland'] or 'not installed'}. 1-minute load average at the start "
-            f"{load[0]:.1f} (2 cores; other work shared the machine; every row records its "
-            f"own load), wall time {data['wall_s']:.0f} s.",
+            "Each time-against-error curve below ends in a recommended default; the library's "
+            "value is read from the code when this file is written.",
             "",
-            mod.markdown(data),
+            table,
             "",
         ]
+    for name in CORE:
+        paths = [out / f"{name}.json"] + sorted(out.glob(f"{name}_*.json"))
+        for path in paths:
+            if not path.exists():
+                continue
+            parts += _section(name, path)
     (out / "README.md").write_text("\n".join(parts) + "\n")
+
+
+def _section(name: str, path: pathlib.Path) -> list[str]:
+    data = json.loads(path.read_text())
+    m = data["machine"]
+    mod = importlib.import_module(f"{__package__}.{name}")
+    load = m["load_average_at_start"]
+    return [
+        f"## {path.stem}" if path.stem != name else f"## {name}",
+        "",
+        f"Made by `{data['command']}` at git commit {m['git_commit']} on "
+        f"{m['cpu_model']}, {m['logical_cores']} logical cores, {m.get('memory_gib')} GiB "
+        f"({m['platform']}); python {m['python']}, jax {m['jax']}, jaxlib {m['jaxlib']}, "
+        f"equinox {m['equinox']}, numpy {m['numpy']}, jaxlens {m['jaxlens']}, optiland "
+        f"{m['optiland'] or 'not installed'}. 1-minute load average at the start "
+        f"{load[0]:.1f}, at the end {data['load_average_at_end'][0]:.1f} (2 cores; other work "
+        f"shared the machine; every row records its own load), wall time "
+        f"{data['wall_s']:.0f} s.",
+        "",
+        mod.markdown(data),
+        "",
+    ]
 
 
 if __name__ == "__main__":

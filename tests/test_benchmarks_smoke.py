@@ -31,8 +31,18 @@ def smoke_results(tmp_path_factory):
 
     throughput.run = quick
     try:
-        res = main(["--smoke", "--out", str(out), "--no-plots", "--only", "throughput",
-                    "pareto", "skipping"])
+        res = main(
+            [
+                "--smoke",
+                "--out",
+                str(out),
+                "--no-plots",
+                "--only",
+                "throughput",
+                "pareto",
+                "skipping",
+            ]
+        )
     finally:
         throughput.run = original
     return out, res
@@ -72,3 +82,23 @@ def test_shortcuts_give_the_same_answer(smoke_results):
     _, res = smoke_results
     for r in res["skipping"]["rows"]:
         assert r["same_answer"], r
+
+
+def test_readme_lists_defaults_and_tagged_runs(smoke_results):
+    """The README sets every recommendation beside the library's default, and a ``--tag``
+    rerun's file gets its own section without replacing the full one."""
+    import shutil
+
+    from benchmarks.run import write_readme
+    from benchmarks.summary import library_defaults
+
+    out, _ = smoke_results
+    lib = library_defaults()
+    assert lib["newton_iters"][0] >= 1
+    assert lib["rms_spot_pupil"][0] is not None  # the rms_spot fallback is still found
+    shutil.copy(out / "throughput.json", out / "throughput_quick.json")
+    write_readme(out)
+    text = (out / "README.md").read_text()
+    assert "## Recommended defaults against the library's" in text
+    assert "Newton iterations, float64" in text
+    assert "## throughput\n" in text and "## throughput_quick\n" in text
