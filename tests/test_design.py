@@ -229,14 +229,14 @@ class _Quadratic(eqx.Module):
 
     target: LensParams
     sampling: object
-    nan_after: int = eqx.field(static=True, default=-1)
+    nan_above: float | None = eqx.field(static=True, default=None)  # NaN where d[0] > this
 
     def __call__(self, params, args):
         r = jnp.concatenate([(x - t).ravel() for x, t in zip(
             jax.tree.leaves(params), jax.tree.leaves(self.target), strict=True)])
         r = r * (1.0 + 0.5 * jnp.tanh(r))  # mildly nonlinear
-        if self.nan_after >= 0:
-            r = jnp.where(args.tan_max > 0, jnp.nan, r)
+        if self.nan_above is not None:
+            r = jnp.where(params.d[0] > self.nan_above, jnp.nan, r)
         loss = jnp.sum(r**2)
         aux = losses.Aux(loss, loss, jnp.full((3,), jnp.sqrt(loss)), jnp.ones(3), jnp.zeros(3))
         return r, aux
@@ -249,12 +249,12 @@ class _Sampling(eqx.Module):
     area: jax.Array
 
 
-def _toy(nan=False):
+def _toy(nan_above=None):
     key = jax.random.PRNGKey(1)
     p0 = LensParams(c=jnp.zeros(4), a=jnp.zeros((4, 2)), k=jnp.zeros(4), d=jnp.ones(3))
     tgt = jax.tree.map(lambda x: x + 0.3 * jax.random.normal(key, x.shape), p0)
     tgt = eqx.tree_at(lambda t: t.k, tgt, p0.k)  # k is frozen
-    return p0, _Quadratic(tgt, _Sampling(jnp.full(3, 1 / 3)), 0 if nan else -1)
+    return p0, _Quadratic(tgt, _Sampling(jnp.full(3, 1 / 3)), nan_above)
 
 
 @pytest.mark.parametrize("name", ["adam", "lm", "lm-optx", "lbfgsb"])
@@ -286,7 +286,7 @@ def test_solvers_lower_the_loss(name):
 
 
 def test_run_stops_on_nonfinite_loss():
-    p0, obj = _toy(nan=True)
+    p0, obj = _toy(nan_above=0.0)
     params = jax.tree.map(lambda x: jnp.stack([x, x]), p0)
     stages = [curriculum.Stage("warm", 60.0, 2.4, 4), curriculum.Stage("bad", 80.8, 2.0, 4)]
     lrs = LensParams(c=jnp.asarray(0.01), a=jnp.asarray(0.01), k=jnp.asarray(0.0),
@@ -301,14 +301,36 @@ def test_run_stops_on_nonfinite_loss():
 
 
 def test_run_drops_nonfinite_designs():
-    p0, obj = _toy(nan=True)
-    params = jax.tree.map(lambda x: jnp.stack([x, x]), p0)
+    p0, obj = _toy(nan_above=1.5)
+    bad = eqx.tree_at(lambda p: p.d, p0, p0.d.at[0].set(2.0))  # its loss is NaN from step 0
+    params = jax.tree.map(lambda x, y: jnp.stack([x, y]), p0, bad)
     stages = [curriculum.Stage("bad", 80.8, 2.0, 3)]
     lrs = LensParams(c=jnp.asarray(0.01), a=jnp.asarray(0.01), k=jnp.asarray(0.0),
                      d=jnp.asarray(0.01))
-    out, hist = curriculum.run(SPEC, stages, params, obj,
-                               lambda name, lr, o: solvers.Adam(o, lrs), progress=False,
-                               log_every=3, seeds=[3, 4], on_nonfinite="drop")
-    assert sorted(hist.failed) == [3, 4] and "step 0" in hist.failed[3]
+
+    def make(name, lr, objective):
+        return solvers.Adam(objective, lrs)
+
+    out, hist = curriculum.run(SPEC, stages, params, obj, make, progress=False, log_every=3,
+                               seeds=[3, 4], on_nonfinite="drop")
+    assert list(hist.failed) == [4] and "stage 0 (bad) at step 0" in hist.failed[4]
     for x, y in zip(jax.tree.leaves(out), jax.tree.leaves(params), strict=True):
-        np.testing.assert_array_equal(x, y)  # frozen at the last finite parameters
+        np.testing.assert_array_equal(x[1], y[1])  # frozen at the last finite parameters
+    assert not np.array_equal(out.c[0], params.c[0])  # the healthy design moved on
+    # When every design has failed, the run stops and names the stage and step.
+    both = jax.tree.map(lambda x: jnp.stack([x, x]), bad)
+    with pytest.raises(FloatingPointError, match=r"every design.*stage 0 \(bad\) at step 0"):
+        curriculum.run(SPEC, stages, both, obj, make, progress=False, log_every=3,
+                       seeds=[5, 6], on_nonfinite="drop")
+
+
+def test_soft_hinge_is_a_hinge_near_the_bound_and_never_overflows():
+    from jaxlens.design.regularizers import _soft_hinge
+
+    x = jnp.asarray([-1.0, 0.0, 1e-3, 1e30], jnp.float32)
+    h = _soft_hinge(x)
+    assert h[0] == 0 and h[1] == 0
+    np.testing.assert_allclose(h[2], 1e-3, rtol=1e-3)
+    assert np.isfinite(np.asarray(h[3] ** 2))  # a plain hinge squared overflows float32 here
+    g = jax.vmap(jax.grad(_soft_hinge))(x)
+    assert g[0] == 0 and 0 < g[3] < 1e-20 and abs(g[2] - 1) < 1e-2
