@@ -399,6 +399,7 @@ def run_ablation(args, argv) -> dict:
             "rms_max_um": float(np.max(rms)) if rms else None,
             "non_finite_seeds": {str(k): v for k, v in failed.items()},
             "wall_seconds": wall, "seconds_per_design": wall / len(seeds),
+            "load_average": os.getloadavg()[0],
             "stage_seconds": dict(zip(res.history.stages, res.history.seconds, strict=True)),
             "per_seed": [{"seed": s, **e.summary()} for s, e in zip(seeds, evs, strict=True)],
         }
@@ -459,6 +460,9 @@ def _write_table_md(table: dict, path: str) -> None:
     ]
     c = table["columns"]
     p = table["paper_full_method"]
+    lines.append("| random starts (seeds) | " + " | ".join(
+        f"{len(c[k]['seeds'])} ({min(c[k]['seeds'])}–{max(c[k]['seeds'])})" for k in cols) +
+        " | 20 |")
     rows = [
         ("designs without self-intersection (%)", "no_self_intersection_percent", 0,
          _fmt(p["valid_percent"], 0)),
@@ -473,11 +477,13 @@ def _write_table_md(table: dict, path: str) -> None:
     for label, key, nd, paper in rows:
         lines.append(f"| {label} | " + " | ".join(_fmt(c[k].get(key), nd) for k in cols) +
                      f" | {paper} |")
-    seeds = sorted({s for k in cols for s in c[k]["seeds"]})
     devices = sorted({c[k].get("devices", 1) for k in cols})
-    lines += ["", f"Seeds: {seeds[0]}–{seeds[-1]} ({len(seeds)} random starts per column), "
-              f"{'/'.join(map(str, devices))} XLA CPU device(s). Wall time per design = the "
-              "column's wall time (all seeds designed together) / seeds.", ""]
+    loads = [c[k]["load_average"] for k in cols if c[k].get("load_average") is not None]
+    load = (f" The 1-minute load average at the end of each column: "
+            f"{', '.join(f'{x:.1f}' for x in loads)} (other jobs shared the cores)."
+            if loads else "")
+    lines += ["", f"{'/'.join(map(str, devices))} XLA CPU device(s). Wall time per design = the "
+              f"column's wall time (all its seeds designed together) / seeds.{load}", ""]
     with open(path, "w") as f:
         f.write("\n".join(lines))
 
