@@ -132,6 +132,30 @@ def test_perturb_changes_lens_and_zero_tolerance_keeps_it(classical):
     assert float(moved.surfaces[0].c) == 0.0  # the stop stays flat
 
 
+def test_lens_rate_waits_for_the_network():
+    from jaxlens.edof.train import Config, make_optimizer
+
+    cfg = Config(steps=8, lens_delay=0.25, lr_net=1e-2, lr_lens=1e-1)
+    opt = make_optimizer(cfg, cfg.steps)
+    trainable = ({"w": jnp.ones(3)}, {"c": jnp.ones(2)})
+    grads = ({"w": jnp.ones(3)}, {"c": jnp.ones(2)})
+    state = opt.init(trainable)
+    lens_steps, net_steps = [], []
+    for _ in range(6):
+        (u_net, u_lens), state = opt.update(grads, state, trainable)
+        lens_steps.append(float(jnp.abs(u_lens["c"][0])))
+        net_steps.append(float(jnp.abs(u_net["w"][0])))
+    # Frozen for 2 steps (the network trains), then a linear ramp over 2 steps to the rate.
+    assert lens_steps[:3] == [0.0, 0.0, 0.0]
+    assert lens_steps[3] == pytest.approx(0.5 * 0.1, rel=1e-3)
+    assert lens_steps[4] == pytest.approx(0.1, rel=1e-3)
+    assert all(v > 0 for v in net_steps[1:])
+    # With no delay the lens moves from the first step.
+    opt0 = make_optimizer(Config(steps=8, lens_delay=0.0, lr_lens=1e-1), 8)
+    (_, u_lens), _ = opt0.update(grads, opt0.init(trainable), trainable)
+    assert float(jnp.abs(u_lens["c"][0])) == pytest.approx(0.1, rel=1e-3)
+
+
 # --- image formation helpers -----------------------------------------------------------------
 def test_conv_valid_is_a_true_convolution():
     rng = np.random.default_rng(0)

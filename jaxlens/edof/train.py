@@ -51,6 +51,12 @@ class Config:
         steps: stage-1 steps (joint lens and network).
         steps2: stage-2 steps (network on perturbed lenses).
         lr_net, lr_lens: Adam learning rates (the lens parameters are scaled to order 1).
+        lens_delay: fraction of the stage-1 steps during which the lens stays frozen and
+            only the network trains (then the lens rate ramps up linearly over as many
+            steps). Through a network that cannot yet reconstruct (a fresh NAFNet is the
+            identity), the lens gradient only rewards a sharp raw image. Off (0) by
+            default: at the CPU scale a delay of 0.25 did not keep the odd terms from
+            shrinking and did not improve validation PSNR (``experiments/edof/NOTES.md``).
         w_sim, w_raw: ω1 and ω2 of the loss.
         noise: standard deviation of the Gaussian read noise (image range [0, 1]).
         width, enc_blocks, middle_blocks, dec_blocks: the NAFNet.
@@ -71,6 +77,7 @@ class Config:
     steps2: int = 100
     lr_net: float = 1e-3
     lr_lens: float = 2e-2
+    lens_delay: float = 0.0
     w_sim: float = 0.1
     w_raw: float = 0.1
     noise: float = 0.01
@@ -118,7 +125,10 @@ def _labels(trainable):
 
 @functools.lru_cache(maxsize=16)
 def make_optimizer(cfg: Config, steps: int):
-    """Adam with a cosine-decayed rate for the network and a constant one for the lens.
+    """Adam with a cosine-decayed rate for the network and a delayed one for the lens.
+
+    The lens rate is 0 for the first ``lens_delay · cfg.steps`` steps, ramps linearly to
+    ``lr_lens`` over as many steps again and then stays constant (``Config.lens_delay``).
 
     Cached, so that equal configurations give the same (hashable) optimizer and the jitted
     steps, which take it as a static argument, compile once.
@@ -127,7 +137,10 @@ def make_optimizer(cfg: Config, steps: int):
         0.0, cfg.lr_net, max(1, min(20, steps // 10)), max(steps, 1), cfg.lr_net * 0.05
     )
     net_opt = optax.chain(optax.clip_by_global_norm(1.0), optax.adam(sched))
-    return optax.multi_transform({"net": net_opt, "lens": optax.adam(cfg.lr_lens)}, _labels)
+    delay = int(round(cfg.lens_delay * cfg.steps))
+    lens_sched = optax.linear_schedule(0.0, cfg.lr_lens, max(delay, 1), transition_begin=delay)
+    lens_opt = optax.adam(lens_sched if delay > 0 else cfg.lr_lens)
+    return optax.multi_transform({"net": net_opt, "lens": lens_opt}, _labels)
 
 
 def _simulate_batch(lens, windows, xy, depths, key, cfg: Config, perturbation=None):
@@ -214,12 +227,25 @@ def train_step(
     (loss, parts), grads = eqx.filter_value_and_grad(loss_fn, has_aux=True)(trainable)
     g_net, g_lens = grads
     grads = (g_net, apply_gates(g_lens, gate, tie))
-    updates, opt_state = optimizer.update(
+    # A step whose loss or gradient is not finite (a rare ray-tracing failure) is skipped:
+    # one NaN update would make the lens NaN for good, and a NaN lens renders black
+    # patches with a finite loss. ``parts["skipped"]`` counts such steps.
+    leaves = [g for g in jax.tree_util.tree_leaves(grads) if eqx.is_inexact_array(g)]
+    ok = jnp.isfinite(loss) & jnp.all(jnp.stack([jnp.all(jnp.isfinite(g)) for g in leaves]))
+    grads = jax.tree_util.tree_map(
+        lambda g: jnp.where(ok, g, 0.0) if eqx.is_inexact_array(g) else g, grads
+    )
+    new_updates, new_state = optimizer.update(
         grads, opt_state, eqx.filter(trainable, eqx.is_inexact_array)
     )
-    u_net, u_lens = updates
-    u_net = jax.tree_util.tree_map(lambda u: u * net_scale.astype(u.dtype), u_net)
+    opt_state = jax.tree_util.tree_map(
+        lambda a, b: jnp.where(ok, a, b) if eqx.is_array(a) else a, new_state, opt_state
+    )
+    u_net, u_lens = new_updates
+    u_net = jax.tree_util.tree_map(lambda u: u * net_scale.astype(u.dtype) * ok, u_net)
+    u_lens = jax.tree_util.tree_map(lambda u: u * ok, u_lens)
     net, params = eqx.apply_updates(trainable, (u_net, u_lens))
+    parts = dict(parts, skipped=1.0 - ok.astype(loss.dtype))
     return net, params, opt_state, loss, parts
 
 
@@ -263,8 +289,9 @@ def train(
     ``kind`` ("classical", "cubic" or "hybrid") selects the free lens parameters
     (``lenses.gates``). Stage 2 restarts the network's Adam state with its learning rate
     scaled by ``STAGE2_LR_SCALE``. ``history`` holds the loss parts every ``log_every``
-    steps (``stage1``: dicts with ``step``, ``loss``, ``rec``, ``sim``, ``raw``; ``stage2``:
-    dicts with ``step`` and ``rec``).
+    steps (``stage1``: dicts with ``step``, ``loss``, ``rec``, ``sim``, ``raw`` and
+    ``skipped``, the number of steps skipped for a non-finite gradient since the last
+    record; ``stage2``: dicts with ``step``, ``rec`` and ``skipped``).
     """
     dtype = params.c.dtype
     opt = make_optimizer(cfg, max(cfg.steps, cfg.steps2))
@@ -307,12 +334,15 @@ def train(
             rec = {"step": step + 1, "loss": float(np.mean([v[0] for v in vals]))}
             for k in ("rec", "sim", "raw"):
                 rec[k] = float(np.mean([v[1][k] for v in vals]))
+            rec["skipped"] = int(round(sum(float(v[1]["skipped"]) for v in vals)))
             if not math.isfinite(rec["loss"]):
                 raise FloatingPointError(
                     f"train[{name}]: non-finite loss at stage {stage} step {step + 1}"
                 )
             hist[f"stage{stage}"].append(
-                rec if stage == 1 else {"step": rec["step"], "rec": rec["rec"]}
+                rec
+                if stage == 1
+                else {"step": rec["step"], "rec": rec["rec"], "skipped": rec["skipped"]}
             )
             if bar is not None:
                 bar.set_postfix(stage=stage, loss=f"{rec['loss']:.4f}", rec=f"{rec['rec']:.4f}")

@@ -79,6 +79,11 @@ def build_parser() -> argparse.ArgumentParser:
     g.add_argument("--pupil", type=int, help="pupil samples per side of a training PSF (32)")
     g.add_argument("--lr-net", type=float, help="network learning rate (1e-3)")
     g.add_argument("--lr-lens", type=float, help="lens learning rate, scaled units (2e-2)")
+    g.add_argument(
+        "--lens-delay",
+        type=float,
+        help="fraction of stage-1 steps with the lens frozen while the network warms up (0)",
+    )
     g.add_argument("--w-sim", type=float, help="ω1, weight of L_sim (0.1)")
     g.add_argument("--w-raw", type=float, help="ω2, weight of L_raw (0.1)")
     g.add_argument("--noise", type=float, help="read-noise standard deviation (0.01)")
@@ -148,6 +153,7 @@ def config_from_args(a):
         "pupil": a.pupil,
         "lr_net": a.lr_net,
         "lr_lens": a.lr_lens,
+        "lens_delay": a.lens_delay,
         "w_sim": a.w_sim,
         "w_raw": a.w_raw,
         "noise": a.noise,
