@@ -200,20 +200,27 @@ def masked_fields(lens, pupil, n_fields: int, keep: int, with_grad: bool = True)
     (va, ga), (vb, gb) = full_fn(lens), short_fn(lens)
     la = [x for x in jax.tree_util.tree_leaves(ga) if eqx.is_array(x)]
     lb = [x for x in jax.tree_util.tree_leaves(gb) if eqx.is_array(x)]
-    diff = max(
-        [abs(float(va) - float(vb))]
-        + [float(jnp.max(jnp.abs(x - y))) if x.size else 0.0 for x, y in zip(la, lb, strict=True)]
+    # Relative differences: the loss against the loss, each gradient leaf against that leaf's
+    # largest entry (the leaves have different units, and a gradient can be 1e2 x the loss).
+    loss_diff = abs(float(va) - float(vb)) / max(abs(float(va)), 1e-300)
+    grad_diff = max(
+        [
+            float(jnp.max(jnp.abs(x - y)) / jnp.maximum(jnp.max(jnp.abs(x)), 1e-300))
+            for x, y in zip(la, lb, strict=True)
+            if x.size
+        ],
+        default=0.0,
     )
-    scale = max(abs(float(va)), 1e-300)
-    return _row(
+    row = _row(
         "masked_fields",
         full,
         short,
         f"{n_fields} fields traced, loss × mask",
         f"{keep} unmasked fields traced",
-        diff / scale,
+        max(loss_diff, grad_diff),
         1e-12,
     )
+    return row | dict(loss_rel_diff=loss_diff, grad_rel_diff=grad_diff)
 
 
 def no_odd_terms(lens, rays):

@@ -155,11 +155,14 @@ def defaults_table(out: pathlib.Path) -> str:
                 ]
             )
         if "render" in imaging:
-            s = imaging["render"]["recommended_spp"]
+            r = imaging["render"]
+            s = r["recommended_spp"]
+            by = r.get("recommended_spp_by_target", {})
             rows.append(
                 [
-                    "render spp (rel. RMSE ≤ 2 % against 256 spp)",
-                    str(s),
+                    f"render spp, cellphone6 {r['size']}² (per-pixel rel. RMSE ≤ 2 % against "
+                    f"{r['reference_spp']} spp)",
+                    str(s) + (f" ({by['5%']} for ≤ 5 %)" if by.get("5%") else ""),
                     f"{lib['design_image_spp'][0]} (design image loss; render() itself "
                     "requires spp)",
                     lib["design_image_spp"][1] + "; " + lib["design_multistart_image_spp"][1],
