@@ -18,6 +18,9 @@ import re
 
 from . import common
 
+F32_INTERCEPT_MM = 1e-4  # the bound documented in docs/stability.md (tests/test_stress.py)
+F32_GRAD_REL = 1e-3  # relative deviation of the design gradient (curvatures, gaps)
+
 
 def library_defaults() -> dict:
     """The defaults the library uses, each with the place that defines it."""
@@ -64,6 +67,10 @@ def library_defaults() -> dict:
         "jaxlens/design/multistart.py DesignConfig.image_spp",
     )
     out["design_rings"] = (cfg["rings"].default, "jaxlens/design/multistart.py DesignConfig.rings")
+    out["design_float64"] = (
+        cfg["float64"].default,
+        "jaxlens/design/multistart.py DesignConfig.float64",
+    )
     return out
 
 
@@ -131,6 +138,34 @@ def defaults_table(out: pathlib.Path) -> str:
                         _verdict(nrec[dt]["newton_iters"], lib_it),
                     ]
                 )
+        dt_rows = [r for r in pareto["dtype"]["rows"] if "rel_dev_grad_design" in r]
+        if dt_rows:
+            ok = all(
+                r["max_intercept_dev_mm"] <= F32_INTERCEPT_MM
+                and r["rel_dev_grad_design"] <= F32_GRAD_REL
+                and r["valid_mismatch"] == 0
+                for r in dt_rows
+            )
+            lib_f64 = lib["design_float64"][0]
+            rec = "float32" if ok else "float64"
+            rows.append(
+                [
+                    f"dtype (float32 where intercepts stay within {F32_INTERCEPT_MM:g} mm, the "
+                    f"design gradient within {F32_GRAD_REL:g} relative and no validity flag "
+                    "changes, on every sample lens)",
+                    f"{rec} ({min(r['speedup_forward'] for r in dt_rows):.1f}–"
+                    f"{max(r['speedup_forward'] for r in dt_rows):.1f}x forward, "
+                    f"{min(r['speedup_grad'] for r in dt_rows):.1f}–"
+                    f"{max(r['speedup_grad'] for r in dt_rows):.1f}x gradient; intercepts within "
+                    f"{common.fmt(max(r['max_intercept_dev_mm'] for r in dt_rows))} mm, design "
+                    f"gradient within {common.fmt(max(r['rel_dev_grad_design'] for r in dt_rows))}"
+                    ")",
+                    "trace follows the rays' dtype; design: "
+                    + ("float64" if lib_f64 else "float32"),
+                    lib["design_float64"][1],
+                    _verdict(rec, "float64" if lib_f64 else "float32"),
+                ]
+            )
     if imaging:
         psf = imaging["psf"]
         k = psf.get("recommended_kernel_size")
