@@ -248,3 +248,58 @@ def markdown(res: dict) -> str:
             "",
         ]
     return "\n".join(out)
+
+
+def plot(res: dict, path) -> None:
+    """Time against error: PSF kernel size, PSF pupil sampling and render spp."""
+    import matplotlib
+
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+
+    psf = res["psf"]
+    panels = 1 + ("pupil" in psf) + ("render" in res)
+    fig, axes = plt.subplots(1, panels, figsize=(4.5 * panels, 4), squeeze=False)
+    ax = axes[0][0]
+    ks = [r["kernel_size"] for r in psf["kernel"]]
+    ax.semilogy(ks, [max(r["truncated_worst"], 1e-17) for r in psf["kernel"]], marker="o")
+    ax.axhline(0.01, color="k", lw=0.5)
+    ax.set_title("PSF kernel size (cellphone6)")
+    ax.set_xlabel("kernel_size (pixels)")
+    ax.set_ylabel("energy outside the kernel, worst field")
+    i = 1
+    if "pupil" in psf:
+        ax = axes[0][i]
+        i += 1
+        ax.loglog(
+            [r["time_s"] for r in psf["pupil"]], [r["l1_worst"] for r in psf["pupil"]], marker="o"
+        )
+        for r in psf["pupil"]:
+            ax.annotate(str(r["pupil"]), (r["time_s"], r["l1_worst"]), fontsize=7)
+        ax.axhline(0.02, color="k", lw=0.5)
+        ax.set_title(f"PSF pupil rays per side (kernel {psf['pupil_kernel_size']})")
+        ax.set_xlabel("time of one PSF (s)")
+        ax.set_ylabel("L1 error, worst field")
+    if "render" in res:
+        ax = axes[0][i]
+        rows = res["render"]["rows"]
+        for strat, style in ((True, "o-"), (False, "s--")):
+            sel = [r for r in rows if r.get("stratified", True) == strat]
+            if sel:
+                ax.loglog(
+                    [r["time_s"] for r in sel],
+                    [r["rel_rmse"] for r in sel],
+                    style,
+                    label="stratified (square spp)" if strat else "random (other spp)",
+                )
+                for r in sel:
+                    ax.annotate(str(r["spp"]), (r["time_s"], r["rel_rmse"]), fontsize=7)
+        ax.axhline(0.02, color="k", lw=0.5)
+        ax.axhline(0.05, color="k", lw=0.5, ls=":")
+        ax.set_title(f"render spp ({res['render']['size']}²)")
+        ax.set_xlabel("time of one render (s)")
+        ax.set_ylabel("per-pixel relative RMSE")
+        ax.legend(fontsize=7)
+    fig.tight_layout()
+    fig.savefig(path, dpi=110)
+    plt.close(fig)

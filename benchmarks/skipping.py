@@ -302,3 +302,29 @@ def markdown(res: dict) -> str:
             ),
         ]
     )
+
+
+def plot(res: dict, path) -> None:
+    """Saving of each shortcut (full time / shortcut time)."""
+    import matplotlib
+
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+
+    rows = res["rows"]
+    fig, ax = plt.subplots(figsize=(6, 3.5))
+    names = [r["shortcut"] for r in rows]
+    ax.barh(
+        names, [r["saving"] for r in rows], color=["C0" if r["same_answer"] else "C3" for r in rows]
+    )
+    ax.axvline(1.0, color="k", lw=0.5)
+    ax.set_xscale("log")
+    ax.set_xlabel("saving (full time / shortcut time)")
+    same = all(r["same_answer"] for r in rows)
+    ax.set_title(
+        "skipping unneeded work"
+        + (" (every shortcut gives the same answer)" if same else " (red: answer differs)")
+    )
+    fig.tight_layout()
+    fig.savefig(path, dpi=110)
+    plt.close(fig)
