@@ -143,24 +143,14 @@ def run_isolated(size: int, spp: int, checkpoint: bool, patch: int, cap: int) ->
         "wall_s": round(time.perf_counter() - t0, 1),
         "sampled_peak_rss_bytes": peak,
     }
+    # A run that did not report back still records what it was asked to do.
+    asked = dict(size=size, spp=spp, checkpoint=checkpoint, patch=patch, rays=size * size * spp * 3)
     if killed:
-        res.update(
-            size=size,
-            spp=spp,
-            checkpoint=checkpoint,
-            patch=patch,
-            rays=size * size * spp * 3,
-            exceeded_cap=True,
-            cap_bytes=cap,
-        )
+        res.update(asked, exceeded_cap=True, cap_bytes=cap)
         return res
     if proc.returncode != 0:
         res.update(
-            size=size,
-            spp=spp,
-            checkpoint=checkpoint,
-            patch=patch,
-            rays=size * size * spp * 3,
+            asked,
             failed=True,
             returncode=proc.returncode,
             stderr_tail=err[-600:],
