@@ -17,6 +17,14 @@ Intersections:
     theorem result dt/dθ = −(∂F/∂θ)/(∂F/∂t), so the backward pass never unrolls the
     iterations.
 
+Fusion:
+    Each expensive per-ray result (the root t, the refraction gain) is returned as one
+    array that also carries its validity: an invalid entry holds the marker ``MISS``.
+    XLA's CPU backend fuses a computation into one pass over the rays only when it
+    has a single output, so a (value, flag) pair would cost extra passes over memory
+    per surface (benchmarks/SPEED.md). A finite marker, not NaN, keeps
+    ``jax_debug_nans`` usable.
+
 Validity:
     A ray is invalid once it misses a surface (no real root, outside the conic's
     domain, or Newton did not converge), is clipped by a semi-diameter, undergoes
@@ -45,8 +53,16 @@ DEFAULT_NEWTON_ITERS = 6
 T_MAX = 1e12
 
 
-def _where_nonzero(x):
-    return jnp.where(x == 0, 1.0, x)
+# Marker for "no valid result" in a ray parameter or a refraction gain; valid values are
+# far smaller (|t| < 2 T_MAX), so |x| < MISS_BELOW tells them apart in float32 and float64.
+MISS = 1e30
+MISS_BELOW = 1e29
+
+
+def _unmark(x):
+    """(x with marked entries set to 0, validity)."""
+    ok = jnp.abs(x) < MISS_BELOW
+    return jnp.where(ok, x, 0.0), ok
 
 
 def _bounded_div(num, den):
@@ -60,12 +76,15 @@ def _bounded_div(num, den):
 
 
 def _conic_root(surface: AbstractSurface, o, d, t_min):
-    """Closed-form intersection with the base conic; returns (t, hit).
+    """Closed-form intersection with the base conic; returns t, marked MISS on a miss.
 
     ``o`` and ``d`` are (x, y, z) tuples of arrays in the surface's local frame, with ``o``
-    near the vertex plane (see ``intersect``). Of the two roots of
+    near the surface (see ``intersect``). Of the two roots of
     c(x² + y²) + c(1+k)z² − 2z = 0, only those on the sheet through the vertex
-    (1 − c(1+k)z ≥ 0) and with t_min ≤ t count; the first along the ray is taken.
+    (1 − c(1+k)z ≥ 0) and with t_min ≤ t (``None``: any t) count; the first along the
+    ray is taken. The roots are the stable pair t1 = cc/q (finite as c -> 0) and
+    t2 = q/a; which one is chosen is decided on numerators and denominators, so the
+    result is a single division (one fused pass over the rays, see the module notes).
     """
     c, k = surface.c, surface.k
     ox, oy, oz = o
@@ -78,17 +97,25 @@ def _conic_root(surface: AbstractSurface, o, d, t_min):
     real = disc >= 0
     pos = disc > 0
     root = jnp.where(pos, jnp.sqrt(jnp.where(pos, disc, 1.0)), 0.0)
-    # Stable pair of roots: t1 = cc/q stays finite as c -> 0, t2 = q/a.
     q = -b + jnp.where(b <= 0, root, -root)
-    t1, ok1 = _bounded_div(cc, q)
-    t2, ok2 = _bounded_div(q, a)
 
-    def usable(t, bounded):
-        return bounded & real & (t >= t_min) & (ck * (oz + t * dz) <= 1)
+    def usable(num, den):
+        """Whether the root num/den is bounded, on the vertex sheet and past t_min."""
+        sign, size = jnp.sign(den), jnp.abs(den)
+        ok = real & (jnp.abs(num) < T_MAX * size)
+        ok = ok & (ck * (oz * den + num * dz) * sign <= size)
+        if t_min is not None:
+            ok = ok & (num * sign >= t_min * size)
+        return ok
 
-    u1, u2 = usable(t1, ok1), usable(t2, ok2)
-    t = jnp.where(u1 & u2, jnp.minimum(t1, t2), jnp.where(u1, t1, t2))
-    return jnp.where(u1 | u2, t, 0.0), u1 | u2
+    u1, u2 = usable(cc, q), usable(q, a)
+    # t1 <= t2  <=>  cc·a <= q² when q·a > 0 (the inequality flips when q·a < 0).
+    sign = jnp.sign(q) * jnp.sign(a)
+    first_is_t1 = u1 & (~u2 | (cc * a * sign <= q * q * sign))
+    hit = u1 | u2
+    num = jnp.where(first_is_t1, cc, q)
+    den = jnp.where(first_is_t1, q, a)
+    return jnp.where(hit, num, MISS) / jnp.where(hit, den, 1.0)
 
 
 def _residual(surface: AbstractSurface, o, d, t):
@@ -115,23 +142,24 @@ def intersect(
         first: whether this is the first surface (object space).
 
     Returns:
-        t: ray parameter of the intersection (from ``o``), ``[*batch]``.
-        ok: ``[*batch]`` bool, True where a valid intersection was found.
+        The ray parameter t of the intersection (from ``o``), ``[*batch]``, holding the
+        ``MISS`` marker where no valid intersection was found (see ``_unmark``).
     """
     eps = jnp.finfo(o[2].dtype).eps
-    t_min = -jnp.inf if first else -1e3 * jax.lax.stop_gradient(eps * (1 + jnp.abs(o[2])))
-    t_plane, _ = _bounded_div(-o[2], d[2])  # 0 for rays parallel to the plane
-    o = tuple(oi + t_plane * di for oi, di in zip(o, d, strict=True))
-    t_min = t_min - t_plane
+    if first:
+        t_min = None
+        t_plane, _ = _bounded_div(-o[2], d[2])  # 0 for rays parallel to the plane
+        o = tuple(oi + t_plane * di for oi, di in zip(o, d, strict=True))
+    else:
+        t_min = -1e3 * jax.lax.stop_gradient(eps * (1 + jnp.abs(o[2])))
+        t_plane = 0.0
     if not surface.has_polynomial:
         # Conics: the closed form is exact and differentiable as it stands.
-        t, ok = _conic_root(surface, o, d, t_min)
-        return jnp.where(ok, t + t_plane, 0.0), ok
+        return _conic_root(surface, o, d, t_min) + t_plane
     o_s, d_s = jax.lax.stop_gradient((o, d))
     surf_s = jax.lax.stop_gradient(surface)
-    t0, hit = _conic_root(surf_s, o_s, d_s, t_min)
     # Rays that miss the base conic start Newton from the vertex plane (t = 0 now).
-    t0 = jnp.where(hit, t0, 0.0)
+    t0, _ = _unmark(_conic_root(surf_s, o_s, d_s, t_min))
 
     def step(_, t):
         f, df, _ = _residual(surf_s, o_s, d_s, t)
@@ -142,15 +170,39 @@ def intersect(
     f0, df0, _ = _residual(surf_s, o_s, d_s, t0)
     scale = 1.0 + jnp.abs(t0)
     ok = (jnp.abs(f0) <= 64 * jnp.sqrt(eps) * scale) & jnp.isfinite(f0) & (df0 != 0)
-    ok = ok & (t0 >= t_min)
+    if t_min is not None:
+        ok = ok & (t0 >= t_min)
     # Flagged rays take the last step at a harmless point, so their gradient stays finite.
     t0 = jnp.where(ok, t0, 0.0)
     df0 = jax.lax.stop_gradient(jnp.where(ok, df0, 1.0))
     # One differentiable step with F' held fixed: the implicit-function gradient.
     f, _, inside = _residual(surface, o, d, t0)
-    t = t0 - f / df0
     ok = ok & inside
-    return jnp.where(ok, t + t_plane, 0.0), ok
+    # t0 + t_plane − f/df0, written as one division (one fused pass, see the module notes).
+    return jnp.where(ok, (t0 + t_plane) * df0 - f, MISS) / jnp.where(ok, df0, 1.0)
+
+
+def refraction_gain(d, normal, mu):
+    """Vector Snell's law: the gain g such that the refracted direction is mu·d + g·normal.
+
+    Args:
+        d: unit incident directions, an (x, y, z) tuple of arrays.
+        normal: surface normals of any length and either orientation.
+        mu: n_before / n_after.
+
+    Returns:
+        g, marked ``MISS`` where the ray undergoes total internal reflection.
+    """
+    # With |n|² = nn and d·n = dn (cos_i = dn/|n|), the unit-normal result
+    # mu·d + (±sqrt(1 − mu²(1 − cos_i²)) − mu·cos_i)·n/|n| has the gain
+    # (±sqrt(nn − mu²(nn − dn²)) − mu·dn)/nn: one division, no rsqrt.
+    nn = normal[0] * normal[0] + normal[1] * normal[1] + normal[2] * normal[2]
+    dn = d[0] * normal[0] + d[1] * normal[1] + d[2] * normal[2]
+    k = nn - mu * mu * (nn - dn * dn)
+    ok = (k >= 0) & (nn > 0)
+    root = jnp.sqrt(jnp.where(ok, k, 1.0))
+    g = jnp.where(dn < 0, -root, root) - mu * dn
+    return jnp.where(ok, g, MISS) / jnp.where(ok, nn, 1.0)
 
 
 def refract(d, normal, mu):
@@ -158,32 +210,26 @@ def refract(d, normal, mu):
 
     Args:
         d: unit incident directions.
-        normal: unit surface normals (either orientation).
+        normal: surface normals of any length and either orientation.
         mu: n_before / n_after.
 
     Returns:
-        (refracted unit directions, ok) with ok False on total internal reflection.
+        (refracted unit directions, ok) with ok False on total internal reflection (those
+        rays keep their direction).
     """
-    cos_i = d[0] * normal[0] + d[1] * normal[1] + d[2] * normal[2]
-    k = 1.0 - mu * mu * (1.0 - cos_i * cos_i)
-    ok = k >= 0
-    root = jnp.sqrt(jnp.where(ok, k, 1.0))
-    g = jnp.where(cos_i < 0, -root, root) - mu * cos_i
+    g, ok = _unmark(refraction_gain(d, normal, mu))
     out = tuple(jnp.where(ok, mu * di + g * ni, di) for di, ni in zip(d, normal, strict=True))
     return out, ok
 
 
-def _surface_normal(surface: AbstractSurface, x, y, z):
-    """Unit normal (+z at the vertex) at a point (local frame) on the surface."""
+def surface_normal(surface: AbstractSurface, x, y, z):
+    """A normal (+z at the vertex, not of unit length) at a point on the surface (local frame)."""
     if surface.has_polynomial:
         _, gx, gy, _ = surface.sag_and_grad(x, y)
-        nx, ny, nz = -gx, -gy, jnp.ones_like(gx)
-    else:
-        # Gradient of the implicit conic c(x² + y²) + c(1+k)z² − 2z: no square root needed.
-        c = surface.c
-        nx, ny, nz = -c * x, -c * y, 1.0 - c * (1.0 + surface.k) * z
-    inv = jax.lax.rsqrt(nx * nx + ny * ny + nz * nz)
-    return nx * inv, ny * inv, nz * inv
+        return -gx, -gy, jnp.ones_like(gx)
+    # Gradient of the implicit conic c(x² + y²) + c(1+k)z² − 2z: no square root needed.
+    c = surface.c
+    return -c * x, -c * y, 1.0 - c * (1.0 + surface.k) * z
 
 
 class _State(eqx.Module):
@@ -198,7 +244,7 @@ class _State(eqx.Module):
 def _step(surface, z_vertex, st: _State, n_before, n_after, *, first, refracts, newton_iters):
     """Move rays to one surface and refract them there."""
     o_local = (st.p[0], st.p[1], st.p[2] - z_vertex)
-    t, ok = intersect(surface, o_local, st.d, newton_iters, first=first)
+    t, ok = _unmark(intersect(surface, o_local, st.d, newton_iters, first=first))
     if not first:
         ok = ok & (t >= -1e3 * jnp.finfo(t.dtype).eps * (1 + jnp.abs(o_local[2])))
     x, y, z = (oi + t * di for oi, di in zip(o_local, st.d, strict=True))
@@ -207,7 +253,7 @@ def _step(surface, z_vertex, st: _State, n_before, n_after, *, first, refracts, 
     ok = ok & (x * x + y * y <= rim)
     d = st.d
     if refracts:
-        d, no_tir = refract(d, _surface_normal(surface, x, y, z), n_before / n_after)
+        d, no_tir = refract(d, surface_normal(surface, x, y, z), n_before / n_after)
         ok = ok & no_tir
     valid = st.valid & ok
     keep = lambda new, old: jnp.where(valid, new, old)  # noqa: E731
