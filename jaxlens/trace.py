@@ -76,6 +76,14 @@ def _bounded_div(num, den):
 
 
 def _conic_root(surface: AbstractSurface, o, d, t_min):
+    """The first intersection with the base conic: ``_conic_root_arrays`` on a surface."""
+    if t_min is None:
+        return _conic_root_arrays(False, surface.c, surface.k, *o, *d, jnp.zeros_like(o[2]))
+    return _conic_root_arrays(True, surface.c, surface.k, *o, *d, t_min)
+
+
+@functools.partial(jax.custom_jvp, nondiff_argnums=(0,))
+def _conic_root_arrays(bounded_below, c, k, ox, oy, oz, dx, dy, dz, t_min):
     """Closed-form intersection with the base conic; returns t, marked MISS on a miss.
 
     ``o`` and ``d`` are (x, y, z) tuples of arrays in the surface's local frame, with ``o``
@@ -86,9 +94,6 @@ def _conic_root(surface: AbstractSurface, o, d, t_min):
     t2 = q/a; which one is chosen is decided on numerators and denominators, so the
     result is a single division (one fused pass over the rays, see the module notes).
     """
-    c, k = surface.c, surface.k
-    ox, oy, oz = o
-    dx, dy, dz = d
     ck = c * (1 + k)
     a = c * (dx * dx + dy * dy) + ck * dz * dz
     b = c * (ox * dx + oy * dy) + ck * oz * dz - dz
@@ -104,7 +109,7 @@ def _conic_root(surface: AbstractSurface, o, d, t_min):
         sign, size = jnp.sign(den), jnp.abs(den)
         ok = real & (jnp.abs(num) < T_MAX * size)
         ok = ok & (ck * (oz * den + num * dz) * sign <= size)
-        if t_min is not None:
+        if bounded_below:
             ok = ok & (num * sign >= t_min * size)
         return ok
 
@@ -116,6 +121,34 @@ def _conic_root(surface: AbstractSurface, o, d, t_min):
     num = jnp.where(first_is_t1, cc, q)
     den = jnp.where(first_is_t1, q, a)
     return jnp.where(hit, num, MISS) / jnp.where(hit, den, 1.0)
+
+
+@_conic_root_arrays.defjvp
+def _conic_root_jvp(bounded_below, primals, tangents):
+    """Implicit-function derivative dt = −dF/F_t of F = c(x² + y²) + c(1+k)z² − 2z on the ray.
+
+    It reuses the root, so the gradient costs a few multiplies instead of the derivative
+    of the quadratic formula and its root selection.
+    """
+    c, k, ox, oy, oz, dx, dy, dz, _ = primals
+    tc, tk, tox, toy, toz, tdx, tdy, tdz, _ = tangents
+    t_marked = _conic_root_arrays(bounded_below, *primals)
+    t, hit = _unmark(t_marked)
+    x, y, z = ox + t * dx, oy + t * dy, oz + t * dz
+    fx, fy, fz = 2 * c * x, 2 * c * y, 2 * c * (1 + k) * z - 2  # ∇F
+    f_t = fx * dx + fy * dy + fz * dz
+    df = (
+        (x * x + y * y + (1 + k) * z * z) * tc
+        + c * z * z * tk
+        + fx * (tox + t * tdx)
+        + fy * (toy + t * tdy)
+        + fz * (toz + t * tdz)
+    )
+    # A ray tangent to the surface (cos of incidence below eps) gets zero derivative; the
+    # guard must not look at the tangents (they enter linearly).
+    eps = jnp.finfo(f_t.dtype).eps
+    good = hit & (jnp.abs(f_t) > eps * (jnp.abs(fx) + jnp.abs(fy) + jnp.abs(fz)))
+    return t_marked, jnp.where(good, -df / jnp.where(good, f_t, 1.0), 0.0)
 
 
 def _residual(surface: AbstractSurface, o, d, t):
