@@ -221,7 +221,7 @@ def headline(out: pathlib.Path) -> str:
         n = 1_000_000 if 1_000_000 in counts else counts[-1]
         body = []
         for r in rows:
-            if r["rays"] != n or r["mode"] != "forward" or r["engine"] == "prototype":
+            if r["rays"] != n or r["mode"] != "forward":
                 continue
             per_core = r["rays"] * r["surfaces"] / r["cpu_s"] if r.get("cpu_s") else None
             body.append(

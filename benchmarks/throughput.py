@@ -10,8 +10,7 @@ wavelength) are traced:
   squared spot radius about the centroid of the valid rays (the RMS-spot loss of lens design).
 
 ray·surfaces/s = rays × lens surfaces (the image surface not counted) / best run time.
-``engine = "jaxlens"`` is ``jaxlens.trace``; ``engine = "prototype"`` is the structure-of-arrays,
-chunked variant in ``benchmarks/fast_trace.py`` proposed for ``jaxlens/trace.py``; ``engine =
+``engine = "jaxlens"`` is ``jaxlens.trace`` with its defaults; ``engine =
 "optiland"`` is optiland's numpy trace (float64 only) of the same rays in the same run, with
 ``ratio_vs_optiland`` on every jaxlens row of the same lens and ray count. The image
 intercepts of every engine are compared with ``jaxlens.trace`` (``max_dev_mm``).
@@ -28,7 +27,6 @@ import jaxlens
 from jaxlens import sampling, zoo
 
 from . import common, optiland_ref
-from .fast_trace import rays_to_state, trace_soa_chunked
 
 LENSES = ("cooke_triplet", "double_gauss", "cellphone6")
 
@@ -70,18 +68,12 @@ def forward_grad(lens, rays):
     return eqx.filter_value_and_grad(loss)(lens)
 
 
-@eqx.filter_jit
-def proto_forward(lens, state, wavelength):
-    return trace_soa_chunked(lens, state, wavelength, closed_form=True)
-
-
 def run(
     smoke: bool = False,
     full: bool = False,
     lenses=LENSES,
     counts=None,
     with_optiland: bool = True,
-    with_prototype: bool = True,
 ) -> dict:
     """Run the throughput benchmark and return its result dictionary."""
     if counts is None:
@@ -145,18 +137,10 @@ def run(
                 dname = jnp.dtype(dtype).name
                 reps = 1 if n >= 10_000_000 else 3 if n >= 1_000_000 else 5
                 engines = [("jaxlens", "forward", forward, (lens, rays))]
-                # forward+grad keeps every surface's residuals: ~0.4 KB per ray and surface in
-                # float64 (5.5 GiB for 1e6 rays through the 13-surface phone lens), so 1e7 rays
-                # would not fit in this machine's 24 GiB; it stops at 1e6.
-                if (not smoke or dtype == jnp.float64) and n < 10_000_000:
+                # The trace goes through large batches in checkpointed chunks, so the
+                # gradient's memory is bounded and 1e7 rays fit.
+                if not smoke or dtype == jnp.float64:
                     engines.append(("jaxlens", "forward+grad", forward_grad, (lens, rays)))
-                if with_prototype and not smoke and name == "cooke_triplet":
-                    st = rays_to_state(rays)
-                    # Forward only: the prototype's unrolled gradient takes ~90 s to compile
-                    # and runs no faster than jaxlens.trace's.
-                    engines.append(
-                        ("prototype", "forward", proto_forward, (lens, st, rays.wavelength))
-                    )
                 for engine, mode, fn, args in engines:
                     t = common.time_jitted(
                         fn,
@@ -178,7 +162,7 @@ def run(
                     )
                     if mode == "forward" and ref64 is not None:
                         out = fn(*args)
-                        y = out.origin if engine == "jaxlens" else jnp.stack(out[:3], -1)
+                        y = out.origin
                         ok = np.asarray(ref64.valid)
                         row["max_dev_mm"] = float(
                             np.max(np.abs(np.asarray(y, np.float64) - np.asarray(ref64.origin))[ok])
@@ -202,9 +186,8 @@ def run(
         "definition": "rate = rays × lens surfaces (image surface not counted) / best run "
         "time; forward+grad = value and gradient of the mean squared spot "
         "radius w.r.t. every lens array",
-        "notes": "forward+grad is measured up to 1e6 rays: its residuals (~0.4 KB per ray "
-        "and surface in float64) would not fit 1e7 rays in 24 GiB; cpu_s is the process CPU "
-        "time of the best run (all threads), so cpu_s/run_s shows how many cores it used",
+        "notes": "cpu_s is the process CPU time of the best run (all threads), so cpu_s/run_s "
+        "shows how many cores it used",
     }
 
 
@@ -304,7 +287,7 @@ def plot(res: dict, path) -> None:
                 r for r in rows if r["lens"] == name and (r["engine"], r["dtype"], r["mode"]) == key
             ]
             sel.sort(key=lambda r: r["rays"])
-            style = {"jaxlens": "-", "prototype": "--", "optiland": ":"}[key[0]]
+            style = {"jaxlens": "-", "optiland": ":"}[key[0]]
             ax.loglog(
                 [r["rays"] for r in sel],
                 [r["rate"] for r in sel],

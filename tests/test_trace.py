@@ -296,3 +296,43 @@ def eqx_tree_at_object(lens, distance):
     return jl.Lens(lens.surfaces, lens.thickness, lens.materials, stop=lens.stop, epd=lens.epd,
                    fields=lens.fields, wavelengths=lens.wavelengths, primary=lens.primary,
                    object_distance=distance)
+
+
+@pytest.mark.parametrize("n", [1000, 1003])  # 1003: the last chunk is padded
+def test_chunked_trace_equals_one_piece(n):
+    """Chunking is an implementation detail: values, flags and gradients are unchanged."""
+    lens = jl.zoo.cooke_triplet()
+    key = jax.random.PRNGKey(3)
+    pupil = jl.sampling.pupil_random(key, n, jnp.float64)
+    rays = jl.sampling.collimated(lens, 0.8 * float(lens.fields[-1]), pupil)
+    wl = jnp.linspace(0.48, 0.65, n)  # per-ray wavelengths are chunked with the rays
+    valid = jnp.arange(n) % 7 != 3  # invalid input rays pass through untouched
+    rays = jl.Rays(rays.origin, rays.direction, wl, valid)
+    whole = jl.trace(lens, rays, chunk=None)
+    parts = jl.trace(lens, rays, chunk=96)
+    assert not bool(jnp.all(whole.valid))
+    np.testing.assert_array_equal(parts.valid, whole.valid)
+    for a, b in [(parts.origin, whole.origin), (parts.direction, whole.direction),
+                 (parts.opl, whole.opl)]:
+        np.testing.assert_allclose(a, b, rtol=0, atol=1e-12)
+
+    def loss(lens, chunk):
+        out = jl.trace(lens, rays, chunk=chunk)
+        w = out.valid.astype(out.origin.dtype)
+        return jnp.sum(w * jnp.sum(out.origin[:, :2] ** 2, -1)) / jnp.sum(w)
+
+    g_whole = jax.grad(loss)(lens, None)
+    g_parts = jax.grad(loss)(lens, 96)
+    for a, b in zip(jax.tree_util.tree_leaves(g_parts), jax.tree_util.tree_leaves(g_whole)):
+        np.testing.assert_allclose(a, b, rtol=1e-10, atol=1e-12)
+
+
+def test_chunk_sizes_are_simd_friendly():
+    from jaxlens.trace import _chunking
+
+    assert _chunking(1_000_000, 2**16) == (20, 50_000)
+    m, size = _chunking(1003, 96)
+    assert m * size >= 1003 and size <= 96 + 16 and size % 16 == 0
+    with pytest.raises(ValueError, match="chunk"):
+        rays = jl.Rays(jnp.zeros((5, 3)), jnp.ones((5, 3)) / 3**0.5, 0.5)
+        jl.trace(jl.zoo.cooke_triplet(), rays, chunk=0)
