@@ -453,7 +453,8 @@ def trace(
     """
 
     def whole(r: Rays) -> Rays:
-        return _to_rays(_trace_states(lens, r, newton_iters, None, keep_path=False)[-1], r.wavelength)
+        states = _trace_states(lens, r, newton_iters, None, keep_path=False)
+        return _to_rays(states[-1], r.wavelength)
 
     n = rays.origin.shape[0]
     if chunk is None or rays.origin.ndim != 2 or n <= chunk:

@@ -323,7 +323,8 @@ def test_chunked_trace_equals_one_piece(n):
 
     g_whole = jax.grad(loss)(lens, None)
     g_parts = jax.grad(loss)(lens, 96)
-    for a, b in zip(jax.tree_util.tree_leaves(g_parts), jax.tree_util.tree_leaves(g_whole)):
+    leaves = jax.tree_util.tree_leaves
+    for a, b in zip(leaves(g_parts), leaves(g_whole), strict=True):
         np.testing.assert_allclose(a, b, rtol=1e-10, atol=1e-12)
 
 

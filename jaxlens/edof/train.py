@@ -30,7 +30,7 @@ import optax
 
 from ..lens import Lens
 from ..nets import NAFNet
-from .lenses import DEPTHS_M, SPEC, Tolerances, apply_gates, gates, perturb
+from .lenses import DEPTHS_M, SPEC, Tolerances, apply_gates, dioptric_weights, gates, perturb
 from .losses import edof_loss
 from .optics import render_tiled, simulate_patch
 
@@ -57,6 +57,8 @@ class Config:
             identity), the lens gradient only rewards a sharp raw image. Off (0) by
             default: at the CPU scale a delay of 0.25 did not keep the odd terms from
             shrinking and did not improve validation PSNR (``experiments/edof/NOTES.md``).
+        depth_sampling: how a batch draws its two depths of the 8: "uniform" or
+            "dioptric" (weights even in dioptres, ``lenses.dioptric_weights``).
         w_sim, w_raw: ω1 and ω2 of the loss.
         noise: standard deviation of the Gaussian read noise (image range [0, 1]).
         width, enc_blocks, middle_blocks, dec_blocks: the NAFNet.
@@ -78,6 +80,7 @@ class Config:
     lr_net: float = 1e-3
     lr_lens: float = 2e-2
     lens_delay: float = 0.0
+    depth_sampling: str = "uniform"
     w_sim: float = 0.1
     w_raw: float = 0.1
     noise: float = 0.01
@@ -259,12 +262,17 @@ class BatchSource:
         h, w = lens.sensor.size
         self.half = 0.5 * np.array([float(w), float(h)])
         self.depths = 1e3 * np.asarray(DEPTHS_M)
+        if cfg.depth_sampling not in ("uniform", "dioptric"):
+            raise ValueError(
+                f"depth_sampling must be 'uniform' or 'dioptric', got {cfg.depth_sampling!r}"
+            )
+        self.weights = dioptric_weights(DEPTHS_M) if cfg.depth_sampling == "dioptric" else None
 
     def __call__(self, dtype=np.float32):
         cfg = self.cfg
         windows = self.sampler.sample(cfg.batch)
         xy = self.rng.uniform(-1.0, 1.0, (cfg.batch, 2)) * self.half
-        pair = self.rng.choice(len(self.depths), 2, replace=False)
+        pair = self.rng.choice(len(self.depths), 2, replace=False, p=self.weights)
         return (
             jnp.asarray(windows, dtype),
             jnp.asarray(xy, dtype),

@@ -84,6 +84,12 @@ def build_parser() -> argparse.ArgumentParser:
         type=float,
         help="fraction of stage-1 steps with the lens frozen while the network warms up (0)",
     )
+    g.add_argument(
+        "--depth-sampling",
+        choices=("uniform", "dioptric"),
+        help="how a batch draws its 2 of the 8 training depths: uniformly, or with weights "
+        "even in dioptres (uniform)",
+    )
     g.add_argument("--w-sim", type=float, help="ω1, weight of L_sim (0.1)")
     g.add_argument("--w-raw", type=float, help="ω2, weight of L_raw (0.1)")
     g.add_argument("--noise", type=float, help="read-noise standard deviation (0.01)")
@@ -154,6 +160,7 @@ def config_from_args(a):
         "lr_net": a.lr_net,
         "lr_lens": a.lr_lens,
         "lens_delay": a.lens_delay,
+        "depth_sampling": a.depth_sampling,
         "w_sim": a.w_sim,
         "w_raw": a.w_raw,
         "noise": a.noise,
