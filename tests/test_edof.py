@@ -109,8 +109,24 @@ def test_gates_select_and_tie_parameters(classical):
     out = L.apply_gates(g, gate, tie)
     np.testing.assert_allclose(out.odd_x, [1.0, 2.0, 3.0])
     assert float(out.radius) == 0
+    gate, tie = L.gates(p, "hybrid-held-focus")
+    out = L.apply_gates(g, gate, tie)
+    assert float(out.c) == 0 and float(out.focus) == 0 and float(out.k) == 2.0
+    np.testing.assert_allclose(out.odd_y, [3.0, 4.0, 5.0])
     with pytest.raises(ValueError, match="kind"):
         L.gates(p, "other")
+
+
+def test_dioptric_depth_weights():
+    w = L.dioptric_weights()
+    assert w.shape == (8,) and w.sum() == pytest.approx(1.0)
+    assert np.all(np.diff(w) < 0)  # depths are listed near to far; near ones stand for more
+    # Each depth stands for the dioptric interval halfway to its neighbours; the end ones
+    # mirror their one gap, so 10 cm (10 D) stands for 10 - 6.67 = 3.33 D of the total.
+    d = 1 / np.asarray(L.DEPTHS_M)
+    raw = [d[0] - d[1]] + [(d[i - 1] - d[i + 1]) / 2 for i in range(1, 7)] + [d[-2] - d[-1]]
+    np.testing.assert_allclose(w, np.array(raw) / sum(raw), rtol=1e-12)
+    np.testing.assert_allclose(L.dioptric_weights(L.DEPTHS_M[::-1]), w[::-1])
 
 
 def test_cubic_strength_guess_matches_formula(classical):

@@ -241,7 +241,8 @@ class HybridParams(eqx.Module):
 def gates(params: HybridParams, kind: str) -> tuple[HybridParams, Array]:
     """Which parameters a lens may change: a gate pytree (1 trainable, 0 frozen) and a tie.
 
-    ``kind`` is "classical" (nothing moves), "hybrid" (everything moves) or "cubic" (the
+    ``kind`` is "classical" (nothing moves), "hybrid" (everything moves),
+    "hybrid-held-focus" (everything but the base curvature and the sensor position) or "cubic" (the
     cubic phase plate at the aperture: only the x³ and y³ terms, tied to one strength a of
     the sag a·(x³ + y³), and the sensor position move). The classical lens and the cubic
     plate are thus the same ``HybridParams`` (and share one compiled training step); a lens
@@ -254,6 +255,12 @@ def gates(params: HybridParams, kind: str) -> tuple[HybridParams, Array]:
     dtype = params.c.dtype
     if kind == "hybrid":
         gate, tie = ones, 0.0
+    elif kind == "hybrid-held-focus":
+        # The paraxial focus stays at the classical lens's 20 cm: no sensor shift, no change
+        # of the base curvature (the r² term is not a parameter), so depth of field can only
+        # come from the aspheric and odd terms, not from refocusing.
+        gate = eqx.tree_at(lambda p: (p.c, p.focus), ones, (zeros.c, zeros.focus))
+        tie = 0.0
     elif kind == "classical":
         gate, tie = zeros, 0.0
     elif kind == "cubic":

@@ -59,6 +59,9 @@ class Config:
             shrinking and did not improve validation PSNR (``experiments/edof/NOTES.md``).
         depth_sampling: how a batch draws its two depths of the 8: "uniform" or
             "dioptric" (weights even in dioptres, ``lenses.dioptric_weights``).
+        hold_focus: the hybrid lens keeps the classical lens's base curvature and sensor
+            position (``lenses.gates`` "hybrid-held-focus"), so it cannot trade near for
+            far depths by refocusing.
         w_sim, w_raw: ω1 and ω2 of the loss.
         noise: standard deviation of the Gaussian read noise (image range [0, 1]).
         width, enc_blocks, middle_blocks, dec_blocks: the NAFNet.
@@ -81,6 +84,7 @@ class Config:
     lr_lens: float = 2e-2
     lens_delay: float = 0.0
     depth_sampling: str = "uniform"
+    hold_focus: bool = False
     w_sim: float = 0.1
     w_raw: float = 0.1
     noise: float = 0.01
@@ -303,7 +307,7 @@ def train(
     """
     dtype = params.c.dtype
     opt = make_optimizer(cfg, max(cfg.steps, cfg.steps2))
-    gate, tie = gates(params, kind)
+    gate, tie = gates(params, "hybrid-held-focus" if kind == "hybrid" and cfg.hold_focus else kind)
     frozen, _ = gates(params, "classical")
     stages = (
         (1, cfg.steps, gate, tie, 0.0, 1.0),

@@ -90,6 +90,11 @@ def build_parser() -> argparse.ArgumentParser:
         help="how a batch draws its 2 of the 8 training depths: uniformly, or with weights "
         "even in dioptres (uniform)",
     )
+    g.add_argument(
+        "--hold-focus",
+        action=argparse.BooleanOptionalAction,
+        help="the hybrid keeps the classical lens's base curvature and sensor position (off)",
+    )
     g.add_argument("--w-sim", type=float, help="ω1, weight of L_sim (0.1)")
     g.add_argument("--w-raw", type=float, help="ω2, weight of L_raw (0.1)")
     g.add_argument("--noise", type=float, help="read-noise standard deviation (0.01)")
@@ -161,6 +166,7 @@ def config_from_args(a):
         "lr_lens": a.lr_lens,
         "lens_delay": a.lens_delay,
         "depth_sampling": a.depth_sampling,
+        "hold_focus": a.hold_focus,
         "w_sim": a.w_sim,
         "w_raw": a.w_raw,
         "noise": a.noise,
