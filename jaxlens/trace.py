@@ -348,18 +348,29 @@ def _runs(surfaces, start: int, stop: int) -> list[tuple[int, int]]:
     return runs
 
 
+def _prepare(lens: Lens, rays: Rays):
+    """The lens cast to the rays' dtype, its vertex positions and its indices at the rays'
+    wavelengths: what every chunk of a trace shares."""
+    lens = lens.astype(rays.dtype)
+    return lens, lens.vertex_z(), lens.indices(rays.wavelength)
+
+
 def _trace_states(
-    lens: Lens, rays: Rays, newton_iters: int, upto: int | None, keep_path: bool = True
+    lens: Lens,
+    rays: Rays,
+    newton_iters: int,
+    upto: int | None,
+    keep_path: bool = True,
+    prepared=None,
 ) -> list[_State]:
     """Trace and return the states after each surface (only the last unless keep_path).
 
     Runs of surfaces of the same kind (a stack of even aspheres, say) are traced with
     one ``lax.scan``, so the compiled program, and above all its gradient, does not grow
     with the number of surfaces. Surface 1 is traced on its own (object-space rules).
+    ``prepared`` is ``_prepare(lens, rays)`` when the caller has it already.
     """
-    lens = lens.astype(rays.dtype)
-    zs = lens.vertex_z()
-    idx = lens.indices(rays.wavelength)
+    lens, zs, idx = _prepare(lens, rays) if prepared is None else prepared
     shape = jnp.shape(rays.wavelength)  # indices are per wavelength, not per ray
     st = _to_state(rays)
     step = functools.partial(_step, refracts=True, newton_iters=newton_iters)
@@ -452,8 +463,8 @@ def trace(
         True
     """
 
-    def whole(r: Rays) -> Rays:
-        states = _trace_states(lens, r, newton_iters, None, keep_path=False)
+    def whole(r: Rays, prepared=None) -> Rays:
+        states = _trace_states(lens, r, newton_iters, None, keep_path=False, prepared=prepared)
         return _to_rays(states[-1], r.wavelength)
 
     n = rays.origin.shape[0]
@@ -471,12 +482,15 @@ def trace(
 
     leaves = (rays.origin, rays.direction, rays.valid, rays.opl)
     leaves = leaves + ((rays.wavelength,) if per_ray else ())
+    # Lens data shared by all chunks is computed once (with per-ray wavelengths the indices
+    # are per ray and are computed in each chunk).
+    prepared = None if per_ray else _prepare(lens, rays)
 
     @jax.checkpoint
     def one(xs):
         o, d, v, opl = xs[:4]
         w = xs[4] if per_ray else rays.wavelength
-        return whole(Rays(o, d, w, v, opl))
+        return whole(Rays(o, d, w, v, opl), prepared)
 
     out = jax.lax.map(one, tuple(split(x) for x in leaves))
     join = lambda x: x.reshape(m * size, *x.shape[2:])[:n]  # noqa: E731
