@@ -9,7 +9,9 @@ Conventions:
 
 Intersections:
     Planes, spheres and conics are intersected in closed form (the numerically stable
-    roots of the quadratic), which is exact and differentiable as it stands. Surfaces
+    roots of the quadratic), which is exact; its derivative is the implicit-function one,
+    dt = −dF/F_t on the implicit conic F (a ``custom_jvp``, so forward and reverse mode
+    both work and neither differentiates the root selection). Surfaces
     with polynomial terms start from that root and take ``newton_iters`` Newton steps
     on F(t) = z(t) − sag(x(t), y(t)). Those iterations carry no gradient. One last
     Newton step is taken with gradients switched on and the derivative F'(t) held
@@ -164,9 +166,10 @@ def intersect(
 
     The first intersection along the ray is taken; with ``first=False`` only t ≥ 0
     (up to rounding) counts, with ``first=True`` (object space) the whole line does.
-    Each ray is first carried along its line to the vertex plane, so the quadratic is
-    solved from a point near the surface: a distant origin (an object at 10 m) then loses
-    no digits to cancellation.
+    On the first surface each ray is first carried along its line to the vertex plane, so
+    the quadratic is solved from a point near the surface: a distant origin (an object at
+    10 m) then loses no digits to cancellation. Later surfaces start from the previous
+    surface, a few mm away, and skip that step.
 
     Args:
         surface: the surface.
@@ -467,11 +470,11 @@ def trace(
         states = _trace_states(lens, r, newton_iters, None, keep_path=False, prepared=prepared)
         return _to_rays(states[-1], r.wavelength)
 
+    if chunk is not None and chunk < 1:
+        raise ValueError(f"trace: chunk must be a positive number of rays, got {chunk}")
     n = rays.origin.shape[0]
     if chunk is None or rays.origin.ndim != 2 or n <= chunk:
         return whole(rays)
-    if chunk < 1:
-        raise ValueError(f"trace: chunk must be a positive number of rays, got {chunk}")
     per_ray = jnp.ndim(rays.wavelength) == 1
     m, size = _chunking(n, chunk)
 
