@@ -190,12 +190,14 @@ def intersect(
         t_min = -1e3 * jax.lax.stop_gradient(eps * (1 + jnp.abs(o[2])))
         t_plane = 0.0
     if not surface.has_polynomial:
-        # Conics: the closed form is exact and differentiable as it stands.
+        # Conics: the closed form is exact (its derivative: ``_conic_root_jvp``).
         return _conic_root(surface, o, d, t_min) + t_plane
     o_s, d_s = jax.lax.stop_gradient((o, d))
     surf_s = jax.lax.stop_gradient(surface)
-    # Rays that miss the base conic start Newton from the vertex plane (t = 0 now).
-    t0, _ = _unmark(_conic_root(surf_s, o_s, d_s, t_min))
+    # Rays that miss the base conic start Newton from the vertex plane.
+    t0, hit = _unmark(_conic_root(surf_s, o_s, d_s, t_min))
+    if not first:  # (on surface 1 the rays are on that plane already: t = 0)
+        t0 = jnp.where(hit, t0, _bounded_div(-o_s[2], d_s[2])[0])
 
     def step(_, t):
         f, df, _ = _residual(surf_s, o_s, d_s, t)
