@@ -46,7 +46,6 @@ DEPTHS_M = (0.1, 0.15, 0.2, 0.3, 0.5, 1.0, 3.0, 10.0)
 """The paper's 8 training depths (m, from the aperture stop)."""
 
 
-
 def dioptric_weights(depths_m=DEPTHS_M) -> np.ndarray:
     """Sampling weights that spread the training depths evenly in dioptres (1/m).
 
