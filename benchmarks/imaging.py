@@ -6,13 +6,13 @@ time-against-error curves that end in recommended defaults, on the 6-element pho
 (``jaxlens.zoo.cellphone6``, the lens the renders use), primary wavelength, at the lens's
 sensor pitch (5.29 µm):
 
-* ``psf_kernel``: geometric PSF (``jaxlens.psf``) at 0, 70 % and 100 % of the field against
+* ``psf_kernel``: geometric PSF (``jaxlens.imaging.psf``) at 0, 70 % and 100 % of the field against
   ``kernel_size``. Error = the energy fraction outside the kernel (``truncated``), worst field.
-  Time = one ``jaxlens.psf`` call. Recommended: the smallest kernel losing ≤ 1 % everywhere.
+  Time = one ``jaxlens.imaging.psf`` call. Recommended: the smallest kernel losing ≤ 1 % everywhere.
 * ``psf_pupil``: the same PSF, at the recommended kernel, against the pupil sampling (rays per
   side); error = L1 distance to a 512-per-side reference (sum over the kernel of |Δ|, i.e. the
   fraction of energy misplaced), worst field. Recommended: the smallest pupil with L1 ≤ 2 %.
-* ``render_spp``: ``jaxlens.render`` (method "ray") of the skimage ``astronaut`` scene on a
+* ``render_spp``: ``jaxlens.imaging.render`` (method "ray") of the skimage ``astronaut`` scene on a
   192 × 192 sensor of the lens's full sensor side against spp; error = RMS difference from a
   reference (the mean of two 1024-spp renders with other seeds, whose own noise is subtracted
   in quadrature) over the RMS of the reference. spp that are perfect squares are stratified.
@@ -42,7 +42,7 @@ SPP_TARGETS = (0.02, 0.05)  # per-pixel relative RMSE; the first gives the recom
 
 
 def _psf(lens, field, kernel, pupil):
-    return jaxlens.psf.psf_info(
+    return jaxlens.imaging.psf.psf_info(
         lens,
         field,
         kernel_size=kernel,
@@ -133,7 +133,7 @@ def render_study(size: int = 192, ref_spp: int = 1024) -> dict:
     side = float(lens.sensor.pixel_size) * lens.sensor.resolution[1]
     sensor = jaxlens.Sensor((size, size), side / size)
     scene = jnp.asarray(images.scene("astronaut", (size, size)))
-    fp = jaxlens.render.footprints(lens, sensor=sensor, dtype=jnp.float32)
+    fp = jaxlens.imaging.render.footprints(lens, sensor=sensor, dtype=jnp.float32)
     key = jax.random.PRNGKey(0)
 
     def go(spp, key=key):

@@ -4,11 +4,12 @@ Three studies (the render-side curves, render error against spp and PSF error ag
 size, belong to the render module's benchmarks; see the suite's README):
 
 * ``rms_spot``: the RMS spot radius estimated from M pupil samples by each sampling scheme of
-  ``jaxlens.sampling`` (grid, hexapolar, random, stratified), against a converged reference: a
+  ``jaxlens.imaging.sampling`` (grid, hexapolar, random, stratified), against a converged
+  reference: a
   polar Gauss quadrature (Gauss–Legendre in r², 128 nodes, times 512 equally spaced angles,
   65 536 weighted rays), which agrees with a 1001×1001 grid to the grid's own error. Error =
   max over the lens's fields of |estimate − reference| / reference (random and stratified: the
-  root mean square over 8 seeds). Time = ``jaxlens.analysis.rms_spot`` for one field and one
+  root mean square over 8 seeds). Time = ``jaxlens.analysis.spots.rms_spot`` for one field and one
   wavelength at that ray count (measured at a ladder of ray counts and interpolated). A weighted
   polar Gauss rule (``gauss``, not in the library) is included as a candidate.
 * ``newton``: the intersection error (max image-intercept deviation from 40 iterations in
@@ -29,7 +30,7 @@ import numpy as np
 
 import jaxlens
 from jaxlens import sampling, zoo
-from jaxlens.analysis import rms_spot
+from jaxlens.analysis.spots import rms_spot
 
 from . import common
 

@@ -1,7 +1,7 @@
 """Peak memory of a render gradient, with and without ``jax.checkpoint``.
 
 Measures the peak resident memory (RSS) of one gradient of an MSE image loss through
-``jaxlens.render`` (method "ray", RGB, float32) with respect to the surfaces and gaps of
+``jaxlens.imaging.render`` (method "ray", RGB, float32) with respect to the surfaces and gaps of
 the 6-element plastic asphere cellphone lens (``jaxlens.zoo.cellphone6``, 1024 × 1024
 sensor), each configuration in a fresh Python process so that one run's memory does not
 count against another. The parent process samples each worker's RSS from /proc every
@@ -56,7 +56,7 @@ def worker(size: int, spp: int, checkpoint: bool, patch: int) -> dict:
         replace=(jax.tree_util.tree_map(lambda _: True, params.surfaces), True),
     )
     diff, rest = eqx.partition(params, is_param)
-    fp = jaxlens.render.footprints(lens, sensor=sensor, dtype=jnp.float32)
+    fp = jaxlens.imaging.render.footprints(lens, sensor=sensor, dtype=jnp.float32)
 
     @jax.jit
     def loss_grad(diff):
@@ -208,7 +208,7 @@ def main(argv=None) -> None:
         runs.append(r)
     main_ck, main_plain = runs[0], runs[1]
     result = {
-        "benchmark": "peak RSS of value_and_grad of an MSE loss on jaxlens.render "
+        "benchmark": "peak RSS of value_and_grad of an MSE loss on jaxlens.imaging.render "
         "(method='ray', RGB, float32) through jaxlens.zoo.cellphone6, w.r.t. "
         "its surfaces and gaps",
         "command": "python -m benchmarks.render_memory",

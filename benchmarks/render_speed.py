@@ -1,4 +1,4 @@
-"""Forward speed of ``jaxlens.render``: a 512 × 512 RGB image at 16 spp.
+"""Forward speed of ``jaxlens.imaging.render``: a 512 × 512 RGB image at 16 spp.
 
 The lens is the 6-element plastic asphere cellphone lens (``jaxlens.zoo.cellphone6``:
 13 surfaces, 12 even aspheres to A12), the scene ``astronaut`` from skimage.data in linear
@@ -54,11 +54,11 @@ def main(argv=None) -> None:
     key = jax.random.PRNGKey(0)
 
     t0 = time.perf_counter()
-    fp = jaxlens.render.footprints(lens, sensor=sensor, dtype=jnp.float32)
+    fp = jaxlens.imaging.render.footprints(lens, sensor=sensor, dtype=jnp.float32)
     jax.block_until_ready(fp)
     t_fp_first = time.perf_counter() - t0
     t0 = time.perf_counter()
-    jax.block_until_ready(jaxlens.render.footprints(lens, sensor=sensor, dtype=jnp.float32))
+    jax.block_until_ready(jaxlens.imaging.render.footprints(lens, sensor=sensor, dtype=jnp.float32))
     t_fp = time.perf_counter() - t0
 
     @jax.jit

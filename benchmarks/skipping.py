@@ -29,7 +29,7 @@ import numpy as np
 
 import jaxlens
 from jaxlens import sampling, zoo
-from jaxlens.analysis import rms_spot
+from jaxlens.analysis.spots import rms_spot
 
 from . import common
 
@@ -74,7 +74,7 @@ def _spot_depths(lens, fields, pupil, depths):
         # Launch the same lines from their entrance-pupil points instead of the far object
         # point: works around notes/bugs.md #3 (the conic root loses precision for origins
         # far from the surface) without moving any ray.
-        zep = jaxlens.paraxial.entrance_pupil_z(lens)
+        zep = jaxlens.optics.paraxial.entrance_pupil_z(lens)
         xy = pupil * (0.5 * lens.epd)
         target = jnp.concatenate([xy, jnp.broadcast_to(zep, xy.shape[:-1])[..., None]], -1)
         rays = jaxlens.Rays(target, rays.direction, rays.wavelength)

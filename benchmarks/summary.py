@@ -1,9 +1,9 @@
 """Headline figures of the benchmark results, and the recommended defaults against the library's.
 
 Every Pareto curve of ``pareto`` and ``imaging`` ends in a recommended default. This module reads
-the library's actual defaults from the code (``jaxlens.trace.DEFAULT_NEWTON_ITERS``, the
-signatures of ``jaxlens.psf`` / ``jaxlens.render``, the ``pupil=None`` fallback of
-``jaxlens.analysis.rms_spot``, the design losses' ``spp``) and sets them beside the
+the library's actual defaults from the code (``jaxlens.tracing.forward.DEFAULT_NEWTON_ITERS``, the
+signatures of ``jaxlens.imaging.psf`` / ``jaxlens.imaging.render``, the ``pupil=None`` fallback of
+``jaxlens.analysis.spots.rms_spot``, the design losses' ``spp``) and sets them beside the
 recommendations, so a drift between the two shows in ``results/README.md``.
 """
 
@@ -24,11 +24,11 @@ F32_GRAD_REL = 1e-3  # relative deviation of the design gradient (curvatures, ga
 
 def library_defaults() -> dict:
     """The defaults the library uses, each with the place that defines it."""
-    # ``jaxlens.trace`` and ``jaxlens.render`` are also the names of functions; take modules.
-    analysis = importlib.import_module("jaxlens.analysis")
-    psf = importlib.import_module("jaxlens.psf")
-    render = importlib.import_module("jaxlens.render")
-    trace = importlib.import_module("jaxlens.trace")
+    # Take the modules (``jaxlens.render`` and ``jaxlens.trace`` are functions).
+    analysis = importlib.import_module("jaxlens.analysis.spots")
+    psf = importlib.import_module("jaxlens.imaging.psf")
+    render = importlib.import_module("jaxlens.imaging.render")
+    trace = importlib.import_module("jaxlens.tracing.forward")
     losses = importlib.import_module("jaxlens.design.losses")
     multistart = importlib.import_module("jaxlens.design.multistart")
 

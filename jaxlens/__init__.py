@@ -1,52 +1,65 @@
 """jaxlens: differentiable lens design in JAX.
 
 Units: mm for lengths, µm for wavelengths, degrees for user-facing angles. Light travels
-toward +z and surface 1's vertex is at z = 0. See ``jaxlens.lens`` and ``jaxlens.surfaces``
-for the sign conventions.
+toward +z and surface 1's vertex is at z = 0. See ``jaxlens.optics.lens`` and
+``jaxlens.optics.surfaces`` for the sign conventions.
+
+
+Layout (each layer imports only from the layers above it):
+    optics     surfaces, materials, glass catalogs, the lens, rays, paraxial optics
+    tracing    the one tracer: surface step, forward and backward traces
+    imaging    ray sources and aiming, PSFs, MTF, radiometry, distortion, rendering
+    analysis   spots, RMS, distortion, geometry checks, the report
+    io         lens files (JSON, .zmx) and images
+    design     ab initio lens design (spec, parameters, losses, solvers, curriculum)
+    nets       reconstruction networks
+    experiments  ``python -m jaxlens.experiments.classical`` / ``.edof``
 """
 
 from . import analysis as analysis
-from . import catalog as catalog
-from . import distortion_relax as distortion_relax
-from . import images as images
+from . import imaging as imaging
+from . import io as io
 from . import nets as nets
-from . import paraxial as paraxial
-from . import psf as psf  # callable: jaxlens.psf(...) is jaxlens.psf.psf(...)
-from . import radiometry as radiometry
-from . import render as render  # callable: jaxlens.render(...) is jaxlens.render.render(...)
-from . import reverse as reverse
-from . import sampling as sampling
+from . import optics as optics
+from . import tracing as tracing
 from . import zoo as zoo
-from .catalog import CatalogMaterial as CatalogMaterial
-from .catalog import catalog_names as catalog_names
-from .catalog import get_material as get_material
-from .catalog import glass_info as glass_info
-from .catalog import load_agf as load_agf
-from .catalog import register_catalog as register_catalog
-from .files import load as load
-from .files import save as save
-from .lens import Lens as Lens
-from .lens import Sensor as Sensor
-from .materials import AbstractMaterial as AbstractMaterial
-from .materials import Air as Air
-from .materials import ModelGlass as ModelGlass
-from .materials import Schott as Schott
-from .materials import Sellmeier as Sellmeier
-from .materials import Tabulated as Tabulated
-from .paraxial import ParaxialData as ParaxialData
-from .paraxial import bfl as bfl
-from .paraxial import efl as efl
-from .paraxial import paraxial_data as paraxial_data
-from .rays import Rays as Rays
-from .surfaces import AbstractSurface as AbstractSurface
-from .surfaces import Conic as Conic
-from .surfaces import EvenAsphere as EvenAsphere
-from .surfaces import Hybrid as Hybrid
-from .surfaces import Plane as Plane
-from .surfaces import Sphere as Sphere
-from .surfaces import Standard as Standard
-from .surfaces import Stop as Stop
-from .trace import trace as trace
-from .trace import trace_path as trace_path
+from .imaging import sampling as sampling
+from .imaging.psf import psf as psf
+from .imaging.render import render as render
+from .io import images as images
+from .io.files import load as load
+from .io.files import save as save
+from .optics import catalog as catalog
+from .optics import paraxial as paraxial
+from .optics.catalog import CatalogMaterial as CatalogMaterial
+from .optics.catalog import catalog_names as catalog_names
+from .optics.catalog import get_material as get_material
+from .optics.catalog import glass_info as glass_info
+from .optics.catalog import load_agf as load_agf
+from .optics.catalog import register_catalog as register_catalog
+from .optics.lens import Lens as Lens
+from .optics.lens import Sensor as Sensor
+from .optics.materials import AbstractMaterial as AbstractMaterial
+from .optics.materials import Air as Air
+from .optics.materials import ModelGlass as ModelGlass
+from .optics.materials import Schott as Schott
+from .optics.materials import Sellmeier as Sellmeier
+from .optics.materials import Tabulated as Tabulated
+from .optics.paraxial import ParaxialData as ParaxialData
+from .optics.paraxial import bfl as bfl
+from .optics.paraxial import efl as efl
+from .optics.paraxial import paraxial_data as paraxial_data
+from .optics.rays import Rays as Rays
+from .optics.surfaces import AbstractSurface as AbstractSurface
+from .optics.surfaces import Conic as Conic
+from .optics.surfaces import EvenAsphere as EvenAsphere
+from .optics.surfaces import Hybrid as Hybrid
+from .optics.surfaces import Plane as Plane
+from .optics.surfaces import Sphere as Sphere
+from .optics.surfaces import Standard as Standard
+from .optics.surfaces import Stop as Stop
+from .tracing.backward import trace_backward as trace_backward
+from .tracing.forward import trace as trace
+from .tracing.forward import trace_path as trace_path
 
 __version__ = "0.1.0"

@@ -14,7 +14,7 @@ import argparse
 import importlib
 import sys
 
-_COMMANDS = ("jaxlens.report",)
+_COMMANDS = ("jaxlens.analysis.report",)
 
 
 def build_parser() -> argparse.ArgumentParser:

@@ -62,8 +62,9 @@ def plot_layout(lens, fields: Sequence[float] | None = None, *, n_rays: int = 9,
     """
     import jax.numpy as jnp
 
-    from . import analysis, sampling
-    from .trace import trace_path
+    from .analysis import spots as analysis
+    from .imaging import sampling
+    from .tracing.forward import trace_path
 
     lens = lens.astype(jnp.float64)
     fmax = float(np.max(np.abs(np.asarray(lens.fields))))
@@ -134,7 +135,8 @@ def plot_spots(lens, fields: Sequence[float] | None = None, *, wavelengths=None,
     """Spot diagrams (µm about the polychromatic centroid) for y fields (deg)."""
     import jax.numpy as jnp
 
-    from . import analysis, sampling
+    from .analysis import spots as analysis
+    from .imaging import sampling
 
     lens = lens.astype(jnp.float64)
     fmax = float(np.max(np.abs(np.asarray(lens.fields))))
@@ -198,11 +200,11 @@ def plot_rms_map(rms_um, sensor_size, *, title: str | None = None) -> Figure:
 
 def plot_mtf(lens, fields: Sequence[float] | None = None, *, frequencies=None,
              title: str | None = None) -> Figure:
-    """Tangential (solid) and sagittal (dashed) polychromatic MTF (``jaxlens.psf.mtf``,
+    """Tangential (solid) and sagittal (dashed) polychromatic MTF (``jaxlens.imaging.psf.mtf``,
     geometric × diffraction limit) for y fields (deg)."""
     import jax.numpy as jnp
 
-    from .psf import mtf
+    from .imaging.psf import mtf
 
     lens = lens.astype(jnp.float64)
     fmax = float(np.max(np.abs(np.asarray(lens.fields))))

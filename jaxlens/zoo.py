@@ -20,9 +20,17 @@ from __future__ import annotations
 
 import jax.numpy as jnp
 
-from .lens import Lens, Sensor
-from .materials import LAMBDA_C, LAMBDA_D, LAMBDA_F, AbstractMaterial, Air, ModelGlass, Tabulated
-from .surfaces import EvenAsphere, Plane, Sphere, Stop
+from .optics.lens import Lens, Sensor
+from .optics.materials import (
+    LAMBDA_C,
+    LAMBDA_D,
+    LAMBDA_F,
+    AbstractMaterial,
+    Air,
+    ModelGlass,
+    Tabulated,
+)
+from .optics.surfaces import EvenAsphere, Plane, Sphere, Stop
 
 __all__ = ["cooke_triplet", "double_gauss", "cellphone6", "ZOO"]
 

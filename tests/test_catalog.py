@@ -7,7 +7,7 @@ import numpy as np
 import pytest
 
 from jaxlens import catalog
-from jaxlens.catalog import (
+from jaxlens.optics.catalog import (
     CatalogMaterial,
     catalog_names,
     get_material,
@@ -15,7 +15,7 @@ from jaxlens.catalog import (
     load_agf,
     register_catalog,
 )
-from jaxlens.materials import (
+from jaxlens.optics.materials import (
     EXTENDED2_POWERS,
     EXTENDED3_POWERS,
     EXTENDED_POWERS,

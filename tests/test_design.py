@@ -118,8 +118,8 @@ def test_params_roundtrip():
 def test_fasttrace_matches_trace():
     pm, p = _design_lens()
     lens = pm.to_lens(p)
-    pupil = jaxlens.sampling.pupil_hexapolar(3, jnp.float64)
-    rays = jaxlens.sampling.collimated(lens, 18.0, pupil)
+    pupil = jaxlens.imaging.sampling.pupil_hexapolar(3, jnp.float64)
+    rays = jaxlens.imaging.sampling.collimated(lens, 18.0, pupil)
     ref = jaxlens.trace_path(lens, rays)
     got = fasttrace.trace_path_scan(lens, rays)
     assert got.origin.shape[0] == len(ref)

@@ -8,10 +8,10 @@ import jax.numpy as jnp
 import numpy as np
 import pytest
 
-from jaxlens.edof import lenses as L
-from jaxlens.edof import losses as LS
-from jaxlens.edof import optics as O
-from jaxlens.surfaces import Hybrid
+from jaxlens.experiments.edof import lenses as L
+from jaxlens.experiments.edof import losses as LS
+from jaxlens.experiments.edof import optics as O
+from jaxlens.optics.surfaces import Hybrid
 
 
 @pytest.fixture(scope="module")
@@ -42,7 +42,7 @@ def test_loss_shape_errors():
 
 # --- lenses and parameters -----------------------------------------------------------------
 def test_classical_lens_meets_the_spec(classical):
-    from jaxlens.analysis import chief_ray, rms_spot
+    from jaxlens.analysis.spots import chief_ray, rms_spot
 
     assert classical.stop == 0
     assert float(classical.epd) == pytest.approx(2.60)
@@ -149,7 +149,7 @@ def test_perturb_changes_lens_and_zero_tolerance_keeps_it(classical):
 
 
 def test_lens_rate_waits_for_the_network():
-    from jaxlens.edof.train import Config, make_optimizer
+    from jaxlens.experiments.edof.train import Config, make_optimizer
 
     cfg = Config(steps=8, lens_delay=0.25, lr_net=1e-2, lr_lens=1e-1)
     opt = make_optimizer(cfg, cfg.steps)
@@ -213,7 +213,7 @@ def test_psf_depth_variation_measure():
 
 # --- the experiment, end to end ------------------------------------------------------------------
 def test_smoke_run_writes_outputs_and_loss_falls(tmp_path):
-    from jaxlens.experiments import edof
+    from jaxlens.experiments.edof import cli as edof
 
     out = tmp_path / "edof"
     summary = edof.run(

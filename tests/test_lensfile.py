@@ -11,11 +11,11 @@ import numpy as np
 import pytest
 
 import jaxlens
-from jaxlens import lensfile
-from jaxlens.catalog import get_material, load_agf
-from jaxlens.lens import Sensor
-from jaxlens.materials import Air, ModelGlass, Sellmeier, Tabulated
-from jaxlens.surfaces import EvenAsphere, Hybrid, Standard
+from jaxlens.io import lensfile
+from jaxlens.optics.catalog import get_material, load_agf
+from jaxlens.optics.lens import Sensor
+from jaxlens.optics.materials import Air, ModelGlass, Sellmeier, Tabulated
+from jaxlens.optics.surfaces import EvenAsphere, Hybrid, Standard
 
 DATA = pathlib.Path(jaxlens.__file__).parent / "data" / "lenses"
 DOCS = pathlib.Path(__file__).resolve().parents[1] / "docs" / "lens-format.md"
@@ -243,7 +243,7 @@ def test_materials_and_apertures():
         (lambda d: d["surfaces"][1].update(thickness="nan"), r"finite number"),
         (lambda d: d["surfaces"][1].update(conic=[1]), r"conic: expected a number"),
         (lambda d: d["surfaces"][1].update(type="toroidal"), r"unknown surface type"),
-        (lambda d: d.update(format="jaxlens.lens/99"), r"unsupported format"),
+        (lambda d: d.update(format="jaxlens.optics.lens/99"), r"unsupported format"),
         (lambda d: d.pop("aperture"), r"no aperture"),
         (lambda d: d.update(primary_wavelength_nm=500.0), r"not one of the wavelengths"),
         (lambda d: d["surfaces"][1].update(material={"nd": 1.5, "vd": -3}), r"model glass"),

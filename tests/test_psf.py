@@ -14,8 +14,8 @@ import numpy as np
 import pytest
 
 import jaxlens
-from jaxlens import psf as P
-from jaxlens.materials import LAMBDA_D
+from jaxlens.imaging import psf as P
+from jaxlens.optics.materials import LAMBDA_D
 
 N = 1.5
 R = 20.0
@@ -161,10 +161,10 @@ def test_mtf_of_perfect_lens_is_diffraction_limited():
     freqs = jnp.array([0.0, 0.1, 0.3, 0.5, 0.7]) * cutoff
     s = np.asarray(freqs) * WL * 1e-3 * FNUM
     ideal = 2 / np.pi * (np.arccos(s) - s * np.sqrt(1 - s**2))
-    f, t, sg = jaxlens.psf.mtf(lens, 0.0, wavelengths=[WL], frequencies=freqs, pupil=16)
+    f, t, sg = jaxlens.imaging.psf.mtf(lens, 0.0, wavelengths=[WL], frequencies=freqs, pupil=16)
     np.testing.assert_allclose(t, ideal, atol=1e-9)
     np.testing.assert_allclose(sg, ideal, atol=1e-9)
-    _, tc, sc = jaxlens.psf.mtf(lens, 0.0, wavelengths=[WL], frequencies=freqs,
+    _, tc, sc = jaxlens.imaging.psf.mtf(lens, 0.0, wavelengths=[WL], frequencies=freqs,
                                 model="coherent", kernel_size=96, pupil=48)
     np.testing.assert_allclose(tc, ideal, atol=0.03)
     np.testing.assert_allclose(sc, ideal, atol=0.03)

@@ -11,9 +11,9 @@ import numpy as np
 import pytest
 
 import jaxlens
-from jaxlens import distortion_relax as DR
-from jaxlens import radiometry as RAD
-from jaxlens import render as R
+from jaxlens.imaging import distortion as DR
+from jaxlens.imaging import radiometry as RAD
+from jaxlens.imaging import render as R
 
 KEY = jax.random.PRNGKey(0)
 SENSOR = jaxlens.Sensor((12, 18), 2.0)  # 24 × 36 mm in 2 mm pixels
@@ -84,7 +84,7 @@ def test_psf_method_matches_ray_method(cooke):
     conv = R.render(lens, scene, spp=16, key=KEY, sensor=SENSOR, patch=6, method="psf",
                     kernel_size=7)
     sharp = R.render(cooke, scene, spp=256, key=KEY, sensor=SENSOR, patch=6)
-    psnr = jaxlens.images.psnr
+    psnr = jaxlens.io.images.psnr
     assert psnr(ray, conv, data_range=1.0) > 38.0
     assert psnr(ray, sharp, data_range=1.0) < 30.0
 
@@ -185,7 +185,7 @@ def test_distortion_relaxation_aligns_the_image():
 def test_distortion_maps_are_inverse(cooke):
     """Forward chief rays (object side, aimed at the stop) and backward chief rays (sensor
     side, aimed at the stop) give inverse maps (grid as render(method="psf") uses)."""
-    lens = jaxlens.psf.apertured(cooke)
+    lens = jaxlens.imaging.psf.apertured(cooke)
     d = DR.distortion_map(lens, grid=(17, 17), sensor=SENSOR)
     inv = DR.inverse_distortion_map(lens, resolution=(12, 18),
                                     pixel_size=jnp.asarray(SENSOR.pixel_size), grid=(17, 17))

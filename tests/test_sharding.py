@@ -10,7 +10,7 @@ import pytest
 from jax.sharding import Mesh
 
 import jaxlens
-from jaxlens import render as R
+from jaxlens.imaging import render as R
 
 KEY = jax.random.PRNGKey(0)
 SENSOR = jaxlens.Sensor((12, 18), 2.0)  # as in test_render: its compiled render is reused

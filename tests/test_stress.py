@@ -32,8 +32,8 @@ from hypothesis import strategies as st
 
 import jaxlens
 from jaxlens import sampling, zoo
-from jaxlens.materials import ModelGlass
-from jaxlens.surfaces import EvenAsphere, Standard
+from jaxlens.optics.materials import ModelGlass
+from jaxlens.optics.surfaces import EvenAsphere, Standard
 
 CI = settings(max_examples=12, deadline=None, derandomize=True, database=None,
               suppress_health_check=[HealthCheck.too_slow])
@@ -371,7 +371,7 @@ def test_rms_spot_counts_valid_rays_only():
     lens = zoo.cooke_triplet()
     # A pupil reaching past the stop: the outer ring is clipped by the stop's semi-diameter.
     pupil = jnp.concatenate([sampling.pupil_hexapolar(4) * 0.9, sampling.pupil_hexapolar(4) * 1.5])
-    res = jaxlens.analysis.rms_spot(lens, jnp.array([0.0]), jnp.array([WL]), pupil=pupil)
+    res = jaxlens.analysis.spots.rms_spot(lens, jnp.array([0.0]), jnp.array([WL]), pupil=pupil)
     out = jaxlens.trace(lens, sampling.collimated(lens, 0.0, pupil))
     ok = np.asarray(out.valid)
     n_inner = sampling.pupil_hexapolar(4).shape[0]

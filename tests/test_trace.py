@@ -372,7 +372,7 @@ def test_chunked_trace_equals_one_piece(n):
 
 
 def test_chunk_sizes_are_simd_friendly():
-    from jaxlens.trace import _chunking
+    from jaxlens.tracing.forward import _chunking
 
     assert _chunking(1_000_000, 2**16) == (20, 50_000)
     m, size = _chunking(1003, 96)

@@ -11,10 +11,10 @@ import pytest
 from test_lensfile import assert_same_lens, every_kind_of_lens
 
 import jaxlens
-from jaxlens import zmx
-from jaxlens.catalog import load_agf
-from jaxlens.materials import ModelGlass, Tabulated
-from jaxlens.surfaces import EvenAsphere, Hybrid
+from jaxlens.io import zmx
+from jaxlens.optics.catalog import load_agf
+from jaxlens.optics.materials import ModelGlass, Tabulated
+from jaxlens.optics.surfaces import EvenAsphere, Hybrid
 
 DATA = pathlib.Path(jaxlens.__file__).parent / "data" / "lenses"
 

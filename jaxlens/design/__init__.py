@@ -9,7 +9,7 @@ deep learned refractive optics", Nat. Commun. 15, 6572 (2024), in JAX:
 * :func:`sine_path`, :func:`paper_stages`, :func:`run` (``curriculum``): the sine-path
   schedule of FoV and F-number, and the plain Python design loop (one jitted update a step).
 * :class:`Objective`, :class:`ImageObjective` (``losses``): the ray-based RMS spot loss and
-  the image-based loss through ``jaxlens.render`` with distortion relaxation.
+  the image-based loss through ``jaxlens.imaging.render`` with distortion relaxation.
 * ``regularizers``: ray obliquity, surface spacing and surface slope, zero inside bounds.
 * :func:`reweighting_mask` (``mask``): the paper's field re-weighting mask.
 * :class:`Adam`, :class:`DampedLeastSquares`, :class:`LevenbergMarquardt`, :class:`LBFGSB`

@@ -8,9 +8,9 @@ Conventions:
     (the paper's convention: f = sensor half-diagonal / tan(half FoV), EPD = f/F#). The RMS
     spot radius of a field pools the rays of all design wavelengths (F, d, C) about their
     common centroid, with the 21 × 21 square pupil grid (317 rays per wavelength) aimed at
-    the paraxial entrance pupil: ``jaxlens.analysis.rms_spot(reference="centroid")``.
+    the paraxial entrance pupil: ``jaxlens.analysis.spots.rms_spot(reference="centroid")``.
 
-    A design counts as *valid* when ``jaxlens.analysis.self_intersection`` finds no
+    A design counts as *valid* when ``jaxlens.analysis.spots.self_intersection`` finds no
     overlap of neighbouring surfaces (or of the last surface with the sensor) over the
     clear apertures, and at least ``min_valid`` (99 %) of the rays of every field reach
     the sensor. Designs whose rays fail are reported as failures, never as small spots.
@@ -25,8 +25,9 @@ import equinox as eqx
 import jax.numpy as jnp
 import numpy as np
 
-from .. import analysis, paraxial
-from ..lens import Lens
+from ..analysis import spots as analysis
+from ..optics import paraxial
+from ..optics.lens import Lens
 from .spec import DesignSpec
 
 MIN_VALID_FRACTION = 0.99

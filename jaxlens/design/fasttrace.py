@@ -7,7 +7,7 @@ surface kind (``EvenAsphere`` with the same number of terms; the flat stop is a 
 so here the surfaces are stacked into one pytree and traced with ``lax.scan``: the loop body is
 compiled once.
 
-The physics and validity rules are those of ``jaxlens.trace`` (and ``tests/test_design.py``
+The physics and validity rules are those of ``jaxlens.tracing.forward`` (and ``tests/test_design.py``
 checks the two against each other): the first intersection with the base conic in closed
 form, then Newton's method on the polynomial sag without gradient and one last Newton step
 with gradient and a frozen derivative (the implicit-function gradient); vector Snell
@@ -15,7 +15,7 @@ refraction. A ray becomes invalid when it misses a surface (no root, outside the
 domain, Newton not converged), is clipped by a finite semi-diameter, is totally internally
 reflected, or would travel backward after the first surface. Invalid rays keep finite values.
 
-Conventions are those of ``jaxlens.trace``: mm, light toward +z, surface 1's vertex at z = 0.
+Conventions are those of ``jaxlens.tracing.forward``: mm, light toward +z, surface 1's vertex at z = 0.
 Rays are handled as (x, y, z) component arrays, which vectorise better than ``[..., 3]``.
 """
 
@@ -24,9 +24,9 @@ from __future__ import annotations
 import jax
 import jax.numpy as jnp
 
-from ..lens import Lens
-from ..rays import Rays
-from ..surfaces import EvenAsphere
+from ..optics.lens import Lens
+from ..optics.rays import Rays
+from ..optics.surfaces import EvenAsphere
 
 NEWTON_ITERS = 6
 

@@ -16,9 +16,9 @@ import jax
 import jax.numpy as jnp
 import numpy as np
 
-from ..lens import Lens, Sensor
-from ..materials import Air
-from ..surfaces import EvenAsphere, Stop
+from ..optics.lens import Lens, Sensor
+from ..optics.materials import Air
+from ..optics.surfaces import EvenAsphere, Stop
 from .params import LensParams, Parameterization
 from .spec import AIR_MIN_GAP, ELEMENT_MIN_THICKNESS, DesignSpec, get_material
 

@@ -37,10 +37,10 @@ import jax.numpy as jnp
 import numpy as np
 from jaxtyping import Array, Float
 
-from .. import paraxial
-from ..lens import Lens
-from ..rays import Rays
-from ..sampling import pupil_hexapolar
+from ..imaging.sampling import pupil_hexapolar
+from ..optics import paraxial
+from ..optics.lens import Lens
+from ..optics.rays import Rays
 from .fasttrace import stacked_surfaces, trace_path_scan
 
 
@@ -277,8 +277,8 @@ class ImageObjective(eqx.Module):
     """The paper's image-based loss: render a scene through the lens, compare with the scene.
 
     The scene (linear RGB, the sensor's aspect) is rendered by backward ray tracing
-    (``jaxlens.render``, ``relative_illumination=False``) after the distortion relaxation of
-    ``jaxlens.distortion_relax``: the object is pre-warped by the lens's own distortion
+    (``jaxlens.imaging.render``, ``relative_illumination=False``) after the distortion relaxation of
+    ``jaxlens.imaging.distortion``: the object is pre-warped by the lens's own distortion
     (``prewarp``, held fixed for the gradient), so the loss sees blur and not distortion,
     and the alignment penalty (``alignment_penalty``, weight ``alpha``, in pixels²) keeps
     distortion bounded. (Differentiating through the pre-warp, as
@@ -313,8 +313,8 @@ class ImageObjective(eqx.Module):
         return self.ray.field_rms(params, args)
 
     def __call__(self, params, args: StageArgs):
-        from ..distortion_relax import alignment_penalty, prewarp
-        from ..render import render
+        from ..imaging.distortion import alignment_penalty, prewarp
+        from ..imaging.render import render
 
         res_ray, aux = self.ray(params, args)
         s = self.ray.sampling

@@ -128,7 +128,7 @@ def shard_seeds(tree, mesh: Mesh | None = None):
 def _image_objective(objective: Objective, spec: DesignSpec, config: DesignConfig):
     from skimage import data, transform
 
-    from ..lens import Sensor
+    from ..optics.lens import Sensor
 
     n = config.image_pixels
     img = data.astronaut().astype(np.float64) / 255.0

@@ -12,7 +12,7 @@ Conventions:
     * ``d``: the gaps in mm (stop to first surface and every surface to the next), all but the
       last one. The last gap (to the sensor) is ``total_track − Σ d``, so the track is fixed.
 
-    Units are those of ``jaxlens.lens``: mm, light toward +z, surface 1 at z = 0.
+    Units are those of ``jaxlens.optics.lens``: mm, light toward +z, surface 1 at z = 0.
 """
 
 from __future__ import annotations
@@ -21,8 +21,8 @@ import equinox as eqx
 import jax.numpy as jnp
 from jaxtyping import Array, Float
 
-from ..lens import Lens
-from ..surfaces import EvenAsphere
+from ..optics.lens import Lens
+from ..optics.surfaces import EvenAsphere
 
 
 class LensParams(eqx.Module):

@@ -33,8 +33,8 @@ import jax
 import jax.numpy as jnp
 from jaxtyping import Array, Float
 
-from ..lens import Lens
-from ..rays import Rays
+from ..optics.lens import Lens
+from ..optics.rays import Rays
 
 OBLIQUITY_BOUND = 0.7
 SLOPE_BOUND = 0.5

@@ -19,9 +19,9 @@ from __future__ import annotations
 import dataclasses
 import math
 
-from ..materials import LAMBDA_C, LAMBDA_D, LAMBDA_F, AbstractMaterial, ModelGlass
+from ..optics.materials import LAMBDA_C, LAMBDA_D, LAMBDA_F, AbstractMaterial, ModelGlass
 
-# Stand-in (nd, Vd) of common lens plastics, used only if ``jaxlens.catalog`` is unavailable.
+# Stand-in (nd, Vd) of common lens plastics, used only if ``jaxlens.optics.catalog`` is unavailable.
 _PLASTICS = {
     "E48R": (1.5312, 56.0),
     "OKP4": (1.607, 27.0),
@@ -40,9 +40,9 @@ AIR_MIN_GAP = 0.2
 
 
 def get_material(name: str) -> AbstractMaterial:
-    """A lens material by catalog name (``jaxlens.catalog``), or a model-glass stand-in."""
+    """A lens material by catalog name (``jaxlens.optics.catalog``), or a model-glass stand-in."""
     try:
-        from ..catalog import get_material as _catalog_get
+        from ..optics.catalog import get_material as _catalog_get
     except ImportError:  # pragma: no cover - the catalog ships with jaxlens
         _catalog_get = None
     if _catalog_get is not None:
@@ -87,7 +87,7 @@ class DesignSpec:
         sensor_aspect: sensor (height, width) ratio; (1, 1) is a square sensor.
         sensor_pixels: pixels along the sensor's longer side (for rendering).
         n_elements: number of lens elements.
-        materials: one material name per element (``jaxlens.catalog`` names).
+        materials: one material name per element (``jaxlens.optics.catalog`` names).
         total_track: first vertex to sensor, mm (fixed during design).
         bfl: minimum clearance from the last lens surface to the sensor, mm.
         stop: number of elements in front of the aperture stop (0 = stop first).

@@ -112,7 +112,7 @@ def build_parser() -> argparse.ArgumentParser:
                         "jacfwd Jacobian; lm-optx: optimistix LevenbergMarquardt)")
     r.add_argument("--loss", default="ray", choices=("ray", "image"),
                    help="fine-tuning loss: ray-based RMS spot, or image-based through "
-                        "jaxlens.render with distortion relaxation")
+                        "jaxlens.imaging.render with distortion relaxation")
     r.add_argument("--no-curriculum", action="store_true", help="stay at the full spec")
     r.add_argument("--no-regularize", action="store_true", help="switch the regularizers off")
     r.add_argument("--no-mask", action="store_true", help="switch the re-weighting mask off")

@@ -19,11 +19,11 @@ import jax.numpy as jnp
 import numpy as np
 from jaxtyping import Array, Bool, Float
 
-from . import paraxial
-from .lens import Lens
-from .rays import Rays
-from .sampling import field_rays, pupil_grid
-from .trace import DEFAULT_NEWTON_ITERS, trace, trace_path
+from ..imaging.sampling import field_rays, pupil_grid
+from ..optics import paraxial
+from ..optics.lens import Lens
+from ..optics.rays import Rays
+from ..tracing.forward import DEFAULT_NEWTON_ITERS, trace, trace_path
 
 
 def _fields_array(fields) -> Array:

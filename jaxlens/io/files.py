@@ -1,15 +1,15 @@
 """Lens files by extension: ``load(path)`` and ``save(lens, path)``.
 
-``.json`` is jaxlens's own format (``jaxlens.lensfile``, documented in
+``.json`` is jaxlens's own format (``jaxlens.io.lensfile``, documented in
 ``docs/lens-format.md``); ``.zmx`` is Zemax OpticStudio's sequential format
-(``jaxlens.zmx``). Lengths are in mm and wavelengths in µm once loaded.
+(``jaxlens.io.zmx``). Lengths are in mm and wavelengths in µm once loaded.
 """
 
 from __future__ import annotations
 
 import os
 
-from .lens import Lens
+from ..optics.lens import Lens
 from .lensfile import load_json, save_json
 from .zmx import load_zmx, save_zmx
 
@@ -52,7 +52,7 @@ def save(lens: Lens, path: str | os.PathLike, **options) -> list[str]:
         lens: the lens.
         path: the file; the extension picks the format.
         **options: format options (``.zmx``: ``model_glass="blank"|"agf"``, see
-            ``jaxlens.zmx.save_zmx``).
+            ``jaxlens.io.zmx.save_zmx``).
 
     Returns:
         The paths written: the file itself, and for ``.zmx`` any ``.AGF`` glass catalogs

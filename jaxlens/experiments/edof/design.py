@@ -1,6 +1,7 @@
 """Design of the classical starting lens with the curriculum tools (``jaxlens.design``).
 
-``python -m jaxlens.edof.design`` designs the EDoF experiment's classical lens from random,
+``python -m jaxlens.experiments.edof.design`` designs the EDoF experiment's classical lens
+from random,
 nearly flat starts and writes it as JSON (default: the shipped
 ``jaxlens/data/lenses/edof_classical.json``). The spec is the paper's EDoF lens in the
 curriculum's convention (``jaxlens.design.spec``): 68.8° diagonal field on a 7.20 mm sensor
@@ -25,7 +26,7 @@ import jax
 import jax.numpy as jnp
 import numpy as np
 
-from ..lens import Lens, Sensor
+from ...optics.lens import Lens, Sensor
 from .lenses import FOCUS_DEPTH, SPEC, WAVELENGTHS_RGB
 
 
@@ -37,7 +38,7 @@ def classical_spec(
     bfl: float = 0.8,
 ):
     """The ``DesignSpec`` of the classical lens (see the module docstring)."""
-    from ..design.spec import DesignSpec
+    from ...design.spec import DesignSpec
 
     half = 0.5 * SPEC["fov_deg"]
     f = 0.5 * SPEC["image_height_mm"] / math.tan(math.radians(half))
@@ -57,7 +58,7 @@ def classical_spec(
 
 
 def _mean_rms(lens: Lens, depth_mm: float, fields) -> float:
-    from ..analysis import rms_spot
+    from ...analysis.spots import rms_spot
 
     r = rms_spot(lens, jnp.asarray(fields), jnp.asarray(WAVELENGTHS_RGB), depth=depth_mm)
     return float(jnp.sqrt(jnp.mean(r.polychromatic**2)))
@@ -125,7 +126,7 @@ def design_classical(*, seeds=(0, 1, 2, 3), scale: float = 1.0, progress: bool =
         The finished lens (refocused at 20 cm) and a dict with the chosen seed, the
         curriculum's 256-field evaluation at infinity and the RMS at 20 cm.
     """
-    from ..design import evaluate, multistart
+    from ...design import evaluate, multistart
 
     spec = classical_spec() if spec is None else spec
     config = multistart.DesignConfig().scaled(scale)
@@ -157,13 +158,13 @@ def main(argv=None) -> None:
     """Command line: design the classical lens and save it."""
     import json
 
-    from .. import save
+    from ... import save
 
     here = os.path.join(
         os.path.dirname(os.path.dirname(__file__)), "data", "lenses", "edof_classical.json"
     )
     p = argparse.ArgumentParser(
-        prog="python -m jaxlens.edof.design",
+        prog="python -m jaxlens.experiments.edof.design",
         description=__doc__,
         formatter_class=argparse.RawDescriptionHelpFormatter,
     )

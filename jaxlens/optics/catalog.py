@@ -12,10 +12,10 @@ source in its ``!`` header lines):
 Lookups are case-insensitive. Catalogs registered with :func:`register_catalog` are
 searched first (latest first), then the shipped ones in the order above, so ``"F2"`` is
 SCHOTT's F2; pass ``catalogs=["CDGM"]`` to get CDGM's. ``"AIR"`` and ``""`` give
-:class:`~jaxlens.materials.Air`. Wavelengths are in µm, as everywhere in jaxlens.
+:class:`~jaxlens.optics.materials.Air`. Wavelengths are in µm, as everywhere in jaxlens.
 
 Example:
-    >>> from jaxlens.catalog import get_material, glass_info
+    >>> from jaxlens.optics.catalog import get_material, glass_info
     >>> bk7 = get_material("n-bk7")
     >>> glass_info("N-BK7")
     ('SCHOTT', 1.5168, 64.17)
@@ -451,7 +451,7 @@ def get_material(name: str, catalogs: str | Iterable[str] | None = None) -> Abst
             catalogs first, then ``SHIPPED_CATALOGS``.
 
     Returns:
-        A :class:`CatalogMaterial` for AGF glasses, :class:`~jaxlens.materials.Air` for air,
+        A :class:`CatalogMaterial` for AGF glasses, :class:`~jaxlens.optics.materials.Air` for air,
         or the registered object for catalogs given as mappings.
 
     Raises:

@@ -16,7 +16,7 @@ The medium after mirrored surface j is the medium before original surface n−1�
 Directions map as (L, M, N) → (L, M, −N). Optical path lengths are unchanged.
 
 Scanned tracing:
-    ``trace_scan`` traces like ``jaxlens.trace`` (it runs the same per-surface step) but
+    ``trace_scan`` traces like ``jaxlens.tracing.forward`` (it runs the same per-surface step) but
     loops over the surfaces with ``lax.scan`` after converting them to one common kind
     (Standard, EvenAsphere or Hybrid, polynomial coefficients zero-padded to a common
     length). XLA then compiles one surface instead of every surface: on the 13-surface
@@ -26,15 +26,13 @@ Scanned tracing:
 
 from __future__ import annotations
 
-import sys
-
 import jax
 import jax.numpy as jnp
 
-from .lens import Lens
-from .rays import Rays
-from .surfaces import AbstractSurface, EvenAsphere, Hybrid, Standard
-from .trace import DEFAULT_NEWTON_ITERS
+from ..optics.lens import Lens
+from ..optics.rays import Rays
+from ..optics.surfaces import AbstractSurface, EvenAsphere, Hybrid, Standard
+from .forward import DEFAULT_NEWTON_ITERS
 
 __all__ = [
     "mirror_surface",
@@ -46,7 +44,7 @@ __all__ = [
 ]
 
 # The per-surface step of the core tracer (the same physics, reused, not re-implemented).
-_core = sys.modules["jaxlens.trace"]
+from . import forward as _core
 
 
 def common_surfaces(surfaces) -> list[AbstractSurface]:
@@ -83,7 +81,7 @@ def trace_scan(
     newton_iters: int = DEFAULT_NEWTON_ITERS,
     upto: int | None = None,
 ) -> Rays:
-    """Trace rays like ``jaxlens.trace``, looping over the surfaces with ``lax.scan``.
+    """Trace rays like ``jaxlens.tracing.forward``, looping over the surfaces with ``lax.scan``.
 
     Args:
         lens: the lens.
@@ -92,7 +90,7 @@ def trace_scan(
         upto: stop after ``surfaces[upto]`` (0-based); None traces to the image surface.
 
     Returns:
-        The rays at the image surface (or after ``surfaces[upto]``), as ``jaxlens.trace``.
+        The rays at the image surface (or after ``surfaces[upto]``), as ``jaxlens.tracing.forward``.
     """
     lens = lens.astype(rays.dtype)
     last = lens.num_surfaces - 1 if upto is None else upto

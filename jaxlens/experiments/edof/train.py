@@ -28,8 +28,8 @@ import jax.numpy as jnp
 import numpy as np
 import optax
 
-from ..lens import Lens
-from ..nets import NAFNet
+from ...nets import NAFNet
+from ...optics.lens import Lens
 from .lenses import DEPTHS_M, SPEC, Tolerances, apply_gates, dioptric_weights, gates, perturb
 from .losses import edof_loss
 from .optics import render_tiled, simulate_patch
@@ -392,7 +392,7 @@ def evaluate(lens: Lens, net: NAFNet, images, depths_m, cfg: Config, *, key, kee
         "rec": {...}} averaged over the images; examples[str(depth)] = (sim, rec) of the
         kept image (NumPy, clipped to [0, 1]).
     """
-    from ..images import psnr, ssim
+    from ...io.images import psnr, ssim
 
     metrics, examples = {}, {}
     for d in depths_m:

@@ -57,12 +57,12 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
+from ..optics import materials as _materials
+from ..optics.lens import Lens, Sensor
+from ..optics.materials import AbstractMaterial, Air, ModelGlass, Tabulated
+from ..optics.surfaces import AbstractSurface, EvenAsphere, Hybrid, Standard
 from . import lensfile
-from . import materials as _materials
-from .lens import Lens, Sensor
 from .lensfile import _arr, apply_aperture, catalog_material, material_from_spec
-from .materials import AbstractMaterial, Air, ModelGlass, Tabulated
-from .surfaces import AbstractSurface, EvenAsphere, Hybrid, Standard
 
 ZEMAX_CATALOGS = frozenset(
     "SCHOTT CDGM OHARA HOYA SUMITA HIKARI HIKARI_CHINA MISC ZEON INFRARED BIREFRINGENT "
@@ -461,7 +461,7 @@ class _Glasses:
             fname = listing.get(f"{cat}.AGF")
             if fname is not None:
                 p = os.path.join(self.dir, fname)
-                from . import catalog
+                from ..optics import catalog
 
                 mats = {k.upper(): v for k, v in catalog.load_agf(p).items()}
                 self.side[cat] = (mats, _read_agf_markers(p), p)

@@ -19,9 +19,9 @@ import jax.numpy as jnp
 import numpy as np
 from jaxtyping import Array, Float
 
-from . import paraxial
-from .lens import Lens
-from .rays import Rays
+from ..optics import paraxial
+from ..optics.lens import Lens
+from ..optics.rays import Rays
 
 
 def pupil_grid(n: int = 21, dtype=None) -> Float[Array, "m 2"]:
@@ -195,7 +195,7 @@ def aim_at_stop(
     from forward-mode autodiff of a partial trace to the stop. A collimated beam keeps its
     direction; rays from ``source_point`` (a finite object) are re-aimed from that point.
     """
-    from .trace import trace_path
+    from ..tracing.forward import trace_path
 
     stop_r = paraxial.paraxial_data(lens).stop_semi_diameter
     target = pupil * stop_r

@@ -1,8 +1,6 @@
 """Image simulation: ``render(lens, scene, ...)`` by backward ray tracing or by PSF convolution.
 
-``jaxlens.render`` is both this module and its main function: the module is callable, so
-``jaxlens.render(lens, scene, ...)`` renders while ``jaxlens.render.bilinear`` and
-``from jaxlens.render import render`` reach the rest (as for ``jaxlens.psf``).
+``jaxlens.render(lens, scene, ...)`` is re-exported from here.
 
 Conventions:
     Lengths in mm, wavelengths in µm. ``scene`` is a linear-light ``[H, W, 3]`` float image
@@ -70,8 +68,6 @@ Memory and scale-out:
 from __future__ import annotations
 
 import math
-import sys
-import types
 
 import equinox as eqx
 import jax
@@ -80,9 +76,12 @@ import numpy as np
 from jax.sharding import Mesh, PartitionSpec
 from jaxtyping import Array, Float
 
-from . import paraxial
-from .distortion_relax import inverse_distortion_map
-from .lens import Lens, Sensor
+from ..optics import paraxial
+from ..optics.lens import Lens, Sensor
+from ..optics.rays import Rays
+from ..tracing.backward import trace_backward
+from ..tracing.forward import DEFAULT_NEWTON_ITERS
+from .distortion import inverse_distortion_map
 from .psf import (
     RGB_WAVELENGTHS,
     _geometric,
@@ -93,9 +92,6 @@ from .psf import (
     sensor_grid,
 )
 from .radiometry import _ri_impl, star_region
-from .rays import Rays
-from .reverse import trace_backward
-from .trace import DEFAULT_NEWTON_ITERS
 
 __all__ = ["render", "footprints", "Footprints", "METHODS", "bilinear", "pixel_positions"]
 
@@ -558,7 +554,7 @@ def render(
     if not jnp.issubdtype(scene.dtype, jnp.floating):
         raise ValueError(
             f"render: scene must be a linear float image, got dtype {scene.dtype} "
-            "(convert with jaxlens.images.to_linear)"
+            "(convert with jaxlens.io.images.to_linear)"
         )
     if wls.ndim != 1 or wls.shape[0] != scene.shape[-1]:
         raise ValueError(
@@ -597,14 +593,3 @@ def render(
                              newton_iters=common["newton_iters"])
     return _render_psf(lens, scene, key, depth, wls, pixel_size, inv, ri_map,
                        kernel_size=int(kernel_size), **common)
-
-
-# --------------------------------------------------------------------------------------
-# Make the module callable: ``jaxlens.render(...)`` is :func:`render`.
-# --------------------------------------------------------------------------------------
-class _CallableModule(types.ModuleType):
-    def __call__(self, *args, **kwargs):
-        return render(*args, **kwargs)
-
-
-sys.modules[__name__].__class__ = _CallableModule

@@ -108,7 +108,7 @@ def build_parser() -> argparse.ArgumentParser:
     d.add_argument(
         "--train-dir",
         default=None,
-        help="folder of training images (default: skimage.data, see jaxlens.edof.scenes)",
+        help="folder of training images (default: skimage.data; see edof.scenes)",
     )
     d.add_argument("--test-dir", default=None, help="folder of held-out test images")
     d.add_argument("--test-images", type=int, default=None, help="use only the first N tests")
@@ -117,7 +117,7 @@ def build_parser() -> argparse.ArgumentParser:
 
 
 def config_from_args(a):
-    from jaxlens.edof.train import Config
+    from jaxlens.experiments.edof.train import Config
 
     if a.paper:
         cfg = Config(
@@ -193,10 +193,10 @@ def run(argv=None) -> dict:
     from tqdm.auto import tqdm
 
     import jaxlens
-    from jaxlens.edof import lenses as L
-    from jaxlens.edof import optics as O
-    from jaxlens.edof import scenes as S
-    from jaxlens.edof import train as T
+    from jaxlens.experiments.edof import lenses as L
+    from jaxlens.experiments.edof import optics as O
+    from jaxlens.experiments.edof import scenes as S
+    from jaxlens.experiments.edof import train as T
 
     argv = list(sys.argv[1:] if argv is None else argv)
     a = build_parser().parse_args(argv)
@@ -285,7 +285,7 @@ def run(argv=None) -> dict:
     timings["evaluate_s"] = time.perf_counter() - t0
     consistency = None
     if not a.smoke and "classical" in names:
-        # Cross-check of the tiled renderer against jaxlens.render on one test image.
+        # Cross-check of the tiled renderer against jaxlens.imaging.render on one test image.
         t0 = time.perf_counter()
         lens = trained["classical"][0]
         scene = jnp.asarray(tests[0], dtype)
@@ -439,7 +439,7 @@ def write_figures(
     import matplotlib.pyplot as plt
     import numpy as np
 
-    from jaxlens.edof import lenses as L
+    from jaxlens.experiments.edof import lenses as L
 
     files = {}
     dpi = 60 if smoke else 110

@@ -26,12 +26,14 @@ import jax
 import jax.numpy as jnp
 import numpy as np
 
-from . import analysis, paraxial, sampling
-from .files import load
-from .lens import Lens
-from .lensfile import nm_to_um
-from .materials import Air, ModelGlass, Tabulated
-from .surfaces import EvenAsphere, Hybrid
+from ..imaging import sampling
+from ..io.files import load
+from ..io.lensfile import nm_to_um
+from ..optics import paraxial
+from ..optics.lens import Lens
+from ..optics.materials import Air, ModelGlass, Tabulated
+from ..optics.surfaces import EvenAsphere, Hybrid
+from . import spots as analysis
 
 UNITS = {
     "length": "mm",

@@ -35,11 +35,11 @@ import jax
 import jax.numpy as jnp
 import numpy as np
 
-from . import materials as _materials
-from . import paraxial
-from .lens import Lens, Sensor
-from .materials import AbstractMaterial, Air, ModelGlass, Tabulated
-from .surfaces import AbstractSurface, EvenAsphere, Hybrid, Standard
+from ..optics import materials as _materials
+from ..optics import paraxial
+from ..optics.lens import Lens, Sensor
+from ..optics.materials import AbstractMaterial, Air, ModelGlass, Tabulated
+from ..optics.surfaces import AbstractSurface, EvenAsphere, Hybrid, Standard
 
 FORMAT = "jaxlens.lens/1"
 """The value of the ``format`` key this module writes (name/version)."""
@@ -145,7 +145,7 @@ def _out(x) -> Any:
 
 def _catalog():
     try:
-        from . import catalog
+        from ..optics import catalog
     except ImportError:  # the catalog module lands separately
         return None
     return catalog
@@ -179,7 +179,7 @@ def same_material(a: AbstractMaterial, b: AbstractMaterial) -> bool:
 
 
 def catalog_material(name: str, where: str = "") -> AbstractMaterial:
-    """A glass by catalog name (``jaxlens.catalog.get_material``); air names give ``Air()``.
+    """A glass by catalog name (``jaxlens.optics.catalog.get_material``); air names give ``Air()``.
 
     Raises:
         ValueError: unknown glass; the message carries the catalog's close matches.
@@ -189,7 +189,7 @@ def catalog_material(name: str, where: str = "") -> AbstractMaterial:
     cat = _catalog()
     if cat is None:
         raise ValueError(
-            f"{where}: glass {name!r} needs the glass catalog (jaxlens.catalog), which is "
+            f"{where}: glass {name!r} needs the glass catalog (jaxlens.optics.catalog), which is "
             "not available; give the material as {'nd':..,'vd':..} or an index table"
         )
     try:
@@ -199,7 +199,7 @@ def catalog_material(name: str, where: str = "") -> AbstractMaterial:
 
 
 SHIPPED_FOR_NAMES = ("SCHOTT", "CDGM", "PLASTICS", "MISC")
-"""Catalogs whose glasses a file may name (``jaxlens.catalog.SHIPPED_CATALOGS``)."""
+"""Catalogs whose glasses a file may name (``jaxlens.optics.catalog.SHIPPED_CATALOGS``)."""
 
 
 def is_catalog_glass(m: AbstractMaterial) -> bool:

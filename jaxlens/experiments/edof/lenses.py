@@ -4,13 +4,13 @@ Conventions:
     Lengths in mm, wavelengths in µm, angles in degrees. Light travels toward +z and
     surface 1's vertex is at z = 0. Object depths in this package are measured from the
     aperture stop (``stop_z``); ``object_depth`` converts them to the distance from
-    surface 1 that ``jaxlens.psf`` and ``jaxlens.render`` take (the same for a stop-first
-    lens).
+    surface 1 that ``jaxlens.psf`` and ``jaxlens.render`` take (the same for a stop-first lens).
 
 The classical lens (``classical_lens``) is the shipped prescription
 ``jaxlens/data/lenses/edof_classical.json``: a 4-element plastic aspheric lens with the stop
 first, paraxial EFL 5.55 mm, EPD 2.60 mm (F/2.1), a 68.8° diagonal field on a 7.20 mm sensor
-diagonal (1024 × 1024 pixels of 4.97 µm), focused at 20 cm. ``jaxlens.edof.design`` made it.
+diagonal (1024 × 1024 pixels of 4.97 µm), focused at 20 cm.
+``jaxlens.experiments.edof.design`` made it.
 
 The EDoF lens replaces the first lens surface by a ``Hybrid`` surface (even asphere plus the
 odd polynomial Σ_j b_j x^{2j+1} + d_j y^{2j+1}). The cubic-plate baseline is a thin cubic
@@ -36,8 +36,8 @@ import jax.numpy as jnp
 import numpy as np
 from jaxtyping import Array, Float
 
-from ..lens import Lens, Sensor
-from ..surfaces import EvenAsphere, Hybrid
+from ...optics.lens import Lens, Sensor
+from ...optics.surfaces import EvenAsphere, Hybrid
 
 CLASSICAL_FILE = "edof_classical.json"
 """File name of the classical starting lens under ``jaxlens/data/lenses``."""
@@ -91,9 +91,9 @@ SAG_SCALE = 0.01
 
 def _load(path):
     try:
-        from .. import load
+        from ... import load
     except ImportError:  # pragma: no cover - the files module ships with jaxlens
-        from ..lensfile import load_json as load
+        from ...io.lensfile import load_json as load
     return load(path)
 
 

@@ -31,8 +31,11 @@ import jax
 import jax.numpy as jnp
 from jaxtyping import Array, Float
 
-from . import paraxial
-from .lens import Lens, Sensor
+from ..optics import paraxial
+from ..optics.lens import Lens, Sensor
+from ..optics.rays import Rays
+from ..tracing.backward import trace_backward
+from ..tracing.forward import DEFAULT_NEWTON_ITERS
 from .psf import (
     _chief_point,
     _static_depth,
@@ -43,9 +46,6 @@ from .psf import (
     sensor_grid,
     unclipped,
 )
-from .rays import Rays
-from .reverse import trace_backward
-from .trace import DEFAULT_NEWTON_ITERS
 
 __all__ = [
     "DistortionMap",
@@ -205,7 +205,7 @@ def prewarp(
 ) -> Float[Array, "H W C"]:
     """Pre-warp a scene by the lens's distortion: ``scene'(v) = scene(D(v))``.
 
-    Rendering the result with ``jaxlens.render`` gives an image aligned with ``scene``.
+    Rendering the result with ``jaxlens.imaging.render`` gives an image aligned with ``scene``.
     D is computed on ``grid`` and interpolated bilinearly; positions beyond the grid
     extend its edge values. Differentiable with respect to the lens and the scene.
 
@@ -289,7 +289,7 @@ def relaxed_render(
     distortion; add the penalty (weight ``alpha``) to the loss to keep distortion bounded.
 
     Args:
-        lens, scene, spp, key, depth, render_kwargs: as :func:`jaxlens.render`.
+        lens, scene, spp, key, depth, render_kwargs: as :func:`jaxlens.imaging.render`.
         alpha: weight of :func:`alignment_penalty`.
         grid: grid of the distortion map.
     """

@@ -38,12 +38,12 @@ import jax.numpy as jnp
 import numpy as np
 from jaxtyping import Array, Float
 
-from . import paraxial
-from .lens import Lens
+from ..optics import paraxial
+from ..optics.lens import Lens
+from ..optics.rays import Rays
+from ..tracing.backward import trace_scan as trace
+from ..tracing.forward import DEFAULT_NEWTON_ITERS
 from .psf import _static_depth, apertured
-from .rays import Rays
-from .reverse import trace_scan as trace
-from .trace import DEFAULT_NEWTON_ITERS
 
 __all__ = ["RelativeIllumination", "relative_illumination", "star_region"]
 

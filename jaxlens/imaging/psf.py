@@ -1,8 +1,7 @@
 """Point spread functions: geometric (ray splatting) and coherent (wave optics), PSF maps, MTF.
 
-``jaxlens.psf`` is both this module and its main function: the module is callable, so
-``jaxlens.psf(lens, field, ...)`` computes a PSF while ``jaxlens.psf.mtf``,
-``jaxlens.psf.psf_map`` and ``from jaxlens.psf import mtf`` reach the rest.
+``jaxlens.psf(lens, field, ...)`` (re-exported from here) computes one PSF; ``psf_map`` and
+``mtf`` are in this module.
 
 Conventions:
     Lengths in mm, wavelengths in µm, field angles in degrees (θy, or (θx, θy)). An object
@@ -14,7 +13,7 @@ Conventions:
     A PSF is a ``[kernel_size, kernel_size]`` array of the energy per sensor pixel of side
     ``pixel_size`` (mm), normalised so that it sums to 1 when no energy falls outside the
     kernel (``truncated`` is the fraction that does). It is sampled in the orientation of
-    ``jaxlens.render``'s output, which reads the sensor out rotated by 180° (as a camera
+    ``jaxlens.imaging.render``'s output, which reads the sensor out rotated by 180° (as a camera
     does, so that a lens renders its scene upright): the pixel ``[i, j]`` is centred on the
     sensor point ``ref + (−(j − c)·p, (i − c)·p)`` with ``c = (kernel_size − 1)/2``, so
     convolving a rendered-orientation image with the kernel applies the PSF.
@@ -47,8 +46,6 @@ Models:
 from __future__ import annotations
 
 import math
-import sys
-import types
 
 import equinox as eqx
 import jax
@@ -56,12 +53,13 @@ import jax.numpy as jnp
 import numpy as np
 from jaxtyping import Array, ArrayLike, Float
 
-from . import paraxial, sampling
-from .lens import Lens
-from .materials import LAMBDA_C, LAMBDA_D, LAMBDA_F
-from .rays import Rays
-from .reverse import trace_scan
-from .trace import DEFAULT_NEWTON_ITERS
+from ..optics import paraxial
+from ..optics.lens import Lens
+from ..optics.materials import LAMBDA_C, LAMBDA_D, LAMBDA_F
+from ..optics.rays import Rays
+from ..tracing.backward import trace_scan
+from ..tracing.forward import DEFAULT_NEWTON_ITERS
+from . import sampling
 
 
 def trace(lens, rays, *, newton_iters=DEFAULT_NEWTON_ITERS):
@@ -791,14 +789,3 @@ def mtf(
                      overfill=float(overfill), kernel_size=kernel_size,
                      diffraction=bool(diffraction), newton_iters=newton_iters)
     return freqs, t, s
-
-
-# --------------------------------------------------------------------------------------
-# Make the module callable: ``jaxlens.psf(...)`` is :func:`psf`.
-# --------------------------------------------------------------------------------------
-class _CallableModule(types.ModuleType):
-    def __call__(self, *args, **kwargs):
-        return psf(*args, **kwargs)
-
-
-sys.modules[__name__].__class__ = _CallableModule

@@ -2,19 +2,19 @@
 
 Conventions:
     Lengths in mm, wavelengths in µm, depths in mm from the aperture stop
-    (``lenses.object_depth``). Images are ``[H, W, 3]`` linear RGB in ``jaxlens.render``'s
-    orientation (read out rotated by 180°, see ``jaxlens.psf``), one wavelength per channel
+    (``lenses.object_depth``). Images are ``[H, W, 3]`` linear RGB in ``jaxlens.imaging.render``'s
+    orientation (read out rotated by 180°, see ``jaxlens.imaging.psf``), one wavelength per channel
     (``WAVELENGTHS_RGB``). A sensor position (x, y) in mm shows the field whose
-    distortion-free image lies there (``jaxlens.psf.ideal_to_field``); PSFs are centred on
+    distortion-free image lies there (``jaxlens.imaging.psf.ideal_to_field``); PSFs are centred on
     the chief ray, so distortion moves no content (the paper's distortion relaxation).
 
 Training simulates patches: a ``P × P`` sensor patch centred at a sensor position is the
 scene window of ``(P + k − 1)²`` pixels convolved ("valid") with the RGB PSF of that
-position (``rgb_psf``: geometric, the model of ``jaxlens.psf``, jittered pupil samples).
+position (``rgb_psf``: geometric, the model of ``jaxlens.imaging.psf``, jittered pupil samples).
 Each patch is a ``jax.checkpoint``, so the backward pass re-traces its rays instead of
-storing them and the memory of a gradient grows with the patch, as in ``jaxlens.render``.
+storing them and the memory of a gradient grows with the patch, as in ``jaxlens.imaging.render``.
 Whole test images are rendered tile by tile with the same model (``render_tiled``);
-``render_library`` renders them through ``jaxlens.render`` as a cross-check.
+``render_library`` renders them through ``jaxlens.imaging.render`` as a cross-check.
 """
 
 from __future__ import annotations
@@ -25,11 +25,11 @@ import jax.numpy as jnp
 import numpy as np
 from jaxtyping import Array, Float
 
-from .. import psf as _psf
-from .. import sampling
-from ..lens import Lens
-from ..render import pixel_positions
-from ..trace import trace
+from ...imaging import psf as _psf
+from ...imaging import sampling
+from ...imaging.render import pixel_positions
+from ...optics.lens import Lens
+from ...tracing.forward import trace
 from .lenses import DEPTHS_M, WAVELENGTHS_RGB, object_depth
 
 
@@ -68,12 +68,12 @@ def rgb_psf(
     wavelengths=WAVELENGTHS_RGB,
 ) -> Float[Array, "3 k k"]:
     """The RGB geometric PSF at sensor position ``xy`` (mm) of an object ``depth`` mm from
-    the stop, in ``jaxlens.psf``'s kernel orientation.
+    the stop, in ``jaxlens.imaging.psf``'s kernel orientation.
 
     The rays leave the object point for ``pupil²`` points of the entrance-pupil disc
     (``pupil_disc``, jittered by ``key``), aimed at the paraxial entrance pupil (exact for a
     stop-first lens, whose entrance pupil is the stop), weighted by cos⁴ of their launch
-    angle and splatted bilinearly (``jaxlens.psf.splat``) around the chief ray of the middle
+    angle and splatted bilinearly (``jaxlens.imaging.psf.splat``) around the chief ray of the middle
     channel (green, 587 nm), so lateral colour shows as a shift between the channels. Each
     channel is normalised to unit sum over the kernel.
 
@@ -103,7 +103,7 @@ def conv_valid(window: Float[Array, "N N C"], kern: Float[Array, "C k k"]) -> Ar
 
     Returns ``[N − k + 1, N − k + 1, C]``; kernel pixel [i, j] is the energy landing i rows
     and j columns from the source pixel, offset by the kernel centre (a true convolution,
-    as ``jaxlens.render`` applies PSFs).
+    as ``jaxlens.imaging.render`` applies PSFs).
     """
     n0, n1 = window.shape[0], window.shape[1]
     k = kern.shape[-1]
@@ -156,7 +156,7 @@ def render_tiled(
     The sensor is cut into ``patch × patch`` tiles (the training patch size); each tile is
     its scene window convolved with the RGB PSF of its centre (``rgb_psf``, ``pupil²`` rays
     per channel, no jitter), exactly the training model. The scene is edge-padded by half a
-    kernel. This is ``jaxlens.render``'s "psf" method without its distortion warp and
+    kernel. This is ``jaxlens.imaging.render``'s "psf" method without its distortion warp and
     relative-illumination shading: the PSFs are centred on the chief ray, so the image stays
     aligned with the scene (the paper's distortion relaxation), and a shift-invariant
     network could not undo shading that depends on the position in the frame.
@@ -195,10 +195,10 @@ def render_tiled(
 def render_library(
     lens: Lens, scene, depth, key, *, kernel_size: int, spp: int = 1, patch: int = 64
 ):
-    """The same image through ``jaxlens.render`` (method "psf", checkpointed tiles) on the
-    pre-warped scene (``jaxlens.distortion_relax.relaxed_render``), without shading: a
+    """The same image through ``jaxlens.imaging.render`` (method "psf", checkpointed tiles) on the
+    pre-warped scene (``jaxlens.imaging.distortion.relaxed_render``), without shading: a
     cross-check of ``render_tiled`` by an independent code path."""
-    from ..distortion_relax import relaxed_render
+    from ...imaging.distortion import relaxed_render
 
     img, _ = relaxed_render(
         lens,
@@ -301,7 +301,7 @@ def mtf_by_depth(lens: Lens, xy, depths_mm, *, frequencies, pupil: int = 96):
     """Tangential and sagittal polychromatic MTF at sensor point ``xy`` for each depth.
 
     Returns ``(frequencies [F] cycles/mm, tangential [D, F], sagittal [D, F])`` from
-    ``jaxlens.psf.mtf`` (geometric, exact ray Fourier transform, times the diffraction
+    ``jaxlens.imaging.psf.mtf`` (geometric, exact ray Fourier transform, times the diffraction
     limit).
     """
     field = np.asarray(field_of(lens, jnp.asarray(xy, lens.epd.dtype)))

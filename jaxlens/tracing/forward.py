@@ -2,7 +2,7 @@
 
 Conventions:
     Global coordinates in mm, light toward +z, surface 1's vertex at z = 0 (see
-    ``jaxlens.lens``). Rays start in object space: a ray is the whole line through its
+    ``jaxlens.optics.lens``). Rays start in object space: a ray is the whole line through its
     origin, so its intersection with surface 1 may lie behind the origin (a pupil
     point given on an entrance-pupil plane inside the lens is fine). After surface 1,
     a ray that would have to travel backward (t < 0) is invalid.
@@ -43,9 +43,9 @@ import equinox as eqx
 import jax
 import jax.numpy as jnp
 
-from .lens import Lens
-from .rays import Rays
-from .surfaces import AbstractSurface
+from ..optics.lens import Lens
+from ..optics.rays import Rays
+from ..optics.surfaces import AbstractSurface
 
 DEFAULT_NEWTON_ITERS = 6
 

@@ -1,0 +1,11 @@
+"""Real-ray analysis: spots, RMS, distortion, clear apertures, geometry checks, the report."""
+
+from .spots import Distortion as Distortion
+from .spots import GeometryCheck as GeometryCheck
+from .spots import RmsSpot as RmsSpot
+from .spots import chief_ray as chief_ray
+from .spots import clear_semi_diameters as clear_semi_diameters
+from .spots import distortion as distortion
+from .spots import rms_spot as rms_spot
+from .spots import self_intersection as self_intersection
+from .spots import spot_rays as spot_rays

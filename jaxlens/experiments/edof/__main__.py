@@ -1,0 +1,5 @@
+"""``python -m jaxlens.experiments.edof``: the EDoF experiment's command line (see ``cli``)."""
+
+from .cli import main
+
+main()

@@ -1,0 +1,9 @@
+"""Image formation on top of the tracer: ray sources and aiming, PSFs and MTF, relative
+illumination, distortion maps and the checkpointed renderer (``jaxlens.psf`` and
+``jaxlens.render`` are the entry points)."""
+
+from . import distortion as distortion
+from . import psf as psf
+from . import radiometry as radiometry
+from . import render as render
+from . import sampling as sampling

@@ -1,0 +1,5 @@
+"""Files: jaxlens JSON and Zemax ``.zmx`` lenses, images (OpenEXR, PNG)."""
+
+from . import images as images
+from .files import load as load
+from .files import save as save

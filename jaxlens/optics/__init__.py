@@ -1,0 +1,14 @@
+"""The optical system as data: surfaces, materials, glass catalogs, the lens, rays, paraxial.
+
+Everything here is a pytree (``equinox.Module``) or a pure function of one; nothing traces rays
+except the paraxial y–nu trace. Conventions: lengths in mm, wavelengths in µm, light toward +z,
+curvature c = 1/R, a surface carries the medium after it (see ``lens``).
+"""
+
+from . import catalog as catalog
+from . import materials as materials
+from . import paraxial as paraxial
+from . import surfaces as surfaces
+from .lens import Lens as Lens
+from .lens import Sensor as Sensor
+from .rays import Rays as Rays
