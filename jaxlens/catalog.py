@@ -108,9 +108,10 @@ _ALIASES = {
     "BK7": ("SCHOTT", "N-BK7"),
     "SK16": ("SCHOTT", "N-SK16"),
 }
-"""Unambiguous alternative names, used only when the name itself is in no catalog. BK7 and
-SK16 are SCHOTT's lead-containing predecessors of N-BK7 and N-SK16 (practically the same
-nd and Vd); the shipped 2013 catalog has only the N- glasses."""
+"""Unambiguous alternative names, used only when the name itself is in no searched catalog.
+BK7 and SK16 are SCHOTT's lead-containing predecessors of N-BK7 and N-SK16 (practically the
+same nd and Vd); the shipped 2013 catalog has only the N- glasses. HIKARI has a glass named
+SK16, so the SK16 alias serves only searches limited to SCHOTT."""
 
 
 @dataclasses.dataclass(frozen=True)
