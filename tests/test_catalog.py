@@ -241,6 +241,41 @@ def test_unknown_glass_lists_close_matches():
         glass_info("n-bk8")
 
 
+def test_nearest_glasses_on_the_glass_map():
+    def dist(d, v):
+        return float(np.hypot((d - 1.5168) / catalog.ND_PER_VD, v - 64.17))
+
+    near = catalog.nearest_glasses(1.5168, 64.17)
+    assert len(near) == 5 and near[0][:2] == ("SCHOTT", "N-BK7")
+    d = [dist(nd, vd) for _, _, nd, vd in near]
+    assert d == sorted(d)
+    # No glass of any shipped catalog is nearer than the fifth one returned.
+    chosen = {name.upper() for _, name, _, _ in near}
+    others = [dist(r.nd, r.vd) for _, entries in catalog._shipped()
+              for key, r in entries.items() if key not in chosen]
+    assert min(others) >= d[-1]
+    assert catalog.nearest_glasses(1.5168, 64.17, count=1, catalogs="CDGM")[0][:2] == \
+        ("CDGM", "H-K9LA")  # Vd 64.1987, nearer than H-K9L (64.20)
+    for bad in [dict(nd=0.9, vd=60.0), dict(nd=1.5, vd=-1.0), dict(nd=float("nan"), vd=60.0),
+                dict(nd=1.5, vd=60.0, count=0)]:
+        with pytest.raises(ValueError, match="nd|vd|count"):
+            catalog.nearest_glasses(**bad)
+
+
+def test_unknown_glass_suggests_optically_close_glasses():
+    # D-ZK3M (LightPath's moulded D-ZK3) is in no shipped catalog.
+    with pytest.raises(ValueError) as err:
+        get_material("D-ZK3M", nd=1.58913, vd=61.27)
+    message = str(err.value)
+    assert "Closest catalog matches: D-ZK3," in message
+    optical = message.split("Optically closest to nd 1.58913, Vd 61.27:")[1]
+    assert optical.startswith(" SCHOTT N-SK5 (nd 1.58913, Vd 61.27);")
+    assert optical.count("(nd ") == 5
+    with pytest.raises(ValueError) as err:
+        get_material("D-ZK3M")
+    assert "Optically" not in str(err.value)
+
+
 def test_catalog_material_metadata_jit_and_grad():
     glass = get_material("N-SF11")
     assert (glass.catalog_nd, glass.catalog_vd, glass.formula) == (1.78472, 25.68, 2)
