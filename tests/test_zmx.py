@@ -359,6 +359,15 @@ def test_maker_catalog_glasses_load_and_round_trip(gcat, glass):
     assert_same_lens(lens, zmx.loads(written))
 
 
+@pytest.mark.parametrize("gcat, catalog", [
+    ("SCHOTT", "SCHOTT"), ("HIKARI", "HIKARI"), ("NIKON", "HIKARI"), ("CDGM", "CDGM"),
+    ("LIGHTPATH SUMITA", "SCHOTT"),  # neither holds an F2: the search order decides
+])
+def test_gcat_picks_the_catalog_of_a_shared_name(gcat, catalog):
+    text = f"GCAT {gcat}\n" + _minimal("  CURV 0.02\n").replace("GLAS N-BK7", "GLAS F2")
+    assert zmx.loads(text).materials[0].catalog == catalog
+
+
 def test_model_glass_and_tabulated_read_back_exactly(tmp_path):
     lens = zmx.loads(
         _minimal("  CURV 0.02\n").replace(
