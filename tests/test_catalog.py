@@ -440,8 +440,9 @@ def _rii_index(kind, c, w):
     """refractiveindex.info formulas 1, 2 and 3, evaluated as its documentation writes them."""
     w = np.asarray(w, dtype=float)
     if kind == 3:
-        return np.sqrt(c[0] + sum(k * w**p for k, p in zip(c[1::2], c[2::2])))
-    terms = sum(b * w**2 / (w**2 - (l**2 if kind == 1 else l)) for b, l in zip(c[1::2], c[2::2]))
+        return np.sqrt(c[0] + sum(k * w**p for k, p in zip(c[1::2], c[2::2], strict=True)))
+    pairs = zip(c[1::2], c[2::2], strict=True)
+    terms = sum(b * w**2 / (w**2 - (l**2 if kind == 1 else l)) for b, l in pairs)
     return np.sqrt(1.0 + c[0] + terms)
 
 
