@@ -324,6 +324,50 @@ def test_unknown_glass_lists_close_matches(tmp_path):
     assert msg.startswith(f"{p}:9: glass 'N-BK8'") and "N-BK7" in msg
 
 
+def test_unknown_glass_names_unshipped_gcat_and_optically_close_glasses():
+    text = _minimal("  CURV 0.02\n").replace(
+        "GLAS N-BK7", "GLAS D-ZK3M 0 0 1.58913 61.27 0 0 0 0 0 0"
+    )
+    with pytest.raises(ValueError) as e:
+        zmx.loads("GCAT LIGHTPATH SCHOTT\n" + text)
+    msg = str(e.value)
+    assert msg.startswith("<zmx>:10: glass 'D-ZK3M'")
+    assert "Closest catalog matches: D-ZK3," in msg
+    assert "Optically closest to nd 1.58913, Vd 61.27: SCHOTT N-SK5 (nd 1.58913" in msg
+    assert "GCAT names LIGHTPATH, which jaxlens does not ship" in msg
+    assert "SCHOTT, CDGM" in msg and "OHARA" in msg and "LIGHTPATH.AGF" in msg
+    with pytest.raises(ValueError) as e:
+        zmx.loads("GCAT SCHOTT OHARA\n" + text)
+    assert "does not ship" not in str(e.value) and "Optically closest" in str(e.value)
+    # A GLAS line without nd and Vd still gets the close names.
+    with pytest.raises(ValueError) as e:
+        zmx.loads(text.replace(" 0 0 1.58913 61.27 0 0 0 0 0 0", ""))
+    assert "D-ZK3" in str(e.value) and "Optically" not in str(e.value)
+
+
+@pytest.mark.parametrize("gcat, glass", [
+    ("OHARA", "S-LAH64"), ("HOYA", "TAFD30"), ("HIKARI", "E-LAFH3"), ("SUMITA", "K-SFLD6"),
+    ("CDGM", "H-ZK3A"), ("SCHOTT", "B270"), ("CORNING", "C79-80"),
+])
+def test_maker_catalog_glasses_load_and_round_trip(gcat, glass):
+    text = f"GCAT {gcat}\n" + _minimal("  CURV 0.02\n").replace("GLAS N-BK7", f"GLAS {glass}")
+    lens = zmx.loads(text)
+    m = lens.materials[0]
+    assert (m.name, m.catalog) == (glass, gcat)
+    written, _ = zmx.dumps(lens)
+    assert f"GCAT {gcat}" in written and f"GLAS {glass}" in written
+    assert_same_lens(lens, zmx.loads(written))
+
+
+@pytest.mark.parametrize("gcat, catalog", [
+    ("SCHOTT", "SCHOTT"), ("HIKARI", "HIKARI"), ("NIKON", "HIKARI"), ("CDGM", "CDGM"),
+    ("LIGHTPATH SUMITA", "SCHOTT"),  # neither holds an F2: the search order decides
+])
+def test_gcat_picks_the_catalog_of_a_shared_name(gcat, catalog):
+    text = f"GCAT {gcat}\n" + _minimal("  CURV 0.02\n").replace("GLAS N-BK7", "GLAS F2")
+    assert zmx.loads(text).materials[0].catalog == catalog
+
+
 def test_model_glass_and_tabulated_read_back_exactly(tmp_path):
     lens = zmx.loads(
         _minimal("  CURV 0.02\n").replace(

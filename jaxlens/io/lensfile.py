@@ -178,8 +178,12 @@ def same_material(a: AbstractMaterial, b: AbstractMaterial) -> bool:
     )
 
 
-def catalog_material(name: str, where: str = "") -> AbstractMaterial:
+def catalog_material(name: str, where: str = "", nd: float | None = None,
+                     vd: float | None = None) -> AbstractMaterial:
     """A glass by catalog name (``jaxlens.optics.catalog.get_material``); air names give ``Air()``.
+
+    ``nd`` and ``vd``, where the file gives them, only feed the error's list of optically
+    close glasses.
 
     Raises:
         ValueError: unknown glass; the message carries the catalog's close matches.
@@ -193,12 +197,15 @@ def catalog_material(name: str, where: str = "") -> AbstractMaterial:
             "not available; give the material as {'nd':..,'vd':..} or an index table"
         )
     try:
-        return cat.get_material(name)
+        if nd is None or vd is None:
+            return cat.get_material(name)
+        return cat.get_material(name, nd=nd, vd=vd)
     except ValueError as e:
         raise ValueError(f"{where}: {e}" if where else str(e)) from None
 
 
-SHIPPED_FOR_NAMES = ("SCHOTT", "CDGM", "PLASTICS", "MISC")
+SHIPPED_FOR_NAMES = ("SCHOTT", "CDGM", "PLASTICS", "MISC", "OHARA", "HOYA", "HIKARI", "SUMITA",
+                     "CORNING")
 """Catalogs whose glasses a file may name (``jaxlens.optics.catalog.SHIPPED_CATALOGS``)."""
 
 

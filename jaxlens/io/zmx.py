@@ -90,6 +90,12 @@ _SHIPPED_FOR_ZEMAX = {
     "MISC": ("MISC", "PLASTICS"),
     "ZEON": ("PLASTICS",),
     "OSAKAGASCHEMICAL": ("PLASTICS",),
+    "OHARA": ("OHARA",),
+    "HOYA": ("HOYA",),
+    "HIKARI": ("HIKARI",),
+    "NIKON": ("HIKARI",),  # the shipped HIKARI file is NIKON's Zemax catalog (2017-11)
+    "SUMITA": ("SUMITA",),
+    "CORNING": ("CORNING",),
 }
 _SURFACE_KEYS = {
     "TYPE",
@@ -498,10 +504,27 @@ class _Glasses:
                         return cat_mod.get_material(name, catalogs=[shipped])
                     except ValueError:
                         continue
+        nd, vd = _glas_nd_vd(ln)
         try:
-            return catalog_material(name)
+            return catalog_material(name, nd=nd, vd=vd)
         except ValueError as e:
+            missing = [c for c in self.gcat if c not in self.side and c not in _SHIPPED_FOR_ZEMAX]
+            if missing:
+                e = (f"{e}. The file's GCAT names {', '.join(missing)}, which jaxlens does not "
+                     f"ship (GCAT catalogs it reads: {', '.join(_SHIPPED_FOR_ZEMAX)}); put "
+                     f"{missing[0]}.AGF beside the file or use jaxlens.catalog.register_catalog")
             raise ln.error(f"glass {name!r}: {e}") from None
+
+
+def _glas_nd_vd(ln: _Line) -> tuple[float | None, float | None]:
+    """nd and Vd that a GLAS line carries after the name (tokens 4 and 5), if valid."""
+    try:
+        nd, vd = float(ln.tokens[4]), float(ln.tokens[5])
+    except (IndexError, ValueError):
+        return None, None
+    if not (math.isfinite(nd) and nd > 1.0 and math.isfinite(vd) and vd > 0.0):
+        return None, None
+    return nd, vd
 
 
 def _fields(f: _File) -> np.ndarray:

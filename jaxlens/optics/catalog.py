@@ -8,6 +8,10 @@ source in its ``!`` header lines):
 * ``PLASTICS``: molding plastics: PMMA, POLYCARB, POLYSTYR, SAN, COC, ZEONEX 330R/480R/E48R,
   OKP4 and OKP4HT.
 * ``MISC``: fused silica, CaF₂, quartz, water and a few legacy glasses.
+* ``OHARA``, ``HOYA``, ``HIKARI``, ``SUMITA``: the makers' Zemax catalogs (2017) as held by
+  the refractiveindex.info database (CC0), converted by ``tools/make_agf.py``; SCHOTT and CDGM
+  also get that database's glasses that their files above lack (and SCHOTT B270).
+* ``CORNING``: HPFS 7980 fused silica (``C79-80``).
 
 Lookups are case-insensitive. Catalogs registered with :func:`register_catalog` are
 searched first (latest first), then the shipped ones in the order above, so ``"F2"`` is
@@ -62,11 +66,13 @@ __all__ = [
     "get_material",
     "glass_info",
     "load_agf",
+    "nearest_glasses",
     "parse_agf",
     "register_catalog",
 ]
 
-SHIPPED_CATALOGS = ("SCHOTT", "CDGM", "PLASTICS", "MISC")
+SHIPPED_CATALOGS = ("SCHOTT", "CDGM", "PLASTICS", "MISC", "OHARA", "HOYA", "HIKARI", "SUMITA",
+                    "CORNING")
 """Shipped catalogs in search order (files ``jaxlens/data/glass/<NAME>.agf``)."""
 
 FORMULA_NAMES = {
@@ -102,9 +108,10 @@ _ALIASES = {
     "BK7": ("SCHOTT", "N-BK7"),
     "SK16": ("SCHOTT", "N-SK16"),
 }
-"""Unambiguous alternative names, used only when the name itself is in no catalog. BK7 and
-SK16 are SCHOTT's lead-containing predecessors of N-BK7 and N-SK16 (practically the same
-nd and Vd); the shipped 2013 catalog has only the N- glasses."""
+"""Unambiguous alternative names, used only when the name itself is in no searched catalog.
+BK7 and SK16 are SCHOTT's lead-containing predecessors of N-BK7 and N-SK16 (practically the
+same nd and Vd); the shipped 2013 catalog has only the N- glasses. HIKARI has a glass named
+SK16, so the SK16 alias serves only searches limited to SCHOTT."""
 
 
 @dataclasses.dataclass(frozen=True)
@@ -434,14 +441,65 @@ def _find(name: str, catalogs) -> tuple[str, GlassRecord | AbstractMaterial] | N
     return None
 
 
-def _unknown(name: str, catalogs) -> ValueError:
+def _unknown(name: str, catalogs, nd: float | None = None,
+             vd: float | None = None) -> ValueError:
     upper = {n.upper(): n for n in catalog_names(catalogs=catalogs)}
     close = difflib.get_close_matches(name.strip().upper(), list(upper), n=5, cutoff=0.0)
     hint = ", ".join(upper[c] for c in close) if close else "none"
-    return ValueError(f"Unknown material {name!r}. Closest catalog matches: {hint}")
+    message = f"Unknown material {name!r}. Closest catalog matches: {hint}"
+    if nd is not None and vd is not None:
+        near = nearest_glasses(nd, vd, catalogs=catalogs)
+        listed = "; ".join(f"{c} {n} (nd {d:.5f}, Vd {v:.2f})" for c, n, d, v in near)
+        message += f". Optically closest to nd {nd:.5f}, Vd {vd:.2f}: {listed or 'none'}"
+    return ValueError(message)
 
 
-def get_material(name: str, catalogs: str | Iterable[str] | None = None) -> AbstractMaterial:
+ND_PER_VD = 0.01
+"""Glass-map scale of :func:`nearest_glasses`: an nd step of 0.01 weighs as one unit of Vd."""
+
+
+def nearest_glasses(nd: float, vd: float, count: int = 5,
+                    catalogs: str | Iterable[str] | None = None
+                    ) -> list[tuple[str, str, float, float]]:
+    """The glasses nearest to (nd, Vd) on the glass map, for substituting an unknown glass.
+
+    The distance is ``hypot((nd − nd′)/ND_PER_VD, Vd − Vd′)`` with the catalogs' nd and Vd.
+    A name found in an earlier catalog of the search order is not repeated.
+
+    Args:
+        nd: Index at the d line (587.56 nm), > 1.
+        vd: Abbe number Vd, > 0.
+        count: How many glasses to return, ≥ 1.
+        catalogs: As for :func:`get_material`.
+
+    Returns:
+        (catalog, name, nd, Vd) tuples, nearest first.
+
+    Raises:
+        ValueError: If nd, vd or count is out of range.
+    """
+    if not (np.isfinite(nd) and nd > 1.0):
+        raise ValueError(f"nd must be a finite index > 1, got {nd!r}")
+    if not (np.isfinite(vd) and vd > 0.0):
+        raise ValueError(f"vd must be a finite Abbe number > 0, got {vd!r}")
+    if count < 1:
+        raise ValueError(f"count must be >= 1, got {count!r}")
+    seen: set[str] = set()
+    rows = []
+    for cat, entries in _search_order(catalogs):
+        for key, entry in entries.items():
+            if key in seen:
+                continue
+            seen.add(key)
+            d, v = _nd_vd(entry)
+            rows.append((float(np.hypot((d - nd) / ND_PER_VD, v - vd)), cat,
+                         entry.name if entry.name else key, d, v))
+    rows.sort(key=lambda r: r[0])
+    return [(c, n, d, v) for _, c, n, d, v in rows[:count]]
+
+
+def get_material(name: str, catalogs: str | Iterable[str] | None = None, *,
+                 nd: float | None = None, vd: float | None = None) -> AbstractMaterial:
     """A material by name from the registered and shipped catalogs.
 
     Args:
@@ -449,6 +507,8 @@ def get_material(name: str, catalogs: str | Iterable[str] | None = None) -> Abst
             alias (``"PC"``, ``"PS"``, ``"BK7"``…), or ``"AIR"``/``""`` for air.
         catalogs: Catalog name(s) to search, in order (e.g. ``"CDGM"``); default: all, user
             catalogs first, then ``SHIPPED_CATALOGS``.
+        nd, vd: The glass's nd and Vd where known (a Zemax GLAS line carries them); used
+            only in the error for an unknown name, to list optically close glasses.
 
     Returns:
         A :class:`CatalogMaterial` for AGF glasses, :class:`~jaxlens.optics.materials.Air` for air,
@@ -456,13 +516,13 @@ def get_material(name: str, catalogs: str | Iterable[str] | None = None) -> Abst
 
     Raises:
         ValueError: If the name is in no searched catalog; the message lists the 5 closest
-            catalog names.
+            catalog names and, given nd and vd, the 5 nearest glasses (:func:`nearest_glasses`).
     """
     if name.strip().upper() in ("", "AIR"):
         return Air()
     found = _find(name, catalogs)
     if found is None:
-        raise _unknown(name, catalogs)
+        raise _unknown(name, catalogs, nd, vd)
     entry = found[1]
     return entry.to_material() if isinstance(entry, GlassRecord) else entry
 
