@@ -9,9 +9,10 @@ import numpy as np
 import pytest
 
 import jaxlens
-from jaxlens.design import curriculum, fasttrace, init, losses, mask, regularizers, solvers
+from jaxlens.design import curriculum, init, losses, mask, regularizers, solvers
 from jaxlens.design.params import LensParams
 from jaxlens.design.spec import DesignSpec
+from jaxlens.tracing.forward import stacked_surfaces
 
 SPEC = DesignSpec()
 
@@ -115,21 +116,21 @@ def test_params_roundtrip():
         np.testing.assert_allclose(x, y, rtol=1e-12, atol=1e-15)
 
 
-def test_fasttrace_matches_trace():
+def test_uniform_trace_matches_trace():
+    """One scan over padded surfaces (the design loss's trace) agrees with the per-kind runs."""
     pm, p = _design_lens()
     lens = pm.to_lens(p)
     pupil = jaxlens.imaging.sampling.pupil_hexapolar(3, jnp.float64)
     rays = jaxlens.imaging.sampling.collimated(lens, 18.0, pupil)
     ref = jaxlens.trace_path(lens, rays)
-    got = fasttrace.trace_path_scan(lens, rays)
-    assert got.origin.shape[0] == len(ref)
-    for i, r in enumerate(ref):
-        np.testing.assert_array_equal(got.valid[i], r.valid)
-        v = np.asarray(r.valid)
-        np.testing.assert_allclose(np.asarray(got.origin[i])[v], np.asarray(r.origin)[v],
-                                   atol=1e-9)
-        np.testing.assert_allclose(np.asarray(got.direction[i])[v],
-                                   np.asarray(r.direction)[v], atol=1e-9)
+    got = jaxlens.trace_path(lens, rays, uniform=True)
+    assert got.origin.shape == ref.origin.shape == (lens.num_surfaces + 1, *rays.shape, 3)
+    np.testing.assert_array_equal(got.valid, ref.valid)
+    v = np.asarray(ref.valid)
+    for field in ("origin", "direction"):
+        np.testing.assert_allclose(np.asarray(getattr(got, field))[v],
+                                   np.asarray(getattr(ref, field))[v], atol=1e-12)
+    np.testing.assert_allclose(np.asarray(got.opl)[v], np.asarray(ref.opl)[v], atol=1e-12)
     assert np.asarray(ref[-1].valid).mean() > 0.9
 
 
@@ -138,7 +139,7 @@ def test_fasttrace_matches_trace():
 
 def _geometry_penalties(p, pm, radii, gb):
     lens = pm.to_lens(p)
-    stack = fasttrace.stacked_surfaces(lens)
+    stack = stacked_surfaces(lens.surfaces)
     return jnp.stack([jnp.sum(regularizers.spacing(lens, stack, radii, gb) ** 2),
                       jnp.sum(regularizers.slope(stack, lens.stop, radii) ** 2)])
 
@@ -176,9 +177,9 @@ def test_spacing_and_slope_zero_inside_and_pull_back_outside():
 def _obliquity(c, pm, p, samp, args):
     lens = pm.to_lens(eqx.tree_at(lambda q: q.c, p, c))
     rays = losses.launch(lens, samp, args)
-    path = fasttrace.trace_path_scan(lens, rays)
-    stack = fasttrace.stacked_surfaces(lens)
-    return jnp.sum(regularizers.obliquity(stack, lens.stop, rays, path) ** 2)
+    path = jaxlens.trace_path(lens, rays, uniform=True)
+    stack = stacked_surfaces(lens.surfaces)
+    return jnp.sum(regularizers.obliquity(stack, lens.vertex_z(), lens.stop, rays, path) ** 2)
 
 
 _obliquity_grad = jax.jit(jax.value_and_grad(_obliquity))

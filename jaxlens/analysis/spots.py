@@ -186,7 +186,7 @@ def clear_semi_diameters(lens: Lens, fields=None, n_rim: int = 64) -> Float[Arra
     def heights(field, wl):
         rays = field_rays(lens, field, pupil, wl, depth=depth)
         path = trace_path(lens, rays, upto=lens.num_surfaces - 1)
-        r = jnp.stack([jnp.hypot(p.origin[:, 0], p.origin[:, 1]) for p in path])  # [n, M]
+        r = jnp.hypot(path.origin[..., 0], path.origin[..., 1])  # [n, M]
         return jnp.max(jnp.where(path[-1].valid[None], r, 0.0), axis=-1)
 
     h = jax.vmap(lambda f: jax.vmap(lambda w: heights(f, w))(lens.wavelengths))(fields)

@@ -41,7 +41,7 @@ from ..imaging.sampling import pupil_hexapolar
 from ..optics import paraxial
 from ..optics.lens import Lens
 from ..optics.rays import Rays
-from .fasttrace import stacked_surfaces, trace_path_scan
+from ..tracing.forward import stacked_surfaces, trace_path
 
 
 class StageArgs(eqx.Module):
@@ -198,7 +198,7 @@ def spot_errors(path: Rays, sampling: RayLoss, args: StageArgs) -> SpotResult:
 
 def trace_stage(lens: Lens, sampling: RayLoss, args: StageArgs) -> Rays:
     """Trace the loss rays; stacked ``[n + 1, K, W, P]`` after every surface and the image."""
-    return trace_path_scan(lens, launch(lens, sampling, args))
+    return trace_path(lens, launch(lens, sampling, args), uniform=True)
 
 
 class Aux(eqx.Module):
@@ -228,11 +228,11 @@ def design_residuals(params, pmap, sampling: RayLoss, args: StageArgs, gap_bound
 
     lens = pmap.to_lens(params)
     rays = launch(lens, sampling, args)
-    path = trace_path_scan(lens, rays)
+    path = trace_path(lens, rays, uniform=True)
     spot = spot_errors(path, sampling, args)
-    stack = stacked_surfaces(lens)
+    stack = stacked_surfaces(lens.surfaces)
     radii = reg.clear_radii(path)
-    h_obl = reg.obliquity(stack, lens.stop, rays, path)
+    h_obl = reg.obliquity(stack, lens.vertex_z(), lens.stop, rays, path)
     h_gap = reg.spacing(lens, stack, radii, jnp.asarray(gap_bounds, radii.dtype))
     h_slope = reg.slope(stack, lens.stop, radii)
     w = jnp.sqrt(args.reg_weights)

@@ -35,6 +35,7 @@ from jaxtyping import Array, Float
 
 from ..optics.lens import Lens
 from ..optics.rays import Rays
+from ..tracing.step import surface_normal
 
 OBLIQUITY_BOUND = 0.7
 SLOPE_BOUND = 0.5
@@ -51,7 +52,7 @@ def clear_radii(path: Rays) -> Float[Array, " n"]:
     """Largest valid ray height on each lens surface (mm), without gradient.
 
     Args:
-        path: stacked rays ``[n + 1, ...]`` from ``trace_path_scan`` (the image row is
+        path: stacked rays ``[n + 1, ...]`` from ``trace_path`` (the image row is
             ignored).
     """
     h = jnp.hypot(path.origin[:-1, ..., 0], path.origin[:-1, ..., 1])
@@ -59,25 +60,28 @@ def clear_radii(path: Rays) -> Float[Array, " n"]:
     return jax.lax.stop_gradient(jnp.max(h.reshape(h.shape[0], -1), axis=-1))
 
 
-def _normal(surface, x, y):
-    _, gx, gy, _ = surface.sag_and_grad(x, y)
-    n = jnp.stack([-gx, -gy, jnp.ones_like(gx)], -1)
-    return n / jnp.sqrt(1.0 + gx * gx + gy * gy)[..., None]
+def _unit_normal(surface, x, y, z):
+    n = jnp.stack(surface_normal(surface, x, y, z), -1)
+    return n / jnp.linalg.norm(n, axis=-1, keepdims=True)
 
 
-def obliquity(stack, stop: int, rays_in: Rays, path: Rays, *, bound: float = OBLIQUITY_BOUND):
+def obliquity(stack, z_vertex, stop: int, rays_in: Rays, path: Rays, *,
+              bound: float = OBLIQUITY_BOUND):
     """Hinge residuals of ray obliquity, one per refracting surface and leading ray axis.
 
     Args:
         stack: the lens surfaces stacked on a leading axis (``stacked_surfaces``).
+        z_vertex: ``[n]`` global z of the surface vertices (mm).
         stop: index of the stop (not a refracting surface).
         rays_in: the launched rays (their directions are the incident directions at surface 1).
-        path: stacked rays ``[n + 1, ...]`` from ``trace_path_scan``.
+        path: stacked rays ``[n + 1, ...]`` from ``trace_path``.
         bound: the cosine bound ε.
     """
     n_surf = path.origin.shape[0] - 1
     d_in = jnp.concatenate([rays_in.direction[None], path.direction[: n_surf - 1]])
-    n = jax.vmap(_normal)(stack, path.origin[:n_surf, ..., 0], path.origin[:n_surf, ..., 1])
+    p = path.origin[:n_surf]
+    z_local = p[..., 2] - z_vertex.reshape((-1,) + (1,) * (p.ndim - 2))
+    n = jax.vmap(_unit_normal)(stack, p[..., 0], p[..., 1], z_local)
     cos_in = jnp.abs(jnp.sum(d_in * n, -1))
     cos_out = jnp.abs(jnp.sum(path.direction[:n_surf] * n, -1))
     h = jax.nn.relu(bound - jnp.minimum(cos_in, cos_out))

@@ -57,14 +57,8 @@ from ..optics import paraxial
 from ..optics.lens import Lens
 from ..optics.materials import LAMBDA_C, LAMBDA_D, LAMBDA_F
 from ..optics.rays import Rays
-from ..tracing.backward import trace_scan
-from ..tracing.forward import DEFAULT_NEWTON_ITERS
+from ..tracing.forward import DEFAULT_NEWTON_ITERS, trace
 from . import sampling
-
-
-def trace(lens, rays, *, newton_iters=DEFAULT_NEWTON_ITERS):
-    """Trace to the image surface with the scanned tracer (fast to compile)."""
-    return trace_scan(lens, rays, newton_iters=newton_iters)
 
 __all__ = [
     "RGB_WAVELENGTHS",
@@ -232,8 +226,8 @@ def chief_ray(lens: Lens, field, depth=None, wavelength=None, *,
     aim_lens = unclipped(lens)
 
     def at_stop(uv, aim_lens):
-        return trace_scan(aim_lens, launch(uv), newton_iters=newton_iters,
-                          upto=lens.stop).origin[0, :2]
+        return trace(aim_lens, launch(uv), newton_iters=newton_iters, upto=lens.stop,
+                     uniform=True).origin[0, :2]
 
     uv = newton_2d(at_stop, jnp.zeros(2, lens.epd.dtype), aim_lens, iters)
     return launch(uv)
@@ -270,7 +264,7 @@ def newton_2d(fn, x0, params, iters: int):
 def _chief_point(lens, field, depth, newton_iters) -> Array:
     """Image-surface (x, y) of the real chief ray (through the stop centre), primary λ."""
     rays = chief_ray(lens, field, depth, newton_iters=newton_iters)
-    return trace(lens, rays, newton_iters=newton_iters).origin[0, :2]
+    return trace(lens, rays, newton_iters=newton_iters, uniform=True).origin[0, :2]
 
 
 def _reference(lens, field, depth, center, newton_iters, pos=None, w=None) -> Array:
@@ -332,7 +326,7 @@ def splat(pos, weight, kernel_size: int, pixel_size, order: int = 1) -> Float[Ar
 
 def _trace_beam(lens, field, depth, wl, pupil, mask, newton_iters):
     rays = _launch(lens, field, depth, pupil, wl)
-    out = trace(lens, rays, newton_iters=newton_iters)
+    out = trace(lens, rays, newton_iters=newton_iters, uniform=True)
     w = jnp.where(out.valid & mask, _flux(rays, depth), 0.0)
     return rays, out, w
 
@@ -370,7 +364,7 @@ def _coherent(lens, field, depth, wls, *, kernel_size, pixel_size, center, pupil
 
     def beam(uv, wl):
         rays = _launch(lens, field, depth, uv, wl)
-        out = trace(lens, rays, newton_iters=newton_iters)
+        out = trace(lens, rays, newton_iters=newton_iters, uniform=True)
         return out.direction[..., :2], (rays, out)
 
     def one(wl):

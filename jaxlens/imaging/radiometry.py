@@ -41,8 +41,7 @@ from jaxtyping import Array, Float
 from ..optics import paraxial
 from ..optics.lens import Lens
 from ..optics.rays import Rays
-from ..tracing.backward import trace_scan as trace
-from ..tracing.forward import DEFAULT_NEWTON_ITERS
+from ..tracing.forward import DEFAULT_NEWTON_ITERS, trace
 from .psf import _static_depth, apertured
 
 __all__ = ["RelativeIllumination", "relative_illumination", "star_region"]
@@ -135,7 +134,7 @@ def _irradiance(lens: Lens, t, depth, wl, n_coarse, n_fine, newton_iters):
         return Rays(jnp.broadcast_to(p, o_plane.shape), d, wl)
 
     def valid_fn(pts):
-        return trace(lens, launch(t, pts), newton_iters=newton_iters).valid
+        return trace(lens, launch(t, pts), newton_iters=newton_iters, uniform=True).valid
 
     # The part of the entrance-pupil plane whose rays reach the sensor (its area exactly,
     # as a polygon), then a grid over its bounding box for the centroid.
@@ -146,7 +145,7 @@ def _irradiance(lens: Lens, t, depth, wl, n_coarse, n_fine, newton_iters):
 
     def centroid(s):
         rays = launch(s, fine)
-        out = trace(lens, rays, newton_iters=newton_iters)
+        out = trace(lens, rays, newton_iters=newton_iters, uniform=True)
         w = out.valid.astype(t.dtype)
         if depth is not None:
             w = w * rays.direction[..., 2] ** 4

@@ -71,6 +71,12 @@ class Rays(eqx.Module):
         w = self.wavelength if self.wavelength.ndim == 0 else self.wavelength[idx]
         return Rays(self.origin[idx], self.direction[idx], w, self.valid[idx], self.opl[idx])
 
+    def __iter__(self):
+        """Iterate over the leading axis (for example the surfaces of ``trace_path``)."""
+        if not self.shape:
+            raise TypeError("iteration over a single ray (Rays of shape ())")
+        return (self[i] for i in range(self.shape[0]))
+
     def reshape(self, *shape: int) -> Rays:
         w = self.wavelength if self.wavelength.ndim == 0 else self.wavelength.reshape(shape)
         return Rays(

@@ -15,106 +15,26 @@ The medium after mirrored surface j is the medium before original surface n−1�
 
 Directions map as (L, M, N) → (L, M, −N). Optical path lengths are unchanged.
 
-Scanned tracing:
-    ``trace_scan`` traces like ``jaxlens.tracing.forward`` (it runs the same per-surface step) but
-    loops over the surfaces with ``lax.scan`` after converting them to one common kind
-    (Standard, EvenAsphere or Hybrid, polynomial coefficients zero-padded to a common
-    length). XLA then compiles one surface instead of every surface: on the 13-surface
-    cellphone lens the gradient of a trace compiles in about 13 s instead of several
-    minutes. Image formation (psf, render, radiometry) traces with it.
+The backward trace is the forward tracer on the mirrored lens, with ``uniform=True``
+(one ``lax.scan`` over the surfaces: short compile times for image formation).
 """
 
 from __future__ import annotations
 
-import jax
 import jax.numpy as jnp
 
 from ..optics.lens import Lens
 from ..optics.rays import Rays
 from ..optics.surfaces import AbstractSurface, EvenAsphere, Hybrid, Standard
-from .forward import DEFAULT_NEWTON_ITERS
+from .forward import DEFAULT_NEWTON_ITERS, trace
 
 __all__ = [
     "mirror_surface",
     "reversed_lens",
     "to_mirror_frame",
     "trace_backward",
-    "trace_scan",
-    "common_surfaces",
 ]
 
-# The per-surface step of the core tracer (the same physics, reused, not re-implemented).
-from . import forward as _core
-
-
-def common_surfaces(surfaces) -> list[AbstractSurface]:
-    """Convert surfaces to one kind with equal coefficient lengths (zero-padded).
-
-    All ``Standard`` if none has polynomial terms, else ``EvenAsphere`` if none has odd
-    terms, else ``Hybrid``. The sag is unchanged.
-    """
-    even = [s.even_coeffs() for s in surfaces]
-    odd = [s.odd_coeffs()[0] for s in surfaces]
-    m = max(a.shape[0] for a in even)
-    p = max(b.shape[0] for b in odd)
-
-    def pad(a, n):
-        return jnp.concatenate([a, jnp.zeros((n - a.shape[0],), a.dtype)])
-
-    out = []
-    for s, a in zip(surfaces, even, strict=True):
-        if m == 0 and p == 0:
-            out.append(Standard(c=s.c, k=s.k, semi_diameter=s.semi_diameter))
-        elif p == 0:
-            out.append(EvenAsphere(c=s.c, k=s.k, coeffs=pad(a, m), semi_diameter=s.semi_diameter))
-        else:
-            bx, by = s.odd_coeffs()
-            out.append(Hybrid(c=s.c, k=s.k, coeffs=pad(a, m), odd_x=pad(bx, p), odd_y=pad(by, p),
-                              semi_diameter=s.semi_diameter))
-    return out
-
-
-def trace_scan(
-    lens: Lens,
-    rays: Rays,
-    *,
-    newton_iters: int = DEFAULT_NEWTON_ITERS,
-    upto: int | None = None,
-) -> Rays:
-    """Trace rays like ``jaxlens.tracing.forward``, looping over the surfaces with ``lax.scan``.
-
-    Args:
-        lens: the lens.
-        rays: rays in object space.
-        newton_iters: Newton iterations for polynomial surfaces.
-        upto: stop after ``surfaces[upto]`` (0-based); None traces to the image surface.
-
-    Returns:
-        The rays at the image surface (or after ``surfaces[upto]``), as ``jaxlens.tracing.forward``.
-    """
-    lens = lens.astype(rays.dtype)
-    last = lens.num_surfaces - 1 if upto is None else upto
-    surfs = common_surfaces(lens.surfaces[: last + 1])
-    zs = lens.vertex_z()
-    idx = jnp.stack(jnp.broadcast_arrays(*lens.indices(rays.wavelength)))
-    st = _core._to_state(rays)
-    step = _core._step
-    st = step(surfs[0], zs[0], st, idx[0], idx[1], first=True, refracts=True,
-              newton_iters=newton_iters)
-    if last >= 1:
-        stack = jax.tree.map(lambda *x: jnp.stack(x), *surfs[1:])
-
-        def body(st, x):
-            s, z, n0, n1 = x
-            return step(s, z, st, n0, n1, first=False, refracts=True,
-                        newton_iters=newton_iters), None
-
-        st, _ = jax.lax.scan(body, st, (stack, zs[1 : last + 1], idx[1 : last + 1],
-                                        idx[2 : last + 2]))
-    if upto is None:
-        st = step(lens.image, lens.image_z(), st, idx[-1], idx[-1], first=False,
-                  refracts=False, newton_iters=newton_iters)
-    return _core._to_rays(st, rays.wavelength)
 
 
 def mirror_surface(surface: AbstractSurface) -> AbstractSurface:
@@ -217,11 +137,13 @@ def trace_backward(
     """
     rev = reversed_lens(lens)
     o, d = to_mirror_frame(lens, rays.origin, rays.direction)
-    out = trace_scan(
+    out = trace(
         rev,
         Rays(o, d, rays.wavelength, rays.valid, rays.opl),
         newton_iters=newton_iters,
         upto=lens.num_surfaces - 1 - (0 if upto is None else upto),
+        uniform=True,
+        chunk=None,
     )
     o, d = to_mirror_frame(lens, out.origin, out.direction)
     return Rays(o, d, out.wavelength, out.valid, out.opl)

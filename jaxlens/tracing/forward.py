@@ -1,38 +1,11 @@
-"""Sequential real-ray tracing: intersection, vector Snell refraction, validity masks.
+"""Forward tracing from object space: runs of same-kind surfaces scanned, large batches chunked.
 
-Conventions:
-    Global coordinates in mm, light toward +z, surface 1's vertex at z = 0 (see
-    ``jaxlens.optics.lens``). Rays start in object space: a ray is the whole line through its
-    origin, so its intersection with surface 1 may lie behind the origin (a pupil
-    point given on an entrance-pupil plane inside the lens is fine). After surface 1,
-    a ray that would have to travel backward (t < 0) is invalid.
-
-Intersections:
-    Planes, spheres and conics are intersected in closed form (the numerically stable
-    roots of the quadratic), which is exact; its derivative is the implicit-function one,
-    dt = −dF/F_t on the implicit conic F (a ``custom_jvp``, so forward and reverse mode
-    both work and neither differentiates the root selection). Surfaces
-    with polynomial terms start from that root and take ``newton_iters`` Newton steps
-    on F(t) = z(t) − sag(x(t), y(t)). Those iterations carry no gradient. One last
-    Newton step is taken with gradients switched on and the derivative F'(t) held
-    fixed; at the converged root its derivative is exactly the implicit-function
-    theorem result dt/dθ = −(∂F/∂θ)/(∂F/∂t), so the backward pass never unrolls the
-    iterations.
-
-Fusion:
-    Each expensive per-ray result (the root t, the refraction gain) is returned as one
-    array that also carries its validity: an invalid entry holds the marker ``MISS``.
-    XLA's CPU backend fuses a computation into one pass over the rays only when it
-    has a single output, so a (value, flag) pair would cost extra passes over memory
-    per surface (benchmarks/SPEED.md). A finite marker, not NaN, keeps
-    ``jax_debug_nans`` usable.
-
-Validity:
-    A ray is invalid once it misses a surface (no real root, outside the conic's
-    domain, or Newton did not converge), is clipped by a semi-diameter, undergoes
-    total internal reflection, or would travel backward. Invalid rays keep finite
-    values (they stop where they failed), and every guard is a "double where", so
-    gradients are finite everywhere.
+``trace`` returns the rays on the image surface, ``trace_path`` the rays after every surface
+(stacked on a leading axis). Both move rays with ``step.surface_step``. Runs of surfaces of
+the same kind and shape are traced with one ``lax.scan``; with ``uniform=True`` every surface
+after the first is first converted to one common kind (``uniform_surfaces``, coefficients
+zero-padded, the sag unchanged), so the whole lens is one scan and compile time does not grow
+with the surface count. Conventions: see ``step``.
 """
 
 from __future__ import annotations
@@ -45,291 +18,46 @@ import jax.numpy as jnp
 
 from ..optics.lens import Lens
 from ..optics.rays import Rays
-from ..optics.surfaces import AbstractSurface
-
-DEFAULT_NEWTON_ITERS = 6
-
-
-# No lens needs a ray parameter beyond this (mm); larger roots are treated as misses, which
-# also keeps every division below bounded, so gradients stay finite.
-T_MAX = 1e12
-
-
-# Marker for "no valid result" in a ray parameter or a refraction gain; valid values are
-# far smaller (|t| < 2 T_MAX), so |x| < MISS_BELOW tells them apart in float32 and float64.
-MISS = 1e30
-MISS_BELOW = 1e29
+from ..optics.surfaces import AbstractSurface, EvenAsphere, Hybrid, Standard
+from .step import (
+    DEFAULT_NEWTON_ITERS,
+    RayState,
+    rays_from_state,
+    state_from_rays,
+    surface_step,
+)
 
 
-def _unmark(x):
-    """(x with marked entries set to 0, validity)."""
-    ok = jnp.abs(x) < MISS_BELOW
-    return jnp.where(ok, x, 0.0), ok
+def uniform_surfaces(surfaces) -> list[AbstractSurface]:
+    """The surfaces converted to one kind with equal coefficient lengths (zero-padded).
 
-
-def _bounded_div(num, den):
-    """num/den where |num/den| < T_MAX (tested without dividing), else 0; and that flag.
-
-    Guarding by size, not only by zero, keeps the unselected branch's derivative
-    (−num/den²) finite, so a tiny denominator never puts NaN into a gradient.
+    All ``Standard`` if none has polynomial terms, else ``EvenAsphere`` if none has odd
+    terms, else ``Hybrid``. Each sag is unchanged, so traces agree to rounding.
     """
-    ok = jnp.abs(num) < T_MAX * jnp.abs(den)
-    return jnp.where(ok, num / jnp.where(ok, den, 1.0), 0.0), ok
+    even = [s.even_coeffs() for s in surfaces]
+    odd = [s.odd_coeffs()[0] for s in surfaces]
+    m = max(a.shape[0] for a in even)
+    p = max(b.shape[0] for b in odd)
+
+    def pad(a, n):
+        return jnp.concatenate([a, jnp.zeros((n - a.shape[0],), a.dtype)])
+
+    out = []
+    for s, a in zip(surfaces, even, strict=True):
+        if m == 0 and p == 0:
+            out.append(Standard(c=s.c, k=s.k, semi_diameter=s.semi_diameter))
+        elif p == 0:
+            out.append(EvenAsphere(c=s.c, k=s.k, coeffs=pad(a, m), semi_diameter=s.semi_diameter))
+        else:
+            bx, by = s.odd_coeffs()
+            out.append(Hybrid(c=s.c, k=s.k, coeffs=pad(a, m), odd_x=pad(bx, p), odd_y=pad(by, p),
+                              semi_diameter=s.semi_diameter))
+    return out
 
 
-def _conic_root(surface: AbstractSurface, o, d, t_min):
-    """The first intersection with the base conic: ``_conic_root_arrays`` on a surface."""
-    if t_min is None:
-        return _conic_root_arrays(False, surface.c, surface.k, *o, *d, jnp.zeros_like(o[2]))
-    return _conic_root_arrays(True, surface.c, surface.k, *o, *d, t_min)
-
-
-@functools.partial(jax.custom_jvp, nondiff_argnums=(0,))
-def _conic_root_arrays(bounded_below, c, k, ox, oy, oz, dx, dy, dz, t_min):
-    """Closed-form intersection with the base conic; returns t, marked MISS on a miss.
-
-    ``o`` and ``d`` are (x, y, z) tuples of arrays in the surface's local frame, with ``o``
-    near the surface (see ``intersect``). Of the two roots of
-    c(x² + y²) + c(1+k)z² − 2z = 0, only those on the sheet through the vertex
-    (1 − c(1+k)z ≥ 0) and with t_min ≤ t (``None``: any t) count; the first along the
-    ray is taken. The roots are the stable pair t1 = cc/q (finite as c -> 0) and
-    t2 = q/a; which one is chosen is decided on numerators and denominators, so the
-    result is a single division (one fused pass over the rays, see the module notes).
-    """
-    ck = c * (1 + k)
-    a = c * (dx * dx + dy * dy) + ck * dz * dz
-    b = c * (ox * dx + oy * dy) + ck * oz * dz - dz
-    cc = c * (ox * ox + oy * oy) + ck * oz * oz - 2 * oz
-    disc = b * b - a * cc
-    real = disc >= 0
-    pos = disc > 0
-    root = jnp.where(pos, jnp.sqrt(jnp.where(pos, disc, 1.0)), 0.0)
-    q = -b + jnp.where(b <= 0, root, -root)
-
-    def usable(num, den):
-        """Whether the root num/den is bounded, on the vertex sheet and past t_min."""
-        sign, size = jnp.sign(den), jnp.abs(den)
-        ok = real & (jnp.abs(num) < T_MAX * size)
-        ok = ok & (ck * (oz * den + num * dz) * sign <= size)
-        if bounded_below:
-            ok = ok & (num * sign >= t_min * size)
-        return ok
-
-    u1, u2 = usable(cc, q), usable(q, a)
-    # t1 <= t2  <=>  cc·a <= q² when q·a > 0 (the inequality flips when q·a < 0).
-    sign = jnp.sign(q) * jnp.sign(a)
-    first_is_t1 = u1 & (~u2 | (cc * a * sign <= q * q * sign))
-    hit = u1 | u2
-    num = jnp.where(first_is_t1, cc, q)
-    den = jnp.where(first_is_t1, q, a)
-    return jnp.where(hit, num, MISS) / jnp.where(hit, den, 1.0)
-
-
-@_conic_root_arrays.defjvp
-def _conic_root_jvp(bounded_below, primals, tangents):
-    """Implicit-function derivative dt = −dF/F_t of F = c(x² + y²) + c(1+k)z² − 2z on the ray.
-
-    It reuses the root, so the gradient costs a few multiplies instead of the derivative
-    of the quadratic formula and its root selection.
-    """
-    c, k, ox, oy, oz, dx, dy, dz, _ = primals
-    tc, tk, tox, toy, toz, tdx, tdy, tdz, _ = tangents
-    t_marked = _conic_root_arrays(bounded_below, *primals)
-    t, hit = _unmark(t_marked)
-    x, y, z = ox + t * dx, oy + t * dy, oz + t * dz
-    fx, fy, fz = 2 * c * x, 2 * c * y, 2 * c * (1 + k) * z - 2  # ∇F
-    f_t = fx * dx + fy * dy + fz * dz
-    df = (
-        (x * x + y * y + (1 + k) * z * z) * tc
-        + c * z * z * tk
-        + fx * (tox + t * tdx)
-        + fy * (toy + t * tdy)
-        + fz * (toz + t * tdz)
-    )
-    # A ray tangent to the surface (cos of incidence below eps) gets zero derivative; the
-    # guard must not look at the tangents (they enter linearly).
-    eps = jnp.finfo(f_t.dtype).eps
-    good = hit & (jnp.abs(f_t) > eps * (jnp.abs(fx) + jnp.abs(fy) + jnp.abs(fz)))
-    return t_marked, jnp.where(good, -df / jnp.where(good, f_t, 1.0), 0.0)
-
-
-def _residual(surface: AbstractSurface, o, d, t):
-    px, py, pz = (oi + t * di for oi, di in zip(o, d, strict=True))
-    z, gx, gy, inside = surface.sag_and_grad(px, py)
-    return pz - z, d[2] - gx * d[0] - gy * d[1], inside
-
-
-def intersect(
-    surface: AbstractSurface, o, d, newton_iters: int = DEFAULT_NEWTON_ITERS, *, first=False
-):
-    """Intersect rays with a surface in its local frame (vertex at the origin).
-
-    The first intersection along the ray is taken; with ``first=False`` only t ≥ 0
-    (up to rounding) counts, with ``first=True`` (object space) the whole line does.
-    On the first surface each ray is first carried along its line to the vertex plane, so
-    the quadratic is solved from a point near the surface: a distant origin (an object at
-    10 m) then loses no digits to cancellation. Later surfaces start from the previous
-    surface, a few mm away, and skip that step.
-
-    Args:
-        surface: the surface.
-        o, d: (x, y, z) tuples of ``[*batch]`` arrays: ray points and unit directions.
-        newton_iters: Newton iterations for surfaces with polynomial terms.
-        first: whether this is the first surface (object space).
-
-    Returns:
-        The ray parameter t of the intersection (from ``o``), ``[*batch]``, holding the
-        ``MISS`` marker where no valid intersection was found (see ``_unmark``).
-    """
-    eps = jnp.finfo(o[2].dtype).eps
-    if first:
-        t_min = None
-        t_plane, _ = _bounded_div(-o[2], d[2])  # 0 for rays parallel to the plane
-        o = tuple(oi + t_plane * di for oi, di in zip(o, d, strict=True))
-    else:
-        t_min = -1e3 * jax.lax.stop_gradient(eps * (1 + jnp.abs(o[2])))
-        t_plane = 0.0
-    if not surface.has_polynomial:
-        # Conics: the closed form is exact (its derivative: ``_conic_root_jvp``).
-        return _conic_root(surface, o, d, t_min) + t_plane
-    o_s, d_s = jax.lax.stop_gradient((o, d))
-    surf_s = jax.lax.stop_gradient(surface)
-    # Rays that miss the base conic start Newton from the vertex plane.
-    t0, hit = _unmark(_conic_root(surf_s, o_s, d_s, t_min))
-    if not first:  # (on surface 1 the rays are on that plane already: t = 0)
-        t0 = jnp.where(hit, t0, _bounded_div(-o_s[2], d_s[2])[0])
-
-    def step(_, t):
-        f, df, _ = _residual(surf_s, o_s, d_s, t)
-        dt, _ = _bounded_div(f, df)
-        return t - dt
-
-    t0 = jax.lax.fori_loop(0, newton_iters, step, t0)
-    f0, df0, _ = _residual(surf_s, o_s, d_s, t0)
-    scale = 1.0 + jnp.abs(t0)
-    ok = (jnp.abs(f0) <= 64 * jnp.sqrt(eps) * scale) & jnp.isfinite(f0) & (df0 != 0)
-    if t_min is not None:
-        ok = ok & (t0 >= t_min)
-    # Flagged rays take the last step at a harmless point, so their gradient stays finite.
-    t0 = jnp.where(ok, t0, 0.0)
-    df0 = jax.lax.stop_gradient(jnp.where(ok, df0, 1.0))
-    # One differentiable step with F' held fixed: the implicit-function gradient.
-    f, _, inside = _residual(surface, o, d, t0)
-    ok = ok & inside
-    # t0 + t_plane − f/df0, written as one division (one fused pass, see the module notes).
-    return jnp.where(ok, (t0 + t_plane) * df0 - f, MISS) / jnp.where(ok, df0, 1.0)
-
-
-def refraction_gain(d, normal, mu):
-    """Vector Snell's law: the gain g such that the refracted direction is mu·d + g·normal.
-
-    Args:
-        d: unit incident directions, an (x, y, z) tuple of arrays.
-        normal: surface normals of any length and either orientation.
-        mu: n_before / n_after.
-
-    Returns:
-        g, marked ``MISS`` where the ray undergoes total internal reflection.
-    """
-    # With |n|² = nn and d·n = dn (cos_i = dn/|n|), the unit-normal result
-    # mu·d + (±sqrt(1 − mu²(1 − cos_i²)) − mu·cos_i)·n/|n| has the gain
-    # (±sqrt(nn − mu²(nn − dn²)) − mu·dn)/nn: one division, no rsqrt.
-    nn = normal[0] * normal[0] + normal[1] * normal[1] + normal[2] * normal[2]
-    dn = d[0] * normal[0] + d[1] * normal[1] + d[2] * normal[2]
-    k = nn - mu * mu * (nn - dn * dn)
-    ok = (k >= 0) & (nn > 0)
-    root = jnp.sqrt(jnp.where(ok, k, 1.0))
-    g = jnp.where(dn < 0, -root, root) - mu * dn
-    return jnp.where(ok, g, MISS) / jnp.where(ok, nn, 1.0)
-
-
-def refract(d, normal, mu):
-    """Vector Snell's law on (x, y, z) tuples of arrays.
-
-    Args:
-        d: unit incident directions.
-        normal: surface normals of any length and either orientation.
-        mu: n_before / n_after.
-
-    Returns:
-        (refracted unit directions, ok) with ok False on total internal reflection (those
-        rays keep their direction).
-    """
-    g, ok = _unmark(refraction_gain(d, normal, mu))
-    out = tuple(jnp.where(ok, mu * di + g * ni, di) for di, ni in zip(d, normal, strict=True))
-    return out, ok
-
-
-def surface_normal(surface: AbstractSurface, x, y, z):
-    """A normal (+z at the vertex, not of unit length) at a point on the surface (local frame)."""
-    if surface.has_polynomial:
-        _, gx, gy, _ = surface.sag_and_grad(x, y)
-        return -gx, -gy, jnp.ones_like(gx)
-    # Gradient of the implicit conic c(x² + y²) + c(1+k)z² − 2z: no square root needed.
-    c = surface.c
-    return -c * x, -c * y, 1.0 - c * (1.0 + surface.k) * z
-
-
-class _State(eqx.Module):
-    """Rays as separate x, y, z component arrays (vectorises better than [N, 3])."""
-
-    p: tuple
-    d: tuple
-    valid: jax.Array
-    opl: jax.Array
-
-
-def _step(surface, z_vertex, st: _State, n_before, n_after, *, first, refracts, newton_iters):
-    """Move rays to one surface and refract them there."""
-    o_local = (st.p[0], st.p[1], st.p[2] - z_vertex)
-    t, ok = _unmark(intersect(surface, o_local, st.d, newton_iters, first=first))
-    if not first:
-        ok = ok & (t >= -1e3 * jnp.finfo(t.dtype).eps * (1 + jnp.abs(o_local[2])))
-    x, y, z = (oi + t * di for oi, di in zip(o_local, st.d, strict=True))
-    # A ray exactly on the rim stays in despite rounding.
-    rim = surface.semi_diameter**2 * (1 + 64 * jnp.finfo(x.dtype).eps)
-    ok = ok & (x * x + y * y <= rim)
-    d = st.d
-    if refracts:
-        d, no_tir = refract(d, surface_normal(surface, x, y, z), n_before / n_after)
-        ok = ok & no_tir
-    valid = st.valid & ok
-    keep = lambda new, old: jnp.where(valid, new, old)  # noqa: E731
-    p = (keep(x, st.p[0]), keep(y, st.p[1]), keep(z + z_vertex, st.p[2]))
-    d = tuple(keep(a, b) for a, b in zip(d, st.d, strict=True))
-    return _State(p, d, valid, st.opl + jnp.where(valid, n_before * t, 0.0))
-
-
-def _to_state(rays: Rays) -> _State:
-    o, d = rays.origin, rays.direction
-    return _State((o[..., 0], o[..., 1], o[..., 2]), (d[..., 0], d[..., 1], d[..., 2]),
-                  rays.valid, rays.opl)
-
-
-def _to_rays(st: _State, wavelength) -> Rays:
-    return Rays(jnp.stack(st.p, -1), jnp.stack(st.d, -1), wavelength, st.valid, st.opl)
-
-
-def trace_path(
-    lens: Lens,
-    rays: Rays,
-    *,
-    newton_iters: int = DEFAULT_NEWTON_ITERS,
-    upto: int | None = None,
-) -> list[Rays]:
-    """Trace rays and return them after every surface.
-
-    Args:
-        lens: the lens.
-        rays: rays in object space.
-        newton_iters: Newton iterations for surfaces with polynomial terms.
-        upto: stop after ``surfaces[upto]`` (0-based); ``None`` traces to the image.
-
-    Returns:
-        A list with the rays at each surface (after refraction) and, last, at the
-        image surface (when ``upto`` is None).
-    """
-    return [_to_rays(st, rays.wavelength) for st in _trace_states(lens, rays, newton_iters, upto)]
+def stacked_surfaces(surfaces) -> AbstractSurface:
+    """``uniform_surfaces`` stacked into one surface pytree with a leading surface axis."""
+    return jax.tree.map(lambda *x: jnp.stack(x), *uniform_surfaces(surfaces))
 
 
 def _same_kind(a, b) -> bool:
@@ -353,41 +81,37 @@ def _runs(surfaces, start: int, stop: int) -> list[tuple[int, int]]:
     return runs
 
 
-def _prepare(lens: Lens, rays: Rays):
-    """The lens cast to the rays' dtype, its vertex positions and its indices at the rays'
-    wavelengths: what every chunk of a trace shares."""
+def _prepare(lens: Lens, rays: Rays, uniform: bool):
+    """What every chunk of a trace shares: the surfaces in the rays' dtype (made uniform
+    after surface 1 if asked), the vertex positions and the indices at the rays' wavelengths."""
     lens = lens.astype(rays.dtype)
-    return lens, lens.vertex_z(), lens.indices(rays.wavelength)
+    surfaces = list(lens.surfaces)
+    if uniform and len(surfaces) > 2:
+        surfaces[1:] = uniform_surfaces(surfaces[1:])
+    return surfaces, lens.vertex_z(), lens.indices(rays.wavelength), lens
 
 
-def _trace_states(
-    lens: Lens,
-    rays: Rays,
-    newton_iters: int,
-    upto: int | None,
-    keep_path: bool = True,
-    prepared=None,
-) -> list[_State]:
+def _trace_states(lens: Lens, rays: Rays, newton_iters: int, upto: int | None, *,
+                  keep_path: bool, uniform: bool, prepared=None) -> list[RayState]:
     """Trace and return the states after each surface (only the last unless keep_path).
 
     Runs of surfaces of the same kind (a stack of even aspheres, say) are traced with
     one ``lax.scan``, so the compiled program, and above all its gradient, does not grow
     with the number of surfaces. Surface 1 is traced on its own (object-space rules).
-    ``prepared`` is ``_prepare(lens, rays)`` when the caller has it already.
     """
-    lens, zs, idx = _prepare(lens, rays) if prepared is None else prepared
+    surfaces, zs, idx, lens = _prepare(lens, rays, uniform) if prepared is None else prepared
     shape = jnp.shape(rays.wavelength)  # indices are per wavelength, not per ray
-    st = _to_state(rays)
-    step = functools.partial(_step, refracts=True, newton_iters=newton_iters)
-    last = lens.num_surfaces - 1 if upto is None else upto
-    st = step(lens.surfaces[0], zs[0], st, idx[0], idx[1], first=True)
+    st = state_from_rays(rays)
+    step = functools.partial(surface_step, refracts=True, newton_iters=newton_iters)
+    last = len(surfaces) - 1 if upto is None else upto
+    st = step(surfaces[0], zs[0], st, idx[0], idx[1], first=True)
     out = [st]
-    for i, j in _runs(lens.surfaces, 1, last + 1):
+    for i, j in _runs(surfaces, 1, last + 1):
         if j - i == 1:
-            st = step(lens.surfaces[i], zs[i], st, idx[i], idx[i + 1], first=False)
+            st = step(surfaces[i], zs[i], st, idx[i], idx[i + 1], first=False)
             out.append(st)
             continue
-        stacked = jax.tree_util.tree_map(lambda *x: jnp.stack(x), *lens.surfaces[i:j])
+        stacked = jax.tree.map(lambda *x: jnp.stack(x), *surfaces[i:j])
         n_in = jnp.stack([jnp.broadcast_to(n, shape) for n in idx[i:j]])
         n_out = jnp.stack([jnp.broadcast_to(n, shape) for n in idx[i + 1 : j + 1]])
 
@@ -401,14 +125,51 @@ def _trace_states(
 
         st, path = jax.lax.scan(body, st, (stacked, zs[i:j], n_in, n_out))
         if keep_path:
-            out += [jax.tree_util.tree_map(lambda x, k=k: x[k], path) for k in range(j - i)]
+            out += [jax.tree.map(lambda x, k=k: x[k], path) for k in range(j - i)]
         else:
             out.append(st)
     if upto is None:
-        st = _step(lens.image, lens.image_z(), st, idx[-1], idx[-1], first=False,
-                   refracts=False, newton_iters=newton_iters)
+        st = surface_step(lens.image, lens.image_z(), st, idx[-1], idx[-1], first=False,
+                          refracts=False, newton_iters=newton_iters)
         out.append(st)
     return out
+
+
+def _check_upto(lens: Lens, upto: int | None) -> None:
+    if upto is not None and not 0 <= upto < lens.num_surfaces:
+        raise ValueError(f"trace: upto must be a surface index in [0, {lens.num_surfaces - 1}] "
+                         f"(0-based), got {upto}")
+
+
+def trace_path(
+    lens: Lens,
+    rays: Rays,
+    *,
+    newton_iters: int = DEFAULT_NEWTON_ITERS,
+    upto: int | None = None,
+    uniform: bool = False,
+) -> Rays:
+    """Trace rays and return them after every surface, stacked on a new leading axis.
+
+    Args:
+        lens: the lens.
+        rays: rays in object space, ``[*batch]``.
+        newton_iters: Newton iterations for surfaces with polynomial terms.
+        upto: stop after ``surfaces[upto]`` (0-based); ``None`` traces to the image.
+        uniform: trace every surface after the first as one kind (one ``lax.scan``:
+            short compile times for many surfaces; see the module notes).
+
+    Returns:
+        ``Rays`` of shape ``[m, *batch]``: after each surface (after refraction) and, last,
+        on the image surface when ``upto`` is None (m = num_surfaces + 1), else
+        m = upto + 1. ``path[i]`` is the rays after surface i; the wavelength is broadcast
+        to the full shape.
+    """
+    _check_upto(lens, upto)
+    states = _trace_states(lens, rays, newton_iters, upto, keep_path=True, uniform=uniform)
+    stacked = jax.tree.map(lambda *x: jnp.stack(x), *states)
+    wl = jnp.broadcast_to(rays.wavelength, (len(states),) + rays.shape)
+    return rays_from_state(stacked, wl)
 
 
 # Rays per chunk for large batches. One chunk's working set (the state and the temporaries
@@ -440,8 +201,10 @@ def trace(
     *,
     newton_iters: int = DEFAULT_NEWTON_ITERS,
     chunk: int | None = CHUNK,
+    upto: int | None = None,
+    uniform: bool = False,
 ) -> Rays:
-    """Trace rays from object space to the image surface.
+    """Trace rays from object space to the image surface (or to ``surfaces[upto]``).
 
     Pure, jittable, vmappable and differentiable. The result follows the dtype of
     ``rays`` (the lens is cast to it).
@@ -453,10 +216,14 @@ def trace(
         chunk: a batch ``[N, 3]`` with N above this is traced ``chunk`` rays at a time
             (``jax.lax.map``; the gradient recomputes each chunk instead of storing it).
             ``None`` traces every batch in one piece. Results do not depend on it.
+        upto: stop after ``surfaces[upto]`` (0-based); ``None`` traces to the image.
+        uniform: trace every surface after the first as one kind (one ``lax.scan``;
+            see the module notes). Results agree to rounding.
 
     Returns:
-        The rays on the image surface: intercepts in ``origin``, direction cosines
-        after the last surface in ``direction``, ``valid`` and ``opl``.
+        The rays on the image surface (or after ``surfaces[upto]``): intercepts in
+        ``origin``, direction cosines after the last surface in ``direction``, ``valid``
+        and ``opl``.
 
     Example:
         >>> import jaxlens, jax.numpy as jnp
@@ -468,9 +235,12 @@ def trace(
         True
     """
 
+    _check_upto(lens, upto)
+
     def whole(r: Rays, prepared=None) -> Rays:
-        states = _trace_states(lens, r, newton_iters, None, keep_path=False, prepared=prepared)
-        return _to_rays(states[-1], r.wavelength)
+        states = _trace_states(lens, r, newton_iters, upto, keep_path=False, uniform=uniform,
+                               prepared=prepared)
+        return rays_from_state(states[-1], r.wavelength)
 
     if chunk is not None and chunk < 1:
         raise ValueError(f"trace: chunk must be a positive number of rays, got {chunk}")
@@ -489,7 +259,7 @@ def trace(
     leaves = leaves + ((rays.wavelength,) if per_ray else ())
     # Lens data shared by all chunks is computed once (with per-ray wavelengths the indices
     # are per ray and are computed in each chunk).
-    prepared = None if per_ray else _prepare(lens, rays)
+    prepared = None if per_ray else _prepare(lens, rays, uniform)
 
     @jax.checkpoint
     def one(xs):

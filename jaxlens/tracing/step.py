@@ -1,0 +1,321 @@
+"""The surface step: intersection, vector Snell refraction, validity and optical path.
+
+Every trace (forward, backward from the sensor, the design loss) moves rays with
+``surface_step``; it is the only place in jaxlens that refracts.
+
+Conventions:
+    Global coordinates in mm, light toward +z, surface 1's vertex at z = 0 (see
+    ``jaxlens.optics.lens``). Rays start in object space: a ray is the whole line through its
+    origin, so its intersection with surface 1 may lie behind the origin (a pupil
+    point given on an entrance-pupil plane inside the lens is fine). After surface 1,
+    a ray that would have to travel backward (t < 0) is invalid.
+
+Intersections:
+    Planes, spheres and conics are intersected in closed form (the numerically stable
+    roots of the quadratic), which is exact; its derivative is the implicit-function one,
+    dt = −dF/F_t on the implicit conic F (a ``custom_jvp``, so forward and reverse mode
+    both work and neither differentiates the root selection). Surfaces
+    with polynomial terms start from that root and take ``newton_iters`` Newton steps
+    on F(t) = z(t) − sag(x(t), y(t)). Those iterations carry no gradient. One last
+    Newton step is taken with gradients switched on and the derivative F'(t) held
+    fixed; at the converged root its derivative is exactly the implicit-function
+    theorem result dt/dθ = −(∂F/∂θ)/(∂F/∂t), so the backward pass never unrolls the
+    iterations.
+
+Fusion:
+    Each expensive per-ray result (the root t, the refraction gain) is returned as one
+    array that also carries its validity: an invalid entry holds the marker ``MISS``.
+    XLA's CPU backend fuses a computation into one pass over the rays only when it
+    has a single output, so a (value, flag) pair would cost extra passes over memory
+    per surface (benchmarks/SPEED.md). A finite marker, not NaN, keeps
+    ``jax_debug_nans`` usable.
+
+Validity:
+    A ray is invalid once it misses a surface (no real root, outside the conic's
+    domain, or Newton did not converge), is clipped by a semi-diameter, undergoes
+    total internal reflection, or would travel backward. Invalid rays keep finite
+    values (they stop where they failed), and every guard is a "double where", so
+    gradients are finite everywhere.
+"""
+
+from __future__ import annotations
+
+import functools
+
+import equinox as eqx
+import jax
+import jax.numpy as jnp
+
+from ..optics.rays import Rays
+from ..optics.surfaces import AbstractSurface
+
+DEFAULT_NEWTON_ITERS = 6
+
+
+# No lens needs a ray parameter beyond this (mm); larger roots are treated as misses, which
+# also keeps every division below bounded, so gradients stay finite.
+T_MAX = 1e12
+
+
+# Marker for "no valid result" in a ray parameter or a refraction gain; valid values are
+# far smaller (|t| < 2 T_MAX), so |x| < MISS_BELOW tells them apart in float32 and float64.
+MISS = 1e30
+MISS_BELOW = 1e29
+
+
+def unmark(x):
+    """(x with marked entries set to 0, validity)."""
+    ok = jnp.abs(x) < MISS_BELOW
+    return jnp.where(ok, x, 0.0), ok
+
+
+def bounded_div(num, den):
+    """num/den where |num/den| < T_MAX (tested without dividing), else 0; and that flag.
+
+    Guarding by size, not only by zero, keeps the unselected branch's derivative
+    (−num/den²) finite, so a tiny denominator never puts NaN into a gradient.
+    """
+    ok = jnp.abs(num) < T_MAX * jnp.abs(den)
+    return jnp.where(ok, num / jnp.where(ok, den, 1.0), 0.0), ok
+
+
+def _conic_root(surface: AbstractSurface, o, d, t_min):
+    """The first intersection with the base conic: ``_conic_root_arrays`` on a surface."""
+    if t_min is None:
+        return _conic_root_arrays(False, surface.c, surface.k, *o, *d, jnp.zeros_like(o[2]))
+    return _conic_root_arrays(True, surface.c, surface.k, *o, *d, t_min)
+
+
+@functools.partial(jax.custom_jvp, nondiff_argnums=(0,))
+def _conic_root_arrays(bounded_below, c, k, ox, oy, oz, dx, dy, dz, t_min):
+    """Closed-form intersection with the base conic; returns t, marked MISS on a miss.
+
+    ``o`` and ``d`` are (x, y, z) tuples of arrays in the surface's local frame, with ``o``
+    near the surface (see ``intersect``). Of the two roots of
+    c(x² + y²) + c(1+k)z² − 2z = 0, only those on the sheet through the vertex
+    (1 − c(1+k)z ≥ 0) and with t_min ≤ t (``None``: any t) count; the first along the
+    ray is taken. The roots are the stable pair t1 = cc/q (finite as c -> 0) and
+    t2 = q/a; which one is chosen is decided on numerators and denominators, so the
+    result is a single division (one fused pass over the rays, see the module notes).
+    """
+    ck = c * (1 + k)
+    a = c * (dx * dx + dy * dy) + ck * dz * dz
+    b = c * (ox * dx + oy * dy) + ck * oz * dz - dz
+    cc = c * (ox * ox + oy * oy) + ck * oz * oz - 2 * oz
+    disc = b * b - a * cc
+    real = disc >= 0
+    pos = disc > 0
+    root = jnp.where(pos, jnp.sqrt(jnp.where(pos, disc, 1.0)), 0.0)
+    q = -b + jnp.where(b <= 0, root, -root)
+
+    def usable(num, den):
+        """Whether the root num/den is bounded, on the vertex sheet and past t_min."""
+        sign, size = jnp.sign(den), jnp.abs(den)
+        ok = real & (jnp.abs(num) < T_MAX * size)
+        ok = ok & (ck * (oz * den + num * dz) * sign <= size)
+        if bounded_below:
+            ok = ok & (num * sign >= t_min * size)
+        return ok
+
+    u1, u2 = usable(cc, q), usable(q, a)
+    # t1 <= t2  <=>  cc·a <= q² when q·a > 0 (the inequality flips when q·a < 0).
+    sign = jnp.sign(q) * jnp.sign(a)
+    first_is_t1 = u1 & (~u2 | (cc * a * sign <= q * q * sign))
+    hit = u1 | u2
+    num = jnp.where(first_is_t1, cc, q)
+    den = jnp.where(first_is_t1, q, a)
+    return jnp.where(hit, num, MISS) / jnp.where(hit, den, 1.0)
+
+
+@_conic_root_arrays.defjvp
+def _conic_root_jvp(bounded_below, primals, tangents):
+    """Implicit-function derivative dt = −dF/F_t of F = c(x² + y²) + c(1+k)z² − 2z on the ray.
+
+    It reuses the root, so the gradient costs a few multiplies instead of the derivative
+    of the quadratic formula and its root selection.
+    """
+    c, k, ox, oy, oz, dx, dy, dz, _ = primals
+    tc, tk, tox, toy, toz, tdx, tdy, tdz, _ = tangents
+    t_marked = _conic_root_arrays(bounded_below, *primals)
+    t, hit = unmark(t_marked)
+    x, y, z = ox + t * dx, oy + t * dy, oz + t * dz
+    fx, fy, fz = 2 * c * x, 2 * c * y, 2 * c * (1 + k) * z - 2  # ∇F
+    f_t = fx * dx + fy * dy + fz * dz
+    df = (
+        (x * x + y * y + (1 + k) * z * z) * tc
+        + c * z * z * tk
+        + fx * (tox + t * tdx)
+        + fy * (toy + t * tdy)
+        + fz * (toz + t * tdz)
+    )
+    # A ray tangent to the surface (cos of incidence below eps) gets zero derivative; the
+    # guard must not look at the tangents (they enter linearly).
+    eps = jnp.finfo(f_t.dtype).eps
+    good = hit & (jnp.abs(f_t) > eps * (jnp.abs(fx) + jnp.abs(fy) + jnp.abs(fz)))
+    return t_marked, jnp.where(good, -df / jnp.where(good, f_t, 1.0), 0.0)
+
+
+def _residual(surface: AbstractSurface, o, d, t):
+    px, py, pz = (oi + t * di for oi, di in zip(o, d, strict=True))
+    z, gx, gy, inside = surface.sag_and_grad(px, py)
+    return pz - z, d[2] - gx * d[0] - gy * d[1], inside
+
+
+def intersect(
+    surface: AbstractSurface, o, d, newton_iters: int = DEFAULT_NEWTON_ITERS, *, first=False
+):
+    """Intersect rays with a surface in its local frame (vertex at the origin).
+
+    The first intersection along the ray is taken; with ``first=False`` only t ≥ 0
+    (up to rounding) counts, with ``first=True`` (object space) the whole line does.
+    On the first surface each ray is first carried along its line to the vertex plane, so
+    the quadratic is solved from a point near the surface: a distant origin (an object at
+    10 m) then loses no digits to cancellation. Later surfaces start from the previous
+    surface, a few mm away, and skip that step.
+
+    Args:
+        surface: the surface.
+        o, d: (x, y, z) tuples of ``[*batch]`` arrays: ray points and unit directions.
+        newton_iters: Newton iterations for surfaces with polynomial terms.
+        first: whether this is the first surface (object space).
+
+    Returns:
+        The ray parameter t of the intersection (from ``o``), ``[*batch]``, holding the
+        ``MISS`` marker where no valid intersection was found (see ``unmark``).
+    """
+    eps = jnp.finfo(o[2].dtype).eps
+    if first:
+        t_min = None
+        t_plane, _ = bounded_div(-o[2], d[2])  # 0 for rays parallel to the plane
+        o = tuple(oi + t_plane * di for oi, di in zip(o, d, strict=True))
+    else:
+        t_min = -1e3 * jax.lax.stop_gradient(eps * (1 + jnp.abs(o[2])))
+        t_plane = 0.0
+    if not surface.has_polynomial:
+        # Conics: the closed form is exact (its derivative: ``_conic_root_jvp``).
+        return _conic_root(surface, o, d, t_min) + t_plane
+    o_s, d_s = jax.lax.stop_gradient((o, d))
+    surf_s = jax.lax.stop_gradient(surface)
+    # Rays that miss the base conic start Newton from the vertex plane.
+    t0, hit = unmark(_conic_root(surf_s, o_s, d_s, t_min))
+    if not first:  # (on surface 1 the rays are on that plane already: t = 0)
+        t0 = jnp.where(hit, t0, bounded_div(-o_s[2], d_s[2])[0])
+
+    def step(_, t):
+        f, df, _ = _residual(surf_s, o_s, d_s, t)
+        dt, _ = bounded_div(f, df)
+        return t - dt
+
+    t0 = jax.lax.fori_loop(0, newton_iters, step, t0)
+    f0, df0, _ = _residual(surf_s, o_s, d_s, t0)
+    scale = 1.0 + jnp.abs(t0)
+    ok = (jnp.abs(f0) <= 64 * jnp.sqrt(eps) * scale) & jnp.isfinite(f0) & (df0 != 0)
+    if t_min is not None:
+        ok = ok & (t0 >= t_min)
+    # Flagged rays take the last step at a harmless point, so their gradient stays finite.
+    t0 = jnp.where(ok, t0, 0.0)
+    df0 = jax.lax.stop_gradient(jnp.where(ok, df0, 1.0))
+    # One differentiable step with F' held fixed: the implicit-function gradient.
+    f, _, inside = _residual(surface, o, d, t0)
+    ok = ok & inside
+    # t0 + t_plane − f/df0, written as one division (one fused pass, see the module notes).
+    return jnp.where(ok, (t0 + t_plane) * df0 - f, MISS) / jnp.where(ok, df0, 1.0)
+
+
+def refraction_gain(d, normal, mu):
+    """Vector Snell's law: the gain g such that the refracted direction is mu·d + g·normal.
+
+    Args:
+        d: unit incident directions, an (x, y, z) tuple of arrays.
+        normal: surface normals of any length and either orientation.
+        mu: n_before / n_after.
+
+    Returns:
+        g, marked ``MISS`` where the ray undergoes total internal reflection.
+    """
+    # With |n|² = nn and d·n = dn (cos_i = dn/|n|), the unit-normal result
+    # mu·d + (±sqrt(1 − mu²(1 − cos_i²)) − mu·cos_i)·n/|n| has the gain
+    # (±sqrt(nn − mu²(nn − dn²)) − mu·dn)/nn: one division, no rsqrt.
+    nn = normal[0] * normal[0] + normal[1] * normal[1] + normal[2] * normal[2]
+    dn = d[0] * normal[0] + d[1] * normal[1] + d[2] * normal[2]
+    k = nn - mu * mu * (nn - dn * dn)
+    ok = (k >= 0) & (nn > 0)
+    root = jnp.sqrt(jnp.where(ok, k, 1.0))
+    g = jnp.where(dn < 0, -root, root) - mu * dn
+    return jnp.where(ok, g, MISS) / jnp.where(ok, nn, 1.0)
+
+
+def refract(d, normal, mu):
+    """Vector Snell's law on (x, y, z) tuples of arrays.
+
+    Args:
+        d: unit incident directions.
+        normal: surface normals of any length and either orientation.
+        mu: n_before / n_after.
+
+    Returns:
+        (refracted unit directions, ok) with ok False on total internal reflection (those
+        rays keep their direction).
+    """
+    g, ok = unmark(refraction_gain(d, normal, mu))
+    out = tuple(jnp.where(ok, mu * di + g * ni, di) for di, ni in zip(d, normal, strict=True))
+    return out, ok
+
+
+def surface_normal(surface: AbstractSurface, x, y, z):
+    """A normal (+z at the vertex, not of unit length) at a point on the surface (local frame)."""
+    if surface.has_polynomial:
+        _, gx, gy, _ = surface.sag_and_grad(x, y)
+        return -gx, -gy, jnp.ones_like(gx)
+    # Gradient of the implicit conic c(x² + y²) + c(1+k)z² − 2z: no square root needed.
+    c = surface.c
+    return -c * x, -c * y, 1.0 - c * (1.0 + surface.k) * z
+
+
+class RayState(eqx.Module):
+    """Rays as separate x, y, z component arrays (vectorises better than [N, 3])."""
+
+    p: tuple
+    d: tuple
+    valid: jax.Array
+    opl: jax.Array
+
+
+def surface_step(surface, z_vertex, st: RayState, n_before, n_after, *, first, refracts,
+                 newton_iters):
+    """Move rays to one surface (vertex at global ``z_vertex``) and refract them there.
+
+    ``n_before``/``n_after`` are the refractive indices on either side; ``first`` applies the
+    object-space rules of surface 1; ``refracts=False`` only intersects (the image surface).
+    Rays that fail keep their last position and direction and become invalid; ``opl`` adds
+    n·t for valid rays.
+    """
+    o_local = (st.p[0], st.p[1], st.p[2] - z_vertex)
+    t, ok = unmark(intersect(surface, o_local, st.d, newton_iters, first=first))
+    if not first:
+        ok = ok & (t >= -1e3 * jnp.finfo(t.dtype).eps * (1 + jnp.abs(o_local[2])))
+    x, y, z = (oi + t * di for oi, di in zip(o_local, st.d, strict=True))
+    # A ray exactly on the rim stays in despite rounding.
+    rim = surface.semi_diameter**2 * (1 + 64 * jnp.finfo(x.dtype).eps)
+    ok = ok & (x * x + y * y <= rim)
+    d = st.d
+    if refracts:
+        d, no_tir = refract(d, surface_normal(surface, x, y, z), n_before / n_after)
+        ok = ok & no_tir
+    valid = st.valid & ok
+    keep = lambda new, old: jnp.where(valid, new, old)  # noqa: E731
+    p = (keep(x, st.p[0]), keep(y, st.p[1]), keep(z + z_vertex, st.p[2]))
+    d = tuple(keep(a, b) for a, b in zip(d, st.d, strict=True))
+    return RayState(p, d, valid, st.opl + jnp.where(valid, n_before * t, 0.0))
+
+
+
+
+def state_from_rays(rays: Rays) -> RayState:
+    o, d = rays.origin, rays.direction
+    return RayState((o[..., 0], o[..., 1], o[..., 2]), (d[..., 0], d[..., 1], d[..., 2]),
+                    rays.valid, rays.opl)
+
+
+def rays_from_state(st: RayState, wavelength) -> Rays:
+    return Rays(jnp.stack(st.p, -1), jnp.stack(st.d, -1), wavelength, st.valid, st.opl)
