@@ -174,7 +174,7 @@ def test_distortion_relaxation_aligns_the_image():
 
     plain = R.render(lens, scene, spp=64, key=KEY, patch=8, sensor=sensor,
                      relative_illumination=False)
-    img, pen = DR.relaxed_render(lens, scene, spp=64, key=KEY, patch=8, alpha=0.5,
+    img, pen = R.relaxed_render(lens, scene, spp=64, key=KEY, patch=8, alpha=0.5,
                                  sensor=sensor, relative_illumination=False)
     assert np.hypot(*np.subtract(centroid(plain), pred)) < 0.1
     assert np.hypot(*np.subtract(centroid(img), (r0, c0))) < 0.1

@@ -10,10 +10,10 @@ distortion from growing without bound.
 Conventions:
     Sensor positions in mm on the image surface, in the frame of ``render``: the ideal
     (distortion-free) image of the field (θx, θy) is ``K·(tanθx, tanθy)`` with
-    ``K = psf.image_scale(lens)``. The distortion map D sends an ideal position v to the
+    ``K = aiming.image_scale(lens)``. The distortion map D sends an ideal position v to the
     position where the real chief ray (through the centre of the stop, primary
     wavelength) of that field lands. Grids span the sensor corner to corner
-    (``psf.sensor_grid``: row 0 / column 0 is the top-left pixel of the rendered image).
+    (``grid.sensor_grid``: row 0 / column 0 is the top-left pixel of the rendered image).
 
 Pre-warp:
     A scene is shown at ideal positions. The simulated image at u shows the object whose
@@ -36,16 +36,9 @@ from ..optics.lens import Lens, Sensor
 from ..optics.rays import Rays
 from ..tracing.backward import trace_backward
 from ..tracing.forward import DEFAULT_NEWTON_ITERS
-from .psf import (
-    _chief_point,
-    _static_depth,
-    apertured,
-    ideal_to_field,
-    image_scale,
-    newton_2d,
-    sensor_grid,
-    unclipped,
-)
+from . import sampling
+from .aiming import apertured, chief_point, ideal_to_field, image_scale, newton_2d, unclipped
+from .grid import bilinear, grid_coords, sensor_grid
 
 __all__ = [
     "DistortionMap",
@@ -53,7 +46,6 @@ __all__ = [
     "inverse_distortion_map",
     "prewarp",
     "alignment_penalty",
-    "relaxed_render",
 ]
 
 
@@ -74,7 +66,7 @@ def _sensor(lens: Lens, sensor):
 @eqx.filter_jit
 def _forward_map(lens, ideal, depth, newton_iters):
     fields = ideal_to_field(lens, ideal.reshape(-1, 2))
-    real = jax.vmap(lambda f: _chief_point(lens, f, depth, newton_iters))(fields)
+    real = jax.vmap(lambda f: chief_point(lens, f, depth, newton_iters))(fields)
     return real.reshape(ideal.shape)
 
 
@@ -99,7 +91,7 @@ def distortion_map(
         A :class:`DistortionMap` (differentiable with respect to the lens).
     """
     s = _sensor(lens, sensor)
-    depth = _static_depth(depth)
+    depth = sampling.static_depth(depth)
     lens = apertured(lens)
     ideal = sensor_grid(s.resolution, s.pixel_size, grid).astype(lens.epd.dtype)
     return DistortionMap(ideal, _forward_map(lens, ideal, depth, newton_iters))
@@ -134,7 +126,6 @@ def inverse_distortion_map(
     """
     return _inverse_map(lens, jnp.asarray(pixel_size), depth, resolution=tuple(resolution),
                         grid=tuple(grid), newton_iters=newton_iters, iters=iters)
-
 
 
 @eqx.filter_jit
@@ -231,8 +222,6 @@ def prewarp(
 
 @eqx.filter_jit
 def _prewarp(scene, real, pixel_size, *, resolution, grid):
-    from .render import _grid_coords, bilinear
-
     dtype = scene.dtype
     hs, ws = scene.shape[:2]
     x, y, pr, pc = _ideal_of_pixels((hs, ws), resolution, pixel_size, dtype)
@@ -240,7 +229,7 @@ def _prewarp(scene, real, pixel_size, *, resolution, grid):
     h, w = resolution
     rows = y / pixel_size + 0.5 * (h - 1)
     cols = -x / pixel_size + 0.5 * (w - 1)
-    gy, gx = _grid_coords(resolution, grid, rows, cols)
+    gy, gx = grid_coords(resolution, grid, rows, cols)
     dv = bilinear(real, gy, gx)  # [H, W, 2]
     r_sc = 0.5 * (hs - 1) + dv[..., 1] / pr
     c_sc = 0.5 * (ws - 1) - dv[..., 0] / pc
@@ -272,31 +261,3 @@ def alignment_penalty(
     return jnp.asarray(alpha) * jnp.mean(err)
 
 
-def relaxed_render(
-    lens: Lens,
-    scene,
-    *,
-    spp: int,
-    key,
-    alpha=0.0,
-    depth=math.inf,
-    grid: tuple[int, int] = (17, 17),
-    **render_kwargs,
-):
-    """Render the pre-warped scene and return ``(image, alignment_penalty)``.
-
-    The image lines up with ``scene``, so an image loss against ``scene`` sees blur but not
-    distortion; add the penalty (weight ``alpha``) to the loss to keep distortion bounded.
-
-    Args:
-        lens, scene, spp, key, depth, render_kwargs: as :func:`jaxlens.imaging.render`.
-        alpha: weight of :func:`alignment_penalty`.
-        grid: grid of the distortion map.
-    """
-    from .render import render
-
-    sensor = render_kwargs.get("sensor")
-    warped = prewarp(lens, scene, depth=depth, sensor=sensor, grid=grid)
-    img = render(lens, warped, spp=spp, key=key, depth=depth, **render_kwargs)
-    pen = alignment_penalty(lens, alpha=alpha, depth=depth, sensor=sensor)
-    return img, pen

@@ -1,7 +1,7 @@
 """Point spread functions: geometric (ray splatting) and coherent (wave optics), PSF maps, MTF.
 
 ``jaxlens.psf(lens, field, ...)`` (re-exported from here) computes one PSF; ``psf_map`` and
-``mtf`` are in this module.
+``mtf`` are in this module; chief-ray aiming and the ideal image mapping are in ``aiming``.
 
 Conventions:
     Lengths in mm, wavelengths in µm, field angles in degrees (θy, or (θx, θy)). An object
@@ -50,7 +50,6 @@ import math
 import equinox as eqx
 import jax
 import jax.numpy as jnp
-import numpy as np
 from jaxtyping import Array, ArrayLike, Float
 
 from ..optics import paraxial
@@ -59,6 +58,8 @@ from ..optics.materials import LAMBDA_C, LAMBDA_D, LAMBDA_F
 from ..optics.rays import Rays
 from ..tracing.forward import DEFAULT_NEWTON_ITERS, trace
 from . import sampling
+from .aiming import apertured, chief_point, field_to_ideal, ideal_to_field
+from .grid import pupil_cells, sensor_grid
 
 __all__ = [
     "RGB_WAVELENGTHS",
@@ -69,11 +70,6 @@ __all__ = [
     "psf_rgb",
     "psf_map",
     "mtf",
-    "image_scale",
-    "ideal_to_field",
-    "field_to_ideal",
-    "sensor_grid",
-    "apertured",
 ]
 
 RGB_WAVELENGTHS = (LAMBDA_C, LAMBDA_D, LAMBDA_F)
@@ -81,104 +77,6 @@ RGB_WAVELENGTHS = (LAMBDA_C, LAMBDA_D, LAMBDA_F)
 
 MODELS = ("geometric", "coherent")
 CENTERS = ("chief", "centroid", "ideal")
-
-
-# --------------------------------------------------------------------------------------
-# Geometry shared with render, radiometry and distortion_relax
-# --------------------------------------------------------------------------------------
-def apertured(lens: Lens) -> Lens:
-    """The lens with an unbounded stop given the paraxial stop radius from the EPD.
-
-    Overfilled beams rely on the stop to clip them; a stop with ``semi_diameter = inf``
-    gets the radius that the entrance pupil diameter implies. A lens whose stop is bounded
-    (a concrete value, checked outside jit) is returned as it is, at no cost.
-    """
-    sd = lens.surfaces[lens.stop].semi_diameter
-    if not isinstance(sd, jax.core.Tracer) and bool(np.all(np.isfinite(np.asarray(sd)))):
-        return lens
-    finite = jnp.isfinite(sd)
-    stop_r = paraxial.paraxial_data(lens).stop_semi_diameter
-    new = jnp.where(finite, sd, stop_r)
-    return eqx.tree_at(lambda m: m.surfaces[m.stop].semi_diameter, lens, new)
-
-
-def unclipped(lens: Lens) -> Lens:
-    """The lens with every semi-diameter set to inf, for aiming rays (an aperture that clips
-    an intermediate Newton iterate would otherwise stop it where it was clipped)."""
-    surfaces = tuple(
-        eqx.tree_at(lambda s: s.semi_diameter, s, jnp.full_like(s.semi_diameter, jnp.inf))
-        for s in lens.surfaces
-    )
-    return eqx.tree_at(lambda m: m.surfaces, lens, surfaces)
-
-
-def image_scale(lens: Lens, wavelength=None) -> Float[Array, ""]:
-    """K (mm): the paraxial chief-ray height on the image surface per unit tanθ.
-
-    The distortion-free image of the field (θx, θy) lies at ``K·(tanθx, tanθy)``; for a lens
-    focused at infinity K is the focal length. The paraxial chief ray is linear in tanθ, so
-    one ray at 45° gives K.
-    """
-    return paraxial.image_height(lens, 45.0, wavelength) / jnp.tan(jnp.deg2rad(45.0))
-
-
-def field_to_ideal(lens: Lens, field, wavelength=None) -> Float[Array, "*b 2"]:
-    """Distortion-free image position (mm) of a field (degrees, θy or (θx, θy))."""
-    th = sampling._field_xy(field)
-    return image_scale(lens, wavelength) * jnp.tan(th)
-
-
-def ideal_to_field(lens: Lens, xy, wavelength=None) -> Float[Array, "*b 2"]:
-    """Field (θx, θy) in degrees whose distortion-free image lies at ``xy`` (mm)."""
-    return jnp.rad2deg(jnp.arctan(jnp.asarray(xy) / image_scale(lens, wavelength)))
-
-
-def sensor_grid(resolution, pixel_size, grid) -> Float[Array, "gr gc 2"]:
-    """Sensor points (x, y) in mm of a ``grid = (rows, cols)`` in rendered orientation.
-
-    Row 0 / column 0 are the top-left corner pixel centres of ``render``'s output, the last
-    row / column the opposite corner; a grid of 1 gives the centre. Sensor x grows to the
-    left of the rendered image and y downward (the 180° readout, see the module docstring).
-    """
-    rows, cols = resolution
-    gr, gc = grid
-    p = jnp.asarray(pixel_size)
-    r = jnp.linspace(0.0, rows - 1.0, gr) if gr > 1 else jnp.full((1,), 0.5 * (rows - 1))
-    c = jnp.linspace(0.0, cols - 1.0, gc) if gc > 1 else jnp.full((1,), 0.5 * (cols - 1))
-    y = (r - 0.5 * (rows - 1)) * p
-    x = -(c - 0.5 * (cols - 1)) * p
-    xx, yy = jnp.meshgrid(x, y, indexing="xy")
-    return jnp.stack([xx, yy], -1)
-
-
-def _static_depth(depth):
-    """None for an object at infinity (a concrete inf), else the depth as an array."""
-    if depth is None:
-        return None
-    if isinstance(depth, jax.core.Tracer):
-        return depth
-    if np.all(np.isinf(np.asarray(depth))):
-        return None
-    d = np.asarray(depth)
-    if np.any(d <= 0):
-        raise ValueError(f"depth must be positive (mm from the object to surface 1), got {depth}")
-    return jnp.asarray(depth)
-
-
-def _pupil_cells(n: int, overfill: float, dtype, key=None):
-    """Cell-centred n×n grid over the disc of radius ``overfill`` (normalised pupil units).
-
-    Returns the points ``[n*n, 2]``, a mask ``[n*n]`` (inside the disc) and the cell side.
-    With a key, each point is jittered uniformly inside its cell (stratified sampling).
-    """
-    g = (np.arange(n) + 0.5) / n * 2.0 - 1.0
-    px, py = np.meshgrid(g, g, indexing="xy")
-    pts = jnp.asarray(np.stack([px.ravel(), py.ravel()], -1), dtype)
-    cell = 2.0 / n
-    if key is not None:
-        pts = pts + (jax.random.uniform(key, pts.shape, dtype) - 0.5) * cell
-    mask = jnp.sum(pts * pts, -1) <= 1.0
-    return pts * overfill, mask, cell * overfill
 
 
 def _launch(lens: Lens, field, depth, pupil, wavelength) -> Rays:
@@ -192,86 +90,11 @@ def _flux(rays: Rays, depth) -> Array:
     return rays.direction[..., 2] ** 4
 
 
-def chief_ray(lens: Lens, field, depth=None, wavelength=None, *,
-              newton_iters: int = DEFAULT_NEWTON_ITERS, iters: int = 5) -> Rays:
-    """The real chief ray of a field: aimed by Newton's method at the centre of the stop.
-
-    Args:
-        lens: the lens.
-        field: degrees, θy or (θx, θy).
-        depth: None for infinity, else the object distance in mm.
-        wavelength: µm (default primary).
-        newton_iters: Newton iterations for aspheric surfaces.
-        iters: aiming iterations.
-
-    Returns:
-        One ray (shape ``[1]``) in object space, launched from the entrance-pupil plane
-        (infinity) or from the object point.
-    """
-    wl = lens.primary_wavelength if wavelength is None else jnp.asarray(wavelength)
-    zep = paraxial.entrance_pupil_z(lens)
-    if depth is None:
-        d0 = sampling.field_direction(field).astype(lens.epd.dtype)
-        p0 = None
-    else:
-        p0 = sampling.object_point(lens, field, depth)
-
-    def launch(uv):
-        q = jnp.concatenate([uv, zep[None]])
-        if p0 is None:
-            return Rays(q[None], d0[None], wl)
-        v = q - p0
-        return Rays(p0[None], (v / jnp.linalg.norm(v))[None], wl)
-
-    aim_lens = unclipped(lens)
-
-    def at_stop(uv, aim_lens):
-        return trace(aim_lens, launch(uv), newton_iters=newton_iters, upto=lens.stop,
-                     uniform=True).origin[0, :2]
-
-    uv = newton_2d(at_stop, jnp.zeros(2, lens.epd.dtype), aim_lens, iters)
-    return launch(uv)
-
-
-def newton_2d(fn, x0, params, iters: int):
-    """Solve fn(x, params) = 0 for x in R² by Newton's method with an implicit gradient.
-
-    The iterations run without gradients; one last step with the Jacobian held fixed gives
-    the implicit-function derivative dx/dparams = −J⁻¹·∂fn/∂params, so reverse mode never
-    unrolls the loop.
-    """
-
-    def inv_step(x, p):
-        f = fn(x, p)
-        jac = jax.jacfwd(fn)(x, p)
-        det = jac[0, 0] * jac[1, 1] - jac[0, 1] * jac[1, 0]
-        det = jnp.where(det == 0, 1.0, det)
-        inv = jnp.array([[jac[1, 1], -jac[0, 1]], [-jac[1, 0], jac[0, 0]]]) / det
-        return f, inv
-
-    p_s = jax.lax.stop_gradient(params)
-
-    def body(_, x):
-        f, inv = inv_step(x, p_s)
-        return x - inv @ f
-
-    x = jax.lax.fori_loop(0, iters, body, jax.lax.stop_gradient(x0))
-    x = jax.lax.stop_gradient(x)
-    _, inv = jax.lax.stop_gradient(inv_step(x, p_s))
-    return x - inv @ fn(x, params)
-
-
-def _chief_point(lens, field, depth, newton_iters) -> Array:
-    """Image-surface (x, y) of the real chief ray (through the stop centre), primary λ."""
-    rays = chief_ray(lens, field, depth, newton_iters=newton_iters)
-    return trace(lens, rays, newton_iters=newton_iters, uniform=True).origin[0, :2]
-
-
 def _reference(lens, field, depth, center, newton_iters, pos=None, w=None) -> Array:
     if not isinstance(center, str):
         return center  # a given point (x, y), mm
     if center == "chief":
-        return _chief_point(lens, field, depth, newton_iters)
+        return chief_point(lens, field, depth, newton_iters)
     if center == "ideal":
         return field_to_ideal(lens, field)
     # centroid over all wavelengths; pos [W, M, 2], w [W, M]
@@ -331,10 +154,15 @@ def _trace_beam(lens, field, depth, wl, pupil, mask, newton_iters):
     return rays, out, w
 
 
-def _geometric(lens, field, depth, wls, *, kernel_size, pixel_size, center, pupil, overfill,
-               key, newton_iters, order=1):
+def geometric_kernels(lens, field, depth, wls, *, kernel_size, pixel_size, center, pupil,
+                      overfill, key, newton_iters, order=1):
+    """Geometric PSFs ``[W, k, k]`` of one field at wavelengths ``wls`` (an apertured lens).
+
+    Returns (kernels, truncated fraction [W], reference point [2], NaN Strehl [W], no
+    aliasing [W]), as the coherent model does; see the module docstring for the arguments.
+    """
     dtype = lens.epd.dtype
-    pts, mask, _ = _pupil_cells(pupil, overfill, dtype, key)
+    pts, mask, _ = pupil_cells(pupil, overfill, dtype, key)
 
     def one(wl):
         _, out, w = _trace_beam(lens, field, depth, wl, pts, mask, newton_iters)
@@ -355,7 +183,7 @@ def _geometric(lens, field, depth, wls, *, kernel_size, pixel_size, center, pupi
 def _coherent(lens, field, depth, wls, *, kernel_size, pixel_size, center, pupil, overfill,
               newton_iters):
     dtype = lens.epd.dtype
-    pts, mask, cell = _pupil_cells(pupil, overfill, dtype, None)
+    pts, mask, cell = pupil_cells(pupil, overfill, dtype, None)
     k = kernel_size
     c = 0.5 * (k - 1)
     idx = jnp.arange(k, dtype=dtype)
@@ -443,7 +271,7 @@ def _psf_impl(lens, field, depth, wls, pixel_size, key, *, kernel_size, model, c
     kw = dict(kernel_size=kernel_size, pixel_size=pixel_size, center=center, pupil=pupil,
               overfill=overfill, newton_iters=newton_iters)
     if model == "geometric":
-        return _geometric(lens, field, depth, wls, key=key, **kw)
+        return geometric_kernels(lens, field, depth, wls, key=key, **kw)
     return _coherent(lens, field, depth, wls, **kw)
 
 
@@ -472,7 +300,7 @@ def _prepare(lens, field, depth, wavelength, kernel_size, pixel_size, model, cen
     field = jnp.asarray(field, dtype)
     if field.ndim > 1 or (field.ndim == 1 and field.shape[0] != 2):
         raise ValueError(f"{caller}: field must be θy or (θx, θy) in degrees, got {field.shape}")
-    return field, _static_depth(depth), wl, pixel_size
+    return field, sampling.static_depth(depth), wl, pixel_size
 
 
 def psf_info(
@@ -663,7 +491,7 @@ def _diffraction_mtf(nu, lam_mm, fnum):
 
 def _directions(field):
     """Unit tangential (radial) and sagittal directions in the sensor plane."""
-    t = jnp.tan(sampling._field_xy(field))
+    t = jnp.tan(sampling.field_xy(field))
     r = jnp.sqrt(jnp.sum(t * t))
     on_axis = r == 0
     e_t = jnp.where(on_axis, jnp.array([0.0, 1.0], t.dtype), t / jnp.where(on_axis, 1.0, r))
@@ -680,7 +508,7 @@ def _mtf_impl(lens, field, depth, wls, freqs, pixel_size, *, model, pupil, overf
     fnum = paraxial.paraxial_data(lens).working_fnum
     nw = wls.shape[0]
     if model == "geometric":
-        pts, mask, _ = _pupil_cells(pupil, overfill, dtype)
+        pts, mask, _ = pupil_cells(pupil, overfill, dtype)
 
         def otf(wl):
             _, out, w = _trace_beam(lens, field, depth, wl, pts, mask, newton_iters)

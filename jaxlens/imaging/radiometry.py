@@ -35,22 +35,17 @@ import math
 import equinox as eqx
 import jax
 import jax.numpy as jnp
-import numpy as np
 from jaxtyping import Array, Float
 
 from ..optics import paraxial
 from ..optics.lens import Lens
 from ..optics.rays import Rays
 from ..tracing.forward import DEFAULT_NEWTON_ITERS, trace
-from .psf import _static_depth, apertured
+from . import sampling
+from .aiming import apertured
+from .grid import pupil_cells
 
 __all__ = ["RelativeIllumination", "relative_illumination", "star_region"]
-
-
-def _cells(n: int, dtype):
-    g = (np.arange(n) + 0.5) / n * 2.0 - 1.0
-    px, py = np.meshgrid(g, g, indexing="xy")
-    return jnp.asarray(np.stack([px.ravel(), py.ravel()], -1), dtype)
 
 
 def star_region(valid_fn, center, half, *, n_coarse: int = 24, n_dirs: int = 128,
@@ -74,7 +69,7 @@ def star_region(valid_fn, center, half, *, n_coarse: int = 24, n_dirs: int = 128
     center = jax.lax.stop_gradient(center)
     half = jax.lax.stop_gradient(half)
     dtype = center.dtype
-    coarse = center + half * _cells(n_coarse, dtype)
+    coarse = center + half * pupil_cells(n_coarse, 1.0, dtype)[0]
     v = jax.lax.stop_gradient(valid_fn(coarse))
     anyv = jnp.any(v)
     wv = v.astype(dtype)
@@ -141,7 +136,7 @@ def _irradiance(lens: Lens, t, depth, wl, n_coarse, n_fine, newton_iters):
     _, poly, area, _ = star_region(valid_fn, jnp.zeros(2, t.dtype), 3.0 * r_ep,
                                    n_coarse=n_coarse)
     lo, hi = jnp.min(poly, 0), jnp.max(poly, 0)
-    fine = 0.5 * (lo + hi) + 0.5 * (hi - lo) * _cells(n_fine, t.dtype)
+    fine = 0.5 * (lo + hi) + 0.5 * (hi - lo) * pupil_cells(n_fine, 1.0, t.dtype)[0]
 
     def centroid(s):
         rays = launch(s, fine)
@@ -168,7 +163,9 @@ def _irradiance(lens: Lens, t, depth, wl, n_coarse, n_fine, newton_iters):
 
 
 @eqx.filter_jit
-def _ri_impl(lens, fields, depth, wl, *, n_coarse, n_fine, newton_iters):
+def relative_illumination_samples(lens, fields, depth, wl, *, n_coarse, n_fine, newton_iters):
+    """Relative illumination at ``fields`` (degrees) of an apertured lens, jitted core of
+    ``relative_illumination``: (ri, irradiance, footprint centre) per field."""
     dtype = fields.dtype
     lens = lens.astype(dtype)
     th = jnp.deg2rad(fields)
@@ -219,7 +216,7 @@ def relative_illumination(
     if f.ndim != 2 or f.shape[-1] != 2:
         raise ValueError(f"relative_illumination: fields must be [F] or [F, 2], got {f.shape}")
     wl = jnp.asarray(lens.primary_wavelength if wavelength is None else wavelength, dtype)
-    ri, e, cen = _ri_impl(apertured(lens), f, _static_depth(depth), wl,
+    ri, e, cen = relative_illumination_samples(apertured(lens), f, sampling.static_depth(depth), wl,
                           n_coarse=max(16, pupil // 3), n_fine=int(pupil),
                           newton_iters=newton_iters)
     return RelativeIllumination(f, cen, ri, e)

@@ -6,7 +6,7 @@ Conventions:
     Lengths in mm, wavelengths in µm. ``scene`` is a linear-light ``[H, W, 3]`` float image
     of the object. It fills the sensor's field of view as a distortion-free lens would image
     it: the scene point shown at sensor position u (mm) is the object point of field
-    tanθ = u / K, with K = ``psf.image_scale(lens)`` (the paraxial chief-ray height per unit
+    tanθ = u / K, with K = ``aiming.image_scale(lens)`` (the paraxial chief-ray height per unit
     tanθ; the focal length for a lens focused at infinity). At a finite ``depth`` the object
     plane lies ``depth`` mm in front of surface 1 and the same field angles are measured at
     the entrance pupil, so the scene spans the same angles. Scene pixels are looked up with
@@ -81,72 +81,16 @@ from ..optics.lens import Lens, Sensor
 from ..optics.rays import Rays
 from ..tracing.backward import trace_backward
 from ..tracing.forward import DEFAULT_NEWTON_ITERS
-from .distortion import inverse_distortion_map
-from .psf import (
-    RGB_WAVELENGTHS,
-    _geometric,
-    _static_depth,
-    apertured,
-    ideal_to_field,
-    image_scale,
-    sensor_grid,
-)
-from .radiometry import _ri_impl, star_region
+from . import sampling
+from .aiming import apertured, ideal_to_field, image_scale
+from .distortion import alignment_penalty, inverse_distortion_map, prewarp
+from .grid import bilinear, grid_coords, interp_grid, pixel_positions, scene_coords, sensor_grid
+from .psf import RGB_WAVELENGTHS, geometric_kernels
+from .radiometry import relative_illumination_samples, star_region
 
 __all__ = ["render", "footprints", "Footprints", "METHODS", "bilinear", "pixel_positions"]
 
 METHODS = ("ray", "psf")
-
-
-# --------------------------------------------------------------------------------------
-# Small helpers
-# --------------------------------------------------------------------------------------
-def bilinear(img: Float[Array, "H W *C"], row, col) -> Array:
-    """Bilinear lookup of ``img`` at fractional (row, col); edge pixels extend outward.
-
-    Differentiable with respect to the image and the coordinates.
-    """
-    h, w = img.shape[0], img.shape[1]
-    r = jnp.clip(row, 0.0, h - 1.0)
-    c = jnp.clip(col, 0.0, w - 1.0)
-    r0 = jnp.clip(jnp.floor(jax.lax.stop_gradient(r)), 0, max(h - 2, 0)).astype(jnp.int32)
-    c0 = jnp.clip(jnp.floor(jax.lax.stop_gradient(c)), 0, max(w - 2, 0)).astype(jnp.int32)
-    fr = (r - r0)[..., None] if img.ndim == 3 else r - r0
-    fc = (c - c0)[..., None] if img.ndim == 3 else c - c0
-    r1 = jnp.minimum(r0 + 1, h - 1)
-    c1 = jnp.minimum(c0 + 1, w - 1)
-    top = img[r0, c0] * (1 - fc) + img[r0, c1] * fc
-    bot = img[r1, c0] * (1 - fc) + img[r1, c1] * fc
-    return top * (1 - fr) + bot * fr
-
-
-def pixel_positions(resolution, pixel_size, rows, cols):
-    """Sensor (x, y) in mm of fractional pixel coordinates (rendered orientation)."""
-    h, w = resolution
-    return -(cols - 0.5 * (w - 1)) * pixel_size, (rows - 0.5 * (h - 1)) * pixel_size
-
-
-def _scene_coords(scene_shape, resolution, pixel_size, x, y):
-    """Fractional scene (row, col) shown at ideal sensor position (x, y)."""
-    hs, ws = scene_shape
-    h, w = resolution
-    pr = pixel_size * h / hs
-    pc = pixel_size * w / ws
-    return 0.5 * (hs - 1) + y / pr, 0.5 * (ws - 1) - x / pc
-
-
-def _interp_grid(grid_vals, gy, gx):
-    """Bilinear interpolation on a regular grid given fractional grid coordinates."""
-    return bilinear(grid_vals, gy, gx)
-
-
-def _grid_coords(resolution, grid, rows, cols):
-    """Fractional coordinates on a ``grid`` spanning corner to corner pixel centres."""
-    h, w = resolution
-    gr, gc = grid
-    gy = rows * (gr - 1) / max(h - 1, 1) if gr > 1 else jnp.zeros_like(rows)
-    gx = cols * (gc - 1) / max(w - 1, 1) if gc > 1 else jnp.zeros_like(cols)
-    return gy, gx
 
 
 # --------------------------------------------------------------------------------------
@@ -359,9 +303,9 @@ def _render_ray(lens, scene, key, depth, wls, pixel_size, footprints, *, resolut
         x, y = pixel_positions(resolution, pixel_size, sr, sc)
         # Footprint disc at each sample point: bilinear in the grid, grown by the margin
         # that covers the interpolation error.
-        gy, gx = _grid_coords(resolution, grid, sr, sc)
-        cen = _interp_grid(fp_cen, gy, gx)  # [P, P, S, 2]
-        rad = jnp.minimum(_interp_grid(fp_rad, gy, gx) + fp_margin, 0.999)
+        gy, gx = grid_coords(resolution, grid, sr, sc)
+        cen = interp_grid(fp_cen, gy, gx)  # [P, P, S, 2]
+        rad = jnp.minimum(interp_grid(fp_rad, gy, gx) + fp_margin, 0.999)
         disc = _unit_disc(k2, (patch, patch), spp, dtype)
         lm = cen + rad[..., None] * disc  # [P, P, S, 2]
         inside = jnp.sum(lm * lm, -1) < 1.0
@@ -381,7 +325,7 @@ def _render_ray(lens, scene, key, depth, wls, pixel_size, footprints, *, resolut
                 xo = out.origin[..., 0] + s * out.direction[..., 0]
                 yo = out.origin[..., 1] + s * out.direction[..., 1]
                 tx_, ty_ = -xo / (zep + depth), -yo / (zep + depth)
-            r_sc, c_sc = _scene_coords(scene.shape[:2], resolution, pixel_size,
+            r_sc, c_sc = scene_coords(scene.shape[:2], resolution, pixel_size,
                                        k_scale * tx_, k_scale * ty_)
             val = bilinear(img, r_sc, c_sc)
             okf = ok.astype(dtype)
@@ -422,8 +366,9 @@ def _psf_setup(lens, depth, pixel_size, *, resolution, ri, newton_iters):
     if not ri:
         return inv, None
     fields = ideal_to_field(lens, inv[::2, ::2]).reshape(-1, 2)
-    ri_vals, _, _ = _ri_impl(lens, fields, depth, lens.primary_wavelength, n_coarse=16,
-                             n_fine=48, newton_iters=newton_iters)
+    ri_vals, _, _ = relative_illumination_samples(
+        lens, fields, depth, lens.primary_wavelength, n_coarse=16,
+        n_fine=48, newton_iters=newton_iters)
     return inv, ri_vals.reshape(9, 9)
 
 
@@ -438,15 +383,15 @@ def _render_psf(lens, scene, key, depth, wls, pixel_size, inv, ri_map, *, resolu
     h, w = resolution
     # 1. Distortion: the sensor pixel u shows the scene at the ideal point D^-1(u).
     rr, cc = jnp.meshgrid(jnp.arange(h, dtype=dtype), jnp.arange(w, dtype=dtype), indexing="ij")
-    gy, gx = _grid_coords(resolution, (17, 17), rr, cc)
-    ideal = _interp_grid(inv, gy, gx)  # [h, w, 2]
-    r_sc, c_sc = _scene_coords(scene.shape[:2], resolution, pixel_size, ideal[..., 0],
+    gy, gx = grid_coords(resolution, (17, 17), rr, cc)
+    ideal = interp_grid(inv, gy, gx)  # [h, w, 2]
+    r_sc, c_sc = scene_coords(scene.shape[:2], resolution, pixel_size, ideal[..., 0],
                                ideal[..., 1])
     warped = bilinear(scene, r_sc, c_sc)  # [h, w, C]
     # 2. Relative illumination, interpolated from the 9 × 9 grid.
     if ri_map is not None:
-        gy9, gx9 = _grid_coords(resolution, (9, 9), rr, cc)
-        warped = warped * _interp_grid(ri_map.astype(dtype), gy9, gx9)[..., None]
+        gy9, gx9 = grid_coords(resolution, (9, 9), rr, cc)
+        warped = warped * interp_grid(ri_map.astype(dtype), gy9, gx9)[..., None]
     # 3. Tiles with a halo of half a kernel.
     n_ty, n_tx = -(-h // patch), -(-w // patch)
     half = kernel_size // 2
@@ -465,10 +410,10 @@ def _render_psf(lens, scene, key, depth, wls, pixel_size, inv, ri_map, *, resolu
         # The tile centre (kept on the sensor) and the field whose chief ray lands there.
         rc = jnp.minimum((r0 + 0.5 * (patch - 1)).astype(dtype), h - 1.0)
         ccen = jnp.minimum((c0 + 0.5 * (patch - 1)).astype(dtype), w - 1.0)
-        gy, gx = _grid_coords(resolution, (17, 17), rc, ccen)
-        field = ideal_to_field(lens, _interp_grid(inv, gy, gx))
+        gy, gx = grid_coords(resolution, (17, 17), rc, ccen)
+        field = ideal_to_field(lens, interp_grid(inv, gy, gx))
         ref = jnp.stack(pixel_positions(resolution, pixel_size, rc, ccen))
-        kern, _, _, _, _ = _geometric(lens, field, depth, wls, kernel_size=kernel_size,
+        kern, _, _, _, _ = geometric_kernels(lens, field, depth, wls, kernel_size=kernel_size,
                                       pixel_size=pixel_size, center=ref, pupil=pupil,
                                       overfill=1.25, key=jax.random.fold_in(key, t),
                                       newton_iters=newton_iters, order=2)
@@ -568,7 +513,7 @@ def render(
             f"render: scene of {hs}x{ws} pixels does not match the {rows}x{cols} sensor "
             "(the aspect ratios differ; resize or crop the scene)"
         )
-    depth = _static_depth(depth)
+    depth = sampling.static_depth(depth)
     lens = apertured(lens)
     key = jnp.asarray(key) if not isinstance(key, jax.Array) else key
     common = dict(resolution=(int(rows), int(cols)), spp=int(spp), patch=int(patch),
@@ -593,3 +538,31 @@ def render(
                              newton_iters=common["newton_iters"])
     return _render_psf(lens, scene, key, depth, wls, pixel_size, inv, ri_map,
                        kernel_size=int(kernel_size), **common)
+
+
+def relaxed_render(
+    lens: Lens,
+    scene,
+    *,
+    spp: int,
+    key,
+    alpha=0.0,
+    depth=math.inf,
+    grid: tuple[int, int] = (17, 17),
+    **render_kwargs,
+):
+    """Render the pre-warped scene and return ``(image, alignment_penalty)``.
+
+    The image lines up with ``scene``, so an image loss against ``scene`` sees blur but not
+    distortion; add the penalty (weight ``alpha``) to the loss to keep distortion bounded.
+
+    Args:
+        lens, scene, spp, key, depth, render_kwargs: as :func:`render`.
+        alpha: weight of :func:`alignment_penalty`.
+        grid: grid of the distortion map.
+    """
+    sensor = render_kwargs.get("sensor")
+    warped = prewarp(lens, scene, depth=depth, sensor=sensor, grid=grid)
+    img = render(lens, warped, spp=spp, key=key, depth=depth, **render_kwargs)
+    pen = alignment_penalty(lens, alpha=alpha, depth=depth, sensor=sensor)
+    return img, pen

@@ -79,7 +79,7 @@ def pupil_samples(scheme: str, n: int, key=None, dtype=None) -> Float[Array, "m 
     )
 
 
-def _field_xy(field) -> Array:
+def field_xy(field) -> Array:
     f = jnp.asarray(field)
     if f.ndim == 0 or f.shape[-1] != 2:
         f = jnp.stack([jnp.zeros_like(f), f], -1)
@@ -88,7 +88,7 @@ def _field_xy(field) -> Array:
 
 def field_direction(field) -> Float[Array, "*b 3"]:
     """Unit direction of a collimated beam at field (θx, θy) or θy (degrees)."""
-    th = _field_xy(field)
+    th = field_xy(field)
     v = jnp.concatenate([jnp.tan(th), jnp.ones_like(th[..., :1])], -1)
     return v / jnp.linalg.norm(v, axis=-1, keepdims=True)
 
@@ -162,7 +162,7 @@ def point_source(
 def object_point(lens: Lens, field, depth) -> Array:
     """The object point (global mm) at a field angle (deg) and distance ``depth`` in front of
     surface 1 (mm, positive)."""
-    th = _field_xy(field)
+    th = field_xy(field)
     depth = jnp.asarray(depth)
     z = -depth
     zep = paraxial.entrance_pupil_z(lens, lens.primary_wavelength)
@@ -234,3 +234,17 @@ def aim_at_stop(
     if source_point is not None:
         opl = n_obj * jnp.linalg.norm(o - source_point, axis=-1)
     return Rays(o, d, rays.wavelength, opl=opl)
+
+
+def static_depth(depth):
+    """None for an object at infinity (a concrete inf), else the depth as an array."""
+    if depth is None:
+        return None
+    if isinstance(depth, jax.core.Tracer):
+        return depth
+    if np.all(np.isinf(np.asarray(depth))):
+        return None
+    d = np.asarray(depth)
+    if np.any(d <= 0):
+        raise ValueError(f"depth must be positive (mm from the object to surface 1), got {depth}")
+    return jnp.asarray(depth)

@@ -116,7 +116,7 @@ def _trace_ray(lens: Lens, y, nu, n):
     return jnp.stack(ys), jnp.stack(nus)
 
 
-def chief_ray(lens: Lens, field_deg, wavelength=None):
+def paraxial_chief_ray(lens: Lens, field_deg, wavelength=None):
     """Paraxial chief ray (y, nu) after every surface for a field angle (degrees)."""
     wl = lens.primary_wavelength if wavelength is None else wavelength
     n = lens.indices(wl)
@@ -142,7 +142,7 @@ def bfl(lens: Lens, wavelength=None) -> Array:
 def image_height(lens: Lens, field_deg, wavelength=None) -> Array:
     """Paraxial chief-ray height on the image surface (mm)."""
     wl = lens.primary_wavelength if wavelength is None else wavelength
-    y, nu = chief_ray(lens, field_deg, wl)
+    y, nu = paraxial_chief_ray(lens, field_deg, wl)
     n_img = lens.materials[-1].index(wl)
     return y[-1] + lens.thickness[-1] * nu[-1] / n_img
 

@@ -5,8 +5,8 @@ Conventions:
     (``lenses.object_depth``). Images are ``[H, W, 3]`` linear RGB in ``jaxlens.imaging.render``'s
     orientation (read out rotated by 180°, see ``jaxlens.imaging.psf``), one wavelength per channel
     (``WAVELENGTHS_RGB``). A sensor position (x, y) in mm shows the field whose
-    distortion-free image lies there (``jaxlens.imaging.psf.ideal_to_field``); PSFs are centred on
-    the chief ray, so distortion moves no content (the paper's distortion relaxation).
+    distortion-free image lies there (``jaxlens.imaging.aiming.ideal_to_field``); PSFs are
+    centred on the chief ray, so distortion moves no content (the paper's distortion relaxation).
 
 Training simulates patches: a ``P × P`` sensor patch centred at a sensor position is the
 scene window of ``(P + k − 1)²`` pixels convolved ("valid") with the RGB PSF of that
@@ -27,7 +27,8 @@ from jaxtyping import Array, Float
 
 from ...imaging import psf as _psf
 from ...imaging import sampling
-from ...imaging.render import pixel_positions
+from ...imaging.aiming import ideal_to_field
+from ...imaging.grid import pixel_positions, sensor_grid
 from ...optics.lens import Lens
 from ...tracing.forward import trace
 from .lenses import DEPTHS_M, WAVELENGTHS_RGB, object_depth
@@ -35,7 +36,7 @@ from .lenses import DEPTHS_M, WAVELENGTHS_RGB, object_depth
 
 def field_of(lens: Lens, xy) -> Float[Array, "*b 2"]:
     """Field angles (θx, θy), degrees, shown at sensor position(s) ``xy`` (mm)."""
-    return _psf.ideal_to_field(lens, xy)
+    return ideal_to_field(lens, xy)
 
 
 def pupil_disc(n_side: int, key=None, dtype=None) -> Float[Array, "m 2"]:
@@ -196,9 +197,9 @@ def render_library(
     lens: Lens, scene, depth, key, *, kernel_size: int, spp: int = 1, patch: int = 64
 ):
     """The same image through ``jaxlens.imaging.render`` (method "psf", checkpointed tiles) on the
-    pre-warped scene (``jaxlens.imaging.distortion.relaxed_render``), without shading: a
+    pre-warped scene (``jaxlens.imaging.render.relaxed_render``), without shading: a
     cross-check of ``render_tiled`` by an independent code path."""
-    from ...imaging.distortion import relaxed_render
+    from ...imaging.render import relaxed_render
 
     img, _ = relaxed_render(
         lens,
@@ -294,7 +295,7 @@ def diagonal_points(lens: Lens, fractions=(0.0, 0.5, 1.0)) -> np.ndarray:
 def grid_points(lens: Lens, n: int = 3) -> np.ndarray:
     """An ``n × n`` grid of sensor points (mm), corner pixel to corner pixel."""
     s = lens.sensor
-    return np.asarray(_psf.sensor_grid(s.resolution, s.pixel_size, (n, n))).reshape(-1, 2)
+    return np.asarray(sensor_grid(s.resolution, s.pixel_size, (n, n))).reshape(-1, 2)
 
 
 def mtf_by_depth(lens: Lens, xy, depths_mm, *, frequencies, pupil: int = 96):

@@ -1,0 +1,145 @@
+"""Chief-ray aiming and the ideal (distortion-free) image mapping.
+
+``stop_chief_ray`` aims the real chief ray at the centre of the stop with one 2-D Newton solver
+(``newton_2d``, implicit gradient); ``image_scale``/``field_to_ideal``/``ideal_to_field`` map
+field angles (degrees) to distortion-free sensor points ``K·tanθ`` (mm) and back.
+"""
+
+from __future__ import annotations
+
+import equinox as eqx
+import jax
+import jax.numpy as jnp
+import numpy as np
+from jaxtyping import Array, Float
+
+from ..optics import paraxial
+from ..optics.lens import Lens
+from ..optics.rays import Rays
+from ..tracing.forward import DEFAULT_NEWTON_ITERS, trace
+from . import sampling
+
+
+# --------------------------------------------------------------------------------------
+# Geometry shared with render, radiometry and distortion_relax
+# --------------------------------------------------------------------------------------
+def apertured(lens: Lens) -> Lens:
+    """The lens with an unbounded stop given the paraxial stop radius from the EPD.
+
+    Overfilled beams rely on the stop to clip them; a stop with ``semi_diameter = inf``
+    gets the radius that the entrance pupil diameter implies. A lens whose stop is bounded
+    (a concrete value, checked outside jit) is returned as it is, at no cost.
+    """
+    sd = lens.surfaces[lens.stop].semi_diameter
+    if not isinstance(sd, jax.core.Tracer) and bool(np.all(np.isfinite(np.asarray(sd)))):
+        return lens
+    finite = jnp.isfinite(sd)
+    stop_r = paraxial.paraxial_data(lens).stop_semi_diameter
+    new = jnp.where(finite, sd, stop_r)
+    return eqx.tree_at(lambda m: m.surfaces[m.stop].semi_diameter, lens, new)
+
+
+def unclipped(lens: Lens) -> Lens:
+    """The lens with every semi-diameter set to inf, for aiming rays (an aperture that clips
+    an intermediate Newton iterate would otherwise stop it where it was clipped)."""
+    surfaces = tuple(
+        eqx.tree_at(lambda s: s.semi_diameter, s, jnp.full_like(s.semi_diameter, jnp.inf))
+        for s in lens.surfaces
+    )
+    return eqx.tree_at(lambda m: m.surfaces, lens, surfaces)
+
+
+def image_scale(lens: Lens, wavelength=None) -> Float[Array, ""]:
+    """K (mm): the paraxial chief-ray height on the image surface per unit tanθ.
+
+    The distortion-free image of the field (θx, θy) lies at ``K·(tanθx, tanθy)``; for a lens
+    focused at infinity K is the focal length. The paraxial chief ray is linear in tanθ, so
+    one ray at 45° gives K.
+    """
+    return paraxial.image_height(lens, 45.0, wavelength) / jnp.tan(jnp.deg2rad(45.0))
+
+
+def field_to_ideal(lens: Lens, field, wavelength=None) -> Float[Array, "*b 2"]:
+    """Distortion-free image position (mm) of a field (degrees, θy or (θx, θy))."""
+    th = sampling.field_xy(field)
+    return image_scale(lens, wavelength) * jnp.tan(th)
+
+
+def ideal_to_field(lens: Lens, xy, wavelength=None) -> Float[Array, "*b 2"]:
+    """Field (θx, θy) in degrees whose distortion-free image lies at ``xy`` (mm)."""
+    return jnp.rad2deg(jnp.arctan(jnp.asarray(xy) / image_scale(lens, wavelength)))
+
+
+def stop_chief_ray(lens: Lens, field, depth=None, wavelength=None, *,
+              newton_iters: int = DEFAULT_NEWTON_ITERS, iters: int = 5) -> Rays:
+    """The real chief ray of a field: aimed by Newton's method at the centre of the stop.
+
+    Args:
+        lens: the lens.
+        field: degrees, θy or (θx, θy).
+        depth: None for infinity, else the object distance in mm.
+        wavelength: µm (default primary).
+        newton_iters: Newton iterations for aspheric surfaces.
+        iters: aiming iterations.
+
+    Returns:
+        One ray (shape ``[1]``) in object space, launched from the entrance-pupil plane
+        (infinity) or from the object point.
+    """
+    wl = lens.primary_wavelength if wavelength is None else jnp.asarray(wavelength)
+    zep = paraxial.entrance_pupil_z(lens)
+    if depth is None:
+        d0 = sampling.field_direction(field).astype(lens.epd.dtype)
+        p0 = None
+    else:
+        p0 = sampling.object_point(lens, field, depth)
+
+    def launch(uv):
+        q = jnp.concatenate([uv, zep[None]])
+        if p0 is None:
+            return Rays(q[None], d0[None], wl)
+        v = q - p0
+        return Rays(p0[None], (v / jnp.linalg.norm(v))[None], wl)
+
+    aim_lens = unclipped(lens)
+
+    def at_stop(uv, aim_lens):
+        return trace(aim_lens, launch(uv), newton_iters=newton_iters, upto=lens.stop,
+                     uniform=True).origin[0, :2]
+
+    uv = newton_2d(at_stop, jnp.zeros(2, lens.epd.dtype), aim_lens, iters)
+    return launch(uv)
+
+
+def newton_2d(fn, x0, params, iters: int):
+    """Solve fn(x, params) = 0 for x in R² by Newton's method with an implicit gradient.
+
+    The iterations run without gradients; one last step with the Jacobian held fixed gives
+    the implicit-function derivative dx/dparams = −J⁻¹·∂fn/∂params, so reverse mode never
+    unrolls the loop.
+    """
+
+    def inv_step(x, p):
+        f = fn(x, p)
+        jac = jax.jacfwd(fn)(x, p)
+        det = jac[0, 0] * jac[1, 1] - jac[0, 1] * jac[1, 0]
+        det = jnp.where(det == 0, 1.0, det)
+        inv = jnp.array([[jac[1, 1], -jac[0, 1]], [-jac[1, 0], jac[0, 0]]]) / det
+        return f, inv
+
+    p_s = jax.lax.stop_gradient(params)
+
+    def body(_, x):
+        f, inv = inv_step(x, p_s)
+        return x - inv @ f
+
+    x = jax.lax.fori_loop(0, iters, body, jax.lax.stop_gradient(x0))
+    x = jax.lax.stop_gradient(x)
+    _, inv = jax.lax.stop_gradient(inv_step(x, p_s))
+    return x - inv @ fn(x, params)
+
+
+def chief_point(lens, field, depth, newton_iters) -> Array:
+    """Image-surface (x, y) of the real chief ray (through the stop centre), primary λ."""
+    rays = stop_chief_ray(lens, field, depth, newton_iters=newton_iters)
+    return trace(lens, rays, newton_iters=newton_iters, uniform=True).origin[0, :2]

@@ -1,0 +1,98 @@
+"""Sensor and pupil grids and bilinear interpolation on them (lengths in mm).
+
+Rendered orientation: row 0 / column 0 is the top-left pixel of ``render``'s output, which
+reads the sensor out rotated by 180° (sensor x grows to the left, y downward), as a camera
+does, so that a lens renders its scene upright.
+"""
+
+from __future__ import annotations
+
+import jax
+import jax.numpy as jnp
+import numpy as np
+from jaxtyping import Array, Float
+
+
+def sensor_grid(resolution, pixel_size, grid) -> Float[Array, "gr gc 2"]:
+    """Sensor points (x, y) in mm of a ``grid = (rows, cols)`` in rendered orientation.
+
+    Row 0 / column 0 are the top-left corner pixel centres of ``render``'s output, the last
+    row / column the opposite corner; a grid of 1 gives the centre. Sensor x grows to the
+    left of the rendered image and y downward (the 180° readout, see the module docstring).
+    """
+    rows, cols = resolution
+    gr, gc = grid
+    p = jnp.asarray(pixel_size)
+    r = jnp.linspace(0.0, rows - 1.0, gr) if gr > 1 else jnp.full((1,), 0.5 * (rows - 1))
+    c = jnp.linspace(0.0, cols - 1.0, gc) if gc > 1 else jnp.full((1,), 0.5 * (cols - 1))
+    y = (r - 0.5 * (rows - 1)) * p
+    x = -(c - 0.5 * (cols - 1)) * p
+    xx, yy = jnp.meshgrid(x, y, indexing="xy")
+    return jnp.stack([xx, yy], -1)
+
+
+def pixel_positions(resolution, pixel_size, rows, cols):
+    """Sensor (x, y) in mm of fractional pixel coordinates (rendered orientation)."""
+    h, w = resolution
+    return -(cols - 0.5 * (w - 1)) * pixel_size, (rows - 0.5 * (h - 1)) * pixel_size
+
+
+# --------------------------------------------------------------------------------------
+# Small helpers
+# --------------------------------------------------------------------------------------
+def bilinear(img: Float[Array, "H W *C"], row, col) -> Array:
+    """Bilinear lookup of ``img`` at fractional (row, col); edge pixels extend outward.
+
+    Differentiable with respect to the image and the coordinates.
+    """
+    h, w = img.shape[0], img.shape[1]
+    r = jnp.clip(row, 0.0, h - 1.0)
+    c = jnp.clip(col, 0.0, w - 1.0)
+    r0 = jnp.clip(jnp.floor(jax.lax.stop_gradient(r)), 0, max(h - 2, 0)).astype(jnp.int32)
+    c0 = jnp.clip(jnp.floor(jax.lax.stop_gradient(c)), 0, max(w - 2, 0)).astype(jnp.int32)
+    fr = (r - r0)[..., None] if img.ndim == 3 else r - r0
+    fc = (c - c0)[..., None] if img.ndim == 3 else c - c0
+    r1 = jnp.minimum(r0 + 1, h - 1)
+    c1 = jnp.minimum(c0 + 1, w - 1)
+    top = img[r0, c0] * (1 - fc) + img[r0, c1] * fc
+    bot = img[r1, c0] * (1 - fc) + img[r1, c1] * fc
+    return top * (1 - fr) + bot * fr
+
+
+def interp_grid(grid_vals, gy, gx):
+    """Bilinear interpolation on a regular grid given fractional grid coordinates."""
+    return bilinear(grid_vals, gy, gx)
+
+
+def grid_coords(resolution, grid, rows, cols):
+    """Fractional coordinates on a ``grid`` spanning corner to corner pixel centres."""
+    h, w = resolution
+    gr, gc = grid
+    gy = rows * (gr - 1) / max(h - 1, 1) if gr > 1 else jnp.zeros_like(rows)
+    gx = cols * (gc - 1) / max(w - 1, 1) if gc > 1 else jnp.zeros_like(cols)
+    return gy, gx
+
+
+def scene_coords(scene_shape, resolution, pixel_size, x, y):
+    """Fractional scene (row, col) shown at ideal sensor position (x, y)."""
+    hs, ws = scene_shape
+    h, w = resolution
+    pr = pixel_size * h / hs
+    pc = pixel_size * w / ws
+    return 0.5 * (hs - 1) + y / pr, 0.5 * (ws - 1) - x / pc
+
+
+def pupil_cells(n: int, overfill: float, dtype, key=None):
+    """Cell-centred n×n grid over the disc of radius ``overfill`` (normalised pupil units).
+
+    Returns the points ``[n*n, 2]``, a mask ``[n*n]`` (inside the disc) and the cell side.
+    With a key, each point is jittered uniformly inside its cell (stratified sampling).
+    """
+    g = (np.arange(n) + 0.5) / n * 2.0 - 1.0
+    px, py = np.meshgrid(g, g, indexing="xy")
+    pts = jnp.asarray(np.stack([px.ravel(), py.ravel()], -1), dtype)
+    cell = 2.0 / n
+    if key is not None:
+        pts = pts + (jax.random.uniform(key, pts.shape, dtype) - 0.5) * cell
+    mask = jnp.sum(pts * pts, -1) <= 1.0
+    return pts * overfill, mask, cell * overfill
