@@ -37,6 +37,15 @@ def import_baseline(ref: str):
     with tarfile.open(fileobj=io.BytesIO(tar)) as tf:
         tf.extractall(tmp, filter="data")
     os.rename(os.path.join(tmp, "jaxlens"), os.path.join(tmp, NAME))
+    # Earlier versions looked one module up by its absolute name.
+    for root, _, names in os.walk(os.path.join(tmp, NAME)):
+        for n in names:
+            if n.endswith(".py"):
+                path = os.path.join(root, n)
+                with open(path) as f:
+                    text = f.read()
+                with open(path, "w") as f:
+                    f.write(text.replace('sys.modules["jaxlens.', f'sys.modules["{NAME}.'))
     sys.path.insert(0, tmp)
     return importlib.import_module(NAME)
 
