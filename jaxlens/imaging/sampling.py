@@ -80,7 +80,7 @@ def pupil_samples(scheme: str, n: int, key=None, dtype=None) -> Float[Array, "m 
 
 
 def _field_xy(field) -> Array:
-    f = checks.field_angles(jnp.asarray(field), "field angle")
+    f = checks.field_angles(jnp.asarray(field), "sampling", "field")
     if f.ndim == 0 or f.shape[-1] != 2:
         f = jnp.stack([jnp.zeros_like(f), f], -1)
     return jnp.deg2rad(f)

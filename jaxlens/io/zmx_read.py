@@ -6,12 +6,14 @@ import json
 import math
 import os
 import re
+import warnings
 from dataclasses import dataclass, field
 
 import jax.numpy as jnp
 import numpy as np
 
 from ..optics import catalog as _catalog_module
+from ..optics import checks
 from ..optics.lens import Lens, Sensor
 from ..optics.materials import AbstractMaterial, Air, ModelGlass
 from ..optics.surfaces import AbstractSurface, EvenAsphere, Hybrid, Standard
@@ -45,6 +47,19 @@ _SURFACE_KEYS = {
     "COMM",
     "CLAP",
 }
+# Keywords that Zemax writes and this reader knows but does not use (drawing, tolerancing,
+# solves, multi-configuration, optimisation and environment data). Any other keyword is
+# reported: a warning, or an error with ``strict=True`` (a cut-off keyword means a truncated
+# file).
+IGNORED_KEYWORDS = frozenset("""
+    VERS NOTE PFIL LANG ENVD GFAC SDMA RAIM PUSH ROPD PICB HYPR POLS GLRS GSTD NSCD COFN COFJ
+    FWGN FWGT VDXN VDYN VCXN VCYN VANN ZVDX ZVDY ZVCX ZVCY ZVAN XFLD YFLD WWGT WWGN WAVN
+    FLDM MNCA MXCA MNEA MXEA MNCG MXCG MNEG MXEG MNPD MXPD TCEM TMIN TMAX BLNK TOL TOLE MNUM
+    MOFF MOPS MAZH EFFL DMFS SCOL SCTH SCON CONF OPDX PWRH VPAR PRAM IGNR PZUP TELE AFOC
+    APMN APMX APCX APCY APDX APDY APTP OBDC OBSF SQAP ELAP FLAP MEMA OEMA POPS HIDE MIRR SLAB
+    COAT FIMP CTHK EDGE THSO TRAC VARI VCXN VDSZ WAVL XFLN YFLN PPAR BLKS BLNK CAMA GLCZ HIDX
+    TCEX MAZH MIND MXWL MNWL OPTI NSCS NSOA NSOD NSOO NSOP NSOQ NSOS NSOU NSOV NSOW GCAT
+    """.split())
 _KEYWORD = re.compile(r"^[A-Z][A-Z0-9_]{1,9}$")
 _MAX_XDAT_TERMS = 230  # Zemax's extended polynomial: all terms up to degree 20
 
@@ -126,6 +141,7 @@ class _Surf:
     diam: tuple[float, int | None] | None = None
     clap: float | None = None
     comment: str = ""
+    keys: set = field(default_factory=set)  # the keywords this block has
 
 
 @dataclass
@@ -142,6 +158,8 @@ class _File:
     wavl: _Line | None = None
     pwav: _Line | None = None
     surfs: list = field(default_factory=list)
+    unknown: list = field(default_factory=list)  # lines with a keyword nobody knows
+    zemax: bool = False  # written by Zemax (a VERS line): every block is complete
 
 
 def _parse(text: str, path: str) -> _File:
@@ -164,8 +182,12 @@ def _parse(text: str, path: str) -> _File:
             if cur is None:
                 raise ln.error(f"{key} before the first SURF")
             _surface_line(cur, key, ln)
-        else:
+        elif key in _TOP_KEYS:
             _top_line(f, key, ln, raw)
+        elif key not in IGNORED_KEYWORDS:
+            f.unknown.append(ln)
+        if key in _SURFACE_KEYS and cur is not None:
+            cur.keys.add(key)
     if not f.surfs:
         raise ValueError(f"{path}: no SURF lines; not a sequential Zemax lens file")
     return f
@@ -203,7 +225,13 @@ def _surface_line(s: _Surf, key: str, ln: _Line) -> None:
         s.comment = ln.text.strip()[4:].strip()
 
 
+_TOP_KEYS = frozenset("VERS MODE NAME UNIT ENPD FNUM FLOA OBNA OBSC PUPD GCAT FTYP XFLN YFLN "
+                      "WAVM WAVL PWAV".split())
+
+
 def _top_line(f: _File, key: str, ln: _Line, raw: str) -> None:
+    if key == "VERS":
+        f.zemax = True
     if key == "MODE" and len(ln.tokens) > 1 and ln.tokens[1].upper() != "SEQ":
         raise ln.error("only sequential (MODE SEQ) files are supported")
     if key == "NAME":
@@ -312,7 +340,9 @@ def _hybrid_from_xpoly(s: _Surf, unit: float, c: float, sd: float) -> Hybrid:
     bx = [terms.get((2 * j + 1, 0), 0.0) for j in range(1, p + 1)]
     by = [terms.get((0, 2 * j + 1), 0.0) for j in range(1, p + 1)]
     expected = xpoly_terms(a, bx, by)
-    for key, v in terms.items():
+    # Terms absent from the file count as 0: an x² term alone (a cylinder) misses its y².
+    for key in sorted(set(terms) | set(expected)):
+        v = terms.get(key, 0.0)
         e = expected.get(key, 0.0)
         d = sum(key)
         scale = max(abs(a[d // 2 - 1]) if d % 2 == 0 and 0 < d // 2 <= m else 0.0, abs(e))
@@ -376,8 +406,9 @@ class _Glasses:
         if up == "___BLANK":
             nd = ln.float(4, "model glass nd")
             vd = ln.float(5, "model glass Vd")
-            if not nd > 0 or vd < 0:
-                raise ln.error("model glass needs nd > 0 and Vd >= 0")
+            if not nd >= 1 or vd < 0:
+                raise ln.error(f"model glass needs nd >= 1 and Vd >= 0 (0: no dispersion), got "
+                               f"nd {nd:g}, Vd {vd:g}")
             return ModelGlass(_arr(nd), _arr(math.inf if vd == 0 else vd))
         if up == "MIRROR":
             raise ln.error("mirrors are not supported")
@@ -399,12 +430,13 @@ class _Glasses:
             for cat in self.gcat:
                 for shipped in _SHIPPED_FOR_ZEMAX.get(cat, ()):
                     try:
-                        return cat_mod.get_material(name, catalogs=[shipped])
+                        m = cat_mod.get_material(name, catalogs=[shipped])
                     except ValueError:
                         continue
+                    return _cross_checked(m, ln)
         nd, vd = _glas_nd_vd(ln)
         try:
-            return catalog_material(name, nd=nd, vd=vd)
+            return _cross_checked(catalog_material(name, nd=nd, vd=vd), ln)
         except ValueError as e:
             missing = [c for c in self.gcat if c not in self.side and c not in _SHIPPED_FOR_ZEMAX]
             if missing:
@@ -412,6 +444,24 @@ class _Glasses:
                      f"ship (GCAT catalogs it reads: {', '.join(_SHIPPED_FOR_ZEMAX)}); put "
                      f"{missing[0]}.AGF beside the file or use jaxlens.catalog.register_catalog")
             raise ln.error(f"glass {name!r}: {e}") from None
+
+
+ND_TOLERANCE, VD_TOLERANCE = 2e-3, 0.5
+"""Largest accepted difference between a GLAS line's nd and Vd and the catalog's."""
+
+
+def _cross_checked(m: AbstractMaterial, ln: _Line) -> AbstractMaterial:
+    """Warn when the nd and Vd a GLAS line carries differ from the catalog glass found."""
+    nd, vd = _glas_nd_vd(ln)
+    cat_nd, cat_vd = getattr(m, "catalog_nd", None), getattr(m, "catalog_vd", None)
+    if nd is None or cat_nd is None or cat_vd is None:
+        return m
+    if abs(nd - cat_nd) > ND_TOLERANCE or abs(vd - cat_vd) > VD_TOLERANCE:
+        warnings.warn(
+            f"{ln.path}:{ln.number}: GLAS {m.name} gives nd {nd:g}, Vd {vd:g}, but catalog "
+            f"{getattr(m, 'catalog', '')} has nd {cat_nd:g}, Vd {cat_vd:g}; using the "
+            f"catalog's glass (a different glass of the same name?)", ZmxWarning, stacklevel=5)
+    return m
 
 
 def _glas_nd_vd(ln: _Line) -> tuple[float | None, float | None]:
@@ -491,14 +541,72 @@ def _sensor(img: _Surf, unit: float) -> Sensor | None:
     return Sensor((rows, cols), _arr(pixel * unit))
 
 
-def loads(text: str, path: str = "<zmx>") -> Lens:
-    """A ``Lens`` from the text of a ``.zmx`` file (``path`` locates side AGF catalogs)."""
-    f = _parse(text, path)
+def _report(strict: bool, msg: str) -> None:
+    """An error under ``strict``, else a warning."""
+    if strict:
+        raise ValueError(msg + " (strict mode)")
+    warnings.warn(msg, ZmxWarning, stacklevel=4)
+
+
+class ZmxWarning(UserWarning):
+    """A ``.zmx`` file has content the reader does not understand (it may be truncated)."""
+
+
+def _check_structure(f: _File, text: str, strict: bool) -> None:
+    """Refuse a file that is cut off or has incomplete surface blocks; report unknown keywords.
+
+    Zemax writes TYPE, CURV and DISZ in every SURF block and ends each line with a line
+    break, so a file with a ``VERS`` line missing any of those was cut off. Any file needs a
+    DISZ for the object and every lens surface (a missing one is not read as 0), and its
+    last block is the image, whose thickness is 0: a last block with a DISZ other than 0 is
+    a lens surface of a file that was cut short.
+    """
+    path = f.path
     if len(f.surfs) < 3:
         raise ValueError(
             f"{path}: a lens needs an object, at least one surface and an image "
             f"(found {len(f.surfs)} SURF blocks)"
         )
+    img = f.surfs[-1]
+    for s in f.surfs:
+        need = ("TYPE", "CURV", "DISZ") if f.zemax else ("DISZ",) if s is not img else ()
+        missing = [k for k in need if k not in s.keys]
+        if missing:
+            what = "the image surface" if s is img else f"surface {s.number}"
+            raise s.line.error(
+                f"{what} has no {' or '.join(missing)} line (every surface needs its "
+                f"thickness{'; Zemax writes TYPE, CURV and DISZ in every block' if f.zemax else ''}"
+                f"); the file may be truncated")
+    if img.disz_line is not None and img.disz != 0:
+        raise img.disz_line.error(
+            f"the last surface, which a .zmx file makes the image, has thickness {img.disz:g}; "
+            f"the image surface's is 0. The file may be truncated after surface {img.number}")
+    if text and not text.endswith(("\n", "\r")):
+        lines = text.splitlines()
+        _report(strict, f"{path}:{len(lines)}: the file does not end with a line break; it "
+                        f"may be truncated: {lines[-1].strip()!r}")
+    for ln in f.unknown:
+        _report(strict, f"{path}:{ln.number}: unknown keyword {ln.tokens[0]!r} ignored "
+                        f"(a cut-off keyword means a truncated file): {ln.text.strip()!r}")
+
+
+def loads(text: str, path: str = "<zmx>", *, strict: bool = False) -> Lens:
+    """A ``Lens`` from the text of a ``.zmx`` file (``path`` locates side AGF catalogs).
+
+    Args:
+        text: The file's text.
+        path: The file name, for messages and side AGF catalogs.
+        strict: Refuse unknown keywords and a last line without a line break (a truncated
+            file); by default they give a ``ZmxWarning``. Incomplete surface blocks are
+            always refused.
+
+    Raises:
+        ValueError: On a malformed, incomplete or truncated file (the message names the
+            file and the line), an unknown glass, or wavelengths, fields or materials out
+            of range.
+    """
+    f = _parse(text, path)
+    _check_structure(f, text, strict)
     u = f.unit
     glasses = _Glasses(path, f.gcat)
     obj, body, img = f.surfs[0], f.surfs[1:-1], f.surfs[-1]
@@ -537,6 +645,10 @@ def loads(text: str, path: str = "<zmx>") -> Lens:
         sensor=_sensor(img, u),
         name=f.name,
     )
+    # Before the paraxial work of the aperture: values the lens cannot be traced with.
+    checks.wavelengths(lens, wl, f"{path}: WAVM", "wavelength")
+    checks.material_indices(lens, wl, path)
+    checks.field_angles(np.asarray(lens.fields), f"{path}: XFLN/YFLN", "field angles")
     if f.aperture is None:
         raise ValueError(f"{path}: no aperture (ENPD, FNUM or FLOA line)")
     kind, value, ln = f.aperture
@@ -559,9 +671,9 @@ def loads(text: str, path: str = "<zmx>") -> Lens:
         raise ln.error(str(e)) from None
 
 
-def load_zmx(path: str | os.PathLike) -> Lens:
-    """Read a Zemax ``.zmx`` lens file (UTF-16 or UTF-8)."""
+def load_zmx(path: str | os.PathLike, *, strict: bool = False) -> Lens:
+    """Read a Zemax ``.zmx`` lens file (UTF-16 or UTF-8); ``strict`` as for :func:`loads`."""
     path = os.fspath(path)
     with open(path, "rb") as fh:
         raw = fh.read()
-    return loads(decode(raw, path), path)
+    return loads(decode(raw, path), path, strict=strict)

@@ -131,6 +131,10 @@ def _nm_hint(wl) -> str:
     if big.size:
         v = float(big[0])
         return f" (wavelengths are in µm: {v:g} nm is {v / 1000:g} µm)"
+    small = a[np.isfinite(a) & (a > 0) & (a < 0.01)]
+    if small.size:
+        v = float(small[0]) * 1000
+        return f" (that is {v:g} nm: were µm given where nm are expected?)"
     return " (wavelengths are in µm)"
 
 
