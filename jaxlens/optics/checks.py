@@ -58,14 +58,15 @@ def number(value, arg: str, where: str, *, lo=None, hi=None, lo_open=False, hi_o
     Returns:
         The value as float (or int when ``integer``).
     """
-    left = "(" if lo_open else "["
-    right = ")" if hi_open else "]"
+    left = "(" if lo_open or lo is None else "["
+    right = ")" if hi_open or hi is None else "]"
     low = "-inf" if lo is None else f"{lo:g}"
     high = "inf" if hi is None else f"{hi:g}"
     span = f"{left}{low}, {high}{right}"
     kind = "a whole number" if integer else "a finite number"
     u = f" {unit}" if unit else ""
-    msg = f"{where}: {arg} must be {kind} in {span}{u}, got {value!r}"
+    shown = repr(value) if isinstance(value, (str, bool, int, float)) else fmt(value)
+    msg = f"{where}: {arg} must be {kind} in {span}{u}, got {shown}"
     if isinstance(value, bool) or isinstance(value, str):
         raise ValueError(msg)
     try:
