@@ -29,7 +29,7 @@ import numpy as np
 from ..imaging import sampling
 from ..io.files import load
 from ..io.lensfile import nm_to_um
-from ..optics import paraxial
+from ..optics import checks, paraxial
 from ..optics.lens import Lens
 from ..optics.materials import Air, ModelGlass, Tabulated
 from ..optics.surfaces import EvenAsphere, Hybrid
@@ -112,6 +112,7 @@ def with_fields_and_wavelengths(lens: Lens, fields=None, wavelengths=None) -> Le
     """
     dtype = lens.thickness.dtype
     if fields is not None:
+        checks.field_angles(np.asarray(fields, np.float64), "report", "--fields")
         f = jnp.asarray(np.atleast_1d(np.asarray(fields, np.float64)), dtype)
         lens = eqx.tree_at(lambda l: l.fields, lens, f)
     if wavelengths is not None:
@@ -119,6 +120,8 @@ def with_fields_and_wavelengths(lens: Lens, fields=None, wavelengths=None) -> Le
         w = np.where(w > 100.0, nm_to_um(w), w)
         if w.size == 0 or np.any(w <= 0):
             raise ValueError(f"report: wavelengths must be positive, got {wavelengths}")
+        checks.wavelengths(lens, w, "report", "--wavelengths")
+        checks.material_indices(lens, w, "report", "--wavelengths")
         primary = int(np.argmin(np.abs(w - float(lens.primary_wavelength))))
         lens = dataclasses.replace(lens, wavelengths=jnp.asarray(w, dtype), primary=primary)
     return lens
@@ -218,10 +221,17 @@ def _material_label(m) -> str:
     return name or type(m).__name__
 
 
-def _num(v: float, width: int = 12, prec: int = 6) -> str:
-    if v is None or not math.isfinite(v):
-        return f"{'Infinity':>{width}}"
-    return f"{v:>{width}.{prec}f}"
+def _num(v: float | None, width: int = 12, prec: int = 6, missing: str = "failed") -> str:
+    """A table cell: ``missing`` for None (no valid ray, no paraxial image), "Infinity" for
+    an infinite distance, and scientific notation where fixed point would not fit."""
+    if v is None or math.isnan(v):
+        return f"{missing:>{width}}"
+    if math.isinf(v):
+        return f"{'Infinity' if v > 0 else '-Infinity':>{width}}"
+    text = f"{v:.{prec}f}"
+    if len(text) >= width or (v != 0 and abs(v) < 10.0**-prec):
+        text = f"{v:.{max(1, min(prec, width - 8))}e}"
+    return f"{text:>{width}}"
 
 
 def _surface_table(lens: Lens) -> list[str]:
@@ -254,9 +264,9 @@ def _surface_table(lens: Lens) -> list[str]:
                     for i, v in enumerate(np.asarray(arr))
                     if v != 0
                 )
-        sd_txt = f"{sd:>10.4f}" if math.isfinite(sd) else f"{'-':>10}"
+        sd_txt = _num(sd, 10, 4) if math.isfinite(sd) else f"{'-':>10}"
         lines.append(
-            f"  {label:<5}{typ:<10}{_num(r, 13, 6)}{_num(t, 13, 6)}  {glass:<16}"
+            f"  {label:<5}{typ:<10}{_num(r, 13, 6)}{_num(t, 13, 6, '')}  {glass:<16}"
             f"{sd_txt}{k:>11.4g}  {asph.strip()}"
         )
 
@@ -293,7 +303,8 @@ def format_report(data: dict, lens: Lens | None = None) -> str:
         ("Paraxial image height", data["image_height"], "mm"),
         ("Real chief-ray image height", data["real_image_height"], "mm"),
         ("Total track", data["total_track"], "mm"),
-        ("Object distance", data["object_distance"], "mm"),
+        ("Object distance", math.inf if data["object_distance"] is None
+         else data["object_distance"], "mm"),
     ]
     for label, v, unit in rows:
         L.append(f"  {label:<34}: {_num(v, 14, 6)} {unit}".rstrip())
@@ -367,7 +378,7 @@ def register(subparsers) -> None:
 def run(args: argparse.Namespace) -> int:
     """Run the ``report`` subcommand; returns the exit status."""
     try:
-        lens = load(args.lens)
+        lens = load(args.lens, strict=True)  # a report must not describe a truncated file
         data = report_data(lens, fields=args.fields, wavelengths=args.wavelengths)
     except (ValueError, OSError) as e:
         print(f"jaxlens report: error: {e}", file=sys.stderr)

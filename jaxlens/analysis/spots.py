@@ -65,11 +65,21 @@ class RmsSpot(eqx.Module):
 
 
 def _weighted_rms(p, ref, w):
+    """RMS distance from ref; NaN where no ray is valid (never 0, which looks perfect).
+
+    Both square roots and the NaN are "double where"s, so the gradient is finite
+    everywhere: 0 for a field without rays and for a perfect point.
+    """
     d2 = jnp.sum((p - ref) ** 2, axis=-1)
-    return jnp.sqrt(jnp.sum(w * d2, axis=-1) / jnp.maximum(jnp.sum(w, axis=-1), 1.0))
+    total = jnp.sum(w, axis=-1)
+    ms = jnp.sum(w * d2, axis=-1) / jnp.maximum(total, 1.0)
+    pos = ms > 0
+    rms = jnp.where(pos, jnp.sqrt(jnp.where(pos, ms, 1.0)), 0.0)
+    return jnp.where(total > 0, rms, jnp.nan)
 
 
 def _centroid(p, w):
+    """Weighted centroid, 0 (finite, so gradients stay finite) where no ray is valid."""
     return jnp.sum(w[..., None] * p, axis=-2) / jnp.maximum(jnp.sum(w, axis=-1), 1.0)[..., None]
 
 
@@ -96,6 +106,8 @@ def rms_spot(
 
     Returns:
         An ``RmsSpot``. Only valid rays count; ``valid_fraction`` says how many those were.
+        A field and wavelength that no ray gets through has NaN radius (and centroid),
+        with ``valid_fraction`` 0; its gradient is 0, never NaN.
     """
     if reference not in ("centroid", "chief"):
         raise ValueError(f"rms_spot: reference must be 'centroid' or 'chief', got {reference!r}")
@@ -132,7 +144,8 @@ def rms_spot(
         pall, wall = p.reshape(-1, 2), w.reshape(-1)
         ref_all = _centroid(pall, wall) if reference == "centroid" else chief
         poly = _weighted_rms(pall, ref_all, wall)
-        return per, poly, jnp.mean(w, axis=-1), cen, chief
+        cen_out = jnp.where(jnp.sum(w, axis=-1)[:, None] > 0, cen, jnp.nan)
+        return per, poly, jnp.mean(w, axis=-1), cen_out, chief
 
     per, poly, frac, cen, chief = jax.vmap(per_field)(fields)
     return RmsSpot(per, poly, frac, cen, chief)

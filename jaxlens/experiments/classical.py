@@ -42,6 +42,9 @@ import shlex
 import sys
 import time
 
+from jaxlens.experiments.runfolder import OneLineParser, RunFolder, fail
+from jaxlens.optics import checks
+
 ABLATION_COLUMNS = (
     ("baseline", dict(curriculum=False, regularize=False, mask=False)),
     ("+curriculum", dict(curriculum=True, regularize=False, mask=False)),
@@ -80,7 +83,7 @@ def _ensure_devices(n: int, argv: list[str]) -> None:
 
 
 def build_parser() -> argparse.ArgumentParser:
-    p = argparse.ArgumentParser(
+    p = OneLineParser(
         prog="python -m jaxlens.experiments.classical",
         description="Ab initio curriculum design of the paper's classical lens (Table 1).")
     g = p.add_argument_group("design spec")
@@ -123,6 +126,8 @@ def build_parser() -> argparse.ArgumentParser:
                    help="XLA host devices to shard seeds over (default: CPU cores)")
     o = p.add_argument_group("output")
     o.add_argument("--out", default="runs/classical", help="output folder")
+    o.add_argument("--overwrite", action="store_true",
+                   help="replace an earlier run in --out (default: refuse)")
     o.add_argument("--no-plots", action="store_true", help="skip figures and rendering")
     o.add_argument("--no-render", action="store_true", help="skip the rendered test scene")
     o.add_argument("--smoke", action="store_true",
@@ -135,6 +140,43 @@ def build_parser() -> argparse.ArgumentParser:
     a.add_argument("--columns", default=None,
                    help="comma-separated subset of columns (default: all five)")
     return p
+
+
+MAX_ASPHERE_TERMS = 12
+"""Most even aspheric terms per surface the CLI accepts (r⁴ … r²⁶)."""
+
+
+def check_args(args) -> None:
+    """Refuse any option outside its range (ValueError naming option, value, range, unit)."""
+    w = "design"
+    n = checks.number
+    n(args.fov, "--fov", w, lo=0, hi=180, lo_open=True, hi_open=True, unit="deg")
+    n(args.fov_start, "--fov-start", w, lo=0, hi=180, lo_open=True, hi_open=True, unit="deg")
+    n(args.fnum, "--fnum", w, lo=0, lo_open=True)
+    n(args.fnum_start, "--fnum-start", w, lo=0, lo_open=True)
+    n(args.sensor_diagonal, "--sensor-diagonal", w, lo=0, lo_open=True, unit="mm")
+    n(args.elements, "--elements", w, lo=1, hi=30, integer=True)
+    n(args.track, "--track", w, lo=0, lo_open=True, unit="mm")
+    n(args.bfl, "--bfl", w, lo=0, lo_open=True, unit="mm")
+    n(args.stop, "--stop", w, lo=0, hi=args.elements, integer=True, unit="elements")
+    n(args.asphere_terms, "--asphere-terms", w, lo=0, hi=MAX_ASPHERE_TERMS, integer=True)
+    n(args.seeds, "--seeds", w, lo=1, integer=True)
+    n(args.first_seed, "--first-seed", w, lo=0, integer=True)
+    n(args.steps, "--steps", w, lo=0, lo_open=True, unit="(scale of every stage's steps)")
+    if args.polish_steps is not None:
+        n(args.polish_steps, "--polish-steps", w, lo=0, integer=True)
+    n(args.devices, "--devices", w, lo=1, integer=True)
+    n(args.ablation_seeds, "--ablation-seeds", w, lo=1, integer=True)
+    if args.seed_list is not None:
+        parts = [p.strip() for p in args.seed_list.split(",")]
+        if not parts or not all(p.isdigit() for p in parts):
+            raise ValueError(f"{w}: --seed-list must be comma-separated whole numbers >= 0, got "
+                             f"{args.seed_list!r}")
+    if args.columns is not None:
+        names = [c for c, _ in ABLATION_COLUMNS]
+        bad = [c.strip() for c in args.columns.split(",") if c.strip() not in names]
+        if bad or not args.columns.strip():
+            raise ValueError(f"{w}: --columns takes names from {names}, got {args.columns!r}")
 
 
 def spec_from_args(args):
@@ -261,17 +303,25 @@ def _min_or_none(x):
 
 
 def run_design(args, argv) -> dict:
+    t_start = time.perf_counter()
+    spec = spec_from_args(args)
+    config = config_from_args(args)
+    seeds = _seeds(args)
+    folder = RunFolder(args.out, overwrite=args.overwrite)
+    out = folder.start()  # written here, renamed to --out when the run is complete
+    try:
+        return _design_into(args, argv, spec, config, seeds, folder, out, t_start)
+    except BaseException:
+        folder.abandon()
+        raise
+
+
+def _design_into(args, argv, spec, config, seeds, folder, out, t_start) -> dict:
     import jax
     import numpy as np
 
     from jaxlens.design import evaluate, multistart
 
-    t_start = time.perf_counter()
-    spec = spec_from_args(args)
-    config = config_from_args(args)
-    seeds = _seeds(args)
-    out = args.out
-    os.makedirs(out, exist_ok=True)
     log = print
     log(f"design: {spec.n_elements} elements {spec.materials}, {spec.fov}° FoV, F/{spec.fnum},"
         f" sensor diagonal {spec.sensor_diagonal} mm -> f = {spec.focal_length:.4f} mm, "
@@ -328,10 +378,12 @@ def run_design(args, argv) -> dict:
         "seconds": {"design": t_design, "evaluation": t_eval,
                     "total": time.perf_counter() - t_start},
         "devices": len(jax.devices()),
-        "files": {k: (v if isinstance(v, str) else list(v)) for k, v in files.items()},
+        "files": {k: (folder.final_path(v) if isinstance(v, str)
+                      else [folder.final_path(x) for x in v]) for k, v in files.items()},
     }
     with open(os.path.join(out, "summary.json"), "w") as f:
         json.dump(summary, f, indent=2, default=float)
+    out = folder.finish()
     b = summary["best"]
     log(f"best seed {seeds[best]}: {b['n_fields']}-field RMS mean {b['rms_mean_um']:.2f} µm, "
         f"min {b['rms_min_um']:.2f} µm, max {b['rms_max_um']:.2f} µm; "
@@ -490,13 +542,17 @@ def _write_table_md(table: dict, path: str) -> None:
 
 def main(argv: list[str] | None = None) -> int:
     argv = sys.argv[1:] if argv is None else list(argv)
-    args = build_parser().parse_args(argv)
-    # Validate the spec before anything heavy (and before re-executing).
+    parser = build_parser()
+    args = parser.parse_args(argv)
+    # Validate every option, the spec and the output folder before anything heavy (and
+    # before re-executing).
     try:
+        check_args(args)
         spec_from_args(args)
+        if not args.ablation:
+            RunFolder(args.out, overwrite=args.overwrite)
     except ValueError as e:
-        print(f"error: {e}", file=sys.stderr)
-        return 2
+        return fail(parser.prog, e)
     _ensure_devices(args.devices, argv)
     import jax
 

@@ -52,7 +52,7 @@ import jax
 import jax.numpy as jnp
 from jaxtyping import Array, ArrayLike, Float
 
-from ..optics import paraxial
+from ..optics import checks, paraxial
 from ..optics.lens import Lens
 from ..optics.materials import LAMBDA_C, LAMBDA_D, LAMBDA_F
 from ..optics.rays import Rays
@@ -174,7 +174,12 @@ def geometric_kernels(lens, field, depth, wls, *, kernel_size, pixel_size, cente
     kern = jax.vmap(lambda p, ww: splat(p - ref, ww, kernel_size, pixel_size, order))(pos, w)
     kern = kern / total[:, None, None]
     nan = jnp.full(wls.shape, jnp.nan, dtype)
-    return kern, 1.0 - jnp.sum(kern, (-1, -2)), ref, nan, jnp.zeros(wls.shape, bool)
+    return kern, _truncation(kern, w), ref, nan, jnp.zeros(wls.shape, bool)
+
+
+def _truncation(kern, flux):
+    """Energy fraction outside the kernel, NaN where no ray got through (nothing to lose)."""
+    return jnp.where(jnp.sum(flux, -1) > 0, 1.0 - jnp.sum(kern, (-1, -2)), jnp.nan)
 
 
 # --------------------------------------------------------------------------------------
@@ -237,7 +242,7 @@ def _coherent(lens, field, depth, wls, *, kernel_size, pixel_size, center, pupil
         return inten, strehl, aliased
 
     kern, strehl, aliased = jax.vmap(field_at)(pos, lm, opl, flux, d_omega, n_img, wls)
-    return kern, 1.0 - jnp.sum(kern, (-1, -2)), ref, strehl, aliased
+    return kern, _truncation(kern, flux), ref, strehl, aliased
 
 
 # --------------------------------------------------------------------------------------
@@ -276,7 +281,7 @@ def _psf_impl(lens, field, depth, wls, pixel_size, key, *, kernel_size, model, c
 
 
 def _prepare(lens, field, depth, wavelength, kernel_size, pixel_size, model, center, pupil,
-             caller):
+             caller, overfill=1.25):
     if model not in MODELS:
         raise ValueError(f"{caller}: model must be one of {MODELS}, got {model!r}")
     if center not in CENTERS:
@@ -291,10 +296,15 @@ def _prepare(lens, field, depth, wavelength, kernel_size, pixel_size, model, cen
         pixel_size = lens.sensor.pixel_size
     dtype = jnp.result_type(float)
     pixel_size = jnp.asarray(pixel_size, dtype)
-    if not isinstance(pixel_size, jax.core.Tracer) and not bool(pixel_size > 0):
-        raise ValueError(f"{caller}: pixel_size must be positive (mm), got {pixel_size}")
+    if not checks.is_traced(pixel_size):
+        checks.number(pixel_size, "pixel_size", caller, lo=0, lo_open=True, unit="mm")
+    checks.number(overfill, "overfill", caller, lo=0, lo_open=True,
+                  unit="(beam radius over the entrance-pupil radius)")
     wl = lens.primary_wavelength if wavelength is None else wavelength
     wl = jnp.asarray(wl, dtype)
+    checks.wavelengths(lens, wl, caller, "wavelength")
+    checks.material_indices(lens, wl, caller)
+    field = checks.field_angles(field, caller, "field")
     if wl.ndim > 1:
         raise ValueError(f"{caller}: wavelength must be a scalar or 1-D (µm), got {wl.shape}")
     field = jnp.asarray(field, dtype)
@@ -327,12 +337,22 @@ def psf_info(
         A :class:`PSFResult`.
     """
     field, depth, wl, pixel_size = _prepare(lens, field, depth, wavelength, kernel_size,
-                                            pixel_size, model, center, pupil, "psf")
+                                            pixel_size, model, center, pupil, "psf", overfill)
     wls = jnp.atleast_1d(wl)
     kern, trunc, ref, strehl, aliased = _psf_impl(
         apertured(lens), field, depth, wls, pixel_size, key, kernel_size=kernel_size, model=model,
         center=center, pupil=pupil, overfill=float(overfill), newton_iters=newton_iters)
     if max_truncation is not None:
+        kern = eqx.error_if(
+            kern, jnp.any(jnp.isnan(trunc)),
+            "psf: no ray of the beam reaches the image surface (the field is vignetted or "
+            "beyond the lens's coverage), so there is no PSF",
+        )
+        kern = eqx.error_if(
+            kern, jnp.any(trunc < -max_truncation),
+            f"psf: the kernel holds more than 1 + {max_truncation:g} of the beam's energy: the "
+            "coherent sum is too coarse for this pixel pitch; raise pupil (rays per side)",
+        )
         kern = eqx.error_if(
             kern, jnp.any(trunc > max_truncation),
             f"psf: more than {max_truncation:g} of the PSF energy falls outside the "
@@ -463,7 +483,7 @@ def psf_map(
     xy = sensor_grid(sensor.resolution, sensor.pixel_size, grid)
     fields = ideal_to_field(lens, xy)
     _, depth, wl, pixel_size = _prepare(lens, 0.0, depth, wavelength, kernel_size, pixel_size,
-                                        model, center, pupil, "psf_map")
+                                        model, center, pupil, "psf_map", overfill)
     wls = jnp.atleast_1d(wl)
     lens = apertured(lens)
 
@@ -595,6 +615,7 @@ def mtf(
     dtype = jnp.result_type(float)
     wls = jnp.atleast_1d(jnp.asarray(lens.wavelengths if wavelengths is None else wavelengths,
                                      dtype))
+    checks.wavelengths(lens, wls, "mtf", "wavelengths")
     fnum = paraxial.paraxial_data(lens.astype(dtype)).working_fnum
     lam_min = jnp.min(wls) * 1e-3
     if frequencies is None:
@@ -606,7 +627,7 @@ def mtf(
     freqs = jnp.atleast_1d(jnp.asarray(frequencies, dtype))
     pix = lam_min * fnum / 4.0 if pixel_size is None else jnp.asarray(pixel_size, dtype)
     field, depth, _, pix = _prepare(lens, field, depth, None, kernel_size, pix, model,
-                                    "centroid", pupil, "mtf")
+                                    "centroid", pupil, "mtf", overfill)
     t, s = _mtf_impl(apertured(lens), field, depth, wls, freqs, pix, model=model, pupil=pupil,
                      overfill=float(overfill), kernel_size=kernel_size,
                      diffraction=bool(diffraction), newton_iters=newton_iters)

@@ -76,7 +76,7 @@ import numpy as np
 from jax.sharding import Mesh, PartitionSpec
 from jaxtyping import Array, Float
 
-from ..optics import paraxial
+from ..optics import checks, paraxial
 from ..optics.lens import Lens, Sensor
 from ..optics.rays import Rays
 from ..tracing.backward import trace_backward
@@ -489,6 +489,16 @@ def render(
         raise ValueError(f"render: patch must be a positive int, got {patch!r}")
     if mesh is not None and not isinstance(mesh, Mesh):
         raise ValueError(f"render: mesh must be a jax.sharding.Mesh or None, got {mesh!r}")
+    if key is None or not hasattr(key, "shape"):
+        raise ValueError(f"render: key must be a PRNG key (jax.random.key(0) or "
+                         f"jax.random.PRNGKey(0)), got {key!r}")
+    if checks.number(kernel_size, "kernel_size", "render", lo=1, unit="pixels",
+                     integer=True) % 2 == 0:
+        raise ValueError(f"render: kernel_size must be odd (a kernel centred on a pixel), in "
+                         f"[1, inf) pixels, got {kernel_size!r}")
+    checks.number(footprint_grid, "footprint_grid", "render", lo=2, unit="points per side",
+                  integer=True)
+    checks.number(newton_iters, "newton_iters", "render", lo=0, integer=True)
     sensor = lens.sensor if sensor is None else sensor
     if sensor is None:
         raise ValueError("render: the lens has no sensor; pass sensor=jaxlens.Sensor(...)")
@@ -506,6 +516,12 @@ def render(
             f"render: {scene.shape[-1]} scene channels need as many wavelengths, got "
             f"{wls.shape}"
         )
+    if scene.size == 0:
+        raise ValueError(f"render: scene is empty (shape {scene.shape}); it needs at least one "
+                         f"pixel and channel")
+    scene = checks.finite_array(scene, "scene", "render", "linear pixel values")
+    checks.wavelengths(lens, wls, "render", "wavelengths")
+    checks.material_indices(lens, wls, "render", "wavelengths")
     rows, cols = sensor.resolution
     hs, ws = scene.shape[:2]
     if abs(hs * cols - ws * rows) >= max(rows, cols):

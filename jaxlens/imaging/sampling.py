@@ -19,7 +19,7 @@ import jax.numpy as jnp
 import numpy as np
 from jaxtyping import Array, Float
 
-from ..optics import paraxial
+from ..optics import checks, paraxial
 from ..optics.lens import Lens
 from ..optics.rays import Rays
 
@@ -80,7 +80,7 @@ def pupil_samples(scheme: str, n: int, key=None, dtype=None) -> Float[Array, "m 
 
 
 def field_xy(field) -> Array:
-    f = jnp.asarray(field)
+    f = checks.field_angles(jnp.asarray(field), "sampling", "field")
     if f.ndim == 0 or f.shape[-1] != 2:
         f = jnp.stack([jnp.zeros_like(f), f], -1)
     return jnp.deg2rad(f)

@@ -23,13 +23,15 @@ def _ext(path: str, what: str) -> str:
     return ext
 
 
-def load(path: str | os.PathLike, *, dtype=None) -> Lens:
+def load(path: str | os.PathLike, *, dtype=None, strict: bool = False) -> Lens:
     """Read a lens file (``.json`` or ``.zmx``).
 
     Args:
         path: the file.
         dtype: cast every floating array to this dtype (default: JAX's default float,
             float64 when ``jax_enable_x64`` is on; numbers are read as float64).
+        strict: for ``.zmx``, refuse unknown keywords and a file cut off mid-line
+            (default: a warning); see ``jaxlens.io.zmx.loads``.
 
     Returns:
         The ``Lens``.
@@ -41,7 +43,7 @@ def load(path: str | os.PathLike, *, dtype=None) -> Lens:
     """
     path = os.fspath(path)
     ext = _ext(path, "load")
-    lens = load_json(path) if ext == ".json" else load_zmx(path)
+    lens = load_json(path) if ext == ".json" else load_zmx(path, strict=strict)
     return lens if dtype is None else lens.astype(dtype)
 
 

@@ -35,8 +35,8 @@ import jax
 import jax.numpy as jnp
 import numpy as np
 
+from ..optics import checks, paraxial
 from ..optics import materials as _materials
-from ..optics import paraxial
 from ..optics.lens import Lens, Sensor
 from ..optics.materials import AbstractMaterial, Air, ModelGlass, Tabulated
 from ..optics.surfaces import AbstractSurface, EvenAsphere, Hybrid, Standard
@@ -340,8 +340,9 @@ def material_from_spec(spec: Any, where: str, *, n_table: Any = None) -> Abstrac
     if "nd" in spec:
         nd = _num(spec["nd"], f"{where}: nd")
         vd = _num(spec.get("vd", "inf"), f"{where}: vd", finite=False)
-        if nd <= 0 or vd <= 0:
-            raise ValueError(f"{where}: model glass needs nd > 0 and vd > 0, got {nd}, {vd}")
+        if nd < 1 or vd <= 0:
+            raise ValueError(f"{where}: model glass needs nd >= 1 and vd > 0 (inf: no "
+                             f"dispersion), got nd {nd}, vd {vd}")
         return ModelGlass(_arr(nd), _arr(vd), name=name)
     if "n" in spec:
         wl, n = _table_from_nm(spec["n"], f"{where}: n")
@@ -657,6 +658,12 @@ def lens_from_dict(d: dict, *, source: str = "<lens>") -> Lens:
         sensor=sensor,
         name=name,
     )
+    # Before the paraxial work of the aperture: values the lens cannot be traced with.
+    key = next((k for k in ("wavelengths_um", "wavelengths_nm", "wavelengths") if k in d),
+               "wavelengths")
+    checks.wavelengths(lens, wl, f"{source}: {key}", "wavelength")
+    checks.material_indices(lens, wl, source)
+    checks.field_angles(fields, f"{source}: fields", "field angles")
     if "epd" not in aperture:
         lens = apply_aperture(lens, **aperture)
     return lens
@@ -710,7 +717,15 @@ def load_json(path: str | os.PathLike) -> Lens:
             d = json.load(f)
     except json.JSONDecodeError as e:
         raise ValueError(f"{path}:{e.lineno}: not valid JSON: {e.msg}") from None
-    return lens_from_dict(d, source=path)
+    except UnicodeDecodeError as e:
+        raise ValueError(f"{path}: not UTF-8 text ({e.reason} at byte {e.start}); save the "
+                         f"lens file as UTF-8") from None
+    except RecursionError:
+        raise ValueError(f"{path}: JSON nested too deeply to be a lens file") from None
+    try:
+        return lens_from_dict(d, source=path)
+    except RecursionError:
+        raise ValueError(f"{path}: JSON nested too deeply to be a lens file") from None
 
 
 def _pretty(o: Any, level: int = 0) -> str:

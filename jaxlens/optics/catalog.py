@@ -38,6 +38,7 @@ import equinox as eqx
 import jax.numpy as jnp
 import numpy as np
 
+from . import checks
 from .materials import (
     EXTENDED2_POWERS,
     EXTENDED3_POWERS,
@@ -142,8 +143,12 @@ class GlassRecord:
     glass_code: str = ""
 
     def to_material(self) -> CatalogMaterial:
-        """The dispersion model of this record, wrapped with its catalog metadata."""
-        return CatalogMaterial(
+        """The dispersion model of this record, wrapped with its catalog metadata.
+
+        Raises:
+            ValueError: If the formula gives no finite index >= 1 inside the glass's range.
+        """
+        m = CatalogMaterial(
             model=_dispersion_model(self.formula, self.coefficients, self.name),
             name=self.name,
             catalog=self.catalog,
@@ -152,6 +157,10 @@ class GlassRecord:
             formula=self.formula,
             wavelength_range=self.wavelength_range,
         )
+        lo, hi = self.wavelength_range or (LAMBDA_D, LAMBDA_D)
+        probe = LAMBDA_D if lo <= LAMBDA_D <= hi else 0.5 * (lo + hi)
+        checks.material(m, probe, f"glass {self.name} of catalog {self.catalog or '?'}")
+        return m
 
 
 class CatalogMaterial(AbstractMaterial):

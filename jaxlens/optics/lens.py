@@ -23,6 +23,7 @@ import jax.numpy as jnp
 import numpy as np
 from jaxtyping import Array, Float
 
+from . import checks
 from .materials import AbstractMaterial, Air
 from .surfaces import AbstractSurface, Standard
 
@@ -46,6 +47,17 @@ class Sensor(eqx.Module):
 
     resolution: tuple[int, int] = eqx.field(static=True)
     pixel_size: Float[Array, ""] = eqx.field(converter=jnp.asarray)
+
+    def __check_init__(self):
+        res = tuple(self.resolution)
+        if len(res) != 2 or not all(
+                isinstance(n, (int, np.integer)) and not isinstance(n, bool) and n >= 1
+                for n in res):
+            raise ValueError(f"Sensor: resolution must be (rows, columns), whole numbers >= 1 "
+                             f"pixels, got {self.resolution!r}")
+        if not checks.is_traced(self.pixel_size):
+            checks.number(self.pixel_size, "pixel_size", "Sensor", lo=0, lo_open=True,
+                          unit="mm")
 
     @property
     def size(self) -> tuple[Array, Array]:

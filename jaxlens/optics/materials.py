@@ -14,7 +14,10 @@ from __future__ import annotations
 
 import equinox as eqx
 import jax.numpy as jnp
+import numpy as np
 from jaxtyping import Array, ArrayLike, Float
+
+from . import checks
 
 LAMBDA_D = 0.5875618
 LAMBDA_F = 0.4861327
@@ -52,6 +55,21 @@ class ModelGlass(AbstractMaterial):
     vd: Float[Array, ""] = eqx.field(converter=jnp.asarray)
     name: str = eqx.field(static=True, default="")
 
+    def __check_init__(self):
+        # Concrete values only: an optimiser's traced nd and Vd are checked by its bounds.
+        if checks.is_traced((self.nd, self.vd)):
+            return
+        nd, vd = np.asarray(self.nd, float), np.asarray(self.vd, float)
+        if np.any(~np.isfinite(nd) | (nd < 1.0)):
+            raise ValueError(f"ModelGlass{self._of()}: nd must be a finite index >= 1, got "
+                             f"{checks.fmt(nd)}")
+        if np.any(np.isnan(vd) | (vd <= 0.0)):
+            raise ValueError(f"ModelGlass{self._of()}: vd must be an Abbe number > 0 (inf for "
+                             f"no dispersion), got {checks.fmt(vd)}")
+
+    def _of(self) -> str:
+        return f" {self.name!r}" if self.name else ""
+
     def index(self, wavelength):
         w = jnp.asarray(wavelength)
         slope = (self.nd - 1.0) / self.vd / (LAMBDA_F**-2 - LAMBDA_C**-2)
@@ -64,6 +82,13 @@ class Sellmeier(AbstractMaterial):
     B: Float[Array, " k"] = eqx.field(converter=jnp.asarray)
     C: Float[Array, " k"] = eqx.field(converter=jnp.asarray)
     name: str = eqx.field(static=True, default="")
+
+    def __check_init__(self):
+        if self.B.shape != self.C.shape:
+            raise ValueError(
+                f"Sellmeier{f' {self.name!r}' if self.name else ''}: B and C need one "
+                f"coefficient per term (the same length), got shapes {self.B.shape} and "
+                f"{self.C.shape}")
 
     def index(self, wavelength):
         w2 = jnp.asarray(wavelength)[..., None] ** 2

@@ -14,6 +14,15 @@ import equinox as eqx
 import jax.numpy as jnp
 from jaxtyping import Array, ArrayLike, Bool, Float
 
+from . import checks
+
+
+class _NoMaterials:
+    """A stand-in lens without materials: only the generic wavelength range applies."""
+
+    object_material = None
+    materials = ()
+
 
 class Rays(eqx.Module):
     """A batch of rays.
@@ -58,6 +67,10 @@ class Rays(eqx.Module):
             jnp.ones(batch, bool) if valid is None else jnp.broadcast_to(jnp.asarray(valid), batch)
         )
         self.opl = jnp.zeros(batch, dtype) if opl is None else jnp.asarray(opl, dtype)
+        # Concrete input only (a traced value is checked where it is used, see ``trace``).
+        checks.unit_directions(self.direction, self.valid, "Rays")
+        if not checks.is_traced(self.wavelength):
+            checks.wavelengths(_NoMaterials, self.wavelength, "Rays", "wavelength")
 
     @property
     def dtype(self):

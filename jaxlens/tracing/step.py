@@ -8,7 +8,9 @@ Conventions:
     ``jaxlens.optics.lens``). Rays start in object space: a ray is the whole line through its
     origin, so its intersection with surface 1 may lie behind the origin (a pupil
     point given on an entrance-pupil plane inside the lens is fine). After surface 1,
-    a ray that would have to travel backward (t < 0) is invalid.
+    a ray that would have to travel backward (t < 0) is invalid, except across a
+    negative gap (a surface whose vertex lies before the previous one, legal in Zemax
+    files): there the ray goes back along its line to the surface.
 
 Intersections:
     Planes, spheres and conics are intersected in closed form (the numerically stable
@@ -162,7 +164,8 @@ def _residual(surface: AbstractSurface, o, d, t):
 
 
 def intersect(
-    surface: AbstractSurface, o, d, newton_iters: int = DEFAULT_NEWTON_ITERS, *, first=False
+    surface: AbstractSurface, o, d, newton_iters: int = DEFAULT_NEWTON_ITERS, *, first=False,
+    backward=None,
 ):
     """Intersect rays with a surface in its local frame (vertex at the origin).
 
@@ -178,6 +181,10 @@ def intersect(
         o, d: (x, y, z) tuples of ``[*batch]`` arrays: ray points and unit directions.
         newton_iters: Newton iterations for surfaces with polynomial terms.
         first: whether this is the first surface (object space).
+        backward: bool array, True where the gap to this surface is negative (its vertex
+            lies before the previous one, as Zemax files allow): there the ray may travel
+            back along its line to reach the surface (t < 0 counts, the first root along
+            the line is taken). ``None``: no negative gaps.
 
     Returns:
         The ray parameter t of the intersection (from ``o``), ``[*batch]``, holding the
@@ -190,6 +197,8 @@ def intersect(
         o = tuple(oi + t_plane * di for oi, di in zip(o, d, strict=True))
     else:
         t_min = -1e3 * jax.lax.stop_gradient(eps * (1 + jnp.abs(o[2])))
+        if backward is not None:
+            t_min = jnp.where(backward, -T_MAX, t_min)
         t_plane = 0.0
     if not surface.has_polynomial:
         # Conics: the closed form is exact (its derivative: ``_conic_root_jvp``).
@@ -282,18 +291,23 @@ class RayState(eqx.Module):
 
 
 def surface_step(surface, z_vertex, st: RayState, n_before, n_after, *, first, refracts,
-                 newton_iters):
+                 newton_iters, gap=None):
     """Move rays to one surface (vertex at global ``z_vertex``) and refract them there.
 
     ``n_before``/``n_after`` are the refractive indices on either side; ``first`` applies the
     object-space rules of surface 1; ``refracts=False`` only intersects (the image surface).
     Rays that fail keep their last position and direction and become invalid; ``opl`` adds
-    n·t for valid rays.
+    n·t for valid rays. ``gap`` is the thickness before this surface: where it is negative
+    the surface lies behind the previous one and the ray reaches it by going back along
+    its line.
     """
     o_local = (st.p[0], st.p[1], st.p[2] - z_vertex)
-    t, ok = unmark(intersect(surface, o_local, st.d, newton_iters, first=first))
+    backward = None if gap is None or first else gap < 0
+    t, ok = unmark(intersect(surface, o_local, st.d, newton_iters, first=first,
+                             backward=backward))
     if not first:
-        ok = ok & (t >= -1e3 * jnp.finfo(t.dtype).eps * (1 + jnp.abs(o_local[2])))
+        forward = t >= -1e3 * jnp.finfo(t.dtype).eps * (1 + jnp.abs(o_local[2]))
+        ok = ok & (forward if backward is None else forward | backward)
     x, y, z = (oi + t * di for oi, di in zip(o_local, st.d, strict=True))
     # A ray exactly on the rim stays in despite rounding.
     rim = surface.semi_diameter**2 * (1 + 64 * jnp.finfo(x.dtype).eps)

@@ -45,6 +45,9 @@ import shutil
 import sys
 import time
 
+from jaxlens.experiments.runfolder import OneLineParser, RunFolder, UsageError, fail
+from jaxlens.optics import checks as input_checks
+
 LENS_NAMES = ("classical", "cubic", "hybrid")
 
 
@@ -53,12 +56,14 @@ def _ints(text: str) -> tuple[int, ...]:
 
 
 def build_parser() -> argparse.ArgumentParser:
-    p = argparse.ArgumentParser(
+    p = OneLineParser(
         prog="python -m jaxlens.experiments.edof",
         description=__doc__.split("\n\n")[0],
         formatter_class=argparse.RawDescriptionHelpFormatter,
     )
     p.add_argument("--out", default="runs/edof", help="output folder (default runs/edof)")
+    p.add_argument("--overwrite", action="store_true",
+                   help="replace an earlier run in --out (default: refuse)")
     p.add_argument(
         "--record", default=None, help="also copy tables, summary and figures to this folder"
     )
@@ -177,15 +182,79 @@ def config_from_args(a):
         "n_odd": a.n_odd,
     }
     cfg = dataclasses.replace(cfg, seed=a.seed, **{k: v for k, v in over.items() if v is not None})
+    n, w = input_checks.number, "edof"
+    for opt, v in (("--steps", cfg.steps), ("--batch", cfg.batch), ("--patch", cfg.patch),
+                   ("--kernel", cfg.kernel_size), ("--binning", cfg.binning),
+                   ("--width", cfg.width)):
+        n(v, opt, w, lo=1, integer=True)
+    for opt, v in (("--steps2", cfg.steps2), ("--middle", cfg.middle_blocks),
+                   ("--n-odd", cfg.n_odd), ("--seed", cfg.seed)):
+        n(v, opt, w, lo=0, integer=True)
+    n(cfg.pupil, "--pupil", w, lo=2, integer=True, unit="samples per side")
+    n(cfg.lr_net, "--lr-net", w, lo=0, lo_open=True)
+    n(cfg.lr_lens, "--lr-lens", w, lo=0, lo_open=True)
+    n(cfg.lens_delay, "--lens-delay", w, lo=0, hi=1, unit="(fraction of stage-1 steps)")
+    for opt, v in (("--w-sim", cfg.w_sim), ("--w-raw", cfg.w_raw), ("--noise", cfg.noise)):
+        n(v, opt, w, lo=0)
+    for opt, blocks in (("--enc", cfg.enc_blocks), ("--dec", cfg.dec_blocks)):
+        if not blocks or any(b < 0 for b in blocks):
+            raise ValueError(f"edof: {opt} must be comma-separated whole numbers >= 0 (blocks "
+                             f"per level), got {blocks!r}")
+    if 1024 % cfg.binning:
+        raise ValueError(f"edof: --binning must divide the 1024-pixel sensor side, got "
+                         f"{cfg.binning}")
     if cfg.kernel_size % 2 == 0:
-        raise ValueError(f"edof: --kernel must be odd, got {cfg.kernel_size}")
+        raise ValueError(f"edof: --kernel must be an odd whole number >= 1 pixels, got "
+                         f"{cfg.kernel_size}")
     if len(cfg.enc_blocks) != len(cfg.dec_blocks):
         raise ValueError("edof: --enc and --dec need the same number of levels")
     return cfg
 
 
+def check_args(a):
+    """The configuration, the lens names and the run folder of valid options.
+
+    Raises:
+        UsageError: For an option out of range or an unusable ``--out`` (nothing has been
+            computed or written yet).
+    """
+    try:
+        cfg = config_from_args(a)
+        names = tuple(n.strip() for n in a.lenses.split(",") if n.strip())
+        bad = [n for n in names if n not in LENS_NAMES]
+        if bad or not names:
+            raise ValueError(f"edof: --lenses takes names from {LENS_NAMES}, got {a.lenses!r}")
+        if a.test_images is not None:
+            input_checks.number(a.test_images, "--test-images", "edof", lo=1, integer=True)
+        for opt, d in (("--train-dir", a.train_dir), ("--test-dir", a.test_dir)):
+            if d is not None and not os.path.isdir(d):
+                raise ValueError(f"edof: {opt} {d} is not a folder")
+        folder = RunFolder(a.out, overwrite=a.overwrite)
+    except UsageError:
+        raise
+    except ValueError as e:
+        raise UsageError(str(e)) from None
+    return cfg, names, folder
+
+
 def run(argv=None) -> dict:
-    """Run the experiment (see the module docstring); returns the summary."""
+    """Run the experiment (see the module docstring); returns the summary.
+
+    Raises:
+        UsageError: For a bad option or ``--out``, before any work.
+    """
+    argv = list(sys.argv[1:] if argv is None else argv)
+    a = build_parser().parse_args(argv)
+    cfg, names, folder = check_args(a)
+    out = folder.start()  # written here, renamed to --out when the run is complete
+    try:
+        return _run_into(a, argv, cfg, names, folder, out)
+    except BaseException:
+        folder.abandon()
+        raise
+
+
+def _run_into(a, argv, cfg, names, folder, out) -> dict:
     import equinox as eqx
     import jax
     import jax.numpy as jnp
@@ -198,14 +267,6 @@ def run(argv=None) -> dict:
     from jaxlens.experiments.edof import scenes as S
     from jaxlens.experiments.edof import train as T
 
-    argv = list(sys.argv[1:] if argv is None else argv)
-    a = build_parser().parse_args(argv)
-    cfg = config_from_args(a)
-    names = tuple(n.strip() for n in a.lenses.split(",") if n.strip())
-    bad = [n for n in names if n not in LENS_NAMES]
-    if bad or not names:
-        raise ValueError(f"edof: --lenses takes names from {LENS_NAMES}, got {a.lenses!r}")
-    out = a.out
     os.makedirs(os.path.join(out, "lenses"), exist_ok=True)
     os.makedirs(os.path.join(out, "nets"), exist_ok=True)
     command = "python -m jaxlens.experiments.edof " + shlex.join(argv)
@@ -358,10 +419,12 @@ def run(argv=None) -> dict:
         "history": histories,
         "timings_s": timings,
         "devices": [str(d) for d in jax.devices()],
-        "files": files,
+        "files": {k: folder.final_path(v) for k, v in files.items()},
     }
     with open(os.path.join(out, "summary.json"), "w") as f:
         json.dump(summary, f, indent=2)
+    out = folder.finish()
+    files = summary["files"]
     if a.record:
         record(out, a.record, files)
     print(table_md)
@@ -579,7 +642,10 @@ def record(out: str, dest: str, files: dict) -> None:
 
 
 def main() -> None:
-    run()
+    try:
+        run()
+    except UsageError as e:
+        sys.exit(fail("python -m jaxlens.experiments.edof", e))
 
 
 if __name__ == "__main__":

@@ -1,0 +1,58 @@
+"""Shared by the ``.zmx`` reader and writer: Zemax catalog names, the extended-polynomial
+term order and the ``jaxlens`` comment markers (see ``jaxlens.io.zmx`` for the format)."""
+
+from __future__ import annotations
+
+import math
+import re
+
+ZEMAX_CATALOGS = frozenset(
+    "SCHOTT CDGM OHARA HOYA SUMITA HIKARI HIKARI_CHINA MISC ZEON INFRARED BIREFRINGENT "
+    "ARCHER ARTON CORNING HERAEUS ISUZU LIGHTPATH LZOS NHG NIKON OSAKAGASCHEMICAL RPO "
+    "SCHOTT_IRG SCHOTT_HT UMICORE MITSUI OPTIMAX KOREA_OGC LIGHTPATH_BD2 SCHOTT_2000 "
+    "NSG QIOPTIQ".split()
+)
+"""Catalog names shipped with Zemax OpticStudio; glasses from them are written by name."""
+
+PLASTIC_CATALOG = {
+    "PMMA": "MISC",
+    "ACRYLIC": "MISC",
+    "POLYCARB": "MISC",
+    "POLYSTYR": "MISC",
+    "SAN": "MISC",
+    "COC": "MISC",
+    "330R": "ZEON",
+    "480R": "ZEON",
+    "E48R": "ZEON",
+}
+HYBRID_COMMENT = re.compile(r"jaxlens hybrid even=(\d+) odd=(\d+)")
+SENSOR_COMMENT = re.compile(r"jaxlens sensor rows=(\d+) cols=(\d+) pixel=(\S+)")
+MARKER = "jaxlens "
+MAX_XPOLY_DEGREE = 20
+
+
+def term_powers(j: int) -> tuple[int, int]:
+    """(power of x, power of y) of Zemax extended-polynomial term j (1-based)."""
+    d = int((math.isqrt(8 * j + 1) - 1) // 2)
+    while d * (d + 1) // 2 > j:
+        d -= 1
+    while (d + 1) * (d + 2) // 2 <= j:
+        d += 1
+    return d - (j - d * (d + 1) // 2), j - d * (d + 1) // 2
+
+
+def term_index(mx: int, ny: int) -> int:
+    d = mx + ny
+    return d * (d + 1) // 2 + ny
+
+
+def xpoly_terms(a, bx, by) -> dict:
+    """Extended-polynomial coefficients {(px, py): value} of a hybrid surface's polynomial."""
+    out = {}
+    for i, ai in enumerate(a, start=1):
+        for j in range(i + 1):
+            out[(2 * i - 2 * j, 2 * j)] = math.comb(i, j) * float(ai)
+    for j, (b, d) in enumerate(zip(bx, by, strict=True), start=1):
+        out[(2 * j + 1, 0)] = float(b)
+        out[(0, 2 * j + 1)] = float(d)
+    return out

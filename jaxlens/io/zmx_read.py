@@ -1,0 +1,679 @@
+"""Reading Zemax ``.zmx`` lens files (the format: ``jaxlens.io.zmx``)."""
+
+from __future__ import annotations
+
+import json
+import math
+import os
+import re
+import warnings
+from dataclasses import dataclass, field
+
+import jax.numpy as jnp
+import numpy as np
+
+from ..optics import catalog as _catalog_module
+from ..optics import checks
+from ..optics.lens import Lens, Sensor
+from ..optics.materials import AbstractMaterial, Air, ModelGlass
+from ..optics.surfaces import AbstractSurface, EvenAsphere, Hybrid, Standard
+from .lensfile import apply_aperture, catalog_material, material_from_spec
+from .zmx_common import HYBRID_COMMENT, MARKER, SENSOR_COMMENT, term_index, term_powers, xpoly_terms
+
+_UNITS = {"MM": 1.0, "CM": 10.0, "IN": 25.4, "METER": 1000.0, "M": 1000.0}
+_SHIPPED_FOR_ZEMAX = {
+    "SCHOTT": ("SCHOTT",),
+    "CDGM": ("CDGM",),
+    "MISC": ("MISC", "PLASTICS"),
+    "ZEON": ("PLASTICS",),
+    "OSAKAGASCHEMICAL": ("PLASTICS",),
+    "OHARA": ("OHARA",),
+    "HOYA": ("HOYA",),
+    "HIKARI": ("HIKARI",),
+    "NIKON": ("HIKARI",),  # the shipped HIKARI file is NIKON's Zemax catalog (2017-11)
+    "SUMITA": ("SUMITA",),
+    "CORNING": ("CORNING",),
+}
+_SURFACE_KEYS = {
+    "TYPE",
+    "CURV",
+    "DISZ",
+    "CONI",
+    "PARM",
+    "XDAT",
+    "GLAS",
+    "STOP",
+    "DIAM",
+    "COMM",
+    "CLAP",
+}
+# Keywords that Zemax writes and this reader knows but does not use (drawing, tolerancing,
+# solves, multi-configuration, optimisation and environment data). Any other keyword is
+# reported: a warning, or an error with ``strict=True`` (a cut-off keyword means a truncated
+# file).
+IGNORED_KEYWORDS = frozenset("""
+    VERS NOTE PFIL LANG ENVD GFAC SDMA RAIM PUSH ROPD PICB HYPR POLS GLRS GSTD NSCD COFN COFJ
+    FWGN FWGT VDXN VDYN VCXN VCYN VANN ZVDX ZVDY ZVCX ZVCY ZVAN XFLD YFLD WWGT WWGN WAVN
+    FLDM MNCA MXCA MNEA MXEA MNCG MXCG MNEG MXEG MNPD MXPD TCEM TMIN TMAX BLNK TOL TOLE MNUM
+    MOFF MOPS MAZH EFFL DMFS SCOL SCTH SCON CONF OPDX PWRH VPAR PRAM IGNR PZUP TELE AFOC
+    APMN APMX APCX APCY APDX APDY APTP OBDC OBSF SQAP ELAP FLAP MEMA OEMA POPS HIDE MIRR SLAB
+    COAT FIMP CTHK EDGE THSO TRAC VARI VCXN VDSZ WAVL XFLN YFLN PPAR BLKS BLNK CAMA GLCZ HIDX
+    TCEX MAZH MIND MXWL MNWL OPTI NSCS NSOA NSOD NSOO NSOP NSOQ NSOS NSOU NSOV NSOW GCAT
+    """.split())
+_KEYWORD = re.compile(r"^[A-Z][A-Z0-9_]{1,9}$")
+_MAX_XDAT_TERMS = 230  # Zemax's extended polynomial: all terms up to degree 20
+
+
+def _arr(x):
+    return jnp.asarray(np.asarray(x, np.float64))
+
+
+
+class _Line:
+    """One line of a file, for error messages."""
+
+    def __init__(self, path: str, number: int, text: str):
+        self.path, self.number, self.text = path, number, text
+        self.tokens = text.split()
+
+    def error(self, msg: str) -> ValueError:
+        return ValueError(f"{self.path}:{self.number}: {msg}: {self.text.strip()!r}")
+
+    def float(self, i: int, what: str, *, allow_inf: bool = False) -> float:
+        try:
+            tok = self.tokens[i]
+        except IndexError:
+            raise self.error(f"missing {what}") from None
+        if allow_inf and tok.upper() in ("INFINITY", "INF"):
+            return math.inf
+        try:
+            v = float(tok.replace("D", "E").replace("d", "e"))
+        except ValueError:
+            raise self.error(f"{what} is not a number ({tok!r})") from None
+        if not math.isfinite(v):
+            raise self.error(f"{what} must be finite")
+        return v
+
+    def int(self, i: int, what: str) -> int:
+        v = self.float(i, what)
+        if v != int(v):
+            raise self.error(f"{what} must be an integer")
+        return int(v)
+
+
+# ---------------------------------------------------------------------------- reading
+
+
+def decode(raw: bytes, path: str = "<zmx>") -> str:
+    """Text of a Zemax file: UTF-16 (BOM or NUL-interleaved), UTF-8 (BOM or not), latin-1."""
+    try:
+        if raw.startswith((b"\xff\xfe", b"\xfe\xff")):
+            return raw.decode("utf-16")
+        if raw.startswith(b"\xef\xbb\xbf"):
+            return raw[3:].decode("utf-8")
+        head = raw[:400]
+        if head and head.count(b"\x00") > len(head) // 4:
+            return raw.decode("utf-16-le" if head[1:2] == b"\x00" else "utf-16-be")
+    except UnicodeDecodeError as e:
+        raise ValueError(f"{path}: not a readable UTF-16 text file ({e.reason})") from None
+    if b"\x00" in raw:
+        raise ValueError(f"{path}: binary data, not a Zemax text file")
+    try:
+        return raw.decode("utf-8")
+    except UnicodeDecodeError:
+        return raw.decode("latin-1")
+
+
+@dataclass
+class _Surf:
+    number: int
+    line: _Line
+    type: str = "STANDARD"
+    type_line: _Line | None = None
+    curv: float = 0.0
+    disz: float = 0.0
+    disz_line: _Line | None = None
+    coni: float = 0.0
+    parm: dict = field(default_factory=dict)  # index -> (value, line)
+    xdat: dict = field(default_factory=dict)
+    glas: _Line | None = None
+    stop: bool = False
+    diam: tuple[float, int | None] | None = None
+    clap: float | None = None
+    comment: str = ""
+    keys: set = field(default_factory=set)  # the keywords this block has
+
+
+@dataclass
+class _File:
+    path: str
+    name: str = ""
+    unit: float = 1.0
+    aperture: tuple[str, float, _Line] | None = None
+    gcat: list = field(default_factory=list)
+    ftyp: _Line | None = None
+    xfln: _Line | None = None
+    yfln: _Line | None = None
+    wavm: dict = field(default_factory=dict)
+    wavl: _Line | None = None
+    pwav: _Line | None = None
+    surfs: list = field(default_factory=list)
+    unknown: list = field(default_factory=list)  # lines with a keyword nobody knows
+    zemax: bool = False  # written by Zemax (a VERS line): every block is complete
+
+
+def _parse(text: str, path: str) -> _File:
+    f = _File(path)
+    cur: _Surf | None = None
+    for number, raw in enumerate(text.splitlines(), start=1):
+        ln = _Line(path, number, raw)
+        if not ln.tokens:
+            continue
+        key = ln.tokens[0]
+        if not _KEYWORD.match(key):
+            raise ln.error("not a Zemax keyword line")
+        if key == "SURF":
+            n = ln.int(1, "surface number")
+            if n != len(f.surfs):
+                raise ln.error(f"surfaces must be numbered 0, 1, 2, …; expected {len(f.surfs)}")
+            cur = _Surf(n, ln)
+            f.surfs.append(cur)
+        elif key in _SURFACE_KEYS:
+            if cur is None:
+                raise ln.error(f"{key} before the first SURF")
+            _surface_line(cur, key, ln)
+        elif key in _TOP_KEYS:
+            _top_line(f, key, ln, raw)
+        elif key not in IGNORED_KEYWORDS:
+            f.unknown.append(ln)
+        if key in _SURFACE_KEYS and cur is not None:
+            cur.keys.add(key)
+    if not f.surfs:
+        raise ValueError(f"{path}: no SURF lines; not a sequential Zemax lens file")
+    return f
+
+
+def _surface_line(s: _Surf, key: str, ln: _Line) -> None:
+    if key == "TYPE":
+        if len(ln.tokens) < 2:
+            raise ln.error("TYPE needs a surface type")
+        s.type, s.type_line = ln.tokens[1].upper(), ln
+    elif key == "CURV":
+        s.curv = ln.float(1, "curvature")
+    elif key == "DISZ":
+        s.disz, s.disz_line = ln.float(1, "thickness", allow_inf=True), ln
+    elif key == "CONI":
+        s.coni = ln.float(1, "conic constant")
+    elif key in ("PARM", "XDAT"):
+        i = ln.int(1, f"{key} index")
+        (s.parm if key == "PARM" else s.xdat)[i] = (ln.float(2, f"{key} {i} value"), ln)
+    elif key == "GLAS":
+        if len(ln.tokens) < 2:
+            raise ln.error("GLAS needs a glass name")
+        s.glas = ln
+    elif key == "STOP":
+        s.stop = True
+    elif key == "DIAM":
+        v = ln.float(1, "semi-diameter")
+        flag = ln.int(2, "semi-diameter solve flag") if len(ln.tokens) > 2 else None
+        if v < 0:
+            raise ln.error("semi-diameter must be >= 0")
+        s.diam = (v, flag)
+    elif key == "CLAP":
+        s.clap = ln.float(2, "circular aperture maximum radius")
+    elif key == "COMM":
+        s.comment = ln.text.strip()[4:].strip()
+
+
+_TOP_KEYS = frozenset("VERS MODE NAME UNIT ENPD FNUM FLOA OBNA OBSC PUPD GCAT FTYP XFLN YFLN "
+                      "WAVM WAVL PWAV".split())
+
+
+def _top_line(f: _File, key: str, ln: _Line, raw: str) -> None:
+    if key == "VERS":
+        f.zemax = True
+    if key == "MODE" and len(ln.tokens) > 1 and ln.tokens[1].upper() != "SEQ":
+        raise ln.error("only sequential (MODE SEQ) files are supported")
+    if key == "NAME":
+        f.name = raw.strip()[4:].strip()
+    elif key == "UNIT":
+        u = ln.tokens[1].upper() if len(ln.tokens) > 1 else ""
+        if u not in _UNITS:
+            raise ln.error(f"unknown lens unit {u!r}; use MM, CM, IN or METER")
+        f.unit = _UNITS[u]
+    elif key == "ENPD":
+        f.aperture = ("epd", ln.float(1, "entrance pupil diameter"), ln)
+    elif key == "FNUM":
+        if len(ln.tokens) > 2 and ln.int(2, "F/# type") != 0:
+            raise ln.error("only the image-space F/# (FNUM x 0) is supported")
+        f.aperture = ("fnum", ln.float(1, "F/#"), ln)
+    elif key == "FLOA":
+        f.aperture = ("float", 0.0, ln)
+    elif key in ("OBNA", "OBSC", "PUPD"):
+        raise ln.error("this aperture type is not supported; use ENPD, FNUM or FLOA")
+    elif key == "GCAT":
+        f.gcat = [t.upper() for t in ln.tokens[1:]]
+    elif key == "FTYP":
+        f.ftyp = ln
+    elif key == "XFLN":
+        f.xfln = ln
+    elif key == "YFLN":
+        f.yfln = ln
+    elif key == "WAVM":
+        i = ln.int(1, "wavelength number")
+        f.wavm[i] = (ln.float(2, "wavelength"), ln)
+    elif key == "WAVL":
+        f.wavl = ln
+    elif key == "PWAV":
+        f.pwav = ln
+
+
+def _sd(s: _Surf, unit: float) -> float:
+    if s.clap is not None:
+        return s.clap * unit if s.clap > 0 else math.inf
+    if s.diam is None:
+        return math.inf
+    v, flag = s.diam
+    if v == 0 or flag == 0:  # automatic semi-diameter: informational
+        return math.inf
+    return v * unit
+
+
+def _xdat_terms(s: _Surf, unit: float, what: str):
+    where = s.type_line or s.line
+    if 1 not in s.xdat or 2 not in s.xdat:
+        raise where.error(f"{what} needs XDAT 1 (number of terms) and XDAT 2 (norm radius)")
+    n_val, n_line = s.xdat[1]
+    if n_val != int(n_val) or not 0 <= n_val <= _MAX_XDAT_TERMS:
+        raise n_line.error(f"XDAT 1 must be a whole number of terms, 0..{_MAX_XDAT_TERMS}")
+    norm, norm_line = s.xdat[2]
+    if not norm > 0:
+        raise norm_line.error("the normalisation radius (XDAT 2) must be > 0")
+    for i, (v, ln) in s.xdat.items():
+        if i > int(n_val) + 2 and v != 0:
+            raise ln.error(f"coefficient beyond the {int(n_val)} terms of XDAT 1")
+    vals = [s.xdat.get(j + 2, (0.0, None))[0] for j in range(1, int(n_val) + 1)]
+    return int(n_val), norm, vals
+
+
+def _surface(s: _Surf, unit: float) -> AbstractSurface:
+    c = s.curv / unit
+    sd = _sd(s, unit)
+    where = s.type_line or s.line
+    if s.type == "STANDARD":
+        return Standard(c=_arr(c), k=_arr(s.coni), semi_diameter=_arr(sd))
+    if s.type == "EVENASPH":
+        for i, (v, ln) in s.parm.items():
+            if (i < 1 or i > 8) and v != 0:
+                raise ln.error("EVENASPH uses PARM 1..8 (A2..A16) only")
+        m = max([i for i in s.parm if 1 <= i <= 8], default=0)
+        a = [s.parm.get(i, (0.0, None))[0] * unit ** (1 - 2 * i) for i in range(1, m + 1)]
+        return EvenAsphere(
+            c=_arr(c), k=_arr(s.coni), coeffs=_arr(np.array(a, np.float64)), semi_diameter=_arr(sd)
+        )
+    if s.type == "XASPHERE":
+        n, norm, vals = _xdat_terms(s, unit, "XASPHERE")
+        a = [v / norm ** (2 * i) * unit ** (1 - 2 * i) for i, v in enumerate(vals, start=1)]
+        return EvenAsphere(
+            c=_arr(c), k=_arr(s.coni), coeffs=_arr(np.array(a, np.float64)), semi_diameter=_arr(sd)
+        )
+    if s.type == "XPOLYNOM":
+        return _hybrid_from_xpoly(s, unit, c, sd)
+    raise where.error(
+        f"surface type {s.type} is not supported (STANDARD, EVENASPH, XASPHERE, XPOLYNOM)"
+    )
+
+
+def _hybrid_from_xpoly(s: _Surf, unit: float, c: float, sd: float) -> Hybrid:
+    n, norm, vals = _xdat_terms(s, unit, "XPOLYNOM")
+    terms = {}
+    for j, v in enumerate(vals, start=1):
+        mx, ny = term_powers(j)
+        d = mx + ny
+        terms[(mx, ny)] = v / norm**d * unit ** (1 - d)
+    top = sum(term_powers(n)) if n else 0
+    m, p = top // 2, max(top - 1, 0) // 2
+    hit = HYBRID_COMMENT.search(s.comment)
+    if hit:
+        m, p = int(hit.group(1)), int(hit.group(2))
+    a = [terms.get((2 * i, 0), 0.0) for i in range(1, m + 1)]
+    bx = [terms.get((2 * j + 1, 0), 0.0) for j in range(1, p + 1)]
+    by = [terms.get((0, 2 * j + 1), 0.0) for j in range(1, p + 1)]
+    expected = xpoly_terms(a, bx, by)
+    # Terms absent from the file count as 0: an x² term alone (a cylinder) misses its y².
+    for key in sorted(set(terms) | set(expected)):
+        v = terms.get(key, 0.0)
+        e = expected.get(key, 0.0)
+        d = sum(key)
+        scale = max(abs(a[d // 2 - 1]) if d % 2 == 0 and 0 < d // 2 <= m else 0.0, abs(e))
+        if abs(v - e) > 1e-9 * scale:
+            where = s.xdat.get(term_index(*key) + 2, (0, s.type_line or s.line))[1]
+            raise where.error(
+                f"XPOLYNOM term x^{key[0]} y^{key[1]} = {v!r} does not fit the hybrid surface "
+                f"(even asphere in r² plus odd terms in x and y; expected {e!r})"
+            )
+    return Hybrid(
+        c=_arr(c),
+        k=_arr(s.coni),
+        coeffs=_arr(np.array(a, np.float64)),
+        odd_x=_arr(np.array(bx, np.float64)),
+        odd_y=_arr(np.array(by, np.float64)),
+        semi_diameter=_arr(sd),
+    )
+
+
+
+
+def _read_agf_markers(path: str) -> dict[str, str]:
+    """Glass name (upper case) -> jaxlens JSON material spec from ``GC jaxlens`` records."""
+    with open(path, "rb") as fh:
+        text = decode(fh.read(), path)
+    out, name = {}, None
+    for line in text.splitlines():
+        t = line.split(maxsplit=1)
+        if not t:
+            continue
+        if t[0] == "NM" and len(t) > 1:
+            name = t[1].split()[0].upper()
+        elif t[0] == "GC" and name and len(t) > 1 and t[1].startswith(MARKER):
+            out[name] = t[1][len(MARKER) :]
+    return out
+
+
+class _Glasses:
+    """Resolves GLAS names: side AGF catalogs, then the shipped catalogs."""
+
+    def __init__(self, path: str, gcat: list[str]):
+        self.dir = os.path.dirname(os.path.abspath(path))
+        self.gcat = gcat
+        self.side: dict[str, tuple[dict, dict, str]] = {}
+        try:
+            listing = {n.upper(): n for n in os.listdir(self.dir)}
+        except OSError:
+            listing = {}
+        for cat in gcat:
+            fname = listing.get(f"{cat}.AGF")
+            if fname is not None:
+                p = os.path.join(self.dir, fname)
+                from ..optics import catalog
+
+                mats = {k.upper(): v for k, v in catalog.load_agf(p).items()}
+                self.side[cat] = (mats, _read_agf_markers(p), p)
+
+    def get(self, ln: _Line) -> AbstractMaterial:
+        name = ln.tokens[1]
+        up = name.upper()
+        if up == "___BLANK":
+            nd = ln.float(4, "model glass nd")
+            vd = ln.float(5, "model glass Vd")
+            if not nd >= 1 or vd < 0:
+                raise ln.error(f"model glass needs nd >= 1 and Vd >= 0 (0: no dispersion), got "
+                               f"nd {nd:g}, Vd {vd:g}")
+            return ModelGlass(_arr(nd), _arr(math.inf if vd == 0 else vd))
+        if up == "MIRROR":
+            raise ln.error("mirrors are not supported")
+        if up == "AIR":
+            return Air()
+        for cat in self.gcat:
+            if cat in self.side:
+                mats, markers, p = self.side[cat]
+                if up in markers:
+                    try:
+                        spec = json.loads(markers[up])
+                    except json.JSONDecodeError:
+                        raise ValueError(f"{p}: bad jaxlens record for glass {name}") from None
+                    return material_from_spec(spec, f"{p}: glass {name}")
+                if up in mats:
+                    return mats[up]
+        cat_mod = _catalog_module
+        if cat_mod is not None:
+            for cat in self.gcat:
+                for shipped in _SHIPPED_FOR_ZEMAX.get(cat, ()):
+                    try:
+                        m = cat_mod.get_material(name, catalogs=[shipped])
+                    except ValueError:
+                        continue
+                    return _cross_checked(m, ln)
+        nd, vd = _glas_nd_vd(ln)
+        try:
+            return _cross_checked(catalog_material(name, nd=nd, vd=vd), ln)
+        except ValueError as e:
+            missing = [c for c in self.gcat if c not in self.side and c not in _SHIPPED_FOR_ZEMAX]
+            if missing:
+                e = (f"{e}. The file's GCAT names {', '.join(missing)}, which jaxlens does not "
+                     f"ship (GCAT catalogs it reads: {', '.join(_SHIPPED_FOR_ZEMAX)}); put "
+                     f"{missing[0]}.AGF beside the file or use jaxlens.catalog.register_catalog")
+            raise ln.error(f"glass {name!r}: {e}") from None
+
+
+ND_TOLERANCE, VD_TOLERANCE = 2e-3, 0.5
+"""Largest accepted difference between a GLAS line's nd and Vd and the catalog's."""
+
+
+def _cross_checked(m: AbstractMaterial, ln: _Line) -> AbstractMaterial:
+    """Warn when the nd and Vd a GLAS line carries differ from the catalog glass found."""
+    nd, vd = _glas_nd_vd(ln)
+    cat_nd, cat_vd = getattr(m, "catalog_nd", None), getattr(m, "catalog_vd", None)
+    if nd is None or cat_nd is None or cat_vd is None:
+        return m
+    if abs(nd - cat_nd) > ND_TOLERANCE or abs(vd - cat_vd) > VD_TOLERANCE:
+        warnings.warn(
+            f"{ln.path}:{ln.number}: GLAS {m.name} gives nd {nd:g}, Vd {vd:g}, but catalog "
+            f"{getattr(m, 'catalog', '')} has nd {cat_nd:g}, Vd {cat_vd:g}; using the "
+            f"catalog's glass (a different glass of the same name?)", ZmxWarning, stacklevel=5)
+    return m
+
+
+def _glas_nd_vd(ln: _Line) -> tuple[float | None, float | None]:
+    """nd and Vd that a GLAS line carries after the name (tokens 4 and 5), if valid."""
+    try:
+        nd, vd = float(ln.tokens[4]), float(ln.tokens[5])
+    except (IndexError, ValueError):
+        return None, None
+    if not (math.isfinite(nd) and nd > 1.0 and math.isfinite(vd) and vd > 0.0):
+        return None, None
+    return nd, vd
+
+
+def _fields(f: _File) -> np.ndarray:
+    count = None
+    if f.ftyp is not None:
+        if f.ftyp.int(1, "field type") != 0:
+            raise f.ftyp.error("only angle fields (FTYP 0) are supported")
+        if len(f.ftyp.tokens) > 3:
+            count = f.ftyp.int(3, "number of fields")
+    if f.yfln is None:
+        return np.zeros(1)
+    ys = [f.yfln.float(i, "y field") for i in range(1, len(f.yfln.tokens))]
+    xs = [f.xfln.float(i, "x field") for i in range(1, len(f.xfln.tokens))] if f.xfln else []
+    if count is None:
+        count = max(1, max((i + 1 for i, v in enumerate(ys) if v != 0), default=1))
+    if len(ys) < count:
+        raise f.yfln.error(f"FTYP announces {count} fields, YFLN gives {len(ys)}")
+    xs = (xs + [0.0] * count)[:count]
+    ys = ys[:count]
+    if any(x != 0 for x in xs):
+        return np.stack([np.array(xs), np.array(ys)], axis=-1)
+    return np.array(ys, np.float64)
+
+
+def _wavelengths(f: _File) -> tuple[np.ndarray, int]:
+    count = None
+    if f.ftyp is not None and len(f.ftyp.tokens) > 4:
+        count = f.ftyp.int(4, "number of wavelengths")
+    if f.wavm:
+        n = count if count is not None else max(f.wavm)
+        missing = [i for i in range(1, n + 1) if i not in f.wavm]
+        if missing:
+            ln = f.ftyp or next(iter(f.wavm.values()))[1]
+            raise ln.error(f"no WAVM line for wavelength {missing[0]}")
+        wl = [f.wavm[i][0] for i in range(1, n + 1)]
+        lines = [f.wavm[i][1] for i in range(1, n + 1)]
+    elif f.wavl is not None:
+        wl = [f.wavl.float(i, "wavelength") for i in range(1, len(f.wavl.tokens))]
+        wl = wl[:count] if count is not None else [w for w in wl if w != 0]
+        lines = [f.wavl] * len(wl)
+    else:
+        wl, lines = [0.55], [None]  # Zemax's default wavelength
+    for w, ln in zip(wl, lines, strict=True):
+        if not w > 0:
+            raise ln.error("wavelengths must be > 0 (µm)")
+    primary = 0
+    if f.pwav is not None:
+        primary = f.pwav.int(1, "primary wavelength number") - 1
+        if not 0 <= primary < len(wl):
+            raise f.pwav.error(f"primary wavelength must be 1..{len(wl)}")
+    return np.array(wl, np.float64), primary
+
+
+def _sensor(img: _Surf, unit: float) -> Sensor | None:
+    """The sensor recorded in the image surface's comment by ``save_zmx``, if any."""
+    hit = SENSOR_COMMENT.search(img.comment)
+    if hit is None:
+        return None
+    try:
+        pixel = float(hit.group(3))
+    except ValueError:
+        pixel = math.nan
+    rows, cols = int(hit.group(1)), int(hit.group(2))
+    if not pixel > 0 or not math.isfinite(pixel) or rows <= 0 or cols <= 0:
+        raise img.line.error(f"bad sensor in the image surface comment {img.comment!r}")
+    return Sensor((rows, cols), _arr(pixel * unit))
+
+
+def _report(strict: bool, msg: str) -> None:
+    """An error under ``strict``, else a warning."""
+    if strict:
+        raise ValueError(msg + " (strict mode)")
+    warnings.warn(msg, ZmxWarning, stacklevel=4)
+
+
+class ZmxWarning(UserWarning):
+    """A ``.zmx`` file has content the reader does not understand (it may be truncated)."""
+
+
+def _check_structure(f: _File, text: str, strict: bool) -> None:
+    """Refuse a file that is cut off or has incomplete surface blocks; report unknown keywords.
+
+    Zemax writes TYPE, CURV and DISZ in every SURF block and ends each line with a line
+    break, so a file with a ``VERS`` line missing any of those was cut off. Any file needs a
+    DISZ for the object and every lens surface (a missing one is not read as 0), and its
+    last block is the image, whose thickness is 0: a last block with a DISZ other than 0 is
+    a lens surface of a file that was cut short.
+    """
+    path = f.path
+    if len(f.surfs) < 3:
+        raise ValueError(
+            f"{path}: a lens needs an object, at least one surface and an image "
+            f"(found {len(f.surfs)} SURF blocks)"
+        )
+    img = f.surfs[-1]
+    for s in f.surfs:
+        need = ("TYPE", "CURV", "DISZ") if f.zemax else ("DISZ",) if s is not img else ()
+        missing = [k for k in need if k not in s.keys]
+        if missing:
+            what = "the image surface" if s is img else f"surface {s.number}"
+            raise s.line.error(
+                f"{what} has no {' or '.join(missing)} line (every surface needs its "
+                f"thickness{'; Zemax writes TYPE, CURV and DISZ in every block' if f.zemax else ''}"
+                f"); the file may be truncated")
+    if img.disz_line is not None and img.disz != 0:
+        raise img.disz_line.error(
+            f"the last surface, which a .zmx file makes the image, has thickness {img.disz:g}; "
+            f"the image surface's is 0. The file may be truncated after surface {img.number}")
+    if text and not text.endswith(("\n", "\r")):
+        lines = text.splitlines()
+        _report(strict, f"{path}:{len(lines)}: the file does not end with a line break; it "
+                        f"may be truncated: {lines[-1].strip()!r}")
+    for ln in f.unknown:
+        _report(strict, f"{path}:{ln.number}: unknown keyword {ln.tokens[0]!r} ignored "
+                        f"(a cut-off keyword means a truncated file): {ln.text.strip()!r}")
+
+
+def loads(text: str, path: str = "<zmx>", *, strict: bool = False) -> Lens:
+    """A ``Lens`` from the text of a ``.zmx`` file (``path`` locates side AGF catalogs).
+
+    Args:
+        text: The file's text.
+        path: The file name, for messages and side AGF catalogs.
+        strict: Refuse unknown keywords and a last line without a line break (a truncated
+            file); by default they give a ``ZmxWarning``. Incomplete surface blocks are
+            always refused.
+
+    Raises:
+        ValueError: On a malformed, incomplete or truncated file (the message names the
+            file and the line), an unknown glass, or wavelengths, fields or materials out
+            of range.
+    """
+    f = _parse(text, path)
+    _check_structure(f, text, strict)
+    u = f.unit
+    glasses = _Glasses(path, f.gcat)
+    obj, body, img = f.surfs[0], f.surfs[1:-1], f.surfs[-1]
+    surfaces, thick, mats = [], [], []
+    for s in body:
+        surfaces.append(_surface(s, u))
+        if math.isinf(s.disz):
+            raise s.disz_line.error("only the object surface may have an infinite thickness")
+        thick.append(s.disz * u)
+        mats.append(glasses.get(s.glas) if s.glas is not None else Air())
+    stops = [i for i, s in enumerate(body) if s.stop]
+    for s in (obj, img):
+        if s.stop:
+            raise s.line.error("the object or image surface cannot be the stop")
+    if len(stops) > 1:
+        raise body[stops[1]].line.error("more than one STOP surface")
+    stop = stops[0] if stops else 0
+    if img.type not in ("STANDARD", "EVENASPH"):
+        raise (img.type_line or img.line).error("the image surface must be STANDARD or EVENASPH")
+    dist = obj.disz * u if obj.disz_line is not None else math.inf
+    if not dist > 0:
+        raise (obj.disz_line or obj.line).error("object distance must be > 0 or INFINITY")
+    wl, primary = _wavelengths(f)
+    lens = Lens(
+        surfaces=tuple(surfaces),
+        thickness=_arr(np.array(thick, np.float64)),
+        materials=tuple(mats),
+        stop=stop,
+        epd=_arr(1.0),
+        fields=_arr(_fields(f)),
+        wavelengths=_arr(wl),
+        primary=primary,
+        object_distance=_arr(dist),
+        object_material=glasses.get(obj.glas) if obj.glas is not None else Air(),
+        image=_surface(img, u),
+        sensor=_sensor(img, u),
+        name=f.name,
+    )
+    # Before the paraxial work of the aperture: values the lens cannot be traced with.
+    checks.wavelengths(lens, wl, f"{path}: WAVM", "wavelength")
+    checks.material_indices(lens, wl, path)
+    checks.field_angles(np.asarray(lens.fields), f"{path}: XFLN/YFLN", "field angles")
+    if f.aperture is None:
+        raise ValueError(f"{path}: no aperture (ENPD, FNUM or FLOA line)")
+    kind, value, ln = f.aperture
+    try:
+        if kind == "epd":
+            if not value > 0:
+                raise ln.error("entrance pupil diameter must be > 0")
+            return apply_aperture(lens, epd=value * u)
+        if kind == "fnum":
+            if not value > 0:
+                raise ln.error("F/# must be > 0")
+            return apply_aperture(lens, fnum=value)
+        sd = body[stop].diam
+        if sd is None or not sd[0] > 0:
+            raise ln.error("FLOA needs a DIAM (stop semi-diameter) on the STOP surface")
+        return apply_aperture(lens, stop_semi_diameter=sd[0] * u)
+    except ValueError as e:
+        if str(e).startswith(path):
+            raise
+        raise ln.error(str(e)) from None
+
+
+def load_zmx(path: str | os.PathLike, *, strict: bool = False) -> Lens:
+    """Read a Zemax ``.zmx`` lens file (UTF-16 or UTF-8); ``strict`` as for :func:`loads`."""
+    path = os.fspath(path)
+    with open(path, "rb") as fh:
+        raw = fh.read()
+    return loads(decode(raw, path), path, strict=strict)

@@ -1,0 +1,376 @@
+"""Writing Zemax ``.zmx`` lens files and their side AGF catalogs (the format:
+``jaxlens.io.zmx``)."""
+
+from __future__ import annotations
+
+import json
+import math
+import os
+import re
+from dataclasses import dataclass
+
+import numpy as np
+
+from ..optics import materials as _materials
+from ..optics.lens import Lens
+from ..optics.materials import AbstractMaterial, Air, ModelGlass, Tabulated
+from ..optics.surfaces import AbstractSurface, EvenAsphere, Hybrid, Standard
+from . import lensfile
+from .zmx_common import (
+    MARKER,
+    MAX_XPOLY_DEGREE,
+    PLASTIC_CATALOG,
+    ZEMAX_CATALOGS,
+    term_powers,
+    xpoly_terms,
+)
+
+# ---------------------------------------------------------------------------- numbers
+
+
+def _z(x: float) -> str:
+    """Zemax-style number, exact (shortest round trip), e.g. ``6.41655E+001``."""
+    x = float(x)
+    if x == 0.0:
+        return "0"
+    if not math.isfinite(x):
+        raise ValueError(f"save_zmx: cannot write the non-finite number {x}")
+    return np.format_float_scientific(x, unique=True, exp_digits=3, trim="0").upper()
+
+
+# ---------------------------------------------------------------------------- writing
+
+
+def _zemax_catalog(m: AbstractMaterial) -> str | None:
+    """The Zemax catalog that holds ``m`` exactly as jaxlens ships it, or None."""
+    if not lensfile.is_catalog_glass(m):
+        return None
+    if m.catalog == "PLASTICS":
+        return PLASTIC_CATALOG.get(m.name.upper())
+    return m.catalog if m.catalog in ZEMAX_CATALOGS else None
+
+
+def _formula(m: AbstractMaterial):
+    """(Zemax formula number, coefficients) holding ``m`` exactly, or None."""
+    M = _materials
+    kinds = [
+        (getattr(M, n, None), f)
+        for n, f in (
+            ("Schott", 1),
+            ("Herzberger", 3),
+            ("Sellmeier2", 4),
+            ("Conrady", 5),
+            ("Handbook1", 7),
+            ("Handbook2", 8),
+            ("Sellmeier4", 9),
+        )
+    ]
+    if type(m).__name__ == "CatalogMaterial":
+        return _formula(m.model)
+    if isinstance(m, ModelGlass):
+        # n = A + B/λ² exactly as the Schott series n² = A² + 2AB/λ² + B²/λ⁴.
+        nd, vd = float(m.nd), float(m.vd)
+        b = (nd - 1.0) / vd / (M.LAMBDA_F**-2 - M.LAMBDA_C**-2)
+        a = nd - b * M.LAMBDA_D**-2
+        return 1, [a * a, 0.0, 2 * a * b, b * b, 0.0, 0.0]
+    if isinstance(m, M.Sellmeier):
+        B, C = np.asarray(m.B, np.float64), np.asarray(m.C, np.float64)
+        k = B.size
+        if k > 5:
+            return None
+        form = {4: 6, 5: 11}.get(k, 2)
+        terms = max(k, 3) if form == 2 else k
+        B, C = np.pad(B, (0, terms - k)), np.pad(C, (0, terms - k))
+        return form, [float(v) for pair in zip(B, C, strict=True) for v in pair]
+    laurent = getattr(M, "Laurent", None)
+    if laurent is not None and isinstance(m, laurent):
+        table = {
+            tuple(M.EXTENDED_POWERS): 10,
+            tuple(M.EXTENDED2_POWERS): 12,
+            tuple(M.EXTENDED3_POWERS): 13,
+        }
+        form = table.get(tuple(m.powers))
+        return None if form is None else (form, [float(v) for v in np.asarray(m.coeffs)])
+    for cls, form in kinds:
+        if cls is not None and isinstance(m, cls):
+            return form, [float(v) for v in np.asarray(m.coeffs, np.float64)]
+    return None
+
+
+_SCHOTT_POWERS = (0, -2, -4, 2, -6, -8)  # order in which the fit adds Schott terms
+
+
+def _schott_fit(wl: np.ndarray, n: np.ndarray) -> list[float]:
+    """Schott-formula coefficients through (wl, n): exact for ≤ 6 points, else least squares."""
+    k = min(len(wl), 6)
+    powers = _SCHOTT_POWERS[:k]
+    A = np.stack([wl**p for p in powers], axis=-1)
+    sol, *_ = np.linalg.lstsq(A, n**2, rcond=None)
+    order = {0: 0, 2: 1, -2: 2, -4: 3, -6: 4, -8: 5}
+    out = [0.0] * 6
+    for p, v in zip(powers, sol, strict=True):
+        out[order[p]] = float(v)
+    return out
+
+
+def _nd_vd(m: AbstractMaterial) -> tuple[float, float]:
+    n = np.asarray(
+        m.index(np.array([_materials.LAMBDA_D, _materials.LAMBDA_F, _materials.LAMBDA_C])),
+        np.float64,
+    )
+    dn = n[1] - n[2]
+    return float(n[0]), float((n[0] - 1.0) / dn) if dn != 0 else 0.0
+
+
+@dataclass
+class _AgfGlass:
+    name: str
+    material: AbstractMaterial
+    marker: bool
+
+
+def _sanitize(name: str) -> str:
+    s = re.sub(r"[^A-Z0-9_\-.]", "_", name.upper())
+    return s or "GLASS"
+
+
+class _GlassWriter:
+    """Decides how each material is written and collects the side AGF catalogs."""
+
+    def __init__(self, stem: str, model_glass: str):
+        base = _sanitize(stem).replace(".", "_").replace("-", "_")
+        self.own = base if base not in ZEMAX_CATALOGS else base + "_JL"
+        self.model_glass = model_glass
+        self.agf: dict[str, list[_AgfGlass]] = {}
+        self.catalogs: list[str] = []
+
+    def _use(self, cat: str) -> None:
+        if cat not in self.catalogs:
+            self.catalogs.append(cat)
+
+    def _add(self, cat: str, name: str, m: AbstractMaterial, marker: bool) -> str:
+        entries = self.agf.setdefault(cat, [])
+        base, i = name, 1
+        while True:
+            same = [e for e in entries if e.name.upper() == name.upper()]
+            if not same:
+                entries.append(_AgfGlass(name, m, marker))
+                return name
+            if lensfile.same_material(same[0].material, m):
+                return name
+            i += 1
+            name = f"{base}_{i}"
+
+    def glas(self, m: AbstractMaterial) -> str | None:
+        """The GLAS line for a material (None for air)."""
+        if isinstance(m, Air):
+            return None
+        if isinstance(m, ModelGlass) and self.model_glass == "blank":
+            vd = float(m.vd)
+            return (
+                f"GLAS ___BLANK 1 0 {float(m.nd)!r} {_z(0.0 if math.isinf(vd) else vd)} 0 0 0 0 0 0"
+            )
+        cat = _zemax_catalog(m)
+        if cat is not None:
+            self._use(cat)
+            return f"GLAS {m.name} 0 0 {float(m.catalog_nd)!r} {_z(m.catalog_vd)} 0 0 0 0 0 0"
+        plain = (
+            type(m).__name__ == "CatalogMaterial"
+            and m.catalog
+            and m.catalog not in ZEMAX_CATALOGS
+            and re.fullmatch(r"[\w\-.]+", m.name)
+            and re.fullmatch(r"\w+", m.catalog)
+            and _formula(m) is not None
+            and m.formula == _formula(m)[0]
+            and not any(
+                e.name.upper() == m.name.upper() and not lensfile.same_material(e.material, m)
+                for e in self.agf.get(m.catalog, [])
+            )
+        )
+        if plain:  # a user AGF glass: its own catalog, read back exactly by load_agf
+            cat = m.catalog
+            name = self._add(cat, m.name, m, marker=False)
+        else:  # exact definition kept in a GC record
+            cat = self.own
+            name = self._add(cat, _sanitize(getattr(m, "name", "") or "JLGLASS"), m, True)
+        if cat not in self.catalogs:
+            self.catalogs.insert(0, cat)  # side catalogs first: Zemax searches in order
+        nd, vd = self._nd_vd_of(m)
+        return f"GLAS {name} 0 0 {nd!r} {_z(vd)} 0 0 0 0 0 0"
+
+    @staticmethod
+    def _nd_vd_of(m):
+        if type(m).__name__ == "CatalogMaterial" and math.isfinite(m.catalog_nd):
+            return float(m.catalog_nd), float(m.catalog_vd)
+        return _nd_vd(m)
+
+    def write_agf(self, folder: str, wavelengths: np.ndarray) -> list[str]:
+        written = []
+        lo = min(0.3, float(np.min(wavelengths)))
+        hi = max(2.5, float(np.max(wavelengths)))
+        for cat, entries in self.agf.items():
+            lines = [f"CC {cat}: glasses written by jaxlens"]
+            for e in entries:
+                m = e.material
+                nd, vd = self._nd_vd_of(m)
+                exact = _formula(m)
+                if exact is not None:
+                    form, coeffs = exact
+                elif isinstance(m, Tabulated):
+                    form = 1
+                    coeffs = _schott_fit(
+                        np.asarray(m.wavelengths, np.float64), np.asarray(m.indices, np.float64)
+                    )
+                else:
+                    w = np.unique(np.concatenate([np.linspace(0.38, 1.0, 32), wavelengths]))
+                    form, coeffs = 1, _schott_fit(w, np.asarray(m.index(w), np.float64))
+                code = f"{round((nd - 1) * 1000):03d}{round(vd * 10) % 1000:03d}"
+                lines.append(f"NM {e.name} {form} {code} {nd!r} {vd!r} 0 0 0")
+                if e.marker:
+                    spec = lensfile.material_to_spec(m, by_name=False)
+                    lines.append("GC " + MARKER + json.dumps(spec, separators=(",", ":")))
+                lines.append("ED 0 0 0 0 0")
+                lines.append("CD " + " ".join(_z(c) for c in coeffs))
+                lines.append("TD 0 0 0 0 0 0 20")
+                rng = (lo, hi) if e.marker else getattr(m, "wavelength_range", None)
+                if rng is not None:
+                    lines.append(f"LD {float(rng[0])!r} {float(rng[1])!r}")
+            path = os.path.join(folder, f"{cat}.AGF")
+            with open(path, "w", encoding="utf-8", newline="\r\n") as fh:
+                fh.write("\n".join(lines) + "\n")
+            written.append(path)
+        return written
+
+
+def surface_lines(s: AbstractSurface, *, image: bool = False) -> list[str]:
+    out = []
+    if isinstance(s, Hybrid):
+        a = [float(v) for v in np.asarray(s.coeffs)]
+        bx = [float(v) for v in np.asarray(s.odd_x)]
+        by = [float(v) for v in np.asarray(s.odd_y)]
+        deg = max(2 * len(a), 2 * len(bx) + 1 if bx else 0)
+        if deg > MAX_XPOLY_DEGREE:
+            raise ValueError(
+                f"save_zmx: hybrid surface of degree {deg} exceeds Zemax's "
+                f"extended polynomial (degree {MAX_XPOLY_DEGREE})"
+            )
+        n = (deg + 1) * (deg + 2) // 2 - 1 if deg else 0
+        terms = xpoly_terms(a, bx, by)
+        out += ["TYPE XPOLYNOM", f"COMM jaxlens hybrid even={len(a)} odd={len(bx)}"]
+        out += [
+            f'CURV {_z(s.c)} 0 0 0 0 ""',
+            f"CONI {_z(s.k)}",
+            f'XDAT 1 {n} 0 0 1 0 0 ""',
+            'XDAT 2 1.0 0 0 1 0 0 ""',
+        ]
+        for j in range(1, n + 1):
+            v = terms.get(term_powers(j), 0.0)
+            out.append(f'XDAT {j + 2} {_z(v)} 0 0 1 0 0 ""')
+    elif isinstance(s, EvenAsphere):
+        a = [float(v) for v in np.asarray(s.coeffs)]
+        if len(a) <= 8:
+            out += ["TYPE EVENASPH", f'CURV {_z(s.c)} 0 0 0 0 ""', f"CONI {_z(s.k)}"]
+            out += [f"PARM {i} {_z(v)}" for i, v in enumerate(a, start=1)]
+        else:
+            out += [
+                "TYPE XASPHERE",
+                f'CURV {_z(s.c)} 0 0 0 0 ""',
+                f"CONI {_z(s.k)}",
+                f'XDAT 1 {len(a)} 0 0 1 0 0 ""',
+                'XDAT 2 1.0 0 0 1 0 0 ""',
+            ]
+            out += [f'XDAT {i + 2} {_z(v)} 0 0 1 0 0 ""' for i, v in enumerate(a, start=1)]
+    elif isinstance(s, Standard):
+        out += ["TYPE STANDARD", f'CURV {_z(s.c)} 0 0 0 0 ""', f"CONI {_z(s.k)}"]
+    else:
+        raise ValueError(f"save_zmx: surface type {type(s).__name__} has no .zmx form")
+    if image and isinstance(s, Hybrid):
+        raise ValueError("save_zmx: the image surface must be standard or an even asphere")
+    return out
+
+
+def dumps(lens: Lens, path: str = "lens.zmx", *, model_glass: str = "blank"):
+    """Text of a ``.zmx`` file and the glass writer holding its side AGF catalogs."""
+    if model_glass not in ("blank", "agf"):
+        raise ValueError(f"save_zmx: model_glass must be 'blank' or 'agf', got {model_glass!r}")
+    stem = os.path.splitext(os.path.basename(os.fspath(path)))[0]
+    gw = _GlassWriter(stem, model_glass)
+    fields = np.asarray(lens.fields, np.float64)
+    fields = fields.reshape(-1, 2) if fields.ndim == 2 else fields.reshape(-1)
+    xs = fields[:, 0] if fields.ndim == 2 else np.zeros_like(fields)
+    ys = fields[:, 1] if fields.ndim == 2 else fields
+    wl = np.atleast_1d(np.asarray(lens.wavelengths, np.float64))
+    surf_lines = []
+
+    def block(number, lines, t, glas, sd, stop=False):
+        surf_lines.append(f"SURF {number}")
+        if stop:
+            surf_lines.append("  STOP")
+        surf_lines.extend("  " + x for x in lines)
+        surf_lines.append(f"  DISZ {'INFINITY' if math.isinf(t) else _z(t)}")
+        if glas:
+            surf_lines.append("  " + glas)
+        sd = float(sd)
+        surf_lines.append(
+            f'  DIAM {_z(sd)} 1 0 0 1 ""' if math.isfinite(sd) else '  DIAM 0 0 0 0 1 ""'
+        )
+
+    dist = math.inf if lens.object_distance is None else float(lens.object_distance)
+    block(0, ["TYPE STANDARD", 'CURV 0 0 0 0 0 ""'], dist, gw.glas(lens.object_material), np.inf)
+    for i, s in enumerate(lens.surfaces):
+        block(
+            i + 1,
+            surface_lines(s),
+            float(lens.thickness[i]),
+            gw.glas(lens.materials[i]),
+            s.semi_diameter,
+            stop=i == lens.stop,
+        )
+    img = surface_lines(lens.image, image=True)
+    if lens.sensor is not None:
+        rows, cols = lens.sensor.resolution
+        img.append(
+            f"COMM jaxlens sensor rows={rows} cols={cols} pixel={float(lens.sensor.pixel_size)!r}"
+        )
+    block(lens.num_surfaces + 1, img, 0.0, None, lens.image.semi_diameter)
+    head = [
+        "VERS 190513 80 123457 L123457",
+        "MODE SEQ",
+        f"NAME {' '.join(lens.name.split())}".rstrip(),
+        "UNIT MM X W X CM MR CPMM",
+        f"ENPD {_z(lens.epd)}",
+        "ENVD 2.0E+1 1 0",
+        "GFAC 0 0",
+        "GCAT " + " ".join(gw.catalogs or ["SCHOTT"]),
+        f"FTYP 0 0 {len(ys)} {len(wl)} 0 0 0",
+        "XFLN " + " ".join(_z(v) for v in xs),
+        "YFLN " + " ".join(_z(v) for v in ys),
+        "FWGN " + " ".join("1" for _ in ys),
+    ]
+    head += [f"WAVM {i} {_z(w)} 1" for i, w in enumerate(wl, start=1)]
+    head.append(f"PWAV {lens.primary + 1}")
+    return "\n".join(head + surf_lines) + "\n", gw
+
+
+def save_zmx(lens: Lens, path: str | os.PathLike, *, model_glass: str = "blank") -> list[str]:
+    """Write a Zemax ``.zmx`` file (UTF-8, CRLF line ends) and its side ``.AGF`` catalogs.
+
+    Args:
+        lens: the lens.
+        path: the ``.zmx`` file.
+        model_glass: ``"blank"`` writes a ``ModelGlass`` as Zemax's own model glass
+            (``GLAS ___BLANK 1 0 nd Vd …``, exact nd and Vd; Zemax's model dispersion away
+            from the d line differs slightly from jaxlens's); ``"agf"`` writes it into the
+            side AGF catalog with the Schott formula that reproduces jaxlens's dispersion
+            exactly.
+
+    Returns:
+        The paths of the AGF catalogs written beside the file (possibly none).
+    """
+    path = os.fspath(path)
+    text, gw = dumps(lens, path, model_glass=model_glass)
+    folder = os.path.dirname(os.path.abspath(path))
+    agfs = gw.write_agf(folder, np.atleast_1d(np.asarray(lens.wavelengths, np.float64)))
+    with open(path, "w", encoding="utf-8", newline="\r\n") as fh:
+        fh.write(text)
+    return agfs

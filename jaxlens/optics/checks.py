@@ -1,0 +1,232 @@
+"""Input validation shared by the entry points: refuse bad input before any long work.
+
+Every refusal is a ``ValueError`` that names the caller, the argument, the value, the
+valid range and the unit. Inside ``jit`` a value is not known, so the same checks attach
+``eqx.error_if`` to the array instead (its message names the range, not the value).
+
+Wavelengths are in µm. A material's valid range is its catalog's (the AGF ``LD`` record,
+``CatalogMaterial.wavelength_range``); other materials get ``GENERIC_RANGE_UM``, which no
+optical glass model is meant for outside. Field angles are in degrees and must lie in
+(−90°, 90°): a collimated beam's direction is (tan θx, tan θy, 1), which wraps at 90°.
+"""
+
+from __future__ import annotations
+
+import math
+
+import equinox as eqx
+import jax
+import jax.numpy as jnp
+import numpy as np
+
+GENERIC_RANGE_UM = (0.15, 30.0)
+"""Wavelengths (µm) accepted for materials without catalog data (model glasses, formulas)."""
+
+UNIT_TOLERANCE = 1e-4
+"""Largest accepted deviation of a ray direction's length from 1."""
+
+_REL = 1e-6  # wavelength bounds are compared with this relative slack (float32 rounding)
+
+
+def is_traced(x) -> bool:
+    """True for a JAX tracer (inside jit, grad or vmap): its value is not known."""
+    return any(isinstance(leaf, jax.core.Tracer) for leaf in jax.tree_util.tree_leaves(x))
+
+
+def fmt(v) -> str:
+    """A value or the first few values of an array, for messages."""
+    a = np.asarray(v)
+    if a.size == 1:
+        return f"{float(a.reshape(-1)[0]):g}"
+    return np.array2string(a.reshape(-1)[:8], precision=6, separator=", ") + (
+        " …" if a.size > 8 else "")
+
+
+def number(value, arg: str, where: str, *, lo=None, hi=None, lo_open=False, hi_open=False,
+           unit: str = "", integer: bool = False) -> float | int:
+    """A finite number within [lo, hi] (open ends where asked); raises ValueError otherwise.
+
+    Args:
+        value: The value given.
+        arg: The argument's name as the user wrote it (``"--steps"``, ``"overfill"``).
+        where: The caller (``"psf"``, ``"render"``, ``"design"``).
+        lo, hi: Bounds, None for unbounded.
+        lo_open, hi_open: Exclude the bound itself.
+        unit: Unit named in the message (``"mm"``, ``"µm"``, ``"deg"``, ``""``).
+        integer: Require a whole number (bools are refused).
+
+    Returns:
+        The value as float (or int when ``integer``).
+    """
+    left = "(" if lo_open or lo is None else "["
+    right = ")" if hi_open or hi is None else "]"
+    low = "-inf" if lo is None else f"{lo:g}"
+    high = "inf" if hi is None else f"{hi:g}"
+    span = f"{left}{low}, {high}{right}"
+    kind = "a whole number" if integer else "a finite number"
+    u = f" {unit}" if unit else ""
+    shown = repr(value) if isinstance(value, (str, bool, int, float)) else fmt(value)
+    msg = f"{where}: {arg} must be {kind} in {span}{u}, got {shown}"
+    if isinstance(value, bool) or isinstance(value, str):
+        raise ValueError(msg)
+    try:
+        a = np.asarray(value, dtype=float)
+    except (TypeError, ValueError):
+        raise ValueError(msg) from None
+    if a.size != 1:
+        raise ValueError(msg)
+    v = float(a.reshape(-1)[0])
+    bad = not math.isfinite(v)
+    bad |= lo is not None and (v <= lo if lo_open else v < lo)
+    bad |= hi is not None and (v >= hi if hi_open else v > hi)
+    if integer and not bad:
+        bad = v != int(v) or (not isinstance(value, (int, np.integer)) and
+                              not float(value).is_integer())
+    if bad:
+        raise ValueError(msg)
+    return int(v) if integer else v
+
+
+# ---------------------------------------------------------------------------- wavelengths
+
+
+def material_range(material) -> tuple[float, float]:
+    """Wavelength range (µm) over which a material's data holds."""
+    rng = getattr(material, "wavelength_range", None)
+    if rng is not None:
+        return float(rng[0]), float(rng[1])
+    return GENERIC_RANGE_UM
+
+
+def _label(material, what: str) -> str:
+    name = getattr(material, "name", "") or type(material).__name__
+    cat = getattr(material, "catalog", "")
+    return f"{name}{f' ({cat})' if cat else ''} {what}"
+
+
+def _lens_materials(lens) -> list[tuple[object, str]]:
+    out = [(lens.object_material, "in object space")]
+    out += [(m, f"after surface {i + 1}") for i, m in enumerate(lens.materials)]
+    return out
+
+
+def wavelength_range(lens) -> tuple[float, float, str]:
+    """(lo, hi, reason): the wavelengths (µm) every material of the lens has data for."""
+    lo, hi = GENERIC_RANGE_UM
+    why_lo = why_hi = "jaxlens's range for materials without catalog data"
+    for m, what in _lens_materials(lens):
+        if m is None or type(m).__name__ == "Air":
+            continue
+        a, b = material_range(m)
+        if a > lo:
+            lo, why_lo = a, f"the data range of {_label(m, what)}"
+        if b < hi:
+            hi, why_hi = b, f"the data range of {_label(m, what)}"
+    reason = why_lo if why_lo == why_hi else f"{why_lo}; {why_hi}"
+    return lo, hi, reason
+
+
+def _nm_hint(wl) -> str:
+    a = np.abs(np.asarray(wl, dtype=float).reshape(-1))
+    big = a[np.isfinite(a) & (a > 100)]
+    if big.size:
+        v = float(big[0])
+        return f" (wavelengths are in µm: {v:g} nm is {v / 1000:g} µm)"
+    small = a[np.isfinite(a) & (a > 0) & (a < 0.01)]
+    if small.size:
+        v = float(small[0]) * 1000
+        return f" (that is {v:g} nm: were µm given where nm are expected?)"
+    return " (wavelengths are in µm)"
+
+
+def wavelengths(lens, wl, where: str, arg: str = "wavelength"):
+    """Check wavelengths (µm) against the lens's materials; returns ``wl``.
+
+    A concrete value out of range raises ``ValueError`` at once; a traced one gets an
+    ``eqx.error_if`` that fires when the computation runs.
+    """
+    lo, hi, why = wavelength_range(lens)
+    if is_traced(wl):
+        w = jnp.asarray(wl)
+        bad = ~jnp.isfinite(w) | (w < lo * (1 - _REL)) | (w > hi * (1 + _REL))
+        return eqx.error_if(
+            wl, jnp.any(bad),
+            f"{where}: {arg} outside {lo:g}–{hi:g} µm, {why}; wavelengths are in µm "
+            f"(587.6 nm is 0.5876 µm)")
+    a = np.asarray(wl, dtype=float)
+    bad = ~np.isfinite(a) | (a < lo * (1 - _REL)) | (a > hi * (1 + _REL))
+    if np.any(bad):
+        raise ValueError(
+            f"{where}: {arg} {fmt(a[bad])} µm is outside {lo:g}–{hi:g} µm, {why}"
+            f"{_nm_hint(a[bad])}")
+    return wl
+
+
+def material_indices(lens, wl, where: str, arg: str = "wavelength") -> None:
+    """Refuse materials whose index at the (concrete) wavelengths is not finite or below 1."""
+    if is_traced(wl) or is_traced(lens):
+        return
+    w = np.atleast_1d(np.asarray(wl, dtype=float))
+    for m, what in _lens_materials(lens):
+        material(m, w, f"{where}: {_label(m, what)}", arg=arg)
+
+
+def material(m, wl, where: str, arg: str = "wavelength") -> None:
+    """Refuse a material whose index at the wavelengths (µm) is NaN, infinite or below 1."""
+    if is_traced(m) or is_traced(wl):
+        return
+    w = np.atleast_1d(np.asarray(wl, dtype=float))
+    n = np.asarray(m.index(jnp.asarray(w)), dtype=float)
+    bad = ~np.isfinite(n) | (n < 1.0 - 1e-9)
+    if np.any(bad):
+        raise ValueError(
+            f"{where}: refractive index {fmt(n[bad])} at {arg} {fmt(w[bad])} µm; a material "
+            f"needs a finite index >= 1 (check its dispersion coefficients or nd)")
+
+
+# ---------------------------------------------------------------------------- rays and fields
+
+
+def field_angles(field, where: str, arg: str = "field"):
+    """Field angles (degrees) must be finite and inside (−90°, 90°); returns ``field``."""
+    msg = f"{where}: {arg} must be finite angles in (-90, 90) deg"
+    if is_traced(field):
+        f = jnp.asarray(field)
+        return eqx.error_if(field, jnp.any(~(jnp.abs(f) < 90.0)), msg)
+    a = np.asarray(field, dtype=float)
+    bad = ~(np.abs(a) < 90.0)
+    if np.any(bad):
+        raise ValueError(f"{msg}, got {fmt(a[bad])} deg (tan θ wraps at 90°: 120° would "
+                         f"be traced as -60°)")
+    return field
+
+
+def unit_directions(direction, valid, where: str = "Rays") -> None:
+    """Refuse (concrete) ray directions that are not unit vectors."""
+    if is_traced(direction) or is_traced(valid):
+        return
+    d = np.asarray(direction, dtype=float)
+    if d.size == 0:
+        return
+    norm = np.sqrt(np.sum(d * d, axis=-1))
+    v = np.broadcast_to(np.asarray(valid, bool), norm.shape)
+    bad = v & ~(np.abs(norm - 1.0) <= UNIT_TOLERANCE)
+    if np.any(bad):
+        raise ValueError(
+            f"{where}: direction must hold unit vectors (length 1 ± {UNIT_TOLERANCE:g}), got "
+            f"length {fmt(norm[bad][:1])} for {int(bad.sum())} ray(s); normalise with "
+            f"d / jnp.linalg.norm(d, axis=-1, keepdims=True)")
+
+
+def finite_array(x, arg: str, where: str, unit: str = ""):
+    """Refuse NaN or infinite entries (ValueError, or ``eqx.error_if`` under jit)."""
+    u = f" ({unit})" if unit else ""
+    if is_traced(x):
+        return eqx.error_if(x, jnp.any(~jnp.isfinite(x)), f"{where}: {arg}{u} holds NaN or inf")
+    a = np.asarray(x)
+    bad = ~np.isfinite(a)
+    if np.any(bad):
+        first = tuple(int(i) for i in np.argwhere(bad)[0])
+        raise ValueError(f"{where}: {arg}{u} holds {int(bad.sum())} NaN or infinite value(s), "
+                         f"first at index {first}: {a[first]!r}; every value must be finite")
+    return x
