@@ -21,17 +21,47 @@ def classical():
 
 # --- losses ------------------------------------------------------------------------------
 def test_losses_on_known_values():
-    gt = jnp.zeros((2, 4, 4, 3))
-    sim = jnp.stack([jnp.full_like(gt, 0.1), jnp.full_like(gt, 0.3)])
-    rec = jnp.stack([jnp.full_like(gt, -0.2), jnp.full_like(gt, 0.2)])
-    assert float(LS.l_sim(sim)) == pytest.approx(0.2)
+    # Three different term values (L_rec 0.1, L_sim 0.4, L_raw 0.2) and unequal weights, so a
+    # swapped weight or a term computed from the wrong images changes the total.
+    gt = jnp.full((2, 4, 4, 3), 0.5).at[0, 0, 0, 0].set(0.7)
+    sim = jnp.stack([gt + 0.1, gt - 0.3])
+    rec = jnp.stack([gt - 0.05, gt + 0.15])
+    assert float(LS.l_sim(sim)) == pytest.approx(0.4)
     assert float(LS.l_raw(sim, gt)) == pytest.approx(0.2)
-    assert float(LS.l_rec(rec, gt)) == pytest.approx(0.2)
+    assert float(LS.l_rec(rec, gt)) == pytest.approx(0.1)
     total, parts = LS.edof_loss(rec, sim, gt, w_sim=0.5, w_raw=0.25)
-    assert float(total) == pytest.approx(0.2 + 0.5 * 0.2 + 0.25 * 0.2)
-    assert set(parts) == {"rec", "sim", "raw"}
+    assert float(total) == pytest.approx(0.1 + 0.5 * 0.4 + 0.25 * 0.2)
+    assert {k: float(v) for k, v in parts.items()} == pytest.approx(
+        {"rec": 0.1, "sim": 0.4, "raw": 0.2})
     # Simulations that agree across depths cost nothing in L_sim.
     assert float(LS.l_sim(jnp.stack([sim[0], sim[0]]))) == 0.0
+    # The distances are L1: errors of ±0.2 on half the pixels cost 0.1, not 0.02 (L2).
+    half = jnp.where(jnp.arange(3) % 2 == 0, 0.2, -0.2) * (jnp.arange(4)[:, None, None] < 2)
+    assert float(LS.l_rec(jnp.stack([gt + half, gt + half]), gt)) == pytest.approx(0.1)
+
+
+def test_table2_rec_metrics_come_from_the_reconstruction(classical):
+    """``train.evaluate``: "sim" scores the noisy simulation, "rec" the network's output."""
+    from jaxlens.edof import train
+    from jaxlens.images import psnr, ssim
+
+    cfg = train.Config(binning=8, patch=64, kernel_size=5, eval_pupil=4, noise=0.02)
+    rng = np.random.default_rng(0)
+    img = rng.random((128, 128, 3))
+
+    def grey(x):  # a "network" that returns mid-grey: its PSNR is known in closed form
+        return jnp.full_like(x, 0.5)
+
+    metrics, ex = train.evaluate(classical, grey, [img], [0.2], cfg, key=jax.random.PRNGKey(0),
+                                 keep=0)
+    m = metrics["0.2"]
+    sim, rec = ex["0.2"]
+    np.testing.assert_array_equal(rec, 0.5)
+    want = 10 * np.log10(1.0 / np.mean((img - 0.5) ** 2))
+    assert m["rec"]["psnr"] == pytest.approx(want, rel=1e-9)
+    assert m["rec"]["ssim"] == pytest.approx(ssim(img, rec, data_range=1.0), rel=1e-9)
+    assert m["sim"]["psnr"] == pytest.approx(psnr(img, sim, data_range=1.0), rel=1e-9)
+    assert abs(m["sim"]["psnr"] - m["rec"]["psnr"]) > 1.0
 
 
 def test_loss_shape_errors():
