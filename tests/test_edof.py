@@ -285,5 +285,9 @@ def test_smoke_run_writes_outputs_and_loss_falls(tmp_path):
         h = summary["history"][name]["stage1"]
         assert h[-1]["loss"] < h[0]["loss"], name
     assert (tmp_path / "rec" / "table2.md").is_file()
-    v = summary["psf_depth_variation"]
-    assert 0 <= v["hybrid"]["l1"] <= 2 and 0 <= v["classical"]["l1"] <= 2
+    # PSFs at 10 cm, 20 cm and 10 m differ (the smoke lenses are far from depth-invariant,
+    # about 0.25 in L1 of unit-sum PSFs), and the summary is the mean over the 3 fields.
+    for name, v in summary["psf_depth_variation"].items():
+        assert len(v["l1_per_field"]) == len(v["ncc_per_field"]) == 3, name
+        assert v["l1"] == pytest.approx(np.mean(v["l1_per_field"]), rel=1e-9)
+        assert 0.05 < v["l1"] < 1.0 and 0.5 < v["ncc"] < 1.0, (name, v)
