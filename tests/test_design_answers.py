@@ -201,6 +201,23 @@ def test_field_weights_use_the_area_weighted_mean():
     np.testing.assert_allclose(w[0], [0, 0, 0.125, 0.875], rtol=1e-12)
     w = mask.field_weights(jnp.asarray(RMS)[None], jnp.asarray(AREA), mask=False, irls=False)
     np.testing.assert_allclose(w[0], AREA, rtol=1e-12)
+    # Realistic RMS values (mm) and shares that do not sum to 1 (e.g. pixel counts), one
+    # design (1-D) and a batch of three (3-D): the same answer.
+    rms_mm = 2e-3 * RMS
+    m = mask.reweighting_mask(jnp.asarray(rms_mm), jnp.asarray(70 * AREA))
+    np.testing.assert_allclose(m, [0, 0, 3 / 3.4, 4 / 3.4], rtol=1e-12)
+    w = mask.field_weights(jnp.asarray(rms_mm), jnp.asarray(70 * AREA), mask=True, irls=False)
+    np.testing.assert_allclose(w, AREA * keep / np.sum(AREA * keep), rtol=1e-12)
+    b = jnp.broadcast_to(jnp.asarray(rms_mm), (3, 1, 4))
+    w = mask.field_weights(b, jnp.asarray(70 * AREA), mask=True, irls=True)
+    np.testing.assert_allclose(w, np.broadcast_to([0, 0, 0.125, 0.875], (3, 1, 4)), rtol=1e-12)
+    # A field exactly at the threshold stays; a perfect lens (zero mean) keeps every field.
+    np.testing.assert_allclose(mask.reweighting_mask(jnp.asarray([0.8, 1.2]) * 1e-3),
+                               [0.8, 1.2], rtol=1e-12)
+    np.testing.assert_array_equal(mask.reweighting_mask(jnp.zeros(3), jnp.ones(3)), 1.0)
+    # Weights of a batch row whose fields are all dropped stay finite (zero).
+    w = mask.field_weights(jnp.zeros((1, 3)), jnp.zeros(3), mask=False, irls=False)
+    np.testing.assert_array_equal(w, 0.0)
 
 
 class _Probe(eqx.Module):
