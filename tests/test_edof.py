@@ -66,7 +66,10 @@ def test_table2_rec_metrics_come_from_the_reconstruction(classical):
 
 def test_loss_shape_errors():
     gt = jnp.zeros((2, 4, 4, 3))
-    with pytest.raises(ValueError, match="edof_loss"):
+    # The message names the function, the shapes it needs and the shapes it got.
+    with pytest.raises(ValueError, match=r"^edof_loss: need rec and sim of shape \[2, \*b\] and "
+                       r"gt of shape \[\*b\], got \(3, 2, 4, 4, 3\), \(3, 2, 4, 4, 3\), "
+                       r"\(2, 4, 4, 3\)$"):
         LS.edof_loss(jnp.zeros((3, 2, 4, 4, 3)), jnp.zeros((3, 2, 4, 4, 3)), gt, w_sim=1, w_raw=1)
 
 
