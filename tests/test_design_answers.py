@@ -272,3 +272,48 @@ def test_run_applies_mask_and_regularizers_per_stage(irls):
     np.testing.assert_allclose(hist.loss[0], 2 + 30 + 500, rtol=1e-12)
     np.testing.assert_allclose(hist.loss[1], 2 + 30 + 500, rtol=1e-12)
     np.testing.assert_allclose(hist.loss[2], 0.0)
+
+
+def test_obliquity_residuals_are_the_hinge_of_the_cosines_on_both_sides():
+    # Surfaces: the stop (no residuals), a flat face and a sphere; synthetic ray directions
+    # before and after each surface, so that every cosine is known in closed form.
+    c = 0.2
+    lens = _lens([jl.Stop(), jl.EvenAsphere(0.0, 0.0, (0.0,)), jl.EvenAsphere(c, 0.0, (0.0,))],
+                 [1.0, 1.0, 1.0])
+    stack = fasttrace.stacked_surfaces(lens)
+    rng = np.random.default_rng(7)
+    K, P = 2, 5
+
+    def unit(tilt):  # directions at up to `tilt` rad from the axis
+        th = rng.uniform(0, tilt, (K, P))
+        ph = rng.uniform(0, 2 * np.pi, (K, P))
+        return np.stack([np.sin(th) * np.cos(ph), np.sin(th) * np.sin(ph), np.cos(th)], -1)
+
+    d_in = unit(1.2)
+    d = np.stack([unit(1.2), unit(1.2), unit(1.2), unit(0.1)])  # after each surface, image
+    o = np.zeros((4, K, P, 3))
+    o[..., :2] = rng.uniform(-2, 2, (4, K, P, 2))
+    valid = np.ones((4, K, P), bool)
+    valid[1, 0, 0] = False  # a failed ray costs no obliquity
+    rays = jl.Rays(jnp.asarray(np.broadcast_to(o[0], (K, P, 3))), jnp.asarray(d_in), 0.55)
+    path = jl.Rays(jnp.asarray(o), jnp.asarray(d), 0.55, valid=jnp.asarray(valid))
+    got = np.asarray(regularizers.obliquity(stack, lens.stop, rays, path))
+
+    def normal(i, xy):
+        if i < 2:
+            return np.broadcast_to([0.0, 0.0, 1.0], xy.shape[:-1] + (3,))
+        r2 = np.sum(xy**2, -1, keepdims=True)
+        g = c * xy / np.sqrt(1 - c**2 * r2)  # the sphere's sag gradient
+        n = np.concatenate([-g, np.ones_like(r2)], -1)
+        return n / np.linalg.norm(n, axis=-1, keepdims=True)
+
+    want = []
+    for i in (1, 2):
+        n = normal(i, o[i, ..., :2])
+        cos_in = np.abs(np.sum(d[i - 1] * n, -1))
+        cos_out = np.abs(np.sum(d[i] * n, -1))
+        h = np.where(valid[i], np.maximum(0.7 - np.minimum(cos_in, cos_out), 0.0), 0.0)
+        want.append(np.sqrt(np.sum(h**2, -1) / (K * P)))
+    want = np.concatenate(want)
+    assert np.all(want > 0)
+    np.testing.assert_allclose(got, want, rtol=1e-10)
