@@ -18,7 +18,7 @@ declare -A FILE SEL ONLY
 FILE[mask]=jaxlens/design/mask.py
 SEL[mask]="$T::test_field_weights_use_the_area_weighted_mean $D::test_reweighting_mask $T::test_run_applies_mask_and_regularizers_per_stage"
 FILE[regularizers]=jaxlens/design/regularizers.py
-SEL[regularizers]="$T::test_slope_residuals_are_the_hinge_of_the_parabola_slope $T::test_spacing_residuals_use_both_sags_and_the_image $T::test_clear_radii_are_the_largest_valid_heights $D::test_soft_hinge_is_a_hinge_near_the_bound_and_never_overflows $D::test_spacing_and_slope_zero_inside_and_pull_back_outside $D::test_obliquity_zero_inside_and_pull_back_outside"
+SEL[regularizers]="$T::test_obliquity_residuals_are_the_hinge_of_the_cosines_on_both_sides $T::test_slope_residuals_are_the_hinge_of_the_parabola_slope $T::test_spacing_residuals_use_both_sags_and_the_image $T::test_clear_radii_are_the_largest_valid_heights $D::test_soft_hinge_is_a_hinge_near_the_bound_and_never_overflows $D::test_spacing_and_slope_zero_inside_and_pull_back_outside $D::test_obliquity_zero_inside_and_pull_back_outside"
 FILE[losses]=jaxlens/design/losses.py
 SEL[losses]="$T tests/test_design_residuals.py"
 FILE[curriculum]=jaxlens/design/curriculum.py
