@@ -41,27 +41,39 @@ def test_losses_on_known_values():
 
 
 def test_table2_rec_metrics_come_from_the_reconstruction(classical):
-    """``train.evaluate``: "sim" scores the noisy simulation, "rec" the network's output."""
+    """``train.evaluate``: "sim" scores the noisy simulation at the depth in m (rendered at
+    1000·d mm, clipped to [0, 1]), "rec" the network's output clipped to [0, 1]."""
     from jaxlens.edof import train
     from jaxlens.images import psnr, ssim
 
     cfg = train.Config(binning=8, patch=64, kernel_size=5, eval_pupil=4, noise=0.02)
     rng = np.random.default_rng(0)
     img = rng.random((128, 128, 3))
+    img[:40, :40] = 1.0  # a white corner: blur plus noise goes above 1 there
+    target = np.clip(rng.normal(0.5, 0.6, img.shape), -0.5, 1.5)
 
-    def grey(x):  # a "network" that returns mid-grey: its PSNR is known in closed form
-        return jnp.full_like(x, 0.5)
+    def net(x):  # a "network" whose output is known: its PSNR is known in closed form
+        return jnp.asarray(target, x.dtype)
 
-    metrics, ex = train.evaluate(classical, grey, [img], [0.2], cfg, key=jax.random.PRNGKey(0),
-                                 keep=0)
+    # Two images (the second the negative of the first); keep=0 returns the first.
+    metrics, ex = train.evaluate(classical, net, [img, 1.0 - img], [0.2], cfg,
+                                 key=jax.random.PRNGKey(0), keep=0)
     m = metrics["0.2"]
     sim, rec = ex["0.2"]
-    np.testing.assert_array_equal(rec, 0.5)
-    want = 10 * np.log10(1.0 / np.mean((img - 0.5) ** 2))
-    assert m["rec"]["psnr"] == pytest.approx(want, rel=1e-9)
-    assert m["rec"]["ssim"] == pytest.approx(ssim(img, rec, data_range=1.0), rel=1e-9)
-    assert m["sim"]["psnr"] == pytest.approx(psnr(img, sim, data_range=1.0), rel=1e-9)
-    assert abs(m["sim"]["psnr"] - m["rec"]["psnr"]) > 1.0
+    np.testing.assert_array_equal(rec, np.clip(target, 0.0, 1.0))
+    clean = np.asarray(O.render_tiled(classical, jnp.asarray(img), 200.0, kernel_size=5,
+                                      pixel_size=cfg.pixel_size, patch=64, pupil=4))
+    inside = (clean > 0.1) & (clean < 0.9)
+    noise = (sim - clean)[inside]
+    assert abs(noise.mean()) < 2e-3 and np.std(noise) == pytest.approx(0.02, rel=0.05)
+    assert sim.min() >= 0.0 and sim.max() == 1.0  # clipped, and the white corner reaches 1
+    want = [10 * np.log10(1.0 / np.mean((x - np.clip(target, 0, 1)) ** 2)) for x in (img,
+                                                                                     1 - img)]
+    assert m["rec"]["psnr"] == pytest.approx(np.mean(want), rel=1e-9)
+    assert m["rec"]["ssim"] < 0.1  # noise against an image: no structure in common
+    assert m["sim"]["psnr"] > m["rec"]["psnr"] + 5.0
+    assert psnr(img, sim, data_range=1.0) > 20.0
+    assert ssim(img, rec, data_range=1.0) < 0.1
 
 
 def test_loss_shape_errors():
