@@ -231,3 +231,24 @@ def test_network_with_nonzero_scales_matches_numpy():
     x = np.random.default_rng(4).random((7, 6, 3))  # odd size: reflect-padded to 8 × 8
     got = np.asarray(_apply(net, jnp.asarray(x)))
     np.testing.assert_allclose(got, _np_net(net, x), rtol=1e-9, atol=1e-9)
+
+
+def test_initialisation_is_pytorch_default_and_keeps_the_dtype():
+    """Weights and biases uniform in ±1/√fan_in (fan_in = c_in·k·k; 9 for the depthwise
+    3×3), as PyTorch initialises convolutions; the requested dtype is kept."""
+    conv = Conv(8, 64, 3, key=KEY, dtype=jnp.float32)
+    dw = Depthwise(256, key=KEY, dtype=jnp.float32)
+    for w, fan_in in ((conv.weight, 72), (conv.bias, 72), (dw.weight, 9), (dw.bias, 9)):
+        bound = 1 / np.sqrt(fan_in)
+        w = np.asarray(w)
+        assert w.dtype == np.float32
+        assert np.abs(w).max() <= bound and np.abs(w).max() > 0.9 * bound
+        assert w.min() < -0.9 * bound and abs(w.mean()) < 0.2 * bound
+    net = NAFNet(width=4, enc_blocks=(1,), dec_blocks=(1,), key=KEY, dtype=jnp.float32)
+    assert {x.dtype for x in jax.tree.leaves(net) if eqx.is_array(x)} == {jnp.dtype("float32")}
+
+
+def test_building_under_jit_is_refused():
+    with pytest.raises(ValueError, match=r"^NAFNet: parameters are drawn on the host; build the "
+                       r"network outside jit/eval_shape \(it takes well under a second\)"):
+        jax.jit(lambda k: NAFNet(width=4, enc_blocks=(1,), dec_blocks=(1,), key=k))(KEY)
