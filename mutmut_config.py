@@ -10,7 +10,7 @@ import functools
 import os
 
 
-@functools.lru_cache(maxsize=None)
+@functools.cache
 def _ranges(filename, names):
     tree = ast.parse(open(filename, encoding="utf-8").read())
     return [(n.lineno, n.end_lineno) for n in tree.body

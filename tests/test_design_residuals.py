@@ -7,7 +7,6 @@ import equinox as eqx
 import jax
 import jax.numpy as jnp
 import numpy as np
-import pytest
 
 from jaxlens.design import curriculum, fasttrace, init, losses, regularizers
 from jaxlens.design.params import LensParams
