@@ -81,12 +81,13 @@ def test_spacing_residuals_use_both_sags_and_the_image():
 
 
 def test_clear_radii_are_the_largest_valid_heights():
-    o = np.zeros((3, 2, 3))
-    o[0, :, :2] = [[0.3, 0.4], [3.0, 4.0]]  # the second ray is invalid on surface 0
-    o[1, :, :2] = [[1.0, 0.0], [0.0, -2.0]]
-    o[2, :, :2] = [[9.0, 9.0], [9.0, 9.0]]  # the image row is ignored
-    valid = np.array([[True, False], [True, True], [True, True]])
-    path = jl.Rays(jnp.asarray(o), jnp.zeros((3, 2, 3)).at[..., 2].set(1.0), 0.55,
+    # Two lens surfaces and the image row, three rays.
+    o = np.zeros((3, 3, 3))
+    o[0, :, :2] = [[0.3, 0.4], [3.0, 4.0], [-0.1, 0.2]]  # the second ray fails here
+    o[1, :, :2] = [[1.0, 0.0], [0.0, -2.0], [1.5, 0.0]]
+    o[2, :, :2] = 9.0  # the image row is ignored
+    valid = np.array([[True, False, True], [True, True, True], [True, True, True]])
+    path = jl.Rays(jnp.asarray(o), jnp.zeros((3, 3, 3)).at[..., 2].set(1.0), 0.55,
                    valid=jnp.asarray(valid))
     np.testing.assert_allclose(regularizers.clear_radii(path), [0.5, 2.0])
 
