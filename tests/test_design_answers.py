@@ -318,3 +318,14 @@ def test_obliquity_residuals_are_the_hinge_of_the_cosines_on_both_sides():
     want = np.concatenate(want)
     assert np.all(want > 0)
     np.testing.assert_allclose(got, want, rtol=1e-10)
+
+
+def test_stage_defaults_and_short_sine_paths():
+    s = curriculum.Stage("x", 60.0, 2.5, 7)
+    assert (s.solver, s.beta, s.pin, s.mask, s.regularize, s.lr, s.loss) == (
+        "adam", 0.0, 0.0, False, True, 1.0, "ray")
+    # n = 1: the start and the end; n = 0: the end only (no curriculum).
+    np.testing.assert_allclose(curriculum.sine_path(2.8, 2.0, 1), [2.8, 2.0])
+    np.testing.assert_allclose(curriculum.sine_path(2.8, 2.0, 0), [2.0])
+    np.testing.assert_allclose(curriculum.sine_path(2.8, 2.0, 2),
+                               [2.8, 2.8 - 0.8 * math.sqrt(0.5), 2.0])
