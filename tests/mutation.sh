@@ -5,8 +5,11 @@
 #   MUTMUT=/work/mutvenv/bin/mutmut PY=/work/mutvenv/bin/python tests/mutation.sh [module ...]
 #
 # Runs mutmut 2 on each module with its own fast test selection (a mutant costs seconds),
-# in a scratch copy of the tracked files (mutmut edits files in place), and prints
-# `mutmut results`. Module keys: see the table below; default all. Results: tests/MUTATION.md.
+# in a scratch copy of the tracked files (mutmut edits files in place), and prints per module
+# the mutants generated, killed and surviving. Module keys: see the table below; default all.
+# RETEST=1 re-runs only the survivors (and untested mutants) of an earlier run in $WORK against
+# the current tests. Don't run `mutmut show` in $WORK while a run is going (it corrupts the
+# cache); copy .mutmut-cache and jaxlens/ elsewhere first. Results: tests/MUTATION.md.
 set -euo pipefail
 ROOT=$(cd "$(dirname "$0")/.." && pwd)
 MUTMUT=${MUTMUT:-mutmut}
@@ -43,18 +46,34 @@ SEL[zmx_writer]="tests/test_zmx.py"
 ONLY[zmx_writer]="_z,_zemax_catalog,_formula,_schott_fit,_nd_vd,_sanitize,_GlassWriter,_surface_lines,dumps,save_zmx"
 ALL="mask regularizers losses curriculum evaluate edof_losses edof_metrics image_metrics nets zmx_writer"
 
-rm -rf "$WORK" && mkdir -p "$WORK"
-(cd "$ROOT" && git ls-files -z | xargs -0 -I{} cp --parents {} "$WORK/")
-cp "$ROOT/mutmut_config.py" "$WORK/"
+if [[ -n "${RETEST:-}" ]]; then
+    # Re-test only the surviving mutants of an earlier run in $WORK against the current tests.
+    cp -r "$ROOT/tests/." "$WORK/tests/"
+else
+    rm -rf "$WORK" && mkdir -p "$WORK"
+    (cd "$ROOT" && git ls-files -z | xargs -0 -I{} cp --parents {} "$WORK/")
+    cp "$ROOT/mutmut_config.py" "$WORK/"
+fi
 cd "$WORK"
 export JAX_COMPILATION_CACHE_DIR=${JAX_COMPILATION_CACHE_DIR:-$WORK/.jaxcache}
 export JAX_PERSISTENT_CACHE_MIN_COMPILE_TIME_SECS=0
 for key in ${@:-$ALL}; do
     sel=${SEL[$key]}
     echo "== $key: ${FILE[$key]} (only: ${ONLY[$key]:-all}) $(date -u +%FT%TZ)"
-    MUTATE_ONLY=${ONLY[$key]:-} "$MUTMUT" run --paths-to-mutate "${FILE[$key]}" \
-        --tests-dir tests --runner "env PYTHONPATH=$WORK $PY -m pytest -x -q -p no:cacheprovider $sel" \
-        > "$WORK/$key.log" 2>&1 || true
+    runner="env PYTHONPATH=$WORK $PY -m pytest -x -q -p no:cacheprovider $sel"
+    if [[ -n "${RETEST:-}" ]]; then
+        ids=$("$PY" -c "import sqlite3; db = sqlite3.connect('.mutmut-cache'); print(' '.join(
+            str(r[0]) for r in db.execute('select m.id from mutant m join line l on m.line = l.id '
+            'join sourcefile s on l.sourcefile = s.id where s.filename = ? and m.status in '
+            '(\"bad_survived\", \"untested\")', ('${FILE[$key]}',))))")
+        for id in $ids; do
+            MUTATE_ONLY=${ONLY[$key]:-} "$MUTMUT" run "$id" --tests-dir tests --runner "$runner" \
+                >> "$WORK/$key.retest.log" 2>&1 || true
+        done
+    else
+        MUTATE_ONLY=${ONLY[$key]:-} "$MUTMUT" run --paths-to-mutate "${FILE[$key]}" \
+            --tests-dir tests --runner "$runner" > "$WORK/$key.log" 2>&1 || true
+    fi
     "$MUTMUT" results > "$WORK/$key.results" 2>&1 || true
     "$PY" - "${FILE[$key]}" <<'PYEOF'
 import sqlite3, sys
