@@ -67,7 +67,8 @@ for key in ${@:-$ALL}; do
             'join sourcefile s on l.sourcefile = s.id where s.filename = ? and m.status in '
             '(\"bad_survived\", \"untested\")', ('${FILE[$key]}',))))")
         for id in $ids; do
-            MUTATE_ONLY=${ONLY[$key]:-} "$MUTMUT" run "$id" --tests-dir tests --runner "$runner" \
+            MUTATE_ONLY=${ONLY[$key]:-} "$MUTMUT" run "$id" --paths-to-mutate "${FILE[$key]}" --tests-dir tests \
+                --runner "$runner" \
                 >> "$WORK/$key.retest.log" 2>&1 || true
         done
     else
