@@ -28,6 +28,9 @@ SEL[losses]="tests/test_design_residuals.py $T::test_spot_loss_is_measured_from_
 ONLY[losses]="StageArgs,radial_area_weights,half_pupil,RayLoss,launch,SpotResult,spot_errors,trace_stage,Aux,design_residuals,design_loss,Objective"
 FILE[curriculum]=jaxlens/design/curriculum.py
 SEL[curriculum]="$T::test_stage_defaults_and_short_sine_paths $T::test_launch_fields_and_stage_args $T::test_run_applies_mask_and_regularizers_per_stage $D::test_sine_path_paper_schedule $D::test_paper_stages $D::test_run_stops_on_nonfinite_loss $D::test_run_drops_nonfinite_designs"
+# The design loop's plumbing (devices, progress bar, logging) is left out: run's mask and
+# regularizer hand-off is checked through stage_args and _reweight, which it calls.
+ONLY[curriculum]="sine_path,Stage,paper_stages,stage_args,_reweight"
 FILE[evaluate]=jaxlens/design/evaluate.py
 SEL[evaluate]="tests/test_evaluate.py"
 FILE[edof_losses]=jaxlens/edof/losses.py
