@@ -329,3 +329,19 @@ def test_stage_defaults_and_short_sine_paths():
     np.testing.assert_allclose(curriculum.sine_path(2.8, 2.0, 0), [2.0])
     np.testing.assert_allclose(curriculum.sine_path(2.8, 2.0, 2),
                                [2.8, 2.8 - 0.8 * math.sqrt(0.5), 2.0])
+
+
+def test_paper_stage_defaults_and_float32_sampling():
+    st = curriculum.paper_stages(SPEC)
+    # N = 3 (four stages on the sine path, 300 steps each), then 600 fine-tuning steps.
+    assert [s.steps for s in st] == [300] * 4 + [600]
+    assert [s.solver for s in st] == ["adam"] * 5 and st[-1].pin == 1.0
+    # float32 designs stay float32 (the sampling and the launched rays).
+    samp = losses.RayLoss.make(3, 2, (0.5, 0.6), (3.0, 3.0), jnp.float32)
+    assert {x.dtype for x in jax.tree.leaves(samp)} == {jnp.dtype("float32")}
+    lens = _lens([jl.Stop(), jl.EvenAsphere(0.1, 0.0, (0.0,))], [1.0, 4.0]).astype(jnp.float32)
+    args = jax.tree.map(lambda x: x[0], curriculum.stage_args(
+        SPEC, curriculum.Stage("s", 60.0, 2.5, 1), jnp.ones((1, 3)), (1.0, 1.0, 1.0),
+        jnp.float32))
+    rays = losses.launch(lens, samp, args)
+    assert rays.origin.dtype == rays.direction.dtype == jnp.float32
