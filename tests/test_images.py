@@ -65,8 +65,24 @@ def test_scenes_psnr_ssim():
     assert images.psnr(s, s, data_range=1.0) == np.inf
     assert images.ssim(s, s, data_range=1.0) == pytest.approx(1.0)
     assert images.ssim(s, noisy, data_range=1.0) < 1.0
-    with pytest.raises(ValueError, match="shapes differ"):
+    with pytest.raises(ValueError, match=r"^psnr: shapes differ: \(32, 48, 3\) and \(31, 48, 3\)$"):
         images.psnr(s, s[:-1])
+    with pytest.raises(ValueError, match=r"^ssim: shapes differ: \(32, 48, 3\) and \(31, 48, 3\)$"):
+        images.ssim(s, s[:-1])
+
+
+def test_psnr_default_range_is_the_span_of_both_images_and_zero():
+    a = np.full((8, 8), 0.2)
+    b = a.copy()
+    b[0, 0] = 0.7  # MSE 0.25/64; span max(0.7) − min(0.2, 0) = 0.7
+    mse = 0.25 / 64
+    assert images.psnr(a, b) == pytest.approx(10 * np.log10(0.7**2 / mse), rel=1e-12)
+    # A negative value widens the span below zero.
+    assert images.psnr(a - 0.5, b - 0.5) == pytest.approx(10 * np.log10(0.5**2 / mse),
+                                                          rel=1e-12)
+    # An explicit range wins.
+    assert images.psnr(a, b, data_range=4.0) == pytest.approx(10 * np.log10(16 / mse),
+                                                              rel=1e-12)
 
 
 def test_psf_stack_round_trip(tmp_path):

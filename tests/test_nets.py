@@ -118,3 +118,137 @@ def test_strided_conv_halves_and_pixel_shuffle_doubles():
                 np.testing.assert_array_equal(
                     np.asarray(z[a::2, b::2, ch]), np.asarray(y[..., 4 * ch + 2 * a + b])
                 )
+
+
+# --- the block and the whole network against a direct NumPy computation -----------------------
+# NAFNet (Chen et al., ECCV 2022), written out with NumPy loops from the paper's definition:
+# x1 = x + β·Proj(SCA(SG(DW(Expand(LN1(x)))))), out = x1 + γ·FFNout(SG(FFNin(LN2(x1)))),
+# SCA(y) = y · (W·mean_{hw}(y) + b); the UNet adds each encoder level's output to the
+# decoder input of that level, and the global residual adds the (padded) input.
+
+
+def _np_ln(x, w, b, eps=1e-6):
+    mu = x.mean(-1, keepdims=True)
+    var = ((x - mu) ** 2).mean(-1, keepdims=True)
+    return (x - mu) / np.sqrt(var + eps) * w + b
+
+
+def _np_conv(x, w, b, stride=1):
+    """Dense convolution ``[H, W, ci]`` × ``[k, k, ci, co]``, 'SAME' zero padding (stride 1) or
+    non-overlapping windows (stride = k)."""
+    k = w.shape[0]
+    if stride == 1:
+        p = k // 2
+        x = np.pad(x, ((p, p), (p, p), (0, 0)))
+        h, wd = x.shape[0] - k + 1, x.shape[1] - k + 1
+    else:
+        h, wd = x.shape[0] // k, x.shape[1] // k
+    out = np.zeros((h, wd, w.shape[3]))
+    for i in range(h):
+        for j in range(wd):
+            patch = x[i * stride : i * stride + k, j * stride : j * stride + k]
+            out[i, j] = np.einsum("abc,abcd->d", patch, w)
+    return out + b
+
+
+def _np_block(blk, x):
+    g = {k: np.asarray(v, np.float64) for k, v in {
+        "n1w": blk.norm1.weight, "n1b": blk.norm1.bias, "ew": blk.expand.weight,
+        "eb": blk.expand.bias, "dw": blk.dw.weight, "db": blk.dw.bias, "sw": blk.sca.weight,
+        "sb": blk.sca.bias, "pw": blk.project.weight, "pb": blk.project.bias,
+        "n2w": blk.norm2.weight, "n2b": blk.norm2.bias, "fiw": blk.ffn_in.weight,
+        "fib": blk.ffn_in.bias, "fow": blk.ffn_out.weight, "fob": blk.ffn_out.bias,
+        "beta": blk.beta, "gamma": blk.gamma}.items()}
+    y = _np_ln(x, g["n1w"], g["n1b"]) @ g["ew"] + g["eb"]
+    dw = g["dw"][:, :, None, :] * np.eye(y.shape[-1])[None, None]  # depthwise as dense
+    y = _np_conv(y, dw, g["db"])
+    c = y.shape[-1] // 2
+    y = y[..., :c] * y[..., c:]
+    y = y * (y.mean(axis=(0, 1)) @ g["sw"] + g["sb"])
+    x = x + (y @ g["pw"] + g["pb"]) * g["beta"]
+    y = _np_ln(x, g["n2w"], g["n2b"]) @ g["fiw"] + g["fib"]
+    c = y.shape[-1] // 2
+    y = y[..., :c] * y[..., c:]
+    return x + (y @ g["fow"] + g["fob"]) * g["gamma"]
+
+
+def _randomise(model, seed):
+    """Every floating-point leaf drawn at random (β, γ and the norms' affine maps too)."""
+    rng = np.random.default_rng(seed)
+    leaves, tree = jax.tree.flatten(model)
+    new = [jnp.asarray(rng.normal(0.0, 0.5, x.shape), x.dtype)
+           if eqx.is_inexact_array(x) else x for x in leaves]
+    return jax.tree.unflatten(tree, new)
+
+
+def test_block_with_nonzero_scales_matches_numpy():
+    blk = _randomise(NAFBlock(4, key=KEY, dtype=jnp.float64), 1)
+    assert np.all(np.abs(np.asarray(blk.beta)) > 0) and np.all(np.abs(np.asarray(blk.gamma)) > 0)
+    x = np.random.default_rng(2).normal(size=(5, 6, 4))
+    got = np.asarray(blk(jnp.asarray(x)))
+    want = _np_block(blk, x)
+    np.testing.assert_allclose(got, want, rtol=1e-10, atol=1e-10)
+    assert np.abs(want - x).max() > 0.1  # the block does something
+
+
+def _np_shuffle(x, r=2):
+    """PyTorch's pixel shuffle: channel c·r² + a·r + b of (i, j) → channel c of (ri+a, rj+b)."""
+    h, w, c4 = x.shape
+    c = c4 // (r * r)
+    out = np.zeros((h * r, w * r, c))
+    for ch in range(c):
+        for a in range(r):
+            for b in range(r):
+                out[a::r, b::r, ch] = x[..., ch * r * r + a * r + b]
+    return out
+
+
+def _np_net(net, x):
+    h, w, _ = x.shape
+    m = 2 ** len(net.downs)
+    inp = np.pad(x, ((0, (-h) % m), (0, (-w) % m), (0, 0)), mode="reflect")
+    y = _np_conv(inp, np.asarray(net.intro.weight), np.asarray(net.intro.bias))
+    skips = []
+    for blocks, down in zip(net.encoders, net.downs, strict=True):
+        for b in blocks:
+            y = _np_block(b, y)
+        skips.append(y)
+        y = _np_conv(y, np.asarray(down.weight), np.asarray(down.bias), stride=2)
+    for b in net.middle:
+        y = _np_block(b, y)
+    for up, blocks, skip in zip(net.ups, net.decoders, skips[::-1], strict=True):
+        y = _np_shuffle(y @ np.asarray(up.conv.weight) + np.asarray(up.conv.bias)) + skip
+        for b in blocks:
+            y = _np_block(b, y)
+    y = _np_conv(y, np.asarray(net.ending.weight), np.asarray(net.ending.bias)) + inp
+    return y[:h, :w]
+
+
+def test_network_with_nonzero_scales_matches_numpy():
+    net = NAFNet(width=4, enc_blocks=(1, 1), middle_blocks=1, dec_blocks=(1, 1), key=KEY,
+                 dtype=jnp.float64)
+    net = _randomise(net, 3)
+    x = np.random.default_rng(4).random((7, 6, 3))  # odd size: reflect-padded to 8 × 8
+    got = np.asarray(_apply(net, jnp.asarray(x)))
+    np.testing.assert_allclose(got, _np_net(net, x), rtol=1e-9, atol=1e-9)
+
+
+def test_initialisation_is_pytorch_default_and_keeps_the_dtype():
+    """Weights and biases uniform in ±1/√fan_in (fan_in = c_in·k·k; 9 for the depthwise
+    3×3), as PyTorch initialises convolutions; the requested dtype is kept."""
+    conv = Conv(8, 64, 3, key=KEY, dtype=jnp.float32)
+    dw = Depthwise(256, key=KEY, dtype=jnp.float32)
+    for w, fan_in in ((conv.weight, 72), (conv.bias, 72), (dw.weight, 9), (dw.bias, 9)):
+        bound = 1 / np.sqrt(fan_in)
+        w = np.asarray(w)
+        assert w.dtype == np.float32
+        assert np.abs(w).max() <= bound and np.abs(w).max() > 0.9 * bound
+        assert w.min() < -0.9 * bound and abs(w.mean()) < 0.2 * bound
+    net = NAFNet(width=4, enc_blocks=(1,), dec_blocks=(1,), key=KEY, dtype=jnp.float32)
+    assert {x.dtype for x in jax.tree.leaves(net) if eqx.is_array(x)} == {jnp.dtype("float32")}
+
+
+def test_building_under_jit_is_refused():
+    with pytest.raises(ValueError, match=r"^NAFNet: parameters are drawn on the host; build the "
+                       r"network outside jit/eval_shape \(it takes well under a second\)"):
+        jax.jit(lambda k: NAFNet(width=4, enc_blocks=(1,), dec_blocks=(1,), key=k))(KEY)

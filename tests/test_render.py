@@ -181,6 +181,38 @@ def test_distortion_relaxation_aligns_the_image():
     assert float(pen) > 0
 
 
+def test_prewarp_shows_at_each_pixel_the_scene_at_its_chief_ray_landing_point():
+    """The CI version of the test above, on the definition: the pre-warped scene at ideal
+    position v is the scene at D(v), where D(v) is where the chief ray of v's field lands.
+
+    The scene is the linear ramp (row, col), which bilinear interpolation reproduces
+    exactly, and the sensor has one pixel per distortion-grid node; D comes from
+    ``analysis.chief_ray`` (the lens's stop is its first surface, so aiming at the paraxial
+    entrance pupil is aiming at the stop), the field of v from ``v = K·tan θ``. A pre-warp
+    the wrong way round (scene(D⁻¹(v)), or rows and columns swapped) moves every corner
+    value by over a pixel."""
+    lens = distorting_lens()
+    n, p = 17, 32.0 / 17
+    sensor = jaxlens.Sensor((n, n), p)
+    rr, cc = np.meshgrid(np.arange(n, dtype=float), np.arange(n, dtype=float), indexing="ij")
+    ramp = jnp.asarray(np.stack([rr, cc, rr + 2 * cc], -1))
+    got = np.asarray(DR.prewarp(lens, ramp, sensor=sensor, grid=(n, n)))
+    x, y = R.pixel_positions((n, n), p, rr, cc)
+    k = float(jaxlens.psf.image_scale(lens))
+    fields = np.degrees(np.arctan(np.stack([x, y], -1).reshape(-1, 2) / k))
+    land = jax.vmap(lambda f: jaxlens.analysis.chief_ray(lens, f).origin[:2])(
+        jnp.asarray(fields))
+    land = np.asarray(land).reshape(n, n, 2)
+    # Back to (row, col) with pixel_positions's frame: x = −(col − c₀)·p, y = (row − r₀)·p.
+    want_r = land[..., 1] / p + 0.5 * (n - 1)
+    want_c = -land[..., 0] / p + 0.5 * (n - 1)
+    np.testing.assert_allclose(got[..., 0], want_r, atol=1e-6)
+    np.testing.assert_allclose(got[..., 1], want_c, atol=1e-6)
+    np.testing.assert_allclose(got[..., 2], want_r + 2 * want_c, atol=1e-6)
+    # Barrel distortion pulls the corners in by about a pixel.
+    assert want_r[0, 0] > 0.9 and want_c[0, 0] > 0.9
+
+
 @pytest.mark.slow
 def test_distortion_maps_are_inverse(cooke):
     """Forward chief rays (object side, aimed at the stop) and backward chief rays (sensor

@@ -32,8 +32,10 @@ def test_sharded_render_equals_single_device(mesh):
     one = R.render(lens, scene, spp=16, key=KEY, sensor=SENSOR, patch=6)
     sharded = R.render(lens, scene, spp=16, key=KEY, sensor=SENSOR, patch=6, mesh=mesh)
     np.testing.assert_allclose(sharded, one, rtol=1e-12, atol=1e-12)
-    # The output lives on the mesh devices.
-    assert len(sharded.devices()) >= 1
+    # The work went to the mesh: the result lives on all four of its devices (a render that
+    # ignored the mesh would leave it on one).
+    assert sharded.devices() == set(mesh.devices.flat)
+    assert len(one.devices()) == 1
 
 
 def test_sharded_mesh_must_be_a_mesh(mesh):

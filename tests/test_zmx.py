@@ -6,6 +6,7 @@ import math
 import pathlib
 import re
 
+import jax.numpy as jnp
 import numpy as np
 import pytest
 from test_lensfile import assert_same_lens, every_kind_of_lens
@@ -387,3 +388,46 @@ def test_model_glass_and_tabulated_read_back_exactly(tmp_path):
     lens = dataclasses.replace(lens, materials=tables)
     jaxlens.save(lens, tmp_path / "t.zmx")
     assert_same_lens(lens, jaxlens.load(tmp_path / "t.zmx"))
+
+
+def test_header_follows_zemax_system_lines(tmp_path):
+    """FTYP, XFLN/YFLN, FWGN, WAVM, PWAV, UNIT and ENPD as OpticStudio defines them, on a lens
+    with 2 fields and 5 wavelengths (unequal counts: a swap cannot pass).
+
+    The system lines of a .zmx file (OpticStudio's "ZMX file format" conventions, also how
+    independent readers such as rayoptics parse them): ``UNIT MM …`` (lens units first),
+    ``ENPD d`` (entrance pupil diameter, lens units), ``FTYP type telecentric n_fields
+    n_wavelengths normalisation …`` with type 0 = angle in degrees, ``XFLN``/``YFLN`` the
+    field values, ``FWGN`` one weight per field, ``WAVM i λ_µm weight`` per wavelength and
+    ``PWAV i`` the 1-based primary wavelength.
+    """
+    wl = (0.4861327, 0.5875618, 0.6562725, 0.4358343, 0.7065188)
+    lens = jaxlens.Lens(
+        surfaces=(jaxlens.Sphere(1 / 30.0), jaxlens.Stop(4.0), jaxlens.Sphere(-1 / 45.0)),
+        thickness=jnp.array([3.0, 2.0, 40.0]),
+        materials=(jaxlens.get_material("N-BK7"), jaxlens.Air(), jaxlens.Air()),
+        stop=1, epd=8.0, fields=jnp.array([0.0, 12.5]), wavelengths=jnp.array(wl), primary=1,
+    )
+    text, _ = zmx.dumps(lens, tmp_path / "two_five.zmx")
+    head = {ln.split()[0]: ln.split()[1:] for ln in text.splitlines()
+            if ln and not ln.startswith(" ") and ln.split()[0] not in ("WAVM", "SURF")}
+    assert head["UNIT"][0] == "MM"
+    assert float(head["ENPD"][0]) == 8.0
+    ftyp = [int(v) for v in head["FTYP"]]
+    assert ftyp[:5] == [0, 0, 2, 5, 0]  # angles, not telecentric, 2 fields, 5 wavelengths
+    assert [float(v) for v in head["YFLN"][:2]] == [0.0, 12.5]
+    assert [float(v) for v in head["XFLN"][:2]] == [0.0, 0.0]
+    assert [float(v) for v in head["FWGN"][:2]] == [1.0, 1.0]
+    # XFLN, YFLN and FWGN are parallel lists, one entry per field slot.
+    assert len(head["XFLN"]) == len(head["YFLN"]) == len(head["FWGN"]) >= 2
+    wavm = [ln.split() for ln in text.splitlines() if ln.startswith("WAVM")]
+    assert [int(w[1]) for w in wavm] == [1, 2, 3, 4, 5]
+    np.testing.assert_allclose([float(w[2]) for w in wavm], wl, rtol=1e-12)  # µm
+    assert all(float(w[3]) == 1.0 for w in wavm)
+    assert head["PWAV"] == ["2"]
+    stop_surf = text.split("SURF 2\n")[1].split("SURF 3")[0]
+    assert "  STOP" in stop_surf  # Zemax numbers surfaces from 0 (the object)
+    back = zmx.loads(text)
+    np.testing.assert_allclose(np.asarray(back.fields), [0.0, 12.5])
+    np.testing.assert_allclose(np.asarray(back.wavelengths), wl)
+    assert back.primary == 1 and back.stop == 1
