@@ -14,9 +14,10 @@ import numpy as np
 import pytest
 
 import jaxlens as jl
-from jaxlens.design import curriculum, fasttrace, losses, mask, regularizers, solvers
+from jaxlens.design import curriculum, losses, mask, regularizers, solvers
 from jaxlens.design.params import LensParams
 from jaxlens.design.spec import DesignSpec
+from jaxlens.tracing.forward import stacked_surfaces
 
 SPEC = DesignSpec()
 N_RADIAL = 16  # the regularizers' default radial samples
@@ -48,7 +49,7 @@ def test_slope_residuals_are_the_hinge_of_the_parabola_slope():
     a_in, a_out = 0.45 / (2 * radius), -0.8 / (2 * radius)
     lens = _lens([jl.Stop(), jl.EvenAsphere(0.0, 0.0, (a_in, 0.0)),
                   jl.EvenAsphere(0.0, 0.0, (a_out, 0.0))], [1.0, 1.0, 1.0])
-    stack = fasttrace.stacked_surfaces(lens)
+    stack = stacked_surfaces(lens.surfaces)
     h = np.asarray(regularizers.slope(stack, lens.stop, jnp.full(3, radius)))
     assert h.shape == (2 * N_RADIAL,)  # the stop has no slope residuals
     want = np.concatenate([_soft(0.45 * U - 0.5), _soft(0.8 * U - 0.5)]) / math.sqrt(N_RADIAL)
@@ -64,7 +65,7 @@ def test_spacing_residuals_use_both_sags_and_the_image():
     t = [1.0, 0.5, 2.0]
     lens = _lens([jl.EvenAsphere(c0, 0.0, (0.0, 0.0)), jl.EvenAsphere(c1, 0.0, (0.0, 0.0)),
                   jl.EvenAsphere(0.0, 0.0, (0.0, 0.0))], t)
-    stack = fasttrace.stacked_surfaces(lens)
+    stack = stacked_surfaces(lens.surfaces)
     bounds = np.array([0.8, 0.6, 2.5])
     h = np.asarray(regularizers.spacing(lens, stack, jnp.asarray(radii), jnp.asarray(bounds)))
     r0 = U * 1.5
@@ -281,7 +282,7 @@ def test_obliquity_residuals_are_the_hinge_of_the_cosines_on_both_sides():
     c = 0.2
     lens = _lens([jl.EvenAsphere(0.0, 0.0, (0.0,)), jl.Stop(), jl.EvenAsphere(c, 0.0, (0.0,))],
                  [1.0, 1.0, 1.0], stop=1)
-    stack = fasttrace.stacked_surfaces(lens)
+    stack = stacked_surfaces(lens.surfaces)
     rng = np.random.default_rng(7)
     K, P = 2, 5
 
@@ -298,7 +299,7 @@ def test_obliquity_residuals_are_the_hinge_of_the_cosines_on_both_sides():
     valid[0, 0, 0] = False  # a failed ray costs no obliquity
     rays = jl.Rays(jnp.asarray(np.broadcast_to(o[0], (K, P, 3))), jnp.asarray(d_in), 0.55)
     path = jl.Rays(jnp.asarray(o), jnp.asarray(d), 0.55, valid=jnp.asarray(valid))
-    got = np.asarray(regularizers.obliquity(stack, lens.stop, rays, path))
+    got = np.asarray(regularizers.obliquity(stack, lens.vertex_z(), lens.stop, rays, path))
 
     def normal(i, xy):
         if i < 2:

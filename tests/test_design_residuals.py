@@ -8,9 +8,11 @@ import jax
 import jax.numpy as jnp
 import numpy as np
 
-from jaxlens.design import curriculum, fasttrace, init, losses, regularizers
+import jaxlens
+from jaxlens.design import curriculum, init, losses, regularizers
 from jaxlens.design.params import LensParams
 from jaxlens.design.spec import DesignSpec
+from jaxlens.tracing.forward import stacked_surfaces
 
 SMALL = DesignSpec(n_elements=2, materials=("E48R", "OKP4"), fov=40.0, fnum=4.0,
                    fov_start=30.0, fnum_start=4.0, total_track=3.0, bfl=0.8, asphere_terms=3)
@@ -90,12 +92,12 @@ def _parts(p, pm, samp, args, gb):
     """Each part of the design loss, computed on its own."""
     lens = pm.to_lens(p)
     rays = losses.launch(lens, samp, args)
-    path = fasttrace.trace_path_scan(lens, rays)
+    path = jaxlens.trace_path(lens, rays, uniform=True)
     spot = losses.spot_errors(path, samp, args)
-    stack = fasttrace.stacked_surfaces(lens)
+    stack = stacked_surfaces(lens.surfaces)
     radii = regularizers.clear_radii(path)
     regs = jnp.stack([
-        jnp.sum(regularizers.obliquity(stack, lens.stop, rays, path) ** 2),
+        jnp.sum(regularizers.obliquity(stack, lens.vertex_z(), lens.stop, rays, path) ** 2),
         jnp.sum(regularizers.spacing(lens, stack, radii, gb) ** 2),
         jnp.sum(regularizers.slope(stack, lens.stop, radii) ** 2),
     ])
