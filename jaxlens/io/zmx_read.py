@@ -557,7 +557,8 @@ def _check_structure(f: _File, text: str, strict: bool) -> None:
 
     Zemax writes TYPE, CURV and DISZ in every SURF block and ends each line with a line
     break, so a file with a ``VERS`` line missing any of those was cut off. Any file needs a
-    DISZ for the object and every lens surface (a missing one is not read as 0), and its
+    DISZ for every lens surface (a missing one is not read as 0; the object's means
+    infinity), and its
     last block is the image, whose thickness is 0: a last block with a DISZ other than 0 is
     a lens surface of a file that was cut short.
     """
@@ -569,7 +570,8 @@ def _check_structure(f: _File, text: str, strict: bool) -> None:
         )
     img = f.surfs[-1]
     for s in f.surfs:
-        need = ("TYPE", "CURV", "DISZ") if f.zemax else ("DISZ",) if s is not img else ()
+        body = s is not img and s is not f.surfs[0]  # a missing object DISZ means infinity
+        need = ("TYPE", "CURV", "DISZ") if f.zemax else ("DISZ",) if body else ()
         missing = [k for k in need if k not in s.keys]
         if missing:
             what = "the image surface" if s is img else f"surface {s.number}"
