@@ -43,9 +43,8 @@ def test_losses_on_known_values():
 def test_table2_rec_metrics_come_from_the_reconstruction(classical):
     """``train.evaluate``: "sim" scores the noisy simulation at the depth in m (rendered at
     1000·d mm, clipped to [0, 1]), "rec" the network's output clipped to [0, 1]."""
-    from jaxlens.io.images import psnr, ssim
-
     from jaxlens.experiments.edof import train
+    from jaxlens.io.images import psnr, ssim
 
     cfg = train.Config(binning=8, patch=64, kernel_size=5, eval_pupil=4, noise=0.02)
     rng = np.random.default_rng(0)
