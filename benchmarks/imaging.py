@@ -46,8 +46,7 @@ def _psf(lens, field, kernel, pupil):
         lens,
         field,
         kernel_size=kernel,
-        pupil=pupil,
-        model="geometric",
+        model=jaxlens.imaging.psf.GeometricPSF(pupil=pupil),
         center="chief",
         max_truncation=None,
     )

@@ -45,7 +45,8 @@ def library_defaults() -> dict:
     )
     sig = inspect.signature(psf.psf_info).parameters
     out["psf_kernel_size"] = (sig["kernel_size"].default, "jaxlens/psf.py psf(kernel_size=...)")
-    out["psf_pupil"] = (sig["pupil"].default, "jaxlens/psf.py psf(pupil=...)")
+    out["psf_pupil"] = (sig["model"].default.pupil,
+                        "jaxlens/imaging/psf.py psf(model=GeometricPSF(pupil=...))")
     rsig = inspect.signature(render.render).parameters
     out["render_kernel_size"] = (
         rsig["kernel_size"].default,

@@ -25,6 +25,7 @@ import pytest
 
 import jaxlens as jl
 from jaxlens.experiments import runfolder
+from jaxlens.imaging.psf import CoherentPSF, GeometricPSF
 from jaxlens.io import zmx
 from jaxlens.optics import checks
 
@@ -233,19 +234,20 @@ def test_report_fields_out_of_range(capsys):
 def test_psf_no_ray_is_not_truncation_and_overfill_is_checked():
     lens = _vignetting()
     with pytest.raises(Exception, match=r"no ray of the beam reaches the image surface"):
-        jl.psf(lens, 20.0, pixel_size=0.01, kernel_size=9, pupil=8)
-    info = jl.imaging.psf.psf_info(lens, 20.0, pixel_size=0.01, kernel_size=9, pupil=8)
+        jl.psf(lens, 20.0, pixel_size=0.01, kernel_size=9, model=GeometricPSF(pupil=8))
+    info = jl.imaging.psf.psf_info(lens, 20.0, pixel_size=0.01, kernel_size=9,
+                                   model=GeometricPSF(pupil=8))
     assert np.isnan(float(info.truncated))
     for bad in (0.0, -1.0, float("nan")):
         with pytest.raises(ValueError, match=r"psf: overfill must be a finite number in "
                                              r"\(0, inf\)"):
-            jl.psf(lens, 0.0, pixel_size=0.01, overfill=bad)
+            jl.psf(lens, 0.0, pixel_size=0.01, model=GeometricPSF(overfill=bad))
 
 
 def test_psf_kernel_holding_too_much_energy_is_refused(cooke):
     # A coarse pupil sampling against a wide kernel: the coherent sum over-counts the
     # energy (1.48), which the truncation check (1 - sum > 0.05) let through.
-    kw = dict(model="coherent", pixel_size=1e-3, kernel_size=45, pupil=12)
+    kw = dict(model=CoherentPSF(pupil=12), pixel_size=1e-3, kernel_size=45)
     info = jl.imaging.psf.psf_info(cooke, 0.0, **kw)
     assert float(np.sum(info.psf)) > 1.4
     with pytest.raises(Exception, match=r"kernel holds more than 1 \+ 0\.05"):

@@ -15,6 +15,7 @@ import pytest
 
 import jaxlens
 from jaxlens.imaging import psf as P
+from jaxlens.imaging.psf import CoherentPSF, GeometricPSF
 from jaxlens.optics.materials import LAMBDA_D
 
 N = 1.5
@@ -58,7 +59,8 @@ def test_paraxial_setup():
 
 
 # The coherent tests share one compiled PSF (same kernel, pupil and lens structure).
-COHERENT = dict(wavelength=WL, kernel_size=41, model="coherent", pupil=64, max_truncation=None)
+COHERENT = dict(wavelength=WL, kernel_size=41, model=CoherentPSF(pupil=64),
+                max_truncation=None)
 R_AIRY = 1.22 * WL * 1e-3 * FNUM  # mm
 
 
@@ -92,7 +94,8 @@ def test_defocus_strehl_matches_sinc():
 
 
 # The geometric tests share one compiled PSF too.
-GEOMETRIC = dict(wavelength=WL, kernel_size=51, pupil=96, max_truncation=None)
+GEOMETRIC = dict(wavelength=WL, kernel_size=51, model=GeometricPSF(pupil=96),
+                 max_truncation=None)
 DELTA = 0.5
 
 
@@ -125,8 +128,10 @@ def test_truncation_detected():
 
 def test_bad_arguments():
     lens = perfect_lens()
-    with pytest.raises(ValueError, match="model"):
-        jaxlens.psf(lens, 0.0, model="wave", pixel_size=0.001)
+    with pytest.raises(TypeError, match="PSF model object, not a string"):
+        jaxlens.psf(lens, 0.0, model="coherent", pixel_size=0.001)
+    with pytest.raises(ValueError, match="pupil"):
+        jaxlens.psf(lens, 0.0, model=CoherentPSF(pupil=1), pixel_size=0.001)
     with pytest.raises(ValueError, match="pixel_size"):
         jaxlens.psf(lens, 0.0)  # no sensor
     with pytest.raises(ValueError, match="depth"):
@@ -161,11 +166,12 @@ def test_mtf_of_perfect_lens_is_diffraction_limited():
     freqs = jnp.array([0.0, 0.1, 0.3, 0.5, 0.7]) * cutoff
     s = np.asarray(freqs) * WL * 1e-3 * FNUM
     ideal = 2 / np.pi * (np.arccos(s) - s * np.sqrt(1 - s**2))
-    f, t, sg = jaxlens.imaging.psf.mtf(lens, 0.0, wavelengths=[WL], frequencies=freqs, pupil=16)
+    f, t, sg = jaxlens.imaging.psf.mtf(lens, 0.0, wavelengths=[WL], frequencies=freqs,
+                                            model=GeometricPSF(pupil=16))
     np.testing.assert_allclose(t, ideal, atol=1e-9)
     np.testing.assert_allclose(sg, ideal, atol=1e-9)
     _, tc, sc = jaxlens.imaging.psf.mtf(lens, 0.0, wavelengths=[WL], frequencies=freqs,
-                                model="coherent", kernel_size=96, pupil=48)
+                                model=CoherentPSF(pupil=48), kernel_size=96)
     np.testing.assert_allclose(tc, ideal, atol=0.03)
     np.testing.assert_allclose(sc, ideal, atol=0.03)
 
@@ -174,7 +180,7 @@ def test_psf_map_orientation_and_rgb():
     """Corner PSFs of a rotationally symmetric lens are 180° rotations of each other, the
     centre PSF is on axis and symmetric, and RGB maps stack three wavelengths."""
     lens = jaxlens.zoo.cooke_triplet()
-    m = P.psf_map(lens, grid=(3, 3), kernel_size=15, pixel_size=0.01, pupil=24,
+    m = P.psf_map(lens, grid=(3, 3), kernel_size=15, pixel_size=0.01, model=GeometricPSF(pupil=24),
                   wavelength=jnp.asarray(P.RGB_WAVELENGTHS), center="ideal")
     assert m.psf.shape == (3, 3, 3, 15, 15)
     np.testing.assert_allclose(m.psf[0, 0], m.psf[2, 2][..., ::-1, ::-1], atol=1e-9)

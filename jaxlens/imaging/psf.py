@@ -62,6 +62,9 @@ from .aiming import apertured, chief_point, field_to_ideal, ideal_to_field
 from .grid import pupil_cells, sensor_grid
 
 __all__ = [
+    "AbstractPSFModel",
+    "CoherentPSF",
+    "GeometricPSF",
     "RGB_WAVELENGTHS",
     "PSFResult",
     "PSFMap",
@@ -75,7 +78,6 @@ __all__ = [
 RGB_WAVELENGTHS = (LAMBDA_C, LAMBDA_D, LAMBDA_F)
 """Default (R, G, B) wavelengths in µm: the C, d and F lines."""
 
-MODELS = ("geometric", "coherent")
 CENTERS = ("chief", "centroid", "ideal")
 
 
@@ -154,13 +156,84 @@ def _trace_beam(lens, field, depth, wl, pupil, mask, newton_iters):
     return rays, out, w
 
 
-def geometric_kernels(lens, field, depth, wls, *, kernel_size, pixel_size, center, pupil,
-                      overfill, key, newton_iters, order=1):
-    """Geometric PSFs ``[W, k, k]`` of one field at wavelengths ``wls`` (an apertured lens).
+class AbstractPSFModel(eqx.Module):
+    """How a PSF is computed: a small, final strategy object passed as ``model=``.
 
-    Returns (kernels, truncated fraction [W], reference point [2], NaN Strehl [W], no
-    aliasing [W]), as the coherent model does; see the module docstring for the arguments.
+    ``pupil`` is the number of rays per side of the square pupil grid (about 0.62·pupil²
+    rays are launched after the disc cut) and ``overfill`` the radius of the launched beam
+    over the paraxial entrance-pupil radius (the stop clips it). Both are static.
     """
+
+    pupil: eqx.AbstractVar[int]
+    overfill: eqx.AbstractVar[float]
+
+    def check(self, caller: str) -> None:
+        """Refuse a pupil or overfill outside their range, naming the caller."""
+        if not isinstance(self.pupil, int) or self.pupil < 2:
+            raise ValueError(f"{caller}: pupil (rays per side) must be an int >= 2, got "
+                             f"{self.pupil!r}")
+        checks.number(self.overfill, "overfill", caller, lo=0, lo_open=True,
+                      unit="(beam radius over the entrance-pupil radius)")
+
+    def kernels(self, lens, field, depth, wls, *, kernel_size, pixel_size, center, key,
+                newton_iters):
+        """PSFs ``[W, k, k]`` of one field at wavelengths ``wls`` of an apertured lens.
+
+        Returns (kernels, truncated fraction [W] (NaN where no ray got through), reference
+        point [2], Strehl ratio [W] (NaN for ray models), aliased [W]).
+        """
+        raise NotImplementedError
+
+
+def _model(model, caller: str) -> AbstractPSFModel:
+    if isinstance(model, str):
+        raise TypeError(f"{caller}: model is a PSF model object, not a string: use "
+                        f"GeometricPSF(pupil=..., overfill=...) or CoherentPSF(...), got "
+                        f"{model!r}")
+    if not isinstance(model, AbstractPSFModel):
+        raise TypeError(f"{caller}: model must be GeometricPSF(...) or CoherentPSF(...), got "
+                        f"{type(model).__name__}")
+    model.check(caller)
+    return model
+
+
+class GeometricPSF(AbstractPSFModel):
+    """Ray splatting: rays fill the overfilled pupil, are traced and splatted bilinearly
+    (``order=1``, a one-pixel tent; ``order=2``, a smoother quadratic B-spline)."""
+
+    pupil: int = 64
+    overfill: float = 1.25
+    order: int = 1
+
+    def kernels(self, lens, field, depth, wls, *, kernel_size, pixel_size, center, key,
+                newton_iters):
+        return _geometric(lens, field, depth, wls, kernel_size=kernel_size,
+                          pixel_size=pixel_size, center=center, pupil=self.pupil,
+                          overfill=self.overfill, key=key, newton_iters=newton_iters,
+                          order=self.order)
+
+
+class CoherentPSF(AbstractPSFModel):
+    """Wave optics: the ray-based Debye integral over the traced optical paths (see the
+    module notes); ``pupil`` must resolve the wavefront over the kernel."""
+
+    pupil: int = 64
+    overfill: float = 1.25
+
+    def kernels(self, lens, field, depth, wls, *, kernel_size, pixel_size, center, key,
+                newton_iters):
+        del key  # the coherent sum uses the regular grid
+        return _coherent(lens, field, depth, wls, kernel_size=kernel_size,
+                         pixel_size=pixel_size, center=center, pupil=self.pupil,
+                         overfill=self.overfill, newton_iters=newton_iters)
+
+
+DEFAULT_MODEL = GeometricPSF()
+"""The default PSF model: ray splatting, 64 rays per pupil side, beam overfilled 1.25×."""
+
+
+def _geometric(lens, field, depth, wls, *, kernel_size, pixel_size, center, pupil, overfill,
+               key, newton_iters, order):
     dtype = lens.epd.dtype
     pts, mask, _ = pupil_cells(pupil, overfill, dtype, key)
 
@@ -269,27 +342,21 @@ class PSFResult(eqx.Module):
 
 
 @eqx.filter_jit
-def _psf_impl(lens, field, depth, wls, pixel_size, key, *, kernel_size, model, center, pupil,
-              overfill, newton_iters):
+def _psf_impl(lens, field, depth, wls, pixel_size, key, *, kernel_size, model, center,
+              newton_iters):
     dtype = jnp.result_type(pixel_size)
     lens = lens.astype(dtype)
-    kw = dict(kernel_size=kernel_size, pixel_size=pixel_size, center=center, pupil=pupil,
-              overfill=overfill, newton_iters=newton_iters)
-    if model == "geometric":
-        return geometric_kernels(lens, field, depth, wls, key=key, **kw)
-    return _coherent(lens, field, depth, wls, **kw)
+    return model.kernels(lens, field, depth, wls, kernel_size=kernel_size,
+                         pixel_size=pixel_size, center=center, key=key,
+                         newton_iters=newton_iters)
 
 
-def _prepare(lens, field, depth, wavelength, kernel_size, pixel_size, model, center, pupil,
-             caller, overfill=1.25):
-    if model not in MODELS:
-        raise ValueError(f"{caller}: model must be one of {MODELS}, got {model!r}")
+def _prepare(lens, field, depth, wavelength, kernel_size, pixel_size, model, center, caller):
+    _model(model, caller)
     if center not in CENTERS:
         raise ValueError(f"{caller}: center must be one of {CENTERS}, got {center!r}")
     if not isinstance(kernel_size, int) or kernel_size < 1:
         raise ValueError(f"{caller}: kernel_size must be a positive int, got {kernel_size!r}")
-    if not isinstance(pupil, int) or pupil < 2:
-        raise ValueError(f"{caller}: pupil (rays per side) must be an int >= 2, got {pupil!r}")
     if pixel_size is None:
         if lens.sensor is None:
             raise ValueError(f"{caller}: give pixel_size (mm); the lens has no sensor")
@@ -298,8 +365,6 @@ def _prepare(lens, field, depth, wavelength, kernel_size, pixel_size, model, cen
     pixel_size = jnp.asarray(pixel_size, dtype)
     if not checks.is_traced(pixel_size):
         checks.number(pixel_size, "pixel_size", caller, lo=0, lo_open=True, unit="mm")
-    checks.number(overfill, "overfill", caller, lo=0, lo_open=True,
-                  unit="(beam radius over the entrance-pupil radius)")
     wl = lens.primary_wavelength if wavelength is None else wavelength
     wl = jnp.asarray(wl, dtype)
     checks.wavelengths(lens, wl, caller, "wavelength")
@@ -321,10 +386,8 @@ def psf_info(
     wavelength: Float[ArrayLike, "*w"] | None = None,
     kernel_size: int = 31,
     pixel_size=None,
-    model: str = "geometric",
+    model: AbstractPSFModel = DEFAULT_MODEL,
     center: str = "chief",
-    pupil: int = 64,
-    overfill: float = 1.25,
     key=None,
     max_truncation: float | None = None,
     newton_iters: int = DEFAULT_NEWTON_ITERS,
@@ -337,11 +400,11 @@ def psf_info(
         A :class:`PSFResult`.
     """
     field, depth, wl, pixel_size = _prepare(lens, field, depth, wavelength, kernel_size,
-                                            pixel_size, model, center, pupil, "psf", overfill)
+                                            pixel_size, model, center, "psf")
     wls = jnp.atleast_1d(wl)
     kern, trunc, ref, strehl, aliased = _psf_impl(
         apertured(lens), field, depth, wls, pixel_size, key, kernel_size=kernel_size, model=model,
-        center=center, pupil=pupil, overfill=float(overfill), newton_iters=newton_iters)
+        center=center, newton_iters=newton_iters)
     if max_truncation is not None:
         kern = eqx.error_if(
             kern, jnp.any(jnp.isnan(trunc)),
@@ -376,10 +439,8 @@ def psf(
     wavelength: Float[ArrayLike, "*w"] | None = None,
     kernel_size: int = 31,
     pixel_size=None,
-    model: str = "geometric",
+    model: AbstractPSFModel = DEFAULT_MODEL,
     center: str = "chief",
-    pupil: int = 64,
-    overfill: float = 1.25,
     key=None,
     max_truncation: float | None = 0.05,
     newton_iters: int = DEFAULT_NEWTON_ITERS,
@@ -394,12 +455,9 @@ def psf(
             primary wavelength.
         kernel_size: kernel side in pixels (odd keeps the reference on a pixel centre).
         pixel_size: pixel pitch in mm; default the lens's sensor pitch.
-        model: "geometric" (ray splatting) or "coherent" (wave optics).
+        model: ``GeometricPSF(pupil, overfill, order)`` (ray splatting, the default) or
+            ``CoherentPSF(pupil, overfill)`` (wave optics).
         center: "chief", "centroid" or "ideal" (see the module docstring).
-        pupil: rays per side of the square pupil grid (about 0.62·pupil² rays are launched
-            after the disc cut).
-        overfill: radius of the launched beam over the paraxial entrance pupil radius; the
-            stop clips it.
         key: PRNG key to jitter the geometric pupil grid (stratified sampling); None for the
             regular grid.
         max_truncation: raise (``eqx.error_if``) when more than this fraction of the energy
@@ -419,8 +477,8 @@ def psf(
     """
     return psf_info(
         lens, field, depth=depth, wavelength=wavelength, kernel_size=kernel_size,
-        pixel_size=pixel_size, model=model, center=center, pupil=pupil, overfill=overfill,
-        key=key, max_truncation=max_truncation, newton_iters=newton_iters,
+        pixel_size=pixel_size, model=model, center=center, key=key,
+        max_truncation=max_truncation, newton_iters=newton_iters,
     ).psf
 
 
@@ -455,10 +513,8 @@ def psf_map(
     wavelength=None,
     kernel_size: int = 31,
     pixel_size=None,
-    model: str = "geometric",
+    model: AbstractPSFModel = DEFAULT_MODEL,
     center: str = "chief",
-    pupil: int = 64,
-    overfill: float = 1.25,
     sensor=None,
     newton_iters: int = DEFAULT_NEWTON_ITERS,
 ) -> PSFMap:
@@ -483,13 +539,13 @@ def psf_map(
     xy = sensor_grid(sensor.resolution, sensor.pixel_size, grid)
     fields = ideal_to_field(lens, xy)
     _, depth, wl, pixel_size = _prepare(lens, 0.0, depth, wavelength, kernel_size, pixel_size,
-                                        model, center, pupil, "psf_map", overfill)
+                                        model, center, "psf_map")
     wls = jnp.atleast_1d(wl)
     lens = apertured(lens)
 
     def one(f):
         return _psf_impl(lens, f, depth, wls, pixel_size, None, kernel_size=kernel_size,
-                         model=model, center=center, pupil=pupil, overfill=float(overfill),
+                         model=model, center=center,
                          newton_iters=newton_iters)
 
     kern, trunc, ref, _, _ = jax.vmap(one)(fields.reshape(-1, 2))
@@ -520,15 +576,15 @@ def _directions(field):
 
 
 @eqx.filter_jit
-def _mtf_impl(lens, field, depth, wls, freqs, pixel_size, *, model, pupil, overfill,
-              kernel_size, diffraction, newton_iters):
+def _mtf_impl(lens, field, depth, wls, freqs, pixel_size, *, model, kernel_size, diffraction,
+              newton_iters):
     dtype = freqs.dtype
     lens = lens.astype(dtype)
     e_t, e_s = _directions(field)
     fnum = paraxial.paraxial_data(lens).working_fnum
     nw = wls.shape[0]
-    if model == "geometric":
-        pts, mask, _ = pupil_cells(pupil, overfill, dtype)
+    if isinstance(model, GeometricPSF):
+        pts, mask, _ = pupil_cells(model.pupil, model.overfill, dtype)
 
         def otf(wl):
             _, out, w = _trace_beam(lens, field, depth, wl, pts, mask, newton_iters)
@@ -549,9 +605,9 @@ def _mtf_impl(lens, field, depth, wls, freqs, pixel_size, *, model, pupil, overf
             return jnp.abs(jnp.sum(o, 0) / nw)
 
         return along(e_t), along(e_s)
-    kern, _, _, _, _ = _coherent(lens, field, depth, wls, kernel_size=kernel_size,
-                                 pixel_size=pixel_size, center="centroid", pupil=pupil,
-                                 overfill=overfill, newton_iters=newton_iters)
+    kern, _, _, _, _ = model.kernels(lens, field, depth, wls, kernel_size=kernel_size,
+                                     pixel_size=pixel_size, center="centroid", key=None,
+                                     newton_iters=newton_iters)
     k = kernel_size
     c = 0.5 * (k - 1)
     idx = jnp.arange(k, dtype=dtype)
@@ -576,9 +632,7 @@ def mtf(
     wavelengths=None,
     depth=math.inf,
     frequencies=None,
-    model: str = "geometric",
-    pupil: int = 64,
-    overfill: float = 1.25,
+    model: AbstractPSFModel = DEFAULT_MODEL,
     diffraction: bool = True,
     kernel_size: int = 64,
     pixel_size=None,
@@ -602,16 +656,16 @@ def mtf(
         frequencies: spatial frequencies in cycles/mm; default 33 points from 0 to the
             sensor's Nyquist frequency, or to the diffraction cut-off 1/(λ·F#) without a
             sensor.
-        model: "geometric" or "coherent".
-        pupil, overfill, newton_iters: pupil sampling as in :func:`psf`.
+        model: ``GeometricPSF(...)`` (exact OTF of the ray positions) or
+            ``CoherentPSF(...)``, as in :func:`psf`.
+        newton_iters: Newton iterations for aspheric surfaces.
         diffraction: scale the geometric MTF by the diffraction limit.
         kernel_size, pixel_size: PSF grid of the coherent model.
 
     Returns:
         ``(frequencies [F] cycles/mm, mtf_tangential [F], mtf_sagittal [F])``.
     """
-    if model not in MODELS:
-        raise ValueError(f"mtf: model must be one of {MODELS}, got {model!r}")
+    _model(model, "mtf")
     dtype = jnp.result_type(float)
     wls = jnp.atleast_1d(jnp.asarray(lens.wavelengths if wavelengths is None else wavelengths,
                                      dtype))
@@ -627,8 +681,8 @@ def mtf(
     freqs = jnp.atleast_1d(jnp.asarray(frequencies, dtype))
     pix = lam_min * fnum / 4.0 if pixel_size is None else jnp.asarray(pixel_size, dtype)
     field, depth, _, pix = _prepare(lens, field, depth, None, kernel_size, pix, model,
-                                    "centroid", pupil, "mtf", overfill)
-    t, s = _mtf_impl(apertured(lens), field, depth, wls, freqs, pix, model=model, pupil=pupil,
-                     overfill=float(overfill), kernel_size=kernel_size,
+                                    "centroid", "mtf")
+    t, s = _mtf_impl(apertured(lens), field, depth, wls, freqs, pix, model=model,
+                     kernel_size=kernel_size,
                      diffraction=bool(diffraction), newton_iters=newton_iters)
     return freqs, t, s

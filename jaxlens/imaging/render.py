@@ -85,7 +85,7 @@ from . import sampling
 from .aiming import apertured, ideal_to_field, image_scale
 from .distortion import alignment_penalty, inverse_distortion_map, prewarp
 from .grid import bilinear, grid_coords, interp_grid, pixel_positions, scene_coords, sensor_grid
-from .psf import RGB_WAVELENGTHS, geometric_kernels
+from .psf import RGB_WAVELENGTHS, GeometricPSF
 from .radiometry import relative_illumination_samples, star_region
 
 __all__ = ["render", "footprints", "Footprints", "METHODS", "bilinear", "pixel_positions"]
@@ -413,10 +413,11 @@ def _render_psf(lens, scene, key, depth, wls, pixel_size, inv, ri_map, *, resolu
         gy, gx = grid_coords(resolution, (17, 17), rc, ccen)
         field = ideal_to_field(lens, interp_grid(inv, gy, gx))
         ref = jnp.stack(pixel_positions(resolution, pixel_size, rc, ccen))
-        kern, _, _, _, _ = geometric_kernels(lens, field, depth, wls, kernel_size=kernel_size,
-                                      pixel_size=pixel_size, center=ref, pupil=pupil,
-                                      overfill=1.25, key=jax.random.fold_in(key, t),
-                                      newton_iters=newton_iters, order=2)
+        model = GeometricPSF(pupil=pupil, order=2)
+        kern, _, _, _, _ = model.kernels(lens, field, depth, wls, kernel_size=kernel_size,
+                                         pixel_size=pixel_size, center=ref,
+                                         key=jax.random.fold_in(key, t),
+                                         newton_iters=newton_iters)
         kern = kern / jnp.maximum(jnp.sum(kern, (-1, -2), keepdims=True), 1e-30)
         return _conv_rgb(win, kern[:nc])
 

@@ -314,7 +314,7 @@ def mtf_by_depth(lens: Lens, xy, depths_mm, *, frequencies, pupil: int = 96):
             wavelengths=jnp.asarray(WAVELENGTHS_RGB),
             depth=float(object_depth(lens, d)),
             frequencies=jnp.asarray(frequencies),
-            pupil=pupil,
+            model=_psf.GeometricPSF(pupil=pupil),
         )
         tan.append(np.asarray(t))
         sag.append(np.asarray(s))
