@@ -136,7 +136,8 @@ def render_study(size: int = 192, ref_spp: int = 1024) -> dict:
     key = jax.random.PRNGKey(0)
 
     def go(spp, key=key):
-        return jaxlens.render(lens, scene, spp=spp, key=key, sensor=sensor, footprints=fp)
+        return jaxlens.render(lens, scene, spp=spp, key=key, sensor=sensor,
+                              method=jaxlens.imaging.render.RayRender(footprints=fp))
 
     r1 = np.asarray(go(ref_spp, jax.random.PRNGKey(123)), np.float64)
     r2 = np.asarray(go(ref_spp, jax.random.PRNGKey(124)), np.float64)

@@ -70,7 +70,7 @@ def worker(size: int, spp: int, checkpoint: bool, patch: int) -> dict:
                 sensor=sensor,
                 patch=patch,
                 checkpoint=checkpoint,
-                footprints=fp,
+                method=jaxlens.imaging.render.RayRender(footprints=fp),
             )
             return jnp.mean((img - scene) ** 2)
 
@@ -209,7 +209,7 @@ def main(argv=None) -> None:
     main_ck, main_plain = runs[0], runs[1]
     result = {
         "benchmark": "peak RSS of value_and_grad of an MSE loss on jaxlens.imaging.render "
-        "(method='ray', RGB, float32) through jaxlens.zoo.cellphone6, w.r.t. "
+        "(method=RayRender(), RGB, float32) through jaxlens.zoo.cellphone6, w.r.t. "
         "its surfaces and gaps",
         "command": "python -m benchmarks.render_memory",
         "size": args.size,

@@ -49,8 +49,8 @@ def library_defaults() -> dict:
                         "jaxlens/imaging/psf.py psf(model=GeometricPSF(pupil=...))")
     rsig = inspect.signature(render.render).parameters
     out["render_kernel_size"] = (
-        rsig["kernel_size"].default,
-        "jaxlens/render.py render(kernel_size=...)",
+        render.PSFRender().kernel_size,
+        "jaxlens/imaging/render.py PSFRender(kernel_size=...)",
     )
     spp = rsig["spp"].default
     out["render_spp"] = (

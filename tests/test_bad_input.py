@@ -26,6 +26,7 @@ import pytest
 import jaxlens as jl
 from jaxlens.experiments import runfolder
 from jaxlens.imaging.psf import CoherentPSF, GeometricPSF
+from jaxlens.imaging.render import PSFRender, RayRender
 from jaxlens.io import zmx
 from jaxlens.optics import checks
 
@@ -263,10 +264,11 @@ def test_render_arguments_are_checked(cooke):
     scene = jnp.ones((8, 8, 3))
     cases = [
         (dict(key=None), r"render: key must be a PRNG key"),
-        (dict(key=key, method="psf", kernel_size=0), r"kernel_size must be a whole number in "
-                                                    r"\[1, inf\) pixels, got 0"),
-        (dict(key=key, method="psf", kernel_size=8), r"kernel_size must be odd"),
-        (dict(key=key, footprint_grid=1), r"footprint_grid must be a whole number in \[2"),
+        (dict(key=key, method=PSFRender(kernel_size=0)), r"kernel_size must be a whole number "
+                                                         r"in \[1, inf\) pixels, got 0"),
+        (dict(key=key, method=PSFRender(kernel_size=8)), r"kernel_size must be odd"),
+        (dict(key=key, method=RayRender(footprint_grid=1)),
+         r"footprint_grid must be a whole number in \[2"),
     ]
     for kw, match in cases:
         with pytest.raises(ValueError, match=match):

@@ -55,7 +55,7 @@ def test_sharded_gradient_equals_single_device(mesh):
 
         lens_t = eqx.tree_at(lambda m: m.thickness, lens, t)
         img = R.render(lens_t, scene, spp=4, key=KEY, sensor=SENSOR, patch=6, mesh=mesh,
-                       footprints=fp)
+                       method=R.RayRender(footprints=fp))
         return jnp.mean(img**2)
 
     g1 = jax.grad(loss)(lens.thickness, None)

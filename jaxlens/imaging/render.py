@@ -26,9 +26,9 @@ Radiometry:
     independently by forward tracing). With ``False`` each pixel averages the scene over
     the rays that pass (no falloff), as in DeepLens.
 
-Methods:
-    "ray": backward tracing. Each pixel sends ``spp`` rays per wavelength from random points
-    inside the pixel, uniformly over a disc in image-space direction-cosine space (L, M)
+Methods (``method=``):
+    ``RayRender``: backward tracing. Each pixel sends ``spp`` rays per wavelength from random
+    points inside the pixel, uniformly over a disc in image-space direction-cosine space (L, M)
     that covers the exit pupil as seen from that pixel. Uniform samples in (L, M) are
     uniform in projected solid angle, so the irradiance estimate is
     L_scene·(π R²)·(valid fraction) with no further weights. The discs are found once per
@@ -38,11 +38,11 @@ Methods:
     normalises the image is the area of the on-axis footprint. spp samples are stratified
     when spp is a perfect square. The same samples serve the three channels.
 
-    "psf": the scene is first warped by the lens's distortion (real chief rays, D⁻¹ on a
-    17 × 17 grid), then each ``patch × patch`` tile is convolved with the RGB geometric PSF
+    ``PSFRender``: the scene is first warped by the lens's distortion (real chief rays, D⁻¹ on
+    a 17 × 17 grid), then each ``patch × patch`` tile is convolved with the RGB geometric PSF
     of its centre field (centred on the chief ray, from ``spp·kernel_size²`` jittered pupil
     rays per channel, splatted with the quadratic B-spline so that it is integrated over
-    the pixel as in the "ray" method), and multiplied by the relative-illumination map
+    the pixel as in ``RayRender``), and multiplied by the relative-illumination map
     (``radiometry``, on a 9 × 9 grid, interpolated). For a scene at the sensor's resolution
     the two methods then compute the same image, up to Monte-Carlo noise and the
     piecewise-constant PSF.
@@ -88,9 +88,8 @@ from .grid import bilinear, grid_coords, interp_grid, pixel_positions, scene_coo
 from .psf import RGB_WAVELENGTHS, GeometricPSF
 from .radiometry import relative_illumination_samples, star_region
 
-__all__ = ["render", "footprints", "Footprints", "METHODS", "bilinear", "pixel_positions"]
-
-METHODS = ("ray", "psf")
+__all__ = ["render", "relaxed_render", "footprints", "Footprints", "RayRender", "PSFRender",
+           "bilinear", "pixel_positions"]
 
 
 # --------------------------------------------------------------------------------------
@@ -429,6 +428,33 @@ def _render_psf(lens, scene, key, depth, wls, pixel_size, inv, ri_map, *, resolu
 # --------------------------------------------------------------------------------------
 # Public entry point
 # --------------------------------------------------------------------------------------
+class RayRender(eqx.Module):
+    """The "ray" method: backward tracing from the sensor pixels (see Methods).
+
+    Attributes:
+        footprint_grid: sensor grid (per side) for the exit-pupil discs the rays aim at.
+        footprints: precomputed :func:`footprints` for this sensor and these wavelengths;
+            ``None`` computes them from the lens at each call.
+    """
+
+    footprint_grid: int = 9
+    footprints: Footprints | None = None
+
+
+class PSFRender(eqx.Module):
+    """The "psf" method: patch-wise convolution with a spatially varying geometric PSF.
+
+    Attributes:
+        kernel_size: PSF kernel side in pixels (odd: the kernel is centred on a pixel).
+    """
+
+    kernel_size: int = 31
+
+
+RAY = RayRender()
+"""The default render method."""
+
+
 def render(
     lens: Lens,
     scene: Float[Array, "H W 3"],
@@ -436,16 +462,13 @@ def render(
     spp: int,
     key,
     depth=math.inf,
-    method: str = "ray",
+    method: RayRender | PSFRender = RAY,
     wavelengths=RGB_WAVELENGTHS,
     sensor: Sensor | None = None,
     patch: int = 64,
     checkpoint: bool = True,
     mesh: Mesh | None = None,
     relative_illumination: bool = True,
-    kernel_size: int = 31,
-    footprint_grid: int = 9,
-    footprints: Footprints | None = None,
     newton_iters: int = DEFAULT_NEWTON_ITERS,
 ) -> Float[Array, "rows cols 3"]:
     """Simulate the sensor image of a scene through a lens (see the module docstring).
@@ -457,21 +480,18 @@ def render(
         lens: the lens.
         scene: ``[H, W, C]`` linear float image (C = 3 for RGB, one wavelength per channel),
             with the sensor's aspect ratio.
-        spp: rays per pixel per wavelength (method "ray"); for "psf", rays per kernel pixel
-            in each patch's PSF (spp·kernel_size² per channel).
+        spp: rays per pixel per wavelength (``RayRender``); for ``PSFRender``, rays per
+            kernel pixel in each patch's PSF (spp·kernel_size² per channel).
         key: PRNG key (``jax.random.PRNGKey``); the same key gives the same image.
         depth: object distance in mm in front of surface 1, ``inf`` for infinity.
-        method: "ray" (backward tracing) or "psf" (patch-wise PSF convolution).
+        method: ``RayRender(footprint_grid, footprints)`` (backward tracing, the default)
+            or ``PSFRender(kernel_size)`` (patch-wise PSF convolution).
         wavelengths: one wavelength (µm) per channel, default the C, d, F lines for R, G, B.
         sensor: the sensor; default ``lens.sensor``.
         patch: tile side in pixels (memory of a gradient grows with patch²·spp).
         checkpoint: recompute each tile in the backward pass (``jax.checkpoint``).
         mesh: a ``jax.sharding.Mesh`` to spread the tiles over its devices.
         relative_illumination: include vignetting and the cos⁴ falloff (see Radiometry).
-        kernel_size: PSF kernel side in pixels (method "psf").
-        footprint_grid: sensor grid (per side) for the exit-pupil discs (method "ray").
-        footprints: precomputed :func:`footprints` for this sensor and these wavelengths
-            (method "ray"); default computed from the lens.
         newton_iters: Newton iterations for aspheric surfaces.
 
     Returns:
@@ -482,8 +502,12 @@ def render(
             wavelengths, an aspect ratio unlike the sensor's, a non-positive spp, a missing
             sensor, an unknown method or a non-positive depth.
     """
-    if method not in METHODS:
-        raise ValueError(f"render: method must be one of {METHODS}, got {method!r}")
+    if isinstance(method, str):
+        raise TypeError(f"render: method is a render method object, not a string: use "
+                        f"RayRender(...) or PSFRender(kernel_size=...), got {method!r}")
+    if not isinstance(method, RayRender | PSFRender):
+        raise TypeError(f"render: method must be RayRender(...) or PSFRender(...), got "
+                        f"{type(method).__name__}")
     if not isinstance(spp, (int, np.integer)) or isinstance(spp, bool) or spp <= 0:
         raise ValueError(f"render: spp must be a positive int, got {spp!r}")
     if not isinstance(patch, int) or patch < 1:
@@ -493,12 +517,15 @@ def render(
     if key is None or not hasattr(key, "shape"):
         raise ValueError(f"render: key must be a PRNG key (jax.random.key(0) or "
                          f"jax.random.PRNGKey(0)), got {key!r}")
-    if checks.number(kernel_size, "kernel_size", "render", lo=1, unit="pixels",
-                     integer=True) % 2 == 0:
-        raise ValueError(f"render: kernel_size must be odd (a kernel centred on a pixel), in "
-                         f"[1, inf) pixels, got {kernel_size!r}")
-    checks.number(footprint_grid, "footprint_grid", "render", lo=2, unit="points per side",
-                  integer=True)
+    if isinstance(method, PSFRender):
+        kernel_size = method.kernel_size
+        if checks.number(kernel_size, "kernel_size", "render", lo=1, unit="pixels",
+                         integer=True) % 2 == 0:
+            raise ValueError(f"render: kernel_size must be odd (a kernel centred on a pixel), "
+                             f"in [1, inf) pixels, got {kernel_size!r}")
+    else:
+        checks.number(method.footprint_grid, "footprint_grid", "render", lo=2,
+                      unit="points per side", integer=True)
     checks.number(newton_iters, "newton_iters", "render", lo=0, integer=True)
     sensor = lens.sensor if sensor is None else sensor
     if sensor is None:
@@ -539,10 +566,12 @@ def render(
     pixel_size = jnp.asarray(sensor.pixel_size)
     if depth is not None:
         depth = jnp.asarray(depth, scene.dtype)
-    if method == "ray":
+    if isinstance(method, RayRender):
+        footprints = method.footprints
         if footprints is None:
             footprints = _compute_footprints(
-                lens, sensor=sensor, wavelengths=wls, grid=footprint_grid, dtype=scene.dtype,
+                lens, sensor=sensor, wavelengths=wls, grid=method.footprint_grid,
+                dtype=scene.dtype,
                 newton_iters=common["newton_iters"])
         elif footprints.e0.shape != wls.shape:
             raise ValueError(
@@ -554,7 +583,7 @@ def render(
     inv, ri_map = _psf_setup(lens, depth, pixel_size, resolution=common["resolution"], ri=ri,
                              newton_iters=common["newton_iters"])
     return _render_psf(lens, scene, key, depth, wls, pixel_size, inv, ri_map,
-                       kernel_size=int(kernel_size), **common)
+                       kernel_size=int(method.kernel_size), **common)
 
 
 def relaxed_render(

@@ -199,7 +199,7 @@ def render_library(
     """The same image through ``jaxlens.imaging.render`` (method "psf", checkpointed tiles) on the
     pre-warped scene (``jaxlens.imaging.render.relaxed_render``), without shading: a
     cross-check of ``render_tiled`` by an independent code path."""
-    from ...imaging.render import relaxed_render
+    from ...imaging.render import PSFRender, relaxed_render
 
     img, _ = relaxed_render(
         lens,
@@ -207,8 +207,7 @@ def render_library(
         spp=spp,
         key=key,
         depth=object_depth(lens, depth),
-        method="psf",
-        kernel_size=kernel_size,
+        method=PSFRender(kernel_size=kernel_size),
         patch=patch,
         checkpoint=True,
         relative_illumination=False,
