@@ -327,7 +327,7 @@ def test_negative_gap_is_traced_not_lost():
 def _cli(module, *args, cwd=None):
     t0 = time.perf_counter()
     r = subprocess.run([sys.executable, "-m", module, *args], capture_output=True, text=True,
-                       env={**os.environ, "PYTHONPATH": str(ROOT), "JAXLENS_NO_REEXEC": "1"},
+                       env={**os.environ, "PYTHONPATH": str(ROOT)},
                        cwd=cwd, timeout=120)
     return r, time.perf_counter() - t0
 

@@ -380,3 +380,21 @@ def test_chunk_sizes_are_simd_friendly():
     with pytest.raises(ValueError, match="chunk"):
         rays = jl.Rays(jnp.zeros((5, 3)), jnp.ones((5, 3)) / 3**0.5, 0.5)
         jl.trace(jl.zoo.cooke_triplet(), rays, chunk=0)
+
+
+def test_import_builds_no_arrays():
+    """Importing jaxlens starts no JAX backend, so a CLI can still choose the device count."""
+    import subprocess
+    import sys
+
+    code = ("import jaxlens, jaxlens.design, jaxlens.experiments.classical, "
+            "jaxlens.experiments.edof.cli\n"
+            "from jax._src import xla_bridge\n"
+            "assert not xla_bridge.backends_are_initialized()\n"
+            "from jaxlens.experiments.classical import _ensure_devices\n"
+            "_ensure_devices(3)\n"
+            "import jax\n"
+            "assert jax.device_count() == 3, jax.devices()\n")
+    env = {k: v for k, v in __import__("os").environ.items() if k != "XLA_FLAGS"}
+    r = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, env=env)
+    assert r.returncode == 0, r.stderr

@@ -63,23 +63,24 @@ CONVENTION = (
     "the rays of every field reach the sensor")
 
 
-def _ensure_devices(n: int, argv: list[str]) -> None:
-    """Re-run this module with ``n`` XLA host devices (one per core) if not set up yet.
+def _ensure_devices(n: int) -> None:
+    """Ask XLA for ``n`` host devices (one per core) before the JAX backend starts.
 
-    jaxlens initialises the JAX backend on import, so the device count must be in
-    ``XLA_FLAGS`` before the process starts.
+    Importing jaxlens builds no arrays, so the backend is still unstarted here and
+    ``XLA_FLAGS`` set now takes effect; a flag the user already set is kept.
     """
     flags = os.environ.get("XLA_FLAGS", "")
     if n <= 1 or "xla_force_host_platform_device_count" in flags:
         return
-    if os.environ.get("JAXLENS_NO_REEXEC"):
-        return
-    env = dict(os.environ)
-    env["XLA_FLAGS"] = (flags + f" --xla_force_host_platform_device_count={n}").strip()
-    env["JAXLENS_NO_REEXEC"] = "1"
-    sys.stdout.flush()
-    os.execve(sys.executable, [sys.executable, "-m", "jaxlens.experiments.classical", *argv],
-              env)
+    if _backend_started():
+        return  # too late (an embedding program started JAX first): use what is there
+    os.environ["XLA_FLAGS"] = (flags + f" --xla_force_host_platform_device_count={n}").strip()
+
+
+def _backend_started() -> bool:
+    from jax._src import xla_bridge  # no public API tells whether the backend has started
+
+    return xla_bridge.backends_are_initialized()
 
 
 def build_parser() -> argparse.ArgumentParser:
@@ -553,7 +554,7 @@ def main(argv: list[str] | None = None) -> int:
             RunFolder(args.out, overwrite=args.overwrite)
     except ValueError as e:
         return fail(parser.prog, e)
-    _ensure_devices(args.devices, argv)
+    _ensure_devices(args.devices)
     import jax
 
     jax.config.update("jax_enable_x64", True)

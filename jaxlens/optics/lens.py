@@ -82,8 +82,8 @@ class Lens(eqx.Module):
     wavelengths: Float[Array, " w"] = eqx.field(converter=jnp.asarray, default=(0.5875618,))
     primary: int = eqx.field(static=True, default=0)
     object_distance: Float[Array, ""] | None = eqx.field(converter=_distance, default=None)
-    object_material: AbstractMaterial = Air()
-    image: AbstractSurface = Standard()
+    object_material: AbstractMaterial = eqx.field(default_factory=Air)
+    image: AbstractSurface = eqx.field(default_factory=Standard)
     sensor: Sensor | None = None
     name: str = eqx.field(static=True, default="")
 
