@@ -336,6 +336,7 @@ def test_paper_stage_defaults_and_float32_sampling():
     # N = 3 (four stages on the sine path, 300 steps each), then 600 fine-tuning steps.
     assert [s.steps for s in st] == [300] * 4 + [600]
     assert [s.solver for s in st] == ["adam"] * 5 and st[-1].pin == 1.0
+    assert [s.loss for s in st] == ["ray"] * 5
     # float32 designs stay float32 (the sampling and the launched rays).
     samp = losses.RayLoss.make(3, 2, (0.5, 0.6), (3.0, 3.0), jnp.float32)
     assert {x.dtype for x in jax.tree.leaves(samp)} == {jnp.dtype("float32")}
