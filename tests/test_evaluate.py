@@ -129,3 +129,4 @@ def test_summary_drops_the_per_field_arrays(clear):
     assert "rms_um" not in s and "valid_fraction" not in s
     assert s["min_valid_fraction"] == 1.0 and s["rms_mean_um"] == got.rms_mean_um
     assert s["valid"] is True and set(s) >= {"efl", "fnum", "bfl", "geometry", "min_gap"}
+
