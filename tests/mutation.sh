@@ -23,30 +23,30 @@ SEL[mask]="$T::test_field_weights_use_the_area_weighted_mean $D::test_reweightin
 FILE[regularizers]=jaxlens/design/regularizers.py
 SEL[regularizers]="$T::test_obliquity_residuals_are_the_hinge_of_the_cosines_on_both_sides $T::test_slope_residuals_are_the_hinge_of_the_parabola_slope $T::test_spacing_residuals_use_both_sags_and_the_image $T::test_clear_radii_are_the_largest_valid_heights $D::test_soft_hinge_is_a_hinge_near_the_bound_and_never_overflows $D::test_spacing_and_slope_zero_inside_and_pull_back_outside $D::test_obliquity_zero_inside_and_pull_back_outside"
 FILE[losses]=jaxlens/design/losses.py
-SEL[losses]="tests/test_design_residuals.py $T::test_spot_loss_is_measured_from_the_ideal_image_point_f_tan $T::test_failed_rays_cost_half_the_pupil $T::test_centroid_reference_and_pin $T::test_launch_fields_and_stage_args"
+SEL[losses]="tests/test_design_residuals.py $T::test_paper_stage_defaults_and_float32_sampling $T::test_spot_loss_is_measured_from_the_ideal_image_point_f_tan $T::test_failed_rays_cost_half_the_pupil $T::test_centroid_reference_and_pin $T::test_launch_fields_and_stage_args"
 # ImageObjective renders a scene (seconds per call): its mutants are not run here.
 ONLY[losses]="StageArgs,radial_area_weights,half_pupil,RayLoss,launch,SpotResult,spot_errors,trace_stage,Aux,design_residuals,design_loss,Objective"
 FILE[curriculum]=jaxlens/design/curriculum.py
-SEL[curriculum]="$T::test_stage_defaults_and_short_sine_paths $T::test_launch_fields_and_stage_args $T::test_run_applies_mask_and_regularizers_per_stage $D::test_sine_path_paper_schedule $D::test_paper_stages $D::test_run_stops_on_nonfinite_loss $D::test_run_drops_nonfinite_designs"
+SEL[curriculum]="$T::test_stage_defaults_and_short_sine_paths $T::test_paper_stage_defaults_and_float32_sampling $T::test_launch_fields_and_stage_args $T::test_run_applies_mask_and_regularizers_per_stage $D::test_sine_path_paper_schedule $D::test_paper_stages $D::test_run_stops_on_nonfinite_loss $D::test_run_drops_nonfinite_designs"
 # The design loop's plumbing (devices, progress bar, logging) is left out: run's mask and
 # regularizer hand-off is checked through stage_args and _reweight, which it calls.
 ONLY[curriculum]="sine_path,Stage,paper_stages,stage_args,_reweight"
 FILE[evaluate]=jaxlens/design/evaluate.py
 SEL[evaluate]="tests/test_evaluate.py"
-FILE[edof_losses]=jaxlens/edof/losses.py
+FILE[edof_losses]=jaxlens/experiments/edof/losses.py
 SEL[edof_losses]="tests/test_edof.py::test_losses_on_known_values tests/test_edof.py::test_loss_shape_errors"
-FILE[edof_metrics]=jaxlens/edof/train.py
+FILE[edof_metrics]=jaxlens/experiments/edof/train.py
 SEL[edof_metrics]="tests/test_edof.py::test_table2_rec_metrics_come_from_the_reconstruction"
 ONLY[edof_metrics]="evaluate,_restore,_depth_key"
-FILE[image_metrics]=jaxlens/images.py
+FILE[image_metrics]=jaxlens/io/images.py
 SEL[image_metrics]="tests/test_images.py::test_scenes_psnr_ssim tests/test_images.py::test_psnr_default_range_is_the_span_of_both_images_and_zero tests/test_edof.py::test_table2_rec_metrics_come_from_the_reconstruction"
 ONLY[image_metrics]="psnr,ssim,_data_range"
 FILE[nets]=jaxlens/nets.py
 N=tests/test_nets.py
 SEL[nets]="$N::test_block_with_nonzero_scales_matches_numpy $N::test_network_with_nonzero_scales_matches_numpy $N::test_fresh_block_is_identity $N::test_layernorm2d_normalises_each_pixel_over_channels $N::test_simple_gate_multiplies_the_two_halves $N::test_depthwise_matches_grouped_convolution $N::test_strided_conv_halves_and_pixel_shuffle_doubles $N::test_bad_options_raise $N::test_default_is_small_and_options_scale_it $N::test_nafnet_keeps_shape_and_pads_odd_sizes $N::test_initialisation_is_pytorch_default_and_keeps_the_dtype $N::test_building_under_jit_is_refused"
-FILE[zmx_writer]=jaxlens/zmx.py
+FILE[zmx_writer]=jaxlens/io/zmx_write.py
 SEL[zmx_writer]="tests/test_zmx.py"
-ONLY[zmx_writer]="_z,_zemax_catalog,_formula,_schott_fit,_nd_vd,_sanitize,_GlassWriter,_surface_lines,dumps,save_zmx"
+ONLY[zmx_writer]="_z,_zemax_catalog,_formula,_schott_fit,_nd_vd,_sanitize,_GlassWriter,surface_lines,dumps,save_zmx"
 ALL="mask regularizers losses curriculum evaluate edof_losses edof_metrics image_metrics nets zmx_writer"
 
 if [[ -n "${RETEST:-}" ]]; then

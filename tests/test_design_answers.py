@@ -63,8 +63,10 @@ def test_spacing_residuals_use_both_sags_and_the_image():
     c0, c1 = 0.2, -0.25
     radii = np.array([1.5, 1.2, 1.0])
     t = [1.0, 0.5, 2.0]
-    lens = _lens([jl.EvenAsphere(c0, 0.0, (0.0, 0.0)), jl.EvenAsphere(c1, 0.0, (0.0, 0.0)),
-                  jl.EvenAsphere(0.0, 0.0, (0.0, 0.0))], t)
+    c_img = -0.3  # a curved sensor
+    lens = eqx.tree_at(lambda m: m.image, _lens(
+        [jl.EvenAsphere(c0, 0.0, (0.0, 0.0)), jl.EvenAsphere(c1, 0.0, (0.0, 0.0)),
+         jl.EvenAsphere(0.0, 0.0, (0.0, 0.0))], t), jl.Standard(c_img))
     stack = stacked_surfaces(lens.surfaces)
     bounds = np.array([0.8, 0.6, 2.5])
     h = np.asarray(regularizers.spacing(lens, stack, jnp.asarray(radii), jnp.asarray(bounds)))
@@ -73,7 +75,7 @@ def test_spacing_residuals_use_both_sags_and_the_image():
     r2 = U * 1.0
     gaps = [t[0] + _sphere_sag(c1, r0) - _sphere_sag(c0, r0),
             t[1] + 0.0 - _sphere_sag(c1, r1),
-            t[2] + 0.0 - 0.0 * r2]
+            t[2] + _sphere_sag(c_img, r2) - 0.0]
     want = np.concatenate([_soft(b - g) for b, g in zip(bounds, gaps, strict=True)])
     np.testing.assert_allclose(h, want / math.sqrt(N_RADIAL), rtol=1e-12, atol=1e-15)
     # Each gap's hinge is active somewhere, and the first depends on both sags.
@@ -111,7 +113,9 @@ def _spot_setup(beta=0.0, valid_mask=None, focal=4.0, tan_max=0.5, pin=0.0, scal
     d[..., 2] = 1.0
     img = jl.Rays(jnp.asarray(o), jnp.asarray(d), jnp.broadcast_to(jnp.asarray(wl)[None, :,
                   None], (K, W, P)), valid=jnp.asarray(valid))
-    path = jax.tree.map(lambda x: jnp.stack([x, x]), img)
+    before = jl.Rays(jnp.asarray(o) + 5.0, jnp.asarray(d), img.wavelength,
+                     valid=jnp.zeros((K, W, P), bool))
+    path = jax.tree.map(lambda a, b: jnp.stack([a, a, b]), before, img)  # the image is last
     fw = np.array([0.2, 0.3, 0.5])
     args = losses.StageArgs(
         tan_max=jnp.asarray(tan_max), epd=jnp.asarray(1.6), focal=jnp.asarray(focal),
@@ -284,7 +288,7 @@ def test_obliquity_residuals_are_the_hinge_of_the_cosines_on_both_sides():
                  [1.0, 1.0, 1.0], stop=1)
     stack = stacked_surfaces(lens.surfaces)
     rng = np.random.default_rng(7)
-    K, P = 2, 5
+    K, P = 3, 5
 
     def unit(tilt):  # directions at up to `tilt` rad from the axis
         th = rng.uniform(0, tilt, (K, P))
@@ -319,6 +323,13 @@ def test_obliquity_residuals_are_the_hinge_of_the_cosines_on_both_sides():
     want = np.concatenate(want)
     assert np.all(want > 0)
     np.testing.assert_allclose(got, want, rtol=1e-10)
+    # Rays without a leading axis: one residual per surface, the same sum of squares.
+    flat = jax.tree.map(lambda x: x.reshape((x.shape[0], -1) + x.shape[3:]) if x.ndim > 2
+                        else x, path)
+    one = np.asarray(regularizers.obliquity(stack, lens.vertex_z(), lens.stop, jax.tree.map(
+        lambda x: x.reshape((-1,) + x.shape[2:]) if x.ndim > 1 else x, rays), flat))
+    assert one.shape == (2,)
+    np.testing.assert_allclose(np.sum(one**2), np.sum(got**2), rtol=1e-10)
 
 
 def test_stage_defaults_and_short_sine_paths():
@@ -337,6 +348,7 @@ def test_paper_stage_defaults_and_float32_sampling():
     # N = 3 (four stages on the sine path, 300 steps each), then 600 fine-tuning steps.
     assert [s.steps for s in st] == [300] * 4 + [600]
     assert [s.solver for s in st] == ["adam"] * 5 and st[-1].pin == 1.0
+    assert [s.loss for s in st] == ["ray"] * 5
     # float32 designs stay float32 (the sampling and the launched rays).
     samp = losses.RayLoss.make(3, 2, (0.5, 0.6), (3.0, 3.0), jnp.float32)
     assert {x.dtype for x in jax.tree.leaves(samp)} == {jnp.dtype("float32")}

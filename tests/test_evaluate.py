@@ -121,3 +121,12 @@ def test_clipped_corners_fail_the_99_percent_rule():
     lowest = float(frac.min())
     assert ev.evaluate(_plate(sd), SPEC, min_valid=lowest - 1e-9).valid
     assert not ev.evaluate(_plate(sd), SPEC, min_valid=lowest + 1e-6).valid
+
+
+def test_summary_drops_the_per_field_arrays(clear):
+    got, _ = clear
+    s = got.summary()
+    assert "rms_um" not in s and "valid_fraction" not in s
+    assert s["min_valid_fraction"] == 1.0 and s["rms_mean_um"] == got.rms_mean_um
+    assert s["valid"] is True and set(s) >= {"efl", "fnum", "bfl", "geometry", "min_gap"}
+
