@@ -8,6 +8,7 @@ import numpy as np
 import pytest
 
 import jaxlens as jl
+from jaxlens.analysis import report
 from jaxlens.imaging.aiming import unclipped
 
 DATA = jl.__file__.rsplit("/", 1)[0] + "/data/lenses"
@@ -44,3 +45,30 @@ def test_real_aiming_through_clipping_apertures():
         valid = np.asarray(jl.trace(lens, rays).valid)
         np.testing.assert_array_equal(valid, passes)
         assert 0 < passes.sum() < passes.size  # the apertures clip some rays, not all
+
+
+def test_efl_in_air_and_in_image_space_for_a_singlet_into_glass():
+    """A thick singlet whose image space is glass (n′ = 1.6): 1/Φ and n′/Φ from the
+    thick-lens power Φ = Φ1 + Φ2 − (t/n)·Φ1·Φ2."""
+    n, n_img, c1, c2, t = 1.5, 1.6, 1 / 40.0, -1 / 60.0, 4.0
+    lens = jl.Lens(
+        (jl.Sphere(c1), jl.Sphere(c2)),
+        jnp.array([t, 50.0]),
+        (jl.ModelGlass(n, np.inf), jl.ModelGlass(n_img, np.inf)),
+        epd=5.0,
+        fields=[0.0, 5.0],
+        wavelengths=[0.5875618],
+    )
+    p1, p2 = (n - 1) * c1, (n_img - n) * c2
+    power = p1 + p2 - t / n * p1 * p2
+    pd = jl.paraxial_data(lens)
+    assert float(pd.efl) == pytest.approx(1 / power, rel=1e-13)
+    assert float(pd.efl_image_space) == pytest.approx(n_img / power, rel=1e-13)
+    data = report.report_data(lens)
+    assert data["efl"] == pytest.approx(1 / power, rel=1e-13)
+    assert data["efl_image_space"] == pytest.approx(n_img / power, rel=1e-13)
+    text = report.format_report(data)
+    row = {line.split(":")[0].strip(): float(line.split(":")[1].split()[0])
+           for line in text.splitlines() if line.startswith("  Effective focal")}
+    assert row == {"Effective focal length (in air)": pytest.approx(1 / power, rel=1e-6),
+                   "Effective focal length (img space)": pytest.approx(n_img / power, rel=1e-6)}
