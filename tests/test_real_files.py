@@ -37,8 +37,9 @@ def test_real_aiming_through_clipping_apertures():
     for field in (14.0, 20.0):
         rays = jl.sampling.collimated(lens, field, pupil, aim="real")
         free = jl.trace_path(unclipped(lens), rays)
-        np.testing.assert_allclose(np.asarray(free.origin[lens.stop, :, :2]), target, rtol=0,
-                                   atol=1e-9)
+        np.testing.assert_allclose(
+            np.asarray(free.origin[lens.stop, :, :2]), target, rtol=0, atol=1e-9
+        )
         # Known answer for validity: the aimed ray passes iff it stays inside both apertures.
         radius = np.linalg.norm(np.asarray(free.origin[:2, :, :2]), axis=-1).max(0)
         passes = (radius <= clip) & np.asarray(free.valid[-1])
@@ -68,10 +69,15 @@ def test_efl_in_air_and_in_image_space_for_a_singlet_into_glass():
     assert data["efl"] == pytest.approx(1 / power, rel=1e-13)
     assert data["efl_image_space"] == pytest.approx(n_img / power, rel=1e-13)
     text = report.format_report(data)
-    row = {line.split(":")[0].strip(): float(line.split(":")[1].split()[0])
-           for line in text.splitlines() if line.startswith("  Effective focal")}
-    assert row == {"Effective focal length (in air)": pytest.approx(1 / power, rel=1e-6),
-                   "Effective focal length (img space)": pytest.approx(n_img / power, rel=1e-6)}
+    row = {
+        line.split(":")[0].strip(): float(line.split(":")[1].split()[0])
+        for line in text.splitlines()
+        if line.startswith("  Effective focal")
+    }
+    assert row == {
+        "Effective focal length (in air)": pytest.approx(1 / power, rel=1e-6),
+        "Effective focal length (img space)": pytest.approx(n_img / power, rel=1e-6),
+    }
 
 
 # ---------------------------------------------------------------------------- writing
@@ -120,8 +126,14 @@ def test_save_writes_clipping_as_clap_and_the_image_medium(tmp_path):
     blocks = _blocks(text)
     # Zemax's circular aperture, CLAP min max 0, on exactly the clipped surfaces.
     claps = {n: [x for x in b if x.startswith("CLAP")] for n, b in blocks.items()}
-    assert claps == {0: [], 1: ["CLAP 0 3.0E+000 0"], 2: [], 3: ["CLAP 0 4.0E+000 0"], 4: [],
-                     5: ["CLAP 0 9.0E+000 0"]}
+    assert claps == {
+        0: [],
+        1: ["CLAP 0 3.0E+000 0"],
+        2: [],
+        3: ["CLAP 0 4.0E+000 0"],
+        4: [],
+        5: ["CLAP 0 9.0E+000 0"],
+    }
     # The image surface names image space's medium, as the last lens surface does.
     glas = [x.split()[1] for x in blocks[5] if x.startswith("GLAS")]
     assert glas == ["N-BK7"] == [x.split()[1] for x in blocks[4] if x.startswith("GLAS")]
@@ -129,14 +141,16 @@ def test_save_writes_clipping_as_clap_and_the_image_medium(tmp_path):
     assert_same_lens(lens, back)  # load -> save -> load is exact
     # The clipping is in the CLAP lines alone (all that Zemax and optiland clip with).
     (tmp_path / "clap_only.zmx").write_text(
-        "\n".join(x for x in text.splitlines() if not x.strip().startswith("DIAM")) + "\n")
+        "\n".join(x for x in text.splitlines() if not x.strip().startswith("DIAM")) + "\n"
+    )
     clap_only = jl.load(tmp_path / "clap_only.zmx")
     assert [float(s.semi_diameter) for s in clap_only.surfaces] == [3.0, np.inf, 4.0, np.inf]
     # Known answer: rays parallel to the axis at 2.9 mm pass the 3 mm window, at 3.1 mm not.
     rays = _axial_rays([0.0, 2.9, 3.1])
     for clipped in (lens, back, clap_only):
-        np.testing.assert_array_equal(np.asarray(jl.trace(clipped, rays).valid),
-                                      [True, True, False])
+        np.testing.assert_array_equal(
+            np.asarray(jl.trace(clipped, rays).valid), [True, True, False]
+        )
     assert bool(jl.trace(unclipped(lens), rays).valid.all())
     n_img = float(jl.get_material("N-BK7").index(0.5875618))
     pd = jl.paraxial_data(back)
@@ -158,10 +172,12 @@ def _singlet_efl_bfl():
 def _file(system, surface1="", image_surface="", obj="  DISZ INFINITY\n", image_gap=None):
     """A stop-in-front singlet (model glass n = 1.5, no dispersion) as .zmx text."""
     bfl = _singlet_efl_bfl()[1] if image_gap is None else image_gap
-    return (f"UNIT MM\n{system}WAVM 1 0.5875618 1\nSURF 0\n{obj}"
-            f"SURF 1\n  STOP\n  CURV {SINGLET_C1!r}\n  DISZ {SINGLET_T!r}\n"
-            f"  GLAS ___BLANK 1 0 1.5 0 0 0 0 0 0 0\n{surface1}"
-            f"SURF 2\n  CURV {SINGLET_C2!r}\n  DISZ {bfl!r}\nSURF 3\n{image_surface}")
+    return (
+        f"UNIT MM\n{system}WAVM 1 0.5875618 1\nSURF 0\n{obj}"
+        f"SURF 1\n  STOP\n  CURV {SINGLET_C1!r}\n  DISZ {SINGLET_T!r}\n"
+        f"  GLAS ___BLANK 1 0 1.5 0 0 0 0 0 0 0\n{surface1}"
+        f"SURF 2\n  CURV {SINGLET_C2!r}\n  DISZ {bfl!r}\nSURF 3\n{image_surface}"
+    )
 
 
 def _load_text(tmp_path, text, name="f.zmx"):
@@ -177,7 +193,7 @@ def _refused(tmp_path, text, match):
     with pytest.raises(ValueError, match=match) as e:
         jl.load(p)
     msg = str(e.value)
-    number = int(msg[len(str(p)) + 1:].split(":")[0])
+    number = int(msg[len(str(p)) + 1 :].split(":")[0])
     assert msg.startswith(f"{p}:{number}: ")
     assert repr(text.splitlines()[number - 1].strip()) in msg
     return text.splitlines()[number - 1].strip()
@@ -214,17 +230,24 @@ def test_paraxial_image_height_fields(tmp_path):
     # In centimetres the heights are 10x larger in mm.
     cm = _file(system).replace("UNIT MM", "UNIT CM")
     cm_lens = _load_text(tmp_path, cm)[1]
-    np.testing.assert_allclose(np.asarray(jl.paraxial.image_height(cm_lens, cm_lens.fields[:, 1])),
-                               [0.0, 50.0, -30.0], rtol=0, atol=1e-11)
+    np.testing.assert_allclose(
+        np.asarray(jl.paraxial.image_height(cm_lens, cm_lens.fields[:, 1])),
+        [0.0, 50.0, -30.0],
+        rtol=0,
+        atol=1e-11,
+    )
 
 
-@pytest.mark.parametrize(("ftyp", "match"), [
-    ("FTYP 3 0 2 1 0 0 0", "real image height fields .FTYP 3. are not supported"),
-    ("FTYP 1 0 2 1 0 0 0", r"field type 1 \(object heights\) is not supported"),
-    ("FTYP 4 0 2 1 0 0 0", r"field type 4 \(theodolite angles\)"),
-    ("FTYP 0 1 2 1 0 0 0", "object-space telecentric"),
-    ("FTYP 0 0 2 1 0 0 1", "afocal image space"),
-])
+@pytest.mark.parametrize(
+    ("ftyp", "match"),
+    [
+        ("FTYP 3 0 2 1 0 0 0", "real image height fields .FTYP 3. are not supported"),
+        ("FTYP 1 0 2 1 0 0 0", r"field type 1 \(object heights\) is not supported"),
+        ("FTYP 4 0 2 1 0 0 0", r"field type 4 \(theodolite angles\)"),
+        ("FTYP 0 1 2 1 0 0 0", "object-space telecentric"),
+        ("FTYP 0 0 2 1 0 0 1", "afocal image space"),
+    ],
+)
 def test_field_types_refused_with_the_line(tmp_path, ftyp, match):
     text = _file(f"ENPD 10\n{ftyp}\nYFLN 0 5\n")
     assert _refused(tmp_path, text, match) == ftyp
@@ -237,8 +260,11 @@ def test_vignetting_factors_refused_on_used_fields(tmp_path):
     _load_text(tmp_path, _file(head + zeros.replace("VCYN 0 0 0 0", "VCYN 0 0 0.5 0")))  # unused
     for key in ("VDXN", "VDYN", "VCXN", "VCYN", "VANN"):
         bad = zeros.replace(f"{key} 0 0 0 0", f"{key} 0 0.25 0 0")
-        line = _refused(tmp_path, _file(head + bad), f"vignetting factors are not supported "
-                                                       f"\\({key} of field 2 is 0.25\\)")
+        line = _refused(
+            tmp_path,
+            _file(head + bad),
+            f"vignetting factors are not supported \\({key} of field 2 is 0.25\\)",
+        )
         assert line == f"{key} 0 0.25 0 0"
 
 
@@ -250,8 +276,12 @@ def test_obscurations_and_other_apertures_refused(tmp_path):
     _, lens = _load_text(tmp_path, _file(ep, surface1="  OBSC 0 0 0\n"))
     assert float(lens.epd) == 10.0
     assert _refused(tmp_path, _file(ep, surface1="  CLAP 1 4 0\n"), "annular apertures")
-    assert _refused(tmp_path, _file(ep, surface1="  CLAP 0 4 0\n  OBDC 0 0.5\n"),
-                    "decentered apertures") == "OBDC 0 0.5"
+    assert (
+        _refused(
+            tmp_path, _file(ep, surface1="  CLAP 0 4 0\n  OBDC 0 0.5\n"), "decentered apertures"
+        )
+        == "OBDC 0 0.5"
+    )
     _, lens = _load_text(tmp_path, _file(ep, surface1="  CLAP 0 4 0\n  OBDC 0 0\n"))
     assert float(lens.surfaces[0].semi_diameter) == 4.0
 
@@ -260,10 +290,16 @@ def test_ray_aiming_and_image_medium_are_reported(tmp_path):
     from jaxlens.io.zmx import ZmxWarning
 
     _load_text(tmp_path, _file("ENPD 10\nRAIM 0 0 1 1 0 0 0 0 0\n"))  # aiming off: silent
-    with pytest.warns(ZmxWarning, match=r"f\.zmx:3: the file aims rays at the stop .RAIM.; "
-                                        r".*aim='real'"):
+    with pytest.warns(
+        ZmxWarning,
+        match=r"f\.zmx:3: the file aims rays at the stop .RAIM.; "
+        r".*aim='real'",
+    ):
         _load_text(tmp_path, _file("ENPD 10\nRAIM 0 2 1 1 0 0 0 0 0\n"))
-    with pytest.warns(ZmxWarning, match=r"the image surface names N-BK7 but image space .* "
-                                        r"is AIR; jaxlens uses AIR"):
+    with pytest.warns(
+        ZmxWarning,
+        match=r"the image surface names N-BK7 but image space .* "
+        r"is AIR; jaxlens uses AIR",
+    ):
         _, lens = _load_text(tmp_path, _file("ENPD 10\n", image_surface="  GLAS N-BK7\n"))
     assert lens.materials[-1] == jl.Air()

@@ -30,8 +30,10 @@ def epd_from_object_na(lens: Lens, value: float, cone_angle: bool) -> float:
             cone angle in (0, 90) deg).
     """
     if lens.object_distance is None:
-        raise ValueError("an object-space NA or cone angle needs a finite object distance "
-                         "(the object DISZ is INFINITY); use ENPD or FNUM")
+        raise ValueError(
+            "an object-space NA or cone angle needs a finite object distance "
+            "(the object DISZ is INFINITY); use ENPD or FNUM"
+        )
     wl = lens.primary_wavelength
     if cone_angle:
         if not 0.0 < value < 90.0:
@@ -40,13 +42,17 @@ def epd_from_object_na(lens: Lens, value: float, cone_angle: bool) -> float:
     else:
         n0 = float(lens.object_material.index(wl))
         if not 0.0 < value < n0:
-            raise ValueError(f"object-space NA must be in (0, n) with n = {n0:.6g} the object "
-                             f"space index, got {value:g}")
+            raise ValueError(
+                f"object-space NA must be in (0, n) with n = {n0:.6g} the object "
+                f"space index, got {value:g}"
+            )
         u = math.asin(value / n0)
     to_pupil = float(paraxial.entrance_pupil_z(lens, wl)) + float(lens.object_distance)
     if not to_pupil > 0:
-        raise ValueError(f"the entrance pupil lies {-to_pupil:g} mm before the object; an "
-                         f"object-space NA does not define a pupil there")
+        raise ValueError(
+            f"the entrance pupil lies {-to_pupil:g} mm before the object; an "
+            f"object-space NA does not define a pupil there"
+        )
     return 2.0 * to_pupil * math.tan(u)
 
 
@@ -59,15 +65,22 @@ def angles_from_paraxial_image_heights(lens: Lens, heights: np.ndarray) -> Lens:
     """
     k = float(paraxial.image_height(lens, 45.0) / jnp.tan(jnp.deg2rad(45.0)))
     if not (math.isfinite(k) and k != 0.0):
-        raise ValueError(f"paraxial image heights cannot be converted to angles: the paraxial "
-                         f"image height per unit field tangent is {k:g} mm (an afocal or "
-                         f"telecentric image space)")
+        raise ValueError(
+            f"paraxial image heights cannot be converted to angles: the paraxial "
+            f"image height per unit field tangent is {k:g} mm (an afocal or "
+            f"telecentric image space)"
+        )
     angles = np.degrees(np.arctan(np.asarray(heights, np.float64) / k))
     return eqx.tree_at(lambda m: m.fields, lens, jnp.asarray(angles))
 
 
-FIELD_TYPES = {0: "angles", 1: "object heights", 2: "paraxial image heights",
-               3: "real image heights", 4: "theodolite angles"}
+FIELD_TYPES = {
+    0: "angles",
+    1: "object heights",
+    2: "paraxial image heights",
+    3: "real image heights",
+    4: "theodolite angles",
+}
 """Zemax's field types (FTYP's first value)."""
 
 
@@ -81,15 +94,18 @@ def field_type(ln) -> int:
         return 0
     kind = ln.int(1, "field type")
     if kind == 3:
-        raise ln.error("real image height fields (FTYP 3) are not supported: each needs a "
-                       "real chief-ray solve that the reader does not do; give the fields as "
-                       "angles (FTYP 0) or paraxial image heights (FTYP 2)")
+        raise ln.error(
+            "real image height fields (FTYP 3) are not supported: each needs a "
+            "real chief-ray solve that the reader does not do; give the fields as "
+            "angles (FTYP 0) or paraxial image heights (FTYP 2)"
+        )
     if kind not in (0, 2):
-        raise ln.error(f"field type {kind} ({FIELD_TYPES.get(kind, 'unknown')}) is not "
-                       f"supported; use angles (FTYP 0) or paraxial image heights (FTYP 2)")
+        raise ln.error(
+            f"field type {kind} ({FIELD_TYPES.get(kind, 'unknown')}) is not "
+            f"supported; use angles (FTYP 0) or paraxial image heights (FTYP 2)"
+        )
     if len(ln.tokens) > 2 and ln.int(2, "object-space telecentric flag") != 0:
-        raise ln.error("object-space telecentric systems (FTYP's second value 1) are not "
-                       "supported")
+        raise ln.error("object-space telecentric systems (FTYP's second value 1) are not supported")
     if len(ln.tokens) > 7 and ln.int(7, "afocal image space flag") != 0:
         raise ln.error("afocal image space (FTYP's seventh value 1) is not supported")
     return kind
@@ -110,7 +126,8 @@ def check_vignetting(lines, count: int) -> None:
             raise ln.error(
                 f"vignetting factors are not supported ({ln.tokens[0]} of field {i} is "
                 f"{v:g}); jaxlens samples the whole entrance pupil and lets surface apertures "
-                f"(CLAP) vignette: clear the vignetting factors and give the apertures instead")
+                f"(CLAP) vignette: clear the vignetting factors and give the apertures instead"
+            )
 
 
 def ray_aiming(ln, path: str) -> None:
@@ -118,7 +135,10 @@ def ray_aiming(ln, path: str) -> None:
     2 real): a ``Lens`` carries no aiming setting; jaxlens's samplers take ``aim``."""
     if ln is None or len(ln.tokens) < 3 or ln.int(2, "ray aiming type") == 0:
         return
-    warnings.warn(f"{path}:{ln.number}: the file aims rays at the stop (RAIM); jaxlens "
-                  f"lenses carry no aiming setting: pass aim='real' to jaxlens.sampling "
-                  f"(collimated, point_source, field_rays) for the same rays", ZmxWarning,
-                  stacklevel=4)
+    warnings.warn(
+        f"{path}:{ln.number}: the file aims rays at the stop (RAIM); jaxlens "
+        f"lenses carry no aiming setting: pass aim='real' to jaxlens.sampling "
+        f"(collimated, point_source, field_rays) for the same rays",
+        ZmxWarning,
+        stacklevel=4,
+    )
