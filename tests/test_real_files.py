@@ -303,3 +303,14 @@ def test_ray_aiming_and_image_medium_are_reported(tmp_path):
     ):
         _, lens = _load_text(tmp_path, _file("ENPD 10\n", image_surface="  GLAS N-BK7\n"))
     assert lens.materials[-1] == jl.Air()
+
+
+def test_rectangular_and_elliptical_apertures_are_reported(tmp_path):
+    from jaxlens.io.zmx import ZmxWarning
+
+    for line in ("SQAP 3 4 0", "ELAP 3 4 0"):
+        text = _file("ENPD 10\n", surface1=f"  {line}\n")
+        with pytest.warns(ZmxWarning, match=f"f.zmx:11: .* aperture ignored .*'{line}'"):
+            _load_text(tmp_path, text)
+        with pytest.raises(ValueError, match="aperture ignored.*strict mode"):
+            jl.io.zmx.loads(text, "f.zmx", strict=True)

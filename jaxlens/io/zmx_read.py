@@ -67,7 +67,7 @@ IGNORED_KEYWORDS = frozenset("""
     FWGN FWGT ZVDX ZVDY ZVCX ZVCY ZVAN XFLD YFLD WWGT WWGN WAVN
     FLDM MNCA MXCA MNEA MXEA MNCG MXCG MNEG MXEG MNPD MXPD TCEM TMIN TMAX BLNK TOL TOLE MNUM
     MOFF MOPS MAZH EFFL DMFS SCOL SCTH SCON CONF OPDX PWRH VPAR PRAM IGNR PZUP TELE AFOC
-    APMN APMX APCX APCY APDX APDY APTP OBSF SQAP ELAP FLAP MEMA OEMA POPS HIDE MIRR SLAB
+    APMN APMX APCX APCY APDX APDY APTP OBSF FLAP MEMA OEMA POPS HIDE MIRR SLAB
     COAT FIMP CTHK EDGE THSO TRAC VARI VDSZ WAVL XFLN YFLN PPAR BLKS BLNK CAMA GLCZ HIDX
     TCEX MAZH MIND MXWL MNWL OPTI NSCS NSOA NSOD NSOO NSOP NSOQ NSOS NSOU NSOV NSOW GCAT
     """.split())
@@ -172,6 +172,7 @@ class _File:
     pwav: _Line | None = None
     vignetting: list = field(default_factory=list)  # VDXN/VDYN/VCXN/VCYN/VANN lines
     raim: _Line | None = None
+    shaped_apertures: list = field(default_factory=list)  # SQAP/ELAP lines
     surfs: list = field(default_factory=list)
     unknown: list = field(default_factory=list)  # lines with a keyword nobody knows
     zemax: bool = False  # written by Zemax (a VERS line): every block is complete
@@ -199,6 +200,8 @@ def _parse(text: str, path: str) -> _File:
             _surface_line(cur, key, ln)
         elif key in _TOP_KEYS:
             _top_line(f, key, ln, raw)
+        elif key in ("SQAP", "ELAP"):
+            f.shaped_apertures.append(ln)
         elif key not in IGNORED_KEYWORDS:
             f.unknown.append(ln)
         if key in _SURFACE_KEYS and cur is not None:
@@ -625,9 +628,14 @@ def _check_structure(f: _File, text: str, strict: bool) -> None:
                         f"(a cut-off keyword means a truncated file): {ln.text.strip()!r}")
 
 
-def _check_apertures(f: _File) -> None:
+def _check_apertures(f: _File, strict: bool) -> None:
     """Refuse surface apertures the tracer cannot model (it clips outside a centred
-    semi-diameter only)."""
+    semi-diameter only); rectangular and elliptical ones are reported (an error under
+    ``strict``)."""
+    for ln in f.shaped_apertures:
+        shape = "rectangular" if ln.tokens[0] == "SQAP" else "elliptical"
+        _report(strict, f"{f.path}:{ln.number}: {shape} aperture ignored (jaxlens clips at "
+                        f"circular semi-diameters only): {ln.text.strip()!r}")
     for s in f.surfs:
         if s.obsc is not None:
             raise s.obsc.error("central obscurations (OBSC) are not supported: the tracer "
@@ -691,7 +699,7 @@ def loads(text: str, path: str = "<zmx>", *, strict: bool = False) -> Lens:
     if not dist > 0:
         raise (obj.disz_line or obj.line).error("object distance must be > 0 or INFINITY")
     wl, primary = _wavelengths(f)
-    _check_apertures(f)
+    _check_apertures(f, strict)
     _check_image_medium(f, body)
     zmx_system.ray_aiming(f.raim, f.path)
     field_type = zmx_system.field_type(f.ftyp)
