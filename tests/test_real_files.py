@@ -314,3 +314,15 @@ def test_rectangular_and_elliptical_apertures_are_reported(tmp_path):
             _load_text(tmp_path, text)
         with pytest.raises(ValueError, match="aperture ignored.*strict mode"):
             jl.io.zmx.loads(text, "f.zmx", strict=True)
+
+
+def test_image_surface_model_glass_must_match_image_space(tmp_path):
+    from jaxlens.io.zmx import ZmxWarning
+
+    last = "  GLAS ___BLANK 1 0 1.5 0 0 0 0 0 0 0\n"  # surface 2 into the same model glass
+    text = _file("ENPD 10\n").replace(
+        f"  DISZ {_singlet_efl_bfl()[1]!r}\n", f"  DISZ {_singlet_efl_bfl()[1]!r}\n{last}"
+    )
+    _load_text(tmp_path, text + last)  # the same model glass: silent
+    with pytest.warns(ZmxWarning, match="names ___BLANK 1.6 0 but image space .* is ___BLANK"):
+        _load_text(tmp_path, text + last.replace("1.5", "1.6"))

@@ -652,9 +652,13 @@ def _check_image_medium(f: _File, body: list) -> None:
     img = f.surfs[-1]
     if img.glas is None:
         return
-    last = body[-1].glas.tokens[1].upper() if body and body[-1].glas is not None else "AIR"
-    if img.glas.tokens[1].upper() != last:
-        warnings.warn(f"{f.path}:{img.glas.number}: the image surface names {img.glas.tokens[1]}"
+    def named(ln):  # a model glass is its nd and Vd
+        t = [x.upper() for x in ln.tokens[1:]]
+        return " ".join(t[:1] + t[3:5]) if t[0] == "___BLANK" else t[0]
+
+    last = named(body[-1].glas) if body and body[-1].glas is not None else "AIR"
+    if named(img.glas) != last:
+        warnings.warn(f"{f.path}:{img.glas.number}: the image surface names {named(img.glas)}"
                       f" but image space (the GLAS of surface {img.number - 1}) is {last}; "
                       f"jaxlens uses {last}", ZmxWarning, stacklevel=3)
 
