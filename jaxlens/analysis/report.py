@@ -9,8 +9,11 @@ Conventions (also written into the JSON output under ``units``):
     aimed at the paraxial entrance pupil), about the centroid of each wavelength's
     spot. ``distortion`` is 100·(y_chief − EFL·tanθ)/(EFL·tanθ) (f-tanθ distortion) and
     ``distortion_paraxial`` uses the paraxial chief-ray height on the image surface as
-    the reference. The chief ray is the primary-wavelength ray through the centre of the
-    paraxial entrance pupil. Pupil positions are global z (surface 1's vertex at 0).
+    the reference. ``efl`` is 1/Φ, the focal length in air; ``efl_image_space`` is n′/Φ
+    with n′ the image-space index, the EFL that Zemax ("in image space") and optiland
+    report; they differ only when image space is not air. The chief ray is the
+    primary-wavelength ray through the centre of the paraxial entrance pupil. Pupil
+    positions are global z (surface 1's vertex at 0).
 """
 
 from __future__ import annotations
@@ -179,6 +182,7 @@ def report_data(lens: Lens, *, fields=None, wavelengths=None) -> dict:
         "name": lens.name,
         "units": UNITS,
         "efl": _f(pd.efl),
+        "efl_image_space": _f(pd.efl_image_space),
         "bfl": _f(pd.bfl),
         "fnum": _f(pd.fnum),
         "working_fnum": _f(pd.working_fnum),
@@ -291,7 +295,8 @@ def format_report(data: dict, lens: Lens | None = None) -> str:
     ep, xp = data["entrance_pupil"], data["exit_pupil"]
     wl = data["wavelengths"]
     rows = [
-        ("Effective focal length", data["efl"], "mm"),
+        ("Effective focal length (in air)", data["efl"], "mm"),
+        ("Effective focal length (img space)", data["efl_image_space"], "mm"),
         ("Back focal length", data["bfl"], "mm"),
         ("Image space F/#", data["fnum"], ""),
         ("Paraxial working F/#", data["working_fnum"], ""),

@@ -194,13 +194,20 @@ def aim_at_stop(
     Newton's method on the 2D launch point in the entrance-pupil plane, with the Jacobian
     from forward-mode autodiff of a partial trace to the stop. A collimated beam keeps its
     direction; rays from ``source_point`` (a finite object) are re-aimed from that point.
+
+    The aiming traces the lens without its apertures (``aiming.unclipped``): an aperture
+    that clips a Newton iterate stops that ray where it was clipped, which leaves the
+    iterate short of the stop point, and the real trace may then pass the wrong ray. Which
+    of the aimed rays the apertures stop is for the caller's trace of the real lens.
     """
     from ..tracing.forward import trace_path
+    from .aiming import unclipped
 
     stop_r = paraxial.paraxial_data(lens).stop_semi_diameter
     target = pupil * stop_r
     zep = paraxial.entrance_pupil_z(lens)
     n_obj = lens.object_material.index(rays.wavelength)
+    free = unclipped(lens)
 
     def launch(uv, d):
         p = jnp.stack([uv[0], uv[1], zep])
@@ -211,7 +218,7 @@ def aim_at_stop(
 
     def at_stop(uv, d, w):
         o2, d2 = launch(uv, d)
-        r = trace_path(lens, Rays(o2[None], d2[None], w), upto=lens.stop)[-1]
+        r = trace_path(free, Rays(o2[None], d2[None], w), upto=lens.stop)[-1]
         return r.origin[0, :2]
 
     def solve(uv0, d, tgt, w):

@@ -21,7 +21,14 @@ What is read and written:
       number of even and odd coefficients so the round trip restores the same shapes.
     * ``DISZ`` (INFINITY for the object), ``STOP``, ``DIAM`` (the semi-diameter; a value
       with solve flag 0 is Zemax's automatic semi-diameter and is read as no clipping,
-      a fixed value clips rays), ``CLAP`` (circular aperture, read as the semi-diameter).
+      a fixed value clips rays), ``CLAP 0 r 0`` (circular aperture, read as the
+      semi-diameter; it wins over DIAM). A clipping semi-diameter is written as both
+      ``DIAM r 1`` and ``CLAP 0 r 0``: Zemax and optiland clip only at apertures.
+      Refused: ``OBSC`` (central obscuration), annular CLAP, decentered apertures (OBDC);
+      ``SQAP``/``ELAP`` give a warning and are ignored.
+    * Image space is the last lens surface's GLAS; it is also written on the image
+      surface (optiland reads image space there). An image-surface GLAS that differs
+      gives a warning.
     * ``GLAS``: catalog glasses by name (``GLAS N-BK7 0 0 1.5168 6.417E+001 0 0 0 0 0 0``,
       with the catalog's nd and Vd), model glasses as Zemax writes them
       (``GLAS ___BLANK 1 0 nd Vd 0 0 0 0 0 0``), ``GCAT`` (the catalogs searched, in
@@ -35,8 +42,15 @@ What is read and written:
       beyond), and its exact definition in a ``GC jaxlens {...}`` comment record, which
       Zemax ignores and jaxlens reads back, so the round trip loses nothing.
     * ``ENPD`` (entrance pupil diameter), ``FNUM x 0`` (image-space F/# = EFL/EPD), ``FLOA``
-      (float by stop size: the stop's DIAM), ``FTYP`` with ``XFLN``/``YFLN`` angle fields,
-      ``WAVM`` (or the older ``WAVL``) and ``PWAV``, ``UNIT``, ``NAME``.
+      (float by stop size: the stop's CLAP or DIAM), ``OBNA x 0`` (object-space NA) and
+      ``OBNA x 1`` (object cone angle, degrees), both read as EPD = 2·d·tan u with d the
+      object-to-entrance-pupil distance; ``FTYP 0`` (angle fields) and ``FTYP 2``
+      (paraxial image heights, converted exactly to angles: θ = atan(h/K), K the paraxial
+      image height per unit tan θ) with ``XFLN``/``YFLN``; other field types, telecentric
+      object space, afocal image space and vignetting factors (VDXN, VDYN, VCXN, VCYN,
+      VANN) other than 0 are refused. ``RAIM`` with ray aiming on gives a warning (a
+      ``Lens`` has no aiming setting; the samplers take ``aim="real"``). ``WAVM`` (or the
+      older ``WAVL``) and ``PWAV``, ``UNIT``, ``NAME``.
     * The sensor (``Lens.sensor``) is kept in the image surface's comment,
       ``COMM jaxlens sensor rows=480 cols=640 pixel=0.005``, which Zemax ignores.
     * Files are read as UTF-16 (with BOM, Zemax's default), UTF-8 (with or without BOM)

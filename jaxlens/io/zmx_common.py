@@ -31,6 +31,10 @@ MARKER = "jaxlens "
 MAX_XPOLY_DEGREE = 20
 
 
+class ZmxWarning(UserWarning):
+    """A ``.zmx`` file has content the reader does not understand (it may be truncated)."""
+
+
 def term_powers(j: int) -> tuple[int, int]:
     """(power of x, power of y) of Zemax extended-polynomial term j (1-based)."""
     d = int((math.isqrt(8 * j + 1) - 1) // 2)

@@ -17,8 +17,17 @@ from ..optics import checks
 from ..optics.lens import Lens, Sensor
 from ..optics.materials import AbstractMaterial, Air, ModelGlass
 from ..optics.surfaces import AbstractSurface, EvenAsphere, Hybrid, Standard
+from . import zmx_system
 from .lensfile import apply_aperture, catalog_material, material_from_spec
-from .zmx_common import HYBRID_COMMENT, MARKER, SENSOR_COMMENT, term_index, term_powers, xpoly_terms
+from .zmx_common import (
+    HYBRID_COMMENT,
+    MARKER,
+    SENSOR_COMMENT,
+    ZmxWarning,
+    term_index,
+    term_powers,
+    xpoly_terms,
+)
 
 _UNITS = {"MM": 1.0, "CM": 10.0, "IN": 25.4, "METER": 1000.0, "M": 1000.0}
 _SHIPPED_FOR_ZEMAX = {
@@ -46,18 +55,20 @@ _SURFACE_KEYS = {
     "DIAM",
     "COMM",
     "CLAP",
+    "OBSC",
+    "OBDC",
 }
 # Keywords that Zemax writes and this reader knows but does not use (drawing, tolerancing,
 # solves, multi-configuration, optimisation and environment data). Any other keyword is
 # reported: a warning, or an error with ``strict=True`` (a cut-off keyword means a truncated
 # file).
 IGNORED_KEYWORDS = frozenset("""
-    VERS NOTE PFIL LANG ENVD GFAC SDMA RAIM PUSH ROPD PICB HYPR POLS GLRS GSTD NSCD COFN COFJ
-    FWGN FWGT VDXN VDYN VCXN VCYN VANN ZVDX ZVDY ZVCX ZVCY ZVAN XFLD YFLD WWGT WWGN WAVN
+    VERS NOTE PFIL LANG ENVD GFAC SDMA PUSH ROPD PICB HYPR POLS GLRS GSTD NSCD COFN COFJ
+    FWGN FWGT ZVDX ZVDY ZVCX ZVCY ZVAN XFLD YFLD WWGT WWGN WAVN
     FLDM MNCA MXCA MNEA MXEA MNCG MXCG MNEG MXEG MNPD MXPD TCEM TMIN TMAX BLNK TOL TOLE MNUM
     MOFF MOPS MAZH EFFL DMFS SCOL SCTH SCON CONF OPDX PWRH VPAR PRAM IGNR PZUP TELE AFOC
-    APMN APMX APCX APCY APDX APDY APTP OBDC OBSF SQAP ELAP FLAP MEMA OEMA POPS HIDE MIRR SLAB
-    COAT FIMP CTHK EDGE THSO TRAC VARI VCXN VDSZ WAVL XFLN YFLN PPAR BLKS BLNK CAMA GLCZ HIDX
+    APMN APMX APCX APCY APDX APDY APTP OBSF FLAP MEMA OEMA POPS HIDE MIRR SLAB
+    COAT FIMP CTHK EDGE THSO TRAC VARI VDSZ WAVL XFLN YFLN PPAR BLKS BLNK CAMA GLCZ HIDX
     TCEX MAZH MIND MXWL MNWL OPTI NSCS NSOA NSOD NSOO NSOP NSOQ NSOS NSOU NSOV NSOW GCAT
     """.split())
 _KEYWORD = re.compile(r"^[A-Z][A-Z0-9_]{1,9}$")
@@ -140,6 +151,8 @@ class _Surf:
     stop: bool = False
     diam: tuple[float, int | None] | None = None
     clap: float | None = None
+    obsc: _Line | None = None  # a circular obscuration (OBSC min max)
+    obdc: _Line | None = None  # the aperture's decenter (OBDC x y)
     comment: str = ""
     keys: set = field(default_factory=set)  # the keywords this block has
 
@@ -157,6 +170,9 @@ class _File:
     wavm: dict = field(default_factory=dict)
     wavl: _Line | None = None
     pwav: _Line | None = None
+    vignetting: list = field(default_factory=list)  # VDXN/VDYN/VCXN/VCYN/VANN lines
+    raim: _Line | None = None
+    shaped_apertures: list = field(default_factory=list)  # SQAP/ELAP lines
     surfs: list = field(default_factory=list)
     unknown: list = field(default_factory=list)  # lines with a keyword nobody knows
     zemax: bool = False  # written by Zemax (a VERS line): every block is complete
@@ -184,6 +200,8 @@ def _parse(text: str, path: str) -> _File:
             _surface_line(cur, key, ln)
         elif key in _TOP_KEYS:
             _top_line(f, key, ln, raw)
+        elif key in ("SQAP", "ELAP"):
+            f.shaped_apertures.append(ln)
         elif key not in IGNORED_KEYWORDS:
             f.unknown.append(ln)
         if key in _SURFACE_KEYS and cur is not None:
@@ -220,13 +238,23 @@ def _surface_line(s: _Surf, key: str, ln: _Line) -> None:
             raise ln.error("semi-diameter must be >= 0")
         s.diam = (v, flag)
     elif key == "CLAP":
+        if ln.float(1, "circular aperture minimum radius") != 0:
+            raise ln.error("annular apertures (CLAP with a minimum radius > 0) are not "
+                           "supported; jaxlens clips rays outside a semi-diameter only")
         s.clap = ln.float(2, "circular aperture maximum radius")
+    elif key == "OBSC":
+        ln.float(1, "obscuration minimum radius")
+        if ln.float(2, "obscuration maximum radius") > 0:
+            s.obsc = ln
+    elif key == "OBDC":
+        if ln.float(1, "aperture x decenter") != 0 or ln.float(2, "aperture y decenter") != 0:
+            s.obdc = ln
     elif key == "COMM":
         s.comment = ln.text.strip()[4:].strip()
 
 
-_TOP_KEYS = frozenset("VERS MODE NAME UNIT ENPD FNUM FLOA OBNA OBSC PUPD GCAT FTYP XFLN YFLN "
-                      "WAVM WAVL PWAV".split())
+_TOP_KEYS = frozenset("VERS MODE NAME UNIT ENPD FNUM FLOA OBNA PUPD GCAT FTYP XFLN YFLN "
+                      "WAVM WAVL PWAV RAIM VDXN VDYN VCXN VCYN VANN".split())
 
 
 def _top_line(f: _File, key: str, ln: _Line, raw: str) -> None:
@@ -249,8 +277,19 @@ def _top_line(f: _File, key: str, ln: _Line, raw: str) -> None:
         f.aperture = ("fnum", ln.float(1, "F/#"), ln)
     elif key == "FLOA":
         f.aperture = ("float", 0.0, ln)
-    elif key in ("OBNA", "OBSC", "PUPD"):
-        raise ln.error("this aperture type is not supported; use ENPD, FNUM or FLOA")
+    elif key == "OBNA":
+        kind = ln.int(2, "OBNA type (0: NA, 1: cone angle)") if len(ln.tokens) > 2 else 0
+        if kind not in (0, 1):
+            raise ln.error(f"OBNA type must be 0 (object-space NA) or 1 (object cone angle), "
+                           f"got {kind}")
+        what = "object cone angle" if kind else "object-space NA"
+        f.aperture = ("cone" if kind else "obna", ln.float(1, what), ln)
+    elif key == "PUPD":
+        raise ln.error("this aperture type is not supported; use ENPD, FNUM, FLOA or OBNA")
+    elif key in ("VDXN", "VDYN", "VCXN", "VCYN", "VANN"):
+        f.vignetting.append(ln)
+    elif key == "RAIM":
+        f.raim = ln
     elif key == "GCAT":
         f.gcat = [t.upper() for t in ln.tokens[1:]]
     elif key == "FTYP":
@@ -476,12 +515,10 @@ def _glas_nd_vd(ln: _Line) -> tuple[float | None, float | None]:
 
 
 def _fields(f: _File) -> np.ndarray:
+    """The field values as written: angles (deg) or paraxial image heights (lens units)."""
     count = None
-    if f.ftyp is not None:
-        if f.ftyp.int(1, "field type") != 0:
-            raise f.ftyp.error("only angle fields (FTYP 0) are supported")
-        if len(f.ftyp.tokens) > 3:
-            count = f.ftyp.int(3, "number of fields")
+    if f.ftyp is not None and len(f.ftyp.tokens) > 3:
+        count = f.ftyp.int(3, "number of fields")
     if f.yfln is None:
         return np.zeros(1)
     ys = [f.yfln.float(i, "y field") for i in range(1, len(f.yfln.tokens))]
@@ -490,6 +527,7 @@ def _fields(f: _File) -> np.ndarray:
         count = max(1, max((i + 1 for i, v in enumerate(ys) if v != 0), default=1))
     if len(ys) < count:
         raise f.yfln.error(f"FTYP announces {count} fields, YFLN gives {len(ys)}")
+    zmx_system.check_vignetting(f.vignetting, count)
     xs = (xs + [0.0] * count)[:count]
     ys = ys[:count]
     if any(x != 0 for x in xs):
@@ -548,8 +586,6 @@ def _report(strict: bool, msg: str) -> None:
     warnings.warn(msg, ZmxWarning, stacklevel=4)
 
 
-class ZmxWarning(UserWarning):
-    """A ``.zmx`` file has content the reader does not understand (it may be truncated)."""
 
 
 def _check_structure(f: _File, text: str, strict: bool) -> None:
@@ -592,6 +628,41 @@ def _check_structure(f: _File, text: str, strict: bool) -> None:
                         f"(a cut-off keyword means a truncated file): {ln.text.strip()!r}")
 
 
+def _check_apertures(f: _File, strict: bool) -> None:
+    """Refuse surface apertures the tracer cannot model (it clips outside a centred
+    semi-diameter only); rectangular and elliptical ones are reported (an error under
+    ``strict``)."""
+    for ln in f.shaped_apertures:
+        shape = "rectangular" if ln.tokens[0] == "SQAP" else "elliptical"
+        _report(strict, f"{f.path}:{ln.number}: {shape} aperture ignored (jaxlens clips at "
+                        f"circular semi-diameters only): {ln.text.strip()!r}")
+    for s in f.surfs:
+        if s.obsc is not None:
+            raise s.obsc.error("central obscurations (OBSC) are not supported: the tracer "
+                               "clips rays outside a semi-diameter only and would pass the "
+                               "obscured rays")
+        if s.obdc is not None and (s.clap is not None or s.diam is not None):
+            raise s.obdc.error("decentered apertures (OBDC other than 0 0) are not supported; "
+                               "jaxlens apertures are centred on the axis")
+
+
+def _check_image_medium(f: _File, body: list) -> None:
+    """Warn when the image surface names a medium other than image space's (the last
+    surface's GLAS): image space is what the rays cross, so that is what jaxlens uses."""
+    img = f.surfs[-1]
+    if img.glas is None:
+        return
+    def named(ln):  # a model glass is its nd and Vd
+        t = [x.upper() for x in ln.tokens[1:]]
+        return " ".join(t[:1] + t[3:5]) if t[0] == "___BLANK" else t[0]
+
+    last = named(body[-1].glas) if body and body[-1].glas is not None else "AIR"
+    if named(img.glas) != last:
+        warnings.warn(f"{f.path}:{img.glas.number}: the image surface names {named(img.glas)}"
+                      f" but image space (the GLAS of surface {img.number - 1}) is {last}; "
+                      f"jaxlens uses {last}", ZmxWarning, stacklevel=3)
+
+
 def loads(text: str, path: str = "<zmx>", *, strict: bool = False) -> Lens:
     """A ``Lens`` from the text of a ``.zmx`` file (``path`` locates side AGF catalogs).
 
@@ -632,13 +703,18 @@ def loads(text: str, path: str = "<zmx>", *, strict: bool = False) -> Lens:
     if not dist > 0:
         raise (obj.disz_line or obj.line).error("object distance must be > 0 or INFINITY")
     wl, primary = _wavelengths(f)
+    _check_apertures(f, strict)
+    _check_image_medium(f, body)
+    zmx_system.ray_aiming(f.raim, f.path)
+    field_type = zmx_system.field_type(f.ftyp)
+    fields = _fields(f)
     lens = Lens(
         surfaces=tuple(surfaces),
         thickness=_arr(np.array(thick, np.float64)),
         materials=tuple(mats),
         stop=stop,
         epd=_arr(1.0),
-        fields=_arr(_fields(f)),
+        fields=_arr(fields if field_type == 0 else np.zeros_like(fields)),
         wavelengths=_arr(wl),
         primary=primary,
         object_distance=_arr(dist),
@@ -650,11 +726,19 @@ def loads(text: str, path: str = "<zmx>", *, strict: bool = False) -> Lens:
     # Before the paraxial work of the aperture: values the lens cannot be traced with.
     checks.wavelengths(lens, wl, f"{path}: WAVM", "wavelength")
     checks.material_indices(lens, wl, path)
+    if field_type == 2:
+        try:
+            lens = zmx_system.angles_from_paraxial_image_heights(lens, fields * u)
+        except ValueError as e:
+            raise f.ftyp.error(str(e)) from None
     checks.field_angles(np.asarray(lens.fields), f"{path}: XFLN/YFLN", "field angles")
     if f.aperture is None:
-        raise ValueError(f"{path}: no aperture (ENPD, FNUM or FLOA line)")
+        raise ValueError(f"{path}: no aperture (ENPD, FNUM, FLOA or OBNA line)")
     kind, value, ln = f.aperture
     try:
+        if kind in ("obna", "cone"):
+            epd = zmx_system.epd_from_object_na(lens, value, kind == "cone")
+            return apply_aperture(lens, epd=epd)
         if kind == "epd":
             if not value > 0:
                 raise ln.error("entrance pupil diameter must be > 0")
@@ -663,10 +747,10 @@ def loads(text: str, path: str = "<zmx>", *, strict: bool = False) -> Lens:
             if not value > 0:
                 raise ln.error("F/# must be > 0")
             return apply_aperture(lens, fnum=value)
-        sd = body[stop].diam
-        if sd is None or not sd[0] > 0:
-            raise ln.error("FLOA needs a DIAM (stop semi-diameter) on the STOP surface")
-        return apply_aperture(lens, stop_semi_diameter=sd[0] * u)
+        sd = body[stop].clap if body[stop].clap else (body[stop].diam or (0.0,))[0]
+        if not sd > 0:
+            raise ln.error("FLOA needs a DIAM or CLAP (stop semi-diameter) on the STOP surface")
+        return apply_aperture(lens, stop_semi_diameter=sd * u)
     except ValueError as e:
         if str(e).startswith(path):
             raise

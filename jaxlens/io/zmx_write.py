@@ -311,9 +311,13 @@ def dumps(lens: Lens, path: str = "lens.zmx", *, model_glass: str = "blank"):
         if glas:
             surf_lines.append("  " + glas)
         sd = float(sd)
-        surf_lines.append(
-            f'  DIAM {_z(sd)} 1 0 0 1 ""' if math.isfinite(sd) else '  DIAM 0 0 0 0 1 ""'
-        )
+        if math.isfinite(sd):
+            # DIAM is only the drawn size; Zemax and optiland clip rays at an aperture, so a
+            # clipping semi-diameter is also written as a circular aperture (CLAP min max 0).
+            surf_lines.append(f'  DIAM {_z(sd)} 1 0 0 1 ""')
+            surf_lines.append(f"  CLAP 0 {_z(sd)} 0")
+        else:
+            surf_lines.append('  DIAM 0 0 0 0 1 ""')
 
     dist = math.inf if lens.object_distance is None else float(lens.object_distance)
     block(0, ["TYPE STANDARD", 'CURV 0 0 0 0 0 ""'], dist, gw.glas(lens.object_material), np.inf)
@@ -332,7 +336,9 @@ def dumps(lens: Lens, path: str = "lens.zmx", *, model_glass: str = "blank"):
         img.append(
             f"COMM jaxlens sensor rows={rows} cols={cols} pixel={float(lens.sensor.pixel_size)!r}"
         )
-    block(lens.num_surfaces + 1, img, 0.0, None, lens.image.semi_diameter)
+    # Image space is the last surface's medium. The image surface names it too: optiland
+    # gives every surface the medium after it and takes image space from the image surface.
+    block(lens.num_surfaces + 1, img, 0.0, gw.glas(lens.materials[-1]), lens.image.semi_diameter)
     head = [
         "VERS 190513 80 123457 L123457",
         "MODE SEQ",

@@ -4,7 +4,10 @@ Conventions:
     Lengths in mm. A paraxial ray is (y, nu): height and reduced angle n·u, with u the
     slope dy/dz. Surfaces refract with their paraxial curvature c + 2·a_1, so the
     r² term of an even asphere counts (Zemax does this; optiland and rayoptics do not).
-    ``efl`` is 1/power, the image-space focal length of a system in air; ``bfl`` is
+    ``efl`` is 1/Φ (Φ the power), the focal length in air (Zemax's "effective focal
+    length (in air)"); ``efl_image_space`` is n′/Φ with n′ the image-space index, the
+    focal length measured in image space, which Zemax ("in image space") and optiland
+    report as the EFL. They differ only when image space is not air. ``bfl`` is
     measured from the last surface vertex to the paraxial focus; pupil positions are
     global z (surface 1 at 0); ``exit_pupil_z`` is also global. Everything is a pure
     jnp function, so it is differentiable and jittable.
@@ -47,9 +50,15 @@ def system_matrix(lens: Lens, wavelength=None, start: int = 0, end: int | None =
 
 
 class ParaxialData(eqx.Module):
-    """First-order properties of a lens at one wavelength (mm; see module docstring)."""
+    """First-order properties of a lens at one wavelength (mm; see module docstring).
+
+    ``efl`` = 1/Φ (in air) and ``efl_image_space`` = n′/Φ (in image space, Zemax's and
+    optiland's EFL); ``front_focal_length`` = n·efl and ``rear_focal_length`` = n′·efl
+    with n, n′ the object- and image-space indices.
+    """
 
     efl: Float[Array, ""]
+    efl_image_space: Float[Array, ""]
     bfl: Float[Array, ""]
     front_focal_length: Float[Array, ""]
     rear_focal_length: Float[Array, ""]
@@ -183,6 +192,7 @@ def paraxial_data(lens: Lens, wavelength=None) -> ParaxialData:
     paraxial_image_z = z_last - ym[-1] * n_img / num[-1]
     return ParaxialData(
         efl=f,
+        efl_image_space=n_img * f,
         bfl=back,
         front_focal_length=n0 * f,
         rear_focal_length=n_img * f,

@@ -1,0 +1,144 @@
+"""System data of a ``.zmx`` file beyond surfaces: the object-space NA aperture (``OBNA``),
+field types (``FTYP``; paraxial image heights converted to angles), vignetting factors and
+ray aiming (``RAIM``). The format: ``jaxlens.io.zmx``."""
+
+from __future__ import annotations
+
+import math
+import warnings
+
+import equinox as eqx
+import jax.numpy as jnp
+import numpy as np
+
+from ..optics import paraxial
+from ..optics.lens import Lens
+from .zmx_common import ZmxWarning
+
+
+def epd_from_object_na(lens: Lens, value: float, cone_angle: bool) -> float:
+    """Entrance pupil diameter (mm) of a finite-conjugate lens from its object-space
+    numerical aperture n·sin(u) (``OBNA value 0``) or its object cone half-angle u in degrees
+    (``OBNA value 1``).
+
+    The paraxial marginal ray leaves the axial object point at slope tan(u) and reaches the
+    paraxial entrance pupil at the pupil's edge, as in Zemax and optiland:
+    EPD = 2·(z_EP − z_object)·tan(u).
+
+    Raises:
+        ValueError: for an object at infinity, or a value out of range (NA in (0, n),
+            cone angle in (0, 90) deg).
+    """
+    if lens.object_distance is None:
+        raise ValueError(
+            "an object-space NA or cone angle needs a finite object distance "
+            "(the object DISZ is INFINITY); use ENPD or FNUM"
+        )
+    wl = lens.primary_wavelength
+    if cone_angle:
+        if not 0.0 < value < 90.0:
+            raise ValueError(f"object cone angle must be in (0, 90) deg, got {value:g}")
+        u = math.radians(value)
+    else:
+        n0 = float(lens.object_material.index(wl))
+        if not 0.0 < value < n0:
+            raise ValueError(
+                f"object-space NA must be in (0, n) with n = {n0:.6g} the object "
+                f"space index, got {value:g}"
+            )
+        u = math.asin(value / n0)
+    to_pupil = float(paraxial.entrance_pupil_z(lens, wl)) + float(lens.object_distance)
+    if not to_pupil > 0:
+        raise ValueError(
+            f"the entrance pupil lies {-to_pupil:g} mm before the object; an "
+            f"object-space NA does not define a pupil there"
+        )
+    return 2.0 * to_pupil * math.tan(u)
+
+
+def angles_from_paraxial_image_heights(lens: Lens, heights: np.ndarray) -> Lens:
+    """The lens with ``heights`` (paraxial image heights in mm on the image surface, y or
+    (x, y), at the primary wavelength) as field angles in degrees.
+
+    The paraxial chief ray at field (θx, θy) meets the image surface at K·(tan θx, tan θy),
+    K the height per unit tangent (linear), so θ = atan(h / K) exactly.
+    """
+    k = float(paraxial.image_height(lens, 45.0) / jnp.tan(jnp.deg2rad(45.0)))
+    if not (math.isfinite(k) and k != 0.0):
+        raise ValueError(
+            f"paraxial image heights cannot be converted to angles: the paraxial "
+            f"image height per unit field tangent is {k:g} mm (an afocal or "
+            f"telecentric image space)"
+        )
+    angles = np.degrees(np.arctan(np.asarray(heights, np.float64) / k))
+    return eqx.tree_at(lambda m: m.fields, lens, jnp.asarray(angles))
+
+
+FIELD_TYPES = {
+    0: "angles",
+    1: "object heights",
+    2: "paraxial image heights",
+    3: "real image heights",
+    4: "theodolite angles",
+}
+"""Zemax's field types (FTYP's first value)."""
+
+
+def field_type(ln) -> int:
+    """FTYP's field type: 0 (angles, degrees) or 2 (paraxial image heights); others refused.
+
+    Args:
+        ln: the file's FTYP line (the reader's line object) or None.
+    """
+    if ln is None:
+        return 0
+    kind = ln.int(1, "field type")
+    if kind == 3:
+        raise ln.error(
+            "real image height fields (FTYP 3) are not supported: each needs a "
+            "real chief-ray solve that the reader does not do; give the fields as "
+            "angles (FTYP 0) or paraxial image heights (FTYP 2)"
+        )
+    if kind not in (0, 2):
+        raise ln.error(
+            f"field type {kind} ({FIELD_TYPES.get(kind, 'unknown')}) is not "
+            f"supported; use angles (FTYP 0) or paraxial image heights (FTYP 2)"
+        )
+    if len(ln.tokens) > 2 and ln.int(2, "object-space telecentric flag") != 0:
+        raise ln.error("object-space telecentric systems (FTYP's second value 1) are not supported")
+    if len(ln.tokens) > 7 and ln.int(7, "afocal image space flag") != 0:
+        raise ln.error("afocal image space (FTYP's seventh value 1) is not supported")
+    return kind
+
+
+def check_vignetting(lines, count: int) -> None:
+    """Refuse vignetting factors (VDXN, VDYN, VCXN, VCYN, VANN) other than 0 on the first
+    ``count`` (used) fields.
+
+    They shrink and shift each field's pupil; jaxlens's pupil is the whole entrance pupil
+    for every field, so ignoring them would trace a beam the file does not describe.
+    """
+    for ln in lines:
+        vals = [ln.float(i, f"{ln.tokens[0]} value") for i in range(1, len(ln.tokens))]
+        used = [(i + 1, v) for i, v in enumerate(vals[:count]) if v != 0]
+        if used:
+            i, v = used[0]
+            raise ln.error(
+                f"vignetting factors are not supported ({ln.tokens[0]} of field {i} is "
+                f"{v:g}); jaxlens samples the whole entrance pupil and lets surface apertures "
+                f"(CLAP) vignette: clear the vignetting factors and give the apertures instead"
+            )
+
+
+def ray_aiming(ln, path: str) -> None:
+    """Warn when the file aims rays at the stop (RAIM's ray aiming type, 1 paraxial or
+    2 real): a ``Lens`` carries no aiming setting; jaxlens's samplers take ``aim``."""
+    if ln is None or len(ln.tokens) < 3 or ln.int(2, "ray aiming type") == 0:
+        return
+    warnings.warn(
+        f"{path}:{ln.number}: the file aims rays at the stop (RAIM); jaxlens "
+        f"lenses carry no aiming setting: pass aim='real' to jaxlens.sampling "
+        f"(collimated, point_source, field_rays) for the same rays",
+        ZmxWarning,
+        stacklevel=4,
+    )

@@ -1,0 +1,328 @@
+"""Issue 12 (real lens files): clipping apertures and the image medium in written .zmx files,
+real ray aiming through clipping apertures, the image-space focal length, and the reader's
+apertures, field types and vignetting factors."""
+
+import equinox as eqx
+import jax.numpy as jnp
+import numpy as np
+import pytest
+
+import jaxlens as jl
+from jaxlens.analysis import report
+from jaxlens.imaging.aiming import unclipped
+
+DATA = jl.__file__.rsplit("/", 1)[0] + "/data/lenses"
+
+
+def _clip_front(lens, radius, count):
+    """The lens with its first ``count`` surfaces clipped at ``radius`` (mm)."""
+    surfaces = tuple(
+        eqx.tree_at(lambda s: s.semi_diameter, s, jnp.asarray(radius)) if i < count else s
+        for i, s in enumerate(lens.surfaces)
+    )
+    return eqx.tree_at(lambda m: m.surfaces, lens, surfaces)
+
+
+def test_real_aiming_through_clipping_apertures():
+    """Aimed rays cross the stop at pupil·(stop radius) even where the front apertures clip
+    the paraxial launch points; the apertures then decide which rays pass.
+
+    Before the aiming traced the unclipped lens, two of these rays were reported valid while
+    crossing the stop up to 0.66 mm from their pupil point.
+    """
+    clip = 16.0
+    lens = _clip_front(jl.load(f"{DATA}/double_gauss.json"), clip, 2)
+    pupil = jl.sampling.pupil_hexapolar(3)
+    target = np.asarray(pupil * jl.paraxial_data(lens).stop_semi_diameter)
+    for field in (14.0, 20.0):
+        rays = jl.sampling.collimated(lens, field, pupil, aim="real")
+        free = jl.trace_path(unclipped(lens), rays)
+        np.testing.assert_allclose(
+            np.asarray(free.origin[lens.stop, :, :2]), target, rtol=0, atol=1e-9
+        )
+        # Known answer for validity: the aimed ray passes iff it stays inside both apertures.
+        radius = np.linalg.norm(np.asarray(free.origin[:2, :, :2]), axis=-1).max(0)
+        passes = (radius <= clip) & np.asarray(free.valid[-1])
+        valid = np.asarray(jl.trace(lens, rays).valid)
+        np.testing.assert_array_equal(valid, passes)
+        assert 0 < passes.sum() < passes.size  # the apertures clip some rays, not all
+
+
+def test_efl_in_air_and_in_image_space_for_a_singlet_into_glass():
+    """A thick singlet whose image space is glass (n′ = 1.6): 1/Φ and n′/Φ from the
+    thick-lens power Φ = Φ1 + Φ2 − (t/n)·Φ1·Φ2."""
+    n, n_img, c1, c2, t = 1.5, 1.6, 1 / 40.0, -1 / 60.0, 4.0
+    lens = jl.Lens(
+        (jl.Sphere(c1), jl.Sphere(c2)),
+        jnp.array([t, 50.0]),
+        (jl.ModelGlass(n, np.inf), jl.ModelGlass(n_img, np.inf)),
+        epd=5.0,
+        fields=[0.0, 5.0],
+        wavelengths=[0.5875618],
+    )
+    p1, p2 = (n - 1) * c1, (n_img - n) * c2
+    power = p1 + p2 - t / n * p1 * p2
+    pd = jl.paraxial_data(lens)
+    assert float(pd.efl) == pytest.approx(1 / power, rel=1e-13)
+    assert float(pd.efl_image_space) == pytest.approx(n_img / power, rel=1e-13)
+    data = report.report_data(lens)
+    assert data["efl"] == pytest.approx(1 / power, rel=1e-13)
+    assert data["efl_image_space"] == pytest.approx(n_img / power, rel=1e-13)
+    text = report.format_report(data)
+    row = {
+        line.split(":")[0].strip(): float(line.split(":")[1].split()[0])
+        for line in text.splitlines()
+        if line.startswith("  Effective focal")
+    }
+    assert row == {
+        "Effective focal length (in air)": pytest.approx(1 / power, rel=1e-6),
+        "Effective focal length (img space)": pytest.approx(n_img / power, rel=1e-6),
+    }
+
+
+# ---------------------------------------------------------------------------- writing
+
+
+def _window_and_singlet():
+    """A flat N-BK7 window clipped at 3 mm, then a singlet (front surface clipped at 4 mm)
+    whose image space is N-BK7."""
+    bk7 = jl.get_material("N-BK7")
+    return jl.Lens(
+        (jl.Plane(3.0), jl.Plane(), jl.Sphere(1 / 40.0, 4.0), jl.Sphere(-1 / 60.0)),
+        jnp.array([2.0, 1.0, 4.0, 30.0]),
+        (bk7, jl.Air(), jl.ModelGlass(1.6, 40.0), bk7),
+        stop=2,
+        epd=5.0,
+        wavelengths=[0.5875618],
+        image=jl.Standard(c=0.0, k=0.0, semi_diameter=9.0),
+    )
+
+
+def _axial_rays(heights):
+    h = jnp.asarray(heights)
+    origin = jnp.stack([jnp.zeros_like(h), h, jnp.full_like(h, -1.0)], -1)
+    direction = jnp.broadcast_to(jnp.array([0.0, 0.0, 1.0]), origin.shape)
+    return jl.Rays(origin, direction, 0.5875618)
+
+
+def _blocks(text):
+    """{surface number: [lines]} of a .zmx text."""
+    out, cur = {}, None
+    for line in text.splitlines():
+        if line.startswith("SURF "):
+            cur = out.setdefault(int(line.split()[1]), [])
+        elif cur is not None:
+            cur.append(line.strip())
+    return out
+
+
+def test_save_writes_clipping_as_clap_and_the_image_medium(tmp_path):
+    from test_lensfile import assert_same_lens
+
+    lens = _window_and_singlet()
+    path = tmp_path / "clipped.zmx"
+    jl.save(lens, path)
+    text = path.read_text()
+    blocks = _blocks(text)
+    # Zemax's circular aperture, CLAP min max 0, on exactly the clipped surfaces.
+    claps = {n: [x for x in b if x.startswith("CLAP")] for n, b in blocks.items()}
+    assert claps == {
+        0: [],
+        1: ["CLAP 0 3.0E+000 0"],
+        2: [],
+        3: ["CLAP 0 4.0E+000 0"],
+        4: [],
+        5: ["CLAP 0 9.0E+000 0"],
+    }
+    # The image surface names image space's medium, as the last lens surface does.
+    glas = [x.split()[1] for x in blocks[5] if x.startswith("GLAS")]
+    assert glas == ["N-BK7"] == [x.split()[1] for x in blocks[4] if x.startswith("GLAS")]
+    back = jl.load(path)
+    assert_same_lens(lens, back)  # load -> save -> load is exact
+    # The clipping is in the CLAP lines alone (all that Zemax and optiland clip with).
+    (tmp_path / "clap_only.zmx").write_text(
+        "\n".join(x for x in text.splitlines() if not x.strip().startswith("DIAM")) + "\n"
+    )
+    clap_only = jl.load(tmp_path / "clap_only.zmx")
+    assert [float(s.semi_diameter) for s in clap_only.surfaces] == [3.0, np.inf, 4.0, np.inf]
+    # Known answer: rays parallel to the axis at 2.9 mm pass the 3 mm window, at 3.1 mm not.
+    rays = _axial_rays([0.0, 2.9, 3.1])
+    for clipped in (lens, back, clap_only):
+        np.testing.assert_array_equal(
+            np.asarray(jl.trace(clipped, rays).valid), [True, True, False]
+        )
+    assert bool(jl.trace(unclipped(lens), rays).valid.all())
+    n_img = float(jl.get_material("N-BK7").index(0.5875618))
+    pd = jl.paraxial_data(back)
+    assert float(pd.efl_image_space) == pytest.approx(n_img * float(pd.efl), rel=1e-15)
+    assert float(pd.efl_image_space) == float(jl.paraxial_data(lens).efl_image_space)
+
+
+# ---------------------------------------------------------------------------- reading
+
+SINGLET_C1, SINGLET_C2, SINGLET_T, SINGLET_N = 1 / 50.0, -1 / 50.0, 5.0, 1.5
+
+
+def _singlet_efl_bfl():
+    p1, p2 = (SINGLET_N - 1) * SINGLET_C1, (1 - SINGLET_N) * SINGLET_C2
+    f = 1 / (p1 + p2 - SINGLET_T / SINGLET_N * p1 * p2)
+    return f, f * (1 - SINGLET_T * p1 / SINGLET_N)
+
+
+def _file(system, surface1="", image_surface="", obj="  DISZ INFINITY\n", image_gap=None):
+    """A stop-in-front singlet (model glass n = 1.5, no dispersion) as .zmx text."""
+    bfl = _singlet_efl_bfl()[1] if image_gap is None else image_gap
+    return (
+        f"UNIT MM\n{system}WAVM 1 0.5875618 1\nSURF 0\n{obj}"
+        f"SURF 1\n  STOP\n  CURV {SINGLET_C1!r}\n  DISZ {SINGLET_T!r}\n"
+        f"  GLAS ___BLANK 1 0 1.5 0 0 0 0 0 0 0\n{surface1}"
+        f"SURF 2\n  CURV {SINGLET_C2!r}\n  DISZ {bfl!r}\nSURF 3\n{image_surface}"
+    )
+
+
+def _load_text(tmp_path, text, name="f.zmx"):
+    p = tmp_path / name
+    p.write_text(text)
+    return p, jl.load(p)
+
+
+def _refused(tmp_path, text, match):
+    """The ValueError's message, checked to name the file, the line and the line's text."""
+    p = tmp_path / "bad.zmx"
+    p.write_text(text)
+    with pytest.raises(ValueError, match=match) as e:
+        jl.load(p)
+    msg = str(e.value)
+    number = int(msg[len(str(p)) + 1 :].split(":")[0])
+    assert msg.startswith(f"{p}:{number}: ")
+    assert repr(text.splitlines()[number - 1].strip()) in msg
+    return text.splitlines()[number - 1].strip()
+
+
+def test_object_space_na_and_cone_angle(tmp_path):
+    """OBNA v 0: EPD = 2·d·tan(asin(NA/n)); OBNA v 1: EPD = 2·d·tan(u), with d the distance
+    from the object to the entrance pupil (here the stop on surface 1, 200 mm away)."""
+    obj = "  DISZ 200\n"
+    _, na = _load_text(tmp_path, _file("OBNA 0.1 0\n", obj=obj))
+    assert float(na.epd) == pytest.approx(2 * 200 * 0.1 / np.sqrt(1 - 0.01), rel=1e-14)
+    _, cone = _load_text(tmp_path, _file("OBNA 5 1\n", obj=obj))
+    assert float(cone.epd) == pytest.approx(2 * 200 * np.tan(np.radians(5.0)), rel=1e-14)
+    # In water (n = 1.333) the same NA is a smaller angle.
+    water = "  DISZ 200\n  GLAS ___BLANK 1 0 1.333 0 0 0 0 0 0 0\n"
+    _, wet = _load_text(tmp_path, _file("OBNA 0.1 0\n", obj=water))
+    u = np.arcsin(0.1 / 1.333)
+    assert float(wet.epd) == pytest.approx(2 * 200 * np.tan(u), rel=1e-13)
+    assert _refused(tmp_path, _file("OBNA 0.1 0\n"), "needs a finite object") == "OBNA 0.1 0"
+    assert _refused(tmp_path, _file("OBNA 1.2 0\n", obj=obj), r"NA must be in \(0, n\)")
+    assert _refused(tmp_path, _file("OBNA 0.1 3\n", obj=obj), "OBNA type must be 0")
+
+
+def test_paraxial_image_height_fields(tmp_path):
+    """FTYP 2: the image surface is at the paraxial focus, so a paraxial image height h is
+    the field θ = atan(h / EFL) (object at infinity, in air)."""
+    efl, _ = _singlet_efl_bfl()
+    system = "ENPD 10\nFTYP 2 0 3 1 0 0 0\nXFLN 0 0 2\nYFLN 0 5 -3\n"
+    _, lens = _load_text(tmp_path, _file(system))
+    want = np.degrees(np.arctan(np.array([[0.0, 0.0], [0.0, 5.0], [2.0, -3.0]]) / efl))
+    np.testing.assert_allclose(np.asarray(lens.fields), want, rtol=1e-14, atol=0)
+    heights = jl.paraxial.image_height(lens, lens.fields[:, 1])
+    np.testing.assert_allclose(np.asarray(heights), [0.0, 5.0, -3.0], rtol=0, atol=1e-12)
+    # In centimetres the heights are 10x larger in mm.
+    cm = _file(system).replace("UNIT MM", "UNIT CM")
+    cm_lens = _load_text(tmp_path, cm)[1]
+    np.testing.assert_allclose(
+        np.asarray(jl.paraxial.image_height(cm_lens, cm_lens.fields[:, 1])),
+        [0.0, 50.0, -30.0],
+        rtol=0,
+        atol=1e-11,
+    )
+
+
+@pytest.mark.parametrize(
+    ("ftyp", "match"),
+    [
+        ("FTYP 3 0 2 1 0 0 0", "real image height fields .FTYP 3. are not supported"),
+        ("FTYP 1 0 2 1 0 0 0", r"field type 1 \(object heights\) is not supported"),
+        ("FTYP 4 0 2 1 0 0 0", r"field type 4 \(theodolite angles\)"),
+        ("FTYP 0 1 2 1 0 0 0", "object-space telecentric"),
+        ("FTYP 0 0 2 1 0 0 1", "afocal image space"),
+    ],
+)
+def test_field_types_refused_with_the_line(tmp_path, ftyp, match):
+    text = _file(f"ENPD 10\n{ftyp}\nYFLN 0 5\n")
+    assert _refused(tmp_path, text, match) == ftyp
+
+
+def test_vignetting_factors_refused_on_used_fields(tmp_path):
+    head = "ENPD 10\nFTYP 0 0 2 1 0 0 0\nYFLN 0 5 0 0\n"
+    zeros = "VDXN 0 0 0 0\nVDYN 0 0 0 0\nVCXN 0 0 0 0\nVCYN 0 0 0 0\nVANN 0 0 0 0\n"
+    _load_text(tmp_path, _file(head + zeros))  # all zero: nothing to honour
+    _load_text(tmp_path, _file(head + zeros.replace("VCYN 0 0 0 0", "VCYN 0 0 0.5 0")))  # unused
+    for key in ("VDXN", "VDYN", "VCXN", "VCYN", "VANN"):
+        bad = zeros.replace(f"{key} 0 0 0 0", f"{key} 0 0.25 0 0")
+        line = _refused(
+            tmp_path,
+            _file(head + bad),
+            f"vignetting factors are not supported \\({key} of field 2 is 0.25\\)",
+        )
+        assert line == f"{key} 0 0.25 0 0"
+
+
+def test_obscurations_and_other_apertures_refused(tmp_path):
+    ep = "ENPD 10\n"
+    line = _refused(tmp_path, _file(ep, surface1="  OBSC 0 2 0\n"), "central obscurations")
+    assert line == "OBSC 0 2 0"
+    # An obscuration of radius 0 obscures nothing; OBSC is no longer read as a system aperture.
+    _, lens = _load_text(tmp_path, _file(ep, surface1="  OBSC 0 0 0\n"))
+    assert float(lens.epd) == 10.0
+    assert _refused(tmp_path, _file(ep, surface1="  CLAP 1 4 0\n"), "annular apertures")
+    assert (
+        _refused(
+            tmp_path, _file(ep, surface1="  CLAP 0 4 0\n  OBDC 0 0.5\n"), "decentered apertures"
+        )
+        == "OBDC 0 0.5"
+    )
+    _, lens = _load_text(tmp_path, _file(ep, surface1="  CLAP 0 4 0\n  OBDC 0 0\n"))
+    assert float(lens.surfaces[0].semi_diameter) == 4.0
+
+
+def test_ray_aiming_and_image_medium_are_reported(tmp_path):
+    from jaxlens.io.zmx import ZmxWarning
+
+    _load_text(tmp_path, _file("ENPD 10\nRAIM 0 0 1 1 0 0 0 0 0\n"))  # aiming off: silent
+    with pytest.warns(
+        ZmxWarning,
+        match=r"f\.zmx:3: the file aims rays at the stop .RAIM.; "
+        r".*aim='real'",
+    ):
+        _load_text(tmp_path, _file("ENPD 10\nRAIM 0 2 1 1 0 0 0 0 0\n"))
+    with pytest.warns(
+        ZmxWarning,
+        match=r"the image surface names N-BK7 but image space .* "
+        r"is AIR; jaxlens uses AIR",
+    ):
+        _, lens = _load_text(tmp_path, _file("ENPD 10\n", image_surface="  GLAS N-BK7\n"))
+    assert lens.materials[-1] == jl.Air()
+
+
+def test_rectangular_and_elliptical_apertures_are_reported(tmp_path):
+    from jaxlens.io.zmx import ZmxWarning
+
+    for line in ("SQAP 3 4 0", "ELAP 3 4 0"):
+        text = _file("ENPD 10\n", surface1=f"  {line}\n")
+        with pytest.warns(ZmxWarning, match=f"f.zmx:11: .* aperture ignored .*'{line}'"):
+            _load_text(tmp_path, text)
+        with pytest.raises(ValueError, match="aperture ignored.*strict mode"):
+            jl.io.zmx.loads(text, "f.zmx", strict=True)
+
+
+def test_image_surface_model_glass_must_match_image_space(tmp_path):
+    from jaxlens.io.zmx import ZmxWarning
+
+    last = "  GLAS ___BLANK 1 0 1.5 0 0 0 0 0 0 0\n"  # surface 2 into the same model glass
+    text = _file("ENPD 10\n").replace(
+        f"  DISZ {_singlet_efl_bfl()[1]!r}\n", f"  DISZ {_singlet_efl_bfl()[1]!r}\n{last}"
+    )
+    _load_text(tmp_path, text + last)  # the same model glass: silent
+    with pytest.warns(ZmxWarning, match="names ___BLANK 1.6 0 but image space .* is ___BLANK"):
+        _load_text(tmp_path, text + last.replace("1.5", "1.6"))
