@@ -9,7 +9,7 @@ import pytest
 
 import jaxlens as jl
 from jaxlens.analysis import report
-from jaxlens.imaging.aiming import unclipped
+from jaxlens.optics.lens import unclipped
 
 DATA = jl.__file__.rsplit("/", 1)[0] + "/data/lenses"
 

@@ -198,7 +198,7 @@ def test_prewarp_shows_at_each_pixel_the_scene_at_its_chief_ray_landing_point():
     ramp = jnp.asarray(np.stack([rr, cc, rr + 2 * cc], -1))
     got = np.asarray(DR.prewarp(lens, ramp, sensor=sensor, grid=(n, n)))
     x, y = R.pixel_positions((n, n), p, rr, cc)
-    k = float(jaxlens.psf.image_scale(lens))
+    k = float(jaxlens.imaging.aiming.image_scale(lens))
     fields = np.degrees(np.arctan(np.stack([x, y], -1).reshape(-1, 2) / k))
     land = jax.vmap(lambda f: jaxlens.analysis.chief_ray(lens, f).origin[:2])(
         jnp.asarray(fields))

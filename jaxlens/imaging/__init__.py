@@ -2,7 +2,9 @@
 illumination, distortion maps and the checkpointed renderer (``jaxlens.psf`` and
 ``jaxlens.render`` are the entry points)."""
 
+from . import aiming as aiming
 from . import distortion as distortion
+from . import grid as grid
 from . import psf as psf
 from . import radiometry as radiometry
 from . import render as render

@@ -14,7 +14,7 @@ import numpy as np
 from jaxtyping import Array, Float
 
 from ..optics import paraxial
-from ..optics.lens import Lens
+from ..optics.lens import Lens, unclipped
 from ..optics.rays import Rays
 from ..tracing.forward import DEFAULT_NEWTON_ITERS, trace
 from . import sampling
@@ -37,16 +37,6 @@ def apertured(lens: Lens) -> Lens:
     stop_r = paraxial.paraxial_data(lens).stop_semi_diameter
     new = jnp.where(finite, sd, stop_r)
     return eqx.tree_at(lambda m: m.surfaces[m.stop].semi_diameter, lens, new)
-
-
-def unclipped(lens: Lens) -> Lens:
-    """The lens with every semi-diameter set to inf, for aiming rays (an aperture that clips
-    an intermediate Newton iterate would otherwise stop it where it was clipped)."""
-    surfaces = tuple(
-        eqx.tree_at(lambda s: s.semi_diameter, s, jnp.full_like(s.semi_diameter, jnp.inf))
-        for s in lens.surfaces
-    )
-    return eqx.tree_at(lambda m: m.surfaces, lens, surfaces)
 
 
 def image_scale(lens: Lens, wavelength=None) -> Float[Array, ""]:

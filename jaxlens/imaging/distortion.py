@@ -32,12 +32,12 @@ import jax.numpy as jnp
 from jaxtyping import Array, Float
 
 from ..optics import paraxial
-from ..optics.lens import Lens, Sensor
+from ..optics.lens import Lens, Sensor, unclipped
 from ..optics.rays import Rays
 from ..tracing.backward import trace_backward
 from ..tracing.forward import DEFAULT_NEWTON_ITERS
 from . import sampling
-from .aiming import apertured, chief_point, ideal_to_field, image_scale, newton_2d, unclipped
+from .aiming import apertured, chief_point, ideal_to_field, image_scale, newton_2d
 from .grid import bilinear, grid_coords, sensor_grid
 
 __all__ = [

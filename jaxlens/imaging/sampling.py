@@ -20,7 +20,7 @@ import numpy as np
 from jaxtyping import Array, Float
 
 from ..optics import checks, paraxial
-from ..optics.lens import Lens
+from ..optics.lens import Lens, unclipped
 from ..optics.rays import Rays
 
 
@@ -195,13 +195,12 @@ def aim_at_stop(
     from forward-mode autodiff of a partial trace to the stop. A collimated beam keeps its
     direction; rays from ``source_point`` (a finite object) are re-aimed from that point.
 
-    The aiming traces the lens without its apertures (``aiming.unclipped``): an aperture
+    The aiming traces the lens without its apertures (``optics.lens.unclipped``): an aperture
     that clips a Newton iterate stops that ray where it was clipped, which leaves the
     iterate short of the stop point, and the real trace may then pass the wrong ray. Which
     of the aimed rays the apertures stop is for the caller's trace of the real lens.
     """
     from ..tracing.forward import trace_path
-    from .aiming import unclipped
 
     stop_r = paraxial.paraxial_data(lens).stop_semi_diameter
     target = pupil * stop_r

@@ -139,3 +139,13 @@ class Lens(eqx.Module):
             return x
 
         return jax.tree_util.tree_map(cast, self)
+
+
+def unclipped(lens: Lens) -> Lens:
+    """The lens with every semi-diameter set to inf, for aiming rays (an aperture that clips
+    an intermediate Newton iterate would otherwise stop it where it was clipped)."""
+    surfaces = tuple(
+        eqx.tree_at(lambda s: s.semi_diameter, s, jnp.full_like(s.semi_diameter, jnp.inf))
+        for s in lens.surfaces
+    )
+    return eqx.tree_at(lambda m: m.surfaces, lens, surfaces)
