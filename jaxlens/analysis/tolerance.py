@@ -50,6 +50,7 @@ MTF:
 
 from __future__ import annotations
 
+import copy
 import dataclasses
 import math
 
@@ -181,8 +182,8 @@ def zero_perturbation(lens: Lens) -> Perturbation:
 def refracting(lens: Lens) -> list[bool]:
     """Whether each surface separates two media (not air on both sides)."""
     media = [lens.object_material, *lens.materials]
-    return [not (isinstance(a, Air) and isinstance(b, Air)) for a, b in zip(media[:-1],
-                                                                            media[1:])]
+    return [not (isinstance(a, Air) and isinstance(b, Air))
+            for a, b in zip(media[:-1], media[1:], strict=True)]
 
 
 def perturb(lens: Lens, p: Perturbation, clear_radius, *, add_r4: tuple[bool, ...] | None = None
@@ -438,6 +439,25 @@ class ToleranceModel:
         self.names, self.units, self.kinds = self._labels()
         self._chunk = eqx.filter_jit(jax.vmap(self._one, in_axes=(0, None)))
         self._grad = eqx.filter_jit(jax.value_and_grad(self._metric_at))
+
+    def with_tolerances(self, tolerances: Tolerances) -> ToleranceModel:
+        """The same model (its compiled functions too) under other tolerances.
+
+        Raises ValueError if the change needs another lens structure (irregularity switched on
+        for a surface that has no r⁴ term); build a new model then.
+        """
+        if not isinstance(tolerances, Tolerances):
+            raise ValueError(f"with_tolerances: expected Tolerances, got "
+                             f"{type(tolerances).__name__}")
+        needs = any(tolerances.irregularity > 0 and ref and s.even_coeffs().shape[0] < 2
+                    and not add for s, ref, add in zip(self.lens.surfaces, self.refracting,
+                                                        self.add_r4, strict=True))
+        if needs:
+            raise ValueError("with_tolerances: irregularity > 0 needs r^4 terms this model was "
+                             "built without; build a new ToleranceModel")
+        out = copy.copy(self)
+        out.tolerances = tolerances
+        return out
 
     # labels of every entry of the flat perturbation vector
     def _labels(self):

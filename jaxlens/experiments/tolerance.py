@@ -165,8 +165,9 @@ def analyse_design(lens, spec, *, trials: int = DEFAULT_TRIALS,
     return report
 
 
-def write_report(report: dict, out: str) -> dict:
-    """Write ``tolerance.json`` and ``tolerance_rms.png`` into ``out``; return the paths."""
+def write_report(report: dict, out: str, *, plots: bool = True) -> dict:
+    """Write ``tolerance.json`` and (with ``plots``) ``tolerance_rms.png`` into ``out``;
+    return the paths."""
     from jaxlens import plot
 
     os.makedirs(out, exist_ok=True)
@@ -176,7 +177,7 @@ def write_report(report: dict, out: str) -> dict:
     with open(path, "w") as f:
         json.dump(data, f, indent=2, default=float)
     files = {"tolerance_json": path}
-    if mc is not None:
+    if mc is not None and plots:
         files["tolerance_rms"] = plot.save(plot.plot_tolerance_histogram(mc),
                                            os.path.join(out, "tolerance_rms.png"))
     return files
