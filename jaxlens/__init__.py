@@ -9,7 +9,8 @@ Layout (each layer imports only from the layers above it):
     optics     surfaces, materials, glass catalogs, the lens, rays, paraxial optics
     tracing    the one tracer: surface step, forward and backward traces
     imaging    ray sources and aiming, PSFs, MTF, radiometry, distortion, rendering
-    analysis   spots, RMS, distortion, geometry checks, the report
+    analysis   spots, RMS, distortion, geometry checks, tolerancing (``jaxlens.tolerance``),
+               the report
     io         lens files (JSON, .zmx) and images
     design     ab initio lens design (spec, parameters, losses, solvers, curriculum)
     nets       reconstruction networks
@@ -23,6 +24,7 @@ from . import nets as nets
 from . import optics as optics
 from . import tracing as tracing
 from . import zoo as zoo
+from .analysis import tolerance as tolerance
 from .imaging import sampling as sampling
 from .imaging.psf import psf as psf
 from .imaging.render import render as render

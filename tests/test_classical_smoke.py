@@ -11,7 +11,8 @@ def test_classical_smoke(tmp_path):
     out = str(tmp_path / "run")
     assert classical.main(["--smoke", "--out", out, "--quiet", "--devices", "1"]) == 0
     for name in ("lens.json", "lens.zmx", "layout.png", "spots.png", "rms_map.png", "mtf.png",
-                 "progress.png", "render.png", "summary.json", "seeds/seed_0.json"):
+                 "progress.png", "render.png", "summary.json", "seeds/seed_0.json",
+                 "tolerance.json", "tolerance_rms.png"):
         path = os.path.join(out, name)
         assert os.path.isfile(path) and os.path.getsize(path) > 0, name
     with open(os.path.join(out, "summary.json")) as f:
@@ -25,3 +26,9 @@ def test_classical_smoke(tmp_path):
     with open(os.path.join(out, "lens.zmx"), encoding="latin-1") as f:
         zmx = f.read()
     assert "GLAS" in zmx
+    with open(os.path.join(out, "tolerance.json")) as f:
+        t = json.load(f)
+    mc = t["monte_carlo"]
+    assert mc["trials"] == 4 and mc["rms_p50_um"] <= mc["rms_p90_um"]
+    assert {"tolerances", "sensitivity", "compensator"} <= set(t)
+    assert s["tolerance"]["trials"] == 4

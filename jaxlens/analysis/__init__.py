@@ -1,5 +1,7 @@
-"""Real-ray analysis: spots, RMS, distortion, clear apertures, geometry checks, the report."""
+"""Real-ray analysis: spots, RMS, distortion, clear apertures, geometry checks, tolerancing,
+the report."""
 
+from . import tolerance as tolerance
 from .spots import Distortion as Distortion
 from .spots import GeometryCheck as GeometryCheck
 from .spots import RmsSpot as RmsSpot

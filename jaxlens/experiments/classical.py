@@ -7,7 +7,9 @@ from random, nearly flat starts. It writes an output folder (``--out``, default
 ``runs/classical``) with the best design as JSON and Zemax ``.zmx`` (plus ``.AGF`` catalogs
 for glasses Zemax does not ship), every seed's design as JSON, figures (layout with rays,
 spot diagrams, RMS map over the sensor, MTF curves, design progress, a rendered test
-scene) and ``summary.json``, whose headline it also prints.
+scene), the tolerance analysis of the best design (``tolerance.json``,
+``tolerance_rms.png``: ``jaxlens.experiments.tolerance``; ``--tolerance-trials 0`` skips
+it) and ``summary.json``, whose headline it also prints.
 
 Convention (the paper's): f = (sensor half-diagonal)/tan(half FoV) = 3.83/tan(40.4°) ≈
 4.50 mm and EPD = f/F# ≈ 2.25 mm. Distortion is free to move the paraxial EFL; the summary
@@ -131,6 +133,12 @@ def build_parser() -> argparse.ArgumentParser:
                    help="replace an earlier run in --out (default: refuse)")
     o.add_argument("--no-plots", action="store_true", help="skip figures and rendering")
     o.add_argument("--no-render", action="store_true", help="skip the rendered test scene")
+    o.add_argument("--tolerance-trials", type=int, default=200,
+                   help="Monte-Carlo trials of the tolerance analysis of the best design "
+                        "(tolerance.json, tolerance_rms.png; 0 skips it)")
+    o.add_argument("--tolerance-threshold", type=float, default=6.0,
+                   help="yield threshold of the tolerance analysis: mean RMS after "
+                        "refocusing, µm")
     o.add_argument("--smoke", action="store_true",
                    help="a few steps, one seed, coarse sampling (CI check of the pipeline)")
     o.add_argument("--quiet", action="store_true", help="no progress bar")
@@ -168,6 +176,8 @@ def check_args(args) -> None:
         n(args.polish_steps, "--polish-steps", w, lo=0, integer=True)
     n(args.devices, "--devices", w, lo=1, integer=True)
     n(args.ablation_seeds, "--ablation-seeds", w, lo=1, integer=True)
+    n(args.tolerance_trials, "--tolerance-trials", w, lo=0, integer=True)
+    n(args.tolerance_threshold, "--tolerance-threshold", w, lo=0, lo_open=True, unit="µm")
     if args.seed_list is not None:
         parts = [p.strip() for p in args.seed_list.split(",")]
         if not parts or not all(p.isdigit() for p in parts):
@@ -353,6 +363,24 @@ def _design_into(args, argv, spec, config, seeds, folder, out, t_start) -> dict:
     files = write_design_outputs(lens, evals[best], spec, out, history=result.history,
                                  plots=not args.no_plots, render=not args.no_render,
                                  smoke=args.smoke, log=log)
+    t_tol = 0.0
+    tolerance = None
+    if args.tolerance_trials > 0:
+        from jaxlens.experiments import tolerance as tol_exp
+
+        t0 = time.perf_counter()
+        # Sensitivities for every parameter from one gradient; the ±tolerance re-trace
+        # check only for the 16 largest (python -m jaxlens.experiments.tolerance checks all).
+        rep = tol_exp.analyse_design(
+            lens, spec, trials=min(args.tolerance_trials, 4) if args.smoke
+            else args.tolerance_trials, threshold_um=args.tolerance_threshold,
+            grid=4 if args.smoke else 16, fd_check=4 if args.smoke else 16, log=log)
+        files.update(tol_exp.write_report(rep, out, plots=not args.no_plots))
+        t_tol = time.perf_counter() - t0
+        tolerance = {**{k: rep["monte_carlo"][k] for k in (
+            "trials", "rms_p50_um", "rms_p90_um", "yield", "threshold_um", "mtf_p50",
+            "mtf_frequency_cycles_per_mm")}, "worst_parameter": rep["sensitivity"][0]["parameter"],
+            "nominal_refocus_mm": rep["compensator"]["nominal_refocus_mm"]}
     loss_first = [float(np.nanmean(h[0])) for h in result.history.loss if len(h)]
     rms_hist = [h for h in result.history.spot_rms if len(h)]
     ev = evals[best]
@@ -375,8 +403,9 @@ def _design_into(args, argv, spec, config, seeds, folder, out, t_start) -> dict:
         "loss_first_step": loss_first[0] if loss_first else None,
         "spot_rms_first_um": float(np.min(rms_hist[0][0]) * 1e3) if rms_hist else None,
         "spot_rms_last_um": float(np.min(rms_hist[-1][-1]) * 1e3) if rms_hist else None,
+        "tolerance": tolerance,
         "stage_seconds": dict(zip(result.history.stages, result.history.seconds, strict=True)),
-        "seconds": {"design": t_design, "evaluation": t_eval,
+        "seconds": {"design": t_design, "evaluation": t_eval, "tolerance": t_tol,
                     "total": time.perf_counter() - t_start},
         "devices": len(jax.devices()),
         "files": {k: (folder.final_path(v) if isinstance(v, str)

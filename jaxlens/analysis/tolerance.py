@@ -1,0 +1,737 @@
+"""Tolerance analysis: sensitivities, Monte-Carlo yield and a back-focus compensator.
+
+Metric (the one number everything here reports):
+    The field-weighted mean of the polychromatic RMS spot radius, in µm: the rays of all
+    wavelengths pooled with equal weights about their common centroid, the 21 × 21 square
+    pupil grid (317 rays per wavelength) aimed at the paraxial entrance pupil, only valid
+    rays counted. Per field this is exactly
+    ``jaxlens.analysis.rms_spot(lens, fields, wavelengths, reference="centroid")
+    .polychromatic``; with the 16 × 16 sensor grid of ``jaxlens.design.evaluate`` it is
+    Table 1's "RMS spot, 256 fields". ``symmetric_fields`` folds such a grid onto its
+    distinct fields under the square's symmetry with multiplicities as weights; the mean
+    is unchanged (every lens analysed here is rotationally symmetric and the pupil grid is
+    symmetric under the square's eight symmetries), for 36 instead of 256 traced fields.
+
+Perturbations (``Perturbation``; surface 1 is ``lens.surfaces[0]``):
+    radius_rel    relative radius change, R → R (1 + δ), i.e. c → c / (1 + δ)
+    thickness     mm added to ``thickness[i]`` (the last entry moves the image plane)
+    conic         added to k
+    asphere       added to the even coefficients a_1 … a_m (units mm^(1−2i))
+    irregularity  peak sag (mm) of an added r⁴ term at the surface's clear semi-diameter h:
+                  Δz = s (r/h)⁴, a low-order (spherical-like) form error
+    index         added to the material's nd (each non-air material slot = one element)
+    abbe_rel      relative Abbe-number change, Vd → Vd (1 + δ)
+
+    Index and Abbe changes wrap the design's own material (``PerturbedMaterial``):
+    n'(λ) = n(λ) + Δnd + (s − 1)(n(λ) − nd) with s = (nd + Δnd − 1)/((nd − 1)(1 + δ)),
+    so n'(d) = nd + Δnd and V'd = Vd (1 + δ) while the catalog dispersion curve keeps its
+    shape. At zero perturbation this is the design's material to the last bit (no model
+    glass substitution, so no difference to state).
+
+    Element decenter and tilt are NOT toleranced: the engine traces coaxial, rotationally
+    symmetric surfaces only (no per-surface decenter or tilt), so they cannot be modelled.
+
+Compensator:
+    The back focus (the last thickness, i.e. the image-plane position) is re-optimised per
+    trial, as Zemax's default compensator does. Image space is homogeneous, so a ray's
+    image-plane point moves linearly with the plane, p(Δz) = p + Δz · (dx/dz, dy/dz):
+    each field's mean square spot radius is an exact quadratic in Δz, the metric is a
+    sum of square roots of quadratics (convex), and a few damped Newton steps minimise it
+    from the closed-form minimiser of the field-weighted mean square. No re-trace.
+
+MTF:
+    Geometric polychromatic MTF at one stated frequency (cycles/mm) from the same spot
+    rays (the Fourier transform of the ray positions, wavelengths averaged), times the
+    diffraction-limited MTF of a circular pupil at the paraxial working F-number — the
+    definition of ``jaxlens.imaging.psf.mtf(model="geometric", diffraction=True)`` on a
+    coarser pupil. Per field the mean of tangential and sagittal; per lens the
+    field-weighted mean.
+"""
+
+from __future__ import annotations
+
+import copy
+import dataclasses
+import math
+
+import equinox as eqx
+import jax
+import jax.numpy as jnp
+import numpy as np
+from jax.flatten_util import ravel_pytree
+from jaxtyping import Array, Float
+
+from ..imaging.sampling import field_xy, pupil_grid
+from ..optics import paraxial
+from ..optics.lens import Lens
+from ..optics.materials import LAMBDA_D, AbstractMaterial, Air, abbe_number
+from ..optics.surfaces import EvenAsphere, Standard
+from .spots import clear_semi_diameters, spot_rays
+
+DECENTER_TILT = ("not modelled: the engine traces coaxial, rotationally symmetric surfaces "
+                 "only (no per-element decenter or tilt)")
+
+DISTRIBUTIONS = ("uniform", "normal")
+
+
+def _nonneg(value, name: str, unit: str) -> float:
+    try:
+        v = float(value)
+    except (TypeError, ValueError):
+        v = float("nan")
+    if not math.isfinite(v) or v < 0:
+        raise ValueError(f"Tolerances: {name} must be a finite number >= 0{unit}, got "
+                         f"{value!r}")
+    return v
+
+
+@dataclasses.dataclass(frozen=True)
+class Tolerances:
+    """Tolerance half-ranges (± each value). See the module docstring for their meaning.
+
+    Attributes:
+        radius_rel: relative radius tolerance (0.005 = ±0.5 % of R); flat surfaces get none.
+        thickness: mm, every thickness including the image distance.
+        index: absolute nd.
+        abbe_rel: relative Abbe-number tolerance (0.005 = ±0.5 % of Vd).
+        irregularity: mm, peak sag of an r⁴ form error at the clear semi-diameter.
+        conic: absolute conic constant (sensitivity table only).
+        asphere_sag: mm; each asphere coefficient a_i gets the tolerance asphere_sag / h^(2i),
+            the change that moves the sag at the clear semi-diameter h by that much
+            (sensitivity table only).
+        distribution: Monte-Carlo law: "uniform" over ±tolerance, or "normal" with σ =
+            tolerance/2 truncated at ±tolerance.
+    """
+
+    radius_rel: float = 0.005
+    thickness: float = 0.02
+    index: float = 0.0005
+    abbe_rel: float = 0.005
+    irregularity: float = 0.5e-3
+    conic: float = 0.01
+    asphere_sag: float = 0.5e-3
+    distribution: str = "uniform"
+
+    def __post_init__(self):
+        units = {"radius_rel": " (relative)", "thickness": " mm", "index": "",
+                 "abbe_rel": " (relative)", "irregularity": " mm", "conic": "",
+                 "asphere_sag": " mm"}
+        for name, unit in units.items():
+            object.__setattr__(self, name, _nonneg(getattr(self, name), name, unit))
+        if self.radius_rel >= 0.5 or self.abbe_rel >= 0.5:
+            raise ValueError(f"Tolerances: radius_rel and abbe_rel must be below 0.5 "
+                             f"(relative), got {self.radius_rel!r} and {self.abbe_rel!r}")
+        if self.distribution not in DISTRIBUTIONS:
+            raise ValueError(f"Tolerances: distribution must be one of {DISTRIBUTIONS}, got "
+                             f"{self.distribution!r}")
+
+    def describe(self) -> dict:
+        """The tolerances with their units, for reports."""
+        return {
+            "radius": {"value": self.radius_rel, "unit": "relative (dR/R)"},
+            "thickness": {"value": self.thickness, "unit": "mm"},
+            "index": {"value": self.index, "unit": "nd"},
+            "abbe": {"value": self.abbe_rel, "unit": "relative (dVd/Vd)"},
+            "irregularity": {"value": self.irregularity,
+                             "unit": "mm peak sag of r^4 at the clear semi-diameter"},
+            "conic": {"value": self.conic, "unit": "absolute k (sensitivity only)"},
+            "asphere": {"value": self.asphere_sag,
+                        "unit": "mm sag at the clear semi-diameter (sensitivity only)"},
+            "decenter_tilt": DECENTER_TILT,
+            "distribution": (self.distribution + (" over +-tolerance" if self.distribution
+                                                  == "uniform" else
+                                                  ", sigma = tolerance/2, truncated")),
+        }
+
+
+class PerturbedMaterial(AbstractMaterial):
+    """A material with its nd shifted and its Abbe number scaled (see module docstring)."""
+
+    base: AbstractMaterial
+    delta_nd: Float[Array, ""] = eqx.field(converter=jnp.asarray)
+    abbe_rel: Float[Array, ""] = eqx.field(converter=jnp.asarray)
+    name: str = eqx.field(static=True, default="")
+
+    def index(self, wavelength):
+        n = self.base.index(wavelength)
+        nd = self.base.index(jnp.asarray(LAMBDA_D, jnp.result_type(n)))
+        s = (nd + self.delta_nd - 1.0) / ((nd - 1.0) * (1.0 + self.abbe_rel))
+        return n + self.delta_nd + (s - 1.0) * (n - nd)
+
+
+class Perturbation(eqx.Module):
+    """Changes to a lens's numbers, one entry per surface (see module docstring)."""
+
+    radius_rel: Float[Array, " n"]
+    thickness: Float[Array, " n"]
+    conic: Float[Array, " n"]
+    asphere: tuple[Float[Array, " m"], ...]
+    irregularity: Float[Array, " n"]
+    index: Float[Array, " n"]
+    abbe_rel: Float[Array, " n"]
+
+
+def zero_perturbation(lens: Lens) -> Perturbation:
+    """The perturbation that changes nothing (float64 when x64 is on)."""
+    n = lens.num_surfaces
+    z = jnp.zeros(n, lens.thickness.dtype)
+    return Perturbation(z, z, z, tuple(jnp.zeros_like(s.even_coeffs()) for s in lens.surfaces),
+                        z, z, z)
+
+
+def refracting(lens: Lens) -> list[bool]:
+    """Whether each surface separates two media (not air on both sides)."""
+    media = [lens.object_material, *lens.materials]
+    return [not (isinstance(a, Air) and isinstance(b, Air))
+            for a, b in zip(media[:-1], media[1:], strict=True)]
+
+
+def perturb(lens: Lens, p: Perturbation, clear_radius, *, add_r4: tuple[bool, ...] | None = None
+            ) -> Lens:
+    """The lens with perturbation ``p`` applied (jittable, differentiable in ``p``).
+
+    Args:
+        lens: the nominal lens.
+        p: the perturbation.
+        clear_radius: ``[n]`` clear semi-diameters (mm) that scale the irregularity.
+        add_r4: per surface, give a surface without an r⁴ coefficient one (an
+            ``EvenAsphere``) so that irregularity can act on it; static. Default: none.
+    """
+    add_r4 = add_r4 or (False,) * lens.num_surfaces
+    surfaces = []
+    for i, s in enumerate(lens.surfaces):
+        c = s.c / (1.0 + p.radius_rel[i])
+        k = s.k + p.conic[i]
+        r4 = p.irregularity[i] / clear_radius[i] ** 4
+        a = s.even_coeffs()
+        if a.shape[0]:
+            a = a + p.asphere[i]
+            if a.shape[0] >= 2:
+                a = a.at[1].add(r4)
+            s2 = eqx.tree_at(lambda x: (x.c, x.k, x.coeffs), s, (c, k, a))
+        elif add_r4[i]:
+            if not isinstance(s, Standard):
+                raise ValueError(f"perturb: surface {i + 1} ({type(s).__name__}) has no even "
+                                 "series to carry an irregularity")
+            s2 = EvenAsphere(c=c, k=k, coeffs=jnp.stack([jnp.zeros_like(r4), r4]),
+                             semi_diameter=s.semi_diameter)
+        else:
+            s2 = eqx.tree_at(lambda x: (x.c, x.k), s, (c, k))
+        surfaces.append(s2)
+    materials = tuple(m if isinstance(m, Air) else
+                      PerturbedMaterial(m, p.index[i], p.abbe_rel[i], getattr(m, "name", ""))
+                      for i, m in enumerate(lens.materials))
+    return eqx.tree_at(lambda x: (x.surfaces, x.thickness, x.materials), lens,
+                       (tuple(surfaces), lens.thickness + p.thickness, materials))
+
+
+def symmetric_fields(fields) -> tuple[np.ndarray, np.ndarray]:
+    """Fold 2-D fields (θx, θy) onto their distinct representatives under the square's
+    symmetries (sign flips, x ↔ y): ``(fields [K, 2] deg, weights [K] = multiplicities)``.
+
+    A mean over the representatives weighted by ``weights`` equals the mean over all fields
+    for a rotationally symmetric lens traced with a pupil grid that has those symmetries
+    (the default 21 × 21 grid has).
+    """
+    f = np.asarray(fields, float)
+    if f.ndim == 1:
+        f = np.stack([np.zeros_like(f), f], -1)
+    if f.ndim != 2 or f.shape[-1] != 2 or f.shape[0] == 0:
+        raise ValueError(f"symmetric_fields: fields must be [F] or [F, 2] degrees with F >= 1, "
+                         f"got shape {np.shape(fields)}")
+    key = np.sort(np.abs(f), axis=-1)
+    rounded = np.round(key, 9)
+    _, first, counts = np.unique(rounded, axis=0, return_index=True, return_counts=True)
+    return key[first], counts.astype(float)
+
+
+# --------------------------------------------------------------------------- spot data
+class SpotData(eqx.Module):
+    """Rays on the image plane, per field F, wavelength W and pupil point M."""
+
+    position: Float[Array, "F W M 2"]  # mm
+    slope: Float[Array, "F W M 2"]  # (dx/dz, dy/dz) in image space
+    weight: Float[Array, "F W M"]  # 1 for a valid ray, 0 otherwise
+
+
+def spot_data(lens: Lens, fields, wavelengths, pupil) -> SpotData:
+    """Trace every field and wavelength (jittable, vmappable over lenses)."""
+
+    def one(field, wl):
+        r = spot_rays(lens, field, wl, pupil=pupil)
+        dz = r.direction[..., 2:3]
+        ok = dz > 1e-12  # rays that reach the image surface travel forward
+        slope = r.direction[..., :2] / jnp.where(ok, dz, 1.0)
+        return r.origin[..., :2], jnp.where(ok, slope, 0.0), r.valid.astype(r.origin.dtype)
+
+    per_field = jax.vmap(lambda f: jax.vmap(lambda w: one(f, w))(wavelengths))
+    return SpotData(*per_field(fields))
+
+
+def _pooled(data: SpotData):
+    f = data.weight.shape[0]
+    return data.position.reshape(f, -1, 2), data.slope.reshape(f, -1, 2), \
+        data.weight.reshape(f, -1)
+
+
+def _rms(p, w):
+    """Pooled RMS radius about the centroid per field (mm); NaN where no ray is valid.
+
+    The same arithmetic as ``analysis.spots.rms_spot`` (its polychromatic value)."""
+    total = jnp.sum(w, -1)
+    cen = jnp.sum(w[..., None] * p, -2) / jnp.maximum(total, 1.0)[..., None]
+    d2 = jnp.sum((p - cen[..., None, :]) ** 2, -1)
+    ms = jnp.sum(w * d2, -1) / jnp.maximum(total, 1.0)
+    pos = ms > 0
+    rms = jnp.where(pos, jnp.sqrt(jnp.where(pos, ms, 1.0)), 0.0)
+    return jnp.where(total > 0, rms, jnp.nan)
+
+
+def field_rms(data: SpotData, dz=0.0) -> Float[Array, " F"]:
+    """Polychromatic RMS radius per field (mm) with the image plane moved by ``dz`` mm."""
+    p, u, w = _pooled(data)
+    return _rms(p + dz * u, w)
+
+
+def _norm_weights(weights):
+    return weights / jnp.sum(weights)
+
+
+def mean_rms_um(data: SpotData, weights, dz=0.0) -> Float[Array, ""]:
+    """The metric: field-weighted mean polychromatic RMS radius (µm)."""
+    return 1e3 * jnp.sum(_norm_weights(weights) * field_rms(data, dz))
+
+
+def best_focus(data: SpotData, weights, *, iters: int = 8) -> Float[Array, ""]:
+    """Image-plane shift Δz (mm) that minimises the metric (the back-focus compensator).
+
+    Fields without valid rays are ignored. See the module docstring for the method.
+    """
+    p, u, w = _pooled(data)
+    total = jnp.sum(w, -1)
+    alpha = jnp.where(total > 0, _norm_weights(weights), 0.0)
+    tot = jnp.maximum(total, 1.0)[:, None]
+    dp = p - (jnp.sum(w[..., None] * p, 1) / tot)[:, None, :]
+    du = u - (jnp.sum(w[..., None] * u, 1) / tot)[:, None, :]
+    a = jnp.sum(w * jnp.sum(dp * dp, -1), -1) / tot[:, 0]
+    b = jnp.sum(w * jnp.sum(dp * du, -1), -1) / tot[:, 0]
+    c = jnp.sum(w * jnp.sum(du * du, -1), -1) / tot[:, 0]
+    tiny = jnp.finfo(p.dtype).tiny
+
+    def metric(z):
+        return jnp.sum(alpha * jnp.sqrt(jnp.maximum(a + 2 * b * z + c * z * z, 0.0)))
+
+    z0 = -jnp.sum(alpha * b) / jnp.maximum(jnp.sum(alpha * c), tiny)
+    scales = jnp.asarray([1.0, 0.5, 0.25, 0.125, 0.0], p.dtype)
+
+    def step(_, z):
+        ms = jnp.maximum(a + 2 * b * z + c * z * z, tiny)
+        r = jnp.sqrt(ms)
+        g = jnp.sum(alpha * (b + c * z) / r)
+        h = jnp.sum(alpha * jnp.maximum(a * c - b * b, 0.0) / (r * ms))
+        full = jnp.where(h > 0, -g / jnp.where(h > 0, h, 1.0), 0.0)
+        cand = z + scales * full
+        return cand[jnp.argmin(jax.vmap(metric)(cand))]
+
+    return jax.lax.fori_loop(0, iters, step, z0)
+
+
+def _directions(fields):
+    """Unit tangential (radial) and sagittal directions in the image plane per field."""
+    t = jnp.tan(field_xy(fields))  # [F, 2]
+    r = jnp.sqrt(jnp.sum(t * t, -1, keepdims=True))
+    on_axis = r == 0
+    e_t = jnp.where(on_axis, jnp.asarray([0.0, 1.0], t.dtype), t / jnp.where(on_axis, 1.0, r))
+    return e_t, jnp.stack([e_t[:, 1], -e_t[:, 0]], -1)
+
+
+def field_mtf(data: SpotData, fields, wavelengths, frequency, fnum, dz=0.0
+              ) -> Float[Array, " F"]:
+    """Geometric × diffraction MTF at ``frequency`` (cycles/mm), mean of T and S, per field."""
+    q = data.position + dz * data.slope  # [F, W, M, 2]
+    w = data.weight
+    tot_w = jnp.maximum(jnp.sum(w, -1, keepdims=True), jnp.finfo(q.dtype).tiny)
+    ref = jnp.sum(w[..., None] * q, (1, 2)) / jnp.maximum(jnp.sum(w, (1, 2)), 1e-30)[:, None]
+    rel = q - ref[:, None, None, :]
+    wn = w / tot_w
+    lam = wavelengths * 1e-3
+    s = jnp.clip(frequency * lam * fnum, 0.0, 1.0)
+    root = jnp.sqrt(jnp.where(s < 1, 1.0 - s * s, 1.0))
+    diff = jnp.where(s < 1, (2 / jnp.pi) * (jnp.arccos(s) - s * root), 0.0)  # [W]
+    e_t, e_s = _directions(fields)
+
+    def along(e):
+        proj = jnp.sum(rel * e[:, None, None, :], -1)  # [F, W, M]
+        o = jnp.sum(wn * jnp.exp(-2j * jnp.pi * frequency * proj), -1)  # [F, W]
+        return jnp.abs(jnp.mean(o * diff, -1))
+
+    return 0.5 * (along(e_t) + along(e_s))
+
+
+# ------------------------------------------------------------------------ the model
+def _check_fields(fields, weights, where):
+    f = np.asarray(fields, float)
+    if f.ndim not in (1, 2) or f.shape[0] == 0 or (f.ndim == 2 and f.shape[1] != 2) \
+            or not np.all(np.isfinite(f)):
+        raise ValueError(f"{where}: fields must be finite [F] or [F, 2] degrees with F >= 1, "
+                         f"got shape {f.shape}")
+    w = np.ones(f.shape[0]) if weights is None else np.asarray(weights, float)
+    if w.shape != (f.shape[0],) or not np.all(np.isfinite(w)) or np.any(w < 0) or w.sum() <= 0:
+        raise ValueError(f"{where}: field_weights must be [{f.shape[0]}] finite numbers >= 0 "
+                         f"with a positive sum, got {weights!r}")
+    return f, w
+
+
+class ToleranceModel:
+    """A lens, its evaluation fields and the parameters that tolerancing may change.
+
+    Args:
+        lens: the nominal lens (analysed in float64 when x64 is on).
+        fields: field angles (deg), ``[F]`` (y) or ``[F, 2]``; default ``lens.fields``.
+        field_weights: ``[F]`` weights of the field mean (default equal).
+        wavelengths: µm (default ``lens.wavelengths``).
+        pupil: ``[M, 2]`` unit-pupil points (default the 21 × 21 grid).
+        tolerances: the ``Tolerances``.
+        batch: lenses traced together in one vmapped call.
+        apertures: "open" (default): every surface but the stop loses its semi-diameter for
+            the analysis, as Zemax's automatic (floating) semi-diameters do, so a perturbed
+            beam is not clipped by apertures drawn exactly around the nominal beam; "lens":
+            keep the lens's semi-diameters (perturbed beams can then be vignetted). The
+            irregularity is scaled by the nominal clear semi-diameters either way.
+    """
+
+    def __init__(self, lens: Lens, *, fields=None, field_weights=None, wavelengths=None,
+                 pupil=None, tolerances: Tolerances | None = None, batch: int = 25,
+                 apertures: str = "open"):
+        self.tolerances = Tolerances() if tolerances is None else tolerances
+        if not isinstance(self.tolerances, Tolerances):
+            raise ValueError(f"ToleranceModel: tolerances must be a Tolerances, got "
+                             f"{type(tolerances).__name__}")
+        f, w = _check_fields(lens.fields if fields is None else fields, field_weights,
+                             "ToleranceModel")
+        if not (isinstance(batch, int) and batch >= 1):
+            raise ValueError(f"ToleranceModel: batch must be a whole number >= 1, got {batch!r}")
+        dtype = jnp.result_type(float)
+        self.lens = lens.astype(dtype)
+        self.fields = jnp.asarray(f, dtype)
+        self.weights = jnp.asarray(w, dtype)
+        self.wavelengths = jnp.asarray(
+            self.lens.wavelengths if wavelengths is None else jnp.atleast_1d(
+                jnp.asarray(wavelengths, dtype)), dtype)
+        self.pupil = pupil_grid(21, dtype) if pupil is None else jnp.asarray(pupil, dtype)
+        self.batch = batch
+        if apertures not in ("open", "lens"):
+            raise ValueError(f"ToleranceModel: apertures must be 'open' or 'lens', got "
+                             f"{apertures!r}")
+        self.clear_radius = clear_semi_diameters(self.lens)
+        if apertures == "open":
+            inf = jnp.asarray(jnp.inf, dtype)
+            self.lens = eqx.tree_at(lambda x: x.surfaces, self.lens, tuple(
+                s if i == self.lens.stop else eqx.tree_at(lambda y: y.semi_diameter, s, inf)
+                for i, s in enumerate(self.lens.surfaces)))
+        self.apertures = apertures
+        zero = zero_perturbation(self.lens)
+        self.zero, self.unravel = ravel_pytree(zero)
+        self.refracting = refracting(self.lens)
+        tol = self.tolerances
+        self.add_r4 = tuple(bool(tol.irregularity > 0 and ref and s.even_coeffs().shape[0] < 2)
+                            for s, ref in zip(self.lens.surfaces, self.refracting, strict=True))
+        self.names, self.units, self.kinds = self._labels()
+        self._chunk = eqx.filter_jit(jax.vmap(self._one, in_axes=(0, None)))
+        self._grad = eqx.filter_jit(jax.value_and_grad(self._metric_at))
+
+    def with_tolerances(self, tolerances: Tolerances) -> ToleranceModel:
+        """The same model (its compiled functions too) under other tolerances.
+
+        Raises ValueError if the change needs another lens structure (irregularity switched on
+        for a surface that has no r⁴ term); build a new model then.
+        """
+        if not isinstance(tolerances, Tolerances):
+            raise ValueError(f"with_tolerances: expected Tolerances, got "
+                             f"{type(tolerances).__name__}")
+        needs = any(tolerances.irregularity > 0 and ref and s.even_coeffs().shape[0] < 2
+                    and not add for s, ref, add in zip(self.lens.surfaces, self.refracting,
+                                                        self.add_r4, strict=True))
+        if needs:
+            raise ValueError("with_tolerances: irregularity > 0 needs r^4 terms this model was "
+                             "built without; build a new ToleranceModel")
+        out = copy.copy(self)
+        out.tolerances = tolerances
+        return out
+
+    # labels of every entry of the flat perturbation vector
+    def _labels(self):
+        lens = self.lens
+        n = lens.num_surfaces
+        glass = {}
+        for i, m in enumerate(lens.materials):
+            if not isinstance(m, Air):
+                glass[i] = f"E{len(glass) + 1} ({getattr(m, 'name', '') or type(m).__name__})"
+        per = {
+            "radius_rel": [(f"S{i + 1} radius", "relative", "radius") for i in range(n)],
+            "thickness": [(f"T{i + 1} thickness" + (" (image distance)" if i == n - 1 else ""),
+                           "mm", "thickness") for i in range(n)],
+            "conic": [(f"S{i + 1} conic", "1", "conic") for i in range(n)],
+            "asphere": [[(f"S{i + 1} A{2 * (j + 1)}", f"mm^{1 - 2 * (j + 1)}", "asphere")
+                         for j in range(s.even_coeffs().shape[0])]
+                        for i, s in enumerate(lens.surfaces)],
+            "irregularity": [(f"S{i + 1} irregularity", "mm", "irregularity") for i in range(n)],
+            "index": [(f"{glass.get(i, f'M{i + 1}')} nd", "1", "index") for i in range(n)],
+            "abbe_rel": [(f"{glass.get(i, f'M{i + 1}')} Vd", "relative", "abbe")
+                         for i in range(n)],
+        }
+        labels = Perturbation(**{k: (tuple(v) if k == "asphere" else v) for k, v in per.items()})
+        leaves = jax.tree_util.tree_leaves(labels, is_leaf=lambda x: isinstance(x, tuple)
+                                           and len(x) == 3 and isinstance(x[0], str))
+        if len(leaves) != self.zero.size:
+            raise AssertionError("ToleranceModel: labels do not match the perturbation vector")
+        names, units, kinds = zip(*leaves, strict=True) if leaves else ((), (), ())
+        return list(names), list(units), list(kinds)
+
+    def tolerance_vector(self, *, sensitivity: bool) -> np.ndarray:
+        """Half-range of every perturbation entry (0 = not toleranced).
+
+        Monte-Carlo (``sensitivity=False``): radius, thickness, index, Abbe, irregularity.
+        Sensitivity: radius, thickness, conic, every asphere term, index, Abbe.
+        """
+        lens, tol = self.lens, self.tolerances
+        n = lens.num_surfaces
+        curved = [ref and float(s.c) != 0.0 for s, ref in zip(lens.surfaces, self.refracting,
+                                                                strict=True)]
+        glass = [not isinstance(m, Air) for m in lens.materials]
+        dispersive = [g and math.isfinite(float(abbe_number(m)))
+                      for g, m in zip(glass, lens.materials, strict=True)]
+        h = np.asarray(self.clear_radius, float)
+        f = lambda flags, v: np.where(flags, v, 0.0)  # noqa: E731
+        asph = tuple(
+            np.asarray([tol.asphere_sag / h[i] ** (2 * (j + 1)) if (sensitivity and
+                        self.refracting[i]) else 0.0 for j in range(s.even_coeffs().shape[0])])
+            for i, s in enumerate(lens.surfaces))
+        p = Perturbation(
+            radius_rel=f(curved, tol.radius_rel),
+            thickness=np.full(n, tol.thickness),
+            conic=f(curved, tol.conic if sensitivity else 0.0),
+            asphere=asph,
+            irregularity=f(self.refracting, 0.0 if sensitivity else tol.irregularity),
+            index=f(glass, tol.index),
+            abbe_rel=f(dispersive, tol.abbe_rel),
+        )
+        return np.asarray(ravel_pytree(jax.tree_util.tree_map(jnp.asarray, p))[0])
+
+    def lens_at(self, pvec) -> Lens:
+        """The lens perturbed by the flat vector ``pvec``."""
+        return perturb(self.lens, self.unravel(pvec), self.clear_radius, add_r4=self.add_r4)
+
+    def data_at(self, pvec) -> SpotData:
+        return spot_data(self.lens_at(pvec), self.fields, self.wavelengths, self.pupil)
+
+    def _metric_at(self, pvec):
+        return mean_rms_um(self.data_at(pvec), self.weights)
+
+    def _one(self, pvec, frequency):
+        lens = self.lens_at(pvec)
+        data = spot_data(lens, self.fields, self.wavelengths, self.pupil)
+        dz = best_focus(data, self.weights)
+        fnum = paraxial.paraxial_data(lens).working_fnum
+        alpha = _norm_weights(self.weights)
+        return {
+            "rms_um": mean_rms_um(data, self.weights),
+            "rms_compensated_um": mean_rms_um(data, self.weights, dz),
+            "refocus_mm": dz,
+            "mtf": jnp.sum(alpha * field_mtf(data, self.fields, self.wavelengths, frequency,
+                                             fnum, 0.0)),
+            "mtf_compensated": jnp.sum(alpha * field_mtf(data, self.fields, self.wavelengths,
+                                                         frequency, fnum, dz)),
+            "min_valid_fraction": jnp.min(jnp.mean(data.weight, -1)),
+        }
+
+    def evaluate(self, pvecs, *, mtf_frequency: float = 0.0) -> dict[str, np.ndarray]:
+        """Evaluate ``[B, P]`` perturbation vectors, ``batch`` lenses per vmapped call."""
+        v = np.asarray(pvecs, float).reshape(-1, self.zero.size)
+        out = []
+        freq = jnp.asarray(mtf_frequency, self.zero.dtype)
+        for start in range(0, v.shape[0], self.batch):
+            chunk = v[start:start + self.batch]
+            pad = self.batch - chunk.shape[0]
+            full = np.concatenate([chunk, np.zeros((pad, v.shape[1]))]) if pad else chunk
+            res = self._chunk(jnp.asarray(full, self.zero.dtype), freq)
+            out.append({k: np.asarray(x)[:chunk.shape[0]] for k, x in res.items()})
+        return {k: np.concatenate([o[k] for o in out]) for k in out[0]} if out else {}
+
+    def gradient(self) -> tuple[float, np.ndarray]:
+        """(nominal metric µm, d metric / d pvec) in one reverse-mode pass."""
+        val, g = self._grad(self.zero)
+        return float(val), np.asarray(g)
+
+    def nominal_values(self) -> np.ndarray:
+        """The nominal value of every entry's parameter (R mm, t mm, k, a_i, nd, Vd)."""
+        lens = self.lens
+        dtype = np.float64
+        c = np.asarray([float(s.c) for s in lens.surfaces], dtype)
+        radius = np.where(c != 0, 1.0 / np.where(c != 0, c, 1.0), np.inf)
+        nd = [float(m.index(jnp.asarray(LAMBDA_D))) for m in lens.materials]
+        vd = [float(abbe_number(m)) if not isinstance(m, Air) else np.inf
+              for m in lens.materials]
+        p = Perturbation(
+            radius_rel=radius, thickness=np.asarray(lens.thickness, dtype),
+            conic=np.asarray([float(s.k) for s in lens.surfaces], dtype),
+            asphere=tuple(np.asarray(s.even_coeffs(), dtype) for s in lens.surfaces),
+            irregularity=np.zeros(lens.num_surfaces, dtype), index=np.asarray(nd, dtype),
+            abbe_rel=np.asarray(vd, dtype))
+        return np.asarray(ravel_pytree(jax.tree_util.tree_map(jnp.asarray, p))[0])
+
+
+# ------------------------------------------------------------------------- analyses
+def percentile(values, q: float) -> float:
+    """The q-th percentile (0–100) with linear interpolation between order statistics
+    (numpy's default); NaN counts as +inf (a failed trial is the worst trial)."""
+    v = np.sort(np.where(np.isnan(np.asarray(values, float)), np.inf,
+                         np.asarray(values, float)).ravel())
+    if v.size == 0:
+        raise ValueError("percentile: values must hold at least one number")
+    if not 0 <= q <= 100:
+        raise ValueError(f"percentile: q must be in [0, 100], got {q!r}")
+    x = q / 100 * (v.size - 1)
+    lo, hi = int(math.floor(x)), int(math.ceil(x))
+    frac = x - lo
+    if frac == 0 or v[lo] == v[hi]:
+        return float(v[lo])
+    return float(v[lo] + frac * (v[hi] - v[lo]))
+
+
+def yield_fraction(rms_um, threshold_um: float, valid_fraction=None,
+                   min_valid: float = 0.99) -> float:
+    """Fraction of trials with RMS ≤ threshold (µm) and, when given, ≥ ``min_valid`` of
+    every field's rays reaching the image; non-finite RMS fails."""
+    r = np.asarray(rms_um, float)
+    ok = np.isfinite(r) & (r <= threshold_um)
+    if valid_fraction is not None:
+        ok &= np.asarray(valid_fraction, float) >= min_valid
+    return float(np.mean(ok))
+
+
+def sensitivity(model: ToleranceModel, *, check: int | None = None) -> dict:
+    """d(metric)/d(parameter) for every toleranced parameter from one reverse-mode pass,
+    with a finite-difference check at ± each tolerance.
+
+    Returns a dict with ``nominal_rms_um`` and ``rows``: for each parameter its name, unit,
+    nominal value, tolerance, ``gradient_um_per_unit`` (autodiff), ``delta_rms_um`` =
+    gradient × tolerance (first order), ``delta_rms_plus_um`` / ``delta_rms_minus_um``
+    (re-traced change at ± tolerance), ``second_order_um`` = (r₊ + r₋ − 2 r₀)/2, the
+    curvature term the first order leaves out, ``fd_gradient_um_per_unit`` = (r₊ − r₋)/(2
+    tolerance) and ``delta_rms_compensated_um`` (worst of ± after refocusing, against the
+    refocused nominal). With ``check`` = k only the k parameters with the largest
+    |gradient × tolerance| are re-traced (the others' check fields are None); None checks all.
+    """
+    if check is not None and (isinstance(check, bool) or not isinstance(check, int)
+                              or check < 0):
+        raise ValueError(f"sensitivity: check must be None or a whole number >= 0 of "
+                         f"parameters, got {check!r}")
+    nominal, g = model.gradient()
+    tol = model.tolerance_vector(sensitivity=True)
+    listed = np.nonzero(tol)[0]
+    idx = listed
+    if check is not None:
+        idx = np.sort(listed[np.argsort(-np.abs(g[listed] * tol[listed]))[:check]])
+    steps = np.zeros((idx.size, tol.size))
+    steps[np.arange(idx.size), idx] = tol[idx]
+    res = model.evaluate(np.concatenate([steps, -steps, np.zeros((1, tol.size))]))
+    k = idx.size
+    r_p, r_m = res["rms_um"][:k], res["rms_um"][k:2 * k]
+    c_p, c_m = res["rms_compensated_um"][:k], res["rms_compensated_um"][k:2 * k]
+    c0 = res["rms_compensated_um"][-1]
+    values = model.nominal_values()
+    at = {int(i): j for j, i in enumerate(idx)}
+    rows = []
+    for i in listed:
+        t = float(tol[i])
+        row = {"parameter": model.names[i], "unit": model.units[i], "nominal": float(values[i]),
+               "tolerance": t, "gradient_um_per_unit": float(g[i]),
+               "delta_rms_um": float(g[i] * t)}
+        j = at.get(int(i))
+        row.update({
+            "delta_rms_plus_um": None if j is None else float(r_p[j] - nominal),
+            "delta_rms_minus_um": None if j is None else float(r_m[j] - nominal),
+            "second_order_um": None if j is None else float(0.5 * (r_p[j] + r_m[j]
+                                                                   - 2 * nominal)),
+            "fd_gradient_um_per_unit": None if j is None else float((r_p[j] - r_m[j])
+                                                                    / (2 * t)),
+            "delta_rms_compensated_um": None if j is None else float(max(c_p[j], c_m[j]) - c0),
+        })
+        rows.append(row)
+    return {"nominal_rms_um": nominal, "nominal_rms_compensated_um": float(c0), "rows": rows}
+
+
+def sample_perturbations(model: ToleranceModel, trials: int, key) -> np.ndarray:
+    """``[trials, P]`` random perturbation vectors under the Monte-Carlo tolerances."""
+    if isinstance(trials, bool) or not isinstance(trials, (int, np.integer)) or trials < 1:
+        raise ValueError(f"monte_carlo: trials must be a whole number >= 1, got {trials!r}")
+    tol = model.tolerance_vector(sensitivity=False)
+    shape = (int(trials), tol.size)
+    if model.tolerances.distribution == "uniform":
+        x = jax.random.uniform(key, shape, minval=-1.0, maxval=1.0)
+    else:
+        x = 0.5 * jax.random.truncated_normal(key, -2.0, 2.0, shape)
+    return np.asarray(x, float) * tol
+
+
+def monte_carlo(model: ToleranceModel, *, trials: int = 200, key=None,
+                threshold_um: float, mtf_frequency: float, min_valid: float = 0.99) -> dict:
+    """Monte-Carlo tolerancing with the back-focus compensator.
+
+    Args:
+        model: the ``ToleranceModel``.
+        trials: number of random lenses (>= 1).
+        key: ``jax.random`` key (default ``PRNGKey(0)``).
+        threshold_um: RMS (µm, the module's metric after refocusing) a lens must meet.
+        mtf_frequency: cycles/mm at which the MTF is reported.
+        min_valid: a trial also fails when a field gets fewer than this fraction of its rays
+            to the image.
+
+    Returns:
+        A dict: ``trials``, per-trial arrays (``rms_um``, ``rms_compensated_um``,
+        ``refocus_mm``, ``mtf``, ``mtf_compensated``, ``min_valid_fraction``), and the
+        summary (``rms_p50_um``, ``rms_p90_um`` after refocusing, the same without it,
+        ``mtf_p50``/``mtf_p10`` after refocusing, ``yield``, ``threshold_um``).
+    """
+    threshold_um = _positive(threshold_um, "threshold_um", "µm")
+    if not (math.isfinite(float(mtf_frequency)) and float(mtf_frequency) >= 0):
+        raise ValueError(f"monte_carlo: mtf_frequency must be a finite number >= 0 cycles/mm, "
+                         f"got {mtf_frequency!r}")
+    key = jax.random.PRNGKey(0) if key is None else key
+    x = sample_perturbations(model, trials, key)
+    res = model.evaluate(np.concatenate([np.zeros((1, x.shape[1])), x]),
+                         mtf_frequency=float(mtf_frequency))
+    nom = {k: float(v[0]) for k, v in res.items()}
+    per = {k: v[1:] for k, v in res.items()}
+    rc, r0 = per["rms_compensated_um"], per["rms_um"]
+    return {
+        "trials": int(trials),
+        "nominal": nom,
+        "per_trial": per,
+        "rms_p50_um": percentile(rc, 50), "rms_p90_um": percentile(rc, 90),
+        "rms_mean_um": float(np.mean(rc)),
+        "rms_uncompensated_p50_um": percentile(r0, 50),
+        "rms_uncompensated_p90_um": percentile(r0, 90),
+        "mtf_frequency_cycles_per_mm": float(mtf_frequency),
+        "mtf_p50": -percentile(-per["mtf_compensated"], 50),
+        "mtf_p10": -percentile(-per["mtf_compensated"], 90),
+        "refocus_p50_mm": percentile(per["refocus_mm"], 50),
+        "refocus_abs_p90_mm": percentile(np.abs(per["refocus_mm"]), 90),
+        "threshold_um": threshold_um,
+        "min_valid": min_valid,
+        "yield": yield_fraction(rc, threshold_um, per["min_valid_fraction"], min_valid),
+        "yield_uncompensated": yield_fraction(r0, threshold_um, per["min_valid_fraction"],
+                                              min_valid),
+    }
+
+
+def _positive(value, name, unit):
+    try:
+        v = float(value)
+    except (TypeError, ValueError):
+        v = float("nan")
+    if not (math.isfinite(v) and v > 0):
+        raise ValueError(f"monte_carlo: {name} must be a finite number > 0 {unit}, got "
+                         f"{value!r}")
+    return v
