@@ -42,7 +42,7 @@ def test_white_scene_renders_to_relative_illumination(cooke):
     ``radiometry`` computes by forward tracing (vignetting, cos⁴, distortion)."""
     img = np.asarray(R.render(cooke, jnp.ones((12, 18, 3)), spp=256, key=KEY, sensor=SENSOR,
                               patch=6))
-    fields = np.linspace(0.0, 25.0, 81)  # 81 fields and pupil=48, as render(method="psf")
+    fields = np.linspace(0.0, 25.0, 81)  # 81 fields and pupil=48, as render(method=PSFRender())
     ri = RAD.relative_illumination(cooke, fields, pupil=48)
     h = np.hypot(*np.asarray(ri.image_xy).T)
     curve = np.asarray(ri.ri)
@@ -81,8 +81,7 @@ def test_psf_method_matches_ray_method(cooke):
     lens = eqx.tree_at(lambda m: m.thickness, cooke, cooke.thickness.at[-1].add(20.0))
     scene = wave_scene(12, 18)
     ray = R.render(lens, scene, spp=256, key=KEY, sensor=SENSOR, patch=6)
-    conv = R.render(lens, scene, spp=16, key=KEY, sensor=SENSOR, patch=6, method="psf",
-                    kernel_size=7)
+    conv = R.render(lens, scene, spp=16, key=KEY, sensor=SENSOR, patch=6, method=R.PSFRender(kernel_size=7))
     sharp = R.render(cooke, scene, spp=256, key=KEY, sensor=SENSOR, patch=6)
     psnr = jaxlens.io.images.psnr
     assert psnr(ray, conv, data_range=1.0) > 38.0
@@ -93,7 +92,7 @@ def _render_loss(theta, lens, scene, target, checkpoint, fp):
     lens = eqx.tree_at(lambda m: (m.surfaces[0].c, m.thickness), lens,
                        (theta[0], lens.thickness.at[-1].set(theta[1])))
     img = R.render(lens, scene, spp=16, key=KEY, sensor=SENSOR, patch=6,
-                   checkpoint=checkpoint, footprints=fp)
+                   checkpoint=checkpoint, method=R.RayRender(footprints=fp))
     return jnp.mean((img - target) ** 2)
 
 
@@ -128,8 +127,8 @@ def test_bad_input(cooke, tmp_path):
             R.render(cooke, ok, spp=spp, key=KEY, sensor=SENSOR)
     with pytest.raises(ValueError, match="linear float"):
         R.render(cooke, jnp.ones((12, 18, 3), jnp.uint8), spp=4, key=KEY, sensor=SENSOR)
-    with pytest.raises(ValueError, match="method"):
-        R.render(cooke, ok, spp=4, key=KEY, sensor=SENSOR, method="nerf")
+    with pytest.raises(TypeError, match="not a string"):
+        R.render(cooke, ok, spp=4, key=KEY, sensor=SENSOR, method="psf")
     with pytest.raises(ValueError, match="no sensor"):
         R.render(eqx.tree_at(lambda m: m.sensor, cooke, None, is_leaf=lambda x: x is None),
                  ok, spp=4, key=KEY)
@@ -216,7 +215,7 @@ def test_prewarp_shows_at_each_pixel_the_scene_at_its_chief_ray_landing_point():
 @pytest.mark.slow
 def test_distortion_maps_are_inverse(cooke):
     """Forward chief rays (object side, aimed at the stop) and backward chief rays (sensor
-    side, aimed at the stop) give inverse maps (grid as render(method="psf") uses)."""
+    side, aimed at the stop) give inverse maps (grid as render(method=PSFRender()) uses)."""
     lens = jaxlens.imaging.psf.apertured(cooke)
     d = DR.distortion_map(lens, grid=(17, 17), sensor=SENSOR)
     inv = DR.inverse_distortion_map(lens, resolution=(12, 18),

@@ -191,7 +191,7 @@ def footprints(
     dtype=None,
     newton_iters: int = DEFAULT_NEWTON_ITERS,
 ) -> Footprints:
-    """The sampling footprints that ``render(method="ray")`` computes for a lens and sensor.
+    """The sampling footprints that ``render(method=RayRender())`` computes for a lens and sensor.
 
     Pass them to ``render(..., footprints=...)`` to reuse them (for example across the steps
     of an optimisation where the lens changes little), or to hold them fixed while
