@@ -81,7 +81,8 @@ def test_psf_method_matches_ray_method(cooke):
     lens = eqx.tree_at(lambda m: m.thickness, cooke, cooke.thickness.at[-1].add(20.0))
     scene = wave_scene(12, 18)
     ray = R.render(lens, scene, spp=256, key=KEY, sensor=SENSOR, patch=6)
-    conv = R.render(lens, scene, spp=16, key=KEY, sensor=SENSOR, patch=6, method=R.PSFRender(kernel_size=7))
+    conv = R.render(lens, scene, spp=16, key=KEY, sensor=SENSOR, patch=6,
+                    method=R.PSFRender(kernel_size=7))
     sharp = R.render(cooke, scene, spp=256, key=KEY, sensor=SENSOR, patch=6)
     psnr = jaxlens.io.images.psnr
     assert psnr(ray, conv, data_range=1.0) > 38.0
