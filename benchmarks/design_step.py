@@ -1,8 +1,9 @@
-"""Design-loss gradient step: this checkout against an earlier commit, in one process.
+"""Design-loss gradient step and the bare trace: this checkout against an earlier commit.
 
 The default classical spec and recipe (float32, every random start of ``--seeds`` at once, the
 curriculum's first stage): ``jit(vmap(value_and_grad(design loss)))`` is compiled and timed for
-each version, the versions alternating, and the median of ``--repeats`` calls is reported. The
+each version, the versions alternating, and the median of ``--repeats`` calls is reported; so
+are the bare trace's forward and forward + gradient on the Cooke triplet (``--rays``). The
 earlier commit's ``jaxlens`` package is extracted with ``git archive`` into a temporary folder
 and imported under another name, so both run on the same machine at the same load.
 
@@ -16,6 +17,7 @@ import importlib
 import io
 import json
 import os
+import pathlib
 import subprocess
 import sys
 import tarfile
@@ -80,6 +82,23 @@ def step_fn(pkg, seeds: int):
     return fn, params, args
 
 
+def trace_fns(pkg, n: int):
+    """(forward, forward + gradient, lens, rays): the Cooke triplet, float32, ``n`` rays."""
+    import jax
+    import jax.numpy as jnp
+
+    lens = pkg.zoo.cooke_triplet().astype(jnp.float32)
+    pupil = np.random.default_rng(0).uniform(-0.7, 0.7, (n, 2))
+    rays = pkg.sampling.collimated(lens, 10.0, jnp.asarray(pupil, jnp.float32))
+
+    def loss(lens, rays):
+        out = pkg.trace(lens, rays)
+        return jnp.sum(jnp.where(out.valid, out.origin[:, 1] ** 2, 0.0))
+
+    fwd = jax.jit(lambda lens, rays: pkg.trace(lens, rays).origin)
+    return fwd, jax.jit(jax.value_and_grad(loss)), lens, rays
+
+
 def timed(fn, params, args):
     import jax
 
@@ -93,7 +112,9 @@ def main(argv=None) -> dict:
     p.add_argument("--baseline", default="cf2efb6", help="git revision to compare against")
     p.add_argument("--seeds", type=int, default=4)
     p.add_argument("--repeats", type=int, default=20)
+    p.add_argument("--rays", type=int, default=1_000_000, help="rays of the bare-trace timing")
     p.add_argument("--tag", default="", help="suffix of the result file name")
+    p.add_argument("--out-dir", default=None, help="folder of the result (default: results/)")
     a = p.parse_args(argv)
     if a.seeds < 1 or a.repeats < 1:
         p.error("--seeds and --repeats must be at least 1")
@@ -101,13 +122,18 @@ def main(argv=None) -> dict:
 
     versions = {"new": jaxlens, "baseline": import_baseline(a.baseline)}
     fns = {k: step_fn(v, a.seeds) for k, v in versions.items()}
+    for k, v in versions.items():
+        fwd, grad, lens, rays = trace_fns(v, a.rays)
+        fns[f"trace_forward_{k}"] = (fwd, lens, rays)
+        fns[f"trace_grad_{k}"] = (grad, lens, rays)
     compile_s = {k: timed(*f) for k, f in fns.items()}
     runs = {k: [] for k in fns}
     for _ in range(a.repeats):
         for k, f in fns.items():
             runs[k].append(timed(*f))
     med = {k: float(np.median(v)) for k, v in runs.items()}
-    vals = {k: float(np.sum(np.asarray(f[0](f[1], f[2])[0]))) for k, f in fns.items()}
+    vals = {k: float(np.sum(np.asarray(fns[k][0](fns[k][1], fns[k][2])[0])))
+            for k in versions}
     result = {
         "benchmark": "design-loss value_and_grad, default spec and recipe, first curriculum "
                      f"stage, float32, {a.seeds} seeds vmapped",
@@ -115,11 +141,18 @@ def main(argv=None) -> dict:
         "median_s": med,
         "compile_s": compile_s,
         "speedup_new_over_baseline": med["baseline"] / med["new"],
+        "trace": f"Cooke triplet, float32, {a.rays} rays, 10 deg, forward and value_and_grad",
+        "trace_grad_over_forward_rate": {
+            k: med[f"trace_forward_{k}"] / med[f"trace_grad_{k}"] for k in versions},
         "loss_sum": vals,
         "load": os.getloadavg()[0],
         "cpu_count": os.cpu_count(),
     }
-    write_json("design_step" + (f"_{a.tag}" if a.tag else ""), result)
+    name = "design_step" + (f"_{a.tag}" if a.tag else "")
+    if a.out_dir is None:
+        write_json(name, result)
+    else:
+        write_json(name, result, pathlib.Path(a.out_dir))
     print(json.dumps(result, indent=1))
     return result
 

@@ -107,3 +107,15 @@ def test_readme_lists_defaults_and_tagged_runs(smoke_results):
     assert "## Recommended defaults against the library's" in text
     assert "Newton iterations, float64" in text
     assert "## throughput\n" in text and "## throughput_quick\n" in text
+
+
+def test_design_step_smoke(tmp_path):
+    """The old-against-new benchmark runs end to end (this commit against itself)."""
+    from benchmarks import design_step
+
+    r = design_step.main(["--baseline", "HEAD", "--seeds", "1", "--repeats", "1", "--rays",
+                          "512", "--out-dir", str(tmp_path)])
+    assert (tmp_path / "design_step.json").exists()
+    # The same code on both sides computes the same loss, to the last bit.
+    assert r["loss_sum"]["new"] == r["loss_sum"]["baseline"]
+    assert all(v > 0 for v in r["median_s"].values())
