@@ -32,3 +32,19 @@ def test_classical_smoke(tmp_path):
     assert mc["trials"] == 4 and mc["rms_p50_um"] <= mc["rms_p90_um"]
     assert {"tolerances", "sensitivity", "compensator"} <= set(t)
     assert s["tolerance"]["trials"] == 4
+
+
+def test_cli_sets_the_device_count_before_jax_starts(tmp_path):
+    """``--devices 3`` gives 3 XLA host devices: no option check may start JAX first."""
+    import os
+    import subprocess
+    import sys
+
+    code = ("import sys, jax\n"
+            "from jaxlens.experiments import classical\n"
+            "classical.run_design = lambda args, argv: print('DEVICES', len(jax.devices()))\n"
+            f"sys.exit(classical.main(['--devices', '3', '--out', {str(tmp_path / 'r')!r}]))\n")
+    env = {k: v for k, v in os.environ.items() if k != "XLA_FLAGS"}
+    r = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, env=env)
+    assert r.returncode == 0, r.stderr
+    assert "DEVICES 3" in r.stdout, r.stdout + r.stderr

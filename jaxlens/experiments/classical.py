@@ -74,8 +74,13 @@ def _ensure_devices(n: int) -> None:
     flags = os.environ.get("XLA_FLAGS", "")
     if n <= 1 or "xla_force_host_platform_device_count" in flags:
         return
-    if _backend_started():
-        return  # too late (an embedding program started JAX first): use what is there
+    if _backend_started():  # an embedding program started JAX first: use what is there
+        import warnings
+
+        warnings.warn(f"--devices {n}: JAX has already started, so the device count stays as "
+                      f"it is (set XLA_FLAGS=--xla_force_host_platform_device_count={n})",
+                      stacklevel=2)
+        return
     os.environ["XLA_FLAGS"] = (flags + f" --xla_force_host_platform_device_count={n}").strip()
 
 
@@ -574,16 +579,16 @@ def main(argv: list[str] | None = None) -> int:
     argv = sys.argv[1:] if argv is None else list(argv)
     parser = build_parser()
     args = parser.parse_args(argv)
-    # Validate every option, the spec and the output folder before anything heavy (and
-    # before re-executing).
+    # Validate every option, the spec and the output folder before anything heavy. The
+    # device count is set once the options are known and before any array exists.
     try:
         check_args(args)
+        _ensure_devices(args.devices)
         spec_from_args(args)
         if not args.ablation:
             RunFolder(args.out, overwrite=args.overwrite)
     except ValueError as e:
         return fail(parser.prog, e)
-    _ensure_devices(args.devices)
     import jax
 
     jax.config.update("jax_enable_x64", True)
