@@ -398,3 +398,19 @@ def test_import_builds_no_arrays():
     env = {k: v for k, v in __import__("os").environ.items() if k != "XLA_FLAGS"}
     r = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, env=env)
     assert r.returncode == 0, r.stderr
+
+
+def test_self_intersection_found_where_it_loses_the_rim_rays():
+    """Faces that cross inside the beam: the rim rays fail there, yet the check sees it.
+
+    A 0.2 mm plate between spheres of radius ±5 mm: the faces meet at r = sqrt(R·t − t²/4)
+    ≈ 0.995 mm, inside the 1.5 mm beam. With the semi-diameters of the rays that pass the
+    whole lens (0 here: every rim ray fails) only the vertex would be checked.
+    """
+    lens = jl.Lens(surfaces=(jl.Sphere(0.2), jl.Sphere(-0.2)), thickness=jnp.array([0.2, 10.0]),
+                   materials=(jl.ModelGlass(1.5168, 64.17), jl.Air()), epd=3.0)
+    check = jl.analysis.self_intersection(lens)
+    assert not bool(check.ok)
+    assert float(check.min_gap[0]) < 0.0
+    reach = jl.analysis.clear_semi_diameters(lens, reaching=True)
+    assert float(reach[0]) == pytest.approx(1.5, rel=1e-9)

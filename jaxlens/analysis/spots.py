@@ -184,11 +184,15 @@ def distortion(lens: Lens, fields=None, wavelength=None) -> Distortion:
 
 
 @eqx.filter_jit
-def clear_semi_diameters(lens: Lens, fields=None, n_rim: int = 64) -> Float[Array, " n"]:
+def clear_semi_diameters(lens: Lens, fields=None, n_rim: int = 64, *,
+                         reaching: bool = False) -> Float[Array, " n"]:
     """Clear semi-diameter of every surface (mm).
 
     A finite ``semi_diameter`` is used as is; otherwise the largest radial height of the
-    rim and chief rays over the lens's fields and wavelengths (paraxial aiming).
+    rim and chief rays over the lens's fields and wavelengths (paraxial aiming) among the
+    rays that pass the whole lens, or, with ``reaching=True``, among the rays that reach
+    that surface (the beam footprint: a ray lost further on, say where two surfaces cross,
+    still lights every surface before).
     """
     fields = _fields_array(lens.fields if fields is None else fields)
     a = np.linspace(0, 2 * np.pi, n_rim, endpoint=False)
@@ -200,7 +204,8 @@ def clear_semi_diameters(lens: Lens, fields=None, n_rim: int = 64) -> Float[Arra
         rays = field_rays(lens, field, pupil, wl, depth=depth)
         path = trace_path(lens, rays, upto=lens.num_surfaces - 1)
         r = jnp.hypot(path.origin[..., 0], path.origin[..., 1])  # [n, M]
-        return jnp.max(jnp.where(path[-1].valid[None], r, 0.0), axis=-1)
+        valid = path.valid if reaching else path[-1].valid[None]
+        return jnp.max(jnp.where(valid, r, 0.0), axis=-1)
 
     h = jax.vmap(lambda f: jax.vmap(lambda w: heights(f, w))(lens.wavelengths))(fields)
     traced = jnp.max(h, axis=(0, 1))
@@ -237,11 +242,17 @@ def self_intersection(
 
     The axial gap z_{i+1} + sag_{i+1}(x, y) − z_i − sag_i(x, y) is sampled on a polar grid
     out to the larger of the two clear semi-diameters (the element's outer edge), so
-    aspheres that cross away from the centre are caught. The last surface is checked
-    against the image surface. ``ok`` is True when every gap exceeds ``min_gap`` and every
-    sag is defined. The check is independent of any design regularizer.
+    aspheres that cross away from the centre are caught. The default semi-diameters are the
+    beam footprints (``clear_semi_diameters(..., reaching=True)``): rays lost where two
+    surfaces cross still count on the surfaces they reached, so the crossing lies inside the
+    checked aperture. The last surface is checked against the image surface. ``ok`` is True
+    when every gap exceeds ``min_gap`` and every sag is defined. The check is independent of
+    any design regularizer.
     """
-    sd = clear_semi_diameters(lens) if semi_diameters is None else jnp.asarray(semi_diameters)
+    if semi_diameters is None:
+        sd = clear_semi_diameters(lens, reaching=True)
+    else:
+        sd = jnp.asarray(semi_diameters)
     n = lens.num_surfaces
     surfs = list(lens.surfaces) + [lens.image]
     zs = jnp.concatenate([lens.vertex_z(), lens.image_z()[None]])
