@@ -91,6 +91,13 @@ from .radiometry import relative_illumination_samples, star_region
 __all__ = ["render", "relaxed_render", "footprints", "Footprints", "RayRender", "PSFRender",
            "bilinear", "pixel_positions"]
 
+# The PSF method's grids: D⁻¹ (the distortion map) on a 17 × 17 grid over the sensor, and the
+# relative illumination on every other point of it (9 × 9), from 16² coarse and 48² fine
+# footprint samples per field (radiometry.relative_illumination_samples).
+DISTORTION_GRID = (17, 17)
+RI_GRID = (9, 9)
+RI_SAMPLES = (16, 48)
+
 
 # --------------------------------------------------------------------------------------
 # Exit-pupil footprints seen from the sensor
@@ -361,14 +368,14 @@ def _psf_setup(lens, depth, pixel_size, *, resolution, ri, newton_iters):
     ``inverse_distortion_map`` and ``relative_illumination`` calls of the same shapes.
     """
     inv = inverse_distortion_map(lens, resolution=resolution, pixel_size=pixel_size,
-                                 grid=(17, 17), depth=depth, newton_iters=newton_iters)
+                                 grid=DISTORTION_GRID, depth=depth, newton_iters=newton_iters)
     if not ri:
         return inv, None
-    fields = ideal_to_field(lens, inv[::2, ::2]).reshape(-1, 2)
+    fields = ideal_to_field(lens, inv[::2, ::2]).reshape(-1, 2)  # the RI_GRID points
     ri_vals, _, _ = relative_illumination_samples(
-        lens, fields, depth, lens.primary_wavelength, n_coarse=16,
-        n_fine=48, newton_iters=newton_iters)
-    return inv, ri_vals.reshape(9, 9)
+        lens, fields, depth, lens.primary_wavelength, n_coarse=RI_SAMPLES[0],
+        n_fine=RI_SAMPLES[1], newton_iters=newton_iters)
+    return inv, ri_vals.reshape(RI_GRID)
 
 
 @eqx.filter_jit
@@ -382,14 +389,14 @@ def _render_psf(lens, scene, key, depth, wls, pixel_size, inv, ri_map, *, resolu
     h, w = resolution
     # 1. Distortion: the sensor pixel u shows the scene at the ideal point D^-1(u).
     rr, cc = jnp.meshgrid(jnp.arange(h, dtype=dtype), jnp.arange(w, dtype=dtype), indexing="ij")
-    gy, gx = grid_coords(resolution, (17, 17), rr, cc)
+    gy, gx = grid_coords(resolution, DISTORTION_GRID, rr, cc)
     ideal = interp_grid(inv, gy, gx)  # [h, w, 2]
     r_sc, c_sc = scene_coords(scene.shape[:2], resolution, pixel_size, ideal[..., 0],
                                ideal[..., 1])
     warped = bilinear(scene, r_sc, c_sc)  # [h, w, C]
     # 2. Relative illumination, interpolated from the 9 × 9 grid.
     if ri_map is not None:
-        gy9, gx9 = grid_coords(resolution, (9, 9), rr, cc)
+        gy9, gx9 = grid_coords(resolution, RI_GRID, rr, cc)
         warped = warped * interp_grid(ri_map.astype(dtype), gy9, gx9)[..., None]
     # 3. Tiles with a halo of half a kernel.
     n_ty, n_tx = -(-h // patch), -(-w // patch)
@@ -409,7 +416,7 @@ def _render_psf(lens, scene, key, depth, wls, pixel_size, inv, ri_map, *, resolu
         # The tile centre (kept on the sensor) and the field whose chief ray lands there.
         rc = jnp.minimum((r0 + 0.5 * (patch - 1)).astype(dtype), h - 1.0)
         ccen = jnp.minimum((c0 + 0.5 * (patch - 1)).astype(dtype), w - 1.0)
-        gy, gx = grid_coords(resolution, (17, 17), rc, ccen)
+        gy, gx = grid_coords(resolution, DISTORTION_GRID, rc, ccen)
         field = ideal_to_field(lens, interp_grid(inv, gy, gx))
         ref = jnp.stack(pixel_positions(resolution, pixel_size, rc, ccen))
         model = GeometricPSF(pupil=pupil, order=2)
@@ -594,7 +601,7 @@ def relaxed_render(
     key,
     alpha=0.0,
     depth=math.inf,
-    grid: tuple[int, int] = (17, 17),
+    grid: tuple[int, int] = DISTORTION_GRID,
     **render_kwargs,
 ):
     """Render the pre-warped scene and return ``(image, alignment_penalty)``.
