@@ -14,6 +14,7 @@ import numpy as np
 
 from ..optics import catalog as _catalog_module
 from ..optics import checks
+from ..optics.catalog import decode_zemax_text as decode
 from ..optics.lens import Lens, Sensor
 from ..optics.materials import AbstractMaterial, Air, ModelGlass
 from ..optics.surfaces import AbstractSurface, EvenAsphere, Hybrid, Standard
@@ -79,7 +80,6 @@ def _arr(x):
     return jnp.asarray(np.asarray(x, np.float64))
 
 
-
 class _Line:
     """One line of a file, for error messages."""
 
@@ -113,26 +113,6 @@ class _Line:
 
 
 # ---------------------------------------------------------------------------- reading
-
-
-def decode(raw: bytes, path: str = "<zmx>") -> str:
-    """Text of a Zemax file: UTF-16 (BOM or NUL-interleaved), UTF-8 (BOM or not), latin-1."""
-    try:
-        if raw.startswith((b"\xff\xfe", b"\xfe\xff")):
-            return raw.decode("utf-16")
-        if raw.startswith(b"\xef\xbb\xbf"):
-            return raw[3:].decode("utf-8")
-        head = raw[:400]
-        if head and head.count(b"\x00") > len(head) // 4:
-            return raw.decode("utf-16-le" if head[1:2] == b"\x00" else "utf-16-be")
-    except UnicodeDecodeError as e:
-        raise ValueError(f"{path}: not a readable UTF-16 text file ({e.reason})") from None
-    if b"\x00" in raw:
-        raise ValueError(f"{path}: binary data, not a Zemax text file")
-    try:
-        return raw.decode("utf-8")
-    except UnicodeDecodeError:
-        return raw.decode("latin-1")
 
 
 @dataclass
@@ -401,8 +381,6 @@ def _hybrid_from_xpoly(s: _Surf, unit: float, c: float, sd: float) -> Hybrid:
     )
 
 
-
-
 def _read_agf_markers(path: str) -> dict[str, str]:
     """Glass name (upper case) -> jaxlens JSON material spec from ``GC jaxlens`` records."""
     with open(path, "rb") as fh:
@@ -584,8 +562,6 @@ def _report(strict: bool, msg: str) -> None:
     if strict:
         raise ValueError(msg + " (strict mode)")
     warnings.warn(msg, ZmxWarning, stacklevel=4)
-
-
 
 
 def _check_structure(f: _File, text: str, strict: bool) -> None:

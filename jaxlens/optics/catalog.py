@@ -234,15 +234,21 @@ def _dispersion_model(formula: int, coefficients: tuple[float, ...], name: str):
 # ---------------------------------------------------------------------------- AGF reader
 
 
-def _decode(raw: bytes) -> str:
-    """Text of an AGF file: UTF-16 (BOM or NUL-interleaved), UTF-8, else latin-1."""
-    if raw.startswith((b"\xff\xfe", b"\xfe\xff")):
-        return raw.decode("utf-16")
-    if raw.startswith(b"\xef\xbb\xbf"):
-        return raw[3:].decode("utf-8")
-    head = raw[:200]
-    if head and head.count(b"\x00") > len(head) // 4:
-        return raw.decode("utf-16-le" if head[1:2] == b"\x00" else "utf-16-be")
+def decode_zemax_text(raw: bytes, path: str = "<file>") -> str:
+    """Text of a Zemax file (.zmx, .agf): UTF-16 (BOM or NUL-interleaved), UTF-8 (BOM or
+    not), else latin-1; other binary data is a ValueError naming ``path``."""
+    try:
+        if raw.startswith((b"\xff\xfe", b"\xfe\xff")):
+            return raw.decode("utf-16")
+        if raw.startswith(b"\xef\xbb\xbf"):
+            return raw[3:].decode("utf-8")
+        head = raw[:400]
+        if head and head.count(b"\x00") > len(head) // 4:
+            return raw.decode("utf-16-le" if head[1:2] == b"\x00" else "utf-16-be")
+    except UnicodeDecodeError as e:
+        raise ValueError(f"{path}: not a readable UTF-16 text file ({e.reason})") from None
+    if b"\x00" in raw:
+        raise ValueError(f"{path}: binary data, not a Zemax text file")
     try:
         return raw.decode("utf-8")
     except UnicodeDecodeError:
@@ -346,7 +352,7 @@ def _read_records(path: str | os.PathLike, catalog: str | None = None) -> list[G
     path = os.fspath(path)
     name = catalog or os.path.splitext(os.path.basename(path))[0].upper()
     with open(path, "rb") as f:
-        return parse_agf(_decode(f.read()), source=path, catalog=name)
+        return parse_agf(decode_zemax_text(f.read(), path), source=path, catalog=name)
 
 
 def load_agf(path: str | os.PathLike) -> dict[str, CatalogMaterial]:
@@ -387,7 +393,7 @@ def _shipped() -> tuple[tuple[str, dict[str, GlassRecord]], ...]:
     order = [c for c in SHIPPED_CATALOGS if c in paths] + sorted(set(paths) - set(SHIPPED_CATALOGS))
     out = []
     for cat in order:
-        text = _decode(paths[cat].read_bytes())
+        text = decode_zemax_text(paths[cat].read_bytes(), str(paths[cat]))
         records = parse_agf(text, source=f"jaxlens/data/glass/{paths[cat].name}", catalog=cat)
         out.append((cat, {r.name.upper(): r for r in records}))
     return tuple(out)
