@@ -11,6 +11,11 @@ Conventions:
     measured from the last surface vertex to the paraxial focus; pupil positions are
     global z (surface 1 at 0); ``exit_pupil_z`` is also global. Everything is a pure
     jnp function, so it is differentiable and jittable.
+
+    A ``ParaxialSurface`` (ideal thin lens) has power 1/f whatever its media. A lens with a
+    ``Toroidal`` surface has no single paraxial trace: everything here is its y–z section
+    (as in Zemax, whose paraxial data are y–z), and ``x_section(lens)`` is the lens as
+    its x–z section sees it, so ``paraxial_data(x_section(lens))`` is the x–z data.
 """
 
 from __future__ import annotations
@@ -20,14 +25,34 @@ import jax.numpy as jnp
 from jaxtyping import Array, Float
 
 from .lens import Lens
+from .paraxial_surface import ParaxialSurface
+from .surfaces import Standard
+from .toroidal import Toroidal
 
 
 def _transfer(y, nu, d, n):
     return y + d * nu / n, nu
 
 
-def _refract(y, nu, c, n1, n2):
-    return y, nu - y * c * (n2 - n1)
+def _refract(y, nu, power):
+    return y, nu - y * power
+
+
+def surface_power(surface, n1, n2):
+    """Paraxial power (1/mm) of a surface between indices n1 and n2 (y–z section)."""
+    if isinstance(surface, ParaxialSurface):
+        return surface.power
+    return surface.paraxial_curvature * (n2 - n1)
+
+
+def x_section(lens: Lens) -> Lens:
+    """The lens as its x–z section sees it, for paraxial work: each ``Toroidal`` surface
+    becomes the sphere of its x–z vertex curvature cx (same semi-diameter). Surfaces with
+    the same vertex curvature in x and y are unchanged. Not for real-ray tracing."""
+    surfaces = tuple(
+        Standard(c=s.paraxial_curvature_x, k=0.0, semi_diameter=s.semi_diameter)
+        if isinstance(s, Toroidal) else s for s in lens.surfaces)
+    return eqx.tree_at(lambda m: m.surfaces, lens, surfaces)
 
 
 def system_matrix(lens: Lens, wavelength=None, start: int = 0, end: int | None = None):
@@ -44,7 +69,7 @@ def system_matrix(lens: Lens, wavelength=None, start: int = 0, end: int | None =
         if i > start:
             t = lens.thickness[i - 1] / n[i]
             a, b = a + t * c, b + t * d
-        p = lens.surfaces[i].paraxial_curvature * (n[i + 1] - n[i])
+        p = surface_power(lens.surfaces[i], n[i], n[i + 1])
         c, d = c - p * a, d - p * b
     return a, b, c, d
 
@@ -119,7 +144,7 @@ def _trace_ray(lens: Lens, y, nu, n):
     for i, s in enumerate(lens.surfaces):
         if i > 0:
             y, nu = _transfer(y, nu, lens.thickness[i - 1], n[i])
-        y, nu = _refract(y, nu, s.paraxial_curvature, n[i], n[i + 1])
+        y, nu = _refract(y, nu, surface_power(s, n[i], n[i + 1]))
         ys.append(y)
         nus.append(nu)
     return jnp.stack(ys), jnp.stack(nus)

@@ -24,8 +24,10 @@ from __future__ import annotations
 import jax.numpy as jnp
 
 from ..optics.lens import Lens
+from ..optics.paraxial_surface import ParaxialSurface
 from ..optics.rays import Rays
 from ..optics.surfaces import AbstractSurface, EvenAsphere, Hybrid, Standard
+from ..optics.toroidal import Toroidal
 from .forward import DEFAULT_NEWTON_ITERS, trace
 
 __all__ = [
@@ -41,10 +43,13 @@ def mirror_surface(surface: AbstractSurface) -> AbstractSurface:
     """The surface with its sag negated (z → −z in its local frame).
 
     Args:
-        surface: a ``Standard``, ``EvenAsphere`` or ``Hybrid`` surface.
+        surface: a ``Standard``, ``EvenAsphere``, ``Hybrid``, ``Toroidal`` or
+            ``ParaxialSurface``.
 
     Returns:
-        A surface of the same kind with c, the even and the odd coefficients negated.
+        A surface of the same kind with c, the even and the odd coefficients (and a
+        toroid's cx) negated; a paraxial surface is its own mirror image (its optical
+        path is then that of infinite conjugates on the image side).
 
     Raises:
         ValueError: for a surface kind that this module does not know how to mirror.
@@ -64,6 +69,12 @@ def mirror_surface(surface: AbstractSurface) -> AbstractSurface:
             odd_y=-surface.odd_y,
             semi_diameter=surface.semi_diameter,
         )
+    if isinstance(surface, Toroidal):  # z_y -> -z_y and cx -> -cx negate the whole sag
+        return Toroidal(c=-surface.c, k=surface.k, coeffs=-surface.coeffs, cx=-surface.cx,
+                        semi_diameter=surface.semi_diameter)
+    if isinstance(surface, ParaxialSurface):
+        # n′u′ = nu − x/f read backward (slopes negated, media swapped) is the same law.
+        return surface
     raise ValueError(f"mirror_surface: cannot mirror a {type(surface).__name__} surface")
 
 

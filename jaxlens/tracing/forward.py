@@ -33,18 +33,24 @@ def uniform_surfaces(surfaces) -> list[AbstractSurface]:
     """The surfaces converted to one kind with equal coefficient lengths (zero-padded).
 
     All ``Standard`` if none has polynomial terms, else ``EvenAsphere`` if none has odd
-    terms, else ``Hybrid``. Each sag is unchanged, so traces agree to rounding.
+    terms, else ``Hybrid``. Each sag is unchanged, so traces agree to rounding. Other
+    kinds (``Toroidal``, ``ParaxialSurface``) are kept as they are: they split the scan.
     """
-    even = [s.even_coeffs() for s in surfaces]
-    odd = [s.odd_coeffs()[0] for s in surfaces]
-    m = max(a.shape[0] for a in even)
-    p = max(b.shape[0] for b in odd)
+    common = (Standard, EvenAsphere, Hybrid)
+    even = [s.even_coeffs() for s in surfaces if type(s) in common]
+    odd = [s.odd_coeffs()[0] for s in surfaces if type(s) in common]
+    m = max((a.shape[0] for a in even), default=0)
+    p = max((b.shape[0] for b in odd), default=0)
 
     def pad(a, n):
         return jnp.concatenate([a, jnp.zeros((n - a.shape[0],), a.dtype)])
 
     out = []
-    for s, a in zip(surfaces, even, strict=True):
+    for s in surfaces:
+        if type(s) not in common:
+            out.append(s)
+            continue
+        a = s.even_coeffs()
         if m == 0 and p == 0:
             out.append(Standard(c=s.c, k=s.k, semi_diameter=s.semi_diameter))
         elif p == 0:
@@ -57,7 +63,16 @@ def uniform_surfaces(surfaces) -> list[AbstractSurface]:
 
 
 def stacked_surfaces(surfaces) -> AbstractSurface:
-    """``uniform_surfaces`` stacked into one surface pytree with a leading surface axis."""
+    """``uniform_surfaces`` stacked into one surface pytree with a leading surface axis.
+
+    Raises:
+        ValueError: for a ``Toroidal`` or ``ParaxialSurface``, which have no common kind
+            with the rotationally symmetric surfaces (design works on those only).
+    """
+    for i, s in enumerate(surfaces):
+        if type(s) not in (Standard, EvenAsphere, Hybrid):
+            raise ValueError(f"stacked_surfaces: surface {i} is a {type(s).__name__}; only "
+                             f"Standard, EvenAsphere and Hybrid surfaces can be stacked")
     return jax.tree.map(lambda *x: jnp.stack(x), *uniform_surfaces(surfaces))
 
 

@@ -48,6 +48,7 @@ import equinox as eqx
 import jax
 import jax.numpy as jnp
 
+from ..optics.paraxial_surface import ParaxialSurface
 from ..optics.rays import Rays
 from ..optics.surfaces import AbstractSurface
 
@@ -271,6 +272,41 @@ def refract(d, normal, mu):
     return out, ok
 
 
+def paraxial_bend(d, x, y, focal_length, n_before, n_after):
+    """The ideal thin lens of ``ParaxialSurface``: bend rays on its plane and add their path.
+
+    Slopes u = L/N, v = M/N change by n′u′ = nu − x/f, n′v′ = nv − y/f (the paraxial
+    refraction equation with power 1/f, exact for real slopes), and the direction becomes
+    (u′, v′, 1)/sqrt(1 + u′² + v′²). The optical path added is that of a perfect lens at
+    infinite conjugates, φ = sgn(f)·n′(|P′| − |P′ − Q|) − n·d·Q with P′ = (n f u, n f v, n′ f),
+    written without cancellation as (2n·(u, v)·Q − |Q|²/f)/(s0 + s1) − n·d·Q, where
+    s0 = sqrt(1 + |n(u, v)/n′|²) and s1 = sqrt(1 + u′² + v′²) (derivation:
+    ``jaxlens.optics.paraxial_surface``).
+
+    Args:
+        d: unit directions, an (x, y, z) tuple of arrays.
+        x, y: points of incidence on the plane (local frame, mm).
+        focal_length: f (mm), nonzero.
+        n_before, n_after: refractive indices n and n′.
+
+    Returns:
+        (new unit directions, ok, added optical path in mm); ok is False where the ray
+        does not travel toward +z (its slope is undefined); those rays keep their direction.
+    """
+    u, ok_u = bounded_div(d[0], d[2])
+    v, ok_v = bounded_div(d[1], d[2])
+    ok = ok_u & ok_v & (d[2] > 0)
+    u2 = (n_before * u - x / focal_length) / n_after
+    v2 = (n_before * v - y / focal_length) / n_after
+    s1 = jnp.sqrt(1.0 + u2 * u2 + v2 * v2)
+    out = tuple(jnp.where(ok, a / s1, di) for a, di in zip((u2, v2, 1.0), d, strict=True))
+    m = n_before / n_after
+    s0 = jnp.sqrt(1.0 + (m * u) ** 2 + (m * v) ** 2)
+    path = (2 * n_before * (u * x + v * y) - (x * x + y * y) / focal_length) / (s0 + s1)
+    path = path - n_before * (d[0] * x + d[1] * y)
+    return out, ok, jnp.where(ok, path, 0.0)
+
+
 def surface_normal(surface: AbstractSurface, x, y, z):
     """A normal (+z at the vertex, not of unit length) at a point on the surface (local frame)."""
     if surface.has_polynomial:
@@ -313,14 +349,18 @@ def surface_step(surface, z_vertex, st: RayState, n_before, n_after, *, first, r
     rim = surface.semi_diameter**2 * (1 + 64 * jnp.finfo(x.dtype).eps)
     ok = ok & (x * x + y * y <= rim)
     d = st.d
-    if refracts:
+    path = n_before * t
+    if refracts and isinstance(surface, ParaxialSurface):  # static: the ideal thin lens
+        d, bent, phase = paraxial_bend(d, x, y, surface.focal_length, n_before, n_after)
+        ok, path = ok & bent, path + phase
+    elif refracts:
         d, no_tir = refract(d, surface_normal(surface, x, y, z), n_before / n_after)
         ok = ok & no_tir
     valid = st.valid & ok
     keep = lambda new, old: jnp.where(valid, new, old)  # noqa: E731
     p = (keep(x, st.p[0]), keep(y, st.p[1]), keep(z + z_vertex, st.p[2]))
     d = tuple(keep(a, b) for a, b in zip(d, st.d, strict=True))
-    return RayState(p, d, valid, st.opl + jnp.where(valid, n_before * t, 0.0))
+    return RayState(p, d, valid, st.opl + jnp.where(valid, path, 0.0))
 
 
 
