@@ -18,7 +18,7 @@ from ..optics.catalog import decode_zemax_text as decode
 from ..optics.lens import Lens, Sensor
 from ..optics.materials import AbstractMaterial, Air, ModelGlass
 from ..optics.surfaces import AbstractSurface, EvenAsphere, Hybrid, Standard
-from . import zmx_system
+from . import zmx_surfaces, zmx_system
 from .lensfile import apply_aperture, catalog_material, material_from_spec
 from .zmx_common import (
     HYBRID_COMMENT,
@@ -338,8 +338,13 @@ def _surface(s: _Surf, unit: float) -> AbstractSurface:
         )
     if s.type == "XPOLYNOM":
         return _hybrid_from_xpoly(s, unit, c, sd)
+    if s.type == "TOROIDAL":
+        return zmx_surfaces.toroidal(s, unit, sd)
+    if s.type == "PARAXIAL":
+        return zmx_surfaces.paraxial_surface(s, unit, sd)[0]
     raise where.error(
-        f"surface type {s.type} is not supported (STANDARD, EVENASPH, XASPHERE, XPOLYNOM)"
+        f"surface type {s.type} is not supported (STANDARD, EVENASPH, XASPHERE, XPOLYNOM, "
+        f"TOROIDAL, PARAXIAL)"
     )
 
 
@@ -702,6 +707,9 @@ def loads(text: str, path: str = "<zmx>", *, strict: bool = False) -> Lens:
     # Before the paraxial work of the aperture: values the lens cannot be traced with.
     checks.wavelengths(lens, wl, f"{path}: WAVM", "wavelength")
     checks.material_indices(lens, wl, path)
+    zmx_surfaces.check_opd_modes(lens, {
+        i: (zmx_surfaces.paraxial_surface(s, u, math.inf)[1], s.type_line or s.line)
+        for i, s in enumerate(body) if s.type == "PARAXIAL"})
     if field_type == 2:
         try:
             lens = zmx_system.angles_from_paraxial_image_heights(lens, fields * u)

@@ -15,7 +15,7 @@ from ..optics import materials as _materials
 from ..optics.lens import Lens
 from ..optics.materials import AbstractMaterial, Air, ModelGlass, Tabulated
 from ..optics.surfaces import AbstractSurface, EvenAsphere, Hybrid, Standard
-from . import lensfile
+from . import lensfile, zmx_surfaces
 from .zmx_common import (
     MARKER,
     MAX_XPOLY_DEGREE,
@@ -243,6 +243,12 @@ class _GlassWriter:
 
 
 def surface_lines(s: AbstractSurface, *, image: bool = False) -> list[str]:
+    out = zmx_surfaces.surface_lines(s, _z)
+    if out is not None:
+        if image:
+            raise ValueError(f"save_zmx: the image surface must be standard or an even "
+                             f"asphere, not {type(s).__name__}")
+        return out
     out = []
     if isinstance(s, Hybrid):
         a = [float(v) for v in np.asarray(s.coeffs)]

@@ -1,0 +1,152 @@
+"""``.zmx`` surface types beyond the rotationally symmetric ones: ``TOROIDAL`` and
+``PARAXIAL``, read and written (the format: ``jaxlens.io.zmx``; the surfaces:
+``jaxlens.optics.toroidal`` and ``jaxlens.optics.paraxial_surface``).
+
+TOROIDAL: CURV and CONI are the y–z profile's curvature and conic, PARM 1 the radius of
+rotation R (0: a cylinder), PARM 2…9 the coefficients on y², y⁴, …, y¹⁶. Its extra data
+(XDAT) hold Zernike terms added to the sag; jaxlens refuses any that is not zero.
+
+PARAXIAL: PARM 1 is the focal length, PARM 2 the OPD mode (0: conjugates from a real
+parabasal ray, 1: integrated phase, 2: infinite conjugates, 3: conjugates from a paraxial
+ray). The rays do not depend on the mode. jaxlens's optical path is mode 2's; the others
+give the same path where the beam reaching the surface is collimated (object at infinity
+and no net power before the surface, in the y–z and the x–z section, at every wavelength),
+and are refused elsewhere. The writer writes mode 2.
+"""
+
+from __future__ import annotations
+
+import decimal
+import fractions
+
+import jax.numpy as jnp
+import numpy as np
+
+from ..optics import paraxial
+from ..optics.lens import Lens
+from ..optics.paraxial_surface import ParaxialSurface
+from ..optics.toroidal import Toroidal
+
+OPD_MODES = {0: "real parabasal conjugates", 1: "integrated phase", 2: "infinite conjugates",
+             3: "paraxial conjugates"}
+"""Zemax's OPD modes of a PARAXIAL surface (PARM 2)."""
+
+COLLIMATED = 1e-9
+"""A beam counts as collimated when the power before the surface, times its focal length,
+is below this (the beam would converge more than 1e9 focal lengths away)."""
+
+
+def _arr(x):
+    return jnp.asarray(np.asarray(x, np.float64))
+
+
+def _parms(s, allowed: range, what: str) -> None:
+    for i, (v, ln) in s.parm.items():
+        if i not in allowed and v != 0:
+            raise ln.error(f"{what} uses PARM {allowed.start}..{allowed.stop - 1} only")
+
+
+def toroidal(s, unit: float, sd: float) -> Toroidal:
+    """A ``Toroidal`` from a TOROIDAL surface block (the reader's surface record)."""
+    _parms(s, range(1, 10), "TOROIDAL")
+    for i, (v, ln) in s.xdat.items():
+        if i >= 3 and v != 0:
+            raise ln.error("TOROIDAL Zernike terms (extra data) are not supported; jaxlens's "
+                           "toroid is the conic-plus-polynomial profile only")
+    cx = curvature_of_rotation(s.parm[1][1].tokens[2], unit) if 1 in s.parm else 0.0
+    m = max([i - 1 for i in s.parm if 2 <= i <= 9], default=0)
+    a = [s.parm.get(i + 1, (0.0, None))[0] * unit ** (1 - 2 * i) for i in range(1, m + 1)]
+    return Toroidal(c=_arr(s.curv / unit), k=_arr(s.coni), coeffs=_arr(np.array(a, np.float64)),
+                    cx=_arr(cx), semi_diameter=_arr(sd))
+
+
+def paraxial_surface(s, unit: float, sd: float) -> tuple[ParaxialSurface, int | None]:
+    """(``ParaxialSurface``, OPD mode or None when the file gives none) from a PARAXIAL block."""
+    where = s.type_line or s.line
+    _parms(s, range(1, 3), "PARAXIAL")
+    if s.curv != 0 or s.coni != 0:
+        raise where.error("a PARAXIAL surface is flat; its CURV and CONI must be 0")
+    if 1 not in s.parm or s.parm[1][0] == 0:
+        raise (s.parm.get(1, (0, where))[1]).error(
+            "a PARAXIAL surface needs a nonzero focal length (PARM 1)")
+    mode = None
+    if 2 in s.parm:
+        v, ln = s.parm[2]
+        if v not in OPD_MODES:
+            raise ln.error(f"PARAXIAL OPD mode (PARM 2) must be 0, 1, 2 or 3, got {v:g}")
+        mode = int(v)
+    return ParaxialSurface(focal_length=_arr(s.parm[1][0] * unit), semi_diameter=_arr(sd)), mode
+
+
+def check_opd_modes(lens: Lens, modes: dict) -> None:
+    """Refuse a PARAXIAL surface whose OPD mode gives another optical path than jaxlens's.
+
+    Args:
+        lens: the lens read from the file.
+        modes: surface index (0-based) -> (OPD mode or None, the line to name).
+    """
+    for i, (mode, ln) in modes.items():
+        if mode == 2:
+            continue
+        why = _not_collimated(lens, i)
+        if why:
+            named = "no OPD mode (Zemax's default)" if mode is None else \
+                f"OPD mode {mode} ({OPD_MODES[mode]})"
+            raise ln.error(
+                f"this PARAXIAL surface has {named}, which computes the optical path from the "
+                f"conjugates it is used at, and {why}; jaxlens computes the path of a perfect "
+                f"lens at infinite conjugates (OPD mode 2, PARM 2 2) only. Set PARM 2 to 2 to "
+                f"accept that path (the rays are the same in every mode)")
+
+
+def _not_collimated(lens: Lens, i: int) -> str:
+    """Why the beam that reaches surface i is not collimated ('' if it is)."""
+    if lens.object_at_infinity is False:
+        return "the object is at a finite distance"
+    if i == 0:
+        return ""
+    f = abs(float(lens.surfaces[i].focal_length))
+    for section, name in ((lens, "y–z"), (paraxial.x_section(lens), "x–z")):
+        for wl in np.atleast_1d(np.asarray(lens.wavelengths)):
+            _, _, c, _ = paraxial.system_matrix(section, wl, 0, i - 1)
+            if not abs(float(c)) * f <= COLLIMATED:
+                return (f"the surfaces before it have power {float(-c):.6g}/mm in the {name} "
+                        f"section at {float(wl):g} µm (the beam reaching it is not collimated)")
+    return ""
+
+
+def radius_text(cx: float) -> str:
+    """PARM 1 for the curvature of rotation cx: 1/cx to 25 significant digits ("0" for a
+    cylinder). ``toroidal`` reads it back as the correctly rounded 1/R, which is cx bit for
+    bit (a double R would not do: about one double in ten is no double's reciprocal)."""
+    if cx == 0:
+        return "0"
+    short = np.format_float_scientific(1.0 / cx, unique=True, exp_digits=3, trim="0").upper()
+    if curvature_of_rotation(short, 1.0) == cx:
+        return short  # the shortest form of the double 1/cx reads back exactly (most cases)
+    with decimal.localcontext() as ctx:
+        ctx.prec = 25
+        r = decimal.Decimal(1) / decimal.Decimal(cx)
+    return f"{r.normalize():E}"
+
+
+def curvature_of_rotation(token: str, unit: float) -> float:
+    """1/(R·unit) correctly rounded from PARM 1's text (0 for R = 0)."""
+    r = fractions.Fraction(token.replace("D", "E").replace("d", "e")) * fractions.Fraction(unit)
+    return 0.0 if r == 0 else float(1 / r)
+
+
+def surface_lines(s, z) -> list[str] | None:
+    """The TYPE/CURV/CONI/PARM lines of a ``Toroidal`` or ``ParaxialSurface`` (None for other
+    kinds); ``z`` formats a number exactly."""
+    if isinstance(s, Toroidal):
+        a = [float(v) for v in np.asarray(s.coeffs)]
+        if len(a) > 8:
+            raise ValueError(f"save_zmx: a Toroidal surface has {len(a)} profile coefficients; "
+                             f"Zemax's TOROIDAL holds 8 (y² … y¹⁶)")
+        out = ["TYPE TOROIDAL", f'CURV {z(s.c)} 0 0 0 0 ""', f"CONI {z(s.k)}",
+               f"PARM 1 {radius_text(float(s.cx))}"]
+        return out + [f"PARM {i + 1} {z(v)}" for i, v in enumerate(a, start=1)]
+    if isinstance(s, ParaxialSurface):
+        return ["TYPE PARAXIAL", 'CURV 0 0 0 0 0 ""', f"PARM 1 {z(s.focal_length)}", "PARM 2 2"]
+    return None
