@@ -241,7 +241,6 @@ def test_paraxial_image_height_fields(tmp_path):
 @pytest.mark.parametrize(
     ("ftyp", "match"),
     [
-        ("FTYP 3 0 2 1 0 0 0", "real image height fields .FTYP 3. are not supported"),
         ("FTYP 1 0 2 1 0 0 0", r"field type 1 \(object heights\) is not supported"),
         ("FTYP 4 0 2 1 0 0 0", r"field type 4 \(theodolite angles\)"),
         ("FTYP 0 1 2 1 0 0 0", "object-space telecentric"),

@@ -147,7 +147,7 @@ def test_paraxial_surface_images_finite_conjugates_and_diverges():
 def test_gradients_through_toroid_and_paraxial_surface():
     """d(image-plane intercepts and path)/d(parameter) against central differences
     (Richardson-extrapolated, error h⁴), for every number of the toroid and the ideal lens,
-    traced in one lens (uniform and not). One compiled loss serves every difference."""
+    traced in one lens. One compiled loss serves every difference."""
     rays, _, _ = _collimated(3.0, 5.0, np.linspace(-1.5, 1.5, 4))
 
     def build(p):
@@ -158,23 +158,22 @@ def test_gradients_through_toroid_and_paraxial_surface():
 
     p0 = {k: jnp.asarray(v) for k, v in
           {"c": C_Y, "k": K_Y, "a1": A_1, "a2": A_2, "cx": C_X, "f": 60.0, "gap": 2.0}.items()}
-    for uniform in (False, True):
-        @jax.jit
-        def loss(p, uniform=uniform):
-            out = jl.trace(build(p), rays, uniform=uniform)
-            return jnp.sum(out.origin[:, 0] ** 2 + out.origin[:, 1] ** 3) + 1e-3 * jnp.sum(
-                out.opl)
 
-        grads = jax.jit(jax.grad(loss))(p0)
-        for name, v in p0.items():
-            def central(h, name=name, v=v):
-                up, down = {**p0, name: v + h}, {**p0, name: v - h}
-                return (float(loss(up)) - float(loss(down))) / (2 * h)
+    @jax.jit
+    def loss(p):
+        out = jl.trace(build(p), rays)
+        return jnp.sum(out.origin[:, 0] ** 2 + out.origin[:, 1] ** 3) + 1e-3 * jnp.sum(out.opl)
 
-            h = 1e-3 * abs(float(v))
-            fd = (4 * central(h / 2) - central(h)) / 3
-            assert float(grads[name]) == pytest.approx(fd, rel=1e-7), name
-            assert float(grads[name]) != 0.0
+    grads = jax.jit(jax.grad(loss))(p0)
+    for name, v in p0.items():
+        def central(h, name=name, v=v):
+            up, down = {**p0, name: v + h}, {**p0, name: v - h}
+            return (float(loss(up)) - float(loss(down))) / (2 * h)
+
+        h = 1e-3 * abs(float(v))
+        fd = (4 * central(h / 2) - central(h)) / 3
+        assert float(grads[name]) == pytest.approx(fd, rel=1e-7), name
+        assert float(grads[name]) != 0.0
 
 
 def test_uniform_and_backward_traces_keep_the_new_surfaces():
@@ -328,3 +327,50 @@ def test_zmx_round_trip_is_exact(tmp_path):
     assert "TYPE PARAXIAL" in zmx.dumps(lens)[0] and "PARM 2 2" in zmx.dumps(lens)[0]
     with pytest.raises(ValueError, match="image surface must be standard"):
         zmx.dumps(eqx.tree_at(lambda m: m.image, lens, ParaxialSurface(10.0)))
+
+
+# ---------------------------------------------------------------------------- FTYP 3
+
+SINGLET = """UNIT MM
+ENPD 8
+FTYP {ftyp} 0 3 1 0 0 0
+XFLN 0 0 4
+YFLN 0 6 -9
+WAVM 1 0.5875618 1
+SURF 0
+  DISZ {obj}
+SURF 1
+  STOP
+  DISZ 6
+SURF 2
+  CURV 0.05
+  DISZ 5
+  GLAS ___BLANK 1 0 1.6 0 0 0 0 0 0 0
+SURF 3
+  CURV -0.01
+  DISZ 30
+SURF 4
+"""
+
+
+@pytest.mark.parametrize("obj", ["INFINITY", pytest.param("300", marks=pytest.mark.slow)])
+def test_real_image_height_fields_land_the_chief_ray_there(tmp_path, obj):
+    """FTYP 3: the real chief ray of each field (aimed at the stop centre) meets the image
+    surface at the requested (x, y); the paraxial reading (FTYP 2) of the same numbers
+    misses by the distortion, so the two are told apart."""
+    from jaxlens.imaging import aiming
+
+    want = np.array([[0.0, 0.0], [0.0, 6.0], [4.0, -9.0]])
+    real = _load(tmp_path, SINGLET.format(ftyp=3, obj=obj))
+    par = _load(tmp_path, SINGLET.format(ftyp=2, obj=obj))
+    land = eqx.filter_jit(lambda lens, f: aiming.chief_point(lens, f, lens.object_distance, 6))
+    for i, h in enumerate(want):
+        got = np.asarray(land(real, real.fields[i]))
+        np.testing.assert_allclose(got, h, rtol=0, atol=1e-9)
+        if i:
+            off = np.asarray(land(par, par.fields[i]))
+            assert np.abs(off - h).max() > 1e-3  # distortion: the paraxial angle misses
+    far = SINGLET.format(ftyp=3, obj=obj).replace("YFLN 0 6 -9", "YFLN 0 6 -900")
+    with pytest.raises(ValueError, match=r"t\.zmx:3: no real chief ray reaches the image "
+                                         r"height \[4\.0, -900\.0\]"):
+        _load(tmp_path, far)

@@ -1,5 +1,5 @@
 """System data of a ``.zmx`` file beyond surfaces: the object-space NA aperture (``OBNA``),
-field types (``FTYP``; paraxial image heights converted to angles), vignetting factors and
+field types (``FTYP``; paraxial and real image heights converted to angles), vignetting factors and
 ray aiming (``RAIM``). The format: ``jaxlens.io.zmx``."""
 
 from __future__ import annotations
@@ -11,7 +11,9 @@ import equinox as eqx
 import jax.numpy as jnp
 import numpy as np
 
+from ..imaging import aiming
 from ..optics import paraxial
+from ..tracing import forward
 from ..optics.lens import Lens
 from .zmx_common import ZmxWarning
 
@@ -74,6 +76,69 @@ def angles_from_paraxial_image_heights(lens: Lens, heights: np.ndarray) -> Lens:
     return eqx.tree_at(lambda m: m.fields, lens, jnp.asarray(angles))
 
 
+REAL_HEIGHT_TOLERANCE = 1e-9
+"""Largest accepted miss (mm, relative to 1 + |h|) of the solved chief ray at FTYP 3 fields."""
+
+
+def angles_from_real_image_heights(lens: Lens, heights: np.ndarray) -> Lens:
+    """The lens with ``heights`` (real image heights in mm, y or (x, y), primary wavelength)
+    as field angles in degrees: for each, the field whose real chief ray (aimed at the stop
+    centre) meets the image surface at that point.
+
+    The unknown is (tan θx, tan θy), solved by ``aiming.newton_2d`` from the paraxial guess
+    h/K (K the paraxial height per unit tangent), so the angle stays inside (−90°, 90°).
+
+    Raises:
+        ValueError: when no valid real chief ray reaches a height (to
+            ``REAL_HEIGHT_TOLERANCE``), naming the height.
+    """
+    h = np.asarray(heights, np.float64)
+    xy = np.stack([np.zeros_like(h), h], -1) if h.ndim == 1 else h
+    k = float(aiming.image_scale(lens))
+    if not (math.isfinite(k) and k != 0.0):
+        raise ValueError(f"real image heights cannot be converted to angles: the paraxial "
+                         f"image height per unit field tangent is {k:g} mm")
+    angles = []
+    for target in xy:
+        t = jnp.asarray(target)
+        field = _real_height_field(lens, t, jnp.asarray(k))
+        point, valid = _chief_ray_landing(lens, field)
+        err = float(jnp.max(jnp.abs(point - t)))
+        if not (bool(valid) and err <= REAL_HEIGHT_TOLERANCE * (1 + abs(target).max())):
+            raise ValueError(f"no real chief ray reaches the image height {target.tolist()} mm "
+                             f"(closest: {err:.3g} mm away, valid: {bool(valid)})")
+        angles.append(np.asarray(field, np.float64))
+    a = np.array(angles)
+    return eqx.tree_at(lambda m: m.fields, lens, jnp.asarray(a[:, 1] if h.ndim == 1 else a))
+
+
+def _tangent_field(tan_xy):
+    """Field angles (deg) of (tan θx, tan θy), kept finite and inside (−90°, 90°) while an
+    iterate runs away (the final check then refuses it)."""
+    t = jnp.clip(jnp.where(jnp.isfinite(tan_xy), tan_xy, 0.0), -1e6, 1e6)
+    return jnp.rad2deg(jnp.arctan(t))
+
+
+@eqx.filter_jit
+def _real_height_field(lens: Lens, target, k):
+    """The field (deg) whose real chief ray meets the image surface at ``target`` (mm)."""
+    def miss(tan_xy, target):
+        point = aiming.chief_point(lens, _tangent_field(tan_xy), lens.object_distance,
+                                   forward.DEFAULT_NEWTON_ITERS)
+        return point - target
+
+    return _tangent_field(aiming.newton_2d(miss, target / k, target, 12))
+
+
+@eqx.filter_jit
+def _chief_ray_landing(lens: Lens, field):
+    """(x, y) on the image surface of the real chief ray of ``field`` (deg), and its validity
+    through the lens as it is (clipping apertures included)."""
+    out = forward.trace(lens, aiming.stop_chief_ray(lens, field, lens.object_distance),
+                        uniform=True)
+    return out.origin[0, :2], out.valid[0]
+
+
 FIELD_TYPES = {
     0: "angles",
     1: "object heights",
@@ -85,7 +150,8 @@ FIELD_TYPES = {
 
 
 def field_type(ln) -> int:
-    """FTYP's field type: 0 (angles, degrees) or 2 (paraxial image heights); others refused.
+    """FTYP's field type: 0 (angles, degrees), 2 (paraxial image heights) or 3 (real image
+    heights); others refused.
 
     Args:
         ln: the file's FTYP line (the reader's line object) or None.
@@ -93,16 +159,10 @@ def field_type(ln) -> int:
     if ln is None:
         return 0
     kind = ln.int(1, "field type")
-    if kind == 3:
-        raise ln.error(
-            "real image height fields (FTYP 3) are not supported: each needs a "
-            "real chief-ray solve that the reader does not do; give the fields as "
-            "angles (FTYP 0) or paraxial image heights (FTYP 2)"
-        )
-    if kind not in (0, 2):
+    if kind not in (0, 2, 3):
         raise ln.error(
             f"field type {kind} ({FIELD_TYPES.get(kind, 'unknown')}) is not "
-            f"supported; use angles (FTYP 0) or paraxial image heights (FTYP 2)"
+            f"supported; use angles (FTYP 0), paraxial (FTYP 2) or real (FTYP 3) image heights"
         )
     if len(ln.tokens) > 2 and ln.int(2, "object-space telecentric flag") != 0:
         raise ln.error("object-space telecentric systems (FTYP's second value 1) are not supported")
