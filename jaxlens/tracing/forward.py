@@ -37,20 +37,19 @@ def uniform_surfaces(surfaces) -> list[AbstractSurface]:
     kinds (``Toroidal``, ``ParaxialSurface``) are kept as they are: they split the scan.
     """
     common = (Standard, EvenAsphere, Hybrid)
-    even = [s.even_coeffs() for s in surfaces if type(s) in common]
-    odd = [s.odd_coeffs()[0] for s in surfaces if type(s) in common]
-    m = max((a.shape[0] for a in even), default=0)
-    p = max((b.shape[0] for b in odd), default=0)
+    even = [s.even_coeffs() if type(s) in common else None for s in surfaces]
+    odd = [s.odd_coeffs()[0] if type(s) in common else None for s in surfaces]
+    m = max((a.shape[0] for a in even if a is not None), default=0)
+    p = max((b.shape[0] for b in odd if b is not None), default=0)
 
     def pad(a, n):
         return jnp.concatenate([a, jnp.zeros((n - a.shape[0],), a.dtype)])
 
     out = []
-    for s in surfaces:
-        if type(s) not in common:
+    for s, a in zip(surfaces, even, strict=True):
+        if a is None:
             out.append(s)
             continue
-        a = s.even_coeffs()
         if m == 0 and p == 0:
             out.append(Standard(c=s.c, k=s.k, semi_diameter=s.semi_diameter))
         elif p == 0:

@@ -348,11 +348,10 @@ def surface_step(surface, z_vertex, st: RayState, n_before, n_after, *, first, r
     # A ray exactly on the rim stays in despite rounding.
     rim = surface.semi_diameter**2 * (1 + 64 * jnp.finfo(x.dtype).eps)
     ok = ok & (x * x + y * y <= rim)
-    d = st.d
-    path = n_before * t
+    d, phase = st.d, None
     if refracts and isinstance(surface, ParaxialSurface):  # static: the ideal thin lens
         d, bent, phase = paraxial_bend(d, x, y, surface.focal_length, n_before, n_after)
-        ok, path = ok & bent, path + phase
+        ok = ok & bent
     elif refracts:
         d, no_tir = refract(d, surface_normal(surface, x, y, z), n_before / n_after)
         ok = ok & no_tir
@@ -360,6 +359,7 @@ def surface_step(surface, z_vertex, st: RayState, n_before, n_after, *, first, r
     keep = lambda new, old: jnp.where(valid, new, old)  # noqa: E731
     p = (keep(x, st.p[0]), keep(y, st.p[1]), keep(z + z_vertex, st.p[2]))
     d = tuple(keep(a, b) for a, b in zip(d, st.d, strict=True))
+    path = n_before * t if phase is None else n_before * t + phase
     return RayState(p, d, valid, st.opl + jnp.where(valid, path, 0.0))
 
 
