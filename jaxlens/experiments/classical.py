@@ -400,8 +400,9 @@ def _design_into(args, argv, spec, config, seeds, folder, out, t_start) -> dict:
         "best_seed": seeds[best],
         "best": {**ev.summary(), "rms_min_um": float(np.min(ev.rms_um)),
                  "rms_median_um": float(np.median(ev.rms_um)), "n_fields": int(ev.rms_um.size)},
-        "per_seed": [{"seed": s, **e.summary(), "rms_min_um": float(np.min(e.rms_um))}
-                     for s, e in zip(seeds, evals, strict=True)],
+        "per_seed": [{"seed": s, "solver_status": st, **e.summary(),
+                      "rms_min_um": float(np.min(e.rms_um))}
+                     for s, st, e in zip(seeds, result.status, evals, strict=True)],
         "valid_designs": int(sum(e.valid for e in evals)),
         "valid_designs_rms_mean_um": _mean_or_none([e.rms_mean_um for e in evals if e.valid]),
         "valid_designs_rms_min_um": _min_or_none([e.rms_mean_um for e in evals if e.valid]),
@@ -488,7 +489,8 @@ def run_ablation(args, argv) -> dict:
             "wall_seconds": wall, "seconds_per_design": wall / len(seeds),
             "load_average": os.getloadavg()[0],
             "stage_seconds": dict(zip(res.history.stages, res.history.seconds, strict=True)),
-            "per_seed": [{"seed": s, **e.summary()} for s, e in zip(seeds, evs, strict=True)],
+            "per_seed": [{"seed": s, "solver_status": st, **e.summary()}
+                         for s, st, e in zip(seeds, res.status, evs, strict=True)],
         }
         if name == "+both+mask":
             for i, s in enumerate(seeds):
