@@ -145,14 +145,11 @@ def shard_seeds(tree, mesh: Mesh | None = None):
 
 
 def _image_objective(objective: Objective, spec: DesignSpec, config: DesignConfig):
-    from skimage import data, transform
-
+    from ..io.images import scene
     from ..optics.lens import Sensor
 
     n = config.image_pixels
-    img = data.astronaut().astype(np.float64) / 255.0
-    s = min(img.shape[:2])
-    img = transform.resize(img[:s, :s], (n, n, 3), anti_aliasing=True) ** 2.2
+    img = scene("astronaut", (n, n))  # linear light
     dtype = objective.gap_bounds.dtype
     sensor = Sensor(resolution=(n, n), pixel_size=jnp.asarray(spec.sensor_size[0] / n, dtype))
     return ImageObjective(objective, jnp.asarray(img, dtype), sensor, spp=config.image_spp)
