@@ -124,9 +124,12 @@ class Lens(eqx.Module):
                 continue
             if not bool(eqx.tree_equal(before, after)):
                 what = "mirror" if i in m else "coordinate break"
+                name = lambda x: getattr(x, "name", None) or type(x).__name__  # noqa: E731
                 raise ValueError(
                     f"Lens: surface {i} is a {what}; the medium after it is the medium before "
-                    f"it, so materials[{i}] must be {before!r}, got {after!r}")
+                    f"it, so materials[{i}] must be the same material as "
+                    f"{'object_material' if i == 0 else f'materials[{i - 1}]'} "
+                    f"({name(before)}), got {name(after)}")
 
     @property
     def num_surfaces(self) -> int:
