@@ -151,8 +151,8 @@ def _trace_states(lens: Lens, rays: Rays, newton_iters: int, upto: int | None, *
             new = step(surface, z, carry, n1, n2, first=False, gap=gap)
             return new, (new if keep_path else None)
 
-        xs = (stacked, zs[i:j], n_in, n_out, gaps(slice(i - 1, j - 1)))
-        st, path = jax.lax.scan(body, st, xs)
+        run_gaps = gaps(slice(i - 1, j - 1))
+        st, path = jax.lax.scan(body, st, (stacked, zs[i:j], n_in, n_out, run_gaps))
         if keep_path:
             out += [jax.tree.map(lambda x, k=k: x[k], path) for k in range(j - i)]
         else:
