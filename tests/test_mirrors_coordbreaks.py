@@ -293,8 +293,8 @@ SURF 5
 
 def test_zmx_with_mirrors_and_coordinate_breaks_round_trips(tmp_path):
     """A folded Newtonian (paraboloid f = 200, 45° flat 150 mm in front of it, image 50 mm
-    to the side, a file in Zemax's form written for this test): read, traced (the on-axis beam focuses: paraboloids are perfect on axis),
-    written and read back exactly."""
+    to the side; a file in Zemax's form written for this test): read, traced (the on-axis
+    beam focuses: paraboloids are perfect on axis), written and read back exactly."""
     path = tmp_path / "newt.zmx"
     path.write_text(_ZMX)
     lens = jl.load(path)

@@ -53,7 +53,8 @@ class CoordinateBreak(AbstractSurface):
     tilt_x: Float[Array, ""] = eqx.field(converter=jnp.asarray, default=0.0)
     tilt_y: Float[Array, ""] = eqx.field(converter=jnp.asarray, default=0.0)
     tilt_z: Float[Array, ""] = eqx.field(converter=jnp.asarray, default=0.0)
-    semi_diameter: Float[Array, ""] = eqx.field(converter=jnp.asarray, default_factory=lambda: jnp.asarray(jnp.inf))
+    semi_diameter: Float[Array, ""] = eqx.field(converter=jnp.asarray,
+                                                default_factory=lambda: jnp.asarray(jnp.inf))
     order: int = eqx.field(static=True, default=0)
 
     def __check_init__(self):

@@ -220,7 +220,8 @@ def trace_path(
         ``Rays`` of shape ``[m, *batch]``: after each surface (after refraction) and, last,
         on the image surface when ``upto`` is None (m = num_surfaces + 1), else
         m = upto + 1. ``path[i]`` is the rays after surface i; the wavelength is broadcast
-        to the full shape.
+        to the full shape. After a coordinate break each entry is in its surface's frame
+        (``optics.coordinates.frame_of(lens, i)``); at a break the rays have not moved.
     """
     _check_upto(lens, upto)
     rays = _checked(lens, rays, "trace_path")
