@@ -23,6 +23,8 @@ def test_classical_smoke(tmp_path):
     assert abs(s["nominal_focal_length_mm"] - 3.83 / math.tan(math.radians(40.4))) < 1e-9
     assert abs(s["epd_mm"] - s["nominal_focal_length_mm"] / 2.0) < 1e-9
     assert "convention" in s and s["best"]["efl"] > 0
+    # Each seed carries its solver's last result code (the smoke's last stage is the LM polish).
+    assert s["per_seed"][0]["solver_status"] in ("successful", "rejected", "damping_limit")
     with open(os.path.join(out, "lens.zmx"), encoding="latin-1") as f:
         zmx = f.read()
     assert "GLAS" in zmx

@@ -284,6 +284,25 @@ def test_solvers_lower_the_loss(name):
     l1 = float(obj(p, args)[1].loss)
     assert l1 < 0.5 * l0
     np.testing.assert_array_equal(p.k, p0.k)  # frozen group untouched
+    assert isinstance(state.result, solvers.SolverResult)
+
+
+def test_least_squares_result_codes_say_when_a_step_is_rejected():
+    # At the minimum no damped step lowers the loss: the step is rejected, λ grows, and at
+    # the cap the code says the solver cannot make progress.
+    p0, obj = _toy()
+    at_min = obj.target
+    sol = solvers.DampedLeastSquares(obj, free=LensParams(c=True, a=True, k=False, d=True))
+    step = eqx.filter_jit(sol.step)
+    state = sol.init(p0, None)
+    p, state, _ = step(p0, state, None, jnp.asarray(1.0))
+    assert solvers.result_names(state.result) == ["successful"]
+    state = solvers.LeastSquaresState(jnp.asarray(1.0), state.result)
+    _, state, _ = step(at_min, state, None, jnp.asarray(1.0))
+    assert solvers.result_names(state.result) == ["rejected"]
+    state = solvers.LeastSquaresState(jnp.asarray(solvers.DAMPING_MAX), state.result)
+    _, state, _ = step(at_min, state, None, jnp.asarray(1.0))
+    assert solvers.result_names(state.result) == ["damping_limit"]
 
 
 def test_run_stops_on_nonfinite_loss():
@@ -315,6 +334,7 @@ def test_run_drops_nonfinite_designs():
     out, hist = curriculum.run(SPEC, stages, params, obj, make, progress=False, log_every=3,
                                seeds=[3, 4], on_nonfinite="drop")
     assert list(hist.failed) == [4] and "stage 0 (bad) at step 0" in hist.failed[4]
+    assert hist.results == [["successful", "nonfinite"]]
     for x, y in zip(jax.tree.leaves(out), jax.tree.leaves(params), strict=True):
         np.testing.assert_array_equal(x[1], y[1])  # frozen at the last finite parameters
     assert not np.array_equal(out.c[0], params.c[0])  # the healthy design moved on

@@ -4,6 +4,8 @@ import json
 import subprocess
 import sys
 
+import jax.numpy as jnp
+import numpy as np
 import pytest
 
 from jaxlens.__main__ import main
@@ -108,3 +110,16 @@ def test_cli_subprocess_smoke(tmp_path):
         timeout=120,
     )
     assert run.returncode == 0 and "--wavelengths" in run.stdout
+
+
+def test_weighted_rms_is_the_hand_computed_radius():
+    from jaxlens.analysis.spots import weighted_centroid, weighted_rms
+
+    p = jnp.asarray([[0.0, 0.0], [2.0, 0.0], [0.0, 2.0], [5.0, 5.0]])
+    w = jnp.asarray([1.0, 1.0, 1.0, 0.0])  # the last point is an invalid ray
+    cen = np.asarray([2 / 3, 2 / 3])
+    np.testing.assert_allclose(weighted_centroid(p, w), cen, rtol=1e-12)
+    want = np.sqrt(np.mean(np.sum((np.asarray(p[:3]) - cen) ** 2, -1)))
+    np.testing.assert_allclose(weighted_rms(p, w), want, rtol=1e-12)
+    np.testing.assert_allclose(weighted_rms(p, w, jnp.zeros(2)), np.sqrt(8 / 3), rtol=1e-12)
+    assert np.isnan(weighted_rms(p, jnp.zeros(4)))  # no valid ray: NaN, never 0

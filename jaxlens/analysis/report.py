@@ -53,14 +53,6 @@ def _pct(a, b):
     return jnp.where(nz, 100.0 * (a - b) / jnp.where(nz, b, 1.0), 0.0)
 
 
-def _rms(p, w):
-    """Centroid and RMS radius of points p [..., M, 2] with weights w [..., M]."""
-    total = jnp.maximum(jnp.sum(w, axis=-1), 1.0)
-    cen = jnp.sum(w[..., None] * p, axis=-2) / total[..., None]
-    d2 = jnp.sum((p - cen[..., None, :]) ** 2, axis=-1)
-    return cen, jnp.sqrt(jnp.sum(w * d2, axis=-1) / total)
-
-
 class _Result(eqx.Module):
     paraxial: paraxial.ParaxialData
     chief_height: jax.Array  # [F] mm, real chief ray (primary wavelength)
@@ -97,9 +89,9 @@ def _compute(lens: Lens) -> _Result:
 
     p, valid = jax.vmap(field)(lens.fields)  # [F, W, M, 2], [F, W, M]
     w = valid.astype(p.dtype)
-    _, rms = _rms(p, w)
+    rms = analysis.weighted_rms(p, w)
     F = p.shape[0]
-    _, poly = _rms(p.reshape(F, -1, 2), w.reshape(F, -1))
+    poly = analysis.weighted_rms(p.reshape(F, -1, 2), w.reshape(F, -1))
     chief = p[:, lens.primary, centre, 1]
     ftan = pd.efl * jnp.tan(jnp.deg2rad(lens.fields))
     ypar = jax.vmap(lambda th: paraxial.image_height(lens, th))(lens.fields)

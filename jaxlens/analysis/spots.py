@@ -64,13 +64,17 @@ class RmsSpot(eqx.Module):
     chief: Float[Array, "F 2"]
 
 
-def _weighted_rms(p, ref, w):
-    """RMS distance from ref; NaN where no ray is valid (never 0, which looks perfect).
+def weighted_rms(p, w, ref=None):
+    """RMS distance of points ``p [..., M, 2]`` (weights ``w [..., M]``) from ``ref [..., 2]``.
+
+    ``ref`` defaults to the weighted centroid. NaN where no ray is valid (never 0, which
+    looks perfect); the one RMS definition of the library (spots, report, tolerancing).
 
     Both square roots and the NaN are "double where"s, so the gradient is finite
     everywhere: 0 for a field without rays and for a perfect point.
     """
-    d2 = jnp.sum((p - ref) ** 2, axis=-1)
+    ref = weighted_centroid(p, w) if ref is None else ref
+    d2 = jnp.sum((p - ref[..., None, :]) ** 2, axis=-1)
     total = jnp.sum(w, axis=-1)
     ms = jnp.sum(w * d2, axis=-1) / jnp.maximum(total, 1.0)
     pos = ms > 0
@@ -78,7 +82,7 @@ def _weighted_rms(p, ref, w):
     return jnp.where(total > 0, rms, jnp.nan)
 
 
-def _centroid(p, w):
+def weighted_centroid(p, w):
     """Weighted centroid, 0 (finite, so gradients stay finite) where no ray is valid."""
     return jnp.sum(w[..., None] * p, axis=-2) / jnp.maximum(jnp.sum(w, axis=-1), 1.0)[..., None]
 
@@ -132,18 +136,19 @@ def rms_spot(
         p_ext, w_ext = jax.vmap(per_wl)(wls)  # [W, M+1, 2], [W, M+1]
         p, w = p_ext[:, :m], w_ext[:, :m]
         if own_wavelengths:
-            chief = p_ext[lens.primary, m]
+            chief, chief_valid = p_ext[lens.primary, m], w_ext[lens.primary, m]
         else:
-            chief = spot_rays(
-                lens, field, primary, pupil=jnp.zeros((1, 2), pupil.dtype), depth=depth,
-                newton_iters=newton_iters,
-            ).origin[0, :2]
-        cen = _centroid(p, w)  # [W, 2]
+            cr = spot_rays(lens, field, primary, pupil=jnp.zeros((1, 2), pupil.dtype),
+                           depth=depth, newton_iters=newton_iters)
+            chief, chief_valid = cr.origin[0, :2], cr.valid[0].astype(cr.origin.dtype)
+        cen = weighted_centroid(p, w)  # [W, 2]
         ref = cen if reference == "centroid" else jnp.broadcast_to(chief, cen.shape)
-        per = _weighted_rms(p, ref[:, None, :], w)
+        per = weighted_rms(p, w, ref)
         pall, wall = p.reshape(-1, 2), w.reshape(-1)
-        ref_all = _centroid(pall, wall) if reference == "centroid" else chief
-        poly = _weighted_rms(pall, ref_all, wall)
+        poly = weighted_rms(pall, wall, None if reference == "centroid" else chief)
+        if reference == "chief":  # no chief ray, no radius about it (never a silent value)
+            chief_ok = chief_valid > 0
+            per, poly = jnp.where(chief_ok, per, jnp.nan), jnp.where(chief_ok, poly, jnp.nan)
         cen_out = jnp.where(jnp.sum(w, axis=-1)[:, None] > 0, cen, jnp.nan)
         return per, poly, jnp.mean(w, axis=-1), cen_out, chief
 

@@ -66,7 +66,7 @@ from ..optics import paraxial
 from ..optics.lens import Lens
 from ..optics.materials import LAMBDA_D, AbstractMaterial, Air, abbe_number
 from ..optics.surfaces import EvenAsphere, Standard
-from .spots import clear_semi_diameters, spot_rays
+from .spots import clear_semi_diameters, spot_rays, weighted_rms
 
 DECENTER_TILT = ("not modelled: the engine traces coaxial, rotationally symmetric surfaces "
                  "only (no per-element decenter or tilt)")
@@ -274,23 +274,10 @@ def _pooled(data: SpotData):
         data.weight.reshape(f, -1)
 
 
-def _rms(p, w):
-    """Pooled RMS radius about the centroid per field (mm); NaN where no ray is valid.
-
-    The same arithmetic as ``analysis.spots.rms_spot`` (its polychromatic value)."""
-    total = jnp.sum(w, -1)
-    cen = jnp.sum(w[..., None] * p, -2) / jnp.maximum(total, 1.0)[..., None]
-    d2 = jnp.sum((p - cen[..., None, :]) ** 2, -1)
-    ms = jnp.sum(w * d2, -1) / jnp.maximum(total, 1.0)
-    pos = ms > 0
-    rms = jnp.where(pos, jnp.sqrt(jnp.where(pos, ms, 1.0)), 0.0)
-    return jnp.where(total > 0, rms, jnp.nan)
-
-
 def field_rms(data: SpotData, dz=0.0) -> Float[Array, " F"]:
     """Polychromatic RMS radius per field (mm) with the image plane moved by ``dz`` mm."""
     p, u, w = _pooled(data)
-    return _rms(p + dz * u, w)
+    return weighted_rms(p + dz * u, w)
 
 
 def _norm_weights(weights):

@@ -33,7 +33,7 @@ from .losses import ImageObjective, Objective, RayLoss, StageArgs
 from .mask import reweighting_mask
 from .multistart import DesignConfig, DesignResult, design
 from .params import LensParams, Parameterization
-from .solvers import LBFGSB, Adam, DampedLeastSquares, LevenbergMarquardt
+from .solvers import LBFGSB, Adam, DampedLeastSquares, LevenbergMarquardt, SolverResult
 from .spec import DesignSpec
 
 __all__ = [
@@ -50,6 +50,7 @@ __all__ = [
     "Objective",
     "Parameterization",
     "RayLoss",
+    "SolverResult",
     "Stage",
     "StageArgs",
     "design",

@@ -33,6 +33,7 @@ import optax
 
 from .losses import StageArgs
 from .mask import field_weights
+from .solvers import SolverResult, result_names
 from .spec import DesignSpec
 
 
@@ -209,6 +210,8 @@ def _vstep(solver, params, state, args, lr_scale, alive, mesh=None):
         new_p = jax.tree.map(keep, new_p, params)
         new_s = jax.tree.map(lambda n, o: keep(n, o) if eqx.is_array(n) and n.ndim and
                              n.shape[0] == ok.shape[0] else n, new_s, state)
+        mark = jax.vmap(lambda o, r: SolverResult.where(o, r, SolverResult.nonfinite))
+        new_s = eqx.tree_at(lambda st: st.result, new_s, mark(ok, new_s.result))
         return new_p, new_s, aux, ok
 
     return _over_seeds(local, mesh, 4, 2)(params, state, args, alive, dyn, lr_scale)
@@ -240,6 +243,8 @@ class History:
     spot_rms: list[np.ndarray] = dataclasses.field(default_factory=list)  # [steps, B]
     seconds: list[float] = dataclasses.field(default_factory=list)
     failed: dict = dataclasses.field(default_factory=dict)  # seed -> message (non-finite)
+    # Per stage, every design's last ``SolverResult`` by member name ("successful", ...).
+    results: list[list[str]] = dataclasses.field(default_factory=list)
 
 
 def run(
@@ -372,6 +377,7 @@ def run(
         hist.loss.append(np.asarray(jnp.stack(losses)) if losses else np.zeros((0, b)))
         hist.spot_rms.append(np.asarray(jnp.stack(rmss)) if rmss else np.zeros((0, b)))
         hist.seconds.append(time.perf_counter() - t0)
+        hist.results.append(["successful"] * b if state is None else result_names(state.result))
         if callback is not None:
             callback(si, stage, params)
     bar.close()

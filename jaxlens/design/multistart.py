@@ -98,7 +98,14 @@ class DesignConfig:
 
 @dataclasses.dataclass
 class DesignResult:
-    """Designed parameters (leading seed axis), their lenses, and the run history."""
+    """Designed parameters (leading seed axis), their lenses, and the run history.
+
+    ``status[i]`` is seed ``i``'s :class:`~jaxlens.design.solvers.SolverResult` member name
+    after its last stage: ``"nonfinite"`` marks a failed design (frozen at its last finite
+    parameters, with the message in ``history.failed``); ``"rejected"`` or
+    ``"damping_limit"`` after the least-squares polish mean its last step found no lower
+    loss (converged, or stuck); ``"solver_error"`` passes on an optimistix/jaxopt failure.
+    """
 
     spec: DesignSpec
     config: DesignConfig
@@ -106,6 +113,18 @@ class DesignResult:
     params: LensParams
     pmap: object
     history: History
+
+    @property
+    def status(self) -> list[str]:
+        """Each seed's last solver result (see the class docstring)."""
+        last = self.history.results[-1] if self.history.results else ["successful"] * len(
+            self.seeds)
+        return list(last[: len(self.seeds)])
+
+    @property
+    def failed(self) -> list[bool]:
+        """Seeds whose design went non-finite."""
+        return [s == "nonfinite" for s in self.status]
 
     def lens(self, i: int, dtype=jnp.float64):
         """The i-th design as a ``Lens`` (cast to ``dtype``)."""
@@ -126,14 +145,11 @@ def shard_seeds(tree, mesh: Mesh | None = None):
 
 
 def _image_objective(objective: Objective, spec: DesignSpec, config: DesignConfig):
-    from skimage import data, transform
-
+    from ..io.images import scene
     from ..optics.lens import Sensor
 
     n = config.image_pixels
-    img = data.astronaut().astype(np.float64) / 255.0
-    s = min(img.shape[:2])
-    img = transform.resize(img[:s, :s], (n, n, 3), anti_aliasing=True) ** 2.2
+    img = scene("astronaut", (n, n))  # linear light
     dtype = objective.gap_bounds.dtype
     sensor = Sensor(resolution=(n, n), pixel_size=jnp.asarray(spec.sensor_size[0] / n, dtype))
     return ImageObjective(objective, jnp.asarray(img, dtype), sensor, spp=config.image_spp)
@@ -231,4 +247,5 @@ def design(
     params = jax.tree.map(lambda x: np.asarray(x)[: len(seeds)], params)
     hist.loss = [h[:, : len(seeds)] for h in hist.loss]
     hist.spot_rms = [h[:, : len(seeds)] for h in hist.spot_rms]
+    hist.results = [r[: len(seeds)] for r in hist.results]
     return DesignResult(spec, config, seeds, params, pmap, hist)

@@ -6,6 +6,11 @@ Every solver works on the order-1 design variables (``LensParams``, see
 * ``init(params, args) -> state``
 * ``step(params, state, args, lr_scale) -> (params, state, aux)``
 
+Every state is a typed ``eqx.Module`` with a ``result`` field, a :class:`SolverResult` code
+that says how the last step went (``successful``, ``rejected``, ``damping_limit``,
+``solver_error``; the design loop adds ``nonfinite``). Result codes are an
+``eqx.Enumeration``, as in optimistix, so they vmap and jit like arrays.
+
 Both are pure and jittable, so a multi-start run vmaps them over seeds and a curriculum calls
 ``step`` from a plain Python loop (one jitted update per call). ``args`` carries everything
 that changes between stages (``StageArgs``), so stages share one compiled update.
@@ -27,6 +32,7 @@ from collections.abc import Callable
 import equinox as eqx
 import jax
 import jax.numpy as jnp
+import numpy as np
 import optax
 import optimistix as optx
 
@@ -38,6 +44,50 @@ with warnings.catch_warnings():
     import jaxopt
 
 ALL_FREE = LensParams(c=True, a=True, k=False, d=True)
+
+# Damped least squares clips its damping to this range; at the top no step is accepted.
+DAMPING_MAX = 1e9
+DAMPING_MIN = 1e-9
+
+
+class SolverResult(eqx.Enumeration):
+    """How a design's last solver step went (one code per design under ``vmap``)."""
+
+    successful = ""
+    rejected = "the least-squares step did not lower the loss (damping raised)"
+    damping_limit = "the damping reached its cap: the least-squares solver cannot make progress"
+    solver_error = "the solver reported an error (optimistix result or failed line search)"
+    nonfinite = "a loss or update became non-finite; the design is frozen at its last finite state"
+
+
+def result_names(results: SolverResult) -> list[str]:
+    """The member names of a batch (leading axis) or a single ``SolverResult``, on the host."""
+    names = ("successful", "rejected", "damping_limit", "solver_error", "nonfinite")
+    hits = np.stack([np.atleast_1d(np.asarray(results == getattr(SolverResult, n)))
+                     for n in names])
+    return [names[int(i)] for i in np.argmax(hits, axis=0)]
+
+
+class AdamState(eqx.Module):
+    """Adam's moment estimates."""
+
+    moments: optax.OptState
+    result: SolverResult
+
+
+class LeastSquaresState(eqx.Module):
+    """Damped least squares: the damping λ carried between steps (unused by optimistix)."""
+
+    damping: jax.Array
+    result: SolverResult
+
+
+class LBFGSBState(eqx.Module):
+    """L-BFGS-B: the box bounds and jaxopt's own state."""
+
+    bounds: tuple
+    inner: object
+    result: SolverResult
 
 
 def _merge(free, fixed):
@@ -83,11 +133,12 @@ class Adam(AbstractSolver):
         return optax.scale_by_adam(b1=self.b1, b2=self.b2, eps=self.eps)
 
     def init(self, params, args):
-        return self._tx.init(params)
+        return AdamState(self._tx.init(params), SolverResult.successful)
 
     def step(self, params, state, args, lr_scale):
         (_, aux), grads = jax.value_and_grad(self.loss_fn, has_aux=True)(params, args)
-        updates, state = self._tx.update(grads, state, params)
+        updates, moments = self._tx.update(grads, state.moments, params)
+        state = AdamState(moments, SolverResult.successful)
         mask = jax.tree.map(lambda f, x: jnp.full_like(x, float(f)), self.free, params,
                             is_leaf=lambda x: isinstance(x, bool))
         updates = jax.tree.map(lambda u, lr, m: -lr_scale * lr * m * u, updates, self.lrs, mask)
@@ -121,7 +172,7 @@ class LevenbergMarquardt(AbstractSolver):
         return eqx.partition(params, mask)
 
     def init(self, params, args):
-        return jnp.zeros((), params.c.dtype)
+        return LeastSquaresState(jnp.zeros((), params.c.dtype), SolverResult.successful)
 
     def step(self, params, state, args, lr_scale):
         y, fixed = self._split(params)
@@ -138,7 +189,11 @@ class LevenbergMarquardt(AbstractSolver):
             fn, optx.LevenbergMarquardt(rtol=self.rtol, atol=self.atol), y0, args,
             has_aux=True, options={"jac": "fwd"}, max_steps=self.inner, throw=False)
         y1 = jax.tree.map(lambda a, b: a.astype(b.dtype), sol.value, y)
-        return _merge(y1, fixed), state, aux
+        # Running out of ``inner`` iterations is the normal end of a step, not a failure.
+        ok = (sol.result == optx.RESULTS.successful) | (
+            sol.result == optx.RESULTS.max_steps_reached)
+        result = SolverResult.where(ok, SolverResult.successful, SolverResult.solver_error)
+        return _merge(y1, fixed), LeastSquaresState(state.damping, result), aux
 
 
 class DampedLeastSquares(AbstractSolver):
@@ -172,7 +227,8 @@ class DampedLeastSquares(AbstractSolver):
         return eqx.partition(params, mask)
 
     def init(self, params, args):
-        return jnp.asarray(self.lam0, jnp.result_type(float))
+        return LeastSquaresState(jnp.asarray(self.lam0, jnp.result_type(float)),
+                                 SolverResult.successful)
 
     def step(self, params, state, args, lr_scale):
         from jax.flatten_util import ravel_pytree
@@ -186,7 +242,7 @@ class DampedLeastSquares(AbstractSolver):
             return r, aux
 
         def one(carry, _):
-            x, lam, aux_first = carry
+            x, lam, _ = carry
             r, aux = res(x)
             jac = jax.jacfwd(lambda z: res(z)[0])(x).astype(dt)
             r64 = r.astype(dt)
@@ -210,12 +266,17 @@ class DampedLeastSquares(AbstractSolver):
             accept = ls[best] < l0
             x = jnp.where(accept, xs[best], x)
             lam = jnp.where(accept, mus[best], 10.0 * lam)
-            lam = jnp.clip(lam, 1e-9, 1e9)
-            return (x, lam, aux_first), None
+            lam = jnp.clip(lam, DAMPING_MIN, DAMPING_MAX)
+            return (x, lam, accept), None
 
         _, aux0 = res(x0)
-        (x, lam, _), _ = jax.lax.scan(one, (x0, state, aux0), None, length=self.inner)
-        return _merge(unravel(x), fixed), lam, aux0
+        (x, lam, accepted), _ = jax.lax.scan(one, (x0, state.damping, jnp.asarray(True)), None,
+                                             length=self.inner)
+        result = SolverResult.where(
+            accepted, SolverResult.successful,
+            SolverResult.where(lam >= DAMPING_MAX, SolverResult.damping_limit,
+                               SolverResult.rejected))
+        return _merge(unravel(x), fixed), LeastSquaresState(lam, result), aux0
 
 
 class LBFGSB(AbstractSolver):
@@ -250,9 +311,11 @@ class LBFGSB(AbstractSolver):
 
     def init(self, params, args):
         bounds = self._bounds(params)
-        return bounds, self._solver().init_state(params, bounds, args)
+        return LBFGSBState(bounds, self._solver().init_state(params, bounds, args),
+                           SolverResult.successful)
 
     def step(self, params, state, args, lr_scale):
-        bounds, st = state
-        params, st = self._solver().update(params, st, bounds, args)
-        return params, (bounds, st), st.aux
+        params, st = self._solver().update(params, state.inner, state.bounds, args)
+        result = SolverResult.where(st.failed_linesearch, SolverResult.solver_error,
+                                    SolverResult.successful)
+        return params, LBFGSBState(state.bounds, st, result), st.aux

@@ -251,19 +251,6 @@ def finished_lens(result, i: int, spec):
     return eqx.tree_at(lambda x: x.surfaces, lens, tuple(surfaces))
 
 
-def _scene(shape):
-    """A test scene from scikit-image (no download), resized to ``shape`` (rows, cols)."""
-    import numpy as np
-    from skimage import data, transform
-
-    img = data.astronaut().astype(np.float64) / 255.0
-    h, w = img.shape[:2]
-    s = min(h, w)
-    img = img[(h - s) // 2:(h - s) // 2 + s, (w - s) // 2:(w - s) // 2 + s]
-    img = transform.resize(img, (shape[0], shape[1], 3), anti_aliasing=True)
-    return (img**2.2).astype(np.float32)  # sRGB-ish to linear
-
-
 def write_design_outputs(lens, ev, spec, out, *, history=None, plots=True, render=True,
                          smoke=False, log=print) -> dict:
     """Lens files, figures and the rendered scene of one design; returns the file list."""
@@ -273,6 +260,7 @@ def write_design_outputs(lens, ev, spec, out, *, history=None, plots=True, rende
 
     import jaxlens
     from jaxlens import plot
+    from jaxlens.io import images
 
     files = {}
     os.makedirs(out, exist_ok=True)
@@ -297,12 +285,12 @@ def write_design_outputs(lens, ev, spec, out, *, history=None, plots=True, rende
         rows = 64 if smoke else 256
         sensor = jaxlens.Sensor(resolution=(rows, rows),
                                 pixel_size=jnp.asarray(spec.sensor_size[0] / rows))
-        scene = _scene((rows, rows))
+        scene = images.scene("astronaut", (rows, rows))  # linear light
         img = jaxlens.render(lens.astype(jnp.float32), jnp.asarray(scene),
                              spp=4 if smoke else 32, key=jax.random.PRNGKey(0),
                              sensor=sensor, relative_illumination=False)
-        img = np.asarray(img) ** (1 / 2.2)
-        both = np.concatenate([scene ** (1 / 2.2), np.clip(img, 0, 1)], axis=1)
+        shown = [images.linear_to_srgb(np.clip(x, 0, 1)) for x in (scene, np.asarray(img))]
+        both = np.concatenate(shown, axis=1)
         files["render"] = plot.save(plot.plot_image(both, title="scene | rendered through "
                                                     "the design (with its distortion)"),
                                     os.path.join(out, "render.png"))
@@ -400,8 +388,9 @@ def _design_into(args, argv, spec, config, seeds, folder, out, t_start) -> dict:
         "best_seed": seeds[best],
         "best": {**ev.summary(), "rms_min_um": float(np.min(ev.rms_um)),
                  "rms_median_um": float(np.median(ev.rms_um)), "n_fields": int(ev.rms_um.size)},
-        "per_seed": [{"seed": s, **e.summary(), "rms_min_um": float(np.min(e.rms_um))}
-                     for s, e in zip(seeds, evals, strict=True)],
+        "per_seed": [{"seed": s, "solver_status": st, **e.summary(),
+                      "rms_min_um": float(np.min(e.rms_um))}
+                     for s, st, e in zip(seeds, result.status, evals, strict=True)],
         "valid_designs": int(sum(e.valid for e in evals)),
         "valid_designs_rms_mean_um": _mean_or_none([e.rms_mean_um for e in evals if e.valid]),
         "valid_designs_rms_min_um": _min_or_none([e.rms_mean_um for e in evals if e.valid]),
@@ -488,7 +477,8 @@ def run_ablation(args, argv) -> dict:
             "wall_seconds": wall, "seconds_per_design": wall / len(seeds),
             "load_average": os.getloadavg()[0],
             "stage_seconds": dict(zip(res.history.stages, res.history.seconds, strict=True)),
-            "per_seed": [{"seed": s, **e.summary()} for s, e in zip(seeds, evs, strict=True)],
+            "per_seed": [{"seed": s, "solver_status": st, **e.summary()}
+                         for s, st, e in zip(seeds, res.status, evs, strict=True)],
         }
         if name == "+both+mask":
             for i, s in enumerate(seeds):

@@ -380,7 +380,7 @@ def _prepare(lens, field, depth, wavelength, kernel_size, pixel_size, model, cen
 
 def psf_info(
     lens: Lens,
-    field: Float[ArrayLike, " *2"],
+    field: Float[ArrayLike, ""] | Float[ArrayLike, " 2"],
     *,
     depth=math.inf,
     wavelength: Float[ArrayLike, "*w"] | None = None,
@@ -433,7 +433,7 @@ def psf_info(
 
 def psf(
     lens: Lens,
-    field: Float[ArrayLike, " *2"],
+    field: Float[ArrayLike, ""] | Float[ArrayLike, " 2"],
     *,
     depth=math.inf,
     wavelength: Float[ArrayLike, "*w"] | None = None,

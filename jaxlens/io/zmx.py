@@ -26,6 +26,11 @@ What is read and written:
       ``DIAM r 1`` and ``CLAP 0 r 0``: Zemax and optiland clip only at apertures.
       Refused: ``OBSC`` (central obscuration), annular CLAP, decentered apertures (OBDC);
       ``SQAP``/``ELAP`` give a warning and are ignored.
+    * ``TYPE COORDBRK`` (a ``CoordinateBreak``): PARM 1, 2 decenter x, y; PARM 3, 4, 5 tilt
+      about x, y, z in degrees; PARM 6 the order flag (0 or 1); CURV 0; no GLAS (the
+      medium continues). ``GLAS MIRROR`` makes a surface a mirror (``Lens.mirrors``); the
+      medium after it is the one before, and the thicknesses after an odd number of
+      mirrors are negative, as Zemax writes them.
     * Image space is the last lens surface's GLAS; it is also written on the image
       surface (optiland reads image space there). An image-surface GLAS that differs
       gives a warning.

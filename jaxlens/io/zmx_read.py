@@ -15,6 +15,7 @@ import numpy as np
 from ..optics import catalog as _catalog_module
 from ..optics import checks
 from ..optics.catalog import decode_zemax_text as decode
+from ..optics.coordinates import CoordinateBreak
 from ..optics.lens import Lens, Sensor
 from ..optics.materials import AbstractMaterial, Air, ModelGlass
 from ..optics.surfaces import AbstractSurface, EvenAsphere, Hybrid, Standard
@@ -342,10 +343,41 @@ def _surface(s: _Surf, unit: float) -> AbstractSurface:
         return zmx_surfaces.toroidal(s, unit, sd)
     if s.type == "PARAXIAL":
         return zmx_surfaces.paraxial_surface(s, unit, sd)[0]
+    if s.type == "COORDBRK":
+        return _coordinate_break(s, unit)
     raise where.error(
         f"surface type {s.type} is not supported (STANDARD, EVENASPH, XASPHERE, XPOLYNOM, "
-        f"TOROIDAL, PARAXIAL)"
+        f"TOROIDAL, PARAXIAL, COORDBRK)"
     )
+
+
+def _coordinate_break(s: _Surf, unit: float) -> CoordinateBreak:
+    """COORDBRK: PARM 1, 2 decenter x, y (lens units), 3, 4, 5 tilt about x, y, z (degrees),
+    6 the order flag (0: decenter then tilt, 1: tilt then decenter)."""
+    where = s.type_line or s.line
+    for i, (v, ln) in s.parm.items():
+        if not 1 <= i <= 6 and v != 0:
+            raise ln.error("COORDBRK uses PARM 1..6 (decenter x, y, tilt x, y, z, order)")
+    if s.curv != 0 or s.coni != 0:
+        raise where.error("a coordinate break (COORDBRK) has no shape; its CURV and CONI must "
+                          "be 0")
+    order, ln = s.parm.get(6, (0.0, where))
+    if order not in (0.0, 1.0):
+        raise ln.error(f"COORDBRK order flag (PARM 6) must be 0 (decenter, then tilt) or 1 "
+                       f"(tilt, then decenter), got {order:g}")
+    p = {i: s.parm.get(i, (0.0, None))[0] for i in range(1, 6)}
+    return CoordinateBreak(decenter_x=_arr(p[1] * unit), decenter_y=_arr(p[2] * unit),
+                           tilt_x=_arr(p[3]), tilt_y=_arr(p[4]), tilt_z=_arr(p[5]),
+                           order=int(order))
+
+
+def _is_mirror(s: _Surf) -> bool:
+    return s.glas is not None and s.glas.tokens[1].upper() == "MIRROR"
+
+
+def _keeps_medium(s: _Surf) -> bool:
+    """Mirrors and coordinate breaks: the medium after them is the medium before."""
+    return _is_mirror(s) or s.type == "COORDBRK"
 
 
 def _hybrid_from_xpoly(s: _Surf, unit: float, c: float, sd: float) -> Hybrid:
@@ -433,7 +465,7 @@ class _Glasses:
                                f"nd {nd:g}, Vd {vd:g}")
             return ModelGlass(_arr(nd), _arr(math.inf if vd == 0 else vd))
         if up == "MIRROR":
-            raise ln.error("mirrors are not supported")
+            raise ln.error("GLAS MIRROR belongs on a lens surface (not the object or image)")
         if up == "AIR":
             return Air()
         for cat in self.gcat:
@@ -637,10 +669,12 @@ def _check_image_medium(f: _File, body: list) -> None:
         t = [x.upper() for x in ln.tokens[1:]]
         return " ".join(t[:1] + t[3:5]) if t[0] == "___BLANK" else t[0]
 
-    last = named(body[-1].glas) if body and body[-1].glas is not None else "AIR"
+    medium = [s for s in body if not _keeps_medium(s)]  # mirrors, breaks: the medium before
+    src = medium[-1] if medium else f.surfs[0]
+    last = named(src.glas) if src.glas is not None else "AIR"
     if named(img.glas) != last:
         warnings.warn(f"{f.path}:{img.glas.number}: the image surface names {named(img.glas)}"
-                      f" but image space (the GLAS of surface {img.number - 1}) is {last}; "
+                      f" but image space (the GLAS of surface {src.number}) is {last}; "
                       f"jaxlens uses {last}", ZmxWarning, stacklevel=3)
 
 
@@ -664,13 +698,27 @@ def loads(text: str, path: str = "<zmx>", *, strict: bool = False) -> Lens:
     u = f.unit
     glasses = _Glasses(path, f.gcat)
     obj, body, img = f.surfs[0], f.surfs[1:-1], f.surfs[-1]
-    surfaces, thick, mats = [], [], []
-    for s in body:
+    surfaces, thick, mats, mirrors = [], [], [], []
+    for s in (obj, img):
+        if _is_mirror(s):
+            raise s.glas.error("the object or image surface cannot be a mirror")
+    obj_mat = glasses.get(obj.glas) if obj.glas is not None else Air()
+    for i, s in enumerate(body):
         surfaces.append(_surface(s, u))
         if math.isinf(s.disz):
             raise s.disz_line.error("only the object surface may have an infinite thickness")
         thick.append(s.disz * u)
-        mats.append(glasses.get(s.glas) if s.glas is not None else Air())
+        if _is_mirror(s):
+            if s.type == "COORDBRK":
+                raise s.glas.error("a coordinate break cannot be a mirror")
+            mirrors.append(i)
+        if _keeps_medium(s):
+            if s.glas is not None and not _is_mirror(s):
+                raise s.glas.error("a coordinate break keeps the medium before it; it takes no "
+                                   "GLAS")
+            mats.append(mats[-1] if mats else obj_mat)
+        else:
+            mats.append(glasses.get(s.glas) if s.glas is not None else Air())
     stops = [i for i, s in enumerate(body) if s.stop]
     for s in (obj, img):
         if s.stop:
@@ -699,10 +747,11 @@ def loads(text: str, path: str = "<zmx>", *, strict: bool = False) -> Lens:
         wavelengths=_arr(wl),
         primary=primary,
         object_distance=_arr(dist),
-        object_material=glasses.get(obj.glas) if obj.glas is not None else Air(),
+        object_material=obj_mat,
         image=_surface(img, u),
         sensor=_sensor(img, u),
         name=f.name,
+        mirrors=tuple(mirrors),
     )
     # Before the paraxial work of the aperture: values the lens cannot be traced with.
     checks.wavelengths(lens, wl, f"{path}: WAVM", "wavelength")

@@ -12,6 +12,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from ..optics import materials as _materials
+from ..optics.coordinates import CoordinateBreak
 from ..optics.lens import Lens
 from ..optics.materials import AbstractMaterial, Air, ModelGlass, Tabulated
 from ..optics.surfaces import AbstractSurface, EvenAsphere, Hybrid, Standard
@@ -288,6 +289,11 @@ def surface_lines(s: AbstractSurface, *, image: bool = False) -> list[str]:
             out += [f'XDAT {i + 2} {_z(v)} 0 0 1 0 0 ""' for i, v in enumerate(a, start=1)]
     elif isinstance(s, Standard):
         out += ["TYPE STANDARD", f'CURV {_z(s.c)} 0 0 0 0 ""', f"CONI {_z(s.k)}"]
+    elif isinstance(s, CoordinateBreak) and not image:
+        parms = (s.decenter_x, s.decenter_y, s.tilt_x, s.tilt_y, s.tilt_z)
+        out += ["TYPE COORDBRK", 'CURV 0 0 0 0 0 ""']
+        out += [f"PARM {i} {_z(v)}" for i, v in enumerate(parms, start=1)]
+        out.append(f"PARM 6 {s.order}")
     else:
         raise ValueError(f"save_zmx: surface type {type(s).__name__} has no .zmx form")
     if image and isinstance(s, Hybrid):
@@ -328,11 +334,17 @@ def dumps(lens: Lens, path: str = "lens.zmx", *, model_glass: str = "blank"):
     dist = math.inf if lens.object_distance is None else float(lens.object_distance)
     block(0, ["TYPE STANDARD", 'CURV 0 0 0 0 0 ""'], dist, gw.glas(lens.object_material), np.inf)
     for i, s in enumerate(lens.surfaces):
+        # A mirror and a coordinate break keep the medium before them (Lens checks it).
+        glas = gw.glas(lens.materials[i])
+        if i in lens.mirrors:
+            glas = "GLAS MIRROR 0 0 1.5 4.0E+1 0 0 0 0 0 0"
+        elif isinstance(s, CoordinateBreak):
+            glas = None
         block(
             i + 1,
             surface_lines(s),
             float(lens.thickness[i]),
-            gw.glas(lens.materials[i]),
+            glas,
             s.semi_diameter,
             stop=i == lens.stop,
         )

@@ -10,9 +10,13 @@ Conventions:
     object to surface 1's vertex (``inf`` for an object at infinity). ``epd`` is the
     entrance pupil diameter, ``fields`` the field angles in degrees (y direction), and
     ``wavelengths`` the system wavelengths with ``primary`` the index of the primary one.
+    ``mirrors`` lists the (0-based) indices of reflecting surfaces (Zemax ``GLAS MIRROR``);
+    the medium after a mirror, like the medium after a ``CoordinateBreak``, is the medium
+    before it (``materials[i]`` must repeat it). After an odd number of mirrors light travels
+    toward −z and the thicknesses are negative, as in Zemax.
 
-The structure (surface kinds, counts, polynomial orders, stop index) is static; every
-number is an array so ``jax.grad`` reaches it.
+The structure (surface kinds, counts, polynomial orders, stop index, mirrors) is static;
+every number is an array so ``jax.grad`` reaches it.
 """
 
 from __future__ import annotations
@@ -24,6 +28,7 @@ import numpy as np
 from jaxtyping import Array, Float
 
 from . import checks
+from .coordinates import CoordinateBreak
 from .materials import AbstractMaterial, Air
 from .surfaces import AbstractSurface, Standard
 
@@ -86,6 +91,7 @@ class Lens(eqx.Module):
     image: AbstractSurface = eqx.field(default_factory=Standard)
     sensor: Sensor | None = None
     name: str = eqx.field(static=True, default="")
+    mirrors: tuple[int, ...] = eqx.field(static=True, default=(), converter=tuple)
 
     def __check_init__(self):
         n = len(self.surfaces)
@@ -97,6 +103,33 @@ class Lens(eqx.Module):
             raise ValueError(f"Lens: stop index {self.stop} outside 0..{n - 1}")
         if not 0 <= self.primary < self.wavelengths.shape[-1]:
             raise ValueError(f"Lens: primary index {self.primary} outside the wavelengths")
+        self._check_mirrors_and_breaks()
+
+    def _check_mirrors_and_breaks(self):
+        """Mirrors and coordinate breaks keep the medium: materials[i] repeats the one before."""
+        n = len(self.surfaces)
+        m = self.mirrors
+        if (any(isinstance(i, bool) or not isinstance(i, (int, np.integer)) for i in m)
+                or list(m) != sorted(set(m)) or (m and not 0 <= m[0] <= m[-1] < n)):
+            raise ValueError(f"Lens: mirrors must be increasing surface indices in [0, {n - 1}] "
+                             f"(0-based), got {m!r}")
+        breaks = [i for i, s in enumerate(self.surfaces) if isinstance(s, CoordinateBreak)]
+        for i in m:
+            if i in breaks:
+                raise ValueError(f"Lens: surface {i} is a coordinate break and cannot be a mirror")
+        for i in sorted(set(m) | set(breaks)):
+            before = self.object_material if i == 0 else self.materials[i - 1]
+            after = self.materials[i]
+            if checks.is_traced((before, after)):
+                continue
+            if not bool(eqx.tree_equal(before, after)):
+                what = "mirror" if i in m else "coordinate break"
+                name = lambda x: getattr(x, "name", None) or type(x).__name__  # noqa: E731
+                raise ValueError(
+                    f"Lens: surface {i} is a {what}; the medium after it is the medium before "
+                    f"it, so materials[{i}] must be the same material as "
+                    f"{'object_material' if i == 0 else f'materials[{i - 1}]'} "
+                    f"({name(before)}), got {name(after)}")
 
     @property
     def num_surfaces(self) -> int:

@@ -12,6 +12,13 @@ Conventions:
     global z (surface 1 at 0); ``exit_pupil_z`` is also global. Everything is a pure
     jnp function, so it is differentiable and jittable.
 
+    Mirrors: after each mirror the index changes sign (Zemax's convention), so a mirror of
+    curvature c in a medium of index n has power −2nc and the transfer t/n stays positive
+    with the negative thicknesses after it. ``bfl``, ``rear_focal_length`` and the image
+    and exit-pupil positions are then z values (negative where light leaves toward −z);
+    ``efl`` is 1/Φ and ``efl_image_space`` |n′|/Φ. Coordinate breaks are dummy surfaces
+    here: the trace follows each surface's local axis and ignores decenters and tilts.
+
     A ``ParaxialSurface`` (ideal thin lens) has power 1/f whatever its media. A lens with a
     ``Toroidal`` surface has no single paraxial trace: everything here is its y–z section
     (as in Zemax, whose paraxial data are y–z), and ``x_section(lens)`` is the lens as
@@ -55,13 +62,22 @@ def x_section(lens: Lens) -> Lens:
     return eqx.tree_at(lambda m: m.surfaces, lens, surfaces)
 
 
+def signed_indices(lens: Lens, wavelength) -> list[Array]:
+    """``lens.indices`` with the sign flipped after every mirror (the y–nu trace's indices)."""
+    n = lens.indices(wavelength)
+    if not lens.mirrors:
+        return n
+    flips = [sum(1 for m in lens.mirrors if m < i) % 2 for i in range(len(n))]
+    return [-x if f else x for x, f in zip(n, flips, strict=True)]
+
+
 def system_matrix(lens: Lens, wavelength=None, start: int = 0, end: int | None = None):
     """ABCD matrix in (y, nu) from just before ``surfaces[start]`` to just after ``surfaces[end]``.
 
     Returns the four entries (A, B, C, D) with [y', nu'] = [[A, B], [C, D]] [y, nu].
     """
     wl = lens.primary_wavelength if wavelength is None else wavelength
-    n = lens.indices(wl)
+    n = signed_indices(lens, wl)
     end = lens.num_surfaces - 1 if end is None else end
     one = jnp.ones_like(lens.thickness[0])
     a, b, c, d = one, 0 * one, 0 * one, one
@@ -107,7 +123,7 @@ def entrance_pupil_z(lens: Lens, wavelength=None) -> Array:
         return jnp.zeros_like(lens.thickness[0])
     # Matrix from surface 1 to just before the stop: after surfaces[stop-1], then transfer.
     a, b, c, d = system_matrix(lens, wl, 0, lens.stop - 1)
-    ns = lens.indices(wl)[lens.stop]
+    ns = signed_indices(lens, wl)[lens.stop]
     t = lens.thickness[lens.stop - 1] / ns
     a, b = a + t * c, b + t * d
     # Chief ray reaches the stop centre: a*y0 + b*nu0 = 0 with y0 = -z_ep*u0, nu0 = n0*u0.
@@ -120,7 +136,7 @@ def entrance_pupil_magnification(lens: Lens, wavelength=None) -> Array:
     if lens.stop == 0:
         return jnp.ones_like(lens.thickness[0])
     a, _, c, _ = system_matrix(lens, wl, 0, lens.stop - 1)
-    t = lens.thickness[lens.stop - 1] / lens.indices(wl)[lens.stop]
+    t = lens.thickness[lens.stop - 1] / signed_indices(lens, wl)[lens.stop]
     # Imaging EP -> stop has B = 0, so the magnification is the A entry.
     return a + t * c
 
@@ -128,7 +144,7 @@ def entrance_pupil_magnification(lens: Lens, wavelength=None) -> Array:
 def marginal_ray(lens: Lens, wavelength=None):
     """Paraxial marginal ray (y, nu) after every surface, for the lens's EPD and object."""
     wl = lens.primary_wavelength if wavelength is None else wavelength
-    n = lens.indices(wl)
+    n = signed_indices(lens, wl)
     zep = entrance_pupil_z(lens, wl)
     h = 0.5 * lens.epd
     if lens.object_at_infinity:
@@ -153,7 +169,7 @@ def _trace_ray(lens: Lens, y, nu, n):
 def paraxial_chief_ray(lens: Lens, field_deg, wavelength=None):
     """Paraxial chief ray (y, nu) after every surface for a field angle (degrees)."""
     wl = lens.primary_wavelength if wavelength is None else wavelength
-    n = lens.indices(wl)
+    n = signed_indices(lens, wl)
     zep = entrance_pupil_z(lens, wl)
     u = jnp.tan(jnp.deg2rad(jnp.asarray(field_deg)))
     return _trace_ray(lens, -zep * u, n[0] * u, n)
@@ -169,7 +185,7 @@ def bfl(lens: Lens, wavelength=None) -> Array:
     """Back focal length: last vertex to the paraxial focus of an object at infinity (mm)."""
     a, _, c, _ = system_matrix(lens, wavelength)
     wl = lens.primary_wavelength if wavelength is None else wavelength
-    n_img = lens.materials[-1].index(wl)
+    n_img = signed_indices(lens, wl)[-1]
     return -a * n_img / c
 
 
@@ -177,14 +193,14 @@ def image_height(lens: Lens, field_deg, wavelength=None) -> Array:
     """Paraxial chief-ray height on the image surface (mm)."""
     wl = lens.primary_wavelength if wavelength is None else wavelength
     y, nu = paraxial_chief_ray(lens, field_deg, wl)
-    n_img = lens.materials[-1].index(wl)
+    n_img = signed_indices(lens, wl)[-1]
     return y[-1] + lens.thickness[-1] * nu[-1] / n_img
 
 
 def paraxial_data(lens: Lens, wavelength=None) -> ParaxialData:
     """All first-order data at one wavelength (default: primary)."""
     wl = lens.primary_wavelength if wavelength is None else wavelength
-    n = lens.indices(wl)
+    n = signed_indices(lens, wl)
     n0, n_img = n[0], n[-1]
     a, b, c, d = system_matrix(lens, wl)
     power = -c
@@ -217,7 +233,7 @@ def paraxial_data(lens: Lens, wavelength=None) -> ParaxialData:
     paraxial_image_z = z_last - ym[-1] * n_img / num[-1]
     return ParaxialData(
         efl=f,
-        efl_image_space=n_img * f,
+        efl_image_space=jnp.abs(n_img) * f,
         bfl=back,
         front_focal_length=n0 * f,
         rear_focal_length=n_img * f,

@@ -23,6 +23,7 @@ from __future__ import annotations
 
 import jax.numpy as jnp
 
+from ..optics.coordinates import CoordinateBreak
 from ..optics.lens import Lens
 from ..optics.paraxial_surface import ParaxialSurface
 from ..optics.rays import Rays
@@ -92,6 +93,9 @@ def reversed_lens(lens: Lens, *, image_distance=None) -> Lens:
         mirrored, a flat image surface and no sensor. Field, wavelength and pupil data are
         copied unchanged (they do not describe the mirrored system).
     """
+    if lens.mirrors or any(isinstance(s, CoordinateBreak) for s in lens.surfaces):
+        raise ValueError("reversed_lens: lenses with mirrors or coordinate breaks cannot be "
+                         "traced backward (nor rendered) yet; trace them forward with trace")
     n = lens.num_surfaces
     t = lens.thickness
     last = jnp.zeros_like(t[-1]) if image_distance is None else jnp.asarray(image_distance, t.dtype)

@@ -6,6 +6,11 @@ the same kind and shape are traced with one ``lax.scan``; with ``uniform=True`` 
 after the first is first converted to one common kind (``uniform_surfaces``, coefficients
 zero-padded, the sag unchanged), so the whole lens is one scan and compile time does not grow
 with the surface count. Conventions: see ``step``.
+
+Mirrors (``Lens.mirrors``) and coordinate breaks (``optics.coordinates``) are static
+structure: each is traced on its own, outside the scans, and a lens without them is traced by
+exactly the same operations as before they existed. After a coordinate break the rays are in
+the break's frame (``optics.coordinates.frame_of`` maps them to global coordinates).
 """
 
 from __future__ import annotations
@@ -17,6 +22,7 @@ import jax
 import jax.numpy as jnp
 
 from ..optics import checks
+from ..optics.coordinates import CoordinateBreak, transform
 from ..optics.lens import Lens
 from ..optics.rays import Rays
 from ..optics.surfaces import AbstractSurface, EvenAsphere, Hybrid, Standard
@@ -34,7 +40,8 @@ def uniform_surfaces(surfaces) -> list[AbstractSurface]:
 
     All ``Standard`` if none has polynomial terms, else ``EvenAsphere`` if none has odd
     terms, else ``Hybrid``. Each sag is unchanged, so traces agree to rounding. Other
-    kinds (``Toroidal``, ``ParaxialSurface``) are kept as they are: they split the scan.
+    kinds (``Toroidal``, ``ParaxialSurface``, ``CoordinateBreak``) are kept as they are: they
+    split the scan.
     """
     common = (Standard, EvenAsphere, Hybrid)
     even = [s.even_coeffs() if type(s) in common else None for s in surfaces]
@@ -84,12 +91,14 @@ def _same_kind(a, b) -> bool:
     return all(x.shape == y.shape and x.dtype == y.dtype for x, y in zip(la, lb, strict=True))
 
 
-def _runs(surfaces, start: int, stop: int) -> list[tuple[int, int]]:
-    """Split surfaces[start:stop] into maximal runs of the same kind."""
+def _runs(surfaces, start: int, stop: int, alone=frozenset()) -> list[tuple[int, int]]:
+    """Split surfaces[start:stop] into maximal runs of the same kind; indices in ``alone``
+    (mirrors, coordinate breaks) are runs of their own."""
     runs, i = [], start
     while i < stop:
         j = i + 1
-        while j < stop and _same_kind(surfaces[j], surfaces[i]):
+        while (j < stop and i not in alone and j not in alone
+               and _same_kind(surfaces[j], surfaces[i])):
             j += 1
         runs.append((i, j))
         i = j
@@ -119,12 +128,28 @@ def _trace_states(lens: Lens, rays: Rays, newton_iters: int, upto: int | None, *
     st = state_from_rays(rays)
     step = functools.partial(surface_step, refracts=True, newton_iters=newton_iters)
     last = len(surfaces) - 1 if upto is None else upto
-    st = step(surfaces[0], zs[0], st, idx[0], idx[1], first=True)
-    out = [st]
-    for i, j in _runs(surfaces, 1, last + 1):
+    breaks = frozenset(i for i, s in enumerate(surfaces) if isinstance(s, CoordinateBreak))
+    mirrors = frozenset(lens.mirrors)
+    gaps = _travel_gaps(lens)
+    out = []
+    first = 0
+    while first in breaks and first <= last:  # breaks before the first surface: object space
+        st = _break_step(surfaces[first], zs[first], st)
+        out.append(st)
+        first += 1
+    if first > last:
+        return out
+    st = step(surfaces[first], zs[first], st, idx[first], idx[first + 1], first=True,
+              reflects=first in mirrors)
+    out.append(st)
+    for i, j in _runs(surfaces, first + 1, last + 1, breaks | mirrors):
+        if i in breaks:
+            st = _break_step(surfaces[i], zs[i], st)
+            out.append(st)
+            continue
         if j - i == 1:
             st = step(surfaces[i], zs[i], st, idx[i], idx[i + 1], first=False,
-                      gap=lens.thickness[i - 1])
+                      gap=gaps(i - 1), reflects=i in mirrors)
             out.append(st)
             continue
         stacked = jax.tree.map(lambda *x: jnp.stack(x), *surfaces[i:j])
@@ -139,17 +164,39 @@ def _trace_states(lens: Lens, rays: Rays, newton_iters: int, upto: int | None, *
             new = step(surface, z, carry, n1, n2, first=False, gap=gap)
             return new, (new if keep_path else None)
 
-        gaps = lens.thickness[i - 1 : j - 1]
-        st, path = jax.lax.scan(body, st, (stacked, zs[i:j], n_in, n_out, gaps))
+        run_gaps = gaps(slice(i - 1, j - 1))
+        st, path = jax.lax.scan(body, st, (stacked, zs[i:j], n_in, n_out, run_gaps))
         if keep_path:
             out += [jax.tree.map(lambda x, k=k: x[k], path) for k in range(j - i)]
         else:
             out.append(st)
     if upto is None:
         st = surface_step(lens.image, lens.image_z(), st, idx[-1], idx[-1], first=False,
-                          refracts=False, newton_iters=newton_iters, gap=lens.thickness[-1])
+                          refracts=False, newton_iters=newton_iters, gap=gaps(-1))
         out.append(st)
     return out
+
+
+def _break_step(cb: CoordinateBreak, z_vertex, st: RayState) -> RayState:
+    """The rays, unmoved, in the frame after a coordinate break (``optics.coordinates``)."""
+    p, d = transform(cb, z_vertex, st.p, st.d)
+    return RayState(p, d, st.valid, st.opl)
+
+
+def _travel_gaps(lens: Lens):
+    """``gaps(key)``: ``thickness[key]`` (an index or a slice) along the direction of travel.
+
+    After an odd number of mirrors light travels toward −z and a Zemax thickness is
+    negative; the surface step needs the gap along the travel direction (a negative one
+    means the next surface lies behind the rays). Without mirrors this is the thickness
+    slice itself, so a lens without mirrors is traced by the same operations.
+    """
+    t = lens.thickness
+    if not lens.mirrors:
+        return lambda key: t[key]
+    flips = [sum(1 for m in lens.mirrors if m <= i) % 2 for i in range(len(lens.surfaces))]
+    sign = jnp.asarray([-1.0 if f else 1.0 for f in flips], t.dtype)
+    return lambda key: (t * sign)[key]
 
 
 def _checked(lens: Lens, rays: Rays, where: str) -> Rays:
@@ -186,7 +233,8 @@ def trace_path(
         ``Rays`` of shape ``[m, *batch]``: after each surface (after refraction) and, last,
         on the image surface when ``upto`` is None (m = num_surfaces + 1), else
         m = upto + 1. ``path[i]`` is the rays after surface i; the wavelength is broadcast
-        to the full shape.
+        to the full shape. After a coordinate break each entry is in its surface's frame
+        (``optics.coordinates.frame_of(lens, i)``); at a break the rays have not moved.
     """
     _check_upto(lens, upto)
     rays = _checked(lens, rays, "trace_path")

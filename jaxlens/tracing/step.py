@@ -1,7 +1,8 @@
-"""The surface step: intersection, vector Snell refraction, validity and optical path.
+"""The surface step: intersection, vector Snell refraction (or reflection at a mirror),
+validity and optical path.
 
 Every trace (forward, backward from the sensor, the design loss) moves rays with
-``surface_step``; it is the only place in jaxlens that refracts.
+``surface_step``; it is the only place in jaxlens that refracts or reflects.
 
 Conventions:
     Global coordinates in mm, light toward +z, surface 1's vertex at z = 0 (see
@@ -307,6 +308,23 @@ def paraxial_bend(d, x, y, focal_length, n_before, n_after):
     return out, ok, jnp.where(ok, path, 0.0)
 
 
+def reflect(d, normal):
+    """The law of reflection, d − 2 (d·n̂) n̂, on (x, y, z) tuples of arrays.
+
+    Args:
+        d: unit incident directions.
+        normal: surface normals of any length and either orientation.
+
+    Returns:
+        The reflected unit directions (unchanged where the normal has zero length).
+    """
+    nn = normal[0] * normal[0] + normal[1] * normal[1] + normal[2] * normal[2]
+    dn = d[0] * normal[0] + d[1] * normal[1] + d[2] * normal[2]
+    ok = nn > 0
+    g = jnp.where(ok, -2.0 * dn / jnp.where(ok, nn, 1.0), 0.0)
+    return tuple(di + g * ni for di, ni in zip(d, normal, strict=True))
+
+
 def surface_normal(surface: AbstractSurface, x, y, z):
     """A normal (+z at the vertex, not of unit length) at a point on the surface (local frame)."""
     if surface.has_polynomial:
@@ -327,15 +345,17 @@ class RayState(eqx.Module):
 
 
 def surface_step(surface, z_vertex, st: RayState, n_before, n_after, *, first, refracts,
-                 newton_iters, gap=None):
+                 newton_iters, gap=None, reflects=False):
     """Move rays to one surface (vertex at global ``z_vertex``) and refract them there.
 
     ``n_before``/``n_after`` are the refractive indices on either side; ``first`` applies the
-    object-space rules of surface 1; ``refracts=False`` only intersects (the image surface).
+    object-space rules of surface 1; ``refracts=False`` only intersects (the image surface);
+    ``reflects=True`` (static) makes the surface a mirror (``n_after`` is then unused).
     Rays that fail keep their last position and direction and become invalid; ``opl`` adds
     n·t for valid rays. ``gap`` is the thickness before this surface: where it is negative
     the surface lies behind the previous one and the ray reaches it by going back along
-    its line.
+    its line, measured along the direction of travel (after an odd number of mirrors the
+    caller passes minus the Zemax thickness).
     """
     o_local = (st.p[0], st.p[1], st.p[2] - z_vertex)
     backward = None if gap is None or first else gap < 0
@@ -349,7 +369,9 @@ def surface_step(surface, z_vertex, st: RayState, n_before, n_after, *, first, r
     rim = surface.semi_diameter**2 * (1 + 64 * jnp.finfo(x.dtype).eps)
     ok = ok & (x * x + y * y <= rim)
     d, phase = st.d, None
-    if refracts and isinstance(surface, ParaxialSurface):  # static: the ideal thin lens
+    if reflects:
+        d = reflect(d, surface_normal(surface, x, y, z))
+    elif refracts and isinstance(surface, ParaxialSurface):  # static: the ideal thin lens
         d, bent, phase = paraxial_bend(d, x, y, surface.focal_length, n_before, n_after)
         ok = ok & bent
     elif refracts:

@@ -1,0 +1,147 @@
+"""Coordinate breaks: decenters and tilts between surfaces (Zemax ``COORDBRK``).
+
+A ``CoordinateBreak`` is a dummy surface in ``Lens.surfaces``: it neither refracts nor clips,
+and its only effect is to give the surfaces after it a new local frame.
+
+Conventions (Zemax's):
+    Decenters in mm along the current x and y axes; tilts in degrees about the x, y and z
+    axes, right-handed: the coordinate axes turn counterclockwise looking from the +axis
+    toward the origin. ``order = 0`` decenters first, then tilts about x, then about the
+    new y, then about the new z, so the new axes are the columns of
+    R = Rx(tilt_x)·Ry(tilt_y)·Rz(tilt_z). ``order = 1`` tilts first, about z, then the new y,
+    then the new x (R = Rz·Ry·Rx), and then decenters along the tilted axes. A break with
+    ``order`` toggled and every parameter negated undoes a break. With these signs a tilt
+    of +45° about x turns the new +z axis toward −y, so a fold mirror between two such
+    breaks sends light travelling toward +z off toward +y.
+
+Frames in the tracer:
+    Rays are carried in the frame of the last coordinate break before them, shifted along
+    its z axis so that every vertex keeps the z of ``Lens.vertex_z`` (without breaks this
+    is the global frame). The image intercepts that ``trace`` returns are in the image
+    surface's frame; ``frame_of`` gives that frame in global coordinates. A break moves no
+    ray: the rays stay where the previous surface left them, expressed in the new frame.
+"""
+
+from __future__ import annotations
+
+import equinox as eqx
+import jax.numpy as jnp
+import numpy as np
+from jaxtyping import Array, Float
+
+from . import checks
+from .surfaces import AbstractSurface
+
+
+class CoordinateBreak(AbstractSurface):
+    """A new local frame for the surfaces that follow (Zemax ``COORDBRK``, PARM 1..6).
+
+    Args:
+        decenter_x, decenter_y: decenters in mm (PARM 1, 2).
+        tilt_x, tilt_y, tilt_z: tilts in degrees, right-handed (PARM 3, 4, 5).
+        order: 0 decenter then tilt x, y, z; 1 tilt z, y, x then decenter (PARM 6). Static.
+
+    ``c`` and ``k`` are always 0 and ``semi_diameter`` is inf: code that reads any surface's
+    curvature or aperture sees a flat dummy surface. The medium after a break is the medium
+    before it (``Lens`` checks this).
+    """
+
+    c: Float[Array, ""] = eqx.field(converter=jnp.asarray, default=0.0)
+    k: Float[Array, ""] = eqx.field(converter=jnp.asarray, default=0.0)
+    decenter_x: Float[Array, ""] = eqx.field(converter=jnp.asarray, default=0.0)
+    decenter_y: Float[Array, ""] = eqx.field(converter=jnp.asarray, default=0.0)
+    tilt_x: Float[Array, ""] = eqx.field(converter=jnp.asarray, default=0.0)
+    tilt_y: Float[Array, ""] = eqx.field(converter=jnp.asarray, default=0.0)
+    tilt_z: Float[Array, ""] = eqx.field(converter=jnp.asarray, default=0.0)
+    semi_diameter: Float[Array, ""] = eqx.field(converter=jnp.asarray,
+                                                default_factory=lambda: jnp.asarray(jnp.inf))
+    order: int = eqx.field(static=True, default=0)
+
+    def __check_init__(self):
+        if self.order not in (0, 1) or isinstance(self.order, bool):
+            raise ValueError(f"CoordinateBreak: order must be 0 (decenter, then tilt) or 1 "
+                             f"(tilt, then decenter), got {self.order!r}")
+        for name in ("c", "k"):
+            v = getattr(self, name)
+            if not checks.is_traced(v) and np.any(np.asarray(v) != 0):
+                raise ValueError(f"CoordinateBreak: {name} must be 0 (a coordinate break has "
+                                 f"no shape), got {np.asarray(v)!r}")
+        for name in ("decenter_x", "decenter_y", "tilt_x", "tilt_y", "tilt_z"):
+            v = getattr(self, name)
+            if not checks.is_traced(v):
+                unit = "mm" if name.startswith("decenter") else "degrees"
+                checks.number(v, name, "CoordinateBreak", unit=unit)
+
+    def rotation(self) -> tuple:
+        """R as a row-major 3×3 tuple of tuples: the new axes are its columns."""
+        rx, ry, rz = (_rot(a, axis) for a, axis in
+                      ((self.tilt_x, 0), (self.tilt_y, 1), (self.tilt_z, 2)))
+        return _matmul(_matmul(rx, ry), rz) if self.order == 0 else _matmul(_matmul(rz, ry), rx)
+
+
+def _rot(deg, axis: int):
+    """Right-handed rotation by ``deg`` degrees about coordinate axis ``axis``."""
+    a = jnp.deg2rad(deg)
+    c, s = jnp.cos(a), jnp.sin(a)
+    one, zero = jnp.ones_like(c), jnp.zeros_like(c)
+    if axis == 0:
+        return ((one, zero, zero), (zero, c, -s), (zero, s, c))
+    if axis == 1:
+        return ((c, zero, s), (zero, one, zero), (-s, zero, c))
+    return ((c, -s, zero), (s, c, zero), (zero, zero, one))
+
+
+def _matmul(a, b):
+    return tuple(tuple(sum(a[i][k] * b[k][j] for k in range(3)) for j in range(3))
+                 for i in range(3))
+
+
+def transform(cb: CoordinateBreak, z_vertex, p, d):
+    """Points ``p`` and directions ``d`` ((x, y, z) tuples) in the frame after the break.
+
+    ``z_vertex`` is the break's vertex z in the current (z-shifted) frame; it keeps that z in
+    the new frame (see the module notes). Returns (p', d').
+    """
+    r = cb.rotation()
+    dx, dy = cb.decenter_x, cb.decenter_y
+    q = (p[0], p[1], p[2] - z_vertex)
+    if cb.order == 0:
+        q = (q[0] - dx, q[1] - dy, q[2])
+
+    def inv(v):  # Rᵀ v
+        return tuple(r[0][j] * v[0] + r[1][j] * v[1] + r[2][j] * v[2] for j in range(3))
+
+    q, d = inv(q), inv(d)
+    if cb.order == 1:
+        q = (q[0] - dx, q[1] - dy, q[2])
+    return (q[0], q[1], q[2] + z_vertex), d
+
+
+def frame_of(lens, index: int | None = None):
+    """The frame that ``trace`` reports rays in after ``lens.surfaces[index]`` (``None``:
+    the image surface), in global coordinates.
+
+    Returns:
+        (R, t): a ``[3, 3]`` rotation and a ``[3]`` offset such that a point ``p`` reported by
+        the tracer is ``R @ p + t`` in global coordinates (surface 1's frame) and a direction
+        ``d`` is ``R @ d``. The identity and zero without coordinate breaks.
+    """
+    n = lens.num_surfaces if index is None else index + 1
+    zs = lens.vertex_z()
+    dtype = jnp.result_type(lens.thickness)
+    rot = jnp.eye(3, dtype=dtype)
+    off = jnp.zeros(3, dtype)
+    for i in range(n):
+        s = lens.surfaces[i]
+        if not isinstance(s, CoordinateBreak):
+            continue
+        # Tracer frame after the break: p_new = Rᵀ(p_old − v) + (0, 0, z) with v the break's
+        # vertex (plus the decenter), so p_old = R p_new + v − R (0, 0, z).
+        r = jnp.stack([jnp.stack(row) for row in s.rotation()]).astype(dtype)
+        ez = jnp.asarray([0.0, 0.0, 1.0], dtype) * zs[i]
+        dec = jnp.stack([s.decenter_x, s.decenter_y, jnp.zeros_like(s.decenter_x)]).astype(dtype)
+        v = ez + (dec if s.order == 0 else r @ dec)
+        # Compose with the frame so far: global = rot @ p_old + off.
+        off = rot @ (v - r @ ez) + off
+        rot = rot @ r
+    return rot, off
