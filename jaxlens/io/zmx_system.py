@@ -13,8 +13,8 @@ import numpy as np
 
 from ..imaging import aiming
 from ..optics import paraxial
-from ..tracing import forward
 from ..optics.lens import Lens
+from ..tracing import forward
 from .zmx_common import ZmxWarning
 
 
