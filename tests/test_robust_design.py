@@ -1,4 +1,4 @@
-"""Tolerance-aware design (``jaxlens.design.robust``): the averaged loss, its pieces, its gradient."""
+"""Tolerance-aware design (``jaxlens.design.robust``): the averaged loss and its gradient."""
 
 import equinox as eqx
 import jax
@@ -36,8 +36,8 @@ def test_robust_loss_is_the_weighted_mean_of_the_perturbed_losses():
     robust = RobustObjective(base, draws, nominal_weight=0.3)
     _, aux = robust(p, args)
     l0 = float(base(p, args)[1].loss)
-    lk = [float(base(perturbed(p, jax.tree.map(lambda x: x[i], draws)), args)[1].loss)
-          for i in range(5)]
+    one_draw = [jax.tree.map(lambda x, i=i: x[i], draws) for i in range(5)]
+    lk = [float(base(perturbed(p, dr), args)[1].loss) for dr in one_draw]
     assert float(aux.loss) == pytest.approx(0.3 * l0 + 0.7 * np.mean(lk), rel=1e-12)
     assert np.std(lk) > 1e-3 * np.mean(lk)  # the draws really change the lens
     # A draw of a relative radius error ε scales the radius by 1 + ε.
