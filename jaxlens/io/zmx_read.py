@@ -515,6 +515,8 @@ def _glas_nd_vd(ln: _Line) -> tuple[float | None, float | None]:
         return None, None
     if not (math.isfinite(nd) and nd > 1.0 and math.isfinite(vd) and vd > 0.0):
         return None, None
+    if (nd, vd) == (1.5, 40.0):  # Zemax's untouched model-glass defaults: no claim
+        return None, None
     return nd, vd
 
 
