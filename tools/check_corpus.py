@@ -1,7 +1,8 @@
 """Run a folder of Zemax ``.zmx`` files through jaxlens (and optiland, where installed).
 
 For each file: does jaxlens load it (or refuse it, with the message), its image-space EFL
-(n′/Φ, what Zemax and optiland report), whether ``load → save → load`` is exact, and, with
+(|n′|/Φ; optiland reports n′/Φ, negative after an odd number of mirrors, and the
+comparison takes that sign into account), whether ``load → save → load`` is exact, and, with
 optiland installed: optiland's EFL of the original file and of the file jaxlens wrote, the
 relative EFL difference, and whether optiland reads the written file with jaxlens's clipping
 (CLAP radii) and image-space medium.
@@ -88,6 +89,8 @@ def check_file(path: str) -> dict:
     else:
         rec["status"] = "loaded"
         rec["efl"] = float(jl.paraxial_data(lens).efl_image_space)
+        # jaxlens reports |n′|/Φ; optiland n′/Φ with n′ < 0 after an odd number of mirrors.
+        rec["odd_mirrors"] = len(lens.mirrors) % 2 == 1
         with tempfile.TemporaryDirectory() as d:
             out = os.path.join(d, "written.zmx")
             with warnings.catch_warnings():
@@ -100,7 +103,8 @@ def check_file(path: str) -> dict:
         efl, _, err = optiland_efl(path)
         rec["optiland_efl"], rec["optiland_error"] = efl, err
         if efl is not None and "efl" in rec:
-            rec["rel_diff"] = abs(efl - rec["efl"]) / abs(rec["efl"])
+            sign = -1.0 if rec["odd_mirrors"] else 1.0
+            rec["rel_diff"] = abs(sign * efl - rec["efl"]) / abs(rec["efl"])
     return rec
 
 
@@ -119,10 +123,11 @@ def _optiland_written(lens, out: str) -> dict:
     wl = float(lens.wavelengths[lens.primary])
     n_ours = float(np.asarray(lens.materials[-1].index(wl)))
     n_theirs = optiland_image_index(optic, wl)
+    ours_efl = float(jl.paraxial_data(lens).efl_image_space)
+    sign = -1.0 if len(lens.mirrors) % 2 else 1.0  # optiland's n′/Φ has n′ < 0 (odd mirrors)
     return {
         "written_optiland_efl": efl,
-        "written_rel_diff": abs(efl - float(jl.paraxial_data(lens).efl_image_space))
-        / abs(float(jl.paraxial_data(lens).efl_image_space)),
+        "written_rel_diff": abs(sign * efl - ours_efl) / abs(ours_efl),
         "written_clipping_same": clip_ok,
         "written_image_index_same": math.isclose(n_ours, n_theirs, rel_tol=1e-9),
     }
@@ -134,7 +139,7 @@ def _fmt(x, spec=".10g"):
 
 def table(records: list[dict]) -> str:
     have_optiland = load_zemax_file is not None
-    head = f"{'file':42s} {'jaxlens':8s} {'EFL (n′/Φ)':>16s} {'rt':3s}"
+    head = f"{'file':42s} {'jaxlens':8s} {'EFL |n′|/Φ':>16s} {'rt':3s}"
     if have_optiland:
         head += f" {'optiland EFL':>16s} {'rel diff':>9s} {'written: EFL/clip/n′':>22s}"
     rows = [head, "-" * len(head)]
