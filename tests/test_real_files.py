@@ -2,6 +2,8 @@
 real ray aiming through clipping apertures, the image-space focal length, and the reader's
 apertures, field types and vignetting factors."""
 
+import warnings
+
 import equinox as eqx
 import jax.numpy as jnp
 import numpy as np
@@ -9,6 +11,7 @@ import pytest
 
 import jaxlens as jl
 from jaxlens.analysis import report
+from jaxlens.io import zmx
 from jaxlens.optics.lens import unclipped
 
 DATA = jl.__file__.rsplit("/", 1)[0] + "/data/lenses"
@@ -252,19 +255,25 @@ def test_field_types_refused_with_the_line(tmp_path, ftyp, match):
     assert _refused(tmp_path, text, match) == ftyp
 
 
-def test_vignetting_factors_refused_on_used_fields(tmp_path):
+def test_vignetting_factors_reported_on_used_fields(tmp_path):
+    """Vignetting factors on a used field are reported with the line (a warning; an error
+    under strict): the lens traces the whole pupil and its apertures clip. Its paraxial data
+    do not depend on them."""
     head = "ENPD 10\nFTYP 0 0 2 1 0 0 0\nYFLN 0 5 0 0\n"
     zeros = "VDXN 0 0 0 0\nVDYN 0 0 0 0\nVCXN 0 0 0 0\nVCYN 0 0 0 0\nVANN 0 0 0 0\n"
-    _load_text(tmp_path, _file(head + zeros))  # all zero: nothing to honour
-    _load_text(tmp_path, _file(head + zeros.replace("VCYN 0 0 0 0", "VCYN 0 0 0.5 0")))  # unused
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")
+        _, plain = _load_text(tmp_path, _file(head + zeros))  # all zero: nothing to report
+        _load_text(tmp_path, _file(head + zeros.replace("VCYN 0 0 0 0", "VCYN 0 0 0.5 0")))
     for key in ("VDXN", "VDYN", "VCXN", "VCYN", "VANN"):
-        bad = zeros.replace(f"{key} 0 0 0 0", f"{key} 0 0.25 0 0")
-        line = _refused(
-            tmp_path,
-            _file(head + bad),
-            f"vignetting factors are not supported \\({key} of field 2 is 0.25\\)",
-        )
-        assert line == f"{key} 0 0.25 0 0"
+        bad = _file(head + zeros.replace(f"{key} 0 0 0 0", f"{key} 0 0.25 0 0"))
+        number = bad.splitlines().index(f"{key} 0 0.25 0 0") + 1
+        with pytest.warns(zmx.ZmxWarning, match=f"f.zmx:{number}: vignetting factors ignored "
+                                               f"\\({key} of field 2 is 0.25\\)"):
+            _, lens = _load_text(tmp_path, bad)
+        assert float(jl.paraxial_data(lens).efl) == float(jl.paraxial_data(plain).efl)
+        with pytest.raises(ValueError, match=f"{key} of field 2 is 0.25.*strict"):
+            jl.load(tmp_path / "f.zmx", strict=True)
 
 
 def test_obscurations_and_other_apertures_refused(tmp_path):

@@ -51,9 +51,12 @@ What is read and written:
       ``OBNA x 1`` (object cone angle, degrees), both read as EPD = 2·d·tan u with d the
       object-to-entrance-pupil distance; ``FTYP 0`` (angle fields) and ``FTYP 2``
       (paraxial image heights, converted exactly to angles: θ = atan(h/K), K the paraxial
-      image height per unit tan θ) with ``XFLN``/``YFLN``; other field types, telecentric
-      object space, afocal image space and vignetting factors (VDXN, VDYN, VCXN, VCYN,
-      VANN) other than 0 are refused. ``RAIM`` with ray aiming on gives a warning (a
+      image height per unit tan θ) with ``XFLN``/``YFLN`` (fields FTYP counts but
+      ``YFLN`` omits are on axis, with a warning); other field types, telecentric object
+      space and afocal image space are refused. Vignetting factors (VDXN, VDYN, VCXN, VCYN,
+      VANN) other than 0 give a warning (an error with ``strict``): the whole pupil is traced
+      and the apertures clip. ``PUPD`` beside another aperture line (older Zemax) is
+      ignored; alone it is refused. ``RAIM`` with ray aiming on gives a warning (a
       ``Lens`` has no aiming setting; the samplers take ``aim="real"``). ``WAVM`` (or the
       older ``WAVL``) and ``PWAV``, ``UNIT``, ``NAME``.
     * The sensor (``Lens.sensor``) is kept in the image surface's comment,

@@ -30,6 +30,7 @@ from .zmx_common import (
     term_powers,
     xpoly_terms,
 )
+from .zmx_keywords import IGNORED_KEYWORDS
 
 _UNITS = {"MM": 1.0, "CM": 10.0, "IN": 25.4, "METER": 1000.0, "M": 1000.0}
 _SHIPPED_FOR_ZEMAX = {
@@ -60,19 +61,6 @@ _SURFACE_KEYS = {
     "OBSC",
     "OBDC",
 }
-# Keywords that Zemax writes and this reader knows but does not use (drawing, tolerancing,
-# solves, multi-configuration, optimisation and environment data). Any other keyword is
-# reported: a warning, or an error with ``strict=True`` (a cut-off keyword means a truncated
-# file).
-IGNORED_KEYWORDS = frozenset("""
-    VERS NOTE PFIL LANG ENVD GFAC SDMA PUSH ROPD PICB HYPR POLS GLRS GSTD NSCD COFN COFJ
-    FWGN FWGT ZVDX ZVDY ZVCX ZVCY ZVAN XFLD YFLD WWGT WWGN WAVN
-    FLDM MNCA MXCA MNEA MXEA MNCG MXCG MNEG MXEG MNPD MXPD TCEM TMIN TMAX BLNK TOL TOLE MNUM
-    MOFF MOPS MAZH EFFL DMFS SCOL SCTH SCON CONF OPDX PWRH VPAR PRAM IGNR PZUP TELE AFOC
-    APMN APMX APCX APCY APDX APDY APTP OBSF FLAP MEMA OEMA POPS HIDE MIRR SLAB
-    COAT FIMP CTHK EDGE THSO TRAC VARI VDSZ WAVL XFLN YFLN PPAR BLKS BLNK CAMA GLCZ HIDX
-    TCEX MAZH MIND MXWL MNWL OPTI NSCS NSOA NSOD NSOO NSOP NSOQ NSOS NSOU NSOV NSOW GCAT
-    """.split())
 _KEYWORD = re.compile(r"^[A-Z][A-Z0-9_]{1,9}$")
 _MAX_XDAT_TERMS = 230  # Zemax's extended polynomial: all terms up to degree 20
 
@@ -144,6 +132,7 @@ class _File:
     name: str = ""
     unit: float = 1.0
     aperture: tuple[str, float, _Line] | None = None
+    pupd: _Line | None = None  # older Zemax writes it beside ENPD/FLOA/…; alone it is refused
     gcat: list = field(default_factory=list)
     ftyp: _Line | None = None
     xfln: _Line | None = None
@@ -266,7 +255,7 @@ def _top_line(f: _File, key: str, ln: _Line, raw: str) -> None:
         what = "object cone angle" if kind else "object-space NA"
         f.aperture = ("cone" if kind else "obna", ln.float(1, what), ln)
     elif key == "PUPD":
-        raise ln.error("this aperture type is not supported; use ENPD, FNUM, FLOA or OBNA")
+        f.pupd = ln
     elif key in ("VDXN", "VDYN", "VCXN", "VCYN", "VANN"):
         f.vignetting.append(ln)
     elif key == "RAIM":
@@ -526,10 +515,12 @@ def _glas_nd_vd(ln: _Line) -> tuple[float | None, float | None]:
         return None, None
     if not (math.isfinite(nd) and nd > 1.0 and math.isfinite(vd) and vd > 0.0):
         return None, None
+    if (nd, vd) == (1.5, 40.0):  # Zemax's untouched model-glass defaults: no claim
+        return None, None
     return nd, vd
 
 
-def _fields(f: _File) -> np.ndarray:
+def _fields(f: _File, strict: bool) -> np.ndarray:
     """The field values as written: angles (deg) or paraxial image heights (lens units)."""
     count = None
     if f.ftyp is not None and len(f.ftyp.tokens) > 3:
@@ -541,8 +532,12 @@ def _fields(f: _File) -> np.ndarray:
     if count is None:
         count = max(1, max((i + 1 for i, v in enumerate(ys) if v != 0), default=1))
     if len(ys) < count:
-        raise f.yfln.error(f"FTYP announces {count} fields, YFLN gives {len(ys)}")
-    zmx_system.check_vignetting(f.vignetting, count)
+        _report(strict, f"{f.path}:{f.yfln.number}: FTYP announces {count} fields, YFLN gives "
+                        f"{len(ys)}; the fields it does not give are read as 0 (on axis)")
+        ys += [0.0] * (count - len(ys))
+    vignetting = zmx_system.vignetting_factors(f.vignetting, count)
+    if vignetting:
+        _report(strict, vignetting)
     xs = (xs + [0.0] * count)[:count]
     ys = ys[:count]
     if any(x != 0 for x in xs):
@@ -736,7 +731,7 @@ def loads(text: str, path: str = "<zmx>", *, strict: bool = False) -> Lens:
     _check_image_medium(f, body)
     zmx_system.ray_aiming(f.raim, f.path)
     field_type = zmx_system.field_type(f.ftyp)
-    fields = _fields(f)
+    fields = _fields(f, strict)
     lens = Lens(
         surfaces=tuple(surfaces),
         thickness=_arr(np.array(thick, np.float64)),
@@ -767,6 +762,8 @@ def loads(text: str, path: str = "<zmx>", *, strict: bool = False) -> Lens:
         except ValueError as e:
             raise f.ftyp.error(str(e)) from None
     checks.field_angles(np.asarray(lens.fields), f"{path}: XFLN/YFLN", "field angles")
+    if f.aperture is None and f.pupd is not None:
+        raise f.pupd.error("this aperture type is not supported; use ENPD, FNUM, FLOA or OBNA")
     if f.aperture is None:
         raise ValueError(f"{path}: no aperture (ENPD, FNUM, FLOA or OBNA line)")
     kind, value, ln = f.aperture

@@ -171,23 +171,26 @@ def field_type(ln) -> int:
     return kind
 
 
-def check_vignetting(lines, count: int) -> None:
-    """Refuse vignetting factors (VDXN, VDYN, VCXN, VCYN, VANN) other than 0 on the first
-    ``count`` (used) fields.
+def vignetting_factors(lines, count: int) -> str | None:
+    """The message for vignetting factors (VDXN, VDYN, VCXN, VCYN, VANN) other than 0 on the
+    first ``count`` (used) fields, or None.
 
-    They shrink and shift each field's pupil; jaxlens's pupil is the whole entrance pupil
-    for every field, so ignoring them would trace a beam the file does not describe.
+    They shrink and shift each field's pupil, Zemax's stand-in for the clipping of the
+    surface apertures. jaxlens samples the whole entrance pupil for every field and lets the
+    apertures clip, so the beam can differ from the file's: the reader reports them (a
+    warning; an error under ``strict``). Paraxial data and the EFL do not depend on them.
     """
     for ln in lines:
         vals = [ln.float(i, f"{ln.tokens[0]} value") for i in range(1, len(ln.tokens))]
         used = [(i + 1, v) for i, v in enumerate(vals[:count]) if v != 0]
         if used:
             i, v = used[0]
-            raise ln.error(
-                f"vignetting factors are not supported ({ln.tokens[0]} of field {i} is "
-                f"{v:g}); jaxlens samples the whole entrance pupil and lets surface apertures "
-                f"(CLAP) vignette: clear the vignetting factors and give the apertures instead"
+            return (
+                f"{ln.path}:{ln.number}: vignetting factors ignored ({ln.tokens[0]} of field {i} "
+                f"is {v:g}); jaxlens samples the whole entrance pupil and lets the surface "
+                f"apertures (CLAP, fixed DIAM) vignette: {ln.text.strip()!r}"
             )
+    return None
 
 
 def ray_aiming(ln, path: str) -> None:

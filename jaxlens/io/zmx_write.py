@@ -360,7 +360,8 @@ def dumps(lens: Lens, path: str = "lens.zmx", *, model_glass: str = "blank"):
     head = [
         "VERS 190513 80 123457 L123457",
         "MODE SEQ",
-        f"NAME {' '.join(lens.name.split())}".rstrip(),
+        # One line; the reader strips the ends but keeps inner spacing (a round trip is exact).
+        f"NAME {' '.join(lens.name.splitlines()).strip()}".rstrip(),
         "UNIT MM X W X CM MR CPMM",
         f"ENPD {_z(lens.epd)}",
         "ENVD 2.0E+1 1 0",

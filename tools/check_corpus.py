@@ -1,0 +1,197 @@
+"""Run a folder of Zemax ``.zmx`` files through jaxlens (and optiland, where installed).
+
+For each file: does jaxlens load it (or refuse it, with the message), its image-space EFL
+(|n′|/Φ; optiland reports n′/Φ, negative after an odd number of mirrors, and the
+comparison takes that sign into account), whether ``load → save → load`` is exact, and, with
+optiland installed: optiland's EFL of the original file and of the file jaxlens wrote, the
+relative EFL difference, and whether optiland reads the written file with jaxlens's clipping
+(CLAP radii) and image-space medium.
+
+    python tools/check_corpus.py /tmp/corpus            # a table
+    python tools/check_corpus.py /tmp/corpus --json     # one JSON record a file
+
+optiland is optional (it is not a jaxlens dependency); without it its columns are skipped.
+"""
+
+from __future__ import annotations
+
+import argparse
+import contextlib
+import io
+import json
+import math
+import os
+import sys
+import tempfile
+import warnings
+
+import jax
+
+jax.config.update("jax_enable_x64", True)
+
+import numpy as np  # noqa: E402
+
+import jaxlens as jl  # noqa: E402
+
+try:  # optional
+    import optiland  # noqa: F401
+    from optiland.fileio import load_zemax_file
+except ImportError:
+    load_zemax_file = None
+
+EFL_RTOL = 1e-6
+
+
+def optiland_efl(path: str):
+    """optiland's EFL (f2) of a .zmx file and the optic, or (None, None, error text)."""
+    try:
+        with warnings.catch_warnings(), contextlib.redirect_stdout(io.StringIO()):
+            warnings.simplefilter("ignore")
+            optic = load_zemax_file(path)
+            return float(np.asarray(optic.paraxial.f2())), optic, ""
+    except Exception as e:  # noqa: BLE001  (report whatever optiland raises)
+        return None, None, f"{type(e).__name__}: {str(e)[:120]}"
+
+
+def optiland_apertures(optic) -> list[float]:
+    """optiland's clipping radius of each surface (inf where it has none)."""
+    out = []
+    for s in optic.surfaces:
+        ap = getattr(s, "aperture", None)
+        r = getattr(ap, "r_max", None) if ap is not None else None
+        out.append(float(r) if r is not None else math.inf)
+    return out
+
+
+def optiland_image_index(optic, wavelength: float) -> float:
+    mat = optic.surfaces[-1].material_post
+    return float(np.ravel(np.asarray(mat.n(wavelength)))[0])
+
+
+def _same_lens(a, b) -> bool:
+    la, lb = jax.tree_util.tree_leaves(a), jax.tree_util.tree_leaves(b)
+    if len(la) != len(lb) or jax.tree_util.tree_structure(a) != jax.tree_util.tree_structure(b):
+        return False
+    return all(np.array_equal(np.asarray(x), np.asarray(y), equal_nan=True) for x, y in zip(la, lb))
+
+
+def check_file(path: str) -> dict:
+    rec: dict = {"file": os.path.basename(path)}
+    try:
+        with warnings.catch_warnings(record=True) as caught:
+            warnings.simplefilter("always")
+            lens = jl.load(path)
+        rec["warnings"] = [str(w.message) for w in caught]
+    except ValueError as e:
+        rec.update(status="refused", message=str(e))
+    except Exception as e:  # noqa: BLE001  (a crash is what this tool is for finding)
+        rec.update(status="crash", message=f"{type(e).__name__}: {e}")
+    else:
+        rec["status"] = "loaded"
+        rec["efl"] = float(jl.paraxial_data(lens).efl_image_space)
+        # jaxlens reports |n′|/Φ; optiland n′/Φ with n′ < 0 after an odd number of mirrors.
+        rec["odd_mirrors"] = len(lens.mirrors) % 2 == 1
+        with tempfile.TemporaryDirectory() as d:
+            out = os.path.join(d, "written.zmx")
+            with warnings.catch_warnings():
+                warnings.simplefilter("ignore")
+                jl.save(lens, out)
+                rec["round_trip_exact"] = _same_lens(lens, jl.load(out))
+            if load_zemax_file is not None:
+                rec.update(_optiland_written(lens, out))
+    if load_zemax_file is not None:
+        efl, _, err = optiland_efl(path)
+        rec["optiland_efl"], rec["optiland_error"] = efl, err
+        if efl is not None and "efl" in rec:
+            sign = -1.0 if rec["odd_mirrors"] else 1.0
+            rec["rel_diff"] = abs(sign * efl - rec["efl"]) / abs(rec["efl"])
+    return rec
+
+
+def _optiland_written(lens, out: str) -> dict:
+    """optiland on the file jaxlens wrote: EFL, clipping radii and image medium."""
+    efl, optic, err = optiland_efl(out)
+    if efl is None:
+        return {"written_optiland_error": err}
+    # The finite clipping radii in surface order (optiland may fold coordinate breaks into
+    # the next surface, so surfaces are not matched one to one).
+    ours = [float(getattr(s, "semi_diameter", math.inf)) for s in lens.surfaces]
+    ours = [r for r in ours if math.isfinite(r)]
+    theirs = [r for r in optiland_apertures(optic) if math.isfinite(r)]
+    clip_ok = len(ours) == len(theirs) and all(
+        math.isclose(a, b, rel_tol=1e-12) for a, b in zip(ours, theirs))
+    wl = float(lens.wavelengths[lens.primary])
+    n_ours = float(np.asarray(lens.materials[-1].index(wl)))
+    n_theirs = optiland_image_index(optic, wl)
+    ours_efl = float(jl.paraxial_data(lens).efl_image_space)
+    sign = -1.0 if len(lens.mirrors) % 2 else 1.0  # optiland's n′/Φ has n′ < 0 (odd mirrors)
+    return {
+        "written_optiland_efl": efl,
+        "written_rel_diff": abs(sign * efl - ours_efl) / abs(ours_efl),
+        "written_clipping_same": clip_ok,
+        "written_image_index_same": math.isclose(n_ours, n_theirs, rel_tol=1e-9),
+    }
+
+
+def _fmt(x, spec=".10g"):
+    return "-" if x is None else format(x, spec)
+
+
+def table(records: list[dict]) -> str:
+    have_optiland = load_zemax_file is not None
+    head = f"{'file':42s} {'jaxlens':8s} {'EFL |n′|/Φ':>16s} {'rt':3s}"
+    if have_optiland:
+        head += f" {'optiland EFL':>16s} {'rel diff':>9s} {'written: EFL/clip/n′':>22s}"
+    rows = [head, "-" * len(head)]
+    for r in records:
+        line = (f"{r['file'][:42]:42s} {r['status']:8s} {_fmt(r.get('efl')):>16s} "
+                f"{('yes' if r.get('round_trip_exact') else 'NO') if 'efl' in r else '-':3s}")
+        if have_optiland:
+            rd = r.get("rel_diff")
+            flag = "" if rd is None or rd <= EFL_RTOL else " !"
+            w = ("-" if "written_rel_diff" not in r else
+                 f"{r['written_rel_diff']:.1e}/{'ok' if r['written_clipping_same'] else 'NO'}/"
+                 f"{'ok' if r['written_image_index_same'] else 'NO'}")
+            if "written_optiland_error" in r:
+                w = "optiland failed"
+            line += f" {_fmt(r.get('optiland_efl')):>16s} {_fmt(rd, '.1e'):>9s}{flag:2s} {w:>20s}"
+        rows.append(line)
+        if r["status"] != "loaded":
+            rows.append(f"    {r['message'][:300]}")
+        if have_optiland and r.get("optiland_error"):
+            rows.append(f"    optiland: {r['optiland_error']}")
+    n = len(records)
+    loaded = sum(r["status"] == "loaded" for r in records)
+    rows.append(f"\njaxlens loads {loaded}/{n}; refused "
+                f"{sum(r['status'] == 'refused' for r in records)}; crashed "
+                f"{sum(r['status'] == 'crash' for r in records)}")
+    if have_optiland:
+        both = [r for r in records if r.get("rel_diff") is not None]
+        agree = sum(r["rel_diff"] <= EFL_RTOL for r in both)
+        rows.append(f"both load {len(both)}; EFL agrees to {EFL_RTOL:g} relative in {agree}")
+    else:
+        rows.append("optiland not installed: its columns are skipped")
+    return "\n".join(rows)
+
+
+def main(argv=None) -> int:
+    ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    ap.add_argument("folder")
+    ap.add_argument("--json", action="store_true", help="one JSON record a file")
+    args = ap.parse_args(argv)
+    files = sorted(os.path.join(args.folder, f) for f in os.listdir(args.folder)
+                   if f.lower().endswith(".zmx"))
+    if not files:
+        print(f"{args.folder}: no .zmx files", file=sys.stderr)
+        return 2
+    records = [check_file(f) for f in files]
+    if args.json:
+        for r in records:
+            print(json.dumps(r))
+    else:
+        print(table(records))
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())
