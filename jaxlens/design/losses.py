@@ -266,9 +266,12 @@ class Objective(eqx.Module):
         sampling: the ray-loss sampling.
         gap_bounds: ``[n]`` spacing bounds (mm).
         efl: paraxial EFL target (mm, ``DesignSpec.efl``), or None for a free EFL. When set,
-            one more residual ``sqrt(efl_weight · spot_scale) · (EFL − efl)`` is appended
-            (last), so an EFL miss of δ mm costs as much as a mean square spot error of
-            ``efl_weight · δ²`` mm².
+            one more residual ``sqrt(efl_weight · beta · spot_scale) · (EFL − efl)`` is
+            appended (last): with the centroid reference (beta = 1) an EFL miss of δ mm
+            costs as much as a mean square spot error of ``efl_weight · δ²`` mm². With the
+            ideal reference (beta = 0) it is off: the ideal image points already carry the
+            EFL (``DesignSpec.image_mapping``), and from a nearly flat start an EFL residual
+            would outweigh the spots and crowd the elements.
         efl_weight: weight of that residual.
     """
 
@@ -283,7 +286,7 @@ class Objective(eqx.Module):
         if self.efl is None:
             return res, aux
         f = paraxial.efl(self.pmap.to_lens(params))
-        r = jnp.sqrt(self.efl_weight * args.spot_scale) * (f - self.efl)
+        r = jnp.sqrt(self.efl_weight * args.beta * args.spot_scale) * (f - self.efl)
         aux = eqx.tree_at(lambda a: a.loss, aux, aux.loss + r**2)
         return jnp.concatenate([res, r[None]]), aux
 
