@@ -148,15 +148,17 @@ def stage_args(spec: DesignSpec, stage: Stage, weights, reg_weights, dtype) -> S
         return jnp.full((b,), x, dtype)
 
     rw = jnp.asarray(reg_weights, dtype) * (1.0 if stage.regularize else 0.0)
+    focal, k = spec.image_mapping()
     return StageArgs(
         tan_max=full(math.tan(math.radians(0.5 * stage.fov))),
         epd=full(spec.focal_length / stage.fnum),
-        focal=full(spec.focal_length),
+        focal=full(focal),
         beta=full(stage.beta),
         pin=full(stage.pin),
         spot_scale=full(1.0),
         field_weights=jnp.asarray(weights, dtype),
         reg_weights=jnp.broadcast_to(rw, (b, 3)),
+        distortion_k=full(k),
     )
 
 

@@ -18,8 +18,9 @@ Ray loss:
 
     with ω_p the pupil weight and e = |p − ref_k| for a ray that reaches the image, or a
     fixed EPD/2 for a ray that fails (so vignetting or losing rays never pays). The
-    reference blends the ideal (distortion-free, pinhole) image point (0, f·tan θ_k), f the
-    spec's focal length, and the polychromatic centroid:
+    reference blends the ideal image point (0, f·tan θ_k) (distortion-free, pinhole; f the
+    spec's focal length, or with an EFL target f·tan θ_k·(1 + k·tan²θ_k), see
+    ``DesignSpec.image_mapping``) and the polychromatic centroid:
     ``ref = beta·centroid + (1 − beta)·ideal``. With the centroid reference, ``pin`` adds
     the squared miss of the full-field centroid height from the sensor's (stage) half
     diagonal, so the field still fills the sensor while distortion relaxes. The loss is
@@ -51,6 +52,8 @@ class StageArgs(eqx.Module):
         tan_max: tan of the stage's half diagonal field.
         epd: entrance pupil diameter of the stage, mm.
         focal: the spec focal length f (mm) that sets the ideal image points.
+        distortion_k: the ideal image height is ``focal·tanθ·(1 + distortion_k·tan²θ)``
+            (0: distortion-free; see ``DesignSpec.image_mapping``).
         beta: spot reference blend, 0 = ideal image point, 1 = centroid.
         pin: weight of the full-field image-height pin (used with the centroid reference).
         spot_scale: factor (1/mm²) on the spot and pin terms; the design loop sets it to the
@@ -68,6 +71,7 @@ class StageArgs(eqx.Module):
     spot_scale: Float[Array, ""]
     field_weights: Float[Array, " K"]
     reg_weights: Float[Array, " 3"]
+    distortion_k: Float[Array, ""] = 0.0
 
 
 def radial_area_weights(fracs, sensor_size, n: int = 16) -> np.ndarray:
@@ -179,7 +183,8 @@ def spot_errors(path: Rays, sampling: RayLoss, args: StageArgs) -> SpotResult:
     total = jnp.sum(pw, axis=(1, 2))  # [K]
     cen = jnp.sum(v[..., None] * p, axis=(1, 2)) / safe[:, None]  # [K, 2]
     tan = sampling.fracs * args.tan_max
-    ideal = jnp.stack([jnp.zeros_like(tan), args.focal * tan], -1)
+    ideal_y = args.focal * tan * (1.0 + args.distortion_k * tan**2)
+    ideal = jnp.stack([jnp.zeros_like(tan), ideal_y], -1)
     ref = args.beta * cen + (1.0 - args.beta) * ideal
     err = jnp.where(valid[..., None], p - ref[:, None, None, :], 0.0)
     # A ray that fails is charged a fixed error of half the entrance pupil diameter, so that
@@ -190,7 +195,8 @@ def spot_errors(path: Rays, sampling: RayLoss, args: StageArgs) -> SpotResult:
     w = args.field_weights / jnp.maximum(jnp.sum(args.field_weights), 1e-12)
     scale = jnp.sqrt(args.spot_scale * w / total)[:, None, None] * jnp.sqrt(pw)
     residuals = err * scale[..., None]
-    height = args.focal * args.tan_max  # stage half diagonal on the sensor
+    # The stage's full-field image height (the sensor half diagonal in the last stages).
+    height = args.focal * args.tan_max * (1.0 + args.distortion_k * args.tan_max**2)
     pin = jnp.sqrt(args.pin * args.spot_scale) * (cen[-1, 1] - height)
     frac = jnp.sum(v, axis=(1, 2)) / total
     return SpotResult(residuals, ms, frac, cen[:, 1], pin)
@@ -259,14 +265,30 @@ class Objective(eqx.Module):
         pmap: the ``Parameterization``.
         sampling: the ray-loss sampling.
         gap_bounds: ``[n]`` spacing bounds (mm).
+        efl: paraxial EFL target (mm, ``DesignSpec.efl``), or None for a free EFL. When set,
+            one more residual ``sqrt(efl_weight · beta · spot_scale) · (EFL − efl)`` is
+            appended (last): with the centroid reference (beta = 1) an EFL miss of δ mm
+            costs as much as a mean square spot error of ``efl_weight · δ²`` mm². With the
+            ideal reference (beta = 0) it is off: the ideal image points already carry the
+            EFL (``DesignSpec.image_mapping``), and from a nearly flat start an EFL residual
+            would outweigh the spots and crowd the elements.
+        efl_weight: weight of that residual.
     """
 
     pmap: object
     sampling: RayLoss
     gap_bounds: Float[Array, " n"]
+    efl: float | None = eqx.field(static=True, default=None)
+    efl_weight: float = eqx.field(static=True, default=1.0)
 
     def __call__(self, params, args: StageArgs):
-        return design_residuals(params, self.pmap, self.sampling, args, self.gap_bounds)
+        res, aux = design_residuals(params, self.pmap, self.sampling, args, self.gap_bounds)
+        if self.efl is None:
+            return res, aux
+        f = paraxial.efl(self.pmap.to_lens(params))
+        r = jnp.sqrt(self.efl_weight * args.beta * args.spot_scale) * (f - self.efl)
+        aux = eqx.tree_at(lambda a: a.loss, aux, aux.loss + r**2)
+        return jnp.concatenate([res, r[None]]), aux
 
     def field_rms(self, params, args: StageArgs) -> Float[Array, " K"]:
         """RMS spot error per loss field (mm) at the current parameters."""

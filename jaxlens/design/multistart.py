@@ -46,6 +46,8 @@ class DesignConfig:
         reg_weights: obliquity, spacing and slope regularizer weights (the spot term is
             normalised to about 1 at every epoch start).
         pin: weight of the image-height pin in the final stages.
+        efl_weight: weight of the paraxial EFL residual when ``spec.efl`` is set
+            (``losses.Objective``).
         reference: spot reference of the curriculum stages (``"ideal"`` or ``"centroid"``).
         epoch: steps between re-weightings.
         irls: re-weight fields by 1/RMS.
@@ -72,6 +74,7 @@ class DesignConfig:
     lr_k: float = 0.0
     reg_weights: tuple[float, float, float] = (40.0, 1000.0, 40.0)
     pin: float = 1.0
+    efl_weight: float = 1.0
     reference: str = "ideal"
     epoch: int = 50
     irls: bool = True
@@ -224,7 +227,8 @@ def design(
     pmap = parameterization(spec, dtype)
     sampling = RayLoss.make(config.n_fields, config.rings, spec.wavelengths, spec.sensor_size,
                             dtype)
-    objective = Objective(pmap, sampling, jnp.asarray(gap_bounds(spec), dtype))
+    objective = Objective(pmap, sampling, jnp.asarray(gap_bounds(spec), dtype), efl=spec.efl,
+                          efl_weight=config.efl_weight)
     devices = list(jax.devices() if devices is None else devices)
     n_dev = min(len(devices), len(seeds)) if shard else 1
     padded = seeds + [seeds[-1]] * (-len(seeds) % n_dev)

@@ -97,6 +97,10 @@ class DesignSpec:
         fov_start: full diagonal FoV (deg) where the curriculum starts.
         fnum_start: F-number where the curriculum starts.
         name: a label for files and plots.
+        efl: paraxial EFL target in mm, or None (free, the paper's convention). When set,
+            the design loss holds the paraxial EFL there (``design.losses.Objective``) while
+            ``focal_length`` still sets the sensor-filling image height and the EPD, so the
+            difference is taken up by distortion (e.g. barrel when ``efl > focal_length``).
     """
 
     fov: float = 80.8
@@ -115,6 +119,7 @@ class DesignSpec:
     fov_start: float = 47.5
     fnum_start: float = 2.8
     name: str = "classical6p"
+    efl: float | None = None
 
     def __post_init__(self):
         self.validate()
@@ -139,6 +144,19 @@ class DesignSpec:
     def epd(self) -> float:
         """Entrance pupil diameter f / F#, mm."""
         return self.focal_length / self.fnum
+
+    def image_mapping(self) -> tuple[float, float]:
+        """``(f, k)`` of the ideal image height ``f·tanθ·(1 + k·tan²θ)`` the design aims at.
+
+        Without an ``efl`` target, ``(focal_length, 0)``: distortion-free. With one,
+        ``f = efl`` (the paraxial slope) and k puts the full field on the sensor
+        half-diagonal, ``efl·tanθ·(1 + k·tan²θ) = half_diagonal``: a barrel (k < 0) or
+        pincushion (k > 0) that grows as tan²θ, the leading term of smooth distortion.
+        """
+        if self.efl is None:
+            return self.focal_length, 0.0
+        t2 = math.tan(math.radians(self.half_fov)) ** 2
+        return self.efl, (self.focal_length / self.efl - 1.0) / t2
 
     def focal_length_at(self, fov: float) -> float:
         """Focal length implied by a (stage) FoV on this sensor, mm."""
@@ -205,6 +223,9 @@ class DesignSpec:
         if not 0.0 < self.fov_start <= self.fov:
             raise ValueError(f"{where}: fov_start must lie in (0, fov={self.fov}], got "
                              f"{self.fov_start}")
+        if self.efl is not None and not self.efl > 0:
+            raise ValueError(f"{where}: efl must be a positive focal length in mm (or None), "
+                             f"got {self.efl}")
         if self.bfl <= 0:
             raise ValueError(f"{where}: bfl must be positive, got {self.bfl}")
         if self.total_track <= self.bfl:

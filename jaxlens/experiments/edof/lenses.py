@@ -7,10 +7,10 @@ Conventions:
     surface 1 that ``jaxlens.psf`` and ``jaxlens.render`` take (the same for a stop-first lens).
 
 The classical lens (``classical_lens``) is the shipped prescription
-``jaxlens/data/lenses/edof_classical.json``: a 4-element plastic aspheric lens with the stop
-first, paraxial EFL 5.55 mm, EPD 2.60 mm (F/2.1), a 68.8° diagonal field on a 7.20 mm sensor
-diagonal (1024 × 1024 pixels of 4.97 µm), focused at 20 cm.
-``jaxlens.experiments.edof.design`` made it.
+``jaxlens/data/lenses/edof_classical.json``: a 5-element plastic aspheric lens with the stop
+first, paraxial EFL 5.55 mm, EPD 2.60 mm (F/2.13), a 68.8° diagonal field on a 7.20 mm sensor
+diagonal (1024 × 1024 pixels of 4.97 µm; about −5 % barrel distortion at the corner), focused
+at 20 cm. ``jaxlens.experiments.edof.design`` made it (record: ``experiments/edof/base_lens.json``).
 
 The EDoF lens replaces the first lens surface by a ``Hybrid`` surface (even asphere plus the
 odd polynomial Σ_j b_j x^{2j+1} + d_j y^{2j+1}). The cubic-plate baseline is a thin cubic
