@@ -8,7 +8,6 @@ number is computed here by the library's paraxial and real-ray functions.
 
 import json
 import math
-import time
 
 import equinox as eqx
 import jax
@@ -127,10 +126,8 @@ def test_spec_efl_checks_and_objective_residual():
 
 def test_design_command_smoke(tmp_path):
     out = tmp_path / "lens.json"
-    t0 = time.perf_counter()
     D.main(["--smoke", "--seeds", "0", "--elements", "4", "--out", str(out),
             "--record-dir", str(tmp_path), "--quiet"])
-    seconds = time.perf_counter() - t0
     for name in ("base_lens.json", "base_lens_spots.png", "base_lens_command.txt"):
         assert (tmp_path / name).stat().st_size > 0, name
     from jaxlens import load
@@ -144,7 +141,6 @@ def test_design_command_smoke(tmp_path):
     assert set(rec["rms_map"]["mean_um"]) == {"0.1", "0.2", "10"}
     assert rec["design"]["spec"]["efl_target"] == pytest.approx(5.55)
     assert "--smoke" in (tmp_path / "base_lens_command.txt").read_text()
-    assert seconds < 120, seconds  # a budget of seconds, not minutes
 
 
 def test_image_mapping_puts_the_full_field_on_the_sensor_corner():
