@@ -73,7 +73,7 @@ def test_loads_with_optilands_efl(name):
     lens, caught = _load(name)
     expected = EXPECTED_WARNINGS.get(name, [])
     assert len(caught) == len(expected), caught
-    for pattern, msg in zip(expected, caught):
+    for pattern, msg in zip(expected, caught, strict=True):
         assert re.search(pattern, msg), (pattern, msg)
         assert msg.startswith(os.path.join(DATA, name) + ":")
     efl, wavelength = OPTILAND_EFL[name]
@@ -89,7 +89,7 @@ def test_round_trip_is_exact(name, tmp_path):
     again, caught = _load(out)
     assert caught == []  # what jaxlens writes it reads back without a report
     assert jax.tree_util.tree_structure(again) == jax.tree_util.tree_structure(lens)
-    for a, b in zip(jax.tree_util.tree_leaves(lens), jax.tree_util.tree_leaves(again)):
+    for a, b in zip(jax.tree_util.tree_leaves(lens), jax.tree_util.tree_leaves(again), strict=True):
         np.testing.assert_array_equal(np.asarray(a), np.asarray(b))
 
 
