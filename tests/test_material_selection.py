@@ -193,3 +193,25 @@ def test_cli_smoke_selects_catalog_materials(tmp_path):
         glas = [ln.split()[1] for ln in f if ln.strip().startswith("GLAS")]
     assert glas == sel["best"]
     assert os.path.isfile(os.path.join(out, "PLASTICS.AGF"))
+
+
+@pytest.mark.slow
+def test_search_then_polish_gives_catalog_lenses():
+    """The whole path: continuous stages, the loss search, the polish around the choice."""
+    from jaxlens.optics.catalog import CatalogMaterial
+
+    cfg = multistart.DesignConfig(n_fields=3, rings=2, steps=3, final_steps=3, polish_steps=1,
+                                  epoch=3, log_every=3, float64=True, materials="search")
+    res = multistart.design(SMALL, [0, 1], cfg, progress=False, shard=False)
+    assert res.history.stages[-1].startswith("polish")
+    names = set(catalog.catalog_names("PLASTICS"))
+    for i in range(2):
+        lens = res.lens(i)
+        glass = [m for m in lens.materials if isinstance(m, CatalogMaterial)]
+        assert [m.name for m in glass] == list(res.materials[i]) and set(res.materials[i]) <= names
+        # The polished geometry traced with the real catalog materials: the same indices at
+        # the design wavelengths as the tables the polish used.
+        wl = jnp.asarray(SMALL.wavelengths)
+        np.testing.assert_allclose(np.stack([np.asarray(m.index(wl)) for m in glass]),
+                                   np.asarray(res.params.m[i]), rtol=1e-12)
+    assert res.continuous_materials.shape == (2, 2, 2)

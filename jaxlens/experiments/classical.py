@@ -241,11 +241,8 @@ def config_from_args(args):
     if args.polish == "none":
         cfg = dataclasses.replace(cfg, polish_steps=0)
     if args.smoke:
-        # With material selection the smoke run keeps 2 polish steps (the re-optimisation
-        # around the snapped materials).
         cfg = dataclasses.replace(cfg, n_fields=5, rings=2, steps=6, final_steps=6,
-                                  polish_steps=0 if args.select_materials == "fixed" else 2,
-                                  epoch=6, log_every=3)
+                                  polish_steps=0, epoch=6, log_every=3)
     elif args.steps != 1.0:
         cfg = cfg.scaled(args.steps)
     if args.polish_steps is not None and not args.smoke and args.polish != "none":
