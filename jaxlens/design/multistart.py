@@ -19,12 +19,19 @@ import jax.numpy as jnp
 import numpy as np
 from jax.sharding import Mesh, NamedSharding, PartitionSpec
 
+from ..optics import catalog
 from .curriculum import History, Stage, paper_stages, run, stage_args
 from .init import gap_bounds, parameterization, random_starts
 from .losses import ImageObjective, Objective, RayLoss
-from ..optics import catalog
-from .materials import (DEFAULT_CATALOGS, CatalogRegion, TableMaterials, check_mode,
-                        initial_logits, search, snap)
+from .materials import (
+    DEFAULT_CATALOGS,
+    CatalogRegion,
+    TableMaterials,
+    check_mode,
+    initial_logits,
+    search,
+    snap,
+)
 from .params import LensParams
 from .solvers import LBFGSB, Adam, DampedLeastSquares, LevenbergMarquardt
 from .spec import DesignSpec
