@@ -16,6 +16,8 @@ deep learned refractive optics", Nat. Commun. 15, 6572 (2024), in JAX:
   (``solvers``): one interface over optax, a jacfwd Levenberg–Marquardt, optimistix and
   jaxopt.
 * :func:`design` (``multistart``): many seeds at once, vmapped and sharded over devices.
+* :class:`CatalogRegion`, :class:`HullMaterials` (``materials``): material selection, each
+  element's (nd, Vd) free inside a catalog's hull, then snapped to a catalog material.
 * :func:`evaluate_design` (``evaluate.evaluate``): the honest 256-field evaluation and
   validity check.
 
@@ -31,6 +33,7 @@ from .evaluate import evaluate as evaluate_design
 from .init import parameterization, random_params, random_starts
 from .losses import ImageObjective, Objective, RayLoss, StageArgs
 from .mask import reweighting_mask
+from .materials import CatalogRegion, HullMaterials, TableMaterials
 from .multistart import DesignConfig, DesignResult, design
 from .params import LensParams, Parameterization
 from .solvers import LBFGSB, Adam, DampedLeastSquares, LevenbergMarquardt, SolverResult
@@ -39,11 +42,13 @@ from .spec import DesignSpec
 __all__ = [
     "LBFGSB",
     "Adam",
+    "CatalogRegion",
     "DampedLeastSquares",
     "DesignConfig",
     "DesignResult",
     "DesignSpec",
     "Evaluation",
+    "HullMaterials",
     "ImageObjective",
     "LensParams",
     "LevenbergMarquardt",
@@ -53,6 +58,7 @@ __all__ = [
     "SolverResult",
     "Stage",
     "StageArgs",
+    "TableMaterials",
     "design",
     "evaluate_design",
     "paper_stages",

@@ -19,9 +19,19 @@ import jax.numpy as jnp
 import numpy as np
 from jax.sharding import Mesh, NamedSharding, PartitionSpec
 
-from .curriculum import History, Stage, paper_stages, run
+from ..optics import catalog
+from .curriculum import History, Stage, paper_stages, run, stage_args
 from .init import gap_bounds, parameterization, random_starts
 from .losses import ImageObjective, Objective, RayLoss
+from .materials import (
+    DEFAULT_CATALOGS,
+    CatalogRegion,
+    TableMaterials,
+    check_mode,
+    initial_logits,
+    search,
+    snap,
+)
 from .params import LensParams
 from .solvers import LBFGSB, Adam, DampedLeastSquares, LevenbergMarquardt
 from .spec import DesignSpec
@@ -55,6 +65,14 @@ class DesignConfig:
         float64: design in float64 (default float32).
         image_pixels, image_spp: sensor pixels per side and rays per pixel of the
             image-based loss.
+        materials: material selection (``jaxlens.design.materials``): ``"fixed"`` keeps the
+            spec's materials; ``"continuous"`` frees each element's (nd, Vd) inside the hull
+            of ``material_catalogs`` until the polish, then snaps it to the nearest catalog
+            material, which the polish re-optimises around; ``"search"`` does the same but
+            picks each catalog material by the design loss (a discrete search over the
+            catalog, geometry held) instead of the nearest on the glass map.
+        material_catalogs: catalogs the materials are chosen from.
+        lr_m: Adam learning rate of the material logits.
     """
 
     n_fields: int = 9
@@ -82,6 +100,9 @@ class DesignConfig:
     float64: bool = False
     image_pixels: int = 64
     image_spp: int = 4
+    materials: str = "fixed"
+    material_catalogs: tuple[str, ...] = DEFAULT_CATALOGS
+    lr_m: float = 1e-2
 
     def scaled(self, factor: float) -> DesignConfig:
         """The same recipe with every step count scaled by ``factor`` (at least 1 step)."""
@@ -108,6 +129,9 @@ class DesignResult:
     parameters, with the message in ``history.failed``); ``"rejected"`` or
     ``"damping_limit"`` after the least-squares polish mean its last step found no lower
     loss (converged, or stuck); ``"solver_error"`` passes on an optimistix/jaxopt failure.
+
+    With material selection, ``materials`` holds each design's chosen catalog names and
+    ``continuous_materials`` the ``[B, E, 2]`` (nd, Vd) points they were snapped from.
     """
 
     spec: DesignSpec
@@ -116,6 +140,12 @@ class DesignResult:
     params: LensParams
     pmap: object
     history: History
+    materials: list[tuple[str, ...]] | None = None
+    continuous_materials: np.ndarray | None = None
+
+    def material_names(self, i: int) -> tuple[str, ...]:
+        """The element materials of the i-th design (catalog names)."""
+        return self.spec.materials if self.materials is None else self.materials[i]
 
     @property
     def status(self) -> list[str]:
@@ -130,9 +160,18 @@ class DesignResult:
         return [s == "nonfinite" for s in self.status]
 
     def lens(self, i: int, dtype=jnp.float64):
-        """The i-th design as a ``Lens`` (cast to ``dtype``)."""
+        """The i-th design as a ``Lens`` (cast to ``dtype``), with catalog materials."""
         p = jax.tree.map(lambda x: jnp.asarray(np.asarray(x)[i]), self.params)
-        return self.pmap.to_lens(p).astype(dtype)
+        lens = self.pmap.to_lens(p)
+        if self.materials is not None:
+            import equinox as eqx
+
+            new = iter(catalog.get_material(n, self.config.material_catalogs)
+                       for n in self.materials[i])
+            mats = tuple(next(new) if j in self.pmap.glass else m
+                         for j, m in enumerate(lens.materials))
+            lens = eqx.tree_at(lambda x: x.materials, lens, mats)
+        return lens.astype(dtype)
 
 
 def seed_mesh(devices=None) -> Mesh:
@@ -158,18 +197,25 @@ def _image_objective(objective: Objective, spec: DesignSpec, config: DesignConfi
     return ImageObjective(objective, jnp.asarray(img, dtype), sensor, spp=config.image_spp)
 
 
-def make_solver_factory(config: DesignConfig, spec: DesignSpec, dtype):
-    """``(name, stage_lr, objective) -> solver`` for the curriculum loop."""
+def make_solver_factory(config: DesignConfig, spec: DesignSpec, dtype, materials=None):
+    """``(name, stage_lr, objective) -> solver`` for the curriculum loop.
+
+    ``materials``: None when the parameters carry no materials (``LensParams.m`` is None),
+    True when they are free (continuous selection), False when they are held.
+    """
     m = spec.asphere_terms
     lower_d = jnp.asarray(gap_bounds(spec)[:-1], dtype)  # element / air / stop minimums
-    free = LensParams(c=True, a=True, k=config.lr_k > 0, d=True)
+    free = LensParams(c=True, a=True, k=config.lr_k > 0, d=True, m=materials)
+    lr_m = None if materials is None else jnp.asarray(config.lr_m, dtype)
+    bound_m = None if materials is None else jnp.asarray(jnp.inf, dtype)
     s = spec.num_surfaces - 1
 
     def make(name: str, lr: float, objective):
         if name == "adam":
             lrs = LensParams(
                 c=jnp.asarray(config.lr_c * lr, dtype), a=jnp.full((m,), config.lr_a * lr, dtype),
-                k=jnp.asarray(config.lr_k * lr, dtype), d=jnp.asarray(config.lr_d * lr, dtype))
+                k=jnp.asarray(config.lr_k * lr, dtype), d=jnp.asarray(config.lr_d * lr, dtype),
+                m=None if lr_m is None else lr_m * lr)
             return Adam(objective, lrs, free=free)
         if name == "lm":
             return DampedLeastSquares(objective, free=free)
@@ -178,10 +224,11 @@ def make_solver_factory(config: DesignConfig, spec: DesignSpec, dtype):
         if name == "lbfgsb":
             inf = jnp.asarray(jnp.inf, dtype)
             lower = LensParams(c=jnp.full((s,), -inf), a=jnp.full((s, m), -inf),
-                               k=jnp.full((s,), -inf), d=lower_d)
+                               k=jnp.full((s,), -inf), d=lower_d,
+                               m=None if bound_m is None else -bound_m)
             upper = LensParams(c=jnp.full((s,), inf), a=jnp.full((s, m), inf),
                                k=jnp.full((s,), inf),
-                               d=jnp.full(lower_d.shape, spec.total_track, dtype))
+                               d=jnp.full(lower_d.shape, spec.total_track, dtype), m=bound_m)
             return LBFGSB(objective, lower, upper, free=free)
         raise ValueError(f"design: unknown solver {name!r}; use adam, lm, lm-optx or lbfgsb")
 
@@ -224,32 +271,86 @@ def design(
     dtype = jnp.float64 if config.float64 else jnp.float32
     if config.float64 and not jax.config.jax_enable_x64:
         raise ValueError("design: float64 needs jax_enable_x64")
+    mode = check_mode(config.materials)
     pmap = parameterization(spec, dtype)
     sampling = RayLoss.make(config.n_fields, config.rings, spec.wavelengths, spec.sensor_size,
                             dtype)
-    objective = Objective(pmap, sampling, jnp.asarray(gap_bounds(spec), dtype), efl=spec.efl,
-                          efl_weight=config.efl_weight)
+    bounds = jnp.asarray(gap_bounds(spec), dtype)
     devices = list(jax.devices() if devices is None else devices)
     n_dev = min(len(devices), len(seeds)) if shard else 1
     padded = seeds + [seeds[-1]] * (-len(seeds) % n_dev)
     params = random_starts(spec, padded, dtype)
-    mesh = None
-    if n_dev > 1:
-        mesh = seed_mesh(devices[:n_dev])
-        params = shard_seeds(params, mesh)
-    make = make_solver_factory(config, spec, dtype)
-    objectives = {"ray": objective}
+    mesh = seed_mesh(devices[:n_dev]) if n_dev > 1 else None
     stages = config.stages(spec)
     if image_loss:
-        objectives["image"] = _image_objective(objective, spec, config)
         stages = [dataclasses.replace(s, loss="image") if s.name.startswith("fine-tune") else s
                   for s in stages]
-    params, hist = run(
-        spec, stages, params, objectives, make, reg_weights=config.reg_weights,
-        epoch=config.epoch, irls=config.irls, log_every=config.log_every, progress=progress,
-        seeds=padded, callback=callback, mesh=mesh, on_nonfinite=on_nonfinite)
+
+    def objectives(pm):
+        ray = Objective(pm, sampling, bounds, efl=spec.efl, efl_weight=config.efl_weight)
+        return {"ray": ray, **({"image": _image_objective(ray, spec, config)} if image_loss
+                               else {})}
+
+    def design_stages(stages, params, pm, materials, first=0):
+        cb = None if callback is None else (lambda i, st, p: callback(first + i, st, p))
+        return run(spec, stages, params if mesh is None else shard_seeds(params, mesh),
+                   objectives(pm), make_solver_factory(config, spec, dtype, materials),
+                   reg_weights=config.reg_weights, epoch=config.epoch, irls=config.irls,
+                   log_every=config.log_every, progress=progress, seeds=padded, callback=cb,
+                   mesh=mesh, on_nonfinite=on_nonfinite)
+
+    chosen = points = None
+    if mode == "fixed":
+        params, hist = design_stages(stages, params, pmap, None)
+    else:
+        params, hist, pmap, chosen, points = _select_materials(
+            spec, config, mode, stages, params, pmap, objectives, design_stages)
     params = jax.tree.map(lambda x: np.asarray(x)[: len(seeds)], params)
     hist.loss = [h[:, : len(seeds)] for h in hist.loss]
     hist.spot_rms = [h[:, : len(seeds)] for h in hist.spot_rms]
     hist.results = [r[: len(seeds)] for r in hist.results]
-    return DesignResult(spec, config, seeds, params, pmap, hist)
+    if chosen is not None:
+        chosen, points = chosen[: len(seeds)], points[: len(seeds)]
+    return DesignResult(spec, config, seeds, params, pmap, hist, chosen, points)
+
+
+def _select_materials(spec, config, mode, stages, params, pmap, objectives, design_stages):
+    """Stages with continuous materials, the snap (or search), then the rest (the polish).
+
+    Materials are free in every stage but the polish; with no polish the snap comes last and
+    nothing re-optimises around the catalog materials.
+    """
+    import equinox as eqx
+
+    dtype = params.c.dtype
+    b = params.c.shape[0]
+    region = CatalogRegion.of(config.material_catalogs)
+    hull = region.hull()
+    split = len(stages) - 1 if config.polish_steps and len(stages) > 1 else len(stages)
+    m0 = jnp.asarray(initial_logits(hull, spec.materials), dtype)
+    params = LensParams(params.c, params.a, params.k, params.d,
+                        jnp.broadcast_to(m0, (b,) + m0.shape))
+    pm_c = eqx.tree_at(lambda p: p.materials, pmap, hull, is_leaf=lambda x: x is None)
+    params, hist = design_stages(stages[:split], params, pm_c, True)
+    points, names = snap(region, hull, np.asarray(params.m))
+    pm_t = eqx.tree_at(lambda p: p.materials, pmap, TableMaterials(spec.wavelengths),
+                       is_leaf=lambda x: x is None)
+
+    def with_tables(p, names):
+        t = np.stack([region.table(n, spec.wavelengths) for n in names])
+        return LensParams(*(jnp.asarray(np.asarray(x)) for x in (p.c, p.a, p.k, p.d)),
+                          jnp.asarray(t, dtype))
+
+    params = with_tables(params, names)
+    if mode == "search":
+        area = objectives(pm_t)["ray"].sampling.area
+        weights = jnp.broadcast_to(area, (b, area.shape[0]))
+        args = stage_args(spec, stages[-1], weights, config.reg_weights, dtype)
+        names = search(region, objectives(pm_t)["ray"], params, args, names, spec.wavelengths)
+        params = with_tables(params, names)
+    if split < len(stages):
+        params, h2 = design_stages(stages[split:], params, pm_t, False, first=split)
+        for f in ("stages", "loss", "spot_rms", "seconds", "results"):
+            getattr(hist, f).extend(getattr(h2, f))
+        hist.failed.update(h2.failed)
+    return params, hist, pm_t, names, points

@@ -10,7 +10,9 @@ Conventions:
       it duplicates the curvature;
     * ``k``: the conic constant (unscaled; optional);
     * ``d``: the gaps in mm (stop to first surface and every surface to the next), all but the
-      last one. The last gap (to the sensor) is ``total_track − Σ d``, so the track is fixed.
+      last one. The last gap (to the sensor) is ``total_track − Σ d``, so the track is fixed;
+    * ``m``: the materials of the elements, or None (the template's materials, fixed); its
+      meaning is set by the parameterisation's material model (``jaxlens.design.materials``).
 
     Units are those of ``jaxlens.optics.lens``: mm, light toward +z, surface 1 at z = 0.
 """
@@ -22,6 +24,7 @@ import jax.numpy as jnp
 from jaxtyping import Array, Float
 
 from ..optics.lens import Lens
+from ..optics.materials import Air
 from ..optics.surfaces import EvenAsphere
 
 
@@ -32,6 +35,7 @@ class LensParams(eqx.Module):
     a: Float[Array, "*b S m"]
     k: Float[Array, "*b S"]
     d: Float[Array, "*b G"]
+    m: Float[Array, "*b E q"] | None = None
 
 
 class Parameterization(eqx.Module):
@@ -42,12 +46,15 @@ class Parameterization(eqx.Module):
         r_norm: normalisation radius of every optical surface, mm ``[S]``.
         total_track: the fixed first-vertex-to-sensor distance, mm.
         optical: indices of the optical (non-stop) surfaces, static.
+        materials: the material model of ``LensParams.m`` (``HullMaterials`` or
+            ``TableMaterials`` of ``jaxlens.design.materials``), or None: the template's.
     """
 
     template: Lens
     r_norm: Float[Array, " S"] = eqx.field(converter=jnp.asarray)
     total_track: Float[Array, ""] = eqx.field(converter=jnp.asarray)
     optical: tuple[int, ...] = eqx.field(static=True)
+    materials: eqx.Module | None = None
 
     @property
     def n_terms(self) -> int:
@@ -66,11 +73,21 @@ class Parameterization(eqx.Module):
             surfaces[i] = EvenAsphere(c=c, k=p.k[j], coeffs=coeffs, semi_diameter=s.semi_diameter)
         last = self.total_track.astype(p.d.dtype) - jnp.sum(p.d)
         thickness = jnp.concatenate([p.d, last[None]])
+        materials = self.template.materials
+        if self.materials is not None and p.m is not None:
+            new = iter(self.materials.materials(p.m))
+            materials = tuple(next(new) if i in self.glass else mat
+                              for i, mat in enumerate(materials))
         return eqx.tree_at(
-            lambda lens: (lens.surfaces, lens.thickness),
+            lambda lens: (lens.surfaces, lens.thickness, lens.materials),
             self.template,
-            (tuple(surfaces), thickness),
+            (tuple(surfaces), thickness, materials),
         )
+
+    @property
+    def glass(self) -> tuple[int, ...]:
+        """Indices of the surfaces followed by an element's material (not air), in order."""
+        return tuple(i for i, m in enumerate(self.template.materials) if not isinstance(m, Air))
 
     def from_lens(self, lens: Lens) -> LensParams:
         """Scaled parameters of a lens with this structure (inverse of ``to_lens``)."""
