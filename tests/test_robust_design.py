@@ -1,5 +1,7 @@
 """Tolerance-aware design (``jaxlens.design.robust``): the averaged loss and its gradient."""
 
+import dataclasses
+
 import equinox as eqx
 import jax
 import jax.numpy as jnp
@@ -73,3 +75,23 @@ def test_bad_robust_options_are_refused():
         draw_perturbations(4, 3, 0, radius_rel=0.01, thickness=0.01)
     with pytest.raises(ValueError, match="thickness"):
         draw_perturbations(4, 3, 2, radius_rel=0.01, thickness=-0.01)
+
+
+def test_design_with_tolerance_aware_loss_runs_and_differs():
+    from jaxlens.design.multistart import DesignConfig, design
+
+    cfg = DesignConfig(n_fields=3, rings=2, curriculum_n=1, steps=3, final_steps=3,
+                       polish_steps=0, epoch=3, log_every=3, float64=True)
+    nominal = design(SMALL, [0], cfg, progress=False, shard=False)
+    robust = design(SMALL, [0], dataclasses.replace(cfg, tolerance_trials=3), progress=False,
+                    shard=False)
+    assert np.all(np.isfinite(robust.params.c))
+    # Same start, same steps: only the objective differs, so the designs do too.
+    assert not np.allclose(robust.params.c, nominal.params.c)
+
+
+def test_tolerance_aware_option_is_checked_before_work(capsys):
+    from jaxlens.experiments import classical
+
+    assert classical.main(["--tolerance-aware", "-1", "--out", "/nonexistent/x"]) == 2
+    assert "--tolerance-aware" in capsys.readouterr().err

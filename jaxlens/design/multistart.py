@@ -33,6 +33,7 @@ from .materials import (
     snap,
 )
 from .params import LensParams
+from .robust import RobustObjective, draw_perturbations
 from .solvers import LBFGSB, Adam, DampedLeastSquares, LevenbergMarquardt
 from .spec import DesignSpec
 
@@ -73,6 +74,11 @@ class DesignConfig:
             catalog, geometry held) instead of the nearest on the glass map.
         material_catalogs: catalogs the materials are chosen from.
         lr_m: Adam learning rate of the material logits.
+        tolerance_trials: 0, or K > 0 for tolerance-aware design (``jaxlens.design.robust``):
+            the ray loss averaged over K fixed radius and gap errors drawn from
+            ``analysis.tolerance.Tolerances()`` (±0.5 % radius, ±0.02 mm gaps), with the
+            nominal design weighted ``tolerance_nominal_weight``.
+        tolerance_nominal_weight: w₀ of the tolerance-aware loss.
     """
 
     n_fields: int = 9
@@ -103,6 +109,8 @@ class DesignConfig:
     materials: str = "fixed"
     material_catalogs: tuple[str, ...] = DEFAULT_CATALOGS
     lr_m: float = 1e-2
+    tolerance_trials: int = 0
+    tolerance_nominal_weight: float = 0.5
 
     def scaled(self, factor: float) -> DesignConfig:
         """The same recipe with every step count scaled by ``factor`` (at least 1 step)."""
@@ -281,6 +289,14 @@ def design(
     padded = seeds + [seeds[-1]] * (-len(seeds) % n_dev)
     params = random_starts(spec, padded, dtype)
     mesh = seed_mesh(devices[:n_dev]) if n_dev > 1 else None
+    robust_draws = None
+    if config.tolerance_trials:
+        from ..analysis.tolerance import Tolerances
+
+        tol = Tolerances()
+        robust_draws = draw_perturbations(
+            params.c.shape[-1], params.d.shape[-1], config.tolerance_trials,
+            radius_rel=tol.radius_rel, thickness=tol.thickness, dtype=dtype)
     stages = config.stages(spec)
     if image_loss:
         stages = [dataclasses.replace(s, loss="image") if s.name.startswith("fine-tune") else s
@@ -288,8 +304,10 @@ def design(
 
     def objectives(pm):
         ray = Objective(pm, sampling, bounds, efl=spec.efl, efl_weight=config.efl_weight)
-        return {"ray": ray, **({"image": _image_objective(ray, spec, config)} if image_loss
-                               else {})}
+        image = {"image": _image_objective(ray, spec, config)} if image_loss else {}
+        if config.tolerance_trials:
+            ray = RobustObjective(ray, robust_draws, config.tolerance_nominal_weight)
+        return {"ray": ray, **image}
 
     def design_stages(stages, params, pm, materials, first=0):
         cb = None if callback is None else (lambda i, st, p: callback(first + i, st, p))
