@@ -199,18 +199,38 @@ def _model(model, caller: str) -> AbstractPSFModel:
 
 class GeometricPSF(AbstractPSFModel):
     """Ray splatting: rays fill the overfilled pupil, are traced and splatted bilinearly
-    (``order=1``, a one-pixel tent; ``order=2``, a smoother quadratic B-spline)."""
+    (``order=1``, a one-pixel tent; ``order=2``, a smoother quadratic B-spline).
+
+    ``grid`` places the rays: "square" (a cell-centred square grid cut to the disc of
+    ``overfill``) or "polar" (``pupil²`` equal-area polar cells strictly inside that disc,
+    ``sampling.pupil_polar``; with ``overfill < 1`` no ray of a stop-first lens fails at the
+    stop). ``normalize`` sets what a kernel's sum counts: "transmitted" (the default) divides
+    by the flux of the rays that reach the image surface, so the kernel sums to 1 less the
+    light outside it; "pupil" divides by the flux that enters the paraxial entrance pupil
+    (launched rays with pupil radius <= 1, passed or not), so light lost to vignetting
+    counts as lost too and the kernel's sum is the fraction of that light on the kernel.
+    """
 
     pupil: int = 64
     overfill: float = 1.25
     order: int = 1
+    grid: str = "square"
+    normalize: str = "transmitted"
+
+    def check(self, caller: str) -> None:
+        super().check(caller)
+        if self.grid not in ("square", "polar"):
+            raise ValueError(f"{caller}: grid must be 'square' or 'polar', got {self.grid!r}")
+        if self.normalize not in ("transmitted", "pupil"):
+            raise ValueError(f"{caller}: normalize must be 'transmitted' or 'pupil', got "
+                             f"{self.normalize!r}")
 
     def kernels(self, lens, field, depth, wls, *, kernel_size, pixel_size, center, key,
                 newton_iters):
         return _geometric(lens, field, depth, wls, kernel_size=kernel_size,
                           pixel_size=pixel_size, center=center, pupil=self.pupil,
                           overfill=self.overfill, key=key, newton_iters=newton_iters,
-                          order=self.order)
+                          order=self.order, grid=self.grid, normalize=self.normalize)
 
 
 class CoherentPSF(AbstractPSFModel):
@@ -233,17 +253,24 @@ DEFAULT_MODEL = GeometricPSF()
 
 
 def _geometric(lens, field, depth, wls, *, kernel_size, pixel_size, center, pupil, overfill,
-               key, newton_iters, order):
+               key, newton_iters, order, grid="square", normalize="transmitted"):
     dtype = lens.epd.dtype
-    pts, mask, _ = pupil_cells(pupil, overfill, dtype, key)
+    if grid == "polar":
+        pts = sampling.pupil_polar(pupil, key, dtype) * overfill
+        mask = jnp.ones(pts.shape[:1], bool)
+    else:
+        pts, mask, _ = pupil_cells(pupil, overfill, dtype, key)
+    in_pupil = mask & (jnp.sum(pts * pts, -1) <= 1.0)
 
     def one(wl):
-        _, out, w = _trace_beam(lens, field, depth, wl, pts, mask, newton_iters)
-        return out.origin[..., :2], w
+        rays, out, w = _trace_beam(lens, field, depth, wl, pts, mask, newton_iters)
+        entering = jnp.sum(jnp.where(in_pupil, _flux(rays, depth), 0.0))
+        return out.origin[..., :2], w, entering
 
-    pos, w = jax.vmap(one)(wls)  # [W, M, 2], [W, M]
+    pos, w, entering = jax.vmap(one)(wls)  # [W, M, 2], [W, M], [W]
     ref = _reference(lens, field, depth, center, newton_iters, pos, w)
-    total = jnp.maximum(jnp.sum(w, -1), jnp.finfo(dtype).tiny)  # [W]
+    total = entering if normalize == "pupil" else jnp.sum(w, -1)
+    total = jnp.maximum(total, jnp.finfo(dtype).tiny)  # [W]
     kern = jax.vmap(lambda p, ww: splat(p - ref, ww, kernel_size, pixel_size, order))(pos, w)
     kern = kern / total[:, None, None]
     nan = jnp.full(wls.shape, jnp.nan, dtype)
