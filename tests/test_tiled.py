@@ -8,7 +8,7 @@ import pytest
 
 import jaxlens
 from jaxlens.imaging import sampling, tiled
-from jaxlens.imaging.psf import GeometricPSF
+from jaxlens.imaging.psf import CoherentPSF, GeometricPSF
 from jaxlens.tracing.forward import trace
 
 
@@ -129,3 +129,20 @@ def test_wiener_tiles_undoes_a_known_blur_and_a_light_loss():
     # The wrong kernel does not invert the blur.
     wrong = np.asarray(tiled.wiener_tiles(blurred, jnp.asarray(np.swapaxes(kern, -1, -2)), 1e-8))
     assert np.max(np.abs(wrong[inner] - img[inner])) > 0.05
+
+
+def test_pupil_centre_is_the_chief_ray_of_a_stop_first_lens():
+    from jaxlens.experiments.edof.lenses import classical_lens
+
+    lens = classical_lens(binning=8)
+    assert lens.stop == 0
+    model = GeometricPSF(pupil=12, overfill=1.0, grid="polar", normalize="pupil")
+    kw = dict(wavelengths=(0.656, 0.587, 0.486), kernel_size=9, pixel_size=0.02, model=model)
+    xy = jnp.array([[1.0, -2.0]])
+    a = tiled.psf_points(lens, xy, 150.0, center="pupil", **kw)
+    b = tiled.psf_points(lens, xy, 150.0, center="chief", **kw)
+    np.testing.assert_allclose(np.asarray(a), np.asarray(b), atol=1e-6)
+    c = tiled.psf_points(lens, xy, 150.0, center="centroid", **kw)
+    assert float(jnp.max(jnp.abs(c - b))) > 1e-3  # the reference point matters
+    with pytest.raises(ValueError, match="center='pupil' is for the geometric model"):
+        jaxlens.psf(lens, 0.0, model=CoherentPSF(pupil=8), center="pupil")

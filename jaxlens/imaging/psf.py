@@ -21,8 +21,11 @@ Conventions:
     ``center`` picks the reference point ``ref`` on the image surface: "chief" (the real
     chief ray through the centre of the stop, at the lens's primary wavelength), "centroid"
     (the energy centroid over all requested wavelengths) or "ideal" (the distortion-free
-    image point ``K·tanθ``, ``K = image_scale(lens)``). One reference serves every
-    wavelength, so lateral colour shows as a shift between the channels.
+    image point ``K·tanθ``, ``K = image_scale(lens)``); the geometric model also takes
+    "pupil" (where the ray through the centre of the paraxial entrance pupil lands, at the
+    middle requested wavelength: traced with the beam, no aiming iterations; the real chief
+    ray when the stop is the entrance pupil, as for a stop-first lens). One reference serves
+    every wavelength, so lateral colour shows as a shift between the channels.
 
 Models:
     geometric: rays from the object point fill an overfilled entrance pupil (the aperture
@@ -78,7 +81,7 @@ __all__ = [
 RGB_WAVELENGTHS = (LAMBDA_C, LAMBDA_D, LAMBDA_F)
 """Default (R, G, B) wavelengths in µm: the C, d and F lines."""
 
-CENTERS = ("chief", "centroid", "ideal")
+CENTERS = ("chief", "centroid", "ideal", "pupil")
 
 
 def _launch(lens: Lens, field, depth, pupil, wavelength) -> Rays:
@@ -260,6 +263,9 @@ def _geometric(lens, field, depth, wls, *, kernel_size, pixel_size, center, pupi
         mask = jnp.ones(pts.shape[:1], bool)
     else:
         pts, mask, _ = pupil_cells(pupil, overfill, dtype, key)
+    if center == "pupil":  # the pupil-centre ray rides along with no weight
+        pts = jnp.concatenate([jnp.zeros((1, 2), dtype), pts])
+        mask = jnp.concatenate([jnp.zeros((1,), bool), mask])
     in_pupil = mask & (jnp.sum(pts * pts, -1) <= 1.0)
 
     def one(wl):
@@ -268,7 +274,10 @@ def _geometric(lens, field, depth, wls, *, kernel_size, pixel_size, center, pupi
         return out.origin[..., :2], w, entering
 
     pos, w, entering = jax.vmap(one)(wls)  # [W, M, 2], [W, M], [W]
-    ref = _reference(lens, field, depth, center, newton_iters, pos, w)
+    if center == "pupil":
+        ref = pos[wls.shape[0] // 2, 0]
+    else:
+        ref = _reference(lens, field, depth, center, newton_iters, pos, w)
     total = entering if normalize == "pupil" else jnp.sum(w, -1)
     total = jnp.maximum(total, jnp.finfo(dtype).tiny)  # [W]
     kern = jax.vmap(lambda p, ww: splat(p - ref, ww, kernel_size, pixel_size, order))(pos, w)
@@ -287,6 +296,8 @@ def _truncation(kern, flux):
 # --------------------------------------------------------------------------------------
 def _coherent(lens, field, depth, wls, *, kernel_size, pixel_size, center, pupil, overfill,
               newton_iters):
+    if center == "pupil":
+        raise ValueError("psf: center='pupil' is for the geometric model; use 'chief'")
     dtype = lens.epd.dtype
     pts, mask, cell = pupil_cells(pupil, overfill, dtype, None)
     k = kernel_size

@@ -45,12 +45,15 @@ def patch_psfs(lens: Lens, xy, depths, *, kernel_size: int, pixel_size, pupil: i
     Differentiable with respect to the lens (``jaxlens.imaging.tiled.psf_points``).
     """
     model = psf_model(pupil)
+    # The stop-first lens's entrance pupil is its stop: the ray through the pupil centre is
+    # the chief ray (traced with the beam, no aiming iterations to compile).
+    center = "pupil" if lens.stop == 0 else "chief"
     keys = None if key is None else jax.random.split(key, xy.shape[0])
 
     def one(p, d, k):
         return tiled.psf_points(lens, p[None], object_depth(lens, d), wavelengths=WAVELENGTHS_RGB,
                                 kernel_size=kernel_size, pixel_size=pixel_size, model=model,
-                                key=k)[0]
+                                key=k, center=center)[0]
 
     if keys is None:
         return jax.vmap(lambda p, d: one(p, d, None))(xy, depths)
