@@ -186,12 +186,17 @@ def wiener_tiles(
     nsr,
     *,
     halo: int | None = None,
+    prior: str = "white",
 ) -> Float[Array, "H W C"]:
     """Wiener deconvolution tile by tile with each tile's kernel.
 
     Each tile is deconvolved in a window of ``tile + 2·halo`` pixels (edge-padded at the frame
-    border) by X = conj(K)·Y / (|K|² + nsr) in the Fourier domain, and its centre is kept; the
-    halo (default the kernel side) holds the wrap-around of the circular deconvolution.
+    border) by X = conj(K)·Y / (|K|² + nsr·P) in the Fourier domain, and its centre is kept;
+    the halo (default the kernel side) holds the wrap-around of the circular deconvolution.
+    ``prior`` sets P: "white" (P = 1, a flat signal spectrum) or "gradient" (P = |∇|², the
+    power of the discrete gradient, 4 − 2·cos ωx − 2·cos ωy: a signal spectrum falling as
+    1/f², as natural images do; then nsr is the noise variance over the variance of the
+    image's pixel differences).
     A kernel that sums to s < 1 is inverted to a gain of about 1/s at low frequencies, so the
     light that the lens lost is restored on average.
 
@@ -200,6 +205,7 @@ def wiener_tiles(
         kernels: ``[ty, tx, C, k, k]`` PSFs (``psf`` orientation, k odd).
         nsr: noise-to-signal power ratio, a scalar or ``[C]`` (> 0), differentiable.
         halo: pixels around each tile (default k).
+        prior: "white" or "gradient" (see above).
 
     Returns:
         ``[ty·P, tx·P, C]``, differentiable with respect to the image, kernels and ``nsr``.
@@ -228,6 +234,12 @@ def wiener_tiles(
     kf = jnp.fft.rfft2(kk)  # [T, C, win, win//2+1]
     yf = jnp.fft.rfft2(wins.transpose(0, 3, 1, 2))
     nsr = jnp.broadcast_to(jnp.asarray(nsr, image.dtype), (nc,))[None, :, None, None]
+    if prior == "gradient":
+        wy = 2 * jnp.pi * jnp.fft.fftfreq(win)[:, None]
+        wx = 2 * jnp.pi * jnp.fft.rfftfreq(win)[None, :]
+        nsr = nsr * (4.0 - 2.0 * jnp.cos(wy) - 2.0 * jnp.cos(wx)).astype(image.dtype)
+    elif prior != "white":
+        raise ValueError(f"wiener_tiles: prior must be 'white' or 'gradient', got {prior!r}")
     xf = jnp.conj(kf) * yf / (kf.real**2 + kf.imag**2 + nsr)
     x = jnp.fft.irfft2(xf, s=(win, win)).transpose(0, 2, 3, 1)
     x = x[:, halo: halo + tile, halo: halo + tile]

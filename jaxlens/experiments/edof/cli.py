@@ -9,7 +9,7 @@ cubic phase plate at the aperture (its strength bounded below, its sensor positi
 trainable). All three get the same decoder, batches, steps and lens updates.
 
 Image formation goes through ``jaxlens.imaging`` (``edof.optics``): PSFs normalised by the
-light entering the entrance pupil, one per 64-pixel tile (8 × 8 per frame), shot and read
+light entering the entrance pupil, one per 32-pixel tile (8 × 8 per frame), shot and read
 noise. For every seed and lens it trains (``edof.train``), then scores the raw image, the
 reconstruction and a Wiener-deconvolution reference on held-out native-resolution test
 crops at 10 cm, 20 cm and 10 m (``edof.evaluate``).
@@ -21,8 +21,8 @@ timings, histories, PSF measures), ``command.txt``, the trained lenses
 ``--record DIR`` copies tables, summary and figures there (the committed copy is
 ``experiments/edof``).
 
-Defaults are the CPU scale (2× binned 512² sensor, a 16-wide NAFNet behind a Wiener front
-end, 400 + 100 steps per lens, one seed); ``--seeds 0,1,2`` gives the 3-seed table.
+Defaults are the CPU scale (4× binned 256² sensor, so a 256² test crop fills the frame; a
+16-wide NAFNet behind a Wiener front end; 300 + 60 steps per lens; one seed); ``--seeds 0,1,2`` gives the 3-seed table.
 ``--paper`` selects the paper's scale for a GPU; with ``--checkpoint DIR`` a run saves its
 state every ``refresh_every`` steps, ``--time-limit S`` stops it at the first checkpoint
 after S seconds (exit status 3) and ``--resume`` continues it, so it can go in pieces.
@@ -84,12 +84,12 @@ def build_parser() -> argparse.ArgumentParser:
     g = p.add_argument_group("training (defaults: CPU scale)")
     g.add_argument("--decoder", choices=("nafnet", "wiener"),
                    help="NAFNet alone, or behind a Wiener front end (wiener)")
-    g.add_argument("--steps", type=int, help="stage-1 steps per lens (400)")
-    g.add_argument("--steps2", type=int, help="stage-2 steps per lens (100)")
-    g.add_argument("--batch", type=int, help="patches per batch (4)")
-    g.add_argument("--tile", type=int, help="tile and patch side, pixels (64)")
-    g.add_argument("--kernel", type=int, help="PSF kernel side, pixels (41)")
-    g.add_argument("--binning", type=int, help="sensor binning of the 1024² sensor (2)")
+    g.add_argument("--steps", type=int, help="stage-1 steps per lens (300)")
+    g.add_argument("--steps2", type=int, help="stage-2 steps per lens (60)")
+    g.add_argument("--batch", type=int, help="patches per batch (8)")
+    g.add_argument("--tile", type=int, help="tile and patch side, pixels (32)")
+    g.add_argument("--kernel", type=int, help="PSF kernel side, pixels (21)")
+    g.add_argument("--binning", type=int, help="sensor binning of the 1024² sensor (4)")
     g.add_argument("--pupil", type=int, help="pupil rays per side of a training PSF (32)")
     g.add_argument("--eval-pupil", type=int, help="pupil rays per side at evaluation (32)")
     g.add_argument("--lens-every", type=int, help="a lens update every N steps (4)")

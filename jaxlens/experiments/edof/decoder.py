@@ -3,8 +3,8 @@
 ``Decoder(wiener=False)`` is the paper's decoder: a NAFNet (``jaxlens.nets``) that starts as
 the identity (its last convolution is zero), so training starts from the raw image.
 ``Decoder(wiener=True)`` first deconvolves the raw image tile by tile with the lens's
-depth-averaged PSF (``jaxlens.imaging.tiled.wiener_tiles``) and a learnable noise-to-signal
-ratio per channel, then refines the result with the same NAFNet: the network no longer has
+depth-averaged PSF (``jaxlens.imaging.tiled.wiener_tiles``, gradient prior) and a learnable
+noise-to-signal ratio per channel, then refines the result with the same NAFNet: the network no longer has
 to learn the inverse of the blur, only to remove what the deconvolution leaves (noise,
 ringing, the depth-dependent part of the blur). The depth is unknown at test time, so the
 front end uses the PSF averaged over the 8 training depths.
@@ -42,7 +42,9 @@ class Decoder(eqx.Module):
 
     def front(self, raw, kernels):
         """The input the network sees (the Wiener estimate, or the raw image)."""
-        return wiener_tiles(raw, kernels, jnp.exp(self.log_nsr)) if self.wiener else raw
+        if not self.wiener:
+            return raw
+        return wiener_tiles(raw, kernels, jnp.exp(self.log_nsr), prior="gradient")
 
 
 def make_decoder(kind: str, *, nsr: float, key, width: int, enc_blocks, middle_blocks: int,

@@ -85,14 +85,14 @@ class Config:
         log_every: host sync / progress-bar refresh interval (steps).
     """
 
-    binning: int = 2
-    tile: int = 64
-    kernel_size: int = 41
-    batch: int = 4
+    binning: int = 4
+    tile: int = 32
+    kernel_size: int = 21
+    batch: int = 8
     pupil: int = 32
     eval_pupil: int = 32
-    steps: int = 400
-    steps2: int = 100
+    steps: int = 300
+    steps2: int = 60
     lens_every: int = 4
     refresh_every: int = 50
     lr_net: float = 1e-3
