@@ -146,3 +146,20 @@ def test_pupil_centre_is_the_chief_ray_of_a_stop_first_lens():
     assert float(jnp.max(jnp.abs(c - b))) > 1e-3  # the reference point matters
     with pytest.raises(ValueError, match="center='pupil' is for the geometric model"):
         jaxlens.psf(lens, 0.0, model=CoherentPSF(pupil=8), center="pupil")
+
+
+def test_wiener_gradient_prior_damps_high_frequencies_only():
+    """The gradient prior's penalty nsr·|∇|² vanishes at zero frequency: a flat image keeps
+    its level (a white prior pulls it towards 0 by 1/(1 + nsr)), while noise is damped."""
+    kern = np.zeros((1, 1, 1, 3, 3))
+    kern[..., 1, 1] = 1.0
+    flat = jnp.full((16, 16, 1), 0.5)
+    g = np.asarray(tiled.wiener_tiles(flat, jnp.asarray(kern), 1.0, prior="gradient"))
+    w = np.asarray(tiled.wiener_tiles(flat, jnp.asarray(kern), 1.0, prior="white"))
+    np.testing.assert_allclose(g, 0.5, atol=1e-6)
+    np.testing.assert_allclose(w, 0.25, atol=1e-6)
+    noise = jnp.asarray(np.random.default_rng(0).normal(0.0, 1.0, (16, 16, 1)))
+    smooth = np.asarray(tiled.wiener_tiles(noise, jnp.asarray(kern), 1.0, prior="gradient"))
+    assert np.std(smooth) < 0.6 * float(jnp.std(noise))
+    with pytest.raises(ValueError, match="prior must be 'white' or 'gradient'"):
+        tiled.wiener_tiles(flat, jnp.asarray(kern), 1.0, prior="laplace")

@@ -132,9 +132,9 @@ def config_from_args(a):
                      log_every=50, crop=256)
     elif a.smoke:
         cfg = Config(binning=16, tile=16, kernel_size=9, batch=2, pupil=8, eval_pupil=8,
-                     steps=40, steps2=2, lens_every=4, refresh_every=20, width=4,
-                     enc_blocks=(1,), middle_blocks=1, dec_blocks=(1,), lr_net=3e-3,
-                     log_every=10, crop=32)
+                     steps=60, steps2=2, lens_every=4, refresh_every=20, width=4,
+                     enc_blocks=(1,), middle_blocks=1, dec_blocks=(1,), lr_net=5e-3,
+                     log_every=10, crop=32, decoder="nafnet", photons=100.0)
     else:
         cfg = Config()
     over = {

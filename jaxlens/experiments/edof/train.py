@@ -227,6 +227,11 @@ def net_step(dec, net_state, kernels, windows, wkern, key, scale, *, cfg: Config
 _perturb = eqx.filter_jit(perturb)
 
 
+@eqx.filter_jit
+def _probe_loss(dec, kernels, windows, wkern, key, *, cfg: Config):
+    return _sim_loss(dec, kernels, windows, wkern, key, cfg)[0]
+
+
 class BatchSource:
     """Host-side batches: scene windows, tile indices and the depth pair."""
 
@@ -368,9 +373,37 @@ class Trainer:
             return jnp.zeros((len(tiles), 3, 1, 1), self.base_lens.epd.dtype)
         return self.mean_bank[tiles[:, 0], tiles[:, 1]]
 
+    def probe(self) -> float:
+        """The loss of the current lens and decoder on a fixed batch (its own random stream:
+        scene windows, tiles, the depths 10 cm and 10 m, noise), recorded before and after
+        training as ``hist["probe"]``: a measure of learning free of batch-to-batch noise."""
+        from .scenes import PatchSampler
+
+        cfg = self.cfg
+        dt = self.base_lens.epd.dtype
+        rng = np.random.default_rng(4242)
+        windows = PatchSampler(self.source.sampler.images, cfg.window, seed=4242).sample(
+            cfg.batch)
+        tiles = np.stack([rng.integers(0, n, cfg.batch) for n in self.xy.shape[:2]], -1)
+        depths = jnp.asarray([1e3 * DEPTHS_M[0], 1e3 * DEPTHS_M[-1]], dt)
+        lens = self.lens()
+        xy = jnp.asarray(self.xy[tiles[:, 0], tiles[:, 1]], dt)
+        kern = psfs_nograd(lens, jnp.concatenate([xy, xy]), jnp.repeat(depths, cfg.batch),
+                           jnp.asarray(lens.sensor.pixel_size, dt), kernel_size=cfg.kernel_size,
+                           pupil=cfg.pupil)
+        if self.dec.wiener:
+            self._banks(lens, full=False)
+        loss = _probe_loss(self.dec, kern.reshape((2, cfg.batch) + kern.shape[1:]),
+                           jnp.asarray(windows, dt), self._wkern(tiles),
+                           jax.random.PRNGKey(4242), cfg=cfg)
+        return float(loss)
+
     def run(self, progress: Callable | None = None):
         """Train to the end (or to the deadline: ``OutOfTime`` after a checkpoint)."""
         cfg = self.cfg
+        if "probe" not in self.hist:
+            self.hist["probe"] = {"before": self.probe()}
+            self.mean_bank = None  # the training's own refresh schedule
         opt1, lens_opt = optimizers(cfg)
         dt = self.base_lens.epd.dtype
         depths = jnp.asarray(1e3 * np.asarray(DEPTHS_M), dt)
@@ -436,6 +469,8 @@ class Trainer:
             self.seconds += time.perf_counter() - t0
         if bar is not None:
             bar.close()
+        if "after" not in self.hist["probe"]:
+            self.hist["probe"]["after"] = self.probe()
         self.save()
         return self.dec, self.params, self.hist
 
