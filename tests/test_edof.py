@@ -333,3 +333,11 @@ def test_smoke_run_writes_outputs_loss_falls_and_resumes(tmp_path):
     edof.run(common + ["--out", str(out2), "--checkpoint", str(ck), "--resume"])
     again = json.loads((out2 / "table2.json").read_text())
     assert again["lenses"] == table["lenses"]
+    # Resumed once more after the end: nothing is trained or evaluated again (the
+    # evaluations are kept in the checkpoint folder), and the table is the same.
+    assert (ck / "seed0" / "eval_hybrid.json").is_file()
+    third = edof.run(common + ["--out", str(tmp_path / "edof3"), "--checkpoint", str(ck),
+                               "--resume"])
+    assert json.loads((tmp_path / "edof3" / "table2.json").read_text())["lenses"] == \
+        table["lenses"]
+    assert third["timings_s"]["train_hybrid_s0_s"] < 5.0

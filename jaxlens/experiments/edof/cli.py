@@ -335,10 +335,15 @@ def _run_into(a, argv, cfg, names, folder, out) -> dict:
             jaxlens.save(lens, os.path.join(out, "lenses", f"{tag}.json"))
             eqx.tree_serialise_leaves(os.path.join(out, "nets", f"{tag}.eqx"), dec)
             t0 = time.perf_counter()
-            bank = O.psf_bank(lens, tile=cfg.tile, kernel_size=cfg.kernel_size,
-                              pupil=cfg.eval_pupil, chunk=2 * cfg.batch)
-            vals, ex = E.evaluate(dec, bank, windows, cfg=cfg, key=k_eval, nsr=nsr,
-                                  keep=0 if seed == a.seeds[0] else None)
+            cached = _load_eval(ck, name)  # a resumed run does not evaluate a lens twice
+            if cached is None:
+                bank = O.psf_bank(lens, tile=cfg.tile, kernel_size=cfg.kernel_size,
+                                  pupil=cfg.eval_pupil, chunk=2 * cfg.batch)
+                vals, ex = E.evaluate(dec, bank, windows, cfg=cfg, key=k_eval, nsr=nsr,
+                                      keep=0 if seed == a.seeds[0] else None)
+                _save_eval(ck, name, bank, vals, ex)
+            else:
+                bank, vals, ex = cached
             timings[f"evaluate_{tag}_s"] = time.perf_counter() - t0
             per_image.setdefault(str(seed), {})[name] = vals
             light.setdefault(name, []).append(O.light_on_sensor(bank))
@@ -400,6 +405,36 @@ def _run_into(a, argv, cfg, names, folder, out) -> dict:
     print(table_md)
     print(f"total {timings['total_s']:.0f} s; outputs in {out}")
     return summary
+
+
+def _save_eval(ck, name, bank, vals, examples) -> None:
+    """Keep a lens's evaluation in the checkpoint folder (bank, per-crop values, examples)."""
+    import numpy as np
+
+    if ck is None:
+        return
+    os.makedirs(ck, exist_ok=True)
+    np.save(os.path.join(ck, f"eval_{name}_bank.npy"), bank)
+    ex = {f"{d}|{i}": x for d, xs in examples.items() for i, x in enumerate(xs)}
+    np.savez(os.path.join(ck, f"eval_{name}_examples.npz"), **ex)
+    with open(os.path.join(ck, f"eval_{name}.json"), "w") as f:
+        json.dump(vals, f)
+
+
+def _load_eval(ck, name):
+    """``(bank, values, examples)`` saved by ``_save_eval``, or None."""
+    import numpy as np
+
+    if ck is None or not os.path.isfile(os.path.join(ck, f"eval_{name}.json")):
+        return None
+    with open(os.path.join(ck, f"eval_{name}.json")) as f:
+        vals = json.load(f)
+    bank = np.load(os.path.join(ck, f"eval_{name}_bank.npy"))
+    with np.load(os.path.join(ck, f"eval_{name}_examples.npz")) as z:
+        ex = {}
+        for k in sorted(z.files, key=lambda k: (k.split("|")[0], int(k.split("|")[1]))):
+            ex.setdefault(k.split("|")[0], []).append(z[k])
+    return bank, vals, {d: tuple(v) for d, v in ex.items()}
 
 
 def table2(per_image, names, seeds, windows, crop_info, test_names, source, classical, light,
