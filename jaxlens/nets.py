@@ -6,8 +6,9 @@ LayerNorm over channels, a 1×1 expansion, a depthwise 3×3 convolution, a *Simp
 channels split in two halves that are multiplied), *simplified channel attention* (a global
 average pool followed by a 1×1 convolution that rescales the channels) and a gated
 feed-forward branch. Both branches enter the residual stream through learned per-channel
-scales that start at zero, so a fresh block is the identity and a fresh network returns its
-input (the global residual).
+scales that start at zero, so a fresh block is the identity; the last convolution starts at
+zero too (``identity_init``), so a fresh network returns its input exactly (the global
+residual) and training starts from the raw image rather than from a random correction.
 
 Conventions:
     Images are channels-last ``[H, W, C]`` arrays, one image per call (``jax.vmap`` over a
@@ -226,6 +227,8 @@ class NAFNet(eqx.Module):
             listed from the deepest level up.
         key: PRNG key.
         dtype: parameter dtype (default: JAX's default float).
+        identity_init: start the last convolution at zero, so that the fresh network is the
+            identity (default); False draws it like the other convolutions.
 
     The default (width 16, one block per level, depth 3) has about 0.1 M parameters and
     trains on CPU; the paper-scale NAFNet is ``width=32, enc_blocks=(1, 1, 1, 28),
@@ -257,6 +260,7 @@ class NAFNet(eqx.Module):
         dec_blocks: Sequence[int] = (1, 1, 1),
         key: PRNGKeyArray | np.random.Generator,
         dtype=None,
+        identity_init: bool = True,
     ):
         if in_channels != out_channels:
             raise ValueError(
@@ -288,7 +292,11 @@ class NAFNet(eqx.Module):
             c //= 2
             decoders.append(tuple(NAFBlock(c, key=next(keys), dtype=dtype) for _ in range(n)))
         self.ups, self.decoders = tuple(ups), tuple(decoders)
-        self.ending = Conv(width, out_channels, 3, key=next(keys), dtype=dtype)
+        ending = Conv(width, out_channels, 3, key=next(keys), dtype=dtype)
+        if identity_init:
+            ending = eqx.tree_at(lambda m: (m.weight, m.bias), ending,
+                                 (jnp.zeros_like(ending.weight), jnp.zeros_like(ending.bias)))
+        self.ending = ending
 
     @property
     def depth(self) -> int:

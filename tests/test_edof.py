@@ -1,4 +1,4 @@
-"""The EDoF experiment: losses, lens parameters, patch convolution, PSF measures, smoke run."""
+"""The EDoF experiment: losses, lens parameters, noise, evaluation, PSF measures, smoke run."""
 
 import json
 import os
@@ -8,9 +8,11 @@ import jax.numpy as jnp
 import numpy as np
 import pytest
 
+from jaxlens.experiments.edof import evaluate as E
 from jaxlens.experiments.edof import lenses as L
 from jaxlens.experiments.edof import losses as LS
 from jaxlens.experiments.edof import optics as O
+from jaxlens.imaging import tiled
 from jaxlens.optics.surfaces import Hybrid
 
 
@@ -40,40 +42,95 @@ def test_losses_on_known_values():
     assert float(LS.l_rec(jnp.stack([gt + half, gt + half]), gt)) == pytest.approx(0.1)
 
 
-def test_table2_rec_metrics_come_from_the_reconstruction(classical):
-    """``train.evaluate``: "sim" scores the noisy simulation at the depth in m (rendered at
-    1000·d mm, clipped to [0, 1]), "rec" the network's output clipped to [0, 1]."""
-    from jaxlens.experiments.edof import train
-    from jaxlens.io.images import psnr, ssim
+def test_table2_rec_metrics_come_from_the_reconstruction():
+    """``evaluate``: "sim" scores the noisy simulation (the crop blurred by the bank at the
+    depth, clipped to [0, 1]), "rec" the decoder's output clipped to [0, 1] and "wiener" the
+    Wiener deconvolution of the same noisy image with the depth-averaged kernels."""
+    from jaxlens.experiments.edof.train import Config
+    from jaxlens.io.images import psnr
 
-    cfg = train.Config(binning=8, patch=64, kernel_size=5, eval_pupil=4, noise=0.02)
+    cfg = Config(tile=8, kernel_size=3, crop=16, photons=1e12, read_noise=0.02)
     rng = np.random.default_rng(0)
-    img = rng.random((128, 128, 3))
-    img[:40, :40] = 1.0  # a white corner: blur plus noise goes above 1 there
-    target = np.clip(rng.normal(0.5, 0.6, img.shape), -0.5, 1.5)
+    windows = rng.random((3, 18, 18, 3)).astype(np.float32)
+    windows[0, :8, :8] = 1.0  # a white corner: noise goes above 1 there
+    bank = np.zeros((8, 4, 4, 3, 3, 3), np.float32)
+    bank[..., 1, 1] = 0.9  # 10 % of the light lost at every depth ...
+    bank[:, :, :, :, 1, 2] = np.linspace(0.0, 0.1, 8)[:, None, None, None]  # ... blur by depth
+    target = np.clip(rng.normal(0.5, 0.6, (16, 16, 3)), -0.5, 1.5).astype(np.float32)
 
-    def net(x):  # a "network" whose output is known: its PSNR is known in closed form
+    def dec(x, kern):  # a "decoder" whose output is known: its PSNR is known in closed form
         return jnp.asarray(target, x.dtype)
 
-    # Two images (the second the negative of the first); keep=0 returns the first.
-    metrics, ex = train.evaluate(classical, net, [img, 1.0 - img], [0.2], cfg,
-                                 key=jax.random.PRNGKey(0), keep=0)
-    m = metrics["0.2"]
-    sim, rec = ex["0.2"]
+    vals, ex = E.evaluate(dec, bank, windows, cfg=cfg, key=jax.random.PRNGKey(0), nsr=1e-4,
+                          depths_m=(0.1, 10.0), keep=0)
+    v = vals["10"]
+    sim, rec, wien = ex["10"]
     np.testing.assert_array_equal(rec, np.clip(target, 0.0, 1.0))
-    clean = np.asarray(O.render_tiled(classical, jnp.asarray(img), 200.0, kernel_size=5,
-                                      pixel_size=cfg.pixel_size, patch=64, pupil=4))
-    inside = (clean > 0.1) & (clean < 0.9)
+    gts = windows[:, 1:17, 1:17].astype(np.float64)
+    want = [10 * np.log10(1.0 / np.mean((g - np.clip(target, 0, 1)) ** 2)) for g in gts]
+    np.testing.assert_allclose(v["rec"]["psnr"], want, rtol=1e-6)
+    # Crop 0 sits on the frame's first 2 × 2 tiles and is blurred by the 10 m kernels.
+    clean = np.asarray(tiled.convolve_tiles(jnp.asarray(windows[0]), jnp.asarray(bank[7, :2, :2]),
+                                            pad="valid"))
+    inside = (clean > 0.1) & (clean < 0.85)
     noise = (sim - clean)[inside]
-    assert abs(noise.mean()) < 2e-3 and np.std(noise) == pytest.approx(0.02, rel=0.05)
+    assert abs(noise.mean()) < 5e-3 and np.std(noise) == pytest.approx(0.02, rel=0.15)
     assert sim.min() >= 0.0 and sim.max() == 1.0  # clipped, and the white corner reaches 1
-    want = [10 * np.log10(1.0 / np.mean((x - np.clip(target, 0, 1)) ** 2)) for x in (img,
-                                                                                     1 - img)]
-    assert m["rec"]["psnr"] == pytest.approx(np.mean(want), rel=1e-9)
-    assert m["rec"]["ssim"] < 0.1  # noise against an image: no structure in common
-    assert m["sim"]["psnr"] > m["rec"]["psnr"] + 5.0
-    assert psnr(img, sim, data_range=1.0) > 20.0
-    assert ssim(img, rec, data_range=1.0) < 0.1
+    assert v["sim"]["psnr"][0] == pytest.approx(psnr(gts[0], sim, data_range=1.0), rel=1e-9)
+    # The Wiener reference restores the lost 10 %: it is much closer to the scene than sim.
+    assert v["wiener"]["psnr"][0] > v["sim"]["psnr"][0] + 1.0
+    assert psnr(gts[0], wien, data_range=1.0) == pytest.approx(v["wiener"]["psnr"][0], rel=1e-9)
+    # The 10 cm images differ from the 10 m ones (another kernel), the target does not.
+    assert vals["0.1"]["sim"]["psnr"] != v["sim"]["psnr"]
+    assert vals["0.1"]["rec"]["psnr"] == pytest.approx(v["rec"]["psnr"])
+
+
+def test_placements_cycle_over_the_frame_blocks():
+    assert E.placements(5, (8, 8), 4) == [(0, 0), (0, 4), (4, 0), (4, 4), (0, 0)]
+    with pytest.raises(ValueError, match="does not fit"):
+        E.placements(1, (2, 2), 4)
+
+
+def test_bootstrap_gain_over_seeds_and_crops():
+    rng = np.random.default_rng(0)
+    flat = E.bootstrap_gain(np.full((3, 40), 0.7))
+    assert flat["mean"] == pytest.approx(0.7) and flat["ci95"] == pytest.approx([0.7, 0.7])
+    crops = rng.normal(1.0, 1.0, 40)
+    one = E.bootstrap_gain(crops[None])
+    # Seeds that disagree (offsets −1, 0, +1 dB) widen the interval: the seed level is drawn.
+    three = E.bootstrap_gain(np.stack([crops - 1, crops, crops + 1]))
+    assert one["mean"] == pytest.approx(three["mean"])
+    assert one["ci95"][0] < one["mean"] < one["ci95"][1]
+    assert three["ci95"][1] - three["ci95"][0] > 2 * (one["ci95"][1] - one["ci95"][0])
+    # The crop-only interval is about ±1.96 σ/√n.
+    assert one["ci95"][1] - one["ci95"][0] == pytest.approx(2 * 1.96 * crops.std() / 40**0.5,
+                                                            rel=0.15)
+
+
+def test_noise_model_has_shot_and_read_noise():
+    x = jnp.concatenate([jnp.zeros(20000), jnp.full(20000, 0.5)])
+    y = np.asarray(O.add_noise(x, jax.random.PRNGKey(1), photons=200.0, read=0.01)) - np.asarray(x)
+    assert np.std(y[:20000]) == pytest.approx(0.01, rel=0.03)
+    assert np.std(y[20000:]) == pytest.approx(np.sqrt(0.5 / 200 + 1e-4), rel=0.03)
+
+
+def test_decoders_start_from_the_raw_image_or_its_wiener_estimate():
+    from jaxlens.experiments.edof.decoder import make_decoder
+
+    raw = jnp.asarray(np.random.default_rng(0).random((16, 16, 3)), jnp.float32)
+    kern = np.zeros((2, 2, 3, 3, 3), np.float32)
+    kern[..., 1, 1], kern[..., 1, 2] = 0.7, 0.2
+    kw = dict(nsr=0.05, key=jax.random.PRNGKey(0), width=4, enc_blocks=(1,), middle_blocks=1,
+              dec_blocks=(1,))
+    plain = make_decoder("nafnet", **kw)
+    np.testing.assert_array_equal(np.asarray(plain(raw, jnp.asarray(kern))), np.asarray(raw))
+    wien = make_decoder("wiener", **kw)
+    want = tiled.wiener_tiles(raw, jnp.asarray(kern), 0.05, prior="gradient")
+    np.testing.assert_allclose(np.asarray(wien(raw, jnp.asarray(kern))), np.asarray(want),
+                               atol=1e-6)
+    assert float(jnp.max(jnp.abs(want - raw))) > 0.05
+    with pytest.raises(ValueError, match="kind must be one of"):
+        make_decoder("unet", **kw)
 
 
 def test_loss_shape_errors():
@@ -142,9 +199,13 @@ def test_gates_select_and_tie_parameters(classical):
         radius=g.radius,
         index=g.index,
     )
-    gate, tie = L.gates(p, "classical")
+    gate, tie = L.gates(p, "frozen")
     out = L.apply_gates(g, gate, tie)
     assert all(float(jnp.sum(jnp.abs(v))) == 0 for v in jax.tree_util.tree_leaves(out))
+    gate, tie = L.gates(p, "classical")  # a trainable focus and nothing else
+    out = L.apply_gates(g, gate, tie)
+    assert float(out.focus) == 2.0
+    assert sum(float(jnp.sum(jnp.abs(v))) for v in jax.tree_util.tree_leaves(out)) == 2.0
     gate, tie = L.gates(p, "cubic")
     out = L.apply_gates(g, gate, tie)
     np.testing.assert_allclose(out.odd_x, [2.0, 0.0, 0.0])
@@ -160,6 +221,15 @@ def test_gates_select_and_tie_parameters(classical):
     np.testing.assert_allclose(out.odd_y, [3.0, 4.0, 5.0])
     with pytest.raises(ValueError, match="kind"):
         L.gates(p, "other")
+
+
+def test_project_holds_the_cubic_strength_above_its_floor(classical):
+    p = L.HybridParams.from_lens(L.to_hybrid(classical, n_odd=2, cubic=0.003))
+    low = L.project(p, 2.0 * float(p.odd_x[0]))
+    np.testing.assert_allclose([low.odd_x[0], low.odd_y[0]], 2.0 * float(p.odd_x[0]))
+    np.testing.assert_array_equal(low.odd_x[1:], p.odd_x[1:])
+    same = L.project(p, -np.inf)
+    np.testing.assert_array_equal(same.odd_x, p.odd_x)
 
 
 def test_dioptric_depth_weights():
@@ -193,53 +263,6 @@ def test_perturb_changes_lens_and_zero_tolerance_keeps_it(classical):
     assert float(moved.surfaces[0].c) == 0.0  # the stop stays flat
 
 
-def test_lens_rate_waits_for_the_network():
-    from jaxlens.experiments.edof.train import Config, make_optimizer
-
-    cfg = Config(steps=8, lens_delay=0.25, lr_net=1e-2, lr_lens=1e-1)
-    opt = make_optimizer(cfg, cfg.steps)
-    trainable = ({"w": jnp.ones(3)}, {"c": jnp.ones(2)})
-    grads = ({"w": jnp.ones(3)}, {"c": jnp.ones(2)})
-    state = opt.init(trainable)
-    lens_steps, net_steps = [], []
-    for _ in range(6):
-        (u_net, u_lens), state = opt.update(grads, state, trainable)
-        lens_steps.append(float(jnp.abs(u_lens["c"][0])))
-        net_steps.append(float(jnp.abs(u_net["w"][0])))
-    # Frozen for 2 steps (the network trains), then a linear ramp over 2 steps to the rate.
-    assert lens_steps[:3] == [0.0, 0.0, 0.0]
-    assert lens_steps[3] == pytest.approx(0.5 * 0.1, rel=1e-3)
-    assert lens_steps[4] == pytest.approx(0.1, rel=1e-3)
-    assert all(v > 0 for v in net_steps[1:])
-    # With no delay the lens moves from the first step.
-    opt0 = make_optimizer(Config(steps=8, lens_delay=0.0, lr_lens=1e-1), 8)
-    (_, u_lens), _ = opt0.update(grads, opt0.init(trainable), trainable)
-    assert float(jnp.abs(u_lens["c"][0])) == pytest.approx(0.1, rel=1e-3)
-
-
-# --- image formation helpers -----------------------------------------------------------------
-def test_conv_valid_is_a_true_convolution():
-    rng = np.random.default_rng(0)
-    win = rng.random((9, 9, 2))
-    ker = rng.random((2, 3, 3))
-    out = np.asarray(O.conv_valid(jnp.asarray(win), jnp.asarray(ker)))
-    ref = np.zeros((7, 7, 2))
-    for c in range(2):
-        for i in range(7):
-            for j in range(7):
-                # y[n] = Σ_m x[n − m] k[m], in 'valid' coordinates.
-                ref[i, j, c] = np.sum(win[i : i + 3, j : j + 3, c] * ker[c, ::-1, ::-1])
-    np.testing.assert_allclose(out, ref, rtol=1e-10)
-
-
-def test_pupil_disc_fills_the_disc_evenly():
-    p = np.asarray(O.pupil_disc(16))
-    r = np.hypot(p[:, 0], p[:, 1])
-    assert p.shape == (256, 2) and r.max() < 1.0
-    # Equal-area cells: half the points inside radius 1/sqrt(2).
-    assert np.mean(r < 2**-0.5) == pytest.approx(0.5, abs=1 / 16)
-
-
 def test_psf_depth_variation_measure():
     rng = np.random.default_rng(1)
     p = rng.random((1, 2, 3, 5, 5))
@@ -254,55 +277,67 @@ def test_psf_depth_variation_measure():
     apart = O.psf_depth_variation(np.concatenate([a, b]))
     assert apart["l1"] == pytest.approx(2.0)
     assert apart["ncc"] < 0
+    # Shapes are compared, not sums: a PSF that loses half its light is the same shape.
+    dim = O.psf_depth_variation(np.concatenate([p, 0.5 * p]))
+    assert dim["l1"] == pytest.approx(0.0, abs=1e-12)
 
 
 # --- the experiment, end to end ------------------------------------------------------------------
-def test_smoke_run_writes_outputs_and_loss_falls(tmp_path):
+def test_smoke_run_writes_outputs_loss_falls_and_resumes(tmp_path):
+    """The smoke run (NAFNet decoder) writes every output with the issue-10 schema and its
+    loss falls; a run
+    stopped by its time limit at a checkpoint and resumed gives the same table as one run
+    straight through (compiled programs are shared, so the second and third runs are cheap)."""
     from jaxlens.experiments.edof import cli as edof
+    from jaxlens.experiments.edof.train import OutOfTime
 
+    common = ["--smoke", "--quiet", "--lenses", "classical,hybrid", "--max-crops", "4"]
     out = tmp_path / "edof"
-    summary = edof.run(
-        [
-            "--smoke",
-            "--quiet",
-            "--lenses",
-            "classical,hybrid",
-            "--out",
-            str(out),
-            "--record",
-            str(tmp_path / "rec"),
-        ]
-    )
-    for name in (
-        "table2.json",
-        "table2.md",
-        "summary.json",
-        "command.txt",
-        "loss.png",
-        "psf_grid_hybrid.png",
-        "mtf_by_depth.png",
-        "odd_profile.png",
-        "reconstructions.png",
-        "lenses/hybrid.json",
-        "lenses/hybrid.zmx",
-        "nets/hybrid.eqx",
-    ):
+    summary = edof.run(common + ["--out", str(out), "--record", str(tmp_path / "rec")])
+    for name in ("table2.json", "table2.md", "table2_per_image.json", "summary.json",
+                 "command.txt", "loss.png", "psf_grid_hybrid.png", "mtf_by_depth.png",
+                 "odd_profile.png", "reconstructions.png", "lenses/hybrid_s0.json",
+                 "nets/hybrid_s0.eqx"):
         assert (out / name).is_file(), name
         assert os.path.getsize(out / name) > 0
     table = json.loads((out / "table2.json").read_text())
-    assert set(table) == {"classical", "hybrid"}
-    for row in table.values():
+    assert set(table["lenses"]) == {"classical", "hybrid", "wiener_classical", "wiener_hybrid"}
+    for row in table["lenses"].values():
         assert set(row) == {"0.1", "0.2", "10"}
         for d in row.values():
             assert set(d) == {"sim", "rec"}
             assert all(np.isfinite(d[t][m]) for t in d for m in ("psnr", "ssim"))
-    for name in ("classical", "hybrid"):
-        h = summary["history"][name]["stage1"]
-        assert h[-1]["loss"] < h[0]["loss"], name
+    assert set(table["gain_vs_classical"]) == {"hybrid"}
+    g = table["gain_vs_classical"]["hybrid"]["0.1"]
+    assert g["ci95"][0] <= g["mean"] <= g["ci95"][1]
+    assert table["test"]["crops"] == 4 and table["seeds"] == [0]
+    assert set(table["base_lens"]) == {"efl_mm", "fov_deg", "fnum", "image_diagonal_mm",
+                                       "elements"}
+    assert all(0.0 < v <= 1.0 + 1e-6 for v in table["light_on_sensor"].values())
+    per = json.loads((out / "table2_per_image.json").read_text())
+    assert len(per["crops"]) == 4
+    assert len(per["values"]["0"]["hybrid"]["0.1"]["rec"]["psnr"]) == 4
+    # The table's rec row is the mean of the per-crop reconstruction values.
+    assert table["lenses"]["hybrid"]["0.1"]["rec"]["psnr"] == pytest.approx(
+        np.mean(per["values"]["0"]["hybrid"]["0.1"]["rec"]["psnr"]))
+    for name in ("classical_s0", "hybrid_s0"):  # on a fixed batch, so batches add no noise
+        p = summary["history"][name]["probe"]
+        assert p["after"] < 0.97 * p["before"], (name, p)
     assert (tmp_path / "rec" / "table2.md").is_file()
-    # PSFs at 10 cm, 20 cm and 10 m differ (the smoke lenses are far from depth-invariant,
-    # about 0.25 in L1 of unit-sum PSFs), and the summary is the mean over the 3 fields.
-    for name, v in summary["psf_depth_variation"].items():
-        assert len(v["l1_per_field"]) == len(v["ncc_per_field"]) == 3, name
-        assert v["l1"] == pytest.approx(np.mean(v["l1_per_field"]), rel=1e-9)
-        assert 0.05 < v["l1"] < 1.0 and 0.5 < v["ncc"] < 1.0, (name, v)
+
+    # Stopped at the first checkpoint, then resumed: the same numbers as straight through.
+    ck, out2 = tmp_path / "ck", tmp_path / "edof2"
+    with pytest.raises(OutOfTime):
+        edof.run(common + ["--out", str(out2), "--checkpoint", str(ck), "--time-limit", "1e-6"])
+    assert not out2.exists() and (ck / "seed0" / "classical.json").is_file()
+    edof.run(common + ["--out", str(out2), "--checkpoint", str(ck), "--resume"])
+    again = json.loads((out2 / "table2.json").read_text())
+    assert again["lenses"] == table["lenses"]
+    # Resumed once more after the end: nothing is trained or evaluated again (the
+    # evaluations are kept in the checkpoint folder), and the table is the same.
+    assert (ck / "seed0" / "eval_hybrid.json").is_file()
+    third = edof.run(common + ["--out", str(tmp_path / "edof3"), "--checkpoint", str(ck),
+                               "--resume"])
+    assert json.loads((tmp_path / "edof3" / "table2.json").read_text())["lenses"] == \
+        table["lenses"]
+    assert third["timings_s"]["train_hybrid_s0_s"] < 5.0

@@ -45,7 +45,7 @@ def test_nafnet_batches_with_vmap_and_has_gradients(small_net):
 
     @eqx.filter_jit
     def loss(net):
-        return jnp.mean((jax.vmap(net)(x) - x) ** 2)
+        return jnp.mean((jax.vmap(net)(x) - 0.5 * x) ** 2)  # a fresh net returns x
 
     g = eqx.filter_grad(loss)(small_net)
     leaves = jax.tree_util.tree_leaves(eqx.filter(g, eqx.is_inexact_array))
@@ -72,6 +72,17 @@ def test_fresh_block_is_identity():
     blk = NAFBlock(6, key=KEY)
     x = jax.random.normal(KEY, (5, 7, 6))
     np.testing.assert_array_equal(np.asarray(blk(x)), np.asarray(x))
+
+
+def test_fresh_network_is_exactly_the_identity():
+    """The last convolution starts at zero (and every block's scales do), so a fresh network
+    returns its input bit for bit; ``identity_init=False`` draws the last layer at random."""
+    x = jax.random.uniform(KEY, (13, 22, 3), jnp.float32)
+    net = NAFNet(width=4, enc_blocks=(1, 1), dec_blocks=(1, 1), key=KEY, dtype=jnp.float32)
+    np.testing.assert_array_equal(np.asarray(_apply(net, x)), np.asarray(x))
+    rand = NAFNet(width=4, enc_blocks=(1, 1), dec_blocks=(1, 1), key=KEY, dtype=jnp.float32,
+                  identity_init=False)
+    assert float(jnp.max(jnp.abs(_apply(rand, x) - x))) > 1e-3
 
 
 def test_layernorm2d_normalises_each_pixel_over_channels():

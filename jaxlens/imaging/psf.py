@@ -21,8 +21,11 @@ Conventions:
     ``center`` picks the reference point ``ref`` on the image surface: "chief" (the real
     chief ray through the centre of the stop, at the lens's primary wavelength), "centroid"
     (the energy centroid over all requested wavelengths) or "ideal" (the distortion-free
-    image point ``K·tanθ``, ``K = image_scale(lens)``). One reference serves every
-    wavelength, so lateral colour shows as a shift between the channels.
+    image point ``K·tanθ``, ``K = image_scale(lens)``); the geometric model also takes
+    "pupil" (where the ray through the centre of the paraxial entrance pupil lands, at the
+    middle requested wavelength: traced with the beam, no aiming iterations; the real chief
+    ray when the stop is the entrance pupil, as for a stop-first lens). One reference serves
+    every wavelength, so lateral colour shows as a shift between the channels.
 
 Models:
     geometric: rays from the object point fill an overfilled entrance pupil (the aperture
@@ -78,7 +81,7 @@ __all__ = [
 RGB_WAVELENGTHS = (LAMBDA_C, LAMBDA_D, LAMBDA_F)
 """Default (R, G, B) wavelengths in µm: the C, d and F lines."""
 
-CENTERS = ("chief", "centroid", "ideal")
+CENTERS = ("chief", "centroid", "ideal", "pupil")
 
 
 def _launch(lens: Lens, field, depth, pupil, wavelength) -> Rays:
@@ -199,18 +202,38 @@ def _model(model, caller: str) -> AbstractPSFModel:
 
 class GeometricPSF(AbstractPSFModel):
     """Ray splatting: rays fill the overfilled pupil, are traced and splatted bilinearly
-    (``order=1``, a one-pixel tent; ``order=2``, a smoother quadratic B-spline)."""
+    (``order=1``, a one-pixel tent; ``order=2``, a smoother quadratic B-spline).
+
+    ``grid`` places the rays: "square" (a cell-centred square grid cut to the disc of
+    ``overfill``) or "polar" (``pupil²`` equal-area polar cells strictly inside that disc,
+    ``sampling.pupil_polar``; with ``overfill < 1`` no ray of a stop-first lens fails at the
+    stop). ``normalize`` sets what a kernel's sum counts: "transmitted" (the default) divides
+    by the flux of the rays that reach the image surface, so the kernel sums to 1 less the
+    light outside it; "pupil" divides by the flux that enters the paraxial entrance pupil
+    (launched rays with pupil radius <= 1, passed or not), so light lost to vignetting
+    counts as lost too and the kernel's sum is the fraction of that light on the kernel.
+    """
 
     pupil: int = 64
     overfill: float = 1.25
     order: int = 1
+    grid: str = "square"
+    normalize: str = "transmitted"
+
+    def check(self, caller: str) -> None:
+        super().check(caller)
+        if self.grid not in ("square", "polar"):
+            raise ValueError(f"{caller}: grid must be 'square' or 'polar', got {self.grid!r}")
+        if self.normalize not in ("transmitted", "pupil"):
+            raise ValueError(f"{caller}: normalize must be 'transmitted' or 'pupil', got "
+                             f"{self.normalize!r}")
 
     def kernels(self, lens, field, depth, wls, *, kernel_size, pixel_size, center, key,
                 newton_iters):
         return _geometric(lens, field, depth, wls, kernel_size=kernel_size,
                           pixel_size=pixel_size, center=center, pupil=self.pupil,
                           overfill=self.overfill, key=key, newton_iters=newton_iters,
-                          order=self.order)
+                          order=self.order, grid=self.grid, normalize=self.normalize)
 
 
 class CoherentPSF(AbstractPSFModel):
@@ -233,17 +256,30 @@ DEFAULT_MODEL = GeometricPSF()
 
 
 def _geometric(lens, field, depth, wls, *, kernel_size, pixel_size, center, pupil, overfill,
-               key, newton_iters, order):
+               key, newton_iters, order, grid="square", normalize="transmitted"):
     dtype = lens.epd.dtype
-    pts, mask, _ = pupil_cells(pupil, overfill, dtype, key)
+    if grid == "polar":
+        pts = sampling.pupil_polar(pupil, key, dtype) * overfill
+        mask = jnp.ones(pts.shape[:1], bool)
+    else:
+        pts, mask, _ = pupil_cells(pupil, overfill, dtype, key)
+    if center == "pupil":  # the pupil-centre ray rides along with no weight
+        pts = jnp.concatenate([jnp.zeros((1, 2), dtype), pts])
+        mask = jnp.concatenate([jnp.zeros((1,), bool), mask])
+    in_pupil = mask & (jnp.sum(pts * pts, -1) <= 1.0)
 
     def one(wl):
-        _, out, w = _trace_beam(lens, field, depth, wl, pts, mask, newton_iters)
-        return out.origin[..., :2], w
+        rays, out, w = _trace_beam(lens, field, depth, wl, pts, mask, newton_iters)
+        entering = jnp.sum(jnp.where(in_pupil, _flux(rays, depth), 0.0))
+        return out.origin[..., :2], w, entering
 
-    pos, w = jax.vmap(one)(wls)  # [W, M, 2], [W, M]
-    ref = _reference(lens, field, depth, center, newton_iters, pos, w)
-    total = jnp.maximum(jnp.sum(w, -1), jnp.finfo(dtype).tiny)  # [W]
+    pos, w, entering = jax.vmap(one)(wls)  # [W, M, 2], [W, M], [W]
+    if center == "pupil":
+        ref = pos[wls.shape[0] // 2, 0]
+    else:
+        ref = _reference(lens, field, depth, center, newton_iters, pos, w)
+    total = entering if normalize == "pupil" else jnp.sum(w, -1)
+    total = jnp.maximum(total, jnp.finfo(dtype).tiny)  # [W]
     kern = jax.vmap(lambda p, ww: splat(p - ref, ww, kernel_size, pixel_size, order))(pos, w)
     kern = kern / total[:, None, None]
     nan = jnp.full(wls.shape, jnp.nan, dtype)
@@ -260,6 +296,8 @@ def _truncation(kern, flux):
 # --------------------------------------------------------------------------------------
 def _coherent(lens, field, depth, wls, *, kernel_size, pixel_size, center, pupil, overfill,
               newton_iters):
+    if center == "pupil":
+        raise ValueError("psf: center='pupil' is for the geometric model; use 'chief'")
     dtype = lens.epd.dtype
     pts, mask, cell = pupil_cells(pupil, overfill, dtype, None)
     k = kernel_size

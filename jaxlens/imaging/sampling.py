@@ -63,6 +63,31 @@ def pupil_stratified(key, n_side: int, dtype=None) -> Float[Array, "m 2"]:
     return jnp.stack([r * jnp.cos(a), r * jnp.sin(a)], -1).reshape(-1, 2)
 
 
+def pupil_polar(n_side: int, key=None, dtype=None, *, radius: float = 1.0 - 1e-4
+                ) -> Float[Array, "m 2"]:
+    """``n_side²`` points, one per cell of an equal-area polar grid of the disc of ``radius``.
+
+    Without a key each point sits at its cell's centre (in r² and angle); with one it is
+    jittered uniformly inside its cell (stratified sampling). Every point lies strictly
+    inside the disc, so a beam aimed at a stop-first lens's entrance pupil with
+    ``radius < 1`` loses no ray at the stop: no ray is carried invalid through the lens, and
+    no stale ray can make a gradient NaN.
+    """
+    if not isinstance(n_side, int) or n_side < 1:
+        raise ValueError(f"pupil_polar: n_side must be an int >= 1, got {n_side!r}")
+    if not 0 < radius <= 1:
+        raise ValueError(f"pupil_polar: radius must be in (0, 1] (pupil radii), got {radius!r}")
+    dt = dtype or jnp.result_type(float)
+    i, j = jnp.meshgrid(jnp.arange(n_side), jnp.arange(n_side), indexing="ij")
+    if key is None:
+        u = jnp.full((2, n_side, n_side), 0.5, dt)
+    else:
+        u = jax.random.uniform(key, (2, n_side, n_side), dt)
+    r = jnp.sqrt((i + u[0]) / n_side) * radius
+    a = 2 * jnp.pi * (j + u[1]) / n_side
+    return jnp.stack([r * jnp.cos(a), r * jnp.sin(a)], -1).reshape(-1, 2)
+
+
 def pupil_samples(scheme: str, n: int, key=None, dtype=None) -> Float[Array, "m 2"]:
     """Pupil points by scheme name: "grid" (n per side), "hexapolar" (n rings),
     "random" (n points) or "stratified" (n per side)."""

@@ -8,15 +8,19 @@ runs it.
 
 Modules:
     lenses: the classical lens, the hybrid EDoF lens, the cubic-plate baseline, scaled
-        trainable parameters and manufacturing perturbations.
-    optics: RGB PSFs, checkpointed patch simulation, whole-image rendering and PSF
-        analysis (depth variation, MTF).
+        trainable parameters, their gates and bounds, manufacturing perturbations.
+    optics: image formation through ``jaxlens.imaging`` (PSFs normalised by the light that
+        enters the pupil, PSF banks, tiled blur, sensor noise) and PSF measures.
+    decoder: the NAFNet decoder, optionally behind a tiled Wiener front end.
     losses: L_sim, L_raw, L_rec and their weighted sum.
-    scenes: training and held-out test images from ``skimage.data`` or a folder.
-    train: the two training stages and the Table 2 evaluation.
+    scenes: training, validation and test images from ``skimage.data`` or a folder.
+    train: the two training stages, with checkpoints.
+    evaluate: per-crop Table 2 metrics, the Wiener reference, bootstrap gains.
 """
 
 from . import lenses as lenses
+from . import decoder as decoder
+from . import evaluate as evaluate
 from . import losses as losses
 from . import optics as optics
 from . import scenes as scenes

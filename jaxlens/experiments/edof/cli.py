@@ -3,34 +3,37 @@
 ``python -m jaxlens.experiments.edof`` reproduces, at CPU scale, the paper's second result
 (Yang, Fu & Heidrich, Nat. Commun. 2024): a large-aperture (F/2.1), wide-field (68.8°)
 cellphone-style lens whose first surface becomes a hybrid surface (even asphere plus odd
-polynomial terms), trained jointly with a NAFNet so that images are restored from 10 cm to
-10 m, against the classical lens (focused at 20 cm) and a cubic phase plate at the aperture,
-each with its own network trained the same way.
+polynomial terms), trained jointly with a decoder so that images are restored from 10 cm to
+10 m, against the classical lens (focused at 20 cm, its sensor position trainable) and a
+cubic phase plate at the aperture (its strength bounded below, its sensor position
+trainable). All three get the same decoder, batches, steps and lens updates.
 
-For every lens it runs stage 1 (network and free lens parameters with
-L = L_rec + ω1·L_sim + ω2·L_raw; two of the 8 training depths per batch, 486/587/656 nm),
-then stage 2 (lens frozen, network refined on perturbed lenses), then evaluates PSNR and SSIM
-of the raw simulation and the reconstruction on held-out test images at 10 cm, 20 cm and
-10 m (the paper's Table 2). It also measures how much each lens's PSFs change with depth,
-and writes PSF grids, MTF curves by depth, the odd polynomial's height profile and example
-reconstructions.
+Image formation goes through ``jaxlens.imaging`` (``edof.optics``): PSFs normalised by the
+light entering the entrance pupil, one per 32-pixel tile (8 × 8 per frame), shot and read
+noise. For every seed and lens it trains (``edof.train``), then scores the raw image, the
+reconstruction and a Wiener-deconvolution reference on held-out native-resolution test
+crops at 10 cm, 20 cm and 10 m (``edof.evaluate``).
 
-Outputs (``--out``, default ``runs/edof``): ``table2.json``/``table2.md``, ``summary.json``
-(config, timings, PSF-variation measures, loss histories), ``command.txt``, the trained
-lenses (``lenses/<name>.json`` and ``.zmx``), the network weights (``nets/<name>.eqx``,
-``eqx.tree_serialise_leaves``), and figures (``psf_grid_<name>.png``, ``mtf_by_depth.png``,
-``odd_profile.png``, ``reconstructions.png``, ``loss.png``). ``--record DIR`` copies the
-tables, summary and figures there (the committed copy is ``experiments/edof``).
+Outputs (``--out``, default ``runs/edof``): ``table2.json`` / ``table2.md`` (the schema of
+issue 10), ``table2_per_image.json`` (every crop's numbers), ``summary.json`` (config,
+timings, histories, PSF measures), ``command.txt``, the trained lenses
+(``lenses/<name>_s<seed>.json``), decoders (``nets/<name>_s<seed>.eqx``) and figures.
+``--record DIR`` copies tables, summary and figures there (the committed copy is
+``experiments/edof``).
 
-Defaults are the CPU scale (2× binned 512² sensor, 64-pixel patches, a 16-wide NAFNet,
-400 + 100 steps per lens); ``--paper`` selects the paper's scale for a GPU (full 1024²
-sensor, 256-pixel patches, the 32-wide NAFNet with 28 deep blocks, many more steps).
+Defaults are the CPU scale (4× binned 256² sensor, so a 256² test crop fills the frame; a
+16-wide NAFNet behind a Wiener front end; 300 + 60 steps per lens; one seed); ``--seeds 0,1,2`` gives the 3-seed table.
+``--paper`` selects the paper's scale for a GPU; with ``--checkpoint DIR`` a run saves its
+state every ``refresh_every`` steps, ``--time-limit S`` stops it at the first checkpoint
+after S seconds (exit status 3) and ``--resume`` continues it, so it can go in pieces.
 ``--smoke`` is a seconds-scale run for tests.
 
 Examples:
     python -m jaxlens.experiments.edof
-    python -m jaxlens.experiments.edof --steps 2000 --steps2 500 --out runs/edof_long
-    python -m jaxlens.experiments.edof --paper --out runs/edof_paper
+    python -m jaxlens.experiments.edof --seeds 0,1,2 --out runs/edof3
+    python -m jaxlens.experiments.edof --paper --checkpoint ck --time-limit 540 --out runs/p
+    python -m jaxlens.experiments.edof --paper --checkpoint ck --resume --time-limit 540 \\
+        --out runs/p
     python -m jaxlens.experiments.edof --smoke --out /tmp/edof_smoke
 """
 
@@ -39,6 +42,7 @@ from __future__ import annotations
 import argparse
 import dataclasses
 import json
+import math
 import os
 import shlex
 import shutil
@@ -49,6 +53,8 @@ from jaxlens.experiments.runfolder import OneLineParser, RunFolder, UsageError, 
 from jaxlens.optics import checks as input_checks
 
 LENS_NAMES = ("classical", "cubic", "hybrid")
+OUT_OF_TIME = 3
+"""Exit status of a run stopped by ``--time-limit`` at a checkpoint."""
 
 
 def _ints(text: str) -> tuple[int, ...]:
@@ -64,59 +70,54 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument("--out", default="runs/edof", help="output folder (default runs/edof)")
     p.add_argument("--overwrite", action="store_true",
                    help="replace an earlier run in --out (default: refuse)")
-    p.add_argument(
-        "--record", default=None, help="also copy tables, summary and figures to this folder"
-    )
-    p.add_argument(
-        "--lenses",
-        default=",".join(LENS_NAMES),
-        help="lenses to train, from classical,cubic,hybrid",
-    )
+    p.add_argument("--record", default=None,
+                   help="also copy tables, summary and figures to this folder")
+    p.add_argument("--lenses", default=",".join(LENS_NAMES),
+                   help="lenses to train, from classical,cubic,hybrid")
+    p.add_argument("--seeds", type=_ints, default=(0,), help="training seeds, e.g. 0,1,2 (0)")
     p.add_argument("--smoke", action="store_true", help="tiny, seconds-scale run (tests)")
     p.add_argument("--paper", action="store_true", help="the paper's scale (GPU)")
+    p.add_argument("--checkpoint", default=None, help="folder for checkpoints (none)")
+    p.add_argument("--resume", action="store_true", help="continue from --checkpoint")
+    p.add_argument("--time-limit", type=float, default=None,
+                   help="stop at the first checkpoint after this many seconds (exit 3)")
     g = p.add_argument_group("training (defaults: CPU scale)")
-    g.add_argument("--steps", type=int, help="stage-1 steps per lens (400)")
-    g.add_argument("--steps2", type=int, help="stage-2 steps per lens (100)")
-    g.add_argument("--batch", type=int, help="patches per batch (4)")
-    g.add_argument("--patch", type=int, help="patch side, pixels (64)")
-    g.add_argument("--kernel", type=int, help="PSF kernel side, pixels (41)")
-    g.add_argument("--binning", type=int, help="sensor binning of the 1024² sensor (2)")
-    g.add_argument("--pupil", type=int, help="pupil samples per side of a training PSF (32)")
+    g.add_argument("--decoder", choices=("nafnet", "wiener"),
+                   help="NAFNet alone, or behind a Wiener front end (wiener)")
+    g.add_argument("--steps", type=int, help="stage-1 steps per lens (300)")
+    g.add_argument("--steps2", type=int, help="stage-2 steps per lens (60)")
+    g.add_argument("--batch", type=int, help="patches per batch (8)")
+    g.add_argument("--tile", type=int, help="tile and patch side, pixels (32)")
+    g.add_argument("--kernel", type=int, help="PSF kernel side, pixels (21)")
+    g.add_argument("--binning", type=int, help="sensor binning of the 1024² sensor (4)")
+    g.add_argument("--pupil", type=int, help="pupil rays per side of a training PSF (32)")
+    g.add_argument("--eval-pupil", type=int, help="pupil rays per side at evaluation (32)")
+    g.add_argument("--lens-every", type=int, help="a lens update every N steps (4)")
     g.add_argument("--lr-net", type=float, help="network learning rate (1e-3)")
     g.add_argument("--lr-lens", type=float, help="lens learning rate, scaled units (2e-2)")
-    g.add_argument(
-        "--lens-delay",
-        type=float,
-        help="fraction of stage-1 steps with the lens frozen while the network warms up (0)",
-    )
-    g.add_argument(
-        "--depth-sampling",
-        choices=("uniform", "dioptric"),
-        help="how a batch draws its 2 of the 8 training depths: uniformly, or with weights "
-        "even in dioptres (uniform)",
-    )
-    g.add_argument(
-        "--hold-focus",
-        action=argparse.BooleanOptionalAction,
-        help="the hybrid keeps the classical lens's base curvature and sensor position (off)",
-    )
+    g.add_argument("--depth-sampling", choices=("uniform", "dioptric"),
+                   help="how a batch draws its 2 of the 8 training depths (uniform)")
+    g.add_argument("--hold-focus", action=argparse.BooleanOptionalAction,
+                   help="the hybrid keeps the classical lens's base curvature and sensor "
+                   "position (off)")
     g.add_argument("--w-sim", type=float, help="ω1, weight of L_sim (0.1)")
     g.add_argument("--w-raw", type=float, help="ω2, weight of L_raw (0.1)")
-    g.add_argument("--noise", type=float, help="read-noise standard deviation (0.01)")
+    g.add_argument("--photons", type=float, help="photo-electrons at the value 1 (2000)")
+    g.add_argument("--read-noise", type=float, help="read-noise standard deviation (0.002)")
     g.add_argument("--width", type=int, help="NAFNet width (16)")
     g.add_argument("--enc", type=_ints, help="NAFNet encoder blocks per level (1,1,1)")
     g.add_argument("--middle", type=int, help="NAFNet middle blocks (1)")
     g.add_argument("--dec", type=_ints, help="NAFNet decoder blocks per level (1,1,1)")
     g.add_argument("--n-odd", type=int, help="odd terms per axis of the hybrid surface (3)")
-    g.add_argument("--seed", type=int, default=0)
+    g.add_argument("--cubic-floor", type=float,
+                   help="lower bound of the cubic strength, fraction of its start (1)")
     d = p.add_argument_group("data")
-    d.add_argument(
-        "--train-dir",
-        default=None,
-        help="folder of training images (default: skimage.data; see edof.scenes)",
-    )
+    d.add_argument("--train-dir", default=None,
+                   help="folder of training images (default: skimage.data; see edof.scenes)")
     d.add_argument("--test-dir", default=None, help="folder of held-out test images")
-    d.add_argument("--test-images", type=int, default=None, help="use only the first N tests")
+    d.add_argument("--validation", action="store_true",
+                   help="score the validation images instead of the test images")
+    d.add_argument("--max-crops", type=int, default=None, help="use only the first N crops")
     p.add_argument("--quiet", action="store_true", help="no progress bars")
     return p
 
@@ -125,76 +126,47 @@ def config_from_args(a):
     from jaxlens.experiments.edof.train import Config
 
     if a.paper:
-        cfg = Config(
-            binning=1,
-            patch=256,
-            kernel_size=81,
-            batch=8,
-            pupil=96,
-            steps=20000,
-            steps2=5000,
-            width=32,
-            enc_blocks=(1, 1, 1, 28),
-            middle_blocks=1,
-            dec_blocks=(1, 1, 1, 1),
-            eval_pupil=128,
-            log_every=50,
-        )
+        cfg = Config(binning=1, tile=128, kernel_size=81, batch=8, pupil=64, eval_pupil=96,
+                     steps=20000, steps2=5000, lens_every=4, refresh_every=250, width=32,
+                     enc_blocks=(1, 1, 1, 28), middle_blocks=1, dec_blocks=(1, 1, 1, 1),
+                     log_every=50, crop=256)
     elif a.smoke:
-        cfg = Config(
-            binning=16,
-            patch=16,
-            kernel_size=9,
-            batch=2,
-            pupil=8,
-            steps=8,
-            steps2=2,
-            width=4,
-            enc_blocks=(1,),
-            middle_blocks=1,
-            dec_blocks=(1,),
-            eval_pupil=12,
-            lr_net=3e-3,
-            log_every=2,
-        )
+        cfg = Config(binning=16, tile=16, kernel_size=9, batch=2, pupil=8, eval_pupil=8,
+                     steps=60, steps2=2, lens_every=4, refresh_every=20, width=4,
+                     enc_blocks=(1,), middle_blocks=1, dec_blocks=(1,), lr_net=5e-3,
+                     log_every=10, crop=32, decoder="nafnet", photons=100.0)
     else:
         cfg = Config()
     over = {
-        "steps": a.steps,
-        "steps2": a.steps2,
-        "batch": a.batch,
-        "patch": a.patch,
-        "kernel_size": a.kernel,
-        "binning": a.binning,
-        "pupil": a.pupil,
-        "lr_net": a.lr_net,
-        "lr_lens": a.lr_lens,
-        "lens_delay": a.lens_delay,
-        "depth_sampling": a.depth_sampling,
-        "hold_focus": a.hold_focus,
-        "w_sim": a.w_sim,
-        "w_raw": a.w_raw,
-        "noise": a.noise,
-        "width": a.width,
-        "enc_blocks": a.enc,
-        "middle_blocks": a.middle,
-        "dec_blocks": a.dec,
-        "n_odd": a.n_odd,
+        "decoder": a.decoder, "steps": a.steps, "steps2": a.steps2, "batch": a.batch,
+        "tile": a.tile, "kernel_size": a.kernel, "binning": a.binning, "pupil": a.pupil,
+        "eval_pupil": a.eval_pupil, "lens_every": a.lens_every, "lr_net": a.lr_net,
+        "lr_lens": a.lr_lens, "depth_sampling": a.depth_sampling, "hold_focus": a.hold_focus,
+        "w_sim": a.w_sim, "w_raw": a.w_raw, "photons": a.photons, "read_noise": a.read_noise,
+        "width": a.width, "enc_blocks": a.enc, "middle_blocks": a.middle,
+        "dec_blocks": a.dec, "n_odd": a.n_odd, "cubic_floor": a.cubic_floor,
     }
-    cfg = dataclasses.replace(cfg, seed=a.seed, **{k: v for k, v in over.items() if v is not None})
+    cfg = dataclasses.replace(cfg, **{k: v for k, v in over.items() if v is not None})
     n, w = input_checks.number, "edof"
-    for opt, v in (("--steps", cfg.steps), ("--batch", cfg.batch), ("--patch", cfg.patch),
+    for opt, v in (("--steps", cfg.steps), ("--batch", cfg.batch), ("--tile", cfg.tile),
                    ("--kernel", cfg.kernel_size), ("--binning", cfg.binning),
-                   ("--width", cfg.width)):
+                   ("--width", cfg.width), ("--lens-every", cfg.lens_every)):
         n(v, opt, w, lo=1, integer=True)
     for opt, v in (("--steps2", cfg.steps2), ("--middle", cfg.middle_blocks),
-                   ("--n-odd", cfg.n_odd), ("--seed", cfg.seed)):
+                   ("--n-odd", cfg.n_odd)):
         n(v, opt, w, lo=0, integer=True)
-    n(cfg.pupil, "--pupil", w, lo=2, integer=True, unit="samples per side")
+    for s in a.seeds:
+        n(s, "--seeds", w, lo=0, integer=True)
+    if not a.seeds:
+        raise ValueError("edof: --seeds needs at least one seed")
+    n(cfg.pupil, "--pupil", w, lo=2, integer=True, unit="rays per side")
+    n(cfg.eval_pupil, "--eval-pupil", w, lo=2, integer=True, unit="rays per side")
     n(cfg.lr_net, "--lr-net", w, lo=0, lo_open=True)
     n(cfg.lr_lens, "--lr-lens", w, lo=0, lo_open=True)
-    n(cfg.lens_delay, "--lens-delay", w, lo=0, hi=1, unit="(fraction of stage-1 steps)")
-    for opt, v in (("--w-sim", cfg.w_sim), ("--w-raw", cfg.w_raw), ("--noise", cfg.noise)):
+    n(cfg.photons, "--photons", w, lo=0, lo_open=True, unit="electrons")
+    n(cfg.cubic_floor, "--cubic-floor", w, lo=0, unit="(fraction of the start strength)")
+    for opt, v in (("--w-sim", cfg.w_sim), ("--w-raw", cfg.w_raw),
+                   ("--read-noise", cfg.read_noise)):
         n(v, opt, w, lo=0)
     for opt, blocks in (("--enc", cfg.enc_blocks), ("--dec", cfg.dec_blocks)):
         if not blocks or any(b < 0 for b in blocks):
@@ -203,6 +175,10 @@ def config_from_args(a):
     if 1024 % cfg.binning:
         raise ValueError(f"edof: --binning must divide the 1024-pixel sensor side, got "
                          f"{cfg.binning}")
+    side = 1024 // cfg.binning
+    if side % cfg.tile or cfg.crop % cfg.tile or cfg.crop > side:
+        raise ValueError(f"edof: --tile must divide the {side}-pixel frame and the "
+                         f"{cfg.crop}-pixel test crops, got {cfg.tile}")
     if cfg.kernel_size % 2 == 0:
         raise ValueError(f"edof: --kernel must be an odd whole number >= 1 pixels, got "
                          f"{cfg.kernel_size}")
@@ -224,11 +200,20 @@ def check_args(a):
         bad = [n for n in names if n not in LENS_NAMES]
         if bad or not names:
             raise ValueError(f"edof: --lenses takes names from {LENS_NAMES}, got {a.lenses!r}")
-        if a.test_images is not None:
-            input_checks.number(a.test_images, "--test-images", "edof", lo=1, integer=True)
+        if a.max_crops is not None:
+            input_checks.number(a.max_crops, "--max-crops", "edof", lo=1, integer=True)
+        if a.time_limit is not None:
+            input_checks.number(a.time_limit, "--time-limit", "edof", lo=0, lo_open=True,
+                                unit="s")
+        if a.resume and a.checkpoint is None:
+            raise ValueError("edof: --resume needs --checkpoint (the folder to resume from)")
         for opt, d in (("--train-dir", a.train_dir), ("--test-dir", a.test_dir)):
             if d is not None and not os.path.isdir(d):
                 raise ValueError(f"edof: {opt} {d} is not a folder")
+        if a.checkpoint and not a.resume and os.path.isdir(a.checkpoint) and \
+                os.listdir(a.checkpoint):
+            raise ValueError(f"edof: --checkpoint {a.checkpoint} is not empty; give --resume "
+                             f"to continue from it, or choose another folder")
         folder = RunFolder(a.out, overwrite=a.overwrite)
     except UsageError:
         raise
@@ -242,6 +227,8 @@ def run(argv=None) -> dict:
 
     Raises:
         UsageError: For a bad option or ``--out``, before any work.
+        jaxlens.experiments.edof.train.OutOfTime: when ``--time-limit`` stopped the run at a
+            checkpoint (``--out`` is left as it was).
     """
     argv = list(sys.argv[1:] if argv is None else argv)
     a = build_parser().parse_args(argv)
@@ -254,6 +241,28 @@ def run(argv=None) -> dict:
         raise
 
 
+def _scenes(a, cfg):
+    from jaxlens.experiments.edof import scenes as S
+
+    train_imgs = S.load_images(None if a.train_dir else S.TRAIN_IMAGES, folder=a.train_dir,
+                               max_side=None)
+    if a.test_dir:
+        paths = S.folder_images(a.test_dir)
+        names = [p.stem for p in paths]
+        imgs = S.load_images(folder=a.test_dir, max_side=None)
+        source = f"every image file in {a.test_dir}"
+    else:
+        names = list(S.VAL_IMAGES if a.validation else S.TEST_IMAGES)
+        imgs = S.load_images(names, max_side=None)
+        source = ("skimage.data " + ("validation" if a.validation else "test") +
+                  " images (jaxlens.experiments.edof.scenes), sRGB decoded to linear")
+    windows, info = S.test_crops(imgs, names, size=cfg.crop, margin=cfg.kernel_size // 2)
+    most = a.max_crops or (8 if a.smoke else None)
+    if most:
+        windows, info = windows[:most], info[:most]
+    return train_imgs, windows, info, names, source
+
+
 def _run_into(a, argv, cfg, names, folder, out) -> dict:
     import equinox as eqx
     import jax
@@ -262,144 +271,113 @@ def _run_into(a, argv, cfg, names, folder, out) -> dict:
     from tqdm.auto import tqdm
 
     import jaxlens
+    from jaxlens.experiments.edof import evaluate as E
     from jaxlens.experiments.edof import lenses as L
     from jaxlens.experiments.edof import optics as O
     from jaxlens.experiments.edof import scenes as S
     from jaxlens.experiments.edof import train as T
+    from jaxlens.experiments.edof.decoder import make_decoder
+    from jaxlens.imaging.tiled import tile_counts
 
+    deadline = None if a.time_limit is None else time.time() + a.time_limit
     os.makedirs(os.path.join(out, "lenses"), exist_ok=True)
     os.makedirs(os.path.join(out, "nets"), exist_ok=True)
     command = "python -m jaxlens.experiments.edof " + shlex.join(argv)
     with open(os.path.join(out, "command.txt"), "w") as f:
         f.write(command + "\n")
     progress = None if a.quiet else tqdm
-    t_all = time.perf_counter()
-    cpu_all = time.process_time()
+    t_all, cpu_all = time.perf_counter(), time.process_time()
     timings = {}
     dtype = jnp.float32
 
-    # Lenses: the classical lens, as a Hybrid-first lens with zero odd terms.
     classical = L.classical_lens(binning=cfg.binning)
     base = L.to_hybrid(classical, n_odd=cfg.n_odd).astype(dtype)
     cubic0 = L.cubic_strength_guess(classical, ratio=cfg.cubic_ratio)
     start_cubic = {"classical": 0.0, "cubic": cubic0, "hybrid": 0.5 * cubic0}
     pix = float(base.sensor.pixel_size)
-    size = base.sensor.resolution[0]
+    n_tiles = tile_counts(base.sensor.resolution, cfg.tile)
 
-    # Scenes.
     t0 = time.perf_counter()
-    max_side = 2 * size if not a.smoke else 4 * cfg.window
-    train_imgs = S.load_images(
-        None if a.train_dir else S.TRAIN_IMAGES,
-        folder=a.train_dir,
-        max_side=max(max_side, cfg.window),
-    )
-    test_raw = S.load_images(
-        None if a.test_dir else S.TEST_IMAGES, folder=a.test_dir, max_side=None
-    )
-    if a.test_images:
-        test_raw = test_raw[: a.test_images]
-    if a.smoke:
-        test_raw = test_raw[:1]
-    tests = [S.square_crop(img, size) for img in test_raw]
+    train_imgs, windows, crop_info, test_names, source = _scenes(a, cfg)
+    probe = S.PatchSampler(train_imgs, cfg.window, seed=12345).sample(64)
+    nsr = E.wiener_nsr(probe, photons=cfg.photons, read=cfg.read_noise)
     timings["scenes_s"] = time.perf_counter() - t0
 
-    # Training.
-    key = jax.random.PRNGKey(cfg.seed)
-    k_net, k_train, k_eval = jax.random.split(key, 3)
-    trained, histories = {}, {}
-    for i, name in enumerate(names):
-        lens0 = L.to_hybrid(classical, n_odd=cfg.n_odd, cubic=start_cubic[name]).astype(dtype)
-        params = L.HybridParams.from_lens(lens0)
-        net = T.make_net(cfg, k_net, dtype)  # the same initial network for every lens
-        sampler = S.PatchSampler(train_imgs, cfg.window, seed=cfg.seed + 17)
-        source = T.BatchSource(sampler, lens0, cfg, seed=cfg.seed + 29)
-        t0 = time.perf_counter()
-        net, params, hist = T.train(
-            name,
-            lens0,
-            params,
-            net,
-            source,
-            cfg,
-            kind=name,
-            key=jax.random.fold_in(k_train, i),
-            progress=progress,
-        )
-        timings[f"train_{name}_s"] = time.perf_counter() - t0
-        lens = params.apply(lens0)
-        trained[name] = (lens, net, params)
-        histories[name] = hist
-        jaxlens.save(lens, os.path.join(out, "lenses", f"{name}.json"))
-        jaxlens.save(lens, os.path.join(out, "lenses", f"{name}.zmx"))
-        eqx.tree_serialise_leaves(os.path.join(out, "nets", f"{name}.eqx"), net)
+    per_image = {}  # seed -> lens -> depth -> kind -> metric -> [crops]
+    light, variation, histories, examples, banks, trained = {}, {}, {}, {}, {}, {}
+    for seed in a.seeds:
+        key = jax.random.PRNGKey(seed)
+        k_net, k_train, k_eval = jax.random.split(key, 3)
+        k_eval = jax.random.PRNGKey(10_000)  # the same noise for every seed and lens
+        ck = None if a.checkpoint is None else os.path.join(a.checkpoint, f"seed{seed}")
+        for i, name in enumerate(names):
+            tag = f"{name}_s{seed}"
+            lens0 = L.to_hybrid(classical, n_odd=cfg.n_odd,
+                                cubic=start_cubic[name]).astype(dtype)
+            params = L.HybridParams.from_lens(lens0)
+            floor = (cfg.cubic_floor * float(params.odd_x[0]) if name == "cubic"
+                     else -math.inf)
+            dec = make_decoder(cfg.decoder, nsr=nsr, key=k_net, width=cfg.width,
+                               enc_blocks=cfg.enc_blocks, middle_blocks=cfg.middle_blocks,
+                               dec_blocks=cfg.dec_blocks, dtype=dtype)
+            sampler = S.PatchSampler(train_imgs, cfg.window, seed=seed + 17)
+            src = T.BatchSource(sampler, n_tiles, cfg, seed=seed + 29)
+            trainer = T.Trainer(name, lens0, params, dec, src, cfg,
+                                jax.random.fold_in(k_train, i), floor=floor, folder=ck,
+                                deadline=deadline)
+            if a.resume:
+                trainer.load()
+            t0 = time.perf_counter()
+            dec, params, hist = trainer.run(progress)
+            timings[f"train_{tag}_s"] = time.perf_counter() - t0
+            lens = params.apply(lens0)
+            histories[tag] = hist
+            jaxlens.save(lens, os.path.join(out, "lenses", f"{tag}.json"))
+            eqx.tree_serialise_leaves(os.path.join(out, "nets", f"{tag}.eqx"), dec)
+            t0 = time.perf_counter()
+            cached = _load_eval(ck, name)  # a resumed run does not evaluate a lens twice
+            if cached is None:
+                bank = O.psf_bank(lens, tile=cfg.tile, kernel_size=cfg.kernel_size,
+                                  pupil=cfg.eval_pupil, chunk=2 * cfg.batch)
+                vals, ex = E.evaluate(dec, bank, windows, cfg=cfg, key=k_eval, nsr=nsr,
+                                      keep=0 if seed == a.seeds[0] else None)
+                _save_eval(ck, name, bank, vals, ex)
+            else:
+                bank, vals, ex = cached
+            timings[f"evaluate_{tag}_s"] = time.perf_counter() - t0
+            per_image.setdefault(str(seed), {})[name] = vals
+            light.setdefault(name, []).append(O.light_on_sensor(bank))
+            ty, tx = bank.shape[1:3]
+            sub = bank[:, ::max(1, ty // 3), ::max(1, tx // 3)]
+            variation.setdefault(name, []).append(
+                O.psf_depth_variation(sub.reshape((sub.shape[0], -1) + sub.shape[3:])))
+            if seed == a.seeds[0]:
+                examples[name], banks[name], trained[name] = ex, bank, (lens, params)
+            if deadline is not None and time.time() > deadline and (
+                    name != names[-1] or seed != a.seeds[-1]):
+                raise T.OutOfTime(f"stopped after {tag}")
 
-    # Table 2.
+    table = table2(per_image, names, a.seeds, windows, crop_info, test_names, source, classical,
+                   light, nsr)
+    summary_extra = {
+        "psf_depth_variation": {n: {"l1": float(np.mean([v["l1"] for v in variation[n]])),
+                                    "ncc": float(np.mean([v["ncc"] for v in variation[n]])),
+                                    "per_seed_l1": [v["l1"] for v in variation[n]]}
+                                for n in names},
+        "odd_terms": {n: {"odd_x_scaled": np.asarray(trained[n][1].odd_x).tolist(),
+                          "focus_scaled": float(trained[n][1].focus)} for n in names},
+        "wiener_reference_nsr": nsr,
+        "noise": {"photons_at_1": cfg.photons, "read_noise": cfg.read_noise},
+    }
+    table["psf_depth_variation"] = summary_extra["psf_depth_variation"]
     t0 = time.perf_counter()
-    depths_eval = L.TEST_DEPTHS_M
-    table, examples = {}, {}
-    for name in names:
-        lens, net, _ = trained[name]
-        m, ex = T.evaluate(lens, net, tests, depths_eval, cfg, key=k_eval, keep=0)
-        table[name] = m
-        examples[name] = ex
-    timings["evaluate_s"] = time.perf_counter() - t0
-    consistency = None
-    if not a.smoke and "classical" in names:
-        # Cross-check of the tiled renderer against jaxlens.imaging.render on one test image.
-        t0 = time.perf_counter()
-        lens = trained["classical"][0]
-        scene = jnp.asarray(tests[0], dtype)
-        consistency = {}
-        for d in (0.1, 0.2):
-            mine = O.render_tiled(
-                lens,
-                scene,
-                jnp.asarray(1e3 * d, dtype),
-                kernel_size=cfg.kernel_size,
-                pixel_size=pix,
-                patch=cfg.patch,
-                pupil=cfg.eval_pupil,
-            )
-            lib = O.render_library(
-                lens, scene, 1e3 * d, k_eval, kernel_size=cfg.kernel_size, spp=4, patch=cfg.patch
-            )
-            err = float(jnp.mean((mine - lib) ** 2))
-            consistency[f"{d:g}"] = {"psnr_db": float(10 * np.log10(1.0 / max(err, 1e-20)))}
-        timings["render_crosscheck_s"] = time.perf_counter() - t0
-
-    # PSF analysis.
-    t0 = time.perf_counter()
-    pts = O.diagonal_points(base, (0.0, 0.5, 1.0))
-    dmm = O.depths_mm()
-    pupil_a = 24 if a.smoke else 128
-    stacks, variation = {}, {}
-    for name in names:
-        lens = trained[name][0]
-        stacks[name] = O.psf_stack(
-            lens, pts, dmm, kernel_size=cfg.kernel_size, pixel_size=pix, pupil=pupil_a
-        )
-        variation[name] = O.psf_depth_variation(stacks[name])
-    freqs = np.linspace(0.0, 0.5 / pix, 9 if a.smoke else 26)
-    mtfs = {}
-    for name in names:
-        lens = trained[name][0]
-        mtfs[name] = {
-            f"{frac:g}": O.mtf_by_depth(
-                lens, p, dmm, frequencies=freqs, pupil=24 if a.smoke else 96
-            )
-            for frac, p in ((0.0, pts[0]), (0.7, 0.7 * pts[2]))
-        }
-    timings["psf_analysis_s"] = time.perf_counter() - t0
-
-    # Files.
-    t0 = time.perf_counter()
-    files = write_figures(
-        out, names, trained, stacks, mtfs, examples, tests, histories, cfg, smoke=a.smoke
-    )
-    table_md = table2_markdown(table, variation, command, cfg)
+    files = write_figures(out, names, trained, banks, examples, windows, histories, cfg, pix,
+                          smoke=a.smoke)
+    table_md = table2_markdown(table, command, cfg)
     with open(os.path.join(out, "table2.json"), "w") as f:
         json.dump(table, f, indent=2)
+    with open(os.path.join(out, "table2_per_image.json"), "w") as f:
+        json.dump({"crops": crop_info, "seeds": list(a.seeds), "values": per_image}, f)
     with open(os.path.join(out, "table2.md"), "w") as f:
         f.write(table_md)
     timings["figures_s"] = time.perf_counter() - t0
@@ -409,13 +387,11 @@ def _run_into(a, argv, cfg, names, folder, out) -> dict:
         "command": command,
         "config": dataclasses.asdict(cfg),
         "train_images": list(S.TRAIN_IMAGES) if a.train_dir is None else a.train_dir,
-        "test_images": list(S.TEST_IMAGES[: len(tests)]) if a.test_dir is None else a.test_dir,
-        "sensor": {"resolution": [size, size], "pixel_size_mm": pix},
+        "sensor": {"resolution": list(base.sensor.resolution), "pixel_size_mm": pix,
+                   "tiles": list(n_tiles)},
         "cubic_start_strength_per_mm2": cubic0,
-        "table2": table,
-        "psf_depth_variation": {n: {k: v for k, v in variation[n].items()} for n in names},
-        "checks": checks(table, variation),
-        "render_crosscheck_classical_vs_jaxlens_render": consistency,
+        **summary_extra,
+        "checks": checks(table),
         "history": histories,
         "timings_s": timings,
         "devices": [str(d) for d in jax.devices()],
@@ -424,77 +400,189 @@ def _run_into(a, argv, cfg, names, folder, out) -> dict:
     with open(os.path.join(out, "summary.json"), "w") as f:
         json.dump(summary, f, indent=2)
     out = folder.finish()
-    files = summary["files"]
     if a.record:
-        record(out, a.record, files)
+        record(out, a.record, summary["files"])
     print(table_md)
     print(f"total {timings['total_s']:.0f} s; outputs in {out}")
     return summary
 
 
-def checks(table: dict, variation: dict) -> dict:
+def _save_eval(ck, name, bank, vals, examples) -> None:
+    """Keep a lens's evaluation in the checkpoint folder (bank, per-crop values, examples)."""
+    import numpy as np
+
+    if ck is None:
+        return
+    os.makedirs(ck, exist_ok=True)
+    np.save(os.path.join(ck, f"eval_{name}_bank.npy"), bank)
+    ex = {f"{d}|{i}": x for d, xs in examples.items() for i, x in enumerate(xs)}
+    np.savez(os.path.join(ck, f"eval_{name}_examples.npz"), **ex)
+    with open(os.path.join(ck, f"eval_{name}.json"), "w") as f:
+        json.dump(vals, f)
+
+
+def _load_eval(ck, name):
+    """``(bank, values, examples)`` saved by ``_save_eval``, or None."""
+    import numpy as np
+
+    if ck is None or not os.path.isfile(os.path.join(ck, f"eval_{name}.json")):
+        return None
+    with open(os.path.join(ck, f"eval_{name}.json")) as f:
+        vals = json.load(f)
+    bank = np.load(os.path.join(ck, f"eval_{name}_bank.npy"))
+    with np.load(os.path.join(ck, f"eval_{name}_examples.npz")) as z:
+        ex = {}
+        for k in sorted(z.files, key=lambda k: (k.split("|")[0], int(k.split("|")[1]))):
+            ex.setdefault(k.split("|")[0], []).append(z[k])
+    return bank, vals, {d: tuple(v) for d, v in ex.items()}
+
+
+def table2(per_image, names, seeds, windows, crop_info, test_names, source, classical, light,
+           nsr) -> dict:
+    """The issue-10 schema from the per-crop values (means over crops and seeds)."""
+    import numpy as np
+
+    from jaxlens.experiments.edof import evaluate as E
+    from jaxlens.experiments.edof import lenses as L
+    from jaxlens.optics import paraxial
+    from jaxlens.optics.materials import Air
+
+    seeds = [str(s) for s in seeds]
+    depths = [E.depth_key(d) for d in L.TEST_DEPTHS_M]
+
+    def mean(lens, d, kind, metric):
+        return float(np.mean([per_image[s][lens][d][kind][metric] for s in seeds]))
+
+    lenses = {}
+    for n in names:
+        lenses[n] = {d: {t: {m: mean(n, d, t, m) for m in ("psnr", "ssim")}
+                         for t in ("sim", "rec")} for d in depths}
+        lenses[f"wiener_{n}"] = {d: {"sim": {m: mean(n, d, "sim", m) for m in ("psnr", "ssim")},
+                                     "rec": {m: mean(n, d, "wiener", m)
+                                             for m in ("psnr", "ssim")}} for d in depths}
+    gains, per_seed = {}, {}
+    if "classical" in names:
+        for n in names:
+            if n == "classical":
+                continue
+            gains[n], per_seed[n] = {}, {}
+            for d in depths:
+                diff = np.array([np.subtract(per_image[s][n][d]["rec"]["psnr"],
+                                             per_image[s]["classical"][d]["rec"]["psnr"])
+                                 for s in seeds])  # [seeds, crops]
+                gains[n][d] = E.bootstrap_gain(diff)
+                per_seed[n][d] = diff.mean(axis=1).tolist()
+    pd = paraxial.paraxial_data(classical)
+    base = {"efl_mm": float(pd.efl), "fov_deg": _fov(classical),
+            "fnum": float(pd.fnum),
+            "image_diagonal_mm": float(math.hypot(*[float(v) for v in classical.sensor.size])),
+            "elements": int(sum(1 for m in classical.materials if not isinstance(m, Air)))}
+    by_image = {}
+    for n in names:
+        for d in depths:
+            for img in test_names:
+                idx = [i for i, c in enumerate(crop_info) if c["image"] == img]
+                if not idx:
+                    continue
+                v = [np.mean([per_image[s][n][d]["rec"]["psnr"][i] for s in seeds]) for i in idx]
+                by_image.setdefault(n, {}).setdefault(d, {})[img] = float(np.mean(v))
+    return {
+        "seeds": [int(s) for s in seeds],
+        "test": {"crops": int(len(windows)), "images": sorted({c["image"] for c in crop_info}),
+                 "source": source},
+        "base_lens": base,
+        "lenses": lenses,
+        "gain_vs_classical": gains,
+        "light_on_sensor": {n: float(np.mean(v)) for n, v in light.items()},
+        "gain_per_seed": per_seed,
+        "rec_psnr_by_image": by_image,
+        "wiener_reference_nsr": nsr,
+    }
+
+
+def _fov(lens) -> float:
+    """Diagonal field of view (degrees) whose distortion-free image spans the sensor diagonal."""
+    from jaxlens.imaging.aiming import image_scale
+
+    half = 0.5 * math.hypot(*[float(v) for v in lens.sensor.size])
+    return float(2 * math.degrees(math.atan(half / float(image_scale(lens)))))
+
+
+def checks(table: dict) -> dict:
     """The issue's pass/fail criteria, evaluated on the results."""
     out = {}
-    if "hybrid" in table and "classical" in table:
-        h, c = table["hybrid"], table["classical"]
-        d = {k: h[k]["rec"]["psnr"] - c[k]["rec"]["psnr"] for k in h}
-        out["rec_psnr_gain_hybrid_vs_classical_db"] = d
-        out["beats_by_1db_at_0.1m"] = bool(d.get("0.1", -1e9) >= 1.0)
-        out["beats_by_1db_at_10m"] = bool(d.get("10", -1e9) >= 1.0)
-        out["within_0.5db_at_0.2m"] = bool(abs(d.get("0.2", 1e9)) <= 0.5 or d["0.2"] > 0)
-    if "hybrid" in variation and "classical" in variation:
-        out["psf_l1_hybrid_below_classical"] = bool(
-            variation["hybrid"]["l1"] < variation["classical"]["l1"]
-        )
+    g = table["gain_vs_classical"].get("hybrid")
+    if g:
+        out["hybrid_gain_db"] = {d: v["mean"] for d, v in g.items()}
+        out["beats_by_1db_at_0.1m_ci_above_0"] = bool(g["0.1"]["mean"] >= 1.0
+                                                     and g["0.1"]["ci95"][0] > 0)
+        out["beats_by_1db_at_10m_ci_above_0"] = bool(g["10"]["mean"] >= 1.0
+                                                    and g["10"]["ci95"][0] > 0)
+        out["within_0.5db_at_0.2m"] = bool(g["0.2"]["mean"] >= -0.5)
+    c = table["lenses"].get("classical")
+    if c:
+        out["classical_rec_minus_sim_db"] = {d: c[d]["rec"]["psnr"] - c[d]["sim"]["psnr"]
+                                             for d in c}
+        out["classical_deblurs_3db_at_0.1m"] = bool(
+            out["classical_rec_minus_sim_db"]["0.1"] >= 3.0)
+    v = table.get("psf_depth_variation", {})
+    if "hybrid" in v and "classical" in v:
+        out["psf_l1_hybrid_below_classical"] = bool(v["hybrid"]["l1"] < v["classical"]["l1"])
     return out
 
 
-def table2_markdown(table: dict, variation: dict, command: str, cfg) -> str:
-    depths = list(next(iter(table.values())).keys())
+def table2_markdown(table: dict, command: str, cfg) -> str:
+    depths = list(next(iter(table["lenses"].values())).keys())
+    t = table["test"]
     lines = [
-        "# EDoF lens: Table 2 analogue (held-out test images)",
+        "# EDoF lens: Table 2 analogue",
         "",
         f"Command: `{command}`",
         "",
-        "PSNR (dB) / SSIM of the raw simulation (sim, with read noise σ = "
-        f"{cfg.noise:g}) and of the network's reconstruction (rec), averaged over the test "
-        "images, per object distance from the stop.",
+        f"Test: {t['crops']} crops of {cfg.crop}² pixels at native resolution from "
+        f"{len(t['images'])} images ({t['source']}); seeds {table['seeds']}. PSNR (dB) / SSIM "
+        f"in linear light of the raw simulation (sim: shot noise of {cfg.photons:g} e⁻ at 1, "
+        f"read noise σ = {cfg.read_noise:g}) and of the reconstruction (rec: decoder "
+        f"'{cfg.decoder}'; for the wiener_* rows, Wiener deconvolution with the lens's "
+        "depth-averaged PSF), averaged over crops and seeds, per object distance from the stop.",
         "",
         "| lens | " + " | ".join(f"{d} m sim | {d} m rec" for d in depths) + " |",
         "|---|" + "---|---|" * len(depths),
     ]
-    for name, row in table.items():
-        cells = []
-        for d in depths:
-            for t in ("sim", "rec"):
-                cells.append(f"{row[d][t]['psnr']:.2f} / {row[d][t]['ssim']:.3f}")
+    for name, row in table["lenses"].items():
+        cells = [f"{row[d][k]['psnr']:.2f} / {row[d][k]['ssim']:.3f}" for d in depths
+                 for k in ("sim", "rec")]
         lines.append(f"| {name} | " + " | ".join(cells) + " |")
-    lines += [
-        "",
-        "PSF variation with depth (8 training depths, 3 fields along the diagonal, "
-        "RGB): mean L1 distance Σ|p_i − p_j| over depth pairs (0 = identical, 2 = "
-        "disjoint) and mean normalised cross-correlation (1 = identical).",
-        "",
-        "| lens | L1 | NCC |",
-        "|---|---|---|",
-    ]
-    for name, v in variation.items():
-        lines.append(f"| {name} | {v['l1']:.3f} | {v['ncc']:.3f} |")
-    c = checks(table, variation)
-    if "rec_psnr_gain_hybrid_vs_classical_db" in c:
-        g = c["rec_psnr_gain_hybrid_vs_classical_db"]
-        lines += [
-            "",
-            "Reconstruction PSNR gain of the hybrid lens over the classical lens: "
-            + ", ".join(f"{d} m: {v:+.2f} dB" for d, v in g.items())
-            + " (the paper reports +1.2 dB at 10 cm and +2.4 dB at 10 m).",
-        ]
+    if table["gain_vs_classical"]:
+        lines += ["", "Reconstruction PSNR gain over the classical lens (paired per crop, mean "
+                  "over seeds; 95 % two-level bootstrap interval over seeds and crops; per-seed "
+                  "means):", "", "| lens | " + " | ".join(f"{d} m" for d in depths) + " |",
+                  "|---|" + "---|" * len(depths)]
+        for n, g in table["gain_vs_classical"].items():
+            cells = [f"{g[d]['mean']:+.2f} [{g[d]['ci95'][0]:+.2f}, {g[d]['ci95'][1]:+.2f}] "
+                     f"({', '.join(f'{v:+.2f}' for v in table['gain_per_seed'][n][d])})"
+                     for d in depths]
+            lines.append(f"| {n} | " + " | ".join(cells) + " |")
+    lines += ["", "Light on the sensor (fraction of the light entering the entrance pupil that "
+              "lands in the PSF kernels, mean over 8 depths × all tiles × RGB): " +
+              ", ".join(f"{n} {v:.3f}" for n, v in table["light_on_sensor"].items()) + "."]
+    v = table.get("psf_depth_variation")
+    if v:
+        lines += ["", "PSF variation with depth (8 training depths, 3 × 3 tiles, RGB, PSFs "
+                  "rescaled to unit sum): mean L1 distance over depth pairs (0 = identical, "
+                  "2 = disjoint) and mean normalised cross-correlation (1 = identical).", "",
+                  "| lens | L1 | NCC |", "|---|---|---|"]
+        for n, x in v.items():
+            lines.append(f"| {n} | {x['l1']:.3f} | {x['ncc']:.3f} |")
+    b = table["base_lens"]
+    lines += ["", f"Base lens: paraxial EFL {b['efl_mm']:.3f} mm, F/{b['fnum']:.2f}, "
+              f"{b['fov_deg']:.1f}° diagonal field on a {b['image_diagonal_mm']:.2f} mm "
+              f"diagonal, {b['elements']} elements."]
     return "\n".join(lines) + "\n"
 
 
-def write_figures(
-    out, names, trained, stacks, mtfs, examples, tests, histories, cfg, *, smoke=False
-) -> dict:
+def write_figures(out, names, trained, banks, examples, windows, histories, cfg, pix, *,
+                  smoke=False) -> dict:
     """PSF grids, MTF curves, odd-polynomial profile, reconstructions and loss curves."""
     import matplotlib
 
@@ -503,135 +591,112 @@ def write_figures(
     import numpy as np
 
     from jaxlens.experiments.edof import lenses as L
+    from jaxlens.experiments.edof import optics as O
 
     files = {}
     dpi = 60 if smoke else 110
     depths = L.DEPTHS_M
-    fracs = (0.0, 0.5, 1.0)
+
+    def save(fig, stem):
+        fig.tight_layout()
+        path = os.path.join(out, f"{stem}.png")
+        fig.savefig(path, dpi=dpi)
+        plt.close(fig)
+        files[stem] = path
+
     for name in names:
-        st = stacks[name]  # [D, F, 3, k, k]
-        fig, axes = plt.subplots(
-            len(depths), len(fracs), figsize=(1.6 * len(fracs) + 1, 1.5 * len(depths))
-        )
+        b = banks[name]  # [D, ty, tx, 3, k, k]
+        ty = b.shape[1]
+        diag = [(0, 0), (ty // 4, ty // 4), (ty // 2, ty // 2)]  # corner, between, near centre
+        fig, axes = plt.subplots(len(depths), len(diag),
+                                 figsize=(1.6 * len(diag) + 1, 1.5 * len(depths)))
         for i, d in enumerate(depths):
-            for j, fr in enumerate(fracs):
+            for j, (r, c) in enumerate(diag):
                 ax = axes[i, j]
-                img = np.transpose(st[i, j], (1, 2, 0))
-                ax.imshow(np.sqrt(img / max(img.max(), 1e-12)), interpolation="nearest")
+                img = np.transpose(b[i, r, c], (1, 2, 0))
+                ax.imshow(np.sqrt(np.clip(img, 0, None) / max(img.max(), 1e-12)),
+                          interpolation="nearest")
                 ax.set_xticks([])
                 ax.set_yticks([])
                 if j == 0:
                     ax.set_ylabel(f"{d:g} m", fontsize=8)
                 if i == 0:
-                    ax.set_title(f"field {fr:g}", fontsize=8)
-        fig.suptitle(f"{name}: RGB PSFs by depth (rows) and field (cols), √ scale", fontsize=9)
-        fig.tight_layout()
-        path = os.path.join(out, f"psf_grid_{name}.png")
-        fig.savefig(path, dpi=dpi)
-        plt.close(fig)
-        files[f"psf_grid_{name}"] = path
+                    ax.set_title(f"tile {r},{c}", fontsize=8)
+        fig.suptitle(f"{name}: RGB PSFs by depth and tile, √ scale", fontsize=9)
+        save(fig, f"psf_grid_{name}")
 
-    fig, axes = plt.subplots(2, len(names), figsize=(4 * len(names), 6.5), squeeze=False)
+    fig, axes = plt.subplots(1, len(names), figsize=(4 * len(names), 3.4), squeeze=False)
     cmap = plt.get_cmap("viridis")
     for j, name in enumerate(names):
-        for i, (frac, (f, tan, sag)) in enumerate(mtfs[name].items()):
-            ax = axes[i, j]
-            for k, d in enumerate(depths):
-                ax.plot(
-                    f, 0.5 * (tan[k] + sag[k]), color=cmap(k / (len(depths) - 1)), label=f"{d:g} m"
-                )
-            ax.set_ylim(0, 1.02)
-            ax.set_title(f"{name}, field {frac}", fontsize=9)
-            ax.set_xlabel("cycles/mm")
-            if j == 0:
-                ax.set_ylabel("MTF (mean of T and S)")
+        b = banks[name]
+        mid = b.shape[1] // 2
+        f, mx, my = O.bank_mtf(b[:, mid, mid], pix)
+        ax = axes[0, j]
+        for k, d in enumerate(depths):
+            ax.plot(f, 0.5 * (mx[k] + my[k]), color=cmap(k / (len(depths) - 1)),
+                    label=f"{d:g} m")
+        ax.set_ylim(0, 1.02)
+        ax.set_title(f"{name}, centre tile", fontsize=9)
+        ax.set_xlabel("cycles/mm")
+        ax.set_ylabel("MTF (mean of x and y)")
     axes[0, -1].legend(fontsize=7)
-    fig.tight_layout()
-    path = os.path.join(out, "mtf_by_depth.png")
-    fig.savefig(path, dpi=dpi)
-    plt.close(fig)
-    files["mtf_by_depth"] = path
+    save(fig, "mtf_by_depth")
 
     odd = [n for n in names if n in ("hybrid", "cubic")]
     if odd:
-        fig, axes = plt.subplots(2, len(odd), figsize=(4.2 * len(odd), 7), squeeze=False)
+        fig, axes = plt.subplots(1, len(odd), figsize=(4.2 * len(odd), 3.6), squeeze=False)
         for j, name in enumerate(odd):
             x, h = L.odd_profile(trained[name][0])
-            im = axes[0, j].imshow(
-                1e3 * h, extent=(x[0], x[-1], x[0], x[-1]), origin="lower", cmap="RdBu_r"
-            )
+            im = axes[0, j].imshow(1e3 * h, extent=(x[0], x[-1], x[0], x[-1]), origin="lower",
+                                   cmap="RdBu_r")
             fig.colorbar(im, ax=axes[0, j], label="µm")
             axes[0, j].set_title(f"{name}: odd-polynomial height", fontsize=9)
             axes[0, j].set_xlabel("x (mm)")
             axes[0, j].set_ylabel("y (mm)")
-            mid = len(x) // 2
-            axes[1, j].plot(x, 1e3 * h[mid, :], label="along x (y = 0)")
-            axes[1, j].plot(x, 1e3 * h[:, mid], label="along y (x = 0)")
-            axes[1, j].set_xlabel("mm")
-            axes[1, j].set_ylabel("height (µm)")
-            axes[1, j].legend(fontsize=8)
-        fig.tight_layout()
-        path = os.path.join(out, "odd_profile.png")
-        fig.savefig(path, dpi=dpi)
-        plt.close(fig)
-        files["odd_profile"] = path
+        save(fig, "odd_profile")
 
-    if examples and tests:
-        gt = tests[0]
-        s = gt.shape[0]
-        c = min(s, 192)
-        y0 = (s - c) // 2
-        crop = lambda im: np.clip(im[y0 : y0 + c, y0 : y0 + c], 0, 1)  # noqa: E731
-        keys = list(next(iter(examples.values())).keys())
-        fig, axes = plt.subplots(
-            len(names),
-            1 + 2 * len(keys),
-            figsize=(1.9 * (1 + 2 * len(keys)), 2.0 * len(names)),
-            squeeze=False,
-        )
+    if examples and all(examples.get(n) for n in names):
+        m = cfg.kernel_size // 2
+        gt = windows[0][m:m + cfg.crop, m:m + cfg.crop]
+        keys = list(examples[names[0]].keys())
+        enc = lambda im: np.clip(im, 0, 1) ** (1 / 2.2)  # noqa: E731 (display only)
+        fig, axes = plt.subplots(len(names), 1 + 3 * len(keys),
+                                 figsize=(1.7 * (1 + 3 * len(keys)), 1.9 * len(names)),
+                                 squeeze=False)
         for i, name in enumerate(names):
-            axes[i, 0].imshow(crop(gt))
+            axes[i, 0].imshow(enc(gt))
             axes[i, 0].set_ylabel(name)
-            axes[i, 0].set_title("ground truth", fontsize=8)
+            axes[i, 0].set_title("ground truth", fontsize=7)
             for k, d in enumerate(keys):
-                sim, rec = examples[name][d]
-                axes[i, 1 + 2 * k].imshow(crop(sim))
-                axes[i, 1 + 2 * k].set_title(f"sim {d} m", fontsize=8)
-                axes[i, 2 + 2 * k].imshow(crop(rec))
-                axes[i, 2 + 2 * k].set_title(f"rec {d} m", fontsize=8)
+                for t, (im, lab) in enumerate(zip(examples[name][d], ("sim", "rec", "wiener"),
+                                                  strict=True)):
+                    axes[i, 1 + 3 * k + t].imshow(enc(im))
+                    axes[i, 1 + 3 * k + t].set_title(f"{lab} {d} m", fontsize=7)
         for ax in axes.ravel():
             ax.set_xticks([])
             ax.set_yticks([])
-        fig.tight_layout()
-        path = os.path.join(out, "reconstructions.png")
-        fig.savefig(path, dpi=dpi)
-        plt.close(fig)
-        files["reconstructions"] = path
+        save(fig, "reconstructions")
 
     fig, ax = plt.subplots(1, 2, figsize=(10, 3.5))
-    for name in names:
-        h1 = histories[name]["stage1"]
-        ax[0].plot([r["step"] for r in h1], [r["loss"] for r in h1], label=f"{name} L")
-        ax[0].plot([r["step"] for r in h1], [r["rec"] for r in h1], "--", label=f"{name} L_rec")
-        h2 = histories[name]["stage2"]
-        ax[1].plot([r["step"] for r in h2], [r["rec"] for r in h2], label=name)
+    for tag, h in histories.items():
+        h1 = h["stage1"]
+        ax[0].plot([r["step"] for r in h1], [r["loss"] for r in h1], label=f"{tag} L")
+        h2 = h["stage2"]
+        ax[1].plot([r["step"] for r in h2], [r["rec"] for r in h2], label=tag)
     ax[0].set_title("stage 1 (joint)", fontsize=9)
     ax[1].set_title("stage 2 (perturbed lenses), L_rec", fontsize=9)
     for x in ax:
         x.set_xlabel("step")
-        x.legend(fontsize=7)
-    fig.tight_layout()
-    path = os.path.join(out, "loss.png")
-    fig.savefig(path, dpi=dpi)
-    plt.close(fig)
-    files["loss"] = path
+        x.legend(fontsize=6)
+    save(fig, "loss")
     return files
 
 
 def record(out: str, dest: str, files: dict) -> None:
     """Copy the tables, summary, command, trained lenses and figures to ``dest``."""
     os.makedirs(dest, exist_ok=True)
-    for name in ("table2.md", "table2.json", "summary.json", "command.txt"):
+    for name in ("table2.md", "table2.json", "table2_per_image.json", "summary.json",
+                 "command.txt"):
         shutil.copy2(os.path.join(out, name), os.path.join(dest, name))
     for path in files.values():
         shutil.copy2(path, os.path.join(dest, os.path.basename(path)))
@@ -646,6 +711,14 @@ def main() -> None:
         run()
     except UsageError as e:
         sys.exit(fail("python -m jaxlens.experiments.edof", e))
+    except Exception as e:
+        from jaxlens.experiments.edof.train import OutOfTime
+
+        if not isinstance(e, OutOfTime):
+            raise
+        print(f"python -m jaxlens.experiments.edof: time limit: {e}; run the same command "
+              f"with --resume to continue", file=sys.stderr)
+        sys.exit(OUT_OF_TIME)
 
 
 if __name__ == "__main__":

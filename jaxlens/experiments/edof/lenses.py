@@ -242,11 +242,12 @@ class HybridParams(eqx.Module):
 def gates(params: HybridParams, kind: str) -> tuple[HybridParams, Array]:
     """Which parameters a lens may change: a gate pytree (1 trainable, 0 frozen) and a tie.
 
-    ``kind`` is "classical" (nothing moves), "hybrid" (everything moves),
-    "hybrid-held-focus" (everything but the base curvature and the sensor position) or "cubic" (the
-    cubic phase plate at the aperture: only the x³ and y³ terms, tied to one strength a of
-    the sag a·(x³ + y³), and the sensor position move). The classical lens and the cubic
-    plate are thus the same ``HybridParams`` (and share one compiled training step); a lens
+    ``kind`` is "frozen" (nothing moves), "classical" (only the sensor position: the
+    classical lens with a trainable focus), "hybrid" (everything moves), "hybrid-held-focus"
+    (everything but the base curvature and the sensor position) or "cubic" (the cubic phase
+    plate at the aperture: only the x³ and y³ terms, tied to one strength a of the sag
+    a·(x³ + y³), and the sensor position move; ``project`` keeps a above its floor). All
+    lenses are thus the same ``HybridParams`` (and share one compiled training step); a lens
     starts as ``to_hybrid(classical, cubic=a)``. With ``tie = 1`` the gradients of the x³
     and y³ coefficients are replaced by their mean (``apply_gates``), so Adam moves them
     together.
@@ -262,8 +263,11 @@ def gates(params: HybridParams, kind: str) -> tuple[HybridParams, Array]:
         # come from the aspheric and odd terms, not from refocusing.
         gate = eqx.tree_at(lambda p: (p.c, p.focus), ones, (zeros.c, zeros.focus))
         tie = 0.0
-    elif kind == "classical":
+    elif kind == "frozen":
         gate, tie = zeros, 0.0
+    elif kind == "classical":
+        gate = eqx.tree_at(lambda p: p.focus, zeros, jnp.ones_like(params.focus))
+        tie = 0.0
     elif kind == "cubic":
         first = jnp.zeros_like(params.odd_x).at[0].set(1.0)
         gate = eqx.tree_at(
@@ -273,9 +277,19 @@ def gates(params: HybridParams, kind: str) -> tuple[HybridParams, Array]:
         )
         tie = 1.0
     else:
-        raise ValueError(f"gates: kind must be classical, cubic or hybrid, got {kind!r}")
+        raise ValueError(f"gates: kind must be frozen, classical, cubic, hybrid or "
+                         f"hybrid-held-focus, got {kind!r}")
     gate = eqx.tree_at(lambda p: p.radius, gate, jnp.zeros_like(params.radius))
     return gate, jnp.asarray(tie, dtype)
+
+
+def project(params: HybridParams, floor) -> HybridParams:
+    """The parameters with the cubic strength (the x³ and y³ terms) held at or above ``floor``
+    (scaled units; ``-inf`` for no bound): the cubic plate stays a cubic plate."""
+    fx = jnp.maximum(params.odd_x[0], floor)
+    fy = jnp.maximum(params.odd_y[0], floor)
+    return eqx.tree_at(lambda p: (p.odd_x, p.odd_y), params,
+                       (params.odd_x.at[0].set(fx), params.odd_y.at[0].set(fy)))
 
 
 def apply_gates(grads: HybridParams, gate: HybridParams, tie) -> HybridParams:

@@ -1,20 +1,21 @@
-"""Image formation for the EDoF experiment: RGB PSFs, patch simulation, PSF analysis.
+"""Image formation for the EDoF experiment, through ``jaxlens.imaging``: PSFs, banks, noise.
 
 Conventions:
     Lengths in mm, wavelengths in µm, depths in mm from the aperture stop
-    (``lenses.object_depth``). Images are ``[H, W, 3]`` linear RGB in ``jaxlens.imaging.render``'s
-    orientation (read out rotated by 180°, see ``jaxlens.imaging.psf``), one wavelength per channel
-    (``WAVELENGTHS_RGB``). A sensor position (x, y) in mm shows the field whose
-    distortion-free image lies there (``jaxlens.imaging.aiming.ideal_to_field``); PSFs are
-    centred on the chief ray, so distortion moves no content (the paper's distortion relaxation).
+    (``lenses.object_depth`` converts them). Images are ``[H, W, 3]`` linear RGB in
+    ``jaxlens.imaging.render``'s orientation, one wavelength per channel (``WAVELENGTHS_RGB``).
 
-Training simulates patches: a ``P × P`` sensor patch centred at a sensor position is the
-scene window of ``(P + k − 1)²`` pixels convolved ("valid") with the RGB PSF of that
-position (``rgb_psf``: geometric, the model of ``jaxlens.imaging.psf``, jittered pupil samples).
-Each patch is a ``jax.checkpoint``, so the backward pass re-traces its rays instead of
-storing them and the memory of a gradient grows with the patch, as in ``jaxlens.imaging.render``.
-Whole test images are rendered tile by tile with the same model (``render_tiled``);
-``render_library`` renders them through ``jaxlens.imaging.render`` as a cross-check.
+The sensor frame is cut into ``tile × tile`` pixel tiles (``jaxlens.imaging.tiled``); each tile
+is blurred with the PSF of its centre, and a training patch is one tile. A PSF comes from
+``jaxlens.imaging.tiled.psf_points`` with the model of ``psf_model``: geometric, rays on an
+equal-area polar grid strictly inside the entrance pupil (a stop-first lens loses none of
+them at the stop, so no invalid ray is traced and no gradient turns NaN), normalised by the
+flux that enters the entrance pupil. A PSF's sum is therefore the fraction of that light
+that lands in the kernel: light lost to vignetting or thrown outside the kernel is lost to
+the image, and a lens cannot gain by spreading light beyond the kernel.
+
+A lens that does not change has a PSF bank (``psf_bank``: 8 depths × all tiles), computed
+once without gradients; a lens being trained gets its PSFs per batch (``patch_psfs``).
 """
 
 from __future__ import annotations
@@ -25,238 +26,116 @@ import jax.numpy as jnp
 import numpy as np
 from jaxtyping import Array, Float
 
-from ...imaging import psf as _psf
-from ...imaging import sampling
-from ...imaging.aiming import ideal_to_field
-from ...imaging.grid import pixel_positions, sensor_grid
+from ...imaging import tiled
+from ...imaging.psf import GeometricPSF
 from ...optics.lens import Lens
-from ...tracing.forward import trace
 from .lenses import DEPTHS_M, WAVELENGTHS_RGB, object_depth
 
 
-def field_of(lens: Lens, xy) -> Float[Array, "*b 2"]:
-    """Field angles (θx, θy), degrees, shown at sensor position(s) ``xy`` (mm)."""
-    return ideal_to_field(lens, xy)
+def psf_model(pupil: int) -> GeometricPSF:
+    """The PSF model: ``pupil²`` rays on a polar grid inside the entrance pupil, splatted with
+    the quadratic B-spline (integrated over the pixel), normalised by the entering light."""
+    return GeometricPSF(pupil=pupil, overfill=1.0, order=2, grid="polar", normalize="pupil")
 
 
-def pupil_disc(n_side: int, key=None, dtype=None) -> Float[Array, "m 2"]:
-    """``n_side²`` points in the unit pupil disc, one per cell of a polar grid (equal areas).
+def patch_psfs(lens: Lens, xy, depths, *, kernel_size: int, pixel_size, pupil: int,
+               key=None) -> Float[Array, "n 3 k k"]:
+    """RGB PSFs at sensor points ``xy [N, 2]`` (mm) for objects ``depths [N]`` mm from the stop.
 
-    With a key each point is jittered inside its cell (stratified sampling); without one
-    it sits at the cell centre. Radii stay below 1 so every ray clears the stop's rim.
+    Differentiable with respect to the lens (``jaxlens.imaging.tiled.psf_points``).
     """
-    dt = dtype or jnp.result_type(float)
-    i, j = jnp.meshgrid(jnp.arange(n_side), jnp.arange(n_side), indexing="ij")
-    u = (
-        jnp.full((2, n_side, n_side), 0.5, dt)
-        if key is None
-        else jax.random.uniform(key, (2, n_side, n_side), dt)
-    )
-    r = jnp.sqrt((i + u[0]) / n_side) * (1.0 - 1e-4)
-    a = 2 * jnp.pi * (j + u[1]) / n_side
-    return jnp.stack([r * jnp.cos(a), r * jnp.sin(a)], -1).reshape(-1, 2)
+    model = psf_model(pupil)
+    # The stop-first lens's entrance pupil is its stop: the ray through the pupil centre is
+    # the chief ray (traced with the beam, no aiming iterations to compile).
+    center = "pupil" if lens.stop == 0 else "chief"
+    keys = None if key is None else jax.random.split(key, xy.shape[0])
 
+    def one(p, d, k):
+        return tiled.psf_points(lens, p[None], object_depth(lens, d), wavelengths=WAVELENGTHS_RGB,
+                                kernel_size=kernel_size, pixel_size=pixel_size, model=model,
+                                key=k, center=center)[0]
 
-def rgb_psf(
-    lens: Lens,
-    xy,
-    depth,
-    *,
-    kernel_size: int,
-    pixel_size: float,
-    pupil: int,
-    key=None,
-    wavelengths=WAVELENGTHS_RGB,
-) -> Float[Array, "3 k k"]:
-    """The RGB geometric PSF at sensor position ``xy`` (mm) of an object ``depth`` mm from
-    the stop, in ``jaxlens.imaging.psf``'s kernel orientation.
-
-    The rays leave the object point for ``pupil²`` points of the entrance-pupil disc
-    (``pupil_disc``, jittered by ``key``), aimed at the paraxial entrance pupil (exact for a
-    stop-first lens, whose entrance pupil is the stop), weighted by cos⁴ of their launch
-    angle and splatted bilinearly (``jaxlens.imaging.psf.splat``) around the chief ray of the middle
-    channel (green, 587 nm), so lateral colour shows as a shift between the channels. Each
-    channel is normalised to unit sum over the kernel.
-
-    Only rays inside the pupil are launched: none fails at the stop, so no ray is carried
-    invalid through the lens (where a stale far-away ray can make the gradient NaN).
-    """
-    dtype = lens.epd.dtype
-    field = field_of(lens, xy)
-    obj = sampling.object_point(lens, field, object_depth(lens, depth))
-    # The chief ray rides along as the first ray of every channel (one trace to compile).
-    pts = jnp.concatenate([jnp.zeros((1, 2), dtype), pupil_disc(pupil, key, dtype)])
-
-    def one(wl):
-        rays = sampling.point_source(lens, obj, pts, wl)
-        out = trace(lens, rays)
-        w = jnp.where(out.valid, rays.direction[:, 2] ** 4, 0.0).at[0].set(0.0)
-        return out.origin[:, :2], w
-
-    pos, w = jax.vmap(one)(jnp.asarray(wavelengths, dtype))  # [C, 1 + m, 2], [C, 1 + m]
-    ref = pos[len(wavelengths) // 2, 0]  # chief ray of the middle (green) channel
-    k = jax.vmap(lambda p, ww: _psf.splat(p - ref, ww, kernel_size, pixel_size))(pos, w)
-    return k / jnp.maximum(jnp.sum(k, axis=(-1, -2), keepdims=True), 1e-12)
-
-
-def conv_valid(window: Float[Array, "N N C"], kern: Float[Array, "C k k"]) -> Array:
-    """'Valid' 2-D convolution of a window with per-channel kernels, by FFT.
-
-    Returns ``[N − k + 1, N − k + 1, C]``; kernel pixel [i, j] is the energy landing i rows
-    and j columns from the source pixel, offset by the kernel centre (a true convolution,
-    as ``jaxlens.imaging.render`` applies PSFs).
-    """
-    n0, n1 = window.shape[0], window.shape[1]
-    k = kern.shape[-1]
-    kk = jnp.zeros((n0, n1, kern.shape[0]), window.dtype)
-    kk = kk.at[:k, :k].set(jnp.transpose(kern, (1, 2, 0)).astype(window.dtype))
-    y = jnp.fft.irfft2(
-        jnp.fft.rfft2(window, axes=(0, 1)) * jnp.fft.rfft2(kk, axes=(0, 1)), s=(n0, n1), axes=(0, 1)
-    )
-    return y[k - 1 :, k - 1 :].astype(window.dtype)
-
-
-def simulate_patch(
-    lens: Lens,
-    window: Float[Array, "N N 3"],
-    xy,
-    depth,
-    key,
-    *,
-    kernel_size: int,
-    pixel_size: float,
-    pupil: int,
-) -> Float[Array, "P P 3"]:
-    """Sensor patch of a scene window at sensor position ``xy`` and object ``depth``.
-
-    A ``jax.checkpoint``: its rays are traced again in the backward pass (same ``key``).
-    """
-
-    def run(lens, window, xy, depth, key):
-        kern = rgb_psf(
-            lens, xy, depth, kernel_size=kernel_size, pixel_size=pixel_size, pupil=pupil, key=key
-        )
-        return conv_valid(window, kern)
-
-    return jax.checkpoint(run)(lens, window, xy, depth, key)
+    if keys is None:
+        return jax.vmap(lambda p, d: one(p, d, None))(xy, depths)
+    return jax.vmap(one)(xy, depths, keys)
 
 
 @eqx.filter_jit
-def render_tiled(
-    lens: Lens,
-    scene: Float[Array, "S S 3"],
-    depth,
-    *,
-    kernel_size: int,
-    pixel_size: float,
-    patch: int,
-    pupil: int,
-) -> Float[Array, "S S 3"]:
-    """Whole-sensor image of ``scene`` at ``depth`` (mm from the stop), tile by tile.
+def psfs_nograd(lens: Lens, xy, depths, pixel_size, *, kernel_size: int, pupil: int):
+    """``patch_psfs`` of a lens held constant: the forward trace only, no gradient."""
+    return patch_psfs(jax.lax.stop_gradient(lens), xy, depths, kernel_size=kernel_size,
+                      pixel_size=pixel_size, pupil=pupil)
 
-    The sensor is cut into ``patch × patch`` tiles (the training patch size); each tile is
-    its scene window convolved with the RGB PSF of its centre (``rgb_psf``, ``pupil²`` rays
-    per channel, no jitter), exactly the training model. The scene is edge-padded by half a
-    kernel. This is ``jaxlens.imaging.render``'s "psf" method without its distortion warp and
-    relative-illumination shading: the PSFs are centred on the chief ray, so the image stays
-    aligned with the scene (the paper's distortion relaxation), and a shift-invariant
-    network could not undo shading that depends on the position in the frame.
+
+def centers(lens: Lens, tile: int) -> np.ndarray:
+    """Sensor points (mm) of the tile centres, ``[ty, tx, 2]``."""
+    s = lens.sensor
+    return np.asarray(tiled.tile_centers(s.resolution, s.pixel_size, tile))
+
+
+def psf_bank(lens: Lens, *, tile: int, kernel_size: int, pupil: int, chunk: int,
+             depths_m=DEPTHS_M) -> np.ndarray:
+    """PSFs ``[D, ty, tx, 3, k, k]`` of every tile at every depth, without gradients.
+
+    Computed ``chunk`` PSFs at a time through ``psfs_nograd``, so that a bank and the training
+    steps (``2 × batch`` PSFs each) share one compiled program.
     """
-    res = lens.sensor.resolution
-    if scene.shape[:2] != tuple(res):
-        raise ValueError(f"render_tiled: scene {scene.shape[:2]} must match the sensor {res}")
-    h = kernel_size // 2
-    n_ty, n_tx = -(-res[0] // patch), -(-res[1] // patch)
-    ph, pw = n_ty * patch - res[0], n_tx * patch - res[1]
-    padded = jnp.pad(scene, ((h, h + ph), (h, h + pw), (0, 0)), mode="edge")
-    win = patch + 2 * h
-
-    def tile(t):
-        ty, tx = t // n_tx, t % n_tx
-        r0, c0 = ty * patch, tx * patch
-        window = jax.lax.dynamic_slice(padded, (r0, c0, 0), (win, win, scene.shape[-1]))
-        rc = (r0 + 0.5 * (patch - 1)).astype(scene.dtype)
-        cc = (c0 + 0.5 * (patch - 1)).astype(scene.dtype)
-        x, y = pixel_positions(res, pixel_size, rc, cc)
-        kern = rgb_psf(
-            lens,
-            jnp.stack([x, y]),
-            depth,
-            kernel_size=kernel_size,
-            pixel_size=pixel_size,
-            pupil=pupil,
-        )
-        return conv_valid(window, kern)
-
-    tiles = jax.lax.map(tile, jnp.arange(n_ty * n_tx))
-    img = tiles.reshape(n_ty, n_tx, patch, patch, -1).transpose(0, 2, 1, 3, 4)
-    return img.reshape(n_ty * patch, n_tx * patch, -1)[: res[0], : res[1]]
+    xy = centers(lens, tile)
+    ty, tx = xy.shape[:2]
+    dm = 1e3 * np.asarray(depths_m, np.float64)
+    pts = np.tile(xy.reshape(-1, 2), (len(dm), 1))
+    ds = np.repeat(dm, ty * tx)
+    n = pts.shape[0]
+    pad = (-n) % chunk
+    pts = np.concatenate([pts, pts[:pad]])
+    ds = np.concatenate([ds, ds[:pad]])
+    dt = lens.epd.dtype
+    pix = jnp.asarray(lens.sensor.pixel_size, dt)
+    out = [np.asarray(psfs_nograd(lens, jnp.asarray(pts[i:i + chunk], dt),
+                                  jnp.asarray(ds[i:i + chunk], dt), pix,
+                                  kernel_size=kernel_size, pupil=pupil))
+           for i in range(0, n + pad, chunk)]
+    return np.concatenate(out)[:n].reshape((len(dm), ty, tx) + out[0].shape[1:])
 
 
-def render_library(
-    lens: Lens, scene, depth, key, *, kernel_size: int, spp: int = 1, patch: int = 64
-):
-    """The same image through ``jaxlens.imaging.render`` (method "psf", checkpointed tiles) on the
-    pre-warped scene (``jaxlens.imaging.render.relaxed_render``), without shading: a
-    cross-check of ``render_tiled`` by an independent code path."""
-    from ...imaging.render import PSFRender, relaxed_render
+def light_on_sensor(bank: np.ndarray) -> float:
+    """Mean fraction of the light entering the entrance pupil that lands in the kernels."""
+    return float(np.mean(np.sum(bank, axis=(-1, -2))))
 
-    img, _ = relaxed_render(
-        lens,
-        scene,
-        spp=spp,
-        key=key,
-        depth=object_depth(lens, depth),
-        method=PSFRender(kernel_size=kernel_size),
-        patch=patch,
-        checkpoint=True,
-        relative_illumination=False,
-    )
-    return img
+
+def simulate(windows: Float[Array, "b n n 3"], kernels: Float[Array, "2 b 3 k k"]) -> Array:
+    """``[2, B, P, P, 3]`` sensor patches: each scene window (patch plus a kernel's margin)
+    blurred with its kernel at each of the two depths (``tiled.convolve_tiles``, 'valid')."""
+
+    def one(w, k):
+        return tiled.convolve_tiles(w, k[None, None], pad="valid")
+
+    return jax.vmap(jax.vmap(one), in_axes=(None, 0))(windows, kernels)
+
+
+def add_noise(x, key, *, photons: float, read: float):
+    """Shot and read noise (Gaussian approximations): variance x / photons + read².
+
+    ``photons`` is the number of photo-electrons of a pixel at the linear value 1 (the shot
+    noise of a value x has variance x / photons); ``read`` is the read-noise standard deviation
+    in the same units as x. The same key gives the same normal draws for every lens, so
+    comparisons between lenses are paired.
+    """
+    var = jnp.maximum(x, 0.0) / photons + read * read
+    return x + jnp.sqrt(var) * jax.random.normal(key, x.shape, x.dtype)
 
 
 # --------------------------------------------------------------------------------------
 # PSF analysis
 # --------------------------------------------------------------------------------------
-@eqx.filter_jit
-def _psf_points(lens, pts, depth, *, kernel_size, pixel_size, pupil):
-    return jax.vmap(
-        lambda p: rgb_psf(
-            lens, p, depth, kernel_size=kernel_size, pixel_size=pixel_size, pupil=pupil
-        )
-    )(pts)
-
-
-def psf_stack(
-    lens: Lens, points, depths_mm, *, kernel_size: int, pixel_size: float, pupil: int = 128
-) -> np.ndarray:
-    """RGB PSFs ``[D, F, 3, k, k]`` at ``depths_mm`` (from the stop) and sensor ``points``
-    ``[F, 2]`` (mm), without jitter."""
-    pts = jnp.asarray(points, lens.epd.dtype)
-    return np.stack(
-        [
-            np.asarray(
-                _psf_points(
-                    lens,
-                    pts,
-                    jnp.asarray(d, pts.dtype),
-                    kernel_size=kernel_size,
-                    pixel_size=pixel_size,
-                    pupil=pupil,
-                )
-            )
-            for d in depths_mm
-        ]
-    )
-
-
 def psf_depth_variation(stack: np.ndarray) -> dict:
     """How much PSFs change with depth: the paper's EDoF property, as numbers.
 
-    For every field and every pair of depths (i < j) of ``stack`` ``[D, F, C, k, k]``
-    (each PSF with unit sum), it takes the L1 distance Σ|p_i − p_j| (0 for equal PSFs,
-    2 for disjoint ones) and the normalised cross-correlation
-    ⟨p_i − p̄_i, p_j − p̄_j⟩ / (‖p_i − p̄_i‖‖p_j − p̄_j‖) at zero shift, per colour channel.
+    For every field and every pair of depths (i < j) of ``stack`` ``[D, F, C, k, k]``, each
+    PSF rescaled to unit sum (the shape, not the light lost, is compared), it takes the L1
+    distance Σ|p_i − p_j| (0 for equal PSFs, 2 for disjoint ones) and the normalised
+    cross-correlation ⟨p_i − p̄_i, p_j − p̄_j⟩ / (‖p_i − p̄_i‖‖p_j − p̄_j‖) at zero shift, per
+    colour channel.
 
     Returns:
         ``{"l1": mean L1 over fields, depth pairs and channels, "ncc": mean NCC,
@@ -264,6 +143,7 @@ def psf_depth_variation(stack: np.ndarray) -> dict:
         ``l1`` and an ``ncc`` near 1.
     """
     s = np.asarray(stack, np.float64)
+    s = s / np.maximum(s.sum(axis=(-1, -2), keepdims=True), 1e-30)
     d = s.shape[0]
     l1, ncc = [], []
     for i in range(d):
@@ -284,42 +164,16 @@ def psf_depth_variation(stack: np.ndarray) -> dict:
     }
 
 
-def diagonal_points(lens: Lens, fractions=(0.0, 0.5, 1.0)) -> np.ndarray:
-    """Sensor points (mm) along the sensor diagonal at fractions of the half-diagonal."""
-    h, w = lens.sensor.size
-    corner = 0.5 * np.array([float(w), float(h)])
-    return np.array([f * corner for f in fractions])
-
-
-def grid_points(lens: Lens, n: int = 3) -> np.ndarray:
-    """An ``n × n`` grid of sensor points (mm), corner pixel to corner pixel."""
-    s = lens.sensor
-    return np.asarray(sensor_grid(s.resolution, s.pixel_size, (n, n))).reshape(-1, 2)
-
-
-def mtf_by_depth(lens: Lens, xy, depths_mm, *, frequencies, pupil: int = 96):
-    """Tangential and sagittal polychromatic MTF at sensor point ``xy`` for each depth.
-
-    Returns ``(frequencies [F] cycles/mm, tangential [D, F], sagittal [D, F])`` from
-    ``jaxlens.imaging.psf.mtf`` (geometric, exact ray Fourier transform, times the diffraction
-    limit).
-    """
-    field = np.asarray(field_of(lens, jnp.asarray(xy, lens.epd.dtype)))
-    tan, sag = [], []
-    for d in depths_mm:
-        f, t, s = _psf.mtf(
-            lens,
-            field,
-            wavelengths=jnp.asarray(WAVELENGTHS_RGB),
-            depth=float(object_depth(lens, d)),
-            frequencies=jnp.asarray(frequencies),
-            model=_psf.GeometricPSF(pupil=pupil),
-        )
-        tan.append(np.asarray(t))
-        sag.append(np.asarray(s))
-    return np.asarray(f), np.stack(tan), np.stack(sag)
-
-
-def depths_mm(depths_m=DEPTHS_M) -> np.ndarray:
-    """Depths in mm from depths in m."""
-    return 1e3 * np.asarray(depths_m, np.float64)
+def bank_mtf(bank: np.ndarray, pixel_size: float):
+    """Polychromatic MTF along x and y of each PSF of a bank ``[..., 3, k, k]``, from the
+    pixel-sampled kernel (each rescaled to unit sum). Returns ``(cycles/mm [m], mtf_x [..., m],
+    mtf_y [..., m])`` up to the Nyquist frequency."""
+    b = np.asarray(bank, np.float64)
+    b = b / np.maximum(b.sum(axis=(-1, -2), keepdims=True), 1e-30)
+    k = b.shape[-1]
+    f = np.abs(np.fft.rfft2(b, axes=(-2, -1)))  # [..., 3, k, k//2+1]
+    m = k // 2 + 1
+    mx = f[..., 0, :m].mean(axis=-2)
+    my = np.abs(np.fft.rfft(b.sum(axis=-1), axis=-1))[..., :m].mean(axis=-2)
+    freqs = np.arange(m) / (k * pixel_size)
+    return freqs, mx, my

@@ -1,15 +1,17 @@
-"""Training and test scenes: images that ship with scikit-image, or a user's folder.
+"""Training, validation and test scenes: images that ship with scikit-image, or a user's folder.
 
 Nothing is downloaded: the images below are the ones ``skimage.data`` stores inside the
-package. Training and test sets are disjoint.
+package. The three sets share no image.
 
-* Training (10): astronaut, rocket, hubble_deep_field, immunohistochemistry, retina,
-  motorcycle_left (left image of ``stereo_motorcycle``), colorwheel, brick, grass, gravel.
-* Held-out test (3): chelsea, coffee, camera.
+* Training (8): astronaut, immunohistochemistry, motorcycle_left (left image of
+  ``stereo_motorcycle``), colorwheel, grass, logo, page, text.
+* Validation (2, for choices made before a recorded run): cell, hubble_deep_field.
+* Test (10): retina, camera, moon, brick, gravel, coffee, rocket, motorcycle_right, chelsea,
+  coins; ``test_crops`` cuts them into disjoint 256² crops at native resolution (no
+  resampling): 48 crops, 24 of them from retina, the largest image.
 
-Pixel values are scaled to [0, 1] and used as linear intensities (as the paper's
-simulation does with its sRGB training images); grey images are repeated on the three
-channels. Images larger than ``max_side`` are downscaled (area averaging).
+Pixel values are 8-bit sRGB and are decoded to linear light (``jaxlens.io.images.to_linear``)
+before any simulation; grey images are repeated on the three channels.
 """
 
 from __future__ import annotations
@@ -21,34 +23,37 @@ import numpy as np
 
 TRAIN_IMAGES = (
     "astronaut",
-    "rocket",
-    "hubble_deep_field",
     "immunohistochemistry",
-    "retina",
     "motorcycle_left",
     "colorwheel",
-    "brick",
     "grass",
-    "gravel",
+    "logo",
+    "page",
+    "text",
 )
-TEST_IMAGES = ("chelsea", "coffee", "camera")
+VAL_IMAGES = ("cell", "hubble_deep_field")
+TEST_IMAGES = ("retina", "camera", "moon", "brick", "gravel", "coffee", "rocket",
+               "motorcycle_right", "chelsea", "coins")
 _EXTS = (".png", ".jpg", ".jpeg", ".tif", ".tiff", ".bmp")
+MIN_MEAN, MIN_STD = 0.02, 0.01
+"""A test crop is kept when its linear mean and standard deviation reach these (a rule fixed
+before any result: it drops crops of empty black background, where PSNR measures noise)."""
 
 
 def _to_float_rgb(a: np.ndarray) -> np.ndarray:
+    from ...io.images import to_linear
+
     a = np.asarray(a)
     if a.dtype == bool:
-        a = a.astype(np.float32)
-    elif np.issubdtype(a.dtype, np.integer):
-        a = a.astype(np.float32) / float(np.iinfo(a.dtype).max)
-    a = a.astype(np.float32)
+        a = a.astype(np.uint8) * 255
+    if a.ndim == 3 and a.shape[-1] == 4:
+        a = a[..., :3]
+    a = to_linear(a)
     if a.ndim == 2:
         a = np.repeat(a[..., None], 3, axis=-1)
-    if a.shape[-1] == 4:
-        a = a[..., :3]
     if a.ndim != 3 or a.shape[-1] != 3:
         raise ValueError(f"scenes: expected a grey or RGB image, got shape {a.shape}")
-    return np.clip(a, 0.0, 1.0)
+    return np.clip(a, 0.0, 1.0).astype(np.float32)
 
 
 def _downscale(a: np.ndarray, max_side: int | None) -> np.ndarray:
@@ -62,15 +67,23 @@ def _downscale(a: np.ndarray, max_side: int | None) -> np.ndarray:
 
 
 def skimage_image(name: str) -> np.ndarray:
-    """One ``skimage.data`` image by name, as float32 RGB in [0, 1]."""
+    """One ``skimage.data`` image by name, as float32 linear RGB in [0, 1]."""
     import skimage.data as data
 
-    if name == "motorcycle_left":
-        return _to_float_rgb(data.stereo_motorcycle()[0])
+    if name in ("motorcycle_left", "motorcycle_right"):
+        return _to_float_rgb(data.stereo_motorcycle()[0 if name.endswith("left") else 1])
     fn = getattr(data, name, None)
     if fn is None:
         raise ValueError(f"scenes: skimage.data has no image {name!r}")
     return _to_float_rgb(fn())
+
+
+def folder_images(folder: str | os.PathLike) -> list[pathlib.Path]:
+    """The image files of a folder, sorted by name."""
+    paths = sorted(p for p in pathlib.Path(folder).iterdir() if p.suffix.lower() in _EXTS)
+    if not paths:
+        raise ValueError(f"scenes: no image files ({', '.join(_EXTS)}) in {folder}")
+    return paths
 
 
 def load_images(
@@ -84,23 +97,37 @@ def load_images(
     if folder is not None:
         from skimage.io import imread
 
-        paths = sorted(p for p in pathlib.Path(folder).iterdir() if p.suffix.lower() in _EXTS)
-        if not paths:
-            raise ValueError(f"scenes: no image files ({', '.join(_EXTS)}) in {folder}")
+        paths = folder_images(folder)
         return [_downscale(_to_float_rgb(imread(p)), max_side) for p in paths]
     return [_downscale(skimage_image(n), max_side) for n in names]
 
 
-def square_crop(img: np.ndarray, size: int) -> np.ndarray:
-    """Resize the shorter side to ``size`` and crop the centre ``size × size``."""
-    from skimage.transform import resize
+def test_crops(images, names, *, size: int, margin: int):
+    """Disjoint ``size × size`` crops at native resolution, each with a margin of scene around it.
 
-    h, w = img.shape[:2]
-    s = size / min(h, w)
-    shape = (max(size, round(h * s)), max(size, round(w * s)), 3)
-    r = resize(img, shape, anti_aliasing=s < 1, preserve_range=True).astype(np.float32)
-    y0, x0 = (r.shape[0] - size) // 2, (r.shape[1] - size) // 2
-    return r[y0 : y0 + size, x0 : x0 + size]
+    Every image is cut on a grid from its top-left corner (``⌊H/size⌋ × ⌊W/size⌋`` crops);
+    a crop is kept if its linear mean and standard deviation reach ``MIN_MEAN`` and
+    ``MIN_STD``. Each crop comes as a window of ``size + 2·margin`` pixels (the image
+    reflect-padded where the margin leaves it), so a blur sees real scene beyond the crop.
+
+    Returns:
+        ``(windows [N, size + 2·margin, size + 2·margin, 3], info)``, ``info`` a list of
+        ``{"image", "row", "col"}`` (the crop's top-left pixel in its image).
+    """
+    wins, info = [], []
+    for img, name in zip(images, names, strict=True):
+        pad = np.pad(img, ((margin, margin), (margin, margin), (0, 0)), mode="reflect")
+        for r in range(img.shape[0] // size):
+            for c in range(img.shape[1] // size):
+                crop = img[r * size:(r + 1) * size, c * size:(c + 1) * size]
+                if crop.mean() < MIN_MEAN or crop.std() < MIN_STD:
+                    continue
+                y, x = r * size, c * size
+                wins.append(pad[y:y + size + 2 * margin, x:x + size + 2 * margin])
+                info.append({"image": name, "row": y, "col": x})
+    if not wins:
+        raise ValueError(f"scenes: no {size}x{size} test crop in {list(names)}")
+    return np.stack(wins).astype(np.float32), info
 
 
 class PatchSampler:

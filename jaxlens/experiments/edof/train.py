@@ -1,25 +1,36 @@
-"""Joint training of a lens and a reconstruction network, and the evaluation of Table 2.
+"""Joint training of a lens and its decoder, in two stages, with checkpoints.
 
-Stage 1 trains the network together with the lens's free parameters (``HybridParams`` gated
-by ``lenses.gates``: all for the hybrid lens, the tied cubic strength for the cubic plate,
-none for the classical lens) on simulated patches with the paper's loss
-(``losses.edof_loss``). Every batch draws two distinct depths of the 8 training depths and
-renders all its patches at both, with the three wavelengths of ``WAVELENGTHS_RGB``. Stage 2
-freezes the lens and refines the network on patches rendered through randomly perturbed
-copies of it (``lenses.perturb``: manufacturing and registration errors), one copy per
-patch, with ``L_rec`` alone.
+Stage 1 trains the decoder on every step and the lens's free parameters (``HybridParams``
+gated by ``lenses.gates``: the sensor position of the classical lens, the cubic strength
+(bounded below, ``lenses.project``) and sensor position of the cubic plate, everything of the
+hybrid lens) on every ``lens_every``-th step, with the paper's loss (``losses.edof_loss``).
+All three lenses get the same steps, the same lens updates and the same batches. A batch
+is ``batch`` tiles of the sensor (random tiles, random scene windows) rendered at two
+distinct depths of the 8 training depths.
 
-Each step is one jitted function (``train_step``, shared by both stages and all three
-lenses); the Python loop over steps syncs with the host only every ``log_every`` steps.
-Gaussian read noise of standard deviation ``noise`` is added to the simulations before the
-network sees them.
+Only a lens-update step differentiates through the ray tracer (``joint_step``). On the other
+steps the PSFs of the batch come from a forward trace of the current lens
+(``optics.psfs_nograd``) and only the decoder is differentiated (``net_step``); a lens that
+cannot move (no free parameter) takes them from its cached PSF bank, with no tracing at all.
+Stage 2 freezes the lens and refines the decoder on PSFs of randomly perturbed copies of it
+(``lenses.perturb``: manufacturing and registration errors), one copy per step, with
+``L_rec`` alone.
+
+Sensor noise (``optics.add_noise``: shot noise of ``photons`` electrons at the value 1 and
+read noise ``read_noise``) is added to the simulations before the decoder sees them. The
+Wiener decoder's front end uses the depth-averaged PSF of each tile from a bank that is
+refreshed every ``refresh_every`` steps; checkpoints are written at those steps too
+(``Trainer.save``), so a resumed run continues exactly where the saved one was.
 """
 
 from __future__ import annotations
 
 import dataclasses
 import functools
+import json
 import math
+import os
+import time
 from collections.abc import Callable
 
 import equinox as eqx
@@ -28,11 +39,12 @@ import jax.numpy as jnp
 import numpy as np
 import optax
 
-from ...nets import NAFNet
 from ...optics.lens import Lens
-from .lenses import DEPTHS_M, SPEC, Tolerances, apply_gates, dioptric_weights, gates, perturb
+from .decoder import Decoder
+from .lenses import (
+    DEPTHS_M, SPEC, Tolerances, apply_gates, dioptric_weights, gates, perturb, project)
 from .losses import edof_loss
-from .optics import render_tiled, simulate_patch
+from .optics import add_noise, centers, patch_psfs, psf_bank, psfs_nograd, simulate
 
 STAGE2_LR_SCALE = 0.3
 """Stage 2's network learning rate relative to stage 1's."""
@@ -44,65 +56,70 @@ class Config:
 
     Attributes:
         binning: sensor pixel binning of the paper's 1024² sensor of 4.97 µm pixels.
-        patch: training patch side (pixels).
-        kernel_size: PSF kernel side (pixels).
+        tile: tile side (pixels): one PSF per tile, and a training patch is one tile.
+        kernel_size: PSF kernel side (pixels); light outside it is lost.
         batch: patches per batch (each rendered at two depths).
-        pupil: rays per side of the pupil grid of a training PSF.
-        steps: stage-1 steps (joint lens and network).
-        steps2: stage-2 steps (network on perturbed lenses).
+        pupil: rays per side of the polar pupil grid of a training PSF.
+        eval_pupil: the same for the evaluation's PSF banks.
+        steps: stage-1 steps (decoder every step, lens every ``lens_every``-th).
+        steps2: stage-2 steps (decoder on perturbed lenses).
+        lens_every: a lens update every this many stage-1 steps.
+        refresh_every: steps between refreshes of the Wiener front end's PSF bank and
+            between checkpoints.
         lr_net, lr_lens: Adam learning rates (the lens parameters are scaled to order 1).
-        lens_delay: fraction of the stage-1 steps during which the lens stays frozen and
-            only the network trains (then the lens rate ramps up linearly over as many
-            steps). Through a network that cannot yet reconstruct (a fresh NAFNet is the
-            identity), the lens gradient only rewards a sharp raw image. Off (0) by
-            default: at the CPU scale a delay of 0.25 did not keep the odd terms from
-            shrinking and did not improve validation PSNR (``experiments/edof/NOTES.md``).
         depth_sampling: how a batch draws its two depths of the 8: "uniform" or
             "dioptric" (weights even in dioptres, ``lenses.dioptric_weights``).
         hold_focus: the hybrid lens keeps the classical lens's base curvature and sensor
-            position (``lenses.gates`` "hybrid-held-focus"), so it cannot trade near for
-            far depths by refocusing.
+            position (``lenses.gates`` "hybrid-held-focus").
         w_sim, w_raw: ω1 and ω2 of the loss.
-        noise: standard deviation of the Gaussian read noise (image range [0, 1]).
+        photons: photo-electrons at the linear value 1 (shot noise); read_noise: read-noise
+            standard deviation (linear units).
+        decoder: "nafnet" or "wiener" (``decoder.Decoder``).
         width, enc_blocks, middle_blocks, dec_blocks: the NAFNet.
         n_odd: odd terms per axis of the hybrid surface (x³, x⁵, …).
-        cubic_ratio: initial cubic strength, as a multiple of the defocus it hides
-            (``lenses.cubic_strength_guess``); the hybrid starts at half of the plate's.
-        eval_pupil: pupil samples per side of the evaluation PSFs.
+        cubic_ratio: the cubic plate's strength, as a multiple of the defocus it hides
+            (``lenses.cubic_strength_guess``); the hybrid starts at half of it.
+        cubic_floor: lower bound of the cubic plate's strength as a fraction of its start.
+        crop: side of the test crops (pixels, native resolution).
         seed: random seed.
         log_every: host sync / progress-bar refresh interval (steps).
     """
 
-    binning: int = 2
-    patch: int = 64
-    kernel_size: int = 41
-    batch: int = 4
+    binning: int = 4
+    tile: int = 32
+    kernel_size: int = 21
+    batch: int = 8
     pupil: int = 32
-    steps: int = 400
-    steps2: int = 100
+    eval_pupil: int = 32
+    steps: int = 300
+    steps2: int = 60
+    lens_every: int = 4
+    refresh_every: int = 50
     lr_net: float = 1e-3
     lr_lens: float = 2e-2
-    lens_delay: float = 0.0
     depth_sampling: str = "uniform"
     hold_focus: bool = False
     w_sim: float = 0.1
     w_raw: float = 0.1
-    noise: float = 0.01
+    photons: float = 2000.0
+    read_noise: float = 0.002
+    decoder: str = "wiener"
     width: int = 16
     enc_blocks: tuple[int, ...] = (1, 1, 1)
     middle_blocks: int = 1
     dec_blocks: tuple[int, ...] = (1, 1, 1)
     n_odd: int = 3
     cubic_ratio: float = 1.5
-    eval_pupil: int = 64
+    cubic_floor: float = 1.0
+    crop: int = 256
     seed: int = 0
     log_every: int = 10
     tolerances: Tolerances = dataclasses.field(default_factory=Tolerances)
 
     @property
     def window(self) -> int:
-        """Side of a training scene window: the patch plus a kernel's margin (pixels)."""
-        return self.patch + self.kernel_size - 1
+        """Side of a training scene window: the tile plus a kernel's margin (pixels)."""
+        return self.tile + self.kernel_size - 1
 
     @property
     def pixel_size(self) -> float:
@@ -110,320 +127,360 @@ class Config:
         return self.binning * SPEC["pixel_size_mm"]
 
 
-def make_net(cfg: Config, key, dtype=jnp.float32) -> NAFNet:
-    """The reconstruction network of the configuration."""
-    return NAFNet(
-        width=cfg.width,
-        enc_blocks=cfg.enc_blocks,
-        middle_blocks=cfg.middle_blocks,
-        dec_blocks=cfg.dec_blocks,
-        key=key,
-        dtype=dtype,
-    )
-
-
-def _labels(trainable):
-    net, params = trainable
-    return (
-        jax.tree_util.tree_map(lambda _: "net", net),
-        jax.tree_util.tree_map(lambda _: "lens", params),
-    )
-
-
-@functools.lru_cache(maxsize=16)
-def make_optimizer(cfg: Config, steps: int):
-    """Adam with a cosine-decayed rate for the network and a delayed one for the lens.
-
-    The lens rate is 0 for the first ``lens_delay · cfg.steps`` steps, ramps linearly to
-    ``lr_lens`` over as many steps again and then stays constant (``Config.lens_delay``).
-
-    Cached, so that equal configurations give the same (hashable) optimizer and the jitted
-    steps, which take it as a static argument, compile once.
-    """
+def make_net_optimizer(cfg: Config, steps: int, scale: float = 1.0):
+    """Adam with a warm-up and cosine decay, gradients clipped to norm 1."""
+    lr = cfg.lr_net * scale
     sched = optax.warmup_cosine_decay_schedule(
-        0.0, cfg.lr_net, max(1, min(20, steps // 10)), max(steps, 1), cfg.lr_net * 0.05
-    )
-    net_opt = optax.chain(optax.clip_by_global_norm(1.0), optax.adam(sched))
-    delay = int(round(cfg.lens_delay * cfg.steps))
-    lens_sched = optax.linear_schedule(0.0, cfg.lr_lens, max(delay, 1), transition_begin=delay)
-    lens_opt = optax.adam(lens_sched if delay > 0 else cfg.lr_lens)
-    return optax.multi_transform({"net": net_opt, "lens": lens_opt}, _labels)
+        0.0, lr, max(1, min(20, steps // 10)), max(steps, 1), lr * 0.05)
+    return optax.chain(optax.clip_by_global_norm(1.0), optax.adam(sched))
 
 
-def _simulate_batch(lens, windows, xy, depths, key, cfg: Config, perturbation=None):
-    """``[2, B, P, P, 3]`` patches at the two depths (one PSF per patch and depth).
-
-    With ``perturbation`` (an array scale of ``cfg.tolerances``), every patch is rendered
-    through its own randomly perturbed copy of the lens (``lenses.perturb``).
-    """
-    b = windows.shape[0]
-    k_sim, k_pert = jax.random.split(key)
-    keys = jax.random.split(k_sim, 2 * b).reshape(2, b, -1)
-
-    def one(ln, window, p, d, k):
-        return simulate_patch(
-            ln,
-            window,
-            p,
-            d,
-            k,
-            kernel_size=cfg.kernel_size,
-            pixel_size=cfg.pixel_size,
-            pupil=cfg.pupil,
-        )
-
-    if perturbation is None:
-        per_depth = jax.vmap(one, in_axes=(None, 0, 0, None, 0))
-        return jax.vmap(per_depth, in_axes=(None, None, None, 0, 0))(
-            lens, windows, xy, depths, keys
-        )
-    lenses = jax.vmap(lambda k: perturb(lens, k, cfg.tolerances, scale=perturbation))(
-        jax.random.split(k_pert, b)
-    )
-    per_depth = jax.vmap(one, in_axes=(0, 0, 0, None, 0))
-    return jax.vmap(per_depth, in_axes=(None, None, None, 0, 0))(lenses, windows, xy, depths, keys)
+@functools.lru_cache(maxsize=8)
+def optimizers(cfg: Config):
+    """(network, lens) optimizers, cached so that the jitted steps compile once. Stage 2
+    restarts the network's state and scales its updates by ``STAGE2_LR_SCALE``."""
+    return make_net_optimizer(cfg, cfg.steps), optax.adam(cfg.lr_lens)
 
 
 def _gt(windows, cfg: Config):
     h = cfg.kernel_size // 2
-    return windows[:, h : h + cfg.patch, h : h + cfg.patch]
+    return windows[:, h: h + cfg.tile, h: h + cfg.tile]
 
 
-def _reconstruct(net, sims, key, noise):
-    noisy = sims + noise * jax.random.normal(key, sims.shape, sims.dtype)
-    flat = noisy.reshape((-1,) + sims.shape[2:])
-    return jax.vmap(net)(flat).reshape(sims.shape)
+def _sim_loss(dec: Decoder, kernels, windows, wkern, key, cfg: Config):
+    """The loss of a batch whose PSFs are ``kernels [2, B, 3, k, k]``."""
+    sims = simulate(windows, kernels)
+    noisy = add_noise(sims, key, photons=cfg.photons, read=cfg.read_noise)
+    per_patch = jax.vmap(lambda x, k: dec(x, k[None, None]))
+    recs = jax.vmap(per_patch, in_axes=(0, None))(noisy, wkern)
+    return edof_loss(recs, sims, _gt(windows, cfg), w_sim=cfg.w_sim, w_raw=cfg.w_raw)
+
+
+def _finite(loss, tree):
+    leaves = [g for g in jax.tree_util.tree_leaves(tree) if eqx.is_inexact_array(g)]
+    return jnp.isfinite(loss) & jnp.all(jnp.stack([jnp.all(jnp.isfinite(g)) for g in leaves]))
+
+
+def _apply(opt, grads, state, params, ok, scale=1.0):
+    """An optimizer step (updates times ``scale``) that is skipped (parameters and state
+    kept) where ``ok`` is False."""
+    grads = jax.tree_util.tree_map(lambda g: jnp.where(ok, g, 0.0), grads)
+    upd, new = opt.update(grads, state, params)
+    upd = jax.tree_util.tree_map(lambda u: u * ok * scale, upd)
+    state = jax.tree_util.tree_map(lambda a, b: jnp.where(ok, a, b) if eqx.is_array(a) else a,
+                                   new, state)
+    return eqx.apply_updates(params, upd), state
 
 
 @eqx.filter_jit
-def train_step(
-    net,
-    params,
-    opt_state,
-    base_lens,
-    windows,
-    xy,
-    depths,
-    key,
-    gate,
-    tie,
-    perturbation,
-    net_scale,
-    *,
-    cfg: Config,
-    optimizer,
-):
-    """One training step of either stage; returns (net, params, opt_state, loss, parts).
+def joint_step(dec, params, net_state, lens_state, base_lens, windows, xy, depths, wkern, key,
+               gate, tie, floor, *, cfg: Config, net_opt, lens_opt):
+    """A lens-update step: the loss is differentiated through the ray tracer.
 
-    Stage 1 (joint): ``gate`` and ``tie`` (``lenses.gates``) say which lens parameters move,
-    ``perturbation = 0``. Stage 2: ``gate`` all zero (the lens is frozen, so L_sim and L_raw
-    do not reach the network and only L_rec trains it) and ``perturbation = 1`` (each patch
-    through a randomly perturbed lens). ``net_scale`` scales the network's updates. All of
-    these are arrays, so the three lenses and both stages share one compiled step.
+    ``xy [B, 2]`` are the tiles' centres (mm), ``depths [2]`` the two depths (mm from the
+    stop), ``wkern [B, 3, k, k]`` the front end's depth-averaged PSFs. Returns
+    ``(dec, params, net_state, lens_state, loss, parts)``; a step whose loss or gradient is not
+    finite is skipped and counted in ``parts["skipped"]``.
     """
-    k_sim, k_noise = jax.random.split(key)
+    b = windows.shape[0]
+    k_sim, k_psf = jax.random.split(key)
 
     def loss_fn(trainable):
-        net, params = trainable
-        lens = params.apply(base_lens)
-        sims = _simulate_batch(lens, windows, xy, depths, k_sim, cfg, perturbation)
-        recs = _reconstruct(net, sims, k_noise, cfg.noise)
-        return edof_loss(recs, sims, _gt(windows, cfg), w_sim=cfg.w_sim, w_raw=cfg.w_raw)
+        d, p = trainable
+        lens = p.apply(base_lens)
+        kern = patch_psfs(lens, jnp.concatenate([xy, xy]), jnp.repeat(depths, b),
+                          kernel_size=cfg.kernel_size, pixel_size=lens.sensor.pixel_size,
+                          pupil=cfg.pupil, key=k_psf)
+        return _sim_loss(d, kern.reshape((2, b) + kern.shape[1:]), windows, wkern, k_sim, cfg)
 
-    trainable = (net, params)
-    (loss, parts), grads = eqx.filter_value_and_grad(loss_fn, has_aux=True)(trainable)
-    g_net, g_lens = grads
-    grads = (g_net, apply_gates(g_lens, gate, tie))
-    # A step whose loss or gradient is not finite (a rare ray-tracing failure) is skipped:
-    # one NaN update would make the lens NaN for good, and a NaN lens renders black
-    # patches with a finite loss. ``parts["skipped"]`` counts such steps.
-    leaves = [g for g in jax.tree_util.tree_leaves(grads) if eqx.is_inexact_array(g)]
-    ok = jnp.isfinite(loss) & jnp.all(jnp.stack([jnp.all(jnp.isfinite(g)) for g in leaves]))
-    grads = jax.tree_util.tree_map(
-        lambda g: jnp.where(ok, g, 0.0) if eqx.is_inexact_array(g) else g, grads
-    )
-    new_updates, new_state = optimizer.update(
-        grads, opt_state, eqx.filter(trainable, eqx.is_inexact_array)
-    )
-    opt_state = jax.tree_util.tree_map(
-        lambda a, b: jnp.where(ok, a, b) if eqx.is_array(a) else a, new_state, opt_state
-    )
-    u_net, u_lens = new_updates
-    u_net = jax.tree_util.tree_map(lambda u: u * net_scale.astype(u.dtype) * ok, u_net)
-    u_lens = jax.tree_util.tree_map(lambda u: u * ok, u_lens)
-    net, params = eqx.apply_updates(trainable, (u_net, u_lens))
+    net_p, net_static = eqx.partition(dec, eqx.is_inexact_array)
+    (loss, parts), (g_net, g_lens) = eqx.filter_value_and_grad(loss_fn, has_aux=True)(
+        (dec, params))
+    g_lens = apply_gates(g_lens, gate, tie)
+    ok = _finite(loss, (g_net, g_lens))
+    net_p, net_state = _apply(net_opt, eqx.filter(g_net, eqx.is_inexact_array), net_state,
+                              net_p, ok)
+    lp, lens_static = eqx.partition(params, eqx.is_inexact_array)
+    lp, lens_state = _apply(lens_opt, eqx.filter(g_lens, eqx.is_inexact_array), lens_state, lp,
+                            ok)
+    params = project(eqx.combine(lp, lens_static), floor)
     parts = dict(parts, skipped=1.0 - ok.astype(loss.dtype))
-    return net, params, opt_state, loss, parts
+    return eqx.combine(net_p, net_static), params, net_state, lens_state, loss, parts
+
+
+@eqx.filter_jit
+def net_step(dec, net_state, kernels, windows, wkern, key, scale, *, cfg: Config, net_opt):
+    """A decoder-only step on given PSFs ``kernels [2, B, 3, k, k]`` (no ray tracing), its
+    updates scaled by ``scale`` (an array: both stages share the compiled step)."""
+    net_p, net_static = eqx.partition(dec, eqx.is_inexact_array)
+
+    def loss_fn(p):
+        return _sim_loss(eqx.combine(p, net_static), kernels, windows, wkern, key, cfg)
+
+    (loss, parts), g = eqx.filter_value_and_grad(loss_fn, has_aux=True)(net_p)
+    ok = _finite(loss, g)
+    net_p, net_state = _apply(net_opt, g, net_state, net_p, ok, scale)
+    parts = dict(parts, skipped=1.0 - ok.astype(loss.dtype))
+    return eqx.combine(net_p, net_static), net_state, loss, parts
+
+
+_perturb = eqx.filter_jit(perturb)
+
+
+@eqx.filter_jit
+def _probe_loss(dec, kernels, windows, wkern, key, *, cfg: Config):
+    return _sim_loss(dec, kernels, windows, wkern, key, cfg)[0]
 
 
 class BatchSource:
-    """Host-side batches: scene windows, sensor positions and the depth pair."""
+    """Host-side batches: scene windows, tile indices and the depth pair."""
 
-    def __init__(self, sampler, lens: Lens, cfg: Config, seed: int):
+    def __init__(self, sampler, n_tiles: tuple[int, int], cfg: Config, seed: int):
         self.sampler = sampler
         self.cfg = cfg
+        self.n_tiles = n_tiles
         self.rng = np.random.default_rng(seed)
-        h, w = lens.sensor.size
-        self.half = 0.5 * np.array([float(w), float(h)])
-        self.depths = 1e3 * np.asarray(DEPTHS_M)
         if cfg.depth_sampling not in ("uniform", "dioptric"):
             raise ValueError(
-                f"depth_sampling must be 'uniform' or 'dioptric', got {cfg.depth_sampling!r}"
-            )
+                f"depth_sampling must be 'uniform' or 'dioptric', got {cfg.depth_sampling!r}")
         self.weights = dioptric_weights(DEPTHS_M) if cfg.depth_sampling == "dioptric" else None
 
-    def __call__(self, dtype=np.float32):
+    def __call__(self):
+        """``(windows [B, W, W, 3], tiles [B, 2] (row, col), depth indices [2])``."""
         cfg = self.cfg
         windows = self.sampler.sample(cfg.batch)
-        xy = self.rng.uniform(-1.0, 1.0, (cfg.batch, 2)) * self.half
-        pair = self.rng.choice(len(self.depths), 2, replace=False, p=self.weights)
-        return (
-            jnp.asarray(windows, dtype),
-            jnp.asarray(xy, dtype),
-            jnp.asarray(self.depths[pair], dtype),
-        )
+        tiles = np.stack([self.rng.integers(0, self.n_tiles[0], cfg.batch),
+                          self.rng.integers(0, self.n_tiles[1], cfg.batch)], -1)
+        pair = self.rng.choice(len(DEPTHS_M), 2, replace=False, p=self.weights)
+        return windows, tiles, pair
+
+    def state(self) -> dict:
+        """The random states (JSON), to resume the same stream."""
+        return {"source": self.rng.bit_generator.state,
+                "sampler": self.sampler.rng.bit_generator.state}
+
+    def set_state(self, s: dict) -> None:
+        self.rng.bit_generator.state = s["source"]
+        self.sampler.rng.bit_generator.state = s["sampler"]
 
 
-def train(
-    name: str,
-    base_lens: Lens,
-    params,
-    net: NAFNet,
-    source: BatchSource,
-    cfg: Config,
-    *,
-    kind: str,
-    key,
-    progress: Callable | None = None,
-):
-    """Stage 1 then stage 2 for one lens; returns ``(net, params, history)``.
+class OutOfTime(Exception):
+    """Raised when a time limit stops training at a checkpoint."""
 
-    ``kind`` ("classical", "cubic" or "hybrid") selects the free lens parameters
-    (``lenses.gates``). Stage 2 restarts the network's Adam state with its learning rate
-    scaled by ``STAGE2_LR_SCALE``. ``history`` holds the loss parts every ``log_every``
-    steps (``stage1``: dicts with ``step``, ``loss``, ``rec``, ``sim``, ``raw`` and
-    ``skipped``, the number of steps skipped for a non-finite gradient since the last
-    record; ``stage2``: dicts with ``step``, ``rec`` and ``skipped``).
+
+@dataclasses.dataclass
+class Trainer:
+    """Trains one lens and its decoder (``run``), with checkpoints in ``folder``.
+
+    Attributes:
+        name: "classical", "cubic" or "hybrid" (also the ``gates`` kind).
+        base_lens: the starting lens (a Hybrid first surface).
+        params: its ``HybridParams``.
+        dec: the decoder.
+        source: the batch stream.
+        cfg: the configuration.
+        key: PRNG key of the run.
+        floor: lower bound of the cubic strength (scaled units; ``-inf`` for none).
+        folder: checkpoint folder (None: no checkpoints).
+        deadline: ``time.time()`` after which training stops at the next checkpoint.
     """
-    dtype = params.c.dtype
-    opt = make_optimizer(cfg, max(cfg.steps, cfg.steps2))
-    gate, tie = gates(params, "hybrid-held-focus" if kind == "hybrid" and cfg.hold_focus else kind)
-    frozen, _ = gates(params, "classical")
-    stages = (
-        (1, cfg.steps, gate, tie, 0.0, 1.0),
-        (2, cfg.steps2, frozen, jnp.zeros((), dtype), 1.0, STAGE2_LR_SCALE),
-    )
-    hist: dict[str, list] = {"stage1": [], "stage2": []}
-    bar = progress(total=cfg.steps + cfg.steps2, desc=name) if progress else None
-    for stage, steps, g, t, pert, scale in stages:
-        state = opt.init(eqx.filter((net, params), eqx.is_inexact_array))
-        pert, scale = jnp.asarray(pert, dtype), jnp.asarray(scale, dtype)
+
+    name: str
+    base_lens: Lens
+    params: object
+    dec: Decoder
+    source: BatchSource
+    cfg: Config
+    key: jax.Array
+    floor: float = -math.inf
+    folder: str | None = None
+    deadline: float | None = None
+
+    def __post_init__(self):
+        cfg = self.cfg
+        opt1, lens_opt = optimizers(cfg)
+        kind = "hybrid-held-focus" if self.name == "hybrid" and cfg.hold_focus else self.name
+        self.gate, self.tie = gates(self.params, kind)
+        self.movable = any(float(jnp.sum(jnp.abs(g))) > 0
+                           for g in jax.tree_util.tree_leaves(self.gate))
+        self.stage, self.step = 1, 0
+        self.net_state = opt1.init(eqx.filter(self.dec, eqx.is_inexact_array))
+        self.lens_state = lens_opt.init(eqx.filter(self.params, eqx.is_inexact_array))
+        self.hist: dict[str, list] = {"stage1": [], "stage2": []}
+        self.xy = centers(self.base_lens, cfg.tile)
+        self.bank = None  # [8, ty, tx, 3, k, k] of the current lens, when one is needed
+        self.mean_bank = None
+        self.seconds = 0.0
+
+    # -- checkpoints ---------------------------------------------------------------------
+    def _paths(self):
+        return (os.path.join(self.folder, f"{self.name}.eqx"),
+                os.path.join(self.folder, f"{self.name}.json"))
+
+    def save(self) -> None:
+        """Write the state (a finished lens, or one in progress) to ``folder``."""
+        if self.folder is None:
+            return
+        os.makedirs(self.folder, exist_ok=True)
+        tree, meta = self._paths()
+        eqx.tree_serialise_leaves(tree + ".tmp", (self.dec, self.params, self.net_state,
+                                                  self.lens_state, self.key))
+        info = {"stage": self.stage, "step": self.step, "hist": self.hist,
+                "rng": self.source.state(), "seconds": self.seconds,
+                "config": dataclasses.asdict(self.cfg)}
+        with open(meta + ".tmp", "w") as f:
+            json.dump(info, f)
+        os.replace(tree + ".tmp", tree)
+        os.replace(meta + ".tmp", meta)
+
+    def load(self) -> bool:
+        """Resume from ``folder`` if it holds this lens; returns whether it did."""
+        if self.folder is None:
+            return False
+        tree, meta = self._paths()
+        if not (os.path.isfile(tree) and os.path.isfile(meta)):
+            return False
+        with open(meta) as f:
+            info = json.load(f)
+        if info["config"] != json.loads(json.dumps(dataclasses.asdict(self.cfg))):
+            raise ValueError(f"resume: the checkpoint {meta} was written with another "
+                             f"configuration; use the same options, or another --checkpoint")
+        self.stage, self.step = info["stage"], info["step"]
+        like = (self.dec, self.params, self.net_state, self.lens_state, self.key)
+        self.dec, self.params, self.net_state, self.lens_state, self.key = \
+            eqx.tree_deserialise_leaves(tree, like)
+        self.hist, self.seconds = info["hist"], info["seconds"]
+        self.source.set_state(info["rng"])
+        return True
+
+    @property
+    def done(self) -> bool:
+        return self.stage == 3
+
+    # -- training ------------------------------------------------------------------------
+    def lens(self) -> Lens:
+        return self.params.apply(self.base_lens)
+
+    def _banks(self, lens, *, full: bool):
+        cfg = self.cfg
+        bank = psf_bank(lens, tile=cfg.tile, kernel_size=cfg.kernel_size, pupil=cfg.pupil,
+                        chunk=2 * cfg.batch)
+        self.mean_bank = jnp.asarray(bank.mean(0), self.base_lens.epd.dtype)
+        self.bank = jnp.asarray(bank, self.base_lens.epd.dtype) if full else None
+
+    def _wkern(self, tiles):
+        if not self.dec.wiener:
+            return jnp.zeros((len(tiles), 3, 1, 1), self.base_lens.epd.dtype)
+        return self.mean_bank[tiles[:, 0], tiles[:, 1]]
+
+    def probe(self) -> float:
+        """The loss of the current lens and decoder on a fixed batch (its own random stream:
+        scene windows, tiles, the depths 10 cm and 10 m, noise), recorded before and after
+        training as ``hist["probe"]``: a measure of learning free of batch-to-batch noise."""
+        from .scenes import PatchSampler
+
+        cfg = self.cfg
+        dt = self.base_lens.epd.dtype
+        rng = np.random.default_rng(4242)
+        windows = PatchSampler(self.source.sampler.images, cfg.window, seed=4242).sample(
+            cfg.batch)
+        tiles = np.stack([rng.integers(0, n, cfg.batch) for n in self.xy.shape[:2]], -1)
+        depths = jnp.asarray([1e3 * DEPTHS_M[0], 1e3 * DEPTHS_M[-1]], dt)
+        lens = self.lens()
+        xy = jnp.asarray(self.xy[tiles[:, 0], tiles[:, 1]], dt)
+        kern = psfs_nograd(lens, jnp.concatenate([xy, xy]), jnp.repeat(depths, cfg.batch),
+                           jnp.asarray(lens.sensor.pixel_size, dt), kernel_size=cfg.kernel_size,
+                           pupil=cfg.pupil)
+        if self.dec.wiener:
+            self._banks(lens, full=False)
+        loss = _probe_loss(self.dec, kern.reshape((2, cfg.batch) + kern.shape[1:]),
+                           jnp.asarray(windows, dt), self._wkern(tiles),
+                           jax.random.PRNGKey(4242), cfg=cfg)
+        return float(loss)
+
+    def run(self, progress: Callable | None = None):
+        """Train to the end (or to the deadline: ``OutOfTime`` after a checkpoint)."""
+        cfg = self.cfg
+        if "probe" not in self.hist:
+            self.hist["probe"] = {"before": self.probe()}
+            self.mean_bank = None  # the training's own refresh schedule
+        opt1, lens_opt = optimizers(cfg)
+        dt = self.base_lens.epd.dtype
+        depths = jnp.asarray(1e3 * np.asarray(DEPTHS_M), dt)
+        pix = jnp.asarray(self.base_lens.sensor.pixel_size, dt)
+        total = cfg.steps + cfg.steps2
+        bar = progress(total=total, desc=self.name) if progress else None
+        if bar is not None:
+            bar.update(self.step + (cfg.steps if self.stage == 2 else 0))
         acc = []
-        for step in range(steps):
-            key, sub = jax.random.split(key)
-            windows, xy, depths = source()
-            net, params, state, loss, parts = train_step(
-                net,
-                params,
-                state,
-                base_lens,
-                windows,
-                xy,
-                depths,
-                sub,
-                g,
-                t,
-                pert,
-                scale,
-                cfg=cfg,
-                optimizer=opt,
-            )
-            acc.append((loss, parts))
-            if (step + 1) % cfg.log_every and step + 1 != steps:
+        floor = jnp.asarray(self.floor, dt)
+        while self.stage < 3:
+            steps = cfg.steps if self.stage == 1 else cfg.steps2
+            if self.step >= steps:
+                self.stage, self.step = self.stage + 1, 0
+                if self.stage == 2:
+                    self.net_state = opt1.init(eqx.filter(self.dec, eqx.is_inexact_array))
                 continue
-            vals = jax.device_get(acc)
-            acc = []
-            rec = {"step": step + 1, "loss": float(np.mean([v[0] for v in vals]))}
-            for k in ("rec", "sim", "raw"):
-                rec[k] = float(np.mean([v[1][k] for v in vals]))
-            rec["skipped"] = int(round(sum(float(v[1]["skipped"]) for v in vals)))
-            if not math.isfinite(rec["loss"]):
-                raise FloatingPointError(
-                    f"train[{name}]: non-finite loss at stage {stage} step {step + 1}"
-                )
-            hist[f"stage{stage}"].append(
-                rec
-                if stage == 1
-                else {"step": rec["step"], "rec": rec["rec"], "skipped": rec["skipped"]}
-            )
-            if bar is not None:
-                bar.set_postfix(stage=stage, loss=f"{rec['loss']:.4f}", rec=f"{rec['rec']:.4f}")
-                bar.update(len(vals))
-    if bar is not None:
-        bar.close()
-    return net, params, hist
+            t0 = time.perf_counter()
+            lens = self.lens()
+            frozen = self.stage == 2 or not self.movable
+            if self.step % cfg.refresh_every == 0 or self.mean_bank is None:
+                if self.step % cfg.refresh_every == 0 and self.step > 0:
+                    self.save()
+                    if self.deadline is not None and time.time() > self.deadline:
+                        raise OutOfTime(f"{self.name}: stopped at stage {self.stage} step "
+                                        f"{self.step}")
+                if self.dec.wiener or (frozen and self.stage == 1):
+                    # In stage 2 the bank only feeds the front end: the PSFs are perturbed.
+                    self._banks(lens, full=frozen and self.stage == 1)
+            self.key, sub = jax.random.split(self.key)
+            windows, tiles, pair = self.source()
+            windows = jnp.asarray(windows, dt)
+            wk = self._wkern(tiles)
+            xy = jnp.asarray(self.xy[tiles[:, 0], tiles[:, 1]], dt)
+            if self.stage == 1 and self.movable and self.step % cfg.lens_every == 0:
+                self.dec, self.params, self.net_state, self.lens_state, loss, parts = joint_step(
+                    self.dec, self.params, self.net_state, self.lens_state, self.base_lens,
+                    windows, xy, depths[pair], wk, sub, self.gate, self.tie, floor, cfg=cfg,
+                    net_opt=opt1, lens_opt=lens_opt)
+            else:
+                if self.stage == 1 and frozen:
+                    kern = self.bank[pair][:, tiles[:, 0], tiles[:, 1]]
+                else:
+                    k_pert, sub = jax.random.split(sub)
+                    src = lens if self.stage == 1 else _perturb(lens, k_pert, cfg.tolerances)
+                    kern = psfs_nograd(src, jnp.concatenate([xy, xy]),
+                                       jnp.repeat(depths[pair], len(tiles)), pix,
+                                       kernel_size=cfg.kernel_size, pupil=cfg.pupil)
+                    kern = kern.reshape((2, len(tiles)) + kern.shape[1:])
+                scale = jnp.asarray(1.0 if self.stage == 1 else STAGE2_LR_SCALE, dt)
+                self.dec, self.net_state, loss, parts = net_step(
+                    self.dec, self.net_state, kern, windows, wk, sub, scale, cfg=cfg,
+                    net_opt=opt1)
+            acc.append((loss, parts))
+            self.step += 1
+            if self.step % cfg.log_every == 0 or self.step == steps:
+                self._log(acc, steps)
+                if bar is not None:
+                    last = self.hist[f"stage{self.stage}"][-1]
+                    bar.set_postfix(stage=self.stage, loss=f"{last['loss']:.4f}")
+                    bar.update(len(acc))
+                acc = []
+            self.seconds += time.perf_counter() - t0
+        if bar is not None:
+            bar.close()
+        if "after" not in self.hist["probe"]:
+            self.hist["probe"]["after"] = self.probe()
+        self.save()
+        return self.dec, self.params, self.hist
 
-
-# --------------------------------------------------------------------------------------
-# Evaluation (Table 2)
-# --------------------------------------------------------------------------------------
-@eqx.filter_jit
-def _restore(net, img):
-    return jnp.clip(net(img), 0.0, 1.0)
-
-
-def evaluate(lens: Lens, net: NAFNet, images, depths_m, cfg: Config, *, key, keep=None):
-    """PSNR and SSIM of simulation and reconstruction on whole test images.
-
-    Each test image fills the sensor; it is rendered tile by tile (``optics.render_tiled``:
-    one RGB PSF per ``patch × patch`` tile, the training model on the whole frame), read
-    noise is added, and the network restores the whole frame at once.
-
-    Args:
-        lens: the (trained) lens with its sensor.
-        net: the network.
-        images: test scenes ``[S, S, 3]`` at the sensor resolution.
-        depths_m: depths (m from the stop).
-        key: PRNG key for the noise (the same for every lens).
-        keep: index of a test image whose images to return.
-
-    Returns:
-        ``(metrics, examples)``: metrics[str(depth)] = {"sim": {"psnr", "ssim"},
-        "rec": {...}} averaged over the images; examples[str(depth)] = (sim, rec) of the
-        kept image (NumPy, clipped to [0, 1]).
-    """
-    from ...io.images import psnr, ssim
-
-    metrics, examples = {}, {}
-    for d in depths_m:
-        vals = {"sim": {"psnr": [], "ssim": []}, "rec": {"psnr": [], "ssim": []}}
-        for i, img in enumerate(images):
-            scene = jnp.asarray(img, lens.epd.dtype)
-            sim = render_tiled(
-                lens,
-                scene,
-                jnp.asarray(1e3 * d, scene.dtype),
-                kernel_size=cfg.kernel_size,
-                pixel_size=cfg.pixel_size,
-                patch=cfg.patch,
-                pupil=cfg.eval_pupil,
-            )
-            noise = jax.random.normal(jax.random.fold_in(key, i), sim.shape, sim.dtype)
-            sim = sim + cfg.noise * noise
-            rec = np.asarray(_restore(net, sim), np.float64)
-            sim = np.clip(np.asarray(sim, np.float64), 0.0, 1.0)
-            gt = np.asarray(img, np.float64)
-            for tag, x in (("sim", sim), ("rec", rec)):
-                vals[tag]["psnr"].append(psnr(gt, x, data_range=1.0))
-                vals[tag]["ssim"].append(ssim(gt, x, data_range=1.0))
-            if keep is not None and i == keep:
-                examples[_depth_key(d)] = (sim, rec)
-        metrics[_depth_key(d)] = {
-            t: {m: float(np.mean(v)) for m, v in vals[t].items()} for t in vals
-        }
-    return metrics, examples
-
-
-def _depth_key(d) -> str:
-    """'0.1', '0.2', '10' for depths in m."""
-    return f"{float(d):g}"
+    def _log(self, acc, steps):
+        vals = jax.device_get(acc)
+        rec = {"step": self.step, "loss": float(np.mean([v[0] for v in vals]))}
+        for k in ("rec", "sim", "raw"):
+            rec[k] = float(np.mean([v[1][k] for v in vals]))
+        rec["skipped"] = int(round(sum(float(v[1]["skipped"]) for v in vals)))
+        if not math.isfinite(rec["loss"]):
+            raise FloatingPointError(f"train[{self.name}]: non-finite loss at stage "
+                                     f"{self.stage} step {self.step}")
+        self.hist[f"stage{self.stage}"].append(rec)

@@ -1,0 +1,165 @@
+"""Tiled image formation: polar pupil sampling, pupil-normalised PSFs, PSFs at sensor points,
+tiled convolution and tiled Wiener deconvolution."""
+
+import jax
+import jax.numpy as jnp
+import numpy as np
+import pytest
+
+import jaxlens
+from jaxlens.imaging import sampling, tiled
+from jaxlens.imaging.psf import CoherentPSF, GeometricPSF
+from jaxlens.tracing.forward import trace
+
+
+def test_pupil_polar_fills_the_disc_evenly_and_strictly_inside():
+    p = np.asarray(sampling.pupil_polar(16))
+    r = np.hypot(p[:, 0], p[:, 1])
+    assert p.shape == (256, 2) and r.max() < 1.0 and r.max() > 0.98
+    # Equal-area cells: half the points inside radius 1/sqrt(2), a quarter inside 1/2.
+    assert np.mean(r < 2**-0.5) == pytest.approx(0.5, abs=1 / 16)
+    assert np.mean(r < 0.5) == pytest.approx(0.25, abs=1 / 16)
+    q = np.asarray(sampling.pupil_polar(16, jax.random.PRNGKey(3), radius=0.5))
+    assert np.hypot(q[:, 0], q[:, 1]).max() < 0.5 and not np.allclose(q, 0.5 * p)
+    with pytest.raises(ValueError, match=r"pupil_polar: radius must be in \(0, 1\]"):
+        sampling.pupil_polar(4, radius=1.5)
+
+
+@pytest.fixture(scope="module")
+def triplet():
+    return jaxlens.zoo.cooke_triplet()
+
+
+def test_pupil_normalised_psf_counts_vignetting_as_lost(triplet):
+    """With ``normalize="pupil"`` a kernel sums to the flux that reaches the image over the flux
+    that enters the entrance pupil (counted here by an independent trace); "transmitted"
+    kernels sum to 1."""
+    field, wl, k, pix = 20.0, 0.5876, 81, 0.01
+    import equinox as eqx
+    # A small front element clips the oblique beam (the zoo triplet's apertures do not).
+    triplet = eqx.tree_at(lambda m: m.surfaces[0].semi_diameter, triplet,
+                          jnp.asarray(0.6 * float(triplet.epd)))
+    pup = GeometricPSF(pupil=24, overfill=1.0, grid="polar", normalize="pupil")
+    tra = GeometricPSF(pupil=24, overfill=1.0, grid="polar")
+    a = jaxlens.psf(triplet, field, wavelength=wl, kernel_size=k, pixel_size=pix, model=pup,
+                    max_truncation=None)
+    b = jaxlens.psf(triplet, field, wavelength=wl, kernel_size=k, pixel_size=pix, model=tra)
+    rays = sampling.collimated(triplet, field, sampling.pupil_polar(24), wl)
+    passed = float(jnp.mean(trace(triplet, rays).valid))
+    assert 0.3 < passed < 0.95  # the 20° field of the triplet is vignetted
+    assert float(a.sum()) == pytest.approx(passed, abs=2e-3)
+    assert float(b.sum()) == pytest.approx(1.0, abs=2e-3)
+    np.testing.assert_allclose(np.asarray(a), passed * np.asarray(b) / float(b.sum()),
+                               atol=1e-6)
+    with pytest.raises(ValueError, match="normalize must be 'transmitted' or 'pupil'"):
+        jaxlens.psf(triplet, 0.0, model=GeometricPSF(normalize="entrance"))
+
+
+def test_psf_points_is_psf_at_the_ideal_field_and_differentiable(triplet):
+    model = GeometricPSF(pupil=16, overfill=1.0, grid="polar", normalize="pupil")
+    xy = jnp.array([[0.0, 0.0], [3.0, -5.0]])
+    got = tiled.psf_points(triplet, xy, 1000.0, wavelengths=(0.486, 0.6563), kernel_size=15,
+                           pixel_size=0.01, model=model)
+    assert got.shape == (2, 2, 15, 15)
+    for i in range(2):
+        field = jaxlens.imaging.aiming.ideal_to_field(triplet, xy[i])
+        want = jaxlens.psf(triplet, field, depth=1000.0, wavelength=jnp.array([0.486, 0.6563]),
+                           kernel_size=15, pixel_size=0.01, model=model, max_truncation=None)
+        np.testing.assert_allclose(np.asarray(got[i]), np.asarray(want), atol=1e-12)
+
+    def loss(c):
+        surfaces = list(triplet.surfaces)
+        lens = triplet
+        import equinox as eqx
+        lens = eqx.tree_at(lambda m: m.surfaces[1].c, lens, c)
+        del surfaces
+        k = tiled.psf_points(lens, xy, 1000.0, wavelengths=(0.5876,), kernel_size=15,
+                             pixel_size=0.01, model=model)
+        return jnp.sum(k * k)
+
+    g = jax.jit(jax.grad(loss))(triplet.surfaces[1].c)
+    assert np.isfinite(float(g)) and float(g) != 0.0
+
+
+def _np_convolve_tiles(img, kern):
+    ty, tx, c, k, _ = kern.shape
+    h = k // 2
+    p = img.shape[0] // ty
+    pad = np.pad(img, ((h, h), (h, h), (0, 0)), mode="edge")
+    out = np.zeros_like(img)
+    for r in range(img.shape[0]):
+        for s in range(img.shape[1]):
+            kk = kern[r // p, s // p]  # [C, k, k]
+            for m in range(k):
+                for n in range(k):
+                    # out[r, s] = Σ img[r − (m − h), s − (n − h)] · kern[m, n]
+                    out[r, s] += pad[r + h - (m - h), s + h - (n - h)] * kk[:, m, n]
+    return out
+
+
+def test_convolve_tiles_applies_each_tiles_kernel():
+    rng = np.random.default_rng(0)
+    img = rng.random((10, 10, 2))
+    kern = rng.random((2, 2, 2, 3, 3))
+    kern[0, 1, :, 1, 2] += 3.0  # an asymmetric kernel: a flipped kernel would be caught
+    got = np.asarray(tiled.convolve_tiles(jnp.asarray(img), jnp.asarray(kern)))
+    np.testing.assert_allclose(got, _np_convolve_tiles(img, kern), rtol=1e-12)
+    pad = np.pad(img, ((1, 1), (1, 1), (0, 0)), mode="edge")
+    valid = np.asarray(tiled.convolve_tiles(jnp.asarray(pad), jnp.asarray(kern), pad="valid"))
+    np.testing.assert_allclose(valid, got, rtol=1e-12)
+    with pytest.raises(ValueError, match="does not split into 3x3 square tiles"):
+        tiled.convolve_tiles(jnp.asarray(img), jnp.zeros((3, 3, 2, 3, 3)))
+
+
+def test_wiener_tiles_undoes_a_known_blur_and_a_light_loss():
+    rng = np.random.default_rng(1)
+    img = rng.random((48, 48, 3))
+    k = np.zeros((3, 7, 7))
+    k[:, 3, 3] = 0.6
+    k[:, 3, 4] = 0.1
+    k[:, 2, 3] = 0.1  # sums to 0.8: a fifth of the light is lost
+    kern = np.broadcast_to(k, (2, 2, 3, 7, 7)).copy()
+    blurred = tiled.convolve_tiles(jnp.asarray(img), jnp.asarray(kern))
+    back = np.asarray(tiled.wiener_tiles(blurred, jnp.asarray(kern), 1e-8))
+    inner = (slice(8, 40), slice(8, 40))
+    np.testing.assert_allclose(back[inner], img[inner], atol=1e-4)
+    # A larger noise-to-signal ratio smooths: the error grows, and nsr has a gradient.
+    g = jax.grad(lambda n: jnp.sum(tiled.wiener_tiles(blurred, jnp.asarray(kern), n)))(0.1)
+    assert np.isfinite(float(g)) and float(g) != 0.0
+    # The wrong kernel does not invert the blur.
+    wrong = np.asarray(tiled.wiener_tiles(blurred, jnp.asarray(np.swapaxes(kern, -1, -2)), 1e-8))
+    assert np.max(np.abs(wrong[inner] - img[inner])) > 0.05
+
+
+def test_pupil_centre_is_the_chief_ray_of_a_stop_first_lens():
+    from jaxlens.experiments.edof.lenses import classical_lens
+
+    lens = classical_lens(binning=8)
+    assert lens.stop == 0
+    model = GeometricPSF(pupil=12, overfill=1.0, grid="polar", normalize="pupil")
+    kw = dict(wavelengths=(0.656, 0.587, 0.486), kernel_size=9, pixel_size=0.02, model=model)
+    xy = jnp.array([[1.0, -2.0]])
+    a = tiled.psf_points(lens, xy, 150.0, center="pupil", **kw)
+    b = tiled.psf_points(lens, xy, 150.0, center="chief", **kw)
+    np.testing.assert_allclose(np.asarray(a), np.asarray(b), atol=1e-6)
+    c = tiled.psf_points(lens, xy, 150.0, center="centroid", **kw)
+    assert float(jnp.max(jnp.abs(c - b))) > 1e-3  # the reference point matters
+    with pytest.raises(ValueError, match="center='pupil' is for the geometric model"):
+        jaxlens.psf(lens, 0.0, model=CoherentPSF(pupil=8), center="pupil")
+
+
+def test_wiener_gradient_prior_damps_high_frequencies_only():
+    """The gradient prior's penalty nsr·|∇|² vanishes at zero frequency: a flat image keeps
+    its level (a white prior pulls it towards 0 by 1/(1 + nsr)), while noise is damped."""
+    kern = np.zeros((1, 1, 1, 3, 3))
+    kern[..., 1, 1] = 1.0
+    flat = jnp.full((16, 16, 1), 0.5)
+    g = np.asarray(tiled.wiener_tiles(flat, jnp.asarray(kern), 1.0, prior="gradient"))
+    w = np.asarray(tiled.wiener_tiles(flat, jnp.asarray(kern), 1.0, prior="white"))
+    np.testing.assert_allclose(g, 0.5, atol=1e-6)
+    np.testing.assert_allclose(w, 0.25, atol=1e-6)
+    noise = jnp.asarray(np.random.default_rng(0).normal(0.0, 1.0, (16, 16, 1)))
+    smooth = np.asarray(tiled.wiener_tiles(noise, jnp.asarray(kern), 1.0, prior="gradient"))
+    assert np.std(smooth) < 0.6 * float(jnp.std(noise))
+    with pytest.raises(ValueError, match="prior must be 'white' or 'gradient'"):
+        tiled.wiener_tiles(flat, jnp.asarray(kern), 1.0, prior="laplace")
