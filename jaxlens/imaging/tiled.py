@@ -26,7 +26,7 @@ from ..optics.lens import Lens
 from ..tracing.forward import DEFAULT_NEWTON_ITERS
 from .aiming import apertured, ideal_to_field
 from .grid import pixel_positions
-from .psf import AbstractPSFModel, GeometricPSF
+from .psf import DEFAULT_MODEL, AbstractPSFModel
 
 __all__ = ["tile_counts", "tile_centers", "psf_points", "convolve_tiles", "wiener_tiles"]
 
@@ -62,7 +62,7 @@ def psf_points(
     wavelengths,
     kernel_size: int,
     pixel_size,
-    model: AbstractPSFModel = GeometricPSF(),
+    model: AbstractPSFModel = DEFAULT_MODEL,
     key=None,
     center: str = "chief",
     newton_iters: int = DEFAULT_NEWTON_ITERS,

@@ -18,9 +18,9 @@ Modules:
     evaluate: per-crop Table 2 metrics, the Wiener reference, bootstrap gains.
 """
 
-from . import lenses as lenses
 from . import decoder as decoder
 from . import evaluate as evaluate
+from . import lenses as lenses
 from . import losses as losses
 from . import optics as optics
 from . import scenes as scenes

@@ -22,7 +22,8 @@ timings, histories, PSF measures), ``command.txt``, the trained lenses
 ``experiments/edof``).
 
 Defaults are the CPU scale (4× binned 256² sensor, so a 256² test crop fills the frame; a
-16-wide NAFNet behind a Wiener front end; 300 + 60 steps per lens; one seed); ``--seeds 0,1,2`` gives the 3-seed table.
+16-wide NAFNet behind a Wiener front end; 300 + 60 steps per lens; one seed); ``--seeds 0,1,2``
+gives the 3-seed table.
 ``--paper`` selects the paper's scale for a GPU; with ``--checkpoint DIR`` a run saves its
 state every ``refresh_every`` steps, ``--time-limit S`` stops it at the first checkpoint
 after S seconds (exit status 3) and ``--resume`` continues it, so it can go in pieces.

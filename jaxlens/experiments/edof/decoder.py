@@ -4,8 +4,8 @@
 the identity (its last convolution is zero), so training starts from the raw image.
 ``Decoder(wiener=True)`` first deconvolves the raw image tile by tile with the lens's
 depth-averaged PSF (``jaxlens.imaging.tiled.wiener_tiles``, gradient prior) and a learnable
-noise-to-signal ratio per channel, then refines the result with the same NAFNet: the network no longer has
-to learn the inverse of the blur, only to remove what the deconvolution leaves (noise,
+noise-to-signal ratio per channel, then refines the result with the same NAFNet: the network no
+longer has to learn the inverse of the blur, only to remove what the deconvolution leaves (noise,
 ringing, the depth-dependent part of the blur). The depth is unknown at test time, so the
 front end uses the PSF averaged over the 8 training depths.
 """

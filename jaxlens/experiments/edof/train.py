@@ -42,7 +42,15 @@ import optax
 from ...optics.lens import Lens
 from .decoder import Decoder
 from .lenses import (
-    DEPTHS_M, SPEC, Tolerances, apply_gates, dioptric_weights, gates, perturb, project)
+    DEPTHS_M,
+    SPEC,
+    Tolerances,
+    apply_gates,
+    dioptric_weights,
+    gates,
+    perturb,
+    project,
+)
 from .losses import edof_loss
 from .optics import add_noise, centers, patch_psfs, psf_bank, psfs_nograd, simulate
 
