@@ -35,6 +35,7 @@ OPTILAND_EFL = {
     "rayoptics_HoO-V2C18Ex46.zmx": (305.00166666666667, None),
     "rayoptics_HoO-V2C18Ex66.zmx": (90.05187904998931, None),
     "rayoptics_US00583336-2-scaled.zmx": (49.38897584676335, None),
+    "rayoptics_US05331467-1.zmx": (999.6369653778445, None),  # mirrors and an OBSC
 }
 
 # What each file that loads is reported for (a ZmxWarning naming the line), if anything.
@@ -49,7 +50,6 @@ EXPECTED_WARNINGS = {
 
 # Files jaxlens cannot represent: the line and the reason.
 REFUSED = {
-    "rayoptics_US05331467-1.zmx": (90, "central obscurations \\(OBSC\\) are not supported"),
     "rayoptics_US05831776-1.zmx": (38, "object-space telecentric systems"),
     "rayoptics_US08427765-1.ZMX": (93, "glass 'L-TIM28_MOLD': Unknown material"),
     "rayoptics_zmax_37992.zmx": (118, "decentered apertures \\(OBDC"),

@@ -276,10 +276,26 @@ def test_vignetting_factors_reported_on_used_fields(tmp_path):
             jl.load(tmp_path / "f.zmx", strict=True)
 
 
-def test_obscurations_and_other_apertures_refused(tmp_path):
+def test_central_obscuration_blocks_the_rays_inside_it(tmp_path):
+    # OBSC 0 2 on surface 1 (the stop): rays meeting it within 2 mm of the axis are blocked,
+    # the others pass, and a written file reads back with the same obscuration.
+    p, lens = _load_text(tmp_path, _file("ENPD 10\n", surface1="  OBSC 0 2 0\n"))
+    assert lens.obscurations == ((0, 0.0, 2.0),)
+    h = jnp.asarray([0.0, 1.0, 1.99, 2.01, 3.0, 4.9])
+    o = jnp.stack([jnp.zeros_like(h), h, jnp.full_like(h, -1.0)], -1)
+    d = jnp.broadcast_to(jnp.asarray([0.0, 0.0, 1.0]), o.shape)
+    out = jl.trace(lens, jl.Rays(o, d, 0.5875618))
+    assert np.asarray(out.valid).tolist() == [False, False, False, True, True, True]
+    jl.save(lens, tmp_path / "again.zmx")
+    assert jl.load(tmp_path / "again.zmx").obscurations == lens.obscurations
+    with pytest.raises(ValueError, match="OBSC needs 0 ≤ minimum < maximum"):
+        _load_text(tmp_path, _file("ENPD 10\n", surface1="  OBSC 3 2 0\n"))
+    with pytest.raises(ValueError, match="obscuration"):
+        jl.save(lens, tmp_path / "x.json")  # no JSON form yet: refused, never dropped
+
+
+def test_other_apertures_refused(tmp_path):
     ep = "ENPD 10\n"
-    line = _refused(tmp_path, _file(ep, surface1="  OBSC 0 2 0\n"), "central obscurations")
-    assert line == "OBSC 0 2 0"
     # An obscuration of radius 0 obscures nothing; OBSC is no longer read as a system aperture.
     _, lens = _load_text(tmp_path, _file(ep, surface1="  OBSC 0 0 0\n"))
     assert float(lens.epd) == 10.0

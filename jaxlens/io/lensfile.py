@@ -671,9 +671,10 @@ def lens_from_dict(d: dict, *, source: str = "<lens>") -> Lens:
 
 def lens_to_dict(lens: Lens) -> dict:
     """The JSON object of a lens (format ``jaxlens.lens/1``)."""
-    if lens.mirrors:
-        raise ValueError(f"save: mirrors (Lens.mirrors = {lens.mirrors}) have no jaxlens JSON "
-                         f"form yet; save the lens as .zmx")
+    if lens.mirrors or lens.obscurations:
+        raise ValueError(f"save: mirrors and obscurations (Lens.mirrors = {lens.mirrors}, "
+                         f"Lens.obscurations = {lens.obscurations}) have no jaxlens JSON form "
+                         f"yet; save the lens as .zmx")
     dist = math.inf if lens.object_distance is None else lens.object_distance
     obj = {
         "type": "object",

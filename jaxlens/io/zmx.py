@@ -24,7 +24,8 @@ What is read and written:
       a fixed value clips rays), ``CLAP 0 r 0`` (circular aperture, read as the
       semi-diameter; it wins over DIAM). A clipping semi-diameter is written as both
       ``DIAM r 1`` and ``CLAP 0 r 0``: Zemax and optiland clip only at apertures.
-      Refused: ``OBSC`` (central obscuration), annular CLAP, decentered apertures (OBDC);
+      ``OBSC r_min r_max`` (a circular obscuration, ``Lens.obscurations``) is read and
+      written. Refused: annular CLAP, decentered apertures (OBDC);
       ``SQAP``/``ELAP`` give a warning and are ignored.
     * ``TYPE COORDBRK`` (a ``CoordinateBreak``): PARM 1, 2 decenter x, y; PARM 3, 4, 5 tilt
       about x, y, z in degrees; PARM 6 the order flag (0 or 1); CURV 0; no GLAS (the

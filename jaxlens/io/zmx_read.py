@@ -213,8 +213,9 @@ def _surface_line(s: _Surf, key: str, ln: _Line) -> None:
                            "supported; jaxlens clips rays outside a semi-diameter only")
         s.clap = ln.float(2, "circular aperture maximum radius")
     elif key == "OBSC":
-        ln.float(1, "obscuration minimum radius")
         if ln.float(2, "obscuration maximum radius") > 0:
+            if not 0 <= ln.float(1, "obscuration minimum radius") < ln.float(2, ""):
+                raise ln.error("OBSC needs 0 ≤ minimum < maximum radius (lens units)")
             s.obsc = ln
     elif key == "OBDC":
         if ln.float(1, "aperture x decenter") != 0 or ln.float(2, "aperture y decenter") != 0:
@@ -645,10 +646,6 @@ def _check_apertures(f: _File, strict: bool) -> None:
         _report(strict, f"{f.path}:{ln.number}: {shape} aperture ignored (jaxlens clips at "
                         f"circular semi-diameters only): {ln.text.strip()!r}")
     for s in f.surfs:
-        if s.obsc is not None:
-            raise s.obsc.error("central obscurations (OBSC) are not supported: the tracer "
-                               "clips rays outside a semi-diameter only and would pass the "
-                               "obscured rays")
         if s.obdc is not None and (s.clap is not None or s.diam is not None):
             raise s.obdc.error("decentered apertures (OBDC other than 0 0) are not supported; "
                                "jaxlens apertures are centred on the axis")
@@ -747,6 +744,8 @@ def loads(text: str, path: str = "<zmx>", *, strict: bool = False) -> Lens:
         sensor=_sensor(img, u),
         name=f.name,
         mirrors=tuple(mirrors),
+        obscurations=tuple((i, s.obsc.float(1, "") * u, s.obsc.float(2, "") * u)
+                           for i, s in enumerate(body) if s.obsc is not None),
     )
     # Before the paraxial work of the aperture: values the lens cannot be traced with.
     checks.wavelengths(lens, wl, f"{path}: WAVM", "wavelength")

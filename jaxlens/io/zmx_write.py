@@ -314,6 +314,8 @@ def dumps(lens: Lens, path: str = "lens.zmx", *, model_glass: str = "blank"):
     wl = np.atleast_1d(np.asarray(lens.wavelengths, np.float64))
     surf_lines = []
 
+    obscured = {i: (a, b) for i, a, b in lens.obscurations}
+
     def block(number, lines, t, glas, sd, stop=False):
         surf_lines.append(f"SURF {number}")
         if stop:
@@ -330,6 +332,8 @@ def dumps(lens: Lens, path: str = "lens.zmx", *, model_glass: str = "blank"):
             surf_lines.append(f"  CLAP 0 {_z(sd)} 0")
         else:
             surf_lines.append('  DIAM 0 0 0 0 1 ""')
+        if number - 1 in obscured:  # rays meeting r_min ≤ r ≤ r_max are blocked
+            surf_lines.append(f"  OBSC {_z(obscured[number - 1][0])} {_z(obscured[number - 1][1])}")
 
     dist = math.inf if lens.object_distance is None else float(lens.object_distance)
     block(0, ["TYPE STANDARD", 'CURV 0 0 0 0 0 ""'], dist, gw.glas(lens.object_material), np.inf)

@@ -14,6 +14,9 @@ Conventions:
     the medium after a mirror, like the medium after a ``CoordinateBreak``, is the medium
     before it (``materials[i]`` must repeat it). After an odd number of mirrors light travels
     toward −z and the thicknesses are negative, as in Zemax.
+    ``obscurations`` lists ``(i, r_min, r_max)``: surface ``i`` blocks the rays that meet it
+    at a height r_min ≤ r ≤ r_max (mm; Zemax ``OBSC``, r_min = 0 for a central
+    obscuration such as a Cassegrain's secondary mirror).
 
 The structure (surface kinds, counts, polynomial orders, stop index, mirrors) is static;
 every number is an array so ``jax.grad`` reaches it.
@@ -92,6 +95,9 @@ class Lens(eqx.Module):
     sensor: Sensor | None = None
     name: str = eqx.field(static=True, default="")
     mirrors: tuple[int, ...] = eqx.field(static=True, default=(), converter=tuple)
+    obscurations: tuple[tuple[int, float, float], ...] = eqx.field(
+        static=True, default=(), converter=lambda o: tuple(
+            (int(i), float(a), float(b)) for i, a, b in o))
 
     def __check_init__(self):
         n = len(self.surfaces)
@@ -104,6 +110,13 @@ class Lens(eqx.Module):
         if not 0 <= self.primary < self.wavelengths.shape[-1]:
             raise ValueError(f"Lens: primary index {self.primary} outside the wavelengths")
         self._check_mirrors_and_breaks()
+        n = len(self.surfaces)
+        seen = [o[0] for o in self.obscurations]
+        for i, r_min, r_max in self.obscurations:
+            if not 0 <= i < n or seen.count(i) > 1 or not 0.0 <= r_min < r_max:
+                raise ValueError(
+                    f"Lens: obscuration ({i}, {r_min}, {r_max}) must name one surface in "
+                    f"[0, {n - 1}] (0-based) once with 0 ≤ r_min < r_max (mm)")
 
     def _check_mirrors_and_breaks(self):
         """Mirrors and coordinate breaks keep the medium: materials[i] repeats the one before."""

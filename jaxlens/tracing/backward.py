@@ -93,8 +93,10 @@ def reversed_lens(lens: Lens, *, image_distance=None) -> Lens:
         mirrored, a flat image surface and no sensor. Field, wavelength and pupil data are
         copied unchanged (they do not describe the mirrored system).
     """
-    if lens.mirrors or any(isinstance(s, CoordinateBreak) for s in lens.surfaces):
-        raise ValueError("reversed_lens: lenses with mirrors or coordinate breaks cannot be "
+    if lens.mirrors or lens.obscurations or any(
+            isinstance(s, CoordinateBreak) for s in lens.surfaces):
+        raise ValueError("reversed_lens: lenses with mirrors, obscurations or coordinate breaks "
+                         "cannot be "
                          "traced backward (nor rendered) yet; trace them forward with trace")
     n = lens.num_surfaces
     t = lens.thickness

@@ -130,6 +130,7 @@ def _trace_states(lens: Lens, rays: Rays, newton_iters: int, upto: int | None, *
     last = len(surfaces) - 1 if upto is None else upto
     breaks = frozenset(i for i, s in enumerate(surfaces) if isinstance(s, CoordinateBreak))
     mirrors = frozenset(lens.mirrors)
+    obsc = {i: (a, b) for i, a, b in lens.obscurations}
     gaps = _travel_gaps(lens)
     out = []
     first = 0
@@ -140,16 +141,16 @@ def _trace_states(lens: Lens, rays: Rays, newton_iters: int, upto: int | None, *
     if first > last:
         return out
     st = step(surfaces[first], zs[first], st, idx[first], idx[first + 1], first=True,
-              reflects=first in mirrors)
+              reflects=first in mirrors, obscured=obsc.get(first))
     out.append(st)
-    for i, j in _runs(surfaces, first + 1, last + 1, breaks | mirrors):
+    for i, j in _runs(surfaces, first + 1, last + 1, breaks | mirrors | frozenset(obsc)):
         if i in breaks:
             st = _break_step(surfaces[i], zs[i], st)
             out.append(st)
             continue
         if j - i == 1:
             st = step(surfaces[i], zs[i], st, idx[i], idx[i + 1], first=False,
-                      gap=gaps(i - 1), reflects=i in mirrors)
+                      gap=gaps(i - 1), reflects=i in mirrors, obscured=obsc.get(i))
             out.append(st)
             continue
         stacked = jax.tree.map(lambda *x: jnp.stack(x), *surfaces[i:j])

@@ -345,12 +345,13 @@ class RayState(eqx.Module):
 
 
 def surface_step(surface, z_vertex, st: RayState, n_before, n_after, *, first, refracts,
-                 newton_iters, gap=None, reflects=False):
+                 newton_iters, gap=None, reflects=False, obscured=None):
     """Move rays to one surface (vertex at global ``z_vertex``) and refract them there.
 
     ``n_before``/``n_after`` are the refractive indices on either side; ``first`` applies the
     object-space rules of surface 1; ``refracts=False`` only intersects (the image surface);
-    ``reflects=True`` (static) makes the surface a mirror (``n_after`` is then unused).
+    ``reflects=True`` (static) makes the surface a mirror (``n_after`` is then unused);
+    ``obscured=(r_min, r_max)`` (static, mm) blocks the rays that meet it in that annulus.
     Rays that fail keep their last position and direction and become invalid; ``opl`` adds
     n·t for valid rays. ``gap`` is the thickness before this surface: where it is negative
     the surface lies behind the previous one and the ray reaches it by going back along
@@ -368,6 +369,9 @@ def surface_step(surface, z_vertex, st: RayState, n_before, n_after, *, first, r
     # A ray exactly on the rim stays in despite rounding.
     rim = surface.semi_diameter**2 * (1 + 64 * jnp.finfo(x.dtype).eps)
     ok = ok & (x * x + y * y <= rim)
+    if obscured is not None:  # static: a central (or annular) obscuration
+        r2 = x * x + y * y
+        ok = ok & ((r2 < obscured[0] ** 2) | (r2 > obscured[1] ** 2))
     d, phase = st.d, None
     if reflects:
         d = reflect(d, surface_normal(surface, x, y, z))
