@@ -33,3 +33,14 @@ def refcase_dir():
     if p is None:
         pytest.skip("no reference cases found")
     return p
+
+
+@pytest.fixture(autouse=True, scope="module")
+def _release_compiled_programs():
+    """Drop JAX's compiled programs after each test file: the whole suite in one process
+    otherwise keeps every executable it ever built (hundreds of large traces and designs)."""
+    yield
+    import gc
+
+    jax.clear_caches()
+    gc.collect()
