@@ -45,7 +45,7 @@ FILE[nets]=jaxlens/nets.py
 N=tests/test_nets.py
 SEL[nets]="$N::test_block_with_nonzero_scales_matches_numpy $N::test_network_with_nonzero_scales_matches_numpy $N::test_fresh_block_is_identity $N::test_layernorm2d_normalises_each_pixel_over_channels $N::test_simple_gate_multiplies_the_two_halves $N::test_depthwise_matches_grouped_convolution $N::test_strided_conv_halves_and_pixel_shuffle_doubles $N::test_bad_options_raise $N::test_default_is_small_and_options_scale_it $N::test_nafnet_keeps_shape_and_pads_odd_sizes $N::test_initialisation_is_pytorch_default_and_keeps_the_dtype $N::test_building_under_jit_is_refused"
 FILE[zmx_writer]=jaxlens/io/zmx_write.py
-SEL[zmx_writer]="tests/test_zmx.py"
+SEL[zmx_writer]="tests/test_zmx.py tests/test_corpus.py tests/test_toroid_paraxial.py::test_zmx_round_trip_is_exact tests/test_mirrors_coordbreaks.py::test_zmx_with_mirrors_and_coordinate_breaks_round_trips tests/test_lensfile.py::test_materials_and_apertures"
 ONLY[zmx_writer]="_z,_zemax_catalog,_formula,_schott_fit,_nd_vd,_sanitize,_GlassWriter,surface_lines,dumps,save_zmx"
 ALL="mask regularizers losses curriculum evaluate edof_losses edof_metrics image_metrics nets zmx_writer"
 
@@ -62,6 +62,8 @@ export JAX_COMPILATION_CACHE_DIR=${JAX_COMPILATION_CACHE_DIR:-$WORK/.jaxcache}
 export JAX_PERSISTENT_CACHE_MIN_COMPILE_TIME_SECS=0
 for key in ${@:-$ALL}; do
     sel=${SEL[$key]}
+    # SCOPE=f,g (one module) narrows the run to those functions, e.g. to finish an earlier run.
+    [[ -n "${SCOPE:-}" ]] && ONLY[$key]=$SCOPE
     echo "== $key: ${FILE[$key]} (only: ${ONLY[$key]:-all}) $(date -u +%FT%TZ)"
     runner="env PYTHONPATH=$WORK $PY -m pytest -x -q -p no:cacheprovider $sel"
     if [[ -n "${RETEST:-}" ]]; then

@@ -130,3 +130,40 @@ def test_summary_drops_the_per_field_arrays(clear):
     assert s["min_valid_fraction"] == 1.0 and s["rms_mean_um"] == got.rms_mean_um
     assert s["valid"] is True and set(s) >= {"efl", "fnum", "bfl", "geometry", "min_gap"}
 
+
+
+def test_an_ideal_lens_has_no_distortion_and_its_chief_ray_at_f_tan():
+    """An ideal thin lens (f = spec's focal length) behind the stop images a direction θ at
+    f·tanθ, so the full-field chief ray lands at f·tan(FoV/2) and the distortion is 0."""
+    from jaxlens.optics.paraxial_surface import ParaxialSurface
+
+    f = SPEC.focal_length
+    lens = jl.Lens(
+        surfaces=(jl.Stop(), ParaxialSurface(focal_length=f)),
+        thickness=jnp.array([0.7, f]), materials=(jl.Air(), jl.Air()), stop=0, epd=1.0,
+        wavelengths=jnp.asarray(SPEC.wavelengths), primary=SPEC.primary,
+    )
+    got = ev.evaluate(lens, SPEC)
+    assert got.efl == pytest.approx(f, rel=1e-12)
+    assert got.chief_height_full_field == pytest.approx(f * np.tan(np.radians(SPEC.fov / 2)),
+                                                        rel=1e-10)
+    assert abs(got.distortion_percent) < 1e-8
+    np.testing.assert_allclose(got.rms_um, 0.0, atol=1e-9)  # a perfect lens: point images
+    assert got.valid
+
+
+def test_the_valid_rule_is_at_least_min_valid_and_crossing_faces_are_invalid():
+    sd = 2.2
+    got = ev.evaluate(_plate(sd), SPEC)
+    # Exactly the smallest field's fraction still passes ("at least").
+    assert ev.evaluate(_plate(sd), SPEC, min_valid=float(got.valid_fraction.min())).rays_ok
+    # A biconvex element 0.2 mm thick with 3 mm radii: its faces cross inside the beam
+    # (each face's sag is 0.1 mm at r = 0.77 mm; the spec's EPD is 2.25 mm).
+    assert SPEC.epd / 2 > 0.77
+    lens = jl.Lens(
+        surfaces=(jl.Stop(), jl.Sphere(1 / 3), jl.Sphere(-1 / 3)),
+        thickness=jnp.array([0.2, 0.2, 4.0]), materials=(jl.Air(), GLASS, jl.Air()),
+        stop=0, epd=1.0, wavelengths=jnp.asarray(SPEC.wavelengths), primary=SPEC.primary,
+    )
+    bad = ev.evaluate(lens, SPEC)
+    assert bad.self_intersection is True and not bad.valid and bad.min_gap < 0

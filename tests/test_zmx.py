@@ -14,8 +14,8 @@ from test_lensfile import assert_same_lens, every_kind_of_lens
 import jaxlens
 from jaxlens.io import zmx
 from jaxlens.optics.catalog import load_agf
-from jaxlens.optics.materials import ModelGlass, Tabulated
-from jaxlens.optics.surfaces import EvenAsphere, Hybrid
+from jaxlens.optics.materials import Air, ModelGlass, Tabulated
+from jaxlens.optics.surfaces import EvenAsphere, Hybrid, Standard
 
 DATA = pathlib.Path(jaxlens.__file__).parent / "data" / "lenses"
 
@@ -431,3 +431,89 @@ def test_header_follows_zemax_system_lines(tmp_path):
     np.testing.assert_allclose(np.asarray(back.fields), [0.0, 12.5])
     np.testing.assert_allclose(np.asarray(back.wavelengths), wl)
     assert back.primary == 1 and back.stop == 1
+
+
+# Zemax's AGF dispersion formula numbers (OpticStudio manual, "Glass catalog" chapter) and a
+# direct numpy evaluation of each formula, λ in µm: independent of jaxlens's own tables.
+def _l(w):
+    return 1.0 / (w * w - 0.028)
+
+
+FORMULAS = {
+    "Schott": (1, [2.27, -0.0101, 0.0107, 2.2e-4, -7.6e-6, 4.9e-7],
+               lambda a, w: np.sqrt(a[0] + a[1] * w**2 + a[2] / w**2 + a[3] / w**4
+                                    + a[4] / w**6 + a[5] / w**8)),
+    "Sellmeier1": (2, [1.04, 0.006, 0.23, 0.02, 1.01, 103.6],
+                   lambda a, w: np.sqrt(1 + sum(a[2 * i] * w**2 / (w**2 - a[2 * i + 1])
+                                                for i in range(3)))),
+    "Herzberger": (3, [1.50, 0.004, 1e-4, -3e-3, 2e-5, -1e-7],
+                   lambda a, w: a[0] + a[1] * _l(w) + a[2] * _l(w) ** 2 + a[3] * w**2
+                   + a[4] * w**4 + a[5] * w**6),
+    "Sellmeier2": (4, [1.2, 0.1, 0.12, 0.01, 0.15],
+                   lambda a, w: np.sqrt(1 + a[0] + a[1] * w**2 / (w**2 - a[2] ** 2)
+                                        + a[3] / (w**2 - a[4] ** 2))),
+    "Conrady": (5, [1.49, 0.005, 1e-4], lambda a, w: a[0] + a[1] / w + a[2] / w**3.5),
+    "Sellmeier3": (6, [1.0, 0.006, 0.2, 0.02, 0.9, 100.0, 0.01, 0.05],
+                   lambda a, w: np.sqrt(1 + sum(a[2 * i] * w**2 / (w**2 - a[2 * i + 1])
+                                                for i in range(4)))),
+    "Handbook1": (7, [2.2, 0.011, 0.012, 0.01],
+                  lambda a, w: np.sqrt(a[0] + a[1] / (w**2 - a[2]) - a[3] * w**2)),
+    "Handbook2": (8, [2.2, 0.011, 0.012, 0.01],
+                  lambda a, w: np.sqrt(a[0] + a[1] * w**2 / (w**2 - a[2]) - a[3] * w**2)),
+    "Sellmeier4": (9, [2.0, 0.2, 0.02, 0.9, 100.0],
+                   lambda a, w: np.sqrt(a[0] + a[1] * w**2 / (w**2 - a[2])
+                                        + a[3] * w**2 / (w**2 - a[4]))),
+    "Sellmeier5": (11, [1.0, 0.006, 0.2, 0.02, 0.9, 100.0, 0.01, 0.05, 0.001, 0.1],
+                   lambda a, w: np.sqrt(1 + sum(a[2 * i] * w**2 / (w**2 - a[2 * i + 1])
+                                                for i in range(5)))),
+}
+
+
+def _material_of(kind, coeffs, name):
+    from jaxlens.optics import materials as M
+
+    if kind.startswith("Sellmeier") and kind not in ("Sellmeier2", "Sellmeier4"):
+        return M.Sellmeier(coeffs[0::2], coeffs[1::2], name=name)
+    return getattr(M, kind)(coeffs, name=name)
+
+
+def _agf_record(path):
+    """(formula number, CD coefficients) of the one glass in an AGF file, read as Zemax would
+    (the NM and CD lines; jaxlens's own GC record is not looked at)."""
+    lines = pathlib.Path(path).read_text().splitlines()
+    (nm,) = [ln.split() for ln in lines if ln.startswith("NM ")]
+    (cd,) = [ln.split() for ln in lines if ln.startswith("CD ")]
+    return int(nm[2]), np.array([float(v) for v in cd[1:]])
+
+
+@pytest.mark.parametrize("kind", sorted(FORMULAS))
+def test_hand_made_glass_is_written_with_zemaxs_formula_number(kind, tmp_path):
+    """A glass of each dispersion formula goes to the lens's AGF under the formula number of
+    the Zemax manual, with coefficients that give the same index as the formula by hand."""
+    number, coeffs, by_hand = FORMULAS[kind]
+    glass = _material_of(kind, coeffs, f"MY {kind}")
+    w = np.linspace(0.45, 0.70, 6)
+    np.testing.assert_allclose(np.asarray(glass.index(w)), by_hand(np.asarray(coeffs), w),
+                               rtol=0, atol=1e-13)
+    lens = jaxlens.Lens(surfaces=(Standard(c=0.02), Standard(c=-0.02), Standard(c=0.0)),
+                        thickness=[3.0, 40.0, 0.0], materials=(glass, Air(), Air()), epd=5.0)
+    written = jaxlens.save(lens, tmp_path / "one.zmx")
+    form, cd = _agf_record(next(p for p in written if str(p).endswith("ONE.AGF")))
+    assert form == number
+    np.testing.assert_allclose(by_hand(cd, w), np.asarray(glass.index(w)), rtol=0, atol=1e-12)
+
+
+def test_sellmeier_with_more_terms_than_zemax_has_goes_as_a_fitted_schott_series(tmp_path):
+    """Six Sellmeier terms have no Zemax formula: the writer falls back to a fitted series."""
+    from jaxlens.optics.materials import Sellmeier
+
+    glass = Sellmeier([1.0, 0.006, 0.2, 0.02, 0.9, 0.001],
+                      [0.006, 0.02, 100.0, 0.05, 0.01, 0.03], name="SIX")
+    lens = jaxlens.Lens(surfaces=(Standard(c=0.02), Standard(c=-0.02), Standard(c=0.0)),
+                        thickness=[3.0, 40.0, 0.0], materials=(glass, Air(), Air()), epd=5.0)
+    written = jaxlens.save(lens, tmp_path / "six.zmx")
+    form, cd = _agf_record(next(p for p in written if str(p).endswith("SIX.AGF")))
+    assert form == 1 and cd.size == 6
+    w = np.linspace(0.45, 0.70, 6)
+    np.testing.assert_allclose(FORMULAS["Schott"][2](cd, w), np.asarray(glass.index(w)),
+                               rtol=0, atol=1e-4)
