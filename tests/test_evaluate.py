@@ -152,6 +152,32 @@ def test_an_ideal_lens_has_no_distortion_and_its_chief_ray_at_f_tan():
     assert got.valid
 
 
+def test_distortion_of_an_ideal_lens_with_a_plate_before_the_image():
+    """The stop at an ideal lens: the chief ray leaves it undeviated at θ. A flat plate
+    (thickness t, index n) between lens and image bends it to sinθ_p = sinθ/n, while the
+    paraxial focus moves by t(1 − 1/n) and the EFL stays f. By hand:
+    h = (d1 + d2)·tanθ + t·tanθ_p with d1 + t/n + d2 = f, distortion = 100 (h − f tanθ)/(f tanθ)."""
+    from jaxlens.optics.paraxial_surface import ParaxialSurface
+
+    f, t, d1 = SPEC.focal_length, 1.5, 0.5
+    glass = jl.ModelGlass(1.6, 1e9)  # no dispersion: one index at every wavelength
+    n = float(glass.index(0.5876))
+    d2 = f - d1 - t / n
+    lens = jl.Lens(
+        surfaces=(jl.Stop(), ParaxialSurface(focal_length=f), jl.Sphere(0.0), jl.Sphere(0.0)),
+        thickness=jnp.array([0.0, d1, t, d2]), materials=(jl.Air(), jl.Air(), glass, jl.Air()),
+        stop=0, epd=1.0, wavelengths=jnp.asarray(SPEC.wavelengths), primary=SPEC.primary,
+    )
+    th = np.radians(SPEC.fov / 2)
+    h = (d1 + d2) * np.tan(th) + t * np.tan(np.arcsin(np.sin(th) / n))
+    got = ev.evaluate(lens, SPEC)
+    assert got.efl == pytest.approx(f, rel=1e-12)
+    assert got.chief_height_full_field == pytest.approx(h, rel=1e-10)
+    expected = 100 * (h - f * np.tan(th)) / (f * np.tan(th))
+    assert expected < -1.0  # a plate in a converging beam: barrel distortion of over 1 %
+    assert got.distortion_percent == pytest.approx(expected, rel=1e-8)
+
+
 def test_the_valid_rule_is_at_least_min_valid_and_crossing_faces_are_invalid():
     sd = 2.2
     got = ev.evaluate(_plate(sd), SPEC)

@@ -174,6 +174,13 @@ def test_agf_for_glasses_zemax_does_not_ship(tmp_path):
         np.asarray(cat["TAB_1"].index(wl)), np.asarray(tab.indices), rtol=0, atol=1e-12
     )
     assert cat["TAB_1"].formula == 1
+    # Three points give the three-term series A0 + A2/λ² + A3/λ⁴ through them (no λ², λ⁻⁶,
+    # λ⁻⁸ terms free to bend it between the points).
+    lines = (out / "MYLENS.AGF").read_text().splitlines()
+    at = next(i for i, ln in enumerate(lines) if ln.startswith("NM TAB_1 "))
+    cd = np.array([float(v) for v in next(ln for ln in lines[at:] if ln.startswith("CD "))
+                   .split()[1:]])
+    assert np.all(cd[[0, 2, 3]] != 0) and np.all(cd[[1, 4, 5]] == 0)
     text = (out / "MYLENS.AGF").read_text()
     assert re.search(r'^GC jaxlens \{"wavelengths_um":\[0\.45,0\.55,0\.65\]', text, re.M)
     # OKP4's shipped data is a model dispersion: written exactly, not referenced.
@@ -463,6 +470,18 @@ FORMULAS = {
     "Sellmeier4": (9, [2.0, 0.2, 0.02, 0.9, 100.0],
                    lambda a, w: np.sqrt(a[0] + a[1] * w**2 / (w**2 - a[2])
                                         + a[3] * w**2 / (w**2 - a[4]))),
+    "Sellmeier1_2terms": (2, [1.04, 0.006, 0.23, 0.02],
+                          lambda a, w: np.sqrt(1 + sum(a[2 * i] * w**2 / (w**2 - a[2 * i + 1])
+                                                       for i in range(len(a) // 2)))),
+    "Extended": (10, [2.27, -0.01, 0.0107, 2e-4, -7e-6, 5e-7, 1e-8, -1e-9],
+                 lambda a, w: np.sqrt(sum(c * w**p for c, p in zip(
+                     a, (0, 2, -2, -4, -6, -8, -10, -12), strict=True)))),
+    "Extended2": (12, [2.27, -0.01, 0.0107, 2e-4, -7e-6, 5e-7, 1e-5, -1e-6],
+                  lambda a, w: np.sqrt(sum(c * w**p for c, p in zip(
+                      a, (0, 2, -2, -4, -6, -8, 4, 6), strict=True)))),
+    "Extended3": (13, [2.27, -0.01, 1e-5, 0.0107, 2e-4, -7e-6, 5e-7, 1e-8, -1e-9],
+                  lambda a, w: np.sqrt(sum(c * w**p for c, p in zip(
+                      a, (0, 2, 4, -2, -4, -6, -8, -10, -12), strict=True)))),
     "Sellmeier5": (11, [1.0, 0.006, 0.2, 0.02, 0.9, 100.0, 0.01, 0.05, 0.001, 0.1],
                    lambda a, w: np.sqrt(1 + sum(a[2 * i] * w**2 / (w**2 - a[2 * i + 1])
                                                 for i in range(5)))),
@@ -474,6 +493,10 @@ def _material_of(kind, coeffs, name):
 
     if kind.startswith("Sellmeier") and kind not in ("Sellmeier2", "Sellmeier4"):
         return M.Sellmeier(coeffs[0::2], coeffs[1::2], name=name)
+    if kind.startswith("Extended"):
+        powers = {"Extended": M.EXTENDED_POWERS, "Extended2": M.EXTENDED2_POWERS,
+                  "Extended3": M.EXTENDED3_POWERS}[kind]
+        return M.Laurent(coeffs, powers=powers, name=name)
     return getattr(M, kind)(coeffs, name=name)
 
 
@@ -500,6 +523,9 @@ def test_hand_made_glass_is_written_with_zemaxs_formula_number(kind, tmp_path):
     written = jaxlens.save(lens, tmp_path / "one.zmx")
     form, cd = _agf_record(next(p for p in written if str(p).endswith("ONE.AGF")))
     assert form == number
+    # The CD line holds the formula's coefficients: Sellmeier 1 always three (K, L) pairs.
+    assert cd.size == (6 if number == 2 else len(coeffs))
+    cd = cd[: len(coeffs)]
     np.testing.assert_allclose(by_hand(cd, w), np.asarray(glass.index(w)), rtol=0, atol=1e-12)
 
 
