@@ -19,6 +19,8 @@ Conventions:
 
 from __future__ import annotations
 
+import abc
+
 import equinox as eqx
 import jax.numpy as jnp
 from jaxtyping import Array, Float
@@ -38,7 +40,25 @@ class LensParams(eqx.Module):
     m: Float[Array, "*b E q"] | None = None
 
 
-class Parameterization(eqx.Module):
+class AbstractParameterization(eqx.Module):
+    """The parameterisation protocol: design variables (a pytree, scaled to order 1) ⇄ a Lens.
+
+    ``to_lens(params)`` builds the lens (pure, jittable, differentiable in ``params``) and
+    ``from_lens(lens)`` gives the variables of a lens of the same structure, so that
+    ``to_lens(from_lens(lens))`` is ``lens``. The classical design (``Parameterization``) and
+    the EDoF experiment (``experiments.edof.lenses.HybridParameterization``) implement it.
+    """
+
+    @abc.abstractmethod
+    def to_lens(self, params) -> Lens:
+        """The lens for one set of parameters."""
+
+    @abc.abstractmethod
+    def from_lens(self, lens: Lens):
+        """The parameters of ``lens`` (inverse of ``to_lens``)."""
+
+
+class Parameterization(AbstractParameterization):
     """Maps ``LensParams`` to a ``Lens`` built on a template (structure, media, system data).
 
     Args:

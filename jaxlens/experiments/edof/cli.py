@@ -315,7 +315,8 @@ def _run_into(a, argv, cfg, names, folder, out) -> dict:
             tag = f"{name}_s{seed}"
             lens0 = L.to_hybrid(classical, n_odd=cfg.n_odd,
                                 cubic=start_cubic[name]).astype(dtype)
-            params = L.HybridParams.from_lens(lens0)
+            pmap = L.HybridParameterization.of(lens0)
+            params = pmap.from_lens(lens0)
             floor = (cfg.cubic_floor * float(params.odd_x[0]) if name == "cubic"
                      else -math.inf)
             dec = make_decoder(cfg.decoder, nsr=nsr, key=k_net, width=cfg.width,
@@ -323,7 +324,7 @@ def _run_into(a, argv, cfg, names, folder, out) -> dict:
                                dec_blocks=cfg.dec_blocks, dtype=dtype)
             sampler = S.PatchSampler(train_imgs, cfg.window, seed=seed + 17)
             src = T.BatchSource(sampler, n_tiles, cfg, seed=seed + 29)
-            trainer = T.Trainer(name, lens0, params, dec, src, cfg,
+            trainer = T.Trainer(name, pmap, params, dec, src, cfg,
                                 jax.random.fold_in(k_train, i), floor=floor, folder=ck,
                                 deadline=deadline)
             if a.resume:
@@ -331,7 +332,7 @@ def _run_into(a, argv, cfg, names, folder, out) -> dict:
             t0 = time.perf_counter()
             dec, params, hist = trainer.run(progress)
             timings[f"train_{tag}_s"] = time.perf_counter() - t0
-            lens = params.apply(lens0)
+            lens = pmap.to_lens(params)
             histories[tag] = hist
             jaxlens.save(lens, os.path.join(out, "lenses", f"{tag}.json"))
             eqx.tree_serialise_leaves(os.path.join(out, "nets", f"{tag}.eqx"), dec)

@@ -21,7 +21,8 @@ structure (and one compiled training step); the classical lens has all odd terms
 The trainable parameters live apart from the lens (``HybridParams``, with ``gates`` saying
 which of them each lens may change), scaled to order 1: a curvature times the normalisation
 radius R, and each polynomial coefficient as the sag (in units of ``SAG_SCALE``) that its
-term adds at R. ``apply`` writes them back.
+term adds at R. ``HybridParameterization`` maps them to the lens and back, with the same
+protocol as the classical design (``jaxlens.design.params.AbstractParameterization``).
 """
 
 from __future__ import annotations
@@ -36,6 +37,7 @@ import jax.numpy as jnp
 import numpy as np
 from jaxtyping import Array, Float
 
+from ...design.params import AbstractParameterization
 from ...optics.lens import Lens, Sensor
 from ...optics.surfaces import EvenAsphere, Hybrid
 
@@ -173,7 +175,8 @@ def cubic_strength_guess(lens: Lens, *, depths_m=DEPTHS_M, ratio: float = 1.5) -
 # Trainable parameters, scaled to order 1
 # --------------------------------------------------------------------------------------
 class HybridParams(eqx.Module):
-    """Scaled parameters of a hybrid surface and of the sensor position.
+    """Scaled parameters of a hybrid surface and of the sensor position (R: the normalisation
+    radius of ``HybridParameterization``).
 
     Attributes:
         c: curvature × R.
@@ -182,8 +185,6 @@ class HybridParams(eqx.Module):
             (the r² coefficient stays at its value: it duplicates the curvature).
         odd_x, odd_y: odd coefficients (x³, x⁵, …), each as its sag at R over ``SAG_SCALE``.
         focus: sensor shift along z over ``SAG_SCALE`` (mm).
-        radius: normalisation radius R (mm).
-        index: index of the hybrid surface (static).
     """
 
     c: Float[Array, ""]
@@ -192,50 +193,70 @@ class HybridParams(eqx.Module):
     odd_x: Float[Array, " p"]
     odd_y: Float[Array, " p"]
     focus: Float[Array, ""]
+
+
+class HybridParameterization(AbstractParameterization):
+    """Maps ``HybridParams`` to a lens: its surface ``index`` (a ``Hybrid``) and sensor
+    position, the rest of ``template`` held (the protocol of ``jaxlens.design.params``).
+
+    Attributes:
+        template: the lens the parameters are written into (a ``Hybrid`` at ``index``).
+        radius: normalisation radius R (mm); held, not differentiated.
+        index: index of the hybrid surface (static).
+    """
+
+    template: Lens
     radius: Float[Array, ""] = eqx.field(converter=jnp.asarray)
     index: int = eqx.field(static=True)
 
     @classmethod
-    def from_lens(cls, lens: Lens, *, index: int | None = None, radius=None) -> HybridParams:
-        """Parameters that reproduce ``lens`` (whose surface ``index`` is a ``Hybrid``)."""
+    def of(cls, lens: Lens, *, index: int | None = None, radius=None) -> HybridParameterization:
+        """The parameterisation of ``lens`` at its surface ``index`` (default: the first after
+        the stop), with R = ``radius`` (default: the entrance-pupil radius)."""
         i = first_lens_surface(lens) if index is None else index
         s = lens.surfaces[i]
         if not isinstance(s, Hybrid):
-            raise ValueError(f"HybridParams: surface {i} is a {type(s).__name__}, not Hybrid")
+            raise ValueError(f"HybridParameterization: surface {i} is a {type(s).__name__}, "
+                             f"not Hybrid")
         r = jnp.asarray(0.5 * lens.epd if radius is None else radius)
-        m = s.coeffs.shape[0]
-        ev_pow = 2 * jnp.arange(2, m + 1)  # r^4, r^6, ...
+        return cls(lens, r, i)
+
+    def from_lens(self, lens: Lens) -> HybridParams:
+        """Parameters that reproduce ``lens`` (of the template's structure; focus 0 when its
+        sensor sits where the template's does)."""
+        s = lens.surfaces[self.index]
+        r = self.radius
+        ev_pow = 2 * jnp.arange(2, s.coeffs.shape[0] + 1)  # r^4, r^6, ...
         od_pow = 2 * jnp.arange(s.odd_x.shape[0]) + 3  # x^3, x^5, ...
-        return cls(
+        shift = lens.thickness[-1] - self.template.thickness[-1]
+        return HybridParams(
             c=s.c * r,
             k=s.k,
             even=s.coeffs[1:] * r**ev_pow / SAG_SCALE,
             odd_x=s.odd_x * r**od_pow / SAG_SCALE,
             odd_y=s.odd_y * r**od_pow / SAG_SCALE,
-            focus=jnp.zeros_like(s.c),
-            radius=r,
-            index=i,
+            focus=shift / SAG_SCALE,
         )
 
-    def apply(self, lens: Lens) -> Lens:
-        """Write the parameters into ``lens`` (the lens they were taken from)."""
+    def to_lens(self, p: HybridParams) -> Lens:
+        """The template with the parameters written in."""
+        lens = self.template
         s = lens.surfaces[self.index]
-        r = jax.lax.stop_gradient(self.radius).astype(self.c.dtype)
-        ev_pow = 2 * jnp.arange(2, self.even.shape[0] + 2)
-        od_pow = 2 * jnp.arange(self.odd_x.shape[0]) + 3
+        r = jax.lax.stop_gradient(self.radius).astype(p.c.dtype)
+        ev_pow = 2 * jnp.arange(2, p.even.shape[0] + 2)
+        od_pow = 2 * jnp.arange(p.odd_x.shape[0]) + 3
         coeffs = jnp.concatenate(
-            [s.coeffs[:1].astype(self.even.dtype), self.even * SAG_SCALE / r**ev_pow]
+            [s.coeffs[:1].astype(p.even.dtype), p.even * SAG_SCALE / r**ev_pow]
         )
         new = Hybrid(
-            c=self.c / r,
-            k=self.k,
+            c=p.c / r,
+            k=p.k,
             coeffs=coeffs,
-            odd_x=self.odd_x * SAG_SCALE / r**od_pow,
-            odd_y=self.odd_y * SAG_SCALE / r**od_pow,
+            odd_x=p.odd_x * SAG_SCALE / r**od_pow,
+            odd_y=p.odd_y * SAG_SCALE / r**od_pow,
             semi_diameter=s.semi_diameter,
         )
-        t = lens.thickness
-        t = t.at[-1].add(self.focus * SAG_SCALE)
+        t = lens.thickness.at[-1].add(p.focus * SAG_SCALE)
         return eqx.tree_at(lambda m: (m.surfaces[self.index], m.thickness), lens, (new, t))
 
 
@@ -279,7 +300,6 @@ def gates(params: HybridParams, kind: str) -> tuple[HybridParams, Array]:
     else:
         raise ValueError(f"gates: kind must be frozen, classical, cubic, hybrid or "
                          f"hybrid-held-focus, got {kind!r}")
-    gate = eqx.tree_at(lambda p: p.radius, gate, jnp.zeros_like(params.radius))
     return gate, jnp.asarray(tie, dtype)
 
 

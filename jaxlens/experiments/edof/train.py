@@ -44,6 +44,7 @@ from .decoder import Decoder
 from .lenses import (
     DEPTHS_M,
     SPEC,
+    HybridParameterization,
     Tolerances,
     apply_gates,
     dioptric_weights,
@@ -181,7 +182,7 @@ def _apply(opt, grads, state, params, ok, scale=1.0):
 
 
 @eqx.filter_jit
-def joint_step(dec, params, net_state, lens_state, base_lens, windows, xy, depths, wkern, key,
+def joint_step(dec, params, net_state, lens_state, pmap, windows, xy, depths, wkern, key,
                gate, tie, floor, *, cfg: Config, net_opt, lens_opt):
     """A lens-update step: the loss is differentiated through the ray tracer.
 
@@ -195,7 +196,7 @@ def joint_step(dec, params, net_state, lens_state, base_lens, windows, xy, depth
 
     def loss_fn(trainable):
         d, p = trainable
-        lens = p.apply(base_lens)
+        lens = pmap.to_lens(p)
         kern = patch_psfs(lens, jnp.concatenate([xy, xy]), jnp.repeat(depths, b),
                           kernel_size=cfg.kernel_size, pixel_size=lens.sensor.pixel_size,
                           pupil=cfg.pupil, key=k_psf)
@@ -282,8 +283,8 @@ class Trainer:
 
     Attributes:
         name: "classical", "cubic" or "hybrid" (also the ``gates`` kind).
-        base_lens: the starting lens (a Hybrid first surface).
-        params: its ``HybridParams``.
+        pmap: the lens's ``HybridParameterization`` (its template: the starting lens).
+        params: the starting ``HybridParams``.
         dec: the decoder.
         source: the batch stream.
         cfg: the configuration.
@@ -294,7 +295,7 @@ class Trainer:
     """
 
     name: str
-    base_lens: Lens
+    pmap: HybridParameterization
     params: object
     dec: Decoder
     source: BatchSource
@@ -315,7 +316,7 @@ class Trainer:
         self.net_state = opt1.init(eqx.filter(self.dec, eqx.is_inexact_array))
         self.lens_state = lens_opt.init(eqx.filter(self.params, eqx.is_inexact_array))
         self.hist: dict[str, list] = {"stage1": [], "stage2": []}
-        self.xy = centers(self.base_lens, cfg.tile)
+        self.xy = centers(self.pmap.template, cfg.tile)
         self.bank = None  # [8, ty, tx, 3, k, k] of the current lens, when one is needed
         self.mean_bank = None
         self.seconds = 0.0
@@ -367,18 +368,18 @@ class Trainer:
 
     # -- training ------------------------------------------------------------------------
     def lens(self) -> Lens:
-        return self.params.apply(self.base_lens)
+        return self.pmap.to_lens(self.params)
 
     def _banks(self, lens, *, full: bool):
         cfg = self.cfg
         bank = psf_bank(lens, tile=cfg.tile, kernel_size=cfg.kernel_size, pupil=cfg.pupil,
                         chunk=2 * cfg.batch)
-        self.mean_bank = jnp.asarray(bank.mean(0), self.base_lens.epd.dtype)
-        self.bank = jnp.asarray(bank, self.base_lens.epd.dtype) if full else None
+        self.mean_bank = jnp.asarray(bank.mean(0), self.pmap.template.epd.dtype)
+        self.bank = jnp.asarray(bank, self.pmap.template.epd.dtype) if full else None
 
     def _wkern(self, tiles):
         if not self.dec.wiener:
-            return jnp.zeros((len(tiles), 3, 1, 1), self.base_lens.epd.dtype)
+            return jnp.zeros((len(tiles), 3, 1, 1), self.pmap.template.epd.dtype)
         return self.mean_bank[tiles[:, 0], tiles[:, 1]]
 
     def probe(self) -> float:
@@ -388,7 +389,7 @@ class Trainer:
         from .scenes import PatchSampler
 
         cfg = self.cfg
-        dt = self.base_lens.epd.dtype
+        dt = self.pmap.template.epd.dtype
         rng = np.random.default_rng(4242)
         windows = PatchSampler(self.source.sampler.images, cfg.window, seed=4242).sample(
             cfg.batch)
@@ -413,9 +414,9 @@ class Trainer:
             self.hist["probe"] = {"before": self.probe()}
             self.mean_bank = None  # the training's own refresh schedule
         opt1, lens_opt = optimizers(cfg)
-        dt = self.base_lens.epd.dtype
+        dt = self.pmap.template.epd.dtype
         depths = jnp.asarray(1e3 * np.asarray(DEPTHS_M), dt)
-        pix = jnp.asarray(self.base_lens.sensor.pixel_size, dt)
+        pix = jnp.asarray(self.pmap.template.sensor.pixel_size, dt)
         total = cfg.steps + cfg.steps2
         bar = progress(total=total, desc=self.name) if progress else None
         if bar is not None:
@@ -448,7 +449,7 @@ class Trainer:
             xy = jnp.asarray(self.xy[tiles[:, 0], tiles[:, 1]], dt)
             if self.stage == 1 and self.movable and self.step % cfg.lens_every == 0:
                 self.dec, self.params, self.net_state, self.lens_state, loss, parts = joint_step(
-                    self.dec, self.params, self.net_state, self.lens_state, self.base_lens,
+                    self.dec, self.params, self.net_state, self.lens_state, self.pmap,
                     windows, xy, depths[pair], wk, sub, self.gate, self.tie, floor, cfg=cfg,
                     net_opt=opt1, lens_opt=lens_opt)
             else:
