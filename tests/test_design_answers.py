@@ -230,7 +230,9 @@ class _Probe(eqx.Module):
     """A stand-in objective whose diagnostics report the weights the loop gives it.
 
     Its RMS per field is fixed (``RMS``); ``Aux.spot`` is (Σ_k w_k·k)² so that the loop's
-    recorded spot RMS reads back Σ_k w_k·k, and ``Aux.loss`` is Σ reg_weights·(1, 10, 100).
+    recorded spot RMS reads back Σ_k w_k·k, and ``Aux.loss`` is Σ reg_weights·(1, 10, 100)
+    plus 1000·spot_scale·Σ_k w_k·RMS_k²: the loop sets spot_scale to the inverse of the
+    weighted mean square at each epoch start, so that term reads 1000.
     """
 
     sampling: object
@@ -239,6 +241,7 @@ class _Probe(eqx.Module):
         fw = args.field_weights
         probe = jnp.sum(fw * jnp.arange(1.0, 5.0)) + 0.0 * params.c[0]
         loss = jnp.sum(args.reg_weights * jnp.asarray([1.0, 10.0, 100.0]))
+        loss = loss + 1e3 * args.spot_scale * jnp.sum(fw * jnp.asarray(RMS) ** 2)
         aux = losses.Aux(loss, probe**2, jnp.asarray(RMS), jnp.ones(4), jnp.zeros(3))
         return jnp.concatenate([params.c * 0.0, jnp.sqrt(loss)[None]]), aux
 
@@ -275,9 +278,9 @@ def test_run_applies_mask_and_regularizers_per_stage(irls):
     np.testing.assert_allclose(hist.spot_rms[0], plain, rtol=1e-12)
     np.testing.assert_allclose(hist.spot_rms[1], masked, rtol=1e-12)
     np.testing.assert_allclose(hist.spot_rms[2], plain, rtol=1e-12)
-    np.testing.assert_allclose(hist.loss[0], 2 + 30 + 500, rtol=1e-12)
-    np.testing.assert_allclose(hist.loss[1], 2 + 30 + 500, rtol=1e-12)
-    np.testing.assert_allclose(hist.loss[2], 0.0)
+    np.testing.assert_allclose(hist.loss[0], 2 + 30 + 500 + 1000, rtol=1e-12)
+    np.testing.assert_allclose(hist.loss[1], 2 + 30 + 500 + 1000, rtol=1e-12)
+    np.testing.assert_allclose(hist.loss[2], 1000, rtol=1e-12)
 
 
 def test_obliquity_residuals_are_the_hinge_of_the_cosines_on_both_sides():
