@@ -543,3 +543,37 @@ def test_sellmeier_with_more_terms_than_zemax_has_goes_as_a_fitted_schott_series
     w = np.linspace(0.45, 0.70, 6)
     np.testing.assert_allclose(FORMULAS["Schott"][2](cd, w), np.asarray(glass.index(w)),
                                rtol=0, atol=1e-4)
+
+
+def test_side_catalog_and_glass_names(tmp_path):
+    """The lens's own AGF is named after the file (Zemax catalog names: letters, digits, _),
+    gets "_JL" when that name is a Zemax catalog, and two different glasses of one name are
+    kept apart as NAME and NAME_2; the NM line carries each glass's nd and Vd."""
+    from jaxlens.optics.materials import Sellmeier
+
+    a = Sellmeier([1.04, 0.23], [0.006, 0.02], name="mine")
+    b = Sellmeier([1.10, 0.20], [0.006, 0.02], name="MINE")
+    lens = jaxlens.Lens(
+        surfaces=(Standard(c=0.02), Standard(c=-0.02), Standard(c=0.01), Standard(c=-0.01),
+                  Standard(c=0.0)),
+        thickness=[3.0, 2.0, 3.0, 30.0, 0.0], materials=(a, Air(), b, Air(), Air()), epd=5.0)
+    written = jaxlens.save(lens, tmp_path / "my-lens.v2.zmx")
+    agf = pathlib.Path(written[1])
+    assert agf.name == "MY_LENS_V2.AGF"
+    text = agf.read_text()
+    nm = [ln.split() for ln in text.splitlines() if ln.startswith("NM ")]
+    assert [t[1] for t in nm] == ["MINE", "MINE_2"]
+    zmx_text = pathlib.Path(written[0]).read_text()
+    assert "GCAT MY_LENS_V2" in zmx_text
+    assert [ln.split()[1] for ln in zmx_text.splitlines() if ln.strip().startswith("GLAS")] \
+        == ["MINE", "MINE_2"]
+    for t, glass in zip(nm, (a, b), strict=True):
+        nd, nf, nc = (float(glass.index(w)) for w in (0.5875618, 0.4861327, 0.6562725))
+        assert float(t[4]) == pytest.approx(nd, abs=1e-12)
+        assert float(t[5]) == pytest.approx((nd - 1) / (nf - nc), rel=1e-10)
+    back = jaxlens.load(written[0])
+    assert_same_lens(back, lens)
+    # A file named after a Zemax catalog does not shadow it.
+    (tmp_path / "s").mkdir()
+    written = jaxlens.save(lens, tmp_path / "s" / "schott.zmx")
+    assert pathlib.Path(written[1]).name == "SCHOTT_JL.AGF"
