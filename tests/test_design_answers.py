@@ -98,14 +98,15 @@ def test_clear_radii_are_the_largest_valid_heights():
 # --- the spot loss on synthetic rays at the image surface ------------------------------------
 
 
-def _spot_setup(beta=0.0, valid_mask=None, focal=4.0, tan_max=0.5, pin=0.0, scale=2.0):
+def _spot_setup(beta=0.0, valid_mask=None, focal=4.0, tan_max=0.5, pin=0.0, scale=2.0,
+                distortion_k=0.0, fw=(0.2, 0.3, 0.5)):
     wl = (0.48, 0.59)
     samp = losses.RayLoss.make(3, 1, wl, (3.0, 3.0), jnp.float64)
     K, W, P = 3, 2, samp.pupil.shape[0]
     rng = np.random.default_rng(4)
     off = rng.normal(0.0, 0.01, (K, W, P, 2))
     tan = np.asarray(samp.fracs) * tan_max
-    ideal = np.stack([np.zeros(K), focal * tan], -1)
+    ideal = np.stack([np.zeros(K), focal * tan * (1 + distortion_k * tan**2)], -1)
     pts = ideal[:, None, None, :] + off
     valid = np.ones((K, W, P), bool) if valid_mask is None else valid_mask
     o = np.concatenate([pts, np.zeros((K, W, P, 1))], -1)
@@ -116,11 +117,12 @@ def _spot_setup(beta=0.0, valid_mask=None, focal=4.0, tan_max=0.5, pin=0.0, scal
     before = jl.Rays(jnp.asarray(o) + 5.0, jnp.asarray(d), img.wavelength,
                      valid=jnp.zeros((K, W, P), bool))
     path = jax.tree.map(lambda a, b: jnp.stack([a, a, b]), before, img)  # the image is last
-    fw = np.array([0.2, 0.3, 0.5])
+    fw = np.asarray(fw)
     args = losses.StageArgs(
         tan_max=jnp.asarray(tan_max), epd=jnp.asarray(1.6), focal=jnp.asarray(focal),
         beta=jnp.asarray(beta), pin=jnp.asarray(pin), spot_scale=jnp.asarray(scale),
-        field_weights=jnp.asarray(fw), reg_weights=jnp.ones(3))
+        field_weights=jnp.asarray(fw), reg_weights=jnp.ones(3),
+        distortion_k=jnp.asarray(distortion_k))
     pw = np.asarray(samp.pupil_weights)
     return samp, args, path, pts, ideal, valid, pw, fw
 
@@ -141,6 +143,25 @@ def test_spot_loss_is_measured_from_the_ideal_image_point_f_tan():
     # Σ residuals² is spot_scale × the field-weighted mean square error.
     np.testing.assert_allclose(jnp.sum(res.residuals**2), 2.0 * np.sum(fw * ms), rtol=1e-10)
     np.testing.assert_allclose(res.valid_fraction, 1.0)
+
+
+def test_ideal_image_height_follows_the_image_mapping_and_weights_are_normalised():
+    """With DesignSpec.image_mapping's k the ideal height is f·t·(1 + k·t²) (t = tan θ), the
+    pin aims at f·t_max·(1 + k·t_max²), and the field weights enter divided by their sum."""
+    k, fw = -0.3, np.array([0.6, 0.9, 1.5])  # weights summing to 3
+    samp, args, path, pts, ideal, valid, pw, _ = _spot_setup(distortion_k=k, fw=fw, beta=0.0,
+                                                             pin=3.0)
+    tan = np.asarray(samp.fracs) * 0.5
+    np.testing.assert_allclose(ideal[:, 1], 4.0 * tan * (1 + k * tan**2), rtol=1e-15)
+    res = losses.spot_errors(path, samp, args)
+    ms = _expected_ms(pts, ideal, valid, pw, 0.8)
+    np.testing.assert_allclose(res.ms, ms, rtol=1e-10)
+    assert ms.max() < 1e-3
+    np.testing.assert_allclose(jnp.sum(res.residuals**2), 2.0 * np.sum(fw / 3.0 * ms),
+                               rtol=1e-10)
+    cen = np.sum(pw * pts[-1, ..., 1]) / np.sum(np.broadcast_to(pw, pts.shape[1:3]))
+    np.testing.assert_allclose(res.pin, math.sqrt(3.0 * 2.0) * (cen - 4.0 * 0.5 * (1 + k / 4)),
+                               rtol=1e-10)
 
 
 def test_failed_rays_cost_half_the_pupil():
