@@ -577,3 +577,76 @@ def test_side_catalog_and_glass_names(tmp_path):
     (tmp_path / "s").mkdir()
     written = jaxlens.save(lens, tmp_path / "s" / "schott.zmx")
     assert pathlib.Path(written[1]).name == "SCHOTT_JL.AGF"
+
+
+def test_user_catalog_glasses_share_their_catalog_and_unnamed_glasses_get_a_name(tmp_path):
+    """Two glasses of one user AGF catalog, one of them used twice, go to that catalog once
+    each. A glass with the name of one of them but other data goes to the lens's own catalog
+    under another name: Zemax finds a GLAS name in the first GCAT catalog that has it, so a
+    name must mean one glass in the whole file. An unnamed hand-made glass is JLGLASS. The
+    own catalog's LD line spans 0.3–2.5 µm and every system wavelength."""
+    from jaxlens.optics.materials import Sellmeier
+
+    agf = tmp_path / "MYCAT.agf"
+    agf.write_text(
+        "CC test catalog\n"
+        "NM ONE 2 517642 1.5168 64.17 0 1\n"
+        "CD 1.03961212 0.00600069867 0.231792344 0.0200179144 1.01046945 103.560653\n"
+        "LD 0.3 3.2\n"
+        "NM TWO 2 530600 1.5300 60.0 0 1\n"
+        "CD 1.06 0.006 0.23 0.02 1.01 103.5\n"
+        "LD 0.3 3.2\n"
+    )
+    cat = load_agf(agf)
+    other = tmp_path / "other"
+    other.mkdir()
+    (other / "MYCAT.agf").write_text(
+        "NM ONE 2 560500 1.56 50.0 0 1\nCD 1.2 0.006 0.23 0.02 1.01 103.5\nLD 0.3 3.2\n")
+    clash = load_agf(other / "MYCAT.agf")["ONE"]  # same catalog and name, other data
+    mats = (cat["ONE"], Air(), cat["TWO"], Air(), cat["ONE"], Air(), clash, Air(),
+            Sellmeier([1.04, 0.23], [0.006, 0.02]), Air(), Air())
+    n = len(mats)
+    lens = jaxlens.Lens(
+        surfaces=tuple(Standard(c=0.01 * (-1) ** i) for i in range(n - 1)) + (Standard(c=0.0),),
+        thickness=[2.0] * (n - 1) + [0.0], materials=mats, epd=4.0,
+        wavelengths=[0.45, 0.55, 2.8], primary=1)
+    paths = jaxlens.save(lens, tmp_path / "u.zmx")
+    written = {pathlib.Path(p).name: pathlib.Path(p) for p in paths}
+    assert set(written) == {"u.zmx", "MYCAT.AGF", "U.AGF"}
+
+    def names(p):
+        return [ln.split()[1] for ln in p.read_text().splitlines() if ln.startswith("NM ")]
+
+    assert names(written["MYCAT.AGF"]) == ["ONE", "TWO"]
+    assert names(written["U.AGF"]) == ["ONE_2", "JLGLASS"]
+    glas = [ln.split()[1] for ln in written["u.zmx"].read_text().splitlines()
+            if ln.strip().startswith("GLAS")]
+    assert glas == ["ONE", "TWO", "ONE", "ONE_2", "JLGLASS"]
+    ld = [ln.split() for ln in written["U.AGF"].read_text().splitlines() if ln.startswith("LD")]
+    assert all((float(t[1]), float(t[2])) == (0.3, 2.8) for t in ld)
+    back = jaxlens.load(written["u.zmx"])
+    w = np.array([0.45, 0.55, 2.8])
+    for m0, m1 in zip(lens.materials, back.materials, strict=True):
+        np.testing.assert_allclose(np.asarray(m1.index(w)), np.asarray(m0.index(w)), rtol=0,
+                                   atol=1e-12)
+
+
+def test_a_hand_made_glass_never_shadows_a_catalog_glass_of_its_name(tmp_path):
+    from jaxlens.optics.catalog import get_material
+    from jaxlens.optics.materials import Sellmeier
+
+    fake = Sellmeier([1.2, 0.2], [0.006, 0.02], name="N-BK7")  # before the real one
+    lens = jaxlens.Lens(
+        surfaces=(Standard(c=0.02), Standard(c=-0.02), Standard(c=0.01), Standard(c=-0.01),
+                  Standard(c=0.0)),
+        thickness=[3.0, 2.0, 3.0, 30.0, 0.0],
+        materials=(fake, Air(), get_material("N-BK7"), Air(), Air()), epd=5.0)
+    written = jaxlens.save(lens, tmp_path / "f.zmx")
+    glas = [ln.split()[1] for ln in pathlib.Path(written[0]).read_text().splitlines()
+            if ln.strip().startswith("GLAS")]
+    assert glas == ["N-BK7_2", "N-BK7"]
+    back = jaxlens.load(written[0])
+    w = np.array([0.48, 0.59, 0.66])
+    for m0, m1 in zip(lens.materials, back.materials, strict=True):
+        np.testing.assert_allclose(np.asarray(m1.index(w)), np.asarray(m0.index(w)), rtol=0,
+                                   atol=1e-12)

@@ -144,23 +144,35 @@ class _GlassWriter:
         self.model_glass = model_glass
         self.agf: dict[str, list[_AgfGlass]] = {}
         self.catalogs: list[str] = []
+        # Every glass name the file uses (upper case) and its material: Zemax finds a GLAS
+        # name by searching the GCAT catalogs in order, so a name must mean one glass in all.
+        self.names: dict[str, AbstractMaterial] = {}
+
+    def reserve(self, materials) -> None:
+        """Claim the names of the Zemax catalog glasses first: those cannot be renamed."""
+        for m in materials:
+            if not isinstance(m, Air) and _zemax_catalog(m) is not None:
+                self.names.setdefault(m.name.upper(), m)
+
+    def _clashes(self, name: str, m: AbstractMaterial) -> bool:
+        taken = self.names.get(name.upper())
+        return taken is not None and not lensfile.same_material(taken, m)
 
     def _use(self, cat: str) -> None:
         if cat not in self.catalogs:
             self.catalogs.append(cat)
 
     def _add(self, cat: str, name: str, m: AbstractMaterial, marker: bool) -> str:
-        entries = self.agf.setdefault(cat, [])
+        """Put ``m`` in catalog ``cat`` under ``name``, or ``name_2``, … when another glass
+        of the file has that name; a glass already written keeps its name."""
         base, i = name, 1
-        while True:
-            same = [e for e in entries if e.name.upper() == name.upper()]
-            if not same:
-                entries.append(_AgfGlass(name, m, marker))
-                return name
-            if lensfile.same_material(same[0].material, m):
-                return name
+        while self._clashes(name, m):
             i += 1
             name = f"{base}_{i}"
+        if name.upper() not in self.names:
+            self.names[name.upper()] = m
+            self.agf.setdefault(cat, []).append(_AgfGlass(name, m, marker))
+        return name
 
     def glas(self, m: AbstractMaterial) -> str | None:
         """The GLAS line for a material (None for air)."""
@@ -183,10 +195,7 @@ class _GlassWriter:
             and re.fullmatch(r"\w+", m.catalog)
             and _formula(m) is not None
             and m.formula == _formula(m)[0]
-            and not any(
-                e.name.upper() == m.name.upper() and not lensfile.same_material(e.material, m)
-                for e in self.agf.get(m.catalog, [])
-            )
+            and not self._clashes(m.name, m)
         )
         if plain:  # a user AGF glass: its own catalog, read back exactly by load_agf
             cat = m.catalog
@@ -307,6 +316,7 @@ def dumps(lens: Lens, path: str = "lens.zmx", *, model_glass: str = "blank"):
         raise ValueError(f"save_zmx: model_glass must be 'blank' or 'agf', got {model_glass!r}")
     stem = os.path.splitext(os.path.basename(os.fspath(path)))[0]
     gw = _GlassWriter(stem, model_glass)
+    gw.reserve((lens.object_material,) + tuple(lens.materials))
     fields = np.asarray(lens.fields, np.float64)
     fields = fields.reshape(-1, 2) if fields.ndim == 2 else fields.reshape(-1)
     xs = fields[:, 0] if fields.ndim == 2 else np.zeros_like(fields)
