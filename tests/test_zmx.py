@@ -571,6 +571,8 @@ def test_side_catalog_and_glass_names(tmp_path):
         nd, nf, nc = (float(glass.index(w)) for w in (0.5875618, 0.4861327, 0.6562725))
         assert float(t[4]) == pytest.approx(nd, abs=1e-12)
         assert float(t[5]) == pytest.approx((nd - 1) / (nf - nc), rel=1e-10)
+        # The six-digit glass code: 1000·(nd − 1) and 10·Vd, rounded (N-BK7 is 517642).
+        assert t[3] == f"{round(1000 * (nd - 1)):03d}{round(10 * (nd - 1) / (nf - nc)):03d}"
     back = jaxlens.load(written[0])
     assert_same_lens(back, lens)
     # A file named after a Zemax catalog does not shadow it.
