@@ -25,7 +25,7 @@ SEL[regularizers]="$T::test_obliquity_residuals_are_the_hinge_of_the_cosines_on_
 FILE[losses]=jaxlens/design/losses.py
 SEL[losses]="tests/test_design_residuals.py $T::test_paper_stage_defaults_and_float32_sampling $T::test_spot_loss_is_measured_from_the_ideal_image_point_f_tan $T::test_failed_rays_cost_half_the_pupil $T::test_centroid_reference_and_pin $T::test_launch_fields_and_stage_args"
 # ImageObjective renders a scene (seconds per call): its mutants are not run here.
-ONLY[losses]="StageArgs,radial_area_weights,half_pupil,RayLoss,launch,SpotResult,spot_errors,trace_stage,Aux,design_residuals,design_loss,Objective"
+ONLY[losses]="StageArgs,radial_area_weights,half_pupil,RayLoss,launch,SpotResult,spot_errors,Aux,design_residuals,Objective"
 FILE[curriculum]=jaxlens/design/curriculum.py
 SEL[curriculum]="$T::test_stage_defaults_and_short_sine_paths $T::test_paper_stage_defaults_and_float32_sampling $T::test_launch_fields_and_stage_args $T::test_run_applies_mask_and_regularizers_per_stage $D::test_sine_path_paper_schedule $D::test_paper_stages $D::test_run_stops_on_nonfinite_loss $D::test_run_drops_nonfinite_designs"
 # The design loop's plumbing (devices, progress bar, logging) is left out: run's mask and

@@ -202,11 +202,6 @@ def spot_errors(path: Rays, sampling: RayLoss, args: StageArgs) -> SpotResult:
     return SpotResult(residuals, ms, frac, cen[:, 1], pin)
 
 
-def trace_stage(lens: Lens, sampling: RayLoss, args: StageArgs) -> Rays:
-    """Trace the loss rays; stacked ``[n + 1, K, W, P]`` after every surface and the image."""
-    return trace_path(lens, launch(lens, sampling, args), uniform=True)
-
-
 class Aux(eqx.Module):
     """Diagnostics returned with the design residuals."""
 
@@ -250,12 +245,6 @@ def design_residuals(params, pmap, sampling: RayLoss, args: StageArgs, gap_bound
     aux = Aux(total, jnp.sum(sampling.area * spot.ms), jnp.sqrt(spot.ms), spot.valid_fraction,
               regs)
     return res, aux
-
-
-def design_loss(params, pmap, sampling: RayLoss, args: StageArgs, gap_bounds):
-    """Scalar design loss Σ residuals² and its ``Aux``."""
-    res, aux = design_residuals(params, pmap, sampling, args, gap_bounds)
-    return aux.loss, aux
 
 
 class Objective(eqx.Module):
