@@ -121,6 +121,13 @@ def test_spec_efl_checks_and_objective_residual():
     np.testing.assert_allclose(np.asarray(r1[:-1]), np.asarray(r0))
     assert float(r1[-1]) == pytest.approx(math.sqrt(4.0 * 2.5) * (efl - 5.55))
     assert float(a1.loss) == pytest.approx(float(jnp.sum(r1**2)))
+    np.testing.assert_allclose(np.asarray(held.field_rms(params, args)), np.asarray(a1.rms))
+    # The residual scales with sqrt(efl_weight · beta · spot_scale); the weight defaults to 1.
+    half = eqx.tree_at(lambda a: a.beta, args, jnp.asarray(0.5, jnp.float64))
+    assert float(held(params, half)[0][-1]) == pytest.approx(math.sqrt(4.0 * 0.5 * 2.5)
+                                                               * (efl - 5.55))
+    plain = Objective(pmap, sampling, gb, efl=5.55)
+    assert float(plain(params, args)[0][-1]) == pytest.approx(math.sqrt(2.5) * (efl - 5.55))
     # With the ideal reference (beta = 0) the ideal image points carry the EFL: no residual.
     args0 = eqx.tree_at(lambda a: a.beta, args, jnp.asarray(0.0, jnp.float64))
     assert float(held(params, args0)[0][-1]) == 0.0
