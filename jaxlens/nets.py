@@ -173,16 +173,16 @@ class NAFBlock(eqx.Module):
 
     def __init__(self, channels: int, *, dw_expand: int = 2, ffn_expand: int = 2, key, dtype=None):
         dtype = dtype or jnp.result_type(float)
-        k = [_generator(key)] * 6
+        g = _generator(key)  # one stream, drawn layer by layer in this order
         c, dw_c, ffn_c = channels, channels * dw_expand, channels * ffn_expand
         self.norm1 = LayerNorm2d(c, dtype=dtype)
-        self.expand = Pointwise(c, dw_c, key=k[0], dtype=dtype)
-        self.dw = Depthwise(dw_c, key=k[1], dtype=dtype)
-        self.sca = Pointwise(dw_c // 2, dw_c // 2, key=k[2], dtype=dtype)
-        self.project = Pointwise(dw_c // 2, c, key=k[3], dtype=dtype)
+        self.expand = Pointwise(c, dw_c, key=g, dtype=dtype)
+        self.dw = Depthwise(dw_c, key=g, dtype=dtype)
+        self.sca = Pointwise(dw_c // 2, dw_c // 2, key=g, dtype=dtype)
+        self.project = Pointwise(dw_c // 2, c, key=g, dtype=dtype)
         self.norm2 = LayerNorm2d(c, dtype=dtype)
-        self.ffn_in = Pointwise(c, ffn_c, key=k[4], dtype=dtype)
-        self.ffn_out = Pointwise(ffn_c // 2, c, key=k[5], dtype=dtype)
+        self.ffn_in = Pointwise(c, ffn_c, key=g, dtype=dtype)
+        self.ffn_out = Pointwise(ffn_c // 2, c, key=g, dtype=dtype)
         self.beta = jnp.zeros((c,), dtype)
         self.gamma = jnp.zeros((c,), dtype)
 

@@ -264,3 +264,15 @@ def test_building_under_jit_is_refused():
     with pytest.raises(ValueError, match=r"^NAFNet: parameters are drawn on the host; build the "
                        r"network outside jit/eval_shape \(it takes well under a second\)"):
         jax.jit(lambda k: NAFNet(width=4, enc_blocks=(1,), dec_blocks=(1,), key=k))(KEY)
+
+
+def test_block_widths_are_the_papers_expansions():
+    """NAFNet's block expands to 2c channels in both branches (DW_Expand = FFN_Expand = 2);
+    the gates halve them back to c."""
+    c = 8
+    b = NAFBlock(c, key=jax.random.PRNGKey(0))
+    shapes = {n: getattr(b, n).weight.shape for n in
+              ("expand", "sca", "project", "ffn_in", "ffn_out")}
+    assert shapes == {"expand": (c, 2 * c), "sca": (c, c), "project": (c, c),
+                      "ffn_in": (c, 2 * c), "ffn_out": (c, c)}
+    assert b.dw.weight.shape[-1] == 2 * c
