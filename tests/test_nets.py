@@ -276,3 +276,26 @@ def test_block_widths_are_the_papers_expansions():
     assert shapes == {"expand": (c, 2 * c), "sca": (c, c), "project": (c, c),
                       "ffn_in": (c, 2 * c), "ffn_out": (c, c)}
     assert b.dw.weight.shape[-1] == 2 * c
+
+
+def test_default_architecture_and_its_bounds():
+    """The default is width 16 with three levels of one block, one middle block, and a zero
+    last layer; it pads to a multiple of 2³. Width ≥ 1 and block counts ≥ 0 are the limits."""
+    net = NAFNet(key=KEY)
+    assert net.depth == 3 and net.intro.weight.shape[-1] == 16
+    assert [len(e) for e in net.encoders] == [1, 1, 1] and len(net.middle) == 1
+    assert [len(d) for d in net.decoders] == [1, 1, 1]
+    assert not np.any(np.asarray(net.ending.weight)) and not np.any(np.asarray(net.ending.bias))
+    x = jax.random.uniform(KEY, (12, 20, 3), jnp.float32)
+    np.testing.assert_allclose(np.asarray(_apply(net, x)), np.asarray(x), atol=1e-6)
+    net = NAFNet(width=1, enc_blocks=(0,), middle_blocks=0, dec_blocks=(0,), key=KEY,
+                 identity_init=False)
+    assert np.any(np.asarray(net.ending.weight))
+    with pytest.raises(ValueError, match="width must be >= 1"):
+        NAFNet(width=0, key=KEY)
+    with pytest.raises(ValueError, match="block counts >= 0"):
+        NAFNet(middle_blocks=-1, key=KEY)
+    with pytest.raises(ValueError, match="block counts >= 0"):
+        NAFNet(dec_blocks=(1, 1, -1), key=KEY)
+    with pytest.raises(ValueError, match=r"one \[H, W, C\] image"):
+        net(jnp.zeros((2, 8, 8, 3)))
