@@ -286,7 +286,7 @@ def test_default_architecture_and_its_bounds():
     assert [len(e) for e in net.encoders] == [1, 1, 1] and len(net.middle) == 1
     assert [len(d) for d in net.decoders] == [1, 1, 1]
     assert not np.any(np.asarray(net.ending.weight)) and not np.any(np.asarray(net.ending.bias))
-    x = jax.random.uniform(KEY, (12, 20, 3), jnp.float32)
+    x = jax.random.uniform(KEY, (16, 21, 3), jnp.float32)  # pads the width only, by 3
     np.testing.assert_allclose(np.asarray(_apply(net, x)), np.asarray(x), atol=1e-6)
     net = NAFNet(width=1, enc_blocks=(0,), middle_blocks=0, dec_blocks=(0,), key=KEY,
                  identity_init=False)
