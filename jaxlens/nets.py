@@ -195,7 +195,7 @@ class NAFBlock(eqx.Module):
         return x + y * self.gamma.astype(x.dtype)
 
 
-def _pixel_shuffle(x: Float[Array, "H W c4"], r: int = 2) -> Float[Array, "Hr Wr c"]:
+def _pixel_shuffle(x: Float[Array, "H W c4"], r: int) -> Float[Array, "Hr Wr c"]:
     h, w, c = x.shape
     x = x.reshape(h, w, c // (r * r), r, r)
     return x.transpose(0, 3, 1, 4, 2).reshape(h * r, w * r, c // (r * r))
