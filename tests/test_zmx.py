@@ -231,6 +231,22 @@ def test_hybrid_is_zemax_extended_polynomial():
     np.testing.assert_allclose(
         _xpoly_sag(lines, x, y), np.asarray(s.sag(x, y)[0]), rtol=1e-13, atol=1e-15
     )
+    # XDAT 1 is the number of terms up to the surface's degree d, (d + 1)(d + 2)/2 − 1 (no
+    # constant term): d = 10 from r¹⁰ here; an odd x¹¹ term or the even part alone set it
+    # elsewhere; degree 20 is Zemax's limit.
+    def count(lines):
+        return int(next(ln for ln in lines if ln.startswith("XDAT 1 ")).split()[2])
+
+    assert count(lines) == 11 * 12 // 2 - 1
+    odd11 = Hybrid(c=0.0, k=0.0, coeffs=[1e-3, 1e-5], odd_x=[1e-4, 0, 0, 0, 1e-12],
+                   odd_y=[0, 0, 0, 0, 0])
+    assert count(zmx.surface_lines(odd11)) == 12 * 13 // 2 - 1
+    even_only = Hybrid(c=0.0, k=0.0, coeffs=[1e-3, 1e-5], odd_x=[], odd_y=[])
+    assert count(zmx.surface_lines(even_only)) == 5 * 6 // 2 - 1
+    assert count(zmx.surface_lines(Hybrid(c=0.0, k=0.0, coeffs=[1e-9] * 10, odd_x=[1e-5],
+                                          odd_y=[0.0]))) == 21 * 22 // 2 - 1
+    with pytest.raises(ValueError, match="degree 22 exceeds"):
+        zmx.surface_lines(Hybrid(c=0.0, k=0.0, coeffs=[1e-9] * 11, odd_x=[1e-5], odd_y=[0.0]))
     # Zemax's ordering: x, y, x², xy, y², x³, x²y, ...
     assert [zmx.term_powers(j) for j in range(1, 8)] == [
         (1, 0),
@@ -504,6 +520,11 @@ def _agf_record(path):
     """(formula number, CD coefficients) of the one glass in an AGF file, read as Zemax would
     (the NM and CD lines; jaxlens's own GC record is not looked at)."""
     lines = pathlib.Path(path).read_text().splitlines()
+    # Only AGF record keywords (comment, name, jaxlens's own record, extra, dispersion,
+    # thermal and range data), and a glass's NM/ED/CD/TD records in the catalog's order.
+    assert {ln.split()[0] for ln in lines} <= {"CC", "NM", "GC", "ED", "CD", "TD", "LD"}
+    keys = [ln.split()[0] for ln in lines if ln.split()[0] in ("NM", "ED", "CD", "TD")]
+    assert keys == ["NM", "ED", "CD", "TD"]
     (nm,) = [ln.split() for ln in lines if ln.startswith("NM ")]
     (cd,) = [ln.split() for ln in lines if ln.startswith("CD ")]
     return int(nm[2]), np.array([float(v) for v in cd[1:]])
@@ -542,7 +563,20 @@ def test_sellmeier_with_more_terms_than_zemax_has_goes_as_a_fitted_schott_series
     assert form == 1 and cd.size == 6
     w = np.linspace(0.45, 0.70, 6)
     np.testing.assert_allclose(FORMULAS["Schott"][2](cd, w), np.asarray(glass.index(w)),
-                               rtol=0, atol=1e-4)
+                               rtol=0, atol=1e-6)  # the fit is good to 1e-7 here
+
+
+def test_a_glass_without_dispersion_is_written_with_vd_0(tmp_path):
+    """Zemax reads Vd = 0 as no dispersion; (nd − 1)/(nF − nC) would divide by zero."""
+    from jaxlens.optics.materials import Sellmeier
+
+    glass = Sellmeier([1.25], [0.0], name="FLAT")  # n² = 2.25 at every wavelength
+    lens = jaxlens.Lens(surfaces=(Standard(c=0.02), Standard(c=-0.02), Standard(c=0.0)),
+                        thickness=[3.0, 40.0, 0.0], materials=(glass, Air(), Air()), epd=5.0)
+    written = jaxlens.save(lens, tmp_path / "flat.zmx")
+    text = pathlib.Path(written[1]).read_text()
+    nm = next(ln.split() for ln in text.splitlines() if ln.startswith("NM "))
+    assert float(nm[4]) == pytest.approx(1.5, abs=1e-15) and float(nm[5]) == 0.0
 
 
 def test_side_catalog_and_glass_names(tmp_path):
