@@ -238,6 +238,8 @@ def test_hybrid_is_zemax_extended_polynomial():
         return int(next(ln for ln in lines if ln.startswith("XDAT 1 ")).split()[2])
 
     assert count(lines) == 11 * 12 // 2 - 1
+    xdat = [int(ln.split()[1]) for ln in lines if ln.startswith("XDAT")]
+    assert xdat == list(range(1, count(lines) + 3))  # XDAT 1, 2 (the norm radius), terms
     odd11 = Hybrid(c=0.0, k=0.0, coeffs=[1e-3, 1e-5], odd_x=[1e-4, 0, 0, 0, 1e-12],
                    odd_y=[0, 0, 0, 0, 0])
     assert count(zmx.surface_lines(odd11)) == 12 * 13 // 2 - 1
@@ -686,3 +688,14 @@ def test_a_hand_made_glass_never_shadows_a_catalog_glass_of_its_name(tmp_path):
     for m0, m1 in zip(lens.materials, back.materials, strict=True):
         np.testing.assert_allclose(np.asarray(m1.index(w)), np.asarray(m0.index(w)), rtol=0,
                                    atol=1e-12)
+
+
+def test_even_asphere_type_follows_the_term_count_and_the_image_takes_no_break():
+    """Zemax's EVENASPH holds 8 terms (PARM 1–8, r² … r¹⁶); more go to the extended
+    asphere. A coordinate break cannot be the image surface."""
+    eight = zmx.surface_lines(EvenAsphere(c=0.01, k=0.0, coeffs=[1e-9] * 8))
+    assert eight[0] == "TYPE EVENASPH"
+    assert [ln.split()[1] for ln in eight if ln.startswith("PARM")] == [str(i) for i in range(1, 9)]
+    assert zmx.surface_lines(EvenAsphere(c=0.01, k=0.0, coeffs=[1e-9] * 9))[0] == "TYPE XASPHERE"
+    with pytest.raises(ValueError, match="no .zmx form"):
+        zmx.surface_lines(jaxlens.CoordinateBreak(tilt_x=5.0), image=True)
