@@ -23,7 +23,7 @@ SEL[mask]="$T::test_field_weights_use_the_area_weighted_mean $D::test_reweightin
 FILE[regularizers]=jaxlens/design/regularizers.py
 SEL[regularizers]="$T::test_obliquity_residuals_are_the_hinge_of_the_cosines_on_both_sides $T::test_slope_residuals_are_the_hinge_of_the_parabola_slope $T::test_spacing_residuals_use_both_sags_and_the_image $T::test_clear_radii_are_the_largest_valid_heights $D::test_soft_hinge_is_a_hinge_near_the_bound_and_never_overflows $D::test_spacing_and_slope_zero_inside_and_pull_back_outside $D::test_obliquity_zero_inside_and_pull_back_outside"
 FILE[losses]=jaxlens/design/losses.py
-SEL[losses]="tests/test_design_residuals.py tests/test_edof_base_lens.py::test_spec_efl_checks_and_objective_residual $T::test_paper_stage_defaults_and_float32_sampling $T::test_spot_loss_is_measured_from_the_ideal_image_point_f_tan $T::test_failed_rays_cost_half_the_pupil $T::test_centroid_reference_and_pin $T::test_launch_fields_and_stage_args"
+SEL[losses]="tests/test_design_residuals.py tests/test_edof_base_lens.py::test_spec_efl_checks_and_objective_residual $T::test_paper_stage_defaults_and_float32_sampling $T::test_spot_loss_is_measured_from_the_ideal_image_point_f_tan $T::test_ideal_image_height_follows_the_image_mapping_and_weights_are_normalised $T::test_failed_rays_cost_half_the_pupil $T::test_centroid_reference_and_pin $T::test_launch_fields_and_stage_args"
 # ImageObjective renders a scene (seconds per call): its mutants are not run here.
 ONLY[losses]="StageArgs,radial_area_weights,half_pupil,RayLoss,launch,SpotResult,spot_errors,Aux,design_residuals,Objective"
 FILE[curriculum]=jaxlens/design/curriculum.py
