@@ -72,7 +72,8 @@ def _same_lens(a, b) -> bool:
     la, lb = jax.tree_util.tree_leaves(a), jax.tree_util.tree_leaves(b)
     if len(la) != len(lb) or jax.tree_util.tree_structure(a) != jax.tree_util.tree_structure(b):
         return False
-    return all(np.array_equal(np.asarray(x), np.asarray(y), equal_nan=True) for x, y in zip(la, lb))
+    return all(np.array_equal(np.asarray(x), np.asarray(y), equal_nan=True)
+               for x, y in zip(la, lb, strict=True))
 
 
 def check_file(path: str) -> dict:
@@ -119,7 +120,7 @@ def _optiland_written(lens, out: str) -> dict:
     ours = [r for r in ours if math.isfinite(r)]
     theirs = [r for r in optiland_apertures(optic) if math.isfinite(r)]
     clip_ok = len(ours) == len(theirs) and all(
-        math.isclose(a, b, rel_tol=1e-12) for a, b in zip(ours, theirs))
+        math.isclose(a, b, rel_tol=1e-12) for a, b in zip(ours, theirs, strict=True))
     wl = float(lens.wavelengths[lens.primary])
     n_ours = float(np.asarray(lens.materials[-1].index(wl)))
     n_theirs = optiland_image_index(optic, wl)
