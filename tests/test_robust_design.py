@@ -79,6 +79,7 @@ def test_bad_robust_options_are_refused():
         draw_perturbations(4, 3, 2, radius_rel=0.01, thickness=-0.01)
 
 
+@pytest.mark.slow  # a design run (about 30 s); the loss itself is tested above
 def test_design_with_tolerance_aware_loss_runs_and_differs():
     from jaxlens.design.multistart import DesignConfig, design
 
