@@ -518,6 +518,19 @@ def _material_of(kind, coeffs, name):
     return getattr(M, kind)(coeffs, name=name)
 
 
+def _singlet(glass):
+    """A biconvex singlet of ``glass`` in air, for writing one glass to an AGF."""
+    return jaxlens.Lens(surfaces=(Standard(c=0.02), Standard(c=-0.02), Standard(c=0.0)),
+                        thickness=[3.0, 40.0, 0.0], materials=(glass, Air(), Air()), epd=5.0)
+
+
+def _assert_same_indices(a, b, w):
+    """Every medium of lenses ``a`` and ``b`` has the same index at wavelengths ``w``."""
+    for m0, m1 in zip(a.materials, b.materials, strict=True):
+        np.testing.assert_allclose(np.asarray(m1.index(w)), np.asarray(m0.index(w)), rtol=0,
+                                   atol=1e-12)
+
+
 def _agf_record(path):
     """(formula number, CD coefficients) of the one glass in an AGF file, read as Zemax would
     (the NM and CD lines; jaxlens's own GC record is not looked at)."""
@@ -541,8 +554,7 @@ def test_hand_made_glass_is_written_with_zemaxs_formula_number(kind, tmp_path):
     w = np.linspace(0.45, 0.70, 6)
     np.testing.assert_allclose(np.asarray(glass.index(w)), by_hand(np.asarray(coeffs), w),
                                rtol=0, atol=1e-13)
-    lens = jaxlens.Lens(surfaces=(Standard(c=0.02), Standard(c=-0.02), Standard(c=0.0)),
-                        thickness=[3.0, 40.0, 0.0], materials=(glass, Air(), Air()), epd=5.0)
+    lens = _singlet(glass)
     written = jaxlens.save(lens, tmp_path / "one.zmx")
     form, cd = _agf_record(next(p for p in written if str(p).endswith("ONE.AGF")))
     assert form == number
@@ -558,8 +570,7 @@ def test_sellmeier_with_more_terms_than_zemax_has_goes_as_a_fitted_schott_series
 
     glass = Sellmeier([1.0, 0.006, 0.2, 0.02, 0.9, 0.001],
                       [0.006, 0.02, 100.0, 0.05, 0.01, 0.03], name="SIX")
-    lens = jaxlens.Lens(surfaces=(Standard(c=0.02), Standard(c=-0.02), Standard(c=0.0)),
-                        thickness=[3.0, 40.0, 0.0], materials=(glass, Air(), Air()), epd=5.0)
+    lens = _singlet(glass)
     written = jaxlens.save(lens, tmp_path / "six.zmx")
     form, cd = _agf_record(next(p for p in written if str(p).endswith("SIX.AGF")))
     assert form == 1 and cd.size == 6
@@ -573,8 +584,7 @@ def test_a_glass_without_dispersion_is_written_with_vd_0(tmp_path):
     from jaxlens.optics.materials import Sellmeier
 
     glass = Sellmeier([1.25], [0.0], name="FLAT")  # n² = 2.25 at every wavelength
-    lens = jaxlens.Lens(surfaces=(Standard(c=0.02), Standard(c=-0.02), Standard(c=0.0)),
-                        thickness=[3.0, 40.0, 0.0], materials=(glass, Air(), Air()), epd=5.0)
+    lens = _singlet(glass)
     written = jaxlens.save(lens, tmp_path / "flat.zmx")
     text = pathlib.Path(written[1]).read_text()
     nm = next(ln.split() for ln in text.splitlines() if ln.startswith("NM "))
@@ -664,9 +674,7 @@ def test_user_catalog_glasses_share_their_catalog_and_unnamed_glasses_get_a_name
     assert all((float(t[1]), float(t[2])) == (0.3, 2.8) for t in ld)
     back = jaxlens.load(written["u.zmx"])
     w = np.array([0.45, 0.55, 2.8])
-    for m0, m1 in zip(lens.materials, back.materials, strict=True):
-        np.testing.assert_allclose(np.asarray(m1.index(w)), np.asarray(m0.index(w)), rtol=0,
-                                   atol=1e-12)
+    _assert_same_indices(lens, back, w)
 
 
 def test_a_hand_made_glass_never_shadows_a_catalog_glass_of_its_name(tmp_path):
@@ -685,9 +693,7 @@ def test_a_hand_made_glass_never_shadows_a_catalog_glass_of_its_name(tmp_path):
     assert glas == ["N-BK7_2", "N-BK7"]
     back = jaxlens.load(written[0])
     w = np.array([0.48, 0.59, 0.66])
-    for m0, m1 in zip(lens.materials, back.materials, strict=True):
-        np.testing.assert_allclose(np.asarray(m1.index(w)), np.asarray(m0.index(w)), rtol=0,
-                                   atol=1e-12)
+    _assert_same_indices(lens, back, w)
 
 
 def test_even_asphere_type_follows_the_term_count_and_the_image_takes_no_break():
