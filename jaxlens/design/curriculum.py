@@ -248,6 +248,23 @@ class History:
     # Per stage, every design's last ``SolverResult`` by member name ("successful", ...).
     results: list[list[str]] = dataclasses.field(default_factory=list)
 
+    def select(self, columns: Sequence[int], relabel: dict | None = None) -> History:
+        """The history of designs ``columns`` only; ``relabel`` maps their seed labels to new
+        ones (failures of designs not selected are dropped)."""
+        cols = list(columns)
+        relabel = {} if relabel is None else relabel
+        failed = {relabel.get(k, k): v for k, v in self.failed.items()
+                  if not relabel or k in relabel}
+        return History(list(self.stages), [h[:, cols] for h in self.loss],
+                       [h[:, cols] for h in self.spot_rms], list(self.seconds), failed,
+                       [[r[c] for c in cols] for r in self.results])
+
+    def extend(self, later: History) -> None:
+        """Append the stages of ``later`` (the same designs, run after these stages)."""
+        for f in ("stages", "loss", "spot_rms", "seconds", "results"):
+            getattr(self, f).extend(getattr(later, f))
+        self.failed.update(later.failed)
+
 
 def run(
     spec: DesignSpec,

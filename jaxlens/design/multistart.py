@@ -79,6 +79,9 @@ class DesignConfig:
             ``analysis.tolerance.Tolerances()`` (±0.5 % radius, ±0.02 mm gaps), with the
             nominal design weighted ``tolerance_nominal_weight``.
         tolerance_nominal_weight: w₀ of the tolerance-aware loss.
+        population: random starts per design. All of them run the curriculum and
+            fine-tuning; only the best of each design's starts (lowest loss-field RMS)
+            continues to material snapping and the polish.
     """
 
     n_fields: int = 9
@@ -111,6 +114,7 @@ class DesignConfig:
     lr_m: float = 1e-2
     tolerance_trials: int = 0
     tolerance_nominal_weight: float = 0.5
+    population: int = 1
 
     def scaled(self, factor: float) -> DesignConfig:
         """The same recipe with every step count scaled by ``factor`` (at least 1 step)."""
@@ -140,6 +144,7 @@ class DesignResult:
 
     With material selection, ``materials`` holds each design's chosen catalog names and
     ``continuous_materials`` the ``[B, E, 2]`` (nd, Vd) points they were snapped from.
+    ``starts`` holds each design's chosen random start (``population_starts``).
     """
 
     spec: DesignSpec
@@ -150,6 +155,7 @@ class DesignResult:
     history: History
     materials: list[tuple[str, ...]] | None = None
     continuous_materials: np.ndarray | None = None
+    starts: list[int] | None = None
 
     def material_names(self, i: int) -> tuple[str, ...]:
         """The element materials of the i-th design (catalog names)."""
@@ -160,7 +166,9 @@ class DesignResult:
         """Each seed's last solver result (see the class docstring)."""
         last = self.history.results[-1] if self.history.results else ["successful"] * len(
             self.seeds)
-        return list(last[: len(self.seeds)])
+        # A design that failed in an earlier run of stages stays failed after the polish.
+        return ["nonfinite" if s in self.history.failed else r
+                for s, r in zip(self.seeds, last[: len(self.seeds)], strict=True)]
 
     @property
     def failed(self) -> list[bool]:
@@ -276,6 +284,9 @@ def design(
     seeds = [int(s) for s in seeds]
     if not seeds:
         raise ValueError("design: need at least one seed")
+    if config.population < 1:
+        raise ValueError(f"design: population must be at least 1 start per design, got "
+                         f"{config.population}")
     dtype = jnp.float64 if config.float64 else jnp.float32
     if config.float64 and not jax.config.jax_enable_x64:
         raise ValueError("design: float64 needs jax_enable_x64")
@@ -285,10 +296,11 @@ def design(
                             dtype)
     bounds = jnp.asarray(gap_bounds(spec), dtype)
     devices = list(jax.devices() if devices is None else devices)
-    n_dev = min(len(devices), len(seeds)) if shard else 1
-    padded = seeds + [seeds[-1]] * (-len(seeds) % n_dev)
-    params = random_starts(spec, padded, dtype)
+    starts = population_starts(seeds, config.population)
+    n_dev = min(len(devices), len(starts)) if shard else 1
     mesh = seed_mesh(devices[:n_dev]) if n_dev > 1 else None
+    labels = _padded(starts, n_dev)
+    params = random_starts(spec, labels, dtype)
     robust_draws = None
     if config.tolerance_trials:
         from ..analysis.tolerance import Tolerances
@@ -309,34 +321,91 @@ def design(
             ray = RobustObjective(ray, robust_draws, config.tolerance_nominal_weight)
         return {"ray": ray, **image}
 
-    def design_stages(stages, params, pm, materials, first=0):
+    def design_stages(stages, params, pm, materials, labels, first=0):
         cb = None if callback is None else (lambda i, st, p: callback(first + i, st, p))
         return run(spec, stages, params if mesh is None else shard_seeds(params, mesh),
                    objectives(pm), make_solver_factory(config, spec, dtype, materials),
                    reg_weights=config.reg_weights, epoch=config.epoch, irls=config.irls,
-                   log_every=config.log_every, progress=progress, seeds=padded, callback=cb,
+                   log_every=config.log_every, progress=progress, seeds=labels, callback=cb,
                    mesh=mesh, on_nonfinite=on_nonfinite)
 
-    chosen = points = None
-    if mode == "fixed":
-        params, hist = design_stages(stages, params, pmap, None)
+    # Every start runs up to the polish; then the best start of each design continues (with
+    # material selection, after its materials are snapped or searched).
+    split = len(stages) - 1 if config.polish_steps and len(stages) > 1 else len(stages)
+    free_materials = None
+    if mode != "fixed":
+        params, pm_first, free_materials = _free_materials(spec, config, params, pmap)
     else:
-        params, hist, pmap, chosen, points = _select_materials(
-            spec, config, mode, stages, params, pmap, objectives, design_stages)
-    params = jax.tree.map(lambda x: np.asarray(x)[: len(seeds)], params)
-    hist.loss = [h[:, : len(seeds)] for h in hist.loss]
-    hist.spot_rms = [h[:, : len(seeds)] for h in hist.spot_rms]
-    hist.results = [r[: len(seeds)] for r in hist.results]
-    if chosen is not None:
-        chosen, points = chosen[: len(seeds)], points[: len(seeds)]
-    return DesignResult(spec, config, seeds, params, pmap, hist, chosen, points)
+        pm_first = pmap
+    params, hist = design_stages(stages[:split], params, pm_first, free_materials, labels)
+    keep = best_starts(hist, labels, len(seeds), config.population)
+    params = jax.tree.map(lambda x: np.asarray(x)[keep], params)
+    hist = hist.select(keep, relabel=dict(zip([labels[k] for k in keep], seeds, strict=True)))
+    chosen = points = None
+    if mode != "fixed":
+        params, pmap, chosen, points = _catalog_materials(
+            spec, config, mode, stages, params, pmap, objectives)
+    if split < len(stages):
+        padded = _padded(seeds, n_dev)
+        params = jax.tree.map(lambda x: np.concatenate([x, np.repeat(x[-1:], len(padded) - len(
+            seeds), 0)]), params)
+        params, h2 = design_stages(stages[split:], params, pmap, False if mode != "fixed"
+                                   else None, padded, first=split)
+        hist.extend(h2.select(list(range(len(seeds)))))
+        params = jax.tree.map(lambda x: np.asarray(x)[: len(seeds)], params)
+    starts_used = [labels[k] for k in keep]
+    return DesignResult(spec, config, seeds, params, pmap, hist, chosen, points, starts_used)
 
 
-def _select_materials(spec, config, mode, stages, params, pmap, objectives, design_stages):
-    """Stages with continuous materials, the snap (or search), then the rest (the polish).
+def population_starts(seeds: Sequence[int], population: int) -> list[int]:
+    """The random-start seeds of designs ``seeds`` with ``population`` starts each.
 
-    Materials are free in every stage but the polish; with no polish the snap comes last and
-    nothing re-optimises around the catalog materials.
+    Design ``s`` draws starts ``s·P … s·P + P − 1``: disjoint across designs, and with
+    ``P = 1`` each design's start is its own seed.
+    """
+    return [s * population + j for s in seeds for j in range(population)]
+
+
+def best_starts(hist: History, labels: Sequence[int], n_designs: int, population: int):
+    """Index of each design's best start: lowest loss-field RMS after the last stage run,
+    failed starts last (a design whose starts all failed keeps its first, still failed)."""
+    rms = np.asarray(hist.spot_rms[-1][-1], float) if hist.spot_rms and len(
+        hist.spot_rms[-1]) else np.zeros(len(labels))
+    bad = np.array([labels[i] in hist.failed or not np.isfinite(rms[i])
+                    for i in range(len(labels))])
+    score = np.where(bad, np.inf, rms)
+    keep = []
+    for d in range(n_designs):
+        block = np.arange(d * population, (d + 1) * population)
+        keep.append(int(block[np.argmin(score[block])]) if not bad[block].all()
+                    else int(block[0]))
+    return keep
+
+
+def _padded(labels: list[int], n_dev: int) -> list[int]:
+    """``labels`` padded to a multiple of the device count with copies of the last one."""
+    return labels + [labels[-1]] * (-len(labels) % n_dev)
+
+
+def _free_materials(spec, config, params, pmap):
+    """Parameters and parameterisation with each element's (nd, Vd) free inside the hull."""
+    import equinox as eqx
+
+    dtype = params.c.dtype
+    b = params.c.shape[0]
+    hull = CatalogRegion.of(config.material_catalogs).hull()
+    m0 = jnp.asarray(initial_logits(hull, spec.materials), dtype)
+    params = LensParams(params.c, params.a, params.k, params.d,
+                        jnp.broadcast_to(m0, (b,) + m0.shape))
+    pm = eqx.tree_at(lambda p: p.materials, pmap, hull, is_leaf=lambda x: x is None)
+    return params, pm, True
+
+
+def _catalog_materials(spec, config, mode, stages, params, pmap, objectives):
+    """Each design's free materials snapped to the catalog (or searched on the design loss).
+
+    Returns the parameters with the catalog materials' index tables, the parameterisation
+    that reads them, the chosen names and the continuous (nd, Vd) points.
     """
     import equinox as eqx
 
@@ -344,12 +413,6 @@ def _select_materials(spec, config, mode, stages, params, pmap, objectives, desi
     b = params.c.shape[0]
     region = CatalogRegion.of(config.material_catalogs)
     hull = region.hull()
-    split = len(stages) - 1 if config.polish_steps and len(stages) > 1 else len(stages)
-    m0 = jnp.asarray(initial_logits(hull, spec.materials), dtype)
-    params = LensParams(params.c, params.a, params.k, params.d,
-                        jnp.broadcast_to(m0, (b,) + m0.shape))
-    pm_c = eqx.tree_at(lambda p: p.materials, pmap, hull, is_leaf=lambda x: x is None)
-    params, hist = design_stages(stages[:split], params, pm_c, True)
     points, names = snap(region, hull, np.asarray(params.m))
     pm_t = eqx.tree_at(lambda p: p.materials, pmap, TableMaterials(spec.wavelengths),
                        is_leaf=lambda x: x is None)
@@ -366,9 +429,5 @@ def _select_materials(spec, config, mode, stages, params, pmap, objectives, desi
         args = stage_args(spec, stages[-1], weights, config.reg_weights, dtype)
         names = search(region, objectives(pm_t)["ray"], params, args, names, spec.wavelengths)
         params = with_tables(params, names)
-    if split < len(stages):
-        params, h2 = design_stages(stages[split:], params, pm_t, False, first=split)
-        for f in ("stages", "loss", "spot_rms", "seconds", "results"):
-            getattr(hist, f).extend(getattr(h2, f))
-        hist.failed.update(h2.failed)
-    return params, hist, pm_t, names, points
+    params = jax.tree.map(np.asarray, params)
+    return params, pm_t, names, points
