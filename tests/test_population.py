@@ -68,11 +68,19 @@ def test_population_design_polishes_only_the_survivors():
     assert res.history.stages[-1].startswith("polish")
     assert [h.shape[1] for h in res.history.spot_rms] == [2] * len(res.history.stages)
     assert res.starts[0] in (0, 1, 2) and res.starts[1] in (3, 4, 5)
-    assert res.status == ["successful"] * 2 or set(res.status) <= {
-        "successful", "rejected", "damping_limit"}
+    assert set(res.status) <= {"successful", "rejected", "damping_limit"}
 
 
 def test_population_must_be_positive():
     with pytest.raises(ValueError, match="population must be at least 1"):
         multistart.design(SMALL, [0], multistart.DesignConfig(**TINY, population=0),
                           progress=False)
+
+
+@pytest.mark.parametrize("value", ["0", "65"])
+def test_cli_refuses_a_bad_population_before_work(value, capsys):
+    from jaxlens.experiments import classical
+
+    assert classical.main(["--population", value, "--out", "/nonexistent/x"]) == 2
+    err = capsys.readouterr().err
+    assert "--population" in err and "starts per design" in err

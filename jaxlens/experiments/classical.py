@@ -139,6 +139,10 @@ def build_parser() -> argparse.ArgumentParser:
     r.add_argument("--tolerance-aware", type=int, default=0, metavar="K",
                    help="design against the mean loss over K fixed manufacturing errors "
                         "(±0.5%% radius, ±0.02 mm gaps; jaxlens.design.robust); 0 = nominal")
+    r.add_argument("--population", type=int, default=1, metavar="P",
+                   help="random starts per design: all P run the curriculum and fine-tuning, "
+                        "the best continues to the polish (design s draws starts s·P … "
+                        "s·P+P−1)")
     r.add_argument("--no-mask", action="store_true", help="switch the re-weighting mask off")
     r.add_argument("--float32", action="store_true",
                    help="design in float32 (default float64: near-TIR rays rounded to valid in "
@@ -196,6 +200,7 @@ def check_args(args) -> None:
     n(args.ablation_seeds, "--ablation-seeds", w, lo=1, integer=True)
     n(args.tolerance_trials, "--tolerance-trials", w, lo=0, integer=True)
     n(args.tolerance_aware, "--tolerance-aware", w, lo=0, integer=True)
+    n(args.population, "--population", w, lo=1, hi=64, integer=True, unit="starts per design")
     n(args.tolerance_threshold, "--tolerance-threshold", w, lo=0, lo_open=True, unit="µm")
     if args.seed_list is not None:
         parts = [p.strip() for p in args.seed_list.split(",")]
@@ -242,7 +247,7 @@ def config_from_args(args):
         mask=not args.no_mask, solver=args.solver,
         polish="lm" if args.polish == "none" else args.polish, float64=not args.float32,
         materials=args.select_materials, material_catalogs=_catalogs(args),
-        tolerance_trials=args.tolerance_aware)
+        tolerance_trials=args.tolerance_aware, population=args.population)
     if args.polish == "none":
         cfg = dataclasses.replace(cfg, polish_steps=0)
     if args.smoke:
@@ -437,7 +442,8 @@ def _design_into(args, argv, spec, config, seeds, folder, out, t_start) -> dict:
             "continuous_nd_vd": (None if result.continuous_materials is None else
                                  np.asarray(result.continuous_materials).tolist()),
         },
-        "per_seed": [{"seed": s, "solver_status": result.status[i], **e.summary(),
+        "per_seed": [{"seed": s, "start": result.starts[i], "solver_status": result.status[i],
+                      **e.summary(),
                       "rms_min_um": float(np.min(e.rms_um)),
                       "materials": list(result.material_names(i))}
                      for i, (s, e) in enumerate(zip(seeds, evals, strict=True))],
