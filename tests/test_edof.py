@@ -355,3 +355,33 @@ def test_smoke_run_writes_outputs_loss_falls_and_resumes(tmp_path):
     assert json.loads((tmp_path / "edof3" / "table2.json").read_text())["lenses"] == \
         table["lenses"]
     assert third["timings_s"]["train_hybrid_s0_s"] < 5.0
+
+
+def test_reported_fov_is_the_real_chief_ray_to_the_sensor_corner():
+    """The stop at an ideal thin lens, then a flat plate (thickness t, index n) before the
+    image: the chief ray of θ lands at h(θ) = (d1 + d2)·tanθ + t·tanθ_p, sinθ_p = sinθ/n
+    (barrel distortion). The reported FoV is 2θ with h(θ) = the sensor half-diagonal, solved
+    here by bisection in numpy; the paraxial 2·atan(half/f) would be over 1° less."""
+    import jaxlens as jl
+    from jaxlens.experiments.edof import cli
+    from jaxlens.optics.lens import Sensor
+    from jaxlens.optics.paraxial_surface import ParaxialSurface
+
+    f, t, d1 = 5.0, 1.5, 0.5
+    glass = jl.ModelGlass(1.6, 1e9)
+    n = float(glass.index(0.5876))
+    d2 = f - d1 - t / n
+    lens = jl.Lens(surfaces=(jl.Stop(), ParaxialSurface(focal_length=f), jl.Sphere(0.0),
+                             jl.Sphere(0.0)),
+                   thickness=jnp.array([0.0, d1, t, d2]),
+                   materials=(jl.Air(), jl.Air(), glass, jl.Air()), stop=0, epd=1.0,
+                   sensor=Sensor((600, 800), 0.01))
+    half = 0.5 * np.hypot(6.0, 8.0)
+    lo, hi = 0.0, np.pi / 2 - 1e-9
+    for _ in range(200):
+        th = 0.5 * (lo + hi)
+        h = (d1 + d2) * np.tan(th) + t * np.tan(np.arcsin(np.sin(th) / n))
+        lo, hi = (th, hi) if h < half else (lo, th)
+    want = 2 * np.degrees(lo)
+    assert want - 2 * np.degrees(np.arctan(half / f)) > 1.0
+    assert cli._fov(lens) == pytest.approx(want, abs=1e-8)

@@ -503,11 +503,28 @@ def table2(per_image, names, seeds, windows, crop_info, test_names, source, clas
 
 
 def _fov(lens) -> float:
-    """Diagonal field of view (degrees) whose distortion-free image spans the sensor diagonal."""
-    from jaxlens.imaging.aiming import image_scale
+    """Diagonal field of view (degrees, object at infinity): twice the field angle whose
+    real chief ray lands on the sensor corner (distortion included)."""
+    import jax
+    import jax.numpy as jnp
+
+    import jaxlens
+    from jaxlens.imaging.aiming import apertured, stop_chief_ray
 
     half = 0.5 * math.hypot(*[float(v) for v in lens.sensor.size])
-    return float(2 * math.degrees(math.atan(half / float(image_scale(lens)))))
+    lens = apertured(lens.astype(jnp.float64))
+
+    @jax.jit
+    def chief(th):
+        out = jaxlens.trace(lens, stop_chief_ray(lens, jnp.stack([0.0 * th, th])))
+        return jnp.abs(out.origin[0, 1]), out.valid[0]  # (the image is inverted)
+
+    lo, hi = 0.0, 89.0
+    for _ in range(40):  # bisection: the chief-ray height grows with the field angle
+        mid = 0.5 * (lo + hi)
+        h, ok = chief(jnp.asarray(mid))
+        lo, hi = (mid, hi) if bool(ok) and float(h) < half else (lo, mid)
+    return 2 * lo
 
 
 def checks(table: dict) -> dict:
