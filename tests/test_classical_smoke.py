@@ -69,3 +69,20 @@ def test_ablation_smoke_writes_the_table_with_the_recipe_column(tmp_path):
     for folder in ("designs", "designs_paper_method"):
         lens = jaxlens.load(str(out / folder / "seed_0.zmx"))
         assert lens.num_surfaces > 6
+
+
+def test_recipes_of_the_design_run_and_the_ablation():
+    """The default run uses the strong recipe; --recipe paper is the DesignConfig default
+    (Table 1's +both+mask); explicit options win over the recipe."""
+    from jaxlens.design.multistart import DesignConfig
+
+    parse = classical.build_parser().parse_args
+    strong = classical.config_from_args(parse([]))
+    assert (strong.polish_steps, strong.n_fields) == (240, 13)
+    paper = classical.config_from_args(parse(["--recipe", "paper"]))
+    assert paper == DesignConfig(float64=True)
+    assert classical.config_from_args(parse([]), recipe="paper") == paper
+    assert classical.config_from_args(parse(["--polish-steps", "7"])).polish_steps == 7
+    assert classical.config_from_args(parse(["--steps", "0.5"])).polish_steps == 120
+    assert dict(classical.ABLATION_COLUMNS)["+recipe"] == dict(
+        curriculum=True, regularize=True, mask=True, polish_steps=240, n_fields=13)
