@@ -84,3 +84,21 @@ def test_cli_refuses_a_bad_population_before_work(value, capsys):
     assert classical.main(["--population", value, "--out", "/nonexistent/x"]) == 2
     err = capsys.readouterr().err
     assert "--population" in err and "starts per design" in err
+
+
+def test_polish_rings_change_only_the_polish_sampling():
+    """The polish may use a finer pupil: with as many rings as the other stages it is the
+    same design; with more rings only the polish differs."""
+    base = dict(TINY, polish_steps=2)
+    plain = multistart.design(SMALL, [0], multistart.DesignConfig(**base), progress=False,
+                              shard=False)
+    same = multistart.design(SMALL, [0], multistart.DesignConfig(**base, polish_rings=2),
+                             progress=False, shard=False)
+    finer = multistart.design(SMALL, [0], multistart.DesignConfig(**base, polish_rings=4),
+                              progress=False, shard=False)
+    np.testing.assert_allclose(same.params.c, plain.params.c, rtol=1e-12, atol=1e-15)
+    for a, b in zip(plain.history.spot_rms[:-1], finer.history.spot_rms[:-1], strict=True):
+        np.testing.assert_array_equal(a, b)  # every stage before the polish is unchanged
+    # The polish measures its first spot (same parameters) on the finer pupil.
+    assert plain.history.spot_rms[-1][0, 0] != pytest.approx(finer.history.spot_rms[-1][0, 0],
+                                                             rel=1e-6)

@@ -79,6 +79,9 @@ class DesignConfig:
             ``analysis.tolerance.Tolerances()`` (±0.5 % radius, ±0.02 mm gaps), with the
             nominal design weighted ``tolerance_nominal_weight``.
         tolerance_nominal_weight: w₀ of the tolerance-aware loss.
+        polish_rings: hexapolar rings of the polish's pupil sampling (0: ``rings``). A
+            finer pupil in the polish keeps the aspheres from fitting the sampled rays
+            only, between which rays can then fail or spread.
         population: random starts per design. All of them run the curriculum and
             fine-tuning; only the best of each design's starts (lowest loss-field RMS)
             continues to material snapping and the polish.
@@ -115,6 +118,7 @@ class DesignConfig:
     tolerance_trials: int = 0
     tolerance_nominal_weight: float = 0.5
     population: int = 1
+    polish_rings: int = 0
 
     def scaled(self, factor: float) -> DesignConfig:
         """The same recipe with every step count scaled by ``factor`` (at least 1 step)."""
@@ -314,12 +318,27 @@ def design(
         stages = [dataclasses.replace(s, loss="image") if s.name.startswith("fine-tune") else s
                   for s in stages]
 
+    if config.polish_rings:
+        stages = [dataclasses.replace(s, loss="polish") if s.name.startswith("polish") else s
+                  for s in stages]
+        polish_sampling = RayLoss.make(config.n_fields, config.polish_rings, spec.wavelengths,
+                                       spec.sensor_size, dtype)
+
     def objectives(pm):
-        ray = Objective(pm, sampling, bounds, efl=spec.efl, efl_weight=config.efl_weight)
-        image = {"image": _image_objective(ray, spec, config)} if image_loss else {}
-        if config.tolerance_trials:
-            ray = RobustObjective(ray, robust_draws, config.tolerance_nominal_weight)
-        return {"ray": ray, **image}
+        def ray_objective(sampling):
+            ray = Objective(pm, sampling, bounds, efl=spec.efl, efl_weight=config.efl_weight)
+            if config.tolerance_trials:
+                ray = RobustObjective(ray, robust_draws, config.tolerance_nominal_weight)
+            return ray
+
+        ray = ray_objective(sampling)
+        out = {"ray": ray}
+        if image_loss:
+            out["image"] = _image_objective(Objective(pm, sampling, bounds, efl=spec.efl,
+                                                      efl_weight=config.efl_weight), spec, config)
+        if config.polish_rings:
+            out["polish"] = ray_objective(polish_sampling)
+        return out
 
     def design_stages(stages, params, pm, materials, labels, first=0):
         cb = None if callback is None else (lambda i, st, p: callback(first + i, st, p))
