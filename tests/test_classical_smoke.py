@@ -78,11 +78,11 @@ def test_recipes_of_the_design_run_and_the_ablation():
 
     parse = classical.build_parser().parse_args
     strong = classical.config_from_args(parse([]))
-    assert (strong.polish_steps, strong.n_fields) == (240, 13)
+    assert (strong.polish_steps, strong.n_fields) == (240, 9)
     paper = classical.config_from_args(parse(["--recipe", "paper"]))
     assert paper == DesignConfig(float64=True)
     assert classical.config_from_args(parse([]), recipe="paper") == paper
     assert classical.config_from_args(parse(["--polish-steps", "7"])).polish_steps == 7
     assert classical.config_from_args(parse(["--steps", "0.5"])).polish_steps == 120
     assert dict(classical.ABLATION_COLUMNS)["+recipe"] == dict(
-        curriculum=True, regularize=True, mask=True, polish_steps=240, n_fields=13)
+        curriculum=True, regularize=True, mask=True, polish_steps=240)
