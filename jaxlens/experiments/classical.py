@@ -20,12 +20,15 @@ Recipe (default): multi-start (seeds vmapped and sharded over the CPU cores), Ad
 order-1 parameter space through the curriculum (FoV and F-number along the paper's sine
 path, ideal-image reference), fine-tuning at the full spec with the centroid reference,
 the image-height pin, the re-weighting mask and 1/RMS field weights, then a
-Levenberg–Marquardt polish on the spot residuals; the three regularizers throughout.
+Levenberg–Marquardt polish on the spot residuals; the three regularizers throughout. The
+default ``--recipe strong`` polishes for 240 steps; ``--recipe paper`` for 80, as Table 1's
+paper-method columns (``experiments/classical/RECIPE.md`` has the measurements).
 
 ``--ablation`` runs the Table 1 columns (baseline; +curriculum; +regularization; +both;
-+both+mask) over 20 random starts each and writes ``table1.md``, ``table1.json``, the full
-method's designs as ``designs/seed_<n>.zmx`` and the exact command into ``--ablation-out``
-(default ``experiments/classical``).
++both+mask; +recipe, the strong recipe) over 20 random starts each and writes
+``table1.md``, ``table1.json``, the designs of the +recipe and +both+mask columns as
+``designs/seed_<n>.zmx`` and ``designs_paper_method/seed_<n>.zmx`` and the exact command
+into ``--ablation-out`` (default ``experiments/classical``).
 
 Examples:
     python -m jaxlens.experiments.classical
