@@ -340,7 +340,7 @@ def design(
             out["polish"] = ray_objective(polish_sampling)
         return out
 
-    def design_stages(stages, params, pm, materials, labels, first=0):
+    def design_stages(stages, params, pm, materials, labels, first=0, mesh=mesh):
         cb = None if callback is None else (lambda i, st, p: callback(first + i, st, p))
         return run(spec, stages, params if mesh is None else shard_seeds(params, mesh),
                    objectives(pm), make_solver_factory(config, spec, dtype, materials),
@@ -365,11 +365,15 @@ def design(
         params, pmap, chosen, points = _catalog_materials(
             spec, config, mode, stages, params, pmap, objectives)
     if split < len(stages):
-        padded = _padded(seeds, n_dev)
+        # Least-squares and L-BFGS-B polishes run on one device (``run``): no mesh, so no
+        # padded copies to polish.
+        sharded = mesh is not None and all(s.solver == "adam" for s in stages[split:])
+        padded = _padded(seeds, n_dev) if sharded else list(seeds)
         params = jax.tree.map(lambda x: np.concatenate([x, np.repeat(x[-1:], len(padded) - len(
             seeds), 0)]), params)
         params, h2 = design_stages(stages[split:], params, pmap, False if mode != "fixed"
-                                   else None, padded, first=split)
+                                   else None, padded, first=split,
+                                   mesh=mesh if sharded else None)
         hist.extend(h2.select(list(range(len(seeds)))))
         params = jax.tree.map(lambda x: np.asarray(x)[: len(seeds)], params)
     starts_used = [labels[k] for k in keep]

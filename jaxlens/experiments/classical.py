@@ -132,7 +132,7 @@ def build_parser() -> argparse.ArgumentParser:
     g.add_argument("--fnum-start", type=float, default=2.8, help="curriculum start F#")
     g.add_argument("--asphere-terms", type=int, default=6, help="even terms r^4 … per surface")
     r = p.add_argument_group("recipe")
-    r.add_argument("--seeds", type=int, default=4, help="number of random starts")
+    r.add_argument("--seeds", type=int, default=3, help="number of random starts")
     r.add_argument("--seed-list", default=None, help="explicit comma-separated seeds")
     r.add_argument("--first-seed", type=int, default=0, help="first seed of --seeds")
     r.add_argument("--recipe", default="strong", choices=tuple(RECIPES),
