@@ -12,7 +12,7 @@ The metric is Table 1's: the mean over the 16 × 16 sensor grid of the polychrom
 radius (``jaxlens.design.evaluate``), computed on the grid's 36 distinct fields.
 
 Example (the recorded ``experiments/classical/tolerance.json``):
-    python -m jaxlens.experiments.tolerance experiments/classical/designs/seed_9.zmx \\
+    python -m jaxlens.experiments.tolerance experiments/classical/designs/seed_13.zmx \\
         --out experiments/classical
 """
 
