@@ -190,19 +190,22 @@ def distortion(lens: Lens, fields=None, wavelength=None) -> Distortion:
 
 @eqx.filter_jit
 def clear_semi_diameters(lens: Lens, fields=None, n_rim: int = 64, *,
-                         reaching: bool = False) -> Float[Array, " n"]:
+                         reaching: bool = False, pupil=None) -> Float[Array, " n"]:
     """Clear semi-diameter of every surface (mm).
 
     A finite ``semi_diameter`` is used as is; otherwise the largest radial height of the
     rim and chief rays over the lens's fields and wavelengths (paraxial aiming) among the
     rays that pass the whole lens, or, with ``reaching=True``, among the rays that reach
     that surface (the beam footprint: a ray lost further on, say where two surfaces cross,
-    still lights every surface before).
+    still lights every surface before). ``pupil`` (``[M, 2]`` unit-pupil points) adds
+    interior rays: where rim rays fail, a ray inside the pupil can pass higher than any
+    rim ray that passes, and an aperture sized from the rim alone would clip it.
     """
     fields = _fields_array(lens.fields if fields is None else fields)
     a = np.linspace(0, 2 * np.pi, n_rim, endpoint=False)
-    pupil = jnp.asarray(np.concatenate([[[0.0, 0.0]], np.stack([np.cos(a), np.sin(a)], -1)]),
-                        lens.epd.dtype)
+    rim = jnp.asarray(np.concatenate([[[0.0, 0.0]], np.stack([np.cos(a), np.sin(a)], -1)]),
+                      lens.epd.dtype)
+    pupil = rim if pupil is None else jnp.concatenate([rim, jnp.asarray(pupil, rim.dtype)])
     depth = None if lens.object_at_infinity else lens.object_distance
 
     def heights(field, wl):

@@ -285,17 +285,36 @@ def _seeds(args) -> list[int]:
 
 def finished_lens(result, i: int, spec):
     """Design i as a float64 lens with clear semi-diameters set for export."""
+    return with_clear_apertures(result.lens(i), spec)
+
+
+def with_clear_apertures(lens, spec):
+    """The lens (float64) with every surface's semi-diameter set to its clear aperture.
+
+    The stop gets EPD/2; every other surface the largest height of the rays that pass the
+    lens among the evaluation's own rays (the 256 fields, the 21 × 21 pupil grid, the three
+    wavelengths) and the pupil rim, so the exported design clips none of the rays it was
+    evaluated with.
+    """
     import equinox as eqx
     import jax.numpy as jnp
 
     from jaxlens import analysis
+    from jaxlens.design.evaluate import sensor_field_grid
+    from jaxlens.imaging.sampling import pupil_grid
 
-    lens = result.lens(i)
-    sd = analysis.clear_semi_diameters(lens)
+    lens = lens.astype(jnp.float64)
+    free = tuple(eqx.tree_at(lambda x: x.semi_diameter, s, jnp.asarray(jnp.inf))
+                 for s in lens.surfaces)
+    lens = eqx.tree_at(lambda x: (x.surfaces, x.epd), lens, (free, jnp.asarray(spec.epd)))
+    lens = eqx.tree_at(lambda x: x.wavelengths, lens, jnp.asarray(spec.wavelengths))
+    angles, _ = sensor_field_grid(spec)
+    sd = analysis.clear_semi_diameters(lens, jnp.asarray(angles),
+                                       pupil=pupil_grid(21, jnp.float64))
     surfaces = []
     for j, s in enumerate(lens.surfaces):
-        r = 0.5 * spec.epd * (1 + 1e-9) if j == lens.stop else float(sd[j]) * 1.0
-        surfaces.append(eqx.tree_at(lambda x: x.semi_diameter, s, jnp.asarray(r)))
+        r = 0.5 * spec.epd if j == lens.stop else float(sd[j])
+        surfaces.append(eqx.tree_at(lambda x: x.semi_diameter, s, jnp.asarray(r * (1 + 1e-9))))
     return eqx.tree_at(lambda x: x.surfaces, lens, tuple(surfaces))
 
 
