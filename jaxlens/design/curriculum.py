@@ -249,8 +249,9 @@ class History:
     results: list[list[str]] = dataclasses.field(default_factory=list)
 
     def select(self, columns: Sequence[int], relabel: dict | None = None) -> History:
-        """The history of designs ``columns`` only; ``relabel`` maps their seed labels to new
-        ones (failures of designs not selected are dropped)."""
+        """The history of designs ``columns`` only. ``relabel`` maps the selected designs'
+        seed labels to new ones; given, it also drops every failure whose label it does not
+        map (the designs not selected)."""
         cols = list(columns)
         relabel = {} if relabel is None else relabel
         failed = {relabel.get(k, k): v for k, v in self.failed.items()

@@ -325,19 +325,20 @@ def design(
                                        spec.sensor_size, dtype)
 
     def objectives(pm):
-        def ray_objective(sampling):
-            ray = Objective(pm, sampling, bounds, efl=spec.efl, efl_weight=config.efl_weight)
-            if config.tolerance_trials:
-                ray = RobustObjective(ray, robust_draws, config.tolerance_nominal_weight)
-            return ray
+        def robust(objective):
+            if not config.tolerance_trials:
+                return objective
+            return RobustObjective(objective, robust_draws, config.tolerance_nominal_weight)
 
-        ray = ray_objective(sampling)
-        out = {"ray": ray}
+        def ray(sampling):
+            return Objective(pm, sampling, bounds, efl=spec.efl, efl_weight=config.efl_weight)
+
+        plain = ray(sampling)
+        out = {"ray": robust(plain)}
         if image_loss:
-            out["image"] = _image_objective(Objective(pm, sampling, bounds, efl=spec.efl,
-                                                      efl_weight=config.efl_weight), spec, config)
+            out["image"] = _image_objective(plain, spec, config)
         if config.polish_rings:
-            out["polish"] = ray_objective(polish_sampling)
+            out["polish"] = robust(ray(polish_sampling))
         return out
 
     def design_stages(stages, params, pm, materials, labels, first=0, mesh=mesh):
@@ -351,11 +352,10 @@ def design(
     # Every start runs up to the polish; then the best start of each design continues (with
     # material selection, after its materials are snapped or searched).
     split = len(stages) - 1 if config.polish_steps and len(stages) > 1 else len(stages)
-    free_materials = None
-    if mode != "fixed":
-        params, pm_first, free_materials = _free_materials(spec, config, params, pmap)
-    else:
-        pm_first = pmap
+    free_materials = None if mode == "fixed" else True
+    pm_first = pmap
+    if free_materials:
+        params, pm_first = _free_materials(spec, config, params, pmap)
     params, hist = design_stages(stages[:split], params, pm_first, free_materials, labels)
     keep = best_starts(hist, labels, len(seeds), config.population)
     params = jax.tree.map(lambda x: np.asarray(x)[keep], params)
@@ -371,8 +371,8 @@ def design(
         padded = _padded(seeds, n_dev) if sharded else list(seeds)
         params = jax.tree.map(lambda x: np.concatenate([x, np.repeat(x[-1:], len(padded) - len(
             seeds), 0)]), params)
-        params, h2 = design_stages(stages[split:], params, pmap, False if mode != "fixed"
-                                   else None, padded, first=split,
+        held = None if free_materials is None else False  # catalog materials now held
+        params, h2 = design_stages(stages[split:], params, pmap, held, padded, first=split,
                                    mesh=mesh if sharded else None)
         hist.extend(h2.select(list(range(len(seeds)))))
         params = jax.tree.map(lambda x: np.asarray(x)[: len(seeds)], params)
@@ -421,7 +421,7 @@ def _free_materials(spec, config, params, pmap):
     params = LensParams(params.c, params.a, params.k, params.d,
                         jnp.broadcast_to(m0, (b,) + m0.shape))
     pm = eqx.tree_at(lambda p: p.materials, pmap, hull, is_leaf=lambda x: x is None)
-    return params, pm, True
+    return params, pm
 
 
 def _catalog_materials(spec, config, mode, stages, params, pmap, objectives):
@@ -447,10 +447,11 @@ def _catalog_materials(spec, config, mode, stages, params, pmap, objectives):
 
     params = with_tables(params, names)
     if mode == "search":
-        area = objectives(pm_t)["ray"].sampling.area
+        objective = objectives(pm_t)["ray"]
+        area = objective.sampling.area
         weights = jnp.broadcast_to(area, (b, area.shape[0]))
         args = stage_args(spec, stages[-1], weights, config.reg_weights, dtype)
-        names = search(region, objectives(pm_t)["ray"], params, args, names, spec.wavelengths)
+        names = search(region, objective, params, args, names, spec.wavelengths)
         params = with_tables(params, names)
     params = jax.tree.map(np.asarray, params)
     return params, pm_t, names, points
