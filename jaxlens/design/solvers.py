@@ -243,8 +243,9 @@ class DampedLeastSquares(AbstractSolver):
 
         def one(carry, _):
             x, lam, _ = carry
-            r, aux = res(x)
-            jac = jax.jacfwd(lambda z: res(z)[0])(x).astype(dt)
+            # The residuals come with the Jacobian's primal pass (no second evaluation).
+            jac, r = jax.jacfwd(lambda z: (res(z)[0],) * 2, has_aux=True)(x)
+            jac = jac.astype(dt)
             r64 = r.astype(dt)
             h = jac.T @ jac
             g = jac.T @ r64

@@ -207,17 +207,38 @@ def intersect(
         return _conic_root(surface, o, d, t_min) + t_plane
     o_s, d_s = jax.lax.stop_gradient((o, d))
     surf_s = jax.lax.stop_gradient(surface)
-    # Rays that miss the base conic start Newton from the vertex plane.
-    t0, hit = unmark(_conic_root(surf_s, o_s, d_s, t_min))
-    if not first:  # (on surface 1 the rays are on that plane already: t = 0)
-        t0 = jnp.where(hit, t0, bounded_div(-o_s[2], d_s[2])[0])
+    # Two starts: the base conic's root and the vertex plane (t = 0 on surface 1, where the
+    # rays already are). Newton begins at the one whose first step is shorter: where the
+    # polynomial terms move the surface far from its base conic, the ray can graze the
+    # surface at the conic root (F' ≈ 0) and the first step would throw it kilometres away.
+    t_conic, hit = unmark(_conic_root(surf_s, o_s, d_s, t_min))
+    t_vertex = jnp.zeros_like(t_conic) if first else bounded_div(-o_s[2], d_s[2])[0]
+
+    def project(t):
+        # Projected Newton: a root before t_min is invalid anyway, so an overshoot behind
+        # the ray's start restarts from t_min instead of wandering back.
+        return t if t_min is None else jnp.maximum(t, t_min)
+
+    def newton_step(t, f, df):
+        """The next iterate and the step's length (inf where F' is too small to divide)."""
+        dt, ok = bounded_div(f, df)
+        return project(t - dt), jnp.where(ok, jnp.abs(dt), jnp.inf)
+
+    f_c, df_c, _ = _residual(surf_s, o_s, d_s, t_conic)
+    f_v, df_v, _ = _residual(surf_s, o_s, d_s, t_vertex)
+    t_c, step_c = newton_step(t_conic, f_c, df_c)
+    t_v, step_v = newton_step(t_vertex, f_v, df_v)
+    from_conic = hit & (step_c <= step_v)
+    if newton_iters == 0:
+        t0 = jnp.where(from_conic, t_conic, t_vertex)
+    else:  # the first iteration, taken from the chosen start
+        t0 = jnp.where(from_conic, t_c, t_v)
 
     def step(_, t):
         f, df, _ = _residual(surf_s, o_s, d_s, t)
-        dt, _ = bounded_div(f, df)
-        return t - dt
+        return newton_step(t, f, df)[0]
 
-    t0 = jax.lax.fori_loop(0, newton_iters, step, t0)
+    t0 = jax.lax.fori_loop(0, max(newton_iters - 1, 0), step, t0)
     f0, df0, _ = _residual(surf_s, o_s, d_s, t0)
     scale = 1.0 + jnp.abs(t0)
     ok = (jnp.abs(f0) <= 64 * jnp.sqrt(eps) * scale) & jnp.isfinite(f0) & (df0 != 0)

@@ -1,0 +1,129 @@
+"""Re-evaluate exported designs with an independent tracer (optiland), beside jaxlens.
+
+``python -m benchmarks.reevaluate experiments/classical/designs`` reads every ``.zmx`` in the
+folder, evaluates it with ``jaxlens.design.evaluate`` (Table 1's definition) and traces the
+same evaluation rays with optiland's numpy backend (``benchmarks.optiland_ref``): the 16 × 16
+sensor fields, the 21 × 21 pupil grid (317 rays) aimed at the paraxial entrance pupil, at
+every design wavelength. Ray generation and the statistic are shared; the intersections and
+refractions are optiland's own. Per field the RMS spot radius pools the wavelengths about
+their common centroid; a ray counts when optiland returns it finite with non-zero
+intensity. optiland is not a jaxlens dependency: without it the script says so and stops.
+
+The optiland bridge carries no clear apertures, so it tests the optical prescription; the
+apertures and the self-intersection check are jaxlens's (``Evaluation.valid``).
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+import pathlib
+import sys
+import time
+
+import jax
+import numpy as np
+
+
+def _optiland_field_stats(lens, spec, pupil, fields):
+    """``(rms_um [F], valid_fraction [F])`` from optiland traces of the evaluation rays."""
+    import jax.numpy as jnp
+
+    from jaxlens.imaging.sampling import field_rays
+
+    from . import optiland_ref
+
+    pts, ok = [], []
+    for wl in spec.wavelengths:
+        rays = jax.vmap(lambda f, wl=wl: field_rays(lens, f, pupil, wl))(jnp.asarray(fields))
+        o = np.asarray(rays.origin, float).reshape(-1, 3)
+        d = np.asarray(rays.direction, float).reshape(-1, 3)
+        op = optiland_ref.build_optic(lens, float(wl))
+        out = optiland_ref.trace(op, o, d, float(wl))
+        p = optiland_ref.intercepts(out)
+        good = np.all(np.isfinite(p), -1) & (np.asarray(out.i) > 0)
+        pts.append(p[:, :2].reshape(len(fields), -1, 2))
+        ok.append(good.reshape(len(fields), -1))
+    p = np.concatenate(pts, 1)  # [F, W·M, 2]
+    v = np.concatenate(ok, 1)
+    w = v.astype(float)
+    n = np.maximum(w.sum(1), 1.0)
+    q = np.where(v[..., None], p, 0.0)
+    cen = q.sum(1) / n[:, None]
+    r2 = np.where(v, np.sum((q - cen[:, None]) ** 2, -1), 0.0).sum(1) / n
+    return 1e3 * np.sqrt(r2), v.mean(1)
+
+
+def reevaluate(folder: pathlib.Path, spec) -> dict:
+    import equinox as eqx
+    import jax.numpy as jnp
+
+    import jaxlens
+    from jaxlens.design.evaluate import MIN_VALID_FRACTION, evaluate, sensor_field_grid
+    from jaxlens.imaging.sampling import pupil_grid
+
+    files = sorted(folder.glob("*.zmx"), key=lambda f: (len(f.stem), f.stem))
+    if not files:
+        raise SystemExit(f"reevaluate: no .zmx files in {folder}")
+    ang, _ = sensor_field_grid(spec)
+    pupil = pupil_grid(21, jnp.float64)
+    rows = []
+    for f in files:
+        lens = jaxlens.load(f).astype(jnp.float64)
+        ev = evaluate(lens, spec)
+        bare = eqx.tree_at(lambda x: x.epd, lens, jnp.asarray(spec.epd, jnp.float64))
+        rms, frac = _optiland_field_stats(bare, spec, pupil, ang)
+        rows.append(dict(
+            design=f.name, jaxlens_rms_mean_um=ev.rms_mean_um, jaxlens_valid=ev.valid,
+            jaxlens_min_valid_fraction=float(np.min(ev.valid_fraction)),
+            optiland_rms_mean_um=float(np.mean(rms)),
+            optiland_min_valid_fraction=float(np.min(frac)),
+            optiland_rays_ok=bool(np.all(frac >= MIN_VALID_FRACTION)),
+            relative_difference=float(np.mean(rms) / ev.rms_mean_um - 1.0)))
+        print(f"{f.name:14s} jaxlens {ev.rms_mean_um:7.3f} µm valid {ev.valid!s:5s} | optiland "
+              f"{np.mean(rms):7.3f} µm min ray share {np.min(frac):.4f}", flush=True)
+    ok = [r for r in rows if r["jaxlens_valid"] and r["optiland_rays_ok"]]
+    o = np.array([r["optiland_rms_mean_um"] for r in ok])
+    j = np.array([r["jaxlens_rms_mean_um"] for r in ok])
+    return dict(
+        folder=str(folder), designs=len(rows), valid_both=len(ok),
+        optiland_rms_mean_um=float(o.mean()) if len(o) else None,
+        optiland_rms_min_um=float(o.min()) if len(o) else None,
+        optiland_rms_max_um=float(o.max()) if len(o) else None,
+        jaxlens_rms_mean_um=float(j.mean()) if len(j) else None,
+        max_abs_relative_difference=float(max(abs(r["relative_difference"]) for r in rows)),
+        per_design=rows)
+
+
+def main(argv=None):
+    p = argparse.ArgumentParser(prog="python -m benchmarks.reevaluate", description=__doc__,
+                                formatter_class=argparse.RawDescriptionHelpFormatter)
+    p.add_argument("folder", type=pathlib.Path, help="folder of exported .zmx designs")
+    p.add_argument("--out", type=pathlib.Path, default=None,
+                   help="JSON file for the results (default: <folder>/../reevaluation.json)")
+    a = p.parse_args(argv)
+    from . import optiland_ref
+
+    if not optiland_ref.available():
+        print("reevaluate: optiland is not installed (pip install optiland); it is an "
+              "optional, independent reference and not a jaxlens dependency", file=sys.stderr)
+        return 2
+    jax.config.update("jax_enable_x64", True)
+    from jaxlens.design.spec import DesignSpec
+
+    t0 = time.perf_counter()
+    out = reevaluate(a.folder, DesignSpec())
+    out["seconds"] = time.perf_counter() - t0
+    out["command"] = "python -m benchmarks.reevaluate " + str(a.folder)
+    dest = a.out or a.folder.parent / "reevaluation.json"
+    dest.write_text(json.dumps(out, indent=1) + "\n")
+    print(f"{out['valid_both']}/{out['designs']} valid in both; optiland mean "
+          f"{out['optiland_rms_mean_um']:.3f} µm, min {out['optiland_rms_min_um']:.3f}, max "
+          f"{out['optiland_rms_max_um']:.3f}; jaxlens mean {out['jaxlens_rms_mean_um']:.3f}; "
+          f"largest per-design difference {100 * out['max_abs_relative_difference']:.3f} % "
+          f"-> {dest}")
+    return 0
+
+
+if __name__ == "__main__":
+    raise SystemExit(main())
