@@ -18,8 +18,9 @@ Intersections:
     roots of the quadratic), which is exact; its derivative is the implicit-function one,
     dt = −dF/F_t on the implicit conic F (a ``custom_jvp``, so forward and reverse mode
     both work and neither differentiates the root selection). Surfaces
-    with polynomial terms start from that root and take ``newton_iters`` Newton steps
-    on F(t) = z(t) − sag(x(t), y(t)). Those iterations carry no gradient. One last
+    with polynomial terms take ``newton_iters`` Newton steps on F(t) = z(t) − sag(x(t),
+    y(t)), from the base conic's root or the vertex plane, whichever gives the shorter
+    first step, kept at t ≥ t_min (projected Newton). Those iterations carry no gradient. One last
     Newton step is taken with gradients switched on and the derivative F'(t) held
     fixed; at the converged root its derivative is exactly the implicit-function
     theorem result dt/dθ = −(∂F/∂θ)/(∂F/∂t), so the backward pass never unrolls the
