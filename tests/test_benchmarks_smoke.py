@@ -148,3 +148,30 @@ def test_reevaluate_agrees_with_jaxlens_on_an_exported_design(tmp_path):
     row = out["per_design"][0]
     assert row["jaxlens_valid"] and row["optiland_rays_ok"]
     assert abs(row["relative_difference"]) < 1e-5  # optiland stops its Newton earlier
+
+
+def test_first_crossing_scan_accepts_a_correct_trace_and_rejects_a_wrong_root(monkeypatch):
+    """The brute-force check behind the re-evaluation: jaxlens's intersections on a shipped
+    +recipe design are first crossings; the same path checked against a lens with one gap
+    0.05 mm longer (its points now off the surfaces) is rejected."""
+    import equinox as eqx
+    import jax.numpy as jnp
+    import numpy as np
+
+    import jaxlens as jl
+    import jaxlens.tracing.forward as fwd
+
+    if str(ROOT) not in sys.path:
+        sys.path.insert(0, str(ROOT))
+    from benchmarks import reevaluate
+    from jaxlens.imaging.sampling import field_rays, pupil_grid
+
+    lens = jl.load(ROOT / "experiments" / "classical" / "designs" / "seed_11.zmx")
+    rays = field_rays(lens, jnp.array([31.0, 31.0]), pupil_grid(9), 0.4861327)
+    valid = np.asarray(jl.trace(lens, rays).valid)
+    assert valid.sum() > 10
+    assert np.array_equal(reevaluate.first_crossings(lens, rays), valid)
+    path = fwd.trace_path(lens, rays)
+    monkeypatch.setattr(fwd, "trace_path", lambda *_: path)
+    moved = eqx.tree_at(lambda x: x.thickness, lens, lens.thickness.at[4].add(0.05))
+    assert not reevaluate.first_crossings(moved, rays)[valid].any()
