@@ -284,8 +284,12 @@ def _seeds(args) -> list[int]:
 
 
 def finished_lens(result, i: int, spec):
-    """Design i as a float64 lens with clear semi-diameters set for export."""
-    return with_clear_apertures(result.lens(i), spec)
+    """Design i as a float64 lens for export: clear semi-diameters set, and each asphere
+    written on its closest conic (``optics.rebase``: the same sag, traceable by tools that
+    start Newton at the base conic)."""
+    from jaxlens.optics.rebase import rebase_conics
+
+    return rebase_conics(with_clear_apertures(result.lens(i), spec))
 
 
 def with_clear_apertures(lens, spec):
