@@ -64,6 +64,7 @@ def _optiland_field_stats(lens, spec, pupil, fields):
     ``confirmed`` those of them whose jaxlens path :func:`first_crossings` confirms."""
     import jax.numpy as jnp
 
+    from jaxlens.analysis.spots import weighted_rms
     from jaxlens.imaging.sampling import field_rays
     from jaxlens.optics.rays import Rays
     from jaxlens.tracing.forward import trace
@@ -89,14 +90,10 @@ def _optiland_field_stats(lens, spec, pupil, fields):
             confirmed += int(np.sum(first_crossings(lens, sub)))
         pts.append(p[:, :2].reshape(len(fields), -1, 2))
         ok.append(good.reshape(len(fields), -1))
-    p = np.concatenate(pts, 1)  # [F, W·M, 2]
-    v = np.concatenate(ok, 1)
-    w = v.astype(float)
-    n = np.maximum(w.sum(1), 1.0)
-    q = np.where(v[..., None], p, 0.0)
-    cen = q.sum(1) / n[:, None]
-    r2 = np.where(v, np.sum((q - cen[:, None]) ** 2, -1), 0.0).sum(1) / n
-    return 1e3 * np.sqrt(r2), v.mean(1), disputed, confirmed
+    v = np.concatenate(ok, 1)  # [F, W·M]
+    p = np.where(v[..., None], np.concatenate(pts, 1), 0.0)
+    rms = weighted_rms(jnp.asarray(p), jnp.asarray(v, p.dtype))  # the library's definition
+    return 1e3 * np.asarray(rms), v.mean(1), disputed, confirmed
 
 
 def reevaluate(folder: pathlib.Path, spec) -> dict:
@@ -116,8 +113,8 @@ def reevaluate(folder: pathlib.Path, spec) -> dict:
     for f in files:
         lens = jaxlens.load(f).astype(jnp.float64)
         ev = evaluate(lens, spec)
-        bare = eqx.tree_at(lambda x: x.epd, lens, jnp.asarray(spec.epd, jnp.float64))
-        rms, frac, disputed, confirmed = _optiland_field_stats(bare, spec, pupil, ang)
+        at_spec = eqx.tree_at(lambda x: x.epd, lens, jnp.asarray(spec.epd, jnp.float64))
+        rms, frac, disputed, confirmed = _optiland_field_stats(at_spec, spec, pupil, ang)
         rows.append(dict(
             design=f.name, jaxlens_rms_mean_um=ev.rms_mean_um, jaxlens_valid=ev.valid,
             jaxlens_min_valid_fraction=float(np.min(ev.valid_fraction)),

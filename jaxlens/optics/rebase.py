@@ -20,11 +20,12 @@ Conventions: lengths in mm; sag z(r) = c r²/(1 + √(1 − (1 + k) c² r²)) + 
 from __future__ import annotations
 
 import equinox as eqx
+import jax
 import jax.numpy as jnp
 import numpy as np
 
 from .lens import Lens
-from .surfaces import EvenAsphere
+from .surfaces import EvenAsphere, Standard
 
 # Refitted sag may differ from the original by at most this much over the aperture (mm).
 SAG_TOLERANCE = 1e-8
@@ -34,8 +35,14 @@ CONIC_GRID = np.linspace(-50.0, 50.0, 2001)
 MIN_GAIN = 0.1
 
 
-def _conic_sag(c: float, k: float, r: np.ndarray) -> np.ndarray:
-    return c * r**2 / (1.0 + np.sqrt(np.maximum(1.0 - (1.0 + k) * c**2 * r**2, 0.0)))
+def _conic_sags(c: float, ks: np.ndarray, r: np.ndarray) -> np.ndarray:
+    """``[K, n]`` sags of the base conics (curvature c, conic constants ``ks``) at radii r."""
+    r = jnp.asarray(r)
+
+    def one(k):
+        return Standard(c=c, k=k).sag(jnp.zeros_like(r), r)[0]
+
+    return np.asarray(jax.vmap(one)(jnp.asarray(ks, r.dtype)), float)
 
 
 def rebase_conic(surface: EvenAsphere, semi_diameter: float | None = None,
@@ -66,17 +73,17 @@ def rebase_conic(surface: EvenAsphere, semi_diameter: float | None = None,
     basis = u[:, None] ** powers[None, :]
     target = z - a[0] * r**2
 
-    def departure(kk):
-        return np.sqrt(np.sum(u * (z - _conic_sag(c, kk, r)) ** 2) / np.sum(u))
-
     ok = 1.0 - (1.0 + CONIC_GRID) * c**2 * (1.05 * r_max) ** 2 > 0.0
     candidates = CONIC_GRID[ok]
-    deps = np.array([departure(kk) for kk in candidates])
+    bases = _conic_sags(c, np.concatenate([[k], candidates]), r)
+    # Area-weighted RMS distance of each base conic from the surface.
+    deps = np.sqrt(np.sum(u * (z - bases) ** 2, -1) / np.sum(u))
+    now, bases, deps = deps[0], bases[1:], deps[1:]
     best_k, best_coef = k, None
     for i in np.argsort(deps):  # closest conic first; the first whose refit is exact wins
-        if deps[i] >= (1.0 - MIN_GAIN) * departure(k):
+        if deps[i] >= (1.0 - MIN_GAIN) * now:
             break
-        rest = target - _conic_sag(c, candidates[i], r)
+        rest = target - bases[i]
         coef, *_ = np.linalg.lstsq(basis, rest, rcond=None)
         if np.max(np.abs(basis @ coef - rest)) <= SAG_TOLERANCE:
             best_k, best_coef = float(candidates[i]), coef
