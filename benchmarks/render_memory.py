@@ -10,10 +10,15 @@ shared machine), so the run without checkpointing, which needs far more than the
 1024², is reported as "exceeded the cap" rather than taking the machine down; it is also
 measured at smaller sizes to show how it grows.
 
-Run (about 15 minutes on 2 cores)::
+It also measures, in a worker of its own, the bare trace's forward+gradient rate on the same
+lens (``benchmarks.throughput.forward_grad``: 1e6 rays, float32, best of 3), and reports the
+checkpointed render gradient's ray·surfaces/s as a ratio of it (issue 15's target: ≥ 0.4).
+
+Run (about 6 minutes on 2 cores)::
 
     python -m benchmarks.render_memory            # writes benchmarks/results/render_memory.json
     python -m benchmarks.render_memory --worker --size 256 --spp 16 --checkpoint 0   # one run
+    python -m benchmarks.render_memory --worker --trace-rays 1000000   # the trace reference
 """
 
 from __future__ import annotations
@@ -98,6 +103,24 @@ def worker(size: int, spp: int, checkpoint: bool, patch: int) -> dict:
     }
 
 
+def trace_worker(n: int) -> dict:
+    """The bare trace's value_and_grad rate on the same lens (``throughput.forward_grad``)."""
+    import jax
+    import jax.numpy as jnp
+
+    jax.config.update("jax_enable_x64", True)  # as in the throughput benchmark: float64 setup
+    import jaxlens
+
+    from . import common, throughput
+
+    lens = jaxlens.zoo.cellphone6()
+    rays = throughput.make_rays(lens, n, jnp.float32)
+    t = common.time_jitted(throughput.forward_grad, lens, rays, repeats=3, min_total_s=0.2)
+    ns = lens.num_surfaces
+    return {"trace_rays": n, "surfaces": ns, "run_s": t["run_s"],
+            "rate": n * ns / t["run_s"], "timing": t}
+
+
 def _rss(pid: int) -> int:
     try:
         for line in pathlib.Path(f"/proc/{pid}/status").read_text().splitlines():
@@ -108,8 +131,10 @@ def _rss(pid: int) -> int:
     return 0
 
 
-def run_isolated(size: int, spp: int, checkpoint: bool, patch: int, cap: int) -> dict:
-    """Run ``worker`` in a fresh process, sampling its RSS; stop it above ``cap`` bytes."""
+def run_isolated(size: int, spp: int, checkpoint: bool, patch: int, cap: int,
+                 trace_rays: int = 0) -> dict:
+    """Run ``worker`` (or ``trace_worker`` if ``trace_rays``) in a fresh process, sampling its
+    RSS; stop it above ``cap`` bytes."""
     cmd = [
         sys.executable,
         "-m",
@@ -123,7 +148,7 @@ def run_isolated(size: int, spp: int, checkpoint: bool, patch: int, cap: int) ->
         str(int(checkpoint)),
         "--patch",
         str(patch),
-    ]
+    ] + (["--trace-rays", str(trace_rays)] if trace_rays else [])
     env = dict(os.environ, XLA_FLAGS=os.environ.get("XLA_FLAGS", ""))
     t0 = time.perf_counter()
     proc = subprocess.Popen(
@@ -144,7 +169,9 @@ def run_isolated(size: int, spp: int, checkpoint: bool, patch: int, cap: int) ->
         "sampled_peak_rss_bytes": peak,
     }
     # A run that did not report back still records what it was asked to do.
-    asked = dict(size=size, spp=spp, checkpoint=checkpoint, patch=patch, rays=size * size * spp * 3)
+    asked = (dict(trace_rays=trace_rays) if trace_rays else
+             dict(size=size, spp=spp, checkpoint=checkpoint, patch=patch,
+                  rays=size * size * spp * 3))
     if killed:
         res.update(asked, exceeded_cap=True, cap_bytes=cap)
         return res
@@ -160,7 +187,7 @@ def run_isolated(size: int, spp: int, checkpoint: bool, patch: int, cap: int) ->
             res["failed_allocation_bytes"] = int(m.group(1))
         return res
     res.update(json.loads(out.strip().splitlines()[-1]))
-    res["peak_rss_bytes"] = max(res["ru_maxrss_bytes"], peak)
+    res["peak_rss_bytes"] = max(res.get("ru_maxrss_bytes", 0), peak)
     return res
 
 
@@ -177,6 +204,22 @@ def _outcome(run: dict, cap_gib: float) -> str:
     return "failed"
 
 
+def residual_note(runs: list[dict], size: int, spp: int) -> str:
+    """What the gradient without checkpointing stores per ray, from the runs that finished."""
+    done = sorted((r["rays"], r["peak_rss_bytes"]) for r in runs
+                  if not r.get("checkpoint") and "peak_rss_bytes" in r and "rays" in r)
+    note = "peak RSS includes XLA compilation and the Python process (about 1 GB)"
+    if len(done) < 2 or done[-1][0] == done[0][0]:
+        return note
+    (n0, b0), (n1, b1) = done[0], done[-1]
+    per_ray = (b1 - b0) / (n1 - n0)
+    rays = size * size * spp * 3
+    return (f"{note}; without checkpointing the gradient stores every ray's residuals, about "
+            f"{per_ray:.0f} bytes per ray (slope between the plain runs of {n0} and {n1} rays), "
+            f"so {size}² x {spp} spp x 3 colours ({rays / 1e6:.0f} M rays) would need about "
+            f"{per_ray * rays / 1e9:.0f} GB")
+
+
 def main(argv=None) -> None:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--worker", action="store_true", help="run one configuration here")
@@ -184,9 +227,14 @@ def main(argv=None) -> None:
     ap.add_argument("--spp", type=int, default=16)
     ap.add_argument("--patch", type=int, default=64)
     ap.add_argument("--checkpoint", type=int, default=1)
+    ap.add_argument("--trace-rays", type=int, default=0,
+                    help="worker: time the bare trace's gradient on this many rays instead")
     ap.add_argument("--cap-gib", type=float, default=8.0)
     ap.add_argument("--out", type=pathlib.Path, default=RESULTS / "render_memory.json")
     args = ap.parse_args(argv)
+    if args.worker and args.trace_rays:
+        print(json.dumps(trace_worker(args.trace_rays)))
+        return
     if args.worker:
         print(json.dumps(worker(args.size, args.spp, bool(args.checkpoint), args.patch)))
         return
@@ -206,7 +254,12 @@ def main(argv=None) -> None:
         r = run_isolated(size, args.spp, ckpt, args.patch, cap)
         print(json.dumps(r), flush=True)
         runs.append(r)
+    ref = run_isolated(0, 0, False, 0, cap, trace_rays=10**6)
+    print(json.dumps(ref), flush=True)
     main_ck, main_plain = runs[0], runs[1]
+    lens_surfaces = ref.get("surfaces")
+    render_rate = (main_ck["rays"] * lens_surfaces / main_ck["run_s"]
+                   if "run_s" in main_ck and lens_surfaces else None)
     result = {
         "benchmark": "peak RSS of value_and_grad of an MSE loss on jaxlens.imaging.render "
         "(method=RayRender(), RGB, float32) through jaxlens.zoo.cellphone6, w.r.t. "
@@ -220,10 +273,16 @@ def main(argv=None) -> None:
         "no_checkpoint_outcome": _outcome(main_plain, args.cap_gib),
         "no_checkpoint_failed_allocation_bytes": main_plain.get("failed_allocation_bytes"),
         "checkpoint_fits_4GB": bool(main_ck.get("peak_rss_bytes", 1 << 62) < 4 * 10**9),
-        "note": "peak RSS includes XLA compilation and the Python process (about 1 GB); "
-        "without checkpointing the gradient stores every ray's residuals, about "
-        "2.3 kB per ray (128² and 256² runs), so 1024² x 16 spp x 3 colours "
-        "(50 M rays) would need about 120 GB",
+        "render_gradient_s": main_ck.get("run_s"),
+        "render_gradient_rate": render_rate,
+        "trace_gradient_rate": ref.get("rate"),
+        "render_over_trace_gradient": (render_rate / ref["rate"]
+                                       if render_rate and ref.get("rate") else None),
+        "rate_note": "ray·surfaces/s of value_and_grad: the render's rays (size² × spp × 3 "
+        "colours) × the lens's surfaces / its run time, against the bare trace of 1e6 rays "
+        "through the same lens (benchmarks.throughput.forward_grad, float32)",
+        "trace_reference": ref,
+        "note": residual_note(runs, args.size, args.spp),
         "runs": runs,
         "machine": machine_info(),
     }

@@ -282,6 +282,15 @@ def headline(out: pathlib.Path) -> str:
             mem.get("note", ""),
             "",
         ]
+        if mem.get("render_over_trace_gradient"):
+            parts += [
+                f"Gradient rate: the checkpointed {mem['size']}² render gradient took "
+                f"{mem['render_gradient_s']:.1f} s, {mem['render_gradient_rate']:.3g} "
+                f"ray·surfaces/s, **{mem['render_over_trace_gradient']:.2f}×** the bare trace's "
+                f"forward+gradient rate on the same lens in the same run "
+                f"({mem['trace_gradient_rate']:.3g} ray·surfaces/s, 1e6 rays, float32).",
+                "",
+            ]
     speed = _load(out, "render_speed")
     if speed:
         parts += [

@@ -121,6 +121,25 @@ def test_design_step_smoke(tmp_path):
     assert all(v > 0 for v in r["median_s"].values())
 
 
+def test_render_memory_smoke():
+    """One checkpointed render gradient and the bare-trace reference, each in its own process,
+    on tiny sizes; the per-ray residual note is the slope between the plain runs."""
+    if str(ROOT) not in sys.path:
+        sys.path.insert(0, str(ROOT))
+    from benchmarks import render_memory
+
+    cap = 8 * 2**30
+    run = render_memory.run_isolated(32, 1, True, 16, cap)
+    assert run["gradient_finite"] and run["run_s"] > 0 and run["rays"] == 32 * 32 * 3
+    ref = render_memory.run_isolated(0, 0, False, 0, cap, trace_rays=4096)
+    assert ref["surfaces"] == 13 and math.isfinite(ref["rate"]) and ref["rate"] > 0
+    runs = [dict(rays=100, checkpoint=False, peak_rss_bytes=10_000),
+            dict(rays=300, checkpoint=False, peak_rss_bytes=50_000),
+            dict(rays=300, checkpoint=True, peak_rss_bytes=1)]
+    assert "about 200 bytes per ray" in render_memory.residual_note(runs, 10, 1)
+    assert "bytes per ray" not in render_memory.residual_note(runs[:1], 10, 1)
+
+
 def test_reevaluate_without_optiland_says_so(monkeypatch, capsys, tmp_path):
     if str(ROOT) not in sys.path:
         sys.path.insert(0, str(ROOT))
