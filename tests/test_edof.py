@@ -87,6 +87,26 @@ def test_table2_rec_metrics_come_from_the_reconstruction():
     assert vals["0.1"]["rec"]["psnr"] == pytest.approx(v["rec"]["psnr"])
 
 
+def test_image_balanced_gain_weights_every_image_equally():
+    # 30 crops of one image at 0 dB and 2 crops of another at +2 dB: the crop mean is 0.125,
+    # the image-balanced mean 1.0; drawing the images gives replicates 0, 1 or 2.
+    images = ["big"] * 30 + ["small"] * 2
+    diff = np.array([[0.0] * 30 + [2.0] * 2] * 3)
+    crop = E.bootstrap_gain(diff)
+    bal = E.bootstrap_gain_by_image(diff, images, n=2000)
+    assert crop["mean"] == pytest.approx(0.125)
+    assert bal["mean"] == pytest.approx(1.0)
+    assert bal["ci95"] == pytest.approx([0.0, 2.0])
+    # Within-image spread and seed offsets enter the interval; the mean is unchanged.
+    rng = np.random.default_rng(1)
+    noisy = diff + rng.normal(0, 0.5, diff.shape) + np.array([[-1.0], [0.0], [1.0]])
+    b2 = E.bootstrap_gain_by_image(noisy, images)
+    assert b2["mean"] == pytest.approx(np.mean([noisy[:, :30].mean(), noisy[:, 30:].mean()]))
+    assert b2["ci95"][0] < b2["mean"] < b2["ci95"][1]
+    with pytest.raises(ValueError, match="image labels"):
+        E.bootstrap_gain_by_image(diff, images[:-1])
+
+
 def test_placements_cycle_over_the_frame_blocks():
     assert E.placements(5, (8, 8), 4) == [(0, 0), (0, 4), (4, 0), (4, 4), (0, 0)]
     with pytest.raises(ValueError, match="does not fit"):
@@ -355,6 +375,16 @@ def test_smoke_run_writes_outputs_loss_falls_and_resumes(tmp_path):
     assert json.loads((tmp_path / "edof3" / "table2.json").read_text())["lenses"] == \
         table["lenses"]
     assert third["timings_s"]["train_hybrid_s0_s"] < 5.0
+    # An evaluation-only option (--eval-pupil) resumes the trained lenses and evaluates them
+    # anew; an option that changes the training refuses the checkpoint.
+    fourth = edof.run(common + ["--out", str(tmp_path / "edof4"), "--checkpoint", str(ck),
+                                "--resume", "--eval-pupil", "12"])
+    assert fourth["timings_s"]["train_hybrid_s0_s"] < 5.0
+    settings = json.loads((ck / "seed0" / "eval_hybrid_settings.json").read_text())
+    assert settings == {"eval_pupil": 12, "crops": 4}
+    with pytest.raises(ValueError, match="another configuration"):
+        edof.run(common + ["--out", str(tmp_path / "edof5"), "--checkpoint", str(ck),
+                           "--resume", "--steps", "61"])
 
 
 def test_reported_fov_is_the_real_chief_ray_to_the_sensor_corner():

@@ -9,7 +9,7 @@ cubic phase plate at the aperture (its strength bounded below, its sensor positi
 trainable). All three get the same decoder, batches, steps and lens updates.
 
 Image formation goes through ``jaxlens.imaging`` (``edof.optics``): PSFs normalised by the
-light entering the entrance pupil, one per 32-pixel tile (8 × 8 per frame), shot and read
+light entering the entrance pupil, one per 32-pixel tile (16 × 16 per frame), shot and read
 noise. For every seed and lens it trains (``edof.train``), then scores the raw image, the
 reconstruction and a Wiener-deconvolution reference on held-out native-resolution test
 crops at 10 cm, 20 cm and 10 m (``edof.evaluate``).
@@ -21,9 +21,10 @@ timings, histories, PSF measures), ``command.txt``, the trained lenses
 ``--record DIR`` copies tables, summary and figures there (the committed copy is
 ``experiments/edof``).
 
-Defaults are the CPU scale (4× binned 256² sensor, so a 256² test crop fills the frame; a
-16-wide NAFNet behind a Wiener front end; 300 + 60 steps per lens; one seed); ``--seeds 0,1,2``
-gives the 3-seed table.
+Defaults are the CPU scale (2× binned 512² sensor of 9.94 µm pixels, so a 256² test crop
+fills a quarter of the frame and the defocus blur is half its full-resolution width in
+pixels; 31² PSF kernels; a 16-wide NAFNet behind a Wiener front end; 1200 + 60 steps per
+lens; one seed); ``--seeds 0,1,2`` gives the 3-seed table.
 ``--paper`` selects the paper's scale for a GPU; with ``--checkpoint DIR`` a run saves its
 state every ``refresh_every`` steps, ``--time-limit S`` stops it at the first checkpoint
 after S seconds (exit status 3) and ``--resume`` continues it, so it can go in pieces.
@@ -85,14 +86,14 @@ def build_parser() -> argparse.ArgumentParser:
     g = p.add_argument_group("training (defaults: CPU scale)")
     g.add_argument("--decoder", choices=("nafnet", "wiener"),
                    help="NAFNet alone, or behind a Wiener front end (wiener)")
-    g.add_argument("--steps", type=int, help="stage-1 steps per lens (300)")
+    g.add_argument("--steps", type=int, help="stage-1 steps per lens (1200)")
     g.add_argument("--steps2", type=int, help="stage-2 steps per lens (60)")
     g.add_argument("--batch", type=int, help="patches per batch (8)")
     g.add_argument("--tile", type=int, help="tile and patch side, pixels (32)")
-    g.add_argument("--kernel", type=int, help="PSF kernel side, pixels (21)")
-    g.add_argument("--binning", type=int, help="sensor binning of the 1024² sensor (4)")
+    g.add_argument("--kernel", type=int, help="PSF kernel side, pixels (31)")
+    g.add_argument("--binning", type=int, help="sensor binning of the 1024² sensor (2)")
     g.add_argument("--pupil", type=int, help="pupil rays per side of a training PSF (32)")
-    g.add_argument("--eval-pupil", type=int, help="pupil rays per side at evaluation (32)")
+    g.add_argument("--eval-pupil", type=int, help="pupil rays per side at evaluation (64)")
     g.add_argument("--lens-every", type=int, help="a lens update every N steps (4)")
     g.add_argument("--lr-net", type=float, help="network learning rate (1e-3)")
     g.add_argument("--lr-lens", type=float, help="lens learning rate, scaled units (2e-2)")
@@ -337,13 +338,15 @@ def _run_into(a, argv, cfg, names, folder, out) -> dict:
             jaxlens.save(lens, os.path.join(out, "lenses", f"{tag}.json"))
             eqx.tree_serialise_leaves(os.path.join(out, "nets", f"{tag}.eqx"), dec)
             t0 = time.perf_counter()
-            cached = _load_eval(ck, name)  # a resumed run does not evaluate a lens twice
+            # A resumed run does not evaluate a lens twice with the same settings.
+            settings = {"eval_pupil": cfg.eval_pupil, "crops": int(len(windows))}
+            cached = _load_eval(ck, name, settings)
             if cached is None:
                 bank = O.psf_bank(lens, tile=cfg.tile, kernel_size=cfg.kernel_size,
                                   pupil=cfg.eval_pupil, chunk=2 * cfg.batch)
                 vals, ex = E.evaluate(dec, bank, windows, cfg=cfg, key=k_eval, nsr=nsr,
                                       keep=0 if seed == a.seeds[0] else None)
-                _save_eval(ck, name, bank, vals, ex)
+                _save_eval(ck, name, bank, vals, ex, settings)
             else:
                 bank, vals, ex = cached
             timings[f"evaluate_{tag}_s"] = time.perf_counter() - t0
@@ -409,8 +412,9 @@ def _run_into(a, argv, cfg, names, folder, out) -> dict:
     return summary
 
 
-def _save_eval(ck, name, bank, vals, examples) -> None:
-    """Keep a lens's evaluation in the checkpoint folder (bank, per-crop values, examples)."""
+def _save_eval(ck, name, bank, vals, examples, settings: dict) -> None:
+    """Keep a lens's evaluation in the checkpoint folder (bank, per-crop values, examples,
+    and the evaluation settings they were made with)."""
     import numpy as np
 
     if ck is None:
@@ -421,14 +425,22 @@ def _save_eval(ck, name, bank, vals, examples) -> None:
     np.savez(os.path.join(ck, f"eval_{name}_examples.npz"), **ex)
     with open(os.path.join(ck, f"eval_{name}.json"), "w") as f:
         json.dump(vals, f)
+    with open(os.path.join(ck, f"eval_{name}_settings.json"), "w") as f:
+        json.dump(settings, f)
 
 
-def _load_eval(ck, name):
-    """``(bank, values, examples)`` saved by ``_save_eval``, or None."""
+def _load_eval(ck, name, settings: dict):
+    """``(bank, values, examples)`` saved by ``_save_eval`` with these settings, or None."""
     import numpy as np
 
     if ck is None or not os.path.isfile(os.path.join(ck, f"eval_{name}.json")):
         return None
+    path = os.path.join(ck, f"eval_{name}_settings.json")
+    if not os.path.isfile(path):
+        return None
+    with open(path) as f:
+        if json.load(f) != settings:
+            return None
     with open(os.path.join(ck, f"eval_{name}.json")) as f:
         vals = json.load(f)
     bank = np.load(os.path.join(ck, f"eval_{name}_bank.npy"))
@@ -462,17 +474,19 @@ def table2(per_image, names, seeds, windows, crop_info, test_names, source, clas
         lenses[f"wiener_{n}"] = {d: {"sim": {m: mean(n, d, "sim", m) for m in ("psnr", "ssim")},
                                      "rec": {m: mean(n, d, "wiener", m)
                                              for m in ("psnr", "ssim")}} for d in depths}
-    gains, per_seed = {}, {}
+    gains, per_seed, balanced = {}, {}, {}
+    crop_images = [c["image"] for c in crop_info]
     if "classical" in names:
         for n in names:
             if n == "classical":
                 continue
-            gains[n], per_seed[n] = {}, {}
+            gains[n], per_seed[n], balanced[n] = {}, {}, {}
             for d in depths:
                 diff = np.array([np.subtract(per_image[s][n][d]["rec"]["psnr"],
                                              per_image[s]["classical"][d]["rec"]["psnr"])
                                  for s in seeds])  # [seeds, crops]
                 gains[n][d] = E.bootstrap_gain(diff)
+                balanced[n][d] = E.bootstrap_gain_by_image(diff, crop_images)
                 per_seed[n][d] = diff.mean(axis=1).tolist()
     pd = paraxial.paraxial_data(classical)
     base = {"efl_mm": float(pd.efl), "fov_deg": _fov(classical),
@@ -491,12 +505,13 @@ def table2(per_image, names, seeds, windows, crop_info, test_names, source, clas
     return {
         "seeds": [int(s) for s in seeds],
         "test": {"crops": int(len(windows)), "images": sorted({c["image"] for c in crop_info}),
-                 "source": source},
+                 "source": source, "crop_images": crop_images},
         "base_lens": base,
         "lenses": lenses,
         "gain_vs_classical": gains,
         "light_on_sensor": {n: float(np.mean(v)) for n, v in light.items()},
         "gain_per_seed": per_seed,
+        "gain_vs_classical_image_balanced": balanced,
         "rec_psnr_by_image": by_image,
         "wiener_reference_nsr": nsr,
     }
@@ -580,6 +595,20 @@ def table2_markdown(table: dict, command: str, cfg) -> str:
         for n, g in table["gain_vs_classical"].items():
             cells = [f"{g[d]['mean']:+.2f} [{g[d]['ci95'][0]:+.2f}, {g[d]['ci95'][1]:+.2f}] "
                      f"({', '.join(f'{v:+.2f}' for v in table['gain_per_seed'][n][d])})"
+                     for d in depths]
+            lines.append(f"| {n} | " + " | ".join(cells) + " |")
+    if table.get("gain_vs_classical_image_balanced"):
+        counts = {}
+        for img in table["test"].get("crop_images", []):
+            counts[img] = counts.get(img, 0) + 1
+        per = ", ".join(f"{k} {v}" for k, v in sorted(counts.items(), key=lambda kv: -kv[1]))
+        lines += ["", "The same gain with every test image weighted equally (crops of an image "
+                  "averaged first; 95 % bootstrap over seeds, images and crops within images)"
+                  + (f"; crops per image: {per}" if per else "") + ":", "",
+                  "| lens | " + " | ".join(f"{d} m" for d in depths) + " |",
+                  "|---|" + "---|" * len(depths)]
+        for n, g in table["gain_vs_classical_image_balanced"].items():
+            cells = [f"{g[d]['mean']:+.2f} [{g[d]['ci95'][0]:+.2f}, {g[d]['ci95'][1]:+.2f}]"
                      for d in depths]
             lines.append(f"| {n} | " + " | ".join(cells) + " |")
     lines += ["", "Light on the sensor (fraction of the light entering the entrance pupil that "

@@ -56,6 +56,15 @@ from .losses import edof_loss
 from .optics import add_noise, centers, patch_psfs, psf_bank, psfs_nograd, simulate
 
 STAGE2_LR_SCALE = 0.3
+
+EVAL_ONLY = ("eval_pupil",)
+"""Config fields that only the evaluation reads: a checkpointed training resumes across them."""
+
+
+def training_config(cfg) -> dict:
+    """The config as JSON data without the evaluation-only fields (``EVAL_ONLY``)."""
+    d = json.loads(json.dumps(dataclasses.asdict(cfg)))
+    return {k: v for k, v in d.items() if k not in EVAL_ONLY}
 """Stage 2's network learning rate relative to stage 1's."""
 
 
@@ -94,13 +103,13 @@ class Config:
         log_every: host sync / progress-bar refresh interval (steps).
     """
 
-    binning: int = 4
+    binning: int = 2
     tile: int = 32
-    kernel_size: int = 21
+    kernel_size: int = 31
     batch: int = 8
     pupil: int = 32
-    eval_pupil: int = 32
-    steps: int = 300
+    eval_pupil: int = 64
+    steps: int = 1200
     steps2: int = 60
     lens_every: int = 4
     refresh_every: int = 50
@@ -351,7 +360,8 @@ class Trainer:
             return False
         with open(meta) as f:
             info = json.load(f)
-        if info["config"] != json.loads(json.dumps(dataclasses.asdict(self.cfg))):
+        saved = {k: v for k, v in info["config"].items() if k not in EVAL_ONLY}
+        if saved != training_config(self.cfg):
             raise ValueError(f"resume: the checkpoint {meta} was written with another "
                              f"configuration; use the same options, or another --checkpoint")
         self.stage, self.step = info["stage"], info["step"]
