@@ -56,16 +56,15 @@ from .losses import edof_loss
 from .optics import add_noise, centers, patch_psfs, psf_bank, psfs_nograd, simulate
 
 STAGE2_LR_SCALE = 0.3
+"""Stage 2's network learning rate relative to stage 1's."""
 
 EVAL_ONLY = ("eval_pupil",)
 """Config fields that only the evaluation reads: a checkpointed training resumes across them."""
 
 
-def training_config(cfg) -> dict:
-    """The config as JSON data without the evaluation-only fields (``EVAL_ONLY``)."""
-    d = json.loads(json.dumps(dataclasses.asdict(cfg)))
-    return {k: v for k, v in d.items() if k not in EVAL_ONLY}
-"""Stage 2's network learning rate relative to stage 1's."""
+def training_config(config: dict) -> dict:
+    """A config as JSON data without the evaluation-only fields (``EVAL_ONLY``)."""
+    return {k: v for k, v in config.items() if k not in EVAL_ONLY}
 
 
 @dataclasses.dataclass(frozen=True)
@@ -360,8 +359,8 @@ class Trainer:
             return False
         with open(meta) as f:
             info = json.load(f)
-        saved = {k: v for k, v in info["config"].items() if k not in EVAL_ONLY}
-        if saved != training_config(self.cfg):
+        current = json.loads(json.dumps(dataclasses.asdict(self.cfg)))
+        if training_config(info["config"]) != training_config(current):
             raise ValueError(f"resume: the checkpoint {meta} was written with another "
                              f"configuration; use the same options, or another --checkpoint")
         self.stage, self.step = info["stage"], info["step"]
