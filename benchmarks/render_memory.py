@@ -232,6 +232,12 @@ def main(argv=None) -> None:
     ap.add_argument("--cap-gib", type=float, default=8.0)
     ap.add_argument("--out", type=pathlib.Path, default=RESULTS / "render_memory.json")
     args = ap.parse_args(argv)
+    for name, lo in (("size", 1), ("spp", 1), ("patch", 1), ("trace_rays", 0)):
+        if getattr(args, name) < lo:
+            ap.error(f"--{name.replace('_', '-')} must be a whole number >= {lo}, "
+                     f"got {getattr(args, name)}")
+    if not 0 < args.cap_gib < float("inf"):
+        ap.error(f"--cap-gib must be a positive number of GiB, got {args.cap_gib}")
     if args.worker and args.trace_rays:
         print(json.dumps(trace_worker(args.trace_rays)))
         return

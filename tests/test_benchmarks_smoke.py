@@ -194,3 +194,16 @@ def test_first_crossing_scan_accepts_a_correct_trace_and_rejects_a_wrong_root(mo
     monkeypatch.setattr(fwd, "trace_path", lambda *_: path)
     moved = eqx.tree_at(lambda x: x.thickness, lens, lens.thickness.at[4].add(0.05))
     assert not reevaluate.first_crossings(moved, rays)[valid].any()
+
+
+@pytest.mark.parametrize("args", [["--trace-rays", "-3"], ["--size", "0"], ["--cap-gib", "nan"],
+                                  ["--spp", "-1"]])
+def test_render_memory_refuses_bad_arguments(args, capsys):
+    """Bad sizes are refused with the option's name before any worker starts."""
+    if str(ROOT) not in sys.path:
+        sys.path.insert(0, str(ROOT))
+    from benchmarks import render_memory
+
+    with pytest.raises(SystemExit):
+        render_memory.main(args)
+    assert args[0] in capsys.readouterr().err

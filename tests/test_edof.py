@@ -415,3 +415,22 @@ def test_reported_fov_is_the_real_chief_ray_to_the_sensor_corner():
     want = 2 * np.degrees(lo)
     assert want - 2 * np.degrees(np.arctan(half / f)) > 1.0
     assert cli._fov(lens) == pytest.approx(want, abs=1e-8)
+
+
+def test_training_config_keeps_only_what_a_lens_reads():
+    """A lens resumes across options of other lenses and evaluation-only options, and a
+    checkpoint written before a field existed reads as that field's default."""
+    import dataclasses
+
+    from jaxlens.experiments.edof.train import Config, training_config
+
+    old = json.loads(json.dumps(dataclasses.asdict(Config())))
+    new = dict(old, hybrid_floor=1.0, eval_pupil=12)
+    assert training_config(old, "classical") == training_config(new, "classical")
+    assert training_config(old, "cubic") == training_config(new, "cubic")
+    assert training_config(old, "hybrid") != training_config(new, "hybrid")
+    assert training_config(old) != training_config(new)  # no lens: every training field
+    del old["hybrid_floor"]  # written before the field existed
+    assert training_config(old, "hybrid") == training_config(dict(new, hybrid_floor=None),
+                                                             "hybrid")
+    assert training_config(old, "cubic") != training_config(dict(new, steps=61), "cubic")

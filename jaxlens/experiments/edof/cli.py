@@ -113,6 +113,9 @@ def build_parser() -> argparse.ArgumentParser:
     g.add_argument("--n-odd", type=int, help="odd terms per axis of the hybrid surface (3)")
     g.add_argument("--cubic-floor", type=float,
                    help="lower bound of the cubic strength, fraction of its start (1)")
+    g.add_argument("--hybrid-floor", type=float,
+                   help="lower bound of the hybrid's x³ and y³ terms, fraction of their "
+                   "start (none)")
     d = p.add_argument_group("data")
     d.add_argument("--train-dir", default=None,
                    help="folder of training images (default: skimage.data; see edof.scenes)")
@@ -147,6 +150,7 @@ def config_from_args(a):
         "w_sim": a.w_sim, "w_raw": a.w_raw, "photons": a.photons, "read_noise": a.read_noise,
         "width": a.width, "enc_blocks": a.enc, "middle_blocks": a.middle,
         "dec_blocks": a.dec, "n_odd": a.n_odd, "cubic_floor": a.cubic_floor,
+        "hybrid_floor": a.hybrid_floor,
     }
     cfg = dataclasses.replace(cfg, **{k: v for k, v in over.items() if v is not None})
     n, w = input_checks.number, "edof"
@@ -167,6 +171,9 @@ def config_from_args(a):
     n(cfg.lr_lens, "--lr-lens", w, lo=0, lo_open=True)
     n(cfg.photons, "--photons", w, lo=0, lo_open=True, unit="electrons")
     n(cfg.cubic_floor, "--cubic-floor", w, lo=0, unit="(fraction of the start strength)")
+    if cfg.hybrid_floor is not None:
+        n(cfg.hybrid_floor, "--hybrid-floor", w, lo=0,
+          unit="(fraction of the start strength)")
     for opt, v in (("--w-sim", cfg.w_sim), ("--w-raw", cfg.w_raw),
                    ("--read-noise", cfg.read_noise)):
         n(v, opt, w, lo=0)
@@ -318,8 +325,8 @@ def _run_into(a, argv, cfg, names, folder, out) -> dict:
                                 cubic=start_cubic[name]).astype(dtype)
             pmap = L.HybridParameterization.of(lens0)
             params = pmap.from_lens(lens0)
-            floor = (cfg.cubic_floor * float(params.odd_x[0]) if name == "cubic"
-                     else -math.inf)
+            fraction = {"cubic": cfg.cubic_floor, "hybrid": cfg.hybrid_floor}.get(name)
+            floor = -math.inf if fraction is None else fraction * float(params.odd_x[0])
             dec = make_decoder(cfg.decoder, nsr=nsr, key=k_net, width=cfg.width,
                                enc_blocks=cfg.enc_blocks, middle_blocks=cfg.middle_blocks,
                                dec_blocks=cfg.dec_blocks, dtype=dtype)

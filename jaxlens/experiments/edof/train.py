@@ -61,10 +61,18 @@ STAGE2_LR_SCALE = 0.3
 EVAL_ONLY = ("eval_pupil",)
 """Config fields that only the evaluation reads: a checkpointed training resumes across them."""
 
+LENS_ONLY = {"cubic_floor": "cubic", "hybrid_floor": "hybrid", "hold_focus": "hybrid"}
+"""Config fields that only one lens's training reads: the others resume across them."""
 
-def training_config(config: dict) -> dict:
-    """A config as JSON data without the evaluation-only fields (``EVAL_ONLY``)."""
-    return {k: v for k, v in config.items() if k not in EVAL_ONLY}
+
+def training_config(config: dict, lens: str | None = None) -> dict:
+    """The part of a config (JSON data) that a lens's training reads: without the
+    evaluation-only fields (``EVAL_ONLY``), without the fields of other lenses
+    (``LENS_ONLY``; all of them are kept when ``lens`` is None), and with the defaults of
+    fields added to ``Config`` after the config was written."""
+    defaults = json.loads(json.dumps(dataclasses.asdict(Config())))
+    return {k: v for k, v in {**defaults, **config}.items()
+            if k not in EVAL_ONLY and (lens is None or LENS_ONLY.get(k, lens) == lens)}
 
 
 @dataclasses.dataclass(frozen=True)
@@ -97,6 +105,8 @@ class Config:
         cubic_ratio: the cubic plate's strength, as a multiple of the defocus it hides
             (``lenses.cubic_strength_guess``); the hybrid starts at half of it.
         cubic_floor: lower bound of the cubic plate's strength as a fraction of its start.
+        hybrid_floor: lower bound of the hybrid's x³ and y³ terms as a fraction of their
+            start (half the cubic plate's); ``None``: unbounded.
         crop: side of the test crops (pixels, native resolution).
         seed: random seed.
         log_every: host sync / progress-bar refresh interval (steps).
@@ -128,6 +138,7 @@ class Config:
     n_odd: int = 3
     cubic_ratio: float = 1.5
     cubic_floor: float = 1.0
+    hybrid_floor: float | None = None
     crop: int = 256
     seed: int = 0
     log_every: int = 10
@@ -360,7 +371,8 @@ class Trainer:
         with open(meta) as f:
             info = json.load(f)
         current = json.loads(json.dumps(dataclasses.asdict(self.cfg)))
-        if training_config(info["config"]) != training_config(current):
+        if (training_config(info["config"], self.name)
+                != training_config(current, self.name)):
             raise ValueError(f"resume: the checkpoint {meta} was written with another "
                              f"configuration; use the same options, or another --checkpoint")
         self.stage, self.step = info["stage"], info["step"]
