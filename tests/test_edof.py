@@ -434,3 +434,45 @@ def test_training_config_keeps_only_what_a_lens_reads():
     assert training_config(old, "hybrid") == training_config(dict(new, hybrid_floor=None),
                                                              "hybrid")
     assert training_config(old, "cubic") != training_config(dict(new, steps=61), "cubic")
+
+
+def test_live_front_end_differentiates_the_wiener_psfs(classical):
+    """With ``live_front_end`` the lens step traces all 8 depths and the front end's PSFs are
+    their mean (the bank's ``wkern`` is not read); without it the bank's PSFs are used."""
+    import dataclasses
+
+    from jaxlens.experiments.edof import train as T
+    from jaxlens.experiments.edof.decoder import make_decoder
+
+    cfg = dataclasses.replace(T.Config(), tile=8, kernel_size=5, batch=2, pupil=6, width=4,
+                              enc_blocks=(1,), middle_blocks=0, dec_blocks=(1,))
+    lens = L.to_hybrid(classical, n_odd=2, cubic=0.003).astype(jnp.float32)
+    pmap = L.HybridParameterization.of(lens)
+    params = pmap.from_lens(lens)
+    dec = make_decoder("wiener", nsr=0.05, key=jax.random.PRNGKey(0), width=4,
+                       enc_blocks=(1,), middle_blocks=0, dec_blocks=(1,))
+    gate, tie = L.gates(params, "hybrid")
+    windows = jnp.asarray(np.random.default_rng(1).random((2, 12, 12, 3)), jnp.float32)
+    xy = jnp.asarray([[0.0, 0.0], [0.3, -0.2]], jnp.float32)
+    depths = jnp.asarray(1e3 * np.asarray(L.DEPTHS_M), jnp.float32)
+    pair = jnp.asarray([0, 7])
+    delta = jnp.zeros((2, 3, 5, 5), jnp.float32).at[..., 2, 2].set(1.0)
+    box = jnp.full((2, 3, 5, 5), 1 / 25, jnp.float32)
+
+    def step(live, wkern):
+        c = dataclasses.replace(cfg, live_front_end=live)
+        net_opt, lens_opt = T.optimizers(c)
+        out = T.joint_step(dec, params, net_opt.init(eqx.filter(dec, eqx.is_inexact_array)),
+                           lens_opt.init(eqx.filter(params, eqx.is_inexact_array)), pmap,
+                           windows, xy, depths, pair, wkern, jax.random.PRNGKey(2), gate, tie,
+                           -jnp.inf, cfg=c, net_opt=net_opt, lens_opt=lens_opt)
+        return float(out[4]), out[1]
+
+    live_a, p_live = step(True, delta)
+    live_b, _ = step(True, box)
+    stale_a, _ = step(False, delta)
+    stale_b, _ = step(False, box)
+    assert live_a == live_b and stale_a != stale_b
+    assert np.isfinite(live_a) and live_a != stale_a
+    moved = jax.tree_util.tree_map(lambda u, v: float(jnp.max(jnp.abs(u - v))), p_live, params)
+    assert max(jax.tree_util.tree_leaves(moved)) > 0  # the lens took a finite step

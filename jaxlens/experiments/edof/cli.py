@@ -116,6 +116,9 @@ def build_parser() -> argparse.ArgumentParser:
     g.add_argument("--hybrid-floor", type=float,
                    help="lower bound of the hybrid's x³ and y³ terms, fraction of their "
                    "start (none)")
+    g.add_argument("--live-front-end", action=argparse.BooleanOptionalAction,
+                   help="lens-update steps differentiate the Wiener front end's PSFs too "
+                   "(all 8 depths traced; off)")
     d = p.add_argument_group("data")
     d.add_argument("--train-dir", default=None,
                    help="folder of training images (default: skimage.data; see edof.scenes)")
@@ -150,7 +153,7 @@ def config_from_args(a):
         "w_sim": a.w_sim, "w_raw": a.w_raw, "photons": a.photons, "read_noise": a.read_noise,
         "width": a.width, "enc_blocks": a.enc, "middle_blocks": a.middle,
         "dec_blocks": a.dec, "n_odd": a.n_odd, "cubic_floor": a.cubic_floor,
-        "hybrid_floor": a.hybrid_floor,
+        "hybrid_floor": a.hybrid_floor, "live_front_end": a.live_front_end,
     }
     cfg = dataclasses.replace(cfg, **{k: v for k, v in over.items() if v is not None})
     n, w = input_checks.number, "edof"

@@ -107,6 +107,8 @@ class Config:
         cubic_floor: lower bound of the cubic plate's strength as a fraction of its start.
         hybrid_floor: lower bound of the hybrid's x³ and y³ terms as a fraction of their
             start (half the cubic plate's); ``None``: unbounded.
+        live_front_end: on lens-update steps the Wiener front end's PSFs are the current
+            lens's (traced at all 8 depths and differentiated) instead of the bank's.
         crop: side of the test crops (pixels, native resolution).
         seed: random seed.
         log_every: host sync / progress-bar refresh interval (steps).
@@ -139,6 +141,7 @@ class Config:
     cubic_ratio: float = 1.5
     cubic_floor: float = 1.0
     hybrid_floor: float | None = None
+    live_front_end: bool = False
     crop: int = 256
     seed: int = 0
     log_every: int = 10
@@ -201,25 +204,33 @@ def _apply(opt, grads, state, params, ok, scale=1.0):
 
 
 @eqx.filter_jit
-def joint_step(dec, params, net_state, lens_state, pmap, windows, xy, depths, wkern, key,
-               gate, tie, floor, *, cfg: Config, net_opt, lens_opt):
+def joint_step(dec, params, net_state, lens_state, pmap, windows, xy, depths, pair, wkern,
+               key, gate, tie, floor, *, cfg: Config, net_opt, lens_opt):
     """A lens-update step: the loss is differentiated through the ray tracer.
 
-    ``xy [B, 2]`` are the tiles' centres (mm), ``depths [2]`` the two depths (mm from the
-    stop), ``wkern [B, 3, k, k]`` the front end's depth-averaged PSFs. Returns
+    ``xy [B, 2]`` are the tiles' centres (mm), ``depths [D]`` the training depths (mm from
+    the stop), ``pair [2]`` the indices of the batch's two, ``wkern [B, 3, k, k]`` the front
+    end's depth-averaged PSFs from the bank. With ``cfg.live_front_end`` (and the Wiener
+    decoder) the PSFs at all D depths are traced and their mean replaces ``wkern``, so the
+    gradient also sees the front end follow the lens. Returns
     ``(dec, params, net_state, lens_state, loss, parts)``; a step whose loss or gradient is not
     finite is skipped and counted in ``parts["skipped"]``.
     """
     b = windows.shape[0]
     k_sim, k_psf = jax.random.split(key)
+    live = cfg.live_front_end and dec.wiener
+    traced = depths if live else depths[pair]
 
     def loss_fn(trainable):
         d, p = trainable
         lens = pmap.to_lens(p)
-        kern = patch_psfs(lens, jnp.concatenate([xy, xy]), jnp.repeat(depths, b),
+        n = traced.shape[0]
+        kern = patch_psfs(lens, jnp.tile(xy, (n, 1)), jnp.repeat(traced, b),
                           kernel_size=cfg.kernel_size, pixel_size=lens.sensor.pixel_size,
                           pupil=cfg.pupil, key=k_psf)
-        return _sim_loss(d, kern.reshape((2, b) + kern.shape[1:]), windows, wkern, k_sim, cfg)
+        kern = kern.reshape((n, b) + kern.shape[1:])
+        front = kern.mean(0).astype(wkern.dtype) if live else wkern
+        return _sim_loss(d, kern[pair] if live else kern, windows, front, k_sim, cfg)
 
     net_p, net_static = eqx.partition(dec, eqx.is_inexact_array)
     (loss, parts), (g_net, g_lens) = eqx.filter_value_and_grad(loss_fn, has_aux=True)(
@@ -471,7 +482,8 @@ class Trainer:
             if self.stage == 1 and self.movable and self.step % cfg.lens_every == 0:
                 self.dec, self.params, self.net_state, self.lens_state, loss, parts = joint_step(
                     self.dec, self.params, self.net_state, self.lens_state, self.pmap,
-                    windows, xy, depths[pair], wk, sub, self.gate, self.tie, floor, cfg=cfg,
+                    windows, xy, depths, jnp.asarray(pair), wk, sub, self.gate, self.tie, floor,
+                    cfg=cfg,
                     net_opt=opt1, lens_opt=lens_opt)
             else:
                 if self.stage == 1 and frozen:
