@@ -174,6 +174,9 @@ def config_from_args(a):
     n(cfg.lr_lens, "--lr-lens", w, lo=0, lo_open=True)
     n(cfg.photons, "--photons", w, lo=0, lo_open=True, unit="electrons")
     n(cfg.cubic_floor, "--cubic-floor", w, lo=0, unit="(fraction of the start strength)")
+    if cfg.live_front_end and cfg.decoder != "wiener":
+        raise ValueError(f"edof: --live-front-end needs the Wiener front end (--decoder "
+                         f"wiener), got --decoder {cfg.decoder}")
     if cfg.hybrid_floor is not None:
         n(cfg.hybrid_floor, "--hybrid-floor", w, lo=0,
           unit="(fraction of the start strength)")
