@@ -476,3 +476,49 @@ def test_live_front_end_differentiates_the_wiener_psfs(classical):
     assert np.isfinite(live_a) and live_a != stale_a
     moved = jax.tree_util.tree_map(lambda u, v: float(jnp.max(jnp.abs(u - v))), p_live, params)
     assert max(jax.tree_util.tree_leaves(moved)) > 0  # the lens took a finite step
+
+
+def test_lens_accept_undoes_a_lens_step_that_raises_the_check_loss(classical, monkeypatch):
+    """With ``lens_accept`` a lens update is kept or undone (parameters and optimizer state)
+    by comparing ``Trainer.check_loss`` of the new and the old lens; both outcomes are
+    counted in ``hist["lens_steps"]``."""
+    import dataclasses
+
+    from jaxlens.experiments.edof import scenes as S
+    from jaxlens.experiments.edof import train as T
+    from jaxlens.experiments.edof.decoder import make_decoder
+
+    cfg = dataclasses.replace(T.Config(), tile=8, kernel_size=5, batch=2, pupil=6, steps=1,
+                              steps2=0, lens_every=1, width=4, enc_blocks=(1,),
+                              middle_blocks=0, dec_blocks=(1,), decoder="nafnet",
+                              lens_accept=True)
+    lens = L.to_hybrid(classical, n_odd=2, cubic=0.003).astype(jnp.float32)
+    pmap = L.HybridParameterization.of(lens)
+    images = [np.random.default_rng(3).random((24, 24, 3)).astype(np.float32)]
+    start = pmap.from_lens(lens)
+
+    def train(new_minus_old):
+        dec = make_decoder("nafnet", nsr=0.05, key=jax.random.PRNGKey(0), width=4,
+                           enc_blocks=(1,), middle_blocks=0, dec_blocks=(1,))
+        src = T.BatchSource(S.PatchSampler(images, cfg.window, seed=1), (2, 2), cfg, seed=2)
+        tr = T.Trainer("hybrid", pmap, start, dec, src, cfg, jax.random.PRNGKey(4))
+        real = tr.check_loss
+        calls = []
+
+        def fake(params):  # first call: the new lens, second: the old one
+            calls.append(real(params))
+            return calls[-1] + (new_minus_old if len(calls) % 2 == 1 else 0.0)
+
+        monkeypatch.setattr(tr, "check_loss", fake)
+        _, params, hist = tr.run()
+        assert len(calls) == 2 and np.all(np.isfinite(calls))
+        return params, hist["lens_steps"]
+
+    params, counts = train(+1.0)
+    assert counts == {"kept": 0, "undone": 1}
+    assert all(bool(jnp.all(a == b)) for a, b in zip(jax.tree_util.tree_leaves(params),
+                                                     jax.tree_util.tree_leaves(start)))
+    params, counts = train(-1.0)
+    assert counts == {"kept": 1, "undone": 0}
+    assert any(bool(jnp.any(a != b)) for a, b in zip(jax.tree_util.tree_leaves(params),
+                                                     jax.tree_util.tree_leaves(start)))

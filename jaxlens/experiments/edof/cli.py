@@ -119,6 +119,9 @@ def build_parser() -> argparse.ArgumentParser:
     g.add_argument("--live-front-end", action=argparse.BooleanOptionalAction,
                    help="lens-update steps differentiate the Wiener front end's PSFs too "
                    "(all 8 depths traced; off)")
+    g.add_argument("--lens-accept", action=argparse.BooleanOptionalAction,
+                   help="keep a lens update only if L_rec on a fixed check batch (8 depths) "
+                   "does not rise (off)")
     d = p.add_argument_group("data")
     d.add_argument("--train-dir", default=None,
                    help="folder of training images (default: skimage.data; see edof.scenes)")
@@ -154,6 +157,7 @@ def config_from_args(a):
         "width": a.width, "enc_blocks": a.enc, "middle_blocks": a.middle,
         "dec_blocks": a.dec, "n_odd": a.n_odd, "cubic_floor": a.cubic_floor,
         "hybrid_floor": a.hybrid_floor, "live_front_end": a.live_front_end,
+        "lens_accept": a.lens_accept,
     }
     cfg = dataclasses.replace(cfg, **{k: v for k, v in over.items() if v is not None})
     n, w = input_checks.number, "edof"

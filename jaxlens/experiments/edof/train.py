@@ -109,6 +109,9 @@ class Config:
             start (half the cubic plate's); ``None``: unbounded.
         live_front_end: on lens-update steps the Wiener front end's PSFs are the current
             lens's (traced at all 8 depths and differentiated) instead of the bank's.
+        lens_accept: a lens update is kept only if it does not raise the reconstruction
+            loss (``L_rec``, the updated decoder) on a fixed check batch of training
+            windows at all 8 depths with fixed noise (``Trainer.check_loss``).
         crop: side of the test crops (pixels, native resolution).
         seed: random seed.
         log_every: host sync / progress-bar refresh interval (steps).
@@ -142,6 +145,7 @@ class Config:
     cubic_floor: float = 1.0
     hybrid_floor: float | None = None
     live_front_end: bool = False
+    lens_accept: bool = False
     crop: int = 256
     seed: int = 0
     log_every: int = 10
@@ -161,8 +165,10 @@ class Config:
 def make_net_optimizer(cfg: Config, steps: int, scale: float = 1.0):
     """Adam with a warm-up and cosine decay, gradients clipped to norm 1."""
     lr = cfg.lr_net * scale
-    sched = optax.warmup_cosine_decay_schedule(
-        0.0, lr, max(1, min(20, steps // 10)), max(steps, 1), lr * 0.05)
+    warmup = max(1, min(20, steps // 10))
+    # optax needs a decay phase after the warm-up, even for a one-step run.
+    sched = optax.warmup_cosine_decay_schedule(0.0, lr, warmup, max(steps, warmup + 1),
+                                               lr * 0.05)
     return optax.chain(optax.clip_by_global_norm(1.0), optax.adam(sched))
 
 
@@ -271,6 +277,19 @@ def _probe_loss(dec, kernels, windows, wkern, key, *, cfg: Config):
     return _sim_loss(dec, kernels, windows, wkern, key, cfg)[0]
 
 
+@eqx.filter_jit
+def _check_rec_loss(dec, kernels, windows, key, *, cfg: Config):
+    """``L_rec`` of windows ``[B, ...]`` at every depth of ``kernels [D, B, 3, k, k]`` (D
+    even), the front end fed each tile's mean PSF over the D depths."""
+    d, b = kernels.shape[:2]
+    front = jnp.tile(kernels.mean(0), (d // 2, 1, 1, 1))
+    if not dec.wiener:
+        front = jnp.zeros(front.shape[:2] + (1, 1), front.dtype)
+    pairs = kernels.reshape((2, d // 2 * b) + kernels.shape[2:])
+    windows = jnp.tile(windows, (d // 2, 1, 1, 1))
+    return _sim_loss(dec, pairs, windows, front, key, cfg)[1]["rec"]
+
+
 class BatchSource:
     """Host-side batches: scene windows, tile indices and the depth pair."""
 
@@ -350,6 +369,7 @@ class Trainer:
         self.bank = None  # [8, ty, tx, 3, k, k] of the current lens, when one is needed
         self.mean_bank = None
         self.seconds = 0.0
+        self._check = None  # the fixed check batch of ``check_loss``, made on first use
 
     # -- checkpoints ---------------------------------------------------------------------
     def _paths(self):
@@ -439,6 +459,32 @@ class Trainer:
                            jax.random.PRNGKey(4242), cfg=cfg)
         return float(loss)
 
+    def check_loss(self, params) -> float:
+        """``L_rec`` of the lens ``params`` with the current decoder on the fixed check batch
+        (``Config.lens_accept``): its own random stream of training windows and tiles, all
+        8 depths, fixed noise."""
+        cfg = self.cfg
+        dt = self.pmap.template.epd.dtype
+        if self._check is None:
+            from .scenes import PatchSampler
+
+            rng = np.random.default_rng(777)
+            windows = PatchSampler(self.source.sampler.images, cfg.window, seed=777).sample(
+                cfg.batch)
+            tiles = np.stack([rng.integers(0, n, cfg.batch) for n in self.xy.shape[:2]], -1)
+            self._check = (jnp.asarray(windows, dt),
+                           jnp.asarray(self.xy[tiles[:, 0], tiles[:, 1]], dt))
+        windows, xy = self._check
+        lens = self.pmap.to_lens(params)
+        depths = jnp.asarray(1e3 * np.asarray(DEPTHS_M), dt)
+        n = len(DEPTHS_M)
+        kern = psfs_nograd(lens, jnp.tile(xy, (n, 1)), jnp.repeat(depths, cfg.batch),
+                           jnp.asarray(lens.sensor.pixel_size, dt),
+                           kernel_size=cfg.kernel_size, pupil=cfg.pupil)
+        kern = kern.reshape((n, cfg.batch) + kern.shape[1:])
+        return float(_check_rec_loss(self.dec, kern, windows, jax.random.PRNGKey(777),
+                                     cfg=cfg))
+
     def run(self, progress: Callable | None = None):
         """Train to the end (or to the deadline: ``OutOfTime`` after a checkpoint)."""
         cfg = self.cfg
@@ -480,11 +526,18 @@ class Trainer:
             wk = self._wkern(tiles)
             xy = jnp.asarray(self.xy[tiles[:, 0], tiles[:, 1]], dt)
             if self.stage == 1 and self.movable and self.step % cfg.lens_every == 0:
+                before = (self.params, self.lens_state)
                 self.dec, self.params, self.net_state, self.lens_state, loss, parts = joint_step(
                     self.dec, self.params, self.net_state, self.lens_state, self.pmap,
                     windows, xy, depths, jnp.asarray(pair), wk, sub, self.gate, self.tie, floor,
                     cfg=cfg,
                     net_opt=opt1, lens_opt=lens_opt)
+                if cfg.lens_accept:
+                    kept = self.check_loss(self.params) <= self.check_loss(before[0])
+                    if not kept:
+                        self.params, self.lens_state = before
+                    counts = self.hist.setdefault("lens_steps", {"kept": 0, "undone": 0})
+                    counts["kept" if kept else "undone"] += 1
             else:
                 if self.stage == 1 and frozen:
                     kern = self.bank[pair][:, tiles[:, 0], tiles[:, 1]]
