@@ -517,8 +517,10 @@ def test_lens_accept_undoes_a_lens_step_that_raises_the_check_loss(classical, mo
     params, counts = train(+1.0)
     assert counts == {"kept": 0, "undone": 1}
     assert all(bool(jnp.all(a == b)) for a, b in zip(jax.tree_util.tree_leaves(params),
-                                                     jax.tree_util.tree_leaves(start)))
+                                                     jax.tree_util.tree_leaves(start),
+                                                     strict=True))
     params, counts = train(-1.0)
     assert counts == {"kept": 1, "undone": 0}
     assert any(bool(jnp.any(a != b)) for a, b in zip(jax.tree_util.tree_leaves(params),
-                                                     jax.tree_util.tree_leaves(start)))
+                                                     jax.tree_util.tree_leaves(start),
+                                                     strict=True))
