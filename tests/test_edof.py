@@ -214,6 +214,12 @@ def test_hybrid_params_round_trip_and_odd_terms(classical):
     # Scaled odd parameter = sag at R over SAG_SCALE.
     r = 0.5 * float(hyb.epd)
     assert float(p.odd_x[0]) == pytest.approx(0.004 * r**3 / L.SAG_SCALE)
+    # Every parameter in the same sag unit: c as the paraxial sag c·R²/2 at R, so that a
+    # step of 1 in c moves the sag at R by SAG_SCALE, like a step of 1 in an odd term.
+    c = float(hyb.surfaces[1].c)
+    assert float(p.c) == pytest.approx(c * r * r / 2 / L.SAG_SCALE)
+    step = pmap.to_lens(eqx.tree_at(lambda q: q.c, p, p.c + 1.0)).surfaces[1]
+    assert (float(step.c) - c) * r * r / 2 == pytest.approx(L.SAG_SCALE)
     # The odd profile is the analytic cubic a·(x³ + y³).
     xs, h = L.odd_profile(hyb, n=21)
     xx, yy = np.meshgrid(xs, xs)

@@ -19,10 +19,11 @@ phase plate at the aperture: the sag a·(x³ + y³) added to that same surface, 
 structure (and one compiled training step); the classical lens has all odd terms at zero.
 
 The trainable parameters live apart from the lens (``HybridParams``, with ``gates`` saying
-which of them each lens may change), scaled to order 1: a curvature times the normalisation
-radius R, and each polynomial coefficient as the sag (in units of ``SAG_SCALE``) that its
-term adds at R. ``HybridParameterization`` maps them to the lens and back, with the same
-protocol as the classical design (``jaxlens.design.params.AbstractParameterization``).
+which of them each lens may change), all in one unit: the sag (in units of ``SAG_SCALE``)
+that each term adds at the normalisation radius R (for the curvature c its paraxial sag
+c·R²/2), so that an optimizer step of a given size changes every term's sag alike.
+``HybridParameterization`` maps them to the lens and back, with the same protocol as the
+classical design (``jaxlens.design.params.AbstractParameterization``).
 """
 
 from __future__ import annotations
@@ -172,14 +173,16 @@ def cubic_strength_guess(lens: Lens, *, depths_m=DEPTHS_M, ratio: float = 1.5) -
 
 
 # --------------------------------------------------------------------------------------
-# Trainable parameters, scaled to order 1
+# Trainable parameters, all as sags at R in units of SAG_SCALE
 # --------------------------------------------------------------------------------------
 class HybridParams(eqx.Module):
     """Scaled parameters of a hybrid surface and of the sensor position (R: the normalisation
     radius of ``HybridParameterization``).
 
     Attributes:
-        c: curvature × R.
+        c: the base sphere's paraxial sag at R, c·R²/2, over ``SAG_SCALE`` (in the same unit
+            as the other terms: as curvature × R, a step of Adam's size was a 66× larger sag
+            change and moved the focus by several depths of focus per lens update).
         k: conic constant.
         even: even coefficients from r⁴ on, each as its sag at R over ``SAG_SCALE``
             (the r² coefficient stays at its value: it duplicates the curvature).
@@ -230,7 +233,7 @@ class HybridParameterization(AbstractParameterization):
         od_pow = 2 * jnp.arange(s.odd_x.shape[0]) + 3  # x^3, x^5, ...
         shift = lens.thickness[-1] - self.template.thickness[-1]
         return HybridParams(
-            c=s.c * r,
+            c=s.c * r * r / (2 * SAG_SCALE),
             k=s.k,
             even=s.coeffs[1:] * r**ev_pow / SAG_SCALE,
             odd_x=s.odd_x * r**od_pow / SAG_SCALE,
@@ -249,7 +252,7 @@ class HybridParameterization(AbstractParameterization):
             [s.coeffs[:1].astype(p.even.dtype), p.even * SAG_SCALE / r**ev_pow]
         )
         new = Hybrid(
-            c=p.c / r,
+            c=p.c * 2 * SAG_SCALE / (r * r),
             k=p.k,
             coeffs=coeffs,
             odd_x=p.odd_x * SAG_SCALE / r**od_pow,

@@ -61,6 +61,10 @@ STAGE2_LR_SCALE = 0.3
 EVAL_ONLY = ("eval_pupil",)
 """Config fields that only the evaluation reads: a checkpointed training resumes across them."""
 
+PARAMS_VERSION = 2
+"""Version of the ``HybridParams`` units in a checkpoint (2: the curvature as a sag at R, like
+the other terms; 1, unmarked: curvature × R). A checkpoint of another version is refused."""
+
 LENS_ONLY = {"cubic_floor": "cubic", "hybrid_floor": "hybrid", "hold_focus": "hybrid"}
 """Config fields that only one lens's training reads: the others resume across them."""
 
@@ -91,7 +95,8 @@ class Config:
         lens_every: a lens update every this many stage-1 steps.
         refresh_every: steps between refreshes of the Wiener front end's PSF bank and
             between checkpoints.
-        lr_net, lr_lens: Adam learning rates (the lens parameters are scaled to order 1).
+        lr_net, lr_lens: Adam learning rates (the lens parameters are sags in units of
+            ``lenses.SAG_SCALE``).
         depth_sampling: how a batch draws its two depths of the 8: "uniform" or
             "dioptric" (weights even in dioptres, ``lenses.dioptric_weights``).
         hold_focus: the hybrid lens keeps the classical lens's base curvature and sensor
@@ -386,7 +391,7 @@ class Trainer:
                                                   self.lens_state, self.key))
         info = {"stage": self.stage, "step": self.step, "hist": self.hist,
                 "rng": self.source.state(), "seconds": self.seconds,
-                "config": dataclasses.asdict(self.cfg)}
+                "config": dataclasses.asdict(self.cfg), "params_version": PARAMS_VERSION}
         with open(meta + ".tmp", "w") as f:
             json.dump(info, f)
         os.replace(tree + ".tmp", tree)
@@ -401,6 +406,10 @@ class Trainer:
             return False
         with open(meta) as f:
             info = json.load(f)
+        if info.get("params_version", 1) != PARAMS_VERSION:
+            raise ValueError(f"resume: the checkpoint {meta} stores its lens parameters in "
+                             f"the units of version {info.get('params_version', 1)}, this "
+                             f"code reads version {PARAMS_VERSION}; use another --checkpoint")
         current = json.loads(json.dumps(dataclasses.asdict(self.cfg)))
         if (training_config(info["config"], self.name)
                 != training_config(current, self.name)):
