@@ -530,3 +530,44 @@ def test_lens_accept_undoes_a_lens_step_that_raises_the_check_loss(classical, mo
     assert any(bool(jnp.any(a != b)) for a, b in zip(jax.tree_util.tree_leaves(params),
                                                      jax.tree_util.tree_leaves(start),
                                                      strict=True))
+
+
+def test_checkpoints_of_the_old_curvature_units_convert_only_where_exact(classical, tmp_path):
+    """A version-1 checkpoint (c stored as c·R) resumes a lens that never trains c with c
+    converted to its sag unit; a lens that trains c (the hybrid) refuses it."""
+    import dataclasses
+
+    from jaxlens.experiments.edof import scenes as S
+    from jaxlens.experiments.edof import train as T
+    from jaxlens.experiments.edof.decoder import make_decoder
+
+    cfg = dataclasses.replace(T.Config(), tile=8, kernel_size=5, batch=2, width=4,
+                              enc_blocks=(1,), middle_blocks=0, dec_blocks=(1,),
+                              decoder="nafnet")
+    lens = L.to_hybrid(classical, n_odd=2).astype(jnp.float32)
+    pmap = L.HybridParameterization.of(lens)
+    start = pmap.from_lens(lens)
+    r = float(pmap.radius)
+    images = [np.random.default_rng(3).random((24, 24, 3)).astype(np.float32)]
+
+    def trainer(name):
+        dec = make_decoder("nafnet", nsr=0.05, key=jax.random.PRNGKey(0), width=4,
+                           enc_blocks=(1,), middle_blocks=0, dec_blocks=(1,))
+        src = T.BatchSource(S.PatchSampler(images, cfg.window, seed=1), (2, 2), cfg, seed=2)
+        return T.Trainer(name, pmap, start, dec, src, cfg, jax.random.PRNGKey(4),
+                         folder=str(tmp_path / name))
+
+    for name in ("classical", "hybrid"):
+        old = trainer(name)
+        old.params = eqx.tree_at(lambda p: p.c, old.params, jnp.asarray(
+            float(lens.surfaces[1].c) * r, jnp.float32))  # version 1: c·R
+        old.save()
+        meta = tmp_path / name / f"{name}.json"
+        info = json.loads(meta.read_text())
+        info["params_version"] = 1
+        meta.write_text(json.dumps(info))
+    new = trainer("classical")
+    assert new.load()
+    assert float(new.params.c) == pytest.approx(float(start.c), rel=1e-6)
+    with pytest.raises(ValueError, match="units of version 1"):
+        trainer("hybrid").load()

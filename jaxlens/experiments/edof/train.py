@@ -43,6 +43,7 @@ from ...optics.lens import Lens
 from .decoder import Decoder
 from .lenses import (
     DEPTHS_M,
+    SAG_SCALE,
     SPEC,
     HybridParameterization,
     Tolerances,
@@ -406,10 +407,13 @@ class Trainer:
             return False
         with open(meta) as f:
             info = json.load(f)
-        if info.get("params_version", 1) != PARAMS_VERSION:
+        version = info.get("params_version", 1)
+        # Version 1 wrote c as c·R; a lens that never trains c converts exactly.
+        convertible = version == 1 and float(jnp.sum(jnp.abs(self.gate.c))) == 0
+        if version != PARAMS_VERSION and not convertible:
             raise ValueError(f"resume: the checkpoint {meta} stores its lens parameters in "
-                             f"the units of version {info.get('params_version', 1)}, this "
-                             f"code reads version {PARAMS_VERSION}; use another --checkpoint")
+                             f"the units of version {version}, this code reads version "
+                             f"{PARAMS_VERSION}; use another --checkpoint")
         current = json.loads(json.dumps(dataclasses.asdict(self.cfg)))
         if (training_config(info["config"], self.name)
                 != training_config(current, self.name)):
@@ -419,6 +423,10 @@ class Trainer:
         like = (self.dec, self.params, self.net_state, self.lens_state, self.key)
         self.dec, self.params, self.net_state, self.lens_state, self.key = \
             eqx.tree_deserialise_leaves(tree, like)
+        if version == 1:
+            r = self.pmap.radius.astype(self.params.c.dtype)
+            self.params = eqx.tree_at(lambda p: p.c, self.params,
+                                      self.params.c * r / (2 * SAG_SCALE))
         self.hist, self.seconds = info["hist"], info["seconds"]
         self.source.set_state(info["rng"])
         return True
