@@ -232,15 +232,15 @@ def main(argv=None) -> None:
     ap.add_argument("--cap-gib", type=float, default=8.0)
     ap.add_argument("--out", type=pathlib.Path, default=RESULTS / "render_memory.json")
     args = ap.parse_args(argv)
+    if args.worker and args.trace_rays > 0:  # the bare-trace worker ignores the render sizes
+        print(json.dumps(trace_worker(args.trace_rays)))
+        return
     for name, lo in (("size", 1), ("spp", 1), ("patch", 1), ("trace_rays", 0)):
         if getattr(args, name) < lo:
             ap.error(f"--{name.replace('_', '-')} must be a whole number >= {lo}, "
                      f"got {getattr(args, name)}")
     if not 0 < args.cap_gib < float("inf"):
         ap.error(f"--cap-gib must be a positive number of GiB, got {args.cap_gib}")
-    if args.worker and args.trace_rays:
-        print(json.dumps(trace_worker(args.trace_rays)))
-        return
     if args.worker:
         print(json.dumps(worker(args.size, args.spp, bool(args.checkpoint), args.patch)))
         return
