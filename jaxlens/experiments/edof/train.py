@@ -451,56 +451,56 @@ class Trainer:
             return jnp.zeros((len(tiles), 3, 1, 1), self.pmap.template.epd.dtype)
         return self.mean_bank[tiles[:, 0], tiles[:, 1]]
 
-    def probe(self) -> float:
-        """The loss of the current lens and decoder on a fixed batch (its own random stream:
-        scene windows, tiles, the depths 10 cm and 10 m, noise), recorded before and after
-        training as ``hist["probe"]``: a measure of learning free of batch-to-batch noise."""
+    def _fixed_batch(self, seed: int):
+        """Scene windows, tile indices and tile centres (mm) of a fixed batch drawn from its
+        own random stream ``seed`` (the same batch on every call and after a resume)."""
         from .scenes import PatchSampler
 
         cfg = self.cfg
         dt = self.pmap.template.epd.dtype
-        rng = np.random.default_rng(4242)
-        windows = PatchSampler(self.source.sampler.images, cfg.window, seed=4242).sample(
+        rng = np.random.default_rng(seed)
+        windows = PatchSampler(self.source.sampler.images, cfg.window, seed=seed).sample(
             cfg.batch)
         tiles = np.stack([rng.integers(0, n, cfg.batch) for n in self.xy.shape[:2]], -1)
-        depths = jnp.asarray([1e3 * DEPTHS_M[0], 1e3 * DEPTHS_M[-1]], dt)
+        return (jnp.asarray(windows, dt), tiles,
+                jnp.asarray(self.xy[tiles[:, 0], tiles[:, 1]], dt))
+
+    def _depth_psfs(self, lens, xy, depths):
+        """Forward-traced PSFs ``[D, B, 3, k, k]`` at tile centres ``xy [B, 2]`` for every
+        object depth of ``depths [D]`` (mm from the stop)."""
+        cfg = self.cfg
+        n, b = depths.shape[0], xy.shape[0]
+        kern = psfs_nograd(lens, jnp.tile(xy, (n, 1)), jnp.repeat(depths, b),
+                           jnp.asarray(lens.sensor.pixel_size, xy.dtype),
+                           kernel_size=cfg.kernel_size, pupil=cfg.pupil)
+        return kern.reshape((n, b) + kern.shape[1:])
+
+    def probe(self) -> float:
+        """The loss of the current lens and decoder on a fixed batch (its own random stream:
+        scene windows, tiles, the depths 10 cm and 10 m, noise), recorded before and after
+        training as ``hist["probe"]``: a measure of learning free of batch-to-batch noise."""
+        windows, tiles, xy = self._fixed_batch(4242)
+        depths = jnp.asarray([1e3 * DEPTHS_M[0], 1e3 * DEPTHS_M[-1]], xy.dtype)
         lens = self.lens()
-        xy = jnp.asarray(self.xy[tiles[:, 0], tiles[:, 1]], dt)
-        kern = psfs_nograd(lens, jnp.concatenate([xy, xy]), jnp.repeat(depths, cfg.batch),
-                           jnp.asarray(lens.sensor.pixel_size, dt), kernel_size=cfg.kernel_size,
-                           pupil=cfg.pupil)
+        kern = self._depth_psfs(lens, xy, depths)
         if self.dec.wiener:
             self._banks(lens, full=False)
-        loss = _probe_loss(self.dec, kern.reshape((2, cfg.batch) + kern.shape[1:]),
-                           jnp.asarray(windows, dt), self._wkern(tiles),
-                           jax.random.PRNGKey(4242), cfg=cfg)
+        loss = _probe_loss(self.dec, kern, windows, self._wkern(tiles),
+                           jax.random.PRNGKey(4242), cfg=self.cfg)
         return float(loss)
 
     def check_loss(self, params) -> float:
         """``L_rec`` of the lens ``params`` with the current decoder on the fixed check batch
         (``Config.lens_accept``): its own random stream of training windows and tiles, all
         8 depths, fixed noise."""
-        cfg = self.cfg
-        dt = self.pmap.template.epd.dtype
         if self._check is None:
-            from .scenes import PatchSampler
-
-            rng = np.random.default_rng(777)
-            windows = PatchSampler(self.source.sampler.images, cfg.window, seed=777).sample(
-                cfg.batch)
-            tiles = np.stack([rng.integers(0, n, cfg.batch) for n in self.xy.shape[:2]], -1)
-            self._check = (jnp.asarray(windows, dt),
-                           jnp.asarray(self.xy[tiles[:, 0], tiles[:, 1]], dt))
+            windows, _, xy = self._fixed_batch(777)
+            self._check = (windows, xy)
         windows, xy = self._check
-        lens = self.pmap.to_lens(params)
-        depths = jnp.asarray(1e3 * np.asarray(DEPTHS_M), dt)
-        n = len(DEPTHS_M)
-        kern = psfs_nograd(lens, jnp.tile(xy, (n, 1)), jnp.repeat(depths, cfg.batch),
-                           jnp.asarray(lens.sensor.pixel_size, dt),
-                           kernel_size=cfg.kernel_size, pupil=cfg.pupil)
-        kern = kern.reshape((n, cfg.batch) + kern.shape[1:])
+        depths = jnp.asarray(1e3 * np.asarray(DEPTHS_M), xy.dtype)
+        kern = self._depth_psfs(self.pmap.to_lens(params), xy, depths)
         return float(_check_rec_loss(self.dec, kern, windows, jax.random.PRNGKey(777),
-                                     cfg=cfg))
+                                     cfg=self.cfg))
 
     def run(self, progress: Callable | None = None):
         """Train to the end (or to the deadline: ``OutOfTime`` after a checkpoint)."""
@@ -511,7 +511,6 @@ class Trainer:
         opt1, lens_opt = optimizers(cfg)
         dt = self.pmap.template.epd.dtype
         depths = jnp.asarray(1e3 * np.asarray(DEPTHS_M), dt)
-        pix = jnp.asarray(self.pmap.template.sensor.pixel_size, dt)
         total = cfg.steps + cfg.steps2
         bar = progress(total=total, desc=self.name) if progress else None
         if bar is not None:
@@ -561,10 +560,7 @@ class Trainer:
                 else:
                     k_pert, sub = jax.random.split(sub)
                     src = lens if self.stage == 1 else _perturb(lens, k_pert, cfg.tolerances)
-                    kern = psfs_nograd(src, jnp.concatenate([xy, xy]),
-                                       jnp.repeat(depths[pair], len(tiles)), pix,
-                                       kernel_size=cfg.kernel_size, pupil=cfg.pupil)
-                    kern = kern.reshape((2, len(tiles)) + kern.shape[1:])
+                    kern = self._depth_psfs(src, xy, depths[pair])
                 scale = jnp.asarray(1.0 if self.stage == 1 else STAGE2_LR_SCALE, dt)
                 self.dec, self.net_state, loss, parts = net_step(
                     self.dec, self.net_state, kern, windows, wk, sub, scale, cfg=cfg,
