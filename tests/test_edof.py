@@ -387,10 +387,27 @@ def test_smoke_run_writes_outputs_loss_falls_and_resumes(tmp_path):
                                 "--resume", "--eval-pupil", "12"])
     assert fourth["timings_s"]["train_hybrid_s0_s"] < 5.0
     settings = json.loads((ck / "seed0" / "eval_hybrid_settings.json").read_text())
-    assert settings == {"eval_pupil": 12, "crops": 4}
+    assert settings["eval_pupil"] == 12 and settings["crops"] == 4
+    assert settings["training"]["steps2"] == 2
     with pytest.raises(ValueError, match="another configuration"):
         edof.run(common + ["--out", str(tmp_path / "edof5"), "--checkpoint", str(ck),
                            "--resume", "--steps", "61"])
+    # A longer stage 2 extends the finished lenses and evaluates them anew (its cached
+    # evaluation was made with the shorter training): the same table as a run straight
+    # through with it. A shorter one than the lenses have done is refused.
+    longer = common + ["--steps2", "4"]
+    extended = edof.run(longer + ["--out", str(tmp_path / "edof6"), "--checkpoint", str(ck),
+                                  "--resume"])
+    assert [r["step"] for r in extended["history"]["hybrid_s0"]["stage2"]] == [2, 4]
+    assert "after" in extended["history"]["hybrid_s0"]["probe"]
+    edof.run(longer + ["--out", str(tmp_path / "edof7")])
+    table6 = json.loads((tmp_path / "edof6" / "table2.json").read_text())
+    assert table6["lenses"] == json.loads((tmp_path / "edof7" / "table2.json").read_text())[
+        "lenses"]
+    assert table6["lenses"] != table["lenses"]
+    with pytest.raises(ValueError, match="stage-2 steps"):
+        edof.run(common + ["--out", str(tmp_path / "edof8"), "--checkpoint", str(ck),
+                           "--resume", "--steps2", "3"])
 
 
 def test_reported_fov_is_the_real_chief_ray_to_the_sensor_corner():

@@ -415,11 +415,21 @@ class Trainer:
                              f"the units of version {version}, this code reads version "
                              f"{PARAMS_VERSION}; use another --checkpoint")
         current = json.loads(json.dumps(dataclasses.asdict(self.cfg)))
-        if (training_config(info["config"], self.name)
-                != training_config(current, self.name)):
+        saved = training_config(info["config"], self.name)
+        if saved != dict(training_config(current, self.name), steps2=saved["steps2"]):
             raise ValueError(f"resume: the checkpoint {meta} was written with another "
                              f"configuration; use the same options, or another --checkpoint")
         self.stage, self.step = info["stage"], info["step"]
+        # A longer stage 2 extends a lens exactly (its schedule does not depend on steps2);
+        # a finished lens goes back into stage 2 where it stopped.
+        done2 = saved["steps2"] if self.stage == 3 else self.step if self.stage == 2 else 0
+        if done2 > self.cfg.steps2:
+            raise ValueError(f"resume: the checkpoint {meta} has {done2} stage-2 steps, "
+                             f"more than --steps2 {self.cfg.steps2}; use --steps2 "
+                             f">= {done2}, or another --checkpoint")
+        if self.stage == 3 and done2 < self.cfg.steps2:
+            self.stage, self.step = 2, done2
+            info["hist"].get("probe", {}).pop("after", None)
         like = (self.dec, self.params, self.net_state, self.lens_state, self.key)
         self.dec, self.params, self.net_state, self.lens_state, self.key = \
             eqx.tree_deserialise_leaves(tree, like)
