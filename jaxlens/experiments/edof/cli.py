@@ -28,6 +28,8 @@ lens; one seed); ``--seeds 0,1,2`` gives the 3-seed table.
 ``--paper`` selects the paper's scale for a GPU; with ``--checkpoint DIR`` a run saves its
 state every ``refresh_every`` steps, ``--time-limit S`` stops it at the first checkpoint
 after S seconds (exit status 3) and ``--resume`` continues it, so it can go in pieces.
+A resumed lens may get a longer ``--steps2`` (its stage 2 goes on where it stopped, as in
+one run with the longer stage); any other training option must stay the same.
 ``--smoke`` is a seconds-scale run for tests.
 
 Examples:
@@ -87,7 +89,8 @@ def build_parser() -> argparse.ArgumentParser:
     g.add_argument("--decoder", choices=("nafnet", "wiener"),
                    help="NAFNet alone, or behind a Wiener front end (wiener)")
     g.add_argument("--steps", type=int, help="stage-1 steps per lens (1200)")
-    g.add_argument("--steps2", type=int, help="stage-2 steps per lens (60)")
+    g.add_argument("--steps2", type=int,
+                   help="stage-2 steps per lens (60); may grow on --resume")
     g.add_argument("--batch", type=int, help="patches per batch (8)")
     g.add_argument("--tile", type=int, help="tile and patch side, pixels (32)")
     g.add_argument("--kernel", type=int, help="PSF kernel side, pixels (31)")
