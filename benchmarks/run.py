@@ -63,6 +63,20 @@ def main(argv: list[str] | None = None) -> dict:
     args = p.parse_args(argv)
     if args.tag is not None and not re.fullmatch(r"[A-Za-z0-9_-]+", args.tag):
         p.error("--tag: letters, digits, '_' and '-' only")
+    for n in args.counts or ():
+        if n < 1:
+            p.error(f"--counts must be whole numbers in [1, inf) rays, got {n}")
+    if args.lenses:
+        import difflib
+
+        from jaxlens import zoo
+
+        for name in args.lenses:
+            if name not in zoo.ZOO:
+                close = difflib.get_close_matches(name, sorted(zoo.ZOO), n=3, cutoff=0.5)
+                hint = f"; closest: {', '.join(close)}" if close else ""
+                p.error(f"--lenses: unknown zoo lens {name!r} (known: "
+                        f"{', '.join(sorted(zoo.ZOO))}){hint}")
 
     jax.config.update("jax_enable_x64", True)  # float64 runs next to float32
     out = args.out

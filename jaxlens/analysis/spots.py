@@ -20,7 +20,7 @@ import numpy as np
 from jaxtyping import Array, Bool, Float
 
 from ..imaging.sampling import field_rays, pupil_grid
-from ..optics import paraxial
+from ..optics import checks, paraxial
 from ..optics.lens import Lens
 from ..optics.rays import Rays
 from ..tracing.forward import DEFAULT_NEWTON_ITERS, trace, trace_path
@@ -201,6 +201,8 @@ def clear_semi_diameters(lens: Lens, fields=None, n_rim: int = 64, *,
     interior rays: where rim rays fail, a ray inside the pupil can pass higher than any
     rim ray that passes, and an aperture sized from the rim alone would clip it.
     """
+    checks.number(n_rim, "n_rim", "clear_semi_diameters", lo=4, integer=True,
+                  unit="rim rays per beam (fewer miss the rim in x or y)")
     fields = _fields_array(lens.fields if fields is None else fields)
     a = np.linspace(0, 2 * np.pi, n_rim, endpoint=False)
     rim = jnp.asarray(np.concatenate([[[0.0, 0.0]], np.stack([np.cos(a), np.sin(a)], -1)]),

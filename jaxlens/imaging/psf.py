@@ -53,6 +53,7 @@ import math
 import equinox as eqx
 import jax
 import jax.numpy as jnp
+import numpy as np
 from jaxtyping import Array, ArrayLike, Float
 
 from ..optics import checks, paraxial
@@ -389,8 +390,10 @@ def _psf_impl(lens, field, depth, wls, pixel_size, key, *, kernel_size, model, c
                          newton_iters=newton_iters)
 
 
-def _prepare(lens, field, depth, wavelength, kernel_size, pixel_size, model, center, caller):
+def _prepare(lens, field, depth, wavelength, kernel_size, pixel_size, model, center, caller,
+             newton_iters=DEFAULT_NEWTON_ITERS):
     _model(model, caller)
+    checks.number(newton_iters, "newton_iters", caller, lo=0, integer=True, unit="iterations")
     if center not in CENTERS:
         raise ValueError(f"{caller}: center must be one of {CENTERS}, got {center!r}")
     if not isinstance(kernel_size, int) or kernel_size < 1:
@@ -438,7 +441,10 @@ def psf_info(
         A :class:`PSFResult`.
     """
     field, depth, wl, pixel_size = _prepare(lens, field, depth, wavelength, kernel_size,
-                                            pixel_size, model, center, "psf")
+                                            pixel_size, model, center, "psf", newton_iters)
+    if max_truncation is not None:
+        checks.number(max_truncation, "max_truncation", "psf", lo=0,
+                      unit="(fraction of the PSF energy; None to skip the check)")
     wls = jnp.atleast_1d(wl)
     kern, trunc, ref, strehl, aliased = _psf_impl(
         apertured(lens), field, depth, wls, pixel_size, key, kernel_size=kernel_size, model=model,
@@ -574,10 +580,15 @@ def psf_map(
     if sensor is None:
         raise ValueError("psf_map: the lens has no sensor; pass sensor=Sensor(...)")
     pixel_size = sensor.pixel_size if pixel_size is None else pixel_size
+    if (not isinstance(grid, (tuple, list)) or len(grid) != 2 or not all(
+            isinstance(g, (int, np.integer)) and not isinstance(g, bool) and g >= 1
+            for g in grid)):
+        raise ValueError(f"psf_map: grid must be (rows, cols), whole numbers >= 1 PSFs, got "
+                         f"{grid!r}")
+    _, depth, wl, pixel_size = _prepare(lens, 0.0, depth, wavelength, kernel_size, pixel_size,
+                                        model, center, "psf_map", newton_iters)
     xy = sensor_grid(sensor.resolution, sensor.pixel_size, grid)
     fields = ideal_to_field(lens, xy)
-    _, depth, wl, pixel_size = _prepare(lens, 0.0, depth, wavelength, kernel_size, pixel_size,
-                                        model, center, "psf_map")
     wls = jnp.atleast_1d(wl)
     lens = apertured(lens)
 
@@ -718,8 +729,10 @@ def mtf(
         frequencies = jnp.linspace(0.0, 1.0, 33, dtype=dtype) * top
     freqs = jnp.atleast_1d(jnp.asarray(frequencies, dtype))
     pix = lam_min * fnum / 4.0 if pixel_size is None else jnp.asarray(pixel_size, dtype)
+    if not checks.is_traced(freqs):
+        checks.finite_array(freqs, "frequencies", "mtf", "cycles/mm")
     field, depth, _, pix = _prepare(lens, field, depth, None, kernel_size, pix, model,
-                                    "centroid", "mtf")
+                                    "centroid", "mtf", newton_iters)
     t, s = _mtf_impl(apertured(lens), field, depth, wls, freqs, pix, model=model,
                      kernel_size=kernel_size,
                      diffraction=bool(diffraction), newton_iters=newton_iters)

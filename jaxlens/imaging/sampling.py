@@ -26,6 +26,7 @@ from ..optics.rays import Rays
 
 def pupil_grid(n: int = 21, dtype=None) -> Float[Array, "m 2"]:
     """Square grid of n×n points over [−1, 1]², kept inside the unit disc (r² ≤ 1 + 1e-12)."""
+    n = checks.number(n, "n", "pupil_grid", lo=1, integer=True, unit="points per side")
     u = np.linspace(-1.0, 1.0, n) if n > 1 else np.zeros(1)
     px, py = np.meshgrid(u, u, indexing="xy")
     keep = px**2 + py**2 <= 1.0 + 1e-12
@@ -35,6 +36,7 @@ def pupil_grid(n: int = 21, dtype=None) -> Float[Array, "m 2"]:
 
 def pupil_hexapolar(rings: int = 6, dtype=None) -> Float[Array, "m 2"]:
     """Hexapolar pattern: the centre plus ring i (1..rings) of 6·i equally spaced points."""
+    rings = checks.number(rings, "rings", "pupil_hexapolar", lo=0, integer=True, unit="rings")
     pts = [(0.0, 0.0)]
     for i in range(1, rings + 1):
         r = i / rings
@@ -46,6 +48,7 @@ def pupil_hexapolar(rings: int = 6, dtype=None) -> Float[Array, "m 2"]:
 
 def pupil_random(key, n: int, dtype=None) -> Float[Array, "n 2"]:
     """n points uniform over the unit disc."""
+    n = checks.number(n, "n", "pupil_random", lo=1, integer=True, unit="points")
     k1, k2 = jax.random.split(key)
     dt = dtype or jnp.result_type(float)
     r = jnp.sqrt(jax.random.uniform(k1, (n,), dt))
@@ -55,6 +58,8 @@ def pupil_random(key, n: int, dtype=None) -> Float[Array, "n 2"]:
 
 def pupil_stratified(key, n_side: int, dtype=None) -> Float[Array, "m 2"]:
     """Jittered (stratified) samples: one random point per cell of an n_side² polar grid."""
+    n_side = checks.number(n_side, "n_side", "pupil_stratified", lo=1, integer=True,
+                           unit="cells per side")
     dt = dtype or jnp.result_type(float)
     i, j = jnp.meshgrid(jnp.arange(n_side), jnp.arange(n_side), indexing="ij")
     u = jax.random.uniform(key, (2, n_side, n_side), dt)
@@ -104,6 +109,17 @@ def pupil_samples(scheme: str, n: int, key=None, dtype=None) -> Float[Array, "m 
     )
 
 
+def _pupil(pupil, where: str) -> Array:
+    """Normalised pupil points ``[m, 2]``: finite (concrete) and shaped as (Px, Py) pairs."""
+    pupil = jnp.asarray(pupil)
+    if pupil.ndim < 1 or pupil.shape[-1] != 2 or pupil.size == 0:
+        raise ValueError(f"{where}: pupil must be [m, 2] normalised pupil points (Px, Py), got "
+                         f"shape {pupil.shape}")
+    if not checks.is_traced(pupil):
+        checks.finite_array(pupil, "pupil", where, "normalised pupil coordinates")
+    return pupil
+
+
 def field_xy(field) -> Array:
     f = checks.field_angles(jnp.asarray(field), "sampling", "field")
     if f.ndim == 0 or f.shape[-1] != 2:
@@ -139,6 +155,7 @@ def collimated(
         ``[m]`` rays launched on the entrance-pupil plane.
     """
     wl = lens.primary_wavelength if wavelength is None else jnp.asarray(wavelength)
+    pupil = _pupil(pupil, "collimated")
     d = field_direction(field)
     zep = paraxial.entrance_pupil_z(lens, lens.primary_wavelength)
     h = 0.5 * lens.epd
@@ -167,7 +184,12 @@ def point_source(
     entrance-pupil points, with ``opl`` already holding the path from the object point.
     """
     wl = lens.primary_wavelength if wavelength is None else jnp.asarray(wavelength)
+    pupil = _pupil(pupil, "point_source")
     point = jnp.asarray(point)
+    if point.shape[-1:] != (3,):
+        raise ValueError(f"point_source: point must be (x, y, z) in mm, got shape {point.shape}")
+    if not checks.is_traced(point):
+        checks.values(point, "point", "point_source", unit="mm")
     zep = paraxial.entrance_pupil_z(lens, lens.primary_wavelength)
     xy = pupil * (0.5 * lens.epd)
     target = jnp.concatenate([xy, jnp.broadcast_to(zep, xy.shape[:-1])[..., None]], -1)
@@ -189,6 +211,9 @@ def object_point(lens: Lens, field, depth) -> Array:
     surface 1 (mm, positive)."""
     th = field_xy(field)
     depth = jnp.asarray(depth)
+    if not checks.is_traced(depth):
+        checks.values(depth, "depth", "object_point", lo=0, lo_open=True,
+                      unit="mm (object to surface 1)")
     z = -depth
     zep = paraxial.entrance_pupil_z(lens, lens.primary_wavelength)
     xy = jnp.tan(th) * (zep - z)
@@ -275,7 +300,6 @@ def static_depth(depth):
         return depth
     if np.all(np.isinf(np.asarray(depth))):
         return None
-    d = np.asarray(depth)
-    if np.any(d <= 0):
-        raise ValueError(f"depth must be positive (mm from the object to surface 1), got {depth}")
+    checks.values(depth, "depth", "sampling", lo=0, lo_open=True,
+                  unit="mm from the object to surface 1 (inf: an object at infinity)")
     return jnp.asarray(depth)

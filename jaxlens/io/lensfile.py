@@ -89,6 +89,55 @@ def _num(value: Any, where: str, *, finite: bool = True) -> float:
     return v
 
 
+_TOP_KEYS = ("format", "name", "description", "surfaces", "aperture", "fields",
+             "wavelengths_um", "wavelengths_nm", "wavelengths", "primary",
+             "primary_wavelength_um", "primary_wavelength_nm", "primary_wavelength",
+             "stop_surface_index", "object", "sensor", "units", "epd", "EPD")
+_SURFACE_KEYS = ("type", "curvature", "radius", "thickness", "conic", "even_asphere_coeffs",
+                 "odd_x", "odd_y", "semi_diameter", "is_stop", "material", "n", "shape")
+_APERTURE_KEYS = ("epd", "EPD", "fnum", "FNUM", "f_number", "stop_semi_diameter")
+_SENSOR_KEYS = ("resolution", "pixel_size")
+_FIELD_KEYS = ("type", "values")
+
+
+def _edits(a: str, b: str) -> int:
+    """Levenshtein distance between two short strings."""
+    row = list(range(len(b) + 1))
+    for i, ca in enumerate(a, 1):
+        prev, row[0] = row[0], i
+        for j, cb in enumerate(b, 1):
+            prev, row[j] = row[j], min(row[j] + 1, row[j - 1] + 1, prev + (ca != cb))
+    return row[-1]
+
+
+def _no_misspelled_keys(d: Any, known: tuple[str, ...], where: str) -> None:
+    """Refuse a key that is one or two letters off a key the reader knows.
+
+    Unknown keys are ignored (informational data may share the file), so a misspelled
+    one (``"wavelength_nm"``, ``"radus"``) would silently fall back to a default.
+    """
+    if not isinstance(d, dict):
+        return
+    for key in d:
+        if not isinstance(key, str) or key in known:
+            continue
+        dist = {k: _edits(k.lower(), key.lower()) for k in known}
+        # Keys of one or two letters ("n") match only in another case: "nd" or "vd" are
+        # informational glass data, not typos of "n".
+        near = sorted((d, k) for k, d in dist.items()
+                      if d <= (0 if len(k) <= 2 else 1 if len(k) <= 6 else 2))
+        if near:
+            raise ValueError(f"{where}: unknown key {key!r}; did you mean {near[0][1]!r}? (a "
+                             f"misspelled key would be ignored and its default used)")
+
+
+def _whole(value: Any) -> int:
+    """A whole JSON number (``8`` or ``8.0``); ``2.5``, ``true`` and strings are refused."""
+    if isinstance(value, bool) or not isinstance(value, int | float) or value != int(value):
+        raise ValueError(f"not a whole number: {value!r}")
+    return int(value)
+
+
 def _text(value: Any, where: str) -> str:
     if not isinstance(value, str):
         raise ValueError(f"{where}: expected a string, got {value!r}")
@@ -296,7 +345,10 @@ def _tabulated(wl, n, name, where) -> AbstractMaterial:
         raise ValueError(f"{where}: repeated wavelength in the index table")
     if name.strip().lower() in _AIR_NAMES and np.all(n == 1.0):
         return Air()
-    return Tabulated(_arr(wl), _arr(n), name=name)
+    try:
+        return Tabulated(_arr(wl), _arr(n), name=name)
+    except ValueError as e:
+        raise ValueError(f"{where}: {e}") from None
 
 
 def material_from_spec(spec: Any, where: str, *, n_table: Any = None) -> AbstractMaterial:
@@ -485,7 +537,11 @@ def _aperture_of(d: dict, where: str) -> dict:
     }
     for top in ("epd", "EPD"):
         if top in d:
-            return {"epd": _num(d[top], f"{where}: {top}")}
+            v = _num(d[top], f"{where}: {top}")
+            if not v > 0:
+                raise ValueError(f"{where}: {top} (entrance pupil diameter) must be > 0 mm, "
+                                 f"got {v}")
+            return {"epd": v}
     for key, names in keys.items():  # EPD first: the reference cases give it besides others
         for n in names:
             if n in ap:
@@ -536,6 +592,9 @@ def _fields_of(d: dict, where: str) -> np.ndarray:
     out = np.atleast_1d(_nums(f, f"{where}: fields"))
     if out.size == 0:
         raise ValueError(f"{where}: no fields")
+    if out.ndim > 2 or (out.ndim == 2 and out.shape[1] != 2):
+        raise ValueError(f"{where}: fields must be a list of angles θy or of [θx, θy] pairs "
+                         f"(deg), got an array of shape {out.shape}")
     return out
 
 
@@ -557,6 +616,11 @@ def lens_from_dict(d: dict, *, source: str = "<lens>") -> Lens:
             f"{source}: unsupported format {fmt!r}; this jaxlens reads "
             f"{', '.join(_SUPPORTED_FORMATS)}"
         )
+    _no_misspelled_keys(d, _TOP_KEYS, source)
+    _no_misspelled_keys(d.get("aperture"), _APERTURE_KEYS, f"{source}: aperture")
+    _no_misspelled_keys(d.get("sensor"), _SENSOR_KEYS, f"{source}: sensor")
+    _no_misspelled_keys(d.get("fields"), _FIELD_KEYS, f"{source}: fields")
+    _no_misspelled_keys(d.get("object"), ("distance",), f"{source}: object")
     surfs = d.get("surfaces")
     if not isinstance(surfs, list) or not surfs:
         raise ValueError(f"{source}: 'surfaces' must be a non-empty list")
@@ -587,6 +651,7 @@ def lens_from_dict(d: dict, *, source: str = "<lens>") -> Lens:
         where = f"{source}: surface {i}"
         if not isinstance(s, dict):
             raise ValueError(f"{where}: must be an object, got {s!r}")
+        _no_misspelled_keys(s, _SURFACE_KEYS, where)
         if _text(s.get("type", ""), f"{where}: type").lower() in ("object", "image"):
             raise ValueError(f"{where}: an {s['type']} surface can only be first/last")
         surfaces.append(surface_from_dict(s, where))
@@ -630,7 +695,7 @@ def lens_from_dict(d: dict, *, source: str = "<lens>") -> Lens:
     if d.get("sensor") is not None:
         sd = d["sensor"]
         try:
-            res = tuple(int(v) for v in sd["resolution"])
+            res = tuple(_whole(v) for v in sd["resolution"])
             pix = _num(sd["pixel_size"], f"{source}: sensor.pixel_size")
         except (KeyError, TypeError, ValueError, OverflowError):
             raise ValueError(
@@ -643,6 +708,11 @@ def lens_from_dict(d: dict, *, source: str = "<lens>") -> Lens:
     if not isinstance(name, str):
         raise ValueError(f"{source}: name must be a string")
     aperture = _aperture_of(d, source)
+    key = next((k for k in ("wavelengths_um", "wavelengths_nm", "wavelengths") if k in d),
+               "wavelengths")
+    # The Lens checks these too, but here the message names the file and the key.
+    checks.wavelengths(checks.NoMaterials, wl, f"{source}: {key}", "wavelength")
+    checks.field_angles(fields, f"{source}: fields", "field angles")
     lens = Lens(
         surfaces=tuple(surfaces),
         thickness=_arr(np.array(thick)),
@@ -659,8 +729,6 @@ def lens_from_dict(d: dict, *, source: str = "<lens>") -> Lens:
         name=name,
     )
     # Before the paraxial work of the aperture: values the lens cannot be traced with.
-    key = next((k for k in ("wavelengths_um", "wavelengths_nm", "wavelengths") if k in d),
-               "wavelengths")
     checks.wavelengths(lens, wl, f"{source}: {key}", "wavelength")
     checks.material_indices(lens, wl, source)
     checks.field_angles(fields, f"{source}: fields", "field angles")

@@ -212,6 +212,9 @@ def _surface_line(s: _Surf, key: str, ln: _Line) -> None:
             raise ln.error("annular apertures (CLAP with a minimum radius > 0) are not "
                            "supported; jaxlens clips rays outside a semi-diameter only")
         s.clap = ln.float(2, "circular aperture maximum radius")
+        if s.clap < 0:
+            raise ln.error("circular aperture maximum radius must be >= 0 (lens units; 0: "
+                           "none)")
     elif key == "OBSC":
         if ln.float(2, "obscuration maximum radius") > 0:
             if not 0 <= ln.float(1, "obscuration minimum radius") < ln.float(2, ""):
@@ -526,6 +529,9 @@ def _fields(f: _File, strict: bool) -> np.ndarray:
     count = None
     if f.ftyp is not None and len(f.ftyp.tokens) > 3:
         count = f.ftyp.int(3, "number of fields")
+        if count < 1:
+            raise f.ftyp.error(f"number of fields (FTYP's fourth value) must be >= 1, got "
+                               f"{count}")
     if f.yfln is None:
         return np.zeros(1)
     ys = [f.yfln.float(i, "y field") for i in range(1, len(f.yfln.tokens))]
@@ -550,6 +556,9 @@ def _wavelengths(f: _File) -> tuple[np.ndarray, int]:
     count = None
     if f.ftyp is not None and len(f.ftyp.tokens) > 4:
         count = f.ftyp.int(4, "number of wavelengths")
+        if count < 1:
+            raise f.ftyp.error(f"number of wavelengths (FTYP's fifth value) must be >= 1, got "
+                               f"{count}")
     if f.wavm:
         n = count if count is not None else max(f.wavm)
         missing = [i for i in range(1, n + 1) if i not in f.wavm]
@@ -729,6 +738,10 @@ def loads(text: str, path: str = "<zmx>", *, strict: bool = False) -> Lens:
     zmx_system.ray_aiming(f.raim, f.path)
     field_type = zmx_system.field_type(f.ftyp)
     fields = _fields(f, strict)
+    # The Lens checks these too, but here the message names the file.
+    checks.wavelengths(checks.NoMaterials, np.asarray(wl), f"{path}: WAVM", "wavelength")
+    if field_type == 0:
+        checks.field_angles(np.asarray(fields), f"{path}: XFLN/YFLN", "field angles")
     lens = Lens(
         surfaces=tuple(surfaces),
         thickness=_arr(np.array(thick, np.float64)),

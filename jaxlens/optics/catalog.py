@@ -533,6 +533,9 @@ def get_material(name: str, catalogs: str | Iterable[str] | None = None, *,
         ValueError: If the name is in no searched catalog; the message lists the 5 closest
             catalog names and, given nd and vd, the 5 nearest glasses (:func:`nearest_glasses`).
     """
+    if not isinstance(name, str):
+        raise TypeError(f"get_material: name must be a glass name (str), got "
+                        f"{type(name).__name__} {name!r}")
     if name.strip().upper() in ("", "AIR"):
         return Air()
     found = _find(name, catalogs)

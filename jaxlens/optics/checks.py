@@ -42,6 +42,14 @@ def fmt(v) -> str:
         " …" if a.size > 8 else "")
 
 
+def _span(lo, hi, lo_open, hi_open) -> str:
+    left = "(" if lo_open or lo is None else "["
+    right = ")" if hi_open or hi is None else "]"
+    low = "-inf" if lo is None else f"{lo:g}"
+    high = "inf" if hi is None else f"{hi:g}"
+    return f"{left}{low}, {high}{right}"
+
+
 def number(value, arg: str, where: str, *, lo=None, hi=None, lo_open=False, hi_open=False,
            unit: str = "", integer: bool = False) -> float | int:
     """A finite number within [lo, hi] (open ends where asked); raises ValueError otherwise.
@@ -58,11 +66,7 @@ def number(value, arg: str, where: str, *, lo=None, hi=None, lo_open=False, hi_o
     Returns:
         The value as float (or int when ``integer``).
     """
-    left = "(" if lo_open or lo is None else "["
-    right = ")" if hi_open or hi is None else "]"
-    low = "-inf" if lo is None else f"{lo:g}"
-    high = "inf" if hi is None else f"{hi:g}"
-    span = f"{left}{low}, {high}{right}"
+    span = _span(lo, hi, lo_open, hi_open)
     kind = "a whole number" if integer else "a finite number"
     u = f" {unit}" if unit else ""
     shown = repr(value) if isinstance(value, (str, bool, int, float)) else fmt(value)
@@ -87,7 +91,54 @@ def number(value, arg: str, where: str, *, lo=None, hi=None, lo_open=False, hi_o
     return int(v) if integer else v
 
 
+def values(x, arg: str, where: str, *, lo=None, hi=None, lo_open=False, hi_open=False,
+           unit: str = "", inf_ok: bool = False):
+    """Every entry of an array within [lo, hi] (open ends where asked); returns ``x``.
+
+    The array form of :func:`number`, for arrays of any shape (a batched lens, a list of
+    wavelengths). NaN is always refused; ±inf only where ``inf_ok`` (and then only where
+    the bound allows it: ``inf_ok`` with ``lo=0`` accepts +inf, not -inf). A concrete bad
+    value raises ``ValueError`` naming the caller, the argument, the first bad value, the
+    range and the unit; a traced array gets an ``eqx.error_if`` with the same message
+    without the value.
+    """
+    span = _span(lo, hi, lo_open, hi_open)
+    if inf_ok and hi is None:
+        span = span[:-1] + "]"
+    u = f" {unit}" if unit else ""
+    kind = "numbers" if inf_ok else "finite numbers"
+    msg = (f"{where}: {arg} must be {kind} in {span}{u}" if lo is not None or hi is not None
+           else f"{where}: {arg} must be {kind}{f' ({unit})' if unit else ''}")
+
+    def bad_of(a, xp):
+        bad = xp.isnan(a) if inf_ok else ~xp.isfinite(a)
+        if lo is not None:
+            bad = bad | ((a <= lo) if lo_open else (a < lo))
+        if hi is not None:
+            bad = bad | ((a >= hi) if hi_open else (a > hi))
+        return bad
+
+    if is_traced(x):
+        return eqx.error_if(x, jnp.any(bad_of(jnp.asarray(x), jnp)), msg)
+    try:
+        a = np.asarray(x, dtype=float)
+    except (TypeError, ValueError):
+        raise ValueError(f"{msg}, got {x!r}") from None
+    bad = bad_of(a, np)
+    if np.any(bad):
+        raise ValueError(f"{msg}, got {fmt(a[bad][:1])}{u.split(' (')[0]}"
+                         f"{f' (first of {int(bad.sum())} bad values)' if bad.sum() > 1 else ''}")
+    return x
+
+
 # ---------------------------------------------------------------------------- wavelengths
+
+
+class NoMaterials:
+    """A stand-in lens without materials: only ``GENERIC_RANGE_UM`` applies to wavelengths."""
+
+    object_material = None
+    materials = ()
 
 
 def material_range(material) -> tuple[float, float]:

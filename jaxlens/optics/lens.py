@@ -101,10 +101,13 @@ class Lens(eqx.Module):
 
     def __check_init__(self):
         n = len(self.surfaces)
-        if self.thickness.shape != (n,) and self.thickness.ndim == 1:
-            raise ValueError(f"Lens: {n} surfaces need {n} thicknesses, got {self.thickness.shape}")
+        self._check_types()
+        if self.thickness.ndim == 0 or self.thickness.shape[-1] != n:
+            raise ValueError(f"Lens: {n} surfaces need {n} thicknesses (mm), got shape "
+                             f"{self.thickness.shape}")
         if len(self.materials) != n:
             raise ValueError(f"Lens: {n} surfaces need {n} materials, got {len(self.materials)}")
+        self._check_values()
         if not 0 <= self.stop < n:
             raise ValueError(f"Lens: stop index {self.stop} outside 0..{n - 1}")
         if not 0 <= self.primary < self.wavelengths.shape[-1]:
@@ -117,6 +120,35 @@ class Lens(eqx.Module):
                 raise ValueError(
                     f"Lens: obscuration ({i}, {r_min}, {r_max}) must name one surface in "
                     f"[0, {n - 1}] (0-based) once with 0 ≤ r_min < r_max (mm)")
+
+    def _check_types(self):
+        """Surfaces and materials of the right kind (a bare number or a glass name is not)."""
+        parts = [(f"surfaces[{i}]", s, AbstractSurface, "a surface (jaxlens.Sphere, Standard, "
+                  "EvenAsphere, …)") for i, s in enumerate(self.surfaces)]
+        parts.append(("image", self.image, AbstractSurface, "a surface"))
+        mat = "a material (jaxlens.get_material('N-BK7'), jaxlens.Air(), …)"
+        parts += [(f"materials[{i}]", m, AbstractMaterial, mat)
+                  for i, m in enumerate(self.materials)]
+        parts.append(("object_material", self.object_material, AbstractMaterial, mat))
+        for arg, v, cls, what in parts:
+            if not isinstance(v, cls):
+                raise TypeError(f"Lens: {arg} must be {what}, got {type(v).__name__} {v!r}")
+
+    def _check_values(self):
+        """Concrete numbers only (a traced lens, inside jit or vmap, is not known here)."""
+        if not checks.is_traced(self.thickness):
+            checks.values(self.thickness, "thickness", "Lens", unit="mm")
+        if not checks.is_traced(self.epd):
+            checks.values(self.epd, "epd (entrance pupil diameter)", "Lens", lo=0, lo_open=True,
+                          unit="mm")
+        if not checks.is_traced(self.fields):
+            checks.field_angles(self.fields, "Lens", "fields")
+        if not checks.is_traced(self.wavelengths):
+            checks.wavelengths(checks.NoMaterials, self.wavelengths, "Lens", "wavelengths")
+        d = self.object_distance
+        if d is not None and not checks.is_traced(d):
+            checks.values(d, "object_distance", "Lens", lo=0, unit="mm (inf or None: an "
+                          "object at infinity)")
 
     def _check_mirrors_and_breaks(self):
         """Mirrors and coordinate breaks keep the medium: materials[i] repeats the one before."""

@@ -24,6 +24,18 @@ LAMBDA_F = 0.4861327
 LAMBDA_C = 0.6562725
 
 
+def _check_coeffs(m, count: int | None = None, field: str = "coeffs") -> None:
+    """A formula's coefficients: ``count`` of them (JAX would clamp a missing one's index and
+    read another coefficient in its place), and finite where concrete."""
+    a = getattr(m, field)
+    where = f"{type(m).__name__}{f' {m.name!r}' if m.name else ''}"
+    if a.ndim < 1 or (count is not None and a.shape[-1] != count):
+        want = f"{count} coefficients" if count is not None else "a 1-D array of coefficients"
+        raise ValueError(f"{where}: {field} must hold {want}, got shape {a.shape}")
+    if not checks.is_traced(a):
+        checks.values(a, field, where)
+
+
 class AbstractMaterial(eqx.Module):
     """A medium with a refractive index that depends on wavelength (µm).
 
@@ -89,6 +101,8 @@ class Sellmeier(AbstractMaterial):
                 f"Sellmeier{f' {self.name!r}' if self.name else ''}: B and C need one "
                 f"coefficient per term (the same length), got shapes {self.B.shape} and "
                 f"{self.C.shape}")
+        _check_coeffs(self, None, "B")
+        _check_coeffs(self, None, "C")
 
     def index(self, wavelength):
         w2 = jnp.asarray(wavelength)[..., None] ** 2
@@ -100,6 +114,9 @@ class Schott(AbstractMaterial):
 
     coeffs: Float[Array, 6] = eqx.field(converter=jnp.asarray)
     name: str = eqx.field(static=True, default="")
+
+    def __check_init__(self):
+        _check_coeffs(self, 6)
 
     def index(self, wavelength):
         w2 = jnp.asarray(wavelength) ** 2
@@ -118,6 +135,20 @@ class Tabulated(AbstractMaterial):
     wavelengths: Float[Array, " k"] = eqx.field(converter=jnp.asarray)
     indices: Float[Array, " k"] = eqx.field(converter=jnp.asarray)
     name: str = eqx.field(static=True, default="")
+
+    def __check_init__(self):
+        where = f"Tabulated{f' {self.name!r}' if self.name else ''}"
+        w, n = self.wavelengths, self.indices
+        if w.ndim != 1 or w.shape != n.shape or w.shape[0] == 0:
+            raise ValueError(f"{where}: wavelengths (µm) and indices must be 1-D arrays of the "
+                             f"same non-zero length, got shapes {w.shape} and {n.shape}")
+        if checks.is_traced((w, n)):
+            return
+        checks.values(w, "wavelengths", where, lo=0, lo_open=True, unit="µm")
+        checks.values(n, "indices", where, lo=1, unit="(refractive index)")
+        if np.unique(np.asarray(w)).size != w.shape[0]:
+            raise ValueError(f"{where}: wavelengths must be distinct (one index per "
+                             f"wavelength), got {checks.fmt(w)} µm")
 
     def index(self, wavelength):
         w = jnp.asarray(wavelength)
@@ -149,6 +180,9 @@ class Herzberger(AbstractMaterial):
     coeffs: Float[Array, " 6"] = eqx.field(converter=jnp.asarray)
     name: str = eqx.field(static=True, default="")
 
+    def __check_init__(self):
+        _check_coeffs(self, 6)
+
     def index(self, wavelength):
         w2 = jnp.asarray(wavelength) ** 2
         a = self.coeffs
@@ -166,6 +200,9 @@ class Sellmeier2(AbstractMaterial):
     coeffs: Float[Array, " 5"] = eqx.field(converter=jnp.asarray)
     name: str = eqx.field(static=True, default="")
 
+    def __check_init__(self):
+        _check_coeffs(self, 5)
+
     def index(self, wavelength):
         w2 = jnp.asarray(wavelength) ** 2
         a, b1, l1, b2, l2 = (self.coeffs[i] for i in range(5))
@@ -178,6 +215,9 @@ class Conrady(AbstractMaterial):
 
     coeffs: Float[Array, " 3"] = eqx.field(converter=jnp.asarray)
     name: str = eqx.field(static=True, default="")
+
+    def __check_init__(self):
+        _check_coeffs(self, 3)
 
     def index(self, wavelength):
         w = jnp.asarray(wavelength)
@@ -192,6 +232,9 @@ class Handbook1(AbstractMaterial):
 
     coeffs: Float[Array, " 4"] = eqx.field(converter=jnp.asarray)
     name: str = eqx.field(static=True, default="")
+
+    def __check_init__(self):
+        _check_coeffs(self, 4)
 
     def index(self, wavelength):
         w2 = jnp.asarray(wavelength) ** 2
@@ -208,6 +251,9 @@ class Handbook2(AbstractMaterial):
     coeffs: Float[Array, " 4"] = eqx.field(converter=jnp.asarray)
     name: str = eqx.field(static=True, default="")
 
+    def __check_init__(self):
+        _check_coeffs(self, 4)
+
     def index(self, wavelength):
         w2 = jnp.asarray(wavelength) ** 2
         a = self.coeffs
@@ -222,6 +268,9 @@ class Sellmeier4(AbstractMaterial):
 
     coeffs: Float[Array, " 5"] = eqx.field(converter=jnp.asarray)
     name: str = eqx.field(static=True, default="")
+
+    def __check_init__(self):
+        _check_coeffs(self, 5)
 
     def index(self, wavelength):
         w2 = jnp.asarray(wavelength) ** 2
@@ -255,6 +304,7 @@ class Laurent(AbstractMaterial):
                 f"Laurent needs one coefficient per power: {len(self.powers)} powers, "
                 f"coefficients of shape {self.coeffs.shape}"
             )
+        _check_coeffs(self, len(self.powers))
 
     def index(self, wavelength):
         w = jnp.asarray(wavelength)[..., None]

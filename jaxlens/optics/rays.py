@@ -12,16 +12,12 @@ from __future__ import annotations
 
 import equinox as eqx
 import jax.numpy as jnp
+import numpy as np
 from jaxtyping import Array, ArrayLike, Bool, Float
 
 from . import checks
 
-
-class _NoMaterials:
-    """A stand-in lens without materials: only the generic wavelength range applies."""
-
-    object_material = None
-    materials = ()
+_NoMaterials = checks.NoMaterials
 
 
 class Rays(eqx.Module):
@@ -67,8 +63,31 @@ class Rays(eqx.Module):
             jnp.ones(batch, bool) if valid is None else jnp.broadcast_to(jnp.asarray(valid), batch)
         )
         self.opl = jnp.zeros(batch, dtype) if opl is None else jnp.asarray(opl, dtype)
+        for arg, a in (("wavelength", self.wavelength), ("opl", self.opl)):
+            try:
+                ok = jnp.broadcast_shapes(a.shape, batch) == batch
+            except ValueError:
+                ok = False
+            if not ok:
+                raise ValueError(f"Rays: {arg} must be a scalar or one value per ray (shape "
+                                 f"{batch}), got shape {a.shape}")
         # Concrete input only (a traced value is checked where it is used, see ``trace``).
         checks.unit_directions(self.direction, self.valid, "Rays")
+        if not checks.is_traced((self.origin, self.valid)):
+            # Only rays marked valid: invalid rays keep finite values, but a caller may mask
+            # rays it has no origin for.
+            o = np.asarray(self.origin)
+            bad = np.asarray(self.valid) & ~np.all(np.isfinite(o), axis=-1)
+            if np.any(bad):
+                raise ValueError(f"Rays: origin (mm) of {int(bad.sum())} valid ray(s) holds NaN "
+                                 f"or inf, first {checks.fmt(o[bad][0])}; every coordinate "
+                                 f"must be finite")
+            if not checks.is_traced(self.opl):
+                opl = np.broadcast_to(np.asarray(self.opl), self.valid.shape)
+                bad = np.asarray(self.valid) & ~np.isfinite(opl)
+                if np.any(bad):
+                    raise ValueError(f"Rays: opl (optical path length, mm) of {int(bad.sum())} "
+                                     f"valid ray(s) is NaN or inf; it must be finite")
         if not checks.is_traced(self.wavelength):
             checks.wavelengths(_NoMaterials, self.wavelength, "Rays", "wavelength")
 

@@ -27,6 +27,8 @@ import equinox as eqx
 import jax.numpy as jnp
 from jaxtyping import Array, Float
 
+from . import checks
+
 
 def _safe_sqrt(x):
     """sqrt with a finite gradient where x <= 0 (the "double where" guard)."""
@@ -49,6 +51,26 @@ class AbstractSurface(eqx.Module):
     def odd_coeffs(self) -> tuple[Float[Array, " p"], Float[Array, " p"]]:
         z = jnp.zeros((0,), jnp.result_type(self.c))
         return z, z
+
+    def _check_numbers(self):
+        """Shapes always; concrete values: finite c and k, a semi-diameter > 0 (inf: none)."""
+        where = type(self).__name__
+        arrays = [(n, getattr(self, n)) for n in ("coeffs", "odd_x", "odd_y") if hasattr(self, n)]
+        for name, a in arrays:
+            if not 1 <= a.ndim <= jnp.ndim(self.c) + 1:
+                raise ValueError(f"{where}: {name} must be a 1-D array of coefficients (one "
+                                 f"per term), got shape {a.shape}")
+        for name, unit in (("c", "1/mm"), ("k", "")):
+            v = getattr(self, name)
+            if not checks.is_traced(v):
+                checks.values(v, name, where, unit=unit)
+        for name, a in arrays:
+            if not checks.is_traced(a):
+                checks.values(a, name, where)
+        sd = self.semi_diameter
+        if not checks.is_traced(sd):
+            checks.values(sd, "semi_diameter", where, lo=0, lo_open=True, inf_ok=True,
+                          unit="mm (inf: no clipping)")
 
     # --- geometry -----------------------------------------------------------------
     def conic_sag(self, r2):
@@ -119,6 +141,9 @@ class Standard(AbstractSurface):
     k: Float[Array, ""] = eqx.field(converter=jnp.asarray, default=0.0)
     semi_diameter: Float[Array, ""] = eqx.field(converter=jnp.asarray, default_factory=_inf)
 
+    def __check_init__(self):
+        self._check_numbers()
+
 
 class EvenAsphere(AbstractSurface):
     """Conic plus an even series a_1 r² + a_2 r⁴ + … (Zemax EVENASPH, PARM1 = a_1)."""
@@ -127,6 +152,9 @@ class EvenAsphere(AbstractSurface):
     k: Float[Array, ""] = eqx.field(converter=jnp.asarray, default=0.0)
     coeffs: Float[Array, " m"] = eqx.field(converter=jnp.asarray, default=(0.0,) * 8)
     semi_diameter: Float[Array, ""] = eqx.field(converter=jnp.asarray, default_factory=_inf)
+
+    def __check_init__(self):
+        self._check_numbers()
 
     def even_coeffs(self):
         return self.coeffs
@@ -153,6 +181,7 @@ class Hybrid(AbstractSurface):
                 f"Hybrid: odd_x and odd_y need the same length, got {self.odd_x.shape} "
                 f"and {self.odd_y.shape}"
             )
+        self._check_numbers()
 
     def even_coeffs(self):
         return self.coeffs

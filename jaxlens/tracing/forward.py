@@ -206,7 +206,8 @@ def _checked(lens: Lens, rays: Rays, where: str) -> Rays:
     return Rays(rays.origin, rays.direction, wl, rays.valid, rays.opl)
 
 
-def _check_upto(lens: Lens, upto: int | None) -> None:
+def _check_upto(lens: Lens, upto: int | None, newton_iters: int) -> None:
+    checks.number(newton_iters, "newton_iters", "trace", lo=0, integer=True, unit="iterations")
     if upto is not None and not 0 <= upto < lens.num_surfaces:
         raise ValueError(f"trace: upto must be a surface index in [0, {lens.num_surfaces - 1}] "
                          f"(0-based), got {upto}")
@@ -237,7 +238,7 @@ def trace_path(
         to the full shape. After a coordinate break each entry is in its surface's frame
         (``optics.coordinates.frame_of(lens, i)``); at a break the rays have not moved.
     """
-    _check_upto(lens, upto)
+    _check_upto(lens, upto, newton_iters)
     rays = _checked(lens, rays, "trace_path")
     states = _trace_states(lens, rays, newton_iters, upto, keep_path=True, uniform=uniform)
     stacked = jax.tree.map(lambda *x: jnp.stack(x), *states)
@@ -308,7 +309,7 @@ def trace(
         True
     """
 
-    _check_upto(lens, upto)
+    _check_upto(lens, upto, newton_iters)
 
     def whole(r: Rays, prepared=None) -> Rays:
         states = _trace_states(lens, r, newton_iters, upto, keep_path=False, uniform=uniform,
