@@ -297,8 +297,8 @@ def _zmx(old, new):
     ("FTYP 0 0 3 3 0 0 0", "FTYP 0 0 3 0 0 0 0", r"<zmx>:9: number of wavelengths \(FTYP's "
                                                  r"fifth value\) must be >= 1, got 0"),
     # A negative CLAP radius was read as "no aperture".
-    ('DIAM 0 0 0 0 1 ""', "CLAP 0 -1 0", r"<zmx>:21: circular aperture maximum radius must be "
-                                         r">= 0 \(lens units"),
+    ('DIAM 0 0 0 0 1 ""', "CLAP 0 -1 0", r"<zmx>:21: circular aperture maximum radius \(lens "
+                                         r"units\) must be >= 0, got -1"),
     # The Lens constructor refuses these too; the reader's message must still name the file.
     ("WAVM 2 5.875618E-001", "WAVM 2 587.5618", r"^<zmx>: WAVM: wavelength 587\.562 µm is "
                                                 r"outside .*587\.562 nm is 0\.587562 µm"),

@@ -40,6 +40,7 @@ from ..optics import materials as _materials
 from ..optics.lens import Lens, Sensor
 from ..optics.materials import AbstractMaterial, Air, ModelGlass, Tabulated
 from ..optics.surfaces import AbstractSurface, EvenAsphere, Hybrid, Standard
+from . import lens_keys
 
 FORMAT = "jaxlens.lens/1"
 """The value of the ``format`` key this module writes (name/version)."""
@@ -87,48 +88,6 @@ def _num(value: Any, where: str, *, finite: bool = True) -> float:
     if math.isnan(v) or (finite and math.isinf(v)):
         raise ValueError(f"{where}: expected a finite number, got {value!r}")
     return v
-
-
-_TOP_KEYS = ("format", "name", "description", "surfaces", "aperture", "fields",
-             "wavelengths_um", "wavelengths_nm", "wavelengths", "primary",
-             "primary_wavelength_um", "primary_wavelength_nm", "primary_wavelength",
-             "stop_surface_index", "object", "sensor", "units", "epd", "EPD")
-_SURFACE_KEYS = ("type", "curvature", "radius", "thickness", "conic", "even_asphere_coeffs",
-                 "odd_x", "odd_y", "semi_diameter", "is_stop", "material", "n", "shape")
-_APERTURE_KEYS = ("epd", "EPD", "fnum", "FNUM", "f_number", "stop_semi_diameter")
-_SENSOR_KEYS = ("resolution", "pixel_size")
-_FIELD_KEYS = ("type", "values")
-
-
-def _edits(a: str, b: str) -> int:
-    """Levenshtein distance between two short strings."""
-    row = list(range(len(b) + 1))
-    for i, ca in enumerate(a, 1):
-        prev, row[0] = row[0], i
-        for j, cb in enumerate(b, 1):
-            prev, row[j] = row[j], min(row[j] + 1, row[j - 1] + 1, prev + (ca != cb))
-    return row[-1]
-
-
-def _no_misspelled_keys(d: Any, known: tuple[str, ...], where: str) -> None:
-    """Refuse a key that is one or two letters off a key the reader knows.
-
-    Unknown keys are ignored (informational data may share the file), so a misspelled
-    one (``"wavelength_nm"``, ``"radus"``) would silently fall back to a default.
-    """
-    if not isinstance(d, dict):
-        return
-    for key in d:
-        if not isinstance(key, str) or key in known:
-            continue
-        dist = {k: _edits(k.lower(), key.lower()) for k in known}
-        # Keys of one or two letters ("n") match only in another case: "nd" or "vd" are
-        # informational glass data, not typos of "n".
-        near = sorted((d, k) for k, d in dist.items()
-                      if d <= (0 if len(k) <= 2 else 1 if len(k) <= 6 else 2))
-        if near:
-            raise ValueError(f"{where}: unknown key {key!r}; did you mean {near[0][1]!r}? (a "
-                             f"misspelled key would be ignored and its default used)")
 
 
 def _whole(value: Any) -> int:
@@ -616,11 +575,7 @@ def lens_from_dict(d: dict, *, source: str = "<lens>") -> Lens:
             f"{source}: unsupported format {fmt!r}; this jaxlens reads "
             f"{', '.join(_SUPPORTED_FORMATS)}"
         )
-    _no_misspelled_keys(d, _TOP_KEYS, source)
-    _no_misspelled_keys(d.get("aperture"), _APERTURE_KEYS, f"{source}: aperture")
-    _no_misspelled_keys(d.get("sensor"), _SENSOR_KEYS, f"{source}: sensor")
-    _no_misspelled_keys(d.get("fields"), _FIELD_KEYS, f"{source}: fields")
-    _no_misspelled_keys(d.get("object"), ("distance",), f"{source}: object")
+    lens_keys.no_misspelled_keys(d, source)
     surfs = d.get("surfaces")
     if not isinstance(surfs, list) or not surfs:
         raise ValueError(f"{source}: 'surfaces' must be a non-empty list")
@@ -651,7 +606,7 @@ def lens_from_dict(d: dict, *, source: str = "<lens>") -> Lens:
         where = f"{source}: surface {i}"
         if not isinstance(s, dict):
             raise ValueError(f"{where}: must be an object, got {s!r}")
-        _no_misspelled_keys(s, _SURFACE_KEYS, where)
+        lens_keys.no_misspelled(s, lens_keys.SURFACE, where)
         if _text(s.get("type", ""), f"{where}: type").lower() in ("object", "image"):
             raise ValueError(f"{where}: an {s['type']} surface can only be first/last")
         surfaces.append(surface_from_dict(s, where))

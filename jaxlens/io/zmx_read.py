@@ -79,7 +79,7 @@ class _Line:
     def error(self, msg: str) -> ValueError:
         return ValueError(f"{self.path}:{self.number}: {msg}: {self.text.strip()!r}")
 
-    def float(self, i: int, what: str, *, allow_inf: bool = False) -> float:
+    def float(self, i: int, what: str, *, allow_inf: bool = False, lo=None) -> float:
         try:
             tok = self.tokens[i]
         except IndexError:
@@ -92,10 +92,12 @@ class _Line:
             raise self.error(f"{what} is not a number ({tok!r})") from None
         if not math.isfinite(v):
             raise self.error(f"{what} must be finite")
+        if lo is not None and v < lo:
+            raise self.error(f"{what} must be >= {lo}, got {tok}")
         return v
 
-    def int(self, i: int, what: str) -> int:
-        v = self.float(i, what)
+    def int(self, i: int, what: str, *, lo=None) -> int:
+        v = self.float(i, what, lo=lo)
         if v != int(v):
             raise self.error(f"{what} must be an integer")
         return int(v)
@@ -211,10 +213,7 @@ def _surface_line(s: _Surf, key: str, ln: _Line) -> None:
         if ln.float(1, "circular aperture minimum radius") != 0:
             raise ln.error("annular apertures (CLAP with a minimum radius > 0) are not "
                            "supported; jaxlens clips rays outside a semi-diameter only")
-        s.clap = ln.float(2, "circular aperture maximum radius")
-        if s.clap < 0:
-            raise ln.error("circular aperture maximum radius must be >= 0 (lens units; 0: "
-                           "none)")
+        s.clap = ln.float(2, "circular aperture maximum radius (lens units)", lo=0)
     elif key == "OBSC":
         if ln.float(2, "obscuration maximum radius") > 0:
             if not 0 <= ln.float(1, "obscuration minimum radius") < ln.float(2, ""):
@@ -528,10 +527,7 @@ def _fields(f: _File, strict: bool) -> np.ndarray:
     """The field values as written: angles (deg) or paraxial image heights (lens units)."""
     count = None
     if f.ftyp is not None and len(f.ftyp.tokens) > 3:
-        count = f.ftyp.int(3, "number of fields")
-        if count < 1:
-            raise f.ftyp.error(f"number of fields (FTYP's fourth value) must be >= 1, got "
-                               f"{count}")
+        count = f.ftyp.int(3, "number of fields (FTYP's fourth value)", lo=1)
     if f.yfln is None:
         return np.zeros(1)
     ys = [f.yfln.float(i, "y field") for i in range(1, len(f.yfln.tokens))]
@@ -555,10 +551,7 @@ def _fields(f: _File, strict: bool) -> np.ndarray:
 def _wavelengths(f: _File) -> tuple[np.ndarray, int]:
     count = None
     if f.ftyp is not None and len(f.ftyp.tokens) > 4:
-        count = f.ftyp.int(4, "number of wavelengths")
-        if count < 1:
-            raise f.ftyp.error(f"number of wavelengths (FTYP's fifth value) must be >= 1, got "
-                               f"{count}")
+        count = f.ftyp.int(4, "number of wavelengths (FTYP's fifth value)", lo=1)
     if f.wavm:
         n = count if count is not None else max(f.wavm)
         missing = [i for i in range(1, n + 1) if i not in f.wavm]
@@ -738,10 +731,7 @@ def loads(text: str, path: str = "<zmx>", *, strict: bool = False) -> Lens:
     zmx_system.ray_aiming(f.raim, f.path)
     field_type = zmx_system.field_type(f.ftyp)
     fields = _fields(f, strict)
-    # The Lens checks these too, but here the message names the file.
-    checks.wavelengths(checks.NoMaterials, np.asarray(wl), f"{path}: WAVM", "wavelength")
-    if field_type == 0:
-        checks.field_angles(np.asarray(fields), f"{path}: XFLN/YFLN", "field angles")
+    zmx_system.check_wavelengths_and_fields(path, wl, fields, field_type)
     lens = Lens(
         surfaces=tuple(surfaces),
         thickness=_arr(np.array(thick, np.float64)),
