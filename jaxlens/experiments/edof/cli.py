@@ -360,8 +360,7 @@ def _run_into(a, argv, cfg, names, folder, out) -> dict:
             t0 = time.perf_counter()
             # A resumed run does not evaluate a lens twice with the same settings.
             settings = {"eval_pupil": cfg.eval_pupil, "crops": int(len(windows)),
-                        "training": T.training_config(
-                            json.loads(json.dumps(dataclasses.asdict(cfg))), name)}
+                        "training": T.training_config(T.config_data(cfg), name)}
             cached = _load_eval(ck, name, settings)
             if cached is None:
                 bank = O.psf_bank(lens, tile=cfg.tile, kernel_size=cfg.kernel_size,

@@ -70,12 +70,17 @@ LENS_ONLY = {"cubic_floor": "cubic", "hybrid_floor": "hybrid", "hold_focus": "hy
 """Config fields that only one lens's training reads: the others resume across them."""
 
 
+def config_data(cfg: Config) -> dict:
+    """A config as JSON data (tuples as lists), as checkpoints and caches store it."""
+    return json.loads(json.dumps(dataclasses.asdict(cfg)))
+
+
 def training_config(config: dict, lens: str | None = None) -> dict:
     """The part of a config (JSON data) that a lens's training reads: without the
     evaluation-only fields (``EVAL_ONLY``), without the fields of other lenses
     (``LENS_ONLY``; all of them are kept when ``lens`` is None), and with the defaults of
     fields added to ``Config`` after the config was written."""
-    defaults = json.loads(json.dumps(dataclasses.asdict(Config())))
+    defaults = config_data(Config())
     return {k: v for k, v in {**defaults, **config}.items()
             if k not in EVAL_ONLY and (lens is None or LENS_ONLY.get(k, lens) == lens)}
 
@@ -414,7 +419,7 @@ class Trainer:
             raise ValueError(f"resume: the checkpoint {meta} stores its lens parameters in "
                              f"the units of version {version}, this code reads version "
                              f"{PARAMS_VERSION}; use another --checkpoint")
-        current = json.loads(json.dumps(dataclasses.asdict(self.cfg)))
+        current = config_data(self.cfg)
         saved = training_config(info["config"], self.name)
         if saved != dict(training_config(current, self.name), steps2=saved["steps2"]):
             raise ValueError(f"resume: the checkpoint {meta} was written with another "
