@@ -218,7 +218,9 @@ class NAFNet(eqx.Module):
 
     Args:
         in_channels, out_channels: image channels (3 for RGB). A global residual adds the
-            input to the output, so they must be equal.
+            first ``out_channels`` input channels to the output, so ``in_channels`` may not
+            be smaller; extra input channels (e.g. other estimates of the image) only feed
+            the network.
         width: channels at full resolution; level ``i`` has ``width·2**i``.
         enc_blocks: NAFBlocks at each encoder level; its length is the UNet depth (number of
             ×2 downsamplings).
@@ -262,9 +264,9 @@ class NAFNet(eqx.Module):
         dtype=None,
         identity_init: bool = True,
     ):
-        if in_channels != out_channels:
+        if in_channels < out_channels:
             raise ValueError(
-                f"NAFNet: the global residual needs in_channels == out_channels, got "
+                f"NAFNet: the global residual needs in_channels >= out_channels, got "
                 f"{in_channels} and {out_channels}"
             )
         if len(enc_blocks) != len(dec_blocks):
@@ -303,8 +305,8 @@ class NAFNet(eqx.Module):
         """Number of ×2 downsamplings."""
         return len(self.downs)
 
-    def __call__(self, x: Float[Array, "H W C"]) -> Float[Array, "H W C"]:
-        """Restore one image ``[H, W, C]``; returns the same shape."""
+    def __call__(self, x: Float[Array, "H W Cin"]) -> Float[Array, "H W Cout"]:
+        """Restore one image ``[H, W, in_channels]``; returns ``[H, W, out_channels]``."""
         if x.ndim != 3:
             raise ValueError(f"NAFNet: expected one [H, W, C] image, got shape {x.shape}")
         h, w, _ = x.shape
@@ -324,7 +326,8 @@ class NAFNet(eqx.Module):
             y = up(y) + skip
             for b in blocks:
                 y = b(y)
-        y = self.ending(y) + inp
+        y = self.ending(y)
+        y = y + inp[..., : y.shape[-1]]
         return y[:h, :w]
 
 

@@ -415,7 +415,7 @@ def test_cli_refuses_an_earlier_run_without_overwrite(tmp_path):
     (["--lenses", "zoom"], r"--lenses takes names from"),
     (["--binning", "3"], r"--binning must divide"),
     (["--hybrid-floor", "-1"], r"--hybrid-floor must be a finite number in \[0, inf\)"),
-    (["--live-front-end", "--decoder", "nafnet"], r"--live-front-end needs the Wiener"),
+    (["--live-front-end", "--decoder", "nafnet"], r"--live-front-end needs a Wiener"),
 ])
 def test_edof_cli_refuses_bad_options_fast(args, match, tmp_path):
     r, dt = _cli("jaxlens.experiments.edof", *args, "--out", str(tmp_path / "run"))

@@ -60,8 +60,13 @@ def test_table2_rec_metrics_come_from_the_reconstruction():
     bank[:, :, :, :, 1, 2] = np.linspace(0.0, 0.1, 8)[:, None, None, None]  # ... blur by depth
     target = np.clip(rng.normal(0.5, 0.6, (16, 16, 3)), -0.5, 1.5).astype(np.float32)
 
-    def dec(x, kern):  # a "decoder" whose output is known: its PSNR is known in closed form
-        return jnp.asarray(target, x.dtype)
+    class Known:  # a "decoder" whose output is known: its PSNR is known in closed form
+        wiener = False
+
+        def __call__(self, x, kern):
+            return jnp.asarray(target, x.dtype)
+
+    dec = Known()
 
     vals, ex = E.evaluate(dec, bank, windows, cfg=cfg, key=jax.random.PRNGKey(0), nsr=1e-4,
                           depths_m=(0.1, 10.0), keep=0)
@@ -148,9 +153,26 @@ def test_decoders_start_from_the_raw_image_or_its_wiener_estimate():
     np.testing.assert_array_equal(np.asarray(plain(raw, jnp.asarray(kern))), np.asarray(raw))
     wien = make_decoder("wiener", **kw)
     want = tiled.wiener_tiles(raw, jnp.asarray(kern), 0.05, prior="gradient")
-    np.testing.assert_allclose(np.asarray(wien(raw, jnp.asarray(kern))), np.asarray(want),
-                               atol=1e-6)
+    np.testing.assert_allclose(np.asarray(wien(raw, jnp.asarray(kern)[None])),
+                               np.asarray(want), atol=1e-6)
     assert float(jnp.max(jnp.abs(want - raw))) > 0.05
+    # The multi-Wiener decoder sees the depth-averaged estimate and each depth's, and starts
+    # as the Wiener decoder (its residual is the depth-averaged estimate).
+    by_depth = np.stack([np.roll(kern, s, axis=-1) for s in (-1, 0, 0, 0, 0, 0, 0, 1)])
+    multi = make_decoder("multiwiener", **kw)
+    stack = multi.front_kernels(by_depth)
+    assert stack.shape == (9,) + kern.shape
+    np.testing.assert_allclose(np.asarray(stack[0]), by_depth.mean(0), atol=1e-7)
+    np.testing.assert_array_equal(np.asarray(stack[1:]), by_depth)
+    assert wien.front_kernels(by_depth).shape == (1,) + kern.shape
+    front = multi.front(raw, stack)
+    assert front.shape == (16, 16, 27)
+    np.testing.assert_allclose(
+        np.asarray(front[..., 3:6]),
+        np.asarray(tiled.wiener_tiles(raw, jnp.asarray(by_depth[0]), 0.05, prior="gradient")),
+        atol=1e-6)
+    mean_est = tiled.wiener_tiles(raw, stack[0], 0.05, prior="gradient")
+    np.testing.assert_allclose(np.asarray(multi(raw, stack)), np.asarray(mean_est), atol=1e-6)
     with pytest.raises(ValueError, match="kind must be one of"):
         make_decoder("unet", **kw)
 
@@ -462,7 +484,7 @@ def test_training_config_keeps_only_what_a_lens_reads():
 
 def test_live_front_end_differentiates_the_wiener_psfs(classical):
     """With ``live_front_end`` the lens step traces all 8 depths and the front end's PSFs are
-    their mean (the bank's ``wkern`` is not read); without it the bank's PSFs are used."""
+    their mean (the bank's ``wkern`` [K=1, B, 3, k, k] is not read); without it the bank's PSFs are used."""
     import dataclasses
 
     from jaxlens.experiments.edof import train as T
@@ -480,8 +502,8 @@ def test_live_front_end_differentiates_the_wiener_psfs(classical):
     xy = jnp.asarray([[0.0, 0.0], [0.3, -0.2]], jnp.float32)
     depths = jnp.asarray(1e3 * np.asarray(L.DEPTHS_M), jnp.float32)
     pair = jnp.asarray([0, 7])
-    delta = jnp.zeros((2, 3, 5, 5), jnp.float32).at[..., 2, 2].set(1.0)
-    box = jnp.full((2, 3, 5, 5), 1 / 25, jnp.float32)
+    delta = jnp.zeros((1, 2, 3, 5, 5), jnp.float32).at[..., 2, 2].set(1.0)
+    box = jnp.full((1, 2, 3, 5, 5), 1 / 25, jnp.float32)
 
     def step(live, wkern):
         c = dataclasses.replace(cfg, live_front_end=live)

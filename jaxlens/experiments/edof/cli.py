@@ -86,8 +86,9 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument("--time-limit", type=float, default=None,
                    help="stop at the first checkpoint after this many seconds (exit 3)")
     g = p.add_argument_group("training (defaults: CPU scale)")
-    g.add_argument("--decoder", choices=("nafnet", "wiener"),
-                   help="NAFNet alone, or behind a Wiener front end (wiener)")
+    g.add_argument("--decoder", choices=("nafnet", "wiener", "multiwiener"),
+                   help="NAFNet alone, or behind a Wiener front end with the depth-averaged "
+                   "PSF (wiener) or with it and each depth's PSF (multiwiener) (wiener)")
     g.add_argument("--steps", type=int, help="stage-1 steps per lens (1200)")
     g.add_argument("--steps2", type=int,
                    help="stage-2 steps per lens (60); may grow on --resume")
@@ -181,9 +182,9 @@ def config_from_args(a):
     n(cfg.lr_lens, "--lr-lens", w, lo=0, lo_open=True)
     n(cfg.photons, "--photons", w, lo=0, lo_open=True, unit="electrons")
     n(cfg.cubic_floor, "--cubic-floor", w, lo=0, unit="(fraction of the start strength)")
-    if cfg.live_front_end and cfg.decoder != "wiener":
-        raise ValueError(f"edof: --live-front-end needs the Wiener front end (--decoder "
-                         f"wiener), got --decoder {cfg.decoder}")
+    if cfg.live_front_end and cfg.decoder == "nafnet":
+        raise ValueError("edof: --live-front-end needs a Wiener front end (--decoder wiener "
+                         "or multiwiener), got --decoder nafnet")
     if cfg.hybrid_floor is not None:
         n(cfg.hybrid_floor, "--hybrid-floor", w, lo=0,
           unit="(fraction of the start strength)")

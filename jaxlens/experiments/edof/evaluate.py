@@ -29,10 +29,10 @@ from .optics import add_noise
 
 
 @eqx.filter_jit
-def _one(dec, window, kern, mean_kern, key, nsr, photons, read):
+def _one(dec, window, kern, front_kern, mean_kern, key, nsr, photons, read):
     sim = convolve_tiles(window, kern, pad="valid")
     noisy = add_noise(sim, key, photons=photons, read=read)
-    rec = dec(noisy, mean_kern)
+    rec = dec(noisy, front_kern)
     wien = wiener_tiles(noisy, mean_kern, nsr, prior="gradient")
     return tuple(jnp.clip(x, 0.0, 1.0) for x in (noisy, rec, wien))
 
@@ -76,6 +76,7 @@ def evaluate(dec, bank: np.ndarray, windows: np.ndarray, *, cfg, key, nsr: float
         raise ValueError(f"evaluate: crops of {size} pixels are not whole tiles of {cfg.tile}")
     place = placements(len(windows), bank.shape[1:3], ct)
     mean = bank.mean(0)
+    front = np.asarray(dec.front_kernels(bank)) if dec.wiener else mean[None]
     dt = jnp.float32
     values, examples = {}, {}
     for d in depths_m:
@@ -85,7 +86,8 @@ def evaluate(dec, bank: np.ndarray, windows: np.ndarray, *, cfg, key, nsr: float
             r, c = place[i]
             kern = jnp.asarray(bank[di, r:r + ct, c:c + ct], dt)
             mk = jnp.asarray(mean[r:r + ct, c:c + ct], dt)
-            outs = _one(dec, jnp.asarray(w, dt), kern, mk,
+            fk = jnp.asarray(front[:, r:r + ct, c:c + ct], dt)
+            outs = _one(dec, jnp.asarray(w, dt), kern, fk, mk,
                         jax.random.fold_in(jax.random.fold_in(key, i), di),
                         jnp.asarray(nsr, dt), cfg.photons, cfg.read_noise)
             gt = np.asarray(w[m:m + size, m:m + size], np.float64)

@@ -18,8 +18,9 @@ Stage 2 freezes the lens and refines the decoder on PSFs of randomly perturbed c
 
 Sensor noise (``optics.add_noise``: shot noise of ``photons`` electrons at the value 1 and
 read noise ``read_noise``) is added to the simulations before the decoder sees them. The
-Wiener decoder's front end uses the depth-averaged PSF of each tile from a bank that is
-refreshed every ``refresh_every`` steps; checkpoints are written at those steps too
+Wiener decoders' front end uses each tile's PSF stack (``Decoder.front_kernels``: the
+depth-averaged PSF, and for "multiwiener" each depth's) from a bank that is refreshed every
+``refresh_every`` steps; checkpoints are written at those steps too
 (``Trainer.save``), so a resumed run continues exactly where the saved one was.
 """
 
@@ -110,7 +111,7 @@ class Config:
         w_sim, w_raw: ω1 and ω2 of the loss.
         photons: photo-electrons at the linear value 1 (shot noise); read_noise: read-noise
             standard deviation (linear units).
-        decoder: "nafnet" or "wiener" (``decoder.Decoder``).
+        decoder: "nafnet", "wiener" or "multiwiener" (``decoder.DECODERS``).
         width, enc_blocks, middle_blocks, dec_blocks: the NAFNet.
         n_odd: odd terms per axis of the hybrid surface (x³, x⁵, …).
         cubic_ratio: the cubic plate's strength, as a multiple of the defocus it hides
@@ -196,10 +197,11 @@ def _gt(windows, cfg: Config):
 
 
 def _sim_loss(dec: Decoder, kernels, windows, wkern, key, cfg: Config):
-    """The loss of a batch whose PSFs are ``kernels [2, B, 3, k, k]``."""
+    """The loss of a batch whose PSFs are ``kernels [2, B, 3, k, k]`` and whose front-end
+    PSF stacks are ``wkern [K, B, 3, k, k]`` (``Decoder.front_kernels``)."""
     sims = simulate(windows, kernels)
     noisy = add_noise(sims, key, photons=cfg.photons, read=cfg.read_noise)
-    per_patch = jax.vmap(lambda x, k: dec(x, k[None, None]))
+    per_patch = jax.vmap(lambda x, k: dec(x, k[:, None, None]), in_axes=(0, 1))
     recs = jax.vmap(per_patch, in_axes=(0, None))(noisy, wkern)
     return edof_loss(recs, sims, _gt(windows, cfg), w_sim=cfg.w_sim, w_raw=cfg.w_raw)
 
@@ -226,9 +228,9 @@ def joint_step(dec, params, net_state, lens_state, pmap, windows, xy, depths, pa
     """A lens-update step: the loss is differentiated through the ray tracer.
 
     ``xy [B, 2]`` are the tiles' centres (mm), ``depths [D]`` the training depths (mm from
-    the stop), ``pair [2]`` the indices of the batch's two, ``wkern [B, 3, k, k]`` the front
-    end's depth-averaged PSFs from the bank. With ``cfg.live_front_end`` (and the Wiener
-    decoder) the PSFs at all D depths are traced and their mean replaces ``wkern``, so the
+    the stop), ``pair [2]`` the indices of the batch's two, ``wkern [K, B, 3, k, k]`` the
+    front end's PSF stacks from the bank. With ``cfg.live_front_end`` (and a Wiener
+    decoder) the PSFs at all D depths are traced and their stacks replace ``wkern``, so the
     gradient also sees the front end follow the lens. Returns
     ``(dec, params, net_state, lens_state, loss, parts)``; a step whose loss or gradient is not
     finite is skipped and counted in ``parts["skipped"]``.
@@ -246,7 +248,7 @@ def joint_step(dec, params, net_state, lens_state, pmap, windows, xy, depths, pa
                           kernel_size=cfg.kernel_size, pixel_size=lens.sensor.pixel_size,
                           pupil=cfg.pupil, key=k_psf)
         kern = kern.reshape((n, b) + kern.shape[1:])
-        front = kern.mean(0).astype(wkern.dtype) if live else wkern
+        front = d.front_kernels(kern).astype(wkern.dtype) if live else wkern
         return _sim_loss(d, kern[pair] if live else kern, windows, front, k_sim, cfg)
 
     net_p, net_static = eqx.partition(dec, eqx.is_inexact_array)
@@ -291,11 +293,11 @@ def _probe_loss(dec, kernels, windows, wkern, key, *, cfg: Config):
 @eqx.filter_jit
 def _check_rec_loss(dec, kernels, windows, key, *, cfg: Config):
     """``L_rec`` of windows ``[B, ...]`` at every depth of ``kernels [D, B, 3, k, k]`` (D
-    even), the front end fed each tile's mean PSF over the D depths."""
+    even), the front end fed each tile's PSF stack over the D depths."""
     d, b = kernels.shape[:2]
-    front = jnp.tile(kernels.mean(0), (d // 2, 1, 1, 1))
+    front = jnp.tile(dec.front_kernels(kernels), (1, d // 2, 1, 1, 1))
     if not dec.wiener:
-        front = jnp.zeros(front.shape[:2] + (1, 1), front.dtype)
+        front = jnp.zeros(front.shape[:3] + (1, 1), front.dtype)
     pairs = kernels.reshape((2, d // 2 * b) + kernels.shape[2:])
     windows = jnp.tile(windows, (d // 2, 1, 1, 1))
     return _sim_loss(dec, pairs, windows, front, key, cfg)[1]["rec"]
@@ -378,7 +380,7 @@ class Trainer:
         self.hist: dict[str, list] = {"stage1": [], "stage2": []}
         self.xy = centers(self.pmap.template, cfg.tile)
         self.bank = None  # [8, ty, tx, 3, k, k] of the current lens, when one is needed
-        self.mean_bank = None
+        self.front_bank = None  # [K, ty, tx, 3, k, k]: the front end's PSF stacks
         self.seconds = 0.0
         self._check = None  # the fixed check batch of ``check_loss``, made on first use
 
@@ -458,13 +460,14 @@ class Trainer:
         cfg = self.cfg
         bank = psf_bank(lens, tile=cfg.tile, kernel_size=cfg.kernel_size, pupil=cfg.pupil,
                         chunk=2 * cfg.batch)
-        self.mean_bank = jnp.asarray(bank.mean(0), self.pmap.template.epd.dtype)
-        self.bank = jnp.asarray(bank, self.pmap.template.epd.dtype) if full else None
+        dt = self.pmap.template.epd.dtype
+        self.front_bank = jnp.asarray(self.dec.front_kernels(bank), dt)
+        self.bank = jnp.asarray(bank, dt) if full else None
 
     def _wkern(self, tiles):
         if not self.dec.wiener:
-            return jnp.zeros((len(tiles), 3, 1, 1), self.pmap.template.epd.dtype)
-        return self.mean_bank[tiles[:, 0], tiles[:, 1]]
+            return jnp.zeros((1, len(tiles), 3, 1, 1), self.pmap.template.epd.dtype)
+        return self.front_bank[:, tiles[:, 0], tiles[:, 1]]
 
     def _fixed_batch(self, seed: int):
         """Scene windows, tile indices and tile centres (mm) of a fixed batch drawn from its
@@ -522,7 +525,7 @@ class Trainer:
         cfg = self.cfg
         if "probe" not in self.hist:
             self.hist["probe"] = {"before": self.probe()}
-            self.mean_bank = None  # the training's own refresh schedule
+            self.front_bank = None  # the training's own refresh schedule
         opt1, lens_opt = optimizers(cfg)
         dt = self.pmap.template.epd.dtype
         depths = jnp.asarray(1e3 * np.asarray(DEPTHS_M), dt)
@@ -542,7 +545,7 @@ class Trainer:
             t0 = time.perf_counter()
             lens = self.lens()
             frozen = self.stage == 2 or not self.movable
-            if self.step % cfg.refresh_every == 0 or self.mean_bank is None:
+            if self.step % cfg.refresh_every == 0 or self.front_bank is None:
                 if self.step % cfg.refresh_every == 0 and self.step > 0:
                     self.save()
                     if self.deadline is not None and time.time() > self.deadline:
