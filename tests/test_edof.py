@@ -156,8 +156,8 @@ def test_decoders_start_from_the_raw_image_or_its_wiener_estimate():
     np.testing.assert_allclose(np.asarray(wien(raw, jnp.asarray(kern)[None])),
                                np.asarray(want), atol=1e-6)
     assert float(jnp.max(jnp.abs(want - raw))) > 0.05
-    # The multi-Wiener decoder sees the depth-averaged estimate and each depth's, and starts
-    # as the Wiener decoder (its residual is the depth-averaged estimate).
+    # The multi-Wiener decoder weights each depth's estimate by the tile's depth posterior
+    # and starts as that weighted estimate; it also sees the mean and per-depth estimates.
     by_depth = np.stack([np.roll(kern, s, axis=-1) for s in (-1, 0, 0, 0, 0, 0, 0, 1)])
     multi = make_decoder("multiwiener", **kw)
     stack = multi.front_kernels(by_depth)
@@ -166,13 +166,16 @@ def test_decoders_start_from_the_raw_image_or_its_wiener_estimate():
     np.testing.assert_array_equal(np.asarray(stack[1:]), by_depth)
     assert wien.front_kernels(by_depth).shape == (1,) + kern.shape
     front = multi.front(raw, stack)
-    assert front.shape == (16, 16, 27)
-    np.testing.assert_allclose(
-        np.asarray(front[..., 3:6]),
-        np.asarray(tiled.wiener_tiles(raw, jnp.asarray(by_depth[0]), 0.05, prior="gradient")),
-        atol=1e-6)
-    mean_est = tiled.wiener_tiles(raw, stack[0], 0.05, prior="gradient")
-    np.testing.assert_allclose(np.asarray(multi(raw, stack)), np.asarray(mean_est), atol=1e-6)
+    assert front.shape == (16, 16, 38)
+    est = [tiled.wiener_tiles(raw, jnp.asarray(k), 0.05, prior="gradient") for k in by_depth]
+    np.testing.assert_allclose(np.asarray(front[..., 9:12]), np.asarray(est[1]), atol=1e-6)
+    post = np.asarray(front[..., 30:])
+    np.testing.assert_allclose(post.sum(-1), 1.0, atol=1e-5)
+    np.testing.assert_array_equal(post[:8, :8], np.broadcast_to(post[0, 0], (8, 8, 8)))
+    chosen = sum(post[..., d:d + 1] * np.asarray(est[d]) for d in range(8))
+    np.testing.assert_allclose(np.asarray(front[..., :3]), chosen, atol=1e-5)
+    np.testing.assert_allclose(np.asarray(multi(raw, stack)), np.asarray(front[..., :3]),
+                               atol=1e-6)
     with pytest.raises(ValueError, match="kind must be one of"):
         make_decoder("unet", **kw)
 

@@ -28,7 +28,8 @@ from .aiming import apertured, ideal_to_field
 from .grid import pixel_positions
 from .psf import DEFAULT_MODEL, AbstractPSFModel
 
-__all__ = ["tile_counts", "tile_centers", "psf_points", "convolve_tiles", "wiener_tiles"]
+__all__ = ["tile_counts", "tile_centers", "psf_points", "convolve_tiles", "wiener_tiles",
+           "tile_evidence"]
 
 
 def tile_counts(resolution, tile: int) -> tuple[int, int]:
@@ -180,6 +181,49 @@ def convolve_tiles(
     return _assemble(out, n_ty, n_tx)
 
 
+def _spectra(image, kernels, nsr, halo, prior, caller, taper=False):
+    """Each tile window's spectra for a Wiener filter: ``(K, Y, R, tile, halo)``, K and Y
+    ``[T, C, win, win//2 + 1]`` (rfft2), R = nsr·P the filter's regulariser (see
+    ``wiener_tiles``)."""
+    image = jnp.asarray(image)
+    kernels = jnp.asarray(kernels)
+    _check_bank(image, kernels, caller)
+    n_ty, n_tx, nc, k, _ = kernels.shape
+    if image.shape[0] % n_ty or image.shape[1] % n_tx or \
+            image.shape[0] // n_ty != image.shape[1] // n_tx:
+        raise ValueError(f"{caller}: a {image.shape[0]}x{image.shape[1]} frame does not "
+                         f"split into {n_ty}x{n_tx} square tiles")
+    tile = image.shape[0] // n_ty
+    halo = k if halo is None else int(halo)
+    if halo < k // 2:
+        raise ValueError(f"{caller}: halo must be at least k // 2 = {k // 2} pixels, got "
+                         f"{halo}")
+    win = tile + 2 * halo
+    padded = jnp.pad(image, ((halo, halo), (halo, halo), (0, 0)), mode="edge")
+    wins = _windows(padded, n_ty, n_tx, tile, halo)  # [T, win, win, C]
+    # The kernel's centre pixel goes to index 0 of the window (circular convolution).
+    c = k // 2
+    kk = jnp.zeros((kernels.shape[0] * n_tx, nc, win, win), image.dtype)
+    kk = kk.at[:, :, :k, :k].set(kernels.reshape(-1, nc, k, k).astype(image.dtype))
+    kk = jnp.roll(kk, (-c, -c), axis=(-2, -1))
+    kf = jnp.fft.rfft2(kk)  # [T, C, win, win//2+1]
+    if taper:
+        # A Hann window, so that the circular model's wrap-around edge adds no false detail;
+        # the mean goes first, or its leak would look like low-frequency signal.
+        hann = jnp.sin(jnp.pi * (jnp.arange(win) + 0.5) / win).astype(image.dtype) ** 2
+        wins = wins - wins.mean((1, 2), keepdims=True)
+        wins = wins * (hann[:, None] * hann[None, :])[None, :, :, None]
+    yf = jnp.fft.rfft2(wins.transpose(0, 3, 1, 2))
+    reg = jnp.broadcast_to(jnp.asarray(nsr, image.dtype), (nc,))[None, :, None, None]
+    if prior == "gradient":
+        wy = 2 * jnp.pi * jnp.fft.fftfreq(win)[:, None]
+        wx = 2 * jnp.pi * jnp.fft.rfftfreq(win)[None, :]
+        reg = reg * (4.0 - 2.0 * jnp.cos(wy) - 2.0 * jnp.cos(wx)).astype(image.dtype)
+    elif prior != "white":
+        raise ValueError(f"{caller}: prior must be 'white' or 'gradient', got {prior!r}")
+    return kf, yf, jnp.broadcast_to(reg, (1, nc, win, win // 2 + 1)), tile, halo
+
+
 def wiener_tiles(
     image: Float[Array, "H W C"],
     kernels: Float[Array, "ty tx C k k"],
@@ -211,36 +255,55 @@ def wiener_tiles(
         ``[ty·P, tx·P, C]``, differentiable with respect to the image, kernels and ``nsr``.
     """
     image = jnp.asarray(image)
-    kernels = jnp.asarray(kernels)
-    _check_bank(image, kernels, "wiener_tiles")
-    n_ty, n_tx, nc, k, _ = kernels.shape
-    if image.shape[0] % n_ty or image.shape[1] % n_tx or \
-            image.shape[0] // n_ty != image.shape[1] // n_tx:
-        raise ValueError(f"wiener_tiles: a {image.shape[0]}x{image.shape[1]} frame does not "
-                         f"split into {n_ty}x{n_tx} square tiles")
-    tile = image.shape[0] // n_ty
-    halo = k if halo is None else int(halo)
-    if halo < k // 2:
-        raise ValueError(f"wiener_tiles: halo must be at least k // 2 = {k // 2} pixels, got "
-                         f"{halo}")
+    n_ty, n_tx = jnp.shape(kernels)[:2]
+    kf, yf, nsr, tile, halo = _spectra(image, kernels, nsr, halo, prior, "wiener_tiles")
     win = tile + 2 * halo
-    padded = jnp.pad(image, ((halo, halo), (halo, halo), (0, 0)), mode="edge")
-    wins = _windows(padded, n_ty, n_tx, tile, halo)  # [T, win, win, C]
-    # The kernel's centre pixel goes to index 0 of the window (circular convolution).
-    c = k // 2
-    kk = jnp.zeros((kernels.shape[0] * n_tx, nc, win, win), image.dtype)
-    kk = kk.at[:, :, :k, :k].set(kernels.reshape(-1, nc, k, k).astype(image.dtype))
-    kk = jnp.roll(kk, (-c, -c), axis=(-2, -1))
-    kf = jnp.fft.rfft2(kk)  # [T, C, win, win//2+1]
-    yf = jnp.fft.rfft2(wins.transpose(0, 3, 1, 2))
-    nsr = jnp.broadcast_to(jnp.asarray(nsr, image.dtype), (nc,))[None, :, None, None]
-    if prior == "gradient":
-        wy = 2 * jnp.pi * jnp.fft.fftfreq(win)[:, None]
-        wx = 2 * jnp.pi * jnp.fft.rfftfreq(win)[None, :]
-        nsr = nsr * (4.0 - 2.0 * jnp.cos(wy) - 2.0 * jnp.cos(wx)).astype(image.dtype)
-    elif prior != "white":
-        raise ValueError(f"wiener_tiles: prior must be 'white' or 'gradient', got {prior!r}")
     xf = jnp.conj(kf) * yf / (kf.real**2 + kf.imag**2 + nsr)
     x = jnp.fft.irfft2(xf, s=(win, win)).transpose(0, 2, 3, 1)
     x = x[:, halo: halo + tile, halo: halo + tile]
     return _assemble(x, n_ty, n_tx).astype(image.dtype)
+
+
+def tile_evidence(
+    image: Float[Array, "H W C"],
+    kernels: Float[Array, "ty tx C k k"],
+    nsr,
+    *,
+    halo: int | None = None,
+    prior: str = "gradient",
+) -> Float[Array, "ty tx"]:
+    """How well each tile's kernel explains the image: a negative log-likelihood per tile.
+
+    The model is ``wiener_tiles``'s, as a Gaussian process: in each tile's window the image is
+    a Gaussian signal of spectrum S ∝ 1/P blurred by the kernel K plus white noise of power
+    N = nsr·S·P, so each Fourier coefficient Y is complex normal with variance
+    σ²·(|K|²/(nsr·P) + 1). The overall scale σ² (the noise power) is profiled out, so only
+    ``nsr`` is needed: per channel, NLL = M·log Σ w·|Y|²/(g + 1) + Σ w·log(g + 1), g =
+    |K|²/(nsr·P), summed over the independent frequencies where P > 0 (weights w, M = Σ w),
+    then over channels. The window is Hann-tapered (its mean removed first) so that the
+    wrap-around edge of the circular model does not look like detail. Compared across
+    candidate kernels for the same image (e.g. the PSFs of several object depths), the
+    smallest value marks the most likely blur, and exp(−NLL) normalised over the candidates
+    is their posterior under this model with equal priors (depth from defocus by
+    deconvolution, as in Levin et al., SIGGRAPH 2007).
+
+    Args:
+        image, kernels, nsr, halo, prior: as for ``wiener_tiles`` (default prior "gradient").
+
+    Returns:
+        ``[ty, tx]``, differentiable; only differences between kernel sets are meaningful.
+    """
+    n_ty, n_tx = jnp.shape(kernels)[:2]
+    kf, yf, reg, tile, halo = _spectra(image, kernels, nsr, halo, prior, "tile_evidence",
+                                       taper=True)
+    win = tile + 2 * halo
+    # A real image's spectrum holds each coefficient twice (Y(−ω) = Y(ω)*): count the rfft2
+    # half once, and its columns 0 and win/2, which hold both members of their pairs, half.
+    half = jnp.ones(win // 2 + 1).at[0].set(0.5)
+    half = half.at[-1].set(0.5) if win % 2 == 0 else half
+    w = jnp.where(reg > 0, half, 0.0).astype(reg.dtype)  # P = 0 (the mean) is unconstrained
+    g = (kf.real**2 + kf.imag**2) / jnp.where(reg > 0, reg, 1.0)
+    power = (yf.real**2 + yf.imag**2) / (g + 1.0)
+    m = jnp.sum(w, (-2, -1))
+    nll = m * jnp.log(jnp.sum(w * power, (-2, -1))) + jnp.sum(w * jnp.log1p(g), (-2, -1))
+    return nll.sum(-1).reshape(n_ty, n_tx)

@@ -9,14 +9,18 @@ Three kinds (``DECODERS``):
   noise-to-signal ratio per channel; the same NAFNet refines the result. The network no
   longer has to learn the inverse of the blur, only to remove what the deconvolution leaves
   (noise, ringing, the depth-dependent part of the blur).
-- "multiwiener": the network also sees the raw image deconvolved with the PSF of each of the
-  8 training depths (27 input channels). The depth is unknown at test time, but one of the
-  estimates is deconvolved with about the right PSF, and the wrong ones ring; the network
-  learns to pick per region (the idea of multi-Wiener deconvolution networks, Yanny et al.,
-  Optics Express 2022). Its global residual is the depth-averaged estimate, so it starts as
-  the "wiener" decoder.
+- "multiwiener": the raw image is also deconvolved with the PSF of each of the 8 training
+  depths, and each tile's estimates are weighted by the posterior of its depth
+  (``jaxlens.imaging.tiled.tile_evidence``: the Gaussian likelihood of the tile under each
+  depth's blur, the same model as the Wiener filter). The depth is unknown at test time, but
+  the blur of the right depth explains the tile best (depth from defocus). The network sees
+  the posterior-weighted estimate (its global residual, so it starts as that estimate), the
+  depth-averaged one, the 8 per-depth ones and the 8 posteriors: 38 channels. The idea of
+  giving a network several Wiener estimates is that of multi-Wiener deconvolution networks
+  (Yanny et al., Optics Express 2022).
 
-A decoder takes the front end's PSF stack ``[K, ty, tx, 3, k, k]`` (K = 1 or 9) that
+A decoder takes the front end's PSF stack ``[K, ty, tx, 3, k, k]`` (K = 1, or 9 for
+multiwiener: the mean, then each depth's) that
 ``Decoder.front_kernels`` makes from PSFs at the 8 training depths.
 """
 
@@ -27,7 +31,7 @@ import jax
 import jax.numpy as jnp
 from jaxtyping import Array, Float
 
-from ...imaging.tiled import wiener_tiles
+from ...imaging.tiled import tile_evidence, wiener_tiles
 from ...nets import NAFNet
 from .lenses import DEPTHS_M
 
@@ -66,13 +70,30 @@ class Decoder(eqx.Module):
         return jnp.concatenate([mean, by_depth]) if self.kind == "multiwiener" else mean
 
     def front(self, raw, kernels):
-        """The input the network sees: the raw image, or its Wiener estimates side by side
-        (the depth-averaged one first)."""
+        """The input the network sees: the raw image, its Wiener estimate, or (multiwiener)
+        the posterior-weighted estimate, the depth-averaged one, each depth's and the depth
+        posteriors, as channels."""
         if not self.wiener:
             return raw
         nsr = jnp.exp(self.log_nsr)
         est = jax.vmap(lambda k: wiener_tiles(raw, k, nsr, prior="gradient"))(kernels)
-        return jnp.concatenate(list(est), -1)
+        if self.kind == "wiener":
+            return est[0]
+        post = depth_posterior(raw, kernels[1:], nsr)
+        tile = raw.shape[0] // kernels.shape[1]
+        post = jnp.repeat(jnp.repeat(post, tile, 1), tile, 2)  # [D, H, W], per pixel
+        chosen = jnp.sum(post[..., None] * est[1:], 0)
+        return jnp.concatenate([chosen, *est, jnp.moveaxis(post, 0, -1)], -1)
+
+
+def depth_posterior(raw: Float[Array, "H W 3"], by_depth: Float[Array, "D ty tx 3 k k"],
+                    nsr) -> Float[Array, "D ty tx"]:
+    """Each tile's posterior over the D depths whose PSFs are ``by_depth`` (equal priors;
+    ``tile_evidence``'s Gaussian model)."""
+    # A loop, not a vmap: the vmapped form, under the training's nested vmaps and grad,
+    # crashes XLA:CPU (segmentation fault, jaxlib 0.10.2).
+    nll = jnp.stack([tile_evidence(raw, k, nsr) for k in by_depth])
+    return jax.nn.softmax(-nll, axis=0)
 
 
 def make_decoder(kind: str, *, nsr: float, key, width: int, enc_blocks, middle_blocks: int,
@@ -80,7 +101,8 @@ def make_decoder(kind: str, *, nsr: float, key, width: int, enc_blocks, middle_b
     """A fresh decoder (``kind`` one of ``DECODERS``) whose front end starts at ``nsr``."""
     if kind not in DECODERS:
         raise ValueError(f"make_decoder: kind must be one of {DECODERS}, got {kind!r}")
-    estimates = 1 + len(DEPTHS_M) if kind == "multiwiener" else 1
-    net = NAFNet(3 * estimates, 3, width=width, enc_blocks=enc_blocks,
+    n = len(DEPTHS_M)
+    channels = 3 * (2 + n) + n if kind == "multiwiener" else 3
+    net = NAFNet(channels, 3, width=width, enc_blocks=enc_blocks,
                  middle_blocks=middle_blocks, dec_blocks=dec_blocks, key=key, dtype=dtype)
     return Decoder(net, jnp.full((3,), jnp.log(nsr), dtype), kind)
