@@ -487,7 +487,8 @@ def test_training_config_keeps_only_what_a_lens_reads():
 
 def test_live_front_end_differentiates_the_wiener_psfs(classical):
     """With ``live_front_end`` the lens step traces all 8 depths and the front end's PSFs are
-    their mean (the bank's ``wkern`` [K=1, B, 3, k, k] is not read); without it the bank's PSFs are used."""
+    their mean (the bank's ``wkern`` [K=1, B, 3, k, k] is not read); without it the bank's
+    PSFs are used."""
     import dataclasses
 
     from jaxlens.experiments.edof import train as T

@@ -406,3 +406,14 @@ def test_benchmarks_cli_refuses_bad_lenses_and_counts(args, match, capsys):
         main(["--only", "throughput", "--out", "/nonexistent/never", *args])
     assert e.value.code == 2
     assert re.search(match, capsys.readouterr().err)
+
+
+def test_point_source_behind_the_lens_is_refused():
+    import jaxlens
+    from jaxlens.imaging import sampling
+
+    lens = jaxlens.zoo.cooke_triplet()
+    pupil = jnp.zeros((1, 2))
+    assert sampling.point_source(lens, jnp.array([0.0, 1.0, -500.0]), pupil).direction[0, 2] > 0
+    with pytest.raises(ValueError, match=r"point_source: the point's z must be .* mm \(global z"):
+        sampling.point_source(lens, jnp.array([0.0, 1.0, 5.0]), pupil)

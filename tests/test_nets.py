@@ -67,6 +67,18 @@ def test_bad_options_raise():
         NAFNet(in_channels=1, out_channels=3, key=KEY)
 
 
+def test_extra_input_channels_feed_the_network_but_not_the_residual():
+    net = NAFNet(in_channels=5, out_channels=3, width=4, enc_blocks=(1,), dec_blocks=(1,),
+                 key=KEY)
+    x = jax.random.normal(KEY, (12, 10, 5))
+    np.testing.assert_array_equal(np.asarray(net(x)), np.asarray(x[..., :3]))  # fresh: identity
+    w = net.ending.weight
+    trained = eqx.tree_at(lambda m: m.ending.weight, net, 0.1 * jax.random.normal(KEY, w.shape))
+    other = x.at[..., 3:].set(0.0)
+    assert trained(x).shape == (12, 10, 3)
+    assert float(jnp.max(jnp.abs(trained(x) - trained(other)))) > 1e-3  # the extras count
+
+
 def test_fresh_block_is_identity():
     # beta and gamma start at zero: a new block adds nothing to its input.
     blk = NAFBlock(6, key=KEY)

@@ -191,6 +191,12 @@ def point_source(
     if not checks.is_traced(point):
         checks.values(point, "point", "point_source", unit="mm")
     zep = paraxial.entrance_pupil_z(lens, lens.primary_wavelength)
+    if not (checks.is_traced(point) or checks.is_traced(zep)):
+        # A point behind surface 1 or the entrance pupil would launch its rays backwards.
+        checks.values(point[..., 2], "the point's z", "point_source",
+                      hi=min(0.0, float(np.min(np.asarray(zep)))), hi_open=True,
+                      unit="mm (global z: surface 1 at 0 and the entrance pupil, the object "
+                      "in front of both)")
     xy = pupil * (0.5 * lens.epd)
     target = jnp.concatenate([xy, jnp.broadcast_to(zep, xy.shape[:-1])[..., None]], -1)
     v = target - point
