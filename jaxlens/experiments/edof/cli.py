@@ -23,7 +23,8 @@ timings, histories, PSF measures), ``command.txt``, the trained lenses
 
 Defaults are the CPU scale (2× binned 512² sensor of 9.94 µm pixels, so a 256² test crop
 fills a quarter of the frame and the defocus blur is half its full-resolution width in
-pixels; 31² PSF kernels; a 16-wide NAFNet behind a Wiener front end; 1200 + 60 steps per
+pixels; 31² PSF kernels; a 16-wide NAFNet behind a Wiener front end (``--decoder``:
+``edof.decoder``); 1200 + 60 steps per
 lens; one seed); ``--seeds 0,1,2`` gives the 3-seed table.
 ``--paper`` selects the paper's scale for a GPU; with ``--checkpoint DIR`` a run saves its
 state every ``refresh_every`` steps, ``--time-limit S`` stops it at the first checkpoint
