@@ -485,6 +485,7 @@ def test_training_config_keeps_only_what_a_lens_reads():
     assert training_config(old, "cubic") != training_config(dict(new, steps=61), "cubic")
 
 
+@pytest.mark.slow  # a non-default option (about 30-40 s on 2 cores); CI time
 def test_live_front_end_differentiates_the_wiener_psfs(classical):
     """With ``live_front_end`` the lens step traces all 8 depths and the front end's PSFs are
     their mean (the bank's ``wkern`` [K=1, B, 3, k, k] is not read); without it the bank's
@@ -528,6 +529,7 @@ def test_live_front_end_differentiates_the_wiener_psfs(classical):
     assert max(jax.tree_util.tree_leaves(moved)) > 0  # the lens took a finite step
 
 
+@pytest.mark.slow  # a non-default option (about 30-40 s on 2 cores); CI time
 def test_lens_accept_undoes_a_lens_step_that_raises_the_check_loss(classical, monkeypatch):
     """With ``lens_accept`` a lens update is kept or undone (parameters and optimizer state)
     by comparing ``Trainer.check_loss`` of the new and the old lens; both outcomes are

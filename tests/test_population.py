@@ -86,6 +86,7 @@ def test_cli_refuses_a_bad_population_before_work(value, capsys):
     assert "--population" in err and "starts per design" in err
 
 
+@pytest.mark.slow  # a non-default option (about 30-40 s on 2 cores); CI time
 def test_polish_rings_change_only_the_polish_sampling():
     """The polish may use a finer pupil: with as many rings as the other stages it is the
     same design; with more rings only the polish differs."""
