@@ -417,3 +417,33 @@ def test_point_source_behind_the_lens_is_refused():
     assert sampling.point_source(lens, jnp.array([0.0, 1.0, -500.0]), pupil).direction[0, 2] > 0
     with pytest.raises(ValueError, match=r"point_source: the point's z must be .* mm \(global z"):
         sampling.point_source(lens, jnp.array([0.0, 1.0, 5.0]), pupil)
+
+
+def test_tabulated_glass_refuses_wavelengths_beyond_its_table():
+    """A table's index is held constant past its end nodes: a silent wrong answer, so the
+    trace refuses wavelengths outside the table (a rounded F line is still accepted)."""
+    import jaxlens
+    from jaxlens.imaging import sampling
+    from jaxlens.optics.materials import Tabulated
+
+    lens = jaxlens.zoo.cooke_triplet()
+    pupil = sampling.pupil_grid(3)
+    assert bool(jnp.all(jaxlens.trace(lens, sampling.collimated(lens, 0.0, pupil, 0.4861)).valid))
+    with pytest.raises(Exception, match=r"outside 0\.48.*–0\.65.* µm, the data range of SK16"):
+        jaxlens.trace(lens, sampling.collimated(lens, 0.0, pupil, 5.0))
+    assert Tabulated([0.55], [1.5]).wavelength_range is None  # one node: no dispersion
+    lo, hi = Tabulated([0.5, 0.6], [1.51, 1.50]).wavelength_range
+    assert lo == pytest.approx(0.5 * (1 - 1e-3)) and hi == pytest.approx(0.6 * (1 + 1e-3))
+
+
+def test_checks_on_constants_hold_inside_jit():
+    """Under jit, jnp.asarray of a Python constant is a tracer: a check made after the
+    conversion was skipped (rms_spot at a negative depth gave NaN, a jitted psf took a zero
+    pixel). The checks now look at the value as given."""
+    import jaxlens
+
+    lens = jaxlens.zoo.cooke_triplet()
+    with pytest.raises(ValueError, match=r"object_point: depth must be .* \(0, inf\) mm"):
+        jaxlens.analysis.rms_spot(lens, depth=-100.0)
+    with pytest.raises(ValueError, match=r"psf: pixel_size must be .* \(0, inf\) mm"):
+        jax.jit(lambda: jaxlens.psf(lens, 0.0, pixel_size=0.0))()

@@ -121,7 +121,7 @@ def every_kind_of_lens(tmp_path):
             get_material("E48R"),
             get_material("OKP4"),
             _user_glass(tmp_path),
-            Tabulated([0.45, 0.55, 0.65], [1.6, 1.59, 1.585], name="TAB 1"),
+            Tabulated([0.45, 0.55, 0.66], [1.6, 1.59, 1.585], name="TAB 1"),
             Sellmeier([1.0, 0.2], [0.01, 100.0], name="hand made"),
         ),
         stop=4,

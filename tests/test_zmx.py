@@ -182,7 +182,7 @@ def test_agf_for_glasses_zemax_does_not_ship(tmp_path):
                    .split()[1:]])
     assert np.all(cd[[0, 2, 3]] != 0) and np.all(cd[[1, 4, 5]] == 0)
     text = (out / "MYLENS.AGF").read_text()
-    assert re.search(r'^GC jaxlens \{"wavelengths_um":\[0\.45,0\.55,0\.65\]', text, re.M)
+    assert re.search(r'^GC jaxlens \{"wavelengths_um":\[0\.45,0\.55,0\.66\]', text, re.M)
     # OKP4's shipped data is a model dispersion: written exactly, not referenced.
     okp4 = load_agf(out / "PLASTICS.AGF")["OKP4"]
     assert_same_lens(okp4, lens.materials[4])

@@ -403,12 +403,11 @@ def _prepare(lens, field, depth, wavelength, kernel_size, pixel_size, model, cen
             raise ValueError(f"{caller}: give pixel_size (mm); the lens has no sensor")
         pixel_size = lens.sensor.pixel_size
     dtype = jnp.result_type(float)
-    pixel_size = jnp.asarray(pixel_size, dtype)
-    if not checks.is_traced(pixel_size):
+    if not checks.is_traced(pixel_size):  # before jnp.asarray: it traces constants under jit
         checks.number(pixel_size, "pixel_size", caller, lo=0, lo_open=True, unit="mm")
+    pixel_size = jnp.asarray(pixel_size, dtype)
     wl = lens.primary_wavelength if wavelength is None else wavelength
-    wl = jnp.asarray(wl, dtype)
-    checks.wavelengths(lens, wl, caller, "wavelength")
+    wl = checks.wavelengths(lens, jnp.asarray(wl, dtype), caller, "wavelength")
     checks.material_indices(lens, wl, caller)
     field = checks.field_angles(field, caller, "field")
     if wl.ndim > 1:
@@ -718,7 +717,7 @@ def mtf(
     dtype = jnp.result_type(float)
     wls = jnp.atleast_1d(jnp.asarray(lens.wavelengths if wavelengths is None else wavelengths,
                                      dtype))
-    checks.wavelengths(lens, wls, "mtf", "wavelengths")
+    wls = checks.wavelengths(lens, wls, "mtf", "wavelengths")
     fnum = paraxial.paraxial_data(lens.astype(dtype)).working_fnum
     lam_min = jnp.min(wls) * 1e-3
     if frequencies is None:
@@ -727,10 +726,10 @@ def mtf(
         else:
             top = 1.0 / (lam_min * fnum)
         frequencies = jnp.linspace(0.0, 1.0, 33, dtype=dtype) * top
+    if not checks.is_traced(frequencies):  # before jnp.asarray: it traces constants under jit
+        checks.finite_array(np.asarray(frequencies), "frequencies", "mtf", "cycles/mm")
     freqs = jnp.atleast_1d(jnp.asarray(frequencies, dtype))
     pix = lam_min * fnum / 4.0 if pixel_size is None else jnp.asarray(pixel_size, dtype)
-    if not checks.is_traced(freqs):
-        checks.finite_array(freqs, "frequencies", "mtf", "cycles/mm")
     field, depth, _, pix = _prepare(lens, field, depth, None, kernel_size, pix, model,
                                     "centroid", "mtf", newton_iters)
     t, s = _mtf_impl(apertured(lens), field, depth, wls, freqs, pix, model=model,

@@ -555,7 +555,7 @@ def render(
         raise ValueError(f"render: scene is empty (shape {scene.shape}); it needs at least one "
                          f"pixel and channel")
     scene = checks.finite_array(scene, "scene", "render", "linear pixel values")
-    checks.wavelengths(lens, wls, "render", "wavelengths")
+    wls = checks.wavelengths(lens, wls, "render", "wavelengths")
     checks.material_indices(lens, wls, "render", "wavelengths")
     rows, cols = sensor.resolution
     hs, ws = scene.shape[:2]

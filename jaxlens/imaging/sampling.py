@@ -185,16 +185,20 @@ def point_source(
     """
     wl = lens.primary_wavelength if wavelength is None else jnp.asarray(wavelength)
     pupil = _pupil(pupil, "point_source")
+    # Checked before jnp.asarray, which makes a tracer of a constant under jit.
+    concrete = not checks.is_traced(point)
+    given = np.asarray(point, float) if concrete else point
     point = jnp.asarray(point)
     if point.shape[-1:] != (3,):
         raise ValueError(f"point_source: point must be (x, y, z) in mm, got shape {point.shape}")
-    if not checks.is_traced(point):
-        checks.values(point, "point", "point_source", unit="mm")
     zep = paraxial.entrance_pupil_z(lens, lens.primary_wavelength)
-    if not (checks.is_traced(point) or checks.is_traced(zep)):
-        # A point behind surface 1 or the entrance pupil would launch its rays backwards.
-        checks.values(point[..., 2], "the point's z", "point_source",
-                      hi=min(0.0, float(np.min(np.asarray(zep)))), hi_open=True,
+    if concrete:
+        checks.values(given, "point", "point_source", unit="mm")
+        # A point behind surface 1 or the entrance pupil would launch its rays backwards
+        # (the pupil's position is known only for a concrete lens).
+        pupil_z = 0.0 if checks.is_traced(zep) else float(np.min(np.asarray(zep)))
+        checks.values(given[..., 2], "the point's z", "point_source",
+                      hi=min(0.0, pupil_z), hi_open=True,
                       unit="mm (global z: surface 1 at 0 and the entrance pupil, the object "
                       "in front of both)")
     xy = pupil * (0.5 * lens.epd)
@@ -216,10 +220,10 @@ def object_point(lens: Lens, field, depth) -> Array:
     """The object point (global mm) at a field angle (deg) and distance ``depth`` in front of
     surface 1 (mm, positive)."""
     th = field_xy(field)
-    depth = jnp.asarray(depth)
-    if not checks.is_traced(depth):
+    if not checks.is_traced(depth):  # before jnp.asarray, which traces a constant under jit
         checks.values(depth, "depth", "object_point", lo=0, lo_open=True,
                       unit="mm (object to surface 1)")
+    depth = jnp.asarray(depth)
     z = -depth
     zep = paraxial.entrance_pupil_z(lens, lens.primary_wavelength)
     xy = jnp.tan(th) * (zep - z)

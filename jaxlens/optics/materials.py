@@ -125,16 +125,38 @@ class Schott(AbstractMaterial):
         return jnp.sqrt(n2)
 
 
+TABLE_SLACK = 1e-3
+"""Relative margin beyond a table's end nodes where the end value is still used: a rounded
+F or C line (0.4861 for 0.4861327 µm) is accepted; the index error there is below ~1e-4."""
+
+
 class Tabulated(AbstractMaterial):
     """Indices given at a list of wavelengths.
 
-    The index is interpolated piecewise-linearly in 1/λ² (exact at the nodes) and held
-    constant beyond the first and last node.
+    The index is interpolated piecewise-linearly in 1/λ² (exact at the nodes). Beyond the
+    first and last node it is held constant, so the table's span (plus ``TABLE_SLACK``) is
+    its ``wavelength_range``: traces, PSFs and renders refuse wavelengths outside it. A table
+    of one node is a non-dispersive material, valid at any wavelength.
     """
 
     wavelengths: Float[Array, " k"] = eqx.field(converter=jnp.asarray)
     indices: Float[Array, " k"] = eqx.field(converter=jnp.asarray)
     name: str = eqx.field(static=True, default="")
+    wavelength_range: tuple[float, float] | None = eqx.field(static=True, default=None)
+    """(shortest, longest) wavelength of the table (µm), widened by ``TABLE_SLACK``, set at
+    construction (static, so that it is known under jit); None for one node."""
+
+    def __post_init__(self):
+        # Runs before the field converters: the wavelengths may still be a list. The range
+        # is rounded to float32, so that a table in either precision (``astype``, a file
+        # round trip) has the same static range.
+        w = self.wavelengths
+        if self.wavelength_range is None and not checks.is_traced(w):
+            a = np.asarray(np.asarray(w, np.float32), float)
+            if a.ndim == 1 and a.size >= 2 and np.all(np.isfinite(a)):
+                slack = TABLE_SLACK
+                self.wavelength_range = (float(a.min()) * (1 - slack),
+                                         float(a.max()) * (1 + slack))
 
     def __check_init__(self):
         where = f"Tabulated{f' {self.name!r}' if self.name else ''}"
