@@ -180,6 +180,40 @@ def test_decoders_start_from_the_raw_image_or_its_wiener_estimate():
         make_decoder("unet", **kw)
 
 
+@pytest.mark.parametrize("kind,real_halo,context", [("nafnet", False, 8), ("wiener", True, 0),
+                                                    ("wiener", True, 4)])
+def test_training_patch_context_is_read_and_the_loss_sees_the_tile(kind, real_halo, context):
+    """With real scene around a training patch (``real_halo``, ``context``) the simulated
+    patch grows, the decoder reads all of it and the loss reads the central tile: with a
+    decoder that starts as (nearly) the identity (a sharp kernel, a tiny NSR), L_rec is the
+    noise's error on that tile and agrees with L_raw; a misaligned crop would not."""
+    from jaxlens.experiments.edof.decoder import make_decoder
+    from jaxlens.experiments.edof.train import Config, _sim_loss
+
+    cfg = Config(tile=16, kernel_size=5, batch=2, decoder=kind, real_halo=real_halo,
+                 context=context, photons=1e7, read_noise=1e-5, w_sim=0.0, w_raw=0.0)
+    halo = 5 if real_halo else 0
+    assert cfg.patch == 16 + 2 * (context + halo) and cfg.window == cfg.patch + 4
+    assert cfg.front_pad == ("valid" if real_halo else "edge")
+    rng = np.random.default_rng(0)
+    windows = jnp.asarray(rng.random((2, cfg.window, cfg.window, 3)), jnp.float32)
+    k = np.zeros((3, 5, 5), np.float32)
+    k[:, 2, 2] = 1.0
+    kern = jnp.asarray(np.broadcast_to(k, (2, 2, 3, 5, 5)))
+    dec = make_decoder(kind, nsr=1e-9, key=jax.random.PRNGKey(0), width=4, enc_blocks=(1,),
+                       middle_blocks=1, dec_blocks=(1,))
+    _, parts = _sim_loss(dec, kern, windows, kern[:1], jax.random.PRNGKey(1), cfg)
+    gt = windows[:, cfg.window // 2 - 8: cfg.window // 2 + 8, cfg.window // 2 - 8:
+                 cfg.window // 2 + 8]
+    sims = O.simulate(windows, kern)
+    m = (cfg.patch - 16) // 2
+    np.testing.assert_allclose(float(parts["raw"]),
+                               float(jnp.mean(jnp.abs(sims[:, :, m:m + 16, m:m + 16] - gt))),
+                               atol=1e-7)
+    assert float(parts["raw"]) < 1e-6  # a delta kernel: the centre crop is the ground truth
+    assert float(parts["rec"]) < 2e-4
+
+
 def test_loss_shape_errors():
     gt = jnp.zeros((2, 4, 4, 3))
     # The message names the function, the shapes it needs and the shapes it got.

@@ -131,6 +131,35 @@ def test_wiener_tiles_undoes_a_known_blur_and_a_light_loss():
     assert np.max(np.abs(wrong[inner] - img[inner])) > 0.05
 
 
+def test_valid_padding_reads_the_margin_instead_of_edge_copies():
+    """With ``pad="valid"`` a tile's window is real image: on a 3 × 3-tile frame with the halo
+    one tile wide, the centre tile's window in the edge-padded frame reaches no padding, so
+    the centre of ``pad="edge"`` equals ``pad="valid"`` on the same frame as one tile with
+    its margin, for the Wiener estimate and the evidence; the edge copies of a lone tile
+    differ."""
+    rng = np.random.default_rng(3)
+    p = 12
+    img = jnp.asarray(rng.random((3 * p, 3 * p, 3)))
+    k = np.broadcast_to(_gauss_kernel(1.2, 7), (3, 7, 7))
+    one = jnp.asarray(k[None, None])
+    nine = jnp.asarray(np.broadcast_to(k, (3, 3, 3, 7, 7)))
+    centre = (slice(p, 2 * p), slice(p, 2 * p))
+    edge = tiled.wiener_tiles(img, nine, 0.01, halo=p, prior="gradient")
+    valid = tiled.wiener_tiles(img, one, 0.01, halo=p, prior="gradient", pad="valid")
+    assert valid.shape == (p, p, 3)
+    np.testing.assert_allclose(np.asarray(valid), np.asarray(edge[centre]), atol=1e-12)
+    lone = tiled.wiener_tiles(img[centre], one, 0.01, halo=p, prior="gradient")
+    assert float(jnp.max(jnp.abs(lone - valid))) > 1e-3
+    ev_edge = tiled.tile_evidence(img, nine, 0.01, halo=p)
+    ev_valid = tiled.tile_evidence(img, one, 0.01, halo=p, pad="valid")
+    np.testing.assert_allclose(np.asarray(ev_valid)[0, 0], np.asarray(ev_edge)[1, 1],
+                               rtol=1e-12)
+    with pytest.raises(ValueError, match="inside its 12-pixel margin"):
+        tiled.wiener_tiles(img[:-1], one, 0.01, halo=p, pad="valid")
+    with pytest.raises(ValueError, match="pad must be 'edge' or 'valid'"):
+        tiled.wiener_tiles(img, one, 0.01, pad="reflect")
+
+
 def test_pupil_centre_is_the_chief_ray_of_a_stop_first_lens():
     from jaxlens.experiments.edof.lenses import classical_lens
 

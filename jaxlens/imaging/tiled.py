@@ -181,7 +181,7 @@ def convolve_tiles(
     return _assemble(out, n_ty, n_tx)
 
 
-def _spectra(image, kernels, nsr, halo, prior, caller, taper=False):
+def _spectra(image, kernels, nsr, halo, prior, caller, pad, taper=False):
     """Each tile window's spectra for a Wiener filter: ``(K, Y, R, tile, halo)``, K and Y
     ``[T, C, win, win//2 + 1]`` (rfft2), R = nsr·P the filter's regulariser (see
     ``wiener_tiles``)."""
@@ -189,17 +189,22 @@ def _spectra(image, kernels, nsr, halo, prior, caller, taper=False):
     kernels = jnp.asarray(kernels)
     _check_bank(image, kernels, caller)
     n_ty, n_tx, nc, k, _ = kernels.shape
-    if image.shape[0] % n_ty or image.shape[1] % n_tx or \
-            image.shape[0] // n_ty != image.shape[1] // n_tx:
-        raise ValueError(f"{caller}: a {image.shape[0]}x{image.shape[1]} frame does not "
-                         f"split into {n_ty}x{n_tx} square tiles")
-    tile = image.shape[0] // n_ty
     halo = k if halo is None else int(halo)
     if halo < k // 2:
         raise ValueError(f"{caller}: halo must be at least k // 2 = {k // 2} pixels, got "
                          f"{halo}")
+    if pad not in ("edge", "valid"):
+        raise ValueError(f"{caller}: pad must be 'edge' or 'valid', got {pad!r}")
+    margin = 2 * halo if pad == "valid" else 0
+    rows, cols = image.shape[0] - margin, image.shape[1] - margin
+    if rows <= 0 or rows % n_ty or cols % n_tx or rows // n_ty != cols // n_tx:
+        extra = f" inside its {halo}-pixel margin" if margin else ""
+        raise ValueError(f"{caller}: a {image.shape[0]}x{image.shape[1]} frame{extra} does "
+                         f"not split into {n_ty}x{n_tx} square tiles")
+    tile = rows // n_ty
     win = tile + 2 * halo
-    padded = jnp.pad(image, ((halo, halo), (halo, halo), (0, 0)), mode="edge")
+    padded = (image if margin else
+              jnp.pad(image, ((halo, halo), (halo, halo), (0, 0)), mode="edge"))
     wins = _windows(padded, n_ty, n_tx, tile, halo)  # [T, win, win, C]
     # The kernel's centre pixel goes to index 0 of the window (circular convolution).
     c = k // 2
@@ -231,12 +236,14 @@ def wiener_tiles(
     *,
     halo: int | None = None,
     prior: str = "white",
-) -> Float[Array, "H W C"]:
+    pad: str = "edge",
+) -> Float[Array, "h w C"]:
     """Wiener deconvolution tile by tile with each tile's kernel.
 
     Each tile is deconvolved in a window of ``tile + 2·halo`` pixels (edge-padded at the frame
-    border) by X = conj(K)·Y / (|K|² + nsr·P) in the Fourier domain, and its centre is kept;
-    the halo (default the kernel side) holds the wrap-around of the circular deconvolution.
+    border, or with ``pad="valid"`` taken from a margin that the image holds) by
+    X = conj(K)·Y / (|K|² + nsr·P) in the Fourier domain, and its centre is kept; the halo
+    (default the kernel side) holds the wrap-around of the circular deconvolution.
     ``prior`` sets P: "white" (P = 1, a flat signal spectrum) or "gradient" (P = |∇|², the
     power of the discrete gradient, 4 − 2·cos ωx − 2·cos ωy: a signal spectrum falling as
     1/f², as natural images do; then nsr is the noise variance over the variance of the
@@ -245,18 +252,21 @@ def wiener_tiles(
     light that the lens lost is restored on average.
 
     Args:
-        image: ``[ty·P, tx·P, C]`` blurred image.
+        image: ``[ty·P, tx·P, C]`` blurred image; with ``pad="valid"``, ``[ty·P + 2·halo,
+            tx·P + 2·halo, C]``: the tiled area and a margin of real image around it (e.g. a
+            training patch in its scene, so that no window holds edge copies).
         kernels: ``[ty, tx, C, k, k]`` PSFs (``psf`` orientation, k odd).
         nsr: noise-to-signal power ratio, a scalar or ``[C]`` (> 0), differentiable.
         halo: pixels around each tile (default k).
         prior: "white" or "gradient" (see above).
+        pad: "edge" or "valid" (see ``image``).
 
     Returns:
         ``[ty·P, tx·P, C]``, differentiable with respect to the image, kernels and ``nsr``.
     """
     image = jnp.asarray(image)
     n_ty, n_tx = jnp.shape(kernels)[:2]
-    kf, yf, nsr, tile, halo = _spectra(image, kernels, nsr, halo, prior, "wiener_tiles")
+    kf, yf, nsr, tile, halo = _spectra(image, kernels, nsr, halo, prior, "wiener_tiles", pad)
     win = tile + 2 * halo
     xf = jnp.conj(kf) * yf / (kf.real**2 + kf.imag**2 + nsr)
     x = jnp.fft.irfft2(xf, s=(win, win)).transpose(0, 2, 3, 1)
@@ -271,6 +281,7 @@ def tile_evidence(
     *,
     halo: int | None = None,
     prior: str = "gradient",
+    pad: str = "edge",
 ) -> Float[Array, "ty tx"]:
     """How well each tile's kernel explains the image: a negative log-likelihood per tile.
 
@@ -288,14 +299,15 @@ def tile_evidence(
     deconvolution, as in Levin et al., SIGGRAPH 2007).
 
     Args:
-        image, kernels, nsr, halo, prior: as for ``wiener_tiles`` (default prior "gradient").
+        image, kernels, nsr, halo, prior, pad: as for ``wiener_tiles`` (default prior
+            "gradient").
 
     Returns:
         ``[ty, tx]``, differentiable; only differences between kernel sets are meaningful.
     """
     n_ty, n_tx = jnp.shape(kernels)[:2]
     kf, yf, reg, tile, halo = _spectra(image, kernels, nsr, halo, prior, "tile_evidence",
-                                       taper=True)
+                                       pad, taper=True)
     win = tile + 2 * halo
     # A real image's spectrum holds each coefficient twice (Y(−ω) = Y(ω)*): count the rfft2
     # half once, and its columns 0 and win/2, which hold both members of their pairs, half.

@@ -127,6 +127,11 @@ def build_parser() -> argparse.ArgumentParser:
     g.add_argument("--lens-accept", action=argparse.BooleanOptionalAction,
                    help="keep a lens update only if L_rec on a fixed check batch (8 depths) "
                    "does not rise (off)")
+    g.add_argument("--real-halo", action=argparse.BooleanOptionalAction,
+                   help="simulate training patches with the Wiener front end's halo of real "
+                   "scene around them, as test tiles have (off)")
+    g.add_argument("--context", type=int,
+                   help="pixels of scene the decoder sees around a training patch (0)")
     d = p.add_argument_group("data")
     d.add_argument("--train-dir", default=None,
                    help="folder of training images (default: skimage.data; see edof.scenes)")
@@ -162,7 +167,7 @@ def config_from_args(a):
         "width": a.width, "enc_blocks": a.enc, "middle_blocks": a.middle,
         "dec_blocks": a.dec, "n_odd": a.n_odd, "cubic_floor": a.cubic_floor,
         "hybrid_floor": a.hybrid_floor, "live_front_end": a.live_front_end,
-        "lens_accept": a.lens_accept,
+        "lens_accept": a.lens_accept, "real_halo": a.real_halo, "context": a.context,
     }
     cfg = dataclasses.replace(cfg, **{k: v for k, v in over.items() if v is not None})
     n, w = input_checks.number, "edof"
@@ -171,7 +176,7 @@ def config_from_args(a):
                    ("--width", cfg.width), ("--lens-every", cfg.lens_every)):
         n(v, opt, w, lo=1, integer=True)
     for opt, v in (("--steps2", cfg.steps2), ("--middle", cfg.middle_blocks),
-                   ("--n-odd", cfg.n_odd)):
+                   ("--n-odd", cfg.n_odd), ("--context", cfg.context)):
         n(v, opt, w, lo=0, integer=True)
     for s in a.seeds:
         n(s, "--seeds", w, lo=0, integer=True)

@@ -56,10 +56,14 @@ class Decoder(eqx.Module):
         """Whether the decoder has a Wiener front end (and so reads PSFs)."""
         return self.kind != "nafnet"
 
-    def __call__(self, raw: Float[Array, "H W 3"],
-                 kernels: Float[Array, "K ty tx 3 k k"]) -> Float[Array, "H W 3"]:
-        """Restore a raw image given its front-end PSF stack (``front_kernels``)."""
-        return self.net(self.front(raw, kernels))
+    def __call__(self, raw: Float[Array, "H W 3"], kernels: Float[Array, "K ty tx 3 k k"],
+                 pad: str = "edge") -> Float[Array, "h w 3"]:
+        """Restore a raw image given its front-end PSF stack (``front_kernels``).
+
+        With ``pad="valid"`` (Wiener kinds) ``raw`` holds a margin of real scene around the
+        tiled area, as wide as the front end's halo (``kernel side``), which the front end
+        reads and the result drops (``jaxlens.imaging.tiled.wiener_tiles``)."""
+        return self.net(self.front(raw, kernels, pad))
 
     def front_kernels(self, by_depth: Float[Array, "D *tiles 3 k k"]
                       ) -> Float[Array, "K *tiles 3 k k"]:
@@ -69,30 +73,32 @@ class Decoder(eqx.Module):
         mean = by_depth.mean(0, keepdims=True)
         return jnp.concatenate([mean, by_depth]) if self.kind == "multiwiener" else mean
 
-    def front(self, raw, kernels):
+    def front(self, raw, kernels, pad="edge"):
         """The input the network sees: the raw image, its Wiener estimate, or (multiwiener)
         the posterior-weighted estimate, the depth-averaged one, each depth's and the depth
         posteriors, as channels."""
         if not self.wiener:
+            if pad != "edge":
+                raise ValueError("Decoder: a decoder without a front end takes pad='edge'")
             return raw
         nsr = jnp.exp(self.log_nsr)
-        est = jax.vmap(lambda k: wiener_tiles(raw, k, nsr, prior="gradient"))(kernels)
+        est = jax.vmap(lambda k: wiener_tiles(raw, k, nsr, prior="gradient", pad=pad))(kernels)
         if self.kind == "wiener":
             return est[0]
-        post = depth_posterior(raw, kernels[1:], nsr)
-        tile = raw.shape[0] // kernels.shape[1]
+        post = depth_posterior(raw, kernels[1:], nsr, pad)
+        tile = est.shape[1] // kernels.shape[1]
         post = jnp.repeat(jnp.repeat(post, tile, 1), tile, 2)  # [D, H, W], per pixel
         chosen = jnp.sum(post[..., None] * est[1:], 0)
         return jnp.concatenate([chosen, *est, jnp.moveaxis(post, 0, -1)], -1)
 
 
 def depth_posterior(raw: Float[Array, "H W 3"], by_depth: Float[Array, "D ty tx 3 k k"],
-                    nsr) -> Float[Array, "D ty tx"]:
+                    nsr, pad: str = "edge") -> Float[Array, "D ty tx"]:
     """Each tile's posterior over the D depths whose PSFs are ``by_depth`` (equal priors;
-    ``tile_evidence``'s Gaussian model)."""
+    ``tile_evidence``'s Gaussian model; ``pad`` as for ``tile_evidence``)."""
     # A loop, not a vmap: the vmapped form, under the training's nested vmaps and grad,
     # crashes XLA:CPU (segmentation fault, jaxlib 0.10.2).
-    nll = jnp.stack([tile_evidence(raw, k, nsr) for k in by_depth])
+    nll = jnp.stack([tile_evidence(raw, k, nsr, pad=pad) for k in by_depth])
     return jax.nn.softmax(-nll, axis=0)
 
 

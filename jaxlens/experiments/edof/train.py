@@ -124,6 +124,13 @@ class Config:
         lens_accept: a lens update is kept only if it does not raise the reconstruction
             loss (``L_rec``, the updated decoder) on a fixed check batch of training
             windows at all 8 depths with fixed noise (``Trainer.check_loss``).
+        real_halo: a training patch is simulated with the Wiener front end's halo (the kernel
+            side) of real scene around it, which the front end reads (``pad="valid"``), as
+            it reads the neighbouring tiles in a test image; otherwise the halo holds edge
+            copies of the patch.
+        context: pixels of simulated scene that the decoder also sees on each side of a
+            training patch (the loss reads the patch only), as the network sees the rest of
+            a test image beyond a tile.
         crop: side of the test crops (pixels, native resolution).
         seed: random seed.
         log_every: host sync / progress-bar refresh interval (steps).
@@ -158,15 +165,29 @@ class Config:
     hybrid_floor: float | None = None
     live_front_end: bool = False
     lens_accept: bool = False
+    real_halo: bool = False
+    context: int = 0
     crop: int = 256
     seed: int = 0
     log_every: int = 10
     tolerances: Tolerances = dataclasses.field(default_factory=Tolerances)
 
     @property
+    def front_pad(self) -> str:
+        """The Wiener front end's padding of a training patch (``wiener_tiles``' ``pad``)."""
+        return "valid" if self.real_halo and self.decoder != "nafnet" else "edge"
+
+    @property
+    def patch(self) -> int:
+        """Side of a simulated training patch (pixels): the tile, ``context`` on each side and
+        (``real_halo``) the front end's halo of k on each side."""
+        halo = self.kernel_size if self.front_pad == "valid" else 0
+        return self.tile + 2 * (self.context + halo)
+
+    @property
     def window(self) -> int:
-        """Side of a training scene window: the tile plus a kernel's margin (pixels)."""
-        return self.tile + self.kernel_size - 1
+        """Side of a training scene window: the patch plus a kernel's margin (pixels)."""
+        return self.patch + self.kernel_size - 1
 
     @property
     def pixel_size(self) -> float:
@@ -191,9 +212,10 @@ def optimizers(cfg: Config):
     return make_net_optimizer(cfg, cfg.steps), optax.adam(cfg.lr_lens)
 
 
-def _gt(windows, cfg: Config):
-    h = cfg.kernel_size // 2
-    return windows[:, h: h + cfg.tile, h: h + cfg.tile]
+def _centre(x, cfg: Config):
+    """The central ``tile × tile`` pixels of ``[..., n, n, C]`` images."""
+    m = (x.shape[-2] - cfg.tile) // 2
+    return x[..., m: m + cfg.tile, m: m + cfg.tile, :]
 
 
 def _sim_loss(dec: Decoder, kernels, windows, wkern, key, cfg: Config):
@@ -201,9 +223,10 @@ def _sim_loss(dec: Decoder, kernels, windows, wkern, key, cfg: Config):
     PSF stacks are ``wkern [K, B, 3, k, k]`` (``Decoder.front_kernels``)."""
     sims = simulate(windows, kernels)
     noisy = add_noise(sims, key, photons=cfg.photons, read=cfg.read_noise)
-    per_patch = jax.vmap(lambda x, k: dec(x, k[:, None, None]), in_axes=(0, 1))
+    per_patch = jax.vmap(lambda x, k: dec(x, k[:, None, None], cfg.front_pad), in_axes=(0, 1))
     recs = jax.vmap(per_patch, in_axes=(0, None))(noisy, wkern)
-    return edof_loss(recs, sims, _gt(windows, cfg), w_sim=cfg.w_sim, w_raw=cfg.w_raw)
+    return edof_loss(_centre(recs, cfg), _centre(sims, cfg), _centre(windows, cfg),
+                     w_sim=cfg.w_sim, w_raw=cfg.w_raw)
 
 
 def _finite(loss, tree):
