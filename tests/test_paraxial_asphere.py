@@ -71,3 +71,16 @@ def test_a_near_axis_real_ray_focuses_at_the_paraxial_bfl():
     last = float(lens.vertex_z()[-1])
     z_cross = o[2] - o[1] * d[2] / d[1]
     assert z_cross - last == pytest.approx(bfl, abs=1e-6)
+
+
+def test_an_afocal_lens_has_an_infinite_positive_focal_length():
+    """A plane-parallel plate has zero power: its EFL is +inf, never −inf (the sign of a
+    zero from the system matrix must not decide it)."""
+    glass = jl.ModelGlass(1.52, 60.0)
+    plate = jl.Lens(surfaces=(jl.Stop(3.0), jl.EvenAsphere(0.0, 0.0, ()),
+                              jl.EvenAsphere(0.0, 0.0, ())),
+                    thickness=jnp.array([1.0, 5.0, 10.0]),
+                    materials=(jl.Air(), glass, jl.Air()), stop=0, epd=4.0)
+    pd = jl.paraxial_data(plate)
+    assert float(pd.efl) == np.inf and float(jl.efl(plate)) == np.inf
+    assert float(pd.fnum) == np.inf

@@ -176,9 +176,16 @@ def paraxial_chief_ray(lens: Lens, field_deg, wavelength=None):
 
 
 def efl(lens: Lens, wavelength=None) -> Array:
-    """Effective focal length 1/power (mm) at ``wavelength`` (default: primary)."""
+    """Effective focal length 1/power (mm) at ``wavelength`` (default: primary); +inf for an
+    afocal lens (zero power)."""
     _, _, c, _ = system_matrix(lens, wavelength)
-    return -1.0 / c
+    return 1.0 / _power(c)
+
+
+def _power(c):
+    # 0.0 − c, not −c: a zero power is +0.0, so an afocal lens's focal length is +inf
+    # (−c of a +0.0 entry is −0.0, and 1/−0.0 = −inf).
+    return 0.0 - c
 
 
 def bfl(lens: Lens, wavelength=None) -> Array:
@@ -203,8 +210,7 @@ def paraxial_data(lens: Lens, wavelength=None) -> ParaxialData:
     n = signed_indices(lens, wl)
     n0, n_img = n[0], n[-1]
     a, b, c, d = system_matrix(lens, wl)
-    power = -c
-    f = 1.0 / power
+    f = 1.0 / _power(c)
     back = -a * n_img / c
     zs = lens.vertex_z()
     z_last = zs[-1]
