@@ -328,8 +328,10 @@ def _run_into(a, argv, cfg, names, folder, out) -> dict:
 
     t0 = time.perf_counter()
     train_imgs, windows, crop_info, test_names, source = _scenes(a, cfg)
-    probe = S.PatchSampler(train_imgs, cfg.window, seed=12345).sample(64)
-    nsr = E.wiener_nsr(probe, photons=cfg.photons, read=cfg.read_noise)
+    # The NSR from windows of the base size, so that options that widen the training window
+    # (--real-halo, --context) leave the Wiener reference and the front end's start as they are.
+    base_windows = S.PatchSampler(train_imgs, cfg.tile + cfg.kernel_size - 1, seed=12345)
+    nsr = E.wiener_nsr(base_windows.sample(64), photons=cfg.photons, read=cfg.read_noise)
     timings["scenes_s"] = time.perf_counter() - t0
 
     per_image = {}  # seed -> lens -> depth -> kind -> metric -> [crops]
