@@ -13,6 +13,7 @@ from test_lensfile import assert_same_lens, every_kind_of_lens
 
 import jaxlens
 from jaxlens.io import zmx
+from jaxlens.io.zmx_common import ZmxWarning
 from jaxlens.optics.catalog import load_agf
 from jaxlens.optics.materials import Air, ModelGlass, Tabulated
 from jaxlens.optics.surfaces import EvenAsphere, Hybrid, Standard
@@ -387,11 +388,38 @@ def test_maker_catalog_glasses_load_and_round_trip(gcat, glass):
 
 @pytest.mark.parametrize("gcat, catalog", [
     ("SCHOTT", "SCHOTT"), ("HIKARI", "HIKARI"), ("NIKON", "HIKARI"), ("CDGM", "CDGM"),
-    ("LIGHTPATH SUMITA", "SCHOTT"),  # neither holds an F2: the search order decides
+    ("SUMITA_AUG2011 SCHOTT_2000", "SCHOTT"),  # dated catalogs are their maker's
+    ("LIGHTPATH SUMITA", "SCHOTT"),  # neither holds an F2: found elsewhere, with a warning
 ])
 def test_gcat_picks_the_catalog_of_a_shared_name(gcat, catalog):
     text = f"GCAT {gcat}\n" + _minimal("  CURV 0.02\n").replace("GLAS N-BK7", "GLAS F2")
-    assert zmx.loads(text).materials[0].catalog == catalog
+    if not gcat.startswith("LIGHTPATH"):
+        assert zmx.loads(text).materials[0].catalog == catalog
+        return
+    with pytest.warns(ZmxWarning, match=r":\d+: glass 'F2' is not in the file's catalogs "
+                      r"\(LIGHTPATH, SUMITA\); using SCHOTT F2 \(nd 1.620"):
+        assert zmx.loads(text).materials[0].catalog == catalog
+    with pytest.raises(ValueError, match="not in the file's catalogs.*strict mode"):
+        zmx.loads(text, strict=True)
+
+
+def test_a_discontinued_schott_glass_becomes_its_successor_with_a_warning():
+    """KF9 is not in the shipped SCHOTT catalog: N-KF9 (its lead-free successor, nd within
+    1e-4) stands in, with a warning, rather than a glass of the same name from another
+    maker; strict mode refuses."""
+    text = "GCAT SCHOTT\n" + _minimal("  CURV 0.02\n").replace("GLAS N-BK7", "GLAS KF9")
+    with pytest.warns(ZmxWarning, match=r"glass 'KF9' is not in the shipped SCHOTT catalog "
+                      r"\(a discontinued glass\); using its lead-free successor N-KF9"):
+        m = zmx.loads(text).materials[0]
+    assert (m.name, m.catalog) == ("N-KF9", "SCHOTT")
+    with pytest.raises(ValueError, match="N-KF9.*strict mode"):
+        zmx.loads(text, strict=True)
+    # BAF4 exists in CDGM as another glass (nd 1.583 against SCHOTT's 1.606): SCHOTT's
+    # successor wins for a file that names SCHOTT.
+    text = "GCAT SCHOTT\n" + _minimal("  CURV 0.02\n").replace("GLAS N-BK7", "GLAS BAF4")
+    with pytest.warns(ZmxWarning, match="N-BAF4"):
+        m = zmx.loads(text).materials[0]
+    assert m.name == "N-BAF4" and abs(float(m.catalog_nd) - 1.6057) < 1e-3
 
 
 def test_model_glass_and_tabulated_read_back_exactly(tmp_path):

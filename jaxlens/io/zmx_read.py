@@ -46,6 +46,14 @@ _SHIPPED_FOR_ZEMAX = {
     "SUMITA": ("SUMITA",),
     "CORNING": ("CORNING",),
 }
+
+
+def _shipped_for(cat: str) -> tuple[str, ...]:
+    """The shipped catalogs that stand for a GCAT name: its own, or those of its maker for a
+    dated or prefixed variant (SUMITA_AUG2011, NIKON-HIKARI)."""
+    if cat in _SHIPPED_FOR_ZEMAX:
+        return _SHIPPED_FOR_ZEMAX[cat]
+    return _SHIPPED_FOR_ZEMAX.get(re.split(r"[_-]", cat, maxsplit=1)[0], ())
 _SURFACE_KEYS = {
     "TYPE",
     "CURV",
@@ -429,9 +437,10 @@ def _read_agf_markers(path: str) -> dict[str, str]:
 class _Glasses:
     """Resolves GLAS names: side AGF catalogs, then the shipped catalogs."""
 
-    def __init__(self, path: str, gcat: list[str]):
+    def __init__(self, path: str, gcat: list[str], strict: bool = False):
         self.dir = os.path.dirname(os.path.abspath(path))
         self.gcat = gcat
+        self.strict = strict
         self.side: dict[str, tuple[dict, dict, str]] = {}
         try:
             listing = {n.upper(): n for n in os.listdir(self.dir)}
@@ -474,22 +483,55 @@ class _Glasses:
         cat_mod = _catalog_module
         if cat_mod is not None:
             for cat in self.gcat:
-                for shipped in _SHIPPED_FOR_ZEMAX.get(cat, ()):
+                for shipped in _shipped_for(cat):
                     try:
                         m = cat_mod.get_material(name, catalogs=[shipped])
                     except ValueError:
                         continue
                     return _cross_checked(m, ln)
+            successor = self._successor(ln, name, cat_mod)
+            if successor is not None:
+                return successor
         nd, vd = _glas_nd_vd(ln)
         try:
-            return _cross_checked(catalog_material(name, nd=nd, vd=vd), ln)
+            m = catalog_material(name, nd=nd, vd=vd)
         except ValueError as e:
-            missing = [c for c in self.gcat if c not in self.side and c not in _SHIPPED_FOR_ZEMAX]
+            missing = [c for c in self.gcat if c not in self.side and not _shipped_for(c)]
             if missing:
                 e = (f"{e}. The file's GCAT names {', '.join(missing)}, which jaxlens does not "
                      f"ship (GCAT catalogs it reads: {', '.join(_SHIPPED_FOR_ZEMAX)}); put "
                      f"{missing[0]}.AGF beside the file or use jaxlens.catalog.register_catalog")
             raise ln.error(f"glass {name!r}: {e}") from None
+        if self.gcat and getattr(m, "catalog", None) is not None:
+            # A glass of the same name from another maker may be another glass (CDGM BAF4 is
+            # nd 1.583, SCHOTT's BaF4 1.606): never take it silently.
+            _report(self.strict, f"{ln.path}:{ln.number}: glass {name!r} is not in the file's "
+                    f"catalogs ({', '.join(self.gcat)}); using {m.catalog} {m.name}"
+                    f"{_nd_vd_text(m)}, a glass of the same name from another catalog: check "
+                    f"it, or put the file's catalog (.AGF) beside it")
+        return _cross_checked(m, ln)
+
+    def _successor(self, ln: _Line, name: str, cat_mod):
+        """SCHOTT's lead-free successor N-<name> of a glass that the file's SCHOTT catalog
+        lacks (KF9 → N-KF9), with a warning (an error under strict): the successor matches
+        the old glass's nd and Vd to about 1e-3 and 0.5, so it is a closer guess than a
+        glass of the same name from another maker."""
+        if "SCHOTT" not in self.gcat or "SCHOTT" in self.side or name.upper().startswith("N-"):
+            return None
+        try:
+            m = cat_mod.get_material("N-" + name, catalogs=["SCHOTT"])
+        except ValueError:
+            return None
+        _report(self.strict, f"{ln.path}:{ln.number}: glass {name!r} is not in the shipped "
+                f"SCHOTT catalog (a discontinued glass); using its lead-free successor "
+                f"{m.name}{_nd_vd_text(m)}; put the file's SCHOTT.AGF beside it for the "
+                f"original")
+        return _cross_checked(m, ln)
+
+
+def _nd_vd_text(m) -> str:
+    nd, vd = getattr(m, "catalog_nd", None), getattr(m, "catalog_vd", None)
+    return "" if nd is None or vd is None else f" (nd {nd:.5f}, Vd {vd:.2f})"
 
 
 ND_TOLERANCE, VD_TOLERANCE = 2e-3, 0.5
@@ -690,7 +732,7 @@ def loads(text: str, path: str = "<zmx>", *, strict: bool = False) -> Lens:
     f = _parse(text, path)
     _check_structure(f, text, strict)
     u = f.unit
-    glasses = _Glasses(path, f.gcat)
+    glasses = _Glasses(path, f.gcat, strict)
     obj, body, img = f.surfs[0], f.surfs[1:-1], f.surfs[-1]
     surfaces, thick, mats, mirrors = [], [], [], []
     for s in (obj, img):
