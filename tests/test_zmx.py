@@ -733,3 +733,16 @@ def test_even_asphere_type_follows_the_term_count_and_the_image_takes_no_break()
     assert zmx.surface_lines(EvenAsphere(c=0.01, k=0.0, coeffs=[1e-9] * 9))[0] == "TYPE XASPHERE"
     with pytest.raises(ValueError, match="no .zmx form"):
         zmx.surface_lines(jaxlens.CoordinateBreak(tilt_x=5.0), image=True)
+
+
+@pytest.mark.parametrize("disz, at_infinity", [("1E+20", True), ("1.0E10", True),
+                                               ("9.9E9", False)])
+def test_object_distance_of_1e10_or_more_is_infinity(disz, at_infinity):
+    """Zemax reads object thicknesses of 1e10 and more as infinite (OpTaliX writes 1e20);
+    a finite 1e20 mm object gave rays that no float can aim (NaN spots)."""
+    lens = zmx.loads(_minimal("  CURV 0.02\n").replace("DISZ INFINITY", f"DISZ {disz}"))
+    assert lens.object_at_infinity is at_infinity
+    if at_infinity:
+        spot = jaxlens.analysis.rms_spot(lens)
+        assert np.all(np.isfinite(np.asarray(spot.polychromatic)))  # the rays trace
+        assert np.all(np.asarray(spot.valid_fraction) == 1.0)

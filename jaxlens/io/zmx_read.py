@@ -534,6 +534,10 @@ def _nd_vd_text(m) -> str:
     return "" if nd is None or vd is None else f" (nd {nd:.5f}, Vd {vd:.2f})"
 
 
+INFINITE_OBJECT_MM = 1e10
+"""An object distance at or beyond this (mm) is at infinity, as in Zemax (which reads object
+thicknesses of 1e10 and more as infinite; other programs write 1e20 for infinity)."""
+
 ND_TOLERANCE, VD_TOLERANCE = 2e-3, 0.5
 """Largest accepted difference between a GLAS line's nd and Vd and the catalog's."""
 
@@ -765,6 +769,9 @@ def loads(text: str, path: str = "<zmx>", *, strict: bool = False) -> Lens:
     if img.type not in ("STANDARD", "EVENASPH"):
         raise (img.type_line or img.line).error("the image surface must be STANDARD or EVENASPH")
     dist = obj.disz * u if obj.disz_line is not None else math.inf
+    if dist >= INFINITE_OBJECT_MM:
+        dist = math.inf  # Zemax's convention; a finite 1e20 mm would need ray directions of
+        # relative size 1e-20, which no float can aim
     if not dist > 0:
         raise (obj.disz_line or obj.line).error("object distance must be > 0 or INFINITY")
     wl, primary = _wavelengths(f)
