@@ -746,3 +746,17 @@ def test_object_distance_of_1e10_or_more_is_infinity(disz, at_infinity):
         spot = jaxlens.analysis.rms_spot(lens)
         assert np.all(np.isfinite(np.asarray(spot.polychromatic)))  # the rays trace
         assert np.all(np.asarray(spot.valid_fraction) == 1.0)
+
+
+def test_vendor_files_without_type_lines_and_with_family_glass_names():
+    """An Edmund-style file: no TYPE line (a STANDARD surface) and GLAS family|glass."""
+    text = "VERS 130404\n" + _minimal("  CURV 0.02\n").replace(
+        "GLAS N-BK7", "GLAS SCHOTT-BK|N-BK7").replace("SURF 0\n", "SURF 0\n  CURV 0.0\n")
+    text = text.replace("SURF 3\n", "SURF 3\n  CURV 0.0\n  DISZ 0\n")
+    text = re.sub(r"(SURF [12]\n)", r"\1", text)
+    lens = zmx.loads(text)
+    assert lens.materials[0].name == "N-BK7"
+    assert float(lens.surfaces[0].c) == 0.02
+    # A block cut before its DISZ is still a truncated file.
+    with pytest.raises(ValueError, match=r"surface 2 has no DISZ line"):
+        zmx.loads(text.replace("  DISZ 45\n", ""))

@@ -456,7 +456,8 @@ class _Glasses:
                 self.side[cat] = (mats, _read_agf_markers(p), p)
 
     def get(self, ln: _Line) -> AbstractMaterial:
-        name = ln.tokens[1]
+        # Some vendors' files write "family|glass" (Edmund: SCHOTT-BK|N-BK7).
+        name = ln.tokens[1].rsplit("|", 1)[-1]
         up = name.upper()
         if up == "___BLANK":
             nd = ln.float(4, "model glass nd")
@@ -648,8 +649,9 @@ def _report(strict: bool, msg: str) -> None:
 def _check_structure(f: _File, text: str, strict: bool) -> None:
     """Refuse a file that is cut off or has incomplete surface blocks; report unknown keywords.
 
-    Zemax writes TYPE, CURV and DISZ in every SURF block and ends each line with a line
-    break, so a file with a ``VERS`` line missing any of those was cut off. Any file needs a
+    Zemax writes CURV and DISZ in every SURF block and ends each line with a line break, so
+    a file with a ``VERS`` line missing any of those was cut off. (Its TYPE line may be
+    missing: a STANDARD surface, as some vendors' files write it.) Any file needs a
     DISZ for every lens surface (a missing one is not read as 0; the object's means
     infinity), and its
     last block is the image, whose thickness is 0: a last block with a DISZ other than 0 is
@@ -664,13 +666,13 @@ def _check_structure(f: _File, text: str, strict: bool) -> None:
     img = f.surfs[-1]
     for s in f.surfs:
         body = s is not img and s is not f.surfs[0]  # a missing object DISZ means infinity
-        need = ("TYPE", "CURV", "DISZ") if f.zemax else ("DISZ",) if body else ()
+        need = ("CURV", "DISZ") if f.zemax else ("DISZ",) if body else ()
         missing = [k for k in need if k not in s.keys]
         if missing:
             what = "the image surface" if s is img else f"surface {s.number}"
             raise s.line.error(
                 f"{what} has no {' or '.join(missing)} line (every surface needs its "
-                f"thickness{'; Zemax writes TYPE, CURV and DISZ in every block' if f.zemax else ''}"
+                f"thickness{'; Zemax writes CURV and DISZ in every block' if f.zemax else ''}"
                 f"); the file may be truncated")
     if img.disz_line is not None and img.disz != 0:
         raise img.disz_line.error(
