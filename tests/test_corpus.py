@@ -182,3 +182,12 @@ def test_zemax_default_model_values_on_a_catalog_glass_are_no_claim(tmp_path):
     p.write_text(text("1.6", "40"))
     with pytest.warns(zmx.ZmxWarning, match=r"g.zmx:11: GLAS N-BK7 gives nd 1.6, Vd 40"):
         jl.load(p)
+
+
+def test_a_mirror_system_with_zero_gap_breaks_traces_its_whole_beam():
+    """Ex66 folds with mirrors between coordinate breaks at zero gaps: every ray of every
+    field reaches the image (half the on-axis beam was lost where the surface after a
+    curved mirror lay behind the reflection point)."""
+    lens, _ = _load("rayoptics_HoO-V2C18Ex66.zmx")
+    spot = jl.analysis.rms_spot(lens)
+    np.testing.assert_array_equal(np.asarray(spot.valid_fraction), 1.0)

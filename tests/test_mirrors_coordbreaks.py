@@ -101,6 +101,23 @@ def test_spherical_mirror_focuses_at_half_its_radius(r):
     assert float(axis.opl[0]) == pytest.approx(10 - r / 2, rel=1e-14)
 
 
+@pytest.mark.parametrize("r", [-100.0, 80.0])
+def test_a_surface_at_zero_gap_after_a_mirror_is_reached_backward_if_need_be(r):
+    """A dummy plane at the mirror's vertex (Zemax DISZ 0, as files put a reference plane or
+    a coordinate break there): a reflected ray leaves the mirror at z = sag(h), on either
+    side of that plane, and reaches it going back along its line where needed, as in a
+    sequential trace. The image points and path lengths equal those without the plane; the
+    rays were lost before."""
+    bare = jl.Lens((jl.Sphere(1 / r),), jnp.array([-60.0]), (AIR,), mirrors=(0,), epd=40.0)
+    with_plane = jl.Lens((jl.Sphere(1 / r), jl.Plane()), jnp.array([0.0, -60.0]), (AIR, AIR),
+                         mirrors=(0,), epd=40.0)
+    rays = _collimated([0.0, 5.0, -12.0, 19.0])
+    a, b = jl.trace(bare, rays), jl.trace(with_plane, rays)
+    assert bool(a.valid.all()) and bool(b.valid.all())
+    np.testing.assert_allclose(np.asarray(b.origin), np.asarray(a.origin), atol=1e-12)
+    np.testing.assert_allclose(np.asarray(b.opl), np.asarray(a.opl), atol=1e-12)
+
+
 def _cassegrain(c1=-1 / 200.0, c2=-1 / 100.0, d=70.0, epd=0.02):
     """Concave primary (f1 = 100), convex secondary (f2 = −50) 70 mm in front of it, image
     75 mm behind the secondary; the primary is the stop."""

@@ -11,7 +11,9 @@ Conventions:
     point given on an entrance-pupil plane inside the lens is fine). After surface 1,
     a ray that would have to travel backward (t < 0) is invalid, except across a
     negative gap (a surface whose vertex lies before the previous one, legal in Zemax
-    files): there the ray goes back along its line to the surface.
+    files) or to a dummy surface (same index on both sides) on the previous vertex plane,
+    such as a reference plane at a mirror: there the ray goes back along its line to the
+    surface where it must, as in a sequential trace.
 
 Intersections:
     Planes, spheres and conics are intersected in closed form (the numerically stable
@@ -376,12 +378,18 @@ def surface_step(surface, z_vertex, st: RayState, n_before, n_after, *, first, r
     ``obscured=(r_min, r_max)`` (static, mm) blocks the rays that meet it in that annulus.
     Rays that fail keep their last position and direction and become invalid; ``opl`` adds
     n·t for valid rays. ``gap`` is the thickness before this surface: where it is negative
-    the surface lies behind the previous one and the ray reaches it by going back along
-    its line, measured along the direction of travel (after an odd number of mirrors the
-    caller passes minus the Zemax thickness).
+    (or zero, for a dummy surface) the surface may lie behind the ray's start and the ray
+    reaches it by going back along its line; it is measured along the direction of travel
+    (after an odd number of mirrors the caller passes minus the Zemax thickness).
     """
     o_local = (st.p[0], st.p[1], st.p[2] - z_vertex)
-    backward = None if gap is None or first else gap < 0
+    backward = None
+    if gap is not None and not first:
+        # A dummy surface (same index on both sides, not a mirror) on the previous vertex
+        # plane, e.g. a reference plane at a mirror, may lie behind where the ray starts; a
+        # refracting one there would make a lens of negative thickness, and stays refused.
+        dummy = jnp.all(n_before == n_after) & (not reflects)  # a scalar, as gap is
+        backward = (gap < 0) | ((gap == 0) & dummy)
     t, ok = unmark(intersect(surface, o_local, st.d, newton_iters, first=first,
                              backward=backward))
     if not first:
