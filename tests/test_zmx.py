@@ -760,3 +760,18 @@ def test_vendor_files_without_type_lines_and_with_family_glass_names():
     # A block cut before its DISZ is still a truncated file.
     with pytest.raises(ValueError, match=r"surface 2 has no DISZ line"):
         zmx.loads(text.replace("  DISZ 45\n", ""))
+
+
+def test_a_multi_configuration_file_is_reported_once_and_its_operands_are_known():
+    """A zoom lens's MNUM and its THIC operands: one report that the other configurations
+    are ignored (an error under strict), not one 'unknown keyword' per operand line."""
+    extra = "MNUM 2 1\nTHIC 2 0 0 0 0 0 0 0\nTHIC 2 0 0 0 0 0 0 0\nCSUM 1693307950\n"
+    text = _minimal("  CURV 0.02\n").replace("ENPD 10\n", "ENPD 10\n" + extra)
+    with pytest.warns(ZmxWarning) as caught:
+        zmx.loads(text)
+    msgs = [str(w.message) for w in caught]
+    assert len(msgs) == 1 and re.search(r"<zmx>:3: a multi-configuration file \(2 "
+                                        r"configurations", msgs[0]), msgs
+    with pytest.raises(ValueError, match="multi-configuration.*strict mode"):
+        zmx.loads(text, strict=True)
+    zmx.loads(text.replace("MNUM 2 1", "MNUM 1 1"))  # one configuration: nothing to say

@@ -16,10 +16,18 @@ SETTINGS = frozenset("""
     APMN APMX APCX APCY APDX APDY APTP OBSF FLAP MEMA OEMA POPS HIDE MIRR SLAB
     COAT FIMP CTHK EDGE THSO TRAC VARI VDSZ WAVL XFLN YFLN PPAR BLKS BLNK CAMA GLCZ HIDX
     TCEX MAZH MIND MXWL MNWL OPTI NSCS NSOA NSOD NSOO NSOP NSOQ NSOS NSOU NSOV NSOW GCAT
-    OMMA SCBD TCED XDVA MOD2 RWRE TOLP
+    OMMA SCBD TCED XDVA MOD2 RWRE TOLP CSUM DBDT
     """.split())
 """Lens-data settings the reader ignores (``OMMA``: the optimisation method; ``SCBD``: a
-surface's coordinate-break-after-surface data written as all zeros by OpticStudio)."""
+surface's coordinate-break-after-surface data written as all zeros by OpticStudio; ``CSUM``:
+a checksum; ``DBDT``: the stock-lens database record of a vendor's file)."""
+
+CONFIG_OPERANDS = frozenset("""
+    THIC CRVT CONN GLSS SDIA APER XFIE YFIE FLWT WAVE WLWT TEMP PRES
+    """.split())
+"""Multi-configuration operands (one line per operand after ``MNUM``): the reader loads the
+lens as the file's surfaces give it, the configuration active when it was saved, and
+reports that the other configurations are ignored."""
 
 MERIT_OPERANDS = frozenset("""
     ABCD ABGT ABLT ABSO ACOS ACOT AMAG ANAC ANAR ANAX ANAY ANCX ANCY ASIN ATAN AXCL BLTH
@@ -44,4 +52,4 @@ MERIT_OPERANDS = frozenset("""
     """.split())
 """Zemax merit-function operand names: the operand lines that follow a lens's surfaces."""
 
-IGNORED_KEYWORDS = SETTINGS | MERIT_OPERANDS
+IGNORED_KEYWORDS = SETTINGS | MERIT_OPERANDS | CONFIG_OPERANDS

@@ -155,6 +155,7 @@ class _File:
     shaped_apertures: list = field(default_factory=list)  # SQAP/ELAP lines
     surfs: list = field(default_factory=list)
     unknown: list = field(default_factory=list)  # lines with a keyword nobody knows
+    mnum: _Line | None = None  # the number of configurations
     zemax: bool = False  # written by Zemax (a VERS line): every block is complete
 
 
@@ -182,6 +183,8 @@ def _parse(text: str, path: str) -> _File:
             _top_line(f, key, ln, raw)
         elif key in ("SQAP", "ELAP"):
             f.shaped_apertures.append(ln)
+        elif key == "MNUM":
+            f.mnum = ln
         elif key not in IGNORED_KEYWORDS:
             f.unknown.append(ln)
         if key in _SURFACE_KEYS and cur is not None:
@@ -682,9 +685,15 @@ def _check_structure(f: _File, text: str, strict: bool) -> None:
         lines = text.splitlines()
         _report(strict, f"{path}:{len(lines)}: the file does not end with a line break; it "
                         f"may be truncated: {lines[-1].strip()!r}")
+    if f.mnum is not None and f.mnum.int(1, "number of configurations") > 1:
+        _report(strict, f"{path}:{f.mnum.number}: a multi-configuration file "
+                        f"({f.mnum.tokens[1]} configurations, e.g. zoom positions); jaxlens "
+                        f"reads the lens as its surfaces give it (the configuration active "
+                        f"when it was saved) and ignores the others")
     for ln in f.unknown:
-        _report(strict, f"{path}:{ln.number}: unknown keyword {ln.tokens[0]!r} ignored "
-                        f"(a cut-off keyword means a truncated file): {ln.text.strip()!r}")
+        _report(strict, f"{path}:{ln.number}: unknown keyword {ln.tokens[0]!r} ignored (not "
+                        f"one jaxlens reads; a keyword cut off mid-word means a truncated "
+                        f"file): {ln.text.strip()!r}")
 
 
 def _check_apertures(f: _File, strict: bool) -> None:
