@@ -294,12 +294,32 @@ def test_central_obscuration_blocks_the_rays_inside_it(tmp_path):
         jl.save(lens, tmp_path / "x.json")  # no JSON form yet: refused, never dropped
 
 
+def test_annular_aperture_passes_only_its_ring(tmp_path):
+    """CLAP 1 4 (an annulus): rays meeting the surface within 1 mm of the axis are blocked
+    (a central obscuration) and beyond 4 mm clipped; a written file reads back the same."""
+    _, lens = _load_text(tmp_path, _file("ENPD 10\n", surface1="  CLAP 1 4 0\n"))
+    assert lens.obscurations == ((0, 0.0, 1.0),)
+    assert float(lens.surfaces[0].semi_diameter) == 4.0
+    h = jnp.asarray([0.0, 0.99, 1.01, 3.0, 3.99, 4.01])
+    o = jnp.stack([jnp.zeros_like(h), h, jnp.full_like(h, -1.0)], -1)
+    d = jnp.broadcast_to(jnp.asarray([0.0, 0.0, 1.0]), o.shape)
+    out = jl.trace(lens, jl.Rays(o, d, 0.5875618))
+    assert np.asarray(out.valid).tolist() == [False, False, True, True, True, False]
+    jl.save(lens, tmp_path / "again.zmx")
+    again = jl.load(tmp_path / "again.zmx")
+    assert again.obscurations == lens.obscurations
+    assert float(again.surfaces[0].semi_diameter) == 4.0
+    with pytest.raises(ValueError, match="annular aperture needs minimum < maximum"):
+        _load_text(tmp_path, _file("ENPD 10\n", surface1="  CLAP 5 4 0\n"))
+    with pytest.raises(ValueError, match="annular aperture .CLAP. and an obscuration"):
+        _load_text(tmp_path, _file("ENPD 10\n", surface1="  CLAP 1 4 0\n  OBSC 0 0.5 0\n"))
+
+
 def test_other_apertures_refused(tmp_path):
     ep = "ENPD 10\n"
     # An obscuration of radius 0 obscures nothing; OBSC is no longer read as a system aperture.
     _, lens = _load_text(tmp_path, _file(ep, surface1="  OBSC 0 0 0\n"))
     assert float(lens.epd) == 10.0
-    assert _refused(tmp_path, _file(ep, surface1="  CLAP 1 4 0\n"), "annular apertures")
     assert (
         _refused(
             tmp_path, _file(ep, surface1="  CLAP 0 4 0\n  OBDC 0 0.5\n"), "decentered apertures"

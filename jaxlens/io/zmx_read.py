@@ -130,6 +130,7 @@ class _Surf:
     stop: bool = False
     diam: tuple[float, int | None] | None = None
     clap: float | None = None
+    clap_min: _Line | None = None  # an annular aperture's CLAP line (minimum radius > 0)
     obsc: _Line | None = None  # a circular obscuration (OBSC min max)
     obdc: _Line | None = None  # the aperture's decenter (OBDC x y)
     comment: str = ""
@@ -221,10 +222,12 @@ def _surface_line(s: _Surf, key: str, ln: _Line) -> None:
             raise ln.error("semi-diameter must be >= 0")
         s.diam = (v, flag)
     elif key == "CLAP":
-        if ln.float(1, "circular aperture minimum radius") != 0:
-            raise ln.error("annular apertures (CLAP with a minimum radius > 0) are not "
-                           "supported; jaxlens clips rays outside a semi-diameter only")
+        lo = ln.float(1, "circular aperture minimum radius (lens units)", lo=0)
         s.clap = ln.float(2, "circular aperture maximum radius (lens units)", lo=0)
+        if lo > 0:  # an annulus: the clipping radius and a central obscuration inside lo
+            if not lo < s.clap:
+                raise ln.error("an annular aperture needs minimum < maximum radius")
+            s.clap_min = ln
     elif key == "OBSC":
         if ln.float(2, "obscuration maximum radius") > 0:
             if not 0 <= ln.float(1, "obscuration minimum radius") < ln.float(2, ""):
@@ -696,6 +699,21 @@ def _check_structure(f: _File, text: str, strict: bool) -> None:
                         f"file): {ln.text.strip()!r}")
 
 
+def _obscurations(body, u) -> tuple:
+    """``Lens.obscurations`` from OBSC lines and annular CLAP lines (the centre of an annular
+    aperture, inside its minimum radius, blocks like a central obscuration)."""
+    out = []
+    for i, s in enumerate(body):
+        if s.obsc is not None and s.clap_min is not None:
+            raise s.clap_min.error("an annular aperture (CLAP) and an obscuration (OBSC) on one "
+                                   "surface are not supported (one blocked zone per surface)")
+        if s.obsc is not None:
+            out.append((i, s.obsc.float(1, "") * u, s.obsc.float(2, "") * u))
+        elif s.clap_min is not None:
+            out.append((i, 0.0, s.clap_min.float(1, "") * u))
+    return tuple(out)
+
+
 def _check_apertures(f: _File, strict: bool) -> None:
     """Refuse surface apertures the tracer cannot model (it clips outside a centred
     semi-diameter only); rectangular and elliptical ones are reported (an error under
@@ -807,8 +825,7 @@ def loads(text: str, path: str = "<zmx>", *, strict: bool = False) -> Lens:
         sensor=_sensor(img, u),
         name=f.name,
         mirrors=tuple(mirrors),
-        obscurations=tuple((i, s.obsc.float(1, "") * u, s.obsc.float(2, "") * u)
-                           for i, s in enumerate(body) if s.obsc is not None),
+        obscurations=_obscurations(body, u),
     )
     # Before the paraxial work of the aperture: values the lens cannot be traced with.
     checks.wavelengths(lens, wl, f"{path}: WAVM", "wavelength")
