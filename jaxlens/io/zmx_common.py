@@ -5,6 +5,7 @@ from __future__ import annotations
 
 import math
 import re
+import warnings
 
 ZEMAX_CATALOGS = frozenset(
     "SCHOTT CDGM OHARA HOYA SUMITA HIKARI HIKARI_CHINA MISC ZEON INFRARED BIREFRINGENT "
@@ -33,6 +34,13 @@ MAX_XPOLY_DEGREE = 20
 
 class ZmxWarning(UserWarning):
     """A ``.zmx`` file has content the reader does not understand (it may be truncated)."""
+
+
+def report(strict: bool, msg: str) -> None:
+    """An error under ``strict``, else a warning."""
+    if strict:
+        raise ValueError(msg + " (strict mode)")
+    warnings.warn(msg, ZmxWarning, stacklevel=4)
 
 
 def term_powers(j: int) -> tuple[int, int]:

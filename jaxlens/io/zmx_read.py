@@ -2,7 +2,6 @@
 
 from __future__ import annotations
 
-import json
 import math
 import os
 import re
@@ -12,48 +11,27 @@ from dataclasses import dataclass, field
 import jax.numpy as jnp
 import numpy as np
 
-from ..optics import catalog as _catalog_module
 from ..optics import checks
 from ..optics.catalog import decode_zemax_text as decode
 from ..optics.coordinates import CoordinateBreak
 from ..optics.lens import Lens, Sensor
-from ..optics.materials import AbstractMaterial, Air, ModelGlass
+from ..optics.materials import Air
 from ..optics.surfaces import AbstractSurface, EvenAsphere, Hybrid, Standard
 from . import zmx_surfaces, zmx_system
-from .lensfile import apply_aperture, catalog_material, material_from_spec
+from .lensfile import apply_aperture
 from .zmx_common import (
     HYBRID_COMMENT,
-    MARKER,
     SENSOR_COMMENT,
     ZmxWarning,
+    report,
     term_index,
     term_powers,
     xpoly_terms,
 )
+from .zmx_glass import GlassResolver
 from .zmx_keywords import IGNORED_KEYWORDS
 
 _UNITS = {"MM": 1.0, "CM": 10.0, "IN": 25.4, "METER": 1000.0, "M": 1000.0}
-_SHIPPED_FOR_ZEMAX = {
-    "SCHOTT": ("SCHOTT",),
-    "CDGM": ("CDGM",),
-    "MISC": ("MISC", "PLASTICS"),
-    "ZEON": ("PLASTICS",),
-    "OSAKAGASCHEMICAL": ("PLASTICS",),
-    "OHARA": ("OHARA",),
-    "HOYA": ("HOYA",),
-    "HIKARI": ("HIKARI",),
-    "NIKON": ("HIKARI",),  # the shipped HIKARI file is NIKON's Zemax catalog (2017-11)
-    "SUMITA": ("SUMITA",),
-    "CORNING": ("CORNING",),
-}
-
-
-def _shipped_for(cat: str) -> tuple[str, ...]:
-    """The shipped catalogs that stand for a GCAT name: its own, or those of its maker for a
-    dated or prefixed variant (SUMITA_AUG2011, NIKON-HIKARI)."""
-    if cat in _SHIPPED_FOR_ZEMAX:
-        return _SHIPPED_FOR_ZEMAX[cat]
-    return _SHIPPED_FOR_ZEMAX.get(re.split(r"[_-]", cat, maxsplit=1)[0], ())
 _SURFACE_KEYS = {
     "TYPE",
     "CURV",
@@ -424,157 +402,9 @@ def _hybrid_from_xpoly(s: _Surf, unit: float, c: float, sd: float) -> Hybrid:
     )
 
 
-def _read_agf_markers(path: str) -> dict[str, str]:
-    """Glass name (upper case) -> jaxlens JSON material spec from ``GC jaxlens`` records."""
-    with open(path, "rb") as fh:
-        text = decode(fh.read(), path)
-    out, name = {}, None
-    for line in text.splitlines():
-        t = line.split(maxsplit=1)
-        if not t:
-            continue
-        if t[0] == "NM" and len(t) > 1:
-            name = t[1].split()[0].upper()
-        elif t[0] == "GC" and name and len(t) > 1 and t[1].startswith(MARKER):
-            out[name] = t[1][len(MARKER) :]
-    return out
-
-
-class _Glasses:
-    """Resolves GLAS names: side AGF catalogs, then the shipped catalogs."""
-
-    def __init__(self, path: str, gcat: list[str], strict: bool = False):
-        self.dir = os.path.dirname(os.path.abspath(path))
-        self.gcat = gcat
-        self.strict = strict
-        self.side: dict[str, tuple[dict, dict, str]] = {}
-        try:
-            listing = {n.upper(): n for n in os.listdir(self.dir)}
-        except OSError:
-            listing = {}
-        for cat in gcat:
-            fname = listing.get(f"{cat}.AGF")
-            if fname is not None:
-                p = os.path.join(self.dir, fname)
-                from ..optics import catalog
-
-                mats = {k.upper(): v for k, v in catalog.load_agf(p).items()}
-                self.side[cat] = (mats, _read_agf_markers(p), p)
-
-    def get(self, ln: _Line) -> AbstractMaterial:
-        # Some vendors' files write "family|glass" (Edmund: SCHOTT-BK|N-BK7).
-        name = ln.tokens[1].rsplit("|", 1)[-1]
-        up = name.upper()
-        if up == "___BLANK":
-            nd = ln.float(4, "model glass nd")
-            vd = ln.float(5, "model glass Vd")
-            if not nd >= 1 or vd < 0:
-                raise ln.error(f"model glass needs nd >= 1 and Vd >= 0 (0: no dispersion), got "
-                               f"nd {nd:g}, Vd {vd:g}")
-            return ModelGlass(_arr(nd), _arr(math.inf if vd == 0 else vd))
-        if up == "MIRROR":
-            raise ln.error("GLAS MIRROR belongs on a lens surface (not the object or image)")
-        if up == "AIR":
-            return Air()
-        for cat in self.gcat:
-            if cat in self.side:
-                mats, markers, p = self.side[cat]
-                if up in markers:
-                    try:
-                        spec = json.loads(markers[up])
-                    except json.JSONDecodeError:
-                        raise ValueError(f"{p}: bad jaxlens record for glass {name}") from None
-                    return material_from_spec(spec, f"{p}: glass {name}")
-                if up in mats:
-                    return mats[up]
-        cat_mod = _catalog_module
-        if cat_mod is not None:
-            for cat in self.gcat:
-                for shipped in _shipped_for(cat):
-                    try:
-                        m = cat_mod.get_material(name, catalogs=[shipped])
-                    except ValueError:
-                        continue
-                    return _cross_checked(m, ln)
-            successor = self._successor(ln, name, cat_mod)
-            if successor is not None:
-                return successor
-        nd, vd = _glas_nd_vd(ln)
-        try:
-            m = catalog_material(name, nd=nd, vd=vd)
-        except ValueError as e:
-            missing = [c for c in self.gcat if c not in self.side and not _shipped_for(c)]
-            if missing:
-                e = (f"{e}. The file's GCAT names {', '.join(missing)}, which jaxlens does not "
-                     f"ship (GCAT catalogs it reads: {', '.join(_SHIPPED_FOR_ZEMAX)}); put "
-                     f"{missing[0]}.AGF beside the file or use jaxlens.catalog.register_catalog")
-            raise ln.error(f"glass {name!r}: {e}") from None
-        if self.gcat and getattr(m, "catalog", None) is not None:
-            # A glass of the same name from another maker may be another glass (CDGM BAF4 is
-            # nd 1.583, SCHOTT's BaF4 1.606): never take it silently.
-            _report(self.strict, f"{ln.path}:{ln.number}: glass {name!r} is not in the file's "
-                    f"catalogs ({', '.join(self.gcat)}); using {m.catalog} {m.name}"
-                    f"{_nd_vd_text(m)}, a glass of the same name from another catalog: check "
-                    f"it, or put the file's catalog (.AGF) beside it")
-        return _cross_checked(m, ln)
-
-    def _successor(self, ln: _Line, name: str, cat_mod):
-        """SCHOTT's lead-free successor N-<name> of a glass that the file's SCHOTT catalog
-        lacks (KF9 → N-KF9), with a warning (an error under strict): the successor matches
-        the old glass's nd and Vd to about 1e-3 and 0.5, so it is a closer guess than a
-        glass of the same name from another maker."""
-        if "SCHOTT" not in self.gcat or "SCHOTT" in self.side or name.upper().startswith("N-"):
-            return None
-        try:
-            m = cat_mod.get_material("N-" + name, catalogs=["SCHOTT"])
-        except ValueError:
-            return None
-        _report(self.strict, f"{ln.path}:{ln.number}: glass {name!r} is not in the shipped "
-                f"SCHOTT catalog (a discontinued glass); using its lead-free successor "
-                f"{m.name}{_nd_vd_text(m)}; put the file's SCHOTT.AGF beside it for the "
-                f"original")
-        return _cross_checked(m, ln)
-
-
-def _nd_vd_text(m) -> str:
-    nd, vd = getattr(m, "catalog_nd", None), getattr(m, "catalog_vd", None)
-    return "" if nd is None or vd is None else f" (nd {nd:.5f}, Vd {vd:.2f})"
-
-
 INFINITE_OBJECT_MM = 1e10
 """An object distance at or beyond this (mm) is at infinity, as in Zemax (which reads object
 thicknesses of 1e10 and more as infinite; other programs write 1e20 for infinity)."""
-
-ND_TOLERANCE, VD_TOLERANCE = 2e-3, 0.5
-"""Largest accepted difference between a GLAS line's nd and Vd and the catalog's."""
-
-
-def _cross_checked(m: AbstractMaterial, ln: _Line) -> AbstractMaterial:
-    """Warn when the nd and Vd a GLAS line carries differ from the catalog glass found."""
-    nd, vd = _glas_nd_vd(ln)
-    cat_nd, cat_vd = getattr(m, "catalog_nd", None), getattr(m, "catalog_vd", None)
-    if nd is None or cat_nd is None or cat_vd is None:
-        return m
-    if abs(nd - cat_nd) > ND_TOLERANCE or abs(vd - cat_vd) > VD_TOLERANCE:
-        warnings.warn(
-            f"{ln.path}:{ln.number}: GLAS {m.name} gives nd {nd:g}, Vd {vd:g}, but catalog "
-            f"{getattr(m, 'catalog', '')} has nd {cat_nd:g}, Vd {cat_vd:g}; using the "
-            f"catalog's glass (a different glass of the same name?)", ZmxWarning, stacklevel=5)
-    return m
-
-
-def _glas_nd_vd(ln: _Line) -> tuple[float | None, float | None]:
-    """nd and Vd that a GLAS line carries after the name (tokens 4 and 5), if valid."""
-    try:
-        nd, vd = float(ln.tokens[4]), float(ln.tokens[5])
-    except (IndexError, ValueError):
-        return None, None
-    if not (math.isfinite(nd) and nd > 1.0 and math.isfinite(vd) and vd > 0.0):
-        return None, None
-    if (nd, vd) == (1.5, 40.0):  # Zemax's untouched model-glass defaults: no claim
-        return None, None
-    return nd, vd
-
 
 def _fields(f: _File, strict: bool) -> np.ndarray:
     """The field values as written: angles (deg) or paraxial image heights (lens units)."""
@@ -588,12 +418,12 @@ def _fields(f: _File, strict: bool) -> np.ndarray:
     if count is None:
         count = max(1, max((i + 1 for i, v in enumerate(ys) if v != 0), default=1))
     if len(ys) < count:
-        _report(strict, f"{f.path}:{f.yfln.number}: FTYP announces {count} fields, YFLN gives "
+        report(strict, f"{f.path}:{f.yfln.number}: FTYP announces {count} fields, YFLN gives "
                         f"{len(ys)}; the fields it does not give are read as 0 (on axis)")
         ys += [0.0] * (count - len(ys))
     vignetting = zmx_system.vignetting_factors(f.vignetting, count)
     if vignetting:
-        _report(strict, vignetting)
+        report(strict, vignetting)
     xs = (xs + [0.0] * count)[:count]
     ys = ys[:count]
     if any(x != 0 for x in xs):
@@ -645,13 +475,6 @@ def _sensor(img: _Surf, unit: float) -> Sensor | None:
     return Sensor((rows, cols), _arr(pixel * unit))
 
 
-def _report(strict: bool, msg: str) -> None:
-    """An error under ``strict``, else a warning."""
-    if strict:
-        raise ValueError(msg + " (strict mode)")
-    warnings.warn(msg, ZmxWarning, stacklevel=4)
-
-
 def _check_structure(f: _File, text: str, strict: bool) -> None:
     """Refuse a file that is cut off or has incomplete surface blocks; report unknown keywords.
 
@@ -686,15 +509,15 @@ def _check_structure(f: _File, text: str, strict: bool) -> None:
             f"the image surface's is 0. The file may be truncated after surface {img.number}")
     if text and not text.endswith(("\n", "\r")):
         lines = text.splitlines()
-        _report(strict, f"{path}:{len(lines)}: the file does not end with a line break; it "
+        report(strict, f"{path}:{len(lines)}: the file does not end with a line break; it "
                         f"may be truncated: {lines[-1].strip()!r}")
     if f.mnum is not None and f.mnum.int(1, "number of configurations") > 1:
-        _report(strict, f"{path}:{f.mnum.number}: a multi-configuration file "
+        report(strict, f"{path}:{f.mnum.number}: a multi-configuration file "
                         f"({f.mnum.tokens[1]} configurations, e.g. zoom positions); jaxlens "
                         f"reads the lens as its surfaces give it (the configuration active "
                         f"when it was saved) and ignores the others")
     for ln in f.unknown:
-        _report(strict, f"{path}:{ln.number}: unknown keyword {ln.tokens[0]!r} ignored (not "
+        report(strict, f"{path}:{ln.number}: unknown keyword {ln.tokens[0]!r} ignored (not "
                         f"one jaxlens reads; a keyword cut off mid-word means a truncated "
                         f"file): {ln.text.strip()!r}")
 
@@ -720,7 +543,7 @@ def _check_apertures(f: _File, strict: bool) -> None:
     ``strict``)."""
     for ln in f.shaped_apertures:
         shape = "rectangular" if ln.tokens[0] == "SQAP" else "elliptical"
-        _report(strict, f"{f.path}:{ln.number}: {shape} aperture ignored (jaxlens clips at "
+        report(strict, f"{f.path}:{ln.number}: {shape} aperture ignored (jaxlens clips at "
                         f"circular semi-diameters only): {ln.text.strip()!r}")
     for s in f.surfs:
         if s.obdc is not None and (s.clap is not None or s.diam is not None):
@@ -765,7 +588,7 @@ def loads(text: str, path: str = "<zmx>", *, strict: bool = False) -> Lens:
     f = _parse(text, path)
     _check_structure(f, text, strict)
     u = f.unit
-    glasses = _Glasses(path, f.gcat, strict)
+    glasses = GlassResolver(path, f.gcat, strict)
     obj, body, img = f.surfs[0], f.surfs[1:-1], f.surfs[-1]
     surfaces, thick, mats, mirrors = [], [], [], []
     for s in (obj, img):

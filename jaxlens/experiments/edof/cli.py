@@ -128,10 +128,8 @@ def build_parser() -> argparse.ArgumentParser:
                    help="keep a lens update only if L_rec on a fixed check batch (8 depths) "
                    "does not rise (off)")
     g.add_argument("--real-halo", action=argparse.BooleanOptionalAction,
-                   help="simulate training patches with the Wiener front end's halo of real "
-                   "scene around them, as test tiles have (off)")
-    g.add_argument("--context", type=int,
-                   help="pixels of scene the decoder sees around a training patch (0)")
+                   help="training patches carry the Wiener front end's halo of real scene (off)")
+    g.add_argument("--context", type=int, help="scene pixels the decoder sees around a patch (0)")
     d = p.add_argument_group("data")
     d.add_argument("--train-dir", default=None,
                    help="folder of training images (default: skimage.data; see edof.scenes)")
@@ -328,8 +326,7 @@ def _run_into(a, argv, cfg, names, folder, out) -> dict:
 
     t0 = time.perf_counter()
     train_imgs, windows, crop_info, test_names, source = _scenes(a, cfg)
-    # The NSR from windows of the base size, so that options that widen the training window
-    # (--real-halo, --context) leave the Wiener reference and the front end's start as they are.
+    # Base-size windows: --real-halo and --context leave the Wiener NSR as it is.
     base_windows = S.PatchSampler(train_imgs, cfg.tile + cfg.kernel_size - 1, seed=12345)
     nsr = E.wiener_nsr(base_windows.sample(64), photons=cfg.photons, read=cfg.read_noise)
     timings["scenes_s"] = time.perf_counter() - t0

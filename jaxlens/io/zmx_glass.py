@@ -1,0 +1,200 @@
+"""Glass names of ``.zmx`` files: which catalog glass a ``GLAS`` line means.
+
+A name is looked up in the catalogs the file's ``GCAT`` line names (side ``.AGF`` files
+first, then the shipped catalogs that stand for them), then as SCHOTT's lead-free successor
+of a discontinued SCHOTT glass, then in every shipped catalog. The last two are reported (a
+``ZmxWarning``; an error under ``strict``): a glass of the same name from another maker may be
+another glass. The nd and Vd that a ``GLAS`` line carries are cross-checked against the
+catalog's.
+"""
+
+from __future__ import annotations
+
+import json
+import math
+import os
+import re
+import warnings
+
+import jax.numpy as jnp
+import numpy as np
+
+from ..optics import catalog
+from ..optics.catalog import decode_zemax_text as decode
+from ..optics.materials import AbstractMaterial, Air, ModelGlass
+from .lensfile import catalog_material, material_from_spec
+from .zmx_common import MARKER, ZmxWarning, report
+
+
+def _arr(x):
+    return jnp.asarray(np.asarray(x, np.float64))
+
+
+SHIPPED_FOR_ZEMAX = {
+    "SCHOTT": ("SCHOTT",),
+    "CDGM": ("CDGM",),
+    "MISC": ("MISC", "PLASTICS"),
+    "ZEON": ("PLASTICS",),
+    "OSAKAGASCHEMICAL": ("PLASTICS",),
+    "OHARA": ("OHARA",),
+    "HOYA": ("HOYA",),
+    "HIKARI": ("HIKARI",),
+    "NIKON": ("HIKARI",),  # the shipped HIKARI file is NIKON's Zemax catalog (2017-11)
+    "SUMITA": ("SUMITA",),
+    "CORNING": ("CORNING",),
+}
+
+
+def shipped_for(cat: str) -> tuple[str, ...]:
+    """The shipped catalogs that stand for a GCAT name: its own, or those of its maker for a
+    dated or prefixed variant (SUMITA_AUG2011, NIKON-HIKARI)."""
+    if cat in SHIPPED_FOR_ZEMAX:
+        return SHIPPED_FOR_ZEMAX[cat]
+    return SHIPPED_FOR_ZEMAX.get(re.split(r"[_-]", cat, maxsplit=1)[0], ())
+
+def read_agf_markers(path: str) -> dict[str, str]:
+    """Glass name (upper case) -> jaxlens JSON material spec from ``GC jaxlens`` records."""
+    with open(path, "rb") as fh:
+        text = decode(fh.read(), path)
+    out, name = {}, None
+    for line in text.splitlines():
+        t = line.split(maxsplit=1)
+        if not t:
+            continue
+        if t[0] == "NM" and len(t) > 1:
+            name = t[1].split()[0].upper()
+        elif t[0] == "GC" and name and len(t) > 1 and t[1].startswith(MARKER):
+            out[name] = t[1][len(MARKER) :]
+    return out
+
+
+class GlassResolver:
+    """Resolves GLAS names: side AGF catalogs, then the shipped catalogs."""
+
+    def __init__(self, path: str, gcat: list[str], strict: bool = False):
+        self.dir = os.path.dirname(os.path.abspath(path))
+        self.gcat = gcat
+        self.strict = strict
+        self.side: dict[str, tuple[dict, dict, str]] = {}
+        try:
+            listing = {n.upper(): n for n in os.listdir(self.dir)}
+        except OSError:
+            listing = {}
+        for cat in gcat:
+            fname = listing.get(f"{cat}.AGF")
+            if fname is not None:
+                p = os.path.join(self.dir, fname)
+                from ..optics import catalog
+
+                mats = {k.upper(): v for k, v in catalog.load_agf(p).items()}
+                self.side[cat] = (mats, read_agf_markers(p), p)
+
+    def get(self, ln) -> AbstractMaterial:
+        # Some vendors' files write "family|glass" (Edmund: SCHOTT-BK|N-BK7).
+        name = ln.tokens[1].rsplit("|", 1)[-1]
+        up = name.upper()
+        if up == "___BLANK":
+            nd = ln.float(4, "model glass nd")
+            vd = ln.float(5, "model glass Vd")
+            if not nd >= 1 or vd < 0:
+                raise ln.error(f"model glass needs nd >= 1 and Vd >= 0 (0: no dispersion), got "
+                               f"nd {nd:g}, Vd {vd:g}")
+            return ModelGlass(_arr(nd), _arr(math.inf if vd == 0 else vd))
+        if up == "MIRROR":
+            raise ln.error("GLAS MIRROR belongs on a lens surface (not the object or image)")
+        if up == "AIR":
+            return Air()
+        for cat in self.gcat:
+            if cat in self.side:
+                mats, markers, p = self.side[cat]
+                if up in markers:
+                    try:
+                        spec = json.loads(markers[up])
+                    except json.JSONDecodeError:
+                        raise ValueError(f"{p}: bad jaxlens record for glass {name}") from None
+                    return material_from_spec(spec, f"{p}: glass {name}")
+                if up in mats:
+                    return mats[up]
+        cat_mod = catalog
+        if cat_mod is not None:
+            for cat in self.gcat:
+                for shipped in shipped_for(cat):
+                    try:
+                        m = cat_mod.get_material(name, catalogs=[shipped])
+                    except ValueError:
+                        continue
+                    return _cross_checked(m, ln)
+            successor = self._successor(ln, name, cat_mod)
+            if successor is not None:
+                return successor
+        nd, vd = _glas_nd_vd(ln)
+        try:
+            m = catalog_material(name, nd=nd, vd=vd)
+        except ValueError as e:
+            missing = [c for c in self.gcat if c not in self.side and not shipped_for(c)]
+            if missing:
+                e = (f"{e}. The file's GCAT names {', '.join(missing)}, which jaxlens does not "
+                     f"ship (GCAT catalogs it reads: {', '.join(SHIPPED_FOR_ZEMAX)}); put "
+                     f"{missing[0]}.AGF beside the file or use jaxlens.catalog.register_catalog")
+            raise ln.error(f"glass {name!r}: {e}") from None
+        if self.gcat and getattr(m, "catalog", None) is not None:
+            # A glass of the same name from another maker may be another glass (CDGM BAF4 is
+            # nd 1.583, SCHOTT's BaF4 1.606): never take it silently.
+            report(self.strict, f"{ln.path}:{ln.number}: glass {name!r} is not in the file's "
+                    f"catalogs ({', '.join(self.gcat)}); using {m.catalog} {m.name}"
+                    f"{_nd_vd_text(m)}, a glass of the same name from another catalog: check "
+                    f"it, or put the file's catalog (.AGF) beside it")
+        return _cross_checked(m, ln)
+
+    def _successor(self, ln, name: str, cat_mod):
+        """SCHOTT's lead-free successor N-<name> of a glass that the file's SCHOTT catalog
+        lacks (KF9 → N-KF9), with a warning (an error under strict): the successor matches
+        the old glass's nd and Vd to about 1e-3 and 0.5, so it is a closer guess than a
+        glass of the same name from another maker."""
+        if "SCHOTT" not in self.gcat or "SCHOTT" in self.side or name.upper().startswith("N-"):
+            return None
+        try:
+            m = cat_mod.get_material("N-" + name, catalogs=["SCHOTT"])
+        except ValueError:
+            return None
+        report(self.strict, f"{ln.path}:{ln.number}: glass {name!r} is not in the shipped "
+                f"SCHOTT catalog (a discontinued glass); using its lead-free successor "
+                f"{m.name}{_nd_vd_text(m)}; put the file's SCHOTT.AGF beside it for the "
+                f"original")
+        return _cross_checked(m, ln)
+
+
+def _nd_vd_text(m) -> str:
+    nd, vd = getattr(m, "catalog_nd", None), getattr(m, "catalog_vd", None)
+    return "" if nd is None or vd is None else f" (nd {nd:.5f}, Vd {vd:.2f})"
+
+
+ND_TOLERANCE, VD_TOLERANCE = 2e-3, 0.5
+"""Largest accepted difference between a GLAS line's nd and Vd and the catalog's."""
+
+
+def _cross_checked(m: AbstractMaterial, ln) -> AbstractMaterial:
+    """Warn when the nd and Vd a GLAS line carries differ from the catalog glass found."""
+    nd, vd = _glas_nd_vd(ln)
+    cat_nd, cat_vd = getattr(m, "catalog_nd", None), getattr(m, "catalog_vd", None)
+    if nd is None or cat_nd is None or cat_vd is None:
+        return m
+    if abs(nd - cat_nd) > ND_TOLERANCE or abs(vd - cat_vd) > VD_TOLERANCE:
+        warnings.warn(
+            f"{ln.path}:{ln.number}: GLAS {m.name} gives nd {nd:g}, Vd {vd:g}, but catalog "
+            f"{getattr(m, 'catalog', '')} has nd {cat_nd:g}, Vd {cat_vd:g}; using the "
+            f"catalog's glass (a different glass of the same name?)", ZmxWarning, stacklevel=5)
+    return m
+
+
+def _glas_nd_vd(ln) -> tuple[float | None, float | None]:
+    """nd and Vd that a GLAS line carries after the name (tokens 4 and 5), if valid."""
+    try:
+        nd, vd = float(ln.tokens[4]), float(ln.tokens[5])
+    except (IndexError, ValueError):
+        return None, None
+    if not (math.isfinite(nd) and nd > 1.0 and math.isfinite(vd) and vd > 0.0):
+        return None, None
+    if (nd, vd) == (1.5, 40.0):  # Zemax's untouched model-glass defaults: no claim
+        return None, None
+    return nd, vd
