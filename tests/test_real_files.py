@@ -241,10 +241,23 @@ def test_paraxial_image_height_fields(tmp_path):
     )
 
 
+def test_object_height_fields_put_the_object_points_there(tmp_path):
+    """FTYP 1 with an object 200 mm away: each field becomes the angle whose object point
+    (``sampling.object_point``) lies at the file's object height, (x, y) = (0, 5) and
+    (2, −3) mm."""
+    from jaxlens.imaging import sampling
+
+    text = _file("ENPD 10\nFTYP 1 0 2 1 0 0 0\nXFLN 0 2\nYFLN 5 -3\n", obj="  DISZ 200\n")
+    _, lens = _load_text(tmp_path, text)
+    for field, want in zip(np.asarray(lens.fields), [(0.0, 5.0), (2.0, -3.0)], strict=True):
+        p = np.asarray(sampling.object_point(lens, jnp.asarray(field), 200.0))
+        np.testing.assert_allclose(p, [want[0], want[1], -200.0], rtol=0, atol=1e-12)
+
+
 @pytest.mark.parametrize(
     ("ftyp", "match"),
     [
-        ("FTYP 1 0 2 1 0 0 0", r"field type 1 \(object heights\) is not supported"),
+        ("FTYP 1 0 2 1 0 0 0", r"object heights \(FTYP 1\) need a finite object distance"),
         ("FTYP 4 0 2 1 0 0 0", r"field type 4 \(theodolite angles\)"),
         ("FTYP 0 1 2 1 0 0 0", "object-space telecentric"),
         ("FTYP 0 0 2 1 0 0 1", "afocal image space"),

@@ -656,9 +656,10 @@ def loads(text: str, path: str = "<zmx>", *, strict: bool = False) -> Lens:
     zmx_surfaces.check_opd_modes(lens, {
         i: (zmx_surfaces.paraxial_surface(s, u, math.inf)[1], s.type_line or s.line)
         for i, s in enumerate(body) if s.type == "PARAXIAL"})
-    if field_type in (2, 3):
-        to_angles = (zmx_system.angles_from_paraxial_image_heights if field_type == 2 else
-                     zmx_system.angles_from_real_image_heights)
+    if field_type in (1, 2, 3):
+        to_angles = {1: zmx_system.angles_from_object_heights,
+                     2: zmx_system.angles_from_paraxial_image_heights,
+                     3: zmx_system.angles_from_real_image_heights}[field_type]
         try:
             lens = to_angles(lens, fields * u)
         except ValueError as e:

@@ -76,6 +76,24 @@ def angles_from_paraxial_image_heights(lens: Lens, heights: np.ndarray) -> Lens:
     return eqx.tree_at(lambda m: m.fields, lens, jnp.asarray(angles))
 
 
+def angles_from_object_heights(lens: Lens, heights: np.ndarray) -> Lens:
+    """The lens with ``heights`` (object heights in mm, y or (x, y); a finite object) as
+    field angles in degrees: the angles whose object points (``sampling.object_point``: the
+    point at which the chief ray toward the paraxial entrance pupil's centre makes that
+    angle) are those heights, θ = atan(−h / (D + z_ep)), D the object distance and z_ep the
+    pupil's position from surface 1 (a positive angle looks at an object below the axis).
+    """
+    if lens.object_at_infinity:
+        raise ValueError("object heights (FTYP 1) need a finite object distance")
+    lever = float(lens.object_distance) + float(paraxial.entrance_pupil_z(
+        lens, lens.primary_wavelength))
+    if not (math.isfinite(lever) and lever > 0.0):
+        raise ValueError(f"object heights cannot be converted to angles: the entrance pupil "
+                         f"lies {-lever:g} mm before the object")
+    angles = np.degrees(np.arctan(-np.asarray(heights, np.float64) / lever))
+    return eqx.tree_at(lambda m: m.fields, lens, jnp.asarray(angles))
+
+
 REAL_HEIGHT_TOLERANCE = 1e-9
 """Largest accepted miss (mm, relative to 1 + |h|) of the solved chief ray at FTYP 3 fields,
 in float64; in a lower precision, 64 times its machine epsilon (float32: 7.6e-6)."""
@@ -152,8 +170,8 @@ FIELD_TYPES = {
 
 
 def field_type(ln) -> int:
-    """FTYP's field type: 0 (angles, degrees), 2 (paraxial image heights) or 3 (real image
-    heights); others refused.
+    """FTYP's field type: 0 (angles, degrees), 1 (object heights), 2 (paraxial image heights)
+    or 3 (real image heights); others refused.
 
     Args:
         ln: the file's FTYP line (the reader's line object) or None.
@@ -161,11 +179,11 @@ def field_type(ln) -> int:
     if ln is None:
         return 0
     kind = ln.int(1, "field type")
-    if kind not in (0, 2, 3):
+    if kind not in (0, 1, 2, 3):
         raise ln.error(
-            f"field type {kind} ({FIELD_TYPES.get(kind, 'unknown')}) is not "
-            f"supported; use angles (FTYP 0), paraxial (FTYP 2) or real (FTYP 3) image heights"
-        )
+            f"field type {kind} ({FIELD_TYPES.get(kind, 'unknown')}) is not supported; use "
+            f"angles (FTYP 0), object heights (FTYP 1), paraxial (FTYP 2) or real (FTYP 3) "
+            f"image heights")
     if len(ln.tokens) > 2 and ln.int(2, "object-space telecentric flag") != 0:
         raise ln.error("object-space telecentric systems (FTYP's second value 1) are not supported")
     if len(ln.tokens) > 7 and ln.int(7, "afocal image space flag") != 0:
