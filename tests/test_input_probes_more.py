@@ -447,3 +447,20 @@ def test_checks_on_constants_hold_inside_jit():
         jaxlens.analysis.rms_spot(lens, depth=-100.0)
     with pytest.raises(ValueError, match=r"psf: pixel_size must be .* \(0, inf\) mm"):
         jax.jit(lambda: jaxlens.psf(lens, 0.0, pixel_size=0.0))()
+
+
+def test_an_object_1e10_mm_away_or_more_is_at_infinity():
+    """Zemax's rule, also for a Lens built in code: a 1e20 mm object (as some programs
+    write infinity) gave NaN spots in float32 (its square overflows when rays are aimed)."""
+    base = jl.load(DATA / "cooke_triplet.json")
+
+    def at(distance):
+        return jl.Lens(surfaces=base.surfaces, thickness=base.thickness,
+                       materials=base.materials, stop=base.stop, epd=base.epd,
+                       fields=base.fields, wavelengths=base.wavelengths,
+                       object_distance=distance)
+
+    assert at(1e20).object_at_infinity and at(1e10).object_at_infinity
+    assert not at(9.9e9).object_at_infinity
+    spot = jl.analysis.rms_spot(at(1e20))
+    np.testing.assert_array_equal(np.asarray(spot.valid_fraction), 1.0)

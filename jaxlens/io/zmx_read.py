@@ -14,7 +14,7 @@ import numpy as np
 from ..optics import checks
 from ..optics.catalog import decode_zemax_text as decode
 from ..optics.coordinates import CoordinateBreak
-from ..optics.lens import Lens, Sensor
+from ..optics.lens import INFINITE_OBJECT_MM, Lens, Sensor
 from ..optics.materials import Air
 from ..optics.surfaces import AbstractSurface, EvenAsphere, Hybrid, Standard
 from . import zmx_surfaces, zmx_system
@@ -401,10 +401,6 @@ def _hybrid_from_xpoly(s: _Surf, unit: float, c: float, sd: float) -> Hybrid:
         semi_diameter=_arr(sd),
     )
 
-
-INFINITE_OBJECT_MM = 1e10
-"""An object distance at or beyond this (mm) is at infinity, as in Zemax (which reads object
-thicknesses of 1e10 and more as infinite; other programs write 1e20 for infinity)."""
 
 def _fields(f: _File, strict: bool) -> np.ndarray:
     """The field values as written: angles (deg) or paraxial image heights (lens units)."""

@@ -7,9 +7,10 @@ Conventions:
     entry is the distance to the image surface. ``materials[i]`` is the medium *after*
     ``surfaces[i]`` (so ``materials[-1]`` is image space). ``stop`` is the 0-based index
     of the aperture stop in ``surfaces``. ``object_distance`` is measured from the
-    object to surface 1's vertex (``inf`` for an object at infinity). ``epd`` is the
-    entrance pupil diameter, ``fields`` the field angles in degrees (y direction), and
-    ``wavelengths`` the system wavelengths with ``primary`` the index of the primary one.
+    object to surface 1's vertex (``inf``, or 1e10 mm and more, for an object at infinity).
+    ``epd`` is the entrance pupil diameter, ``fields`` the field angles in degrees (y
+    direction), and ``wavelengths`` the system wavelengths with ``primary`` the index of
+    the primary one.
     ``mirrors`` lists the (0-based) indices of reflecting surfaces (Zemax ``GLAS MIRROR``);
     the medium after a mirror, like the medium after a ``CoordinateBreak``, is the medium
     before it (``materials[i]`` must repeat it). After an odd number of mirrors light travels
@@ -35,12 +36,17 @@ from .coordinates import CoordinateBreak
 from .materials import AbstractMaterial, Air
 from .surfaces import AbstractSurface, Standard
 
+INFINITE_OBJECT_MM = 1e10
+"""A concrete object distance at or beyond this (mm) is at infinity, as in Zemax (other
+programs write 1e20 for infinity, whose square overflows float32 when rays are aimed)."""
+
 
 def _distance(x):
-    """None (or inf) means an object at infinity; that is static structure, not a number."""
+    """None (or inf, or ≥ ``INFINITE_OBJECT_MM``) means an object at infinity; that is static
+    structure, not a number."""
     if x is None:
         return None
-    if not isinstance(x, jax.core.Tracer) and bool(np.isinf(np.asarray(x))):
+    if not isinstance(x, jax.core.Tracer) and bool(np.all(np.asarray(x) >= INFINITE_OBJECT_MM)):
         return None
     return jnp.asarray(x)
 
