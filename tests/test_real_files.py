@@ -341,6 +341,12 @@ def test_other_apertures_refused(tmp_path):
     )
     _, lens = _load_text(tmp_path, _file(ep, surface1="  CLAP 0 4 0\n  OBDC 0 0\n"))
     assert float(lens.surfaces[0].semi_diameter) == 4.0
+    # A decenter of a surface that clips nothing (an automatic DIAM, solve flag 0, as in an
+    # off-axis mirror system's file) has nothing to move: ignored. A fixed DIAM clips.
+    _, lens = _load_text(tmp_path, _file(ep, surface1='  DIAM 6 0 0 0 1 ""\n  OBDC 0 -3\n'))
+    assert float(lens.surfaces[0].semi_diameter) == np.inf
+    assert _refused(tmp_path, _file(ep, surface1='  DIAM 6 1 0 0 1 ""\n  OBDC 0 -3\n'),
+                    "decentered apertures") == "OBDC 0 -3"
 
 
 def test_ray_aiming_and_image_medium_are_reported(tmp_path):

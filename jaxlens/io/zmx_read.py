@@ -542,7 +542,10 @@ def _check_apertures(f: _File, strict: bool) -> None:
         report(strict, f"{f.path}:{ln.number}: {shape} aperture ignored (jaxlens clips at "
                         f"circular semi-diameters only): {ln.text.strip()!r}")
     for s in f.surfs:
-        if s.obdc is not None and (s.clap is not None or s.diam is not None):
+        # An aperture decenter moves a clipping aperture or an obscuration; a surface with
+        # neither (an automatic DIAM is informational) has nothing for it to move.
+        clips = math.isfinite(_sd(s, 1.0)) or s.obsc is not None or s.clap_min is not None
+        if s.obdc is not None and clips:
             raise s.obdc.error("decentered apertures (OBDC other than 0 0) are not supported; "
                                "jaxlens apertures are centred on the axis")
 
