@@ -25,8 +25,10 @@ What is read and written:
       semi-diameter; it wins over DIAM). A clipping semi-diameter is written as both
       ``DIAM r 1`` and ``CLAP 0 r 0``: Zemax and optiland clip only at apertures.
       ``OBSC r_min r_max`` (a circular obscuration, ``Lens.obscurations``) is read and
-      written. Refused: annular CLAP, decentered apertures (OBDC);
-      ``SQAP``/``ELAP`` give a warning and are ignored.
+      written; an annular ``CLAP r_in r 0`` is the clipping radius r and an obscuration
+      inside r_in. Refused: decentered apertures (OBDC) of a clipping aperture (on a surface
+      that clips nothing they are ignored); ``SQAP``/``ELAP`` give a warning and are
+      ignored.
     * ``TYPE COORDBRK`` (a ``CoordinateBreak``): PARM 1, 2 decenter x, y; PARM 3, 4, 5 tilt
       about x, y, z in degrees; PARM 6 the order flag (0 or 1); CURV 0; no GLAS (the
       medium continues). ``GLAS MIRROR`` makes a surface a mirror (``Lens.mirrors``); the
@@ -38,7 +40,7 @@ What is read and written:
     * ``GLAS``: catalog glasses by name (``GLAS N-BK7 0 0 1.5168 6.417E+001 0 0 0 0 0 0``,
       with the catalog's nd and Vd), model glasses as Zemax writes them
       (``GLAS ___BLANK 1 0 nd Vd 0 0 0 0 0 0``), ``GCAT`` (the catalogs searched, in
-      order).
+      order; ``jaxlens.io.zmx_glass`` says what happens to a name they lack).
     * Glasses not in Zemax's own catalogs (user AGF glasses, index tables, the model
       dispersion of OKP4, materials of any other class) go into ``.AGF`` catalogs written
       beside the ``.zmx`` and listed first in ``GCAT``. Zemax reads them once copied into
@@ -50,9 +52,11 @@ What is read and written:
     * ``ENPD`` (entrance pupil diameter), ``FNUM x 0`` (image-space F/# = EFL/EPD), ``FLOA``
       (float by stop size: the stop's CLAP or DIAM), ``OBNA x 0`` (object-space NA) and
       ``OBNA x 1`` (object cone angle, degrees), both read as EPD = 2·d·tan u with d the
-      object-to-entrance-pupil distance; ``FTYP 0`` (angle fields) and ``FTYP 2``
-      (paraxial image heights, converted exactly to angles: θ = atan(h/K), K the paraxial
-      image height per unit tan θ) with ``XFLN``/``YFLN`` (fields FTYP counts but
+      object-to-entrance-pupil distance; ``FTYP 0`` (angle fields), ``FTYP 1`` (object
+      heights of a finite object, converted exactly to the angles whose object points lie
+      there), ``FTYP 3`` (real image heights) and ``FTYP 2`` (paraxial image heights,
+      converted exactly to angles: θ = atan(h/K), K the paraxial image height per unit
+      tan θ) with ``XFLN``/``YFLN`` (fields FTYP counts but
       ``YFLN`` omits are on axis, with a warning); other field types, telecentric object
       space and afocal image space are refused. Vignetting factors (VDXN, VDYN, VCXN, VCYN,
       VANN) other than 0 give a warning (an error with ``strict``): the whole pupil is traced

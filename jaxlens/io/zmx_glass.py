@@ -52,6 +52,7 @@ def shipped_for(cat: str) -> tuple[str, ...]:
         return SHIPPED_FOR_ZEMAX[cat]
     return SHIPPED_FOR_ZEMAX.get(re.split(r"[_-]", cat, maxsplit=1)[0], ())
 
+
 def read_agf_markers(path: str) -> dict[str, str]:
     """Glass name (upper case) -> jaxlens JSON material spec from ``GC jaxlens`` records."""
     with open(path, "rb") as fh:
@@ -69,7 +70,7 @@ def read_agf_markers(path: str) -> dict[str, str]:
 
 
 class GlassResolver:
-    """Resolves GLAS names: side AGF catalogs, then the shipped catalogs."""
+    """Resolves a file's GLAS lines (``get``) in the order of the module docstring."""
 
     def __init__(self, path: str, gcat: list[str], strict: bool = False):
         self.dir = os.path.dirname(os.path.abspath(path))
@@ -84,8 +85,6 @@ class GlassResolver:
             fname = listing.get(f"{cat}.AGF")
             if fname is not None:
                 p = os.path.join(self.dir, fname)
-                from ..optics import catalog
-
                 mats = {k.upper(): v for k, v in catalog.load_agf(p).items()}
                 self.side[cat] = (mats, read_agf_markers(p), p)
 
@@ -115,18 +114,16 @@ class GlassResolver:
                     return material_from_spec(spec, f"{p}: glass {name}")
                 if up in mats:
                     return mats[up]
-        cat_mod = catalog
-        if cat_mod is not None:
-            for cat in self.gcat:
-                for shipped in shipped_for(cat):
-                    try:
-                        m = cat_mod.get_material(name, catalogs=[shipped])
-                    except ValueError:
-                        continue
-                    return _cross_checked(m, ln)
-            successor = self._successor(ln, name, cat_mod)
-            if successor is not None:
-                return successor
+        for cat in self.gcat:
+            for shipped in shipped_for(cat):
+                try:
+                    m = catalog.get_material(name, catalogs=[shipped])
+                except ValueError:
+                    continue
+                return _cross_checked(m, ln)
+        successor = self._successor(ln, name)
+        if successor is not None:
+            return successor
         nd, vd = _glas_nd_vd(ln)
         try:
             m = catalog_material(name, nd=nd, vd=vd)
@@ -146,7 +143,7 @@ class GlassResolver:
                     f"it, or put the file's catalog (.AGF) beside it")
         return _cross_checked(m, ln)
 
-    def _successor(self, ln, name: str, cat_mod):
+    def _successor(self, ln, name: str):
         """SCHOTT's lead-free successor N-<name> of a glass that the file's SCHOTT catalog
         lacks (KF9 → N-KF9), with a warning (an error under strict): the successor matches
         the old glass's nd and Vd to about 1e-3 and 0.5, so it is a closer guess than a
@@ -154,7 +151,7 @@ class GlassResolver:
         if "SCHOTT" not in self.gcat or "SCHOTT" in self.side or name.upper().startswith("N-"):
             return None
         try:
-            m = cat_mod.get_material("N-" + name, catalogs=["SCHOTT"])
+            m = catalog.get_material("N-" + name, catalogs=["SCHOTT"])
         except ValueError:
             return None
         report(self.strict, f"{ln.path}:{ln.number}: glass {name!r} is not in the shipped "
