@@ -180,8 +180,9 @@ def test_decoders_start_from_the_raw_image_or_its_wiener_estimate():
         make_decoder("unet", **kw)
 
 
-@pytest.mark.parametrize("kind,real_halo,context", [("nafnet", False, 8), ("wiener", True, 0),
-                                                    ("wiener", True, 4)])
+@pytest.mark.parametrize("kind,real_halo,context", [
+    pytest.param("nafnet", False, 8, marks=pytest.mark.slow), ("wiener", True, 0),
+    pytest.param("wiener", True, 4, marks=pytest.mark.slow)])
 def test_training_patch_context_is_read_and_the_loss_sees_the_tile(kind, real_halo, context):
     """With real scene around a training patch (``real_halo``, ``context``) the simulated
     patch grows, the decoder reads all of it and the loss reads the central tile: with a
