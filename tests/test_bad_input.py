@@ -263,7 +263,7 @@ def test_render_arguments_are_checked(cooke):
     key = jax.random.PRNGKey(0)
     scene = jnp.ones((8, 8, 3))
     cases = [
-        (dict(key=None), r"render: key must be a PRNG key"),
+        (dict(key=None), r"render: key must be one PRNG key"),
         (dict(key=key, method=PSFRender(kernel_size=0)), r"kernel_size must be a whole number "
                                                          r"in \[1, inf\) pixels, got 0"),
         (dict(key=key, method=PSFRender(kernel_size=8)), r"kernel_size must be odd"),

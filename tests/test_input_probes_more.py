@@ -78,7 +78,7 @@ def test_checks_values_names_argument_range_unit_and_first_bad_value():
     (dict(wavelengths=jnp.array([587.6])), r"Lens: wavelengths 587\.6 µm is outside "
                                            r"0\.15–30 µm.*587\.6 nm is 0\.5876 µm"),
     (dict(wavelengths=jnp.array([-0.5])), r"Lens: wavelengths -0\.5 µm is outside"),
-    (dict(object_distance=-10.0), r"Lens: object_distance must be finite numbers in \[0, inf\)"
+    (dict(object_distance=-10.0), r"Lens: object_distance must be finite numbers in \(0, inf\)"
                                   r" mm .*got -10 mm"),
     (dict(object_distance=float("nan")), r"Lens: object_distance must be finite"),
 ])

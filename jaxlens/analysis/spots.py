@@ -26,9 +26,13 @@ from ..optics.rays import Rays
 from ..tracing.forward import DEFAULT_NEWTON_ITERS, trace, trace_path
 
 
-def _fields_array(fields) -> Array:
+def _fields_array(fields, where: str) -> Array:
+    """Fields as ``[F]`` (θy) or ``[F, 2]`` (θx, θy) degrees; refuses other shapes and F = 0."""
     f = jnp.asarray(fields)
-    return f.reshape(-1) if f.ndim <= 1 else f.reshape(-1, 2)
+    if f.ndim > 2 or (f.ndim == 2 and f.shape[-1] != 2) or f.size == 0:
+        raise ValueError(f"{where}: fields must be [F] θy or [F, 2] (θx, θy) degrees with "
+                         f"F >= 1, got shape {f.shape}")
+    return f.reshape(-1) if f.ndim <= 1 else f
 
 
 @eqx.filter_jit
@@ -115,13 +119,18 @@ def rms_spot(
     """
     if reference not in ("centroid", "chief"):
         raise ValueError(f"rms_spot: reference must be 'centroid' or 'chief', got {reference!r}")
-    fields = lens.fields if fields is None else fields
-    fields = _fields_array(fields)
+    fields = _fields_array(lens.fields if fields is None else fields, "rms_spot")
     # With the lens's own wavelengths the chief ray is one more pupil point (the centre)
     # of the primary-wavelength trace, so one trace serves both.
     own_wavelengths = wavelengths is None
     wls = lens.wavelengths if own_wavelengths else jnp.atleast_1d(jnp.asarray(wavelengths))
-    pupil = pupil_grid(21, lens.epd.dtype) if pupil is None else pupil
+    if wls.ndim != 1 or wls.size == 0:
+        raise ValueError(f"rms_spot: wavelengths must be [W] µm with W >= 1, got shape "
+                         f"{wls.shape}")
+    pupil = pupil_grid(21, lens.epd.dtype) if pupil is None else jnp.asarray(pupil)
+    if pupil.ndim != 2 or pupil.shape[1] != 2 or pupil.shape[0] == 0:  # before the concatenate
+        raise ValueError(f"rms_spot: pupil must be [M, 2] normalised pupil points (Px, Py) "
+                         f"with M >= 1, got shape {pupil.shape}")
     m = pupil.shape[0]
     pupil_ext = jnp.concatenate([pupil, jnp.zeros((1, 2), pupil.dtype)])
     if depth is None and not lens.object_at_infinity:
@@ -157,9 +166,14 @@ def rms_spot(
 
 
 class Distortion(eqx.Module):
-    """Real chief-ray distortion per field (heights in mm, distortion in %)."""
+    """Real chief-ray distortion per field (heights in mm, distortion in %).
 
-    field: Float[Array, " F"]
+    For ``[F, 2]`` fields (θx, θy) the heights are radial: components along the field's
+    direction (tanθx, tanθy) in the image plane, and ``f_tan`` is EFL·tanθ of the field's
+    radial angle θ (tan²θ = tan²θx + tan²θy).
+    """
+
+    field: Float[Array, " F"] | Float[Array, "F 2"]
     chief_height: Float[Array, " F"]
     f_tan: Float[Array, " F"]
     paraxial_height: Float[Array, " F"]
@@ -169,17 +183,34 @@ class Distortion(eqx.Module):
 
 @eqx.filter_jit
 def distortion(lens: Lens, fields=None, wavelength=None) -> Distortion:
-    """Distortion of the real chief ray (y fields, degrees) at ``wavelength`` (default primary).
+    """Distortion of the real chief ray at ``wavelength`` (default primary).
 
+    ``fields`` are degrees, ``[F]`` (θy) or ``[F, 2]`` (θx, θy); default ``lens.fields``.
     ``percent_ftan`` = 100·(y_real − EFL·tanθ)/(EFL·tanθ); ``percent_paraxial`` uses the
-    paraxial chief-ray height on the image surface instead. Zero fields give 0.
+    paraxial chief-ray height on the image surface instead. Heights are along y for
+    ``[F]`` fields and radial for ``[F, 2]`` (see :class:`Distortion`). Zero fields give 0.
     """
-    fields = jnp.atleast_1d(jnp.asarray(lens.fields if fields is None else fields))
+    fields = _fields_array(lens.fields if fields is None else fields, "distortion")
     wl = lens.primary_wavelength if wavelength is None else wavelength
+    if jnp.ndim(wl) != 0:
+        raise ValueError(f"distortion: wavelength must be one value (µm), got shape "
+                         f"{jnp.shape(wl)}")
     f = paraxial.efl(lens, wl)
-    y = jax.vmap(lambda th: chief_ray(lens, th, wl).origin[1])(fields)
-    ftan = f * jnp.tan(jnp.deg2rad(fields))
-    ypar = jax.vmap(lambda th: paraxial.image_height(lens, th, wl))(fields)
+    xy = fields if fields.ndim == 2 else jnp.stack([jnp.zeros_like(fields), fields], -1)
+    t = jnp.tan(jnp.deg2rad(xy))  # the ideal image point is EFL·t
+    p = jax.vmap(lambda th: chief_ray(lens, th, wl).origin[:2])(fields)
+    if fields.ndim == 2:
+        s = jnp.sum(t * t, axis=-1)
+        tr = jnp.where(s > 0, jnp.sqrt(jnp.where(s > 0, s, 1.0)), 0.0)  # grad-safe at 0
+        nz = (tr > 0)[:, None]
+        u = jnp.where(nz, t / jnp.where(nz, tr[:, None], 1.0),
+                      jnp.array([0.0, 1.0], t.dtype))  # the field's direction; y on axis
+        y = jnp.sum(p * u, axis=-1)
+        radial = jnp.rad2deg(jnp.arctan(tr))  # paraxial data: the y–z section, used radially
+    else:
+        tr, radial, y = t[:, 1], fields, p[:, 1]  # signed heights along y
+    ftan = f * tr
+    ypar = jax.vmap(lambda th: paraxial.image_height(lens, th, wl))(radial)
 
     def pct(a, b):
         nz = b != 0
@@ -203,7 +234,7 @@ def clear_semi_diameters(lens: Lens, fields=None, n_rim: int = 64, *,
     """
     checks.number(n_rim, "n_rim", "clear_semi_diameters", lo=4, integer=True,
                   unit="rim rays per beam (fewer miss the rim in x or y)")
-    fields = _fields_array(lens.fields if fields is None else fields)
+    fields = _fields_array(lens.fields if fields is None else fields, "clear_semi_diameters")
     a = np.linspace(0, 2 * np.pi, n_rim, endpoint=False)
     rim = jnp.asarray(np.concatenate([[[0.0, 0.0]], np.stack([np.cos(a), np.sin(a)], -1)]),
                       lens.epd.dtype)

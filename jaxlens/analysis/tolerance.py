@@ -62,7 +62,7 @@ from jax.flatten_util import ravel_pytree
 from jaxtyping import Array, Float
 
 from ..imaging.sampling import field_xy, pupil_grid
-from ..optics import paraxial
+from ..optics import checks, paraxial
 from ..optics.lens import Lens
 from ..optics.materials import LAMBDA_D, AbstractMaterial, Air, abbe_number
 from ..optics.surfaces import EvenAsphere, Standard
@@ -590,6 +590,9 @@ def yield_fraction(rms_um, threshold_um: float, valid_fraction=None,
                    min_valid: float = 0.99) -> float:
     """Fraction of trials with RMS ≤ threshold (µm) and, when given, ≥ ``min_valid`` of
     every field's rays reaching the image; non-finite RMS fails."""
+    checks.number(threshold_um, "threshold_um", "yield_fraction", lo=0, lo_open=True, unit="µm")
+    checks.number(min_valid, "min_valid", "yield_fraction", lo=0, hi=1,
+                  unit="(fraction of a field's rays)")
     r = np.asarray(rms_um, float)
     ok = np.isfinite(r) & (r <= threshold_um)
     if valid_fraction is not None:

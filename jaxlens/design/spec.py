@@ -18,7 +18,12 @@ from __future__ import annotations
 
 import dataclasses
 import math
+import numbers
+import types
 
+import numpy as np
+
+from ..optics import checks
 from ..optics.materials import LAMBDA_C, LAMBDA_D, LAMBDA_F, AbstractMaterial, ModelGlass
 
 # Stand-in (nd, Vd) of common lens plastics, used only if ``jaxlens.optics.catalog`` is unavailable.
@@ -37,6 +42,12 @@ _PLASTICS = {
 # edge thickness) and between neighbouring elements (air gaps).
 ELEMENT_MIN_THICKNESS = 0.4
 AIR_MIN_GAP = 0.2
+
+MAX_ASPHERE_TERMS = 12
+"""Most even aspheric terms per surface (r⁴ … r²⁶), the CLI's ``--asphere-terms`` bound: more
+than lens designs use, and the parameterization's scale r_norm^(2j+3) of term j stays
+inside float32's range up to a full-frame half-diagonal (21.6 mm; 1000 terms overflow even
+float64)."""
 
 
 def get_material(name: str) -> AbstractMaterial:
@@ -193,58 +204,90 @@ class DesignSpec:
 
     # --- validation -----------------------------------------------------------------
     def validate(self) -> None:
-        """Raise ``ValueError`` naming the bad value if no lens can meet this spec."""
+        """Raise ``ValueError`` (``TypeError`` for a wrong type) naming the bad value if no
+        lens can meet this spec."""
         where = "DesignSpec"
-        if not 0.0 < self.fov < 180.0:
-            raise ValueError(f"{where}: fov must lie in (0, 180) degrees, got {self.fov}")
-        if self.fnum <= 0 or self.fnum_start <= 0:
-            raise ValueError(f"{where}: F-numbers must be positive, got fnum={self.fnum}, "
-                             f"fnum_start={self.fnum_start}")
-        if self.sensor_diagonal <= 0:
-            raise ValueError(f"{where}: sensor_diagonal must be positive, got "
-                             f"{self.sensor_diagonal}")
-        if min(self.sensor_aspect) <= 0 or len(self.sensor_aspect) != 2:
-            raise ValueError(f"{where}: sensor_aspect must be two positive numbers, got "
-                             f"{self.sensor_aspect}")
-        if self.n_elements < 1:
-            raise ValueError(f"{where}: n_elements must be at least 1, got {self.n_elements}")
-        if len(self.materials) != self.n_elements:
-            raise ValueError(f"{where}: {self.n_elements} elements need {self.n_elements} "
-                             f"materials, got {len(self.materials)}: {self.materials}")
-        if not 0 <= self.stop <= self.n_elements:
-            raise ValueError(f"{where}: stop must lie in 0..{self.n_elements} (elements in "
-                             f"front of the stop), got {self.stop}")
-        if not self.wavelengths or min(self.wavelengths) <= 0:
-            raise ValueError(f"{where}: wavelengths must be positive µm, got {self.wavelengths}")
-        if not 0 <= self.primary < len(self.wavelengths):
-            raise ValueError(f"{where}: primary index {self.primary} outside the wavelengths")
-        if self.asphere_terms < 0:
-            raise ValueError(f"{where}: asphere_terms must be ≥ 0, got {self.asphere_terms}")
-        if not 0.0 < self.fov_start <= self.fov:
-            raise ValueError(f"{where}: fov_start must lie in (0, fov={self.fov}], got "
-                             f"{self.fov_start}")
-        if self.efl is not None and not self.efl > 0:
-            raise ValueError(f"{where}: efl must be a positive focal length in mm (or None), "
-                             f"got {self.efl}")
-        if self.bfl <= 0:
-            raise ValueError(f"{where}: bfl must be positive, got {self.bfl}")
-        if self.total_track <= self.bfl:
-            raise ValueError(f"{where}: total_track {self.total_track} mm is not longer than "
-                             f"the back focal length bfl {self.bfl} mm")
-        if self.total_track < self.min_track():
+        fov = _number(self.fov, "fov", lo=0, hi=180, lo_open=True, hi_open=True, unit="deg")
+        _number(self.fov_start, "fov_start", lo=0, hi=fov, lo_open=True, unit="deg")
+        _number(self.fnum, "fnum", lo=0, lo_open=True)
+        _number(self.fnum_start, "fnum_start", lo=0, lo_open=True)
+        _number(self.sensor_diagonal, "sensor_diagonal", lo=0, lo_open=True, unit="mm")
+        aspect = _sequence(self.sensor_aspect, "sensor_aspect", "(height, width)")
+        if len(aspect) != 2:
+            raise ValueError(f"{where}: sensor_aspect must be two positive numbers (height, "
+                             f"width), got {self.sensor_aspect}")
+        for a in aspect:
+            _number(a, "sensor_aspect", lo=0, lo_open=True)
+        _number(self.sensor_pixels, "sensor_pixels", lo=1, integer=True, unit="pixels")
+        n = _number(self.n_elements, "n_elements", lo=1, integer=True)
+        names = _sequence(self.materials, "materials", "catalog names, one per element")
+        if not all(isinstance(m, str) for m in names):
+            raise TypeError(f"{where}: materials must be catalog names (str), got "
+                            f"{self.materials!r}")
+        if len(names) != n:
+            raise ValueError(f"{where}: {n} elements need {n} materials, got "
+                             f"{len(names)}: {self.materials}")
+        bfl = _number(self.bfl, "bfl", lo=0, lo_open=True, unit="mm")
+        track = _number(self.total_track, "total_track", lo=0, lo_open=True, unit="mm")
+        _number(self.stop, "stop", lo=0, hi=n, integer=True, unit="elements in front of it")
+        wl = _sequence(self.wavelengths, "wavelengths", "µm")
+        for w in wl:
+            _number(w, "wavelengths", lo=0, lo_open=True, unit="µm")
+        if not wl:
+            raise ValueError(f"{where}: wavelengths must hold at least one wavelength (µm)")
+        _number(self.primary, "primary", lo=0, hi=len(wl) - 1, integer=True,
+                unit="(index into wavelengths)")
+        _number(self.asphere_terms, "asphere_terms", lo=0, hi=MAX_ASPHERE_TERMS, integer=True,
+                unit="terms per surface")
+        if self.efl is not None:
+            _number(self.efl, "efl", lo=0, lo_open=True, unit="mm (or None)")
+        if not isinstance(self.name, str):
+            raise TypeError(f"{where}: name must be a str, got {type(self.name).__name__} "
+                            f"{self.name!r}")
+        # Materials are known here: refuse wavelengths outside their data (or given in nm)
+        # with the Lens's own check, on the lens's sequence of media (air after the stop
+        # and after each element).
+        media = [x for m in names for x in (get_material(m), None)]
+        media.insert(2 * self.stop, None)
+        lens = types.SimpleNamespace(object_material=None, materials=tuple(media))
+        checks.wavelengths(lens, np.asarray(wl, dtype=float), where, "wavelengths")
+        if track <= bfl:
+            raise ValueError(f"{where}: total_track {track} mm is not longer than "
+                             f"the back focal length bfl {bfl} mm")
+        if track < self.min_track():
             raise ValueError(
-                f"{where}: total_track {self.total_track} mm cannot hold {self.n_elements} "
+                f"{where}: total_track {track} mm cannot hold {n} "
                 f"elements of ≥ {ELEMENT_MIN_THICKNESS} mm with air gaps ≥ {AIR_MIN_GAP} mm and "
-                f"bfl {self.bfl} mm (needs ≥ {self.min_track():.3f} mm)")
-        min_fnum, max_product = aperture_field_limits(self.n_elements)
+                f"bfl {bfl} mm (needs ≥ {self.min_track():.3f} mm)")
+        min_fnum, max_product = aperture_field_limits(n)
         if self.fnum < min_fnum:
-            raise ValueError(f"{where}: F/{self.fnum} is faster than {self.n_elements} element(s) "
+            raise ValueError(f"{where}: F/{self.fnum} is faster than {n} element(s) "
                              f"can reach (F/{min_fnum:.2f} or slower)")
         product = math.tan(math.radians(self.half_fov)) / self.fnum
         if product > max_product:
             raise ValueError(
                 f"{where}: a {self.fov}° field at F/{self.fnum} (tan(half FoV)/F# = "
-                f"{product:.3f}) is more than {self.n_elements} element(s) can reach "
+                f"{product:.3f}) is more than {n} element(s) can reach "
                 f"(≤ {max_product:.3f}); use more elements, a smaller field or a slower lens")
-        for m in self.materials:
-            get_material(m)  # raises ValueError for an unknown name
+
+
+def _number(value, arg: str, *, lo=None, hi=None, lo_open=False, hi_open=False, unit="",
+            integer=False):
+    """``checks.number`` for a DesignSpec field, after its type check (TypeError): a number,
+    or an int where ``integer`` (a bool is neither: True would pass as 1)."""
+    if isinstance(value, bool) or not isinstance(value, numbers.Integral if integer
+                                                 else numbers.Real):
+        span = checks._span(lo, hi, lo_open, hi_open)
+        raise TypeError(f"DesignSpec: {arg} must be {'an int' if integer else 'a number'} in "
+                        f"{span}{f' {unit}' if unit else ''}, got {type(value).__name__} "
+                        f"{value!r}")
+    return checks.number(value, arg, "DesignSpec", lo=lo, hi=hi, lo_open=lo_open,
+                         hi_open=hi_open, unit=unit, integer=integer)
+
+
+def _sequence(value, arg: str, what: str) -> tuple:
+    """A tuple or list field as a tuple (TypeError for a str, an array or a scalar)."""
+    if not isinstance(value, (tuple, list)):
+        raise TypeError(f"DesignSpec: {arg} must be a tuple of {what}, got "
+                        f"{type(value).__name__} {value!r}")
+    return tuple(value)

@@ -67,6 +67,8 @@ ABLATION_COLUMNS = (
 # Columns whose designs are exported (designs folder under --ablation-out).
 EXPORTED_COLUMNS = {"+both+mask": "designs_paper_method", "+recipe": "designs"}
 
+FOV_START, FNUM_START = 47.5, 2.8  # the paper's curriculum start (deg, F#)
+
 PAPER_TABLE1_FULL = {"valid_percent": 100.0, "rms_mean_um": 15.74, "rms_min_um": 12.50}
 
 CONVENTION = (
@@ -128,8 +130,12 @@ def build_parser() -> argparse.ArgumentParser:
     g.add_argument("--bfl", type=float, default=0.8,
                    help="minimum last-surface-to-sensor clearance, mm")
     g.add_argument("--stop", type=int, default=0, help="elements in front of the stop")
-    g.add_argument("--fov-start", type=float, default=47.5, help="curriculum start FoV")
-    g.add_argument("--fnum-start", type=float, default=2.8, help="curriculum start F#")
+    g.add_argument("--fov-start", type=float, default=None,
+                   help=f"curriculum start FoV, at most --fov (default {FOV_START}°, or --fov "
+                        f"if smaller)")
+    g.add_argument("--fnum-start", type=float, default=None,
+                   help=f"curriculum start F#, at least --fnum (default {FNUM_START}, or --fnum "
+                        f"if larger)")
     g.add_argument("--asphere-terms", type=int, default=6, help="even terms r^4 … per surface")
     r = p.add_argument_group("recipe")
     r.add_argument("--seeds", type=int, default=3, help="number of random starts")
@@ -188,24 +194,29 @@ def build_parser() -> argparse.ArgumentParser:
     return p
 
 
-MAX_ASPHERE_TERMS = 12
-"""Most even aspheric terms per surface the CLI accepts (r⁴ … r²⁶)."""
-
-
 def check_args(args) -> None:
     """Refuse any option outside its range (ValueError naming option, value, range, unit)."""
+    from jaxlens.design.materials import CatalogRegion
+    from jaxlens.design.spec import MAX_ASPHERE_TERMS
+
     w = "design"
     n = checks.number
     n(args.fov, "--fov", w, lo=0, hi=180, lo_open=True, hi_open=True, unit="deg")
-    n(args.fov_start, "--fov-start", w, lo=0, hi=180, lo_open=True, hi_open=True, unit="deg")
     n(args.fnum, "--fnum", w, lo=0, lo_open=True)
-    n(args.fnum_start, "--fnum-start", w, lo=0, lo_open=True)
+    # The curriculum starts at an easier spec: an explicit start beyond the target is refused
+    # (only the defaults follow --fov and --fnum).
+    if args.fov_start is not None:
+        n(args.fov_start, "--fov-start", w, lo=0, hi=args.fov, lo_open=True,
+          unit="deg (at most --fov)")
+    if args.fnum_start is not None:
+        n(args.fnum_start, "--fnum-start", w, lo=args.fnum, unit="(at least --fnum)")
     n(args.sensor_diagonal, "--sensor-diagonal", w, lo=0, lo_open=True, unit="mm")
     n(args.elements, "--elements", w, lo=1, hi=30, integer=True)
     n(args.track, "--track", w, lo=0, lo_open=True, unit="mm")
     n(args.bfl, "--bfl", w, lo=0, lo_open=True, unit="mm")
     n(args.stop, "--stop", w, lo=0, hi=args.elements, integer=True, unit="elements")
-    n(args.asphere_terms, "--asphere-terms", w, lo=0, hi=MAX_ASPHERE_TERMS, integer=True)
+    n(args.asphere_terms, "--asphere-terms", w, lo=0, hi=MAX_ASPHERE_TERMS, integer=True,
+      unit="terms per surface")
     n(args.seeds, "--seeds", w, lo=1, integer=True)
     n(args.first_seed, "--first-seed", w, lo=0, integer=True)
     n(args.steps, "--steps", w, lo=0, lo_open=True, unit="(scale of every stage's steps)")
@@ -222,13 +233,10 @@ def check_args(args) -> None:
         if not parts or not all(p.isdigit() for p in parts):
             raise ValueError(f"{w}: --seed-list must be comma-separated whole numbers >= 0, got "
                              f"{args.seed_list!r}")
-    if args.select_materials != "fixed":
-        from jaxlens.design.materials import CatalogRegion
-
-        try:
-            CatalogRegion.of(_catalogs(args))
-        except ValueError as e:
-            raise ValueError(f"{w}: --material-catalogs {args.material_catalogs!r}: {e}") from e
+    try:  # checked even when unused (--select-materials fixed): a typo must not go unseen
+        CatalogRegion.of(_catalogs(args))
+    except ValueError as e:
+        raise ValueError(f"{w}: --material-catalogs {args.material_catalogs!r}: {e}") from e
     if args.columns is not None:
         names = [c for c, _ in ABLATION_COLUMNS]
         bad = [c.strip() for c in args.columns.split(",") if c.strip() not in names]
@@ -241,7 +249,9 @@ def spec_from_args(args):
 
     kw = dict(fov=args.fov, fnum=args.fnum, sensor_diagonal=args.sensor_diagonal,
               n_elements=args.elements, total_track=args.track, bfl=args.bfl, stop=args.stop,
-              fov_start=min(args.fov_start, args.fov), fnum_start=max(args.fnum_start, args.fnum),
+              fov_start=min(FOV_START, args.fov) if args.fov_start is None else args.fov_start,
+              fnum_start=(max(FNUM_START, args.fnum) if args.fnum_start is None
+                          else args.fnum_start),
               asphere_terms=args.asphere_terms)
     if args.materials:
         kw["materials"] = tuple(m.strip() for m in args.materials.split(",") if m.strip())

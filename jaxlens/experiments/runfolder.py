@@ -5,7 +5,11 @@ interrupted. :class:`RunFolder` checks ``--out`` before any work starts (an earl
 there is refused unless ``overwrite``; an unwritable place is found at once), the run
 writes into a hidden temporary folder beside it, and :meth:`RunFolder.finish` marks it
 finished and renames it into place. An interrupted run leaves only the temporary folder
-(``.<name>.partial-*``), never ``--out`` itself.
+(``.<name>.partial-*``), never ``--out`` itself; the callers remove it with
+:meth:`RunFolder.abandon` on any exception, and SIGTERM (``timeout``, ``kill``, a batch
+scheduler) becomes one (``SystemExit(143)``) while the folder is open. A run that finishes
+while another has filled ``--out`` meanwhile keeps its result in the temporary folder and
+does not replace the other's (unless ``overwrite``, and then only a finished run).
 
 Bad options exit with status 2 and one line on stderr (:class:`OneLineParser`,
 :func:`fail`), in well under a second: nothing is imported or compiled before the checks.
@@ -16,8 +20,10 @@ from __future__ import annotations
 import argparse
 import os
 import shutil
+import signal
 import sys
 import tempfile
+import threading
 
 FINISHED = "RUN_FINISHED"
 """File that :meth:`RunFolder.finish` writes into a completed run folder."""
@@ -39,6 +45,11 @@ def fail(prog: str, error: Exception) -> int:
     """Print one line for a refused option and return exit status 2."""
     print(f"{prog}: error: {' '.join(str(error).split())}", file=sys.stderr)
     return 2
+
+
+def _terminated(signum, frame):
+    """SIGTERM as an exception, so that the run's cleanup (``abandon``) runs."""
+    raise SystemExit(128 + signum)  # the shell's exit status for death by that signal
 
 
 def _nearest_existing(path: str) -> str:
@@ -67,34 +78,56 @@ class RunFolder:
     def __init__(self, path: str, *, overwrite: bool = False, option: str = "--out"):
         self.final = os.path.abspath(path)
         self.option = option
+        self.overwrite = overwrite
         self.tmp: str | None = None
-        if os.path.exists(self.final):
-            if not os.path.isdir(self.final):
-                raise UsageError(f"{option} {path} is a file, not a folder")
-            entries = os.listdir(self.final)
-            if entries and FINISHED not in entries:
-                raise UsageError(
-                    f"{option} {path} is not empty and holds no finished jaxlens run "
-                    f"({len(entries)} entries); choose an empty or new folder")
-            if entries and not overwrite:
-                raise UsageError(
-                    f"{option} {path} holds an earlier run; give --overwrite to replace it, or "
-                    f"choose another folder")
+        self._sigterm = None  # the SIGTERM handler to restore, while ours is installed
+        self._check_final(path)
         base = _nearest_existing(os.path.dirname(self.final))
         if not os.path.isdir(base) or not os.access(base, os.W_OK | os.X_OK):
             raise UsageError(f"{option} {path}: cannot create or write there ({base} is not a "
                              f"writable folder)")
 
+    def _check_final(self, path: str) -> None:
+        """Refuse to replace what is at the final folder (before the run, and again at the
+        end: another run may have finished there meanwhile)."""
+        if not os.path.exists(self.final):
+            return
+        if not os.path.isdir(self.final):
+            raise UsageError(f"{self.option} {path} is a file, not a folder")
+        entries = os.listdir(self.final)
+        if entries and FINISHED not in entries:
+            raise UsageError(
+                f"{self.option} {path} is not empty and holds no finished jaxlens run "
+                f"({len(entries)} entries); choose an empty or new folder")
+        if entries and not self.overwrite:
+            raise UsageError(
+                f"{self.option} {path} holds an earlier run; give --overwrite to replace it, "
+                f"or choose another folder")
+
     def start(self) -> str:
-        """Create the temporary folder and return its path (write everything there)."""
+        """Create the temporary folder and return its path (write everything there).
+
+        From here until :meth:`finish` or :meth:`abandon`, SIGTERM raises ``SystemExit``
+        in the main thread, so the caller's cleanup runs as for any exception.
+        """
         parent = os.path.dirname(self.final)
+        if threading.current_thread() is threading.main_thread():  # signal's own limit
+            previous = signal.signal(signal.SIGTERM, _terminated)
+            self._sigterm = signal.SIG_DFL if previous is None else previous
         try:
             os.makedirs(parent, exist_ok=True)
             self.tmp = tempfile.mkdtemp(prefix=f".{os.path.basename(self.final)}.partial-",
                                         dir=parent)
         except OSError as e:
+            self._release()
             raise UsageError(f"{self.option} {self.final}: cannot write there ({e})") from None
         return self.tmp
+
+    def _release(self) -> None:
+        """Give SIGTERM back its handler from before :meth:`start`."""
+        if self._sigterm is not None:
+            signal.signal(signal.SIGTERM, self._sigterm)
+            self._sigterm = None
 
     def final_path(self, path: str) -> str:
         """Where a path inside the temporary folder will be once the run is finished."""
@@ -103,11 +136,24 @@ class RunFolder:
         return path
 
     def finish(self) -> str:
-        """Mark the run finished and move it into place; returns the final folder."""
+        """Mark the run finished and move it into place; returns the final folder.
+
+        Raises:
+            UsageError: If another run has filled the final folder since this one began
+                (and ``overwrite`` is not given, or it holds no finished run). This run's
+                result then stays, finished, in the temporary folder the message names.
+        """
         if self.tmp is None:
             raise RuntimeError("RunFolder.finish before start")
         with open(os.path.join(self.tmp, FINISHED), "w") as f:
             f.write("finished\n")
+        self._release()  # SIGTERM from here on stops the swap without removing either run
+        try:
+            self._check_final(self.final)
+        except UsageError as e:
+            kept, self.tmp = self.tmp, None  # not abandon()'s to remove: it is finished
+            raise UsageError(f"{e} (it was filled while this run went on; this run is "
+                             f"finished in {kept})") from None
         old = None
         if os.path.exists(self.final):
             if os.listdir(self.final):
@@ -126,3 +172,4 @@ class RunFolder:
         if self.tmp is not None:
             shutil.rmtree(self.tmp, ignore_errors=True)
             self.tmp = None
+        self._release()

@@ -410,8 +410,9 @@ def _prepare(lens, field, depth, wavelength, kernel_size, pixel_size, model, cen
     wl = checks.wavelengths(lens, jnp.asarray(wl, dtype), caller, "wavelength")
     checks.material_indices(lens, wl, caller)
     field = checks.field_angles(field, caller, "field")
-    if wl.ndim > 1:
-        raise ValueError(f"{caller}: wavelength must be a scalar or 1-D (µm), got {wl.shape}")
+    if wl.ndim > 1 or wl.size == 0:
+        raise ValueError(f"{caller}: wavelength must be a scalar or 1-D (µm) with at least one "
+                         f"value, got shape {wl.shape}")
     field = jnp.asarray(field, dtype)
     if field.ndim > 1 or (field.ndim == 1 and field.shape[0] != 2):
         raise ValueError(f"{caller}: field must be θy or (θx, θy) in degrees, got {field.shape}")
@@ -441,6 +442,7 @@ def psf_info(
     """
     field, depth, wl, pixel_size = _prepare(lens, field, depth, wavelength, kernel_size,
                                             pixel_size, model, center, "psf", newton_iters)
+    checks.prng_key(key, "psf", optional=True)
     if max_truncation is not None:
         checks.number(max_truncation, "max_truncation", "psf", lo=0,
                       unit="(fraction of the PSF energy; None to skip the check)")
@@ -598,6 +600,19 @@ def psf_map(
 
     kern, trunc, ref, _, _ = jax.vmap(one)(fields.reshape(-1, 2))
     g = tuple(grid)
+    # A field without light has an all-zero kernel (truncated NaN): refuse it, as psf does.
+    dark = jnp.any(jnp.isnan(trunc), axis=-1)
+    msg = ("psf_map: no ray of the beam reaches the image surface at {}, so there is no PSF "
+           "there (the field is vignetted or beyond the lens's coverage); use a smaller sensor")
+    if checks.is_traced(dark):
+        kern = eqx.error_if(kern, jnp.any(dark), msg.format("a grid point"))
+    elif np.any(dark):
+        r, col = divmod(int(np.argmax(np.asarray(dark))), g[1])
+        fx, fy = np.asarray(fields)[r, col]
+        x, y = np.asarray(xy)[r, col]
+        raise ValueError(msg.format(
+            f"grid point (row {r}, col {col}) (first of {int(np.sum(dark))}), field (θx, θy) = "
+            f"({fx:.4g}, {fy:.4g}) deg, sensor point ({x:.4g}, {y:.4g}) mm"))
     if wl.ndim == 0:
         kern, trunc = kern[:, 0], trunc[:, 0]
     return PSFMap(kern.reshape(g + kern.shape[1:]), trunc.reshape(g + trunc.shape[1:]), xy,
@@ -714,9 +729,13 @@ def mtf(
         ``(frequencies [F] cycles/mm, mtf_tangential [F], mtf_sagittal [F])``.
     """
     _model(model, "mtf")
+    if not isinstance(diffraction, (bool, np.bool_)):  # a string such as "no" is truthy
+        raise ValueError(f"mtf: diffraction must be True or False, got {diffraction!r}")
     dtype = jnp.result_type(float)
     wls = jnp.atleast_1d(jnp.asarray(lens.wavelengths if wavelengths is None else wavelengths,
                                      dtype))
+    if wls.ndim != 1 or wls.size == 0:
+        raise ValueError(f"mtf: wavelengths must be [W] µm with W >= 1, got shape {wls.shape}")
     wls = checks.wavelengths(lens, wls, "mtf", "wavelengths")
     fnum = paraxial.paraxial_data(lens.astype(dtype)).working_fnum
     lam_min = jnp.min(wls) * 1e-3

@@ -37,7 +37,7 @@ import jax
 import jax.numpy as jnp
 from jaxtyping import Array, Float
 
-from ..optics import paraxial
+from ..optics import checks, paraxial
 from ..optics.lens import Lens
 from ..optics.rays import Rays
 from ..tracing.forward import DEFAULT_NEWTON_ITERS, trace
@@ -207,15 +207,19 @@ def relative_illumination(
         A :class:`RelativeIllumination`; ``image_xy`` tells where on the sensor each value
         applies.
     """
+    where = "relative_illumination"
+    checks.number(pupil, "pupil", where, lo=1, integer=True, unit="cells per side")
     dtype = jnp.result_type(float)
-    f = jnp.asarray(fields, dtype)
+    f = jnp.asarray(checks.field_angles(fields, where, "fields"), dtype)
     if f.ndim == 0:
         f = f[None]
     if f.ndim == 1:
         f = jnp.stack([jnp.zeros_like(f), f], -1)
-    if f.ndim != 2 or f.shape[-1] != 2:
-        raise ValueError(f"relative_illumination: fields must be [F] or [F, 2], got {f.shape}")
+    if f.ndim != 2 or f.shape[-1] != 2 or f.shape[0] == 0:
+        raise ValueError(f"{where}: fields must be [F] or [F, 2] degrees with F >= 1, got shape "
+                         f"{jnp.shape(fields)}")
     wl = jnp.asarray(lens.primary_wavelength if wavelength is None else wavelength, dtype)
+    wl = checks.wavelengths(lens, wl, where)
     ri, e, cen = relative_illumination_samples(apertured(lens), f, sampling.static_depth(depth), wl,
                           n_coarse=max(16, pupil // 3), n_fine=int(pupil),
                           newton_iters=newton_iters)

@@ -521,9 +521,7 @@ def render(
         raise ValueError(f"render: patch must be a positive int, got {patch!r}")
     if mesh is not None and not isinstance(mesh, Mesh):
         raise ValueError(f"render: mesh must be a jax.sharding.Mesh or None, got {mesh!r}")
-    if key is None or not hasattr(key, "shape"):
-        raise ValueError(f"render: key must be a PRNG key (jax.random.key(0) or "
-                         f"jax.random.PRNGKey(0)), got {key!r}")
+    checks.prng_key(key, "render")
     if isinstance(method, PSFRender):
         kernel_size = method.kernel_size
         if checks.number(kernel_size, "kernel_size", "render", lo=1, unit="pixels",

@@ -7,7 +7,10 @@
 
 from __future__ import annotations
 
+import inspect
 import os
+
+import numpy as np
 
 from ..optics.lens import Lens
 from .lensfile import load_json, save_json
@@ -28,8 +31,9 @@ def load(path: str | os.PathLike, *, dtype=None, strict: bool = False) -> Lens:
 
     Args:
         path: the file.
-        dtype: cast every floating array to this dtype (default: JAX's default float,
-            float64 when ``jax_enable_x64`` is on; numbers are read as float64).
+        dtype: cast every floating array to this dtype, float32 or float64 (default: JAX's
+            default float, float64 when ``jax_enable_x64`` is on; numbers are read as
+            float64).
         strict: for ``.zmx``, refuse unknown keywords and a file cut off mid-line
             (default: a warning); see ``jaxlens.io.zmx.loads``.
 
@@ -43,8 +47,23 @@ def load(path: str | os.PathLike, *, dtype=None, strict: bool = False) -> Lens:
     """
     path = os.fspath(path)
     ext = _ext(path, "load")
+    if dtype is not None:
+        dtype = _float_dtype(dtype)
     lens = load_json(path) if ext == ".json" else load_zmx(path, strict=strict)
     return lens if dtype is None else lens.astype(dtype)
+
+
+def _float_dtype(dtype) -> np.dtype:
+    """float32 or float64 (by name or dtype): an integer dtype would truncate every number,
+    and float16 has too few digits to trace a lens."""
+    try:
+        dt = np.dtype(dtype)
+    except TypeError:
+        dt = None
+    if dt not in (np.float32, np.float64):
+        raise ValueError(f"load: dtype must be float32 or float64 (a name or a dtype), got "
+                         f"{dtype!r}")
+    return dt
 
 
 def save(lens: Lens, path: str | os.PathLike, **options) -> list[str]:
@@ -66,4 +85,8 @@ def save(lens: Lens, path: str | os.PathLike, **options) -> list[str]:
             raise ValueError(f"save: .json takes no options, got {sorted(options)}")
         save_json(lens, path)
         return [path]
+    known = [p.name for p in inspect.signature(save_zmx).parameters.values()
+             if p.kind is p.KEYWORD_ONLY]
+    if unknown := sorted(set(options) - set(known)):
+        raise ValueError(f"save: .zmx takes the options {known}, got {unknown}")
     return [path] + save_zmx(lens, path, **options)

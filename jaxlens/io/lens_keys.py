@@ -1,25 +1,56 @@
-"""The keys a JSON lens file may hold, and the refusal of near misses.
+"""The keys a JSON lens file may hold, and the refusal of near misses and synonyms.
 
 The reader ignores unknown keys, so that informational data (``description``, ``paraxial``,
 ``semi_diameter_real_rays``, …) can live in the same file. A misspelled known key
-(``"wavelength_nm"``, ``"radus"``, ``"Thickness"``) would then silently fall back to its
-default, so a key within a small edit distance of a known one is refused instead.
+(``"wavelength_nm"``, ``"radus"``, ``"Thickness"``) or a synonym of one from another program
+(``"glass"``, ``"R"``, ``"k"``, ``"stop"``) would then silently fall back to its default, so
+such a key is refused instead, naming the key this format uses. Each table maps the keys of
+one level of the file to their synonyms (lower case).
 """
 
 from __future__ import annotations
 
+import re
 from typing import Any
 
-TOP = ("format", "name", "description", "surfaces", "aperture", "fields", "wavelengths_um",
-       "wavelengths_nm", "wavelengths", "primary", "primary_wavelength_um",
-       "primary_wavelength_nm", "primary_wavelength", "stop_surface_index", "object",
-       "sensor", "units", "epd", "EPD")
-SURFACE = ("type", "curvature", "radius", "thickness", "conic", "even_asphere_coeffs",
-           "odd_x", "odd_y", "semi_diameter", "is_stop", "material", "n", "shape")
-APERTURE = ("epd", "EPD", "fnum", "FNUM", "f_number", "stop_semi_diameter")
-SENSOR = ("resolution", "pixel_size")
-FIELDS = ("type", "values")
-OBJECT = ("distance",)
+TOP = {
+    "format": (), "name": (), "description": (), "surfaces": (), "units": (),
+    "aperture": ("f_number", "fnum", "fno", "f/#"), "epd": (), "EPD": (),
+    "fields": ("field_angles", "fields_deg", "field_angles_deg", "angles", "fov"),
+    "wavelengths_um": ("lambda_um", "lambdas_um", "wavelengths_micron"),
+    "wavelengths_nm": ("lambda_nm", "lambdas_nm"), "wavelengths": ("lambda", "lambdas"),
+    "primary": ("primary_index", "primary_wavelength_index"), "primary_wavelength_um": (),
+    "primary_wavelength_nm": (), "primary_wavelength": (),
+    "stop_surface_index": ("stop", "stop_index", "stop_surface"),
+    "object": ("object_distance", "object_dist", "obj_distance", "object_thickness"),
+    "sensor": (),
+}
+SURFACE = {
+    "type": ("surface_type",), "curvature": ("c", "cv", "curv"),
+    "radius": ("r", "roc", "radius_of_curvature", "rad"),
+    "thickness": ("t", "thick", "thi", "disz", "distance", "gap"),
+    "conic": ("k", "cc", "conic_constant", "kappa"),
+    "even_asphere_coeffs": ("asphere_coeffs", "aspheric_coeffs", "asphere_coefficients",
+                            "aspheric_coefficients", "coeffs", "coefficients", "even_coeffs"),
+    "odd_x": (), "odd_y": (),
+    "semi_diameter": ("diameter", "diam", "aperture_radius", "sd", "clear_aperture",
+                      "clear_semi_diameter"),
+    "is_stop": ("stop", "aperture_stop"), "material": ("glass", "glas", "medium"), "n": (),
+    "shape": (),
+}
+APERTURE = {"epd": ("entrance_pupil_diameter", "pupil_diameter", "diameter"), "EPD": (),
+            "fnum": ("fno", "f/#"), "FNUM": (), "f_number": (),
+            "stop_semi_diameter": ("stop_radius", "stop_semi_diam")}
+SENSOR = {"resolution": ("pixels", "res", "size_px"), "pixel_size": ("pixel_pitch", "pitch")}
+FIELDS = {"type": ("kind",), "values": ("vals", "angles", "angles_deg", "values_deg",
+                                        "field_angles", "fields", "deg", "degrees")}
+OBJECT = {"distance": ("dist", "d", "thickness", "object_distance", "z")}
+REQUIRED = {"fields": "values", "object": "distance"}
+"""Sections that are read only for one key: without it the section would be ignored."""
+
+_FORM = {"aperture": '{"aperture": {"fnum": F}}',
+         "fields": '{"fields": {"values": [deg, ...]}}',
+         "object": '{"object": {"distance": mm}}'}
 
 
 def edit_distance(a: str, b: str) -> int:
@@ -38,25 +69,56 @@ def _allowed_edits(known: str) -> int:
     return 0 if len(known) <= 2 else 1 if len(known) <= 6 else 2
 
 
-def no_misspelled(d: Any, known: tuple[str, ...], where: str) -> None:
-    """Raise ``ValueError`` for a key of the mapping ``d`` that is a near miss of a known
-    key (case ignored), naming the nearest one; other unknown keys pass."""
+def no_misspelled(d: Any, known: dict[str, tuple[str, ...]], where: str) -> None:
+    """Raise ``ValueError`` for a key of the mapping ``d`` that is a near miss of a known key
+    or one of its synonyms (case ignored), naming the key to use; other keys pass."""
     if not isinstance(d, dict):
         return
+    # Synonyms match exactly: a deliberate list, where near misses of "r" or "sd" would
+    # catch unrelated informational keys.
+    synonym = {s: k for k, syn in known.items() for s in syn}
     for key in d:
         if not isinstance(key, str) or key in known:
             continue
         near = sorted((dist, k) for k in known
                       if (dist := edit_distance(k.lower(), key.lower())) <= _allowed_edits(k))
-        if near:
-            raise ValueError(f"{where}: unknown key {key!r}; did you mean {near[0][1]!r}? (a "
-                             f"misspelled key would be ignored and its default used)")
+        right = synonym.get(key.lower(), near[0][1] if near else None)
+        if right:
+            form = f", as in {_FORM[right]}" if known is TOP and right in _FORM else ""
+            raise ValueError(f"{where}: unknown key {key!r}; did you mean {right!r}{form}? (a "
+                             f"key not read would be ignored and its default used)")
 
 
-def no_misspelled_keys(d: dict, source: str) -> None:
-    """``no_misspelled`` over a lens file's top level and its system sections (the
-    surfaces are checked where they are read)."""
+def _units(u: Any, source: str) -> None:
+    """Lengths must be mm (a file in inches or cm would be read as mm); wavelength and
+    angle units are given by the keys (``wavelengths_nm``) and are degrees."""
+    ok = {"length": ("mm", "millimeter", "millimeters", "millimetre", "millimetres"),
+          "wavelength": ("um", "µm", "micron", "microns", "micrometer", "nm"),
+          "angle": ("deg", "degree", "degrees")}
+    if isinstance(u, str):  # "mm" or "mm; wavelengths in nm; angles in degrees"
+        u = {"length": (re.findall(r"[^\W\d_]+", u) or [""])[0]}
+    if not isinstance(u, dict):
+        raise ValueError(f"{source}: units must be \"mm\" or an object such as "
+                         f"{{\"length\": \"mm\"}}, got {u!r}")
+    for what, unit in u.items():
+        if what in ok and (not isinstance(unit, str) or unit.strip().lower() not in ok[what]):
+            raise ValueError(f"{source}: units.{what} {unit!r} is not supported: lens files "
+                             f"hold lengths in mm, angles in deg and wavelengths in the unit "
+                             f"of their key (µm, or nm for *_nm); convert the file")
+
+
+def check_keys(d: dict, source: str) -> None:
+    """A lens file's top level and system sections: near misses and synonyms of known keys
+    (the surfaces are checked where they are read), sections without their one key, units."""
     no_misspelled(d, TOP, source)
     for section, known in (("aperture", APERTURE), ("sensor", SENSOR), ("fields", FIELDS),
                            ("object", OBJECT)):
         no_misspelled(d.get(section), known, f"{source}: {section}")
+    for section, key in REQUIRED.items():
+        v = d.get(section)
+        if (section == "object" and section in d and not isinstance(v, dict)) or (
+                isinstance(v, dict) and key not in v):
+            raise ValueError(f"{source}: {section} needs {key!r}, as in {_FORM[section]}, got "
+                             f"{v!r}")
+    if "units" in d:
+        _units(d["units"], source)

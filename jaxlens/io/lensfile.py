@@ -13,7 +13,9 @@ The format is a superset of the reference cases in ``tests/refcases`` (object su
 image surface, ``n`` dicts keyed by nm, ``aperture.EPD``, ``fields.values``,
 ``wavelengths_nm``, ``primary_wavelength_nm``), so files written that way load as they
 are. Informational keys such as ``semi_diameter_real_rays`` are ignored, never used to
-clip rays.
+clip rays; a near miss or a synonym of a key the reader knows (``"radus"``, ``"glass"``,
+``"R"``, ``"k"``) is refused (``lens_keys``), as are a ``fields`` or ``object`` object
+without ``values`` or ``distance`` and ``units`` other than mm.
 
 Saving writes every number with Python's shortest round-trip representation, so
 ``load(save(lens))`` gives the same numbers to the last bit (as float64), the same
@@ -575,7 +577,7 @@ def lens_from_dict(d: dict, *, source: str = "<lens>") -> Lens:
             f"{source}: unsupported format {fmt!r}; this jaxlens reads "
             f"{', '.join(_SUPPORTED_FORMATS)}"
         )
-    lens_keys.no_misspelled_keys(d, source)
+    lens_keys.check_keys(d, source)
     surfs = d.get("surfaces")
     if not isinstance(surfs, list) or not surfs:
         raise ValueError(f"{source}: 'surfaces' must be a non-empty list")
@@ -585,6 +587,8 @@ def lens_from_dict(d: dict, *, source: str = "<lens>") -> Lens:
     if not body:
         raise ValueError(f"{source}: no lens surfaces between the object and the image")
     first = 1 if obj is not None else 0
+    for s, where in ((obj, "surface 0"), (img, "image surface")):
+        lens_keys.no_misspelled(s, lens_keys.SURFACE, f"{source}: {where}")
 
     # Object distance: surface 0's thickness, or an "object" block.
     dist = math.inf

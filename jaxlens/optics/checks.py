@@ -131,6 +131,43 @@ def values(x, arg: str, where: str, *, lo=None, hi=None, lo_open=False, hi_open=
     return x
 
 
+def float_array(arg: str, where: str, unit: str = ""):
+    """A field converter to a real floating JAX array.
+
+    Integers become JAX's default float (an int array would truncate values and block
+    ``jax.grad``); strings, bools, complex numbers and other objects raise ``TypeError``
+    naming ``where``, ``arg`` and the unit.
+    """
+    u = f" ({unit})" if unit else ""
+
+    def convert(x):
+        try:
+            a = jnp.asarray(x)
+        except (TypeError, ValueError):
+            a = None
+        if a is None or not (jnp.issubdtype(a.dtype, jnp.floating)
+                             or jnp.issubdtype(a.dtype, jnp.integer)):
+            shown = repr(x) if len(repr(x)) <= 60 else repr(x)[:57] + "..."
+            raise TypeError(f"{where}: {arg} must be a real number or an array of real "
+                            f"numbers{u}, got {type(x).__name__} {shown}")
+        return a if jnp.issubdtype(a.dtype, jnp.floating) else a.astype(jnp.result_type(float))
+
+    return convert
+
+
+def prng_key(key, where: str, *, optional: bool = False) -> None:
+    """Refuse anything but one PRNG key: typed (``jax.random.key``) or raw uint32[2]
+    (``jax.random.PRNGKey``); ``optional`` also lets None through."""
+    dt = getattr(key, "dtype", None)
+    if (key is None and optional) or (dt is not None and (
+            (jax.dtypes.issubdtype(dt, jax.dtypes.prng_key) and jnp.shape(key) == ()) or
+            (dt == jnp.uint32 and jnp.shape(key) == (2,)))):
+        return
+    none = "None or " if optional else ""
+    raise ValueError(f"{where}: key must be {none}one PRNG key (jax.random.key(0) or "
+                     f"jax.random.PRNGKey(0)), got {key!r}")
+
+
 # ---------------------------------------------------------------------------- wavelengths
 
 

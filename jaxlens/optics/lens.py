@@ -41,14 +41,33 @@ INFINITE_OBJECT_MM = 1e10
 programs write 1e20 for infinity, whose square overflows float32 when rays are aimed)."""
 
 
+_as_distance = checks.float_array("object_distance", "Lens", "mm")
+
+
 def _distance(x):
     """None (or inf, or ≥ ``INFINITE_OBJECT_MM``) means an object at infinity; that is static
     structure, not a number."""
     if x is None:
         return None
+    x = _as_distance(x)
     if not isinstance(x, jax.core.Tracer) and bool(np.all(np.asarray(x) >= INFINITE_OBJECT_MM)):
         return None
-    return jnp.asarray(x)
+    return x
+
+
+def _index(arg: str):
+    """A converter for the static indices ``stop`` and ``primary``: an int (a float or a bool
+    would pass ``0 <= i < n`` and fail later as an unrelated indexing error)."""
+    def convert(i):
+        if isinstance(i, bool) or not isinstance(i, (int, np.integer)):
+            raise TypeError(f"Lens: {arg} must be an int (a 0-based index), got "
+                            f"{type(i).__name__} {i!r}")
+        return int(i)
+    return convert
+
+
+def _floats(arg: str, unit: str, where: str = "Lens", **default):
+    return eqx.field(converter=checks.float_array(arg, where, unit), **default)
 
 
 class Sensor(eqx.Module):
@@ -60,7 +79,7 @@ class Sensor(eqx.Module):
     """
 
     resolution: tuple[int, int] = eqx.field(static=True)
-    pixel_size: Float[Array, ""] = eqx.field(converter=jnp.asarray)
+    pixel_size: Float[Array, ""] = _floats("pixel_size", "mm", where="Sensor")
 
     def __check_init__(self):
         res = tuple(self.resolution)
@@ -88,13 +107,13 @@ class Lens(eqx.Module):
     """A sequential lens: surfaces, the gaps and media between them, and the system data."""
 
     surfaces: tuple[AbstractSurface, ...]
-    thickness: Float[Array, " n"] = eqx.field(converter=jnp.asarray)
+    thickness: Float[Array, " n"] = _floats("thickness", "mm")
     materials: tuple[AbstractMaterial, ...]
-    stop: int = eqx.field(static=True, default=0)
-    epd: Float[Array, ""] = eqx.field(converter=jnp.asarray, default=1.0)
-    fields: Float[Array, " f"] = eqx.field(converter=jnp.asarray, default=(0.0,))
-    wavelengths: Float[Array, " w"] = eqx.field(converter=jnp.asarray, default=(0.5875618,))
-    primary: int = eqx.field(static=True, default=0)
+    stop: int = eqx.field(static=True, default=0, converter=_index("stop"))
+    epd: Float[Array, ""] = _floats("epd", "mm", default=1.0)
+    fields: Float[Array, " f"] = _floats("fields", "deg", default=(0.0,))
+    wavelengths: Float[Array, " w"] = _floats("wavelengths", "µm", default=(0.5875618,))
+    primary: int = eqx.field(static=True, default=0, converter=_index("primary"))
     object_distance: Float[Array, ""] | None = eqx.field(converter=_distance, default=None)
     object_material: AbstractMaterial = eqx.field(default_factory=Air)
     image: AbstractSurface = eqx.field(default_factory=Standard)
@@ -113,6 +132,7 @@ class Lens(eqx.Module):
                              f"{self.thickness.shape}")
         if len(self.materials) != n:
             raise ValueError(f"Lens: {n} surfaces need {n} materials, got {len(self.materials)}")
+        self._check_shapes()
         self._check_values()
         if not 0 <= self.stop < n:
             raise ValueError(f"Lens: stop index {self.stop} outside 0..{n - 1}")
@@ -140,6 +160,19 @@ class Lens(eqx.Module):
             if not isinstance(v, cls):
                 raise TypeError(f"Lens: {arg} must be {what}, got {type(v).__name__} {v!r}")
 
+    def _check_shapes(self):
+        """Shapes are known even under jit; a wrong one would be reshaped into wrong data."""
+        f = self.fields
+        if f.size == 0 or f.ndim > 2 or (f.ndim == 2 and f.shape[1] != 2):
+            raise ValueError(f"Lens: fields must be angles θy of shape [F] or [θx, θy] pairs "
+                             f"of shape [F, 2] (deg), got shape {f.shape}")
+        if self.wavelengths.ndim != 1 or self.wavelengths.size == 0:
+            raise ValueError(f"Lens: wavelengths must be a 1-D array [W] (µm), got shape "
+                             f"{self.wavelengths.shape}")
+        for arg, v in (("epd", self.epd), ("object_distance", self.object_distance)):
+            if v is not None and v.ndim != 0:
+                raise ValueError(f"Lens: {arg} must be a scalar (mm), got shape {v.shape}")
+
     def _check_values(self):
         """Concrete numbers only (a traced lens, inside jit or vmap, is not known here)."""
         if not checks.is_traced(self.thickness):
@@ -153,8 +186,8 @@ class Lens(eqx.Module):
             checks.wavelengths(checks.NoMaterials, self.wavelengths, "Lens", "wavelengths")
         d = self.object_distance
         if d is not None and not checks.is_traced(d):
-            checks.values(d, "object_distance", "Lens", lo=0, unit="mm (inf or None: an "
-                          "object at infinity)")
+            checks.values(d, "object_distance", "Lens", lo=0, lo_open=True,
+                          unit="mm (inf or None: an object at infinity)")
 
     def _check_mirrors_and_breaks(self):
         """Mirrors and coordinate breaks keep the medium: materials[i] repeats the one before."""

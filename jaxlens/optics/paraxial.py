@@ -10,7 +10,9 @@ Conventions:
     report as the EFL. They differ only when image space is not air. ``bfl`` is
     measured from the last surface vertex to the paraxial focus; pupil positions are
     global z (surface 1 at 0); ``exit_pupil_z`` is also global. Everything is a pure
-    jnp function, so it is differentiable and jittable.
+    jnp function, so it is differentiable and jittable. A given wavelength must lie in the
+    materials' range and a field angle in (−90°, 90°) (``checks``: ValueError, or
+    ``eqx.error_if`` under jit).
 
     Mirrors: after each mirror the index changes sign (Zemax's convention), so a mirror of
     curvature c in a medium of index n has power −2nc and the transfer t/n stays positive
@@ -31,6 +33,7 @@ import equinox as eqx
 import jax.numpy as jnp
 from jaxtyping import Array, Float
 
+from . import checks
 from .lens import Lens
 from .paraxial_surface import ParaxialSurface
 from .surfaces import Standard
@@ -166,9 +169,18 @@ def _trace_ray(lens: Lens, y, nu, n):
     return jnp.stack(ys), jnp.stack(nus)
 
 
+def _wavelength(lens: Lens, wavelength, where: str):
+    """The wavelength (µm) to use: the primary one, or the given one checked against the
+    lens's materials (an error_if under jit, so these stay usable in jitted losses)."""
+    if wavelength is None:
+        return lens.primary_wavelength
+    return checks.wavelengths(lens, wavelength, where)
+
+
 def paraxial_chief_ray(lens: Lens, field_deg, wavelength=None):
     """Paraxial chief ray (y, nu) after every surface for a field angle (degrees)."""
-    wl = lens.primary_wavelength if wavelength is None else wavelength
+    wl = _wavelength(lens, wavelength, "paraxial_chief_ray")
+    field_deg = checks.field_angles(field_deg, "paraxial_chief_ray", "field_deg")
     n = signed_indices(lens, wl)
     zep = entrance_pupil_z(lens, wl)
     u = jnp.tan(jnp.deg2rad(jnp.asarray(field_deg)))
@@ -178,7 +190,7 @@ def paraxial_chief_ray(lens: Lens, field_deg, wavelength=None):
 def efl(lens: Lens, wavelength=None) -> Array:
     """Effective focal length 1/power (mm) at ``wavelength`` (default: primary); +inf for an
     afocal lens (zero power)."""
-    _, _, c, _ = system_matrix(lens, wavelength)
+    _, _, c, _ = system_matrix(lens, _wavelength(lens, wavelength, "efl"))
     return 1.0 / _power(c)
 
 
@@ -190,15 +202,16 @@ def _power(c):
 
 def bfl(lens: Lens, wavelength=None) -> Array:
     """Back focal length: last vertex to the paraxial focus of an object at infinity (mm)."""
-    a, _, c, _ = system_matrix(lens, wavelength)
-    wl = lens.primary_wavelength if wavelength is None else wavelength
+    wl = _wavelength(lens, wavelength, "bfl")
+    a, _, c, _ = system_matrix(lens, wl)
     n_img = signed_indices(lens, wl)[-1]
     return -a * n_img / c
 
 
 def image_height(lens: Lens, field_deg, wavelength=None) -> Array:
     """Paraxial chief-ray height on the image surface (mm)."""
-    wl = lens.primary_wavelength if wavelength is None else wavelength
+    wl = _wavelength(lens, wavelength, "image_height")
+    field_deg = checks.field_angles(field_deg, "image_height", "field_deg")
     y, nu = paraxial_chief_ray(lens, field_deg, wl)
     n_img = signed_indices(lens, wl)[-1]
     return y[-1] + lens.thickness[-1] * nu[-1] / n_img
@@ -206,7 +219,7 @@ def image_height(lens: Lens, field_deg, wavelength=None) -> Array:
 
 def paraxial_data(lens: Lens, wavelength=None) -> ParaxialData:
     """All first-order data at one wavelength (default: primary)."""
-    wl = lens.primary_wavelength if wavelength is None else wavelength
+    wl = _wavelength(lens, wavelength, "paraxial_data")
     n = signed_indices(lens, wl)
     n0, n_img = n[0], n[-1]
     a, b, c, d = system_matrix(lens, wl)

@@ -133,13 +133,22 @@ class AbstractSurface(eqx.Module):
 
 _inf = lambda: jnp.asarray(jnp.inf)  # noqa: E731
 
+_UNITS = {"c": "curvature, 1/mm", "k": "conic constant", "semi_diameter": "mm"}
+
+
+def _number(name: str, **default):
+    """A numeric surface field: one converter for every surface class, so a string or bool
+    is a TypeError naming the field and an integer becomes a float."""
+    return eqx.field(converter=checks.float_array(name, "surface", _UNITS.get(name, "")),
+                     **default)
+
 
 class Standard(AbstractSurface):
     """Plane, sphere or conic (Zemax STANDARD)."""
 
-    c: Float[Array, ""] = eqx.field(converter=jnp.asarray, default=0.0)
-    k: Float[Array, ""] = eqx.field(converter=jnp.asarray, default=0.0)
-    semi_diameter: Float[Array, ""] = eqx.field(converter=jnp.asarray, default_factory=_inf)
+    c: Float[Array, ""] = _number("c", default=0.0)
+    k: Float[Array, ""] = _number("k", default=0.0)
+    semi_diameter: Float[Array, ""] = _number("semi_diameter", default_factory=_inf)
 
     def __check_init__(self):
         self._check_numbers()
@@ -148,10 +157,10 @@ class Standard(AbstractSurface):
 class EvenAsphere(AbstractSurface):
     """Conic plus an even series a_1 r² + a_2 r⁴ + … (Zemax EVENASPH, PARM1 = a_1)."""
 
-    c: Float[Array, ""] = eqx.field(converter=jnp.asarray, default=0.0)
-    k: Float[Array, ""] = eqx.field(converter=jnp.asarray, default=0.0)
-    coeffs: Float[Array, " m"] = eqx.field(converter=jnp.asarray, default=(0.0,) * 8)
-    semi_diameter: Float[Array, ""] = eqx.field(converter=jnp.asarray, default_factory=_inf)
+    c: Float[Array, ""] = _number("c", default=0.0)
+    k: Float[Array, ""] = _number("k", default=0.0)
+    coeffs: Float[Array, " m"] = _number("coeffs", default=(0.0,) * 8)
+    semi_diameter: Float[Array, ""] = _number("semi_diameter", default_factory=_inf)
 
     def __check_init__(self):
         self._check_numbers()
@@ -168,12 +177,12 @@ class Hybrid(AbstractSurface):
     This is the paper's hybrid surface for end-to-end design (no rotational symmetry).
     """
 
-    c: Float[Array, ""] = eqx.field(converter=jnp.asarray, default=0.0)
-    k: Float[Array, ""] = eqx.field(converter=jnp.asarray, default=0.0)
-    coeffs: Float[Array, " m"] = eqx.field(converter=jnp.asarray, default=(0.0,) * 8)
-    odd_x: Float[Array, " p"] = eqx.field(converter=jnp.asarray, default=(0.0,) * 4)
-    odd_y: Float[Array, " p"] = eqx.field(converter=jnp.asarray, default=(0.0,) * 4)
-    semi_diameter: Float[Array, ""] = eqx.field(converter=jnp.asarray, default_factory=_inf)
+    c: Float[Array, ""] = _number("c", default=0.0)
+    k: Float[Array, ""] = _number("k", default=0.0)
+    coeffs: Float[Array, " m"] = _number("coeffs", default=(0.0,) * 8)
+    odd_x: Float[Array, " p"] = _number("odd_x", default=(0.0,) * 4)
+    odd_y: Float[Array, " p"] = _number("odd_y", default=(0.0,) * 4)
+    semi_diameter: Float[Array, ""] = _number("semi_diameter", default_factory=_inf)
 
     def __check_init__(self):
         if self.odd_x.shape != self.odd_y.shape:
