@@ -412,7 +412,7 @@ def test_cli_refuses_an_earlier_run_without_overwrite(tmp_path):
     (["--steps", "0"], r"--steps must be a whole number in \[1, inf\), got 0"),
     (["--kernel", "8"], r"--kernel must be an odd whole number"),
     (["--lr-net", "inf"], r"--lr-net must be a finite number in \(0, inf\)"),
-    (["--lenses", "zoom"], r"--lenses takes names from"),
+    (["--lenses", "zoom"], r"--lenses takes distinct names from"),
     (["--binning", "3"], r"--binning must divide"),
     (["--hybrid-floor", "-1"], r"--hybrid-floor must be a finite number in \[0, inf\)"),
     (["--live-front-end", "--decoder", "nafnet"], r"--live-front-end needs a Wiener"),

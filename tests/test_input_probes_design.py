@@ -125,3 +125,21 @@ def test_a_run_finishing_late_keeps_the_run_finished_meanwhile(tmp_path):
     second.abandon()  # the caller's cleanup on any exception: removes nothing now
     assert (out / "lens.json").read_text() == "first"
     assert (kept / runfolder.FINISHED).exists()
+
+
+@pytest.mark.parametrize("args, match", [
+    (["--seeds", "0,0"], r"--seeds needs distinct seeds"),
+    (["--lenses", "hybrid,hybrid"], r"--lenses takes distinct names"),
+    (["--time-limit", "60"], r"--resume and --time-limit need --checkpoint"),
+])
+def test_edof_cli_refuses_repeats_and_a_time_limit_with_nothing_to_save(args, match, tmp_path):
+    """A repeated seed or lens would count twice in the table's means (their results are
+    stored per seed and lens); a time limit without a checkpoint would stop with nothing
+    saved."""
+    from jaxlens.experiments.edof import cli
+
+    a = cli.build_parser().parse_args([*args, "--out", str(tmp_path / "run")])
+    with pytest.raises(runfolder.UsageError, match=match):
+        cli.check_args(a)
+    with pytest.raises(SystemExit):  # argparse: --smoke and --paper exclude each other
+        cli.build_parser().parse_args(["--smoke", "--paper"])

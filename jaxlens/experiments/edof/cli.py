@@ -24,9 +24,8 @@ timings, histories, PSF measures), ``command.txt``, the trained lenses
 Defaults are the CPU scale (2× binned 512² sensor of 9.94 µm pixels, so a 256² test crop
 fills a quarter of the frame and the defocus blur is half its full-resolution width in
 pixels; 31² PSF kernels; a 16-wide NAFNet behind a Wiener front end (``--decoder``:
-``edof.decoder``); 1200 + 60 steps per
-lens; one seed); ``--seeds 0,1,2`` gives the 3-seed table.
-``--paper`` selects the paper's scale for a GPU; with ``--checkpoint DIR`` a run saves its
+``edof.decoder``); 1200 + 60 steps per lens; one seed); ``--seeds 0,1,2`` gives the 3-seed
+table. ``--paper`` selects the paper's scale for a GPU; with ``--checkpoint DIR`` a run saves its
 state every ``refresh_every`` steps, ``--time-limit S`` stops it at the first checkpoint
 after S seconds (exit status 3) and ``--resume`` continues it, so it can go in pieces.
 A resumed lens may get a longer ``--steps2`` (its stage 2 goes on where it stopped, as in
@@ -37,8 +36,7 @@ Examples:
     python -m jaxlens.experiments.edof
     python -m jaxlens.experiments.edof --seeds 0,1,2 --out runs/edof3
     python -m jaxlens.experiments.edof --paper --checkpoint ck --time-limit 540 --out runs/p
-    python -m jaxlens.experiments.edof --paper --checkpoint ck --resume --time-limit 540 \\
-        --out runs/p
+    python -m jaxlens.experiments.edof --paper --checkpoint ck --resume --out runs/p
     python -m jaxlens.experiments.edof --smoke --out /tmp/edof_smoke
 """
 
@@ -80,8 +78,9 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument("--lenses", default=",".join(LENS_NAMES),
                    help="lenses to train, from classical,cubic,hybrid")
     p.add_argument("--seeds", type=_ints, default=(0,), help="training seeds, e.g. 0,1,2 (0)")
-    p.add_argument("--smoke", action="store_true", help="tiny, seconds-scale run (tests)")
-    p.add_argument("--paper", action="store_true", help="the paper's scale (GPU)")
+    scale = p.add_mutually_exclusive_group()
+    scale.add_argument("--smoke", action="store_true", help="tiny, seconds-scale run (tests)")
+    scale.add_argument("--paper", action="store_true", help="the paper's scale (GPU)")
     p.add_argument("--checkpoint", default=None, help="folder for checkpoints (none)")
     p.add_argument("--resume", action="store_true", help="continue from --checkpoint")
     p.add_argument("--time-limit", type=float, default=None,
@@ -178,8 +177,8 @@ def config_from_args(a):
         n(v, opt, w, lo=0, integer=True)
     for s in a.seeds:
         n(s, "--seeds", w, lo=0, integer=True)
-    if not a.seeds:
-        raise ValueError("edof: --seeds needs at least one seed")
+    if not a.seeds or len(set(a.seeds)) < len(a.seeds):  # a repeat would count twice
+        raise ValueError(f"edof: --seeds needs distinct seeds, got {a.seeds}")
     n(cfg.pupil, "--pupil", w, lo=2, integer=True, unit="rays per side")
     n(cfg.eval_pupil, "--eval-pupil", w, lo=2, integer=True, unit="rays per side")
     n(cfg.lr_net, "--lr-net", w, lo=0, lo_open=True)
@@ -225,15 +224,16 @@ def check_args(a):
         cfg = config_from_args(a)
         names = tuple(n.strip() for n in a.lenses.split(",") if n.strip())
         bad = [n for n in names if n not in LENS_NAMES]
-        if bad or not names:
-            raise ValueError(f"edof: --lenses takes names from {LENS_NAMES}, got {a.lenses!r}")
+        if bad or not names or len(set(names)) < len(names):
+            raise ValueError(f"edof: --lenses takes distinct names from {LENS_NAMES}, got "
+                             f"{a.lenses!r}")
         if a.max_crops is not None:
             input_checks.number(a.max_crops, "--max-crops", "edof", lo=1, integer=True)
         if a.time_limit is not None:
-            input_checks.number(a.time_limit, "--time-limit", "edof", lo=0, lo_open=True,
-                                unit="s")
-        if a.resume and a.checkpoint is None:
-            raise ValueError("edof: --resume needs --checkpoint (the folder to resume from)")
+            input_checks.number(a.time_limit, "--time-limit", "edof", lo=0, lo_open=True, unit="s")
+        if (a.resume or a.time_limit is not None) and a.checkpoint is None:
+            raise ValueError("edof: --resume and --time-limit need --checkpoint (the folder "
+                             "to resume from, or to save to before the time is up)")
         for opt, d in (("--train-dir", a.train_dir), ("--test-dir", a.test_dir)):
             if d is not None and not os.path.isdir(d):
                 raise ValueError(f"edof: {opt} {d} is not a folder")
