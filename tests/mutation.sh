@@ -65,7 +65,7 @@ for key in ${@:-$ALL}; do
     # SCOPE=f,g (one module) narrows the run to those functions, e.g. to finish an earlier run.
     [[ -n "${SCOPE:-}" ]] && ONLY[$key]=$SCOPE
     echo "== $key: ${FILE[$key]} (only: ${ONLY[$key]:-all}) $(date -u +%FT%TZ)"
-    runner="env PYTHONPATH=$WORK $PY -m pytest -x -q -p no:cacheprovider $sel"
+    runner="env PYTHONPATH=$WORK $PY -m pytest -x -q -n 0 -p no:cacheprovider $sel"
     if [[ -n "${RETEST:-}" ]]; then
         ids=$("$PY" -c "import sqlite3; db = sqlite3.connect('.mutmut-cache'); print(' '.join(
             str(r[0]) for r in db.execute('select m.id from mutant m join line l on m.line = l.id '
