@@ -10,6 +10,9 @@ import pytest
 
 import jaxlens as jl
 from jaxlens.io.lensfile import lens_from_dict
+from jaxlens.optics.coordinates import CoordinateBreak
+from jaxlens.optics.paraxial_surface import ParaxialSurface
+from jaxlens.optics.toroidal import Toroidal
 
 COOKE = pathlib.Path(jl.__file__).parent / "data" / "lenses" / "cooke_triplet.json"
 
@@ -116,6 +119,11 @@ def test_save_zmx_names_the_options_it_takes(cooke, tmp_path):
     (lambda: jl.EvenAsphere(coeffs=["0", 1e-5]), r"surface: coeffs must be"),
     (lambda: jl.Hybrid(odd_x=[1j], odd_y=[0.0]), r"surface: odd_x must be .* got list"),
     (lambda: jl.Sphere(0.02, semi_diameter="10"), r"surface: semi_diameter must be .*\(mm\)"),
+    (lambda: CoordinateBreak(tilt_x="5"), r"surface: tilt_x must be .*\(deg\), got str"),
+    (lambda: Toroidal(cx="0.1"), r"surface: cx must be .*1/mm\), got str"),
+    (lambda: ParaxialSurface(focal_length="50"), r"surface: focal_length must be .*\(mm\)"),
+    (lambda: jl.ModelGlass("1.5", 50.0), r"ModelGlass: nd must be a real number"),
+    (lambda: jl.Sellmeier([1.0, "0"], [0.01, 0.02]), r"Sellmeier: B must be"),
 ])
 def test_surface_parameters_of_the_wrong_type_are_type_errors(make, match):
     with pytest.raises(TypeError, match=match):

@@ -168,6 +168,12 @@ def prng_key(key, where: str, *, optional: bool = False) -> None:
                      f"jax.random.PRNGKey(0)), got {key!r}")
 
 
+def float_field(arg: str, where: str, unit: str = "", **kwargs):
+    """An ``eqx.field`` whose converter is ``float_array``: one mechanism for every numeric
+    field of the lens's parts."""
+    return eqx.field(converter=float_array(arg, where, unit), **kwargs)
+
+
 # ---------------------------------------------------------------------------- wavelengths
 
 

@@ -30,7 +30,7 @@ import numpy as np
 from jaxtyping import Array, Float
 
 from . import checks
-from .surfaces import AbstractSurface
+from .surfaces import AbstractSurface, number_field
 
 
 class CoordinateBreak(AbstractSurface):
@@ -46,15 +46,15 @@ class CoordinateBreak(AbstractSurface):
     before it (``Lens`` checks this).
     """
 
-    c: Float[Array, ""] = eqx.field(converter=jnp.asarray, default=0.0)
-    k: Float[Array, ""] = eqx.field(converter=jnp.asarray, default=0.0)
-    decenter_x: Float[Array, ""] = eqx.field(converter=jnp.asarray, default=0.0)
-    decenter_y: Float[Array, ""] = eqx.field(converter=jnp.asarray, default=0.0)
-    tilt_x: Float[Array, ""] = eqx.field(converter=jnp.asarray, default=0.0)
-    tilt_y: Float[Array, ""] = eqx.field(converter=jnp.asarray, default=0.0)
-    tilt_z: Float[Array, ""] = eqx.field(converter=jnp.asarray, default=0.0)
-    semi_diameter: Float[Array, ""] = eqx.field(converter=jnp.asarray,
-                                                default_factory=lambda: jnp.asarray(jnp.inf))
+    c: Float[Array, ""] = number_field("c", default=0.0)
+    k: Float[Array, ""] = number_field("k", default=0.0)
+    decenter_x: Float[Array, ""] = number_field("decenter_x", default=0.0)
+    decenter_y: Float[Array, ""] = number_field("decenter_y", default=0.0)
+    tilt_x: Float[Array, ""] = number_field("tilt_x", default=0.0)
+    tilt_y: Float[Array, ""] = number_field("tilt_y", default=0.0)
+    tilt_z: Float[Array, ""] = number_field("tilt_z", default=0.0)
+    semi_diameter: Float[Array, ""] = number_field(
+        "semi_diameter", default_factory=lambda: jnp.asarray(jnp.inf))
     order: int = eqx.field(static=True, default=0)
 
     def __check_init__(self):

@@ -67,7 +67,7 @@ def _index(arg: str):
 
 
 def _floats(arg: str, unit: str, where: str = "Lens", **default):
-    return eqx.field(converter=checks.float_array(arg, where, unit), **default)
+    return checks.float_field(arg, where, unit, **default)
 
 
 class Sensor(eqx.Module):

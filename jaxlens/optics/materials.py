@@ -63,8 +63,8 @@ class ModelGlass(AbstractMaterial):
     nF − nC = (nd − 1)/Vd, so ``index(0.5875618)`` returns nd exactly.
     """
 
-    nd: Float[Array, ""] = eqx.field(converter=jnp.asarray)
-    vd: Float[Array, ""] = eqx.field(converter=jnp.asarray)
+    nd: Float[Array, ""] = checks.float_field("nd", "ModelGlass")
+    vd: Float[Array, ""] = checks.float_field("vd", "ModelGlass")
     name: str = eqx.field(static=True, default="")
 
     def __check_init__(self):
@@ -91,8 +91,8 @@ class ModelGlass(AbstractMaterial):
 class Sellmeier(AbstractMaterial):
     """Sellmeier formula n² − 1 = Σ B_i λ² / (λ² − C_i), λ in µm (Zemax formula 2)."""
 
-    B: Float[Array, " k"] = eqx.field(converter=jnp.asarray)
-    C: Float[Array, " k"] = eqx.field(converter=jnp.asarray)
+    B: Float[Array, " k"] = checks.float_field("B", "Sellmeier")
+    C: Float[Array, " k"] = checks.float_field("C", "Sellmeier")
     name: str = eqx.field(static=True, default="")
 
     def __check_init__(self):
@@ -112,7 +112,7 @@ class Sellmeier(AbstractMaterial):
 class Schott(AbstractMaterial):
     """Schott formula n² = a0 + a1 λ² + a2 λ⁻² + a3 λ⁻⁴ + a4 λ⁻⁶ + a5 λ⁻⁸ (Zemax formula 1)."""
 
-    coeffs: Float[Array, 6] = eqx.field(converter=jnp.asarray)
+    coeffs: Float[Array, 6] = checks.float_field("coeffs", "Schott")
     name: str = eqx.field(static=True, default="")
 
     def __check_init__(self):
@@ -139,8 +139,8 @@ class Tabulated(AbstractMaterial):
     of one node is a non-dispersive material, valid at any wavelength.
     """
 
-    wavelengths: Float[Array, " k"] = eqx.field(converter=jnp.asarray)
-    indices: Float[Array, " k"] = eqx.field(converter=jnp.asarray)
+    wavelengths: Float[Array, " k"] = checks.float_field("wavelengths", "Tabulated")
+    indices: Float[Array, " k"] = checks.float_field("indices", "Tabulated")
     name: str = eqx.field(static=True, default="")
     wavelength_range: tuple[float, float] | None = eqx.field(static=True, default=None)
     """(shortest, longest) wavelength of the table (µm), widened by ``TABLE_SLACK``, set at
@@ -199,7 +199,7 @@ class Herzberger(AbstractMaterial):
     (A, B, C, D, E, F).
     """
 
-    coeffs: Float[Array, " 6"] = eqx.field(converter=jnp.asarray)
+    coeffs: Float[Array, " 6"] = checks.float_field("coeffs", "Herzberger")
     name: str = eqx.field(static=True, default="")
 
     def __check_init__(self):
@@ -219,7 +219,7 @@ class Sellmeier2(AbstractMaterial):
     (A, B1, λ1, B2, λ2).
     """
 
-    coeffs: Float[Array, " 5"] = eqx.field(converter=jnp.asarray)
+    coeffs: Float[Array, " 5"] = checks.float_field("coeffs", "Sellmeier2")
     name: str = eqx.field(static=True, default="")
 
     def __check_init__(self):
@@ -235,7 +235,7 @@ class Conrady(AbstractMaterial):
     """Conrady formula (Zemax formula 5): n = n0 + A/λ + B/λ^3.5, λ in µm; ``coeffs`` is
     (n0, A, B)."""
 
-    coeffs: Float[Array, " 3"] = eqx.field(converter=jnp.asarray)
+    coeffs: Float[Array, " 3"] = checks.float_field("coeffs", "Conrady")
     name: str = eqx.field(static=True, default="")
 
     def __check_init__(self):
@@ -252,7 +252,7 @@ class Handbook1(AbstractMaterial):
     n² = A + B/(λ² − C) − D λ², λ in µm; ``coeffs`` is (A, B, C, D).
     """
 
-    coeffs: Float[Array, " 4"] = eqx.field(converter=jnp.asarray)
+    coeffs: Float[Array, " 4"] = checks.float_field("coeffs", "Handbook1")
     name: str = eqx.field(static=True, default="")
 
     def __check_init__(self):
@@ -270,7 +270,7 @@ class Handbook2(AbstractMaterial):
     n² = A + B λ²/(λ² − C) − D λ², λ in µm; ``coeffs`` is (A, B, C, D).
     """
 
-    coeffs: Float[Array, " 4"] = eqx.field(converter=jnp.asarray)
+    coeffs: Float[Array, " 4"] = checks.float_field("coeffs", "Handbook2")
     name: str = eqx.field(static=True, default="")
 
     def __check_init__(self):
@@ -288,7 +288,7 @@ class Sellmeier4(AbstractMaterial):
     n² = A + B λ²/(λ² − C) + D λ²/(λ² − E), λ in µm; ``coeffs`` is (A, B, C, D, E).
     """
 
-    coeffs: Float[Array, " 5"] = eqx.field(converter=jnp.asarray)
+    coeffs: Float[Array, " 5"] = checks.float_field("coeffs", "Sellmeier4")
     name: str = eqx.field(static=True, default="")
 
     def __check_init__(self):
@@ -316,7 +316,7 @@ class Laurent(AbstractMaterial):
     coefficients in catalog order.
     """
 
-    coeffs: Float[Array, " k"] = eqx.field(converter=jnp.asarray)
+    coeffs: Float[Array, " k"] = checks.float_field("coeffs", "Laurent")
     powers: tuple[int, ...] = eqx.field(static=True, default=EXTENDED_POWERS)
     name: str = eqx.field(static=True, default="")
 

@@ -32,13 +32,12 @@ from __future__ import annotations
 
 from typing import ClassVar
 
-import equinox as eqx
 import jax.numpy as jnp
 import numpy as np
 from jaxtyping import Array, Float
 
 from . import checks
-from .surfaces import AbstractSurface
+from .surfaces import AbstractSurface, number_field
 
 
 class ParaxialSurface(AbstractSurface):
@@ -57,9 +56,9 @@ class ParaxialSurface(AbstractSurface):
     # ``from __future__ import annotations``, which equinox then takes for fields).
     c: ClassVar[property]
     k: ClassVar[property]
-    focal_length: Float[Array, ""] = eqx.field(converter=jnp.asarray, default=100.0)
-    semi_diameter: Float[Array, ""] = eqx.field(converter=jnp.asarray,
-                                                default_factory=lambda: jnp.asarray(jnp.inf))
+    focal_length: Float[Array, ""] = number_field("focal_length", default=100.0)
+    semi_diameter: Float[Array, ""] = number_field(
+        "semi_diameter", default_factory=lambda: jnp.asarray(jnp.inf))
 
     def __check_init__(self):
         f = self.focal_length

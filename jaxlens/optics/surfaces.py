@@ -133,22 +133,23 @@ class AbstractSurface(eqx.Module):
 
 _inf = lambda: jnp.asarray(jnp.inf)  # noqa: E731
 
-_UNITS = {"c": "curvature, 1/mm", "k": "conic constant", "semi_diameter": "mm"}
+_UNITS = {"c": "curvature, 1/mm", "cx": "curvature, 1/mm", "k": "conic constant",
+          "semi_diameter": "mm", "focal_length": "mm", "decenter_x": "mm", "decenter_y": "mm",
+          "tilt_x": "deg", "tilt_y": "deg", "tilt_z": "deg"}
 
 
-def _number(name: str, **default):
+def number_field(name: str, **default):
     """A numeric surface field: one converter for every surface class, so a string or bool
     is a TypeError naming the field and an integer becomes a float."""
-    return eqx.field(converter=checks.float_array(name, "surface", _UNITS.get(name, "")),
-                     **default)
+    return checks.float_field(name, "surface", _UNITS.get(name, ""), **default)
 
 
 class Standard(AbstractSurface):
     """Plane, sphere or conic (Zemax STANDARD)."""
 
-    c: Float[Array, ""] = _number("c", default=0.0)
-    k: Float[Array, ""] = _number("k", default=0.0)
-    semi_diameter: Float[Array, ""] = _number("semi_diameter", default_factory=_inf)
+    c: Float[Array, ""] = number_field("c", default=0.0)
+    k: Float[Array, ""] = number_field("k", default=0.0)
+    semi_diameter: Float[Array, ""] = number_field("semi_diameter", default_factory=_inf)
 
     def __check_init__(self):
         self._check_numbers()
@@ -157,10 +158,10 @@ class Standard(AbstractSurface):
 class EvenAsphere(AbstractSurface):
     """Conic plus an even series a_1 r² + a_2 r⁴ + … (Zemax EVENASPH, PARM1 = a_1)."""
 
-    c: Float[Array, ""] = _number("c", default=0.0)
-    k: Float[Array, ""] = _number("k", default=0.0)
-    coeffs: Float[Array, " m"] = _number("coeffs", default=(0.0,) * 8)
-    semi_diameter: Float[Array, ""] = _number("semi_diameter", default_factory=_inf)
+    c: Float[Array, ""] = number_field("c", default=0.0)
+    k: Float[Array, ""] = number_field("k", default=0.0)
+    coeffs: Float[Array, " m"] = number_field("coeffs", default=(0.0,) * 8)
+    semi_diameter: Float[Array, ""] = number_field("semi_diameter", default_factory=_inf)
 
     def __check_init__(self):
         self._check_numbers()
@@ -177,12 +178,12 @@ class Hybrid(AbstractSurface):
     This is the paper's hybrid surface for end-to-end design (no rotational symmetry).
     """
 
-    c: Float[Array, ""] = _number("c", default=0.0)
-    k: Float[Array, ""] = _number("k", default=0.0)
-    coeffs: Float[Array, " m"] = _number("coeffs", default=(0.0,) * 8)
-    odd_x: Float[Array, " p"] = _number("odd_x", default=(0.0,) * 4)
-    odd_y: Float[Array, " p"] = _number("odd_y", default=(0.0,) * 4)
-    semi_diameter: Float[Array, ""] = _number("semi_diameter", default_factory=_inf)
+    c: Float[Array, ""] = number_field("c", default=0.0)
+    k: Float[Array, ""] = number_field("k", default=0.0)
+    coeffs: Float[Array, " m"] = number_field("coeffs", default=(0.0,) * 8)
+    odd_x: Float[Array, " p"] = number_field("odd_x", default=(0.0,) * 4)
+    odd_y: Float[Array, " p"] = number_field("odd_y", default=(0.0,) * 4)
+    semi_diameter: Float[Array, ""] = number_field("semi_diameter", default_factory=_inf)
 
     def __check_init__(self):
         if self.odd_x.shape != self.odd_y.shape:

@@ -26,11 +26,10 @@ Conventions:
 
 from __future__ import annotations
 
-import equinox as eqx
 import jax.numpy as jnp
 from jaxtyping import Array, Float
 
-from .surfaces import AbstractSurface
+from .surfaces import AbstractSurface, number_field
 
 
 def _guarded_sqrt(x):
@@ -51,12 +50,12 @@ class Toroidal(AbstractSurface):
         semi_diameter: clear-aperture radius (mm), ``inf`` for none.
     """
 
-    c: Float[Array, ""] = eqx.field(converter=jnp.asarray, default=0.0)
-    k: Float[Array, ""] = eqx.field(converter=jnp.asarray, default=0.0)
-    coeffs: Float[Array, " m"] = eqx.field(converter=jnp.asarray, default=(0.0,))
-    cx: Float[Array, ""] = eqx.field(converter=jnp.asarray, default=0.0)
-    semi_diameter: Float[Array, ""] = eqx.field(converter=jnp.asarray,
-                                                default_factory=lambda: jnp.asarray(jnp.inf))
+    c: Float[Array, ""] = number_field("c", default=0.0)
+    k: Float[Array, ""] = number_field("k", default=0.0)
+    coeffs: Float[Array, " m"] = number_field("coeffs", default=(0.0,))
+    cx: Float[Array, ""] = number_field("cx", default=0.0)
+    semi_diameter: Float[Array, ""] = number_field(
+        "semi_diameter", default_factory=lambda: jnp.asarray(jnp.inf))
 
     def __check_init__(self):
         if self.coeffs.ndim != 1:
