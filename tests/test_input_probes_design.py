@@ -78,6 +78,15 @@ def test_classical_cli_refuses_flags_it_used_to_change_or_ignore(capsys, tmp_pat
     assert re.search(r"--fnum-start must be a finite number in \[2, inf\) \(at least --fnum\), "
                      r"got 1.5", _refused(capsys, tmp_path, "--fnum", "2", "--fnum-start", "1.5"))
     assert "--material-catalogs 'FOO'" in _refused(capsys, tmp_path, "--material-catalogs", "FOO")
+    # An option that another one overrides is refused, not ignored.
+    for args, msg in ((("--seed-list", "1,2", "--seeds", "5"), "--seeds would be ignored with "
+                                                                 "--seed-list"),
+                      (("--smoke", "--steps", "2", "--polish-steps", "9"),
+                       "--steps, --polish-steps would be ignored with --smoke"),
+                      (("--polish", "none", "--polish-steps", "9"), "with --polish none"),
+                      (("--loss", "image", "--polish-steps", "9"), "with --loss image"),
+                      (("--columns", "+recipe",), "--columns would be ignored with no --ablation")):
+        assert msg in _refused(capsys, tmp_path, *args), args
     # Only the defaults follow the target.
     args = classical.build_parser().parse_args(["--fov", "40", "--fnum", "4", "--elements", "4"])
     spec = classical.spec_from_args(args)

@@ -237,11 +237,30 @@ def check_args(args) -> None:
         CatalogRegion.of(_catalogs(args))
     except ValueError as e:
         raise ValueError(f"{w}: --material-catalogs {args.material_catalogs!r}: {e}") from e
+    _no_ignored_options(args, w)
     if args.columns is not None:
         names = [c for c, _ in ABLATION_COLUMNS]
         bad = [c.strip() for c in args.columns.split(",") if c.strip() not in names]
         if bad or not args.columns.strip():
             raise ValueError(f"{w}: --columns takes names from {names}, got {args.columns!r}")
+
+
+def _no_ignored_options(args, w: str) -> None:
+    """Refuse an option given with a value that another option overrides: it would be
+    ignored without a word."""
+    default = vars(build_parser().parse_args([]))
+    rules = (
+        (args.seed_list is not None, "--seed-list", ("seeds", "first_seed")),
+        (args.smoke and not args.ablation, "--smoke", ("seeds", "steps", "polish_steps")),
+        (args.polish == "none", "--polish none", ("polish_steps",)),
+        (args.loss == "image", "--loss image", ("polish_steps",)),
+        (not args.ablation, "no --ablation", ("columns", "ablation_seeds", "ablation_out")),
+    )
+    for active, why, names in rules:
+        given = ["--" + n.replace("_", "-") for n in names if getattr(args, n) != default[n]]
+        if active and given:
+            raise ValueError(f"{w}: {', '.join(given)} would be ignored with {why}; leave "
+                             f"{'it' if len(given) == 1 else 'them'} out")
 
 
 def spec_from_args(args):
