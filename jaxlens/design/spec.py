@@ -277,7 +277,7 @@ def _number(value, arg: str, *, lo=None, hi=None, lo_open=False, hi_open=False, 
     or an int where ``integer`` (a bool is neither: True would pass as 1)."""
     if isinstance(value, bool) or not isinstance(value, numbers.Integral if integer
                                                  else numbers.Real):
-        span = checks._span(lo, hi, lo_open, hi_open)
+        span = checks.interval(lo, hi, lo_open, hi_open)
         raise TypeError(f"DesignSpec: {arg} must be {'an int' if integer else 'a number'} in "
                         f"{span}{f' {unit}' if unit else ''}, got {type(value).__name__} "
                         f"{value!r}")

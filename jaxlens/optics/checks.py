@@ -42,7 +42,8 @@ def fmt(v) -> str:
         " …" if a.size > 8 else "")
 
 
-def _span(lo, hi, lo_open, hi_open) -> str:
+def interval(lo, hi, lo_open, hi_open) -> str:
+    """The interval in the notation of the messages, e.g. "(0, inf)" or "[1, 12]"."""
     left = "(" if lo_open or lo is None else "["
     right = ")" if hi_open or hi is None else "]"
     low = "-inf" if lo is None else f"{lo:g}"
@@ -66,7 +67,7 @@ def number(value, arg: str, where: str, *, lo=None, hi=None, lo_open=False, hi_o
     Returns:
         The value as float (or int when ``integer``).
     """
-    span = _span(lo, hi, lo_open, hi_open)
+    span = interval(lo, hi, lo_open, hi_open)
     kind = "a whole number" if integer else "a finite number"
     u = f" {unit}" if unit else ""
     shown = repr(value) if isinstance(value, (str, bool, int, float)) else fmt(value)
@@ -102,7 +103,7 @@ def values(x, arg: str, where: str, *, lo=None, hi=None, lo_open=False, hi_open=
     range and the unit; a traced array gets an ``eqx.error_if`` with the same message
     without the value.
     """
-    span = _span(lo, hi, lo_open, hi_open)
+    span = interval(lo, hi, lo_open, hi_open)
     if inf_ok and hi is None:
         span = span[:-1] + "]"
     u = f" {unit}" if unit else ""
