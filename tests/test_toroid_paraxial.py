@@ -375,3 +375,40 @@ def test_real_image_height_fields_land_the_chief_ray_there(tmp_path, obj):
     with pytest.raises(ValueError, match=r"t\.zmx:3: no real chief ray reaches the image "
                                          r"height \[4\.0, -900\.0\]"):
         _load(tmp_path, far)
+
+
+BEHIND_STOP = """UNIT MM
+ENPD 8
+FTYP 3 0 2 1 0 0 0
+XFLN 0 0
+YFLN 0 -9
+WAVM 1 0.5875618 1
+SURF 0
+  DISZ INFINITY
+SURF 1
+  CURV 0.05
+  DIAM {sd} 1
+  DISZ 5
+  GLAS ___BLANK 1 0 1.6 0 0 0 0 0 0 0
+SURF 2
+  CURV -0.01
+  DISZ 6
+SURF 3
+  STOP
+  DISZ 30
+SURF 4
+"""
+
+
+def test_real_image_height_solve_is_not_stopped_by_a_clipped_first_guess():
+    """A lens in front of its stop has pincushion distortion: the paraxial guess for a 9 mm
+    real height sends the chief ray through surface 1 at 2.75 mm, the answer at 2.647 mm.
+    A 2.7 mm aperture there clips the guess, not the answer: the field is found (the solve
+    sees the geometry only; the answer is then checked through the apertures). At 2.6 mm
+    the answer itself is clipped, and the message says where."""
+    lens = zmx.loads(BEHIND_STOP.format(sd=2.7), "t.zmx")
+    assert float(lens.fields[1]) == pytest.approx(-11.341742282662544, abs=1e-9)
+    with pytest.raises(ValueError, match=r"t\.zmx:3: no real chief ray .* it is clipped at "
+                                         r"surface 1, which it meets 2\.647 mm from the axis, "
+                                         r"outside its semi-diameter 2\.6 mm"):
+        zmx.loads(BEHIND_STOP.format(sd=2.6), "t.zmx")

@@ -13,7 +13,7 @@ import numpy as np
 
 from ..imaging import aiming
 from ..optics import checks, paraxial
-from ..optics.lens import Lens
+from ..optics.lens import Lens, unclipped
 from ..tracing import forward
 from .zmx_common import ZmxWarning
 
@@ -125,8 +125,9 @@ def angles_from_real_image_heights(lens: Lens, heights: np.ndarray) -> Lens:
         err = float(jnp.max(jnp.abs(point - t)))
         tol = max(REAL_HEIGHT_TOLERANCE, 64 * float(jnp.finfo(point.dtype).eps))
         if not (bool(valid) and err <= tol * (1 + abs(target).max())):
+            why = "" if bool(valid) else "; " + _where_it_stops(lens, field)
             raise ValueError(f"no real chief ray reaches the image height {target.tolist()} mm "
-                             f"(closest: {err:.3g} mm away, valid: {bool(valid)})")
+                             f"(closest: {err:.3g} mm away, valid: {bool(valid)}{why})")
         angles.append(np.asarray(field, np.float64))
     a = np.array(angles)
     return eqx.tree_at(lambda m: m.fields, lens, jnp.asarray(a[:, 1] if h.ndim == 1 else a))
@@ -142,8 +143,10 @@ def _tangent_field(tan_xy):
 @eqx.filter_jit
 def _real_height_field(lens: Lens, target, k):
     """The field (deg) whose real chief ray meets the image surface at ``target`` (mm)."""
+    free = _geometry_only(lens)  # a clipped iterate would stop short of the image
+
     def miss(tan_xy, target):
-        point = aiming.chief_point(lens, _tangent_field(tan_xy), lens.object_distance,
+        point = aiming.chief_point(free, _tangent_field(tan_xy), lens.object_distance,
                                    forward.DEFAULT_NEWTON_ITERS)
         return point - target
 
@@ -157,6 +160,31 @@ def _chief_ray_landing(lens: Lens, field):
     out = forward.trace(lens, aiming.stop_chief_ray(lens, field, lens.object_distance),
                         uniform=True)
     return out.origin[0, :2], out.valid[0]
+
+
+def _geometry_only(lens: Lens) -> Lens:
+    """The lens with no semi-diameter clipping, the image surface's included."""
+    free = unclipped(lens)
+    return eqx.tree_at(lambda m: m.image.semi_diameter, free,
+                       jnp.full_like(free.image.semi_diameter, jnp.inf))
+
+
+def _where_it_stops(lens: Lens, field) -> str:
+    """Where the chief ray of ``field`` becomes invalid, in words (Zemax surface numbers):
+    clipped by a semi-diameter, or lost (a miss or total internal reflection)."""
+    rays = aiming.stop_chief_ray(lens, field, lens.object_distance)
+    free = _geometry_only(lens)
+    path, free_path = (forward.trace_path(m, rays, uniform=True) for m in (lens, free))
+    valid = np.asarray(path.valid).reshape(len(path.valid), -1)[:, 0]
+    i = int(np.argmin(valid))  # the first invalid entry: surface i (the last: the image)
+    surface = lens.surfaces[i] if i < lens.num_surfaces else lens.image
+    name = f"surface {i + 1}" if i < lens.num_surfaces else "the image surface"
+    if not bool(np.asarray(free_path.valid).reshape(len(valid), -1)[i, 0]):
+        return f"it is lost at {name} (a miss or total internal reflection)"
+    r = float(np.hypot(*np.asarray(free_path.origin).reshape(len(valid), -1, 3)[i, 0, :2]))
+    return (f"it is clipped at {name}, which it meets {r:.4g} mm from the axis, outside its "
+            f"semi-diameter {float(surface.semi_diameter):.4g} mm (a fixed DIAM or a CLAP "
+            f"clips rays in jaxlens)")
 
 
 FIELD_TYPES = {
