@@ -33,6 +33,7 @@ from .io.files import load as load
 from .io.files import save as save
 from .optics import catalog as catalog
 from .optics import paraxial as paraxial
+from .optics.apertures import Aperture as Aperture
 from .optics.catalog import CatalogMaterial as CatalogMaterial
 from .optics.catalog import catalog_names as catalog_names
 from .optics.catalog import get_material as get_material

@@ -334,20 +334,24 @@ def test_other_apertures_refused(tmp_path):
     # An obscuration of radius 0 obscures nothing; OBSC is no longer read as a system aperture.
     _, lens = _load_text(tmp_path, _file(ep, surface1="  OBSC 0 0 0\n"))
     assert float(lens.epd) == 10.0
-    assert (
-        _refused(
-            tmp_path, _file(ep, surface1="  CLAP 0 4 0\n  OBDC 0 0.5\n"), "decentered apertures"
-        )
-        == "OBDC 0 0.5"
-    )
+    # A decentered circular aperture (OBDC) is read as a decentered circle that alone clips.
+    _, lens = _load_text(tmp_path, _file(ep, surface1="  CLAP 0 4 0\n  OBDC 0 0.5\n"))
+    assert lens.apertures == ((0, jl.Aperture.circle(4.0, 0.0, 0.5)),)
+    assert float(lens.surfaces[0].semi_diameter) == np.inf
+    assert _axial_valid(lens, [-3.49, -3.51, 4.49, 4.51]) == [True, False, True, False]
     _, lens = _load_text(tmp_path, _file(ep, surface1="  CLAP 0 4 0\n  OBDC 0 0\n"))
     assert float(lens.surfaces[0].semi_diameter) == 4.0
+    assert lens.apertures == ()
     # A decenter of a surface that clips nothing (an automatic DIAM, solve flag 0, as in an
-    # off-axis mirror system's file) has nothing to move: ignored. A fixed DIAM clips.
+    # off-axis mirror system's file) has nothing to move: ignored. A fixed DIAM clips, and
+    # with no aperture for the decenter to move it is refused.
     _, lens = _load_text(tmp_path, _file(ep, surface1='  DIAM 6 0 0 0 1 ""\n  OBDC 0 -3\n'))
     assert float(lens.surfaces[0].semi_diameter) == np.inf
     assert _refused(tmp_path, _file(ep, surface1='  DIAM 6 1 0 0 1 ""\n  OBDC 0 -3\n'),
-                    "decentered apertures") == "OBDC 0 -3"
+                    "decenter .OBDC. of a fixed semi-diameter") == "OBDC 0 -3"
+    # A decentered annular obscuration has no Lens form.
+    assert _refused(tmp_path, _file(ep, surface1="  OBSC 1 2 0\n  OBDC 0 -3\n"),
+                    "decentered .OBDC. annular obscuration") == "OBSC 1 2 0"
 
 
 def test_ray_aiming_and_image_medium_are_reported(tmp_path):
@@ -369,15 +373,19 @@ def test_ray_aiming_and_image_medium_are_reported(tmp_path):
     assert lens.materials[-1] == jl.Air()
 
 
-def test_rectangular_and_elliptical_apertures_are_reported(tmp_path):
-    from jaxlens.io.zmx import ZmxWarning
-
-    for line in ("SQAP 3 4 0", "ELAP 3 4 0"):
+def test_rectangular_and_elliptical_apertures_are_read(tmp_path):
+    """SQAP/ELAP (once ignored with a warning) are read as Lens.apertures and clip, silently
+    even under strict; half-widths that are not > 0 are refused."""
+    for line, shape in (("SQAP 3 4 0", "rect"), ("ELAP 3 4 0", "ellipse")):
         text = _file("ENPD 10\n", surface1=f"  {line}\n")
-        with pytest.warns(ZmxWarning, match=f"f.zmx:11: .* aperture ignored .*'{line}'"):
-            _load_text(tmp_path, text)
-        with pytest.raises(ValueError, match="aperture ignored.*strict mode"):
-            jl.io.zmx.loads(text, "f.zmx", strict=True)
+        with warnings.catch_warnings():
+            warnings.simplefilter("error")
+            _, lens = _load_text(tmp_path, text)
+        assert lens.apertures == ((0, jl.Aperture(shape, 3.0, 4.0)),)
+        assert _axial_valid(lens, [3.99, 4.01]) == [True, False]
+        assert jl.io.zmx.loads(text, "f.zmx", strict=True).apertures == lens.apertures
+        assert _refused(tmp_path, text.replace(line, line.replace("3", "0")),
+                        "needs half-widths > 0") == line.replace("3", "0")
 
 
 def test_image_surface_model_glass_must_match_image_space(tmp_path):

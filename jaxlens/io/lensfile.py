@@ -698,7 +698,7 @@ def lens_from_dict(d: dict, *, source: str = "<lens>") -> Lens:
 
 def lens_to_dict(lens: Lens) -> dict:
     """The JSON object of a lens (format ``jaxlens.lens/1``)."""
-    if lens.mirrors or lens.obscurations:
+    if lens.mirrors or lens.obscurations or lens.apertures:
         raise ValueError(f"save: mirrors and obscurations (Lens.mirrors = {lens.mirrors}, "
                          f"Lens.obscurations = {lens.obscurations}) have no jaxlens JSON form "
                          f"yet; save the lens as .zmx")

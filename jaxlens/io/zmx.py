@@ -26,9 +26,14 @@ What is read and written:
       ``DIAM r 1`` and ``CLAP 0 r 0``: Zemax and optiland clip only at apertures.
       ``OBSC r_min r_max`` (a circular obscuration, ``Lens.obscurations``) is read and
       written; an annular ``CLAP r_in r 0`` is the clipping radius r and an obscuration
-      inside r_in. Refused: decentered apertures (OBDC) of a clipping aperture (on a surface
-      that clips nothing they are ignored); ``SQAP``/``ELAP`` give a warning and are
-      ignored.
+      inside r_in. ``SQAP hx hy``/``ELAP hx hy`` (rectangular/elliptical apertures, half-widths)
+      and ``SQOB``/``ELOB`` (rectangular/elliptical obscurations) are ``Lens.apertures``
+      (``jaxlens.Aperture``), and so are CLAP and ``OBSC 0 r`` on a surface with an aperture
+      decenter ``OBDC dx dy``, which moves every aperture of its surface. A surface with
+      such apertures clips at them only (not at its DIAM), as in Zemax. They are written
+      back the same way (one OBDC per surface). Refused: a decentered annular OBSC, an OBDC
+      on a surface whose only clipping is a fixed DIAM (on a surface that clips nothing it
+      is ignored), and a decentered or non-circular stop aperture under ``FLOA``.
     * ``TYPE COORDBRK`` (a ``CoordinateBreak``): PARM 1, 2 decenter x, y; PARM 3, 4, 5 tilt
       about x, y, z in degrees; PARM 6 the order flag (0 or 1); CURV 0; no GLAS (the
       medium continues). ``GLAS MIRROR`` makes a surface a mirror (``Lens.mirrors``); the

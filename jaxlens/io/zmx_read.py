@@ -12,6 +12,7 @@ import jax.numpy as jnp
 import numpy as np
 
 from ..optics import checks
+from ..optics.apertures import Aperture
 from ..optics.catalog import decode_zemax_text as decode
 from ..optics.coordinates import CoordinateBreak
 from ..optics.lens import INFINITE_OBJECT_MM, Lens, Sensor
@@ -46,7 +47,13 @@ _SURFACE_KEYS = {
     "CLAP",
     "OBSC",
     "OBDC",
+    "SQAP",
+    "ELAP",
+    "SQOB",
+    "ELOB",
 }
+_SHAPES = {"SQAP": ("rect", False), "ELAP": ("ellipse", False), "SQOB": ("rect", True),
+           "ELOB": ("ellipse", True)}  # keyword -> (Aperture shape, blocks)
 _KEYWORD = re.compile(r"^[A-Z][A-Z0-9_]{1,9}$")
 _MAX_XDAT_TERMS = 230  # Zemax's extended polynomial: all terms up to degree 20
 
@@ -110,7 +117,8 @@ class _Surf:
     clap: float | None = None
     clap_min: _Line | None = None  # an annular aperture's CLAP line (minimum radius > 0)
     obsc: _Line | None = None  # a circular obscuration (OBSC min max)
-    obdc: _Line | None = None  # the aperture's decenter (OBDC x y)
+    obdc: _Line | None = None  # the aperture's decenter (OBDC x y), if not 0 0
+    shaped: list = field(default_factory=list)  # SQAP/ELAP/SQOB/ELOB lines
     comment: str = ""
     keys: set = field(default_factory=set)  # the keywords this block has
 
@@ -131,7 +139,6 @@ class _File:
     pwav: _Line | None = None
     vignetting: list = field(default_factory=list)  # VDXN/VDYN/VCXN/VCYN/VANN lines
     raim: _Line | None = None
-    shaped_apertures: list = field(default_factory=list)  # SQAP/ELAP lines
     surfs: list = field(default_factory=list)
     unknown: list = field(default_factory=list)  # lines with a keyword nobody knows
     mnum: _Line | None = None  # the number of configurations
@@ -160,8 +167,6 @@ def _parse(text: str, path: str) -> _File:
             _surface_line(cur, key, ln)
         elif key in _TOP_KEYS:
             _top_line(f, key, ln, raw)
-        elif key in ("SQAP", "ELAP"):
-            f.shaped_apertures.append(ln)
         elif key == "MNUM":
             f.mnum = ln
         elif key not in IGNORED_KEYWORDS:
@@ -214,6 +219,11 @@ def _surface_line(s: _Surf, key: str, ln: _Line) -> None:
     elif key == "OBDC":
         if ln.float(1, "aperture x decenter") != 0 or ln.float(2, "aperture y decenter") != 0:
             s.obdc = ln
+    elif key in _SHAPES:
+        for i, what in ((1, "x"), (2, "y")):
+            if not ln.float(i, f"aperture {what} half-width") > 0:
+                raise ln.error(f"{key} needs half-widths > 0 (lens units), got {ln.tokens[i]}")
+        s.shaped.append(ln)
     elif key == "COMM":
         s.comment = ln.text.strip()[4:].strip()
 
@@ -273,6 +283,8 @@ def _top_line(f: _File, key: str, ln: _Line, raw: str) -> None:
 
 
 def _sd(s: _Surf, unit: float) -> float:
+    if s.shaped or (s.obdc is not None and s.clap):  # clips at its apertures only
+        return math.inf
     if s.clap is not None:
         return s.clap * unit if s.clap > 0 else math.inf
     if s.diam is None:
@@ -526,6 +538,8 @@ def _obscurations(body, u) -> tuple:
         if s.obsc is not None and s.clap_min is not None:
             raise s.clap_min.error("an annular aperture (CLAP) and an obscuration (OBSC) on one "
                                    "surface are not supported (one blocked zone per surface)")
+        if s.obdc is not None:  # decentered: Lens.apertures (_apertures)
+            continue
         if s.obsc is not None:
             out.append((i, s.obsc.float(1, "") * u, s.obsc.float(2, "") * u))
         elif s.clap_min is not None:
@@ -533,21 +547,40 @@ def _obscurations(body, u) -> tuple:
     return tuple(out)
 
 
-def _check_apertures(f: _File, strict: bool) -> None:
-    """Refuse surface apertures the tracer cannot model (it clips outside a centred
-    semi-diameter only); rectangular and elliptical ones are reported (an error under
-    ``strict``)."""
-    for ln in f.shaped_apertures:
-        shape = "rectangular" if ln.tokens[0] == "SQAP" else "elliptical"
-        report(strict, f"{f.path}:{ln.number}: {shape} aperture ignored (jaxlens clips at "
-                        f"circular semi-diameters only): {ln.text.strip()!r}")
-    for s in f.surfs:
-        # An aperture decenter moves a clipping aperture or an obscuration; a surface with
-        # neither (an automatic DIAM is informational) has nothing for it to move.
-        clips = math.isfinite(_sd(s, 1.0)) or s.obsc is not None or s.clap_min is not None
-        if s.obdc is not None and clips:
-            raise s.obdc.error("decentered apertures (OBDC other than 0 0) are not supported; "
-                               "jaxlens apertures are centred on the axis")
+def _apertures(surfs, u) -> tuple:
+    """``Lens.apertures`` from SQAP/ELAP/SQOB/ELOB lines and decentered (OBDC) CLAP and OBSC
+    lines, for ``surfs`` = the lens surfaces and the image. The decenter moves every
+    aperture of its surface; a surface with such apertures clips at them only."""
+    out = []
+    for i, s in enumerate(surfs):
+        dx, dy = ((s.obdc.float(1, "") * u, s.obdc.float(2, "") * u) if s.obdc is not None
+                  else (0.0, 0.0))
+        for ln in s.shaped:
+            shape, blocks = _SHAPES[ln.tokens[0]]
+            out.append((i, Aperture(shape, ln.float(1, "") * u, ln.float(2, "") * u, dx, dy,
+                                    blocks)))
+        moved = bool(s.shaped)
+        if s.clap and (moved or s.obdc is not None):  # the semi-diameter does not clip
+            out.append((i, Aperture.circle(s.clap * u, dx, dy)))
+            moved = True
+        if s.obdc is None:  # centred obscurations stay in Lens.obscurations
+            continue
+        if s.clap and s.clap_min is not None:  # the blocked centre of an annulus
+            out.append((i, Aperture.circle(s.clap_min.float(1, "") * u, dx, dy, True)))
+        if s.obsc is not None:
+            if s.obsc.float(1, "") != 0:
+                raise s.obsc.error("a decentered (OBDC) annular obscuration (OBSC with minimum "
+                                   "radius > 0) is not supported; decentered obscurations are "
+                                   "discs (OBSC 0 r)")
+            out.append((i, Aperture.circle(s.obsc.float(2, "") * u, dx, dy, True)))
+            moved = True
+        # A fixed DIAM clips (centred); with no aperture for the decenter to move, refuse it
+        # rather than guess. A surface that clips nothing has nothing for it to move.
+        if not moved and math.isfinite(_sd(s, 1.0)):
+            raise s.obdc.error("a decenter (OBDC) of a fixed semi-diameter (DIAM) with no "
+                               "aperture is not supported; give the surface a CLAP, SQAP or "
+                               "ELAP for it to move")
+    return tuple(out)
 
 
 def _check_image_medium(f: _File, body: list) -> None:
@@ -626,7 +659,6 @@ def loads(text: str, path: str = "<zmx>", *, strict: bool = False) -> Lens:
     if not dist > 0:
         raise (obj.disz_line or obj.line).error("object distance must be > 0 or INFINITY")
     wl, primary = _wavelengths(f)
-    _check_apertures(f, strict)
     _check_image_medium(f, body)
     zmx_system.ray_aiming(f.raim, f.path)
     field_type = zmx_system.field_type(f.ftyp)
@@ -648,6 +680,7 @@ def loads(text: str, path: str = "<zmx>", *, strict: bool = False) -> Lens:
         name=f.name,
         mirrors=tuple(mirrors),
         obscurations=_obscurations(body, u),
+        apertures=_apertures(body + [img], u),
     )
     # Before the paraxial work of the aperture: values the lens cannot be traced with.
     checks.wavelengths(lens, wl, f"{path}: WAVM", "wavelength")
@@ -681,6 +714,10 @@ def loads(text: str, path: str = "<zmx>", *, strict: bool = False) -> Lens:
             if not value > 0:
                 raise ln.error("F/# must be > 0")
             return apply_aperture(lens, fnum=value)
+        if body[stop].shaped or body[stop].obdc is not None:
+            raise ln.error("FLOA (pupil set by the stop size) needs a centred circular stop "
+                           "aperture; the STOP surface has a decentered (OBDC) or rectangular/"
+                           "elliptical one. Give the pupil with ENPD, FNUM or OBNA")
         sd = body[stop].clap if body[stop].clap else (body[stop].diam or (0.0,))[0]
         if not sd > 0:
             raise ln.error("FLOA needs a DIAM or CLAP (stop semi-diameter) on the STOP surface")

@@ -310,6 +310,41 @@ def surface_lines(s: AbstractSurface, *, image: bool = False) -> list[str]:
     return out
 
 
+_APERTURE_KEYS = {("rect", False): "SQAP", ("ellipse", False): "ELAP", ("rect", True): "SQOB",
+                  ("ellipse", True): "ELOB"}
+
+
+def aperture_lines(i: int, aps: list, obscured: bool) -> list[str]:
+    """The lines of surface i's apertures (``Lens.apertures``): SQAP/ELAP/SQOB/ELOB, CLAP for
+    a clipping circle, OBSC for a blocking one, and their common decenter as ``OBDC``
+    (Zemax has one decenter per surface). A centred circle reads back as the semi-diameter
+    (or ``Lens.obscurations``): the same clipping."""
+    if not aps:
+        return []
+    dec = {(a.decenter_x, a.decenter_y) for a in aps}
+    if len(dec) > 1:
+        raise ValueError(f"save_zmx: the apertures of surface {i} have different decenters "
+                         f"{sorted(dec)} (mm); a .zmx surface has one aperture decenter (OBDC)")
+    (dx, dy), = dec
+    if obscured and (dx, dy) != (0.0, 0.0):
+        raise ValueError(f"save_zmx: surface {i} has an obscuration (Lens.obscurations) and "
+                         f"decentered apertures; the file's decenter (OBDC) would move both")
+    circles = [a.blocks for a in aps if a.shape == "circle"] + [True] * obscured
+    if len(circles) != len(set(circles)):
+        raise ValueError(f"save_zmx: surface {i} has more than one clipping or more than one "
+                         f"blocking circle (apertures and obscurations); a .zmx surface has "
+                         f"one CLAP and one OBSC")
+    out = []
+    for a in aps:
+        if a.shape == "circle":
+            out.append(f"  OBSC 0 {_z(a.half_x)}" if a.blocks else f"  CLAP 0 {_z(a.half_x)} 0")
+        else:
+            out.append(f"  {_APERTURE_KEYS[a.shape, a.blocks]} {_z(a.half_x)} {_z(a.half_y)} 0")
+    if (dx, dy) != (0.0, 0.0):
+        out.append(f"  OBDC {_z(dx)} {_z(dy)}")
+    return out
+
+
 def dumps(lens: Lens, path: str = "lens.zmx", *, model_glass: str = "blank"):
     """Text of a ``.zmx`` file and the glass writer holding its side AGF catalogs."""
     if model_glass not in ("blank", "agf"):
@@ -325,6 +360,9 @@ def dumps(lens: Lens, path: str = "lens.zmx", *, model_glass: str = "blank"):
     surf_lines = []
 
     obscured = {i: (a, b) for i, a, b in lens.obscurations}
+    apertures = {}
+    for i, a in lens.apertures:
+        apertures.setdefault(i, []).append(a)
 
     def block(number, lines, t, glas, sd, stop=False):
         surf_lines.append(f"SURF {number}")
@@ -335,6 +373,12 @@ def dumps(lens: Lens, path: str = "lens.zmx", *, model_glass: str = "blank"):
         if glas:
             surf_lines.append("  " + glas)
         sd = float(sd)
+        aps = apertures.get(number - 1, [])
+        if aps and math.isfinite(sd):
+            raise ValueError(f"save_zmx: surface {number - 1} has apertures (Lens.apertures) and "
+                             f"a finite semi-diameter ({sd} mm); a .zmx surface clips at its "
+                             f"apertures only: set its semi_diameter to inf (add a circle "
+                             f"Aperture for it)")
         if math.isfinite(sd):
             # DIAM is only the drawn size; Zemax and optiland clip rays at an aperture, so a
             # clipping semi-diameter is also written as a circular aperture (CLAP min max 0).
@@ -344,6 +388,7 @@ def dumps(lens: Lens, path: str = "lens.zmx", *, model_glass: str = "blank"):
             surf_lines.append('  DIAM 0 0 0 0 1 ""')
         if number - 1 in obscured:  # rays meeting r_min ≤ r ≤ r_max are blocked
             surf_lines.append(f"  OBSC {_z(obscured[number - 1][0])} {_z(obscured[number - 1][1])}")
+        surf_lines.extend(aperture_lines(number - 1, aps, number - 1 in obscured))
 
     dist = math.inf if lens.object_distance is None else float(lens.object_distance)
     block(0, ["TYPE STANDARD", 'CURV 0 0 0 0 0 ""'], dist, gw.glas(lens.object_material), np.inf)

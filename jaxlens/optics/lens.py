@@ -18,12 +18,19 @@ Conventions:
     ``obscurations`` lists ``(i, r_min, r_max)``: surface ``i`` blocks the rays that meet it
     at a height r_min ≤ r ≤ r_max (mm; Zemax ``OBSC``, r_min = 0 for a central
     obscuration such as a Cassegrain's secondary mirror).
+    ``apertures`` lists ``(i, Aperture)`` pairs (``jaxlens.optics.apertures``): circles,
+    ellipses and rectangles, decentered or not, that clip (or, with ``blocks``, obscure) the
+    rays at surface ``i``; ``i = len(surfaces)`` is the image surface. They act besides the
+    semi-diameters and ``obscurations`` (a surface clipped only by its apertures has
+    ``semi_diameter = inf``).
 
 The structure (surface kinds, counts, polynomial orders, stop index, mirrors) is static;
 every number is an array so ``jax.grad`` reaches it.
 """
 
 from __future__ import annotations
+
+import copy
 
 import equinox as eqx
 import jax
@@ -32,6 +39,7 @@ import numpy as np
 from jaxtyping import Array, Float
 
 from . import checks
+from .apertures import Aperture
 from .coordinates import CoordinateBreak
 from .materials import AbstractMaterial, Air
 from .surfaces import AbstractSurface, Standard
@@ -123,6 +131,9 @@ class Lens(eqx.Module):
     obscurations: tuple[tuple[int, float, float], ...] = eqx.field(
         static=True, default=(), converter=lambda o: tuple(
             (int(i), float(a), float(b)) for i, a, b in o))
+    apertures: tuple[tuple[int, Aperture], ...] = eqx.field(
+        static=True, default=(), converter=lambda a: tuple(
+            tuple(e) if isinstance(e, (list, tuple)) else e for e in a))
 
     def __check_init__(self):
         n = len(self.surfaces)
@@ -146,6 +157,19 @@ class Lens(eqx.Module):
                 raise ValueError(
                     f"Lens: obscuration ({i}, {r_min}, {r_max}) must name one surface in "
                     f"[0, {n - 1}] (0-based) once with 0 ≤ r_min < r_max (mm)")
+        self._check_apertures()
+
+    def _check_apertures(self):
+        n = len(self.surfaces)
+        for entry in self.apertures:
+            i, a = entry if isinstance(entry, tuple) and len(entry) == 2 else (None, None)
+            if (isinstance(i, bool) or not isinstance(i, (int, np.integer))
+                    or not 0 <= i <= n or not isinstance(a, Aperture)):
+                raise ValueError(
+                    f"Lens: apertures must be (i, Aperture) pairs with i a surface index in "
+                    f"[0, {n}] (0-based; {n} is the image surface), got {entry!r}")
+            if i < n and isinstance(self.surfaces[i], CoordinateBreak):
+                raise ValueError(f"Lens: surface {i} is a coordinate break; it has no aperture")
 
     def _check_types(self):
         """Surfaces and materials of the right kind (a bare number or a glass name is not)."""
@@ -259,10 +283,15 @@ class Lens(eqx.Module):
 
 
 def unclipped(lens: Lens) -> Lens:
-    """The lens with every semi-diameter set to inf, for aiming rays (an aperture that clips
-    an intermediate Newton iterate would otherwise stop it where it was clipped)."""
+    """The lens with every semi-diameter set to inf and no ``apertures``, for aiming rays (an
+    aperture that clips an intermediate Newton iterate would otherwise stop it where it was
+    clipped)."""
     surfaces = tuple(
         eqx.tree_at(lambda s: s.semi_diameter, s, jnp.full_like(s.semi_diameter, jnp.inf))
         for s in lens.surfaces
     )
-    return eqx.tree_at(lambda m: m.surfaces, lens, surfaces)
+    free = eqx.tree_at(lambda m: m.surfaces, lens, surfaces)
+    if free.apertures:  # static structure, which tree_at does not reach
+        free = copy.copy(free)
+        object.__setattr__(free, "apertures", ())
+    return free

@@ -93,10 +93,10 @@ def reversed_lens(lens: Lens, *, image_distance=None) -> Lens:
         mirrored, a flat image surface and no sensor. Field, wavelength and pupil data are
         copied unchanged (they do not describe the mirrored system).
     """
-    if lens.mirrors or lens.obscurations or any(
+    if lens.mirrors or lens.obscurations or lens.apertures or any(
             isinstance(s, CoordinateBreak) for s in lens.surfaces):
-        raise ValueError("reversed_lens: lenses with mirrors, obscurations or coordinate breaks "
-                         "cannot be "
+        raise ValueError("reversed_lens: lenses with mirrors, obscurations, apertures "
+                         "(Lens.apertures) or coordinate breaks cannot be "
                          "traced backward (nor rendered) yet; trace them forward with trace")
     n = lens.num_surfaces
     t = lens.thickness

@@ -131,6 +131,9 @@ def _trace_states(lens: Lens, rays: Rays, newton_iters: int, upto: int | None, *
     breaks = frozenset(i for i, s in enumerate(surfaces) if isinstance(s, CoordinateBreak))
     mirrors = frozenset(lens.mirrors)
     obsc = {i: (a, b) for i, a, b in lens.obscurations}
+    aps = {}  # surface index -> its apertures (static)
+    for i, a in lens.apertures:
+        aps[i] = aps.get(i, ()) + (a,)
     gaps = _travel_gaps(lens)
     out = []
     first = 0
@@ -141,16 +144,18 @@ def _trace_states(lens: Lens, rays: Rays, newton_iters: int, upto: int | None, *
     if first > last:
         return out
     st = step(surfaces[first], zs[first], st, idx[first], idx[first + 1], first=True,
-              reflects=first in mirrors, obscured=obsc.get(first))
+              reflects=first in mirrors, obscured=obsc.get(first), apertures=aps.get(first, ()))
     out.append(st)
-    for i, j in _runs(surfaces, first + 1, last + 1, breaks | mirrors | frozenset(obsc)):
+    alone = breaks | mirrors | frozenset(obsc) | frozenset(aps)
+    for i, j in _runs(surfaces, first + 1, last + 1, alone):
         if i in breaks:
             st = _break_step(surfaces[i], zs[i], st)
             out.append(st)
             continue
         if j - i == 1:
             st = step(surfaces[i], zs[i], st, idx[i], idx[i + 1], first=False,
-                      gap=gaps(i - 1), reflects=i in mirrors, obscured=obsc.get(i))
+                      gap=gaps(i - 1), reflects=i in mirrors, obscured=obsc.get(i),
+                      apertures=aps.get(i, ()))
             out.append(st)
             continue
         stacked = jax.tree.map(lambda *x: jnp.stack(x), *surfaces[i:j])
@@ -173,7 +178,8 @@ def _trace_states(lens: Lens, rays: Rays, newton_iters: int, upto: int | None, *
             out.append(st)
     if upto is None:
         st = surface_step(lens.image, lens.image_z(), st, idx[-1], idx[-1], first=False,
-                          refracts=False, newton_iters=newton_iters, gap=gaps(-1))
+                          refracts=False, newton_iters=newton_iters, gap=gaps(-1),
+                          apertures=aps.get(len(surfaces), ()))
         out.append(st)
     return out
 

@@ -52,6 +52,7 @@ import equinox as eqx
 import jax
 import jax.numpy as jnp
 
+from ..optics.apertures import passes_all
 from ..optics.paraxial_surface import ParaxialSurface
 from ..optics.rays import Rays
 from ..optics.surfaces import AbstractSurface
@@ -369,13 +370,15 @@ class RayState(eqx.Module):
 
 
 def surface_step(surface, z_vertex, st: RayState, n_before, n_after, *, first, refracts,
-                 newton_iters, gap=None, reflects=False, obscured=None):
+                 newton_iters, gap=None, reflects=False, obscured=None, apertures=()):
     """Move rays to one surface (vertex at global ``z_vertex``) and refract them there.
 
     ``n_before``/``n_after`` are the refractive indices on either side; ``first`` applies the
     object-space rules of surface 1; ``refracts=False`` only intersects (the image surface);
     ``reflects=True`` (static) makes the surface a mirror (``n_after`` is then unused);
-    ``obscured=(r_min, r_max)`` (static, mm) blocks the rays that meet it in that annulus.
+    ``obscured=(r_min, r_max)`` (static, mm) blocks the rays that meet it in that annulus;
+    ``apertures`` (static, a tuple of ``optics.apertures.Aperture``) clip or block the rays
+    that meet it outside or inside each of them.
     Rays that fail keep their last position and direction and become invalid; ``opl`` adds
     n·t for valid rays. ``gap`` is the thickness before this surface: where it is negative
     (or zero, for a dummy surface) the surface may lie behind the ray's start and the ray
@@ -402,6 +405,7 @@ def surface_step(surface, z_vertex, st: RayState, n_before, n_after, *, first, r
     if obscured is not None:  # static: a central (or annular) obscuration
         r2 = x * x + y * y
         ok = ok & ((r2 < obscured[0] ** 2) | (r2 > obscured[1] ** 2))
+    ok = passes_all(apertures, x, y, ok)
     d, phase = st.d, None
     if reflects:
         d = reflect(d, surface_normal(surface, x, y, z))
