@@ -8,7 +8,6 @@ in the skipping benchmark gives the same answer as the full computation.
 import json
 import math
 import pathlib
-import sys
 
 import pytest
 
@@ -17,8 +16,6 @@ ROOT = pathlib.Path(__file__).resolve().parents[1]
 
 @pytest.fixture(scope="module")
 def smoke_results(tmp_path_factory):
-    if str(ROOT) not in sys.path:
-        sys.path.insert(0, str(ROOT))
     from benchmarks import throughput
     from benchmarks.run import main
 
@@ -124,8 +121,6 @@ def test_design_step_smoke(tmp_path):
 def test_render_memory_smoke():
     """One checkpointed render gradient and the bare-trace reference, each in its own process,
     on tiny sizes; the per-ray residual note is the slope between the plain runs."""
-    if str(ROOT) not in sys.path:
-        sys.path.insert(0, str(ROOT))
     from benchmarks import render_memory
 
     cap = 8 * 2**30
@@ -141,8 +136,6 @@ def test_render_memory_smoke():
 
 
 def test_reevaluate_without_optiland_says_so(monkeypatch, capsys, tmp_path):
-    if str(ROOT) not in sys.path:
-        sys.path.insert(0, str(ROOT))
     from benchmarks import optiland_ref, reevaluate
 
     monkeypatch.setattr(optiland_ref, "available", lambda: False)
@@ -155,8 +148,6 @@ def test_reevaluate_agrees_with_jaxlens_on_an_exported_design(tmp_path):
     pytest.importorskip("optiland")
     import shutil
 
-    if str(ROOT) not in sys.path:
-        sys.path.insert(0, str(ROOT))
     from benchmarks import reevaluate
 
     src = ROOT / "experiments" / "classical" / "designs" / "seed_0.zmx"
@@ -179,9 +170,6 @@ def test_first_crossing_scan_accepts_a_correct_trace_and_rejects_a_wrong_root(mo
 
     import jaxlens as jl
     import jaxlens.tracing.forward as fwd
-
-    if str(ROOT) not in sys.path:
-        sys.path.insert(0, str(ROOT))
     from benchmarks import reevaluate
     from jaxlens.imaging.sampling import field_rays, pupil_grid
 
@@ -200,8 +188,6 @@ def test_first_crossing_scan_accepts_a_correct_trace_and_rejects_a_wrong_root(mo
                                   ["--spp", "-1"]])
 def test_render_memory_refuses_bad_arguments(args, capsys):
     """Bad sizes are refused with the option's name before any worker starts."""
-    if str(ROOT) not in sys.path:
-        sys.path.insert(0, str(ROOT))
     from benchmarks import render_memory
 
     with pytest.raises(SystemExit):
