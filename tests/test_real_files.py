@@ -398,3 +398,19 @@ def test_image_surface_model_glass_must_match_image_space(tmp_path):
     _load_text(tmp_path, text + last)  # the same model glass: silent
     with pytest.warns(ZmxWarning, match="names ___BLANK 1.6 0 but image space .* is ___BLANK"):
         _load_text(tmp_path, text + last.replace("1.5", "1.6"))
+
+
+def test_older_zemax_xfld_yfld_fields(tmp_path):
+    """Zemax files before XFLN/YFLN list the fields as XFLD/YFLD, one value a field (FTYP
+    without a count). They were read as a single on-axis field; XFLN without YFLN is
+    refused rather than dropped."""
+    old = "ENPD 10\nFTYP 0 0\nXFLD 0 0 3\nYFLD 0 10 20\nFWGT 1 1 1\n"
+    _, lens = _load_text(tmp_path, _file(old))
+    np.testing.assert_array_equal(np.asarray(lens.fields), [[0, 0], [0, 10], [3, 20]])
+    _, lens = _load_text(tmp_path, _file(old.replace("XFLD 0 0 3\n", "")))
+    np.testing.assert_array_equal(np.asarray(lens.fields), [0, 10, 20])
+    # XFLN/YFLN win where a file has both (Zemax 2005-2013 wrote both).
+    both = old + "XFLN 0 0 0 0 0 0 0 0 0 0 0 0\nYFLN 0 7 0 0 0 0 0 0 0 0 0 0\n"
+    _, lens = _load_text(tmp_path, _file(both.replace("FTYP 0 0", "FTYP 0 0 2 1")))
+    np.testing.assert_array_equal(np.asarray(lens.fields), [0, 7])
+    assert _refused(tmp_path, _file("ENPD 10\nXFLN 0 5\n"), "without the y fields") == "XFLN 0 5"

@@ -134,6 +134,8 @@ class _File:
     ftyp: _Line | None = None
     xfln: _Line | None = None
     yfln: _Line | None = None
+    xfld: _Line | None = None  # older Zemax: the fields, one value each (no padding to 12)
+    yfld: _Line | None = None
     wavm: dict = field(default_factory=dict)
     wavl: _Line | None = None
     pwav: _Line | None = None
@@ -229,7 +231,7 @@ def _surface_line(s: _Surf, key: str, ln: _Line) -> None:
 
 
 _TOP_KEYS = frozenset("VERS MODE NAME UNIT ENPD FNUM FLOA OBNA PUPD GCAT FTYP XFLN YFLN "
-                      "WAVM WAVL PWAV RAIM VDXN VDYN VCXN VCYN VANN".split())
+                      "XFLD YFLD WAVM WAVL PWAV RAIM VDXN VDYN VCXN VCYN VANN".split())
 
 
 def _top_line(f: _File, key: str, ln: _Line, raw: str) -> None:
@@ -273,6 +275,10 @@ def _top_line(f: _File, key: str, ln: _Line, raw: str) -> None:
         f.xfln = ln
     elif key == "YFLN":
         f.yfln = ln
+    elif key == "XFLD":
+        f.xfld = ln
+    elif key == "YFLD":
+        f.yfld = ln
     elif key == "WAVM":
         i = ln.int(1, "wavelength number")
         f.wavm[i] = (ln.float(2, "wavelength"), ln)
@@ -419,15 +425,25 @@ def _fields(f: _File, strict: bool) -> np.ndarray:
     count = None
     if f.ftyp is not None and len(f.ftyp.tokens) > 3:
         count = f.ftyp.int(3, "number of fields (FTYP's fourth value)", lo=1)
-    if f.yfln is None:
+    # Older Zemax (before XFLN/YFLN, which list 12 values padded with zeros) wrote the
+    # fields as XFLD/YFLD, exactly one value a field: a file with only those has them all.
+    yln = f.yfln if f.yfln is not None else f.yfld
+    xln = f.xfln if f.yfln is not None or f.xfld is None else f.xfld
+    if yln is None:
+        if xln is not None:
+            raise xln.error(f"{xln.tokens[0]} (x fields) without the y fields "
+                            f"(YFLN or YFLD) of the same fields")
         return np.zeros(1)
-    ys = [f.yfln.float(i, "y field") for i in range(1, len(f.yfln.tokens))]
-    xs = [f.xfln.float(i, "x field") for i in range(1, len(f.xfln.tokens))] if f.xfln else []
+    ys = [yln.float(i, "y field") for i in range(1, len(yln.tokens))]
+    xs = [xln.float(i, "x field") for i in range(1, len(xln.tokens))] if xln else []
+    if count is None and yln is f.yfld:
+        count = max(1, len(ys))
     if count is None:
         count = max(1, max((i + 1 for i, v in enumerate(ys) if v != 0), default=1))
     if len(ys) < count:
-        report(strict, f"{f.path}:{f.yfln.number}: FTYP announces {count} fields, YFLN gives "
-                        f"{len(ys)}; the fields it does not give are read as 0 (on axis)")
+        report(strict, f"{f.path}:{yln.number}: FTYP announces {count} fields, "
+                        f"{yln.tokens[0]} gives {len(ys)}; the fields it does not give are "
+                        f"read as 0 (on axis)")
         ys += [0.0] * (count - len(ys))
     vignetting = zmx_system.vignetting_factors(f.vignetting, count)
     if vignetting:
