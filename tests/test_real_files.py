@@ -414,3 +414,29 @@ def test_older_zemax_xfld_yfld_fields(tmp_path):
     _, lens = _load_text(tmp_path, _file(both.replace("FTYP 0 0", "FTYP 0 0 2 1")))
     np.testing.assert_array_equal(np.asarray(lens.fields), [0, 7])
     assert _refused(tmp_path, _file("ENPD 10\nXFLN 0 5\n"), "without the y fields") == "XFLN 0 5"
+
+
+def test_parameters_on_a_standard_surface(tmp_path):
+    """A block without TYPE is STANDARD: with asphere terms (PARM ≠ 0) its TYPE line is
+    missing, and reading it as a sphere would drop them silently, so it is refused. Under an
+    explicit TYPE STANDARD, Zemax ignores left-over parameters: a warning."""
+    parm = "  PARM 2 1.5E-5\n"
+    assert _refused(tmp_path, _file("ENPD 10\n", surface1=parm), "has no TYPE line") == (
+        "PARM 2 1.5E-5")
+    with pytest.warns(zmx.ZmxWarning, match="PARM 2 on a STANDARD surface ignored"):
+        _, lens = _load_text(tmp_path, _file("ENPD 10\n", surface1="  TYPE STANDARD\n" + parm))
+    assert float(jl.paraxial_data(lens).efl) == pytest.approx(_singlet_efl_bfl()[0], rel=1e-14)
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")
+        _load_text(tmp_path, _file("ENPD 10\n", surface1="  PARM 1 0\n  PARM 2 0\n"))
+
+
+def test_model_glass_partial_dispersion_reported(tmp_path):
+    """GLAS ___BLANK 1 0 nd Vd ΔPgF: a ΔPgF other than 0 is not modelled (the index off the
+    d line differs from Zemax's): a warning naming the line."""
+    text = _file("ENPD 10\n").replace("___BLANK 1 0 1.5 0 0", "___BLANK 1 0 1.5 50 0.02")
+    with pytest.warns(zmx.ZmxWarning, match=r"f.zmx:10: model glass ΔPgF 0.02 ignored"):
+        _load_text(tmp_path, text)
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")
+        _load_text(tmp_path, text.replace("50 0.02", "50 0"))

@@ -98,6 +98,13 @@ class GlassResolver:
             if not nd >= 1 or vd < 0:
                 raise ln.error(f"model glass needs nd >= 1 and Vd >= 0 (0: no dispersion), got "
                                f"nd {nd:g}, Vd {vd:g}")
+            if len(ln.tokens) > 6 and ln.float(6, "model glass ΔPgF") != 0:
+                # Zemax's model bends the dispersion curve by ΔPgF; jaxlens's ModelGlass is
+                # linear in 1/λ² (nd and nF - nC kept): the index off the d line differs.
+                warnings.warn(f"{ln.path}:{ln.number}: model glass ΔPgF "
+                              f"{ln.tokens[6]} ignored: jaxlens's model glass keeps nd "
+                              f"and Vd only (no partial-dispersion deviation): "
+                              f"{ln.text.strip()!r}", ZmxWarning, stacklevel=4)
             return ModelGlass(_arr(nd), _arr(math.inf if vd == 0 else vd))
         if up == "MIRROR":
             raise ln.error("GLAS MIRROR belongs on a lens surface (not the object or image)")

@@ -323,6 +323,7 @@ def _surface(s: _Surf, unit: float) -> AbstractSurface:
     sd = _sd(s, unit)
     where = s.type_line or s.line
     if s.type == "STANDARD":
+        _standard_without_terms(s)
         return Standard(c=_arr(c), k=_arr(s.coni), semi_diameter=_arr(sd))
     if s.type == "EVENASPH":
         for i, (v, ln) in s.parm.items():
@@ -351,6 +352,24 @@ def _surface(s: _Surf, unit: float) -> AbstractSurface:
         f"surface type {s.type} is not supported (STANDARD, EVENASPH, XASPHERE, XPOLYNOM, "
         f"TOROIDAL, PARAXIAL, COORDBRK)"
     )
+
+
+def _standard_without_terms(s: _Surf) -> None:
+    """A STANDARD surface has no parameters. Non-zero PARM/XDAT values in a block without a
+    TYPE line (read as STANDARD) mean a surface whose type line is missing, an asphere most
+    likely: refused. Under an explicit ``TYPE STANDARD`` they are left over from another
+    type, and Zemax ignores them: a warning."""
+    extra = [ln for _, (v, ln) in sorted(s.parm.items()) + sorted(s.xdat.items()) if v != 0]
+    if not extra:
+        return
+    ln = extra[0]
+    if s.type_line is None:
+        raise ln.error(f"surface {s.number} has no TYPE line, so it would be STANDARD, which "
+                       f"has no parameters, but it gives {ln.tokens[0]} {ln.tokens[1]} (an "
+                       f"asphere's terms?); add the surface's TYPE line")
+    warnings.warn(f"{ln.path}:{ln.number}: {ln.tokens[0]} {ln.tokens[1]} on a STANDARD "
+                  f"surface ignored (as in Zemax: STANDARD has no parameters): "
+                  f"{ln.text.strip()!r}", ZmxWarning, stacklevel=4)
 
 
 def _coordinate_break(s: _Surf, unit: float) -> CoordinateBreak:
