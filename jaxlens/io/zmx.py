@@ -6,7 +6,9 @@ Conventions:
     or METER), wavelengths are in µm as in Zemax, field angles in degrees.
 
 What is read and written:
-    * ``TYPE STANDARD`` (CURV, CONI), ``TYPE EVENASPH`` (PARM 1..8 = A2, A4, …, A16, so
+    * ``TYPE STANDARD`` (CURV, CONI; a block without TYPE, but not one with non-zero
+      PARM/XDAT, which is refused as a missing TYPE line), ``TYPE EVENASPH``
+      (PARM 1..8 = A2, A4, …, A16, so
       PARM 1 multiplies r²) and ``TYPE XASPHERE`` (extended asphere: XDAT 1 = number of
       terms, XDAT 2 = normalisation radius, XDAT 3… = the r², r⁴, … coefficients; used
       for even aspheres with more than 8 terms).
@@ -62,7 +64,8 @@ What is read and written:
       there), ``FTYP 3`` (real image heights) and ``FTYP 2`` (paraxial image heights,
       converted exactly to angles: θ = atan(h/K), K the paraxial image height per unit
       tan θ) with ``XFLN``/``YFLN`` (fields FTYP counts but
-      ``YFLN`` omits are on axis, with a warning); other field types, telecentric object
+      ``YFLN`` omits are on axis, with a warning; older files' ``XFLD``/``YFLD``, one value a
+      field, where there are no XFLN/YFLN); other field types, telecentric object
       space and afocal image space are refused. Vignetting factors (VDXN, VDYN, VCXN, VCYN,
       VANN) other than 0 give a warning (an error with ``strict``): the whole pupil is traced
       and the apertures clip. ``PUPD`` beside another aperture line (older Zemax) is
