@@ -35,7 +35,20 @@ def _fields_array(fields, where: str) -> Array:
     return f.reshape(-1) if f.ndim <= 1 else f
 
 
-@eqx.filter_jit
+def _concrete_inputs(lens: Lens, where: str, *, fields=None, wavelengths=None,
+                     arg_f: str = "fields", arg_w: str = "wavelengths") -> None:
+    """Check the field angles (deg) and wavelengths (µm) the caller gave, before the jitted
+    body: inside it a constant array is a tracer, and the same checks became an
+    ``EquinoxRuntimeError`` raised after the whole trace had run."""
+    if not isinstance(lens, Lens):
+        raise TypeError(f"{where}: lens must be a jaxlens.Lens, got {type(lens).__name__}")
+    if fields is not None and not checks.is_traced(fields):
+        checks.field_angles(fields, where, arg_f)
+    if wavelengths is not None and not checks.is_traced(wavelengths):
+        checks.wavelengths(lens, wavelengths, where, arg_w)
+        checks.material_indices(lens, wavelengths, where, arg_w)
+
+
 def spot_rays(
     lens: Lens,
     field,
@@ -47,6 +60,14 @@ def spot_rays(
     newton_iters: int = DEFAULT_NEWTON_ITERS,
 ) -> Rays:
     """Rays of one field and wavelength on the image surface (a spot diagram as data)."""
+    _concrete_inputs(lens, "spot_rays", fields=field, wavelengths=wavelength, arg_f="field",
+                     arg_w="wavelength")
+    return _spot_rays(lens, field, wavelength, pupil=pupil, depth=depth, aim=aim,
+                      newton_iters=newton_iters)
+
+
+@eqx.filter_jit
+def _spot_rays(lens, field, wavelength, *, pupil, depth, aim, newton_iters) -> Rays:
     pupil = pupil_grid(21, lens.epd.dtype) if pupil is None else pupil
     rays = field_rays(lens, field, pupil, wavelength, depth=depth, aim=aim)
     return trace(lens, rays, newton_iters=newton_iters)
@@ -54,8 +75,11 @@ def spot_rays(
 
 def chief_ray(lens: Lens, field, wavelength=None, *, depth=None) -> Rays:
     """The chief ray (through the paraxial entrance-pupil centre) on the image surface."""
+    _concrete_inputs(lens, "chief_ray", fields=field, wavelengths=wavelength, arg_f="field",
+                     arg_w="wavelength")
     centre = jnp.zeros((1, 2), lens.epd.dtype)
-    return spot_rays(lens, field, wavelength, pupil=centre, depth=depth)[0]
+    return _spot_rays(lens, field, wavelength, pupil=centre, depth=depth, aim="paraxial",
+                      newton_iters=DEFAULT_NEWTON_ITERS)[0]
 
 
 class RmsSpot(eqx.Module):
@@ -91,7 +115,6 @@ def weighted_centroid(p, w):
     return jnp.sum(w[..., None] * p, axis=-2) / jnp.maximum(jnp.sum(w, axis=-1), 1.0)[..., None]
 
 
-@eqx.filter_jit
 def rms_spot(
     lens: Lens,
     fields=None,
@@ -117,6 +140,13 @@ def rms_spot(
         A field and wavelength that no ray gets through has NaN radius (and centroid),
         with ``valid_fraction`` 0; its gradient is 0, never NaN.
     """
+    _concrete_inputs(lens, "rms_spot", fields=fields, wavelengths=wavelengths)
+    return _rms_spot(lens, fields, wavelengths, pupil=pupil, reference=reference, depth=depth,
+                     newton_iters=newton_iters)
+
+
+@eqx.filter_jit
+def _rms_spot(lens, fields, wavelengths, *, pupil, reference, depth, newton_iters) -> RmsSpot:
     if reference not in ("centroid", "chief"):
         raise ValueError(f"rms_spot: reference must be 'centroid' or 'chief', got {reference!r}")
     fields = _fields_array(lens.fields if fields is None else fields, "rms_spot")
@@ -139,7 +169,8 @@ def rms_spot(
 
     def per_field(field):
         def per_wl(wl):
-            r = spot_rays(lens, field, wl, pupil=pupil_ext, depth=depth, newton_iters=newton_iters)
+            r = _spot_rays(lens, field, wl, pupil=pupil_ext, depth=depth, aim="paraxial",
+                           newton_iters=newton_iters)
             return r.origin[..., :2], r.valid.astype(r.origin.dtype)
 
         p_ext, w_ext = jax.vmap(per_wl)(wls)  # [W, M+1, 2], [W, M+1]
@@ -147,8 +178,8 @@ def rms_spot(
         if own_wavelengths:
             chief, chief_valid = p_ext[lens.primary, m], w_ext[lens.primary, m]
         else:
-            cr = spot_rays(lens, field, primary, pupil=jnp.zeros((1, 2), pupil.dtype),
-                           depth=depth, newton_iters=newton_iters)
+            cr = _spot_rays(lens, field, primary, pupil=jnp.zeros((1, 2), pupil.dtype),
+                            depth=depth, aim="paraxial", newton_iters=newton_iters)
             chief, chief_valid = cr.origin[0, :2], cr.valid[0].astype(cr.origin.dtype)
         cen = weighted_centroid(p, w)  # [W, 2]
         ref = cen if reference == "centroid" else jnp.broadcast_to(chief, cen.shape)
@@ -181,7 +212,6 @@ class Distortion(eqx.Module):
     percent_paraxial: Float[Array, " F"]
 
 
-@eqx.filter_jit
 def distortion(lens: Lens, fields=None, wavelength=None) -> Distortion:
     """Distortion of the real chief ray at ``wavelength`` (default primary).
 
@@ -189,7 +219,16 @@ def distortion(lens: Lens, fields=None, wavelength=None) -> Distortion:
     ``percent_ftan`` = 100·(y_real − EFL·tanθ)/(EFL·tanθ); ``percent_paraxial`` uses the
     paraxial chief-ray height on the image surface instead. Heights are along y for
     ``[F]`` fields and radial for ``[F, 2]`` (see :class:`Distortion`). Zero fields give 0.
+    A field whose real chief ray does not reach the image (vignetted, or beyond the lens's
+    coverage) has NaN height and distortion (its height was 0: a plausible −100 %).
     """
+    _concrete_inputs(lens, "distortion", fields=fields, wavelengths=wavelength,
+                     arg_w="wavelength")
+    return _distortion(lens, fields, wavelength)
+
+
+@eqx.filter_jit
+def _distortion(lens, fields, wavelength) -> Distortion:
     fields = _fields_array(lens.fields if fields is None else fields, "distortion")
     wl = lens.primary_wavelength if wavelength is None else wavelength
     if jnp.ndim(wl) != 0:
@@ -198,7 +237,10 @@ def distortion(lens: Lens, fields=None, wavelength=None) -> Distortion:
     f = paraxial.efl(lens, wl)
     xy = fields if fields.ndim == 2 else jnp.stack([jnp.zeros_like(fields), fields], -1)
     t = jnp.tan(jnp.deg2rad(xy))  # the ideal image point is EFL·t
-    p = jax.vmap(lambda th: chief_ray(lens, th, wl).origin[:2])(fields)
+    chief = jax.vmap(lambda th: _spot_rays(
+        lens, th, wl, pupil=jnp.zeros((1, 2), lens.epd.dtype), depth=None, aim="paraxial",
+        newton_iters=DEFAULT_NEWTON_ITERS)[0])(fields)
+    p = jnp.where(chief.valid[:, None], chief.origin[:, :2], jnp.nan)
     if fields.ndim == 2:
         s = jnp.sum(t * t, axis=-1)
         tr = jnp.where(s > 0, jnp.sqrt(jnp.where(s > 0, s, 1.0)), 0.0)  # grad-safe at 0
@@ -219,7 +261,6 @@ def distortion(lens: Lens, fields=None, wavelength=None) -> Distortion:
     return Distortion(fields, y, ftan, ypar, pct(y, ftan), pct(y, ypar))
 
 
-@eqx.filter_jit
 def clear_semi_diameters(lens: Lens, fields=None, n_rim: int = 64, *,
                          reaching: bool = False, pupil=None) -> Float[Array, " n"]:
     """Clear semi-diameter of every surface (mm).
@@ -232,6 +273,12 @@ def clear_semi_diameters(lens: Lens, fields=None, n_rim: int = 64, *,
     interior rays: where rim rays fail, a ray inside the pupil can pass higher than any
     rim ray that passes, and an aperture sized from the rim alone would clip it.
     """
+    _concrete_inputs(lens, "clear_semi_diameters", fields=fields)
+    return _clear_semi_diameters(lens, fields, n_rim, reaching=reaching, pupil=pupil)
+
+
+@eqx.filter_jit
+def _clear_semi_diameters(lens, fields, n_rim, *, reaching, pupil) -> Float[Array, " n"]:
     checks.number(n_rim, "n_rim", "clear_semi_diameters", lo=4, integer=True,
                   unit="rim rays per beam (fewer miss the rim in x or y)")
     fields = _fields_array(lens.fields if fields is None else fields, "clear_semi_diameters")
@@ -290,11 +337,22 @@ def self_intersection(
     when every gap exceeds ``min_gap`` and every sag is defined. The check is independent of
     any design regularizer.
     """
+    where = "self_intersection"
+    checks.number(n_radial, "n_radial", where, lo=2, integer=True, unit="radii")
+    checks.number(n_angle, "n_angle", where, lo=1, integer=True, unit="azimuths")
+    if not checks.is_traced(min_gap):
+        checks.number(min_gap, "min_gap", where, unit="mm")
+    n = lens.num_surfaces
     if semi_diameters is None:
         sd = clear_semi_diameters(lens, reaching=True)
     else:
+        if not checks.is_traced(semi_diameters):
+            checks.real_values(semi_diameters, "semi_diameters", where, "mm")
+            checks.values(semi_diameters, "semi_diameters", where, lo=0, unit="mm")
         sd = jnp.asarray(semi_diameters)
-    n = lens.num_surfaces
+        if sd.shape != (n,):
+            raise ValueError(f"{where}: semi_diameters must hold one value per surface, shape "
+                             f"({n},) (mm), got shape {sd.shape}")
     surfs = list(lens.surfaces) + [lens.image]
     zs = jnp.concatenate([lens.vertex_z(), lens.image_z()[None]])
     sd_all = jnp.concatenate([sd, sd[-1:]])

@@ -31,7 +31,7 @@ import jax
 import jax.numpy as jnp
 from jaxtyping import Array, Float
 
-from ..optics import paraxial
+from ..optics import checks, paraxial
 from ..optics.lens import Lens, Sensor, unclipped
 from ..optics.rays import Rays
 from ..tracing.backward import trace_backward
@@ -60,6 +60,9 @@ def _sensor(lens: Lens, sensor):
     sensor = lens.sensor if sensor is None else sensor
     if sensor is None:
         raise ValueError("distortion_relax: the lens has no sensor; pass sensor=Sensor(...)")
+    if not isinstance(sensor, Sensor):
+        raise TypeError(f"distortion_relax: sensor must be a jaxlens.Sensor, got "
+                        f"{type(sensor).__name__} {sensor!r}")
     return sensor
 
 
@@ -91,6 +94,9 @@ def distortion_map(
         A :class:`DistortionMap` (differentiable with respect to the lens).
     """
     s = _sensor(lens, sensor)
+    grid = checks.grid(grid, "distortion_map", "grid", "points")
+    checks.number(newton_iters, "newton_iters", "distortion_map", lo=0, integer=True,
+                  unit="iterations")
     depth = sampling.static_depth(depth)
     lens = apertured(lens)
     ideal = sensor_grid(s.resolution, s.pixel_size, grid).astype(lens.epd.dtype)
@@ -124,8 +130,17 @@ def inverse_distortion_map(
     Returns:
         ``[gr, gc, 2]`` ideal positions (mm), differentiable with respect to the lens.
     """
-    return _inverse_map(lens, jnp.asarray(pixel_size), depth, resolution=tuple(resolution),
-                        grid=tuple(grid), newton_iters=newton_iters, iters=iters)
+    where = "inverse_distortion_map"
+    resolution = checks.grid(resolution, where, "resolution", "pixels")
+    grid = checks.grid(grid, where, "grid", "points")
+    if not checks.is_traced(pixel_size):
+        checks.number(pixel_size, "pixel_size", where, lo=0, lo_open=True, unit="mm")
+    checks.number(newton_iters, "newton_iters", where, lo=0, integer=True, unit="iterations")
+    checks.number(iters, "iters", where, lo=0, integer=True, unit="aiming iterations")
+    if depth is not None:  # None, or a finite distance > 0 (inf: at infinity, as elsewhere)
+        depth = sampling.static_depth(depth)
+    return _inverse_map(lens, jnp.asarray(pixel_size), depth, resolution=resolution,
+                        grid=grid, newton_iters=newton_iters, iters=iters)
 
 
 @eqx.filter_jit
@@ -215,6 +230,7 @@ def prewarp(
     scene = jnp.asarray(scene)
     if scene.ndim != 3:
         raise ValueError(f"prewarp: scene must be [H, W, C], got {scene.shape}")
+    grid = checks.grid(grid, "prewarp", "grid", "points")
     dmap = distortion_map(lens, grid=grid, depth=depth, sensor=s, newton_iters=newton_iters)
     return _prewarp(scene, dmap.real.astype(scene.dtype), jnp.asarray(s.pixel_size),
                     resolution=tuple(s.resolution), grid=tuple(grid))

@@ -57,7 +57,7 @@ import numpy as np
 from jaxtyping import Array, ArrayLike, Float
 
 from ..optics import checks, paraxial
-from ..optics.lens import Lens
+from ..optics.lens import Lens, Sensor
 from ..optics.materials import LAMBDA_C, LAMBDA_D, LAMBDA_F
 from ..optics.rays import Rays
 from ..tracing.forward import DEFAULT_NEWTON_ITERS, trace
@@ -396,8 +396,8 @@ def _prepare(lens, field, depth, wavelength, kernel_size, pixel_size, model, cen
     checks.number(newton_iters, "newton_iters", caller, lo=0, integer=True, unit="iterations")
     if center not in CENTERS:
         raise ValueError(f"{caller}: center must be one of {CENTERS}, got {center!r}")
-    if not isinstance(kernel_size, int) or kernel_size < 1:
-        raise ValueError(f"{caller}: kernel_size must be a positive int, got {kernel_size!r}")
+    checks.number(kernel_size, "kernel_size", caller, lo=1, integer=True, unit="pixels per side")
+    kernel_size = int(kernel_size)  # a static shape: True or 9.0 compiled a wrong kernel
     if pixel_size is None:
         if lens.sensor is None:
             raise ValueError(f"{caller}: give pixel_size (mm); the lens has no sensor")
@@ -416,7 +416,7 @@ def _prepare(lens, field, depth, wavelength, kernel_size, pixel_size, model, cen
     field = jnp.asarray(field, dtype)
     if field.ndim > 1 or (field.ndim == 1 and field.shape[0] != 2):
         raise ValueError(f"{caller}: field must be θy or (θx, θy) in degrees, got {field.shape}")
-    return field, sampling.static_depth(depth), wl, pixel_size
+    return field, sampling.static_depth(depth), wl, pixel_size, kernel_size
 
 
 def psf_info(
@@ -440,8 +440,9 @@ def psf_info(
     Returns:
         A :class:`PSFResult`.
     """
-    field, depth, wl, pixel_size = _prepare(lens, field, depth, wavelength, kernel_size,
-                                            pixel_size, model, center, "psf", newton_iters)
+    field, depth, wl, pixel_size, kernel_size = _prepare(
+        lens, field, depth, wavelength, kernel_size, pixel_size, model, center, "psf",
+        newton_iters)
     checks.prng_key(key, "psf", optional=True)
     if max_truncation is not None:
         checks.number(max_truncation, "max_truncation", "psf", lo=0,
@@ -581,13 +582,13 @@ def psf_map(
     if sensor is None:
         raise ValueError("psf_map: the lens has no sensor; pass sensor=Sensor(...)")
     pixel_size = sensor.pixel_size if pixel_size is None else pixel_size
-    if (not isinstance(grid, (tuple, list)) or len(grid) != 2 or not all(
-            isinstance(g, (int, np.integer)) and not isinstance(g, bool) and g >= 1
-            for g in grid)):
-        raise ValueError(f"psf_map: grid must be (rows, cols), whole numbers >= 1 PSFs, got "
-                         f"{grid!r}")
-    _, depth, wl, pixel_size = _prepare(lens, 0.0, depth, wavelength, kernel_size, pixel_size,
-                                        model, center, "psf_map", newton_iters)
+    if not isinstance(sensor, Sensor):
+        raise TypeError(f"psf_map: sensor must be a jaxlens.Sensor, got "
+                        f"{type(sensor).__name__} {sensor!r}")
+    grid = checks.grid(grid, "psf_map", "grid", "PSFs")
+    _, depth, wl, pixel_size, kernel_size = _prepare(
+        lens, 0.0, depth, wavelength, kernel_size, pixel_size, model, center, "psf_map",
+        newton_iters)
     xy = sensor_grid(sensor.resolution, sensor.pixel_size, grid)
     fields = ideal_to_field(lens, xy)
     wls = jnp.atleast_1d(wl)
@@ -746,11 +747,17 @@ def mtf(
             top = 1.0 / (lam_min * fnum)
         frequencies = jnp.linspace(0.0, 1.0, 33, dtype=dtype) * top
     if not checks.is_traced(frequencies):  # before jnp.asarray: it traces constants under jit
+        checks.real_values(frequencies, "frequencies", "mtf", "cycles/mm")
         checks.finite_array(np.asarray(frequencies), "frequencies", "mtf", "cycles/mm")
+        checks.values(np.asarray(frequencies, float), "frequencies", "mtf", lo=0,
+                      unit="cycles/mm")
     freqs = jnp.atleast_1d(jnp.asarray(frequencies, dtype))
+    if freqs.ndim != 1 or freqs.size == 0:
+        raise ValueError(f"mtf: frequencies must be [F] cycles/mm with F >= 1, got shape "
+                         f"{freqs.shape}")
     pix = lam_min * fnum / 4.0 if pixel_size is None else jnp.asarray(pixel_size, dtype)
-    field, depth, _, pix = _prepare(lens, field, depth, None, kernel_size, pix, model,
-                                    "centroid", "mtf", newton_iters)
+    field, depth, _, pix, kernel_size = _prepare(lens, field, depth, None, kernel_size, pix,
+                                                 model, "centroid", "mtf", newton_iters)
     t, s = _mtf_impl(apertured(lens), field, depth, wls, freqs, pix, model=model,
                      kernel_size=kernel_size,
                      diffraction=bool(diffraction), newton_iters=newton_iters)

@@ -27,6 +27,7 @@ from ..optics.rays import Rays
 def pupil_grid(n: int = 21, dtype=None) -> Float[Array, "m 2"]:
     """Square grid of n×n points over [−1, 1]², kept inside the unit disc (r² ≤ 1 + 1e-12)."""
     n = checks.number(n, "n", "pupil_grid", lo=1, integer=True, unit="points per side")
+    checks.float_dtype(dtype, "pupil_grid")
     u = np.linspace(-1.0, 1.0, n) if n > 1 else np.zeros(1)
     px, py = np.meshgrid(u, u, indexing="xy")
     keep = px**2 + py**2 <= 1.0 + 1e-12
@@ -37,6 +38,7 @@ def pupil_grid(n: int = 21, dtype=None) -> Float[Array, "m 2"]:
 def pupil_hexapolar(rings: int = 6, dtype=None) -> Float[Array, "m 2"]:
     """Hexapolar pattern: the centre plus ring i (1..rings) of 6·i equally spaced points."""
     rings = checks.number(rings, "rings", "pupil_hexapolar", lo=0, integer=True, unit="rings")
+    checks.float_dtype(dtype, "pupil_hexapolar")
     pts = [(0.0, 0.0)]
     for i in range(1, rings + 1):
         r = i / rings
@@ -49,6 +51,8 @@ def pupil_hexapolar(rings: int = 6, dtype=None) -> Float[Array, "m 2"]:
 def pupil_random(key, n: int, dtype=None) -> Float[Array, "n 2"]:
     """n points uniform over the unit disc."""
     n = checks.number(n, "n", "pupil_random", lo=1, integer=True, unit="points")
+    checks.prng_key(key, "pupil_random")
+    checks.float_dtype(dtype, "pupil_random")
     k1, k2 = jax.random.split(key)
     dt = dtype or jnp.result_type(float)
     r = jnp.sqrt(jax.random.uniform(k1, (n,), dt))
@@ -60,7 +64,8 @@ def pupil_stratified(key, n_side: int, dtype=None) -> Float[Array, "m 2"]:
     """Jittered (stratified) samples: one random point per cell of an n_side² polar grid."""
     n_side = checks.number(n_side, "n_side", "pupil_stratified", lo=1, integer=True,
                            unit="cells per side")
-    dt = dtype or jnp.result_type(float)
+    checks.prng_key(key, "pupil_stratified")
+    dt = checks.float_dtype(dtype, "pupil_stratified") or jnp.result_type(float)
     i, j = jnp.meshgrid(jnp.arange(n_side), jnp.arange(n_side), indexing="ij")
     u = jax.random.uniform(key, (2, n_side, n_side), dt)
     r = jnp.sqrt((i + u[0]) / n_side)
@@ -78,11 +83,12 @@ def pupil_polar(n_side: int, key=None, dtype=None, *, radius: float = 1.0 - 1e-4
     ``radius < 1`` loses no ray at the stop: no ray is carried invalid through the lens, and
     no stale ray can make a gradient NaN.
     """
-    if not isinstance(n_side, int) or n_side < 1:
-        raise ValueError(f"pupil_polar: n_side must be an int >= 1, got {n_side!r}")
-    if not 0 < radius <= 1:
-        raise ValueError(f"pupil_polar: radius must be in (0, 1] (pupil radii), got {radius!r}")
-    dt = dtype or jnp.result_type(float)
+    n_side = checks.number(n_side, "n_side", "pupil_polar", lo=1, integer=True,
+                           unit="cells per side")
+    checks.number(radius, "radius", "pupil_polar", lo=0, hi=1, lo_open=True,
+                  unit="(pupil radii)")
+    checks.prng_key(key, "pupil_polar", optional=True)
+    dt = checks.float_dtype(dtype, "pupil_polar") or jnp.result_type(float)
     i, j = jnp.meshgrid(jnp.arange(n_side), jnp.arange(n_side), indexing="ij")
     if key is None:
         u = jnp.full((2, n_side, n_side), 0.5, dt)
@@ -120,7 +126,18 @@ def _pupil(pupil, where: str) -> Array:
     return pupil
 
 
+def _one_field(field, where: str) -> None:
+    """One field: θy (a scalar) or (θx, θy); a list of fields would be broadcast against the
+    pupil points (a shape error deep in JAX, or a wrong pairing of fields and points)."""
+    checks.real_values(field, "field", where, "deg")
+    shape = jnp.shape(field)
+    if shape not in ((), (2,), (1,)):
+        raise ValueError(f"{where}: field must be one field, θy or (θx, θy) in degrees, got "
+                         f"shape {shape} (trace several fields one at a time, or vmap)")
+
+
 def field_xy(field) -> Array:
+    checks.real_values(field, "field", "sampling", "deg")  # before jnp.asarray
     f = checks.field_angles(jnp.asarray(field), "sampling", "field")
     if f.ndim == 0 or f.shape[-1] != 2:
         f = jnp.stack([jnp.zeros_like(f), f], -1)
@@ -156,6 +173,7 @@ def collimated(
     """
     wl = lens.primary_wavelength if wavelength is None else jnp.asarray(wavelength)
     pupil = _pupil(pupil, "collimated")
+    _one_field(field, "collimated")
     d = field_direction(field)
     zep = paraxial.entrance_pupil_z(lens, lens.primary_wavelength)
     h = 0.5 * lens.epd
@@ -185,6 +203,7 @@ def point_source(
     """
     wl = lens.primary_wavelength if wavelength is None else jnp.asarray(wavelength)
     pupil = _pupil(pupil, "point_source")
+    checks.real_values(point, "point", "point_source", "mm")
     # Checked before jnp.asarray, which makes a tracer of a constant under jit.
     concrete = not checks.is_traced(point)
     given = np.asarray(point, float) if concrete else point
@@ -219,6 +238,7 @@ def point_source(
 def object_point(lens: Lens, field, depth) -> Array:
     """The object point (global mm) at a field angle (deg) and distance ``depth`` in front of
     surface 1 (mm, positive)."""
+    _one_field(field, "object_point")
     th = field_xy(field)
     if not checks.is_traced(depth):  # before jnp.asarray, which traces a constant under jit
         checks.values(depth, "depth", "object_point", lo=0, lo_open=True,
@@ -236,7 +256,10 @@ def field_rays(lens: Lens, field, pupil, wavelength=None, *, depth=None, aim="pa
     The chief ray of a finite-depth field point makes the angle θ with the axis at the
     entrance pupil, as for an object at infinity.
     """
-    if depth is None or (not isinstance(depth, jax.core.Tracer) and np.isinf(np.asarray(depth))):
+    if depth is not None:
+        checks.real_values(depth, "depth", "field_rays", "mm")
+    if depth is None or (not isinstance(depth, jax.core.Tracer)
+                         and np.all(np.isposinf(np.asarray(depth)))):
         return collimated(lens, field, pupil, wavelength, aim=aim)
     return point_source(lens, object_point(lens, field, depth), pupil, wavelength, aim=aim)
 
@@ -262,6 +285,12 @@ def aim_at_stop(
     """
     from ..tracing.forward import trace_path
 
+    checks.number(iters, "iters", "aim_at_stop", lo=0, integer=True, unit="Newton iterations")
+    pupil = _pupil(pupil, "aim_at_stop")
+    if pupil.shape[:-1] != rays.shape:
+        raise ValueError(f"aim_at_stop: pupil needs one point per ray: rays of shape "
+                         f"{rays.shape} need pupil of shape {rays.shape + (2,)}, got "
+                         f"{pupil.shape}")
     stop_r = paraxial.paraxial_data(lens).stop_semi_diameter
     target = pupil * stop_r
     zep = paraxial.entrance_pupil_z(lens)
@@ -308,7 +337,9 @@ def static_depth(depth):
         return None
     if isinstance(depth, jax.core.Tracer):
         return depth
-    if np.all(np.isinf(np.asarray(depth))):
+    checks.real_values(depth, "depth", "sampling", "mm")
+    given = np.asarray(depth)
+    if given.dtype.kind in "iuf" and np.all(np.isposinf(given)):
         return None
     checks.values(depth, "depth", "sampling", lo=0, lo_open=True,
                   unit="mm from the object to surface 1 (inf: an object at infinity)")

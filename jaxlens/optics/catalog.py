@@ -46,6 +46,7 @@ from .materials import (
     LAMBDA_C,
     LAMBDA_D,
     LAMBDA_F,
+    MAX_ND,
     AbstractMaterial,
     Air,
     Conrady,
@@ -462,7 +463,7 @@ def _unknown(name: str, catalogs, nd: float | None = None,
     close = difflib.get_close_matches(name.strip().upper(), list(upper), n=5, cutoff=0.0)
     hint = ", ".join(upper[c] for c in close) if close else "none"
     message = f"Unknown material {name!r}. Closest catalog matches: {hint}"
-    if nd is not None and vd is not None:
+    if nd is not None and vd is not None and 1.0 < nd <= MAX_ND and 0.0 < vd < np.inf:
         near = nearest_glasses(nd, vd, catalogs=catalogs)
         listed = "; ".join(f"{c} {n} (nd {d:.5f}, Vd {v:.2f})" for c, n, d, v in near)
         message += f". Optically closest to nd {nd:.5f}, Vd {vd:.2f}: {listed or 'none'}"
@@ -493,12 +494,11 @@ def nearest_glasses(nd: float, vd: float, count: int = 5,
     Raises:
         ValueError: If nd, vd or count is out of range.
     """
-    if not (np.isfinite(nd) and nd > 1.0):
-        raise ValueError(f"nd must be a finite index > 1, got {nd!r}")
-    if not (np.isfinite(vd) and vd > 0.0):
-        raise ValueError(f"vd must be a finite Abbe number > 0, got {vd!r}")
-    if count < 1:
-        raise ValueError(f"count must be >= 1, got {count!r}")
+    checks.number(nd, "nd", "nearest_glasses", lo=1, hi=MAX_ND, lo_open=True,
+                  unit="(the d-line index; an nd above it is an Abbe number: nd and vd "
+                       "swapped?)")
+    checks.number(vd, "vd", "nearest_glasses", lo=0, lo_open=True, unit="(Abbe number)")
+    checks.number(count, "count", "nearest_glasses", lo=1, integer=True, unit="glasses")
     seen: set[str] = set()
     rows = []
     for cat, entries in _search_order(catalogs):
@@ -588,6 +588,9 @@ def glass_info(name: str, catalogs: str | Iterable[str] | None = None) -> tuple[
     Raises:
         ValueError: If the name is in no searched catalog.
     """
+    if not isinstance(name, str):
+        raise TypeError(f"glass_info: name must be a glass name (str), got "
+                        f"{type(name).__name__} {name!r}")
     found = _find(name, catalogs)
     if found is None:
         raise _unknown(name, catalogs)

@@ -132,6 +132,50 @@ def values(x, arg: str, where: str, *, lo=None, hi=None, lo_open=False, hi_open=
     return x
 
 
+def real_values(x, arg: str, where: str, unit: str = "") -> None:
+    """Refuse a concrete value that is not real numbers: a string (``np.asarray("10", float)``
+    would read it as 10, JAX refuses it deep inside), a bool, a complex number, None or
+    another object. Raises ``TypeError`` naming ``where``, ``arg`` and the unit."""
+    if is_traced(x):
+        return
+    dt = getattr(x, "dtype", None)  # an array: no copy to the host
+    if dt is None:
+        try:
+            dt = np.asarray(x).dtype
+        except (TypeError, ValueError):
+            dt = None
+    if dt is None or not (np.dtype(dt).kind in "iuf" or jnp.issubdtype(dt, jnp.floating)):
+        u = f" ({unit})" if unit else ""
+        shown = repr(x) if len(repr(x)) <= 60 else repr(x)[:57] + "..."
+        raise TypeError(f"{where}: {arg} must be a real number or an array of real "
+                        f"numbers{u}, got {type(x).__name__} {shown}")
+
+
+def float_dtype(dtype, where: str, arg: str = "dtype"):
+    """None or a floating dtype (float32, float64): an integer dtype would truncate
+    coordinates to whole numbers; returns the dtype."""
+    if dtype is None:
+        return None
+    try:
+        dt = np.dtype(dtype)
+    except TypeError:
+        dt = None
+    if dt is None or dt.kind != "f" or dt.itemsize < 4:
+        raise ValueError(f"{where}: {arg} must be None, float32 or float64, got {dtype!r}")
+    return dtype
+
+
+def grid(value, where: str, arg: str = "grid", what: str = "points") -> tuple[int, int]:
+    """A ``(rows, cols)`` pair of whole numbers >= 1 (numpy ints allowed, bools and floats
+    refused: ``linspace`` would take 2.5 as 2 and a 0 as one centre point)."""
+    ok = (isinstance(value, (tuple, list)) and len(value) == 2 and all(
+        isinstance(g, (int, np.integer)) and not isinstance(g, bool) and g >= 1 for g in value))
+    if not ok:
+        raise ValueError(f"{where}: {arg} must be (rows, cols), whole numbers >= 1 {what}, "
+                         f"got {value!r}")
+    return int(value[0]), int(value[1])
+
+
 def float_array(arg: str, where: str, unit: str = ""):
     """A field converter to a real floating JAX array.
 
@@ -240,6 +284,7 @@ def wavelengths(lens, wl, where: str, arg: str = "wavelength"):
     A concrete value out of range raises ``ValueError`` at once; a traced one gets an
     ``eqx.error_if`` that fires when the computation runs.
     """
+    real_values(wl, arg, where, "µm")
     lo, hi, why = wavelength_range(lens)
     if is_traced(wl):
         w = jnp.asarray(wl)
@@ -285,6 +330,7 @@ def material(m, wl, where: str, arg: str = "wavelength") -> None:
 def field_angles(field, where: str, arg: str = "field"):
     """Field angles (degrees) must be finite and inside (−90°, 90°); returns ``field``."""
     msg = f"{where}: {arg} must be finite angles in (-90, 90) deg"
+    real_values(field, arg, where, "deg")
     if is_traced(field):
         f = jnp.asarray(field)
         return eqx.error_if(field, jnp.any(~(jnp.abs(f) < 90.0)), msg)

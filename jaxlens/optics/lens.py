@@ -74,6 +74,32 @@ def _index(arg: str):
     return convert
 
 
+def _sequence(arg: str, what: str):
+    """A converter to a tuple for a static list (``mirrors=1`` was "'int' object is not
+    iterable" from deep inside equinox)."""
+    def convert(x):
+        if isinstance(x, (str, bytes)) or not hasattr(x, "__iter__"):
+            raise TypeError(f"Lens: {arg} must be a tuple of {what}, got "
+                            f"{type(x).__name__} {x!r}")
+        return tuple(x)
+    return convert
+
+
+def _obscurations(o):
+    """``(i, r_min, r_max)`` triples: surface index (0-based) and radii in mm."""
+    out = []
+    for e in _sequence("obscurations", "(i, r_min, r_max) triples")(o):
+        try:
+            i, a, b = e
+            if isinstance(i, bool) or not isinstance(i, (int, np.integer)):
+                raise TypeError
+            out.append((int(i), float(a), float(b)))
+        except (TypeError, ValueError):
+            raise ValueError(f"Lens: obscurations must be (i, r_min, r_max) triples: a surface "
+                             f"index (int, 0-based) and two radii in mm, got {e!r}") from None
+    return tuple(out)
+
+
 def _floats(arg: str, unit: str, where: str = "Lens", **default):
     return checks.float_field(arg, where, unit, **default)
 
@@ -90,7 +116,7 @@ class Sensor(eqx.Module):
     pixel_size: Float[Array, ""] = _floats("pixel_size", "mm", where="Sensor")
 
     def __check_init__(self):
-        res = tuple(self.resolution)
+        res = tuple(self.resolution) if isinstance(self.resolution, (tuple, list)) else ()
         if len(res) != 2 or not all(
                 isinstance(n, (int, np.integer)) and not isinstance(n, bool) and n >= 1
                 for n in res):
@@ -127,10 +153,10 @@ class Lens(eqx.Module):
     image: AbstractSurface = eqx.field(default_factory=Standard)
     sensor: Sensor | None = None
     name: str = eqx.field(static=True, default="")
-    mirrors: tuple[int, ...] = eqx.field(static=True, default=(), converter=tuple)
+    mirrors: tuple[int, ...] = eqx.field(static=True, default=(),
+                                         converter=_sequence("mirrors", "surface indices"))
     obscurations: tuple[tuple[int, float, float], ...] = eqx.field(
-        static=True, default=(), converter=lambda o: tuple(
-            (int(i), float(a), float(b)) for i, a, b in o))
+        static=True, default=(), converter=_obscurations)
     apertures: tuple[tuple[int, Aperture], ...] = eqx.field(
         static=True, default=(), converter=lambda a: tuple(
             tuple(e) if isinstance(e, (list, tuple)) else e for e in a))

@@ -56,6 +56,11 @@ class Air(AbstractMaterial):
         return jnp.ones_like(w)
 
 
+MAX_ND = 4.5
+"""Largest d-line index a model glass may have (no optical material reaches 3; an nd of 60
+is an Abbe number given in its place)."""
+
+
 class ModelGlass(AbstractMaterial):
     """A model glass from its d-line index and Abbe number.
 
@@ -75,6 +80,10 @@ class ModelGlass(AbstractMaterial):
         if np.any(~np.isfinite(nd) | (nd < 1.0)):
             raise ValueError(f"ModelGlass{self._of()}: nd must be a finite index >= 1, got "
                              f"{checks.fmt(nd)}")
+        if np.any(nd > MAX_ND):
+            raise ValueError(f"ModelGlass{self._of()}: nd must be a finite index >= 1 and <= "
+                             f"{MAX_ND:g} (the d-line index), got {checks.fmt(nd)} (were nd "
+                             f"and vd swapped?)")
         if np.any(np.isnan(vd) | (vd <= 0.0)):
             raise ValueError(f"ModelGlass{self._of()}: vd must be an Abbe number > 0 (inf for "
                              f"no dispersion), got {checks.fmt(vd)}")
@@ -167,6 +176,10 @@ class Tabulated(AbstractMaterial):
         if checks.is_traced((w, n)):
             return
         checks.values(w, "wavelengths", where, lo=0, lo_open=True, unit="µm")
+        lo, hi = checks.GENERIC_RANGE_UM
+        a = np.asarray(w, float)
+        if not np.any((a >= lo) & (a <= hi)):  # a table in nm (or of no usable wavelength)
+            checks.wavelengths(checks.NoMaterials, a, where, "wavelengths")
         checks.values(n, "indices", where, lo=1, unit="(refractive index)")
         if np.unique(np.asarray(w)).size != w.shape[0]:
             raise ValueError(f"{where}: wavelengths must be distinct (one index per "

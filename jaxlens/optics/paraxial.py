@@ -31,6 +31,7 @@ from __future__ import annotations
 
 import equinox as eqx
 import jax.numpy as jnp
+import numpy as np
 from jaxtyping import Array, Float
 
 from . import checks
@@ -65,9 +66,21 @@ def x_section(lens: Lens) -> Lens:
     return eqx.tree_at(lambda m: m.surfaces, lens, surfaces)
 
 
+def _given(lens: Lens, wavelength, where: str):
+    """The wavelength (µm) for the helpers that internal (often traced) code calls with the
+    primary one: the primary one for None, a given concrete one checked against the lens's
+    materials (587.6 in nm gave a plausible but wrong pupil), a traced one as it is (no
+    ``error_if`` on the traced hot path: ``paraxial_data`` and ``efl`` check theirs)."""
+    if wavelength is None:
+        return lens.primary_wavelength
+    if checks.is_traced(wavelength):
+        return wavelength
+    return checks.wavelengths(lens, wavelength, where)
+
+
 def signed_indices(lens: Lens, wavelength) -> list[Array]:
     """``lens.indices`` with the sign flipped after every mirror (the y–nu trace's indices)."""
-    n = lens.indices(wavelength)
+    n = lens.indices(_given(lens, wavelength, "signed_indices"))
     if not lens.mirrors:
         return n
     flips = [sum(1 for m in lens.mirrors if m < i) % 2 for i in range(len(n))]
@@ -79,9 +92,14 @@ def system_matrix(lens: Lens, wavelength=None, start: int = 0, end: int | None =
 
     Returns the four entries (A, B, C, D) with [y', nu'] = [[A, B], [C, D]] [y, nu].
     """
-    wl = lens.primary_wavelength if wavelength is None else wavelength
+    wl = _given(lens, wavelength, "system_matrix")
     n = signed_indices(lens, wl)
-    end = lens.num_surfaces - 1 if end is None else end
+    last = lens.num_surfaces - 1
+    end = last if end is None else end
+    for arg, v, lo in (("start", start, 0), ("end", end, start)):
+        if isinstance(v, bool) or not isinstance(v, (int, np.integer)) or not lo <= v <= last:
+            raise ValueError(f"system_matrix: {arg} must be a surface index in [{lo}, {last}] "
+                             f"(0-based; start <= end), got {v!r}")
     one = jnp.ones_like(lens.thickness[0])
     a, b, c, d = one, 0 * one, 0 * one, one
     for i in range(start, end + 1):
@@ -120,7 +138,7 @@ class ParaxialData(eqx.Module):
 
 def entrance_pupil_z(lens: Lens, wavelength=None) -> Array:
     """Global z of the paraxial entrance pupil (image of the stop in object space)."""
-    wl = lens.primary_wavelength if wavelength is None else wavelength
+    wl = _given(lens, wavelength, "entrance_pupil_z")
     n0 = lens.object_material.index(wl)
     if lens.stop == 0:
         return jnp.zeros_like(lens.thickness[0])
@@ -135,7 +153,7 @@ def entrance_pupil_z(lens: Lens, wavelength=None) -> Array:
 
 def entrance_pupil_magnification(lens: Lens, wavelength=None) -> Array:
     """Paraxial magnification from the entrance pupil to the stop (stop height / EP height)."""
-    wl = lens.primary_wavelength if wavelength is None else wavelength
+    wl = _given(lens, wavelength, "entrance_pupil_magnification")
     if lens.stop == 0:
         return jnp.ones_like(lens.thickness[0])
     a, _, c, _ = system_matrix(lens, wl, 0, lens.stop - 1)
@@ -146,7 +164,7 @@ def entrance_pupil_magnification(lens: Lens, wavelength=None) -> Array:
 
 def marginal_ray(lens: Lens, wavelength=None):
     """Paraxial marginal ray (y, nu) after every surface, for the lens's EPD and object."""
-    wl = lens.primary_wavelength if wavelength is None else wavelength
+    wl = _given(lens, wavelength, "marginal_ray")
     n = signed_indices(lens, wl)
     zep = entrance_pupil_z(lens, wl)
     h = 0.5 * lens.epd

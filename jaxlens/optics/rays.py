@@ -20,6 +20,24 @@ from . import checks
 _NoMaterials = checks.NoMaterials
 
 
+def _valid_mask(valid, batch) -> Array:
+    """``valid`` as a bool mask of the batch's shape. Integers were kept as they were, and
+    ``valid & ok`` of an int mask is a bitwise and (2 & True is 0: a valid ray lost)."""
+    v = jnp.asarray(valid)
+    if v.dtype != jnp.bool_:
+        ok = jnp.issubdtype(v.dtype, jnp.integer) and (
+            checks.is_traced(v) or bool(np.all((np.asarray(v) == 0) | (np.asarray(v) == 1))))
+        if not ok:
+            raise TypeError(f"Rays: valid must be a bool mask (True for a valid ray), got "
+                            f"dtype {v.dtype}{'' if checks.is_traced(v) else f' {checks.fmt(v)}'}")
+        v = v.astype(bool)
+    try:
+        return jnp.broadcast_to(v, batch)
+    except ValueError:
+        raise ValueError(f"Rays: valid must be a scalar or one flag per ray (shape {batch}), "
+                         f"got shape {v.shape}") from None
+
+
 class Rays(eqx.Module):
     """A batch of rays.
 
@@ -45,6 +63,10 @@ class Rays(eqx.Module):
         valid: Bool[ArrayLike, "*batch"] | None = None,
         opl: Float[ArrayLike, "*batch"] | None = None,
     ):
+        for arg, v, unit in (("origin", origin, "mm"), ("direction", direction, ""),
+                             ("wavelength", wavelength, "µm"), ("opl", opl, "mm")):
+            if v is not None:  # before jnp.asarray: a string "0.55" would be read as 0.55
+                checks.real_values(v, arg, "Rays", unit)
         origin = jnp.asarray(origin)
         direction = jnp.asarray(direction)
         if origin.shape[-1:] != (3,) or direction.shape != origin.shape:
@@ -59,9 +81,7 @@ class Rays(eqx.Module):
         self.origin = origin.astype(dtype)
         self.direction = direction.astype(dtype)
         self.wavelength = jnp.asarray(wavelength, dtype=dtype)
-        self.valid = (
-            jnp.ones(batch, bool) if valid is None else jnp.broadcast_to(jnp.asarray(valid), batch)
-        )
+        self.valid = jnp.ones(batch, bool) if valid is None else _valid_mask(valid, batch)
         self.opl = jnp.zeros(batch, dtype) if opl is None else jnp.asarray(opl, dtype)
         for arg, a in (("wavelength", self.wavelength), ("opl", self.opl)):
             try:

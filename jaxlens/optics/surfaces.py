@@ -23,8 +23,11 @@ odd terms evaluates none.
 
 from __future__ import annotations
 
+import math
+
 import equinox as eqx
 import jax.numpy as jnp
+import numpy as np
 from jaxtyping import Array, Float
 
 from . import checks
@@ -71,6 +74,27 @@ class AbstractSurface(eqx.Module):
         if not checks.is_traced(sd):
             checks.values(sd, "semi_diameter", where, lo=0, lo_open=True, inf_ok=True,
                           unit="mm (inf: no clipping)")
+        if not checks.is_traced((self.c, self.k, sd)):
+            self._check_domain(where)
+
+    def _check_domain(self, where: str):
+        """The conic must exist out to the semi-diameter: (1 + k) c² r² <= 1 (+ 1e-6 for
+        float32 rounding). A sphere of radius 3 mm with a 5 mm semi-diameter has no sag
+        beyond 3 mm; every ray there was lost without a word."""
+        c, k, sd = (np.asarray(v, float) for v in (self.c, self.k, self.semi_diameter))
+        c, k, sd = np.broadcast_arrays(c, k, sd)
+        q = (1.0 + k) * c * c
+        with np.errstate(invalid="ignore", over="ignore"):
+            bad = np.isfinite(sd) & (q > 0) & (q * sd * sd > 1.0 + 1e-6)
+        if np.any(bad):
+            i = np.argwhere(bad)[0] if bad.ndim else ()
+            ci, ki, si = float(c[tuple(i)]), float(k[tuple(i)]), float(sd[tuple(i)])
+            r_max = 1.0 / math.sqrt((1.0 + ki) * ci * ci)
+            raise ValueError(
+                f"{where}: the surface (c = {ci:g} 1/mm, R = {1 / ci:g} mm, k = {ki:g}) is "
+                f"defined only out to r = 1/(|c|·sqrt(1 + k)) = {r_max:g} mm, but its "
+                f"semi_diameter is {si:g} mm; use a semi_diameter <= {r_max:g} mm (or a "
+                f"flatter surface)")
 
     # --- geometry -----------------------------------------------------------------
     def conic_sag(self, r2):
