@@ -355,21 +355,19 @@ def _surface(s: _Surf, unit: float) -> AbstractSurface:
 
 
 def _standard_without_terms(s: _Surf) -> None:
-    """A STANDARD surface has no parameters. Non-zero PARM/XDAT values in a block without a
-    TYPE line (read as STANDARD) mean a surface whose type line is missing, an asphere most
-    likely: refused. Under an explicit ``TYPE STANDARD`` they are left over from another
-    type, and Zemax ignores them: a warning."""
-    extra = [ln for _, (v, ln) in sorted(s.parm.items()) + sorted(s.xdat.items()) if v != 0]
-    if not extra:
+    """A block without a TYPE line is STANDARD, which has no parameters: non-zero PARM/XDAT
+    values there mean a surface whose type line is missing (an asphere, most likely), and
+    reading it as a sphere would drop them, so it is refused. Under an explicit
+    ``TYPE STANDARD`` they are left over from another type (a normalisation radius, old
+    terms) and Zemax ignores them, as the reader does."""
+    if s.type_line is not None:
         return
-    ln = extra[0]
-    if s.type_line is None:
+    extra = [ln for _, (v, ln) in sorted(s.parm.items()) + sorted(s.xdat.items()) if v != 0]
+    if extra:
+        ln = extra[0]
         raise ln.error(f"surface {s.number} has no TYPE line, so it would be STANDARD, which "
                        f"has no parameters, but it gives {ln.tokens[0]} {ln.tokens[1]} (an "
                        f"asphere's terms?); add the surface's TYPE line")
-    warnings.warn(f"{ln.path}:{ln.number}: {ln.tokens[0]} {ln.tokens[1]} on a STANDARD "
-                  f"surface ignored (as in Zemax: STANDARD has no parameters): "
-                  f"{ln.text.strip()!r}", ZmxWarning, stacklevel=4)
 
 
 def _coordinate_break(s: _Surf, unit: float) -> CoordinateBreak:
