@@ -42,7 +42,8 @@ def make_rays(lens: jaxlens.Lens, n: int, dtype, seed: int = 0) -> jaxlens.Rays:
     )
 
 
-def _spot_loss_from(xy, valid):
+def spot_loss(xy, valid):
+    """Mean squared spot radius of the valid rays about their centroid (the design loss)."""
     w = valid.astype(xy.dtype)
     nv = jnp.maximum(jnp.sum(w), 1.0)
     c = jnp.sum(w[:, None] * xy, 0) / nv
@@ -63,7 +64,7 @@ _reference_trace = eqx.filter_jit(lambda lens, rays: jaxlens.trace(lens, rays))
 def forward_grad(lens, rays):
     def loss(lens):
         out = jaxlens.trace(lens, rays)
-        return _spot_loss_from(out.origin[:, :2], out.valid)
+        return spot_loss(out.origin[:, :2], out.valid)
 
     return eqx.filter_value_and_grad(loss)(lens)
 

@@ -193,3 +193,14 @@ def test_render_memory_refuses_bad_arguments(args, capsys):
     with pytest.raises(SystemExit):
         render_memory.main(args)
     assert args[0] in capsys.readouterr().err
+
+
+def test_grad_levers_smoke():
+    """The gradient-lever probe (benchmarks/SPEED.md): a flag setting that XLA refuses is
+    reported and skipped (its child process dies at start-up), a chunk size is measured."""
+    from benchmarks import grad_levers
+
+    rows = grad_levers.main(["--rays", "2000", "--flag=--xla_cpu_no_such_flag=1",
+                             "--chunks", "1024"])
+    assert len(rows) == 1 and rows[0]["chunk"] == 1024
+    assert math.isfinite(rows[0]["ratio"]) and 0 < rows[0]["ratio"] < 2
