@@ -358,3 +358,16 @@ def test_refcase_style_held_out_features():
     d["surfaces"][1]["type"] = "odd_asphere"
     with pytest.raises(ValueError, match="not supported"):
         lensfile.lens_from_dict(d)
+
+
+def test_a_surface_the_class_refuses_names_the_file_and_surface(tmp_path):
+    """A semi-diameter wider than a sphere's radius is refused by the surface class; the
+    reader reports it with the file and the surface's index."""
+    lens = jaxlens.zoo.cooke_triplet()
+    path = tmp_path / "wide.json"
+    jaxlens.save(lens, path)
+    d = json.loads(path.read_text())
+    d["surfaces"][1]["semi_diameter"] = 3 / abs(d["surfaces"][1]["curvature"])
+    path.write_text(json.dumps(d))
+    with pytest.raises(ValueError, match=rf"^{re.escape(str(path))}: surface 1: .*defined only"):
+        jaxlens.load(path)

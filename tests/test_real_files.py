@@ -441,3 +441,13 @@ def test_model_glass_partial_dispersion_reported(tmp_path):
     with warnings.catch_warnings():
         warnings.simplefilter("error")
         _load_text(tmp_path, text.replace("50 0.02", "50 0"))
+
+
+def test_a_semi_diameter_beyond_the_sphere_is_refused_naming_the_surface(tmp_path):
+    """A fixed DIAM wider than the sphere itself (|R| < DIAM) has no surface to clip at: the
+    lens class refuses it, and the reader reports that with the surface's line."""
+    r = 1 / abs(SINGLET_C1)
+    line = _refused(tmp_path, _file("ENPD 10\n", surface1=f"  DIAM {2 * r!r} 1\n"),
+                    r"is defined only out to r = .* semi_diameter")
+    assert line == "SURF 1"
+    _load_text(tmp_path, _file("ENPD 10\n", surface1=f"  DIAM {0.5 * r!r} 1\n"))

@@ -400,7 +400,15 @@ def _curvature(d: dict, where: str) -> float:
 
 
 def surface_from_dict(d: dict, where: str, *, kind: str | None = None) -> AbstractSurface:
-    """A surface from its JSON object; ``kind`` overrides the ``type`` key."""
+    """A surface from its JSON object; ``kind`` overrides the ``type`` key. What the surface
+    class refuses (a semi-diameter beyond a steep sphere's edge, say) names ``where``."""
+    try:
+        return _surface(d, where, kind)
+    except ValueError as e:
+        raise ValueError(str(e) if str(e).startswith(where) else f"{where}: {e}") from None
+
+
+def _surface(d: dict, where: str, kind: str | None) -> AbstractSurface:
     raw = _text(kind or d.get("type") or "standard", f"{where}: type")
     kind = re.sub(r"[^a-z0-9]", "", raw.lower())  # "Even Asphere" == "even_asphere"
     if "odd" in kind and "hybrid" not in kind:

@@ -319,6 +319,17 @@ def _xdat_terms(s: _Surf, unit: float, what: str):
 
 
 def _surface(s: _Surf, unit: float) -> AbstractSurface:
+    """The surface of a SURF block; a value its class refuses (a semi-diameter beyond a
+    steep sphere's edge, say) is reported with the block's line."""
+    try:
+        return _surface_of(s, unit)
+    except ValueError as e:
+        if str(e).startswith(f"{s.line.path}:"):
+            raise
+        raise (s.type_line or s.line).error(str(e)) from None
+
+
+def _surface_of(s: _Surf, unit: float) -> AbstractSurface:
     c = s.curv / unit
     sd = _sd(s, unit)
     where = s.type_line or s.line
