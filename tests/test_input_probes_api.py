@@ -318,3 +318,26 @@ def test_lens_static_lists_give_clear_errors():
             jl.Lens(**base, obscurations=bad)
     with pytest.raises(ValueError, match=r"Sensor: resolution must be \(rows, columns\)"):
         jl.Sensor(10, 0.01)
+
+
+@pytest.mark.parametrize(("kw", "match"), [
+    (dict(upto=True), r"upto must be a surface index in \[0, 5\]"),
+    (dict(upto=1.0), r"upto must be a surface index"),
+    (dict(chunk=2.5), r"chunk must be a whole number in \[1, inf\) rays"),
+    (dict(chunk="8"), r"chunk must be a whole number"),
+])
+def test_trace_refuses_a_bool_or_fractional_upto_and_chunk(kw, match):
+    """``upto=True`` traced to surface 1 and ``chunk=2.5`` failed inside the chunking."""
+    lens = jl.zoo.cooke_triplet()
+    rays = jl.Rays(jnp.array([[0.0, 1.0, -1.0]]), jnp.array([[0.0, 0.0, 1.0]]), 0.5876)
+    with pytest.raises(ValueError, match=match):
+        jl.trace(lens, rays, **kw)
+
+
+def test_trace_names_a_lens_or_rays_of_the_wrong_type():
+    lens = jl.zoo.cooke_triplet()
+    rays = jl.Rays(jnp.array([[0.0, 1.0, -1.0]]), jnp.array([[0.0, 0.0, 1.0]]), 0.5876)
+    with pytest.raises(TypeError, match="trace: lens must be a jaxlens.Lens, got Rays"):
+        jl.trace(rays, lens)
+    with pytest.raises(TypeError, match="trace: rays must be a jaxlens.Rays, got ndarray"):
+        jl.trace_path(lens, np.zeros((1, 3)))

@@ -20,6 +20,7 @@ import functools
 import equinox as eqx
 import jax
 import jax.numpy as jnp
+import numpy as np
 
 from ..optics import checks
 from ..optics.coordinates import CoordinateBreak, transform
@@ -212,11 +213,18 @@ def _checked(lens: Lens, rays: Rays, where: str) -> Rays:
     return Rays(rays.origin, rays.direction, wl, rays.valid, rays.opl)
 
 
-def _check_upto(lens: Lens, upto: int | None, newton_iters: int) -> None:
+def _check_upto(lens: Lens, rays: Rays, upto: int | None, newton_iters: int) -> None:
+    """The arguments every trace shares, checked before tracing (a string for the lens was an
+    AttributeError deep inside, ``upto=True`` traced to surface 1)."""
+    for arg, v, cls in (("lens", lens, Lens), ("rays", rays, Rays)):
+        if not isinstance(v, cls):
+            raise TypeError(f"trace: {arg} must be a jaxlens.{cls.__name__}, got "
+                            f"{type(v).__name__}")
     checks.number(newton_iters, "newton_iters", "trace", lo=0, integer=True, unit="iterations")
-    if upto is not None and not 0 <= upto < lens.num_surfaces:
+    if upto is not None and (isinstance(upto, bool) or not isinstance(upto, (int, np.integer))
+                             or not 0 <= upto < lens.num_surfaces):
         raise ValueError(f"trace: upto must be a surface index in [0, {lens.num_surfaces - 1}] "
-                         f"(0-based), got {upto}")
+                         f"(0-based), got {upto!r}")
 
 
 def trace_path(
@@ -244,7 +252,7 @@ def trace_path(
         to the full shape. After a coordinate break each entry is in its surface's frame
         (``optics.coordinates.frame_of(lens, i)``); at a break the rays have not moved.
     """
-    _check_upto(lens, upto, newton_iters)
+    _check_upto(lens, rays, upto, newton_iters)
     rays = _checked(lens, rays, "trace_path")
     states = _trace_states(lens, rays, newton_iters, upto, keep_path=True, uniform=uniform)
     stacked = jax.tree.map(lambda *x: jnp.stack(x), *states)
@@ -315,15 +323,16 @@ def trace(
         True
     """
 
-    _check_upto(lens, upto, newton_iters)
+    _check_upto(lens, rays, upto, newton_iters)
+    if chunk is not None:
+        chunk = checks.number(chunk, "chunk", "trace", lo=1, integer=True,
+                              unit="rays (None: one piece)")
 
     def whole(r: Rays, prepared=None) -> Rays:
         states = _trace_states(lens, r, newton_iters, upto, keep_path=False, uniform=uniform,
                                prepared=prepared)
         return rays_from_state(states[-1], r.wavelength)
 
-    if chunk is not None and chunk < 1:
-        raise ValueError(f"trace: chunk must be a positive number of rays, got {chunk}")
     rays = _checked(lens, rays, "trace")
     n = rays.origin.shape[0]
     if chunk is None or rays.origin.ndim != 2 or n <= chunk:
