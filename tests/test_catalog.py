@@ -85,12 +85,20 @@ def fresh_registry(monkeypatch):
 def test_shipped_catalogs_and_required_glasses():
     counts = {c: len(catalog_names(catalog=c)) for c in catalog.SHIPPED_CATALOGS}
     assert counts == {"SCHOTT": 163, "CDGM": 324, "PLASTICS": 11, "MISC": 13, "OHARA": 410,
-                      "HOYA": 190, "HIKARI": 370, "SUMITA": 176, "CORNING": 1}
+                      "HOYA": 190, "HIKARI": 370, "SUMITA": 176, "CORNING": 1, "INFRARED": 48,
+                      "LIGHTPATH": 11, "HERAEUS": 5, "UMICORE": 2, "TOPAS": 3, "ARCHER": 15,
+                      "ISUZU": 1}
     # The glasses that real .zmx files of issue 12 failed on, each in its maker's catalog.
     for cat, names in {"OHARA": ["S-LAH64", "L-BAL35", "S-FTM16", "S-LAL10", "L-TIM28"],
                        "HOYA": ["TAF3", "TAFD30"], "HIKARI": ["J-LAK14", "J-LAK02", "E-LAFH3"],
                        "SUMITA": ["K-SSK1", "K-FK5", "K-SFLD6"], "SCHOTT": ["B270"],
-                       "CORNING": ["C79-80"]}.items():
+                       "CORNING": ["C79-80"],
+                       "INFRARED": ["ZNSE", "GERMANIUM", "SILICON", "SAPPHIRE", "MGF2", "KBR",
+                                    "NACL", "LIF", "AMTIR1", "CLEARTRAN", "ZNS_BROAD", "GAAS"],
+                       "LIGHTPATH": ["ECO550", "ECO-550", "D-ZK3M", "BD2"],
+                       "HERAEUS": ["SUPRASIL", "INFRASIL"], "UMICORE": ["GASIR1"],
+                       "TOPAS": ["5013LS-01"], "ARCHER": ["S-LAH53M"],
+                       "ISUZU": ["IIR-SF1"]}.items():
         for name in names:
             assert glass_info(name)[0] == cat, name
     schott = set(catalog_names(catalog="SCHOTT"))
@@ -119,12 +127,25 @@ LOOSE_ND_VD = {
 }
 
 
+# Materials whose NM record carries nd 1, Vd 0: Zemax's mark for "no d-line data" (IR
+# materials). Their formula is checked against published indices instead (below).
+NO_D_LINE_DATA = {
+    "INFRARED": {"AGCL", "AMTIR1", "AMTIR3", "CDSE", "CDTE", "GAAS", "GERMANIUM", "GE_LONG",
+                 "GE_OLD", "IRG100", "KRS5", "NACL", "SILICON", "TI_1173", "ZBLA", "ZBLAN",
+                 "ZNSE", "ZNS_IR"},
+    "LIGHTPATH": {"BD1", "BD2"}, "UMICORE": {"GASIR1", "GASIR2"}, "ISUZU": {"IIR-SF1"},
+}
+
+
 def test_every_shipped_glass_reproduces_its_catalog_nd_and_vd():
     # Unnamed models share one compilation per formula class (names are static fields).
     index_dfc = jax.jit(lambda model: model.index(DFC))
-    failures, loose = [], set()
+    failures, loose, no_data = [], set(), set()
     for cat, entries in catalog._shipped():
         for r in entries.values():
+            if (r.nd, r.vd) == (1.0, 0.0):
+                no_data.add((cat, r.name))
+                continue
             n = np.asarray(index_dfc(catalog._dispersion_model(r.formula, r.coefficients, "")))
             nd, vd = n[0], (n[0] - 1.0) / (n[1] - n[2])
             tight = abs(nd - r.nd) <= 1e-5 and abs(vd - r.vd) <= 0.1
@@ -135,6 +156,69 @@ def test_every_shipped_glass_reproduces_its_catalog_nd_and_vd():
                 failures.append(f"{cat} {r.name}: nd {nd:.6f} vs {r.nd}, Vd {vd:.3f} vs {r.vd}")
     assert not failures, "\n".join(failures)
     assert loose == {(c, n) for c, names in LOOSE_ND_VD.items() for n in names}
+    assert no_data == {(c, n) for c, names in NO_D_LINE_DATA.items() for n in names}
+
+
+def test_no_d_line_data_materials_have_a_real_index_over_their_range():
+    index = jax.jit(lambda model, w: model.index(w))
+    for cat, names in NO_D_LINE_DATA.items():
+        for name in names:
+            r = catalog._shipped()[catalog.SHIPPED_CATALOGS.index(cat)][1][name]
+            n = np.asarray(index(catalog._dispersion_model(r.formula, r.coefficients, ""),
+                                 jnp.geomspace(*r.wavelength_range, 16)))
+            assert np.all((n > 1.3) & (n < 4.2)), (cat, name, n)
+
+
+# Published indices (20-25 °C): ZnSe, Connolly et al., Proc. SPIE 0131 (1978) (Handbook of
+# Optics Vol. II); Ge, Li, J. Phys. Chem. Ref. Data 9, 561 (1980); sapphire (ordinary ray),
+# Malitson, JOSA 52, 1377 (1962); MgF2 (ordinary ray), Dodge, Appl. Opt. 23, 1980 (1984);
+# BaF2, Malitson, Appl. Opt. 3, 1962 (1964); CaF2, Malitson, Appl. Opt. 2, 1103 (1963); LiF,
+# Li, J. Phys. Chem. Ref. Data 5, 329 (1976).
+@pytest.mark.parametrize("name, wavelength, published, tol", [
+    ("ZNSE", 10.6, 2.4028, 1e-3),
+    ("GE_LONG", 10.0, 4.003, 1e-3),
+    ("GERMANIUM", 10.0, 4.003, 2e-3),  # this fit gives 4.0044, 1.4e-3 above Li's value
+    ("SAPPHIRE", 0.5875618, 1.7682, 1e-3),
+    ("MGF2", 0.5875618, 1.3777, 1e-3),
+    ("BAF2", 0.5875618, 1.4744, 1e-3),
+    ("BAF2", 10.0, 1.4014, 1e-3),
+    ("CAF2", 5.0, 1.3990, 1e-3),
+    ("LIF", 0.5875618, 1.3921, 1e-3),
+])
+def test_infrared_catalog_matches_published_indices(name, wavelength, published, tol):
+    got = float(get_material(name, catalogs="INFRARED").index(wavelength))
+    assert got == pytest.approx(published, abs=tol)
+
+
+def test_infrared_silicon_is_the_salzberg_villa_fit():
+    # INFRARED's SILICON (Handbook of Optics Vol. II: Salzberg & Villa, JOSA 47, 244 (1957))
+    # gives 3.4178 at 10 µm, 3.7e-3 below Li's 3.4215 (J. Phys. Chem. Ref. Data 9, 561
+    # (1980)): the two measurements differ by that much; Zemax's catalog is kept as it is.
+    si = get_material("SILICON")
+    assert 3.0e-3 <= 3.4215 - float(si.index(10.0)) <= 4.5e-3
+    assert si.wavelength_range == (1.36, 11.0)
+
+
+def test_new_catalogs_keep_old_names_and_reach_their_own():
+    # Names that resolved before the Zemax INFRARED etc. catalogs were shipped still do.
+    assert glass_info("BAF2") == ("CDGM", 1.5697, 49.45)  # CDGM's barium flint glass
+    assert glass_info("CAF2")[0] == "MISC" and glass_info("F_SILICA")[0] == "MISC"
+    assert glass_info("PBH71")[0] == "OHARA"
+    # … and the crystal of the same name is one catalog argument away.
+    baf2 = get_material("BAF2", catalogs="INFRARED")
+    assert (baf2.catalog, baf2.catalog_nd, baf2.wavelength_range) == ("INFRARED", 1.474478,
+                                                                      (0.27, 10.3))
+    znse = get_material("znse")
+    assert (znse.catalog, znse.formula, znse.wavelength_range) == ("INFRARED", 2, (0.55, 18.0))
+    assert glass_info("ZNSE") == ("INFRARED", 1.0, 0.0)  # the catalog's "no d-line data"
+    assert get_material("ECO-550").name == "ECO550"
+    assert get_material("ECO-550").catalog == "LIGHTPATH"
+    with pytest.raises(ValueError, match="ZNS_IR, ZNS_VIS"):  # Zemax names ZnS fits by band
+        get_material("ZNS")
+    # Materials without d-line data stay off the glass map.
+    near = catalog.nearest_glasses(2.4, 15.0, count=100, catalogs="INFRARED")
+    assert len(near) == 48 - len(NO_D_LINE_DATA["INFRARED"])
+    assert near[0][1] == "SRTIO3" and all(vd > 0 for _, _, _, vd in near)
 
 
 @pytest.mark.parametrize("wavelength, published", [
@@ -263,16 +347,16 @@ def test_nearest_glasses_on_the_glass_map():
 
 
 def test_unknown_glass_suggests_optically_close_glasses():
-    # D-ZK3M (LightPath's moulded D-ZK3) is in no shipped catalog.
+    # D-ZK3Q is no glass (LightPath's moulded D-ZK3 is D-ZK3M, in LIGHTPATH).
     with pytest.raises(ValueError) as err:
-        get_material("D-ZK3M", nd=1.58913, vd=61.27)
+        get_material("D-ZK3Q", nd=1.58913, vd=61.27)
     message = str(err.value)
     assert "Closest catalog matches: D-ZK3," in message
     optical = message.split("Optically closest to nd 1.58913, Vd 61.27:")[1]
     assert optical.startswith(" SCHOTT N-SK5 (nd 1.58913, Vd 61.27);")
     assert optical.count("(nd ") == 5
     with pytest.raises(ValueError) as err:
-        get_material("D-ZK3M")
+        get_material("D-ZK3Q")
     assert "Optically" not in str(err.value)
 
 

@@ -5,6 +5,7 @@ import dataclasses
 import math
 import pathlib
 import re
+import warnings
 
 import jax.numpy as jnp
 import numpy as np
@@ -353,16 +354,16 @@ def test_unknown_glass_lists_close_matches(tmp_path):
 
 def test_unknown_glass_names_unshipped_gcat_and_optically_close_glasses():
     text = _minimal("  CURV 0.02\n").replace(
-        "GLAS N-BK7", "GLAS D-ZK3M 0 0 1.58913 61.27 0 0 0 0 0 0"
+        "GLAS N-BK7", "GLAS D-ZK3Q 0 0 1.58913 61.27 0 0 0 0 0 0"
     )
     with pytest.raises(ValueError) as e:
-        zmx.loads("GCAT LIGHTPATH SCHOTT\n" + text)
+        zmx.loads("GCAT RPO SCHOTT\n" + text)
     msg = str(e.value)
-    assert msg.startswith("<zmx>:10: glass 'D-ZK3M'")
+    assert msg.startswith("<zmx>:10: glass 'D-ZK3Q'")
     assert "Closest catalog matches: D-ZK3," in msg
     assert "Optically closest to nd 1.58913, Vd 61.27: SCHOTT N-SK5 (nd 1.58913" in msg
-    assert "GCAT names LIGHTPATH, which jaxlens does not ship" in msg
-    assert "SCHOTT, CDGM" in msg and "OHARA" in msg and "LIGHTPATH.AGF" in msg
+    assert "GCAT names RPO, which jaxlens does not ship" in msg
+    assert "SCHOTT, CDGM" in msg and "OHARA" in msg and "RPO.AGF" in msg
     with pytest.raises(ValueError) as e:
         zmx.loads("GCAT SCHOTT OHARA\n" + text)
     assert "does not ship" not in str(e.value) and "Optically closest" in str(e.value)
@@ -775,3 +776,48 @@ def test_a_multi_configuration_file_is_reported_once_and_its_operands_are_known(
     with pytest.raises(ValueError, match="multi-configuration.*strict mode"):
         zmx.loads(text, strict=True)
     zmx.loads(text.replace("MNUM 2 1", "MNUM 1 1"))  # one configuration: nothing to say
+
+
+# ---------------------------------------------------------------------------- IR catalogs
+
+
+def test_gcat_infrared_znse_singlet_opens_and_traces_at_10_6_um(tmp_path):
+    # A CO2-laser singlet as Zemax writes it: the INFRARED catalog, ZnSe with the catalog's
+    # "no d-line data" nd 1, Vd 0 on the GLAS line, wavelength 10.6 µm.
+    text = (
+        "UNIT MM\nENPD 10\nGCAT INFRARED\nWAVM 1 10.6 1\nSURF 0\n  DISZ INFINITY\n"
+        "SURF 1\n  CURV 0.01\n  DISZ 4\n  GLAS ZNSE 0 0 1 0 0 0 0 0 0 0\n  DIAM 8\n"
+        "SURF 2\n  DISZ 70\n  DIAM 8\nSURF 3\n"
+    )
+    p = tmp_path / "co2.zmx"
+    p.write_text(text)
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")  # no warning: the name is in the file's catalog
+        lens = jaxlens.load(p)
+    m = lens.materials[0]
+    assert (m.name, m.catalog, m.wavelength_range) == ("ZNSE", "INFRARED", (0.55, 18.0))
+    assert float(m.index(10.6)) == pytest.approx(2.4028, abs=1e-3)
+    rays = jaxlens.analysis.spot_rays(lens, 0.0, 10.6)
+    assert bool(np.all(rays.valid))
+    # f = 1 / ((n - 1) c) for a thin plano-convex lens: about 71 mm; the rays meet near there.
+    assert float(np.max(np.abs(np.asarray(rays.origin)[:, :2]))) < 0.5
+    written, _ = zmx.dumps(lens)
+    assert "GCAT INFRARED" in written and "GLAS ZNSE" in written
+
+
+def test_gcat_infrared_takes_its_own_baf2_and_other_files_keep_cdgms():
+    text = _minimal("  CURV 0.02\n").replace("GLAS N-BK7", "GLAS BAF2")
+    assert zmx.loads("GCAT INFRARED\n" + text).materials[0].catalog == "INFRARED"
+    assert zmx.loads("GCAT CDGM\n" + text).materials[0].catalog == "CDGM"
+    assert zmx.loads("GCAT INFRARED CDGM\n" + text).materials[0].catalog == "INFRARED"
+    # GCAT LIGHTPATH: LightPath's molded glass, no warning.
+    lp = _minimal("  CURV 0.02\n").replace("GLAS N-BK7", "GLAS ECO550 0 0 1.605503 50.28")
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")
+        assert zmx.loads("GCAT LIGHTPATH\n" + lp).materials[0].catalog == "LIGHTPATH"
+    # A GLAS line's nd and Vd are not cross-checked against a catalog without d-line data.
+    ge = _minimal("  CURV 0.02\n", head="ENPD 10\nWAVM 1 10 1\n").replace(
+        "GLAS N-BK7", "GLAS GERMANIUM 0 0 4.0 100.0")
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")
+        assert zmx.loads("GCAT INFRARED\n" + ge).materials[0].name == "GERMANIUM"

@@ -42,6 +42,13 @@ SHIPPED_FOR_ZEMAX = {
     "NIKON": ("HIKARI",),  # the shipped HIKARI file is NIKON's Zemax catalog (2017-11)
     "SUMITA": ("SUMITA",),
     "CORNING": ("CORNING",),
+    "INFRARED": ("INFRARED",),
+    "LIGHTPATH": ("LIGHTPATH",),
+    "HERAEUS": ("HERAEUS",),
+    "UMICORE": ("UMICORE",),
+    "TOPAS": ("TOPAS",),
+    "ARCHER": ("ARCHER",),
+    "ISUZU": ("ISUZU",),
 }
 
 
@@ -181,8 +188,8 @@ def _cross_checked(m: AbstractMaterial, ln) -> AbstractMaterial:
     """Warn when the nd and Vd a GLAS line carries differ from the catalog glass found."""
     nd, vd = _glas_nd_vd(ln)
     cat_nd, cat_vd = getattr(m, "catalog_nd", None), getattr(m, "catalog_vd", None)
-    if nd is None or cat_nd is None or cat_vd is None:
-        return m
+    if nd is None or cat_nd is None or cat_vd is None or not cat_vd > 0:
+        return m  # cat_vd 0: the catalog has no d-line data (IR materials: nd 1, Vd 0)
     if abs(nd - cat_nd) > ND_TOLERANCE or abs(vd - cat_vd) > VD_TOLERANCE:
         warnings.warn(
             f"{ln.path}:{ln.number}: GLAS {m.name} gives nd {nd:g}, Vd {vd:g}, but catalog "

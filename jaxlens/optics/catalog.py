@@ -12,6 +12,14 @@ source in its ``!`` header lines):
   the refractiveindex.info database (CC0), converted by ``tools/make_agf.py``; SCHOTT and CDGM
   also get that database's glasses that their files above lack (and SCHOTT B270).
 * ``CORNING``: HPFS 7980 fused silica (``C79-80``).
+* ``INFRARED``: Zemax's infrared catalog: ZnSe, ZnS, germanium, silicon, GaAs, sapphire, MgF₂,
+  BaF₂, CaF₂, KBr, NaCl, LiF, KRS-5, AMTIR, Cleartran, SCHOTT IRG glasses…
+* ``LIGHTPATH``, ``HERAEUS``, ``UMICORE``, ``TOPAS``, ``ARCHER``, ``ISUZU``: Zemax's catalogs of
+  LightPath molded-lens glasses (ECO550, D-ZK3M, BD1/BD2), Heraeus silica (Suprasil,
+  Infrasil…), Umicore GASIR, TOPAS COC grades, Archer molded glasses and Isuzu IIR-SF1.
+
+IR materials whose d line Zemax gives no data for carry the catalog's nd 1 and Vd 0 (a
+"no data" mark, e.g. ZNSE, GERMANIUM, SILICON); their CD and LD records hold the data.
 
 Lookups are case-insensitive. Catalogs registered with :func:`register_catalog` are
 searched first (latest first), then the shipped ones in the order above, so ``"F2"`` is
@@ -74,8 +82,11 @@ __all__ = [
 ]
 
 SHIPPED_CATALOGS = ("SCHOTT", "CDGM", "PLASTICS", "MISC", "OHARA", "HOYA", "HIKARI", "SUMITA",
-                    "CORNING")
-"""Shipped catalogs in search order (files ``jaxlens/data/glass/<NAME>.agf``)."""
+                    "CORNING", "INFRARED", "LIGHTPATH", "HERAEUS", "UMICORE", "TOPAS", "ARCHER",
+                    "ISUZU")
+"""Shipped catalogs in search order (files ``jaxlens/data/glass/<NAME>.agf``). The catalogs
+from INFRARED on come last, so a name that an earlier catalog already had keeps its meaning
+(``BAF2`` is CDGM's glass; the BaF₂ crystal is ``get_material("BAF2", "INFRARED")``)."""
 
 FORMULA_NAMES = {
     1: "Schott",
@@ -107,6 +118,7 @@ _ALIASES = {
     "FUSED SILICA": ("MISC", "F_SILICA"),
     "FUSED_SILICA": ("MISC", "F_SILICA"),
     "FUSEDSILICA": ("MISC", "F_SILICA"),
+    "ECO-550": ("LIGHTPATH", "ECO550"),
     "BK7": ("SCHOTT", "N-BK7"),
     "SK16": ("SCHOTT", "N-SK16"),
 }
@@ -480,7 +492,8 @@ def nearest_glasses(nd: float, vd: float, count: int = 5,
     """The glasses nearest to (nd, Vd) on the glass map, for substituting an unknown glass.
 
     The distance is ``hypot((nd − nd′)/ND_PER_VD, Vd − Vd′)`` with the catalogs' nd and Vd.
-    A name found in an earlier catalog of the search order is not repeated.
+    A name found in an earlier catalog of the search order is not repeated; materials
+    without catalog nd and Vd (Zemax's nd 1, Vd 0 of IR materials) are not on the map.
 
     Args:
         nd: Index at the d line (587.56 nm), > 1.
@@ -507,6 +520,8 @@ def nearest_glasses(nd: float, vd: float, count: int = 5,
                 continue
             seen.add(key)
             d, v = _nd_vd(entry)
+            if not v > 0:  # nd 1, Vd 0: no d-line data
+                continue
             rows.append((float(np.hypot((d - nd) / ND_PER_VD, v - vd)), cat,
                          entry.name if entry.name else key, d, v))
     rows.sort(key=lambda r: r[0])
