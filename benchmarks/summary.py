@@ -14,7 +14,6 @@ import importlib
 import inspect
 import json
 import pathlib
-import re
 
 from . import common
 
@@ -38,10 +37,9 @@ def library_defaults() -> dict:
             "jaxlens/trace.py DEFAULT_NEWTON_ITERS",
         )
     }
-    m = re.search(r"pupil_grid\((\d+)", inspect.getsource(analysis.rms_spot))
     out["rms_spot_pupil"] = (
-        ("grid", int(m.group(1))) if m else None,
-        "jaxlens/analysis.py rms_spot(pupil=None) -> pupil_grid(n)",
+        ("grid", analysis.PUPIL_GRID),
+        "jaxlens/analysis/spots.py rms_spot(pupil=None) -> pupil_grid(PUPIL_GRID)",
     )
     sig = inspect.signature(psf.psf_info).parameters
     out["psf_kernel_size"] = (sig["kernel_size"].default, "jaxlens/psf.py psf(kernel_size=...)")

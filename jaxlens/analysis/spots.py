@@ -25,6 +25,9 @@ from ..optics.lens import Lens
 from ..optics.rays import Rays
 from ..tracing.forward import DEFAULT_NEWTON_ITERS, trace, trace_path
 
+# The default pupil sampling of spot analyses: a 21 × 21 grid clipped to the disc (317 rays).
+PUPIL_GRID = 21
+
 
 def _fields_array(fields, where: str) -> Array:
     """Fields as ``[F]`` (θy) or ``[F, 2]`` (θx, θy) degrees; refuses other shapes and F = 0."""
@@ -68,7 +71,7 @@ def spot_rays(
 
 @eqx.filter_jit
 def _spot_rays(lens, field, wavelength, *, pupil, depth, aim, newton_iters) -> Rays:
-    pupil = pupil_grid(21, lens.epd.dtype) if pupil is None else pupil
+    pupil = pupil_grid(PUPIL_GRID, lens.epd.dtype) if pupil is None else pupil
     rays = field_rays(lens, field, pupil, wavelength, depth=depth, aim=aim)
     return trace(lens, rays, newton_iters=newton_iters)
 
@@ -157,7 +160,7 @@ def _rms_spot(lens, fields, wavelengths, *, pupil, reference, depth, newton_iter
     if wls.ndim != 1 or wls.size == 0:
         raise ValueError(f"rms_spot: wavelengths must be [W] µm with W >= 1, got shape "
                          f"{wls.shape}")
-    pupil = pupil_grid(21, lens.epd.dtype) if pupil is None else jnp.asarray(pupil)
+    pupil = pupil_grid(PUPIL_GRID, lens.epd.dtype) if pupil is None else jnp.asarray(pupil)
     if pupil.ndim != 2 or pupil.shape[1] != 2 or pupil.shape[0] == 0:  # before the concatenate
         raise ValueError(f"rms_spot: pupil must be [M, 2] normalised pupil points (Px, Py) "
                          f"with M >= 1, got shape {pupil.shape}")
