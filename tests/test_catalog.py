@@ -87,7 +87,7 @@ def test_shipped_catalogs_and_required_glasses():
     assert counts == {"SCHOTT": 163, "CDGM": 324, "PLASTICS": 11, "MISC": 13, "OHARA": 410,
                       "HOYA": 190, "HIKARI": 370, "SUMITA": 176, "CORNING": 1, "INFRARED": 48,
                       "LIGHTPATH": 11, "HERAEUS": 5, "UMICORE": 2, "TOPAS": 3, "ARCHER": 15,
-                      "ISUZU": 1}
+                      "ISUZU": 1, "LZOS": 54, "RAD_HARD": 7}
     # The glasses that real .zmx files of issue 12 failed on, each in its maker's catalog.
     for cat, names in {"OHARA": ["S-LAH64", "L-BAL35", "S-FTM16", "S-LAL10", "L-TIM28"],
                        "HOYA": ["TAF3", "TAFD30"], "HIKARI": ["J-LAK14", "J-LAK02", "E-LAFH3"],
@@ -98,7 +98,9 @@ def test_shipped_catalogs_and_required_glasses():
                        "LIGHTPATH": ["ECO550", "ECO-550", "D-ZK3M", "BD2"],
                        "HERAEUS": ["SUPRASIL", "INFRASIL"], "UMICORE": ["GASIR1"],
                        "TOPAS": ["5013LS-01"], "ARCHER": ["S-LAH53M"],
-                       "ISUZU": ["IIR-SF1"]}.items():
+                       "ISUZU": ["IIR-SF1"],
+                       "LZOS": ["LZ_K8", "LZ_TF1", "LZ_LK7", "LZ_CTK9", "LZ_OK4"],
+                       "RAD_HARD": ["SF8G07"]}.items():
         for name in names:
             assert glass_info(name)[0] == cat, name
     schott = set(catalog_names(catalog="SCHOTT"))
@@ -140,8 +142,9 @@ NO_D_LINE_DATA = {
 def test_every_shipped_glass_reproduces_its_catalog_nd_and_vd():
     # Unnamed models share one compilation per formula class (names are static fields).
     index_dfc = jax.jit(lambda model: model.index(DFC))
-    failures, loose, no_data = [], set(), set()
+    failures, loose, no_data, checked = [], set(), set(), {}
     for cat, entries in catalog._shipped():
+        checked[cat] = len(entries)
         for r in entries.values():
             if (r.nd, r.vd) == (1.0, 0.0):
                 no_data.add((cat, r.name))
@@ -157,6 +160,9 @@ def test_every_shipped_glass_reproduces_its_catalog_nd_and_vd():
     assert not failures, "\n".join(failures)
     assert loose == {(c, n) for c, names in LOOSE_ND_VD.items() for n in names}
     assert no_data == {(c, n) for c, names in NO_D_LINE_DATA.items() for n in names}
+    # Every shipped catalog is checked, the Zemax LZOS and RAD_HARD ones included.
+    assert set(checked) == set(catalog.SHIPPED_CATALOGS)
+    assert (checked["LZOS"], checked["RAD_HARD"]) == (54, 7)
 
 
 def test_no_d_line_data_materials_have_a_real_index_over_their_range():
@@ -219,6 +225,21 @@ def test_new_catalogs_keep_old_names_and_reach_their_own():
     near = catalog.nearest_glasses(2.4, 15.0, count=100, catalogs="INFRARED")
     assert len(near) == 48 - len(NO_D_LINE_DATA["INFRARED"])
     assert near[0][1] == "SRTIO3" and all(vd > 0 for _, _, _, vd in near)
+
+
+def test_lzos_and_rad_hard_keep_schotts_names_and_reach_their_own():
+    # LZOS names carry Zemax's LZ_ prefix: none clashes, plain K8 is still no glass.
+    assert glass_info("LZ_K8") == ("LZOS", 1.516367, 63.840333)
+    assert glass_info("lz_tf1")[0] == "LZOS"
+    with pytest.raises(ValueError):
+        get_material("K8")
+    assert "LZ_NEWGLASS" not in catalog_names(catalog="LZOS")  # Zemax's n = 1 template
+    assert get_material("LZ_OK4").wavelength_range == (0.365, 0.70652)
+    # RAD_HARD shares six names with SCHOTT, which keeps them; SF8G07 is RAD_HARD's only.
+    assert glass_info("BK7G18") == ("SCHOTT", 1.51975, 63.58)
+    rad = get_material("BK7G18", catalogs="RAD_HARD")
+    assert (rad.catalog, rad.catalog_nd, rad.formula) == ("RAD_HARD", 1.519747, 1)
+    assert glass_info("SF8G07")[0] == "RAD_HARD"
 
 
 @pytest.mark.parametrize("wavelength, published", [

@@ -821,3 +821,29 @@ def test_gcat_infrared_takes_its_own_baf2_and_other_files_keep_cdgms():
     with warnings.catch_warnings():
         warnings.simplefilter("error")
         assert zmx.loads("GCAT INFRARED\n" + ge).materials[0].name == "GERMANIUM"
+
+
+# ------------------------------------------------------------------ LZOS and RAD_HARD catalogs
+
+
+def test_gcat_lzos_soviet_glass_opens_and_gcat_rad_hard_takes_its_own_bk7g18(tmp_path):
+    # A singlet as Zemax writes it with the LZOS catalog: LZ_K8 is in no other catalog.
+    text = (
+        "UNIT MM\nENPD 10\nGCAT LZOS\nWAVM 1 0.5875618 1\nSURF 0\n  DISZ INFINITY\n"
+        "SURF 1\n  CURV 0.02\n  DISZ 4\n  GLAS LZ_K8 0 0 1.516367 63.840333 0 0 0 0 0 0\n"
+        "  DIAM 8\nSURF 2\n  DISZ 95\n  DIAM 8\nSURF 3\n"
+    )
+    p = tmp_path / "k8.zmx"
+    p.write_text(text)
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")  # no warning: the name and nd/Vd are LZOS's
+        lens = jaxlens.load(p)
+    m = lens.materials[0]
+    assert (m.name, m.catalog) == ("LZ_K8", "LZOS")
+    assert float(m.index(0.5875618)) == pytest.approx(1.516367, abs=1e-5)
+    assert "GCAT LZOS" in zmx.dumps(lens)[0]
+    # BK7G18 is in SCHOTT and RAD_HARD: GCAT RAD_HARD takes RAD_HARD's record.
+    bk = _minimal("  CURV 0.02\n").replace("GLAS N-BK7", "GLAS BK7G18")
+    assert zmx.loads("GCAT RAD_HARD\n" + bk).materials[0].catalog == "RAD_HARD"
+    assert zmx.loads("GCAT SCHOTT\n" + bk).materials[0].catalog == "SCHOTT"
+    assert zmx.loads("GCAT RAD_HARD SCHOTT\n" + bk).materials[0].catalog == "RAD_HARD"

@@ -49,6 +49,8 @@ SHIPPED_FOR_ZEMAX = {
     "TOPAS": ("TOPAS",),
     "ARCHER": ("ARCHER",),
     "ISUZU": ("ISUZU",),
+    "LZOS": ("LZOS",),
+    "RAD_HARD": ("RAD_HARD",),
 }
 
 

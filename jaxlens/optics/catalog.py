@@ -17,6 +17,10 @@ source in its ``!`` header lines):
 * ``LIGHTPATH``, ``HERAEUS``, ``UMICORE``, ``TOPAS``, ``ARCHER``, ``ISUZU``: Zemax's catalogs of
   LightPath molded-lens glasses (ECO550, D-ZK3M, BD1/BD2), Heraeus silica (Suprasil,
   Infrasil…), Umicore GASIR, TOPAS COC grades, Archer molded glasses and Isuzu IIR-SF1.
+* ``LZOS``: Zemax's catalog of the Russian (Soviet GOST) LZOS glasses, named with the prefix
+  ``LZ_`` (LZ_K8, LZ_TF1, LZ_LK7, LZ_CTK9…).
+* ``RAD_HARD``: Zemax's catalog of SCHOTT radiation-resistant glasses (BK7G18, F2G12, SF8G07…);
+  six of its seven names are also SCHOTT's and stay SCHOTT's.
 
 IR materials whose d line Zemax gives no data for carry the catalog's nd 1 and Vd 0 (a
 "no data" mark, e.g. ZNSE, GERMANIUM, SILICON); their CD and LD records hold the data.
@@ -83,10 +87,11 @@ __all__ = [
 
 SHIPPED_CATALOGS = ("SCHOTT", "CDGM", "PLASTICS", "MISC", "OHARA", "HOYA", "HIKARI", "SUMITA",
                     "CORNING", "INFRARED", "LIGHTPATH", "HERAEUS", "UMICORE", "TOPAS", "ARCHER",
-                    "ISUZU")
+                    "ISUZU", "LZOS", "RAD_HARD")
 """Shipped catalogs in search order (files ``jaxlens/data/glass/<NAME>.agf``). The catalogs
 from INFRARED on come last, so a name that an earlier catalog already had keeps its meaning
-(``BAF2`` is CDGM's glass; the BaF₂ crystal is ``get_material("BAF2", "INFRARED")``)."""
+(``BAF2`` is CDGM's glass; the BaF₂ crystal is ``get_material("BAF2", "INFRARED")``;
+``BK7G18`` is SCHOTT's, RAD_HARD's is ``get_material("BK7G18", "RAD_HARD")``)."""
 
 FORMULA_NAMES = {
     1: "Schott",
