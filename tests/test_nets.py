@@ -256,6 +256,29 @@ def test_network_with_nonzero_scales_matches_numpy():
     np.testing.assert_allclose(got, _np_net(net, x), rtol=1e-9, atol=1e-9)
 
 
+def test_runs_of_several_blocks_match_numpy_and_have_gradients():
+    """Runs of two or more blocks go through one ``lax.scan`` (the paper's 28-block level
+    compiles as one block); they still apply every block in turn, gradients included."""
+    net = NAFNet(width=4, enc_blocks=(1, 3), middle_blocks=2, dec_blocks=(2, 1), key=KEY,
+                 dtype=jnp.float64)
+    net = _randomise(net, 5)
+    x = np.random.default_rng(6).random((8, 8, 3))
+    got = np.asarray(_apply(net, jnp.asarray(x)))
+    np.testing.assert_allclose(got, _np_net(net, x), rtol=1e-9, atol=1e-9)
+    xj = jnp.asarray(x)
+    g = jax.grad(lambda n: jnp.sum(n(xj) ** 2))(net)
+    w = net.encoders[1][2].ffn_out.weight  # in the third block of the scanned run
+    eps, i = 1e-6, (0, 1)
+
+    def loss_at(delta):
+        n = eqx.tree_at(lambda n: n.encoders[1][2].ffn_out.weight, net, w.at[i].add(delta))
+        return float(jnp.sum(n(xj) ** 2))
+
+    fd = (loss_at(eps) - loss_at(-eps)) / (2 * eps)
+    np.testing.assert_allclose(float(g.encoders[1][2].ffn_out.weight[i]), fd, rtol=1e-6)
+    assert abs(fd) > 1e-3
+
+
 def test_initialisation_is_pytorch_default_and_keeps_the_dtype():
     """Weights and biases uniform in ±1/√fan_in (fan_in = c_in·k·k; 9 for the depthwise
     3×3), as PyTorch initialises convolutions; the requested dtype is kept."""
