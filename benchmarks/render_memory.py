@@ -100,6 +100,9 @@ def worker(size: int, spp: int, checkpoint: bool, patch: int) -> dict:
         "compile_s": round(t1 - t0, 2),
         "run_s": round(t2 - t1, 2),
         "ru_maxrss_bytes": resource.getrusage(resource.RUSAGE_SELF).ru_maxrss * 1024,
+        # On a GPU the arrays live in device memory, which RSS does not see.
+        "device_peak_bytes": (jax.devices()[0].memory_stats() or {}).get("peak_bytes_in_use"),
+        "device": jax.devices()[0].device_kind,
     }
 
 

@@ -222,7 +222,8 @@ def _blocks(blocks: Sequence[NAFBlock], y):
             y = b(y)
         return y
     _, static = eqx.partition(blocks[0], eqx.is_array)
-    stacked = jax.tree.map(lambda *xs: jnp.stack(xs), *(eqx.filter(b, eqx.is_array) for b in blocks))
+    arrays = (eqx.filter(b, eqx.is_array) for b in blocks)
+    stacked = jax.tree.map(lambda *xs: jnp.stack(xs), *arrays)
     y, _ = jax.lax.scan(lambda y, p: (eqx.combine(p, static)(y), None), y, stacked)
     return y
 

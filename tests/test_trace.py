@@ -383,6 +383,23 @@ def test_chunk_sizes_are_simd_friendly():
         jl.trace(jl.zoo.cooke_triplet(), rays, chunk=0)
 
 
+def test_default_chunk_follows_the_backend(monkeypatch):
+    """``chunk="auto"`` (the default) is 2**16 rays on a CPU and 2**20 on a GPU, where small
+    chunks leave the device idle (SPEED.md); a string other than "auto" is refused."""
+    from jaxlens.tracing import forward
+
+    assert forward.default_chunk() == forward.CHUNK == 2**16  # the tests run on the CPU
+    monkeypatch.setattr(forward.jax, "default_backend", lambda: "gpu")
+    assert forward.default_chunk() == forward.CHUNK_ACCELERATOR == 2**20
+    monkeypatch.undo()
+    rays = jl.Rays(jnp.zeros((5, 3)), jnp.tile(jnp.array([0.0, 0.0, 1.0]), (5, 1)), 0.5876)
+    lens = jl.zoo.cooke_triplet()
+    np.testing.assert_array_equal(jl.trace(lens, rays).origin,
+                                  jl.trace(lens, rays, chunk="auto").origin)
+    with pytest.raises(ValueError, match="chunk"):
+        jl.trace(lens, rays, chunk="big")
+
+
 def test_import_builds_no_arrays():
     """Importing jaxlens starts no JAX backend, so a CLI can still choose the device count."""
     import subprocess

@@ -16,6 +16,7 @@ the break's frame (``optics.coordinates.frame_of`` maps them to global coordinat
 from __future__ import annotations
 
 import functools
+from typing import Literal
 
 import equinox as eqx
 import jax
@@ -260,11 +261,22 @@ def trace_path(
     return rays_from_state(stacked, wl)
 
 
-# Rays per chunk for large batches. One chunk's working set (the state and the temporaries
-# of a surface, ~10 arrays) then stays in the CPU caches, which doubles forward throughput
-# at 1e6 rays, and a gradient holds one chunk's intermediates at a time
+# Rays per chunk for large batches on a CPU. One chunk's working set (the state and the
+# temporaries of a surface, ~10 arrays) then stays in the CPU caches, which doubles forward
+# throughput at 1e6 rays, and a gradient holds one chunk's intermediates at a time
 # (benchmarks/SPEED.md). Small batches are traced in one piece.
 CHUNK = 2**16
+# On a GPU the chunks run one after another and each fills only a part of the device: on an
+# H100, 1e6 rays through the Cooke triplet took 1.5-2.3 ms forward and 10.6-12.1 ms forward +
+# gradient in chunks of 2**16, and 0.6-0.8 ms and 2.2 ms in one piece (SPEED.md). Chunks of
+# 2**20 bound the gradient's memory for larger batches.
+CHUNK_ACCELERATOR = 2**20
+
+
+def default_chunk() -> int:
+    """Rays per chunk that ``trace(chunk="auto")`` uses: ``CHUNK`` when JAX's default backend
+    is the CPU, ``CHUNK_ACCELERATOR`` on a GPU or TPU."""
+    return CHUNK if jax.default_backend() == "cpu" else CHUNK_ACCELERATOR
 
 
 def _chunking(n: int, chunk: int, lanes: int = 16) -> tuple[int, int]:
@@ -288,7 +300,7 @@ def trace(
     rays: Rays,
     *,
     newton_iters: int = DEFAULT_NEWTON_ITERS,
-    chunk: int | None = CHUNK,
+    chunk: int | Literal["auto"] | None = "auto",
     upto: int | None = None,
     uniform: bool = False,
 ) -> Rays:
@@ -303,6 +315,7 @@ def trace(
         newton_iters: Newton iterations for aspheric and hybrid surfaces.
         chunk: a batch ``[N, 3]`` with N above this is traced ``chunk`` rays at a time
             (``jax.lax.map``; the gradient recomputes each chunk instead of storing it).
+            ``"auto"``: ``default_chunk()``, 2**16 on a CPU and 2**20 on a GPU.
             ``None`` traces every batch in one piece. Results do not depend on it.
         upto: stop after ``surfaces[upto]`` (0-based); ``None`` traces to the image.
         uniform: trace every surface after the first as one kind (one ``lax.scan``;
@@ -324,9 +337,11 @@ def trace(
     """
 
     _check_upto(lens, rays, upto, newton_iters)
+    if isinstance(chunk, str) and chunk == "auto":
+        chunk = default_chunk()
     if chunk is not None:
         chunk = checks.number(chunk, "chunk", "trace", lo=1, integer=True,
-                              unit="rays (None: one piece)")
+                              unit='rays ("auto": by backend; None: one piece)')
 
     def whole(r: Rays, prepared=None) -> Rays:
         states = _trace_states(lens, r, newton_iters, upto, keep_path=False, uniform=uniform,

@@ -625,7 +625,9 @@ class Trainer:
 
     def _log(self, acc, steps):
         vals = jax.device_get(acc)
-        rec = {"step": self.step, "loss": float(np.mean([v[0] for v in vals]))}
+        # Training seconds so far (this lens, all pieces of a resumed run): the step rate.
+        rec = {"step": self.step, "loss": float(np.mean([v[0] for v in vals])),
+               "seconds": round(self.seconds, 2)}
         for k in ("rec", "sim", "raw"):
             rec[k] = float(np.mean([v[1][k] for v in vals]))
         rec["skipped"] = int(round(sum(float(v[1]["skipped"]) for v in vals)))
