@@ -341,3 +341,39 @@ def test_trace_names_a_lens_or_rays_of_the_wrong_type():
         jl.trace(rays, lens)
     with pytest.raises(TypeError, match="trace: rays must be a jaxlens.Rays, got ndarray"):
         jl.trace_path(lens, np.zeros((1, 3)))
+
+
+def _every_material():
+    from jaxlens.analysis.tolerance import PerturbedMaterial
+
+    glass = jl.get_material("N-BK7")
+    return [jl.Air(), jl.ModelGlass(1.5168, 64.17), glass, jl.get_material("ZNSE", "INFRARED"),
+            jl.Tabulated(jnp.array([0.4, 0.6, 0.8]), jnp.array([1.53, 1.52, 1.51])),
+            *(jl.get_material(n) for n in ("PMMA", "POLYCARB")),
+            PerturbedMaterial(glass, jnp.asarray(0.001), jnp.asarray(0.0))]
+
+
+@pytest.mark.parametrize("material", _every_material(), ids=lambda m: type(m).__name__)
+def test_material_index_refuses_a_wavelength_in_nm(material):
+    """Every material's ``index`` takes µm; 587.6 (nm) would give a plausible wrong index
+    from any dispersion formula, so a concrete value that cannot be in µm is refused. An
+    in-µm value outside the data range still gives a number (infrared materials' nd)."""
+    with pytest.raises(ValueError, match="587.6 nm is 0.5876 µm"):
+        material.index(587.6)
+    with pytest.raises(ValueError, match="not a wavelength in µm"):
+        material.index(jnp.array([0.5, -0.5]))
+    n = float(material.index(0.5876))
+    assert 1.0 <= n < 3.0
+    assert float(jax.jit(lambda w: material.index(w))(0.5876)) == pytest.approx(n, rel=1e-6)
+
+
+def test_a_new_material_class_gets_the_unit_check():
+    class Constant(jl.AbstractMaterial):
+        name: str = "constant"
+
+        def index(self, wavelength):
+            return jnp.full_like(jnp.asarray(wavelength, float), 1.4)
+
+    assert float(Constant().index(0.55)) == pytest.approx(1.4)
+    with pytest.raises(ValueError, match="Constant.index"):
+        Constant().index(550.0)

@@ -278,6 +278,19 @@ def _nm_hint(wl) -> str:
     return " (wavelengths are in µm)"
 
 
+def wavelength_unit(wl, where: str, arg: str = "wavelength") -> None:
+    """Refuse a concrete wavelength that is not a positive number below 100 µm: a value in nm
+    (or not a wavelength at all). Traced values pass; ``wavelengths`` checks ranges."""
+    if is_traced(wl) or isinstance(wl, (int, float)) and 0 < wl < 100:
+        return
+    real_values(wl, arg, where, "µm")
+    a = np.asarray(wl, dtype=float)
+    bad = ~np.isfinite(a) | (a <= 0) | (a >= 100)
+    if np.any(bad):
+        raise ValueError(f"{where}: {arg} {fmt(a[bad])} µm is not a wavelength in µm (0 to "
+                         f"100 µm){_nm_hint(a[bad])}")
+
+
 def wavelengths(lens, wl, where: str, arg: str = "wavelength"):
     """Check wavelengths (µm) against the lens's materials; returns ``wl``.
 

@@ -45,6 +45,26 @@ class AbstractMaterial(eqx.Module):
     def index(self, wavelength: Float[ArrayLike, "*b"]) -> Float[Array, "*b"]:
         raise NotImplementedError
 
+    def __init_subclass__(cls, **kwargs):
+        # Every ``index`` refuses a concrete wavelength that cannot be in µm (e.g. 587.6, in
+        # nm), which every formula would otherwise turn into a plausible wrong index. Traced
+        # wavelengths are checked where they enter (``checks.wavelengths``), and in-µm values
+        # outside a material's data range stay allowed here (nd/Vd of infrared materials).
+        super().__init_subclass__(**kwargs)
+        if "index" in cls.__dict__:
+            cls.index = _unit_checked(cls.__dict__["index"])
+
+
+def _unit_checked(index):
+    def checked(self, wavelength):
+        checks.wavelength_unit(wavelength, f"{type(self).__name__}.index")
+        return index(self, wavelength)
+
+    checked.__name__, checked.__qualname__, checked.__doc__ = (
+        index.__name__, index.__qualname__, index.__doc__)
+    checked.__wrapped__ = index
+    return checked
+
 
 class Air(AbstractMaterial):
     """Air as glass catalogs use it: n = 1 exactly at every wavelength."""
