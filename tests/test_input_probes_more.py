@@ -11,6 +11,7 @@ import json
 import pathlib
 import re
 
+import equinox as eqx
 import jax
 import jax.numpy as jnp
 import numpy as np
@@ -434,6 +435,16 @@ def test_tabulated_glass_refuses_wavelengths_beyond_its_table():
     assert Tabulated([0.55], [1.5]).wavelength_range is None  # one node: no dispersion
     lo, hi = Tabulated([0.5, 0.6], [1.51, 1.50]).wavelength_range
     assert lo == pytest.approx(0.5 * (1 - 1e-3)) and hi == pytest.approx(0.6 * (1 + 1e-3))
+    # eqx.tree_at replaces the table without refreshing the static range: the checks made
+    # before a jit (analyses, psf) use the table as it is now.
+    sk16 = lens.materials[0]
+    assert isinstance(sk16, Tabulated)
+    short = eqx.tree_at(lambda m: (m.wavelengths, m.indices), sk16,
+                        (sk16.wavelengths[1:], sk16.indices[1:]))
+    edited = eqx.tree_at(lambda lz: lz.materials[0], lens, short)
+    assert short.wavelength_range == sk16.wavelength_range  # stale
+    with pytest.raises(ValueError, match=r"0\.4861 µm is outside 0\.58.*the data range of SK16"):
+        jaxlens.analysis.rms_spot(edited, wavelengths=[0.4861])
 
 
 def test_checks_on_constants_hold_inside_jit():

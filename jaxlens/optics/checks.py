@@ -231,7 +231,9 @@ class NoMaterials:
 
 def material_range(material) -> tuple[float, float]:
     """Wavelength range (µm) over which a material's data holds."""
-    rng = getattr(material, "wavelength_range", None)
+    live = getattr(material, "table_range", None)  # a table's own span, if concrete
+    rng = live() if callable(live) else None
+    rng = rng if rng is not None else getattr(material, "wavelength_range", None)
     if rng is not None:
         return float(rng[0]), float(rng[1])
     return GENERIC_RANGE_UM

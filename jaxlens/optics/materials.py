@@ -179,13 +179,20 @@ class Tabulated(AbstractMaterial):
         # Runs before the field converters: the wavelengths may still be a list. The range
         # is rounded to float32, so that a table in either precision (``astype``, a file
         # round trip) has the same static range.
+        if self.wavelength_range is None:
+            self.wavelength_range = self.table_range()
+
+    def table_range(self) -> tuple[float, float] | None:
+        """The span of the table as it is now (µm, widened by ``TABLE_SLACK``); None when
+        traced or of one node. Checks use it before the static ``wavelength_range``, which
+        ``eqx.tree_at`` does not update when it replaces the table."""
         w = self.wavelengths
-        if self.wavelength_range is None and not checks.is_traced(w):
-            a = np.asarray(np.asarray(w, np.float32), float)
-            if a.ndim == 1 and a.size >= 2 and np.all(np.isfinite(a)):
-                slack = TABLE_SLACK
-                self.wavelength_range = (float(a.min()) * (1 - slack),
-                                         float(a.max()) * (1 + slack))
+        if checks.is_traced(w):
+            return None
+        a = np.asarray(np.asarray(w, np.float32), float)
+        if a.ndim != 1 or a.size < 2 or not np.all(np.isfinite(a)):
+            return None
+        return float(a.min()) * (1 - TABLE_SLACK), float(a.max()) * (1 + TABLE_SLACK)
 
     def __check_init__(self):
         where = f"Tabulated{f' {self.name!r}' if self.name else ''}"
