@@ -477,7 +477,7 @@ def test_reported_fov_is_the_real_chief_ray_to_the_sensor_corner():
     (barrel distortion). The reported FoV is 2θ with h(θ) = the sensor half-diagonal, solved
     here by bisection in numpy; the paraxial 2·atan(half/f) would be over 1° less."""
     import jaxlens as jl
-    from jaxlens.experiments.edof import cli
+    from jaxlens.experiments.edof import report
     from jaxlens.optics.lens import Sensor
     from jaxlens.optics.paraxial_surface import ParaxialSurface
 
@@ -498,7 +498,7 @@ def test_reported_fov_is_the_real_chief_ray_to_the_sensor_corner():
         lo, hi = (th, hi) if h < half else (lo, th)
     want = 2 * np.degrees(lo)
     assert want - 2 * np.degrees(np.arctan(half / f)) > 1.0
-    assert cli._fov(lens) == pytest.approx(want, abs=1e-8)
+    assert report._fov(lens) == pytest.approx(want, abs=1e-8)
 
 
 def test_training_config_keeps_only_what_a_lens_reads():
@@ -652,3 +652,25 @@ def test_checkpoints_of_the_old_curvature_units_convert_only_where_exact(classic
     assert float(new.params.c) == pytest.approx(float(start.c), rel=1e-6)
     with pytest.raises(ValueError, match="units of version 1"):
         trainer("hybrid").load()
+
+
+def test_the_command_line_keeps_compiled_programs_beside_the_checkpoints(tmp_path):
+    """A resumed piece loads what the last piece compiled: ``use_compile_cache`` points JAX's
+    persistent cache into ``--checkpoint`` (a process-wide setting, so checked in a fresh
+    process), and defers to a cache the user named in the environment."""
+    import os
+    import subprocess
+    import sys
+
+    code = ("import jax, sys\n"
+            "from jaxlens.experiments.edof import cli\n"
+            "print(cli.use_compile_cache(sys.argv[1]))\n"
+            "print(jax.config.jax_compilation_cache_dir)\n")
+    env = {k: v for k, v in os.environ.items() if k != "JAX_COMPILATION_CACHE_DIR"}
+    out = subprocess.run([sys.executable, "-c", code, str(tmp_path / "ck")], env=env,
+                         capture_output=True, text=True, check=True).stdout.split()
+    assert out == [str(tmp_path / "ck" / "compile_cache")] * 2
+    env["JAX_COMPILATION_CACHE_DIR"] = str(tmp_path / "mine")
+    out = subprocess.run([sys.executable, "-c", code, str(tmp_path / "ck")], env=env,
+                         capture_output=True, text=True, check=True).stdout.split()
+    assert out == [str(tmp_path / "mine")] * 2
