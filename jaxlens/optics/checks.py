@@ -283,7 +283,7 @@ def _nm_hint(wl) -> str:
 def wavelength_unit(wl, where: str, arg: str = "wavelength") -> None:
     """Refuse a concrete wavelength that is not a positive number below 100 µm: a value in nm
     (or not a wavelength at all). Traced values pass; ``wavelengths`` checks ranges."""
-    if is_traced(wl) or isinstance(wl, (int, float)) and 0 < wl < 100:
+    if is_traced(wl) or type(wl) in (int, float) and 0 < wl < 100:  # not bools
         return
     real_values(wl, arg, where, "µm")
     a = np.asarray(wl, dtype=float)
