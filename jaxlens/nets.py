@@ -216,7 +216,8 @@ class Upsample(eqx.Module):
 def _blocks(blocks: Sequence[NAFBlock], y):
     """Apply a run of same-shape blocks in turn; a longer run as one ``lax.scan`` over their
     stacked parameters, so that the compiled program holds one block, not 28 (the paper's
-    deepest level), and compiles in seconds instead of minutes."""
+    deepest level): the paper-scale NAFNet's gradient compiled in 27 s instead of 214 s on
+    the 2-core CPU (batch 8 of 128², under load)."""
     if len(blocks) < 2:
         for b in blocks:
             y = b(y)
