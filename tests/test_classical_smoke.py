@@ -4,19 +4,31 @@ import json
 import math
 import os
 
+import numpy as np
+import pytest
+
 from jaxlens.experiments import classical
 
 
-def test_classical_smoke(tmp_path):
-    out = str(tmp_path / "run")
-    assert classical.main(["--smoke", "--out", out, "--quiet", "--devices", "1"]) == 0
+@pytest.fixture(scope="module")
+def smoke_run(tmp_path_factory):
+    """One smoke run, read by the two tests below: the whole command (figures, render,
+    tolerancing) with continuous material selection, which changes only how the glasses
+    are chosen, so the same run is the material-selection smoke (one run instead of two)."""
+    out = str(tmp_path_factory.mktemp("classical") / "run")
+    assert classical.main(["--smoke", "--select-materials", "continuous", "--out", out,
+                           "--quiet", "--devices", "1"]) == 0
+    with open(os.path.join(out, "summary.json")) as f:
+        return out, json.load(f)
+
+
+def test_classical_smoke(smoke_run):
+    out, s = smoke_run
     for name in ("lens.json", "lens.zmx", "layout.png", "spots.png", "rms_map.png", "mtf.png",
                  "progress.png", "render.png", "summary.json", "seeds/seed_0.json",
                  "tolerance.json", "tolerance_rms.png"):
         path = os.path.join(out, name)
         assert os.path.isfile(path) and os.path.getsize(path) > 0, name
-    with open(os.path.join(out, "summary.json")) as f:
-        s = json.load(f)
     # The loss falls: the spot RMS of the loss fields at the last step is below the first.
     assert s["spot_rms_last_um"] < s["spot_rms_first_um"]
     assert s["best"]["n_fields"] == 16
@@ -34,6 +46,41 @@ def test_classical_smoke(tmp_path):
     assert mc["trials"] == 4 and mc["rms_p50_um"] <= mc["rms_p90_um"]
     assert {"tolerances", "sensitivity", "compensator"} <= set(t)
     assert s["tolerance"]["trials"] == 4
+
+
+def test_cli_smoke_selects_catalog_materials(smoke_run):
+    """The continuous-selection run: catalog names in the summary and GLAS lines."""
+    import jaxlens
+    from jaxlens.design.materials import CatalogRegion
+    from jaxlens.optics import catalog
+
+    out, s = smoke_run
+    region = CatalogRegion.of(("PLASTICS",))
+    corners = np.asarray(region.hull().corners)
+    sel = s["material_selection"]
+    assert sel["mode"] == "continuous" and sel["catalogs"] == ["PLASTICS"]
+    names = set(catalog.catalog_names("PLASTICS"))
+    assert len(sel["best"]) == 6 and set(sel["best"]) <= names
+    pts = np.asarray(sel["continuous_nd_vd"])
+    assert pts.shape == (1, 6, 2)
+    # Every point inside the hull: on the inner side of every counter-clockwise edge
+    # (glass-map scale).
+    scale = np.array([catalog.ND_PER_VD, 1.0])
+    p, v = pts[0] / scale, corners / scale
+    e = np.roll(v, -1, 0) - v
+    rel = p[:, None, :] - v[None]
+    assert np.all(e[None, :, 0] * rel[..., 1] - e[None, :, 1] * rel[..., 0] >= -1e-7)
+    # Each chosen name is the snap of its continuous point.
+    assert [region.names[int(region.nearest(*q))] for q in pts[0]] == sel["best"]
+    assert s["per_seed"][0]["materials"] == sel["best"]
+    assert s["best"]["rms_on_axis_um"] > 0
+    with open(os.path.join(out, "lens.zmx"), encoding="latin-1") as f:
+        glas = [ln.split()[1] for ln in f if ln.strip().startswith("GLAS")]
+    assert glas == sel["best"]
+    # The file reads back with those catalog glasses (Zemax's own catalogs, or the side
+    # .AGF written for glasses Zemax does not ship, such as OKP4).
+    back = jaxlens.load(os.path.join(out, "lens.zmx"))
+    assert [m.name for m in back.materials if m.name != "air"] == sel["best"]
 
 
 def test_cli_sets_the_device_count_before_jax_starts(tmp_path):

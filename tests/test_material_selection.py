@@ -1,6 +1,5 @@
 """Material selection (jaxlens.design.materials): the hull map, the snap, gradients, options."""
 
-import json
 import os
 
 import equinox as eqx
@@ -169,35 +168,9 @@ def test_cli_refuses_bad_material_options(tmp_path, capsys):
     assert not os.path.exists(tmp_path / "b")
 
 
-def test_cli_smoke_selects_catalog_materials(tmp_path):
-    """A tiny continuous-selection run: catalog names in the summary and GLAS lines."""
-    from jaxlens.experiments import classical
-
-    out = str(tmp_path / "run")
-    assert classical.main(["--smoke", "--select-materials", "continuous", "--out", out,
-                           "--quiet", "--devices", "1", "--no-plots",
-                           "--tolerance-trials", "0"]) == 0
-    with open(os.path.join(out, "summary.json")) as f:
-        s = json.load(f)
-    sel = s["material_selection"]
-    assert sel["mode"] == "continuous" and sel["catalogs"] == ["PLASTICS"]
-    names = set(catalog.catalog_names("PLASTICS"))
-    assert len(sel["best"]) == 6 and set(sel["best"]) <= names
-    pts = np.asarray(sel["continuous_nd_vd"])
-    assert pts.shape == (1, 6, 2) and np.all(_inside(pts[0], HULL.corners, tol=1e-7))
-    # Each chosen name is the snap of its continuous point.
-    assert [REGION.names[int(REGION.nearest(*q))] for q in pts[0]] == sel["best"]
-    assert s["per_seed"][0]["materials"] == sel["best"]
-    assert s["best"]["rms_on_axis_um"] > 0
-    with open(os.path.join(out, "lens.zmx"), encoding="latin-1") as f:
-        glas = [ln.split()[1] for ln in f if ln.strip().startswith("GLAS")]
-    assert glas == sel["best"]
-    # The file reads back with those catalog glasses (Zemax's own catalogs, or the side
-    # .AGF written for glasses Zemax does not ship, such as OKP4).
-    import jaxlens
-
-    back = jaxlens.load(os.path.join(out, "lens.zmx"))
-    assert [m.name for m in back.materials if m.name != "air"] == sel["best"]
+# The command-line smoke with --select-materials continuous (catalog names in the summary
+# and the GLAS lines, the file read back) shares the classical smoke run:
+# tests/test_classical_smoke.py::test_cli_smoke_selects_catalog_materials.
 
 
 @pytest.mark.slow
