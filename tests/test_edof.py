@@ -203,7 +203,8 @@ def test_training_patch_context_is_read_and_the_loss_sees_the_tile(kind, real_ha
     kern = jnp.asarray(np.broadcast_to(k, (2, 2, 3, 5, 5)))
     dec = make_decoder(kind, nsr=1e-9, key=jax.random.PRNGKey(0), width=4, enc_blocks=(1,),
                        middle_blocks=1, dec_blocks=(1,))
-    _, parts = _sim_loss(dec, kern, windows, kern[:1], jax.random.PRNGKey(1), cfg)
+    _, parts = _sim_loss(dec, kern, windows, kern[:1], jax.random.PRNGKey(1),
+                         cfg.step_config)
     gt = windows[:, cfg.window // 2 - 8: cfg.window // 2 + 8, cfg.window // 2 - 8:
                  cfg.window // 2 + 8]
     sims = O.simulate(windows, kern)
@@ -521,6 +522,46 @@ def test_training_config_keeps_only_what_a_lens_reads():
     assert training_config(old, "cubic") != training_config(dict(new, steps=61), "cubic")
 
 
+@pytest.mark.parametrize("steps", [1, 7, 60, 1200])
+def test_network_learning_rate_is_optax_warmup_cosine(steps):
+    """The host-side schedule (an argument of the compiled steps) is optax's warm-up and
+    cosine decay to 5 % at ``steps``, and holds its end value after it."""
+    import optax
+
+    from jaxlens.experiments.edof.train import net_learning_rate
+
+    warmup = max(1, min(20, steps // 10))
+    want = optax.warmup_cosine_decay_schedule(0.0, 3e-3, warmup, max(steps, warmup + 1),
+                                              1.5e-4)
+    for step in sorted({0, 1, warmup - 1, warmup, warmup + 1, steps // 2, steps - 1, steps,
+                        steps + 5}):
+        assert net_learning_rate(step, steps, 3e-3) == pytest.approx(float(want(step)),
+                                                                     rel=1e-6, abs=1e-12)
+
+
+def test_compiled_steps_see_only_what_they_read():
+    """Configs that differ in seeds, step counts, learning rates, logging or evaluation get
+    the same static step options and optimizers (so one compiled program serves them); an
+    option the steps read changes them."""
+    import dataclasses
+
+    from jaxlens.experiments.edof import train as T
+
+    base = T.Config()
+    other = dataclasses.replace(base, seed=3, steps=61, steps2=4, lr_net=3e-3, log_every=5,
+                                refresh_every=7, eval_pupil=12, crop=64, lens_every=2,
+                                cubic_floor=0.5, hybrid_floor=1.0, lens_accept=True)
+    assert other.step_config == base.step_config
+    assert hash(other.step_config) == hash(base.step_config)
+    assert T.optimizers(other) == T.optimizers(base)
+    for change in ({"photons": 100.0}, {"tile": 16}, {"live_front_end": True},
+                   {"real_halo": True}):
+        assert dataclasses.replace(base, **change).step_config != base.step_config, change
+    assert T.optimizers(dataclasses.replace(base, lr_lens=1e-3)) != T.optimizers(base)
+    with pytest.raises(AttributeError):
+        base.step_config.seed  # noqa: B018
+
+
 @pytest.mark.slow  # a non-default option (about 30-40 s on 2 cores); CI time
 def test_live_front_end_differentiates_the_wiener_psfs(classical):
     """With ``live_front_end`` the lens step traces all 8 depths and the front end's PSFs are
@@ -552,7 +593,8 @@ def test_live_front_end_differentiates_the_wiener_psfs(classical):
         out = T.joint_step(dec, params, net_opt.init(eqx.filter(dec, eqx.is_inexact_array)),
                            lens_opt.init(eqx.filter(params, eqx.is_inexact_array)), pmap,
                            windows, xy, depths, pair, wkern, jax.random.PRNGKey(2), gate, tie,
-                           -jnp.inf, cfg=c, net_opt=net_opt, lens_opt=lens_opt)
+                           -jnp.inf, jnp.float32(1e-3), cfg=c.step_config, net_opt=net_opt,
+                           lens_opt=lens_opt)
         return float(out[4]), out[1]
 
     live_a, p_live = step(True, delta)

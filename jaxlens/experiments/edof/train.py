@@ -194,31 +194,70 @@ class Config:
         """Binned pixel pitch (mm)."""
         return self.binning * SPEC["pixel_size_mm"]
 
+    @property
+    def step_config(self) -> StepConfig:
+        """What the compiled steps read of this config (their static argument)."""
+        return StepConfig(tile=self.tile, kernel_size=self.kernel_size, pupil=self.pupil,
+                          photons=self.photons, read_noise=self.read_noise, w_sim=self.w_sim,
+                          w_raw=self.w_raw, live_front_end=self.live_front_end,
+                          front_pad=self.front_pad)
 
-def make_net_optimizer(cfg: Config, steps: int, scale: float = 1.0):
-    """Adam with a warm-up and cosine decay, gradients clipped to norm 1."""
-    lr = cfg.lr_net * scale
+
+@dataclasses.dataclass(frozen=True)
+class StepConfig:
+    """The options that the compiled steps (``joint_step``, ``net_step``, the probe and
+    check losses) read: they take this as a static argument instead of the whole
+    ``Config``, so runs that differ in seeds, step counts, learning rates, logging or
+    evaluation options share one compiled program (in memory, and in the command line's
+    compilation cache). A step that read any other option would fail when traced."""
+
+    tile: int
+    kernel_size: int
+    pupil: int
+    photons: float
+    read_noise: float
+    w_sim: float
+    w_raw: float
+    live_front_end: bool
+    front_pad: str
+
+
+def net_learning_rate(step: int, steps: int, peak: float) -> float:
+    """The network's learning rate at ``step`` of a stage: a linear warm-up from 0 over
+    ``min(20, steps // 10)`` steps (at least 1), then a cosine decay to 5 % of ``peak`` at
+    ``steps`` (optax's ``warmup_cosine_decay_schedule``, computed on the host: the compiled
+    steps take it as an argument, so a run of another length reuses them)."""
     warmup = max(1, min(20, steps // 10))
-    # optax needs a decay phase after the warm-up, even for a one-step run.
-    sched = optax.warmup_cosine_decay_schedule(0.0, lr, warmup, max(steps, warmup + 1),
-                                               lr * 0.05)
-    return optax.chain(optax.clip_by_global_norm(1.0), optax.adam(sched))
+    if step < warmup:
+        return peak * step / warmup
+    span = max(steps, warmup + 1) - warmup  # optax needs a decay phase after the warm-up
+    cosine = 0.5 * (1.0 + math.cos(math.pi * min(step - warmup, span) / span))
+    return peak * (0.95 * cosine + 0.05)
 
 
 @functools.lru_cache(maxsize=8)
+def _optimizers(lr_lens: float):
+    # The network's learning rate multiplies its updates in ``_apply`` (a traced argument,
+    # ``net_learning_rate``); the unit schedule keeps the optimizer state's layout of earlier
+    # checkpoints (its step count is not read).
+    net = optax.chain(optax.clip_by_global_norm(1.0), optax.adam(lambda count: 1.0))
+    return net, optax.adam(lr_lens)
+
+
 def optimizers(cfg: Config):
-    """(network, lens) optimizers, cached so that the jitted steps compile once. Stage 2
-    restarts the network's state and scales its updates by ``STAGE2_LR_SCALE``."""
-    return make_net_optimizer(cfg, cfg.steps), optax.adam(cfg.lr_lens)
+    """(network, lens) optimizers: Adam, the network's gradients clipped to norm 1. Cached
+    so that the jitted steps compile once; the network's learning rate is not part of them
+    (``net_learning_rate``). Stage 2 restarts the network's state."""
+    return _optimizers(float(cfg.lr_lens))
 
 
-def _centre(x, cfg: Config):
+def _centre(x, cfg: StepConfig):
     """The central ``tile × tile`` pixels of ``[..., n, n, C]`` images."""
     m = (x.shape[-2] - cfg.tile) // 2
     return x[..., m: m + cfg.tile, m: m + cfg.tile, :]
 
 
-def _sim_loss(dec: Decoder, kernels, windows, wkern, key, cfg: Config):
+def _sim_loss(dec: Decoder, kernels, windows, wkern, key, cfg: StepConfig):
     """The loss of a batch whose PSFs are ``kernels [2, B, 3, k, k]`` and whose front-end
     PSF stacks are ``wkern [K, B, 3, k, k]`` (``Decoder.front_kernels``)."""
     sims = simulate(windows, kernels)
@@ -235,8 +274,8 @@ def _finite(loss, tree):
 
 
 def _apply(opt, grads, state, params, ok, scale=1.0):
-    """An optimizer step (updates times ``scale``) that is skipped (parameters and state
-    kept) where ``ok`` is False."""
+    """An optimizer step (updates times ``scale``, e.g. the network's learning rate) that
+    is skipped (parameters and state kept) where ``ok`` is False."""
     grads = jax.tree_util.tree_map(lambda g: jnp.where(ok, g, 0.0), grads)
     upd, new = opt.update(grads, state, params)
     upd = jax.tree_util.tree_map(lambda u: u * ok * scale, upd)
@@ -247,7 +286,7 @@ def _apply(opt, grads, state, params, ok, scale=1.0):
 
 @eqx.filter_jit
 def joint_step(dec, params, net_state, lens_state, pmap, windows, xy, depths, pair, wkern,
-               key, gate, tie, floor, *, cfg: Config, net_opt, lens_opt):
+               key, gate, tie, floor, lr, *, cfg: StepConfig, net_opt, lens_opt):
     """A lens-update step: the loss is differentiated through the ray tracer.
 
     ``xy [B, 2]`` are the tiles' centres (mm), ``depths [D]`` the training depths (mm from
@@ -280,7 +319,7 @@ def joint_step(dec, params, net_state, lens_state, pmap, windows, xy, depths, pa
     g_lens = apply_gates(g_lens, gate, tie)
     ok = _finite(loss, (g_net, g_lens))
     net_p, net_state = _apply(net_opt, eqx.filter(g_net, eqx.is_inexact_array), net_state,
-                              net_p, ok)
+                              net_p, ok, lr)
     lp, lens_static = eqx.partition(params, eqx.is_inexact_array)
     lp, lens_state = _apply(lens_opt, eqx.filter(g_lens, eqx.is_inexact_array), lens_state, lp,
                             ok)
@@ -290,9 +329,9 @@ def joint_step(dec, params, net_state, lens_state, pmap, windows, xy, depths, pa
 
 
 @eqx.filter_jit
-def net_step(dec, net_state, kernels, windows, wkern, key, scale, *, cfg: Config, net_opt):
-    """A decoder-only step on given PSFs ``kernels [2, B, 3, k, k]`` (no ray tracing), its
-    updates scaled by ``scale`` (an array: both stages share the compiled step)."""
+def net_step(dec, net_state, kernels, windows, wkern, key, lr, *, cfg: StepConfig, net_opt):
+    """A decoder-only step on given PSFs ``kernels [2, B, 3, k, k]`` (no ray tracing) at
+    the learning rate ``lr`` (an array: both stages share the compiled step)."""
     net_p, net_static = eqx.partition(dec, eqx.is_inexact_array)
 
     def loss_fn(p):
@@ -300,7 +339,7 @@ def net_step(dec, net_state, kernels, windows, wkern, key, scale, *, cfg: Config
 
     (loss, parts), g = eqx.filter_value_and_grad(loss_fn, has_aux=True)(net_p)
     ok = _finite(loss, g)
-    net_p, net_state = _apply(net_opt, g, net_state, net_p, ok, scale)
+    net_p, net_state = _apply(net_opt, g, net_state, net_p, ok, lr)
     parts = dict(parts, skipped=1.0 - ok.astype(loss.dtype))
     return eqx.combine(net_p, net_static), net_state, loss, parts
 
@@ -309,12 +348,12 @@ _perturb = eqx.filter_jit(perturb)
 
 
 @eqx.filter_jit
-def _probe_loss(dec, kernels, windows, wkern, key, *, cfg: Config):
+def _probe_loss(dec, kernels, windows, wkern, key, *, cfg: StepConfig):
     return _sim_loss(dec, kernels, windows, wkern, key, cfg)[0]
 
 
 @eqx.filter_jit
-def _check_rec_loss(dec, kernels, windows, key, *, cfg: Config):
+def _check_rec_loss(dec, kernels, windows, key, *, cfg: StepConfig):
     """``L_rec`` of windows ``[B, ...]`` at every depth of ``kernels [D, B, 3, k, k]`` (D
     even), the front end fed each tile's PSF stack over the D depths."""
     d, b = kernels.shape[:2]
@@ -527,7 +566,7 @@ class Trainer:
         if self.dec.wiener:
             self._banks(lens, full=False)
         loss = _probe_loss(self.dec, kern, windows, self._wkern(tiles),
-                           jax.random.PRNGKey(4242), cfg=self.cfg)
+                           jax.random.PRNGKey(4242), cfg=self.cfg.step_config)
         return float(loss)
 
     def check_loss(self, params) -> float:
@@ -541,7 +580,7 @@ class Trainer:
         depths = jnp.asarray(1e3 * np.asarray(DEPTHS_M), xy.dtype)
         kern = self._depth_psfs(self.pmap.to_lens(params), xy, depths)
         return float(_check_rec_loss(self.dec, kern, windows, jax.random.PRNGKey(777),
-                                     cfg=self.cfg))
+                                     cfg=self.cfg.step_config))
 
     def run(self, progress: Callable | None = None):
         """Train to the end (or to the deadline: ``OutOfTime`` after a checkpoint)."""
@@ -582,13 +621,15 @@ class Trainer:
             windows = jnp.asarray(windows, dt)
             wk = self._wkern(tiles)
             xy = jnp.asarray(self.xy[tiles[:, 0], tiles[:, 1]], dt)
+            peak = cfg.lr_net * (1.0 if self.stage == 1 else STAGE2_LR_SCALE)
+            # Stage 2 restarts the schedule, which keeps the stage-1 length.
+            lr = jnp.asarray(net_learning_rate(self.step, cfg.steps, peak), dt)
             if self.stage == 1 and self.movable and self.step % cfg.lens_every == 0:
                 before = (self.params, self.lens_state)
                 self.dec, self.params, self.net_state, self.lens_state, loss, parts = joint_step(
                     self.dec, self.params, self.net_state, self.lens_state, self.pmap,
                     windows, xy, depths, jnp.asarray(pair), wk, sub, self.gate, self.tie, floor,
-                    cfg=cfg,
-                    net_opt=opt1, lens_opt=lens_opt)
+                    lr, cfg=cfg.step_config, net_opt=opt1, lens_opt=lens_opt)
                 if cfg.lens_accept:
                     kept = self.check_loss(self.params) <= self.check_loss(before[0])
                     if not kept:
@@ -602,10 +643,9 @@ class Trainer:
                     k_pert, sub = jax.random.split(sub)
                     src = lens if self.stage == 1 else _perturb(lens, k_pert, cfg.tolerances)
                     kern = self._depth_psfs(src, xy, depths[pair])
-                scale = jnp.asarray(1.0 if self.stage == 1 else STAGE2_LR_SCALE, dt)
                 self.dec, self.net_state, loss, parts = net_step(
-                    self.dec, self.net_state, kern, windows, wk, sub, scale, cfg=cfg,
-                    net_opt=opt1)
+                    self.dec, self.net_state, kern, windows, wk, sub, lr,
+                    cfg=cfg.step_config, net_opt=opt1)
             acc.append((loss, parts))
             self.step += 1
             if self.step % cfg.log_every == 0 or self.step == steps:
