@@ -475,3 +475,15 @@ def test_an_object_1e10_mm_away_or_more_is_at_infinity():
     assert not at(9.9e9).object_at_infinity
     spot = jl.analysis.rms_spot(at(1e20))
     np.testing.assert_array_equal(np.asarray(spot.valid_fraction), 1.0)
+
+
+@pytest.mark.parametrize("name", ["lens.zmx", "lens.json"])
+def test_save_into_a_missing_folder_names_the_folder_and_writes_nothing(cooke, tmp_path, name):
+    """A lens saved into a folder that does not exist is refused before anything is
+    written (a .zmx used to fail on its glass catalog's name, not the folder's)."""
+    import jaxlens
+
+    target = tmp_path / "missing" / name
+    with pytest.raises(FileNotFoundError, match="missing.*does not exist"):
+        jaxlens.save(cooke, target)
+    assert list(tmp_path.iterdir()) == []

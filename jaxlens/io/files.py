@@ -80,7 +80,12 @@ def save(lens: Lens, path: str | os.PathLike, **options) -> list[str]:
         written beside it for glasses that Zemax's own catalogs do not hold.
     """
     path = os.fspath(path)
-    if _ext(path, "save") == ".json":
+    ext = _ext(path, "save")
+    folder = os.path.dirname(os.path.abspath(path))
+    if not os.path.isdir(folder):  # before a .zmx's glass catalogs are written beside it
+        raise FileNotFoundError(f"save: the folder {folder!r} of {path!r} does not exist "
+                                f"(save creates no folders)")
+    if ext == ".json":
         if options:
             raise ValueError(f"save: .json takes no options, got {sorted(options)}")
         save_json(lens, path)
