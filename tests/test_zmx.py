@@ -847,3 +847,25 @@ def test_gcat_lzos_soviet_glass_opens_and_gcat_rad_hard_takes_its_own_bk7g18(tmp
     assert zmx.loads("GCAT RAD_HARD\n" + bk).materials[0].catalog == "RAD_HARD"
     assert zmx.loads("GCAT SCHOTT\n" + bk).materials[0].catalog == "SCHOTT"
     assert zmx.loads("GCAT RAD_HARD SCHOTT\n" + bk).materials[0].catalog == "RAD_HARD"
+
+
+@pytest.mark.parametrize("old, new, line, match", [
+    ("WAVM 2 5.875618E-1 1", "WAVM 2 5.875618E-1 2", 18, r"weighs its 3 wavelengths \(1, 2, 1\)"),
+    ("FWGN 1 1 1 1", "FWGN 1 0.5 1 1", 17, r"weighs its 3 fields \(1, 0.5, 1\)"),
+    # Older Zemax: WAVL and its weights in WWGT.
+    ("WAVM 1 4.861327E-1 1\nWAVM 2 5.875618E-1 1\nWAVM 3 6.562725E-1 1\nWAVM 4 5.5E-1 1\n",
+     "WAVL 0.4861327 0.5875618 0.6562725\nWWGT 1 3 1\n", 19,
+     r"weighs its 3 wavelengths \(1, 3, 1\)"),
+])
+def test_unequal_field_and_wavelength_weights_are_reported(old, new, line, match):
+    """A Lens holds no weights, so a file that weighs its wavelengths or fields unequally
+    gets a warning naming the line; equal weights, and weights of unused fields (beyond
+    FTYP's count), say nothing."""
+    assert old in COOKE_ZMX
+    with pytest.warns(zmx.ZmxWarning, match=rf"<zmx>:{line}: .*{match}"):
+        lens = zmx.loads(COOKE_ZMX.replace(old, new))
+    assert lens.wavelengths.shape == (3,)
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")
+        zmx.loads(COOKE_ZMX.replace("FWGN 1 1 1 1 1 1 1 1 1 1 1 1",
+                                    "FWGN 1 1 1 0 0 0 0 0 0 0 0 0"))

@@ -139,6 +139,8 @@ class _File:
     wavm: dict = field(default_factory=dict)
     wavl: _Line | None = None
     pwav: _Line | None = None
+    fwgn: _Line | None = None  # field weights (FWGN; older Zemax: FWGT)
+    wwgt: _Line | None = None  # weights of WAVL's wavelengths (WWGT or WWGN)
     vignetting: list = field(default_factory=list)  # VDXN/VDYN/VCXN/VCYN/VANN lines
     raim: _Line | None = None
     surfs: list = field(default_factory=list)
@@ -231,7 +233,8 @@ def _surface_line(s: _Surf, key: str, ln: _Line) -> None:
 
 
 _TOP_KEYS = frozenset("VERS MODE NAME UNIT ENPD FNUM FLOA OBNA PUPD GCAT FTYP XFLN YFLN "
-                      "XFLD YFLD WAVM WAVL PWAV RAIM VDXN VDYN VCXN VCYN VANN".split())
+                      "XFLD YFLD WAVM WAVL PWAV RAIM VDXN VDYN VCXN VCYN VANN FWGN FWGT WWGT "
+                      "WWGN".split())
 
 
 def _top_line(f: _File, key: str, ln: _Line, raw: str) -> None:
@@ -286,6 +289,11 @@ def _top_line(f: _File, key: str, ln: _Line, raw: str) -> None:
         f.wavl = ln
     elif key == "PWAV":
         f.pwav = ln
+    elif key in ("FWGN", "FWGT"):
+        f.fwgn = ln
+    elif key in ("WWGT", "WWGN"):
+        f.wwgt = ln
+
 
 
 def _sd(s: _Surf, unit: float) -> float:
@@ -478,6 +486,9 @@ def _fields(f: _File, strict: bool) -> np.ndarray:
         report(strict, vignetting)
     xs = (xs + [0.0] * count)[:count]
     ys = ys[:count]
+    if f.fwgn is not None:
+        given = [f.fwgn.float(i, "field weight") for i in range(1, len(f.fwgn.tokens))]
+        zmx_system.unequal_weights(f.fwgn, "fields", given[:count])
     if any(x != 0 for x in xs):
         return np.stack([np.array(xs), np.array(ys)], axis=-1)
     return np.array(ys, np.float64)
@@ -495,10 +506,16 @@ def _wavelengths(f: _File) -> tuple[np.ndarray, int]:
             raise ln.error(f"no WAVM line for wavelength {missing[0]}")
         wl = [f.wavm[i][0] for i in range(1, n + 1)]
         lines = [f.wavm[i][1] for i in range(1, n + 1)]
+        weights = [ln.float(3, "wavelength weight") for ln in lines if len(ln.tokens) > 3]
+        if len(weights) == n:
+            zmx_system.unequal_weights(lines[0], "wavelengths", weights)
     elif f.wavl is not None:
         wl = [f.wavl.float(i, "wavelength") for i in range(1, len(f.wavl.tokens))]
         wl = wl[:count] if count is not None else [w for w in wl if w != 0]
         lines = [f.wavl] * len(wl)
+        if f.wwgt is not None:
+            given = [f.wwgt.float(i, "wavelength weight") for i in range(1, len(f.wwgt.tokens))]
+            zmx_system.unequal_weights(f.wwgt, "wavelengths", given[:len(wl)])
     else:
         wl, lines = [0.55], [None]  # Zemax's default wavelength
     for w, ln in zip(wl, lines, strict=True):

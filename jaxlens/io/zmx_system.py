@@ -241,6 +241,18 @@ def vignetting_factors(lines, count: int) -> str | None:
     return None
 
 
+def unequal_weights(ln, what: str, weights: list) -> None:
+    """Warn where the file weighs its fields or wavelengths unequally: a ``Lens`` holds no
+    weights, and jaxlens's figures over several of them weigh each equally."""
+    if len(set(weights)) < 2:
+        return
+    shown = ", ".join(f"{w:g}" for w in weights)
+    warnings.warn(f"{ln.path}:{ln.number}: the file weighs its {len(weights)} {what} "
+                  f"({shown}); a jaxlens Lens holds no weights, so its figures over several "
+                  f"{what} weigh each equally (Zemax's weighted figures differ)", ZmxWarning,
+                  stacklevel=5)
+
+
 def ray_aiming(ln, path: str) -> None:
     """Warn when the file aims rays at the stop (RAIM's ray aiming type, 1 paraxial or
     2 real): a ``Lens`` carries no aiming setting; jaxlens's samplers take ``aim``."""
