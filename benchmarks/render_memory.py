@@ -1,13 +1,13 @@
 """Peak memory of a render gradient, with and without ``jax.checkpoint``.
 
 Measures the peak resident memory (RSS) of one gradient of an MSE image loss through
-``jaxlens.imaging.render`` (method "ray", RGB, float32) with respect to the surfaces and gaps of
-the 6-element plastic asphere cellphone lens (``jaxlens.zoo.cellphone6``, 1024 × 1024
-sensor), each configuration in a fresh Python process so that one run's memory does not
-count against another. The parent process samples each worker's RSS from /proc every
-0.1 s and stops a worker that passes ``--cap-gib`` (default 8 GiB, a third of this
-shared machine), so the run without checkpointing, which needs far more than the machine has at
-1024², is reported as "exceeded the cap" rather than taking the machine down; it is also
+``jaxlens.imaging.render`` (method "ray", RGB, float32) with respect to the surfaces and gaps
+of the 6-element plastic asphere cellphone lens (``jaxlens.zoo.cellphone6``, 1024 × 1024
+sensor; another zoo lens with ``--lens``), each configuration in a fresh Python process so that
+one run's memory does not count against another. The parent process samples each worker's RSS
+from /proc every 0.1 s and stops a worker that passes ``--cap-gib`` (default 8 GiB, a third of
+this shared machine), so the run without checkpointing, which needs far more than the machine
+has at 1024², is reported as "exceeded the cap" rather than taking the machine down; it is also
 measured at smaller sizes to show how it grows.
 
 It also measures, in a worker of its own, the bare trace's forward+gradient rate on the same
@@ -36,7 +36,8 @@ ROOT = pathlib.Path(__file__).resolve().parents[1]
 RESULTS = ROOT / "benchmarks" / "results"
 
 
-def worker(size: int, spp: int, checkpoint: bool, patch: int) -> dict:
+def worker(size: int, spp: int, checkpoint: bool, patch: int,
+           lens_name: str = "cellphone6") -> dict:
     """One gradient in this process; returns timings and ru_maxrss."""
     import resource
 
@@ -47,7 +48,7 @@ def worker(size: int, spp: int, checkpoint: bool, patch: int) -> dict:
     import jaxlens
     from jaxlens import images
 
-    lens = jaxlens.zoo.cellphone6()
+    lens = jaxlens.zoo.ZOO[lens_name]()
     side = float(lens.sensor.pixel_size) * lens.sensor.resolution[1]
     sensor = jaxlens.Sensor((size, size), side / size)
     scene = jnp.asarray(images.scene("astronaut", (size, size)))  # float32, linear
@@ -90,6 +91,7 @@ def worker(size: int, spp: int, checkpoint: bool, patch: int) -> dict:
     t2 = time.perf_counter()
     finite = bool(all(jnp.all(jnp.isfinite(g)) for g in jax.tree_util.tree_leaves(grad)))
     return {
+        "lens": lens_name,
         "size": size,
         "spp": spp,
         "checkpoint": checkpoint,
@@ -106,7 +108,7 @@ def worker(size: int, spp: int, checkpoint: bool, patch: int) -> dict:
     }
 
 
-def trace_worker(n: int) -> dict:
+def trace_worker(n: int, lens_name: str = "cellphone6") -> dict:
     """The bare trace's value_and_grad rate on the same lens (``throughput.forward_grad``)."""
     import jax
     import jax.numpy as jnp
@@ -116,11 +118,11 @@ def trace_worker(n: int) -> dict:
 
     from . import common, throughput
 
-    lens = jaxlens.zoo.cellphone6()
+    lens = jaxlens.zoo.ZOO[lens_name]()
     rays = throughput.make_rays(lens, n, jnp.float32)
     t = common.time_jitted(throughput.forward_grad, lens, rays, repeats=3, min_total_s=0.2)
     ns = lens.num_surfaces
-    return {"trace_rays": n, "surfaces": ns, "run_s": t["run_s"],
+    return {"lens": lens_name, "trace_rays": n, "surfaces": ns, "run_s": t["run_s"],
             "rate": n * ns / t["run_s"], "timing": t}
 
 
@@ -135,7 +137,7 @@ def _rss(pid: int) -> int:
 
 
 def run_isolated(size: int, spp: int, checkpoint: bool, patch: int, cap: int,
-                 trace_rays: int = 0) -> dict:
+                 trace_rays: int = 0, lens: str = "cellphone6") -> dict:
     """Run ``worker`` (or ``trace_worker`` if ``trace_rays``) in a fresh process, sampling its
     RSS; stop it above ``cap`` bytes."""
     cmd = [
@@ -151,6 +153,8 @@ def run_isolated(size: int, spp: int, checkpoint: bool, patch: int, cap: int,
         str(int(checkpoint)),
         "--patch",
         str(patch),
+        "--lens",
+        lens,
     ] + (["--trace-rays", str(trace_rays)] if trace_rays else [])
     env = dict(os.environ, XLA_FLAGS=os.environ.get("XLA_FLAGS", ""))
     t0 = time.perf_counter()
@@ -233,10 +237,13 @@ def main(argv=None) -> None:
     ap.add_argument("--trace-rays", type=int, default=0,
                     help="worker: time the bare trace's gradient on this many rays instead")
     ap.add_argument("--cap-gib", type=float, default=8.0)
+    ap.add_argument("--lens", default="cellphone6", choices=("cooke_triplet", "double_gauss",
+                                                             "cellphone6"),
+                    help="zoo lens (the smoke test uses the smallest)")
     ap.add_argument("--out", type=pathlib.Path, default=RESULTS / "render_memory.json")
     args = ap.parse_args(argv)
     if args.worker and args.trace_rays > 0:  # the bare-trace worker ignores the render sizes
-        print(json.dumps(trace_worker(args.trace_rays)))
+        print(json.dumps(trace_worker(args.trace_rays, args.lens)))
         return
     for name, lo in (("size", 1), ("spp", 1), ("patch", 1), ("trace_rays", 0)):
         if getattr(args, name) < lo:
@@ -245,7 +252,8 @@ def main(argv=None) -> None:
     if not 0 < args.cap_gib < float("inf"):
         ap.error(f"--cap-gib must be a positive number of GiB, got {args.cap_gib}")
     if args.worker:
-        print(json.dumps(worker(args.size, args.spp, bool(args.checkpoint), args.patch)))
+        print(json.dumps(worker(args.size, args.spp, bool(args.checkpoint), args.patch,
+                                args.lens)))
         return
     sys.path.insert(0, str(ROOT))
     from benchmarks.common import machine_info
@@ -260,10 +268,10 @@ def main(argv=None) -> None:
         (128, True),
         (128, False),
     ):
-        r = run_isolated(size, args.spp, ckpt, args.patch, cap)
+        r = run_isolated(size, args.spp, ckpt, args.patch, cap, lens=args.lens)
         print(json.dumps(r), flush=True)
         runs.append(r)
-    ref = run_isolated(0, 0, False, 0, cap, trace_rays=10**6)
+    ref = run_isolated(0, 0, False, 0, cap, trace_rays=10**6, lens=args.lens)
     print(json.dumps(ref), flush=True)
     main_ck, main_plain = runs[0], runs[1]
     lens_surfaces = ref.get("surfaces")
@@ -271,9 +279,10 @@ def main(argv=None) -> None:
                    if "run_s" in main_ck and lens_surfaces else None)
     result = {
         "benchmark": "peak RSS of value_and_grad of an MSE loss on jaxlens.imaging.render "
-        "(method=RayRender(), RGB, float32) through jaxlens.zoo.cellphone6, w.r.t. "
+        f"(method=RayRender(), RGB, float32) through jaxlens.zoo.{args.lens}, w.r.t. "
         "its surfaces and gaps",
-        "command": "python -m benchmarks.render_memory",
+        "command": "python -m benchmarks.render_memory"
+        + ("" if args.lens == "cellphone6" else f" --lens {args.lens}"),
         "size": args.size,
         "spp": args.spp,
         "patch": args.patch,
