@@ -25,6 +25,10 @@ from jaxlens.optics import paraxial
 HALF_FOV = 34.4
 RGB = jnp.asarray(L.WAVELENGTHS_RGB)
 
+# Objectives evaluated compiled: one program per objective (and method), shared by the tests
+# below; op-by-op, the first evaluation took longer than compiling.
+_jit_call = eqx.filter_jit(lambda f, params, args: f(params, args))
+
 
 @pytest.fixture(scope="module")
 def lens():
@@ -33,7 +37,10 @@ def lens():
 
 def _mean_rms(lens, depth, fields=None):
     fields = np.linspace(0.0, HALF_FOV, 7) if fields is None else fields
-    r = rms_spot(lens, jnp.asarray(fields), RGB, depth=depth).polychromatic
+    # The depth as an array: a traced argument, so every depth and sensor shift of a test
+    # runs one compiled program (a Python float is static: one compile per depth).
+    r = rms_spot(lens, jnp.asarray(fields), RGB, depth=jnp.asarray(depth, jnp.float64))
+    r = r.polychromatic
     return float(jnp.sqrt(jnp.mean(r**2)))
 
 
@@ -111,26 +118,29 @@ def test_spec_efl_checks_and_objective_residual():
     gb = jnp.asarray(gap_bounds(spec))
     args = StageArgs(*(jnp.asarray(x, jnp.float64) for x in (
         math.tan(math.radians(HALF_FOV)), spec.epd, spec.focal_length, 1.0, 1.0, 2.5)),
-        field_weights=jnp.ones(3), reg_weights=jnp.asarray([40.0, 1000.0, 40.0]))
+        field_weights=jnp.ones(3), reg_weights=jnp.asarray([40.0, 1000.0, 40.0]),
+        distortion_k=jnp.asarray(0.0, jnp.float64))  # an array, as in the test below
     free = Objective(pmap, sampling, gb)
     held = Objective(pmap, sampling, gb, efl=5.55, efl_weight=4.0)
-    r0, a0 = free(params, args)
-    r1, a1 = held(params, args)
+    r0, a0 = _jit_call(free, params, args)
+    r1, a1 = _jit_call(held, params, args)
     efl = float(paraxial.efl(pmap.to_lens(params)))
     assert r1.shape[0] == r0.shape[0] + 1
     np.testing.assert_allclose(np.asarray(r1[:-1]), np.asarray(r0))
     assert float(r1[-1]) == pytest.approx(math.sqrt(4.0 * 2.5) * (efl - 5.55))
     assert float(a1.loss) == pytest.approx(float(jnp.sum(r1**2)))
-    np.testing.assert_allclose(np.asarray(held.field_rms(params, args)), np.asarray(a1.rms))
+    np.testing.assert_allclose(np.asarray(_jit_call(held.field_rms, params, args)),
+                               np.asarray(a1.rms))
     # The residual scales with sqrt(efl_weight · beta · spot_scale); the weight defaults to 1.
     half = eqx.tree_at(lambda a: a.beta, args, jnp.asarray(0.5, jnp.float64))
-    assert float(held(params, half)[0][-1]) == pytest.approx(math.sqrt(4.0 * 0.5 * 2.5)
-                                                               * (efl - 5.55))
+    assert float(_jit_call(held, params, half)[0][-1]) == pytest.approx(
+        math.sqrt(4.0 * 0.5 * 2.5) * (efl - 5.55))
     plain = Objective(pmap, sampling, gb, efl=5.55)
-    assert float(plain(params, args)[0][-1]) == pytest.approx(math.sqrt(2.5) * (efl - 5.55))
+    assert float(_jit_call(plain, params, args)[0][-1]) == pytest.approx(
+        math.sqrt(2.5) * (efl - 5.55))
     # With the ideal reference (beta = 0) the ideal image points carry the EFL: no residual.
     args0 = eqx.tree_at(lambda a: a.beta, args, jnp.asarray(0.0, jnp.float64))
-    assert float(held(params, args0)[0][-1]) == 0.0
+    assert float(_jit_call(held, params, args0)[0][-1]) == 0.0
 
 
 def test_design_command_smoke(tmp_path):
@@ -171,8 +181,8 @@ def test_image_mapping_puts_the_full_field_on_the_sensor_corner():
     def residuals(beta, kk):
         args = StageArgs(*(jnp.asarray(x, jnp.float64) for x in (t, spec.epd, f, beta, 1.0, 2.0)),
                          field_weights=jnp.ones(3), reg_weights=jnp.zeros(3),
-                         distortion_k=jnp.asarray(kk))
-        return np.asarray(obj(params, args)[0])
+                         distortion_k=jnp.asarray(kk, jnp.float64))
+        return np.asarray(_jit_call(obj, params, args)[0])
 
     n_spot = 3 * len(spec.wavelengths) * sampling.pupil.shape[0] * 2
     r0, r1 = residuals(1.0, 0.0), residuals(1.0, k)
