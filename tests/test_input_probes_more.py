@@ -487,3 +487,28 @@ def test_save_into_a_missing_folder_names_the_folder_and_writes_nothing(cooke, t
     with pytest.raises(FileNotFoundError, match="missing.*does not exist"):
         jaxlens.save(cooke, target)
     assert list(tmp_path.iterdir()) == []
+
+
+def test_spot_analyses_compile_once_for_every_finite_depth(cooke, caplog):
+    """A finite depth reaches the compiled spot programs as an argument (one program for
+    every depth; a Python float was static and compiled one per value), is still checked
+    before them, and inf still means an object at infinity."""
+    import logging
+
+    from jaxlens.analysis import spots
+
+    pupil = jnp.array([[0.0, 0.5], [0.5, 0.0], [0.0, -0.5]])
+    near = spots.rms_spot(cooke, pupil=pupil, depth=800.0)  # compiles
+    with jax.log_compiles(), caplog.at_level(logging.WARNING):
+        caplog.clear()
+        far = spots.rms_spot(cooke, pupil=pupil, depth=1600.0)
+        assert not [r for r in caplog.records if "_rms_spot" in r.getMessage()]
+    assert not np.allclose(np.asarray(near.polychromatic), np.asarray(far.polychromatic))
+    at_inf = spots.rms_spot(cooke, pupil=pupil, depth=np.inf)
+    very_far = spots.rms_spot(cooke, pupil=pupil, depth=1e9)
+    np.testing.assert_allclose(np.asarray(at_inf.polychromatic),
+                               np.asarray(very_far.polychromatic), rtol=1e-4)
+    with pytest.raises(ValueError, match="depth must be"):
+        spots.rms_spot(cooke, pupil=pupil, depth=-5.0)
+    chief = spots.chief_ray(cooke, 10.0, depth=500.0)
+    assert chief.origin.dtype == cooke.epd.dtype and bool(chief.valid)

@@ -19,7 +19,7 @@ import jax.numpy as jnp
 import numpy as np
 from jaxtyping import Array, Bool, Float
 
-from ..imaging.sampling import field_rays, pupil_grid
+from ..imaging.sampling import field_rays, pupil_grid, static_depth
 from ..optics import checks, paraxial
 from ..optics.lens import Lens
 from ..optics.rays import Rays
@@ -65,8 +65,19 @@ def spot_rays(
     """Rays of one field and wavelength on the image surface (a spot diagram as data)."""
     _concrete_inputs(lens, "spot_rays", fields=field, wavelengths=wavelength, arg_f="field",
                      arg_w="wavelength")
-    return _spot_rays(lens, field, wavelength, pupil=pupil, depth=depth, aim=aim,
-                      newton_iters=newton_iters)
+    return _spot_rays(lens, field, wavelength, pupil=pupil, depth=_depth(lens, depth),
+                      aim=aim, newton_iters=newton_iters)
+
+
+def _depth(lens: Lens, depth):
+    """A finite depth as an array of the lens's dtype (checked first), so the compiled
+    programs take it as an argument: one program serves every depth, where a Python float
+    would be static and compile one per value. None (the lens's object) and inf stay as
+    given: static."""
+    given = static_depth(depth)
+    if given is None or isinstance(given, jax.core.Tracer):
+        return depth
+    return given.astype(lens.epd.dtype)
 
 
 @eqx.filter_jit
@@ -81,8 +92,8 @@ def chief_ray(lens: Lens, field, wavelength=None, *, depth=None) -> Rays:
     _concrete_inputs(lens, "chief_ray", fields=field, wavelengths=wavelength, arg_f="field",
                      arg_w="wavelength")
     centre = jnp.zeros((1, 2), lens.epd.dtype)
-    return _spot_rays(lens, field, wavelength, pupil=centre, depth=depth, aim="paraxial",
-                      newton_iters=DEFAULT_NEWTON_ITERS)[0]
+    return _spot_rays(lens, field, wavelength, pupil=centre, depth=_depth(lens, depth),
+                      aim="paraxial", newton_iters=DEFAULT_NEWTON_ITERS)[0]
 
 
 class RmsSpot(eqx.Module):
@@ -144,8 +155,8 @@ def rms_spot(
         with ``valid_fraction`` 0; its gradient is 0, never NaN.
     """
     _concrete_inputs(lens, "rms_spot", fields=fields, wavelengths=wavelengths)
-    return _rms_spot(lens, fields, wavelengths, pupil=pupil, reference=reference, depth=depth,
-                     newton_iters=newton_iters)
+    return _rms_spot(lens, fields, wavelengths, pupil=pupil, reference=reference,
+                     depth=_depth(lens, depth), newton_iters=newton_iters)
 
 
 @eqx.filter_jit
