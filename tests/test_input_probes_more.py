@@ -454,7 +454,7 @@ def test_checks_on_constants_hold_inside_jit():
     import jaxlens
 
     lens = jaxlens.zoo.cooke_triplet()
-    with pytest.raises(ValueError, match=r"object_point: depth must be .* \(0, inf\) mm"):
+    with pytest.raises(ValueError, match=r"rms_spot: depth must be .* \(0, inf\) mm"):
         jaxlens.analysis.rms_spot(lens, depth=-100.0)
     with pytest.raises(ValueError, match=r"psf: pixel_size must be .* \(0, inf\) mm"):
         jax.jit(lambda: jaxlens.psf(lens, 0.0, pixel_size=0.0))()
@@ -508,7 +508,9 @@ def test_spot_analyses_compile_once_for_every_finite_depth(cooke, caplog):
     very_far = spots.rms_spot(cooke, pupil=pupil, depth=1e9)
     np.testing.assert_allclose(np.asarray(at_inf.polychromatic),
                                np.asarray(very_far.polychromatic), rtol=1e-4)
-    with pytest.raises(ValueError, match="depth must be"):
+    with pytest.raises(ValueError, match="rms_spot: depth must be"):
         spots.rms_spot(cooke, pupil=pupil, depth=-5.0)
+    with pytest.raises(ValueError, match="chief_ray: depth must be"):
+        spots.chief_ray(cooke, 10.0, depth=float("nan"))
     chief = spots.chief_ray(cooke, 10.0, depth=500.0)
     assert chief.origin.dtype == cooke.epd.dtype and bool(chief.valid)

@@ -65,16 +65,17 @@ def spot_rays(
     """Rays of one field and wavelength on the image surface (a spot diagram as data)."""
     _concrete_inputs(lens, "spot_rays", fields=field, wavelengths=wavelength, arg_f="field",
                      arg_w="wavelength")
-    return _spot_rays(lens, field, wavelength, pupil=pupil, depth=_depth(lens, depth),
-                      aim=aim, newton_iters=newton_iters)
+    return _spot_rays(lens, field, wavelength, pupil=pupil,
+                      depth=_depth(lens, depth, "spot_rays"), aim=aim,
+                      newton_iters=newton_iters)
 
 
-def _depth(lens: Lens, depth):
+def _depth(lens: Lens, depth, where: str):
     """A finite depth as an array of the lens's dtype (checked first), so the compiled
     programs take it as an argument: one program serves every depth, where a Python float
     would be static and compile one per value. None (the lens's object) and inf stay as
     given: static."""
-    given = static_depth(depth)
+    given = static_depth(depth, where)
     if given is None or isinstance(given, jax.core.Tracer):
         return depth
     return given.astype(lens.epd.dtype)
@@ -92,8 +93,9 @@ def chief_ray(lens: Lens, field, wavelength=None, *, depth=None) -> Rays:
     _concrete_inputs(lens, "chief_ray", fields=field, wavelengths=wavelength, arg_f="field",
                      arg_w="wavelength")
     centre = jnp.zeros((1, 2), lens.epd.dtype)
-    return _spot_rays(lens, field, wavelength, pupil=centre, depth=_depth(lens, depth),
-                      aim="paraxial", newton_iters=DEFAULT_NEWTON_ITERS)[0]
+    return _spot_rays(lens, field, wavelength, pupil=centre,
+                      depth=_depth(lens, depth, "chief_ray"), aim="paraxial",
+                      newton_iters=DEFAULT_NEWTON_ITERS)[0]
 
 
 class RmsSpot(eqx.Module):
@@ -156,7 +158,7 @@ def rms_spot(
     """
     _concrete_inputs(lens, "rms_spot", fields=fields, wavelengths=wavelengths)
     return _rms_spot(lens, fields, wavelengths, pupil=pupil, reference=reference,
-                     depth=_depth(lens, depth), newton_iters=newton_iters)
+                     depth=_depth(lens, depth, "rms_spot"), newton_iters=newton_iters)
 
 
 @eqx.filter_jit

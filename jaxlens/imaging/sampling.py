@@ -331,16 +331,17 @@ def aim_at_stop(
     return Rays(o, d, rays.wavelength, opl=opl)
 
 
-def static_depth(depth):
-    """None for an object at infinity (a concrete inf), else the depth as an array."""
+def static_depth(depth, where: str = "sampling"):
+    """None for an object at infinity (a concrete inf), else the depth as an array (checked,
+    errors naming ``where``)."""
     if depth is None:
         return None
     if isinstance(depth, jax.core.Tracer):
         return depth
-    checks.real_values(depth, "depth", "sampling", "mm")
+    checks.real_values(depth, "depth", where, "mm")
     given = np.asarray(depth)
     if given.dtype.kind in "iuf" and np.all(np.isposinf(given)):
         return None
-    checks.values(depth, "depth", "sampling", lo=0, lo_open=True,
+    checks.values(depth, "depth", where, lo=0, lo_open=True,
                   unit="mm from the object to surface 1 (inf: an object at infinity)")
     return jnp.asarray(depth)

@@ -295,7 +295,6 @@ def _top_line(f: _File, key: str, ln: _Line, raw: str) -> None:
         f.wwgt = ln
 
 
-
 def _sd(s: _Surf, unit: float) -> float:
     if s.shaped or (s.obdc is not None and s.clap):  # clips at its apertures only
         return math.inf
