@@ -91,6 +91,12 @@ def test_report_errors_are_messages(tmp_path, capsys):
     code, out, err = _run(capsys, bad)
     assert code == 2 and out == ""
     assert f"{bad}:7" in err and "N-BK7" in err
+    # With the line's nd and Vd, --unknown-glass model opens it with a model glass.
+    bad.write_text(bad.read_text().replace("GLAS N-BK8", "GLAS N-BK8 0 0 1.52 60")
+                   .replace("SURF 2\n", "SURF 2\n  DISZ 9\nSURF 3\n"))
+    with pytest.warns(UserWarning, match="model glass with the line's nd 1.52, Vd 60"):
+        code, out, err = _run(capsys, bad, "--json", "--unknown-glass", "model")
+    assert code == 0 and json.loads(out)["efl"] == pytest.approx(19.1623405, rel=1e-7)
 
 
 def test_cli_subprocess_smoke(tmp_path):

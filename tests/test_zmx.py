@@ -373,6 +373,27 @@ def test_unknown_glass_names_unshipped_gcat_and_optically_close_glasses():
     assert "D-ZK3" in str(e.value) and "Optically" not in str(e.value)
 
 
+def test_unknown_glass_model_opens_the_file_with_the_lines_nd_and_vd():
+    text = _minimal("  CURV 0.02\n").replace("GLAS N-BK7", "GLAS S-LAL7Q 0 0 1.6516 58.54 0 0 0")
+    with pytest.raises(ValueError, match="unknown_glass='model'"):
+        zmx.loads(text)
+    with pytest.warns(ZmxWarning, match=r"<zmx>:9: glass 'S-LAL7Q' is in no catalog.*nd 1.6516"):
+        lens = zmx.loads(text, unknown_glass="model")
+    glass = lens.materials[0]
+    assert isinstance(glass, ModelGlass)
+    n_d, n_f, n_c = (float(glass.index(w)) for w in (0.5875618, 0.4861327, 0.6562725))
+    assert n_d == pytest.approx(1.6516, abs=1e-12)
+    assert (n_d - 1) / (n_f - n_c) == pytest.approx(58.54, rel=1e-9)
+    # Nothing to model from: no nd/Vd, or Zemax's untouched defaults 1.5/40.
+    for bare in ("GLAS S-LAL7Q", "GLAS S-LAL7Q 0 0 1.5 40"):
+        with pytest.raises(ValueError, match="S-LAL7Q") as e:
+            zmx.loads(text.replace("GLAS S-LAL7Q 0 0 1.6516 58.54 0 0 0", bare),
+                      unknown_glass="model")
+        assert "unknown_glass" not in str(e.value)
+    with pytest.raises(ValueError, match="unknown_glass must be 'error' or 'model'"):
+        zmx.loads(text, unknown_glass="yes")
+
+
 @pytest.mark.parametrize("gcat, glass", [
     ("OHARA", "S-LAH64"), ("HOYA", "TAFD30"), ("HIKARI", "E-LAFH3"), ("SUMITA", "K-SFLD6"),
     ("CDGM", "H-ZK3A"), ("SCHOTT", "B270"), ("CORNING", "C79-80"),

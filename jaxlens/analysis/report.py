@@ -369,13 +369,21 @@ def register(subparsers) -> None:
         metavar="UM",
         help="wavelengths in um (values above 100 are read as nm; default: the lens's wavelengths)",
     )
+    p.add_argument(
+        "--unknown-glass",
+        choices=("error", "model"),
+        default="error",
+        help=".zmx glasses in no catalog: refuse (default) or use a model glass of the nd "
+        "and Vd on their GLAS line (with a warning)",
+    )
     p.set_defaults(func=run)
 
 
 def run(args: argparse.Namespace) -> int:
     """Run the ``report`` subcommand; returns the exit status."""
     try:
-        lens = load(args.lens, strict=True)  # a report must not describe a truncated file
+        # strict: a report must not describe a truncated file
+        lens = load(args.lens, strict=True, unknown_glass=args.unknown_glass)
         data = report_data(lens, fields=args.fields, wavelengths=args.wavelengths)
     except (ValueError, OSError) as e:
         print(f"jaxlens report: error: {e}", file=sys.stderr)

@@ -26,7 +26,8 @@ def _ext(path: str, what: str) -> str:
     return ext
 
 
-def load(path: str | os.PathLike, *, dtype=None, strict: bool = False) -> Lens:
+def load(path: str | os.PathLike, *, dtype=None, strict: bool = False,
+         unknown_glass: str = "error") -> Lens:
     """Read a lens file (``.json`` or ``.zmx``).
 
     Args:
@@ -36,6 +37,9 @@ def load(path: str | os.PathLike, *, dtype=None, strict: bool = False) -> Lens:
             float64).
         strict: for ``.zmx``, refuse unknown keywords and a file cut off mid-line
             (default: a warning); see ``jaxlens.io.zmx.loads``.
+        unknown_glass: for ``.zmx``, ``"model"`` opens a file whose glass is in no catalog
+            with a model glass of the nd and Vd its GLAS line gives (a ``ZmxWarning``); the
+            default ``"error"`` refuses it.
 
     Returns:
         The ``Lens``.
@@ -49,7 +53,10 @@ def load(path: str | os.PathLike, *, dtype=None, strict: bool = False) -> Lens:
     ext = _ext(path, "load")
     if dtype is not None:
         dtype = _float_dtype(dtype)
-    lens = load_json(path) if ext == ".json" else load_zmx(path, strict=strict)
+    if ext == ".json":
+        lens = load_json(path)
+    else:
+        lens = load_zmx(path, strict=strict, unknown_glass=unknown_glass)
     return lens if dtype is None else lens.astype(dtype)
 
 

@@ -81,10 +81,12 @@ def read_agf_markers(path: str) -> dict[str, str]:
 class GlassResolver:
     """Resolves a file's GLAS lines (``get``) in the order of the module docstring."""
 
-    def __init__(self, path: str, gcat: list[str], strict: bool = False):
+    def __init__(self, path: str, gcat: list[str], strict: bool = False,
+                 unknown_glass: str = "error"):
         self.dir = os.path.dirname(os.path.abspath(path))
         self.gcat = gcat
         self.strict = strict
+        self.unknown_glass = unknown_glass
         self.side: dict[str, tuple[dict, dict, str]] = {}
         try:
             listing = {n.upper(): n for n in os.listdir(self.dir)}
@@ -144,11 +146,20 @@ class GlassResolver:
         try:
             m = catalog_material(name, nd=nd, vd=vd)
         except ValueError as e:
+            if self.unknown_glass == "model" and nd is not None:
+                warnings.warn(f"{ln.path}:{ln.number}: glass {name!r} is in no catalog jaxlens "
+                              f"reads; using a model glass with the line's nd {nd:g}, Vd {vd:g} "
+                              f"(exact at the d line, linear in 1/λ² elsewhere; "
+                              f"unknown_glass='model')", ZmxWarning, stacklevel=4)
+                return ModelGlass(_arr(nd), _arr(vd))
             missing = [c for c in self.gcat if c not in self.side and not shipped_for(c)]
             if missing:
                 e = (f"{e}. The file's GCAT names {', '.join(missing)}, which jaxlens does not "
                      f"ship (GCAT catalogs it reads: {', '.join(SHIPPED_FOR_ZEMAX)}); put "
                      f"{missing[0]}.AGF beside the file or use jaxlens.catalog.register_catalog")
+            if nd is not None:
+                e = (f"{e}. To open the file anyway with a model glass of the line's nd {nd:g}, "
+                     f"Vd {vd:g}, load it with unknown_glass='model'")
             raise ln.error(f"glass {name!r}: {e}") from None
         if self.gcat and getattr(m, "catalog", None) is not None:
             # A glass of the same name from another maker may be another glass (CDGM BAF4 is

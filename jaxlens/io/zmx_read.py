@@ -662,7 +662,8 @@ def _check_image_medium(f: _File, body: list) -> None:
                       f"jaxlens uses {last}", ZmxWarning, stacklevel=3)
 
 
-def loads(text: str, path: str = "<zmx>", *, strict: bool = False) -> Lens:
+def loads(text: str, path: str = "<zmx>", *, strict: bool = False,
+          unknown_glass: str = "error") -> Lens:
     """A ``Lens`` from the text of a ``.zmx`` file (``path`` locates side AGF catalogs).
 
     Args:
@@ -671,16 +672,22 @@ def loads(text: str, path: str = "<zmx>", *, strict: bool = False) -> Lens:
         strict: Refuse unknown keywords and a last line without a line break (a truncated
             file); by default they give a ``ZmxWarning``. Incomplete surface blocks are
             always refused.
+        unknown_glass: ``"error"`` (default) refuses a glass found in no catalog, listing
+            close matches; ``"model"`` uses a model glass (``ModelGlass``) with the nd and Vd
+            that its GLAS line carries, with a ``ZmxWarning`` (a line without them, or with
+            Zemax's untouched defaults 1.5/40, is still refused).
 
     Raises:
         ValueError: On a malformed, incomplete or truncated file (the message names the
             file and the line), an unknown glass, or wavelengths, fields or materials out
             of range.
     """
+    if unknown_glass not in ("error", "model"):
+        raise ValueError(f"loads: unknown_glass must be 'error' or 'model', got {unknown_glass!r}")
     f = _parse(text, path)
     _check_structure(f, text, strict)
     u = f.unit
-    glasses = GlassResolver(path, f.gcat, strict)
+    glasses = GlassResolver(path, f.gcat, strict, unknown_glass)
     obj, body, img = f.surfs[0], f.surfs[1:-1], f.surfs[-1]
     surfaces, thick, mats, mirrors = [], [], [], []
     for s in (obj, img):
@@ -788,9 +795,11 @@ def loads(text: str, path: str = "<zmx>", *, strict: bool = False) -> Lens:
         raise ln.error(str(e)) from None
 
 
-def load_zmx(path: str | os.PathLike, *, strict: bool = False) -> Lens:
-    """Read a Zemax ``.zmx`` lens file (UTF-16 or UTF-8); ``strict`` as for :func:`loads`."""
+def load_zmx(path: str | os.PathLike, *, strict: bool = False,
+             unknown_glass: str = "error") -> Lens:
+    """Read a Zemax ``.zmx`` lens file (UTF-16 or UTF-8); ``strict`` and ``unknown_glass`` as
+    for :func:`loads`."""
     path = os.fspath(path)
     with open(path, "rb") as fh:
         raw = fh.read()
-    return loads(decode(raw, path), path, strict=strict)
+    return loads(decode(raw, path), path, strict=strict, unknown_glass=unknown_glass)
