@@ -83,6 +83,9 @@ class GlassResolver:
 
     def __init__(self, path: str, gcat: list[str], strict: bool = False,
                  unknown_glass: str = "error"):
+        if unknown_glass not in ("error", "model"):
+            raise ValueError(f"{path}: unknown_glass must be 'error' or 'model', got "
+                             f"{unknown_glass!r}")
         self.dir = os.path.dirname(os.path.abspath(path))
         self.gcat = gcat
         self.strict = strict

@@ -672,18 +672,14 @@ def loads(text: str, path: str = "<zmx>", *, strict: bool = False,
         strict: Refuse unknown keywords and a last line without a line break (a truncated
             file); by default they give a ``ZmxWarning``. Incomplete surface blocks are
             always refused.
-        unknown_glass: ``"error"`` (default) refuses a glass found in no catalog, listing
-            close matches; ``"model"`` uses a model glass (``ModelGlass``) with the nd and Vd
-            that its GLAS line carries, with a ``ZmxWarning`` (a line without them, or with
-            Zemax's untouched defaults 1.5/40, is still refused).
+        unknown_glass: ``"error"`` refuses a glass in no catalog; ``"model"`` uses a
+            ``ModelGlass`` of its GLAS line's nd and Vd instead (a ``ZmxWarning``).
 
     Raises:
         ValueError: On a malformed, incomplete or truncated file (the message names the
             file and the line), an unknown glass, or wavelengths, fields or materials out
             of range.
     """
-    if unknown_glass not in ("error", "model"):
-        raise ValueError(f"loads: unknown_glass must be 'error' or 'model', got {unknown_glass!r}")
     f = _parse(text, path)
     _check_structure(f, text, strict)
     u = f.unit
@@ -797,8 +793,7 @@ def loads(text: str, path: str = "<zmx>", *, strict: bool = False,
 
 def load_zmx(path: str | os.PathLike, *, strict: bool = False,
              unknown_glass: str = "error") -> Lens:
-    """Read a Zemax ``.zmx`` lens file (UTF-16 or UTF-8); ``strict`` and ``unknown_glass`` as
-    for :func:`loads`."""
+    """Read a Zemax ``.zmx`` lens file (UTF-16 or UTF-8); options as for :func:`loads`."""
     path = os.fspath(path)
     with open(path, "rb") as fh:
         raw = fh.read()
