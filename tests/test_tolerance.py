@@ -7,6 +7,8 @@ three 2-D fields folded by symmetry, a 9 × 9 pupil; a plano-hyperbolic singlet 
 """
 
 import dataclasses
+import pathlib
+import time
 
 import equinox as eqx
 import jax
@@ -186,3 +188,17 @@ def test_bad_input_raises(triplet_model):
         T.ToleranceModel(_triplet(), fields=[0.0, 5.0], field_weights=[1.0, -1.0])
     with pytest.raises(ValueError, match="check"):
         T.sensitivity(triplet_model, check=-1)
+
+
+def test_cli_refuses_to_replace_an_earlier_run_before_any_work(tmp_path, capsys):
+    from jaxlens.experiments import tolerance as cli
+
+    design = pathlib.Path(jl.__file__).parent / "data" / "lenses" / "cooke_triplet.zmx"
+    earlier = tmp_path / "tolerance.json"
+    earlier.write_text('{"earlier": true}')
+    t0 = time.perf_counter()
+    assert cli.main([str(design), "--out", str(tmp_path)]) == 2
+    err = capsys.readouterr().err
+    assert "tolerance.json" in err and "--overwrite" in err
+    assert earlier.read_text() == '{"earlier": true}'
+    assert time.perf_counter() - t0 < 5  # refused before the analysis, not after

@@ -5,7 +5,8 @@ or jaxlens JSON) of the classical spec (the CLI's defaults: 80.8°, F/2.0, 7.66 
 diagonal, F/d/C) with ``jaxlens.analysis.tolerance``: sensitivities from one reverse-mode
 pass checked against finite differences, a vmapped Monte-Carlo with the back-focus
 compensator, RMS percentiles, the MTF at the sensor's Nyquist frequency and the yield. It
-writes ``DIR/tolerance.json`` and ``DIR/tolerance_rms.png``. ``python -m
+writes ``DIR/tolerance.json`` and ``DIR/tolerance_rms.png`` (refusing, before any work, to
+replace those of an earlier run unless ``--overwrite`` is given). ``python -m
 jaxlens.experiments.classical`` calls :func:`analyse_design` for its best design.
 
 The metric is Table 1's: the mean over the 16 × 16 sensor grid of the polychromatic RMS spot
@@ -13,7 +14,7 @@ radius (``jaxlens.design.evaluate``), computed on the grid's 36 distinct fields.
 
 Example (the recorded ``experiments/classical/tolerance.json``):
     python -m jaxlens.experiments.tolerance experiments/classical/designs/seed_13.zmx \\
-        --out experiments/classical
+        --out experiments/classical --overwrite
 """
 
 from __future__ import annotations
@@ -165,6 +166,9 @@ def analyse_design(lens, spec, *, trials: int = DEFAULT_TRIALS,
     return report
 
 
+OUTPUT_FILES = ("tolerance.json", "tolerance_rms.png")
+
+
 def write_report(report: dict, out: str, *, plots: bool = True) -> dict:
     """Write ``tolerance.json`` and (with ``plots``) ``tolerance_rms.png`` into ``out``;
     return the paths."""
@@ -173,13 +177,13 @@ def write_report(report: dict, out: str, *, plots: bool = True) -> dict:
     os.makedirs(out, exist_ok=True)
     mc = report.get("_mc")
     data = {k: v for k, v in report.items() if k != "_mc"}
-    path = os.path.join(out, "tolerance.json")
+    path = os.path.join(out, OUTPUT_FILES[0])
     with open(path, "w") as f:
         json.dump(data, f, indent=2, default=float)
     files = {"tolerance_json": path}
     if mc is not None and plots:
         files["tolerance_rms"] = plot.save(plot.plot_tolerance_histogram(mc),
-                                           os.path.join(out, "tolerance_rms.png"))
+                                           os.path.join(out, OUTPUT_FILES[1]))
     return files
 
 
@@ -192,6 +196,8 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument("--threshold", type=float, default=DEFAULT_THRESHOLD_UM,
                    help="yield threshold on the mean RMS after refocusing, µm")
     p.add_argument("--seed", type=int, default=0, help="Monte-Carlo random seed")
+    p.add_argument("--overwrite", action="store_true",
+                   help="replace an earlier run's tolerance.json and tolerance_rms.png in --out")
     p.add_argument("--no-small-step-check", action="store_true",
                    help="skip the small-step finite-difference check of the gradient")
     return p
@@ -208,6 +214,11 @@ def main(argv: list[str] | None = None) -> int:
                                      f"{args.threshold}"))
     if not os.path.isfile(args.design):
         return fail(prog, ValueError(f"design file {args.design!r} not found"))
+    earlier = [f for f in OUTPUT_FILES if os.path.exists(os.path.join(args.out, f))]
+    if earlier and not args.overwrite:
+        return fail(prog, ValueError(f"--out {args.out} already holds {', '.join(earlier)} of an "
+                                     f"earlier run; give --overwrite to replace them, or choose "
+                                     f"another folder"))
     import jax
 
     jax.config.update("jax_enable_x64", True)
