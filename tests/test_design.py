@@ -295,8 +295,11 @@ def test_least_squares_result_codes_say_when_a_step_is_rejected():
     sol = solvers.DampedLeastSquares(obj, free=LensParams(c=True, a=True, k=False, d=True))
     step = eqx.filter_jit(sol.step)
     state = sol.init(p0, None)
-    p, state, _ = step(p0, state, None, jnp.asarray(1.0))
+    p, state, aux = step(p0, state, None, jnp.asarray(1.0))
     assert solvers.result_names(state.result) == ["successful"]
+    # The aux is the objective's at the step's start (as for every solver), not at its end.
+    assert float(aux.loss) == pytest.approx(float(obj(p0, None)[1].loss), rel=1e-12)
+    assert float(obj(p, None)[1].loss) < float(aux.loss)
     state = solvers.LeastSquaresState(jnp.asarray(1.0), state.result)
     _, state, _ = step(at_min, state, None, jnp.asarray(1.0))
     assert solvers.result_names(state.result) == ["rejected"]

@@ -243,8 +243,9 @@ class DampedLeastSquares(AbstractSolver):
 
         def one(carry, _):
             x, lam, _ = carry
-            # The residuals come with the Jacobian's primal pass (no second evaluation).
-            jac, r = jax.jacfwd(lambda z: (res(z)[0],) * 2, has_aux=True)(x)
+            # The residuals and aux come with the Jacobian's primal pass (no second
+            # evaluation); the first iteration's aux is the aux at the step's start.
+            jac, (r, aux) = jax.jacfwd(lambda z: (lambda o: (o[0], o))(res(z)), has_aux=True)(x)
             jac = jac.astype(dt)
             r64 = r.astype(dt)
             h = jac.T @ jac
@@ -268,11 +269,11 @@ class DampedLeastSquares(AbstractSolver):
             x = jnp.where(accept, xs[best], x)
             lam = jnp.where(accept, mus[best], 10.0 * lam)
             lam = jnp.clip(lam, DAMPING_MIN, DAMPING_MAX)
-            return (x, lam, accept), None
+            return (x, lam, accept), aux
 
-        _, aux0 = res(x0)
-        (x, lam, accepted), _ = jax.lax.scan(one, (x0, state.damping, jnp.asarray(True)), None,
-                                             length=self.inner)
+        (x, lam, accepted), auxs = jax.lax.scan(one, (x0, state.damping, jnp.asarray(True)),
+                                                None, length=self.inner)
+        aux0 = jax.tree.map(lambda a: a[0], auxs)
         result = SolverResult.where(
             accepted, SolverResult.successful,
             SolverResult.where(lam >= DAMPING_MAX, SolverResult.damping_limit,
