@@ -103,6 +103,15 @@ def test_zmx_cut_mid_line_and_unknown_keywords_warn_or_refuse_in_strict_mode():
     cut = zmx.decode(COOKE_ZMX).rstrip("\r\n")[:-3]  # the last DIAM line, cut
     with pytest.raises(ValueError, match=r"does not end with a line break.*strict"):
         zmx.loads(cut, strict=True)
+    # A last line jaxlens ignores (a vendor's file ending on MOFF) cannot change the lens,
+    # and OpticStudio's AUTH/LUID/SSID/RCMF/XAIM lines are known: neither is reported.
+    ends_on_moff = zmx.decode(COOKE_ZMX).rstrip("\r\n") + '\nMOFF 0 1 "" 0 0 0 1 1 0 0.0 ""'
+    with_ids = zmx.decode(COOKE_ZMX).replace("GFAC 0 0", "GFAC 0 0\nAUTH \nLUID 3\nXAIM 0\n"
+                                             "RCMF 1 0")
+    with warnings.catch_warnings():
+        warnings.simplefilter("error", zmx.ZmxWarning)
+        for text in (ends_on_moff, with_ids):
+            assert zmx.loads(text, strict=True).num_surfaces == 6
 
 
 def _minimal(surface1="  CURV 0.02\n", head="ENPD 10\nWAVM 1 0.55 1\n", glass="GLAS N-BK7",

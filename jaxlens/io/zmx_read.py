@@ -550,9 +550,9 @@ def _check_structure(f: _File, text: str, strict: bool) -> None:
     a file with a ``VERS`` line missing any of those was cut off. (Its TYPE line may be
     missing: a STANDARD surface, as some vendors' files write it.) Any file needs a
     DISZ for every lens surface (a missing one is not read as 0; the object's means
-    infinity), and its
-    last block is the image, whose thickness is 0: a last block with a DISZ other than 0 is
-    a lens surface of a file that was cut short.
+    infinity), and its last block is the image, whose thickness is 0: a last block with a
+    DISZ other than 0 is a lens surface of a file that was cut short. A last line without a
+    line break is reported unless jaxlens ignores it (a vendor's file ending on MOFF).
     """
     path = f.path
     if len(f.surfs) < 3:
@@ -575,8 +575,8 @@ def _check_structure(f: _File, text: str, strict: bool) -> None:
         raise img.disz_line.error(
             f"the last surface, which a .zmx file makes the image, has thickness {img.disz:g}; "
             f"the image surface's is 0. The file may be truncated after surface {img.number}")
-    if text and not text.endswith(("\n", "\r")):
-        lines = text.splitlines()
+    lines = text.splitlines() or [""]
+    if not text.endswith(("\n", "\r")) and (lines[-1].split() or [""])[0] not in IGNORED_KEYWORDS:
         report(strict, f"{path}:{len(lines)}: the file does not end with a line break; it "
                         f"may be truncated: {lines[-1].strip()!r}")
     if f.mnum is not None and f.mnum.int(1, "number of configurations") > 1:
