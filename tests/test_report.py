@@ -129,3 +129,21 @@ def test_weighted_rms_is_the_hand_computed_radius():
     np.testing.assert_allclose(weighted_rms(p, w), want, rtol=1e-12)
     np.testing.assert_allclose(weighted_rms(p, w, jnp.zeros(2)), np.sqrt(8 / 3), rtol=1e-12)
     assert np.isnan(weighted_rms(p, jnp.zeros(4)))  # no valid ray: NaN, never 0
+
+
+def test_report_notes_that_paraxial_data_ignore_decenters_and_tilts():
+    import jaxlens
+    from jaxlens.analysis.report import report_data
+
+    glass = jaxlens.ModelGlass(1.5168, 64.17)
+
+    def lens(decenter):
+        return jaxlens.Lens(
+            surfaces=(jaxlens.Sphere(0.02), jaxlens.CoordinateBreak(decenter_y=decenter),
+                      jaxlens.Sphere(-0.02)),
+            thickness=jnp.array([2.5, 2.5, 45.0]), materials=(glass, glass, jaxlens.Air()),
+            epd=4.0, fields=(0.0, 1.0))
+
+    assert report_data(lens(0.0))["notes"] == []
+    notes = report_data(lens(0.1))["notes"]
+    assert len(notes) == 1 and "surface(s) 2" in notes[0] and "ignore those decenters" in notes[0]

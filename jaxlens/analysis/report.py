@@ -33,6 +33,7 @@ from ..imaging import sampling
 from ..io.files import load
 from ..io.lensfile import nm_to_um
 from ..optics import checks, paraxial
+from ..optics.coordinates import CoordinateBreak
 from ..optics.lens import Lens
 from ..optics.materials import Air, ModelGlass, Tabulated
 from ..optics.surfaces import EvenAsphere, Hybrid
@@ -200,7 +201,21 @@ def report_data(lens: Lens, *, fields=None, wavelengths=None) -> dict:
         "wavelengths": [float(w) for w in wl],
         "primary_wavelength": float(wl[lens.primary]),
         "fields": out_fields,
+        "notes": _notes(lens),
     }
+
+
+def _notes(lens: Lens) -> list[str]:
+    """Caveats the numbers need: a decentered or tilted system has no single optical axis,
+    so its first-order data describe the unbroken local axes only."""
+    moved = [i + 1 for i, s in enumerate(lens.surfaces) if isinstance(s, CoordinateBreak) and any(
+        float(v) != 0.0 for v in (s.decenter_x, s.decenter_y, s.tilt_x, s.tilt_y, s.tilt_z))]
+    if not moved:
+        return []
+    return [f"coordinate breaks decenter or tilt the system at surface(s) "
+            f"{', '.join(map(str, moved))}: the paraxial data (EFL, BFL, F/#, pupils, paraxial "
+            f"image height and distortion) follow each surface's local axis and ignore those "
+            f"decenters and tilts; the real-ray chief heights and RMS spots are exact"]
 
 
 # ---------------------------------------------------------------------------- text
@@ -310,6 +325,8 @@ def format_report(data: dict, lens: Lens | None = None) -> str:
         f"{w:.6f}" + (" (primary)" if w == data["primary_wavelength"] else "") for w in wl
     )
     L.append(f"  {'Wavelengths (um)':<34}: {wtxt}")
+    for note in data.get("notes", ()):
+        L.append(f"  Note: {note}")
     if lens is not None:
         L.append("")
         L.append("SURFACE DATA (radius, thickness, semi-diameter in mm; glass: name or nd,Vd)")
