@@ -66,6 +66,8 @@ def test_rms_spot_field_without_rays_is_nan_with_finite_gradient():
     assert np.all(np.isnan(np.asarray(r.per_wavelength[1])))
     assert np.isnan(float(r.polychromatic[1]))
     assert np.isfinite(float(r.polychromatic[0])) and float(r.polychromatic[0]) > 0
+    # No chief ray reaches the image either: no intercept (it was where the ray failed).
+    assert np.all(np.isnan(np.asarray(r.chief[1]))) and np.all(np.isfinite(np.asarray(r.chief[0])))
 
     def loss(c):
         s = eqx.tree_at(lambda L: L.surfaces[0].c, lens, c)

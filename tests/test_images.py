@@ -83,6 +83,10 @@ def test_psnr_default_range_is_the_span_of_both_images_and_zero():
     # An explicit range wins.
     assert images.psnr(a, b, data_range=4.0) == pytest.approx(10 * np.log10(16 / mse),
                                                               rel=1e-12)
+    for bad in (0, -1.0, float("nan"), float("inf")):
+        for metric in (images.psnr, images.ssim):
+            with pytest.raises(ValueError, match="data_range must be a finite number > 0"):
+                metric(a, b, data_range=bad)
 
 
 def test_psf_stack_round_trip(tmp_path):

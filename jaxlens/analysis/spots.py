@@ -99,7 +99,9 @@ def chief_ray(lens: Lens, field, wavelength=None, *, depth=None) -> Rays:
 
 
 class RmsSpot(eqx.Module):
-    """RMS spot radii (mm) for F fields and W wavelengths."""
+    """RMS spot radii (mm) for F fields and W wavelengths; ``centroid`` and ``chief`` (the
+    primary-wavelength chief ray's intercept) are image-plane (x, y) in mm, NaN where no
+    ray (or no chief ray) reaches the image."""
 
     per_wavelength: Float[Array, "F W"]
     polychromatic: Float[Array, " F"]
@@ -206,7 +208,9 @@ def _rms_spot(lens, fields, wavelengths, *, pupil, reference, depth, newton_iter
             chief_ok = chief_valid > 0
             per, poly = jnp.where(chief_ok, per, jnp.nan), jnp.where(chief_ok, poly, jnp.nan)
         cen_out = jnp.where(jnp.sum(w, axis=-1)[:, None] > 0, cen, jnp.nan)
-        return per, poly, jnp.mean(w, axis=-1), cen_out, chief
+        # An invalid chief ray stops where it failed: its last position is not an intercept.
+        chief_out = jnp.where(chief_valid > 0, chief, jnp.nan)
+        return per, poly, jnp.mean(w, axis=-1), cen_out, chief_out
 
     per, poly, frac, cen, chief = jax.vmap(per_field)(fields)
     return RmsSpot(per, poly, frac, cen, chief)

@@ -296,6 +296,9 @@ def scene(name: str = "astronaut", size: tuple[int, int] | None = None) -> np.nd
 
 def _data_range(a, b, data_range):
     if data_range is not None:
+        if not (np.isfinite(data_range) and data_range > 0):
+            raise ValueError(f"data_range must be a finite number > 0 (the peak-to-peak range "
+                             f"of pixel values, 1 for [0, 1] images), got {data_range!r}")
         return float(data_range)
     return float(max(np.max(a), np.max(b)) - min(np.min(a), np.min(b), 0.0)) or 1.0
 
