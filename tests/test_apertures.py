@@ -148,3 +148,26 @@ def test_floating_stop_needs_a_centred_circular_stop_aperture():
         with pytest.raises(ValueError, match="FLOA .* needs a centred circular stop aperture"):
             zmx.loads(_text(lines, "FLOA\n"), "t.zmx")
         zmx.loads(_text(lines), "t.zmx")
+
+
+def test_a_blocked_chief_ray_still_marks_the_psf_reference():
+    # A central obscuration (a Cassegrain's secondary) blocks the chief ray; as a reference
+    # point it is traced unobscured, so the PSF is centred where it lands, not where it stopped.
+    from jaxlens.imaging.aiming import chief_point
+
+    def singlet(obscurations):
+        return jl.Lens(surfaces=(jl.Sphere(0.02), jl.Sphere(-0.02)),
+                       thickness=jnp.array([5.0, 47.0]),
+                       materials=(jl.get_material("N-BK7"), jl.Air()), epd=10.0,
+                       fields=jnp.array([0.0, 3.0]), obscurations=obscurations)
+
+    clear = singlet(())
+    for surface in (0, 1):
+        blocked = singlet(((surface, 0.0, 2.0),))
+        assert not bool(jl.trace(blocked, jl.sampling.collimated(blocked, 3.0,
+                                                                 jnp.zeros((1, 2)))).valid[0])
+        assert not unclipped(blocked).obscurations
+        np.testing.assert_allclose(chief_point(blocked, 3.0, None, 6),
+                                   chief_point(clear, 3.0, None, 6), rtol=0, atol=1e-12)
+        psf = jl.psf(blocked, 3.0, kernel_size=41, pixel_size=0.02, center="chief")
+        assert float(jnp.sum(psf)) > 0.99

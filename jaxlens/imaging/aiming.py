@@ -130,6 +130,9 @@ def newton_2d(fn, x0, params, iters: int):
 
 
 def chief_point(lens, field, depth, newton_iters) -> Array:
-    """Image-surface (x, y) of the real chief ray (through the stop centre), primary λ."""
+    """Image-surface (x, y) of the real chief ray (through the stop centre), primary λ.
+
+    A reference point, so it is traced without clipping or obscurations: a blocked chief
+    ray (a Cassegrain's, behind its secondary) would otherwise stop where it was blocked."""
     rays = stop_chief_ray(lens, field, depth, newton_iters=newton_iters)
-    return trace(lens, rays, newton_iters=newton_iters, uniform=True).origin[0, :2]
+    return trace(unclipped(lens), rays, newton_iters=newton_iters, uniform=True).origin[0, :2]

@@ -19,7 +19,8 @@ Conventions:
     convolving a rendered-orientation image with the kernel applies the PSF.
 
     ``center`` picks the reference point ``ref`` on the image surface: "chief" (the real
-    chief ray through the centre of the stop, at the lens's primary wavelength), "centroid"
+    chief ray through the centre of the stop, at the lens's primary wavelength, traced
+    without clipping or obscurations, so a blocked chief ray still marks it), "centroid"
     (the energy centroid over all requested wavelengths) or "ideal" (the distortion-free
     image point ``K·tanθ``, ``K = image_scale(lens)``); the geometric model also takes
     "pupil" (where the ray through the centre of the paraxial entrance pupil lands, at the

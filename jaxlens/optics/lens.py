@@ -309,15 +309,17 @@ class Lens(eqx.Module):
 
 
 def unclipped(lens: Lens) -> Lens:
-    """The lens with every semi-diameter set to inf and no ``apertures``, for aiming rays (an
-    aperture that clips an intermediate Newton iterate would otherwise stop it where it was
-    clipped)."""
+    """The lens with every semi-diameter set to inf and no ``apertures`` or ``obscurations``,
+    for aiming rays and for reference rays such as the chief ray (an aperture that clips an
+    intermediate Newton iterate would otherwise stop it where it was clipped, and a central
+    obscuration blocks the chief ray of a reflecting telescope)."""
     surfaces = tuple(
         eqx.tree_at(lambda s: s.semi_diameter, s, jnp.full_like(s.semi_diameter, jnp.inf))
         for s in lens.surfaces
     )
     free = eqx.tree_at(lambda m: m.surfaces, lens, surfaces)
-    if free.apertures:  # static structure, which tree_at does not reach
+    if free.apertures or free.obscurations:  # static structure, which tree_at does not reach
         free = copy.copy(free)
         object.__setattr__(free, "apertures", ())
+        object.__setattr__(free, "obscurations", ())
     return free
