@@ -7,7 +7,10 @@ wavelength) are traced:
 
 * ``forward``: ``jaxlens.trace(lens, rays)``, every output leaf blocked on.
 * ``forward+grad``: value and gradient, with respect to every array of the lens, of the mean
-  squared spot radius about the centroid of the valid rays (the RMS-spot loss of lens design).
+  squared spot radius about the centroid of the valid rays (the RMS-spot loss of lens design),
+  traced with ``jaxlens.trace(..., reverse_rule=True)``: a reverse-only gradient, so plane,
+  sphere and conic surfaces take the hand-written reverse rule (``tracing.surface_adjoint``;
+  identical values, faster gradient; benchmarks/SPEED.md).
 
 ray·surfaces/s = rays × lens surfaces (the image surface not counted) / best run time.
 ``engine = "jaxlens"`` is ``jaxlens.trace`` with its defaults; ``engine =
@@ -63,7 +66,7 @@ _reference_trace = eqx.filter_jit(lambda lens, rays: jaxlens.trace(lens, rays))
 @eqx.filter_jit
 def forward_grad(lens, rays):
     def loss(lens):
-        out = jaxlens.trace(lens, rays)
+        out = jaxlens.trace(lens, rays, reverse_rule=True)
         return spot_loss(out.origin[:, :2], out.valid)
 
     return eqx.filter_value_and_grad(loss)(lens)

@@ -28,6 +28,11 @@ f+g 302-309 ms (forward 96 ms, ratio 0.31-0.32), with jaxlens's 50 000-ray chunk
 The custom backward is bound by cache traffic (21 per-ray fusions reading 6-17 arrays each per
 surface), hence the smaller chunk; jaxlens.trace itself gains less from it (458-466 ms).
 
+This rule is in the library since 2026-11-27: ``jaxlens.tracing.surface_adjoint`` (the
+``--split 1`` backward, t and g saved), used by ``jaxlens.trace(..., reverse_rule=True)``;
+"old" here stays ``jaxlens.trace``'s default. The root comes from ``step.conic_root_arrays``
+(public since then).
+
     python -m benchmarks.vjp_probe --check            # values and gradients (float64), FD
     python -m benchmarks.vjp_probe --save tg --chunk 8192 65536 --old-chunk 8192 --repeats 9
     python -m benchmarks.vjp_probe --fusions --save tg --split 0 1 --chunk 8192
@@ -53,8 +58,8 @@ from jaxlens import zoo  # noqa: E402
 from jaxlens.tracing.forward import CHUNK, _chunking  # noqa: E402
 from jaxlens.tracing.step import (  # noqa: E402
     T_MAX,
-    _conic_root_arrays,
     bounded_div,
+    conic_root_arrays,
     refraction_gain,
     unmark,
 )
@@ -73,11 +78,11 @@ def _forward(first, refracts, params, p, d, valid, opl):
     if first:
         t_plane, _ = bounded_div(-o[2], d[2])
         o1 = tuple(oi + t_plane * di for oi, di in zip(o, d, strict=True))
-        t_m = _conic_root_arrays(False, c, k, *o1, *d, jnp.zeros_like(o[2])) + t_plane
+        t_m = conic_root_arrays(False, c, k, *o1, *d, jnp.zeros_like(o[2])) + t_plane
     else:
         t_min = -1e3 * (eps * (1 + jnp.abs(o[2])))
         t_min = jnp.where(bk, -T_MAX, t_min)
-        t_m = _conic_root_arrays(True, c, k, *o, *d, t_min)
+        t_m = conic_root_arrays(True, c, k, *o, *d, t_min)
     t, ok = unmark(t_m)
     if not first:
         fwd = t >= -1e3 * eps * (1 + jnp.abs(o[2]))

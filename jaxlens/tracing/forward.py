@@ -1,11 +1,13 @@
 """Forward tracing from object space: runs of same-kind surfaces scanned, large batches chunked.
 
 ``trace`` returns the rays on the image surface, ``trace_path`` the rays after every surface
-(stacked on a leading axis). Both move rays with ``step.surface_step``. Runs of surfaces of
-the same kind and shape are traced with one ``lax.scan``; with ``uniform=True`` every surface
-after the first is first converted to one common kind (``uniform_surfaces``, coefficients
-zero-padded, the sag unchanged), so the whole lens is one scan and compile time does not grow
-with the surface count. Conventions: see ``step``.
+(stacked on a leading axis). Both move rays with ``step.surface_step``; with
+``reverse_rule=True``, plane, sphere and conic surfaces with ``surface_adjoint.conic_step`` (the
+same values, a hand-written reverse rule, no forward mode).
+Runs of surfaces of the same kind and shape are traced with one ``lax.scan``; with
+``uniform=True`` every surface after the first is first converted to one common kind
+(``uniform_surfaces``, coefficients zero-padded, the sag unchanged), so the whole lens is one
+scan and compile time does not grow with the surface count. Conventions: see ``step``.
 
 Mirrors (``Lens.mirrors``) and coordinate breaks (``optics.coordinates``) are static
 structure: each is traced on its own, outside the scans, and a lens without them is traced by
@@ -15,7 +17,6 @@ the break's frame (``optics.coordinates.frame_of`` maps them to global coordinat
 
 from __future__ import annotations
 
-import functools
 from typing import Literal
 
 import equinox as eqx
@@ -28,6 +29,7 @@ from ..optics.coordinates import CoordinateBreak, transform
 from ..optics.lens import Lens
 from ..optics.rays import Rays
 from ..optics.surfaces import AbstractSurface, EvenAsphere, Hybrid, Standard
+from . import surface_adjoint
 from .step import (
     DEFAULT_NEWTON_ITERS,
     RayState,
@@ -118,17 +120,31 @@ def _prepare(lens: Lens, rays: Rays, uniform: bool):
 
 
 def _trace_states(lens: Lens, rays: Rays, newton_iters: int, upto: int | None, *,
-                  keep_path: bool, uniform: bool, prepared=None) -> list[RayState]:
+                  keep_path: bool, uniform: bool, prepared=None,
+                  reverse_rule: bool = False) -> list[RayState]:
     """Trace and return the states after each surface (only the last unless keep_path).
 
     Runs of surfaces of the same kind (a stack of even aspheres, say) are traced with
     one ``lax.scan``, so the compiled program, and above all its gradient, does not grow
     with the number of surfaces. Surface 1 is traced on its own (object-space rules).
+    With ``reverse_rule``, plane, sphere and conic surfaces (``surface_adjoint.supported``)
+    are moved by ``surface_adjoint.conic_step``: ``surface_step``'s values with a hand-written
+    reverse rule (faster gradients, no forward mode).
     """
     surfaces, zs, idx, lens = _prepare(lens, rays, uniform) if prepared is None else prepared
     shape = jnp.shape(rays.wavelength)  # indices are per wavelength, not per ray
     st = state_from_rays(rays)
-    step = functools.partial(surface_step, refracts=True, newton_iters=newton_iters)
+
+    def step(surface, z, st, n1, n2, *, first, refracts=True, gap=None, reflects=False,
+             obscured=None, apertures=()):
+        if reverse_rule and surface_adjoint.supported(surface, reflects=reflects,
+                                                      obscured=obscured, apertures=apertures):
+            return surface_adjoint.conic_step(surface, z, st, n1, n2, first=first,
+                                              refracts=refracts, gap=gap)
+        return surface_step(surface, z, st, n1, n2, first=first, refracts=refracts,
+                            newton_iters=newton_iters, gap=gap, reflects=reflects,
+                            obscured=obscured, apertures=apertures)
+
     last = len(surfaces) - 1 if upto is None else upto
     breaks = frozenset(i for i, s in enumerate(surfaces) if isinstance(s, CoordinateBreak))
     mirrors = frozenset(lens.mirrors)
@@ -164,13 +180,16 @@ def _trace_states(lens: Lens, rays: Rays, newton_iters: int, upto: int | None, *
         n_in = jnp.stack([jnp.broadcast_to(n, shape) for n in idx[i:j]])
         n_out = jnp.stack([jnp.broadcast_to(n, shape) for n in idx[i + 1 : j + 1]])
 
-        # Checkpointed body: the backward pass recomputes a surface from the carry instead
-        # of storing every intermediate (2.5-5x faster gradients, benchmarks/SPEED.md).
-        @jax.checkpoint
         def body(carry, xs):
             surface, z, n1, n2, gap = xs
             new = step(surface, z, carry, n1, n2, first=False, gap=gap)
             return new, (new if keep_path else None)
+
+        # Checkpointed body: the backward pass recomputes a surface from the carry instead
+        # of storing every intermediate (2.5-5x faster gradients, benchmarks/SPEED.md). The
+        # reverse rule keeps only the root and the gain, and is faster not recomputed.
+        if not (reverse_rule and surface_adjoint.supported(surfaces[i])):
+            body = jax.checkpoint(body)
 
         run_gaps = gaps(slice(i - 1, j - 1))
         st, path = jax.lax.scan(body, st, (stacked, zs[i:j], n_in, n_out, run_gaps))
@@ -179,9 +198,8 @@ def _trace_states(lens: Lens, rays: Rays, newton_iters: int, upto: int | None, *
         else:
             out.append(st)
     if upto is None:
-        st = surface_step(lens.image, lens.image_z(), st, idx[-1], idx[-1], first=False,
-                          refracts=False, newton_iters=newton_iters, gap=gaps(-1),
-                          apertures=aps.get(len(surfaces), ()))
+        st = step(lens.image, lens.image_z(), st, idx[-1], idx[-1], first=False,
+                  refracts=False, gap=gaps(-1), apertures=aps.get(len(surfaces), ()))
         out.append(st)
     return out
 
@@ -228,6 +246,12 @@ def _check_upto(lens: Lens, rays: Rays, upto: int | None, newton_iters: int) -> 
                          f"(0-based), got {upto!r}")
 
 
+def _check_switch(reverse_rule, where: str) -> None:
+    """``reverse_rule`` is a static switch: a traced or non-boolean value is refused."""
+    if not isinstance(reverse_rule, (bool, np.bool_)):
+        raise TypeError(f"{where}: reverse_rule must be True or False, got {reverse_rule!r}")
+
+
 def trace_path(
     lens: Lens,
     rays: Rays,
@@ -235,6 +259,7 @@ def trace_path(
     newton_iters: int = DEFAULT_NEWTON_ITERS,
     upto: int | None = None,
     uniform: bool = False,
+    reverse_rule: bool = False,
 ) -> Rays:
     """Trace rays and return them after every surface, stacked on a new leading axis.
 
@@ -245,6 +270,7 @@ def trace_path(
         upto: stop after ``surfaces[upto]`` (0-based); ``None`` traces to the image.
         uniform: trace every surface after the first as one kind (one ``lax.scan``:
             short compile times for many surfaces; see the module notes).
+        reverse_rule: as in ``trace``.
 
     Returns:
         ``Rays`` of shape ``[m, *batch]``: after each surface (after refraction) and, last,
@@ -254,8 +280,10 @@ def trace_path(
         (``optics.coordinates.frame_of(lens, i)``); at a break the rays have not moved.
     """
     _check_upto(lens, rays, upto, newton_iters)
+    _check_switch(reverse_rule, "trace_path")
     rays = _checked(lens, rays, "trace_path")
-    states = _trace_states(lens, rays, newton_iters, upto, keep_path=True, uniform=uniform)
+    states = _trace_states(lens, rays, newton_iters, upto, keep_path=True, uniform=uniform,
+                           reverse_rule=reverse_rule)
     stacked = jax.tree.map(lambda *x: jnp.stack(x), *states)
     wl = jnp.broadcast_to(rays.wavelength, (len(states),) + rays.shape)
     return rays_from_state(stacked, wl)
@@ -303,6 +331,7 @@ def trace(
     chunk: int | Literal["auto"] | None = "auto",
     upto: int | None = None,
     uniform: bool = False,
+    reverse_rule: bool = False,
 ) -> Rays:
     """Trace rays from object space to the image surface (or to ``surfaces[upto]``).
 
@@ -320,6 +349,11 @@ def trace(
         upto: stop after ``surfaces[upto]`` (0-based); ``None`` traces to the image.
         uniform: trace every surface after the first as one kind (one ``lax.scan``;
             see the module notes). Results agree to rounding.
+        reverse_rule: (static) differentiate plane, sphere and conic surfaces (not mirrors,
+            nor with obscurations or apertures) with a hand-written reverse rule
+            (``surface_adjoint``): identical values, the same gradients to rounding, a faster
+            ``grad``; but ``jax.jvp``/``jax.jacfwd`` through such a trace raise a TypeError
+            (a ``custom_vjp`` has no forward mode). Other surfaces take ``surface_step``.
 
     Returns:
         The rays on the image surface (or after ``surfaces[upto]``): intercepts in
@@ -337,6 +371,7 @@ def trace(
     """
 
     _check_upto(lens, rays, upto, newton_iters)
+    _check_switch(reverse_rule, "trace")
     if isinstance(chunk, str) and chunk == "auto":
         chunk = default_chunk()
     if chunk is not None:
@@ -345,7 +380,7 @@ def trace(
 
     def whole(r: Rays, prepared=None) -> Rays:
         states = _trace_states(lens, r, newton_iters, upto, keep_path=False, uniform=uniform,
-                               prepared=prepared)
+                               prepared=prepared, reverse_rule=reverse_rule)
         return rays_from_state(states[-1], r.wavelength)
 
     rays = _checked(lens, rays, "trace")

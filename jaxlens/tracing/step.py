@@ -88,14 +88,14 @@ def bounded_div(num, den):
 
 
 def _conic_root(surface: AbstractSurface, o, d, t_min):
-    """The first intersection with the base conic: ``_conic_root_arrays`` on a surface."""
+    """The first intersection with the base conic: ``conic_root_arrays`` on a surface."""
     if t_min is None:
-        return _conic_root_arrays(False, surface.c, surface.k, *o, *d, jnp.zeros_like(o[2]))
-    return _conic_root_arrays(True, surface.c, surface.k, *o, *d, t_min)
+        return conic_root_arrays(False, surface.c, surface.k, *o, *d, jnp.zeros_like(o[2]))
+    return conic_root_arrays(True, surface.c, surface.k, *o, *d, t_min)
 
 
 @functools.partial(jax.custom_jvp, nondiff_argnums=(0,))
-def _conic_root_arrays(bounded_below, c, k, ox, oy, oz, dx, dy, dz, t_min):
+def conic_root_arrays(bounded_below, c, k, ox, oy, oz, dx, dy, dz, t_min):
     """Closed-form intersection with the base conic; returns t, marked MISS on a miss.
 
     ``o`` and ``d`` are (x, y, z) tuples of arrays in the surface's local frame, with ``o``
@@ -135,7 +135,7 @@ def _conic_root_arrays(bounded_below, c, k, ox, oy, oz, dx, dy, dz, t_min):
     return jnp.where(hit, num, MISS) / jnp.where(hit, den, 1.0)
 
 
-@_conic_root_arrays.defjvp
+@conic_root_arrays.defjvp
 def _conic_root_jvp(bounded_below, primals, tangents):
     """Implicit-function derivative dt = −dF/F_t of F = c(x² + y²) + c(1+k)z² − 2z on the ray.
 
@@ -144,7 +144,7 @@ def _conic_root_jvp(bounded_below, primals, tangents):
     """
     c, k, ox, oy, oz, dx, dy, dz, _ = primals
     tc, tk, tox, toy, toz, tdx, tdy, tdz, _ = tangents
-    t_marked = _conic_root_arrays(bounded_below, *primals)
+    t_marked = conic_root_arrays(bounded_below, *primals)
     t, hit = unmark(t_marked)
     x, y, z = ox + t * dx, oy + t * dy, oz + t * dz
     fx, fy, fz = 2 * c * x, 2 * c * y, 2 * c * (1 + k) * z - 2  # ∇F

@@ -1,0 +1,184 @@
+"""The conic surface step with a hand-written reverse rule, for faster gradients of the trace.
+
+``conic_step`` is ``step.surface_step`` for a refracting (or, on the image surface, only
+intersecting) ``Standard`` surface (plane, sphere, conic) that is not a mirror and has no
+obscuration or aperture. Its values are ``surface_step``'s bit for bit (the same operations
+from ``step``, in the same order); its derivative (``reverse_step``, a ``jax.custom_vjp``,
+the rule of benchmarks/vjp_probe.py) is written out by hand from the saved root ``t`` and
+refraction gain ``g``:
+
+    t     implicit conic root, F(o + t d) = 0 with F = c(x² + y²) + c(1+k)z² − 2z; ∇F = −2N
+          (N the step's unnormalised normal), so dt = (F_c dc + F_k dk − 2N·(do + t dd))/(2 d·N)
+    g     refraction gain, g·nn = R − mu·dn with R = ±sqrt(nn − mu²(nn − dn²)); R is rebuilt
+          as g·nn + mu·dn (no square root), dR = d(R²)/(2R)
+    d'    mu·d + g·N,  p' = o + t d (+ z_vertex),  opl' = opl + n1·t
+
+The shared per-ray adjoint scalars (the cotangents of d·N, N·N and mu, and the root term
+bar_t/(2 d·N)) each end in a division, which XLA:CPU never duplicates, so each is written once
+and the output passes stay short (benchmarks/SPEED.md, "A hand-written reverse rule"). A
+``custom_vjp`` has no forward mode, so ``trace(reverse_rule=True)`` is for callers that only
+take reverse-mode gradients; a hand-written ``custom_jvp`` of the same formulas (which keeps
+forward mode) measured 5-34 % slower than this rule, and not faster than JAX's own derivative
+of ``surface_step`` on a quiet machine. Rays invalid on
+entry or lost here pass their cotangents through unchanged, as in ``surface_step``; a ray
+grazing the surface (|d·N| below eps·|N|₁) gets no root derivative, as in
+``step.conic_root_arrays``.
+"""
+
+from __future__ import annotations
+
+import functools
+
+import jax
+import jax.numpy as jnp
+
+from ..optics.surfaces import Standard
+from .step import T_MAX, RayState, bounded_div, conic_root_arrays, refraction_gain, unmark
+
+
+def supported(surface, *, reflects=False, obscured=None, apertures=()) -> bool:
+    """Whether ``conic_step`` can take this surface (static): a ``Standard`` surface that is
+    not a mirror and has no obscuration or aperture."""
+    return type(surface) is Standard and not reflects and obscured is None and not apertures
+
+
+def _advance(first, refracts, params, p, d, valid, opl):
+    """((new p, new d, new valid, new opl), t, g): ``surface_step``'s operations, in order."""
+    c, k, sd, zv, n1, n2, bk = params
+    o = (p[0], p[1], p[2] - zv)
+    eps = jnp.finfo(o[2].dtype).eps
+    if first:
+        t_plane, _ = bounded_div(-o[2], d[2])
+        o1 = tuple(oi + t_plane * di for oi, di in zip(o, d, strict=True))
+        t_m = conic_root_arrays(False, c, k, *o1, *d, jnp.zeros_like(o[2])) + t_plane
+    else:
+        t_min = -1e3 * (eps * (1 + jnp.abs(o[2])))
+        t_min = jnp.where(bk, -T_MAX, t_min)
+        t_m = conic_root_arrays(True, c, k, *o, *d, t_min)
+    t, ok = unmark(t_m)
+    if not first:
+        ok = ok & ((t >= -1e3 * eps * (1 + jnp.abs(o[2]))) | bk)
+    x, y, z = (oi + t * di for oi, di in zip(o, d, strict=True))
+    rim = sd**2 * (1 + 64 * eps)
+    ok = ok & (x * x + y * y <= rim)
+    g = jnp.zeros((), t.dtype)
+    d_new = d
+    if refracts:
+        normal = (-c * x, -c * y, 1.0 - c * (1.0 + k) * z)
+        mu = n1 / n2
+        g, no_tir = unmark(refraction_gain(d, normal, mu))
+        d_new = tuple(jnp.where(no_tir, mu * di + g * ni, di)
+                      for di, ni in zip(d, normal, strict=True))
+        ok = ok & no_tir
+    v = valid & ok
+    keep = lambda new, old: jnp.where(v, new, old)  # noqa: E731
+    p2 = (keep(x, p[0]), keep(y, p[1]), keep(z + zv, p[2]))
+    d2 = tuple(keep(a, b) for a, b in zip(d_new, d, strict=True))
+    return (p2, d2, v, opl + jnp.where(v, n1 * t, 0.0)), t, g
+
+
+def _geometry(params, p, d, v, t):
+    """Point, normal N, d·N and where the root has a derivative (|d·N| > eps·|N|₁)."""
+    c, k, _, zv, _, _, _ = params
+    eps = jnp.finfo(p[0].dtype).eps
+    o = (p[0], p[1], p[2] - zv)
+    x = tuple(oi + t * di for oi, di in zip(o, d, strict=True))
+    N = (-c * x[0], -c * x[1], 1.0 - c * (1.0 + k) * x[2])
+    dn = d[0] * N[0] + d[1] * N[1] + d[2] * N[2]
+    good = v & (jnp.abs(dn) > eps * (jnp.abs(N[0]) + jnp.abs(N[1]) + jnp.abs(N[2])))
+    return x, N, dn, good
+
+
+def _sum_like(x, like):
+    """x summed over the axes that ``like`` (an index: a scalar or per ray) broadcast along."""
+    shape = jnp.shape(like)
+    x = jnp.sum(x, axis=tuple(range(x.ndim - len(shape))))
+    axes = tuple(i for i, (a, b) in enumerate(zip(x.shape, shape, strict=True)) if b == 1 != a)
+    return (jnp.sum(x, axis=axes, keepdims=True) if axes else x).astype(jnp.result_type(like))
+
+
+def _backward(refracts, params, p, d, v, t, g, cts):
+    """Cotangents of (params, p, d, valid, opl) from those of the outputs."""
+    c, k, sd, zv, n1, n2, _ = params
+    P, D, _, L = cts
+    (x, y, z), N, dn, good = _geometry(params, p, d, v, t)
+    ck = c * (1.0 + k)
+    mu = None
+    if refracts:
+        mu = n1 / n2
+        mu2 = mu * mu
+        nn = N[0] * N[0] + N[1] * N[1] + N[2] * N[2]
+        R = g * nn + mu * dn
+        bg = D[0] * N[0] + D[1] * N[1] + D[2] * N[2]
+        den = jnp.where(v, nn * R, 1.0)
+        # Each shared adjoint scalar ends in a division: written once (see the module notes).
+        b_dn = jnp.where(v, bg * (mu2 * dn - mu * R), 0.0) / den
+        b_nn = jnp.where(v, bg * (0.5 * (1.0 - mu2) - g * R), 0.0) / den
+        b_mu = jnp.where(v, bg * (-mu * (nn - dn * dn) - dn * R)
+                         + (D[0] * d[0] + D[1] * d[1] + D[2] * d[2]) * den, 0.0) / den
+        bN = tuple(g * Di + b_dn * di + 2.0 * b_nn * Ni for Di, di, Ni in zip(D, d, N,
+                                                                               strict=True))
+        bx = (P[0] - c * bN[0], P[1] - c * bN[1], P[2] - ck * bN[2])
+    else:
+        bx = P
+    b_t = n1 * L + bx[0] * d[0] + bx[1] * d[1] + bx[2] * d[2]
+    T = jnp.where(good, 0.5 * b_t, 0.0) / jnp.where(good, dn, 1.0)
+    bo = tuple(bxi - 2.0 * T * Ni for bxi, Ni in zip(bx, N, strict=True))
+    if refracts:
+        bd = tuple(mu * Di + b_dn * Ni + t * boi for Di, Ni, boi in zip(D, N, bo, strict=True))
+    else:
+        bd = tuple(Di + t * boi for Di, boi in zip(D, bo, strict=True))
+    out_p = tuple(jnp.where(v, a, b) for a, b in zip(bo, P, strict=True))
+    out_d = tuple(jnp.where(v, a, b) for a, b in zip(bd, D, strict=True))
+    r2 = x * x + y * y
+    if refracts:
+        bc = T * (r2 + (1.0 + k) * z * z) - (x * bN[0] + y * bN[1] + (1.0 + k) * z * bN[2])
+        bk_ = c * z * (T * z - bN[2])
+    else:
+        bc = T * (r2 + (1.0 + k) * z * z)
+        bk_ = T * (c * z * z)
+    # T and b_mu are zero on invalid rays already; so is P[2] − out_p[2] (the vertex's term).
+    s_c = _sum_like(jnp.where(v, bc, 0.0), c)
+    s_k = _sum_like(jnp.where(v, bk_, 0.0), k)
+    s_zv = _sum_like(P[2] - out_p[2], zv)
+    tl = jnp.where(v, t * L, 0.0)
+    if refracts:
+        g_n1 = _sum_like(b_mu / n2 + tl, n1)
+        g_n2 = _sum_like(-b_mu * (n1 / (n2 * n2)), n2)
+    else:
+        g_n1, g_n2 = _sum_like(tl, n1), jnp.zeros_like(n2)
+    return (s_c, s_k, jnp.zeros_like(sd), s_zv, g_n1, g_n2, None), out_p, out_d, None, L
+
+
+@functools.partial(jax.custom_vjp, nondiff_argnums=(0, 1))
+def reverse_step(first, refracts, params, p, d, valid, opl):
+    """(p, d, valid, opl) after the surface; ``params`` = (c, k, semi_diameter, z_vertex,
+    n_before, n_after, backward), ``backward`` where the ray may go back along its line.
+    Reverse mode only (``jvp``/``jacfwd`` raise a TypeError)."""
+    return _advance(first, refracts, params, p, d, valid, opl)[0]
+
+
+def _reverse_fwd(first, refracts, params, p, d, valid, opl):
+    out, t, g = _advance(first, refracts, params, p, d, valid, opl)
+    return out, (params, p, d, out[2], t, g)
+
+
+def _reverse_bwd(first, refracts, res, cts):
+    params, p, d, v, t, g = res
+    return _backward(refracts, params, p, d, v, t, g, cts)
+
+
+reverse_step.defvjp(_reverse_fwd, _reverse_bwd)
+
+
+def conic_step(surface, z_vertex, st: RayState, n_before, n_after, *, first, refracts,
+               gap=None) -> RayState:
+    """``surface_step`` on a ``supported`` surface (same arguments, same values), with the
+    hand-written reverse rule ``reverse_step`` (no forward mode)."""
+    backward = jnp.zeros((), bool)
+    if gap is not None and not first:  # as in surface_step (never a mirror here)
+        backward = (gap < 0) | ((gap == 0) & jnp.all(n_before == n_after))
+    params = (surface.c, surface.k, surface.semi_diameter, z_vertex, n_before, n_after,
+              backward)
+    p, d, v, opl = reverse_step(first, refracts, params, st.p, st.d, st.valid, st.opl)
+    return RayState(p, d, v, opl)

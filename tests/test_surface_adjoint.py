@@ -1,0 +1,185 @@
+"""The hand-written reverse rule of the conic surface step (``tracing.surface_adjoint``).
+
+``trace(reverse_rule=True)`` moves plane, sphere and conic surfaces with
+``surface_adjoint.conic_step``; the reference is the same trace with ``step.surface_step``
+everywhere (the default), whose derivative JAX takes itself. Values must be bit-identical,
+gradients equal to rounding, and forward mode must refuse the rule clearly.
+"""
+
+import equinox as eqx
+import jax
+import jax.numpy as jnp
+import numpy as np
+import pytest
+
+import jaxlens as jl
+from jaxlens.tracing import forward, surface_adjoint
+from jaxlens.tracing.step import RayState, state_from_rays, surface_step
+
+
+def _trace(lens, rays, reverse_rule, path=False):
+    """(origin, direction, valid, opl) on the image (every surface's if ``path``)."""
+    states = forward._trace_states(lens, rays, 6, None, keep_path=path, uniform=False,
+                                   reverse_rule=reverse_rule)
+    if path:
+        states = [jax.tree.map(lambda *x: jnp.stack(x), *states)]
+    st = states[-1]
+    return jnp.stack(st.p, -1), jnp.stack(st.d, -1), st.valid, st.opl
+
+
+def _folded():
+    """A singlet, a dummy plane 10 mm after it and a gap of -10 mm back (Zemax allows it)."""
+    bk7 = jl.get_material("N-BK7")
+    return jl.Lens(surfaces=(jl.Sphere(0.02), jl.Sphere(-0.02), jl.Plane()),
+                   thickness=jnp.array([5.0, 55.0, -10.0]),
+                   materials=(bk7, jl.Air(), jl.Air()), epd=10.0)
+
+
+def _rays(lens, n, scale, seed=0, per_ray_wl=False):
+    """Rays over ``scale`` × the pupil at 80 % field (scale > 1: some are clipped), with
+    some invalid on entry; per-ray wavelengths if asked."""
+    pupil = scale * jl.sampling.pupil_random(jax.random.PRNGKey(seed), n, jnp.float64)
+    r = jl.sampling.collimated(lens, 0.8 * float(lens.fields[-1]), pupil)
+    wl = jnp.linspace(0.49, 0.65, n) if per_ray_wl else r.wavelength
+    return jl.Rays(r.origin, r.direction, wl, jnp.arange(n) % 11 != 5)
+
+
+CASES = {
+    "cooke": lambda: jl.zoo.cooke_triplet(),
+    "double_gauss": lambda: jl.zoo.double_gauss(),
+    "folded": _folded,
+}
+
+
+def _loss(out):
+    """Spot size, direction and optical path of the valid rays: every output leaf counts."""
+    o, d, v, opl = out
+    w = v.astype(o.dtype)
+    nv = jnp.sum(w)
+    c = jnp.sum(w[:, None] * o[:, :2], 0) / nv
+    spot = jnp.sum(w * jnp.sum((o[:, :2] - c) ** 2, -1)) / nv
+    return spot + jnp.sum(w * (d[:, 0] + 0.3 * d[:, 1])) / nv + 1e-3 * jnp.sum(w * opl) / nv
+
+
+@pytest.fixture(scope="module")
+def compiled():
+    """One compiled trace, path and value-and-gradient per setting of ``reverse_rule``."""
+    fns = {}
+    for hand in (True, False):
+        fns["trace", hand] = jax.jit(lambda lens, rays, h=hand: _trace(lens, rays, h))
+        fns["path", hand] = jax.jit(lambda lens, rays, h=hand: _trace(lens, rays, h, True))
+        fns["grad", hand] = jax.jit(jax.value_and_grad(
+            lambda lens, rays, h=hand: _loss(_trace(lens, rays, h))))
+    return fns
+
+
+@pytest.mark.parametrize("case, scale, per_ray_wl", [
+    ("cooke", 1.3, True), ("double_gauss", 0.999, False), ("folded", 1.2, False)])
+def test_values_and_gradients_match_the_library_step(compiled, case, scale,
+                                                                per_ray_wl):
+    lens = CASES[case]()
+    rays = _rays(lens, 257, scale, per_ray_wl=per_ray_wl)
+    for kind in ("trace", "path"):
+        new, old = compiled[kind, True](lens, rays), compiled[kind, False](lens, rays)
+        for a, b in zip(new, old, strict=True):
+            np.testing.assert_array_equal(np.asarray(a), np.asarray(b))
+    v = np.asarray(compiled["trace", True](lens, rays)[2])
+    assert 0 < v.sum() < v.size  # some rays are lost (on entry at least)
+    (ln, gn), (lo, go) = compiled["grad", True](lens, rays), compiled["grad", False](lens, rays)
+    assert float(ln) == pytest.approx(float(lo), rel=1e-14)  # fused differently under AD
+    checked = 0
+    # Each leaf to 1e-10 of its largest entry; leaves that are rounding noise (a flat
+    # surface's k, say, ~1e-18) to 1e-14 of the largest gradient.
+    top = max(float(np.max(np.abs(b), initial=0.0)) for b in jax.tree.leaves(go))
+    for a, b in zip(jax.tree.leaves(gn), jax.tree.leaves(go), strict=True):
+        a, b = np.asarray(a), np.asarray(b)
+        scl = float(np.max(np.abs(b), initial=0.0))
+        np.testing.assert_allclose(a, b, rtol=0, atol=1e-10 * scl + 1e-14 * top)
+        checked += bool(np.any(b != 0))
+    assert checked >= 5
+
+
+def test_public_entry_points_and_forward_mode():
+    """grad through ``trace(reverse_rule=True)`` (chunked) equals the default's; the path of
+    ``trace_path(uniform=True, reverse_rule=True)`` (the design loss's trace) is identical;
+    jvp refuses the rule with a TypeError, and the default trace keeps forward mode."""
+    lens = jl.zoo.cooke_triplet()
+    rays = _rays(lens, 200, 1.1)
+
+    def loss(L, rr):
+        out = jl.trace(L, rays, chunk=64, reverse_rule=rr)
+        return jnp.sum(jnp.where(out.valid, out.origin[:, 1] ** 2 + out.opl, 0.0))
+
+    g, g_ref = jax.grad(loss)(lens, True), jax.grad(loss)(lens, False)
+    for a, b in zip(jax.tree.leaves(g), jax.tree.leaves(g_ref), strict=True):
+        np.testing.assert_allclose(a, b, rtol=1e-10, atol=1e-12)
+    path = jl.trace_path(lens, rays, uniform=True, reverse_rule=True)
+    ref = jl.trace_path(lens, rays, uniform=True)
+    for a, b in zip(jax.tree.leaves(path), jax.tree.leaves(ref), strict=True):
+        np.testing.assert_array_equal(a, b)
+
+    def curv(c, rr):
+        L = eqx.tree_at(lambda x: x.surfaces[2].c, lens, c)
+        return jl.trace(L, rays, reverse_rule=rr).origin[:, :2]
+
+    c0 = lens.surfaces[2].c
+    assert np.all(np.isfinite(jax.jacfwd(curv)(c0, False)))
+    with pytest.raises(TypeError, match="custom_vjp"):
+        jax.jvp(lambda c: curv(c, True), (c0,), (jnp.ones_like(c0),))
+    with pytest.raises(TypeError, match="reverse_rule must be True or False"):
+        jl.trace(lens, rays, reverse_rule="yes")
+
+
+def test_gradient_matches_central_differences():
+    lens = _folded()
+    rays = _rays(lens, 300, 1.2)
+    fn = jax.jit(lambda L: _loss(_trace(L, rays, True)))
+    g = jax.grad(fn)(lens)
+    for get, j, h in ((lambda L: L.surfaces[0].c, None, 1e-7),
+                      (lambda L: L.surfaces[1].c, None, 1e-7),
+                      (lambda L: L.thickness, 0, 1e-6),
+                      (lambda L: L.thickness, 1, 1e-6)):
+        def at(dx, get=get, j=j):
+            new = get(lens) + dx if j is None else get(lens).at[j].add(dx)
+            return float(fn(eqx.tree_at(get, lens, new)))
+
+        fd = (at(h) - at(-h)) / (2 * h)
+        ad = float(get(g) if j is None else get(g)[j])
+        assert ad == pytest.approx(fd, rel=2e-6, abs=1e-9)
+
+
+def _floats(st):
+    return [x for x in jax.tree.leaves(st) if x.dtype != bool]
+
+
+@pytest.mark.parametrize("first, refracts", [(True, True), (False, True), (False, False)])
+def test_one_step_equals_surface_step(first, refracts):
+    """The step alone, including a ray behind a negative gap, a clipped one and TIR."""
+    glass = jl.ModelGlass(1.5, 60.0)
+    surface = jl.Conic(-0.04, -0.5, semi_diameter=6.0)
+    o = jnp.array([[0.0, 0.0, -3.0], [0.3, 1.0, 2.0], [0.0, 7.0, -1.0], [0.0, 5.9, -1.0]])
+    d = jnp.array([[0.0, 0.0, 1.0], [0.0, 0.6, 0.8], [0.0, 0.0, 1.0], [0.0, 0.8, 0.6]])
+    st = state_from_rays(jl.Rays(o, d, 0.55))
+    n1, n2 = glass.index(0.55), jnp.asarray(1.0)
+    assert surface_adjoint.supported(surface)
+    assert not surface_adjoint.supported(surface, reflects=True)
+    assert not surface_adjoint.supported(jl.EvenAsphere(c=0.01))
+
+    def both(c, z, gap):
+        s = eqx.tree_at(lambda x: x.c, surface, c)
+        kw = dict(first=first, refracts=refracts, gap=None if first else gap)
+        a = surface_adjoint.conic_step(s, z, st, n1, n2, **kw)
+        b = surface_step(s, z, st, n1, n2, newton_iters=6, **kw)
+        return a, b
+
+    for gap in (jnp.asarray(-4.0), jnp.asarray(2.0)):
+        a, b = both(surface.c, jnp.asarray(1.0), gap)
+        assert isinstance(a, RayState)
+        for x, y in zip(jax.tree.leaves(a), jax.tree.leaves(b), strict=True):
+            np.testing.assert_array_equal(x, y)
+        ja = jax.jacrev(lambda c, z, gap=gap: _floats(both(c, z, gap)[0]),
+                        argnums=(0, 1))(surface.c, jnp.asarray(1.0))
+        jb = jax.jacrev(lambda c, z, gap=gap: _floats(both(c, z, gap)[1]),
+                        argnums=(0, 1))(surface.c, jnp.asarray(1.0))
+        for x, y in zip(jax.tree.leaves(ja), jax.tree.leaves(jb), strict=True):
+            np.testing.assert_allclose(x, y, rtol=1e-12, atol=1e-13)
