@@ -36,6 +36,7 @@ This rule is in the library since 2026-11-27: ``jaxlens.tracing.surface_adjoint`
     python -m benchmarks.vjp_probe --check            # values and gradients (float64), FD
     python -m benchmarks.vjp_probe --save tg --chunk 8192 65536 --old-chunk 8192 --repeats 9
     python -m benchmarks.vjp_probe --fusions --save tg --split 0 1 --chunk 8192
+    python -m benchmarks.vjp_probe --save --library-rule --repeats 9   # the library's rule
 """
 
 from __future__ import annotations
@@ -364,11 +365,11 @@ def _loss_new(lens, rays, **kw):
     return throughput.spot_loss(p[:, :2], v)
 
 
-def fns(old_chunk="auto", **kw):
+def fns(old_chunk="auto", reverse_rule=False, **kw):
     fwd_old = eqx.filter_jit(lambda lens, rays: jaxlens.trace(lens, rays, chunk=old_chunk))
 
     def loss_old(lens, rays):
-        out = jaxlens.trace(lens, rays, chunk=old_chunk)
+        out = jaxlens.trace(lens, rays, chunk=old_chunk, reverse_rule=reverse_rule)
         return throughput.spot_loss(out.origin[:, :2], out.valid)
 
     fwd_new = eqx.filter_jit(lambda lens, rays: trace_new(lens, rays, **kw))
@@ -512,17 +513,21 @@ def timing(n=1_000_000, repeats=7, variants=({},), dtype=jnp.float32):
     rays = throughput.make_rays(lens, n, dtype)
     dname = jnp.dtype(dtype).name
     fs = {}
+    fo, _, go, _ = fns()
+    fs["old"] = (fo, go)
     for i, var in enumerate(variants):
-        if var.get("old"):  # jaxlens.trace with another chunk
+        if var.get("library"):  # the library's own rule: jaxlens.trace(reverse_rule=True)
+            fo, _, go, _ = fns(reverse_rule=True)
+            name = "jaxlens.trace reverse_rule=True"
+            fs[name] = (fo, go)
+        elif var.get("old"):  # jaxlens.trace with another chunk
             fo, _, go, _ = fns(old_chunk=var["chunk"])
             name = f"old chunk={var['chunk']}"
             fs[name] = (fo, go)
         else:
             kw = {k: v for k, v in var.items() if k not in OPTS}
             OPTS.update({k: v for k, v in var.items() if k in OPTS})
-            fo, fn, go, gn = fns(**kw)
-            if "old" not in fs:
-                fs["old"] = (fo, go)
+            _, fn, _, gn = fns(**kw)
             name = f"new {var}"
             fs[name] = (fn, gn)
         for f in fs[name] + (fs["old"] if i == 0 else ()):  # trace, compile, warm
@@ -576,6 +581,9 @@ def main(argv=None):
                     help="largest chunk of the new trace (jaxlens.trace keeps its default)")
     ap.add_argument("--old-chunk", nargs="*", type=int, default=[],
                     help="also time jaxlens.trace with these chunks")
+    ap.add_argument("--library-rule", action="store_true",
+                    help="also time jaxlens.trace(reverse_rule=True), the rule in the library "
+                         "(give --save with no value to time only it against jaxlens.trace)")
     ap.add_argument("--split", nargs="*", type=int, default=[1],
                     help="0: _backward; 1: _backward_split (adjoint scalars as divisions); "
                          "2: the same with one division and an optimization barrier")
@@ -588,6 +596,7 @@ def main(argv=None):
                 for sp in a.split]
     variants = [dict(v, chunk=c) if c != CHUNK else v for v in variants for c in a.chunk]
     variants += [dict(old=True, chunk=c) for c in a.old_chunk]
+    variants += [dict(library=True)] if a.library_rule else []
     if a.fusions:
         for var in variants:
             print(var)

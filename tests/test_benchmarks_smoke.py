@@ -222,9 +222,9 @@ def test_vjp_probe_smoke():
 
     from benchmarks import vjp_probe
 
-    out = vjp_probe.timing(2048, 1, [dict(chunk=512)], dtype=jnp.float64)
-    new = out["new {'chunk': 512}"]
-    assert new["same_values"] and out["old"]["same_values"]
-    assert new["grad_rel"] < 1e-10 and out["old"]["grad_rel"] == 0
+    out = vjp_probe.timing(2048, 1, [dict(chunk=512), dict(library=True)], dtype=jnp.float64)
+    new, lib = out["new {'chunk': 512}"], out["jaxlens.trace reverse_rule=True"]
+    assert new["same_values"] and out["old"]["same_values"] and lib["same_values"]
+    assert new["grad_rel"] < 1e-10 and lib["grad_rel"] < 1e-10 and out["old"]["grad_rel"] == 0
     for r in out.values():
         assert all(math.isfinite(r[k]) and r[k] > 0 for k in ("forward_ms", "grad_ms"))
