@@ -181,9 +181,8 @@ def test_one_step_equals_surface_step(first, refracts):
         assert isinstance(a, RayState)
         for x, y in zip(jax.tree.leaves(a), jax.tree.leaves(b), strict=True):
             np.testing.assert_array_equal(x, y)
-        ja = jax.jacrev(lambda c, z, gap=gap: _floats(both(c, z, gap)[0]),
-                        argnums=(0, 1))(surface.c, jnp.asarray(1.0))
-        jb = jax.jacrev(lambda c, z, gap=gap: _floats(both(c, z, gap)[1]),
-                        argnums=(0, 1))(surface.c, jnp.asarray(1.0))
+        ja, jb = jax.jit(jax.jacrev(lambda c, z, gap=gap: (_floats(both(c, z, gap)[0]),
+                                                           _floats(both(c, z, gap)[1])),
+                                    argnums=(0, 1)))(surface.c, jnp.asarray(1.0))
         for x, y in zip(jax.tree.leaves(ja), jax.tree.leaves(jb), strict=True):
             np.testing.assert_allclose(x, y, rtol=1e-12, atol=1e-13)
