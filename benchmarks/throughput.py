@@ -34,10 +34,12 @@ from . import common, optiland_ref
 LENSES = ("cooke_triplet", "double_gauss", "cellphone6")
 
 
-def make_rays(lens: jaxlens.Lens, n: int, dtype, seed: int = 0) -> jaxlens.Rays:
-    """``n`` rays uniform over the pupil at 70 % of the largest field, primary wavelength."""
+def make_rays(lens: jaxlens.Lens, n: int, dtype, seed: int = 0,
+              pupil_scale: float = 0.999) -> jaxlens.Rays:
+    """``n`` rays uniform over the pupil at 70 % of the largest field, primary wavelength
+    (over ``pupil_scale`` times the entrance pupil; above 1, some rays are clipped)."""
     lens64 = lens.astype(jnp.float64)
-    pupil = 0.999 * sampling.pupil_random(jax.random.PRNGKey(seed), n, jnp.float64)
+    pupil = pupil_scale * sampling.pupil_random(jax.random.PRNGKey(seed), n, jnp.float64)
     field = 0.7 * float(lens.fields[-1])
     r = sampling.collimated(lens64, field, pupil)
     return jaxlens.Rays(

@@ -214,17 +214,20 @@ def test_grad_levers_smoke():
     assert math.isfinite(rows[0]["ratio"]) and 0 < rows[0]["ratio"] < 2
 
 
-def test_vjp_probe_smoke():
-    """The custom_vjp surface-step probe against jaxlens.trace, float64, on 2048 rays in
-    chunks of 512 (its chunked, checkpointed path): forward values bit-identical, value and
-    gradient equal to rounding, and both timed."""
-    import jax.numpy as jnp
+def test_vjp_probe_smoke(tmp_path):
+    """The reverse-rule probe from its command line, float64 rays, 2048 in chunks of 512 (the
+    chunked, checkpointed path): the three programs timed, the rule's value and gradient equal
+    to JAX's to rounding, the JSON file written with its command."""
+    import json
 
     from benchmarks import vjp_probe
 
-    out = vjp_probe.timing(2048, 1, [dict(chunk=512), dict(library=True)], dtype=jnp.float64)
-    new, lib = out["new {'chunk': 512}"], out["jaxlens.trace reverse_rule=True"]
-    assert new["same_values"] and out["old"]["same_values"] and lib["same_values"]
-    assert new["grad_rel"] < 1e-10 and lib["grad_rel"] < 1e-10 and out["old"]["grad_rel"] == 0
-    for r in out.values():
-        assert all(math.isfinite(r[k]) and r[k] > 0 for k in ("forward_ms", "grad_ms"))
+    path = tmp_path / "probe.json"
+    vjp_probe.main(["--rays", "2048", "--repeats", "1", "--chunk", "512", "--dtype", "float64",
+                    "--json", str(path)])
+    out = json.loads(path.read_text())
+    assert out["rays"] == 2048 and "--json" in out["command"]
+    assert len(out["programs"]) == 3
+    assert all(math.isfinite(r["ms"]) and r["ms"] > 0 for r in out["programs"].values())
+    row = out["chunks"]["512"]
+    assert row["rule_grad_rel"] < 1e-10 and 0 < row["forward_over_fg_rule"] < 5

@@ -4,7 +4,7 @@
 intersecting) ``Standard`` surface (plane, sphere, conic) that is not a mirror and has no
 obscuration or aperture. Its values are ``surface_step``'s bit for bit (the same operations
 from ``step``, in the same order); its derivative (``reverse_step``, a ``jax.custom_vjp``,
-the rule of benchmarks/vjp_probe.py) is written out by hand from the saved root ``t`` and
+first prototyped in benchmarks/vjp_probe.py) is written out by hand from the saved root ``t`` and
 refraction gain ``g``:
 
     t     implicit conic root, F(o + t d) = 0 with F = c(x² + y²) + c(1+k)z² − 2z; ∇F = −2N
