@@ -186,3 +186,34 @@ def test_one_step_equals_surface_step(first, refracts):
                                     argnums=(0, 1)))(surface.c, jnp.asarray(1.0))
         for x, y in zip(jax.tree.leaves(ja), jax.tree.leaves(jb), strict=True):
             np.testing.assert_allclose(x, y, rtol=1e-12, atol=1e-13)
+
+
+def test_a_ray_at_the_critical_angle_has_finite_equal_gradients():
+    """A ray leaving glass of index 1.25 through a plane at exactly the critical angle
+    (direction (0, 0.8, 0.6): nn − mu²(nn − dn²) = 0 in floating point). The square root's
+    slope is infinite there; both steps take it as zero, so the gradients are finite and
+    agree. Op by op (no jit), so no fused multiply-add moves the ray off the critical angle."""
+    plane = jl.Plane()
+    o = jnp.array([[0.0, 0.0, -1.0]])
+    d = jnp.array([[0.0, 0.8, 0.6]])
+    n2 = jnp.asarray(1.0)
+
+    def out(step, d, n1):
+        st = state_from_rays(jl.Rays(o, d, 0.55))
+        kw = dict(first=False, refracts=True, gap=jnp.asarray(1.0))
+        if step is surface_step:
+            kw["newton_iters"] = 6
+        new = step(plane, jnp.asarray(0.0), st, n1, n2, **kw)
+        return jnp.stack(new.d, -1), new.opl
+
+    with jax.disable_jit():
+        n1 = jnp.asarray(1.25)
+        (d_out, _), (d_ref, _) = out(surface_adjoint.conic_step, d, n1), out(surface_step, d, n1)
+        np.testing.assert_array_equal(d_out, d_ref)
+        assert float(d_ref[0, 2]) == 0.0  # refracted along the surface: the critical angle
+        jac = {s: jax.jacrev(lambda d, n1, s=s: out(s, d, n1), argnums=(0, 1))(d, n1)
+               for s in (surface_adjoint.conic_step, surface_step)}
+    for a, b in zip(jax.tree.leaves(jac[surface_adjoint.conic_step]),
+                    jax.tree.leaves(jac[surface_step]), strict=True):
+        assert np.all(np.isfinite(a)) and np.all(np.isfinite(b))
+        np.testing.assert_allclose(a, b, rtol=1e-12, atol=1e-13)

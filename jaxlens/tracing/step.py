@@ -276,7 +276,10 @@ def refraction_gain(d, normal, mu):
     dn = d[0] * normal[0] + d[1] * normal[1] + d[2] * normal[2]
     k = nn - mu * mu * (nn - dn * dn)
     ok = (k >= 0) & (nn > 0)
-    root = jnp.sqrt(jnp.where(ok, k, 1.0))
+    # At the critical angle (k = 0) the square root's slope is infinite: there the root is a
+    # constant 0, so no 0·inf reaches a gradient (the slope is taken one-sided, as zero).
+    above = ok & (k > 0)
+    root = jnp.where(above, jnp.sqrt(jnp.where(above, k, 1.0)), 0.0)
     g = jnp.where(dn < 0, -root, root) - mu * dn
     return jnp.where(ok, g, MISS) / jnp.where(ok, nn, 1.0)
 

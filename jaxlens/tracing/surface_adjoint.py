@@ -109,12 +109,18 @@ def _backward(refracts, params, p, d, v, t, g, cts):
         mu2 = mu * mu
         nn = N[0] * N[0] + N[1] * N[1] + N[2] * N[2]
         R = g * nn + mu * dn
+        # At the critical angle (R = 0, rebuilt to within rounding of mu·dn) the root's
+        # slope, carried by the 1/R terms, is taken as zero, as in step.refraction_gain:
+        # m drops those terms and R is replaced by 1.
+        critical = jnp.abs(R) <= 4 * jnp.finfo(R.dtype).eps * jnp.abs(mu * dn)
+        m = jnp.where(critical, 0.0, 1.0).astype(R.dtype)
+        R = jnp.where(critical, 1.0, R)
         bg = D[0] * N[0] + D[1] * N[1] + D[2] * N[2]
         den = jnp.where(v, nn * R, 1.0)
         # Each shared adjoint scalar ends in a division: written once (see the module notes).
-        b_dn = jnp.where(v, bg * (mu2 * dn - mu * R), 0.0) / den
-        b_nn = jnp.where(v, bg * (0.5 * (1.0 - mu2) - g * R), 0.0) / den
-        b_mu = jnp.where(v, bg * (-mu * (nn - dn * dn) - dn * R)
+        b_dn = jnp.where(v, bg * (m * mu2 * dn - mu * R), 0.0) / den
+        b_nn = jnp.where(v, bg * (m * 0.5 * (1.0 - mu2) - g * R), 0.0) / den
+        b_mu = jnp.where(v, bg * (-m * mu * (nn - dn * dn) - dn * R)
                          + (D[0] * d[0] + D[1] * d[1] + D[2] * d[2]) * den, 0.0) / den
         bN = tuple(g * Di + b_dn * di + 2.0 * b_nn * Ni for Di, di, Ni in zip(D, d, N,
                                                                                strict=True))
