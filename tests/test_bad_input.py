@@ -419,6 +419,45 @@ def test_cli_refuses_an_earlier_run_without_overwrite(tmp_path):
         assert (out / "summary.json").read_text() == "{}"
 
 
+def test_ablation_refuses_to_replace_a_column_or_write_into_a_file(tmp_path, capsys):
+    """Columns run separately share ``--ablation-out``: a column already there is kept unless
+    ``--overwrite`` is given, and a file as the folder is refused, both before any work."""
+    from jaxlens.experiments import classical
+
+    out = tmp_path / "ablation"
+    (out / "columns").mkdir(parents=True)
+    earlier = out / "columns" / "plus_recipe.json"
+    earlier.write_text("{}")
+    common = ["--ablation", "--smoke", "--ablation-seeds", "1", "--quiet", "--devices", "1"]
+    t0 = time.perf_counter()
+    assert classical.main(common + ["--columns", "+both,+recipe", "--ablation-out",
+                                    str(out)]) == 2
+    err = capsys.readouterr().err
+    assert "holds the column(s) +recipe of an earlier run" in err and "--overwrite" in err
+    assert earlier.read_text() == "{}"
+    (tmp_path / "file").write_text("x")
+    assert classical.main(common + ["--ablation-out", str(tmp_path / "file")]) == 2
+    assert "is a file, not a folder" in capsys.readouterr().err
+    assert time.perf_counter() - t0 < 10
+
+
+def test_an_out_folder_the_file_system_refuses_is_one_line(tmp_path, capsys, monkeypatch):
+    """``--out`` whose temporary folder cannot be made when the run starts (e.g. under /proc,
+    which passes the writability check) is a one-line error, not a traceback."""
+    import tempfile
+
+    from jaxlens.experiments import classical
+
+    def refuse(*a, **k):
+        raise FileNotFoundError(2, "No such file or directory")
+
+    monkeypatch.setattr(tempfile, "mkdtemp", refuse)
+    assert classical.main(["--smoke", "--quiet", "--devices", "1", "--out",
+                           str(tmp_path / "run")]) == 2
+    err = capsys.readouterr().err.strip().splitlines()
+    assert len(err) == 1 and "cannot write there" in err[0], err
+
+
 @pytest.mark.parametrize("args, match", [
     (["--steps", "0"], r"--steps must be a whole number in \[1, inf\), got 0"),
     (["--kernel", "8"], r"--kernel must be an odd whole number"),

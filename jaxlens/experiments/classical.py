@@ -47,7 +47,7 @@ import shlex
 import sys
 import time
 
-from jaxlens.experiments.runfolder import OneLineParser, RunFolder, fail
+from jaxlens.experiments.runfolder import OneLineParser, RunFolder, UsageError, fail
 from jaxlens.optics import checks
 
 # Recipes of a single design run (--recipe): the paper's method as in Table 1's +both+mask
@@ -173,7 +173,8 @@ def build_parser() -> argparse.ArgumentParser:
     o = p.add_argument_group("output")
     o.add_argument("--out", default="runs/classical", help="output folder")
     o.add_argument("--overwrite", action="store_true",
-                   help="replace an earlier run in --out (default: refuse)")
+                   help="replace an earlier run in --out, or with --ablation the columns "
+                        "already in --ablation-out (default: refuse)")
     o.add_argument("--no-plots", action="store_true", help="skip figures and rendering")
     o.add_argument("--no-render", action="store_true", help="skip the rendered test scene")
     o.add_argument("--tolerance-trials", type=int, default=200,
@@ -619,8 +620,7 @@ def run_ablation(args, argv) -> dict:
         print(f"{name}: no self-intersection {col['no_self_intersection_percent']:.0f} %, valid "
               f"{col['valid_percent']:.0f} %, RMS mean {col['rms_mean_um']} µm, min "
               f"{col['rms_min_um']} µm, {col['seconds_per_design']:.1f} s/design", flush=True)
-        fname = name.replace("+", "plus_").strip("_") or "baseline"
-        with open(os.path.join(out, "columns", f"{fname}.json"), "w") as f:
+        with open(column_file(out, name), "w") as f:
             json.dump(col, f, indent=2, default=float)
         build_table(out, spec)
     return build_table(out, spec)
@@ -698,6 +698,34 @@ def _write_table_md(table: dict, path: str) -> None:
         f.write("\n".join(lines))
 
 
+def column_file(out: str, name: str) -> str:
+    """The JSON file of ablation column ``name`` in the ablation folder ``out``."""
+    stem = name.replace("+", "plus_").strip("_") or "baseline"
+    return os.path.join(out, "columns", f"{stem}.json")
+
+
+def check_ablation_out(args) -> None:
+    """Refuse an unusable ``--ablation-out``, or one that holds a column this run would
+    replace (unless ``--overwrite``): columns run separately share the folder and its table,
+    so a column already there is kept unless asked."""
+    out = os.path.abspath(args.ablation_out)
+    if os.path.exists(out) and not os.path.isdir(out):
+        raise UsageError(f"--ablation-out {args.ablation_out} is a file, not a folder")
+    base = out
+    while not os.path.exists(base):
+        base = os.path.dirname(base)
+    if not os.access(base, os.W_OK | os.X_OK):
+        raise UsageError(f"--ablation-out {args.ablation_out}: cannot create or write there "
+                         f"({base} is not a writable folder)")
+    wanted = ([c.strip() for c in args.columns.split(",")] if args.columns
+              else [c for c, _ in ABLATION_COLUMNS])
+    there = [c for c in wanted if os.path.exists(column_file(out, c))]
+    if there and not args.overwrite:
+        raise UsageError(f"--ablation-out {args.ablation_out} holds the column(s) "
+                         f"{', '.join(there)} of an earlier run; give --overwrite to replace "
+                         f"them, or choose another folder")
+
+
 def main(argv: list[str] | None = None) -> int:
     argv = sys.argv[1:] if argv is None else list(argv)
     parser = build_parser()
@@ -708,17 +736,22 @@ def main(argv: list[str] | None = None) -> int:
         check_args(args)
         _ensure_devices(args.devices)
         spec_from_args(args)
-        if not args.ablation:
+        if args.ablation:
+            check_ablation_out(args)
+        else:
             RunFolder(args.out, overwrite=args.overwrite)
     except ValueError as e:
         return fail(parser.prog, e)
     import jax
 
     jax.config.update("jax_enable_x64", True)
-    if args.ablation:
-        run_ablation(args, argv)
-    else:
-        run_design(args, argv)
+    try:
+        if args.ablation:
+            run_ablation(args, argv)
+        else:
+            run_design(args, argv)
+    except UsageError as e:  # e.g. --out refused by the file system when the run starts
+        return fail(parser.prog, e)
     return 0
 
 
