@@ -162,6 +162,24 @@ def test_design_command_smoke(tmp_path):
     assert "--smoke" in (tmp_path / "base_lens_command.txt").read_text()
 
 
+def test_design_command_refuses_to_replace_a_lens_or_record(tmp_path, capsys):
+    """Before any design work: an existing --out (by default the lens jaxlens ships) or
+    record file is kept unless --overwrite is given, and a folder as --out is refused."""
+    out = tmp_path / "lens.json"
+    out.write_text("{}")
+    for args, words in ((["--out", str(out)], "--overwrite"),
+                        (["--out", str(tmp_path / "new.json")], "base_lens.json"),
+                        (["--out", str(tmp_path)], "is a folder")):
+        (tmp_path / "base_lens.json").write_text("{}")
+        with pytest.raises(SystemExit) as e:
+            D.main(["--smoke", "--seeds", "0", "--record-dir", str(tmp_path), "--quiet",
+                    *args])
+        assert e.value.code == 2
+        err = capsys.readouterr().err.strip().splitlines()
+        assert len(err) == 1 and words in err[0], err
+    assert out.read_text() == "{}" and not (tmp_path / "new.json").exists()
+
+
 def test_image_mapping_puts_the_full_field_on_the_sensor_corner():
     spec = D.classical_spec(n_elements=4)
     f, k = spec.image_mapping()

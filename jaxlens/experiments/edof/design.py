@@ -397,12 +397,13 @@ def main(argv=None) -> None:
     import sys
 
     from ... import plot, save
+    from ..runfolder import OneLineParser
 
     here = os.path.join(
         os.path.dirname(os.path.dirname(os.path.dirname(__file__))), "data", "lenses",
         "edof_classical.json",
     )
-    p = argparse.ArgumentParser(
+    p = OneLineParser(
         prog="python -m jaxlens.experiments.edof.design",
         description=__doc__,
         formatter_class=argparse.RawDescriptionHelpFormatter,
@@ -421,7 +422,19 @@ def main(argv=None) -> None:
     p.add_argument("--smoke", action="store_true",
                    help="a tiny recipe and a coarse refocus (checks the command runs)")
     p.add_argument("--quiet", action="store_true")
+    p.add_argument("--overwrite", action="store_true",
+                   help="replace an existing --out lens and record in --record-dir (default: "
+                        "refuse; the default --out is the lens jaxlens ships)")
     a = p.parse_args(argv)
+    # Refused before the design (minutes): the defaults are the shipped lens and its record.
+    record_files = ("base_lens.json", "base_lens_spots.png", "base_lens_command.txt")
+    if os.path.isdir(a.out):
+        p.error(f"--out {a.out} is a folder; give the lens file's path (.json or .zmx)")
+    there = [x for x in (a.out, *(os.path.join(a.record_dir, n) for n in record_files))
+             if os.path.exists(x)]
+    if there and not a.overwrite:
+        p.error(f"{', '.join(there)} already exist(s); give --overwrite to replace them, or "
+                f"choose --out and --record-dir")
     try:
         seeds = [int(s) for s in a.seeds.split(",") if s.strip()]
     except ValueError:
