@@ -4,18 +4,6 @@ import os
 
 os.environ.setdefault("XLA_FLAGS", "--xla_force_host_platform_device_count=4")
 
-# Many test files compile the same programs (designs, PSFs, the experiments' steps), and the
-# files run in two worker processes that drop their compiled programs after each file: JAX's
-# persistent compilation cache, in a folder made for this test run (the first process to load
-# this file makes it; the xdist workers and the tests' subprocesses inherit it), compiles
-# each such program once. Values are those of a fresh compile (the same executable).
-if "JAX_COMPILATION_CACHE_DIR" not in os.environ:
-    import tempfile
-
-    os.environ["JAX_COMPILATION_CACHE_DIR"] = tempfile.mkdtemp(prefix="jaxlens-tests-jax-")
-    os.environ["JAXLENS_TESTS_OWN_CACHE"] = str(os.getpid())
-    os.environ.setdefault("JAX_PERSISTENT_CACHE_MIN_COMPILE_TIME_SECS", "0.5")
-
 import jax  # noqa: E402
 
 jax.config.update("jax_enable_x64", True)
@@ -56,11 +44,3 @@ def _release_compiled_programs():
 
     jax.clear_caches()
     gc.collect()
-
-
-def pytest_sessionfinish(session, exitstatus):
-    """Remove the test run's compilation cache (in the process that made it)."""
-    if os.environ.get("JAXLENS_TESTS_OWN_CACHE") == str(os.getpid()):
-        import shutil
-
-        shutil.rmtree(os.environ["JAX_COMPILATION_CACHE_DIR"], ignore_errors=True)
