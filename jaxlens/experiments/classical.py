@@ -47,7 +47,13 @@ import shlex
 import sys
 import time
 
-from jaxlens.experiments.runfolder import OneLineParser, RunFolder, UsageError, fail
+from jaxlens.experiments.runfolder import (
+    OneLineParser,
+    RunFolder,
+    UsageError,
+    check_writable,
+    fail,
+)
 from jaxlens.optics import checks
 
 # Recipes of a single design run (--recipe): the paper's method as in Table 1's +both+mask
@@ -567,7 +573,7 @@ def run_ablation(args, argv) -> dict:
     out = args.ablation_out
     os.makedirs(os.path.join(out, "columns"), exist_ok=True)
     names = [c for c, _ in ABLATION_COLUMNS]
-    wanted = names if not args.columns else [c.strip() for c in args.columns.split(",")]
+    wanted = wanted_columns(args)
     unknown = [c for c in wanted if c not in names]
     if unknown:
         raise ValueError(f"--columns: unknown column(s) {unknown}; use {names}")
@@ -698,6 +704,13 @@ def _write_table_md(table: dict, path: str) -> None:
         f.write("\n".join(lines))
 
 
+def wanted_columns(args) -> list[str]:
+    """The ablation columns this run designs, in the order asked for (all by default)."""
+    if not args.columns:
+        return [c for c, _ in ABLATION_COLUMNS]
+    return [c.strip() for c in args.columns.split(",")]
+
+
 def column_file(out: str, name: str) -> str:
     """The JSON file of ablation column ``name`` in the ablation folder ``out``."""
     stem = name.replace("+", "plus_").strip("_") or "baseline"
@@ -708,18 +721,11 @@ def check_ablation_out(args) -> None:
     """Refuse an unusable ``--ablation-out``, or one that holds a column this run would
     replace (unless ``--overwrite``): columns run separately share the folder and its table,
     so a column already there is kept unless asked."""
-    out = os.path.abspath(args.ablation_out)
+    out = args.ablation_out
     if os.path.exists(out) and not os.path.isdir(out):
-        raise UsageError(f"--ablation-out {args.ablation_out} is a file, not a folder")
-    base = out
-    while not os.path.exists(base):
-        base = os.path.dirname(base)
-    if not os.access(base, os.W_OK | os.X_OK):
-        raise UsageError(f"--ablation-out {args.ablation_out}: cannot create or write there "
-                         f"({base} is not a writable folder)")
-    wanted = ([c.strip() for c in args.columns.split(",")] if args.columns
-              else [c for c, _ in ABLATION_COLUMNS])
-    there = [c for c in wanted if os.path.exists(column_file(out, c))]
+        raise UsageError(f"--ablation-out {out} is a file, not a folder")
+    check_writable(out, "--ablation-out")
+    there = [c for c in wanted_columns(args) if os.path.exists(column_file(out, c))]
     if there and not args.overwrite:
         raise UsageError(f"--ablation-out {args.ablation_out} holds the column(s) "
                          f"{', '.join(there)} of an earlier run; give --overwrite to replace "

@@ -62,6 +62,15 @@ def _nearest_existing(path: str) -> str:
     return p
 
 
+def check_writable(path: str, option: str) -> None:
+    """Refuse (UsageError) a folder ``path`` that cannot be created or written: its nearest
+    existing ancestor must be a writable folder."""
+    base = _nearest_existing(os.path.dirname(os.path.abspath(path)))
+    if not os.path.isdir(base) or not os.access(base, os.W_OK | os.X_OK):
+        raise UsageError(f"{option} {path}: cannot create or write there ({base} is not a "
+                         f"writable folder)")
+
+
 class RunFolder:
     """The output folder of one run, written through a temporary folder beside it.
 
@@ -82,10 +91,7 @@ class RunFolder:
         self.tmp: str | None = None
         self._sigterm = None  # the SIGTERM handler to restore, while ours is installed
         self._check_final(path)
-        base = _nearest_existing(os.path.dirname(self.final))
-        if not os.path.isdir(base) or not os.access(base, os.W_OK | os.X_OK):
-            raise UsageError(f"{option} {path}: cannot create or write there ({base} is not a "
-                             f"writable folder)")
+        check_writable(path, option)
 
     def _check_final(self, path: str) -> None:
         """Refuse to replace what is at the final folder (before the run, and again at the
