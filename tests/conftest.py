@@ -44,3 +44,31 @@ def _release_compiled_programs():
 
     jax.clear_caches()
     gc.collect()
+
+
+# The test files that take longest (seconds of one worker on 2 cores, from
+# `pytest --junitxml`), heaviest first. The two workers take whole files from the front of the
+# queue, so starting with these keeps one worker from finishing a long file alone at the end
+# (pytest-xdist otherwise orders files by their number of tests: see --no-loadscope-reorder in
+# pyproject.toml). The order changes no result.
+HEAVIEST_FIRST = (
+    "test_classical_smoke.py",  # 247 s
+    "test_edof.py",  # 240
+    "test_benchmarks_smoke.py",  # 216
+    "test_trace.py",  # 178
+    "test_render.py",  # 148
+    "test_tiled.py",  # 141
+    "test_edof_base_lens.py",  # 134
+    "test_surface_adjoint.py",  # 133
+    "test_stress.py",  # 116
+    "test_bad_input.py",  # 109
+    "test_toroid_paraxial.py",  # 93
+    "test_nets.py",  # 91
+    "test_population.py",  # 67
+)
+
+
+def pytest_collection_modifyitems(config, items):
+    rank = {name: i for i, name in enumerate(HEAVIEST_FIRST)}
+    items.sort(key=lambda item: rank.get(item.path.name, len(rank)))  # stable: files keep
+    # their own order of tests, and the other files their order after these

@@ -41,6 +41,7 @@ from __future__ import annotations
 
 import argparse
 import dataclasses
+import functools
 import json
 import os
 import shlex
@@ -344,17 +345,19 @@ def with_clear_apertures(lens, spec):
     from jaxlens.imaging.sampling import pupil_grid
 
     lens = lens.astype(jnp.float64)
-    free = tuple(eqx.tree_at(lambda x: x.semi_diameter, s, jnp.asarray(jnp.inf))
-                 for s in lens.surfaces)
-    lens = eqx.tree_at(lambda x: (x.surfaces, x.epd), lens, (free, jnp.asarray(spec.epd)))
-    lens = eqx.tree_at(lambda x: x.wavelengths, lens, jnp.asarray(spec.wavelengths))
+    # Leaves of an explicit dtype: weak-typed ones (from Python floats) would make every
+    # jitted analysis of this lens compile a second program.
+    f64 = functools.partial(jnp.asarray, dtype=jnp.float64)
+    free = tuple(eqx.tree_at(lambda x: x.semi_diameter, s, f64(jnp.inf)) for s in lens.surfaces)
+    lens = eqx.tree_at(lambda x: (x.surfaces, x.epd), lens, (free, f64(spec.epd)))
+    lens = eqx.tree_at(lambda x: x.wavelengths, lens, f64(spec.wavelengths))
     angles, _ = sensor_field_grid(spec)
     sd = analysis.clear_semi_diameters(lens, jnp.asarray(angles),
                                        pupil=pupil_grid(21, jnp.float64))
     surfaces = []
     for j, s in enumerate(lens.surfaces):
         r = 0.5 * spec.epd if j == lens.stop else float(sd[j])
-        surfaces.append(eqx.tree_at(lambda x: x.semi_diameter, s, jnp.asarray(r * (1 + 1e-9))))
+        surfaces.append(eqx.tree_at(lambda x: x.semi_diameter, s, f64(r * (1 + 1e-9))))
     return eqx.tree_at(lambda x: x.surfaces, lens, tuple(surfaces))
 
 
