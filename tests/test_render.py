@@ -104,11 +104,11 @@ def test_render_gradient_matches_finite_differences_and_checkpoint(cooke):
     theta = jnp.array([float(cooke.surfaces[0].c), float(cooke.thickness[-1])])
     fp = R.footprints(cooke, sensor=SENSOR)  # the sampling is held fixed
 
-    def f(th):
-        return _render_loss(th, cooke, scene, target, True, fp)
-
-    g = jax.grad(f)(theta)
-    g_plain = jax.grad(lambda th: _render_loss(th, cooke, scene, target, False, fp))(theta)
+    # Each compiled once (the loss runs four times for the differences).
+    f = jax.jit(lambda th: _render_loss(th, cooke, scene, target, True, fp))
+    g = jax.jit(jax.grad(f))(theta)
+    g_plain = jax.jit(jax.grad(lambda th: _render_loss(th, cooke, scene, target, False, fp)))(
+        theta)
     np.testing.assert_allclose(g, g_plain, rtol=1e-12, atol=0)
     for i, h in ((0, 1e-8), (1, 1e-6)):
         e = jnp.zeros(2).at[i].set(h)
