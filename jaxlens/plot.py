@@ -60,15 +60,18 @@ def plot_layout(lens, fields: Sequence[float] | None = None, *, n_rays: int = 9,
             ``analysis.clear_semi_diameters``).
         title: figure title.
     """
+    import jax
     import jax.numpy as jnp
 
     from .analysis import spots as analysis
     from .imaging import sampling
+    from .optics import checks
     from .tracing.forward import trace_path
 
     lens = lens.astype(jnp.float64)
     fmax = float(np.max(np.abs(np.asarray(lens.fields))))
     fields = [0.0, 0.7 * fmax, fmax] if fields is None else list(fields)
+    checks.field_angles(fields, "plot_layout", "fields")  # here, not deep in the program
     sd = np.asarray(analysis.clear_semi_diameters(lens)) if semi_diameters is None else \
         np.asarray(semi_diameters)
     zs = np.asarray(lens.vertex_z())
@@ -78,15 +81,24 @@ def plot_layout(lens, fields: Sequence[float] | None = None, *, n_rays: int = 9,
     # Rays.
     u = np.linspace(-1.0, 1.0, n_rays)
     pupil = jnp.asarray(np.stack([np.zeros_like(u), u], -1))
+
+    @jax.jit
+    def fans(lens, fields):
+        """Each field's fan, launched and after every surface (one compiled program; op by
+        op the traces took seconds per field)."""
+        def one(f):
+            rays = sampling.collimated(lens, f, pupil)
+            return rays.origin, rays.direction, trace_path(lens, rays)
+        return jax.vmap(one)(fields)
+
+    starts, dirs, paths = fans(lens, jnp.asarray(fields, lens.epd.dtype))
     for i, f in enumerate(fields):
-        rays = sampling.collimated(lens, f, pupil)
-        path = trace_path(lens, rays)
-        start = np.asarray(rays.origin)
-        d0 = np.asarray(rays.direction)
+        start, d0 = np.asarray(starts[i]), np.asarray(dirs[i])
+        path = paths.origin[i]
         # Start the drawn rays a little in front of the first surface.
         t0 = (-0.5 - start[:, 2]) / d0[:, 2]
-        pts = [start + t0[:, None] * d0] + [np.asarray(p.origin) for p in path]
-        valid = np.asarray(path[-1].valid)
+        pts = [start + t0[:, None] * d0] + list(np.asarray(path))
+        valid = np.asarray(paths.valid[i, -1])
         ys = np.stack([p[:, 1] for p in pts])
         zz = np.stack([p[:, 2] for p in pts])
         color = _FIELD_COLORS[i % len(_FIELD_COLORS)]
