@@ -12,6 +12,7 @@ import math
 import os
 from collections.abc import Sequence
 
+import jax
 import numpy as np
 from matplotlib.backends.backend_agg import FigureCanvasAgg
 from matplotlib.figure import Figure
@@ -47,6 +48,20 @@ def _profile(surface, r):
     return np.asarray(z)
 
 
+@jax.jit
+def _fans(lens, fields, pupil):
+    """Each field's meridional fan, launched and after every surface: one compiled program,
+    kept between figures (op by op the traces took seconds per field)."""
+    from .imaging import sampling
+    from .tracing.forward import trace_path
+
+    def one(f):
+        rays = sampling.collimated(lens, f, pupil)
+        return rays.origin, rays.direction, trace_path(lens, rays)
+
+    return jax.vmap(one)(fields)
+
+
 def plot_layout(lens, fields: Sequence[float] | None = None, *, n_rays: int = 9,
                 semi_diameters=None, title: str | None = None) -> Figure:
     """Meridional section of the lens with ray fans.
@@ -60,13 +75,10 @@ def plot_layout(lens, fields: Sequence[float] | None = None, *, n_rays: int = 9,
             ``analysis.clear_semi_diameters``).
         title: figure title.
     """
-    import jax
     import jax.numpy as jnp
 
     from .analysis import spots as analysis
-    from .imaging import sampling
     from .optics import checks
-    from .tracing.forward import trace_path
 
     lens = lens.astype(jnp.float64)
     fmax = float(np.max(np.abs(np.asarray(lens.fields))))
@@ -81,17 +93,7 @@ def plot_layout(lens, fields: Sequence[float] | None = None, *, n_rays: int = 9,
     # Rays.
     u = np.linspace(-1.0, 1.0, n_rays)
     pupil = jnp.asarray(np.stack([np.zeros_like(u), u], -1))
-
-    @jax.jit
-    def fans(lens, fields):
-        """Each field's fan, launched and after every surface (one compiled program; op by
-        op the traces took seconds per field)."""
-        def one(f):
-            rays = sampling.collimated(lens, f, pupil)
-            return rays.origin, rays.direction, trace_path(lens, rays)
-        return jax.vmap(one)(fields)
-
-    starts, dirs, paths = fans(lens, jnp.asarray(fields, lens.epd.dtype))
+    starts, dirs, paths = _fans(lens, jnp.asarray(fields, lens.epd.dtype), pupil)
     for i, f in enumerate(fields):
         start, d0 = np.asarray(starts[i]), np.asarray(dirs[i])
         path = paths.origin[i]
