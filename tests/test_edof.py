@@ -695,6 +695,13 @@ def test_checkpoints_of_the_old_curvature_units_convert_only_where_exact(classic
     assert float(new.params.c) == pytest.approx(float(start.c), rel=1e-6)
     with pytest.raises(ValueError, match="units of version 1"):
         trainer("hybrid").load()
+    # A checkpoint whose optimizer states are per leaf (before optax.flatten) is refused.
+    meta = tmp_path / "classical" / "classical.json"
+    info = json.loads(meta.read_text())
+    del info["state_layout"]
+    meta.write_text(json.dumps(info))
+    with pytest.raises(ValueError, match="optimizer states in layout 1"):
+        trainer("classical").load()
 
 
 def test_the_command_line_keeps_compiled_programs_beside_the_checkpoints(tmp_path):
