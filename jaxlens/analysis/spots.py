@@ -294,7 +294,9 @@ def clear_semi_diameters(lens: Lens, fields=None, n_rim: int = 64, *,
     rim ray that passes, and an aperture sized from the rim alone would clip it.
     """
     _concrete_inputs(lens, "clear_semi_diameters", fields=fields)
-    return _clear_semi_diameters(lens, fields, n_rim, reaching=reaching, pupil=pupil)
+    # ``reaching`` is an array, so that both kinds of height share one compiled program.
+    return _clear_semi_diameters(lens, fields, n_rim, reaching=jnp.asarray(reaching),
+                                 pupil=pupil)
 
 
 @eqx.filter_jit
@@ -312,7 +314,7 @@ def _clear_semi_diameters(lens, fields, n_rim, *, reaching, pupil) -> Float[Arra
         rays = field_rays(lens, field, pupil, wl, depth=depth)
         path = trace_path(lens, rays, upto=lens.num_surfaces - 1)
         r = jnp.hypot(path.origin[..., 0], path.origin[..., 1])  # [n, M]
-        valid = path.valid if reaching else path[-1].valid[None]
+        valid = jnp.where(reaching, path.valid, path[-1].valid[None])
         return jnp.max(jnp.where(valid, r, 0.0), axis=-1)
 
     h = jax.vmap(lambda f: jax.vmap(lambda w: heights(f, w))(lens.wavelengths))(fields)
