@@ -41,12 +41,19 @@ def test_pupil_normalised_psf_counts_vignetting_as_lost(triplet):
                           jnp.asarray(0.6 * float(triplet.epd)))
     pup = GeometricPSF(pupil=24, overfill=1.0, grid="polar", normalize="pupil")
     tra = GeometricPSF(pupil=24, overfill=1.0, grid="polar")
-    a = jaxlens.psf(triplet, field, wavelength=wl, kernel_size=k, pixel_size=pix, model=pup,
-                    max_truncation=None)
-    b = jaxlens.psf(triplet, field, wavelength=wl, kernel_size=k, pixel_size=pix, model=tra)
-    # Compiled: op by op the trace took twice as long.
-    passed = float(jax.jit(lambda lens: jnp.mean(trace(
-        lens, sampling.collimated(lens, field, sampling.pupil_polar(24), wl)).valid))(triplet))
+
+    # The two kernels and the independent count in one compiled program: the two models are
+    # two programs of their own otherwise, and the trace op by op took twice as long.
+    @jax.jit
+    def run(lens):
+        a = jaxlens.psf(lens, field, wavelength=wl, kernel_size=k, pixel_size=pix, model=pup,
+                        max_truncation=None)
+        b = jaxlens.psf(lens, field, wavelength=wl, kernel_size=k, pixel_size=pix, model=tra)
+        rays = sampling.collimated(lens, field, sampling.pupil_polar(24), wl)
+        return a, b, jnp.mean(trace(lens, rays).valid)
+
+    a, b, passed = run(triplet)
+    passed = float(passed)
     assert 0.3 < passed < 0.95  # the 20° field of the triplet is vignetted
     assert float(a.sum()) == pytest.approx(passed, abs=2e-3)
     assert float(b.sum()) == pytest.approx(1.0, abs=2e-3)
@@ -62,20 +69,31 @@ def test_psf_points_is_psf_at_the_ideal_field_and_differentiable(triplet):
     model = GeometricPSF(pupil=16, overfill=1.0, grid="polar", normalize="pupil")
     xy = jnp.array([[0.0, 0.0], [3.0, -5.0]])
 
+    def lens_at(c):
+        return eqx.tree_at(lambda m: m.surfaces[1].c, triplet, c)
+
     def loss(c):
-        lens = eqx.tree_at(lambda m: m.surfaces[1].c, triplet, c)
-        k = tiled.psf_points(lens, xy, 1000.0, wavelengths=(0.486, 0.6563), kernel_size=15,
-                             pixel_size=0.01, model=model)
+        k = tiled.psf_points(lens_at(c), xy, 1000.0, wavelengths=(0.486, 0.6563),
+                             kernel_size=15, pixel_size=0.01, model=model)
         return jnp.sum(k * k), k
 
-    # One compiled program gives the kernels (checked against ``psf``) and their gradient.
-    (_, got), g = jax.jit(jax.value_and_grad(loss, has_aux=True))(triplet.surfaces[1].c)
-    assert got.shape == (2, 2, 15, 15)
+    def want(c, p):
+        field = jaxlens.imaging.aiming.ideal_to_field(lens_at(c), p)
+        return jaxlens.psf(lens_at(c), field, depth=1000.0,
+                           wavelength=jnp.array([0.486, 0.6563]), kernel_size=15,
+                           pixel_size=0.01, model=model, max_truncation=None)
+
+    # One compiled program gives the kernels, their gradient and ``psf`` at each point's ideal
+    # field (a program of its own otherwise).
+    @jax.jit
+    def run(c):
+        (_, got), g = jax.value_and_grad(loss, has_aux=True)(c)
+        return got, g, jax.vmap(want, (None, 0))(c, xy)
+
+    got, g, ref = run(triplet.surfaces[1].c)
+    assert got.shape == (2, 2, 15, 15) and ref.shape == got.shape
     for i in range(2):
-        field = jaxlens.imaging.aiming.ideal_to_field(triplet, xy[i])
-        want = jaxlens.psf(triplet, field, depth=1000.0, wavelength=jnp.array([0.486, 0.6563]),
-                           kernel_size=15, pixel_size=0.01, model=model, max_truncation=None)
-        np.testing.assert_allclose(np.asarray(got[i]), np.asarray(want), atol=1e-12)
+        np.testing.assert_allclose(np.asarray(got[i]), np.asarray(ref[i]), atol=1e-12)
     assert np.isfinite(float(g)) and float(g) != 0.0
 
 
@@ -142,14 +160,19 @@ def test_valid_padding_reads_the_margin_instead_of_edge_copies():
     one = jnp.asarray(k[None, None])
     nine = jnp.asarray(np.broadcast_to(k, (3, 3, 3, 7, 7)))
     centre = (slice(p, 2 * p), slice(p, 2 * p))
-    edge = tiled.wiener_tiles(img, nine, 0.01, halo=p, prior="gradient")
-    valid = tiled.wiener_tiles(img, one, 0.01, halo=p, prior="gradient", pad="valid")
+
+    @jax.jit  # the five results in one compiled program: op by op took five times as long
+    def run(img, one, nine):
+        return (tiled.wiener_tiles(img, nine, 0.01, halo=p, prior="gradient"),
+                tiled.wiener_tiles(img, one, 0.01, halo=p, prior="gradient", pad="valid"),
+                tiled.wiener_tiles(img[centre], one, 0.01, halo=p, prior="gradient"),
+                tiled.tile_evidence(img, nine, 0.01, halo=p),
+                tiled.tile_evidence(img, one, 0.01, halo=p, pad="valid"))
+
+    edge, valid, lone, ev_edge, ev_valid = run(img, one, nine)
     assert valid.shape == (p, p, 3)
     np.testing.assert_allclose(np.asarray(valid), np.asarray(edge[centre]), atol=1e-12)
-    lone = tiled.wiener_tiles(img[centre], one, 0.01, halo=p, prior="gradient")
     assert float(jnp.max(jnp.abs(lone - valid))) > 1e-3
-    ev_edge = tiled.tile_evidence(img, nine, 0.01, halo=p)
-    ev_valid = tiled.tile_evidence(img, one, 0.01, halo=p, pad="valid")
     np.testing.assert_allclose(np.asarray(ev_valid)[0, 0], np.asarray(ev_edge)[1, 1],
                                rtol=1e-12)
     with pytest.raises(ValueError, match="inside its 12-pixel margin"):
@@ -239,10 +262,17 @@ def test_tile_evidence_gradient_matches_finite_differences():
         return jnp.sum(tiled.tile_evidence(img, jnp.asarray(kern) * scale, nsr) *
                        jnp.array([[1.0, -0.5], [0.3, 2.0]]))
 
-    g_nsr, g_k = jax.grad(f, argnums=(0, 1))(0.05, 1.0)
     h = 1e-6
-    fd_nsr = (f(0.05 + h, 1.0) - f(0.05 - h, 1.0)) / (2 * h)
-    fd_k = (f(0.05, 1.0 + h) - f(0.05, 1.0 - h)) / (2 * h)
+    # The four shifted points, [nsr ± h, 1] and [0.05, 1 ± h].
+    pts = jnp.array([[0.05 + h, 1.0], [0.05 - h, 1.0], [0.05, 1.0 + h], [0.05, 1.0 - h]])
+
+    @jax.jit  # one compiled program for the gradient and the differences, not op by op
+    def grads_and_values(x0, pts):
+        return jax.grad(f, argnums=(0, 1))(*x0), jax.vmap(f)(pts[:, 0], pts[:, 1])
+
+    (g_nsr, g_k), v = grads_and_values(jnp.array([0.05, 1.0]), pts)
+    fd_nsr = (v[0] - v[1]) / (2 * h)
+    fd_k = (v[2] - v[3]) / (2 * h)
     assert float(g_nsr) == pytest.approx(float(fd_nsr), rel=1e-6)
     assert float(g_k) == pytest.approx(float(fd_k), rel=1e-6)
     assert abs(float(g_nsr)) > 1.0 and abs(float(g_k)) > 1.0

@@ -186,10 +186,16 @@ def test_uniform_and_backward_traces_keep_the_new_surfaces():
                    (jl.ModelGlass(1.6, np.inf), jl.Air(), jl.ModelGlass(1.5, np.inf), jl.Air(),
                     jl.Air()), epd=4.0)
     rays, o, _ = _collimated(2.0, -4.0, np.linspace(-1.5, 1.5, 4), z0=-1.0)
-    a, b = jl.trace(lens, rays), jl.trace(lens, rays, uniform=True)
+
+    @eqx.filter_jit  # the three traces in one compiled program (three programs otherwise)
+    def traces(lens, rays):
+        a = jl.trace(lens, rays)
+        return a, jl.trace(lens, rays, uniform=True), jl.trace_backward(
+            lens, jl.Rays(a.origin, -a.direction, 0.5876))
+
+    a, b, back = traces(lens, rays)
     assert bool(a.valid.all())
     np.testing.assert_allclose(np.asarray(a.origin), np.asarray(b.origin), rtol=0, atol=1e-13)
-    back = jl.trace_backward(lens, jl.Rays(a.origin, -a.direction, 0.5876))
     assert bool(back.valid.all())
     # Back on surface 1, the reversed ray points back along the incoming one.
     start = rays.origin + (back.origin[:, 2:] - rays.origin[:, 2:]) / rays.direction[:, 2:] * \
