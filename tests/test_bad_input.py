@@ -349,6 +349,23 @@ def _cli(module, *args, cwd=None):
     return r, time.perf_counter() - t0
 
 
+def _cli_in_process(module, args, monkeypatch, capsys):
+    """(exit status, stderr, seconds) of ``python -m module *args`` run in this process:
+    the option checks without a new interpreter and JAX import (about 4 s each). One case
+    per command line also runs as a real subprocess (``test_*_cli_refusal_is_one_line``)."""
+    import importlib
+
+    main = importlib.import_module(f"{module}.cli" if module.endswith("edof") else module).main
+    monkeypatch.setattr(sys, "argv", [f"python -m {module}", *args])
+    capsys.readouterr()
+    t0 = time.perf_counter()
+    try:
+        code = main(args) if module.endswith("classical") else main()
+    except SystemExit as e:
+        code = e.code
+    return code, capsys.readouterr().err, time.perf_counter() - t0
+
+
 @pytest.mark.parametrize("args, match", [
     (["--steps", "0"], r"--steps must be a finite number in \(0, inf\)"),
     (["--steps", "-1"], r"--steps must be"),
@@ -359,14 +376,27 @@ def _cli(module, *args, cwd=None):
     (["--devices", "0"], r"--devices must be a whole number in \[1, inf\), got 0"),
     (["--fov", "nan"], r"--fov must be a finite number in \(0, 180\) deg"),
 ])
-def test_design_cli_refuses_bad_options_fast(args, match, tmp_path):
+def test_design_cli_refuses_bad_options_fast(args, match, tmp_path, monkeypatch, capsys):
     out = tmp_path / "run"
-    r, dt = _cli("jaxlens.experiments.classical", *args, "--out", str(out))
-    assert r.returncode == 2, r.stderr
-    lines = r.stderr.strip().splitlines()
-    assert len(lines) == 1, r.stderr
+    code, err, dt = _cli_in_process("jaxlens.experiments.classical", [*args, "--out", str(out)],
+                                    monkeypatch, capsys)
+    assert code == 2, err
+    lines = err.strip().splitlines()
+    assert len(lines) == 1, err
     assert re.search(match, lines[0]), lines[0]
     assert dt < 10, dt
+    assert not out.exists()
+
+
+def test_design_cli_refusal_is_one_line_from_a_fresh_interpreter(tmp_path):
+    """The real command line (new process: the device-count setup, JAX's import and its
+    warnings included) also refuses with status 2 and one stderr line, before any work."""
+    out = tmp_path / "run"
+    r, dt = _cli("jaxlens.experiments.classical", "--fov", "nan", "--out", str(out))
+    assert r.returncode == 2, r.stderr
+    lines = r.stderr.strip().splitlines()
+    assert len(lines) == 1 and re.search(r"--fov must be a finite number", lines[0]), r.stderr
+    assert dt < 20, dt
     assert not out.exists()
 
 
@@ -473,12 +503,23 @@ def test_an_out_folder_the_file_system_refuses_is_one_line(tmp_path, capsys, mon
     (["--hybrid-floor", "-1"], r"--hybrid-floor must be a finite number in \[0, inf\)"),
     (["--live-front-end", "--decoder", "nafnet"], r"--live-front-end needs a Wiener"),
 ])
-def test_edof_cli_refuses_bad_options_fast(args, match, tmp_path):
-    r, dt = _cli("jaxlens.experiments.edof", *args, "--out", str(tmp_path / "run"))
+def test_edof_cli_refuses_bad_options_fast(args, match, tmp_path, monkeypatch, capsys):
+    code, err, dt = _cli_in_process("jaxlens.experiments.edof",
+                                    [*args, "--out", str(tmp_path / "run")], monkeypatch, capsys)
+    assert code == 2, err
+    lines = err.strip().splitlines()
+    assert len(lines) == 1 and re.search(match, lines[0]), err
+    assert dt < 10
+    assert not (tmp_path / "run").exists()
+
+
+def test_edof_cli_refusal_is_one_line_from_a_fresh_interpreter(tmp_path):
+    r, dt = _cli("jaxlens.experiments.edof", "--kernel", "8", "--out", str(tmp_path / "run"))
     assert r.returncode == 2, r.stderr
     lines = r.stderr.strip().splitlines()
-    assert len(lines) == 1 and re.search(match, lines[0]), r.stderr
-    assert dt < 10
+    assert len(lines) == 1 and re.search(r"--kernel must be an odd whole number", lines[0]), \
+        r.stderr
+    assert dt < 20
     assert not (tmp_path / "run").exists()
 
 
