@@ -4,6 +4,10 @@ The library is imported under jaxtyping's import hook in a fresh process, so eve
 function and ``eqx.Module`` of ``jaxlens`` checks its arguments' dtypes and shapes. The script
 runs the public entry points on the Cooke triplet with correct inputs (no check may fire) and
 with a wrongly shaped input to each (the check must fire, so the hook is really on).
+
+The correct calls run under ``jax.eval_shape``: every annotated function is called as usual
+and checks the shapes and dtypes of what it gets and returns (tracers carry both), but nothing
+is compiled (the script took 40 s with the compiles, 9 s without).
 """
 
 import subprocess
@@ -25,16 +29,18 @@ SCRIPT = textwrap.dedent(
     origin = jnp.stack([jnp.zeros(n), y, jnp.full(n, -5.0)], -1)
     direction = jnp.broadcast_to(jnp.asarray([0.0, 0.0, 1.0]), (n, 3))
     rays = jl.Rays(origin, direction, 0.5876)
-    out = jl.trace(lens, rays)
-    path = jl.trace_path(lens, rays)
+    out = jax.eval_shape(lambda: jl.trace(lens, rays))
+    path = jax.eval_shape(lambda: jl.trace_path(lens, rays))
     assert out.origin.shape == (n, 3) and path.origin.shape[-2:] == (n, 3)
-    jl.paraxial_data(lens)
-    k = jl.psf(lens, jnp.asarray([0.0, 5.0]), kernel_size=9, pixel_size=0.01)
+    jax.eval_shape(lambda: jl.paraxial_data(lens))
+    k = jax.eval_shape(lambda: jl.psf(lens, jnp.asarray([0.0, 5.0]), kernel_size=9,
+                                      pixel_size=0.01))
     assert k.shape[-2:] == (9, 9)
-    jl.psf(lens, 5.0, kernel_size=9, pixel_size=0.01)  # a bare θy is a field too
+    jax.eval_shape(lambda: jl.psf(lens, 5.0, kernel_size=9, pixel_size=0.01))  # a bare θy
     scene = jnp.ones((8, 8, 3))
     sensor = jl.Sensor(resolution=(8, 8), pixel_size=0.05)
-    img = jl.render(lens, scene, spp=1, key=jax.random.key(0), sensor=sensor, patch=8)
+    img = jax.eval_shape(lambda: jl.render(lens, scene, spp=1, key=jax.random.key(0),
+                                           sensor=sensor, patch=8))
     assert img.shape == (8, 8, 3)
 
     def fires(fn):
