@@ -357,6 +357,8 @@ def _cli_in_process(module, args, monkeypatch, capsys):
 
     main = importlib.import_module(f"{module}.cli" if module.endswith("edof") else module).main
     monkeypatch.setattr(sys, "argv", [f"python -m {module}", *args])
+    # The design command may set the device count in XLA_FLAGS before a later check refuses.
+    monkeypatch.setenv("XLA_FLAGS", os.environ.get("XLA_FLAGS", ""))
     capsys.readouterr()
     t0 = time.perf_counter()
     try:
