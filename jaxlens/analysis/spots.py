@@ -294,6 +294,8 @@ def clear_semi_diameters(lens: Lens, fields=None, n_rim: int = 64, *,
     rim ray that passes, and an aperture sized from the rim alone would clip it.
     """
     _concrete_inputs(lens, "clear_semi_diameters", fields=fields)
+    if not isinstance(reaching, (bool, np.bool_)):
+        raise TypeError(f"clear_semi_diameters: reaching must be True or False, got {reaching!r}")
     # ``reaching`` is an array, so that both kinds of height share one compiled program.
     return _clear_semi_diameters(lens, fields, n_rim, reaching=jnp.asarray(reaching),
                                  pupil=pupil)
