@@ -442,6 +442,33 @@ def test_smoke_run_writes_outputs_loss_falls_and_resumes(tmp_path):
     assert json.loads((tmp_path / "edof3" / "table2.json").read_text())["lenses"] == \
         table["lenses"]
     assert third["timings_s"]["train_hybrid_s0_s"] < 5.0
+    # A second seed run on its own, merged with the first (edof.merge), gives the table of
+    # one run over both seeds; the merge refuses runs that share a seed or differ otherwise.
+    from jaxlens.experiments.edof import merge
+    from jaxlens.experiments.runfolder import UsageError
+
+    edof.run(common + ["--seeds", "1", "--out", str(tmp_path / "s1"), "--checkpoint", str(ck),
+                       "--resume"])
+    edof.run(common + ["--seeds", "0,1", "--out", str(tmp_path / "s01"), "--checkpoint",
+                       str(ck), "--resume"])
+    merged = merge.run(["--out", str(tmp_path / "merged"), str(out2), str(tmp_path / "s1")])
+    m, both = (json.loads((tmp_path / f / "table2.json").read_text()) for f in ("merged", "s01"))
+    assert m["seeds"] == both["seeds"] == [0, 1]
+    for key in ("lenses", "gain_vs_classical", "gain_per_seed", "light_on_sensor",
+                "gain_vs_classical_image_balanced", "rec_psnr_by_image", "psf_depth_variation",
+                "test", "base_lens"):
+        assert m[key] == both[key], key
+    assert merged["checks"] == json.loads((tmp_path / "s01" / "summary.json").read_text())[
+        "checks"]
+    assert "seeds [1]" in (tmp_path / "merged" / "table2.md").read_text()
+    with pytest.raises(UsageError, match="seed 0 is in both"):
+        merge.run(["--out", str(tmp_path / "m2"), str(out2), str(tmp_path / "edof3")])
+    (tmp_path / "empty").mkdir()
+    with pytest.raises(UsageError, match="has no table2_per_image.json"):
+        merge.run(["--out", str(tmp_path / "m2"), str(out2), str(tmp_path / "empty")])
+    with pytest.raises(UsageError, match="holds an earlier run"):
+        merge.run(["--out", str(tmp_path / "merged"), str(out2), str(tmp_path / "s1")])
+    assert not (tmp_path / "m2").exists()
     # An evaluation-only option (--eval-pupil) resumes the trained lenses and evaluates them
     # anew; an option that changes the training refuses the checkpoint.
     fourth = edof.run(common + ["--out", str(tmp_path / "edof4"), "--checkpoint", str(ck),
@@ -460,6 +487,8 @@ def test_smoke_run_writes_outputs_loss_falls_and_resumes(tmp_path):
     # The straight run goes first: the extension then reuses its compiled programs.)
     longer = ["--smoke", "--quiet", "--lenses", "classical", "--max-crops", "4", "--steps2", "4"]
     edof.run(longer + ["--out", str(tmp_path / "edof7")])
+    with pytest.raises(UsageError, match=r"other options \(steps2\)"):
+        merge.run(["--out", str(tmp_path / "m2"), str(tmp_path / "s1"), str(tmp_path / "edof7")])
     extended = edof.run(longer + ["--out", str(tmp_path / "edof6"), "--checkpoint", str(ck),
                                   "--resume"])
     assert [r["step"] for r in extended["history"]["classical_s0"]["stage2"]] == [2, 4]

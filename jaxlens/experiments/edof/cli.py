@@ -52,7 +52,13 @@ import shutil
 import sys
 import time
 
-from jaxlens.experiments.edof.report import checks, table2, table2_markdown, write_figures
+from jaxlens.experiments.edof.report import (
+    base_lens_data,
+    checks,
+    table2,
+    table2_markdown,
+    write_figures,
+)
 from jaxlens.experiments.runfolder import OneLineParser, RunFolder, UsageError, fail
 from jaxlens.optics import checks as input_checks
 
@@ -411,8 +417,8 @@ def _run_into(a, argv, cfg, names, folder, out, compile_cache=False) -> dict:
                     name != names[-1] or seed != a.seeds[-1]):
                 raise T.OutOfTime(f"stopped after {tag}")
 
-    table = table2(per_image, names, a.seeds, windows, crop_info, test_names, source, classical,
-                   light, nsr)
+    table = table2(per_image, names, a.seeds, crop_info, test_names, source,
+                   base_lens_data(classical), light, nsr)
     summary_extra = {
         "psf_depth_variation": {n: {"l1": float(np.mean([v["l1"] for v in variation[n]])),
                                     "ncc": float(np.mean([v["ncc"] for v in variation[n]])),

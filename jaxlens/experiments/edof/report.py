@@ -7,15 +7,29 @@ import math
 import os
 
 
-def table2(per_image, names, seeds, windows, crop_info, test_names, source, classical, light,
-           nsr) -> dict:
-    """The issue-10 schema from the per-crop values (means over crops and seeds)."""
+def base_lens_data(classical) -> dict:
+    """The base lens's first-order data for the table (``base_lens``)."""
+    from jaxlens.optics import paraxial
+    from jaxlens.optics.materials import Air
+
+    pd = paraxial.paraxial_data(classical)
+    return {"efl_mm": float(pd.efl), "fov_deg": _fov(classical), "fnum": float(pd.fnum),
+            "image_diagonal_mm": float(math.hypot(*[float(v) for v in classical.sensor.size])),
+            "elements": int(sum(1 for m in classical.materials if not isinstance(m, Air)))}
+
+
+def table2(per_image, names, seeds, crop_info, test_names, source, base, light, nsr) -> dict:
+    """The issue-10 schema from the per-crop values (means over crops and seeds).
+
+    Args:
+        per_image: ``{seed: {lens: {depth: {kind: {metric: [per crop]}}}}}``, seeds as strings.
+        base: the base lens's data (:func:`base_lens_data`).
+        light: ``{lens: [fraction of light on the sensor, one per seed]}``.
+    """
     import numpy as np
 
     from jaxlens.experiments.edof import evaluate as E
     from jaxlens.experiments.edof import lenses as L
-    from jaxlens.optics import paraxial
-    from jaxlens.optics.materials import Air
 
     seeds = [str(s) for s in seeds]
     depths = [E.depth_key(d) for d in L.TEST_DEPTHS_M]
@@ -44,11 +58,6 @@ def table2(per_image, names, seeds, windows, crop_info, test_names, source, clas
                 gains[n][d] = E.bootstrap_gain(diff)
                 balanced[n][d] = E.bootstrap_gain_by_image(diff, crop_images)
                 per_seed[n][d] = diff.mean(axis=1).tolist()
-    pd = paraxial.paraxial_data(classical)
-    base = {"efl_mm": float(pd.efl), "fov_deg": _fov(classical),
-            "fnum": float(pd.fnum),
-            "image_diagonal_mm": float(math.hypot(*[float(v) for v in classical.sensor.size])),
-            "elements": int(sum(1 for m in classical.materials if not isinstance(m, Air)))}
     by_image = {}
     for n in names:
         for d in depths:
@@ -60,7 +69,7 @@ def table2(per_image, names, seeds, windows, crop_info, test_names, source, clas
                 by_image.setdefault(n, {}).setdefault(d, {})[img] = float(np.mean(v))
     return {
         "seeds": [int(s) for s in seeds],
-        "test": {"crops": int(len(windows)), "images": sorted({c["image"] for c in crop_info}),
+        "test": {"crops": int(len(crop_info)), "images": sorted({c["image"] for c in crop_info}),
                  "source": source, "crop_images": crop_images},
         "base_lens": base,
         "lenses": lenses,
