@@ -1,5 +1,7 @@
 """Ray tracing: reference cases, analytic answers, gradients, degenerate geometry."""
 
+import math
+
 import jax
 import jax.numpy as jnp
 import numpy as np
@@ -495,3 +497,32 @@ def test_newton_converges_where_the_base_conic_start_is_poor(case):
                              tuple(jnp.asarray(x) for x in d)))
     assert bool(ok), f"reported as a miss after {DEFAULT_NEWTON_ITERS} Newton iterations"
     assert float(t) == pytest.approx(0.5 * (lo + hi), abs=1e-12)
+
+
+def test_newton_2d_root_with_and_without_its_implicit_gradient():
+    """x² + y = p₀, x − y = p₁ from (1, 0): the root (x = (−1 + √(1 + 4(p₀ + p₁)))/2), its
+    implicit gradient against central differences, and, without ``implicit_gradient``, the
+    same root with no gradient."""
+    from jaxlens.imaging.aiming import newton_2d
+
+    def fn(x, p):
+        return jnp.stack([x[0] ** 2 + x[1] - p[0], x[0] - x[1] - p[1]])
+
+    def solve(p, implicit):
+        return newton_2d(fn, jnp.array([1.0, 0.0]), p, 20, implicit_gradient=implicit)
+
+    @jax.jit
+    def results(p):
+        return (solve(p, True), solve(p, False), jax.jacrev(solve)(p, True),
+                jax.jacrev(solve)(p, False))
+
+    p = jnp.array([3.0, 1.0])
+    x, x_plain, jac, jac_plain = results(p)
+    root = (-1.0 + math.sqrt(1.0 + 4.0 * 4.0)) / 2.0
+    np.testing.assert_allclose(np.asarray(x), [root, root - 1.0], rtol=1e-13)
+    np.testing.assert_allclose(np.asarray(x_plain), np.asarray(x), rtol=1e-13)
+    h = 1e-6
+    fd = np.stack([(np.asarray(results(p + h * e)[0]) - np.asarray(results(p - h * e)[0]))
+                   / (2 * h) for e in np.eye(2)], axis=1)
+    np.testing.assert_allclose(np.asarray(jac), fd, rtol=1e-7, atol=1e-9)
+    assert np.all(np.asarray(jac_plain) == 0.0)

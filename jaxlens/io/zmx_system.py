@@ -150,7 +150,8 @@ def _real_height_field(lens: Lens, target, k):
                                    forward.DEFAULT_NEWTON_ITERS)
         return point - target
 
-    return _tangent_field(aiming.newton_2d(miss, target / k, target, 12))
+    return _tangent_field(aiming.newton_2d(miss, target / k, target, 12,
+                                           implicit_gradient=False))
 
 
 @eqx.filter_jit
