@@ -2,6 +2,7 @@
 
 import json
 import os
+import shutil
 
 import equinox as eqx
 import jax
@@ -466,6 +467,15 @@ def test_smoke_run_writes_outputs_loss_falls_and_resumes(tmp_path):
     (tmp_path / "empty").mkdir()
     with pytest.raises(UsageError, match="has no table2_per_image.json"):
         merge.run(["--out", str(tmp_path / "m2"), str(out2), str(tmp_path / "empty")])
+    bad = tmp_path / "bad"
+    shutil.copytree(tmp_path / "s1", bad)
+    (bad / "summary.json").write_text('{"config": {},\n "command": ')
+    with pytest.raises(UsageError, match=r"bad/summary.json:2: not valid JSON"):
+        merge.run(["--out", str(tmp_path / "m2"), str(out2), str(bad)])
+    (bad / "summary.json").write_text('{"config": {}}')
+    with pytest.raises(UsageError, match=r"summary.json is not an EDoF run's summary: it has "
+                                         r"no command, psf_depth_variation, odd_terms"):
+        merge.run(["--out", str(tmp_path / "m2"), str(out2), str(bad)])
     with pytest.raises(UsageError, match="holds an earlier run"):
         merge.run(["--out", str(tmp_path / "merged"), str(out2), str(tmp_path / "s1")])
     assert not (tmp_path / "m2").exists()

@@ -39,7 +39,20 @@ def read_run(folder: str) -> dict:
         if not os.path.isfile(path):
             raise UsageError(f"{folder} is not a finished EDoF run: it has no {name}")
         with open(path) as f:
-            data[name.removesuffix(".json")] = json.load(f)
+            try:
+                data[name.removesuffix(".json")] = json.load(f)
+            except json.JSONDecodeError as e:
+                raise UsageError(f"{path}:{e.lineno}: not valid JSON ({e.msg})") from None
+    for key, stem, fields in (("per-crop values", "table2_per_image", ("crops", "seeds",
+                                                                        "values")),
+                              ("table", "table2", ("light_on_sensor", "test", "base_lens",
+                                                   "wiener_reference_nsr")),
+                              ("summary", "summary", ("config", "command",
+                                                      "psf_depth_variation", "odd_terms"))):
+        missing = [k for k in fields if not isinstance(data[stem], dict) or k not in data[stem]]
+        if missing:
+            raise UsageError(f"{os.path.join(folder, stem + '.json')} is not an EDoF run's "
+                             f"{key}: it has no {', '.join(missing)}")
     return data
 
 
