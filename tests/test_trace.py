@@ -526,3 +526,23 @@ def test_newton_2d_root_with_and_without_its_implicit_gradient():
                    / (2 * h) for e in np.eye(2)], axis=1)
     np.testing.assert_allclose(np.asarray(jac), fd, rtol=1e-7, atol=1e-9)
     assert np.all(np.asarray(jac_plain) == 0.0)
+
+
+def test_spot_analyses_of_python_numbers_share_one_program(caplog):
+    """Fields and wavelengths given as Python numbers are arguments of the compiled spot
+    programs, not constants: a spot diagram over 3 wavelengths and 2 fields compiled one
+    program per wavelength when they were."""
+    import logging
+
+    from jaxlens.analysis.spots import rms_spot, spot_rays
+
+    lens = jl.zoo.cooke_triplet()
+    with jax.log_compiles(True), caplog.at_level(logging.WARNING):
+        for w in (0.4861, 0.5876, 0.6563):
+            for f in (0.0, 5.0):
+                spot_rays(lens, f, w)
+        for fields in ([0.0, 7.0], [3.0, 14.0]):
+            rms_spot(lens, fields, [0.5876])
+    compiled = [r.getMessage() for r in caplog.records if "Compiling" in r.getMessage()]
+    assert sum("_spot_rays" in m for m in compiled) <= 1, compiled
+    assert sum("_rms_spot" in m for m in compiled) <= 1, compiled

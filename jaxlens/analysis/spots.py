@@ -52,6 +52,14 @@ def _concrete_inputs(lens: Lens, where: str, *, fields=None, wavelengths=None,
         checks.material_indices(lens, wavelengths, where, arg_w)
 
 
+def _as_arrays(lens: Lens, *values):
+    """Python numbers and lists of them as arrays of the lens's dtype (None and arrays as
+    they are). ``filter_jit`` keeps a Python number static: a spot diagram that passed
+    ``float(w)`` compiled one program per wavelength; as arrays, one program serves all."""
+    return tuple(v if v is None or isinstance(v, (jax.Array, np.ndarray)) or checks.is_traced(v)
+                 else jnp.asarray(v, lens.epd.dtype) for v in values)
+
+
 def spot_rays(
     lens: Lens,
     field,
@@ -65,6 +73,7 @@ def spot_rays(
     """Rays of one field and wavelength on the image surface (a spot diagram as data)."""
     _concrete_inputs(lens, "spot_rays", fields=field, wavelengths=wavelength, arg_f="field",
                      arg_w="wavelength")
+    field, wavelength = _as_arrays(lens, field, wavelength)
     return _spot_rays(lens, field, wavelength, pupil=pupil,
                       depth=_depth(lens, depth, "spot_rays"), aim=aim,
                       newton_iters=newton_iters)
@@ -92,6 +101,7 @@ def chief_ray(lens: Lens, field, wavelength=None, *, depth=None) -> Rays:
     """The chief ray (through the paraxial entrance-pupil centre) on the image surface."""
     _concrete_inputs(lens, "chief_ray", fields=field, wavelengths=wavelength, arg_f="field",
                      arg_w="wavelength")
+    field, wavelength = _as_arrays(lens, field, wavelength)
     centre = jnp.zeros((1, 2), lens.epd.dtype)
     return _spot_rays(lens, field, wavelength, pupil=centre,
                       depth=_depth(lens, depth, "chief_ray"), aim="paraxial",
@@ -159,6 +169,7 @@ def rms_spot(
         with ``valid_fraction`` 0; its gradient is 0, never NaN.
     """
     _concrete_inputs(lens, "rms_spot", fields=fields, wavelengths=wavelengths)
+    fields, wavelengths = _as_arrays(lens, fields, wavelengths)
     return _rms_spot(lens, fields, wavelengths, pupil=pupil, reference=reference,
                      depth=_depth(lens, depth, "rms_spot"), newton_iters=newton_iters)
 
@@ -244,6 +255,7 @@ def distortion(lens: Lens, fields=None, wavelength=None) -> Distortion:
     """
     _concrete_inputs(lens, "distortion", fields=fields, wavelengths=wavelength,
                      arg_w="wavelength")
+    fields, wavelength = _as_arrays(lens, fields, wavelength)
     return _distortion(lens, fields, wavelength)
 
 
@@ -297,6 +309,7 @@ def clear_semi_diameters(lens: Lens, fields=None, n_rim: int = 64, *,
     if not isinstance(reaching, (bool, np.bool_)):
         raise TypeError(f"clear_semi_diameters: reaching must be True or False, got {reaching!r}")
     # ``reaching`` is an array, so that both kinds of height share one compiled program.
+    (fields,) = _as_arrays(lens, fields)
     return _clear_semi_diameters(lens, fields, n_rim, reaching=jnp.asarray(reaching),
                                  pupil=pupil)
 
