@@ -476,6 +476,15 @@ def test_smoke_run_writes_outputs_loss_falls_and_resumes(tmp_path):
     with pytest.raises(UsageError, match=r"summary.json is not an EDoF run's summary: it has "
                                          r"no command, psf_depth_variation, odd_terms"):
         merge.run(["--out", str(tmp_path / "m2"), str(out2), str(bad)])
+    # Runs written by a version with an option this one lacks still merge with each other.
+    for name, src in (("f0", out2), ("f1", tmp_path / "s1")):
+        shutil.copytree(src, tmp_path / name)
+        summ = json.loads((tmp_path / name / "summary.json").read_text())
+        summ["config"]["future_option"] = 1
+        (tmp_path / name / "summary.json").write_text(json.dumps(summ))
+    future = merge.run(["--out", str(tmp_path / "mf"), str(tmp_path / "f0"),
+                        str(tmp_path / "f1")])
+    assert future["checks"] == merged["checks"]
     with pytest.raises(UsageError, match="holds an earlier run"):
         merge.run(["--out", str(tmp_path / "merged"), str(out2), str(tmp_path / "s1")])
     assert not (tmp_path / "m2").exists()

@@ -21,6 +21,7 @@ import math
 import os
 import shlex
 import sys
+import types
 
 from jaxlens.experiments.edof.report import checks, table2, table2_markdown
 from jaxlens.experiments.runfolder import OneLineParser, RunFolder, UsageError, fail
@@ -148,8 +149,6 @@ def build_parser() -> argparse.ArgumentParser:
 
 def run(argv=None) -> dict:
     """Merge the runs named in ``argv``; returns the merged summary."""
-    from jaxlens.experiments.edof.train import Config
-
     argv = list(sys.argv[1:] if argv is None else argv)
     a = build_parser().parse_args(argv)
     folder = RunFolder(a.out, overwrite=a.overwrite)
@@ -157,8 +156,9 @@ def run(argv=None) -> dict:
     table, per_image, summary = merge_runs(runs, a.runs)
     command = "python -m jaxlens.experiments.edof.merge " + shlex.join(argv)
     summary = {"command": command, **summary}
-    cfg = Config(**{k: tuple(v) if isinstance(v, list) else v
-                    for k, v in summary["config"].items()})
+    # The runs' recorded options, read by name (a run written by another version may
+    # have fields that this version's Config lacks).
+    cfg = types.SimpleNamespace(**summary["config"])
     md = table2_markdown(table, command, cfg) + "\nMerged runs:\n\n" + "".join(
         f"- seeds {r['seeds']}: `{r['command']}`\n" for r in summary["runs"])
     out = folder.start()
