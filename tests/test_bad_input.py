@@ -290,6 +290,11 @@ def test_render_arguments_are_checked(cooke):
     with pytest.raises(ValueError, match=r"render: scene \(linear pixel values\) holds 1 NaN "
                                          r"or infinite value\(s\), first at index \(3, 4, 1\)"):
         jl.render(lens, nan_scene, spp=1, key=key)
+    # Radiance is never negative: an image left in [-1, 1] is refused, not rendered.
+    with pytest.raises(ValueError, match=r"render: scene must be finite numbers in \[0, inf\) "
+                                         r"\(linear radiance\), got -0.5"):
+        jl.render(lens, scene.at[2, 2, 0].set(-0.5), spp=1, key=key)
+    assert jnp.all(jnp.isfinite(jl.render(lens, scene.at[2, 2, 0].set(0.0), spp=1, key=key)))
     with pytest.raises(ValueError, match=r"Sensor: pixel_size must be a finite number in "
                                          r"\(0, inf\) mm, got"):
         jl.Sensor((8, 8), 0.0)

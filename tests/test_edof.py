@@ -476,6 +476,17 @@ def test_smoke_run_writes_outputs_loss_falls_and_resumes(tmp_path):
     with pytest.raises(UsageError, match=r"summary.json is not an EDoF run's summary: it has "
                                          r"no command, psf_depth_variation, odd_terms"):
         merge.run(["--out", str(tmp_path / "m2"), str(out2), str(bad)])
+    shutil.copy(tmp_path / "s1" / "summary.json", bad / "summary.json")
+    per = json.loads((bad / "table2_per_image.json").read_text())
+    per["values"]["1"]["hybrid"]["0.1"]["rec"]["psnr"].pop()
+    (bad / "table2_per_image.json").write_text(json.dumps(per))
+    with pytest.raises(UsageError, match=r"seed 1, lens hybrid, 0.1 m, rec psnr: 3 values for "
+                                         r"4 crops"):
+        merge.run(["--out", str(tmp_path / "m2"), str(out2), str(bad)])
+    del per["values"]["1"]["hybrid"]
+    (bad / "table2_per_image.json").write_text(json.dumps(per))
+    with pytest.raises(UsageError, match=r"per-crop values of seed 1, lens hybrid are missing"):
+        merge.run(["--out", str(tmp_path / "m2"), str(out2), str(bad)])
     # Runs written by a version with an option this one lacks still merge with each other.
     for name, src in (("f0", out2), ("f1", tmp_path / "s1")):
         shutil.copytree(src, tmp_path / name)

@@ -505,9 +505,9 @@ def render(
         ``[rows, cols, C]`` sensor image in the scene's dtype.
 
     Raises:
-        ValueError: for a scene that is not ``[H, W, C]`` float with C matching the
-            wavelengths, an aspect ratio unlike the sensor's, a non-positive spp, a missing
-            sensor, an unknown method or a non-positive depth.
+        ValueError: for a scene that is not ``[H, W, C]`` float, finite and non-negative,
+            with C matching the wavelengths, an aspect ratio unlike the sensor's, a
+            non-positive spp, a missing sensor, an unknown method or a non-positive depth.
     """
     if isinstance(method, str):
         raise TypeError(f"render: method is a render method object, not a string: use "
@@ -553,6 +553,8 @@ def render(
         raise ValueError(f"render: scene is empty (shape {scene.shape}); it needs at least one "
                          f"pixel and channel")
     scene = checks.finite_array(scene, "scene", "render", "linear pixel values")
+    if not checks.is_traced(scene):  # radiance is never negative: e.g. an image in [-1, 1]
+        checks.values(scene, "scene", "render", lo=0.0, unit="(linear radiance)")
     wls = checks.wavelengths(lens, wls, "render", "wavelengths")
     checks.material_indices(lens, wls, "render", "wavelengths")
     rows, cols = sensor.resolution

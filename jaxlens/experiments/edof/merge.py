@@ -54,7 +54,41 @@ def read_run(folder: str) -> dict:
         if missing:
             raise UsageError(f"{os.path.join(folder, stem + '.json')} is not an EDoF run's "
                              f"{key}: it has no {', '.join(missing)}")
+    _check_values(data, os.path.join(folder, "table2_per_image.json"))
     return data
+
+
+def _check_values(data: dict, path: str) -> None:
+    """Every listed seed has, for every lens, the same depths, kinds and metrics as the
+    first, each with one value per crop (values[seed][lens][depth][kind][metric])."""
+    per_image, lenses = data["table2_per_image"], list(data["table2"]["light_on_sensor"])
+    values, n = per_image["values"], len(per_image["crops"])
+
+    def layout(entry):  # {depth: {kind: [metrics]}} of a well-formed entry, else None
+        if not (isinstance(entry, dict) and entry and all(
+                isinstance(k, dict) and all(isinstance(m, dict) for m in k.values())
+                for k in entry.values())):
+            return None
+        return {d: {k: sorted(m) for k, m in kinds.items()} for d, kinds in entry.items()}
+
+    first = None
+    for s in per_image["seeds"]:
+        for lens in lenses:
+            seed_values = values.get(str(s)) if isinstance(values, dict) else None
+            entry = seed_values.get(lens) if isinstance(seed_values, dict) else None
+            shape = layout(entry)
+            first = shape if first is None else first
+            if shape is None or shape != first:
+                raise UsageError(f"{path}: the per-crop values of seed {s}, lens {lens} are "
+                                 f"missing or laid out unlike the others")
+            for depth, kinds in entry.items():
+                for kind, metrics in kinds.items():
+                    for metric, xs in metrics.items():
+                        if not isinstance(xs, list) or len(xs) != n:
+                            raise UsageError(
+                                f"{path}: seed {s}, lens {lens}, {depth} m, {kind} {metric}: "
+                                f"{len(xs) if isinstance(xs, list) else 'no list of'} values "
+                                f"for {n} crops")
 
 
 def _same(runs: list[dict], folders: list[str], what: str, get) -> None:
