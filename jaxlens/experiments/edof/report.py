@@ -3,6 +3,7 @@ Markdown form and the figures, made from the per-crop values that ``cli`` collec
 
 from __future__ import annotations
 
+import functools
 import math
 import os
 
@@ -82,27 +83,37 @@ def table2(per_image, names, seeds, crop_info, test_names, source, base, light, 
     }
 
 
-def _fov(lens) -> float:
-    """Diagonal field of view (degrees, object at infinity): twice the field angle whose
-    real chief ray lands on the sensor corner (distortion included)."""
+@functools.cache
+def _chief_height():
+    """Jitted (lens, field angle) -> (|chief-ray height on the image|, valid): one program
+    for every call with lenses of one layout, not one per call."""
     import jax
     import jax.numpy as jnp
 
     import jaxlens
-    from jaxlens.imaging.aiming import apertured, stop_chief_ray
-
-    half = 0.5 * math.hypot(*[float(v) for v in lens.sensor.size])
-    lens = apertured(lens.astype(jnp.float64))
+    from jaxlens.imaging.aiming import stop_chief_ray
 
     @jax.jit
-    def chief(th):
+    def chief(lens, th):
         out = jaxlens.trace(lens, stop_chief_ray(lens, jnp.stack([0.0 * th, th])))
         return jnp.abs(out.origin[0, 1]), out.valid[0]  # (the image is inverted)
 
+    return chief
+
+
+def _fov(lens) -> float:
+    """Diagonal field of view (degrees, object at infinity): twice the field angle whose
+    real chief ray lands on the sensor corner (distortion included)."""
+    import jax.numpy as jnp
+
+    from jaxlens.imaging.aiming import apertured
+
+    half = 0.5 * math.hypot(*[float(v) for v in lens.sensor.size])
+    lens = apertured(lens.astype(jnp.float64))
     lo, hi = 0.0, 89.0
     for _ in range(40):  # bisection: the chief-ray height grows with the field angle
         mid = 0.5 * (lo + hi)
-        h, ok = chief(jnp.asarray(mid))
+        h, ok = _chief_height()(lens, jnp.asarray(mid))
         lo, hi = (mid, hi) if bool(ok) and float(h) < half else (lo, mid)
     return 2 * lo
 
