@@ -443,24 +443,17 @@ def test_smoke_run_writes_outputs_loss_falls_and_resumes(tmp_path):
     assert json.loads((tmp_path / "edof3" / "table2.json").read_text())["lenses"] == \
         table["lenses"]
     assert third["timings_s"]["train_hybrid_s0_s"] < 5.0
-    # A second seed run on its own, merged with the first (edof.merge), gives the table of
-    # one run over both seeds; the merge refuses runs that share a seed or differ otherwise.
+    # edof.merge at smoke cost: the resumed run and a copy relabelled as seed 1 (the merge's
+    # equality with a two-seed run is checked by the slow test below); its refusals.
     from jaxlens.experiments.edof import merge
     from jaxlens.experiments.runfolder import UsageError
 
-    edof.run(common + ["--seeds", "1", "--out", str(tmp_path / "s1"), "--checkpoint", str(ck),
-                       "--resume"])
-    edof.run(common + ["--seeds", "0,1", "--out", str(tmp_path / "s01"), "--checkpoint",
-                       str(ck), "--resume"])
+    _relabelled(out2, tmp_path / "s1", seed=1)
     merged = merge.run(["--out", str(tmp_path / "merged"), str(out2), str(tmp_path / "s1")])
-    m, both = (json.loads((tmp_path / f / "table2.json").read_text()) for f in ("merged", "s01"))
-    assert m["seeds"] == both["seeds"] == [0, 1]
-    for key in ("lenses", "gain_vs_classical", "gain_per_seed", "light_on_sensor",
-                "gain_vs_classical_image_balanced", "rec_psnr_by_image", "psf_depth_variation",
-                "test", "base_lens"):
-        assert m[key] == both[key], key
-    assert merged["checks"] == json.loads((tmp_path / "s01" / "summary.json").read_text())[
-        "checks"]
+    m = json.loads((tmp_path / "merged" / "table2.json").read_text())
+    assert m["seeds"] == [0, 1] and _flat(m["lenses"]) == pytest.approx(
+        _flat(table["lenses"]), rel=1e-14)  # the mean of two equal seeds, to rounding
+    assert m["gain_per_seed"]["hybrid"]["0.1"] == 2 * table["gain_per_seed"]["hybrid"]["0.1"]
     assert "seeds [1]" in (tmp_path / "merged" / "table2.md").read_text()
     with pytest.raises(UsageError, match="seed 0 is in both"):
         merge.run(["--out", str(tmp_path / "m2"), str(out2), str(tmp_path / "edof3")])
@@ -487,6 +480,12 @@ def test_smoke_run_writes_outputs_loss_falls_and_resumes(tmp_path):
     (bad / "table2_per_image.json").write_text(json.dumps(per))
     with pytest.raises(UsageError, match=r"per-crop values of seed 1, lens hybrid are missing"):
         merge.run(["--out", str(tmp_path / "m2"), str(out2), str(bad)])
+    shutil.copy(tmp_path / "s1" / "table2_per_image.json", bad / "table2_per_image.json")
+    summ = json.loads((tmp_path / "s1" / "summary.json").read_text())
+    summ["config"]["steps2"] += 2
+    (bad / "summary.json").write_text(json.dumps(summ))
+    with pytest.raises(UsageError, match=r"other options \(steps2\)"):
+        merge.run(["--out", str(tmp_path / "m2"), str(out2), str(bad)])
     # Runs written by a version with an option this one lacks still merge with each other.
     for name, src in (("f0", out2), ("f1", tmp_path / "s1")):
         shutil.copytree(src, tmp_path / name)
@@ -499,6 +498,54 @@ def test_smoke_run_writes_outputs_loss_falls_and_resumes(tmp_path):
     with pytest.raises(UsageError, match="holds an earlier run"):
         merge.run(["--out", str(tmp_path / "merged"), str(out2), str(tmp_path / "s1")])
     assert not (tmp_path / "m2").exists()
+
+
+def _flat(tree: dict, path: str = "") -> dict:
+    """A nested dict of numbers as ``{"a/b/c": number}``."""
+    out = {}
+    for k, v in tree.items():
+        out.update(_flat(v, f"{path}{k}/") if isinstance(v, dict) else {f"{path}{k}": v})
+    return out
+
+
+def _relabelled(src, dst, *, seed):
+    """A copy of a one-seed run folder whose per-crop values are filed under ``seed``."""
+    shutil.copytree(src, dst)
+    per = json.loads((dst / "table2_per_image.json").read_text())
+    (old,) = per["seeds"]
+    per["seeds"], per["values"] = [seed], {str(seed): per["values"][str(old)]}
+    (dst / "table2_per_image.json").write_text(json.dumps(per))
+
+
+@pytest.mark.slow
+def test_merge_extension_and_evaluation_options_of_the_smoke_run(tmp_path):
+    """Slow (CI runs the smoke above): a second seed run on its own and merged with the
+    first gives the table of one run over both seeds; an evaluation-only option resumes the
+    trained lenses; a longer stage 2 extends them, a shorter one is refused."""
+    from jaxlens.experiments.edof import cli as edof
+
+    common = ["--smoke", "--quiet", "--lenses", "classical,hybrid", "--max-crops", "4"]
+    out2, ck = tmp_path / "edof2", tmp_path / "ck"
+    edof.run(common + ["--out", str(out2), "--checkpoint", str(ck)])
+    table = json.loads((out2 / "table2.json").read_text())
+    # A second seed run on its own, merged with the first (edof.merge), gives the table of
+    # one run over both seeds; the merge refuses runs that share a seed or differ otherwise.
+    from jaxlens.experiments.edof import merge
+    from jaxlens.experiments.runfolder import UsageError
+
+    edof.run(common + ["--seeds", "1", "--out", str(tmp_path / "s1"), "--checkpoint", str(ck),
+                       "--resume"])
+    edof.run(common + ["--seeds", "0,1", "--out", str(tmp_path / "s01"), "--checkpoint",
+                       str(ck), "--resume"])
+    merged = merge.run(["--out", str(tmp_path / "merged"), str(out2), str(tmp_path / "s1")])
+    m, both = (json.loads((tmp_path / f / "table2.json").read_text()) for f in ("merged", "s01"))
+    assert m["seeds"] == both["seeds"] == [0, 1]
+    for key in ("lenses", "gain_vs_classical", "gain_per_seed", "light_on_sensor",
+                "gain_vs_classical_image_balanced", "rec_psnr_by_image", "psf_depth_variation",
+                "test", "base_lens"):
+        assert m[key] == both[key], key
+    assert merged["checks"] == json.loads((tmp_path / "s01" / "summary.json").read_text())[
+        "checks"]
     # An evaluation-only option (--eval-pupil) resumes the trained lenses and evaluates them
     # anew; an option that changes the training refuses the checkpoint.
     fourth = edof.run(common + ["--out", str(tmp_path / "edof4"), "--checkpoint", str(ck),
@@ -513,7 +560,7 @@ def test_smoke_run_writes_outputs_loss_falls_and_resumes(tmp_path):
     # A longer stage 2 extends the finished lenses and evaluates them anew (its cached
     # evaluation was made with the shorter training): the same table as a run straight
     # through with it. A shorter one than the lenses have done is refused.
-    # (The classical lens only, to keep CI short: the mechanism is the same for every lens.
+    # (The classical lens only, to keep the test short: the mechanism is the same for every lens.
     # The straight run goes first: the extension then reuses its compiled programs.)
     longer = ["--smoke", "--quiet", "--lenses", "classical", "--max-crops", "4", "--steps2", "4"]
     edof.run(longer + ["--out", str(tmp_path / "edof7")])

@@ -169,10 +169,6 @@ class DesignSpec:
         t2 = math.tan(math.radians(self.half_fov)) ** 2
         return self.efl, (self.focal_length / self.efl - 1.0) / t2
 
-    def focal_length_at(self, fov: float) -> float:
-        """Focal length implied by a (stage) FoV on this sensor, mm."""
-        return self.half_diagonal / math.tan(math.radians(0.5 * fov))
-
     @property
     def sensor_size(self) -> tuple[float, float]:
         """(height, width) in mm."""
