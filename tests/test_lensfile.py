@@ -1,5 +1,6 @@
 """JSON lens files: reference cases, bit-exact round trips, materials, errors."""
 
+import dataclasses
 import json
 import pathlib
 import re
@@ -169,11 +170,29 @@ def test_sample_lenses_load():
     for p in paths:
         lens = jaxlens.load(p)
         assert np.isfinite(float(jaxlens.efl(lens)))
-    # The .zmx samples are the .json samples written by save().
+    # The .zmx samples are the .json samples written by save() (a .zmx has no description).
     for p in DATA.glob("*.zmx"):
-        assert_same_lens(jaxlens.load(p.with_suffix(".json")), jaxlens.load(p))
+        twin = dataclasses.replace(jaxlens.load(p.with_suffix(".json")), description="")
+        assert_same_lens(twin, jaxlens.load(p))
     dg = jaxlens.load(DATA / "double_gauss.json")  # aperture given as F/5
     assert float(jaxlens.efl(dg) / dg.epd) == pytest.approx(5.0, rel=1e-14)
+
+
+def test_description_is_kept_by_load_and_save(tmp_path):
+    """A JSON file's free-text description survives load → save → load; a non-string one
+    is refused naming the file."""
+    lens = jaxlens.load(DATA / "cooke_triplet.json")
+    assert lens.description.startswith("Cooke triplet, f = 50 mm, F/5.")
+    path = tmp_path / "lens.json"
+    jaxlens.save(lens, path)
+    assert json.loads(path.read_text())["description"] == lens.description
+    assert_same_lens(jaxlens.load(path), lens)
+    jaxlens.save(dataclasses.replace(lens, description=""), path)
+    assert "description" not in json.loads(path.read_text())
+    d = json.loads((DATA / "cooke_triplet.json").read_text())
+    d["description"] = ["not", "text"]
+    with pytest.raises(ValueError, match=r"x.json: description must be a string, got list"):
+        lensfile.lens_from_dict(d, source="x.json")
 
 
 def _doc_lenses():

@@ -1,7 +1,8 @@
 """The keys a JSON lens file may hold, and the refusal of near misses and synonyms.
 
-The reader ignores unknown keys, so that informational data (``description``, ``paraxial``,
-``semi_diameter_real_rays``, …) can live in the same file. A misspelled known key
+The reader ignores unknown keys, so that informational data (``paraxial``,
+``semi_diameter_real_rays``, …) can live in the same file (``description`` is read, as
+``Lens.description``). A misspelled known key
 (``"wavelength_nm"``, ``"radus"``, ``"Thickness"``) or a synonym of one from another program
 (``"glass"``, ``"R"``, ``"k"``, ``"stop"``) would then silently fall back to its default, so
 such a key is refused instead, naming the key this format uses. Each table maps the keys of

@@ -671,9 +671,12 @@ def lens_from_dict(d: dict, *, source: str = "<lens>") -> Lens:
         if len(res) != 2 or min(res) <= 0 or not pix > 0:
             raise ValueError(f"{source}: bad sensor {sd!r}")
         sensor = Sensor(res, _arr(pix))
-    name = d.get("name", "")
+    name, description = d.get("name", ""), d.get("description", "")
     if not isinstance(name, str):
         raise ValueError(f"{source}: name must be a string")
+    if not isinstance(description, str):
+        raise ValueError(f"{source}: description must be a string, got "
+                         f"{type(description).__name__}")
     aperture = _aperture_of(d, source)
     key = next((k for k in ("wavelengths_um", "wavelengths_nm", "wavelengths") if k in d),
                "wavelengths")
@@ -694,6 +697,7 @@ def lens_from_dict(d: dict, *, source: str = "<lens>") -> Lens:
         image=image,
         sensor=sensor,
         name=name,
+        description=description,
     )
     # Before the paraxial work of the aperture: values the lens cannot be traced with.
     checks.wavelengths(lens, wl, f"{source}: {key}", "wavelength")
@@ -730,6 +734,7 @@ def lens_to_dict(lens: Lens) -> dict:
     out = {
         "format": FORMAT,
         "name": lens.name,
+        **({"description": lens.description} if lens.description else {}),
         "units": {"length": "mm", "wavelength": "um", "angle": "deg"},
         "aperture": {"epd": _out(lens.epd)},
         "fields": {

@@ -160,6 +160,8 @@ class Lens(eqx.Module):
     apertures: tuple[tuple[int, Aperture], ...] = eqx.field(
         static=True, default=(), converter=lambda a: tuple(
             tuple(e) if isinstance(e, (list, tuple)) else e for e in a))
+    # Free text (provenance, source of the prescription): kept by JSON load and save.
+    description: str = eqx.field(static=True, default="")
 
     def __check_init__(self):
         n = len(self.surfaces)
