@@ -672,11 +672,9 @@ def lens_from_dict(d: dict, *, source: str = "<lens>") -> Lens:
             raise ValueError(f"{source}: bad sensor {sd!r}")
         sensor = Sensor(res, _arr(pix))
     name, description = d.get("name", ""), d.get("description", "")
-    if not isinstance(name, str):
-        raise ValueError(f"{source}: name must be a string")
-    if not isinstance(description, str):
-        raise ValueError(f"{source}: description must be a string, got "
-                         f"{type(description).__name__}")
+    for key, text in (("name", name), ("description", description)):
+        if not isinstance(text, str):
+            raise ValueError(f"{source}: {key} must be a string, got {type(text).__name__}")
     aperture = _aperture_of(d, source)
     key = next((k for k in ("wavelengths_um", "wavelengths_nm", "wavelengths") if k in d),
                "wavelengths")
