@@ -294,6 +294,54 @@ def test_apertures():
     assert float(lens.surfaces[0].semi_diameter) == 3.0  # fixed semi-diameter clips
 
 
+
+def _thin_lenses(head, *focal_lengths, gap=100.0, obj="  DISZ 100\n"):
+    """Ideal thin lenses (PARAXIAL), the first the stop, ``gap`` mm apart, then the image."""
+    surfs = "".join(f"SURF {i}\n{'  STOP' + chr(10) if i == 1 else ''}  TYPE PARAXIAL\n"
+                    f"  PARM 1 {f}\n  PARM 2 2\n  DISZ {gap}\n"
+                    for i, f in enumerate(focal_lengths, start=1))
+    return (f"UNIT MM\n{head}WAVM 1 0.55 1\nSURF 0\n{obj}{surfs}"
+            f"SURF {len(focal_lengths) + 1}\n  DISZ 0\n")
+
+
+def test_paraxial_working_fnum():
+    """FNUM x 1 is the paraxial working F/# 1/(2 n′ u′). A thin lens of f = 50 mm imaging
+    an object 100 mm away at 1:1, stop at the lens: u′ = (D/2)/100, so F/5 means D = 20 mm.
+    At infinity u′ = (D/2)/f: the same EPD as the image-space F/# (FNUM x 0)."""
+    lens = zmx.loads(_thin_lenses("FNUM 5 1\n", 50.0))
+    assert float(lens.epd) == pytest.approx(20.0, rel=1e-12)
+    far = _minimal("  STOP\n  CURV 0.02\n", head="FNUM 4 1\nWAVM 1 0.55 1\n")
+    assert float(zmx.loads(far).epd) == pytest.approx(
+        float(zmx.loads(far.replace("FNUM 4 1", "FNUM 4 0")).epd), rel=1e-12)
+    with pytest.raises(ValueError, match=r"t.zmx:2: F/# type must be 0 \(image space\) or 1"):
+        zmx.loads(_thin_lenses("FNUM 5 2\n", 50.0), "t.zmx")
+    # A telescope (f = 50 mm twice, 100 mm apart) leaves the marginal ray parallel.
+    with pytest.raises(ValueError, match=r"t.zmx:2: .*afocal lens.*'FNUM 5 1'"):
+        zmx.loads(_thin_lenses("FNUM 5 1\n", 50.0, 50.0, obj="  DISZ INFINITY\n"), "t.zmx")
+
+
+@pytest.mark.parametrize("obj, line, what", [
+    ("  CURV 0.01\n", 6, r"CURV 0.01"),
+    ("  TYPE TILTSURF\n  PARM 2 -1\n", 7, r"PARM 2 -1"),
+    ("  TYPE COORDBRK\n", 6, r"TYPE COORDBRK"),
+])
+def test_a_finite_object_must_be_a_plane(obj, line, what):
+    """jaxlens objects are planes normal to the axis: a curved or tilted object surface at a
+    finite distance is refused with its line, not read as a plane; at infinity its shape does
+    not matter."""
+    text = _thin_lenses("ENPD 10\n", 50.0, obj=f"  DISZ 100\n{obj}")
+    with pytest.raises(ValueError, match=rf"t.zmx:{line}: the object surface at a finite "
+                                         rf"distance must be a plane.*{what}"):
+        zmx.loads(text, "t.zmx")
+    far = zmx.loads(text.replace("DISZ 100\n", "DISZ INFINITY\n", 1), "t.zmx")
+    assert far.object_distance is None
+
+
+def test_tolerance_comments_are_known():
+    """TCMM (a tolerance operand's comment) is a keyword Zemax writes; strict mode accepts it."""
+    zmx.loads(_minimal("  STOP\n  CURV 0.02\n", extra="TOL TRAD 1 0 -0.1 0.1 0 0 0\n"
+                       "TCMM Default radius tolerances.\n"), strict=True)
+
 BAD = [
     ("  CURV abc\n", "", 7, r"curvature is not a number"),
     ("  CURV 1e999\n", "", 7, r"curvature must be finite"),

@@ -16,13 +16,14 @@ SETTINGS = frozenset("""
     APMN APMX APCX APCY APDX APDY APTP OBSF FLAP MEMA OEMA POPS HIDE MIRR SLAB
     COAT FIMP CTHK EDGE THSO TRAC VARI VDSZ WAVL XFLN YFLN PPAR BLKS BLNK CAMA GLCZ HIDX
     TCEX MAZH MIND MXWL MNWL OPTI NSCS NSOA NSOD NSOO NSOP NSOQ NSOS NSOU NSOV NSOW GCAT
-    OMMA SCBD TCED XDVA MOD2 RWRE TOLP CSUM DBDT AUTH LUID SSID RCMF XAIM YAIM ZAIM
+    OMMA SCBD TCED XDVA MOD2 RWRE TOLP CSUM DBDT AUTH LUID SSID RCMF XAIM YAIM ZAIM TCMM
     """.split())
 """Lens-data settings the reader ignores (``OMMA``: the optimisation method; ``SCBD``: a
 surface's coordinate-break-after-surface data written as all zeros by OpticStudio; ``CSUM``:
-a checksum; ``DBDT``: the stock-lens database record of a vendor's file; ``AUTH``, ``LUID``,
-``SSID``, ``RCMF``: OpticStudio's author, lens and surface ids and a file flag; ``XAIM``,
-``YAIM``, ``ZAIM``: ray-aiming settings, which jaxlens does not model: ``RAIM`` says so)."""
+a checksum; ``TCMM``: a tolerance operand's comment; ``DBDT``: the stock-lens database record
+of a vendor's file; ``AUTH``, ``LUID``, ``SSID``, ``RCMF``: OpticStudio's author, lens and
+surface ids and a file flag; ``XAIM``, ``YAIM``, ``ZAIM``: ray-aiming settings, which jaxlens
+does not model: ``RAIM`` says so)."""
 
 CONFIG_OPERANDS = frozenset("""
     THIC CRVT CONN GLSS SDIA APER XFIE YFIE FLWT WAVE WLWT TEMP PRES

@@ -15,14 +15,13 @@ from ..optics import checks
 from ..optics.apertures import Aperture
 from ..optics.catalog import decode_zemax_text as decode
 from ..optics.coordinates import CoordinateBreak
-from ..optics.lens import INFINITE_OBJECT_MM, Lens, Sensor
+from ..optics.lens import INFINITE_OBJECT_MM, Lens
 from ..optics.materials import Air
 from ..optics.surfaces import AbstractSurface, EvenAsphere, Hybrid, Standard
 from . import zmx_surfaces, zmx_system
 from .lensfile import apply_aperture
 from .zmx_common import (
     HYBRID_COMMENT,
-    SENSOR_COMMENT,
     ZmxWarning,
     report,
     term_index,
@@ -106,6 +105,7 @@ class _Surf:
     type: str = "STANDARD"
     type_line: _Line | None = None
     curv: float = 0.0
+    curv_line: _Line | None = None
     disz: float = 0.0
     disz_line: _Line | None = None
     coni: float = 0.0
@@ -188,7 +188,7 @@ def _surface_line(s: _Surf, key: str, ln: _Line) -> None:
             raise ln.error("TYPE needs a surface type")
         s.type, s.type_line = ln.tokens[1].upper(), ln
     elif key == "CURV":
-        s.curv = ln.float(1, "curvature")
+        s.curv, s.curv_line = ln.float(1, "curvature"), ln
     elif key == "DISZ":
         s.disz, s.disz_line = ln.float(1, "thickness", allow_inf=True), ln
     elif key == "CONI":
@@ -251,10 +251,11 @@ def _top_line(f: _File, key: str, ln: _Line, raw: str) -> None:
         f.unit = _UNITS[u]
     elif key == "ENPD":
         f.aperture = ("epd", ln.float(1, "entrance pupil diameter"), ln)
-    elif key == "FNUM":
-        if len(ln.tokens) > 2 and ln.int(2, "F/# type") != 0:
-            raise ln.error("only the image-space F/# (FNUM x 0) is supported")
-        f.aperture = ("fnum", ln.float(1, "F/#"), ln)
+    elif key == "FNUM":  # FNUM x 0: image-space F/#; FNUM x 1: paraxial working F/#
+        kind = ln.int(2, "F/# type") if len(ln.tokens) > 2 else 0
+        if kind not in (0, 1):
+            raise ln.error(f"F/# type must be 0 (image space) or 1 (paraxial working), got {kind}")
+        f.aperture = ("wfno" if kind else "fnum", ln.float(1, "F/#"), ln)
     elif key == "FLOA":
         f.aperture = ("float", 0.0, ln)
     elif key == "OBNA":
@@ -528,21 +529,6 @@ def _wavelengths(f: _File) -> tuple[np.ndarray, int]:
     return np.array(wl, np.float64), primary
 
 
-def _sensor(img: _Surf, unit: float) -> Sensor | None:
-    """The sensor recorded in the image surface's comment by ``save_zmx``, if any."""
-    hit = SENSOR_COMMENT.search(img.comment)
-    if hit is None:
-        return None
-    try:
-        pixel = float(hit.group(3))
-    except ValueError:
-        pixel = math.nan
-    rows, cols = int(hit.group(1)), int(hit.group(2))
-    if not pixel > 0 or not math.isfinite(pixel) or rows <= 0 or cols <= 0:
-        raise img.line.error(f"bad sensor in the image surface comment {img.comment!r}")
-    return Sensor((rows, cols), _arr(pixel * unit))
-
-
 def _check_structure(f: _File, text: str, strict: bool) -> None:
     """Refuse a file that is cut off or has incomplete surface blocks; report unknown keywords.
 
@@ -721,6 +707,7 @@ def loads(text: str, path: str = "<zmx>", *, strict: bool = False,
         # relative size 1e-20, which no float can aim
     if not dist > 0:
         raise (obj.disz_line or obj.line).error("object distance must be > 0 or INFINITY")
+    zmx_surfaces.check_object_plane(obj, dist)
     wl, primary = _wavelengths(f)
     _check_image_medium(f, body)
     zmx_system.ray_aiming(f.raim, f.path)
@@ -739,7 +726,7 @@ def loads(text: str, path: str = "<zmx>", *, strict: bool = False,
         object_distance=_arr(dist),
         object_material=obj_mat,
         image=_surface(img, u),
-        sensor=_sensor(img, u),
+        sensor=zmx_surfaces.sensor(img, u),
         name=f.name,
         mirrors=tuple(mirrors),
         obscurations=_obscurations(body, u),
@@ -766,8 +753,9 @@ def loads(text: str, path: str = "<zmx>", *, strict: bool = False,
         raise ValueError(f"{path}: no aperture (ENPD, FNUM, FLOA or OBNA line)")
     kind, value, ln = f.aperture
     try:
-        if kind in ("obna", "cone"):
-            epd = zmx_system.epd_from_object_na(lens, value, kind == "cone")
+        if kind in ("obna", "cone", "wfno"):
+            epd = (zmx_system.epd_from_working_fnum(lens, value) if kind == "wfno" else
+                   zmx_system.epd_from_object_na(lens, value, kind == "cone"))
             return apply_aperture(lens, epd=epd)
         if kind == "epd":
             if not value > 0:

@@ -18,14 +18,16 @@ from __future__ import annotations
 
 import decimal
 import fractions
+import math
 
 import jax.numpy as jnp
 import numpy as np
 
 from ..optics import paraxial
-from ..optics.lens import Lens
+from ..optics.lens import Lens, Sensor
 from ..optics.paraxial_surface import ParaxialSurface
 from ..optics.toroidal import Toroidal
+from .zmx_common import SENSOR_COMMENT
 
 OPD_MODES = {0: "real parabasal conjugates", 1: "integrated phase", 2: "infinite conjugates",
              3: "paraxial conjugates"}
@@ -150,3 +152,35 @@ def surface_lines(s, z) -> list[str] | None:
     if isinstance(s, ParaxialSurface):
         return ["TYPE PARAXIAL", 'CURV 0 0 0 0 0 ""', f"PARM 1 {z(s.focal_length)}", "PARM 2 2"]
     return None
+
+
+def sensor(img, unit: float) -> Sensor | None:
+    """The sensor recorded in the image surface's comment by ``save_zmx``, if any."""
+    hit = SENSOR_COMMENT.search(img.comment)
+    if hit is None:
+        return None
+    try:
+        pixel = float(hit.group(3))
+    except ValueError:
+        pixel = math.nan
+    rows, cols = int(hit.group(1)), int(hit.group(2))
+    if not pixel > 0 or not math.isfinite(pixel) or rows <= 0 or cols <= 0:
+        raise img.line.error(f"bad sensor in the image surface comment {img.comment!r}")
+    return Sensor((rows, cols), _arr(pixel * unit))
+
+
+def check_object_plane(obj, distance: float) -> None:
+    """Refuse a finite object whose surface is not a plane normal to the axis (a curved
+    object, a TILTSURF's tilted plane, aspheric terms): a jaxlens object is such a plane, and
+    reading the file as one would move its object points. At infinity the shape is moot."""
+    if math.isinf(distance):
+        return
+    where = obj.type_line or obj.line
+    terms = [ln for _, (v, ln) in sorted(obj.parm.items()) + sorted(obj.xdat.items()) if v != 0]
+    if obj.type not in ("STANDARD", "EVENASPH", "TILTSURF") or obj.curv != 0 or terms:
+        what = (f"TYPE {obj.type}" if obj.type not in ("STANDARD", "EVENASPH", "TILTSURF")
+                else f"CURV {obj.curv:g}" if obj.curv != 0 else " ".join(terms[0].tokens[:3]))
+        at = obj.curv_line if obj.curv != 0 else terms[0] if terms else where
+        raise at.error(
+            f"the object surface at a finite distance must be a plane normal to the axis "
+            f"(CURV 0, no tilt or terms); it has {what}, which jaxlens cannot represent")

@@ -1,6 +1,7 @@
-"""System data of a ``.zmx`` file beyond surfaces: the object-space NA aperture (``OBNA``),
-field types (``FTYP``; paraxial and real image heights converted to angles), vignetting factors and
-ray aiming (``RAIM``). The format: ``jaxlens.io.zmx``."""
+"""System data of a ``.zmx`` file beyond surfaces: the object-space NA and paraxial working
+F/# apertures (``OBNA``, ``FNUM x 1``), field types (``FTYP``; paraxial and real image heights
+converted to angles), vignetting factors and ray aiming (``RAIM``). The format:
+``jaxlens.io.zmx``."""
 
 from __future__ import annotations
 
@@ -56,6 +57,25 @@ def epd_from_object_na(lens: Lens, value: float, cone_angle: bool) -> float:
             f"object-space NA does not define a pupil there"
         )
     return 2.0 * to_pupil * math.tan(u)
+
+
+def epd_from_working_fnum(lens: Lens, fnum: float) -> float:
+    """Entrance pupil diameter (mm) from the paraxial working F/# (``FNUM value 1``),
+    1/(2·n′·u′) with u′ the paraxial marginal ray's slope in image space and n′ its index.
+    n′u′ grows in proportion to the EPD, so one paraxial trace at the lens's EPD gives it.
+
+    Raises:
+        ValueError: for a value not > 0, or an image-space marginal ray parallel to the axis
+            (an afocal lens), where no EPD gives the F/#.
+    """
+    if not fnum > 0:
+        raise ValueError(f"paraxial working F/# must be > 0, got {fnum:g}")
+    _, nu = paraxial.marginal_ray(lens, lens.primary_wavelength)
+    per_mm = abs(float(nu[-1])) / float(lens.epd)
+    if not (per_mm > 0 and math.isfinite(per_mm)):
+        raise ValueError("the paraxial marginal ray leaves the lens parallel to the axis (an "
+                         "afocal lens): no entrance pupil gives a working F/#; use ENPD")
+    return 1.0 / (2.0 * fnum * per_mm)
 
 
 def angles_from_paraxial_image_heights(lens: Lens, heights: np.ndarray) -> Lens:
