@@ -337,6 +337,25 @@ def test_a_finite_object_must_be_a_plane(obj, line, what):
     assert far.object_distance is None
 
 
+def test_environment_other_than_20_c_and_1_atm():
+    """ENVD t p 1 (indices adjusted to t °C, p atm) is refused with its line: jaxlens's indices
+    are the catalogs', relative to air at 20 °C and 1 atm. With the flag 0 the environment is
+    reported (an error under strict); 20 °C and 1 atm, or a lens of mirrors in air, pass."""
+    def text(envd, glass="N-BK7"):
+        return _minimal("  STOP\n  CURV 0.02\n", head=f"ENPD 10\n{envd}WAVM 1 0.55 1\n"
+                        ).replace("GLAS N-BK7", f"GLAS {glass}")
+    with pytest.raises(ValueError, match=r"t.zmx:3: glass indices adjusted to -40 °C and 0 atm"):
+        zmx.loads(text("ENVD -40 0 1\n"), "t.zmx")
+    with pytest.warns(zmx.ZmxWarning, match=r"t.zmx:3: the file's environment \(-40 °C, 0 atm\)"):
+        zmx.loads(text("ENVD -40 0 0\n"), "t.zmx")
+    with pytest.raises(ValueError, match=r"environment.*strict"):
+        zmx.loads(text("ENVD -40 0 0\n"), "t.zmx", strict=True)
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")
+        zmx.loads(text("ENVD 2.0E+1 1 0\n"), "t.zmx")
+        zmx.loads(text("ENVD 20 1 1\n"), "t.zmx")
+        zmx.loads(text("ENVD -40 0 1\n", glass="MIRROR"), "t.zmx")
+
 def test_tolerance_comments_are_known():
     """TCMM (a tolerance operand's comment) is a keyword Zemax writes; strict mode accepts it."""
     zmx.loads(_minimal("  STOP\n  CURV 0.02\n", extra="TOL TRAD 1 0 -0.1 0.1 0 0 0\n"

@@ -130,6 +130,7 @@ class _File:
     unit: float = 1.0
     aperture: tuple[str, float, _Line] | None = None
     pupd: _Line | None = None  # older Zemax writes it beside ENPD/FLOA/…; alone it is refused
+    envd: _Line | None = None  # the environment: temperature (°C), pressure (atm), flag
     gcat: list = field(default_factory=list)
     ftyp: _Line | None = None
     xfln: _Line | None = None
@@ -232,7 +233,7 @@ def _surface_line(s: _Surf, key: str, ln: _Line) -> None:
         s.comment = ln.text.strip()[4:].strip()
 
 
-_TOP_KEYS = frozenset("VERS MODE NAME UNIT ENPD FNUM FLOA OBNA PUPD GCAT FTYP XFLN YFLN "
+_TOP_KEYS = frozenset("VERS MODE NAME UNIT ENPD FNUM FLOA OBNA PUPD ENVD GCAT FTYP XFLN YFLN "
                       "XFLD YFLD WAVM WAVL PWAV RAIM VDXN VDYN VCXN VCYN VANN FWGN FWGT WWGT "
                       "WWGN".split())
 
@@ -267,6 +268,8 @@ def _top_line(f: _File, key: str, ln: _Line, raw: str) -> None:
         f.aperture = ("cone" if kind else "obna", ln.float(1, what), ln)
     elif key == "PUPD":
         f.pupd = ln
+    elif key == "ENVD":
+        f.envd = ln
     elif key in ("VDXN", "VDYN", "VCXN", "VCYN", "VANN"):
         f.vignetting.append(ln)
     elif key == "RAIM":
@@ -692,6 +695,7 @@ def loads(text: str, path: str = "<zmx>", *, strict: bool = False,
             mats.append(mats[-1] if mats else obj_mat)
         else:
             mats.append(glasses.get(s.glas) if s.glas is not None else Air())
+    zmx_system.environment(f.envd, [obj_mat, *mats], strict)
     stops = [i for i, s in enumerate(body) if s.stop]
     for s in (obj, img):
         if s.stop:

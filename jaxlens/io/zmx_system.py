@@ -1,7 +1,7 @@
 """System data of a ``.zmx`` file beyond surfaces: the object-space NA and paraxial working
 F/# apertures (``OBNA``, ``FNUM x 1``), field types (``FTYP``; paraxial and real image heights
-converted to angles), vignetting factors and ray aiming (``RAIM``). The format:
-``jaxlens.io.zmx``."""
+converted to angles), vignetting factors, ray aiming (``RAIM``) and the environment
+(``ENVD``). The format: ``jaxlens.io.zmx``."""
 
 from __future__ import annotations
 
@@ -15,8 +15,9 @@ import numpy as np
 from ..imaging import aiming
 from ..optics import checks, paraxial
 from ..optics.lens import Lens, unclipped
+from ..optics.materials import Air
 from ..tracing import forward
-from .zmx_common import ZmxWarning
+from .zmx_common import ZmxWarning, report
 
 
 def epd_from_object_na(lens: Lens, value: float, cone_angle: bool) -> float:
@@ -278,6 +279,26 @@ def unequal_weights(ln, what: str, weights: list) -> None:
                   f"({shown}); a jaxlens Lens holds no weights, so its figures over several "
                   f"{what} weigh each equally (Zemax's weighted figures differ)", ZmxWarning,
                   stacklevel=5)
+
+
+def environment(ln, materials, strict: bool) -> None:
+    """Check the file's environment (``ENVD`` temperature °C, pressure atm, and a flag, 1 where
+    Zemax adjusts the glass indices to them). jaxlens takes catalog indices relative to air
+    at 20 °C and 1 atm: another environment with the flag set changes every refracting
+    surface's index (1 atm of air alone is 3e-4), so it is refused; with the flag 0 it is
+    reported. Systems of mirrors in air do not depend on it."""
+    if ln is None or len(ln.tokens) < 3 or all(isinstance(m, Air) for m in materials):
+        return
+    t, p = ln.float(1, "temperature (°C)"), ln.float(2, "pressure (atm)")
+    if (t, p) == (20.0, 1.0):
+        return
+    if len(ln.tokens) > 3 and ln.int(3, "ENVD's index adjustment flag") != 0:
+        raise ln.error(f"glass indices adjusted to {t:g} °C and {p:g} atm (ENVD's third value 1) "
+                       f"are not supported; jaxlens uses catalog indices relative to air at "
+                       f"20 °C and 1 atm")
+    report(strict, f"{ln.path}:{ln.number}: the file's environment ({t:g} °C, {p:g} atm) is "
+                   f"ignored; jaxlens uses catalog indices relative to air at 20 °C and 1 atm: "
+                   f"{ln.text.strip()!r}")
 
 
 def ray_aiming(ln, path: str) -> None:
