@@ -99,8 +99,10 @@ def worker(size: int, spp: int, checkpoint: bool, patch: int,
         "rays": size * size * spp * 3,
         "loss": float(val),
         "gradient_finite": finite,
-        "compile_s": round(t1 - t0, 2),
-        "run_s": round(t2 - t1, 2),
+        # Not rounded: a tiny render on a fast machine runs in milliseconds, and the rates
+        # below divide by this time.
+        "compile_s": t1 - t0,
+        "run_s": t2 - t1,
         "ru_maxrss_bytes": resource.getrusage(resource.RUSAGE_SELF).ru_maxrss * 1024,
         # On a GPU the arrays live in device memory, which RSS does not see.
         "device_peak_bytes": (jax.devices()[0].memory_stats() or {}).get("peak_bytes_in_use"),

@@ -94,6 +94,8 @@ def test_lens_refuses_wrong_kinds_of_parts():
         _lens(materials=("N-BK7", jl.Air()))
     with pytest.raises(TypeError, match=r"Lens: surfaces\[0\] must be a surface .*got float"):
         _lens(surfaces=(0.1, jl.Sphere(-1 / 45.0)))
+    with pytest.raises(TypeError, match=r"Lens: description must be a string, got list"):
+        _lens(description=["not", "text"])
 
 
 def test_lens_checks_do_not_break_jit_grad_or_vmap():

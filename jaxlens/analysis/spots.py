@@ -60,6 +60,12 @@ def _as_arrays(lens: Lens, *values):
                  else jnp.asarray(v, lens.epd.dtype) for v in values)
 
 
+def _own_fields(lens: Lens, fields):
+    """``lens.fields`` where ``fields`` is None, so that a call with the lens's fields and
+    one that passes them share one compiled program (None and an array would not)."""
+    return lens.fields if fields is None else fields
+
+
 def spot_rays(
     lens: Lens,
     field,
@@ -169,7 +175,7 @@ def rms_spot(
         with ``valid_fraction`` 0; its gradient is 0, never NaN.
     """
     _concrete_inputs(lens, "rms_spot", fields=fields, wavelengths=wavelengths)
-    fields, wavelengths = _as_arrays(lens, fields, wavelengths)
+    fields, wavelengths = _as_arrays(lens, _own_fields(lens, fields), wavelengths)
     return _rms_spot(lens, fields, wavelengths, pupil=pupil, reference=reference,
                      depth=_depth(lens, depth, "rms_spot"), newton_iters=newton_iters)
 
@@ -178,7 +184,7 @@ def rms_spot(
 def _rms_spot(lens, fields, wavelengths, *, pupil, reference, depth, newton_iters) -> RmsSpot:
     if reference not in ("centroid", "chief"):
         raise ValueError(f"rms_spot: reference must be 'centroid' or 'chief', got {reference!r}")
-    fields = _fields_array(lens.fields if fields is None else fields, "rms_spot")
+    fields = _fields_array(fields, "rms_spot")
     # With the lens's own wavelengths the chief ray is one more pupil point (the centre)
     # of the primary-wavelength trace, so one trace serves both.
     own_wavelengths = wavelengths is None
@@ -255,13 +261,13 @@ def distortion(lens: Lens, fields=None, wavelength=None) -> Distortion:
     """
     _concrete_inputs(lens, "distortion", fields=fields, wavelengths=wavelength,
                      arg_w="wavelength")
-    fields, wavelength = _as_arrays(lens, fields, wavelength)
+    fields, wavelength = _as_arrays(lens, _own_fields(lens, fields), wavelength)
     return _distortion(lens, fields, wavelength)
 
 
 @eqx.filter_jit
 def _distortion(lens, fields, wavelength) -> Distortion:
-    fields = _fields_array(lens.fields if fields is None else fields, "distortion")
+    fields = _fields_array(fields, "distortion")
     wl = lens.primary_wavelength if wavelength is None else wavelength
     if jnp.ndim(wl) != 0:
         raise ValueError(f"distortion: wavelength must be one value (µm), got shape "
@@ -309,7 +315,7 @@ def clear_semi_diameters(lens: Lens, fields=None, n_rim: int = 64, *,
     if not isinstance(reaching, (bool, np.bool_)):
         raise TypeError(f"clear_semi_diameters: reaching must be True or False, got {reaching!r}")
     # ``reaching`` is an array, so that both kinds of height share one compiled program.
-    (fields,) = _as_arrays(lens, fields)
+    (fields,) = _as_arrays(lens, _own_fields(lens, fields))
     return _clear_semi_diameters(lens, fields, n_rim, reaching=jnp.asarray(reaching),
                                  pupil=pupil)
 
@@ -318,7 +324,7 @@ def clear_semi_diameters(lens: Lens, fields=None, n_rim: int = 64, *,
 def _clear_semi_diameters(lens, fields, n_rim, *, reaching, pupil) -> Float[Array, " n"]:
     checks.number(n_rim, "n_rim", "clear_semi_diameters", lo=4, integer=True,
                   unit="rim rays per beam (fewer miss the rim in x or y)")
-    fields = _fields_array(lens.fields if fields is None else fields, "clear_semi_diameters")
+    fields = _fields_array(fields, "clear_semi_diameters")
     a = np.linspace(0, 2 * np.pi, n_rim, endpoint=False)
     rim = jnp.asarray(np.concatenate([[[0.0, 0.0]], np.stack([np.cos(a), np.sin(a)], -1)]),
                       lens.epd.dtype)

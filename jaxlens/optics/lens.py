@@ -208,6 +208,7 @@ class Lens(eqx.Module):
         parts += [(f"materials[{i}]", m, AbstractMaterial, mat)
                   for i, m in enumerate(self.materials)]
         parts.append(("object_material", self.object_material, AbstractMaterial, mat))
+        parts.append(("description", self.description, str, "a string"))
         for arg, v, cls, what in parts:
             if not isinstance(v, cls):
                 raise TypeError(f"Lens: {arg} must be {what}, got {type(v).__name__} {v!r}")
