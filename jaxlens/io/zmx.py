@@ -56,7 +56,8 @@ What is read and written:
       Schott formula through its data points (exact for up to 6 points, least squares
       beyond), and its exact definition in a ``GC jaxlens {...}`` comment record, which
       Zemax ignores and jaxlens reads back, so the round trip loses nothing.
-    * ``ENPD`` (entrance pupil diameter), ``FNUM x 0`` (image-space F/# = EFL/EPD), ``FLOA``
+    * ``ENPD`` (entrance pupil diameter), ``FNUM x 0`` (image-space F/# = EFL/EPD),
+      ``FNUM x 1`` (paraxial working F/# = 1/(2n′u′), u′ the image-space marginal slope), ``FLOA``
       (float by stop size: the stop's CLAP or DIAM), ``OBNA x 0`` (object-space NA) and
       ``OBNA x 1`` (object cone angle, degrees), both read as EPD = 2·d·tan u with d the
       object-to-entrance-pupil distance; ``FTYP 0`` (angle fields), ``FTYP 1`` (object
@@ -71,7 +72,9 @@ What is read and written:
       and the apertures clip. ``PUPD`` beside another aperture line (older Zemax) is
       ignored; alone it is refused. ``RAIM`` with ray aiming on gives a warning (a
       ``Lens`` has no aiming setting; the samplers take ``aim="real"``). ``WAVM`` (or the
-      older ``WAVL``) and ``PWAV``, ``UNIT``, ``NAME``.
+      older ``WAVL``) and ``PWAV``, ``UNIT``, ``NAME``. ``ENVD``: indices adjusted to an
+      environment other than 20 °C and 1 atm are refused; not adjusted, a warning. A finite
+      object must be a plane normal to the axis (a curved or tilted one is refused).
     * The sensor (``Lens.sensor``) is kept in the image surface's comment,
       ``COMM jaxlens sensor rows=480 cols=640 pixel=0.005``, which Zemax ignores.
     * Files are read as UTF-16 (with BOM, Zemax's default), UTF-8 (with or without BOM)
