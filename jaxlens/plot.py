@@ -84,6 +84,7 @@ def plot_layout(lens, fields: Sequence[float] | None = None, *, n_rays: int = 9,
     fmax = float(np.max(np.abs(np.asarray(lens.fields))))
     fields = [0.0, 0.7 * fmax, fmax] if fields is None else list(fields)
     checks.field_angles(fields, "plot_layout", "fields")  # here, not deep in the program
+    checks.number(n_rays, "n_rays", "plot_layout", lo=1, integer=True, unit="rays per fan")
     sd = np.asarray(analysis.clear_semi_diameters(lens)) if semi_diameters is None else \
         np.asarray(semi_diameters)
     zs = np.asarray(lens.vertex_z())
@@ -196,10 +197,20 @@ def plot_rms_map(rms_um, sensor_size, *, title: str | None = None) -> Figure:
         sensor_size: (height, width) in mm.
         title: figure title.
     """
+    from .optics import checks
+
     v = np.asarray(rms_um, float)
     n = int(round(math.sqrt(v.size)))
+    if v.size == 0 or n * n != v.size or v.ndim not in (1, 2):
+        raise ValueError(f"plot_rms_map: rms_um must be [n, n] or [n²] values (µm), got shape "
+                         f"{v.shape}")
     v = v.reshape(n, n)
-    h, w = sensor_size
+    # A negative or swapped size would draw a mirrored map with wrong axis labels.
+    if not isinstance(sensor_size, tuple | list) or len(sensor_size) != 2:
+        raise ValueError(f"plot_rms_map: sensor_size must be (height, width) in mm, got "
+                         f"{sensor_size!r}")
+    h, w = (checks.number(x, "sensor_size", "plot_rms_map", lo=0, lo_open=True, unit="mm")
+            for x in sensor_size)
     fig = _figure(5, 4.2)
     ax = fig.add_subplot(1, 1, 1)
     im = ax.imshow(v, origin="lower", extent=(-w / 2, w / 2, -h / 2, h / 2), cmap="viridis",
@@ -249,6 +260,9 @@ def _mtf_parts(res):
 
 def plot_progress(history, *, title: str | None = None) -> Figure:
     """Spot RMS (µm, log scale) of every design over the steps, stages marked."""
+    if not (hasattr(history, "stages") and hasattr(history, "spot_rms")):
+        raise TypeError(f"plot_progress: history must be a design History (DesignResult."
+                        f"history), got {type(history).__name__}")
     fig = _figure(7, 4)
     ax = fig.add_subplot(1, 1, 1)
     offset = 0
@@ -286,6 +300,11 @@ def plot_image(img, *, title: str | None = None) -> Figure:
 def plot_tolerance_histogram(mc: dict, *, title: str | None = None) -> Figure:
     """Monte-Carlo RMS distribution (``jaxlens.analysis.tolerance.monte_carlo``'s result):
     RMS after refocusing (filled) and without the compensator (outline), µm."""
+    if not (isinstance(mc, dict) and "per_trial" in mc and "nominal" in mc):
+        raise ValueError("plot_tolerance_histogram: mc must be the dict that "
+                         "jaxlens.analysis.tolerance.monte_carlo returns (keys 'per_trial', "
+                         f"'nominal'), got {type(mc).__name__}"
+                         f"{f' with keys {sorted(mc)}' if isinstance(mc, dict) else ''}")
     per = mc["per_trial"]
     rc = np.asarray(per["rms_compensated_um"], float)
     r0 = np.asarray(per["rms_um"], float)

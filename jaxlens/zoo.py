@@ -43,6 +43,8 @@ def _fdc(nf: float, nd: float, nc: float, name: str) -> Tabulated:
 
 
 def _sd(value: float, clip: bool) -> float:
+    if not isinstance(clip, bool):  # "no" or None would read as True or False
+        raise ValueError(f"zoo: clip must be True or False, got {clip!r}")
     return value if clip else float("inf")
 
 

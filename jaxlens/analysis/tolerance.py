@@ -239,6 +239,7 @@ def symmetric_fields(fields) -> tuple[np.ndarray, np.ndarray]:
     if f.ndim != 2 or f.shape[-1] != 2 or f.shape[0] == 0:
         raise ValueError(f"symmetric_fields: fields must be [F] or [F, 2] degrees with F >= 1, "
                          f"got shape {np.shape(fields)}")
+    checks.field_angles(f, "symmetric_fields", "fields")
     key = np.sort(np.abs(f), axis=-1)
     rounded = np.round(key, 9)
     _, first, counts = np.unique(rounded, axis=0, return_index=True, return_counts=True)
@@ -362,6 +363,7 @@ def _check_fields(fields, weights, where):
             or not np.all(np.isfinite(f)):
         raise ValueError(f"{where}: fields must be finite [F] or [F, 2] degrees with F >= 1, "
                          f"got shape {f.shape}")
+    checks.field_angles(f, where, "fields")  # 95° would wrap, found only after the trials
     w = np.ones(f.shape[0]) if weights is None else np.asarray(weights, float)
     if w.shape != (f.shape[0],) or not np.all(np.isfinite(w)) or np.any(w < 0) or w.sum() <= 0:
         raise ValueError(f"{where}: field_weights must be [{f.shape[0]}] finite numbers >= 0 "
@@ -406,6 +408,13 @@ class ToleranceModel:
             self.lens.wavelengths if wavelengths is None else jnp.atleast_1d(
                 jnp.asarray(wavelengths, dtype)), dtype)
         self.pupil = pupil_grid(21, dtype) if pupil is None else jnp.asarray(pupil, dtype)
+        # Checked here: monte_carlo and sensitivity would fail only after compiling the trials.
+        checks.wavelengths(self.lens, self.wavelengths, "ToleranceModel", "wavelengths")
+        if self.pupil.ndim != 2 or self.pupil.shape[0] == 0 or self.pupil.shape[1] != 2:
+            raise ValueError(f"ToleranceModel: pupil must be [M, 2] unit-pupil points with "
+                             f"M >= 1, got shape {np.shape(pupil)}")
+        checks.values(self.pupil, "pupil", "ToleranceModel", lo=-1, hi=1,
+                      unit="(normalised pupil)")
         self.batch = batch
         if apertures not in ("open", "lens"):
             raise ValueError(f"ToleranceModel: apertures must be 'open' or 'lens', got "

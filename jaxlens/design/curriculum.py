@@ -31,14 +31,22 @@ import jax.numpy as jnp
 import numpy as np
 import optax
 
+from ..optics import checks
 from .losses import StageArgs
 from .mask import field_weights
 from .solvers import SolverResult, result_names
 from .spec import DesignSpec
 
+STAGE_SOLVERS = ("adam", "lm", "lm-optx", "lbfgsb")
+"""Solver names a stage may use (``multistart.design`` makes the solvers)."""
+
 
 def sine_path(start: float, end: float, n: int) -> np.ndarray:
     """The paper's schedule t_i = start + (end − start)·sin(i/(2n)·π), i = 0 … n."""
+    # n = 0 is one stage at the end; a negative or fractional n was taken as 0 or truncated.
+    n = checks.number(n, "n", "sine_path", lo=0, integer=True, unit="steps")
+    start = checks.number(start, "start", "sine_path")
+    end = checks.number(end, "end", "sine_path")
     if n < 1:
         return np.array([float(end)])
     i = np.arange(n + 1)
@@ -74,6 +82,25 @@ class Stage:
     regularize: bool = True
     lr: float = 1.0
     loss: str = "ray"
+
+    def __post_init__(self):
+        # run() would otherwise trace a stage of 200° or F/0 to NaN, or skip -1 steps.
+        w = f"Stage {self.name!r}"
+        checks.number(self.fov, "fov", w, lo=0, hi=180, lo_open=True, hi_open=True,
+                      unit="deg (full diagonal)")
+        checks.number(self.fnum, "fnum", w, lo=0, lo_open=True)
+        checks.number(self.steps, "steps", w, lo=0, integer=True)
+        checks.number(self.beta, "beta", w, lo=0, hi=1)
+        checks.number(self.pin, "pin", w, lo=0)
+        checks.number(self.lr, "lr", w, lo=0, lo_open=True, unit="(multiplier)")
+        if self.solver not in STAGE_SOLVERS:
+            raise ValueError(f"{w}: solver must be one of {STAGE_SOLVERS}, got {self.solver!r}")
+        if self.loss not in ("ray", "image"):
+            raise ValueError(f"{w}: loss must be 'ray' or 'image', got {self.loss!r}")
+        for arg in ("mask", "regularize"):
+            if not isinstance(getattr(self, arg), bool):
+                raise ValueError(f"{w}: {arg} must be True or False, got "
+                                 f"{getattr(self, arg)!r}")
 
 
 def paper_stages(
@@ -115,6 +142,12 @@ def paper_stages(
         reference: spot reference of the curriculum stages, ``"ideal"`` (the distortion-free
             image point, as the paper's code) or ``"centroid"`` (with the image-height pin).
     """
+    w = "paper_stages"
+    checks.number(n, "n", w, lo=0, integer=True, unit="curriculum steps")
+    for arg, v in (("steps", steps), ("final_steps", final_steps),
+                   ("polish_steps", polish_steps)):
+        checks.number(v, arg, w, lo=0, integer=True, unit="solver steps")
+    checks.number(pin, "pin", w, lo=0)
     if curriculum:
         fovs = sine_path(spec.fov_start, spec.fov, n)
         fnums = sine_path(spec.fnum_start, spec.fnum, n)

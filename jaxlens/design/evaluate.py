@@ -26,7 +26,7 @@ import jax.numpy as jnp
 import numpy as np
 
 from ..analysis import spots as analysis
-from ..optics import paraxial
+from ..optics import checks, paraxial
 from ..optics.lens import Lens
 from .spec import DesignSpec
 
@@ -35,6 +35,11 @@ MIN_VALID_FRACTION = 0.99
 
 def sensor_field_grid(spec: DesignSpec, n: int = 16) -> tuple[np.ndarray, np.ndarray]:
     """The n × n evaluation fields: ``(angles [n², 2] deg (θx, θy), sensor points [n², 2] mm)``."""
+    # n = 0 gave no fields at all and n = 2.5 a TypeError deep in numpy.
+    checks.number(n, "n", "sensor_field_grid", lo=1, integer=True, unit="fields per side")
+    if not isinstance(spec, DesignSpec):
+        raise TypeError(f"sensor_field_grid: spec must be a DesignSpec, got "
+                        f"{type(spec).__name__}")
     h, w = spec.sensor_size
     f = spec.focal_length
     xs = np.linspace(-1.0, 1.0, n) * w / 2
@@ -76,6 +81,11 @@ class Evaluation:
 def evaluate(lens: Lens, spec: DesignSpec, *, n: int = 16,
              min_valid: float = MIN_VALID_FRACTION) -> Evaluation:
     """Evaluate a design on the n × n sensor grid (see module docstring)."""
+    if not isinstance(lens, Lens):
+        raise TypeError(f"evaluate: lens must be a jaxlens Lens, got {type(lens).__name__}")
+    # min_valid above 1 would call every design invalid, below 0 every one valid.
+    checks.number(min_valid, "min_valid", "evaluate", lo=0, hi=1, unit="(fraction of rays)")
+    checks.number(n, "n", "evaluate", lo=1, integer=True, unit="fields per side")
     lens = lens.astype(jnp.float64)
     lens = eqx.tree_at(lambda l: l.epd, lens, jnp.asarray(spec.epd, jnp.float64))
     ang, _ = sensor_field_grid(spec, n)

@@ -16,6 +16,7 @@ import jax
 import jax.numpy as jnp
 import numpy as np
 
+from ..optics import checks
 from ..optics.lens import Lens, Sensor
 from ..optics.materials import Air
 from ..optics.surfaces import EvenAsphere, Stop
@@ -147,5 +148,12 @@ def random_params(spec: DesignSpec, key, dtype=None) -> LensParams:
 
 def random_starts(spec: DesignSpec, seeds, dtype=None) -> LensParams:
     """Random starts for a list of integer seeds, stacked on a leading axis."""
+    # int() would truncate a seed of 1.5 to 1 and read "12" as two seeds 1 and 2.
+    if isinstance(seeds, str | bytes) or not hasattr(seeds, "__len__") or len(seeds) == 0:
+        raise ValueError(f"random_starts: seeds must be a non-empty list of whole numbers "
+                         f">= 0, got {seeds!r}")
+    for s in seeds:
+        checks.number(s, "seeds", "random_starts", lo=0, integer=True)
+    checks.float_dtype(dtype, "random_starts")
     keys = jnp.stack([jax.random.PRNGKey(int(s)) for s in seeds])
     return jax.vmap(lambda k: random_params(spec, k, dtype))(keys)

@@ -12,6 +12,8 @@ from __future__ import annotations
 import jax.numpy as jnp
 from jaxtyping import Array, Float
 
+from ..optics import checks
+
 MASK_THRESHOLD = 0.8
 
 
@@ -30,6 +32,16 @@ def reweighting_mask(
         ``rms / mean(rms)`` where that is ≥ ``threshold``, else 0. A field grid with a zero
         mean (a perfect lens) gives all ones.
     """
+    # Above 1 every field can be dropped (a uniform grid: zero loss); at most 1 keeps the
+    # worst field, whose normalised error is >= 1.
+    checks.number(threshold, "threshold", "reweighting_mask", lo=0, hi=1,
+                  unit="(fraction of the mean RMS)")
+    checks.real_values(rms, "rms", "reweighting_mask")
+    rms = jnp.asarray(rms)
+    if area is not None and not checks.is_traced(area) and \
+            jnp.shape(area) != jnp.shape(rms)[-1:]:
+        raise ValueError(f"reweighting_mask: area must be [K] = {jnp.shape(rms)[-1:]} (one "
+                         f"share per field of rms), got shape {jnp.shape(area)}")
     w = jnp.ones_like(rms) if area is None else jnp.broadcast_to(area, rms.shape)
     mean = jnp.sum(w * rms, -1, keepdims=True) / jnp.sum(w, -1, keepdims=True)
     ok = mean > 0

@@ -19,7 +19,7 @@ import jax.numpy as jnp
 import numpy as np
 from jax.sharding import Mesh, NamedSharding, PartitionSpec
 
-from ..optics import catalog
+from ..optics import catalog, checks
 from .curriculum import History, Stage, paper_stages, run, stage_args
 from .init import gap_bounds, parameterization, random_starts
 from .losses import ImageObjective, Objective, RayLoss
@@ -119,6 +119,27 @@ class DesignConfig:
     tolerance_nominal_weight: float = 0.5
     population: int = 1
     polish_rings: int = 0
+
+    def __post_init__(self):
+        # A count of 0 fields or rings fails deep inside the jitted loss, a negative step
+        # count silently skips a stage, and "no" for a switch would read as True.
+        w = "DesignConfig"
+        for arg, lo in (("n_fields", 1), ("rings", 1), ("curriculum_n", 0), ("steps", 0),
+                        ("final_steps", 0), ("polish_steps", 0), ("epoch", 1),
+                        ("log_every", 1), ("image_pixels", 1), ("image_spp", 1),
+                        ("tolerance_trials", 0), ("polish_rings", 0)):
+            checks.number(getattr(self, arg), arg, w, lo=lo, integer=True)
+        p = self.population
+        if isinstance(p, bool) or not isinstance(p, int | np.integer) or p < 1:
+            raise ValueError(f"{w}: population must be at least 1 start per design (a whole "
+                             f"number in [1, inf)), got {p!r}")
+        for arg in ("lr_c", "lr_a", "lr_d", "lr_k", "lr_m", "pin", "efl_weight",
+                    "tolerance_nominal_weight"):
+            checks.number(getattr(self, arg), arg, w, lo=0)
+        for arg in ("curriculum", "regularize", "mask", "irls", "float64"):
+            if not isinstance(getattr(self, arg), bool):
+                raise ValueError(f"{w}: {arg} must be True or False, got "
+                                 f"{getattr(self, arg)!r}")
 
     def scaled(self, factor: float) -> DesignConfig:
         """The same recipe with every step count scaled by ``factor`` (at least 1 step)."""

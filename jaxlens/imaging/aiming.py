@@ -13,7 +13,7 @@ import jax.numpy as jnp
 import numpy as np
 from jaxtyping import Array, Float
 
-from ..optics import paraxial
+from ..optics import checks, paraxial
 from ..optics.lens import Lens, unclipped
 from ..optics.rays import Rays
 from ..tracing.forward import DEFAULT_NEWTON_ITERS, trace
@@ -76,6 +76,8 @@ def stop_chief_ray(lens: Lens, field, depth=None, wavelength=None, *,
         One ray (shape ``[1]``) in object space, launched from the entrance-pupil plane
         (infinity) or from the object point.
     """
+    checks.number(iters, "iters", "stop_chief_ray", lo=0, integer=True,
+                  unit="aiming iterations")  # -1 ran no iteration without a word
     wl = lens.primary_wavelength if wavelength is None else jnp.asarray(wavelength)
     zep = paraxial.entrance_pupil_z(lens)
     if depth is None:

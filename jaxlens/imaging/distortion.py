@@ -271,6 +271,8 @@ def alignment_penalty(
         sensor: default ``lens.sensor`` (its pitch sets the unit).
         newton_iters: Newton iterations for aspheric surfaces.
     """
+    if not checks.is_traced(alpha):  # a negative weight would reward distortion
+        checks.number(alpha, "alpha", "alignment_penalty", lo=0, unit="(weight)")
     s = _sensor(lens, sensor)
     d = distortion_map(lens, grid=grid, depth=depth, sensor=s, newton_iters=newton_iters)
     err = jnp.sum((d.real - d.ideal) ** 2, -1) / s.pixel_size**2

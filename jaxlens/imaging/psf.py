@@ -224,6 +224,9 @@ class GeometricPSF(AbstractPSFModel):
 
     def check(self, caller: str) -> None:
         super().check(caller)
+        if self.order not in (1, 2) or isinstance(self.order, bool):
+            raise ValueError(f"{caller}: order must be 1 (tent) or 2 (quadratic B-spline), "
+                             f"got {self.order!r}")
         if self.grid not in ("square", "polar"):
             raise ValueError(f"{caller}: grid must be 'square' or 'polar', got {self.grid!r}")
         if self.normalize not in ("transmitted", "pupil"):

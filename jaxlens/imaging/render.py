@@ -215,7 +215,10 @@ def footprints(
     sensor = lens.sensor if sensor is None else sensor
     if sensor is None:
         raise ValueError("footprints: the lens has no sensor; pass sensor=jaxlens.Sensor(...)")
-    dtype = jnp.result_type(float) if dtype is None else dtype
+    dtype = jnp.result_type(float) if dtype is None else checks.float_dtype(dtype, "footprints")
+    # int() took 0 or 2.5 silently; wavelengths are checked here, not inside the jitted trace.
+    checks.number(grid, "grid", "footprints", lo=2, integer=True, unit="points per side")
+    checks.wavelengths(lens, wavelengths, "footprints", "wavelengths")
     g = int(grid) + 1 - int(grid) % 2
     pts = sensor_grid(sensor.resolution, jnp.asarray(sensor.pixel_size), (g, g)).astype(dtype)
     wls = jnp.atleast_1d(jnp.asarray(wavelengths, dtype))

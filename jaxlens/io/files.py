@@ -49,10 +49,19 @@ def load(path: str | os.PathLike, *, dtype=None, strict: bool = False,
             file and, for ``.zmx`` and JSON syntax errors, the line), or an unknown glass
             (the message lists the closest catalog names).
     """
+    if not isinstance(path, str | os.PathLike):
+        raise TypeError(f"load: path must be a file name (str or os.PathLike), got "
+                        f"{type(path).__name__} {path!r}")
     path = os.fspath(path)
     ext = _ext(path, "load")
     if dtype is not None:
         dtype = _float_dtype(dtype)
+    # "yes" would read as True, a misspelt choice as "error": refused rather than guessed.
+    if not isinstance(strict, bool):
+        raise ValueError(f"load: strict must be True or False, got {strict!r}")
+    if unknown_glass not in ("error", "model"):
+        raise ValueError(f"load: unknown_glass must be 'error' or 'model', got "
+                         f"{unknown_glass!r}")
     if ext == ".json":
         lens = load_json(path)
     else:
@@ -86,6 +95,8 @@ def save(lens: Lens, path: str | os.PathLike, **options) -> list[str]:
         The paths written: the file itself, and for ``.zmx`` any ``.AGF`` glass catalogs
         written beside it for glasses that Zemax's own catalogs do not hold.
     """
+    if not isinstance(lens, Lens):  # else an AttributeError from deep in the writer
+        raise TypeError(f"save: lens must be a jaxlens Lens, got {type(lens).__name__}")
     path = os.fspath(path)
     ext = _ext(path, "save")
     folder = os.path.dirname(os.path.abspath(path))

@@ -20,6 +20,8 @@ import zlib
 
 import numpy as np
 
+from ..optics import checks
+
 __all__ = [
     "read_exr",
     "write_exr",
@@ -56,6 +58,11 @@ def linear_to_srgb(v):
 def to_linear(img) -> np.ndarray:
     """An integer sRGB image (uint8/uint16) or a float image in [0, 1] as linear float32."""
     a = np.asarray(img)
+    if np.issubdtype(a.dtype, np.integer) and a.dtype not in (np.uint8, np.uint16):
+        # int64 300 / iinfo(int64).max is 3e-17: an integer image must be 8 or 16 bit.
+        raise ValueError(f"to_linear: an integer image must be uint8 or uint16 sRGB, got "
+                         f"{a.dtype}; give a float image in [0, 1] or convert it with "
+                         f"img.astype(np.uint8)")
     if np.issubdtype(a.dtype, np.integer):
         a = a.astype(np.float64) / np.iinfo(a.dtype).max
         return srgb_to_linear(a).astype(np.float32)
@@ -187,6 +194,8 @@ def write_png(path, img, *, linear: bool = True, bits: int = 8) -> None:
         a = a[..., 0]
     if a.ndim not in (2, 3) or (a.ndim == 3 and a.shape[-1] > 4):
         raise ValueError(f"write_png: image must be [H, W] or [H, W, C<=4], got {a.shape}")
+    # NaN would be cast to an arbitrary integer (0 on most machines): a silent black pixel.
+    checks.finite_array(a, "img", "write_png")
     v = linear_to_srgb(a) if linear else np.clip(a, 0.0, 1.0)
     top = 2**bits - 1
     q = np.round(v * top).astype(">u2" if bits == 16 else np.uint8)
@@ -289,9 +298,23 @@ def scene(name: str = "astronaut", size: tuple[int, int] | None = None) -> np.nd
     a = a[..., :3]
     lin = to_linear(a)
     if size is not None:
+        size = checks.grid(size, "scene", "size", "pixels")
         lin = skimage.transform.resize(lin, tuple(size), order=1, anti_aliasing=True,
                                        preserve_range=True).astype(np.float32)
     return lin
+
+
+def _images(reference, test, where):
+    """Two float64 images of one shape, non-empty and finite: NaN pixels made the score NaN
+    and two empty images scored inf (identical)."""
+    a, b = np.asarray(reference, np.float64), np.asarray(test, np.float64)
+    if a.shape != b.shape:
+        raise ValueError(f"{where}: shapes differ: {a.shape} and {b.shape}")
+    if a.size == 0:
+        raise ValueError(f"{where}: the images are empty, shape {a.shape}")
+    checks.finite_array(a, "reference", where)
+    checks.finite_array(b, "test", where)
+    return a, b
 
 
 def _data_range(a, b, data_range):
@@ -310,9 +333,7 @@ def psnr(reference, test, *, data_range=None) -> float:
     """
     from skimage.metrics import peak_signal_noise_ratio
 
-    a, b = np.asarray(reference, np.float64), np.asarray(test, np.float64)
-    if a.shape != b.shape:
-        raise ValueError(f"psnr: shapes differ: {a.shape} and {b.shape}")
+    a, b = _images(reference, test, "psnr")
     if np.array_equal(a, b):
         return float("inf")
     return float(peak_signal_noise_ratio(a, b, data_range=_data_range(a, b, data_range)))
@@ -322,9 +343,7 @@ def ssim(reference, test, *, data_range=None) -> float:
     """Structural similarity, ``skimage.metrics.structural_similarity`` (channels last)."""
     from skimage.metrics import structural_similarity
 
-    a, b = np.asarray(reference, np.float64), np.asarray(test, np.float64)
-    if a.shape != b.shape:
-        raise ValueError(f"ssim: shapes differ: {a.shape} and {b.shape}")
+    a, b = _images(reference, test, "ssim")
     kw = {"channel_axis": -1} if a.ndim == 3 else {}
     return float(structural_similarity(a, b, data_range=_data_range(a, b, data_range), **kw))
 

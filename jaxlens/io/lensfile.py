@@ -43,6 +43,10 @@ from ..optics.lens import Lens, Sensor
 from ..optics.materials import AbstractMaterial, Air, ModelGlass, Tabulated
 from ..optics.surfaces import AbstractSurface, EvenAsphere, Hybrid, Standard
 from . import lens_keys
+from .json_values import num as _num
+from .json_values import nums as _nums
+from .json_values import text as _text
+from .json_values import whole as _whole
 
 FORMAT = "jaxlens.lens/1"
 """The value of the ``format`` key this module writes (name/version)."""
@@ -62,60 +66,6 @@ _STANDARD_TYPES = (
     "aperture",
     "aperturestop",
 )
-
-
-# --------------------------------------------------------------------------------------
-# numbers
-
-
-def _num(value: Any, where: str, *, finite: bool = True) -> float:
-    """A float from a JSON number or the strings "inf"/"-inf"/"infinity"."""
-    if isinstance(value, bool) or value is None:
-        raise ValueError(f"{where}: expected a number, got {value!r}")
-    if isinstance(value, str):
-        s = value.strip().lower()
-        if s in ("inf", "+inf", "infinity", "+infinity"):
-            v = math.inf
-        elif s in ("-inf", "-infinity"):
-            v = -math.inf
-        else:
-            try:
-                v = float(s)
-            except ValueError:
-                raise ValueError(f"{where}: expected a number, got {value!r}") from None
-    elif isinstance(value, int | float):
-        v = float(value)
-    else:
-        raise ValueError(f"{where}: expected a number, got {value!r}")
-    if math.isnan(v) or (finite and math.isinf(v)):
-        raise ValueError(f"{where}: expected a finite number, got {value!r}")
-    return v
-
-
-def _whole(value: Any) -> int:
-    """A whole JSON number (``8`` or ``8.0``); ``2.5``, ``true`` and strings are refused."""
-    if isinstance(value, bool) or not isinstance(value, int | float) or value != int(value):
-        raise ValueError(f"not a whole number: {value!r}")
-    return int(value)
-
-
-def _text(value: Any, where: str) -> str:
-    if not isinstance(value, str):
-        raise ValueError(f"{where}: expected a string, got {value!r}")
-    return value
-
-
-def _nums(value: Any, where: str, *, finite: bool = True) -> np.ndarray:
-    """A float64 array from a (nested) JSON list of numbers."""
-    if isinstance(value, list | tuple):
-        out = [_nums(v, f"{where}[{i}]", finite=finite) for i, v in enumerate(value)]
-        if not out:
-            return np.zeros((0,), np.float64)
-        try:
-            return np.stack(out)
-        except ValueError:
-            raise ValueError(f"{where}: ragged list {value!r}") from None
-    return np.asarray(_num(value, where, finite=finite), np.float64)
 
 
 def nm_to_um(nm) -> np.ndarray:
@@ -600,10 +550,16 @@ def lens_from_dict(d: dict, *, source: str = "<lens>") -> Lens:
 
     # Object distance: surface 0's thickness, or an "object" block.
     dist = math.inf
+    block = d["object"]["distance"] if isinstance(d.get("object"), dict) and \
+        "distance" in d["object"] else None
     if obj is not None and "thickness" in obj:
         dist = _num(obj["thickness"], f"{source}: surface 0 thickness", finite=False)
-    elif isinstance(d.get("object"), dict) and "distance" in d["object"]:
-        dist = _num(d["object"]["distance"], f"{source}: object.distance", finite=False)
+        if block is not None and _num(block, f"{source}: object.distance",
+                                      finite=False) != dist:  # one of them was ignored
+            raise ValueError(f"{source}: object.distance {block!r} disagrees with surface 0's "
+                             f"thickness {obj['thickness']!r} (mm); give one of them")
+    elif block is not None:
+        dist = _num(block, f"{source}: object.distance", finite=False)
     if dist <= 0:
         raise ValueError(f"{source}: the object distance must be > 0 or 'inf', got {dist}")
     obj_mat = Air()

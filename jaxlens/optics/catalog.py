@@ -361,6 +361,10 @@ def parse_agf(text: str, source: str = "<string>", catalog: str = "") -> list[Gl
             bounds = _floats(tokens[1:], where, "LD wavelengths")
             if len(bounds) != 2:
                 raise ValueError(f"{where}: LD needs min and max wavelength, got {tokens[1:]!r}")
+            # Reversed bounds refused every wavelength later; nm failed without the line.
+            if not 0 < bounds[0] < bounds[1] < 100:
+                raise ValueError(f"{where}: LD needs 0 < min < max < 100 µm (wavelengths in "
+                                 f"µm), got {bounds[0]:g} {bounds[1]:g}")
             pending.wavelength_range = (bounds[0], bounds[1])
     return records + _finish(pending, source, catalog)
 
@@ -370,7 +374,11 @@ def _read_records(path: str | os.PathLike, catalog: str | None = None) -> list[G
     path = os.fspath(path)
     name = catalog or os.path.splitext(os.path.basename(path))[0].upper()
     with open(path, "rb") as f:
-        return parse_agf(decode_zemax_text(f.read(), path), source=path, catalog=name)
+        records = parse_agf(decode_zemax_text(f.read(), path), source=path, catalog=name)
+    if not records:  # an empty or wrong file would register a catalog without glasses
+        raise ValueError(f"{path}: no glass in the file (no NM record); is it a Zemax .agf "
+                         f"glass catalog?")
+    return records
 
 
 def load_agf(path: str | os.PathLike) -> dict[str, CatalogMaterial]:
@@ -432,8 +440,18 @@ def register_catalog(source: str | os.PathLike | Mapping[str, AbstractMaterial],
     Raises:
         ValueError: If the AGF file is malformed.
     """
+    if name is not None and not (isinstance(name, str) and name.strip()):
+        raise ValueError(f"register_catalog: name must be a non-empty string, got {name!r}")
     if isinstance(source, Mapping):
         cat = (name or "USER").upper()
+        # A non-material value would be found by get_material and fail deep in a trace.
+        bad = {k: v for k, v in source.items() if not isinstance(v, AbstractMaterial)}
+        if bad:
+            k, v = next(iter(bad.items()))
+            raise ValueError(f"register_catalog: every value must be a material "
+                             f"(jaxlens.AbstractMaterial), got {type(v).__name__} for {k!r}")
+        if not source:
+            raise ValueError("register_catalog: the mapping holds no material")
         entries: dict = {str(k).upper(): v for k, v in source.items()}
     else:
         records = _read_records(source, catalog=name.upper() if name else None)

@@ -1,0 +1,62 @@
+"""Numbers and strings of a JSON lens file: what ``json`` gives, read strictly.
+
+JSON has no infinity, so the strings "inf", "-inf" and "infinity" stand for it; a bool, a
+null or a string that is not a number is refused, naming where in the file it is.
+"""
+
+from __future__ import annotations
+
+import math
+from typing import Any
+
+import numpy as np
+
+
+def num(value: Any, where: str, *, finite: bool = True) -> float:
+    """A float from a JSON number or the strings "inf"/"-inf"/"infinity"."""
+    if isinstance(value, bool) or value is None:
+        raise ValueError(f"{where}: expected a number, got {value!r}")
+    if isinstance(value, str):
+        s = value.strip().lower()
+        if s in ("inf", "+inf", "infinity", "+infinity"):
+            v = math.inf
+        elif s in ("-inf", "-infinity"):
+            v = -math.inf
+        else:
+            try:
+                v = float(s)
+            except ValueError:
+                raise ValueError(f"{where}: expected a number, got {value!r}") from None
+    elif isinstance(value, int | float):
+        v = float(value)
+    else:
+        raise ValueError(f"{where}: expected a number, got {value!r}")
+    if math.isnan(v) or (finite and math.isinf(v)):
+        raise ValueError(f"{where}: expected a finite number, got {value!r}")
+    return v
+
+
+def whole(value: Any) -> int:
+    """A whole JSON number (``8`` or ``8.0``); ``2.5``, ``true`` and strings are refused."""
+    if isinstance(value, bool) or not isinstance(value, int | float) or value != int(value):
+        raise ValueError(f"not a whole number: {value!r}")
+    return int(value)
+
+
+def text(value: Any, where: str) -> str:
+    if not isinstance(value, str):
+        raise ValueError(f"{where}: expected a string, got {value!r}")
+    return value
+
+
+def nums(value: Any, where: str, *, finite: bool = True) -> np.ndarray:
+    """A float64 array from a (nested) JSON list of numbers."""
+    if isinstance(value, list | tuple):
+        out = [nums(v, f"{where}[{i}]", finite=finite) for i, v in enumerate(value)]
+        if not out:
+            return np.zeros((0,), np.float64)
+        try:
+            return np.stack(out)
+        except ValueError:
+            raise ValueError(f"{where}: ragged list {value!r}") from None
+    return np.asarray(num(value, where, finite=finite), np.float64)
