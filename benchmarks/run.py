@@ -66,6 +66,11 @@ def main(argv: list[str] | None = None) -> dict:
     for n in args.counts or ():
         if n < 1:
             p.error(f"--counts must be whole numbers in [1, inf) rays, got {n}")
+    if args.out is not None and args.out.exists() and not args.out.is_dir():
+        p.error(f"--out {args.out} is a file, not a folder")  # before the first benchmark
+    if (args.lenses or args.counts) and args.only and "throughput" not in args.only:
+        p.error("--lenses and --counts apply to the throughput benchmark only; add throughput "
+                "to --only")
     if args.lenses:
         import difflib
 

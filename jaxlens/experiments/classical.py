@@ -241,6 +241,8 @@ def check_args(args) -> None:
         if not parts or not all(p.isdigit() for p in parts):
             raise ValueError(f"{w}: --seed-list must be comma-separated whole numbers >= 0, got "
                              f"{args.seed_list!r}")
+        if len(set(map(int, parts))) < len(parts):  # a repeat is the same design twice
+            raise ValueError(f"{w}: --seed-list needs distinct seeds, got {args.seed_list!r}")
     try:  # checked even when unused (--select-materials fixed): a typo must not go unseen
         CatalogRegion.of(_catalogs(args))
     except ValueError as e:

@@ -59,7 +59,13 @@ from jaxlens.experiments.edof.report import (
     table2_markdown,
     write_figures,
 )
-from jaxlens.experiments.runfolder import OneLineParser, RunFolder, UsageError, fail
+from jaxlens.experiments.runfolder import (
+    OneLineParser,
+    RunFolder,
+    UsageError,
+    check_writable,
+    fail,
+)
 from jaxlens.optics import checks as input_checks
 
 LENS_NAMES = ("classical", "cubic", "hybrid")
@@ -246,6 +252,12 @@ def check_args(a):
         for opt, d in (("--train-dir", a.train_dir), ("--test-dir", a.test_dir)):
             if d is not None and not os.path.isdir(d):
                 raise ValueError(f"edof: {opt} {d} is not a folder")
+        # A file there would fail only when the first checkpoint or the record is written.
+        for opt, d in (("--checkpoint", a.checkpoint), ("--record", a.record)):
+            if d is not None and os.path.exists(d) and not os.path.isdir(d):
+                raise ValueError(f"edof: {opt} {d} is a file, not a folder")
+            if d is not None:
+                check_writable(os.path.join(d, "x") if os.path.isdir(d) else d, opt)
         if a.checkpoint and not a.resume and os.path.isdir(a.checkpoint) and \
                 os.listdir(a.checkpoint):
             raise ValueError(f"edof: --checkpoint {a.checkpoint} is not empty; give --resume "
