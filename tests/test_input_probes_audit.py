@@ -291,3 +291,18 @@ def test_benchmarks_cli_refuses_a_file_out_and_ignored_options(tmp_path, capsys)
     assert "--lenses and --counts apply to the throughput benchmark only" in \
         capsys.readouterr().err
     assert not (tmp_path / "o").exists()
+
+
+@pytest.mark.parametrize("spec, key, right", [
+    ({"nd": 1.5168, "Vd": 64.17}, "Vd", "vd"),  # read as no dispersion before
+    ({"type": "model", "nd": 1.5168, "vd": 64.17}, "type", "class"),
+    ({"nd": 1.5168, "abbe": 64.17}, "abbe", "vd"),
+])
+def test_material_object_refuses_near_miss_keys(spec, key, right):
+    from jaxlens.io import lensfile
+
+    with pytest.raises(ValueError, match=rf"f.json: surface 1: material: unknown key '{key}'; "
+                                         rf"did you mean '{right}'\?"):
+        lensfile.material_from_spec(spec, "f.json: surface 1")
+    good = lensfile.material_from_spec({"nd": 1.5168, "vd": 64.17, "note": "x"}, "f.json")
+    assert float(good.vd) == pytest.approx(64.17)

@@ -46,6 +46,10 @@ SENSOR = {"resolution": ("pixels", "res", "size_px"), "pixel_size": ("pixel_pitc
 FIELDS = {"type": ("kind",), "values": ("vals", "angles", "angles_deg", "values_deg",
                                         "field_angles", "fields", "deg", "degrees")}
 OBJECT = {"distance": ("dist", "d", "thickness", "object_distance", "z")}
+# A material object: a misspelled "vd" would leave a model glass without dispersion.
+MATERIAL = {"name": ("glass",), "class": ("type", "kind"), "nd": ("n_d",),
+            "vd": ("v_d", "abbe", "abbe_number"), "n": (), "indices": ("index_table",),
+            "wavelengths_um": ("wavelengths", "wavelength_um"), "wavelengths_nm": ()}
 REQUIRED = {"fields": "values", "object": "distance"}
 """Sections that are read only for one key: without it the section would be ignored."""
 

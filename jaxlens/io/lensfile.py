@@ -278,6 +278,8 @@ def material_from_spec(spec: Any, where: str, *, n_table: Any = None) -> Abstrac
         return catalog_material(spec, where)
     if not isinstance(spec, dict):
         raise ValueError(f"{where}: material must be a name or an object, got {spec!r}")
+    if "class" not in spec:  # a class's own fields are checked by the class
+        lens_keys.no_misspelled(spec, lens_keys.MATERIAL, f"{where}: material")
     if "class" in spec:
         classes = _material_classes()
         cls = classes.get(spec["class"])
