@@ -276,6 +276,19 @@ def test_edof_cli_refuses_a_file_for_a_folder_option(tmp_path, opt):
         cli.check_args(a)
 
 
+@pytest.mark.parametrize("opt", ["--train-dir", "--test-dir"])
+def test_edof_cli_refuses_an_image_folder_without_images(tmp_path, opt):
+    from jaxlens.experiments.edof import cli
+    from jaxlens.experiments.runfolder import UsageError
+
+    (tmp_path / "imgs").mkdir()
+    (tmp_path / "imgs" / "notes.txt").write_text("x")
+    a = cli.build_parser().parse_args(["--smoke", opt, str(tmp_path / "imgs"), "--out",
+                                       str(tmp_path / "o")])
+    with pytest.raises(UsageError, match=rf"edof: {opt}: scenes: no image files .* in .*imgs"):
+        cli.check_args(a)
+
+
 def test_benchmarks_cli_refuses_a_file_out_and_ignored_options(tmp_path, capsys):
     from benchmarks.run import main
 

@@ -252,6 +252,13 @@ def check_args(a):
         for opt, d in (("--train-dir", a.train_dir), ("--test-dir", a.test_dir)):
             if d is not None and not os.path.isdir(d):
                 raise ValueError(f"edof: {opt} {d} is not a folder")
+            if d is not None:  # a folder without images fails here, not after the lens work
+                from jaxlens.experiments.edof import scenes
+
+                try:
+                    scenes.folder_images(d)
+                except ValueError as e:
+                    raise ValueError(f"edof: {opt}: {e}") from None
         # A file there would fail only when the first checkpoint or the record is written.
         for opt, d in (("--checkpoint", a.checkpoint), ("--record", a.record)):
             if d is not None and os.path.exists(d) and not os.path.isdir(d):
