@@ -461,6 +461,21 @@ def test_unknown_glass_model_opens_the_file_with_the_lines_nd_and_vd():
         zmx.loads(text, unknown_glass="yes")
 
 
+def test_unknown_glass_model_names_another_glass_whose_nd_and_vd_the_line_holds():
+    """Zemax keeps the nd and Vd of the glass a GLAS line last held: a line naming an
+    obsolete glass with N-SK16's data is said to, so the user can check the model glass."""
+    text = _minimal("  CURV 0.02\n").replace("GLAS N-BK7", "GLAS LASFN30 0 0 1.6204 60.32 0 0 0")
+    with pytest.warns(ZmxWarning, match=r"<zmx>:9: glass 'LASFN30' is in no catalog.*These are "
+                                        r"the nd and Vd of SCHOTT N-SK16: .* check that they "
+                                        r"are LASFN30's"):
+        zmx.loads(text, unknown_glass="model")
+    other = text.replace("1.6204 60.32", "1.8 41.0")  # no catalog glass has exactly these
+    with warnings.catch_warnings(record=True) as caught:
+        warnings.simplefilter("always")
+        zmx.loads(other, unknown_glass="model")
+    assert caught and not any("These are" in str(w.message) for w in caught)
+
+
 @pytest.mark.parametrize("gcat, glass", [
     ("OHARA", "S-LAH64"), ("HOYA", "TAFD30"), ("HIKARI", "E-LAFH3"), ("SUMITA", "K-SFLD6"),
     ("CDGM", "H-ZK3A"), ("SCHOTT", "B270"), ("CORNING", "C79-80"),

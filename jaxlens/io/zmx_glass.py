@@ -153,7 +153,8 @@ class GlassResolver:
                 warnings.warn(f"{ln.path}:{ln.number}: glass {name!r} is in no catalog jaxlens "
                               f"reads; using a model glass with the line's nd {nd:g}, Vd {vd:g} "
                               f"(exact at the d line, linear in 1/λ² elsewhere; "
-                              f"unknown_glass='model')", ZmxWarning, stacklevel=4)
+                              f"unknown_glass='model'){_stale_note(name, nd, vd)}", ZmxWarning,
+                              stacklevel=4)
                 return ModelGlass(_arr(nd), _arr(vd))
             missing = [c for c in self.gcat if c not in self.side and not shipped_for(c)]
             if missing:
@@ -189,6 +190,17 @@ class GlassResolver:
                 f"{m.name}{_nd_vd_text(m)}; put the file's SCHOTT.AGF beside it for the "
                 f"original")
         return _cross_checked(m, ln)
+
+
+def _stale_note(name: str, nd: float, vd: float) -> str:
+    """A warning's note where a GLAS line's nd and Vd are those of another catalog glass to
+    the digits written: Zemax keeps the nd and Vd of the glass a line last held, so they may
+    be stale (a line naming LASFN30 with SK16's 1.6204 and 60.32)."""
+    c, other, d, v = catalog.nearest_glasses(nd, vd, 1)[0]
+    if other.upper() == name.upper() or abs(d - nd) > 1e-4 or abs(v - vd) > 0.01:
+        return ""
+    return (f". These are the nd and Vd of {c} {other}: a GLAS line keeps those of the glass "
+            f"it last held, so check that they are {name}'s")
 
 
 def _nd_vd_text(m) -> str:
