@@ -223,16 +223,24 @@ def test_load_and_save_check_their_options(tmp_path, cooke):
 
 
 @pytest.mark.parametrize("ld, match", [
-    ("LD 2.5 0.3", r"bad.agf:3: LD needs 0 < min < max < 100 µm \(wavelengths in µm\), got "
-                   r"2.5 0.3"),
-    ("LD -0.3 2.5", r"bad.agf:3: LD needs 0 < min < max < 100 µm"),
-    ("LD 300 2500", r"bad.agf:3: LD needs 0 < min < max < 100 µm .*got 300 2500"),
+    ("LD 2.5 0.3", r"bad.agf:3: LD needs 0 < min < max with min < 100 µm \(wavelengths in "
+                   r"µm\), got 2.5 0.3"),
+    ("LD -0.3 2.5", r"bad.agf:3: LD needs 0 < min < max with min < 100 µm"),
+    ("LD 300 2500", r"bad.agf:3: LD needs 0 < min < max with min < 100 µm .*got 300 2500"),
 ])
 def test_agf_ld_record_out_of_range_names_the_line(tmp_path, ld, match):
     p = tmp_path / "bad.agf"
     p.write_text(GOOD_AGF.replace("LD 0.3 2.5", ld))
     with pytest.raises(ValueError, match=match):
         jl.load_agf(p)
+
+
+def test_agf_ld_record_may_reach_the_far_infrared(tmp_path):
+    """A maximum beyond 100 µm (a far-infrared material) is a range in µm, not nm."""
+    p = tmp_path / "ir.agf"
+    p.write_text(GOOD_AGF.replace("LD 0.3 2.5", "LD 0.3 200"))
+    (glass,) = jl.load_agf(p).values()
+    assert glass.wavelength_range == pytest.approx((0.3, 200.0))
 
 
 def test_agf_without_glass_and_bad_registrations_are_refused(tmp_path):

@@ -362,9 +362,10 @@ def parse_agf(text: str, source: str = "<string>", catalog: str = "") -> list[Gl
             if len(bounds) != 2:
                 raise ValueError(f"{where}: LD needs min and max wavelength, got {tokens[1:]!r}")
             # Reversed bounds refused every wavelength later; nm failed without the line.
-            if not 0 < bounds[0] < bounds[1] < 100:
-                raise ValueError(f"{where}: LD needs 0 < min < max < 100 µm (wavelengths in "
-                                 f"µm), got {bounds[0]:g} {bounds[1]:g}")
+            # A minimum of 100 or more is nm (300 for 0.3 µm); a far-infrared maximum is not.
+            if not 0 < bounds[0] < bounds[1] or bounds[0] >= 100:
+                raise ValueError(f"{where}: LD needs 0 < min < max with min < 100 µm "
+                                 f"(wavelengths in µm), got {bounds[0]:g} {bounds[1]:g}")
             pending.wavelength_range = (bounds[0], bounds[1])
     return records + _finish(pending, source, catalog)
 
