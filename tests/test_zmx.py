@@ -337,6 +337,13 @@ def test_a_finite_object_must_be_a_plane(obj, line, what):
     assert far.object_distance is None
 
 
+def test_a_finite_standard_object_ignores_its_unused_parameters():
+    """Under an explicit TYPE STANDARD, PARM values are unused (as in Zemax): a finite plane
+    object with a stale PARM loads, at its distance."""
+    text = _thin_lenses("ENPD 10\n", 50.0, obj="  DISZ 100\n  TYPE STANDARD\n  PARM 2 -1\n")
+    assert float(zmx.loads(text, "t.zmx").object_distance) == pytest.approx(100.0)
+
+
 def test_environment_other_than_20_c_and_1_atm():
     """ENVD t p 1 (indices adjusted to t °C, p atm) is refused with its line: jaxlens's indices
     are the catalogs', relative to air at 20 °C and 1 atm. With the flag 0 the environment is

@@ -176,7 +176,10 @@ def check_object_plane(obj, distance: float) -> None:
     if math.isinf(distance):
         return
     where = obj.type_line or obj.line
-    terms = [ln for _, (v, ln) in sorted(obj.parm.items()) + sorted(obj.xdat.items()) if v != 0]
+    # Under an explicit TYPE STANDARD, PARM and XDAT values are unused (as in Zemax).
+    unused = obj.type == "STANDARD" and obj.type_line is not None
+    terms = [] if unused else [ln for _, (v, ln) in sorted(obj.parm.items())
+                               + sorted(obj.xdat.items()) if v != 0]
     if obj.type not in ("STANDARD", "EVENASPH", "TILTSURF") or obj.curv != 0 or terms:
         what = (f"TYPE {obj.type}" if obj.type not in ("STANDARD", "EVENASPH", "TILTSURF")
                 else f"CURV {obj.curv:g}" if obj.curv != 0 else " ".join(terms[0].tokens[:3]))
