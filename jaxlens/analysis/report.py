@@ -115,7 +115,8 @@ def with_fields_and_wavelengths(lens: Lens, fields=None, wavelengths=None) -> Le
         w = np.atleast_1d(np.asarray(wavelengths, np.float64))
         w = np.where(w > 100.0, nm_to_um(w), w)
         if w.size == 0 or np.any(w <= 0):
-            raise ValueError(f"report: wavelengths must be positive, got {wavelengths}")
+            raise ValueError(f"report: --wavelengths must be numbers in (0, inf) µm (values above "
+                             f"100 are read as nm), got {checks.fmt(wavelengths)}")
         checks.wavelengths(lens, w, "report", "--wavelengths")
         checks.material_indices(lens, w, "report", "--wavelengths")
         primary = int(np.argmin(np.abs(w - float(lens.primary_wavelength))))

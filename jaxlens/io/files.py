@@ -12,6 +12,7 @@ import os
 
 import numpy as np
 
+from ..optics import checks
 from ..optics.lens import Lens
 from .lensfile import load_json, save_json
 from .zmx import load_zmx, save_zmx
@@ -82,6 +83,20 @@ def _float_dtype(dtype) -> np.dtype:
     return dt
 
 
+def _loadable(lens: Lens) -> None:
+    """Refuse a lens that ``load`` would refuse (a lens edited with ``eqx.tree_at`` skips
+    ``Lens``'s own checks): a field of 95°, wavelengths beyond a glass's data, a primary
+    index past the wavelengths. Else ``save`` would write a file that does not read back."""
+    if checks.is_traced(lens):
+        return
+    try:
+        lens.__check_init__()
+        checks.wavelengths(lens, lens.wavelengths, "Lens", "wavelengths")
+        checks.material_indices(lens, lens.wavelengths, "Lens", "wavelengths")
+    except ValueError as e:
+        raise ValueError(f"save: {e}; nothing written (load would refuse the file)") from None
+
+
 def save(lens: Lens, path: str | os.PathLike, **options) -> list[str]:
     """Write a lens file (``.json`` or ``.zmx``); ``load(save(...))`` gives the same lens.
 
@@ -91,6 +106,10 @@ def save(lens: Lens, path: str | os.PathLike, **options) -> list[str]:
         **options: format options (``.zmx``: ``model_glass="blank"|"agf"``, see
             ``jaxlens.io.zmx.save_zmx``).
 
+    Raises:
+        ValueError: an unknown extension, a bad option, or a lens that ``load`` would
+            refuse (fields, wavelengths, primary); nothing is written.
+
     Returns:
         The paths written: the file itself, and for ``.zmx`` any ``.AGF`` glass catalogs
         written beside it for glasses that Zemax's own catalogs do not hold.
@@ -99,6 +118,7 @@ def save(lens: Lens, path: str | os.PathLike, **options) -> list[str]:
         raise TypeError(f"save: lens must be a jaxlens Lens, got {type(lens).__name__}")
     path = os.fspath(path)
     ext = _ext(path, "save")
+    _loadable(lens)
     folder = os.path.dirname(os.path.abspath(path))
     if not os.path.isdir(folder):  # before a .zmx's glass catalogs are written beside it
         raise FileNotFoundError(f"save: the folder {folder!r} of {path!r} does not exist "
