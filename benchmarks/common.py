@@ -223,3 +223,45 @@ def md_table(header: list[str], rows: list[list]) -> str:
             + " |"
         )
     return "\n".join(lines)
+
+
+def whole(lo: int = 1, unit: str = ""):
+    """An argparse ``type=`` for a whole-number option of at least ``lo``: a bad value is one
+    line naming the range and the unit (with ``OneLineParser``), exit status 2, before any
+    benchmark runs."""
+    import argparse
+
+    def parse(text: str) -> int:
+        try:
+            v = int(text)
+        except ValueError:
+            v = None
+        if v is None or v < lo:
+            u = f" {unit}" if unit else ""
+            raise argparse.ArgumentTypeError(f"must be a whole number in [{lo}, inf){u}, got "
+                                             f"{text!r}")
+        return v
+
+    return parse
+
+
+def out_path(kind: str = "file", *, make_parents: bool = True):
+    """An argparse ``type=`` for an output ``kind`` ("file" or "folder"): refuses, before any
+    benchmark runs, a folder given for a file, a file given for a folder, and a path whose
+    folder could not be created (``make_parents``) or does not exist."""
+    import argparse
+
+    def parse(text: str) -> pathlib.Path:
+        p = pathlib.Path(text)
+        if kind == "file" and p.is_dir():
+            raise argparse.ArgumentTypeError(f"{text} is a folder; give a file's path")
+        if kind == "folder" and p.exists() and not p.is_dir():
+            raise argparse.ArgumentTypeError(f"{text} is a file, not a folder")
+        parent = p.absolute().parent
+        while make_parents and not parent.exists():
+            parent = parent.parent
+        if not parent.is_dir():
+            raise argparse.ArgumentTypeError(f"{text}: {parent} is not an existing folder")
+        return p
+
+    return parse

@@ -12,7 +12,6 @@ and imported under another name, so both run on the same machine at the same loa
 
 from __future__ import annotations
 
-import argparse
 import importlib
 import io
 import json
@@ -137,13 +136,19 @@ def compile_all(fns: dict) -> tuple[dict, list]:
 
 
 def main(argv=None) -> dict:
-    p = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
+    from jaxlens.experiments.runfolder import OneLineParser
+
+    from .common import out_path, whole
+
+    p = OneLineParser(description=__doc__.split("\n\n")[0])
     p.add_argument("--baseline", default="cf2efb6", help="git revision to compare against")
-    p.add_argument("--seeds", type=int, default=4)
-    p.add_argument("--repeats", type=int, default=20)
-    p.add_argument("--rays", type=int, default=1_000_000, help="rays of the bare-trace timing")
+    p.add_argument("--seeds", type=whole(1, "seeds"), default=4)
+    p.add_argument("--repeats", type=whole(1, "repeats"), default=20)
+    p.add_argument("--rays", type=whole(1, "rays"), default=1_000_000,
+                   help="rays of the bare-trace timing")
     p.add_argument("--tag", default="", help="suffix of the result file name")
-    p.add_argument("--out-dir", default=None, help="folder of the result (default: results/)")
+    p.add_argument("--out-dir", type=out_path("folder"), default=None,
+                   help="folder of the result (default: results/)")
     a = p.parse_args(argv)
     if a.seeds < 1 or a.repeats < 1:
         p.error("--seeds and --repeats must be at least 1")

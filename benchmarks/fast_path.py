@@ -12,7 +12,6 @@ taken interleaved (median of ``--repeats``, after a warm-up call).
 
 from __future__ import annotations
 
-import argparse
 import time
 
 import numpy as np
@@ -25,11 +24,14 @@ def main(argv=None) -> dict:
     import jax
 
     import jaxlens
+    from jaxlens.experiments.runfolder import OneLineParser
 
-    p = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    from .common import whole
+
+    p = OneLineParser(description=__doc__.splitlines()[0])
     p.add_argument("--baseline", default="04deecd", help="git revision to compare against")
-    p.add_argument("--rays", type=int, default=2**19)
-    p.add_argument("--repeats", type=int, default=15)
+    p.add_argument("--rays", type=whole(1, "rays"), default=2**19)
+    p.add_argument("--repeats", type=whole(1, "repeats"), default=15)
     a = p.parse_args(argv)
     versions = {"new": jaxlens, "baseline": import_baseline(a.baseline)}
     fns = {k: trace_fns(v, a.rays) for k, v in versions.items()}

@@ -144,7 +144,9 @@ def reevaluate(folder: pathlib.Path, spec) -> dict:
 
 
 def main(argv=None):
-    p = argparse.ArgumentParser(prog="python -m benchmarks.reevaluate", description=__doc__,
+    from jaxlens.experiments.runfolder import OneLineParser
+
+    p = OneLineParser(prog="python -m benchmarks.reevaluate", description=__doc__,
                                 formatter_class=argparse.RawDescriptionHelpFormatter)
     p.add_argument("folder", type=pathlib.Path, help="folder of exported .zmx designs")
     p.add_argument("--out", type=pathlib.Path, default=None,
@@ -156,6 +158,13 @@ def main(argv=None):
         print("reevaluate: optiland is not installed (pip install optiland); it is an "
               "optional, independent reference and not a jaxlens dependency", file=sys.stderr)
         return 2
+    if not a.folder.is_dir():  # refused here, not after the optiland runs
+        p.error(f"folder {a.folder} is not a folder")
+    if not any(a.folder.glob("*.zmx")):
+        p.error(f"folder {a.folder} holds no .zmx files")
+    dest = a.out or a.folder.parent / "reevaluation.json"
+    if dest.is_dir() or not dest.parent.is_dir():
+        p.error(f"--out {dest} must be a file in an existing folder")
     jax.config.update("jax_enable_x64", True)
     from jaxlens.design.spec import DesignSpec
 
@@ -163,7 +172,6 @@ def main(argv=None):
     out = reevaluate(a.folder, DesignSpec())
     out["seconds"] = time.perf_counter() - t0
     out["command"] = "python -m benchmarks.reevaluate " + str(a.folder)
-    dest = a.out or a.folder.parent / "reevaluation.json"
     dest.write_text(json.dumps(out, indent=1) + "\n")
     print(f"{out['valid_both']}/{out['designs']} valid in both; optiland mean "
           f"{out['optiland_rms_mean_um']:.3f} µm, min {out['optiland_rms_min_um']:.3f}, max "

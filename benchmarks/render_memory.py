@@ -23,7 +23,6 @@ Run (about 6 minutes on 2 cores)::
 
 from __future__ import annotations
 
-import argparse
 import json
 import os
 import pathlib
@@ -230,7 +229,11 @@ def residual_note(runs: list[dict], size: int, spp: int) -> str:
 
 
 def main(argv=None) -> None:
-    ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    from jaxlens.experiments.runfolder import OneLineParser
+
+    from .common import out_path
+
+    ap = OneLineParser(description=__doc__.splitlines()[0])
     ap.add_argument("--worker", action="store_true", help="run one configuration here")
     ap.add_argument("--size", type=int, default=1024)
     ap.add_argument("--spp", type=int, default=16)
@@ -242,7 +245,7 @@ def main(argv=None) -> None:
     ap.add_argument("--lens", default="cellphone6", choices=("cooke_triplet", "double_gauss",
                                                              "cellphone6"),
                     help="zoo lens (the smoke test uses the smallest)")
-    ap.add_argument("--out", type=pathlib.Path, default=RESULTS / "render_memory.json")
+    ap.add_argument("--out", type=out_path(), default=RESULTS / "render_memory.json")
     args = ap.parse_args(argv)
     if args.worker and args.trace_rays > 0:  # the bare-trace worker ignores the render sizes
         print(json.dumps(trace_worker(args.trace_rays, args.lens)))

@@ -17,7 +17,6 @@ Run::
 
 from __future__ import annotations
 
-import argparse
 import json
 import os
 import pathlib
@@ -30,12 +29,16 @@ RESULTS = ROOT / "benchmarks" / "results"
 
 
 def main(argv=None) -> None:
-    ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    ap.add_argument("--size", type=int, default=512)
-    ap.add_argument("--spp", type=int, default=16)
-    ap.add_argument("--patch", type=int, default=64)
-    ap.add_argument("--repeats", type=int, default=3)
-    ap.add_argument("--out", type=pathlib.Path, default=RESULTS / "render_speed.json")
+    from jaxlens.experiments.runfolder import OneLineParser
+
+    from .common import out_path, whole
+
+    ap = OneLineParser(description=__doc__.splitlines()[0])
+    ap.add_argument("--size", type=whole(1, "pixels"), default=512)
+    ap.add_argument("--spp", type=whole(1, "samples per pixel"), default=16)
+    ap.add_argument("--patch", type=whole(1, "pixels"), default=64)
+    ap.add_argument("--repeats", type=whole(1, "repeats"), default=3)
+    ap.add_argument("--out", type=out_path(), default=RESULTS / "render_speed.json")
     args = ap.parse_args(argv)
     sys.path.insert(0, str(ROOT))
     import jax

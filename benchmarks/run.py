@@ -26,7 +26,6 @@ their ``main([])``, which writes their own result files.
 
 from __future__ import annotations
 
-import argparse
 import importlib
 import json
 import os
@@ -46,7 +45,9 @@ OPTIONAL = ("render_speed", "render_memory")
 
 
 def main(argv: list[str] | None = None) -> dict:
-    p = argparse.ArgumentParser(prog="python -m benchmarks", description=__doc__.split("\n")[0])
+    from jaxlens.experiments.runfolder import OneLineParser
+
+    p = OneLineParser(prog="python -m benchmarks", description=__doc__.split("\n")[0])
     p.add_argument("--smoke", action="store_true", help="tiny sizes; checks the suite works")
     p.add_argument("--full", action="store_true", help="include 1e7 rays in the throughput run")
     p.add_argument("--only", nargs="+", choices=CORE + OPTIONAL, help="run only these")

@@ -16,7 +16,6 @@ kernels per loop body, the measure that explained the rule's speed (benchmarks/S
 
 from __future__ import annotations
 
-import argparse
 import json
 import os
 import re
@@ -171,16 +170,21 @@ def count_fusions(n=1_000_000, chunk=CHUNK):
 
 
 def main(argv=None):
-    ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    from jaxlens.experiments.runfolder import OneLineParser
+
+    from .common import out_path, whole
+
+    ap = OneLineParser(description=__doc__.splitlines()[0])
     ap.add_argument("--check", action="store_true", help="values, gradients and FD (float64)")
     ap.add_argument("--fusions", action="store_true", help="count fusions per loop body")
-    ap.add_argument("--rays", type=int, default=1_000_000)
-    ap.add_argument("--repeats", type=int, default=7)
-    ap.add_argument("--chunk", nargs="+", type=int, default=[CHUNK],
+    ap.add_argument("--rays", type=whole(1, "rays"), default=1_000_000)
+    ap.add_argument("--repeats", type=whole(1, "repeats"), default=7)
+    ap.add_argument("--chunk", nargs="+", type=whole(1, "rays per chunk"), default=[CHUNK],
                     help=f"chunk sizes to time (rays; the CPU default is {CHUNK})")
     ap.add_argument("--dtype", choices=("float32", "float64"), default="float32",
                     help="the rays' dtype (the lens is cast to it)")
-    ap.add_argument("--json", help="also write the timings to this JSON file")
+    ap.add_argument("--json", type=out_path(make_parents=False),
+                    help="also write the timings to this JSON file")
     a = ap.parse_args(argv)
     if a.check:
         check()

@@ -86,6 +86,9 @@ CONVENTION = (
     "the rays of every field reach the sensor")
 
 
+MAX_DEVICES = 256  # XLA takes minutes to start 100 000 host devices
+
+
 def _ensure_devices(n: int) -> None:
     """Ask XLA for ``n`` host devices (one per core) before the JAX backend starts.
 
@@ -175,7 +178,7 @@ def build_parser() -> argparse.ArgumentParser:
     r.add_argument("--float32", action="store_true",
                    help="design in float32 (default float64: near-TIR rays rounded to valid in "
                         "float32 can overflow the gradient and lose a start)")
-    r.add_argument("--devices", type=int, default=os.cpu_count() or 1,
+    r.add_argument("--devices", type=int, default=min(os.cpu_count() or 1, MAX_DEVICES),
                    help="XLA host devices to shard seeds over (default: CPU cores)")
     o = p.add_argument_group("output")
     o.add_argument("--out", default="runs/classical", help="output folder")
@@ -231,6 +234,9 @@ def check_args(args) -> None:
     if args.polish_steps is not None:
         n(args.polish_steps, "--polish-steps", w, lo=0, integer=True)
     n(args.devices, "--devices", w, lo=1, integer=True)
+    if args.devices > MAX_DEVICES:
+        raise ValueError(f"{w}: --devices must be a whole number in [1, {MAX_DEVICES}] host "
+                         f"devices, got {args.devices}")
     n(args.ablation_seeds, "--ablation-seeds", w, lo=1, integer=True)
     n(args.tolerance_trials, "--tolerance-trials", w, lo=0, integer=True)
     n(args.tolerance_aware, "--tolerance-aware", w, lo=0, integer=True)

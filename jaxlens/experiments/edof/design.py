@@ -389,6 +389,48 @@ def plot_spot_record(rec: dict):
     return fig
 
 
+def _check_cli(p, a) -> list[int]:
+    """Refuse (``p.error``: exit 2, one line) a bad option of ``main`` before the design;
+    returns the seeds."""
+    from ...optics import checks
+    from ..runfolder import UsageError, check_writable
+
+    record_files = ("base_lens.json", "base_lens_spots.png", "base_lens_command.txt")
+    w = "edof.design"
+    try:
+        if os.path.isdir(a.out):
+            raise ValueError(f"--out {a.out} is a folder; give the lens file's path (.json or "
+                             f".zmx)")
+        if os.path.splitext(a.out)[1].lower() not in (".json", ".zmx"):
+            raise ValueError(f"--out {a.out} must end in .json or .zmx (the lens file's format)")
+        if not os.path.isdir(os.path.dirname(os.path.abspath(a.out))):
+            raise ValueError(f"--out {a.out}: the folder "
+                             f"{os.path.dirname(os.path.abspath(a.out))} does not exist")
+        if os.path.exists(a.record_dir) and not os.path.isdir(a.record_dir):
+            raise ValueError(f"--record-dir {a.record_dir} is a file, not a folder")
+        check_writable(os.path.join(a.record_dir, "x"), "--record-dir")
+        there = [x for x in (a.out, *(os.path.join(a.record_dir, n) for n in record_files))
+                 if os.path.exists(x)]
+        if there and not a.overwrite:
+            raise ValueError(f"{', '.join(there)} already exist(s); give --overwrite to replace "
+                             f"them, or choose --out and --record-dir")
+        parts = [s.strip() for s in a.seeds.split(",")]
+        if not all(s.isdigit() for s in parts) or len(set(map(int, parts))) < len(parts):
+            raise ValueError(f"--seeds must be distinct comma-separated whole numbers >= 0, "
+                             f"got {a.seeds!r}")
+        checks.number(a.elements, "--elements", w, lo=4, hi=6, integer=True,
+                      unit="elements (the default materials)")
+        checks.number(a.total_track, "--total-track", w, lo=0, lo_open=True, unit="mm")
+        checks.number(a.scale, "--scale", w, lo=0, hi=1000, lo_open=True,
+                      unit="(step-count multiplier)")
+        if a.polish_steps is not None:
+            checks.number(a.polish_steps, "--polish-steps", w, lo=0, integer=True, unit="steps")
+    except (ValueError, UsageError) as e:
+        p.error(" ".join(str(e).split()))
+    return [int(s) for s in parts]
+
+
+
 def main(argv=None) -> None:
     """Command line: design the classical lens, save it and record it."""
     import dataclasses
@@ -427,25 +469,11 @@ def main(argv=None) -> None:
                         "refuse; the default --out is the lens jaxlens ships)")
     a = p.parse_args(argv)
     # Refused before the design (minutes): the defaults are the shipped lens and its record.
-    record_files = ("base_lens.json", "base_lens_spots.png", "base_lens_command.txt")
-    if os.path.isdir(a.out):
-        p.error(f"--out {a.out} is a folder; give the lens file's path (.json or .zmx)")
-    there = [x for x in (a.out, *(os.path.join(a.record_dir, n) for n in record_files))
-             if os.path.exists(x)]
-    if there and not a.overwrite:
-        p.error(f"{', '.join(there)} already exist(s); give --overwrite to replace them, or "
-                f"choose --out and --record-dir")
+    seeds = _check_cli(p, a)
     try:
-        seeds = [int(s) for s in a.seeds.split(",") if s.strip()]
-    except ValueError:
-        p.error(f"--seeds must be comma-separated integers, got {a.seeds!r}")
-    if not seeds:
-        p.error("--seeds: need at least one seed")
-    if a.scale <= 0:
-        p.error(f"--scale must be positive, got {a.scale}")
-    if a.polish_steps is not None and a.polish_steps < 0:
-        p.error(f"--polish-steps must be ≥ 0, got {a.polish_steps}")
-    spec = classical_spec(n_elements=a.elements, total_track=a.total_track)
+        spec = classical_spec(n_elements=a.elements, total_track=a.total_track)
+    except ValueError as e:
+        p.error(" ".join(str(e).split()))
     config = design_config(a.scale, smoke=a.smoke)
     if a.polish_steps is not None:
         config = dataclasses.replace(config, polish_steps=a.polish_steps)
