@@ -20,6 +20,7 @@ from __future__ import annotations
 
 import jax.numpy as jnp
 
+from .optics import checks
 from .optics.lens import Lens, Sensor
 from .optics.materials import (
     LAMBDA_C,
@@ -43,8 +44,7 @@ def _fdc(nf: float, nd: float, nc: float, name: str) -> Tabulated:
 
 
 def _sd(value: float, clip: bool) -> float:
-    if not isinstance(clip, bool):  # "no" or None would read as True or False
-        raise ValueError(f"zoo: clip must be True or False, got {clip!r}")
+    checks.switch(clip, "clip", "zoo")
     return value if clip else float("inf")
 
 

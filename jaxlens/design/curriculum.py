@@ -98,9 +98,7 @@ class Stage:
         if self.loss not in ("ray", "image"):
             raise ValueError(f"{w}: loss must be 'ray' or 'image', got {self.loss!r}")
         for arg in ("mask", "regularize"):
-            if not isinstance(getattr(self, arg), bool):
-                raise ValueError(f"{w}: {arg} must be True or False, got "
-                                 f"{getattr(self, arg)!r}")
+            checks.switch(getattr(self, arg), arg, w)
 
 
 def paper_stages(

@@ -137,9 +137,7 @@ class DesignConfig:
                     "tolerance_nominal_weight"):
             checks.number(getattr(self, arg), arg, w, lo=0)
         for arg in ("curriculum", "regularize", "mask", "irls", "float64"):
-            if not isinstance(getattr(self, arg), bool):
-                raise ValueError(f"{w}: {arg} must be True or False, got "
-                                 f"{getattr(self, arg)!r}")
+            checks.switch(getattr(self, arg), arg, w)
 
     def scaled(self, factor: float) -> DesignConfig:
         """The same recipe with every step count scaled by ``factor`` (at least 1 step)."""

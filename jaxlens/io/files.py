@@ -58,8 +58,7 @@ def load(path: str | os.PathLike, *, dtype=None, strict: bool = False,
     if dtype is not None:
         dtype = _float_dtype(dtype)
     # "yes" would read as True, a misspelt choice as "error": refused rather than guessed.
-    if not isinstance(strict, bool):
-        raise ValueError(f"load: strict must be True or False, got {strict!r}")
+    checks.switch(strict, "strict", "load")
     if unknown_glass not in ("error", "model"):
         raise ValueError(f"load: unknown_glass must be 'error' or 'model', got "
                          f"{unknown_glass!r}")

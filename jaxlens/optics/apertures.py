@@ -13,6 +13,8 @@ from dataclasses import dataclass
 
 import jax.numpy as jnp
 
+from . import checks
+
 SHAPES = ("circle", "ellipse", "rect")
 
 
@@ -49,8 +51,7 @@ class Aperture:
                 rng = "a finite number > 0" if lo is not None else "a finite number"
                 raise ValueError(f"Aperture: {arg} must be {rng} (mm), got {v!r}")
             object.__setattr__(self, arg, f)
-        if not isinstance(self.blocks, bool):
-            raise ValueError(f"Aperture: blocks must be True or False, got {self.blocks!r}")
+        checks.switch(self.blocks, "blocks", "Aperture")
         if self.shape == "circle" and self.half_x != self.half_y:
             raise ValueError(f"Aperture: a circle has half_x == half_y (its radius, mm), got "
                              f"{self.half_x} and {self.half_y}; use shape='ellipse'")

@@ -51,6 +51,14 @@ def interval(lo, hi, lo_open, hi_open) -> str:
     return f"{left}{low}, {high}{right}"
 
 
+def switch(value, arg: str, where: str) -> bool:
+    """A Python bool; raises ValueError otherwise: a string such as "no" is truthy, and None
+    or 0 would read as False, so a switch is never guessed from another type."""
+    if not isinstance(value, bool):
+        raise ValueError(f"{where}: {arg} must be True or False, got {value!r}")
+    return value
+
+
 def number(value, arg: str, where: str, *, lo=None, hi=None, lo_open=False, hi_open=False,
            unit: str = "", integer: bool = False) -> float | int:
     """A finite number within [lo, hi] (open ends where asked); raises ValueError otherwise.
