@@ -94,9 +94,67 @@ def test_report_errors_are_messages(tmp_path, capsys):
     # With the line's nd and Vd, --unknown-glass model opens it with a model glass.
     bad.write_text(bad.read_text().replace("GLAS N-BK8", "GLAS N-BK8 0 0 1.52 60")
                    .replace("SURF 2\n", "SURF 2\n  DISZ 9\nSURF 3\n"))
-    with pytest.warns(UserWarning, match="model glass with the line's nd 1.52, Vd 60"):
-        code, out, err = _run(capsys, bad, "--json", "--unknown-glass", "model")
+    code, out, err = _run(capsys, bad, "--json", "--unknown-glass", "model")
     assert code == 0 and json.loads(out)["efl"] == pytest.approx(19.1623405, rel=1e-7)
+    # The loader's warning is one line on stderr, not a Python warning with its source line.
+    assert err.startswith("jaxlens report: warning: ") and "load_zmx(" not in err
+    assert "model glass with the line's nd 1.52, Vd 60" in err
+
+
+DATA = __import__("pathlib").Path(__file__).parent / "data" / "zmx"
+
+
+def test_report_lenient_reads_what_strict_refuses(capsys):
+    """A patent file with vignetting factors: refused by default (with the way out named),
+    read under --lenient with the loader's warnings on stderr, and then the same numbers as
+    jaxlens.load's default (lenient) reading."""
+    import jaxlens
+    from jaxlens.analysis.report import report_data
+
+    path = DATA / "rayoptics_US00583336-2-scaled.zmx"
+    code, out, err = _run(capsys, path)
+    assert code == 2 and out == "" and "VDYN" in err and "--lenient reads the file" in err
+    code, out, err = _run(capsys, path, "--json", "--lenient")
+    assert code == 0 and "jaxlens report: warning: " in err and "VDYN" in err
+    with pytest.warns(UserWarning):
+        want = report_data(jaxlens.load(path))
+    got = json.loads(out)
+    assert got["efl"] == want["efl"] and got["fields"] == json.loads(json.dumps(want["fields"]))
+
+
+def test_report_of_x_y_fields_agrees_with_the_analysis_functions(capsys):
+    """A tilted, decentered system with (θx, θy) fields: each field's RMS spots, chief-ray
+    landing point and radial distortion are those of rms_spot, chief_ray and distortion."""
+    import jaxlens
+    from jaxlens.imaging.sampling import pupil_grid
+
+    path = DATA / "rayoptics_HoO-V2C18Ex66.zmx"
+    code, out, err = _run(capsys, path, "--json")
+    assert code == 0, err
+    data = json.loads(out)
+    with pytest.warns(UserWarning):
+        lens = jaxlens.load(path)
+    fields = np.asarray(lens.fields)
+    assert fields.shape == (5, 2) and np.any(fields[:, 0] != 0) and np.any(fields[:, 1] != 0)
+    assert [f["angle"] for f in data["fields"]] == fields.tolist()
+    spots = jaxlens.analysis.rms_spot(lens, pupil=pupil_grid(21))
+    dist = jaxlens.analysis.distortion(lens)
+    for i, f in enumerate(data["fields"]):
+        np.testing.assert_allclose(f["rms_spot_mm"], np.asarray(spots.per_wavelength[i]),
+                                   rtol=1e-9)
+        np.testing.assert_allclose(f["chief_ray_xy"], np.asarray(spots.chief[i]), atol=1e-9)
+        assert f["chief_ray_height"] == pytest.approx(float(dist.chief_height[i]), abs=1e-9)
+        t = np.tan(np.deg2rad(fields[i]))  # the height is along the field's direction
+        u = t / np.hypot(*t) if t.any() else np.array([0.0, 1.0])
+        assert f["chief_ray_height"] == pytest.approx(float(np.dot(f["chief_ray_xy"], u)),
+                                                      abs=1e-12)
+        assert f["distortion"] == pytest.approx(float(dist.percent_ftan[i]), abs=1e-9)
+    # The ±9° x fields land at ±x, mirror images of each other.
+    x9, xm9 = data["fields"][3]["chief_ray_xy"], data["fields"][4]["chief_ray_xy"]
+    assert x9[0] > 10 and x9[0] == pytest.approx(-xm9[0], rel=1e-9)
+    assert data["max_field"] == pytest.approx(9.0, rel=1e-12)
+    code, out, _ = _run(capsys, path)
+    assert code == 0 and "Angle x, y" in out and "Chief x, y" in out
 
 
 def test_cli_subprocess_smoke(tmp_path):

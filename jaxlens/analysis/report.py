@@ -23,6 +23,7 @@ import dataclasses
 import json
 import math
 import sys
+import warnings
 
 import equinox as eqx
 import jax
@@ -56,7 +57,9 @@ def _pct(a, b):
 
 class _Result(eqx.Module):
     paraxial: paraxial.ParaxialData
-    chief_height: jax.Array  # [F] mm, real chief ray (primary wavelength)
+    chief_height: jax.Array  # [F] mm, real chief ray (primary wavelength), along the field
+    chief_xy: jax.Array  # [F, 2] mm, where it lands
+    field_angle: jax.Array  # [F] deg, signed θy for [F] fields, radial for [F, 2]
     chief_valid: jax.Array  # [F]
     f_tan: jax.Array  # [F] mm
     paraxial_height: jax.Array  # [F] mm
@@ -93,11 +96,13 @@ def _compute(lens: Lens) -> _Result:
     rms = analysis.weighted_rms(p, w)
     F = p.shape[0]
     poly = analysis.weighted_rms(p.reshape(F, -1, 2), w.reshape(F, -1))
-    chief = p[:, lens.primary, centre, 1]
-    ftan = pd.efl * jnp.tan(jnp.deg2rad(lens.fields))
-    ypar = jax.vmap(lambda th: paraxial.image_height(lens, th))(lens.fields)
+    chief_xy = p[:, lens.primary, centre]
+    tan_radial, radial, chief = analysis.field_heights(lens.fields, chief_xy)
+    ftan = pd.efl * tan_radial
+    ypar = jax.vmap(lambda th: paraxial.image_height(lens, th))(radial)
     return _Result(
-        pd, chief, valid[:, lens.primary, centre], ftan, ypar, rms, poly, jnp.mean(w, axis=-1)
+        pd, chief, chief_xy, radial, valid[:, lens.primary, centre], ftan, ypar, rms, poly,
+        jnp.mean(w, axis=-1)
     )
 
 
@@ -138,13 +143,12 @@ def report_data(lens: Lens, *, fields=None, wavelengths=None) -> dict:
         wavelengths: µm; default the lens's wavelengths.
     """
     lens = with_fields_and_wavelengths(lens, fields, wavelengths)
-    if np.asarray(lens.fields).ndim != 1:
-        raise ValueError("report: only y field angles are supported (fields of shape [F])")
     res = _compute(lens)
     pd = res.paraxial
     wl = np.atleast_1d(np.asarray(lens.wavelengths, np.float64))
     angles = np.asarray(lens.fields, np.float64)
-    fmax = float(np.max(np.abs(angles)))
+    radial = np.abs(np.asarray(res.field_angle, np.float64))
+    fmax = float(np.max(radial))
     per = np.asarray(res.rms, np.float64)
     ok = np.asarray(res.chief_valid)
     chief = np.where(ok, np.asarray(res.chief_height, np.float64), np.nan)
@@ -155,8 +159,9 @@ def report_data(lens: Lens, *, fields=None, wavelengths=None) -> dict:
         frac = np.asarray(res.valid_fraction[i], np.float64)
         out_fields.append(
             {
-                "angle": float(a),
+                "angle": float(a) if a.ndim == 0 else [float(v) for v in a],
                 "chief_ray_height": _f(chief[i]),
+                "chief_ray_xy": [_f(v) for v in np.where(ok[i], res.chief_xy[i], np.nan)],
                 "paraxial_image_height": _f(res.paraxial_height[i]),
                 "f_tan_theta": _f(res.f_tan[i]),
                 "distortion": _f(d_ftan[i]),
@@ -171,7 +176,7 @@ def report_data(lens: Lens, *, fields=None, wavelengths=None) -> dict:
                 "valid_fraction": [float(v) for v in frac],
             }
         )
-    imax = int(np.argmax(np.abs(angles)))
+    imax = int(np.argmax(radial))
     return {
         "name": lens.name,
         "units": UNITS,
@@ -338,14 +343,24 @@ def format_report(data: dict, lens: Lens | None = None) -> str:
         " 21x21 pupil grid)"
     )
     spot_heads = "".join(f"{f'RMS {1000 * w:.1f}nm':>15}" for w in wl)
+    xy = any(isinstance(f["angle"], list) for f in data["fields"])
+    if xy:
+        L.append("  (x, y fields: heights and distortion along each field's direction)")
     L.append(
-        f"  {'Field':>5}{'Angle':>9}{'Chief y':>13}{'Parax y':>13}{'Dist f-tan':>12}"
-        f"{'Dist parax':>12}{spot_heads}{'RMS poly':>12}"
+        f"  {'Field':>5}" + (f"{'Angle x, y':>17}{'Chief x, y':>25}{'Parax h':>13}" if xy
+                             else f"{'Angle':>9}{'Chief y':>13}{'Parax y':>13}")
+        + f"{'Dist f-tan':>12}{'Dist parax':>12}{spot_heads}{'RMS poly':>12}"
     )
     for i, f in enumerate(data["fields"]):
         spots = "".join(_num(v, 15, 4) for v in f["rms_spot"])
+        if xy:
+            a = f["angle"] if isinstance(f["angle"], list) else [0.0, f["angle"]]
+            cx, cy = f["chief_ray_xy"]
+            head = (f"{a[0]:>8.3f},{a[1]:>8.3f}{_num(cx, 12, 6)},{_num(cy, 12, 6)}")
+        else:
+            head = f"{f['angle']:>9.3f}{_num(f['chief_ray_height'], 13, 6)}"
         L.append(
-            f"  {i + 1:>5}{f['angle']:>9.3f}{_num(f['chief_ray_height'], 13, 6)}"
+            f"  {i + 1:>5}{head}"
             f"{_num(f['paraxial_image_height'], 13, 6)}{_num(f['distortion'], 12, 5)}"
             f"{_num(f['distortion_paraxial'], 12, 5)}{spots}"
             f"{_num(f['rms_spot_polychromatic'], 12, 4)}"
@@ -394,17 +409,31 @@ def register(subparsers) -> None:
         help=".zmx glasses in no catalog: refuse (default) or use a model glass of the nd "
         "and Vd on their GLAS line (with a warning)",
     )
+    p.add_argument(
+        "--lenient",
+        action="store_true",
+        help=".zmx: read as jaxlens.load does by default, warning (instead of refusing) about "
+        "settings jaxlens does not use (vignetting factors, unknown keywords) and a file cut "
+        "off mid-line",
+    )
     p.set_defaults(func=run)
 
 
 def run(args: argparse.Namespace) -> int:
     """Run the ``report`` subcommand; returns the exit status."""
     try:
-        # strict: a report must not describe a truncated file
-        lens = load(args.lens, strict=True, unknown_glass=args.unknown_glass)
+        # strict by default: a report must not describe a truncated file, nor rays that the
+        # file's own settings (vignetting factors) would have changed, without being asked
+        with warnings.catch_warnings(record=True) as caught:
+            warnings.simplefilter("always")
+            lens = load(args.lens, strict=not args.lenient, unknown_glass=args.unknown_glass)
+        for w in caught:
+            print(f"jaxlens report: warning: {w.message}", file=sys.stderr)
         data = report_data(lens, fields=args.fields, wavelengths=args.wavelengths)
     except (ValueError, OSError) as e:
-        print(f"jaxlens report: error: {e}", file=sys.stderr)
+        hint = "" if args.lenient or "(strict mode)" not in str(e) else (
+            " (--lenient reads the file anyway, with a warning)")
+        print(f"jaxlens report: error: {e}{hint}", file=sys.stderr)
         return 2
     data["file"] = args.lens
     if args.json:

@@ -249,6 +249,25 @@ class Distortion(eqx.Module):
     percent_paraxial: Float[Array, " F"]
 
 
+def field_heights(fields, xy):
+    """Image heights of points ``xy`` [F, 2] (mm) along their fields' directions.
+
+    Returns ``(tan θ, θ, height)`` per field: for ``[F]`` fields (θy) the signed tangent,
+    the angle and the y coordinate; for ``[F, 2]`` fields (θx, θy) the radial angle θ
+    (tan²θ = tan²θx + tan²θy), its tangent and the component of ``xy`` along the field's
+    direction (tanθx, tanθy) (+y for the on-axis field), so the ideal image point of a
+    distortion-free lens of focal length f is at height f·tanθ.
+    """
+    if fields.ndim == 1:
+        return jnp.tan(jnp.deg2rad(fields)), fields, xy[:, 1]
+    t = jnp.tan(jnp.deg2rad(fields))
+    s = jnp.sum(t * t, axis=-1)
+    tr = jnp.where(s > 0, jnp.sqrt(jnp.where(s > 0, s, 1.0)), 0.0)  # grad-safe at 0
+    nz = (tr > 0)[:, None]
+    u = jnp.where(nz, t / jnp.where(nz, tr[:, None], 1.0), jnp.array([0.0, 1.0], t.dtype))
+    return tr, jnp.rad2deg(jnp.arctan(tr)), jnp.sum(xy * u, axis=-1)
+
+
 def distortion(lens: Lens, fields=None, wavelength=None) -> Distortion:
     """Distortion of the real chief ray at ``wavelength`` (default primary).
 
@@ -273,22 +292,11 @@ def _distortion(lens, fields, wavelength) -> Distortion:
         raise ValueError(f"distortion: wavelength must be one value (µm), got shape "
                          f"{jnp.shape(wl)}")
     f = paraxial.efl(lens, wl)
-    xy = fields if fields.ndim == 2 else jnp.stack([jnp.zeros_like(fields), fields], -1)
-    t = jnp.tan(jnp.deg2rad(xy))  # the ideal image point is EFL·t
     chief = jax.vmap(lambda th: _spot_rays(
         lens, th, wl, pupil=jnp.zeros((1, 2), lens.epd.dtype), depth=None, aim="paraxial",
         newton_iters=DEFAULT_NEWTON_ITERS)[0])(fields)
     p = jnp.where(chief.valid[:, None], chief.origin[:, :2], jnp.nan)
-    if fields.ndim == 2:
-        s = jnp.sum(t * t, axis=-1)
-        tr = jnp.where(s > 0, jnp.sqrt(jnp.where(s > 0, s, 1.0)), 0.0)  # grad-safe at 0
-        nz = (tr > 0)[:, None]
-        u = jnp.where(nz, t / jnp.where(nz, tr[:, None], 1.0),
-                      jnp.array([0.0, 1.0], t.dtype))  # the field's direction; y on axis
-        y = jnp.sum(p * u, axis=-1)
-        radial = jnp.rad2deg(jnp.arctan(tr))  # paraxial data: the y–z section, used radially
-    else:
-        tr, radial, y = t[:, 1], fields, p[:, 1]  # signed heights along y
+    tr, radial, y = field_heights(fields, p)
     ftan = f * tr
     ypar = jax.vmap(lambda th: paraxial.image_height(lens, th, wl))(radial)
 
