@@ -79,16 +79,32 @@ def plot_layout(lens, fields: Sequence[float] | None = None, *, n_rays: int = 9,
 
     from .analysis import spots as analysis
     from .optics import checks
+    from .optics.coordinates import CoordinateBreak, frame_of
 
     lens = lens.astype(jnp.float64)
     fmax = float(np.max(np.abs(np.asarray(lens.fields))))
-    fields = [0.0, 0.7 * fmax, fmax] if fields is None else list(fields)
+    fields = sorted({0.0, 0.7 * fmax, fmax}) if fields is None else list(fields)
     checks.field_angles(fields, "plot_layout", "fields")  # here, not deep in the program
     checks.number(n_rays, "n_rays", "plot_layout", lo=1, integer=True, unit="rays per fan")
     sd = np.asarray(analysis.clear_semi_diameters(lens)) if semi_diameters is None else \
         np.asarray(semi_diameters)
     zs = np.asarray(lens.vertex_z())
-    z_img = float(lens.image_z())
+    n = lens.num_surfaces
+    # Each surface's tracer frame in global coordinates (identity without coordinate breaks):
+    # drawn in the tracer's frames, a decentered or tilted system would come apart.
+    frames = [tuple(np.asarray(a) for a in frame_of(lens, i)) for i in range(n)]
+    frames.append(tuple(np.asarray(a) for a in frame_of(lens, None)))
+
+    def zy(i, p):
+        """Global (z, y) of tracer-frame points p [..., 3] of surface i (n: the image)."""
+        rot, off = frames[i]
+        g = np.asarray(p) @ rot.T + off
+        return g[..., 2], g[..., 1]
+
+    def section(i, y, z):
+        """Global (z, y) of the points (0, y, z) of surface i's frame."""
+        return zy(i, np.stack([np.zeros_like(y), y, z], -1))
+
     fig = _figure(8, 4.5)
     ax = fig.add_subplot(1, 1, 1)
     # Rays.
@@ -97,46 +113,54 @@ def plot_layout(lens, fields: Sequence[float] | None = None, *, n_rays: int = 9,
     starts, dirs, paths = _fans(lens, jnp.asarray(fields, lens.epd.dtype), pupil)
     for i, f in enumerate(fields):
         start, d0 = np.asarray(starts[i]), np.asarray(dirs[i])
-        path = paths.origin[i]
+        path = np.asarray(paths.origin[i])
         # Start the drawn rays a little in front of the first surface.
         t0 = (-0.5 - start[:, 2]) / d0[:, 2]
-        pts = [start + t0[:, None] * d0] + list(np.asarray(path))
+        pts = [zy(0, start + t0[:, None] * d0)] + [zy(k, path[k]) for k in range(n + 1)]
         valid = np.asarray(paths.valid[i, -1])
-        ys = np.stack([p[:, 1] for p in pts])
-        zz = np.stack([p[:, 2] for p in pts])
+        zz = np.stack([p[0] for p in pts])
+        ys = np.stack([p[1] for p in pts])
         color = _FIELD_COLORS[i % len(_FIELD_COLORS)]
         for j in range(n_rays):
             ax.plot(zz[:, j], ys[:, j], color=color, lw=0.6, alpha=0.9 if valid[j] else 0.25,
                     ls="-" if valid[j] else ":")
         ax.plot([], [], color=color, lw=1, label=f"{f:.1f}°")
-    # Surfaces and element edges.
+    # Surfaces and element edges (coordinate breaks are not drawn).
     n_air = [float(np.asarray(m.index(0.5875618))) for m in lens.materials]
+
+    def edge_z(i):
+        return zs[i] + float(_profile(lens.surfaces[i], jnp.asarray([sd[i]]))[0])
+
     prev = None
     for i, s in enumerate(lens.surfaces):
+        if isinstance(s, CoordinateBreak):
+            continue
         if i == lens.stop:
             r = sd[i]
-            ax.plot([zs[i], zs[i]], [r, r + 0.25 * r], color="k", lw=2)
-            ax.plot([zs[i], zs[i]], [-r, -r - 0.25 * r], color="k", lw=2)
+            for sign in (1, -1):
+                ax.plot(*section(i, sign * np.array([r, 1.25 * r]), np.full(2, zs[i])),
+                        color="k", lw=2)
             prev = None
             continue
         r = np.linspace(-sd[i], sd[i], 101)
-        z = zs[i] + _profile(s, jnp.asarray(r))
-        ax.plot(z, r, color="k", lw=1)
+        ax.plot(*section(i, r, zs[i] + _profile(s, jnp.asarray(r))), color="k", lw=1)
         glass_after = abs(n_air[i] - 1.0) > 1e-6
         if prev is not None:
-            j, zj = prev
+            j = prev
             rr = max(sd[i], sd[j])
             for sign in (1, -1):
-                zj_edge = zs[j] + float(_profile(lens.surfaces[j], jnp.asarray([sd[j]]))[0])
-                zi_edge = zs[i] + float(_profile(s, jnp.asarray([sd[i]]))[0])
-                ax.plot([zj_edge, zj_edge, zi_edge], [sign * sd[j], sign * rr, sign * rr],
+                ax.plot(*section(j, sign * np.array([sd[j], rr]), np.full(2, edge_z(j))),
                         color="k", lw=1)
-                ax.plot([zi_edge, zi_edge], [sign * sd[i], sign * rr], color="k", lw=1)
-        prev = (i, zs[i]) if glass_after else None
+                ax.plot(*section(i, sign * np.array([sd[i], rr]), np.full(2, edge_z(i))),
+                        color="k", lw=1)
+                # The rim between the two surfaces' edges (one frame: no break inside glass).
+                ax.plot(*section(i, np.full(2, sign * rr), np.array([edge_z(j), edge_z(i)])),
+                        color="k", lw=1)
+        prev = i if glass_after else None
     h = float(np.max(sd)) * 1.1
     if lens.sensor is not None:
         h = max(h, float(np.asarray(lens.sensor.half_diagonal)))
-    ax.plot([z_img, z_img], [-h, h], color="k", lw=2)
+    ax.plot(*section(n, np.array([-h, h]), np.full(2, float(lens.image_z()))), color="k", lw=2)
     ax.set_aspect("equal")
     ax.set_xlabel("z (mm)")
     ax.set_ylabel("y (mm)")

@@ -32,3 +32,37 @@ def test_layout_refuses_a_field_out_of_range_before_tracing():
     with pytest.raises(ValueError, match=r"plot_layout: fields must be finite angles in "
                                          r"\(-90, 90\) deg, got 95 deg"):
         plot.plot_layout(lens, [0.0, 95.0])
+
+
+def test_layout_of_a_decentered_mirror_is_drawn_in_global_coordinates(recwarn):
+    """A 90° off-axis parabola (a coordinate break decenters the mirror by −190.6 mm, its
+    focus 95.3 mm in front of the vertex): the collimated beam along the axis is drawn
+    hitting the mirror near z = 200 − 95.3 and turning down to the focus at y = −190.6,
+    where the image plane is drawn. In the tracer's frames the beam would sit at
+    y ≈ +190.6 and never meet the drawn stop."""
+    from pathlib import Path
+
+    lens = jaxlens.load(Path(__file__).parent / "data" / "zmx" / "rayoptics_zmax_37992.zmx")
+    n = 5
+    fig = plot.plot_layout(lens, [0.0], n_rays=n)
+    rays = [ln for ln in fig.axes[0].lines[:n] if ln.get_linestyle() == "-"]
+    assert len(rays) >= n - 2  # the two rim rays may be clipped at the 25.4 mm apertures
+    for line in rays:
+        z, y = (np.asarray(v) for v in line.get_data())
+        assert abs(y[0]) <= 25.41  # launched inside the 25.4 mm stop, about the axis
+        assert z[-1] == pytest.approx(200 - 95.3, abs=1e-6)  # ends on the image plane
+        assert y[-1] == pytest.approx(-190.6, abs=1e-3)  # at the parabola's focus
+    image = fig.axes[0].lines[-1]
+    zi, yi = (np.asarray(v) for v in image.get_data())
+    np.testing.assert_allclose(zi, 200 - 95.3, atol=1e-9)
+    assert yi.min() < -190.6 < yi.max()
+
+
+def test_layout_draws_the_on_axis_fan_once():
+    """A lens with one on-axis field gets one fan (0, 70 % and 100 % of 0° are one field)."""
+    lens = jaxlens.zoo.cooke_triplet()
+    lens = jaxlens.Lens(**{**{f: getattr(lens, f) for f in ("surfaces", "thickness",
+                                                             "materials", "epd", "stop")},
+                           "fields": (0.0,)})
+    fig = plot.plot_layout(lens, n_rays=3)
+    assert [t.get_text() for t in fig.axes[0].get_legend().get_texts()] == ["0.0°"]
