@@ -58,6 +58,7 @@ from .optics.surfaces import AbstractSurface as AbstractSurface
 from .optics.surfaces import Conic as Conic
 from .optics.surfaces import EvenAsphere as EvenAsphere
 from .optics.surfaces import Hybrid as Hybrid
+from .optics.surfaces import OddAsphere as OddAsphere
 from .optics.surfaces import Plane as Plane
 from .optics.surfaces import Sphere as Sphere
 from .optics.surfaces import Standard as Standard

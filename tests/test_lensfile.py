@@ -374,8 +374,9 @@ def test_refcase_style_held_out_features():
     assert float(lens.image.c) == -1 / 30.0
     assert isinstance(lens.object_material, Air)
     assert np.isfinite(float(jaxlens.efl(lens)))
-    d["surfaces"][1]["type"] = "odd_asphere"
-    with pytest.raises(ValueError, match="not supported"):
+    d["surfaces"][1]["type"] = "odd_asphere"  # its even_asphere_coeffs do not fit that type
+    with pytest.raises(ValueError, match="surface 1: an odd asphere takes its terms as "
+                                         "odd_asphere_coeffs"):
         lensfile.lens_from_dict(d)
 
 

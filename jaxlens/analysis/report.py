@@ -37,7 +37,7 @@ from ..optics import checks, paraxial
 from ..optics.coordinates import CoordinateBreak
 from ..optics.lens import Lens
 from ..optics.materials import Air, ModelGlass, Tabulated
-from ..optics.surfaces import EvenAsphere, Hybrid
+from ..optics.surfaces import EvenAsphere, Hybrid, OddAsphere
 from . import spots as analysis
 
 UNITS = {
@@ -266,6 +266,8 @@ def _surface_table(lens: Lens) -> list[str]:
             if isinstance(s, Hybrid)
             else "EVENASPH"
             if isinstance(s, EvenAsphere)
+            else "ODDASPHE"
+            if isinstance(s, OddAsphere)
             else "STANDARD"
         )
         sd = float(s.semi_diameter) if s is not None else math.inf
@@ -281,6 +283,9 @@ def _surface_table(lens: Lens) -> list[str]:
                     for i, v in enumerate(np.asarray(arr))
                     if v != 0
                 )
+        if isinstance(s, OddAsphere):  # A<i> multiplies r^i, as A4 does r⁴ above
+            asph = " ".join(f"A{i}={v:.4g}" for i, v in enumerate(np.asarray(s.coeffs), 1)
+                            if v != 0)
         sd_txt = _num(sd, 10, 4) if math.isfinite(sd) else f"{'-':>10}"
         lines.append(
             f"  {label:<5}{typ:<10}{_num(r, 13, 6)}{_num(t, 13, 6, '')}  {glass:<16}"

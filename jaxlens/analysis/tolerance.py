@@ -171,8 +171,18 @@ class Perturbation(eqx.Module):
     abbe_rel: Float[Array, " n"]
 
 
+def _no_radial_terms(lens: Lens, where: str) -> None:
+    """Refuse odd aspheres: their β_i r^i terms would stay untoleranced without a word."""
+    for i, s in enumerate(lens.surfaces):
+        if s.radial_coeffs().shape[0]:
+            raise ValueError(f"{where}: surface {i + 1} is a {type(s).__name__}; tolerance "
+                             f"analysis of the radial terms β_i r^i of an odd asphere is not "
+                             f"supported (asphere tolerances act on even terms only)")
+
+
 def zero_perturbation(lens: Lens) -> Perturbation:
     """The perturbation that changes nothing (float64 when x64 is on)."""
+    _no_radial_terms(lens, "zero_perturbation")
     n = lens.num_surfaces
     z = jnp.zeros(n, lens.thickness.dtype)
     return Perturbation(z, z, z, tuple(jnp.zeros_like(s.even_coeffs()) for s in lens.surfaces),
@@ -197,6 +207,7 @@ def perturb(lens: Lens, p: Perturbation, clear_radius, *, add_r4: tuple[bool, ..
         add_r4: per surface, give a surface without an r⁴ coefficient one (an
             ``EvenAsphere``) so that irregularity can act on it; static. Default: none.
     """
+    _no_radial_terms(lens, "perturb")
     add_r4 = add_r4 or (False,) * lens.num_surfaces
     surfaces = []
     for i, s in enumerate(lens.surfaces):
@@ -392,6 +403,7 @@ class ToleranceModel:
     def __init__(self, lens: Lens, *, fields=None, field_weights=None, wavelengths=None,
                  pupil=None, tolerances: Tolerances | None = None, batch: int = 25,
                  apertures: str = "open"):
+        _no_radial_terms(lens, "ToleranceModel")
         self.tolerances = Tolerances() if tolerances is None else tolerances
         if not isinstance(self.tolerances, Tolerances):
             raise ValueError(f"ToleranceModel: tolerances must be a Tolerances, got "

@@ -76,6 +76,9 @@ class Parameterization(AbstractParameterization):
     optical: tuple[int, ...] = eqx.field(static=True)
     materials: eqx.Module | None = None
 
+    def __check_init__(self):
+        _even_aspheres(self.template, self.optical, "Parameterization: template")
+
     @property
     def n_terms(self) -> int:
         return self.template.surfaces[self.optical[0]].coeffs.shape[0] - 1
@@ -111,9 +114,19 @@ class Parameterization(AbstractParameterization):
 
     def from_lens(self, lens: Lens) -> LensParams:
         """Scaled parameters of a lens with this structure (inverse of ``to_lens``)."""
+        _even_aspheres(lens, self.optical, "Parameterization.from_lens")
         r = self.r_norm
         powers = 2 * jnp.arange(self.n_terms, dtype=r.dtype) + 3
         c = jnp.stack([lens.surfaces[i].c for i in self.optical]) * r
         a = jnp.stack([lens.surfaces[i].coeffs[1:] for i in self.optical]) * r[:, None] ** powers
         k = jnp.stack([lens.surfaces[i].k for i in self.optical])
         return LensParams(c=c, a=a, k=k, d=lens.thickness[:-1])
+
+
+def _even_aspheres(lens: Lens, optical, where: str) -> None:
+    """The design variables are even-asphere terms: any other surface kind (an
+    ``OddAsphere``'s r, r³ … terms, say) would be dropped or misread, so it is refused."""
+    for i in optical:
+        if not isinstance(lens.surfaces[i], EvenAsphere):
+            raise ValueError(f"{where}: surfaces[{i}] is a {type(lens.surfaces[i]).__name__}; "
+                             f"the design parameterisation holds EvenAsphere surfaces only")

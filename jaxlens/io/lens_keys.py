@@ -33,7 +33,7 @@ SURFACE = {
     "conic": ("k", "cc", "conic_constant", "kappa"),
     "even_asphere_coeffs": ("asphere_coeffs", "aspheric_coeffs", "asphere_coefficients",
                             "aspheric_coefficients", "coeffs", "coefficients", "even_coeffs"),
-    "odd_x": (), "odd_y": (),
+    "odd_asphere_coeffs": ("odd_coeffs", "radial_coeffs"), "odd_x": (), "odd_y": (),
     "semi_diameter": ("diameter", "diam", "aperture_radius", "sd", "clear_aperture",
                       "clear_semi_diameter"),
     "is_stop": ("stop", "aperture_stop"), "material": ("glass", "glas", "medium"), "n": (),

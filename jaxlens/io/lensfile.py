@@ -41,7 +41,7 @@ from ..optics import checks, paraxial
 from ..optics import materials as _materials
 from ..optics.lens import Lens, Sensor
 from ..optics.materials import AbstractMaterial, Air, ModelGlass, Tabulated
-from ..optics.surfaces import AbstractSurface, EvenAsphere, Hybrid, Standard
+from ..optics.surfaces import AbstractSurface, EvenAsphere, Hybrid, OddAsphere, Standard
 from . import lens_keys
 from .json_values import num as _num
 from .json_values import nums as _nums
@@ -363,8 +363,6 @@ def surface_from_dict(d: dict, where: str, *, kind: str | None = None) -> Abstra
 def _surface(d: dict, where: str, kind: str | None) -> AbstractSurface:
     raw = _text(kind or d.get("type") or "standard", f"{where}: type")
     kind = re.sub(r"[^a-z0-9]", "", raw.lower())  # "Even Asphere" == "even_asphere"
-    if "odd" in kind and "hybrid" not in kind:
-        raise ValueError(f"{where}: surface type {raw!r} (radial odd powers) is not supported")
     c = _curvature(d, where)
     k = _num(d.get("conic", 0.0), f"{where}: conic")
     sd = d.get("semi_diameter")
@@ -375,6 +373,19 @@ def _surface(d: dict, where: str, kind: str | None) -> AbstractSurface:
     if coeffs.ndim != 1:
         raise ValueError(f"{where}: even_asphere_coeffs must be a flat list")
     has_odd = "odd_x" in d or "odd_y" in d
+    # "oddasph", "Odd Asphere", "ODDASPHE"
+    radial = "odd" in kind and "asph" in kind and "hybrid" not in kind
+    if radial and (has_odd or coeffs.size):
+        raise ValueError(f"{where}: an odd asphere takes its terms as odd_asphere_coeffs "
+                         f"(on r, r², r³, …), not even_asphere_coeffs or odd_x/odd_y")
+    if "odd_asphere_coeffs" in d and not radial:
+        raise ValueError(f"{where}: odd_asphere_coeffs belong to an odd asphere (type "
+                         f"\"oddasph\"), not to type {raw!r}")
+    if radial:
+        b = _nums(d.get("odd_asphere_coeffs", []), f"{where}: odd_asphere_coeffs")
+        if b.ndim != 1:
+            raise ValueError(f"{where}: odd_asphere_coeffs must be a flat list")
+        return OddAsphere(c=_arr(c), k=_arr(k), coeffs=_arr(b), semi_diameter=_arr(sd))
     if "hybrid" in kind or has_odd:
         ox = _nums(d.get("odd_x", []), f"{where}: odd_x")
         oy = _nums(d.get("odd_y", []), f"{where}: odd_y")
@@ -393,7 +404,8 @@ def _surface(d: dict, where: str, kind: str | None) -> AbstractSurface:
         return EvenAsphere(c=_arr(c), k=_arr(k), coeffs=_arr(coeffs), semi_diameter=_arr(sd))
     if kind in _STANDARD_TYPES:
         return Standard(c=_arr(c), k=_arr(k), semi_diameter=_arr(sd))
-    raise ValueError(f"{where}: unknown surface type {raw!r}; use standard, evenasph or hybrid")
+    raise ValueError(f"{where}: unknown surface type {raw!r}; use standard, evenasph, oddasph "
+                     f"or hybrid")
 
 
 def surface_to_dict(s: AbstractSurface) -> dict:
@@ -402,6 +414,8 @@ def surface_to_dict(s: AbstractSurface) -> dict:
         d = {"type": "hybrid"}
     elif isinstance(s, EvenAsphere):
         d = {"type": "evenasph"}
+    elif isinstance(s, OddAsphere):
+        d = {"type": "oddasph"}
     elif isinstance(s, Standard):
         d = {"type": "standard"}
     else:
@@ -410,6 +424,8 @@ def surface_to_dict(s: AbstractSurface) -> dict:
     d["conic"] = _out(s.k)
     if isinstance(s, EvenAsphere | Hybrid):
         d["even_asphere_coeffs"] = _out(s.coeffs)
+    if isinstance(s, OddAsphere):
+        d["odd_asphere_coeffs"] = _out(s.coeffs)
     if isinstance(s, Hybrid):
         d["odd_x"] = _out(s.odd_x)
         d["odd_y"] = _out(s.odd_y)

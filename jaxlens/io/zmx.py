@@ -9,9 +9,12 @@ What is read and written:
     * ``TYPE STANDARD`` (CURV, CONI; a block without TYPE, but not one with non-zero
       PARM/XDAT, which is refused as a missing TYPE line), ``TYPE EVENASPH``
       (PARM 1..8 = A2, A4, …, A16, so
-      PARM 1 multiplies r²) and ``TYPE XASPHERE`` (extended asphere: XDAT 1 = number of
+      PARM 1 multiplies r²), ``TYPE XASPHERE`` (extended asphere: XDAT 1 = number of
       terms, XDAT 2 = normalisation radius, XDAT 3… = the r², r⁴, … coefficients; used
-      for even aspheres with more than 8 terms).
+      for even aspheres with more than 8 terms) and ``TYPE ODDASPHE`` (an ``OddAsphere``:
+      PARM 1..8 = β_1 … β_8 on r, r², …, r⁸; a nonzero PARM beyond 8 is refused, and an
+      ``OddAsphere`` with more than 8 terms is not written). The image surface may be
+      STANDARD, EVENASPH or ODDASPHE.
     * The hybrid surface (even asphere plus odd terms Σ b_j x^{2j+1} + d_j y^{2j+1}) is
       written as Zemax's extended polynomial, ``TYPE XPOLYNOM``: a conic plus Σ A_i E_i
       with E_i the monomials x^m y^n ordered by degree and, within a degree, by falling

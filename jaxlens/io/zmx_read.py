@@ -362,6 +362,8 @@ def _surface_of(s: _Surf, unit: float) -> AbstractSurface:
         return EvenAsphere(
             c=_arr(c), k=_arr(s.coni), coeffs=_arr(np.array(a, np.float64)), semi_diameter=_arr(sd)
         )
+    if s.type == "ODDASPHE":
+        return zmx_surfaces.odd_asphere(s, unit, sd)
     if s.type == "XPOLYNOM":
         return _hybrid_from_xpoly(s, unit, c, sd)
     if s.type == "TOROIDAL":
@@ -371,8 +373,8 @@ def _surface_of(s: _Surf, unit: float) -> AbstractSurface:
     if s.type == "COORDBRK":
         return _coordinate_break(s, unit)
     raise where.error(
-        f"surface type {s.type} is not supported (STANDARD, EVENASPH, XASPHERE, XPOLYNOM, "
-        f"TOROIDAL, PARAXIAL, COORDBRK)"
+        f"surface type {s.type} is not supported (STANDARD, EVENASPH, ODDASPHE, XASPHERE, "
+        f"XPOLYNOM, TOROIDAL, PARAXIAL, COORDBRK)"
     )
 
 
@@ -703,8 +705,9 @@ def loads(text: str, path: str = "<zmx>", *, strict: bool = False,
     if len(stops) > 1:
         raise body[stops[1]].line.error("more than one STOP surface")
     stop = stops[0] if stops else 0
-    if img.type not in ("STANDARD", "EVENASPH"):
-        raise (img.type_line or img.line).error("the image surface must be STANDARD or EVENASPH")
+    if img.type not in ("STANDARD", "EVENASPH", "ODDASPHE"):
+        raise (img.type_line or img.line).error(
+            "the image surface must be STANDARD, EVENASPH or ODDASPHE")
     dist = obj.disz * u if obj.disz_line is not None else math.inf
     if dist >= INFINITE_OBJECT_MM:
         dist = math.inf  # Zemax's convention; a finite 1e20 mm would need ray directions of

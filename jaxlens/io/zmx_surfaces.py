@@ -1,6 +1,10 @@
-"""``.zmx`` surface types beyond the rotationally symmetric ones: ``TOROIDAL`` and
-``PARAXIAL``, read and written (the format: ``jaxlens.io.zmx``; the surfaces:
+"""``.zmx`` surface types beyond the standard and even-asphere ones: ``ODDASPHE`` (read
+here, written with the others by ``zmx_write``), ``TOROIDAL`` and ``PARAXIAL``, read and
+written (the format: ``jaxlens.io.zmx``; the surfaces: ``jaxlens.optics.surfaces``,
 ``jaxlens.optics.toroidal`` and ``jaxlens.optics.paraxial_surface``).
+
+ODDASPHE: CURV and CONI the base conic, PARM 1…8 the coefficients β_1…β_8 on r, r², …, r⁸
+(lens units^(1−i), converted to mm).
 
 TOROIDAL: CURV and CONI are the y–z profile's curvature and conic, PARM 1 the radius of
 rotation R (0: a cylinder), PARM 2…9 the coefficients on y², y⁴, …, y¹⁶. Its extra data
@@ -26,6 +30,7 @@ import numpy as np
 from ..optics import paraxial
 from ..optics.lens import Lens, Sensor
 from ..optics.paraxial_surface import ParaxialSurface
+from ..optics.surfaces import OddAsphere
 from ..optics.toroidal import Toroidal
 from .zmx_common import SENSOR_COMMENT
 
@@ -46,6 +51,15 @@ def _parms(s, allowed: range, what: str) -> None:
     for i, (v, ln) in s.parm.items():
         if i not in allowed and v != 0:
             raise ln.error(f"{what} uses PARM {allowed.start}..{allowed.stop - 1} only")
+
+
+def odd_asphere(s, unit: float, sd: float) -> OddAsphere:
+    """An ``OddAsphere`` from an ODDASPHE surface block (the reader's surface record)."""
+    _parms(s, range(1, 9), "ODDASPHE")
+    q = max([i for i in s.parm if 1 <= i <= 8], default=0)
+    b = [s.parm.get(i, (0.0, None))[0] * unit ** (1 - i) for i in range(1, q + 1)]
+    return OddAsphere(c=_arr(s.curv / unit), k=_arr(s.coni), coeffs=_arr(np.array(b, np.float64)),
+                      semi_diameter=_arr(sd))
 
 
 def toroidal(s, unit: float, sd: float) -> Toroidal:
@@ -180,8 +194,9 @@ def check_object_plane(obj, distance: float) -> None:
     unused = obj.type == "STANDARD" and obj.type_line is not None
     terms = [] if unused else [ln for _, (v, ln) in sorted(obj.parm.items())
                                + sorted(obj.xdat.items()) if v != 0]
-    if obj.type not in ("STANDARD", "EVENASPH", "TILTSURF") or obj.curv != 0 or terms:
-        what = (f"TYPE {obj.type}" if obj.type not in ("STANDARD", "EVENASPH", "TILTSURF")
+    plane_types = ("STANDARD", "EVENASPH", "ODDASPHE", "TILTSURF")  # planes without terms
+    if obj.type not in plane_types or obj.curv != 0 or terms:
+        what = (f"TYPE {obj.type}" if obj.type not in plane_types
                 else f"CURV {obj.curv:g}" if obj.curv != 0 else " ".join(terms[0].tokens[:3]))
         at = obj.curv_line if obj.curv != 0 else terms[0] if terms else where
         raise at.error(

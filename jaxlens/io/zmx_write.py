@@ -15,7 +15,7 @@ from ..optics import materials as _materials
 from ..optics.coordinates import CoordinateBreak
 from ..optics.lens import Lens
 from ..optics.materials import AbstractMaterial, Air, ModelGlass, Tabulated
-from ..optics.surfaces import AbstractSurface, EvenAsphere, Hybrid, Standard
+from ..optics.surfaces import AbstractSurface, EvenAsphere, Hybrid, OddAsphere, Standard
 from . import lensfile, zmx_surfaces
 from .zmx_common import (
     MARKER,
@@ -256,8 +256,8 @@ def surface_lines(s: AbstractSurface, *, image: bool = False) -> list[str]:
     out = zmx_surfaces.surface_lines(s, _z)
     if out is not None:
         if image:
-            raise ValueError(f"save_zmx: the image surface must be standard or an even "
-                             f"asphere, not {type(s).__name__}")
+            raise ValueError(f"save_zmx: the image surface must be standard, an even or an "
+                             f"odd asphere, not {type(s).__name__}")
         return out
     out = []
     if isinstance(s, Hybrid):
@@ -296,6 +296,13 @@ def surface_lines(s: AbstractSurface, *, image: bool = False) -> list[str]:
                 'XDAT 2 1.0 0 0 1 0 0 ""',
             ]
             out += [f'XDAT {i + 2} {_z(v)} 0 0 1 0 0 ""' for i, v in enumerate(a, start=1)]
+    elif isinstance(s, OddAsphere):
+        b = [float(v) for v in np.asarray(s.coeffs)]
+        if len(b) > 8:
+            raise ValueError(f"save_zmx: an OddAsphere has {len(b)} coefficients; Zemax's "
+                             f"ODDASPHE holds 8 (β_1 … β_8 on r … r⁸)")
+        out += ["TYPE ODDASPHE", f'CURV {_z(s.c)} 0 0 0 0 ""', f"CONI {_z(s.k)}"]
+        out += [f"PARM {i} {_z(v)}" for i, v in enumerate(b, start=1)]
     elif isinstance(s, Standard):
         out += ["TYPE STANDARD", f'CURV {_z(s.c)} 0 0 0 0 ""', f"CONI {_z(s.k)}"]
     elif isinstance(s, CoordinateBreak) and not image:
@@ -306,7 +313,8 @@ def surface_lines(s: AbstractSurface, *, image: bool = False) -> list[str]:
     else:
         raise ValueError(f"save_zmx: surface type {type(s).__name__} has no .zmx form")
     if image and isinstance(s, Hybrid):
-        raise ValueError("save_zmx: the image surface must be standard or an even asphere")
+        raise ValueError("save_zmx: the image surface must be standard, an even or an odd "
+                         "asphere")
     return out
 
 

@@ -3,7 +3,8 @@
 Conventions:
     Lengths in mm. A paraxial ray is (y, nu): height and reduced angle n·u, with u the
     slope dy/dz. Surfaces refract with their paraxial curvature c + 2·a_1, so the
-    r² term of an even asphere counts (Zemax does this; optiland and rayoptics do not).
+    r² term of an even asphere counts (Zemax does this; optiland and rayoptics do not), and
+    so does an odd asphere's β_2 r² (c + 2·β_2; its β_1 cone has no paraxial power).
     ``efl`` is 1/Φ (Φ the power), the focal length in air (Zemax's "effective focal
     length (in air)"); ``efl_image_space`` is n′/Φ with n′ the image-space index, the
     focal length measured in image space, which Zemax ("in image space") and optiland

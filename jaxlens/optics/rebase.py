@@ -58,7 +58,14 @@ def rebase_conic(surface: EvenAsphere, semi_diameter: float | None = None,
         The same surface (sag within ``SAG_TOLERANCE`` over the aperture, same c and r²
         term) with a new k and refitted r⁴ … terms; the surface itself where no conic
         brings the base closer by ``MIN_GAIN`` or the refit misses the tolerance.
+
+    Raises:
+        ValueError: for a surface that is not an ``EvenAsphere`` (an ``OddAsphere``'s
+            r, r³, … terms have no even-series form).
     """
+    if not isinstance(surface, EvenAsphere):
+        raise ValueError(f"rebase_conic: only an EvenAsphere can be rebased, got a "
+                         f"{type(surface).__name__}")
     r_max = float(surface.semi_diameter if semi_diameter is None else semi_diameter)
     a = np.asarray(surface.coeffs, float)
     if not np.isfinite(r_max) or r_max <= 0 or a.shape[0] < 2:
@@ -97,6 +104,7 @@ def rebase_conic(surface: EvenAsphere, semi_diameter: float | None = None,
 
 
 def rebase_conics(lens: Lens) -> Lens:
-    """Every even asphere of the lens with a finite clear aperture, rebased (module docstring)."""
+    """Every even asphere of the lens with a finite clear aperture, rebased (module docstring);
+    other surfaces (odd aspheres too) are kept as they are."""
     surfaces = tuple(rebase_conic(s) if isinstance(s, EvenAsphere) else s for s in lens.surfaces)
     return eqx.tree_at(lambda x: x.surfaces, lens, surfaces)

@@ -5,13 +5,15 @@ Conventions:
     origin, the optical axis along +z. The sag is
 
         z(x, y) = c r² / (1 + sqrt(1 − (1+k) c² r²)) + Σ_{i=1..m} a_i r^{2i}
-                  + Σ_{j=1..p} (b_j x^{2j+1} + d_j y^{2j+1})
-
-    (the odd series starts at the cubic: a linear term would only tilt the surface)
+                  + Σ_{i=1..q} β_i r^i + Σ_{j=1..p} (b_j x^{2j+1} + d_j y^{2j+1})
 
     with r² = x² + y², curvature c = 1/R (c = 0 is flat), conic constant k (k = 0
     sphere, k = −1 paraboloid). The even series starts at a_1 r² (Zemax EVENASPH
-    PARM1 = A2). The odd terms are the hybrid surface of Yang et al. (2024).
+    PARM1 = A2). The radial series Σ β_i r^i, every power of r from r¹ on (β_i in
+    mm^(1−i)), is ``OddAsphere``, Zemax's odd asphere (ODDASPHE, PARM i = β_i); its
+    β_1 r term is a cone with its tip on the axis. The x, y odd terms are the hybrid
+    surface of Yang et al. (2024); they start at the cubic (a linear term would only
+    tilt the surface).
 
     ``semi_diameter`` is the clear-aperture radius; rays beyond it are clipped. It is
     ``inf`` (no clipping) unless a file or the user sets it.
@@ -54,6 +56,10 @@ class AbstractSurface(eqx.Module):
     def odd_coeffs(self) -> tuple[Float[Array, " p"], Float[Array, " p"]]:
         z = jnp.zeros((0,), jnp.result_type(self.c))
         return z, z
+
+    def radial_coeffs(self) -> Float[Array, " q"]:
+        """β_1 … β_q of Σ β_i r^i (``[i - 1]`` multiplies r^i)."""
+        return jnp.zeros((0,), jnp.result_type(self.c))
 
     def _check_numbers(self):
         """Shapes always; concrete values: finite c and k, a semi-diameter > 0 (inf: none)."""
@@ -111,6 +117,9 @@ class AbstractSurface(eqx.Module):
         a = self.even_coeffs()
         if a.shape[0]:
             z = z + r2 * jnp.polyval(a[::-1], r2)
+        b = self.radial_coeffs()
+        if b.shape[0]:
+            z = z + _radial(b, r2)[0]
         bx, by = self.odd_coeffs()
         if bx.shape[0]:
             x2, y2 = x * x, y * y
@@ -131,6 +140,10 @@ class AbstractSurface(eqx.Module):
             z = z + r2 * jnp.polyval(a[::-1], r2)
             i = jnp.arange(1, a.shape[0] + 1, dtype=a.dtype)
             dr_over_r = dr_over_r + jnp.polyval((2 * i * a)[::-1], r2)
+        b = self.radial_coeffs()
+        if b.shape[0]:
+            zb, db = _radial(b, r2)
+            z, dr_over_r = z + zb, dr_over_r + db
         gx = x * dr_over_r
         gy = y * dr_over_r
         bx, by = self.odd_coeffs()
@@ -146,13 +159,34 @@ class AbstractSurface(eqx.Module):
     def has_polynomial(self) -> bool:
         """True if the surface needs Newton refinement beyond the closed-form conic."""
         bx, _ = self.odd_coeffs()
-        return bool(self.even_coeffs().shape[0] or bx.shape[0])
+        return bool(self.even_coeffs().shape[0] or self.radial_coeffs().shape[0] or bx.shape[0])
 
     @property
     def paraxial_curvature(self) -> Array:
-        """c + 2·a_1: the curvature the paraxial trace sees (includes the r² term)."""
-        a = self.even_coeffs()
-        return self.c + 2.0 * a[0] if a.shape[0] else self.c
+        """c + 2·a_1 + 2·β_2: the curvature the paraxial trace sees (includes the r² terms).
+
+        A radial β_1 r term has no paraxial power: it is a cone, which tilts a ray by an angle
+        that does not shrink with its height, so the linear y–nu trace cannot hold it; real
+        rays see it.
+        """
+        a, b = self.even_coeffs(), self.radial_coeffs()
+        c = self.c + 2.0 * a[0] if a.shape[0] else self.c
+        return c + 2.0 * b[1] if b.shape[0] >= 2 else c
+
+
+def _radial(b, r2):
+    """Σ β_i r^i and its (dz/dr)/r = β_1/r + Σ_{i≥2} i β_i r^(i−2), with r = sqrt(r²).
+
+    Both and their gradients are finite at r = 0 ("double where" on r and on β_1/r): there
+    the β_1 cone's tip has no slope, so a ray on the axis gets the rest of the surface's
+    normal (the base conic's), and the r^i terms from r² on keep their limit (2 β_2).
+    """
+    r = _safe_sqrt(r2)
+    off_axis = r2 > 0
+    i = jnp.arange(1, b.shape[0] + 1, dtype=b.dtype)
+    rest = jnp.polyval((i * b)[:0:-1], r)  # Σ_{i≥2} i β_i r^(i−2)
+    cone = jnp.where(off_axis, b[0] / jnp.where(off_axis, r, 1.0), 0.0)
+    return r * jnp.polyval(b[::-1], r), cone + rest
 
 
 _inf = lambda: jnp.asarray(jnp.inf)  # noqa: E731
@@ -191,6 +225,25 @@ class EvenAsphere(AbstractSurface):
         self._check_numbers()
 
     def even_coeffs(self):
+        return self.coeffs
+
+
+class OddAsphere(AbstractSurface):
+    """Conic plus the radial series β_1 r + β_2 r² + β_3 r³ + … (Zemax ODDASPHE, PARM i = β_i).
+
+    ``coeffs[i - 1]`` multiplies r^i (mm^(1−i)); every power of r counts, odd and even. β_1
+    is a cone (a kink on the axis) and β_2 adds 2·β_2 to the paraxial curvature.
+    """
+
+    c: Float[Array, ""] = number_field("c", default=0.0)
+    k: Float[Array, ""] = number_field("k", default=0.0)
+    coeffs: Float[Array, " q"] = number_field("coeffs", default=(0.0,) * 8)
+    semi_diameter: Float[Array, ""] = number_field("semi_diameter", default_factory=_inf)
+
+    def __check_init__(self):
+        self._check_numbers()
+
+    def radial_coeffs(self):
         return self.coeffs
 
 

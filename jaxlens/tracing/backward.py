@@ -27,7 +27,7 @@ from ..optics.coordinates import CoordinateBreak
 from ..optics.lens import Lens
 from ..optics.paraxial_surface import ParaxialSurface
 from ..optics.rays import Rays
-from ..optics.surfaces import AbstractSurface, EvenAsphere, Hybrid, Standard
+from ..optics.surfaces import AbstractSurface, EvenAsphere, Hybrid, OddAsphere, Standard
 from ..optics.toroidal import Toroidal
 from .forward import DEFAULT_NEWTON_ITERS, trace
 
@@ -44,11 +44,11 @@ def mirror_surface(surface: AbstractSurface) -> AbstractSurface:
     """The surface with its sag negated (z → −z in its local frame).
 
     Args:
-        surface: a ``Standard``, ``EvenAsphere``, ``Hybrid``, ``Toroidal`` or
-            ``ParaxialSurface``.
+        surface: a ``Standard``, ``EvenAsphere``, ``OddAsphere``, ``Hybrid``, ``Toroidal``
+            or ``ParaxialSurface``.
 
     Returns:
-        A surface of the same kind with c, the even and the odd coefficients (and a
+        A surface of the same kind with c, the even, radial and odd coefficients (and a
         toroid's cx) negated; a paraxial surface is its own mirror image (its optical
         path is then that of infinite conjugates on the image side).
 
@@ -59,6 +59,10 @@ def mirror_surface(surface: AbstractSurface) -> AbstractSurface:
         return Standard(c=-surface.c, k=surface.k, semi_diameter=surface.semi_diameter)
     if isinstance(surface, EvenAsphere):
         return EvenAsphere(
+            c=-surface.c, k=surface.k, coeffs=-surface.coeffs, semi_diameter=surface.semi_diameter
+        )
+    if isinstance(surface, OddAsphere):
+        return OddAsphere(
             c=-surface.c, k=surface.k, coeffs=-surface.coeffs, semi_diameter=surface.semi_diameter
         )
     if isinstance(surface, Hybrid):
