@@ -41,6 +41,21 @@ def _wl_color(w: float, i: int) -> str:
     return _FIELD_COLORS[i % len(_FIELD_COLORS)]
 
 
+def _default_fields(lens, fractions) -> list:
+    """The fields a figure shows when none are given: ``fractions`` of the largest y field
+    (repeats dropped), or the lens's own (θx, θy) fields, since a system that is not
+    rotationally symmetric may image nothing useful at angles it was not set up for."""
+    f = np.asarray(lens.fields, np.float64)
+    if f.ndim == 2:
+        return [tuple(map(float, v)) for v in f]
+    fmax = float(np.max(np.abs(f)))
+    return sorted({float(a) * fmax for a in fractions})
+
+
+def _field_label(f) -> str:
+    return f"{f:.1f}°" if np.ndim(f) == 0 else f"({f[0]:.1f}°, {f[1]:.1f}°)"
+
+
 def _profile(surface, r):
     import jax.numpy as jnp
 
@@ -68,7 +83,8 @@ def plot_layout(lens, fields: Sequence[float] | None = None, *, n_rays: int = 9,
 
     Args:
         lens: the lens.
-        fields: y field angles (deg) of the ray fans; default 0, 70 % and 100 % of the
+        fields: field angles (deg) of the ray fans, θy or (θx, θy) pairs (the section is
+            y–z: x fields are drawn projected); default 0, 70 % and 100 % of the
             lens's largest field.
         n_rays: rays per fan across the entrance pupil (primary wavelength).
         semi_diameters: surface semi-diameters to draw (default
@@ -82,8 +98,7 @@ def plot_layout(lens, fields: Sequence[float] | None = None, *, n_rays: int = 9,
     from .optics.coordinates import CoordinateBreak, frame_of
 
     lens = lens.astype(jnp.float64)
-    fmax = float(np.max(np.abs(np.asarray(lens.fields))))
-    fields = sorted({0.0, 0.7 * fmax, fmax}) if fields is None else list(fields)
+    fields = _default_fields(lens, (0.0, 0.7, 1.0)) if fields is None else list(fields)
     checks.field_angles(fields, "plot_layout", "fields")  # here, not deep in the program
     checks.number(n_rays, "n_rays", "plot_layout", lo=1, integer=True, unit="rays per fan")
     sd = np.asarray(analysis.clear_semi_diameters(lens)) if semi_diameters is None else \
@@ -124,7 +139,7 @@ def plot_layout(lens, fields: Sequence[float] | None = None, *, n_rays: int = 9,
         for j in range(n_rays):
             ax.plot(zz[:, j], ys[:, j], color=color, lw=0.6, alpha=0.9 if valid[j] else 0.25,
                     ls="-" if valid[j] else ":")
-        ax.plot([], [], color=color, lw=1, label=f"{f:.1f}°")
+        ax.plot([], [], color=color, lw=1, label=_field_label(f))
     # Surfaces and element edges (coordinate breaks are not drawn).
     n_air = [float(np.asarray(m.index(0.5875618))) for m in lens.materials]
 
@@ -171,15 +186,15 @@ def plot_layout(lens, fields: Sequence[float] | None = None, *, n_rays: int = 9,
 
 def plot_spots(lens, fields: Sequence[float] | None = None, *, wavelengths=None,
                rings: int = 12, title: str | None = None) -> Figure:
-    """Spot diagrams (µm about the polychromatic centroid) for y fields (deg)."""
+    """Spot diagrams (µm about the polychromatic centroid) for fields θy or (θx, θy) in
+    degrees; default five y fields from 0 to the largest, or the lens's own (θx, θy) fields."""
     import jax.numpy as jnp
 
     from .analysis import spots as analysis
     from .imaging import sampling
 
     lens = lens.astype(jnp.float64)
-    fmax = float(np.max(np.abs(np.asarray(lens.fields))))
-    fields = list(np.linspace(0, fmax, 5)) if fields is None else list(fields)
+    fields = _default_fields(lens, np.linspace(0, 1, 5)) if fields is None else list(fields)
     wls = np.asarray(lens.wavelengths if wavelengths is None else wavelengths)
     pupil = sampling.pupil_hexapolar(rings, jnp.float64)
     fig = _figure(2.6 * len(fields), 2.9)
@@ -205,7 +220,7 @@ def plot_spots(lens, fields: Sequence[float] | None = None, *, wavelengths=None,
         ax.set_xlim(-lim, lim)
         ax.set_ylim(-lim, lim)
         ax.set_aspect("equal")
-        ax.set_title(f"{f:.1f}°  RMS {rms:.2f} µm", fontsize=8)
+        ax.set_title(f"{_field_label(f)}  RMS {rms:.2f} µm", fontsize=8)
         ax.tick_params(labelsize=7)
         if k == 0:
             ax.set_ylabel("µm")
@@ -250,22 +265,22 @@ def plot_rms_map(rms_um, sensor_size, *, title: str | None = None) -> Figure:
 def plot_mtf(lens, fields: Sequence[float] | None = None, *, frequencies=None,
              title: str | None = None) -> Figure:
     """Tangential (solid) and sagittal (dashed) polychromatic MTF (``jaxlens.imaging.psf.mtf``,
-    geometric × diffraction limit) for y fields (deg)."""
+    geometric × diffraction limit) for fields θy or (θx, θy) in degrees; default 0, 50, 70 and
+    100 % of the largest y field, or the lens's own (θx, θy) fields."""
     import jax.numpy as jnp
 
     from .imaging.psf import mtf
 
     lens = lens.astype(jnp.float64)
-    fmax = float(np.max(np.abs(np.asarray(lens.fields))))
-    fields = [0.0, 0.5 * fmax, 0.7 * fmax, fmax] if fields is None else list(fields)
+    fields = _default_fields(lens, (0.0, 0.5, 0.7, 1.0)) if fields is None else list(fields)
     fig = _figure(6, 4.2)
     ax = fig.add_subplot(1, 1, 1)
     for i, f in enumerate(fields):
         res = mtf(lens, f, frequencies=frequencies)
         freq, tan, sag = (np.asarray(x) for x in _mtf_parts(res))
         c = _FIELD_COLORS[i % len(_FIELD_COLORS)]
-        ax.plot(freq, tan, color=c, label=f"{f:.1f}° T")
-        ax.plot(freq, sag, color=c, ls="--", label=f"{f:.1f}° S")
+        ax.plot(freq, tan, color=c, label=f"{_field_label(f)} T")
+        ax.plot(freq, sag, color=c, ls="--", label=f"{_field_label(f)} S")
     ax.set_ylim(0, 1.02)
     ax.set_xlabel("spatial frequency (cycles/mm)")
     ax.set_ylabel("MTF")
