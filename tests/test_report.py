@@ -205,3 +205,17 @@ def test_report_notes_that_paraxial_data_ignore_decenters_and_tilts():
     assert report_data(lens(0.0))["notes"] == []
     notes = report_data(lens(0.1))["notes"]
     assert len(notes) == 1 and "surface(s) 2" in notes[0] and "ignore those decenters" in notes[0]
+
+
+def test_report_prescription_names_each_surface_kind(capsys):
+    """Coordinate breaks, toroids and mirrors are listed as such, with their parameters (they
+    were all listed as STANDARD surfaces of their media)."""
+    code, out, _ = _run(capsys, DATA / "rayoptics_HoO-V2C18Ex46.zmx")
+    assert code == 0
+    rows = [ln.split() for ln in out.split("SURFACE DATA")[1].split("FIELDS")[0].splitlines()[2:]
+            if ln.strip()]
+    kinds = {r[0]: r[1] for r in rows}
+    assert kinds["2"] == "COORDBRK" and rows[2][-1] == "tx=-3.5"
+    assert kinds["7"] == "TOROIDAL" and "Rx=1035" in rows[7] and "MIRROR" in rows[7]
+    assert kinds["STO"] == "STANDARD" and "MIRROR" in rows[3]
+    assert kinds["10"] == "COORDBRK" and rows[10][-1] == "dy=24.07"

@@ -37,7 +37,9 @@ from ..optics import checks, paraxial
 from ..optics.coordinates import CoordinateBreak
 from ..optics.lens import Lens
 from ..optics.materials import Air, ModelGlass, Tabulated
-from ..optics.surfaces import EvenAsphere, Hybrid, OddAsphere
+from ..optics.paraxial_surface import ParaxialSurface
+from ..optics.surfaces import EvenAsphere, Hybrid, OddAsphere, Standard
+from ..optics.toroidal import Toroidal
 from . import spots as analysis
 
 UNITS = {
@@ -251,6 +253,36 @@ def _num(v: float | None, width: int = 12, prec: int = 6, missing: str = "failed
     return f"{text:>{width}}"
 
 
+_ZEMAX_TYPE = {Standard: "STANDARD", EvenAsphere: "EVENASPH", OddAsphere: "ODDASPHE",
+               Hybrid: "HYBRID", Toroidal: "TOROIDAL", ParaxialSurface: "PARAXIAL",
+               CoordinateBreak: "COORDBRK"}
+
+
+def _nonzero(prefix_values) -> str:
+    return " ".join(f"{p}={float(v):.4g}" for p, v in prefix_values if float(v) != 0)
+
+
+def _terms(s) -> str:
+    """The surface's parameters beyond radius and conic, as Zemax names them."""
+    if isinstance(s, CoordinateBreak):
+        return _nonzero([("dx", s.decenter_x), ("dy", s.decenter_y), ("tx", s.tilt_x),
+                         ("ty", s.tilt_y), ("tz", s.tilt_z)]) + (" order=1" if s.order else "")
+    if isinstance(s, ParaxialSurface):
+        return f"f={float(s.focal_length):.6g}"
+    if isinstance(s, OddAsphere):  # A<i> multiplies r^i
+        return _nonzero((f"A{i}", v) for i, v in enumerate(np.asarray(s.coeffs), 1))
+    out = []
+    if isinstance(s, Toroidal):  # coeffs on y², y⁴, …; the x radius of curvature
+        out.append(_nonzero([("Rx", 1.0 / float(s.cx) if float(s.cx) else 0.0)]))
+        out.append(_nonzero((f"Y{2 * (i + 1)}", v) for i, v in enumerate(np.asarray(s.coeffs))))
+    if isinstance(s, EvenAsphere | Hybrid):
+        out.append(_nonzero((f"A{2 * (i + 1)}", v) for i, v in enumerate(np.asarray(s.coeffs))))
+    if isinstance(s, Hybrid):
+        out.append(_nonzero((f"{ax}{2 * i + 3}", v) for ax, arr in (("X", s.odd_x), ("Y", s.odd_y))
+                            for i, v in enumerate(np.asarray(arr))))
+    return " ".join(t for t in out if t)
+
+
 def _surface_table(lens: Lens) -> list[str]:
     head = (
         f"  {'Surf':<5}{'Type':<10}{'Radius':>13}{'Thickness':>13}  {'Glass':<16}"
@@ -261,31 +293,10 @@ def _surface_table(lens: Lens) -> list[str]:
     def row(label, s, t, glass):
         c = float(s.c) if s is not None else 0.0
         r = math.inf if c == 0 else 1.0 / c
-        typ = (
-            "HYBRID"
-            if isinstance(s, Hybrid)
-            else "EVENASPH"
-            if isinstance(s, EvenAsphere)
-            else "ODDASPHE"
-            if isinstance(s, OddAsphere)
-            else "STANDARD"
-        )
+        typ = "STANDARD" if s is None else _ZEMAX_TYPE.get(type(s), type(s).__name__.upper())
         sd = float(s.semi_diameter) if s is not None else math.inf
         k = float(s.k) if s is not None else 0.0
-        asph = ""
-        if isinstance(s, EvenAsphere | Hybrid):
-            a = np.asarray(s.coeffs)
-            asph = " ".join(f"A{2 * (i + 1)}={v:.4g}" for i, v in enumerate(a) if v != 0)
-            if isinstance(s, Hybrid):
-                asph += " " + " ".join(
-                    f"{ax}{2 * i + 3}={v:.4g}"
-                    for ax, arr in (("X", s.odd_x), ("Y", s.odd_y))
-                    for i, v in enumerate(np.asarray(arr))
-                    if v != 0
-                )
-        if isinstance(s, OddAsphere):  # A<i> multiplies r^i, as A4 does r⁴ above
-            asph = " ".join(f"A{i}={v:.4g}" for i, v in enumerate(np.asarray(s.coeffs), 1)
-                            if v != 0)
+        asph = _terms(s) if s is not None else ""
         sd_txt = _num(sd, 10, 4) if math.isfinite(sd) else f"{'-':>10}"
         lines.append(
             f"  {label:<5}{typ:<10}{_num(r, 13, 6)}{_num(t, 13, 6, '')}  {glass:<16}"
@@ -296,7 +307,8 @@ def _surface_table(lens: Lens) -> list[str]:
     row("OBJ", None, dist, _material_label(lens.object_material))
     for i, s in enumerate(lens.surfaces):
         label = "STO" if i == lens.stop else str(i + 1)
-        row(label, s, float(lens.thickness[i]), _material_label(lens.materials[i]))
+        glass = "MIRROR" if i in lens.mirrors else _material_label(lens.materials[i])
+        row(label, s, float(lens.thickness[i]), glass)
     row("IMA", lens.image, None, "")
     return lines
 
