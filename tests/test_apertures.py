@@ -117,6 +117,12 @@ def test_save_and_load_keep_the_apertures(tmp_path):
         (0, jl.Aperture.circle(1.0, 0.1)), (0, jl.Aperture("rect", 1.0, 1.0, 0.2))))
     with pytest.raises(ValueError, match="different decenters"):
         jl.save(two, tmp_path / "c.zmx")
+    # JSON has no aperture form: the refusal names the apertures (it named the lens's empty
+    # mirrors and obscurations) and writes nothing.
+    with pytest.raises(ValueError, match=r"save: apertures \(Lens.apertures = .*rect.*\) have "
+                                         r"no jaxlens JSON form yet; save the lens as .zmx"):
+        jl.save(two, tmp_path / "c.json")
+    assert not (tmp_path / "c.json").exists()
 
 
 def test_bad_aperture_values_are_refused():

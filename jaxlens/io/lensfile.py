@@ -682,10 +682,11 @@ def lens_from_dict(d: dict, *, source: str = "<lens>") -> Lens:
 
 def lens_to_dict(lens: Lens) -> dict:
     """The JSON object of a lens (format ``jaxlens.lens/1``)."""
-    if lens.mirrors or lens.obscurations or lens.apertures:
-        raise ValueError(f"save: mirrors and obscurations (Lens.mirrors = {lens.mirrors}, "
-                         f"Lens.obscurations = {lens.obscurations}) have no jaxlens JSON form "
-                         f"yet; save the lens as .zmx")
+    held = [f"{name} (Lens.{name} = {getattr(lens, name)})"
+            for name in ("mirrors", "obscurations", "apertures") if getattr(lens, name)]
+    if held:
+        raise ValueError(f"save: {', '.join(held)} have no jaxlens JSON form yet; save the "
+                         f"lens as .zmx")
     dist = math.inf if lens.object_distance is None else lens.object_distance
     obj = {
         "type": "object",
