@@ -219,3 +219,25 @@ def test_report_prescription_names_each_surface_kind(capsys):
     assert kinds["7"] == "TOROIDAL" and "Rx=1035" in rows[7] and "MIRROR" in rows[7]
     assert kinds["STO"] == "STANDARD" and "MIRROR" in rows[3]
     assert kinds["10"] == "COORDBRK" and rows[10][-1] == "dy=24.07"
+
+
+def test_report_plot_writes_the_figures_and_keeps_existing_ones(cooke, tmp_path, capsys):
+    """--plot DIR writes the layout, spot diagrams and MTF; a second run keeps them unless
+    --overwrite, and bad --plot/--overwrite options are refused before any work."""
+    path, _ = cooke
+    out = tmp_path / "figs"
+    code, _, err = _run(capsys, path, "--plot", out)
+    assert code == 0, err
+    names = sorted(p.name for p in out.iterdir())
+    assert names == ["cooke_triplet_layout.png", "cooke_triplet_mtf.png",
+                     "cooke_triplet_spots.png"]
+    assert all((out / n).read_bytes()[:8] == b"\x89PNG\r\n\x1a\n" for n in names)
+    stamp = (out / names[0]).stat().st_mtime_ns
+    code, _, err = _run(capsys, path, "--plot", out)
+    assert code == 2 and "cooke_triplet_layout.png exists; give --overwrite" in err
+    assert (out / names[0]).stat().st_mtime_ns == stamp
+    code, _, err = _run(capsys, path, "--overwrite")
+    assert code == 2 and "it needs --plot DIR" in err
+    (tmp_path / "file").write_text("")
+    code, _, err = _run(capsys, path, "--plot", tmp_path / "file")
+    assert code == 2 and "is a file, not a folder" in err

@@ -1,6 +1,7 @@
 """Lens report: system data and per-field chief ray, distortion and RMS spot.
 
-``python -m jaxlens report LENS [--json] [--fields DEG ...] [--wavelengths UM ...]``
+``python -m jaxlens report LENS [--json] [--fields DEG ...] [--wavelengths UM ...]
+[--plot DIR [--overwrite]] [--lenient] [--unknown-glass model]``
 
 Conventions (also written into the JSON output under ``units``):
     Lengths and heights in mm, angles in degrees, wavelengths in µm, distortion in %.
@@ -22,6 +23,7 @@ import argparse
 import dataclasses
 import json
 import math
+import os
 import sys
 import warnings
 
@@ -427,6 +429,13 @@ def register(subparsers) -> None:
         "and Vd on their GLAS line (with a warning)",
     )
     p.add_argument(
+        "--plot",
+        metavar="DIR",
+        help="also write the layout, spot diagrams and MTF as DIR/<lens>_layout.png, "
+        "_spots.png and _mtf.png (DIR is created; existing files are kept unless --overwrite)",
+    )
+    p.add_argument("--overwrite", action="store_true", help="with --plot: replace the figures")
+    p.add_argument(
         "--lenient",
         action="store_true",
         help=".zmx: read as jaxlens.load does by default, warning (instead of refusing) about "
@@ -436,9 +445,43 @@ def register(subparsers) -> None:
     p.set_defaults(func=run)
 
 
+FIGURES = ("layout", "spots", "mtf")
+
+
+def figure_paths(lens_path: str, folder: str, overwrite: bool) -> dict[str, str]:
+    """Where ``--plot`` writes each figure, checked before any work: the folder must be
+    creatable and writable, and no figure may be replaced without ``overwrite``."""
+    stem = os.path.splitext(os.path.basename(lens_path))[0]
+    paths = {k: os.path.join(folder, f"{stem}_{k}.png") for k in FIGURES}
+    if os.path.exists(folder) and not os.path.isdir(folder):
+        raise ValueError(f"--plot {folder} is a file, not a folder")
+    there = [p for p in paths.values() if os.path.exists(p)]
+    if there and not overwrite:
+        raise ValueError(f"--plot: {there[0]} exists; give --overwrite to replace the figures, "
+                         f"or choose another folder")
+    try:
+        os.makedirs(folder, exist_ok=True)
+    except OSError as e:
+        raise ValueError(f"--plot {folder} cannot be created: {e.strerror}") from None
+    if not os.access(folder, os.W_OK):
+        raise ValueError(f"--plot {folder} is not writable")
+    return paths
+
+
+def _write_figures(lens: Lens, paths: dict[str, str]) -> None:
+    from .. import plot
+
+    makers = {"layout": plot.plot_layout, "spots": plot.plot_spots, "mtf": plot.plot_mtf}
+    for key, path in paths.items():
+        plot.save(makers[key](lens), path)
+
+
 def run(args: argparse.Namespace) -> int:
     """Run the ``report`` subcommand; returns the exit status."""
     try:
+        if args.overwrite and not args.plot:
+            raise ValueError("--overwrite replaces --plot figures; it needs --plot DIR")
+        paths = figure_paths(args.lens, args.plot, args.overwrite) if args.plot else None
         # strict by default: a report must not describe a truncated file, nor rays that the
         # file's own settings (vignetting factors) would have changed, without being asked
         with warnings.catch_warnings(record=True) as caught:
@@ -447,6 +490,9 @@ def run(args: argparse.Namespace) -> int:
         for w in caught:
             print(f"jaxlens report: warning: {w.message}", file=sys.stderr)
         data = report_data(lens, fields=args.fields, wavelengths=args.wavelengths)
+        if paths:
+            _write_figures(with_fields_and_wavelengths(lens, args.fields, args.wavelengths),
+                           paths)
     except (ValueError, OSError) as e:
         hint = "" if args.lenient or "(strict mode)" not in str(e) else (
             " (--lenient reads the file anyway, with a warning)")
