@@ -418,3 +418,20 @@ def test_real_image_height_solve_is_not_stopped_by_a_clipped_first_guess():
                                          r"surface 1, which it meets 2\.647 mm from the axis, "
                                          r"outside its semi-diameter 2\.6 mm"):
         zmx.loads(BEHIND_STOP.format(sd=2.6), "t.zmx")
+
+
+@pytest.mark.parametrize("surface", [Toroidal(c=0.02, k=0.0, coeffs=jnp.zeros(1), cx=0.01),
+                                     ParaxialSurface(focal_length=50.0),
+                                     jl.CoordinateBreak(tilt_x=1.0)])
+def test_json_save_of_a_surface_without_json_form_says_to_use_zmx(surface, tmp_path):
+    """The refusal names the surface kind and the format that holds it, and writes nothing
+    (it said the surface "has no file representation", though .zmx holds it)."""
+    lens = jl.Lens((jl.Sphere(0.02), surface, jl.Plane()), jnp.array([2.0, 1.0, 40.0]),
+                   (jl.ModelGlass(1.5168, 64.17), jl.ModelGlass(1.5168, 64.17), jl.Air()),
+                   epd=4.0)
+    with pytest.raises(ValueError, match=f"save: a {type(surface).__name__} surface has no "
+                                         f"jaxlens JSON form yet; save the lens as .zmx"):
+        jl.save(lens, tmp_path / "l.json")
+    assert not (tmp_path / "l.json").exists()
+    jl.save(lens, tmp_path / "l.zmx")  # which does hold it
+    assert type(jl.load(tmp_path / "l.zmx").surfaces[1]) is type(surface)

@@ -419,7 +419,8 @@ def surface_to_dict(s: AbstractSurface) -> dict:
     elif isinstance(s, Standard):
         d = {"type": "standard"}
     else:
-        raise ValueError(f"save: surface type {type(s).__name__} has no file representation")
+        raise ValueError(f"save: a {type(s).__name__} surface has no jaxlens JSON form yet; "
+                         f"save the lens as .zmx")
     d["curvature"] = _out(s.c)
     d["conic"] = _out(s.k)
     if isinstance(s, EvenAsphere | Hybrid):
