@@ -122,8 +122,16 @@ def test_truncation_detected():
     res = P.psf_info(lens, 0.0, pixel_size=pix, **GEOMETRIC)
     assert float(res.truncated) > 0.9
     kw = {**GEOMETRIC, "max_truncation": 0.05}
-    with pytest.raises(Exception, match="outside the 51x51 kernel"):
+    # Concrete inputs: a ValueError with the measured fraction and the kernel's width.
+    want = float(res.truncated)
+    with pytest.raises(ValueError, match=rf"outside the 51x51 kernel; enlarge kernel_size or "
+                                         rf"pixel_size \({want:.3g} falls outside; the kernel "
+                                         rf"spans {51 * pix * 1e3:.4g} µm at {WL:g} µm\)"):
         jaxlens.psf(lens, 0.0, pixel_size=pix, **kw)
+    # Under a trace the same check raises when the program runs.
+    with pytest.raises(Exception, match="outside the 51x51 kernel") as err:
+        jax.jit(lambda p: jaxlens.psf(lens, 0.0, pixel_size=p, **kw))(pix)
+    assert not isinstance(err.value, ValueError)
 
 
 def test_bad_arguments():

@@ -456,29 +456,42 @@ def psf_info(
         apertured(lens), field, depth, wls, pixel_size, key, kernel_size=kernel_size, model=model,
         center=center, newton_iters=newton_iters)
     if max_truncation is not None:
-        kern = eqx.error_if(
-            kern, jnp.any(jnp.isnan(trunc)),
-            "psf: no ray of the beam reaches the image surface (the field is vignetted or "
-            "beyond the lens's coverage), so there is no PSF",
-        )
-        kern = eqx.error_if(
-            kern, jnp.any(trunc < -max_truncation),
-            f"psf: the kernel holds more than 1 + {max_truncation:g} of the beam's energy: the "
-            "coherent sum is too coarse for this pixel pitch; raise pupil (rays per side)",
-        )
-        kern = eqx.error_if(
-            kern, jnp.any(trunc > max_truncation),
-            f"psf: more than {max_truncation:g} of the PSF energy falls outside the "
-            f"{kernel_size}x{kernel_size} kernel; enlarge kernel_size or pixel_size",
-        )
-        kern = eqx.error_if(
-            kern, jnp.any(aliased),
-            "psf: the coherent kernel is wider than the alias period of the pupil sampling; "
-            "raise pupil (rays per side) or shrink the kernel",
-        )
+        kern = _refuse_bad_kernels(kern, trunc, aliased, max_truncation, kernel_size,
+                                   pixel_size, wls)
     if wl.ndim == 0:
         kern, trunc, strehl, aliased = kern[0], trunc[0], strehl[0], aliased[0]
     return PSFResult(kern, trunc, ref, strehl, aliased)
+
+
+def _refuse_bad_kernels(kern, trunc, aliased, max_truncation, kernel_size, pixel_size, wls):
+    """Refuse a PSF that is not one: no light, energy lost outside the kernel or over-counted,
+    or an aliased coherent kernel. Concrete results raise ValueError with the measured value
+    at the worst wavelength; under a trace ``eqx.error_if`` raises at run time."""
+    conditions = [
+        (jnp.isnan(trunc), "psf: no ray of the beam reaches the image surface (the field is "
+         "vignetted or beyond the lens's coverage), so there is no PSF", None),
+        (trunc < -max_truncation, f"psf: the kernel holds more than 1 + {max_truncation:g} of "
+         f"the beam's energy: the coherent sum is too coarse for this pixel pitch; raise pupil "
+         f"(rays per side)", lambda t: f"it holds {1 - t:.3g}"),
+        (trunc > max_truncation, f"psf: more than {max_truncation:g} of the PSF energy falls "
+         f"outside the {kernel_size}x{kernel_size} kernel; enlarge kernel_size or pixel_size",
+         lambda t: f"{t:.3g} falls outside; the kernel spans "
+                   f"{kernel_size * float(pixel_size) * 1e3:.4g} µm"),
+        (aliased, "psf: the coherent kernel is wider than the alias period of the pupil "
+         "sampling; raise pupil (rays per side) or shrink the kernel", None),
+    ]
+    if checks.is_traced((trunc, aliased, pixel_size)):
+        for bad, message, _ in conditions:
+            kern = eqx.error_if(kern, jnp.any(bad), message)
+        return kern
+    t = np.asarray(trunc, np.float64)
+    for bad, message, detail in conditions:
+        bad = np.asarray(bad)
+        if np.any(bad):
+            i = int(np.argmax(np.where(bad, np.abs(np.nan_to_num(t, nan=np.inf)), -1.0)))
+            where = f"at {float(np.asarray(wls)[i]):g} µm"
+            raise ValueError(f"{message} ({detail(t[i]) + ' ' if detail else ''}{where})")
+    return kern
 
 
 def psf(
