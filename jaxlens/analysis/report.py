@@ -40,7 +40,7 @@ from ..optics.coordinates import CoordinateBreak
 from ..optics.lens import Lens
 from ..optics.materials import Air, ModelGlass, Tabulated
 from ..optics.paraxial_surface import ParaxialSurface
-from ..optics.surfaces import EvenAsphere, Hybrid, OddAsphere, Standard
+from ..optics.surfaces import EvenAsphere, Hybrid, OddAsphere, Standard, TiltedPlane
 from ..optics.toroidal import Toroidal
 from . import spots as analysis
 
@@ -257,7 +257,7 @@ def _num(v: float | None, width: int = 12, prec: int = 6, missing: str = "failed
 
 _ZEMAX_TYPE = {Standard: "STANDARD", EvenAsphere: "EVENASPH", OddAsphere: "ODDASPHE",
                Hybrid: "HYBRID", Toroidal: "TOROIDAL", ParaxialSurface: "PARAXIAL",
-               CoordinateBreak: "COORDBRK"}
+               CoordinateBreak: "COORDBRK", TiltedPlane: "TILTSURF"}
 
 
 def _nonzero(prefix_values) -> str:
@@ -271,6 +271,8 @@ def _terms(s) -> str:
                          ("ty", s.tilt_y), ("tz", s.tilt_z)]) + (" order=1" if s.order else "")
     if isinstance(s, ParaxialSurface):
         return f"f={float(s.focal_length):.6g}"
+    if isinstance(s, TiltedPlane):  # PARM 1, 2: the slopes dz/dx, dz/dy
+        return _nonzero([("tan_x", s.tan_x), ("tan_y", s.tan_y)])
     if isinstance(s, OddAsphere):  # A<i> multiplies r^i
         return _nonzero((f"A{i}", v) for i, v in enumerate(np.asarray(s.coeffs), 1))
     out = []

@@ -65,7 +65,7 @@ from ..imaging.sampling import field_xy, pupil_grid
 from ..optics import checks, paraxial
 from ..optics.lens import Lens
 from ..optics.materials import LAMBDA_D, AbstractMaterial, Air, abbe_number
-from ..optics.surfaces import EvenAsphere, Standard
+from ..optics.surfaces import EvenAsphere, Standard, TiltedPlane
 from .spots import clear_semi_diameters, spot_rays, weighted_rms
 
 DECENTER_TILT = ("not modelled: the engine traces coaxial, rotationally symmetric surfaces "
@@ -171,10 +171,17 @@ class Perturbation(eqx.Module):
     abbe_rel: Float[Array, " n"]
 
 
-def _no_radial_terms(lens: Lens, where: str) -> None:
-    """Refuse odd aspheres: their β_i r^i terms would stay untoleranced without a word."""
-    for i, s in enumerate(lens.surfaces):
-        if s.radial_coeffs().shape[0]:
+def _refuse_surfaces(lens: Lens, where: str) -> None:
+    """Refuse odd aspheres: their β_i r^i terms would stay untoleranced without a word. And
+    tilted planes (on the image too): they break the rotational symmetry that the field
+    folding and the back-focus compensator assume, and their c and k are fixed."""
+    for i, s in enumerate((*lens.surfaces, lens.image)):
+        name = f"surface {i + 1}" if i < lens.num_surfaces else "the image surface"
+        if isinstance(s, TiltedPlane):
+            raise ValueError(f"{where}: {name} is a TiltedPlane; tolerance analysis assumes "
+                             f"a rotationally symmetric lens and a flat image normal to the "
+                             f"axis, and does not support tilted surfaces")
+        if i < lens.num_surfaces and s.radial_coeffs().shape[0]:
             raise ValueError(f"{where}: surface {i + 1} is a {type(s).__name__}; tolerance "
                              f"analysis of the radial terms β_i r^i of an odd asphere is not "
                              f"supported (asphere tolerances act on even terms only)")
@@ -182,7 +189,7 @@ def _no_radial_terms(lens: Lens, where: str) -> None:
 
 def zero_perturbation(lens: Lens) -> Perturbation:
     """The perturbation that changes nothing (float64 when x64 is on)."""
-    _no_radial_terms(lens, "zero_perturbation")
+    _refuse_surfaces(lens, "zero_perturbation")
     n = lens.num_surfaces
     z = jnp.zeros(n, lens.thickness.dtype)
     return Perturbation(z, z, z, tuple(jnp.zeros_like(s.even_coeffs()) for s in lens.surfaces),
@@ -207,7 +214,7 @@ def perturb(lens: Lens, p: Perturbation, clear_radius, *, add_r4: tuple[bool, ..
         add_r4: per surface, give a surface without an r⁴ coefficient one (an
             ``EvenAsphere``) so that irregularity can act on it; static. Default: none.
     """
-    _no_radial_terms(lens, "perturb")
+    _refuse_surfaces(lens, "perturb")
     add_r4 = add_r4 or (False,) * lens.num_surfaces
     surfaces = []
     for i, s in enumerate(lens.surfaces):
@@ -403,7 +410,7 @@ class ToleranceModel:
     def __init__(self, lens: Lens, *, fields=None, field_weights=None, wavelengths=None,
                  pupil=None, tolerances: Tolerances | None = None, batch: int = 25,
                  apertures: str = "open"):
-        _no_radial_terms(lens, "ToleranceModel")
+        _refuse_surfaces(lens, "ToleranceModel")
         self.tolerances = Tolerances() if tolerances is None else tolerances
         if not isinstance(self.tolerances, Tolerances):
             raise ValueError(f"ToleranceModel: tolerances must be a Tolerances, got "

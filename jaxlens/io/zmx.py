@@ -13,8 +13,11 @@ What is read and written:
       terms, XDAT 2 = normalisation radius, XDAT 3… = the r², r⁴, … coefficients; used
       for even aspheres with more than 8 terms) and ``TYPE ODDASPHE`` (an ``OddAsphere``:
       PARM 1..8 = β_1 … β_8 on r, r², …, r⁸; a nonzero PARM beyond 8 is refused, and an
-      ``OddAsphere`` with more than 8 terms is not written). The image surface may be
-      STANDARD, EVENASPH or ODDASPHE.
+      ``OddAsphere`` with more than 8 terms is not written). ``TYPE TILTSURF`` (a
+      ``TiltedPlane``, the plane z = tan θx·x + tan θy·y through the vertex: PARM 1 = tan θx,
+      PARM 2 = tan θy, dimensionless; CURV, CONI, other PARMs and XDAT 0; the frame of the
+      surfaces after it is unchanged, unlike COORDBRK). The image surface may be STANDARD,
+      EVENASPH, ODDASPHE or TILTSURF (a tilted image plane).
     * The hybrid surface (even asphere plus odd terms Σ b_j x^{2j+1} + d_j y^{2j+1}) is
       written as Zemax's extended polynomial, ``TYPE XPOLYNOM``: a conic plus Σ A_i E_i
       with E_i the monomials x^m y^n ordered by degree and, within a degree, by falling

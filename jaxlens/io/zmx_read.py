@@ -364,6 +364,8 @@ def _surface_of(s: _Surf, unit: float) -> AbstractSurface:
         )
     if s.type == "ODDASPHE":
         return zmx_surfaces.odd_asphere(s, unit, sd)
+    if s.type == "TILTSURF":
+        return zmx_surfaces.tilted_plane(s, sd)
     if s.type == "XPOLYNOM":
         return _hybrid_from_xpoly(s, unit, c, sd)
     if s.type == "TOROIDAL":
@@ -374,7 +376,7 @@ def _surface_of(s: _Surf, unit: float) -> AbstractSurface:
         return _coordinate_break(s, unit)
     raise where.error(
         f"surface type {s.type} is not supported (STANDARD, EVENASPH, ODDASPHE, XASPHERE, "
-        f"XPOLYNOM, TOROIDAL, PARAXIAL, COORDBRK)"
+        f"XPOLYNOM, TOROIDAL, PARAXIAL, TILTSURF, COORDBRK)"
     )
 
 
@@ -705,9 +707,9 @@ def loads(text: str, path: str = "<zmx>", *, strict: bool = False,
     if len(stops) > 1:
         raise body[stops[1]].line.error("more than one STOP surface")
     stop = stops[0] if stops else 0
-    if img.type not in ("STANDARD", "EVENASPH", "ODDASPHE"):
+    if img.type not in ("STANDARD", "EVENASPH", "ODDASPHE", "TILTSURF"):
         raise (img.type_line or img.line).error(
-            "the image surface must be STANDARD, EVENASPH or ODDASPHE")
+            "the image surface must be STANDARD, EVENASPH, ODDASPHE or TILTSURF")
     dist = obj.disz * u if obj.disz_line is not None else math.inf
     if dist >= INFINITE_OBJECT_MM:
         dist = math.inf  # Zemax's convention; a finite 1e20 mm would need ray directions of

@@ -1,10 +1,15 @@
-"""``.zmx`` surface types beyond the standard and even-asphere ones: ``ODDASPHE`` (read
-here, written with the others by ``zmx_write``), ``TOROIDAL`` and ``PARAXIAL``, read and
-written (the format: ``jaxlens.io.zmx``; the surfaces: ``jaxlens.optics.surfaces``,
-``jaxlens.optics.toroidal`` and ``jaxlens.optics.paraxial_surface``).
+"""``.zmx`` surface types beyond the standard and even-asphere ones: ``ODDASPHE`` and
+``TILTSURF`` (read here, written with the others by ``zmx_write``), ``TOROIDAL`` and
+``PARAXIAL``, read and written (the format: ``jaxlens.io.zmx``; the surfaces:
+``jaxlens.optics.surfaces``, ``jaxlens.optics.toroidal`` and
+``jaxlens.optics.paraxial_surface``).
 
 ODDASPHE: CURV and CONI the base conic, PARM 1…8 the coefficients β_1…β_8 on r, r², …, r⁸
 (lens units^(1−i), converted to mm).
+
+TILTSURF: the plane z = tan θx·x + tan θy·y, PARM 1 = tan θx and PARM 2 = tan θy
+(dimensionless, no unit conversion); CURV and CONI 0 and no other PARM or XDAT. Unlike
+COORDBRK it leaves the frame of the surfaces after it unchanged.
 
 TOROIDAL: CURV and CONI are the y–z profile's curvature and conic, PARM 1 the radius of
 rotation R (0: a cylinder), PARM 2…9 the coefficients on y², y⁴, …, y¹⁶. Its extra data
@@ -30,7 +35,7 @@ import numpy as np
 from ..optics import paraxial
 from ..optics.lens import Lens, Sensor
 from ..optics.paraxial_surface import ParaxialSurface
-from ..optics.surfaces import OddAsphere
+from ..optics.surfaces import OddAsphere, TiltedPlane
 from ..optics.toroidal import Toroidal
 from .zmx_common import SENSOR_COMMENT
 
@@ -60,6 +65,20 @@ def odd_asphere(s, unit: float, sd: float) -> OddAsphere:
     b = [s.parm.get(i, (0.0, None))[0] * unit ** (1 - i) for i in range(1, q + 1)]
     return OddAsphere(c=_arr(s.curv / unit), k=_arr(s.coni), coeffs=_arr(np.array(b, np.float64)),
                       semi_diameter=_arr(sd))
+
+
+def tilted_plane(s, sd: float) -> TiltedPlane:
+    """A ``TiltedPlane`` from a TILTSURF surface block (the reader's surface record); the
+    slopes PARM 1, 2 have no unit."""
+    _parms(s, range(1, 3), "TILTSURF")
+    for _, (v, ln) in sorted(s.xdat.items()):
+        if v != 0:
+            raise ln.error("TILTSURF has no extra data (XDAT)")
+    if s.curv != 0 or s.coni != 0:
+        raise (s.curv_line if s.curv != 0 else s.type_line or s.line).error(
+            "a TILTSURF surface is a plane; its CURV and CONI must be 0")
+    tx, ty = (s.parm.get(i, (0.0, None))[0] for i in (1, 2))
+    return TiltedPlane(tan_x=_arr(tx), tan_y=_arr(ty), semi_diameter=_arr(sd))
 
 
 def toroidal(s, unit: float, sd: float) -> Toroidal:

@@ -15,7 +15,14 @@ from ..optics import materials as _materials
 from ..optics.coordinates import CoordinateBreak
 from ..optics.lens import Lens
 from ..optics.materials import AbstractMaterial, Air, ModelGlass, Tabulated
-from ..optics.surfaces import AbstractSurface, EvenAsphere, Hybrid, OddAsphere, Standard
+from ..optics.surfaces import (
+    AbstractSurface,
+    EvenAsphere,
+    Hybrid,
+    OddAsphere,
+    Standard,
+    TiltedPlane,
+)
 from . import lensfile, zmx_surfaces
 from .zmx_common import (
     MARKER,
@@ -257,7 +264,7 @@ def surface_lines(s: AbstractSurface, *, image: bool = False) -> list[str]:
     if out is not None:
         if image:
             raise ValueError(f"save_zmx: the image surface must be standard, an even or an "
-                             f"odd asphere, not {type(s).__name__}")
+                             f"odd asphere or a tilted plane, not {type(s).__name__}")
         return out
     out = []
     if isinstance(s, Hybrid):
@@ -303,6 +310,9 @@ def surface_lines(s: AbstractSurface, *, image: bool = False) -> list[str]:
                              f"ODDASPHE holds 8 (β_1 … β_8 on r … r⁸)")
         out += ["TYPE ODDASPHE", f'CURV {_z(s.c)} 0 0 0 0 ""', f"CONI {_z(s.k)}"]
         out += [f"PARM {i} {_z(v)}" for i, v in enumerate(b, start=1)]
+    elif isinstance(s, TiltedPlane):  # PARM 1, 2: the slopes, no unit
+        out += ["TYPE TILTSURF", 'CURV 0 0 0 0 0 ""', f"PARM 1 {_z(s.tan_x)}",
+                f"PARM 2 {_z(s.tan_y)}"]
     elif isinstance(s, Standard):
         out += ["TYPE STANDARD", f'CURV {_z(s.c)} 0 0 0 0 ""', f"CONI {_z(s.k)}"]
     elif isinstance(s, CoordinateBreak) and not image:
@@ -314,7 +324,7 @@ def surface_lines(s: AbstractSurface, *, image: bool = False) -> list[str]:
         raise ValueError(f"save_zmx: surface type {type(s).__name__} has no .zmx form")
     if image and isinstance(s, Hybrid):
         raise ValueError("save_zmx: the image surface must be standard, an even or an odd "
-                         "asphere")
+                         "asphere or a tilted plane")
     return out
 
 

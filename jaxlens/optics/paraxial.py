@@ -20,7 +20,9 @@ Conventions:
     with the negative thicknesses after it. ``bfl``, ``rear_focal_length`` and the image
     and exit-pupil positions are then z values (negative where light leaves toward −z);
     ``efl`` is 1/Φ and ``efl_image_space`` |n′|/Φ. Coordinate breaks are dummy surfaces
-    here: the trace follows each surface's local axis and ignores decenters and tilts.
+    here: the trace follows each surface's local axis and ignores decenters and tilts. So
+    is a ``TiltedPlane`` (Zemax TILTSURF): c = 0, no paraxial power, and its tilt, which
+    deviates rays as a prism face does, is seen by real rays only.
 
     A ``ParaxialSurface`` (ideal thin lens) has power 1/f whatever its media. A lens with a
     ``Toroidal`` surface has no single paraxial trace: everything here is its y–z section

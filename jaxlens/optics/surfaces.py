@@ -13,7 +13,8 @@ Conventions:
     mm^(1−i)), is ``OddAsphere``, Zemax's odd asphere (ODDASPHE, PARM i = β_i); its
     β_1 r term is a cone with its tip on the axis. The x, y odd terms are the hybrid
     surface of Yang et al. (2024); they start at the cubic (a linear term would only
-    tilt the surface).
+    tilt the surface). ``TiltedPlane`` is that linear term alone: the plane
+    z = tan θx·x + tan θy·y through the vertex (Zemax TILTSURF), c = k = 0.
 
     ``semi_diameter`` is the clear-aperture radius; rays beyond it are clipped. It is
     ``inf`` (no clipping) unless a file or the user sets it.
@@ -26,6 +27,7 @@ odd terms evaluates none.
 from __future__ import annotations
 
 import math
+from typing import ClassVar
 
 import equinox as eqx
 import jax.numpy as jnp
@@ -245,6 +247,59 @@ class OddAsphere(AbstractSurface):
 
     def radial_coeffs(self):
         return self.coeffs
+
+
+class TiltedPlane(AbstractSurface):
+    """A plane through the vertex tilted against the x and y axes (Zemax TILTSURF).
+
+    The sag is z = tan_x·x + tan_y·y (mm), so ``tan_x = tan θx`` is the slope dz/dx
+    (dimensionless, Zemax PARM 1) and ``tan_y = tan θy`` the slope dz/dy (PARM 2); its normal
+    is (−tan_x, −tan_y, 1)/norm. A positive ``tan_y`` moves the plane towards +z above the
+    axis (y > 0). Unlike a coordinate break it leaves the frame of the surfaces after it
+    unchanged. It has no paraxial power (c = k = 0): its tilt, which deviates rays as a prism
+    face does, is seen by real rays only. Rays meet it by the generic Newton step, which
+    lands on a plane in one iteration.
+
+    Args:
+        tan_x, tan_y: the slopes, finite.
+        semi_diameter: clear-aperture radius (mm) of the projection onto the x–y plane,
+            ``inf`` for none.
+    """
+
+    # c and k are fixed (a plane through the vertex): see ``ParaxialSurface``.
+    c: ClassVar[property]
+    k: ClassVar[property]
+    tan_x: Float[Array, ""] = number_field("tan_x", default=0.0)
+    tan_y: Float[Array, ""] = number_field("tan_y", default=0.0)
+    semi_diameter: Float[Array, ""] = number_field("semi_diameter", default_factory=_inf)
+
+    def __check_init__(self):
+        for name in ("tan_x", "tan_y"):
+            v = getattr(self, name)
+            if not checks.is_traced(v):
+                checks.values(v, name, "TiltedPlane")
+        self._check_numbers()
+
+    @property
+    def c(self) -> Array:
+        return jnp.zeros_like(self.tan_x)
+
+    @property
+    def k(self) -> Array:
+        return jnp.zeros_like(self.tan_x)
+
+    @property
+    def has_polynomial(self) -> bool:
+        return True  # not a conic about the axis: the Newton step finds the plane
+
+    def sag(self, x, y):
+        z = self.tan_x * x + self.tan_y * y
+        return z, jnp.ones(jnp.shape(z), bool)
+
+    def sag_and_grad(self, x, y):
+        z, inside = self.sag(x, y)
+        zero = jnp.zeros_like(z)
+        return z, zero + self.tan_x, zero + self.tan_y, inside
 
 
 class Hybrid(AbstractSurface):

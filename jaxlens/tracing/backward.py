@@ -27,7 +27,14 @@ from ..optics.coordinates import CoordinateBreak
 from ..optics.lens import Lens
 from ..optics.paraxial_surface import ParaxialSurface
 from ..optics.rays import Rays
-from ..optics.surfaces import AbstractSurface, EvenAsphere, Hybrid, OddAsphere, Standard
+from ..optics.surfaces import (
+    AbstractSurface,
+    EvenAsphere,
+    Hybrid,
+    OddAsphere,
+    Standard,
+    TiltedPlane,
+)
 from ..optics.toroidal import Toroidal
 from .forward import DEFAULT_NEWTON_ITERS, trace
 
@@ -44,13 +51,13 @@ def mirror_surface(surface: AbstractSurface) -> AbstractSurface:
     """The surface with its sag negated (z → −z in its local frame).
 
     Args:
-        surface: a ``Standard``, ``EvenAsphere``, ``OddAsphere``, ``Hybrid``, ``Toroidal``
-            or ``ParaxialSurface``.
+        surface: a ``Standard``, ``EvenAsphere``, ``OddAsphere``, ``Hybrid``, ``Toroidal``,
+            ``TiltedPlane`` or ``ParaxialSurface``.
 
     Returns:
         A surface of the same kind with c, the even, radial and odd coefficients (and a
-        toroid's cx) negated; a paraxial surface is its own mirror image (its optical
-        path is then that of infinite conjugates on the image side).
+        toroid's cx, a tilted plane's slopes) negated; a paraxial surface is its own mirror
+        image (its optical path is then that of infinite conjugates on the image side).
 
     Raises:
         ValueError: for a surface kind that this module does not know how to mirror.
@@ -77,6 +84,9 @@ def mirror_surface(surface: AbstractSurface) -> AbstractSurface:
     if isinstance(surface, Toroidal):  # z_y -> -z_y and cx -> -cx negate the whole sag
         return Toroidal(c=-surface.c, k=surface.k, coeffs=-surface.coeffs, cx=-surface.cx,
                         semi_diameter=surface.semi_diameter)
+    if isinstance(surface, TiltedPlane):
+        return TiltedPlane(tan_x=-surface.tan_x, tan_y=-surface.tan_y,
+                           semi_diameter=surface.semi_diameter)
     if isinstance(surface, ParaxialSurface):
         # n′u′ = nu − x/f read backward (slopes negated, media swapped) is the same law.
         return surface

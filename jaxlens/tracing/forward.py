@@ -44,8 +44,8 @@ def uniform_surfaces(surfaces) -> list[AbstractSurface]:
 
     All ``Standard`` if none has polynomial terms, else ``EvenAsphere`` if none has odd
     terms, else ``Hybrid``. Each sag is unchanged, so traces agree to rounding. Other
-    kinds (``OddAsphere``, ``Toroidal``, ``ParaxialSurface``, ``CoordinateBreak``) are kept
-    as they are: they split the scan.
+    kinds (``OddAsphere``, ``TiltedPlane``, ``Toroidal``, ``ParaxialSurface``,
+    ``CoordinateBreak``) are kept as they are: they split the scan.
     """
     common = (Standard, EvenAsphere, Hybrid)
     even = [s.even_coeffs() if type(s) in common else None for s in surfaces]
