@@ -202,3 +202,30 @@ def test_cli_refuses_to_replace_an_earlier_run_before_any_work(tmp_path, capsys)
     assert "tolerance.json" in err and "--overwrite" in err
     assert earlier.read_text() == '{"earlier": true}'
     assert time.perf_counter() - t0 < 5  # refused before the analysis, not after
+
+
+def test_cli_refuses_a_lens_it_would_misdescribe_before_any_work(tmp_path, capsys):
+    """The classical-design analysis runs at the spec's entrance pupil and folds the sensor
+    grid by rotational symmetry: another lens (its pupil was silently replaced by the spec's)
+    or a lens without that symmetry is refused with one line, before any work."""
+    from jaxlens.design.spec import DesignSpec
+    from jaxlens.experiments import tolerance as cli
+
+    root = pathlib.Path(jl.__file__).parent
+    t0 = time.perf_counter()
+    assert cli.main([str(root / "data" / "lenses" / "cooke_triplet.zmx"), "--out",
+                     str(tmp_path / "a")]) == 2
+    err = capsys.readouterr().err
+    assert "entrance pupil is 10 mm and the classical spec's 2.25012 mm" in err
+    assert err.count("\n") == 1 and not (tmp_path / "a").exists()
+    design = jl.load(root.parent / "experiments" / "classical" / "designs" / "seed_13.zmx")
+    cli.check_design(design, DesignSpec())  # a design of the spec passes
+    s = design.surfaces[1]
+    hybrid = eqx.tree_at(lambda L: L.surfaces[1], design,
+                         jl.Hybrid(c=s.c, k=s.k, coeffs=s.coeffs, odd_x=jnp.asarray([1e-4]),
+                                   odd_y=jnp.asarray([0.0]), semi_diameter=s.semi_diameter))
+    jl.save(hybrid, tmp_path / "hybrid.zmx")
+    assert cli.main([str(tmp_path / "hybrid.zmx"), "--out", str(tmp_path / "b")]) == 2
+    err = capsys.readouterr().err
+    assert "the design has Hybrid: the analysis folds the sensor grid" in err
+    assert time.perf_counter() - t0 < 20

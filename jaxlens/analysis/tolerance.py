@@ -28,8 +28,9 @@ Perturbations (``Perturbation``; surface 1 is ``lens.surfaces[0]``):
     shape. At zero perturbation this is the design's material to the last bit (no model
     glass substitution, so no difference to state).
 
-    Element decenter and tilt are NOT toleranced: the engine traces coaxial, rotationally
-    symmetric surfaces only (no per-surface decenter or tilt), so they cannot be modelled.
+    Element decenter and tilt are NOT toleranced: the perturbations are coaxial. The tracer
+    follows decenters and tilts through coordinate breaks, but a perturbation would need a
+    break before and after each element, which this model does not insert.
 
 Compensator:
     The back focus (the last thickness, i.e. the image-plane position) is re-optimised per
@@ -68,8 +69,9 @@ from ..optics.materials import LAMBDA_D, AbstractMaterial, Air, abbe_number
 from ..optics.surfaces import EvenAsphere, Standard, TiltedPlane
 from .spots import clear_semi_diameters, spot_rays, weighted_rms
 
-DECENTER_TILT = ("not modelled: the engine traces coaxial, rotationally symmetric surfaces "
-                 "only (no per-element decenter or tilt)")
+DECENTER_TILT = ("not modelled: the perturbations are coaxial (radii, conics, aspheric terms, "
+                 "gaps, indices); element decenters and tilts, which the tracer can follow "
+                 "through coordinate breaks, are not among them")
 
 DISTRIBUTIONS = ("uniform", "normal")
 

@@ -33,6 +33,30 @@ DEFAULT_TRIALS = 200
 DEFAULT_THRESHOLD_UM = 6.0
 
 
+def check_design(lens, spec) -> None:
+    """Refuse a lens this analysis would misdescribe: it is run at the classical spec's
+    entrance pupil, and the 16 × 16 grid is folded onto 36 fields by rotational symmetry."""
+    import math as _math
+
+    from jaxlens.optics.surfaces import EvenAsphere, Standard
+
+    epd = float(lens.epd)
+    if not _math.isclose(epd, spec.epd, rel_tol=1e-6):
+        raise ValueError(
+            f"the design's entrance pupil is {epd:g} mm and the classical spec's "
+            f"{spec.epd:g} mm (F/{spec.fnum:g}): this tool analyses designs of the classical "
+            f"spec; jaxlens.analysis.tolerance.ToleranceModel takes any lens")
+    kinds = {type(s).__name__ for s in (*lens.surfaces, lens.image)
+             if type(s) not in (Standard, EvenAsphere)}
+    if kinds or lens.apertures:
+        what = ", ".join(sorted(kinds)) or "non-circular or decentered apertures"
+        raise ValueError(
+            f"the design has {what}: the analysis folds the sensor grid onto its distinct "
+            f"fields by rotational symmetry, which needs standard and even-asphere surfaces "
+            f"and circular apertures; jaxlens.analysis.tolerance.ToleranceModel takes any "
+            f"lens with its own fields")
+
+
 def analyse_design(lens, spec, *, trials: int = DEFAULT_TRIALS,
                    threshold_um: float = DEFAULT_THRESHOLD_UM, seed: int = 0,
                    grid: int = 16, small_step_check: bool = False, fd_check: int | None = None,
@@ -46,6 +70,7 @@ def analyse_design(lens, spec, *, trials: int = DEFAULT_TRIALS,
     from jaxlens.analysis import tolerance as tol_mod
     from jaxlens.design.evaluate import sensor_field_grid
 
+    check_design(lens, spec)
     t0 = time.perf_counter()
     lens = lens.astype(jnp.float64)
     lens = eqx.tree_at(lambda x: x.epd, lens, jnp.asarray(spec.epd, jnp.float64))
@@ -225,7 +250,12 @@ def main(argv: list[str] | None = None) -> int:
     import jaxlens
     from jaxlens.design.spec import DesignSpec
 
-    report = analyse_design(jaxlens.load(args.design), DesignSpec(), trials=args.trials,
+    try:  # before any work: a file that does not open, or a lens of another kind
+        lens = jaxlens.load(args.design)
+        check_design(lens, DesignSpec())
+    except ValueError as e:
+        return fail(prog, ValueError(f"{args.design}: {e}"))
+    report = analyse_design(lens, DesignSpec(), trials=args.trials,
                             threshold_um=args.threshold, seed=args.seed,
                             small_step_check=not args.no_small_step_check)
     report = {"command": prog + " " + shlex.join(argv), "design": args.design, **report}
