@@ -175,7 +175,12 @@ def plot_layout(lens, fields: Sequence[float] | None = None, *, n_rays: int = 9,
     h = float(np.max(sd)) * 1.1
     if lens.sensor is not None:
         h = max(h, float(np.asarray(lens.sensor.half_diagonal)))
-    ax.plot(*section(n, np.array([-h, h]), np.full(2, float(lens.image_z()))), color="k", lw=2)
+    on_image = np.asarray(paths.origin[:, -1, :, 1])[np.asarray(paths.valid[:, -1])]
+    if on_image.size:  # long enough for every drawn ray to end on it
+        h = max(h, 1.05 * float(np.max(np.abs(on_image))))
+    r = np.linspace(-h, h, 101)  # the image surface as it is (curved, tilted)
+    ax.plot(*section(n, r, float(lens.image_z()) + _profile(lens.image, jnp.asarray(r))),
+            color="k", lw=2)
     ax.set_aspect("equal")
     ax.set_xlabel("z (mm)")
     ax.set_ylabel("y (mm)")

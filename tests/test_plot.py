@@ -81,3 +81,19 @@ def test_figures_of_a_lens_with_x_y_fields_show_its_own_fields():
     assert [t.split("  RMS")[0] for t in titles] == [f"({x:.1f}°, {y:.1f}°)" for x, y in fields]
     legend = plot.plot_mtf(lens, frequencies=[10.0]).axes[0].get_legend().get_texts()
     assert [t.get_text() for t in legend][::2] == [f"({x:.1f}°, {y:.1f}°) T" for x, y in fields]
+
+
+def test_layout_draws_the_image_surface_as_it_is():
+    """A tilted image plane is drawn tilted (it was a flat line at the vertex), and long
+    enough to hold every ray that lands on it."""
+    base = jaxlens.zoo.cooke_triplet()
+    lens = jaxlens.Lens(**{**{f: getattr(base, f) for f in ("surfaces", "thickness",
+                                                            "materials", "epd", "stop",
+                                                            "fields")},
+                           "image": jaxlens.TiltedPlane(tan_y=0.2)})
+    fig = plot.plot_layout(lens, n_rays=3)
+    z, y = (np.asarray(v) for v in fig.axes[0].lines[-1].get_data())
+    np.testing.assert_allclose(z, float(lens.image_z()) + 0.2 * y, atol=1e-12)
+    ends = [np.asarray(ln.get_data()[1])[-1] for ln in fig.axes[0].lines[:-1]
+            if ln.get_linestyle() == "-" and len(ln.get_data()[1])]
+    assert max(abs(e) for e in ends) > 15 and y.max() >= max(abs(e) for e in ends)
