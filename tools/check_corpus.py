@@ -175,8 +175,10 @@ def table(records: list[dict]) -> str:
     return "\n".join(rows)
 
 
-def main(argv=None) -> int:
-    ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+def run_folder(argv, check_file, table, description: str) -> int:
+    """``TOOL FOLDER [--json]``: ``check_file`` on every ``.zmx`` in FOLDER, printed as
+    ``table`` or one JSON record a file (shared with tools/check_rays.py)."""
+    ap = argparse.ArgumentParser(description=description)
     ap.add_argument("folder")
     ap.add_argument("--json", action="store_true", help="one JSON record a file")
     args = ap.parse_args(argv)
@@ -192,6 +194,10 @@ def main(argv=None) -> int:
     else:
         print(table(records))
     return 0
+
+
+def main(argv=None) -> int:
+    return run_folder(argv, check_file, table, __doc__.splitlines()[0])
 
 
 if __name__ == "__main__":

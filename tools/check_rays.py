@@ -37,10 +37,8 @@ optiland is optional (it is not a jaxlens dependency); without it the script say
 
 from __future__ import annotations
 
-import argparse
 import contextlib
 import io
-import json
 import os
 import sys
 import tempfile
@@ -59,6 +57,9 @@ from jaxlens.optics.catalog import decode_zemax_text  # noqa: E402
 from jaxlens.optics.coordinates import CoordinateBreak, frame_of  # noqa: E402
 from jaxlens.optics.lens import unclipped  # noqa: E402
 from jaxlens.tracing.forward import trace_path  # noqa: E402
+
+sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
+from check_corpus import run_folder  # noqa: E402
 
 try:  # optional
     from optiland.fileio import load_zemax_file
@@ -385,25 +386,10 @@ def table(records: list[dict]) -> str:
 
 
 def main(argv=None) -> int:
-    ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    ap.add_argument("folder")
-    ap.add_argument("--json", action="store_true", help="one JSON record a file")
-    args = ap.parse_args(argv)
     if load_zemax_file is None:
         print("optiland is not installed: nothing to compare with", file=sys.stderr)
         return 2
-    files = sorted(os.path.join(args.folder, f) for f in os.listdir(args.folder)
-                   if f.lower().endswith(".zmx"))
-    if not files:
-        print(f"{args.folder}: no .zmx files", file=sys.stderr)
-        return 2
-    records = [check_file(f) for f in files]
-    if args.json:
-        for r in records:
-            print(json.dumps(r))
-    else:
-        print(table(records))
-    return 0
+    return run_folder(argv, check_file, table, __doc__.splitlines()[0])
 
 
 if __name__ == "__main__":
