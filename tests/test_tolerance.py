@@ -229,3 +229,17 @@ def test_cli_refuses_a_lens_it_would_misdescribe_before_any_work(tmp_path, capsy
     err = capsys.readouterr().err
     assert "the design has Hybrid: the analysis folds the sensor grid" in err
     assert time.perf_counter() - t0 < 20
+
+
+def test_a_paraxial_surface_is_refused_by_name():
+    """An ideal thin lens has no shape to perturb: perturbing it failed deep in JAX
+    ("zeros_like requires ndarray ... _LeafWrapper")."""
+    from jaxlens.optics.paraxial_surface import ParaxialSurface
+
+    lens = jl.Lens((jl.Sphere(0.02, semi_diameter=5.0), ParaxialSurface(focal_length=50.0)),
+                   jnp.array([2.0, 50.0]), (jl.ModelGlass(1.5, 60.0), jl.Air()), epd=4.0,
+                   fields=(0.0, 2.0))
+    for call in (lambda: T.zero_perturbation(lens), lambda: T.ToleranceModel(lens)):
+        with pytest.raises(ValueError, match="surface 2 is a ParaxialSurface \\(an ideal thin "
+                                             "lens\\): it has no radius, conic or aspheric"):
+            call()

@@ -66,6 +66,7 @@ from ..imaging.sampling import field_xy, pupil_grid
 from ..optics import checks, paraxial
 from ..optics.lens import Lens
 from ..optics.materials import LAMBDA_D, AbstractMaterial, Air, abbe_number
+from ..optics.paraxial_surface import ParaxialSurface
 from ..optics.surfaces import EvenAsphere, Standard, TiltedPlane
 from .spots import clear_semi_diameters, spot_rays, weighted_rms
 
@@ -174,11 +175,16 @@ class Perturbation(eqx.Module):
 
 
 def _refuse_surfaces(lens: Lens, where: str) -> None:
-    """Refuse odd aspheres: their β_i r^i terms would stay untoleranced without a word. And
+    """Refuse odd aspheres: their β_i r^i terms would stay untoleranced without a word;
+    paraxial surfaces, which have no shape to perturb (perturbing them failed deep in JAX). And
     tilted planes (on the image too): they break the rotational symmetry that the field
     folding and the back-focus compensator assume, and their c and k are fixed."""
     for i, s in enumerate((*lens.surfaces, lens.image)):
         name = f"surface {i + 1}" if i < lens.num_surfaces else "the image surface"
+        if isinstance(s, ParaxialSurface):
+            raise ValueError(f"{where}: {name} is a ParaxialSurface (an ideal thin lens): it "
+                             f"has no radius, conic or aspheric terms to perturb, so tolerance "
+                             f"analysis does not support it")
         if isinstance(s, TiltedPlane):
             raise ValueError(f"{where}: {name} is a TiltedPlane; tolerance analysis assumes "
                              f"a rotationally symmetric lens and a flat image normal to the "
