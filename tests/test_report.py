@@ -241,3 +241,20 @@ def test_report_plot_writes_the_figures_and_keeps_existing_ones(cooke, tmp_path,
     (tmp_path / "file").write_text("")
     code, _, err = _run(capsys, path, "--plot", tmp_path / "file")
     assert code == 2 and "is a file, not a folder" in err
+    code, out, err = _run(capsys, path, "--plot", "")  # was read as no --plot at all
+    assert code == 2 and out == "" and "--plot needs a folder name" in err
+
+
+def test_report_is_printed_before_a_figure_that_fails(cooke, tmp_path, capsys, monkeypatch):
+    """A figure that cannot be made exits 2 with its message, after the report was printed."""
+    from jaxlens.analysis import report
+
+    def fail(lens, paths):
+        raise ValueError("psf: more than 0.05 of the PSF energy falls outside the kernel")
+
+    monkeypatch.setattr(report, "_write_figures", fail)
+    path, _ = cooke
+    code, out, err = _run(capsys, path, "--plot", tmp_path / "f")
+    assert code == 2 and "SYSTEM DATA" in out
+    assert err.strip() == ("jaxlens report: error: --plot: psf: more than 0.05 of the PSF "
+                           "energy falls outside the kernel")

@@ -481,8 +481,10 @@ def _write_figures(lens: Lens, paths: dict[str, str]) -> None:
 def run(args: argparse.Namespace) -> int:
     """Run the ``report`` subcommand; returns the exit status."""
     try:
-        if args.overwrite and not args.plot:
+        if args.overwrite and args.plot is None:
             raise ValueError("--overwrite replaces --plot figures; it needs --plot DIR")
+        if args.plot is not None and not args.plot.strip():
+            raise ValueError("--plot needs a folder name, got an empty one")
         paths = figure_paths(args.lens, args.plot, args.overwrite) if args.plot else None
         # strict by default: a report must not describe a truncated file, nor rays that the
         # file's own settings (vignetting factors) would have changed, without being asked
@@ -492,20 +494,21 @@ def run(args: argparse.Namespace) -> int:
         for w in caught:
             print(f"jaxlens report: warning: {w.message}", file=sys.stderr)
         data = report_data(lens, fields=args.fields, wavelengths=args.wavelengths)
-        if paths:
-            _write_figures(with_fields_and_wavelengths(lens, args.fields, args.wavelengths),
-                           paths)
     except (ValueError, OSError) as e:
         hint = "" if args.lenient or "(strict mode)" not in str(e) else (
             " (--lenient reads the file anyway, with a warning)")
         print(f"jaxlens report: error: {e}{hint}", file=sys.stderr)
         return 2
     data["file"] = args.lens
+    shown = with_fields_and_wavelengths(lens, args.fields, args.wavelengths)
     if args.json:
         print(json.dumps(data, indent=2, allow_nan=False))
     else:
-        print(
-            format_report(data, with_fields_and_wavelengths(lens, args.fields, args.wavelengths)),
-            end="",
-        )
+        print(format_report(data, shown), end="")
+    if paths:  # after the report, so that a figure that cannot be made does not lose it
+        try:
+            _write_figures(shown, paths)
+        except (ValueError, OSError) as e:
+            print(f"jaxlens report: error: --plot: {e}", file=sys.stderr)
+            return 2
     return 0
