@@ -493,14 +493,14 @@ def run(args: argparse.Namespace) -> int:
             lens = load(args.lens, strict=not args.lenient, unknown_glass=args.unknown_glass)
         for w in caught:
             print(f"jaxlens report: warning: {w.message}", file=sys.stderr)
-        data = report_data(lens, fields=args.fields, wavelengths=args.wavelengths)
+        shown = with_fields_and_wavelengths(lens, args.fields, args.wavelengths)
+        data = report_data(shown)
     except (ValueError, OSError) as e:
         hint = "" if args.lenient or "(strict mode)" not in str(e) else (
             " (--lenient reads the file anyway, with a warning)")
         print(f"jaxlens report: error: {e}{hint}", file=sys.stderr)
         return 2
     data["file"] = args.lens
-    shown = with_fields_and_wavelengths(lens, args.fields, args.wavelengths)
     if args.json:
         print(json.dumps(data, indent=2, allow_nan=False))
     else:

@@ -36,12 +36,10 @@ DEFAULT_THRESHOLD_UM = 6.0
 def check_design(lens, spec) -> None:
     """Refuse a lens this analysis would misdescribe: it is run at the classical spec's
     entrance pupil, and the 16 × 16 grid is folded onto 36 fields by rotational symmetry."""
-    import math as _math
-
     from jaxlens.optics.surfaces import EvenAsphere, Standard
 
     epd = float(lens.epd)
-    if not _math.isclose(epd, spec.epd, rel_tol=1e-6):
+    if not math.isclose(epd, spec.epd, rel_tol=1e-6):
         raise ValueError(
             f"the design's entrance pupil is {epd:g} mm and the classical spec's "
             f"{spec.epd:g} mm (F/{spec.fnum:g}): this tool analyses designs of the classical "
