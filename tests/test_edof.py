@@ -518,7 +518,7 @@ def _relabelled(src, dst, *, seed):
 
 
 @pytest.mark.slow
-def test_merge_extension_and_evaluation_options_of_the_smoke_run(tmp_path):
+def test_merge_extension_and_evaluation_options_of_the_smoke_run(tmp_path, capsys):
     """Slow (CI runs the smoke above): a second seed run on its own and merged with the
     first gives the table of one run over both seeds; an evaluation-only option resumes the
     trained lenses; a longer stage 2 extends them, a shorter one is refused."""
@@ -533,10 +533,14 @@ def test_merge_extension_and_evaluation_options_of_the_smoke_run(tmp_path):
     from jaxlens.experiments.edof import merge
     from jaxlens.experiments.runfolder import UsageError
 
+    capsys.readouterr()
     edof.run(common + ["--seeds", "1", "--out", str(tmp_path / "s1"), "--checkpoint", str(ck),
                        "--resume"])
+    # A lens that --resume finds no checkpoint of is said to start over (a mistyped folder).
+    assert "no checkpoint of the hybrid lens (seed 1)" in capsys.readouterr().err
     edof.run(common + ["--seeds", "0,1", "--out", str(tmp_path / "s01"), "--checkpoint",
                        str(ck), "--resume"])
+    assert "no checkpoint" not in capsys.readouterr().err
     merged = merge.run(["--out", str(tmp_path / "merged"), str(out2), str(tmp_path / "s1")])
     m, both = (json.loads((tmp_path / f / "table2.json").read_text()) for f in ("merged", "s01"))
     assert m["seeds"] == both["seeds"] == [0, 1]

@@ -401,8 +401,9 @@ def _run_into(a, argv, cfg, names, folder, out, compile_cache=False) -> dict:
             trainer = T.Trainer(name, pmap, params, dec, src, cfg,
                                 jax.random.fold_in(k_train, i), floor=floor, folder=ck,
                                 deadline=deadline)
-            if a.resume:
-                trainer.load()
+            if a.resume and not trainer.load():  # a mistyped --checkpoint must not pass unseen
+                print(f"edof: --resume: no checkpoint of the {name} lens (seed {seed}) in "
+                      f"{a.checkpoint}; it trains from the start", file=sys.stderr)
             t0 = time.perf_counter()
             dec, params, hist = trainer.run(progress)
             timings[f"train_{tag}_s"] = time.perf_counter() - t0
