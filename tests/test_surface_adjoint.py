@@ -1,7 +1,8 @@
-"""The hand-written reverse rule of the conic surface step (``tracing.surface_adjoint``).
+"""The hand-written reverse rules of the surface step (``tracing.surface_adjoint``).
 
 ``trace(reverse_rule=True)`` moves plane, sphere and conic surfaces with
-``surface_adjoint.conic_step``; the reference is the same trace with ``step.surface_step``
+``surface_adjoint.conic_step`` and surfaces with polynomial terms with ``sag_step``; the
+reference is the same trace with ``step.surface_step``
 everywhere (the default), whose derivative JAX takes itself. Values must be bit-identical,
 gradients equal to rounding, and forward mode must refuse the rule clearly.
 """
@@ -13,6 +14,8 @@ import numpy as np
 import pytest
 
 import jaxlens as jl
+from jaxlens.optics.paraxial_surface import ParaxialSurface
+from jaxlens.optics.toroidal import Toroidal
 from jaxlens.tracing import forward, surface_adjoint
 from jaxlens.tracing.step import RayState, state_from_rays, surface_step
 
@@ -44,10 +47,27 @@ def _rays(lens, n, scale, seed=0, per_ray_wl=False):
     return jl.Rays(r.origin, r.direction, wl, jnp.arange(n) % 11 != 5)
 
 
+def _freeform():
+    """Every kind ``sag_step`` takes: an odd asphere with a cone term (a kink on the axis),
+    a hybrid with odd x, y terms, a toroid and a tilted plane."""
+    glass = jl.ModelGlass(1.6, 40.0)
+    return jl.Lens(
+        surfaces=(jl.Sphere(0.03),
+                  jl.OddAsphere(c=-0.01, k=0.0, coeffs=jnp.array([2e-3, 3e-3, -1e-4])),
+                  jl.Hybrid(c=0.02, k=-0.5, coeffs=jnp.array([1e-4, -1e-6]),
+                            odd_x=jnp.array([1e-5]), odd_y=jnp.array([2e-5])),
+                  Toroidal(c=-0.02, k=0.2, coeffs=jnp.array([1e-4]), cx=-0.015),
+                  jl.TiltedPlane(tan_x=0.01, tan_y=-0.02), jl.Plane()),
+        thickness=jnp.array([4.0, 3.0, 5.0, 3.0, 2.0, 40.0]),
+        materials=(glass, jl.Air(), glass, jl.Air(), glass, jl.Air()), epd=8.0)
+
+
 CASES = {
     "cooke": lambda: jl.zoo.cooke_triplet(),
     "double_gauss": lambda: jl.zoo.double_gauss(),
     "folded": _folded,
+    "cellphone6": lambda: jl.zoo.cellphone6(),
+    "freeform": _freeform,
 }
 
 
@@ -74,7 +94,8 @@ def compiled():
 
 
 @pytest.mark.parametrize("case, scale, per_ray_wl", [
-    ("cooke", 1.3, True), ("folded", 1.2, False),
+    ("cooke", 1.3, True), ("folded", 1.2, False), ("cellphone6", 1.1, False),
+    ("freeform", 1.1, True),
     # 11 surfaces with a flat stop: the same step kinds as the Cooke triplet's (CI time).
     pytest.param("double_gauss", 0.999, False, marks=pytest.mark.slow)])
 def test_values_and_gradients_match_the_library_step(compiled, case, scale,
@@ -167,7 +188,9 @@ def test_one_step_equals_surface_step(first, refracts):
     n1, n2 = glass.index(0.55), jnp.asarray(1.0)
     assert surface_adjoint.supported(surface)
     assert not surface_adjoint.supported(surface, reflects=True)
-    assert not surface_adjoint.supported(jl.EvenAsphere(c=0.01))
+    assert surface_adjoint.supported(jl.EvenAsphere(c=0.01))
+    assert not surface_adjoint.supported(jl.EvenAsphere(c=0.01, coeffs=jnp.zeros(0)))
+    assert not surface_adjoint.supported(ParaxialSurface(focal_length=50.0))
 
     def both(c, z, gap):
         s = eqx.tree_at(lambda x: x.c, surface, c)
@@ -217,3 +240,92 @@ def test_a_ray_at_the_critical_angle_has_finite_equal_gradients():
                     jax.tree.leaves(jac[surface_step]), strict=True):
         assert np.all(np.isfinite(a)) and np.all(np.isfinite(b))
         np.testing.assert_allclose(a, b, rtol=1e-12, atol=1e-13)
+
+
+def test_polynomial_gradient_matches_central_differences():
+    """The sag rule's gradient in coefficients of every kind against central differences."""
+    lens = _freeform()
+    rays = _rays(lens, 300, 1.1)
+    fn = jax.jit(lambda L: _loss(_trace(L, rays, True)))
+    g = jax.grad(fn)(lens)
+    for get, j, h in ((lambda L: L.surfaces[1].coeffs, 0, 1e-7),
+                      (lambda L: L.surfaces[1].c, None, 1e-7),
+                      (lambda L: L.surfaces[2].odd_y, 0, 1e-7),
+                      (lambda L: L.surfaces[2].k, None, 1e-6),
+                      (lambda L: L.surfaces[3].cx, None, 1e-7),
+                      (lambda L: L.surfaces[4].tan_y, None, 1e-7),
+                      (lambda L: L.thickness, 2, 1e-6)):
+        def at(dx, get=get, j=j):
+            new = get(lens) + dx if j is None else get(lens).at[j].add(dx)
+            return float(fn(eqx.tree_at(get, lens, new)))
+
+        fd = (at(h) - at(-h)) / (2 * h)
+        ad = float(get(g) if j is None else get(g)[j])
+        assert ad != 0.0
+        assert ad == pytest.approx(fd, rel=2e-6, abs=1e-9)
+
+
+@pytest.mark.parametrize("first, refracts", [(True, True), (False, True), (False, False)])
+def test_one_sag_step_equals_surface_step(first, refracts):
+    """``sag_step`` alone on an odd asphere with a cone term: a ray on the axis (r = 0,
+    where the cone's slope is cut off), one behind a negative gap, one clipped, one at TIR
+    and one invalid on entry; values identical, Jacobians equal."""
+    glass = jl.ModelGlass(1.5, 60.0)
+    surface = jl.OddAsphere(c=-0.04, k=-0.5, coeffs=jnp.array([0.05, 2e-3, -1e-3]),
+                            semi_diameter=6.0)
+    o = jnp.array([[0.0, 0.0, -3.0], [0.3, 1.0, 2.0], [0.0, 7.0, -1.0], [0.0, 5.0, -1.0],
+                   [0.2, 0.1, -1.0]])
+    d = jnp.array([[0.0, 0.0, 1.0], [0.0, 0.6, 0.8], [0.0, 0.0, 1.0], [0.0, 0.8, 0.6],
+                   [0.0, 0.0, 1.0]])
+    st = state_from_rays(jl.Rays(o, d, 0.55, jnp.array([True] * 4 + [False])))
+    n1, n2 = glass.index(0.55), jnp.asarray(1.0)
+
+    def both(coeffs, z, gap):
+        s = eqx.tree_at(lambda x: x.coeffs, surface, coeffs)
+        kw = dict(first=first, refracts=refracts, gap=None if first else gap, newton_iters=6)
+        return (surface_adjoint.sag_step(s, z, st, n1, n2, **kw),
+                surface_step(s, z, st, n1, n2, **kw))
+
+    for gap in (jnp.asarray(-4.0), jnp.asarray(2.0)):
+        a, b = both(surface.coeffs, jnp.asarray(1.0), gap)
+        for x, y in zip(jax.tree.leaves(a), jax.tree.leaves(b), strict=True):
+            np.testing.assert_array_equal(x, y)
+        if refracts and not first:
+            assert not bool(a.valid[3])  # TIR leaving the glass
+        ja, jb = jax.jit(jax.jacrev(lambda c, z, gap=gap: (_floats(both(c, z, gap)[0]),
+                                                           _floats(both(c, z, gap)[1])),
+                                    argnums=(0, 1)))(surface.coeffs, jnp.asarray(1.0))
+        for x, y in zip(jax.tree.leaves(ja), jax.tree.leaves(jb), strict=True):
+            assert np.all(np.isfinite(x))
+            np.testing.assert_allclose(x, y, rtol=1e-12, atol=1e-13)
+
+
+def test_design_loss_gradient_with_and_without_the_rule():
+    """The design loss (uniform trace of the stacked even aspheres) with the rule: the same
+    value and gradient; the solver factory gives it to Adam and L-BFGS-B, not to LM."""
+    from jaxlens.design import curriculum, init, losses, multistart
+
+    spec, config = jl.design.DesignSpec(), multistart.DesignConfig()
+    dt = jnp.float64
+    pmap = init.parameterization(spec, dt)
+    sampling = losses.RayLoss.make(config.n_fields, 2, spec.wavelengths, spec.sensor_size, dt)
+    objective = losses.Objective(pmap, sampling, jnp.asarray(init.gap_bounds(spec), dt))
+    params = jax.tree.map(lambda x: x[0], init.random_starts(spec, [3], dt))
+    stage = config.stages(spec)[0]
+    args = curriculum.stage_args(spec, stage, jnp.ones((1, config.n_fields), dt),
+                                 config.reg_weights, dt)
+    args = jax.tree.map(lambda x: x[0], args)  # one seed
+    fast = losses.reverse_mode({"ray": objective})["ray"]
+    assert fast.reverse_rule and not objective.reverse_rule
+
+    def vg(obj):
+        return jax.jit(jax.value_and_grad(lambda p: jnp.sum(obj(p, args)[0] ** 2)))(params)
+
+    (l1, g1), (l0, g0) = vg(fast), vg(objective)
+    assert float(l1) == pytest.approx(float(l0), rel=1e-14)
+    for a, b in zip(jax.tree.leaves(g1), jax.tree.leaves(g0), strict=True):
+        np.testing.assert_allclose(a, b, rtol=1e-11, atol=1e-13 * float(np.max(np.abs(b))))
+    make = multistart.make_solver_factory(config, spec, dt)
+    assert make("adam", 1.0, objective).residual_fn.reverse_rule
+    assert make("lbfgsb", 1.0, objective).residual_fn.reverse_rule
+    assert not make("lm", 1.0, objective).residual_fn.reverse_rule

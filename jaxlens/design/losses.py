@@ -30,6 +30,7 @@ Ray loss:
 
 from __future__ import annotations
 
+import dataclasses
 import math
 
 import equinox as eqx
@@ -212,7 +213,8 @@ class Aux(eqx.Module):
     regs: Float[Array, " 3"]  # unweighted obliquity, spacing, slope penalties
 
 
-def design_residuals(params, pmap, sampling: RayLoss, args: StageArgs, gap_bounds):
+def design_residuals(params, pmap, sampling: RayLoss, args: StageArgs, gap_bounds, *,
+                     reverse_rule: bool = False):
     """All residuals of a design (spot, pin and the three weighted regularizers).
 
     Args:
@@ -221,6 +223,9 @@ def design_residuals(params, pmap, sampling: RayLoss, args: StageArgs, gap_bound
         sampling: the ray-loss sampling.
         args: the stage inputs.
         gap_bounds: ``[n]`` spacing bounds (mm), see ``design.init.gap_bounds``.
+        reverse_rule: (static) trace with the hand-written reverse rule
+            (``trace_path(reverse_rule=True)``): the same values, a faster ``grad``, but no
+            forward mode (``jacfwd`` raises a TypeError).
 
     Returns:
         ``(residuals [R], Aux)``; the design loss is ``Σ residuals²``.
@@ -229,7 +234,7 @@ def design_residuals(params, pmap, sampling: RayLoss, args: StageArgs, gap_bound
 
     lens = pmap.to_lens(params)
     rays = launch(lens, sampling, args)
-    path = trace_path(lens, rays, uniform=True)
+    path = trace_path(lens, rays, uniform=True, reverse_rule=reverse_rule)
     spot = spot_errors(path, sampling, args)
     stack = stacked_surfaces(lens.surfaces)
     radii = reg.clear_radii(path)
@@ -262,6 +267,8 @@ class Objective(eqx.Module):
             EFL (``DesignSpec.image_mapping``), and from a nearly flat start an EFL residual
             would outweigh the spots and crowd the elements.
         efl_weight: weight of that residual.
+        reverse_rule: trace with the hand-written reverse rule (``design_residuals``): for
+            solvers that take only reverse-mode gradients (``reverse_mode`` sets it).
     """
 
     pmap: object
@@ -269,9 +276,11 @@ class Objective(eqx.Module):
     gap_bounds: Float[Array, " n"]
     efl: float | None = eqx.field(static=True, default=None)
     efl_weight: float = eqx.field(static=True, default=1.0)
+    reverse_rule: bool = eqx.field(static=True, default=False)
 
     def __call__(self, params, args: StageArgs):
-        res, aux = design_residuals(params, self.pmap, self.sampling, args, self.gap_bounds)
+        res, aux = design_residuals(params, self.pmap, self.sampling, args, self.gap_bounds,
+                                    reverse_rule=self.reverse_rule)
         if self.efl is None:
             return res, aux
         f = paraxial.efl(self.pmap.to_lens(params))
@@ -282,6 +291,16 @@ class Objective(eqx.Module):
     def field_rms(self, params, args: StageArgs) -> Float[Array, " K"]:
         """RMS spot error per loss field (mm) at the current parameters."""
         return self(params, args)[1].rms
+
+
+def reverse_mode(objective):
+    """``objective`` with every ``Objective`` in it (also inside a robust or image objective)
+    tracing with the hand-written reverse rule: for solvers that only take ``grad`` (Adam,
+    L-BFGS-B), never for ``jacfwd`` (Levenberg–Marquardt)."""
+    def on(x):
+        return dataclasses.replace(x, reverse_rule=True) if isinstance(x, Objective) else x
+
+    return jax.tree.map(on, objective, is_leaf=lambda x: isinstance(x, Objective))
 
 
 class ImageObjective(eqx.Module):

@@ -22,7 +22,7 @@ from jax.sharding import Mesh, NamedSharding, PartitionSpec
 from ..optics import catalog, checks
 from .curriculum import History, Stage, paper_stages, run, stage_args
 from .init import gap_bounds, parameterization, random_starts
-from .losses import ImageObjective, Objective, RayLoss
+from .losses import ImageObjective, Objective, RayLoss, reverse_mode
 from .materials import (
     DEFAULT_CATALOGS,
     CatalogRegion,
@@ -255,7 +255,8 @@ def make_solver_factory(config: DesignConfig, spec: DesignSpec, dtype, materials
                 c=jnp.asarray(config.lr_c * lr, dtype), a=jnp.full((m,), config.lr_a * lr, dtype),
                 k=jnp.asarray(config.lr_k * lr, dtype), d=jnp.asarray(config.lr_d * lr, dtype),
                 m=None if lr_m is None else lr_m * lr)
-            return Adam(objective, lrs, free=free)
+            # Adam and L-BFGS-B take only grad: the trace's hand-written reverse rule.
+            return Adam(reverse_mode(objective), lrs, free=free)
         if name == "lm":
             return DampedLeastSquares(objective, free=free)
         if name == "lm-optx":
@@ -268,7 +269,7 @@ def make_solver_factory(config: DesignConfig, spec: DesignSpec, dtype, materials
             upper = LensParams(c=jnp.full((s,), inf), a=jnp.full((s, m), inf),
                                k=jnp.full((s,), inf),
                                d=jnp.full(lower_d.shape, spec.total_track, dtype), m=bound_m)
-            return LBFGSB(objective, lower, upper, free=free)
+            return LBFGSB(reverse_mode(objective), lower, upper, free=free)
         raise ValueError(f"design: unknown solver {name!r}; use adam, lm, lm-optx or lbfgsb")
 
     return make

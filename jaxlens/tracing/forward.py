@@ -139,8 +139,9 @@ def _trace_states(lens: Lens, rays: Rays, newton_iters: int, upto: int | None, *
              obscured=None, apertures=()):
         if reverse_rule and surface_adjoint.supported(surface, reflects=reflects,
                                                       obscured=obscured, apertures=apertures):
-            return surface_adjoint.conic_step(surface, z, st, n1, n2, first=first,
-                                              refracts=refracts, gap=gap)
+            return surface_adjoint.rule_step(surface, z, st, n1, n2, first=first,
+                                             refracts=refracts, newton_iters=newton_iters,
+                                             gap=gap)
         return surface_step(surface, z, st, n1, n2, first=first, refracts=refracts,
                             newton_iters=newton_iters, gap=gap, reflects=reflects,
                             obscured=obscured, apertures=apertures)

@@ -32,14 +32,32 @@ import functools
 import jax
 import jax.numpy as jnp
 
-from ..optics.surfaces import Standard
-from .step import T_MAX, RayState, bounded_div, conic_root_arrays, refraction_gain, unmark
+from ..optics.surfaces import EvenAsphere, Hybrid, OddAsphere, Standard, TiltedPlane
+from ..optics.toroidal import Toroidal
+from .step import (
+    T_MAX,
+    RayState,
+    bounded_div,
+    conic_root_arrays,
+    intersect,
+    refraction_gain,
+    surface_normal,
+    unmark,
+)
+
+# Surfaces that ``sag_step`` takes: ``surface_step`` intersects them by Newton's method and
+# refracts at the normal (−s_x, −s_y, 1) of ``sag_and_grad``, and nothing else (a listed kind,
+# so a new kind with its own rules in ``surface_step`` is not taken by mistake).
+SAG_KINDS = (EvenAsphere, OddAsphere, Hybrid, TiltedPlane, Toroidal)
 
 
 def supported(surface, *, reflects=False, obscured=None, apertures=()) -> bool:
-    """Whether ``conic_step`` can take this surface (static): a ``Standard`` surface that is
-    not a mirror and has no obscuration or aperture."""
-    return type(surface) is Standard and not reflects and obscured is None and not apertures
+    """Whether ``rule_step`` can take this surface (static): a ``Standard`` surface
+    (``conic_step``) or one with polynomial terms of ``SAG_KINDS`` (``sag_step``), not a
+    mirror and with no obscuration or aperture."""
+    if reflects or obscured is not None or apertures:
+        return False
+    return type(surface) is Standard or (type(surface) in SAG_KINDS and surface.has_polynomial)
 
 
 def _advance(first, refracts, params, p, d, valid, opl):
@@ -70,11 +88,16 @@ def _advance(first, refracts, params, p, d, valid, opl):
         d_new = tuple(jnp.where(no_tir, mu * di + g * ni, di)
                       for di, ni in zip(d, normal, strict=True))
         ok = ok & no_tir
+    return _moved(p, d, valid, opl, ok, (x, y, z), d_new, zv, n1, t), t, g
+
+
+def _moved(p, d, valid, opl, ok, point, d_new, zv, n1, t):
+    """(p, d, valid, opl) after the surface: rays that fail here keep their p and d."""
     v = valid & ok
     keep = lambda new, old: jnp.where(v, new, old)  # noqa: E731
-    p2 = (keep(x, p[0]), keep(y, p[1]), keep(z + zv, p[2]))
+    p2 = (keep(point[0], p[0]), keep(point[1], p[1]), keep(point[2] + zv, p[2]))
     d2 = tuple(keep(a, b) for a, b in zip(d_new, d, strict=True))
-    return (p2, d2, v, opl + jnp.where(v, n1 * t, 0.0)), t, g
+    return p2, d2, v, opl + jnp.where(v, n1 * t, 0.0)
 
 
 def _geometry(params, p, d, v, t):
@@ -97,6 +120,29 @@ def _sum_like(x, like):
     return (jnp.sum(x, axis=axes, keepdims=True) if axes else x).astype(jnp.result_type(like))
 
 
+def _snell_adjoint(d, N, dn, g, mu, v, D):
+    """Cotangents (of N, of d·N, of mu) of d' = mu·d + g·N from that of d' (``D``); zero on
+    invalid rays."""
+    mu2 = mu * mu
+    nn = N[0] * N[0] + N[1] * N[1] + N[2] * N[2]
+    R = g * nn + mu * dn
+    # At the critical angle (R = 0, rebuilt to within rounding of mu·dn) the root's
+    # slope, carried by the 1/R terms, is taken as zero, as in step.refraction_gain:
+    # m drops those terms and R is replaced by 1.
+    critical = jnp.abs(R) <= 4 * jnp.finfo(R.dtype).eps * jnp.abs(mu * dn)
+    m = jnp.where(critical, 0.0, 1.0).astype(R.dtype)
+    R = jnp.where(critical, 1.0, R)
+    bg = D[0] * N[0] + D[1] * N[1] + D[2] * N[2]
+    den = jnp.where(v, nn * R, 1.0)
+    # Each shared adjoint scalar ends in a division: written once (see the module notes).
+    b_dn = jnp.where(v, bg * (m * mu2 * dn - mu * R), 0.0) / den
+    b_nn = jnp.where(v, bg * (m * 0.5 * (1.0 - mu2) - g * R), 0.0) / den
+    b_mu = jnp.where(v, bg * (-m * mu * (nn - dn * dn) - dn * R)
+                     + (D[0] * d[0] + D[1] * d[1] + D[2] * d[2]) * den, 0.0) / den
+    bN = tuple(g * Di + b_dn * di + 2.0 * b_nn * Ni for Di, di, Ni in zip(D, d, N, strict=True))
+    return bN, b_dn, b_mu
+
+
 def _backward(refracts, params, p, d, v, t, g, cts):
     """Cotangents of (params, p, d, valid, opl) from those of the outputs."""
     c, k, sd, zv, n1, n2, _ = params
@@ -106,24 +152,7 @@ def _backward(refracts, params, p, d, v, t, g, cts):
     mu = None
     if refracts:
         mu = n1 / n2
-        mu2 = mu * mu
-        nn = N[0] * N[0] + N[1] * N[1] + N[2] * N[2]
-        R = g * nn + mu * dn
-        # At the critical angle (R = 0, rebuilt to within rounding of mu·dn) the root's
-        # slope, carried by the 1/R terms, is taken as zero, as in step.refraction_gain:
-        # m drops those terms and R is replaced by 1.
-        critical = jnp.abs(R) <= 4 * jnp.finfo(R.dtype).eps * jnp.abs(mu * dn)
-        m = jnp.where(critical, 0.0, 1.0).astype(R.dtype)
-        R = jnp.where(critical, 1.0, R)
-        bg = D[0] * N[0] + D[1] * N[1] + D[2] * N[2]
-        den = jnp.where(v, nn * R, 1.0)
-        # Each shared adjoint scalar ends in a division: written once (see the module notes).
-        b_dn = jnp.where(v, bg * (m * mu2 * dn - mu * R), 0.0) / den
-        b_nn = jnp.where(v, bg * (m * 0.5 * (1.0 - mu2) - g * R), 0.0) / den
-        b_mu = jnp.where(v, bg * (-m * mu * (nn - dn * dn) - dn * R)
-                         + (D[0] * d[0] + D[1] * d[1] + D[2] * d[2]) * den, 0.0) / den
-        bN = tuple(g * Di + b_dn * di + 2.0 * b_nn * Ni for Di, di, Ni in zip(D, d, N,
-                                                                               strict=True))
+        bN, b_dn, b_mu = _snell_adjoint(d, N, dn, g, mu, v, D)
         bx = (P[0] - c * bN[0], P[1] - c * bN[1], P[2] - ck * bN[2])
     else:
         bx = P
@@ -181,10 +210,127 @@ def conic_step(surface, z_vertex, st: RayState, n_before, n_after, *, first, ref
                gap=None) -> RayState:
     """``surface_step`` on a ``supported`` surface (same arguments, same values), with the
     hand-written reverse rule ``reverse_step`` (no forward mode)."""
-    backward = jnp.zeros((), bool)
-    if gap is not None and not first:  # as in surface_step (never a mirror here)
-        backward = (gap < 0) | ((gap == 0) & jnp.all(n_before == n_after))
     params = (surface.c, surface.k, surface.semi_diameter, z_vertex, n_before, n_after,
-              backward)
+              _backward_flag(gap, first, n_before, n_after))
     p, d, v, opl = reverse_step(first, refracts, params, st.p, st.d, st.valid, st.opl)
     return RayState(p, d, v, opl)
+
+
+def _advance_sag(first, refracts, iters, params, p, d, valid, opl):
+    """((new p, new d, new valid, new opl), t, g): ``surface_step``'s operations, in order,
+    on a surface with polynomial terms (Newton intersection, normal from ``sag_and_grad``)."""
+    surface, zv, n1, n2, bk = params
+    o = (p[0], p[1], p[2] - zv)
+    t, ok = unmark(intersect(surface, o, d, iters, first=first, backward=None if first else bk))
+    if not first:
+        ok = ok & ((t >= -1e3 * jnp.finfo(t.dtype).eps * (1 + jnp.abs(o[2]))) | bk)
+    x, y, z = (oi + t * di for oi, di in zip(o, d, strict=True))
+    rim = surface.semi_diameter**2 * (1 + 64 * jnp.finfo(x.dtype).eps)
+    ok = ok & (x * x + y * y <= rim)
+    g = jnp.zeros((), t.dtype)
+    d_new = d
+    if refracts:
+        normal = surface_normal(surface, x, y, z)
+        mu = n1 / n2
+        g, no_tir = unmark(refraction_gain(d, normal, mu))
+        d_new = tuple(jnp.where(no_tir, mu * di + g * ni, di)
+                      for di, ni in zip(d, normal, strict=True))
+        ok = ok & no_tir
+    return _moved(p, d, valid, opl, ok, (x, y, z), d_new, zv, n1, t), t, g
+
+
+def _shape(x, y, surface):
+    """(sag, s_x, s_y) at (x, y): differentiated in the backward for the normal's
+    derivatives (the sag's Hessian) and the root's derivative in the coefficients."""
+    z, gx, gy, _ = surface.sag_and_grad(x, y)
+    return z, gx, gy
+
+
+def _backward_sag(refracts, params, p, d, v, t, g, cts):
+    """Cotangents of (params, p, d, valid, opl): the root of F = z − sag(x, y; θ) on the ray
+    has ∇F = N = (−s_x, −s_y, 1), so dt = −(N·(do + t dd) − sag_θ·dθ)/(d·N)."""
+    surface, zv, n1, n2, _ = params
+    P, D, _, L = cts
+    x, y, _ = (oi + t * di for oi, di in zip((p[0], p[1], p[2] - zv), d, strict=True))
+    (_, gx, gy), pull = jax.vjp(_shape, x, y, surface)
+    N = (-gx, -gy, jnp.ones_like(gx))
+    dn = d[0] * N[0] + d[1] * N[1] + d[2] * N[2]
+    eps = jnp.finfo(dn.dtype).eps
+    good = v & (jnp.abs(dn) > eps * (jnp.abs(N[0]) + jnp.abs(N[1]) + jnp.abs(N[2])))
+    zero = jnp.zeros_like(gx)
+    mu = None
+    if refracts:
+        mu = n1 / n2
+        bN, b_dn, b_mu = _snell_adjoint(d, N, dn, g, mu, v, D)
+        # bN = g·D on rays lost before this surface: masked, or it would reach θ.
+        bN = tuple(jnp.where(v, b, 0.0) for b in bN[:2])
+        bx, by, _ = pull((zero, -bN[0], -bN[1]))  # through the normal's x, y dependence
+        bX = (P[0] + bx, P[1] + by, P[2])
+    else:
+        bN, bX = (zero, zero), P
+    b_t = n1 * L + bX[0] * d[0] + bX[1] * d[1] + bX[2] * d[2]
+    T = jnp.where(good, b_t, 0.0) / jnp.where(good, dn, 1.0)
+    bo = tuple(bxi - T * Ni for bxi, Ni in zip(bX, N, strict=True))
+    if refracts:
+        bd = tuple(mu * Di + b_dn * Ni + t * boi for Di, Ni, boi in zip(D, N, bo, strict=True))
+    else:
+        bd = tuple(Di + t * boi for Di, boi in zip(D, bo, strict=True))
+    out_p = tuple(jnp.where(v, a, b) for a, b in zip(bo, P, strict=True))
+    out_d = tuple(jnp.where(v, a, b) for a, b in zip(bd, D, strict=True))
+    _, _, b_surface = pull((T, -bN[0], -bN[1]))  # the root's and the normal's θ terms
+    s_zv = _sum_like(P[2] - out_p[2], zv)
+    tl = jnp.where(v, t * L, 0.0)
+    if refracts:
+        g_n1 = _sum_like(b_mu / n2 + tl, n1)
+        g_n2 = _sum_like(-b_mu * (n1 / (n2 * n2)), n2)
+    else:
+        g_n1, g_n2 = _sum_like(tl, n1), jnp.zeros_like(n2)
+    return (b_surface, s_zv, g_n1, g_n2, None), out_p, out_d, None, L
+
+
+@functools.partial(jax.custom_vjp, nondiff_argnums=(0, 1, 2))
+def reverse_sag_step(first, refracts, iters, params, p, d, valid, opl):
+    """``reverse_step`` for a surface with polynomial terms; ``params`` = (surface,
+    z_vertex, n_before, n_after, backward), ``iters`` Newton iterations."""
+    return _advance_sag(first, refracts, iters, params, p, d, valid, opl)[0]
+
+
+def _sag_fwd(first, refracts, iters, params, p, d, valid, opl):
+    out, t, g = _advance_sag(first, refracts, iters, params, p, d, valid, opl)
+    return out, (params, p, d, out[2], t, g)
+
+
+def _sag_bwd(first, refracts, iters, res, cts):
+    params, p, d, v, t, g = res
+    return _backward_sag(refracts, params, p, d, v, t, g, cts)
+
+
+reverse_sag_step.defvjp(_sag_fwd, _sag_bwd)
+
+
+def _backward_flag(gap, first, n_before, n_after):
+    """Where the ray may go back along its line (as in ``surface_step``; never a mirror)."""
+    if gap is None or first:
+        return jnp.zeros((), bool)
+    return (gap < 0) | ((gap == 0) & jnp.all(n_before == n_after))
+
+
+def sag_step(surface, z_vertex, st: RayState, n_before, n_after, *, first, refracts,
+             newton_iters, gap=None) -> RayState:
+    """``surface_step`` on a ``supported`` surface with polynomial terms (same arguments,
+    same values), with the hand-written reverse rule ``reverse_sag_step``."""
+    params = (surface, z_vertex, n_before, n_after,
+              _backward_flag(gap, first, n_before, n_after))
+    p, d, v, opl = reverse_sag_step(first, refracts, newton_iters, params, st.p, st.d,
+                                    st.valid, st.opl)
+    return RayState(p, d, v, opl)
+
+
+def rule_step(surface, z_vertex, st: RayState, n_before, n_after, *, first, refracts,
+              newton_iters, gap=None) -> RayState:
+    """``conic_step`` or ``sag_step``, whichever takes this ``supported`` surface."""
+    if type(surface) is Standard:
+        return conic_step(surface, z_vertex, st, n_before, n_after, first=first,
+                          refracts=refracts, gap=gap)
+    return sag_step(surface, z_vertex, st, n_before, n_after, first=first, refracts=refracts,
+                    newton_iters=newton_iters, gap=gap)
