@@ -1,7 +1,11 @@
-"""Real-ray analysis: spots, RMS, distortion, clear apertures, geometry checks, tolerancing,
-the report."""
+"""Real-ray analysis: spots, RMS, distortion, ray fans, field curvature, clear apertures,
+geometry checks, tolerancing, the report."""
 
 from . import tolerance as tolerance
+from .aberrations import FieldCurvature as FieldCurvature
+from .aberrations import RayFan as RayFan
+from .aberrations import field_curvature as field_curvature
+from .aberrations import ray_fan as ray_fan
 from .spots import Distortion as Distortion
 from .spots import GeometryCheck as GeometryCheck
 from .spots import RmsSpot as RmsSpot

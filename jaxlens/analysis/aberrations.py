@@ -1,0 +1,194 @@
+"""Aberration curves: transverse ray fans and field curvature (the astigmatic focal lines).
+
+Conventions (those of Zemax and optiland):
+    Fields are angles θy in degrees (a field along +y), so for a rotationally symmetric
+    lens the tangential plane is the y–z plane and the sagittal plane the x–z plane.
+    Pupil coordinates Px, Py are normalised to the paraxial entrance pupil (−1 … 1).
+    Lengths are mm, wavelengths µm.
+
+    Ray fan: the tangential fan traces the pupil points (0, Py) and gives
+    e_y = y − y_chief on the image surface; the sagittal fan traces (Px, 0) and gives
+    e_x = x − x_chief. The reference is the chief ray (pupil centre) of the primary
+    wavelength for every wavelength, so lateral colour shows as an offset of the others.
+
+    Field curvature: for each field and wavelength, where the rays next to the chief ray
+    cross it, in the y–z plane (tangential focus) and in the x–z plane (sagittal focus),
+    given as the z distance from the chief ray's intercept with the image surface (negative:
+    before it, toward the lens). The neighbours are exact differential rays: the derivative
+    of the image-space ray with respect to Py (Px) is taken by forward-mode differentiation
+    of the trace (``jax.jvp``), which is the limit of optiland's finite parabasal pair. With
+    P the chief ray's intercept, D its direction and dP, dD their derivatives, the neighbour
+    meets the chief ray at P + s·D with s = −(dP × D)/(dD × D) (the 2-D cross product in the
+    plane), and the focus is s·D_z from the image surface. Astigmatism is tangential −
+    sagittal. A focus at infinity (image space afocal for that fan) is ±inf; a field whose
+    chief ray does not reach the image is NaN.
+"""
+
+from __future__ import annotations
+
+import equinox as eqx
+import jax
+import jax.numpy as jnp
+from jaxtyping import Array, Bool, Float
+
+from ..imaging.sampling import field_rays
+from ..optics import checks
+from ..optics.lens import Lens
+from ..tracing.forward import DEFAULT_NEWTON_ITERS, trace
+
+# Default number of points across the pupil in a fan, and of fields in a curvature curve.
+FAN_POINTS = 21
+CURVE_FIELDS = 11
+
+
+class RayFan(eqx.Module):
+    """Transverse ray errors (mm) of one field for W wavelengths at n pupil coordinates."""
+
+    field: Float[Array, ""]
+    wavelengths: Float[Array, " W"]
+    pupil: Float[Array, " n"]
+    tangential: Float[Array, "W n"]  # e_y of the rays (0, Py)
+    sagittal: Float[Array, "W n"]  # e_x of the rays (Px, 0)
+    valid_tangential: Bool[Array, "W n"]
+    valid_sagittal: Bool[Array, "W n"]
+
+
+class FieldCurvature(eqx.Module):
+    """Tangential and sagittal foci (mm from the image surface along z) of F fields."""
+
+    fields: Float[Array, " F"]
+    wavelengths: Float[Array, " W"]
+    tangential: Float[Array, "W F"]
+    sagittal: Float[Array, "W F"]
+
+    @property
+    def astigmatism(self) -> Float[Array, "W F"]:
+        """Tangential minus sagittal focus (mm)."""
+        return self.tangential - self.sagittal
+
+
+def _inputs(lens, where: str, fields, wavelengths):
+    """Checked fields (θy, deg, ``[F]``) and wavelengths (µm, ``[W]``) as lens-dtype arrays."""
+    if not isinstance(lens, Lens):
+        raise TypeError(f"{where}: lens must be a jaxlens.Lens, got {type(lens).__name__}")
+    dtype = lens.epd.dtype
+    f = jnp.asarray(fields, dtype)
+    if f.ndim > 1 or f.size == 0:
+        raise ValueError(f"{where}: fields must be θy angles in degrees, one value or [F], "
+                         f"got shape {f.shape} (these curves are for fields along y)")
+    checks.field_angles(f, where, "field")
+    wl = lens.wavelengths if wavelengths is None else jnp.asarray(wavelengths, dtype)
+    if wl.ndim > 1 or wl.size == 0:
+        raise ValueError(f"{where}: wavelengths must be µm, one value or [W], got shape "
+                         f"{wl.shape}")
+    checks.wavelengths(lens, wl, where, "wavelengths")
+    checks.material_indices(lens, wl, where, "wavelengths")
+    return f.reshape(-1), wl.reshape(-1)
+
+
+def _image_rays(lens, field, wavelength, pupil, depth, aim):
+    rays = field_rays(lens, field, pupil, wavelength, depth=depth, aim=aim)
+    return trace(lens, rays, newton_iters=DEFAULT_NEWTON_ITERS, chunk=None)
+
+
+def ray_fan(lens: Lens, field, wavelengths=None, *, n: int = FAN_POINTS, depth=None,
+            aim: str = "paraxial") -> RayFan:
+    """Tangential and sagittal ray fans of one field (see the module notes).
+
+    Args:
+        lens: the lens.
+        field: θy in degrees.
+        wavelengths: µm, one value or ``[W]``; default the lens's wavelengths.
+        n: pupil points per fan, evenly spaced over −1 … 1.
+        depth: object distance (mm) for a finite object; default the lens's object.
+        aim: ``"paraxial"`` (the paraxial entrance pupil) or ``"real"`` (the real stop).
+
+    Returns:
+        A ``RayFan``; errors of rays that do not reach the image (and all errors where the
+        chief ray does not) are NaN, with the validity flags beside them.
+    """
+    f, wl = _inputs(lens, "ray_fan", field, wavelengths)
+    if f.shape != (1,):
+        raise ValueError(f"ray_fan: field must be one θy angle in degrees, got shape "
+                         f"{jnp.shape(field)}")
+    n = checks.number(n, "n", "ray_fan", lo=2, integer=True, unit="pupil points")
+    return _ray_fan(lens, f[0], wl, n=int(n), depth=depth, aim=aim)
+
+
+@eqx.filter_jit
+def _ray_fan(lens, field, wl, *, n, depth, aim) -> RayFan:
+    t = jnp.linspace(-1.0, 1.0, n, dtype=wl.dtype)
+    zero = jnp.zeros_like(t)
+    chief = _image_rays(lens, field, lens.primary_wavelength, jnp.zeros((1, 2), wl.dtype),
+                        depth, aim)
+    ref = jnp.where(chief.valid[0], chief.origin[0, :2], jnp.nan)
+
+    def one(w):
+        tan = _image_rays(lens, field, w, jnp.stack([zero, t], -1), depth, aim)
+        sag = _image_rays(lens, field, w, jnp.stack([t, zero], -1), depth, aim)
+        vt, vs = tan.valid & chief.valid[0], sag.valid & chief.valid[0]
+        return (jnp.where(vt, tan.origin[:, 1] - ref[1], jnp.nan),
+                jnp.where(vs, sag.origin[:, 0] - ref[0], jnp.nan), vt, vs)
+
+    et, es, vt, vs = jax.vmap(one)(wl)
+    return RayFan(field, wl, t, et, es, vt, vs)
+
+
+def default_fields(lens: Lens, count: int = CURVE_FIELDS) -> Array:
+    """``count`` θy angles from 0 to the lens's largest field (deg): for ``[F, 2]`` fields
+    (θx, θy) the largest radial angle, tan²θ = tan²θx + tan²θy."""
+    f = jnp.asarray(lens.fields)
+    t = jnp.tan(jnp.deg2rad(f))
+    tmax = jnp.max(jnp.abs(t)) if f.ndim <= 1 else jnp.max(jnp.sqrt(jnp.sum(t * t, -1)))
+    return jnp.linspace(0.0, jnp.rad2deg(jnp.arctan(tmax)), count)
+
+
+def field_curvature(lens: Lens, fields=None, wavelengths=None, *, depth=None,
+                    aim: str = "paraxial") -> FieldCurvature:
+    """Tangential and sagittal focus positions over the field (see the module notes).
+
+    Args:
+        lens: the lens.
+        fields: θy angles in degrees, ``[F]``; default ``default_fields(lens)`` (0 to the
+            largest field in 11 steps).
+        wavelengths: µm, one value or ``[W]``; default the lens's wavelengths.
+        depth: object distance (mm) for a finite object; default the lens's object.
+        aim: ``"paraxial"`` or ``"real"`` (chief ray through the paraxial entrance pupil's
+            centre or the real stop's).
+
+    Returns:
+        A ``FieldCurvature`` (mm from the image surface, along z; ``astigmatism`` is their
+        difference).
+    """
+    f, wl = _inputs(lens, "field_curvature",
+                    default_fields(lens) if fields is None else fields, wavelengths)
+    return _field_curvature(lens, f, wl, depth=depth, aim=aim)
+
+
+def _cross(a, b, i):
+    """(a × b) in the plane of axis i (0: x–z, 1: y–z) and z."""
+    return a[..., i] * b[..., 2] - a[..., 2] * b[..., i]
+
+
+@eqx.filter_jit
+def _field_curvature(lens, fields, wl, *, depth, aim) -> FieldCurvature:
+    # Two copies of the chief ray; the first is differentiated along Py, the second along Px.
+    centre = jnp.zeros((2, 2), wl.dtype)
+    tangents = jnp.array([[0.0, 1.0], [1.0, 0.0]], wl.dtype)
+
+    def one(field, w):
+        def image_ray(pupil):
+            out = _image_rays(lens, field, w, pupil, depth, aim)
+            return out.origin, out.direction, out.valid
+
+        (p, d, v), (dp, dd, _) = jax.jvp(image_ray, (centre,), (tangents,))
+        foci = []
+        for row, axis in ((0, 1), (1, 0)):  # tangential: y–z plane; sagittal: x–z plane
+            num = -_cross(dp[row], d[row], axis)
+            den = _cross(dd[row], d[row], axis)
+            s = jnp.where(den != 0, num / jnp.where(den != 0, den, 1.0), jnp.inf * jnp.sign(num))
+            foci.append(jnp.where(v[row], s * d[row, 2], jnp.nan))
+        return foci[0], foci[1]
+
+    tan, sag = jax.vmap(lambda w: jax.vmap(lambda f: one(f, w))(fields))(wl)
+    return FieldCurvature(fields, wl, tan, sag)

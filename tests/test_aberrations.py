@@ -1,0 +1,138 @@
+"""Ray fans and field curvature (jaxlens.analysis.aberrations): against optiland's own
+analyses on the same geometry (tests/data/aberrations_optiland.json, written by
+tools/aberrations_reference.py), the third-order thin lens, and a perfect lens."""
+
+import json
+import pathlib
+
+import jax.numpy as jnp
+import numpy as np
+import pytest
+
+import jaxlens as jl
+from jaxlens.analysis import aberrations as ab
+from jaxlens.optics.paraxial_surface import ParaxialSurface
+
+ROOT = pathlib.Path(__file__).resolve().parents[1]
+REFERENCE = json.loads((ROOT / "tests/data/aberrations_optiland.json").read_text())
+
+
+def _lens(case):
+    src = case["source"]
+    return jl.zoo.ZOO[src.split("'")[1]]() if src.startswith("jaxlens.zoo") else \
+        jl.load(ROOT / src)
+
+
+@pytest.mark.parametrize("name", sorted(REFERENCE["cases"]))
+def test_field_curves_and_fans_match_optiland(name):
+    """optiland's parabasal pairs (Py, Px = ±1e-5) differ from the exact differential rays by
+    O(δ²) (a few 1e-9 mm where the field has coma); its fans are plain traces."""
+    case = REFERENCE["cases"][name]
+    lens = _lens(case)
+    fc = jl.analysis.field_curvature(lens, case["fields_deg"], case["wavelength_um"])
+    np.testing.assert_allclose(fc.tangential[0], case["tangential_mm"], rtol=0, atol=2e-8)
+    np.testing.assert_allclose(fc.sagittal[0], case["sagittal_mm"], rtol=0, atol=1e-10)
+    np.testing.assert_allclose(fc.astigmatism[0],
+                               np.subtract(case["tangential_mm"], case["sagittal_mm"]),
+                               rtol=0, atol=2e-8)
+    for field, fan in case["fans_mm"].items():
+        rf = jl.analysis.ray_fan(lens, float(field), case["wavelength_um"], n=case["fan_points"])
+        assert bool(jnp.all(rf.valid_tangential)) and bool(jnp.all(rf.valid_sagittal))
+        np.testing.assert_allclose(rf.tangential[0], fan["tangential"], rtol=0, atol=1e-12)
+        np.testing.assert_allclose(rf.sagittal[0], fan["sagittal"], rtol=0, atol=1e-12)
+
+
+def _thin_lens(f=100.0, n=1.5, t=0.02):
+    """An equiconvex lens of focal length f (index n, thickness t), stop on its first
+    surface, image plane at the paraxial focus."""
+    # 1/f = (n − 1)·2c − (n − 1)² t c²/n, solved for c.
+    a, b = (n - 1) ** 2 * t / n, -2 * (n - 1)
+    c = (-b - np.sqrt(b * b - 4 * a / f)) / (2 * a)
+    lens = jl.Lens(surfaces=(jl.Sphere(c), jl.Sphere(-c)), thickness=jnp.array([t, f]),
+                   materials=(jl.ModelGlass(n, 60.0), jl.Air()), stop=0, epd=2.0,
+                   fields=jnp.array([0.0, 3.0]), wavelengths=jnp.array([0.5875618]))
+    bfl = float(jl.paraxial_data(lens).bfl)
+    return jl.Lens(surfaces=lens.surfaces, thickness=jnp.array([t, bfl]),
+                   materials=lens.materials, stop=0, epd=2.0, fields=lens.fields,
+                   wavelengths=lens.wavelengths)
+
+
+def test_thin_lens_with_the_stop_at_it_has_third_order_field_curves():
+    """Third order, stop at a thin lens: sagittal focus −(h²/2f)(1 + 1/n), tangential
+    −(h²/2f)(3 + 1/n) from the paraxial image plane (Petzval −h²/(2nf), the tangential
+    focal line three times as far from it as the sagittal), h = f·tanθ."""
+    f, n = 100.0, 1.5
+    lens = _thin_lens(f, n)
+    # Within 1°: the higher orders (∝ θ²) and the thickness (t/f = 2e-4) stay below 1e-3.
+    theta = np.array([0.25, 0.5, 1.0])
+    fc = jl.analysis.field_curvature(lens, theta)
+    h2 = (f * np.tan(np.radians(theta))) ** 2
+    np.testing.assert_allclose(fc.sagittal[0], -h2 / (2 * f) * (1 + 1 / n), rtol=1e-3)
+    np.testing.assert_allclose(fc.tangential[0], -h2 / (2 * f) * (3 + 1 / n), rtol=1e-3)
+    np.testing.assert_allclose(fc.astigmatism[0], -h2 / f, rtol=1e-3)
+    # On axis both foci are on the paraxial image plane.
+    on_axis = jl.analysis.field_curvature(lens, [0.0])
+    assert abs(float(on_axis.tangential[0, 0])) < 1e-9
+    assert abs(float(on_axis.sagittal[0, 0])) < 1e-9
+
+
+def test_a_perfect_lens_has_flat_field_and_no_transverse_errors():
+    """An ideal thin lens images every direction onto its focal plane without aberration."""
+    f = 20.0
+    lens = jl.Lens(surfaces=(jl.Stop(), ParaxialSurface(focal_length=f)),
+                   thickness=jnp.array([1.0, f]), materials=(jl.Air(), jl.Air()), stop=0,
+                   epd=4.0, fields=jnp.array([0.0, 15.0]),
+                   wavelengths=jnp.array([0.48, 0.5875618, 0.65]), primary=1)
+    fc = jl.analysis.field_curvature(lens)
+    assert fc.tangential.shape == fc.sagittal.shape == (3, ab.CURVE_FIELDS)
+    np.testing.assert_allclose(fc.tangential, 0.0, atol=1e-9)
+    np.testing.assert_allclose(fc.sagittal, 0.0, atol=1e-9)
+    rf = jl.analysis.ray_fan(lens, 15.0, n=9)
+    assert rf.tangential.shape == (3, 9)
+    np.testing.assert_allclose(rf.tangential, 0.0, atol=1e-12)
+    np.testing.assert_allclose(rf.sagittal, 0.0, atol=1e-12)
+
+
+def test_fans_are_referred_to_the_primary_chief_ray_and_show_lateral_colour():
+    """Every wavelength's fan is measured from the primary wavelength's chief ray: at the
+    pupil centre the primary fan is 0 and another wavelength's is its lateral colour."""
+    lens = jl.load(ROOT / "jaxlens/data/lenses/cooke_triplet.json")
+    rf = jl.analysis.ray_fan(lens, 20.0, n=5)
+    p = lens.primary
+    assert float(rf.pupil[2]) == 0.0
+    assert float(rf.tangential[p, 2]) == 0.0 and float(rf.sagittal[p, 2]) == 0.0
+    chief = [float(jl.analysis.chief_ray(lens, 20.0, w).origin[1])
+             for w in np.asarray(lens.wavelengths)]
+    for i in range(len(chief)):
+        assert float(rf.tangential[i, 2]) == pytest.approx(chief[i] - chief[p], abs=1e-12)
+    # The sagittal fan of a symmetric lens is odd in Px.
+    np.testing.assert_allclose(rf.sagittal[:, ::-1], -rf.sagittal, atol=1e-12)
+
+
+def test_lost_rays_are_nan_and_flagged():
+    """Rays clipped by a semi-diameter have no error (NaN), and say so."""
+    lens = jl.load(ROOT / "jaxlens/data/lenses/cooke_triplet.json")
+    s = lens.surfaces[0]
+    clipped = jl.Lens(surfaces=(jl.Sphere(s.c, semi_diameter=3.0),) + lens.surfaces[1:],
+                      thickness=lens.thickness, materials=lens.materials, stop=lens.stop,
+                      epd=lens.epd, fields=lens.fields, wavelengths=lens.wavelengths,
+                      primary=lens.primary)
+    rf = jl.analysis.ray_fan(clipped, 0.0, n=11)
+    lost = ~np.asarray(rf.valid_tangential)
+    assert lost[:, 0].all() and lost[:, -1].all() and not lost[:, 5].any()
+    assert np.isnan(np.asarray(rf.tangential)[lost]).all()
+    assert np.isfinite(np.asarray(rf.tangential)[~lost]).all()
+
+
+@pytest.mark.parametrize("call, match", [
+    (lambda lens: jl.analysis.field_curvature(lens, [[0.0, 5.0]]), "fields along y"),
+    (lambda lens: jl.analysis.field_curvature(lens, [95.0]), r"\(-90, 90\) deg"),
+    (lambda lens: jl.analysis.ray_fan(lens, [0.0, 5.0]), "one θy angle"),
+    (lambda lens: jl.analysis.ray_fan(lens, 5.0, n=1), "n must be"),
+    (lambda lens: jl.analysis.ray_fan(lens, 5.0, 550.0), "550 nm is 0.55 µm"),
+    (lambda lens: jl.analysis.field_curvature(lens, [], 0.55), "fields must be"),
+])
+def test_bad_input_is_refused_with_its_reason(call, match):
+    lens = jl.load(ROOT / "jaxlens/data/lenses/cooke_triplet.json")
+    with pytest.raises(ValueError, match=match):
+        call(lens)
