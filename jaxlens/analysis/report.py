@@ -37,6 +37,7 @@ from ..io.files import load
 from ..io.lensfile import nm_to_um
 from ..optics import checks, paraxial
 from ..optics.coordinates import CoordinateBreak
+from ..optics.diffractive import Binary2
 from ..optics.lens import Lens
 from ..optics.materials import Air, ModelGlass, Tabulated
 from ..optics.paraxial_surface import ParaxialSurface
@@ -257,7 +258,7 @@ def _num(v: float | None, width: int = 12, prec: int = 6, missing: str = "failed
 
 _ZEMAX_TYPE = {Standard: "STANDARD", EvenAsphere: "EVENASPH", OddAsphere: "ODDASPHE",
                Hybrid: "HYBRID", Toroidal: "TOROIDAL", ParaxialSurface: "PARAXIAL",
-               CoordinateBreak: "COORDBRK", TiltedPlane: "TILTSURF"}
+               CoordinateBreak: "COORDBRK", TiltedPlane: "TILTSURF", Binary2: "BINARY_2"}
 
 
 def _nonzero(prefix_values) -> str:
@@ -279,8 +280,12 @@ def _terms(s) -> str:
     if isinstance(s, Toroidal):  # coeffs on y², y⁴, …; the x radius of curvature
         out.append(_nonzero([("Rx", 1.0 / float(s.cx) if float(s.cx) else 0.0)]))
         out.append(_nonzero((f"Y{2 * (i + 1)}", v) for i, v in enumerate(np.asarray(s.coeffs))))
-    if isinstance(s, EvenAsphere | Hybrid):
+    if isinstance(s, EvenAsphere | Hybrid | Binary2):
         out.append(_nonzero((f"A{2 * (i + 1)}", v) for i, v in enumerate(np.asarray(s.coeffs))))
+    if isinstance(s, Binary2):  # order, normalisation radius, phase terms on ρ², ρ⁴, …
+        out.append(f"M={float(s.order):.4g} R={float(s.norm_radius):.6g}")
+        out.append(_nonzero((f"P{2 * (i + 1)}", v)
+                            for i, v in enumerate(np.asarray(s.phase_coeffs))))
     if isinstance(s, Hybrid):
         out.append(_nonzero((f"{ax}{2 * i + 3}", v) for ax, arr in (("X", s.odd_x), ("Y", s.odd_y))
                             for i, v in enumerate(np.asarray(arr))))

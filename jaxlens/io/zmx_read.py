@@ -366,6 +366,8 @@ def _surface_of(s: _Surf, unit: float) -> AbstractSurface:
         return zmx_surfaces.odd_asphere(s, unit, sd)
     if s.type == "TILTSURF":
         return zmx_surfaces.tilted_plane(s, sd)
+    if s.type == "BINARY_2":
+        return zmx_surfaces.binary2(s, unit, sd)
     if s.type == "XPOLYNOM":
         return _hybrid_from_xpoly(s, unit, c, sd)
     if s.type == "TOROIDAL":
@@ -376,7 +378,7 @@ def _surface_of(s: _Surf, unit: float) -> AbstractSurface:
         return _coordinate_break(s, unit)
     raise where.error(
         f"surface type {s.type} is not supported (STANDARD, EVENASPH, ODDASPHE, XASPHERE, "
-        f"XPOLYNOM, TOROIDAL, PARAXIAL, TILTSURF, COORDBRK)"
+        f"XPOLYNOM, TOROIDAL, PARAXIAL, TILTSURF, BINARY_2, COORDBRK)"
     )
 
 

@@ -15,6 +15,14 @@ TOROIDAL: CURV and CONI are the y–z profile's curvature and conic, PARM 1 the 
 rotation R (0: a cylinder), PARM 2…9 the coefficients on y², y⁴, …, y¹⁶. Its extra data
 (XDAT) hold Zernike terms added to the sag; jaxlens refuses any that is not zero.
 
+BINARY_2: an even asphere (CURV, CONI, PARM 1…8 on r², r⁴, …, lens units^(1−2i)) with the
+diffractive phase Φ = M Σ A_i ρ^{2i}, ρ = r/R (``jaxlens.optics.diffractive``): PARM 0 is the
+diffraction order M, XDAT 1 the number of terms N (a whole number >= 0), XDAT 2 the
+normalisation radius R (lens units, > 0 when N > 0), XDAT 3 … XDAT N+2 the A_i (radians, no
+unit conversion). Every XDAT up to N+2 must be present (Zemax writes them all), none beyond
+it may be nonzero, and PARM 0 must be given when the phase is not zero (a missing order
+reads as 0 in Zemax, which would switch the phase off). It cannot be a mirror.
+
 PARAXIAL: PARM 1 is the focal length, PARM 2 the OPD mode (0: conjugates from a real
 parabasal ray, 1: integrated phase, 2: infinite conjugates, 3: conjugates from a paraxial
 ray). The rays do not depend on the mode. jaxlens's optical path is mode 2's; the others
@@ -33,6 +41,7 @@ import jax.numpy as jnp
 import numpy as np
 
 from ..optics import paraxial
+from ..optics.diffractive import Binary2
 from ..optics.lens import Lens, Sensor
 from ..optics.paraxial_surface import ParaxialSurface
 from ..optics.surfaces import OddAsphere, TiltedPlane
@@ -79,6 +88,47 @@ def tilted_plane(s, sd: float) -> TiltedPlane:
             "a TILTSURF surface is a plane; its CURV and CONI must be 0")
     tx, ty = (s.parm.get(i, (0.0, None))[0] for i in (1, 2))
     return TiltedPlane(tan_x=_arr(tx), tan_y=_arr(ty), semi_diameter=_arr(sd))
+
+
+MAX_BINARY2_TERMS = 240
+"""The most phase terms a BINARY_2 holds (Zemax's extra data: 242 values, N and R first)."""
+
+
+def binary2(s, unit: float, sd: float) -> Binary2:
+    """A ``Binary2`` from a BINARY_2 surface block (the reader's surface record)."""
+    where = s.type_line or s.line
+    _parms(s, range(0, 9), "BINARY_2")
+    if s.glas is not None and s.glas.tokens[1].upper() == "MIRROR":
+        raise s.glas.error("a BINARY_2 (diffractive) surface cannot be a mirror in jaxlens")
+    for i, (v, ln) in sorted(s.xdat.items()):
+        if i < 1 and v != 0:
+            raise ln.error("BINARY_2 extra data start at XDAT 1 (the number of terms)")
+    n_val, n_line = s.xdat.get(1, (0.0, where))
+    if n_val != int(n_val) or not 0 <= n_val <= MAX_BINARY2_TERMS:
+        raise n_line.error(f"XDAT 1 (the number of phase terms) must be a whole number in "
+                           f"0..{MAX_BINARY2_TERMS}, got {n_val:g}")
+    n = int(n_val)
+    missing = [j for j in range(2, n + 3) if j not in s.xdat]
+    if n and missing:
+        raise n_line.error(f"XDAT 1 gives {n} phase terms, so XDAT 2 … XDAT {n + 2} are needed, "
+                           f"but XDAT {missing[0]} is missing")
+    for i, (v, ln) in sorted(s.xdat.items()):
+        if i > n + 2 and v != 0:
+            raise ln.error(f"coefficient beyond the {n} phase terms of XDAT 1")
+    norm, norm_line = s.xdat.get(2, (1.0, where))
+    if n and not norm > 0:
+        raise norm_line.error("the normalisation radius (XDAT 2) must be > 0")
+    a_phase = [s.xdat[j + 2][0] for j in range(1, n + 1)]
+    if 0 not in s.parm and any(v != 0 for v in a_phase):
+        raise where.error("this BINARY_2 surface has phase terms but no diffraction order "
+                          "(PARM 0), which Zemax reads as 0 (no diffraction); add PARM 0 "
+                          "(1 for the first order)")
+    order = s.parm.get(0, (1.0, None))[0]
+    m = max([i for i in s.parm if 1 <= i <= 8], default=0)
+    a = [s.parm.get(i, (0.0, None))[0] * unit ** (1 - 2 * i) for i in range(1, m + 1)]
+    return Binary2(c=_arr(s.curv / unit), k=_arr(s.coni), coeffs=_arr(np.array(a, np.float64)),
+                   order=_arr(order), norm_radius=_arr(norm * unit if norm > 0 else 1.0),
+                   phase_coeffs=_arr(np.array(a_phase, np.float64)), semi_diameter=_arr(sd))
 
 
 def toroidal(s, unit: float, sd: float) -> Toroidal:
@@ -172,8 +222,8 @@ def curvature_of_rotation(token: str, unit: float) -> float:
 
 
 def surface_lines(s, z) -> list[str] | None:
-    """The TYPE/CURV/CONI/PARM lines of a ``Toroidal`` or ``ParaxialSurface`` (None for other
-    kinds); ``z`` formats a number exactly."""
+    """The TYPE/CURV/CONI/PARM (and XDAT) lines of a ``Toroidal``, ``ParaxialSurface`` or
+    ``Binary2`` (None for other kinds); ``z`` formats a number exactly."""
     if isinstance(s, Toroidal):
         a = [float(v) for v in np.asarray(s.coeffs)]
         if len(a) > 8:
@@ -184,7 +234,23 @@ def surface_lines(s, z) -> list[str] | None:
         return out + [f"PARM {i + 1} {z(v)}" for i, v in enumerate(a, start=1)]
     if isinstance(s, ParaxialSurface):
         return ["TYPE PARAXIAL", 'CURV 0 0 0 0 0 ""', f"PARM 1 {z(s.focal_length)}", "PARM 2 2"]
+    if isinstance(s, Binary2):
+        return _binary2_lines(s, z)
     return None
+
+
+def _binary2_lines(s: Binary2, z) -> list[str]:
+    a = [float(v) for v in np.asarray(s.coeffs)]
+    ph = [float(v) for v in np.asarray(s.phase_coeffs)]
+    if len(a) > 8 or len(ph) > MAX_BINARY2_TERMS:
+        raise ValueError(f"save_zmx: a Binary2 surface has {len(a)} asphere and {len(ph)} phase "
+                         f"coefficients; Zemax's BINARY_2 holds 8 (r² … r¹⁶) and "
+                         f"{MAX_BINARY2_TERMS}")
+    out = ["TYPE BINARY_2", f'CURV {z(s.c)} 0 0 0 0 ""', f"CONI {z(s.k)}",
+           f"PARM 0 {z(s.order)}"]
+    out += [f"PARM {i} {z(v)}" for i, v in enumerate(a, start=1)]
+    out += [f'XDAT 1 {len(ph)} 0 0 1 0 0 ""', f'XDAT 2 {z(s.norm_radius)} 0 0 1 0 0 ""']
+    return out + [f'XDAT {i + 2} {z(v)} 0 0 1 0 0 ""' for i, v in enumerate(ph, start=1)]
 
 
 def sensor(img, unit: float) -> Sensor | None:

@@ -7,10 +7,12 @@ curvature c = 1/R, a surface carries the medium after it (see ``lens``).
 
 from . import catalog as catalog
 from . import coordinates as coordinates
+from . import diffractive as diffractive
 from . import materials as materials
 from . import paraxial as paraxial
 from . import surfaces as surfaces
 from .coordinates import CoordinateBreak as CoordinateBreak
+from .diffractive import Binary2 as Binary2
 from .lens import Lens as Lens
 from .lens import Sensor as Sensor
 from .rays import Rays as Rays

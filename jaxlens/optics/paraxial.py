@@ -24,7 +24,9 @@ Conventions:
     is a ``TiltedPlane`` (Zemax TILTSURF): c = 0, no paraxial power, and its tilt, which
     deviates rays as a prism face does, is seen by real rays only.
 
-    A ``ParaxialSurface`` (ideal thin lens) has power 1/f whatever its media. A lens with a
+    A ``ParaxialSurface`` (ideal thin lens) has power 1/f whatever its media. A ``Binary2``
+    (diffractive) surface adds its phase's power −M λ A_1/(π R²) to its base's, whatever its
+    media and proportional to the wavelength (``jaxlens.optics.diffractive``). A lens with a
     ``Toroidal`` surface has no single paraxial trace: everything here is its y–z section
     (as in Zemax, whose paraxial data are y–z), and ``x_section(lens)`` is the lens as
     its x–z section sees it, so ``paraxial_data(x_section(lens))`` is the x–z data.
@@ -38,6 +40,7 @@ import numpy as np
 from jaxtyping import Array, Float
 
 from . import checks
+from .diffractive import Binary2
 from .lens import Lens
 from .paraxial_surface import ParaxialSurface
 from .surfaces import Standard
@@ -52,10 +55,16 @@ def _refract(y, nu, power):
     return y, nu - y * power
 
 
-def surface_power(surface, n1, n2):
-    """Paraxial power (1/mm) of a surface between indices n1 and n2 (y–z section)."""
+def surface_power(surface, n1, n2, wavelength=None):
+    """Paraxial power (1/mm) of a surface between indices n1 and n2 (y–z section); a
+    ``Binary2`` adds its phase's power at ``wavelength`` (µm), which it then needs."""
     if isinstance(surface, ParaxialSurface):
         return surface.power
+    if isinstance(surface, Binary2):
+        if wavelength is None:
+            raise ValueError("surface_power: a Binary2 (diffractive) surface's power depends "
+                             "on the wavelength; pass it (µm)")
+        return surface.paraxial_curvature * (n2 - n1) + surface.paraxial_power(wavelength)
     return surface.paraxial_curvature * (n2 - n1)
 
 
@@ -109,7 +118,7 @@ def system_matrix(lens: Lens, wavelength=None, start: int = 0, end: int | None =
         if i > start:
             t = lens.thickness[i - 1] / n[i]
             a, b = a + t * c, b + t * d
-        p = surface_power(lens.surfaces[i], n[i], n[i + 1])
+        p = surface_power(lens.surfaces[i], n[i], n[i + 1], wl)
         c, d = c - p * a, d - p * b
     return a, b, c, d
 
@@ -176,15 +185,15 @@ def marginal_ray(lens: Lens, wavelength=None):
     else:
         u = h / (lens.object_distance + zep)
         y, nu = lens.object_distance * u, n[0] * u
-    return _trace_ray(lens, y, nu, n)
+    return _trace_ray(lens, y, nu, n, wl)
 
 
-def _trace_ray(lens: Lens, y, nu, n):
+def _trace_ray(lens: Lens, y, nu, n, wl):
     ys, nus = [], []
     for i, s in enumerate(lens.surfaces):
         if i > 0:
             y, nu = _transfer(y, nu, lens.thickness[i - 1], n[i])
-        y, nu = _refract(y, nu, surface_power(s, n[i], n[i + 1]))
+        y, nu = _refract(y, nu, surface_power(s, n[i], n[i + 1], wl))
         ys.append(y)
         nus.append(nu)
     return jnp.stack(ys), jnp.stack(nus)
@@ -205,7 +214,7 @@ def paraxial_chief_ray(lens: Lens, field_deg, wavelength=None):
     n = signed_indices(lens, wl)
     zep = entrance_pupil_z(lens, wl)
     u = jnp.tan(jnp.deg2rad(jnp.asarray(field_deg)))
-    return _trace_ray(lens, -zep * u, n[0] * u, n)
+    return _trace_ray(lens, -zep * u, n[0] * u, n, wl)
 
 
 def efl(lens: Lens, wavelength=None) -> Array:

@@ -24,6 +24,7 @@ from __future__ import annotations
 import jax.numpy as jnp
 
 from ..optics.coordinates import CoordinateBreak
+from ..optics.diffractive import Binary2
 from ..optics.lens import Lens
 from ..optics.paraxial_surface import ParaxialSurface
 from ..optics.rays import Rays
@@ -52,12 +53,14 @@ def mirror_surface(surface: AbstractSurface) -> AbstractSurface:
 
     Args:
         surface: a ``Standard``, ``EvenAsphere``, ``OddAsphere``, ``Hybrid``, ``Toroidal``,
-            ``TiltedPlane`` or ``ParaxialSurface``.
+            ``TiltedPlane``, ``ParaxialSurface`` or ``Binary2``.
 
     Returns:
         A surface of the same kind with c, the even, radial and odd coefficients (and a
         toroid's cx, a tilted plane's slopes) negated; a paraxial surface is its own mirror
-        image (its optical path is then that of infinite conjugates on the image side).
+        image (its optical path is then that of infinite conjugates on the image side); a
+        ``Binary2`` keeps its phase (a retraced ray gets the same tangential kick, so it
+        retraces the forward ray and its optical path gains the same (λ/2π)Φ).
 
     Raises:
         ValueError: for a surface kind that this module does not know how to mirror.
@@ -87,6 +90,12 @@ def mirror_surface(surface: AbstractSurface) -> AbstractSurface:
     if isinstance(surface, TiltedPlane):
         return TiltedPlane(tan_x=-surface.tan_x, tan_y=-surface.tan_y,
                            semi_diameter=surface.semi_diameter)
+    if isinstance(surface, Binary2):
+        # Same phase: n′d′_t = n·d_t + K_t negated is the retraced ray's rule with the same K
+        # (x, y unchanged by the mirror), so the order stays.
+        return Binary2(c=-surface.c, k=surface.k, coeffs=-surface.coeffs, order=surface.order,
+                       norm_radius=surface.norm_radius, phase_coeffs=surface.phase_coeffs,
+                       semi_diameter=surface.semi_diameter)
     if isinstance(surface, ParaxialSurface):
         # n′u′ = nu − x/f read backward (slopes negated, media swapped) is the same law.
         return surface

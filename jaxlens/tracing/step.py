@@ -53,6 +53,7 @@ import jax
 import jax.numpy as jnp
 
 from ..optics.apertures import passes_all
+from ..optics.diffractive import Binary2
 from ..optics.paraxial_surface import ParaxialSurface
 from ..optics.rays import Rays
 from ..optics.surfaces import AbstractSurface
@@ -301,6 +302,60 @@ def refract(d, normal, mu):
     return out, ok
 
 
+def refract_diffract(d, normal, mu, kick):
+    """The local grating equation: refraction with a tangential kick (``Binary2``).
+
+    The outgoing direction is a + g·normal with a = mu·d + kick, the gain g chosen so that it
+    has unit length and stays on the side of the surface that d travels to. Only the part of
+    ``kick`` tangent to the surface matters: a normal part is absorbed by g. With kick = 0
+    this is ``refract`` (same roots, evaluated without assuming |a| = 1).
+
+    Args:
+        d: unit incident directions, an (x, y, z) tuple of arrays.
+        normal: surface normals of any length and either orientation.
+        mu: n_before / n_after.
+        kick: (λ/2π)∇Φ / n_after, an (x, y, z) tuple (dimensionless).
+
+    Returns:
+        (outgoing unit directions, ok) with ok False where no real direction exists (an
+        evanescent order, or total internal reflection); those rays keep their direction.
+    """
+    a = tuple(mu * di + ki for di, ki in zip(d, kick, strict=True))
+    nn = normal[0] * normal[0] + normal[1] * normal[1] + normal[2] * normal[2]
+    dn = d[0] * normal[0] + d[1] * normal[1] + d[2] * normal[2]
+    an = a[0] * normal[0] + a[1] * normal[1] + a[2] * normal[2]
+    aa = a[0] * a[0] + a[1] * a[1] + a[2] * a[2]
+    # |a + g·N|² = 1: nn·g² + 2·an·g + aa − 1 = 0, the root on d's side of the surface.
+    disc = an * an - nn * (aa - 1.0)
+    ok = (disc >= 0) & (nn > 0)
+    above = ok & (disc > 0)  # the root's slope is infinite at disc = 0 (as in refraction_gain)
+    root = jnp.where(above, jnp.sqrt(jnp.where(above, disc, 1.0)), 0.0)
+    g = jnp.where(ok, jnp.where(dn < 0, -root, root) - an, 0.0) / jnp.where(ok, nn, 1.0)
+    out = tuple(jnp.where(ok, ai + g * ni, di) for ai, ni, di in zip(a, normal, d, strict=True))
+    return out, ok
+
+
+def diffract(surface: Binary2, d, p, n_before, n_after, wavelength):
+    """A ``Binary2`` surface's ray rule: ``refract_diffract`` with its phase, and the path.
+
+    Args:
+        surface: the diffractive surface.
+        d: unit directions, an (x, y, z) tuple of arrays.
+        p: the points of incidence (local frame, mm), an (x, y, z) tuple.
+        n_before, n_after: refractive indices n and n′.
+        wavelength: λ in µm (a scalar or one per ray, shaped like the indices).
+
+    Returns:
+        (new unit directions, ok, added optical path (λ/2π)Φ in mm).
+    """
+    x, y, z = p
+    phi, px, py = surface.phase(x, y)
+    scale = wavelength * 1e-3 / (2.0 * jnp.pi)  # µm -> mm, per radian
+    kick = (scale * px / n_after, scale * py / n_after, jnp.zeros_like(px))
+    out, ok = refract_diffract(d, surface_normal(surface, x, y, z), n_before / n_after, kick)
+    return out, ok, scale * phi
+
+
 def paraxial_bend(d, x, y, focal_length, n_before, n_after):
     """The ideal thin lens of ``ParaxialSurface``: bend rays on its plane and add their path.
 
@@ -373,7 +428,8 @@ class RayState(eqx.Module):
 
 
 def surface_step(surface, z_vertex, st: RayState, n_before, n_after, *, first, refracts,
-                 newton_iters, gap=None, reflects=False, obscured=None, apertures=()):
+                 newton_iters, gap=None, reflects=False, obscured=None, apertures=(),
+                 wavelength=None):
     """Move rays to one surface (vertex at global ``z_vertex``) and refract them there.
 
     ``n_before``/``n_after`` are the refractive indices on either side; ``first`` applies the
@@ -387,7 +443,15 @@ def surface_step(surface, z_vertex, st: RayState, n_before, n_after, *, first, r
     (or zero, for a dummy surface) the surface may lie behind the ray's start and the ray
     reaches it by going back along its line; it is measured along the direction of travel
     (after an odd number of mirrors the caller passes minus the Zemax thickness).
+    ``wavelength`` (µm, shaped like the indices) is needed by a diffractive (``Binary2``)
+    surface only, which adds (λ/2π)Φ to ``opl``; other surfaces ignore it.
     """
+    if isinstance(surface, Binary2) and refracts:  # static structure, refused before tracing
+        if reflects:
+            raise ValueError("surface_step: a Binary2 (diffractive) surface cannot be a mirror")
+        if wavelength is None:
+            raise ValueError("surface_step: a Binary2 (diffractive) surface needs the "
+                             "wavelength (µm) of the rays")
     o_local = (st.p[0], st.p[1], st.p[2] - z_vertex)
     backward = None
     if gap is not None and not first:
@@ -414,6 +478,9 @@ def surface_step(surface, z_vertex, st: RayState, n_before, n_after, *, first, r
         d = reflect(d, surface_normal(surface, x, y, z))
     elif refracts and isinstance(surface, ParaxialSurface):  # static: the ideal thin lens
         d, bent, phase = paraxial_bend(d, x, y, surface.focal_length, n_before, n_after)
+        ok = ok & bent
+    elif refracts and isinstance(surface, Binary2):  # static: the diffractive surface
+        d, bent, phase = diffract(surface, d, (x, y, z), n_before, n_after, wavelength)
         ok = ok & bent
     elif refracts:
         d, no_tir = refract(d, surface_normal(surface, x, y, z), n_before / n_after)
