@@ -1,17 +1,20 @@
 """Probe: the trace's gradient with and without the hand-written reverse rule, chunk by chunk.
 
 ``jaxlens.trace(..., reverse_rule=True)`` moves plane, sphere and conic surfaces with
-``jaxlens.tracing.surface_adjoint.reverse_step``, a ``jax.custom_vjp`` whose backward is
-written out by hand (the implicit conic root and the Snell adjoint, from the saved root t and
-refraction gain g). This probe compiles, for each chunk size, the forward trace, its forward +
-gradient with JAX's own derivative, and with the rule, and times them interleaved in one
-process (best of N), on the Cooke triplet with the throughput benchmark's rays and spot loss.
+``jaxlens.tracing.surface_adjoint.reverse_step`` and surfaces with polynomial terms with
+``reverse_sag_step``: ``jax.custom_vjp``s whose backward is written out by hand (the implicit
+root and the Snell adjoint, from the saved root t and refraction gain g). This probe
+compiles, for each chunk size, the forward trace, its forward + gradient with JAX's own
+derivative, and with the rule, and times them interleaved in one process (best of N), on a
+zoo lens (``--lens``, the Cooke triplet by default; ``cellphone6`` has 12 even aspheres,
+``sag_step``'s case) with the throughput benchmark's rays and spot loss.
 It also checks that the rule's values and gradients are JAX's (float64) and counts the fused
 kernels per loop body, the measure that explained the rule's speed (benchmarks/SPEED.md).
 
     python -m benchmarks.vjp_probe --check                       # values, gradients, FD
     python -m benchmarks.vjp_probe --repeats 9 --chunk 65536 16384 --json out.json
     python -m benchmarks.vjp_probe --fusions --chunk 65536
+    python -m benchmarks.vjp_probe --lens cellphone6 --repeats 9
 """
 
 from __future__ import annotations
@@ -57,21 +60,25 @@ def programs(chunk):
 
 
 def _max_rel(ref, other):
-    """max over leaves of max |Δ| / max |ref|."""
+    """max over leaves of max |Δ| / max |ref|; a leaf below 1e-6 of the largest (rounding
+    noise, such as a flat stop's curvature at ~1e-10) is measured against 1e-6 of it."""
+    leaves = [(np.asarray(a, np.float64), np.asarray(b, np.float64))
+              for a, b in zip(jax.tree.leaves(ref), jax.tree.leaves(other), strict=True)]
+    top = max((float(np.max(np.abs(a), initial=0.0)) for a, _ in leaves), default=0.0)
     worst = 0.0
-    for a, b in zip(jax.tree.leaves(ref), jax.tree.leaves(other), strict=True):
-        a, b = np.asarray(a, np.float64), np.asarray(b, np.float64)
-        if np.max(np.abs(a)) > 0:
-            worst = max(worst, float(np.max(np.abs(a - b)) / np.max(np.abs(a))))
+    for a, b in leaves:
+        scale = max(float(np.max(np.abs(a), initial=0.0)), 1e-6 * top)
+        if scale > 0:
+            worst = max(worst, float(np.max(np.abs(a - b), initial=0.0)) / scale)
     return worst
 
 
-def check(n=20_000, chunk=4096, pupil_scale=1.3):
+def check(n=20_000, chunk=4096, pupil_scale=1.3, lens_name="cooke_triplet"):
     """Float64, some rays clipped (pupil overfilled by ``pupil_scale``): the rule's value and
     gradient against JAX's derivative, and both against central differences.
 
     Returns {"grad_rel": ..., "fd": {parameter: (central difference, rule, default)}}."""
-    lens = zoo.cooke_triplet().astype(jnp.float64)
+    lens = zoo.ZOO[lens_name]().astype(jnp.float64)
     rays = throughput.make_rays(lens, n, jnp.float64, pupil_scale=pupil_scale)
     rule = eqx.filter_jit(eqx.filter_value_and_grad(_loss))(lens, rays, chunk, True)
     default = eqx.filter_jit(eqx.filter_value_and_grad(_loss))(lens, rays, chunk, False)
@@ -97,11 +104,11 @@ def check(n=20_000, chunk=4096, pupil_scale=1.3):
     return {"grad_rel": rel, "fd": fd}
 
 
-def timing(n=1_000_000, repeats=7, chunks=(CHUNK,), dtype=jnp.float32):
+def timing(n=1_000_000, repeats=7, chunks=(CHUNK,), dtype=jnp.float32, lens_name="cooke_triplet"):
     """Each chunk's three programs, compiled first, then timed interleaved, best of
     ``repeats``. Returns {program: {ms, cpu_over_wall}} plus, per chunk, the f+g / forward
     ratios and the rule's gradient against the default's (max |Δ|/max|·| per leaf)."""
-    lens = zoo.cooke_triplet()
+    lens = zoo.ZOO[lens_name]()
     rays = throughput.make_rays(lens, n, dtype)
     progs = {}
     for c in chunks:
@@ -119,9 +126,9 @@ def timing(n=1_000_000, repeats=7, chunks=(CHUNK,), dtype=jnp.float32):
             wall = time.perf_counter() - t0
             if wall < best[name]:
                 best[name], cpu[name] = wall, time.process_time() - c0
-    out = {"rays": n, "dtype": jnp.dtype(dtype).name, "repeats": repeats,
+    out = {"lens": lens_name, "rays": n, "dtype": jnp.dtype(dtype).name, "repeats": repeats,
            "load": os.getloadavg()[0], "programs": {}, "chunks": {}}
-    print(f"{n} rays, {out['dtype']}, best of {repeats}, load {out['load']:.1f}")
+    print(f"{lens_name}, {n} rays, {out['dtype']}, best of {repeats}, load {out['load']:.1f}")
     for name in progs:
         out["programs"][name] = {"ms": 1e3 * best[name],
                                  "cpu_over_wall": cpu[name] / best[name]}
@@ -178,6 +185,8 @@ def main(argv=None):
     ap.add_argument("--check", action="store_true", help="values, gradients and FD (float64)")
     ap.add_argument("--fusions", action="store_true", help="count fusions per loop body")
     ap.add_argument("--rays", type=whole(1, "rays"), default=1_000_000)
+    ap.add_argument("--lens", choices=tuple(zoo.ZOO), default="cooke_triplet",
+                    help="zoo lens of --check and the timing")
     ap.add_argument("--repeats", type=whole(1, "repeats"), default=7)
     ap.add_argument("--chunk", nargs="+", type=whole(1, "rays per chunk"), default=[CHUNK],
                     help=f"chunk sizes to time (rays; the CPU default is {CHUNK})")
@@ -187,12 +196,12 @@ def main(argv=None):
                     help="also write the timings to this JSON file")
     a = ap.parse_args(argv)
     if a.check:
-        check()
+        check(lens_name=a.lens)
     elif a.fusions:
         for c in a.chunk:
             count_fusions(a.rays, c)
     else:
-        out = timing(a.rays, a.repeats, tuple(a.chunk), jnp.dtype(a.dtype))
+        out = timing(a.rays, a.repeats, tuple(a.chunk), jnp.dtype(a.dtype), a.lens)
         if a.json:
             with open(a.json, "w") as fh:
                 json.dump(dict(out, command="python -m benchmarks.vjp_probe "

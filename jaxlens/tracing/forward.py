@@ -2,8 +2,8 @@
 
 ``trace`` returns the rays on the image surface, ``trace_path`` the rays after every surface
 (stacked on a leading axis). Both move rays with ``step.surface_step``; with
-``reverse_rule=True``, plane, sphere and conic surfaces with ``surface_adjoint.conic_step`` (the
-same values, a hand-written reverse rule, no forward mode).
+``reverse_rule=True``, plane, sphere and conic surfaces and those with polynomial terms with
+``surface_adjoint.rule_step`` (the same values, a hand-written reverse rule, no forward mode).
 Runs of surfaces of the same kind and shape are traced with one ``lax.scan``; with
 ``uniform=True`` every surface after the first is first converted to one common kind
 (``uniform_surfaces``, coefficients zero-padded, the sag unchanged), so the whole lens is one
@@ -127,9 +127,9 @@ def _trace_states(lens: Lens, rays: Rays, newton_iters: int, upto: int | None, *
     Runs of surfaces of the same kind (a stack of even aspheres, say) are traced with
     one ``lax.scan``, so the compiled program, and above all its gradient, does not grow
     with the number of surfaces. Surface 1 is traced on its own (object-space rules).
-    With ``reverse_rule``, plane, sphere and conic surfaces (``surface_adjoint.supported``)
-    are moved by ``surface_adjoint.conic_step``: ``surface_step``'s values with a hand-written
-    reverse rule (faster gradients, no forward mode).
+    With ``reverse_rule``, the surfaces ``surface_adjoint.supported`` takes (plane, sphere,
+    conic and polynomial ones) are moved by ``surface_adjoint.rule_step``: ``surface_step``'s
+    values with a hand-written reverse rule (faster gradients, no forward mode).
     """
     surfaces, zs, idx, lens = _prepare(lens, rays, uniform) if prepared is None else prepared
     shape = jnp.shape(rays.wavelength)  # indices are per wavelength, not per ray
@@ -188,7 +188,8 @@ def _trace_states(lens: Lens, rays: Rays, newton_iters: int, upto: int | None, *
 
         # Checkpointed body: the backward pass recomputes a surface from the carry instead
         # of storing every intermediate (2.5-5x faster gradients, benchmarks/SPEED.md). The
-        # reverse rule keeps only the root and the gain, and is faster not recomputed.
+        # reverse rule keeps only the root and the gain, and is faster not recomputed (for
+        # polynomial surfaces, recomputing would also re-run the Newton iterations).
         if not (reverse_rule and surface_adjoint.supported(surfaces[i])):
             body = jax.checkpoint(body)
 
@@ -350,8 +351,9 @@ def trace(
         upto: stop after ``surfaces[upto]`` (0-based); ``None`` traces to the image.
         uniform: trace every surface after the first as one kind (one ``lax.scan``;
             see the module notes). Results agree to rounding.
-        reverse_rule: (static) differentiate plane, sphere and conic surfaces (not mirrors,
-            nor with obscurations or apertures) with a hand-written reverse rule
+        reverse_rule: (static) differentiate plane, sphere and conic surfaces and those with
+            polynomial terms (``surface_adjoint.SAG_KINDS``; not mirrors, nor with
+            obscurations or apertures) with a hand-written reverse rule
             (``surface_adjoint``): identical values, the same gradients to rounding, a faster
             ``grad``; but ``jax.jvp``/``jax.jacfwd`` through such a trace raise a TypeError
             (a ``custom_vjp`` has no forward mode). Other surfaces take ``surface_step``.

@@ -1,28 +1,35 @@
-"""The conic surface step with a hand-written reverse rule, for faster gradients of the trace.
+"""The surface step with hand-written reverse rules, for faster gradients of the trace.
 
 ``conic_step`` is ``step.surface_step`` for a refracting (or, on the image surface, only
-intersecting) ``Standard`` surface (plane, sphere, conic) that is not a mirror and has no
-obscuration or aperture. Its values are ``surface_step``'s bit for bit (the same operations
-from ``step``, in the same order); its derivative (``reverse_step``, a ``jax.custom_vjp``,
-first prototyped in benchmarks/vjp_probe.py) is written out by hand from the saved root ``t`` and
-refraction gain ``g``:
+intersecting) ``Standard`` surface (plane, sphere, conic), ``sag_step`` for a surface with
+polynomial terms (``SAG_KINDS``: even and odd aspheres, hybrids, toroids, tilted planes); neither
+a mirror nor with an obscuration or aperture. Their values are ``surface_step``'s bit for bit
+(the same operations from ``step``, in the same order, Newton's intersection included); their
+derivatives (``reverse_step``, ``reverse_sag_step``: ``jax.custom_vjp``s, first prototyped in
+benchmarks/vjp_probe.py) are written out by hand from the saved root ``t`` and refraction gain
+``g``:
 
-    t     implicit conic root, F(o + t d) = 0 with F = c(x² + y²) + c(1+k)z² − 2z; ∇F = −2N
-          (N the step's unnormalised normal), so dt = (F_c dc + F_k dk − 2N·(do + t dd))/(2 d·N)
+    t     implicit root. Conic: F(o + t d) = 0 with F = c(x² + y²) + c(1+k)z² − 2z; ∇F = −2N
+          (N the step's unnormalised normal), so dt = (F_c dc + F_k dk − 2N·(do + t dd))/(2 d·N).
+          Polynomial: F = z − sag(x, y; θ), ∇F = N = (−s_x, −s_y, 1), so
+          dt = (sag_θ·dθ − N·(do + t dd))/(d·N) at the returned root (``step.intersect``'s
+          last, differentiable Newton step gives it at the iterate before, a converged step
+          away), without re-running the Newton iterations
     g     refraction gain, g·nn = R − mu·dn with R = ±sqrt(nn − mu²(nn − dn²)); R is rebuilt
           as g·nn + mu·dn (no square root), dR = d(R²)/(2R)
     d'    mu·d + g·N,  p' = o + t d (+ z_vertex),  opl' = opl + n1·t
 
-The shared per-ray adjoint scalars (the cotangents of d·N, N·N and mu, and the root term
-bar_t/(2 d·N)) each end in a division, which XLA:CPU never duplicates, so each is written once
-and the output passes stay short (benchmarks/SPEED.md, "A hand-written reverse rule"). A
-``custom_vjp`` has no forward mode, so ``trace(reverse_rule=True)`` is for callers that only
-take reverse-mode gradients; a hand-written ``custom_jvp`` of the same formulas (which keeps
-forward mode) measured 5-34 % slower than this rule, and not faster than JAX's own derivative
-of ``surface_step`` on a quiet machine. Rays invalid on
-entry or lost here pass their cotangents through unchanged, as in ``surface_step``; a ray
-grazing the surface (|d·N| below eps·|N|₁) gets no root derivative, as in
-``step.conic_root_arrays``.
+A polynomial normal depends on the point and on θ through ``sag_and_grad``: its cotangents
+(the sag's second derivatives) and the root's θ term come from a ``jax.vjp`` of the per-ray
+``sag_and_grad`` inside the backward. The shared per-ray adjoint scalars (the cotangents of d·N,
+N·N and mu, and the root term) each end in a division, which XLA:CPU never duplicates, so each
+is written once and the output passes stay short (benchmarks/SPEED.md, "A hand-written reverse
+rule"). A ``custom_vjp`` has no forward mode, so ``trace(reverse_rule=True)`` is for callers
+that only take reverse-mode gradients; a hand-written ``custom_jvp`` of the same formulas (which
+keeps forward mode) measured 5-34 % slower than this rule, and not faster than JAX's own
+derivative of ``surface_step`` on a quiet machine. Rays invalid on entry or lost here pass
+their cotangents through unchanged, as in ``surface_step``; a ray grazing the surface (|d·N|
+below eps·|N|₁) gets no root derivative, as in ``step.conic_root_arrays``.
 """
 
 from __future__ import annotations
