@@ -142,9 +142,10 @@ def _trace_states(lens: Lens, rays: Rays, newton_iters: int, upto: int | None, *
             return surface_adjoint.rule_step(surface, z, st, n1, n2, first=first,
                                              refracts=refracts, newton_iters=newton_iters,
                                              gap=gap)
+        # The wavelength is read by a diffractive (Binary2) surface only.
         return surface_step(surface, z, st, n1, n2, first=first, refracts=refracts,
                             newton_iters=newton_iters, gap=gap, reflects=reflects,
-                            obscured=obscured, apertures=apertures)
+                            obscured=obscured, apertures=apertures, wavelength=rays.wavelength)
 
     last = len(surfaces) - 1 if upto is None else upto
     breaks = frozenset(i for i, s in enumerate(surfaces) if isinstance(s, CoordinateBreak))
