@@ -1,4 +1,5 @@
-"""Figures: lens layout with rays, spot diagrams, RMS map, MTF curves, design progress.
+"""Figures: lens layout with rays, spot diagrams, ray fans, field curvature and distortion,
+RMS map, MTF curves, design progress.
 
 Every function builds a ``matplotlib.figure.Figure`` with the Agg canvas (no pyplot, no
 display needed) and returns it; ``save(fig, path)`` writes it. Conventions: lengths in mm
@@ -300,6 +301,86 @@ def _mtf_parts(res):
     if isinstance(res, tuple):
         return res[0], res[1], res[2]
     return res.frequencies, res.tangential, res.sagittal
+
+
+def plot_ray_fans(lens, fields: Sequence[float] | None = None, *, wavelengths=None,
+                  n: int = 41, title: str | None = None) -> Figure:
+    """Transverse ray fans (``jaxlens.analysis.aberrations.ray_fan``, µm against the primary
+    chief ray): a row per field θy or (θx, θy) in degrees, tangential e_y against Py on the
+    left, sagittal e_x against Px on the right; default 0, 70 and 100 % of the largest y
+    field, or the lens's own (θx, θy) fields. Lost rays leave gaps."""
+    import jax.numpy as jnp
+
+    from .analysis.aberrations import ray_fan
+
+    lens = lens.astype(jnp.float64)
+    fields = _default_fields(lens, (0.0, 0.7, 1.0)) if fields is None else list(fields)
+    fans = [ray_fan(lens, f, wavelengths, n=n) for f in fields]
+    lim = max([float(np.nanmax(np.abs(np.concatenate([np.asarray(r.tangential).ravel(),
+                                                       np.asarray(r.sagittal).ravel()]))))
+               for r in fans if bool(np.any(r.valid_tangential) or np.any(r.valid_sagittal))]
+              + [1e-6]) * 1e3 * 1.05
+    fig = _figure(6.4, 1.9 * len(fields) + 0.6)
+    fig.set_layout_engine("constrained")
+    for k, (f, r) in enumerate(zip(fields, fans, strict=True)):
+        px = np.asarray(r.pupil)
+        for j, (errs, name, axis) in enumerate(((r.tangential, "tangential", "e_y"),
+                                                (r.sagittal, "sagittal", "e_x"))):
+            ax = fig.add_subplot(len(fields), 2, 2 * k + j + 1)
+            for i, w in enumerate(np.asarray(r.wavelengths)):
+                ax.plot(px, np.asarray(errs[i]) * 1e3, color=_wl_color(float(w), i), lw=1,
+                        label=f"{w:.3f} µm")
+            ax.axhline(0, color="k", lw=0.4)
+            ax.set_ylim(-lim, lim)
+            ax.tick_params(labelsize=7)
+            ax.set_title(f"{_field_label(f)} {name}", fontsize=8)
+            ax.set_ylabel(f"{axis} (µm)", fontsize=7)
+            if k == len(fields) - 1:
+                ax.set_xlabel("Py" if j == 0 else "Px", fontsize=7)
+    fig.axes[0].legend(fontsize=6)
+    fig.suptitle(title or "ray fans (transverse error against the primary chief ray)",
+                 fontsize=9)
+    return fig
+
+
+def plot_field_curvature(lens, *, wavelengths=None, title: str | None = None) -> Figure:
+    """Field curvature (tangential foci dashed, sagittal solid, mm from the image surface,
+    per wavelength) and distortion (% against f·tanθ, primary wavelength) over θy from 0 to
+    the largest field (``jaxlens.analysis.aberrations.field_curvature``, ``spots.distortion``)."""
+    import jax.numpy as jnp
+
+    from .analysis.aberrations import default_fields, field_curvature
+    from .analysis.spots import distortion
+
+    lens = lens.astype(jnp.float64)
+    fields = default_fields(lens, 21)
+    fc = field_curvature(lens, fields, wavelengths)
+    dist = distortion(lens, fields)
+    th = np.asarray(fields)
+    fig = _figure(7, 4)
+    fig.set_layout_engine("constrained")
+    ax = fig.add_subplot(1, 2, 1)
+    for i, w in enumerate(np.asarray(fc.wavelengths)):
+        c = _wl_color(float(w), i)
+        ax.plot(np.asarray(fc.tangential[i]), th, color=c, ls="--", lw=1, label=f"{w:.3f} T")
+        ax.plot(np.asarray(fc.sagittal[i]), th, color=c, lw=1, label=f"{w:.3f} S")
+    ax.axvline(0, color="k", lw=0.4)
+    ax.set_xlabel("focus from the image surface (mm)")
+    ax.set_ylabel("field θy (deg)")
+    ax.set_ylim(0, max(float(th[-1]), 1e-9))
+    ax.grid(alpha=0.3)
+    ax.legend(fontsize=6)
+    ax.set_title("field curvature", fontsize=8)
+    ax = fig.add_subplot(1, 2, 2)
+    # Distortion is 0/0 on axis: drawn from the first field off it.
+    ax.plot(np.asarray(dist.percent_ftan)[1:], th[1:], color="k", lw=1)
+    ax.axvline(0, color="k", lw=0.4)
+    ax.set_xlabel("distortion against f·tanθ (%)")
+    ax.set_ylim(0, max(float(th[-1]), 1e-9))
+    ax.grid(alpha=0.3)
+    ax.set_title("distortion", fontsize=8)
+    fig.suptitle(title or "field curvature and distortion", fontsize=9)
+    return fig
 
 
 def plot_progress(history, *, title: str | None = None) -> Figure:

@@ -107,6 +107,11 @@ def test_fans_are_referred_to_the_primary_chief_ray_and_show_lateral_colour():
         assert float(rf.tangential[i, 2]) == pytest.approx(chief[i] - chief[p], abs=1e-12)
     # The sagittal fan of a symmetric lens is odd in Px.
     np.testing.assert_allclose(rf.sagittal[:, ::-1], -rf.sagittal, atol=1e-12)
+    # A (θx, θy) field along y is the θy field; along x its fans swap roles.
+    same = jl.analysis.ray_fan(lens, [0.0, 20.0], n=5)
+    np.testing.assert_allclose(same.tangential, rf.tangential, atol=1e-13)
+    turned = jl.analysis.ray_fan(lens, [20.0, 0.0], n=5)
+    np.testing.assert_allclose(turned.sagittal, rf.tangential, atol=1e-12)
 
 
 def test_lost_rays_are_nan_and_flagged():
@@ -127,7 +132,8 @@ def test_lost_rays_are_nan_and_flagged():
 @pytest.mark.parametrize("call, match", [
     (lambda lens: jl.analysis.field_curvature(lens, [[0.0, 5.0]]), "fields along y"),
     (lambda lens: jl.analysis.field_curvature(lens, [95.0]), r"\(-90, 90\) deg"),
-    (lambda lens: jl.analysis.ray_fan(lens, [0.0, 5.0]), "one θy angle"),
+    (lambda lens: jl.analysis.ray_fan(lens, [0.0, 5.0, 1.0]), "one field"),
+    (lambda lens: jl.analysis.ray_fan(lens, [95.0, 5.0]), r"\(-90, 90\) deg"),
     (lambda lens: jl.analysis.ray_fan(lens, 5.0, n=1), "n must be"),
     (lambda lens: jl.analysis.ray_fan(lens, 5.0, 550.0), "550 nm is 0.55 µm"),
     (lambda lens: jl.analysis.field_curvature(lens, [], 0.55), "fields must be"),

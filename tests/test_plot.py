@@ -97,3 +97,28 @@ def test_layout_draws_the_image_surface_as_it_is():
     ends = [np.asarray(ln.get_data()[1])[-1] for ln in fig.axes[0].lines[:-1]
             if ln.get_linestyle() == "-" and len(ln.get_data()[1])]
     assert max(abs(e) for e in ends) > 15 and y.max() >= max(abs(e) for e in ends)
+
+
+def test_fans_and_field_curves_draw_the_analysis_data():
+    """``plot_ray_fans`` draws ``ray_fan`` (µm) per field and wavelength; ``plot_field_curvature``
+    draws ``field_curvature`` (T dashed, S solid) against θy, and the distortion."""
+    from jaxlens.analysis import aberrations, spots
+
+    lens = jaxlens.zoo.cooke_triplet().astype(jnp.float64)
+    fig = plot.plot_ray_fans(lens, [0.0, 20.0], n=7)
+    assert len(fig.axes) == 4
+    fan = aberrations.ray_fan(lens, 20.0, n=7)
+    for i, line in enumerate(fig.axes[2].lines[:3]):  # 20° tangential, three wavelengths
+        x, y = line.get_data()
+        np.testing.assert_allclose(x, np.asarray(fan.pupil))
+        np.testing.assert_allclose(y, np.asarray(fan.tangential[i]) * 1e3, atol=1e-9)
+    fig = plot.plot_field_curvature(lens)
+    fc = aberrations.field_curvature(lens, aberrations.default_fields(lens, 21))
+    t_line, s_line = fig.axes[0].lines[0], fig.axes[0].lines[1]
+    assert t_line.get_linestyle() == "--" and s_line.get_linestyle() == "-"
+    np.testing.assert_allclose(t_line.get_data()[0], np.asarray(fc.tangential[0]), atol=1e-9)
+    np.testing.assert_allclose(s_line.get_data()[0], np.asarray(fc.sagittal[0]), atol=1e-9)
+    np.testing.assert_allclose(t_line.get_data()[1], np.asarray(fc.fields))
+    d = spots.distortion(lens, fc.fields)
+    np.testing.assert_allclose(fig.axes[1].lines[0].get_data()[0],
+                               np.asarray(d.percent_ftan)[1:], atol=1e-9)

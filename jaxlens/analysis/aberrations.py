@@ -2,7 +2,9 @@
 
 Conventions (those of Zemax and optiland):
     Fields are angles θy in degrees (a field along +y), so for a rotationally symmetric
-    lens the tangential plane is the y–z plane and the sagittal plane the x–z plane.
+    lens the tangential plane is the y–z plane and the sagittal plane the x–z plane. A ray
+    fan also takes a field (θx, θy); its fans stay along the pupil's y and x axes, as in
+    Zemax.
     Pupil coordinates Px, Py are normalised to the paraxial entrance pupil (−1 … 1).
     Lengths are mm, wavelengths µm.
 
@@ -44,7 +46,7 @@ CURVE_FIELDS = 11
 class RayFan(eqx.Module):
     """Transverse ray errors (mm) of one field for W wavelengths at n pupil coordinates."""
 
-    field: Float[Array, ""]
+    field: Float[Array, ""] | Float[Array, " 2"]  # θy, or (θx, θy), degrees
     wavelengths: Float[Array, " W"]
     pupil: Float[Array, " n"]
     tangential: Float[Array, "W n"]  # e_y of the rays (0, Py)
@@ -97,7 +99,7 @@ def ray_fan(lens: Lens, field, wavelengths=None, *, n: int = FAN_POINTS, depth=N
 
     Args:
         lens: the lens.
-        field: θy in degrees.
+        field: θy, or (θx, θy), in degrees.
         wavelengths: µm, one value or ``[W]``; default the lens's wavelengths.
         n: pupil points per fan, evenly spaced over −1 … 1.
         depth: object distance (mm) for a finite object; default the lens's object.
@@ -107,12 +109,14 @@ def ray_fan(lens: Lens, field, wavelengths=None, *, n: int = FAN_POINTS, depth=N
         A ``RayFan``; errors of rays that do not reach the image (and all errors where the
         chief ray does not) are NaN, with the validity flags beside them.
     """
-    f, wl = _inputs(lens, "ray_fan", field, wavelengths)
-    if f.shape != (1,):
-        raise ValueError(f"ray_fan: field must be one θy angle in degrees, got shape "
-                         f"{jnp.shape(field)}")
+    shape = jnp.shape(field)
+    if shape not in ((), (1,), (2,)):
+        raise ValueError(f"ray_fan: field must be one field, θy or (θx, θy) in degrees, got "
+                         f"shape {shape}")
+    f, wl = _inputs(lens, "ray_fan", jnp.reshape(jnp.asarray(field, float), (-1,)),
+                    wavelengths)
     n = checks.number(n, "n", "ray_fan", lo=2, integer=True, unit="pupil points")
-    return _ray_fan(lens, f[0], wl, n=int(n), depth=depth, aim=aim)
+    return _ray_fan(lens, f if shape == (2,) else f[0], wl, n=int(n), depth=depth, aim=aim)
 
 
 @eqx.filter_jit
