@@ -229,7 +229,8 @@ def test_report_plot_writes_the_figures_and_keeps_existing_ones(cooke, tmp_path,
     code, _, err = _run(capsys, path, "--plot", out)
     assert code == 0, err
     names = sorted(p.name for p in out.iterdir())
-    assert names == ["cooke_triplet_layout.png", "cooke_triplet_mtf.png",
+    assert names == ["cooke_triplet_fans.png", "cooke_triplet_field.png",
+                     "cooke_triplet_layout.png", "cooke_triplet_mtf.png",
                      "cooke_triplet_spots.png"]
     assert all((out / n).read_bytes()[:8] == b"\x89PNG\r\n\x1a\n" for n in names)
     stamp = (out / names[0]).stat().st_mtime_ns

@@ -438,8 +438,9 @@ def register(subparsers) -> None:
     p.add_argument(
         "--plot",
         metavar="DIR",
-        help="also write the layout, spot diagrams and MTF as DIR/<lens>_layout.png, "
-        "_spots.png and _mtf.png (DIR is created; existing files are kept unless --overwrite)",
+        help="also write the layout, spot diagrams, ray fans, field curvature with distortion, "
+        "and MTF as DIR/<lens>_layout.png, _spots.png, _fans.png, _field.png and _mtf.png "
+        "(DIR is created; existing files are kept unless --overwrite)",
     )
     p.add_argument("--overwrite", action="store_true", help="with --plot: replace the figures")
     p.add_argument(
@@ -452,7 +453,7 @@ def register(subparsers) -> None:
     p.set_defaults(func=run)
 
 
-FIGURES = ("layout", "spots", "mtf")
+FIGURES = ("layout", "spots", "fans", "field", "mtf")
 
 
 def figure_paths(lens_path: str, folder: str, overwrite: bool) -> dict[str, str]:
@@ -478,7 +479,8 @@ def figure_paths(lens_path: str, folder: str, overwrite: bool) -> dict[str, str]
 def _write_figures(lens: Lens, paths: dict[str, str]) -> None:
     from .. import plot
 
-    makers = {"layout": plot.plot_layout, "spots": plot.plot_spots, "mtf": plot.plot_mtf}
+    makers = {"layout": plot.plot_layout, "spots": plot.plot_spots, "fans": plot.plot_ray_fans,
+              "field": plot.plot_field_curvature, "mtf": plot.plot_mtf}
     for key, path in paths.items():
         plot.save(makers[key](lens), path)
 
