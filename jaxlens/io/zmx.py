@@ -16,8 +16,12 @@ What is read and written:
       ``OddAsphere`` with more than 8 terms is not written). ``TYPE TILTSURF`` (a
       ``TiltedPlane``, the plane z = tan θx·x + tan θy·y through the vertex: PARM 1 = tan θx,
       PARM 2 = tan θy, dimensionless; CURV, CONI, other PARMs and XDAT 0; the frame of the
-      surfaces after it is unchanged, unlike COORDBRK). The image surface may be STANDARD,
-      EVENASPH, ODDASPHE or TILTSURF (a tilted image plane).
+      surfaces after it is unchanged, unlike COORDBRK). ``TYPE BINARY_2`` (a ``Binary2``,
+      ``jaxlens.optics.diffractive``: CURV, CONI and PARM 1..8 the even asphere, PARM 0 the
+      diffraction order M, XDAT 1 = number of phase terms N, XDAT 2 = normalisation radius R
+      (lens units), XDAT 3.. = A_1 … A_N in radians on (r/R)², (r/R)⁴, …; phase terms without
+      PARM 0, a mirror, and malformed XDAT lines are refused with the line). The image
+      surface may be STANDARD, EVENASPH, ODDASPHE or TILTSURF (a tilted image plane).
     * The hybrid surface (even asphere plus odd terms Σ b_j x^{2j+1} + d_j y^{2j+1}) is
       written as Zemax's extended polynomial, ``TYPE XPOLYNOM``: a conic plus Σ A_i E_i
       with E_i the monomials x^m y^n ordered by degree and, within a degree, by falling
