@@ -167,3 +167,20 @@ def test_folded_mirror_system_field_curves_equal_parabasal_pairs():
             s = cross(p2 - p1, d2) / cross(d1, d2)
             want = [fc.tangential, fc.sagittal][row][0, k]
             assert float(want) == pytest.approx(s * d1[2], abs=1e-6)
+
+
+@pytest.mark.filterwarnings("ignore:.*aims rays at the stop")
+def test_forward_mode_analyses_of_a_folded_lens_use_the_loop_emitters():
+    """Only lenses with surfaces outside the scans get XLA's loop emitters (forward.
+    LOOP_EMITTERS): relative illumination of the folded system finishes (it did not in
+    minutes) and is 1 on axis; a plain lens keeps the default compile."""
+    from jaxlens.imaging import radiometry
+    from jaxlens.tracing import forward
+
+    folded = jl.load(ROOT / "tests/data/zmx/rayoptics_HoO-V2C18Ex66.zmx")
+    plain = jl.load(ROOT / "jaxlens/data/lenses/cooke_triplet.json")
+    assert forward.has_unscanned_surfaces(folded)
+    assert not forward.has_unscanned_surfaces(plain)
+    ri = radiometry.relative_illumination(folded, jnp.array([[0.0, 0.0], [0.0, 1.0]]), pupil=24)
+    assert float(ri.ri[0]) == pytest.approx(1.0, abs=1e-9)
+    assert 0.5 < float(ri.ri[1]) <= 1.0 + 1e-9

@@ -36,7 +36,7 @@ from jaxtyping import Array, Bool, Float
 from ..imaging.sampling import field_rays
 from ..optics import checks
 from ..optics.lens import Lens
-from ..tracing.forward import DEFAULT_NEWTON_ITERS, trace
+from ..tracing.forward import DEFAULT_NEWTON_ITERS, forward_mode_jit, trace
 
 # Default number of points across the pupil in a fan, and of fields in a curvature curve.
 FAN_POINTS = 21
@@ -174,17 +174,8 @@ def _cross(a, b, i):
     return a[..., i] * b[..., 2] - a[..., 2] * b[..., i]
 
 
+@forward_mode_jit
 def _field_curvature(lens, fields, wl, *, depth, aim) -> FieldCurvature:
-    # XLA:CPU's fusion emitters (jaxlib 0.10) run the forward-mode derivative of a long
-    # unscanned trace in time exponential in its length: a folded 19-surface system
-    # (tests/data/zmx/rayoptics_HoO-V2C18Ex66.zmx) took 0.003 / 0.1 / 4.8 / 14 s for 2
-    # rays to its surface 6 / 8 / 10 / 11 and did not finish in 10 minutes; the older loop
-    # emitters run it in 1 ms. The option is read by the CPU compiler only.
-    fn = _curves_cpu if jax.default_backend() == "cpu" else _curves
-    return fn(lens, fields, wl, depth=depth, aim=aim)
-
-
-def _curves_impl(lens, fields, wl, *, depth, aim) -> FieldCurvature:
     # Two copies of the chief ray; the first is differentiated along Py, the second along Px.
     centre = jnp.zeros((2, 2), wl.dtype)
     tangents = jnp.array([[0.0, 1.0], [1.0, 0.0]], wl.dtype)
@@ -206,7 +197,3 @@ def _curves_impl(lens, fields, wl, *, depth, aim) -> FieldCurvature:
     tan, sag = jax.vmap(lambda w: jax.vmap(lambda f: one(f, w))(fields))(wl)
     return FieldCurvature(fields, wl, tan, sag)
 
-
-_curves = eqx.filter_jit(_curves_impl)
-_curves_cpu = eqx.filter_jit(_curves_impl,
-                             compiler_options={"xla_cpu_use_fusion_emitters": False})

@@ -40,7 +40,7 @@ from jaxtyping import Array, Float
 from ..optics import checks, paraxial
 from ..optics.lens import Lens
 from ..optics.rays import Rays
-from ..tracing.forward import DEFAULT_NEWTON_ITERS, trace
+from ..tracing.forward import DEFAULT_NEWTON_ITERS, forward_mode_jit, trace
 from . import sampling
 from .aiming import apertured
 from .grid import pupil_cells
@@ -162,7 +162,7 @@ def _irradiance(lens: Lens, t, depth, wl, n_coarse, n_fine, newton_iters):
     return e, cen
 
 
-@eqx.filter_jit
+@forward_mode_jit  # a folded lens compiles with XLA's loop emitters (forward.LOOP_EMITTERS)
 def relative_illumination_samples(lens, fields, depth, wl, *, n_coarse, n_fine, newton_iters):
     """Relative illumination at ``fields`` (degrees) of an apertured lens, jitted core of
     ``relative_illumination``: (ri, irradiance, footprint centre) per field."""

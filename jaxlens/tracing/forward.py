@@ -109,6 +109,36 @@ def _runs(surfaces, start: int, stop: int, alone=frozenset()) -> list[tuple[int,
     return runs
 
 
+# XLA:CPU's fusion emitters (jaxlib 0.10) run the forward-mode derivative of a trace with many
+# surfaces outside the scans (mirrors, coordinate breaks, apertures) in time exponential in
+# their number: to surface 6 / 8 / 10 / 11 of the folded rayoptics_HoO-V2C18Ex66.zmx, 2 rays
+# took 0.003 / 0.1 / 4.8 / 14 s, to its image over 10 minutes; the older loop emitters take
+# 1 ms. They trace the Cooke triplet 1.6x slower (benchmarks/SPEED.md), so only such lenses
+# get them, and only in forward-mode analyses (``forward_mode_jit``).
+LOOP_EMITTERS = {"xla_cpu_use_fusion_emitters": False}
+
+
+def has_unscanned_surfaces(lens: Lens) -> bool:
+    """Whether some surface besides the first is traced outside the scans (static)."""
+    return bool(lens.mirrors or lens.obscurations or lens.apertures
+                or any(isinstance(s, CoordinateBreak) for s in lens.surfaces))
+
+
+def forward_mode_jit(fn):
+    """``eqx.filter_jit(fn)`` for a function of a lens (its first argument) that takes
+    forward-mode derivatives of the trace: on a CPU, a lens with unscanned surfaces is
+    compiled with ``LOOP_EMITTERS`` (see there); other lenses compile as before."""
+    plain = eqx.filter_jit(fn)
+    loops = eqx.filter_jit(fn, compiler_options=LOOP_EMITTERS)
+
+    def call(lens, *args, **kwargs):
+        slow = has_unscanned_surfaces(lens) and jax.default_backend() == "cpu"
+        return (loops if slow else plain)(lens, *args, **kwargs)
+
+    call.__doc__, call.__name__, call.__wrapped__ = fn.__doc__, fn.__name__, fn
+    return call
+
+
 def _prepare(lens: Lens, rays: Rays, uniform: bool):
     """What every chunk of a trace shares: the surfaces in the rays' dtype (made uniform
     after surface 1 if asked), the vertex positions and the indices at the rays' wavelengths."""
