@@ -54,6 +54,23 @@ def test_report_json_matches_reference(cooke, capsys):
             d["distortion_pct_vs_paraxial_chief_at_image"], abs=1e-9
         )
     assert by_angle[0.0]["chief_ray_height"] == 0.0 and by_angle[0.0]["distortion"] == 0.0
+    # Field curvature at the primary wavelength: analysis.field_curvature's values (checked
+    # against optiland in tests/test_aberrations.py), in the JSON and in the text.
+    import jaxlens
+
+    lens = jaxlens.load(path)
+    fc = jaxlens.analysis.field_curvature(lens, lens.fields, lens.primary_wavelength)
+    assert data["units"]["focus"] == "mm"
+    np.testing.assert_allclose([f["focus_tangential"] for f in data["fields"]],
+                               np.asarray(fc.tangential[0]), rtol=0, atol=1e-12)
+    np.testing.assert_allclose([f["focus_sagittal"] for f in data["fields"]],
+                               np.asarray(fc.sagittal[0]), rtol=0, atol=1e-12)
+    code, text, _ = _run(capsys, path)
+    rows = text.split("FIELD CURVATURE")[1].splitlines()[2:2 + len(data["fields"])]
+    for row, f in zip(rows, data["fields"], strict=True):
+        tan, sag, astig = map(float, row.split()[2:5])
+        assert tan == pytest.approx(f["focus_tangential"], abs=1e-6)
+        assert astig == pytest.approx(f["focus_tangential"] - f["focus_sagittal"], abs=2e-6)
 
 
 def test_report_text_and_options(cooke, capsys):
@@ -153,8 +170,11 @@ def test_report_of_x_y_fields_agrees_with_the_analysis_functions(capsys):
     x9, xm9 = data["fields"][3]["chief_ray_xy"], data["fields"][4]["chief_ray_xy"]
     assert x9[0] > 10 and x9[0] == pytest.approx(-xm9[0], rel=1e-9)
     assert data["max_field"] == pytest.approx(9.0, rel=1e-12)
+    # No field curvature for (θx, θy) fields: their tangential plane is not y–z.
+    assert all(f["focus_tangential"] is None for f in data["fields"])
     code, out, _ = _run(capsys, path)
     assert code == 0 and "Angle x, y" in out and "Chief x, y" in out
+    assert "FIELD CURVATURE" not in out
 
 
 def test_cli_subprocess_smoke(tmp_path):

@@ -14,7 +14,10 @@ Conventions (also written into the JSON output under ``units``):
     with n′ the image-space index, the EFL that Zemax ("in image space") and optiland
     report; they differ only when image space is not air. The chief ray is the
     primary-wavelength ray through the centre of the paraxial entrance pupil. Pupil
-    positions are global z (surface 1's vertex at 0).
+    positions are global z (surface 1's vertex at 0). ``focus_tangential`` and
+    ``focus_sagittal`` (mm) are ``analysis.field_curvature`` at the primary wavelength: where
+    the rays next to the chief ray meet it, along z from the image surface (+ behind it);
+    ``None`` for (θx, θy) fields.
 """
 
 from __future__ import annotations
@@ -44,6 +47,7 @@ from ..optics.paraxial_surface import ParaxialSurface
 from ..optics.surfaces import EvenAsphere, Hybrid, OddAsphere, Standard, TiltedPlane
 from ..optics.toroidal import Toroidal
 from . import spots as analysis
+from .aberrations import field_curvature
 
 UNITS = {
     "length": "mm",
@@ -52,6 +56,7 @@ UNITS = {
     "distortion": "%",
     "rms_spot": "um",
     "rms_spot_mm": "mm",
+    "focus": "mm",
 }
 
 
@@ -181,6 +186,14 @@ def report_data(lens: Lens, *, fields=None, wavelengths=None) -> dict:
                 "valid_fraction": [float(v) for v in frac],
             }
         )
+    # Field curvature (y fields only: the tangential plane of a (θx, θy) field is not y–z).
+    foci = None
+    if angles.ndim == 1:
+        fc = field_curvature(lens, lens.fields, lens.primary_wavelength)
+        foci = (np.asarray(fc.tangential[0]), np.asarray(fc.sagittal[0]))
+    for i, entry in enumerate(out_fields):
+        entry["focus_tangential"] = None if foci is None else _f(foci[0][i])
+        entry["focus_sagittal"] = None if foci is None else _f(foci[1][i])
     imax = int(np.argmax(radial))
     return {
         "name": lens.name,
@@ -398,6 +411,17 @@ def format_report(data: dict, lens: Lens | None = None) -> str:
         ]
         if lost:
             L.append(f"        field {i + 1}: rays clipped or failed: " + ", ".join(lost))
+    if not xy:
+        L.append("")
+        L.append("FIELD CURVATURE (primary wavelength; tangential and sagittal foci in mm from "
+                 "the image surface along z, + behind it)")
+        L.append(f"  {'Field':>5}{'Angle':>9}{'Tangential':>13}{'Sagittal':>13}"
+                 f"{'Astigmatism':>13}")
+        for i, f in enumerate(data["fields"]):
+            t, s = f["focus_tangential"], f["focus_sagittal"]
+            astig = None if t is None or s is None else t - s
+            L.append(f"  {i + 1:>5}{f['angle']:>9.3f}{_num(t, 13, 6)}{_num(s, 13, 6)}"
+                     f"{_num(astig, 13, 6)}")
     return "\n".join(L) + "\n"
 
 
