@@ -127,6 +127,14 @@ def _sum_like(x, like):
     return (jnp.sum(x, axis=axes, keepdims=True) if axes else x).astype(jnp.result_type(like))
 
 
+def _index_cotangents(refracts, b_mu, t, L, v, n1, n2):
+    """Cotangents of n_before and n_after: through mu = n1/n2 (``b_mu``) and the path n1·t."""
+    tl = jnp.where(v, t * L, 0.0)
+    if refracts:
+        return _sum_like(b_mu / n2 + tl, n1), _sum_like(-b_mu * (n1 / (n2 * n2)), n2)
+    return _sum_like(tl, n1), jnp.zeros_like(n2)
+
+
 def _snell_adjoint(d, N, dn, g, mu, v, D):
     """Cotangents (of N, of d·N, of mu) of d' = mu·d + g·N from that of d' (``D``); zero on
     invalid rays."""
@@ -156,7 +164,7 @@ def _backward(refracts, params, p, d, v, t, g, cts):
     P, D, _, L = cts
     (x, y, z), N, dn, good = _geometry(params, p, d, v, t)
     ck = c * (1.0 + k)
-    mu = None
+    mu = b_mu = None
     if refracts:
         mu = n1 / n2
         bN, b_dn, b_mu = _snell_adjoint(d, N, dn, g, mu, v, D)
@@ -183,12 +191,7 @@ def _backward(refracts, params, p, d, v, t, g, cts):
     s_c = _sum_like(jnp.where(v, bc, 0.0), c)
     s_k = _sum_like(jnp.where(v, bk_, 0.0), k)
     s_zv = _sum_like(P[2] - out_p[2], zv)
-    tl = jnp.where(v, t * L, 0.0)
-    if refracts:
-        g_n1 = _sum_like(b_mu / n2 + tl, n1)
-        g_n2 = _sum_like(-b_mu * (n1 / (n2 * n2)), n2)
-    else:
-        g_n1, g_n2 = _sum_like(tl, n1), jnp.zeros_like(n2)
+    g_n1, g_n2 = _index_cotangents(refracts, b_mu, t, L, v, n1, n2)
     return (s_c, s_k, jnp.zeros_like(sd), s_zv, g_n1, g_n2, None), out_p, out_d, None, L
 
 
@@ -265,7 +268,7 @@ def _backward_sag(refracts, params, p, d, v, t, g, cts):
     eps = jnp.finfo(dn.dtype).eps
     good = v & (jnp.abs(dn) > eps * (jnp.abs(N[0]) + jnp.abs(N[1]) + jnp.abs(N[2])))
     zero = jnp.zeros_like(gx)
-    mu = None
+    mu = b_mu = None
     if refracts:
         mu = n1 / n2
         bN, b_dn, b_mu = _snell_adjoint(d, N, dn, g, mu, v, D)
@@ -286,12 +289,7 @@ def _backward_sag(refracts, params, p, d, v, t, g, cts):
     out_d = tuple(jnp.where(v, a, b) for a, b in zip(bd, D, strict=True))
     _, _, b_surface = pull((T, -bN[0], -bN[1]))  # the root's and the normal's θ terms
     s_zv = _sum_like(P[2] - out_p[2], zv)
-    tl = jnp.where(v, t * L, 0.0)
-    if refracts:
-        g_n1 = _sum_like(b_mu / n2 + tl, n1)
-        g_n2 = _sum_like(-b_mu * (n1 / (n2 * n2)), n2)
-    else:
-        g_n1, g_n2 = _sum_like(tl, n1), jnp.zeros_like(n2)
+    g_n1, g_n2 = _index_cotangents(refracts, b_mu, t, L, v, n1, n2)
     return (b_surface, s_zv, g_n1, g_n2, None), out_p, out_d, None, L
 
 
