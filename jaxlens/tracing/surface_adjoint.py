@@ -86,16 +86,22 @@ def _advance(first, refracts, params, p, d, valid, opl):
     x, y, z = (oi + t * di for oi, di in zip(o, d, strict=True))
     rim = sd**2 * (1 + 64 * eps)
     ok = ok & (x * x + y * y <= rim)
+    normal = (-c * x, -c * y, 1.0 - c * (1.0 + k) * z) if refracts else None
+    return _refracted(refracts, p, d, valid, opl, ok, (x, y, z), normal, zv, n1, n2, t)
+
+
+def _refracted(refracts, p, d, valid, opl, ok, point, normal, zv, n1, n2, t):
+    """((new p, new d, new valid, new opl), t, g) after Snell's law at ``point`` (as in
+    ``surface_step``: TIR loses the ray); without ``refracts`` the rays only move (g = 0)."""
     g = jnp.zeros((), t.dtype)
     d_new = d
     if refracts:
-        normal = (-c * x, -c * y, 1.0 - c * (1.0 + k) * z)
         mu = n1 / n2
         g, no_tir = unmark(refraction_gain(d, normal, mu))
         d_new = tuple(jnp.where(no_tir, mu * di + g * ni, di)
                       for di, ni in zip(d, normal, strict=True))
         ok = ok & no_tir
-    return _moved(p, d, valid, opl, ok, (x, y, z), d_new, zv, n1, t), t, g
+    return _moved(p, d, valid, opl, ok, point, d_new, zv, n1, t), t, g
 
 
 def _moved(p, d, valid, opl, ok, point, d_new, zv, n1, t):
@@ -237,16 +243,8 @@ def _advance_sag(first, refracts, iters, params, p, d, valid, opl):
     x, y, z = (oi + t * di for oi, di in zip(o, d, strict=True))
     rim = surface.semi_diameter**2 * (1 + 64 * jnp.finfo(x.dtype).eps)
     ok = ok & (x * x + y * y <= rim)
-    g = jnp.zeros((), t.dtype)
-    d_new = d
-    if refracts:
-        normal = surface_normal(surface, x, y, z)
-        mu = n1 / n2
-        g, no_tir = unmark(refraction_gain(d, normal, mu))
-        d_new = tuple(jnp.where(no_tir, mu * di + g * ni, di)
-                      for di, ni in zip(d, normal, strict=True))
-        ok = ok & no_tir
-    return _moved(p, d, valid, opl, ok, (x, y, z), d_new, zv, n1, t), t, g
+    normal = surface_normal(surface, x, y, z) if refracts else None
+    return _refracted(refracts, p, d, valid, opl, ok, (x, y, z), normal, zv, n1, n2, t)
 
 
 def _shape(x, y, surface):
