@@ -4,9 +4,7 @@ from __future__ import annotations
 
 import math
 import os
-import re
 import warnings
-from dataclasses import dataclass, field
 
 import jax.numpy as jnp
 import numpy as np
@@ -30,30 +28,8 @@ from .zmx_common import (
 )
 from .zmx_glass import GlassResolver
 from .zmx_keywords import IGNORED_KEYWORDS
+from .zmx_parse import SHAPES, ZmxFile, ZmxSurface, parse
 
-_UNITS = {"MM": 1.0, "CM": 10.0, "IN": 25.4, "METER": 1000.0, "M": 1000.0}
-_SURFACE_KEYS = {
-    "TYPE",
-    "CURV",
-    "DISZ",
-    "CONI",
-    "PARM",
-    "XDAT",
-    "GLAS",
-    "STOP",
-    "DIAM",
-    "COMM",
-    "CLAP",
-    "OBSC",
-    "OBDC",
-    "SQAP",
-    "ELAP",
-    "SQOB",
-    "ELOB",
-}
-_SHAPES = {"SQAP": ("rect", False), "ELAP": ("ellipse", False), "SQOB": ("rect", True),
-           "ELOB": ("ellipse", True)}  # keyword -> (Aperture shape, blocks)
-_KEYWORD = re.compile(r"^[A-Z][A-Z0-9_]{1,9}$")
 _MAX_XDAT_TERMS = 230  # Zemax's extended polynomial: all terms up to degree 20
 
 
@@ -61,245 +37,7 @@ def _arr(x):
     return jnp.asarray(np.asarray(x, np.float64))
 
 
-class _Line:
-    """One line of a file, for error messages."""
-
-    def __init__(self, path: str, number: int, text: str):
-        self.path, self.number, self.text = path, number, text
-        self.tokens = text.split()
-
-    def error(self, msg: str) -> ValueError:
-        return ValueError(f"{self.path}:{self.number}: {msg}: {self.text.strip()!r}")
-
-    def float(self, i: int, what: str, *, allow_inf: bool = False, lo=None) -> float:
-        try:
-            tok = self.tokens[i]
-        except IndexError:
-            raise self.error(f"missing {what}") from None
-        if allow_inf and tok.upper() in ("INFINITY", "INF"):
-            return math.inf
-        try:
-            v = float(tok.replace("D", "E").replace("d", "e"))
-        except ValueError:
-            raise self.error(f"{what} is not a number ({tok!r})") from None
-        if not math.isfinite(v):
-            raise self.error(f"{what} must be finite")
-        if lo is not None and v < lo:
-            raise self.error(f"{what} must be >= {lo}, got {tok}")
-        return v
-
-    def int(self, i: int, what: str, *, lo=None) -> int:
-        v = self.float(i, what, lo=lo)
-        if v != int(v):
-            raise self.error(f"{what} must be an integer")
-        return int(v)
-
-
-# ---------------------------------------------------------------------------- reading
-
-
-@dataclass
-class _Surf:
-    number: int
-    line: _Line
-    type: str = "STANDARD"
-    type_line: _Line | None = None
-    curv: float = 0.0
-    curv_line: _Line | None = None
-    disz: float = 0.0
-    disz_line: _Line | None = None
-    coni: float = 0.0
-    parm: dict = field(default_factory=dict)  # index -> (value, line)
-    xdat: dict = field(default_factory=dict)
-    glas: _Line | None = None
-    stop: bool = False
-    diam: tuple[float, int | None] | None = None
-    clap: float | None = None
-    clap_min: _Line | None = None  # an annular aperture's CLAP line (minimum radius > 0)
-    obsc: _Line | None = None  # a circular obscuration (OBSC min max)
-    obdc: _Line | None = None  # the aperture's decenter (OBDC x y), if not 0 0
-    shaped: list = field(default_factory=list)  # SQAP/ELAP/SQOB/ELOB lines
-    comment: str = ""
-    keys: set = field(default_factory=set)  # the keywords this block has
-
-
-@dataclass
-class _File:
-    path: str
-    name: str = ""
-    unit: float = 1.0
-    aperture: tuple[str, float, _Line] | None = None
-    pupd: _Line | None = None  # older Zemax writes it beside ENPD/FLOA/…; alone it is refused
-    envd: _Line | None = None  # the environment: temperature (°C), pressure (atm), flag
-    gcat: list = field(default_factory=list)
-    ftyp: _Line | None = None
-    xfln: _Line | None = None
-    yfln: _Line | None = None
-    xfld: _Line | None = None  # older Zemax: the fields, one value each (no padding to 12)
-    yfld: _Line | None = None
-    wavm: dict = field(default_factory=dict)
-    wavl: _Line | None = None
-    pwav: _Line | None = None
-    fwgn: _Line | None = None  # field weights (FWGN; older Zemax: FWGT)
-    wwgt: _Line | None = None  # weights of WAVL's wavelengths (WWGT or WWGN)
-    vignetting: list = field(default_factory=list)  # VDXN/VDYN/VCXN/VCYN/VANN lines
-    raim: _Line | None = None
-    surfs: list = field(default_factory=list)
-    unknown: list = field(default_factory=list)  # lines with a keyword nobody knows
-    mnum: _Line | None = None  # the number of configurations
-    zemax: bool = False  # written by Zemax (a VERS line): every block is complete
-
-
-def _parse(text: str, path: str) -> _File:
-    f = _File(path)
-    cur: _Surf | None = None
-    for number, raw in enumerate(text.splitlines(), start=1):
-        ln = _Line(path, number, raw)
-        if not ln.tokens:
-            continue
-        key = ln.tokens[0]
-        if not _KEYWORD.match(key):
-            raise ln.error("not a Zemax keyword line")
-        if key == "SURF":
-            n = ln.int(1, "surface number")
-            if n != len(f.surfs):
-                raise ln.error(f"surfaces must be numbered 0, 1, 2, …; expected {len(f.surfs)}")
-            cur = _Surf(n, ln)
-            f.surfs.append(cur)
-        elif key in _SURFACE_KEYS:
-            if cur is None:
-                raise ln.error(f"{key} before the first SURF")
-            _surface_line(cur, key, ln)
-        elif key in _TOP_KEYS:
-            _top_line(f, key, ln, raw)
-        elif key == "MNUM":
-            f.mnum = ln
-        elif key not in IGNORED_KEYWORDS:
-            f.unknown.append(ln)
-        if key in _SURFACE_KEYS and cur is not None:
-            cur.keys.add(key)
-    if not f.surfs:
-        raise ValueError(f"{path}: no SURF lines; not a sequential Zemax lens file")
-    return f
-
-
-def _surface_line(s: _Surf, key: str, ln: _Line) -> None:
-    if key == "TYPE":
-        if len(ln.tokens) < 2:
-            raise ln.error("TYPE needs a surface type")
-        s.type, s.type_line = ln.tokens[1].upper(), ln
-    elif key == "CURV":
-        s.curv, s.curv_line = ln.float(1, "curvature"), ln
-    elif key == "DISZ":
-        s.disz, s.disz_line = ln.float(1, "thickness", allow_inf=True), ln
-    elif key == "CONI":
-        s.coni = ln.float(1, "conic constant")
-    elif key in ("PARM", "XDAT"):
-        i = ln.int(1, f"{key} index")
-        (s.parm if key == "PARM" else s.xdat)[i] = (ln.float(2, f"{key} {i} value"), ln)
-    elif key == "GLAS":
-        if len(ln.tokens) < 2:
-            raise ln.error("GLAS needs a glass name")
-        s.glas = ln
-    elif key == "STOP":
-        s.stop = True
-    elif key == "DIAM":
-        v = ln.float(1, "semi-diameter")
-        flag = ln.int(2, "semi-diameter solve flag") if len(ln.tokens) > 2 else None
-        if v < 0:
-            raise ln.error("semi-diameter must be >= 0")
-        s.diam = (v, flag)
-    elif key == "CLAP":
-        lo = ln.float(1, "circular aperture minimum radius (lens units)", lo=0)
-        s.clap = ln.float(2, "circular aperture maximum radius (lens units)", lo=0)
-        if lo > 0:  # an annulus: the clipping radius and a central obscuration inside lo
-            if not lo < s.clap:
-                raise ln.error("an annular aperture needs minimum < maximum radius")
-            s.clap_min = ln
-    elif key == "OBSC":
-        if ln.float(2, "obscuration maximum radius") > 0:
-            if not 0 <= ln.float(1, "obscuration minimum radius") < ln.float(2, ""):
-                raise ln.error("OBSC needs 0 ≤ minimum < maximum radius (lens units)")
-            s.obsc = ln
-    elif key == "OBDC":
-        if ln.float(1, "aperture x decenter") != 0 or ln.float(2, "aperture y decenter") != 0:
-            s.obdc = ln
-    elif key in _SHAPES:
-        for i, what in ((1, "x"), (2, "y")):
-            if not ln.float(i, f"aperture {what} half-width") > 0:
-                raise ln.error(f"{key} needs half-widths > 0 (lens units), got {ln.tokens[i]}")
-        s.shaped.append(ln)
-    elif key == "COMM":
-        s.comment = ln.text.strip()[4:].strip()
-
-
-_TOP_KEYS = frozenset("VERS MODE NAME UNIT ENPD FNUM FLOA OBNA PUPD ENVD GCAT FTYP XFLN YFLN "
-                      "XFLD YFLD WAVM WAVL PWAV RAIM VDXN VDYN VCXN VCYN VANN FWGN FWGT WWGT "
-                      "WWGN".split())
-
-
-def _top_line(f: _File, key: str, ln: _Line, raw: str) -> None:
-    if key == "VERS":
-        f.zemax = True
-    if key == "MODE" and len(ln.tokens) > 1 and ln.tokens[1].upper() != "SEQ":
-        raise ln.error("only sequential (MODE SEQ) files are supported")
-    if key == "NAME":
-        f.name = raw.strip()[4:].strip()
-    elif key == "UNIT":
-        u = ln.tokens[1].upper() if len(ln.tokens) > 1 else ""
-        if u not in _UNITS:
-            raise ln.error(f"unknown lens unit {u!r}; use MM, CM, IN or METER")
-        f.unit = _UNITS[u]
-    elif key == "ENPD":
-        f.aperture = ("epd", ln.float(1, "entrance pupil diameter"), ln)
-    elif key == "FNUM":  # FNUM x 0: image-space F/#; FNUM x 1: paraxial working F/#
-        kind = ln.int(2, "F/# type") if len(ln.tokens) > 2 else 0
-        if kind not in (0, 1):
-            raise ln.error(f"F/# type must be 0 (image space) or 1 (paraxial working), got {kind}")
-        f.aperture = ("wfno" if kind else "fnum", ln.float(1, "F/#"), ln)
-    elif key == "FLOA":
-        f.aperture = ("float", 0.0, ln)
-    elif key == "OBNA":
-        kind = ln.int(2, "OBNA type (0: NA, 1: cone angle)") if len(ln.tokens) > 2 else 0
-        if kind not in (0, 1):
-            raise ln.error(f"OBNA type must be 0 (object-space NA) or 1 (object cone angle), "
-                           f"got {kind}")
-        what = "object cone angle" if kind else "object-space NA"
-        f.aperture = ("cone" if kind else "obna", ln.float(1, what), ln)
-    elif key == "PUPD":
-        f.pupd = ln
-    elif key == "ENVD":
-        f.envd = ln
-    elif key in ("VDXN", "VDYN", "VCXN", "VCYN", "VANN"):
-        f.vignetting.append(ln)
-    elif key == "RAIM":
-        f.raim = ln
-    elif key == "GCAT":
-        f.gcat = [t.upper() for t in ln.tokens[1:]]
-    elif key == "FTYP":
-        f.ftyp = ln
-    elif key == "XFLN":
-        f.xfln = ln
-    elif key == "YFLN":
-        f.yfln = ln
-    elif key == "XFLD":
-        f.xfld = ln
-    elif key == "YFLD":
-        f.yfld = ln
-    elif key == "WAVM":
-        i = ln.int(1, "wavelength number")
-        f.wavm[i] = (ln.float(2, "wavelength"), ln)
-    elif key == "WAVL":
-        f.wavl = ln
-    elif key == "PWAV":
-        f.pwav = ln
-    elif key in ("FWGN", "FWGT"):
-        f.fwgn = ln
-    elif key in ("WWGT", "WWGN"):
-        f.wwgt = ln
-
-
-def _sd(s: _Surf, unit: float) -> float:
+def _sd(s: ZmxSurface, unit: float) -> float:
     if s.shaped or (s.obdc is not None and s.clap):  # clips at its apertures only
         return math.inf
     if s.clap is not None:
@@ -312,7 +50,7 @@ def _sd(s: _Surf, unit: float) -> float:
     return v * unit
 
 
-def _xdat_terms(s: _Surf, unit: float, what: str):
+def _xdat_terms(s: ZmxSurface, unit: float, what: str):
     where = s.type_line or s.line
     if 1 not in s.xdat or 2 not in s.xdat:
         raise where.error(f"{what} needs XDAT 1 (number of terms) and XDAT 2 (norm radius)")
@@ -329,7 +67,7 @@ def _xdat_terms(s: _Surf, unit: float, what: str):
     return int(n_val), norm, vals
 
 
-def _surface(s: _Surf, unit: float) -> AbstractSurface:
+def _surface(s: ZmxSurface, unit: float) -> AbstractSurface:
     """The surface of a SURF block; a value its class refuses (a semi-diameter beyond a
     steep sphere's edge, say) is reported with the block's line."""
     try:
@@ -340,7 +78,7 @@ def _surface(s: _Surf, unit: float) -> AbstractSurface:
         raise (s.type_line or s.line).error(str(e)) from None
 
 
-def _surface_of(s: _Surf, unit: float) -> AbstractSurface:
+def _surface_of(s: ZmxSurface, unit: float) -> AbstractSurface:
     c = s.curv / unit
     sd = _sd(s, unit)
     where = s.type_line or s.line
@@ -382,7 +120,7 @@ def _surface_of(s: _Surf, unit: float) -> AbstractSurface:
     )
 
 
-def _standard_without_terms(s: _Surf) -> None:
+def _standard_without_terms(s: ZmxSurface) -> None:
     """A block without a TYPE line is STANDARD, which has no parameters: non-zero PARM/XDAT
     values there mean a surface whose type line is missing (an asphere, most likely), and
     reading it as a sphere would drop them, so it is refused. Under an explicit
@@ -398,7 +136,7 @@ def _standard_without_terms(s: _Surf) -> None:
                        f"asphere's terms?); add the surface's TYPE line")
 
 
-def _coordinate_break(s: _Surf, unit: float) -> CoordinateBreak:
+def _coordinate_break(s: ZmxSurface, unit: float) -> CoordinateBreak:
     """COORDBRK: PARM 1, 2 decenter x, y (lens units), 3, 4, 5 tilt about x, y, z (degrees),
     6 the order flag (0: decenter then tilt, 1: tilt then decenter)."""
     where = s.type_line or s.line
@@ -418,16 +156,16 @@ def _coordinate_break(s: _Surf, unit: float) -> CoordinateBreak:
                            order=int(order))
 
 
-def _is_mirror(s: _Surf) -> bool:
+def _is_mirror(s: ZmxSurface) -> bool:
     return s.glas is not None and s.glas.tokens[1].upper() == "MIRROR"
 
 
-def _keeps_medium(s: _Surf) -> bool:
+def _keeps_medium(s: ZmxSurface) -> bool:
     """Mirrors and coordinate breaks: the medium after them is the medium before."""
     return _is_mirror(s) or s.type == "COORDBRK"
 
 
-def _hybrid_from_xpoly(s: _Surf, unit: float, c: float, sd: float) -> Hybrid:
+def _hybrid_from_xpoly(s: ZmxSurface, unit: float, c: float, sd: float) -> Hybrid:
     n, norm, vals = _xdat_terms(s, unit, "XPOLYNOM")
     terms = {}
     for j, v in enumerate(vals, start=1):
@@ -465,7 +203,7 @@ def _hybrid_from_xpoly(s: _Surf, unit: float, c: float, sd: float) -> Hybrid:
     )
 
 
-def _fields(f: _File, strict: bool) -> np.ndarray:
+def _fields(f: ZmxFile, strict: bool) -> np.ndarray:
     """The field values as written: angles (deg) or paraxial image heights (lens units)."""
     count = None
     if f.ftyp is not None and len(f.ftyp.tokens) > 3:
@@ -503,7 +241,7 @@ def _fields(f: _File, strict: bool) -> np.ndarray:
     return np.array(ys, np.float64)
 
 
-def _wavelengths(f: _File) -> tuple[np.ndarray, int]:
+def _wavelengths(f: ZmxFile) -> tuple[np.ndarray, int]:
     count = None
     if f.ftyp is not None and len(f.ftyp.tokens) > 4:
         count = f.ftyp.int(4, "number of wavelengths (FTYP's fifth value)", lo=1)
@@ -538,7 +276,7 @@ def _wavelengths(f: _File) -> tuple[np.ndarray, int]:
     return np.array(wl, np.float64), primary
 
 
-def _check_structure(f: _File, text: str, strict: bool) -> None:
+def _check_structure(f: ZmxFile, text: str, strict: bool) -> None:
     """Refuse a file that is cut off or has incomplete surface blocks; report unknown keywords.
 
     Zemax writes CURV and DISZ in every SURF block and ends each line with a line break, so
@@ -611,7 +349,7 @@ def _apertures(surfs, u) -> tuple:
         dx, dy = ((s.obdc.float(1, "") * u, s.obdc.float(2, "") * u) if s.obdc is not None
                   else (0.0, 0.0))
         for ln in s.shaped:
-            shape, blocks = _SHAPES[ln.tokens[0]]
+            shape, blocks = SHAPES[ln.tokens[0]]
             out.append((i, Aperture(shape, ln.float(1, "") * u, ln.float(2, "") * u, dx, dy,
                                     blocks)))
         moved = bool(s.shaped)
@@ -638,7 +376,7 @@ def _apertures(surfs, u) -> tuple:
     return tuple(out)
 
 
-def _check_image_medium(f: _File, body: list) -> None:
+def _check_image_medium(f: ZmxFile, body: list) -> None:
     """Warn when the image surface names a medium other than image space's (the last
     surface's GLAS): image space is what the rays cross, so that is what jaxlens uses."""
     img = f.surfs[-1]
@@ -675,7 +413,7 @@ def loads(text: str, path: str = "<zmx>", *, strict: bool = False,
             file and the line), an unknown glass, or wavelengths, fields or materials out
             of range.
     """
-    f = _parse(text, path)
+    f = parse(text, path)
     _check_structure(f, text, strict)
     u = f.unit
     glasses = GlassResolver(path, f.gcat, strict, unknown_glass)

@@ -1,0 +1,272 @@
+"""Reading a ``.zmx`` file's lines: its keywords, the records of its header and of its SURF
+blocks, each value kept with the line it came from for messages (``jaxlens.io.zmx_read``
+makes the lens of them)."""
+
+from __future__ import annotations
+
+import math
+import re
+from dataclasses import dataclass, field
+
+from .zmx_keywords import IGNORED_KEYWORDS
+
+UNITS = {"MM": 1.0, "CM": 10.0, "IN": 25.4, "METER": 1000.0, "M": 1000.0}
+SURFACE_KEYS = {
+    "TYPE",
+    "CURV",
+    "DISZ",
+    "CONI",
+    "PARM",
+    "XDAT",
+    "GLAS",
+    "STOP",
+    "DIAM",
+    "COMM",
+    "CLAP",
+    "OBSC",
+    "OBDC",
+    "SQAP",
+    "ELAP",
+    "SQOB",
+    "ELOB",
+}
+SHAPES = {"SQAP": ("rect", False), "ELAP": ("ellipse", False), "SQOB": ("rect", True),
+          "ELOB": ("ellipse", True)}  # keyword -> (Aperture shape, blocks)
+KEYWORD = re.compile(r"^[A-Z][A-Z0-9_]{1,9}$")
+
+
+class ZmxLine:
+    """One line of a file, for error messages."""
+
+    def __init__(self, path: str, number: int, text: str):
+        self.path, self.number, self.text = path, number, text
+        self.tokens = text.split()
+
+    def error(self, msg: str) -> ValueError:
+        return ValueError(f"{self.path}:{self.number}: {msg}: {self.text.strip()!r}")
+
+    def float(self, i: int, what: str, *, allow_inf: bool = False, lo=None) -> float:
+        try:
+            tok = self.tokens[i]
+        except IndexError:
+            raise self.error(f"missing {what}") from None
+        if allow_inf and tok.upper() in ("INFINITY", "INF"):
+            return math.inf
+        try:
+            v = float(tok.replace("D", "E").replace("d", "e"))
+        except ValueError:
+            raise self.error(f"{what} is not a number ({tok!r})") from None
+        if not math.isfinite(v):
+            raise self.error(f"{what} must be finite")
+        if lo is not None and v < lo:
+            raise self.error(f"{what} must be >= {lo}, got {tok}")
+        return v
+
+    def int(self, i: int, what: str, *, lo=None) -> int:
+        v = self.float(i, what, lo=lo)
+        if v != int(v):
+            raise self.error(f"{what} must be an integer")
+        return int(v)
+
+
+
+
+@dataclass
+class ZmxSurface:
+    number: int
+    line: ZmxLine
+    type: str = "STANDARD"
+    type_line: ZmxLine | None = None
+    curv: float = 0.0
+    curv_line: ZmxLine | None = None
+    disz: float = 0.0
+    disz_line: ZmxLine | None = None
+    coni: float = 0.0
+    parm: dict = field(default_factory=dict)  # index -> (value, line)
+    xdat: dict = field(default_factory=dict)
+    glas: ZmxLine | None = None
+    stop: bool = False
+    diam: tuple[float, int | None] | None = None
+    clap: float | None = None
+    clap_min: ZmxLine | None = None  # an annular aperture's CLAP line (minimum radius > 0)
+    obsc: ZmxLine | None = None  # a circular obscuration (OBSC min max)
+    obdc: ZmxLine | None = None  # the aperture's decenter (OBDC x y), if not 0 0
+    shaped: list = field(default_factory=list)  # SQAP/ELAP/SQOB/ELOB lines
+    comment: str = ""
+    keys: set = field(default_factory=set)  # the keywords this block has
+
+
+@dataclass
+class ZmxFile:
+    path: str
+    name: str = ""
+    unit: float = 1.0
+    aperture: tuple[str, float, ZmxLine] | None = None
+    pupd: ZmxLine | None = None  # older Zemax writes it beside ENPD/FLOA/…; alone it is refused
+    envd: ZmxLine | None = None  # the environment: temperature (°C), pressure (atm), flag
+    gcat: list = field(default_factory=list)
+    ftyp: ZmxLine | None = None
+    xfln: ZmxLine | None = None
+    yfln: ZmxLine | None = None
+    xfld: ZmxLine | None = None  # older Zemax: the fields, one value each (no padding to 12)
+    yfld: ZmxLine | None = None
+    wavm: dict = field(default_factory=dict)
+    wavl: ZmxLine | None = None
+    pwav: ZmxLine | None = None
+    fwgn: ZmxLine | None = None  # field weights (FWGN; older Zemax: FWGT)
+    wwgt: ZmxLine | None = None  # weights of WAVL's wavelengths (WWGT or WWGN)
+    vignetting: list = field(default_factory=list)  # VDXN/VDYN/VCXN/VCYN/VANN lines
+    raim: ZmxLine | None = None
+    surfs: list = field(default_factory=list)
+    unknown: list = field(default_factory=list)  # lines with a keyword nobody knows
+    mnum: ZmxLine | None = None  # the number of configurations
+    zemax: bool = False  # written by Zemax (a VERS line): every block is complete
+
+
+def parse(text: str, path: str) -> ZmxFile:
+    f = ZmxFile(path)
+    cur: ZmxSurface | None = None
+    for number, raw in enumerate(text.splitlines(), start=1):
+        ln = ZmxLine(path, number, raw)
+        if not ln.tokens:
+            continue
+        key = ln.tokens[0]
+        if not KEYWORD.match(key):
+            raise ln.error("not a Zemax keyword line")
+        if key == "SURF":
+            n = ln.int(1, "surface number")
+            if n != len(f.surfs):
+                raise ln.error(f"surfaces must be numbered 0, 1, 2, …; expected {len(f.surfs)}")
+            cur = ZmxSurface(n, ln)
+            f.surfs.append(cur)
+        elif key in SURFACE_KEYS:
+            if cur is None:
+                raise ln.error(f"{key} before the first SURF")
+            surface_line(cur, key, ln)
+        elif key in TOP_KEYS:
+            top_line(f, key, ln, raw)
+        elif key == "MNUM":
+            f.mnum = ln
+        elif key not in IGNORED_KEYWORDS:
+            f.unknown.append(ln)
+        if key in SURFACE_KEYS and cur is not None:
+            cur.keys.add(key)
+    if not f.surfs:
+        raise ValueError(f"{path}: no SURF lines; not a sequential Zemax lens file")
+    return f
+
+
+def surface_line(s: ZmxSurface, key: str, ln: ZmxLine) -> None:
+    if key == "TYPE":
+        if len(ln.tokens) < 2:
+            raise ln.error("TYPE needs a surface type")
+        s.type, s.type_line = ln.tokens[1].upper(), ln
+    elif key == "CURV":
+        s.curv, s.curv_line = ln.float(1, "curvature"), ln
+    elif key == "DISZ":
+        s.disz, s.disz_line = ln.float(1, "thickness", allow_inf=True), ln
+    elif key == "CONI":
+        s.coni = ln.float(1, "conic constant")
+    elif key in ("PARM", "XDAT"):
+        i = ln.int(1, f"{key} index")
+        (s.parm if key == "PARM" else s.xdat)[i] = (ln.float(2, f"{key} {i} value"), ln)
+    elif key == "GLAS":
+        if len(ln.tokens) < 2:
+            raise ln.error("GLAS needs a glass name")
+        s.glas = ln
+    elif key == "STOP":
+        s.stop = True
+    elif key == "DIAM":
+        v = ln.float(1, "semi-diameter")
+        flag = ln.int(2, "semi-diameter solve flag") if len(ln.tokens) > 2 else None
+        if v < 0:
+            raise ln.error("semi-diameter must be >= 0")
+        s.diam = (v, flag)
+    elif key == "CLAP":
+        lo = ln.float(1, "circular aperture minimum radius (lens units)", lo=0)
+        s.clap = ln.float(2, "circular aperture maximum radius (lens units)", lo=0)
+        if lo > 0:  # an annulus: the clipping radius and a central obscuration inside lo
+            if not lo < s.clap:
+                raise ln.error("an annular aperture needs minimum < maximum radius")
+            s.clap_min = ln
+    elif key == "OBSC":
+        if ln.float(2, "obscuration maximum radius") > 0:
+            if not 0 <= ln.float(1, "obscuration minimum radius") < ln.float(2, ""):
+                raise ln.error("OBSC needs 0 ≤ minimum < maximum radius (lens units)")
+            s.obsc = ln
+    elif key == "OBDC":
+        if ln.float(1, "aperture x decenter") != 0 or ln.float(2, "aperture y decenter") != 0:
+            s.obdc = ln
+    elif key in SHAPES:
+        for i, what in ((1, "x"), (2, "y")):
+            if not ln.float(i, f"aperture {what} half-width") > 0:
+                raise ln.error(f"{key} needs half-widths > 0 (lens units), got {ln.tokens[i]}")
+        s.shaped.append(ln)
+    elif key == "COMM":
+        s.comment = ln.text.strip()[4:].strip()
+
+
+TOP_KEYS = frozenset("VERS MODE NAME UNIT ENPD FNUM FLOA OBNA PUPD ENVD GCAT FTYP XFLN YFLN "
+                      "XFLD YFLD WAVM WAVL PWAV RAIM VDXN VDYN VCXN VCYN VANN FWGN FWGT WWGT "
+                      "WWGN".split())
+
+
+def top_line(f: ZmxFile, key: str, ln: ZmxLine, raw: str) -> None:
+    if key == "VERS":
+        f.zemax = True
+    if key == "MODE" and len(ln.tokens) > 1 and ln.tokens[1].upper() != "SEQ":
+        raise ln.error("only sequential (MODE SEQ) files are supported")
+    if key == "NAME":
+        f.name = raw.strip()[4:].strip()
+    elif key == "UNIT":
+        u = ln.tokens[1].upper() if len(ln.tokens) > 1 else ""
+        if u not in UNITS:
+            raise ln.error(f"unknown lens unit {u!r}; use MM, CM, IN or METER")
+        f.unit = UNITS[u]
+    elif key == "ENPD":
+        f.aperture = ("epd", ln.float(1, "entrance pupil diameter"), ln)
+    elif key == "FNUM":  # FNUM x 0: image-space F/#; FNUM x 1: paraxial working F/#
+        kind = ln.int(2, "F/# type") if len(ln.tokens) > 2 else 0
+        if kind not in (0, 1):
+            raise ln.error(f"F/# type must be 0 (image space) or 1 (paraxial working), got {kind}")
+        f.aperture = ("wfno" if kind else "fnum", ln.float(1, "F/#"), ln)
+    elif key == "FLOA":
+        f.aperture = ("float", 0.0, ln)
+    elif key == "OBNA":
+        kind = ln.int(2, "OBNA type (0: NA, 1: cone angle)") if len(ln.tokens) > 2 else 0
+        if kind not in (0, 1):
+            raise ln.error(f"OBNA type must be 0 (object-space NA) or 1 (object cone angle), "
+                           f"got {kind}")
+        what = "object cone angle" if kind else "object-space NA"
+        f.aperture = ("cone" if kind else "obna", ln.float(1, what), ln)
+    elif key == "PUPD":
+        f.pupd = ln
+    elif key == "ENVD":
+        f.envd = ln
+    elif key in ("VDXN", "VDYN", "VCXN", "VCYN", "VANN"):
+        f.vignetting.append(ln)
+    elif key == "RAIM":
+        f.raim = ln
+    elif key == "GCAT":
+        f.gcat = [t.upper() for t in ln.tokens[1:]]
+    elif key == "FTYP":
+        f.ftyp = ln
+    elif key == "XFLN":
+        f.xfln = ln
+    elif key == "YFLN":
+        f.yfln = ln
+    elif key == "XFLD":
+        f.xfld = ln
+    elif key == "YFLD":
+        f.yfld = ln
+    elif key == "WAVM":
+        i = ln.int(1, "wavelength number")
+        f.wavm[i] = (ln.float(2, "wavelength"), ln)
+    elif key == "WAVL":
+        f.wavl = ln
+    elif key == "PWAV":
+        f.pwav = ln
+    elif key in ("FWGN", "FWGT"):
+        f.fwgn = ln
+    elif key in ("WWGT", "WWGN"):
+        f.wwgt = ln
