@@ -74,6 +74,10 @@ def _inputs(lens, where: str, fields, wavelengths):
     if not isinstance(lens, Lens):
         raise TypeError(f"{where}: lens must be a jaxlens.Lens, got {type(lens).__name__}")
     dtype = lens.epd.dtype
+    # Before jnp.asarray, which reads the string "5" as 5°.
+    checks.real_values(fields, "fields", where, "deg")
+    if wavelengths is not None:
+        checks.real_values(wavelengths, "wavelengths", where, "µm")
     f = jnp.asarray(fields, dtype)
     if f.ndim > 1 or f.size == 0:
         raise ValueError(f"{where}: fields must be θy angles in degrees, one value or [F], "
@@ -109,6 +113,7 @@ def ray_fan(lens: Lens, field, wavelengths=None, *, n: int = FAN_POINTS, depth=N
         A ``RayFan``; errors of rays that do not reach the image (and all errors where the
         chief ray does not) are NaN, with the validity flags beside them.
     """
+    checks.real_values(field, "field", "ray_fan", "deg")
     shape = jnp.shape(field)
     if shape not in ((), (1,), (2,)):
         raise ValueError(f"ray_fan: field must be one field, θy or (θx, θy) in degrees, got "

@@ -153,6 +153,10 @@ def report_data(lens: Lens, *, fields=None, wavelengths=None) -> dict:
         wavelengths: µm; default the lens's wavelengths.
     """
     lens = with_fields_and_wavelengths(lens, fields, wavelengths)
+    if wavelengths is None and not checks.is_traced(lens.wavelengths):
+        # Checked here, not as an EquinoxRuntimeError from inside the compiled trace.
+        checks.wavelengths(lens, lens.wavelengths, "report", "the lens's wavelengths")
+        checks.material_indices(lens, lens.wavelengths, "report", "the lens's wavelengths")
     res = _compute(lens)
     pd = res.paraxial
     wl = np.atleast_1d(np.asarray(lens.wavelengths, np.float64))

@@ -39,17 +39,26 @@ def _fields_array(fields, where: str) -> Array:
 
 
 def _concrete_inputs(lens: Lens, where: str, *, fields=None, wavelengths=None,
-                     arg_f: str = "fields", arg_w: str = "wavelengths") -> None:
-    """Check the field angles (deg) and wavelengths (µm) the caller gave, before the jitted
-    body: inside it a constant array is a tracer, and the same checks became an
-    ``EquinoxRuntimeError`` raised after the whole trace had run."""
+                     arg_f: str = "fields", arg_w: str = "wavelengths", pupil=None,
+                     own: str = "primary") -> None:
+    """Check the field angles (deg), wavelengths (µm) and pupil points the caller gave,
+    before the jitted body: inside it a constant array is a tracer, and the same checks
+    became an ``EquinoxRuntimeError`` raised after the whole trace had run (a NaN pupil
+    point was not refused at all: its ray counted as vignetted). Without ``wavelengths``
+    the lens's own are checked: its primary one, or with ``own="all"`` all of them."""
     if not isinstance(lens, Lens):
         raise TypeError(f"{where}: lens must be a jaxlens.Lens, got {type(lens).__name__}")
     if fields is not None and not checks.is_traced(fields):
         checks.field_angles(fields, where, arg_f)
+    if wavelengths is None and not checks.is_traced(lens.wavelengths):
+        wavelengths = lens.wavelengths if own == "all" else lens.primary_wavelength
+        arg_w = f"the lens's {'wavelengths' if own == 'all' else 'primary wavelength'}"
     if wavelengths is not None and not checks.is_traced(wavelengths):
         checks.wavelengths(lens, wavelengths, where, arg_w)
         checks.material_indices(lens, wavelengths, where, arg_w)
+    if pupil is not None and not checks.is_traced(pupil):
+        checks.real_values(pupil, "pupil", where, "normalised pupil coordinates")
+        checks.finite_array(pupil, "pupil", where, "normalised pupil coordinates")
 
 
 def _as_arrays(lens: Lens, *values):
@@ -78,7 +87,7 @@ def spot_rays(
 ) -> Rays:
     """Rays of one field and wavelength on the image surface (a spot diagram as data)."""
     _concrete_inputs(lens, "spot_rays", fields=field, wavelengths=wavelength, arg_f="field",
-                     arg_w="wavelength")
+                     arg_w="wavelength", pupil=pupil)
     field, wavelength = _as_arrays(lens, field, wavelength)
     return _spot_rays(lens, field, wavelength, pupil=pupil,
                       depth=_depth(lens, depth, "spot_rays"), aim=aim,
@@ -174,7 +183,8 @@ def rms_spot(
         A field and wavelength that no ray gets through has NaN radius (and centroid),
         with ``valid_fraction`` 0; its gradient is 0, never NaN.
     """
-    _concrete_inputs(lens, "rms_spot", fields=fields, wavelengths=wavelengths)
+    _concrete_inputs(lens, "rms_spot", fields=fields, wavelengths=wavelengths, pupil=pupil,
+                     own="all")
     fields, wavelengths = _as_arrays(lens, _own_fields(lens, fields), wavelengths)
     return _rms_spot(lens, fields, wavelengths, pupil=pupil, reference=reference,
                      depth=_depth(lens, depth, "rms_spot"), newton_iters=newton_iters)
@@ -319,7 +329,10 @@ def clear_semi_diameters(lens: Lens, fields=None, n_rim: int = 64, *,
     interior rays: where rim rays fail, a ray inside the pupil can pass higher than any
     rim ray that passes, and an aperture sized from the rim alone would clip it.
     """
-    _concrete_inputs(lens, "clear_semi_diameters", fields=fields)
+    _concrete_inputs(lens, "clear_semi_diameters", fields=fields, pupil=pupil, own="all")
+    if pupil is not None and (jnp.ndim(pupil) != 2 or jnp.shape(pupil)[-1] != 2):
+        raise ValueError(f"clear_semi_diameters: pupil must be [M, 2] normalised pupil points "
+                         f"(Px, Py), got shape {jnp.shape(pupil)}")
     if not isinstance(reaching, (bool, np.bool_)):
         raise TypeError(f"clear_semi_diameters: reaching must be True or False, got {reaching!r}")
     # ``reaching`` is an array, so that both kinds of height share one compiled program.

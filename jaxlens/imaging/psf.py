@@ -411,6 +411,7 @@ def _prepare(lens, field, depth, wavelength, kernel_size, pixel_size, model, cen
         checks.number(pixel_size, "pixel_size", caller, lo=0, lo_open=True, unit="mm")
     pixel_size = jnp.asarray(pixel_size, dtype)
     wl = lens.primary_wavelength if wavelength is None else wavelength
+    checks.real_values(wl, "wavelength", caller, "µm")  # jnp.asarray reads "0.55" as 0.55
     wl = checks.wavelengths(lens, jnp.asarray(wl, dtype), caller, "wavelength")
     checks.material_indices(lens, wl, caller)
     field = checks.field_angles(field, caller, "field")
@@ -685,8 +686,8 @@ def _mtf_impl(lens, field, depth, wls, freqs, pixel_size, *, model, kernel_size,
                 o = o * jax.vmap(lambda wl: _diffraction_mtf(freqs, wl * 1e-3, fnum))(wls)
             return jnp.abs(jnp.sum(o, 0) / nw)
 
-        return along(e_t), along(e_s)
-    kern, _, _, _, _ = model.kernels(lens, field, depth, wls, kernel_size=kernel_size,
+        return along(e_t), along(e_s), jnp.sum(w, -1) > 0
+    kern, trunc, _, _, _ = model.kernels(lens, field, depth, wls, kernel_size=kernel_size,
                                      pixel_size=pixel_size, center="centroid", key=None,
                                      newton_iters=newton_iters)
     k = kernel_size
@@ -703,7 +704,7 @@ def _mtf_impl(lens, field, depth, wls, freqs, pixel_size, *, model, kernel_size,
         o = wgt @ jnp.exp(1j * ph).T  # [W, F]
         return jnp.abs(jnp.sum(o, 0) / nw)
 
-    return along(e_t), along(e_s)
+    return along(e_t), along(e_s), ~jnp.isnan(trunc)
 
 
 def mtf(
@@ -750,6 +751,9 @@ def mtf(
     if not isinstance(diffraction, (bool, np.bool_)):  # a string such as "no" is truthy
         raise ValueError(f"mtf: diffraction must be True or False, got {diffraction!r}")
     dtype = jnp.result_type(float)
+    for arg, v in (("wavelengths", wavelengths), ("pixel_size", pixel_size)):
+        if v is not None:  # before jnp.asarray, which reads "0.55" as 0.55
+            checks.real_values(v, arg, "mtf", "µm" if arg == "wavelengths" else "mm")
     wls = jnp.atleast_1d(jnp.asarray(lens.wavelengths if wavelengths is None else wavelengths,
                                      dtype))
     if wls.ndim != 1 or wls.size == 0:
@@ -775,7 +779,16 @@ def mtf(
     pix = lam_min * fnum / 4.0 if pixel_size is None else jnp.asarray(pixel_size, dtype)
     field, depth, _, pix, kernel_size = _prepare(lens, field, depth, None, kernel_size, pix,
                                                  model, "centroid", "mtf", newton_iters)
-    t, s = _mtf_impl(apertured(lens), field, depth, wls, freqs, pix, model=model,
-                     kernel_size=kernel_size,
-                     diffraction=bool(diffraction), newton_iters=newton_iters)
+    t, s, lit = _mtf_impl(apertured(lens), field, depth, wls, freqs, pix, model=model,
+                          kernel_size=kernel_size,
+                          diffraction=bool(diffraction), newton_iters=newton_iters)
+    # A wavelength without light had an MTF of 0 at every frequency (0 at 0 cycles/mm, and
+    # a dark wavelength pulled the polychromatic MTF down): refuse it, as psf does.
+    msg = ("mtf: no ray of the beam reaches the image surface (the field is vignetted or "
+           "beyond the lens's coverage), so there is no MTF")
+    if checks.is_traced(lit):
+        t = eqx.error_if(t, ~jnp.all(lit), msg)
+    elif not np.all(np.asarray(lit)):
+        dark = np.asarray(wls)[~np.asarray(lit)]
+        raise ValueError(f"{msg} (field {checks.fmt(field)} deg, at {checks.fmt(dark)} µm)")
     return freqs, t, s

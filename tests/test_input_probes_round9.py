@@ -1,0 +1,130 @@
+"""Ninth round of bad-input probes: each case used to give a silent wrong answer (a NaN pupil
+point counted as a vignetted ray, an MTF of 0 for a field without light, a string read as
+a number, a switch "no" read as True) or an error from deep inside a compiled trace; each is
+now refused before the work starts, naming the argument, the value, the range and the unit.
+"""
+
+from __future__ import annotations
+
+import equinox as eqx
+import jax.numpy as jnp
+import numpy as np
+import pytest
+
+import jaxlens as jl
+from jaxlens import analysis
+from jaxlens.analysis.report import report_data
+from jaxlens.imaging import psf as P
+
+NAN = float("nan")
+SMALL = P.GeometricPSF(pupil=8)
+
+
+@pytest.fixture(scope="module")
+def cooke():
+    return jl.zoo.cooke_triplet()
+
+
+# ---------------------------------------------------------------- spot analyses: the pupil
+
+
+@pytest.mark.parametrize("call", [
+    lambda l, p: analysis.rms_spot(l, pupil=p),
+    lambda l, p: analysis.spot_rays(l, 5.0, pupil=p),
+    lambda l, p: analysis.clear_semi_diameters(l, pupil=p),
+], ids=["rms_spot", "spot_rays", "clear_semi_diameters"])
+@pytest.mark.parametrize("bad", [NAN, np.inf])
+def test_spot_analyses_refuse_a_pupil_point_that_is_not_finite(cooke, call, bad):
+    """The pupil reached the compiled trace as a tracer, where its finite check is skipped: a
+    NaN point's ray failed and counted as vignetted (rms_spot's valid_fraction fell to 0.5,
+    its radius came from the other rays)."""
+    pupil = jnp.array([[0.0, 0.0], [bad, 0.5]])
+    with pytest.raises(ValueError, match=r"pupil \(normalised pupil coordinates\) holds 1 NaN or "
+                                         r"infinite value\(s\), first at index \(1, 0\)"):
+        call(cooke, pupil)
+
+
+def test_spot_analyses_refuse_a_pupil_of_strings_or_the_wrong_shape(cooke):
+    with pytest.raises(TypeError, match=r"rms_spot: pupil must be a real number or an array of "
+                                        r"real numbers \(normalised pupil coordinates\), got str"):
+        analysis.rms_spot(cooke, pupil="abc")
+    # was a TypeError from jnp.concatenate about shapes (65, 2) and (3, 3)
+    with pytest.raises(ValueError, match=r"clear_semi_diameters: pupil must be \[M, 2\] "
+                                         r"normalised pupil points \(Px, Py\), got shape \(3, 3\)"):
+        analysis.clear_semi_diameters(cooke, pupil=jnp.zeros((3, 3)))
+    # finite pupils still work, as lists too
+    r = analysis.rms_spot(cooke, pupil=[[0.0, 0.0], [0.1, 0.5]])
+    assert np.all(np.isfinite(np.asarray(r.polychromatic)))
+
+
+# ---------------------------------------------------------------- the lens's own wavelengths
+
+
+def _wavelengths(lens, wl):
+    return eqx.tree_at(lambda x: x.wavelengths, lens, jnp.asarray(wl))
+
+
+@pytest.mark.parametrize("call, where", [
+    (lambda l: analysis.rms_spot(l), "rms_spot"),
+    (lambda l: analysis.clear_semi_diameters(l), "clear_semi_diameters"),
+    (lambda l: report_data(l), "report"),
+])
+def test_the_lens_wavelengths_are_checked_before_the_trace(cooke, call, where):
+    """A lens whose wavelengths lie outside its glasses' data (eqx.tree_at skips the Lens's
+    checks) failed with an EquinoxRuntimeError from inside the compiled trace, after the
+    work."""
+    lens = _wavelengths(cooke, [0.25, 0.5875618, 0.6562725])
+    with pytest.raises(ValueError, match=rf"{where}: the lens's wavelengths 0.25 µm is outside "
+                                         rf"0.48\d*–0.65\d* µm, the data range of SK16"):
+        call(lens)
+
+
+def test_the_primary_wavelength_alone_is_checked_where_only_it_is_used(cooke):
+    lens = _wavelengths(cooke, [0.25, 0.5875618, 0.6562725])
+    d = analysis.distortion(lens)  # the primary wavelength is in range: still computed
+    assert np.all(np.isfinite(np.asarray(d.percent_ftan)))
+    lens = eqx.tree_at(lambda x: x.wavelengths, cooke, jnp.array([0.48, 0.25, 0.6]))
+    with pytest.raises(ValueError, match=r"chief_ray: the lens's primary wavelength 0.25 µm is "
+                                         r"outside"):
+        analysis.chief_ray(lens, 5.0)
+
+
+# ---------------------------------------------------------------- ray fans, field curvature
+
+
+def test_fans_and_curvature_refuse_strings_for_numbers(cooke):
+    """jnp.asarray("5", float) is 5.0: a field given as a string was traced."""
+    with pytest.raises(TypeError, match=r"ray_fan: field must be a real number or an array of "
+                                        r"real numbers \(deg\), got str '5'"):
+        analysis.ray_fan(cooke, "5")
+    with pytest.raises(TypeError, match=r"field_curvature: fields must be a real number .* "
+                                        r"\(deg\), got str 'abc'"):  # was "could not convert"
+        analysis.field_curvature(cooke, fields="abc")
+    with pytest.raises(TypeError, match=r"ray_fan: wavelengths must be a real number .*\(µm\)"):
+        analysis.ray_fan(cooke, 5.0, wavelengths="0.55")
+
+
+# ---------------------------------------------------------------- MTF and PSF
+
+
+@pytest.mark.parametrize("model", [SMALL, P.CoherentPSF(pupil=8)], ids=["geometric", "coherent"])
+def test_mtf_of_a_field_without_light_is_refused_not_zero(cooke, model):
+    """60° is far beyond the triplet's coverage: the MTF was 0 at every frequency (0 even at
+    0 cycles/mm), where psf refuses the same field."""
+    with pytest.raises(ValueError, match=r"mtf: no ray of the beam reaches the image surface "
+                                         r"\(the field is vignetted or beyond the lens's "
+                                         r"coverage\), so there is no MTF \(field 60 deg"):
+        P.mtf(cooke, 60.0, model=model, kernel_size=16)
+    f, t, s = P.mtf(cooke, 10.0, model=SMALL)
+    assert abs(float(t[0]) - 1.0) < 1e-6 and abs(float(s[0]) - 1.0) < 1e-6
+
+
+def test_psf_and_mtf_refuse_strings_for_numbers(cooke):
+    with pytest.raises(TypeError, match=r"psf: wavelength must be a real number .*\(µm\), got "
+                                        r"str '0.55'"):
+        jl.psf(cooke, 0.0, wavelength="0.55", kernel_size=15, pixel_size=0.005, model=SMALL)
+    with pytest.raises(TypeError, match=r"mtf: wavelengths must be a real number .*\(µm\)"):
+        P.mtf(cooke, 0.0, wavelengths="0.55", model=SMALL)
+    with pytest.raises(TypeError, match=r"mtf: pixel_size must be a real number .*\(mm\), got "
+                                        r"str '0.001'"):
+        P.mtf(cooke, 0.0, pixel_size="0.001", model=P.CoherentPSF(pupil=8), kernel_size=8)
