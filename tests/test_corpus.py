@@ -26,6 +26,9 @@ D_LINE = 0.5875618
 # only and the two programs extend them to its 0.55 µm differently (index 4e-6 and 6e-5
 # apart), so its value is optiland's at the d line, where both take nd exactly.
 OPTILAND_EFL = {
+    # optiland keeps a file's lens units: this file is in inches (UNIT IN), its f2 is
+    # 0.7300916303992044 in, and jaxlens works in mm.
+    "optiland_circular_aperture_example_with_aperture.zmx": (0.7300916303992044 * 25.4, None),
     "optiland_lens1.zmx": (24.990670494950276, None),
     "optiland_lens_floa.zmx": (20.210667479300504, None),
     "optiland_lens_thorlabs_iso_8859_1.zmx": (14.995572148674018, None),
@@ -40,6 +43,10 @@ OPTILAND_EFL = {
 
 # What each file that loads is reported for (a ZmxWarning naming the line), if anything.
 EXPECTED_WARNINGS = {
+    # OpticStudio 2022 settings of no documented meaning to jaxlens: reported, not guessed.
+    "optiland_circular_aperture_example_with_aperture.zmx": [
+        r":5: unknown keyword 'IWDP' ignored", r":66: unknown keyword 'EERA' ignored",
+        r":18: the file aims rays at the stop"],
     "optiland_lens_floa.zmx": [r":6: FTYP announces 3 fields, YFLN gives 1"],
     "rayoptics_HoO-V2C18Ex66.zmx": [r":11: the file aims rays at the stop"],
     "rayoptics_US00583336-2-scaled.zmx": [r":12: the file aims rays at the stop",

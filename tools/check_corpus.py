@@ -1,8 +1,9 @@
 """Run a folder of Zemax ``.zmx`` files through jaxlens (and optiland, where installed).
 
 For each file: does jaxlens load it (or refuse it, with the message), its image-space EFL
-(|n′|/Φ; optiland reports n′/Φ, negative after an odd number of mirrors, and the
-comparison takes that sign into account), whether ``load → save → load`` is exact, and, with
+in mm (|n′|/Φ; optiland reports n′/Φ in the file's lens units, converted here to mm with the
+file's UNIT line; n′/Φ is negative after an odd number of mirrors, and the comparison takes
+that sign into account), whether ``load → save → load`` is exact, and, with
 optiland installed: optiland's EFL of the original file and of the file jaxlens wrote, the
 relative EFL difference, and whether optiland reads the written file with jaxlens's clipping
 (CLAP radii) and image-space medium.
@@ -32,6 +33,8 @@ jax.config.update("jax_enable_x64", True)
 import numpy as np  # noqa: E402
 
 import jaxlens as jl  # noqa: E402
+from jaxlens.io.zmx import decode  # noqa: E402
+from jaxlens.io.zmx_parse import UNITS  # noqa: E402
 
 try:  # optional
     import optiland  # noqa: F401
@@ -42,13 +45,27 @@ except ImportError:
 EFL_RTOL = 1e-6
 
 
+def lens_unit_mm(path: str) -> float:
+    """The millimetres in one lens unit of a .zmx file (its UNIT line; MM without one)."""
+    with open(path, "rb") as fh:
+        text = decode(fh.read(), path)
+    for line in text.splitlines():
+        t = line.split()
+        if len(t) > 1 and t[0] == "UNIT":
+            return UNITS.get(t[1].upper(), 1.0)
+    return 1.0
+
+
 def optiland_efl(path: str):
-    """optiland's EFL (f2) of a .zmx file and the optic, or (None, None, error text)."""
+    """optiland's EFL (f2) of a .zmx file in mm and the optic, or (None, None, error text).
+
+    optiland keeps a file's lens units (a file in inches gives its EFL in inches); jaxlens
+    works in mm, so the EFL is converted with the file's UNIT line before the comparison."""
     try:
         with warnings.catch_warnings(), contextlib.redirect_stdout(io.StringIO()):
             warnings.simplefilter("ignore")
             optic = load_zemax_file(path)
-            return float(np.asarray(optic.paraxial.f2())), optic, ""
+            return float(np.asarray(optic.paraxial.f2())) * lens_unit_mm(path), optic, ""
     except Exception as e:  # noqa: BLE001  (report whatever optiland raises)
         return None, None, f"{type(e).__name__}: {str(e)[:120]}"
 
