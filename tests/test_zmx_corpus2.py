@@ -10,6 +10,7 @@ import pathlib
 import sys
 import warnings
 
+import numpy as np
 import pytest
 
 import jaxlens as jl
@@ -62,3 +63,67 @@ def test_corpus_tool_agrees_with_optiland_on_the_inch_file():
     assert rec["status"] == "loaded"
     assert rec["optiland_efl"] == pytest.approx(OPTILAND_F2_INCHES * 25.4, rel=1e-12)
     assert rec["rel_diff"] < 1e-12
+
+
+# ------------------------------------------------- the extended odd asphere (TYPE XOSPHERE)
+
+XO_TERMS = "  XDAT 1 4\n  XDAT 2 5\n  XDAT 3 1E-2\n  XDAT 4 0.2\n  XDAT 5 -5E-2\n  XDAT 6 2E-2\n"
+A_OVER_R = [1e-2 / 5, 0.2 / 5**2, -5e-2 / 5**3, 2e-2 / 5**4]  # β_i = A_i / R^i
+
+
+def _xo(lines, unit="MM"):
+    """A plano-convex singlet whose first surface is ``lines``: a dispersionless model glass
+    n = 1.5 and a flat back, so 1/EFL = (n − 1)·(paraxial curvature of surface 1)."""
+    return (f"VERS 190513 80 123457\nUNIT {unit} X W X CM MR CPMM\nENPD 10\n"
+            "WAVM 1 0.5875618 1\nSURF 0\n  TYPE STANDARD\n  CURV 0.0\n  DISZ INFINITY\n"
+            f"SURF 1\n  STOP\n{lines}  DISZ 5\n  GLAS ___BLANK 1 0 1.5 0\nSURF 2\n"
+            "  TYPE STANDARD\n  CURV 0.0\n  DISZ 40\nSURF 3\n  TYPE STANDARD\n  CURV 0.0\n"
+            "  DISZ 0\n")
+
+
+def test_xosphere_is_the_odd_asphere_of_its_normalised_terms():
+    """Zemax's extended odd asphere: conic + Σ A_i (r/R)^i, XDAT 1 = N, XDAT 2 = R, XDAT 3… =
+    A_1 … A_N. It is the odd asphere β_i = A_i / R^i (refused before as an unknown type)."""
+    xo = jl.io.zmx.loads(_xo(f"  TYPE XOSPHERE\n  CURV 0.02\n  CONI -0.5\n{XO_TERMS}"))
+    odd = jl.io.zmx.loads(_xo("  TYPE ODDASPHE\n  CURV 0.02\n  CONI -0.5\n" + "".join(
+        f"  PARM {i} {b!r}\n" for i, b in enumerate(A_OVER_R, start=1))))
+    s = xo.surfaces[0]
+    assert type(s) is jl.OddAsphere and float(s.c) == 0.02 and float(s.k) == -0.5
+    np.testing.assert_allclose(np.asarray(s.coeffs), A_OVER_R, rtol=1e-15)
+    np.testing.assert_allclose(np.asarray(s.coeffs), np.asarray(odd.surfaces[0].coeffs),
+                               rtol=1e-15)
+    # β_2 r² adds 2 β_2 to the paraxial curvature: analytic EFL of the plano-convex lens.
+    efl = float(jl.paraxial_data(xo).efl_image_space)
+    assert efl == pytest.approx(1 / (0.5 * (0.02 + 2 * A_OVER_R[1])), rel=1e-13)
+
+
+def test_xosphere_in_inches():
+    """R is in lens units like the sag: in inches, β_i (mm^(1−i)) = A_i / R^i · 25.4^(1−i)."""
+    s = jl.io.zmx.loads(_xo(f"  TYPE XOSPHERE\n  CURV 0.02\n{XO_TERMS}", unit="IN")).surfaces[0]
+    assert float(s.c) == pytest.approx(0.02 / 25.4, rel=1e-15)
+    np.testing.assert_allclose(np.asarray(s.coeffs),
+                               np.array(A_OVER_R) * 25.4 ** (1 - np.arange(1, 5)), rtol=1e-14)
+
+
+def test_xosphere_round_trip(tmp_path):
+    """Four terms are written back as ODDASPHE (PARM 1..4 = β_i) and read to the same lens."""
+    lens = jl.io.zmx.loads(_xo(f"  TYPE XOSPHERE\n  CURV 0.02\n  CONI -0.5\n{XO_TERMS}"))
+    jl.save(lens, tmp_path / "w.zmx")
+    back = jl.load(tmp_path / "w.zmx")
+    assert type(back.surfaces[0]) is jl.OddAsphere
+    np.testing.assert_array_equal(np.asarray(back.surfaces[0].coeffs),
+                                  np.asarray(lens.surfaces[0].coeffs))
+
+
+@pytest.mark.parametrize("lines, line, reason", [
+    ("  XDAT 1 4\n  XDAT 3 1E-2\n", 11, r"XOSPHERE needs XDAT 1 \(number of terms\) and XDAT 2"),
+    ("  XDAT 1 241\n  XDAT 2 5\n", 13, r"XDAT 1 must be a whole number of terms, 0\.\.240"),
+    ("  XDAT 1 2\n  XDAT 2 0\n", 14, r"the normalisation radius \(XDAT 2\) must be > 0"),
+    ("  XDAT 1 1\n  XDAT 2 5\n  XDAT 4 1E-3\n", 15, r"coefficient beyond the 1 terms"),
+    ("  PARM 1 1E-3\n  XDAT 1 1\n  XDAT 2 5\n", 13, r"XOSPHERE has no parameters \(PARM\)"),
+])
+def test_xosphere_malformed_is_refused_with_its_line(tmp_path, lines, line, reason):
+    p = tmp_path / "xo.zmx"
+    p.write_text(_xo(f"  TYPE XOSPHERE\n  CURV 0.02\n{lines}"))
+    with pytest.raises(ValueError, match=f"^{p}:{line}: {reason}"):
+        jl.load(p)

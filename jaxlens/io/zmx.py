@@ -13,7 +13,10 @@ What is read and written:
       terms, XDAT 2 = normalisation radius, XDAT 3… = the r², r⁴, … coefficients; used
       for even aspheres with more than 8 terms) and ``TYPE ODDASPHE`` (an ``OddAsphere``:
       PARM 1..8 = β_1 … β_8 on r, r², …, r⁸; a nonzero PARM beyond 8 is refused, and an
-      ``OddAsphere`` with more than 8 terms is not written). ``TYPE TILTSURF`` (a
+      ``OddAsphere`` with more than 8 terms is not written); ``TYPE XOSPHERE`` (extended odd
+      asphere, read as an ``OddAsphere``: XDAT 1 = number of terms N, XDAT 2 = normalisation
+      radius R, XDAT 3… = A_1 … A_N on (r/R)¹ … (r/R)ᴺ, so β_i = A_i / R^i; no PARM).
+      ``TYPE TILTSURF`` (a
       ``TiltedPlane``, the plane z = tan θx·x + tan θy·y through the vertex: PARM 1 = tan θx,
       PARM 2 = tan θy, dimensionless; CURV, CONI, other PARMs and XDAT 0; the frame of the
       surfaces after it is unchanged, unlike COORDBRK). ``TYPE BINARY_2`` (a ``Binary2``,

@@ -15,7 +15,7 @@ from ..optics.catalog import decode_zemax_text as decode
 from ..optics.coordinates import CoordinateBreak
 from ..optics.lens import INFINITE_OBJECT_MM, Lens
 from ..optics.materials import Air
-from ..optics.surfaces import AbstractSurface, EvenAsphere, Hybrid, Standard
+from ..optics.surfaces import AbstractSurface, EvenAsphere, Hybrid, OddAsphere, Standard
 from . import zmx_surfaces, zmx_system
 from .lensfile import apply_aperture
 from .zmx_common import (
@@ -50,13 +50,13 @@ def _sd(s: ZmxSurface, unit: float) -> float:
     return v * unit
 
 
-def _xdat_terms(s: ZmxSurface, unit: float, what: str):
+def _xdat_terms(s: ZmxSurface, unit: float, what: str, most: int = _MAX_XDAT_TERMS):
     where = s.type_line or s.line
     if 1 not in s.xdat or 2 not in s.xdat:
         raise where.error(f"{what} needs XDAT 1 (number of terms) and XDAT 2 (norm radius)")
     n_val, n_line = s.xdat[1]
-    if n_val != int(n_val) or not 0 <= n_val <= _MAX_XDAT_TERMS:
-        raise n_line.error(f"XDAT 1 must be a whole number of terms, 0..{_MAX_XDAT_TERMS}")
+    if n_val != int(n_val) or not 0 <= n_val <= most:
+        raise n_line.error(f"XDAT 1 must be a whole number of terms, 0..{most}")
     norm, norm_line = s.xdat[2]
     if not norm > 0:
         raise norm_line.error("the normalisation radius (XDAT 2) must be > 0")
@@ -102,6 +102,15 @@ def _surface_of(s: ZmxSurface, unit: float) -> AbstractSurface:
         )
     if s.type == "ODDASPHE":
         return zmx_surfaces.odd_asphere(s, unit, sd)
+    if s.type == "XOSPHERE":  # Σ A_i (r/R)^i, i = 1..N: the odd asphere's β_i = A_i / R^i
+        for _, (v, ln) in sorted(s.parm.items()):
+            if v != 0:
+                raise ln.error("XOSPHERE has no parameters (PARM); its terms are extra data "
+                               "(XDAT 1 = number of terms, 2 = normalisation radius, 3… = A_i)")
+        n, norm, vals = _xdat_terms(s, unit, "XOSPHERE", zmx_surfaces.MAX_XOSPHERE_TERMS)
+        b = [v / norm**i * unit ** (1 - i) for i, v in enumerate(vals, start=1)]
+        return OddAsphere(c=_arr(c), k=_arr(s.coni), coeffs=_arr(np.array(b, np.float64)),
+                          semi_diameter=_arr(sd))
     if s.type == "TILTSURF":
         return zmx_surfaces.tilted_plane(s, sd)
     if s.type == "BINARY_2":
@@ -116,7 +125,7 @@ def _surface_of(s: ZmxSurface, unit: float) -> AbstractSurface:
         return _coordinate_break(s, unit)
     raise where.error(
         f"surface type {s.type} is not supported (STANDARD, EVENASPH, ODDASPHE, XASPHERE, "
-        f"XPOLYNOM, TOROIDAL, PARAXIAL, TILTSURF, BINARY_2, COORDBRK)"
+        f"XOSPHERE, XPOLYNOM, TOROIDAL, PARAXIAL, TILTSURF, BINARY_2, COORDBRK)"
     )
 
 

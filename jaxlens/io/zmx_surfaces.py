@@ -93,6 +93,10 @@ def tilted_plane(s, sd: float) -> TiltedPlane:
 MAX_BINARY2_TERMS = 240
 """The most phase terms a BINARY_2 holds (Zemax's extra data: 242 values, N and R first)."""
 
+MAX_XOSPHERE_TERMS = 240
+"""The most terms an extended odd asphere (XOSPHERE) holds (its extra data: 242 values, the
+number of terms and the normalisation radius first)."""
+
 
 def binary2(s, unit: float, sd: float) -> Binary2:
     """A ``Binary2`` from a BINARY_2 surface block (the reader's surface record)."""
