@@ -128,3 +128,116 @@ def test_psf_and_mtf_refuse_strings_for_numbers(cooke):
     with pytest.raises(TypeError, match=r"mtf: pixel_size must be a real number .*\(mm\), got "
                                         r"str '0.001'"):
         P.mtf(cooke, 0.0, pixel_size="0.001", model=P.CoherentPSF(pupil=8), kernel_size=8)
+
+
+# ---------------------------------------------------------------- render and distortion maps
+
+
+@pytest.fixture(scope="module")
+def small_sensor(cooke):
+    return eqx.tree_at(lambda x: x.sensor, cooke, jl.Sensor((8, 8), 0.01),
+                       is_leaf=lambda x: x is None)
+
+
+@pytest.mark.parametrize("kw, error, match", [
+    (dict(relative_illumination="no"), ValueError,
+     r"render: relative_illumination must be True or False, got 'no'"),  # "no" read as True
+    (dict(checkpoint=None), ValueError, r"render: checkpoint must be True or False, got None"),
+    (dict(sensor=(8, 8)), TypeError, r"render: sensor must be a jaxlens.Sensor, got tuple"),
+    (dict(wavelengths=["0.5", "0.55", "0.6"]), TypeError,
+     r"render: wavelengths must be a real number or an array of real numbers \(µm\)"),
+])
+def test_render_refuses_switches_sensors_and_wavelengths_of_the_wrong_type(small_sensor, kw,
+                                                                          error, match):
+    import jax
+
+    with pytest.raises(error, match=match):
+        jl.render(small_sensor, jnp.ones((8, 8, 3)), spp=1, key=jax.random.PRNGKey(0), **kw)
+
+
+def test_render_names_a_half_precision_scene(small_sensor):
+    import jax
+
+    # was "footprints: dtype must be None, float32 or float64"
+    with pytest.raises(ValueError, match=r"render: scene must be float32 or float64, got dtype "
+                                         r"float16"):
+        jl.render(small_sensor, jnp.ones((8, 8, 3), jnp.float16), spp=1,
+                  key=jax.random.PRNGKey(0))
+
+
+def test_distortion_map_refuses_chief_rays_that_miss_the_image(cooke):
+    """A 160 mm sensor behind the 50 mm triplet: the corner chief rays (66°) miss a surface and
+    stopped there, so the map gave a plausible (9.6, 9.6) mm for the ideal point (70, 70)."""
+    from jaxlens.imaging import distortion as D
+
+    big = eqx.tree_at(lambda x: x.sensor, cooke, jl.Sensor((8, 8), 20.0),
+                      is_leaf=lambda x: x is None)
+    msg = (r"distortion_map: the real chief ray of grid point \(row 0, col 0\) \(first of "
+           r"\d+\), ideal image point \(70, -70\) mm, does not reach the image surface")
+    with pytest.raises(ValueError, match=msg):
+        D.distortion_map(big, grid=(3, 3))
+    with pytest.raises(ValueError, match=msg):
+        D.prewarp(big, jnp.ones((8, 8, 3)), grid=(3, 3))
+    ok = eqx.tree_at(lambda x: x.sensor, cooke, jl.Sensor((8, 8), 2.0),
+                     is_leaf=lambda x: x is None)
+    assert np.all(np.isfinite(np.asarray(D.distortion_map(ok, grid=(3, 3)).real)))
+
+
+def test_prewarp_refuses_a_nan_scene_and_another_aspect_ratio(small_sensor):
+    from jaxlens.imaging import distortion as D
+
+    with pytest.raises(ValueError, match=r"prewarp: scene \(linear pixel values\) holds 1 NaN"):
+        D.prewarp(small_sensor, jnp.ones((8, 8, 3)).at[1, 2, 0].set(NAN), grid=(3, 3))
+    with pytest.raises(ValueError, match=r"prewarp: scene of 8x80 pixels does not match the 8x8 "
+                                         r"sensor"):
+        D.prewarp(small_sensor, jnp.ones((8, 80, 3)), grid=(3, 3))
+
+
+# ---------------------------------------------------------------- design seeds
+
+
+@pytest.mark.parametrize("seeds, kw, match", [
+    ("12", {}, r"design: seeds must be a non-empty list of whole numbers >= 0, got '12'"),
+    ([1.5], {}, r"design: seeds must be a whole number in \[0, inf\), got 1.5"),
+    ([1, 1], {}, r"design: seeds must be distinct \(a repeated seed designs the same lens "
+                 r"twice\), got \[1, 1\]"),
+    ([2**32], {}, r"design: seeds must be whole numbers in \[0, 4294967295\] \(seeds of JAX's "
+                    r"PRNG\), got 4294967296"),
+    ([0], dict(on_nonfinite="ignore"), r"design: on_nonfinite must be 'raise' or 'drop'"),
+    ([0], dict(devices=[]), r"design: devices must be a non-empty list of JAX devices"),
+])
+def test_design_checks_its_seeds_before_any_work(seeds, kw, match):
+    """design() took int(s) of every seed: "12" was seeds 1 and 2, 1.5 was 1; a repeat
+    designed the same lens twice; 2**32 was seed 0 again without x64 (and 2**63 overflowed
+    with it); devices=[] divided by zero."""
+    from jaxlens.design import DesignSpec, design
+
+    with pytest.raises(ValueError, match=match):
+        design(DesignSpec(), seeds, progress=False, **kw)
+
+
+def test_random_starts_refuses_a_seed_beyond_uint32():
+    from jaxlens.design import DesignSpec, random_starts
+
+    with pytest.raises(ValueError, match=r"random_starts: seeds must be whole numbers in "
+                                         r"\[0, 4294967295\] \(seeds of JAX's PRNG\), got "
+                                         r"4294967296"):
+        random_starts(DesignSpec(), [2**32])
+    assert random_starts(DesignSpec(), np.arange(2)).c.shape[0] == 2
+
+
+@pytest.mark.parametrize("args", [["--first-seed", "99999999999999999999"],
+                                  ["--seed-list", "4294967296"],
+                                  ["--first-seed", "2147483648", "--population", "2"]])
+def test_classical_cli_refuses_seeds_beyond_uint32_before_the_run(tmp_path, capsys,
+                                                                  monkeypatch, args):
+    from jaxlens.experiments import classical
+
+    def started(*a):
+        raise AssertionError("the run started")
+
+    monkeypatch.setattr(classical, "run_design", started)
+    assert classical.main([*args, "--out", str(tmp_path / "run")]) == 2
+    lines = capsys.readouterr().err.strip().splitlines()
+    assert len(lines) == 1 and "seeds must keep them in [0, 4294967295]" in lines[0], lines
+    assert not (tmp_path / "run").exists()

@@ -146,14 +146,31 @@ def random_params(spec: DesignSpec, key, dtype=None) -> LensParams:
     return LensParams(c=c, a=a, k=jnp.zeros((s,), dtype), d=d)
 
 
-def random_starts(spec: DesignSpec, seeds, dtype=None) -> LensParams:
-    """Random starts for a list of integer seeds, stacked on a leading axis."""
+MAX_SEED = 2**32 - 1
+"""Largest seed: JAX without x64 takes a seed modulo 2³² (seed 2³² repeated seed 0's start),
+and with x64 a seed of 2⁶³ or more overflowed."""
+
+
+def check_seeds(seeds, where: str, *, distinct: bool = False) -> list[int]:
+    """A non-empty list of whole-number seeds in [0, ``MAX_SEED``] (``distinct``: no repeat,
+    which would design the same lens twice); returns them as ints."""
     # int() would truncate a seed of 1.5 to 1 and read "12" as two seeds 1 and 2.
     if isinstance(seeds, str | bytes) or not hasattr(seeds, "__len__") or len(seeds) == 0:
-        raise ValueError(f"random_starts: seeds must be a non-empty list of whole numbers "
+        raise ValueError(f"{where}: seeds must be a non-empty list of whole numbers "
                          f">= 0, got {seeds!r}")
-    for s in seeds:
-        checks.number(s, "seeds", "random_starts", lo=0, integer=True)
+    out = [checks.number(s, "seeds", where, lo=0, integer=True) for s in seeds]
+    if max(out) > MAX_SEED:
+        raise ValueError(f"{where}: seeds must be whole numbers in [0, {MAX_SEED}] (seeds of "
+                         f"JAX's PRNG), got {max(out)}")
+    if distinct and len(set(out)) < len(out):
+        raise ValueError(f"{where}: seeds must be distinct (a repeated seed designs the same "
+                         f"lens twice), got {list(seeds)!r}")
+    return out
+
+
+def random_starts(spec: DesignSpec, seeds, dtype=None) -> LensParams:
+    """Random starts for a list of integer seeds, stacked on a leading axis."""
+    seeds = check_seeds(seeds, "random_starts")
     checks.float_dtype(dtype, "random_starts")
     keys = jnp.stack([jax.random.PRNGKey(int(s)) for s in seeds])
     return jax.vmap(lambda k: random_params(spec, k, dtype))(keys)

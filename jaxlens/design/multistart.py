@@ -21,7 +21,7 @@ from jax.sharding import Mesh, NamedSharding, PartitionSpec
 
 from ..optics import catalog, checks
 from .curriculum import History, Stage, paper_stages, run, stage_args
-from .init import gap_bounds, parameterization, random_starts
+from .init import MAX_SEED, check_seeds, gap_bounds, parameterization, random_starts
 from .losses import ImageObjective, Objective, RayLoss, reverse_mode
 from .materials import (
     DEFAULT_CATALOGS,
@@ -305,12 +305,24 @@ def design(
     Returns:
         A :class:`DesignResult`.
     """
-    seeds = [int(s) for s in seeds]
-    if not seeds:
-        raise ValueError("design: need at least one seed")
+    # [int(s) for s in seeds] read "12" as seeds 1 and 2 and a seed of 1.5 as 1.
+    seeds = check_seeds(seeds, "design", distinct=True)
     if config.population < 1:
         raise ValueError(f"design: population must be at least 1 start per design, got "
                          f"{config.population}")
+    if max(seeds) * config.population + config.population - 1 > MAX_SEED:
+        raise ValueError(f"design: seed {max(seeds)} with population {config.population} draws "
+                         f"starts beyond the largest seed {MAX_SEED} (s·P … s·P + P − 1)")
+    if on_nonfinite not in ("raise", "drop"):  # run() would refuse it after the set-up
+        raise ValueError(f"design: on_nonfinite must be 'raise' or 'drop', got "
+                         f"{on_nonfinite!r}")
+    if isinstance(devices, str) or (devices is not None and not hasattr(devices, "__iter__")):
+        raise ValueError(f"design: devices must be a non-empty list of JAX devices or None "
+                         f"(all), got {devices!r}")
+    devices = None if devices is None else list(devices)
+    if devices == []:  # a shard over no device divided by zero
+        raise ValueError("design: devices must be a non-empty list of JAX devices or None "
+                         "(all), got []")
     dtype = jnp.float64 if config.float64 else jnp.float32
     if config.float64 and not jax.config.jax_enable_x64:
         raise ValueError("design: float64 needs jax_enable_x64")

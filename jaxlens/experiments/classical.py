@@ -249,6 +249,13 @@ def check_args(args) -> None:
                              f"{args.seed_list!r}")
         if len(set(map(int, parts))) < len(parts):  # a repeat is the same design twice
             raise ValueError(f"{w}: --seed-list needs distinct seeds, got {args.seed_list!r}")
+    from jaxlens.design.init import MAX_SEED  # the design package: imported by the spec check
+
+    top = args.first_seed + args.ablation_seeds - 1 if args.ablation else max(_seeds(args))
+    last = top * args.population + args.population - 1
+    if last > MAX_SEED:  # design() refused it once the run folder existed
+        raise ValueError(f"{w}: the seeds (with --population {args.population}) draw random "
+                         f"starts up to {last}; seeds must keep them in [0, {MAX_SEED}]")
     try:  # checked even when unused (--select-materials fixed): a typo must not go unseen
         CatalogRegion.of(_catalogs(args))
     except ValueError as e:

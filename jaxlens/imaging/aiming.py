@@ -135,10 +135,13 @@ def newton_2d(fn, x0, params, iters: int, *, implicit_gradient: bool = True):
     return x - inv @ fn(x, params)
 
 
-def chief_point(lens, field, depth, newton_iters) -> Array:
+def chief_point(lens, field, depth, newton_iters, *, with_valid: bool = False):
     """Image-surface (x, y) of the real chief ray (through the stop centre), primary λ.
 
     A reference point, so it is traced without clipping or obscurations: a blocked chief
-    ray (a Cassegrain's, behind its secondary) would otherwise stop where it was blocked."""
+    ray (a Cassegrain's, behind its secondary) would otherwise stop where it was blocked.
+    With ``with_valid``, ``(xy, valid)``: a chief ray that misses a surface or is totally
+    reflected stops where it failed, and ``valid`` is False."""
     rays = stop_chief_ray(lens, field, depth, newton_iters=newton_iters)
-    return trace(unclipped(lens), rays, newton_iters=newton_iters, uniform=True).origin[0, :2]
+    out = trace(unclipped(lens), rays, newton_iters=newton_iters, uniform=True)
+    return (out.origin[0, :2], out.valid[0]) if with_valid else out.origin[0, :2]

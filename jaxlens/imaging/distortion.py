@@ -29,6 +29,7 @@ import math
 import equinox as eqx
 import jax
 import jax.numpy as jnp
+import numpy as np
 from jaxtyping import Array, Float
 
 from ..optics import checks, paraxial
@@ -69,8 +70,9 @@ def _sensor(lens: Lens, sensor):
 @eqx.filter_jit
 def _forward_map(lens, ideal, depth, newton_iters):
     fields = ideal_to_field(lens, ideal.reshape(-1, 2))
-    real = jax.vmap(lambda f: chief_point(lens, f, depth, newton_iters))(fields)
-    return real.reshape(ideal.shape)
+    real, valid = jax.vmap(lambda f: chief_point(lens, f, depth, newton_iters,
+                                                 with_valid=True))(fields)
+    return real.reshape(ideal.shape), valid.reshape(ideal.shape[:-1])
 
 
 def distortion_map(
@@ -100,7 +102,17 @@ def distortion_map(
     depth = sampling.static_depth(depth)
     lens = apertured(lens)
     ideal = sensor_grid(s.resolution, s.pixel_size, grid).astype(lens.epd.dtype)
-    return DistortionMap(ideal, _forward_map(lens, ideal, depth, newton_iters))
+    real, valid = _forward_map(lens, ideal, depth, newton_iters)
+    if not checks.is_traced(valid) and not np.all(np.asarray(valid)):
+        # Such a chief ray stops where it failed: its "image point" was a plausible number.
+        r, c = np.argwhere(~np.asarray(valid))[0]
+        x, y = np.asarray(ideal)[r, c]
+        raise ValueError(
+            f"distortion_map: the real chief ray of grid point (row {r}, col {c}) (first of "
+            f"{int(np.sum(~np.asarray(valid)))}), ideal image point ({x:.4g}, {y:.4g}) mm, does "
+            f"not reach the image surface (the sensor reaches beyond the lens's coverage); use "
+            f"a smaller sensor")
+    return DistortionMap(ideal, real)
 
 
 def inverse_distortion_map(
@@ -230,6 +242,12 @@ def prewarp(
     scene = jnp.asarray(scene)
     if scene.ndim != 3:
         raise ValueError(f"prewarp: scene must be [H, W, C], got {scene.shape}")
+    if not checks.is_traced(scene):
+        checks.finite_array(scene, "scene", "prewarp", "linear pixel values")
+    (rows, cols), (hs, ws) = s.resolution, scene.shape[:2]
+    if abs(hs * cols - ws * rows) >= max(rows, cols):  # as render: the warp would misalign it
+        raise ValueError(f"prewarp: scene of {hs}x{ws} pixels does not match the {rows}x{cols} "
+                         f"sensor (the aspect ratios differ; resize or crop the scene)")
     grid = checks.grid(grid, "prewarp", "grid", "points")
     dmap = distortion_map(lens, grid=grid, depth=depth, sensor=s, newton_iters=newton_iters)
     return _prewarp(scene, dmap.real.astype(scene.dtype), jnp.asarray(s.pixel_size),

@@ -520,10 +520,13 @@ def render(
                         f"{type(method).__name__}")
     if not isinstance(spp, (int, np.integer)) or isinstance(spp, bool) or spp <= 0:
         raise ValueError(f"render: spp must be a positive int, got {spp!r}")
-    if not isinstance(patch, int) or patch < 1:
+    if isinstance(patch, bool) or not isinstance(patch, (int, np.integer)) or patch < 1:
         raise ValueError(f"render: patch must be a positive int, got {patch!r}")
     if mesh is not None and not isinstance(mesh, Mesh):
         raise ValueError(f"render: mesh must be a jax.sharding.Mesh or None, got {mesh!r}")
+    # bool("no") is True: a switch is a bool, never read from another type.
+    checks.switch(checkpoint, "checkpoint", "render")
+    checks.switch(relative_illumination, "relative_illumination", "render")
     checks.prng_key(key, "render")
     if isinstance(method, PSFRender):
         kernel_size = method.kernel_size
@@ -538,6 +541,10 @@ def render(
     sensor = lens.sensor if sensor is None else sensor
     if sensor is None:
         raise ValueError("render: the lens has no sensor; pass sensor=jaxlens.Sensor(...)")
+    if not isinstance(sensor, Sensor):
+        raise TypeError(f"render: sensor must be a jaxlens.Sensor, got {type(sensor).__name__} "
+                        f"{sensor!r}")
+    checks.real_values(wavelengths, "wavelengths", "render", "µm")  # before jnp.asarray
     scene = jnp.asarray(scene)
     wls = jnp.atleast_1d(jnp.asarray(wavelengths, jnp.result_type(float)))
     if scene.ndim != 3:
@@ -547,6 +554,9 @@ def render(
             f"render: scene must be a linear float image, got dtype {scene.dtype} "
             "(convert with jaxlens.io.images.to_linear)"
         )
+    if jnp.finfo(scene.dtype).bits < 32:  # float16 failed later, naming "footprints: dtype"
+        raise ValueError(f"render: scene must be float32 or float64, got dtype {scene.dtype} "
+                         f"(convert with scene.astype(jnp.float32))")
     if wls.ndim != 1 or wls.shape[0] != scene.shape[-1]:
         raise ValueError(
             f"render: {scene.shape[-1]} scene channels need as many wavelengths, got "
