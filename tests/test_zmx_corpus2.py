@@ -14,6 +14,7 @@ import numpy as np
 import pytest
 
 import jaxlens as jl
+from jaxlens.optics import paraxial
 
 DATA = os.path.join(os.path.dirname(__file__), "data", "zmx")
 INCH_FILE = os.path.join(DATA, "optiland_circular_aperture_example_with_aperture.zmx")
@@ -127,3 +128,26 @@ def test_xosphere_malformed_is_refused_with_its_line(tmp_path, lines, line, reas
     p.write_text(_xo(f"  TYPE XOSPHERE\n  CURV 0.02\n{lines}"))
     with pytest.raises(ValueError, match=f"^{p}:{line}: {reason}"):
         jl.load(p)
+
+
+# ------------------------------------- Zemax's own pupil in a 2006-era file (PUPD, VERS 60801)
+
+PIVOTED = os.path.join(DATA, "zemax2006", "kraken_pivoted_lens.ZMX")
+
+
+def test_old_zemax_file_pupil_is_the_one_zemax_wrote():
+    """A course file saved by Zemax in 2006 (VERS 60801: XFLD/YFLD, FWGT, WAVL beside the
+    padded XFLN/YFLN/WAVN lines, PZUP and PPAR pickups): a doublet tilted 5° about a point by
+    two coordinate breaks, object heights 0, 7, 10 mm at 200 mm, the pupil given as a working
+    F/# (FNUM 6 1). Zemax computed the entrance pupil and wrote it on its PUPD line (position
+    0, diameter 33.86421929753): jaxlens's pupil, from the paraxial working F/#, is the same
+    to the 13 digits written, and the object heights become the chief-ray angles through
+    the pupil at the stop."""
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")  # every keyword of the file is known
+        lens = jl.load(PIVOTED)
+    assert float(lens.epd) == pytest.approx(3.386421929753e1, rel=1e-12)
+    assert float(paraxial.entrance_pupil_z(lens)) == pytest.approx(0.0, abs=1e-12)
+    np.testing.assert_allclose(np.abs(np.asarray(lens.fields)),
+                               np.degrees(np.arctan(np.array([0.0, 7.0, 10.0]) / 200.0)),
+                               rtol=1e-12, atol=1e-15)
