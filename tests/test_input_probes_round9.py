@@ -6,6 +6,9 @@ now refused before the work starts, naming the argument, the value, the range an
 
 from __future__ import annotations
 
+import pathlib
+import re
+
 import equinox as eqx
 import jax.numpy as jnp
 import numpy as np
@@ -17,6 +20,7 @@ from jaxlens.analysis.report import report_data
 from jaxlens.imaging import psf as P
 
 NAN = float("nan")
+DATA = pathlib.Path(jl.__file__).parent / "data" / "lenses"
 SMALL = P.GeometricPSF(pupil=8)
 
 
@@ -241,3 +245,46 @@ def test_classical_cli_refuses_seeds_beyond_uint32_before_the_run(tmp_path, caps
     lines = capsys.readouterr().err.strip().splitlines()
     assert len(lines) == 1 and "seeds must keep them in [0, 4294967295]" in lines[0], lines
     assert not (tmp_path / "run").exists()
+
+
+# ---------------------------------------------------------------- tolerancing
+
+
+@pytest.mark.parametrize("kw, error, match", [
+    (dict(min_valid=2.0), ValueError, r"monte_carlo: min_valid must be a finite number in "
+                                      r"\[0, 1\] \(fraction of a field's rays\), got 2.0"),
+    (dict(min_valid=NAN), ValueError, r"monte_carlo: min_valid must be a finite number"),
+    (dict(key=5), ValueError, r"monte_carlo: key must be None or one PRNG key"),
+    (dict(mtf_frequency="10"), TypeError, r"monte_carlo: mtf_frequency must be a real number "
+                                          r".*\(cycles/mm\), got str '10'"),
+])
+def test_monte_carlo_checks_its_options_before_the_trials(kw, error, match):
+    """min_valid was checked by yield_fraction only after every trial had been traced."""
+    from jaxlens.analysis import tolerance as T
+
+    class NoModel:  # any use of the model would be the trials starting
+        def __getattr__(self, name):
+            raise AssertionError("the trials started")
+
+    args = dict(trials=3, threshold_um=5.0, mtf_frequency=10.0) | kw
+    with pytest.raises(error, match=match):
+        T.monte_carlo(NoModel(), **args)
+
+
+@pytest.mark.parametrize("args, match", [
+    (["--seed", "-1"], r"--seed must be a whole number in \[0, 4294967295\], got -1"),
+    (["--seed", "99999999999999999999"], r"--seed must be a whole number in \[0, 4294967295\]"),
+    (["--out", "FILE"], r"--out .*out.txt is a file, not a folder"),
+])
+def test_tolerance_cli_refuses_a_bad_seed_and_a_file_for_out_first(tmp_path, capsys, args,
+                                                                    match):
+    """Both were found only after the sensitivity analysis (the seed) or the whole analysis
+    (--out, when writing)."""
+    from jaxlens.experiments import tolerance as cli
+
+    out = tmp_path / "out.txt"
+    out.write_text("x")
+    args = [str(out) if a == "FILE" else a for a in args]
+    assert cli.main([str(DATA / "cooke_triplet.json"), *args]) == 2
+    lines = capsys.readouterr().err.strip().splitlines()
+    assert len(lines) == 1 and re.search(match, lines[0]), lines

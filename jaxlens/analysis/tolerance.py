@@ -727,6 +727,11 @@ def monte_carlo(model: ToleranceModel, *, trials: int = 200, key=None,
         ``mtf_p50``/``mtf_p10`` after refocusing, ``yield``, ``threshold_um``).
     """
     threshold_um = _positive(threshold_um, "threshold_um", "µm")
+    # Checked before the trials: yield_fraction refused a bad min_valid after all of them.
+    checks.number(min_valid, "min_valid", "monte_carlo", lo=0, hi=1,
+                  unit="(fraction of a field's rays)")
+    checks.prng_key(key, "monte_carlo", optional=True)
+    checks.real_values(mtf_frequency, "mtf_frequency", "monte_carlo", "cycles/mm")
     if not (math.isfinite(float(mtf_frequency)) and float(mtf_frequency) >= 0):
         raise ValueError(f"monte_carlo: mtf_frequency must be a finite number >= 0 cycles/mm, "
                          f"got {mtf_frequency!r}")

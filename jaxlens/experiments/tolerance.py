@@ -235,8 +235,13 @@ def main(argv: list[str] | None = None) -> int:
     if not (math.isfinite(args.threshold) and args.threshold > 0):
         return fail(prog, ValueError(f"--threshold must be a finite number > 0 µm, got "
                                      f"{args.threshold}"))
+    if not 0 <= args.seed <= 2**32 - 1:  # PRNGKey overflowed after the sensitivity pass
+        return fail(prog, ValueError(f"--seed must be a whole number in [0, 4294967295], got "
+                                     f"{args.seed}"))
     if not os.path.isfile(args.design):
         return fail(prog, ValueError(f"design file {args.design!r} not found"))
+    if os.path.exists(args.out) and not os.path.isdir(args.out):  # found only when writing
+        return fail(prog, ValueError(f"--out {args.out} is a file, not a folder"))
     earlier = [f for f in OUTPUT_FILES if os.path.exists(os.path.join(args.out, f))]
     if earlier and not args.overwrite:
         return fail(prog, ValueError(f"--out {args.out} already holds {', '.join(earlier)} of an "
