@@ -288,3 +288,50 @@ def test_tolerance_cli_refuses_a_bad_seed_and_a_file_for_out_first(tmp_path, cap
     assert cli.main([str(DATA / "cooke_triplet.json"), *args]) == 2
     lines = capsys.readouterr().err.strip().splitlines()
     assert len(lines) == 1 and re.search(match, lines[0]), lines
+
+
+# ---------------------------------------------------------------- relative illumination, edof
+
+
+def test_relative_illumination_takes_one_wavelength_as_a_number(cooke):
+    from jaxlens.imaging.radiometry import relative_illumination
+
+    # was "Rays: wavelength must be a scalar or one value per ray (shape (256,))"
+    with pytest.raises(ValueError, match=r"relative_illumination: wavelength must be one value "
+                                         r"\(µm\), got shape \(2,\)"):
+        relative_illumination(cooke, [0.0, 5.0], wavelength=[0.55, 0.6], pupil=8)
+    with pytest.raises(TypeError, match=r"relative_illumination: wavelength must be a real "
+                                        r"number .*\(µm\), got str '0.55'"):
+        relative_illumination(cooke, [0.0, 5.0], wavelength="0.55", pupil=8)
+
+
+def _one_line_refusal(main, argv, capsys, monkeypatch) -> str:
+    import sys
+
+    monkeypatch.setattr(sys, "argv", ["python -m ...", *argv])
+    capsys.readouterr()
+    with pytest.raises(SystemExit) as e:
+        main()
+    assert e.value.code == 2
+    lines = capsys.readouterr().err.strip().splitlines()
+    assert len(lines) == 1, lines
+    return lines[0]
+
+
+def test_edof_clis_refuse_seeds_beyond_uint32_before_the_run(tmp_path, capsys, monkeypatch):
+    """Without x64 PRNGKey(2**32) is PRNGKey(0): the second seed repeated the first."""
+    from jaxlens.experiments.edof import cli, design
+
+    def started(*a, **k):
+        raise AssertionError("the run started")
+
+    monkeypatch.setattr(design, "design_classical", started)
+    err = _one_line_refusal(cli.main, ["--seeds", "0,4294967296", "--out", str(tmp_path / "r")],
+                            capsys, monkeypatch)
+    assert "edof: --seeds must be whole numbers in [0, 4294967295] (seeds of JAX's PRNG), got " \
+           "4294967296" in err
+    assert not (tmp_path / "r").exists()
+    err = _one_line_refusal(design.main, ["--smoke", "--seeds", "4294967296", "--out",
+                                          str(tmp_path / "l.json"), "--record-dir",
+                                          str(tmp_path / "rec")], capsys, monkeypatch)
+    assert "--seeds must be whole numbers in [0, 4294967295]" in err

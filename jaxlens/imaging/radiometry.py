@@ -218,6 +218,11 @@ def relative_illumination(
     if f.ndim != 2 or f.shape[-1] != 2 or f.shape[0] == 0:
         raise ValueError(f"{where}: fields must be [F] or [F, 2] degrees with F >= 1, got shape "
                          f"{jnp.shape(fields)}")
+    if wavelength is not None:
+        checks.real_values(wavelength, "wavelength", where, "µm")  # before jnp.asarray
+        if jnp.ndim(wavelength) != 0:  # was "Rays: wavelength must be a scalar or one per ray"
+            raise ValueError(f"{where}: wavelength must be one value (µm), got shape "
+                             f"{jnp.shape(wavelength)}")
     wl = jnp.asarray(lens.primary_wavelength if wavelength is None else wavelength, dtype)
     wl = checks.wavelengths(lens, wl, where)
     ri, e, cen = relative_illumination_samples(apertured(lens), f, sampling.static_depth(depth), wl,

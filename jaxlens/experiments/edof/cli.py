@@ -192,6 +192,9 @@ def config_from_args(a):
         n(v, opt, w, lo=0, integer=True)
     for s in a.seeds:
         n(s, "--seeds", w, lo=0, integer=True)
+        if s > 2**32 - 1:  # PRNGKey: 2**32 was seed 0 again in float32, 2**63 overflowed
+            raise ValueError(f"edof: --seeds must be whole numbers in [0, 4294967295] (seeds "
+                             f"of JAX's PRNG), got {s}")
     if not a.seeds or len(set(a.seeds)) < len(a.seeds):  # a repeat would count twice
         raise ValueError(f"edof: --seeds needs distinct seeds, got {a.seeds}")
     n(cfg.pupil, "--pupil", w, lo=2, integer=True, unit="rays per side")
