@@ -335,3 +335,26 @@ def test_edof_clis_refuse_seeds_beyond_uint32_before_the_run(tmp_path, capsys, m
                                           str(tmp_path / "l.json"), "--record-dir",
                                           str(tmp_path / "rec")], capsys, monkeypatch)
     assert "--seeds must be whole numbers in [0, 4294967295]" in err
+
+
+# ---------------------------------------------------------------- image metrics
+
+
+def test_image_metrics_refuse_images_on_two_scales_and_name_small_images():
+    from jaxlens.io import images
+
+    a = np.random.default_rng(0).random((8, 8, 3))
+    # a [0, 1] float image against the same image in 0…255 scored 4.6 dB
+    with pytest.raises(ValueError, match=r"psnr: reference and test must be on one scale, got "
+                                         r"dtypes float64 and uint8"):
+        images.psnr(a, (a * 255).astype(np.uint8))
+    with pytest.raises(ValueError, match=r"ssim: reference and test must be on one scale"):
+        images.ssim((a * 255).astype(np.uint8), a)
+    # skimage's message spoke of win_size and channel_axis, which were not given
+    with pytest.raises(ValueError, match=r"ssim: images must be at least 7x7 pixels \(the "
+                                         r"7-pixel window\), got shape \(3, 3\)"):
+        images.ssim(a[:3, :3, 0], a[:3, :3, 1])
+    with pytest.raises(ValueError, match=r"psnr: data_range must be a finite number > 0"):
+        images.psnr(a, a * 0.9, data_range=0)
+    u = (a * 255).astype(np.uint8)
+    assert images.psnr(u, u // 2 * 2) > 40  # one scale, integers: still scored

@@ -307,6 +307,12 @@ def scene(name: str = "astronaut", size: tuple[int, int] | None = None) -> np.nd
 def _images(reference, test, where):
     """Two float64 images of one shape, non-empty and finite: NaN pixels made the score NaN
     and two empty images scored inf (identical)."""
+    kinds = [np.asarray(x).dtype.kind for x in (reference, test)]
+    if len(set(k in "iub" for k in kinds)) > 1:  # a [0, 1] float image against 0…255 scored
+        raise ValueError(f"{where}: reference and test must be on one scale, got dtypes "
+                         f"{np.asarray(reference).dtype} and {np.asarray(test).dtype} (an "
+                         f"integer image is 0…255 or 0…65535, a float image 0…1); convert "
+                         f"the integer one with jaxlens.io.images.to_linear or astype")
     a, b = np.asarray(reference, np.float64), np.asarray(test, np.float64)
     if a.shape != b.shape:
         raise ValueError(f"{where}: shapes differ: {a.shape} and {b.shape}")
@@ -317,11 +323,12 @@ def _images(reference, test, where):
     return a, b
 
 
-def _data_range(a, b, data_range):
+def _data_range(a, b, data_range, where):
     if data_range is not None:
         if not (np.isfinite(data_range) and data_range > 0):
-            raise ValueError(f"data_range must be a finite number > 0 (the peak-to-peak range "
-                             f"of pixel values, 1 for [0, 1] images), got {data_range!r}")
+            raise ValueError(f"{where}: data_range must be a finite number > 0 (the "
+                             f"peak-to-peak range of pixel values, 1 for [0, 1] images), got "
+                             f"{data_range!r}")
         return float(data_range)
     return float(max(np.max(a), np.max(b)) - min(np.min(a), np.min(b), 0.0)) or 1.0
 
@@ -336,7 +343,7 @@ def psnr(reference, test, *, data_range=None) -> float:
     a, b = _images(reference, test, "psnr")
     if np.array_equal(a, b):
         return float("inf")
-    return float(peak_signal_noise_ratio(a, b, data_range=_data_range(a, b, data_range)))
+    return float(peak_signal_noise_ratio(a, b, data_range=_data_range(a, b, data_range, "psnr")))
 
 
 def ssim(reference, test, *, data_range=None) -> float:
@@ -345,7 +352,12 @@ def ssim(reference, test, *, data_range=None) -> float:
 
     a, b = _images(reference, test, "ssim")
     kw = {"channel_axis": -1} if a.ndim == 3 else {}
-    return float(structural_similarity(a, b, data_range=_data_range(a, b, data_range), **kw))
+    side = min(a.shape[:2]) if a.ndim >= 2 else a.shape[0]
+    if side < 7:  # skimage's own message spoke of win_size and channel_axis, not given here
+        raise ValueError(f"ssim: images must be at least 7x7 pixels (the 7-pixel window), got "
+                         f"shape {a.shape}")
+    return float(structural_similarity(a, b, data_range=_data_range(a, b, data_range, "ssim"),
+                                      **kw))
 
 
 def write_psf_stack(path, psfs, *, names=None) -> None:
