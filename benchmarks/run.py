@@ -176,7 +176,46 @@ def write_readme(out: pathlib.Path) -> None:
             if not path.exists():
                 continue
             parts += _section(name, path)
+    parts += _other_files(out)
     (out / "README.md").write_text("\n".join(parts) + "\n")
+
+
+# Result files that the studies above do not make: what each holds (benchmarks/SPEED.md
+# discusses them).
+STANDALONE = {
+    "design_step": "one design-loss gradient step (Adam's `value_and_grad`), a baseline commit "
+                   "against this one in one process (`benchmarks/design_step.py`)",
+    "fast_path": "a lens without optional features: same jaxpr and bit-equal results as a "
+                 "baseline commit (`benchmarks/fast_path.py`)",
+    "vjp_probe": "the trace's forward + gradient with JAX's derivative and with the "
+                 "hand-written reverse rule, interleaved (`benchmarks/vjp_probe.py`)",
+    "render_speed": "forward render time (`benchmarks/render_speed.py`)",
+    "render_memory": "peak memory and rate of the checkpointed render gradient "
+                     "(`benchmarks/render_memory.py`)",
+    "gpu": "raw log of a run on a lent GPU; the commands are its `==` lines",
+}
+
+
+def _other_files(out: pathlib.Path) -> list[str]:
+    """A table of the result files in ``out`` that no ``CORE`` section shows."""
+    rows = []
+    for path in sorted(out.iterdir()):
+        stem = path.stem
+        if path.name == "README.md" or any(
+                stem == n or stem.startswith(f"{n}_") for n in CORE):
+            continue
+        key = next((k for k in STANDALONE if stem == k or stem.startswith(f"{k}_")), None)
+        what = STANDALONE[key] if key else "(not described)"
+        command = ""
+        if path.suffix == ".json":
+            command = json.loads(path.read_text()).get("command") or ""
+        rows.append(f"| `{path.name}` | {what} | {f'`{command}`' if command else '–'} |")
+    if not rows:
+        return []
+    return ["## Other result files", "",
+            "Made by the standalone benchmarks; `benchmarks/SPEED.md` gives their figures and "
+            "the commands of the files without one here.", "",
+            "| file | what | command |", "|---|---|---|", *rows, ""]
 
 
 def _section(name: str, path: pathlib.Path) -> list[str]:

@@ -34,7 +34,7 @@ def library_defaults() -> dict:
     out = {
         "newton_iters": (
             trace.DEFAULT_NEWTON_ITERS,
-            "jaxlens/trace.py DEFAULT_NEWTON_ITERS",
+            "jaxlens/tracing/forward.py DEFAULT_NEWTON_ITERS",
         )
     }
     out["rms_spot_pupil"] = (
@@ -42,7 +42,8 @@ def library_defaults() -> dict:
         "jaxlens/analysis/spots.py rms_spot(pupil=None) -> pupil_grid(PUPIL_GRID)",
     )
     sig = inspect.signature(psf.psf_info).parameters
-    out["psf_kernel_size"] = (sig["kernel_size"].default, "jaxlens/psf.py psf(kernel_size=...)")
+    out["psf_kernel_size"] = (sig["kernel_size"].default,
+                              "jaxlens/imaging/psf.py psf(kernel_size=...)")
     out["psf_pupil"] = (sig["model"].default.pupil,
                         "jaxlens/imaging/psf.py psf(model=GeometricPSF(pupil=...))")
     rsig = inspect.signature(render.render).parameters
@@ -53,7 +54,7 @@ def library_defaults() -> dict:
     spp = rsig["spp"].default
     out["render_spp"] = (
         None if spp is inspect.Parameter.empty else spp,
-        "jaxlens/render.py render(spp=...) (required, no default)",
+        "jaxlens/imaging/render.py render(spp=...) (required, no default)",
     )
     fields = {f.name: f for f in dataclasses.fields(losses.ImageObjective)}
     out["design_image_spp"] = (

@@ -106,6 +106,26 @@ def test_readme_lists_defaults_and_tagged_runs(smoke_results):
     assert "## throughput\n" in text and "## throughput_quick\n" in text
 
 
+def test_defaults_name_files_that_exist(tmp_path):
+    """Each library default's "where" names a module of today's tree (after the layout
+    move, the table still pointed at jaxlens/trace.py and jaxlens/psf.py), and a result file
+    that no study makes is listed with its command rather than left out."""
+    import json
+    import pathlib
+
+    from benchmarks.run import write_readme
+    from benchmarks.summary import library_defaults
+
+    root = pathlib.Path(__file__).resolve().parent.parent
+    for key, (_, where) in library_defaults().items():
+        path = where.split(" ", 1)[0]
+        assert (root / path).is_file(), (key, where)
+    (tmp_path / "vjp_probe_x.json").write_text(json.dumps({"command": "python -m x --y"}))
+    write_readme(tmp_path)
+    text = (tmp_path / "README.md").read_text()
+    assert "| `vjp_probe_x.json` |" in text and "`python -m x --y`" in text
+
+
 def test_design_step_smoke(tmp_path):
     """The old-against-new benchmark runs end to end (this commit against itself). The
     baseline's programs are traced and lowered from the extracted copy; where one lowers to
