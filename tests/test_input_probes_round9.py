@@ -358,3 +358,27 @@ def test_image_metrics_refuse_images_on_two_scales_and_name_small_images():
         images.psnr(a, a * 0.9, data_range=0)
     u = (a * 255).astype(np.uint8)
     assert images.psnr(u, u // 2 * 2) > 40  # one scale, integers: still scored
+
+
+# ---------------------------------------------------------------- glass catalogs
+
+
+def test_unknown_glass_messages_name_the_catalog_spelling_and_the_catalog_it_is_in():
+    # "SCHOTT:N-BK7" listed close names but not how to ask for a glass of one catalog
+    with pytest.raises(ValueError, match=r"Unknown material 'SCHOTT:N-BK7'\. Closest catalog "
+                                         r"matches: N-BK7.*A catalog is its own argument: "
+                                         r"get_material\('N-BK7', 'SCHOTT'\)"):
+        jl.get_material("SCHOTT:N-BK7")
+    # a glass of another catalog was "unknown", with only that catalog's names as matches
+    with pytest.raises(ValueError, match=r"Unknown material 'N-BK7'\. Closest catalog matches: "
+                                         r".*'N-BK7' is in catalog SCHOTT, not searched here"):
+        jl.get_material("N-BK7", "OHARA")
+    assert jl.get_material("N-BK7", "schott").name == "N-BK7"
+
+
+def test_catalog_helpers_refuse_ignored_or_non_numeric_arguments():
+    with pytest.raises(ValueError, match=r"catalog_names: give catalog or catalogs, not both"):
+        jl.catalog_names("SCHOTT", catalogs=["OHARA"])  # catalogs was ignored
+    with pytest.raises(TypeError, match=r"get_material: nd must be a real number .*got str "
+                                        r"'1.5'"):  # was "'<' not supported ..."
+        jl.get_material("XYZ", nd="1.5", vd=60)

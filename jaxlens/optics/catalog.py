@@ -499,6 +499,13 @@ def _unknown(name: str, catalogs, nd: float | None = None,
     close = difflib.get_close_matches(name.strip().upper(), list(upper), n=5, cutoff=0.0)
     hint = ", ".join(upper[c] for c in close) if close else "none"
     message = f"Unknown material {name!r}. Closest catalog matches: {hint}"
+    cat, _, glass = name.strip().partition(":")
+    if glass and cat.strip().upper() in {c for c, _ in _search_order(None)}:
+        # "SCHOTT:N-BK7" matched no name and listed other glasses than the one meant.
+        message += (f". A catalog is its own argument: get_material({glass.strip()!r}, "
+                    f"{cat.strip().upper()!r})")
+    elif catalogs is not None and (elsewhere := _find(name, None)) is not None:
+        message += f". {name.strip()!r} is in catalog {elsewhere[0]}, not searched here"
     if nd is not None and vd is not None and 1.0 < nd <= MAX_ND and 0.0 < vd < np.inf:
         near = nearest_glasses(nd, vd, catalogs=catalogs)
         listed = "; ".join(f"{c} {n} (nd {d:.5f}, Vd {v:.2f})" for c, n, d, v in near)
@@ -577,6 +584,9 @@ def get_material(name: str, catalogs: str | Iterable[str] | None = None, *,
                         f"{type(name).__name__} {name!r}")
     if name.strip().upper() in ("", "AIR"):
         return Air()
+    for arg, v in (("nd", nd), ("vd", vd)):
+        if v is not None:  # a string failed as "'<' not supported" in the error message
+            checks.real_values(v, arg, "get_material")
     found = _find(name, catalogs)
     if found is None:
         raise _unknown(name, catalogs, nd, vd)
@@ -596,6 +606,9 @@ def catalog_names(catalog: str | None = None,
         Glass names as written in their catalogs, in search order; a name found in an
         earlier catalog is not repeated.
     """
+    if catalog is not None and catalogs is not None:  # catalogs was ignored
+        raise ValueError(f"catalog_names: give catalog or catalogs, not both; got "
+                         f"{catalog!r} and {catalogs!r}")
     seen: dict[str, str] = {}
     for _, entries in _search_order(catalog if catalog is not None else catalogs):
         for key, entry in entries.items():
