@@ -382,3 +382,12 @@ def test_catalog_helpers_refuse_ignored_or_non_numeric_arguments():
     with pytest.raises(TypeError, match=r"get_material: nd must be a real number .*got str "
                                         r"'1.5'"):  # was "'<' not supported ..."
         jl.get_material("XYZ", nd="1.5", vd=60)
+
+
+def test_lens_astype_takes_float32_or_float64(cooke):
+    """astype(jnp.int32) truncated every curvature (0.045/mm) and thickness to whole numbers."""
+    for dtype in (jnp.int32, jnp.float16):
+        with pytest.raises(ValueError, match=r"Lens.astype: dtype must be None, float32 or "
+                                             r"float64"):
+            cooke.astype(dtype)
+    assert cooke.astype(jnp.float32).thickness.dtype == jnp.float32

@@ -301,7 +301,9 @@ class Lens(eqx.Module):
         ]
 
     def astype(self, dtype) -> Lens:
-        """Cast every floating array in the lens to ``dtype``."""
+        """Cast every floating array in the lens to ``dtype`` (float32 or float64)."""
+        # int32 truncated every curvature to 0, float16 keeps too few digits to trace a lens.
+        checks.float_dtype(dtype, "Lens.astype")
 
         def cast(x):
             if eqx.is_array(x) and jnp.issubdtype(x.dtype, jnp.floating):
