@@ -282,9 +282,15 @@ def plot_mtf(lens, fields: Sequence[float] | None = None, *, frequencies=None,
     fig = _figure(6, 4.2)
     ax = fig.add_subplot(1, 1, 1)
     for i, f in enumerate(fields):
-        res = mtf(lens, f, frequencies=frequencies)
-        freq, tan, sag = (np.asarray(x) for x in _mtf_parts(res))
         c = _FIELD_COLORS[i % len(_FIELD_COLORS)]
+        try:
+            res = mtf(lens, f, frequencies=frequencies)
+        except ValueError as e:  # a field without light has no MTF (it was drawn as 0)
+            if "no ray of the beam reaches the image surface" not in str(e):
+                raise
+            ax.plot([], [], color=c, ls=":", label=f"{_field_label(f)}: no light")
+            continue
+        freq, tan, sag = (np.asarray(x) for x in _mtf_parts(res))
         ax.plot(freq, tan, color=c, label=f"{_field_label(f)} T")
         ax.plot(freq, sag, color=c, ls="--", label=f"{_field_label(f)} S")
     ax.set_ylim(0, 1.02)

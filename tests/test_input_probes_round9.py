@@ -391,3 +391,12 @@ def test_lens_astype_takes_float32_or_float64(cooke):
                                              r"float64"):
             cooke.astype(dtype)
     assert cooke.astype(jnp.float32).thickness.dtype == jnp.float32
+
+
+def test_plot_mtf_marks_a_field_without_light_instead_of_drawing_zero(cooke):
+    from jaxlens import plot
+
+    fig = plot.plot_mtf(cooke, [0.0, 60.0], frequencies=[0.0, 10.0])
+    labels = [t.get_text() for t in fig.axes[0].get_legend().get_texts()]
+    assert "60.0°: no light" in labels and not any(x.startswith("60.0° ") for x in labels)
+    assert sum(len(line.get_xdata()) > 0 for line in fig.axes[0].get_lines()) == 2  # 0°: T, S
