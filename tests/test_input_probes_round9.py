@@ -400,3 +400,19 @@ def test_plot_mtf_marks_a_field_without_light_instead_of_drawing_zero(cooke):
     labels = [t.get_text() for t in fig.axes[0].get_legend().get_texts()]
     assert "60.0°: no light" in labels and not any(x.startswith("60.0° ") for x in labels)
     assert sum(len(line.get_xdata()) > 0 for line in fig.axes[0].get_lines()) == 2  # 0°: T, S
+
+
+def test_edof_cli_keeps_an_earlier_record_without_overwrite(tmp_path, capsys, monkeypatch):
+    """--record replaced an earlier run's table2.md, summary.json, … at the end of the run,
+    where --out and edof.design's --record-dir refuse to without --overwrite."""
+    from jaxlens.experiments.edof import cli
+
+    rec = tmp_path / "rec"
+    rec.mkdir()
+    (rec / "table2.md").write_text("the earlier run")
+    err = _one_line_refusal(cli.main, ["--smoke", "--out", str(tmp_path / "r"), "--record",
+                                       str(rec)], capsys, monkeypatch)
+    assert re.search(r"edof: --record .*rec already holds table2.md of an earlier run; give "
+                     r"--overwrite to replace them", err), err
+    assert (rec / "table2.md").read_text() == "the earlier run"
+    assert not (tmp_path / "r").exists()

@@ -87,9 +87,10 @@ def build_parser() -> argparse.ArgumentParser:
     )
     p.add_argument("--out", default="runs/edof", help="output folder (default runs/edof)")
     p.add_argument("--overwrite", action="store_true",
-                   help="replace an earlier run in --out (default: refuse)")
+                   help="replace an earlier run in --out and in --record (default: refuse)")
     p.add_argument("--record", default=None,
-                   help="also copy tables, summary and figures to this folder")
+                   help="also copy tables, summary and figures to this folder (refused where "
+                        "an earlier run's are, unless --overwrite)")
     p.add_argument("--lenses", default=",".join(LENS_NAMES),
                    help="lenses to train, from classical,cubic,hybrid")
     p.add_argument("--seeds", type=_ints, default=(0,), help="training seeds, e.g. 0,1,2 (0)")
@@ -268,6 +269,12 @@ def check_args(a):
                 raise ValueError(f"edof: {opt} {d} is a file, not a folder")
             if d is not None:
                 check_writable(os.path.join(d, "x") if os.path.isdir(d) else d, opt)
+        earlier = [n for n in RECORD_TABLES if a.record is not None and
+                   os.path.exists(os.path.join(a.record, n))]
+        if earlier and not a.overwrite:  # the record was replaced at the end without a word
+            raise ValueError(f"edof: --record {a.record} already holds {', '.join(earlier)} of "
+                             f"an earlier run; give --overwrite to replace them, or choose "
+                             f"another folder")
         if a.checkpoint and not a.resume and os.path.isdir(a.checkpoint) and \
                 os.listdir(a.checkpoint):
             raise ValueError(f"edof: --checkpoint {a.checkpoint} is not empty; give --resume "
@@ -529,11 +536,15 @@ def _load_eval(ck, name, settings: dict):
     return bank, vals, {d: tuple(v) for d, v in ex.items()}
 
 
+RECORD_TABLES = ("table2.md", "table2.json", "table2_per_image.json", "summary.json",
+                 "command.txt")
+"""The files ``record`` copies besides the figures and lenses."""
+
+
 def record(out: str, dest: str, files: dict) -> None:
     """Copy the tables, summary, command, trained lenses and figures to ``dest``."""
     os.makedirs(dest, exist_ok=True)
-    for name in ("table2.md", "table2.json", "table2_per_image.json", "summary.json",
-                 "command.txt"):
+    for name in RECORD_TABLES:
         shutil.copy2(os.path.join(out, name), os.path.join(dest, name))
     for path in files.values():
         shutil.copy2(path, os.path.join(dest, os.path.basename(path)))
