@@ -130,7 +130,7 @@ def test_lost_rays_are_nan_and_flagged():
 
 
 @pytest.mark.parametrize("call, match", [
-    (lambda lens: jl.analysis.field_curvature(lens, [[0.0, 5.0]]), "fields along y"),
+    (lambda lens: jl.analysis.field_curvature(lens, [[0.0, 5.0, 1.0]]), r"\(θx, θy\) pairs"),
     (lambda lens: jl.analysis.field_curvature(lens, [95.0]), r"\(-90, 90\) deg"),
     (lambda lens: jl.analysis.ray_fan(lens, [0.0, 5.0, 1.0]), "one field"),
     (lambda lens: jl.analysis.ray_fan(lens, [95.0, 5.0]), r"\(-90, 90\) deg"),
@@ -152,21 +152,51 @@ def test_folded_mirror_system_field_curves_equal_parabasal_pairs():
     from jaxlens.imaging.sampling import field_rays
 
     lens = jl.load(ROOT / "tests/data/zmx/rayoptics_HoO-V2C18Ex66.zmx")
-    fields = [0.0, 1.0]
+    # Its own fields: on axis, (0, ±1°) and (±9°, 0), whose tangential plane is x–z.
+    fields = np.asarray(lens.fields)
     fc = jl.analysis.field_curvature(lens, fields)
     w, h = lens.primary_wavelength, 1e-6
     for k, th in enumerate(fields):
-        for row, (axis, pupil) in enumerate(((1, [[0.0, -h], [0.0, h]]),
-                                             (0, [[-h, 0.0], [h, 0.0]]))):
-            out = jl.trace(lens, field_rays(lens, th, jnp.array(pupil), w))
+        t = np.tan(np.deg2rad(th))
+        a = t / np.hypot(*t) if t.any() else np.array([0.0, 1.0])
+        for row, e in enumerate((a, np.array([a[1], -a[0]]))):
+            out = jl.trace(lens, field_rays(lens, jnp.asarray(th), jnp.array([-h * e, h * e]), w))
             (p1, p2), (d1, d2) = np.asarray(out.origin), np.asarray(out.direction)
-            # Where ray 2 crosses ray 1 in the plane of `axis` and z, along ray 1, as z.
-            def cross(a, b, axis=axis):
-                return a[axis] * b[2] - a[2] * b[axis]
+            # Where ray 2 crosses ray 1 in the plane of e and z, along ray 1, as z.
+            def cross(u, v, e=e):
+                return (u[:2] @ e) * v[2] - u[2] * (v[:2] @ e)
 
             s = cross(p2 - p1, d2) / cross(d1, d2)
             want = [fc.tangential, fc.sagittal][row][0, k]
             assert float(want) == pytest.approx(s * d1[2], abs=1e-6)
+
+
+@pytest.mark.parametrize("azimuth", [0.0, 35.0, 90.0, 200.0])
+def test_a_field_off_the_y_axis_has_its_foci_along_its_azimuth(azimuth):
+    """On a rotationally symmetric lens, a (θx, θy) field has the tangential and sagittal
+    foci of the θy field of the same radial angle: its tangential plane turns with it. Read
+    in the fixed y–z and x–z planes, a 90° field would swap them (0.05–0.28 mm apart here)."""
+    lens = jl.load(ROOT / "jaxlens/data/lenses/cooke_triplet.json")
+    radial = np.array([5.0, 14.0, 20.0])
+    tan_r = np.tan(np.deg2rad(radial))
+    phi = np.deg2rad(azimuth)
+    pairs = np.rad2deg(np.arctan(np.stack([tan_r * np.sin(phi), tan_r * np.cos(phi)], -1)))
+    along_y = jl.analysis.field_curvature(lens, radial)
+    turned = jl.analysis.field_curvature(lens, pairs)
+    np.testing.assert_allclose(np.asarray(turned.tangential), np.asarray(along_y.tangential),
+                               rtol=0, atol=1e-9)
+    np.testing.assert_allclose(np.asarray(turned.sagittal), np.asarray(along_y.sagittal),
+                               rtol=0, atol=1e-9)
+    assert np.abs(np.asarray(along_y.astigmatism)).min() > 0.04  # a swap would show
+
+
+def test_a_theta_y_field_and_the_pair_zero_theta_y_agree_exactly():
+    lens = jl.load(ROOT / "jaxlens/data/lenses/cooke_triplet.json")
+    theta = np.array([0.0, 10.0, -15.0])
+    one = jl.analysis.field_curvature(lens, theta)
+    two = jl.analysis.field_curvature(lens, np.stack([np.zeros(3), theta], -1))
+    np.testing.assert_array_equal(np.asarray(one.tangential), np.asarray(two.tangential))
+    np.testing.assert_array_equal(np.asarray(one.sagittal), np.asarray(two.sagittal))
 
 
 @pytest.mark.filterwarnings("ignore:.*aims rays at the stop")

@@ -170,11 +170,15 @@ def test_report_of_x_y_fields_agrees_with_the_analysis_functions(capsys):
     x9, xm9 = data["fields"][3]["chief_ray_xy"], data["fields"][4]["chief_ray_xy"]
     assert x9[0] > 10 and x9[0] == pytest.approx(-xm9[0], rel=1e-9)
     assert data["max_field"] == pytest.approx(9.0, rel=1e-12)
-    # No field curvature for (θx, θy) fields: their tangential plane is not y–z.
-    assert all(f["focus_tangential"] is None for f in data["fields"])
+    # Field curvature of (θx, θy) fields: tangential plane along each field's azimuth.
+    fc = jaxlens.analysis.field_curvature(lens, lens.fields, lens.primary_wavelength)
+    np.testing.assert_allclose([f["focus_tangential"] for f in data["fields"]],
+                               np.asarray(fc.tangential[0]), rtol=1e-12)
+    np.testing.assert_allclose([f["focus_sagittal"] for f in data["fields"]],
+                               np.asarray(fc.sagittal[0]), rtol=1e-12)
     code, out, _ = _run(capsys, path)
     assert code == 0 and "Angle x, y" in out and "Chief x, y" in out
-    assert "FIELD CURVATURE" not in out
+    assert "FIELD CURVATURE" in out and "along each field's direction" in out
 
 
 def test_cli_subprocess_smoke(tmp_path):

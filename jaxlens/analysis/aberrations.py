@@ -16,12 +16,17 @@ Conventions (those of Zemax and optiland):
     Field curvature: for each field and wavelength, where the rays next to the chief ray
     cross it, in the y–z plane (tangential focus) and in the x–z plane (sagittal focus),
     given as the z distance from the chief ray's intercept with the image surface (negative:
-    before it, toward the lens). The neighbours are exact differential rays: the derivative
+    before it, toward the lens). A field (θx, θy) has its tangential plane along its
+    azimuth a = (tan θx, tan θy)/|…| (the meridional plane of a rotationally symmetric lens):
+    the tangential neighbours leave the pupil along a and are met in the plane of a and z,
+    the sagittal ones along a⊥ = (a_y, −a_x); on axis a = (0, 1), so a θy field and the field
+    (0, θy) give the same foci. The neighbours are exact differential rays: the derivative
     of the image-space ray with respect to Py (Px) is taken by forward-mode differentiation
     of the trace (``jax.jvp``), which is the limit of optiland's finite parabasal pair. With
     P the chief ray's intercept, D its direction and dP, dD their derivatives, the neighbour
     meets the chief ray at P + s·D with s = −(dP × D)/(dD × D) (the 2-D cross product in the
-    plane), and the focus is s·D_z from the image surface. Astigmatism is tangential −
+    plane of e and z, e the plane's unit vector in x, y: u × v = (u·e) v_z − u_z (v·e)), and
+    the focus is s·D_z from the image surface. Astigmatism is tangential −
     sagittal. A focus at infinity (image space afocal for that fan) is ±inf; a field whose
     chief ray does not reach the image is NaN.
 """
@@ -58,7 +63,7 @@ class RayFan(eqx.Module):
 class FieldCurvature(eqx.Module):
     """Tangential and sagittal foci (mm from the image surface along z) of F fields."""
 
-    fields: Float[Array, " F"]
+    fields: Float[Array, " F"] | Float[Array, "F 2"]  # θy, or (θx, θy), degrees
     wavelengths: Float[Array, " W"]
     tangential: Float[Array, "W F"]
     sagittal: Float[Array, "W F"]
@@ -69,8 +74,9 @@ class FieldCurvature(eqx.Module):
         return self.tangential - self.sagittal
 
 
-def _inputs(lens, where: str, fields, wavelengths):
-    """Checked fields (θy, deg, ``[F]``) and wavelengths (µm, ``[W]``) as lens-dtype arrays."""
+def _inputs(lens, where: str, fields, wavelengths, *, pairs: bool = False):
+    """Checked fields (θy, deg, ``[F]``; with ``pairs`` also (θx, θy), ``[F, 2]``) and
+    wavelengths (µm, ``[W]``) as lens-dtype arrays."""
     if not isinstance(lens, Lens):
         raise TypeError(f"{where}: lens must be a jaxlens.Lens, got {type(lens).__name__}")
     dtype = lens.epd.dtype
@@ -79,9 +85,10 @@ def _inputs(lens, where: str, fields, wavelengths):
     if wavelengths is not None:
         checks.real_values(wavelengths, "wavelengths", where, "µm")
     f = jnp.asarray(fields, dtype)
-    if f.ndim > 1 or f.size == 0:
-        raise ValueError(f"{where}: fields must be θy angles in degrees, one value or [F], "
-                         f"got shape {f.shape} (these curves are for fields along y)")
+    if (f.ndim > 1 and not (pairs and f.ndim == 2 and f.shape[1] == 2)) or f.size == 0:
+        also = ", or (θx, θy) pairs [F, 2]" if pairs else " (these curves are for fields along y)"
+        raise ValueError(f"{where}: fields must be θy angles in degrees, one value or [F]"
+                         f"{also}, got shape {f.shape}")
     checks.field_angles(f, where, "field")
     wl = lens.wavelengths if wavelengths is None else jnp.asarray(wavelengths, dtype)
     if wl.ndim > 1 or wl.size == 0:
@@ -89,7 +96,7 @@ def _inputs(lens, where: str, fields, wavelengths):
                          f"{wl.shape}")
     checks.wavelengths(lens, wl, where, "wavelengths")
     checks.material_indices(lens, wl, where, "wavelengths")
-    return f.reshape(-1), wl.reshape(-1)
+    return (f if f.ndim == 2 else f.reshape(-1)), wl.reshape(-1)
 
 
 def _image_rays(lens, field, wavelength, pupil, depth, aim):
@@ -158,8 +165,9 @@ def field_curvature(lens: Lens, fields=None, wavelengths=None, *, depth=None,
 
     Args:
         lens: the lens.
-        fields: θy angles in degrees, ``[F]``; default ``default_fields(lens)`` (0 to the
-            largest field in 11 steps).
+        fields: θy angles in degrees, ``[F]``, or (θx, θy) pairs, ``[F, 2]`` (tangential
+            plane along each field's azimuth); default ``default_fields(lens)`` (θy from 0 to
+            the largest field in 11 steps).
         wavelengths: µm, one value or ``[W]``; default the lens's wavelengths.
         depth: object distance (mm) for a finite object; default the lens's object.
         aim: ``"paraxial"`` or ``"real"`` (chief ray through the paraxial entrance pupil's
@@ -170,31 +178,46 @@ def field_curvature(lens: Lens, fields=None, wavelengths=None, *, depth=None,
         difference).
     """
     f, wl = _inputs(lens, "field_curvature",
-                    default_fields(lens) if fields is None else fields, wavelengths)
+                    default_fields(lens) if fields is None else fields, wavelengths, pairs=True)
     return _field_curvature(lens, f, wl, depth=depth, aim=aim)
 
 
-def _cross(a, b, i):
-    """(a × b) in the plane of axis i (0: x–z, 1: y–z) and z."""
-    return a[..., i] * b[..., 2] - a[..., 2] * b[..., i]
+def _cross(a, b, e):
+    """(a × b) in the plane of the unit vector e = (e_x, e_y) and z."""
+    along = lambda v: v[..., 0] * e[0] + v[..., 1] * e[1]  # noqa: E731
+    return along(a) * b[..., 2] - a[..., 2] * along(b)
+
+
+def _azimuth(field):
+    """Unit (x, y) direction of a field's tangential plane: (0, 1) for a θy field and on
+    axis, else (tan θx, tan θy) normalised."""
+    if field.ndim == 0:
+        return jnp.array([0.0, 1.0], field.dtype)
+    t = jnp.tan(jnp.deg2rad(field))
+    r = jnp.sqrt(t[0] * t[0] + t[1] * t[1])
+    on_axis = r == 0
+    return jnp.where(on_axis, jnp.array([0.0, 1.0], t.dtype), t / jnp.where(on_axis, 1.0, r))
 
 
 @forward_mode_jit
 def _field_curvature(lens, fields, wl, *, depth, aim) -> FieldCurvature:
-    # Two copies of the chief ray; the first is differentiated along Py, the second along Px.
+    # Two copies of the chief ray; the first is differentiated along the field's azimuth a
+    # (tangential), the second along a⊥ (sagittal): along Py and Px for a θy field.
     centre = jnp.zeros((2, 2), wl.dtype)
-    tangents = jnp.array([[0.0, 1.0], [1.0, 0.0]], wl.dtype)
 
     def one(field, w):
+        a = _azimuth(field)
+        planes = (a, jnp.stack([a[1], -a[0]]))
+
         def image_ray(pupil):
             out = _image_rays(lens, field, w, pupil, depth, aim)
             return out.origin, out.direction, out.valid
 
-        (p, d, v), (dp, dd, _) = jax.jvp(image_ray, (centre,), (tangents,))
+        (p, d, v), (dp, dd, _) = jax.jvp(image_ray, (centre,), (jnp.stack(planes),))
         foci = []
-        for row, axis in ((0, 1), (1, 0)):  # tangential: y–z plane; sagittal: x–z plane
-            num = -_cross(dp[row], d[row], axis)
-            den = _cross(dd[row], d[row], axis)
+        for row, e in enumerate(planes):
+            num = -_cross(dp[row], d[row], e)
+            den = _cross(dd[row], d[row], e)
             s = jnp.where(den != 0, num / jnp.where(den != 0, den, 1.0), jnp.inf * jnp.sign(num))
             foci.append(jnp.where(v[row], s * d[row, 2], jnp.nan))
         return foci[0], foci[1]

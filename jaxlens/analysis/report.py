@@ -17,7 +17,7 @@ Conventions (also written into the JSON output under ``units``):
     positions are global z (surface 1's vertex at 0). ``focus_tangential`` and
     ``focus_sagittal`` (mm) are ``analysis.field_curvature`` at the primary wavelength: where
     the rays next to the chief ray meet it, along z from the image surface (+ behind it);
-    ``None`` for (θx, θy) fields.
+    for a (θx, θy) field the tangential plane is along the field's azimuth.
 """
 
 from __future__ import annotations
@@ -190,14 +190,11 @@ def report_data(lens: Lens, *, fields=None, wavelengths=None) -> dict:
                 "valid_fraction": [float(v) for v in frac],
             }
         )
-    # Field curvature (y fields only: the tangential plane of a (θx, θy) field is not y–z).
-    foci = None
-    if angles.ndim == 1:
-        fc = field_curvature(lens, lens.fields, lens.primary_wavelength)
-        foci = (np.asarray(fc.tangential[0]), np.asarray(fc.sagittal[0]))
+    fc = field_curvature(lens, lens.fields, lens.primary_wavelength)
+    foci = (np.asarray(fc.tangential[0]), np.asarray(fc.sagittal[0]))
     for i, entry in enumerate(out_fields):
-        entry["focus_tangential"] = None if foci is None else _f(foci[0][i])
-        entry["focus_sagittal"] = None if foci is None else _f(foci[1][i])
+        entry["focus_tangential"] = _f(foci[0][i])
+        entry["focus_sagittal"] = _f(foci[1][i])
     imax = int(np.argmax(radial))
     return {
         "name": lens.name,
@@ -415,17 +412,21 @@ def format_report(data: dict, lens: Lens | None = None) -> str:
         ]
         if lost:
             L.append(f"        field {i + 1}: rays clipped or failed: " + ", ".join(lost))
-    if not xy:
-        L.append("")
-        L.append("FIELD CURVATURE (primary wavelength; tangential and sagittal foci in mm from "
-                 "the image surface along z, + behind it)")
-        L.append(f"  {'Field':>5}{'Angle':>9}{'Tangential':>13}{'Sagittal':>13}"
-                 f"{'Astigmatism':>13}")
-        for i, f in enumerate(data["fields"]):
-            t, s = f["focus_tangential"], f["focus_sagittal"]
-            astig = None if t is None or s is None else t - s
-            L.append(f"  {i + 1:>5}{f['angle']:>9.3f}{_num(t, 13, 6)}{_num(s, 13, 6)}"
-                     f"{_num(astig, 13, 6)}")
+    L.append("")
+    L.append("FIELD CURVATURE (primary wavelength; tangential and sagittal foci in mm from "
+             "the image surface along z, + behind it"
+             + ("; tangential plane along each field's direction)" if xy else ")"))
+    L.append(f"  {'Field':>5}" + (f"{'Angle x, y':>17}" if xy else f"{'Angle':>9}")
+             + f"{'Tangential':>13}{'Sagittal':>13}{'Astigmatism':>13}")
+    for i, f in enumerate(data["fields"]):
+        t, s = f["focus_tangential"], f["focus_sagittal"]
+        astig = None if t is None or s is None else t - s
+        if xy:
+            a = f["angle"] if isinstance(f["angle"], list) else [0.0, f["angle"]]
+            head = f"{a[0]:>8.3f},{a[1]:>8.3f}"
+        else:
+            head = f"{f['angle']:>9.3f}"
+        L.append(f"  {i + 1:>5}{head}{_num(t, 13, 6)}{_num(s, 13, 6)}{_num(astig, 13, 6)}")
     return "\n".join(L) + "\n"
 
 
