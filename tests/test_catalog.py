@@ -84,7 +84,7 @@ def fresh_registry(monkeypatch):
 
 def test_shipped_catalogs_and_required_glasses():
     counts = {c: len(catalog_names(catalog=c)) for c in catalog.SHIPPED_CATALOGS}
-    assert counts == {"SCHOTT": 163, "CDGM": 324, "PLASTICS": 11, "MISC": 13, "OHARA": 410,
+    assert counts == {"SCHOTT": 358, "CDGM": 324, "PLASTICS": 11, "MISC": 13, "OHARA": 410,
                       "HOYA": 190, "HIKARI": 370, "SUMITA": 176, "CORNING": 1, "INFRARED": 48,
                       "LIGHTPATH": 11, "HERAEUS": 5, "UMICORE": 2, "TOPAS": 3, "ARCHER": 15,
                       "ISUZU": 1, "LZOS": 54, "RAD_HARD": 7}
@@ -304,10 +304,9 @@ def test_shipped_catalogs_are_parsed_once():
     ("n-bk7", "N-BK7", "SCHOTT"), (" N-SF11 ", "N-SF11", "SCHOTT"), ("h-k9l", "H-K9L", "CDGM"),
     ("E48R", "E48R", "PLASTICS"), ("zeonex_e48r", "E48R", "PLASTICS"),
     ("PC", "POLYCARB", "PLASTICS"), ("polycarbonate", "POLYCARB", "PLASTICS"),
-    ("PS", "POLYSTYR", "PLASTICS"), ("BK7", "N-BK7", "SCHOTT"),
-    # A glass named SK16 exists (HIKARI's), so the SK16 → N-SK16 alias serves only where the
-    # search is limited to SCHOTT (a .zmx file whose GCAT is SCHOTT).
-    ("SK16", "SK16", "HIKARI"),
+    ("PS", "POLYSTYR", "PLASTICS"),
+    # SCHOTT's own lead-containing BK7 and SK16 (its 2008 catalog), not N-BK7 or HIKARI's SK16.
+    ("BK7", "BK7", "SCHOTT"), ("SK16", "SK16", "SCHOTT"),
 ])
 def test_names_and_aliases(query, name, cat):
     material = get_material(query)
@@ -317,7 +316,8 @@ def test_names_and_aliases(query, name, cat):
 
 
 def test_alias_within_a_catalog():
-    assert get_material("SK16", catalogs="SCHOTT").name == "N-SK16"
+    assert get_material("ECO-550", catalogs="LIGHTPATH").name == "ECO550"
+    assert get_material("SK16", catalogs="SCHOTT").name == "SK16"  # SCHOTT's own, no alias
 
 
 @pytest.mark.parametrize("query", ["AIR", "air", "", "  "])

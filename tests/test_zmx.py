@@ -471,10 +471,12 @@ def test_unknown_glass_model_opens_the_file_with_the_lines_nd_and_vd():
 def test_unknown_glass_model_names_another_glass_whose_nd_and_vd_the_line_holds():
     """Zemax keeps the nd and Vd of the glass a GLAS line last held: a line naming an
     obsolete glass with N-SK16's data is said to, so the user can check the model glass."""
-    text = _minimal("  CURV 0.02\n").replace("GLAS N-BK7", "GLAS LASFN30 0 0 1.6204 60.32 0 0 0")
-    with pytest.warns(ZmxWarning, match=r"<zmx>:9: glass 'LASFN30' is in no catalog.*These are "
+    # (LASFN30, the glass of the real file this case comes from, is now a shipped SCHOTT
+    # glass: LASF9 is in no catalog.)
+    text = _minimal("  CURV 0.02\n").replace("GLAS N-BK7", "GLAS LASF9 0 0 1.6204 60.32 0 0 0")
+    with pytest.warns(ZmxWarning, match=r"<zmx>:9: glass 'LASF9' is in no catalog.*These are "
                                         r"the nd and Vd of SCHOTT N-SK16: .* check that they "
-                                        r"are LASFN30's"):
+                                        r"are LASF9's"):
         zmx.loads(text, unknown_glass="model")
     other = text.replace("1.6204 60.32", "1.8 41.0")  # no catalog glass has exactly these
     with warnings.catch_warnings(record=True) as caught:
@@ -515,22 +517,28 @@ def test_gcat_picks_the_catalog_of_a_shared_name(gcat, catalog):
 
 
 def test_a_discontinued_schott_glass_becomes_its_successor_with_a_warning():
-    """KF9 is not in the shipped SCHOTT catalog: N-KF9 (its lead-free successor, nd within
-    1e-4) stands in, with a warning, rather than a glass of the same name from another
-    maker; strict mode refuses."""
-    text = "GCAT SCHOTT\n" + _minimal("  CURV 0.02\n").replace("GLAS N-BK7", "GLAS KF9")
-    with pytest.warns(ZmxWarning, match=r"glass 'KF9' is not in the shipped SCHOTT catalog "
-                      r"\(a discontinued glass\); using its lead-free successor N-KF9"):
+    """LAF21 is not in the shipped SCHOTT catalog (neither its 2013 nor its 2008 glasses):
+    N-LAF21 (its lead-free successor) stands in, with a warning, rather than a glass of the
+    same name from another maker; strict mode refuses."""
+    text = "GCAT SCHOTT\n" + _minimal("  CURV 0.02\n").replace("GLAS N-BK7", "GLAS LAF21")
+    with pytest.warns(ZmxWarning, match=r"glass 'LAF21' is not in the shipped SCHOTT catalog "
+                      r"\(a discontinued glass\); using its lead-free successor N-LAF21"):
         m = zmx.loads(text).materials[0]
-    assert (m.name, m.catalog) == ("N-KF9", "SCHOTT")
-    with pytest.raises(ValueError, match="N-KF9.*strict mode"):
+    assert (m.name, m.catalog) == ("N-LAF21", "SCHOTT")
+    with pytest.raises(ValueError, match="N-LAF21.*strict mode"):
         zmx.loads(text, strict=True)
-    # BAF4 exists in CDGM as another glass (nd 1.583 against SCHOTT's 1.606): SCHOTT's
-    # successor wins for a file that names SCHOTT.
-    text = "GCAT SCHOTT\n" + _minimal("  CURV 0.02\n").replace("GLAS N-BK7", "GLAS BAF4")
-    with pytest.warns(ZmxWarning, match="N-BAF4"):
+    # KZFS4 exists in HIKARI: SCHOTT's successor wins for a file that names SCHOTT.
+    text = "GCAT SCHOTT\n" + _minimal("  CURV 0.02\n").replace("GLAS N-BK7", "GLAS KZFS4")
+    with pytest.warns(ZmxWarning, match="N-KZFS4"):
         m = zmx.loads(text).materials[0]
-    assert m.name == "N-BAF4" and abs(float(m.catalog_nd) - 1.6057) < 1e-3
+    assert (m.name, m.catalog) == ("N-KZFS4", "SCHOTT")
+    # BAF4 exists in CDGM as another glass (nd 1.583 against SCHOTT's 1.606): a file that
+    # names SCHOTT gets SCHOTT's own (obsolete) BAF4, without a report.
+    text = "GCAT SCHOTT\n" + _minimal("  CURV 0.02\n").replace("GLAS N-BK7", "GLAS BAF4")
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")
+        m = zmx.loads(text, strict=True).materials[0]
+    assert (m.name, m.catalog, m.catalog_nd) == ("BAF4", "SCHOTT", 1.605621)
 
 
 def test_model_glass_and_tabulated_read_back_exactly(tmp_path):

@@ -3,7 +3,12 @@
 The package ships these catalogs in ``jaxlens/data/glass`` (each file names its public
 source in its ``!`` header lines):
 
-* ``SCHOTT``: the SCHOTT catalog, status April 2013 (preferred, inquiry and obsolete glasses).
+* ``SCHOTT``: the SCHOTT catalog, status April 2013 (preferred, inquiry and obsolete glasses),
+  with the glasses of SCHOTT's February 2008 catalog that it lacks: 193 obsolete ones that
+  real ``.zmx`` files name (the lead-containing SK4, BAF4, KF9, LAF2, PSK3, BK7, SK16, SK2,
+  LAK9, BAK1, SK5, LASFN30…), KZFSN5 and SF57HHT. SCHOTT comes first, so such a name is
+  SCHOTT's even where a later catalog has a glass of that name (HIKARI's SK4, CDGM's BAF4
+  and F4): ``get_material("BAF4", "CDGM")`` gives CDGM's.
 * ``CDGM``: the CDGM (H-K9L, H-ZF…, H-LAK…, H-ZLAF…) catalog, January 2014.
 * ``PLASTICS``: molding plastics: PMMA, POLYCARB, POLYSTYR, SAN, COC, ZEONEX 330R/480R/E48R,
   OKP4 and OKP4HT.
@@ -124,13 +129,9 @@ _ALIASES = {
     "FUSED_SILICA": ("MISC", "F_SILICA"),
     "FUSEDSILICA": ("MISC", "F_SILICA"),
     "ECO-550": ("LIGHTPATH", "ECO550"),
-    "BK7": ("SCHOTT", "N-BK7"),
-    "SK16": ("SCHOTT", "N-SK16"),
 }
 """Unambiguous alternative names, used only when the name itself is in no searched catalog.
-BK7 and SK16 are SCHOTT's lead-containing predecessors of N-BK7 and N-SK16 (practically the
-same nd and Vd); the shipped 2013 catalog has only the N- glasses. HIKARI has a glass named
-SK16, so the SK16 alias serves only searches limited to SCHOTT."""
+(BK7 and SK16 are no aliases of N-BK7 and N-SK16: SCHOTT's own BK7 and SK16 are shipped.)"""
 
 
 @dataclasses.dataclass(frozen=True)
@@ -565,7 +566,7 @@ def get_material(name: str, catalogs: str | Iterable[str] | None = None, *,
 
     Args:
         name: Glass name, case-insensitive (``"N-BK7"``, ``"h-k9l"``, ``"E48R"``), an
-            alias (``"PC"``, ``"PS"``, ``"BK7"``…), or ``"AIR"``/``""`` for air.
+            alias (``"PC"``, ``"PS"``, ``"FUSED SILICA"``…), or ``"AIR"``/``""`` for air.
         catalogs: Catalog name(s) to search, in order (e.g. ``"CDGM"``); default: all, user
             catalogs first, then ``SHIPPED_CATALOGS``.
         nd, vd: The glass's nd and Vd where known (a Zemax GLAS line carries them); used
