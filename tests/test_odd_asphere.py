@@ -214,8 +214,26 @@ def test_zmx_parm_beyond_8_is_refused_with_its_line(tmp_path):
     with pytest.raises(ValueError, match=r"ODDASPHE uses PARM 1\.\.8 only: 'PARM 9 1e-9'") as e:
         jl.load(p)
     assert str(e.value).startswith(f"{p}:15: ")
-    with pytest.raises(ValueError, match="ODDASPHE holds 8"):
-        jl.save(odd_lens(beta=np.full(9, 1e-12)), tmp_path / "nine_out.zmx")
+
+
+def test_more_than_8_terms_are_written_as_an_extended_odd_asphere(tmp_path):
+    """ODDASPHE holds β_1 … β_8; a longer series is written as XOSPHERE (normalisation
+    radius 1 mm, A_i = β_i) and reads back term for term; 241 terms are refused."""
+    beta = np.array([2e-4, -1e-3, 3e-5, 1e-6, -2e-7, 4e-9, 1e-10, -3e-12, 5e-13, -7e-15])
+    lens = odd_lens(beta=beta)
+    path = tmp_path / "ten.zmx"
+    jl.save(lens, path)
+    text = path.read_text(encoding="utf-8")
+    assert "TYPE XOSPHERE" in text and 'XDAT 1 10 ' in text
+    back = jl.load(path)
+    s = back.surfaces[0]
+    assert isinstance(s, jl.OddAsphere)
+    np.testing.assert_array_equal(np.asarray(s.coeffs), beta)
+    rays = jl.sampling.collimated(lens, 5.0, jl.sampling.pupil_hexapolar(4))
+    np.testing.assert_array_equal(np.asarray(jl.trace(back, rays).origin),
+                                  np.asarray(jl.trace(lens, rays).origin))
+    with pytest.raises(ValueError, match="XOSPHERE holds 240"):
+        jl.save(odd_lens(beta=np.full(241, 1e-30)), tmp_path / "long.zmx")
 
 
 @pytest.mark.parametrize("ext", ["zmx", "json"])

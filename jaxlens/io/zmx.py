@@ -12,10 +12,10 @@ What is read and written:
       PARM 1 multiplies r²), ``TYPE XASPHERE`` (extended asphere: XDAT 1 = number of
       terms, XDAT 2 = normalisation radius, XDAT 3… = the r², r⁴, … coefficients; used
       for even aspheres with more than 8 terms) and ``TYPE ODDASPHE`` (an ``OddAsphere``:
-      PARM 1..8 = β_1 … β_8 on r, r², …, r⁸; a nonzero PARM beyond 8 is refused, and an
-      ``OddAsphere`` with more than 8 terms is not written); ``TYPE XOSPHERE`` (extended odd
-      asphere, read as an ``OddAsphere``: XDAT 1 = number of terms N, XDAT 2 = normalisation
-      radius R, XDAT 3… = A_1 … A_N on (r/R)¹ … (r/R)ᴺ, so β_i = A_i / R^i; no PARM).
+      PARM 1..8 = β_1 … β_8 on r, r², …, r⁸; a nonzero PARM beyond 8 is refused); ``TYPE
+      XOSPHERE`` (extended odd asphere, an ``OddAsphere``: XDAT 1 = number of terms N ≤ 240,
+      XDAT 2 = normalisation radius R, XDAT 3… = A_1 … A_N on (r/R)¹ … (r/R)ᴺ, so
+      β_i = A_i / R^i; no PARM; an ``OddAsphere`` with more than 8 terms is written so, R = 1).
       ``TYPE TILTSURF`` (a
       ``TiltedPlane``, the plane z = tan θx·x + tan θy·y through the vertex: PARM 1 = tan θx,
       PARM 2 = tan θy, dimensionless; CURV, CONI, other PARMs and XDAT 0; the frame of the

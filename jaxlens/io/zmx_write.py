@@ -305,11 +305,16 @@ def surface_lines(s: AbstractSurface, *, image: bool = False) -> list[str]:
             out += [f'XDAT {i + 2} {_z(v)} 0 0 1 0 0 ""' for i, v in enumerate(a, start=1)]
     elif isinstance(s, OddAsphere):
         b = [float(v) for v in np.asarray(s.coeffs)]
-        if len(b) > 8:
-            raise ValueError(f"save_zmx: an OddAsphere has {len(b)} coefficients; Zemax's "
-                             f"ODDASPHE holds 8 (β_1 … β_8 on r … r⁸)")
-        out += ["TYPE ODDASPHE", f'CURV {_z(s.c)} 0 0 0 0 ""', f"CONI {_z(s.k)}"]
-        out += [f"PARM {i} {_z(v)}" for i, v in enumerate(b, start=1)]
+        if len(b) <= 8:
+            out += ["TYPE ODDASPHE", f'CURV {_z(s.c)} 0 0 0 0 ""', f"CONI {_z(s.k)}"]
+            out += [f"PARM {i} {_z(v)}" for i, v in enumerate(b, start=1)]
+        else:  # the extended odd asphere, normalisation radius 1 mm: A_i = β_i
+            if len(b) > zmx_surfaces.MAX_XOSPHERE_TERMS:
+                raise ValueError(f"save_zmx: an OddAsphere has {len(b)} coefficients; Zemax's "
+                                 f"XOSPHERE holds {zmx_surfaces.MAX_XOSPHERE_TERMS}")
+            out += ["TYPE XOSPHERE", f'CURV {_z(s.c)} 0 0 0 0 ""', f"CONI {_z(s.k)}",
+                    f'XDAT 1 {len(b)} 0 0 1 0 0 ""', 'XDAT 2 1.0 0 0 1 0 0 ""']
+            out += [f'XDAT {i + 2} {_z(v)} 0 0 1 0 0 ""' for i, v in enumerate(b, start=1)]
     elif isinstance(s, TiltedPlane):  # PARM 1, 2: the slopes, no unit
         out += ["TYPE TILTSURF", 'CURV 0 0 0 0 0 ""', f"PARM 1 {_z(s.tan_x)}",
                 f"PARM 2 {_z(s.tan_y)}"]
