@@ -416,3 +416,20 @@ def test_edof_cli_keeps_an_earlier_record_without_overwrite(tmp_path, capsys, mo
                      r"--overwrite to replace them", err), err
     assert (rec / "table2.md").read_text() == "the earlier run"
     assert not (tmp_path / "r").exists()
+
+
+def test_curriculum_run_checks_every_stage_and_the_seed_labels_first():
+    """A later stage's missing objective was found only after the stages before it had run."""
+    import types
+
+    from jaxlens.design import DesignSpec, Stage, run
+
+    params = types.SimpleNamespace(c=jnp.zeros((2, 3)))
+    stages = [Stage("ray first", 80.8, 2.0, 5), Stage("image next", 80.8, 2.0, 5, loss="image")]
+    kw = dict(progress=False)
+    with pytest.raises(ValueError, match=r"run: stage 'image next' needs a 'image' objective"):
+        run(DesignSpec(), stages, params, object(), None, **kw)
+    with pytest.raises(TypeError, match=r"run: stages must be Stage objects, got dict"):
+        run(DesignSpec(), [{"fov": 80.8}], params, object(), None, **kw)
+    with pytest.raises(ValueError, match=r"run: seeds must label the 2 designs of params, got 1"):
+        run(DesignSpec(), stages[:1], params, object(), None, seeds=[7], **kw)

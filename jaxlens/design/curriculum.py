@@ -355,6 +355,17 @@ def run(
     b = params.c.shape[0]
     seeds = list(range(b)) if seeds is None else list(seeds)
     objectives = objective if isinstance(objective, dict) else {"ray": objective}
+    # Checked before the first stage: a later stage's missing objective was found only after
+    # the stages before it had run, and seed labels of another count mislabelled the designs.
+    for stage in stages:
+        if not isinstance(stage, Stage):
+            raise TypeError(f"run: stages must be Stage objects, got {type(stage).__name__} "
+                            f"{stage!r}")
+        if stage.loss not in objectives:
+            raise ValueError(f"run: stage {stage.name!r} needs a {stage.loss!r} objective")
+    if len(seeds) != b:
+        raise ValueError(f"run: seeds must label the {b} designs of params, got {len(seeds)} "
+                         f"labels: {seeds!r}")
     objective = objectives["ray"]
     area = objective.sampling.area
     total = sum(s.steps for s in stages)
