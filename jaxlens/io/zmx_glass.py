@@ -1,8 +1,10 @@
 """Glass names of ``.zmx`` files: which catalog glass a ``GLAS`` line means.
 
 A name is looked up in the catalogs the file's ``GCAT`` line names (side ``.AGF`` files
-first, then the shipped catalogs that stand for them), then as SCHOTT's lead-free successor
-of a discontinued SCHOTT glass, then in every shipped catalog. The last two are reported (a
+first, then the shipped catalogs that stand for them; the shipped SCHOTT holds the obsolete
+glasses of SCHOTT's 2008 catalog too, so ``SK4`` is SCHOTT's own SK4), then as SCHOTT's
+lead-free successor of a discontinued SCHOTT glass that it still lacks (LAF21 → N-LAF21),
+then in every shipped catalog. The last two are reported (a
 ``ZmxWarning``; an error under ``strict``): a glass of the same name from another maker may be
 another glass. The nd and Vd that a ``GLAS`` line carries are cross-checked against the
 catalog's.
@@ -175,10 +177,11 @@ class GlassResolver:
         return _cross_checked(m, ln)
 
     def _successor(self, ln, name: str):
-        """SCHOTT's lead-free successor N-<name> of a glass that the file's SCHOTT catalog
-        lacks (KF9 → N-KF9), with a warning (an error under strict): the successor matches
-        the old glass's nd and Vd to about 1e-3 and 0.5, so it is a closer guess than a
-        glass of the same name from another maker."""
+        """SCHOTT's lead-free successor N-<name> of a glass that the shipped SCHOTT catalog
+        lacks, 2008 obsolete glasses included (LAF21 → N-LAF21, LASF9 → N-LASF9), with a
+        warning (an error under strict): the successor matches the old glass's nd and Vd to
+        about 1e-3 and 0.5, so it is a closer guess than a glass of the same name from another
+        maker."""
         if "SCHOTT" not in self.gcat or "SCHOTT" in self.side or name.upper().startswith("N-"):
             return None
         try:
