@@ -31,6 +31,8 @@ import jax.numpy as jnp
 import numpy as np
 from jaxtyping import Array, Float, PRNGKeyArray
 
+from .optics import checks
+
 _DIMS = ("NHWC", "HWIO", "NHWC")
 
 
@@ -292,6 +294,15 @@ class NAFNet(eqx.Module):
             )
         if width < 1 or any(n < 0 for n in (*enc_blocks, *dec_blocks, middle_blocks)):
             raise ValueError(f"NAFNet: width must be >= 1 and block counts >= 0, got {width}")
+        # width 2.5 failed as "'float' object cannot be interpreted as an integer", 0
+        # channels as a ZeroDivisionError, and an integer dtype made integer weights.
+        for arg, v, lo in (("in_channels", in_channels, 1), ("out_channels", out_channels, 1),
+                           ("width", width, 1), ("middle_blocks", middle_blocks, 0)):
+            checks.number(v, arg, "NAFNet", lo=lo, integer=True)
+        for arg, v in (("enc_blocks", enc_blocks), ("dec_blocks", dec_blocks)):
+            for n in v:
+                checks.number(n, arg, "NAFNet", lo=0, integer=True, unit="blocks per level")
+        checks.float_dtype(dtype, "NAFNet")
         dtype = dtype or jnp.result_type(float)
         gen = _generator(key)
         keys = iter(lambda: gen, None)  # one host generator, drawn from in order
@@ -325,6 +336,10 @@ class NAFNet(eqx.Module):
         """Restore one image ``[H, W, in_channels]``; returns ``[H, W, out_channels]``."""
         if x.ndim != 3:
             raise ValueError(f"NAFNet: expected one [H, W, C] image, got shape {x.shape}")
+        c_in = self.intro.weight.shape[-2]
+        if x.shape[-1] != c_in:  # was a conv_general_dilated feature-dimension error
+            raise ValueError(f"NAFNet: expected an [H, W, {c_in}] image (in_channels {c_in}), "
+                             f"got shape {x.shape}")
         h, w, _ = x.shape
         m = 2**self.depth
         ph, pw = (-h) % m, (-w) % m

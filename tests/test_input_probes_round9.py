@@ -433,3 +433,28 @@ def test_curriculum_run_checks_every_stage_and_the_seed_labels_first():
         run(DesignSpec(), [{"fov": 80.8}], params, object(), None, **kw)
     with pytest.raises(ValueError, match=r"run: seeds must label the 2 designs of params, got 1"):
         run(DesignSpec(), stages[:1], params, object(), None, seeds=[7], **kw)
+
+
+# ---------------------------------------------------------------- the reconstruction network
+
+
+def test_nafnet_names_bad_sizes_dtypes_and_channel_counts():
+    import jax
+
+    from jaxlens.nets import NAFNet
+
+    key = jax.random.PRNGKey(0)
+    cases = [
+        (dict(width=2.5), r"NAFNet: width must be a whole number in \[1, inf\), got 2.5"),
+        (dict(in_channels=0, out_channels=0), r"NAFNet: in_channels must be a whole number in "
+                                              r"\[1, inf\), got 0"),  # was ZeroDivisionError
+        (dict(dtype=jnp.int32), r"NAFNet: dtype must be None, float32 or float64"),
+    ]
+    for kw, match in cases:
+        with pytest.raises(ValueError, match=match):
+            NAFNet(key=key, **{"width": 4, **kw})
+    net = NAFNet(key=key, width=4, enc_blocks=(1,), dec_blocks=(1,))
+    # was a conv_general_dilated feature-dimension error
+    with pytest.raises(ValueError, match=r"NAFNet: expected an \[H, W, 3\] image \(in_channels "
+                                         r"3\), got shape \(8, 8, 4\)"):
+        net(jnp.ones((8, 8, 4)))
