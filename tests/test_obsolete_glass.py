@@ -271,3 +271,8 @@ def test_zemax_sample_lenses_get_their_efl_with_schotts_old_glasses(text, wavele
     efl = float(jaxlens.paraxial_data(lens).efl_image_space)
     assert efl == pytest.approx(optiland, rel=1e-9)
     assert efl == pytest.approx(_ynu_efl(text, wavelength, scale), rel=1e-9)
+    # Saved, the file names the same SCHOTT glasses and reads back to the same EFL, quietly.
+    written, _ = zmx.dumps(lens)
+    assert "GCAT SCHOTT" in written and f"GLAS {successor[2:]}" in written
+    again = _quiet_load(written)
+    assert float(jaxlens.paraxial_data(again).efl_image_space) == efl
