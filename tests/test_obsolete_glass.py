@@ -78,9 +78,10 @@ def test_the_2008_section_holds_the_glasses_real_files_name():
 
 
 def test_every_added_glass_gives_the_nd_and_vd_of_its_nm_record():
-    """jaxlens's index from the CD coefficients against SCHOTT's nd and Vd of the same glass
-    (largest differences today: nd 3.3e-6 for KZFSN5, Vd 0.0045 for SF57HHT, both given to 2
-    decimals; the obsolete glasses' 6-decimal nd agree to 5e-7)."""
+    """jaxlens's index from the CD coefficients against SCHOTT's nd and Vd of the same glass:
+    within 1e-5 and 0.05 for all (largest today: nd 3.3e-6 for KZFSN5, Vd 0.0044 for SF57HHT,
+    whose NM records round to 5 and 2 decimals), within 1e-6 and 1e-5 for the 193 obsolete
+    glasses, whose NM records give 6 decimals (largest today: 4.9e-7 for both)."""
     bad = []
     for r in _section():
         m = get_material(r.name, "SCHOTT")
@@ -88,7 +89,8 @@ def test_every_added_glass_gives_the_nd_and_vd_of_its_nm_record():
         assert (m.catalog_nd, m.catalog_vd) == (r.nd, r.vd)
         n_d, n_f, n_c = (float(x) for x in m.index(np.array([LAMBDA_D, LAMBDA_F, LAMBDA_C])))
         vd = (n_d - 1) / (n_f - n_c)
-        if abs(n_d - r.nd) > 1e-5 or abs(vd - r.vd) > 0.05:
+        nd_tol, vd_tol = (1e-6, 1e-5) if r.status == 2 else (1e-5, 0.05)
+        if abs(n_d - r.nd) > nd_tol or abs(vd - r.vd) > vd_tol:
             bad.append((r.name, r.nd, n_d, r.vd, vd))
     assert bad == []
 
