@@ -193,3 +193,21 @@ def test_search_then_polish_gives_catalog_lenses():
         np.testing.assert_allclose(np.stack([np.asarray(m.index(wl)) for m in glass]),
                                    np.asarray(res.params.m[i]), rtol=1e-12)
     assert res.continuous_materials.shape == (2, 2, 2)
+
+
+def test_design_regions_leave_out_obsolete_glasses():
+    """SCHOTT's catalog keeps the obsolete glasses that lens files name (SK4, BK7, …, Zemax
+    status 2); glass selection chooses among glasses still made. BAF4 is obsolete at SCHOTT,
+    the first catalog searched, so the name is left out even though CDGM also has a BAF4."""
+    everything = catalog.catalog_names(catalog="SCHOTT")
+    made = catalog.catalog_names(catalog="SCHOTT", obsolete=False)
+    assert {"SK4", "BK7", "N-BK7", "N-SF6"} <= set(everything)
+    assert "N-BK7" in made and "SK4" not in made and "BK7" not in made
+    assert len(made) < len(everything)
+    region = CatalogRegion.of(("SCHOTT", "CDGM"))
+    assert "SK4" not in region.names and "BAF4" not in region.names
+    assert "N-BK7" in region.names and "H-K9L" in region.names
+    assert set(region.names) == set(catalog.catalog_names(catalogs=("SCHOTT", "CDGM"),
+                                                          obsolete=False))
+    with pytest.raises(ValueError, match="obsolete must be True or False"):
+        catalog.catalog_names(catalog="SCHOTT", obsolete="no")

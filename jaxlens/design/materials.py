@@ -137,7 +137,8 @@ class CatalogRegion:
 
     Attributes:
         catalogs: the catalog names searched, in order (``jaxlens.optics.catalog``).
-        names: material names (a name in an earlier catalog is not repeated).
+        names: material names still made (a name in an earlier catalog is not repeated;
+            obsolete glasses, Zemax status 2, are left out).
         points: ``[N, 2]`` their catalog (nd, Vd).
     """
 
@@ -152,7 +153,9 @@ class CatalogRegion:
         if not catalogs or not all(catalogs):
             raise ValueError(f"material catalogs: need at least one catalog name, got "
                              f"{catalogs!r}; shipped: {list(catalog.SHIPPED_CATALOGS)}")
-        names = tuple(catalog.catalog_names(catalogs=catalogs))  # ValueError names unknown ones
+        # Glasses no longer made are left out: a design must be buildable (the SCHOTT
+        # catalog keeps its obsolete glasses for the lens files that name them).
+        names = tuple(catalog.catalog_names(catalogs=catalogs, obsolete=False))
         pts = np.array([catalog.glass_info(n, catalogs)[1:] for n in names], float)
         ok = np.isfinite(pts).all(1) & (pts[:, 0] > 1.0) & (pts[:, 1] > 0.0)
         names, pts = tuple(n for n, k in zip(names, ok, strict=True) if k), pts[ok]

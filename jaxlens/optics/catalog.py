@@ -595,13 +595,21 @@ def get_material(name: str, catalogs: str | Iterable[str] | None = None, *,
     return entry.to_material() if isinstance(entry, GlassRecord) else entry
 
 
+STATUS_OBSOLETE = 2
+"""Zemax's NM-record status of a glass its maker no longer melts."""
+
+
 def catalog_names(catalog: str | None = None,
-                  catalogs: str | Iterable[str] | None = None) -> list[str]:
+                  catalogs: str | Iterable[str] | None = None, *,
+                  obsolete: bool = True) -> list[str]:
     """Names of the available glasses.
 
     Args:
         catalog: Only this catalog (shortcut for ``catalogs=[catalog]``).
         catalogs: Catalogs to list, in order; default: all, in search order.
+        obsolete: Also list glasses of status ``STATUS_OBSOLETE`` (no longer made). A name
+            whose glass in the first catalog that has it is obsolete is left out entirely,
+            since ``get_material`` of that name gives that glass.
 
     Returns:
         Glass names as written in their catalogs, in search order; a name found in an
@@ -610,11 +618,13 @@ def catalog_names(catalog: str | None = None,
     if catalog is not None and catalogs is not None:  # catalogs was ignored
         raise ValueError(f"catalog_names: give catalog or catalogs, not both; got "
                          f"{catalog!r} and {catalogs!r}")
-    seen: dict[str, str] = {}
+    checks.switch(obsolete, "obsolete", "catalog_names")
+    seen: dict[str, tuple[str, bool]] = {}
     for _, entries in _search_order(catalog if catalog is not None else catalogs):
         for key, entry in entries.items():
-            seen.setdefault(key, entry.name if entry.name else key)
-    return list(seen.values())
+            old = isinstance(entry, GlassRecord) and entry.status == STATUS_OBSOLETE
+            seen.setdefault(key, (entry.name if entry.name else key, old))
+    return [name for name, old in seen.values() if obsolete or not old]
 
 
 def _nd_vd(entry: GlassRecord | AbstractMaterial) -> tuple[float, float]:
