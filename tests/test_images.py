@@ -138,3 +138,22 @@ def test_png16_decoder_undoes_every_filter(tmp_path):
     (tmp_path / "f.png").write_bytes(png)
     back = images.read_png(tmp_path / "f.png", linear=False)
     np.testing.assert_allclose(back, img / 65535.0, atol=1e-7)
+
+
+def test_writers_refuse_another_suffix_and_a_folder(tmp_path):
+    """PNG bytes under a .jpg name, or an EXR named .png, would be unreadable as what the name
+    says; a folder gave a raw IsADirectoryError."""
+    img = np.full((2, 2, 3), 0.5)
+    with pytest.raises(ValueError, match=r"write_png: writes PNG files; the path must end in "
+                                         r"\.png, got '.*x\.jpg'"):
+        images.write_png(tmp_path / "x.jpg", img)
+    with pytest.raises(ValueError, match=r"write_exr: writes EXR files; the path must end in "
+                                         r"\.exr"):
+        images.write_exr(tmp_path / "x.png", img)
+    folder = tmp_path / "d.png"
+    folder.mkdir()
+    with pytest.raises(ValueError, match="is a folder, not a file"):
+        images.write_png(folder, img)
+    assert not (tmp_path / "x.jpg").exists() and not (tmp_path / "x.png").exists()
+    images.write_png(tmp_path / "UPPER.PNG", img)  # the suffix in any case
+    np.testing.assert_allclose(images.read_png(tmp_path / "UPPER.PNG"), img, atol=5e-3)

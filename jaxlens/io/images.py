@@ -110,6 +110,18 @@ def read_exr(path, *, channels=None) -> np.ndarray:
     return arr[..., 0] if arr.shape[-1] == 1 else arr
 
 
+def _output_file(path, where: str, suffix: str) -> pathlib.Path:
+    """``path`` as a file to write: its suffix must be ``suffix`` (any case), so that the
+    bytes match the name, and it must not be a folder."""
+    p = pathlib.Path(os.fspath(path))
+    if p.suffix.lower() != suffix:
+        raise ValueError(f"{where}: writes {suffix[1:].upper()} files; the path must end in "
+                         f"{suffix}, got {str(p)!r}")
+    if p.is_dir():
+        raise ValueError(f"{where}: {str(p)!r} is a folder, not a file")
+    return p
+
+
 def write_exr(path, img, *, channels=None) -> None:
     """Write a float image to OpenEXR (32-bit float, ZIP compression).
 
@@ -119,6 +131,7 @@ def write_exr(path, img, *, channels=None) -> None:
         channels: channel names (default Y for one channel, R, G, B for three, else
             C0, C1, ...).
     """
+    path = _output_file(path, "write_exr", ".exr")
     a = np.asarray(img, np.float32)
     if a.ndim == 2:
         a = a[..., None]
@@ -187,6 +200,7 @@ def write_png(path, img, *, linear: bool = True, bits: int = 8) -> None:
             them as they are.
         bits: 8 or 16.
     """
+    path = _output_file(path, "write_png", ".png")
     if bits not in (8, 16):
         raise ValueError(f"write_png: bits must be 8 or 16, got {bits}")
     a = np.asarray(img, np.float64)
@@ -212,7 +226,7 @@ def write_png(path, img, *, linear: bool = True, bits: int = 8) -> None:
     ihdr = struct.pack(">IIBBBBB", w, h, bits, color_type, 0, 0, 0)
     png = (b"\x89PNG\r\n\x1a\n" + chunk(b"IHDR", ihdr) + chunk(b"IDAT", zlib.compress(data, 6))
            + chunk(b"IEND", b""))
-    pathlib.Path(os.fspath(path)).write_bytes(png)
+    path.write_bytes(png)
 
 
 def _unfilter(raw: bytes, h: int, stride: int, bpp: int) -> np.ndarray:
