@@ -64,6 +64,9 @@ def main(argv: list[str] | None = None) -> dict:
     args = p.parse_args(argv)
     if args.tag is not None and not re.fullmatch(r"[A-Za-z0-9_-]+", args.tag):
         p.error("--tag: letters, digits, '_' and '-' only")
+    if args.full and (args.smoke or args.counts):
+        p.error("--full adds 1e7 rays to the default ray counts; it does not go with "
+                + ("--smoke" if args.smoke else "--counts (list 10000000 there instead)"))
     for n in args.counts or ():
         if n < 1:
             p.error(f"--counts must be whole numbers in [1, inf) rays, got {n}")

@@ -74,10 +74,18 @@ def forward_grad(lens, rays):
     return eqx.filter_value_and_grad(loss)(lens)
 
 
+def chosen_lenses(smoke: bool, lenses=None) -> tuple[str, ...]:
+    """The lenses a run traces: those asked for, all of them also in a smoke run (which
+    otherwise takes the first of ``LENSES`` only)."""
+    if lenses is not None:
+        return tuple(lenses)
+    return LENSES[:1] if smoke else LENSES
+
+
 def run(
     smoke: bool = False,
     full: bool = False,
-    lenses=LENSES,
+    lenses=None,
     counts=None,
     with_optiland: bool = True,
 ) -> dict:
@@ -86,8 +94,7 @@ def run(
         counts = [1_000] if smoke else [1_000, 10_000, 100_000, 1_000_000]
         if full:
             counts = counts + [10_000_000]
-    if smoke:
-        lenses = lenses[:1]
+    lenses = chosen_lenses(smoke, lenses)
     have_optiland = with_optiland and optiland_ref.available()
     rows = []
     for name in lenses:

@@ -251,3 +251,25 @@ def test_vjp_probe_smoke(tmp_path):
     assert all(math.isfinite(r["ms"]) and r["ms"] > 0 for r in out["programs"].values())
     row = out["chunks"]["512"]
     assert row["rule_grad_rel"] < 1e-10 and 0 < row["forward_over_fg_rule"] < 5
+
+
+@pytest.mark.parametrize("args, match", [
+    (["--smoke", "--full"], "does not go with --smoke"),
+    (["--full", "--counts", "1000"], "does not go with --counts"),
+])
+def test_run_refuses_full_where_it_would_be_ignored_or_heavy(args, match, capsys):
+    from benchmarks.run import main
+
+    with pytest.raises(SystemExit):
+        main(args)
+    assert match in capsys.readouterr().err
+
+
+def test_smoke_throughput_runs_every_lens_asked_for():
+    """A smoke run keeps one lens only by default; lenses named are all run (only the first
+    one was, silently)."""
+    from benchmarks.throughput import LENSES, chosen_lenses
+
+    assert chosen_lenses(True) == LENSES[:1] and chosen_lenses(False) == LENSES
+    asked = ("cooke_triplet", "double_gauss")
+    assert chosen_lenses(True, asked) == asked == chosen_lenses(False, list(asked))
