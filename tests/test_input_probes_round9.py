@@ -458,3 +458,21 @@ def test_nafnet_names_bad_sizes_dtypes_and_channel_counts():
     with pytest.raises(ValueError, match=r"NAFNet: expected an \[H, W, 3\] image \(in_channels "
                                          r"3\), got shape \(8, 8, 4\)"):
         net(jnp.ones((8, 8, 4)))
+
+
+# ---------------------------------------------------------------- numpy integers and strings
+
+
+def test_numpy_integers_count_as_whole_numbers_and_strings_do_not_as_tolerances():
+    """A count from numpy (np.int64(4), e.g. from an array shape) was refused as not an
+    int; a tolerance of "0.02" was read as 0.02 mm."""
+    from jaxlens.analysis import tolerance
+
+    lens = jl.zoo.cooke_triplet()
+    model = tolerance.ToleranceModel(lens, batch=np.int64(4))
+    assert model.batch == 4 and type(model.batch) is int
+    with pytest.raises(ValueError, match=r"Tolerances: thickness must be a finite number >= 0 "
+                                         r"mm, got '0.02'"):
+        tolerance.Tolerances(thickness="0.02")
+    with pytest.raises(ValueError, match="Tolerances: index must be a finite number >= 0"):
+        tolerance.Tolerances(index=True)

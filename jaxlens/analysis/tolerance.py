@@ -79,8 +79,8 @@ DISTRIBUTIONS = ("uniform", "normal")
 
 
 def _nonneg(value, name: str, unit: str) -> float:
-    try:
-        v = float(value)
+    try:  # float("0.02") would read a string as a number
+        v = float("nan") if isinstance(value, (str, bytes, bool)) else float(value)
     except (TypeError, ValueError):
         v = float("nan")
     if not math.isfinite(v) or v < 0:
@@ -431,8 +431,9 @@ class ToleranceModel:
                              f"{type(tolerances).__name__}")
         f, w = _check_fields(lens.fields if fields is None else fields, field_weights,
                              "ToleranceModel")
-        if not (isinstance(batch, int) and batch >= 1):
+        if isinstance(batch, bool) or not (isinstance(batch, (int, np.integer)) and batch >= 1):
             raise ValueError(f"ToleranceModel: batch must be a whole number >= 1, got {batch!r}")
+        batch = int(batch)
         dtype = jnp.result_type(float)
         self.lens = lens.astype(dtype)
         self.fields = jnp.asarray(f, dtype)
@@ -655,8 +656,8 @@ def sensitivity(model: ToleranceModel, *, check: int | None = None) -> dict:
     refocused nominal). With ``check`` = k only the k parameters with the largest
     |gradient × tolerance| are re-traced (the others' check fields are None); None checks all.
     """
-    if check is not None and (isinstance(check, bool) or not isinstance(check, int)
-                              or check < 0):
+    if check is not None and (isinstance(check, bool)
+                              or not isinstance(check, (int, np.integer)) or check < 0):
         raise ValueError(f"sensitivity: check must be None or a whole number >= 0 of "
                          f"parameters, got {check!r}")
     nominal, g = model.gradient()
