@@ -235,8 +235,10 @@ def main(argv: list[str] | None = None) -> int:
     if not (math.isfinite(args.threshold) and args.threshold > 0):
         return fail(prog, ValueError(f"--threshold must be a finite number > 0 µm, got "
                                      f"{args.threshold}"))
-    if not 0 <= args.seed <= 2**32 - 1:  # PRNGKey overflowed after the sensitivity pass
-        return fail(prog, ValueError(f"--seed must be a whole number in [0, 4294967295], got "
+    from jaxlens.design.init import MAX_SEED  # the design package, for its limit only
+
+    if not 0 <= args.seed <= MAX_SEED:  # PRNGKey overflowed after the sensitivity pass
+        return fail(prog, ValueError(f"--seed must be a whole number in [0, {MAX_SEED}], got "
                                      f"{args.seed}"))
     if not os.path.isfile(args.design):
         return fail(prog, ValueError(f"design file {args.design!r} not found"))

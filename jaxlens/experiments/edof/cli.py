@@ -191,10 +191,12 @@ def config_from_args(a):
     for opt, v in (("--steps2", cfg.steps2), ("--middle", cfg.middle_blocks),
                    ("--n-odd", cfg.n_odd), ("--context", cfg.context)):
         n(v, opt, w, lo=0, integer=True)
+    from jaxlens.design.init import MAX_SEED  # the design package, for its limit only
+
     for s in a.seeds:
         n(s, "--seeds", w, lo=0, integer=True)
-        if s > 2**32 - 1:  # PRNGKey: 2**32 was seed 0 again in float32, 2**63 overflowed
-            raise ValueError(f"edof: --seeds must be whole numbers in [0, 4294967295] (seeds "
+        if s > MAX_SEED:  # PRNGKey: 2**32 was seed 0 again in float32, 2**63 overflowed
+            raise ValueError(f"edof: --seeds must be whole numbers in [0, {MAX_SEED}] (seeds "
                              f"of JAX's PRNG), got {s}")
     if not a.seeds or len(set(a.seeds)) < len(a.seeds):  # a repeat would count twice
         raise ValueError(f"edof: --seeds needs distinct seeds, got {a.seeds}")

@@ -418,8 +418,10 @@ def _check_cli(p, a) -> list[int]:
         if not all(s.isdigit() for s in parts) or len(set(map(int, parts))) < len(parts):
             raise ValueError(f"--seeds must be distinct comma-separated whole numbers >= 0, "
                              f"got {a.seeds!r}")
-        if max(map(int, parts)) > 2**32 - 1:  # design() refused it after the CLI's checks
-            raise ValueError(f"--seeds must be whole numbers in [0, 4294967295] (seeds of "
+        from ...design.init import MAX_SEED  # the design package, imported where used
+
+        if max(map(int, parts)) > MAX_SEED:  # design() refused it after the CLI's checks
+            raise ValueError(f"--seeds must be whole numbers in [0, {MAX_SEED}] (seeds of "
                              f"JAX's PRNG), got {a.seeds!r}")
         checks.number(a.elements, "--elements", w, lo=4, hi=6, integer=True,
                       unit="elements (the default materials)")
