@@ -115,7 +115,7 @@ def test_fans_and_curvature_refuse_strings_for_numbers(cooke):
 def test_mtf_of_a_field_without_light_is_refused_not_zero(cooke, model):
     """60° is far beyond the triplet's coverage: the MTF was 0 at every frequency (0 even at
     0 cycles/mm), where psf refuses the same field."""
-    with pytest.raises(ValueError, match=r"mtf: no ray of the beam reaches the image surface "
+    with pytest.raises(P.NoLightError, match=r"mtf: no ray of the beam reaches the image surface "
                                          r"\(the field is vignetted or beyond the lens's "
                                          r"coverage\), so there is no MTF \(field 60 deg"):
         P.mtf(cooke, 60.0, model=model, kernel_size=16)

@@ -707,6 +707,10 @@ def _mtf_impl(lens, field, depth, wls, freqs, pixel_size, *, model, kernel_size,
     return along(e_t), along(e_s), ~jnp.isnan(trunc)
 
 
+class NoLightError(ValueError):
+    """``mtf`` of a field whose beam puts no ray on the image surface (it has no MTF)."""
+
+
 def mtf(
     lens: Lens,
     field,
@@ -790,5 +794,5 @@ def mtf(
         t = eqx.error_if(t, ~jnp.all(lit), msg)
     elif not np.all(np.asarray(lit)):
         dark = np.asarray(wls)[~np.asarray(lit)]
-        raise ValueError(f"{msg} (field {checks.fmt(field)} deg, at {checks.fmt(dark)} µm)")
+        raise NoLightError(f"{msg} (field {checks.fmt(field)} deg, at {checks.fmt(dark)} µm)")
     return freqs, t, s
