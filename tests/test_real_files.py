@@ -343,12 +343,17 @@ def test_other_apertures_refused(tmp_path):
     assert float(lens.surfaces[0].semi_diameter) == 4.0
     assert lens.apertures == ()
     # A decenter of a surface that clips nothing (an automatic DIAM, solve flag 0, as in an
-    # off-axis mirror system's file) has nothing to move: ignored. A fixed DIAM clips, and
-    # with no aperture for the decenter to move it is refused.
+    # off-axis mirror system's file, or a fixed DIAM with no aperture, which clips nothing
+    # in Zemax) has nothing to move: ignored. A floating aperture (FLAP) clips at the fixed
+    # DIAM, and with no aperture for the decenter to move it is refused.
     _, lens = _load_text(tmp_path, _file(ep, surface1='  DIAM 6 0 0 0 1 ""\n  OBDC 0 -3\n'))
     assert float(lens.surfaces[0].semi_diameter) == np.inf
-    assert _refused(tmp_path, _file(ep, surface1='  DIAM 6 1 0 0 1 ""\n  OBDC 0 -3\n'),
-                    "decenter .OBDC. of a fixed semi-diameter") == "OBDC 0 -3"
+    _, lens = _load_text(tmp_path, _file(ep, surface1='  DIAM 6 1 0 0 1 ""\n  OBDC 0 -3\n'))
+    assert float(lens.surfaces[0].semi_diameter) == np.inf
+    assert lens.apertures == ()
+    assert _refused(tmp_path, _file(ep, surface1='  DIAM 6 1 0 0 1 ""\n  FLAP 0 6 0\n'
+                                                  '  OBDC 0 -3\n'),
+                    "decenter .OBDC. of a floating aperture") == "OBDC 0 -3"
     # A decentered annular obscuration has no Lens form.
     assert _refused(tmp_path, _file(ep, surface1="  OBSC 1 2 0\n  OBDC 0 -3\n"),
                     "decentered .OBDC. annular obscuration") == "OBSC 1 2 0"
@@ -444,10 +449,13 @@ def test_model_glass_partial_dispersion_reported(tmp_path):
 
 
 def test_a_semi_diameter_beyond_the_sphere_is_refused_naming_the_surface(tmp_path):
-    """A fixed DIAM wider than the sphere itself (|R| < DIAM) has no surface to clip at: the
-    lens class refuses it, and the reader reports that with the surface's line."""
+    """A floating aperture at a fixed DIAM wider than the sphere itself (|R| < DIAM) has no
+    surface to clip at: the lens class refuses it, and the reader reports that with the
+    surface's line. (A DIAM alone clips nothing, so it is not refused.)"""
     r = 1 / abs(SINGLET_C1)
-    line = _refused(tmp_path, _file("ENPD 10\n", surface1=f"  DIAM {2 * r!r} 1\n"),
+    line = _refused(tmp_path, _file("ENPD 10\n", surface1=f"  DIAM {2 * r!r} 1\n  FLAP 0 1 0\n"),
                     r"is defined only out to r = .* semi_diameter")
     assert line == "SURF 1"
-    _load_text(tmp_path, _file("ENPD 10\n", surface1=f"  DIAM {0.5 * r!r} 1\n"))
+    _load_text(tmp_path, _file("ENPD 10\n", surface1=f"  DIAM {0.5 * r!r} 1\n  FLAP 0 1 0\n"))
+    _, lens = _load_text(tmp_path, _file("ENPD 10\n", surface1=f"  DIAM {2 * r!r} 1\n"))
+    assert float(lens.surfaces[0].semi_diameter) == np.inf

@@ -394,6 +394,7 @@ SURF 0
 SURF 1
   CURV 0.05
   DIAM {sd} 1
+  FLAP 0 {sd} 0
   DISZ 5
   GLAS ___BLANK 1 0 1.6 0 0 0 0 0 0 0
 SURF 2

@@ -16,10 +16,10 @@ the same float64 origins and directions are traced by ``jaxlens.trace`` and by o
   surface where each code stopped the ray.
 
 Rays whose difference has a known cause are set apart and counted, not failed: jaxlens clips
-at an aperture optiland does not read (OBSC, SQAP, ELAP, SQOB, ELOB, a fixed DIAM without
-CLAP); optiland takes a negative distance to a surface where jaxlens stops the ray (crossed
-surfaces outside the clear aperture); the ray runs in a flat image plane; the ray meets the
-tip of an odd asphere's cone (β1 ≠ 0), which has no normal.
+at an aperture optiland does not read (OBSC, SQAP, ELAP, SQOB, ELOB); optiland takes a
+negative distance to a surface where jaxlens stops the ray (crossed surfaces outside the
+clear aperture); the ray runs in a flat image plane; the ray meets the tip of an odd
+asphere's cone (β1 ≠ 0), which has no normal.
 
 To compare geometry rather than glass data, optiland's media are replaced by jaxlens's
 indices at each wavelength (``Δn`` is the largest difference of optiland's own indices).
@@ -153,13 +153,13 @@ def correct_optiland_toroids(optic, blocks, numbers: list[int]) -> str:
 
 def apertures_optiland_ignores(lines) -> str:
     """The aperture keyword of a surface that jaxlens clips at and optiland 0.6.3 does not
-    read ("" if none): OBSC, SQAP, ELAP, SQOB, ELOB, or a fixed DIAM without CLAP/FLAP."""
+    read ("" if none): OBSC, SQAP, ELAP, SQOB, ELOB. (A semi-diameter, DIAM, clips in
+    neither: jaxlens reads it as Zemax does, and both clip at CLAP and FLAP.)"""
     keys = {t[0] for t in lines}
     for k in ("OBSC", "SQAP", "ELAP", "SQOB", "ELOB"):
         if k in keys:
             return k
-    fixed = any(t[0] == "DIAM" and (len(t) < 3 or t[2] != "0") for t in lines)
-    return "fixed DIAM" if fixed and not keys & {"CLAP", "FLAP"} else ""
+    return ""
 
 
 def unit_of(path: str) -> float:

@@ -34,21 +34,25 @@ What is read and written:
       computes the same sag. Reading checks that the polynomial has that structure and
       raises otherwise. A surface comment ``jaxlens hybrid even=M odd=P`` keeps the
       number of even and odd coefficients so the round trip restores the same shapes.
-    * ``DISZ`` (INFINITY for the object), ``STOP``, ``DIAM`` (the semi-diameter; a value
-      with solve flag 0 is Zemax's automatic semi-diameter and is read as no clipping,
-      a fixed value clips rays), ``CLAP 0 r 0`` (circular aperture, read as the
-      semi-diameter; it wins over DIAM). A clipping semi-diameter is written as both
-      ``DIAM r 1`` and ``CLAP 0 r 0``: Zemax and optiland clip only at apertures.
+    * ``DISZ`` (INFINITY for the object), ``STOP``, ``DIAM`` (the semi-diameter), and the
+      surface apertures, which are what clip rays, as in Zemax: the semi-diameter alone
+      never does (a fixed ``DIAM`` with no aperture clips nothing). ``CLAP 0 r 0``
+      (circular aperture) clips at r; ``FLAP 0 r 0`` (floating aperture, which Zemax adds
+      where a user types a semi-diameter on a surface with power) clips at the DIAM value
+      when that is fixed, and at nothing when DIAM is automatic (solve flag 0: the height
+      of the file's outermost ray). A clipping semi-diameter is written as both
+      ``DIAM r 1`` and ``CLAP 0 r 0``.
       ``OBSC r_min r_max`` (a circular obscuration, ``Lens.obscurations``) is read and
       written; an annular ``CLAP r_in r 0`` is the clipping radius r and an obscuration
       inside r_in. ``SQAP hx hy``/``ELAP hx hy`` (rectangular/elliptical apertures, half-widths)
       and ``SQOB``/``ELOB`` (rectangular/elliptical obscurations) are ``Lens.apertures``
       (``jaxlens.Aperture``), and so are CLAP and ``OBSC 0 r`` on a surface with an aperture
       decenter ``OBDC dx dy``, which moves every aperture of its surface. A surface with
-      such apertures clips at them only (not at its DIAM), as in Zemax. They are written
+      such apertures clips at them only. They are written
       back the same way (one OBDC per surface). Refused: a decentered annular OBSC, an OBDC
-      on a surface whose only clipping is a fixed DIAM (on a surface that clips nothing it
-      is ignored), and a decentered or non-circular stop aperture under ``FLOA``.
+      on a surface whose only clipping is a floating aperture (FLAP; on a surface that
+      clips nothing it is ignored), and a decentered or non-circular stop aperture under
+      ``FLOA``.
     * ``TYPE COORDBRK`` (a ``CoordinateBreak``): PARM 1, 2 decenter x, y; PARM 3, 4, 5 tilt
       about x, y, z in degrees; PARM 6 the order flag (0 or 1); CURV 0; no GLAS (the
       medium continues). ``GLAS MIRROR`` makes a surface a mirror (``Lens.mirrors``); the

@@ -23,6 +23,7 @@ SURFACE_KEYS = {
     "DIAM",
     "COMM",
     "CLAP",
+    "FLAP",
     "OBSC",
     "OBDC",
     "SQAP",
@@ -89,6 +90,7 @@ class ZmxSurface:
     diam: tuple[float, int | None] | None = None
     clap: float | None = None
     clap_min: ZmxLine | None = None  # an annular aperture's CLAP line (minimum radius > 0)
+    flap: ZmxLine | None = None  # a floating aperture (FLAP 0 r 0): a circle of radius DIAM
     obsc: ZmxLine | None = None  # a circular obscuration (OBSC min max)
     obdc: ZmxLine | None = None  # the aperture's decenter (OBDC x y), if not 0 0
     shaped: list = field(default_factory=list)  # SQAP/ELAP/SQOB/ELOB lines
@@ -189,6 +191,9 @@ def surface_line(s: ZmxSurface, key: str, ln: ZmxLine) -> None:
             if not lo < s.clap:
                 raise ln.error("an annular aperture needs minimum < maximum radius")
             s.clap_min = ln
+    elif key == "FLAP":
+        ln.float(2, "floating aperture radius (lens units)", lo=0)
+        s.flap = ln
     elif key == "OBSC":
         if ln.float(2, "obscuration maximum radius") > 0:
             if not 0 <= ln.float(1, "obscuration minimum radius") < ln.float(2, ""):

@@ -38,16 +38,31 @@ def _arr(x):
 
 
 def _sd(s: ZmxSurface, unit: float) -> float:
+    """The radius (mm) at which surface ``s`` clips rays, ``inf`` for none, as in Zemax: the
+    semi-diameter (DIAM) alone never vignettes; a surface aperture does. A centred circular
+    aperture (CLAP) clips at its radius, a floating aperture (FLAP) at the semi-diameter.
+    Apertures of other shapes, or decentered ones, are ``Lens.apertures`` (``_apertures``)."""
     if s.shaped or (s.obdc is not None and s.clap):  # clips at its apertures only
         return math.inf
     if s.clap is not None:
         return s.clap * unit if s.clap > 0 else math.inf
+    if s.flap is not None:
+        return _floating_radius(s) * unit
+    return math.inf
+
+
+def _floating_radius(s: ZmxSurface) -> float:
+    """A floating aperture's radius (lens units; ``inf``: it clips nothing): the surface's
+    semi-diameter. An automatic one (DIAM solve flag 0) is the height of the file's outermost
+    ray, so it passes every ray of the file's fields and pupil (clipping exactly there would
+    lose marginal rays to rounding). Without a DIAM line, the radius written on FLAP."""
     if s.diam is None:
-        return math.inf
-    v, flag = s.diam
-    if v == 0 or flag == 0:  # automatic semi-diameter: informational
-        return math.inf
-    return v * unit
+        r = s.flap.float(2, "")
+    else:
+        r, flag = s.diam
+        if flag == 0:
+            return math.inf
+    return r if r > 0 else math.inf
 
 
 def _xdat_terms(s: ZmxSurface, unit: float, what: str, most: int = _MAX_XDAT_TERMS):
@@ -376,12 +391,12 @@ def _apertures(surfs, u) -> tuple:
                                    "discs (OBSC 0 r)")
             out.append((i, Aperture.circle(s.obsc.float(2, "") * u, dx, dy, True)))
             moved = True
-        # A fixed DIAM clips (centred); with no aperture for the decenter to move, refuse it
+        # A floating aperture (FLAP) is the centred semi-diameter; refuse a decenter of it
         # rather than guess. A surface that clips nothing has nothing for it to move.
         if not moved and math.isfinite(_sd(s, 1.0)):
-            raise s.obdc.error("a decenter (OBDC) of a fixed semi-diameter (DIAM) with no "
-                               "aperture is not supported; give the surface a CLAP, SQAP or "
-                               "ELAP for it to move")
+            raise s.obdc.error("a decenter (OBDC) of a floating aperture (FLAP, the "
+                               "semi-diameter) is not supported; give the surface a CLAP, "
+                               "SQAP or ELAP for it to move")
     return tuple(out)
 
 

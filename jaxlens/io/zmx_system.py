@@ -211,8 +211,8 @@ def _where_it_stops(lens: Lens, field) -> str:
         return f"it is lost at {name} (a miss or total internal reflection)"
     r = float(np.hypot(*np.asarray(free_path.origin).reshape(len(valid), -1, 3)[i, 0, :2]))
     return (f"it is clipped at {name}, which it meets {r:.4g} mm from the axis, outside its "
-            f"semi-diameter {float(surface.semi_diameter):.4g} mm (a fixed DIAM or a CLAP "
-            f"clips rays in jaxlens)")
+            f"semi-diameter {float(surface.semi_diameter):.4g} mm (a surface aperture, "
+            f"CLAP or FLAP, clips rays)")
 
 
 FIELD_TYPES = {
@@ -264,7 +264,7 @@ def vignetting_factors(lines, count: int) -> str | None:
             return (
                 f"{ln.path}:{ln.number}: vignetting factors ignored ({ln.tokens[0]} of field {i} "
                 f"is {v:g}); jaxlens samples the whole entrance pupil and lets the surface "
-                f"apertures (CLAP, fixed DIAM) vignette: {ln.text.strip()!r}"
+                f"apertures (CLAP, FLAP, …) vignette: {ln.text.strip()!r}"
             )
     return None
 
