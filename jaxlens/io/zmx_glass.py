@@ -3,11 +3,11 @@
 A name is looked up in the catalogs the file's ``GCAT`` line names (side ``.AGF`` files
 first, then the shipped catalogs that stand for them; the shipped SCHOTT holds the obsolete
 glasses of SCHOTT's 2008 catalog too, so ``SK4`` is SCHOTT's own SK4), then as SCHOTT's
-lead-free successor of a discontinued SCHOTT glass that it still lacks (LAF21 → N-LAF21),
-then in every shipped catalog. The last two are reported (a
-``ZmxWarning``; an error under ``strict``): a glass of the same name from another maker may be
-another glass. The nd and Vd that a ``GLAS`` line carries are cross-checked against the
-catalog's.
+successor of a discontinued SCHOTT glass that it still lacks (its lead-free N- glass, LAF21 →
+N-LAF21, or else its "A" version, SSK4 → SSK4A), then in every shipped catalog. The last two
+are reported (a ``ZmxWarning``; an error under ``strict``): a glass of the same name from
+another maker may be another glass. The nd and Vd that a ``GLAS`` line carries are
+cross-checked against the catalog's.
 """
 
 from __future__ import annotations
@@ -178,21 +178,24 @@ class GlassResolver:
 
     def _successor(self, ln, name: str):
         """SCHOTT's lead-free successor N-<name> of a glass that the shipped SCHOTT catalog
-        lacks, 2008 obsolete glasses included (LAF21 → N-LAF21, LASF9 → N-LASF9), with a
+        lacks, 2008 obsolete glasses included (LAF21 → N-LAF21, LASF9 → N-LASF9), or else its
+        "A" version <name>A (SSK4 → SSK4A, the same nd and Vd), with a
         warning (an error under strict): the successor matches the old glass's nd and Vd to
         about 1e-3 and 0.5, so it is a closer guess than a glass of the same name from another
         maker."""
         if "SCHOTT" not in self.gcat or "SCHOTT" in self.side or name.upper().startswith("N-"):
             return None
-        try:
-            m = catalog.get_material("N-" + name, catalogs=["SCHOTT"])
-        except ValueError:
-            return None
-        report(self.strict, f"{ln.path}:{ln.number}: glass {name!r} is not in the shipped "
-                f"SCHOTT catalog (a discontinued glass); using its lead-free successor "
-                f"{m.name}{_nd_vd_text(m)}; put the file's SCHOTT.AGF beside it for the "
-                f"original")
-        return _cross_checked(m, ln)
+        for new, kind in (("N-" + name, "lead-free successor"), (name + "A", "successor")):
+            try:
+                m = catalog.get_material(new, catalogs=["SCHOTT"])
+            except ValueError:
+                continue
+            report(self.strict, f"{ln.path}:{ln.number}: glass {name!r} is not in the shipped "
+                    f"SCHOTT catalog (a discontinued glass); using its {kind} "
+                    f"{m.name}{_nd_vd_text(m)}; put the file's SCHOTT.AGF beside it for the "
+                    f"original")
+            return _cross_checked(m, ln)
+        return None
 
 
 def _stale_note(name: str, nd: float, vd: float) -> str:
