@@ -11,21 +11,36 @@ import numpy as np
 import jaxlens as jl
 
 
+def _shape(s):
+    """The surface of a refcase entry: curvature, conic and [A2, A4, ...]."""
+    co = s.get("even_asphere_coeffs") or []
+    c, k = s.get("curvature", 0.0), s.get("conic", 0.0)
+    return jl.EvenAsphere(c=c, k=k, coeffs=co) if co else jl.Standard(c=c, k=k)
+
+
+def _table(n):
+    return jl.Tabulated(np.array([float(w) / 1000 for w in n]), np.array(list(n.values())))
+
+
 def refcase_lens(path) -> tuple[jl.Lens, dict]:
-    """A Lens from a refcase JSON (tabulated indices), and the raw case."""
+    """A Lens from a refcase JSON (tabulated indices), and the raw case.
+
+    Every schema field that changes a trace is used: each surface's curvature, conic and
+    even-asphere terms (the image surface's too), the media after each surface, and the
+    object-space medium (surface 0's ``n``) when it is not air. The medium after the image
+    surface is not part of a Lens; ``refcase_rays`` accounts for it."""
     d = json.loads(pathlib.Path(path).read_text())
     surfs, th, mats, stop = [], [], [], 0
     for s in d["surfaces"][1:-1]:
-        co = s.get("even_asphere_coeffs") or []
-        c, k = s["curvature"], s.get("conic", 0.0)
-        surfs.append(jl.EvenAsphere(c=c, k=k, coeffs=co) if co else jl.Standard(c=c, k=k))
+        surfs.append(_shape(s))
         th.append(s["thickness"])
-        n = s["n"]
-        mats.append(
-            jl.Tabulated(np.array([float(w) / 1000 for w in n]), np.array(list(n.values())))
-        )
+        mats.append(_table(s["n"]))
         if s.get("is_stop"):
             stop = len(surfs) - 1
+    if not any(s.get("is_stop") for s in d["surfaces"]) and "stop_surface_index" in d:
+        stop = d["stop_surface_index"] - 1
+    obj = d["surfaces"][0].get("n") or {}
+    extra = {} if all(v == 1.0 for v in obj.values()) else {"object_material": _table(obj)}
     img = d["surfaces"][-1]
     wls = np.array(d["wavelengths_nm"]) / 1000
     lens = jl.Lens(
@@ -37,9 +52,47 @@ def refcase_lens(path) -> tuple[jl.Lens, dict]:
         wavelengths=wls,
         primary=int(np.argmin(np.abs(wls - d["primary_wavelength_nm"] / 1000))),
         fields=jnp.array(d["fields"]["values"]),
-        image=jl.Standard(c=img.get("curvature", 0.0), k=img.get("conic", 0.0)),
+        image=_shape(img),
+        **extra,
     )
     return lens, d
+
+
+def _image_normal(img, x, y):
+    """Unit normals (pointing +z) of the image surface at local (x, y) [N, 3] (numpy)."""
+    c, k = img.get("curvature", 0.0), img.get("conic", 0.0)
+    r2 = x * x + y * y
+    slope = c / np.sqrt(1.0 - (1.0 + k) * c * c * r2)  # (dz/dr)/r of the conic
+    for i, a in enumerate(img.get("even_asphere_coeffs") or [], start=1):
+        slope = slope + 2 * i * a * r2 ** (i - 1)
+    nrm = np.stack([-x * slope, -y * slope, np.ones_like(x)], -1)
+    return nrm / np.linalg.norm(nrm, axis=-1, keepdims=True)
+
+
+def _undo_image_refraction(d, ref):
+    """Reference directions in image space (where a trace ends).
+
+    When the image surface's own medium (its ``n``, the medium AFTER it) differs from image
+    space (the ``n`` of the last lens surface), the stored directions are after a refraction
+    at the image surface (optiland refracts there); Snell's law is reversible, so they are
+    refracted back, exactly, with the image surface's normal at the stored intercept."""
+    img, last = d["surfaces"][-1], d["surfaces"][-2]
+    if "n" not in img:
+        return ref
+    key = {float(w): w for w in last["n"]}
+    n1 = np.array([last["n"][key[float(r["wavelength_nm"])]] for r in d["real_rays"]])
+    key2 = {float(w): w for w in img["n"]}
+    n2 = np.array([img["n"][key2[float(r["wavelength_nm"])]] for r in d["real_rays"]])
+    if np.all(n1 == n2):
+        return ref
+    nrm = _image_normal(img, ref[:, 0], ref[:, 1])
+    v = ref[:, 3:]
+    cos2 = np.sum(v * nrm, -1, keepdims=True)
+    tangential = (n2 / n1)[:, None] * (v - cos2 * nrm)
+    cos1 = np.sign(cos2) * np.sqrt(1.0 - np.sum(tangential**2, -1, keepdims=True))
+    out = ref.copy()
+    out[:, 3:] = np.where((n1 == n2)[:, None], v, tangential + cos1 * nrm)
+    return out
 
 
 def refcase_rays(d, dtype=jnp.float64):
@@ -52,4 +105,4 @@ def refcase_rays(d, dtype=jnp.float64):
         im = r["image"]
         ref.append([im["x"], im["y"], im["z"], im["L"], im["M"], im["N"]])
     rays = jl.Rays(jnp.array(o, dtype), jnp.array(v, dtype), jnp.array(w, dtype))
-    return rays, np.array(ref)
+    return rays, _undo_image_refraction(d, np.array(ref))
