@@ -334,12 +334,17 @@ class NAFNet(eqx.Module):
 
     def __call__(self, x: Float[Array, "H W Cin"]) -> Float[Array, "H W Cout"]:
         """Restore one image ``[H, W, in_channels]``; returns ``[H, W, out_channels]``."""
-        if x.ndim != 3:
-            raise ValueError(f"NAFNet: expected one [H, W, C] image, got shape {x.shape}")
+        checks.real_values(x, "image", "NAFNet")  # a complex image ran, a list had no .ndim
+        x = jnp.asarray(x)
+        if x.ndim != 3 or x.shape[0] == 0 or x.shape[1] == 0:
+            raise ValueError(f"NAFNet: expected one [H, W, C] image with H, W >= 1, got shape "
+                             f"{x.shape}")
         c_in = self.intro.weight.shape[-2]
         if x.shape[-1] != c_in:  # was a conv_general_dilated feature-dimension error
             raise ValueError(f"NAFNet: expected an [H, W, {c_in}] image (in_channels {c_in}), "
                              f"got shape {x.shape}")
+        # One NaN or inf pixel spreads through the convolutions to every output pixel.
+        x = checks.finite_array(x, "image", "NAFNet")
         h, w, _ = x.shape
         m = 2**self.depth
         ph, pw = (-h) % m, (-w) % m

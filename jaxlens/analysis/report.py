@@ -121,8 +121,19 @@ def with_fields_and_wavelengths(lens: Lens, fields=None, wavelengths=None) -> Le
 
     With new wavelengths the primary is the one closest to the lens's primary wavelength.
     """
+    if not isinstance(lens, Lens):  # else an AttributeError on .thickness
+        raise TypeError(f"report: lens must be a jaxlens.Lens, got {type(lens).__name__}")
     dtype = lens.thickness.dtype
+    # Before np.asarray(..., float64), which reads "5" as 5 and True as 1.
     if fields is not None:
+        checks.real_values(fields, "--fields", "report", "deg")
+    if wavelengths is not None:
+        checks.real_values(wavelengths, "--wavelengths", "report", "µm")
+    if fields is not None:
+        shape = np.shape(fields)
+        if len(shape) > 2 or (len(shape) == 2 and shape[1] != 2) or np.size(fields) == 0:
+            raise ValueError(f"report: --fields must be θy angles in degrees, one value or "
+                             f"[F], or (θx, θy) pairs [F, 2], with F >= 1, got shape {shape}")
         checks.field_angles(np.asarray(fields, np.float64), "report", "--fields")
         f = jnp.asarray(np.atleast_1d(np.asarray(fields, np.float64)), dtype)
         lens = eqx.tree_at(lambda l: l.fields, lens, f)

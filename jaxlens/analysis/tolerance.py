@@ -435,6 +435,13 @@ class ToleranceModel:
             raise ValueError(f"ToleranceModel: batch must be a whole number >= 1, got {batch!r}")
         batch = int(batch)
         dtype = jnp.result_type(float)
+        for arg, v, unit in (("wavelengths", wavelengths, "µm"),
+                             ("pupil", pupil, "normalised pupil")):  # "0.55" read as 0.55
+            if v is not None:
+                checks.real_values(v, arg, "ToleranceModel", unit)
+        if wavelengths is not None and (np.ndim(wavelengths) > 1 or np.size(wavelengths) == 0):
+            raise ValueError(f"ToleranceModel: wavelengths must be µm, one value or [W] with "
+                             f"W >= 1, got shape {np.shape(wavelengths)}")
         self.lens = lens.astype(dtype)
         self.fields = jnp.asarray(f, dtype)
         self.weights = jnp.asarray(w, dtype)
@@ -637,6 +644,8 @@ def yield_fraction(rms_um, threshold_um: float, valid_fraction=None,
     checks.number(min_valid, "min_valid", "yield_fraction", lo=0, hi=1,
                   unit="(fraction of a field's rays)")
     r = np.asarray(rms_um, float)
+    if r.size == 0:  # np.mean of nothing: NaN and a RuntimeWarning
+        raise ValueError("yield_fraction: rms_um must hold at least one trial's RMS (µm)")
     ok = np.isfinite(r) & (r <= threshold_um)
     if valid_fraction is not None:
         ok &= np.asarray(valid_fraction, float) >= min_valid
@@ -765,8 +774,8 @@ def monte_carlo(model: ToleranceModel, *, trials: int = 200, key=None,
 
 
 def _positive(value, name, unit):
-    try:
-        v = float(value)
+    try:  # float("5") would read a string as a number, float(True) as 1
+        v = float("nan") if isinstance(value, (str, bytes, bool)) else float(value)
     except (TypeError, ValueError):
         v = float("nan")
     if not (math.isfinite(v) and v > 0):

@@ -31,8 +31,8 @@ import jax.numpy as jnp
 import numpy as np
 from jaxtyping import Array, Float
 
-from ..optics import catalog
-from ..optics.materials import ModelGlass, Tabulated
+from ..optics import catalog, checks
+from ..optics.materials import MAX_ND, ModelGlass, Tabulated
 
 SELECTION_MODES = ("fixed", "continuous", "search")
 """Material selection modes of the design (``DesignConfig.materials``)."""
@@ -149,6 +149,8 @@ class CatalogRegion:
     @staticmethod
     def of(catalogs: Sequence[str] = DEFAULT_CATALOGS) -> CatalogRegion:
         """The region of the named catalogs (ValueError for an unknown or too small one)."""
+        if isinstance(catalogs, str):  # one name, not its letters ('S', 'C', 'H', ...)
+            catalogs = (catalogs,)
         catalogs = tuple(str(c).strip().upper() for c in catalogs)
         if not catalogs or not all(catalogs):
             raise ValueError(f"material catalogs: need at least one catalog name, got "
@@ -171,13 +173,18 @@ class CatalogRegion:
 
     def distances(self, nd, vd) -> np.ndarray:
         """Glass-map distance of (nd, Vd) (broadcast, ``[...]``) to every material ``[..., N]``."""
+        _check_point(nd, vd, "CatalogRegion.distances")
+        return self._distances(nd, vd)
+
+    def _distances(self, nd, vd) -> np.ndarray:
         nd = np.asarray(nd, float)[..., None]
         vd = np.asarray(vd, float)[..., None]
         return np.hypot((nd - self.points[:, 0]) / catalog.ND_PER_VD, vd - self.points[:, 1])
 
     def nearest(self, nd, vd) -> np.ndarray:
         """Index into ``names`` of the nearest material to each (nd, Vd) (broadcast)."""
-        return np.argmin(self.distances(nd, vd), axis=-1)
+        _check_point(nd, vd, "CatalogRegion.nearest")
+        return np.argmin(self._distances(nd, vd), axis=-1)
 
     def material(self, name: str):
         """The catalog material ``name`` from this region's catalogs."""
@@ -187,6 +194,16 @@ class CatalogRegion:
         """``[E, W]`` indices of the named materials at the wavelengths (µm)."""
         wl = jnp.asarray(np.asarray(wavelengths, float))
         return np.stack([np.asarray(self.material(n).index(wl), float) for n in names])
+
+
+def _check_point(nd, vd, where: str) -> None:
+    """Refuse a glass-map point that is not real numbers, nd in (1, MAX_ND] and Vd > 0: a NaN
+    point's distances are NaN and ``argmin`` of them is 0, the first material, silently."""
+    checks.real_values(nd, "nd", where, "d-line index")
+    checks.real_values(vd, "vd", where, "Abbe number")
+    checks.values(nd, "nd", where, lo=1, hi=MAX_ND, lo_open=True,
+                  unit="(the d-line index; an nd above it is an Abbe number: nd and vd swapped?)")
+    checks.values(vd, "vd", where, lo=0, lo_open=True, unit="(Abbe number)")
 
 
 def check_mode(mode: str, where: str = "design") -> str:
@@ -206,7 +223,8 @@ def snap(region: CatalogRegion, hull: HullMaterials, m) -> tuple[np.ndarray, lis
     """Continuous materials ``m`` ``[B, E, V]`` → their points ``[B, E, 2]`` and the nearest
     catalog material names per design (``B`` tuples of ``E`` names)."""
     pts = np.asarray(hull.nd_vd(jnp.asarray(np.asarray(m, float))))
-    idx = region.nearest(pts[..., 0], pts[..., 1])
+    # Unchecked: a diverged design's NaN point must not stop the others' snapping.
+    idx = np.argmin(region._distances(pts[..., 0], pts[..., 1]), axis=-1)
     return pts, [tuple(region.names[j] for j in row) for row in idx]
 
 

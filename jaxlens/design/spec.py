@@ -43,6 +43,12 @@ _PLASTICS = {
 ELEMENT_MIN_THICKNESS = 0.4
 AIR_MIN_GAP = 0.2
 
+TRACK_PER_FOCAL = (0.1, 100.0)
+"""Accepted range of total_track over the focal length (and over ``efl`` when set): refractive
+lenses lie far inside it (telephotos near 0.6, fisheye retrofocus designs near 20), so a spec
+outside it has lengths in different units (a sensor diagonal in µm, a track in m) or a field
+near 0° whose focal length no track can hold."""
+
 MAX_ASPHERE_TERMS = 12
 """Most even aspheric terms per surface (r⁴ … r²⁶), the CLI's ``--asphere-terms`` bound: more
 than lens designs use, and the parameterization's scale r_norm^(2j+3) of term j stays
@@ -255,6 +261,14 @@ class DesignSpec:
                 f"{where}: total_track {track} mm cannot hold {n} "
                 f"elements of ≥ {ELEMENT_MIN_THICKNESS} mm with air gaps ≥ {AIR_MIN_GAP} mm and "
                 f"bfl {bfl} mm (needs ≥ {self.min_track():.3f} mm)")
+        lo, hi = TRACK_PER_FOCAL
+        for arg, f, what in (("focal length", self.focal_length,
+                              "sensor_diagonal / (2·tan(fov/2))"), ("efl", self.efl, "target")):
+            if f is not None and not lo <= track / f <= hi:
+                raise ValueError(
+                    f"{where}: total_track {track:g} mm is {track / f:.3g} times the {arg} "
+                    f"{f:.4g} mm ({what}); it must be {lo:g} to {hi:g} times it (mm): are all "
+                    f"lengths in mm (sensor_diagonal {self.sensor_diagonal:g} mm)?")
         min_fnum, max_product = aperture_field_limits(n)
         if self.fnum < min_fnum:
             raise ValueError(f"{where}: F/{self.fnum} is faster than {n} element(s) "

@@ -216,9 +216,9 @@ class GeometricPSF(AbstractPSFModel):
     counts as lost too and the kernel's sum is the fraction of that light on the kernel.
     """
 
-    pupil: int = 64
+    pupil: int = eqx.field(default=64, converter=checks.static_int)
     overfill: float = 1.25
-    order: int = 1
+    order: int = eqx.field(default=1, converter=checks.static_int)
     grid: str = "square"
     normalize: str = "transmitted"
 
@@ -245,7 +245,7 @@ class CoherentPSF(AbstractPSFModel):
     """Wave optics: the ray-based Debye integral over the traced optical paths (see the
     module notes); ``pupil`` must resolve the wavefront over the kernel."""
 
-    pupil: int = 64
+    pupil: int = eqx.field(default=64, converter=checks.static_int)
     overfill: float = 1.25
 
     def kernels(self, lens, field, depth, wls, *, kernel_size, pixel_size, center, key,

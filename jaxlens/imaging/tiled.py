@@ -22,6 +22,7 @@ import jax.numpy as jnp
 import numpy as np
 from jaxtyping import Array, Float
 
+from ..optics import checks
 from ..optics.lens import Lens
 from ..tracing.forward import DEFAULT_NEWTON_ITERS
 from .aiming import apertured, ideal_to_field
@@ -39,7 +40,8 @@ def tile_counts(resolution, tile: int) -> tuple[int, int]:
         ValueError: unless ``tile`` is a positive int that divides both sides.
     """
     h, w = (int(v) for v in resolution)
-    if not isinstance(tile, int) or tile < 1 or h % tile or w % tile:
+    tile = checks.static_int(tile)  # a numpy integer is a whole number too
+    if isinstance(tile, bool) or not isinstance(tile, int) or tile < 1 or h % tile or w % tile:
         raise ValueError(f"tile_counts: tile must be a positive int dividing the frame "
                          f"{h}x{w} (pixels), got {tile!r}")
     return h // tile, w // tile
@@ -82,7 +84,8 @@ def psf_points(
         raise TypeError(f"psf_points: model must be a PSF model object, got "
                         f"{type(model).__name__}")
     model.check("psf_points")
-    if not isinstance(kernel_size, int) or kernel_size < 1:
+    kernel_size = checks.static_int(kernel_size)  # a static size: never a numpy scalar
+    if isinstance(kernel_size, bool) or not isinstance(kernel_size, int) or kernel_size < 1:
         raise ValueError(f"psf_points: kernel_size must be a positive int, got {kernel_size!r}")
     lens = apertured(lens)
     dtype = lens.epd.dtype

@@ -141,10 +141,25 @@ def write_exr(path, img, *, channels=None) -> None:
     if channels is None:
         channels = ("Y",) if c == 1 else ("R", "G", "B") if c == 3 else tuple(
             f"C{i}" for i in range(c))
-    if len(channels) != c:
-        raise ValueError(f"write_exr: {c} channels need {c} names, got {channels}")
+    channels = _layer_names(channels, c, "write_exr", "channels", "channels")
     data = {name: np.ascontiguousarray(a[..., i]) for i, name in enumerate(channels)}
     _write_channels(path, data)
+
+
+def _layer_names(names, n: int, where: str, arg: str, what: str) -> list[str]:
+    """``n`` distinct non-empty str names without '.' (EXR's layer separator): a repeated
+    name kept only its last image, so fewer were written than given, without a word."""
+    names = [names] if isinstance(names, str) and n == 1 else list(names)
+    if len(names) != n:
+        raise ValueError(f"{where}: {n} {what} need {n} names, got {len(names)}: {names!r}")
+    bad = [x for x in names if not isinstance(x, str) or not x or "." in x]
+    if bad:
+        raise ValueError(f"{where}: {arg} must be non-empty str without '.', got {bad[0]!r}")
+    if len(set(names)) != n:
+        dup = sorted({x for x in names if names.count(x) > 1})
+        raise ValueError(f"{where}: {arg} must be distinct (a repeated name keeps one of its "
+                         f"{what}), got {dup} more than once")
+    return names
 
 
 def _write_channels(path, data):
@@ -384,15 +399,16 @@ def write_psf_stack(path, psfs, *, names=None) -> None:
             ``[rows, cols, ...]`` can be flattened first.
         names: layer names (default ``psf000``, ``psf001``, ...).
     """
+    path = _output_file(path, "write_psf_stack", ".exr")
     a = np.asarray(psfs, np.float32)
     if a.ndim == 3:
         a = a[:, None]
-    if a.ndim != 4:
-        raise ValueError(f"write_psf_stack: psfs must be [N, k, k] or [N, C, k, k], got {a.shape}")
+    if a.ndim != 4 or 0 in a.shape:
+        raise ValueError(f"write_psf_stack: psfs must be [N, k, k] or [N, C, k, k] with N, C, "
+                         f"k >= 1, got {a.shape}")
     n, c = a.shape[:2]
-    names = [f"psf{i:03d}" for i in range(n)] if names is None else list(names)
-    if len(names) != n:
-        raise ValueError(f"write_psf_stack: {n} PSFs need {n} names, got {len(names)}")
+    names = [f"psf{i:03d}" for i in range(n)] if names is None else names
+    names = _layer_names(names, n, "write_psf_stack", "names", "PSFs")
     chans = ("Y",) if c == 1 else ("R", "G", "B") if c == 3 else tuple(f"C{i}" for i in range(c))
     data = {f"{names[i]}.{ch}": np.ascontiguousarray(a[i, j])
             for i in range(n) for j, ch in enumerate(chans)}

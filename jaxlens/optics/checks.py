@@ -159,6 +159,13 @@ def real_values(x, arg: str, where: str, unit: str = "") -> None:
                         f"numbers{u}, got {type(x).__name__} {shown}")
 
 
+def static_int(value):
+    """A field converter: a numpy integer becomes a Python int (``eqx.filter_jit`` traces a
+    numpy scalar, so ``np.int64(2)`` would reach Python control flow as a tracer); anything
+    else is kept for the field's own check to judge."""
+    return int(value) if isinstance(value, np.integer) else value
+
+
 def float_dtype(dtype, where: str, arg: str = "dtype"):
     """None or a floating dtype (float32, float64): an integer dtype would truncate
     coordinates to whole numbers; returns the dtype."""
