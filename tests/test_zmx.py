@@ -288,10 +288,16 @@ def test_apertures():
     lens = zmx.loads(_minimal("  STOP\n  CURV 0.02\n", head="FNUM 4 0\nWAVM 1 0.55 1\n"))
     assert float(lens.epd) == pytest.approx(float(jaxlens.efl(lens)) / 4, rel=1e-15)
     lens = zmx.loads(
+        _minimal('  STOP\n  CURV 0.02\n  DIAM 3 1 0 0 1 ""\n  FLAP 0 3 0\n',
+                 head="FLOA\nWAVM 1 0.55 1\n")
+    )
+    assert float(lens.epd) == pytest.approx(6.0, rel=1e-15)
+    assert float(lens.surfaces[0].semi_diameter) == 3.0  # its floating aperture clips
+    lens = zmx.loads(
         _minimal('  STOP\n  CURV 0.02\n  DIAM 3 1 0 0 1 ""\n', head="FLOA\nWAVM 1 0.55 1\n")
     )
     assert float(lens.epd) == pytest.approx(6.0, rel=1e-15)
-    assert float(lens.surfaces[0].semi_diameter) == 3.0  # fixed semi-diameter clips
+    assert float(lens.surfaces[0].semi_diameter) == math.inf  # as in Zemax: DIAM alone
 
 
 
