@@ -49,7 +49,7 @@ def cooke():
     (lambda: Stage("s", 40.0, 0.0, 10), r"Stage 's': fnum must be .* in \(0, inf\)"),
     (lambda: Stage("s", 40.0, 2.0, -1), r"Stage 's': steps must be a whole number in \[0"),
     (lambda: Stage("s", 40.0, 2.0, 1, solver="sgd"), r"solver must be one of .*'sgd'"),
-    (lambda: Stage("s", 40.0, 2.0, 1, loss="l2"), r"loss must be 'ray' or 'image'"),
+    (lambda: Stage("s", 40.0, 2.0, 1, loss="l2"), r"loss must be one of \('ray', 'image', 'polish'\)"),
     (lambda: Stage("s", 40.0, 2.0, 1, lr=-1.0), r"lr must be .* in \(0, inf\)"),
     (lambda: paper_stages(DesignSpec(), steps=-1), r"paper_stages: steps must be a whole"),
     (lambda: paper_stages(DesignSpec(), pin=float("nan")), r"paper_stages: pin must be"),
@@ -85,6 +85,9 @@ def test_design_helpers_still_take_good_values():
     assert DesignConfig().scaled(0.1).steps == 45
     assert random_starts(DesignSpec(), [np.int64(0), 1]).c.shape[0] == 2
     assert np.allclose(reweighting_mask(jnp.array([1.0, 2.0]), threshold=0.0), [2 / 3, 4 / 3])
+    # multistart.design gives the polish this loss when DesignConfig.polish_rings is set.
+    assert [Stage("s", 40.0, 2.0, 1, loss=k).loss for k in ("ray", "image", "polish")] == [
+        "ray", "image", "polish"]
 
 
 def test_evaluate_design_checks_its_arguments(cooke):

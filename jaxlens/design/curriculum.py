@@ -39,6 +39,8 @@ from .spec import DesignSpec
 
 STAGE_SOLVERS = ("adam", "lm", "lm-optx", "lbfgsb")
 """Solver names a stage may use (``multistart.design`` makes the solvers)."""
+STAGE_LOSSES = ("ray", "image", "polish")
+"""Objective names a stage may use (keys of the objectives ``run`` takes)."""
 
 
 def sine_path(start: float, end: float, n: int) -> np.ndarray:
@@ -68,7 +70,8 @@ class Stage:
         mask: use the re-weighting mask.
         regularize: use the three regularizers.
         lr: learning-rate multiplier for this stage (Adam).
-        loss: ``"ray"`` (RMS spot) or ``"image"`` (rendered scene).
+        loss: ``"ray"`` (RMS spot), ``"image"`` (rendered scene) or ``"polish"`` (RMS spot
+            on the polish's own pupil sampling, ``DesignConfig.polish_rings``).
     """
 
     name: str
@@ -95,8 +98,8 @@ class Stage:
         checks.number(self.lr, "lr", w, lo=0, lo_open=True, unit="(multiplier)")
         if self.solver not in STAGE_SOLVERS:
             raise ValueError(f"{w}: solver must be one of {STAGE_SOLVERS}, got {self.solver!r}")
-        if self.loss not in ("ray", "image"):
-            raise ValueError(f"{w}: loss must be 'ray' or 'image', got {self.loss!r}")
+        if self.loss not in STAGE_LOSSES:
+            raise ValueError(f"{w}: loss must be one of {STAGE_LOSSES}, got {self.loss!r}")
         for arg in ("mask", "regularize"):
             checks.switch(getattr(self, arg), arg, w)
 
