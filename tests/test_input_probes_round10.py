@@ -7,6 +7,8 @@ starts, naming the argument, the value, the range and the unit, or accepted.
 
 from __future__ import annotations
 
+import pathlib
+
 import equinox as eqx
 import jax
 import jax.numpy as jnp
@@ -225,3 +227,40 @@ def test_psf_stack_refuses_repeated_names_and_another_suffix(tmp_path):
     images.write_psf_stack(tmp_path / "s.exr", psfs, names=["on", "off"])
     back, names = images.read_psf_stack(tmp_path / "s.exr")
     assert names == ["off", "on"] and back.shape == (2, 1, 5, 5)
+
+
+# ---------------------------------------------------------------- huge trial counts
+
+
+def test_monte_carlo_refuses_a_trial_count_it_cannot_hold(cooke, tmp_path, capsys):
+    """--trials 10000000000 passed, the sensitivity pass ran, and then the [trials, P]
+    perturbations could not be allocated."""
+    from jaxlens.experiments import tolerance as cli
+
+    model = tolerance.ToleranceModel(cooke, fields=[0.0], pupil=[[0.0, 0.0], [0.0, 0.5]])
+    with pytest.raises(ValueError, match=r"monte_carlo: trials must be a whole number >= 1 and "
+                                         r"<= 1000000, got 10000000000"):
+        tolerance.monte_carlo(model, trials=10**10, threshold_um=5.0, mtf_frequency=10.0)
+    design = pathlib.Path(jl.__file__).parent / "data" / "lenses" / "cooke_triplet.json"
+    assert cli.main([str(design), "--trials", "10000000000", "--out", str(tmp_path)]) == 2
+    lines = capsys.readouterr().err.strip().splitlines()
+    assert len(lines) == 1 and "--trials must be a whole number >= 1 and <= 1000000, got " \
+                               "10000000000" in lines[0], lines
+    assert not list(tmp_path.iterdir())
+
+
+# ---------------------------------------------------------------- JSON lens files
+
+
+def test_json_lens_file_refuses_a_key_given_twice(cooke, tmp_path):
+    """json keeps the last of two equal keys: "thickness": 3.26, "thickness": 30 loaded a lens
+    30 mm thick there, without a word."""
+    path = tmp_path / "c.json"
+    jl.save(cooke, path)
+    text = path.read_text()
+    assert text.count('"thickness": 3.25896,') == 1
+    path.write_text(text.replace('"thickness": 3.25896,', '"thickness": 3.25896, '
+                                                          '"thickness": 30.0,'))
+    with pytest.raises(ValueError, match=r"c.json: key 'thickness' appears twice in one object "
+                                         r"\(3.25896 and 30.0\); keep one"):
+        jl.load(path)

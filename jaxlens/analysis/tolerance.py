@@ -77,6 +77,9 @@ DECENTER_TILT = ("not modelled: the perturbations are coaxial (radii, conics, as
 
 DISTRIBUTIONS = ("uniform", "normal")
 
+MAX_TRIALS = 1_000_000
+"""Most Monte-Carlo trials (about a day of tracing; their perturbations take trials·P·8 bytes)."""
+
 
 def _nonneg(value, name: str, unit: str) -> float:
     try:  # float("0.02") would read a string as a number
@@ -706,8 +709,10 @@ def sensitivity(model: ToleranceModel, *, check: int | None = None) -> dict:
 
 def sample_perturbations(model: ToleranceModel, trials: int, key) -> np.ndarray:
     """``[trials, P]`` random perturbation vectors under the Monte-Carlo tolerances."""
-    if isinstance(trials, bool) or not isinstance(trials, (int, np.integer)) or trials < 1:
-        raise ValueError(f"monte_carlo: trials must be a whole number >= 1, got {trials!r}")
+    if isinstance(trials, bool) or not isinstance(trials, (int, np.integer)) or not (
+            1 <= trials <= MAX_TRIALS):  # 1e10 failed allocating [trials, P] perturbations
+        raise ValueError(f"monte_carlo: trials must be a whole number >= 1 and <= "
+                         f"{MAX_TRIALS}, got {trials!r}")
     tol = model.tolerance_vector(sensitivity=False)
     shape = (int(trials), tol.size)
     if model.tolerances.distribution == "uniform":

@@ -230,8 +230,11 @@ def main(argv: list[str] | None = None) -> int:
     argv = sys.argv[1:] if argv is None else argv
     args = build_parser().parse_args(argv)
     prog = "python -m jaxlens.experiments.tolerance"
-    if args.trials < 1:
-        return fail(prog, ValueError(f"--trials must be a whole number >= 1, got {args.trials}"))
+    from jaxlens.analysis.tolerance import MAX_TRIALS  # checked before the sensitivity pass
+
+    if not 1 <= args.trials <= MAX_TRIALS:
+        return fail(prog, ValueError(f"--trials must be a whole number >= 1 and <= "
+                                     f"{MAX_TRIALS}, got {args.trials}"))
     if not (math.isfinite(args.threshold) and args.threshold > 0):
         return fail(prog, ValueError(f"--threshold must be a finite number > 0 µm, got "
                                      f"{args.threshold}"))

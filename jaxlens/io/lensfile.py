@@ -727,12 +727,30 @@ def lens_to_dict(lens: Lens) -> dict:
     return out
 
 
+def _unique_keys(pairs: list) -> dict:
+    """An object's pairs as a dict; a repeated key is refused (``json`` keeps the last
+    value without a word, so ``"thickness": 3, "thickness": 30`` read as 30)."""
+    d: dict = {}
+    for k, v in pairs:
+        if k in d:
+            raise _RepeatedKey(f"key {k!r} appears twice in one object ({d[k]!r} and {v!r}); "
+                               f"keep one")
+        d[k] = v
+    return d
+
+
+class _RepeatedKey(ValueError):
+    pass
+
+
 def load_json(path: str | os.PathLike) -> Lens:
     """Read a JSON lens file."""
     path = os.fspath(path)
     try:
         with open(path, encoding="utf-8-sig") as f:
-            d = json.load(f)
+            d = json.load(f, object_pairs_hook=_unique_keys)
+    except _RepeatedKey as e:
+        raise ValueError(f"{path}: {e}") from None
     except json.JSONDecodeError as e:
         raise ValueError(f"{path}:{e.lineno}: not valid JSON: {e.msg}") from None
     except UnicodeDecodeError as e:
