@@ -43,3 +43,18 @@ def test_extra_intercepts_float32(refcase_dir, case):
 @pytest.mark.parametrize("case", SLOW)
 def test_extra_rms_and_distortion(refcase_dir, case):
     test_trace.test_refcase_rms_and_distortion(refcase_dir, case)
+
+
+def test_a_medium_after_the_image_surface_is_named():
+    """jaxlens ends a trace in image space; a case whose image surface has another medium
+    after it (optiland refracts there) loads with a warning that says so."""
+    import warnings
+
+    import jaxlens as jl
+
+    with pytest.warns(UserWarning, match=r"medium after the image surface \(n = 1\) is not "
+                                         r"image space \(n = 1\.78"):
+        jl.load(EXTRA / "plastic_curved_immersed_image.json")
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")
+        jl.load(EXTRA / "immersion_image_space.json")  # the same medium on both sides

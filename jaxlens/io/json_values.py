@@ -7,8 +7,10 @@ null or a string that is not a number is refused, naming where in the file it is
 from __future__ import annotations
 
 import math
+from decimal import Decimal
 from typing import Any
 
+import jax.numpy as jnp
 import numpy as np
 
 
@@ -60,3 +62,35 @@ def nums(value: Any, where: str, *, finite: bool = True) -> np.ndarray:
         except ValueError:
             raise ValueError(f"{where}: ragged list {value!r}") from None
     return np.asarray(num(value, where, finite=finite), np.float64)
+
+
+def nm_to_um(nm) -> np.ndarray:
+    """Wavelengths in nm to µm, as the double nearest to the decimal value / 1000.
+
+    ``587.5618`` nm gives exactly the float ``0.5875618`` (not ``587.5618 / 1000``, which
+    is one ulp off), so files in nm and in µm describe the same wavelengths.
+    """
+    a = np.asarray(nm, np.float64)
+    flat = [
+        float(Decimal(repr(float(v))) / 1000) if math.isfinite(v) else v / 1000
+        for v in a.reshape(-1)
+    ]
+    return np.array(flat, np.float64).reshape(a.shape)
+
+
+def float64_array(x) -> jnp.ndarray:
+    """A float64 JAX array of ``x`` (numbers read from a file)."""
+    return jnp.asarray(np.asarray(x, np.float64))
+
+
+def json_number(x) -> Any:
+    """JSON value of an array or scalar: exact floats, "inf"/"-inf" for infinities."""
+    a = np.asarray(x)
+    if a.ndim == 0:
+        v = float(a)
+        if math.isnan(v):
+            raise ValueError("save: cannot write NaN to a lens file")
+        if math.isinf(v):
+            return "inf" if v > 0 else "-inf"
+        return v
+    return [json_number(v) for v in a]
