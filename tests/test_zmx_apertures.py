@@ -8,6 +8,9 @@ known by hand.
 
 from __future__ import annotations
 
+import pathlib
+import warnings
+
 import jax.numpy as jnp
 import numpy as np
 import pytest
@@ -144,3 +147,18 @@ def test_float_by_stop_size_reads_the_stop_semi_diameter_which_clips_nothing():
     lens = zmx.loads(_lens_text('  DIAM 4 1 0 0 1 ""\n', curv=0.0, head="FLOA\n"))
     assert float(lens.epd) == pytest.approx(8.0)
     assert _passes(lens, _on_y([3.99, 4.01])) == [True, True]
+
+
+DATA = pathlib.Path(__file__).parent / "data" / "zmx"
+
+
+def test_real_files_clip_at_their_apertures_only():
+    """optiland's Thorlabs asphere (OpticStudio output): FLAP on a fixed DIAM 9 clips at 9
+    mm, FLAP on an automatic DIAM clips nothing. optiland's FLOA file: the stop's fixed DIAM
+    8.5 sets the pupil and, with no aperture on it, clips nothing."""
+    lens = jl.load(DATA / "optiland_lens_thorlabs_iso_8859_1.zmx")
+    assert [float(s.semi_diameter) for s in lens.surfaces] == [9.0, np.inf]
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore", zmx.ZmxWarning)  # FTYP announces 3 fields, YFLN 1
+        lens = jl.load(DATA / "optiland_lens_floa.zmx")
+    assert [float(s.semi_diameter) for s in lens.surfaces] == [np.inf] * 3
