@@ -30,7 +30,11 @@ def num(value: Any, where: str, *, finite: bool = True) -> float:
             except ValueError:
                 raise ValueError(f"{where}: expected a number, got {value!r}") from None
     elif isinstance(value, int | float):
-        v = float(value)
+        try:
+            v = float(value)
+        except OverflowError:  # an integer of 400 digits
+            raise ValueError(f"{where}: expected a finite number, got an integer of "
+                             f"{len(str(abs(value)))} digits") from None
     else:
         raise ValueError(f"{where}: expected a number, got {value!r}")
     if math.isnan(v) or (finite and math.isinf(v)):

@@ -37,7 +37,7 @@ import numpy as np
 
 from ..optics import checks, paraxial
 from ..optics import materials as _materials
-from ..optics.lens import Lens, Sensor
+from ..optics.lens import INFINITE_OBJECT_MM, Lens, Sensor
 from ..optics.materials import Air
 from ..optics.surfaces import AbstractSurface, EvenAsphere, Hybrid, OddAsphere, Standard
 from . import lens_keys
@@ -56,6 +56,10 @@ from .material_spec import (  # noqa: F401  (re-exported: the .zmx modules read 
     material_to_spec,
     same_material,
 )
+
+MIN_EPD_MM = 1e-9
+"""The smallest entrance pupil diameter a lens file may give (mm); a subnormal one traces as
+NaN."""
 
 FORMAT = "jaxlens.lens/1"
 """The value of the ``format`` key this module writes (name/version)."""
@@ -103,9 +107,27 @@ def surface_from_dict(d: dict, where: str, *, kind: str | None = None) -> Abstra
     """A surface from its JSON object; ``kind`` overrides the ``type`` key. What the surface
     class refuses (a semi-diameter beyond a steep sphere's edge, say) names ``where``."""
     try:
-        return _surface(d, where, kind)
+        surface = _surface(d, where, kind)
     except ValueError as e:
         raise ValueError(str(e) if str(e).startswith(where) else f"{where}: {e}") from None
+    bad = nonfinite_part(surface)
+    if bad:
+        raise ValueError(f"{where}: {bad} (values out of range)")
+    return surface
+
+
+def nonfinite_part(surface: AbstractSurface) -> str:
+    """What of a surface is not finite ("" if nothing): its shape numbers, or its paraxial
+    curvature c + 2·a_1, which a coefficient of 1e308 overflows (a trace would give NaN)."""
+    for name in ("c", "k", "coeffs", "odd_x", "odd_y", "paraxial_curvature",
+                 "paraxial_curvature_x"):
+        try:
+            v = getattr(surface, name, None)
+        except (ValueError, TypeError):  # a surface without a paraxial curvature
+            continue
+        if v is not None and not np.all(np.isfinite(np.asarray(v, np.float64))):
+            return f"{name} = {np.asarray(v)} is not finite"
+    return ""
 
 
 def _surface(d: dict, where: str, kind: str | None) -> AbstractSurface:
@@ -207,6 +229,9 @@ def apply_aperture(lens: Lens, *, epd=None, fnum=None, stop_semi_diameter=None) 
     value = jnp.abs(value) if fnum is not None else value
     if not bool(jnp.isfinite(value)) or not float(value) > 0:
         raise ValueError(f"aperture: the entrance pupil diameter comes out as {float(value)}")
+    if not MIN_EPD_MM <= float(value) < INFINITE_OBJECT_MM:  # 1e-320 mm traces as NaN
+        raise ValueError(f"aperture: the entrance pupil diameter must be in [{MIN_EPD_MM:g}, "
+                         f"{INFINITE_OBJECT_MM:g}) mm, got {float(value):g} mm")
     return eqx.tree_at(lambda l: l.epd, lens, value)
 
 
@@ -347,7 +372,11 @@ def lens_from_dict(d: dict, *, source: str = "<lens>") -> Lens:
         surfaces.append(surface_from_dict(s, where))
         if "thickness" not in s:
             raise ValueError(f"{where}: missing 'thickness'")
-        thick.append(_num(s["thickness"], f"{where}: thickness"))
+        t = _num(s["thickness"], f"{where}: thickness")
+        if not abs(t) < INFINITE_OBJECT_MM:  # 1e308 passes as finite, then overflows
+            raise ValueError(f"{where}: thickness must be below {INFINITE_OBJECT_MM:g} mm in "
+                             f"size, got {t:g}")
+        thick.append(t)
         mats.append(material_from_spec(s.get("material"), where, n_table=s.get("n")))
         is_stop = s.get("is_stop", False)
         if not isinstance(is_stop, bool):
@@ -426,9 +455,10 @@ def lens_from_dict(d: dict, *, source: str = "<lens>") -> Lens:
     checks.field_angles(fields, f"{source}: fields", "field angles")
     if img is not None and (img.get("material") is not None or img.get("n") is not None):
         _warn_image_medium(img, mats[-1], wl, primary, source)
-    if "epd" not in aperture:
-        lens = apply_aperture(lens, **aperture)
-    return lens
+    try:
+        return apply_aperture(lens, **aperture)
+    except ValueError as e:
+        raise ValueError(f"{source}: {e}") from None
 
 
 def _warn_image_medium(img: dict, image_space, wl, primary: int, source: str) -> None:
@@ -521,10 +551,18 @@ def load_json(path: str | os.PathLike) -> Lens:
                          f"lens file as UTF-8") from None
     except RecursionError:
         raise ValueError(f"{path}: JSON nested too deeply to be a lens file") from None
+    except ValueError as e:  # an integer of more than 4300 digits
+        raise ValueError(f"{path}: not valid JSON: {e}") from None
     try:
         return lens_from_dict(d, source=path)
     except RecursionError:
         raise ValueError(f"{path}: JSON nested too deeply to be a lens file") from None
+    except ValueError as e:  # a check of a class the reader calls (ModelGlass, Lens)
+        if str(e).startswith(path):
+            raise
+        raise ValueError(f"{path}: {e}") from None
+    except ArithmeticError as e:  # a value that overflows once converted
+        raise ValueError(f"{path}: a value out of range ({e})") from None
 
 
 def _pretty(o: Any, level: int = 0) -> str:

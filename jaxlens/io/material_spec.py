@@ -23,6 +23,10 @@ from .json_values import nums as _nums
 _AIR_NAMES = ("", "air", "vacuum")
 
 
+MAX_INDEX = 10.0
+"""The largest refractive index an index table may give."""
+
+
 def _catalog():
     try:
         from ..optics import catalog
@@ -172,6 +176,9 @@ def _tabulated(wl, n, name, where) -> AbstractMaterial:
         raise ValueError(f"{where}: wavelengths must be positive")
     if np.any(n <= 0):
         raise ValueError(f"{where}: indices must be positive")
+    if np.any(n > MAX_INDEX):  # 1e308 passes as finite, then overflows n·c in a trace
+        raise ValueError(f"{where}: indices must be at most {MAX_INDEX:g} (germanium's is "
+                         f"about 4), got {n.max():g}")
     if len(np.unique(wl)) != wl.size:
         raise ValueError(f"{where}: repeated wavelength in the index table")
     if name.strip().lower() in _AIR_NAMES and np.all(n == 1.0):

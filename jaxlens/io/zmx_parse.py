@@ -34,6 +34,10 @@ SURFACE_KEYS = {
 SHAPES = {"SQAP": ("rect", False), "ELAP": ("ellipse", False), "SQOB": ("rect", True),
           "ELOB": ("ellipse", True)}  # keyword -> (Aperture shape, blocks)
 KEYWORD = re.compile(r"^[A-Z][A-Z0-9_]{1,9}$")
+MAX_COUNT = 10_000
+"""The largest whole number (a count, an index, a flag) a ``.zmx`` line may give: Zemax's
+fields, wavelengths, surfaces and terms number far fewer, and a reader looping to 1e15 would
+hang."""
 
 
 class ZmxLine:
@@ -63,10 +67,12 @@ class ZmxLine:
             raise self.error(f"{what} must be >= {lo}, got {tok}")
         return v
 
-    def int(self, i: int, what: str, *, lo=None) -> int:
+    def int(self, i: int, what: str, *, lo=None, hi: int = MAX_COUNT) -> int:
         v = self.float(i, what, lo=lo)
         if v != int(v):
             raise self.error(f"{what} must be an integer")
+        if abs(v) > hi:
+            raise self.error(f"{what} must be at most {hi} in size, got {self.tokens[i]}")
         return int(v)
 
 

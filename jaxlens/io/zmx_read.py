@@ -17,9 +17,10 @@ from ..optics.lens import INFINITE_OBJECT_MM, Lens
 from ..optics.materials import Air
 from ..optics.surfaces import AbstractSurface, EvenAsphere, Hybrid, OddAsphere, Standard
 from . import zmx_surfaces, zmx_system
-from .lensfile import apply_aperture
+from .lensfile import apply_aperture, nonfinite_part
 from .zmx_common import (
     HYBRID_COMMENT,
+    MAX_XPOLY_DEGREE,
     ZmxWarning,
     report,
     term_index,
@@ -85,12 +86,20 @@ def _xdat_terms(s: ZmxSurface, unit: float, what: str, most: int = _MAX_XDAT_TER
 def _surface(s: ZmxSurface, unit: float) -> AbstractSurface:
     """The surface of a SURF block; a value its class refuses (a semi-diameter beyond a
     steep sphere's edge, say) is reported with the block's line."""
+    where = s.type_line or s.line
     try:
-        return _surface_of(s, unit)
+        surface = _surface_of(s, unit)
     except ValueError as e:
         if str(e).startswith(f"{s.line.path}:"):
             raise
-        raise (s.type_line or s.line).error(str(e)) from None
+        raise where.error(str(e)) from None
+    except ArithmeticError:  # a normalisation radius of 1e-300 or 1e300, raised to the 20th
+        raise where.error(f"surface {s.number}'s coefficients overflow once scaled to mm and "
+                          f"the normalisation radius; its values are out of range") from None
+    bad = nonfinite_part(surface)
+    if bad:
+        raise where.error(f"surface {s.number}: {bad} once scaled to mm (values out of range)")
+    return surface
 
 
 def _surface_of(s: ZmxSurface, unit: float) -> AbstractSurface:
@@ -201,6 +210,9 @@ def _hybrid_from_xpoly(s: ZmxSurface, unit: float, c: float, sd: float) -> Hybri
     hit = HYBRID_COMMENT.search(s.comment)
     if hit:
         m, p = int(hit.group(1)), int(hit.group(2))
+        if m > MAX_XPOLY_DEGREE // 2 or p > MAX_XPOLY_DEGREE // 2:
+            raise s.line.error(f"the hybrid comment {hit.group(0)!r} gives more terms than "
+                               f"the extended polynomial's degree {MAX_XPOLY_DEGREE} holds")
     a = [terms.get((2 * i, 0), 0.0) for i in range(1, m + 1)]
     bx = [terms.get((2 * j + 1, 0), 0.0) for j in range(1, p + 1)]
     by = [terms.get((0, 2 * j + 1), 0.0) for j in range(1, p + 1)]
@@ -438,6 +450,17 @@ def loads(text: str, path: str = "<zmx>", *, strict: bool = False,
             of range.
     """
     f = parse(text, path)
+    try:
+        return _lens(f, text, path, strict, unknown_glass)
+    except ValueError as e:
+        if str(e).startswith(path):
+            raise
+        raise ValueError(f"{path}: {e}") from None
+    except ArithmeticError as e:  # a value that overflows once scaled: a file, not a bug
+        raise ValueError(f"{path}: a value out of range ({e})") from None
+
+
+def _lens(f: ZmxFile, text: str, path: str, strict: bool, unknown_glass: str) -> Lens:
     _check_structure(f, text, strict)
     u = f.unit
     glasses = GlassResolver(path, f.gcat, strict, unknown_glass)
@@ -451,6 +474,9 @@ def loads(text: str, path: str = "<zmx>", *, strict: bool = False,
         surfaces.append(_surface(s, u))
         if math.isinf(s.disz):
             raise s.disz_line.error("only the object surface may have an infinite thickness")
+        if not abs(s.disz * u) < INFINITE_OBJECT_MM:
+            raise s.disz_line.error(f"a thickness must be below {INFINITE_OBJECT_MM:g} mm "
+                                    f"in size (Zemax's infinity), got {s.disz * u:g} mm")
         thick.append(s.disz * u)
         if _is_mirror(s):
             if s.type == "COORDBRK":
