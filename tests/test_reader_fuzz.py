@@ -16,6 +16,8 @@ import jaxlens as jl
 LENSES = pathlib.Path(jl.__file__).parent / "data" / "lenses"
 HYBRID_ZMX = (LENSES / "hybrid_singlet.zmx").read_text()
 HYBRID_JSON = (LENSES / "hybrid_singlet.json").read_text()
+COOKE_ZMX = (LENSES / "cooke_triplet.zmx").read_text()
+OPTILAND_ZMX = (pathlib.Path(__file__).parent / "data" / "zmx" / "optiland_lens1.zmx").read_text()
 
 
 def _sub(text, old, new):
@@ -49,6 +51,13 @@ CASES = [
     ("thickness_unit", ".zmx", _sub(_sub(HYBRID_ZMX, "UNIT MM", "UNIT METER"),
                                     "DISZ 3.0E+000", "DISZ 1e306"), 63),
     ("epd_subnormal", ".zmx", _sub(HYBRID_ZMX, "ENPD 5.0E+000", "ENPD 1e-320"), 5),
+    # numbers each finite that trace to NaN together: a curvature of 1e308 with no aperture
+    # to refuse it (the message names the aperture line, where the paraxial work is done)
+    ("curvature_no_aperture", ".zmx", _sub(OPTILAND_ZMX, "CURV -0.0055170138366520405",
+                                           "CURV 1e308"), 3),
+    # a material class's refusal without the line (ModelGlass: nd <= 4.5)
+    ("model_glass_nd", ".zmx", _sub(COOKE_ZMX, "GLAS N-SK16 0 0 1.62041 6.032E+001",
+                                    "GLAS ___BLANK 1 0 1e308 50"), 27),
     # JSON: the same classes, and errors of the classes the reader calls
     ("json_thickness", ".json", _json(_set(2, "thickness", 1e308)), None),
     ("json_epd", ".json", _json(lambda d: d["aperture"].__setitem__("epd", 1e-320)), None),

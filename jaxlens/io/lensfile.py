@@ -107,7 +107,8 @@ def surface_from_dict(d: dict, where: str, *, kind: str | None = None) -> Abstra
     """A surface from its JSON object; ``kind`` overrides the ``type`` key. What the surface
     class refuses (a semi-diameter beyond a steep sphere's edge, say) names ``where``."""
     try:
-        surface = _surface(d, where, kind)
+        with np.errstate(all="ignore"):  # a curvature of 1e308 squared: refused below
+            surface = _surface(d, where, kind)
     except ValueError as e:
         raise ValueError(str(e) if str(e).startswith(where) else f"{where}: {e}") from None
     bad = nonfinite_part(surface)
@@ -232,7 +233,26 @@ def apply_aperture(lens: Lens, *, epd=None, fnum=None, stop_semi_diameter=None) 
     if not MIN_EPD_MM <= float(value) < INFINITE_OBJECT_MM:  # 1e-320 mm traces as NaN
         raise ValueError(f"aperture: the entrance pupil diameter must be in [{MIN_EPD_MM:g}, "
                          f"{INFINITE_OBJECT_MM:g}) mm, got {float(value):g} mm")
-    return eqx.tree_at(lambda l: l.epd, lens, value)
+    lens = eqx.tree_at(lambda l: l.epd, lens, value)
+    _check_traceable(lens)
+    return lens
+
+
+def _check_traceable(lens: Lens) -> None:
+    """Refuse a lens whose paraxial data are NaN, or whose marginal ray is not finite: values
+    each finite but out of range together (a curvature of 1e308 with no aperture) would
+    load and trace to NaN. An afocal lens (focal length inf) and a telecentric one (a
+    pupil at infinity) are fine."""
+    with np.errstate(all="ignore"):
+        pd = paraxial.paraxial_data(lens)
+    values = {k: float(v) for k, v in vars(pd).items()}
+    bad = [k for k, v in values.items() if math.isnan(v)]
+    bad += [k for k in ("entrance_pupil_diameter", "stop_semi_diameter")
+            if math.isinf(values[k])]
+    if bad:
+        raise ValueError(f"the lens cannot be traced: its paraxial {', '.join(bad)} come out "
+                         f"as {', '.join(str(values[k]) for k in bad)} (values out of range: "
+                         f"a curvature, thickness or index too large?)")
 
 
 def _aperture_of(d: dict, where: str) -> dict:

@@ -105,6 +105,16 @@ class GlassResolver:
                 self.side[cat] = (mats, read_agf_markers(p), p)
 
     def get(self, ln) -> AbstractMaterial:
+        """The material of a GLAS line; what a material class refuses (a model glass of
+        nd 1e308, say) is reported with the line."""
+        try:
+            return self._material(ln)
+        except ValueError as e:
+            if str(e).startswith(f"{ln.path}:"):
+                raise
+            raise ln.error(str(e)) from None
+
+    def _material(self, ln) -> AbstractMaterial:
         # Some vendors' files write "family|glass" (Edmund: SCHOTT-BK|N-BK7).
         name = ln.tokens[1].rsplit("|", 1)[-1]
         up = name.upper()

@@ -88,7 +88,8 @@ def _surface(s: ZmxSurface, unit: float) -> AbstractSurface:
     steep sphere's edge, say) is reported with the block's line."""
     where = s.type_line or s.line
     try:
-        surface = _surface_of(s, unit)
+        with np.errstate(all="ignore"):  # a curvature of 1e308 squared: refused below
+            surface = _surface_of(s, unit)
     except ValueError as e:
         if str(e).startswith(f"{s.line.path}:"):
             raise
