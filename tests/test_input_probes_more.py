@@ -303,9 +303,11 @@ def _zmx(old, new):
     ('DIAM 0 0 0 0 1 ""', "CLAP 0 -1 0", r"<zmx>:21: circular aperture maximum radius \(lens "
                                          r"units\) must be >= 0, got -1"),
     # The Lens constructor refuses these too; the reader's message must still name the file.
-    ("WAVM 2 5.875618E-001", "WAVM 2 587.5618", r"^<zmx>: WAVM: wavelength 587\.562 µm is "
+    ("WAVM 2 5.875618E-001", "WAVM 2 587.5618", r"^<zmx>:\d+: WAVM: wavelength 587\.562 µm is "
                                                 r"outside .*587\.562 nm is 0\.587562 µm"),
-    ("YFLN 0 1.4E+001 2.0E+001", "YFLN 0 1.4E+001 95", r"^<zmx>: XFLN/YFLN: field angles must "
+    # Outside the glasses' range (not only the Lens's): the WAVM line is named too.
+    ("WAVM 2 5.875618E-001", "WAVM 2 5.0", r"^<zmx>:\d+: WAVM: wavelength 5 µm is outside "),
+    ("YFLN 0 1.4E+001 2.0E+001", "YFLN 0 1.4E+001 95", r"^<zmx>:\d+: YFLN: field angles must "
                                                        r"be finite angles in \(-90, 90\) deg"),
 ])
 def test_zmx_counts_and_apertures(old, new, match):

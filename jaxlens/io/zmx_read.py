@@ -278,7 +278,17 @@ def _fields(f: ZmxFile, strict: bool) -> np.ndarray:
     return np.array(ys, np.float64)
 
 
-def _wavelengths(f: ZmxFile) -> tuple[np.ndarray, int]:
+def _check_field_angles(f: ZmxFile, fields) -> None:
+    """The ``Lens`` checks these too, but here the message names the file and line."""
+    yln = f.yfln if f.yfln is not None else f.yfld
+    xln = f.xfln if f.yfln is not None or f.xfld is None else f.xfld
+    a = np.asarray(fields)
+    for values, ln in ([(a, yln)] if a.ndim == 1 else [(a[:, 0], xln), (a[:, 1], yln)]):
+        _at_line(ln, lambda v=values, ln=ln: checks.field_angles(
+            v, ln.tokens[0] if ln else f"{f.path}: fields", "field angles"))
+
+
+def _wavelengths(f: ZmxFile) -> tuple[np.ndarray, int, list]:
     count = None
     if f.ftyp is not None and len(f.ftyp.tokens) > 4:
         count = f.ftyp.int(4, "number of wavelengths (FTYP's fifth value)", lo=1)
@@ -305,12 +315,22 @@ def _wavelengths(f: ZmxFile) -> tuple[np.ndarray, int]:
     for w, ln in zip(wl, lines, strict=True):
         if not w > 0:
             raise ln.error("wavelengths must be > 0 (µm)")
+        _at_line(ln, lambda w=w, ln=ln: checks.wavelengths(
+            checks.NoMaterials, np.array([w]), ln.tokens[0] if ln else "WAVM", "wavelength"))
     primary = 0
     if f.pwav is not None:
         primary = f.pwav.int(1, "primary wavelength number") - 1
         if not 0 <= primary < len(wl):
             raise f.pwav.error(f"primary wavelength must be 1..{len(wl)}")
-    return np.array(wl, np.float64), primary
+    return np.array(wl, np.float64), primary, lines
+
+
+def _at_line(ln, check) -> None:
+    """Run ``check``; a ValueError it raises names the file and ``ln`` (if any)."""
+    try:
+        check()
+    except ValueError as e:
+        raise (e if ln is None else ln.error(str(e))) from None
 
 
 def _check_structure(f: ZmxFile, text: str, strict: bool) -> None:
@@ -508,12 +528,13 @@ def _lens(f: ZmxFile, text: str, path: str, strict: bool, unknown_glass: str) ->
     if not dist > 0:
         raise (obj.disz_line or obj.line).error("object distance must be > 0 or INFINITY")
     zmx_surfaces.check_object_plane(obj, dist)
-    wl, primary = _wavelengths(f)
+    wl, primary, wl_lines = _wavelengths(f)
     _check_image_medium(f, body)
     zmx_system.ray_aiming(f.raim, f.path)
     field_type = zmx_system.field_type(f.ftyp)
     fields = _fields(f, strict)
-    zmx_system.check_wavelengths_and_fields(path, wl, fields, field_type)
+    if field_type == 0:  # angles (deg); heights are converted to angles later
+        _check_field_angles(f, fields)
     lens = Lens(
         surfaces=tuple(surfaces),
         thickness=_arr(np.array(thick, np.float64)),
@@ -533,7 +554,9 @@ def _lens(f: ZmxFile, text: str, path: str, strict: bool, unknown_glass: str) ->
         apertures=_apertures(body + [img], u),
     )
     # Before the paraxial work of the aperture: values the lens cannot be traced with.
-    checks.wavelengths(lens, wl, f"{path}: WAVM", "wavelength")
+    for w, ln in zip(wl, wl_lines, strict=True):
+        _at_line(ln, lambda w=w, ln=ln: checks.wavelengths(
+            lens, np.array([w]), ln.tokens[0] if ln else f"{path}: WAVM", "wavelength"))
     checks.material_indices(lens, wl, path)
     zmx_surfaces.check_opd_modes(lens, {
         i: (zmx_surfaces.paraxial_surface(s, u, math.inf)[1], s.type_line or s.line)

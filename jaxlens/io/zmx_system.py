@@ -13,7 +13,7 @@ import jax.numpy as jnp
 import numpy as np
 
 from ..imaging import aiming
-from ..optics import checks, paraxial
+from ..optics import paraxial
 from ..optics.lens import Lens, unclipped
 from ..optics.materials import Air
 from ..tracing import forward
@@ -313,11 +313,3 @@ def ray_aiming(ln, path: str) -> None:
         ZmxWarning,
         stacklevel=4,
     )
-
-
-def check_wavelengths_and_fields(path: str, wavelengths, fields, field_type: int) -> None:
-    """The ``Lens`` checks these too, but here the message names the file."""
-    checks.wavelengths(checks.NoMaterials, np.asarray(wavelengths), f"{path}: WAVM",
-                       "wavelength")
-    if field_type == 0:  # angles (deg); heights are converted to angles later
-        checks.field_angles(np.asarray(fields), f"{path}: XFLN/YFLN", "field angles")
