@@ -49,7 +49,6 @@ from .json_values import nums as _nums
 from .json_values import text as _text
 from .json_values import whole as _whole
 from .material_spec import (  # noqa: F401  (re-exported: the .zmx modules read them here)
-    SHIPPED_FOR_NAMES,
     catalog_material,
     is_catalog_glass,
     material_from_spec,

@@ -11,6 +11,7 @@ from typing import Any
 import jax
 import numpy as np
 
+from ..optics import catalog
 from ..optics import materials as _materials
 from ..optics.materials import AbstractMaterial, Air, ModelGlass, Tabulated
 from . import lens_keys
@@ -27,21 +28,9 @@ MAX_INDEX = 10.0
 """The largest refractive index an index table may give."""
 
 
-def _catalog():
-    try:
-        from ..optics import catalog
-    except ImportError:  # the catalog module lands separately
-        return None
-    return catalog
-
-
 def _material_classes() -> dict[str, type]:
     out = {}
-    mods = [_materials]
-    cat = _catalog()
-    if cat is not None:
-        mods.append(cat)
-    for mod in mods:
+    for mod in (_materials, catalog):
         for name in dir(mod):
             obj = getattr(mod, name)
             if isinstance(obj, type) and issubclass(obj, AbstractMaterial):
@@ -74,36 +63,24 @@ def catalog_material(name: str, where: str = "", nd: float | None = None,
     """
     if name.strip().lower() in _AIR_NAMES:
         return Air()
-    cat = _catalog()
-    if cat is None:
-        raise ValueError(
-            f"{where}: glass {name!r} needs the glass catalog (jaxlens.optics.catalog), which is "
-            "not available; give the material as {'nd':..,'vd':..} or an index table"
-        )
     try:
         if nd is None or vd is None:
-            return cat.get_material(name)
-        return cat.get_material(name, nd=nd, vd=vd)
+            return catalog.get_material(name)
+        return catalog.get_material(name, nd=nd, vd=vd)
     except ValueError as e:
         raise ValueError(f"{where}: {e}" if where else str(e)) from None
-
-
-SHIPPED_FOR_NAMES = ("SCHOTT", "CDGM", "PLASTICS", "MISC", "OHARA", "HOYA", "HIKARI", "SUMITA",
-                     "CORNING")
-"""Catalogs whose glasses a file may name (``jaxlens.optics.catalog.SHIPPED_CATALOGS``)."""
 
 
 def is_catalog_glass(m: AbstractMaterial) -> bool:
     """True if ``m`` is exactly the shipped catalog glass of its name (bit for bit)."""
     name = getattr(m, "name", "")
-    cat = _catalog()
-    if not name or cat is None or isinstance(m, Air) or not isinstance(m, cat.CatalogMaterial):
+    if not name or isinstance(m, Air) or not isinstance(m, catalog.CatalogMaterial):
         return False
-    if m.catalog not in getattr(cat, "SHIPPED_CATALOGS", SHIPPED_FOR_NAMES):
+    if m.catalog not in catalog.SHIPPED_CATALOGS:
         return False
     try:
-        ref = cat.get_material(name, catalogs=[m.catalog])
-        first = cat.get_material(name)
+        ref = catalog.get_material(name, catalogs=[m.catalog])
+        first = catalog.get_material(name)
     except ValueError:
         return False
     # The name must resolve to this very glass when read back (first match wins).

@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import contextlib
 import math
 import os
 import warnings
@@ -284,8 +285,9 @@ def _check_field_angles(f: ZmxFile, fields) -> None:
     xln = f.xfln if f.yfln is not None or f.xfld is None else f.xfld
     a = np.asarray(fields)
     for values, ln in ([(a, yln)] if a.ndim == 1 else [(a[:, 0], xln), (a[:, 1], yln)]):
-        _at_line(ln, lambda v=values, ln=ln: checks.field_angles(
-            v, ln.tokens[0] if ln else f"{f.path}: fields", "field angles"))
+        with _at_line(ln):
+            checks.field_angles(values, ln.tokens[0] if ln else f"{f.path}: fields",
+                                "field angles")
 
 
 def _wavelengths(f: ZmxFile) -> tuple[np.ndarray, int, list]:
@@ -315,8 +317,9 @@ def _wavelengths(f: ZmxFile) -> tuple[np.ndarray, int, list]:
     for w, ln in zip(wl, lines, strict=True):
         if not w > 0:
             raise ln.error("wavelengths must be > 0 (µm)")
-        _at_line(ln, lambda w=w, ln=ln: checks.wavelengths(
-            checks.NoMaterials, np.array([w]), ln.tokens[0] if ln else "WAVM", "wavelength"))
+        with _at_line(ln):
+            checks.wavelengths(checks.NoMaterials, np.array([w]),
+                               ln.tokens[0] if ln else "WAVM", "wavelength")
     primary = 0
     if f.pwav is not None:
         primary = f.pwav.int(1, "primary wavelength number") - 1
@@ -325,10 +328,11 @@ def _wavelengths(f: ZmxFile) -> tuple[np.ndarray, int, list]:
     return np.array(wl, np.float64), primary, lines
 
 
-def _at_line(ln, check) -> None:
-    """Run ``check``; a ValueError it raises names the file and ``ln`` (if any)."""
+@contextlib.contextmanager
+def _at_line(ln):
+    """A ValueError raised inside names the file and ``ln`` (if any)."""
     try:
-        check()
+        yield
     except ValueError as e:
         raise (e if ln is None else ln.error(str(e))) from None
 
@@ -555,8 +559,9 @@ def _lens(f: ZmxFile, text: str, path: str, strict: bool, unknown_glass: str) ->
     )
     # Before the paraxial work of the aperture: values the lens cannot be traced with.
     for w, ln in zip(wl, wl_lines, strict=True):
-        _at_line(ln, lambda w=w, ln=ln: checks.wavelengths(
-            lens, np.array([w]), ln.tokens[0] if ln else f"{path}: WAVM", "wavelength"))
+        with _at_line(ln):
+            checks.wavelengths(lens, np.array([w]), ln.tokens[0] if ln else f"{path}: WAVM",
+                               "wavelength")
     checks.material_indices(lens, wl, path)
     zmx_surfaces.check_opd_modes(lens, {
         i: (zmx_surfaces.paraxial_surface(s, u, math.inf)[1], s.type_line or s.line)
