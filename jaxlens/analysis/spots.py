@@ -90,18 +90,21 @@ def spot_rays(
                      arg_w="wavelength", pupil=pupil)
     field, wavelength = _as_arrays(lens, field, wavelength)
     return _spot_rays(lens, field, wavelength, pupil=pupil,
-                      depth=_depth(lens, depth, "spot_rays"), aim=aim,
+                      depth=analysis_depth(lens, depth, "spot_rays"), aim=aim,
                       newton_iters=newton_iters)
 
 
-def _depth(lens: Lens, depth, where: str):
-    """A finite depth as an array of the lens's dtype (checked first), so the compiled
-    programs take it as an argument: one program serves every depth, where a Python float
-    would be static and compile one per value. None (the lens's object) and inf stay as
-    given: static."""
+def analysis_depth(lens: Lens, depth, where: str):
+    """The object distance an analysis traces from: ``depth`` (mm; inf for infinity) or,
+    for None, the lens's own object (``lens.object_distance``). Checked, with errors naming
+    ``where``. A finite depth comes back as an array of the lens's dtype, so the compiled
+    programs take it as an argument (one program serves every depth, where a Python float
+    would be static and compile one per value); an object at infinity comes back as None."""
+    if depth is None and not lens.object_at_infinity:
+        depth = lens.object_distance
     given = static_depth(depth, where)
     if given is None or isinstance(given, jax.core.Tracer):
-        return depth
+        return given
     return given.astype(lens.epd.dtype)
 
 
@@ -119,7 +122,7 @@ def chief_ray(lens: Lens, field, wavelength=None, *, depth=None) -> Rays:
     field, wavelength = _as_arrays(lens, field, wavelength)
     centre = jnp.zeros((1, 2), lens.epd.dtype)
     return _spot_rays(lens, field, wavelength, pupil=centre,
-                      depth=_depth(lens, depth, "chief_ray"), aim="paraxial",
+                      depth=analysis_depth(lens, depth, "chief_ray"), aim="paraxial",
                       newton_iters=DEFAULT_NEWTON_ITERS)[0]
 
 
@@ -187,7 +190,7 @@ def rms_spot(
                      own="all")
     fields, wavelengths = _as_arrays(lens, _own_fields(lens, fields), wavelengths)
     return _rms_spot(lens, fields, wavelengths, pupil=pupil, reference=reference,
-                     depth=_depth(lens, depth, "rms_spot"), newton_iters=newton_iters)
+                     depth=analysis_depth(lens, depth, "rms_spot"), newton_iters=newton_iters)
 
 
 @eqx.filter_jit
@@ -208,8 +211,6 @@ def _rms_spot(lens, fields, wavelengths, *, pupil, reference, depth, newton_iter
                          f"with M >= 1, got shape {pupil.shape}")
     m = pupil.shape[0]
     pupil_ext = jnp.concatenate([pupil, jnp.zeros((1, 2), pupil.dtype)])
-    if depth is None and not lens.object_at_infinity:
-        depth = lens.object_distance
     primary = lens.primary_wavelength
 
     def per_field(field):
@@ -279,7 +280,9 @@ def field_heights(fields, xy):
 
 
 def distortion(lens: Lens, fields=None, wavelength=None) -> Distortion:
-    """Distortion of the real chief ray at ``wavelength`` (default primary).
+    """Distortion of the real chief ray at ``wavelength`` (default primary), traced from the
+    lens's own object (``lens.object_distance``; at a finite distance a field angle is the
+    chief ray's angle at the entrance pupil, as in ``sampling.object_point``).
 
     ``fields`` are degrees, ``[F]`` (θy) or ``[F, 2]`` (θx, θy); default ``lens.fields``.
     ``percent_ftan`` = 100·(y_real − EFL·tanθ)/(EFL·tanθ); ``percent_paraxial`` uses the
@@ -291,11 +294,11 @@ def distortion(lens: Lens, fields=None, wavelength=None) -> Distortion:
     _concrete_inputs(lens, "distortion", fields=fields, wavelengths=wavelength,
                      arg_w="wavelength")
     fields, wavelength = _as_arrays(lens, _own_fields(lens, fields), wavelength)
-    return _distortion(lens, fields, wavelength)
+    return _distortion(lens, fields, wavelength, analysis_depth(lens, None, "distortion"))
 
 
 @eqx.filter_jit
-def _distortion(lens, fields, wavelength) -> Distortion:
+def _distortion(lens, fields, wavelength, depth) -> Distortion:
     fields = _fields_array(fields, "distortion")
     wl = lens.primary_wavelength if wavelength is None else wavelength
     if jnp.ndim(wl) != 0:
@@ -303,7 +306,7 @@ def _distortion(lens, fields, wavelength) -> Distortion:
                          f"{jnp.shape(wl)}")
     f = paraxial.efl(lens, wl)
     chief = jax.vmap(lambda th: _spot_rays(
-        lens, th, wl, pupil=jnp.zeros((1, 2), lens.epd.dtype), depth=None, aim="paraxial",
+        lens, th, wl, pupil=jnp.zeros((1, 2), lens.epd.dtype), depth=depth, aim="paraxial",
         newton_iters=DEFAULT_NEWTON_ITERS)[0])(fields)
     p = jnp.where(chief.valid[:, None], chief.origin[:, :2], jnp.nan)
     tr, radial, y = field_heights(fields, p)

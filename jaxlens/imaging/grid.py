@@ -1,4 +1,4 @@
-"""Sensor and pupil grids and bilinear interpolation on them (lengths in mm).
+"""Sensor and pupil grids, bilinear interpolation on them and splatting onto them (mm).
 
 Rendered orientation: row 0 / column 0 is the top-left pixel of ``render``'s output, which
 reads the sensor out rotated by 180° (sensor x grows to the left, y downward), as a camera
@@ -96,3 +96,45 @@ def pupil_cells(n: int, overfill: float, dtype, key=None):
         pts = pts + (jax.random.uniform(key, pts.shape, dtype) - 0.5) * cell
     mask = jnp.sum(pts * pts, -1) <= 1.0
     return pts * overfill, mask, cell * overfill
+
+
+def splat(pos, weight, kernel_size: int, pixel_size, order: int = 1) -> Float[Array, "k k"]:
+    """Splat weighted points (sensor offsets in mm from the reference) onto the kernel grid.
+
+    The grid is in rendered orientation (see the module docstring) and centred on the
+    reference; points outside it are dropped. ``order=1`` splats bilinearly (a tent of one
+    pixel); ``order=2`` with the quadratic B-spline (a tent convolved with a one-pixel box),
+    which also integrates the PSF over the pixel's area as ``render`` does. Both are
+    piecewise polynomial in the positions, hence differentiable.
+    """
+    k = kernel_size
+    c = 0.5 * (k - 1)
+    col = c - pos[..., 0] / pixel_size
+    row = c + pos[..., 1] / pixel_size
+    if order == 1:
+        i0 = jax.lax.stop_gradient(jnp.floor(row))
+        j0 = jax.lax.stop_gradient(jnp.floor(col))
+        fr, fc = row - i0, col - j0
+        wr = ((0, 1 - fr), (1, fr))
+        wc = ((0, 1 - fc), (1, fc))
+    elif order == 2:
+        i0 = jax.lax.stop_gradient(jnp.round(row))
+        j0 = jax.lax.stop_gradient(jnp.round(col))
+        fr, fc = row - i0, col - j0
+
+        def b2(f):
+            return ((-1, 0.5 * (0.5 - f) ** 2), (0, 0.75 - f * f), (1, 0.5 * (0.5 + f) ** 2))
+
+        wr, wc = b2(fr), b2(fc)
+    else:
+        raise ValueError(f"splat: order must be 1 or 2, got {order}")
+    i0 = i0.astype(jnp.int32)
+    j0 = j0.astype(jnp.int32)
+    out = jnp.zeros((k * k,), weight.dtype)
+    for di, a in wr:
+        for dj, b in wc:
+            ii, jj = i0 + di, j0 + dj
+            inside = (ii >= 0) & (ii < k) & (jj >= 0) & (jj < k)
+            flat = jnp.where(inside, ii * k + jj, 0)
+            out = out.at[flat.reshape(-1)].add(jnp.where(inside, a * b * weight, 0.0).reshape(-1))
+    return out.reshape(k, k)

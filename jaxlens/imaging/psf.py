@@ -64,7 +64,7 @@ from ..optics.rays import Rays
 from ..tracing.forward import DEFAULT_NEWTON_ITERS, trace
 from . import sampling
 from .aiming import apertured, chief_point, field_to_ideal, ideal_to_field
-from .grid import pupil_cells, sensor_grid
+from .grid import pupil_cells, sensor_grid, splat
 
 __all__ = [
     "AbstractPSFModel",
@@ -112,48 +112,6 @@ def _reference(lens, field, depth, center, newton_iters, pos=None, w=None) -> Ar
 # --------------------------------------------------------------------------------------
 # Geometric PSF
 # --------------------------------------------------------------------------------------
-def splat(pos, weight, kernel_size: int, pixel_size, order: int = 1) -> Float[Array, "k k"]:
-    """Splat weighted points (sensor offsets in mm from the reference) onto the kernel grid.
-
-    The grid is in rendered orientation (see the module docstring); points outside it are
-    dropped. ``order=1`` splats bilinearly (a tent of one pixel); ``order=2`` with the
-    quadratic B-spline (a tent convolved with a one-pixel box), which also integrates the
-    PSF over the pixel's area as ``render`` does. Both are piecewise polynomial in the
-    positions, hence differentiable.
-    """
-    k = kernel_size
-    c = 0.5 * (k - 1)
-    col = c - pos[..., 0] / pixel_size
-    row = c + pos[..., 1] / pixel_size
-    if order == 1:
-        i0 = jax.lax.stop_gradient(jnp.floor(row))
-        j0 = jax.lax.stop_gradient(jnp.floor(col))
-        fr, fc = row - i0, col - j0
-        wr = ((0, 1 - fr), (1, fr))
-        wc = ((0, 1 - fc), (1, fc))
-    elif order == 2:
-        i0 = jax.lax.stop_gradient(jnp.round(row))
-        j0 = jax.lax.stop_gradient(jnp.round(col))
-        fr, fc = row - i0, col - j0
-
-        def b2(f):
-            return ((-1, 0.5 * (0.5 - f) ** 2), (0, 0.75 - f * f), (1, 0.5 * (0.5 + f) ** 2))
-
-        wr, wc = b2(fr), b2(fc)
-    else:
-        raise ValueError(f"splat: order must be 1 or 2, got {order}")
-    i0 = i0.astype(jnp.int32)
-    j0 = j0.astype(jnp.int32)
-    out = jnp.zeros((k * k,), weight.dtype)
-    for di, a in wr:
-        for dj, b in wc:
-            ii, jj = i0 + di, j0 + dj
-            inside = (ii >= 0) & (ii < k) & (jj >= 0) & (jj < k)
-            flat = jnp.where(inside, ii * k + jj, 0)
-            out = out.at[flat.reshape(-1)].add(jnp.where(inside, a * b * weight, 0.0).reshape(-1))
-    return out.reshape(k, k)
-
-
 def _trace_beam(lens, field, depth, wl, pupil, mask, newton_iters):
     rays = _launch(lens, field, depth, pupil, wl)
     out = trace(lens, rays, newton_iters=newton_iters, uniform=True)
@@ -179,6 +137,19 @@ class AbstractPSFModel(eqx.Module):
                              f"{self.pupil!r}")
         checks.number(self.overfill, "overfill", caller, lo=0, lo_open=True,
                       unit="(beam radius over the entrance-pupil radius)")
+        largest = self.largest_overfill()
+        if self.overfill > largest:
+            raise ValueError(
+                f"{caller}: overfill {self.overfill!r} spreads the {self.pupil}² launched rays "
+                f"so wide that none may fall inside the entrance pupil; use an overfill in "
+                f"(0, {largest:.4g}] (beam radius over the entrance-pupil radius, 1.25 by "
+                f"default) or more rays per side")
+
+    def largest_overfill(self) -> float:
+        """The largest overfill that keeps a ray inside the entrance pupil (radius 1): the
+        cell-centred square grid's nearest point to the centre lies within half a cell
+        diagonal, overfill·√2/pupil, of it."""
+        return self.pupil / math.sqrt(2.0)
 
     def kernels(self, lens, field, depth, wls, *, kernel_size, pixel_size, center, key,
                 newton_iters):
@@ -221,6 +192,10 @@ class GeometricPSF(AbstractPSFModel):
     order: int = eqx.field(default=1, converter=checks.static_int)
     grid: str = "square"
     normalize: str = "transmitted"
+
+    def largest_overfill(self) -> float:
+        # The polar grid's innermost ring of cells ends at radius overfill/√pupil.
+        return math.sqrt(self.pupil) if self.grid == "polar" else super().largest_overfill()
 
     def check(self, caller: str) -> None:
         super().check(caller)
