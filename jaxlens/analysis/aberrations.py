@@ -38,11 +38,10 @@ import jax
 import jax.numpy as jnp
 from jaxtyping import Array, Bool, Float
 
-from ..imaging.sampling import field_rays
+from ..imaging.sampling import field_rays, lens_depth
 from ..optics import checks
 from ..optics.lens import Lens
 from ..tracing.forward import DEFAULT_NEWTON_ITERS, forward_mode_jit, trace
-from .spots import analysis_depth
 
 # Default number of points across the pupil in a fan, and of fields in a curvature curve.
 FAN_POINTS = 21
@@ -130,7 +129,7 @@ def ray_fan(lens: Lens, field, wavelengths=None, *, n: int = FAN_POINTS, depth=N
                     wavelengths)
     n = checks.number(n, "n", "ray_fan", lo=2, integer=True, unit="pupil points")
     return _ray_fan(lens, f if shape == (2,) else f[0], wl, n=int(n),
-                    depth=analysis_depth(lens, depth, "ray_fan"), aim=aim)
+                    depth=lens_depth(lens, depth, "ray_fan"), aim=aim)
 
 
 @eqx.filter_jit
@@ -181,7 +180,7 @@ def field_curvature(lens: Lens, fields=None, wavelengths=None, *, depth=None,
     """
     f, wl = _inputs(lens, "field_curvature",
                     default_fields(lens) if fields is None else fields, wavelengths, pairs=True)
-    return _field_curvature(lens, f, wl, depth=analysis_depth(lens, depth, "field_curvature"),
+    return _field_curvature(lens, f, wl, depth=lens_depth(lens, depth, "field_curvature"),
                             aim=aim)
 
 

@@ -19,7 +19,7 @@ import jax.numpy as jnp
 import numpy as np
 from jaxtyping import Array, Bool, Float
 
-from ..imaging.sampling import field_rays, pupil_grid, static_depth
+from ..imaging.sampling import field_rays, lens_depth, pupil_grid
 from ..optics import checks, paraxial
 from ..optics.lens import Lens
 from ..optics.rays import Rays
@@ -90,22 +90,8 @@ def spot_rays(
                      arg_w="wavelength", pupil=pupil)
     field, wavelength = _as_arrays(lens, field, wavelength)
     return _spot_rays(lens, field, wavelength, pupil=pupil,
-                      depth=analysis_depth(lens, depth, "spot_rays"), aim=aim,
+                      depth=lens_depth(lens, depth, "spot_rays"), aim=aim,
                       newton_iters=newton_iters)
-
-
-def analysis_depth(lens: Lens, depth, where: str):
-    """The object distance an analysis traces from: ``depth`` (mm; inf for infinity) or,
-    for None, the lens's own object (``lens.object_distance``). Checked, with errors naming
-    ``where``. A finite depth comes back as an array of the lens's dtype, so the compiled
-    programs take it as an argument (one program serves every depth, where a Python float
-    would be static and compile one per value); an object at infinity comes back as None."""
-    if depth is None and not lens.object_at_infinity:
-        depth = lens.object_distance
-    given = static_depth(depth, where)
-    if given is None or isinstance(given, jax.core.Tracer):
-        return given
-    return given.astype(lens.epd.dtype)
 
 
 @eqx.filter_jit
@@ -122,7 +108,7 @@ def chief_ray(lens: Lens, field, wavelength=None, *, depth=None) -> Rays:
     field, wavelength = _as_arrays(lens, field, wavelength)
     centre = jnp.zeros((1, 2), lens.epd.dtype)
     return _spot_rays(lens, field, wavelength, pupil=centre,
-                      depth=analysis_depth(lens, depth, "chief_ray"), aim="paraxial",
+                      depth=lens_depth(lens, depth, "chief_ray"), aim="paraxial",
                       newton_iters=DEFAULT_NEWTON_ITERS)[0]
 
 
@@ -190,7 +176,7 @@ def rms_spot(
                      own="all")
     fields, wavelengths = _as_arrays(lens, _own_fields(lens, fields), wavelengths)
     return _rms_spot(lens, fields, wavelengths, pupil=pupil, reference=reference,
-                     depth=analysis_depth(lens, depth, "rms_spot"), newton_iters=newton_iters)
+                     depth=lens_depth(lens, depth, "rms_spot"), newton_iters=newton_iters)
 
 
 @eqx.filter_jit
@@ -294,7 +280,7 @@ def distortion(lens: Lens, fields=None, wavelength=None) -> Distortion:
     _concrete_inputs(lens, "distortion", fields=fields, wavelengths=wavelength,
                      arg_w="wavelength")
     fields, wavelength = _as_arrays(lens, _own_fields(lens, fields), wavelength)
-    return _distortion(lens, fields, wavelength, analysis_depth(lens, None, "distortion"))
+    return _distortion(lens, fields, wavelength, lens_depth(lens, None, "distortion"))
 
 
 @eqx.filter_jit

@@ -24,8 +24,6 @@ Pre-warp:
 
 from __future__ import annotations
 
-import math
-
 import equinox as eqx
 import jax
 import jax.numpy as jnp
@@ -79,7 +77,7 @@ def distortion_map(
     lens: Lens,
     *,
     grid: tuple[int, int] = (17, 17),
-    depth=math.inf,
+    depth=None,
     sensor: Sensor | None = None,
     newton_iters: int = DEFAULT_NEWTON_ITERS,
 ) -> DistortionMap:
@@ -88,7 +86,8 @@ def distortion_map(
     Args:
         lens: the lens.
         grid: (rows, cols) of the grid.
-        depth: object distance in mm in front of surface 1 (``inf`` for infinity).
+        depth: object distance in mm in front of surface 1 (``inf`` for infinity); None
+            (default) for the lens's own object (``lens.object_distance``).
         sensor: default ``lens.sensor``.
         newton_iters: Newton iterations for aspheric surfaces.
 
@@ -99,7 +98,7 @@ def distortion_map(
     grid = checks.grid(grid, "distortion_map", "grid", "points")
     checks.number(newton_iters, "newton_iters", "distortion_map", lo=0, integer=True,
                   unit="iterations")
-    depth = sampling.static_depth(depth)
+    depth = sampling.lens_depth(lens, depth, "distortion_map")
     lens = apertured(lens)
     ideal = sensor_grid(s.resolution, s.pixel_size, grid).astype(lens.epd.dtype)
     real, valid = _forward_map(lens, ideal, depth, newton_iters)
@@ -135,7 +134,8 @@ def inverse_distortion_map(
         lens: the lens.
         resolution, pixel_size: the sensor (rows, cols) and pitch (mm).
         grid: (rows, cols) of sensor points, corner to corner.
-        depth: None for infinity, else the object distance in mm (an array).
+        depth: object distance in mm (``inf`` for infinity); None (default) for the
+            lens's own object (``lens.object_distance``).
         newton_iters: Newton iterations for aspheric surfaces.
         iters: aiming iterations.
 
@@ -149,8 +149,7 @@ def inverse_distortion_map(
         checks.number(pixel_size, "pixel_size", where, lo=0, lo_open=True, unit="mm")
     checks.number(newton_iters, "newton_iters", where, lo=0, integer=True, unit="iterations")
     checks.number(iters, "iters", where, lo=0, integer=True, unit="aiming iterations")
-    if depth is not None:  # None, or a finite distance > 0 (inf: at infinity, as elsewhere)
-        depth = sampling.static_depth(depth)
+    depth = sampling.lens_depth(lens, depth, where)
     return _inverse_map(lens, jnp.asarray(pixel_size), depth, resolution=resolution,
                         grid=grid, newton_iters=newton_iters, iters=iters)
 
@@ -216,7 +215,7 @@ def prewarp(
     lens: Lens,
     scene: Float[Array, "H W C"],
     *,
-    depth=math.inf,
+    depth=None,
     sensor: Sensor | None = None,
     grid: tuple[int, int] = (17, 17),
     newton_iters: int = DEFAULT_NEWTON_ITERS,
@@ -230,7 +229,8 @@ def prewarp(
     Args:
         lens: the lens.
         scene: ``[H, W, C]`` linear image with the sensor's aspect ratio.
-        depth: object distance in mm (``inf`` for infinity).
+        depth: object distance in mm (``inf`` for infinity); None (default) for the
+            lens's own object.
         sensor: default ``lens.sensor``.
         grid: grid of the distortion map.
         newton_iters: Newton iterations for aspheric surfaces.
@@ -275,7 +275,7 @@ def alignment_penalty(
     *,
     alpha,
     grid: tuple[int, int] = (9, 9),
-    depth=math.inf,
+    depth=None,
     sensor: Sensor | None = None,
     newton_iters: int = DEFAULT_NEWTON_ITERS,
 ) -> Float[Array, ""]:
@@ -285,7 +285,8 @@ def alignment_penalty(
         lens: the lens.
         alpha: weight α (0 turns the penalty off).
         grid: grid of ideal positions over the sensor.
-        depth: object distance in mm (``inf`` for infinity).
+        depth: object distance in mm (``inf`` for infinity); None (default) for the
+            lens's own object.
         sensor: default ``lens.sensor`` (its pitch sets the unit).
         newton_iters: Newton iterations for aspheric surfaces.
     """

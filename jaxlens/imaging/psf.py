@@ -6,9 +6,9 @@
 Conventions:
     Lengths in mm, wavelengths in µm, field angles in degrees (θy, or (θx, θy)). An object
     at infinity is given by ``depth=inf``; a finite depth is the distance in mm from the
-    object point to surface 1's vertex. The object point of a field at finite depth is
-    placed so that its chief ray makes the field angle at the entrance pupil (as
-    ``sampling.object_point``).
+    object point to surface 1's vertex; ``depth=None`` (the default) is the lens's own
+    object. The object point of a field at finite depth is placed so that its chief ray
+    makes the field angle at the entrance pupil (as ``sampling.object_point``).
 
     A PSF is a ``[kernel_size, kernel_size]`` array of the energy per sensor pixel of side
     ``pixel_size`` (mm), normalised so that it sums to 1 when no energy falls outside the
@@ -396,14 +396,14 @@ def _prepare(lens, field, depth, wavelength, kernel_size, pixel_size, model, cen
     field = jnp.asarray(field, dtype)
     if field.ndim > 1 or (field.ndim == 1 and field.shape[0] != 2):
         raise ValueError(f"{caller}: field must be θy or (θx, θy) in degrees, got {field.shape}")
-    return field, sampling.static_depth(depth), wl, pixel_size, kernel_size
+    return field, sampling.lens_depth(lens, depth, caller), wl, pixel_size, kernel_size
 
 
 def psf_info(
     lens: Lens,
     field: Float[ArrayLike, ""] | Float[ArrayLike, " 2"],
     *,
-    depth=math.inf,
+    depth=None,
     wavelength: Float[ArrayLike, "*w"] | None = None,
     kernel_size: int = 31,
     pixel_size=None,
@@ -474,7 +474,7 @@ def psf(
     lens: Lens,
     field: Float[ArrayLike, ""] | Float[ArrayLike, " 2"],
     *,
-    depth=math.inf,
+    depth=None,
     wavelength: Float[ArrayLike, "*w"] | None = None,
     kernel_size: int = 31,
     pixel_size=None,
@@ -489,7 +489,8 @@ def psf(
     Args:
         lens: the lens.
         field: field angle in degrees, θy or (θx, θy).
-        depth: object distance in mm in front of surface 1; ``inf`` for an object at infinity.
+        depth: object distance in mm in front of surface 1; ``inf`` for an object at
+            infinity; None (default) for the lens's own object (``lens.object_distance``).
         wavelength: µm, a scalar or ``[W]`` (an RGB PSF is ``RGB_WAVELENGTHS``); default the
             primary wavelength.
         kernel_size: kernel side in pixels (odd keeps the reference on a pixel centre).
@@ -548,7 +549,7 @@ def psf_map(
     lens: Lens,
     *,
     grid: tuple[int, int] = (5, 5),
-    depth=math.inf,
+    depth=None,
     wavelength=None,
     kernel_size: int = 31,
     pixel_size=None,
@@ -691,7 +692,7 @@ def mtf(
     field,
     *,
     wavelengths=None,
-    depth=math.inf,
+    depth=None,
     frequencies=None,
     model: AbstractPSFModel = DEFAULT_MODEL,
     diffraction: bool = True,
@@ -713,7 +714,8 @@ def mtf(
         lens: the lens.
         field: field angle in degrees, θy or (θx, θy).
         wavelengths: µm, ``[W]``; default ``lens.wavelengths``.
-        depth: object distance in mm (``inf`` for infinity).
+        depth: object distance in mm (``inf`` for infinity); None (default) for the
+            lens's own object.
         frequencies: spatial frequencies in cycles/mm; default 33 points from 0 to the
             sensor's Nyquist frequency, or to the diffraction cut-off 1/(λ·F#) without a
             sensor.

@@ -30,8 +30,6 @@ Method:
 
 from __future__ import annotations
 
-import math
-
 import equinox as eqx
 import jax
 import jax.numpy as jnp
@@ -187,7 +185,7 @@ def relative_illumination(
     lens: Lens,
     fields,
     *,
-    depth=math.inf,
+    depth=None,
     wavelength=None,
     pupil: int = 128,
     newton_iters: int = DEFAULT_NEWTON_ITERS,
@@ -197,7 +195,8 @@ def relative_illumination(
     Args:
         lens: the lens.
         fields: ``[F]`` θy or ``[F, 2]`` (θx, θy), degrees.
-        depth: object distance in mm in front of surface 1, ``inf`` for infinity.
+        depth: object distance in mm in front of surface 1, ``inf`` for infinity; None
+            (default) for the lens's own object (``lens.object_distance``).
         wavelength: µm (default the primary wavelength).
         pupil: cells per side of the pupil grid for the centroids (the search grid has a
             third of that, at least 16).
@@ -225,7 +224,8 @@ def relative_illumination(
                              f"{jnp.shape(wavelength)}")
     wl = jnp.asarray(lens.primary_wavelength if wavelength is None else wavelength, dtype)
     wl = checks.wavelengths(lens, wl, where)
-    ri, e, cen = relative_illumination_samples(apertured(lens), f, sampling.static_depth(depth), wl,
-                          n_coarse=max(16, pupil // 3), n_fine=int(pupil),
-                          newton_iters=newton_iters)
+    depth = sampling.lens_depth(lens, depth, where)
+    ri, e, cen = relative_illumination_samples(apertured(lens), f, depth, wl,
+                                               n_coarse=max(16, pupil // 3), n_fine=int(pupil),
+                                               newton_iters=newton_iters)
     return RelativeIllumination(f, cen, ri, e)

@@ -471,7 +471,7 @@ def render(
     *,
     spp: int,
     key,
-    depth=math.inf,
+    depth=None,
     method: RayRender | PSFRender = RAY,
     wavelengths=RGB_WAVELENGTHS,
     sensor: Sensor | None = None,
@@ -493,7 +493,8 @@ def render(
         spp: rays per pixel per wavelength (``RayRender``); for ``PSFRender``, rays per
             kernel pixel in each patch's PSF (spp·kernel_size² per channel).
         key: PRNG key (``jax.random.PRNGKey``); the same key gives the same image.
-        depth: object distance in mm in front of surface 1, ``inf`` for infinity.
+        depth: object distance in mm in front of surface 1, ``inf`` for infinity; None
+            (default) for the lens's own object (``lens.object_distance``).
         method: ``RayRender(footprint_grid, footprints)`` (backward tracing, the default)
             or ``PSFRender(kernel_size)`` (patch-wise PSF convolution).
         wavelengths: one wavelength (µm) per channel, default the C, d, F lines for R, G, B.
@@ -577,7 +578,7 @@ def render(
             f"render: scene of {hs}x{ws} pixels does not match the {rows}x{cols} sensor "
             "(the aspect ratios differ; resize or crop the scene)"
         )
-    depth = sampling.static_depth(depth)
+    depth = sampling.lens_depth(lens, depth, "render")
     lens = apertured(lens)
     key = jnp.asarray(key) if not isinstance(key, jax.Array) else key
     common = dict(resolution=(int(rows), int(cols)), spp=int(spp), patch=int(patch),
@@ -613,7 +614,7 @@ def relaxed_render(
     spp: int,
     key,
     alpha=0.0,
-    depth=math.inf,
+    depth=None,
     grid: tuple[int, int] = DISTORTION_GRID,
     **render_kwargs,
 ):

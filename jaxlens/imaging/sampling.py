@@ -331,6 +331,20 @@ def aim_at_stop(
     return Rays(o, d, rays.wavelength, opl=opl)
 
 
+def lens_depth(lens: Lens, depth, where: str):
+    """The object distance an imaging or analysis function traces from: ``depth`` (mm from
+    the object to surface 1; inf for an object at infinity) or, for None, the lens's own
+    object (``lens.object_distance``). Checked, with errors naming ``where``. Returns None
+    for an object at infinity, else an array of the lens's dtype, so that compiled programs
+    take it as an argument (one program serves every depth)."""
+    if depth is None and not lens.object_at_infinity:
+        depth = lens.object_distance
+    given = static_depth(depth, where)
+    if given is None or isinstance(given, jax.core.Tracer):
+        return given
+    return given.astype(lens.epd.dtype)
+
+
 def static_depth(depth, where: str = "sampling"):
     """None for an object at infinity (a concrete inf), else the depth as an array (checked,
     errors naming ``where``)."""
