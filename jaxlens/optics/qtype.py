@@ -20,11 +20,12 @@ Conventions:
     sqrt(1 + (dz_conic/dr)²), so that the polynomial is (to first order) the departure
     along the conic's normal; φ reduces to Forbes's factor at k = 0. This is how
     OpticStudio's Q-type surface reads a Q-bfs surface with a conic: the Thorlabs ASL5040-UV
-    asphere (tests/data/zmx/ASL5040-UV.zmx: c = 0.0576/mm, k = −0.676, six Q-bfs terms over
-    ρ_n = 27 mm, 22.86 mm clear radius) focuses a collimated 405 nm beam to an RMS spot of
-    0.10 µm at its file's focus (Airy radius 0.43 µm) with this φ, but to 125 µm with
-    1/sqrt(1 − (1+k) c² r²) and 1.5 mm with 1/sqrt(1 − c² r²), which is not even defined
-    beyond r = 1/c = 17.4 mm (tests/test_qtype.py).
+    asphere (tests/data/zmx/rayoptics_ASL5040-UV.zmx: c = 0.0576/mm, k = −0.676, six Q-bfs
+    terms over ρ_n = 27 mm, 22.86 mm clear radius) focuses a collimated 405 nm beam to an RMS
+    spot of 0.10 µm at its file's focus (Airy radius 0.61 λ/NA = 0.38 µm, NA 0.65) with this
+    φ, but to 125 µm with 1/sqrt(1 − (1+k) c² r²) and 1.5 mm with 1/sqrt(1 − c² r²), which
+    is not even defined beyond r = 1/c = 17.4 mm (tests/test_qtype.py). The sag equals
+    optiland 0.6.3's Forbes geometry with a conic (ForbesQNormalSlopeGeometry) to 1e-12.
 
     Q-bfs (Forbes 2007, sec. 3): orthonormal slopes, ⟨(dS_m/du)(dS_n/du)⟩ = δ_mn with
     S_m = u²(1 − u²) Q_m(u²) and the average ∫_0^1 f(u) (1 − u²)^(−1/2) du / (π/2).

@@ -27,8 +27,8 @@ from ..optics.coordinates import CoordinateBreak
 from ..optics.diffractive import Binary2
 from ..optics.lens import Lens
 from ..optics.paraxial_surface import ParaxialSurface
-from ..optics.rays import Rays
 from ..optics.qtype import QTypeAsphere
+from ..optics.rays import Rays
 from ..optics.surfaces import (
     AbstractSurface,
     EvenAsphere,
