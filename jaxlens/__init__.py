@@ -54,6 +54,7 @@ from .optics.paraxial import ParaxialData as ParaxialData
 from .optics.paraxial import bfl as bfl
 from .optics.paraxial import efl as efl
 from .optics.paraxial import paraxial_data as paraxial_data
+from .optics.qtype import QTypeAsphere as QTypeAsphere
 from .optics.rays import Rays as Rays
 from .optics.surfaces import AbstractSurface as AbstractSurface
 from .optics.surfaces import Conic as Conic

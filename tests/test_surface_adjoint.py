@@ -15,6 +15,7 @@ import pytest
 
 import jaxlens as jl
 from jaxlens.optics.paraxial_surface import ParaxialSurface
+from jaxlens.optics.qtype import QTypeAsphere
 from jaxlens.optics.toroidal import Toroidal
 from jaxlens.tracing import forward, surface_adjoint
 from jaxlens.tracing.step import RayState, state_from_rays, surface_step
@@ -261,6 +262,39 @@ def test_polynomial_gradient_matches_central_differences():
 
         fd = (at(h) - at(-h)) / (2 * h)
         ad = float(get(g) if j is None else get(g)[j])
+        assert ad != 0.0
+        assert ad == pytest.approx(fd, rel=2e-6, abs=1e-9)
+
+
+def test_qtype_aspheres_take_the_rule_with_equal_values_and_gradients(compiled):
+    """Forbes Q-bfs (on a conic) and Q-con surfaces go through ``sag_step``: values
+    identical to ``surface_step``'s, gradients equal to rounding and, in a coefficient of
+    each, to central differences."""
+    glass = jl.ModelGlass(1.6, 40.0)
+    lens = jl.Lens(
+        surfaces=(QTypeAsphere(c=0.04, k=-0.7, coeffs=jnp.array([0.05, -0.02, 0.01]),
+                               norm_radius=5.0),
+                  QTypeAsphere(c=-0.01, k=0.3, coeffs=jnp.array([2e-3, -1e-3]),
+                               norm_radius=5.0, qtype="con")),
+        thickness=jnp.array([4.0, 30.0]), materials=(glass, jl.Air()), epd=8.0,
+        fields=jnp.array([0.0, 5.0]))
+    assert all(surface_adjoint.supported(s) for s in lens.surfaces)
+    rays = _rays(lens, 200, 1.05)
+    for a, b in zip(compiled["trace", True](lens, rays), compiled["trace", False](lens, rays),
+                    strict=True):
+        np.testing.assert_array_equal(np.asarray(a), np.asarray(b))
+    (_, gn), (_, go) = compiled["grad", True](lens, rays), compiled["grad", False](lens, rays)
+    for a, b in zip(jax.tree.leaves(gn), jax.tree.leaves(go), strict=True):
+        np.testing.assert_allclose(np.asarray(a), np.asarray(b), rtol=1e-10, atol=1e-14)
+    fn = jax.jit(lambda L: _loss(_trace(L, rays, True)))
+    for i, j, h in ((0, 0, 1e-7), (0, 2, 1e-7), (1, 1, 1e-7)):
+        def at(dx, i=i, j=j):
+            L = eqx.tree_at(lambda t: t.surfaces[i].coeffs, lens,
+                            lens.surfaces[i].coeffs.at[j].add(dx))
+            return float(fn(L))
+
+        fd = (at(h) - at(-h)) / (2 * h)
+        ad = float(gn.surfaces[i].coeffs[j])
         assert ad != 0.0
         assert ad == pytest.approx(fd, rel=2e-6, abs=1e-9)
 

@@ -44,6 +44,7 @@ from ..optics.diffractive import Binary2
 from ..optics.lens import Lens
 from ..optics.materials import Air, ModelGlass, Tabulated
 from ..optics.paraxial_surface import ParaxialSurface
+from ..optics.qtype import QTypeAsphere
 from ..optics.surfaces import EvenAsphere, Hybrid, OddAsphere, Standard, TiltedPlane
 from ..optics.toroidal import Toroidal
 from . import spots as analysis
@@ -283,7 +284,8 @@ def _num(v: float | None, width: int = 12, prec: int = 6, missing: str = "failed
 
 _ZEMAX_TYPE = {Standard: "STANDARD", EvenAsphere: "EVENASPH", OddAsphere: "ODDASPHE",
                Hybrid: "HYBRID", Toroidal: "TOROIDAL", ParaxialSurface: "PARAXIAL",
-               CoordinateBreak: "COORDBRK", TiltedPlane: "TILTSURF", Binary2: "BINARY_2"}
+               CoordinateBreak: "COORDBRK", TiltedPlane: "TILTSURF", Binary2: "BINARY_2",
+               QTypeAsphere: "QED_TYPE"}
 
 
 def _nonzero(prefix_values) -> str:
@@ -299,6 +301,9 @@ def _terms(s) -> str:
         return f"f={float(s.focal_length):.6g}"
     if isinstance(s, TiltedPlane):  # PARM 1, 2: the slopes dz/dx, dz/dy
         return _nonzero([("tan_x", s.tan_x), ("tan_y", s.tan_y)])
+    if isinstance(s, QTypeAsphere):  # Q-bfs or Q-con, normalisation radius, a_0 … a_M
+        return f"Q{s.qtype} R={float(s.norm_radius):.6g} " + _nonzero(
+            (f"a{i}", v) for i, v in enumerate(np.asarray(s.coeffs)))
     if isinstance(s, OddAsphere):  # A<i> multiplies r^i
         return _nonzero((f"A{i}", v) for i, v in enumerate(np.asarray(s.coeffs), 1))
     out = []

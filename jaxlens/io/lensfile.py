@@ -39,6 +39,7 @@ from ..optics import checks, paraxial
 from ..optics import materials as _materials
 from ..optics.lens import INFINITE_OBJECT_MM, Lens, Sensor
 from ..optics.materials import Air
+from ..optics.qtype import QTypeAsphere
 from ..optics.surfaces import AbstractSurface, EvenAsphere, Hybrid, OddAsphere, Standard
 from . import lens_keys
 from .json_values import float64_array as _arr
@@ -143,6 +144,9 @@ def _surface(d: dict, where: str, kind: str | None) -> AbstractSurface:
     if coeffs.ndim != 1:
         raise ValueError(f"{where}: even_asphere_coeffs must be a flat list")
     has_odd = "odd_x" in d or "odd_y" in d
+    qtype = _Q_TYPES.get(kind)
+    if qtype is not None or "q_coeffs" in d or "norm_radius" in d:
+        return _qtype_surface(d, where, raw, qtype, c, k, sd, coeffs.size or has_odd)
     # "oddasph", "Odd Asphere", "ODDASPHE"
     radial = "odd" in kind and "asph" in kind and "hybrid" not in kind
     if radial and (has_odd or coeffs.size):
@@ -174,13 +178,39 @@ def _surface(d: dict, where: str, kind: str | None) -> AbstractSurface:
         return EvenAsphere(c=_arr(c), k=_arr(k), coeffs=_arr(coeffs), semi_diameter=_arr(sd))
     if kind in _STANDARD_TYPES:
         return Standard(c=_arr(c), k=_arr(k), semi_diameter=_arr(sd))
-    raise ValueError(f"{where}: unknown surface type {raw!r}; use standard, evenasph, oddasph "
-                     f"or hybrid")
+    raise ValueError(f"{where}: unknown surface type {raw!r}; use standard, evenasph, oddasph, "
+                     f"hybrid, qbfs or qcon")
+
+
+_Q_TYPES = {"qbfs": "bfs", "qcon": "con"}  # the type key without case and punctuation
+
+
+def _qtype_surface(d: dict, where: str, raw: str, qtype, c, k, sd, other_terms) -> QTypeAsphere:
+    """A Forbes Q-type asphere (type "qbfs" or "qcon") from its JSON object."""
+    if qtype is None:
+        raise ValueError(f"{where}: q_coeffs and norm_radius belong to a Q-type asphere (type "
+                         f"\"qbfs\" or \"qcon\"), not to type {raw!r}")
+    if other_terms or "odd_asphere_coeffs" in d:
+        raise ValueError(f"{where}: a Q-type asphere takes its terms as q_coeffs (a_0, a_1, … "
+                         f"in mm), not even_asphere_coeffs, odd_asphere_coeffs or odd_x/odd_y")
+    if "norm_radius" not in d:
+        raise ValueError(f"{where}: a Q-type asphere needs norm_radius (the normalisation "
+                         f"radius, mm)")
+    rn = _num(d["norm_radius"], f"{where}: norm_radius")
+    if not rn > 0:
+        raise ValueError(f"{where}: norm_radius must be > 0 (mm), got {d['norm_radius']!r}")
+    a = _nums(d.get("q_coeffs", []), f"{where}: q_coeffs")
+    if a.ndim != 1:
+        raise ValueError(f"{where}: q_coeffs must be a flat list")
+    return QTypeAsphere(c=_arr(c), k=_arr(k), coeffs=_arr(a), norm_radius=_arr(rn),
+                        semi_diameter=_arr(sd), qtype=qtype)
 
 
 def surface_to_dict(s: AbstractSurface) -> dict:
     """The JSON object of a surface (without thickness and material)."""
-    if isinstance(s, Hybrid):
+    if isinstance(s, QTypeAsphere):
+        d = {"type": "q" + s.qtype}
+    elif isinstance(s, Hybrid):
         d = {"type": "hybrid"}
     elif isinstance(s, EvenAsphere):
         d = {"type": "evenasph"}
@@ -197,6 +227,9 @@ def surface_to_dict(s: AbstractSurface) -> dict:
         d["even_asphere_coeffs"] = _out(s.coeffs)
     if isinstance(s, OddAsphere):
         d["odd_asphere_coeffs"] = _out(s.coeffs)
+    if isinstance(s, QTypeAsphere):
+        d["norm_radius"] = _out(s.norm_radius)
+        d["q_coeffs"] = _out(s.coeffs)
     if isinstance(s, Hybrid):
         d["odd_x"] = _out(s.odd_x)
         d["odd_y"] = _out(s.odd_y)

@@ -23,7 +23,11 @@ What is read and written:
       ``jaxlens.optics.diffractive``: CURV, CONI and PARM 1..8 the even asphere, PARM 0 the
       diffraction order M, XDAT 1 = number of phase terms N, XDAT 2 = normalisation radius R
       (lens units), XDAT 3.. = A_1 … A_N in radians on (r/R)², (r/R)⁴, …; phase terms without
-      PARM 0, a mirror, and malformed XDAT lines are refused with the line). The image
+      PARM 0, a mirror, and malformed XDAT lines are refused with the line). ``TYPE
+      QED_TYPE`` (a Forbes Q-type asphere, ``QTypeAsphere``, ``jaxlens.optics.qtype``: CURV
+      and CONI the base conic, XDAT 1 = 0 Q-bfs or 1 Q-con, XDAT 2 = number of terms N,
+      XDAT 3 = normalisation radius, XDAT 4 … N+3 = a_0 … a_(N−1) in lens units; no PARM;
+      malformed XDAT lines are refused with the line). The image
       surface may be STANDARD, EVENASPH, ODDASPHE or TILTSURF (a tilted image plane).
     * The hybrid surface (even asphere plus odd terms Σ b_j x^{2j+1} + d_j y^{2j+1}) is
       written as Zemax's extended polynomial, ``TYPE XPOLYNOM``: a conic plus Σ A_i E_i

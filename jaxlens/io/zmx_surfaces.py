@@ -23,6 +23,12 @@ unit conversion). Every XDAT up to N+2 must be present (Zemax writes them all), 
 it may be nonzero, and PARM 0 must be given when the phase is not zero (a missing order
 reads as 0 in Zemax, which would switch the phase off). It cannot be a mirror.
 
+QED_TYPE: a Forbes Q-type asphere (``jaxlens.optics.qtype``): CURV and CONI the base conic,
+XDAT 1 the polynomial type (0: Q-bfs, 1: Q-con), XDAT 2 the number of terms N (a whole number
+>= 0), XDAT 3 the normalisation radius (lens units, > 0), XDAT 4 … XDAT N+3 the
+coefficients a_0 … a_(N−1) (lens units). Every XDAT up to N+3 must be present, none beyond
+it may be nonzero, and it has no PARM.
+
 PARAXIAL: PARM 1 is the focal length, PARM 2 the OPD mode (0: conjugates from a real
 parabasal ray, 1: integrated phase, 2: infinite conjugates, 3: conjugates from a paraxial
 ray). The rays do not depend on the mode. jaxlens's optical path is mode 2's; the others
@@ -44,6 +50,7 @@ from ..optics import paraxial
 from ..optics.diffractive import Binary2
 from ..optics.lens import Lens, Sensor
 from ..optics.paraxial_surface import ParaxialSurface
+from ..optics.qtype import QTypeAsphere
 from ..optics.surfaces import OddAsphere, TiltedPlane
 from ..optics.toroidal import Toroidal
 from .zmx_common import SENSOR_COMMENT
@@ -149,6 +156,54 @@ def toroidal(s, unit: float, sd: float) -> Toroidal:
                     cx=_arr(cx), semi_diameter=_arr(sd))
 
 
+MAX_QTYPE_TERMS = 240
+"""The most Q-type (QED_TYPE) terms jaxlens reads or writes."""
+
+_QTYPE_KINDS = {0.0: "bfs", 1.0: "con"}
+
+
+def qtype_asphere(s, unit: float, sd: float) -> QTypeAsphere:
+    """A ``QTypeAsphere`` from a QED_TYPE surface block (the reader's surface record)."""
+    where = s.type_line or s.line
+    for _, (v, ln) in sorted(s.parm.items()):
+        if v != 0:
+            raise ln.error("QED_TYPE has no parameters (PARM); its data are extra data (XDAT 1 "
+                           "= type, 2 = number of terms, 3 = normalisation radius, 4… = terms)")
+    for i, (v, ln) in sorted(s.xdat.items()):
+        if i < 1 and v != 0:
+            raise ln.error("QED_TYPE extra data start at XDAT 1 (the polynomial type)")
+    missing = [j for j in (1, 2, 3) if j not in s.xdat]
+    if missing:
+        raise where.error(f"QED_TYPE needs XDAT 1 (type: 0 Q-bfs, 1 Q-con), XDAT 2 (number of "
+                          f"terms) and XDAT 3 (normalisation radius); XDAT {missing[0]} is "
+                          f"missing")
+    kind, kind_line = s.xdat[1]
+    if kind not in _QTYPE_KINDS:
+        raise kind_line.error(f"XDAT 1 (the Q-type polynomial type) must be 0 (Q-bfs) or 1 "
+                              f"(Q-con), got {kind:g}")
+    n_val, n_line = s.xdat[2]
+    if n_val != int(n_val) or not 0 <= n_val <= MAX_QTYPE_TERMS:
+        raise n_line.error(f"XDAT 2 (the number of Q-type terms) must be a whole number in "
+                           f"0..{MAX_QTYPE_TERMS}, got {n_val:g}")
+    n = int(n_val)
+    norm, norm_line = s.xdat[3]
+    if not (norm > 0 and math.isfinite(norm)):
+        raise norm_line.error(f"XDAT 3 (the normalisation radius, lens units) must be > 0, got "
+                              f"{norm:g}")
+    gone = [j for j in range(4, n + 4) if j not in s.xdat]
+    if gone:
+        raise n_line.error(f"XDAT 2 gives {n} Q-type terms, so XDAT 4 … XDAT {n + 3} are "
+                           f"needed, but XDAT {gone[0]} is missing")
+    for i, (v, ln) in sorted(s.xdat.items()):
+        if i > n + 3 and v != 0:
+            raise ln.error(f"coefficient beyond the {n} Q-type terms of XDAT 2 (XDAT 4 … "
+                           f"XDAT {n + 3})")
+    a = [s.xdat[j + 4][0] * unit for j in range(n)]
+    return QTypeAsphere(c=_arr(s.curv / unit), k=_arr(s.coni), coeffs=_arr(np.array(a, np.float64)),
+                        norm_radius=_arr(norm * unit), semi_diameter=_arr(sd),
+                        qtype=_QTYPE_KINDS[kind])
+
+
 def paraxial_surface(s, unit: float, sd: float) -> tuple[ParaxialSurface, int | None]:
     """(``ParaxialSurface``, OPD mode or None when the file gives none) from a PARAXIAL block."""
     where = s.type_line or s.line
@@ -240,7 +295,21 @@ def surface_lines(s, z) -> list[str] | None:
         return ["TYPE PARAXIAL", 'CURV 0 0 0 0 0 ""', f"PARM 1 {z(s.focal_length)}", "PARM 2 2"]
     if isinstance(s, Binary2):
         return _binary2_lines(s, z)
+    if isinstance(s, QTypeAsphere):
+        return _qtype_lines(s, z)
     return None
+
+
+def _qtype_lines(s: QTypeAsphere, z) -> list[str]:
+    a = [float(v) for v in np.asarray(s.coeffs)]
+    if len(a) > MAX_QTYPE_TERMS:
+        raise ValueError(f"save_zmx: a QTypeAsphere has {len(a)} terms; jaxlens writes at most "
+                         f"{MAX_QTYPE_TERMS}")
+    kind = {v: k for k, v in _QTYPE_KINDS.items()}[s.qtype]
+    out = ["TYPE QED_TYPE", f'CURV {z(s.c)} 0 0 0 0 ""', f"CONI {z(s.k)}",
+           f'XDAT 1 {int(kind)} 0 0 1 0 0 ""', f'XDAT 2 {len(a)} 0 0 1 0 0 ""',
+           f'XDAT 3 {z(s.norm_radius)} 0 0 1 0 0 ""']
+    return out + [f'XDAT {i + 4} {z(v)} 0 0 1 0 0 ""' for i, v in enumerate(a)]
 
 
 def _binary2_lines(s: Binary2, z) -> list[str]:

@@ -10,9 +10,11 @@ from . import coordinates as coordinates
 from . import diffractive as diffractive
 from . import materials as materials
 from . import paraxial as paraxial
+from . import qtype as qtype
 from . import surfaces as surfaces
 from .coordinates import CoordinateBreak as CoordinateBreak
 from .diffractive import Binary2 as Binary2
 from .lens import Lens as Lens
 from .lens import Sensor as Sensor
+from .qtype import QTypeAsphere as QTypeAsphere
 from .rays import Rays as Rays

@@ -27,6 +27,7 @@ from ..optics.coordinates import CoordinateBreak
 from ..optics.diffractive import Binary2
 from ..optics.lens import Lens
 from ..optics.paraxial_surface import ParaxialSurface
+from ..optics.qtype import QTypeAsphere
 from ..optics.rays import Rays
 from ..optics.surfaces import (
     AbstractSurface,
@@ -53,10 +54,10 @@ def mirror_surface(surface: AbstractSurface) -> AbstractSurface:
 
     Args:
         surface: a ``Standard``, ``EvenAsphere``, ``OddAsphere``, ``Hybrid``, ``Toroidal``,
-            ``TiltedPlane``, ``ParaxialSurface`` or ``Binary2``.
+            ``TiltedPlane``, ``ParaxialSurface``, ``Binary2`` or ``QTypeAsphere``.
 
     Returns:
-        A surface of the same kind with c, the even, radial and odd coefficients (and a
+        A surface of the same kind with c, the even, radial, odd and Q-type coefficients (and a
         toroid's cx, a tilted plane's slopes) negated; a paraxial surface is its own mirror
         image (its optical path is then that of infinite conjugates on the image side); a
         ``Binary2`` keeps its phase (a retraced ray gets the same tangential kick, so it
@@ -87,6 +88,10 @@ def mirror_surface(surface: AbstractSurface) -> AbstractSurface:
     if isinstance(surface, Toroidal):  # z_y -> -z_y and cx -> -cx negate the whole sag
         return Toroidal(c=-surface.c, k=surface.k, coeffs=-surface.coeffs, cx=-surface.cx,
                         semi_diameter=surface.semi_diameter)
+    if isinstance(surface, QTypeAsphere):  # φ depends on c² and k: the departure negates too
+        return QTypeAsphere(c=-surface.c, k=surface.k, coeffs=-surface.coeffs,
+                            norm_radius=surface.norm_radius,
+                            semi_diameter=surface.semi_diameter, qtype=surface.qtype)
     if isinstance(surface, TiltedPlane):
         return TiltedPlane(tan_x=-surface.tan_x, tan_y=-surface.tan_y,
                            semi_diameter=surface.semi_diameter)
