@@ -13,6 +13,7 @@ from . import paraxial as paraxial
 from . import surfaces as surfaces
 from .coordinates import CoordinateBreak as CoordinateBreak
 from .diffractive import Binary2 as Binary2
+from .diffractive import Grating as Grating
 from .lens import Lens as Lens
 from .lens import Sensor as Sensor
 from .rays import Rays as Rays
