@@ -23,9 +23,11 @@ import pytest
 import jaxlens as jl
 from jaxlens.analysis import report
 from jaxlens.analysis.tolerance import ToleranceModel
+from jaxlens.design.params import Parameterization
 from jaxlens.io import lensfile
 from jaxlens.optics.lens import unclipped
-from jaxlens.tracing import backward
+from jaxlens.optics.rebase import rebase_conic
+from jaxlens.tracing import backward, forward
 
 LAM = 0.587  # µm
 DATA = os.path.join(os.path.dirname(__file__), "data", "zmx", "gratings")
@@ -363,6 +365,21 @@ def test_every_other_consumer_handles_or_refuses_it(tmp_path):
                    epd=4.0, wavelengths=jnp.array([LAM]))
     with pytest.raises(ValueError, match="ToleranceModel: surface 2 is a Grating"):
         ToleranceModel(lens)
+    with pytest.raises(ValueError, match="Grating; only Standard"):
+        forward.stacked_surfaces(lens.surfaces)
+    with pytest.raises(ValueError, match="only an EvenAsphere can be rebased, got a Grating"):
+        rebase_conic(g)
+    template = eqx.tree_at(lambda m: m.surfaces[0], lens,
+                           jl.EvenAsphere(c=0.02, coeffs=jnp.zeros(3)))
+    with pytest.raises(ValueError, match=r"surfaces\[1\] is a Grating"):
+        Parameterization(template=template, r_norm=jnp.ones(2), total_track=40.0,
+                         optical=(0, 1))
+    with pytest.raises(ValueError, match="Grating"):
+        jl.save(lens, tmp_path / "g.json")
+    mirror = jl.Lens((jl.Plane(), g), jnp.array([5.0, -20.0]), (jl.Air(), jl.Air()), epd=2.0,
+                     mirrors=(1,), wavelengths=jnp.array([LAM]))
+    out = jl.trace(mirror, jl.Rays(jnp.zeros((1, 3)), jnp.array([[0.0, 0.0, 1.0]]), LAM))
+    assert bool(out.valid[0]) and float(out.direction[0, 2]) < 0
     with pytest.raises(ValueError, match="a Grating surface has no jaxlens JSON form yet; "
                                          "save the lens as .zmx"):
         lensfile.surface_to_dict(g)

@@ -23,7 +23,11 @@ What is read and written:
       ``jaxlens.optics.diffractive``: CURV, CONI and PARM 1..8 the even asphere, PARM 0 the
       diffraction order M, XDAT 1 = number of phase terms N, XDAT 2 = normalisation radius R
       (lens units), XDAT 3.. = A_1 … A_N in radians on (r/R)², (r/R)⁴, …; phase terms without
-      PARM 0, a mirror, and malformed XDAT lines are refused with the line). The image
+      PARM 0, a mirror, and malformed XDAT lines are refused with the line). ``TYPE
+      DGRATING`` (a ``Grating``, ``jaxlens.optics.diffractive``: CURV, CONI the base conic,
+      PARM 1 = line density T in lines per µm whatever the lens unit, PARM 2 = the whole
+      diffraction order M, positive toward +y; transmissive, or reflective with GLAS MIRROR;
+      a negative T, a fractional M, other PARMs or any XDAT refused with the line). The image
       surface may be STANDARD, EVENASPH, ODDASPHE or TILTSURF (a tilted image plane).
     * The hybrid surface (even asphere plus odd terms Σ b_j x^{2j+1} + d_j y^{2j+1}) is
       written as Zemax's extended polynomial, ``TYPE XPOLYNOM``: a conic plus Σ A_i E_i
