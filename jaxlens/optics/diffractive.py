@@ -60,15 +60,18 @@ Grating:
     = T, PARM 2 = M). Evidence (tests/test_grating.py): the direction cosines that optiland's
     tests quote to 10 decimals for a skew ray through its flat and curved transmission
     gratings are reproduced to 1e-10, which the projected spacing does and optiland 0.6.3's
-    own kernel (local spacing Λ/|f_xy|) does not (3.5e-7 off on the curved one). At a mirror the same holds with n′ = n and the normal
-    component reversed (the reflected order obeys sin θ′ = sin θ + M λ/Λ with θ′ measured
-    from the reflected axis −z, i.e. its tangential component gains M λ T/n). A grating
+    own kernel (local spacing Λ/|f_xy|) does not (3.5e-7 off on the curved one); optiland's
+    intercepts with the order's sign flipped are millimetres away. At a mirror the same
+    holds with n′ = n and the normal component reversed (the reflected order obeys
+    n sin θ′ = n sin θ + M λ/Λ with θ′ measured from the reflected axis −z toward +y: its
+    tangential component gains M λ T/n). A grating
     has no paraxial power of its own (its power is the base conic's, c(n′ − n), or −2nc as
     a mirror); it deflects the chief ray by M λ T, which the y–nu trace cannot hold, so
     paraxial data (EFL, BFL, …) are those of the lens with the grating's lines removed (its
     order-0 system), see ``jaxlens.optics.paraxial``. Its order must be a whole number and
     its line density ≥ 0 (0: no lines).
 """
+
 from __future__ import annotations
 
 import jax.numpy as jnp

@@ -461,7 +461,7 @@ def surface_step(surface, z_vertex, st: RayState, n_before, n_after, *, first, r
     ``Grating``) surface only, which adds (λ/2π)Φ to ``opl``; other surfaces ignore it. A
     ``Grating`` may be a mirror (it then reflects the diffracted order); a ``Binary2`` may not.
     """
-    if isinstance(surface, DIFFRACTIVE) and refracts:  # static, refused before tracing
+    if isinstance(surface, DIFFRACTIVE) and (refracts or reflects):  # static, refused early
         kind = type(surface).__name__
         if reflects and not isinstance(surface, Grating):
             raise ValueError(f"surface_step: a {kind} (diffractive) surface cannot be a mirror")
