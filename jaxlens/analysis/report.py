@@ -40,7 +40,7 @@ from ..io.files import load
 from ..io.lensfile import nm_to_um
 from ..optics import checks, paraxial
 from ..optics.coordinates import CoordinateBreak
-from ..optics.diffractive import Binary2
+from ..optics.diffractive import Binary2, Grating
 from ..optics.lens import Lens
 from ..optics.materials import Air, ModelGlass, Tabulated
 from ..optics.paraxial_surface import ParaxialSurface
@@ -285,7 +285,7 @@ def _num(v: float | None, width: int = 12, prec: int = 6, missing: str = "failed
 _ZEMAX_TYPE = {Standard: "STANDARD", EvenAsphere: "EVENASPH", OddAsphere: "ODDASPHE",
                Hybrid: "HYBRID", Toroidal: "TOROIDAL", ParaxialSurface: "PARAXIAL",
                CoordinateBreak: "COORDBRK", TiltedPlane: "TILTSURF", Binary2: "BINARY_2",
-               QTypeAsphere: "QED_TYPE"}
+               QTypeAsphere: "QED_TYPE", Grating: "DGRATING"}
 
 
 def _nonzero(prefix_values) -> str:
@@ -299,6 +299,8 @@ def _terms(s) -> str:
                          ("ty", s.tilt_y), ("tz", s.tilt_z)]) + (" order=1" if s.order else "")
     if isinstance(s, ParaxialSurface):
         return f"f={float(s.focal_length):.6g}"
+    if isinstance(s, Grating):  # PARM 1, 2: lines per µm, order
+        return f"T={float(s.lines_per_um):.6g}/um M={float(s.order):.4g}"
     if isinstance(s, TiltedPlane):  # PARM 1, 2: the slopes dz/dx, dz/dy
         return _nonzero([("tan_x", s.tan_x), ("tan_y", s.tan_y)])
     if isinstance(s, QTypeAsphere):  # Q-bfs or Q-con, normalisation radius, a_0 … a_M

@@ -64,7 +64,7 @@ from jaxtyping import Array, Float
 
 from ..imaging.sampling import field_xy, pupil_grid
 from ..optics import checks, paraxial
-from ..optics.diffractive import Binary2
+from ..optics.diffractive import DIFFRACTIVE
 from ..optics.lens import Lens
 from ..optics.materials import LAMBDA_D, AbstractMaterial, Air, abbe_number
 from ..optics.paraxial_surface import ParaxialSurface
@@ -180,7 +180,7 @@ class Perturbation(eqx.Module):
 
 def _refuse_surfaces(lens: Lens, where: str) -> None:
     """Refuse odd aspheres: their β_i r^i terms would stay untoleranced without a word (so
-    would a diffractive ``Binary2``'s phase);
+    would a diffractive ``Binary2``'s phase or a ``Grating``'s lines);
     paraxial surfaces, which have no shape to perturb (perturbing them failed deep in JAX). And
     tilted planes (on the image too): they break the rotational symmetry that the field
     folding and the back-focus compensator assume, and their c and k are fixed."""
@@ -190,10 +190,10 @@ def _refuse_surfaces(lens: Lens, where: str) -> None:
             raise ValueError(f"{where}: {name} is a ParaxialSurface (an ideal thin lens): it "
                              f"has no radius, conic or aspheric terms to perturb, so tolerance "
                              f"analysis does not support it")
-        if isinstance(s, Binary2):
-            raise ValueError(f"{where}: {name} is a Binary2 (diffractive) surface; tolerance "
-                             f"analysis perturbs shapes and glasses only, and would leave its "
-                             f"phase untoleranced, so it does not support it")
+        if isinstance(s, DIFFRACTIVE):
+            raise ValueError(f"{where}: {name} is a {type(s).__name__} (diffractive) surface; "
+                             f"tolerance analysis perturbs shapes and glasses only, and would "
+                             f"leave its phase untoleranced, so it does not support it")
         if isinstance(s, TiltedPlane):
             raise ValueError(f"{where}: {name} is a TiltedPlane; tolerance analysis assumes "
                              f"a rotationally symmetric lens and a flat image normal to the "

@@ -27,7 +27,11 @@ What is read and written:
       QED_TYPE`` (a Forbes Q-type asphere, ``QTypeAsphere``, ``jaxlens.optics.qtype``: CURV
       and CONI the base conic, XDAT 1 = 0 Q-bfs or 1 Q-con, XDAT 2 = number of terms N,
       XDAT 3 = normalisation radius, XDAT 4 … N+3 = a_0 … a_(N−1) in lens units; no PARM;
-      malformed XDAT lines are refused with the line). The image
+      malformed XDAT lines are refused with the line); ``TYPE
+      DGRATING`` (a ``Grating``, ``jaxlens.optics.diffractive``: CURV, CONI the base conic,
+      PARM 1 = line density T in lines per µm whatever the lens unit, PARM 2 = the whole
+      diffraction order M, positive toward +y; transmissive, or reflective with GLAS MIRROR;
+      a negative T, a fractional M, other PARMs or any XDAT refused with the line). The image
       surface may be STANDARD, EVENASPH, ODDASPHE or TILTSURF (a tilted image plane).
     * The hybrid surface (even asphere plus odd terms Σ b_j x^{2j+1} + d_j y^{2j+1}) is
       written as Zemax's extended polynomial, ``TYPE XPOLYNOM``: a conic plus Σ A_i E_i

@@ -141,6 +141,8 @@ def _surface_of(s: ZmxSurface, unit: float) -> AbstractSurface:
         return zmx_surfaces.tilted_plane(s, sd)
     if s.type == "BINARY_2":
         return zmx_surfaces.binary2(s, unit, sd)
+    if s.type == "DGRATING":
+        return zmx_surfaces.grating(s, sd, unit)
     if s.type == "XPOLYNOM":
         return _hybrid_from_xpoly(s, unit, c, sd)
     if s.type == "TOROIDAL":
@@ -153,7 +155,8 @@ def _surface_of(s: ZmxSurface, unit: float) -> AbstractSurface:
         return _coordinate_break(s, unit)
     raise where.error(
         f"surface type {s.type} is not supported (STANDARD, EVENASPH, ODDASPHE, XASPHERE, "
-        f"XOSPHERE, XPOLYNOM, TOROIDAL, PARAXIAL, TILTSURF, BINARY_2, QED_TYPE, COORDBRK)"
+        f"XOSPHERE, XPOLYNOM, TOROIDAL, PARAXIAL, TILTSURF, BINARY_2, QED_TYPE, DGRATING, "
+        f"COORDBRK)"
     )
 
 

@@ -28,6 +28,12 @@ XDAT 1 the polynomial type (0: Q-bfs, 1: Q-con), XDAT 2 the number of terms N (a
 >= 0), XDAT 3 the normalisation radius (lens units, > 0), XDAT 4 … XDAT N+3 the
 coefficients a_0 … a_(N−1) (lens units). Every XDAT up to N+3 must be present, none beyond
 it may be nonzero, and it has no PARM.
+DGRATING: a conic (CURV, CONI) ruled with lines parallel to the local x axis
+(``jaxlens.optics.diffractive.Grating``): PARM 1 the line density T in lines per µm (whatever
+the lens units: no unit conversion; >= 0, equally spaced in the projection on the x–y plane),
+PARM 2 the diffraction order M (a whole number; positive bends rays toward +y). A missing
+PARM reads as 0 (as in Zemax: no lines, or order 0). It may be a mirror (``GLAS MIRROR``: a
+reflective grating). No other PARM and no XDAT.
 
 PARAXIAL: PARM 1 is the focal length, PARM 2 the OPD mode (0: conjugates from a real
 parabasal ray, 1: integrated phase, 2: infinite conjugates, 3: conjugates from a paraxial
@@ -47,7 +53,7 @@ import jax.numpy as jnp
 import numpy as np
 
 from ..optics import paraxial
-from ..optics.diffractive import Binary2
+from ..optics.diffractive import Binary2, Grating
 from ..optics.lens import Lens, Sensor
 from ..optics.paraxial_surface import ParaxialSurface
 from ..optics.qtype import QTypeAsphere
@@ -140,6 +146,25 @@ def binary2(s, unit: float, sd: float) -> Binary2:
     return Binary2(c=_arr(s.curv / unit), k=_arr(s.coni), coeffs=_arr(np.array(a, np.float64)),
                    order=_arr(order), norm_radius=_arr(norm * unit if norm > 0 else 1.0),
                    phase_coeffs=_arr(np.array(a_phase, np.float64)), semi_diameter=_arr(sd))
+
+
+def grating(s, sd: float, unit: float) -> Grating:
+    """A ``Grating`` from a DGRATING surface block (the reader's surface record): PARM 1 the
+    line density (lines/µm, not scaled by the lens unit), PARM 2 the order."""
+    _parms(s, range(1, 3), "DGRATING (PARM 1 = lines per µm, PARM 2 = diffraction order)")
+    for _, (v, ln) in sorted(s.xdat.items()):
+        if v != 0:
+            raise ln.error("DGRATING has no extra data (XDAT)")
+    density, d_line = s.parm.get(1, (0.0, None))
+    if density < 0:
+        raise d_line.error(f"PARM 1 (the grating's line density, lines per µm) must be >= 0, "
+                           f"got {density:g}")
+    order, o_line = s.parm.get(2, (0.0, None))
+    if order != round(order):
+        raise o_line.error(f"PARM 2 (the grating's diffraction order) must be a whole number, "
+                           f"got {order:g}")
+    return Grating(c=_arr(s.curv / unit), k=_arr(s.coni), lines_per_um=_arr(density),
+                   order=_arr(order), semi_diameter=_arr(sd))
 
 
 def toroidal(s, unit: float, sd: float) -> Toroidal:
@@ -281,8 +306,8 @@ def curvature_of_rotation(token: str, unit: float) -> float:
 
 
 def surface_lines(s, z) -> list[str] | None:
-    """The TYPE/CURV/CONI/PARM (and XDAT) lines of a ``Toroidal``, ``ParaxialSurface`` or
-    ``Binary2`` (None for other kinds); ``z`` formats a number exactly."""
+    """The TYPE/CURV/CONI/PARM (and XDAT) lines of a ``Toroidal``, ``ParaxialSurface``,
+    ``Binary2`` or ``Grating`` (None for other kinds); ``z`` formats a number exactly."""
     if isinstance(s, Toroidal):
         a = [float(v) for v in np.asarray(s.coeffs)]
         if len(a) > 8:
@@ -297,6 +322,9 @@ def surface_lines(s, z) -> list[str] | None:
         return _binary2_lines(s, z)
     if isinstance(s, QTypeAsphere):
         return _qtype_lines(s, z)
+    if isinstance(s, Grating):
+        return ["TYPE DGRATING", f'CURV {z(s.c)} 0 0 0 0 ""', f"CONI {z(s.k)}",
+                f"PARM 1 {z(s.lines_per_um)}", f"PARM 2 {z(s.order)}"]
     return None
 
 

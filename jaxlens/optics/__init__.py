@@ -14,6 +14,7 @@ from . import qtype as qtype
 from . import surfaces as surfaces
 from .coordinates import CoordinateBreak as CoordinateBreak
 from .diffractive import Binary2 as Binary2
+from .diffractive import Grating as Grating
 from .lens import Lens as Lens
 from .lens import Sensor as Sensor
 from .qtype import QTypeAsphere as QTypeAsphere

@@ -26,7 +26,12 @@ Conventions:
 
     A ``ParaxialSurface`` (ideal thin lens) has power 1/f whatever its media. A ``Binary2``
     (diffractive) surface adds its phase's power −M λ A_1/(π R²) to its base's, whatever its
-    media and proportional to the wavelength (``jaxlens.optics.diffractive``). A lens with a
+    media and proportional to the wavelength (``jaxlens.optics.diffractive``). A ``Grating``
+    (Zemax DGRATING) has its base conic's power only (c(n′ − n), or −2nc as a mirror): its
+    lines deflect every ray by the same M λ T, a constant the linear y–nu trace cannot hold,
+    so the paraxial data of a lens with a grating are those of its order-0 system (the
+    grating's lines removed; optiland's EFL of its three sample gratings is the same); the
+    real rays see the lines. A lens with a
     ``Toroidal`` surface has no single paraxial trace: everything here is its y–z section
     (as in Zemax, whose paraxial data are y–z), and ``x_section(lens)`` is the lens as
     its x–z section sees it, so ``paraxial_data(x_section(lens))`` is the x–z data.

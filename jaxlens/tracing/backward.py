@@ -24,7 +24,7 @@ from __future__ import annotations
 import jax.numpy as jnp
 
 from ..optics.coordinates import CoordinateBreak
-from ..optics.diffractive import Binary2
+from ..optics.diffractive import Binary2, Grating
 from ..optics.lens import Lens
 from ..optics.paraxial_surface import ParaxialSurface
 from ..optics.qtype import QTypeAsphere
@@ -54,14 +54,15 @@ def mirror_surface(surface: AbstractSurface) -> AbstractSurface:
 
     Args:
         surface: a ``Standard``, ``EvenAsphere``, ``OddAsphere``, ``Hybrid``, ``Toroidal``,
-            ``TiltedPlane``, ``ParaxialSurface``, ``Binary2`` or ``QTypeAsphere``.
+            ``TiltedPlane``, ``ParaxialSurface``, ``Binary2``, ``QTypeAsphere`` or ``Grating``.
 
     Returns:
         A surface of the same kind with c, the even, radial, odd and Q-type coefficients (and a
         toroid's cx, a tilted plane's slopes) negated; a paraxial surface is its own mirror
         image (its optical path is then that of infinite conjugates on the image side); a
         ``Binary2`` keeps its phase (a retraced ray gets the same tangential kick, so it
-        retraces the forward ray and its optical path gains the same (λ/2π)Φ).
+        retraces the forward ray and its optical path gains the same (λ/2π)Φ), and so does a
+        ``Grating`` (same lines and order).
 
     Raises:
         ValueError: for a surface kind that this module does not know how to mirror.
@@ -101,6 +102,9 @@ def mirror_surface(surface: AbstractSurface) -> AbstractSurface:
         return Binary2(c=-surface.c, k=surface.k, coeffs=-surface.coeffs, order=surface.order,
                        norm_radius=surface.norm_radius, phase_coeffs=surface.phase_coeffs,
                        semi_diameter=surface.semi_diameter)
+    if isinstance(surface, Grating):  # as Binary2: the same phase, so the same order
+        return Grating(c=-surface.c, k=surface.k, lines_per_um=surface.lines_per_um,
+                       order=surface.order, semi_diameter=surface.semi_diameter)
     if isinstance(surface, ParaxialSurface):
         # n′u′ = nu − x/f read backward (slopes negated, media swapped) is the same law.
         return surface

@@ -2,7 +2,9 @@
 validity and optical path.
 
 Every trace (forward, backward from the sensor, the design loss) moves rays with
-``surface_step``; it is the only place in jaxlens that refracts or reflects.
+``surface_step``; it is the only place in jaxlens that refracts, reflects or diffracts
+(``refract_diffract``: the local grating equation of the diffractive surfaces, ``Binary2``
+and ``Grating``, in transmission and, for a ``Grating`` mirror, in reflection).
 
 Conventions:
     Global coordinates in mm, light toward +z, surface 1's vertex at z = 0 (see
@@ -53,7 +55,7 @@ import jax
 import jax.numpy as jnp
 
 from ..optics.apertures import passes_all
-from ..optics.diffractive import Binary2
+from ..optics.diffractive import DIFFRACTIVE, Grating
 from ..optics.paraxial_surface import ParaxialSurface
 from ..optics.rays import Rays
 from ..optics.surfaces import AbstractSurface
@@ -302,19 +304,23 @@ def refract(d, normal, mu):
     return out, ok
 
 
-def refract_diffract(d, normal, mu, kick):
-    """The local grating equation: refraction with a tangential kick (``Binary2``).
+def refract_diffract(d, normal, mu, kick, *, reflects=False):
+    """The local grating equation: refraction (or reflection) with a tangential kick.
 
     The outgoing direction is a + g·normal with a = mu·d + kick, the gain g chosen so that it
-    has unit length and stays on the side of the surface that d travels to. Only the part of
+    has unit length and lies on the side of the surface that d travels to (transmission) or,
+    with ``reflects`` (static), on the side d comes from (reflection: pass mu = 1 and the
+    kick divided by the incident index). The two roots of |a + g·normal| = 1 are the
+    transmitted and the reflected wave of the same tangential component. Only the part of
     ``kick`` tangent to the surface matters: a normal part is absorbed by g. With kick = 0
-    this is ``refract`` (same roots, evaluated without assuming |a| = 1).
+    this is ``refract`` (same roots, evaluated without assuming |a| = 1), or ``reflect``.
 
     Args:
         d: unit incident directions, an (x, y, z) tuple of arrays.
         normal: surface normals of any length and either orientation.
-        mu: n_before / n_after.
+        mu: n_before / n_after (1 when ``reflects``).
         kick: (λ/2π)∇Φ / n_after, an (x, y, z) tuple (dimensionless).
+        reflects: take the reflected root (a diffracting mirror).
 
     Returns:
         (outgoing unit directions, ok) with ok False where no real direction exists (an
@@ -330,20 +336,26 @@ def refract_diffract(d, normal, mu, kick):
     ok = (disc >= 0) & (nn > 0)
     above = ok & (disc > 0)  # the root's slope is infinite at disc = 0 (as in refraction_gain)
     root = jnp.where(above, jnp.sqrt(jnp.where(above, disc, 1.0)), 0.0)
-    g = jnp.where(ok, jnp.where(dn < 0, -root, root) - an, 0.0) / jnp.where(ok, nn, 1.0)
+    # d′·normal = an + g·nn = ±root: the sign of d·normal (transmitted), or the other one.
+    onward = (dn >= 0) if reflects else (dn < 0)
+    g = jnp.where(ok, jnp.where(onward, -root, root) - an, 0.0) / jnp.where(ok, nn, 1.0)
     out = tuple(jnp.where(ok, ai + g * ni, di) for ai, ni, di in zip(a, normal, d, strict=True))
     return out, ok
 
 
-def diffract(surface: Binary2, d, p, n_before, n_after, wavelength):
-    """A ``Binary2`` surface's ray rule: ``refract_diffract`` with its phase, and the path.
+def diffract(surface, d, p, n_before, n_after, wavelength, *, reflects=False):
+    """A diffractive surface's ray rule (``Binary2``, ``Grating``): ``refract_diffract``
+    with its phase, and the path.
 
     Args:
-        surface: the diffractive surface.
+        surface: the diffractive surface (any of ``optics.diffractive.DIFFRACTIVE``: a
+            surface with ``phase(x, y)`` returning Φ, ∂Φ/∂x, ∂Φ/∂y).
         d: unit directions, an (x, y, z) tuple of arrays.
         p: the points of incidence (local frame, mm), an (x, y, z) tuple.
-        n_before, n_after: refractive indices n and n′.
+        n_before, n_after: refractive indices n and n′ (``n_after`` unused when
+            ``reflects``: the ray stays in n).
         wavelength: λ in µm (a scalar or one per ray, shaped like the indices).
+        reflects: the surface is a mirror (static): the diffracted ray is reflected.
 
     Returns:
         (new unit directions, ok, added optical path (λ/2π)Φ in mm).
@@ -351,8 +363,10 @@ def diffract(surface: Binary2, d, p, n_before, n_after, wavelength):
     x, y, z = p
     phi, px, py = surface.phase(x, y)
     scale = wavelength * 1e-3 / (2.0 * jnp.pi)  # µm -> mm, per radian
-    kick = (scale * px / n_after, scale * py / n_after, jnp.zeros_like(px))
-    out, ok = refract_diffract(d, surface_normal(surface, x, y, z), n_before / n_after, kick)
+    n_out = n_before if reflects else n_after
+    kick = (scale * px / n_out, scale * py / n_out, jnp.zeros_like(px))
+    out, ok = refract_diffract(d, surface_normal(surface, x, y, z), n_before / n_out, kick,
+                               reflects=reflects)
     return out, ok, scale * phi
 
 
@@ -443,15 +457,17 @@ def surface_step(surface, z_vertex, st: RayState, n_before, n_after, *, first, r
     (or zero, for a dummy surface) the surface may lie behind the ray's start and the ray
     reaches it by going back along its line; it is measured along the direction of travel
     (after an odd number of mirrors the caller passes minus the Zemax thickness).
-    ``wavelength`` (µm, shaped like the indices) is needed by a diffractive (``Binary2``)
-    surface only, which adds (λ/2π)Φ to ``opl``; other surfaces ignore it.
+    ``wavelength`` (µm, shaped like the indices) is needed by a diffractive (``Binary2``,
+    ``Grating``) surface only, which adds (λ/2π)Φ to ``opl``; other surfaces ignore it. A
+    ``Grating`` may be a mirror (it then reflects the diffracted order); a ``Binary2`` may not.
     """
-    if isinstance(surface, Binary2) and refracts:  # static structure, refused before tracing
-        if reflects:
-            raise ValueError("surface_step: a Binary2 (diffractive) surface cannot be a mirror")
+    if isinstance(surface, DIFFRACTIVE) and (refracts or reflects):  # static, refused early
+        kind = type(surface).__name__
+        if reflects and not isinstance(surface, Grating):
+            raise ValueError(f"surface_step: a {kind} (diffractive) surface cannot be a mirror")
         if wavelength is None:
-            raise ValueError("surface_step: a Binary2 (diffractive) surface needs the "
-                             "wavelength (µm) of the rays")
+            raise ValueError(f"surface_step: a {kind} (diffractive) surface needs the "
+                             f"wavelength (µm) of the rays")
     o_local = (st.p[0], st.p[1], st.p[2] - z_vertex)
     backward = None
     if gap is not None and not first:
@@ -474,12 +490,16 @@ def surface_step(surface, z_vertex, st: RayState, n_before, n_after, *, first, r
         ok = ok & ((r2 < obscured[0] ** 2) | (r2 > obscured[1] ** 2))
     ok = passes_all(apertures, x, y, ok)
     d, phase = st.d, None
-    if reflects:
+    if reflects and isinstance(surface, Grating):  # static: a diffracting mirror
+        d, bent, phase = diffract(surface, d, (x, y, z), n_before, n_after, wavelength,
+                                  reflects=True)
+        ok = ok & bent
+    elif reflects:
         d = reflect(d, surface_normal(surface, x, y, z))
     elif refracts and isinstance(surface, ParaxialSurface):  # static: the ideal thin lens
         d, bent, phase = paraxial_bend(d, x, y, surface.focal_length, n_before, n_after)
         ok = ok & bent
-    elif refracts and isinstance(surface, Binary2):  # static: the diffractive surface
+    elif refracts and isinstance(surface, DIFFRACTIVE):  # static: a diffractive surface
         d, bent, phase = diffract(surface, d, (x, y, z), n_before, n_after, wavelength)
         ok = ok & bent
     elif refracts:
