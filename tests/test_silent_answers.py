@@ -75,3 +75,28 @@ def test_parabolic_mirror_as_surface_one_traces_like_behind_a_dummy_plane():
                                analysis.chief_ray(behind, 1.0).origin[1], rtol=0, atol=1e-9)
     np.testing.assert_allclose(analysis.rms_spot(alone).polychromatic,
                                analysis.rms_spot(behind).polychromatic, rtol=1e-9, atol=1e-12)
+
+
+# ------------------------------------------ f-tanθ distortion with an object in a medium
+def test_an_ideal_lens_behind_water_has_no_ftan_distortion():
+    """A field angle is measured in object space, where a distortion-free lens of EFL f (1/Φ)
+    images a collimated beam at n·f·tanθ (its front focal length times tanθ). With the
+    object in water (n = 1.333) an ideal thin lens, whose image is exactly that, showed
+    ``percent_ftan`` 33.3 % at every field (against f·tanθ); now 0, as ``percent_paraxial``
+    always was."""
+    water = jl.ModelGlass(1.333, 55.0)
+    lens = jl.Lens(surfaces=(ParaxialSurface(50.0),), thickness=jnp.array([50.0]),
+                   materials=(jl.Air(),), epd=5.0, fields=jnp.array([0.0, 10.0, 20.0]),
+                   object_material=water)
+    d = analysis.distortion(lens)
+    n = float(water.index(lens.primary_wavelength))
+    np.testing.assert_allclose(d.f_tan, n * 50.0 * np.tan(np.radians([0.0, 10.0, 20.0])),
+                               rtol=1e-12)
+    np.testing.assert_allclose(d.chief_height, d.f_tan, rtol=1e-12)
+    np.testing.assert_allclose(d.percent_ftan, 0.0, atol=1e-10)
+    np.testing.assert_allclose(d.percent_paraxial, 0.0, atol=1e-10)
+    # In air nothing changes: f·tanθ.
+    air = jl.Lens(surfaces=lens.surfaces, thickness=lens.thickness, materials=lens.materials,
+                  epd=5.0, fields=lens.fields)
+    np.testing.assert_allclose(analysis.distortion(air).f_tan,
+                               50.0 * np.tan(np.radians([0.0, 10.0, 20.0])), rtol=1e-12)
