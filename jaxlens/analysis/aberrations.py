@@ -15,9 +15,10 @@ Conventions (those of Zemax and optiland):
 
     Field curvature: for each field and wavelength, where the rays next to the chief ray
     cross it, in the y–z plane (tangential focus) and in the x–z plane (sagittal focus),
-    given as the z distance from the chief ray's intercept with the image surface, measured
-    in the direction of travel (negative: before it, toward the lens; also where light
-    leaves a mirror toward −z). A field (θx, θy) has its tangential plane along its
+    given as the z distance from the chief ray's intercept with the image surface, along +z
+    as in Zemax and optiland (negative: toward −z; that is before the image surface, toward
+    the lens, where light travels toward +z, and beyond it where light leaves an odd number
+    of mirrors toward −z). A field (θx, θy) has its tangential plane along its
     azimuth a = (tan θx, tan θy)/|…| (the meridional plane of a rotationally symmetric lens):
     the tangential neighbours leave the pupil along a and are met in the plane of a and z,
     the sagittal ones along a⊥ = (a_y, −a_x); on axis a = (0, 1), so a θy field and the field
@@ -27,7 +28,7 @@ Conventions (those of Zemax and optiland):
     P the chief ray's intercept, D its direction and dP, dD their derivatives, the neighbour
     meets the chief ray at P + s·D with s = −(dP × D)/(dD × D) (the 2-D cross product in the
     plane of e and z, e the plane's unit vector in x, y: u × v = (u·e) v_z − u_z (v·e)), and
-    the focus is s·|D_z| from the image surface. Astigmatism is tangential −
+    the focus is s·D_z from the image surface. Astigmatism is tangential −
     sagittal. A focus at infinity (image space afocal for that fan) is ±inf; a field whose
     chief ray does not reach the image is NaN.
 """
@@ -222,9 +223,7 @@ def _field_curvature(lens, fields, wl, *, depth, aim) -> FieldCurvature:
             num = -_cross(dp[row], d[row], e)
             den = _cross(dd[row], d[row], e)
             s = jnp.where(den != 0, num / jnp.where(den != 0, den, 1.0), jnp.inf * jnp.sign(num))
-            # Along z in the direction of travel (|D_z|): light leaving a mirror toward −z
-            # has its focus before the image at s < 0 too (s·D_z flipped its sign).
-            foci.append(jnp.where(v[row], s * jnp.abs(d[row, 2]), jnp.nan))
+            foci.append(jnp.where(v[row], s * d[row, 2], jnp.nan))
         return foci[0], foci[1]
 
     tan, sag = jax.vmap(lambda w: jax.vmap(lambda f: one(f, w))(fields))(wl)
