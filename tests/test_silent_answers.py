@@ -102,3 +102,37 @@ def test_an_ideal_lens_behind_water_has_no_ftan_distortion():
                   epd=5.0, fields=lens.fields)
     np.testing.assert_allclose(analysis.distortion(air).f_tan,
                                50.0 * np.tan(np.radians([0.0, 10.0, 20.0])), rtol=1e-12)
+
+
+# -------------------------------------- mtf at a depth: the working F-number of that object
+def test_mtf_at_a_depth_uses_the_working_fnumber_of_that_object():
+    """An ideal lens (f = 50 mm, EPD 10 mm) with its image plane 100 mm behind it images an
+    object 100 mm in front at 1:1, working F/10. ``mtf(lens, depth=100)`` of the lens made
+    for infinity multiplied the (perfect) geometric MTF by the diffraction MTF at F/5, the
+    working F-number of its own object: 0.814 instead of 0.631 at 50 cycles/mm, 0.458
+    instead of 0.048 at 150, and its default frequencies ran to twice the cut-off. The same
+    lens with its own object at 100 mm gave the right values; the two now agree."""
+    from jaxlens.imaging.psf import GeometricPSF, mtf
+
+    def lens(obj):
+        return jl.Lens(surfaces=(ParaxialSurface(50.0),), thickness=jnp.array([100.0]),
+                       materials=(jl.Air(),), epd=10.0, object_distance=obj)
+
+    freqs = jnp.array([0.0, 50.0, 100.0, 150.0])
+    model = GeometricPSF(pupil=16)
+    own = mtf(lens(100.0), 0.0, frequencies=freqs, model=model)
+    given = mtf(lens(None), 0.0, frequencies=freqs, model=model, depth=100.0)
+    s = np.asarray(freqs) * 0.5875618e-3 * 10.0  # ν·λ·F#, working F/10
+    ideal = 2 / np.pi * (np.arccos(s) - s * np.sqrt(1 - s * s))
+    for _, t, sag in (own, given):
+        np.testing.assert_allclose(t, ideal, rtol=0, atol=1e-9)
+        np.testing.assert_allclose(sag, ideal, rtol=0, atol=1e-9)
+    # Default frequencies: 0 to the cut-off 1/(λ·F#) of the working F-number.
+    top = 1 / (0.5875618e-3 * 10.0)
+    assert float(mtf(lens(None), 0.0, model=model, depth=100.0)[0][-1]) == pytest.approx(top)
+    # And the other way: a lens made for 100 mm, asked about infinity, is at F/5.
+    inf = mtf(lens(100.0), 0.0, frequencies=freqs, model=model, depth=float("inf"),
+              diffraction=True)
+    assert float(inf[1][1]) < 1.0  # defocused (its image of infinity is at 50 mm)
+    assert float(mtf(lens(100.0), 0.0, model=model, depth=float("inf"))[0][-1]) == \
+        pytest.approx(2 * top)
