@@ -166,7 +166,8 @@ def rms_spot(
         wavelengths: µm, ``[W]``; default ``lens.wavelengths``.
         pupil: ``[M, 2]`` unit-pupil points; default the 21×21 grid (317 rays).
         reference: "centroid" or "chief" (primary-wavelength chief ray).
-        depth: object distance in mm, or None for the lens's object (infinity).
+        depth: object distance in mm (``inf`` for infinity), or None for the lens's own
+            object (``lens.object_distance``; infinity where it has none).
 
     Returns:
         An ``RmsSpot``. Only valid rays count; ``valid_fraction`` says how many those were.
