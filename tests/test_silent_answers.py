@@ -136,3 +136,23 @@ def test_mtf_at_a_depth_uses_the_working_fnumber_of_that_object():
     assert float(inf[1][1]) < 1.0  # defocused (its image of infinity is at 50 mm)
     assert float(mtf(lens(100.0), 0.0, model=model, depth=float("inf"))[0][-1]) == \
         pytest.approx(2 * top)
+
+
+# ------------------------------------------ a depth traced by jit, with a closed-over lens
+def test_a_jitted_function_of_depth_over_a_closed_over_lens():
+    """``jax.jit(lambda d: rms_spot(lens, depth=d))`` with a concrete lens closed over: the
+    material check evaluated the lens's indices inside the trace and raised a
+    TracerArrayConversionError (valid input refused). Once past that, a traced depth could
+    not be checked: inf gave NaN radii where eager calls trace the collimated beam, and −5 mm
+    gave 17.6 mm radii where eager calls refuse it. Now the finite depth gives the eager
+    answer and the others raise at run time, naming the range and unit."""
+    import equinox as eqx
+
+    lens = jl.zoo.cooke_triplet()
+    spot = eqx.filter_jit(lambda d: analysis.rms_spot(lens, depth=d).polychromatic)
+    np.testing.assert_allclose(spot(jnp.asarray(1e4)),
+                               analysis.rms_spot(lens, depth=1e4).polychromatic, rtol=1e-12)
+    for bad in (jnp.inf, -5.0, jnp.nan):
+        with pytest.raises(Exception, match=r"rms_spot: a traced depth must be finite and in "
+                                            r"\(0, inf\) mm"):
+            spot(jnp.asarray(bad))
