@@ -15,8 +15,10 @@ Conventions (those of Zemax and optiland):
 
     Field curvature: for each field and wavelength, where the rays next to the chief ray
     cross it, in the y–z plane (tangential focus) and in the x–z plane (sagittal focus),
-    given as the z distance from the chief ray's intercept with the image surface (negative:
-    before it, toward the lens). A field (θx, θy) has its tangential plane along its
+    given as the z distance from the chief ray's intercept with the image surface, along +z
+    as in Zemax and optiland (negative: toward −z; that is before the image surface, toward
+    the lens, where light travels toward +z, and beyond it where light leaves an odd number
+    of mirrors toward −z). A field (θx, θy) has its tangential plane along its
     azimuth a = (tan θx, tan θy)/|…| (the meridional plane of a rotationally symmetric lens):
     the tangential neighbours leave the pupil along a and are met in the plane of a and z,
     the sagittal ones along a⊥ = (a_y, −a_x); on axis a = (0, 1), so a θy field and the field

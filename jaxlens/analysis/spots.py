@@ -7,8 +7,9 @@ Conventions:
     radius = sqrt(mean(|p − ref|²)) over the valid rays on the image surface, with ref
     the centroid of the same ray set or the primary-wavelength chief ray (pupil centre).
     Polychromatic values pool the rays of all wavelengths with equal weights.
-    Distortion is given in percent against EFL·tanθ and against the paraxial chief
-    ray height on the image surface.
+    Distortion is given in percent against n·EFL·tanθ (n the object-space index: the front
+    focal length, EFL itself in air) and against the paraxial chief ray height on the image
+    surface.
 """
 
 from __future__ import annotations
@@ -165,7 +166,8 @@ def rms_spot(
         wavelengths: µm, ``[W]``; default ``lens.wavelengths``.
         pupil: ``[M, 2]`` unit-pupil points; default the 21×21 grid (317 rays).
         reference: "centroid" or "chief" (primary-wavelength chief ray).
-        depth: object distance in mm, or None for the lens's object (infinity).
+        depth: object distance in mm (``inf`` for infinity), or None for the lens's own
+            object (``lens.object_distance``; infinity where it has none).
 
     Returns:
         An ``RmsSpot``. Only valid rays count; ``valid_fraction`` says how many those were.
@@ -234,8 +236,9 @@ class Distortion(eqx.Module):
     """Real chief-ray distortion per field (heights in mm, distortion in %).
 
     For ``[F, 2]`` fields (θx, θy) the heights are radial: components along the field's
-    direction (tanθx, tanθy) in the image plane, and ``f_tan`` is EFL·tanθ of the field's
-    radial angle θ (tan²θ = tan²θx + tan²θy).
+    direction (tanθx, tanθy) in the image plane, and ``f_tan`` is n·EFL·tanθ of the field's
+    radial angle θ (tan²θ = tan²θx + tan²θy), n the object-space index (1 in air): the image
+    height of a distortion-free lens, whose front focal length is n·EFL.
     """
 
     field: Float[Array, " F"] | Float[Array, "F 2"]
@@ -271,7 +274,8 @@ def distortion(lens: Lens, fields=None, wavelength=None) -> Distortion:
     chief ray's angle at the entrance pupil, as in ``sampling.object_point``).
 
     ``fields`` are degrees, ``[F]`` (θy) or ``[F, 2]`` (θx, θy); default ``lens.fields``.
-    ``percent_ftan`` = 100·(y_real − EFL·tanθ)/(EFL·tanθ); ``percent_paraxial`` uses the
+    ``percent_ftan`` = 100·(y_real − n·EFL·tanθ)/(n·EFL·tanθ), n the object-space index (1
+    in air; an ideal lens behind water had 33 % against EFL·tanθ); ``percent_paraxial`` uses the
     paraxial chief-ray height on the image surface instead. Heights are along y for
     ``[F]`` fields and radial for ``[F, 2]`` (see :class:`Distortion`). Zero fields give 0.
     A field whose real chief ray does not reach the image (vignetted, or beyond the lens's
@@ -290,7 +294,8 @@ def _distortion(lens, fields, wavelength, depth) -> Distortion:
     if jnp.ndim(wl) != 0:
         raise ValueError(f"distortion: wavelength must be one value (µm), got shape "
                          f"{jnp.shape(wl)}")
-    f = paraxial.efl(lens, wl)
+    # The front focal length n·EFL: a field angle is measured in object space.
+    f = lens.object_material.index(wl) * paraxial.efl(lens, wl)
     chief = jax.vmap(lambda th: _spot_rays(
         lens, th, wl, pupil=jnp.zeros((1, 2), lens.epd.dtype), depth=depth, aim="paraxial",
         newton_iters=DEFAULT_NEWTON_ITERS)[0])(fields)

@@ -49,6 +49,7 @@ Models:
 
 from __future__ import annotations
 
+import copy
 import math
 
 import equinox as eqx
@@ -623,6 +624,16 @@ def _diffraction_mtf(nu, lam_mm, fnum):
     return jnp.where(s < 1, (2 / jnp.pi) * (jnp.arccos(s) - s * root), 0.0)
 
 
+def working_fnum(lens: Lens, depth) -> Array:
+    """The paraxial working F-number 1/(2n′u′) for an object at ``depth`` (mm from surface 1,
+    as ``sampling.lens_depth`` gives it; None for infinity), whatever the lens's own object:
+    ``mtf(lens, depth=...)`` took the lens's own, so a lens made for infinity imaged at 1:1
+    had its diffraction MTF (and default cut-off) at half the working F-number."""
+    at = copy.copy(lens)
+    object.__setattr__(at, "object_distance", depth)
+    return paraxial.paraxial_data(at).working_fnum
+
+
 def _directions(field):
     """Unit tangential (radial) and sagittal directions in the sensor plane."""
     t = jnp.tan(sampling.field_xy(field))
@@ -639,7 +650,7 @@ def _mtf_impl(lens, field, depth, wls, freqs, pixel_size, *, model, kernel_size,
     dtype = freqs.dtype
     lens = lens.astype(dtype)
     e_t, e_s = _directions(field)
-    fnum = paraxial.paraxial_data(lens).working_fnum
+    fnum = working_fnum(lens, depth)
     nw = wls.shape[0]
     if isinstance(model, GeometricPSF):
         pts, mask, _ = pupil_cells(model.pupil, model.overfill, dtype)
@@ -705,7 +716,8 @@ def mtf(
     The optical transfer function is the Fourier transform of the PSF. The geometric model
     evaluates it exactly from the traced ray positions (the Fourier transform of the ray
     density, no pixel grid), optionally times the diffraction-limited MTF of a circular
-    pupil at the paraxial working F-number (``diffraction=True``, the usual geometric-MTF
+    pupil at the paraxial working F-number of the object at ``depth`` (``diffraction=True``,
+    the usual geometric-MTF
     approximation). The coherent model transforms the wave-optics intensity PSF computed
     on a ``kernel_size`` grid of ``pixel_size`` (default λ_min·F#/4). Tangential means
     along the image-plane radius of the field point (y on axis); sagittal is perpendicular.
@@ -740,7 +752,8 @@ def mtf(
     if wls.ndim != 1 or wls.size == 0:
         raise ValueError(f"mtf: wavelengths must be [W] µm with W >= 1, got shape {wls.shape}")
     wls = checks.wavelengths(lens, wls, "mtf", "wavelengths")
-    fnum = paraxial.paraxial_data(lens.astype(dtype)).working_fnum
+    # The working F-number of the object traced (``depth``), not of the lens's own object.
+    fnum = working_fnum(lens.astype(dtype), sampling.lens_depth(lens, depth, "mtf"))
     lam_min = jnp.min(wls) * 1e-3
     if frequencies is None:
         if lens.sensor is not None:

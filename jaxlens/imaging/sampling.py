@@ -14,6 +14,7 @@ from __future__ import annotations
 
 import math
 
+import equinox as eqx
 import jax
 import jax.numpy as jnp
 import numpy as np
@@ -351,7 +352,14 @@ def static_depth(depth, where: str = "sampling"):
     if depth is None:
         return None
     if isinstance(depth, jax.core.Tracer):
-        return depth
+        # Traced (a depth that a jitted function passes on): its value is unknown here, so
+        # it cannot pick the collimated beam of an object at infinity; an infinite depth made
+        # every ray NaN, and a negative one traced an object behind the lens, silently.
+        return eqx.error_if(
+            depth, ~(jnp.isfinite(depth) & (depth > 0)),
+            f"{where}: a traced depth must be finite and in (0, inf) mm from the object to "
+            f"surface 1; for an object at infinity pass inf or None outside the traced "
+            f"arguments")
     checks.real_values(depth, "depth", where, "mm")
     given = np.asarray(depth)
     if given.dtype.kind in "iuf" and np.all(np.isposinf(given)):

@@ -346,7 +346,10 @@ def material(m, wl, where: str, arg: str = "wavelength") -> None:
     if is_traced(m) or is_traced(wl):
         return
     w = np.atleast_1d(np.asarray(wl, dtype=float))
-    n = np.asarray(m.index(jnp.asarray(w)), dtype=float)
+    # Evaluated now even inside a jit trace (a concrete lens closed over by a jitted function):
+    # there m.index gave a tracer, and np.asarray a TracerArrayConversionError.
+    with jax.ensure_compile_time_eval():
+        n = np.asarray(m.index(jnp.asarray(w)), dtype=float)
     bad = ~np.isfinite(n) | (n < 1.0 - 1e-9)
     if np.any(bad):
         raise ValueError(
