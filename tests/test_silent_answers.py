@@ -1,8 +1,7 @@
 """Silent wrong answers found by an audit of the public API: two functions that should agree
 on the same quantity did not, or a result contradicted its documentation. Each test named a
-failure of the code before its fix (an ``xfail`` where the fix lies in a file edited
-elsewhere), except the two field-curvature tests, which pin a convention (float64, as every
-accuracy test)."""
+failure of the code before its fix, except the two field-curvature tests, which pin a
+convention (float64, as every accuracy test)."""
 
 import jax.numpy as jnp
 import numpy as np
@@ -62,10 +61,6 @@ def test_field_curvature_of_a_concentric_mirror_off_axis():
 
 
 # ------------------------------- a paraboloid as surface 1: the far root of the whole line
-@pytest.mark.xfail(strict=True, reason="tracing/step.py conic_root_arrays takes the first root "
-                   "along the whole line on surface 1; a paraboloid opening toward the object "
-                   "meets every tilted line again far behind the vertex (fix described in the "
-                   "audit report; step.py is being changed elsewhere)")
 def test_parabolic_mirror_as_surface_one_traces_like_behind_a_dummy_plane():
     """A parabolic primary (k = −1, concave toward the object) as surface 1: every off-axis
     ray took the paraboloid's second intersection with its line, about 6.6e5 mm behind the
@@ -102,6 +97,21 @@ def test_an_ideal_lens_behind_water_has_no_ftan_distortion():
                   epd=5.0, fields=lens.fields)
     np.testing.assert_allclose(analysis.distortion(air).f_tan,
                                50.0 * np.tan(np.radians([0.0, 10.0, 20.0])), rtol=1e-12)
+
+
+def test_report_distortion_with_an_object_in_water_agrees_with_distortion():
+    """``report`` used EFL·tanθ as its f-tanθ reference where ``distortion`` uses n·EFL·tanθ:
+    with the object in water the report still showed 33.3 % for an ideal lens."""
+    from jaxlens.analysis.report import report_data
+
+    water = jl.ModelGlass(1.333, 55.0)
+    lens = jl.Lens(surfaces=(ParaxialSurface(50.0),), thickness=jnp.array([50.0]),
+                   materials=(jl.Air(),), epd=5.0, fields=jnp.array([0.0, 10.0, 20.0]),
+                   object_material=water)
+    rows = report_data(lens)["fields"]
+    d = analysis.distortion(lens)
+    np.testing.assert_allclose([r["distortion"] for r in rows], d.percent_ftan, atol=1e-10)
+    np.testing.assert_allclose([r["distortion"] for r in rows], 0.0, atol=1e-10)
 
 
 # -------------------------------------- mtf at a depth: the working F-number of that object

@@ -109,7 +109,7 @@ def _compute(lens: Lens) -> _Result:
     poly = analysis.weighted_rms(p.reshape(F, -1, 2), w.reshape(F, -1))
     chief_xy = p[:, lens.primary, centre]
     tan_radial, radial, chief = analysis.field_heights(lens.fields, chief_xy)
-    ftan = pd.efl * tan_radial
+    ftan = pd.front_focal_length * tan_radial  # n·EFL·tanθ, as distortion()
     ypar = jax.vmap(lambda th: paraxial.image_height(lens, th))(radial)
     return _Result(
         pd, chief, chief_xy, radial, valid[:, lens.primary, centre], ftan, ypar, rms, poly,

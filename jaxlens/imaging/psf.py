@@ -49,7 +49,6 @@ Models:
 
 from __future__ import annotations
 
-import copy
 import math
 
 import equinox as eqx
@@ -629,8 +628,7 @@ def working_fnum(lens: Lens, depth) -> Array:
     as ``sampling.lens_depth`` gives it; None for infinity), whatever the lens's own object:
     ``mtf(lens, depth=...)`` took the lens's own, so a lens made for infinity imaged at 1:1
     had its diffraction MTF (and default cut-off) at half the working F-number."""
-    at = copy.copy(lens)
-    object.__setattr__(at, "object_distance", depth)
+    at = eqx.tree_at(lambda m: m.object_distance, lens, depth, is_leaf=lambda x: x is None)
     return paraxial.paraxial_data(at).working_fnum
 
 

@@ -104,8 +104,11 @@ def conic_root_arrays(bounded_below, c, k, ox, oy, oz, dx, dy, dz, t_min):
     ``o`` and ``d`` are (x, y, z) tuples of arrays in the surface's local frame, with ``o``
     near the surface (see ``intersect``). Of the two roots of
     c(x² + y²) + c(1+k)z² − 2z = 0, only those on the sheet through the vertex
-    (1 − c(1+k)z ≥ 0) and with t_min ≤ t (``None``: any t) count; the first along the
-    ray is taken. The roots are the stable pair t1 = cc/q (finite as c -> 0) and
+    (1 − c(1+k)z ≥ 0) and with t_min ≤ t count; the first along the ray is taken. With
+    ``bounded_below=False`` (object space, ``o`` on the vertex plane) any t counts and the
+    root nearer to ``o`` is taken: a paraboloid concave toward the object meets a tilted
+    line a second time far behind its vertex (1° off axis, 6.6e5 mm away), which the first
+    root along the line would pick. The roots are the stable pair t1 = cc/q (finite as c -> 0) and
     t2 = q/a; which one is chosen is decided on numerators and denominators, so the
     result is a single division (one fused pass over the rays, see the module notes).
     """
@@ -129,9 +132,12 @@ def conic_root_arrays(bounded_below, c, k, ox, oy, oz, dx, dy, dz, t_min):
         return ok
 
     u1, u2 = usable(cc, q), usable(q, a)
-    # t1 <= t2  <=>  cc·a <= q² when q·a > 0 (the inequality flips when q·a < 0).
-    sign = jnp.sign(q) * jnp.sign(a)
-    first_is_t1 = u1 & (~u2 | (cc * a * sign <= q * q * sign))
+    if bounded_below:  # the first root along the ray
+        # t1 <= t2  <=>  cc·a <= q² when q·a > 0 (the inequality flips when q·a < 0).
+        sign = jnp.sign(q) * jnp.sign(a)
+        first_is_t1 = u1 & (~u2 | (cc * a * sign <= q * q * sign))
+    else:  # object space, o on the vertex plane: the root nearer to it, |t1| <= |t2|
+        first_is_t1 = u1 & (~u2 | (jnp.abs(cc * a) <= q * q))
     hit = u1 | u2
     num = jnp.where(first_is_t1, cc, q)
     den = jnp.where(first_is_t1, q, a)
@@ -178,8 +184,9 @@ def intersect(
 ):
     """Intersect rays with a surface in its local frame (vertex at the origin).
 
-    The first intersection along the ray is taken; with ``first=False`` only t ≥ 0
-    (up to rounding) counts, with ``first=True`` (object space) the whole line does.
+    With ``first=False`` the first intersection along the ray with t ≥ 0 (up to rounding)
+    is taken; with ``first=True`` (object space) the whole line counts and the intersection
+    nearest the vertex plane is taken.
     On the first surface each ray is first carried along its line to the vertex plane, so
     the quadratic is solved from a point near the surface: a distant origin (an object at
     10 m) then loses no digits to cancellation. Later surfaces start from the previous
