@@ -89,6 +89,44 @@ def test_zero_motion_traces_as_the_nominal_lens(triplet_full):
     assert m.units[m.names.index("E3 (S5-S6) tilt y")] == "deg"
 
 
+def test_breaks_place_the_element_and_restore_the_axis(triplet_full):
+    """The convention in global coordinates (``frame_of``): with the middle element moved by
+    d = (0.1, −0.07) mm and tilted by (0.5°, −0.3°), its front vertex (the pivot) is at
+    (0.1, −0.07, z_a), its axis is R ẑ with R = Rx(0.5°)·Ry(−0.3°), its back vertex at
+    pivot + L R ẑ; every other vertex, and the image, are where they were with the axes
+    unrotated (to 1e-12 mm)."""
+    from jaxlens.optics.coordinates import frame_of
+
+    m = triplet_full
+    nominal_z = np.asarray(m.lens.vertex_z())
+    lens = m.lens_at(_vec(m, decenter_x={1: 0.1}, decenter_y={1: -0.07}, tilt_x={1: 0.5},
+                          tilt_y={1: -0.3}))
+    z = np.asarray(lens.vertex_z())
+    new = [i for i, s in enumerate(lens.surfaces) if not isinstance(s, jl.CoordinateBreak)]
+
+    def vertex(k):
+        r, off = (np.asarray(a) for a in frame_of(lens, k))
+        return r, r @ np.asarray([0.0, 0.0, z[k]]) + off
+
+    ax, ay = np.deg2rad(0.5), np.deg2rad(-0.3)
+    rx = np.asarray([[1, 0, 0], [0, np.cos(ax), -np.sin(ax)], [0, np.sin(ax), np.cos(ax)]])
+    ry = np.asarray([[np.cos(ay), 0, np.sin(ay)], [0, 1, 0], [-np.sin(ay), 0, np.cos(ay)]])
+    rot = rx @ ry
+    for i, k in enumerate(new):
+        r, v = vertex(k)
+        if i in (2, 3):  # the middle element
+            pivot = np.asarray([0.1, -0.07, nominal_z[2]])
+            expect = pivot + (nominal_z[i] - nominal_z[2]) * rot[:, 2]
+            assert np.max(np.abs(r - rot)) < 1e-14
+        else:
+            expect = np.asarray([0.0, 0.0, nominal_z[i]])
+            assert np.max(np.abs(r - np.eye(3))) < 1e-14
+        assert np.max(np.abs(v - expect)) < 1e-12, (i, v, expect)
+    r, off = (np.asarray(a) for a in frame_of(lens))
+    image = r @ np.asarray([0.0, 0.0, float(lens.image_z())]) + off
+    assert np.max(np.abs(image - [0.0, 0.0, float(m.lens.image_z())])) < 1e-12
+
+
 def _centroid(lens, pupil):
     d = T.spot_data(lens, jnp.zeros((1, 2)), jnp.asarray([WL]), pupil)
     w = np.asarray(d.weight)[0, 0]
@@ -248,3 +286,11 @@ def test_refusals():
         T.Tolerances(decenter=-0.01)
     with pytest.raises(ValueError, match="tilt must be"):
         T.Tolerances(tilt=float("nan"))
+
+
+def test_cli_refuses_a_negative_decenter_before_any_work(tmp_path, capsys):
+    from jaxlens.experiments import tolerance as cli
+
+    for flag in ("--decenter", "--tilt"):
+        assert cli.main(["missing.zmx", "--out", str(tmp_path), flag, "-0.01"]) == 2
+        assert f"{flag} must be a finite number >= 0" in capsys.readouterr().err

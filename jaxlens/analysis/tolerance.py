@@ -305,7 +305,9 @@ def symmetric_fields(fields) -> tuple[np.ndarray, np.ndarray]:
 
     A mean over the representatives weighted by ``weights`` equals the mean over all fields
     for a rotationally symmetric lens traced with a pupil grid that has those symmetries
-    (the default 21 × 21 grid has).
+    (the default 21 × 21 grid has). Not for a model with element decenter or tilt
+    (``Tolerances.decenter``/``tilt`` > 0): a moved element breaks that symmetry, and the
+    folded mean is then not the full mean; give such a model the full field set.
     """
     f = np.asarray(fields, float)
     if f.ndim == 1:
