@@ -230,13 +230,17 @@ def test_sensitivities_match_central_differences():
     rows = {row["parameter"]: row for row in T.sensitivity(m, check=0)["rows"]}
     assert rows["E2 (S3-S4) decenter y"]["tolerance"] == 0.02
     assert rows["E2 (S3-S4) tilt x"]["unit"] == "deg"
+    # check=0 re-traces no coaxial entry but every element motion (see the next test)
+    assert rows["S1 radius"]["delta_rms_plus_um"] is None
+    assert all(r["delta_rms_plus_um"] is not None for r in rows.values() if r["unit"] == "deg")
 
 
 def test_mirror_symmetry_and_why_the_fields_are_not_folded(triplet_full):
     """On the symmetric 3 × 3 grid, decentering an element by +δ or −δ (x or y), or tilting it
     by ±θ, gives the same metric (to 1e-12 relative), so the gradient at the nominal lens is
-    0. The folded grid (3 fields with weights) gives the nominal metric exactly but not the
-    decentered one: folding assumes a rotationally symmetric lens."""
+    0 and ``sensitivity`` re-traces them whatever ``check`` says. The folded grid (3 fields
+    with weights) gives the nominal metric exactly but not the decentered one: folding
+    assumes a rotationally symmetric lens."""
     m = triplet_full
     cases = [{"decenter_x": {1: 0.05}}, {"decenter_x": {1: -0.05}},
              {"decenter_y": {0: 0.05}}, {"decenter_y": {0: -0.05}},
@@ -248,6 +252,11 @@ def test_mirror_symmetry_and_why_the_fields_are_not_folded(triplet_full):
     assert np.all(r > nominal + 1e-3)
     rigid_idx = [i for i, k in enumerate(m.kinds) if k in ("decenter", "tilt")]
     assert np.max(np.abs(g[rigid_idx])) < 1e-9
+    # so the sensitivity table's first-order change is 0 and the re-traced one is not
+    rows = [r for r in T.sensitivity(m, check=0)["rows"] if r["unit"] in ("mm", "deg")
+            and ("decenter" in r["parameter"] or "tilt" in r["parameter"])]
+    assert len(rows) == 12 and all(abs(r["delta_rms_um"]) < 1e-9 for r in rows)
+    assert all(r["second_order_um"] > 1e-4 for r in rows)
     fields, weights = T.symmetric_fields(GRID)
     folded = T.ToleranceModel(_triplet(), fields=fields, field_weights=weights, pupil=PUPIL,
                               tolerances=ON, batch=4)

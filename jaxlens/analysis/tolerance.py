@@ -610,6 +610,9 @@ def sensitivity(model: ToleranceModel, *, check: int | None = None) -> dict:
     tolerance) and ``delta_rms_compensated_um`` (worst of ± after refocusing, against the
     refocused nominal). With ``check`` = k only the k parameters with the largest
     |gradient × tolerance| are re-traced (the others' check fields are None); None checks all.
+    Element decenters and tilts are always re-traced: on a symmetric lens and field set the
+    metric is even in them, so their gradient is 0 and the change is second order
+    (``second_order_um``), which a ranking by gradient would never pick.
     """
     if check is not None and (isinstance(check, bool)
                               or not isinstance(check, (int, np.integer)) or check < 0):
@@ -620,7 +623,10 @@ def sensitivity(model: ToleranceModel, *, check: int | None = None) -> dict:
     listed = np.nonzero(tol)[0]
     idx = listed
     if check is not None:
-        idx = np.sort(listed[np.argsort(-np.abs(g[listed] * tol[listed]))[:check]])
+        moved = [i for i in listed if model.kinds[i] in ("decenter", "tilt")]
+        coaxial = np.asarray([i for i in listed if i not in set(moved)], int)
+        ranked = coaxial[np.argsort(-np.abs(g[coaxial] * tol[coaxial]))[:check]]
+        idx = np.sort(np.concatenate([ranked, np.asarray(moved, int)]))
     steps = np.zeros((idx.size, tol.size))
     steps[np.arange(idx.size), idx] = tol[idx]
     res = model.evaluate(np.concatenate([steps, -steps, np.zeros((1, tol.size))]))

@@ -152,7 +152,10 @@ def analyse_design(lens, spec, *, trials: int = DEFAULT_TRIALS,
             "re-traced). Apertures: every surface but the stop unclipped (floating "
             "semi-diameters). Radius tolerances are relative, conic absolute, asphere "
             "coefficients in mm^(1-2i) equivalent to the stated sag at the clear "
-            "semi-diameter. Decenter and tilt: " + tol_mod.DECENTER_TILT),
+            "semi-diameter. Decenter and tilt: " + tol_mod.DECENTER_TILT
+            + (". Their first-order change is 0 (the metric is even in them on the symmetric "
+               "nominal lens and field grid): read the re-traced and second-order columns"
+               if moved else "")),
         "gradient_check": check,
         "monte_carlo": {
             "trials": mc["trials"], "rms_p50_um": mc["rms_p50_um"],
