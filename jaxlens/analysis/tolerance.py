@@ -28,9 +28,15 @@ Perturbations (``Perturbation``; surface 1 is ``lens.surfaces[0]``):
     shape. At zero perturbation this is the design's material to the last bit (no model
     glass substitution, so no difference to state).
 
-    Element decenter and tilt are NOT toleranced: the perturbations are coaxial. The tracer
-    follows decenters and tilts through coordinate breaks, but a perturbation would need a
-    break before and after each element, which this model does not insert.
+    decenter_x, decenter_y   mm, per element (an air-bounded singlet or cemented group)
+    tilt_x, tilt_y           degrees about the element's front vertex, right-handed
+    Elements move rigidly between two coordinate breaks, as Zemax's TEDX/TEDY/TETX/TETY
+    (``jaxlens.analysis.tolerance_rigid`` states the construction and signs). They are
+    toleranced only when ``Tolerances.decenter`` or ``tilt`` is > 0 (default 0: off, and
+    the perturbation vector and the compiled trace are then those of a coaxial model).
+    A moved element breaks the rotational symmetry: ``symmetric_fields`` must not fold the
+    fields then (the folded mean is not the full mean, and d metric / d decenter is 0 at
+    the nominal lens only over a symmetric field set); give the full field set.
 
 Compensator:
     The back focus (the last thickness, i.e. the image-plane position) is re-optimised per
@@ -62,18 +68,29 @@ import numpy as np
 from jax.flatten_util import ravel_pytree
 from jaxtyping import Array, Float
 
-from ..imaging.sampling import field_xy, pupil_grid
+from ..imaging.sampling import pupil_grid
 from ..optics import checks, paraxial
 from ..optics.diffractive import DIFFRACTIVE
 from ..optics.lens import Lens
 from ..optics.materials import LAMBDA_D, AbstractMaterial, Air, abbe_number
 from ..optics.paraxial_surface import ParaxialSurface
 from ..optics.surfaces import EvenAsphere, Standard, TiltedPlane
-from .spots import clear_semi_diameters, spot_rays, weighted_rms
+from . import tolerance_rigid as rigid
+from .spots import clear_semi_diameters
+from .tolerance_metric import (  # noqa: F401  (re-exported: the metric's public names)
+    SpotData,
+    best_focus,
+    field_mtf,
+    field_rms,
+    mean_rms_um,
+    normalised_weights,
+    spot_data,
+)
 
-DECENTER_TILT = ("not modelled: the perturbations are coaxial (radii, conics, aspheric terms, "
-                 "gaps, indices); element decenters and tilts, which the tracer can follow "
-                 "through coordinate breaks, are not among them")
+DECENTER_TILT = ("element decenter x, y (mm) and tilt about x, y (degrees, about the element's "
+                 "front vertex) of every air-bounded element (a cemented group moves as one) "
+                 "between two coordinate breaks, as Zemax's TEDX/TEDY/TETX/TETY; toleranced "
+                 "when Tolerances.decenter or tilt > 0 (default 0: off)")
 
 DISTRIBUTIONS = ("uniform", "normal")
 
@@ -106,6 +123,8 @@ class Tolerances:
         asphere_sag: mm; each asphere coefficient a_i gets the tolerance asphere_sag / h^(2i),
             the change that moves the sag at the clear semi-diameter h by that much
             (sensitivity table only).
+        decenter: mm, each element's decenter in x and in y (0: off; see the module docstring).
+        tilt: degrees, each element's tilt about x and about y (0: off).
         distribution: Monte-Carlo law: "uniform" over ±tolerance, or "normal" with σ =
             tolerance/2 truncated at ±tolerance.
     """
@@ -117,12 +136,14 @@ class Tolerances:
     irregularity: float = 0.5e-3
     conic: float = 0.01
     asphere_sag: float = 0.5e-3
+    decenter: float = 0.0
+    tilt: float = 0.0
     distribution: str = "uniform"
 
     def __post_init__(self):
         units = {"radius_rel": " (relative)", "thickness": " mm", "index": "",
                  "abbe_rel": " (relative)", "irregularity": " mm", "conic": "",
-                 "asphere_sag": " mm"}
+                 "asphere_sag": " mm", "decenter": " mm", "tilt": " degrees"}
         for name, unit in units.items():
             object.__setattr__(self, name, _nonneg(getattr(self, name), name, unit))
         if self.radius_rel >= 0.5 or self.abbe_rel >= 0.5:
@@ -144,6 +165,9 @@ class Tolerances:
             "conic": {"value": self.conic, "unit": "absolute k (sensitivity only)"},
             "asphere": {"value": self.asphere_sag,
                         "unit": "mm sag at the clear semi-diameter (sensitivity only)"},
+            "decenter": {"value": self.decenter, "unit": "mm, each element in x and in y"},
+            "tilt": {"value": self.tilt,
+                     "unit": "degrees, each element about x and about y (front vertex)"},
             "decenter_tilt": DECENTER_TILT,
             "distribution": (self.distribution + (" over +-tolerance" if self.distribution
                                                   == "uniform" else
@@ -176,6 +200,11 @@ class Perturbation(eqx.Module):
     irregularity: Float[Array, " n"]
     index: Float[Array, " n"]
     abbe_rel: Float[Array, " n"]
+    # per element (``tolerance_rigid.element_groups``), or [0] when not toleranced
+    decenter_x: Float[Array, " g"]
+    decenter_y: Float[Array, " g"]
+    tilt_x: Float[Array, " g"]
+    tilt_y: Float[Array, " g"]
 
 
 def _refuse_surfaces(lens: Lens, where: str) -> None:
@@ -204,13 +233,17 @@ def _refuse_surfaces(lens: Lens, where: str) -> None:
                              f"supported (asphere tolerances act on even terms only)")
 
 
-def zero_perturbation(lens: Lens) -> Perturbation:
-    """The perturbation that changes nothing (float64 when x64 is on)."""
+def zero_perturbation(lens: Lens, *, elements: bool = False) -> Perturbation:
+    """The perturbation that changes nothing (float64 when x64 is on); with ``elements``,
+    with a decenter and tilt entry per element (otherwise those arrays are empty)."""
     _refuse_surfaces(lens, "zero_perturbation")
+    if elements:
+        rigid.check_lens(lens, "zero_perturbation")
     n = lens.num_surfaces
     z = jnp.zeros(n, lens.thickness.dtype)
+    g = jnp.zeros(len(rigid.element_groups(lens)) if elements else 0, lens.thickness.dtype)
     return Perturbation(z, z, z, tuple(jnp.zeros_like(s.even_coeffs()) for s in lens.surfaces),
-                        z, z, z)
+                        z, z, z, g, g, g, g)
 
 
 def refracting(lens: Lens) -> list[bool]:
@@ -230,6 +263,9 @@ def perturb(lens: Lens, p: Perturbation, clear_radius, *, add_r4: tuple[bool, ..
         clear_radius: ``[n]`` clear semi-diameters (mm) that scale the irregularity.
         add_r4: per surface, give a surface without an r⁴ coefficient one (an
             ``EvenAsphere``) so that irregularity can act on it; static. Default: none.
+
+    When ``p``'s decenter and tilt arrays are not empty (one entry per element), the elements
+    are then moved between coordinate breaks (``tolerance_rigid.displace``).
     """
     _refuse_surfaces(lens, "perturb")
     add_r4 = add_r4 or (False,) * lens.num_surfaces
@@ -256,8 +292,11 @@ def perturb(lens: Lens, p: Perturbation, clear_radius, *, add_r4: tuple[bool, ..
     materials = tuple(m if isinstance(m, Air) else
                       PerturbedMaterial(m, p.index[i], p.abbe_rel[i], getattr(m, "name", ""))
                       for i, m in enumerate(lens.materials))
-    return eqx.tree_at(lambda x: (x.surfaces, x.thickness, x.materials), lens,
-                       (tuple(surfaces), lens.thickness + p.thickness, materials))
+    out = eqx.tree_at(lambda x: (x.surfaces, x.thickness, x.materials), lens,
+                      (tuple(surfaces), lens.thickness + p.thickness, materials))
+    if p.decenter_x.shape[0] == 0:  # static: no element motion, no coordinate breaks
+        return out
+    return rigid.displace(out, p.decenter_x, p.decenter_y, p.tilt_x, p.tilt_y)
 
 
 def symmetric_fields(fields) -> tuple[np.ndarray, np.ndarray]:
@@ -266,7 +305,9 @@ def symmetric_fields(fields) -> tuple[np.ndarray, np.ndarray]:
 
     A mean over the representatives weighted by ``weights`` equals the mean over all fields
     for a rotationally symmetric lens traced with a pupil grid that has those symmetries
-    (the default 21 × 21 grid has).
+    (the default 21 × 21 grid has). Not for a model with element decenter or tilt
+    (``Tolerances.decenter``/``tilt`` > 0): a moved element breaks that symmetry, and the
+    folded mean is then not the full mean; give such a model the full field set.
     """
     f = np.asarray(fields, float)
     if f.ndim == 1:
@@ -279,116 +320,6 @@ def symmetric_fields(fields) -> tuple[np.ndarray, np.ndarray]:
     rounded = np.round(key, 9)
     _, first, counts = np.unique(rounded, axis=0, return_index=True, return_counts=True)
     return key[first], counts.astype(float)
-
-
-# --------------------------------------------------------------------------- spot data
-class SpotData(eqx.Module):
-    """Rays on the image plane, per field F, wavelength W and pupil point M."""
-
-    position: Float[Array, "F W M 2"]  # mm
-    slope: Float[Array, "F W M 2"]  # (dx/dz, dy/dz) in image space
-    weight: Float[Array, "F W M"]  # 1 for a valid ray, 0 otherwise
-
-
-def spot_data(lens: Lens, fields, wavelengths, pupil) -> SpotData:
-    """Trace every field and wavelength (jittable, vmappable over lenses)."""
-
-    def one(field, wl):
-        r = spot_rays(lens, field, wl, pupil=pupil)
-        dz = r.direction[..., 2:3]
-        ok = dz > 1e-12  # rays that reach the image surface travel forward
-        slope = r.direction[..., :2] / jnp.where(ok, dz, 1.0)
-        return r.origin[..., :2], jnp.where(ok, slope, 0.0), r.valid.astype(r.origin.dtype)
-
-    per_field = jax.vmap(lambda f: jax.vmap(lambda w: one(f, w))(wavelengths))
-    return SpotData(*per_field(fields))
-
-
-def _pooled(data: SpotData):
-    f = data.weight.shape[0]
-    return data.position.reshape(f, -1, 2), data.slope.reshape(f, -1, 2), \
-        data.weight.reshape(f, -1)
-
-
-def field_rms(data: SpotData, dz=0.0) -> Float[Array, " F"]:
-    """Polychromatic RMS radius per field (mm) with the image plane moved by ``dz`` mm."""
-    p, u, w = _pooled(data)
-    return weighted_rms(p + dz * u, w)
-
-
-def _norm_weights(weights):
-    return weights / jnp.sum(weights)
-
-
-def mean_rms_um(data: SpotData, weights, dz=0.0) -> Float[Array, ""]:
-    """The metric: field-weighted mean polychromatic RMS radius (µm)."""
-    return 1e3 * jnp.sum(_norm_weights(weights) * field_rms(data, dz))
-
-
-def best_focus(data: SpotData, weights, *, iters: int = 8) -> Float[Array, ""]:
-    """Image-plane shift Δz (mm) that minimises the metric (the back-focus compensator).
-
-    Fields without valid rays are ignored. See the module docstring for the method.
-    """
-    p, u, w = _pooled(data)
-    total = jnp.sum(w, -1)
-    alpha = jnp.where(total > 0, _norm_weights(weights), 0.0)
-    tot = jnp.maximum(total, 1.0)[:, None]
-    dp = p - (jnp.sum(w[..., None] * p, 1) / tot)[:, None, :]
-    du = u - (jnp.sum(w[..., None] * u, 1) / tot)[:, None, :]
-    a = jnp.sum(w * jnp.sum(dp * dp, -1), -1) / tot[:, 0]
-    b = jnp.sum(w * jnp.sum(dp * du, -1), -1) / tot[:, 0]
-    c = jnp.sum(w * jnp.sum(du * du, -1), -1) / tot[:, 0]
-    tiny = jnp.finfo(p.dtype).tiny
-
-    def metric(z):
-        return jnp.sum(alpha * jnp.sqrt(jnp.maximum(a + 2 * b * z + c * z * z, 0.0)))
-
-    z0 = -jnp.sum(alpha * b) / jnp.maximum(jnp.sum(alpha * c), tiny)
-    scales = jnp.asarray([1.0, 0.5, 0.25, 0.125, 0.0], p.dtype)
-
-    def step(_, z):
-        ms = jnp.maximum(a + 2 * b * z + c * z * z, tiny)
-        r = jnp.sqrt(ms)
-        g = jnp.sum(alpha * (b + c * z) / r)
-        h = jnp.sum(alpha * jnp.maximum(a * c - b * b, 0.0) / (r * ms))
-        full = jnp.where(h > 0, -g / jnp.where(h > 0, h, 1.0), 0.0)
-        cand = z + scales * full
-        return cand[jnp.argmin(jax.vmap(metric)(cand))]
-
-    return jax.lax.fori_loop(0, iters, step, z0)
-
-
-def _directions(fields):
-    """Unit tangential (radial) and sagittal directions in the image plane per field."""
-    t = jnp.tan(field_xy(fields))  # [F, 2]
-    r = jnp.sqrt(jnp.sum(t * t, -1, keepdims=True))
-    on_axis = r == 0
-    e_t = jnp.where(on_axis, jnp.asarray([0.0, 1.0], t.dtype), t / jnp.where(on_axis, 1.0, r))
-    return e_t, jnp.stack([e_t[:, 1], -e_t[:, 0]], -1)
-
-
-def field_mtf(data: SpotData, fields, wavelengths, frequency, fnum, dz=0.0
-              ) -> Float[Array, " F"]:
-    """Geometric × diffraction MTF at ``frequency`` (cycles/mm), mean of T and S, per field."""
-    q = data.position + dz * data.slope  # [F, W, M, 2]
-    w = data.weight
-    tot_w = jnp.maximum(jnp.sum(w, -1, keepdims=True), jnp.finfo(q.dtype).tiny)
-    ref = jnp.sum(w[..., None] * q, (1, 2)) / jnp.maximum(jnp.sum(w, (1, 2)), 1e-30)[:, None]
-    rel = q - ref[:, None, None, :]
-    wn = w / tot_w
-    lam = wavelengths * 1e-3
-    s = jnp.clip(frequency * lam * fnum, 0.0, 1.0)
-    root = jnp.sqrt(jnp.where(s < 1, 1.0 - s * s, 1.0))
-    diff = jnp.where(s < 1, (2 / jnp.pi) * (jnp.arccos(s) - s * root), 0.0)  # [W]
-    e_t, e_s = _directions(fields)
-
-    def along(e):
-        proj = jnp.sum(rel * e[:, None, None, :], -1)  # [F, W, M]
-        o = jnp.sum(wn * jnp.exp(-2j * jnp.pi * frequency * proj), -1)  # [F, W]
-        return jnp.abs(jnp.mean(o * diff, -1))
-
-    return 0.5 * (along(e_t) + along(e_s))
 
 
 # ------------------------------------------------------------------------ the model
@@ -470,10 +401,13 @@ class ToleranceModel:
                 s if i == self.lens.stop else eqx.tree_at(lambda y: y.semi_diameter, s, inf)
                 for i, s in enumerate(self.lens.surfaces)))
         self.apertures = apertures
-        zero = zero_perturbation(self.lens)
-        self.zero, self.unravel = ravel_pytree(zero)
-        self.refracting = refracting(self.lens)
         tol = self.tolerances
+        # Static: elements move (two coordinate breaks each) only when toleranced.
+        self.elements = bool(tol.decenter > 0 or tol.tilt > 0)
+        zero = zero_perturbation(self.lens, elements=self.elements)
+        self.zero, self.unravel = ravel_pytree(zero)
+        self.num_elements = len(rigid.element_groups(self.lens)) if self.elements else 0
+        self.refracting = refracting(self.lens)
         self.add_r4 = tuple(bool(tol.irregularity > 0 and ref and s.even_coeffs().shape[0] < 2)
                             for s, ref in zip(self.lens.surfaces, self.refracting, strict=True))
         self.names, self.units, self.kinds = self._labels()
@@ -495,6 +429,9 @@ class ToleranceModel:
         if needs:
             raise ValueError("with_tolerances: irregularity > 0 needs r^4 terms this model was "
                              "built without; build a new ToleranceModel")
+        if (tolerances.decenter > 0 or tolerances.tilt > 0) and not self.elements:
+            raise ValueError("with_tolerances: decenter or tilt > 0 needs the coordinate breaks "
+                             "this model was built without; build a new ToleranceModel")
         out = copy.copy(self)
         out.tolerances = tolerances
         return out
@@ -520,6 +457,8 @@ class ToleranceModel:
             "abbe_rel": [(f"{glass.get(i, f'M{i + 1}')} Vd", "relative", "abbe")
                          for i in range(n)],
         }
+        moved = rigid.labels(lens) if self.elements else [[]] * len(rigid.FIELDS)
+        per.update(zip(rigid.FIELDS, moved, strict=True))
         labels = Perturbation(**{k: (tuple(v) if k == "asphere" else v) for k, v in per.items()})
         leaves = jax.tree_util.tree_leaves(labels, is_leaf=lambda x: isinstance(x, tuple)
                                            and len(x) == 3 and isinstance(x[0], str))
@@ -533,6 +472,7 @@ class ToleranceModel:
 
         Monte-Carlo (``sensitivity=False``): radius, thickness, index, Abbe, irregularity.
         Sensitivity: radius, thickness, conic, every asphere term, index, Abbe.
+        Both: element decenter and tilt, when the model moves elements.
         """
         lens, tol = self.lens, self.tolerances
         n = lens.num_surfaces
@@ -555,6 +495,8 @@ class ToleranceModel:
             irregularity=f(self.refracting, 0.0 if sensitivity else tol.irregularity),
             index=f(glass, tol.index),
             abbe_rel=f(dispersive, tol.abbe_rel),
+            **{k: np.full(self.num_elements, tol.decenter if k.startswith("decenter") else tol.tilt)
+               for k in rigid.FIELDS},
         )
         return np.asarray(ravel_pytree(jax.tree_util.tree_map(jnp.asarray, p))[0])
 
@@ -573,7 +515,7 @@ class ToleranceModel:
         data = spot_data(lens, self.fields, self.wavelengths, self.pupil)
         dz = best_focus(data, self.weights)
         fnum = paraxial.paraxial_data(lens).working_fnum
-        alpha = _norm_weights(self.weights)
+        alpha = normalised_weights(self.weights)
         return {
             "rms_um": mean_rms_um(data, self.weights),
             "rms_compensated_um": mean_rms_um(data, self.weights, dz),
@@ -617,7 +559,8 @@ class ToleranceModel:
             conic=np.asarray([float(s.k) for s in lens.surfaces], dtype),
             asphere=tuple(np.asarray(s.even_coeffs(), dtype) for s in lens.surfaces),
             irregularity=np.zeros(lens.num_surfaces, dtype), index=np.asarray(nd, dtype),
-            abbe_rel=np.asarray(vd, dtype))
+            abbe_rel=np.asarray(vd, dtype),
+            **{k: np.zeros(self.num_elements, dtype) for k in rigid.FIELDS})
         return np.asarray(ravel_pytree(jax.tree_util.tree_map(jnp.asarray, p))[0])
 
 
@@ -667,6 +610,9 @@ def sensitivity(model: ToleranceModel, *, check: int | None = None) -> dict:
     tolerance) and ``delta_rms_compensated_um`` (worst of ± after refocusing, against the
     refocused nominal). With ``check`` = k only the k parameters with the largest
     |gradient × tolerance| are re-traced (the others' check fields are None); None checks all.
+    Element decenters and tilts are always re-traced: on a symmetric lens and field set the
+    metric is even in them, so their gradient is 0 and the change is second order
+    (``second_order_um``), which a ranking by gradient would never pick.
     """
     if check is not None and (isinstance(check, bool)
                               or not isinstance(check, (int, np.integer)) or check < 0):
@@ -677,7 +623,10 @@ def sensitivity(model: ToleranceModel, *, check: int | None = None) -> dict:
     listed = np.nonzero(tol)[0]
     idx = listed
     if check is not None:
-        idx = np.sort(listed[np.argsort(-np.abs(g[listed] * tol[listed]))[:check]])
+        moved = [i for i in listed if model.kinds[i] in ("decenter", "tilt")]
+        coaxial = np.asarray([i for i in listed if i not in set(moved)], int)
+        ranked = coaxial[np.argsort(-np.abs(g[coaxial] * tol[coaxial]))[:check]]
+        idx = np.sort(np.concatenate([ranked, np.asarray(moved, int)]))
     steps = np.zeros((idx.size, tol.size))
     steps[np.arange(idx.size), idx] = tol[idx]
     res = model.evaluate(np.concatenate([steps, -steps, np.zeros((1, tol.size))]))
