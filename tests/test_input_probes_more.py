@@ -264,10 +264,10 @@ def test_iteration_counts_and_psf_options_are_checked(cooke):
         with pytest.raises(ValueError, match=r"psf: max_truncation must be a finite number in "
                                              r"\[0, inf\) \(fraction of the PSF energy"):
             jl.psf(cooke, 0.0, max_truncation=bad, **kw)
-    with pytest.raises(ValueError, match=r"sampling: depth must be finite numbers"):
+    with pytest.raises(ValueError, match=r"psf: depth must be finite numbers"):
         jl.psf(cooke, 0.0, depth=float("nan"), **kw)
     lens8 = dataclasses.replace(cooke, sensor=jl.Sensor((8, 8), 0.01))
-    with pytest.raises(ValueError, match=r"render: .*|sampling: depth must be finite numbers"):
+    with pytest.raises(ValueError, match=r"render: depth must be finite numbers"):
         jl.render(lens8, jnp.ones((8, 8, 3)), spp=1, key=jax.random.PRNGKey(0),
                   depth=float("nan"))
     for grid in (0, (0, 3), (2.5, 3)):

@@ -235,6 +235,7 @@ def test_sensitivities_match_central_differences():
     assert all(r["delta_rms_plus_um"] is not None for r in rows.values() if r["unit"] == "deg")
 
 
+@pytest.mark.slow  # 15 s (run with -m slow)
 def test_mirror_symmetry_and_why_the_fields_are_not_folded(triplet_full):
     """On the symmetric 3 × 3 grid, decentering an element by +δ or −δ (x or y), or tilting it
     by ±θ, gives the same metric (to 1e-12 relative), so the gradient at the nominal lens is
