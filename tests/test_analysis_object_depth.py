@@ -36,7 +36,8 @@ def lenses():
     lambda lens, **kw: spots.rms_spot(lens, **kw).per_wavelength,
     lambda lens, **kw: jl.psf(lens, 14.0, pixel_size=0.002, kernel_size=15,
                               max_truncation=None, **kw),
-    lambda lens, **kw: relative_illumination(lens, [0.0, 20.0], pupil=16, **kw).ri,
+    pytest.param(lambda lens, **kw: relative_illumination(lens, [0.0, 20.0], pupil=16, **kw).ri,
+                 marks=pytest.mark.slow),  # 12 s
 ], ids=["ray_fan", "field_curvature", "spot_rays", "rms_spot", "psf", "relative_illumination"])
 def test_default_depth_is_the_lens_object(lenses, analysis):
     far, near = lenses

@@ -172,6 +172,7 @@ OPTILAND_SAG = [0.0, 0.16672638897283182, 0.6712195277083992, 2.7582022656796106
                 6.521560217423334, 9.202442861777373, 12.58821891916678, 17.635533649398045]
 
 
+@pytest.mark.slow  # 14 s; the sag against numpy runs in CI
 def test_asl5040_sag_equals_optilands_forbes_geometry():
     s = jl.load(ASL).surfaces[0]
     r = jnp.asarray(OPTILAND_R)

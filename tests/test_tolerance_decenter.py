@@ -207,6 +207,7 @@ def test_tilted_plate_shifts_a_ray_by_the_plate_formula():
         assert abs(float(d.position[0, 0, 0, 0]) + expect) < 1e-12
 
 
+@pytest.mark.slow  # 29 s (run with -m slow)
 def test_sensitivities_match_central_differences():
     """On a one-sided field set (the gradient of a decenter is not zero by symmetry there)
     the reverse-mode gradient through the breaks matches central differences of the
