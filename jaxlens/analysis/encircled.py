@@ -126,7 +126,7 @@ def _geometric_samples(lens, field, wls, *, reference, shape, pupil, depth):
         ref, ok = cr.origin[:2], cr.valid & (jnp.sum(wt) > 0)
     d = _metric(p - ref, shape)
     total = jnp.sum(wt)
-    return d, wt, jnp.maximum(total, 1e-300), jnp.where(ok, ref, jnp.nan), jnp.zeros(())
+    return d, wt, jnp.maximum(total, 1.0), jnp.where(ok, ref, jnp.nan), jnp.zeros(())
 
 
 def _diffraction_samples(lens, field, wls, *, reference, shape, depth, pixel_size, kernel_size,

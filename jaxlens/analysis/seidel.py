@@ -53,11 +53,12 @@ through the top of the pupil (negative for an under-corrected positive singlet, 
 marginal rays cross the axis before the paraxial focus), TDIS the chief ray's height minus
 the paraxial image height, TLAC the short-wavelength chief ray's height minus the long one's.
 
-Compared with optiland 0.6.3 (``optiland.aberrations``): its ``seidels()`` are these sums
-with the same sign (``tests/test_seidel.py``, ``tools/seidel_reference.py``); its
-transverse terms (TSC, CC, TAC, TPC, DC, TAchC, TchC) are −TSPH, −TSCO, −TAST, −TPFC, −TDIS,
-−TAXC, −TLAC. It ignores the polynomial terms of an even asphere (A4 …), which are included
-here.
+Compared with optiland 0.6.3 (``optiland.aberrations``, ``tests/test_seidel.py``,
+``tools/seidel_reference.py``): its ``seidels()`` are −(these sums) (opposite sign
+convention; the same magnitudes to 2e-5 on the Cooke triplet, the glasses differing
+slightly); its per-surface transverse terms TSC, CC, TPC, DC, TAchC, TchC are TSPH, TSCO,
+TPFC, TDIS, TAXC, TLAC here, and its TAC is TAST/2 (S_III/(2n′u′)). It ignores the
+polynomial terms of an even asphere (A4 …), which are included here.
 
 Handled surfaces: ``Standard`` (planes, spheres, conics, the stop), ``EvenAsphere``, and
 ``OddAsphere``/``Hybrid`` whose odd terms (β_1 r, β_3 r³; the hybrid's x³, y³ … series)
