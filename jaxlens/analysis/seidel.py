@@ -51,7 +51,9 @@ TTFC = (3 S_III + S_IV)/(2n′u′), TDIS = S_V/(2n′u′), TAXC = C_L/(n′u�
 They are the third-order parts of a real ray's error: TSPH is y − y_paraxial of the ray
 through the top of the pupil (negative for an under-corrected positive singlet, whose
 marginal rays cross the axis before the paraxial focus), TDIS the chief ray's height minus
-the paraxial image height, TLAC the short-wavelength chief ray's height minus the long one's.
+the paraxial image height, TLAC the short-wavelength chief ray's height minus the long one's
+(``tests/test_seidel.py`` checks all of these signs against real rays; the names are
+Zemax's, but its sign conventions were not available to check against).
 
 Compared with optiland 0.6.3 (``optiland.aberrations``, ``tests/test_seidel.py``,
 ``tools/seidel_reference.py``): its ``seidels()`` are −(these sums) (opposite sign
