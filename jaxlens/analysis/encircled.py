@@ -1,0 +1,256 @@
+"""Encircled and ensquared energy: the fraction of a point image's energy within a radius.
+
+Conventions:
+    Lengths in mm (radii, the reference point), field angles in degrees (θy or (θx, θy)),
+    wavelengths in µm. ``shape="circle"`` counts the energy within distance r of the
+    reference point (encircled energy); ``shape="square"`` within the square of half-width r
+    centred on it, sides along x and y (ensquared energy). ``radius_for_fraction`` is the
+    inverse: the r that holds a given fraction (0.8 gives the D80 radius; the diameter is
+    twice it).
+
+Methods:
+    ``"geometric"`` (the default, as Zemax's geometric encircled energy): rays from the object
+    point fill the entrance pupil uniformly (by default ``pupil_polar(64)``, 4096 rays on cells
+    of equal area, so every ray carries the same energy), are traced to the image surface
+    (``jaxlens.analysis.spots.spot_rays``), and each ray that arrives carries equal energy.
+    The fraction is of the transmitted energy (the rays that reach the image), so
+    vignetting does not lower the curve's end: it reaches 1. Several wavelengths pool
+    their rays with equal weights. The reference is the energy centroid (``"centroid"``,
+    the default) or the primary-wavelength chief ray (``"chief"``). The curve is a step
+    function of r (one step per ray): its derivative with respect to the lens is 0 almost
+    everywhere. ``radius_for_fraction`` interpolates between the sorted ray distances (the
+    k-th of N valid rays at the cumulative fraction (k − ½)/N), so it is continuous and
+    differentiable with respect to the lens through the ray positions.
+
+    ``"diffraction"``: the coherent PSF (``jaxlens.imaging.psf.psf_info`` with
+    ``CoherentPSF(pupil)``, the ray-based Debye integral) on a ``kernel_size``² grid of
+    ``pixel_size`` (mm) centred on the reference point (``"centroid"``: the PSF's energy
+    centroid; ``"chief"``: the real chief ray), integrated radially. The kernel is the
+    energy per pixel, that is the PSF already integrated over each pixel: each pixel's
+    energy is spread uniformly over ``subsamples``² points inside it, so the curve is that of
+    the PSF convolved with one pixel (it rises a little early at r below about a pixel, and
+    its error against the true PSF's curve shrinks as the pixel does: measured on a
+    diffraction-limited F/10 beam at 0.55 µm with 0.5 µm pixels, |EE − Airy| ≤ 2e-3). The
+    fraction is of the whole beam's energy: energy that falls outside the kernel
+    (``truncated``) is never counted, so the curve ends at 1 − truncated; make the kernel
+    wide enough for the radii asked.
+
+Errors: radii must be finite and ≥ 0 mm; a fraction must lie in (0, 1); a fraction the
+kernel cannot hold (above 1 − truncated) gives NaN; a field no ray reaches gives NaN.
+"""
+
+from __future__ import annotations
+
+import equinox as eqx
+import jax
+import jax.numpy as jnp
+import numpy as np
+from jaxtyping import Array, Float
+
+from ..imaging.psf import CoherentPSF, psf_info
+from ..imaging.sampling import pupil_polar
+from ..optics import checks
+from ..optics.lens import Lens
+from .spots import chief_ray, spot_rays, weighted_centroid
+
+METHODS = ("geometric", "diffraction")
+REFERENCES = ("centroid", "chief")
+SHAPES = ("circle", "square")
+PUPIL_SIDE = 64  # default geometric pupil: pupil_polar(64), 4096 equal-area cells
+
+
+class EncircledEnergy(eqx.Module):
+    """Encircled (or ensquared) energy of one field.
+
+    Attributes:
+        radii: ``[R]`` radii (mm; half-widths for squares).
+        energy: ``[R]`` fraction of the energy within each radius (0 … 1).
+        center: ``[2]`` reference point (x, y) on the image surface (mm).
+        truncated: fraction of the beam's energy outside the PSF kernel (diffraction; 0 for
+            the geometric method).
+    """
+
+    radii: Float[Array, " R"]
+    energy: Float[Array, " R"]
+    center: Float[Array, " 2"]
+    truncated: Float[Array, ""]
+
+
+def _check_common(lens, where, field, wavelength, method, reference, shape):
+    if not isinstance(lens, Lens):
+        raise TypeError(f"{where}: lens must be a jaxlens.Lens, got {type(lens).__name__}")
+    for arg, value, allowed in (("method", method, METHODS), ("reference", reference, REFERENCES),
+                                ("shape", shape, SHAPES)):
+        if value not in allowed:
+            raise ValueError(f"{where}: {arg} must be one of {allowed}, got {value!r}")
+    checks.real_values(field, "field", where, "deg")
+    if jnp.shape(field) not in ((), (2,)):
+        raise ValueError(f"{where}: field must be one field, θy or (θx, θy) in degrees, got "
+                         f"shape {jnp.shape(field)}")
+    if not checks.is_traced(field):
+        checks.field_angles(field, where, "field")
+    wl = lens.primary_wavelength if wavelength is None else wavelength
+    if jnp.ndim(wl) > 1 or jnp.size(wl) == 0:
+        raise ValueError(f"{where}: wavelength must be a scalar or [W] µm with W >= 1, got "
+                         f"shape {jnp.shape(wl)}")
+    if not checks.is_traced(wl):
+        checks.wavelengths(lens, wl, where)
+        checks.material_indices(lens, wl, where)
+    dtype = lens.epd.dtype
+    return jnp.asarray(field, dtype), jnp.atleast_1d(jnp.asarray(wl, dtype))
+
+
+def _metric(dxy, shape):
+    """Distance of offsets ``[..., 2]`` from the reference: Euclidean or Chebyshev (square)."""
+    if shape == "square":
+        return jnp.max(jnp.abs(dxy), axis=-1)
+    d2 = jnp.sum(dxy * dxy, axis=-1)
+    pos = d2 > 0
+    return jnp.where(pos, jnp.sqrt(jnp.where(pos, d2, 1.0)), 0.0)  # double where: grad at 0
+
+
+def _geometric_samples(lens, field, wls, *, reference, shape, pupil, depth):
+    """Distances (mm), weights and the reference point of the traced rays, pooled over wls."""
+    pts = pupil_polar(PUPIL_SIDE, dtype=lens.epd.dtype) if pupil is None else pupil
+    ps, ws = [], []
+    for w in wls:
+        r = spot_rays(lens, field, w, pupil=pts, depth=depth)
+        ps.append(r.origin[..., :2])
+        ws.append(r.valid.astype(r.origin.dtype))
+    p, wt = jnp.concatenate(ps), jnp.concatenate(ws)
+    if reference == "centroid":
+        ref = weighted_centroid(p, wt)
+        ok = jnp.sum(wt) > 0
+    else:
+        cr = chief_ray(lens, field, depth=depth)
+        ref, ok = cr.origin[:2], cr.valid & (jnp.sum(wt) > 0)
+    d = _metric(p - ref, shape)
+    total = jnp.sum(wt)
+    return d, wt, jnp.maximum(total, 1.0), jnp.where(ok, ref, jnp.nan), jnp.zeros(())
+
+
+def _diffraction_samples(lens, field, wls, *, reference, shape, depth, pixel_size, kernel_size,
+                         pupil_side, subsamples):
+    """Sub-pixel points of the coherent PSF: distances, energies, reference, truncation."""
+    res = psf_info(lens, field, depth=depth, wavelength=wls, kernel_size=kernel_size,
+                   pixel_size=pixel_size, model=CoherentPSF(pupil=pupil_side), center=reference,
+                   max_truncation=1.0)
+    kern = jnp.mean(res.psf, axis=0)  # [k, k], wavelengths pooled with equal weights
+    k, s = kernel_size, subsamples
+    c = (k - 1) / 2
+    sub = (np.arange(s) + 0.5) / s - 0.5  # sub-sample offsets inside a pixel (pixels)
+    off = (np.arange(k)[:, None] - c + sub[None, :]).reshape(-1)  # [k·s]
+    yy, xx = np.meshgrid(off, off, indexing="ij")
+    dxy = jnp.asarray(np.stack([xx, yy], -1), kern.dtype) * pixel_size  # [k·s, k·s, 2]
+    e = jnp.repeat(jnp.repeat(kern, s, axis=0), s, axis=1) / (s * s)
+    return (_metric(dxy, shape).reshape(-1), e.reshape(-1), jnp.ones((), kern.dtype),
+            res.center, jnp.mean(jnp.atleast_1d(res.truncated)))
+
+
+def _samples(lens, field, radii_or_fraction, where, *, wavelength, method, reference, shape,
+             pupil, depth, pixel_size, kernel_size, pupil_side, subsamples):
+    field, wls = _check_common(lens, where, field, wavelength, method, reference, shape)
+    if method == "geometric":
+        if pupil is not None:
+            pupil = jnp.asarray(pupil)
+            if pupil.ndim != 2 or pupil.shape[-1] != 2 or pupil.shape[0] == 0:
+                raise ValueError(f"{where}: pupil must be [M, 2] normalised pupil points with "
+                                 f"M >= 1, got shape {pupil.shape}")
+        return _geometric_samples(lens, field, wls, reference=reference, shape=shape,
+                                  pupil=pupil, depth=depth)
+    if pixel_size is None:
+        raise ValueError(f"{where}: method='diffraction' needs pixel_size (mm), the PSF grid "
+                         f"pitch: a few per Airy radius 1.22·λ·F#")
+    checks.number(pixel_size, "pixel_size", where, lo=0, lo_open=True, unit="mm")
+    checks.number(kernel_size, "kernel_size", where, lo=1, integer=True, unit="pixels per side")
+    checks.number(pupil_side, "pupil_side", where, lo=2, integer=True, unit="rays per side")
+    checks.number(subsamples, "subsamples", where, lo=1, integer=True,
+                  unit="sub-samples per pixel side")
+    return _diffraction_samples(lens, field, wls, reference=reference, shape=shape, depth=depth,
+                                pixel_size=pixel_size, kernel_size=int(kernel_size),
+                                pupil_side=int(pupil_side), subsamples=int(subsamples))
+
+
+def encircled_energy(lens: Lens, field, radii, *, wavelength=None, method: str = "geometric",
+                     reference: str = "centroid", shape: str = "circle", pupil=None,
+                     depth=None, pixel_size=None, kernel_size: int = 63,
+                     pupil_side: int = 64, subsamples: int = 8) -> EncircledEnergy:
+    """Fraction of a field's energy within each radius of the reference point.
+
+    Args:
+        lens: the lens.
+        field: θy, or (θx, θy), in degrees.
+        radii: radii in mm (half-widths for ``shape="square"``), finite and ≥ 0, any shape
+            (returned flattened).
+        wavelength: µm, a scalar or ``[W]`` (pooled with equal weights); default primary.
+        method: ``"geometric"`` (traced rays) or ``"diffraction"`` (coherent PSF).
+        reference: ``"centroid"`` (default, as Zemax) or ``"chief"`` (the chief ray).
+        shape: ``"circle"`` (encircled) or ``"square"`` (ensquared).
+        pupil: geometric: ``[M, 2]`` normalised pupil points, each carrying equal energy
+            (default ``pupil_polar(64)``: equal-area cells).
+        depth: object distance (mm), ``inf`` for infinity; default the lens's own object.
+        pixel_size, kernel_size, pupil_side, subsamples: diffraction: PSF pitch (mm, needed),
+            kernel side (pixels), coherent pupil rays per side, sub-samples per pixel side.
+
+    Returns:
+        An :class:`EncircledEnergy`; NaN where no ray reaches the image.
+
+    Example:
+        >>> import jax.numpy as jnp, jaxlens
+        >>> ee = encircled_energy(jaxlens.zoo.cooke_triplet(), 0.0, jnp.array([0.0, 1.0]))
+        >>> [round(float(e), 3) for e in ee.energy]
+        [0.0, 1.0]
+    """
+    where = "encircled_energy"
+    checks.real_values(radii, "radii", where, "mm")
+    r = jnp.reshape(jnp.asarray(radii, lens.epd.dtype), (-1,))
+    if r.size == 0:
+        raise ValueError(f"{where}: radii must hold at least one radius (mm)")
+    if not checks.is_traced(radii):
+        checks.values(r, "radii", where, lo=0, unit="mm")
+    d, w, total, center, trunc = _samples(
+        lens, field, radii, where, wavelength=wavelength, method=method, reference=reference,
+        shape=shape, pupil=pupil, depth=depth, pixel_size=pixel_size, kernel_size=kernel_size,
+        pupil_side=pupil_side, subsamples=subsamples)
+    inside = (d[None, :] <= r[:, None]).astype(w.dtype)
+    energy = jnp.sum(inside * w[None, :], axis=-1) / total
+    energy = jnp.where(jnp.all(jnp.isfinite(center)), energy, jnp.nan)
+    return EncircledEnergy(r, energy, center, trunc)
+
+
+def radius_for_fraction(lens: Lens, field, fraction, *, wavelength=None,
+                        method: str = "geometric", reference: str = "centroid",
+                        shape: str = "circle", pupil=None, depth=None, pixel_size=None,
+                        kernel_size: int = 63, pupil_side: int = 64,
+                        subsamples: int = 8) -> Array:
+    """The radius (mm) holding ``fraction`` of the energy (0.8: the D80 radius).
+
+    Args: as :func:`encircled_energy`, with ``fraction`` (a number or array, each in (0, 1))
+    in place of the radii.
+
+    Returns:
+        Radii (mm), the shape of ``fraction``: interpolated between the sorted sample
+        distances (see the module notes); NaN above what the kernel holds (diffraction) or
+        where no ray reaches the image.
+    """
+    where = "radius_for_fraction"
+    checks.real_values(fraction, "fraction", where, "(fraction of the energy)")
+    f = jnp.asarray(fraction, lens.epd.dtype)
+    if not checks.is_traced(fraction):
+        checks.values(f, "fraction", where, lo=0, hi=1, lo_open=True, hi_open=True,
+                      unit="(fraction of the energy)")
+    d, w, total, center, _ = _samples(
+        lens, field, fraction, where, wavelength=wavelength, method=method,
+        reference=reference, shape=shape, pupil=pupil, depth=depth, pixel_size=pixel_size,
+        kernel_size=kernel_size, pupil_side=pupil_side, subsamples=subsamples)
+    # Sort by distance; samples without energy sit at the far end and add nothing.
+    key = jnp.where(w > 0, d, jnp.inf)
+    order = jnp.argsort(jax.lax.stop_gradient(key))
+    ds, ws = d[order], w[order]
+    cum = (jnp.cumsum(ws) - 0.5 * ws) / total  # midpoint cumulative fraction
+    held = jnp.sum(ws) / total
+    # Flat stretches (no energy) keep the first distance: interp needs increasing xp.
+    cum = jnp.where(ws > 0, cum, jnp.inf)
+    radius = jnp.interp(f.reshape(-1), cum, ds).reshape(f.shape)
+    ok = jnp.all(jnp.isfinite(center)) & (f <= held)
+    return jnp.where(ok, radius, jnp.nan)
