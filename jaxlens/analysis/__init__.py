@@ -1,11 +1,16 @@
-"""Real-ray analysis: spots, RMS, distortion, ray fans, field curvature, clear apertures,
-geometry checks, tolerancing, the report."""
+"""Real-ray analysis: spots, RMS, distortion, ray fans, field curvature, encircled energy,
+third-order (Seidel) aberrations, clear apertures, geometry checks, tolerancing, the report."""
 
 from . import tolerance as tolerance
 from .aberrations import FieldCurvature as FieldCurvature
 from .aberrations import RayFan as RayFan
 from .aberrations import field_curvature as field_curvature
 from .aberrations import ray_fan as ray_fan
+from .encircled import EncircledEnergy as EncircledEnergy
+from .encircled import encircled_energy as encircled_energy
+from .encircled import radius_for_fraction as radius_for_fraction
+from .seidel import Seidel as Seidel
+from .seidel import seidel as seidel
 from .spots import Distortion as Distortion
 from .spots import GeometryCheck as GeometryCheck
 from .spots import RmsSpot as RmsSpot
