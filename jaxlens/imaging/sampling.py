@@ -245,7 +245,10 @@ def object_point(lens: Lens, field, depth) -> Array:
         # Beyond INFINITE_OBJECT_MM the first surface is more than the tracer's largest ray
         # parameter away (every ray was lost: a PSF of zeros, an RMS of NaN).
         checks.values(depth, "depth", "object_point", lo=0, lo_open=True,
-                      hi=INFINITE_OBJECT_MM, hi_open=True, unit="mm (object to surface 1)")
+                      unit="mm (object to surface 1)")
+        checks.values(depth, "depth", "object_point", lo=0, lo_open=True, hi=INFINITE_OBJECT_MM,
+                      hi_open=True,
+                      unit="mm (object to surface 1; farther is an object at infinity)")
     depth = jnp.asarray(depth)
     z = -depth
     zep = paraxial.entrance_pupil_z(lens, lens.primary_wavelength)
@@ -361,9 +364,9 @@ def static_depth(depth, where: str = "sampling"):
         # every ray NaN, and a negative one traced an object behind the lens, silently.
         return eqx.error_if(
             depth, ~(jnp.isfinite(depth) & (depth > 0) & (depth < INFINITE_OBJECT_MM)),
-            f"{where}: a traced depth must be in (0, {INFINITE_OBJECT_MM:g}) mm from the "
-            f"object to surface 1; for an object at infinity pass inf or None outside the "
-            f"traced arguments")
+            f"{where}: a traced depth must be finite and in (0, inf) mm from the object to "
+            f"surface 1, below {INFINITE_OBJECT_MM:g} mm (farther is an object at infinity); "
+            f"for an object at infinity pass inf or None outside the traced arguments")
     checks.real_values(depth, "depth", where, "mm")
     given = np.asarray(depth)
     # At or beyond INFINITE_OBJECT_MM (and inf) the object is at infinity, as a Lens's
@@ -371,7 +374,9 @@ def static_depth(depth, where: str = "sampling"):
     # an RMS of NaN at 1e300 mm, and in float32 already at 1e30 mm).
     if given.dtype.kind in "iuf" and np.all(given >= INFINITE_OBJECT_MM):
         return None
-    checks.values(depth, "depth", where, lo=0, lo_open=True, hi=INFINITE_OBJECT_MM,
-                  hi_open=True, unit=f"mm from the object to surface 1 (inf, or "
+    checks.values(depth, "depth", where, lo=0, lo_open=True,
+                  unit="mm from the object to surface 1 (inf: an object at infinity)")
+    checks.values(depth, "depth", where, lo=0, lo_open=True, hi=INFINITE_OBJECT_MM, hi_open=True,
+                  unit=f"mm from the object to surface 1 (inf, or all of them "
                   f"{INFINITE_OBJECT_MM:g} and more: an object at infinity)")
     return jnp.asarray(depth)
