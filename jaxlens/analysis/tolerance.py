@@ -74,6 +74,7 @@ from ..optics.diffractive import DIFFRACTIVE
 from ..optics.lens import Lens
 from ..optics.materials import LAMBDA_D, AbstractMaterial, Air, abbe_number
 from ..optics.paraxial_surface import ParaxialSurface
+from ..optics.qtype import QTypeAsphere
 from ..optics.surfaces import EvenAsphere, Standard, TiltedPlane
 from . import tolerance_rigid as rigid
 from .spots import clear_semi_diameters
@@ -93,6 +94,9 @@ DECENTER_TILT = ("element decenter x, y (mm) and tilt about x, y (degrees, about
                  "when Tolerances.decenter or tilt > 0 (default 0: off)")
 
 DISTRIBUTIONS = ("uniform", "normal")
+
+MAX_TILT = 90.0
+"""Tolerances.tilt must be below this (degrees): an element tilted by 90° faces sideways."""
 
 MAX_TRIALS = 1_000_000
 """Most Monte-Carlo trials (about a day of tracing; their perturbations take trials·P·8 bytes)."""
@@ -124,7 +128,7 @@ class Tolerances:
             the change that moves the sag at the clear semi-diameter h by that much
             (sensitivity table only).
         decenter: mm, each element's decenter in x and in y (0: off; see the module docstring).
-        tilt: degrees, each element's tilt about x and about y (0: off).
+        tilt: degrees, each element's tilt about x and about y (0: off; below 90).
         distribution: Monte-Carlo law: "uniform" over ±tolerance, or "normal" with σ =
             tolerance/2 truncated at ±tolerance.
     """
@@ -146,6 +150,11 @@ class Tolerances:
                  "asphere_sag": " mm", "decenter": " mm", "tilt": " degrees"}
         for name, unit in units.items():
             object.__setattr__(self, name, _nonneg(getattr(self, name), name, unit))
+        if self.tilt >= MAX_TILT:
+            # A tilt of 90° turns an element sideways, and one of 360° is no tilt at all: the
+            # sensitivity table showed a ±360° tilt as harmless.
+            raise ValueError(f"Tolerances: tilt must be below {MAX_TILT:g} degrees (each "
+                             f"element's tilt about x and about y), got {self.tilt!r}")
         if self.radius_rel >= 0.5 or self.abbe_rel >= 0.5:
             raise ValueError(f"Tolerances: radius_rel and abbe_rel must be below 0.5 "
                              f"(relative), got {self.radius_rel!r} and {self.abbe_rel!r}")
@@ -227,6 +236,13 @@ def _refuse_surfaces(lens: Lens, where: str) -> None:
             raise ValueError(f"{where}: {name} is a TiltedPlane; tolerance analysis assumes "
                              f"a rotationally symmetric lens and a flat image normal to the "
                              f"axis, and does not support tilted surfaces")
+        if isinstance(s, QTypeAsphere):
+            # Its a_m are no even series: the asphere tolerances (sensitivity) passed them by
+            # without a row in the table, and the radius tolerance scales the base conic's c,
+            # not the vertex curvature c + 2 Σ a_m Q_m(0)/ρ_n² of a Q-bfs surface.
+            raise ValueError(f"{where}: {name} is a QTypeAsphere (Forbes Q-{s.qtype}); "
+                             f"tolerance analysis perturbs even-asphere terms only and would "
+                             f"leave its Q-type terms untoleranced, so it does not support it")
         if i < lens.num_surfaces and s.radial_coeffs().shape[0]:
             raise ValueError(f"{where}: surface {i + 1} is a {type(s).__name__}; tolerance "
                              f"analysis of the radial terms β_i r^i of an odd asphere is not "

@@ -64,7 +64,21 @@ def check_lens(lens: Lens, where: str) -> None:
         raise ValueError(f"{where}: element decenter and tilt tolerances do not support lenses "
                          f"with mirrors (surfaces {[i + 1 for i in lens.mirrors]}); set "
                          f"Tolerances.decenter and tilt to 0")
-    for a, b in element_groups(lens):
+    groups = element_groups(lens)
+    media = [lens.object_material, *lens.materials]  # media[i] is before surfaces[i]
+    moved = {i for a, b in groups for i in range(a, b + 1)}
+    left = [i + 1 for i in range(lens.num_surfaces) if i not in moved
+            and not (isinstance(media[i], Air) and isinstance(media[i + 1], Air))]
+    if left:
+        # A glass run that starts in object space or ends in image space (an immersion
+        # object, a block cemented to the image) is no air-bounded element: it stayed in
+        # place while the others moved, and the yield left out its decenter without a word.
+        raise ValueError(f"{where}: element decenter and tilt move air-bounded elements "
+                         f"only, and surfaces {left} touch a medium that is not air (object "
+                         f"space: {type(lens.object_material).__name__}, image space: "
+                         f"{type(lens.materials[-1]).__name__}), so they would stay in place "
+                         f"untoleranced; set Tolerances.decenter and tilt to 0")
+    for a, b in groups:
         inside = [i + 1 for i in range(a, b + 1) if isinstance(lens.surfaces[i], CoordinateBreak)]
         if inside:
             raise ValueError(f"{where}: the element of surfaces {a + 1}-{b + 1} holds coordinate "

@@ -260,9 +260,13 @@ def main(argv: list[str] | None = None) -> int:
     if not 0 <= args.seed <= MAX_SEED:  # PRNGKey overflowed after the sensitivity pass
         return fail(prog, ValueError(f"--seed must be a whole number in [0, {MAX_SEED}], got "
                                      f"{args.seed}"))
+    from jaxlens.analysis.tolerance import MAX_TILT
+
     for flag, v, unit in (("--decenter", args.decenter, "mm"), ("--tilt", args.tilt, "deg")):
         if not (math.isfinite(v) and v >= 0):
             return fail(prog, ValueError(f"{flag} must be a finite number >= 0 {unit}, got {v}"))
+    if not args.tilt < MAX_TILT:  # found only after the lens was loaded
+        return fail(prog, ValueError(f"--tilt must be below {MAX_TILT:g} deg, got {args.tilt}"))
     if not os.path.isfile(args.design):
         return fail(prog, ValueError(f"design file {args.design!r} not found"))
     if os.path.exists(args.out) and not os.path.isdir(args.out):  # found only when writing

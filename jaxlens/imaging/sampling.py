@@ -21,7 +21,7 @@ import numpy as np
 from jaxtyping import Array, Float
 
 from ..optics import checks, paraxial
-from ..optics.lens import Lens, unclipped
+from ..optics.lens import INFINITE_OBJECT_MM, Lens, unclipped
 from ..optics.rays import Rays
 
 
@@ -242,8 +242,13 @@ def object_point(lens: Lens, field, depth) -> Array:
     _one_field(field, "object_point")
     th = field_xy(field)
     if not checks.is_traced(depth):  # before jnp.asarray, which traces a constant under jit
+        # Beyond INFINITE_OBJECT_MM the first surface is more than the tracer's largest ray
+        # parameter away (every ray was lost: a PSF of zeros, an RMS of NaN).
         checks.values(depth, "depth", "object_point", lo=0, lo_open=True,
                       unit="mm (object to surface 1)")
+        checks.values(depth, "depth", "object_point", lo=0, lo_open=True, hi=INFINITE_OBJECT_MM,
+                      hi_open=True,
+                      unit="mm (object to surface 1; farther is an object at infinity)")
     depth = jnp.asarray(depth)
     z = -depth
     zep = paraxial.entrance_pupil_z(lens, lens.primary_wavelength)
@@ -252,7 +257,8 @@ def object_point(lens: Lens, field, depth) -> Array:
 
 
 def field_rays(lens: Lens, field, pupil, wavelength=None, *, depth=None, aim="paraxial") -> Rays:
-    """Rays for a field angle at infinity (``depth=None``/inf) or from a finite depth (mm).
+    """Rays for a field angle at infinity (``depth=None``, inf, or ``INFINITE_OBJECT_MM`` =
+    1e10 mm and more, as for ``Lens.object_distance``) or from a finite depth (mm).
 
     The chief ray of a finite-depth field point makes the angle θ with the axis at the
     entrance pupil, as for an object at infinity.
@@ -260,7 +266,7 @@ def field_rays(lens: Lens, field, pupil, wavelength=None, *, depth=None, aim="pa
     if depth is not None:
         checks.real_values(depth, "depth", "field_rays", "mm")
     if depth is None or (not isinstance(depth, jax.core.Tracer)
-                         and np.all(np.isposinf(np.asarray(depth)))):
+                         and np.all(np.asarray(depth) >= INFINITE_OBJECT_MM)):
         return collimated(lens, field, pupil, wavelength, aim=aim)
     return point_source(lens, object_point(lens, field, depth), pupil, wavelength, aim=aim)
 
@@ -334,7 +340,8 @@ def aim_at_stop(
 
 def lens_depth(lens: Lens, depth, where: str):
     """The object distance an imaging or analysis function traces from: ``depth`` (mm from
-    the object to surface 1; inf for an object at infinity) or, for None, the lens's own
+    the object to surface 1; inf, or 1e10 and more, for an object at infinity, as a Lens's
+    ``object_distance``) or, for None, the lens's own
     object (``lens.object_distance``). Checked, with errors naming ``where``. Returns None
     for an object at infinity, else an array of the lens's dtype, so that compiled programs
     take it as an argument (one program serves every depth)."""
@@ -356,14 +363,20 @@ def static_depth(depth, where: str = "sampling"):
         # it cannot pick the collimated beam of an object at infinity; an infinite depth made
         # every ray NaN, and a negative one traced an object behind the lens, silently.
         return eqx.error_if(
-            depth, ~(jnp.isfinite(depth) & (depth > 0)),
+            depth, ~(jnp.isfinite(depth) & (depth > 0) & (depth < INFINITE_OBJECT_MM)),
             f"{where}: a traced depth must be finite and in (0, inf) mm from the object to "
-            f"surface 1; for an object at infinity pass inf or None outside the traced "
-            f"arguments")
+            f"surface 1, below {INFINITE_OBJECT_MM:g} mm (farther is an object at infinity); "
+            f"for an object at infinity pass inf or None outside the traced arguments")
     checks.real_values(depth, "depth", where, "mm")
     given = np.asarray(depth)
-    if given.dtype.kind in "iuf" and np.all(np.isposinf(given)):
+    # At or beyond INFINITE_OBJECT_MM (and inf) the object is at infinity, as a Lens's
+    # object_distance is: traced from there, every ray was lost (a PSF of zeros at 1e12 mm,
+    # an RMS of NaN at 1e300 mm, and in float32 already at 1e30 mm).
+    if given.dtype.kind in "iuf" and np.all(given >= INFINITE_OBJECT_MM):
         return None
     checks.values(depth, "depth", where, lo=0, lo_open=True,
                   unit="mm from the object to surface 1 (inf: an object at infinity)")
+    checks.values(depth, "depth", where, lo=0, lo_open=True, hi=INFINITE_OBJECT_MM, hi_open=True,
+                  unit=f"mm from the object to surface 1 (inf, or all of them "
+                  f"{INFINITE_OBJECT_MM:g} and more: an object at infinity)")
     return jnp.asarray(depth)
