@@ -283,3 +283,27 @@ def test_report_is_printed_before_a_figure_that_fails(cooke, tmp_path, capsys, m
     assert code == 2 and "SYSTEM DATA" in out
     assert err.strip() == ("jaxlens report: error: --plot: psf: more than 0.05 of the PSF "
                            "energy falls outside the kernel")
+
+
+def test_report_carries_the_seidel_sums_or_says_why_not():
+    import jaxlens
+    from jaxlens.analysis import seidel
+    from jaxlens.analysis.report import format_report, report_data
+
+    lens = jaxlens.zoo.cooke_triplet()
+    data = report_data(lens)
+    want = np.asarray(seidel(lens).sums)
+    got = np.array(list(data["seidel"]["sums"].values()))
+    np.testing.assert_allclose(got, want, rtol=1e-12)
+    assert data["seidel"]["field"] == pytest.approx(float(np.max(np.abs(lens.fields))))
+    assert "SEIDEL SUMS (third order" in format_report(data, lens)
+
+    glass = jaxlens.ModelGlass(1.5168, 64.17)
+    tilted = jaxlens.Lens(
+        surfaces=(jaxlens.Sphere(0.02), jaxlens.CoordinateBreak(tilt_x=1.0),
+                  jaxlens.Sphere(-0.02)),
+        thickness=jnp.array([2.5, 2.5, 45.0]), materials=(glass, glass, jaxlens.Air()),
+        epd=4.0, fields=(0.0, 1.0))
+    refused = report_data(tilted)["seidel"]
+    assert set(refused) == {"refused"} and "coordinate break" in refused["refused"]
+    assert "SEIDEL SUMS: not computed" in format_report(report_data(tilted))

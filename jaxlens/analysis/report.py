@@ -17,7 +17,10 @@ Conventions (also written into the JSON output under ``units``):
     positions are global z (surface 1's vertex at 0). ``focus_tangential`` and
     ``focus_sagittal`` (mm) are ``analysis.field_curvature`` at the primary wavelength: where
     the rays next to the chief ray meet it, along z from the image surface (+ behind it);
-    for a (θx, θy) field the tangential plane is along the field's azimuth.
+    for a (θx, θy) field the tangential plane is along the field's azimuth. ``seidel``
+    holds ``analysis.seidel``'s sums S_I … S_V, C_L, C_T (mm) and W040 … W111 (waves) at the
+    primary wavelength and the largest field, or ``refused`` with the reason for a lens
+    outside third-order theory (coordinate breaks, toroids, gratings, …).
 """
 
 from __future__ import annotations
@@ -49,6 +52,7 @@ from ..optics.surfaces import EvenAsphere, Hybrid, OddAsphere, Standard, TiltedP
 from ..optics.toroidal import Toroidal
 from . import spots as analysis
 from .aberrations import field_curvature
+from .seidel import SEIDEL_TERMS, WAVEFRONT_TERMS, seidel
 
 UNITS = {
     "length": "mm",
@@ -58,6 +62,7 @@ UNITS = {
     "rms_spot": "um",
     "rms_spot_mm": "mm",
     "focus": "mm",
+    "seidel": "mm (sums), waves (wavefront)",
 }
 
 
@@ -238,8 +243,22 @@ def report_data(lens: Lens, *, fields=None, wavelengths=None) -> dict:
         "wavelengths": [float(w) for w in wl],
         "primary_wavelength": float(wl[lens.primary]),
         "fields": out_fields,
+        "seidel": _seidel_sums(lens),
         "notes": _notes(lens),
     }
+
+
+def _seidel_sums(lens: Lens) -> dict:
+    """The lens's Seidel sums (mm) and their wavefront terms (waves) at the primary
+    wavelength and largest field, or why third-order theory does not apply."""
+    try:
+        s = seidel(lens)
+    except ValueError as e:
+        return {"refused": str(e)}
+    return {"field": _f(s.field), "wavelength": _f(s.wavelength),
+            "sums": {k: _f(v) for k, v in zip(SEIDEL_TERMS, s.sums, strict=True)},
+            "wavefront": {k: _f(v) for k, v in zip(WAVEFRONT_TERMS, s.wavefront(),
+                                                     strict=True)}}
 
 
 def _notes(lens: Lens) -> list[str]:
@@ -445,6 +464,18 @@ def format_report(data: dict, lens: Lens | None = None) -> str:
         else:
             head = f"{f['angle']:>9.3f}"
         L.append(f"  {i + 1:>5}{head}{_num(t, 13, 6)}{_num(s, 13, 6)}{_num(astig, 13, 6)}")
+    sd = data.get("seidel")
+    if sd:
+        L.append("")
+        if "refused" in sd:
+            L.append(f"SEIDEL SUMS: not computed ({sd['refused']})")
+        else:
+            L.append(f"SEIDEL SUMS (third order, field {sd['field']:.3f} deg, "
+                     f"{sd['wavelength']:.6f} um; S in mm, W in waves)")
+            L.append("  " + "".join(f"{k:>12}" for k in sd["sums"]))
+            L.append("  " + "".join(_num(v, 12, 6) for v in sd["sums"].values()))
+            L.append("  " + "".join(f"{k:>12}" for k in sd["wavefront"]))
+            L.append("  " + "".join(_num(v, 12, 4) for v in sd["wavefront"].values()))
     return "\n".join(L) + "\n"
 
 
