@@ -71,8 +71,10 @@ def _fans(lens, fields, pupil):
     from .imaging import sampling
     from .tracing.forward import trace_path
 
+    depth = sampling.lens_depth(lens, None, "plot_layout")  # from the lens's own object
+
     def one(f):
-        rays = sampling.collimated(lens, f, pupil)
+        rays = sampling.field_rays(lens, f, pupil, depth=depth)
         return rays.origin, rays.direction, trace_path(lens, rays)
 
     return jax.vmap(one)(fields)

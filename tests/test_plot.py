@@ -27,6 +27,28 @@ def test_layout_draws_each_fields_traced_fan():
             assert line.get_linestyle() == ("-" if bool(path.valid[-1, j]) else ":")
 
 
+def test_layout_of_a_finite_object_draws_rays_from_that_object():
+    """A lens with its object at 300 mm: the fans diverge from the object points (they were
+    drawn as collimated beams, an object at infinity)."""
+    import equinox as eqx
+
+    lens = eqx.tree_at(lambda L: L.object_distance, jaxlens.zoo.cooke_triplet(), 300.0,
+                       is_leaf=lambda x: x is None)
+    fields, n = [0.0, 10.0], 5
+    lines = plot.plot_layout(lens, fields, n_rays=n).axes[0].lines
+    pupil = jnp.stack([jnp.zeros(n), jnp.linspace(-1.0, 1.0, n)], -1)
+    for i, f in enumerate(fields):
+        rays = sampling.field_rays(lens, f, pupil, depth=300.0)
+        path = jaxlens.trace_path(lens, rays)
+        for j, line in enumerate(lines[i * (n + 1): i * (n + 1) + n]):
+            z, y = line.get_data()
+            np.testing.assert_allclose(y[1:], np.asarray(path.origin[:, j, 1]), atol=1e-9)
+            # Extended back, each drawn ray meets its object point at z = −300 mm.
+            slope = (y[1] - y[0]) / (z[1] - z[0])
+            np.testing.assert_allclose(y[0] + slope * (-300.0 - z[0]),
+                                       np.asarray(rays.origin[j, 1]), atol=1e-9)
+
+
 def test_layout_refuses_a_field_out_of_range_before_tracing():
     lens = jaxlens.zoo.cooke_triplet()
     with pytest.raises(ValueError, match=r"plot_layout: fields must be finite angles in "
