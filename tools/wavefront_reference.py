@@ -80,13 +80,19 @@ def main() -> None:
             w = np.asarray(d.opd)[keep]
             x = np.asarray(g.distribution.x)[keep]
             y = np.asarray(g.distribution.y)[keep]
-            wt = np.asarray(Wavefront.fit_and_remove_tilt(d, remove_piston=True))[keep]
+            # Tilt as jaxlens removes it: a least-squares plane in (Px, Py).
+            a = np.stack([np.ones_like(x), x, y], -1)
+            wt = w - a @ np.linalg.lstsq(a, w, rcond=None)[0]
+            # optiland's own fit is a plane in the exit-pupil coordinates (mm on the
+            # reference sphere), which pupil distortion bends against (Px, Py).
+            wx = np.asarray(Wavefront.fit_and_remove_tilt(d, remove_piston=True))[keep]
             noll = np.asarray(ZernikeFit(x, y, w, "noll", 37).coeffs)
             fringe = np.asarray(ZernikeFit(x, y, w, "fringe", 36).coeffs)
             out[th] = dict(
                 opd=opd_pts.tolist(), count=int(keep.sum()), rms_chief=float(g.rms()),
                 rms=float(np.std(w)), pv=float(np.ptp(w)), rms_tilt_removed=float(np.std(wt)),
-                pv_tilt_removed=float(np.ptp(wt)), noll=noll.tolist(), fringe=fringe.tolist())
+                pv_tilt_removed=float(np.ptp(wt)), rms_tilt_removed_exit_pupil=float(np.std(wx)),
+                noll=noll.tolist(), fringe=fringe.tolist())
     print(f"# optiland {version('optiland')}, tools/wavefront_reference.py "
           f"(Cooke triplet, {wl} µm, uniform grid {GRID})")
     print(f"POINTS = {POINTS!r}")

@@ -24,10 +24,11 @@ Conventions (those of Zemax's and optiland's "chief ray" reference):
     positive where the ray reaches the reference sphere with less optical path than the
     chief ray, that is where the wavefront is ahead of the reference sphere. This is
     optiland's sign (``optiland.wavefront.OPD``, strategy "chief_ray"), so the numbers
-    compare directly; the chief ray's OPD is 0. A converging wave focused a distance dz
-    before the image surface (light along +z, dz > 0 meaning the image surface lies
-    beyond the focus) has OPD ≈ −n′·dz·(1 − cos U) for a ray at angle U to the chief ray
-    (the paraxial W020 = −n′·dz·NA²/2 at the rim). ``reference="plane"`` (afocal image
+    compare directly; the chief ray's OPD is 0. A perfect wave converging to a focus that
+    lies a distance dz before the image surface (dz > 0: the image surface is beyond the
+    focus) has, for the ray at angle U to the chief ray,
+    OPD = n′·(dz·(1 − cos U) + sqrt(R² − dz²·sin²U) − R)/λ ≈ n′·dz·(1 − cos U)/λ, positive
+    (the paraxial W020 = n′·dz·NA²/(2λ) at the rim). ``reference="plane"`` (afocal image
     space) measures to the plane through C normal to the chief ray instead.
 
     A ray that is vignetted (clipped, missed a surface, TIR) has OPD NaN and valid False;
