@@ -27,6 +27,7 @@ from __future__ import annotations
 
 import os
 import sys
+import textwrap
 import warnings
 
 import numpy as np
@@ -95,13 +96,15 @@ def main() -> None:
                 noll=noll.tolist(), fringe=fringe.tolist())
     print(f"# optiland {version('optiland')}, tools/wavefront_reference.py "
           f"(Cooke triplet, {wl} µm, uniform grid {GRID})")
-    print(f"POINTS = {POINTS!r}")
+    print(textwrap.fill(f"OPTILAND_POINTS = {POINTS!r}", 98, subsequent_indent=" " * 19))
     print("OPTILAND = {")
     for th, v in out.items():
         print(f"    {th!r}: {{")
         for k, val in v.items():
             if isinstance(val, list):
-                print(f"        {k!r}: [" + ", ".join(f"{a:.12g}" for a in val) + "],")
+                body = ", ".join(f"{a:.12g}" for a in val)
+                print(textwrap.fill(f"{k!r}: [{body}],", 98, initial_indent=" " * 8,
+                                    subsequent_indent=" " * 12))
             else:
                 print(f"        {k!r}: {val!r},")
         print("    },")
