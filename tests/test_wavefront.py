@@ -121,6 +121,15 @@ OPTILAND = {
             -2.4082666529e-17, 3.08192898037e-17, -1.76204601284e-05, -2.46647657188e-05],
     },
 }
+# the object 500.0 mm before surface 1: OPD (waves) at OPTILAND_POINTS
+OPTILAND_FINITE = {
+    0.0: [0, -42.2421203287, -42.2421203287, -10.7926235784, -10.7926235784, -42.2421203287,
+        -10.7926235784, -30.6355353589, -24.7784641253],
+    14.0: [0, -40.1589254818, -40.0547759822, -9.91611569413, -9.9459543413, -39.0717864565,
+        -9.89775611242, -28.4887301417, -23.0452760227],
+    20.0: [0, -34.3160918331, -34.7907608195, -8.20392754168, -8.29302270968, -37.6130058217,
+        -9.41243828477, -25.5214092777, -19.7067848256],
+}
 
 
 # --------------------------------------------------------------------------------------
@@ -215,6 +224,14 @@ def test_cooke_triplet_matches_optiland(triplet, field):
     np.testing.assert_allclose(noll.coefficients, ref["noll"], rtol=0, atol=2e-10)
     fringe = wf.zernike(terms=36, indexing="fringe")
     np.testing.assert_allclose(fringe.coefficients, ref["fringe"], rtol=0, atol=2e-10)
+
+
+def test_cooke_triplet_with_a_finite_object_matches_optiland(triplet):
+    """An object 500 mm before surface 1 (the image surface stays at the infinity focus, so
+    tens of waves of defocus): the rays start on the object point's sphere."""
+    for field, ref in OPTILAND_FINITE.items():
+        w = opd(triplet, field, jnp.asarray(OPTILAND_POINTS), depth=500.0)
+        np.testing.assert_allclose(w, ref, rtol=1e-10, atol=1e-9)
 
 
 # --------------------------------------------------------------------------------------

@@ -15,7 +15,9 @@ the chief ray's image point through the paraxial exit pupil):
   removed, and with piston and tilt removed by ``Wavefront.fit_and_remove_tilt(...,
   remove_piston=True)``;
 - ``optiland.zernike.ZernikeFit`` of that grid's OPD: 37 Noll terms and 36 Fringe terms
-  (optiland's Fringe numbering follows the formula past Z36; the Fringe Z37 is R_12^0).
+  (optiland's Fringe numbering follows the formula past Z36; the Fringe Z37 is R_12^0);
+- the OPD at the same points for an object 500 mm before surface 1 (optiland's object
+  thickness set to 500 mm, the same angle fields; jaxlens ``depth=500``).
 
 Run it with optiland's interpreter from the repository root and paste its output into the
 test file:
@@ -38,6 +40,7 @@ FIELDS = (0.0, 14.0, 20.0)
 POINTS = ((0.0, 0.0), (0.0, 1.0), (0.0, -1.0), (0.0, 0.5), (0.0, -0.5), (1.0, 0.0),
           (0.5, 0.0), (0.6, 0.6), (-0.3, 0.7))
 GRID = 33
+FINITE_DEPTH = 500.0
 
 
 def main() -> None:
@@ -108,6 +111,19 @@ def main() -> None:
             else:
                 print(f"        {k!r}: {val!r},")
         print("    },")
+    print("}")
+    op.updater.set_thickness(FINITE_DEPTH, 0)
+    print(f"# the object {FINITE_DEPTH} mm before surface 1: OPD (waves) at OPTILAND_POINTS")
+    print("OPTILAND_FINITE = {")
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")
+        for th in FIELDS:
+            pts = Points()
+            pts.generate_points(0)
+            at = OPD(op, (0.0, th / top), wl, distribution=pts)
+            body = ", ".join(f"{a:.12g}" for a in at.get_data(at.fields[0], at.wavelengths[0]).opd)
+            print(textwrap.fill(f"{th!r}: [{body}],", 98, initial_indent=" " * 4,
+                                subsequent_indent=" " * 8))
     print("}")
 
 
