@@ -274,6 +274,18 @@ def test_an_ellipsoid_images_its_foci_without_wavefront_error():
     assert float(wavefront(_mirror(0.0, -1 / r, -d2, obj=d1), 0.0, grid=17).rms) > 1.0
 
 
+def test_a_plane_reference_for_afocal_image_space():
+    """A glass plate passes a plane wave as a plane wave: OPD 0 to the plane through the
+    chief ray's image point (``reference="plane"``), on and off axis; the reference sphere
+    of a focal system is the wrong one there (hundreds of waves)."""
+    plate = jl.Lens(surfaces=(jl.Plane(), jl.Plane()), thickness=jnp.array([10.0, 20.0]),
+                    materials=(jl.ModelGlass(1.5168, 64.17), jl.Air()), epd=10.0)
+    for field in (0.0, 10.0):
+        wf = wavefront(plate, field, grid=9, reference="plane")
+        assert float(np.nanmax(np.abs(wf.map))) < 1e-9 and int(wf.valid.sum()) == 49
+    assert float(wavefront(plate, 10.0, grid=9).rms) > 100.0
+
+
 def test_defocus_of_a_perfect_lens_is_the_exact_sphere_difference():
     """Image surface dz beyond the focus of a perfect wave: for the ray at angle U,
     OPD = (dz(1 − cos U) + sqrt(R² − dz² sin²U) − R)/λ (R the reference sphere's radius,
