@@ -177,9 +177,9 @@ class ZernikeFit(eqx.Module):
         return z @ self.coefficients
 
 
-def zernike_fit(x: Float[ArrayLike, " p"], y: Float[ArrayLike, " p"],
-                values: Float[ArrayLike, " p"], *, terms: int = 37, indexing: str = "noll",
-                mask: Bool[ArrayLike, " p"] | None = None) -> ZernikeFit:
+def zernike_fit(x: Float[ArrayLike, "*p"], y: Float[ArrayLike, "*p"],
+                values: Float[ArrayLike, "*p"], *, terms: int = 37, indexing: str = "noll",
+                mask: Bool[ArrayLike, "*p"] | None = None) -> ZernikeFit:
     """Least-squares Zernike coefficients of ``values`` at the points (x, y) of the unit disc.
 
     Args:
