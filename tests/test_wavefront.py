@@ -379,6 +379,16 @@ def test_opd_fan_is_the_opd_along_the_pupil_axes(triplet):
     np.testing.assert_allclose(fan.tangential[:, 2], 0.0, atol=1e-9)  # each chief ray
 
 
+def test_a_field_along_x_is_the_field_along_y_turned(triplet):
+    """Field (θx, θy) = (14, 0) at pupil point (Py, −Px) is field θy = 14 at (Px, Py): the
+    lens is turned by 90° about its axis."""
+    p = np.array([[0.3, 0.7], [-0.5, 0.2], [0.0, -1.0]])
+    turned = opd(triplet, jnp.array([14.0, 0.0]), np.stack([p[:, 1], -p[:, 0]], -1))
+    np.testing.assert_allclose(turned, opd(triplet, 14.0, p), atol=1e-10)
+    np.testing.assert_allclose(opd(triplet, jnp.array([0.0, 14.0]), p), opd(triplet, 14.0, p),
+                               atol=1e-12)
+
+
 def _rms_of_curvature(lens, c):
     return wavefront(eqx.tree_at(lambda m: m.surfaces[1].c, lens, c), 5.0, grid=9).rms
 
