@@ -2,7 +2,7 @@
 wavefront map with its RMS and peak-to-valley, Zernike fits, Maréchal's Strehl ratio and
 OPD fans.
 
-Conventions (those of Zemax's and optiland's "chief ray" reference):
+Conventions (optiland's "chief_ray" reference, Zemax's definition of the reference sphere):
     Lengths in mm, wavelengths in µm, field angles in degrees (θy, or (θx, θy)); OPD in
     waves at the wavelength traced. Pupil points (Px, Py) are normalised to the paraxial
     entrance pupil (the unit disc), launched as ``jaxlens.imaging.sampling.field_rays``
@@ -24,9 +24,10 @@ Conventions (those of Zemax's and optiland's "chief ray" reference):
     positive where the ray reaches the reference sphere with less optical path than the
     chief ray, that is where the wavefront is ahead of the reference sphere. This is
     optiland's sign (``optiland.wavefront.OPD``, strategy "chief_ray"), so the numbers
-    compare directly; the chief ray's OPD is 0. A perfect wave converging to a focus that
-    lies a distance dz before the image surface (dz > 0: the image surface is beyond the
-    focus) has, for the ray at angle U to the chief ray,
+    compare directly (Zemax's sign was not checked here); the chief ray's OPD is 0. A
+    perfect wave converging to a focus that lies a distance dz before the image surface
+    (dz > 0: the image surface is beyond the focus) has, for the ray at angle U to the
+    chief ray,
     OPD = n′·(dz·(1 − cos U) + sqrt(R² − dz²·sin²U) − R)/λ ≈ n′·dz·(1 − cos U)/λ, positive
     (the paraxial W020 = n′·dz·NA²/(2λ) at the rim). ``reference="plane"`` (afocal image
     space) measures to the plane through C normal to the chief ray instead.
@@ -37,13 +38,16 @@ Conventions (those of Zemax's and optiland's "chief ray" reference):
 
 Summary statistics (``wavefront``): the map is sampled on a ``grid × grid`` square grid over
 [−1, 1]² cut to the unit disc (points with Px² + Py² <= 1), each point weighing the same, as
-Zemax's wavefront map. ``rms`` and ``pv`` are taken with piston (the mean) removed, Zemax's
-"RMS to chief"; ``rms_tilt_removed`` and ``pv_tilt_removed`` also remove the least-squares
-tilt a + b·Px + c·Py, Zemax's "to centroid" (optiland's ``remove_tilt``, which also fits the
-piston). Zernike coefficients are fitted over the same points in (Px, Py) (``zernike``).
-``strehl`` is Maréchal's approximation exp(−(2π σ)²) with σ = ``rms_tilt_removed`` (the
-Strehl ratio at the best lateral image position, best focus not sought); good to a few
-per cent for σ below about 0.1 wave.
+Zemax's wavefront map. ``rms`` and ``pv`` are taken with piston (the mean) removed and tilt
+kept (Zemax's RMS "to chief", as we read its manual); ``rms_tilt_removed`` and
+``pv_tilt_removed`` also remove the least-squares tilt a + b·Px + c·Py (its "to centroid").
+optiland's ``remove_tilt`` fits its plane in exit-pupil coordinates (mm on the reference
+sphere) instead of (Px, Py); pupil distortion sets them apart (2.5e-5 wave of RMS on the
+Cooke triplet at 14°). Zernike coefficients are fitted over the same points in (Px, Py)
+(``Wavefront.zernike``, equal weights, as optiland's ``ZernikeFit``). ``strehl`` is
+Maréchal's approximation exp(−(2π σ)²) with σ = ``rms_tilt_removed`` (the Strehl ratio at
+the best lateral image position, best focus not sought); good to a few per cent for σ below
+about 0.1 wave.
 """
 
 from __future__ import annotations
@@ -255,9 +259,8 @@ class Wavefront(eqx.Module):
             ray is vignetted. Not piston-removed: the chief ray's OPD is 0.
         valid: ``[g, g]`` the points inside the disc whose rays reach the image surface.
         pupil: ``[g]`` the grid's normalised pupil coordinates, −1 … 1.
-        rms, pv: waves, piston removed (Zemax "to chief").
-        rms_tilt_removed, pv_tilt_removed: waves, piston and tilt removed (Zemax "to
-            centroid").
+        rms, pv: waves, piston removed, tilt kept.
+        rms_tilt_removed, pv_tilt_removed: waves, piston and tilt removed.
         tilt: ``[3]`` the removed plane a + b·Px + c·Py (waves).
         field: degrees; wavelength: µm.
     """
