@@ -1,0 +1,440 @@
+"""Wavefront error: optical path difference (OPD) to the exit-pupil reference sphere, the
+wavefront map with its RMS and peak-to-valley, Zernike fits, Maréchal's Strehl ratio and
+OPD fans.
+
+Conventions (optiland's "chief_ray" reference, Zemax's definition of the reference sphere):
+    Lengths in mm, wavelengths in µm, field angles in degrees (θy, or (θx, θy)); OPD in
+    waves at the wavelength traced. Pupil points (Px, Py) are normalised to the paraxial
+    entrance pupil (the unit disc), launched as ``jaxlens.imaging.sampling.field_rays``
+    launches them (``aim="paraxial"``: through (Px, Py)·EPD/2 on the paraxial
+    entrance-pupil plane; ``aim="real"``: through (Px, Py)·(stop radius) on the real stop).
+
+    Each ray's optical path starts on the incoming wavefront: for an object at infinity the
+    plane wave through the origin (the trace's path plus n₀ d·o for the launch point o and
+    direction d), for a finite object the object point. The chief ray is the ray through the
+    pupil centre (0, 0) at the same wavelength, traced without apertures or obscurations.
+    The reference sphere is centred on the chief ray's intercept C with the image surface
+    and passes through the paraxial exit pupil E = (0, 0, z_xp) (primary wavelength), radius
+    R = |C − E|. Each ray is followed back from its image-surface intercept P along −d to
+    the sphere (the root nearer the exit pupil, distance t > 0), so its path to the sphere
+    is L = OPL(P) − n′·t with n′ the image-space index. Then
+
+        OPD = (L_chief − L) / λ        (waves),
+
+    positive where the ray reaches the reference sphere with less optical path than the
+    chief ray, that is where the wavefront is ahead of the reference sphere. This is
+    optiland's sign (``optiland.wavefront.OPD``, strategy "chief_ray"), so the numbers
+    compare directly (Zemax's sign was not checked here); the chief ray's OPD is 0. A
+    perfect wave converging to a focus that lies a distance dz before the image surface
+    (dz > 0: the image surface is beyond the focus) has, for the ray at angle U to the
+    chief ray,
+    OPD = n′·(dz·(1 − cos U) + sqrt(R² − dz²·sin²U) − R)/λ ≈ n′·dz·(1 − cos U)/λ, positive
+    (the paraxial W020 = n′·dz·NA²/(2λ) at the rim). ``reference="plane"`` (afocal image
+    space) measures to the plane through C normal to the chief ray instead.
+
+    A ray that is vignetted (clipped, missed a surface, TIR) has OPD NaN and valid False;
+    so has every ray when the chief ray fails. Lenses with coordinate breaks are refused
+    (the exit pupil is found on the unfolded axis only).
+
+Summary statistics (``wavefront``): the map is sampled on a ``grid × grid`` square grid over
+[−1, 1]² cut to the unit disc (points with Px² + Py² <= 1), each point weighing the same, as
+Zemax's wavefront map. ``rms`` and ``pv`` are taken with piston (the mean) removed and tilt
+kept (Zemax's RMS "to chief", as we read its manual); ``rms_tilt_removed`` and
+``pv_tilt_removed`` also remove the least-squares tilt a + b·Px + c·Py (its "to centroid").
+optiland's ``remove_tilt`` fits its plane in exit-pupil coordinates (mm on the reference
+sphere) instead of (Px, Py); pupil distortion sets them apart (2.5e-5 wave of RMS on the
+Cooke triplet at 14°). Zernike coefficients are fitted over the same points in (Px, Py)
+(``Wavefront.zernike``, equal weights, as optiland's ``ZernikeFit``). ``strehl`` is
+Maréchal's approximation exp(−(2π σ)²) with σ = ``rms_tilt_removed`` (the Strehl ratio at
+the best lateral image position, best focus not sought); good to a few per cent for σ below
+about 0.1 wave.
+"""
+
+from __future__ import annotations
+
+import equinox as eqx
+import jax
+import jax.numpy as jnp
+import numpy as np
+from jaxtyping import Array, ArrayLike, Bool, Float
+
+from ..imaging.sampling import field_rays, lens_depth
+from ..optics import checks, paraxial
+from ..optics.coordinates import CoordinateBreak
+from ..optics.lens import Lens, unclipped
+from ..tracing.forward import DEFAULT_NEWTON_ITERS, trace
+from .zernike import ZernikeFit, zernike_fit
+
+__all__ = ["REFERENCES", "Wavefront", "OPDFan", "opd", "wavefront", "opd_fan",
+           "marechal_strehl"]
+
+REFERENCES = ("sphere", "plane")
+AIMS = ("paraxial", "real")
+DEFAULT_GRID = 65
+"""Default wavefront-map samples per side (odd: the chief ray is a grid point)."""
+PUPIL_TOLERANCE = 1e-9
+"""Pupil points may lie this far outside the unit disc (rounding)."""
+
+
+# --------------------------------------------------------------------------------------
+# Checks shared by the entry points
+# --------------------------------------------------------------------------------------
+def _common(lens, field, wavelength, depth, reference, aim, where: str):
+    """Checked (field, wavelength, depth) as lens-dtype arrays; raises ValueError naming
+    ``where`` and the argument."""
+    if not isinstance(lens, Lens):
+        raise TypeError(f"{where}: lens must be a jaxlens.Lens, got {type(lens).__name__}")
+    if any(isinstance(s, CoordinateBreak) for s in lens.surfaces):
+        raise ValueError(f"{where}: lenses with coordinate breaks are not supported (the "
+                         f"paraxial exit pupil that sets the reference sphere is found on "
+                         f"the unfolded axis only)")
+    if reference not in REFERENCES:
+        raise ValueError(f"{where}: reference must be one of {REFERENCES} ('sphere': the "
+                         f"exit-pupil reference sphere; 'plane': afocal image space), got "
+                         f"{reference!r}")
+    if aim not in AIMS:
+        raise ValueError(f"{where}: aim must be one of {AIMS}, got {aim!r}")
+    dtype = lens.epd.dtype
+    checks.real_values(field, "field", where, "deg")  # before jnp.asarray ("5" is not 5°)
+    if jnp.shape(field) not in ((), (1,), (2,)):
+        raise ValueError(f"{where}: field must be one field, θy or (θx, θy) in degrees, got "
+                         f"shape {jnp.shape(field)} (analyse several fields one at a time)")
+    field = checks.field_angles(field, where, "field")
+    f = jnp.asarray(field, dtype)
+    f = f.reshape(()) if f.shape == (1,) else f
+    wl = lens.primary_wavelength if wavelength is None else wavelength
+    checks.real_values(wl, "wavelength", where, "µm")
+    if jnp.shape(wl) != ():
+        raise ValueError(f"{where}: wavelength must be one value in µm, got shape "
+                         f"{jnp.shape(wl)} (analyse several wavelengths one at a time)")
+    if not checks.is_traced(wl):
+        checks.number(wl, "wavelength", where, lo=0, lo_open=True, unit="µm")
+    wl = checks.wavelengths(lens, jnp.asarray(wl, dtype), where, "wavelength")
+    checks.material_indices(lens, wl, where)
+    return f, wl, lens_depth(lens, depth, where)
+
+
+def _pupil_points(pupil, where: str):
+    checks.real_values(pupil, "pupil", where, "(normalised pupil coordinates)")
+    p = jnp.asarray(pupil)
+    if p.ndim < 1 or p.shape[-1] != 2 or p.size == 0:
+        raise ValueError(f"{where}: pupil must be normalised pupil points (Px, Py), shape "
+                         f"[..., 2], got shape {p.shape}")
+    if not checks.is_traced(p):
+        a = np.asarray(p, float)
+        checks.finite_array(a, "pupil", where, "normalised pupil coordinates")
+        r = np.sqrt(np.sum(a * a, -1))
+        if np.any(r > 1.0 + PUPIL_TOLERANCE):
+            raise ValueError(f"{where}: pupil points must lie in the unit disc "
+                             f"(Px² + Py² <= 1, normalised to the entrance pupil), got "
+                             f"radius {float(np.max(r)):.6g}")
+    return p
+
+
+# --------------------------------------------------------------------------------------
+# The optical path difference
+# --------------------------------------------------------------------------------------
+def _path_to_reference(lens, field, pts, wl, depth, reference, aim, newton_iters):
+    """(OPD in waves [m], valid [m]) of the rays through the pupil points ``pts`` [m, 2]."""
+    dtype = pts.dtype
+
+    def launched(p, on):
+        rays = field_rays(lens, field, p, wl, depth=depth, aim=aim)
+        out = trace(on, rays, newton_iters=newton_iters, chunk=None)
+        path = out.opl
+        if depth is None:  # the plane wave through the origin: n₀ d·o at the launch point
+            n0 = lens.object_material.index(wl)
+            path = path + n0 * jnp.sum(rays.direction * rays.origin, -1)
+        return out, path
+
+    chief, chief_path = launched(jnp.zeros((1, 2), dtype), unclipped(lens))
+    out, path = launched(pts, lens)
+    n_img = lens.materials[-1].index(wl)
+    c = chief.origin[0]
+    if reference == "sphere":
+        xp = paraxial.paraxial_data(lens).exit_pupil_z
+        e = jnp.stack([jnp.zeros_like(xp), jnp.zeros_like(xp), xp])
+        r2 = jnp.sum((c - e) ** 2)
+
+        def back(p, d):
+            """Distance back along −d from p to the sphere (the root toward the pupil)."""
+            b = jnp.sum(d * (p - c), -1)
+            disc = b * b - jnp.sum((p - c) ** 2, -1) + r2
+            ok = disc > 0
+            return b + jnp.sqrt(jnp.where(ok, disc, 1.0)), ok
+
+        t_c, ok_c = back(c, chief.direction[0])
+        t, ok = back(out.origin, out.direction)
+    else:
+        normal = chief.direction[0]
+
+        def back(p, d):
+            den = jnp.sum(d * normal, -1)
+            ok = den != 0
+            return jnp.sum((p - c) * normal, -1) / jnp.where(ok, den, 1.0), ok
+
+        t_c, ok_c = jnp.zeros((), dtype), jnp.ones((), bool)
+        t, ok = back(out.origin, out.direction)
+    ref_c = chief_path[0] - n_img * t_c
+    opd_mm = ref_c - (path - n_img * t)
+    valid = out.valid & ok & chief.valid[0] & ok_c
+    waves = opd_mm / (wl * 1e-3)
+    return jnp.where(valid, waves, jnp.nan), valid
+
+
+@eqx.filter_jit
+def _opd_impl(lens, field, pts, wl, depth, *, reference, aim, newton_iters):
+    return _path_to_reference(lens, field, pts, wl, depth, reference, aim, newton_iters)
+
+
+def opd(
+    lens: Lens,
+    field: Float[ArrayLike, ""] | Float[ArrayLike, " 2"],
+    pupil: Float[ArrayLike, "*m 2"],
+    *,
+    wavelength: Float[ArrayLike, ""] | None = None,
+    depth=None,
+    reference: str = "sphere",
+    aim: str = "paraxial",
+    newton_iters: int = DEFAULT_NEWTON_ITERS,
+) -> Float[Array, "*m"]:
+    """Optical path difference (waves) of the rays through normalised pupil points.
+
+    See the module notes for the reference sphere and the sign (optiland's: positive where
+    the wavefront is ahead of the reference sphere).
+
+    Args:
+        lens: the lens.
+        field: field angle in degrees, θy or (θx, θy).
+        pupil: ``[..., 2]`` points (Px, Py) in the unit disc (normalised entrance pupil).
+        wavelength: µm (default the primary wavelength); one value.
+        depth: object distance in mm before surface 1 (inf for infinity); None (default)
+            for the lens's own object.
+        reference: "sphere" (exit-pupil reference sphere) or "plane" (afocal image space).
+        aim: "paraxial" or "real" (as ``jaxlens.imaging.sampling.field_rays``).
+        newton_iters: Newton iterations for aspheric surfaces.
+
+    Returns:
+        ``[...]`` OPD in waves at ``wavelength``; NaN for rays that do not reach the image
+        surface (``wavefront(...).valid`` has the mask).
+
+    Example:
+        >>> import jax.numpy as jnp, jaxlens
+        >>> from jaxlens.analysis.wavefront import opd
+        >>> lens = jaxlens.zoo.cooke_triplet()
+        >>> w = opd(lens, 0.0, jnp.array([[0.0, 0.0], [0.0, 1.0]]))
+        >>> float(w[0]), bool(abs(w[1]) < 2)
+        (0.0, True)
+    """
+    f, wl, depth = _common(lens, field, wavelength, depth, reference, aim, "opd")
+    checks.number(newton_iters, "newton_iters", "opd", lo=0, integer=True, unit="iterations")
+    p = _pupil_points(pupil, "opd")
+    shape = p.shape[:-1]
+    w, _ = _opd_impl(lens, f, p.reshape(-1, 2).astype(lens.epd.dtype), wl, depth,
+                     reference=reference, aim=aim, newton_iters=int(newton_iters))
+    return w.reshape(shape)
+
+
+# --------------------------------------------------------------------------------------
+# The wavefront map and its statistics
+# --------------------------------------------------------------------------------------
+def marechal_strehl(rms_waves: Float[ArrayLike, "*b"]) -> Float[Array, "*b"]:
+    """Maréchal's approximation of the Strehl ratio, exp(−(2π σ)²), σ the RMS wavefront
+    error in waves (piston and tilt removed). Good to a few per cent for σ <~ 0.1 wave.
+
+    Example:
+        >>> round(float(marechal_strehl(0.0745)), 3)   # the λ/14 "diffraction limit"
+        0.803
+    """
+    s = jnp.asarray(rms_waves)
+    return jnp.exp(-((2.0 * jnp.pi * s) ** 2))
+
+
+class Wavefront(eqx.Module):
+    """A wavefront map of one field at one wavelength (see the module notes).
+
+    Attributes:
+        map: ``[g, g]`` OPD in waves, row i at Py = ``pupil[i]``, column j at Px =
+            ``pupil[j]`` (Py grows with the row index); NaN outside the disc and where a
+            ray is vignetted. Not piston-removed: the chief ray's OPD is 0.
+        valid: ``[g, g]`` the points inside the disc whose rays reach the image surface.
+        pupil: ``[g]`` the grid's normalised pupil coordinates, −1 … 1.
+        rms, pv: waves, piston removed, tilt kept.
+        rms_tilt_removed, pv_tilt_removed: waves, piston and tilt removed.
+        tilt: ``[3]`` the removed plane a + b·Px + c·Py (waves).
+        field: degrees; wavelength: µm.
+    """
+
+    map: Float[Array, "g g"]
+    valid: Bool[Array, "g g"]
+    pupil: Float[Array, " g"]
+    rms: Float[Array, ""]
+    pv: Float[Array, ""]
+    rms_tilt_removed: Float[Array, ""]
+    pv_tilt_removed: Float[Array, ""]
+    tilt: Float[Array, " 3"]
+    field: Float[Array, ""] | Float[Array, " 2"]
+    wavelength: Float[Array, ""]
+
+    @property
+    def strehl(self) -> Float[Array, ""]:
+        """Maréchal's Strehl ratio from ``rms_tilt_removed``."""
+        return marechal_strehl(self.rms_tilt_removed)
+
+    def zernike(self, *, terms: int = 37, indexing: str = "noll") -> ZernikeFit:
+        """Zernike coefficients (waves) of the map, fitted over its valid points in (Px, Py)
+        (``jaxlens.analysis.zernike``; "noll" is Zemax's Standard, "fringe" its Fringe)."""
+        px, py = jnp.meshgrid(self.pupil, self.pupil, indexing="xy")
+        return zernike_fit(px, py, self.map, terms=terms, indexing=indexing, mask=self.valid)
+
+
+def _rms_pv(w, valid):
+    cnt = jnp.maximum(jnp.sum(valid), 1)
+    wz = jnp.where(valid, w, 0.0)
+    mean = jnp.sum(wz) / cnt
+    dev = jnp.where(valid, wz - mean, 0.0)
+    ms = jnp.sum(dev * dev) / cnt
+    rms = jnp.where(ms > 0, jnp.sqrt(jnp.where(ms > 0, ms, 1.0)), 0.0)
+    pv = jnp.max(jnp.where(valid, wz, -jnp.inf)) - jnp.min(jnp.where(valid, wz, jnp.inf))
+    return rms, jnp.where(jnp.any(valid), pv, jnp.nan)
+
+
+def _statistics(w, valid, px, py):
+    rms, pv = _rms_pv(w, valid)
+    a = jnp.stack([jnp.ones_like(px), px, py], -1) * valid[:, None]
+    wz = jnp.where(valid, w, 0.0)
+    plane = jnp.linalg.solve(a.T @ a, a.T @ wz)
+    rms_t, pv_t = _rms_pv(wz - jnp.stack([jnp.ones_like(px), px, py], -1) @ plane, valid)
+    nan = jnp.where(jnp.any(valid), 0.0, jnp.nan)  # no light: statistics NaN
+    return rms + nan, pv, rms_t + nan, pv_t + nan, plane
+
+
+@eqx.filter_jit
+def _wavefront_impl(lens, field, wl, depth, *, grid, reference, aim, newton_iters):
+    dtype = lens.epd.dtype
+    g = jnp.linspace(-1.0, 1.0, grid, dtype=dtype)
+    px, py = jnp.meshgrid(g, g, indexing="xy")
+    inside = px * px + py * py <= 1.0
+    # Points outside the disc are traced at the centre (finite, no clipping) and masked.
+    pts = jnp.stack([jnp.where(inside, px, 0.0), jnp.where(inside, py, 0.0)], -1)
+    w, valid = _path_to_reference(lens, field, pts.reshape(-1, 2), wl, depth, reference, aim,
+                                  newton_iters)
+    valid = valid & inside.reshape(-1)
+    w = jnp.where(valid, w, jnp.nan)
+    rms, pv, rms_t, pv_t, plane = _statistics(w, valid, px.reshape(-1), py.reshape(-1))
+    return Wavefront(w.reshape(grid, grid), valid.reshape(grid, grid), g, rms, pv, rms_t, pv_t,
+                     plane, field, wl)
+
+
+def wavefront(
+    lens: Lens,
+    field: Float[ArrayLike, ""] | Float[ArrayLike, " 2"],
+    *,
+    wavelength: Float[ArrayLike, ""] | None = None,
+    depth=None,
+    grid: int = DEFAULT_GRID,
+    reference: str = "sphere",
+    aim: str = "paraxial",
+    newton_iters: int = DEFAULT_NEWTON_ITERS,
+) -> Wavefront:
+    """The wavefront map of one field and its RMS, peak-to-valley and Strehl ratio.
+
+    Args:
+        lens: the lens.
+        field: field angle in degrees, θy or (θx, θy).
+        wavelength: µm (default the primary wavelength); one value.
+        depth: object distance in mm (inf for infinity); None (default) for the lens's own.
+        grid: samples per side of the square pupil grid (>= 3; odd keeps the chief ray on
+            the grid).
+        reference, aim, newton_iters: as :func:`opd`.
+
+    Returns:
+        A :class:`Wavefront` (jittable and differentiable in the lens; statistics NaN when
+        no ray reaches the image surface).
+
+    Example:
+        >>> import jaxlens
+        >>> from jaxlens.analysis.wavefront import wavefront
+        >>> wf = wavefront(jaxlens.zoo.cooke_triplet(), 0.0, grid=33)
+        >>> wf.map.shape, bool(0 < float(wf.rms) < 1)
+        ((33, 33), True)
+    """
+    f, wl, depth = _common(lens, field, wavelength, depth, reference, aim, "wavefront")
+    grid = checks.number(grid, "grid", "wavefront", lo=3, integer=True,
+                         unit="pupil samples per side")
+    checks.number(newton_iters, "newton_iters", "wavefront", lo=0, integer=True,
+                  unit="iterations")
+    return _wavefront_impl(lens, f, wl, depth, grid=int(grid), reference=reference, aim=aim,
+                           newton_iters=int(newton_iters))
+
+
+# --------------------------------------------------------------------------------------
+# OPD fans
+# --------------------------------------------------------------------------------------
+class OPDFan(eqx.Module):
+    """OPD (waves) of one field along the pupil's y axis (tangential: (0, Py)) and x axis
+    (sagittal: (Px, 0)), each wavelength against its own chief ray and reference sphere."""
+
+    field: Float[Array, ""] | Float[Array, " 2"]  # θy, or (θx, θy), degrees
+    wavelengths: Float[Array, " W"]
+    pupil: Float[Array, " n"]
+    tangential: Float[Array, "W n"]
+    sagittal: Float[Array, "W n"]
+
+
+@eqx.filter_jit
+def _opd_fan_impl(lens, field, wls, depth, *, n, reference, aim, newton_iters):
+    t = jnp.linspace(-1.0, 1.0, n, dtype=wls.dtype)
+    zero = jnp.zeros_like(t)
+    pts = jnp.concatenate([jnp.stack([zero, t], -1), jnp.stack([t, zero], -1)])
+
+    def one(wl):
+        w, _ = _path_to_reference(lens, field, pts, wl, depth, reference, aim, newton_iters)
+        return w[:n], w[n:]
+
+    tan, sag = jax.vmap(one)(wls)
+    return OPDFan(field, wls, t, tan, sag)
+
+
+def opd_fan(
+    lens: Lens,
+    field: Float[ArrayLike, ""] | Float[ArrayLike, " 2"],
+    wavelengths: Float[ArrayLike, "*W"] | None = None,
+    *,
+    n: int = 21,
+    depth=None,
+    reference: str = "sphere",
+    aim: str = "paraxial",
+    newton_iters: int = DEFAULT_NEWTON_ITERS,
+) -> OPDFan:
+    """Tangential and sagittal OPD fans of one field (waves at each wavelength), beside
+    ``jaxlens.analysis.ray_fan``; NaN where a ray is vignetted.
+
+    Args:
+        lens: the lens.
+        field: θy, or (θx, θy), in degrees.
+        wavelengths: µm, one value or ``[W]``; default the lens's wavelengths.
+        n: pupil points per fan, evenly spaced over −1 … 1.
+        depth, reference, aim, newton_iters: as :func:`opd`.
+
+    Returns:
+        An :class:`OPDFan`.
+    """
+    if wavelengths is not None:
+        checks.real_values(wavelengths, "wavelengths", "opd_fan", "µm")
+    wls = lens.wavelengths if wavelengths is None else jnp.asarray(wavelengths, lens.epd.dtype)
+    if wls.ndim > 1 or wls.size == 0:
+        raise ValueError(f"opd_fan: wavelengths must be µm, one value or [W], got shape "
+                         f"{wls.shape}")
+    wls = wls.reshape(-1)
+    if not checks.is_traced(wls):
+        checks.values(np.asarray(wls, float), "wavelengths", "opd_fan", lo=0, lo_open=True,
+                      unit="µm")
+    f, _, depth = _common(lens, field, wls[0], depth, reference, aim, "opd_fan")
+    wls = checks.wavelengths(lens, wls, "opd_fan", "wavelengths")
+    checks.material_indices(lens, wls, "opd_fan", "wavelengths")
+    n = checks.number(n, "n", "opd_fan", lo=2, integer=True, unit="pupil points")
+    checks.number(newton_iters, "newton_iters", "opd_fan", lo=0, integer=True,
+                  unit="iterations")
+    return _opd_fan_impl(lens, f, wls, depth, n=int(n), reference=reference, aim=aim,
+                         newton_iters=int(newton_iters))
