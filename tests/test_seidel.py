@@ -6,7 +6,7 @@ import numpy as np
 import pytest
 
 import jaxlens as jl
-from jaxlens.analysis.seidel import seidel
+from jaxlens.analysis.third_order import seidel
 
 
 def asphere_doublet():

@@ -1,4 +1,4 @@
-"""Wavefront error (jaxlens.analysis.wavefront) and Zernike fits (jaxlens.analysis.zernike):
+"""Wavefront error (jaxlens.analysis.wavefront_error) and Zernike fits (jaxlens.analysis.zernike):
 against analytic answers (perfect lenses and mirrors, pure defocus, Zernike orthogonality,
 the Strehl ratio of defocus), optiland 0.6.3 on the Cooke triplet, a coherent PSF's Strehl
 ratio and central differences."""
@@ -13,7 +13,7 @@ import pytest
 
 import jaxlens as jl
 from jaxlens.analysis import zernike as zk
-from jaxlens.analysis.wavefront import marechal_strehl, opd, opd_fan, wavefront
+from jaxlens.analysis.wavefront_error import marechal_strehl, opd, opd_fan, wavefront
 from jaxlens.imaging.psf import CoherentPSF, psf_info
 from jaxlens.optics.coordinates import CoordinateBreak
 from jaxlens.optics.paraxial_surface import ParaxialSurface

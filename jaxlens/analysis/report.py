@@ -52,7 +52,7 @@ from ..optics.surfaces import EvenAsphere, Hybrid, OddAsphere, Standard, TiltedP
 from ..optics.toroidal import Toroidal
 from . import spots as analysis
 from .aberrations import field_curvature
-from .seidel import SEIDEL_TERMS, WAVEFRONT_TERMS, seidel
+from .third_order import SEIDEL_TERMS, WAVEFRONT_TERMS, seidel
 
 UNITS = {
     "length": "mm",

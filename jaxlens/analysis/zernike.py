@@ -25,7 +25,7 @@ Conventions:
     ``zernike_fit`` fits by least squares over the given points (each point weighs the same;
     points off the mask, and NaN values, weigh nothing); on a dense uniform grid this is
     the fit over the disc's area. Coefficients carry the unit of the values (waves for
-    ``jaxlens.analysis.wavefront``).
+    ``jaxlens.analysis.wavefront_error``).
 """
 
 from __future__ import annotations

@@ -220,7 +220,7 @@ def opd(
 
     Example:
         >>> import jax.numpy as jnp, jaxlens
-        >>> from jaxlens.analysis.wavefront import opd
+        >>> from jaxlens.analysis.wavefront_error import opd
         >>> lens = jaxlens.zoo.cooke_triplet()
         >>> w = opd(lens, 0.0, jnp.array([[0.0, 0.0], [0.0, 1.0]]))
         >>> float(w[0]), bool(abs(w[1]) < 2)
@@ -354,7 +354,7 @@ def wavefront(
 
     Example:
         >>> import jaxlens
-        >>> from jaxlens.analysis.wavefront import wavefront
+        >>> from jaxlens.analysis.wavefront_error import wavefront
         >>> wf = wavefront(jaxlens.zoo.cooke_triplet(), 0.0, grid=33)
         >>> wf.map.shape, bool(0 < float(wf.rms) < 1)
         ((33, 33), True)
