@@ -133,8 +133,8 @@ def test_float32_lens_wavefront_matches_float64():
     was 0.0247 wave in float32 against 0.0100 in float64. Under x64 the float32 lens is
     traced in float64 (results float32): now 0.0100249 vs 0.0100247."""
     lens = mirror(epd=6.0, fields=(0.0, 2.0))
-    w64 = wavefront(lens, 2.0, grid=17)
-    w32 = wavefront(lens.astype(jnp.float32), 2.0, grid=17)
+    w64 = wavefront(lens, 2.0, grid=9)
+    w32 = wavefront(lens.astype(jnp.float32), 2.0, grid=9)
     assert w32.rms.dtype == jnp.float32 and w32.map.dtype == jnp.float32
     np.testing.assert_allclose(float(w32.rms), float(w64.rms), rtol=1e-3)
     np.testing.assert_allclose(np.asarray(w32.map), np.asarray(w64.map), atol=1e-4)
@@ -195,7 +195,7 @@ def test_seidel_transverse_terms_are_the_real_ray_fans(name):
     np.testing.assert_allclose(edge, w040, rtol=1e-3)
 
 
-@pytest.mark.parametrize("name", [n for n in some("glass_image") if n != "cassegrain"])
+@pytest.mark.parametrize("name", [n for n in some() if n != "cassegrain"])
 def test_seidel_field_curvature_and_wavefront_slope(name):
     """field_curvature's foci (mm along z) are −TTFC/u′ and −TSFC/u′ with u′ = (n′u′)/n′ the
     image-space slope dy/dz, n′ signed (−1 after one mirror: light goes toward −z);
@@ -312,7 +312,8 @@ def test_geometric_encircled_energy_against_the_spot():
 def test_diffraction_ee_and_strehl_with_the_image_in_glass():
     """A perfect lens focusing into N-BK7: the coherent EE is Airy's with NA = n′ sin U′
     (|EE − Airy| ≤ 2.4e-3, as in air); Maréchal's Strehl from the wavefront RMS matches the
-    coherent PSF's for defocus in glass (0.9087 vs 0.9085 at 0.049 wave)."""
+    coherent PSF's for defocus in glass (0.9002 vs 0.8987 at 0.0516 wave), and the PSF's is
+    the exact defocus value sinc²(π W020) = 0.8987 (W020 = 0.1792 wave, n′ = 1.5185)."""
     wl, f = 0.55, 50.0
     lens = at_focus(jl.Lens(surfaces=(ParaxialSurface(focal_length=f),),
                             thickness=jnp.array([f]), materials=(BK7,), stop=0, epd=5.0,
@@ -327,12 +328,14 @@ def test_diffraction_ee_and_strehl_with_the_image_in_glass():
     ee = encircled_energy(lens, 0.0, r, method="diffraction", pixel_size=0.0005,
                           kernel_size=81)
     np.testing.assert_allclose(np.asarray(ee.energy), airy, atol=3e-3)
-    moved = defocused(lens, 0.04)
+    moved = defocused(lens, 0.12)
     wf = wavefront(moved, 0.0, grid=65)
     res = psf_info(moved, 0.0, wavelength=wl, kernel_size=31, pixel_size=0.0005,
                    model=CoherentPSF(pupil=64))
     assert 0.03 < float(wf.rms_tilt_removed) < 0.08
-    np.testing.assert_allclose(float(wf.strehl), float(res.strehl), atol=0.01)
+    np.testing.assert_allclose(float(wf.strehl), float(res.strehl), atol=0.005)
+    w020 = float(opd(moved, 0.0, jnp.array([[0.0, 1.0]]))[0])
+    np.testing.assert_allclose(float(res.strehl), np.sinc(w020) ** 2, atol=1e-3)
 
 
 def test_seidel_under_jit_and_in_float32_and_for_pair_fields():
