@@ -117,15 +117,22 @@ def some(*ci):
 # --------------------------------------------------------------------------------------
 def test_opd_with_the_exit_pupil_at_infinity():
     """Image-space telecentric: the reference sphere has R = inf. The OPD was 0 everywhere
-    (inf − inf); now it is the limit, W040 ρ⁴ on axis (2.0776e-7 wave at EPD 0.5, the real
+    (inf − inf), and nearly so when R is huge; now it is the limit, W040 ρ⁴ on axis (2.0776e-7 wave at EPD 0.5, the real
     OPD 2.0771e-7) and, off axis, the mirror's coma and astigmatism."""
     lens = telecentric_mirror(epd=0.5)
     assert not np.isfinite(float(paraxial.paraxial_data(lens).exit_pupil_z))
     w040 = float(seidel(lens, field=0.0).wavefront()[0])
     edge = float(opd(lens, 0.0, jnp.array([[0.0, 1.0]]))[0])
     np.testing.assert_allclose(edge, w040, rtol=2e-3)
-    off = opd(lens, 0.5, jnp.array([[0.0, 1.0], [0.0, -1.0], [1.0, 0.0]]))
+    pts = jnp.array([[0.0, 1.0], [0.0, -1.0], [1.0, 0.0]])
+    off = opd(lens, 0.5, pts)
     assert np.all(np.isfinite(np.asarray(off))) and float(jnp.max(jnp.abs(off))) > 1e-6
+    # Nearly telecentric (stop 1 µm off the focus: exit pupil 1e7 mm away): the same OPD.
+    # The old b + sqrt(b² − |q|² + R²) − R cancelled catastrophically: (−9.5e-6, 0, −1.27e-5)
+    # wave for the right (−7.76e-6, −1.95e-6, −1.50e-5).
+    near = at_focus(eqx.tree_at(lambda q: q.thickness, lens, lens.thickness.at[0].add(1e-3)))
+    assert abs(float(paraxial.paraxial_data(near).exit_pupil_z)) > 1e6
+    np.testing.assert_allclose(np.asarray(opd(near, 0.5, pts)), np.asarray(off), atol=1e-9)
 
 
 def test_float32_lens_wavefront_matches_float64():
