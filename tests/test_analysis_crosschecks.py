@@ -116,9 +116,10 @@ def some(*ci):
 # Bugs found (each test failed on the code before the fix)
 # --------------------------------------------------------------------------------------
 def test_opd_with_the_exit_pupil_at_infinity():
-    """Image-space telecentric: the reference sphere has R = inf. The OPD was 0 everywhere
-    (inf − inf), and nearly so when R is huge; now it is the limit, W040 ρ⁴ on axis (2.0776e-7 wave at EPD 0.5, the real
-    OPD 2.0771e-7) and, off axis, the mirror's coma and astigmatism."""
+    """Image-space telecentric: the reference sphere has R = inf. The OPD was 0 everywhere,
+    and wrong when R is huge; now it is the limit: W040 ρ⁴ on axis (2.0776e-7 wave at
+    EPD 0.5, the real OPD 2.0771e-7), off axis the mirror's coma and astigmatism, with a
+    finite gradient that matches central differences."""
     lens = telecentric_mirror(epd=0.5)
     assert not np.isfinite(float(paraxial.paraxial_data(lens).exit_pupil_z))
     w040 = float(seidel(lens, field=0.0).wavefront()[0])
@@ -133,6 +134,13 @@ def test_opd_with_the_exit_pupil_at_infinity():
     near = at_focus(eqx.tree_at(lambda q: q.thickness, lens, lens.thickness.at[0].add(1e-3)))
     assert abs(float(paraxial.paraxial_data(near).exit_pupil_z)) > 1e6
     np.testing.assert_allclose(np.asarray(opd(near, 0.5, pts)), np.asarray(off), atol=1e-9)
+
+    def rim(c):
+        return opd(eqx.tree_at(lambda q: q.surfaces[1].c, lens, c), 0.5, pts)[2]
+
+    c0, h = lens.surfaces[1].c, 1e-7
+    g = jax.grad(rim)(c0)
+    np.testing.assert_allclose(float(g), float(rim(c0 + h) - rim(c0 - h)) / (2 * h), rtol=1e-4)
 
 
 def test_float32_lens_wavefront_matches_float64():
