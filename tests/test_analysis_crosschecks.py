@@ -258,7 +258,8 @@ def test_defocus_and_spherical_in_zernike_terms(name):
     """Defocus dz (along the light) adds n′·dz·(1 − cos U′)/λ at the rim (OPD difference
     against the focus; 8.32e-3 wave with n′ = 1.517 at EPD 2, within 1e-3 relative); the
     fitted Noll Z4 moves by that /(2√3). At focus on axis, Noll Z11 = W040/(6√5)
-    (1.3207e-4 vs 1.3192e-4 in glass: 0.2 %)."""
+    (1.3207e-4 vs 1.3192e-4 in glass: 0.2 %); off axis the coma, astigmatism and focus
+    terms follow from W131, W222, W220P (signs of the fit against Seidel's)."""
     lens = LENSES[name](epd=2.0)
     wl = float(lens.primary_wavelength)
     n_img = float(lens.materials[-1].index(wl))
@@ -274,6 +275,15 @@ def test_defocus_and_spherical_in_zernike_terms(name):
     np.testing.assert_allclose(float(z1[3] - z0[3]), w020 / (2 * np.sqrt(3)), rtol=3e-3)
     w040 = float(seidel(lens, field=0.0).wavefront()[0])
     np.testing.assert_allclose(float(z0[10]), w040 / (6 * np.sqrt(5)), rtol=3e-3)
+    # Off axis (field along +y): Noll Z7 (y coma) = W131/(3√8), Z6 (cos 2θ) = −W222/(2√6),
+    # Z4 = (W040 + W222 + W220P)/(2√3) (ρ⁴ = 1/3 + (2ρ² − 1)/2 + …; ρ² cos²φ = ρ²/2 + …).
+    fld = float(lens.fields[-1])
+    w = np.asarray(seidel(lens, field=fld).wavefront())
+    z = np.asarray(wavefront(lens, fld, grid=33).zernike(terms=11).coefficients)
+    big = np.max(np.abs(z[3:11]))
+    np.testing.assert_allclose(z[6], w[1] / (3 * np.sqrt(8)), atol=3e-3 * big)
+    np.testing.assert_allclose(z[5], -w[2] / (2 * np.sqrt(6)), atol=3e-3 * big)
+    np.testing.assert_allclose(z[3], (w[0] + w[2] + w[3]) / (2 * np.sqrt(3)), atol=3e-3 * big)
 
 
 @pytest.mark.slow
