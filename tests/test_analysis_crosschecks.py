@@ -118,8 +118,7 @@ def some(*ci):
 def test_opd_with_the_exit_pupil_at_infinity():
     """Image-space telecentric: the reference sphere has R = inf. The OPD was 0 everywhere,
     and wrong when R is huge; now it is the limit: W040 ρ⁴ on axis (2.0776e-7 wave at
-    EPD 0.5, the real OPD 2.0771e-7), off axis the mirror's coma and astigmatism, with a
-    finite gradient that matches central differences."""
+    EPD 0.5, the real OPD 2.0771e-7), off axis the mirror's coma and astigmatism."""
     lens = telecentric_mirror(epd=0.5)
     assert not np.isfinite(float(paraxial.paraxial_data(lens).exit_pupil_z))
     w040 = float(seidel(lens, field=0.0).wavefront()[0])
@@ -135,6 +134,13 @@ def test_opd_with_the_exit_pupil_at_infinity():
     assert abs(float(paraxial.paraxial_data(near).exit_pupil_z)) > 1e6
     np.testing.assert_allclose(np.asarray(opd(near, 0.5, pts)), np.asarray(off), atol=1e-9)
 
+
+@pytest.mark.slow
+def test_opd_gradient_with_the_exit_pupil_at_infinity():
+    """The telecentric OPD's gradient is finite and matches central differences."""
+    lens = telecentric_mirror(epd=0.5)
+    pts = jnp.array([[0.0, 1.0], [0.0, -1.0], [1.0, 0.0]])
+
     def rim(c):
         return opd(eqx.tree_at(lambda q: q.surfaces[1].c, lens, c), 0.5, pts)[2]
 
@@ -144,14 +150,15 @@ def test_opd_with_the_exit_pupil_at_infinity():
 
 
 def test_float32_lens_wavefront_matches_float64():
-    """Float32 optical paths of ~200 mm carry ~0.02-0.08 wave of rounding: the mirror's RMS
-    was 0.0247 wave in float32 against 0.0100 in float64. Under x64 the float32 lens is
-    traced in float64 (results float32): now 0.0100249 vs 0.0100247."""
-    lens = mirror(epd=6.0, fields=(0.0, 2.0))
-    w64 = wavefront(lens, 2.0, grid=9)
-    w32 = wavefront(lens.astype(jnp.float32), 2.0, grid=9)
+    """Float32 optical paths of ~100 mm carry a few hundredths of a wave of rounding: the
+    RMS of this lens at 2° was 0.1219 wave in float32 against 0.1195 in float64 (a spherical
+    mirror's 0.0247 against 0.0100). Under x64 a float32 lens is traced in float64 and the
+    results cast back: now equal to 1e-5 relative."""
+    lens = glass_image(epd=6.0, fields=(0.0, 2.0))
+    w64 = wavefront(lens, 2.0, grid=33)
+    w32 = wavefront(lens.astype(jnp.float32), 2.0, grid=33)
     assert w32.rms.dtype == jnp.float32 and w32.map.dtype == jnp.float32
-    np.testing.assert_allclose(float(w32.rms), float(w64.rms), rtol=1e-3)
+    np.testing.assert_allclose(float(w32.rms), float(w64.rms), rtol=1e-4)
     np.testing.assert_allclose(np.asarray(w32.map), np.asarray(w64.map), atol=1e-4)
     o32 = opd(lens.astype(jnp.float32), 2.0, jnp.array([[0.0, 1.0]]))
     assert o32.dtype == jnp.float32
