@@ -246,7 +246,8 @@ def test_seidel_field_curvature_and_wavefront_slope(name):
 def test_seidel_colour_against_real_rays_in_glass():
     """TAXC: marginal-ray height at F minus C on the paraxial image plane (−2.5686e-3 vs real
     −2.5634e-3 mm with the image in glass); TLAC: the F chief ray minus the C one
-    (−1.2553e-3 vs −1.2527e-3). Within 0.5 % (second-order colour)."""
+    (−1.2553e-3 vs −1.2527e-3). Within 0.5 % (second-order colour). W020 = C_L/2 against
+    the OPD fans."""
     lens = glass_image(epd=0.5)
     s = seidel(lens, field=0.2)
     t = np.asarray(s.transverse())
@@ -258,6 +259,12 @@ def test_seidel_colour_against_real_rays_in_glass():
         return float(trace(lens, field_rays(lens, 0.2, jnp.zeros((1, 2)), w)).origin[0, 1])
 
     np.testing.assert_allclose(chief_y(FDC[0]) - chief_y(FDC[2]), t[9], rtol=5e-3)
+    # The OPD fans (each wavelength to its own reference sphere) on axis: F minus C at the
+    # rim, in mm, is C_L/2 (5.533e-6 vs 5.531e-6 mm).
+    of = opd_fan(lens, 0.0, FDC[jnp.array([0, 2])], n=3)
+    rim = (float(of.tangential[0, -1]) * float(FDC[0]) - float(of.tangential[1, -1])
+           * float(FDC[2])) * 1e-3
+    np.testing.assert_allclose(rim, float(s.sums[5]) / 2, rtol=2e-3)
 
 
 @pytest.mark.parametrize("name", ["glass_image", pytest.param("mirror", marks=pytest.mark.slow)])
