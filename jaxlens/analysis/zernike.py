@@ -214,7 +214,8 @@ def zernike_fit(x: Float[ArrayLike, "*p"], y: Float[ArrayLike, "*p"],
         v = v.astype(float)
     ok = jnp.isfinite(v)
     if mask is not None:
-        mask = jnp.ravel(jnp.asarray(mask))
+        # A 0/1 (or any numeric) mask means nonzero = fit; ``ok & 2`` was bitwise (0).
+        mask = jnp.ravel(jnp.asarray(mask)).astype(bool)
         if mask.shape != v.shape:
             raise ValueError(f"{where}: mask must have one entry per point ({v.size}), got "
                              f"{mask.size}")
