@@ -307,3 +307,32 @@ def test_report_carries_the_seidel_sums_or_says_why_not():
     refused = report_data(tilted)["seidel"]
     assert set(refused) == {"refused"} and "coordinate break" in refused["refused"]
     assert "SEIDEL SUMS: not computed" in format_report(report_data(tilted))
+
+
+def test_report_wavefront_is_the_analysis_and_gives_strehl_only_where_marechal_holds(capsys):
+    import equinox as eqx
+
+    import jaxlens
+    from jaxlens.analysis import wavefront
+    from jaxlens.analysis.report import MARECHAL_MAX_RMS, report_data
+
+    # The triplet stopped down to EPD 4 has 0.08 wave RMS (tilt removed), at EPD 6 0.15–0.18.
+    for epd, marechal_holds in ((4.0, True), (6.0, False)):
+        lens = eqx.tree_at(lambda L: (L.epd, L.fields), jaxlens.zoo.cooke_triplet(),
+                           (jnp.asarray(epd), jnp.array([0.0, 20.0])))
+        data = report_data(lens, wavefront=True)
+        for entry, angle in zip(data["fields"], (0.0, 20.0), strict=True):
+            w = wavefront(lens, angle)
+            got = entry["wavefront"]
+            np.testing.assert_allclose([got["rms"], got["pv"], got["rms_tilt_removed"]],
+                                       [float(w.rms), float(w.pv), float(w.rms_tilt_removed)],
+                                       rtol=1e-12)
+            assert (float(w.rms_tilt_removed) <= MARECHAL_MAX_RMS) == marechal_holds
+            if marechal_holds:
+                assert got["strehl"] == pytest.approx(float(w.strehl), rel=1e-12)
+            else:
+                assert got["strehl"] is None
+    assert "wavefront" not in report_data(lens)["fields"][0]  # off by default
+
+    code, out, _ = _run(capsys, DATA / "rayoptics_HoO-V2C18Ex46.zmx", "--wavefront")
+    assert code == 0 and "WAVEFRONT ERROR" in out and "coordinate breaks" in out

@@ -1,7 +1,7 @@
 """Lens report: system data and per-field chief ray, distortion and RMS spot.
 
 ``python -m jaxlens report LENS [--json] [--fields DEG ...] [--wavelengths UM ...]
-[--plot DIR [--overwrite]] [--lenient] [--unknown-glass model]``
+[--wavefront] [--plot DIR [--overwrite]] [--lenient] [--unknown-glass model]``
 
 Conventions (also written into the JSON output under ``units``):
     Lengths and heights in mm, angles in degrees, wavelengths in µm, distortion in %.
@@ -20,7 +20,11 @@ Conventions (also written into the JSON output under ``units``):
     for a (θx, θy) field the tangential plane is along the field's azimuth. ``seidel``
     holds ``analysis.seidel``'s sums S_I … S_V, C_L, C_T (mm) and W040 … W111 (waves) at the
     primary wavelength and the largest field, or ``refused`` with the reason for a lens
-    outside third-order theory (coordinate breaks, toroids, gratings, …).
+    outside third-order theory (coordinate breaks, toroids, gratings, …). With
+    ``--wavefront`` each field also has ``wavefront``: ``analysis.wavefront`` at the primary
+    wavelength (``rms``, ``pv``, and both with tilt removed, in waves; ``strehl``, Maréchal's,
+    null where the RMS with tilt removed exceeds 0.1 wave and the approximation fails), or
+    ``refused`` with the reason.
 """
 
 from __future__ import annotations
@@ -53,6 +57,7 @@ from ..optics.toroidal import Toroidal
 from . import spots as analysis
 from .aberrations import field_curvature
 from .third_order import SEIDEL_TERMS, WAVEFRONT_TERMS, seidel
+from .wavefront_error import wavefront as wavefront_map
 
 UNITS = {
     "length": "mm",
@@ -161,13 +166,15 @@ def _f(x) -> float | None:
     return v if math.isfinite(v) else None
 
 
-def report_data(lens: Lens, *, fields=None, wavelengths=None) -> dict:
+def report_data(lens: Lens, *, fields=None, wavelengths=None, wavefront: bool = False) -> dict:
     """The report as a JSON-ready dict (see the module docstring for units).
 
     Args:
         lens: the lens.
         fields: field angles in degrees (y); default the lens's fields.
         wavelengths: µm; default the lens's wavelengths.
+        wavefront: also give each field's wavefront error (``analysis.wavefront`` at the
+            primary wavelength): RMS and P-V in waves, and Maréchal's Strehl ratio.
     """
     lens = with_fields_and_wavelengths(lens, fields, wavelengths)
     if wavelengths is None and not checks.is_traced(lens.wavelengths):
@@ -212,6 +219,9 @@ def report_data(lens: Lens, *, fields=None, wavelengths=None) -> dict:
     for i, entry in enumerate(out_fields):
         entry["focus_tangential"] = _f(foci[0][i])
         entry["focus_sagittal"] = _f(foci[1][i])
+    if wavefront:
+        for entry, angle in zip(out_fields, lens.fields, strict=True):
+            entry["wavefront"] = _wavefront_summary(lens, angle)
     imax = int(np.argmax(radial))
     return {
         "name": lens.name,
@@ -246,6 +256,23 @@ def report_data(lens: Lens, *, fields=None, wavelengths=None) -> dict:
         "seidel": _seidel_sums(lens),
         "notes": _notes(lens),
     }
+
+
+MARECHAL_MAX_RMS = 0.1
+"""Waves: above this RMS (tilt removed) Maréchal's Strehl is no estimate; the report gives
+none."""
+
+
+def _wavefront_summary(lens: Lens, field) -> dict:
+    """One field's wavefront error (waves, primary wavelength), or why there is none."""
+    try:
+        w = wavefront_map(lens, field)
+    except ValueError as e:
+        return {"refused": str(e)}
+    sigma = _f(w.rms_tilt_removed)
+    strehl = _f(w.strehl) if sigma is not None and sigma <= MARECHAL_MAX_RMS else None
+    return {"rms": _f(w.rms), "pv": _f(w.pv), "rms_tilt_removed": sigma,
+            "pv_tilt_removed": _f(w.pv_tilt_removed), "strehl": strehl}
 
 
 def _seidel_sums(lens: Lens) -> dict:
@@ -464,6 +491,21 @@ def format_report(data: dict, lens: Lens | None = None) -> str:
         else:
             head = f"{f['angle']:>9.3f}"
         L.append(f"  {i + 1:>5}{head}{_num(t, 13, 6)}{_num(s, 13, 6)}{_num(astig, 13, 6)}")
+    if any("wavefront" in f for f in data["fields"]):
+        L.append("")
+        L.append("WAVEFRONT ERROR (primary wavelength, waves, to the exit-pupil reference sphere; "
+                 "piston removed; Strehl: Marechal, tilt removed, given where RMS -tilt <= "
+                 f"{MARECHAL_MAX_RMS:g} wave)")
+        L.append(f"  {'Field':>5}{'RMS':>12}{'P-V':>12}{'RMS -tilt':>12}{'P-V -tilt':>12}"
+                 f"{'Strehl':>10}")
+        for i, f in enumerate(data["fields"]):
+            w = f.get("wavefront", {})
+            if "refused" in w:
+                L.append(f"  {i + 1:>5}  not computed ({w['refused']})")
+                continue
+            L.append(f"  {i + 1:>5}{_num(w['rms'], 12, 4)}{_num(w['pv'], 12, 4)}"
+                     f"{_num(w['rms_tilt_removed'], 12, 4)}{_num(w['pv_tilt_removed'], 12, 4)}"
+                     f"{_num(w['strehl'], 10, 4, '-')}")
     sd = data.get("seidel")
     if sd:
         L.append("")
@@ -522,6 +564,12 @@ def register(subparsers) -> None:
     )
     p.add_argument("--overwrite", action="store_true", help="with --plot: replace the figures")
     p.add_argument(
+        "--wavefront",
+        action="store_true",
+        help="also give each field's wavefront error at the primary wavelength (RMS and P-V "
+        "in waves, Marechal Strehl)",
+    )
+    p.add_argument(
         "--lenient",
         action="store_true",
         help=".zmx: read as jaxlens.load does by default, warning (instead of refusing) about "
@@ -579,7 +627,7 @@ def run(args: argparse.Namespace) -> int:
         for w in caught:
             print(f"jaxlens report: warning: {w.message}", file=sys.stderr)
         shown = with_fields_and_wavelengths(lens, args.fields, args.wavelengths)
-        data = report_data(shown)
+        data = report_data(shown, wavefront=args.wavefront)
     except (ValueError, OSError) as e:
         hint = "" if args.lenient or "(strict mode)" not in str(e) else (
             " (--lenient reads the file anyway, with a warning)")
