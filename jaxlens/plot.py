@@ -1,5 +1,6 @@
 """Figures: lens layout with rays, spot diagrams, ray fans, field curvature and distortion,
-RMS map, MTF curves, design progress.
+RMS map, MTF curves, design progress, wavefront map, OPD fans, Seidel diagram, encircled
+energy.
 
 Every function builds a ``matplotlib.figure.Figure`` with the Agg canvas (no pyplot, no
 display needed) and returns it; ``save(fig, path)`` writes it. Conventions: lengths in mm
@@ -481,6 +482,18 @@ def _largest_field(lens):
     return float(f[int(np.argmax(np.abs(f)))])
 
 
+def _checked_fields(lens, fields, fractions, where: str) -> list:
+    """The fields given (or the default ones), checked before any tracing."""
+    from .optics import checks
+
+    fields = _default_fields(lens, fractions) if fields is None else list(fields)
+    if not fields:
+        raise ValueError(f"{where}: fields must hold at least one field (θy or (θx, θy) in "
+                         f"degrees), got none")
+    checks.field_angles(fields, where, "fields")  # here, not after some fields are traced
+    return fields
+
+
 def _one_field(field, where: str):
     """One field θy or (θx, θy) in degrees, checked before any tracing."""
     from .optics import checks
@@ -549,11 +562,9 @@ def plot_opd_fans(lens, fields: Sequence[float] | None = None, *, wavelengths=No
     import jax.numpy as jnp
 
     from .analysis.wavefront_error import opd_fan
-    from .optics import checks
 
     lens = lens.astype(jnp.float64)
-    fields = _default_fields(lens, (0.0, 0.7, 1.0)) if fields is None else list(fields)
-    checks.field_angles(fields, "plot_opd_fans", "fields")  # here, not after some fans
+    fields = _checked_fields(lens, fields, (0.0, 0.7, 1.0), "plot_opd_fans")
     fans = [opd_fan(lens, f, wavelengths, n=n) for f in fields]
     vals = np.concatenate([np.asarray(x).ravel() for r in fans
                            for x in (r.tangential, r.sagittal)])
@@ -643,8 +654,7 @@ def plot_encircled_energy(lens, fields: Sequence[float] | None = None, *,
 
     where = "plot_encircled_energy"
     lens = lens.astype(jnp.float64)
-    fields = _default_fields(lens, (0.0, 0.7, 1.0)) if fields is None else list(fields)
-    checks.field_angles(fields, where, "fields")
+    fields = _checked_fields(lens, fields, (0.0, 0.7, 1.0), where)
     if max_radius is not None:
         max_radius = checks.number(max_radius, "max_radius", where, lo=0, lo_open=True,
                                    unit="µm")

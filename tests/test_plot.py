@@ -165,6 +165,7 @@ def test_wavefront_figure_draws_the_analysis_map_and_its_statistics():
     np.testing.assert_array_equal(np.ma.filled(im.get_array().astype(float), np.nan),
                                   np.asarray(wf.map))  # NaN where NaN, else equal
     assert np.isnan(np.asarray(wf.map)).any()  # the corners: there is something blank
+    assert im.origin == "lower"  # row i at Py = pupil[i]: +Py up
     lo, hi = im.get_clim()
     assert lo == -hi and hi == pytest.approx(float(np.nanmax(np.abs(np.asarray(wf.map)))))
     np.testing.assert_allclose(im.get_extent(), [-1 - 1 / 16, 1 + 1 / 16] * 2)
@@ -283,5 +284,7 @@ def test_new_figures_refuse_bad_fields_before_tracing(monkeypatch):
         plot.plot_opd_fans(lens, [0.0, 95.0])
     with pytest.raises(ValueError, match=r"plot_encircled_energy: fields " + msg):
         plot.plot_encircled_energy(lens, [0.0, 95.0])
+    with pytest.raises(ValueError, match=r"plot_opd_fans: fields must hold at least one"):
+        plot.plot_opd_fans(lens, [])
     with pytest.raises(ValueError, match=r"plot_encircled_energy: max_radius must be"):
         plot.plot_encircled_energy(lens, [0.0], max_radius=-1.0)
