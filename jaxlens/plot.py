@@ -528,7 +528,8 @@ def plot_wavefront(lens, field=None, *, wavelength=None, grid: int = 65,
 
     lens = lens.astype(jnp.float64)
     field = _largest_field(lens) if field is None else _one_field(field, "plot_wavefront")
-    wf = wavefront(lens, field, wavelength=wavelength, grid=grid)
+    # Fields go to the analyses as arrays: a (θx, θy) tuple makes jnp.shape warn there.
+    wf = wavefront(lens, np.asarray(field), wavelength=wavelength, grid=grid)
     m, valid, p = np.asarray(wf.map), np.asarray(wf.valid), np.asarray(wf.pupil)
     wl = float(wf.wavelength)
     lim = max(float(np.max(np.abs(m[valid]))) if valid.any() else 0.0, 1e-6)
@@ -565,7 +566,7 @@ def plot_opd_fans(lens, fields: Sequence[float] | None = None, *, wavelengths=No
 
     lens = lens.astype(jnp.float64)
     fields = _checked_fields(lens, fields, (0.0, 0.7, 1.0), "plot_opd_fans")
-    fans = [opd_fan(lens, f, wavelengths, n=n) for f in fields]
+    fans = [opd_fan(lens, np.asarray(f), wavelengths, n=n) for f in fields]
     vals = np.concatenate([np.asarray(x).ravel() for r in fans
                            for x in (r.tangential, r.sagittal)])
     vals = vals[np.isfinite(vals)]
@@ -659,8 +660,8 @@ def plot_encircled_energy(lens, fields: Sequence[float] | None = None, *,
         max_radius = checks.number(max_radius, "max_radius", where, lo=0, lo_open=True,
                                    unit="µm")
     opts = dict(method=method, wavelength=wavelength, pixel_size=pixel_size)
-    r80, r99 = np.asarray([radius_for_fraction(lens, f, jnp.asarray([0.8, 0.99]), **opts)
-                           for f in fields]).T  # mm
+    r80, r99 = np.asarray([radius_for_fraction(lens, np.asarray(f), jnp.asarray([0.8, 0.99]),
+                                               **opts) for f in fields]).T  # mm
     if max_radius is None:
         top = r99[np.isfinite(r99)] if np.isfinite(r99).any() else 3 * r80[np.isfinite(r80)]
         max_radius = 1.5e3 * float(np.max(top)) if top.size else 1.0
@@ -669,7 +670,8 @@ def plot_encircled_energy(lens, fields: Sequence[float] | None = None, *,
     ax = fig.add_subplot(1, 1, 1)
     for i, (f, r) in enumerate(zip(fields, r80, strict=True)):
         c = _FIELD_COLORS[i % len(_FIELD_COLORS)]
-        ee = np.asarray(encircled_energy(lens, f, jnp.asarray(radii), **opts).energy)
+        ee = np.asarray(encircled_energy(lens, np.asarray(f), jnp.asarray(radii),
+                                         **opts).energy)
         d80 = f"D80 {2e3 * r:.2f} µm" if np.isfinite(r) else "no light"
         ax.plot(radii * 1e3, ee, color=c, lw=1, label=f"{_field_label(f)}: {d80}")
         ax.plot([r * 1e3, r * 1e3], [0.0, 0.8], color=c, ls=":", lw=1)

@@ -1,5 +1,7 @@
 """Figures: what ``plot_layout`` draws is the traced rays, and bad fields are refused."""
 
+import warnings
+
 import jax.numpy as jnp
 import numpy as np
 import pytest
@@ -288,3 +290,35 @@ def test_new_figures_refuse_bad_fields_before_tracing(monkeypatch):
         plot.plot_opd_fans(lens, [])
     with pytest.raises(ValueError, match=r"plot_encircled_energy: max_radius must be"):
         plot.plot_encircled_energy(lens, [0.0], max_radius=-1.0)
+
+
+def test_wavefront_figure_of_a_lens_with_x_y_fields():
+    """A lens set up for (θx, θy) fields: the wavefront map defaults to the largest pair
+    (12°, 0°), given to the analysis as an array (a tuple made it warn)."""
+    from jaxlens.analysis import wavefront
+
+    base = jaxlens.zoo.cooke_triplet()
+    lens = jaxlens.Lens(**{**{f: getattr(base, f) for f in ("surfaces", "thickness",
+                                                            "materials", "epd", "stop")},
+                           "fields": ((0.0, 0.0), (12.0, 0.0), (3.0, -5.0))})
+    with warnings.catch_warnings():  # pyproject ignores them; a future JAX will raise
+        warnings.simplefilter("error", DeprecationWarning)
+        ax = plot.plot_wavefront(lens, grid=9).axes[0]
+    assert ax.get_title().startswith("wavefront map, (12.0°, 0.0°)\n")
+    np.testing.assert_array_equal(np.ma.filled(ax.images[0].get_array().astype(float), np.nan),
+                                  np.asarray(wavefront(lens, jnp.asarray([12.0, 0.0]),
+                                                       grid=9).map))
+
+
+@pytest.mark.slow
+def test_opd_fans_and_encircled_energy_of_x_y_fields():
+    """(θx, θy) pairs reach ``opd_fan`` and ``encircled_energy`` as arrays (no warning) and
+    are labelled as pairs."""
+    lens = jaxlens.zoo.cooke_triplet()
+    with warnings.catch_warnings():  # pyproject ignores them; a future JAX will raise
+        warnings.simplefilter("error", DeprecationWarning)
+        fig = plot.plot_opd_fans(lens, [(3.0, -5.0)], n=5)
+        ax = plot.plot_encircled_energy(lens, [(3.0, -5.0)]).axes[0]
+    assert [a.get_title() for a in fig.axes] == ["(3.0°, -5.0°) tangential",
+                                                 "(3.0°, -5.0°) sagittal"]
+    assert ax.get_legend().get_texts()[0].get_text().startswith("(3.0°, -5.0°): D80 ")
