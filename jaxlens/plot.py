@@ -1,5 +1,6 @@
 """Figures: lens layout with rays, spot diagrams, ray fans, field curvature and distortion,
-RMS map, MTF curves, design progress.
+RMS map, MTF curves, design progress, wavefront map, OPD fans, Seidel diagram, encircled
+energy.
 
 Every function builds a ``matplotlib.figure.Figure`` with the Agg canvas (no pyplot, no
 display needed) and returns it; ``save(fig, path)`` writes it. Conventions: lengths in mm
@@ -456,4 +457,230 @@ def plot_tolerance_histogram(mc: dict, *, title: str | None = None) -> Figure:
     ax.legend(fontsize=7)
     ax.set_title(title or f"Monte-Carlo tolerancing: {mc['trials']} trials, yield "
                  f"{100 * mc['yield']:.0f} % at {mc['threshold_um']:g} µm", fontsize=9)
+    return fig
+
+
+# --------------------------------------------------------------------------------------
+# Wavefront error, OPD fans, Seidel diagram, encircled energy
+# --------------------------------------------------------------------------------------
+MARECHAL_MAX_RMS = 0.1
+"""Waves: ``plot_wavefront`` shows Maréchal's Strehl ratio only where the RMS wavefront error
+(tilt removed) is at most this (above it the approximation is no estimate; the same bound as
+``jaxlens report --wavefront``)."""
+
+_SEIDEL_NAMES = ("spherical", "coma", "astigmatism", "Petzval", "distortion", "axial colour",
+                 "lateral colour")
+
+
+def _largest_field(lens):
+    """The lens's largest field: θy (sign kept), or the (θx, θy) pair of largest radial angle."""
+    f = np.asarray(lens.fields, np.float64)
+    if f.ndim == 2:
+        t = np.tan(np.deg2rad(f))
+        return tuple(map(float, f[int(np.argmax(np.sum(t * t, -1)))]))
+    f = f.reshape(-1)
+    return float(f[int(np.argmax(np.abs(f)))])
+
+
+def _checked_fields(lens, fields, fractions, where: str) -> list:
+    """The fields given (or the default ones), checked before any tracing."""
+    from .optics import checks
+
+    fields = _default_fields(lens, fractions) if fields is None else list(fields)
+    if not fields:
+        raise ValueError(f"{where}: fields must hold at least one field (θy or (θx, θy) in "
+                         f"degrees), got none")
+    checks.field_angles(fields, where, "fields")  # here, not after some fields are traced
+    return fields
+
+
+def _one_field(field, where: str):
+    """One field θy or (θx, θy) in degrees, checked before any tracing."""
+    from .optics import checks
+
+    checks.real_values(field, "field", where, "deg")
+    if np.shape(field) not in ((), (2,)):
+        raise ValueError(f"{where}: field must be one field, θy or (θx, θy) in degrees, got "
+                         f"shape {np.shape(field)}")
+    checks.field_angles(field, where, "field")
+    return float(field) if np.ndim(field) == 0 else tuple(map(float, field))
+
+
+def plot_wavefront(lens, field=None, *, wavelength=None, grid: int = 65,
+                   title: str | None = None) -> Figure:
+    """The wavefront map (OPD to the exit-pupil reference sphere, waves; positive where the
+    wavefront is ahead of the sphere) of one field over the normalised entrance pupil (Px,
+    Py), from ``jaxlens.analysis.wavefront``: a diverging colour scale centred on 0, blank
+    outside the disc and where rays are vignetted. The title gives the RMS and P-V (piston
+    removed, tilt kept) and Maréchal's Strehl ratio (tilt removed), the latter only where
+    the RMS with tilt removed is at most ``MARECHAL_MAX_RMS`` wave.
+
+    Args:
+        lens: the lens.
+        field: θy or (θx, θy) in degrees; default the lens's largest field.
+        wavelength: µm; default the primary wavelength.
+        grid: pupil samples per side (odd keeps the chief ray on the grid).
+        title: first line of the title (the statistics follow below it).
+    """
+    import jax.numpy as jnp
+
+    from .analysis.wavefront_error import wavefront
+
+    lens = lens.astype(jnp.float64)
+    field = _largest_field(lens) if field is None else _one_field(field, "plot_wavefront")
+    # Fields go to the analyses as arrays: a (θx, θy) tuple makes jnp.shape warn there.
+    wf = wavefront(lens, np.asarray(field), wavelength=wavelength, grid=grid)
+    m, valid, p = np.asarray(wf.map), np.asarray(wf.valid), np.asarray(wf.pupil)
+    wl = float(wf.wavelength)
+    lim = max(float(np.max(np.abs(m[valid]))) if valid.any() else 0.0, 1e-6)
+    h = (p[1] - p[0]) / 2
+    fig = _figure(5.2, 4.6)
+    ax = fig.add_subplot(1, 1, 1)
+    im = ax.imshow(m, origin="lower", extent=(p[0] - h, p[-1] + h, p[0] - h, p[-1] + h),
+                   cmap="RdBu_r", vmin=-lim, vmax=lim, interpolation="nearest")
+    fig.colorbar(im, ax=ax, label=f"OPD (waves at {wl:.4f} µm)")
+    ax.set_aspect("equal")
+    ax.set_xlabel("Px (normalised entrance pupil)")
+    ax.set_ylabel("Py")
+    if not valid.any():
+        stats = "no ray reaches the image surface"
+    else:
+        sigma = float(wf.rms_tilt_removed)
+        stats = f"RMS {float(wf.rms):.4f} waves, P-V {float(wf.pv):.4f} waves\n"
+        stats += (f"Strehl {float(wf.strehl):.3f} (Maréchal)" if sigma <= MARECHAL_MAX_RMS
+                  else f"no Strehl: RMS tilt removed {sigma:.3f} > {MARECHAL_MAX_RMS:g} wave "
+                       f"(Maréchal)")
+    ax.set_title(f"{title or f'wavefront map, {_field_label(field)}'}\n{stats}", fontsize=8)
+    return fig
+
+
+def plot_opd_fans(lens, fields: Sequence[float] | None = None, *, wavelengths=None,
+                  n: int = 41, title: str | None = None) -> Figure:
+    """OPD fans (``jaxlens.analysis.opd_fan``, waves at each wavelength against its own chief
+    ray and reference sphere): a row per field θy or (θx, θy) in degrees, tangential (OPD
+    against Py) on the left, sagittal (against Px) on the right; default 0, 70 and 100 % of
+    the largest y field, or the lens's own (θx, θy) fields. Vignetted rays leave gaps."""
+    import jax.numpy as jnp
+
+    from .analysis.wavefront_error import opd_fan
+
+    lens = lens.astype(jnp.float64)
+    fields = _checked_fields(lens, fields, (0.0, 0.7, 1.0), "plot_opd_fans")
+    fans = [opd_fan(lens, np.asarray(f), wavelengths, n=n) for f in fields]
+    vals = np.concatenate([np.asarray(x).ravel() for r in fans
+                           for x in (r.tangential, r.sagittal)])
+    vals = vals[np.isfinite(vals)]
+    lim = max(float(np.max(np.abs(vals))) if vals.size else 0.0, 1e-6) * 1.05
+    fig = _figure(6.4, 1.9 * len(fields) + 0.6)
+    fig.set_layout_engine("constrained")
+    for k, (f, r) in enumerate(zip(fields, fans, strict=True)):
+        t = np.asarray(r.pupil)
+        for j, (opd, name) in enumerate(((r.tangential, "tangential"),
+                                         (r.sagittal, "sagittal"))):
+            ax = fig.add_subplot(len(fields), 2, 2 * k + j + 1)
+            for i, w in enumerate(np.asarray(r.wavelengths)):
+                ax.plot(t, np.asarray(opd[i]), color=_wl_color(float(w), i), lw=1,
+                        label=f"{w:.3f} µm")
+            ax.axhline(0, color="k", lw=0.4)
+            ax.set_ylim(-lim, lim)
+            ax.tick_params(labelsize=7)
+            ax.set_title(f"{_field_label(f)} {name}", fontsize=8)
+            ax.set_ylabel("OPD (waves)", fontsize=7)
+            if k == len(fields) - 1:
+                ax.set_xlabel("Py" if j == 0 else "Px", fontsize=7)
+    fig.axes[0].legend(fontsize=6)
+    fig.suptitle(title or "OPD fans (waves at each wavelength, against its chief ray)",
+                 fontsize=9)
+    return fig
+
+
+def plot_seidel(lens, *, title: str | None = None) -> Figure:
+    """Seidel diagram (``jaxlens.analysis.seidel`` at the largest field and the primary
+    wavelength): for each surface (numbered as in ``lens.surfaces``, from 0) and for the
+    sum, a bar per wavefront term W040 (spherical), W131 (coma), W222 (astigmatism), W220P
+    (Petzval), W311 (distortion), W020 (axial colour), W111 (lateral colour), in waves of the
+    primary wavelength, with Welford's sign (``analysis.third_order``). A lens that
+    third-order theory does not cover raises ``seidel``'s ValueError before anything is
+    drawn."""
+    import jax.numpy as jnp
+
+    from .analysis.third_order import WAVEFRONT_TERMS, seidel
+
+    s = seidel(lens.astype(jnp.float64))
+    w = np.asarray(s.wavefront(per_surface=True))  # [7, n] waves
+    data = np.concatenate([w, np.asarray(s.wavefront())[:, None]], 1)  # sum last
+    n = w.shape[1]
+    labels = [f"{i}\nstop" if i == lens.stop else str(i) for i in range(n)] + ["Sum"]
+    fig = _figure(max(6.0, 0.75 * (n + 1) + 2.0), 4.2)
+    ax = fig.add_subplot(1, 1, 1)
+    x = np.arange(n + 1, dtype=float)
+    width = 0.8 / len(WAVEFRONT_TERMS)
+    for k, (term, name) in enumerate(zip(WAVEFRONT_TERMS, _SEIDEL_NAMES, strict=True)):
+        ax.bar(x + (k - (len(WAVEFRONT_TERMS) - 1) / 2) * width, data[k], width,
+               color=f"C{k}", label=f"{term} {name}")
+    ax.axhline(0, color="k", lw=0.5)
+    ax.axvline(n - 0.5, color="k", lw=0.5, ls=":")
+    ax.set_xticks(x, labels, fontsize=7)
+    ax.set_xlabel("surface")
+    ax.set_ylabel(f"waves at {float(s.wavelength):.4f} µm")
+    ax.grid(alpha=0.3, axis="y")
+    ax.legend(fontsize=6, ncol=2)
+    ax.set_title(title or f"Seidel diagram, field {float(s.field):.1f}° "
+                 f"({lens.name or 'lens'})", fontsize=9)
+    return fig
+
+
+def plot_encircled_energy(lens, fields: Sequence[float] | None = None, *,
+                          method: str = "geometric", max_radius=None, wavelength=None,
+                          pixel_size=None, title: str | None = None) -> Figure:
+    """Encircled energy against the radius from the energy centroid (µm), one line per field
+    θy or (θx, θy) in degrees (``jaxlens.analysis.encircled_energy``), each field's D80
+    radius marked (``radius_for_fraction(…, 0.8)``; the legend gives the diameter D80).
+
+    Args:
+        lens: the lens.
+        fields: default 0, 70 and 100 % of the largest y field, or the lens's own (θx, θy)
+            fields.
+        method: ``"geometric"`` or ``"diffraction"`` (which needs ``pixel_size``).
+        max_radius: the largest radius drawn, in µm as the x axis (> 0); default 1.5 times
+            the largest of the fields' radii holding 99 % of the energy.
+        wavelength: µm, one or ``[W]`` (pooled); default the primary wavelength.
+        pixel_size: diffraction: the PSF pitch in mm.
+        title: figure title.
+    """
+    import jax.numpy as jnp
+
+    from .analysis.encircled import encircled_energy, radius_for_fraction
+    from .optics import checks
+
+    where = "plot_encircled_energy"
+    lens = lens.astype(jnp.float64)
+    fields = _checked_fields(lens, fields, (0.0, 0.7, 1.0), where)
+    if max_radius is not None:
+        max_radius = checks.number(max_radius, "max_radius", where, lo=0, lo_open=True,
+                                   unit="µm")
+    opts = dict(method=method, wavelength=wavelength, pixel_size=pixel_size)
+    r80, r99 = np.asarray([radius_for_fraction(lens, np.asarray(f), jnp.asarray([0.8, 0.99]),
+                                               **opts) for f in fields]).T  # mm
+    if max_radius is None:
+        top = r99[np.isfinite(r99)] if np.isfinite(r99).any() else 3 * r80[np.isfinite(r80)]
+        max_radius = 1.5e3 * float(np.max(top)) if top.size else 1.0
+    radii = np.linspace(0.0, max_radius, 201) * 1e-3  # mm
+    fig = _figure(6, 4.2)
+    ax = fig.add_subplot(1, 1, 1)
+    for i, (f, r) in enumerate(zip(fields, r80, strict=True)):
+        c = _FIELD_COLORS[i % len(_FIELD_COLORS)]
+        ee = np.asarray(encircled_energy(lens, np.asarray(f), jnp.asarray(radii),
+                                         **opts).energy)
+        d80 = f"D80 {2e3 * r:.2f} µm" if np.isfinite(r) else "no light"
+        ax.plot(radii * 1e3, ee, color=c, lw=1, label=f"{_field_label(f)}: {d80}")
+        ax.plot([r * 1e3, r * 1e3], [0.0, 0.8], color=c, ls=":", lw=1)
+    ax.axhline(0.8, color="k", lw=0.4)
+    ax.set_xlim(0, max_radius)
+    ax.set_ylim(0, 1.02)
+    ax.set_xlabel("radius from the energy centroid (µm)")
+    ax.set_ylabel("encircled energy (fraction)")
+    ax.grid(alpha=0.3)
+    ax.legend(fontsize=7)
+    ax.set_title(title or f"{method} encircled energy (D80 radii dotted)", fontsize=9)
     return fig

@@ -1,5 +1,7 @@
 """Figures: what ``plot_layout`` draws is the traced rays, and bad fields are refused."""
 
+import warnings
+
 import jax.numpy as jnp
 import numpy as np
 import pytest
@@ -143,3 +145,180 @@ def test_fans_and_field_curves_draw_the_analysis_data():
     d = spots.distortion(lens, fc.fields)
     np.testing.assert_allclose(fig.axes[1].lines[0].get_data()[0],
                                np.asarray(d.percent_ftan)[1:], atol=1e-9)
+
+
+# --------------------------------------------------------------------------------------
+# Wavefront map, OPD fans, Seidel diagram, encircled energy
+# --------------------------------------------------------------------------------------
+def test_wavefront_figure_draws_the_analysis_map_and_its_statistics():
+    """The image is ``wavefront(...).map`` (NaN blank) over [−1, 1]² with a colour scale
+    centred on 0; the title gives RMS and P-V, and Maréchal's Strehl only where the RMS with
+    tilt removed is at most 0.1 wave (the full Cooke triplet: 0.32 wave at 20°, not shown;
+    at 0.3× its EPD: 0.047 wave, shown). The default field is the largest (20°)."""
+    import equinox as eqx
+
+    from jaxlens.analysis import wavefront
+
+    lens = jaxlens.zoo.cooke_triplet().astype(jnp.float64)
+    fig = plot.plot_wavefront(lens, grid=17)
+    wf = wavefront(lens, 20.0, grid=17)
+    ax = fig.axes[0]
+    im = ax.images[0]
+    np.testing.assert_array_equal(np.ma.filled(im.get_array().astype(float), np.nan),
+                                  np.asarray(wf.map))  # NaN where NaN, else equal
+    assert np.isnan(np.asarray(wf.map)).any()  # the corners: there is something blank
+    assert im.origin == "lower"  # row i at Py = pupil[i]: +Py up
+    lo, hi = im.get_clim()
+    assert lo == -hi and hi == pytest.approx(float(np.nanmax(np.abs(np.asarray(wf.map)))))
+    np.testing.assert_allclose(im.get_extent(), [-1 - 1 / 16, 1 + 1 / 16] * 2)
+    title = ax.get_title()
+    assert title.startswith("wavefront map, 20.0°\n")
+    assert f"RMS {float(wf.rms):.4f} waves, P-V {float(wf.pv):.4f} waves" in title
+    assert "no Strehl: RMS tilt removed 0.325 > 0.1 wave" in title
+    assert "waves at 0.5876 µm" in fig.axes[1].get_ylabel()  # the colour bar
+    small = eqx.tree_at(lambda L: L.epd, lens, lens.epd * 0.3)
+    wf = wavefront(small, 0.0, grid=17)
+    title = plot.plot_wavefront(small, 0.0, grid=17, title="small").axes[0].get_title()
+    assert title.startswith("small\n")
+    assert f"Strehl {float(wf.strehl):.3f} (Maréchal)" in title and "0.918" in title
+
+
+def test_opd_fan_figure_draws_the_analysis_fans():
+    """Per field a row: tangential OPD against Py, sagittal against Px, one line per
+    wavelength, in waves (``opd_fan``)."""
+    from jaxlens.analysis import opd_fan
+
+    lens = jaxlens.zoo.cooke_triplet().astype(jnp.float64)
+    fig = plot.plot_opd_fans(lens, [0.0, 20.0], n=7)
+    assert len(fig.axes) == 4
+    fan = opd_fan(lens, 20.0, n=7)
+    for ax, opd in ((fig.axes[2], fan.tangential), (fig.axes[3], fan.sagittal)):
+        assert ax.get_ylabel() == "OPD (waves)"
+        for i, line in enumerate(ax.lines[:3]):
+            x, y = line.get_data()
+            np.testing.assert_allclose(x, np.asarray(fan.pupil))
+            np.testing.assert_allclose(y, np.asarray(opd[i]), atol=1e-12)
+    assert [ax.get_xlabel() for ax in fig.axes[2:]] == ["Py", "Px"]
+
+
+def test_seidel_diagram_bars_are_the_wavefront_terms_and_their_sums(tmp_path):
+    """A group of seven bars per surface and a "Sum" group: the heights are
+    ``seidel(lens).wavefront(per_surface=True)`` and ``.wavefront()`` (waves), in the order
+    of ``WAVEFRONT_TERMS``; ``save`` writes a PNG."""
+    from jaxlens.analysis import seidel
+    from jaxlens.analysis.third_order import WAVEFRONT_TERMS
+
+    lens = jaxlens.zoo.cooke_triplet().astype(jnp.float64)
+    fig = plot.plot_seidel(lens)
+    s = seidel(lens)
+    per, sums = np.asarray(s.wavefront(per_surface=True)), np.asarray(s.wavefront())
+    ax = fig.axes[0]
+    assert len(ax.containers) == 7
+    for k, bars in enumerate(ax.containers):
+        heights = [b.get_height() for b in bars]
+        np.testing.assert_allclose(heights[:-1], per[k], atol=1e-9)
+        np.testing.assert_allclose(heights[-1], sums[k], atol=1e-9)
+    labels = [t.get_text() for t in ax.get_legend().get_texts()]
+    assert [x.split()[0] for x in labels] == list(WAVEFRONT_TERMS)
+    assert [t.get_text() for t in ax.get_xticklabels()][-1] == "Sum"
+    assert ax.get_ylabel() == "waves at 0.5876 µm"
+    path = plot.save(fig, tmp_path / "seidel.png")
+    with open(path, "rb") as f:
+        assert f.read(8) == b"\x89PNG\r\n\x1a\n"
+
+
+def test_seidel_diagram_of_a_lens_seidel_refuses_raises_its_error(recwarn, monkeypatch):
+    """A lens with a coordinate break: ``seidel``'s ValueError, unchanged, and nothing
+    drawn."""
+    from pathlib import Path
+
+    from jaxlens.analysis import seidel
+
+    lens = jaxlens.load(Path(__file__).parent / "data" / "zmx" / "rayoptics_zmax_37992.zmx")
+    with pytest.raises(ValueError) as direct:
+        seidel(lens)
+    monkeypatch.setattr(plot, "_figure", lambda *a: pytest.fail("drew before refusing"))
+    with pytest.raises(ValueError) as drawn:
+        plot.plot_seidel(lens)
+    assert str(drawn.value) == str(direct.value)
+    assert str(drawn.value).startswith("seidel: surface 1 (CoordinateBreak)")
+
+
+def test_encircled_energy_figure_draws_the_analysis_curves_and_d80():
+    """Each field's line is ``encircled_energy`` at the drawn radii (x in µm); the dotted
+    marker stands at ``radius_for_fraction(…, 0.8)``, the legend gives D80 = twice it; the
+    default axis ends at 1.5 times the largest 99 % radius."""
+    from jaxlens.analysis import encircled_energy, radius_for_fraction
+
+    lens = jaxlens.zoo.cooke_triplet().astype(jnp.float64)
+    fields = [0.0, 20.0]
+    ax = plot.plot_encircled_energy(lens, fields).axes[0]
+    r = [np.asarray(radius_for_fraction(lens, f, jnp.asarray([0.8, 0.99]))) for f in fields]
+    assert ax.get_xlim()[1] == pytest.approx(1.5e3 * max(x[1] for x in r), rel=1e-12)
+    assert ax.get_xlabel() == "radius from the energy centroid (µm)"
+    texts = [t.get_text() for t in ax.get_legend().get_texts()]
+    for i, f in enumerate(fields):
+        curve, marker = ax.lines[2 * i], ax.lines[2 * i + 1]
+        x, y = (np.asarray(v) for v in curve.get_data())
+        assert x[-1] == pytest.approx(ax.get_xlim()[1]) and len(x) > 100
+        ee = encircled_energy(lens, f, jnp.asarray(x * 1e-3)).energy
+        np.testing.assert_allclose(y, np.asarray(ee), atol=1e-12)
+        assert y[0] < 0.8 and y[-1] == 1.0  # the whole rise is inside the axis
+        np.testing.assert_allclose(marker.get_data()[0], [r[i][0] * 1e3] * 2, rtol=1e-12)
+        assert texts[i] == f"{f:.1f}°: D80 {2e3 * r[i][0]:.2f} µm"
+
+
+def test_new_figures_refuse_bad_fields_before_tracing(monkeypatch):
+    """A field out of range (or not one field) is refused, naming the figure, before any
+    analysis runs (the analyses are replaced by ones that fail the test if called)."""
+    from jaxlens.analysis import encircled, wavefront_error
+
+    for mod, name in ((wavefront_error, "wavefront"), (wavefront_error, "opd_fan"),
+                      (encircled, "encircled_energy"), (encircled, "radius_for_fraction")):
+        monkeypatch.setattr(mod, name, lambda *a, **k: pytest.fail("traced"))
+    lens = jaxlens.zoo.cooke_triplet()
+    msg = r"must be finite angles in \(-90, 90\) deg, got 95 deg"
+    with pytest.raises(ValueError, match=r"plot_wavefront: field " + msg):
+        plot.plot_wavefront(lens, 95.0)
+    with pytest.raises(ValueError, match=r"plot_wavefront: field must be one field"):
+        plot.plot_wavefront(lens, [0.0, 1.0, 2.0])
+    with pytest.raises(ValueError, match=r"plot_opd_fans: fields " + msg):
+        plot.plot_opd_fans(lens, [0.0, 95.0])
+    with pytest.raises(ValueError, match=r"plot_encircled_energy: fields " + msg):
+        plot.plot_encircled_energy(lens, [0.0, 95.0])
+    with pytest.raises(ValueError, match=r"plot_opd_fans: fields must hold at least one"):
+        plot.plot_opd_fans(lens, [])
+    with pytest.raises(ValueError, match=r"plot_encircled_energy: max_radius must be"):
+        plot.plot_encircled_energy(lens, [0.0], max_radius=-1.0)
+
+
+def test_wavefront_figure_of_a_lens_with_x_y_fields():
+    """A lens set up for (θx, θy) fields: the wavefront map defaults to the largest pair
+    (12°, 0°), given to the analysis as an array (a tuple made it warn)."""
+    from jaxlens.analysis import wavefront
+
+    base = jaxlens.zoo.cooke_triplet()
+    lens = jaxlens.Lens(**{**{f: getattr(base, f) for f in ("surfaces", "thickness",
+                                                            "materials", "epd", "stop")},
+                           "fields": ((0.0, 0.0), (12.0, 0.0), (3.0, -5.0))})
+    with warnings.catch_warnings():  # pyproject ignores them; a future JAX will raise
+        warnings.simplefilter("error", DeprecationWarning)
+        ax = plot.plot_wavefront(lens, grid=9).axes[0]
+    assert ax.get_title().startswith("wavefront map, (12.0°, 0.0°)\n")
+    np.testing.assert_array_equal(np.ma.filled(ax.images[0].get_array().astype(float), np.nan),
+                                  np.asarray(wavefront(lens, jnp.asarray([12.0, 0.0]),
+                                                       grid=9).map))
+
+
+@pytest.mark.slow
+def test_opd_fans_and_encircled_energy_of_x_y_fields():
+    """(θx, θy) pairs reach ``opd_fan`` and ``encircled_energy`` as arrays (no warning) and
+    are labelled as pairs."""
+    lens = jaxlens.zoo.cooke_triplet()
+    with warnings.catch_warnings():  # pyproject ignores them; a future JAX will raise
+        warnings.simplefilter("error", DeprecationWarning)
+        fig = plot.plot_opd_fans(lens, [(3.0, -5.0)], n=5)
+        ax = plot.plot_encircled_energy(lens, [(3.0, -5.0)]).axes[0]
+    assert [a.get_title() for a in fig.axes] == ["(3.0°, -5.0°) tangential",
+                                                 "(3.0°, -5.0°) sagittal"]
+    assert ax.get_legend().get_texts()[0].get_text().startswith("(3.0°, -5.0°): D80 ")
