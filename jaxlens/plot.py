@@ -463,10 +463,6 @@ def plot_tolerance_histogram(mc: dict, *, title: str | None = None) -> Figure:
 # --------------------------------------------------------------------------------------
 # Wavefront error, OPD fans, Seidel diagram, encircled energy
 # --------------------------------------------------------------------------------------
-MARECHAL_MAX_RMS = 0.1
-"""Waves: ``plot_wavefront`` shows Maréchal's Strehl ratio only where the RMS wavefront error
-(tilt removed) is at most this (above it the approximation is no estimate; the same bound as
-``jaxlens report --wavefront``)."""
 
 _SEIDEL_NAMES = ("spherical", "coma", "astigmatism", "Petzval", "distortion", "axial colour",
                  "lateral colour")
@@ -524,7 +520,7 @@ def plot_wavefront(lens, field=None, *, wavelength=None, grid: int = 65,
     """
     import jax.numpy as jnp
 
-    from .analysis.wavefront_error import wavefront
+    from .analysis.wavefront_error import MARECHAL_MAX_RMS, wavefront
 
     lens = lens.astype(jnp.float64)
     field = _largest_field(lens) if field is None else _one_field(field, "plot_wavefront")

@@ -253,9 +253,8 @@ def test_report_plot_writes_the_figures_and_keeps_existing_ones(cooke, tmp_path,
     code, _, err = _run(capsys, path, "--plot", out)
     assert code == 0, err
     names = sorted(p.name for p in out.iterdir())
-    assert names == ["cooke_triplet_fans.png", "cooke_triplet_field.png",
-                     "cooke_triplet_layout.png", "cooke_triplet_mtf.png",
-                     "cooke_triplet_spots.png"]
+    assert names == [f"cooke_triplet_{k}.png" for k in sorted(
+        ("ee", "fans", "field", "layout", "mtf", "opd", "seidel", "spots", "wavefront"))]
     assert all((out / n).read_bytes()[:8] == b"\x89PNG\r\n\x1a\n" for n in names)
     stamp = (out / names[0]).stat().st_mtime_ns
     code, _, err = _run(capsys, path, "--plot", out)
@@ -268,6 +267,32 @@ def test_report_plot_writes_the_figures_and_keeps_existing_ones(cooke, tmp_path,
     assert code == 2 and "is a file, not a folder" in err
     code, out, err = _run(capsys, path, "--plot", "")  # was read as no --plot at all
     assert code == 2 and out == "" and "--plot needs a folder name" in err
+
+
+def test_report_plot_skips_a_figure_its_analysis_refuses(cooke, tmp_path, capsys,
+                                                         monkeypatch):
+    """A lens the Seidel (or wavefront) analysis refuses gets the other figures and a message
+    naming the one not drawn; any other figure's error still stops with exit status 2."""
+    from jaxlens import plot
+
+    def small(lens, *a, **k):
+        return plot.plot_image(np.zeros((4, 4, 3)))
+
+    def refuse(lens, *a, **k):
+        raise ValueError("seidel: surface 1 (CoordinateBreak): a coordinate break …")
+
+    for name in ("plot_layout", "plot_spots", "plot_ray_fans", "plot_field_curvature",
+                 "plot_mtf", "plot_wavefront", "plot_opd_fans", "plot_encircled_energy"):
+        monkeypatch.setattr(plot, name, small)
+    monkeypatch.setattr(plot, "plot_seidel", refuse)
+    path, _ = cooke
+    code, _, err = _run(capsys, path, "--plot", tmp_path / "a")
+    assert code == 0, err
+    assert "cooke_triplet_seidel.png not drawn: seidel: surface 1 (CoordinateBreak)" in err
+    assert len(list((tmp_path / "a").iterdir())) == 8
+    monkeypatch.setattr(plot, "plot_mtf", refuse)  # not an analysis figure: an error
+    code, _, err = _run(capsys, path, "--plot", tmp_path / "b")
+    assert code == 2 and "--plot: seidel: surface 1" in err
 
 
 def test_report_is_printed_before_a_figure_that_fails(cooke, tmp_path, capsys, monkeypatch):

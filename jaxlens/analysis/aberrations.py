@@ -38,6 +38,7 @@ from __future__ import annotations
 import equinox as eqx
 import jax
 import jax.numpy as jnp
+import numpy as np
 from jaxtyping import Array, Bool, Float
 
 from ..imaging.sampling import field_rays, lens_depth
@@ -123,7 +124,7 @@ def ray_fan(lens: Lens, field, wavelengths=None, *, n: int = FAN_POINTS, depth=N
         chief ray does not) are NaN, with the validity flags beside them.
     """
     checks.real_values(field, "field", "ray_fan", "deg")
-    shape = jnp.shape(field)
+    shape = np.shape(field)
     if shape not in ((), (1,), (2,)):
         raise ValueError(f"ray_fan: field must be one field, θy or (θx, θy) in degrees, got "
                          f"shape {shape}")

@@ -84,9 +84,9 @@ def _check_common(lens, where, field, wavelength, method, reference, shape):
         if value not in allowed:
             raise ValueError(f"{where}: {arg} must be one of {allowed}, got {value!r}")
     checks.real_values(field, "field", where, "deg")
-    if jnp.shape(field) not in ((), (2,)):
+    if np.shape(field) not in ((), (2,)):
         raise ValueError(f"{where}: field must be one field, θy or (θx, θy) in degrees, got "
-                         f"shape {jnp.shape(field)}")
+                         f"shape {np.shape(field)}")
     if not checks.is_traced(field):
         checks.field_angles(field, where, "field")
     wl = lens.primary_wavelength if wavelength is None else wavelength

@@ -57,6 +57,7 @@ from ..optics.toroidal import Toroidal
 from . import spots as analysis
 from .aberrations import field_curvature
 from .third_order import SEIDEL_TERMS, WAVEFRONT_TERMS, seidel
+from .wavefront_error import MARECHAL_MAX_RMS
 from .wavefront_error import wavefront as wavefront_map
 
 UNITS = {
@@ -256,11 +257,6 @@ def report_data(lens: Lens, *, fields=None, wavelengths=None, wavefront: bool = 
         "seidel": _seidel_sums(lens),
         "notes": _notes(lens),
     }
-
-
-MARECHAL_MAX_RMS = 0.1
-"""Waves: above this RMS (tilt removed) Maréchal's Strehl is no estimate; the report gives
-none."""
 
 
 def _wavefront_summary(lens: Lens, field) -> dict:
@@ -559,8 +555,10 @@ def register(subparsers) -> None:
         "--plot",
         metavar="DIR",
         help="also write the layout, spot diagrams, ray fans, field curvature with distortion, "
-        "and MTF as DIR/<lens>_layout.png, _spots.png, _fans.png, _field.png and _mtf.png "
-        "(DIR is created; existing files are kept unless --overwrite)",
+        "MTF, wavefront map, OPD fans, Seidel diagram and encircled energy as "
+        "DIR/<lens>_layout.png, _spots.png, _fans.png, _field.png, _mtf.png, _wavefront.png, "
+        "_opd.png, _seidel.png and _ee.png (DIR is created; existing files are kept unless "
+        "--overwrite; a lens the wavefront or Seidel analysis refuses gets the others)",
     )
     p.add_argument("--overwrite", action="store_true", help="with --plot: replace the figures")
     p.add_argument(
@@ -579,7 +577,10 @@ def register(subparsers) -> None:
     p.set_defaults(func=run)
 
 
-FIGURES = ("layout", "spots", "fans", "field", "mtf")
+FIGURES = ("layout", "spots", "fans", "field", "mtf", "wavefront", "opd", "seidel", "ee")
+ANALYSIS_FIGURES = ("wavefront", "opd", "seidel")
+"""Figures of analyses that refuse some lenses (coordinate breaks, toroids, …): such a lens
+gets the others, and a message that names the figure and the reason."""
 
 
 def figure_paths(lens_path: str, folder: str, overwrite: bool) -> dict[str, str]:
@@ -606,9 +607,19 @@ def _write_figures(lens: Lens, paths: dict[str, str]) -> None:
     from .. import plot
 
     makers = {"layout": plot.plot_layout, "spots": plot.plot_spots, "fans": plot.plot_ray_fans,
-              "field": plot.plot_field_curvature, "mtf": plot.plot_mtf}
+              "field": plot.plot_field_curvature, "mtf": plot.plot_mtf,
+              "wavefront": plot.plot_wavefront, "opd": plot.plot_opd_fans,
+              "seidel": plot.plot_seidel, "ee": plot.plot_encircled_energy}
     for key, path in paths.items():
-        plot.save(makers[key](lens), path)
+        try:
+            fig = makers[key](lens)
+        except ValueError as e:
+            if key not in ANALYSIS_FIGURES:
+                raise
+            print(f"jaxlens report: --plot: {os.path.basename(path)} not drawn: {e}",
+                  file=sys.stderr)
+            continue
+        plot.save(fig, path)
 
 
 def run(args: argparse.Namespace) -> int:

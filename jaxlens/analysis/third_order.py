@@ -76,6 +76,7 @@ from __future__ import annotations
 
 import equinox as eqx
 import jax.numpy as jnp
+import numpy as np
 from jaxtyping import Array, Float
 
 from ..optics import checks, paraxial
@@ -206,7 +207,7 @@ def _field(lens: Lens, field, where: str) -> Array:
         return jnp.rad2deg(jnp.arctan(jnp.max(t)))
     if jnp.ndim(field) != 0:
         raise ValueError(f"{where}: field must be one angle θy in degrees (a scalar), got "
-                         f"shape {jnp.shape(field)}")
+                         f"shape {np.shape(field)}")
     return jnp.asarray(checks.field_angles(field, where, "field"), lens.epd.dtype)
 
 

@@ -75,7 +75,7 @@ from ..tracing.forward import DEFAULT_NEWTON_ITERS, trace
 from .zernike import ZernikeFit, zernike_fit
 
 __all__ = ["REFERENCES", "Wavefront", "OPDFan", "opd", "wavefront", "opd_fan",
-           "marechal_strehl"]
+           "marechal_strehl", "MARECHAL_MAX_RMS"]
 
 REFERENCES = ("sphere", "plane")
 AIMS = ("paraxial", "real")
@@ -124,9 +124,9 @@ def _common(lens, field, wavelength, depth, reference, aim, where: str):
         raise ValueError(f"{where}: aim must be one of {AIMS}, got {aim!r}")
     dtype = lens.epd.dtype
     checks.real_values(field, "field", where, "deg")  # before jnp.asarray ("5" is not 5°)
-    if jnp.shape(field) not in ((), (1,), (2,)):
+    if np.shape(field) not in ((), (1,), (2,)):
         raise ValueError(f"{where}: field must be one field, θy or (θx, θy) in degrees, got "
-                         f"shape {jnp.shape(field)} (analyse several fields one at a time)")
+                         f"shape {np.shape(field)} (analyse several fields one at a time)")
     field = checks.field_angles(field, where, "field")
     f = jnp.asarray(field, dtype)
     f = f.reshape(()) if f.shape == (1,) else f
@@ -276,6 +276,11 @@ def opd(
 # --------------------------------------------------------------------------------------
 # The wavefront map and its statistics
 # --------------------------------------------------------------------------------------
+MARECHAL_MAX_RMS = 0.1
+"""Waves (RMS, tilt removed): above this Maréchal's approximation is no estimate of the Strehl
+ratio; the report and ``plot_wavefront`` show none there."""
+
+
 def marechal_strehl(rms_waves: Float[ArrayLike, "*b"]) -> Float[Array, "*b"]:
     """Maréchal's approximation of the Strehl ratio, exp(−(2π σ)²), σ the RMS wavefront
     error in waves (piston and tilt removed). Good to a few per cent for σ <~ 0.1 wave.
