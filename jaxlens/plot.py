@@ -678,5 +678,6 @@ def plot_encircled_energy(lens, fields: Sequence[float] | None = None, *,
     ax.set_ylabel("encircled energy (fraction)")
     ax.grid(alpha=0.3)
     ax.legend(fontsize=7)
-    ax.set_title(title or f"{method} encircled energy (dotted: the 80 % radius; legend: D80, its diameter)", fontsize=9)
+    ax.set_title(title or f"{method} encircled energy (dotted: the 80 % radius; legend: "
+                          f"D80, its diameter)", fontsize=9)
     return fig
