@@ -48,7 +48,7 @@ import numpy as np
 from jaxtyping import Array, Float
 
 from ..imaging.psf import CoherentPSF, psf_info
-from ..imaging.sampling import pupil_polar
+from ..imaging.sampling import pupil_points, pupil_polar
 from ..optics import checks
 from ..optics.lens import Lens
 from .spots import chief_ray, spot_rays, weighted_centroid
@@ -152,19 +152,10 @@ def _samples(lens, field, radii_or_fraction, where, *, wavelength, method, refer
     field, wls = _check_common(lens, where, field, wavelength, method, reference, shape)
     if method == "geometric":
         if pupil is not None:
-            pupil = jnp.asarray(pupil)
-            if pupil.ndim != 2 or pupil.shape[-1] != 2 or pupil.shape[0] == 0:
+            pupil = pupil_points(pupil, where, unit_disc=True)
+            if pupil.ndim != 2:
                 raise ValueError(f"{where}: pupil must be [M, 2] normalised pupil points with "
                                  f"M >= 1, got shape {pupil.shape}")
-            if not checks.is_traced(pupil):
-                a = np.asarray(pupil, float)
-                checks.finite_array(a, "pupil", where, "normalised pupil coordinates")
-                rad = np.sqrt(np.sum(a * a, -1))
-                if np.any(rad > 1.0 + 1e-9):
-                    # A point outside the disc is no part of the beam: it added energy.
-                    raise ValueError(f"{where}: pupil points must lie in the unit disc "
-                                     f"(Px² + Py² <= 1, normalised to the entrance pupil), "
-                                     f"got radius {float(np.max(rad)):.6g}")
         return _geometric_samples(lens, field, wls, reference=reference, shape=shape,
                                   pupil=pupil, depth=depth)
     if pixel_size is None:

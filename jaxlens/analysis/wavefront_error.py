@@ -67,7 +67,7 @@ import jax.numpy as jnp
 import numpy as np
 from jaxtyping import Array, ArrayLike, Bool, Float
 
-from ..imaging.sampling import field_rays, lens_depth
+from ..imaging.sampling import field_rays, lens_depth, pupil_points
 from ..optics import checks, paraxial
 from ..optics.coordinates import CoordinateBreak
 from ..optics.lens import Lens, unclipped
@@ -81,8 +81,6 @@ REFERENCES = ("sphere", "plane")
 AIMS = ("paraxial", "real")
 DEFAULT_GRID = 65
 """Default wavefront-map samples per side (odd: the chief ray is a grid point)."""
-PUPIL_TOLERANCE = 1e-9
-"""Pupil points may lie this far outside the unit disc (rounding)."""
 
 
 # --------------------------------------------------------------------------------------
@@ -141,22 +139,6 @@ def _common(lens, field, wavelength, depth, reference, aim, where: str):
     checks.material_indices(lens, wl, where)
     return f, wl, lens_depth(lens, depth, where)
 
-
-def _pupil_points(pupil, where: str):
-    checks.real_values(pupil, "pupil", where, "(normalised pupil coordinates)")
-    p = jnp.asarray(pupil)
-    if p.ndim < 1 or p.shape[-1] != 2 or p.size == 0:
-        raise ValueError(f"{where}: pupil must be normalised pupil points (Px, Py), shape "
-                         f"[..., 2], got shape {p.shape}")
-    if not checks.is_traced(p):
-        a = np.asarray(p, float)
-        checks.finite_array(a, "pupil", where, "normalised pupil coordinates")
-        r = np.sqrt(np.sum(a * a, -1))
-        if np.any(r > 1.0 + PUPIL_TOLERANCE):
-            raise ValueError(f"{where}: pupil points must lie in the unit disc "
-                             f"(Px² + Py² <= 1, normalised to the entrance pupil), got "
-                             f"radius {float(np.max(r)):.6g}")
-    return p
 
 
 # --------------------------------------------------------------------------------------
@@ -266,7 +248,7 @@ def opd(
     lens, dtype = _precise(lens)
     f, wl, depth = _common(lens, field, wavelength, depth, reference, aim, "opd")
     checks.number(newton_iters, "newton_iters", "opd", lo=0, integer=True, unit="iterations")
-    p = _pupil_points(pupil, "opd")
+    p = pupil_points(pupil, "opd", unit_disc=True)
     shape = p.shape[:-1]
     w, _ = _opd_impl(lens, f, p.reshape(-1, 2).astype(lens.epd.dtype), wl, depth,
                      reference=reference, aim=aim, newton_iters=int(newton_iters))

@@ -116,14 +116,27 @@ def pupil_samples(scheme: str, n: int, key=None, dtype=None) -> Float[Array, "m 
     )
 
 
-def _pupil(pupil, where: str) -> Array:
-    """Normalised pupil points ``[m, 2]``: finite (concrete) and shaped as (Px, Py) pairs."""
+UNIT_DISC_TOLERANCE = 1e-9
+"""Pupil points may lie this far outside the unit disc (rounding) where it is required."""
+
+
+def pupil_points(pupil, where: str, *, unit_disc: bool = False) -> Array:
+    """Checked normalised pupil points ``[..., 2]`` (Px, Py): real, finite (when concrete),
+    shaped as pairs, and with ``unit_disc`` inside the unit disc (the analyses whose pupil is
+    the beam itself; the ray sources also take overfilled points). Raises naming ``where``."""
+    checks.real_values(pupil, "pupil", where, "normalised pupil coordinates")
     pupil = jnp.asarray(pupil)
     if pupil.ndim < 1 or pupil.shape[-1] != 2 or pupil.size == 0:
         raise ValueError(f"{where}: pupil must be [m, 2] normalised pupil points (Px, Py), got "
                          f"shape {pupil.shape}")
     if not checks.is_traced(pupil):
         checks.finite_array(pupil, "pupil", where, "normalised pupil coordinates")
+        r = np.sqrt(np.sum(np.asarray(pupil, float) ** 2, -1)) if unit_disc else 0.0
+        if np.any(r > 1.0 + UNIT_DISC_TOLERANCE):
+            # A point outside the disc is no part of the beam.
+            raise ValueError(f"{where}: pupil points must lie in the unit disc "
+                             f"(Px² + Py² <= 1, normalised to the entrance pupil), got "
+                             f"radius {float(np.max(r)):.6g}")
     return pupil
 
 
@@ -173,7 +186,7 @@ def collimated(
         ``[m]`` rays launched on the entrance-pupil plane.
     """
     wl = lens.primary_wavelength if wavelength is None else jnp.asarray(wavelength)
-    pupil = _pupil(pupil, "collimated")
+    pupil = pupil_points(pupil, "collimated")
     _one_field(field, "collimated")
     d = field_direction(field)
     zep = paraxial.entrance_pupil_z(lens, lens.primary_wavelength)
@@ -203,7 +216,7 @@ def point_source(
     entrance-pupil points, with ``opl`` already holding the path from the object point.
     """
     wl = lens.primary_wavelength if wavelength is None else jnp.asarray(wavelength)
-    pupil = _pupil(pupil, "point_source")
+    pupil = pupil_points(pupil, "point_source")
     checks.real_values(point, "point", "point_source", "mm")
     # Checked before jnp.asarray, which makes a tracer of a constant under jit.
     concrete = not checks.is_traced(point)
@@ -293,7 +306,7 @@ def aim_at_stop(
     from ..tracing.forward import trace_path
 
     checks.number(iters, "iters", "aim_at_stop", lo=0, integer=True, unit="Newton iterations")
-    pupil = _pupil(pupil, "aim_at_stop")
+    pupil = pupil_points(pupil, "aim_at_stop")
     if pupil.shape[:-1] != rays.shape:
         raise ValueError(f"aim_at_stop: pupil needs one point per ray: rays of shape "
                          f"{rays.shape} need pupil of shape {rays.shape + (2,)}, got "
