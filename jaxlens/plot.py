@@ -327,26 +327,33 @@ def plot_ray_fans(lens, fields: Sequence[float] | None = None, *, wavelengths=No
                                                        np.asarray(r.sagittal).ravel()]))))
                for r in fans if bool(np.any(r.valid_tangential) or np.any(r.valid_sagittal))]
               + [1e-6]) * 1e3 * 1.05
+    return _fan_grid(fields, fans, lim, 1e3, ("e_y (µm)", "e_x (µm)"),
+                     title or "ray fans (transverse error against the primary chief ray)")
+
+
+def _fan_grid(fields, fans, lim, scale, ylabels, title) -> Figure:
+    """A row per field, the tangential fan against Py on the left and the sagittal against
+    Px on the right, a line per wavelength (``fans[k].tangential``/``.sagittal`` ``[W, n]``
+    times ``scale``, on ``fans[k].pupil``); shared by the ray and OPD fan figures."""
     fig = _figure(6.4, 1.9 * len(fields) + 0.6)
     fig.set_layout_engine("constrained")
     for k, (f, r) in enumerate(zip(fields, fans, strict=True)):
-        px = np.asarray(r.pupil)
-        for j, (errs, name, axis) in enumerate(((r.tangential, "tangential", "e_y"),
-                                                (r.sagittal, "sagittal", "e_x"))):
+        t = np.asarray(r.pupil)
+        for j, (vals, name) in enumerate(((r.tangential, "tangential"),
+                                          (r.sagittal, "sagittal"))):
             ax = fig.add_subplot(len(fields), 2, 2 * k + j + 1)
             for i, w in enumerate(np.asarray(r.wavelengths)):
-                ax.plot(px, np.asarray(errs[i]) * 1e3, color=_wl_color(float(w), i), lw=1,
+                ax.plot(t, np.asarray(vals[i]) * scale, color=_wl_color(float(w), i), lw=1,
                         label=f"{w:.3f} µm")
             ax.axhline(0, color="k", lw=0.4)
             ax.set_ylim(-lim, lim)
             ax.tick_params(labelsize=7)
             ax.set_title(f"{_field_label(f)} {name}", fontsize=8)
-            ax.set_ylabel(f"{axis} (µm)", fontsize=7)
+            ax.set_ylabel(ylabels[j], fontsize=7)
             if k == len(fields) - 1:
                 ax.set_xlabel("Py" if j == 0 else "Px", fontsize=7)
     fig.axes[0].legend(fontsize=6)
-    fig.suptitle(title or "ray fans (transverse error against the primary chief ray)",
-                 fontsize=9)
+    fig.suptitle(title, fontsize=9)
     return fig
 
 
@@ -567,27 +574,8 @@ def plot_opd_fans(lens, fields: Sequence[float] | None = None, *, wavelengths=No
                            for x in (r.tangential, r.sagittal)])
     vals = vals[np.isfinite(vals)]
     lim = max(float(np.max(np.abs(vals))) if vals.size else 0.0, 1e-6) * 1.05
-    fig = _figure(6.4, 1.9 * len(fields) + 0.6)
-    fig.set_layout_engine("constrained")
-    for k, (f, r) in enumerate(zip(fields, fans, strict=True)):
-        t = np.asarray(r.pupil)
-        for j, (opd, name) in enumerate(((r.tangential, "tangential"),
-                                         (r.sagittal, "sagittal"))):
-            ax = fig.add_subplot(len(fields), 2, 2 * k + j + 1)
-            for i, w in enumerate(np.asarray(r.wavelengths)):
-                ax.plot(t, np.asarray(opd[i]), color=_wl_color(float(w), i), lw=1,
-                        label=f"{w:.3f} µm")
-            ax.axhline(0, color="k", lw=0.4)
-            ax.set_ylim(-lim, lim)
-            ax.tick_params(labelsize=7)
-            ax.set_title(f"{_field_label(f)} {name}", fontsize=8)
-            ax.set_ylabel("OPD (waves)", fontsize=7)
-            if k == len(fields) - 1:
-                ax.set_xlabel("Py" if j == 0 else "Px", fontsize=7)
-    fig.axes[0].legend(fontsize=6)
-    fig.suptitle(title or "OPD fans (waves at each wavelength, against its chief ray)",
-                 fontsize=9)
-    return fig
+    return _fan_grid(fields, fans, lim, 1.0, ("OPD (waves)", "OPD (waves)"),
+                     title or "OPD fans (waves at each wavelength, against its chief ray)")
 
 
 def plot_seidel(lens, *, title: str | None = None) -> Figure:
