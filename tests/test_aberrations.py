@@ -144,6 +144,8 @@ def test_bad_input_is_refused_with_its_reason(call, match):
         call(lens)
 
 
+# 45–50 s of compiling a 19-surface folded system: slow (CI time).
+@pytest.mark.slow
 @pytest.mark.filterwarnings("ignore:.*aims rays at the stop")
 def test_folded_mirror_system_field_curves_equal_parabasal_pairs():
     """A 19-surface folded system (four mirrors, coordinate breaks): the differential rays
@@ -199,6 +201,8 @@ def test_a_theta_y_field_and_the_pair_zero_theta_y_agree_exactly():
     np.testing.assert_array_equal(np.asarray(one.sagittal), np.asarray(two.sagittal))
 
 
+# 45–50 s of compiling a 19-surface folded system: slow (CI time).
+@pytest.mark.slow
 @pytest.mark.filterwarnings("ignore:.*aims rays at the stop")
 def test_forward_mode_analyses_of_a_folded_lens_use_the_loop_emitters():
     """Only lenses with surfaces outside the scans get XLA's loop emitters (forward.
