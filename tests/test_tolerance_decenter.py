@@ -305,3 +305,23 @@ def test_cli_refuses_a_negative_decenter_before_any_work(tmp_path, capsys):
     for flag in ("--decenter", "--tilt"):
         assert cli.main(["missing.zmx", "--out", str(tmp_path), flag, "-0.01"]) == 2
         assert f"{flag} must be a finite number >= 0" in capsys.readouterr().err
+
+
+def test_glass_labels_number_elements_as_the_rigid_labels_do():
+    """A cemented doublet and a singlet: the doublet's two glasses are both element E1 (with
+    their surfaces), the singlet's glass E2, as in the decenter and tilt labels."""
+    g1, g2 = jl.get_material("N-BK7"), jl.get_material("N-SF5")
+    lens = jl.Lens(surfaces=(jl.Sphere(0.02), jl.Sphere(-0.03), jl.Sphere(-0.01),
+                             jl.Sphere(0.01), jl.Sphere(-0.01)),
+                   thickness=jnp.asarray([4.0, 2.0, 1.0, 3.0, 40.0]),
+                   materials=(g1, g2, jl.Air(), g1, jl.Air()), epd=4.0,
+                   wavelengths=(WL,)).astype(jnp.float64)
+    m = T.ToleranceModel(lens, fields=GRID[:1], pupil=PUPIL, tolerances=ON)
+    index = [n for n, k in zip(m.names, m.kinds, strict=True) if k == "index"]
+    assert index[:5] == ["E1 S1-S2 (N-BK7) nd", "E1 S2-S3 (N-SF5) nd", "M3 nd",
+                         "E2 (N-BK7) nd", "M5 nd"]
+    assert [n for n, k in zip(m.names, m.kinds, strict=True) if k == "decenter"][:2] == [
+        "E1 (S1-S3) decenter x", "E2 (S4-S5) decenter x"]
+    triplet = T.ToleranceModel(_triplet(), fields=GRID[:1], pupil=PUPIL)
+    assert [n for n, k in zip(triplet.names, triplet.kinds, strict=True)
+            if k == "abbe"][::2] == ["E1 (N-SK16) Vd", "E2 (F2) Vd", "E3 (N-SK16) Vd"]

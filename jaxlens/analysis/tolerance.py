@@ -452,14 +452,28 @@ class ToleranceModel:
         out.tolerances = tolerances
         return out
 
+    def _glass_labels(self) -> dict[int, str]:
+        """Label of each glass (``materials`` index): its element numbered as the rigid
+        decenter and tilt labels number it (a cemented group is one element), with the
+        surfaces it spans where the element holds more than one glass."""
+        lens = self.lens
+        out = {}
+        for j, (a, b) in enumerate(rigid.element_groups(lens)):
+            for i in range(a, b):  # materials[i] lies between surfaces i and i + 1 (0-based)
+                m = lens.materials[i]
+                name = getattr(m, "name", "") or type(m).__name__
+                out[i] = (f"E{j + 1} ({name})" if b - a == 1
+                          else f"E{j + 1} S{i + 1}-S{i + 2} ({name})")
+        for i, m in enumerate(lens.materials):  # glass touching object or image space
+            if i not in out and not isinstance(m, Air):
+                out[i] = f"S{i + 1}-S{i + 2} ({getattr(m, 'name', '') or type(m).__name__})"
+        return out
+
     # labels of every entry of the flat perturbation vector
     def _labels(self):
         lens = self.lens
         n = lens.num_surfaces
-        glass = {}
-        for i, m in enumerate(lens.materials):
-            if not isinstance(m, Air):
-                glass[i] = f"E{len(glass) + 1} ({getattr(m, 'name', '') or type(m).__name__})"
+        glass = self._glass_labels()
         per = {
             "radius_rel": [(f"S{i + 1} radius", "relative", "radius") for i in range(n)],
             "thickness": [(f"T{i + 1} thickness" + (" (image distance)" if i == n - 1 else ""),
