@@ -498,15 +498,11 @@ def _checked_fields(lens, fields, fractions, where: str) -> list:
 
 
 def _one_field(field, where: str):
-    """One field θy or (θx, θy) in degrees, checked before any tracing."""
+    """One field θy or (θx, θy) in degrees, checked before any tracing, as Python floats."""
     from .optics import checks
 
-    checks.real_values(field, "field", where, "deg")
-    if np.shape(field) not in ((), (2,)):
-        raise ValueError(f"{where}: field must be one field, θy or (θx, θy) in degrees, got "
-                         f"shape {np.shape(field)}")
-    checks.field_angles(field, where, "field")
-    return float(field) if np.ndim(field) == 0 else tuple(map(float, field))
+    field = np.asarray(checks.one_field(field, where))
+    return float(field) if field.ndim == 0 else tuple(map(float, field))
 
 
 def plot_wavefront(lens, field=None, *, wavelength=None, grid: int = 65,

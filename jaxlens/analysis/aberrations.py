@@ -123,11 +123,8 @@ def ray_fan(lens: Lens, field, wavelengths=None, *, n: int = FAN_POINTS, depth=N
         A ``RayFan``; errors of rays that do not reach the image (and all errors where the
         chief ray does not) are NaN, with the validity flags beside them.
     """
-    checks.real_values(field, "field", "ray_fan", "deg")
+    checks.one_field(field, "ray_fan")
     shape = np.shape(field)
-    if shape not in ((), (1,), (2,)):
-        raise ValueError(f"ray_fan: field must be one field, θy or (θx, θy) in degrees, got "
-                         f"shape {shape}")
     f, wl = _inputs(lens, "ray_fan", jnp.reshape(jnp.asarray(field, float), (-1,)),
                     wavelengths)
     n = checks.number(n, "n", "ray_fan", lo=2, integer=True, unit="pupil points")

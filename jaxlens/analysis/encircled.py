@@ -83,12 +83,7 @@ def _check_common(lens, where, field, wavelength, method, reference, shape):
                                 ("shape", shape, SHAPES)):
         if value not in allowed:
             raise ValueError(f"{where}: {arg} must be one of {allowed}, got {value!r}")
-    checks.real_values(field, "field", where, "deg")
-    if np.shape(field) not in ((), (2,)):
-        raise ValueError(f"{where}: field must be one field, θy or (θx, θy) in degrees, got "
-                         f"shape {np.shape(field)}")
-    if not checks.is_traced(field):
-        checks.field_angles(field, where, "field")
+    field = checks.one_field(field, where)
     wl = lens.primary_wavelength if wavelength is None else wavelength
     if jnp.ndim(wl) > 1 or jnp.size(wl) == 0:
         raise ValueError(f"{where}: wavelength must be a scalar or [W] µm with W >= 1, got "

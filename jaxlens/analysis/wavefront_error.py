@@ -121,13 +121,7 @@ def _common(lens, field, wavelength, depth, reference, aim, where: str):
     if aim not in AIMS:
         raise ValueError(f"{where}: aim must be one of {AIMS}, got {aim!r}")
     dtype = lens.epd.dtype
-    checks.real_values(field, "field", where, "deg")  # before jnp.asarray ("5" is not 5°)
-    if np.shape(field) not in ((), (1,), (2,)):
-        raise ValueError(f"{where}: field must be one field, θy or (θx, θy) in degrees, got "
-                         f"shape {np.shape(field)} (analyse several fields one at a time)")
-    field = checks.field_angles(field, where, "field")
-    f = jnp.asarray(field, dtype)
-    f = f.reshape(()) if f.shape == (1,) else f
+    f = jnp.asarray(checks.one_field(field, where), dtype)
     wl = lens.primary_wavelength if wavelength is None else wavelength
     checks.real_values(wl, "wavelength", where, "µm")
     if jnp.shape(wl) != ():

@@ -140,16 +140,6 @@ def pupil_points(pupil, where: str, *, unit_disc: bool = False) -> Array:
     return pupil
 
 
-def _one_field(field, where: str) -> None:
-    """One field: θy (a scalar) or (θx, θy); a list of fields would be broadcast against the
-    pupil points (a shape error deep in JAX, or a wrong pairing of fields and points)."""
-    checks.real_values(field, "field", where, "deg")
-    shape = jnp.shape(field)
-    if shape not in ((), (2,), (1,)):
-        raise ValueError(f"{where}: field must be one field, θy or (θx, θy) in degrees, got "
-                         f"shape {shape} (trace several fields one at a time, or vmap)")
-
-
 def field_xy(field) -> Array:
     checks.real_values(field, "field", "sampling", "deg")  # before jnp.asarray
     f = checks.field_angles(jnp.asarray(field), "sampling", "field")
@@ -187,7 +177,7 @@ def collimated(
     """
     wl = lens.primary_wavelength if wavelength is None else jnp.asarray(wavelength)
     pupil = pupil_points(pupil, "collimated")
-    _one_field(field, "collimated")
+    checks.one_field(field, "collimated", "trace several fields one at a time, or vmap")
     d = field_direction(field)
     zep = paraxial.entrance_pupil_z(lens, lens.primary_wavelength)
     h = 0.5 * lens.epd
@@ -252,7 +242,7 @@ def point_source(
 def object_point(lens: Lens, field, depth) -> Array:
     """The object point (global mm) at a field angle (deg) and distance ``depth`` in front of
     surface 1 (mm, positive)."""
-    _one_field(field, "object_point")
+    checks.one_field(field, "object_point", "trace several fields one at a time, or vmap")
     th = field_xy(field)
     if not checks.is_traced(depth):  # before jnp.asarray, which traces a constant under jit
         # Beyond INFINITE_OBJECT_MM the first surface is more than the tracer's largest ray

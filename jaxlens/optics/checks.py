@@ -375,6 +375,20 @@ def field_angles(field, where: str, arg: str = "field"):
     return field
 
 
+def one_field(field, where: str, hint: str = "analyse several fields one at a time"):
+    """One field θy or (θx, θy) in degrees, checked (real, finite, inside (−90°, 90°)) before
+    any tracing; a ``[1]`` array is θy. A list of fields would otherwise be broadcast against
+    the pupil points (a shape error deep in JAX, or a wrong pairing). Returns the field with
+    shape ``()`` or ``(2,)``."""
+    real_values(field, "field", where, "deg")  # before jnp.asarray ("5" is not 5°)
+    shape = np.shape(field)
+    if shape not in ((), (1,), (2,)):
+        raise ValueError(f"{where}: field must be one field, θy or (θx, θy) in degrees, got "
+                         f"shape {shape} ({hint})")
+    field = field_angles(field, where, "field")
+    return jnp.reshape(field, ()) if shape == (1,) else field
+
+
 def unit_directions(direction, valid, where: str = "Rays") -> None:
     """Refuse (concrete) ray directions that are not unit vectors."""
     if is_traced(direction) or is_traced(valid):
