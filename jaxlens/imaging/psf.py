@@ -344,7 +344,8 @@ class PSFResult(eqx.Module):
 
     Attributes:
         psf: ``[*W, k, k]`` energy per pixel (leading axis when several wavelengths).
-        truncated: ``[*W]`` fraction of the energy outside the kernel.
+        truncated: ``[*W]`` fraction of the energy outside the kernel; NaN where no ray
+            reaches the image (the PSF is then all zeros).
         center: ``[2]`` reference point (x, y) on the image surface, mm.
         strehl: ``[*W]`` peak of the coherent PSF on the kernel grid over the peak of the
             unaberrated PSF with the same pupil (NaN for the geometric model).
@@ -501,7 +502,9 @@ def psf(
         key: PRNG key to jitter the geometric pupil grid (stratified sampling); None for the
             regular grid.
         max_truncation: raise (``eqx.error_if``) when more than this fraction of the energy
-            falls outside the kernel, or when a coherent kernel aliases; None to skip.
+            falls outside the kernel, when a coherent kernel aliases, or when no ray reaches
+            the image; None skips all three checks (``psf_info`` then reports them: a NaN
+            ``truncated`` for no light, ``aliased``).
         newton_iters: Newton iterations for aspheric surfaces.
 
     Returns:
