@@ -418,8 +418,9 @@ def trace(
     def whole(r: Rays, prepared=None) -> Rays:
         if rebuild:
             surfaces, zs, idx, cast = _prepare(lens, r, uniform) if prepared is None else prepared
-            st = reversible.trace_state(cast, surfaces, zs, idx, state_from_rays(r))
-            return rays_from_state(st, r.wavelength)
+            o, d, v, opl = reversible.trace_rays(cast, surfaces, zs, idx, r.origin,
+                                                 r.direction, r.valid, r.opl)
+            return Rays(o, d, r.wavelength, v, opl)
         states = _trace_states(lens, r, newton_iters, upto, keep_path=False, uniform=uniform,
                                prepared=prepared, reverse_rule=reverse_rule)
         return rays_from_state(states[-1], r.wavelength)

@@ -38,7 +38,7 @@ import jax
 import jax.numpy as jnp
 
 from ..optics.surfaces import Standard
-from .step import RayState, unrefract
+from .step import unrefract
 from .surface_adjoint import advance, backward_flag, conic_backward
 
 
@@ -67,20 +67,30 @@ def surface_params(lens, surfaces, zs, idx):
             jnp.stack(n_in), jnp.stack(n_out), jnp.stack(bk))
 
 
-def trace_state(lens, surfaces, zs, idx, st: RayState) -> RayState:
-    """The rays on the image surface (``supported`` lenses; ``prepared`` surfaces, vertex
-    positions and indices as in ``forward``), with the reversible reverse rule."""
+def trace_rays(lens, surfaces, zs, idx, origin, direction, valid, opl):
+    """(origin, direction, valid, opl) on the image surface, ``[n, 3]`` and ``[n]`` arrays
+    (``supported`` lenses; surfaces, vertex positions and indices as ``forward`` prepares
+    them), with the reversible reverse rule. The input and output arrays are the rule's
+    residuals as they are, so a chunked trace saves no copy of them."""
     params = surface_params(lens, surfaces, zs, idx)
-    p, d, v, opl = _reversible(params, st.p, st.d, st.valid, st.opl)
-    return RayState(p, d, v, opl)
+    return _reversible(params, origin, direction, valid, opl)
+
+
+UNROLL = False
+UNROLL_BACK = False
 
 
 def _at(params, i):
     return tuple(a[i] for a in params)
 
 
-def _forward(params, p, d, valid, opl):
-    """((p, d, valid, opl) on the image, residuals): the surface steps of ``advance``."""
+def _split(x):
+    return x[..., 0], x[..., 1], x[..., 2]
+
+
+def _forward(params, origin, direction, valid, opl):
+    """((origin, direction, valid, opl) on the image, residuals): ``advance``'s steps."""
+    p, d = _split(origin), _split(direction)
     m = params[0].shape[0]
     count_t = jnp.int8 if m < 127 else jnp.int32
     (p, d, v, opl), t0, g0 = advance(True, True, _at(params, 0), p, d, valid, opl)
@@ -92,20 +102,28 @@ def _forward(params, p, d, valid, opl):
         return (out, count + out[2].astype(count_t)), (t, g)
 
     mid = tuple(a[1:-1] for a in params)
-    ((p, d, v, opl), count), (ts, gs) = jax.lax.scan(body, ((p, d, v, opl), count), mid)
+    if UNROLL:
+        carry, tg = ((p, d, v, opl), count), []
+        for i in range(m - 2):
+            carry, y = body(carry, _at(mid, i))
+            tg.append(y)
+        ((p, d, v, opl), count) = carry
+        ts, gs = jnp.stack([y[0] for y in tg]), jnp.stack([y[1] for y in tg])
+    else:
+        ((p, d, v, opl), count), (ts, gs) = jax.lax.scan(body, ((p, d, v, opl), count), mid)
     (p, d, v, opl), t_img, _ = advance(False, False, _at(params, m - 1), p, d, v, opl)
     count = count + v.astype(count_t)
-    return (p, d, v, opl), (t0, g0, ts, gs, t_img, count)
+    return (jnp.stack(p, -1), jnp.stack(d, -1), v, opl), (t0, g0, ts, gs, t_img, count)
 
 
 @jax.custom_vjp
-def _reversible(params, p, d, valid, opl):
-    return _forward(params, p, d, valid, opl)[0]
+def _reversible(params, origin, direction, valid, opl):
+    return _forward(params, origin, direction, valid, opl)[0]
 
 
-def _fwd(params, p, d, valid, opl):
-    out, (t0, g0, ts, gs, t_img, count) = _forward(params, p, d, valid, opl)
-    return out, (params, p, d, out[0], out[1], t0, g0, ts, gs, t_img, count)
+def _fwd(params, origin, direction, valid, opl):
+    out, (t0, g0, ts, gs, t_img, count) = _forward(params, origin, direction, valid, opl)
+    return out, (params, origin, direction, out[0], out[1], t0, g0, ts, gs, t_img, count)
 
 
 def _unstep(refracts, prm, p, d, t, g, v):
@@ -125,7 +143,9 @@ def _unstep(refracts, prm, p, d, t, g, v):
 
 def _bwd(res, cts):
     params, p0, d0, p, d, t0, g0, ts, gs, t_img, count = res
+    p0, d0, p, d = _split(p0), _split(d0), _split(p), _split(d)
     P, D, _, L = cts
+    P, D = _split(P), _split(D)
     m = params[0].shape[0]
     last = _at(params, m - 1)
     v = count >= m
@@ -143,14 +163,22 @@ def _bwd(res, cts):
 
     mid = tuple(a[1:-1] for a in params)
     xs = (mid, ts, gs, jnp.arange(1, m - 1, dtype=count.dtype))
-    (_, _, P, D, L), g_mid = jax.lax.scan(body, (p, d, P, D, L), xs, reverse=True)
+    if UNROLL_BACK:
+        carry, gm = (p, d, P, D, L), []
+        for i in reversed(range(m - 2)):
+            carry, y = body(carry, (_at(mid, i), ts[i], gs[i], i + 1))
+            gm.append(y)
+        (_, _, P, D, L) = carry
+        g_mid = jax.tree.map(lambda *x: jnp.stack(x[::-1]), *gm)
+    else:
+        (_, _, P, D, L), g_mid = jax.lax.scan(body, (p, d, P, D, L), xs, reverse=True)
     g_first, P, D, _, L = conic_backward(True, _at(params, 0), p0, d0, count > 0, t0, g0,
                                          (P, D, None, L))
     g_params = tuple(
         None if a is None else jnp.concatenate([a[None], b, c[None]])
         for a, b, c in zip(g_first, g_mid, g_last, strict=True)
     )
-    return g_params, P, D, None, L
+    return g_params, jnp.stack(P, -1), jnp.stack(D, -1), None, L
 
 
 _reversible.defvjp(_fwd, _bwd)
