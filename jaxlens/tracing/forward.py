@@ -29,7 +29,7 @@ from ..optics.coordinates import CoordinateBreak, transform
 from ..optics.lens import Lens
 from ..optics.rays import Rays
 from ..optics.surfaces import AbstractSurface, EvenAsphere, Hybrid, Standard
-from . import reversible, surface_adjoint
+from . import surface_adjoint
 from .step import (
     DEFAULT_NEWTON_ITERS,
     RayState,
@@ -281,7 +281,7 @@ def _check_upto(lens: Lens, rays: Rays, upto: int | None, newton_iters: int) -> 
 
 def _check_switch(reverse_rule, where: str) -> None:
     """``reverse_rule`` is a static switch: a traced or non-boolean value is refused."""
-    if not (isinstance(reverse_rule, (bool, np.bool_)) or reverse_rule == "reversible"):
+    if not isinstance(reverse_rule, (bool, np.bool_)):
         raise TypeError(f"{where}: reverse_rule must be True or False, got {reverse_rule!r}")
 
 
@@ -412,15 +412,7 @@ def trace(
         chunk = checks.number(chunk, "chunk", "trace", lo=1, integer=True,
                               unit='rays ("auto": by backend; None: one piece)')
 
-    rebuild = (reverse_rule == "reversible"
-               and reversible.supported(lens, lens.surfaces, upto))
-
     def whole(r: Rays, prepared=None) -> Rays:
-        if rebuild:
-            surfaces, zs, idx, cast = _prepare(lens, r, uniform) if prepared is None else prepared
-            o, d, v, opl = reversible.trace_rays(cast, surfaces, zs, idx, r.origin,
-                                                 r.direction, r.valid, r.opl)
-            return Rays(o, d, r.wavelength, v, opl)
         states = _trace_states(lens, r, newton_iters, upto, keep_path=False, uniform=uniform,
                                prepared=prepared, reverse_rule=reverse_rule)
         return rays_from_state(states[-1], r.wavelength)
@@ -443,13 +435,11 @@ def trace(
     # are per ray and are computed in each chunk).
     prepared = None if per_ray else _prepare(lens, rays, uniform)
 
+    @jax.checkpoint
     def one(xs):
         o, d, v, opl = xs[:4]
         w = xs[4] if per_ray else rays.wavelength
         return whole(Rays(o, d, w, v, opl), prepared)
-
-    if not rebuild:
-        one = jax.checkpoint(one)
 
     out = jax.lax.map(one, tuple(split(x) for x in leaves))
     join = lambda x: x.reshape(m * size, *x.shape[2:])[:n]  # noqa: E731

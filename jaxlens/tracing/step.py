@@ -311,14 +311,6 @@ def refract(d, normal, mu):
     return out, ok
 
 
-def unrefract(d_out, normal, mu, g):
-    """The incident direction of a refracted ray: ``refraction_gain``'s relation
-    d_out = mu·d + g·normal solved for d, (d_out − g·normal)/mu, with no square root (the
-    saved gain ``g`` carries it). Used to rebuild a trace backwards (``reversible``)."""
-    inv = 1.0 / mu
-    return tuple((do - g * ni) * inv for do, ni in zip(d_out, normal, strict=True))
-
-
 def refract_diffract(d, normal, mu, kick, *, reflects=False):
     """The local grating equation: refraction (or reflection) with a tangential kick.
 

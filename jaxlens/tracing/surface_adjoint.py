@@ -69,7 +69,7 @@ def supported(surface, *, reflects=False, obscured=None, apertures=()) -> bool:
     return type(surface) is Standard or (type(surface) in SAG_KINDS and surface.has_polynomial)
 
 
-def advance(first, refracts, params, p, d, valid, opl):
+def _advance(first, refracts, params, p, d, valid, opl):
     """((new p, new d, new valid, new opl), t, g): ``surface_step``'s operations, in order."""
     c, k, sd, zv, n1, n2, bk = params
     o = (p[0], p[1], p[2] - zv)
@@ -166,7 +166,7 @@ def _snell_adjoint(d, N, dn, g, mu, v, D):
     return bN, b_dn, b_mu
 
 
-def conic_backward(refracts, params, p, d, v, t, g, cts):
+def _backward(refracts, params, p, d, v, t, g, cts):
     """Cotangents of (params, p, d, valid, opl) from those of the outputs."""
     c, k, sd, zv, n1, n2, _ = params
     P, D, _, L = cts
@@ -208,17 +208,17 @@ def reverse_step(first, refracts, params, p, d, valid, opl):
     """(p, d, valid, opl) after the surface; ``params`` = (c, k, semi_diameter, z_vertex,
     n_before, n_after, backward), ``backward`` where the ray may go back along its line.
     Reverse mode only (``jvp``/``jacfwd`` raise a TypeError)."""
-    return advance(first, refracts, params, p, d, valid, opl)[0]
+    return _advance(first, refracts, params, p, d, valid, opl)[0]
 
 
 def _reverse_fwd(first, refracts, params, p, d, valid, opl):
-    out, t, g = advance(first, refracts, params, p, d, valid, opl)
+    out, t, g = _advance(first, refracts, params, p, d, valid, opl)
     return out, (params, p, d, out[2], t, g)
 
 
 def _reverse_bwd(first, refracts, res, cts):
     params, p, d, v, t, g = res
-    return conic_backward(refracts, params, p, d, v, t, g, cts)
+    return _backward(refracts, params, p, d, v, t, g, cts)
 
 
 reverse_step.defvjp(_reverse_fwd, _reverse_bwd)
@@ -229,7 +229,7 @@ def conic_step(surface, z_vertex, st: RayState, n_before, n_after, *, first, ref
     """``surface_step`` on a ``supported`` surface (same arguments, same values), with the
     hand-written reverse rule ``reverse_step`` (no forward mode)."""
     params = (surface.c, surface.k, surface.semi_diameter, z_vertex, n_before, n_after,
-              backward_flag(gap, first, n_before, n_after))
+              _backward_flag(gap, first, n_before, n_after))
     p, d, v, opl = reverse_step(first, refracts, params, st.p, st.d, st.valid, st.opl)
     return RayState(p, d, v, opl)
 
@@ -313,7 +313,7 @@ def _sag_bwd(first, refracts, iters, res, cts):
 reverse_sag_step.defvjp(_sag_fwd, _sag_bwd)
 
 
-def backward_flag(gap, first, n_before, n_after):
+def _backward_flag(gap, first, n_before, n_after):
     """Where the ray may go back along its line (as in ``surface_step``; never a mirror)."""
     if gap is None or first:
         return jnp.zeros((), bool)
@@ -325,7 +325,7 @@ def sag_step(surface, z_vertex, st: RayState, n_before, n_after, *, first, refra
     """``surface_step`` on a ``supported`` surface with polynomial terms (same arguments,
     same values), with the hand-written reverse rule ``reverse_sag_step``."""
     params = (surface, z_vertex, n_before, n_after,
-              backward_flag(gap, first, n_before, n_after))
+              _backward_flag(gap, first, n_before, n_after))
     p, d, v, opl = reverse_sag_step(first, refracts, newton_iters, params, st.p, st.d,
                                     st.valid, st.opl)
     return RayState(p, d, v, opl)
