@@ -116,6 +116,7 @@ from .zmx_common import ZEMAX_CATALOGS as ZEMAX_CATALOGS
 from .zmx_common import term_index as term_index
 from .zmx_common import term_powers as term_powers
 from .zmx_read import ZmxWarning as ZmxWarning
+from .zmx_read import configurations as configurations
 from .zmx_read import decode as decode
 from .zmx_read import load_zmx as load_zmx
 from .zmx_read import loads as loads
