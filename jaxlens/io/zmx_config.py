@@ -116,6 +116,8 @@ def select(f: ZmxFile, config: int | None, strict: bool) -> int:
         raise ValueError(f"{f.path}: config must be one of the file's {have} (Zemax's "
                          f"numbering, from 1), got {config}")
     chosen = active if config is None else config
+    if n == 1:  # the surfaces are the only configuration; its operand rows repeat them
+        return chosen
     try:
         ops = operands(f, n)
     except ValueError as e:
