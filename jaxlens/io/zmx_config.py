@@ -74,8 +74,8 @@ def operands(f: ZmxFile, n: int) -> list[Operand]:
     table: dict = {}
     for ln in f.config_lines:
         if len(ln.tokens) < 4 and ln.tokens[0] not in NO_OPTICS:
-            raise ln.error(f"a configuration operand line needs the operand, its number, the "
-                           f"configuration and the value")
+            raise ln.error("a configuration operand line needs the operand, its number, the "
+                           "configuration and the value")
         param = ln.int(1, f"{ln.tokens[0]}'s number")
         cfg = ln.int(2, "configuration number")
         if not 1 <= cfg <= n:
