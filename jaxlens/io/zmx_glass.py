@@ -179,9 +179,9 @@ class GlassResolver:
             elif _placeholder_nd_vd(ln):
                 e = (f"{e}. Its GLAS line gives nd 1.5, Vd 40, Zemax's defaults for a glass "
                      f"it has not looked up, not this glass's data, so no model glass can "
-                     f"stand in for it (unknown_glass='model' needs the line's real nd and "
-                     f"Vd); supply the glass's catalog (.AGF) beside the file")
-            e += _molded_note(name)
+                     f"stand in for it (a model glass needs the line's real nd and Vd); "
+                     f"supply the glass's catalog (.AGF) beside the file")
+            e = f"{e}{_molded_note(name)}"
             raise ln.error(f"glass {name!r}: {e}") from None
         if self.gcat and getattr(m, "catalog", None) is not None:
             # A glass of the same name from another maker may be another glass (CDGM BAF4 is
