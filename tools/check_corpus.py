@@ -10,6 +10,7 @@ relative EFL difference, and whether optiland reads the written file with jaxlen
 
     python tools/check_corpus.py /tmp/corpus            # a table
     python tools/check_corpus.py /tmp/corpus --json     # one JSON record a file
+    python tools/check_corpus.py /tmp/corpus --strict   # read as `jaxlens report` does
 
 optiland is optional (it is not a jaxlens dependency); without it its columns are skipped.
 """
@@ -18,6 +19,8 @@ from __future__ import annotations
 
 import argparse
 import contextlib
+import functools
+import inspect
 import io
 import json
 import math
@@ -93,12 +96,12 @@ def _same_lens(a, b) -> bool:
                for x, y in zip(la, lb, strict=True))
 
 
-def check_file(path: str) -> dict:
+def check_file(path: str, strict: bool = False) -> dict:
     rec: dict = {"file": os.path.basename(path)}
     try:
         with warnings.catch_warnings(record=True) as caught:
             warnings.simplefilter("always")
-            lens = jl.load(path)
+            lens = jl.load(path, strict=strict)
         rec["warnings"] = [str(w.message) for w in caught]
     except ValueError as e:
         rec.update(status="refused", message=str(e))
@@ -198,7 +201,14 @@ def run_folder(argv, check_file, table, description: str) -> int:
     ap = argparse.ArgumentParser(description=description)
     ap.add_argument("folder")
     ap.add_argument("--json", action="store_true", help="one JSON record a file")
+    ap.add_argument("--strict", action="store_true",
+                    help="read as `python -m jaxlens report` does: strict=True (settings "
+                         "jaxlens does not use are refused, not warned about)")
     args = ap.parse_args(argv)
+    if args.strict:
+        if "strict" not in inspect.signature(check_file).parameters:
+            ap.error("--strict: this tool's check takes no strict option")
+        check_file = functools.partial(check_file, strict=True)
     files = sorted(os.path.join(args.folder, f) for f in os.listdir(args.folder)
                    if f.lower().endswith(".zmx"))
     if not files:

@@ -1,7 +1,8 @@
 """Lens report: system data and per-field chief ray, distortion and RMS spot.
 
 ``python -m jaxlens report LENS [--json] [--fields DEG ...] [--wavelengths UM ...]
-[--wavefront] [--plot DIR [--overwrite]] [--lenient] [--unknown-glass model]``
+[--wavefront] [--plot DIR [--overwrite]] [--lenient] [--unknown-glass model]
+[--config N] [--list-configs]``
 
 Conventions (also written into the JSON output under ``units``):
     Lengths and heights in mm, angles in degrees, wavelengths in µm, distortion in %.
@@ -45,6 +46,7 @@ import numpy as np
 from ..imaging import sampling
 from ..io.files import load
 from ..io.lensfile import nm_to_um
+from ..io.zmx import configurations, load_zmx
 from ..optics import checks, paraxial
 from ..optics.coordinates import CoordinateBreak
 from ..optics.diffractive import Binary2, Grating
@@ -574,7 +576,57 @@ def register(subparsers) -> None:
         "settings jaxlens does not use (vignetting factors, unknown keywords) and a file cut "
         "off mid-line",
     )
+    p.add_argument(
+        "--config",
+        type=int,
+        metavar="N",
+        help=".zmx multi-configuration file (zoom, focus positions): read configuration N "
+        "(1-based, Zemax's numbering; default: the active one, which the file's surfaces hold)",
+    )
+    p.add_argument(
+        "--list-configs",
+        action="store_true",
+        help=".zmx: list the file's configurations and the operands that differ between them, "
+        "then stop",
+    )
     p.set_defaults(func=run)
+
+
+def _load_lens(args: argparse.Namespace) -> Lens:
+    """The lens of ``args.lens``: ``load``, or for ``--config`` the .zmx reader's ``config``."""
+    if args.config is None:
+        return load(args.lens, strict=not args.lenient, unknown_glass=args.unknown_glass)
+    if os.path.splitext(args.lens)[1].lower() != ".zmx":
+        raise ValueError(f"--config chooses a configuration of a .zmx file; {args.lens} is not "
+                         f"one")
+    return load_zmx(args.lens, strict=not args.lenient, unknown_glass=args.unknown_glass,
+                    config=args.config)
+
+
+def _config_value(v) -> str:
+    """A configuration operand's value text for ``--list-configs``: numbers to 10 digits."""
+    if v is None:
+        return "-"
+    try:
+        return f"{float(v):.10g}"
+    except ValueError:
+        return v[:16]
+
+
+def _list_configs(path: str) -> int:
+    """Print the configurations of a .zmx file (``--list-configs``)."""
+    if os.path.splitext(path)[1].lower() != ".zmx":
+        raise ValueError(f"--list-configs lists a .zmx file's configurations; {path} is not one")
+    info = configurations(path)
+    n = info["count"]
+    print(f"{path}: {n} configuration{'s' if n > 1 else ''}; active (the surfaces): "
+          f"{info['active']}")
+    if info["operands"]:
+        print(f"  {'operand':<10}" + "".join(f" {'config ' + str(c):>16}" for c in range(1, n + 1)))
+        for op in info["operands"]:
+            vals = "".join(f" {_config_value(v):>16}" for v in op["values"])
+            print(f"  {op['operand'] + ' ' + str(op['param']):<10}{vals}")
+    return 0
 
 
 FIGURES = ("layout", "spots", "fans", "field", "mtf", "wavefront", "opd", "seidel", "ee")
@@ -629,12 +681,14 @@ def run(args: argparse.Namespace) -> int:
             raise ValueError("--overwrite replaces --plot figures; it needs --plot DIR")
         if args.plot is not None and not args.plot.strip():
             raise ValueError("--plot needs a folder name, got an empty one")
+        if args.list_configs:
+            return _list_configs(args.lens)
         paths = figure_paths(args.lens, args.plot, args.overwrite) if args.plot else None
         # strict by default: a report must not describe a truncated file, nor rays that the
         # file's own settings (vignetting factors) would have changed, without being asked
         with warnings.catch_warnings(record=True) as caught:
             warnings.simplefilter("always")
-            lens = load(args.lens, strict=not args.lenient, unknown_glass=args.unknown_glass)
+            lens = _load_lens(args)
         for w in caught:
             print(f"jaxlens report: warning: {w.message}", file=sys.stderr)
         shown = with_fields_and_wavelengths(lens, args.fields, args.wavelengths)

@@ -105,9 +105,14 @@ What is read and written:
     * Files are read as UTF-16 (with BOM, Zemax's default), UTF-8 (with or without BOM)
       or latin-1, and written as UTF-8.
 
+    * Multi-configuration files (``MNUM`` and the operand rows after it): the surfaces are
+      the active configuration, which is read by default; ``config=N`` reads configuration
+      N (``jaxlens.io.zmx_config`` says which operands it applies and which it refuses);
+      ``configurations(path)`` lists them. Written lenses have one configuration.
+
 Malformed files raise ``ValueError`` naming the file, the line number and the line.
-Everything else in a file (solves, pickups, tolerances, multi-configuration data,
-coatings, drawing settings) is ignored on reading and not written.
+Everything else in a file (solves, pickups, tolerances, coatings, drawing settings) is
+ignored on reading and not written.
 """
 
 from __future__ import annotations
@@ -116,6 +121,7 @@ from .zmx_common import ZEMAX_CATALOGS as ZEMAX_CATALOGS
 from .zmx_common import term_index as term_index
 from .zmx_common import term_powers as term_powers
 from .zmx_read import ZmxWarning as ZmxWarning
+from .zmx_read import configurations as configurations
 from .zmx_read import decode as decode
 from .zmx_read import load_zmx as load_zmx
 from .zmx_read import loads as loads

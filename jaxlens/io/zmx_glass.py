@@ -176,6 +176,12 @@ class GlassResolver:
             if nd is not None:
                 e = (f"{e}. To open the file anyway with a model glass of the line's nd {nd:g}, "
                      f"Vd {vd:g}, load it with unknown_glass='model'")
+            elif _placeholder_nd_vd(ln):
+                e = (f"{e}. Its GLAS line gives nd 1.5, Vd 40, Zemax's defaults for a glass "
+                     f"it has not looked up, not this glass's data, so no model glass can "
+                     f"stand in for it (a model glass needs the line's real nd and Vd); "
+                     f"supply the glass's catalog (.AGF) beside the file")
+            e = f"{e}{_molded_note(name)}"
             raise ln.error(f"glass {name!r}: {e}") from None
         if self.gcat and getattr(m, "catalog", None) is not None:
             # A glass of the same name from another maker may be another glass (CDGM BAF4 is
@@ -240,6 +246,29 @@ def _cross_checked(m: AbstractMaterial, ln) -> AbstractMaterial:
             f"{getattr(m, 'catalog', '')} has nd {cat_nd:g}, Vd {cat_vd:g}; using the "
             f"catalog's glass (a different glass of the same name?)", ZmxWarning, stacklevel=5)
     return m
+
+
+def _placeholder_nd_vd(ln) -> bool:
+    """The GLAS line's nd and Vd are Zemax's untouched defaults (1.5, 40): no claim."""
+    try:
+        return (float(ln.tokens[4]), float(ln.tokens[5])) == (1.5, 40.0)
+    except (IndexError, ValueError):
+        return False
+
+
+def _molded_note(name: str) -> str:
+    """A note for ``<glass>_MOLD`` (a molded-lens catalog's entry, such as RPO's): the
+    catalog glass of the base name is a different index, so it is not substituted."""
+    if not name.upper().endswith("_MOLD"):
+        return ""
+    base = name[: -len("_MOLD")]
+    try:
+        m = catalog_material(base)
+    except ValueError:
+        return ""
+    return (f". {name} is {base} as a molded lens (a molding catalog's entry); jaxlens has "
+            f"{getattr(m, 'catalog', '')} {m.name}, but a molded glass's index differs from "
+            f"the catalog glass's by the molding, so it is not taken in its place")
 
 
 def _glas_nd_vd(ln) -> tuple[float | None, float | None]:

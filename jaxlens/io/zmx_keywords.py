@@ -17,20 +17,46 @@ SETTINGS = frozenset("""
     COAT FIMP CTHK EDGE THSO TRAC VARI VDSZ WAVL XFLN YFLN PPAR BLKS BLNK CAMA GLCZ HIDX
     TCEX MAZH MIND MXWL MNWL OPTI NSCS NSOA NSOD NSOO NSOP NSOQ NSOS NSOU NSOV NSOW GCAT
     OMMA SCBD TCED XDVA MOD2 RWRE TOLP CSUM DBDT AUTH LUID SSID RCMF XAIM YAIM ZAIM TCMM
+    IWDP STUD EERA
     """.split())
 """Lens-data settings the reader ignores (``OMMA``: the optimisation method; ``SCBD``: a
 surface's coordinate-break-after-surface data written as all zeros by OpticStudio; ``CSUM``:
 a checksum; ``TCMM``: a tolerance operand's comment; ``DBDT``: the stock-lens database record
 of a vendor's file; ``AUTH``, ``LUID``, ``SSID``, ``RCMF``: OpticStudio's author, lens and
 surface ids and a file flag; ``XAIM``, ``YAIM``, ``ZAIM``: ray-aiming settings, which jaxlens
-does not model: ``RAIM`` says so)."""
+does not model: ``RAIM`` says so). ``IWDP``, ``STUD``, ``EERA``: header lines of OpticStudio
+2024 files (beside ``AUTH`` and ``LUID``) that no public format note explains; they are
+ignored only with the values seen in real files (``KNOWN_VALUES``)."""
+
+
+def _zeros(tokens: list, n: int) -> bool:
+    try:
+        return len(tokens) >= n and all(float(t) == 0 for t in tokens[:n])
+    except ValueError:
+        return False
+
+
+KNOWN_VALUES = {
+    # Seen only as ``IWDP 0`` (8 OpticStudio 2024 files of optiland's tests, whose EFLs
+    # jaxlens and optiland agree on); another value is reported as an unknown keyword.
+    "IWDP": lambda t: t == ["0"],
+    # Seen only as ``STUD 1`` (2 of those files).
+    "STUD": lambda t: t == ["1"],
+    # Seen as ``EERA 0 0 0 10 10`` and ``EERA 0 0 0 10``: three zero flags, then counts.
+    "EERA": lambda t: _zeros(t, 3),
+}
+"""Keywords ignored only with the values seen in real files (a predicate on the tokens after
+the keyword). What they do is not documented, so a value never seen may change the lens: it is
+reported like an unknown keyword (an error under ``strict``)."""
 
 CONFIG_OPERANDS = frozenset("""
     THIC CRVT CONN GLSS SDIA APER XFIE YFIE FLWT WAVE WLWT TEMP PRES
+    MOFF LTTL MCOM STPS PRAM FVCX FVCY FVDX FVDY FVAN SATP CWGT PRWV RAAM UDAF ZPHS
     """.split())
-"""Multi-configuration operands (one line per operand after ``MNUM``): the reader loads the
-lens as the file's surfaces give it, the configuration active when it was saved, and
-reports that the other configurations are ignored."""
+"""Multi-configuration operands: after ``MNUM`` (the number of configurations, the active
+one), one line per operand and configuration, ``OPER param configuration value …``
+(``jaxlens.io.zmx_config`` applies them). Names that are also lens-data keywords (``APDX``,
+``TELE``, …) are not taken for operands."""
 
 MERIT_OPERANDS = frozenset("""
     ABCD ABGT ABLT ABSO ACOS ACOT AMAG ANAC ANAR ANAX ANAY ANCX ANCY ASIN ATAN AXCL BLTH

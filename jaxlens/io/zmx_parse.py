@@ -8,7 +8,7 @@ import math
 import re
 from dataclasses import dataclass, field
 
-from .zmx_keywords import IGNORED_KEYWORDS
+from .zmx_keywords import CONFIG_OPERANDS, IGNORED_KEYWORDS, KNOWN_VALUES
 
 UNITS = {"MM": 1.0, "CM": 10.0, "IN": 25.4, "METER": 1000.0, "M": 1000.0}
 SURFACE_KEYS = {
@@ -127,7 +127,8 @@ class ZmxFile:
     raim: ZmxLine | None = None
     surfs: list = field(default_factory=list)
     unknown: list = field(default_factory=list)  # lines with a keyword nobody knows
-    mnum: ZmxLine | None = None  # the number of configurations
+    mnum: ZmxLine | None = None  # the number of configurations (and the active one)
+    config_lines: list = field(default_factory=list)  # operand lines after MNUM, in order
     zemax: bool = False  # written by Zemax (a VERS line): every block is complete
 
 
@@ -155,6 +156,10 @@ def parse(text: str, path: str) -> ZmxFile:
             top_line(f, key, ln, raw)
         elif key == "MNUM":
             f.mnum = ln
+        elif key in CONFIG_OPERANDS and f.mnum is not None:
+            f.config_lines.append(ln)
+        elif key in KNOWN_VALUES and not KNOWN_VALUES[key](ln.tokens[1:]):
+            f.unknown.append(ln)  # a keyword known only with the values seen in real files
         elif key not in IGNORED_KEYWORDS:
             f.unknown.append(ln)
         if key in SURFACE_KEYS and cur is not None:

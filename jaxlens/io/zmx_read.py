@@ -17,7 +17,7 @@ from ..optics.coordinates import CoordinateBreak
 from ..optics.lens import INFINITE_OBJECT_MM, Lens
 from ..optics.materials import Air
 from ..optics.surfaces import AbstractSurface, EvenAsphere, Hybrid, OddAsphere, Standard
-from . import zmx_surfaces, zmx_system
+from . import zmx_config, zmx_surfaces, zmx_system
 from .lensfile import apply_aperture, nonfinite_part
 from .zmx_common import (
     HYBRID_COMMENT,
@@ -29,7 +29,7 @@ from .zmx_common import (
     xpoly_terms,
 )
 from .zmx_glass import GlassResolver
-from .zmx_keywords import IGNORED_KEYWORDS
+from .zmx_keywords import IGNORED_KEYWORDS, KNOWN_VALUES
 from .zmx_parse import SHAPES, ZmxFile, ZmxSurface, parse
 
 _MAX_XDAT_TERMS = 230  # Zemax's extended polynomial: all terms up to degree 20
@@ -378,12 +378,12 @@ def _check_structure(f: ZmxFile, text: str, strict: bool) -> None:
     if not text.endswith(("\n", "\r")) and (lines[-1].split() or [""])[0] not in IGNORED_KEYWORDS:
         report(strict, f"{path}:{len(lines)}: the file does not end with a line break; it "
                         f"may be truncated: {lines[-1].strip()!r}")
-    if f.mnum is not None and f.mnum.int(1, "number of configurations") > 1:
-        report(strict, f"{path}:{f.mnum.number}: a multi-configuration file "
-                        f"({f.mnum.tokens[1]} configurations, e.g. zoom positions); jaxlens "
-                        f"reads the lens as its surfaces give it (the configuration active "
-                        f"when it was saved) and ignores the others")
     for ln in f.unknown:
+        if ln.tokens[0] in KNOWN_VALUES:
+            report(strict, f"{path}:{ln.number}: {ln.tokens[0]} with a value jaxlens has not "
+                            f"seen in real files (an OpticStudio setting whose effect is not "
+                            f"documented; it may change the lens): {ln.text.strip()!r}")
+            continue
         report(strict, f"{path}:{ln.number}: unknown keyword {ln.tokens[0]!r} ignored (not "
                         f"one jaxlens reads; a keyword cut off mid-word means a truncated "
                         f"file): {ln.text.strip()!r}")
@@ -462,7 +462,7 @@ def _check_image_medium(f: ZmxFile, body: list) -> None:
 
 
 def loads(text: str, path: str = "<zmx>", *, strict: bool = False,
-          unknown_glass: str = "error") -> Lens:
+          unknown_glass: str = "error", config: int | None = None) -> Lens:
     """A ``Lens`` from the text of a ``.zmx`` file (``path`` locates side AGF catalogs).
 
     Args:
@@ -473,6 +473,10 @@ def loads(text: str, path: str = "<zmx>", *, strict: bool = False,
             always refused.
         unknown_glass: ``"error"`` refuses a glass in no catalog; ``"model"`` uses a
             ``ModelGlass`` of its GLAS line's nd and Vd instead (a ``ZmxWarning``).
+        config: For a multi-configuration file (``MNUM``), the configuration to read,
+            1-based as in Zemax; ``None`` (default) reads the active one, which is what the
+            file's surfaces hold. Another one applies its operands (``jaxlens.io.zmx_config``
+            lists which); an operand jaxlens cannot apply is refused, naming its line.
 
     Raises:
         ValueError: On a malformed, incomplete or truncated file (the message names the
@@ -481,6 +485,7 @@ def loads(text: str, path: str = "<zmx>", *, strict: bool = False,
     """
     f = parse(text, path)
     try:
+        zmx_config.select(f, config, strict)
         return _lens(f, text, path, strict, unknown_glass)
     except ValueError as e:
         if str(e).startswith(path):
@@ -613,9 +618,21 @@ def _lens(f: ZmxFile, text: str, path: str, strict: bool, unknown_glass: str) ->
 
 
 def load_zmx(path: str | os.PathLike, *, strict: bool = False,
-             unknown_glass: str = "error") -> Lens:
+             unknown_glass: str = "error", config: int | None = None) -> Lens:
     """Read a Zemax ``.zmx`` lens file (UTF-16 or UTF-8); options as for :func:`loads`."""
     path = os.fspath(path)
     with open(path, "rb") as fh:
         raw = fh.read()
-    return loads(decode(raw, path), path, strict=strict, unknown_glass=unknown_glass)
+    return loads(decode(raw, path), path, strict=strict, unknown_glass=unknown_glass,
+                 config=config)
+
+
+def configurations(path: str | os.PathLike) -> dict:
+    """The configurations of a ``.zmx`` file: ``count``, ``active`` (1-based; what its
+    surfaces hold) and ``operands``, one ``{"operand", "param", "values"}`` per operand with
+    its value text in each configuration (see ``jaxlens.io.zmx_config``). A file without
+    ``MNUM`` has one configuration and no operands."""
+    path = os.fspath(path)
+    with open(path, "rb") as fh:
+        raw = fh.read()
+    return zmx_config.describe(parse(decode(raw, path), path))

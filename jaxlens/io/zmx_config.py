@@ -1,0 +1,306 @@
+"""Multi-configuration ``.zmx`` files (zoom positions, focus positions, …): choosing one.
+
+Format, as OpticStudio writes it (and as ``xzos/PyZDDE`` issue #61 and the corpus files show):
+``MNUM n [active]`` gives the number of configurations and the one active when the file was
+saved (1 when absent); after it, one line per operand and configuration::
+
+    THIC   5   2 42.97 0 0 0 1 1 1 0 0        # operand, param, configuration, value, …
+
+``param`` is the operand's first number (a surface for ``THIC``, a field for ``YFIE``, 0 for
+``APER``), ``configuration`` counts from 1 and ``value`` is the operand's value in that
+configuration (lens units for lengths). The surfaces of the file hold the active
+configuration, so reading it needs none of these lines; another configuration is the
+surfaces with its operands' values put in their place.
+
+Applied (lengths in the file's lens units, as on the surfaces): ``THIC`` (surface thickness,
+``DISZ``), ``CRVT`` (curvature), ``CONN`` (conic), ``GLSS`` (glass by name; ``""`` is air),
+``SDIA`` (semi-diameter, where it clips: a fixed ``DIAM``), ``APER`` (the system aperture
+value, in the meaning of the file's ``ENPD``/``FNUM``/``OBNA`` line), ``WAVE`` (wavelength n,
+µm), ``XFIE``/``YFIE`` (field n), ``STPS`` (the stop surface). Ignored: ``MOFF`` (an unused
+row), ``LTTL`` and ``MCOM`` (titles, comments), and the weights ``FLWT``/``WLWT`` (a ``Lens``
+holds none; a warning where they change). Vignetting factors ``FV..`` other than 0 are
+reported as the file's own are. Any other operand whose value in the chosen configuration
+differs from the active one's (``PRAM``, ``TEMP``, …) is refused, naming the line: the lens
+would silently be another one.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import math
+import warnings
+
+from .zmx_common import ZmxWarning, report
+from .zmx_parse import ZmxFile, ZmxLine
+
+NO_OPTICS = frozenset({"MOFF", "LTTL", "MCOM"})
+"""Operands that change nothing the lens holds (an unused row, a title, a comment)."""
+WEIGHTS = frozenset({"FLWT", "WLWT"})
+VIGNETTING = frozenset({"FVCX", "FVCY", "FVDX", "FVDY", "FVAN"})
+REASONS = {
+    "PRAM": "a surface parameter (PARM); jaxlens does not know where its line gives the "
+            "parameter number",
+    "TEMP": "the temperature; jaxlens takes catalog indices at 20 °C",
+    "PRES": "the air pressure; jaxlens takes catalog indices at 1 atm",
+}
+_OBJECT_INFINITY = 1e10  # lens units; Zemax writes an infinite object distance so in THIC
+
+
+@dataclasses.dataclass(frozen=True)
+class Operand:
+    """One multi-configuration operand: its name, first number and value per configuration
+    (the value's text and the line)."""
+
+    name: str
+    param: int
+    values: dict
+
+
+def counts(f: ZmxFile) -> tuple[int, int]:
+    """(number of configurations, the active one, 1-based) of a file; (1, 1) without MNUM."""
+    if f.mnum is None:
+        return 1, 1
+    n = f.mnum.int(1, "number of configurations (MNUM)", lo=1)
+    active = f.mnum.int(2, "active configuration (MNUM's second value)") if len(
+        f.mnum.tokens) > 2 else 1
+    if not 1 <= active <= n:
+        raise f.mnum.error(f"the active configuration must be 1..{n}, got {active}")
+    return n, active
+
+
+def operands(f: ZmxFile, n: int) -> list[Operand]:
+    """The operand lines after MNUM, one ``Operand`` per (name, param); malformed lines raise
+    ``ValueError`` naming the line."""
+    table: dict = {}
+    for ln in f.config_lines:
+        if len(ln.tokens) < 4 and ln.tokens[0] not in NO_OPTICS:
+            raise ln.error("a configuration operand line needs the operand, its number, the "
+                           "configuration and the value")
+        param = ln.int(1, f"{ln.tokens[0]}'s number")
+        cfg = ln.int(2, "configuration number")
+        if not 1 <= cfg <= n:
+            raise ln.error(f"configuration number must be 1..{n} (MNUM), got {cfg}")
+        value = ln.tokens[3] if len(ln.tokens) > 3 else ""
+        op = table.setdefault((ln.tokens[0], param), Operand(ln.tokens[0], param, {}))
+        op.values[cfg] = (value, ln)
+    return list(table.values())
+
+
+def describe(f: ZmxFile) -> dict:
+    """The configurations of a parsed file: ``count``, ``active`` and ``operands``, a list of
+    ``{"operand", "param", "values"}`` with one value text per configuration (``None``
+    where the file has no line)."""
+    n, active = counts(f)
+    ops = operands(f, n) if n > 1 or f.config_lines else []
+    return {"count": n, "active": active, "operands": [
+        {"operand": op.name, "param": op.param,
+         "values": [op.values.get(c, (None, None))[0] for c in range(1, n + 1)]}
+        for op in ops if op.name not in NO_OPTICS]}
+
+
+def select(f: ZmxFile, config: int | None, strict: bool) -> int:
+    """Make ``f`` configuration ``config`` (1-based; ``None``: the active one), in place;
+    returns the configuration read.
+
+    Raises:
+        ValueError: ``config`` outside 1..N, a malformed operand line (for the active
+            configuration: a ``ZmxWarning``, an error under ``strict``), or an operand of
+            configuration ``config`` that jaxlens cannot apply (the message names the line).
+    """
+    if config is not None and (isinstance(config, bool) or not isinstance(config, int)):
+        raise ValueError(f"{f.path}: config must be a whole configuration number (1-based), "
+                         f"got {config!r}")
+    n, active = counts(f)
+    if config is not None and not 1 <= config <= n:
+        have = "one configuration" if n == 1 else f"configurations 1..{n}"
+        raise ValueError(f"{f.path}: config must be one of the file's {have} (Zemax's "
+                         f"numbering, from 1), got {config}")
+    chosen = active if config is None else config
+    if n == 1:  # the surfaces are the only configuration; its operand rows repeat them
+        return chosen
+    try:
+        ops = operands(f, n)
+    except ValueError as e:
+        if chosen != active:
+            raise
+        report(strict, f"{f.path}:{f.mnum.number}: a multi-configuration file ({n} "
+                       f"configurations) whose operand table jaxlens cannot read ({e}); it "
+                       f"reads the lens as its surfaces give it (configuration {active}, the "
+                       f"active one)")
+        return chosen
+    if chosen == active:
+        _check_active(f, ops, active, strict)
+        return chosen
+    for op in ops:
+        if op.name in NO_OPTICS:
+            continue
+        if chosen not in op.values:
+            ln = next(iter(op.values.values()))[1]
+            raise ln.error(f"{op.name} {op.param} has no line for configuration {chosen}")
+        value, ln = op.values[chosen]
+        if op.name in _APPLY:
+            _APPLY[op.name](f, op, value, ln, active)
+            continue
+        before = op.values.get(active, (None, None))[0]
+        if before is not None and _same(value, before):
+            continue
+        if op.name in WEIGHTS:
+            warnings.warn(f"{ln.path}:{ln.number}: configuration {chosen} weighs its "
+                          f"{'fields' if op.name == 'FLWT' else 'wavelengths'} otherwise "
+                          f"({op.name} {op.param}: {value}); a jaxlens Lens holds no weights",
+                          ZmxWarning, stacklevel=4)
+            continue
+        if op.name in VIGNETTING:
+            if _number(value, ln) != 0:
+                report(strict, f"{ln.path}:{ln.number}: vignetting factor {op.name} of field "
+                               f"{op.param} in configuration {chosen} ignored ({value}); "
+                               f"jaxlens samples the whole entrance pupil")
+            continue
+        what = REASONS.get(op.name, "an operand jaxlens does not apply")
+        raise ln.error(f"configuration {chosen} sets {op.name} {op.param} to {value} "
+                       f"(configuration {active}, the surfaces': {before}); {op.name} is "
+                       f"{what}, so jaxlens cannot read configuration {chosen}")
+    return chosen
+
+
+def _same(a: str, b: str) -> bool:
+    try:
+        return float(a) == float(b)
+    except ValueError:
+        return a.strip('"').upper() == b.strip('"').upper()
+
+
+def _number(value: str, ln: ZmxLine) -> float:
+    try:
+        v = float(value.replace("D", "E"))
+    except ValueError:
+        raise ln.error(f"{ln.tokens[0]}'s value must be a number, got {value!r}") from None
+    if not math.isfinite(v):
+        raise ln.error(f"{ln.tokens[0]}'s value must be finite")
+    return v
+
+
+def _surface(f: ZmxFile, op: Operand, ln: ZmxLine):
+    if not 0 <= op.param < len(f.surfs):
+        raise ln.error(f"{op.name} names surface {op.param}; the file has surfaces "
+                       f"0..{len(f.surfs) - 1}")
+    return f.surfs[op.param]
+
+
+def _thic(f, op, value, ln, active):
+    s = _surface(f, op, ln)
+    v = _number(value, ln)
+    s.disz = math.inf if op.param == 0 and v >= _OBJECT_INFINITY else v
+    s.disz_line = ZmxLine(ln.path, ln.number, f"DISZ {value}")
+
+
+def _crvt(f, op, value, ln, active):
+    s = _surface(f, op, ln)
+    s.curv, s.curv_line = _number(value, ln), ZmxLine(ln.path, ln.number, f"CURV {value}")
+
+
+def _conn(f, op, value, ln, active):
+    _surface(f, op, ln).coni = _number(value, ln)
+
+
+def _glss(f, op, value, ln, active):
+    s = _surface(f, op, ln)
+    name = value.strip('"')
+    if not name:
+        s.glas = None  # no glass: air
+        return
+    try:
+        float(name)
+    except ValueError:
+        s.glas = ZmxLine(ln.path, ln.number, f"GLAS {name}")
+        return
+    raise ln.error(f"GLSS's value is a glass name, got the number {value}")
+
+
+def _sdia(f, op, value, ln, active):
+    s = _surface(f, op, ln)
+    v = _number(value, ln)
+    if not v >= 0:
+        raise ln.error("a semi-diameter (SDIA) must be >= 0")
+    floats = f.aperture is not None and f.aperture[0] == "float" and s.stop
+    clips = (s.flap is not None and s.clap is None) or (floats and not s.clap)
+    flag = s.diam[1] if s.diam is not None else None
+    if clips and flag == 0 and not _same(value, op.values.get(active, (value, None))[0]):
+        raise ln.error(f"SDIA {op.param} changes the semi-diameter of surface {op.param}, "
+                       f"which clips there (a floating aperture or FLOA), but its DIAM is "
+                       f"automatic in the file; jaxlens cannot tell what Zemax clips at")
+    s.diam = (v, flag)
+
+
+def _aper(f, op, value, ln, active):
+    v = _number(value, ln)
+    if f.aperture is None:
+        raise ln.error("APER without the file's aperture line (ENPD, FNUM, OBNA)")
+    kind, old, _ = f.aperture
+    if kind == "float":
+        if v != old and not _same(value, op.values.get(active, (value, None))[0]):
+            raise ln.error("APER under FLOA (the pupil set by the stop size) is not applied")
+        return
+    f.aperture = (kind, v, ln)
+
+
+def _wave(f, op, value, ln, active):
+    if not f.wavm:
+        raise ln.error("WAVE needs the file's wavelengths as WAVM lines (this file has WAVL)")
+    if op.param not in f.wavm:
+        raise ln.error(f"WAVE names wavelength {op.param}, which the file's WAVM lines lack")
+    _, old = f.wavm[op.param]
+    weight = old.tokens[3:4]
+    text = " ".join(["WAVM", str(op.param), value, *weight])
+    f.wavm[op.param] = (_number(value, ln), ZmxLine(ln.path, ln.number, text))
+
+
+def _field(f, op, value, ln, active):
+    y = op.name == "YFIE"
+    names = ("yfln", "yfld") if y else ("xfln", "xfld")
+    attr = next((a for a in names if getattr(f, a) is not None), None)
+    if attr is None:
+        if _number(value, ln) == 0:
+            return
+        raise ln.error(f"{op.name} without the file's {'y' if y else 'x'} fields "
+                       f"({names[0].upper()})")
+    old = getattr(f, attr)
+    tokens = list(old.tokens)
+    if not 1 <= op.param < len(tokens):
+        raise ln.error(f"{op.name} names field {op.param}; {old.tokens[0]} gives "
+                       f"{len(tokens) - 1}")
+    _number(value, ln)
+    tokens[op.param] = value
+    setattr(f, attr, ZmxLine(ln.path, ln.number, " ".join(tokens)))
+
+
+def _stps(f, op, value, ln, active):
+    v = _number(value, ln)
+    if v != int(v) or not 1 <= v <= len(f.surfs) - 2:
+        raise ln.error(f"STPS (the stop surface) must be a lens surface, 1..{len(f.surfs) - 2}, "
+                       f"got {value}")
+    for i, s in enumerate(f.surfs):
+        s.stop = i == int(v)
+
+
+_APPLY = {"THIC": _thic, "CRVT": _crvt, "CONN": _conn, "GLSS": _glss, "SDIA": _sdia,
+          "APER": _aper, "WAVE": _wave, "XFIE": _field, "YFIE": _field, "STPS": _stps}
+
+
+def _check_active(f: ZmxFile, ops: list[Operand], active: int, strict: bool) -> None:
+    """The surfaces hold the active configuration: where a THIC, CRVT or CONN row of it
+    says otherwise, the active number (MNUM's second value) is not what it seems."""
+    for op in ops:
+        if op.name not in ("THIC", "CRVT", "CONN") or active not in op.values:
+            continue
+        value, ln = op.values[active]
+        s = _surface(f, op, ln)
+        v = _number(value, ln)
+        have = {"THIC": s.disz, "CRVT": s.curv, "CONN": s.coni}[op.name]
+        if op.name == "THIC" and op.param == 0 and v >= _OBJECT_INFINITY and math.isinf(have):
+            continue
+        if not math.isclose(v, have, rel_tol=1e-9, abs_tol=1e-12):
+            report(strict, f"{ln.path}:{ln.number}: {op.name} {op.param} of configuration "
+                           f"{active}, the active one (MNUM), is {value}, but surface "
+                           f"{op.param} holds {have:g}; jaxlens reads the surfaces")
+            return
