@@ -43,9 +43,9 @@ OPTILAND_EFL = {
 
 # What each file that loads is reported for (a ZmxWarning naming the line), if anything.
 EXPECTED_WARNINGS = {
-    # OpticStudio 2022 settings of no documented meaning to jaxlens: reported, not guessed.
+    # Its OpticStudio header lines IWDP 0 and EERA 0 0 0 … are read with the values seen in
+    # real files (zmx_keywords.KNOWN_VALUES; test_zmx_keywords_more: other values are reported).
     "optiland_circular_aperture_example_with_aperture.zmx": [
-        r":5: unknown keyword 'IWDP' ignored", r":66: unknown keyword 'EERA' ignored",
         r":18: the file aims rays at the stop"],
     "optiland_lens_floa.zmx": [r":6: FTYP announces 3 fields, YFLN gives 1"],
     "rayoptics_HoO-V2C18Ex66.zmx": [r":11: the file aims rays at the stop"],

@@ -206,7 +206,8 @@ def test_report_cli_config_and_list(capsys, tmp_path):
     json_lens = tmp_path / "l.json"
     jl.save(_quiet_load(ZOOM), json_lens)
     assert main(["report", str(json_lens), "--config", "2"]) == 2
-    assert "chooses a configuration of a .zmx file" in capsys.readouterr().err
+    assert "config selects a configuration of a multi-configuration .zmx file" in (
+        capsys.readouterr().err)
 
 
 @pytest.mark.slow
@@ -218,3 +219,18 @@ def test_report_cli_reads_the_chosen_configuration(capsys):
     assert main(["report", ZOOM, "--config", "3", "--json"]) == 0
     data = json.loads(capsys.readouterr().out)
     assert data["efl_image_space"] == pytest.approx(OPTILAND[3][0], rel=1e-9)
+
+
+def test_load_passes_config_and_refuses_it_for_json(tmp_path):
+    """``jaxlens.load(config=N)`` is the .zmx reader's configuration N; a .json lens has one
+    configuration, so a config for it is refused rather than ignored."""
+    import jaxlens
+
+    for c in (1, 2, 3):
+        a = jaxlens.load(ZOOM, config=c)
+        b = zmx.load_zmx(ZOOM, config=c)
+        assert jax.tree.all(jax.tree.map(lambda x, y: bool(np.array_equal(x, y)), a, b))
+    # THIC 2 (Zemax's surface 2, jaxlens's thickness[1]) is 20 / 10 / 5 mm.
+    assert [float(jaxlens.load(ZOOM, config=c).thickness[1]) for c in (1, 2, 3)] == [20, 10, 5]
+    with pytest.raises(ValueError, match=r"load: config selects a configuration .* a \.json"):
+        jaxlens.load(jaxlens.__path__[0] + "/data/lenses/cooke_triplet.json", config=1)

@@ -46,7 +46,7 @@ import numpy as np
 from ..imaging import sampling
 from ..io.files import load
 from ..io.lensfile import nm_to_um
-from ..io.zmx import configurations, load_zmx
+from ..io.zmx import configurations
 from ..optics import checks, paraxial
 from ..optics.coordinates import CoordinateBreak
 from ..optics.diffractive import Binary2, Grating
@@ -593,14 +593,9 @@ def register(subparsers) -> None:
 
 
 def _load_lens(args: argparse.Namespace) -> Lens:
-    """The lens of ``args.lens``: ``load``, or for ``--config`` the .zmx reader's ``config``."""
-    if args.config is None:
-        return load(args.lens, strict=not args.lenient, unknown_glass=args.unknown_glass)
-    if os.path.splitext(args.lens)[1].lower() != ".zmx":
-        raise ValueError(f"--config chooses a configuration of a .zmx file; {args.lens} is not "
-                         f"one")
-    return load_zmx(args.lens, strict=not args.lenient, unknown_glass=args.unknown_glass,
-                    config=args.config)
+    """The lens of ``args.lens`` (``--config``: that configuration of a .zmx file)."""
+    return load(args.lens, strict=not args.lenient, unknown_glass=args.unknown_glass,
+                config=args.config)
 
 
 def _config_value(v) -> str:

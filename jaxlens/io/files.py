@@ -28,7 +28,7 @@ def _ext(path: str, what: str) -> str:
 
 
 def load(path: str | os.PathLike, *, dtype=None, strict: bool = False,
-         unknown_glass: str = "error") -> Lens:
+         unknown_glass: str = "error", config: int | None = None) -> Lens:
     """Read a lens file (``.json`` or ``.zmx``).
 
     Args:
@@ -41,6 +41,9 @@ def load(path: str | os.PathLike, *, dtype=None, strict: bool = False,
         unknown_glass: for ``.zmx``, ``"model"`` opens a file whose glass is in no catalog
             with a model glass of the nd and Vd its GLAS line gives (a ``ZmxWarning``); the
             default ``"error"`` refuses it.
+        config: for a multi-configuration ``.zmx`` (zoom or focus positions), the
+            configuration to read, 1-based as in Zemax; default the active one, which the
+            file's surfaces hold (see ``jaxlens.io.zmx.loads``). Refused for ``.json``.
 
     Returns:
         The ``Lens``.
@@ -63,9 +66,13 @@ def load(path: str | os.PathLike, *, dtype=None, strict: bool = False,
         raise ValueError(f"load: unknown_glass must be 'error' or 'model', got "
                          f"{unknown_glass!r}")
     if ext == ".json":
+        if config is not None:
+            raise ValueError(f"load: config selects a configuration of a multi-configuration "
+                             f".zmx file; a .json lens has one, got config={config!r} for "
+                             f"{path}")
         lens = load_json(path)
     else:
-        lens = load_zmx(path, strict=strict, unknown_glass=unknown_glass)
+        lens = load_zmx(path, strict=strict, unknown_glass=unknown_glass, config=config)
     return lens if dtype is None else lens.astype(dtype)
 
 
