@@ -351,7 +351,7 @@ def check_vignetting(v, where: str, arg: str = "vignetting"):
     returns ``v``."""
     a = np.asarray(v, float)
     for j, col in enumerate(VIGNETTING_COLUMNS):
-        unit = "deg" if col == "VAN" else "(fractions of the entrance-pupil radius)"
+        unit = "deg" if col == "VAN" else "pupil radii"
         hi = 1.0 if col in ("VCX", "VCY") else None
         checks.values(a[..., j], f"{arg} {col}", where, hi=hi, hi_open=True, unit=unit)
     return v
