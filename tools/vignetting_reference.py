@@ -24,10 +24,10 @@ glass data, so every medium gets the index jaxlens takes at the primary waveleng
 import contextlib
 import io
 import sys
+from importlib.metadata import version
 
 import numpy as np
 from optiland.fileio import load_zemax_file
-from importlib.metadata import version
 
 INDICES = [1.6126428468576401, 1.0, 1.6055197471525104, 1.0, 1.0, 1.5233373744874135,
            1.6126428468576401, 1.0]  # after lens surfaces 1..8 at 0.589 µm (SK4, BAF4, KF9)

@@ -15,7 +15,10 @@ image surface, ``n`` dicts keyed by nm, ``aperture.EPD``, ``fields.values``,
 are. Informational keys such as ``semi_diameter_real_rays`` are ignored, never used to
 clip rays; a near miss or a synonym of a key the reader knows (``"radus"``, ``"glass"``,
 ``"R"``, ``"k"``) is refused (``lens_keys``), as are a ``fields`` or ``object`` object
-without ``values`` or ``distance`` and ``units`` other than mm.
+without ``values`` or ``distance`` and ``units`` other than mm. ``fields.vignetting``
+holds ``Lens.vignetting`` (Zemax's vignetting factors) as one list per factor, one value per
+field: ``{"vdx": [...], "vdy": [...], "vcx": [...], "vcy": [...], "van_deg": [...]}`` (pupil
+radii; ``van_deg`` in degrees; a missing list is 0).
 
 Saving writes every number with Python's shortest round-trip representation, so
 ``load(save(lens))`` gives the same numbers to the last bit (as float64), the same

@@ -1,7 +1,7 @@
 """System data of a ``.zmx`` file beyond surfaces: the object-space NA and paraxial working
 F/# apertures (``OBNA``, ``FNUM x 1``), field types (``FTYP``; paraxial and real image heights
-converted to angles), vignetting factors (read into ``Lens.vignetting``), ray aiming (``RAIM``) and the environment
-(``ENVD``). The format: ``jaxlens.io.zmx``."""
+converted to angles), vignetting factors (read into ``Lens.vignetting``), ray aiming
+(``RAIM``) and the environment (``ENVD``). The format: ``jaxlens.io.zmx``."""
 
 from __future__ import annotations
 
