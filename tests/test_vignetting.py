@@ -351,3 +351,12 @@ def test_fields_replaced_without_their_factors_are_refused():
     with pytest.raises(ValueError, match=r"field_vignetting: the lens has 2 field\(s\) but "
                                          r"vignetting factors of shape \(3, 5\)"):
         sampling.field_rays(lens, 20.0, jnp.zeros((1, 2)))
+    # vignetting_for_fields gives the rows for new fields: kept where a field stays
+    rows = np.array([[0, 0, 0, 0, 0], [0.01, -0.02, 0.03, 0.04, 5.0], [0.1, -0.2, 0.3, -0.4, 0]])
+    lens = _cooke(rows)
+    new = jnp.array([20.0, 7.0, 14.0])
+    got = sampling.vignetting_for_fields(lens, new)
+    np.testing.assert_array_equal(got, [rows[2], np.zeros(5), rows[1]])
+    moved = dataclasses.replace(lens, fields=new, vignetting=got)
+    np.testing.assert_array_equal(sampling.field_vignetting(moved, 14.0), rows[1])
+    assert sampling.vignetting_for_fields(zoo.cooke_triplet(), new) is None

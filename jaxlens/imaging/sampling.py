@@ -338,6 +338,20 @@ def field_vignetting(lens: Lens, field) -> Float[Array, " 5"]:
     return jnp.where(jnp.any(match), row, jnp.zeros_like(row))
 
 
+def vignetting_for_fields(lens: Lens, fields) -> Array | None:
+    """The ``Lens.vignetting`` rows for other ``fields`` (deg, ``[F]`` θy or ``[F, 2]``):
+    the factors of each field that equals one of the lens's fields, zeros for a new one;
+    None for a lens without factors. For replacing a lens's fields (``eqx.tree_at`` on
+    ``fields`` alone leaves stale rows, which ``field_rays`` refuses)."""
+    if lens.vignetting is None:
+        return None
+    f = jnp.asarray(fields)
+    if f.ndim not in (1, 2) or (f.ndim == 2 and f.shape[1] != 2):
+        raise ValueError(f"vignetting_for_fields: fields must be [F] angles θy or [F, 2] "
+                         f"pairs (θx, θy) in deg, got shape {f.shape}")
+    return jax.vmap(lambda g: field_vignetting(lens, g))(f)
+
+
 def field_rays(lens: Lens, field, pupil, wavelength=None, *, depth=None, aim="paraxial") -> Rays:
     """Rays for a field angle at infinity (``depth=None``, inf, or ``INFINITE_OBJECT_MM`` =
     1e10 mm and more, as for ``Lens.object_distance``) or from a finite depth (mm).
