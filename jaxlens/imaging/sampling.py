@@ -394,6 +394,8 @@ def aim_at_stop(
     that clips a Newton iterate stops that ray where it was clipped, which leaves the
     iterate short of the stop point, and the real trace may then pass the wrong ray. Which
     of the aimed rays the apertures stop is for the caller's trace of the real lens.
+    The pupil points are aimed at as given (the lens's vignetting factors are applied
+    before, by ``field_rays``).
     """
     from ..tracing.forward import trace_path
 

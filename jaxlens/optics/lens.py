@@ -29,7 +29,9 @@ Conventions:
     rotation) is in degrees. The sampling of a field's pupil maps each normalised pupil
     point (Px, Py) to ``VDX + Px·(1 − VCX)``, ``VDY + Py·(1 − VCY)``, rotated by VAN
     (``jaxlens.imaging.sampling.vignetting_map``). None (the default) or zeros: no
-    vignetting factors, the whole pupil is sampled.
+    vignetting factors, the whole pupil is sampled. They apply to the lens's own fields
+    only (``sampling.field_rays`` for a field equal to one of ``fields``): a field between
+    them (render, a PSF at a pixel's field) samples the whole pupil.
 
 The structure (surface kinds, counts, polynomial orders, stop index, mirrors) is static;
 every number is an array so ``jax.grad`` reaches it.
