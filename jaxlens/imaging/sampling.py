@@ -302,8 +302,8 @@ def vignetting_map(factors, pupil) -> Float[Array, "*m 2"]:
     OpticStudio); zeros map every point to itself.
 
     >>> import jax.numpy as jnp
-    >>> vignetting_map(jnp.array([0.0, 0.1, 0.0, 0.5, 0.0]), jnp.array([[0.0, 1.0]])).tolist()
-    [[0.0, 0.6]]
+    >>> vignetting_map(jnp.array([0.0, 0.25, 0.0, 0.5, 0.0]), jnp.array([[0.0, 1.0]])).tolist()
+    [[0.0, 0.75]]
     """
     v = jnp.asarray(factors)
     pupil = jnp.asarray(pupil)
