@@ -75,6 +75,10 @@ def stop_chief_ray(lens: Lens, field, depth=None, wavelength=None, *,
     Returns:
         One ray (shape ``[1]``) in object space, launched from the entrance-pupil plane
         (infinity) or from the object point.
+
+    The lens's vignetting factors do not move it: it passes through the centre of the stop
+    whatever they are. The ray that ``sampling.field_rays`` launches at pupil point (0, 0)
+    of a vignetted field is the centre of the vignetted pupil, (VDX, VDY) rotated by VAN.
     """
     checks.number(iters, "iters", "stop_chief_ray", lo=0, integer=True,
                   unit="aiming iterations")  # -1 ran no iteration without a word

@@ -8,6 +8,16 @@ Conventions:
     (Px, Py) passes through (Px·EPD/2, Py·EPD/2, z_EP). With ``aim="real"`` the launch
     points are corrected by Newton's method so that the rays cross the real stop at
     (Px, Py)·(stop semi-diameter).
+
+Vignetting factors:
+    A lens's ``vignetting`` (Zemax VDX, VDY, VCX, VCY, VAN, one row per field) reshapes the
+    pupil of each of its fields: ``field_rays`` maps the normalised pupil point (Px, Py) to
+    ``vignetting_map`` (Px', Py') and launches the ray there (aimed there too with
+    ``aim="real"``). The factors belong to the lens's defined fields: they apply to a field
+    equal to one of ``lens.fields`` (within ``FIELD_MATCH_DEG``), and to no other field
+    (no interpolation between fields: render and the PSF at pixel fields between the defined
+    fields sample the whole pupil). ``collimated`` and ``point_source`` take the pupil
+    points as given and never apply them.
 """
 
 from __future__ import annotations
@@ -174,6 +184,9 @@ def collimated(
 
     Returns:
         ``[m]`` rays launched on the entrance-pupil plane.
+
+    The pupil points are used as given: the lens's vignetting factors are not applied here
+    (``field_rays`` applies them for the lens's own fields).
     """
     wl = lens.primary_wavelength if wavelength is None else jnp.asarray(wavelength)
     pupil = pupil_points(pupil, "collimated")
@@ -204,6 +217,8 @@ def point_source(
 
     The entrance pupil diameter is the lens's EPD. The rays are launched at their
     entrance-pupil points, with ``opl`` already holding the path from the object point.
+    The pupil points are used as given: the lens's vignetting factors are not applied here
+    (``field_rays`` applies them for the lens's own fields).
     """
     wl = lens.primary_wavelength if wavelength is None else jnp.asarray(wavelength)
     pupil = pupil_points(pupil, "point_source")
@@ -259,15 +274,92 @@ def object_point(lens: Lens, field, depth) -> Array:
     return jnp.concatenate([-xy, z[..., None] * jnp.ones_like(xy[..., :1])], -1)
 
 
+FIELD_MATCH_DEG = 1e-9
+"""A field within this (degrees, in θx and θy) of one of the lens's fields is that field,
+and gets its vignetting factors."""
+
+
+def vignetting_map(factors, pupil) -> Float[Array, "*m 2"]:
+    """Zemax's vignetted pupil: the normalised pupil points (Px, Py) ``[..., 2]`` mapped by
+    the vignetting factors ``factors = (VDX, VDY, VCX, VCY, VAN)`` ``[5]`` of one field.
+
+    First compression and decenter, ``Px' = VDX + Px·(1 − VCX)`` and
+    ``Py' = VDY + Py·(1 − VCY)`` (VDX, VDY, VCX, VCY in pupil radii; OpticStudio's
+    definition), then a rotation of (Px', Py') about the pupil centre by VAN degrees,
+    counter-clockwise (from +x toward +y): ``Px'' = Px'·cos VAN − Py'·sin VAN``,
+    ``Py'' = Px'·sin VAN + Py'·cos VAN``. The order and sign of the rotation are this
+    library's reading (no reference file with VAN ≠ 0 was at hand to check them against
+    OpticStudio); zeros map every point to itself.
+
+    >>> import jax.numpy as jnp
+    >>> vignetting_map(jnp.array([0.0, 0.25, 0.0, 0.5, 0.0]), jnp.array([[0.0, 1.0]])).tolist()
+    [[0.0, 0.75]]
+    """
+    v = jnp.asarray(factors)
+    pupil = jnp.asarray(pupil)
+    if v.shape != (5,):
+        raise ValueError(f"vignetting_map: factors must be (VDX, VDY, VCX, VCY, VAN) of shape "
+                         f"[5] (pupil radii, VAN in deg), got shape {v.shape}")
+    x = v[0] + pupil[..., 0] * (1.0 - v[2])
+    y = v[1] + pupil[..., 1] * (1.0 - v[3])
+    a = jnp.deg2rad(v[4])
+    c, s = jnp.cos(a), jnp.sin(a)
+    return jnp.stack([c * x - s * y, s * x + c * y], -1)
+
+
+def field_vignetting(lens: Lens, field) -> Float[Array, " 5"]:
+    """The vignetting factors (VDX, VDY, VCX, VCY, VAN) of ``field`` (deg, θy or (θx, θy)):
+    the row of ``lens.vignetting`` of the lens's field equal to it (the first such, within
+    ``FIELD_MATCH_DEG`` in θx and θy), else zeros (a field between the defined fields gets
+    none: OpticStudio's rule for such fields was not verified, so none is guessed). Jittable:
+    the field and the lens may be traced."""
+    v = lens.vignetting
+    if v is None:
+        return jnp.zeros(5, lens.epd.dtype)
+    n = lens.fields.shape[0]
+    if v.shape != (n, 5):  # eqx.tree_at on the fields skips the Lens's checks
+        raise ValueError(f"field_vignetting: the lens has {n} field(s) but vignetting factors "
+                         f"of shape {v.shape}; replace Lens.vignetting ([{n}, 5], or None) "
+                         f"with the fields")
+    defined = jnp.rad2deg(field_xy(lens.fields))  # [F, 2]
+    given = jnp.rad2deg(field_xy(field)).reshape(1, 2)
+    match = jnp.all(jnp.abs(defined - given) <= FIELD_MATCH_DEG, -1)  # [F]
+    row = v[jnp.argmax(match)]
+    return jnp.where(jnp.any(match), row, jnp.zeros_like(row))
+
+
+def vignetting_for_fields(lens: Lens, fields) -> Array | None:
+    """The ``Lens.vignetting`` rows for other ``fields`` (deg, ``[F]`` θy or ``[F, 2]``):
+    the factors of each field that equals one of the lens's fields, zeros for a new one;
+    None for a lens without factors. For replacing a lens's fields (``eqx.tree_at`` on
+    ``fields`` alone leaves stale rows, which ``field_rays`` refuses)."""
+    if lens.vignetting is None:
+        return None
+    f = jnp.asarray(fields)
+    if f.ndim not in (1, 2) or (f.ndim == 2 and f.shape[1] != 2):
+        raise ValueError(f"vignetting_for_fields: fields must be [F] angles θy or [F, 2] "
+                         f"pairs (θx, θy) in deg, got shape {f.shape}")
+    return jax.vmap(lambda g: field_vignetting(lens, g))(f)
+
+
 def field_rays(lens: Lens, field, pupil, wavelength=None, *, depth=None, aim="paraxial") -> Rays:
     """Rays for a field angle at infinity (``depth=None``, inf, or ``INFINITE_OBJECT_MM`` =
     1e10 mm and more, as for ``Lens.object_distance``) or from a finite depth (mm).
 
     The chief ray of a finite-depth field point makes the angle θ with the axis at the
     entrance pupil, as for an object at infinity.
+
+    Where the lens has vignetting factors and ``field`` is one of its fields (within
+    ``FIELD_MATCH_DEG``), the ray of pupil point (Px, Py) is the ray of
+    ``vignetting_map(factors, (Px, Py))``, launched (and, with ``aim="real"``, aimed at
+    the stop) there, as OpticStudio traces it; other fields sample the pupil unchanged.
     """
     if depth is not None:
         checks.real_values(depth, "depth", "field_rays", "mm")
+    if lens.vignetting is not None:
+        pupil = pupil_points(pupil, "field_rays")
+        _one_field(field, "field_rays")
+        pupil = vignetting_map(field_vignetting(lens, field), pupil)
     if depth is None or (not isinstance(depth, jax.core.Tracer)
                          and np.all(np.asarray(depth) >= INFINITE_OBJECT_MM)):
         return collimated(lens, field, pupil, wavelength, aim=aim)
@@ -292,6 +384,8 @@ def aim_at_stop(
     that clips a Newton iterate stops that ray where it was clipped, which leaves the
     iterate short of the stop point, and the real trace may then pass the wrong ray. Which
     of the aimed rays the apertures stop is for the caller's trace of the real lens.
+    The pupil points are aimed at as given (the lens's vignetting factors are applied
+    before, by ``field_rays``).
     """
     from ..tracing.forward import trace_path
 

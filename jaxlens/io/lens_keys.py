@@ -47,7 +47,13 @@ APERTURE = {"epd": ("entrance_pupil_diameter", "pupil_diameter", "diameter"), "E
             "stop_semi_diameter": ("stop_radius", "stop_semi_diam")}
 SENSOR = {"resolution": ("pixels", "res", "size_px"), "pixel_size": ("pixel_pitch", "pitch")}
 FIELDS = {"type": ("kind",), "values": ("vals", "angles", "angles_deg", "values_deg",
-                                        "field_angles", "fields", "deg", "degrees")}
+                                        "field_angles", "fields", "deg", "degrees"),
+          "vignetting": ("vignetting_factors", "vig")}
+# Lens.vignetting's columns, one list of one value per field each (a missing one is 0).
+VIGNETTING = {"vdx": ("vdxn", "decenter_x"), "vdy": ("vdyn", "decenter_y"),
+              "vcx": ("vcxn", "compression_x", "compress_x"),
+              "vcy": ("vcyn", "compression_y", "compress_y"),
+              "van_deg": ("van", "vann", "angle", "angle_deg")}
 OBJECT = {"distance": ("dist", "d", "thickness", "object_distance", "z")}
 # A material object: a misspelled "vd" would leave a model glass without dispersion.
 MATERIAL = {"name": ("glass",), "class": ("type", "kind"), "nd": ("n_d",),

@@ -15,7 +15,10 @@ image surface, ``n`` dicts keyed by nm, ``aperture.EPD``, ``fields.values``,
 are. Informational keys such as ``semi_diameter_real_rays`` are ignored, never used to
 clip rays; a near miss or a synonym of a key the reader knows (``"radus"``, ``"glass"``,
 ``"R"``, ``"k"``) is refused (``lens_keys``), as are a ``fields`` or ``object`` object
-without ``values`` or ``distance`` and ``units`` other than mm.
+without ``values`` or ``distance`` and ``units`` other than mm. ``fields.vignetting``
+holds ``Lens.vignetting`` (Zemax's vignetting factors) as one list per factor, one value per
+field: ``{"vdx": [...], "vdy": [...], "vcx": [...], "vcy": [...], "van_deg": [...]}`` (pupil
+radii; ``van_deg`` in degrees; a missing list is 0).
 
 Saving writes every number with Python's shortest round-trip representation, so
 ``load(save(lens))`` gives the same numbers to the last bit (as float64), the same
@@ -37,7 +40,7 @@ import numpy as np
 
 from ..optics import checks, paraxial
 from ..optics import materials as _materials
-from ..optics.lens import INFINITE_OBJECT_MM, Lens, Sensor
+from ..optics.lens import INFINITE_OBJECT_MM, Lens, Sensor, check_vignetting
 from ..optics.materials import Air
 from ..optics.qtype import QTypeAsphere
 from ..optics.surfaces import AbstractSurface, EvenAsphere, Hybrid, OddAsphere, Standard
@@ -361,6 +364,34 @@ def _fields_of(d: dict, where: str) -> np.ndarray:
     return out
 
 
+def _vignetting_of(d: dict, where: str, n_fields: int) -> np.ndarray | None:
+    """``fields.vignetting``: ``{"vdx": [...], "vdy": [...], "vcx": [...], "vcy": [...],
+    "van_deg": [...]}``, one value per field each (pupil radii; ``van_deg`` in degrees), a
+    missing list 0; None without it. Checked as ``Lens.vignetting``, naming the file."""
+    f = d.get("fields")
+    if not isinstance(f, dict) or f.get("vignetting") is None:
+        return None
+    v, at = f["vignetting"], f"{where}: fields.vignetting"
+    form = '{"vdx": [...], "vdy": [...], "vcx": [...], "vcy": [...], "van_deg": [...]}'
+    if not isinstance(v, dict):
+        raise ValueError(f"{at} must be an object {form}, one value per field each (pupil "
+                         f"radii, van_deg in degrees), got {v!r}")
+    lens_keys.no_misspelled(v, lens_keys.VIGNETTING, at)
+    unknown = [k for k in v if k not in lens_keys.VIGNETTING]
+    if unknown:
+        raise ValueError(f"{at}: unknown key {unknown[0]!r}; the keys are "
+                         f"{', '.join(lens_keys.VIGNETTING)}")
+    out = np.zeros((n_fields, 5))
+    for j, key in enumerate(lens_keys.VIGNETTING):
+        if key in v:
+            col = np.atleast_1d(_nums(v[key], f"{at}.{key}"))
+            if col.shape != (n_fields,):
+                raise ValueError(f"{at}.{key} must hold one value per field ({n_fields}), got "
+                                 f"shape {col.shape}")
+            out[:, j] = col
+    return check_vignetting(out, at, "factors")
+
+
 def _is_kind(s: Any, kind: str) -> bool:
     return isinstance(s, dict) and str(s.get("type", "")).lower() == kind
 
@@ -485,6 +516,7 @@ def lens_from_dict(d: dict, *, source: str = "<lens>") -> Lens:
     # The Lens checks these too, but here the message names the file and the key.
     checks.wavelengths(checks.NoMaterials, wl, f"{source}: {key}", "wavelength")
     checks.field_angles(fields, f"{source}: fields", "field angles")
+    vignetting = _vignetting_of(d, source, fields.shape[0])
     lens = Lens(
         surfaces=tuple(surfaces),
         thickness=_arr(np.array(thick)),
@@ -500,6 +532,7 @@ def lens_from_dict(d: dict, *, source: str = "<lens>") -> Lens:
         sensor=sensor,
         name=name,
         description=description,
+        vignetting=None if vignetting is None else _arr(vignetting),
     )
     # Before the paraxial work of the aperture: values the lens cannot be traced with.
     checks.wavelengths(lens, wl, f"{source}: {key}", "wavelength")
@@ -564,6 +597,10 @@ def lens_to_dict(lens: Lens) -> dict:
         "primary": lens.primary,
         "surfaces": surfs,
     }
+    if lens.vignetting is not None:
+        v = np.asarray(lens.vignetting, np.float64)
+        out["fields"]["vignetting"] = {k: _out(v[:, j])
+                                       for j, k in enumerate(lens_keys.VIGNETTING)}
     if lens.sensor is not None:
         out["sensor"] = {
             "resolution": list(lens.sensor.resolution),

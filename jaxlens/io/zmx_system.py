@@ -1,7 +1,7 @@
 """System data of a ``.zmx`` file beyond surfaces: the object-space NA and paraxial working
 F/# apertures (``OBNA``, ``FNUM x 1``), field types (``FTYP``; paraxial and real image heights
-converted to angles), vignetting factors, ray aiming (``RAIM``) and the environment
-(``ENVD``). The format: ``jaxlens.io.zmx``."""
+converted to angles), vignetting factors (read into ``Lens.vignetting``), ray aiming
+(``RAIM``) and the environment (``ENVD``). The format: ``jaxlens.io.zmx``."""
 
 from __future__ import annotations
 
@@ -247,14 +247,51 @@ def field_type(ln) -> int:
     return kind
 
 
+VIGNETTING_KEYS = ("VDXN", "VDYN", "VCXN", "VCYN", "VANN")
+"""The file's vignetting lines, in the column order of ``Lens.vignetting``."""
+
+
+def vignetting(lines, count: int) -> np.ndarray | None:
+    """The vignetting factors of the first ``count`` (used) fields, ``[count, 5]`` in the
+    column order of ``Lens.vignetting`` (VDX, VDY, VCX, VCY in fractions of the
+    entrance-pupil radius, VAN in degrees), or None where every one is 0 (or no line gives
+    them).
+
+    They reshape each field's pupil, Zemax's stand-in for the clipping of the surface
+    apertures (``jaxlens.imaging.sampling.vignetting_map``); a line the file does not
+    give, or a field it gives no value for, is 0. A line given twice, a value that is not
+    finite, or a compression (VCXN, VCYN) of 1 or more is refused, naming the line.
+    Paraxial data and the EFL do not depend on them.
+    """
+    out = np.zeros((count, len(VIGNETTING_KEYS)))
+    seen: dict[str, object] = {}
+    for ln in lines:
+        key = ln.tokens[0].upper()
+        if key in seen:
+            raise ln.error(f"{key} given twice (first on line {seen[key].number})")
+        seen[key] = ln
+        j = VIGNETTING_KEYS.index(key)
+        vals = [ln.float(i, f"{key} value") for i in range(1, len(ln.tokens))][:count]
+        for i, v in enumerate(vals):
+            unit = "deg" if key == "VANN" else "fractions of the entrance-pupil radius"
+            if not math.isfinite(v):
+                raise ln.error(f"{key} of field {i + 1} must be a finite number ({unit}), "
+                               f"got {v!r}")
+            if key in ("VCXN", "VCYN") and not v < 1.0:
+                raise ln.error(f"{key} of field {i + 1} must be below 1 ({unit}: 1 shrinks "
+                               f"the pupil to a line), got {v:g}")
+            out[i, j] = v
+    return out if np.any(out != 0) else None
+
+
 def vignetting_factors(lines, count: int) -> str | None:
     """The message for vignetting factors (VDXN, VDYN, VCXN, VCYN, VANN) other than 0 on the
-    first ``count`` (used) fields, or None.
+    first ``count`` (used) fields that a reader drops, or None.
 
-    They shrink and shift each field's pupil, Zemax's stand-in for the clipping of the
-    surface apertures. jaxlens samples the whole entrance pupil for every field and lets the
-    apertures clip, so the beam can differ from the file's: the reader reports them (a
-    warning; an error under ``strict``). Paraxial data and the EFL do not depend on them.
+    A reader that builds the ``Lens`` without ``vignetting(lines, count)`` samples the
+    whole entrance pupil for every field, so its beam can differ from the file's: it
+    reports them with this message (a warning; an error under ``strict``). A reader that
+    passes them on calls ``vignetting`` instead.
     """
     for ln in lines:
         vals = [ln.float(i, f"{ln.tokens[0]} value") for i in range(1, len(ln.tokens))]

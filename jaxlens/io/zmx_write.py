@@ -454,6 +454,10 @@ def dumps(lens: Lens, path: str = "lens.zmx", *, model_glass: str = "blank"):
         "YFLN " + " ".join(_z(v) for v in ys),
         "FWGN " + " ".join("1" for _ in ys),
     ]
+    if lens.vignetting is not None:  # one line per factor, one value per field
+        v = np.asarray(lens.vignetting, np.float64).reshape(len(ys), 5)
+        head += [f"{key} " + " ".join(_z(x) for x in v[:, j])
+                 for j, key in enumerate(("VDXN", "VDYN", "VCXN", "VCYN", "VANN"))]
     head += [f"WAVM {i} {_z(w)} 1" for i, w in enumerate(wl, start=1)]
     head.append(f"PWAV {lens.primary + 1}")
     return "\n".join(head + surf_lines) + "\n", gw

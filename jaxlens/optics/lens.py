@@ -23,6 +23,15 @@ Conventions:
     rays at surface ``i``; ``i = len(surfaces)`` is the image surface. They act besides the
     semi-diameters and ``obscurations`` (a surface clipped only by its apertures has
     ``semi_diameter = inf``).
+    ``vignetting`` holds Zemax's vignetting factors, one row per field (``[F, 5]``, rows in
+    the order of ``fields``): (VDX, VDY, VCX, VCY, VAN). VDX, VDY (pupil decenter) and
+    VCX, VCY (pupil compression) are fractions of the entrance-pupil radius, VAN (pupil
+    rotation) is in degrees. The sampling of a field's pupil maps each normalised pupil
+    point (Px, Py) to ``VDX + Px·(1 − VCX)``, ``VDY + Py·(1 − VCY)``, rotated by VAN
+    (``jaxlens.imaging.sampling.vignetting_map``). None (the default) or zeros: no
+    vignetting factors, the whole pupil is sampled. They apply to the lens's own fields
+    only (``sampling.field_rays`` for a field equal to one of ``fields``): a field between
+    them (render, a PSF at a pixel's field) samples the whole pupil.
 
 The structure (surface kinds, counts, polynomial orders, stop index, mirrors) is static;
 every number is an array so ``jax.grad`` reaches it.
@@ -100,6 +109,19 @@ def _obscurations(o):
     return tuple(out)
 
 
+_as_factors = checks.float_array("vignetting", "Lens",
+                                 "(VDX, VDY, VCX, VCY: pupil radii; VAN: deg)")
+
+VIGNETTING_COLUMNS = ("VDX", "VDY", "VCX", "VCY", "VAN")
+"""The columns of ``Lens.vignetting``: pupil decenter x, y and compression x, y (fractions of
+the entrance-pupil radius) and the pupil's rotation angle (degrees), as Zemax names them."""
+
+
+def _vignetting(v):
+    """None (no vignetting factors) or a float array ``[F, 5]`` (checked in the Lens)."""
+    return None if v is None else _as_factors(v)
+
+
 def _floats(arg: str, unit: str, where: str = "Lens", **default):
     return checks.float_field(arg, where, unit, **default)
 
@@ -162,6 +184,8 @@ class Lens(eqx.Module):
             tuple(e) if isinstance(e, (list, tuple)) else e for e in a))
     # Free text (provenance, source of the prescription): kept by JSON load and save.
     description: str = eqx.field(static=True, default="")
+    # Zemax vignetting factors [F, 5] (VDX, VDY, VCX, VCY, VAN), or None: see the module doc.
+    vignetting: Float[Array, "f 5"] | None = eqx.field(converter=_vignetting, default=None)
 
     def __check_init__(self):
         n = len(self.surfaces)
@@ -225,6 +249,12 @@ class Lens(eqx.Module):
         for arg, v in (("epd", self.epd), ("object_distance", self.object_distance)):
             if v is not None and v.ndim != 0:
                 raise ValueError(f"Lens: {arg} must be a scalar (mm), got shape {v.shape}")
+        v = self.vignetting
+        if v is not None and v.shape != (f.shape[0], 5):
+            raise ValueError(
+                f"Lens: vignetting must hold one row (VDX, VDY, VCX, VCY, VAN) per field: shape "
+                f"[{f.shape[0]}, 5] for {f.shape[0]} field(s) (VDX, VDY, VCX, VCY in pupil "
+                f"radii, VAN in deg), got shape {v.shape}")
 
     def _check_values(self):
         """Concrete numbers only (a traced lens, inside jit or vmap, is not known here)."""
@@ -237,6 +267,9 @@ class Lens(eqx.Module):
             checks.field_angles(self.fields, "Lens", "fields")
         if not checks.is_traced(self.wavelengths):
             checks.wavelengths(checks.NoMaterials, self.wavelengths, "Lens", "wavelengths")
+        v = self.vignetting
+        if v is not None and not checks.is_traced(v):
+            check_vignetting(v, "Lens", "vignetting")
         d = self.object_distance
         if d is not None and not checks.is_traced(d):
             checks.values(d, "object_distance", "Lens", lo=0, lo_open=True,
@@ -311,6 +344,19 @@ class Lens(eqx.Module):
             return x
 
         return jax.tree_util.tree_map(cast, self)
+
+
+def check_vignetting(v, where: str, arg: str = "vignetting"):
+    """Concrete vignetting factors ``[..., 5]`` (VDX, VDY, VCX, VCY, VAN): all finite, and the
+    compressions VCX, VCY below 1 (1 shrinks the pupil to a line, more turns it over).
+    Raises ``ValueError`` naming ``where``, ``arg``, the column, the range and the unit;
+    returns ``v``."""
+    a = np.asarray(v, float)
+    for j, col in enumerate(VIGNETTING_COLUMNS):
+        unit = "deg" if col == "VAN" else "pupil radii"
+        hi = 1.0 if col in ("VCX", "VCY") else None
+        checks.values(a[..., j], f"{arg} {col}", where, hi=hi, hi_open=True, unit=unit)
+    return v
 
 
 def unclipped(lens: Lens) -> Lens:
