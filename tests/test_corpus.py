@@ -49,8 +49,8 @@ EXPECTED_WARNINGS = {
         r":18: the file aims rays at the stop"],
     "optiland_lens_floa.zmx": [r":6: FTYP announces 3 fields, YFLN gives 1"],
     "rayoptics_HoO-V2C18Ex66.zmx": [r":11: the file aims rays at the stop"],
-    "rayoptics_US00583336-2-scaled.zmx": [r":12: the file aims rays at the stop",
-                                          r":22: vignetting factors ignored \(VDYN of field 2"],
+    # Its vignetting factors (line 22) are read into Lens.vignetting (test_vignetting).
+    "rayoptics_US00583336-2-scaled.zmx": [r":12: the file aims rays at the stop"],
 }
 
 # Files jaxlens cannot represent: the line and the reason.
@@ -130,8 +130,9 @@ def test_refused_with_line_and_reason(name):
 
 def test_strict_refuses_what_is_only_reported():
     warnings.simplefilter("ignore")  # the reports before the one checked
-    with pytest.raises(ValueError, match=r":22: vignetting factors ignored.*strict"):
-        jl.load(os.path.join(DATA, "rayoptics_US00583336-2-scaled.zmx"), strict=True)
+    # Vignetting factors were reported here before jaxlens applied them: now read, strict too.
+    lens = jl.load(os.path.join(DATA, "rayoptics_US00583336-2-scaled.zmx"), strict=True)
+    assert lens.vignetting is not None and float(lens.vignetting[1, 1]) != 0  # VDYN, field 2
     with pytest.raises(ValueError, match=r":6: FTYP announces 3 fields.*strict"):
         jl.load(os.path.join(DATA, "optiland_lens_floa.zmx"), strict=True)
 

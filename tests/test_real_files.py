@@ -268,25 +268,28 @@ def test_field_types_refused_with_the_line(tmp_path, ftyp, match):
     assert _refused(tmp_path, text, match) == ftyp
 
 
-def test_vignetting_factors_reported_on_used_fields(tmp_path):
-    """Vignetting factors on a used field are reported with the line (a warning; an error
-    under strict): the lens traces the whole pupil and its apertures clip. Its paraxial data
-    do not depend on them."""
+def test_vignetting_factors_read_on_used_fields(tmp_path):
+    """Vignetting factors on a used field are read into ``Lens.vignetting`` (VDX, VDY, VCX,
+    VCY, VAN columns), strict or not and without a word; all zero reads as None. Its paraxial
+    data do not depend on them."""
     head = "ENPD 10\nFTYP 0 0 2 1 0 0 0\nYFLN 0 5 0 0\n"
     zeros = "VDXN 0 0 0 0\nVDYN 0 0 0 0\nVCXN 0 0 0 0\nVCYN 0 0 0 0\nVANN 0 0 0 0\n"
     with warnings.catch_warnings():
         warnings.simplefilter("error")
         _, plain = _load_text(tmp_path, _file(head + zeros))  # all zero: nothing to report
         _load_text(tmp_path, _file(head + zeros.replace("VCYN 0 0 0 0", "VCYN 0 0 0.5 0")))
-    for key in ("VDXN", "VDYN", "VCXN", "VCYN", "VANN"):
-        bad = _file(head + zeros.replace(f"{key} 0 0 0 0", f"{key} 0 0.25 0 0"))
-        number = bad.splitlines().index(f"{key} 0 0.25 0 0") + 1
-        with pytest.warns(zmx.ZmxWarning, match=f"f.zmx:{number}: vignetting factors ignored "
-                                               f"\\({key} of field 2 is 0.25\\)"):
-            _, lens = _load_text(tmp_path, bad)
+    assert plain.vignetting is None
+    for j, key in enumerate(("VDXN", "VDYN", "VCXN", "VCYN", "VANN")):
+        given = _file(head + zeros.replace(f"{key} 0 0 0 0", f"{key} 0 0.25 0 0"))
+        with warnings.catch_warnings():
+            warnings.simplefilter("error")
+            _, lens = _load_text(tmp_path, given)
+            strict = jl.load(tmp_path / "f.zmx", strict=True)
+        want = np.zeros((2, 5))
+        want[1, j] = 0.25
+        np.testing.assert_array_equal(np.asarray(lens.vignetting), want)
+        np.testing.assert_array_equal(np.asarray(strict.vignetting), want)
         assert float(jl.paraxial_data(lens).efl) == float(jl.paraxial_data(plain).efl)
-        with pytest.raises(ValueError, match=f"{key} of field 2 is 0.25.*strict"):
-            jl.load(tmp_path / "f.zmx", strict=True)
 
 
 def _axial_valid(lens, heights):

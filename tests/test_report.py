@@ -122,17 +122,17 @@ DATA = __import__("pathlib").Path(__file__).parent / "data" / "zmx"
 
 
 def test_report_lenient_reads_what_strict_refuses(capsys):
-    """A patent file with vignetting factors: refused by default (with the way out named),
-    read under --lenient with the loader's warnings on stderr, and then the same numbers as
-    jaxlens.load's default (lenient) reading."""
+    """A file whose FTYP announces more fields than its YFLN gives: refused by default (with
+    the way out named), read under --lenient with the loader's warnings on stderr, and then
+    the same numbers as jaxlens.load's default (lenient) reading."""
     import jaxlens
     from jaxlens.analysis.report import report_data
 
-    path = DATA / "rayoptics_US00583336-2-scaled.zmx"
+    path = DATA / "optiland_lens_floa.zmx"
     code, out, err = _run(capsys, path)
-    assert code == 2 and out == "" and "VDYN" in err and "--lenient reads the file" in err
+    assert code == 2 and out == "" and "FTYP announces" in err and "--lenient reads the file" in err
     code, out, err = _run(capsys, path, "--json", "--lenient")
-    assert code == 0 and "jaxlens report: warning: " in err and "VDYN" in err
+    assert code == 0 and "jaxlens report: warning: " in err and "FTYP announces" in err
     with pytest.warns(UserWarning):
         want = report_data(jaxlens.load(path))
     got = json.loads(out)

@@ -304,8 +304,6 @@ def test_zmx_factors_beyond_the_used_fields_are_ignored(tmp_path):
     assert zmx_system.vignetting(_zmx_with(tmp_path, "VCYN 0 0 0 0").vignetting, 3) is None
 
 
-@pytest.mark.xfail(strict=True, reason="needs jaxlens/io/zmx_read.py to pass "
-                   "zmx_system.vignetting to the Lens (the change is in the vignet report)")
 def test_load_zmx_fills_the_factors(tmp_path):
     with warnings.catch_warnings():
         warnings.simplefilter("ignore")  # RAIM

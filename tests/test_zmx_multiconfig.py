@@ -20,6 +20,7 @@ import pytest
 import jaxlens as jl
 from jaxlens.io import zmx
 from jaxlens.optics import paraxial
+from jaxlens.optics.lens import VIGNETTING_COLUMNS
 
 DATA = os.path.join(os.path.dirname(__file__), "data", "zmx_config")
 ZOOM = os.path.join(DATA, "zoom.zmx")
@@ -234,3 +235,21 @@ def test_load_passes_config_and_refuses_it_for_json(tmp_path):
     assert [float(jaxlens.load(ZOOM, config=c).thickness[1]) for c in (1, 2, 3)] == [20, 10, 5]
     with pytest.raises(ValueError, match=r"load: config selects a configuration .* a \.json"):
         jaxlens.load(jaxlens.__path__[0] + "/data/lenses/cooke_triplet.json", config=1)
+
+
+def test_vignetting_operands_set_that_configurations_factors():
+    """FVCY/FVDY of field 2 in configuration 2 become that field's VCYN/VDYN values
+    (``Lens.vignetting``); configuration 1 keeps the file's lines; a field never named keeps 0."""
+    fields = "FTYP 0 0 2 1 0 0 0\nXFLN 0 0\nYFLN 0 3\nVCYN 0 0.1\n"
+    rows = ("FVCY 2 1 0.1 0 0 0 1 1 1 0 0\nFVCY 2 2 0.4 0 0 0 1 1 1 0 0\n"
+            "FVDY 2 1 0 0 0 0 1 1 1 0 0\nFVDY 2 2 -0.05 0 0 0 1 1 1 0 0\n")
+    text = _pair(rows=rows).replace("ENPD 10\n", "ENPD 10\n" + fields)
+    one = zmx.loads(text, strict=True, config=1)
+    two = zmx.loads(text, strict=True, config=2)
+    cols = VIGNETTING_COLUMNS  # VDX, VDY, VCX, VCY, VAN
+    v1, v2 = np.asarray(one.vignetting), np.asarray(two.vignetting)
+    assert v1.shape == v2.shape == (2, len(cols))
+    np.testing.assert_array_equal(v1, [[0, 0, 0, 0, 0], [0, 0, 0, 0.1, 0]])
+    np.testing.assert_array_equal(v2, [[0, 0, 0, 0, 0], [0, -0.05, 0, 0.4, 0]])
+    with pytest.raises(ValueError, match=r"VCYN of field 2 must be below 1"):
+        zmx.loads(text.replace("FVCY 2 2 0.4", "FVCY 2 2 1.2"), config=2)

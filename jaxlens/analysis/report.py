@@ -150,7 +150,9 @@ def with_fields_and_wavelengths(lens: Lens, fields=None, wavelengths=None) -> Le
                              f"[F], or (θx, θy) pairs [F, 2], with F >= 1, got shape {shape}")
         checks.field_angles(np.asarray(fields, np.float64), "report", "--fields")
         f = jnp.asarray(np.atleast_1d(np.asarray(fields, np.float64)), dtype)
-        lens = eqx.tree_at(lambda l: l.fields, lens, f)
+        # The factors of the fields that stay (none for new fields), or none at all.
+        lens = dataclasses.replace(lens, fields=f,
+                                   vignetting=sampling.vignetting_for_fields(lens, f))
     if wavelengths is not None:
         w = np.atleast_1d(np.asarray(wavelengths, np.float64))
         w = np.where(w > 100.0, nm_to_um(w), w)

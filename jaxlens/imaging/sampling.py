@@ -358,7 +358,7 @@ def field_rays(lens: Lens, field, pupil, wavelength=None, *, depth=None, aim="pa
         checks.real_values(depth, "depth", "field_rays", "mm")
     if lens.vignetting is not None:
         pupil = pupil_points(pupil, "field_rays")
-        _one_field(field, "field_rays")
+        field = checks.one_field(field, "field_rays", "trace several fields one at a time, or vmap")
         pupil = vignetting_map(field_vignetting(lens, field), pupil)
     if depth is None or (not isinstance(depth, jax.core.Tracer)
                          and np.all(np.asarray(depth) >= INFINITE_OBJECT_MM)):

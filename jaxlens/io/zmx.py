@@ -93,9 +93,9 @@ What is read and written:
       ``YFLN`` omits are on axis, with a warning; older files' ``XFLD``/``YFLD``, one value a
       field, where there are no XFLN/YFLN); other field types, telecentric object
       space and afocal image space are refused. Vignetting factors (VDXN, VDYN, VCXN, VCYN,
-      VANN) other than 0 give a warning (an error with ``strict``): the whole pupil is traced
-      and the apertures clip. ``PUPD`` beside another aperture line (older Zemax) is
-      ignored; alone it is refused. ``RAIM`` with ray aiming on gives a warning (a
+      VANN) are read into ``Lens.vignetting`` and reshape each field's pupil
+      (``jaxlens.imaging.sampling.field_rays``). ``PUPD`` beside another aperture line
+      (older Zemax) is ignored; alone it is refused. ``RAIM`` with ray aiming on gives a warning (a
       ``Lens`` has no aiming setting; the samplers take ``aim="real"``). ``WAVM`` (or the
       older ``WAVL``) and ``PWAV``, ``UNIT``, ``NAME``. ``ENVD``: indices adjusted to an
       environment other than 20 °C and 1 atm are refused; not adjusted, a warning. A finite

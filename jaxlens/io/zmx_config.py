@@ -18,8 +18,9 @@ Applied (lengths in the file's lens units, as on the surfaces): ``THIC`` (surfac
 value, in the meaning of the file's ``ENPD``/``FNUM``/``OBNA`` line), ``WAVE`` (wavelength n,
 µm), ``XFIE``/``YFIE`` (field n), ``STPS`` (the stop surface). Ignored: ``MOFF`` (an unused
 row), ``LTTL`` and ``MCOM`` (titles, comments), and the weights ``FLWT``/``WLWT`` (a ``Lens``
-holds none; a warning where they change). Vignetting factors ``FV..`` other than 0 are
-reported as the file's own are. Any other operand whose value in the chosen configuration
+holds none; a warning where they change). The vignetting factors ``FVDX``, ``FVDY``,
+``FVCX``, ``FVCY``, ``FVAN`` of field n replace that field's value on the file's ``VDXN`` …
+``VANN`` lines (``Lens.vignetting``). Any other operand whose value in the chosen configuration
 differs from the active one's (``PRAM``, ``TEMP``, …) is refused, naming the line: the lens
 would silently be another one.
 """
@@ -36,7 +37,8 @@ from .zmx_parse import ZmxFile, ZmxLine
 NO_OPTICS = frozenset({"MOFF", "LTTL", "MCOM"})
 """Operands that change nothing the lens holds (an unused row, a title, a comment)."""
 WEIGHTS = frozenset({"FLWT", "WLWT"})
-VIGNETTING = frozenset({"FVCX", "FVCY", "FVDX", "FVDY", "FVAN"})
+VIGNETTING = {"FVDX": "VDXN", "FVDY": "VDYN", "FVCX": "VCXN", "FVCY": "VCYN", "FVAN": "VANN"}
+"""Configuration operand -> the file's line of that vignetting factor (one value a field)."""
 REASONS = {
     "PRAM": "a surface parameter (PARM); jaxlens does not know where its line gives the "
             "parameter number",
@@ -149,12 +151,6 @@ def select(f: ZmxFile, config: int | None, strict: bool) -> int:
                           f"{'fields' if op.name == 'FLWT' else 'wavelengths'} otherwise "
                           f"({op.name} {op.param}: {value}); a jaxlens Lens holds no weights",
                           ZmxWarning, stacklevel=4)
-            continue
-        if op.name in VIGNETTING:
-            if _number(value, ln) != 0:
-                report(strict, f"{ln.path}:{ln.number}: vignetting factor {op.name} of field "
-                               f"{op.param} in configuration {chosen} ignored ({value}); "
-                               f"jaxlens samples the whole entrance pupil")
             continue
         what = REASONS.get(op.name, "an operand jaxlens does not apply")
         raise ln.error(f"configuration {chosen} sets {op.name} {op.param} to {value} "
@@ -274,6 +270,20 @@ def _field(f, op, value, ln, active):
     setattr(f, attr, ZmxLine(ln.path, ln.number, " ".join(tokens)))
 
 
+def _vignetting(f, op, value, ln, active):
+    key = VIGNETTING[op.name]
+    _number(value, ln)
+    if op.param < 1:
+        raise ln.error(f"{op.name} names field {op.param}; fields count from 1")
+    old = next((v for v in f.vignetting if v.tokens[0].upper() == key), None)
+    tokens = list(old.tokens[1:]) if old is not None else []
+    tokens += ["0"] * (op.param - len(tokens))
+    tokens[op.param - 1] = value
+    new = ZmxLine(ln.path, ln.number, " ".join([key, *tokens]))
+    f.vignetting = [new if v is old else v for v in f.vignetting] if old is not None else [
+        *f.vignetting, new]
+
+
 def _stps(f, op, value, ln, active):
     v = _number(value, ln)
     if v != int(v) or not 1 <= v <= len(f.surfs) - 2:
@@ -284,7 +294,8 @@ def _stps(f, op, value, ln, active):
 
 
 _APPLY = {"THIC": _thic, "CRVT": _crvt, "CONN": _conn, "GLSS": _glss, "SDIA": _sdia,
-          "APER": _aper, "WAVE": _wave, "XFIE": _field, "YFIE": _field, "STPS": _stps}
+          "APER": _aper, "WAVE": _wave, "XFIE": _field, "YFIE": _field, "STPS": _stps,
+          **dict.fromkeys(VIGNETTING, _vignetting)}
 
 
 def _check_active(f: ZmxFile, ops: list[Operand], active: int, strict: bool) -> None:

@@ -246,8 +246,9 @@ def _hybrid_from_xpoly(s: ZmxSurface, unit: float, c: float, sd: float) -> Hybri
     )
 
 
-def _fields(f: ZmxFile, strict: bool) -> np.ndarray:
-    """The field values as written: angles (deg) or paraxial image heights (lens units)."""
+def _fields(f: ZmxFile, strict: bool) -> tuple[np.ndarray, np.ndarray | None]:
+    """The field values as written: angles (deg) or paraxial image heights (lens units),
+    and the fields' vignetting factors ``[F, 5]`` (``Lens.vignetting``) or None."""
     count = None
     if f.ftyp is not None and len(f.ftyp.tokens) > 3:
         count = f.ftyp.int(3, "number of fields (FTYP's fourth value)", lo=1)
@@ -259,7 +260,7 @@ def _fields(f: ZmxFile, strict: bool) -> np.ndarray:
         if xln is not None:
             raise xln.error(f"{xln.tokens[0]} (x fields) without the y fields "
                             f"(YFLN or YFLD) of the same fields")
-        return np.zeros(1)
+        return np.zeros(1), zmx_system.vignetting(f.vignetting, 1)
     ys = [yln.float(i, "y field") for i in range(1, len(yln.tokens))]
     xs = [xln.float(i, "x field") for i in range(1, len(xln.tokens))] if xln else []
     if count is None and yln is f.yfld:
@@ -271,17 +272,15 @@ def _fields(f: ZmxFile, strict: bool) -> np.ndarray:
                         f"{yln.tokens[0]} gives {len(ys)}; the fields it does not give are "
                         f"read as 0 (on axis)")
         ys += [0.0] * (count - len(ys))
-    vignetting = zmx_system.vignetting_factors(f.vignetting, count)
-    if vignetting:
-        report(strict, vignetting)
+    vignetting = zmx_system.vignetting(f.vignetting, count)
     xs = (xs + [0.0] * count)[:count]
     ys = ys[:count]
     if f.fwgn is not None:
         given = [f.fwgn.float(i, "field weight") for i in range(1, len(f.fwgn.tokens))]
         zmx_system.unequal_weights(f.fwgn, "fields", given[:count])
     if any(x != 0 for x in xs):
-        return np.stack([np.array(xs), np.array(ys)], axis=-1)
-    return np.array(ys, np.float64)
+        return np.stack([np.array(xs), np.array(ys)], axis=-1), vignetting
+    return np.array(ys, np.float64), vignetting
 
 
 def _check_field_angles(f: ZmxFile, fields) -> None:
@@ -546,7 +545,7 @@ def _lens(f: ZmxFile, text: str, path: str, strict: bool, unknown_glass: str) ->
     _check_image_medium(f, body)
     zmx_system.ray_aiming(f.raim, f.path)
     field_type = zmx_system.field_type(f.ftyp)
-    fields = _fields(f, strict)
+    fields, vignetting = _fields(f, strict)
     if field_type == 0:  # angles (deg); heights are converted to angles later
         _check_field_angles(f, fields)
     lens = Lens(
@@ -566,6 +565,7 @@ def _lens(f: ZmxFile, text: str, path: str, strict: bool, unknown_glass: str) ->
         mirrors=tuple(mirrors),
         obscurations=_obscurations(body, u),
         apertures=_apertures(body + [img], u),
+        vignetting=None if vignetting is None else _arr(vignetting),
     )
     # Before the paraxial work of the aperture: values the lens cannot be traced with.
     for w, ln in zip(wl, wl_lines, strict=True):

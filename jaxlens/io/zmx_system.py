@@ -284,28 +284,6 @@ def vignetting(lines, count: int) -> np.ndarray | None:
     return out if np.any(out != 0) else None
 
 
-def vignetting_factors(lines, count: int) -> str | None:
-    """The message for vignetting factors (VDXN, VDYN, VCXN, VCYN, VANN) other than 0 on the
-    first ``count`` (used) fields that a reader drops, or None.
-
-    A reader that builds the ``Lens`` without ``vignetting(lines, count)`` samples the
-    whole entrance pupil for every field, so its beam can differ from the file's: it
-    reports them with this message (a warning; an error under ``strict``). A reader that
-    passes them on calls ``vignetting`` instead.
-    """
-    for ln in lines:
-        vals = [ln.float(i, f"{ln.tokens[0]} value") for i in range(1, len(ln.tokens))]
-        used = [(i + 1, v) for i, v in enumerate(vals[:count]) if v != 0]
-        if used:
-            i, v = used[0]
-            return (
-                f"{ln.path}:{ln.number}: vignetting factors ignored ({ln.tokens[0]} of field {i} "
-                f"is {v:g}); jaxlens samples the whole entrance pupil and lets the surface "
-                f"apertures (CLAP, FLAP, …) vignette: {ln.text.strip()!r}"
-            )
-    return None
-
-
 def unequal_weights(ln, what: str, weights: list) -> None:
     """Warn where the file weighs its fields or wavelengths unequally: a ``Lens`` holds no
     weights, and jaxlens's figures over several of them weigh each equally."""
