@@ -31,6 +31,8 @@ import dataclasses
 import math
 import warnings
 
+import numpy as np
+
 from .zmx_common import ZmxWarning, report
 from .zmx_parse import ZmxFile, ZmxLine
 
@@ -84,6 +86,12 @@ def operands(f: ZmxFile, n: int) -> list[Operand]:
             raise ln.error(f"configuration number must be 1..{n} (MNUM), got {cfg}")
         value = ln.tokens[3] if len(ln.tokens) > 3 else ""
         op = table.setdefault((ln.tokens[0], param), Operand(ln.tokens[0], param, {}))
+        if cfg in op.values and ln.tokens[0] not in NO_OPTICS:
+            # The later line silently won: which of two values Zemax holds is not known.
+            first = op.values[cfg][1]
+            raise ln.error(f"a second {ln.tokens[0]} {param} line for configuration {cfg} "
+                           f"(the first is line {first.number}); each operand has one value "
+                           f"per configuration")
         op.values[cfg] = (value, ln)
     return list(table.values())
 
@@ -109,9 +117,11 @@ def select(f: ZmxFile, config: int | None, strict: bool) -> int:
             configuration: a ``ZmxWarning``, an error under ``strict``), or an operand of
             configuration ``config`` that jaxlens cannot apply (the message names the line).
     """
-    if config is not None and (isinstance(config, bool) or not isinstance(config, int)):
+    if config is not None and (isinstance(config, bool | np.bool_)
+                               or not isinstance(config, int | np.integer)):
         raise ValueError(f"{f.path}: config must be a whole configuration number (1-based), "
                          f"got {config!r}")
+    config = None if config is None else int(config)  # np.int64(2), as from np.arange, is 2
     n, active = counts(f)
     if config is not None and not 1 <= config <= n:
         have = "one configuration" if n == 1 else f"configurations 1..{n}"
