@@ -31,7 +31,10 @@ Conventions:
     (``jaxlens.imaging.sampling.vignetting_map``). None (the default) or zeros: no
     vignetting factors, the whole pupil is sampled. They apply to the lens's own fields
     only (``sampling.field_rays`` for a field equal to one of ``fields``): a field between
-    them (render, a PSF at a pixel's field) samples the whole pupil.
+    them (render, a PSF at a pixel's field) samples the whole pupil. A field's vignetted
+    pupil is the image of the unit disc: for a field with factors, the points of an
+    overfilled beam outside the unit disc launch no light. The relative illumination
+    (``imaging.radiometry``), ``RayRender`` and the design losses never apply them.
 
 The structure (surface kinds, counts, polynomial orders, stop index, mirrors) is static;
 every number is an array so ``jax.grad`` reaches it.
