@@ -99,3 +99,21 @@ def test_a_configuration_given_two_values_is_refused_naming_both_lines():
     with pytest.raises(ValueError, match=r":61: a second THIC 4 line for configuration 3 "
                                          r"\(the first is line 60\)"):
         zmx_read.loads(text, config=3)
+
+
+def test_active_configuration_vignetting_rows_checked_against_the_file_lines():
+    """The active configuration's FVCY says 0.5 where the file's VCYN says 0.2: the THIC,
+    CRVT and CONN rows were checked against the surfaces, the factor rows not at all, so the
+    active number's mismatch passed silently (strict too)."""
+    text = _zoom().replace("PWAV 1", "PWAV 1\nVCYN 0.1 0.2").replace(
+        "MOFF 0 1", "FVCY 2 1 0.5\nFVCY 2 2 0.2\nFVCY 2 3 0.6\nMOFF 0 1", 1)
+    with pytest.raises(ValueError, match=r"FVCY 2 of configuration 1, the active one \(MNUM\), "
+                                         r"is 0\.5, but the file's VCYN gives field 2 0\.2"):
+        zmx_read.loads(text, strict=True)
+    with pytest.warns(UserWarning, match="FVCY 2 of configuration 1"):
+        lens = zmx_read.loads(text)
+    np.testing.assert_allclose(lens.vignetting[:, 3], [0.1, 0.2])  # the file's VCYN
+    # consistent rows read without a word, and another configuration takes its own
+    ok = text.replace("FVCY 2 1 0.5", "FVCY 2 1 0.2")
+    assert zmx_read.loads(ok, strict=True).vignetting is not None
+    np.testing.assert_allclose(zmx_read.loads(ok, config=3).vignetting[:, 3], [0.1, 0.6])

@@ -309,14 +309,28 @@ _APPLY = {"THIC": _thic, "CRVT": _crvt, "CONN": _conn, "GLSS": _glss, "SDIA": _s
 
 
 def _check_active(f: ZmxFile, ops: list[Operand], active: int, strict: bool) -> None:
-    """The surfaces hold the active configuration: where a THIC, CRVT or CONN row of it
-    says otherwise, the active number (MNUM's second value) is not what it seems."""
+    """The surfaces hold the active configuration: where a THIC, CRVT or CONN row of it (or
+    a vignetting row, FVDX … FVAN, against the file's VDXN … VANN lines) says otherwise,
+    the active number (MNUM's second value) is not what it seems."""
     for op in ops:
-        if op.name not in ("THIC", "CRVT", "CONN") or active not in op.values:
+        if op.name not in ("THIC", "CRVT", "CONN", *VIGNETTING) or active not in op.values:
             continue
         value, ln = op.values[active]
-        s = _surface(f, op, ln)
         v = _number(value, ln)
+        if op.name in VIGNETTING:  # the file's VDXN … VANN lines hold the active factors
+            if op.param < 1:
+                continue
+            key = VIGNETTING[op.name]
+            line = next((x for x in f.vignetting if x.tokens[0].upper() == key), None)
+            have = line.float(op.param, f"{key} value") if (
+                line is not None and op.param < len(line.tokens)) else 0.0
+            if not math.isclose(v, have, rel_tol=1e-9, abs_tol=1e-12):
+                report(strict, f"{ln.path}:{ln.number}: {op.name} {op.param} of configuration "
+                               f"{active}, the active one (MNUM), is {value}, but the file's "
+                               f"{key} gives field {op.param} {have:g}; jaxlens reads {key}")
+                return
+            continue
+        s = _surface(f, op, ln)
         have = {"THIC": s.disz, "CRVT": s.curv, "CONN": s.coni}[op.name]
         if op.name == "THIC" and op.param == 0 and v >= _OBJECT_INFINITY and math.isinf(have):
             continue
