@@ -351,7 +351,9 @@ class Lens(eqx.Module):
 
 def check_vignetting(v, where: str, arg: str = "vignetting"):
     """Concrete vignetting factors ``[..., 5]`` (VDX, VDY, VCX, VCY, VAN): all finite, and the
-    compressions VCX, VCY below 1 (1 shrinks the pupil to a line, more turns it over).
+    compressions VCX, VCY below 1 (1 shrinks the pupil to a line, more turns it over; a
+    negative one expands the pupil, as for a wide-angle lens whose real pupil grows off axis,
+    and the rays beyond the paraxial pupil are the apertures' to clip).
     Raises ``ValueError`` naming ``where``, ``arg``, the column, the range and the unit;
     returns ``v``."""
     a = np.asarray(v, float)
