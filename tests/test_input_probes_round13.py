@@ -117,3 +117,19 @@ def test_active_configuration_vignetting_rows_checked_against_the_file_lines():
     ok = text.replace("FVCY 2 1 0.5", "FVCY 2 1 0.2")
     assert zmx_read.loads(ok, strict=True).vignetting is not None
     np.testing.assert_allclose(zmx_read.loads(ok, config=3).vignetting[:, 3], [0.1, 0.6])
+
+
+def test_mnum_1_with_rows_for_other_configurations_is_reported():
+    """MNUM 1 above rows for configurations 2 and 3 (a count cut short) was read without a
+    word, while ``configurations()`` refused the same file."""
+    text = _zoom().replace("MNUM 3 1", "MNUM 1")
+    with pytest.raises(ValueError, match=r":39: a file of 1 configuration \(MNUM\) whose "
+                                         r"operand table .*configuration number must be 1\.\.1"):
+        zmx_read.loads(text, strict=True)
+    with pytest.warns(UserWarning, match="a file of 1 configuration"):
+        lens = zmx_read.loads(text)
+    np.testing.assert_array_equal(lens.thickness, [5.0, 20.0, 2.0, 40.0])  # the surfaces
+    # MNUM 1 with its own rows only reads silently, strict too
+    ok = "\n".join(ln for ln in text.splitlines() if not (
+        ln[:4] in ("APER", "YFIE", "WAVE", "THIC", "GLSS", "CRVT", "MOFF") and ln.split()[2] != "1"))
+    zmx_read.loads(ok, strict=True)

@@ -128,19 +128,22 @@ def select(f: ZmxFile, config: int | None, strict: bool) -> int:
         raise ValueError(f"{f.path}: config must be one of the file's {have} (Zemax's "
                          f"numbering, from 1), got {config}")
     chosen = active if config is None else config
-    if n == 1:  # the surfaces are the only configuration; its operand rows repeat them
+    if n == 1 and (f.mnum is None or not f.config_lines):
         return chosen
     try:
         ops = operands(f, n)
     except ValueError as e:
         if chosen != active:
             raise
-        report(strict, f"{f.path}:{f.mnum.number}: a multi-configuration file ({n} "
-                       f"configurations) whose operand table jaxlens cannot read ({e}); it "
+        # MNUM 1 with rows for configuration 2 and on (an MNUM count cut short) was read
+        # without a word, while configurations() refused the same file.
+        report(strict, f"{f.path}:{f.mnum.number}: a file of {n} configuration"
+                       f"{'s' if n > 1 else ''} (MNUM) whose operand table jaxlens cannot "
+                       f"read ({e}); it "
                        f"reads the lens as its surfaces give it (configuration {active}, the "
                        f"active one)")
         return chosen
-    if chosen == active:
+    if chosen == active:  # the surfaces hold it; with one configuration its rows repeat them
         _check_active(f, ops, active, strict)
         return chosen
     for op in ops:
