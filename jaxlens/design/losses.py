@@ -26,6 +26,10 @@ Ray loss:
     diagonal, so the field still fills the sensor while distortion relaxes. The loss is
     ``spot_scale · Σ_k w_k·MS_k`` (w_k normalised to sum 1) plus the pin and the weighted
     regularizers; its residual form (for least squares) has the same sum of squares.
+
+    The loss launches its own rays over the whole (half) pupil at the stage's fields: the
+    lens's vignetting factors (``Lens.vignetting``) are never applied, and the design
+    variables (``params.LensParams``) do not include them.
 """
 
 from __future__ import annotations

@@ -45,6 +45,15 @@ Models:
     separable in x and y and evaluated as two matrix products. The pupil sampling must
     resolve the wavefront: the kernel must be smaller than the alias period λ/(n·ΔL) of
     the direction-cosine sampling, which ``max_truncation`` checks as well.
+
+Vignetting factors:
+    Both models launch their rays with ``sampling.field_rays``, so a field equal to one of
+    the lens's fields takes that field's ``Lens.vignetting`` factors: its beam is the
+    factors' image of the unit pupil (the overfilled ring beyond it launches no light), and
+    ``normalize="pupil"`` counts the light of that vignetted pupil. Any other field (a
+    ``psf_map`` grid point between the lens's fields, a render tile) samples the whole
+    pupil, clipped only by the apertures: pass ``dataclasses.replace(lens,
+    vignetting=None)`` for PSFs free of the factors at every field.
 """
 
 from __future__ import annotations

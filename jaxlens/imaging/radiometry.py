@@ -26,6 +26,12 @@ Method:
     square three times the paraxial entrance pupil locates it, and bisection along 128
     directions finds its boundary. The centroid uses a ``pupil × pupil`` grid over the
     region's bounding box.
+
+Vignetting factors:
+    The lens's vignetting factors (``Lens.vignetting``) are not applied, at its own fields
+    either: the transmitted beam is whatever passes the semi-diameters, apertures and
+    obscurations. For a lens (a ``.zmx`` file) whose factors stand in for apertures it does
+    not hold, the relative illumination is that of the unvignetted lens.
 """
 
 from __future__ import annotations

@@ -26,6 +26,16 @@ Radiometry:
     independently by forward tracing). With ``False`` each pixel averages the scene over
     the rays that pass (no falloff), as in DeepLens.
 
+Vignetting factors:
+    ``Lens.vignetting`` (Zemax's VDX … VAN of the lens's own fields) is not applied by
+    ``RayRender``, which traces backward from the sensor through the apertures, nor by the
+    relative illumination (``radiometry``). ``PSFRender``'s tile PSFs are launched by
+    ``sampling.field_rays``, so a tile whose centre field equals one of the lens's fields
+    exactly (the centre tile for an on-axis field 0) takes that field's factors and its
+    neighbours do not. For a lens whose factors stand in for apertures it lacks, the image
+    is that of the unvignetted lens; render ``dataclasses.replace(lens, vignetting=None)``
+    for the same image by both methods.
+
 Methods (``method=``):
     ``RayRender``: backward tracing. Each pixel sends ``spp`` rays per wavelength from random
     points inside the pixel, uniformly over a disc in image-space direction-cosine space (L, M)

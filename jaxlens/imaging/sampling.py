@@ -16,8 +16,10 @@ Vignetting factors:
     ``aim="real"``). The factors belong to the lens's defined fields: they apply to a field
     equal to one of ``lens.fields`` (within ``FIELD_MATCH_DEG``), and to no other field
     (no interpolation between fields: render and the PSF at pixel fields between the defined
-    fields sample the whole pupil). ``collimated`` and ``point_source`` take the pupil
-    points as given and never apply them.
+    fields sample the whole pupil). For a field with nonzero factors, pupil points outside
+    the unit disc (an overfilled beam) launch invalid rays: the vignetted pupil is the image
+    of the unit disc. ``collimated`` and ``point_source`` take the pupil points as given and
+    never apply them.
 """
 
 from __future__ import annotations
@@ -150,12 +152,18 @@ def pupil_points(pupil, where: str, *, unit_disc: bool = False) -> Array:
     return pupil
 
 
-def field_xy(field) -> Array:
+def _field_deg(field) -> Array:
+    """A field (deg, θy or (θx, θy), leading axes batch) as (θx, θy) pairs in degrees."""
     checks.real_values(field, "field", "sampling", "deg")  # before jnp.asarray
     f = checks.field_angles(jnp.asarray(field), "sampling", "field")
     if f.ndim == 0 or f.shape[-1] != 2:
         f = jnp.stack([jnp.zeros_like(f), f], -1)
-    return jnp.deg2rad(f)
+    return f
+
+
+def field_xy(field) -> Array:
+    """A field (deg, θy or (θx, θy)) as (θx, θy) pairs in radians."""
+    return jnp.deg2rad(_field_deg(field))
 
 
 def field_direction(field) -> Float[Array, "*b 3"]:
@@ -276,7 +284,9 @@ def object_point(lens: Lens, field, depth) -> Array:
 
 FIELD_MATCH_DEG = 1e-9
 """A field within this (degrees, in θx and θy) of one of the lens's fields is that field,
-and gets its vignetting factors."""
+and gets its vignetting factors. The comparison is made in the lens's float type, with at
+least 4 units in the last place of the angle as the tolerance (a float32 lens's 19.7° is
+19.7° to float32's precision only, 1.9e-6 deg per unit in the last place)."""
 
 
 def vignetting_map(factors, pupil) -> Float[Array, "*m 2"]:
@@ -321,9 +331,14 @@ def field_vignetting(lens: Lens, field) -> Float[Array, " 5"]:
         raise ValueError(f"field_vignetting: the lens has {n} field(s) but vignetting factors "
                          f"of shape {v.shape}; replace Lens.vignetting ([{n}, 5], or None) "
                          f"with the fields")
-    defined = jnp.rad2deg(field_xy(lens.fields))  # [F, 2]
-    given = jnp.rad2deg(field_xy(field)).reshape(1, 2)
-    match = jnp.all(jnp.abs(defined - given) <= FIELD_MATCH_DEG, -1)  # [F]
+    # Compared in degrees, in the lens's float type: a float64 field against a float32 lens's
+    # own field (19.7 against float32(19.7), 7.6e-7 deg apart) matched none, and the
+    # radian round trip moved float32 angles by an ulp or two.
+    defined = _field_deg(lens.fields)  # [F, 2]
+    given = _field_deg(field).reshape(1, 2).astype(defined.dtype)
+    ulp = 4 * jnp.finfo(defined.dtype).eps * jnp.abs(defined)
+    tol = jnp.maximum(FIELD_MATCH_DEG, ulp)
+    match = jnp.all(jnp.abs(defined - given) <= tol, -1)  # [F]
     row = v[jnp.argmax(match)]
     return jnp.where(jnp.any(match), row, jnp.zeros_like(row))
 
@@ -335,10 +350,13 @@ def vignetting_for_fields(lens: Lens, fields) -> Array | None:
     ``fields`` alone leaves stale rows, which ``field_rays`` refuses)."""
     if lens.vignetting is None:
         return None
+    checks.real_values(fields, "fields", "vignetting_for_fields", "deg")
     f = jnp.asarray(fields)
-    if f.ndim not in (1, 2) or (f.ndim == 2 and f.shape[1] != 2):
+    if f.ndim not in (1, 2) or (f.ndim == 2 and f.shape[1] != 2) or f.size == 0:
         raise ValueError(f"vignetting_for_fields: fields must be [F] angles θy or [F, 2] "
-                         f"pairs (θx, θy) in deg, got shape {f.shape}")
+                         f"pairs (θx, θy) in deg, F >= 1, got shape {f.shape}")
+    if not checks.is_traced(f):  # a NaN or 95° field failed inside vmap (EquinoxRuntimeError)
+        checks.field_angles(f, "vignetting_for_fields", "fields")
     return jax.vmap(lambda g: field_vignetting(lens, g))(f)
 
 
@@ -353,17 +371,34 @@ def field_rays(lens: Lens, field, pupil, wavelength=None, *, depth=None, aim="pa
     ``FIELD_MATCH_DEG``), the ray of pupil point (Px, Py) is the ray of
     ``vignetting_map(factors, (Px, Py))``, launched (and, with ``aim="real"``, aimed at
     the stop) there, as OpticStudio traces it; other fields sample the pupil unchanged.
+    The vignetted pupil is the image of the unit disc: for a field with nonzero factors a
+    pupil point outside the unit disc (an overfilled beam, as the PSF's ``overfill``)
+    launches an invalid ray (``valid`` False), so the factors, not the stop, bound the
+    beam. Factors that map points beyond the unit disc (a negative compression VCX, VCY,
+    which expands the pupil, or a decenter) launch those rays as given; the lens's
+    apertures clip them.
     """
     if depth is not None:
         checks.real_values(depth, "depth", "field_rays", "mm")
+    beyond = None
     if lens.vignetting is not None:
         pupil = pupil_points(pupil, "field_rays")
         field = checks.one_field(field, "field_rays", "trace several fields one at a time, or vmap")
-        pupil = vignetting_map(field_vignetting(lens, field), pupil)
+        factors = field_vignetting(lens, field)
+        # The vignetted pupil is the image of the unit disc: a point of an overfilled beam
+        # (a PSF's 1.25) mapped inside it passed the stop, light OpticStudio never traces
+        # (a "pupil"-normalised PSF held 1.44 of the pupil's energy).
+        outside = jnp.sum(pupil * pupil, -1) > (1.0 + UNIT_DISC_TOLERANCE) ** 2
+        beyond = outside & jnp.any(factors != 0)
+        pupil = vignetting_map(factors, pupil)
     if depth is None or (not isinstance(depth, jax.core.Tracer)
                          and np.all(np.asarray(depth) >= INFINITE_OBJECT_MM)):
-        return collimated(lens, field, pupil, wavelength, aim=aim)
-    return point_source(lens, object_point(lens, field, depth), pupil, wavelength, aim=aim)
+        rays = collimated(lens, field, pupil, wavelength, aim=aim)
+    else:
+        rays = point_source(lens, object_point(lens, field, depth), pupil, wavelength, aim=aim)
+    if beyond is not None:
+        rays = eqx.tree_at(lambda r: r.valid, rays, rays.valid & ~beyond)
+    return rays
 
 
 def aim_at_stop(

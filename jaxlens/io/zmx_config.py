@@ -31,6 +31,8 @@ import dataclasses
 import math
 import warnings
 
+import numpy as np
+
 from .zmx_common import ZmxWarning, report
 from .zmx_parse import ZmxFile, ZmxLine
 
@@ -84,6 +86,12 @@ def operands(f: ZmxFile, n: int) -> list[Operand]:
             raise ln.error(f"configuration number must be 1..{n} (MNUM), got {cfg}")
         value = ln.tokens[3] if len(ln.tokens) > 3 else ""
         op = table.setdefault((ln.tokens[0], param), Operand(ln.tokens[0], param, {}))
+        if cfg in op.values and ln.tokens[0] not in NO_OPTICS:
+            # The later line silently won: which of two values Zemax holds is not known.
+            first = op.values[cfg][1]
+            raise ln.error(f"a second {ln.tokens[0]} {param} line for configuration {cfg} "
+                           f"(the first is line {first.number}); each operand has one value "
+                           f"per configuration")
         op.values[cfg] = (value, ln)
     return list(table.values())
 
@@ -109,28 +117,33 @@ def select(f: ZmxFile, config: int | None, strict: bool) -> int:
             configuration: a ``ZmxWarning``, an error under ``strict``), or an operand of
             configuration ``config`` that jaxlens cannot apply (the message names the line).
     """
-    if config is not None and (isinstance(config, bool) or not isinstance(config, int)):
+    if config is not None and (isinstance(config, bool | np.bool_)
+                               or not isinstance(config, int | np.integer)):
         raise ValueError(f"{f.path}: config must be a whole configuration number (1-based), "
                          f"got {config!r}")
+    config = None if config is None else int(config)  # np.int64(2), as from np.arange, is 2
     n, active = counts(f)
     if config is not None and not 1 <= config <= n:
         have = "one configuration" if n == 1 else f"configurations 1..{n}"
         raise ValueError(f"{f.path}: config must be one of the file's {have} (Zemax's "
                          f"numbering, from 1), got {config}")
     chosen = active if config is None else config
-    if n == 1:  # the surfaces are the only configuration; its operand rows repeat them
+    if n == 1 and (f.mnum is None or not f.config_lines):
         return chosen
     try:
         ops = operands(f, n)
     except ValueError as e:
         if chosen != active:
             raise
-        report(strict, f"{f.path}:{f.mnum.number}: a multi-configuration file ({n} "
-                       f"configurations) whose operand table jaxlens cannot read ({e}); it "
+        # MNUM 1 with rows for configuration 2 and on (an MNUM count cut short) was read
+        # without a word, while configurations() refused the same file.
+        report(strict, f"{f.path}:{f.mnum.number}: a file of {n} configuration"
+                       f"{'s' if n > 1 else ''} (MNUM) whose operand table jaxlens cannot "
+                       f"read ({e}); it "
                        f"reads the lens as its surfaces give it (configuration {active}, the "
                        f"active one)")
         return chosen
-    if chosen == active:
+    if chosen == active:  # the surfaces hold it; with one configuration its rows repeat them
         _check_active(f, ops, active, strict)
         return chosen
     for op in ops:
@@ -299,14 +312,28 @@ _APPLY = {"THIC": _thic, "CRVT": _crvt, "CONN": _conn, "GLSS": _glss, "SDIA": _s
 
 
 def _check_active(f: ZmxFile, ops: list[Operand], active: int, strict: bool) -> None:
-    """The surfaces hold the active configuration: where a THIC, CRVT or CONN row of it
-    says otherwise, the active number (MNUM's second value) is not what it seems."""
+    """The surfaces hold the active configuration: where a THIC, CRVT or CONN row of it (or
+    a vignetting row, FVDX … FVAN, against the file's VDXN … VANN lines) says otherwise,
+    the active number (MNUM's second value) is not what it seems."""
     for op in ops:
-        if op.name not in ("THIC", "CRVT", "CONN") or active not in op.values:
+        if op.name not in ("THIC", "CRVT", "CONN", *VIGNETTING) or active not in op.values:
             continue
         value, ln = op.values[active]
-        s = _surface(f, op, ln)
         v = _number(value, ln)
+        if op.name in VIGNETTING:  # the file's VDXN … VANN lines hold the active factors
+            if op.param < 1:
+                continue
+            key = VIGNETTING[op.name]
+            line = next((x for x in f.vignetting if x.tokens[0].upper() == key), None)
+            have = line.float(op.param, f"{key} value") if (
+                line is not None and op.param < len(line.tokens)) else 0.0
+            if not math.isclose(v, have, rel_tol=1e-9, abs_tol=1e-12):
+                report(strict, f"{ln.path}:{ln.number}: {op.name} {op.param} of configuration "
+                               f"{active}, the active one (MNUM), is {value}, but the file's "
+                               f"{key} gives field {op.param} {have:g}; jaxlens reads {key}")
+                return
+            continue
+        s = _surface(f, op, ln)
         have = {"THIC": s.disz, "CRVT": s.curv, "CONN": s.coni}[op.name]
         if op.name == "THIC" and op.param == 0 and v >= _OBJECT_INFINITY and math.isinf(have):
             continue

@@ -31,7 +31,10 @@ Conventions:
     (``jaxlens.imaging.sampling.vignetting_map``). None (the default) or zeros: no
     vignetting factors, the whole pupil is sampled. They apply to the lens's own fields
     only (``sampling.field_rays`` for a field equal to one of ``fields``): a field between
-    them (render, a PSF at a pixel's field) samples the whole pupil.
+    them (render, a PSF at a pixel's field) samples the whole pupil. A field's vignetted
+    pupil is the image of the unit disc: for a field with factors, the points of an
+    overfilled beam outside the unit disc launch no light. The relative illumination
+    (``imaging.radiometry``), ``RayRender`` and the design losses never apply them.
 
 The structure (surface kinds, counts, polynomial orders, stop index, mirrors) is static;
 every number is an array so ``jax.grad`` reaches it.
@@ -348,7 +351,9 @@ class Lens(eqx.Module):
 
 def check_vignetting(v, where: str, arg: str = "vignetting"):
     """Concrete vignetting factors ``[..., 5]`` (VDX, VDY, VCX, VCY, VAN): all finite, and the
-    compressions VCX, VCY below 1 (1 shrinks the pupil to a line, more turns it over).
+    compressions VCX, VCY below 1 (1 shrinks the pupil to a line, more turns it over; a
+    negative one expands the pupil, as for a wide-angle lens whose real pupil grows off axis,
+    and the rays beyond the paraxial pupil are the apertures' to clip).
     Raises ``ValueError`` naming ``where``, ``arg``, the column, the range and the unit;
     returns ``v``."""
     a = np.asarray(v, float)
