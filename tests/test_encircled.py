@@ -125,12 +125,13 @@ def test_bad_input_is_refused():
     ("collimated", lambda lens, f: jl.sampling.collimated(lens, f, jnp.array([[0.0, 0.5]]))
      .direction)])
 def test_one_field_is_read_alike_by_every_analysis(name, call):
-    """A field of shape [1] is θy, as a scalar is; a list of fields is refused with the same
-    message everywhere (it was accepted by some and refused by others)."""
+    """A field of shape [1] (an array or a list) is θy, as a scalar is; a list of fields is
+    refused with the same message everywhere (it was accepted by some and refused by others)."""
     lens = jl.zoo.cooke_triplet().astype(jnp.float64)
     one = jax.tree.leaves(call(lens, 10.0))
-    for a, b in zip(jax.tree.leaves(call(lens, jnp.array([10.0]))), one, strict=True):
-        np.testing.assert_array_equal(np.asarray(a), np.asarray(b))
+    for given in (jnp.array([10.0]), [10.0]):
+        for a, b in zip(jax.tree.leaves(call(lens, given)), one, strict=True):
+            np.testing.assert_array_equal(np.asarray(a), np.asarray(b))
     with pytest.raises(ValueError, match=rf"{name}: field must be one field, θy or \(θx, θy\)"):
         call(lens, jnp.array([[0.0, 5.0], [0.0, 10.0]]))
     with pytest.raises(ValueError, match=rf"{name}: field must be finite angles in \(-90, 90\)"):

@@ -386,7 +386,7 @@ def one_field(field, where: str, hint: str = "analyse several fields one at a ti
         raise ValueError(f"{where}: field must be one field, θy or (θx, θy) in degrees, got "
                          f"shape {shape} ({hint})")
     field = field_angles(field, where, "field")
-    return jnp.reshape(field, ()) if shape == (1,) else field
+    return jnp.reshape(jnp.asarray(field), ()) if shape == (1,) else field
 
 
 def unit_directions(direction, valid, where: str = "Rays") -> None:
