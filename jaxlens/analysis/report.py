@@ -575,8 +575,8 @@ def register(subparsers) -> None:
         "--lenient",
         action="store_true",
         help=".zmx: read as jaxlens.load does by default, warning (instead of refusing) about "
-        "settings jaxlens does not use (vignetting factors, unknown keywords) and a file cut "
-        "off mid-line",
+        "settings jaxlens does not use (unknown keywords, an environment other than 20 C and "
+        "1 atm) and a file cut off mid-line",
     )
     p.add_argument(
         "--config",
@@ -681,8 +681,8 @@ def run(args: argparse.Namespace) -> int:
         if args.list_configs:
             return _list_configs(args.lens)
         paths = figure_paths(args.lens, args.plot, args.overwrite) if args.plot else None
-        # strict by default: a report must not describe a truncated file, nor rays that the
-        # file's own settings (vignetting factors) would have changed, without being asked
+        # strict by default: a report must not describe a truncated file, nor rays that a
+        # setting jaxlens does not use would have changed, without being asked
         with warnings.catch_warnings(record=True) as caught:
             warnings.simplefilter("always")
             lens = _load_lens(args)

@@ -23,7 +23,7 @@ from ..optics.surfaces import (
     Standard,
     TiltedPlane,
 )
-from . import lensfile, zmx_surfaces
+from . import lensfile, zmx_surfaces, zmx_system
 from .zmx_common import (
     MARKER,
     MAX_XPOLY_DEGREE,
@@ -457,7 +457,7 @@ def dumps(lens: Lens, path: str = "lens.zmx", *, model_glass: str = "blank"):
     if lens.vignetting is not None:  # one line per factor, one value per field
         v = np.asarray(lens.vignetting, np.float64).reshape(len(ys), 5)
         head += [f"{key} " + " ".join(_z(x) for x in v[:, j])
-                 for j, key in enumerate(("VDXN", "VDYN", "VCXN", "VCYN", "VANN"))]
+                 for j, key in enumerate(zmx_system.VIGNETTING_KEYS)]
     head += [f"WAVM {i} {_z(w)} 1" for i, w in enumerate(wl, start=1)]
     head.append(f"PWAV {lens.primary + 1}")
     return "\n".join(head + surf_lines) + "\n", gw
