@@ -4,6 +4,8 @@ Most cases use the Cooke triplet (spherical surfaces compile fast) on a coarse s
 1 mm pixels, where its blur (tens of µm) and distortion (−0.4 %) are far below a pixel.
 """
 
+import dataclasses
+
 import equinox as eqx
 import jax
 import jax.numpy as jnp
@@ -243,3 +245,18 @@ def test_distortion_penalty_is_differentiable():
         eqx.tree_at(lambda m: m.surfaces[1].c, lens, c), alpha=1.0, grid=(5, 5)))(
         lens.surfaces[1].c)
     assert np.isfinite(float(g)) and float(g) != 0
+
+
+def test_render_drops_vignetting_factors_in_both_methods(cooke):
+    """Vignetting factors belong to a lens's few defined fields, a render to every pixel's:
+    ``render`` drops them in both methods (before: PSFRender's PSFs at field points equal
+    to a defined field took them, and 60 % of this image's pixels changed)."""
+    lens = eqx.tree_at(lambda m: m.thickness, cooke, cooke.thickness.at[-1].add(20.0))
+    factors = np.zeros((lens.fields.shape[0], 5))
+    factors[:, 3] = 0.6  # VCY: the pupil squeezed to 40 % in y on every defined field
+    vignetted = dataclasses.replace(lens, vignetting=jnp.asarray(factors))
+    scene = wave_scene(12, 18)
+    for method in (R.PSFRender(kernel_size=7), R.RayRender()):
+        a = R.render(vignetted, scene, spp=16, key=KEY, sensor=SENSOR, patch=6, method=method)
+        b = R.render(lens, scene, spp=16, key=KEY, sensor=SENSOR, patch=6, method=method)
+        np.testing.assert_array_equal(np.asarray(a), np.asarray(b))

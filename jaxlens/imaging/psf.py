@@ -51,9 +51,9 @@ Vignetting factors:
     the lens's fields takes that field's ``Lens.vignetting`` factors: its beam is the
     factors' image of the unit pupil (the overfilled ring beyond it launches no light), and
     ``normalize="pupil"`` counts the light of that vignetted pupil. Any other field (a
-    ``psf_map`` grid point between the lens's fields, a render tile) samples the whole
-    pupil, clipped only by the apertures: pass ``dataclasses.replace(lens,
-    vignetting=None)`` for PSFs free of the factors at every field.
+    ``psf_map`` grid point between the lens's fields) samples the whole pupil, clipped only
+    by the apertures: pass ``dataclasses.replace(lens, vignetting=None)`` for PSFs free of
+    the factors at every field. ``render`` drops them.
 """
 
 from __future__ import annotations

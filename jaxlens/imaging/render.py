@@ -28,13 +28,11 @@ Radiometry:
 
 Vignetting factors:
     ``Lens.vignetting`` (Zemax's VDX … VAN of the lens's own fields) is not applied by
-    ``RayRender``, which traces backward from the sensor through the apertures, nor by the
-    relative illumination (``radiometry``). ``PSFRender``'s tile PSFs are launched by
-    ``sampling.field_rays``, so a tile whose centre field equals one of the lens's fields
-    exactly (the centre tile for an on-axis field 0) takes that field's factors and its
-    neighbours do not. For a lens whose factors stand in for apertures it lacks, the image
-    is that of the unvignetted lens; render ``dataclasses.replace(lens, vignetting=None)``
-    for the same image by both methods.
+    either method, nor by the relative illumination (``radiometry``): factors belong to a
+    few defined fields, and a render covers every pixel's field, so ``render`` drops them
+    (``PSFRender``'s tiles would otherwise take them only where a tile's centre field
+    equals a defined field exactly). The image is that of the lens with its apertures;
+    for a lens whose factors stand in for apertures it lacks, add the apertures.
 
 Methods (``method=``):
     ``RayRender``: backward tracing. Each pixel sends ``spp`` rays per wavelength from random
@@ -589,7 +587,8 @@ def render(
             "(the aspect ratios differ; resize or crop the scene)"
         )
     depth = sampling.lens_depth(lens, depth, "render")
-    lens = apertured(lens)
+    lens = eqx.tree_at(lambda m: m.vignetting, apertured(lens), None,  # "Vignetting factors"
+                       is_leaf=lambda x: x is None)
     key = jnp.asarray(key) if not isinstance(key, jax.Array) else key
     common = dict(resolution=(int(rows), int(cols)), spp=int(spp), patch=int(patch),
                   checkpoint=bool(checkpoint), mesh=mesh, ri=bool(relative_illumination),

@@ -15,11 +15,11 @@ Vignetting factors:
     ``vignetting_map`` (Px', Py') and launches the ray there (aimed there too with
     ``aim="real"``). The factors belong to the lens's defined fields: they apply to a field
     equal to one of ``lens.fields`` (within ``FIELD_MATCH_DEG``), and to no other field
-    (no interpolation between fields: render and the PSF at pixel fields between the defined
-    fields sample the whole pupil). For a field with nonzero factors, pupil points outside
-    the unit disc (an overfilled beam) launch invalid rays: the vignetted pupil is the image
-    of the unit disc. ``collimated`` and ``point_source`` take the pupil points as given and
-    never apply them.
+    (no interpolation between fields: a PSF at a field between the defined fields samples
+    the whole pupil, and ``render`` drops the factors). For a field with nonzero factors,
+    pupil points outside the unit disc (an overfilled beam) launch invalid rays: the
+    vignetted pupil is the image of the unit disc. ``collimated`` and ``point_source`` take
+    the pupil points as given and never apply them.
 """
 
 from __future__ import annotations

@@ -34,7 +34,8 @@ Conventions:
     them (render, a PSF at a pixel's field) samples the whole pupil. A field's vignetted
     pupil is the image of the unit disc: for a field with factors, the points of an
     overfilled beam outside the unit disc launch no light. The relative illumination
-    (``imaging.radiometry``), ``RayRender`` and the design losses never apply them.
+    (``imaging.radiometry``), ``render`` (both methods) and the design losses never apply
+    them.
 
 The structure (surface kinds, counts, polynomial orders, stop index, mirrors) is static;
 every number is an array so ``jax.grad`` reaches it.
