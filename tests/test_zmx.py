@@ -899,7 +899,14 @@ def test_a_multi_configuration_file_is_reported_once_and_its_operands_are_known(
                                         r"configurations", msgs[0]), msgs
     with pytest.raises(ValueError, match="multi-configuration.*strict mode"):
         zmx.loads(text, strict=True)
-    zmx.loads(text.replace("MNUM 2 1", "MNUM 1 1"))  # one configuration: nothing to say
+    # One configuration as OpticStudio writes it (MNUM 1 1 and a MOFF row): nothing to say.
+    # (The rows above give configuration 0, malformed in the operand layout read since,
+    # ``OPER param configuration value``: under MNUM 1 they are reported too.)
+    single = text.replace("MNUM 2 1", "MNUM 1 1")
+    zmx.loads(single.replace("THIC 2 0 0 0 0 0 0 0\nTHIC 2 0 0 0 0 0 0 0\n",
+                             'MOFF   0   1 "" 0 0 0 1 1 0 0.0 "" 0\n'))
+    with pytest.warns(ZmxWarning, match=r"<zmx>:3: a file of 1 configuration \(MNUM\)"):
+        zmx.loads(single)
 
 
 # ---------------------------------------------------------------------------- IR catalogs

@@ -137,11 +137,11 @@ def select(f: ZmxFile, config: int | None, strict: bool) -> int:
             raise
         # MNUM 1 with rows for configuration 2 and on (an MNUM count cut short) was read
         # without a word, while configurations() refused the same file.
-        report(strict, f"{f.path}:{f.mnum.number}: a file of {n} configuration"
-                       f"{'s' if n > 1 else ''} (MNUM) whose operand table jaxlens cannot "
-                       f"read ({e}); it "
-                       f"reads the lens as its surfaces give it (configuration {active}, the "
-                       f"active one)")
+        what = (f"a multi-configuration file ({n} configurations)" if n > 1
+                else "a file of 1 configuration (MNUM)")
+        report(strict, f"{f.path}:{f.mnum.number}: {what} whose operand table jaxlens cannot "
+                       f"read ({e}); it reads the lens as its surfaces give it (configuration "
+                       f"{active}, the active one)")
         return chosen
     if chosen == active:  # the surfaces hold it; with one configuration its rows repeat them
         _check_active(f, ops, active, strict)
