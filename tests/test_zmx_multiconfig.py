@@ -253,3 +253,14 @@ def test_vignetting_operands_set_that_configurations_factors():
     np.testing.assert_array_equal(v2, [[0, 0, 0, 0, 0], [0, -0.05, 0, 0.4, 0]])
     with pytest.raises(ValueError, match=r"VCYN of field 2 must be below 1"):
         zmx.loads(text.replace("FVCY 2 2 0.4", "FVCY 2 2 1.2"), config=2)
+
+
+def test_an_unknown_glass_of_a_glss_row_is_reported_with_the_row_itself():
+    # The message quoted a made-up 'GLAS NAME' line, and with unknown_glass="model" said
+    # nothing of why no model glass stood in (a GLSS row has no nd, Vd).
+    with open(ZOOM) as fh:
+        text = fh.read().replace("GLSS 3 3 N-F2", "GLSS 3 3 NOSUCHGLASS9")
+    for kw in ({}, {"unknown_glass": "model"}):
+        with pytest.raises(ValueError, match=r"<zmx>:\d+: glass 'NOSUCHGLASS9'.*GLSS row gives "
+                                             r"the glass's name only.*'GLSS 3 3 NOSUCHGLASS9 "):
+            zmx.loads(text, config=3, **kw)

@@ -221,7 +221,9 @@ def _glss(f, op, value, ln, active):
     try:
         float(name)
     except ValueError:
-        s.glas = ZmxLine(ln.path, ln.number, f"GLAS {name}")
+        # Read as a GLAS line of the name alone; messages quote the GLSS row itself.
+        s.glas = ZmxLine(ln.path, ln.number, ln.text)
+        s.glas.tokens = ["GLAS", name]
         return
     raise ln.error(f"GLSS's value is a glass name, got the number {value}")
 

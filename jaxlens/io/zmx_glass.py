@@ -176,6 +176,10 @@ class GlassResolver:
             if nd is not None:
                 e = (f"{e}. To open the file anyway with a model glass of the line's nd {nd:g}, "
                      f"Vd {vd:g}, load it with unknown_glass='model'")
+            elif ln.text.split()[0].upper() == "GLSS":
+                e = (f"{e}. A configuration's GLSS row gives the glass's name only, no nd "
+                     f"and Vd, so no model glass can stand in for it; supply the glass's "
+                     f"catalog (.AGF) beside the file")
             elif _placeholder_nd_vd(ln):
                 e = (f"{e}. Its GLAS line gives nd 1.5, Vd 40, Zemax's defaults for a glass "
                      f"it has not looked up, not this glass's data, so no model glass can "
