@@ -106,3 +106,18 @@ def refcase_rays(d, dtype=jnp.float64):
         ref.append([im["x"], im["y"], im["z"], im["L"], im["M"], im["N"]])
     rays = jl.Rays(jnp.array(o, dtype), jnp.array(v, dtype), jnp.array(w, dtype))
     return rays, _undo_image_refraction(d, np.array(ref))
+
+
+def json_round_trip(lens: jl.Lens, folder) -> jl.Lens:
+    """``lens`` saved as JSON in ``folder`` and loaded again, checked equal to it: the same
+    structure (surface kinds, mirrors, apertures, …) and the same leaves, bit for bit."""
+    import jax
+
+    path = pathlib.Path(folder) / "round_trip.json"
+    jl.save(lens, path)
+    again = jl.load(path)
+    assert jax.tree_util.tree_structure(again) == jax.tree_util.tree_structure(lens)
+    for a, b in zip(jax.tree_util.tree_leaves(again), jax.tree_util.tree_leaves(lens),
+                    strict=True):
+        np.testing.assert_array_equal(np.asarray(a, np.float64), np.asarray(b, np.float64))
+    return again

@@ -5,6 +5,7 @@ import equinox as eqx
 import jax.numpy as jnp
 import numpy as np
 import pytest
+from helpers import json_round_trip
 
 import jaxlens as jl
 from jaxlens.io import zmx
@@ -77,7 +78,7 @@ def test_decentered_disc_obscuration_and_annulus():
            lambda x, y: ((x - 1) ** 2 + y**2 <= 25) & ((x - 1) ** 2 + y**2 > 1))
 
 
-def test_apertures_in_a_run_of_surfaces_and_on_the_image():
+def test_apertures_in_a_run_of_surfaces_and_on_the_image(tmp_path):
     """Apertures on a surface inside a run of same-kind surfaces (traced one by one) and on
     the image surface (index len(surfaces)); aiming ignores them (``unclipped``)."""
     flat = jl.Standard(c=0.0, k=0.0)
@@ -90,8 +91,7 @@ def test_apertures_in_a_run_of_surfaces_and_on_the_image():
     np.testing.assert_array_equal(_valid(lens, x, y), want)
     assert unclipped(lens).apertures == ()
     assert _valid(unclipped(lens), x, y).all()
-    with pytest.raises(ValueError, match="no jaxlens JSON form"):
-        jl.save(lens, "/tmp/never_written.json")  # no JSON form: refused, never dropped
+    assert json_round_trip(lens, tmp_path).apertures == lens.apertures
     with pytest.raises(ValueError, match="apertures"):
         jl.tracing.backward.reversed_lens(lens)
 
@@ -117,12 +117,8 @@ def test_save_and_load_keep_the_apertures(tmp_path):
         (0, jl.Aperture.circle(1.0, 0.1)), (0, jl.Aperture("rect", 1.0, 1.0, 0.2))))
     with pytest.raises(ValueError, match="different decenters"):
         jl.save(two, tmp_path / "c.zmx")
-    # JSON has no aperture form: the refusal names the apertures (it named the lens's empty
-    # mirrors and obscurations) and writes nothing.
-    with pytest.raises(ValueError, match=r"save: apertures \(Lens.apertures = .*rect.*\) have "
-                                         r"no jaxlens JSON form yet; save the lens as .zmx"):
-        jl.save(two, tmp_path / "c.json")
-    assert not (tmp_path / "c.json").exists()
+    # JSON holds each aperture's own decenter.
+    assert json_round_trip(two, tmp_path).apertures == two.apertures
 
 
 def test_bad_aperture_values_are_refused():

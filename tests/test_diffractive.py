@@ -14,6 +14,7 @@ import jax
 import jax.numpy as jnp
 import numpy as np
 import pytest
+from helpers import json_round_trip
 
 import jaxlens as jl
 from jaxlens.analysis import report
@@ -348,11 +349,8 @@ def test_every_other_consumer_handles_or_refuses_it(tmp_path):
     with pytest.raises(ValueError, match=r"surfaces\[1\] is a Binary2"):
         Parameterization(template=template, r_norm=jnp.ones(2), total_track=40.0,
                          optical=(0, 1))
-    with pytest.raises(ValueError, match="a Binary2 surface has no jaxlens JSON form yet; "
-                                         "save the lens as .zmx"):
-        lensfile.surface_to_dict(s)
-    with pytest.raises(ValueError, match="Binary2"):
-        jl.save(lens, tmp_path / "doe.json")
+    assert lensfile.surface_to_dict(s)["type"] == "binary2"
+    assert json_round_trip(lens, tmp_path).surfaces[1].phase_coeffs.shape == s.phase_coeffs.shape
     mirror = jl.Lens((jl.Plane(), s), jnp.array([5.0, -20.0]), (jl.Air(), jl.Air()), epd=2.0,
                      mirrors=(1,))
     with pytest.raises(ValueError, match=r"Binary2 \(diffractive\) surface cannot be a mirror"):

@@ -261,7 +261,7 @@ def test_materials_and_apertures():
         (lambda d: d["surfaces"][1].update(radius=10, curvature=0.2), r"disagree"),
         (lambda d: d["surfaces"][1].update(thickness="nan"), r"finite number"),
         (lambda d: d["surfaces"][1].update(conic=[1]), r"conic: expected a number"),
-        (lambda d: d["surfaces"][1].update(type="toroidal"), r"unknown surface type"),
+        (lambda d: d["surfaces"][1].update(type="gradient_index"), r"unknown surface type"),
         (lambda d: d.update(format="jaxlens.optics.lens/99"), r"unsupported format"),
         (lambda d: d.pop("aperture"), r"no aperture"),
         (lambda d: d.update(primary_wavelength_nm=500.0), r"not one of the wavelengths"),

@@ -8,7 +8,6 @@ second pins what the audit checked and found right, each against an independent 
 """
 
 import dataclasses
-import os
 import warnings
 
 import equinox as eqx
@@ -16,6 +15,7 @@ import jax
 import jax.numpy as jnp
 import numpy as np
 import pytest
+from helpers import json_round_trip
 
 import jaxlens as jl
 from jaxlens.analysis import spots, tolerance
@@ -243,11 +243,11 @@ def test_grating_trace_float32_and_jit_agree_with_float64_eager():
     np.testing.assert_array_equal(np.asarray(oj.origin), np.asarray(o64.origin))
 
 
-def test_a_grating_lens_is_refused_by_json_not_saved_without_its_lines(tmp_path):
+def test_a_grating_lens_is_saved_as_json_with_its_lines(tmp_path):
     lens = jl.Lens(surfaces=(jl.Grating(lines_per_um=0.3, order=-2.0),),
                    thickness=jnp.array([10.0]), materials=(jl.Air(),), epd=2.0)
-    with pytest.raises(ValueError, match="Grating surface has no jaxlens JSON form"):
-        jl.save(lens, os.fspath(tmp_path / "g.json"))
+    g = json_round_trip(lens, tmp_path).surfaces[0]
+    assert (float(g.lines_per_um), float(g.order)) == (0.3, -2.0)
 
 
 # ------------------------------------------------------------------ element motion

@@ -13,6 +13,7 @@ import jax
 import jax.numpy as jnp
 import numpy as np
 import pytest
+from helpers import json_round_trip
 
 import jaxlens as jl
 from jaxlens.analysis import report
@@ -224,11 +225,9 @@ def test_every_other_consumer_handles_or_refuses_it(tmp_path):
         ToleranceModel(tilted_image)
     with pytest.raises(ValueError, match="holds EvenAsphere surfaces only"):
         Parameterization(template=lens, r_norm=jnp.ones(2), total_track=40.0, optical=(0, 1))
-    with pytest.raises(ValueError, match="a TiltedPlane surface has no jaxlens JSON form yet; "
-                                         "save the lens as .zmx"):
-        lensfile.surface_to_dict(s)
-    with pytest.raises(ValueError, match="no jaxlens JSON form"):
-        jl.save(lens, tmp_path / "tilt.json")
+    assert lensfile.surface_to_dict(s) == {"type": "tilted_plane", "tan_x": float(s.tan_x),
+                                           "tan_y": float(s.tan_y)}  # no semi-diameter: inf
+    json_round_trip(tilted_image, tmp_path)
     # No paraxial power: the EFL of the plano-convex singlet, tilt or not.
     assert float(jl.efl(lens)) == float(jl.efl(singlet(tan_y=0.0)))
     table = "\n".join(report._surface_table(block(image=jl.TiltedPlane(tan_y=0.3))))

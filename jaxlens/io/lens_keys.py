@@ -41,6 +41,12 @@ SURFACE = {
                       "clear_semi_diameter"),
     "is_stop": ("stop", "aperture_stop"), "material": ("glass", "glas", "medium"), "n": (),
     "shape": (),
+    # surface_json's kinds and per-surface data
+    "y_coeffs": (), "curvature_x": ("cx", "curv_x"), "focal_length": ("f", "efl", "focal"),
+    "diffraction_order": (), "phase_coeffs": (), "lines_per_um": ("lpmm", "lines_per_mm"),
+    "tan_x": (), "tan_y": (), "decenter_x": (), "decenter_y": (), "tilt_x_deg": ("tilt_x",),
+    "tilt_y_deg": ("tilt_y",), "tilt_z_deg": ("tilt_z",), "order": (), "mirror": ("reflect",),
+    "obscuration": ("obsc",), "apertures": ("aperture",),
 }
 APERTURE = {"epd": ("entrance_pupil_diameter", "pupil_diameter", "diameter"), "EPD": (),
             "fnum": ("fno", "f/#"), "FNUM": (), "f_number": (),

@@ -44,7 +44,7 @@ from ..optics.lens import INFINITE_OBJECT_MM, Lens, Sensor, check_vignetting
 from ..optics.materials import Air
 from ..optics.qtype import QTypeAsphere
 from ..optics.surfaces import AbstractSurface, EvenAsphere, Hybrid, OddAsphere, Standard
-from . import lens_keys
+from . import lens_keys, surface_json
 from .json_values import float64_array as _arr
 from .json_values import json_number as _out
 from .json_values import nm_to_um  # noqa: F401  (re-exported: analysis.report reads it here)
@@ -136,6 +136,16 @@ def nonfinite_part(surface: AbstractSurface) -> str:
 
 def _surface(d: dict, where: str, kind: str | None) -> AbstractSurface:
     raw = _text(kind or d.get("type") or "standard", f"{where}: type")
+    other = surface_json.kind_of(raw)
+    if other is not None:  # toroidal, paraxial, diffractive, tilted plane, coordinate break
+        return surface_json.surface_from_json(other, d, where, lens_keys.SURFACE)
+    stray = sorted(surface_json.OWN_KEYS & set(d))
+    if stray:
+        takes = sorted({k for k, (_, pairs) in surface_json.KINDS.items()
+                        for key, _ in pairs if key in stray} | (
+                        {"coordinate_break"} if "order" in stray else set()))
+        raise ValueError(f"{where}: a {raw} surface does not take {', '.join(stray)} (the keys "
+                         f"of type {' or '.join(takes)}); give that type, or drop the keys")
     kind = re.sub(r"[^a-z0-9]", "", raw.lower())  # "Even Asphere" == "even_asphere"
     c = _curvature(d, where)
     k = _num(d.get("conic", 0.0), f"{where}: conic")
@@ -182,7 +192,7 @@ def _surface(d: dict, where: str, kind: str | None) -> AbstractSurface:
     if kind in _STANDARD_TYPES:
         return Standard(c=_arr(c), k=_arr(k), semi_diameter=_arr(sd))
     raise ValueError(f"{where}: unknown surface type {raw!r}; use standard, evenasph, oddasph, "
-                     f"hybrid, qbfs or qcon")
+                     f"hybrid, qbfs, qcon, {', '.join(surface_json.KINDS)}")
 
 
 _Q_TYPES = {"qbfs": "bfs", "qcon": "con"}  # the type key without case and punctuation
@@ -211,6 +221,9 @@ def _qtype_surface(d: dict, where: str, raw: str, qtype, c, k, sd, other_terms) 
 
 def surface_to_dict(s: AbstractSurface) -> dict:
     """The JSON object of a surface (without thickness and material)."""
+    other = surface_json.surface_to_json(s)
+    if other is not None:
+        return other
     if isinstance(s, QTypeAsphere):
         d = {"type": "q" + s.qtype}
     elif isinstance(s, Hybrid):
@@ -444,6 +457,7 @@ def lens_from_dict(d: dict, *, source: str = "<lens>") -> Lens:
         )
 
     surfaces, thick, mats, stops = [], [], [], []
+    mirrors, obscurations, apertures = [], [], []
     for j, s in enumerate(body):
         i = j + first
         where = f"{source}: surface {i}"
@@ -453,6 +467,10 @@ def lens_from_dict(d: dict, *, source: str = "<lens>") -> Lens:
         if _text(s.get("type", ""), f"{where}: type").lower() in ("object", "image"):
             raise ValueError(f"{where}: an {s['type']} surface can only be first/last")
         surfaces.append(surface_from_dict(s, where))
+        mirror, obsc, aps = surface_json.surface_data_from_json(s, where)
+        mirrors += [j] if mirror else []
+        obscurations += [(j, *obsc)] if obsc is not None else []
+        apertures += [(j, a) for a in aps]
         if "thickness" not in s:
             raise ValueError(f"{where}: missing 'thickness'")
         t = _num(s["thickness"], f"{where}: thickness")
@@ -490,6 +508,11 @@ def lens_from_dict(d: dict, *, source: str = "<lens>") -> Lens:
     if img is not None:
         shape = _text(img.get("shape", "standard"), f"{source}: image surface shape")
         image = surface_from_dict(img, f"{source}: image surface", kind=shape)
+        mirror, obsc, aps = surface_json.surface_data_from_json(img, f"{source}: image surface")
+        j = len(surfaces)  # the image surface's index in Lens.mirrors, obscurations, apertures
+        mirrors += [j] if mirror else []
+        obscurations += [(j, *obsc)] if obsc is not None else []
+        apertures += [(j, a) for a in aps]
 
     wl, primary = _wavelengths_of(d, source)
     fields = _fields_of(d, source)
@@ -533,6 +556,9 @@ def lens_from_dict(d: dict, *, source: str = "<lens>") -> Lens:
         name=name,
         description=description,
         vignetting=None if vignetting is None else _arr(vignetting),
+        mirrors=tuple(mirrors),
+        obscurations=tuple(obscurations),
+        apertures=tuple(apertures),
     )
     # Before the paraxial work of the aperture: values the lens cannot be traced with.
     checks.wavelengths(lens, wl, f"{source}: {key}", "wavelength")
@@ -561,11 +587,6 @@ def _warn_image_medium(img: dict, image_space, wl, primary: int, source: str) ->
 
 def lens_to_dict(lens: Lens) -> dict:
     """The JSON object of a lens (format ``jaxlens.lens/1``)."""
-    held = [f"{name} (Lens.{name} = {getattr(lens, name)})"
-            for name in ("mirrors", "obscurations", "apertures") if getattr(lens, name)]
-    if held:
-        raise ValueError(f"save: {', '.join(held)} have no jaxlens JSON form yet; save the "
-                         f"lens as .zmx")
     dist = math.inf if lens.object_distance is None else lens.object_distance
     obj = {
         "type": "object",
@@ -579,9 +600,11 @@ def lens_to_dict(lens: Lens) -> dict:
         e["material"] = material_to_spec(lens.materials[i])
         if i == lens.stop:
             e["is_stop"] = True
+        e.update(surface_json.surface_data_to_json(lens, i))
         surfs.append(e)
     img = surface_to_dict(lens.image)
-    surfs.append({"type": "image", "shape": img.pop("type"), **img})
+    surfs.append({"type": "image", "shape": img.pop("type"), **img,
+                  **surface_json.surface_data_to_json(lens, len(lens.surfaces))})
     fields = np.asarray(lens.fields)
     out = {
         "format": FORMAT,

@@ -39,9 +39,8 @@ Binary2:
     focusing phase of a lens of focal length f at λ is −(2π/λ)(sqrt(r² + f²) − f), so
     A_1 = −π R²/(λ f) to leading order.
 
-    A Binary2 cannot be a mirror (refused when traced), has no JSON form (save it as
-    ``.zmx``) and is refused by tolerancing, the design parameterisation and
-    ``rebase_conic``.
+    A Binary2 cannot be a mirror (refused when traced), and is refused by tolerancing, the
+    design parameterisation and ``rebase_conic``.
 
 Grating:
     The sag is the base conic's (curvature c, conic constant k, as ``Standard``). The lines
