@@ -243,3 +243,29 @@ def test_a_paraxial_surface_is_refused_by_name():
         with pytest.raises(ValueError, match="surface 2 is a ParaxialSurface \\(an ideal thin "
                                              "lens\\): it has no radius, conic or aspheric"):
             call()
+
+
+@pytest.mark.parametrize(("surface", "match"), [
+    (jl.Hybrid(c=0.02, k=0.0, coeffs=jnp.zeros(2), odd_x=jnp.array([1e-4]),
+               odd_y=jnp.array([0.0])), r"surface 1 is a Hybrid with odd x³, y³, … terms"),
+    ("toroidal", r"surface 1 is a Toroidal; tolerance analysis perturbs the radius, conic "
+                 r"and even aspheric terms of Standard, EvenAsphere and Hybrid surfaces"),
+])
+def test_a_surface_with_untoleranced_shape_numbers_is_refused(surface, match):
+    """A toroid (its radius of rotation) and a hybrid's odd terms were accepted and left
+    untoleranced without a word; a hybrid without odd terms is an even asphere and passes."""
+    from jaxlens.optics.toroidal import Toroidal
+
+    if surface == "toroidal":
+        surface = Toroidal(c=0.02, cx=0.01, coeffs=jnp.zeros(1))
+    glass = jl.ModelGlass(1.5168, 64.17)
+
+    def lens(s):
+        return jl.Lens((s, jl.Sphere(-0.02)), jnp.array([3.0, 45.0]), (glass, jl.Air()),
+                       epd=8.0, fields=jnp.array([0.0, 5.0]))
+
+    for call in (T.zero_perturbation, T.ToleranceModel):
+        with pytest.raises(ValueError, match=match):
+            call(lens(surface))
+    even = jl.Hybrid(c=0.02, k=0.0, coeffs=jnp.zeros(2), odd_x=jnp.zeros(1), odd_y=jnp.zeros(1))
+    T.ToleranceModel(lens(even))

@@ -70,12 +70,13 @@ from jaxtyping import Array, Float
 
 from ..imaging.sampling import pupil_grid
 from ..optics import checks, paraxial
+from ..optics.coordinates import CoordinateBreak
 from ..optics.diffractive import DIFFRACTIVE
 from ..optics.lens import Lens
 from ..optics.materials import LAMBDA_D, AbstractMaterial, Air, abbe_number
 from ..optics.paraxial_surface import ParaxialSurface
 from ..optics.qtype import QTypeAsphere
-from ..optics.surfaces import EvenAsphere, Standard, TiltedPlane
+from ..optics.surfaces import EvenAsphere, Hybrid, Standard, TiltedPlane
 from . import tolerance_rigid as rigid
 from .spots import clear_semi_diameters
 from .tolerance_metric import (  # noqa: F401  (re-exported: the metric's public names)
@@ -247,6 +248,24 @@ def _refuse_surfaces(lens: Lens, where: str) -> None:
             raise ValueError(f"{where}: surface {i + 1} is a {type(s).__name__}; tolerance "
                              f"analysis of the radial terms β_i r^i of an odd asphere is not "
                              f"supported (asphere tolerances act on even terms only)")
+        if isinstance(s, Hybrid) and not checks.is_traced(s.odd_x) and (
+                np.any(np.asarray(s.odd_x) != 0) or np.any(np.asarray(s.odd_y) != 0)):
+            raise ValueError(f"{where}: {name} is a Hybrid with odd x³, y³, … terms; tolerance "
+                             f"analysis perturbs radius, conic and even terms only and would "
+                             f"leave them untoleranced, so it does not support it")
+        if type(s) not in _TOLERANCED:
+            # Any other kind (a toroid's radius of rotation, a freeform's terms) would keep
+            # shape numbers that no tolerance moves, without a word.
+            raise ValueError(f"{where}: {name} is a {type(s).__name__}; tolerance analysis "
+                             f"perturbs the radius, conic and even aspheric terms of "
+                             f"Standard, EvenAsphere and Hybrid surfaces without odd terms "
+                             f"(coordinate breaks pass unchanged) and would leave its other "
+                             f"shape numbers untoleranced, so it does not support it")
+
+
+_TOLERANCED = frozenset({Standard, EvenAsphere, Hybrid, CoordinateBreak})
+"""Surface kinds whose every shape number a tolerance moves (a break has none; a hybrid
+only with its odd terms zero)."""
 
 
 def zero_perturbation(lens: Lens, *, elements: bool = False) -> Perturbation:
