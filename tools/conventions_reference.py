@@ -224,7 +224,8 @@ def main(argv=None) -> None:
         warnings.simplefilter("ignore")
         for name, (case, dist) in lenses.items():
             case = dict(case, name=name)
-            cases[name] = {"source": f"tests/refcases/{'cooke_triplet' if 'cooke' in name else 'double_gauss'}.json",
+            base = "cooke_triplet" if "cooke" in name else "double_gauss"
+            cases[name] = {"source": f"tests/refcases/{base}.json",
                            "object_distance_mm": dist,
                            "aspheres": {str(k): v for k, v in ASPHERES.items()}
                            if name == "cooke_asphere" else None,
