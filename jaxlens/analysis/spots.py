@@ -245,8 +245,8 @@ class Distortion(eqx.Module):
     scaled to the field; on the image surface that is the paraxial chief ray's height, so
     it is ``percent_paraxial`` here (optiland 0.6.3's ``Distortion(distortion_type="f-tan")``
     computes it so, and equals ``percent_paraxial`` to 3e-10 %, its scale taken from a
-    real ray at 1e-10 of the field; ``tests/test_conventions_vs_optiland.py``). Its "F-Theta" distortion is
-    ``percent_ftheta``: reference s·θ, θ in radians, s = ``paraxial_height``/tanθ the same
+    real ray at 1e-10 of the field; ``tests/test_conventions_vs_optiland.py``). Its
+    "F-Theta" distortion is ``percent_ftheta``: reference s·θ, θ in radians, s = ``paraxial_height``/tanθ the same
     near-axis scale (optiland's ``distortion_type="f-theta"``, equal to 3e-10 %; that
     OpticStudio takes the same scale for F-Theta was not checked against its output).
     ``percent_ftan`` measures against n·EFL·tanθ instead, the ideal height at the paraxial
