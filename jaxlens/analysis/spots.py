@@ -244,14 +244,15 @@ class Distortion(eqx.Module):
     Distortion) takes its reference height from a real ray traced at a very small field,
     scaled to the field; on the image surface that is the paraxial chief ray's height, so
     it is ``percent_paraxial`` here (optiland 0.6.3's ``Distortion(distortion_type="f-tan")``
-    computes it so, and equals ``percent_paraxial`` to 3e-10 %, its scale taken from a
-    real ray at 1e-10 of the field; ``tests/test_conventions_vs_optiland.py``). Its
-    "F-Theta" distortion is ``percent_ftheta``: reference s·θ, θ in radians, s = ``paraxial_height``/tanθ the same
-    near-axis scale (optiland's ``distortion_type="f-theta"``, equal to 3e-10 %; that
-    OpticStudio takes the same scale for F-Theta was not checked against its output).
-    ``percent_ftan`` measures against n·EFL·tanθ instead, the ideal height at the paraxial
-    focus: it equals ``percent_paraxial`` only when the image surface lies at the paraxial
-    focus, and in general 1 + ``percent_ftan``/100 = (1 + ``percent_paraxial``/100) ·
+    computes it so, its scale taken from a real ray at 1e-10 of the field, and equals
+    ``percent_paraxial`` to 3e-10 %; ``tests/test_conventions_vs_optiland.py``). Its
+    "F-Theta" distortion is ``percent_ftheta``: reference s·θ, θ in radians, s =
+    ``paraxial_height``/tanθ the same near-axis scale (optiland's
+    ``distortion_type="f-theta"``, equal to 3e-10 %; that OpticStudio takes the same scale
+    for F-Theta was not checked against its output). ``percent_ftan`` measures against
+    n·EFL·tanθ instead, the ideal height at the paraxial focus: it equals
+    ``percent_paraxial`` only when the image surface lies at the paraxial focus, and in
+    general 1 + ``percent_ftan``/100 = (1 + ``percent_paraxial``/100) ·
     ``paraxial_height``/``f_tan`` (the Cooke triplet of the reference cases, its image
     surface 0.23 mm before the paraxial focus: −0.386 % against +0.062 % at 20°).
     """
