@@ -31,6 +31,12 @@ Conventions (those of Zemax and optiland):
     the focus is s·D_z from the image surface. Astigmatism is tangential −
     sagittal. A focus at infinity (image space afocal for that fan) is ±inf; a field whose
     chief ray does not reach the image is NaN.
+
+    Against optiland 0.6.3 (``tests/test_conventions_vs_optiland.py``: the Cooke triplet,
+    the double Gauss at infinity and at 300 mm, a triplet with even aspheres; F, d and C
+    lines): ray fans agree to 2e-13 mm at every wavelength, sagittal foci to 5e-11 mm and
+    tangential foci to 5e-8 mm (optiland's parabasal pair at ±1e-5 of the pupil is a finite
+    difference).
 """
 
 from __future__ import annotations

@@ -239,6 +239,22 @@ class Distortion(eqx.Module):
     direction (tanθx, tanθy) in the image plane, and ``f_tan`` is n·EFL·tanθ of the field's
     radial angle θ (tan²θ = tan²θx + tan²θy), n the object-space index (1 in air): the image
     height of a distortion-free lens, whose front focal length is n·EFL.
+
+    Which is Zemax's: OpticStudio's "F-Tan(Theta)" distortion (Field Curvature and
+    Distortion) takes its reference height from a real ray traced at a very small field,
+    scaled to the field; on the image surface that is the paraxial chief ray's height, so
+    it is ``percent_paraxial`` here (optiland 0.6.3's ``Distortion(distortion_type="f-tan")``
+    computes it so, its scale taken from a real ray at 1e-10 of the field, and equals
+    ``percent_paraxial`` to 3e-10 %; ``tests/test_conventions_vs_optiland.py``). Its
+    "F-Theta" distortion is ``percent_ftheta``: reference s·θ, θ in radians, s =
+    ``paraxial_height``/tanθ the same near-axis scale (optiland's
+    ``distortion_type="f-theta"``, equal to 3e-10 %; that OpticStudio takes the same scale
+    for F-Theta was not checked against its output). ``percent_ftan`` measures against
+    n·EFL·tanθ instead, the ideal height at the paraxial focus: it equals
+    ``percent_paraxial`` only when the image surface lies at the paraxial focus, and in
+    general 1 + ``percent_ftan``/100 = (1 + ``percent_paraxial``/100) ·
+    ``paraxial_height``/``f_tan`` (the Cooke triplet of the reference cases, its image
+    surface 0.23 mm before the paraxial focus: −0.386 % against +0.062 % at 20°).
     """
 
     field: Float[Array, " F"] | Float[Array, "F 2"]
@@ -247,6 +263,8 @@ class Distortion(eqx.Module):
     paraxial_height: Float[Array, " F"]
     percent_ftan: Float[Array, " F"]
     percent_paraxial: Float[Array, " F"]
+    f_theta: Float[Array, " F"]
+    percent_ftheta: Float[Array, " F"]
 
 
 def field_heights(fields, xy):
@@ -276,7 +294,9 @@ def distortion(lens: Lens, fields=None, wavelength=None) -> Distortion:
     ``fields`` are degrees, ``[F]`` (θy) or ``[F, 2]`` (θx, θy); default ``lens.fields``.
     ``percent_ftan`` = 100·(y_real − n·EFL·tanθ)/(n·EFL·tanθ), n the object-space index (1
     in air; an ideal lens behind water had 33 % against EFL·tanθ); ``percent_paraxial`` uses the
-    paraxial chief-ray height on the image surface instead. Heights are along y for
+    paraxial chief-ray height on the image surface instead (Zemax's "F-Tan(Theta)"
+    distortion), ``percent_ftheta`` the paraxial scale times θ (Zemax's "F-Theta"); see
+    :class:`Distortion` for the relation between them. Heights are along y for
     ``[F]`` fields and radial for ``[F, 2]`` (see :class:`Distortion`). Zero fields give 0.
     A field whose real chief ray does not reach the image (vignetted, or beyond the lens's
     coverage) has NaN height and distortion (its height was 0: a plausible −100 %).
@@ -308,7 +328,12 @@ def _distortion(lens, fields, wavelength, depth) -> Distortion:
         nz = b != 0
         return jnp.where(nz, 100.0 * (a - b) / jnp.where(nz, b, 1.0), 0.0)
 
-    return Distortion(fields, y, ftan, ypar, pct(y, ftan), pct(y, ypar))
+    # Zemax's F-Theta reference: the near-axis (paraxial) scale per tanθ, times θ (rad).
+    nz = tr != 0
+    scale = ypar / jnp.where(nz, tr, 1.0)
+    ftheta = jnp.where(nz, scale * jnp.deg2rad(radial), 0.0)
+    return Distortion(fields, y, ftan, ypar, pct(y, ftan), pct(y, ypar), ftheta,
+                      pct(y, ftheta))
 
 
 def clear_semi_diameters(lens: Lens, fields=None, n_rim: int = 64, *,

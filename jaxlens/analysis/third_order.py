@@ -56,11 +56,18 @@ the paraxial image height, TLAC the short-wavelength chief ray's height minus th
 Zemax's, but its sign conventions were not available to check against).
 
 Compared with optiland 0.6.3 (``optiland.aberrations``, ``tests/test_seidel.py``,
-``tools/seidel_reference.py``): its ``seidels()`` are −(these sums) (opposite sign
-convention; the same magnitudes to 2e-5 on the Cooke triplet, the glasses differing
-slightly); its per-surface transverse terms TSC, CC, TPC, DC, TAchC, TchC are TSPH, TSCO,
-TPFC, TDIS, TAXC, TLAC here, and its TAC is TAST/2 (S_III/(2n′u′)). It ignores the
-polynomial terms of an even asphere (A4 …), which are included here.
+``tools/seidel_reference.py``, ``tests/test_conventions_vs_optiland.py``): its
+``seidels()`` are −(these sums) (opposite sign convention); its per-surface transverse
+terms TSC, CC, TPC, DC, TAchC, TchC are TSPH, TSCO, TPFC, TDIS, TAXC, TLAC here, and its
+TAC is TAST/2 (S_III/(2n′u′)). With the same glasses they agree to 3e-15 mm per surface on
+the Cooke triplet, the double Gauss and the double Gauss with its object at 300 mm. It
+ignores the polynomial terms of an even asphere (A4 …), which are included here: the
+difference is exactly the δS terms above (checked on a triplet with r⁴ and r⁶ terms).
+Zemax: OpticStudio's "Seidel Coefficients" listing names the sums SPHA (S_I), COMA (S_II),
+ASTI (S_III), FCUR (S_IV), DIST (S_V), CLA (C_L), CTR (C_T), in lens units, and the
+wavefront and transverse terms by the names used here; its manual cites Welford for the
+formulas, whose sign is the one kept here (optiland's is the opposite). No OpticStudio
+output was at hand to check the signs against directly.
 
 Handled surfaces: ``Standard`` (planes, spheres, conics, the stop), ``EvenAsphere``, and
 ``OddAsphere``/``Hybrid`` whose odd terms (β_1 r, β_3 r³; the hybrid's x³, y³ … series)

@@ -23,8 +23,15 @@ Conventions (optiland's "chief_ray" reference, Zemax's definition of the referen
 
     positive where the ray reaches the reference sphere with less optical path than the
     chief ray, that is where the wavefront is ahead of the reference sphere. This is
-    optiland's sign (``optiland.wavefront.OPD``, strategy "chief_ray"), so the numbers
-    compare directly (Zemax's sign was not checked here); the chief ray's OPD is 0. A
+    optiland's sign (``optiland.wavefront.OPD``, strategy "chief_ray"): OPD and Zernike
+    fits agree with optiland 0.6.3's to 1e-9 wave on the Cooke triplet, the double Gauss
+    (object at infinity and at 300 mm) and an even-asphere triplet
+    (``tests/test_conventions_vs_optiland.py``). It is also Zemax's, as far as published
+    material shows: OpticStudio's OPD is Welford's [Q Q̄] (the path from the reference
+    sphere to the wavefront along the ray, Welford's W, positive ahead), and batoid's
+    wavefront (chief-ray path minus ray path) reproduces an OpticStudio Zernike Standard
+    listing (batoid's test of the HSC telescope) with no change of sign. No OpticStudio
+    output was at hand to compare with directly. The chief ray's OPD is 0. A
     perfect wave converging to a focus that lies a distance dz before the image surface
     (dz > 0: the image surface is beyond the focus) has, for the ray at angle U to the
     chief ray,
@@ -48,12 +55,16 @@ Conventions (optiland's "chief_ray" reference, Zemax's definition of the referen
 Summary statistics (``wavefront``): the map is sampled on a ``grid × grid`` square grid over
 [−1, 1]² cut to the unit disc (points with Px² + Py² <= 1), each point weighing the same, as
 Zemax's wavefront map. ``rms`` and ``pv`` are taken with piston (the mean) removed and tilt
-kept (Zemax's RMS "to chief", as we read its manual); ``rms_tilt_removed`` and
-``pv_tilt_removed`` also remove the least-squares tilt a + b·Px + c·Py (its "to centroid").
+kept (Zemax's RMS "to chief": an OpticStudio Zernike listing says it is "the RMS of the
+OPD after subtracting out piston"); ``rms_tilt_removed`` and ``pv_tilt_removed`` also
+remove the least-squares tilt a + b·Px + c·Py (its "to centroid": "after subtracting out
+both piston and tilt", the tilt that minimises the variance).
 optiland's ``remove_tilt`` fits its plane in exit-pupil coordinates (mm on the reference
 sphere) instead of (Px, Py); pupil distortion sets them apart (2.5e-5 wave of RMS on the
 Cooke triplet at 14°). Zernike coefficients are fitted over the same points in (Px, Py)
-(``Wavefront.zernike``, equal weights, as optiland's ``ZernikeFit``). ``strehl`` is
+(``Wavefront.zernike``, equal weights, as optiland's ``ZernikeFit``; "noll" is Zemax's
+"Zernike Standard", whereas optiland's ``zernike_type="standard"`` is the OSA/ANSI set,
+``indexing="ansi"`` here). ``strehl`` is
 Maréchal's approximation exp(−(2π σ)²) with σ = ``rms_tilt_removed`` (the Strehl ratio at
 the best lateral image position, best focus not sought); good to a few per cent for σ below
 about 0.1 wave.

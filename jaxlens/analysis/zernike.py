@@ -15,12 +15,21 @@ Conventions:
     - ``"noll"`` (Zemax "Zernike Standard Coefficients"; Noll 1976): j = 1, 2, …; within an
       order n, j rises with |m|, even j carry cos mθ and odd j sin |m|θ. Normalised,
       N = sqrt(2(n+1)/(1+δ_m0)), so that the mean of Z_j² over the disc is 1 and a
-      wavefront's RMS over the disc (piston removed) is sqrt(Σ_{j≥2} c_j²).
+      wavefront's RMS over the disc (piston removed) is sqrt(Σ_{j≥2} c_j²). This is the
+      table an OpticStudio listing prints (Z2 = 4^½ ρ cos A, Z3 = 4^½ ρ sin A, Z5 = 6^½ ρ²
+      sin 2A, Z6 = 6^½ ρ² cos 2A, …, A measured from +x toward +y: a field along +y gives
+      the sin A terms), and optiland's ``"noll"``.
     - ``"ansi"`` (OSA/ANSI Z80.28): j = (n(n+2) + m)/2 = 0, 1, …, the same normalisation
-      as Noll; the coefficients are returned in j order starting at j = 0.
+      as Noll; the coefficients are returned in j order starting at j = 0. optiland calls
+      this set ``"standard"``: it is not Zemax's Standard set (that is ``"noll"``).
     - ``"fringe"`` (University of Arizona, Zemax "Zernike Fringe Coefficients"): j = 1 … 37,
-      j = (1 + (n+|m|)/2)² − 2|m| + (1 if m < 0), except Z37 = R_12^0; not normalised
-      (N = 1, every term peaks at 1 on the edge), so Z4 = 2ρ² − 1 and Z9 = 6ρ⁴ − 6ρ² + 1.
+      j = (1 + (n+|m|)/2)² − 2|m| + (1 if m < 0), except Z37 = R_12^0 (Zemax's Z37, 924ρ¹²
+      − … + 1); not normalised (N = 1, every term peaks at 1 on the edge), so Z4 = 2ρ² − 1
+      and Z9 = 6ρ⁴ − 6ρ² + 1. optiland 0.6.3 continues the formula to its Z37 = ρ⁶ cos 6θ
+      instead, so 37-term Fringe fits differ from optiland's; 36-term fits agree.
+
+    Fits of the same OPD samples agree with optiland 0.6.3's ``ZernikeFit`` to 1e-9 wave in
+    all three sets (``tests/test_conventions_vs_optiland.py``).
 
     ``zernike_fit`` fits by least squares over the given points (each point weighs the same;
     points off the mask, and NaN values, weigh nothing); on a dense uniform grid this is
