@@ -387,9 +387,12 @@ def plot_field_curvature(lens, *, wavelengths=None, title: str | None = None) ->
     ax.set_title("field curvature", fontsize=8)
     ax = fig.add_subplot(1, 2, 2)
     # Distortion is 0/0 on axis: drawn from the first field off it.
-    ax.plot(np.asarray(dist.percent_ftan)[1:], th[1:], color="k", lw=1)
+    ax.plot(np.asarray(dist.percent_ftan)[1:], th[1:], color="k", lw=1, label="against f·tanθ")
+    ax.plot(np.asarray(dist.percent_paraxial)[1:], th[1:], color="k", lw=1, ls="--",
+            label="against the paraxial chief ray (OpticStudio's F-Tan)")
     ax.axvline(0, color="k", lw=0.4)
-    ax.set_xlabel("distortion against f·tanθ (%)")
+    ax.legend(fontsize=6)
+    ax.set_xlabel("distortion (%)")
     ax.set_ylim(0, max(float(th[-1]), 1e-9))
     ax.grid(alpha=0.3)
     ax.set_title("distortion", fontsize=8)
