@@ -27,10 +27,13 @@ TOP = {
     "sensor": (),
 }
 SURFACE = {
-    "type": ("surface_type",), "curvature": ("c", "cv", "curv"),
-    "radius": ("r", "roc", "radius_of_curvature", "rad"),
+    "type": ("surface_type",), "curvature": ("c", "cv", "curv", "curvature_y"),
+    "radius": ("r", "roc", "radius_of_curvature", "rad", "radius_y"),
     "thickness": ("t", "thick", "thi", "disz", "distance", "gap"),
-    "conic": ("k", "cc", "conic_constant", "kappa"),
+    "conic": ("k", "cc", "conic_constant", "kappa", "conic_y"),
+    "curvature_x": ("cx",), "radius_x": ("rx",), "conic_x": ("kx",),
+    "zernike_coeffs": ("zernike_coefficients", "zernikes", "zernike_terms"),
+    "zernike_decenter_x": (), "zernike_decenter_y": (), "extrapolate": (),
     "even_asphere_coeffs": ("asphere_coeffs", "aspheric_coeffs", "asphere_coefficients",
                             "aspheric_coefficients", "coeffs", "coefficients", "even_coeffs"),
     "odd_asphere_coeffs": ("odd_coeffs", "radial_coeffs"), "odd_x": (), "odd_y": (),

@@ -40,6 +40,7 @@ import numpy as np
 
 from ..optics import checks, paraxial
 from ..optics import materials as _materials
+from ..optics.freeform import Biconic, ZernikeSag
 from ..optics.lens import INFINITE_OBJECT_MM, Lens, Sensor, check_vignetting
 from ..optics.materials import Air
 from ..optics.qtype import QTypeAsphere
@@ -87,21 +88,24 @@ _STANDARD_TYPES = (
 # surfaces
 
 
-def _curvature(d: dict, where: str) -> float:
-    c = d.get("curvature")
-    r = d.get("radius")
+def _curvature(d: dict, where: str, suffix: str = "") -> float:
+    """The curvature from ``curvature`` or ``radius`` (``curvature_x``/``radius_x`` with
+    ``suffix="_x"``, a biconic's x section)."""
+    ck, rk = f"curvature{suffix}", f"radius{suffix}"
+    c = d.get(ck)
+    r = d.get(rk)
     if c is not None:
-        cv = _num(c, f"{where}: curvature")
+        cv = _num(c, f"{where}: {ck}")
         if r is not None:
-            rv = _num(r, f"{where}: radius", finite=False)
+            rv = _num(r, f"{where}: {rk}", finite=False)
             cr = 0.0 if math.isinf(rv) else (math.inf if rv == 0 else 1.0 / rv)
             if not math.isclose(cr, cv, rel_tol=1e-9, abs_tol=1e-15):
-                raise ValueError(f"{where}: radius {r!r} and curvature {c!r} disagree")
+                raise ValueError(f"{where}: {rk} {r!r} and {ck} {c!r} disagree")
         return cv
     if r is not None:
-        rv = _num(r, f"{where}: radius", finite=False)
+        rv = _num(r, f"{where}: {rk}", finite=False)
         if rv == 0:
-            raise ValueError(f"{where}: radius 0 is not a surface; use curvature 0 for flat")
+            raise ValueError(f"{where}: {rk} 0 is not a surface; use {ck} 0 for flat")
         return 0.0 if math.isinf(rv) else 1.0 / rv
     return 0.0
 
@@ -123,8 +127,8 @@ def surface_from_dict(d: dict, where: str, *, kind: str | None = None) -> Abstra
 def nonfinite_part(surface: AbstractSurface) -> str:
     """What of a surface is not finite ("" if nothing): its shape numbers, or its paraxial
     curvature c + 2·a_1, which a coefficient of 1e308 overflows (a trace would give NaN)."""
-    for name in ("c", "k", "coeffs", "odd_x", "odd_y", "paraxial_curvature",
-                 "paraxial_curvature_x"):
+    for name in ("c", "k", "coeffs", "odd_x", "odd_y", "cx", "kx", "zernike",
+                 "paraxial_curvature", "paraxial_curvature_x"):
         try:
             v = getattr(surface, name, None)
         except (ValueError, TypeError):  # a surface without a paraxial curvature
@@ -147,6 +151,8 @@ def _surface(d: dict, where: str, kind: str | None) -> AbstractSurface:
     if coeffs.ndim != 1:
         raise ValueError(f"{where}: even_asphere_coeffs must be a flat list")
     has_odd = "odd_x" in d or "odd_y" in d
+    if kind in _FREEFORM_TYPES or any(key in d for key in _FREEFORM_KEYS):
+        return _freeform_surface(d, where, raw, kind, c, k, sd, coeffs)
     qtype = _Q_TYPES.get(kind)
     if qtype is not None or "q_coeffs" in d or "norm_radius" in d:
         return _qtype_surface(d, where, raw, qtype, c, k, sd, coeffs.size or has_odd)
@@ -182,7 +188,7 @@ def _surface(d: dict, where: str, kind: str | None) -> AbstractSurface:
     if kind in _STANDARD_TYPES:
         return Standard(c=_arr(c), k=_arr(k), semi_diameter=_arr(sd))
     raise ValueError(f"{where}: unknown surface type {raw!r}; use standard, evenasph, oddasph, "
-                     f"hybrid, qbfs or qcon")
+                     f"hybrid, qbfs, qcon, biconic, zernike_standard or zernike_fringe")
 
 
 _Q_TYPES = {"qbfs": "bfs", "qcon": "con"}  # the type key without case and punctuation
@@ -209,8 +215,70 @@ def _qtype_surface(d: dict, where: str, raw: str, qtype, c, k, sd, other_terms) 
                         semi_diameter=_arr(sd), qtype=qtype)
 
 
+_FREEFORM_TYPES = {"biconic": None, "biconicx": None, "zernikestandard": "standard",
+                   "zernikestandardsag": "standard", "szernsag": "standard",
+                   "zernikefringe": "fringe", "zernikefringesag": "fringe", "fzernsag": "fringe"}
+_BICONIC_KEYS = ("curvature_x", "radius_x", "conic_x")
+_ZERNIKE_KEYS = ("zernike_coeffs", "zernike_decenter_x", "zernike_decenter_y", "extrapolate")
+_FREEFORM_KEYS = _BICONIC_KEYS + _ZERNIKE_KEYS
+
+
+def _freeform_surface(d: dict, where: str, raw: str, kind: str, c, k, sd, coeffs):
+    """A ``Biconic`` (type "biconic") or ``ZernikeSag`` (type "zernike_standard" or
+    "zernike_fringe") from its JSON object."""
+    if kind not in _FREEFORM_TYPES:
+        given = next(key for key in _FREEFORM_KEYS if key in d)
+        raise ValueError(f"{where}: {given} belongs to a biconic (type \"biconic\": "
+                         f"curvature_x/radius_x, conic_x) or a Zernike sag surface (type "
+                         f"\"zernike_standard\" or \"zernike_fringe\": zernike_coeffs, "
+                         f"norm_radius, zernike_decenter_x/_y, extrapolate), not to type {raw!r}")
+    ordering = _FREEFORM_TYPES[kind]
+    other = ("odd_asphere_coeffs", "q_coeffs", "odd_x", "odd_y") + (
+        _ZERNIKE_KEYS + ("norm_radius", "even_asphere_coeffs") if ordering is None
+        else _BICONIC_KEYS)
+    extra = next((key for key in other if key in d), None)
+    if extra is not None:
+        raise ValueError(f"{where}: a {'biconic' if ordering is None else 'Zernike sag'} "
+                         f"surface (type {raw!r}) takes no {extra}")
+    if ordering is None:
+        kx = _num(d.get("conic_x", 0.0), f"{where}: conic_x")
+        return Biconic(c=_arr(c), k=_arr(k), cx=_arr(_curvature(d, where, "_x")), kx=_arr(kx),
+                       semi_diameter=_arr(sd))
+    a = _nums(d.get("zernike_coeffs", []), f"{where}: zernike_coeffs")
+    if a.ndim != 1 or coeffs.ndim != 1:
+        raise ValueError(f"{where}: zernike_coeffs and even_asphere_coeffs must be flat lists")
+    if a.size and "norm_radius" not in d:
+        raise ValueError(f"{where}: a Zernike sag surface with zernike_coeffs needs norm_radius "
+                         f"(the normalisation radius, mm)")
+    rn = _num(d.get("norm_radius", 1.0), f"{where}: norm_radius")
+    if not rn > 0:
+        raise ValueError(f"{where}: norm_radius must be > 0 (mm), got {d['norm_radius']!r}")
+    dx, dy = (_num(d.get(f"zernike_decenter_{ax}", 0.0), f"{where}: zernike_decenter_{ax}")
+              for ax in "xy")
+    ext = checks.switch(d.get("extrapolate", True), "extrapolate", where)
+    return ZernikeSag(c=_arr(c), k=_arr(k), coeffs=_arr(coeffs), zernike=_arr(a),
+                      norm_radius=_arr(rn), decenter_x=_arr(dx), decenter_y=_arr(dy),
+                      semi_diameter=_arr(sd), ordering=ordering, extrapolate=ext)
+
+
+def _freeform_to_dict(s) -> dict:
+    """The type-specific entries of a ``Biconic`` or ``ZernikeSag``."""
+    if isinstance(s, Biconic):
+        return {"type": "biconic", "curvature": _out(s.c), "conic": _out(s.k),
+                "curvature_x": _out(s.cx), "conic_x": _out(s.kx)}
+    return {"type": f"zernike_{s.ordering}", "curvature": _out(s.c), "conic": _out(s.k),
+            "even_asphere_coeffs": _out(s.coeffs), "zernike_coeffs": _out(s.zernike),
+            "norm_radius": _out(s.norm_radius), "zernike_decenter_x": _out(s.decenter_x),
+            "zernike_decenter_y": _out(s.decenter_y), "extrapolate": s.extrapolate}
+
+
 def surface_to_dict(s: AbstractSurface) -> dict:
     """The JSON object of a surface (without thickness and material)."""
+    if isinstance(s, Biconic | ZernikeSag):
+        d = _freeform_to_dict(s)
+        if np.isfinite(np.asarray(s.semi_diameter)):
+            d["semi_diameter"] = _out(s.semi_diameter)
+        return d
     if isinstance(s, QTypeAsphere):
         d = {"type": "q" + s.qtype}
     elif isinstance(s, Hybrid):
