@@ -619,6 +619,7 @@ def test_hand_written_zmx_opens_strict_and_round_trips(tmp_path):
     # inches: lengths ×25.4, A_i ×25.4^(1−2i), Zernike coefficients ×25.4, 1/Rx exact
     inch = jl.load(_write(tmp_path, ZMX.format(unit="IN"), "in.zmx"))
     assert float(inch.surfaces[0].cx) == 1 / (60 * 25.4)
+    assert float(inch.surfaces[0].kx) == -0.4 and float(inch.surfaces[0].k) == 0.8  # no unit
     assert float(inch.surfaces[1].norm_radius) == 6.5 * 25.4
     assert float(inch.surfaces[1].zernike[2]) == pytest.approx(0.003 * 25.4, rel=1e-15)
     assert float(inch.surfaces[1].coeffs[1]) == pytest.approx(-2e-6 * 25.4**-3, rel=1e-15)
