@@ -33,9 +33,9 @@ Conventions:
       sqrt(n+1) (m = 0): Z1 = 1, Z2 = 2ρ cos φ, Z3 = 2ρ sin φ, Z4 = √3(2ρ² − 1),
       Z5 = √6 ρ² sin 2φ, Z6 = √6 ρ² cos 2φ, … up to 231 terms (radial order 20).
     * ``"fringe"`` (Zemax Fringe, University of Arizona order): unnormalised, Z1 = 1,
-      Z2 = ρ cos φ, Z3 = ρ sin φ, Z4 = 2ρ² − 1, Z5 = ρ² cos 2φ, Z6 = ρ² sin 2φ, …,
-      Z36 = ρ⁵ sin 5φ … as j = (1 + (n+|m|)/2)² − 2|m| (+1 for sin), and Z37 = R_12^0 (the
-      12th-order spherical term, as in Zemax), 37 terms at most.
+      Z2 = ρ cos φ, Z3 = ρ sin φ, Z4 = 2ρ² − 1, Z5 = ρ² cos 2φ, Z6 = ρ² sin 2φ, …, the
+      term (n, m) at j = (1 + (n+|m|)/2)² − 2|m| (+1 for sin |m|φ) up to Z36 = R_10^0, and
+      Z37 = R_12^0 (the 12th-order spherical term, as in Zemax), 37 terms at most.
 
     With ``extrapolate=False`` (Zemax PARM 0 = 0) the Zernike part is zero where ρ > 1, as
     in Zemax (a step in the surface at ρ = 1); ``True`` (PARM 0 = 1) evaluates it everywhere.
@@ -46,8 +46,11 @@ Conventions:
     and imaginary parts of (u + iv)^m (u, v the normalised decentered coordinates) and
     R_n^m(ρ)/ρ^m is a polynomial in ρ², so the sag and its gradient are polynomials, finite
     with finite derivatives everywhere (no atan2, no division by ρ). Terms of the same m and
-    kind are summed as one polynomial in ρ², whose coefficients are a fixed linear map of
-    the A_j.
+    kind are summed as one polynomial in ρ² (Horner), whose coefficients are a fixed linear
+    map of the A_j (``zernike_basis``).
+
+    Both surfaces are intersected by the tracer's Newton iteration (``has_polynomial``),
+    started from the base conic (c, k) and the vertex plane.
 
     Paraxial optics works in the y–z section, as Zemax does: ``paraxial_curvature`` is the
     vertex curvature d²z/dy² at x = y = 0 (a biconic's c; for ``ZernikeSag`` c + 2a_1 plus
@@ -115,6 +118,8 @@ class Biconic(AbstractSurface):
         """Both sections must exist out to the semi-diameter: on the circle r = sd the root's
         argument is smallest on an axis, so (1+k)c² sd² <= 1 and (1+kx)cx² sd² <= 1."""
         super()._check_domain(where)
+        if checks.is_traced((self.cx, self.kx)):
+            return
         sd = np.asarray(self.semi_diameter, float)
         q = (1.0 + np.asarray(self.kx, float)) * np.asarray(self.cx, float) ** 2
         with np.errstate(invalid="ignore", over="ignore"):
