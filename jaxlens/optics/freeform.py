@@ -65,7 +65,6 @@ import functools
 import math
 
 import equinox as eqx
-import jax
 import jax.numpy as jnp
 import numpy as np
 from jaxtyping import Array, Float
@@ -267,6 +266,45 @@ def zernike_sum(a, u, v, ordering: str):
     return z, du, dv
 
 
+def zernike_curvatures(a, u, v, ordering: str, xp=jnp):
+    """(∂²/∂u², ∂²/∂v²) of Σ_j a_j Z_j at one point (u, v), exactly (the vertex curvature of a
+    ``ZernikeSag``); ``xp`` is ``numpy`` for concrete values (fast outside ``jit``) or
+    ``jax.numpy`` (differentiable)."""
+    n = a.shape[0]
+    if not n:
+        return 0.0 * u, 0.0 * u
+    w = zernike_basis(n, ordering)
+    coef = xp.asarray(w) @ a
+    used = np.any(w != 0, axis=-1)
+    top = w.shape[1] // 2 - 1
+    s = u * u + v * v
+    cm, sm = [1.0 + 0.0 * u], [0.0 * u]
+    for _ in range(top):
+        cm.append(u * cm[-1] - v * sm[-1])
+        sm.append(u * sm[-1] + v * cm[-2])
+    zero = 0.0 * u
+    cu = [zero] + [k * cm[k - 1] for k in range(1, top + 1)]
+    su = [zero] + [k * sm[k - 1] for k in range(1, top + 1)]
+    cuu = [zero, zero] + [k * (k - 1) * cm[k - 2] for k in range(2, top + 1)]
+    suu = [zero, zero] + [k * (k - 1) * sm[k - 2] for k in range(2, top + 1)]
+    t_val, t_u, t_v = cm + sm, cu + su, [-x for x in su] + cu
+    t_uu = cuu + suu  # T_vv = −T_uu (harmonic)
+    huu = hvv = zero
+    for t in range(w.shape[1]):
+        ps = np.flatnonzero(used[:, t])
+        if not ps.size:
+            continue
+        p0 = p1 = p2 = zero  # the polynomial in s and its first two s derivatives
+        for p in range(int(ps[-1]), -1, -1):
+            p2 = p2 * s + 2.0 * p1
+            p1 = p1 * s + p0
+            p0 = p0 * s + coef[p, t]
+        base = 2.0 * p1 * t_val[t]
+        huu = huu + 4.0 * u * u * p2 * t_val[t] + base + 4.0 * u * p1 * t_u[t] + p0 * t_uu[t]
+        hvv = hvv + 4.0 * v * v * p2 * t_val[t] + base + 4.0 * v * p1 * t_v[t] - p0 * t_uu[t]
+    return huu, hvv
+
+
 class ZernikeSag(AbstractSurface):
     """An even asphere plus Zernike polynomials (Zemax SZERNSAG, FZERNSAG; the formulas, units
     and conventions are in the module docstring).
@@ -321,10 +359,21 @@ class ZernikeSag(AbstractSurface):
         return True  # the Zernike terms need the Newton intersection
 
     def _vertex_curvature(self, axis: int) -> Array:
-        zero = jnp.zeros_like(self.c)
-        if axis == 0:
-            return jax.grad(lambda x: self.sag_and_grad(x, zero)[1])(zero)
-        return jax.grad(lambda y: self.sag_and_grad(zero, y)[2])(zero)
+        """d²z/dx² (axis 0) or d²z/dy² (axis 1) at x = y = 0: c + 2a_1 + the Zernike part's;
+        in numpy for concrete values (an eager JAX evaluation of many terms is slow)."""
+        traced = checks.is_traced(self)
+        xp = jnp if traced else np
+        get = (lambda v: v) if traced else (lambda v: np.asarray(v, np.float64))
+        c, a, z = get(self.c), get(self.coeffs), get(self.zernike)
+        out = c + 2.0 * a[0] if a.shape[0] else c
+        if z.shape[0]:
+            inv = 1.0 / get(self.norm_radius)
+            u, v = -get(self.decenter_x) * inv, -get(self.decenter_y) * inv
+            h = zernike_curvatures(z, u, v, self.ordering, xp)[axis] * inv * inv
+            if not self.extrapolate:
+                h = xp.where(u * u + v * v <= 1.0, h, 0.0)
+            out = out + h
+        return out if traced else jnp.asarray(out, jnp.result_type(self.c))
 
     @property
     def paraxial_curvature(self) -> Array:
