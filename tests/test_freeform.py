@@ -431,6 +431,24 @@ def test_even_terms_decenter_and_extrapolate():
     assert np.all(zi[rho > 1] == 0) and np.any(ze[rho > 1] != 0)
 
 
+def test_vertex_flat_and_outside_the_domain_are_finite_with_finite_gradients():
+    """At r = 0, with c = 0 (flat sections) and beyond the conic's domain: finite sag, slope
+    and parameter gradients (zero slope outside, as for the other surfaces)."""
+    surfaces = (Biconic(c=0.0, cx=0.0), Biconic(c=0.2, k=0.5, cx=-0.1, kx=2.0),
+                ZernikeSag(c=0.2, k=0.5, zernike=jnp.array([0.0, 1e-3, 0.0, 2e-3]),
+                           norm_radius=3.0))
+    for s in surfaces:
+        for x, y in ((0.0, 0.0), (9.0, 0.0), (0.0, 9.0)):  # 9 mm: outside the conics
+            z, gx, gy, inside = s.sag_and_grad(jnp.asarray(x), jnp.asarray(y))
+            assert np.all(np.isfinite(np.asarray([z, gx, gy])))
+            if not bool(inside):
+                assert float(gx) == 0.0 and float(gy) == 0.0
+            g = jax.grad(lambda t, x=x, y=y: sum(t.sag_and_grad(jnp.asarray(x),
+                                                                 jnp.asarray(y))[:3]))(s)
+            assert all(np.all(np.isfinite(np.asarray(v))) for v in jax.tree_util.tree_leaves(g))
+    assert not bool(surfaces[1].sag(9.0, 0.0)[1]) and not bool(surfaces[2].sag(9.0, 0.0)[1])
+
+
 def test_mirror_surface_negates_the_sag():
     z = jnp.asarray(np.random.default_rng(6).normal(size=15) * 1e-3)
     for s in (_biconic("general"), ZernikeSag(c=0.02, k=-0.3, coeffs=jnp.array([1e-4]),
