@@ -378,7 +378,7 @@ BAD = [
     ("  CURV abc\n", "", 7, r"curvature is not a number"),
     ("  CURV 1e999\n", "", 7, r"curvature must be finite"),
     ("  CURV nan\n", "", 7, r"curvature must be finite"),
-    ("  TYPE SZERNSAG\n", "", 7, r"surface type SZERNSAG is not supported"),
+    ("  TYPE GRID_SAG\n", "", 7, r"surface type GRID_SAG is not supported"),
     ("  PARM x 1\n", "", 7, r"PARM index is not a number"),
     ("", "  DISZ INFINITY\n", 12, r"only the object surface may have an infinite thickness"),
     ("  TYPE EVENASPH\n  PARM 9 1e-3\n", "", 8, r"PARM 1\.\.8"),

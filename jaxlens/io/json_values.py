@@ -98,3 +98,25 @@ def json_number(x) -> Any:
             return "inf" if v > 0 else "-inf"
         return v
     return [json_number(v) for v in a]
+
+
+def curvature(d: dict, where: str, suffix: str = "") -> float:
+    """The curvature from ``curvature`` or ``radius`` (``curvature_x``/``radius_x`` with
+    ``suffix="_x"``, a biconic's x section)."""
+    ck, rk = f"curvature{suffix}", f"radius{suffix}"
+    c = d.get(ck)
+    r = d.get(rk)
+    if c is not None:
+        cv = num(c, f"{where}: {ck}")
+        if r is not None:
+            rv = num(r, f"{where}: {rk}", finite=False)
+            cr = 0.0 if math.isinf(rv) else (math.inf if rv == 0 else 1.0 / rv)
+            if not math.isclose(cr, cv, rel_tol=1e-9, abs_tol=1e-15):
+                raise ValueError(f"{where}: {rk} {r!r} and {ck} {c!r} disagree")
+        return cv
+    if r is not None:
+        rv = num(r, f"{where}: {rk}", finite=False)
+        if rv == 0:
+            raise ValueError(f"{where}: {rk} 0 is not a surface; use {ck} 0 for flat")
+        return 0.0 if math.isinf(rv) else 1.0 / rv
+    return 0.0

@@ -27,10 +27,13 @@ TOP = {
     "sensor": (),
 }
 SURFACE = {
-    "type": ("surface_type",), "curvature": ("c", "cv", "curv"),
-    "radius": ("r", "roc", "radius_of_curvature", "rad"),
+    "type": ("surface_type",), "curvature": ("c", "cv", "curv", "curvature_y"),
+    "radius": ("r", "roc", "radius_of_curvature", "rad", "radius_y"),
     "thickness": ("t", "thick", "thi", "disz", "distance", "gap"),
-    "conic": ("k", "cc", "conic_constant", "kappa"),
+    "conic": ("k", "cc", "conic_constant", "kappa", "conic_y"),
+    "curvature_x": ("cx", "curv_x"), "radius_x": ("rx",), "conic_x": ("kx",),
+    "zernike_coeffs": ("zernike_coefficients", "zernikes", "zernike_terms"),
+    "zernike_decenter_x": (), "zernike_decenter_y": (), "extrapolate": (),
     "even_asphere_coeffs": ("asphere_coeffs", "aspheric_coeffs", "asphere_coefficients",
                             "aspheric_coefficients", "coeffs", "coefficients", "even_coeffs"),
     "odd_asphere_coeffs": ("odd_coeffs", "radial_coeffs"), "odd_x": (), "odd_y": (),
@@ -42,7 +45,7 @@ SURFACE = {
     "is_stop": ("stop", "aperture_stop"), "material": ("glass", "glas", "medium"), "n": (),
     "shape": (),
     # surface_json's kinds and per-surface data
-    "y_coeffs": (), "curvature_x": ("cx", "curv_x"), "focal_length": ("f", "efl", "focal"),
+    "y_coeffs": (), "focal_length": ("f", "efl", "focal"),
     "diffraction_order": (), "phase_coeffs": (), "lines_per_um": ("lpmm", "lines_per_mm"),
     "tan_x": (), "tan_y": (), "decenter_x": (), "decenter_y": (), "tilt_x_deg": ("tilt_x",),
     "tilt_y_deg": ("tilt_y",), "tilt_z_deg": ("tilt_z",), "order": (), "mirror": ("reflect",),

@@ -45,9 +45,12 @@ from ..optics.materials import Air
 from ..optics.qtype import QTypeAsphere
 from ..optics.surfaces import AbstractSurface, EvenAsphere, Hybrid, OddAsphere, Standard
 from . import lens_keys, surface_json
+from .json_values import (
+    curvature,
+    nm_to_um,  # noqa: F401  (re-exported: analysis.report reads it here)
+)
 from .json_values import float64_array as _arr
 from .json_values import json_number as _out
-from .json_values import nm_to_um  # noqa: F401  (re-exported: analysis.report reads it here)
 from .json_values import num as _num
 from .json_values import nums as _nums
 from .json_values import text as _text
@@ -87,25 +90,6 @@ _STANDARD_TYPES = (
 # surfaces
 
 
-def _curvature(d: dict, where: str) -> float:
-    c = d.get("curvature")
-    r = d.get("radius")
-    if c is not None:
-        cv = _num(c, f"{where}: curvature")
-        if r is not None:
-            rv = _num(r, f"{where}: radius", finite=False)
-            cr = 0.0 if math.isinf(rv) else (math.inf if rv == 0 else 1.0 / rv)
-            if not math.isclose(cr, cv, rel_tol=1e-9, abs_tol=1e-15):
-                raise ValueError(f"{where}: radius {r!r} and curvature {c!r} disagree")
-        return cv
-    if r is not None:
-        rv = _num(r, f"{where}: radius", finite=False)
-        if rv == 0:
-            raise ValueError(f"{where}: radius 0 is not a surface; use curvature 0 for flat")
-        return 0.0 if math.isinf(rv) else 1.0 / rv
-    return 0.0
-
-
 def surface_from_dict(d: dict, where: str, *, kind: str | None = None) -> AbstractSurface:
     """A surface from its JSON object; ``kind`` overrides the ``type`` key. What the surface
     class refuses (a semi-diameter beyond a steep sphere's edge, say) names ``where``."""
@@ -123,8 +107,8 @@ def surface_from_dict(d: dict, where: str, *, kind: str | None = None) -> Abstra
 def nonfinite_part(surface: AbstractSurface) -> str:
     """What of a surface is not finite ("" if nothing): its shape numbers, or its paraxial
     curvature c + 2·a_1, which a coefficient of 1e308 overflows (a trace would give NaN)."""
-    for name in ("c", "k", "coeffs", "odd_x", "odd_y", "paraxial_curvature",
-                 "paraxial_curvature_x"):
+    for name in ("c", "k", "coeffs", "odd_x", "odd_y", "cx", "kx", "zernike",
+                 "paraxial_curvature", "paraxial_curvature_x"):
         try:
             v = getattr(surface, name, None)
         except (ValueError, TypeError):  # a surface without a paraxial curvature
@@ -139,7 +123,8 @@ def _surface(d: dict, where: str, kind: str | None) -> AbstractSurface:
     other = surface_json.kind_of(raw)
     if other is not None:  # toroidal, paraxial, diffractive, tilted plane, coordinate break
         return surface_json.surface_from_json(other, d, where, lens_keys.SURFACE)
-    stray = sorted(surface_json.OWN_KEYS & set(d))
+    # (curvature_x is a biconic's key too: the freeform reader below takes it)
+    stray = sorted((surface_json.OWN_KEYS - set(surface_json.FREEFORM_KEYS)) & set(d))
     if stray:
         takes = sorted({k for k, (_, pairs) in surface_json.KINDS.items()
                         for key, _ in pairs if key in stray} | (
@@ -147,7 +132,7 @@ def _surface(d: dict, where: str, kind: str | None) -> AbstractSurface:
         raise ValueError(f"{where}: a {raw} surface does not take {', '.join(stray)} (the keys "
                          f"of type {' or '.join(takes)}); give that type, or drop the keys")
     kind = re.sub(r"[^a-z0-9]", "", raw.lower())  # "Even Asphere" == "even_asphere"
-    c = _curvature(d, where)
+    c = curvature(d, where)
     k = _num(d.get("conic", 0.0), f"{where}: conic")
     sd = d.get("semi_diameter")
     sd = math.inf if sd is None else _num(sd, f"{where}: semi_diameter", finite=False)
@@ -157,6 +142,8 @@ def _surface(d: dict, where: str, kind: str | None) -> AbstractSurface:
     if coeffs.ndim != 1:
         raise ValueError(f"{where}: even_asphere_coeffs must be a flat list")
     has_odd = "odd_x" in d or "odd_y" in d
+    if kind in surface_json.FREEFORM_TYPES or any(k in d for k in surface_json.FREEFORM_KEYS):
+        return surface_json.freeform_from_json(d, where, raw, kind, c, k, sd, coeffs)
     qtype = _Q_TYPES.get(kind)
     if qtype is not None or "q_coeffs" in d or "norm_radius" in d:
         return _qtype_surface(d, where, raw, qtype, c, k, sd, coeffs.size or has_odd)
@@ -192,7 +179,8 @@ def _surface(d: dict, where: str, kind: str | None) -> AbstractSurface:
     if kind in _STANDARD_TYPES:
         return Standard(c=_arr(c), k=_arr(k), semi_diameter=_arr(sd))
     raise ValueError(f"{where}: unknown surface type {raw!r}; use standard, evenasph, oddasph, "
-                     f"hybrid, qbfs, qcon, {', '.join(surface_json.KINDS)}")
+                     f"hybrid, qbfs, qcon, biconic, zernike_standard, zernike_fringe, "
+                     f"{', '.join(surface_json.KINDS)}")
 
 
 _Q_TYPES = {"qbfs": "bfs", "qcon": "con"}  # the type key without case and punctuation

@@ -25,6 +25,12 @@ JSON ``type``          class                  keys (besides ``thickness``, ``mat
                                               ``tilt_z_deg``, ``order`` (0 or 1)
 =====================  =====================  ==========================================
 
+The freeform kinds (``jaxlens.optics.freeform``) are read by ``freeform_from_json``:
+``"biconic"`` (``curvature``/``radius``, ``conic`` the y–z section; ``curvature_x``/
+``radius_x``, ``conic_x`` the x–z one) and ``"zernike_standard"``/``"zernike_fringe"`` (an
+even asphere plus ``zernike_coeffs`` (mm) on ``norm_radius`` (mm), ``zernike_decenter_x``/``_y``
+(mm), ``extrapolate``).
+
 All but the coordinate break take ``semi_diameter`` (mm). Per surface, any kind:
 ``"mirror": true`` (it reflects: ``Lens.mirrors``), ``"obscuration": [r_min, r_max]`` (mm,
 ``Lens.obscurations``) and ``"apertures": [{"shape": "circle" | "ellipse" | "rect",
@@ -37,12 +43,15 @@ import re
 
 import numpy as np
 
+from ..optics import checks
 from ..optics.apertures import Aperture
 from ..optics.coordinates import CoordinateBreak
 from ..optics.diffractive import Binary2, Grating
+from ..optics.freeform import Biconic, ZernikeSag
 from ..optics.paraxial_surface import ParaxialSurface
 from ..optics.surfaces import AbstractSurface, TiltedPlane
 from ..optics.toroidal import Toroidal
+from .json_values import curvature
 from .json_values import float64_array as _arr
 from .json_values import json_number as _out
 from .json_values import num as _num
@@ -121,7 +130,13 @@ def surface_from_json(kind: str, d: dict, where: str, known_keys) -> AbstractSur
 
 
 def surface_to_json(s: AbstractSurface) -> dict | None:
-    """The JSON object of a surface of a ``KINDS`` class (None for other classes)."""
+    """The JSON object of a surface of a ``KINDS`` class or a freeform one (None for other
+    classes)."""
+    if isinstance(s, Biconic | ZernikeSag):
+        d = _freeform_to_json(s)
+        if np.isfinite(np.asarray(s.semi_diameter)):
+            d["semi_diameter"] = _out(s.semi_diameter)
+        return d
     kind = next((k for k, (cls, _) in KINDS.items() if type(s) is cls), None)
     if kind is None:
         return None
@@ -189,3 +204,60 @@ def surface_data_to_json(lens, i: int) -> dict:
                            "decenter_x": _out(a.decenter_x), "decenter_y": _out(a.decenter_y),
                            "blocks": a.blocks} for a in aps]
     return d
+
+
+FREEFORM_TYPES = {"biconic": None, "biconicx": None, "zernikestandard": "standard",
+                   "zernikestandardsag": "standard", "szernsag": "standard",
+                   "zernikefringe": "fringe", "zernikefringesag": "fringe", "fzernsag": "fringe"}
+_BICONIC_KEYS = ("curvature_x", "radius_x", "conic_x")
+_ZERNIKE_KEYS = ("zernike_coeffs", "zernike_decenter_x", "zernike_decenter_y", "extrapolate")
+FREEFORM_KEYS = _BICONIC_KEYS + _ZERNIKE_KEYS
+
+
+def freeform_from_json(d: dict, where: str, raw: str, kind: str, c, k, sd, coeffs):
+    """A ``Biconic`` (type "biconic") or ``ZernikeSag`` (type "zernike_standard" or
+    "zernike_fringe") from its JSON object."""
+    if kind not in FREEFORM_TYPES:
+        given = next(key for key in FREEFORM_KEYS if key in d)
+        raise ValueError(f"{where}: {given} belongs to a biconic (type \"biconic\": "
+                         f"curvature_x/radius_x, conic_x) or a Zernike sag surface (type "
+                         f"\"zernike_standard\" or \"zernike_fringe\": zernike_coeffs, "
+                         f"norm_radius, zernike_decenter_x/_y, extrapolate), not to type {raw!r}")
+    ordering = FREEFORM_TYPES[kind]
+    other = ("odd_asphere_coeffs", "q_coeffs", "odd_x", "odd_y") + (
+        _ZERNIKE_KEYS + ("norm_radius", "even_asphere_coeffs") if ordering is None
+        else _BICONIC_KEYS)
+    extra = next((key for key in other if key in d), None)
+    if extra is not None:
+        raise ValueError(f"{where}: a {'biconic' if ordering is None else 'Zernike sag'} "
+                         f"surface (type {raw!r}) takes no {extra}")
+    if ordering is None:
+        kx = _num(d.get("conic_x", 0.0), f"{where}: conic_x")
+        return Biconic(c=_arr(c), k=_arr(k), cx=_arr(curvature(d, where, "_x")), kx=_arr(kx),
+                       semi_diameter=_arr(sd))
+    a = _nums(d.get("zernike_coeffs", []), f"{where}: zernike_coeffs")
+    if a.ndim != 1 or coeffs.ndim != 1:
+        raise ValueError(f"{where}: zernike_coeffs and even_asphere_coeffs must be flat lists")
+    if a.size and "norm_radius" not in d:
+        raise ValueError(f"{where}: a Zernike sag surface with zernike_coeffs needs norm_radius "
+                         f"(the normalisation radius, mm)")
+    rn = _num(d.get("norm_radius", 1.0), f"{where}: norm_radius")
+    if not rn > 0:
+        raise ValueError(f"{where}: norm_radius must be > 0 (mm), got {d['norm_radius']!r}")
+    dx, dy = (_num(d.get(f"zernike_decenter_{ax}", 0.0), f"{where}: zernike_decenter_{ax}")
+              for ax in "xy")
+    ext = checks.switch(d.get("extrapolate", True), "extrapolate", where)
+    return ZernikeSag(c=_arr(c), k=_arr(k), coeffs=_arr(coeffs), zernike=_arr(a),
+                      norm_radius=_arr(rn), decenter_x=_arr(dx), decenter_y=_arr(dy),
+                      semi_diameter=_arr(sd), ordering=ordering, extrapolate=ext)
+
+
+def _freeform_to_json(s) -> dict:
+    """The type-specific entries of a ``Biconic`` or ``ZernikeSag``."""
+    if isinstance(s, Biconic):
+        return {"type": "biconic", "curvature": _out(s.c), "conic": _out(s.k),
+                "curvature_x": _out(s.cx), "conic_x": _out(s.kx)}
+    return {"type": f"zernike_{s.ordering}", "curvature": _out(s.c), "conic": _out(s.k),
+            "even_asphere_coeffs": _out(s.coeffs), "zernike_coeffs": _out(s.zernike),
+            "norm_radius": _out(s.norm_radius), "zernike_decenter_x": _out(s.decenter_x),
+            "zernike_decenter_y": _out(s.decenter_y), "extrapolate": s.extrapolate}

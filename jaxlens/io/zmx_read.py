@@ -151,12 +151,16 @@ def _surface_of(s: ZmxSurface, unit: float) -> AbstractSurface:
         return zmx_surfaces.paraxial_surface(s, unit, sd)[0]
     if s.type == "QED_TYPE":
         return zmx_surfaces.qtype_asphere(s, unit, sd)
+    if s.type == "BICONICX":
+        return zmx_surfaces.biconic(s, unit, sd)
+    if s.type in ("SZERNSAG", "FZERNSAG"):
+        return zmx_surfaces.zernike_sag(s, unit, sd)
     if s.type == "COORDBRK":
         return _coordinate_break(s, unit)
     raise where.error(
         f"surface type {s.type} is not supported (STANDARD, EVENASPH, ODDASPHE, XASPHERE, "
         f"XOSPHERE, XPOLYNOM, TOROIDAL, PARAXIAL, TILTSURF, BINARY_2, QED_TYPE, DGRATING, "
-        f"COORDBRK)"
+        f"BICONICX, SZERNSAG, FZERNSAG, COORDBRK)"
     )
 
 

@@ -1,6 +1,7 @@
 """``.zmx`` surface types beyond the standard and even-asphere ones: ``ODDASPHE`` and
-``TILTSURF`` (read here, written with the others by ``zmx_write``), ``TOROIDAL`` and
-``PARAXIAL``, read and written (the format: ``jaxlens.io.zmx``; the surfaces:
+``TILTSURF`` (read here, written with the others by ``zmx_write``), ``TOROIDAL``,
+``PARAXIAL``, ``BICONICX``, ``SZERNSAG`` and ``FZERNSAG`` (and the others below), read and
+written (the format: ``jaxlens.io.zmx``; the surfaces:
 ``jaxlens.optics.surfaces``, ``jaxlens.optics.toroidal`` and
 ``jaxlens.optics.paraxial_surface``).
 
@@ -35,6 +36,20 @@ PARM 2 the diffraction order M (a whole number; positive bends rays toward +y). 
 PARM reads as 0 (as in Zemax: no lines, or order 0). It may be a mirror (``GLAS MIRROR``: a
 reflective grating). No other PARM and no XDAT.
 
+BICONICX: a ``Biconic`` (``jaxlens.optics.freeform``): CURV and CONI the y–z section's
+curvature and conic, PARM 1 the x radius Rx (lens units; 0 is flat in x, as in Zemax), PARM 2
+the x conic. No other PARM and no XDAT. The writer writes PARM 1 as 1/cx to 25 significant
+digits (``radius_text``), so the round trip is exact.
+
+SZERNSAG, FZERNSAG: a ``ZernikeSag`` (Zemax Zernike Standard Sag, Noll order and
+normalisation; Zernike Fringe Sag): CURV, CONI and PARM 1…8 the even asphere (A2…A16 on r²…
+r¹⁶, lens units^(1−2i)), PARM 0 the extrapolate flag (0: Zernike terms only within the
+normalisation radius, 1: everywhere; a missing PARM 0 reads as 0, as in Zemax), PARM 9 and 10
+the decenter x, y of the Zernike terms (lens units), XDAT 1 the number of terms N (whole,
+0…231 Standard, 0…37 Fringe), XDAT 2 the normalisation radius (lens units, > 0), XDAT 3 …
+XDAT N+2 the coefficients of Z_1 … Z_N (lens units; a missing line reads as 0). A nonzero
+XDAT beyond N+2, or PARM 11 and beyond, is refused.
+
 PARAXIAL: PARM 1 is the focal length, PARM 2 the OPD mode (0: conjugates from a real
 parabasal ray, 1: integrated phase, 2: infinite conjugates, 3: conjugates from a paraxial
 ray). The rays do not depend on the mode. jaxlens's optical path is mode 2's; the others
@@ -54,6 +69,7 @@ import numpy as np
 
 from ..optics import paraxial
 from ..optics.diffractive import Binary2, Grating
+from ..optics.freeform import MAX_ZERNIKE_TERMS, Biconic, ZernikeSag
 from ..optics.lens import Lens, Sensor
 from ..optics.paraxial_surface import ParaxialSurface
 from ..optics.qtype import QTypeAsphere
@@ -179,6 +195,58 @@ def toroidal(s, unit: float, sd: float) -> Toroidal:
     a = [s.parm.get(i + 1, (0.0, None))[0] * unit ** (1 - 2 * i) for i in range(1, m + 1)]
     return Toroidal(c=_arr(s.curv / unit), k=_arr(s.coni), coeffs=_arr(np.array(a, np.float64)),
                     cx=_arr(cx), semi_diameter=_arr(sd))
+
+
+def biconic(s, unit: float, sd: float) -> Biconic:
+    """A ``Biconic`` from a BICONICX surface block (the reader's surface record)."""
+    _parms(s, range(1, 3), "BICONICX (PARM 1 = x radius, PARM 2 = x conic)")
+    for _, (v, ln) in sorted(s.xdat.items()):
+        if v != 0:
+            raise ln.error("BICONICX has no extra data (XDAT): jaxlens's biconic is the two "
+                           "conics (CURV/CONI in y, PARM 1/PARM 2 in x) only")
+    cx = curvature_of_rotation(s.parm[1][1].tokens[2], unit) if 1 in s.parm else 0.0
+    return Biconic(c=_arr(s.curv / unit), k=_arr(s.coni), cx=_arr(cx),
+                   kx=_arr(s.parm.get(2, (0.0, None))[0]), semi_diameter=_arr(sd))
+
+
+_ZERNIKE_TYPES = {"SZERNSAG": "standard", "FZERNSAG": "fringe"}
+
+
+def zernike_sag(s, unit: float, sd: float) -> ZernikeSag:
+    """A ``ZernikeSag`` from an SZERNSAG or FZERNSAG surface block (the reader's record)."""
+    where = s.type_line or s.line
+    ordering = _ZERNIKE_TYPES[s.type]
+    _parms(s, range(0, 11), f"{s.type} (PARM 0 = extrapolate, 1…8 = A2…A16, 9 and 10 = "
+                            f"Zernike decenter x, y)")
+    ext, ext_line = s.parm.get(0, (0.0, where))
+    if ext not in (0.0, 1.0):
+        raise ext_line.error(f"PARM 0 (the extrapolate flag) must be 0 (Zernike terms within "
+                             f"the normalisation radius only) or 1 (everywhere), got {ext:g}")
+    for i, (v, ln) in sorted(s.xdat.items()):
+        if i < 1 and v != 0:
+            raise ln.error(f"{s.type} extra data start at XDAT 1 (the number of terms)")
+    most = MAX_ZERNIKE_TERMS[ordering]
+    n_val, n_line = s.xdat.get(1, (0.0, where))
+    if n_val != int(n_val) or not 0 <= n_val <= most:
+        raise n_line.error(f"XDAT 1 (the number of Zernike terms) must be a whole number in "
+                           f"0..{most} for {s.type}, got {n_val:g}")
+    n = int(n_val)
+    for i, (v, ln) in sorted(s.xdat.items()):
+        if i > n + 2 and v != 0:
+            raise ln.error(f"coefficient beyond the {n} Zernike terms of XDAT 1 (XDAT 3 … "
+                           f"XDAT {n + 2})")
+    norm, norm_line = s.xdat.get(2, (1.0 if n == 0 else 0.0, where))
+    if not (norm > 0 and math.isfinite(norm)):
+        raise norm_line.error(f"XDAT 2 (the Zernike normalisation radius, lens units) must be "
+                              f"> 0, got {norm:g}")
+    m = max([i for i in s.parm if 1 <= i <= 8], default=0)
+    a = [s.parm.get(i, (0.0, None))[0] * unit ** (1 - 2 * i) for i in range(1, m + 1)]
+    zern = [s.xdat.get(j + 2, (0.0, None))[0] * unit for j in range(1, n + 1)]
+    dx, dy = (s.parm.get(i, (0.0, None))[0] * unit for i in (9, 10))
+    return ZernikeSag(c=_arr(s.curv / unit), k=_arr(s.coni), coeffs=_arr(np.array(a, np.float64)),
+                      zernike=_arr(np.array(zern, np.float64)), norm_radius=_arr(norm * unit),
+                      decenter_x=_arr(dx), decenter_y=_arr(dy), semi_diameter=_arr(sd),
+                      ordering=ordering, extrapolate=ext == 1.0)
 
 
 MAX_QTYPE_TERMS = 240
@@ -307,7 +375,8 @@ def curvature_of_rotation(token: str, unit: float) -> float:
 
 def surface_lines(s, z) -> list[str] | None:
     """The TYPE/CURV/CONI/PARM (and XDAT) lines of a ``Toroidal``, ``ParaxialSurface``,
-    ``Binary2`` or ``Grating`` (None for other kinds); ``z`` formats a number exactly."""
+    ``Binary2``, ``QTypeAsphere``, ``Biconic``, ``ZernikeSag`` or ``Grating`` (None for other
+    kinds); ``z`` formats a number exactly."""
     if isinstance(s, Toroidal):
         a = [float(v) for v in np.asarray(s.coeffs)]
         if len(a) > 8:
@@ -322,10 +391,30 @@ def surface_lines(s, z) -> list[str] | None:
         return _binary2_lines(s, z)
     if isinstance(s, QTypeAsphere):
         return _qtype_lines(s, z)
+    if isinstance(s, Biconic):
+        return ["TYPE BICONICX", f'CURV {z(s.c)} 0 0 0 0 ""', f"CONI {z(s.k)}",
+                f"PARM 1 {radius_text(float(s.cx))}", f"PARM 2 {z(s.kx)}"]
+    if isinstance(s, ZernikeSag):
+        return _zernike_lines(s, z)
     if isinstance(s, Grating):
         return ["TYPE DGRATING", f'CURV {z(s.c)} 0 0 0 0 ""', f"CONI {z(s.k)}",
                 f"PARM 1 {z(s.lines_per_um)}", f"PARM 2 {z(s.order)}"]
     return None
+
+
+def _zernike_lines(s: ZernikeSag, z) -> list[str]:
+    a = [float(v) for v in np.asarray(s.coeffs)]
+    if len(a) > 8:
+        raise ValueError(f"save_zmx: a ZernikeSag has {len(a)} even-asphere coefficients; "
+                         f"Zemax's Zernike sag surfaces hold 8 (r² … r¹⁶)")
+    kind = {v: k for k, v in _ZERNIKE_TYPES.items()}[s.ordering]
+    zern = [float(v) for v in np.asarray(s.zernike)]
+    out = [f"TYPE {kind}", f'CURV {z(s.c)} 0 0 0 0 ""', f"CONI {z(s.k)}",
+           f"PARM 0 {int(s.extrapolate)}"]
+    out += [f"PARM {i} {z(v)}" for i, v in enumerate(a, start=1)]
+    out += [f"PARM 9 {z(s.decenter_x)}", f"PARM 10 {z(s.decenter_y)}",
+            f'XDAT 1 {len(zern)} 0 0 1 0 0 ""', f'XDAT 2 {z(s.norm_radius)} 0 0 1 0 0 ""']
+    return out + [f'XDAT {j + 2} {z(v)} 0 0 1 0 0 ""' for j, v in enumerate(zern, start=1)]
 
 
 def _qtype_lines(s: QTypeAsphere, z) -> list[str]:

@@ -46,6 +46,7 @@ from jaxtyping import Array, Float
 
 from . import checks
 from .diffractive import Binary2
+from .freeform import Biconic, ZernikeSag
 from .lens import Lens
 from .paraxial_surface import ParaxialSurface
 from .surfaces import Standard
@@ -74,12 +75,13 @@ def surface_power(surface, n1, n2, wavelength=None):
 
 
 def x_section(lens: Lens) -> Lens:
-    """The lens as its x–z section sees it, for paraxial work: each ``Toroidal`` surface
-    becomes the sphere of its x–z vertex curvature cx (same semi-diameter). Surfaces with
+    """The lens as its x–z section sees it, for paraxial work: each ``Toroidal``, ``Biconic``
+    or ``ZernikeSag`` surface becomes the sphere of its x–z vertex curvature (same
+    semi-diameter). Surfaces with
     the same vertex curvature in x and y are unchanged. Not for real-ray tracing."""
     surfaces = tuple(
         Standard(c=s.paraxial_curvature_x, k=0.0, semi_diameter=s.semi_diameter)
-        if isinstance(s, Toroidal) else s for s in lens.surfaces)
+        if isinstance(s, Toroidal | Biconic | ZernikeSag) else s for s in lens.surfaces)
     return eqx.tree_at(lambda m: m.surfaces, lens, surfaces)
 
 

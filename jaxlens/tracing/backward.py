@@ -25,6 +25,7 @@ import jax.numpy as jnp
 
 from ..optics.coordinates import CoordinateBreak
 from ..optics.diffractive import Binary2, Grating
+from ..optics.freeform import Biconic, ZernikeSag
 from ..optics.lens import Lens
 from ..optics.paraxial_surface import ParaxialSurface
 from ..optics.qtype import QTypeAsphere
@@ -54,7 +55,8 @@ def mirror_surface(surface: AbstractSurface) -> AbstractSurface:
 
     Args:
         surface: a ``Standard``, ``EvenAsphere``, ``OddAsphere``, ``Hybrid``, ``Toroidal``,
-            ``TiltedPlane``, ``ParaxialSurface``, ``Binary2``, ``QTypeAsphere`` or ``Grating``.
+            ``TiltedPlane``, ``ParaxialSurface``, ``Binary2``, ``QTypeAsphere``, ``Biconic``,
+            ``ZernikeSag`` or ``Grating``.
 
     Returns:
         A surface of the same kind with c, the even, radial, odd and Q-type coefficients (and a
@@ -93,6 +95,15 @@ def mirror_surface(surface: AbstractSurface) -> AbstractSurface:
         return QTypeAsphere(c=-surface.c, k=surface.k, coeffs=-surface.coeffs,
                             norm_radius=surface.norm_radius,
                             semi_diameter=surface.semi_diameter, qtype=surface.qtype)
+    if isinstance(surface, Biconic):  # both sections' curvatures negate the whole sag
+        return Biconic(c=-surface.c, k=surface.k, cx=-surface.cx, kx=surface.kx,
+                       semi_diameter=surface.semi_diameter)
+    if isinstance(surface, ZernikeSag):  # conic, even and Zernike terms all negate
+        return ZernikeSag(c=-surface.c, k=surface.k, coeffs=-surface.coeffs,
+                          zernike=-surface.zernike, norm_radius=surface.norm_radius,
+                          decenter_x=surface.decenter_x, decenter_y=surface.decenter_y,
+                          semi_diameter=surface.semi_diameter, ordering=surface.ordering,
+                          extrapolate=surface.extrapolate)
     if isinstance(surface, TiltedPlane):
         return TiltedPlane(tan_x=-surface.tan_x, tan_y=-surface.tan_y,
                            semi_diameter=surface.semi_diameter)

@@ -3,7 +3,7 @@
 ``conic_step`` is ``step.surface_step`` for a refracting (or, on the image surface, only
 intersecting) ``Standard`` surface (plane, sphere, conic), ``sag_step`` for a surface with
 polynomial terms (``SAG_KINDS``: even and odd aspheres, hybrids, toroids, tilted planes,
-Forbes Q-type aspheres); neither
+Forbes Q-type aspheres, biconics, Zernike sag surfaces); neither
 a mirror nor with an obscuration or aperture. Their values are ``surface_step``'s bit for bit
 (the same operations from ``step``, in the same order, Newton's intersection included); their
 derivatives (``reverse_step``, ``reverse_sag_step``: ``jax.custom_vjp``s, first prototyped in
@@ -40,6 +40,7 @@ import functools
 import jax
 import jax.numpy as jnp
 
+from ..optics.freeform import Biconic, ZernikeSag
 from ..optics.qtype import QTypeAsphere
 from ..optics.surfaces import EvenAsphere, Hybrid, OddAsphere, Standard, TiltedPlane
 from ..optics.toroidal import Toroidal
@@ -57,7 +58,8 @@ from .step import (
 # Surfaces that ``sag_step`` takes: ``surface_step`` intersects them by Newton's method and
 # refracts at the normal (−s_x, −s_y, 1) of ``sag_and_grad``, and nothing else (a listed kind,
 # so a new kind with its own rules in ``surface_step`` is not taken by mistake).
-SAG_KINDS = (EvenAsphere, OddAsphere, Hybrid, TiltedPlane, Toroidal, QTypeAsphere)
+SAG_KINDS = (EvenAsphere, OddAsphere, Hybrid, TiltedPlane, Toroidal, QTypeAsphere, Biconic,
+             ZernikeSag)
 
 
 def supported(surface, *, reflects=False, obscured=None, apertures=()) -> bool:
