@@ -43,6 +43,8 @@ from .optics.catalog import register_catalog as register_catalog
 from .optics.coordinates import CoordinateBreak as CoordinateBreak
 from .optics.diffractive import Binary2 as Binary2
 from .optics.diffractive import Grating as Grating
+from .optics.freeform import Biconic as Biconic
+from .optics.freeform import ZernikeSag as ZernikeSag
 from .optics.lens import Lens as Lens
 from .optics.lens import Sensor as Sensor
 from .optics.materials import AbstractMaterial as AbstractMaterial

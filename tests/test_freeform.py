@@ -21,6 +21,7 @@ import numpy as np
 import pytest
 
 import jaxlens as jl
+from jaxlens.analysis import report
 from jaxlens.io import lensfile
 from jaxlens.optics import paraxial
 from jaxlens.optics.freeform import Biconic, ZernikeSag, fringe_to_nm, noll_to_nm
@@ -752,3 +753,14 @@ def test_json_refuses_bad_freeform_surfaces(surface, message):
     d["surfaces"][1] = {**surface, "thickness": 4.0}
     with pytest.raises(ValueError, match=message):
         lensfile.lens_from_dict(d, source="bad.json")
+
+
+def test_report_names_the_zemax_types_and_their_terms():
+    glass = jl.ModelGlass(1.5168, 64.17)
+    lens = jl.Lens((jl.Biconic(c=0.02, cx=0.03, kx=-0.5),
+                    jl.ZernikeSag(c=-0.02, zernike=jnp.array([0.0, 0.0, 0.0, 1e-3, 2e-4]),
+                                  norm_radius=5.0, ordering="fringe")),
+                   jnp.array([3.0, 45.0]), (glass, jl.Air()), epd=6.0)
+    rows = report._surface_table(lens)
+    assert "BICONICX" in rows[2] and "Rx=33.33 kx=-0.5" in rows[2]
+    assert "FZERNSAG" in rows[3] and "R=5 Z4=0.001 Z5=0.0002" in rows[3]

@@ -250,6 +250,9 @@ def test_a_paraxial_surface_is_refused_by_name():
                odd_y=jnp.array([0.0])), r"surface 1 is a Hybrid with odd x³, y³, … terms"),
     ("toroidal", r"surface 1 is a Toroidal; tolerance analysis perturbs the radius, conic "
                  r"and even aspheric terms of Standard, EvenAsphere and Hybrid surfaces"),
+    (jl.Biconic(c=0.02, cx=0.03), r"surface 1 is a Biconic; tolerance analysis perturbs"),
+    (jl.ZernikeSag(c=0.02, zernike=jnp.array([0.0, 0.0, 0.0, 1e-3]), norm_radius=5.0),
+     r"surface 1 is a ZernikeSag; tolerance analysis perturbs"),
 ])
 def test_a_surface_with_untoleranced_shape_numbers_is_refused(surface, match):
     """A toroid (its radius of rotation) and a hybrid's odd terms were accepted and left

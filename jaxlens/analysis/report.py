@@ -50,6 +50,7 @@ from ..io.zmx import configurations
 from ..optics import checks, paraxial
 from ..optics.coordinates import CoordinateBreak
 from ..optics.diffractive import Binary2, Grating
+from ..optics.freeform import Biconic, ZernikeSag
 from ..optics.lens import Lens
 from ..optics.materials import Air, ModelGlass, Tabulated
 from ..optics.paraxial_surface import ParaxialSurface
@@ -331,7 +332,7 @@ def _num(v: float | None, width: int = 12, prec: int = 6, missing: str = "failed
 _ZEMAX_TYPE = {Standard: "STANDARD", EvenAsphere: "EVENASPH", OddAsphere: "ODDASPHE",
                Hybrid: "HYBRID", Toroidal: "TOROIDAL", ParaxialSurface: "PARAXIAL",
                CoordinateBreak: "COORDBRK", TiltedPlane: "TILTSURF", Binary2: "BINARY_2",
-               QTypeAsphere: "QED_TYPE", Grating: "DGRATING"}
+               QTypeAsphere: "QED_TYPE", Grating: "DGRATING", Biconic: "BICONICX"}
 
 
 def _nonzero(prefix_values) -> str:
@@ -358,12 +359,19 @@ def _terms(s) -> str:
     if isinstance(s, Toroidal):  # coeffs on y², y⁴, …; the x radius of curvature
         out.append(_nonzero([("Rx", 1.0 / float(s.cx) if float(s.cx) else 0.0)]))
         out.append(_nonzero((f"Y{2 * (i + 1)}", v) for i, v in enumerate(np.asarray(s.coeffs))))
-    if isinstance(s, EvenAsphere | Hybrid | Binary2):
+    if isinstance(s, Biconic):  # PARM 1, 2: the x radius and conic
+        out.append(_nonzero([("Rx", 1.0 / float(s.cx) if float(s.cx) else 0.0),
+                             ("kx", s.kx)]))
+    if isinstance(s, EvenAsphere | Hybrid | Binary2 | ZernikeSag):
         out.append(_nonzero((f"A{2 * (i + 1)}", v) for i, v in enumerate(np.asarray(s.coeffs))))
     if isinstance(s, Binary2):  # order, normalisation radius, phase terms on ρ², ρ⁴, …
         out.append(f"M={float(s.order):.4g} R={float(s.norm_radius):.6g}")
         out.append(_nonzero((f"P{2 * (i + 1)}", v)
                             for i, v in enumerate(np.asarray(s.phase_coeffs))))
+    if isinstance(s, ZernikeSag):  # Zernike terms on the normalisation radius R
+        out.append(f"R={float(s.norm_radius):.6g} " + _nonzero(
+            (f"Z{i}", v) for i, v in enumerate(np.asarray(s.zernike), 1)))
+        out.append(_nonzero([("dx", s.decenter_x), ("dy", s.decenter_y)]))
     if isinstance(s, Hybrid):
         out.append(_nonzero((f"{ax}{2 * i + 3}", v) for ax, arr in (("X", s.odd_x), ("Y", s.odd_y))
                             for i, v in enumerate(np.asarray(arr))))
@@ -381,6 +389,8 @@ def _surface_table(lens: Lens) -> list[str]:
         c = float(s.c) if s is not None else 0.0
         r = math.inf if c == 0 else 1.0 / c
         typ = "STANDARD" if s is None else _ZEMAX_TYPE.get(type(s), type(s).__name__.upper())
+        if isinstance(s, ZernikeSag):
+            typ = "SZERNSAG" if s.ordering == "standard" else "FZERNSAG"
         sd = float(s.semi_diameter) if s is not None else math.inf
         k = float(s.k) if s is not None else 0.0
         asph = _terms(s) if s is not None else ""

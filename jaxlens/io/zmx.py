@@ -31,7 +31,12 @@ What is read and written:
       DGRATING`` (a ``Grating``, ``jaxlens.optics.diffractive``: CURV, CONI the base conic,
       PARM 1 = line density T in lines per µm whatever the lens unit, PARM 2 = the whole
       diffraction order M, positive toward +y; transmissive, or reflective with GLAS MIRROR;
-      a negative T, a fractional M, other PARMs or any XDAT refused with the line). The image
+      a negative T, a fractional M, other PARMs or any XDAT refused with the line); ``TYPE
+      BICONICX`` (a ``Biconic``, ``jaxlens.optics.freeform``: CURV, CONI the y–z section,
+      PARM 1 the x radius (0: flat in x), PARM 2 the x conic); ``TYPE SZERNSAG``/``FZERNSAG``
+      (a ``ZernikeSag``: an even asphere, PARM 1–8, plus Zernike Standard (Noll) or Fringe
+      terms, XDAT 1 = N, XDAT 2 = normalisation radius, XDAT 3… the coefficients in lens
+      units; PARM 0 the extrapolate flag, PARM 9, 10 the terms' decenter). The image
       surface may be STANDARD, EVENASPH, ODDASPHE or TILTSURF (a tilted image plane).
     * The hybrid surface (even asphere plus odd terms Σ b_j x^{2j+1} + d_j y^{2j+1}) is
       written as Zemax's extended polynomial, ``TYPE XPOLYNOM``: a conic plus Σ A_i E_i

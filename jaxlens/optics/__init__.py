@@ -8,6 +8,7 @@ curvature c = 1/R, a surface carries the medium after it (see ``lens``).
 from . import catalog as catalog
 from . import coordinates as coordinates
 from . import diffractive as diffractive
+from . import freeform as freeform
 from . import materials as materials
 from . import paraxial as paraxial
 from . import qtype as qtype
@@ -15,6 +16,8 @@ from . import surfaces as surfaces
 from .coordinates import CoordinateBreak as CoordinateBreak
 from .diffractive import Binary2 as Binary2
 from .diffractive import Grating as Grating
+from .freeform import Biconic as Biconic
+from .freeform import ZernikeSag as ZernikeSag
 from .lens import Lens as Lens
 from .lens import Sensor as Sensor
 from .qtype import QTypeAsphere as QTypeAsphere
