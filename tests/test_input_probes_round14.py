@@ -8,6 +8,7 @@ is now refused naming both lines. No real file in the corpus repeats one.
 """
 
 import os
+import re
 
 import numpy as np
 import pytest
@@ -187,3 +188,33 @@ def test_exported_e48r_is_zemax_catalog_data_and_its_glas_line_says_so(tmp_path)
     with open(SEED0_ZMX) as fh:
         glas = [ln.split() for ln in fh if ln.strip().startswith("GLAS E48R")]
     assert glas and all(float(g[4]) == pytest.approx(nd, abs=1e-5) for g in glas)
+
+
+# ----------------------------------------------------------------------- report CLI
+def _report(capsys, *args):
+    from jaxlens.__main__ import main
+
+    code = main(["report", COOKE_ZMX, *map(str, args)])
+    out, err = capsys.readouterr()
+    return code, out, err
+
+
+@pytest.mark.parametrize("wl", [("0.5875618", "587.5618"), ("0.5", "0.5")])
+def test_report_refuses_a_wavelength_given_twice(capsys, wl):
+    """0.5875618 and 587.5618 (nm) are one wavelength: it was reported twice and weighed
+    twice in the polychromatic RMS spot, without a word."""
+    code, out, err = _report(capsys, "--wavelengths", *wl)
+    assert code == 2 and out == ""
+    assert re.search(r"report: --wavelengths gives 0\.5\d* µm twice \(values above 100 are "
+                     r"read as nm\)", err), err
+
+
+@pytest.mark.parametrize("extra", [("--json",), ("--config", "1"), ("--fields", "5"),
+                                   ("--wavefront",)])
+def test_report_list_configs_refuses_options_it_would_ignore(capsys, extra):
+    """--list-configs --json printed the text listing: the --json was dropped silently."""
+    code, out, err = _report(capsys, "--list-configs", *extra)
+    assert code == 2 and out == ""
+    assert f"--list-configs lists the configurations and stops; {extra[0]} would be " \
+           f"ignored: leave it out" in err
+    assert _report(capsys, "--list-configs")[0] == 0

@@ -90,7 +90,8 @@ def set_media(op, lens) -> None:
 
         def _calculate_n(self, wavelength, **kwargs):
             w = np.asarray(wavelength, float)
-            flat = [table[id(self.m)].get(float(x)) or float(self.m.index(float(x))) for x in w.ravel()]
+            own = table[id(self.m)]
+            flat = [own.get(float(x)) or float(self.m.index(float(x))) for x in w.ravel()]
             return np.reshape(flat, w.shape)
 
         def _calculate_k(self, wavelength, **kwargs):
