@@ -140,16 +140,18 @@ def optiland_numbers(path: str, wavelengths, primary, fields, lens=None) -> dict
             ref = efl * math.tan(math.radians(float(f)))
             dist.append(0.0 if ref == 0 else 100.0 * (y - ref) / ref)
         rms = [[0.0] * len(wavelengths) for _ in fields]
+        lost = 0  # rays of the grid optiland loses (all fields and wavelengths)
         for k, w in enumerate(wavelengths):
             for i, f in enumerate(fields):
                 hy = float(f) / fmax
                 r = op.trace_generic(0.0, hy, PUPIL[:, 0], PUPIL[:, 1], w)
                 x, yy = np.asarray(r.x).ravel(), np.asarray(r.y).ravel()
                 ok = (np.asarray(r.i).ravel() > 0) & np.isfinite(x) & np.isfinite(yy)
+                lost += int(len(PUPIL) - ok.sum())
                 cx, cy = x[ok].mean(), yy[ok].mean()
                 rms[i][k] = 1e3 * math.sqrt(np.mean((x[ok] - cx) ** 2 + (yy[ok] - cy) ** 2))
         out.update(chief_y=chief, distortion=dist, rms_um=rms, index_d=index_d,
-                   rays_lost=int(len(PUPIL) - ok.sum()))
+                   rays_lost=lost)
     return out
 
 
