@@ -218,3 +218,40 @@ def test_report_list_configs_refuses_options_it_would_ignore(capsys, extra):
     assert f"--list-configs lists the configurations and stops; {extra[0]} would be " \
            f"ignored: leave it out" in err
     assert _report(capsys, "--list-configs")[0] == 0
+
+
+# ------------------------------------------------------------ side AGF catalogs on save
+def _singlet(glass):
+    import jax.numpy as jnp
+
+    return jl.Lens(surfaces=(jl.Sphere(1 / 30.0), jl.Sphere(-1 / 45.0)),
+                   thickness=jnp.array([4.0, 45.0]),
+                   materials=(jl.get_material(glass), jl.Air()), epd=8.0,
+                   fields=jnp.array([0.0, 5.0]))
+
+
+def test_save_zmx_never_replaces_a_catalog_it_did_not_write(tmp_path):
+    """A PLASTICS.AGF of the user's own beside the file was replaced by a one-glass catalog
+    without a word; now the save is refused before anything is written."""
+    own = tmp_path / "PLASTICS.AGF"
+    own.write_text("CC my catalog\nNM MYGLASS 1 500600 1.5 60 0 0 0\n")
+    with pytest.raises(ValueError, match=r"save_zmx: .*PLASTICS\.AGF exists and was not "
+                                         r"written by jaxlens"):
+        jl.save(_singlet("OKP4"), tmp_path / "a.zmx")
+    assert own.read_text() == "CC my catalog\nNM MYGLASS 1 500600 1.5 60 0 0 0\n"
+    assert not (tmp_path / "a.zmx").exists()
+
+
+def test_lens_files_of_one_folder_share_its_side_catalog(tmp_path):
+    """b.zmx (OKP4HT) saved after a.zmx (OKP4) rewrote PLASTICS.AGF with OKP4HT alone, so
+    a.zmx no longer found its glass in its folder; the catalog now keeps both."""
+    written = jl.save(_singlet("OKP4"), tmp_path / "a.zmx")
+    assert [os.path.basename(w) for w in written[1:]] == ["PLASTICS.AGF"]
+    jl.save(_singlet("OKP4HT"), tmp_path / "b.zmx")
+    jl.save(_singlet("OKP4"), tmp_path / "a.zmx")  # saved again: the same record, kept once
+    cat = jl.load_agf(tmp_path / "PLASTICS.AGF")
+    assert sorted(cat) == ["OKP4", "OKP4HT"]
+    for name, glass in (("a.zmx", "OKP4"), ("b.zmx", "OKP4HT")):
+        lens = jl.load(tmp_path / name)
+        assert float(lens.materials[0].index(0.5875618)) == pytest.approx(
+            float(jl.get_material(glass).index(0.5875618)), abs=1e-12)
