@@ -209,8 +209,8 @@ def test_report_refuses_a_wavelength_given_twice(capsys, wl):
                      r"read as nm\)", err), err
 
 
-@pytest.mark.parametrize("extra", [("--json",), ("--config", "1"), ("--fields", "5"),
-                                   ("--wavefront",)])
+@pytest.mark.parametrize("extra", [("--json",), ("--config", "1"), ("--config", "0"),
+                                   ("--fields", "5"), ("--wavefront",)])
 def test_report_list_configs_refuses_options_it_would_ignore(capsys, extra):
     """--list-configs --json printed the text listing: the --json was dropped silently."""
     code, out, err = _report(capsys, "--list-configs", *extra)

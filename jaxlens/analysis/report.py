@@ -687,7 +687,8 @@ def run(args: argparse.Namespace) -> int:
             ignored = [o for o, v in (("--json", args.json), ("--fields", args.fields),
                                       ("--wavelengths", args.wavelengths),
                                       ("--wavefront", args.wavefront), ("--plot", args.plot),
-                                      ("--config", args.config)) if v not in (None, False)]
+                                      ("--config", args.config))
+                       if v is not None and v is not False]  # --config 0 too
             if ignored:  # the listing is text about every configuration: they would do nothing
                 raise ValueError(f"--list-configs lists the configurations and stops; "
                                  f"{', '.join(ignored)} would be ignored: leave "
