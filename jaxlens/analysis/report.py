@@ -160,6 +160,11 @@ def with_fields_and_wavelengths(lens: Lens, fields=None, wavelengths=None) -> Le
         if w.size == 0 or np.any(w <= 0):
             raise ValueError(f"report: --wavelengths must be numbers in (0, inf) µm (values above "
                              f"100 are read as nm), got {checks.fmt(wavelengths)}")
+        ws = np.sort(w)
+        same = np.diff(ws) <= 1e-12 * ws[1:]  # 0.5876 587.6: one wavelength weighed twice
+        if np.any(same):
+            raise ValueError(f"report: --wavelengths gives {ws[1:][same][0]:g} µm twice (values "
+                             f"above 100 are read as nm), got {checks.fmt(wavelengths)}")
         checks.wavelengths(lens, w, "report", "--wavelengths")
         checks.material_indices(lens, w, "report", "--wavelengths")
         primary = int(np.argmin(np.abs(w - float(lens.primary_wavelength))))
@@ -689,6 +694,15 @@ def run(args: argparse.Namespace) -> int:
         if args.plot is not None and not args.plot.strip():
             raise ValueError("--plot needs a folder name, got an empty one")
         if args.list_configs:
+            ignored = [o for o, v in (("--json", args.json), ("--fields", args.fields),
+                                      ("--wavelengths", args.wavelengths),
+                                      ("--wavefront", args.wavefront), ("--plot", args.plot),
+                                      ("--config", args.config))
+                       if v is not None and v is not False]  # --config 0 too
+            if ignored:  # the listing is text about every configuration: they would do nothing
+                raise ValueError(f"--list-configs lists the configurations and stops; "
+                                 f"{', '.join(ignored)} would be ignored: leave "
+                                 f"{'it' if len(ignored) == 1 else 'them'} out")
             return _list_configs(args.lens)
         paths = figure_paths(args.lens, args.plot, args.overwrite) if args.plot else None
         # strict by default: a report must not describe a truncated file, nor rays that a

@@ -132,9 +132,26 @@ class ZmxFile:
     zemax: bool = False  # written by Zemax (a VERS line): every block is complete
 
 
+SINGLE_SURFACE_KEYS = frozenset("TYPE CURV DISZ CONI GLAS DIAM CLAP FLAP OBSC OBDC".split())
+"""Keywords a SURF block holds once (PARM and XDAT: once per index). Zemax writes each once;
+a second line (an edit or a merge gone wrong) replaced the first without a word."""
+APERTURE_KEYS = frozenset(("ENPD", "FNUM", "FLOA", "OBNA"))
+SINGLE_TOP_KEYS = frozenset("UNIT FTYP XFLN YFLN XFLD YFLD WAVL PWAV".split())
+
+
+def _once(seen: dict, what: str, ln: ZmxLine, where: str) -> None:
+    """Refuse ``what`` given a second time (``seen`` maps it to its first line)."""
+    first = seen.setdefault(what, ln)
+    if first is not ln:
+        raise ln.error(f"{what} given twice{where} (first on line {first.number}: "
+                       f"{first.text.strip()!r}); a .zmx file gives it once")
+
+
 def parse(text: str, path: str) -> ZmxFile:
     f = ZmxFile(path)
     cur: ZmxSurface | None = None
+    seen_top: dict = {}
+    seen_surf: dict = {}
     for number, raw in enumerate(text.splitlines(), start=1):
         ln = ZmxLine(path, number, raw)
         if not ln.tokens:
@@ -148,12 +165,23 @@ def parse(text: str, path: str) -> ZmxFile:
                 raise ln.error(f"surfaces must be numbered 0, 1, 2, …; expected {len(f.surfs)}")
             cur = ZmxSurface(n, ln)
             f.surfs.append(cur)
+            seen_surf = {}
         elif key in SURFACE_KEYS:
             if cur is None:
                 raise ln.error(f"{key} before the first SURF")
-            surface_line(cur, key, ln)
+            surface_line(cur, key, ln)  # a bad value is named before a repeat
+            if key in SINGLE_SURFACE_KEYS:
+                _once(seen_surf, key, ln, f" in surface {cur.number}")
+            elif key in ("PARM", "XDAT"):
+                _once(seen_surf, f"{key} {ln.tokens[1]}", ln, f" in surface {cur.number}")
         elif key in TOP_KEYS:
             top_line(f, key, ln, raw)
+            if key in APERTURE_KEYS:  # one system aperture: ENPD, FNUM, FLOA or OBNA
+                _once(seen_top, "the system aperture (ENPD, FNUM, FLOA or OBNA)", ln, "")
+            elif key in SINGLE_TOP_KEYS:
+                _once(seen_top, key, ln, "")
+            elif key == "WAVM":
+                _once(seen_top, f"WAVM {ln.tokens[1]}", ln, "")
         elif key == "MNUM":
             f.mnum = ln
         elif key in CONFIG_OPERANDS and f.mnum is not None:
@@ -178,6 +206,8 @@ def surface_line(s: ZmxSurface, key: str, ln: ZmxLine) -> None:
         s.curv, s.curv_line = ln.float(1, "curvature"), ln
     elif key == "DISZ":
         s.disz, s.disz_line = ln.float(1, "thickness", allow_inf=True), ln
+        if math.isinf(s.disz) and s.number > 0:
+            raise ln.error("only the object surface may have an infinite thickness")
     elif key == "CONI":
         s.coni = ln.float(1, "conic constant")
     elif key in ("PARM", "XDAT"):

@@ -222,7 +222,7 @@ class _GlassWriter:
         return _nd_vd(m)
 
     def write_agf(self, folder: str, wavelengths: np.ndarray) -> list[str]:
-        written = []
+        written, texts = [], []
         lo = min(0.3, float(np.min(wavelengths)))
         hi = max(2.5, float(np.max(wavelengths)))
         for cat, entries in self.agf.items():
@@ -253,10 +253,50 @@ class _GlassWriter:
                 if rng is not None:
                     lines.append(f"LD {float(rng[0])!r} {float(rng[1])!r}")
             path = os.path.join(folder, f"{cat}.AGF")
+            texts.append((path, _merged(path, lines, shared=cat != self.own)))
+        for path, lines in texts:  # every catalog checked before any is written
             with open(path, "w", encoding="utf-8", newline="\r\n") as fh:
                 fh.write("\n".join(lines) + "\n")
             written.append(path)
         return written
+
+
+def _records(lines: list[str]) -> dict[str, list[str]]:
+    """The glass records of an AGF catalog's lines: upper-case name -> its lines (NM …)."""
+    out: dict[str, list[str]] = {}
+    rec = None
+    for ln in lines:
+        if ln.startswith("NM "):
+            rec = out.setdefault(ln.split()[1].upper(), [])
+        if rec is not None:
+            rec.append(ln.rstrip())
+    return out
+
+
+def _merged(path: str, lines: list[str], *, shared: bool) -> list[str]:
+    """The lines to write at ``path`` for a catalog of ``lines``. A file already there must be
+    one jaxlens wrote (a catalog of the user's own is never replaced). A catalog that several
+    lens files share (named after a glass's catalog, not after the lens) keeps the glasses
+    other lens files of the folder use; a glass of the same name must hold the same data."""
+    if not os.path.exists(path):
+        return lines
+    with open(path, encoding="utf-8", errors="replace") as fh:
+        old = fh.read().splitlines()
+    mark = lines[0]  # "CC <catalog>: glasses written by jaxlens"
+    if not old or old[0].rstrip() != mark:
+        raise ValueError(f"save_zmx: {path} exists and was not written by jaxlens; writing this "
+                         f"lens's glasses there would replace that catalog. Save the lens into "
+                         f"another folder, or move the file")
+    if not shared:  # the lens's own catalog: replaced, as the lens file is
+        return lines
+    before, new = _records(old[1:]), _records(lines[1:])
+    for name, rec in new.items():
+        if name in before and before[name] != rec:
+            raise ValueError(f"save_zmx: {path} already holds glass {name} with other data (for "
+                             f"another lens file in that folder); replacing it would change that "
+                             f"file's glass. Save the lens into another folder")
+    keep = [ln for name, rec in before.items() if name not in new for ln in rec]
+    return lines[:1] + keep + lines[1:]
 
 
 def surface_lines(s: AbstractSurface, *, image: bool = False) -> list[str]:
