@@ -354,7 +354,9 @@ def test_json_misspelled_keys_are_refused_not_ignored(cooke_json, tmp_path):
     d["surfaces"][1]["comment"] = "front"
     d["surfaces"][1]["semi_diameter_source"] = "real rays"
     d["surfaces"][1]["nd"] = 1.5168  # not a typo of "n"
-    d["surfaces"][1]["conic_k"] = 0.0  # two letters off "conic", but longer than it
+    # Longer than "conic" and 3 edits from "conic_x" (a biconic key since the freeform kinds;
+    # "conic_k" is now 1 from it and refused as a near miss).
+    d["surfaces"][1]["conic_src"] = 0.0
     assert _load(d, tmp_path).num_surfaces == 6
 
 

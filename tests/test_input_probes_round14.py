@@ -255,3 +255,57 @@ def test_lens_files_of_one_folder_share_its_side_catalog(tmp_path):
         lens = jl.load(tmp_path / name)
         assert float(lens.materials[0].index(0.5875618)) == pytest.approx(
             float(jl.get_material(glass).index(0.5875618)), abs=1e-12)
+
+
+# ------------------------------------------------------- JSON lens files (lead, round 14)
+
+
+def _cooke_json():
+    import json
+
+    path = os.path.join(os.path.dirname(jl.__file__), "data", "lenses", "cooke_triplet.json")
+    with open(path) as fh:
+        return json.load(fh)
+
+
+def _load_json(tmp_path, d):
+    import json
+
+    p = tmp_path / "l.json"
+    p.write_text(json.dumps(d))
+    return jl.load(p)
+
+
+def test_a_null_curvature_is_refused_not_read_flat(tmp_path):
+    # "curvature": null read as absent: the Cooke triplet's EFL became -935.5 mm.
+    for key in ("curvature", "radius"):
+        d = _cooke_json()
+        d["surfaces"][1].pop("curvature", None)
+        d["surfaces"][1].pop("radius", None)
+        d["surfaces"][1][key] = None
+        with pytest.raises(ValueError, match=rf"surface 1: {key} is null; give a number"):
+            _load_json(tmp_path, d)
+
+
+def test_an_aperture_given_twice_must_agree(tmp_path):
+    d = _cooke_json()
+    d.pop("epd", None)
+    d["aperture"] = {"epd": 10.0}
+    efl = float(jl.efl(_load_json(tmp_path, d)))
+    d["aperture"] = {"epd": 10.0, "fnum": efl / 10.0}  # the same pupil: accepted
+    assert float(_load_json(tmp_path, d).epd) == 10.0
+    d["aperture"] = {"epd": 10.0, "fnum": 4.0}  # fnum was ignored without a word
+    with pytest.raises(ValueError, match=r"aperture\.epd 10 and aperture\.fnum 4 disagree: they "
+                                         r"give entrance pupil diameters of 10 and 12\.5"):
+        _load_json(tmp_path, d)
+
+
+def test_a_declared_wavelength_unit_must_be_the_keys(tmp_path):
+    d = _cooke_json()
+    d["wavelengths_um"] = [w / 1000.0 for w in d.pop("wavelengths_nm")]
+    d["units"] = {"length": "mm", "wavelength": "nm"}
+    with pytest.raises(ValueError, match=r"units\.wavelength is 'nm', but the wavelengths are "
+                                         r"given as 'wavelengths_um', which is read in µm"):
+        _load_json(tmp_path, d)
+    d["units"] = {"length": "mm", "wavelength": "um"}
+    _load_json(tmp_path, d)

@@ -104,6 +104,10 @@ def curvature(d: dict, where: str, suffix: str = "") -> float:
     """The curvature from ``curvature`` or ``radius`` (``curvature_x``/``radius_x`` with
     ``suffix="_x"``, a biconic's x section)."""
     ck, rk = f"curvature{suffix}", f"radius{suffix}"
+    for key in (ck, rk):
+        if key in d and d[key] is None:  # null was read as absent: a flat surface
+            raise ValueError(f"{where}: {key} is null; give a number (a flat surface: "
+                             f"{ck} 0 or {rk} \"inf\")")
     c = d.get(ck)
     r = d.get(rk)
     if c is not None:

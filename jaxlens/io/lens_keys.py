@@ -145,3 +145,20 @@ def check_keys(d: dict, source: str) -> None:
                              f"{v!r}")
     if "units" in d:
         _units(d["units"], source)
+        _wavelength_unit(d, source)
+
+
+def _wavelength_unit(d: dict, source: str) -> None:
+    """A declared wavelength unit must be the unit of the file's wavelength key (µm for
+    ``wavelengths_um`` and ``wavelengths``, nm for ``wavelengths_nm``): the key decides how
+    the numbers are read, so a disagreeing ``units.wavelength`` was ignored."""
+    u = d["units"]
+    key = next((k for k in ("wavelengths_um", "wavelengths_nm", "wavelengths") if k in d), None)
+    if not isinstance(u, dict) or not isinstance(u.get("wavelength"), str) or key is None:
+        return
+    declared = "nm" if u["wavelength"].strip().lower() == "nm" else "µm"
+    implied = "nm" if key.endswith("_nm") else "µm"
+    if declared != implied:
+        raise ValueError(f"{source}: units.wavelength is {u['wavelength']!r}, but the "
+                         f"wavelengths are given as {key!r}, which is read in {implied}; "
+                         f"make them agree (use wavelengths_{'nm' if declared == 'nm' else 'um'})")

@@ -302,23 +302,41 @@ def _aperture_of(d: dict, where: str) -> dict:
         "fnum": ("fnum", "FNUM", "f_number"),
         "stop_semi_diameter": ("stop_semi_diameter",),
     }
+    given = {}
     for top in ("epd", "EPD"):
         if top in d:
             v = _num(d[top], f"{where}: {top}")
             if not v > 0:
                 raise ValueError(f"{where}: {top} (entrance pupil diameter) must be > 0 mm, "
                                  f"got {v}")
-            return {"epd": v}
+            given.setdefault("epd", (top, v))
     for key, names in keys.items():  # EPD first: the reference cases give it besides others
         for n in names:
             if n in ap:
                 v = _num(ap[n], f"{where}: aperture.{n}")
                 if not v > 0:
                     raise ValueError(f"{where}: aperture.{n} must be > 0, got {v}")
-                return {key: v}
-    raise ValueError(
-        f"{where}: no aperture; give aperture.epd, aperture.fnum or aperture.stop_semi_diameter"
-    )
+                given.setdefault(key, (f"aperture.{n}", v))
+    if not given:
+        raise ValueError(f"{where}: no aperture; give aperture.epd, aperture.fnum or "
+                         f"aperture.stop_semi_diameter")
+    return given
+
+
+def _one_aperture(lens: Lens, given: dict, where: str) -> Lens:
+    """The lens with the first of ``given`` (epd, then fnum, then stop_semi_diameter) as its
+    aperture; any other given must agree with it (to 1e-6), or one of them would be ignored
+    without a word."""
+    first, *others = given
+    lens = apply_aperture(lens, **{first: given[first][1]})
+    for key in others:
+        epd = float(apply_aperture(lens, **{key: given[key][1]}).epd)
+        if not math.isclose(epd, float(lens.epd), rel_tol=1e-6):
+            (a, va), (b, vb) = given[first], given[key]
+            raise ValueError(f"{where}: {a} {va:g} and {b} {vb:g} disagree: they give "
+                             f"entrance pupil diameters of {float(lens.epd):.6g} and {epd:.6g} "
+                             f"mm; give one of them")
+    return lens
 
 
 def _wavelengths_of(d: dict, where: str) -> tuple[np.ndarray, int]:
@@ -533,7 +551,7 @@ def lens_from_dict(d: dict, *, source: str = "<lens>") -> Lens:
         thickness=_arr(np.array(thick)),
         materials=tuple(mats),
         stop=stop,
-        epd=_arr(aperture.get("epd", 1.0)),
+        epd=_arr(aperture["epd"][1] if "epd" in aperture else 1.0),
         fields=_arr(fields),
         wavelengths=_arr(wl),
         primary=primary,
@@ -555,9 +573,9 @@ def lens_from_dict(d: dict, *, source: str = "<lens>") -> Lens:
     if img is not None and (img.get("material") is not None or img.get("n") is not None):
         _warn_image_medium(img, mats[-1], wl, primary, source)
     try:
-        return apply_aperture(lens, **aperture)
+        return _one_aperture(lens, aperture, source)
     except ValueError as e:
-        raise ValueError(f"{source}: {e}") from None
+        raise ValueError(str(e) if str(e).startswith(source) else f"{source}: {e}") from None
 
 
 def _warn_image_medium(img: dict, image_space, wl, primary: int, source: str) -> None:
