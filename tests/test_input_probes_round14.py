@@ -309,3 +309,18 @@ def test_a_declared_wavelength_unit_must_be_the_keys(tmp_path):
         _load_json(tmp_path, d)
     d["units"] = {"length": "mm", "wavelength": "um"}
     _load_json(tmp_path, d)
+
+
+@pytest.mark.parametrize(("argv", "msg"), [
+    (["--seed-list", "1,2", "--seeds", "3"], "--seeds would be ignored with --seed-list"),
+    (["--seed-list", "1,2", "--first-seed", "0"],
+     "--first-seed would be ignored with --seed-list"),
+    (["--smoke", "--seeds", "3"], "--seeds would be ignored with --smoke"),
+])
+def test_an_overridden_option_given_at_its_default_value_is_refused(argv, msg, tmp_path, capsys):
+    # Compared with the defaults, "--seeds 3" (the default) looked not given and was ignored.
+    from jaxlens.experiments import classical
+
+    assert classical.main([*argv, "--out", str(tmp_path / "o")]) == 2
+    assert msg in capsys.readouterr().err
+    assert not (tmp_path / "o").exists()

@@ -54,6 +54,7 @@ from jaxlens.experiments.runfolder import (
     UsageError,
     check_writable,
     fail,
+    given_options,
 )
 from jaxlens.optics import checks
 
@@ -205,7 +206,7 @@ def build_parser() -> argparse.ArgumentParser:
     return p
 
 
-def check_args(args) -> None:
+def check_args(args, given=None) -> None:
     """Refuse any option outside its range (ValueError naming option, value, range, unit)."""
     from jaxlens.design.materials import CatalogRegion
     from jaxlens.design.spec import MAX_ASPHERE_TERMS
@@ -260,7 +261,7 @@ def check_args(args) -> None:
         CatalogRegion.of(_catalogs(args))
     except ValueError as e:
         raise ValueError(f"{w}: --material-catalogs {args.material_catalogs!r}: {e}") from e
-    _no_ignored_options(args, w)
+    _no_ignored_options(args, w, given)
     if args.columns is not None:
         names = [c for c, _ in ABLATION_COLUMNS]
         bad = [c.strip() for c in args.columns.split(",") if c.strip() not in names]
@@ -268,9 +269,11 @@ def check_args(args) -> None:
             raise ValueError(f"{w}: --columns takes names from {names}, got {args.columns!r}")
 
 
-def _no_ignored_options(args, w: str) -> None:
-    """Refuse an option given with a value that another option overrides: it would be
-    ignored without a word."""
+def _no_ignored_options(args, w: str, given=None) -> None:
+    """Refuse an option that another option overrides: it would be ignored without a word.
+    ``given``: the options the command line gives (``runfolder.given_options``); without
+    it, those whose values differ from the defaults (an option given at its default value,
+    ``--seeds 3``, then passes)."""
     default = vars(build_parser().parse_args([]))
     rules = (
         (args.seed_list is not None, "--seed-list", ("seeds", "first_seed")),
@@ -280,10 +283,11 @@ def _no_ignored_options(args, w: str) -> None:
         (not args.ablation, "no --ablation", ("columns", "ablation_seeds", "ablation_out")),
     )
     for active, why, names in rules:
-        given = ["--" + n.replace("_", "-") for n in names if getattr(args, n) != default[n]]
-        if active and given:
-            raise ValueError(f"{w}: {', '.join(given)} would be ignored with {why}; leave "
-                             f"{'it' if len(given) == 1 else 'them'} out")
+        ignored = ["--" + n.replace("_", "-") for n in names
+                   if (n in given if given is not None else getattr(args, n) != default[n])]
+        if active and ignored:
+            raise ValueError(f"{w}: {', '.join(ignored)} would be ignored with {why}; leave "
+                             f"{'it' if len(ignored) == 1 else 'them'} out")
 
 
 def spec_from_args(args):
@@ -757,7 +761,7 @@ def main(argv: list[str] | None = None) -> int:
     # Validate every option, the spec and the output folder before anything heavy. The
     # device count is set once the options are known and before any array exists.
     try:
-        check_args(args)
+        check_args(args, given_options(build_parser, argv))
         _ensure_devices(args.devices)
         spec_from_args(args)
         if args.ablation:

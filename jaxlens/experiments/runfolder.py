@@ -41,6 +41,15 @@ class OneLineParser(argparse.ArgumentParser):
         sys.exit(2)
 
 
+def given_options(build_parser, argv) -> frozenset[str]:
+    """The option names (dests) that ``argv`` gives, whatever their values: an option given
+    at its default value (``--seeds 3``) is given too, which comparing values misses."""
+    unset = object()  # not a string: argparse would run a string default through ``type``
+    p = build_parser()
+    p.set_defaults(**dict.fromkeys(vars(p.parse_args([])), unset))
+    return frozenset(k for k, v in vars(p.parse_args(argv)).items() if v is not unset)
+
+
 def fail(prog: str, error: Exception) -> int:
     """Print one line for a refused option and return exit status 2."""
     print(f"{prog}: error: {' '.join(str(error).split())}", file=sys.stderr)
