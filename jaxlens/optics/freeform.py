@@ -70,19 +70,13 @@ import numpy as np
 from jaxtyping import Array, Float
 
 from . import checks
-from .surfaces import AbstractSurface, number_field
+from .surfaces import AbstractSurface, guarded_sqrt, number_field
 
 ZERNIKE_ORDERINGS = ("standard", "fringe")
 """The ``ZernikeSag`` orderings: Zemax Standard (Noll, normalised) and Fringe (unnormalised)."""
 
 MAX_ZERNIKE_TERMS = {"standard": 231, "fringe": 37}
 """The most Zernike terms of each ordering (Standard: radial orders 0…20; Fringe: Zemax's 37)."""
-
-
-def _root(arg):
-    """(sqrt(arg) where arg > 0 else 0, arg > 0): finite gradients everywhere ("double where")."""
-    ok = arg > 0
-    return jnp.where(ok, jnp.sqrt(jnp.where(ok, arg, 1.0)), 0.0), ok
 
 
 # ------------------------------------------------------------------------------ biconic
@@ -154,7 +148,7 @@ class Biconic(AbstractSurface):
         """Sag and (dz/dx, dz/dy), finite everywhere (zero gradient outside the domain)."""
         px = (1.0 + self.kx) * self.cx**2
         py = (1.0 + self.k) * self.c**2
-        root, inside = _root(1.0 - px * x * x - py * y * y)
+        root, inside = guarded_sqrt(1.0 - px * x * x - py * y * y)
         den = 1.0 + root
         z = (self.cx * x * x + self.c * y * y) / den
         # z·den = B, d(root) = −(dA)/(2 root): dz/dx = (2 cx x + z px x/root)/den.
@@ -394,7 +388,7 @@ class ZernikeSag(AbstractSurface):
         """Sag and (dz/dx, dz/dy), finite everywhere (zero gradient outside the domain)."""
         r2 = x * x + y * y
         z, inside = self.conic_sag(r2)
-        root, _ = _root(1.0 - (1.0 + self.k) * self.c**2 * r2)
+        root, _ = guarded_sqrt(1.0 - (1.0 + self.k) * self.c**2 * r2)
         dr_over_r = self.c / jnp.where(inside, root, 1.0)  # (dz/dr)/r of the conic
         a = self.coeffs
         if a.shape[0]:

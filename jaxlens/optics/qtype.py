@@ -61,16 +61,10 @@ import jax.numpy as jnp
 from jaxtyping import Array, Float
 
 from . import checks
-from .surfaces import AbstractSurface, number_field
+from .surfaces import AbstractSurface, guarded_sqrt, number_field
 
 QTYPES = ("bfs", "con")
 """The kinds of ``QTypeAsphere``: Forbes's Q-bfs and Q-con polynomials."""
-
-
-def _guarded_sqrt(x):
-    """(sqrt(x) where x > 0 else 0, x > 0): finite gradients everywhere ("double where")."""
-    ok = x > 0
-    return jnp.where(ok, jnp.sqrt(jnp.where(ok, x, 1.0)), 0.0), ok
 
 
 def bfs_constants(n: int) -> tuple[list[float], list[float], list[float]]:
@@ -236,7 +230,7 @@ class QTypeAsphere(AbstractSurface):
         """Sag and (dz/dx, dz/dy), finite at r = 0 (zero gradient outside the domain)."""
         r2 = x * x + y * y
         z, inside = self.conic_sag(r2)
-        root, _ = _guarded_sqrt(1.0 - (1.0 + self.k) * self.c**2 * r2)
+        root, _ = guarded_sqrt(1.0 - (1.0 + self.k) * self.c**2 * r2)
         dr_over_r = self.c / jnp.where(inside, root, 1.0)  # (dz/dr)/r of the conic
         inv_n2 = 1.0 / (self.norm_radius * self.norm_radius)
         u2 = r2 * inv_n2

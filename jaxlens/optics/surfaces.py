@@ -37,10 +37,15 @@ from jaxtyping import Array, Float
 from . import checks
 
 
-def _safe_sqrt(x):
-    """sqrt with a finite gradient where x <= 0 (the "double where" guard)."""
+def guarded_sqrt(x):
+    """(sqrt(x) where x > 0 else 0, x > 0): finite gradients everywhere ("double where")."""
     ok = x > 0
-    return jnp.where(ok, jnp.sqrt(jnp.where(ok, x, 1.0)), 0.0)
+    return jnp.where(ok, jnp.sqrt(jnp.where(ok, x, 1.0)), 0.0), ok
+
+
+def _safe_sqrt(x):
+    """sqrt with a finite gradient where x <= 0."""
+    return guarded_sqrt(x)[0]
 
 
 class AbstractSurface(eqx.Module):

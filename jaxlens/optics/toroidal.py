@@ -29,13 +29,7 @@ from __future__ import annotations
 import jax.numpy as jnp
 from jaxtyping import Array, Float
 
-from .surfaces import AbstractSurface, number_field
-
-
-def _guarded_sqrt(x):
-    """(sqrt(x) where x > 0 else 0, x > 0): finite gradients everywhere ("double where")."""
-    ok = x > 0
-    return jnp.where(ok, jnp.sqrt(jnp.where(ok, x, 1.0)), 0.0), ok
+from .surfaces import AbstractSurface, guarded_sqrt, number_field
 
 
 class Toroidal(AbstractSurface):
@@ -83,7 +77,7 @@ class Toroidal(AbstractSurface):
         y2 = y * y
         z, inside = self.conic_sag(y2)
         arg = 1.0 - (1.0 + self.k) * self.c**2 * y2
-        root, _ = _guarded_sqrt(arg)
+        root, _ = guarded_sqrt(arg)
         dz = self.c * y / jnp.where(inside, root, 1.0)
         a = self.coeffs
         if a.shape[0]:
@@ -104,7 +98,7 @@ class Toroidal(AbstractSurface):
     def _sag_parts(self, x, y):
         zy, dzy, inside = self._profile(y)
         w = 1.0 - self.cx * zy
-        root, ok = _guarded_sqrt(w * w - (self.cx * x) ** 2)
+        root, ok = guarded_sqrt(w * w - (self.cx * x) ** 2)
         inside = inside & ok & (w > 0)
         den = jnp.where(inside, w + root, 1.0)
         z = zy + self.cx * x * x / den
