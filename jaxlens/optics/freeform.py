@@ -387,9 +387,7 @@ class ZernikeSag(AbstractSurface):
     def sag_and_grad(self, x, y):
         """Sag and (dz/dx, dz/dy), finite everywhere (zero gradient outside the domain)."""
         r2 = x * x + y * y
-        z, inside = self.conic_sag(r2)
-        root, _ = guarded_sqrt(1.0 - (1.0 + self.k) * self.c**2 * r2)
-        dr_over_r = self.c / jnp.where(inside, root, 1.0)  # (dz/dr)/r of the conic
+        z, dr_over_r, inside = self.conic_sag_and_slope(r2)
         a = self.coeffs
         if a.shape[0]:
             z = z + r2 * jnp.polyval(a[::-1], r2)

@@ -61,7 +61,7 @@ import jax.numpy as jnp
 from jaxtyping import Array, Float
 
 from . import checks
-from .surfaces import AbstractSurface, guarded_sqrt, number_field
+from .surfaces import AbstractSurface, number_field
 
 QTYPES = ("bfs", "con")
 """The kinds of ``QTypeAsphere``: Forbes's Q-bfs and Q-con polynomials."""
@@ -229,9 +229,7 @@ class QTypeAsphere(AbstractSurface):
     def sag_and_grad(self, x, y):
         """Sag and (dz/dx, dz/dy), finite at r = 0 (zero gradient outside the domain)."""
         r2 = x * x + y * y
-        z, inside = self.conic_sag(r2)
-        root, _ = guarded_sqrt(1.0 - (1.0 + self.k) * self.c**2 * r2)
-        dr_over_r = self.c / jnp.where(inside, root, 1.0)  # (dz/dr)/r of the conic
+        z, dr_over_r, inside = self.conic_sag_and_slope(r2)
         inv_n2 = 1.0 / (self.norm_radius * self.norm_radius)
         u2 = r2 * inv_n2
         a = self.coeffs

@@ -110,12 +110,16 @@ class AbstractSurface(eqx.Module):
                 f"flatter surface)")
 
     # --- geometry -----------------------------------------------------------------
+    def conic_sag_and_slope(self, r2):
+        """The base conic's sag, its (dz/dr)/r = c/sqrt(1 − (1+k)c²r²), and whether r² lies
+        inside its domain; both finite (with finite gradients) outside it."""
+        root, inside = guarded_sqrt(1.0 - (1.0 + self.k) * self.c**2 * r2)
+        return self.c * r2 / (1.0 + root), self.c / jnp.where(inside, root, 1.0), inside
+
     def conic_sag(self, r2):
         """Sag of the base conic, and whether r² lies inside its domain."""
-        arg = 1.0 - (1.0 + self.k) * self.c**2 * r2
-        inside = arg > 0
-        root = _safe_sqrt(arg)
-        return self.c * r2 / (1.0 + root), inside
+        z, _, inside = self.conic_sag_and_slope(r2)
+        return z, inside
 
     def sag(self, x, y):
         """Sag z(x, y) in mm; returns (sag, inside_domain)."""
@@ -136,12 +140,7 @@ class AbstractSurface(eqx.Module):
     def sag_and_grad(self, x, y):
         """Sag and its partial derivatives (dz/dx, dz/dy), finite at r = 0 and c = 0."""
         r2 = x * x + y * y
-        arg = 1.0 - (1.0 + self.k) * self.c**2 * r2
-        inside = arg > 0
-        root = _safe_sqrt(arg)
-        z = self.c * r2 / (1.0 + root)
-        # dz/dr / r for the conic: c / sqrt(arg); guarded outside the domain.
-        dr_over_r = self.c / jnp.where(inside, root, 1.0)
+        z, dr_over_r, inside = self.conic_sag_and_slope(r2)
         a = self.even_coeffs()
         if a.shape[0]:
             z = z + r2 * jnp.polyval(a[::-1], r2)

@@ -75,10 +75,8 @@ class Toroidal(AbstractSurface):
     def _profile(self, y):
         """z_y, dz_y/dy and whether y is inside the profile's domain."""
         y2 = y * y
-        z, inside = self.conic_sag(y2)
-        arg = 1.0 - (1.0 + self.k) * self.c**2 * y2
-        root, _ = guarded_sqrt(arg)
-        dz = self.c * y / jnp.where(inside, root, 1.0)
+        z, slope, inside = self.conic_sag_and_slope(y2)
+        dz = y * slope
         a = self.coeffs
         if a.shape[0]:
             z = z + y2 * jnp.polyval(a[::-1], y2)
