@@ -16,7 +16,7 @@ def _lens(head="", glass="N-BK7 0 0 1.5168 64.17 0 0 0 0 0 0"):
             f"  DISZ 0\n")
 
 
-SEEN = "IWDP 0\nSTUD 1\nEERA 0 0 0 10 10\nEERA 0 0 0 10\n"
+SEEN = "IWDP 0\nSTUD 1\nEERA 0 0 0 10 10\nEERA 0 0 0 10\nTELE 0\nAFOC 0\n"
 
 
 def test_header_keywords_with_the_values_seen_read_in_strict_mode_without_a_word():
@@ -29,7 +29,7 @@ def test_header_keywords_with_the_values_seen_read_in_strict_mode_without_a_word
 
 
 @pytest.mark.parametrize("line", ["IWDP 1", "STUD 0", "STUD", "EERA 1 0 0 10 10",
-                                  "EERA 0 0", "IWDP X"])
+                                  "EERA 0 0", "IWDP X", "AFOC 1", "TELE 1"])
 def test_other_values_are_reported_as_undocumented(line):
     text = _lens(line + "\n")
     with pytest.raises(ValueError, match=rf"<zmx>:3: {line.split()[0]} with a value jaxlens "

@@ -44,6 +44,10 @@ KNOWN_VALUES = {
     "STUD": lambda t: t == ["1"],
     # Seen as ``EERA 0 0 0 10 10`` and ``EERA 0 0 0 10``: three zero flags, then counts.
     "EERA": lambda t: _zeros(t, 3),
+    # The names say telecentric object space and afocal image space, which FTYP also sets
+    # and jaxlens refuses there: ignored only when off (0), else reported.
+    "TELE": lambda t: _zeros(t, len(t)),
+    "AFOC": lambda t: _zeros(t, len(t)),
 }
 """Keywords ignored only with the values seen in real files (a predicate on the tokens after
 the keyword). What they do is not documented, so a value never seen may change the lens: it is
