@@ -232,6 +232,30 @@ def test_report_notes_that_paraxial_data_ignore_decenters_and_tilts():
     assert len(notes) == 1 and "surface(s) 2" in notes[0] and "ignore those decenters" in notes[0]
 
 
+def test_report_notes_what_a_tilted_plane_and_a_grating_do_to_the_paraxial_data():
+    """A tilted plane deviates the beam and a grating's lines bend every ray: the paraxial
+    trace sees neither, and the report says so (only where they do something)."""
+    import jaxlens
+    from jaxlens.analysis.report import report_data
+    from jaxlens.optics.diffractive import Grating
+    from jaxlens.optics.surfaces import TiltedPlane
+
+    glass = jaxlens.ModelGlass(1.5168, 64.17)
+
+    def lens(last):
+        return jaxlens.Lens(
+            surfaces=(jaxlens.Sphere(0.02), jaxlens.Sphere(-0.02), jaxlens.Sphere(0.0), last),
+            thickness=jnp.array([2.5, 2.0, 2.0, 45.0]),
+            materials=(glass, jaxlens.Air(), glass, jaxlens.Air()), epd=4.0, fields=(0.0, 1.0))
+
+    assert report_data(lens(TiltedPlane()))["notes"] == []
+    assert report_data(lens(Grating(lines_per_um=0.1, order=0.0)))["notes"] == []
+    notes = report_data(lens(TiltedPlane(tan_y=0.05)))["notes"]
+    assert len(notes) == 1 and "surface(s) 4" in notes[0] and "prism" in notes[0]
+    notes = report_data(lens(Grating(lines_per_um=0.1)))["notes"]
+    assert len(notes) == 1 and "surface(s) 4" in notes[0] and "order-0" in notes[0]
+
+
 def test_report_prescription_names_each_surface_kind(capsys):
     """Coordinate breaks, toroids and mirrors are listed as such, with their parameters (they
     were all listed as STANDARD surfaces of their media)."""

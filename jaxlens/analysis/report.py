@@ -296,15 +296,33 @@ def _seidel_sums(lens: Lens) -> dict:
 
 def _notes(lens: Lens) -> list[str]:
     """Caveats the numbers need: a decentered or tilted system has no single optical axis,
-    so its first-order data describe the unbroken local axes only."""
-    moved = [i + 1 for i, s in enumerate(lens.surfaces) if isinstance(s, CoordinateBreak) and any(
-        float(v) != 0.0 for v in (s.decenter_x, s.decenter_y, s.tilt_x, s.tilt_y, s.tilt_z))]
-    if not moved:
-        return []
-    return [f"coordinate breaks decenter or tilt the system at surface(s) "
-            f"{', '.join(map(str, moved))}: the paraxial data (EFL, BFL, F/#, pupils, paraxial "
-            f"image height and distortion) follow each surface's local axis and ignore those "
-            f"decenters and tilts; the real-ray chief heights and RMS spots are exact"]
+    so its first-order data describe the unbroken local axes only; a tilted plane's
+    deviation and a grating's lines are seen by real rays only."""
+    def numbered(kind, moved):
+        return [i + 1 for i, s in enumerate(lens.surfaces) if isinstance(s, kind) and any(
+            float(v) != 0.0 for v in moved(s))]
+
+    notes = []
+    breaks = numbered(CoordinateBreak, lambda s: (s.decenter_x, s.decenter_y, s.tilt_x,
+                                                  s.tilt_y, s.tilt_z))
+    if breaks:
+        notes.append(f"coordinate breaks decenter or tilt the system at surface(s) "
+                     f"{', '.join(map(str, breaks))}: the paraxial data (EFL, BFL, F/#, pupils, "
+                     f"paraxial image height and distortion) follow each surface's local axis "
+                     f"and ignore those decenters and tilts; the real-ray chief heights and RMS "
+                     f"spots are exact")
+    tilted = numbered(TiltedPlane, lambda s: (s.tan_x, s.tan_y))
+    if tilted:
+        notes.append(f"tilted plane(s) (TILTSURF) at surface(s) {', '.join(map(str, tilted))} "
+                     f"deviate the beam as a prism face does: the paraxial data treat them as "
+                     f"planes normal to the axis; the real-ray chief heights and RMS spots are "
+                     f"exact")
+    gratings = numbered(Grating, lambda s: (s.lines_per_um * s.order,))
+    if gratings:
+        notes.append(f"grating(s) at surface(s) {', '.join(map(str, gratings))}: the paraxial "
+                     f"data are those of the order-0 system (the lines removed); the real rays "
+                     f"see the lines")
+    return notes
 
 
 # ---------------------------------------------------------------------------- text
