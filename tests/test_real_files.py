@@ -261,7 +261,10 @@ def test_object_height_fields_put_the_object_points_there(tmp_path):
         ("FTYP 1 0 2 1 0 0 0", r"object heights \(FTYP 1\) need a finite object distance"),
         ("FTYP 4 0 2 1 0 0 0", r"field type 4 \(theodolite angles\)"),
         ("FTYP 0 1 2 1 0 0 0", "object-space telecentric"),
-        ("FTYP 0 0 2 1 0 0 1", "afocal image space"),
+        ("FTYP 2 0 2 1 0 0 1", r"field type 2 \(paraxial image heights\) with an afocal image "
+                               r"space .*has no heights"),
+        ("FTYP 0 0 2 1 0 0 2", r"afocal image space flag \(FTYP's seventh value\) must be 0 "
+                               r"or 1, got 2"),
     ],
 )
 def test_field_types_refused_with_the_line(tmp_path, ftyp, match):

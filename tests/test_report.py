@@ -364,7 +364,8 @@ def test_report_wavefront_is_the_analysis_and_gives_strehl_only_where_marechal_h
 
     import jaxlens
     from jaxlens.analysis import wavefront
-    from jaxlens.analysis.report import MARECHAL_MAX_RMS, report_data
+    from jaxlens.analysis.report import report_data
+    from jaxlens.analysis.wavefront_error import MARECHAL_MAX_RMS
 
     # The triplet stopped down to EPD 4 has 0.08 wave RMS (tilt removed), at EPD 6 0.15–0.18.
     for epd, marechal_holds in ((4.0, True), (6.0, False)):

@@ -129,6 +129,7 @@ def ray_fan(lens: Lens, field, wavelengths=None, *, n: int = FAN_POINTS, depth=N
         A ``RayFan``; errors of rays that do not reach the image (and all errors where the
         chief ray does not) are NaN, with the validity flags beside them.
     """
+    checks.focal_image(lens, "ray_fan")
     checks.one_field(field, "ray_fan")
     shape = np.shape(field)
     f, wl = _inputs(lens, "ray_fan", jnp.reshape(jnp.asarray(field, float), (-1,)),

@@ -199,6 +199,7 @@ def encircled_energy(lens: Lens, field, radii, *, wavelength=None, method: str =
         >>> [round(float(e), 3) for e in ee.energy]
         [0.0, 1.0]
     """
+    checks.focal_image(lens, "encircled_energy")
     where = "encircled_energy"
     checks.real_values(radii, "radii", where, "mm")
     r = jnp.reshape(jnp.asarray(radii, lens.epd.dtype), (-1,))
@@ -231,6 +232,7 @@ def radius_for_fraction(lens: Lens, field, fraction, *, wavelength=None,
         distances (see the module notes); NaN above what the kernel holds (diffraction) or
         where no ray reaches the image.
     """
+    checks.focal_image(lens, "radius_for_fraction")
     where = "radius_for_fraction"
     checks.real_values(fraction, "fraction", where, "(fraction of the energy)")
     f = jnp.asarray(fraction, lens.epd.dtype)

@@ -59,9 +59,12 @@ from ..optics.surfaces import EvenAsphere, Hybrid, OddAsphere, Standard, TiltedP
 from ..optics.toroidal import Toroidal
 from . import spots as analysis
 from .aberrations import field_curvature
+from .report_afocal import afocal_report_data, format_afocal_report
+from .report_cells import cell as _num
+from .report_cells import json_number as _f
+from .report_cells import wavefront_lines
+from .report_cells import wavefront_summary as _wavefront_summary
 from .third_order import SEIDEL_TERMS, WAVEFRONT_TERMS, seidel
-from .wavefront_error import MARECHAL_MAX_RMS
-from .wavefront_error import wavefront as wavefront_map
 
 UNITS = {
     "length": "mm",
@@ -172,11 +175,6 @@ def with_fields_and_wavelengths(lens: Lens, fields=None, wavelengths=None) -> Le
     return lens
 
 
-def _f(x) -> float | None:
-    v = float(x)
-    return v if math.isfinite(v) else None
-
-
 def report_data(lens: Lens, *, fields=None, wavelengths=None, wavefront: bool = False) -> dict:
     """The report as a JSON-ready dict (see the module docstring for units).
 
@@ -192,6 +190,8 @@ def report_data(lens: Lens, *, fields=None, wavelengths=None, wavefront: bool = 
         # Checked here, not as an EquinoxRuntimeError from inside the compiled trace.
         checks.wavelengths(lens, lens.wavelengths, "report", "the lens's wavelengths")
         checks.material_indices(lens, lens.wavelengths, "report", "the lens's wavelengths")
+    if lens.afocal_image:  # an image at infinity: angles, not heights
+        return afocal_report_data(lens, wavefront=wavefront, notes=_notes(lens))
     res = _compute(lens)
     pd = res.paraxial
     wl = np.atleast_1d(np.asarray(lens.wavelengths, np.float64))
@@ -269,18 +269,6 @@ def report_data(lens: Lens, *, fields=None, wavelengths=None, wavefront: bool = 
     }
 
 
-def _wavefront_summary(lens: Lens, field) -> dict:
-    """One field's wavefront error (waves, primary wavelength), or why there is none."""
-    try:
-        w = wavefront_map(lens, field)
-    except ValueError as e:
-        return {"refused": str(e)}
-    sigma = _f(w.rms_tilt_removed)
-    strehl = _f(w.strehl) if sigma is not None and sigma <= MARECHAL_MAX_RMS else None
-    return {"rms": _f(w.rms), "pv": _f(w.pv), "rms_tilt_removed": sigma,
-            "pv_tilt_removed": _f(w.pv_tilt_removed), "strehl": strehl}
-
-
 def _seidel_sums(lens: Lens) -> dict:
     """The lens's Seidel sums (mm) and their wavefront terms (waves) at the primary
     wavelength and largest field, or why third-order theory does not apply."""
@@ -337,19 +325,6 @@ def _material_label(m) -> str:
     if isinstance(m, Tabulated):
         return name or "TABLE"
     return name or type(m).__name__
-
-
-def _num(v: float | None, width: int = 12, prec: int = 6, missing: str = "failed") -> str:
-    """A table cell: ``missing`` for None (no valid ray, no paraxial image), "Infinity" for
-    an infinite distance, and scientific notation where fixed point would not fit."""
-    if v is None or math.isnan(v):
-        return f"{missing:>{width}}"
-    if math.isinf(v):
-        return f"{'Infinity' if v > 0 else '-Infinity':>{width}}"
-    text = f"{v:.{prec}f}"
-    if len(text) >= width or (v != 0 and abs(v) < 10.0**-prec):
-        text = f"{v:.{max(1, min(prec, width - 8))}e}"
-    return f"{text:>{width}}"
 
 
 _ZEMAX_TYPE = {Standard: "STANDARD", EvenAsphere: "EVENASPH", OddAsphere: "ODDASPHE",
@@ -435,6 +410,8 @@ def _surface_table(lens: Lens) -> list[str]:
 
 def format_report(data: dict, lens: Lens | None = None) -> str:
     """The human-readable report (Zemax-like prescription and field tables)."""
+    if data.get("afocal_image_space"):
+        return format_afocal_report(data, None if lens is None else _surface_table(lens))
     L = []
     title = data.get("name") or "(unnamed lens)"
     L.append(f"jaxlens lens report: {title}")
@@ -524,21 +501,7 @@ def format_report(data: dict, lens: Lens | None = None) -> str:
         else:
             head = f"{f['angle']:>9.3f}"
         L.append(f"  {i + 1:>5}{head}{_num(t, 13, 6)}{_num(s, 13, 6)}{_num(astig, 13, 6)}")
-    if any("wavefront" in f for f in data["fields"]):
-        L.append("")
-        L.append("WAVEFRONT ERROR (primary wavelength, waves, to the exit-pupil reference sphere; "
-                 "piston removed; Strehl: Marechal, tilt removed, given where RMS -tilt <= "
-                 f"{MARECHAL_MAX_RMS:g} wave)")
-        L.append(f"  {'Field':>5}{'RMS':>12}{'P-V':>12}{'RMS -tilt':>12}{'P-V -tilt':>12}"
-                 f"{'Strehl':>10}")
-        for i, f in enumerate(data["fields"]):
-            w = f.get("wavefront", {})
-            if "refused" in w:
-                L.append(f"  {i + 1:>5}  not computed ({w['refused']})")
-                continue
-            L.append(f"  {i + 1:>5}{_num(w['rms'], 12, 4)}{_num(w['pv'], 12, 4)}"
-                     f"{_num(w['rms_tilt_removed'], 12, 4)}{_num(w['pv_tilt_removed'], 12, 4)}"
-                     f"{_num(w['strehl'], 10, 4, '-')}")
+    L += wavefront_lines(data["fields"], "the exit-pupil reference sphere")
     sd = data.get("seidel")
     if sd:
         L.append("")

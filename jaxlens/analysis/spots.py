@@ -174,6 +174,7 @@ def rms_spot(
         A field and wavelength that no ray gets through has NaN radius (and centroid),
         with ``valid_fraction`` 0; its gradient is 0, never NaN.
     """
+    checks.focal_image(lens, "rms_spot")
     _concrete_inputs(lens, "rms_spot", fields=fields, wavelengths=wavelengths, pupil=pupil,
                      own="all")
     fields, wavelengths = _as_arrays(lens, _own_fields(lens, fields), wavelengths)
@@ -301,6 +302,7 @@ def distortion(lens: Lens, fields=None, wavelength=None) -> Distortion:
     A field whose real chief ray does not reach the image (vignetted, or beyond the lens's
     coverage) has NaN height and distortion (its height was 0: a plausible −100 %).
     """
+    checks.focal_image(lens, "distortion")
     _concrete_inputs(lens, "distortion", fields=fields, wavelengths=wavelength,
                      arg_w="wavelength")
     fields, wavelength = _as_arrays(lens, _own_fields(lens, fields), wavelength)

@@ -248,6 +248,7 @@ def seidel(lens: Lens, *, field=None, wavelength=None) -> Seidel:
         >>> s.per_surface.shape
         (7, 6)
     """
+    checks.focal_image(lens, "seidel")
     where = "seidel"
     if not isinstance(lens, Lens):
         raise TypeError(f"{where}: lens must be a jaxlens.Lens, got {type(lens).__name__}")

@@ -125,10 +125,16 @@ def _common(lens, field, wavelength, depth, reference, aim, where: str):
         raise ValueError(f"{where}: lenses with coordinate breaks are not supported (the "
                          f"paraxial exit pupil that sets the reference sphere is found on "
                          f"the unfolded axis only)")
+    if reference is None:  # the lens's own image space
+        reference = "plane" if lens.afocal_image else "sphere"
     if reference not in REFERENCES:
         raise ValueError(f"{where}: reference must be one of {REFERENCES} ('sphere': the "
                          f"exit-pupil reference sphere; 'plane': afocal image space), got "
                          f"{reference!r}")
+    if reference == "sphere" and lens.afocal_image:
+        raise ValueError(f"{where}: the lens has an afocal image space (Lens.afocal_image): "
+                         f"its wavefront is referenced to a plane; pass reference='plane' "
+                         f"(or None, the lens's own)")
     if aim not in AIMS:
         raise ValueError(f"{where}: aim must be one of {AIMS}, got {aim!r}")
     dtype = lens.epd.dtype
@@ -142,7 +148,7 @@ def _common(lens, field, wavelength, depth, reference, aim, where: str):
         checks.number(wl, "wavelength", where, lo=0, lo_open=True, unit="µm")
     wl = checks.wavelengths(lens, jnp.asarray(wl, dtype), where, "wavelength")
     checks.material_indices(lens, wl, where)
-    return f, wl, lens_depth(lens, depth, where)
+    return f, wl, lens_depth(lens, depth, where), reference
 
 
 
@@ -218,7 +224,7 @@ def opd(
     *,
     wavelength: Float[ArrayLike, ""] | None = None,
     depth=None,
-    reference: str = "sphere",
+    reference: str | None = None,
     aim: str = "paraxial",
     newton_iters: int = DEFAULT_NEWTON_ITERS,
 ) -> Float[Array, "*m"]:
@@ -234,7 +240,8 @@ def opd(
         wavelength: µm (default the primary wavelength); one value.
         depth: object distance in mm before surface 1 (inf for infinity); None (default)
             for the lens's own object.
-        reference: "sphere" (exit-pupil reference sphere) or "plane" (afocal image space).
+        reference: "sphere" (exit-pupil reference sphere) or "plane" (afocal image space);
+            None (the default): the lens's own, "plane" where ``lens.afocal_image``.
         aim: "paraxial" or "real" (as ``jaxlens.imaging.sampling.field_rays``).
         newton_iters: Newton iterations for aspheric surfaces.
 
@@ -251,7 +258,7 @@ def opd(
         (0.0, True)
     """
     lens, dtype = _precise(lens)
-    f, wl, depth = _common(lens, field, wavelength, depth, reference, aim, "opd")
+    f, wl, depth, reference = _common(lens, field, wavelength, depth, reference, aim, "opd")
     checks.number(newton_iters, "newton_iters", "opd", lo=0, integer=True, unit="iterations")
     p = pupil_points(pupil, "opd", unit_disc=True)
     shape = p.shape[:-1]
@@ -363,7 +370,7 @@ def wavefront(
     wavelength: Float[ArrayLike, ""] | None = None,
     depth=None,
     grid: int = DEFAULT_GRID,
-    reference: str = "sphere",
+    reference: str | None = None,
     aim: str = "paraxial",
     newton_iters: int = DEFAULT_NEWTON_ITERS,
 ) -> Wavefront:
@@ -390,7 +397,8 @@ def wavefront(
         ((33, 33), True)
     """
     lens, dtype = _precise(lens)
-    f, wl, depth = _common(lens, field, wavelength, depth, reference, aim, "wavefront")
+    f, wl, depth, reference = _common(lens, field, wavelength, depth, reference, aim,
+                                      "wavefront")
     grid = checks.number(grid, "grid", "wavefront", lo=3, integer=True,
                          unit="pupil samples per side")
     checks.number(newton_iters, "newton_iters", "wavefront", lo=0, integer=True,
@@ -434,7 +442,7 @@ def opd_fan(
     *,
     n: int = 21,
     depth=None,
-    reference: str = "sphere",
+    reference: str | None = None,
     aim: str = "paraxial",
     newton_iters: int = DEFAULT_NEWTON_ITERS,
 ) -> OPDFan:
@@ -462,7 +470,7 @@ def opd_fan(
     if not checks.is_traced(wls):
         checks.values(np.asarray(wls, float), "wavelengths", "opd_fan", lo=0, lo_open=True,
                       unit="µm")
-    f, _, depth = _common(lens, field, wls[0], depth, reference, aim, "opd_fan")
+    f, _, depth, reference = _common(lens, field, wls[0], depth, reference, aim, "opd_fan")
     wls = checks.wavelengths(lens, wls, "opd_fan", "wavelengths")
     checks.material_indices(lens, wls, "opd_fan", "wavelengths")
     n = checks.number(n, "n", "opd_fan", lo=2, integer=True, unit="pupil points")

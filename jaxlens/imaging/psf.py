@@ -381,6 +381,7 @@ def _psf_impl(lens, field, depth, wls, pixel_size, key, *, kernel_size, model, c
 
 def _prepare(lens, field, depth, wavelength, kernel_size, pixel_size, model, center, caller,
              newton_iters=DEFAULT_NEWTON_ITERS):
+    checks.focal_image(lens, caller)
     _model(model, caller)
     checks.number(newton_iters, "newton_iters", caller, lo=0, integer=True, unit="iterations")
     if center not in CENTERS:

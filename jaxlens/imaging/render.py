@@ -521,6 +521,7 @@ def render(
             with C matching the wavelengths, an aspect ratio unlike the sensor's, a
             non-positive spp, a missing sensor, an unknown method or a non-positive depth.
     """
+    checks.focal_image(lens, "render")
     if isinstance(method, str):
         raise TypeError(f"render: method is a render method object, not a string: use "
                         f"RayRender(...) or PSFRender(kernel_size=...), got {method!r}")
@@ -637,6 +638,7 @@ def relaxed_render(
         alpha: weight of :func:`alignment_penalty`.
         grid: grid of the distortion map.
     """
+    checks.focal_image(lens, "relaxed_render")
     sensor = render_kwargs.get("sensor")
     warped = prewarp(lens, scene, depth=depth, sensor=sensor, grid=grid)
     img = render(lens, warped, spp=spp, key=key, depth=depth, **render_kwargs)

@@ -24,7 +24,7 @@ TOP = {
     "primary_wavelength_nm": (), "primary_wavelength": (),
     "stop_surface_index": ("stop", "stop_index", "stop_surface"),
     "object": ("object_distance", "object_dist", "obj_distance", "object_thickness"),
-    "sensor": (),
+    "sensor": (), "afocal_image_space": ("afocal", "afocal_image", "afocal_mode"),
 }
 SURFACE = {
     "type": ("surface_type",), "curvature": ("c", "cv", "curv", "curvature_y"),

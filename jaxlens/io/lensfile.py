@@ -18,7 +18,8 @@ clip rays; a near miss or a synonym of a key the reader knows (``"radus"``, ``"g
 without ``values`` or ``distance`` and ``units`` other than mm. ``fields.vignetting``
 holds ``Lens.vignetting`` (Zemax's vignetting factors) as one list per factor, one value per
 field: ``{"vdx": [...], "vdy": [...], "vcx": [...], "vcy": [...], "van_deg": [...]}`` (pupil
-radii; ``van_deg`` in degrees; a missing list is 0).
+radii; ``van_deg`` in degrees; a missing list is 0). ``"afocal_image_space": true`` marks
+an afocal image space (``Lens.afocal_image``; written only when true).
 
 Saving writes every number with Python's shortest round-trip representation, so
 ``load(save(lens))`` gives the same numbers to the last bit (as float64), the same
@@ -546,6 +547,10 @@ def lens_from_dict(d: dict, *, source: str = "<lens>") -> Lens:
     checks.wavelengths(checks.NoMaterials, wl, f"{source}: {key}", "wavelength")
     checks.field_angles(fields, f"{source}: fields", "field angles")
     vignetting = _vignetting_of(d, source, fields.shape[0])
+    afocal = d.get("afocal_image_space", False)
+    if not isinstance(afocal, bool):  # "false" or 0 would be read as a flag silently
+        raise ValueError(f"{source}: afocal_image_space must be true or false, got "
+                         f"{afocal!r}")
     lens = Lens(
         surfaces=tuple(surfaces),
         thickness=_arr(np.array(thick)),
@@ -565,6 +570,7 @@ def lens_from_dict(d: dict, *, source: str = "<lens>") -> Lens:
         mirrors=tuple(mirrors),
         obscurations=tuple(obscurations),
         apertures=tuple(apertures),
+        afocal_image=afocal,
     )
     # Before the paraxial work of the aperture: values the lens cannot be traced with.
     checks.wavelengths(lens, wl, f"{source}: {key}", "wavelength")
@@ -626,6 +632,8 @@ def lens_to_dict(lens: Lens) -> dict:
         "primary": lens.primary,
         "surfaces": surfs,
     }
+    if lens.afocal_image:
+        out["afocal_image_space"] = True
     if lens.vignetting is not None:
         v = np.asarray(lens.vignetting, np.float64)
         out["fields"]["vignetting"] = {k: _out(v[:, j])

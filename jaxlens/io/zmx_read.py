@@ -570,6 +570,7 @@ def _lens(f: ZmxFile, text: str, path: str, strict: bool, unknown_glass: str) ->
         obscurations=_obscurations(body, u),
         apertures=_apertures(body + [img], u),
         vignetting=None if vignetting is None else _arr(vignetting),
+        afocal_image=zmx_system.afocal_image_space(f.ftyp),
     )
     # Before the paraxial work of the aperture: values the lens cannot be traced with.
     for w, ln in zip(wl, wl_lines, strict=True):

@@ -242,9 +242,27 @@ def field_type(ln) -> int:
             f"image heights")
     if len(ln.tokens) > 2 and ln.int(2, "object-space telecentric flag") != 0:
         raise ln.error("object-space telecentric systems (FTYP's second value 1) are not supported")
-    if len(ln.tokens) > 7 and ln.int(7, "afocal image space flag") != 0:
-        raise ln.error("afocal image space (FTYP's seventh value 1) is not supported")
+    if afocal_image_space(ln) and kind in (2, 3):
+        raise ln.error(f"field type {kind} ({FIELD_TYPES[kind]}) with an afocal image space "
+                       f"(FTYP's seventh value 1): an image at infinity has no heights; use "
+                       f"angles (FTYP 0) or object heights (FTYP 1)")
     return kind
+
+
+def afocal_image_space(ln) -> bool:
+    """FTYP's seventh value: 1 for an afocal image space (``Lens.afocal_image``), 0 (or
+    absent) for an image at a finite distance; other values refused.
+
+    Args:
+        ln: the file's FTYP line (the reader's line object) or None.
+    """
+    if ln is None or len(ln.tokens) <= 7:
+        return False
+    flag = ln.int(7, "afocal image space flag (FTYP's seventh value)")
+    if flag not in (0, 1):
+        raise ln.error(f"the afocal image space flag (FTYP's seventh value) must be 0 or 1, "
+                       f"got {flag}")
+    return flag == 1
 
 
 VIGNETTING_KEYS = ("VDXN", "VDYN", "VCXN", "VCYN", "VANN")

@@ -489,7 +489,7 @@ def dumps(lens: Lens, path: str = "lens.zmx", *, model_glass: str = "blank"):
         "ENVD 2.0E+1 1 0",
         "GFAC 0 0",
         "GCAT " + " ".join(gw.catalogs or ["SCHOTT"]),
-        f"FTYP 0 0 {len(ys)} {len(wl)} 0 0 0",
+        f"FTYP 0 0 {len(ys)} {len(wl)} 0 0 {int(lens.afocal_image)}",
         "XFLN " + " ".join(_z(v) for v in xs),
         "YFLN " + " ".join(_z(v) for v in ys),
         "FWGN " + " ".join("1" for _ in ys),

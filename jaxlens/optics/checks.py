@@ -418,3 +418,16 @@ def finite_array(x, arg: str, where: str, unit: str = ""):
         raise ValueError(f"{where}: {arg}{u} holds {int(bad.sum())} NaN or infinite value(s), "
                          f"first at index {first}: {a[first]!r}; every value must be finite")
     return x
+
+
+def focal_image(lens, where: str) -> None:
+    """Refuse a lens with an afocal image space (``Lens.afocal_image``) where the answer is a
+    position on the image surface (mm): its image is at infinity, so those positions depend
+    only on where the image surface happens to be and describe nothing."""
+    if getattr(lens, "afocal_image", False):
+        raise ValueError(
+            f"{where}: the lens has an afocal image space (Lens.afocal_image; Zemax FTYP's "
+            f"'afocal image space'): it images to infinity, so positions on its image "
+            f"surface (mm) describe nothing. Use jaxlens.analysis.angular_spot (angular spot "
+            f"sizes), angular_magnification, or wavefront (referenced to a plane), or pass "
+            f"dataclasses.replace(lens, afocal_image=False) to measure at the image surface")

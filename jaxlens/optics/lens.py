@@ -36,6 +36,14 @@ Conventions:
     overfilled beam outside the unit disc launch no light. The relative illumination
     (``imaging.radiometry``), ``render`` (both methods) and the design losses never apply
     them.
+    ``afocal_image`` marks an afocal image space (Zemax's "Afocal Image Space", FTYP's
+    seventh value): the lens images to infinity (a telescope, a beam expander), so its image
+    is a set of directions, not of points. Tracing and the paraxial data are the same; the
+    analyses that measure positions on the image surface in mm (``rms_spot``,
+    ``distortion``, ``ray_fan``, ``seidel``, the PSFs, ``encircled_energy``, ``render``,
+    the distortion maps) refuse such a lens, ``analysis.angular_spot`` and
+    ``analysis.angular_magnification`` give its angular data, ``analysis.wavefront``
+    references its wavefront to a plane, and the report is the afocal one.
 
 The structure (surface kinds, counts, polynomial orders, stop index, mirrors) is static;
 every number is an array so ``jax.grad`` reaches it.
@@ -95,6 +103,16 @@ def _sequence(arg: str, what: str):
             raise TypeError(f"Lens: {arg} must be a tuple of {what}, got "
                             f"{type(x).__name__} {x!r}")
         return tuple(x)
+    return convert
+
+
+def _flag(arg: str):
+    """A converter for a static flag: a bool (a 0/1, a string or an array would pass as
+    truthy or not and change the analyses silently)."""
+    def convert(v):
+        if not isinstance(v, (bool, np.bool_)):
+            raise TypeError(f"Lens: {arg} must be True or False, got {type(v).__name__} {v!r}")
+        return bool(v)
     return convert
 
 
@@ -190,6 +208,8 @@ class Lens(eqx.Module):
     description: str = eqx.field(static=True, default="")
     # Zemax vignetting factors [F, 5] (VDX, VDY, VCX, VCY, VAN), or None: see the module doc.
     vignetting: Float[Array, "f 5"] | None = eqx.field(converter=_vignetting, default=None)
+    # An afocal image space (the image at infinity): see the module doc.
+    afocal_image: bool = eqx.field(static=True, default=False, converter=_flag("afocal_image"))
 
     def __check_init__(self):
         n = len(self.surfaces)

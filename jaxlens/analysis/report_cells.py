@@ -1,0 +1,62 @@
+"""Pieces that the lens report and the afocal report share: JSON numbers, table cells, and
+each field's wavefront error (summary and table)."""
+
+from __future__ import annotations
+
+import math
+
+from ..optics.lens import Lens
+from .wavefront_error import MARECHAL_MAX_RMS
+from .wavefront_error import wavefront as wavefront_map
+
+
+def json_number(x) -> float | None:
+    """A finite float, or None (JSON has no NaN or inf; the text says "failed")."""
+    v = float(x)
+    return v if math.isfinite(v) else None
+
+
+def cell(v: float | None, width: int = 12, prec: int = 6, missing: str = "failed") -> str:
+    """A table cell: ``missing`` for None (no valid ray, no paraxial image), "Infinity" for
+    an infinite distance, and scientific notation where fixed point would not fit."""
+    if v is None or math.isnan(v):
+        return f"{missing:>{width}}"
+    if math.isinf(v):
+        return f"{'Infinity' if v > 0 else '-Infinity':>{width}}"
+    text = f"{v:.{prec}f}"
+    if len(text) >= width or (v != 0 and abs(v) < 10.0**-prec):
+        text = f"{v:.{max(1, min(prec, width - 8))}e}"
+    return f"{text:>{width}}"
+
+
+def wavefront_summary(lens: Lens, field) -> dict:
+    """One field's wavefront error (waves, primary wavelength; referenced as the lens's image
+    space asks: a sphere, or a plane for an afocal lens), or why there is none."""
+    try:
+        w = wavefront_map(lens, field)
+    except ValueError as e:
+        return {"refused": str(e)}
+    sigma = json_number(w.rms_tilt_removed)
+    strehl = json_number(w.strehl) if sigma is not None and sigma <= MARECHAL_MAX_RMS else None
+    return {"rms": json_number(w.rms), "pv": json_number(w.pv), "rms_tilt_removed": sigma,
+            "pv_tilt_removed": json_number(w.pv_tilt_removed), "strehl": strehl}
+
+
+def wavefront_lines(fields: list[dict], reference: str) -> list[str]:
+    """The WAVEFRONT ERROR table of the fields that have a ``wavefront`` entry (none: [])."""
+    if not any("wavefront" in f for f in fields):
+        return []
+    out = ["", f"WAVEFRONT ERROR (primary wavelength, waves, to {reference}; piston removed; "
+               f"Strehl: Marechal, tilt removed, given where RMS -tilt <= "
+               f"{MARECHAL_MAX_RMS:g} wave)",
+           f"  {'Field':>5}{'RMS':>12}{'P-V':>12}{'RMS -tilt':>12}{'P-V -tilt':>12}"
+           f"{'Strehl':>10}"]
+    for i, f in enumerate(fields):
+        w = f.get("wavefront", {})
+        if "refused" in w:
+            out.append(f"  {i + 1:>5}  not computed ({w['refused']})")
+            continue
+        out.append(f"  {i + 1:>5}{cell(w['rms'], 12, 4)}{cell(w['pv'], 12, 4)}"
+                   f"{cell(w['rms_tilt_removed'], 12, 4)}{cell(w['pv_tilt_removed'], 12, 4)}"
+                   f"{cell(w['strehl'], 10, 4, '-')}")
+    return out
