@@ -201,7 +201,9 @@ def plot_spots(lens, fields: Sequence[float] | None = None, *, wavelengths=None,
 
     from .analysis import spots as analysis
     from .imaging import sampling
+    from .optics import checks
 
+    checks.focal_image(lens, "plot_spots")
     lens = lens.astype(jnp.float64)
     fields = _default_fields(lens, np.linspace(0, 1, 5)) if fields is None else list(fields)
     wls = np.asarray(lens.wavelengths if wavelengths is None else wavelengths)

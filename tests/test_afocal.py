@@ -144,7 +144,7 @@ def test_the_flag_survives_zmx_and_json(tmp_path):
         jl.load(tmp_path / "c.json")
 
 
-def test_the_report_of_an_afocal_lens_gives_angles(capsys):
+def test_the_report_of_an_afocal_lens_gives_angles(capsys, tmp_path):
     lens = jl.load(KEPLER, strict=True)
     assert main(["report", str(KEPLER), "--json", "--wavefront"]) == 0
     data = json.loads(capsys.readouterr().out)
@@ -160,3 +160,9 @@ def test_the_report_of_an_afocal_lens_gives_angles(capsys):
     out = capsys.readouterr().out
     assert "afocal image space" in out and "Angular magnification" in out
     assert "RMS angular radius" in out and "to a plane" not in out
+    # --plot draws what has a meaning and names the rest, with the reason.
+    assert main(["report", str(KEPLER), "--plot", str(tmp_path)]) == 0
+    err = capsys.readouterr().err
+    assert (tmp_path / "jaxlens_afocal_kepler_layout.png").exists()
+    assert not (tmp_path / "jaxlens_afocal_kepler_spots.png").exists()
+    assert "spots.png not drawn: plot_spots: the lens has an afocal image space" in err

@@ -659,7 +659,7 @@ def _write_figures(lens: Lens, paths: dict[str, str]) -> None:
         try:
             fig = makers[key](lens)
         except ValueError as e:
-            if key not in ANALYSIS_FIGURES:
+            if key not in ANALYSIS_FIGURES and not lens.afocal_image:  # afocal: angles only
                 raise
             print(f"jaxlens report: --plot: {os.path.basename(path)} not drawn: {e}",
                   file=sys.stderr)
