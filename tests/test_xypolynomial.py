@@ -468,3 +468,61 @@ def test_json_refuses_bad_surfaces(lens, surface, message):
     d["surfaces"][1] = {**surface, "thickness": 4.0}
     with pytest.raises(ValueError, match=message):
         lensfile.lens_from_dict(d, source="bad.json")
+
+
+# --- the analyses (these need the lead's edits outside this task's files: paraxial.x_section,
+# backward.mirror_surface, surface_adjoint.SAG_KINDS, report, third_order, lens_keys and the
+# jaxlens re-export) ---------------------------------------------------------------------
+
+
+def test_x_section_mirror_report_and_refusals_know_the_surface(lens):
+    from jaxlens.analysis import report
+    from jaxlens.analysis.tolerance import zero_perturbation
+    from jaxlens.optics import paraxial
+    from jaxlens.tracing import surface_adjoint
+    from jaxlens.tracing.backward import mirror_surface
+
+    assert jl.XYPolynomial is XYPolynomial
+    assert surface_adjoint.supported(lens.surfaces[0])  # the reverse rule's sag step takes it
+    assert not surface_adjoint.supported(XYPolynomial(c=0.01))  # no terms: the conic step
+    xs = paraxial.x_section(lens)
+    for s, t in zip(lens.surfaces, xs.surfaces, strict=True):
+        assert type(t) is jl.Standard and float(t.c) == float(s.paraxial_curvature_x)
+    assert float(xs.surfaces[0].c) != float(lens.surfaces[0].paraxial_curvature)
+    pts = np.asarray(REF["points"])
+    for s in lens.surfaces:
+        m = mirror_surface(s)
+        assert type(m) is XYPolynomial
+        _close(_table(m, pts)[:, 0], -_table(s, pts)[:, 0], 1e-15)
+    rows = report._surface_table(lens)
+    assert "XPOLYNOM" in rows[2] and "R=6 X1Y0=0.012 X0Y1=-0.021 X2Y0=-0.003593" in rows[2]
+    with pytest.raises(ValueError, match=r"XY polynomial \(Zemax XPOLYNOM\) is not "
+                                         r"rotationally symmetric"):
+        jl.analysis.seidel(lens)
+    with pytest.raises(ValueError, match=r"surface 1 is a XYPolynomial; tolerance analysis"):
+        zero_perturbation(lens)
+    d = lensfile.lens_to_dict(lens)
+    d["surfaces"][1]["xy_coeffs"] = d["surfaces"][1].pop("polynomial_coeffs")
+    with pytest.raises(ValueError, match=r"unknown key 'xy_coeffs'; did you mean "
+                                         r"'polynomial_coeffs'"):
+        lensfile.lens_from_dict(d, source="bad.json")
+
+
+@pytest.mark.slow
+def test_hand_written_reverse_rule_gives_the_same_gradient(lens):
+    """``trace(..., reverse_rule=True)`` (``surface_adjoint``'s sag step) and JAX's own
+    derivative of the trace agree (8 s: slow)."""
+    one = eqx.tree_at(lambda t: t.surfaces[1], lens, jl.Sphere(-1 / 60))
+    one = eqx.tree_at(lambda t: t.surfaces[0].coeffs, one, lens.surfaces[0].coeffs[:9])
+    rays = _rays()
+
+    def loss(L, rule):
+        out = jl.trace(L, rays, reverse_rule=rule)
+        return jnp.sum(jnp.where(out.valid[:, None], out.origin[:, :2], 0.0) ** 2)
+
+    auto = jax.jit(jax.grad(lambda L: loss(L, False)))(one).surfaces[0]
+    rule = jax.jit(jax.grad(lambda L: loss(L, True)))(one).surfaces[0]
+    for field in ("coeffs", "norm_radius", "c", "k"):
+        a, r = np.asarray(getattr(auto, field)), np.asarray(getattr(rule, field))
+        assert np.all(a != 0), field
+        np.testing.assert_allclose(r, a, rtol=1e-9, atol=1e-12, err_msg=field)
