@@ -20,6 +20,10 @@ JSON ``type``          class                  keys (besides ``thickness``, ``mat
 ``grating``            ``Grating``            ``curvature``, ``conic``, ``lines_per_um``,
                                               ``diffraction_order``
 ``tilted_plane``       ``TiltedPlane``        ``tan_x``, ``tan_y`` (slopes dz/dx, dz/dy)
+``xy_polynomial``      ``XYPolynomial``       ``curvature``, ``conic``,
+                                              ``polynomial_coeffs`` (mm, A_1 … A_N on x, y,
+                                              x², xy, y², … of x/R, y/R; Zemax XPOLYNOM),
+                                              ``norm_radius`` (R, mm; needed with terms)
 ``coordinate_break``   ``CoordinateBreak``    ``decenter_x``, ``decenter_y`` (mm),
                                               ``tilt_x_deg``, ``tilt_y_deg``,
                                               ``tilt_z_deg``, ``order`` (0 or 1)
@@ -51,6 +55,7 @@ from ..optics.freeform import Biconic, ZernikeSag
 from ..optics.paraxial_surface import ParaxialSurface
 from ..optics.surfaces import AbstractSurface, TiltedPlane
 from ..optics.toroidal import Toroidal
+from ..optics.xypolynomial import XYPolynomial
 from .json_values import curvature
 from .json_values import float64_array as _arr
 from .json_values import json_number as _out
@@ -69,13 +74,19 @@ KINDS: dict[str, tuple[type, tuple[tuple[str, str], ...]]] = {
     "grating": (Grating, (("curvature", "c"), ("conic", "k"), ("lines_per_um", "lines_per_um"),
                           ("diffraction_order", "order"), _SD)),
     "tilted_plane": (TiltedPlane, (("tan_x", "tan_x"), ("tan_y", "tan_y"), _SD)),
+    "xy_polynomial": (XYPolynomial, (("curvature", "c"), ("conic", "k"),
+                                     ("polynomial_coeffs", "coeffs"),
+                                     ("norm_radius", "norm_radius"), _SD)),
     "coordinate_break": (CoordinateBreak, (
         ("decenter_x", "decenter_x"), ("decenter_y", "decenter_y"),
         ("tilt_x_deg", "tilt_x"), ("tilt_y_deg", "tilt_y"), ("tilt_z_deg", "tilt_z"))),
 }
 """JSON type -> (surface class, (JSON key, class field) pairs)."""
 
-_LISTS = frozenset({"y_coeffs", "even_asphere_coeffs", "phase_coeffs"})
+_LISTS = frozenset({"y_coeffs", "even_asphere_coeffs", "phase_coeffs", "polynomial_coeffs"})
+_NEEDS = {"polynomial_coeffs": "norm_radius"}
+"""A list key -> the key that must come with it when the list is not empty (a missing
+normalisation radius would silently be the class's default, 1 mm)."""
 KEYS = frozenset(k for _, pairs in KINDS.values() for k, _ in pairs) | {"order"}
 """Every surface key this module reads (for the near-miss check of ``lens_keys``)."""
 OWN_KEYS = KEYS - {"curvature", "conic", "even_asphere_coeffs", "semi_diameter", "norm_radius"}
@@ -117,6 +128,9 @@ def surface_from_json(kind: str, d: dict, where: str, known_keys) -> AbstractSur
         else:
             v = _num(d[key], f"{where}: {key}", finite=key != "semi_diameter")
         kw[field] = _arr(v)
+        if key in _NEEDS and v.size and _NEEDS[key] not in d:
+            raise ValueError(f"{where}: a {kind} surface with {key} needs {_NEEDS[key]} (the "
+                             f"normalisation radius, mm)")
     if cls is CoordinateBreak and "order" in d:
         order = d["order"]
         if isinstance(order, bool) or order not in (0, 1):

@@ -2,8 +2,8 @@
 ``TILTSURF`` (read here, written with the others by ``zmx_write``), ``TOROIDAL``,
 ``PARAXIAL``, ``BICONICX``, ``SZERNSAG`` and ``FZERNSAG`` (and the others below), read and
 written (the format: ``jaxlens.io.zmx``; the surfaces:
-``jaxlens.optics.surfaces``, ``jaxlens.optics.toroidal`` and
-``jaxlens.optics.paraxial_surface``).
+``jaxlens.optics.surfaces``, ``jaxlens.optics.toroidal``,
+``jaxlens.optics.paraxial_surface`` and ``jaxlens.optics.xypolynomial``).
 
 ODDASPHE: CURV and CONI the base conic, PARM 1…8 the coefficients β_1…β_8 on r, r², …, r⁸
 (lens units^(1−i), converted to mm).
@@ -50,6 +50,15 @@ the decenter x, y of the Zernike terms (lens units), XDAT 1 the number of terms 
 XDAT N+2 the coefficients of Z_1 … Z_N (lens units; a missing line reads as 0). A nonzero
 XDAT beyond N+2, or PARM 11 and beyond, is refused.
 
+XPOLYNOM (Zemax's Extended Polynomial), read as an ``XYPolynomial`` unless it carries
+jaxlens's hybrid comment (``jaxlens hybrid even=M odd=P``: a ``Hybrid`` written by jaxlens,
+read by ``zmx_read``): CURV and CONI the base conic, XDAT 1 the number of terms N (a whole
+number in 0…230), XDAT 2 the normalisation radius R (lens units, > 0), XDAT 3 … XDAT N+2 the
+coefficients A_1 … A_N of x, y, x², xy, y², x³, … of the normalised coordinates (lens
+units, converted to mm; the term order: ``jaxlens.optics.xypolynomial``). XDAT 1, XDAT 2 and
+every XDAT up to N+2 must be present (Zemax writes them all), none beyond it may be nonzero,
+and it has no PARM. The writer writes R and each A_i exactly (shortest round-trip digits).
+
 PARAXIAL: PARM 1 is the focal length, PARM 2 the OPD mode (0: conjugates from a real
 parabasal ray, 1: integrated phase, 2: infinite conjugates, 3: conjugates from a paraxial
 ray). The rays do not depend on the mode. jaxlens's optical path is mode 2's; the others
@@ -75,6 +84,7 @@ from ..optics.paraxial_surface import ParaxialSurface
 from ..optics.qtype import QTypeAsphere
 from ..optics.surfaces import OddAsphere, TiltedPlane
 from ..optics.toroidal import Toroidal
+from ..optics.xypolynomial import MAX_XY_TERMS, XYPolynomial
 from .zmx_common import SENSOR_COMMENT
 
 OPD_MODES = {0: "real parabasal conjugates", 1: "integrated phase", 2: "infinite conjugates",
@@ -297,6 +307,42 @@ def qtype_asphere(s, unit: float, sd: float) -> QTypeAsphere:
                         qtype=_QTYPE_KINDS[kind])
 
 
+def xy_polynomial(s, unit: float, sd: float) -> XYPolynomial:
+    """An ``XYPolynomial`` from an XPOLYNOM surface block (the reader's surface record)."""
+    where = s.type_line or s.line
+    for _, (v, ln) in sorted(s.parm.items()):
+        if v != 0:
+            raise ln.error("XPOLYNOM has no parameters (PARM); its data are extra data (XDAT 1 "
+                           "= number of terms, 2 = normalisation radius, 3… = coefficients)")
+    for i, (v, ln) in sorted(s.xdat.items()):
+        if i < 1 and v != 0:
+            raise ln.error("XPOLYNOM extra data start at XDAT 1 (the number of terms)")
+    missing = [j for j in (1, 2) if j not in s.xdat]
+    if missing:
+        raise where.error(f"XPOLYNOM needs XDAT 1 (the number of terms) and XDAT 2 (the "
+                          f"normalisation radius, lens units); XDAT {missing[0]} is missing")
+    n_val, n_line = s.xdat[1]
+    if n_val != int(n_val) or not 0 <= n_val <= MAX_XY_TERMS:
+        raise n_line.error(f"XDAT 1 (the number of extended-polynomial terms) must be a whole "
+                           f"number in 0..{MAX_XY_TERMS} (degree 20), got {n_val:g}")
+    n = int(n_val)
+    norm, norm_line = s.xdat[2]
+    if not (norm > 0 and math.isfinite(norm)):
+        raise norm_line.error(f"XDAT 2 (the normalisation radius, lens units) must be > 0, got "
+                              f"{norm:g}")
+    gone = [j for j in range(3, n + 3) if j not in s.xdat]
+    if gone:
+        raise n_line.error(f"XDAT 1 gives {n} extended-polynomial terms, so XDAT 3 … XDAT "
+                           f"{n + 2} are needed, but XDAT {gone[0]} is missing")
+    for i, (v, ln) in sorted(s.xdat.items()):
+        if i > n + 2 and v != 0:
+            raise ln.error(f"coefficient beyond the {n} extended-polynomial terms of XDAT 1 "
+                           f"(XDAT 3 … XDAT {n + 2})")
+    a = [s.xdat[j + 2][0] * unit for j in range(1, n + 1)]
+    return XYPolynomial(c=_arr(s.curv / unit), k=_arr(s.coni), coeffs=_arr(np.array(a, np.float64)),
+                        norm_radius=_arr(norm * unit), semi_diameter=_arr(sd))
+
+
 def paraxial_surface(s, unit: float, sd: float) -> tuple[ParaxialSurface, int | None]:
     """(``ParaxialSurface``, OPD mode or None when the file gives none) from a PARAXIAL block."""
     where = s.type_line or s.line
@@ -375,8 +421,8 @@ def curvature_of_rotation(token: str, unit: float) -> float:
 
 def surface_lines(s, z) -> list[str] | None:
     """The TYPE/CURV/CONI/PARM (and XDAT) lines of a ``Toroidal``, ``ParaxialSurface``,
-    ``Binary2``, ``QTypeAsphere``, ``Biconic``, ``ZernikeSag`` or ``Grating`` (None for other
-    kinds); ``z`` formats a number exactly."""
+    ``Binary2``, ``QTypeAsphere``, ``Biconic``, ``ZernikeSag``, ``XYPolynomial`` or
+    ``Grating`` (None for other kinds); ``z`` formats a number exactly."""
     if isinstance(s, Toroidal):
         a = [float(v) for v in np.asarray(s.coeffs)]
         if len(a) > 8:
@@ -396,10 +442,19 @@ def surface_lines(s, z) -> list[str] | None:
                 f"PARM 1 {radius_text(float(s.cx))}", f"PARM 2 {z(s.kx)}"]
     if isinstance(s, ZernikeSag):
         return _zernike_lines(s, z)
+    if isinstance(s, XYPolynomial):
+        return _xy_polynomial_lines(s, z)
     if isinstance(s, Grating):
         return ["TYPE DGRATING", f'CURV {z(s.c)} 0 0 0 0 ""', f"CONI {z(s.k)}",
                 f"PARM 1 {z(s.lines_per_um)}", f"PARM 2 {z(s.order)}"]
     return None
+
+
+def _xy_polynomial_lines(s: XYPolynomial, z) -> list[str]:
+    a = [float(v) for v in np.asarray(s.coeffs)]
+    out = ["TYPE XPOLYNOM", f'CURV {z(s.c)} 0 0 0 0 ""', f"CONI {z(s.k)}",
+           f'XDAT 1 {len(a)} 0 0 1 0 0 ""', f'XDAT 2 {z(s.norm_radius)} 0 0 1 0 0 ""']
+    return out + [f'XDAT {i + 2} {z(v)} 0 0 1 0 0 ""' for i, v in enumerate(a, start=1)]
 
 
 def _zernike_lines(s: ZernikeSag, z) -> list[str]:
