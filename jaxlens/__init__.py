@@ -69,6 +69,7 @@ from .optics.surfaces import Sphere as Sphere
 from .optics.surfaces import Standard as Standard
 from .optics.surfaces import Stop as Stop
 from .optics.surfaces import TiltedPlane as TiltedPlane
+from .optics.xypolynomial import XYPolynomial as XYPolynomial
 from .tracing.backward import trace_backward as trace_backward
 from .tracing.forward import trace as trace
 from .tracing.forward import trace_path as trace_path

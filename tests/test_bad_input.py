@@ -136,10 +136,18 @@ def test_zmx_image_with_thickness_means_a_cut_file():
 # ---------------------------------------------------------------- 3. XPOLYNOM cylinder
 
 
-def test_xpolynom_x2_alone_is_refused():
-    text = _minimal("  TYPE XPOLYNOM\n  XDAT 1 3\n  XDAT 2 1\n  XDAT 5 1e-3\n")
+def test_xpolynom_x2_alone_is_a_cylinder_but_not_a_hybrid():
+    """Zemax's XPOLYNOM with an x² term alone is the XYPolynomial cylinder; marked as
+    jaxlens's hybrid (its comment) it is refused: a hybrid's even part is in r²."""
+    text = _minimal("  TYPE XPOLYNOM\n  XDAT 1 3\n  XDAT 2 1\n  XDAT 3 0\n  XDAT 4 0\n"
+                    "  XDAT 5 1e-3\n")
+    s = zmx.loads(text).surfaces[0]
+    assert type(s) is jl.XYPolynomial
+    assert float(s.paraxial_curvature_x) == 2e-3 and float(s.paraxial_curvature) == 0.0
+    hybrid = _minimal("  TYPE XPOLYNOM\n  COMM jaxlens hybrid even=1 odd=0\n  XDAT 1 3\n"
+                      "  XDAT 2 1\n  XDAT 5 1e-3\n")
     with pytest.raises(ValueError, match=r"x\^0 y\^2 = 0\.0 does not fit the hybrid surface"):
-        zmx.loads(text)
+        zmx.loads(hybrid)
 
 
 # ---------------------------------------------------------------- 4. wavelengths

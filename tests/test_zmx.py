@@ -386,11 +386,19 @@ BAD = [
     ("", "  GLAS ___BLANK 1 0 abc 50\n", 12, r"model glass nd is not a number"),
     ("  @@@ garbage\n", "", 7, r"not a Zemax keyword line"),
     ("  STOP\nSURF 1\n", "", 8, r"expected 2"),
-    (
+    (  # jaxlens's hybrid comment: the polynomial must be a hybrid's
+        "  TYPE XPOLYNOM\n  COMM jaxlens hybrid even=1 odd=0\n  XDAT 1 4\n  XDAT 2 1\n"
+        "  XDAT 6 1e-3\n",
+        "",
+        11,
+        r"x\^1 y\^1 .* does not fit the hybrid surface",
+    ),
+    (  # without it, an XYPolynomial: every coefficient line up to XDAT N+2 must be there
         "  TYPE XPOLYNOM\n  XDAT 1 4\n  XDAT 2 1\n  XDAT 6 1e-3\n",
         "",
-        10,
-        r"x\^1 y\^1 .* does not fit the hybrid surface",
+        8,
+        r"XDAT 1 gives 4 extended-polynomial terms, so XDAT 3 … XDAT 6 are needed, but "
+        r"XDAT 3 is missing",
     ),
 ]
 

@@ -57,6 +57,7 @@ from ..optics.paraxial_surface import ParaxialSurface
 from ..optics.qtype import QTypeAsphere
 from ..optics.surfaces import EvenAsphere, Hybrid, OddAsphere, Standard, TiltedPlane
 from ..optics.toroidal import Toroidal
+from ..optics.xypolynomial import XYPolynomial, xy_term_powers
 from . import spots as analysis
 from .aberrations import field_curvature
 from .report_afocal import afocal_report_data, format_afocal_report
@@ -330,7 +331,8 @@ def _material_label(m) -> str:
 _ZEMAX_TYPE = {Standard: "STANDARD", EvenAsphere: "EVENASPH", OddAsphere: "ODDASPHE",
                Hybrid: "HYBRID", Toroidal: "TOROIDAL", ParaxialSurface: "PARAXIAL",
                CoordinateBreak: "COORDBRK", TiltedPlane: "TILTSURF", Binary2: "BINARY_2",
-               QTypeAsphere: "QED_TYPE", Grating: "DGRATING", Biconic: "BICONICX"}
+               QTypeAsphere: "QED_TYPE", Grating: "DGRATING", Biconic: "BICONICX",
+               XYPolynomial: "XPOLYNOM"}
 
 
 def _nonzero(prefix_values) -> str:
@@ -351,6 +353,10 @@ def _terms(s) -> str:
     if isinstance(s, QTypeAsphere):  # Q-bfs or Q-con, normalisation radius, a_0 … a_M
         return f"Q{s.qtype} R={float(s.norm_radius):.6g} " + _nonzero(
             (f"a{i}", v) for i, v in enumerate(np.asarray(s.coeffs)))
+    if isinstance(s, XYPolynomial):  # normalisation radius, A_i on (x/R)^m (y/R)^n
+        return f"R={float(s.norm_radius):.6g} " + _nonzero(
+            ("X{}Y{}".format(*xy_term_powers(i)), v)
+            for i, v in enumerate(np.asarray(s.coeffs), 1))
     if isinstance(s, OddAsphere):  # A<i> multiplies r^i
         return _nonzero((f"A{i}", v) for i, v in enumerate(np.asarray(s.coeffs), 1))
     out = []

@@ -172,6 +172,8 @@ def _check_surfaces(lens: Lens, where: str) -> list:
                 "TiltedPlane": "a tilted plane is not rotationally symmetric",
                 "Toroidal": "a toroid is not rotationally symmetric",
                 "QTypeAsphere": "Q-type aspheres are not handled",
+                "XYPolynomial": "an XY polynomial (Zemax XPOLYNOM) is not rotationally "
+                                "symmetric",
                 "ParaxialSurface": "an ideal paraxial surface has no surface aberrations of "
                                    "its own",
                 "Binary2": "a diffractive surface's aberrations are not a refracting "

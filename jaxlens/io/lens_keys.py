@@ -47,6 +47,7 @@ SURFACE = {
     # surface_json's kinds and per-surface data
     "y_coeffs": (), "focal_length": ("f", "efl", "focal"),
     "diffraction_order": (), "phase_coeffs": (), "lines_per_um": ("lpmm", "lines_per_mm"),
+    "polynomial_coeffs": ("xy_coeffs", "xy_polynomial_coeffs", "xpolynom_coeffs"),
     "tan_x": (), "tan_y": (), "decenter_x": (), "decenter_y": (), "tilt_x_deg": ("tilt_x",),
     "tilt_y_deg": ("tilt_y",), "tilt_z_deg": ("tilt_z",), "order": (), "mirror": ("reflect",),
     "obscuration": ("obsc",), "apertures": ("aperture",),

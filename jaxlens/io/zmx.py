@@ -44,9 +44,11 @@ What is read and written:
       power of x (x, y, x², xy, y², x³, …); XDAT 1 = the number of terms, XDAT 2 = the
       normalisation radius (written as 1, so the coefficients are the sag coefficients
       in mm). The r^{2i} terms are expanded binomially, (x² + y²)^i. This is exact: Zemax
-      computes the same sag. Reading checks that the polynomial has that structure and
-      raises otherwise. A surface comment ``jaxlens hybrid even=M odd=P`` keeps the
-      number of even and odd coefficients so the round trip restores the same shapes.
+      computes the same sag. A surface comment ``jaxlens hybrid even=M odd=P`` keeps the
+      number of even and odd coefficients so the round trip restores the same shapes;
+      reading such a surface checks that the polynomial has that structure and raises
+      otherwise. An ``XPOLYNOM`` without the comment is read as an ``XYPolynomial``
+      (``jaxlens.optics.xypolynomial``: any of the 230 terms).
     * ``DISZ`` (INFINITY for the object), ``STOP``, ``DIAM`` (the semi-diameter), and the
       surface apertures, which are what clip rays, as in Zemax: the semi-diameter alone
       never does (a fixed ``DIAM`` with no aperture clips nothing). ``CLAP 0 r 0``

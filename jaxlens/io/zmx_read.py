@@ -143,8 +143,10 @@ def _surface_of(s: ZmxSurface, unit: float) -> AbstractSurface:
         return zmx_surfaces.binary2(s, unit, sd)
     if s.type == "DGRATING":
         return zmx_surfaces.grating(s, sd, unit)
-    if s.type == "XPOLYNOM":
-        return _hybrid_from_xpoly(s, unit, c, sd)
+    if s.type == "XPOLYNOM":  # jaxlens's hybrid (its comment), else Zemax's XY polynomial
+        if HYBRID_COMMENT.search(s.comment):
+            return _hybrid_from_xpoly(s, unit, c, sd)
+        return zmx_surfaces.xy_polynomial(s, unit, sd)
     if s.type == "TOROIDAL":
         return zmx_surfaces.toroidal(s, unit, sd)
     if s.type == "PARAXIAL":

@@ -13,6 +13,7 @@ from . import materials as materials
 from . import paraxial as paraxial
 from . import qtype as qtype
 from . import surfaces as surfaces
+from . import xypolynomial as xypolynomial
 from .coordinates import CoordinateBreak as CoordinateBreak
 from .diffractive import Binary2 as Binary2
 from .diffractive import Grating as Grating
@@ -22,3 +23,4 @@ from .lens import Lens as Lens
 from .lens import Sensor as Sensor
 from .qtype import QTypeAsphere as QTypeAsphere
 from .rays import Rays as Rays
+from .xypolynomial import XYPolynomial as XYPolynomial

@@ -51,6 +51,7 @@ from .lens import Lens
 from .paraxial_surface import ParaxialSurface
 from .surfaces import Standard
 from .toroidal import Toroidal
+from .xypolynomial import XYPolynomial
 
 
 def _transfer(y, nu, d, n):
@@ -75,13 +76,14 @@ def surface_power(surface, n1, n2, wavelength=None):
 
 
 def x_section(lens: Lens) -> Lens:
-    """The lens as its x–z section sees it, for paraxial work: each ``Toroidal``, ``Biconic``
-    or ``ZernikeSag`` surface becomes the sphere of its x–z vertex curvature (same
+    """The lens as its x–z section sees it, for paraxial work: each ``Toroidal``, ``Biconic``,
+    ``ZernikeSag`` or ``XYPolynomial`` surface becomes the sphere of its x–z vertex curvature (same
     semi-diameter). Surfaces with
     the same vertex curvature in x and y are unchanged. Not for real-ray tracing."""
     surfaces = tuple(
         Standard(c=s.paraxial_curvature_x, k=0.0, semi_diameter=s.semi_diameter)
-        if isinstance(s, Toroidal | Biconic | ZernikeSag) else s for s in lens.surfaces)
+        if isinstance(s, Toroidal | Biconic | ZernikeSag | XYPolynomial) else s
+        for s in lens.surfaces)
     return eqx.tree_at(lambda m: m.surfaces, lens, surfaces)
 
 

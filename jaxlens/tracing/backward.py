@@ -39,6 +39,7 @@ from ..optics.surfaces import (
     TiltedPlane,
 )
 from ..optics.toroidal import Toroidal
+from ..optics.xypolynomial import XYPolynomial
 from .forward import DEFAULT_NEWTON_ITERS, trace
 
 __all__ = [
@@ -56,7 +57,7 @@ def mirror_surface(surface: AbstractSurface) -> AbstractSurface:
     Args:
         surface: a ``Standard``, ``EvenAsphere``, ``OddAsphere``, ``Hybrid``, ``Toroidal``,
             ``TiltedPlane``, ``ParaxialSurface``, ``Binary2``, ``QTypeAsphere``, ``Biconic``,
-            ``ZernikeSag`` or ``Grating``.
+            ``ZernikeSag``, ``XYPolynomial`` or ``Grating``.
 
     Returns:
         A surface of the same kind with c, the even, radial, odd and Q-type coefficients (and a
@@ -104,6 +105,10 @@ def mirror_surface(surface: AbstractSurface) -> AbstractSurface:
                           decenter_x=surface.decenter_x, decenter_y=surface.decenter_y,
                           semi_diameter=surface.semi_diameter, ordering=surface.ordering,
                           extrapolate=surface.extrapolate)
+    if isinstance(surface, XYPolynomial):  # the conic and every term negate
+        return XYPolynomial(c=-surface.c, k=surface.k, coeffs=-surface.coeffs,
+                            norm_radius=surface.norm_radius,
+                            semi_diameter=surface.semi_diameter)
     if isinstance(surface, TiltedPlane):
         return TiltedPlane(tan_x=-surface.tan_x, tan_y=-surface.tan_y,
                            semi_diameter=surface.semi_diameter)

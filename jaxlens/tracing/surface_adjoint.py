@@ -44,6 +44,7 @@ from ..optics.freeform import Biconic, ZernikeSag
 from ..optics.qtype import QTypeAsphere
 from ..optics.surfaces import EvenAsphere, Hybrid, OddAsphere, Standard, TiltedPlane
 from ..optics.toroidal import Toroidal
+from ..optics.xypolynomial import XYPolynomial
 from .step import (
     T_MAX,
     RayState,
@@ -59,7 +60,7 @@ from .step import (
 # refracts at the normal (−s_x, −s_y, 1) of ``sag_and_grad``, and nothing else (a listed kind,
 # so a new kind with its own rules in ``surface_step`` is not taken by mistake).
 SAG_KINDS = (EvenAsphere, OddAsphere, Hybrid, TiltedPlane, Toroidal, QTypeAsphere, Biconic,
-             ZernikeSag)
+             ZernikeSag, XYPolynomial)
 
 
 def supported(surface, *, reflects=False, obscured=None, apertures=()) -> bool:
