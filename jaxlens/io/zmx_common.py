@@ -7,6 +7,10 @@ import math
 import re
 import warnings
 
+# The extended polynomial's term order is the XYPolynomial surface's (one definition).
+from ..optics.xypolynomial import xy_term_index as term_index  # noqa: F401
+from ..optics.xypolynomial import xy_term_powers as term_powers  # noqa: F401
+
 ZEMAX_CATALOGS = frozenset(
     "SCHOTT CDGM OHARA HOYA SUMITA HIKARI HIKARI_CHINA MISC ZEON INFRARED BIREFRINGENT "
     "ARCHER ARTON CORNING HERAEUS ISUZU LIGHTPATH LZOS NHG NIKON OSAKAGASCHEMICAL RPO "
@@ -41,21 +45,6 @@ def report(strict: bool, msg: str) -> None:
     if strict:
         raise ValueError(msg + " (strict mode)")
     warnings.warn(msg, ZmxWarning, stacklevel=4)
-
-
-def term_powers(j: int) -> tuple[int, int]:
-    """(power of x, power of y) of Zemax extended-polynomial term j (1-based)."""
-    d = int((math.isqrt(8 * j + 1) - 1) // 2)
-    while d * (d + 1) // 2 > j:
-        d -= 1
-    while (d + 1) * (d + 2) // 2 <= j:
-        d += 1
-    return d - (j - d * (d + 1) // 2), j - d * (d + 1) // 2
-
-
-def term_index(mx: int, ny: int) -> int:
-    d = mx + ny
-    return d * (d + 1) // 2 + ny
 
 
 def xpoly_terms(a, bx, by) -> dict:
