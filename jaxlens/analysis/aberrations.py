@@ -185,6 +185,7 @@ def field_curvature(lens: Lens, fields=None, wavelengths=None, *, depth=None,
         A ``FieldCurvature`` (mm from the image surface, along z; ``astigmatism`` is their
         difference).
     """
+    checks.focal_image(lens, "field_curvature")
     f, wl = _inputs(lens, "field_curvature",
                     default_fields(lens) if fields is None else fields, wavelengths, pairs=True)
     return _field_curvature(lens, f, wl, depth=lens_depth(lens, depth, "field_curvature"),

@@ -213,6 +213,7 @@ def relative_illumination(
         applies.
     """
     where = "relative_illumination"
+    checks.focal_image(lens, where)
     checks.number(pupil, "pupil", where, lo=1, integer=True, unit="cells per side")
     dtype = jnp.result_type(float)
     f = jnp.asarray(checks.field_angles(fields, where, "fields"), dtype)

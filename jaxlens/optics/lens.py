@@ -40,8 +40,9 @@ Conventions:
     seventh value): the lens images to infinity (a telescope, a beam expander), so its image
     is a set of directions, not of points. Tracing and the paraxial data are the same; the
     analyses that measure positions on the image surface in mm (``rms_spot``,
-    ``distortion``, ``ray_fan``, ``seidel``, the PSFs, ``encircled_energy``, ``render``,
-    the distortion maps) refuse such a lens, ``analysis.angular_spot`` and
+    ``distortion``, ``ray_fan``, ``field_curvature``, ``seidel``, the PSFs,
+    ``encircled_energy``, ``relative_illumination``, ``render``, the distortion maps)
+    refuse such a lens, ``analysis.angular_spot`` and
     ``analysis.angular_magnification`` give its angular data, ``analysis.wavefront``
     references its wavefront to a plane, and the report is the afocal one.
 
