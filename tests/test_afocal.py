@@ -99,6 +99,21 @@ def test_an_ideal_telescope_has_no_angular_blur_and_magnifies_by_minus_f1_over_f
     assert got == pytest.approx(marginal / np.sqrt(2.0), rel=0.02)  # RMS over a uniform disc
 
 
+def test_a_mersenne_beam_reducer_is_erect_and_sharp_on_axis():
+    """Two confocal paraboloids (concave f = 100 mm, convex f = −25 mm, 75 mm apart): an
+    erect 4× telescope (u′/u = +4), without aberration on axis; the beam leaves along +z
+    after the two mirrors, where the output angles are measured from."""
+    air = jl.Air()
+    lens = jl.Lens(surfaces=(jl.Standard(c=-1 / 200, k=-1.0), jl.Standard(c=-1 / 50, k=-1.0)),
+                   thickness=jnp.array([-75.0, 100.0]), materials=(air, air), mirrors=(0, 1),
+                   epd=40.0, fields=(0.0, 0.01, 0.1), afocal_image=True)
+    assert float(angular_magnification(lens)) == pytest.approx(4.0, rel=1e-14)
+    s = angular_spot(lens)
+    assert float(s.per_wavelength[0, 0]) < 1e-12 and np.all(np.asarray(s.valid_fraction) == 1)
+    assert float(s.magnification[1]) == pytest.approx(4.0, rel=1e-5)  # → 4 toward the axis
+    assert float(s.chief_angle[2, 1]) == pytest.approx(0.4, rel=1e-4)  # erect: same sign
+
+
 def test_image_plane_analyses_refuse_an_afocal_lens():
     lens = _ideal()
     calls = {
