@@ -49,7 +49,7 @@ import numpy as np
 from jaxtyping import Array, Float
 
 from . import checks
-from .surfaces import AbstractSurface, guarded_sqrt, number_field
+from .surfaces import AbstractSurface, number_field
 
 MAX_XY_DEGREE = 20
 """The highest total degree of an extended polynomial (Zemax's limit)."""
@@ -195,9 +195,7 @@ class XYPolynomial(AbstractSurface):
     def sag_and_grad(self, x, y):
         """Sag and (dz/dx, dz/dy), finite everywhere (zero gradient outside the domain)."""
         r2 = x * x + y * y
-        z, inside = self.conic_sag(r2)
-        root, _ = guarded_sqrt(1.0 - (1.0 + self.k) * self.c**2 * r2)
-        dr_over_r = self.c / jnp.where(inside, root, 1.0)  # (dz/dr)/r of the conic
+        z, dr_over_r, inside = self.conic_sag_and_slope(r2)
         gx, gy = x * dr_over_r, y * dr_over_r
         if self.coeffs.shape[0]:
             inv = 1.0 / self.norm_radius
