@@ -33,6 +33,8 @@ SCRIPT = textwrap.dedent(
     path = jax.eval_shape(lambda: jl.trace_path(lens, rays))
     assert out.origin.shape == (n, 3) and path.origin.shape[-2:] == (n, 3)
     jax.eval_shape(lambda: jl.paraxial_data(lens))
+    spot = jax.eval_shape(lambda: jl.analysis.angular_spot(lens))
+    assert spot.per_wavelength.shape == (3, 3) and spot.chief_angle.shape == (3, 2)
     k = jax.eval_shape(lambda: jl.psf(lens, jnp.asarray([0.0, 5.0]), kernel_size=9,
                                       pixel_size=0.01))
     assert k.shape[-2:] == (9, 9)

@@ -1,4 +1,5 @@
 """Real-ray analysis: spots, RMS, distortion, ray fans, field curvature, encircled energy,
+angular spots and magnification (afocal image space),
 third-order (Seidel) aberrations, wavefront error and Zernike fits, clear apertures, geometry
 checks, tolerancing, the report."""
 
@@ -7,6 +8,9 @@ from .aberrations import FieldCurvature as FieldCurvature
 from .aberrations import RayFan as RayFan
 from .aberrations import field_curvature as field_curvature
 from .aberrations import ray_fan as ray_fan
+from .afocal import AngularSpot as AngularSpot
+from .afocal import angular_magnification as angular_magnification
+from .afocal import angular_spot as angular_spot
 from .encircled import EncircledEnergy as EncircledEnergy
 from .encircled import encircled_energy as encircled_energy
 from .encircled import radius_for_fraction as radius_for_fraction
