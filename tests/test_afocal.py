@@ -121,6 +121,7 @@ def test_image_plane_analyses_refuse_an_afocal_lens():
         "distortion": lambda: jl.analysis.distortion(lens),
         "ray_fan": lambda: jl.analysis.ray_fan(lens, 0.5),
         "field_curvature": lambda: jl.analysis.field_curvature(lens),
+        "ToleranceModel": lambda: jl.analysis.tolerance.ToleranceModel(lens),
         "relative_illumination": lambda: jl.imaging.radiometry.relative_illumination(lens,
                                                                                       [0.0]),
         "seidel": lambda: jl.analysis.seidel(lens),

@@ -393,6 +393,7 @@ class ToleranceModel:
     def __init__(self, lens: Lens, *, fields=None, field_weights=None, wavelengths=None,
                  pupil=None, tolerances: Tolerances | None = None, batch: int = 25,
                  apertures: str = "open"):
+        checks.focal_image(lens, "ToleranceModel")  # its metrics are spot sizes in µm
         _refuse_surfaces(lens, "ToleranceModel")
         self.tolerances = Tolerances() if tolerances is None else tolerances
         if not isinstance(self.tolerances, Tolerances):
