@@ -84,6 +84,7 @@ def psf_points(
         raise TypeError(f"psf_points: model must be a PSF model object, got "
                         f"{type(model).__name__}")
     model.check("psf_points")
+    checks.focal_image(lens, "psf_points")
     kernel_size = checks.static_int(kernel_size)  # a static size: never a numpy scalar
     if isinstance(kernel_size, bool) or not isinstance(kernel_size, int) or kernel_size < 1:
         raise ValueError(f"psf_points: kernel_size must be a positive int, got {kernel_size!r}")
