@@ -15,6 +15,7 @@ import jaxlens as jl
 from jaxlens.__main__ import main
 from jaxlens.analysis.afocal import angular_magnification, angular_spot
 from jaxlens.imaging.sampling import field_rays
+from jaxlens.imaging.tiled import psf_points
 from jaxlens.optics.paraxial_surface import ParaxialSurface
 
 KEPLER = pathlib.Path(__file__).parent / "data" / "zmx" / "jaxlens_afocal_kepler.zmx"
@@ -122,6 +123,9 @@ def test_image_plane_analyses_refuse_an_afocal_lens():
         "ray_fan": lambda: jl.analysis.ray_fan(lens, 0.5),
         "field_curvature": lambda: jl.analysis.field_curvature(lens),
         "ToleranceModel": lambda: jl.analysis.tolerance.ToleranceModel(lens),
+        "psf_points": lambda: psf_points(lens, jnp.zeros((1, 2)), jnp.inf,
+                                         wavelengths=lens.wavelengths, kernel_size=5,
+                                         pixel_size=0.005),
         "relative_illumination": lambda: jl.imaging.radiometry.relative_illumination(lens,
                                                                                       [0.0]),
         "seidel": lambda: jl.analysis.seidel(lens),
