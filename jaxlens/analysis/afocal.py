@@ -145,7 +145,6 @@ def _frame(c):
 
 @eqx.filter_jit
 def _angular_spot(lens, fields, wavelengths, pupil, *, reference, depth) -> AngularSpot:
-    m = pupil.shape[0]
     centre = jnp.zeros((1, 2), pupil.dtype)
     s = image_axis_sign(lens)
 
@@ -161,9 +160,9 @@ def _angular_spot(lens, fields, wavelengths, pupil, *, reference, depth) -> Angu
             ok = r.valid & (dc > 0)
             safe = jnp.where(ok, dc, 1.0)
             a = jnp.stack([r.direction @ ex, r.direction @ ey], -1) / safe[:, None]
-            return jnp.where(ok[:, None], a, 0.0), ok.astype(a.dtype)
+            return jnp.where(ok[:, None], a, 0.0), ok.astype(a.dtype), r.valid
 
-        a, wgt = jax.vmap(per_wl)(wavelengths)  # [W, M, 2], [W, M]
+        a, wgt, valid = jax.vmap(per_wl)(wavelengths)  # [W, M, 2], [W, M], [W, M]
         ref = (weighted_centroid(a, wgt) if reference == "centroid"
                else jnp.zeros(a.shape[:1] + (2,), a.dtype))
         per = weighted_rms(a, wgt, ref)
@@ -179,7 +178,7 @@ def _angular_spot(lens, fields, wavelengths, pupil, *, reference, depth) -> Angu
         t2 = jnp.dot(t, t)
         mag = jnp.dot(tan_out, t) / jnp.where(t2 > 0, t2, 1.0)
         mag = jnp.where(c_ok & (axial > 0) & (t2 > 0) & (depth is None), mag, jnp.nan)
-        return per, poly, jnp.sum(wgt, -1) / m, angle, mag
+        return per, poly, jnp.mean(valid, -1, dtype=a.dtype), angle, mag
 
     per, poly, frac, angle, mag = jax.vmap(per_field)(fields)
     return AngularSpot(per, poly, frac, angle, mag)
