@@ -143,6 +143,17 @@ def test_image_plane_analyses_refuse_an_afocal_lens():
                 afocal_image=1)
 
 
+def test_angular_spot_refuses_bad_input_before_tracing():
+    lens = _ideal()
+    for kw, match in ((dict(pupil=np.array([[np.nan, 0.0]])), r"pupil .*holds 1 NaN"),
+                      (dict(fields=[95.0]), r"fields must be finite angles in \(-90, 90\)"),
+                      (dict(wavelengths=[]), r"wavelengths must be \[W\] µm with W >= 1"),
+                      (dict(reference="best"), "reference must be one of"),
+                      (dict(depth=-5.0), r"depth must be finite numbers in \(0, inf\) mm")):
+        with pytest.raises(ValueError, match=match):
+            angular_spot(lens, **kw)
+
+
 def test_the_flag_survives_zmx_and_json(tmp_path):
     lens = jl.load(KEPLER, strict=True)
     jl.save(lens, tmp_path / "k.zmx")

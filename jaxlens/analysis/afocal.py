@@ -109,6 +109,8 @@ def angular_spot(
                          ("pupil", pupil, "normalised pupil coordinates")):
         if v is not None and not checks.is_traced(v):
             checks.real_values(v, arg, where, unit)
+    if pupil is not None and not checks.is_traced(pupil):
+        checks.finite_array(pupil, "pupil", where, "normalised pupil coordinates")
     if not checks.is_traced(fields):
         checks.field_angles(fields, where, "fields")
     if not checks.is_traced(wavelengths):
