@@ -18,11 +18,11 @@ from jaxlens.imaging.sampling import field_rays
 from jaxlens.imaging.tiled import psf_points
 from jaxlens.optics.paraxial_surface import ParaxialSurface
 
-KEPLER = pathlib.Path(__file__).parent / "data" / "zmx" / "jaxlens_afocal_kepler.zmx"
+KEPLER = pathlib.Path(__file__).parent / "data" / "afocal_kepler.zmx"
 
 # optiland 0.6.3, the same file, primary wavelength 0.5875618 µm, N-BK7 at jaxlens's index
 # 1.5168000345005883 (SCHOTT's) (/work/optiland_venv/bin/python tools/afocal_reference.py
-# tests/data/zmx/jaxlens_afocal_kepler.zmx).
+# tests/data/afocal_kepler.zmx).
 DIRECTIONS = [  # (field deg, Px, Py, L, M, N)
     (0.0, 0.0, 0.0, 0.0, 0.0, 0.9999999999999993),
     (0.0, 0.0, 1.0, 0.0, 0.0006900770141974322, 0.9999997618968293),
@@ -197,6 +197,6 @@ def test_the_report_of_an_afocal_lens_gives_angles(capsys, tmp_path):
     # --plot draws what has a meaning and names the rest, with the reason.
     assert main(["report", str(KEPLER), "--plot", str(tmp_path)]) == 0
     err = capsys.readouterr().err
-    assert (tmp_path / "jaxlens_afocal_kepler_layout.png").exists()
-    assert not (tmp_path / "jaxlens_afocal_kepler_spots.png").exists()
+    assert (tmp_path / "afocal_kepler_layout.png").exists()
+    assert not (tmp_path / "afocal_kepler_spots.png").exists()
     assert "spots.png not drawn: plot_spots: the lens has an afocal image space" in err

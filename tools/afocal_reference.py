@@ -2,7 +2,7 @@
 optiland 0.6.3 (a reference, not a jaxlens dependency):
 
     /work/optiland_venv/bin/python tools/afocal_reference.py \
-        tests/data/zmx/jaxlens_afocal_kepler.zmx
+        tests/data/afocal_kepler.zmx
 
 optiland has no afocal analysis, but its real rays leave the telescope with the same
 directions whatever the mode, so the script traces them (primary wavelength, paraxial ray
