@@ -243,6 +243,12 @@ def check_args(args, given=None) -> None:
     n(args.tolerance_aware, "--tolerance-aware", w, lo=0, integer=True)
     n(args.population, "--population", w, lo=1, hi=64, integer=True, unit="starts per design")
     n(args.tolerance_threshold, "--tolerance-threshold", w, lo=0, lo_open=True, unit="µm")
+    for flag, text in (("--materials", args.materials),
+                       ("--material-catalogs", args.material_catalogs)):
+        # An empty entry was dropped: "E48R,,OKP4" gave 2 materials for 3 elements.
+        if text is not None and not all(p.strip() for p in text.split(",")):
+            raise ValueError(f"{w}: {flag} must be comma-separated names without an empty "
+                             f"one, got {text!r}")
     if args.seed_list is not None:
         parts = [p.strip() for p in args.seed_list.split(",")]
         if not parts or not all(p.isdigit() for p in parts):

@@ -13,6 +13,7 @@ optical glass model is meant for outside. Field angles are in degrees and must l
 from __future__ import annotations
 
 import math
+import re
 
 import equinox as eqx
 import jax
@@ -49,6 +50,25 @@ def interval(lo, hi, lo_open, hi_open) -> str:
     low = "-inf" if lo is None else f"{lo:g}"
     high = "inf" if hi is None else f"{hi:g}"
     return f"{left}{low}, {high}{right}"
+
+
+_NUMBER_TEXT = re.compile(r"[+-]?(?:\d+\.?\d*|\.\d+)(?:[eEdD][+-]?\d+)?", re.ASCII)
+_SPECIAL_TEXT = {"inf": math.inf, "+inf": math.inf, "-inf": -math.inf, "infinity": math.inf,
+                 "+infinity": math.inf, "-infinity": -math.inf, "nan": math.nan}
+
+
+def number_text(token: str) -> float:
+    """The number a token of a text file (``.zmx``, ``.agf``) writes: decimal digits with an
+    optional point, sign and exponent (``E`` or Fortran's ``D``), or inf/infinity/nan (any
+    case; the caller refuses what it cannot use). Raises ``ValueError`` otherwise: Python's
+    ``float`` also reads ``"1_0"`` as 10 and other digit scripts, which no optics program
+    writes (``"1_03961212"``, a garbled ``1.03961212``, became 103961212)."""
+    t = token.strip()
+    if t.lower() in _SPECIAL_TEXT:
+        return _SPECIAL_TEXT[t.lower()]
+    if not _NUMBER_TEXT.fullmatch(t):
+        raise ValueError(f"not a number: {token!r}")
+    return float(t.replace("D", "E").replace("d", "e"))
 
 
 def switch(value, arg: str, where: str) -> bool:

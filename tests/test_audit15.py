@@ -1,0 +1,165 @@
+"""Round 15 of bad-input and silent-answer probes (``tools/audit15_probe.py``).
+
+An AGF glass record that disagrees with itself (its NM record's nd against its CD record's
+formula, a CD or LD record given twice, a formula number 2.7), a number token that only
+Python reads (``1_03961212``), ``is_stop`` on a JSON file's object or image row, a ``Lens``
+with a sensor or name of the wrong type, ``register_catalog`` of something that is neither a
+file nor a mapping, and the classical CLI's comma lists with an empty entry.
+"""
+
+import json
+import os
+
+import numpy as np
+import pytest
+
+import jaxlens as jl
+from jaxlens.experiments import classical
+from jaxlens.io import zmx
+from jaxlens.io.lensfile import lens_from_dict
+from jaxlens.optics import checks
+from jaxlens.optics.catalog import parse_agf
+
+HERE = os.path.dirname(__file__)
+ROOT = os.path.dirname(HERE)
+LENSES = os.path.join(ROOT, "jaxlens", "data", "lenses")
+
+# N-BK7's records (SCHOTT 2013): nd 1.5168, Sellmeier 1 (formula 2).
+AGF = """CC test catalog
+NM GA 2 517642.251 1.5168 64.17 0 1
+CD 1.03961212 0.00600069867 0.231792344 0.0200179144 1.01046945 103.560653
+LD 0.3 2.5
+"""
+
+
+def _agf(tmp_path, text, name="X.agf"):
+    p = tmp_path / name
+    p.write_text(text, newline="")
+    return jl.load_agf(p)
+
+
+def test_a_consistent_agf_record_still_loads(tmp_path):
+    m = _agf(tmp_path, AGF)["GA"]
+    assert float(m.index(0.5875618)) == pytest.approx(1.5168, abs=1e-5)
+
+
+AGF_BAD = [
+    # (what, old, new, message). Before: each loaded; the index is what the glass then had.
+    ("nd of another glass", "1.5168 64.17", "1.9 20",  # n(d) stayed 1.5168, glass_info 1.9
+     r"X\.agf:2: glass GA of catalog X: its NM record gives nd 1\.9, but its CD coefficients "
+     r"with formula 2 \(Sellmeier 1\) give n = 1\.5168 at the d line"),
+    ("wrong formula number", "NM GA 2 ", "NM GA 1 ",  # Schott formula: n(d) = 85.5
+     r"X\.agf:2: .*formula 1 \(Schott\) give n = 85\.5"),
+    ("formula 2.7", "NM GA 2 ", "NM GA 2.7 ",  # read as formula 2
+     r"X\.agf:2: formula number of GA must be a whole number .*got '2\.7'"),
+    ("underscore in a coefficient", "CD 1.03961212", "CD 1_03961212",  # n(d) = 10285.9
+     r"X\.agf:3: CD coefficients must be finite numbers, got '1_03961212"),
+    ("empty CD record", "CD 1.03961212 0.00600069867 0.231792344 0.0200179144 1.01046945 "
+     "103.560653", "CD",  # n = 1 at every wavelength
+     r"X\.agf:3: CD record of glass GA holds no coefficients"),
+    ("CD twice", "LD 0.3", "CD 2 0.1 0 0 0 0\nLD 0.3",  # the second won: n(d) = 1.9533
+     r"X\.agf:4: CD record given twice for glass GA \(first on line 3\)"),
+    ("LD twice", "LD 0.3 2.5", "LD 0.3 2.5\nLD 0.4 1.0",  # the second range won
+     r"X\.agf:5: LD record given twice for glass GA \(first on line 4\)"),
+    ("nd NaN", "1.5168 64.17", "nan 64.17",  # catalog_nd NaN
+     r"X\.agf:2: nd and Vd of GA must be finite numbers, got 'nan 64\.17'"),
+    ("nd below 1", "1.5168 64.17", "0.5 64.17",
+     r"X\.agf:2: GA needs nd in \[1, 4\.5\] and Vd >= 0 .*got nd 0\.5, Vd 64\.17"),
+    ("negative Vd", "1.5168 64.17", "1.5168 -5",
+     r"X\.agf:2: GA needs nd in \[1, 4\.5\] and Vd >= 0 .*got nd 1\.5168, Vd -5"),
+    ("LD to inf", "LD 0.3 2.5", "LD 0.3 inf",  # range (0.3, inf)
+     r"X\.agf:4: LD wavelengths must be finite numbers, got '0\.3 inf'"),
+]
+
+
+@pytest.mark.parametrize(("what", "old", "new", "match"), AGF_BAD, ids=[c[0] for c in AGF_BAD])
+def test_an_agf_record_that_disagrees_with_itself_is_refused_naming_the_line(
+        tmp_path, what, old, new, match):
+    assert old in AGF
+    with pytest.raises(ValueError, match=match):
+        _agf(tmp_path, AGF.replace(old, new, 1))
+
+
+def test_ir_materials_without_d_line_data_still_load():
+    """nd 1, Vd 0 is the catalogs' "no d-line data" mark: no nd to compare with."""
+    znse = jl.get_material("ZNSE", "INFRARED")
+    assert znse.catalog_nd == 1.0 and float(znse.index(10.0)) == pytest.approx(2.4, abs=0.01)
+
+
+def test_a_bom_kept_by_a_text_read_is_no_part_of_the_first_line():
+    """Before: parse_agf gave "CD record before any NM record" on line 2 (the BOM made the
+    first NM line's key unknown), and zmx.loads "not a Zemax keyword line" on line 1."""
+    assert [r.name for r in parse_agf("\ufeff" + AGF.split("\n", 1)[1])] == ["GA"]
+    with open(os.path.join(LENSES, "cooke_triplet.zmx")) as fh:
+        text = fh.read()
+    lens = zmx.loads("\ufeff" + text, "t.zmx")
+    assert float(jl.efl(lens)) == pytest.approx(50.0214, abs=1e-3)
+
+
+@pytest.mark.parametrize("token", ["4_5e-2", "٤.5e-2", "0x10", "4,5e-2", "1e", "."])
+def test_zmx_numbers_are_plain_decimals(token):
+    """Before: CURV 4_5e-2 was read as 0.45 (Python's float takes underscores): the Cooke
+    triplet's EFL became 4.82 mm instead of 50.02 mm."""
+    with open(os.path.join(LENSES, "cooke_triplet.zmx")) as fh:
+        text = fh.read()
+    old = "CURV 4.5426484276303865E-002"
+    assert old in text
+    with pytest.raises(ValueError, match=r"t\.zmx:24: curvature is not a number"):
+        zmx.loads(text.replace(old, f"CURV {token}"), "t.zmx")
+
+
+def test_number_text_reads_what_optics_files_write():
+    for tok, v in [("1", 1.0), ("-1.5", -1.5), ("+.5", 0.5), ("2.", 2.0), ("1E+001", 10.0),
+                   ("1.5D-3", 1.5e-3), ("1.5d2", 150.0), ("INFINITY", np.inf), ("-inf", -np.inf)]:
+        assert checks.number_text(tok) == v
+    assert np.isnan(checks.number_text("NaN"))
+
+
+@pytest.mark.parametrize("row", [0, -1], ids=["object", "image"])
+def test_json_is_stop_on_the_object_or_image_row_is_refused(row):
+    """Before: ignored; the stop stayed on surface 4 (or on surface 1 without another)."""
+    with open(os.path.join(LENSES, "cooke_triplet.json")) as fh:
+        d = json.load(fh)
+    d["surfaces"][row]["is_stop"] = True
+    where = "surface 0" if row == 0 else "image surface"
+    with pytest.raises(ValueError, match=rf"^t\.json: {where}: the object or image surface "
+                                         rf"cannot be the stop"):
+        lens_from_dict(d, source="t.json")
+    d["surfaces"][row]["is_stop"] = False  # false says nothing: still fine
+    assert lens_from_dict(d, source="t.json").stop == 3
+
+
+@pytest.mark.parametrize(("kw", "match"), [
+    (dict(sensor=5), r"Lens: sensor must be None or a jaxlens\.Sensor, got int 5"),
+    (dict(sensor=(100, 100)), r"Lens: sensor must be None or a jaxlens\.Sensor, got tuple"),
+    (dict(name=5), r"Lens: name must be a string, got int 5"),
+])
+def test_lens_sensor_and_name_must_be_of_their_type(kw, match):
+    """Before: accepted; render failed later on ``sensor.resolution`` of an int."""
+    lens = jl.zoo.cooke_triplet()
+    with pytest.raises(TypeError, match=match):
+        jl.Lens(surfaces=lens.surfaces, thickness=lens.thickness, materials=lens.materials,
+                **kw)
+
+
+def test_register_catalog_names_its_argument():
+    """Before: "expected str, bytes or os.PathLike object, not int" from inside open()."""
+    with pytest.raises(TypeError, match=r"register_catalog: source must be an \.agf file"):
+        jl.register_catalog(5)
+    air = jl.Air()
+    with pytest.raises(ValueError, match=r"register_catalog: every key must be a glass name"):
+        jl.register_catalog({5: air})
+    # Before: "GX" silently replaced "gx" (lookups ignore case).
+    with pytest.raises(ValueError, match=r"'GX' and another spelling of it differ only in "
+                                         r"case"):
+        jl.register_catalog({"gx": air, "GX": jl.ModelGlass(nd=1.5, vd=60.0)})
+
+
+@pytest.mark.parametrize("argv", [["--materials", "E48R,,OKP4", "--elements", "2"],
+                                  ["--material-catalogs", "SCHOTT,,CDGM"]])
+def test_classical_cli_refuses_an_empty_entry_of_a_list(argv, tmp_path, capsys):
+    """Before: the empty entry was dropped, so "E48R,,OKP4" designed 2 elements."""
+    assert classical.main(["--smoke", "--out", str(tmp_path / "run"), *argv]) == 2
+    err = capsys.readouterr().err
+    assert "must be comma-separated names without an empty one" in err
+    assert not (tmp_path / "run").exists()
