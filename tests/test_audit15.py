@@ -163,3 +163,25 @@ def test_classical_cli_refuses_an_empty_entry_of_a_list(argv, tmp_path, capsys):
     err = capsys.readouterr().err
     assert "must be comma-separated names without an empty one" in err
     assert not (tmp_path / "run").exists()
+
+
+def test_an_optimised_catalog_glass_is_written_with_its_own_nd(tmp_path):
+    """A catalog glass whose coefficients were changed (optimised) kept its catalog nd on
+    export: the written AGF record said nd 1.5168 beside coefficients giving 1.5254 (and
+    the GLAS line too), which load_agf now refuses; the writer gives the model's nd."""
+    import equinox as eqx
+
+    agf = tmp_path / "MYCAT.agf"
+    agf.write_text(AGF.replace("NM GA", "NM ONE"))
+    m = eqx.tree_at(lambda g: g.model.B, jl.load_agf(agf)["ONE"],
+                    jl.load_agf(agf)["ONE"].model.B * 1.02)
+    lens = jl.Lens(surfaces=(jl.Standard(c=0.02), jl.Standard(c=-0.02), jl.Standard(c=0.0)),
+                   thickness=[3.0, 40.0, 0.0], materials=(m, jl.Air(), jl.Air()), epd=5.0)
+    out = tmp_path / "out"
+    out.mkdir()
+    jl.save(lens, out / "u.zmx")
+    back = jl.load(out / "u.zmx")
+    nd = float(m.index(0.5875618))
+    assert nd == pytest.approx(1.52535, abs=1e-5)
+    assert float(back.materials[0].index(0.5875618)) == pytest.approx(nd, abs=1e-12)
+    assert back.materials[0].catalog_nd == pytest.approx(nd, abs=1e-9)
