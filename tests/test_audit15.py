@@ -185,3 +185,77 @@ def test_an_optimised_catalog_glass_is_written_with_its_own_nd(tmp_path):
     assert nd == pytest.approx(1.52535, abs=1e-5)
     assert float(back.materials[0].index(0.5875618)) == pytest.approx(nd, abs=1e-12)
     assert back.materials[0].catalog_nd == pytest.approx(nd, abs=1e-9)
+
+
+# ------------------------------------------------ checks that jit, grad and vmap skipped
+def _cooke_with_sensor():
+    import equinox as eqx
+
+    lens = jl.zoo.cooke_triplet()
+    return eqx.tree_at(lambda m: m.sensor, lens, jl.Sensor((16, 16), 0.01),
+                       is_leaf=lambda x: x is None)
+
+
+def _traced_calls():
+    import jax
+    import jax.numpy as jnp
+
+    from jaxlens.analysis.encircled import encircled_energy, radius_for_fraction
+    from jaxlens.imaging import distortion
+
+    lens = _cooke_with_sensor()
+    scene = jnp.ones((16, 16, 3))
+    # (id, function of one traced argument, its bad value, message). Before: each returned
+    # a number without a word, noted beside it.
+    return [
+        ("radius_for_fraction", lambda f: radius_for_fraction(lens, 0.0, f), 1.5,  # NaN
+         r"radius_for_fraction: fraction must be finite numbers in \(0, 1\)"),
+        ("radius_for_fraction_negative", lambda f: radius_for_fraction(lens, 0.0, f), -0.5,
+         r"radius_for_fraction: fraction must be finite numbers in \(0, 1\)"),  # 9.8e-5 mm
+        ("encircled_energy", lambda r: encircled_energy(lens, 0.0, r).energy,
+         np.array([-1.0, 0.01]), r"encircled_energy: radii must be finite numbers in "
+                                 r"\[0, inf\) mm"),  # energy 0 within -1 mm
+        ("psf", lambda p: jl.psf(lens, 0.0, pixel_size=p, kernel_size=7), -1e-3,
+         r"psf: pixel_size must be finite numbers in \(0, inf\) mm"),  # a PSF summing to 1
+        # A negative penalty, which rewards distortion:
+        ("alignment_penalty", lambda a: distortion.alignment_penalty(lens, alpha=a,
+                                                                     grid=(3, 3)), -1.0,
+         r"alignment_penalty: alpha must be finite numbers in \[0, inf\) \(weight\)"),
+        ("inverse_distortion_map", lambda p: distortion.inverse_distortion_map(
+            lens, resolution=(8, 8), pixel_size=p, grid=(3, 3)), -0.01,
+         r"inverse_distortion_map: pixel_size must be finite numbers in \(0, inf\) mm"),
+        ("render", lambda s: jl.render(lens, s, spp=1, key=jax.random.key(0)), -scene,
+         r"render: scene must be finite numbers in \[0, inf\) \(linear radiance\)"),
+    ]
+
+
+CALLS = ["radius_for_fraction", "radius_for_fraction_negative", "encircled_energy", "psf",
+         "alignment_penalty", "inverse_distortion_map",
+         pytest.param("render", marks=pytest.mark.slow)]  # 6.6 s here
+
+
+@pytest.mark.parametrize("which", CALLS)
+def test_a_traced_argument_gets_the_range_check_a_concrete_one_gets(which):
+    import equinox as eqx
+    import jax.numpy as jnp
+
+    _, fn, bad, match = next(c for c in _traced_calls() if c[0] == which)
+    with pytest.raises(Exception, match=match):  # EquinoxRuntimeError, raised at run time
+        out = eqx.filter_jit(fn)(jnp.asarray(bad))
+        np.asarray(out)
+
+
+def test_number_of_a_traced_value_keeps_its_range():
+    import jax
+    import jax.numpy as jnp
+
+    def f(p):
+        return checks.number(p, "pixel_size", "probe", lo=0, lo_open=True, unit="mm") * 2.0
+
+    assert float(jax.jit(f)(jnp.asarray(0.5))) == 1.0
+    assert float(jax.grad(f)(0.5)) == 2.0
+    with pytest.raises(Exception, match=r"probe: pixel_size must be finite numbers in "
+                                        r"\(0, inf\) mm"):
+        np.asarray(jax.jit(f)(jnp.asarray(-0.5)))
+    with pytest.raises(ValueError, match=r"probe: n must be one concrete whole number"):
+        jax.jit(lambda n: checks.number(n, "n", "probe", lo=0, integer=True))(3)

@@ -452,6 +452,99 @@ def json_reader():
         show(f"json {name}", lambda: json_try(mod(f)))
 
 
+
+@probe
+def analyses():
+    import equinox as eqx
+
+    from jaxlens.analysis import spots
+    from jaxlens.analysis.encircled import encircled_energy, radius_for_fraction
+    c = cooke
+    show("rms_spot fields=[]", lambda: spots.rms_spot(c, fields=[]).rms)
+    show("rms_spot wl=[]", lambda: spots.rms_spot(c, wavelengths=[]).rms)
+    show("rms_spot wl=[[0.5]]", lambda: spots.rms_spot(c, wavelengths=[[0.5876]]).rms)
+    show("rms_spot fields [[1,2,3]]", lambda: spots.rms_spot(c, fields=[[1.0, 2.0, 3.0]]).rms)
+    show("rms_spot reference=Chief", lambda: spots.rms_spot(c, reference="Chief").rms)
+    show("rms_spot pupil empty", lambda: spots.rms_spot(c, pupil=jnp.zeros((0, 2))).rms)
+    show("rms_spot pupil outside disc", lambda: spots.rms_spot(c, pupil=jnp.array([[2.0, 0.0], [0, 1.5]])).rms)
+    show("rms_spot depth=-5", lambda: spots.rms_spot(c, depth=-5.0).rms)
+    show("rms_spot depth=0", lambda: spots.rms_spot(c, depth=0.0).rms)
+    show("rms_spot newton_iters=-1", lambda: spots.rms_spot(c, newton_iters=-1).rms)
+    show("rms_spot newton_iters=2.5", lambda: spots.rms_spot(c, newton_iters=2.5).rms)
+    show("rms_spot newton_iters=True", lambda: spots.rms_spot(c, newton_iters=True).rms)
+    show("vmap rms over fields 95", lambda: jax.vmap(lambda f: spots.rms_spot(c, fields=f[None]).rms)(jnp.array([0.0, 95.0])))
+    show("jit rms fields 95", lambda: eqx.filter_jit(lambda f: spots.rms_spot(c, fields=f).rms)(jnp.array([95.0])))
+    show("jit rms wl 10", lambda: eqx.filter_jit(lambda w: spots.rms_spot(c, wavelengths=w).rms)(jnp.array([10.0])))
+    show("grad rms depth -5", lambda: jax.grad(lambda d: spots.rms_spot(c, depth=d).rms.sum())(-5.0))
+    show("jit rms depth -5", lambda: eqx.filter_jit(lambda d: spots.rms_spot(c, depth=d).rms)(jnp.asarray(-5.0)))
+    show("jit rms depth 0", lambda: eqx.filter_jit(lambda d: spots.rms_spot(c, depth=d).rms)(jnp.asarray(0.0)))
+    show("jit rms depth nan", lambda: eqx.filter_jit(lambda d: spots.rms_spot(c, depth=d).rms)(jnp.asarray(jnp.nan)))
+    show("distortion fields 95", lambda: spots.distortion(c, fields=[95.0]))
+    show("chief_ray field (1,2,3)", lambda: spots.chief_ray(c, (1.0, 2.0, 3.0)).origin)
+    show("encircled radii -1", lambda: encircled_energy(c, 0.0, [-1.0, 0.01]).fraction)
+    show("encircled radii nan", lambda: encircled_energy(c, 0.0, [np.nan]).fraction)
+    show("encircled radii []", lambda: encircled_energy(c, 0.0, []).fraction)
+    show("encircled shape 'sq'", lambda: encircled_energy(c, 0.0, [0.01], shape="sq").fraction)
+    show("radius_for_fraction 1.5", lambda: radius_for_fraction(c, 0.0, 1.5))
+    show("radius_for_fraction 0", lambda: radius_for_fraction(c, 0.0, 0.0))
+    show("radius_for_fraction 1.0", lambda: radius_for_fraction(c, 0.0, 1.0))
+    show("radius_for_fraction nan", lambda: radius_for_fraction(c, 0.0, np.nan))
+    show("radius_for_fraction [0.5,0.8]", lambda: radius_for_fraction(c, 0.0, [0.5, 0.8]))
+    show("jit radius_for_fraction 1.5", lambda: eqx.filter_jit(lambda f: radius_for_fraction(c, 0.0, f))(jnp.asarray(1.5)))
+    show("self_intersection min_gap -1", lambda: spots.self_intersection(c, min_gap=-1.0))
+    show("self_intersection min_gap nan", lambda: spots.self_intersection(c, min_gap=np.nan))
+    show("self_intersection n_radial 0", lambda: spots.self_intersection(c, n_radial=0))
+    show("self_intersection sds wrong len", lambda: spots.self_intersection(c, [1.0, 2.0]))
+    show("self_intersection sds negative", lambda: spots.self_intersection(c, [-1.0] * 6))
+    show("clear_semi_diameters n_rim 0", lambda: spots.clear_semi_diameters(c, n_rim=0))
+    show("clear_semi_diameters fields 95", lambda: spots.clear_semi_diameters(c, [95.0]))
+
+
+@probe
+def imaging():
+    import equinox as eqx
+    c = cooke
+    show("psf kernel_size 0", lambda: jl.psf(c, 0.0, kernel_size=0).shape)
+    show("psf kernel_size 30 (even)", lambda: jl.psf(c, 0.0, kernel_size=30).shape)
+    show("psf kernel_size 31.0", lambda: jl.psf(c, 0.0, kernel_size=31.0).shape)
+    show("psf pixel_size -1", lambda: jl.psf(c, 0.0, pixel_size=-1.0).shape)
+    show("psf pixel_size 0", lambda: jl.psf(c, 0.0, pixel_size=0.0).shape)
+    show("psf center 'foo'", lambda: jl.psf(c, 0.0, center="foo").shape)
+    show("psf max_truncation 2", lambda: jl.psf(c, 0.0, max_truncation=2.0).shape)
+    show("psf max_truncation -1", lambda: jl.psf(c, 0.0, max_truncation=-1.0).shape)
+    show("psf newton_iters 0", lambda: float(jl.psf(c, 0.0, newton_iters=0).sum()))
+    show("psf field [0,1,2]", lambda: jl.psf(c, [0.0, 1.0, 2.0]).shape)
+    show("psf wavelength [[0.5]]", lambda: jl.psf(c, 0.0, wavelength=[[0.5876]]).shape)
+    show("psf wavelength []", lambda: jl.psf(c, 0.0, wavelength=[]).shape)
+    show("psf depth -100", lambda: jl.psf(c, 0.0, depth=-100.0).shape)
+    show("psf key=5", lambda: jl.psf(c, 0.0, key=5).shape)
+    show("jit psf field 95", lambda: eqx.filter_jit(lambda f: jl.psf(c, f))(jnp.asarray(95.0)).shape)
+    show("vmap psf field [0,95]", lambda: jax.vmap(lambda f: jl.psf(c, f))(jnp.array([0.0, 95.0])).shape)
+    show("jit psf depth -100", lambda: eqx.filter_jit(lambda d: jl.psf(c, 0.0, depth=d))(jnp.asarray(-100.0)).shape)
+    show("jit psf pixel_size -1", lambda: float(eqx.filter_jit(lambda p: jl.psf(c, 0.0, pixel_size=p))(jnp.asarray(-0.001)).sum()))
+    show("jit psf pixel_size 0", lambda: float(eqx.filter_jit(lambda p: jl.psf(c, 0.0, pixel_size=p))(jnp.asarray(0.0)).sum()))
+    show("jit psf pixel_size nan", lambda: float(eqx.filter_jit(lambda p: jl.psf(c, 0.0, pixel_size=p))(jnp.asarray(jnp.nan)).sum()))
+    show("jit efl lens thickness nan", lambda: eqx.filter_jit(jl.efl)(eqx.tree_at(lambda l: l.thickness, c, c.thickness.at[1].set(jnp.nan))))
+    show("efl lens (tree_at) thickness nan", lambda: jl.efl(eqx.tree_at(lambda l: l.thickness, c, c.thickness.at[1].set(jnp.nan))))
+    show("efl lens (tree_at) c nan", lambda: jl.efl(eqx.tree_at(lambda l: l.surfaces[0].c, c, jnp.asarray(jnp.nan))))
+    show("rms lens (tree_at) epd -1", lambda: jl.analysis.spots.rms_spot(eqx.tree_at(lambda l: l.epd, c, jnp.asarray(-1.0))).rms)
+    show("psf lens (tree_at) epd 0", lambda: float(jl.psf(eqx.tree_at(lambda l: l.epd, c, jnp.asarray(0.0)), 0.0).sum()))
+    sensor = jl.Sensor((16, 16), 0.01)
+    scene = jnp.ones((16, 16, 3))
+    key = jax.random.key(0)
+    show("render spp 0", lambda: jl.render(c, scene, spp=0, key=key, sensor=sensor).shape)
+    show("render spp 1.5", lambda: jl.render(c, scene, spp=1.5, key=key, sensor=sensor).shape)
+    show("render patch 0", lambda: jl.render(c, scene, spp=1, key=key, sensor=sensor, patch=0).shape)
+    show("render patch 7 (not dividing)", lambda: jl.render(c, scene, spp=1, key=key, sensor=sensor, patch=7).shape)
+    show("render scene neg", lambda: float(jl.render(c, -scene, spp=1, key=key, sensor=sensor).min()))
+    show("render scene 2ch", lambda: jl.render(c, jnp.ones((16, 16, 2)), spp=1, key=key, sensor=sensor).shape)
+    show("render scene int", lambda: jl.render(c, jnp.ones((16, 16, 3), int), spp=1, key=key, sensor=sensor).shape)
+    show("render scene uint8 255", lambda: float(jl.render(c, jnp.full((16, 16, 3), 255, jnp.uint8), spp=1, key=key, sensor=sensor).max()))
+    show("render wavelengths 2", lambda: jl.render(c, scene, spp=1, key=key, sensor=sensor, wavelengths=(0.5, 0.6)).shape)
+    show("render depth 0", lambda: jl.render(c, scene, spp=1, key=key, sensor=sensor, depth=0.0).shape)
+    show("render no sensor", lambda: jl.render(c, scene, spp=1, key=key).shape)
+
+
 if __name__ == "__main__":
     for p in PROBES:
         if len(sys.argv) < 2 or sys.argv[1] in p.__name__:

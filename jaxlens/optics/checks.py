@@ -93,8 +93,17 @@ def number(value, arg: str, where: str, *, lo=None, hi=None, lo_open=False, hi_o
         integer: Require a whole number (bools are refused).
 
     Returns:
-        The value as float (or int when ``integer``).
+        The value as float (or int when ``integer``). A traced value (inside jit, grad or
+        vmap), whose number is not known, is returned with an ``eqx.error_if`` of the same
+        range (:func:`values`): use the returned value, or the check is dropped.
     """
+    if is_traced(value):  # skipping it let a negative pixel_size through jit
+        if integer or jnp.size(value) != 1:
+            raise ValueError(f"{where}: {arg} must be one concrete "
+                             f"{'whole ' if integer else ''}number, got a traced array of "
+                             f"shape {jnp.shape(value)}")
+        return values(value, arg, where, lo=lo, hi=hi, lo_open=lo_open, hi_open=hi_open,
+                      unit=unit)
     span = interval(lo, hi, lo_open, hi_open)
     kind = "a whole number" if integer else "a finite number"
     u = f" {unit}" if unit else ""
