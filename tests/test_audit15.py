@@ -259,3 +259,12 @@ def test_number_of_a_traced_value_keeps_its_range():
         np.asarray(jax.jit(f)(jnp.asarray(-0.5)))
     with pytest.raises(ValueError, match=r"probe: n must be one concrete whole number"):
         jax.jit(lambda n: checks.number(n, "n", "probe", lo=0, integer=True))(3)
+
+
+@pytest.mark.parametrize("bad", [1.5, 2.0])
+def test_psf_max_truncation_is_a_fraction(bad):
+    """Before: 2 was taken and could never trigger, the check off without a word."""
+    with pytest.raises(ValueError, match=r"psf: max_truncation must be a finite number in "
+                                         r"\[0, 1\] \(fraction of the PSF energy"):
+        jl.psf(jl.zoo.cooke_triplet(), 0.0, pixel_size=0.005, kernel_size=9,
+               max_truncation=bad)

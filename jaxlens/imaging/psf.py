@@ -435,7 +435,8 @@ def psf_info(
         newton_iters)
     checks.prng_key(key, "psf", optional=True)
     if max_truncation is not None:
-        checks.number(max_truncation, "max_truncation", "psf", lo=0,
+        # A fraction above 1 never triggers: the check was off without a word.
+        checks.number(max_truncation, "max_truncation", "psf", lo=0, hi=1,
                       unit="(fraction of the PSF energy; None to skip the check)")
     wls = jnp.atleast_1d(wl)
     kern, trunc, ref, strehl, aliased = _psf_impl(
