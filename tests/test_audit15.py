@@ -268,3 +268,55 @@ def test_psf_max_truncation_is_a_fraction(bad):
                                          r"\[0, 1\] \(fraction of the PSF energy"):
         jl.psf(jl.zoo.cooke_triplet(), 0.0, pixel_size=0.005, kernel_size=9,
                max_truncation=bad)
+
+
+def _sampling_calls():
+    import jax.numpy as jnp
+
+    from jaxlens import sampling
+
+    lens = jl.zoo.cooke_triplet()
+    grid = sampling.pupil_grid(3)
+    # Before, under jit: NaN rays; a depth of -5 mm and a point behind surface 1 launched
+    # rays from behind the lens (directions -0.61, 0.79), each without a word.
+    return {
+        "collimated_nan_pupil": (lambda p: sampling.collimated(lens, 0.0, p).origin,
+                                 jnp.full((2, 2), jnp.nan),
+                                 r"collimated: pupil \(normalised pupil coordinates\) holds NaN"),
+        "field_rays_negative_depth": (
+            lambda d: sampling.field_rays(lens, 0.0, grid, depth=d).direction,
+            jnp.asarray(-5.0), r"object_point: depth must be finite numbers in \(0, 1e\+10\)"),
+        "point_source_behind": (lambda p: sampling.point_source(lens, p, grid).direction,
+                                jnp.array([0.0, 0.0, 5.0]),
+                                r"point_source: point must be finite \(mm\) with its global z "
+                                r"in front of surface 1"),
+    }
+
+
+@pytest.mark.parametrize("which", ["collimated_nan_pupil", "field_rays_negative_depth",
+                                   "point_source_behind"])
+def test_ray_sources_check_traced_pupils_depths_and_points(which):
+    import equinox as eqx
+
+    fn, bad, match = _sampling_calls()[which]
+    with pytest.raises(Exception, match=match):
+        np.asarray(eqx.filter_jit(fn)(bad))
+
+
+def test_traced_ray_sources_still_trace_good_input_and_differentiate():
+    import jax
+    import jax.numpy as jnp
+
+    from jaxlens import sampling
+
+    lens = jl.zoo.cooke_triplet()
+    grid = sampling.pupil_grid(3)
+
+    def f(d):
+        return sampling.field_rays(lens, 1.0, grid, depth=d).direction[0, 1]
+
+    d0 = 500.0
+    want = sampling.field_rays(lens, 1.0, grid, depth=d0).direction[0, 1]
+    assert float(jax.jit(f)(jnp.asarray(d0))) == pytest.approx(float(want), abs=1e-14)
+    fd = (f(d0 + 1e-3) - f(d0 - 1e-3)) / 2e-3
+    assert float(jax.grad(f)(d0)) == pytest.approx(float(fd), rel=1e-5)
