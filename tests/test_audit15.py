@@ -320,3 +320,16 @@ def test_traced_ray_sources_still_trace_good_input_and_differentiate():
     assert float(jax.jit(f)(jnp.asarray(d0))) == pytest.approx(float(want), abs=1e-14)
     fd = (f(d0 + 1e-3) - f(d0 - 1e-3)) / 2e-3
     assert float(jax.grad(f)(d0)) == pytest.approx(float(fd), rel=1e-5)
+
+
+@pytest.mark.parametrize(("old", "new", "line", "what"), [
+    ("FWGN 1 1 1", "FWGN -1 1 1", 12, "field weight"),
+    ("WAVM 2 5.875618E-001 1", "WAVM 2 5.875618E-001 -1", 14, "wavelength weight"),
+])
+def test_zmx_negative_weights_are_refused(old, new, line, what):
+    """Before: read, and only reported as unequal weights (a weight is never negative)."""
+    with open(os.path.join(LENSES, "cooke_triplet.zmx")) as fh:
+        text = fh.read()
+    assert old in text
+    with pytest.raises(ValueError, match=rf"t\.zmx:{line}: {what} must be >= 0, got -1"):
+        zmx.loads(text.replace(old, new), "t.zmx")
