@@ -333,3 +333,13 @@ def test_zmx_negative_weights_are_refused(old, new, line, what):
     assert old in text
     with pytest.raises(ValueError, match=rf"t\.zmx:{line}: {what} must be >= 0, got -1"):
         zmx.loads(text.replace(old, new), "t.zmx")
+
+
+@pytest.mark.parametrize("name", ["", "AIR", "air"])
+def test_design_spec_refuses_an_element_of_air(name):
+    """Before: accepted; "" and "AIR" are air to get_material, an element without power."""
+    from jaxlens.design.spec import DesignSpec
+
+    with pytest.raises(ValueError, match=rf"DesignSpec: materials\[1\] '{name}' is air; each "
+                                         rf"element needs a glass or plastic"):
+        DesignSpec(materials=("E48R", name, "E48R", "OKP4", "E48R", "OKP4"))
