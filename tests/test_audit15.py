@@ -343,3 +343,29 @@ def test_design_spec_refuses_an_element_of_air(name):
     with pytest.raises(ValueError, match=rf"DesignSpec: materials\[1\] '{name}' is air; each "
                                          rf"element needs a glass or plastic"):
         DesignSpec(materials=("E48R", name, "E48R", "OKP4", "E48R", "OKP4"))
+
+
+def _cooke_dict():
+    with open(os.path.join(LENSES, "cooke_triplet.json")) as fh:
+        return json.load(fh)
+
+
+def test_json_image_thickness_other_than_zero_is_refused():
+    """Before: ignored (nothing follows the image surface)."""
+    d = _cooke_dict()
+    d["surfaces"][-1]["thickness"] = 5
+    with pytest.raises(ValueError, match=r"^t\.json: image surface: thickness 5 is not read"):
+        lens_from_dict(d, source="t.json")
+    d["surfaces"][-1]["thickness"] = 0
+    assert lens_from_dict(d, source="t.json").num_surfaces == 6
+
+
+def test_json_number_strings_are_plain_decimals():
+    """Before: "2_2.01359" was read as 22.01359 (Python's float takes underscores)."""
+    d = _cooke_dict()
+    d["surfaces"][1]["radius"] = "2_2.01359"
+    with pytest.raises(ValueError, match=r"t\.json: surface 1: radius: expected a number, got "
+                                         r"'2_2\.01359'"):
+        lens_from_dict(d, source="t.json")
+    d["surfaces"][1]["radius"] = "22.01359"  # a number in a string still reads
+    assert float(jl.efl(lens_from_dict(d, source="t.json"))) == pytest.approx(50.0214, abs=1e-3)
