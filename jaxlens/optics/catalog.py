@@ -380,9 +380,13 @@ def parse_agf(text: str, source: str = "<string>", catalog: str = "") -> list[Gl
         The records in file order.
 
     Raises:
-        ValueError: On a malformed NM, CD or LD record, a CD/LD record before any NM, an
-            unsupported formula or a glass without CD record; the message names ``source``
-            and the line number.
+        ValueError: On a malformed NM, CD or LD record (a number that is not a plain finite
+            decimal, a formula number that is not whole, nd outside [1, 4.5] or a negative
+            Vd), a CD/LD record before any NM or given twice for one glass, an unsupported
+            formula or a glass without CD record; the message names ``source`` and the line
+            number. ``GlassRecord.to_material`` (so ``load_agf``) also refuses a record whose
+            formula does not give its NM nd at the d line (within ``ND_TOLERANCE``; nd 1
+            with Vd 0 marks a material without d-line data).
     """
     records: list[GlassRecord] = []
     pending: _Pending | None = None
