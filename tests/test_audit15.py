@@ -369,3 +369,25 @@ def test_json_number_strings_are_plain_decimals():
         lens_from_dict(d, source="t.json")
     d["surfaces"][1]["radius"] = "22.01359"  # a number in a string still reads
     assert float(jl.efl(lens_from_dict(d, source="t.json"))) == pytest.approx(50.0214, abs=1e-3)
+
+
+def test_cli_numbers_are_plain_decimals(tmp_path, capsys):
+    """Before: argparse's float and int took "1_0" as 10 (--fov 1_0 designed a 10° lens)."""
+    from jaxlens.__main__ import main as jaxlens_main
+    from jaxlens.experiments import tolerance
+
+    assert checks.cli_float(" -1.5e-3 ") == -1.5e-3 and checks.cli_int("+12") == 12
+    for argv, main, arg, kind in [
+        (["--fov", "1_0"], classical.main, "--fov", "float"),
+        (["--seeds", "1_0"], classical.main, "--seeds", "int"),
+        (["report", os.path.join(LENSES, "cooke_triplet.zmx"), "--fields", "1_0"],
+         jaxlens_main, "--fields", "float"),
+        ([os.path.join(LENSES, "cooke_triplet.zmx"), "--trials", "1_0"], tolerance.main,
+         "--trials", "int"),
+    ]:
+        out = [] if main is jaxlens_main else ["--out", str(tmp_path / "o")]
+        with pytest.raises(SystemExit):
+            main([*argv, *out])
+        err = capsys.readouterr().err
+        assert f"argument {arg}: invalid {kind} value: '1_0'" in err
+        assert not (tmp_path / "o").exists()

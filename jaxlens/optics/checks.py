@@ -71,6 +71,22 @@ def number_text(token: str) -> float:
     return float(t.replace("D", "E").replace("d", "e"))
 
 
+def cli_float(text: str) -> float:
+    """An ``argparse`` type: the number of an option (:func:`number_text`; ``float`` took
+    ``--fov 1_0`` as 10). Named ``float`` so argparse's message says "invalid float value"."""
+    return number_text(text)
+
+
+def cli_int(text: str) -> int:
+    """An ``argparse`` type: a whole number written in ASCII digits (``int`` took ``1_0``)."""
+    if not re.fullmatch(r"\s*[+-]?[0-9]+\s*", text, re.ASCII):
+        raise ValueError(f"not a whole number: {text!r}")
+    return int(text)
+
+
+cli_float.__name__, cli_int.__name__ = "float", "int"
+
+
 def switch(value, arg: str, where: str) -> bool:
     """A Python bool; raises ValueError otherwise: a string such as "no" is truthy, and None
     or 0 would read as False, so a switch is never guessed from another type."""
