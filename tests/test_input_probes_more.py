@@ -262,7 +262,7 @@ def test_iteration_counts_and_psf_options_are_checked(cooke):
         jl.psf(cooke, 0.0, newton_iters=-1, **kw)
     for bad in (-1.0, float("nan")):
         with pytest.raises(ValueError, match=r"psf: max_truncation must be a finite number in "
-                                             r"\[0, inf\) \(fraction of the PSF energy"):
+                                             r"\[0, 1\] \(fraction of the PSF energy"):
             jl.psf(cooke, 0.0, max_truncation=bad, **kw)
     with pytest.raises(ValueError, match=r"psf: depth must be finite numbers"):
         jl.psf(cooke, 0.0, depth=float("nan"), **kw)

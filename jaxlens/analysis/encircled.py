@@ -205,8 +205,7 @@ def encircled_energy(lens: Lens, field, radii, *, wavelength=None, method: str =
     r = jnp.reshape(jnp.asarray(radii, lens.epd.dtype), (-1,))
     if r.size == 0:
         raise ValueError(f"{where}: radii must hold at least one radius (mm)")
-    if not checks.is_traced(radii):
-        checks.values(r, "radii", where, lo=0, unit="mm")
+    r = checks.values(r, "radii", where, lo=0, unit="mm")  # an error_if where traced
     d, w, total, center, trunc = _samples(
         lens, field, radii, where, wavelength=wavelength, method=method, reference=reference,
         shape=shape, pupil=pupil, depth=depth, pixel_size=pixel_size, kernel_size=kernel_size,
@@ -236,8 +235,8 @@ def radius_for_fraction(lens: Lens, field, fraction, *, wavelength=None,
     where = "radius_for_fraction"
     checks.real_values(fraction, "fraction", where, "(fraction of the energy)")
     f = jnp.asarray(fraction, lens.epd.dtype)
-    if not checks.is_traced(fraction):
-        checks.values(f, "fraction", where, lo=0, hi=1, lo_open=True, hi_open=True,
+    # Traced (jit, grad), 1.5 gave NaN and -0.5 a radius: an error_if there.
+    f = checks.values(f, "fraction", where, lo=0, hi=1, lo_open=True, hi_open=True,
                       unit="(fraction of the energy)")
     d, w, total, center, _ = _samples(
         lens, field, fraction, where, wavelength=wavelength, method=method,

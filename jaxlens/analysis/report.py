@@ -538,14 +538,14 @@ def register(subparsers) -> None:
     p.add_argument("--json", action="store_true", help="print a JSON object instead of tables")
     p.add_argument(
         "--fields",
-        type=float,
+        type=checks.cli_float,
         nargs="+",
         metavar="DEG",
         help="field angles in degrees (default: the lens's fields)",
     )
     p.add_argument(
         "--wavelengths",
-        type=float,
+        type=checks.cli_float,
         nargs="+",
         metavar="UM",
         help="wavelengths in um (values above 100 are read as nm; default: the lens's wavelengths)",
@@ -582,7 +582,7 @@ def register(subparsers) -> None:
     )
     p.add_argument(
         "--config",
-        type=int,
+        type=checks.cli_int,
         metavar="N",
         help=".zmx multi-configuration file (zoom, focus positions): read configuration N "
         "(1-based, Zemax's numbering; default: the active one, which the file's surfaces hold)",

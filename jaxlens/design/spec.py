@@ -24,7 +24,14 @@ import types
 import numpy as np
 
 from ..optics import checks
-from ..optics.materials import LAMBDA_C, LAMBDA_D, LAMBDA_F, AbstractMaterial, ModelGlass
+from ..optics.materials import (
+    LAMBDA_C,
+    LAMBDA_D,
+    LAMBDA_F,
+    AbstractMaterial,
+    Air,
+    ModelGlass,
+)
 
 # Stand-in (nd, Vd) of common lens plastics, used only if ``jaxlens.optics.catalog`` is unavailable.
 _PLASTICS = {
@@ -250,6 +257,10 @@ class DesignSpec:
         # with the Lens's own check, on the lens's sequence of media (air after the stop
         # and after each element).
         media = [x for m in names for x in (get_material(m), None)]
+        for i, m in enumerate(media[::2]):  # "" and "AIR" name air: an element without power
+            if isinstance(m, Air):
+                raise ValueError(f"{where}: materials[{i}] {names[i]!r} is air; each element "
+                                 f"needs a glass or plastic (a catalog name such as 'E48R')")
         media.insert(2 * self.stop, None)
         lens = types.SimpleNamespace(object_material=None, materials=tuple(media))
         checks.wavelengths(lens, np.asarray(wl, dtype=float), where, "wavelengths")

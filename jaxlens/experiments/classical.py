@@ -120,10 +120,10 @@ def build_parser() -> argparse.ArgumentParser:
         prog="python -m jaxlens.experiments.classical",
         description="Ab initio curriculum design of the paper's classical lens (Table 1).")
     g = p.add_argument_group("design spec")
-    g.add_argument("--fov", type=float, default=80.8, help="full diagonal FoV, degrees")
-    g.add_argument("--fnum", type=float, default=2.0, help="F-number (EPD = f/F#)")
-    g.add_argument("--sensor-diagonal", type=float, default=7.66, help="mm")
-    g.add_argument("--elements", type=int, default=6, help="number of lens elements")
+    g.add_argument("--fov", type=checks.cli_float, default=80.8, help="full diagonal FoV, degrees")
+    g.add_argument("--fnum", type=checks.cli_float, default=2.0, help="F-number (EPD = f/F#)")
+    g.add_argument("--sensor-diagonal", type=checks.cli_float, default=7.66, help="mm")
+    g.add_argument("--elements", type=checks.cli_int, default=6, help="number of lens elements")
     g.add_argument("--materials", default=None,
                    help="comma-separated catalog names, one per element "
                         "(default E48R,OKP4 alternating); with --select-materials, the start")
@@ -137,26 +137,28 @@ def build_parser() -> argparse.ArgumentParser:
     g.add_argument("--material-catalogs", default="PLASTICS",
                    help="comma-separated catalogs that --select-materials chooses from "
                         "(e.g. SCHOTT,CDGM for a glass design)")
-    g.add_argument("--track", type=float, default=7.0, help="total track, mm (fixed)")
-    g.add_argument("--bfl", type=float, default=0.8,
+    g.add_argument("--track", type=checks.cli_float, default=7.0, help="total track, mm (fixed)")
+    g.add_argument("--bfl", type=checks.cli_float, default=0.8,
                    help="minimum last-surface-to-sensor clearance, mm")
-    g.add_argument("--stop", type=int, default=0, help="elements in front of the stop")
-    g.add_argument("--fov-start", type=float, default=None,
+    g.add_argument("--stop", type=checks.cli_int, default=0, help="elements in front of the stop")
+    g.add_argument("--fov-start", type=checks.cli_float, default=None,
                    help=f"curriculum start FoV, at most --fov (default {FOV_START}°, or --fov "
                         f"if smaller)")
-    g.add_argument("--fnum-start", type=float, default=None,
+    g.add_argument("--fnum-start", type=checks.cli_float, default=None,
                    help=f"curriculum start F#, at least --fnum (default {FNUM_START}, or --fnum "
                         f"if larger)")
-    g.add_argument("--asphere-terms", type=int, default=6, help="even terms r^4 … per surface")
+    g.add_argument("--asphere-terms", type=checks.cli_int,
+                   default=6, help="even terms r^4 … per surface")
     r = p.add_argument_group("recipe")
-    r.add_argument("--seeds", type=int, default=3, help="number of random starts")
+    r.add_argument("--seeds", type=checks.cli_int, default=3, help="number of random starts")
     r.add_argument("--seed-list", default=None, help="explicit comma-separated seeds")
-    r.add_argument("--first-seed", type=int, default=0, help="first seed of --seeds")
+    r.add_argument("--first-seed", type=checks.cli_int, default=0, help="first seed of --seeds")
     r.add_argument("--recipe", default="strong", choices=tuple(RECIPES),
                    help="paper: the paper's method (Table 1's +both+mask column); strong: "
                         "with a 3x longer polish (the +recipe column)")
-    r.add_argument("--steps", type=float, default=1.0, help="scale every stage's step count")
-    r.add_argument("--polish-steps", type=int, default=None,
+    r.add_argument("--steps", type=checks.cli_float,
+                   default=1.0, help="scale every stage's step count")
+    r.add_argument("--polish-steps", type=checks.cli_int, default=None,
                    help="polish iterations (overrides the --steps scaling of the polish)")
     r.add_argument("--solver", default="adam", choices=("adam", "lm", "lbfgsb"),
                    help="solver of the curriculum and fine-tuning stages")
@@ -168,10 +170,10 @@ def build_parser() -> argparse.ArgumentParser:
                         "jaxlens.imaging.render with distortion relaxation")
     r.add_argument("--no-curriculum", action="store_true", help="stay at the full spec")
     r.add_argument("--no-regularize", action="store_true", help="switch the regularizers off")
-    r.add_argument("--tolerance-aware", type=int, default=0, metavar="K",
+    r.add_argument("--tolerance-aware", type=checks.cli_int, default=0, metavar="K",
                    help="design against the mean loss over K fixed manufacturing errors "
                         "(±0.5%% radius, ±0.02 mm gaps; jaxlens.design.robust); 0 = nominal")
-    r.add_argument("--population", type=int, default=1, metavar="P",
+    r.add_argument("--population", type=checks.cli_int, default=1, metavar="P",
                    help="random starts per design: all P run the curriculum and fine-tuning, "
                         "the best continues to the polish (design s draws starts s·P … "
                         "s·P+P−1)")
@@ -179,7 +181,7 @@ def build_parser() -> argparse.ArgumentParser:
     r.add_argument("--float32", action="store_true",
                    help="design in float32 (default float64: near-TIR rays rounded to valid in "
                         "float32 can overflow the gradient and lose a start)")
-    r.add_argument("--devices", type=int, default=min(os.cpu_count() or 1, MAX_DEVICES),
+    r.add_argument("--devices", type=checks.cli_int, default=min(os.cpu_count() or 1, MAX_DEVICES),
                    help="XLA host devices to shard seeds over (default: CPU cores)")
     o = p.add_argument_group("output")
     o.add_argument("--out", default="runs/classical", help="output folder")
@@ -188,10 +190,10 @@ def build_parser() -> argparse.ArgumentParser:
                         "already in --ablation-out (default: refuse)")
     o.add_argument("--no-plots", action="store_true", help="skip figures and rendering")
     o.add_argument("--no-render", action="store_true", help="skip the rendered test scene")
-    o.add_argument("--tolerance-trials", type=int, default=200,
+    o.add_argument("--tolerance-trials", type=checks.cli_int, default=200,
                    help="Monte-Carlo trials of the tolerance analysis of the best design "
                         "(tolerance.json, tolerance_rms.png; 0 skips it)")
-    o.add_argument("--tolerance-threshold", type=float, default=6.0,
+    o.add_argument("--tolerance-threshold", type=checks.cli_float, default=6.0,
                    help="yield threshold of the tolerance analysis: mean RMS after "
                         "refocusing, µm")
     o.add_argument("--smoke", action="store_true",
@@ -199,7 +201,8 @@ def build_parser() -> argparse.ArgumentParser:
     o.add_argument("--quiet", action="store_true", help="no progress bar")
     a = p.add_argument_group("ablation (Table 1)")
     a.add_argument("--ablation", action="store_true", help="run the Table 1 columns")
-    a.add_argument("--ablation-seeds", type=int, default=20, help="random starts per column")
+    a.add_argument("--ablation-seeds", type=checks.cli_int,
+                   default=20, help="random starts per column")
     a.add_argument("--ablation-out", default="experiments/classical", help="results folder")
     a.add_argument("--columns", default=None,
                    help="comma-separated subset of columns (default: all five)")
@@ -243,6 +246,12 @@ def check_args(args, given=None) -> None:
     n(args.tolerance_aware, "--tolerance-aware", w, lo=0, integer=True)
     n(args.population, "--population", w, lo=1, hi=64, integer=True, unit="starts per design")
     n(args.tolerance_threshold, "--tolerance-threshold", w, lo=0, lo_open=True, unit="µm")
+    for flag, text in (("--materials", args.materials),
+                       ("--material-catalogs", args.material_catalogs)):
+        # An empty entry was dropped: "E48R,,OKP4" gave 2 materials for 3 elements.
+        if text is not None and not all(p.strip() for p in text.split(",")):
+            raise ValueError(f"{w}: {flag} must be comma-separated names without an empty "
+                             f"one, got {text!r}")
     if args.seed_list is not None:
         parts = [p.strip() for p in args.seed_list.split(",")]
         if not parts or not all(p.isdigit() for p in parts):

@@ -31,6 +31,7 @@ import sys
 import time
 
 from jaxlens.experiments.runfolder import OneLineParser, fail
+from jaxlens.optics import checks
 
 DEFAULT_TRIALS = 200
 DEFAULT_THRESHOLD_UM = 6.0
@@ -228,15 +229,16 @@ def build_parser() -> argparse.ArgumentParser:
                       description="Tolerance analysis of a classical design.")
     p.add_argument("design", help="design file (.zmx or jaxlens .json)")
     p.add_argument("--out", default=".", help="folder for tolerance.json and tolerance_rms.png")
-    p.add_argument("--trials", type=int, default=DEFAULT_TRIALS, help="Monte-Carlo trials")
-    p.add_argument("--threshold", type=float, default=DEFAULT_THRESHOLD_UM,
+    p.add_argument("--trials", type=checks.cli_int,
+                   default=DEFAULT_TRIALS, help="Monte-Carlo trials")
+    p.add_argument("--threshold", type=checks.cli_float, default=DEFAULT_THRESHOLD_UM,
                    help="yield threshold on the mean RMS after refocusing, µm")
-    p.add_argument("--seed", type=int, default=0, help="Monte-Carlo random seed")
+    p.add_argument("--seed", type=checks.cli_int, default=0, help="Monte-Carlo random seed")
     p.add_argument("--overwrite", action="store_true",
                    help="replace an earlier run's tolerance.json and tolerance_rms.png in --out")
-    p.add_argument("--decenter", type=float, default=0.0,
+    p.add_argument("--decenter", type=checks.cli_float, default=0.0,
                    help="element decenter tolerance, mm in x and in y (default 0: off)")
-    p.add_argument("--tilt", type=float, default=0.0,
+    p.add_argument("--tilt", type=checks.cli_float, default=0.0,
                    help="element tilt tolerance, degrees about x and y (default 0: off)")
     p.add_argument("--no-small-step-check", action="store_true",
                    help="skip the small-step finite-difference check of the gradient")

@@ -147,8 +147,7 @@ def inverse_distortion_map(
     where = "inverse_distortion_map"
     resolution = checks.grid(resolution, where, "resolution", "pixels")
     grid = checks.grid(grid, where, "grid", "points")
-    if not checks.is_traced(pixel_size):
-        checks.number(pixel_size, "pixel_size", where, lo=0, lo_open=True, unit="mm")
+    pixel_size = checks.number(pixel_size, "pixel_size", where, lo=0, lo_open=True, unit="mm")
     checks.number(newton_iters, "newton_iters", where, lo=0, integer=True, unit="iterations")
     checks.number(iters, "iters", where, lo=0, integer=True, unit="aiming iterations")
     depth = sampling.lens_depth(lens, depth, where)
@@ -292,8 +291,8 @@ def alignment_penalty(
         sensor: default ``lens.sensor`` (its pitch sets the unit).
         newton_iters: Newton iterations for aspheric surfaces.
     """
-    if not checks.is_traced(alpha):  # a negative weight would reward distortion
-        checks.number(alpha, "alpha", "alignment_penalty", lo=0, unit="(weight)")
+    # A negative weight would reward distortion (a traced one gets an error_if).
+    alpha = checks.number(alpha, "alpha", "alignment_penalty", lo=0, unit="(weight)")
     s = _sensor(lens, sensor)
     d = distortion_map(lens, grid=grid, depth=depth, sensor=s, newton_iters=newton_iters)
     err = jnp.sum((d.real - d.ideal) ** 2, -1) / s.pixel_size**2

@@ -393,8 +393,8 @@ def _prepare(lens, field, depth, wavelength, kernel_size, pixel_size, model, cen
             raise ValueError(f"{caller}: give pixel_size (mm); the lens has no sensor")
         pixel_size = lens.sensor.pixel_size
     dtype = jnp.result_type(float)
-    if not checks.is_traced(pixel_size):  # before jnp.asarray: it traces constants under jit
-        checks.number(pixel_size, "pixel_size", caller, lo=0, lo_open=True, unit="mm")
+    # Before jnp.asarray (it traces constants under jit); a traced one gets an error_if.
+    pixel_size = checks.number(pixel_size, "pixel_size", caller, lo=0, lo_open=True, unit="mm")
     pixel_size = jnp.asarray(pixel_size, dtype)
     wl = lens.primary_wavelength if wavelength is None else wavelength
     checks.real_values(wl, "wavelength", caller, "µm")  # jnp.asarray reads "0.55" as 0.55
@@ -436,7 +436,8 @@ def psf_info(
         newton_iters)
     checks.prng_key(key, "psf", optional=True)
     if max_truncation is not None:
-        checks.number(max_truncation, "max_truncation", "psf", lo=0,
+        # A fraction above 1 never triggers: the check was off without a word.
+        checks.number(max_truncation, "max_truncation", "psf", lo=0, hi=1,
                       unit="(fraction of the PSF energy; None to skip the check)")
     wls = jnp.atleast_1d(wl)
     kern, trunc, ref, strehl, aliased = _psf_impl(

@@ -576,8 +576,8 @@ def render(
         raise ValueError(f"render: scene is empty (shape {scene.shape}); it needs at least one "
                          f"pixel and channel")
     scene = checks.finite_array(scene, "scene", "render", "linear pixel values")
-    if not checks.is_traced(scene):  # radiance is never negative: e.g. an image in [-1, 1]
-        checks.values(scene, "scene", "render", lo=0.0, unit="(linear radiance)")
+    # Radiance is never negative: e.g. an image in [-1, 1] (an error_if where traced).
+    scene = checks.values(scene, "scene", "render", lo=0.0, unit="(linear radiance)")
     wls = checks.wavelengths(lens, wls, "render", "wavelengths")
     checks.material_indices(lens, wls, "render", "wavelengths")
     rows, cols = sensor.resolution

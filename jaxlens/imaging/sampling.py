@@ -141,7 +141,14 @@ def pupil_points(pupil, where: str, *, unit_disc: bool = False) -> Array:
     if pupil.ndim < 1 or pupil.shape[-1] != 2 or pupil.size == 0:
         raise ValueError(f"{where}: pupil must be [m, 2] normalised pupil points (Px, Py), got "
                          f"shape {pupil.shape}")
-    if not checks.is_traced(pupil):
+    if checks.is_traced(pupil):  # under jit a NaN pupil point launched NaN rays silently
+        pupil = checks.finite_array(pupil, "pupil", where, "normalised pupil coordinates")
+        if unit_disc:
+            r2 = jnp.sum(pupil * pupil, -1)
+            pupil = eqx.error_if(pupil, jnp.any(r2 > (1.0 + UNIT_DISC_TOLERANCE) ** 2),
+                                 f"{where}: pupil points must lie in the unit disc (Px² + Py² "
+                                 f"<= 1, normalised to the entrance pupil)")
+    else:
         checks.finite_array(pupil, "pupil", where, "normalised pupil coordinates")
         r = np.sqrt(np.sum(np.asarray(pupil, float) ** 2, -1)) if unit_disc else 0.0
         if np.any(r > 1.0 + UNIT_DISC_TOLERANCE):
@@ -247,6 +254,11 @@ def point_source(
                       hi=min(0.0, pupil_z), hi_open=True,
                       unit="mm (global z: surface 1 at 0 and the entrance pupil, the object "
                       "in front of both)")
+    else:  # traced: the same checks at run time (a point behind the lens launched rays back)
+        point = eqx.error_if(
+            point, ~(jnp.all(jnp.isfinite(point)) & jnp.all(point[..., 2] < jnp.minimum(0.0, zep))),
+            "point_source: point must be finite (mm) with its global z in front of surface 1 "
+            "and the entrance pupil")
     xy = pupil * (0.5 * lens.epd)
     target = jnp.concatenate([xy, jnp.broadcast_to(zep, xy.shape[:-1])[..., None]], -1)
     v = target - point
@@ -267,7 +279,11 @@ def object_point(lens: Lens, field, depth) -> Array:
     surface 1 (mm, positive)."""
     checks.one_field(field, "object_point", "trace several fields one at a time, or vmap")
     th = field_xy(field)
-    if not checks.is_traced(depth):  # before jnp.asarray, which traces a constant under jit
+    if checks.is_traced(depth):  # -5 traced an object behind the lens without a word
+        depth = checks.values(depth, "depth", "object_point", lo=0, lo_open=True,
+                              hi=INFINITE_OBJECT_MM, hi_open=True,
+                              unit="mm (object to surface 1; farther is an object at infinity)")
+    else:  # before jnp.asarray, which traces a constant under jit
         # Beyond INFINITE_OBJECT_MM the first surface is more than the tracer's largest ray
         # parameter away (every ray was lost: a PSF of zeros, an RMS of NaN).
         checks.values(depth, "depth", "object_point", lo=0, lo_open=True,

@@ -13,6 +13,8 @@ from typing import Any
 import jax.numpy as jnp
 import numpy as np
 
+from ..optics import checks
+
 
 def num(value: Any, where: str, *, finite: bool = True) -> float:
     """A float from a JSON number or the strings "inf"/"-inf"/"infinity"."""
@@ -25,8 +27,8 @@ def num(value: Any, where: str, *, finite: bool = True) -> float:
         elif s in ("-inf", "-infinity"):
             v = -math.inf
         else:
-            try:
-                v = float(s)
+            try:  # not float(): "1_0" would be 10, "٣" 3
+                v = checks.number_text(s)
             except ValueError:
                 raise ValueError(f"{where}: expected a number, got {value!r}") from None
     elif isinstance(value, int | float):

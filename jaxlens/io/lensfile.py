@@ -442,6 +442,14 @@ def lens_from_dict(d: dict, *, source: str = "<lens>") -> Lens:
     first = 1 if obj is not None else 0
     for s, where in ((obj, "surface 0"), (img, "image surface")):
         lens_keys.no_misspelled(s, lens_keys.SURFACE, f"{source}: {where}")
+        if s is not None and s.get("is_stop", False) is not False:  # was ignored
+            raise ValueError(f"{source}: {where}: the object or image surface cannot be the "
+                             f"stop (is_stop {s['is_stop']!r}); mark a lens surface")
+    if img is not None and "thickness" in img and _num(
+            img["thickness"], f"{source}: image surface thickness", finite=False) != 0:
+        # Nothing follows the image surface: a thickness there was ignored.
+        raise ValueError(f"{source}: image surface: thickness {img['thickness']!r} is not "
+                         f"read (nothing follows the image); give 0 or leave it out")
 
     # Object distance: surface 0's thickness, or an "object" block.
     dist = math.inf

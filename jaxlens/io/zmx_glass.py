@@ -23,6 +23,7 @@ import numpy as np
 
 from ..optics import catalog
 from ..optics.catalog import decode_zemax_text as decode
+from ..optics.checks import number_text
 from ..optics.materials import AbstractMaterial, Air, ModelGlass
 from .lensfile import catalog_material, material_from_spec
 from .zmx_common import MARKER, ZmxWarning, report
@@ -255,7 +256,7 @@ def _cross_checked(m: AbstractMaterial, ln) -> AbstractMaterial:
 def _placeholder_nd_vd(ln) -> bool:
     """The GLAS line's nd and Vd are Zemax's untouched defaults (1.5, 40): no claim."""
     try:
-        return (float(ln.tokens[4]), float(ln.tokens[5])) == (1.5, 40.0)
+        return (number_text(ln.tokens[4]), number_text(ln.tokens[5])) == (1.5, 40.0)
     except (IndexError, ValueError):
         return False
 
@@ -278,7 +279,7 @@ def _molded_note(name: str) -> str:
 def _glas_nd_vd(ln) -> tuple[float | None, float | None]:
     """nd and Vd that a GLAS line carries after the name (tokens 4 and 5), if valid."""
     try:
-        nd, vd = float(ln.tokens[4]), float(ln.tokens[5])
+        nd, vd = number_text(ln.tokens[4]), number_text(ln.tokens[5])
     except (IndexError, ValueError):
         return None, None
     if not (math.isfinite(nd) and nd > 1.0 and math.isfinite(vd) and vd > 0.0):

@@ -8,6 +8,7 @@ import math
 import re
 from dataclasses import dataclass, field
 
+from ..optics.checks import number_text
 from .zmx_keywords import CONFIG_OPERANDS, IGNORED_KEYWORDS, KNOWN_VALUES
 
 UNITS = {"MM": 1.0, "CM": 10.0, "IN": 25.4, "METER": 1000.0, "M": 1000.0}
@@ -58,7 +59,7 @@ class ZmxLine:
         if allow_inf and tok.upper() in ("INFINITY", "INF"):
             return math.inf
         try:
-            v = float(tok.replace("D", "E").replace("d", "e"))
+            v = number_text(tok)
         except ValueError:
             raise self.error(f"{what} is not a number ({tok!r})") from None
         if not math.isfinite(v):
@@ -152,6 +153,7 @@ def parse(text: str, path: str) -> ZmxFile:
     cur: ZmxSurface | None = None
     seen_top: dict = {}
     seen_surf: dict = {}
+    text = text.removeprefix("\ufeff")  # a BOM kept by a text read (utf-8, not utf-8-sig)
     for number, raw in enumerate(text.splitlines(), start=1):
         ln = ZmxLine(path, number, raw)
         if not ln.tokens:

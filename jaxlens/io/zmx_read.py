@@ -282,7 +282,7 @@ def _fields(f: ZmxFile, strict: bool) -> tuple[np.ndarray, np.ndarray | None]:
     xs = (xs + [0.0] * count)[:count]
     ys = ys[:count]
     if f.fwgn is not None:
-        given = [f.fwgn.float(i, "field weight") for i in range(1, len(f.fwgn.tokens))]
+        given = [f.fwgn.float(i, "field weight", lo=0) for i in range(1, len(f.fwgn.tokens))]
         zmx_system.unequal_weights(f.fwgn, "fields", given[:count])
     if any(x != 0 for x in xs):
         return np.stack([np.array(xs), np.array(ys)], axis=-1), vignetting
@@ -312,7 +312,7 @@ def _wavelengths(f: ZmxFile) -> tuple[np.ndarray, int, list]:
             raise ln.error(f"no WAVM line for wavelength {missing[0]}")
         wl = [f.wavm[i][0] for i in range(1, n + 1)]
         lines = [f.wavm[i][1] for i in range(1, n + 1)]
-        weights = [ln.float(3, "wavelength weight") for ln in lines if len(ln.tokens) > 3]
+        weights = [ln.float(3, "wavelength weight", lo=0) for ln in lines if len(ln.tokens) > 3]
         if len(weights) == n:
             zmx_system.unequal_weights(lines[0], "wavelengths", weights)
     elif f.wavl is not None:
@@ -320,7 +320,8 @@ def _wavelengths(f: ZmxFile) -> tuple[np.ndarray, int, list]:
         wl = wl[:count] if count is not None else [w for w in wl if w != 0]
         lines = [f.wavl] * len(wl)
         if f.wwgt is not None:
-            given = [f.wwgt.float(i, "wavelength weight") for i in range(1, len(f.wwgt.tokens))]
+            given = [f.wwgt.float(i, "wavelength weight", lo=0)
+                     for i in range(1, len(f.wwgt.tokens))]
             zmx_system.unequal_weights(f.wwgt, "wavelengths", given[:len(wl)])
     else:
         wl, lines = [0.55], [None]  # Zemax's default wavelength

@@ -12,6 +12,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from ..optics import materials as _materials
+from ..optics.catalog import ND_TOLERANCE
 from ..optics.coordinates import CoordinateBreak
 from ..optics.lens import Lens
 from ..optics.materials import AbstractMaterial, Air, ModelGlass, Tabulated
@@ -217,9 +218,14 @@ class _GlassWriter:
 
     @staticmethod
     def _nd_vd_of(m):
-        if type(m).__name__ == "CatalogMaterial" and math.isfinite(m.catalog_nd):
+        """The catalog's nd and Vd while the model still gives that nd; a model whose
+        coefficients were changed (optimised) gets its own, which ``load_agf`` checks the
+        CD record against."""
+        nd, vd = _nd_vd(m)
+        if (type(m).__name__ == "CatalogMaterial" and m.catalog_nd is not None
+                and math.isfinite(m.catalog_nd) and abs(nd - m.catalog_nd) <= ND_TOLERANCE):
             return float(m.catalog_nd), float(m.catalog_vd)
-        return _nd_vd(m)
+        return nd, vd
 
     def write_agf(self, folder: str, wavelengths: np.ndarray) -> list[str]:
         written, texts = [], []

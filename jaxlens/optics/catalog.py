@@ -47,11 +47,13 @@ from __future__ import annotations
 import dataclasses
 import difflib
 import functools
+import math
 import os
 from collections.abc import Iterable, Mapping
 from importlib.resources import files
 
 import equinox as eqx
+import jax
 import jax.numpy as jnp
 import numpy as np
 
@@ -115,6 +117,10 @@ FORMULA_NAMES = {
 }
 """Zemax dispersion formula numbers understood by :func:`load_agf`."""
 
+ND_TOLERANCE = 1e-3
+"""Largest accepted gap between an AGF record's nd and its dispersion formula's index at the
+d line (the shipped catalogs' largest is 3.8e-5)."""
+
 _ALIASES = {
     "PC": ("PLASTICS", "POLYCARB"),
     "POLYCARBONATE": ("PLASTICS", "POLYCARB"),
@@ -149,6 +155,7 @@ class GlassRecord:
         status: Zemax status code from the NM record (0 standard, 1 preferred, 2 obsolete,
             3 special, 4 melt), or None when absent.
         glass_code: The NM record's MIL / glass code field, verbatim.
+        source: ``file:line`` of the NM record, for messages ("" when unknown).
     """
 
     name: str
@@ -160,6 +167,7 @@ class GlassRecord:
     wavelength_range: tuple[float, float] | None = None
     status: int | None = None
     glass_code: str = ""
+    source: str = ""
 
     def to_material(self) -> CatalogMaterial:
         """The dispersion model of this record, wrapped with its catalog metadata.
@@ -178,8 +186,26 @@ class GlassRecord:
         )
         lo, hi = self.wavelength_range or (LAMBDA_D, LAMBDA_D)
         probe = LAMBDA_D if lo <= LAMBDA_D <= hi else 0.5 * (lo + hi)
-        checks.material(m, probe, f"glass {self.name} of catalog {self.catalog or '?'}")
+        where = f"glass {self.name} of catalog {self.catalog or '?'}"
+        checks.material(m, probe, where)
+        if probe == LAMBDA_D and (self.nd, self.vd) != (1.0, 0.0):
+            self._check_nd(m, where)
         return m
+
+    def _check_nd(self, m: CatalogMaterial, where: str) -> None:
+        """The NM record's nd must be what the CD record's formula gives at the d line: a
+        wrong formula number or garbled coefficients made a plausible index of another
+        glass (the shipped catalogs agree to 4e-5)."""
+        with jax.ensure_compile_time_eval():
+            n = float(m.index(jnp.asarray(LAMBDA_D)))
+        if not abs(n - self.nd) <= ND_TOLERANCE:
+            at = f"{self.source}: " if self.source else ""
+            raise ValueError(
+                f"{at}{where}: its NM record gives nd {self.nd:g}, but its CD coefficients "
+                f"with formula {self.formula} ({FORMULA_NAMES.get(self.formula, '?')}) give "
+                f"n = {n:.6g} at the d line ({LAMBDA_D} µm); the record disagrees with "
+                f"itself by more than {ND_TOLERANCE:g} (a wrong formula number or "
+                f"coefficients?)")
 
 
 class CatalogMaterial(AbstractMaterial):
@@ -275,10 +301,14 @@ def decode_zemax_text(raw: bytes, path: str = "<file>") -> str:
 
 
 def _floats(tokens: list[str], where: str, what: str) -> tuple[float, ...]:
+    """Finite numbers (a NaN or inf coefficient, nd or bound is no catalog data)."""
     try:
-        return tuple(float(t) for t in tokens)
+        out = tuple(checks.number_text(t) for t in tokens)
     except ValueError:
-        raise ValueError(f"{where}: {what} must be numbers, got {' '.join(tokens)!r}") from None
+        out = None
+    if out is None or not all(math.isfinite(v) for v in out):
+        raise ValueError(f"{where}: {what} must be finite numbers, got {' '.join(tokens)!r}")
+    return out
 
 
 def _optional_int(tokens: list[str], i: int) -> int | None:
@@ -296,6 +326,7 @@ class _Pending:
     line: int
     coefficients: tuple[float, ...] | None = None
     wavelength_range: tuple[float, float] | None = None
+    seen: dict = dataclasses.field(default_factory=dict)  # record key -> its line number
 
 
 def _parse_nm(tokens: list[str], where: str) -> dict:
@@ -304,12 +335,20 @@ def _parse_nm(tokens: list[str], where: str) -> dict:
         raise ValueError(f"{where}: NM needs name, formula, MIL code, nd and Vd, got {tokens!r}")
     name = tokens[1]
     try:
-        formula = int(float(tokens[2]))
+        number = checks.number_text(tokens[2])
     except ValueError:
         raise ValueError(f"{where}: formula number of {name} is {tokens[2]!r}") from None
+    if not number.is_integer():  # 2.7 was read as formula 2
+        raise ValueError(f"{where}: formula number of {name} must be a whole number "
+                         f"({', '.join(map(str, FORMULA_NAMES))}), got {tokens[2]!r}")
+    formula = int(number)
     if formula not in FORMULA_NAMES:
         raise ValueError(f"{where}: {name} uses unsupported dispersion formula {formula}")
     nd, vd = _floats(tokens[4:6], where, f"nd and Vd of {name}")
+    # nd 1 with Vd 0 is the catalogs' mark of a material without d-line data (IR crystals).
+    if not (1.0 <= nd <= MAX_ND and vd >= 0.0):
+        raise ValueError(f"{where}: {name} needs nd in [1, {MAX_ND:g}] and Vd >= 0 (nd 1, "
+                         f"Vd 0: no d-line data), got nd {tokens[4]}, Vd {tokens[5]}")
     return dict(name=name, formula=formula, nd=nd, vd=vd, glass_code=tokens[3],
                 status=_optional_int(tokens, 7))
 
@@ -322,7 +361,8 @@ def _finish(pending: _Pending | None, source: str, catalog: str) -> list[GlassRe
         name = pending.fields["name"]
         raise ValueError(f"{source}:{pending.line}: glass {name} has no CD record")
     return [GlassRecord(coefficients=pending.coefficients, catalog=catalog,
-                        wavelength_range=pending.wavelength_range, **pending.fields)]
+                        wavelength_range=pending.wavelength_range,
+                        source=f"{source}:{pending.line}", **pending.fields)]
 
 
 def parse_agf(text: str, source: str = "<string>", catalog: str = "") -> list[GlassRecord]:
@@ -340,12 +380,19 @@ def parse_agf(text: str, source: str = "<string>", catalog: str = "") -> list[Gl
         The records in file order.
 
     Raises:
-        ValueError: On a malformed NM, CD or LD record, a CD/LD record before any NM, an
-            unsupported formula or a glass without CD record; the message names ``source``
-            and the line number.
+        ValueError: On a malformed NM, CD or LD record (a number that is not a plain finite
+            decimal, a formula number that is not whole, nd outside [1, 4.5] or a negative
+            Vd), a CD/LD record before any NM or given twice for one glass, an unsupported
+            formula or a glass without CD record; the message names ``source`` and the line
+            number. ``GlassRecord.to_material`` (so ``load_agf``) also refuses a record whose
+            formula does not give its NM nd at the d line (within ``ND_TOLERANCE``; nd 1
+            with Vd 0 marks a material without d-line data).
     """
     records: list[GlassRecord] = []
     pending: _Pending | None = None
+    # A BOM kept by a text read made the first line's key unknown: a first NM record was
+    # skipped without a word.
+    text = text.removeprefix("\ufeff")
     for lineno, line in enumerate(text.splitlines(), start=1):
         tokens = line.split()
         if not tokens or tokens[0].startswith("!"):
@@ -356,9 +403,19 @@ def parse_agf(text: str, source: str = "<string>", catalog: str = "") -> list[Gl
             pending = _Pending(fields=_parse_nm(tokens, where), line=lineno)
         elif key in ("CD", "LD") and pending is None:
             raise ValueError(f"{where}: {key} record before any NM record")
+        elif key in ("CD", "LD") and key in pending.seen:
+            # The second record replaced the first without a word.
+            raise ValueError(f"{where}: {key} record given twice for glass "
+                             f"{pending.fields['name']} (first on line {pending.seen[key]}); "
+                             f"an AGF glass has one")
         elif key == "CD":
+            pending.seen[key] = lineno
             pending.coefficients = _floats(tokens[1:], where, "CD coefficients")
+            if not pending.coefficients:  # every coefficient 0: n = 1 at every wavelength
+                raise ValueError(f"{where}: CD record of glass {pending.fields['name']} holds "
+                                 f"no coefficients")
         elif key == "LD":
+            pending.seen[key] = lineno
             bounds = _floats(tokens[1:], where, "LD wavelengths")
             if len(bounds) != 2:
                 raise ValueError(f"{where}: LD needs min and max wavelength, got {tokens[1:]!r}")
@@ -454,7 +511,20 @@ def register_catalog(source: str | os.PathLike | Mapping[str, AbstractMaterial],
                              f"(jaxlens.AbstractMaterial), got {type(v).__name__} for {k!r}")
         if not source:
             raise ValueError("register_catalog: the mapping holds no material")
-        entries: dict = {str(k).upper(): v for k, v in source.items()}
+        entries: dict = {}
+        for k, v in source.items():
+            if not isinstance(k, str) or not k.strip():
+                raise ValueError(f"register_catalog: every key must be a glass name (a "
+                                 f"non-empty str), got {k!r}")
+            if k.upper() in entries:  # lookups ignore case: one of them was dropped
+                raise ValueError(f"register_catalog: glass names {k!r} and another spelling "
+                                 f"of it differ only in case; lookups ignore case, so give "
+                                 f"one")
+            entries[k.upper()] = v
+    elif not isinstance(source, (str, os.PathLike)):
+        raise TypeError(f"register_catalog: source must be an .agf file (str or os.PathLike) "
+                        f"or a mapping glass name -> material, got {type(source).__name__} "
+                        f"{source!r}")
     else:
         records = _read_records(source, catalog=name.upper() if name else None)
         cat = records[0].catalog if records else (name or "USER").upper()

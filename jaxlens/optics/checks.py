@@ -13,6 +13,7 @@ optical glass model is meant for outside. Field angles are in degrees and must l
 from __future__ import annotations
 
 import math
+import re
 
 import equinox as eqx
 import jax
@@ -51,6 +52,41 @@ def interval(lo, hi, lo_open, hi_open) -> str:
     return f"{left}{low}, {high}{right}"
 
 
+_NUMBER_TEXT = re.compile(r"[+-]?(?:\d+\.?\d*|\.\d+)(?:[eEdD][+-]?\d+)?", re.ASCII)
+_SPECIAL_TEXT = {"inf": math.inf, "+inf": math.inf, "-inf": -math.inf, "infinity": math.inf,
+                 "+infinity": math.inf, "-infinity": -math.inf, "nan": math.nan}
+
+
+def number_text(token: str) -> float:
+    """The number a token of a text file (``.zmx``, ``.agf``) writes: decimal digits with an
+    optional point, sign and exponent (``E`` or Fortran's ``D``), or inf/infinity/nan (any
+    case; the caller refuses what it cannot use). Raises ``ValueError`` otherwise: Python's
+    ``float`` also reads ``"1_0"`` as 10 and other digit scripts, which no optics program
+    writes (``"1_03961212"``, a garbled ``1.03961212``, became 103961212)."""
+    t = token.strip()
+    if t.lower() in _SPECIAL_TEXT:
+        return _SPECIAL_TEXT[t.lower()]
+    if not _NUMBER_TEXT.fullmatch(t):
+        raise ValueError(f"not a number: {token!r}")
+    return float(t.replace("D", "E").replace("d", "e"))
+
+
+def cli_float(text: str) -> float:
+    """An ``argparse`` type: the number of an option (:func:`number_text`; ``float`` took
+    ``--fov 1_0`` as 10). Named ``float`` so argparse's message says "invalid float value"."""
+    return number_text(text)
+
+
+def cli_int(text: str) -> int:
+    """An ``argparse`` type: a whole number written in ASCII digits (``int`` took ``1_0``)."""
+    if not re.fullmatch(r"\s*[+-]?[0-9]+\s*", text, re.ASCII):
+        raise ValueError(f"not a whole number: {text!r}")
+    return int(text)
+
+
+cli_float.__name__, cli_int.__name__ = "float", "int"
+
+
 def switch(value, arg: str, where: str) -> bool:
     """A Python bool; raises ValueError otherwise: a string such as "no" is truthy, and None
     or 0 would read as False, so a switch is never guessed from another type."""
@@ -73,8 +109,17 @@ def number(value, arg: str, where: str, *, lo=None, hi=None, lo_open=False, hi_o
         integer: Require a whole number (bools are refused).
 
     Returns:
-        The value as float (or int when ``integer``).
+        The value as float (or int when ``integer``). A traced value (inside jit, grad or
+        vmap), whose number is not known, is returned with an ``eqx.error_if`` of the same
+        range (:func:`values`): use the returned value, or the check is dropped.
     """
+    if is_traced(value):  # skipping it let a negative pixel_size through jit
+        if integer or jnp.size(value) != 1:
+            raise ValueError(f"{where}: {arg} must be one concrete "
+                             f"{'whole ' if integer else ''}number, got a traced array of "
+                             f"shape {jnp.shape(value)}")
+        return values(value, arg, where, lo=lo, hi=hi, lo_open=lo_open, hi_open=hi_open,
+                      unit=unit)
     span = interval(lo, hi, lo_open, hi_open)
     kind = "a whole number" if integer else "a finite number"
     u = f" {unit}" if unit else ""

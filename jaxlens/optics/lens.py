@@ -258,6 +258,9 @@ class Lens(eqx.Module):
                   for i, m in enumerate(self.materials)]
         parts.append(("object_material", self.object_material, AbstractMaterial, mat))
         parts.append(("description", self.description, str, "a string"))
+        parts.append(("name", self.name, str, "a string"))
+        if self.sensor is not None:  # render and the sensor-sized analyses read it
+            parts.append(("sensor", self.sensor, Sensor, "None or a jaxlens.Sensor"))
         for arg, v, cls, what in parts:
             if not isinstance(v, cls):
                 raise TypeError(f"Lens: {arg} must be {what}, got {type(v).__name__} {v!r}")

@@ -99,41 +99,49 @@ def build_parser() -> argparse.ArgumentParser:
     scale.add_argument("--paper", action="store_true", help="the paper's scale (GPU)")
     p.add_argument("--checkpoint", default=None, help="folder for checkpoints (none)")
     p.add_argument("--resume", action="store_true", help="continue from --checkpoint")
-    p.add_argument("--time-limit", type=float, default=None,
+    p.add_argument("--time-limit", type=input_checks.cli_float, default=None,
                    help="stop at the first checkpoint after this many seconds (exit 3)")
     g = p.add_argument_group("training (defaults: CPU scale)")
     g.add_argument("--decoder", choices=("nafnet", "wiener", "multiwiener"),
                    help="NAFNet alone, or behind a Wiener front end with the depth-averaged "
                    "PSF (wiener) or with it and each depth's PSF (multiwiener) (wiener)")
-    g.add_argument("--steps", type=int, help="stage-1 steps per lens (1200)")
-    g.add_argument("--steps2", type=int,
+    g.add_argument("--steps", type=input_checks.cli_int, help="stage-1 steps per lens (1200)")
+    g.add_argument("--steps2", type=input_checks.cli_int,
                    help="stage-2 steps per lens (60); may grow on --resume")
-    g.add_argument("--batch", type=int, help="patches per batch (8)")
-    g.add_argument("--tile", type=int, help="tile and patch side, pixels (32)")
-    g.add_argument("--kernel", type=int, help="PSF kernel side, pixels (31)")
-    g.add_argument("--binning", type=int, help="sensor binning of the 1024² sensor (2)")
-    g.add_argument("--pupil", type=int, help="pupil rays per side of a training PSF (32)")
-    g.add_argument("--eval-pupil", type=int, help="pupil rays per side at evaluation (64)")
-    g.add_argument("--lens-every", type=int, help="a lens update every N steps (4)")
-    g.add_argument("--lr-net", type=float, help="network learning rate (1e-3)")
-    g.add_argument("--lr-lens", type=float, help="lens learning rate, scaled units (2e-2)")
+    g.add_argument("--batch", type=input_checks.cli_int, help="patches per batch (8)")
+    g.add_argument("--tile", type=input_checks.cli_int, help="tile and patch side, pixels (32)")
+    g.add_argument("--kernel", type=input_checks.cli_int, help="PSF kernel side, pixels (31)")
+    g.add_argument("--binning", type=input_checks.cli_int,
+                   help="sensor binning of the 1024² sensor (2)")
+    g.add_argument("--pupil", type=input_checks.cli_int,
+                   help="pupil rays per side of a training PSF (32)")
+    g.add_argument("--eval-pupil", type=input_checks.cli_int,
+                   help="pupil rays per side at evaluation (64)")
+    g.add_argument("--lens-every", type=input_checks.cli_int,
+                   help="a lens update every N steps (4)")
+    g.add_argument("--lr-net", type=input_checks.cli_float, help="network learning rate (1e-3)")
+    g.add_argument("--lr-lens", type=input_checks.cli_float,
+                   help="lens learning rate, scaled units (2e-2)")
     g.add_argument("--depth-sampling", choices=("uniform", "dioptric"),
                    help="how a batch draws its 2 of the 8 training depths (uniform)")
     g.add_argument("--hold-focus", action=argparse.BooleanOptionalAction,
                    help="the hybrid keeps the classical lens's base curvature and sensor "
                    "position (off)")
-    g.add_argument("--w-sim", type=float, help="ω1, weight of L_sim (0.1)")
-    g.add_argument("--w-raw", type=float, help="ω2, weight of L_raw (0.1)")
-    g.add_argument("--photons", type=float, help="photo-electrons at the value 1 (2000)")
-    g.add_argument("--read-noise", type=float, help="read-noise standard deviation (0.002)")
-    g.add_argument("--width", type=int, help="NAFNet width (16)")
+    g.add_argument("--w-sim", type=input_checks.cli_float, help="ω1, weight of L_sim (0.1)")
+    g.add_argument("--w-raw", type=input_checks.cli_float, help="ω2, weight of L_raw (0.1)")
+    g.add_argument("--photons", type=input_checks.cli_float,
+                   help="photo-electrons at the value 1 (2000)")
+    g.add_argument("--read-noise", type=input_checks.cli_float,
+                   help="read-noise standard deviation (0.002)")
+    g.add_argument("--width", type=input_checks.cli_int, help="NAFNet width (16)")
     g.add_argument("--enc", type=_ints, help="NAFNet encoder blocks per level (1,1,1)")
-    g.add_argument("--middle", type=int, help="NAFNet middle blocks (1)")
+    g.add_argument("--middle", type=input_checks.cli_int, help="NAFNet middle blocks (1)")
     g.add_argument("--dec", type=_ints, help="NAFNet decoder blocks per level (1,1,1)")
-    g.add_argument("--n-odd", type=int, help="odd terms per axis of the hybrid surface (3)")
-    g.add_argument("--cubic-floor", type=float,
+    g.add_argument("--n-odd", type=input_checks.cli_int,
+                   help="odd terms per axis of the hybrid surface (3)")
+    g.add_argument("--cubic-floor", type=input_checks.cli_float,
                    help="lower bound of the cubic strength, fraction of its start (1)")
-    g.add_argument("--hybrid-floor", type=float,
+    g.add_argument("--hybrid-floor", type=input_checks.cli_float,
                    help="lower bound of the hybrid's x³ and y³ terms, fraction of their "
                    "start (none)")
     g.add_argument("--live-front-end", action=argparse.BooleanOptionalAction,
@@ -144,14 +152,16 @@ def build_parser() -> argparse.ArgumentParser:
                    "does not rise (off)")
     g.add_argument("--real-halo", action=argparse.BooleanOptionalAction,
                    help="training patches carry the Wiener front end's halo of real scene (off)")
-    g.add_argument("--context", type=int, help="scene pixels the decoder sees around a patch (0)")
+    g.add_argument("--context", type=input_checks.cli_int,
+                   help="scene pixels the decoder sees around a patch (0)")
     d = p.add_argument_group("data")
     d.add_argument("--train-dir", default=None,
                    help="folder of training images (default: skimage.data; see edof.scenes)")
     d.add_argument("--test-dir", default=None, help="folder of held-out test images")
     d.add_argument("--validation", action="store_true",
                    help="score the validation images instead of the test images")
-    d.add_argument("--max-crops", type=int, default=None, help="use only the first N crops")
+    d.add_argument("--max-crops", type=input_checks.cli_int,
+                   default=None, help="use only the first N crops")
     p.add_argument("--quiet", action="store_true", help="no progress bars")
     return p
 

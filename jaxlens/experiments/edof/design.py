@@ -38,6 +38,7 @@ import jax
 import jax.numpy as jnp
 import numpy as np
 
+from ...optics import checks
 from ...optics.lens import Lens, Sensor
 from .lenses import FOCUS_DEPTH, SPEC, WAVELENGTHS_RGB
 
@@ -459,11 +460,12 @@ def main(argv=None) -> None:
     p.add_argument("--record-dir", default=os.path.join("experiments", "edof"),
                    help="folder of base_lens.json, base_lens_spots.png, base_lens_command.txt")
     p.add_argument("--seeds", default="0,1,2", help="comma-separated seeds (default 0,1,2)")
-    p.add_argument("--elements", type=int, default=5, help="plastic elements (default 5)")
-    p.add_argument("--total-track", type=float, default=TOTAL_TRACK,
+    p.add_argument("--elements", type=checks.cli_int,
+                   default=5, help="plastic elements (default 5)")
+    p.add_argument("--total-track", type=checks.cli_float, default=TOTAL_TRACK,
                    help=f"stop to sensor at infinity, mm (default {TOTAL_TRACK})")
-    p.add_argument("--scale", type=float, default=1.0, help="step-count multiplier")
-    p.add_argument("--polish-steps", type=int, default=None,
+    p.add_argument("--scale", type=checks.cli_float, default=1.0, help="step-count multiplier")
+    p.add_argument("--polish-steps", type=checks.cli_int, default=None,
                    help="Levenberg–Marquardt steps on the best seed (default: the recipe's "
                         "80 × scale)")
     p.add_argument("--smoke", action="store_true",
