@@ -23,6 +23,8 @@ from typing import Any
 import jax
 import numpy as np
 
+from jaxlens.optics import checks
+
 RESULTS = pathlib.Path(__file__).resolve().parent / "results"
 
 
@@ -233,7 +235,7 @@ def whole(lo: int = 1, unit: str = ""):
 
     def parse(text: str) -> int:
         try:
-            v = int(text)
+            v = checks.cli_int(text)  # ASCII digits: int() also took "1_0" as 10
         except ValueError:
             v = None
         if v is None or v < lo:

@@ -230,18 +230,19 @@ def residual_note(runs: list[dict], size: int, spp: int) -> str:
 
 def main(argv=None) -> None:
     from jaxlens.experiments.runfolder import OneLineParser
+    from jaxlens.optics import checks
 
     from .common import out_path
 
     ap = OneLineParser(description=__doc__.splitlines()[0])
     ap.add_argument("--worker", action="store_true", help="run one configuration here")
-    ap.add_argument("--size", type=int, default=1024)
-    ap.add_argument("--spp", type=int, default=16)
-    ap.add_argument("--patch", type=int, default=64)
-    ap.add_argument("--checkpoint", type=int, default=1)
-    ap.add_argument("--trace-rays", type=int, default=0,
+    ap.add_argument("--size", type=checks.cli_int, default=1024)
+    ap.add_argument("--spp", type=checks.cli_int, default=16)
+    ap.add_argument("--patch", type=checks.cli_int, default=64)
+    ap.add_argument("--checkpoint", type=checks.cli_int, default=1)
+    ap.add_argument("--trace-rays", type=checks.cli_int, default=0,
                     help="worker: time the bare trace's gradient on this many rays instead")
-    ap.add_argument("--cap-gib", type=float, default=8.0)
+    ap.add_argument("--cap-gib", type=checks.cli_float, default=8.0)
     ap.add_argument("--lens", default="cellphone6", choices=("cooke_triplet", "double_gauss",
                                                              "cellphone6"),
                     help="zoo lens (the smoke test uses the smallest)")

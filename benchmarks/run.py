@@ -54,7 +54,8 @@ def main(argv: list[str] | None = None) -> dict:
     p.add_argument("--out", type=pathlib.Path, default=None, help="output folder")
     p.add_argument("--no-plots", action="store_true", help="skip the matplotlib figures")
     p.add_argument("--lenses", nargs="+", help="throughput: only these zoo lenses")
-    p.add_argument("--counts", nargs="+", type=int, help="throughput: only these ray counts")
+    p.add_argument("--counts", nargs="+", type=common.checks.cli_int,
+                   help="throughput: only these ray counts")
     p.add_argument(
         "--tag",
         default=None,

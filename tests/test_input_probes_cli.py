@@ -86,6 +86,9 @@ def test_classical_refuses_a_huge_device_count(tmp_path, capsys):
     ("vjp_probe", ["--chunk", "1.5"], r"--chunk: must be a whole number in \[1, inf\) rays"),
     ("vjp_probe", ["--json", "DIR/missing/x.json"], r"--json: .* is not an existing folder"),
     ("run", ["--counts", "1.5"], r"--counts: invalid int value"),
+    ("run", ["--counts", "1_0"], r"--counts: invalid int value"),  # int() reads 10
+    ("design_step", ["--seeds", "1_0"], r"--seeds: must be a whole number in \[1, inf\)"),
+    ("render_memory", ["--size", "1_0"], r"--size: invalid int value: '1_0'"),
     ("reevaluate", ["DIR/missing"], r"folder .*missing is not a folder"),
     ("reevaluate", ["DIR"], r"folder .* holds no .zmx files"),
     ("reevaluate", ["ZMX", "--out", "DIR"], r"--out .* must be a file in an existing folder"),
