@@ -86,6 +86,13 @@ def test_ir_materials_without_d_line_data_still_load():
     assert znse.catalog_nd == 1.0 and float(znse.index(10.0)) == pytest.approx(2.4, abs=0.01)
 
 
+def test_a_record_with_nd_0_and_vd_0_is_read_as_without_d_line_data(tmp_path):
+    """nd 0, Vd 0 is the other "no d-line data" mark (a user catalog's IR crystal): the
+    record loads, its formula gives its index, and no nd is compared."""
+    m = _agf(tmp_path, AGF.replace("1.5168 64.17", "0 0", 1))["GA"]
+    assert float(m.index(0.5875618)) == pytest.approx(1.5168, abs=1e-5)
+
+
 def test_a_bom_kept_by_a_text_read_is_no_part_of_the_first_line():
     """Before: parse_agf gave "CD record before any NM record" on line 2 (the BOM made the
     first NM line's key unknown), and zmx.loads "not a Zemax keyword line" on line 1."""

@@ -117,6 +117,9 @@ FORMULA_NAMES = {
 }
 """Zemax dispersion formula numbers understood by :func:`load_agf`."""
 
+NO_D_LINE_DATA = ((1.0, 0.0), (0.0, 0.0))
+"""(nd, Vd) pairs that mark a record without d-line data (IR crystals): no nd to check."""
+
 ND_TOLERANCE = 1e-3
 """Largest accepted gap between an AGF record's nd and its dispersion formula's index at the
 d line (the shipped catalogs' largest is 3.8e-5)."""
@@ -188,7 +191,7 @@ class GlassRecord:
         probe = LAMBDA_D if lo <= LAMBDA_D <= hi else 0.5 * (lo + hi)
         where = f"glass {self.name} of catalog {self.catalog or '?'}"
         checks.material(m, probe, where)
-        if probe == LAMBDA_D and (self.nd, self.vd) != (1.0, 0.0):
+        if probe == LAMBDA_D and (self.nd, self.vd) not in NO_D_LINE_DATA:
             self._check_nd(m, where)
         return m
 
@@ -345,9 +348,8 @@ def _parse_nm(tokens: list[str], where: str) -> dict:
     if formula not in FORMULA_NAMES:
         raise ValueError(f"{where}: {name} uses unsupported dispersion formula {formula}")
     nd, vd = _floats(tokens[4:6], where, f"nd and Vd of {name}")
-    # nd 1 with Vd 0 is the catalogs' mark of a material without d-line data (IR crystals).
-    if not (1.0 <= nd <= MAX_ND and vd >= 0.0):
-        raise ValueError(f"{where}: {name} needs nd in [1, {MAX_ND:g}] and Vd >= 0 (nd 1, "
+    if (nd, vd) not in NO_D_LINE_DATA and not (1.0 <= nd <= MAX_ND and vd >= 0.0):
+        raise ValueError(f"{where}: {name} needs nd in [1, {MAX_ND:g}] and Vd >= 0 (nd 1 or 0, "
                          f"Vd 0: no d-line data), got nd {tokens[4]}, Vd {tokens[5]}")
     return dict(name=name, formula=formula, nd=nd, vd=vd, glass_code=tokens[3],
                 status=_optional_int(tokens, 7))
