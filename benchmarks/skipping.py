@@ -6,7 +6,7 @@ compared (``max_abs_diff``; ``same_answer`` is True when it is within ``toleranc
 * ``object_at_infinity``: a collimated beam (no depth sampling) against the same spot computed
   through the finite-depth path at ``DEPTHS`` object distances, the farthest at 1e9 mm: the
   answer compared is the RMS spot of the collimated beam against that of the 1e9 mm point
-  source (equal to ~EPD/depth).
+  source (equal to ~2e-5 relative: the point source focuses f²/depth farther).
 * ``single_wavelength``: ``rms_spot`` at one wavelength against three (the three set equal to
   it, so the per-wavelength answers must agree exactly).
 * ``one_field_radius``: a rotationally symmetric lens's RMS spot over an n×n grid of (θx, θy)
@@ -33,7 +33,7 @@ from jaxlens.analysis.spots import rms_spot
 
 from . import common
 
-DEPTHS = (1e3, 1e4, 1e5, 1e6, 1e9, 1e12)
+DEPTHS = (1e3, 1e4, 1e5, 1e6, 1e8, 1e9)
 
 
 def _row(name, full, short, full_desc, short_desc, diff, tol):
@@ -97,8 +97,9 @@ def object_at_infinity(lens, pupil):
     full = common.time_jitted(_spot_depths, lens, f, pupil, depths)
     a = _spot_collimated(lens, f, pupil)
     b = _spot_depths(lens, f, pupil, depths)[-1]
-    # A point source at depth D differs from a collimated beam by ~EPD/D in angle and focuses
-    # f²/D behind it: at D = 1e12 mm the RMS spots agree to ~1e-9; allow 1e-7 relative.
+    # A point source at depth D focuses f²/D behind a collimated beam's focus: at D = 1e9 mm
+    # (depths go up to 1e10 mm, jaxlens's infinity) that is 2.5e-6 mm for the triplet's
+    # 50 mm, and the RMS spots agree to ~2e-5 relative; allow 1e-4.
     return _row(
         "object_at_infinity",
         full,
@@ -106,7 +107,7 @@ def object_at_infinity(lens, pupil):
         f"point sources at {len(DEPTHS)} depths",
         "collimated beam",
         float(jnp.max(jnp.abs(a - b) / a)),
-        1e-7,
+        1e-4,
     )
 
 
