@@ -36,7 +36,7 @@ from ..imaging.sampling import field_rays, lens_depth, pupil_grid
 from ..optics import checks, paraxial
 from ..optics.lens import Lens
 from ..tracing.forward import trace
-from .spots import PUPIL_GRID, weighted_centroid, weighted_rms
+from .spots import PUPIL_GRID, check_inputs, fields_array, weighted_centroid, weighted_rms
 
 REFERENCES = ("centroid", "chief")
 
@@ -99,28 +99,13 @@ def angular_spot(
         depth: object distance in mm (``inf`` for infinity), or None for the lens's own.
     """
     where = "angular_spot"
-    if not isinstance(lens, Lens):
-        raise TypeError(f"{where}: lens must be a jaxlens.Lens, got {type(lens).__name__}")
+    check_inputs(lens, where, fields=fields, wavelengths=wavelengths, pupil=pupil, own="all")
     if reference not in REFERENCES:
         raise ValueError(f"{where}: reference must be one of {REFERENCES}, got {reference!r}")
     fields = lens.fields if fields is None else fields
     wavelengths = lens.wavelengths if wavelengths is None else wavelengths
-    for arg, v, unit in (("fields", fields, "deg"), ("wavelengths", wavelengths, "µm"),
-                         ("pupil", pupil, "normalised pupil coordinates")):
-        if v is not None and not checks.is_traced(v):
-            checks.real_values(v, arg, where, unit)
-    if pupil is not None and not checks.is_traced(pupil):
-        checks.finite_array(pupil, "pupil", where, "normalised pupil coordinates")
-    if not checks.is_traced(fields):
-        checks.field_angles(fields, where, "fields")
-    if not checks.is_traced(wavelengths):
-        checks.wavelengths(lens, wavelengths, where, "wavelengths")
-        checks.material_indices(lens, wavelengths, where, "wavelengths")
     dtype = lens.epd.dtype
-    f = jnp.asarray(fields, dtype)
-    if f.ndim > 2 or (f.ndim == 2 and f.shape[-1] != 2) or f.size == 0:
-        raise ValueError(f"{where}: fields must be [F] θy or [F, 2] (θx, θy) degrees with "
-                         f"F >= 1, got shape {f.shape}")
+    f = fields_array(jnp.asarray(fields, dtype), where)
     w = jnp.atleast_1d(jnp.asarray(wavelengths, dtype))
     if w.ndim != 1 or w.size == 0:
         raise ValueError(f"{where}: wavelengths must be [W] µm with W >= 1, got shape {w.shape}")
@@ -128,7 +113,7 @@ def angular_spot(
     if p.ndim != 2 or p.shape[1] != 2 or p.shape[0] == 0:
         raise ValueError(f"{where}: pupil must be [M, 2] normalised pupil points (Px, Py) "
                          f"with M >= 1, got shape {p.shape}")
-    return _angular_spot(lens, f.reshape(-1) if f.ndim <= 1 else f, w, p,
+    return _angular_spot(lens, f, w, p,
                          reference=reference, depth=lens_depth(lens, depth, where))
 
 

@@ -30,7 +30,7 @@ from ..tracing.forward import DEFAULT_NEWTON_ITERS, trace, trace_path
 PUPIL_GRID = 21
 
 
-def _fields_array(fields, where: str) -> Array:
+def fields_array(fields, where: str) -> Array:
     """Fields as ``[F]`` (θy) or ``[F, 2]`` (θx, θy) degrees; refuses other shapes and F = 0."""
     f = jnp.asarray(fields)
     if f.ndim > 2 or (f.ndim == 2 and f.shape[-1] != 2) or f.size == 0:
@@ -39,9 +39,9 @@ def _fields_array(fields, where: str) -> Array:
     return f.reshape(-1) if f.ndim <= 1 else f
 
 
-def _concrete_inputs(lens: Lens, where: str, *, fields=None, wavelengths=None,
-                     arg_f: str = "fields", arg_w: str = "wavelengths", pupil=None,
-                     own: str = "primary") -> None:
+def check_inputs(lens: Lens, where: str, *, fields=None, wavelengths=None,
+                 arg_f: str = "fields", arg_w: str = "wavelengths", pupil=None,
+                 own: str = "primary") -> None:
     """Check the field angles (deg), wavelengths (µm) and pupil points the caller gave,
     before the jitted body: inside it a constant array is a tracer, and the same checks
     became an ``EquinoxRuntimeError`` raised after the whole trace had run (a NaN pupil
@@ -87,7 +87,7 @@ def spot_rays(
     newton_iters: int = DEFAULT_NEWTON_ITERS,
 ) -> Rays:
     """Rays of one field and wavelength on the image surface (a spot diagram as data)."""
-    _concrete_inputs(lens, "spot_rays", fields=field, wavelengths=wavelength, arg_f="field",
+    check_inputs(lens, "spot_rays", fields=field, wavelengths=wavelength, arg_f="field",
                      arg_w="wavelength", pupil=pupil)
     field, wavelength = _as_arrays(lens, field, wavelength)
     return _spot_rays(lens, field, wavelength, pupil=pupil,
@@ -104,7 +104,7 @@ def _spot_rays(lens, field, wavelength, *, pupil, depth, aim, newton_iters) -> R
 
 def chief_ray(lens: Lens, field, wavelength=None, *, depth=None) -> Rays:
     """The chief ray (through the paraxial entrance-pupil centre) on the image surface."""
-    _concrete_inputs(lens, "chief_ray", fields=field, wavelengths=wavelength, arg_f="field",
+    check_inputs(lens, "chief_ray", fields=field, wavelengths=wavelength, arg_f="field",
                      arg_w="wavelength")
     field, wavelength = _as_arrays(lens, field, wavelength)
     centre = jnp.zeros((1, 2), lens.epd.dtype)
@@ -175,7 +175,7 @@ def rms_spot(
         with ``valid_fraction`` 0; its gradient is 0, never NaN.
     """
     checks.focal_image(lens, "rms_spot")
-    _concrete_inputs(lens, "rms_spot", fields=fields, wavelengths=wavelengths, pupil=pupil,
+    check_inputs(lens, "rms_spot", fields=fields, wavelengths=wavelengths, pupil=pupil,
                      own="all")
     fields, wavelengths = _as_arrays(lens, _own_fields(lens, fields), wavelengths)
     return _rms_spot(lens, fields, wavelengths, pupil=pupil, reference=reference,
@@ -186,7 +186,7 @@ def rms_spot(
 def _rms_spot(lens, fields, wavelengths, *, pupil, reference, depth, newton_iters) -> RmsSpot:
     if reference not in ("centroid", "chief"):
         raise ValueError(f"rms_spot: reference must be 'centroid' or 'chief', got {reference!r}")
-    fields = _fields_array(fields, "rms_spot")
+    fields = fields_array(fields, "rms_spot")
     # With the lens's own wavelengths the chief ray is one more pupil point (the centre)
     # of the primary-wavelength trace, so one trace serves both.
     own_wavelengths = wavelengths is None
@@ -303,7 +303,7 @@ def distortion(lens: Lens, fields=None, wavelength=None) -> Distortion:
     coverage) has NaN height and distortion (its height was 0: a plausible −100 %).
     """
     checks.focal_image(lens, "distortion")
-    _concrete_inputs(lens, "distortion", fields=fields, wavelengths=wavelength,
+    check_inputs(lens, "distortion", fields=fields, wavelengths=wavelength,
                      arg_w="wavelength")
     fields, wavelength = _as_arrays(lens, _own_fields(lens, fields), wavelength)
     return _distortion(lens, fields, wavelength, lens_depth(lens, None, "distortion"))
@@ -311,7 +311,7 @@ def distortion(lens: Lens, fields=None, wavelength=None) -> Distortion:
 
 @eqx.filter_jit
 def _distortion(lens, fields, wavelength, depth) -> Distortion:
-    fields = _fields_array(fields, "distortion")
+    fields = fields_array(fields, "distortion")
     wl = lens.primary_wavelength if wavelength is None else wavelength
     if jnp.ndim(wl) != 0:
         raise ValueError(f"distortion: wavelength must be one value (µm), got shape "
@@ -350,7 +350,7 @@ def clear_semi_diameters(lens: Lens, fields=None, n_rim: int = 64, *,
     interior rays: where rim rays fail, a ray inside the pupil can pass higher than any
     rim ray that passes, and an aperture sized from the rim alone would clip it.
     """
-    _concrete_inputs(lens, "clear_semi_diameters", fields=fields, pupil=pupil, own="all")
+    check_inputs(lens, "clear_semi_diameters", fields=fields, pupil=pupil, own="all")
     if pupil is not None and (jnp.ndim(pupil) != 2 or jnp.shape(pupil)[-1] != 2):
         raise ValueError(f"clear_semi_diameters: pupil must be [M, 2] normalised pupil points "
                          f"(Px, Py), got shape {jnp.shape(pupil)}")
@@ -366,7 +366,7 @@ def clear_semi_diameters(lens: Lens, fields=None, n_rim: int = 64, *,
 def _clear_semi_diameters(lens, fields, n_rim, *, reaching, pupil) -> Float[Array, " n"]:
     checks.number(n_rim, "n_rim", "clear_semi_diameters", lo=4, integer=True,
                   unit="rim rays per beam (fewer miss the rim in x or y)")
-    fields = _fields_array(fields, "clear_semi_diameters")
+    fields = fields_array(fields, "clear_semi_diameters")
     a = np.linspace(0, 2 * np.pi, n_rim, endpoint=False)
     rim = jnp.asarray(np.concatenate([[[0.0, 0.0]], np.stack([np.cos(a), np.sin(a)], -1)]),
                       lens.epd.dtype)
