@@ -100,6 +100,30 @@ def test_an_ideal_telescope_has_no_angular_blur_and_magnifies_by_minus_f1_over_f
     assert got == pytest.approx(marginal / np.sqrt(2.0), rel=0.02)  # RMS over a uniform disc
 
 
+def test_angular_spot_gradient_matches_central_differences():
+    """d(RMS angular radius)/d(the telescope's gap) and d/d(eyepiece curvature), float64."""
+    import equinox as eqx
+    import jax
+
+    lens = jl.load(KEPLER, strict=True)
+    wl = lens.primary_wavelength[None]
+
+    def rms(gap, c):
+        moved = eqx.tree_at(lambda L: (L.thickness, L.surfaces[3].c), lens,
+                            (lens.thickness.at[1].set(gap), c))
+        return angular_spot(moved, fields=jnp.array([0.5]), wavelengths=wl).per_wavelength[0, 0]
+
+    gap, c = lens.thickness[1], lens.surfaces[3].c
+    g = jax.grad(rms, argnums=(0, 1))(gap, c)
+    for i, (x, h) in enumerate(((gap, 1e-4), (c, 1e-7))):
+        args = [gap, c]
+        args[i] = x + h
+        up = rms(*args)
+        args[i] = x - h
+        fd = (up - rms(*args)) / (2 * h)
+        assert float(g[i]) == pytest.approx(float(fd), rel=1e-5), i
+
+
 def test_a_mersenne_beam_reducer_is_erect_and_sharp_on_axis():
     """Two confocal paraboloids (concave f = 100 mm, convex f = −25 mm, 75 mm apart): an
     erect 4× telescope (u′/u = +4), without aberration on axis; the beam leaves along +z
