@@ -550,7 +550,7 @@ def _lens(f: ZmxFile, text: str, path: str, strict: bool, unknown_glass: str) ->
     zmx_surfaces.check_object_plane(obj, dist)
     wl, primary, wl_lines = _wavelengths(f)
     _check_image_medium(f, body)
-    zmx_system.ray_aiming(f.raim, f.path)
+    aim = zmx_system.ray_aiming(f.raim, f.path)
     field_type = zmx_system.field_type(f.ftyp)
     fields, vignetting = _fields(f, strict)
     if field_type == 0:  # angles (deg); heights are converted to angles later
@@ -574,6 +574,7 @@ def _lens(f: ZmxFile, text: str, path: str, strict: bool, unknown_glass: str) ->
         apertures=_apertures(body + [img], u),
         vignetting=None if vignetting is None else _arr(vignetting),
         afocal_image=zmx_system.afocal_image_space(f.ftyp),
+        aim=aim,
     )
     # Before the paraxial work of the aperture: values the lens cannot be traced with.
     for w, ln in zip(wl, wl_lines, strict=True):

@@ -334,15 +334,32 @@ def environment(ln, materials, strict: bool) -> None:
                    f"{ln.text.strip()!r}")
 
 
-def ray_aiming(ln, path: str) -> None:
-    """Warn when the file aims rays at the stop (RAIM's ray aiming type, 1 paraxial or
-    2 real): a ``Lens`` carries no aiming setting; jaxlens's samplers take ``aim``."""
-    if ln is None or len(ln.tokens) < 3 or ln.int(2, "ray aiming type") == 0:
-        return
-    warnings.warn(
-        f"{path}:{ln.number}: the file aims rays at the stop (RAIM); jaxlens "
-        f"lenses carry no aiming setting: pass aim='real' to jaxlens.sampling "
-        f"(collimated, point_source, field_rays) for the same rays",
-        ZmxWarning,
-        stacklevel=4,
-    )
+RAY_AIMING_TYPES = {0: "off", 1: "paraxial", 2: "real"}
+"""Zemax's ray-aiming types (RAIM's second value): 0 "Off" (rays through the paraxial
+entrance pupil), 1 "Paraxial" (real rays aimed at the stop, its size from the paraxial
+marginal ray), 2 "Real" (the same, the stop's size from a real marginal ray)."""
+
+
+def ray_aiming(ln, path: str) -> str:
+    """``Lens.aim`` from RAIM's ray-aiming type: 0 (Zemax's "Off", or no RAIM line) is
+    ``"paraxial"``; 1 (Zemax's "Paraxial" ray aiming: real rays aimed at the stop, whose size
+    the paraxial marginal ray sets) is ``"real"``, which is exactly that. 2 (Zemax's "Real"
+    ray aiming, the stop's size from a real marginal ray) is read as ``"real"`` with a
+    warning: jaxlens sizes the stop paraxially, so the rim rays can differ by the stop's
+    spherical aberration. Other types are refused."""
+    if ln is None or len(ln.tokens) < 3:
+        return "paraxial"
+    kind = ln.int(2, "ray aiming type")
+    if kind not in RAY_AIMING_TYPES:
+        raise ln.error(f"ray aiming type {kind} (RAIM's second value) is not one of 0 (off), "
+                       f"1 (paraxial) or 2 (real)")
+    if kind == 2:
+        warnings.warn(
+            f"{path}:{ln.number}: the file aims rays at the stop sized by real rays (RAIM "
+            f"type 2, Zemax's \"Real\" ray aiming); jaxlens aims them at the stop sized by the "
+            f"paraxial marginal ray (RAIM type 1, Lens.aim='real'), so the rim rays can differ "
+            f"by the stop's spherical aberration",
+            ZmxWarning,
+            stacklevel=4,
+        )
+    return "paraxial" if kind == 0 else "real"
