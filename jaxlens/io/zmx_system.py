@@ -269,7 +269,17 @@ VIGNETTING_KEYS = ("VDXN", "VDYN", "VCXN", "VCYN", "VANN")
 """The file's vignetting lines, in the column order of ``Lens.vignetting``."""
 
 
-def vignetting(lines, count: int) -> np.ndarray | None:
+def values_for_fields(ln, given: int, defined: int, what: str) -> None:
+    """Refuse a field line (``XFLN``, ``FWGN``, ``VDXN``, …) with fewer values than the
+    ``defined`` fields (those the y field line gives): Zemax writes one value a field, or
+    12 padded with zeros, so a shorter line was cut short and the values it lacks are not
+    known (0 would be a silent guess)."""
+    if given < defined:
+        raise ln.error(f"{ln.tokens[0]} gives {given} value{'s' * (given != 1)} ({what}) for "
+                       f"{defined} fields; Zemax writes one a field")
+
+
+def vignetting(lines, count: int, *, defined: int | None = None) -> np.ndarray | None:
     """The vignetting factors of the first ``count`` (used) fields, ``[count, 5]`` in the
     column order of ``Lens.vignetting`` (VDX, VDY, VCX, VCY in fractions of the
     entrance-pupil radius, VAN in degrees), or None where every one is 0 (or no line gives
@@ -277,10 +287,13 @@ def vignetting(lines, count: int) -> np.ndarray | None:
 
     They reshape each field's pupil, Zemax's stand-in for the clipping of the surface
     apertures (``jaxlens.imaging.sampling.vignetting_map``); a line the file does not
-    give, or a field it gives no value for, is 0. A line given twice, a value that is not
-    finite, or a compression (VCXN, VCYN) of 1 or more is refused, naming the line.
-    Paraxial data and the EFL do not depend on them.
+    give is 0 (Zemax's default: no vignetting factor), and so are the fields beyond the
+    ``defined`` ones (default ``count``: those the y field line gives; the reader reports
+    the others). A line with fewer values than the ``defined`` fields, a line given twice,
+    a value that is not finite, or a compression (VCXN, VCYN) of 1 or more is refused,
+    naming the line. Paraxial data and the EFL do not depend on them.
     """
+    defined = count if defined is None else defined
     out = np.zeros((count, len(VIGNETTING_KEYS)))
     seen: dict[str, object] = {}
     for ln in lines:
@@ -289,7 +302,9 @@ def vignetting(lines, count: int) -> np.ndarray | None:
             raise ln.error(f"{key} given twice (first on line {seen[key].number})")
         seen[key] = ln
         j = VIGNETTING_KEYS.index(key)
-        vals = [ln.float(i, f"{key} value") for i in range(1, len(ln.tokens))][:count]
+        vals = [ln.float(i, f"{key} value") for i in range(1, len(ln.tokens))]
+        values_for_fields(ln, len(vals), defined, "vignetting factors")
+        vals = vals[:count]
         for i, v in enumerate(vals):
             unit = "deg" if key == "VANN" else "fractions of the entrance-pupil radius"
             if not math.isfinite(v):
