@@ -170,3 +170,20 @@ def test_the_report_says_which_aiming_it_used():
     assert report_cells.aiming_line({"ray_aiming": "real"}).endswith(
         "real (rays aimed at the real stop)")
     assert "paraxial entrance pupil" in report_cells.aiming_line({})
+
+
+@pytest.mark.slow  # 10 s
+def test_a_ray_the_aiming_does_not_bring_to_its_stop_point_is_invalid():
+    """A singlet 10 mm before its stop at 25°: Newton's 4 steps bring the upper rim ray to
+    the stop's rim but not the chief ray, the lower rim ray or the sagittal one. Those were
+    launched valid, crossing the stop at 0.27, −3.85 and (0.66, 2.12) of its radius; now
+    they are invalid (``sampling.AIM_TOLERANCE``)."""
+    lens = jl.Lens(surfaces=(jl.Standard(c=1 / 30.0), jl.Standard(c=-1 / 80.0), jl.Standard()),
+                   thickness=jnp.array([6.0, 10.0, 40.0]),
+                   materials=(jl.get_material("N-BK7"), jl.Air(), jl.Air()),
+                   stop=2, epd=12.0, fields=(0.0, 25.0), aim="real")
+    pupil = jnp.array([[0.0, 0.0], [0.0, 1.0], [0.0, -1.0], [1.0, 0.0]])
+    rays = sampling.field_rays(lens, 25.0, pupil)
+    np.testing.assert_array_equal(np.asarray(rays.valid), [False, True, False, False])
+    r_stop = float(jl.paraxial_data(lens).stop_semi_diameter)
+    np.testing.assert_allclose(_at_stop(lens, rays)[1], [0.0, r_stop], rtol=0, atol=1e-9)

@@ -429,6 +429,11 @@ def field_rays(lens: Lens, field, pupil, wavelength=None, *, depth=None, aim=Non
     return rays
 
 
+AIM_TOLERANCE = {True: 1e-6, False: 1e-3}
+"""How far (relative to the stop radius, mm) an aimed ray may cross the stop from its aim
+point and stay valid, in float64 (True) and float32 (False)."""
+
+
 def aim_at_stop(
     lens: Lens,
     rays: Rays,
@@ -448,7 +453,9 @@ def aim_at_stop(
     iterate short of the stop point, and the real trace may then pass the wrong ray. Which
     of the aimed rays the apertures stop is for the caller's trace of the real lens.
     The pupil points are aimed at as given (the lens's vignetting factors are applied
-    before, by ``field_rays``).
+    before, by ``field_rays``). A ray that the ``iters`` Newton steps leave farther from its
+    stop point than ``AIM_TOLERANCE`` × max(stop radius, 1 mm) (a pupil too aberrated, a
+    point no ray reaches) is returned invalid (``valid`` False), as is a ray given invalid.
     """
     from ..tracing.forward import trace_path
 
@@ -495,7 +502,13 @@ def aim_at_stop(
     opl = None
     if source_point is not None:
         opl = n_obj * jnp.linalg.norm(o - source_point, axis=-1)
-    return Rays(o, d, rays.wavelength, opl=opl)
+    # A ray that Newton's method did not bring to its stop point (a pupil too aberrated for
+    # the iterations, a stop point no ray reaches) is invalid: it was launched as valid,
+    # crossing the stop far from where it was aimed, without a word.
+    miss = jax.vmap(at_stop)(uv, rays.direction, w) - target
+    tol = AIM_TOLERANCE[jnp.dtype(o.dtype).itemsize >= 8] * jnp.maximum(stop_r, 1.0)
+    hit = jnp.all(jnp.abs(miss) <= tol, axis=-1)
+    return Rays(o, d, rays.wavelength, opl=opl, valid=rays.valid & hit)
 
 
 def lens_depth(lens: Lens, depth, where: str):
