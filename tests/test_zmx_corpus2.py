@@ -117,10 +117,14 @@ def test_xosphere_round_trip(tmp_path):
 
 
 @pytest.mark.parametrize("lines, line, reason", [
-    ("  XDAT 1 4\n  XDAT 3 1E-2\n", 11, r"XOSPHERE needs XDAT 1 \(number of terms\) and XDAT 2"),
-    ("  XDAT 1 241\n  XDAT 2 5\n", 13, r"XDAT 1 must be a whole number of terms, 0\.\.240"),
-    ("  XDAT 1 2\n  XDAT 2 0\n", 14, r"the normalisation radius \(XDAT 2\) must be > 0"),
-    ("  XDAT 1 1\n  XDAT 2 5\n  XDAT 4 1E-3\n", 15, r"coefficient beyond the 1 terms"),
+    ("  XDAT 1 4\n  XDAT 3 1E-2\n", 11, r"XOSPHERE needs XDAT 1 \(the number of terms\) and "
+     r"XDAT 2 \(the normalisation radius, lens units\); XDAT 2 is missing"),
+    ("  XDAT 1 241\n  XDAT 2 5\n", 13, r"XDAT 1 \(the number of terms\) must be a whole number "
+     r"in 0\.\.240, got 241"),
+    ("  XDAT 1 2\n  XDAT 2 0\n", 14, r"XDAT 2 \(the normalisation radius, lens units\) must be "
+     r"> 0, got 0"),
+    ("  XDAT 1 1\n  XDAT 2 5\n  XDAT 4 1E-3\n", 15, r"coefficient beyond the 1 terms of XDAT 1 "
+     r"\(XDAT 3 … XDAT 3\)"),
     ("  PARM 1 1E-3\n  XDAT 1 1\n  XDAT 2 5\n", 13, r"XOSPHERE has no parameters \(PARM\)"),
 ])
 def test_xosphere_malformed_is_refused_with_its_line(tmp_path, lines, line, reason):

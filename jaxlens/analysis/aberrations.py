@@ -47,7 +47,7 @@ import jax.numpy as jnp
 import numpy as np
 from jaxtyping import Array, Bool, Float
 
-from ..imaging.sampling import field_rays, lens_depth
+from ..imaging.sampling import field_rays, lens_aim, lens_depth
 from ..optics import checks
 from ..optics.lens import Lens
 from ..tracing.forward import DEFAULT_NEWTON_ITERS, forward_mode_jit, trace
@@ -114,7 +114,7 @@ def _image_rays(lens, field, wavelength, pupil, depth, aim):
 
 
 def ray_fan(lens: Lens, field, wavelengths=None, *, n: int = FAN_POINTS, depth=None,
-            aim: str = "paraxial") -> RayFan:
+            aim: str | None = None) -> RayFan:
     """Tangential and sagittal ray fans of one field (see the module notes).
 
     Args:
@@ -123,7 +123,8 @@ def ray_fan(lens: Lens, field, wavelengths=None, *, n: int = FAN_POINTS, depth=N
         wavelengths: µm, one value or ``[W]``; default the lens's wavelengths.
         n: pupil points per fan, evenly spaced over −1 … 1.
         depth: object distance (mm) for a finite object; default the lens's object.
-        aim: ``"paraxial"`` (the paraxial entrance pupil) or ``"real"`` (the real stop).
+        aim: ``"paraxial"`` (the paraxial entrance pupil) or ``"real"`` (the real stop);
+            None (the default): the lens's own ray aiming, ``lens.aim``.
 
     Returns:
         A ``RayFan``; errors of rays that do not reach the image (and all errors where the
@@ -136,7 +137,7 @@ def ray_fan(lens: Lens, field, wavelengths=None, *, n: int = FAN_POINTS, depth=N
                     wavelengths)
     n = checks.number(n, "n", "ray_fan", lo=2, integer=True, unit="pupil points")
     return _ray_fan(lens, f if shape == (2,) else f[0], wl, n=int(n),
-                    depth=lens_depth(lens, depth, "ray_fan"), aim=aim)
+                    depth=lens_depth(lens, depth, "ray_fan"), aim=lens_aim(lens, aim, "ray_fan"))
 
 
 @eqx.filter_jit
@@ -168,7 +169,7 @@ def default_fields(lens: Lens, count: int = CURVE_FIELDS) -> Array:
 
 
 def field_curvature(lens: Lens, fields=None, wavelengths=None, *, depth=None,
-                    aim: str = "paraxial") -> FieldCurvature:
+                    aim: str | None = None) -> FieldCurvature:
     """Tangential and sagittal focus positions over the field (see the module notes).
 
     Args:
@@ -179,7 +180,7 @@ def field_curvature(lens: Lens, fields=None, wavelengths=None, *, depth=None,
         wavelengths: µm, one value or ``[W]``; default the lens's wavelengths.
         depth: object distance (mm) for a finite object; default the lens's object.
         aim: ``"paraxial"`` or ``"real"`` (chief ray through the paraxial entrance pupil's
-            centre or the real stop's).
+            centre or the real stop's); None (the default): the lens's own, ``lens.aim``.
 
     Returns:
         A ``FieldCurvature`` (mm from the image surface, along z; ``astigmatism`` is their
@@ -189,7 +190,7 @@ def field_curvature(lens: Lens, fields=None, wavelengths=None, *, depth=None,
     f, wl = _inputs(lens, "field_curvature",
                     default_fields(lens) if fields is None else fields, wavelengths, pairs=True)
     return _field_curvature(lens, f, wl, depth=lens_depth(lens, depth, "field_curvature"),
-                            aim=aim)
+                            aim=lens_aim(lens, aim, "field_curvature"))
 
 
 def _cross(a, b, e):

@@ -61,9 +61,9 @@ from ..optics.xypolynomial import XYPolynomial, xy_term_powers
 from . import spots as analysis
 from .aberrations import field_curvature
 from .report_afocal import afocal_report_data, format_afocal_report
+from .report_cells import aiming_line, wavefront_lines
 from .report_cells import cell as _num
 from .report_cells import json_number as _f
-from .report_cells import wavefront_lines
 from .report_cells import wavefront_summary as _wavefront_summary
 from .third_order import SEIDEL_TERMS, WAVEFRONT_TERMS, seidel
 
@@ -103,8 +103,9 @@ def _compute(lens: Lens) -> _Result:
 
     The rays are ``analysis.spot_rays`` on the 21×21 grid for every field and
     wavelength; the chief ray is the grid's centre point at the primary wavelength (the
-    same ray as ``analysis.chief_ray``). The RMS radii and distortions follow the
-    definitions of ``analysis.rms_spot`` and ``analysis.distortion``; tracing once
+    same ray as ``analysis.chief_ray``; both aimed as ``lens.aim`` says). The RMS radii
+    and distortions follow the definitions of ``analysis.rms_spot`` and
+    ``analysis.distortion``; tracing once
     instead of three times (spots, their chief rays, distortion) cuts compile time.
     """
     pd = paraxial.paraxial_data(lens)
@@ -261,6 +262,7 @@ def report_data(lens: Lens, *, fields=None, wavelengths=None, wavefront: bool = 
         "image_z": _f(pd.image_z),
         "paraxial_image_z": _f(pd.paraxial_image_z),
         "stop_surface": lens.stop + 1,
+        "ray_aiming": lens.aim,
         "object_distance": None if lens.object_distance is None else _f(lens.object_distance),
         "wavelengths": [float(w) for w in wl],
         "primary_wavelength": float(wl[lens.primary]),
@@ -447,6 +449,7 @@ def format_report(data: dict, lens: Lens | None = None) -> str:
     for label, v, unit in rows:
         L.append(f"  {label:<34}: {_num(v, 14, 6)} {unit}".rstrip())
     L.append(f"  {'Stop surface':<34}: {data['stop_surface']:>14d}")
+    L.append(aiming_line(data))
     wtxt = ", ".join(
         f"{w:.6f}" + (" (primary)" if w == data["primary_wavelength"] else "") for w in wl
     )

@@ -20,7 +20,7 @@ import numpy as np
 from ..optics import paraxial
 from ..optics.lens import Lens
 from .afocal import angular_magnification, angular_spot
-from .report_cells import cell, json_number, wavefront_lines, wavefront_summary
+from .report_cells import aiming_line, cell, json_number, wavefront_lines, wavefront_summary
 
 UNITS = {
     "length": "mm",
@@ -72,6 +72,7 @@ def afocal_report_data(lens: Lens, *, wavefront: bool = False, notes=()) -> dict
         "fov": 2.0 * fmax,
         "max_field": fmax,
         "stop_surface": lens.stop + 1,
+        "ray_aiming": lens.aim,
         "object_distance": (None if lens.object_distance is None
                             else json_number(lens.object_distance)),
         "wavelengths": [float(w) for w in wl],
@@ -102,6 +103,7 @@ def format_afocal_report(data: dict, surface_table: list[str] | None = None) -> 
     for label, v, unit in rows:
         L.append(f"  {label:<34}: {cell(v, 14, 6)} {unit}".rstrip())
     L.append(f"  {'Stop surface':<34}: {data['stop_surface']:>14d}")
+    L.append(aiming_line(data))
     wl = data["wavelengths"]
     L.append(f"  {'Wavelengths (um)':<34}: " + ", ".join(
         f"{w:.6f}" + (" (primary)" if w == data["primary_wavelength"] else "") for w in wl))

@@ -29,6 +29,18 @@ def cell(v: float | None, width: int = 12, prec: int = 6, missing: str = "failed
     return f"{text:>{width}}"
 
 
+AIMING_TEXT = {"paraxial": "paraxial (rays through the paraxial entrance pupil)",
+               "real": "real (rays aimed at the real stop)"}
+"""The report's words for each ``Lens.aim``."""
+
+
+def aiming_line(data: dict) -> str:
+    """The report line that says which ray aiming its rays used (``data["ray_aiming"]``;
+    a report written before the key existed used paraxial aiming)."""
+    aim = data.get("ray_aiming", "paraxial")
+    return f"  {'Ray aiming':<34}: {AIMING_TEXT.get(aim, aim)}"
+
+
 def wavefront_summary(lens: Lens, field) -> dict:
     """One field's wavefront error (waves, primary wavelength; referenced as the lens's image
     space asks: a sphere, or a plane for an afocal lens), or why there is none."""

@@ -3,7 +3,9 @@
 Conventions:
     Lengths in mm (RMS spot radii too), field angles in degrees, wavelengths in µm.
     Unless a pupil is given, spots use the 21×21 square grid over the unit pupil kept
-    inside the disc (317 rays), with rays aimed at the paraxial entrance pupil. RMS
+    inside the disc (317 rays), with rays aimed as the lens says (``Lens.aim``: at the
+    paraxial entrance pupil by default, at the real stop for ``"real"``; an ``aim``
+    argument overrides it). The chief ray is the pupil-centre ray of the same aiming. RMS
     radius = sqrt(mean(|p − ref|²)) over the valid rays on the image surface, with ref
     the centroid of the same ray set or the primary-wavelength chief ray (pupil centre).
     Polychromatic values pool the rays of all wavelengths with equal weights.
@@ -20,7 +22,7 @@ import jax.numpy as jnp
 import numpy as np
 from jaxtyping import Array, Bool, Float
 
-from ..imaging.sampling import field_rays, lens_depth, pupil_grid
+from ..imaging.sampling import field_rays, lens_aim, lens_depth, pupil_grid
 from ..optics import checks, paraxial
 from ..optics.lens import Lens
 from ..optics.rays import Rays
@@ -83,15 +85,17 @@ def spot_rays(
     *,
     pupil=None,
     depth=None,
-    aim: str = "paraxial",
+    aim: str | None = None,
     newton_iters: int = DEFAULT_NEWTON_ITERS,
 ) -> Rays:
-    """Rays of one field and wavelength on the image surface (a spot diagram as data)."""
+    """Rays of one field and wavelength on the image surface (a spot diagram as data).
+    ``aim``: "paraxial", "real" or None (the lens's own ray aiming, ``lens.aim``)."""
     check_inputs(lens, "spot_rays", fields=field, wavelengths=wavelength, arg_f="field",
                      arg_w="wavelength", pupil=pupil)
     field, wavelength = _as_arrays(lens, field, wavelength)
     return _spot_rays(lens, field, wavelength, pupil=pupil,
-                      depth=lens_depth(lens, depth, "spot_rays"), aim=aim,
+                      depth=lens_depth(lens, depth, "spot_rays"),
+                      aim=lens_aim(lens, aim, "spot_rays"),
                       newton_iters=newton_iters)
 
 
@@ -102,14 +106,17 @@ def _spot_rays(lens, field, wavelength, *, pupil, depth, aim, newton_iters) -> R
     return trace(lens, rays, newton_iters=newton_iters)
 
 
-def chief_ray(lens: Lens, field, wavelength=None, *, depth=None) -> Rays:
-    """The chief ray (through the paraxial entrance-pupil centre) on the image surface."""
+def chief_ray(lens: Lens, field, wavelength=None, *, depth=None, aim=None) -> Rays:
+    """The chief ray on the image surface: through the paraxial entrance-pupil centre
+    (``aim="paraxial"``) or the real stop's centre (``"real"``); None (the default): the
+    lens's own ray aiming, ``lens.aim``."""
     check_inputs(lens, "chief_ray", fields=field, wavelengths=wavelength, arg_f="field",
                      arg_w="wavelength")
     field, wavelength = _as_arrays(lens, field, wavelength)
     centre = jnp.zeros((1, 2), lens.epd.dtype)
     return _spot_rays(lens, field, wavelength, pupil=centre,
-                      depth=lens_depth(lens, depth, "chief_ray"), aim="paraxial",
+                      depth=lens_depth(lens, depth, "chief_ray"),
+                      aim=lens_aim(lens, aim, "chief_ray"),
                       newton_iters=DEFAULT_NEWTON_ITERS)[0]
 
 
@@ -156,6 +163,7 @@ def rms_spot(
     pupil=None,
     reference: str = "centroid",
     depth=None,
+    aim: str | None = None,
     newton_iters: int = DEFAULT_NEWTON_ITERS,
 ) -> RmsSpot:
     """RMS spot radius per field and wavelength, and polychromatic (mm).
@@ -168,6 +176,9 @@ def rms_spot(
         reference: "centroid" or "chief" (primary-wavelength chief ray).
         depth: object distance in mm (``inf`` for infinity), or None for the lens's own
             object (``lens.object_distance``; infinity where it has none).
+        aim: "paraxial" (rays through the paraxial entrance pupil) or "real" (aimed at the
+            real stop; the chief ray through its centre); None (the default): the lens's
+            own ray aiming, ``lens.aim``.
 
     Returns:
         An ``RmsSpot``. Only valid rays count; ``valid_fraction`` says how many those were.
@@ -179,11 +190,13 @@ def rms_spot(
                      own="all")
     fields, wavelengths = _as_arrays(lens, _own_fields(lens, fields), wavelengths)
     return _rms_spot(lens, fields, wavelengths, pupil=pupil, reference=reference,
-                     depth=lens_depth(lens, depth, "rms_spot"), newton_iters=newton_iters)
+                     depth=lens_depth(lens, depth, "rms_spot"),
+                     aim=lens_aim(lens, aim, "rms_spot"), newton_iters=newton_iters)
 
 
 @eqx.filter_jit
-def _rms_spot(lens, fields, wavelengths, *, pupil, reference, depth, newton_iters) -> RmsSpot:
+def _rms_spot(lens, fields, wavelengths, *, pupil, reference, depth, aim,
+              newton_iters) -> RmsSpot:
     if reference not in ("centroid", "chief"):
         raise ValueError(f"rms_spot: reference must be 'centroid' or 'chief', got {reference!r}")
     fields = fields_array(fields, "rms_spot")
@@ -204,7 +217,7 @@ def _rms_spot(lens, fields, wavelengths, *, pupil, reference, depth, newton_iter
 
     def per_field(field):
         def per_wl(wl):
-            r = _spot_rays(lens, field, wl, pupil=pupil_ext, depth=depth, aim="paraxial",
+            r = _spot_rays(lens, field, wl, pupil=pupil_ext, depth=depth, aim=aim,
                            newton_iters=newton_iters)
             return r.origin[..., :2], r.valid.astype(r.origin.dtype)
 
@@ -214,7 +227,7 @@ def _rms_spot(lens, fields, wavelengths, *, pupil, reference, depth, newton_iter
             chief, chief_valid = p_ext[lens.primary, m], w_ext[lens.primary, m]
         else:
             cr = _spot_rays(lens, field, primary, pupil=jnp.zeros((1, 2), pupil.dtype),
-                            depth=depth, aim="paraxial", newton_iters=newton_iters)
+                            depth=depth, aim=aim, newton_iters=newton_iters)
             chief, chief_valid = cr.origin[0, :2], cr.valid[0].astype(cr.origin.dtype)
         cen = weighted_centroid(p, w)  # [W, 2]
         ref = cen if reference == "centroid" else jnp.broadcast_to(chief, cen.shape)
@@ -287,7 +300,7 @@ def field_heights(fields, xy):
     return tr, jnp.rad2deg(jnp.arctan(tr)), jnp.sum(xy * u, axis=-1)
 
 
-def distortion(lens: Lens, fields=None, wavelength=None) -> Distortion:
+def distortion(lens: Lens, fields=None, wavelength=None, *, aim=None) -> Distortion:
     """Distortion of the real chief ray at ``wavelength`` (default primary), traced from the
     lens's own object (``lens.object_distance``; at a finite distance a field angle is the
     chief ray's angle at the entrance pupil, as in ``sampling.object_point``).
@@ -301,16 +314,19 @@ def distortion(lens: Lens, fields=None, wavelength=None) -> Distortion:
     ``[F]`` fields and radial for ``[F, 2]`` (see :class:`Distortion`). Zero fields give 0.
     A field whose real chief ray does not reach the image (vignetted, or beyond the lens's
     coverage) has NaN height and distortion (its height was 0: a plausible −100 %).
+    The chief ray passes the paraxial entrance pupil's centre (``aim="paraxial"``) or the
+    real stop's (``"real"``); None (the default): the lens's own ray aiming, ``lens.aim``.
     """
     checks.focal_image(lens, "distortion")
     check_inputs(lens, "distortion", fields=fields, wavelengths=wavelength,
                      arg_w="wavelength")
     fields, wavelength = _as_arrays(lens, _own_fields(lens, fields), wavelength)
-    return _distortion(lens, fields, wavelength, lens_depth(lens, None, "distortion"))
+    return _distortion(lens, fields, wavelength, lens_depth(lens, None, "distortion"),
+                       aim=lens_aim(lens, aim, "distortion"))
 
 
 @eqx.filter_jit
-def _distortion(lens, fields, wavelength, depth) -> Distortion:
+def _distortion(lens, fields, wavelength, depth, *, aim) -> Distortion:
     fields = fields_array(fields, "distortion")
     wl = lens.primary_wavelength if wavelength is None else wavelength
     if jnp.ndim(wl) != 0:
@@ -319,7 +335,7 @@ def _distortion(lens, fields, wavelength, depth) -> Distortion:
     # The front focal length n·EFL: a field angle is measured in object space.
     f = lens.object_material.index(wl) * paraxial.efl(lens, wl)
     chief = jax.vmap(lambda th: _spot_rays(
-        lens, th, wl, pupil=jnp.zeros((1, 2), lens.epd.dtype), depth=depth, aim="paraxial",
+        lens, th, wl, pupil=jnp.zeros((1, 2), lens.epd.dtype), depth=depth, aim=aim,
         newton_iters=DEFAULT_NEWTON_ITERS)[0])(fields)
     p = jnp.where(chief.valid[:, None], chief.origin[:, :2], jnp.nan)
     tr, radial, y = field_heights(fields, p)
@@ -343,7 +359,8 @@ def clear_semi_diameters(lens: Lens, fields=None, n_rim: int = 64, *,
     """Clear semi-diameter of every surface (mm).
 
     A finite ``semi_diameter`` is used as is; otherwise the largest radial height of the
-    rim and chief rays over the lens's fields and wavelengths (paraxial aiming) among the
+    rim and chief rays over the lens's fields and wavelengths (the lens's ray aiming,
+    ``Lens.aim``) among the
     rays that pass the whole lens, or, with ``reaching=True``, among the rays that reach
     that surface (the beam footprint: a ray lost further on, say where two surfaces cross,
     still lights every surface before). ``pupil`` (``[M, 2]`` unit-pupil points) adds

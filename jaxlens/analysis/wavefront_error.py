@@ -78,10 +78,10 @@ import jax.numpy as jnp
 import numpy as np
 from jaxtyping import Array, ArrayLike, Bool, Float
 
-from ..imaging.sampling import field_rays, lens_depth, pupil_points
+from ..imaging.sampling import field_rays, lens_aim, lens_depth, pupil_points
 from ..optics import checks, paraxial
 from ..optics.coordinates import CoordinateBreak
-from ..optics.lens import Lens, unclipped
+from ..optics.lens import RAY_AIMING, Lens, unclipped
 from ..tracing.forward import DEFAULT_NEWTON_ITERS, trace
 from .zernike import ZernikeFit, zernike_fit
 
@@ -89,7 +89,7 @@ __all__ = ["REFERENCES", "Wavefront", "OPDFan", "opd", "wavefront", "opd_fan",
            "marechal_strehl", "MARECHAL_MAX_RMS"]
 
 REFERENCES = ("sphere", "plane")
-AIMS = ("paraxial", "real")
+AIMS = RAY_AIMING
 DEFAULT_GRID = 65
 """Default wavefront-map samples per side (odd: the chief ray is a grid point)."""
 
@@ -117,8 +117,8 @@ def _cast(tree, dtype):
 
 
 def _common(lens, field, wavelength, depth, reference, aim, where: str):
-    """Checked (field, wavelength, depth) as lens-dtype arrays; raises ValueError naming
-    ``where`` and the argument."""
+    """Checked (field, wavelength, depth) as lens-dtype arrays, the reference and the ray
+    aiming (None: the lens's own); raises ValueError naming ``where`` and the argument."""
     if not isinstance(lens, Lens):
         raise TypeError(f"{where}: lens must be a jaxlens.Lens, got {type(lens).__name__}")
     if any(isinstance(s, CoordinateBreak) for s in lens.surfaces):
@@ -135,8 +135,7 @@ def _common(lens, field, wavelength, depth, reference, aim, where: str):
         raise ValueError(f"{where}: the lens has an afocal image space (Lens.afocal_image): "
                          f"its wavefront is referenced to a plane; pass reference='plane' "
                          f"(or None, the lens's own)")
-    if aim not in AIMS:
-        raise ValueError(f"{where}: aim must be one of {AIMS}, got {aim!r}")
+    aim = lens_aim(lens, aim, where)
     dtype = lens.epd.dtype
     f = jnp.asarray(checks.one_field(field, where), dtype)
     wl = lens.primary_wavelength if wavelength is None else wavelength
@@ -148,7 +147,7 @@ def _common(lens, field, wavelength, depth, reference, aim, where: str):
         checks.number(wl, "wavelength", where, lo=0, lo_open=True, unit="µm")
     wl = checks.wavelengths(lens, jnp.asarray(wl, dtype), where, "wavelength")
     checks.material_indices(lens, wl, where)
-    return f, wl, lens_depth(lens, depth, where), reference
+    return f, wl, lens_depth(lens, depth, where), reference, aim
 
 
 
@@ -225,7 +224,7 @@ def opd(
     wavelength: Float[ArrayLike, ""] | None = None,
     depth=None,
     reference: str | None = None,
-    aim: str = "paraxial",
+    aim: str | None = None,
     newton_iters: int = DEFAULT_NEWTON_ITERS,
 ) -> Float[Array, "*m"]:
     """Optical path difference (waves) of the rays through normalised pupil points.
@@ -242,7 +241,8 @@ def opd(
             for the lens's own object.
         reference: "sphere" (exit-pupil reference sphere) or "plane" (afocal image space);
             None (the default): the lens's own, "plane" where ``lens.afocal_image``.
-        aim: "paraxial" or "real" (as ``jaxlens.imaging.sampling.field_rays``).
+        aim: "paraxial" or "real" (as ``jaxlens.imaging.sampling.field_rays``); None (the
+            default): the lens's own ray aiming, ``lens.aim``.
         newton_iters: Newton iterations for aspheric surfaces.
 
     Returns:
@@ -258,7 +258,7 @@ def opd(
         (0.0, True)
     """
     lens, dtype = _precise(lens)
-    f, wl, depth, reference = _common(lens, field, wavelength, depth, reference, aim, "opd")
+    f, wl, depth, reference, aim = _common(lens, field, wavelength, depth, reference, aim, "opd")
     checks.number(newton_iters, "newton_iters", "opd", lo=0, integer=True, unit="iterations")
     p = pupil_points(pupil, "opd", unit_disc=True)
     shape = p.shape[:-1]
@@ -371,7 +371,7 @@ def wavefront(
     depth=None,
     grid: int = DEFAULT_GRID,
     reference: str | None = None,
-    aim: str = "paraxial",
+    aim: str | None = None,
     newton_iters: int = DEFAULT_NEWTON_ITERS,
 ) -> Wavefront:
     """The wavefront map of one field and its RMS, peak-to-valley and Strehl ratio.
@@ -397,7 +397,7 @@ def wavefront(
         ((33, 33), True)
     """
     lens, dtype = _precise(lens)
-    f, wl, depth, reference = _common(lens, field, wavelength, depth, reference, aim,
+    f, wl, depth, reference, aim = _common(lens, field, wavelength, depth, reference, aim,
                                       "wavefront")
     grid = checks.number(grid, "grid", "wavefront", lo=3, integer=True,
                          unit="pupil samples per side")
@@ -443,7 +443,7 @@ def opd_fan(
     n: int = 21,
     depth=None,
     reference: str | None = None,
-    aim: str = "paraxial",
+    aim: str | None = None,
     newton_iters: int = DEFAULT_NEWTON_ITERS,
 ) -> OPDFan:
     """Tangential and sagittal OPD fans of one field (waves at each wavelength), beside
@@ -470,7 +470,7 @@ def opd_fan(
     if not checks.is_traced(wls):
         checks.values(np.asarray(wls, float), "wavelengths", "opd_fan", lo=0, lo_open=True,
                       unit="µm")
-    f, _, depth, reference = _common(lens, field, wls[0], depth, reference, aim, "opd_fan")
+    f, _, depth, reference, aim = _common(lens, field, wls[0], depth, reference, aim, "opd_fan")
     wls = checks.wavelengths(lens, wls, "opd_fan", "wavelengths")
     checks.material_indices(lens, wls, "opd_fan", "wavelengths")
     n = checks.number(n, "n", "opd_fan", lo=2, integer=True, unit="pupil points")

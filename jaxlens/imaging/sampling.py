@@ -33,7 +33,7 @@ import numpy as np
 from jaxtyping import Array, Float
 
 from ..optics import checks, paraxial
-from ..optics.lens import INFINITE_OBJECT_MM, Lens, unclipped
+from ..optics.lens import INFINITE_OBJECT_MM, RAY_AIMING, Lens, unclipped
 from ..optics.rays import Rays
 
 
@@ -186,7 +186,7 @@ def collimated(
     pupil: Float[Array, "m 2"],
     wavelength=None,
     *,
-    aim: str = "paraxial",
+    aim: str | None = None,
 ) -> Rays:
     """A collimated beam for an object at infinity, sampled over the entrance pupil.
 
@@ -195,7 +195,8 @@ def collimated(
         field: field angle in degrees, θy or (θx, θy).
         pupil: ``[m, 2]`` normalised pupil points.
         wavelength: µm (default: the lens's primary wavelength).
-        aim: "paraxial" or "real" (aim at the real stop).
+        aim: "paraxial" or "real" (aim at the real stop); None (the default): the lens's
+            own, ``lens.aim``.
 
     Returns:
         ``[m]`` rays launched on the entrance-pupil plane.
@@ -213,10 +214,8 @@ def collimated(
     origin = jnp.concatenate([xy, jnp.broadcast_to(zep, xy.shape[:-1])[..., None]], -1)
     direction = jnp.broadcast_to(d, origin.shape).astype(origin.dtype)
     rays = Rays(origin, direction, wl)
-    if aim == "real":
+    if lens_aim(lens, aim, "collimated") == "real":
         rays = aim_at_stop(lens, rays, pupil)
-    elif aim != "paraxial":
-        raise ValueError(f"collimated: aim must be 'paraxial' or 'real', got {aim!r}")
     return rays
 
 
@@ -226,11 +225,12 @@ def point_source(
     pupil: Float[Array, "m 2"],
     wavelength=None,
     *,
-    aim: str = "paraxial",
+    aim: str | None = None,
 ) -> Rays:
     """Rays from an object point (global mm, z < 0) through the paraxial entrance pupil.
 
-    The entrance pupil diameter is the lens's EPD. The rays are launched at their
+    The entrance pupil diameter is the lens's EPD. ``aim`` as for :func:`collimated` (None:
+    the lens's own, ``lens.aim``). The rays are launched at their
     entrance-pupil points, with ``opl`` already holding the path from the object point.
     The pupil points are used as given: the lens's vignetting factors are not applied here
     (``field_rays`` applies them for the lens's own fields).
@@ -267,11 +267,21 @@ def point_source(
     # distant object); the optical path starts at the object point.
     n_obj = lens.object_material.index(wl)
     rays = Rays(target, v / dist, wl, opl=n_obj * dist[..., 0])
-    if aim == "real":
+    if lens_aim(lens, aim, "point_source") == "real":
         rays = aim_at_stop(lens, rays, pupil, source_point=point)
-    elif aim != "paraxial":
-        raise ValueError(f"point_source: aim must be 'paraxial' or 'real', got {aim!r}")
     return rays
+
+
+def lens_aim(lens: Lens, aim: str | None, where: str) -> str:
+    """The ray aiming a sampler or an analysis uses: ``aim`` if given ("paraxial" or
+    "real"), else the lens's own (``Lens.aim``). Anything else is refused, naming ``where``
+    (a typo such as "Real" aimed paraxially without a word)."""
+    if aim is None:
+        return lens.aim
+    if not isinstance(aim, str) or aim not in RAY_AIMING:
+        raise ValueError(f"{where}: aim must be one of {RAY_AIMING} or None (the lens's own, "
+                         f"Lens.aim), got {type(aim).__name__} {aim!r}")
+    return aim
 
 
 def object_point(lens: Lens, field, depth) -> Array:
@@ -376,12 +386,13 @@ def vignetting_for_fields(lens: Lens, fields) -> Array | None:
     return jax.vmap(lambda g: field_vignetting(lens, g))(f)
 
 
-def field_rays(lens: Lens, field, pupil, wavelength=None, *, depth=None, aim="paraxial") -> Rays:
+def field_rays(lens: Lens, field, pupil, wavelength=None, *, depth=None, aim=None) -> Rays:
     """Rays for a field angle at infinity (``depth=None``, inf, or ``INFINITE_OBJECT_MM`` =
     1e10 mm and more, as for ``Lens.object_distance``) or from a finite depth (mm).
 
     The chief ray of a finite-depth field point makes the angle θ with the axis at the
-    entrance pupil, as for an object at infinity.
+    entrance pupil, as for an object at infinity. ``aim``: "paraxial", "real" or None (the
+    default: the lens's own, ``lens.aim``), as for :func:`collimated`.
 
     Where the lens has vignetting factors and ``field`` is one of its fields (within
     ``FIELD_MATCH_DEG``), the ray of pupil point (Px, Py) is the ray of
@@ -396,6 +407,7 @@ def field_rays(lens: Lens, field, pupil, wavelength=None, *, depth=None, aim="pa
     """
     if depth is not None:
         checks.real_values(depth, "depth", "field_rays", "mm")
+    aim = lens_aim(lens, aim, "field_rays")
     beyond = None
     if lens.vignetting is not None:
         pupil = pupil_points(pupil, "field_rays")
@@ -417,6 +429,11 @@ def field_rays(lens: Lens, field, pupil, wavelength=None, *, depth=None, aim="pa
     return rays
 
 
+AIM_TOLERANCE = {True: 1e-6, False: 1e-3}
+"""How far (relative to the stop radius, mm) an aimed ray may cross the stop from its aim
+point and stay valid, in float64 (True) and float32 (False)."""
+
+
 def aim_at_stop(
     lens: Lens,
     rays: Rays,
@@ -436,7 +453,9 @@ def aim_at_stop(
     iterate short of the stop point, and the real trace may then pass the wrong ray. Which
     of the aimed rays the apertures stop is for the caller's trace of the real lens.
     The pupil points are aimed at as given (the lens's vignetting factors are applied
-    before, by ``field_rays``).
+    before, by ``field_rays``). A ray that the ``iters`` Newton steps leave farther from its
+    stop point than ``AIM_TOLERANCE`` × max(stop radius, 1 mm) (a pupil too aberrated, a
+    point no ray reaches) is returned invalid (``valid`` False), as is a ray given invalid.
     """
     from ..tracing.forward import trace_path
 
@@ -483,7 +502,13 @@ def aim_at_stop(
     opl = None
     if source_point is not None:
         opl = n_obj * jnp.linalg.norm(o - source_point, axis=-1)
-    return Rays(o, d, rays.wavelength, opl=opl)
+    # A ray that Newton's method did not bring to its stop point (a pupil too aberrated for
+    # the iterations, a stop point no ray reaches) is invalid: it was launched as valid,
+    # crossing the stop far from where it was aimed, without a word.
+    miss = jax.vmap(at_stop)(uv, rays.direction, w) - target
+    tol = AIM_TOLERANCE[jnp.dtype(o.dtype).itemsize >= 8] * jnp.maximum(stop_r, 1.0)
+    hit = jnp.all(jnp.abs(miss) <= tol, axis=-1)
+    return Rays(o, d, rays.wavelength, opl=opl, valid=rays.valid & hit)
 
 
 def lens_depth(lens: Lens, depth, where: str):

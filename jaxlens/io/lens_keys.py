@@ -25,6 +25,7 @@ TOP = {
     "stop_surface_index": ("stop", "stop_index", "stop_surface"),
     "object": ("object_distance", "object_dist", "obj_distance", "object_thickness"),
     "sensor": (), "afocal_image_space": ("afocal", "afocal_image", "afocal_mode"),
+    "ray_aiming": ("aim", "aiming", "raim", "ray_aim"),
 }
 SURFACE = {
     "type": ("surface_type",), "curvature": ("c", "cv", "curv", "curvature_y"),

@@ -19,7 +19,9 @@ without ``values`` or ``distance`` and ``units`` other than mm. ``fields.vignett
 holds ``Lens.vignetting`` (Zemax's vignetting factors) as one list per factor, one value per
 field: ``{"vdx": [...], "vdy": [...], "vcx": [...], "vcy": [...], "van_deg": [...]}`` (pupil
 radii; ``van_deg`` in degrees; a missing list is 0). ``"afocal_image_space": true`` marks
-an afocal image space (``Lens.afocal_image``; written only when true).
+an afocal image space (``Lens.afocal_image``; written only when true). ``"ray_aiming"``
+is the lens's ray aiming (``Lens.aim``): ``"paraxial"`` (the default: rays through the
+paraxial entrance pupil) or ``"real"`` (aimed at the real stop); written only when real.
 
 Saving writes every number with Python's shortest round-trip representation, so
 ``load(save(lens))`` gives the same numbers to the last bit (as float64), the same
@@ -41,7 +43,7 @@ import numpy as np
 
 from ..optics import checks, paraxial
 from ..optics import materials as _materials
-from ..optics.lens import INFINITE_OBJECT_MM, Lens, Sensor, check_vignetting
+from ..optics.lens import INFINITE_OBJECT_MM, RAY_AIMING, Lens, Sensor, check_vignetting
 from ..optics.materials import Air
 from ..optics.qtype import QTypeAsphere
 from ..optics.surfaces import AbstractSurface, EvenAsphere, Hybrid, OddAsphere, Standard
@@ -559,6 +561,11 @@ def lens_from_dict(d: dict, *, source: str = "<lens>") -> Lens:
     if not isinstance(afocal, bool):  # "false" or 0 would be read as a flag silently
         raise ValueError(f"{source}: afocal_image_space must be true or false, got "
                          f"{afocal!r}")
+    aim = d.get("ray_aiming", "paraxial")
+    if not isinstance(aim, str) or aim not in RAY_AIMING:  # "Real" would aim paraxially
+        raise ValueError(f"{source}: ray_aiming must be one of {list(RAY_AIMING)} (rays "
+                         f"through the paraxial entrance pupil, or aimed at the real stop), "
+                         f"got {aim!r}")
     lens = Lens(
         surfaces=tuple(surfaces),
         thickness=_arr(np.array(thick)),
@@ -579,6 +586,7 @@ def lens_from_dict(d: dict, *, source: str = "<lens>") -> Lens:
         obscurations=tuple(obscurations),
         apertures=tuple(apertures),
         afocal_image=afocal,
+        aim=aim,
     )
     # Before the paraxial work of the aperture: values the lens cannot be traced with.
     checks.wavelengths(lens, wl, f"{source}: {key}", "wavelength")
@@ -642,6 +650,8 @@ def lens_to_dict(lens: Lens) -> dict:
     }
     if lens.afocal_image:
         out["afocal_image_space"] = True
+    if lens.aim != "paraxial":
+        out["ray_aiming"] = lens.aim
     if lens.vignetting is not None:
         v = np.asarray(lens.vignetting, np.float64)
         out["fields"]["vignetting"] = {k: _out(v[:, j])

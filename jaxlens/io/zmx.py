@@ -102,8 +102,11 @@ What is read and written:
       space and afocal image space are refused. Vignetting factors (VDXN, VDYN, VCXN, VCYN,
       VANN) are read into ``Lens.vignetting`` and reshape each field's pupil
       (``jaxlens.imaging.sampling.field_rays``). ``PUPD`` beside another aperture line
-      (older Zemax) is ignored; alone it is refused. ``RAIM`` with ray aiming on gives a warning (a
-      ``Lens`` has no aiming setting; the samplers take ``aim="real"``). ``WAVM`` (or the
+      (older Zemax) is ignored; alone it is refused. ``RAIM``'s ray-aiming type is
+      ``Lens.aim``: 0 (off) ``"paraxial"``, 1 (Zemax's "Paraxial": rays aimed at the stop,
+      sized paraxially) ``"real"``, 2 (Zemax's "Real": the stop sized by a real ray)
+      ``"real"`` with a warning (jaxlens sizes the stop paraxially); ``"real"`` is written
+      back as type 1. ``WAVM`` (or the
       older ``WAVL``) and ``PWAV``, ``UNIT``, ``NAME``. ``ENVD``: indices adjusted to an
       environment other than 20 °C and 1 atm are refused; not adjusted, a warning. A finite
       object must be a plane normal to the axis (a curved or tilted one is refused).

@@ -23,8 +23,9 @@ SETTINGS = frozenset("""
 surface's coordinate-break-after-surface data written as all zeros by OpticStudio; ``CSUM``:
 a checksum; ``TCMM``: a tolerance operand's comment; ``DBDT``: the stock-lens database record
 of a vendor's file; ``AUTH``, ``LUID``, ``SSID``, ``RCMF``: OpticStudio's author, lens and
-surface ids and a file flag; ``XAIM``, ``YAIM``, ``ZAIM``: ray-aiming settings, which jaxlens
-does not model: ``RAIM`` says so). ``IWDP``, ``STUD``, ``EERA``: header lines of OpticStudio
+surface ids and a file flag; ``XAIM``, ``YAIM``, ``ZAIM``: ray-aiming pupil shifts, a
+starting point of OpticStudio's aiming that jaxlens's Newton aiming (``RAIM``, ``Lens.aim``)
+does not need). ``IWDP``, ``STUD``, ``EERA``: header lines of OpticStudio
 2024 files (beside ``AUTH`` and ``LUID``) that no public format note explains; they are
 ignored only with the values seen in real files (``KNOWN_VALUES``)."""
 

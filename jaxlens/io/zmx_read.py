@@ -67,23 +67,6 @@ def _floating_radius(s: ZmxSurface) -> float:
     return r if r > 0 else math.inf
 
 
-def _xdat_terms(s: ZmxSurface, unit: float, what: str, most: int = _MAX_XDAT_TERMS):
-    where = s.type_line or s.line
-    if 1 not in s.xdat or 2 not in s.xdat:
-        raise where.error(f"{what} needs XDAT 1 (number of terms) and XDAT 2 (norm radius)")
-    n_val, n_line = s.xdat[1]
-    if n_val != int(n_val) or not 0 <= n_val <= most:
-        raise n_line.error(f"XDAT 1 must be a whole number of terms, 0..{most}")
-    norm, norm_line = s.xdat[2]
-    if not norm > 0:
-        raise norm_line.error("the normalisation radius (XDAT 2) must be > 0")
-    for i, (v, ln) in s.xdat.items():
-        if i > int(n_val) + 2 and v != 0:
-            raise ln.error(f"coefficient beyond the {int(n_val)} terms of XDAT 1")
-    vals = [s.xdat.get(j + 2, (0.0, None))[0] for j in range(1, int(n_val) + 1)]
-    return int(n_val), norm, vals
-
-
 def _surface(s: ZmxSurface, unit: float) -> AbstractSurface:
     """The surface of a SURF block; a value its class refuses (a semi-diameter beyond a
     steep sphere's edge, say) is reported with the block's line."""
@@ -121,7 +104,7 @@ def _surface_of(s: ZmxSurface, unit: float) -> AbstractSurface:
             c=_arr(c), k=_arr(s.coni), coeffs=_arr(np.array(a, np.float64)), semi_diameter=_arr(sd)
         )
     if s.type == "XASPHERE":
-        n, norm, vals = _xdat_terms(s, unit, "XASPHERE")
+        n, norm, vals = zmx_surfaces.normalised_terms(s, "terms", _MAX_XDAT_TERMS, missing=0.0)
         a = [v / norm ** (2 * i) * unit ** (1 - 2 * i) for i, v in enumerate(vals, start=1)]
         return EvenAsphere(
             c=_arr(c), k=_arr(s.coni), coeffs=_arr(np.array(a, np.float64)), semi_diameter=_arr(sd)
@@ -133,7 +116,8 @@ def _surface_of(s: ZmxSurface, unit: float) -> AbstractSurface:
             if v != 0:
                 raise ln.error("XOSPHERE has no parameters (PARM); its terms are extra data "
                                "(XDAT 1 = number of terms, 2 = normalisation radius, 3… = A_i)")
-        n, norm, vals = _xdat_terms(s, unit, "XOSPHERE", zmx_surfaces.MAX_XOSPHERE_TERMS)
+        n, norm, vals = zmx_surfaces.normalised_terms(
+            s, "terms", zmx_surfaces.MAX_XOSPHERE_TERMS, missing=0.0)
         b = [v / norm**i * unit ** (1 - i) for i, v in enumerate(vals, start=1)]
         return OddAsphere(c=_arr(c), k=_arr(s.coni), coeffs=_arr(np.array(b, np.float64)),
                           semi_diameter=_arr(sd))
@@ -212,7 +196,8 @@ def _keeps_medium(s: ZmxSurface) -> bool:
 
 
 def _hybrid_from_xpoly(s: ZmxSurface, unit: float, c: float, sd: float) -> Hybrid:
-    n, norm, vals = _xdat_terms(s, unit, "XPOLYNOM")
+    n, norm, vals = zmx_surfaces.normalised_terms(s, "extended-polynomial terms",
+                                                  _MAX_XDAT_TERMS, missing=0.0)
     terms = {}
     for j, v in enumerate(vals, start=1):
         mx, ny = term_powers(j)
@@ -273,16 +258,23 @@ def _fields(f: ZmxFile, strict: bool) -> tuple[np.ndarray, np.ndarray | None]:
         count = max(1, len(ys))
     if count is None:
         count = max(1, max((i + 1 for i, v in enumerate(ys) if v != 0), default=1))
+    # Zemax writes one value a field (or 12, a field each, padded with zeros) on every
+    # field line: a line with fewer values than the fields the y line defines is cut short,
+    # and its missing values are not known (refused, naming the line).
+    defined = min(count, len(ys))
+    if xln is not None:
+        zmx_system.values_for_fields(xln, len(xs), defined, "x field angles or heights")
     if len(ys) < count:
         report(strict, f"{f.path}:{yln.number}: FTYP announces {count} fields, "
                         f"{yln.tokens[0]} gives {len(ys)}; the fields it does not give are "
                         f"read as 0 (on axis)")
         ys += [0.0] * (count - len(ys))
-    vignetting = zmx_system.vignetting(f.vignetting, count)
+    vignetting = zmx_system.vignetting(f.vignetting, count, defined=defined)
     xs = (xs + [0.0] * count)[:count]
     ys = ys[:count]
     if f.fwgn is not None:
         given = [f.fwgn.float(i, "field weight", lo=0) for i in range(1, len(f.fwgn.tokens))]
+        zmx_system.values_for_fields(f.fwgn, len(given), defined, "field weights")
         zmx_system.unequal_weights(f.fwgn, "fields", given[:count])
     if any(x != 0 for x in xs):
         return np.stack([np.array(xs), np.array(ys)], axis=-1), vignetting
@@ -550,7 +542,7 @@ def _lens(f: ZmxFile, text: str, path: str, strict: bool, unknown_glass: str) ->
     zmx_surfaces.check_object_plane(obj, dist)
     wl, primary, wl_lines = _wavelengths(f)
     _check_image_medium(f, body)
-    zmx_system.ray_aiming(f.raim, f.path)
+    aim = zmx_system.ray_aiming(f.raim, f.path)
     field_type = zmx_system.field_type(f.ftyp)
     fields, vignetting = _fields(f, strict)
     if field_type == 0:  # angles (deg); heights are converted to angles later
@@ -574,6 +566,7 @@ def _lens(f: ZmxFile, text: str, path: str, strict: bool, unknown_glass: str) ->
         apertures=_apertures(body + [img], u),
         vignetting=None if vignetting is None else _arr(vignetting),
         afocal_image=zmx_system.afocal_image_space(f.ftyp),
+        aim=aim,
     )
     # Before the paraxial work of the aperture: values the lens cannot be traced with.
     for w, ln in zip(wl, wl_lines, strict=True):

@@ -65,6 +65,8 @@ ray). The rays do not depend on the mode. jaxlens's optical path is mode 2's; th
 give the same path where the beam reaching the surface is collimated (object at infinity
 and no net power before the surface, in the y–z and the x–z section, at every wavelength),
 and are refused elsewhere. The writer writes mode 2.
+Extra data are read through ``ExtraData``: a missing line names the surface's line and the
+XDAT index (a value that is not a number is refused with its line by ``zmx_parse``).
 """
 
 from __future__ import annotations
@@ -106,6 +108,82 @@ def _parms(s, allowed: range, what: str) -> None:
             raise ln.error(f"{what} uses PARM {allowed.start}..{allowed.stop - 1} only")
 
 
+def _no_extra_data(s, message: str) -> None:
+    for _, (v, ln) in sorted(s.xdat.items()):
+        if v != 0:
+            raise ln.error(message)
+
+
+class ExtraData:
+    """Checked access to a surface block's extra data (``s.xdat``: index -> (value, line)),
+    whose ``header`` names XDAT 1, 2, … before the terms. Nonzero data below XDAT 1 are
+    refused; every error names the file and the line (a missing one: the TYPE line)."""
+
+    def __init__(self, s, header: tuple[str, ...], kind: str | None = None):
+        self.s, self.header, self.kind = s, header, kind or s.type
+        self.where = s.type_line or s.line
+        self.counted = (1, 0, "terms", self.where)
+        for i, (v, ln) in sorted(s.xdat.items()):
+            if i < 1 and v != 0:
+                raise ln.error(f"{self.kind} extra data start at XDAT 1 ({header[0]})")
+
+    def get(self, i: int, default: float | None = None):
+        """XDAT i's (value, line); missing: (``default``, TYPE line), refused if None."""
+        if i in self.s.xdat:
+            return self.s.xdat[i]
+        if default is None:
+            names = [f"XDAT {j} ({h})" for j, h in enumerate(self.header, start=1)]
+            listed = names[0] if len(names) == 1 else ", ".join(names[:-1]) + " and " + names[-1]
+            raise self.where.error(f"{self.kind} needs {listed}; XDAT {i} is missing")
+        return default, self.where
+
+    def required(self) -> list:
+        """The header lines' (value, line), each refused where missing."""
+        return [self.get(j) for j in range(1, len(self.header) + 1)]
+
+    def count(self, i: int, terms: str, most: int, note: str = "", default=None) -> int:
+        """XDAT i as a number of ``terms``: a whole number in 0..``most``."""
+        v, ln = self.get(i, default)
+        if v != int(v) or not 0 <= v <= most:
+            raise ln.error(f"XDAT {i} (the number of {terms}) must be a whole number in "
+                           f"0..{most}{note}, got {v:g}")
+        self.counted = (i, int(v), terms, ln)
+        return int(v)
+
+    def radius(self, i: int, what: str = "the normalisation radius, lens units",
+               default=None) -> float:
+        """XDAT i as a length (lens units): finite and > 0."""
+        v, ln = self.get(i, default)
+        if not (v > 0 and math.isfinite(v)):
+            raise ln.error(f"XDAT {i} ({what}) must be > 0, got {v:g}")
+        return v
+
+    def terms(self, first: int, missing: float | None = None) -> list[float]:
+        """The counted terms from XDAT ``first``; missing: ``missing``, refused if None."""
+        ci, n, terms, count_line = self.counted
+        last = first + n - 1
+        span = f"XDAT {first} … XDAT {last}" if n else "none"
+        gone = [j for j in range(first, last + 1) if j not in self.s.xdat]
+        if gone and missing is None:
+            raise count_line.error(f"XDAT {ci} gives {n} {terms}, so {span} are needed, but "
+                                   f"XDAT {gone[0]} is missing")
+        for i, (v, ln) in sorted(self.s.xdat.items()):
+            if i > last and v != 0:
+                raise ln.error(f"coefficient beyond the {n} {terms} of XDAT {ci} ({span})")
+        return [self.s.xdat.get(j, (missing, None))[0] for j in range(first, last + 1)]
+
+
+def normalised_terms(s, terms: str, most: int, note: str = "",
+                     missing: float | None = None) -> tuple[int, float, list]:
+    """(N, R, [A_1 … A_N]) of the XDAT layout XDAT 1 = N (required, 0..``most``), XDAT 2 =
+    the normalisation radius R (required, > 0, lens units), XDAT 3 … XDAT N+2 the terms
+    (a missing one is ``missing``, or refused where None): XPOLYNOM, XASPHERE, XOSPHERE."""
+    xd = ExtraData(s, ("the number of terms", "the normalisation radius, lens units"))
+    xd.required()
+    n = xd.count(1, terms, most, note)
+    return n, xd.radius(2), xd.terms(3, missing)
+
+
 def odd_asphere(s, unit: float, sd: float) -> OddAsphere:
     """An ``OddAsphere`` from an ODDASPHE surface block (the reader's surface record)."""
     _parms(s, range(1, 9), "ODDASPHE")
@@ -119,9 +197,7 @@ def tilted_plane(s, sd: float) -> TiltedPlane:
     """A ``TiltedPlane`` from a TILTSURF surface block (the reader's surface record); the
     slopes PARM 1, 2 have no unit."""
     _parms(s, range(1, 3), "TILTSURF")
-    for _, (v, ln) in sorted(s.xdat.items()):
-        if v != 0:
-            raise ln.error("TILTSURF has no extra data (XDAT)")
+    _no_extra_data(s, "TILTSURF has no extra data (XDAT)")
     if s.curv != 0 or s.coni != 0:
         raise (s.curv_line if s.curv != 0 else s.type_line or s.line).error(
             "a TILTSURF surface is a plane; its CURV and CONI must be 0")
@@ -143,25 +219,12 @@ def binary2(s, unit: float, sd: float) -> Binary2:
     _parms(s, range(0, 9), "BINARY_2")
     if s.glas is not None and s.glas.tokens[1].upper() == "MIRROR":
         raise s.glas.error("a BINARY_2 (diffractive) surface cannot be a mirror in jaxlens")
-    for i, (v, ln) in sorted(s.xdat.items()):
-        if i < 1 and v != 0:
-            raise ln.error("BINARY_2 extra data start at XDAT 1 (the number of terms)")
-    n_val, n_line = s.xdat.get(1, (0.0, where))
-    if n_val != int(n_val) or not 0 <= n_val <= MAX_BINARY2_TERMS:
-        raise n_line.error(f"XDAT 1 (the number of phase terms) must be a whole number in "
-                           f"0..{MAX_BINARY2_TERMS}, got {n_val:g}")
-    n = int(n_val)
-    missing = [j for j in range(2, n + 3) if j not in s.xdat]
-    if n and missing:
-        raise n_line.error(f"XDAT 1 gives {n} phase terms, so XDAT 2 … XDAT {n + 2} are needed, "
-                           f"but XDAT {missing[0]} is missing")
-    for i, (v, ln) in sorted(s.xdat.items()):
-        if i > n + 2 and v != 0:
-            raise ln.error(f"coefficient beyond the {n} phase terms of XDAT 1")
-    norm, norm_line = s.xdat.get(2, (1.0, where))
+    xd = ExtraData(s, ("the number of terms", "the normalisation radius, lens units"))
+    n = xd.count(1, "phase terms", MAX_BINARY2_TERMS, default=0.0)
+    norm, norm_line = xd.get(2, 1.0 if n == 0 else None)
+    a_phase = xd.terms(3)
     if n and not norm > 0:
         raise norm_line.error("the normalisation radius (XDAT 2) must be > 0")
-    a_phase = [s.xdat[j + 2][0] for j in range(1, n + 1)]
     if 0 not in s.parm and any(v != 0 for v in a_phase):
         raise where.error("this BINARY_2 surface has phase terms but no diffraction order "
                           "(PARM 0), which Zemax reads as 0 (no diffraction); add PARM 0 "
@@ -178,9 +241,7 @@ def grating(s, sd: float, unit: float) -> Grating:
     """A ``Grating`` from a DGRATING surface block (the reader's surface record): PARM 1 the
     line density (lines/µm, not scaled by the lens unit), PARM 2 the order."""
     _parms(s, range(1, 3), "DGRATING (PARM 1 = lines per µm, PARM 2 = diffraction order)")
-    for _, (v, ln) in sorted(s.xdat.items()):
-        if v != 0:
-            raise ln.error("DGRATING has no extra data (XDAT)")
+    _no_extra_data(s, "DGRATING has no extra data (XDAT)")
     density, d_line = s.parm.get(1, (0.0, None))
     if density < 0:
         raise d_line.error(f"PARM 1 (the grating's line density, lines per µm) must be >= 0, "
@@ -210,10 +271,8 @@ def toroidal(s, unit: float, sd: float) -> Toroidal:
 def biconic(s, unit: float, sd: float) -> Biconic:
     """A ``Biconic`` from a BICONICX surface block (the reader's surface record)."""
     _parms(s, range(1, 3), "BICONICX (PARM 1 = x radius, PARM 2 = x conic)")
-    for _, (v, ln) in sorted(s.xdat.items()):
-        if v != 0:
-            raise ln.error("BICONICX has no extra data (XDAT): jaxlens's biconic is the two "
-                           "conics (CURV/CONI in y, PARM 1/PARM 2 in x) only")
+    _no_extra_data(s, "BICONICX has no extra data (XDAT): jaxlens's biconic is the two "
+                      "conics (CURV/CONI in y, PARM 1/PARM 2 in x) only")
     cx = curvature_of_rotation(s.parm[1][1].tokens[2], unit) if 1 in s.parm else 0.0
     return Biconic(c=_arr(s.curv / unit), k=_arr(s.coni), cx=_arr(cx),
                    kx=_arr(s.parm.get(2, (0.0, None))[0]), semi_diameter=_arr(sd))
@@ -232,26 +291,12 @@ def zernike_sag(s, unit: float, sd: float) -> ZernikeSag:
     if ext not in (0.0, 1.0):
         raise ext_line.error(f"PARM 0 (the extrapolate flag) must be 0 (Zernike terms within "
                              f"the normalisation radius only) or 1 (everywhere), got {ext:g}")
-    for i, (v, ln) in sorted(s.xdat.items()):
-        if i < 1 and v != 0:
-            raise ln.error(f"{s.type} extra data start at XDAT 1 (the number of terms)")
-    most = MAX_ZERNIKE_TERMS[ordering]
-    n_val, n_line = s.xdat.get(1, (0.0, where))
-    if n_val != int(n_val) or not 0 <= n_val <= most:
-        raise n_line.error(f"XDAT 1 (the number of Zernike terms) must be a whole number in "
-                           f"0..{most} for {s.type}, got {n_val:g}")
-    n = int(n_val)
-    for i, (v, ln) in sorted(s.xdat.items()):
-        if i > n + 2 and v != 0:
-            raise ln.error(f"coefficient beyond the {n} Zernike terms of XDAT 1 (XDAT 3 … "
-                           f"XDAT {n + 2})")
-    norm, norm_line = s.xdat.get(2, (1.0 if n == 0 else 0.0, where))
-    if not (norm > 0 and math.isfinite(norm)):
-        raise norm_line.error(f"XDAT 2 (the Zernike normalisation radius, lens units) must be "
-                              f"> 0, got {norm:g}")
+    xd = ExtraData(s, ("the number of terms", "the Zernike normalisation radius, lens units"))
+    n = xd.count(1, "Zernike terms", MAX_ZERNIKE_TERMS[ordering], f" for {s.type}", 0.0)
+    zern = [v * unit for v in xd.terms(3, missing=0.0)]  # a missing line reads as 0
+    norm = xd.radius(2, xd.header[1], 1.0 if n == 0 else None)
     m = max([i for i in s.parm if 1 <= i <= 8], default=0)
     a = [s.parm.get(i, (0.0, None))[0] * unit ** (1 - 2 * i) for i in range(1, m + 1)]
-    zern = [s.xdat.get(j + 2, (0.0, None))[0] * unit for j in range(1, n + 1)]
     dx, dy = (s.parm.get(i, (0.0, None))[0] * unit for i in (9, 10))
     return ZernikeSag(c=_arr(s.curv / unit), k=_arr(s.coni), coeffs=_arr(np.array(a, np.float64)),
                       zernike=_arr(np.array(zern, np.float64)), norm_radius=_arr(norm * unit),
@@ -267,41 +312,19 @@ _QTYPE_KINDS = {0.0: "bfs", 1.0: "con"}
 
 def qtype_asphere(s, unit: float, sd: float) -> QTypeAsphere:
     """A ``QTypeAsphere`` from a QED_TYPE surface block (the reader's surface record)."""
-    where = s.type_line or s.line
     for _, (v, ln) in sorted(s.parm.items()):
         if v != 0:
             raise ln.error("QED_TYPE has no parameters (PARM); its data are extra data (XDAT 1 "
                            "= type, 2 = number of terms, 3 = normalisation radius, 4… = terms)")
-    for i, (v, ln) in sorted(s.xdat.items()):
-        if i < 1 and v != 0:
-            raise ln.error("QED_TYPE extra data start at XDAT 1 (the polynomial type)")
-    missing = [j for j in (1, 2, 3) if j not in s.xdat]
-    if missing:
-        raise where.error(f"QED_TYPE needs XDAT 1 (type: 0 Q-bfs, 1 Q-con), XDAT 2 (number of "
-                          f"terms) and XDAT 3 (normalisation radius); XDAT {missing[0]} is "
-                          f"missing")
-    kind, kind_line = s.xdat[1]
+    xd = ExtraData(s, ("the polynomial type: 0 Q-bfs, 1 Q-con", "the number of terms",
+                       "the normalisation radius, lens units"))
+    kind, kind_line = xd.required()[0]
     if kind not in _QTYPE_KINDS:
         raise kind_line.error(f"XDAT 1 (the Q-type polynomial type) must be 0 (Q-bfs) or 1 "
                               f"(Q-con), got {kind:g}")
-    n_val, n_line = s.xdat[2]
-    if n_val != int(n_val) or not 0 <= n_val <= MAX_QTYPE_TERMS:
-        raise n_line.error(f"XDAT 2 (the number of Q-type terms) must be a whole number in "
-                           f"0..{MAX_QTYPE_TERMS}, got {n_val:g}")
-    n = int(n_val)
-    norm, norm_line = s.xdat[3]
-    if not (norm > 0 and math.isfinite(norm)):
-        raise norm_line.error(f"XDAT 3 (the normalisation radius, lens units) must be > 0, got "
-                              f"{norm:g}")
-    gone = [j for j in range(4, n + 4) if j not in s.xdat]
-    if gone:
-        raise n_line.error(f"XDAT 2 gives {n} Q-type terms, so XDAT 4 … XDAT {n + 3} are "
-                           f"needed, but XDAT {gone[0]} is missing")
-    for i, (v, ln) in sorted(s.xdat.items()):
-        if i > n + 3 and v != 0:
-            raise ln.error(f"coefficient beyond the {n} Q-type terms of XDAT 2 (XDAT 4 … "
-                           f"XDAT {n + 3})")
-    a = [s.xdat[j + 4][0] * unit for j in range(n)]
+    xd.count(2, "Q-type terms", MAX_QTYPE_TERMS)
+    norm = xd.radius(3)
+    a = [v * unit for v in xd.terms(4)]
     return QTypeAsphere(c=_arr(s.curv / unit), k=_arr(s.coni), coeffs=_arr(np.array(a, np.float64)),
                         norm_radius=_arr(norm * unit), semi_diameter=_arr(sd),
                         qtype=_QTYPE_KINDS[kind])
@@ -309,36 +332,12 @@ def qtype_asphere(s, unit: float, sd: float) -> QTypeAsphere:
 
 def xy_polynomial(s, unit: float, sd: float) -> XYPolynomial:
     """An ``XYPolynomial`` from an XPOLYNOM surface block (the reader's surface record)."""
-    where = s.type_line or s.line
     for _, (v, ln) in sorted(s.parm.items()):
         if v != 0:
             raise ln.error("XPOLYNOM has no parameters (PARM); its data are extra data (XDAT 1 "
                            "= number of terms, 2 = normalisation radius, 3… = coefficients)")
-    for i, (v, ln) in sorted(s.xdat.items()):
-        if i < 1 and v != 0:
-            raise ln.error("XPOLYNOM extra data start at XDAT 1 (the number of terms)")
-    missing = [j for j in (1, 2) if j not in s.xdat]
-    if missing:
-        raise where.error(f"XPOLYNOM needs XDAT 1 (the number of terms) and XDAT 2 (the "
-                          f"normalisation radius, lens units); XDAT {missing[0]} is missing")
-    n_val, n_line = s.xdat[1]
-    if n_val != int(n_val) or not 0 <= n_val <= MAX_XY_TERMS:
-        raise n_line.error(f"XDAT 1 (the number of extended-polynomial terms) must be a whole "
-                           f"number in 0..{MAX_XY_TERMS} (degree 20), got {n_val:g}")
-    n = int(n_val)
-    norm, norm_line = s.xdat[2]
-    if not (norm > 0 and math.isfinite(norm)):
-        raise norm_line.error(f"XDAT 2 (the normalisation radius, lens units) must be > 0, got "
-                              f"{norm:g}")
-    gone = [j for j in range(3, n + 3) if j not in s.xdat]
-    if gone:
-        raise n_line.error(f"XDAT 1 gives {n} extended-polynomial terms, so XDAT 3 … XDAT "
-                           f"{n + 2} are needed, but XDAT {gone[0]} is missing")
-    for i, (v, ln) in sorted(s.xdat.items()):
-        if i > n + 2 and v != 0:
-            raise ln.error(f"coefficient beyond the {n} extended-polynomial terms of XDAT 1 "
-                           f"(XDAT 3 … XDAT {n + 2})")
-    a = [s.xdat[j + 2][0] * unit for j in range(1, n + 1)]
+    _, norm, a = normalised_terms(s, "extended-polynomial terms", MAX_XY_TERMS, " (degree 20)")
+    a = [v * unit for v in a]
     return XYPolynomial(c=_arr(s.curv / unit), k=_arr(s.coni), coeffs=_arr(np.array(a, np.float64)),
                         norm_radius=_arr(norm * unit), semi_diameter=_arr(sd))
 

@@ -269,7 +269,17 @@ VIGNETTING_KEYS = ("VDXN", "VDYN", "VCXN", "VCYN", "VANN")
 """The file's vignetting lines, in the column order of ``Lens.vignetting``."""
 
 
-def vignetting(lines, count: int) -> np.ndarray | None:
+def values_for_fields(ln, given: int, defined: int, what: str) -> None:
+    """Refuse a field line (``XFLN``, ``FWGN``, ``VDXN``, …) with fewer values than the
+    ``defined`` fields (those the y field line gives): Zemax writes one value a field, or
+    12 padded with zeros, so a shorter line was cut short and the values it lacks are not
+    known (0 would be a silent guess)."""
+    if given < defined:
+        raise ln.error(f"{ln.tokens[0]} gives {given} value{'s' * (given != 1)} ({what}) for "
+                       f"{defined} fields; Zemax writes one a field")
+
+
+def vignetting(lines, count: int, *, defined: int | None = None) -> np.ndarray | None:
     """The vignetting factors of the first ``count`` (used) fields, ``[count, 5]`` in the
     column order of ``Lens.vignetting`` (VDX, VDY, VCX, VCY in fractions of the
     entrance-pupil radius, VAN in degrees), or None where every one is 0 (or no line gives
@@ -277,10 +287,13 @@ def vignetting(lines, count: int) -> np.ndarray | None:
 
     They reshape each field's pupil, Zemax's stand-in for the clipping of the surface
     apertures (``jaxlens.imaging.sampling.vignetting_map``); a line the file does not
-    give, or a field it gives no value for, is 0. A line given twice, a value that is not
-    finite, or a compression (VCXN, VCYN) of 1 or more is refused, naming the line.
-    Paraxial data and the EFL do not depend on them.
+    give is 0 (Zemax's default: no vignetting factor), and so are the fields beyond the
+    ``defined`` ones (default ``count``: those the y field line gives; the reader reports
+    the others). A line with fewer values than the ``defined`` fields, a line given twice,
+    a value that is not finite, or a compression (VCXN, VCYN) of 1 or more is refused,
+    naming the line. Paraxial data and the EFL do not depend on them.
     """
+    defined = count if defined is None else defined
     out = np.zeros((count, len(VIGNETTING_KEYS)))
     seen: dict[str, object] = {}
     for ln in lines:
@@ -289,7 +302,9 @@ def vignetting(lines, count: int) -> np.ndarray | None:
             raise ln.error(f"{key} given twice (first on line {seen[key].number})")
         seen[key] = ln
         j = VIGNETTING_KEYS.index(key)
-        vals = [ln.float(i, f"{key} value") for i in range(1, len(ln.tokens))][:count]
+        vals = [ln.float(i, f"{key} value") for i in range(1, len(ln.tokens))]
+        values_for_fields(ln, len(vals), defined, "vignetting factors")
+        vals = vals[:count]
         for i, v in enumerate(vals):
             unit = "deg" if key == "VANN" else "fractions of the entrance-pupil radius"
             if not math.isfinite(v):
@@ -334,15 +349,32 @@ def environment(ln, materials, strict: bool) -> None:
                    f"{ln.text.strip()!r}")
 
 
-def ray_aiming(ln, path: str) -> None:
-    """Warn when the file aims rays at the stop (RAIM's ray aiming type, 1 paraxial or
-    2 real): a ``Lens`` carries no aiming setting; jaxlens's samplers take ``aim``."""
-    if ln is None or len(ln.tokens) < 3 or ln.int(2, "ray aiming type") == 0:
-        return
-    warnings.warn(
-        f"{path}:{ln.number}: the file aims rays at the stop (RAIM); jaxlens "
-        f"lenses carry no aiming setting: pass aim='real' to jaxlens.sampling "
-        f"(collimated, point_source, field_rays) for the same rays",
-        ZmxWarning,
-        stacklevel=4,
-    )
+RAY_AIMING_TYPES = {0: "off", 1: "paraxial", 2: "real"}
+"""Zemax's ray-aiming types (RAIM's second value): 0 "Off" (rays through the paraxial
+entrance pupil), 1 "Paraxial" (real rays aimed at the stop, its size from the paraxial
+marginal ray), 2 "Real" (the same, the stop's size from a real marginal ray)."""
+
+
+def ray_aiming(ln, path: str) -> str:
+    """``Lens.aim`` from RAIM's ray-aiming type: 0 (Zemax's "Off", or no RAIM line) is
+    ``"paraxial"``; 1 (Zemax's "Paraxial" ray aiming: real rays aimed at the stop, whose size
+    the paraxial marginal ray sets) is ``"real"``, which is exactly that. 2 (Zemax's "Real"
+    ray aiming, the stop's size from a real marginal ray) is read as ``"real"`` with a
+    warning: jaxlens sizes the stop paraxially, so the rim rays can differ by the stop's
+    spherical aberration. Other types are refused."""
+    if ln is None or len(ln.tokens) < 3:
+        return "paraxial"
+    kind = ln.int(2, "ray aiming type")
+    if kind not in RAY_AIMING_TYPES:
+        raise ln.error(f"ray aiming type {kind} (RAIM's second value) is not one of 0 (off), "
+                       f"1 (paraxial) or 2 (real)")
+    if kind == 2:
+        warnings.warn(
+            f"{path}:{ln.number}: the file aims rays at the stop sized by real rays (RAIM "
+            f"type 2, Zemax's \"Real\" ray aiming); jaxlens aims them at the stop sized by the "
+            f"paraxial marginal ray (RAIM type 1, Lens.aim='real'), so the rim rays can differ "
+            f"by the stop's spherical aberration",
+            ZmxWarning,
+            stacklevel=4,
+        )
+    return "paraxial" if kind == 0 else "real"

@@ -45,6 +45,14 @@ Conventions:
     refuse such a lens, ``analysis.angular_spot`` and
     ``analysis.angular_magnification`` give its angular data, ``analysis.wavefront``
     references its wavefront to a plane, and the report is the afocal one.
+    ``aim`` is the lens's ray aiming (``RAY_AIMING``): ``"paraxial"`` (the default) launches
+    the ray of pupil point (Px, Py) through (Px, Py)·EPD/2 on the paraxial entrance pupil
+    (Zemax's ray aiming "Off", RAIM type 0); ``"real"`` aims it by Newton's method so that
+    it crosses the real stop at (Px, Py)·(paraxial stop semi-diameter) (Zemax's "Paraxial"
+    ray aiming, RAIM type 1). The samplers (``imaging.sampling.field_rays``, ``collimated``,
+    ``point_source``) and the analyses built on them use it where their ``aim`` is None;
+    ``render``, the relative illumination and the design losses launch their own rays at
+    the paraxial pupil whatever it is (speed).
 
 The structure (surface kinds, counts, polynomial orders, stop index, mirrors) is static;
 every number is an array so ``jax.grad`` reaches it.
@@ -115,6 +123,19 @@ def _flag(arg: str):
             raise TypeError(f"Lens: {arg} must be True or False, got {type(v).__name__} {v!r}")
         return bool(v)
     return convert
+
+
+RAY_AIMING = ("paraxial", "real")
+"""The values of ``Lens.aim``: rays through the paraxial entrance pupil, or aimed at the real
+stop (see the module doc)."""
+
+
+def _aim(v):
+    """A converter for ``Lens.aim``: one of ``RAY_AIMING`` (a typo would aim paraxially)."""
+    if not isinstance(v, str) or v not in RAY_AIMING:
+        raise ValueError(f"Lens: aim (ray aiming) must be one of {RAY_AIMING}, got "
+                         f"{type(v).__name__} {v!r}")
+    return v
 
 
 def _obscurations(o):
@@ -211,6 +232,8 @@ class Lens(eqx.Module):
     vignetting: Float[Array, "f 5"] | None = eqx.field(converter=_vignetting, default=None)
     # An afocal image space (the image at infinity): see the module doc.
     afocal_image: bool = eqx.field(static=True, default=False, converter=_flag("afocal_image"))
+    # Ray aiming, "paraxial" or "real": see the module doc.
+    aim: str = eqx.field(static=True, default="paraxial", converter=_aim)
 
     def __check_init__(self):
         n = len(self.surfaces)
