@@ -45,6 +45,7 @@ from .optics.diffractive import Binary2 as Binary2
 from .optics.diffractive import Grating as Grating
 from .optics.freeform import Biconic as Biconic
 from .optics.freeform import ZernikeSag as ZernikeSag
+from .optics.lens import RAY_AIMING as RAY_AIMING
 from .optics.lens import Lens as Lens
 from .optics.lens import Sensor as Sensor
 from .optics.materials import AbstractMaterial as AbstractMaterial

@@ -50,7 +50,7 @@ def _at_stop(lens, rays):
     return np.asarray(trace_path(lens, rays, upto=lens.stop)[-1].origin[:, :2])
 
 
-@pytest.mark.slow  # 12 s: the Newton aiming compiled for two lenses
+# In CI (about 10 s: the Newton aiming compiled twice): the physics of the setting.
 def test_real_aiming_puts_the_rays_on_the_stop_and_the_lens_setting_chooses_it(lenses):
     lens, real = lenses
     assert lens.aim == "paraxial" and real.aim == "real"

@@ -7,8 +7,9 @@ Conventions:
     image of the field angles tan θx = x/f, tan θy = y/f with f the spec's focal length
     (the paper's convention: f = sensor half-diagonal / tan(half FoV), EPD = f/F#). The RMS
     spot radius of a field pools the rays of all design wavelengths (F, d, C) about their
-    common centroid, with the 21 × 21 square pupil grid (317 rays per wavelength) aimed at
-    the paraxial entrance pupil: ``jaxlens.analysis.spots.rms_spot(reference="centroid")``.
+    common centroid, with the 21 × 21 square pupil grid (317 rays per wavelength) aimed as
+    the lens says (``Lens.aim``: the paraxial entrance pupil for a designed lens):
+    ``jaxlens.analysis.spots.rms_spot(reference="centroid")``.
 
     A design counts as *valid* when ``jaxlens.analysis.spots.self_intersection`` finds no
     overlap of neighbouring surfaces (or of the last surface with the sensor) over the

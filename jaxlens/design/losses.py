@@ -11,7 +11,8 @@ Ray loss:
     image-height fractions ``u_k`` of the stage's field (``tan θ_k = u_k · tan_max``), each
     weighted by the share of the 16 × 16 evaluation grid at that radius (so the loss is the
     radial stand-in of the 256-field mean), at every design wavelength, over the half pupil
-    x ≥ 0 (points on x = 0 count once, the others twice: the spot is symmetric in x). Per
+    x ≥ 0 (points on x = 0 count once, the others twice: the spot is symmetric in x),
+    launched at the paraxial entrance pupil whatever ``Lens.aim`` says (speed). Per
     field the polychromatic mean square spot error is
 
         MS_k = Σ_{w,p} ω_p e²_{wp} / Σ_{w,p} ω_p,

@@ -25,7 +25,7 @@ Method:
     The valid part of the pupil (its area A) is found by ``star_region``: a coarse grid over a
     square three times the paraxial entrance pupil locates it, and bisection along 128
     directions finds its boundary. The centroid uses a ``pupil × pupil`` grid over the
-    region's bounding box.
+    region's bounding box. ``Lens.aim`` plays no part: the region is found, not aimed at.
 
 Vignetting factors:
     The lens's vignetting factors (``Lens.vignetting``) are not applied, at its own fields

@@ -19,6 +19,7 @@ from .diffractive import Binary2 as Binary2
 from .diffractive import Grating as Grating
 from .freeform import Biconic as Biconic
 from .freeform import ZernikeSag as ZernikeSag
+from .lens import RAY_AIMING as RAY_AIMING
 from .lens import Lens as Lens
 from .lens import Sensor as Sensor
 from .qtype import QTypeAsphere as QTypeAsphere
