@@ -149,6 +149,7 @@ def paper_stages(
                    ("polish_steps", polish_steps)):
         checks.number(v, arg, w, lo=0, integer=True, unit="solver steps")
     checks.number(pin, "pin", w, lo=0)
+    checks.switch(curriculum, "curriculum", w)  # "no" is truthy: it ran the curriculum
     if curriculum:
         fovs = sine_path(spec.fov_start, spec.fov, n)
         fnums = sine_path(spec.fnum_start, spec.fnum, n)

@@ -1,0 +1,141 @@
+"""Round 16 of bad-input and silent-answer probes (``tools/audit16_probe.py``).
+
+A lens edited with ``eqx.tree_at`` (its constructor checks skipped), a curriculum that
+starts at a faster F-number than its target, design options that were checked only where
+they were first used (or never), and the surfaces whose constructor values went unchecked.
+"""
+
+import equinox as eqx
+import jax.numpy as jnp
+import numpy as np
+import pytest
+
+import jaxlens as jl
+from jaxlens.analysis import angular_magnification, rms_spot, seidel
+from jaxlens.design import DesignConfig, DesignSpec, paper_stages
+
+# ------------------------------------------------------- a lens edited with eqx.tree_at
+
+
+def _edits():
+    lens = jl.zoo.cooke_triplet()
+    # (id, the edited lens, message). Before: efl gave NaN for the first two; 50.02 mm
+    # (the unedited EFL) for the others, and rms_spot / psf a number (a one-pixel PSF for
+    # an EPD of 0) or a shape error from inside lax.scan.
+    return [
+        ("nan_curvature", eqx.tree_at(lambda m: m.surfaces[1].c, lens, jnp.asarray(jnp.nan)),
+         r"surfaces\[1\]: Standard: c must be finite numbers \(1/mm\), got nan"),
+        ("nan_thickness", eqx.tree_at(lambda m: m.thickness, lens,
+                                      lens.thickness.at[2].set(jnp.nan)),
+         r"Lens: thickness must be finite numbers \(mm\), got nan mm"),
+        ("infinite_conic", eqx.tree_at(lambda m: m.surfaces[1].k, lens, jnp.asarray(jnp.inf)),
+         r"surfaces\[1\]: Standard: k must be finite numbers, got inf"),
+        ("negative_semi_diameter", eqx.tree_at(lambda m: m.surfaces[1].semi_diameter, lens,
+                                               jnp.asarray(-2.0)),
+         r"semi_diameter must be numbers in \(0, inf\] mm \(inf: no clipping\), got -2 mm"),
+        ("zero_epd", eqx.tree_at(lambda m: m.epd, lens, jnp.asarray(0.0)),
+         r"Lens: epd \(entrance pupil diameter\) must be finite numbers in \(0, inf\) mm, "
+         r"got 0 mm"),
+        ("field_95", eqx.tree_at(lambda m: m.fields, lens, jnp.asarray([0.0, 95.0])),
+         r"Lens: fields must be finite angles in \(-90, 90\) deg, got 95 deg"),
+        ("short_thickness", eqx.tree_at(lambda m: m.thickness, lens, lens.thickness[:-1]),
+         r"Lens: 6 surfaces need 6 thicknesses \(mm\), got shape \(5,\)"),
+    ]
+
+
+EDITS = ["nan_curvature", "nan_thickness", "infinite_conic", "negative_semi_diameter",
+         "zero_epd", "field_95", "short_thickness"]
+
+
+def _entry_points():
+    return {
+        "efl": lambda m: jl.efl(m),
+        "paraxial_data": lambda m: jl.paraxial_data(m),
+        "rms_spot": lambda m: rms_spot(m),
+        "psf": lambda m: jl.psf(m, 0.0, kernel_size=9, pixel_size=0.005),
+        "seidel": lambda m: seidel(m),
+        "angular_magnification": lambda m: angular_magnification(m),
+    }
+
+
+@pytest.mark.parametrize("edit", EDITS)
+def test_an_edited_lens_is_refused_by_efl_naming_the_bad_value(edit):
+    _, lens, match = next(e for e in _edits() if e[0] == edit)
+    with pytest.raises(ValueError, match=rf"^efl: the lens fails its own checks, .*{match}.*"
+                                         rf"edited with eqx\.tree_at"):
+        jl.efl(lens)
+
+
+@pytest.mark.parametrize("where", list(_entry_points()))
+def test_every_analysis_refuses_an_edited_lens_before_tracing_it(where):
+    _, lens, match = _edits()[0]  # NaN curvature
+    with pytest.raises(ValueError, match=rf"^{where}: the lens fails its own checks, {match}"):
+        _entry_points()[where](lens)
+
+
+def test_a_lens_edited_to_good_values_and_a_traced_lens_still_work():
+    import jax
+
+    lens = jl.zoo.cooke_triplet()
+    thicker = eqx.tree_at(lambda m: m.thickness, lens, lens.thickness.at[1].add(0.5))
+    assert float(jl.efl(thicker)) != pytest.approx(float(jl.efl(lens)), abs=1e-6)
+    assert np.isfinite(np.asarray(rms_spot(thicker).polychromatic)).all()
+    # Under jit the lens is a tracer: nothing is checked (the entry points check before).
+    f = eqx.filter_jit(jl.efl)
+    assert float(f(lens)) == pytest.approx(float(jl.efl(lens)), abs=1e-9)
+    g = jax.grad(lambda t: jl.efl(eqx.tree_at(lambda m: m.thickness, lens, t)))(lens.thickness)
+    assert np.isfinite(np.asarray(g)).all()
+
+
+# ------------------------------------------------------------------------ design
+def test_design_spec_curriculum_starts_no_faster_than_the_target():
+    """Before: DesignSpec(fnum=2, fnum_start=1.2) was accepted and paper_stages ran
+    F/1.2 → 1.6 → 1.88 → 2.0, the hard end first (and F/0.3, faster than any lens)."""
+    with pytest.raises(ValueError, match=r"DesignSpec: fnum_start must be a finite number in "
+                                         r"\[2, inf\) \(F-number: the curriculum starts no "
+                                         r"faster than the target fnum\), got 1\.2"):
+        DesignSpec(fnum=2.0, fnum_start=1.2)
+    assert DesignSpec(fnum=2.0, fnum_start=2.0).fnum_start == 2.0  # no curriculum in F#
+    stages = paper_stages(DesignSpec())
+    assert [round(s.fnum, 2) for s in stages[:4]] == [2.8, 2.4, 2.11, 2.0]
+
+
+@pytest.mark.parametrize(("kw", "match"), [
+    (dict(reg_weights=(-1.0, 1000.0, 40.0)),  # before: FloatingPointError after the set-up
+     r"DesignConfig: reg_weights \(obliquity\) must be a finite number in \[0, inf\) "
+     r"\(weight\), got -1\.0"),
+    (dict(reg_weights=(40.0, np.nan, 40.0)),
+     r"DesignConfig: reg_weights \(spacing\) must be a finite number"),
+    (dict(reg_weights=(40.0, 1000.0)),  # before: a broadcast error inside the first stage
+     r"DesignConfig: reg_weights must be three weights >= 0 \(obliquity, spacing, slope\)"),
+    (dict(solver="sgd"), r"DesignConfig: solver must be one of \('adam', 'lm'"),
+    (dict(polish="sgd"), r"DesignConfig: polish must be one of \('adam', 'lm'"),
+    (dict(reference="chief"), r"DesignConfig: reference must be 'ideal' or 'centroid'"),
+    (dict(materials="free"), r"DesignConfig: materials: material selection must be one of"),
+    (dict(material_catalogs="SCHOTT"),
+     r"DesignConfig: material_catalogs must be a non-empty tuple of catalog names"),
+    (dict(material_catalogs=()),
+     r"DesignConfig: material_catalogs must be a non-empty tuple of catalog names"),
+    # w₀ = 2 gave the perturbed lenses the weight (1 − w₀)/K < 0: a reward for sensitivity.
+    (dict(tolerance_nominal_weight=2.0),
+     r"DesignConfig: tolerance_nominal_weight must be a finite number in \(0, 1\] \(share "
+     r"of the nominal loss\), got 2\.0"),
+])
+def test_design_config_checks_every_option_on_construction(kw, match):
+    """Before: each was accepted by DesignConfig (checked later, or never)."""
+    with pytest.raises(ValueError, match=match):
+        DesignConfig(**kw)
+
+
+def test_design_config_defaults_and_good_values_pass():
+    DesignConfig()
+    DesignConfig(reg_weights=[0.0, 0.0, 0.0], solver="lbfgsb", polish="adam",
+                 reference="centroid", materials="search", material_catalogs=["SCHOTT"],
+                 tolerance_nominal_weight=1.0)
+
+
+def test_paper_stages_curriculum_is_a_switch():
+    """Before: curriculum="no" (truthy) ran the curriculum."""
+    with pytest.raises(ValueError, match=r"paper_stages: curriculum must be True or False, "
+                                         r"got 'no'"):
+        paper_stages(DesignSpec(), curriculum="no")
