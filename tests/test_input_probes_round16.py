@@ -139,3 +139,25 @@ def test_paper_stages_curriculum_is_a_switch():
     with pytest.raises(ValueError, match=r"paper_stages: curriculum must be True or False, "
                                          r"got 'no'"):
         paper_stages(DesignSpec(), curriculum="no")
+
+
+# ------------------------------------------------------------------------ surfaces
+@pytest.mark.parametrize(("kw", "match"), [
+    (dict(c=np.nan), r"Toroidal: c must be finite numbers \(1/mm\), got nan"),
+    (dict(k=np.inf), r"Toroidal: k must be finite numbers, got inf"),
+    (dict(cx=np.nan), r"Toroidal: cx must be finite numbers \(1/mm\), got nan"),
+    (dict(coeffs=[np.nan]), r"Toroidal: coeffs must be finite numbers, got nan"),
+    (dict(semi_diameter=-1.0),
+     r"Toroidal: semi_diameter must be numbers in \(0, inf\] mm \(inf: no clipping\), got -1"),
+    (dict(c=0.5, semi_diameter=5.0), r"Toroidal: the surface .* is defined only out to r = "),
+    (dict(cx=0.5, semi_diameter=5.0),
+     r"Toroidal: the sweep about the rotation axis \(cx = 0\.5 1/mm, radius of rotation 2 "
+     r"mm\) is defined only out to \|x\| = 1/\|cx\| = 2 mm, but the semi_diameter is 5 mm"),
+])
+def test_toroidal_checks_its_values(kw, match):
+    """Before: every one was accepted (Toroidal checked only the shape of coeffs)."""
+    from jaxlens.optics.toroidal import Toroidal
+
+    with pytest.raises(ValueError, match=match):
+        Toroidal(**kw)
+    Toroidal(c=0.05, cx=-0.1, semi_diameter=5.0)  # inside both domains: fine

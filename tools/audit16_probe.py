@@ -179,7 +179,7 @@ def afocal_and_surfaces():
 @probe
 def ranges():
     from jaxlens.analysis import encircled_energy, rms_spot, seidel, zernike_fit
-    from jaxlens.imaging import mtf as mtfmod
+    from jaxlens.imaging.psf import mtf
     c = cooke
     f2 = jl.get_material("F2")
     show("F2 range", lambda: f2.wavelength_range)
@@ -200,7 +200,10 @@ def ranges():
     show("psf kernel 100001", lambda: jl.psf(c, 0.0, kernel_size=100001).shape)
     show("psf pixel_size 10 (mm, huge)", lambda: float(jl.psf(c, 0.0, kernel_size=9, pixel_size=10.0).sum()))
     show("psf pixel_size 1e-9", lambda: float(jl.psf(c, 0.0, kernel_size=9, pixel_size=1e-9).sum()))
-    show("mtf names", lambda: [n for n in dir(mtfmod) if not n.startswith("_")])
+    show("mtf freqs negative", lambda: mtf(c, 0.0, frequencies=[-10.0, 10.0]))
+    show("mtf freqs nan", lambda: mtf(c, 0.0, frequencies=[np.nan]))
+    show("mtf freqs huge", lambda: mtf(c, 0.0, frequencies=[1e6]))
+    show("mtf pixel_size 0", lambda: mtf(c, 0.0, pixel_size=0.0))
 
 
 @probe
