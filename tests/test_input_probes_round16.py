@@ -161,3 +161,19 @@ def test_toroidal_checks_its_values(kw, match):
     with pytest.raises(ValueError, match=match):
         Toroidal(**kw)
     Toroidal(c=0.05, cx=-0.1, semi_diameter=5.0)  # inside both domains: fine
+
+
+@pytest.mark.parametrize("call", ["psf", "encircled_energy"])
+def test_psf_grids_have_an_upper_bound(call):
+    """Before: kernel_size=100001 raised numpy's "Python integer 10000200001 out of bounds
+    for int32" (psf), after the checks had passed."""
+    from jaxlens.analysis import encircled_energy
+
+    lens = jl.zoo.cooke_triplet()
+    with pytest.raises(ValueError, match=rf"{call}: kernel_size must be a whole number in "
+                                         rf"\[1, 4096\] pixels per side, got 100001"):
+        if call == "psf":
+            jl.psf(lens, 0.0, kernel_size=100001, pixel_size=0.005)
+        else:
+            encircled_energy(lens, 0.0, [0.01], method="diffraction", pixel_size=0.001,
+                             kernel_size=100001)

@@ -26,6 +26,11 @@ GENERIC_RANGE_UM = (0.15, 30.0)
 UNIT_TOLERANCE = 1e-4
 """Largest accepted deviation of a ray direction's length from 1."""
 
+MAX_KERNEL_SIZE = 4096
+"""Most pixels per side of a PSF grid (``psf``, ``mtf``, ``encircled_energy``, ``render``):
+4096² float64 values are 128 MiB per wavelength; a kernel_size of 100001 overflowed int32
+pixel indices (an ``OverflowError`` from numpy) after the lens had been checked."""
+
 _REL = 1e-6  # wavelength bounds are compared with this relative slack (float32 rounding)
 
 
