@@ -503,6 +503,42 @@ def finite_array(x, arg: str, where: str, unit: str = ""):
     return x
 
 
+def float_image(img, where: str, arg: str = "img", *, lo=None, hi=None,
+                unit: str = "", hint: str = "") -> np.ndarray:
+    """An image of real float values as a float64 numpy array; raises ``ValueError``.
+
+    An integer image array (uint8, uint16: 0…255 or 0…65535 sRGB codes) is refused with a
+    hint to ``jaxlens.io.images.to_linear``: as values in [0, 1] a uint8 image was clipped
+    to white, or raised to the power 2.4 (255 became 5.9e5). Bool, complex (numpy dropped
+    the imaginary part with a warning), string or object arrays are refused too, and so
+    are NaN, ±inf and, where ``lo``/``hi`` are given, values outside [lo, hi]. Python
+    numbers and lists of them are read as floats. ``hint`` ends the message of a bad value.
+    """
+    what = f" ({unit})" if unit else ""
+    dt = getattr(img, "dtype", None)
+    try:
+        kind = np.dtype(dt).kind if dt is not None else np.asarray(img).dtype.kind
+    except (TypeError, ValueError):
+        kind = "O"
+    if dt is not None and kind in "iu":
+        raise ValueError(f"{where}: {arg} must be a float image{what}, got an integer image "
+                         f"of dtype {np.dtype(dt)} (sRGB codes 0…{np.iinfo(np.dtype(dt)).max}"
+                         f"?); decode it with jaxlens.io.images.to_linear, or divide by "
+                         f"{np.iinfo(np.dtype(dt)).max} for the encoded values")
+    if kind not in "iuf":
+        raise ValueError(f"{where}: {arg} must be a float image{what}, got dtype "
+                         f"{np.dtype(dt) if dt is not None else type(img).__name__}")
+    a = np.asarray(img, np.float64)
+    bad = ~np.isfinite(a)
+    bad |= (a < lo) if lo is not None else False
+    bad |= (a > hi) if hi is not None else False
+    if np.any(bad):
+        span = f" in {interval(lo, hi, False, False)}" if lo is not None or hi is not None else ""
+        raise ValueError(f"{where}: {arg} must be finite values{span}{what}, got "
+                         f"{fmt(a[bad][:1])} ({int(bad.sum())} bad of {a.size}){hint}")
+    return a
+
+
 def focal_image(lens, where: str) -> None:
     """Refuse a lens with an afocal image space (``Lens.afocal_image``) where the answer is a
     position on the image surface (mm): its image is at infinity, so those positions depend
