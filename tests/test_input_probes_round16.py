@@ -177,3 +177,88 @@ def test_psf_grids_have_an_upper_bound(call):
         else:
             encircled_energy(lens, 0.0, [0.01], method="diffraction", pixel_size=0.001,
                              kernel_size=100001)
+
+
+# ------------------------------------------------------------------------ CLIs
+@pytest.mark.parametrize(("argv", "old", "new"), [
+    (["--smoke"], "python -m benchmarks --only throughput", "smoke"),
+    (["--only", "throughput", "--counts", "100"], "python -m benchmarks", "partial"),
+    (["--smoke", "--only", "throughput"], "python -m benchmarks --only throughput --counts 10",
+     "smoke"),
+])
+def test_benchmarks_never_replace_a_fuller_run(argv, old, new, tmp_path, capsys):
+    """Before: --smoke --out results replaced the committed full results with the smoke
+    sizes, and a --counts rerun the full throughput table, without a word."""
+    import json
+
+    from benchmarks.run import main
+
+    path = tmp_path / "throughput.json"
+    path.write_text(json.dumps({"benchmark": "throughput", "command": old, "rows": []}))
+    kind = "partial" if "--counts" in old else "full"
+    with pytest.raises(SystemExit) as e:
+        main([*argv, "--out", str(tmp_path)])
+    assert e.value.code == 2
+    err = capsys.readouterr().err
+    assert (f"throughput.json holds a {kind} run's results, which this {new} run would "
+            f"replace; give --tag NAME (writes throughput_NAME.json beside it)") in err
+    assert json.loads(path.read_text())["command"] == old  # untouched
+
+
+def test_benchmark_run_kinds():
+    from benchmarks.run import run_kind
+
+    assert run_kind("python -m benchmarks") == "full"
+    assert run_kind("python -m benchmarks --only throughput --full") == "full"
+    assert run_kind("python -m benchmarks --only throughput --lenses cooke_triplet") == "partial"
+    assert run_kind("python -m benchmarks --smoke --counts 10") == "smoke"
+
+
+# ------------------------------------------------------------------------ images
+def _bad_images():
+    return {
+        "uint8": np.full((2, 2, 3), 255, np.uint8),
+        "nan": np.full((2, 2, 3), np.nan),
+        "complex": np.ones((2, 2, 3), complex),
+        "bool": np.ones((2, 2, 3), bool),
+    }
+
+
+# Before: srgb_to_linear(uint8 255) gave 5.9e5 (255 raised to the power 2.4), write_png of
+# a uint8 image a white file, to_linear(float 0…255) radiance 255, a NaN passed through and
+# a complex image lost its imaginary part with only a numpy warning.
+@pytest.mark.parametrize("fn", ["srgb_to_linear", "linear_to_srgb", "write_png", "write_exr"])
+@pytest.mark.parametrize("kind", ["uint8", "nan", "complex", "bool"])
+def test_image_functions_refuse_what_is_not_a_float_image(fn, kind, tmp_path):
+    from jaxlens.io import images
+
+    img = _bad_images()[kind]
+    match = {"uint8": rf"{fn}: \w+ must be a float image .*got an integer image of dtype "
+                      rf"uint8 \(sRGB codes 0…255\?\); decode it with jaxlens\.io\.images\."
+                      rf"to_linear",
+             "nan": rf"{fn}: \w+ must be finite values.*got nan \(12 bad of 12\)",
+             "complex": rf"{fn}: \w+ must be a float image .*got dtype complex128",
+             "bool": rf"{fn}: \w+ must be a float image .*got dtype bool"}[kind]
+    f = getattr(images, fn)
+    with pytest.raises(ValueError, match=match):
+        if fn.startswith("write"):
+            f(tmp_path / f"x.{fn[6:]}", img)
+        else:
+            f(img)
+    assert not list(tmp_path.iterdir())
+
+
+def test_srgb_and_to_linear_ranges():
+    from jaxlens.io import images
+
+    with pytest.raises(ValueError, match=r"srgb_to_linear: v must be finite values in \[0, 1\] "
+                                         r"\(sRGB-encoded\), got 5"):
+        images.srgb_to_linear(np.full(3, 5.0))
+    with pytest.raises(ValueError, match=r"to_linear: img must be finite values in \[0, 1\] "
+                                         r"\(linear light\), got 255 .*divide it by 255"):
+        images.to_linear(np.full((2, 2, 3), 255.0))
+    # Good input still works, Python numbers included; linear_to_srgb still clips.
+    assert images.srgb_to_linear(0.5) == pytest.approx(0.21404114, abs=1e-8)
+    assert float(images.linear_to_srgb(np.array([2.0]))[0]) == pytest.approx(1.0)
+    assert images.to_linear(np.full((1, 1, 3), 255, np.uint8))[0, 0, 0] == pytest.approx(1.0)
+    assert images.scene("astronaut", (8, 8)).shape == (8, 8, 3)

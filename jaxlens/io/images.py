@@ -223,14 +223,13 @@ def write_png(path, img, *, linear: bool = True, bits: int = 8) -> None:
     path = _output_file(path, "write_png", ".png")
     if bits not in (8, 16):
         raise ValueError(f"write_png: bits must be 8 or 16, got {bits}")
-    # An integer image (uint8 codes) was clipped to 1: a white file.
+    # An integer image (uint8 codes) was clipped to 1: a white file; NaN would be cast to
+    # an arbitrary integer (0 on most machines): a silent black pixel.
     a = checks.float_image(img, "write_png", "img", unit="values in [0, 1], clipped")
     if a.ndim == 3 and a.shape[-1] == 1:
         a = a[..., 0]
     if a.ndim not in (2, 3) or (a.ndim == 3 and a.shape[-1] > 4):
         raise ValueError(f"write_png: image must be [H, W] or [H, W, C<=4], got {a.shape}")
-    # NaN would be cast to an arbitrary integer (0 on most machines): a silent black pixel.
-    checks.finite_array(a, "img", "write_png")
     v = linear_to_srgb(a) if linear else np.clip(a, 0.0, 1.0)
     top = 2**bits - 1
     q = np.round(v * top).astype(">u2" if bits == 16 else np.uint8)
