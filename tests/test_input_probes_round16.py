@@ -262,3 +262,11 @@ def test_srgb_and_to_linear_ranges():
     assert float(images.linear_to_srgb(np.array([2.0]))[0]) == pytest.approx(1.0)
     assert images.to_linear(np.full((1, 1, 3), 255, np.uint8))[0, 0, 0] == pytest.approx(1.0)
     assert images.scene("astronaut", (8, 8)).shape == (8, 8, 3)
+
+
+def test_design_config_with_no_solver_step_is_refused():
+    """Before: design() returned the random starts, each marked "successful"."""
+    with pytest.raises(ValueError, match=r"DesignConfig: steps, final_steps and polish_steps "
+                                         r"are all 0: no solver step would run"):
+        DesignConfig(steps=0, final_steps=0, polish_steps=0)
+    DesignConfig(steps=0, final_steps=1, polish_steps=0)

@@ -282,6 +282,52 @@ def clis():
         show(" ".join(a if not a.startswith(d) else a.replace(d, "$D") for a in args), lambda: cli(args))
 
 
+def quick(args, limit=25):
+    """rc and the last stderr line, or STARTED when the run was still going after ``limit``
+    seconds (the option was not refused before the work)."""
+    try:
+        r = subprocess.run([sys.executable, *args], capture_output=True, text=True, cwd=ROOT,
+                           env={**os.environ, "PYTHONPATH": ROOT}, timeout=limit)
+    except subprocess.TimeoutExpired:
+        return "STARTED (not refused within the limit)"
+    tail = (r.stderr.strip().splitlines() or [""])[-1][:240]
+    return f"rc={r.returncode} {tail}"
+
+
+@probe
+def cli_options():
+    d = tempfile.mkdtemp()
+    c = ["-m", "jaxlens.experiments.classical", "--smoke", "--quiet", "--out"]
+    for i, opts in enumerate([
+        ["--fov", "200"], ["--fov", "0"], ["--elements", "0"], ["--elements", "40"],
+        ["--sensor-diagonal", "-1"], ["--track", "0.5"], ["--bfl", "nan"], ["--stop", "-1"],
+        ["--stop", "9"], ["--fov-start", "100"], ["--asphere-terms", "50"], ["--seeds", "0"],
+        ["--seed-list", "1,1"], ["--seed-list", "a"], ["--first-seed", "-3"],
+        ["--steps", "-1"], ["--steps", "nan"], ["--steps", "0"], ["--polish-steps", "-1"],
+        ["--tolerance-aware", "-1"], ["--population", "0"], ["--devices", "0"],
+        ["--devices", "99"], ["--tolerance-trials", "-5"], ["--tolerance-threshold", "0"],
+        ["--ablation-seeds", "0"], ["--columns", "nope"], ["--materials", "E48R"],
+        ["--materials", "N-BK7X,OKP4,E48R,OKP4,E48R,OKP4"], ["--select-materials", "free"],
+        ["--material-catalogs", "NOPE"], ["--no-plots", "--no-render"],
+    ]):
+        show("classical " + " ".join(opts), lambda: quick([*c, os.path.join(d, f"c{i}"), *opts]))
+    e = ["-m", "jaxlens.experiments.edof", "--smoke", "--quiet", "--out"]
+    for i, opts in enumerate([
+        ["--lenses", "nope"], ["--lenses", ""], ["--seeds", "-1"], ["--seeds", "1,1"],
+        ["--time-limit", "-5"], ["--time-limit", "0"], ["--steps", "-1"], ["--batch", "0"],
+        ["--tile", "0"], ["--tile", "7"], ["--kernel", "0"], ["--kernel", "30"],
+        ["--binning", "0"], ["--pupil", "0"], ["--eval-pupil", "1"], ["--lens-every", "0"],
+        ["--lr-net", "-1"], ["--lr-lens", "nan"], ["--w-sim", "-1"], ["--w-raw", "inf"],
+        ["--photons", "0"], ["--read-noise", "-1"], ["--width", "0"], ["--enc", "1,-1"],
+        ["--middle", "-1"], ["--dec", "1"], ["--n-odd", "-1"], ["--cubic-floor", "2"],
+        ["--hybrid-floor", "-1"], ["--context", "-1"], ["--max-crops", "0"],
+        ["--train-dir", d + "/none"], ["--test-dir", d + "/none"], ["--resume"],
+        ["--checkpoint", d + "/ck", "--resume"], ["--record", d + "/none.json"],
+    ]):
+        show("edof " + " ".join(o.replace(d, "$D") for o in opts),
+             lambda: quick([*e, os.path.join(d, f"e{i}"), *opts]))
+
+
 if __name__ == "__main__":
     for p in PROBES:
         if len(sys.argv) < 2 or sys.argv[1] in p.__name__:

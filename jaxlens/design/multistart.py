@@ -129,6 +129,10 @@ class DesignConfig:
                         ("log_every", 1), ("image_pixels", 1), ("image_spp", 1),
                         ("tolerance_trials", 0), ("polish_rings", 0)):
             checks.number(getattr(self, arg), arg, w, lo=lo, integer=True)
+        if not (self.steps or self.final_steps or self.polish_steps):
+            # design() then returned the random starts as designs, marked "successful".
+            raise ValueError(f"{w}: steps, final_steps and polish_steps are all 0: no solver "
+                             f"step would run (give at least one step, e.g. final_steps=1)")
         p = self.population
         if isinstance(p, bool) or not isinstance(p, int | np.integer) or p < 1:
             raise ValueError(f"{w}: population must be at least 1 start per design (a whole "
