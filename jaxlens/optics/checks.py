@@ -388,7 +388,8 @@ def lens_intact(lens, where: str) -> None:
     ``eqx.tree_at`` (and ``jax.tree.map``) build a new lens without ``Lens.__init__``, so an
     edited lens can hold a NaN curvature, an infinite conic, a negative semi-diameter or
     EPD, a field of 95° or a thickness array of the wrong length: the analyses then gave
-    NaN, a PSF of one bright pixel, or a shape error from deep inside ``lax.scan``. A
+    NaN, a PSF of one bright pixel, or a shape error from deep inside ``lax.scan``. The
+    surfaces (and the image surface) and the sensor are checked too. A
     ``ValueError`` (``TypeError`` for a wrong type) names ``where`` and the bad value. A
     traced lens (inside jit, grad or vmap) is not checked: its numbers are not known, and the
     entry points check the lens before they trace it. About 3 ms for a six-surface lens.
@@ -398,8 +399,9 @@ def lens_intact(lens, where: str) -> None:
     parts = [(lens, "")]
     surfaces = getattr(lens, "surfaces", ())
     parts += [(s, f"surfaces[{i}]: ") for i, s in enumerate(surfaces)]
-    image = getattr(lens, "image", None)
-    parts += [(image, "image: ")] if image is not None else []
+    for arg in ("image", "sensor"):  # render reads the sensor's pixel size
+        part = getattr(lens, arg, None)
+        parts += [(part, f"{arg}: ")] if part is not None else []
     for part, label in parts:
         check = getattr(part, "__check_init__", None)
         if not callable(check):
