@@ -270,3 +270,16 @@ def test_design_config_with_no_solver_step_is_refused():
                                          r"are all 0: no solver step would run"):
         DesignConfig(steps=0, final_steps=0, polish_steps=0)
     DesignConfig(steps=0, final_steps=1, polish_steps=0)
+
+
+@pytest.mark.parametrize("stages", [[], "one", None], ids=["empty", "str", "none"])
+def test_curriculum_run_needs_a_list_of_stages(stages):
+    """Before: [] returned the starting parameters as the result, without a step."""
+    import types
+
+    from jaxlens.design import run
+
+    params = types.SimpleNamespace(c=jnp.zeros((2, 3)))
+    with pytest.raises(ValueError, match=r"run: stages must be a non-empty list of Stage "
+                                         r"objects \(e\.g\. paper_stages\(spec\)\)"):
+        run(DesignSpec(), stages, params, object(), None, progress=False)
