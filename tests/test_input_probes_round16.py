@@ -283,3 +283,40 @@ def test_curriculum_run_needs_a_list_of_stages(stages):
     with pytest.raises(ValueError, match=r"run: stages must be a non-empty list of Stage "
                                          r"objects \(e\.g\. paper_stages\(spec\)\)"):
         run(DesignSpec(), stages, params, object(), None, progress=False)
+
+
+@pytest.mark.parametrize("degree", [-1, 2.5, 21, True])
+def test_xy_term_count_takes_a_degree_of_the_extended_polynomial(degree):
+    """Before: -1 gave -1 terms, 2.5 gave 6.0, 21 gave 252 (a surface holds 230), True 2."""
+    from jaxlens.optics.xypolynomial import xy_term_count
+
+    with pytest.raises(ValueError, match=r"xy_term_count: degree must be a whole number in "
+                                         r"\[0, 20\] \(total degree\)"):
+        xy_term_count(degree)
+    assert [xy_term_count(d) for d in (0, 1, 2, 20)] == [0, 2, 5, 230]
+
+
+@pytest.mark.parametrize(("n", "ordering"), [(0, "standard"), (2.5, "standard"),
+                                             (38, "fringe"), (232, "standard")])
+def test_zernike_basis_term_count(n, ordering):
+    """Before: 0 raised "max() arg is an empty sequence", 2.5 a TypeError from range, and
+    38 Fringe terms (Fringe has 37) a basis of terms that do not exist."""
+    from jaxlens.optics.freeform import zernike_basis
+
+    with pytest.raises(ValueError, match=r"zernike_basis: n_terms must be a whole number in "
+                                         r"\[1, (37|231)\] terms"):
+        zernike_basis(n, ordering)
+
+
+def test_zernike_fit_refuses_a_nan_coordinate_at_a_fitted_point():
+    """Before: the point's row of the design matrix was NaN, and so was every coefficient."""
+    from jaxlens.analysis import zernike_fit
+
+    x = jnp.array([0.1, 0.2, jnp.nan, 0.3])
+    y = jnp.zeros(4)
+    with pytest.raises(ValueError, match=r"zernike_fit: x and y must be finite at every "
+                                         r"fitted point .*got \(nan, 0\) at point 2"):
+        zernike_fit(x, y, jnp.ones(4), terms=2)
+    # A point without a value (NaN) weighs nothing: its coordinates are not read.
+    fit = zernike_fit(x, y, jnp.array([1.0, 1.0, jnp.nan, 1.0]), terms=1)
+    assert float(fit.coefficients[0]) == pytest.approx(1.0)
