@@ -88,6 +88,16 @@ def main(argv: list[str] | None = None) -> dict:
                 p.error(f"--lenses: unknown zoo lens {name!r} (known: "
                         f"{', '.join(sorted(zoo.ZOO))}){hint}")
 
+    # Before the first benchmark: the folder written is --out, else the committed results
+    # (a smoke run without --out writes to a new temporary folder).
+    target = args.out if args.out is not None else None if args.smoke else common.RESULTS
+    for name in (args.only or CORE) if target is not None else ():
+        if name in CORE:
+            stem = f"{name}_{args.tag}" if args.tag else name
+            clash = _replaces_fuller_run(target / f"{stem}.json", target, args)
+            if clash:
+                p.error(clash)
+
     jax.config.update("jax_enable_x64", True)  # float64 runs next to float32
     out = args.out
     if out is None:
@@ -148,6 +158,38 @@ def main(argv: list[str] | None = None) -> dict:
 
     write_readme(out)
     return results
+
+
+RUN_KINDS = ("smoke", "partial", "full")
+"""Benchmark runs by how much of the study they hold: ``--smoke`` (tiny sizes, no timings
+kept), a partial throughput run (``--lenses``/``--counts``), and the full study."""
+
+
+def run_kind(command: str) -> str:
+    """The kind (``RUN_KINDS``) of the run that a result file's ``command`` states."""
+    words = command.split()
+    if "--smoke" in words:
+        return "smoke"
+    return "partial" if {"--lenses", "--counts"} & set(words) else "full"
+
+
+def _replaces_fuller_run(path: pathlib.Path, out: pathlib.Path, args) -> str | None:
+    """The refusal message when writing ``path`` would replace a result file of a fuller run
+    (a smoke run over a full one, a partial rerun over the full study), else None.
+
+    Before: ``--smoke --out benchmarks/results`` replaced every committed result with the
+    smoke sizes, and ``--only throughput --counts 1000`` the full throughput table, each
+    without a word (``--tag`` is the documented way to write beside them)."""
+    try:
+        old = run_kind(str(json.loads(path.read_text()).get("command", "")))
+    except (OSError, ValueError, AttributeError):
+        return None  # no file, or not one of ours: nothing to protect
+    new = "smoke" if args.smoke else "partial" if (args.lenses or args.counts) else "full"
+    if RUN_KINDS.index(new) >= RUN_KINDS.index(old):
+        return None
+    return (f"--out {out}: {path.name} holds a {old} run's results, which this {new} "
+            f"run would replace; give --tag NAME (writes {path.stem}_NAME.json beside it) or "
+            f"another --out")
 
 
 def write_readme(out: pathlib.Path) -> None:

@@ -285,7 +285,7 @@ def test_render_arguments_are_checked(cooke):
     cases = [
         (dict(key=None), r"render: key must be one PRNG key"),
         (dict(key=key, method=PSFRender(kernel_size=0)), r"kernel_size must be a whole number "
-                                                         r"in \[1, inf\) pixels, got 0"),
+                                                         r"in \[1, 4096\] pixels, got 0"),
         (dict(key=key, method=PSFRender(kernel_size=8)), r"kernel_size must be odd"),
         (dict(key=key, method=RayRender(footprint_grid=1)),
          r"footprint_grid must be a whole number in \[2"),

@@ -257,7 +257,7 @@ def test_sensor_grids_and_maps_check_their_arguments(cooke, call, match):
 def test_psf_kernel_size_is_a_whole_number(cooke):
     for k in (True, 9.5, 0):
         with pytest.raises(ValueError, match=r"psf: kernel_size must be a whole number in "
-                                             r"\[1, inf\) pixels per side"):
+                                             r"\[1, 4096\] pixels per side"):
             jl.psf(cooke, 0.0, pixel_size=0.005, kernel_size=k, model=GeometricPSF(pupil=4))
 
 

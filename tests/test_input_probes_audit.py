@@ -121,7 +121,8 @@ def test_image_helpers_refuse_nan_empty_and_wrong_types(call, match):
 
 def test_write_png_refuses_nan_and_writes_nothing(tmp_path):
     out = tmp_path / "x.png"
-    with pytest.raises(ValueError, match=r"write_png: img holds 3 NaN or infinite value"):
+    with pytest.raises(ValueError, match=r"write_png: img must be finite values \(values in "
+                                         r"\[0, 1\], clipped\), got nan \(3 bad of 4\)"):
         images.write_png(out, np.array([[0.5, np.nan], [np.nan, np.nan]]))
     assert not out.exists()
     assert images.to_linear(np.full((1, 1, 3), 65535, np.uint16)).max() == 1.0

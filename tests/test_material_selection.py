@@ -145,9 +145,8 @@ def test_loss_gradient_wrt_materials_matches_finite_differences(model):
 def test_bad_selection_values_are_refused():
     with pytest.raises(ValueError, match=r"material selection must be one of.*'bogus'"):
         check_mode("bogus")
-    cfg = multistart.DesignConfig(materials="nearest", float64=True)
     with pytest.raises(ValueError, match="material selection must be one of"):
-        multistart.design(SMALL, [0], cfg, progress=False, shard=False)
+        multistart.DesignConfig(materials="nearest", float64=True)  # refused on construction
     with pytest.raises(ValueError, match=r"Unknown catalog\(s\) \['NOPE'\]"):
         CatalogRegion.of(("NOPE",))
     with pytest.raises(ValueError, match="at least one catalog"):

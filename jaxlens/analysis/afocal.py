@@ -69,6 +69,7 @@ def angular_magnification(lens: Lens, wavelength=None) -> Array:
     if not isinstance(lens, Lens):
         raise TypeError(f"angular_magnification: lens must be a jaxlens.Lens, got "
                         f"{type(lens).__name__}")
+    checks.lens_intact(lens, "angular_magnification")
     wl = lens.primary_wavelength if wavelength is None else wavelength
     if not checks.is_traced(wl):
         checks.wavelengths(lens, wl, "angular_magnification", "wavelength")

@@ -160,7 +160,8 @@ def _samples(lens, field, radii_or_fraction, where, *, wavelength, method, refer
         raise ValueError(f"{where}: method='diffraction' needs pixel_size (mm), the PSF grid "
                          f"pitch: a few per Airy radius 1.22·λ·F#")
     checks.number(pixel_size, "pixel_size", where, lo=0, lo_open=True, unit="mm")
-    checks.number(kernel_size, "kernel_size", where, lo=1, integer=True, unit="pixels per side")
+    checks.number(kernel_size, "kernel_size", where, lo=1, hi=checks.MAX_KERNEL_SIZE,
+                  integer=True, unit="pixels per side")
     checks.number(pupil_side, "pupil_side", where, lo=2, integer=True, unit="rays per side")
     checks.number(subsamples, "subsamples", where, lo=1, integer=True,
                   unit="sub-samples per pixel side")

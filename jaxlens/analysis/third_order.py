@@ -254,6 +254,7 @@ def seidel(lens: Lens, *, field=None, wavelength=None) -> Seidel:
     where = "seidel"
     if not isinstance(lens, Lens):
         raise TypeError(f"{where}: lens must be a jaxlens.Lens, got {type(lens).__name__}")
+    checks.lens_intact(lens, where)
     traced_odd = _check_surfaces(lens, where)
     wl = lens.primary_wavelength if wavelength is None else wavelength
     if jnp.ndim(wl) != 0:

@@ -394,6 +394,7 @@ class ToleranceModel:
                  pupil=None, tolerances: Tolerances | None = None, batch: int = 25,
                  apertures: str = "open"):
         checks.focal_image(lens, "ToleranceModel")  # its metrics are spot sizes in µm
+        checks.lens_intact(lens, "ToleranceModel")
         _refuse_surfaces(lens, "ToleranceModel")
         self.tolerances = Tolerances() if tolerances is None else tolerances
         if not isinstance(self.tolerances, Tolerances):

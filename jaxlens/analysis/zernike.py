@@ -232,6 +232,11 @@ def zernike_fit(x: Float[ArrayLike, "*p"], y: Float[ArrayLike, "*p"],
     if not checks.is_traced((x, y)):
         r2 = np.asarray(x, float) ** 2 + np.asarray(y, float) ** 2
         sel = np.asarray(ok) if not checks.is_traced(ok) else np.ones(r2.shape, bool)
+        if not np.all(np.isfinite(r2[sel])):  # NaN > 1 is False: the fit came out NaN
+            i = int(np.flatnonzero(sel & ~np.isfinite(r2))[0])
+            raise ValueError(f"{where}: x and y must be finite at every fitted point (a "
+                             f"finite value, in the mask), got ({float(np.asarray(x)[i]):g}, "
+                             f"{float(np.asarray(y)[i]):g}) at point {i}")
         if np.any(r2[sel] > 1.0 + 1e-9):
             raise ValueError(f"{where}: points must lie in the unit disc (x² + y² <= 1), got "
                              f"radius {float(np.sqrt(np.max(r2[sel]))):.6g}")
@@ -242,6 +247,9 @@ def zernike_fit(x: Float[ArrayLike, "*p"], y: Float[ArrayLike, "*p"],
 
 
 def _fit(x, y, v, ok, *, terms, indexing) -> ZernikeFit:
+    # A point that weighs nothing is read at the centre: its NaN coordinates (a wavefront
+    # grid's outside points) made a NaN row, and NaN·0 made every coefficient NaN.
+    x, y = jnp.where(ok, x, 0.0), jnp.where(ok, y, 0.0)
     a = zernike_terms(x, y, terms=terms, indexing=indexing)  # [p, J]
     w = ok.astype(a.dtype)
     vz = jnp.where(ok, v, 0.0)

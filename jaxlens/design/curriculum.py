@@ -149,6 +149,7 @@ def paper_stages(
                    ("polish_steps", polish_steps)):
         checks.number(v, arg, w, lo=0, integer=True, unit="solver steps")
     checks.number(pin, "pin", w, lo=0)
+    checks.switch(curriculum, "curriculum", w)  # "no" is truthy: it ran the curriculum
     if curriculum:
         fovs = sine_path(spec.fov_start, spec.fov, n)
         fnums = sine_path(spec.fnum_start, spec.fnum, n)
@@ -360,6 +361,10 @@ def run(
     objectives = objective if isinstance(objective, dict) else {"ray": objective}
     # Checked before the first stage: a later stage's missing objective was found only after
     # the stages before it had run, and seed labels of another count mislabelled the designs.
+    if isinstance(stages, Stage | str) or not isinstance(stages, Sequence) or not stages:
+        # [] returned the starting parameters as the result; one Stage was not iterable.
+        raise ValueError(f"run: stages must be a non-empty list of Stage objects (e.g. "
+                         f"paper_stages(spec)), got {stages!r}")
     for stage in stages:
         if not isinstance(stage, Stage):
             raise TypeError(f"run: stages must be Stage objects, got {type(stage).__name__} "

@@ -20,7 +20,7 @@ import numpy as np
 from jax.sharding import Mesh, NamedSharding, PartitionSpec
 
 from ..optics import catalog, checks
-from .curriculum import History, Stage, paper_stages, run, stage_args
+from .curriculum import STAGE_SOLVERS, History, Stage, paper_stages, run, stage_args
 from .init import MAX_SEED, check_seeds, gap_bounds, parameterization, random_starts
 from .losses import ImageObjective, Objective, RayLoss, reverse_mode
 from .materials import (
@@ -129,15 +129,45 @@ class DesignConfig:
                         ("log_every", 1), ("image_pixels", 1), ("image_spp", 1),
                         ("tolerance_trials", 0), ("polish_rings", 0)):
             checks.number(getattr(self, arg), arg, w, lo=lo, integer=True)
+        if not (self.steps or self.final_steps or self.polish_steps):
+            # design() then returned the random starts as designs, marked "successful".
+            raise ValueError(f"{w}: steps, final_steps and polish_steps are all 0: no solver "
+                             f"step would run (give at least one step, e.g. final_steps=1)")
         p = self.population
         if isinstance(p, bool) or not isinstance(p, int | np.integer) or p < 1:
             raise ValueError(f"{w}: population must be at least 1 start per design (a whole "
                              f"number in [1, inf)), got {p!r}")
-        for arg in ("lr_c", "lr_a", "lr_d", "lr_k", "lr_m", "pin", "efl_weight",
-                    "tolerance_nominal_weight"):
+        for arg in ("lr_c", "lr_a", "lr_d", "lr_k", "lr_m", "pin", "efl_weight"):
             checks.number(getattr(self, arg), arg, w, lo=0)
+        # w₀ > 1 gave the perturbed lenses a negative weight (a loss that rewards tolerance
+        # sensitivity) or a NaN; 0 drops the nominal design (RobustObjective's range).
+        checks.number(self.tolerance_nominal_weight, "tolerance_nominal_weight", w, lo=0,
+                      hi=1, lo_open=True, unit="(share of the nominal loss)")
         for arg in ("curriculum", "regularize", "mask", "irls", "float64"):
             checks.switch(getattr(self, arg), arg, w)
+        # Checked here, not where they are first used: a negative or NaN regularizer weight
+        # rewarded what it should penalise (or made the first loss NaN after the set-up),
+        # and a wrong solver, polish or reference name surfaced only when the stages or the
+        # polish were built.
+        rw = self.reg_weights
+        if (isinstance(rw, str) or not isinstance(rw, (tuple, list)) or len(rw) != 3):
+            raise ValueError(f"{w}: reg_weights must be three weights >= 0 (obliquity, "
+                             f"spacing, slope), got {rw!r}")
+        for name, v in zip(("obliquity", "spacing", "slope"), rw, strict=True):
+            checks.number(v, f"reg_weights ({name})", w, lo=0, unit="(weight)")
+        for arg in ("solver", "polish"):
+            if getattr(self, arg) not in STAGE_SOLVERS:
+                raise ValueError(f"{w}: {arg} must be one of {STAGE_SOLVERS}, got "
+                                 f"{getattr(self, arg)!r}")
+        if self.reference not in ("ideal", "centroid"):
+            raise ValueError(f"{w}: reference must be 'ideal' or 'centroid', got "
+                             f"{self.reference!r}")
+        check_mode(self.materials, f"{w}: materials")
+        cats = self.material_catalogs
+        if (isinstance(cats, str) or not isinstance(cats, (tuple, list)) or not cats
+                or not all(isinstance(c, str) and c.strip() for c in cats)):
+            raise ValueError(f"{w}: material_catalogs must be a non-empty tuple of catalog "
+                             f"names (e.g. ('SCHOTT', 'CDGM')), got {cats!r}")
 
     def scaled(self, factor: float) -> DesignConfig:
         """The same recipe with every step count scaled by ``factor`` (at least 1 step)."""

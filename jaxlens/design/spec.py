@@ -118,8 +118,10 @@ class DesignSpec:
         wavelengths: design wavelengths in µm (F, d, C by default).
         primary: index of the primary wavelength.
         asphere_terms: even aspheric terms per surface beyond the curvature (r⁴, r⁶, …).
-        fov_start: full diagonal FoV (deg) where the curriculum starts.
-        fnum_start: F-number where the curriculum starts.
+        fov_start: full diagonal FoV (deg) where the curriculum starts (<= ``fov``).
+        fnum_start: F-number where the curriculum starts (>= ``fnum``: the curriculum goes
+            from the easier slow lens to the target, as the FoV goes from ``fov_start`` up
+            to ``fov``).
         name: a label for files and plots.
         efl: paraxial EFL target in mm, or None (free, the paper's convention). When set,
             the design loss holds the paraxial EFL there (``design.losses.Objective``) while
@@ -218,8 +220,12 @@ class DesignSpec:
         where = "DesignSpec"
         fov = _number(self.fov, "fov", lo=0, hi=180, lo_open=True, hi_open=True, unit="deg")
         _number(self.fov_start, "fov_start", lo=0, hi=fov, lo_open=True, unit="deg")
-        _number(self.fnum, "fnum", lo=0, lo_open=True)
-        _number(self.fnum_start, "fnum_start", lo=0, lo_open=True)
+        fnum = _number(self.fnum, "fnum", lo=0, lo_open=True)
+        # The curriculum eases in: it starts at a field no wider and an F-number no faster
+        # than the target's (a start of F/1.2 for an F/2 lens ran the stages from the
+        # harder end, through F-numbers the lens was never meant for).
+        _number(self.fnum_start, "fnum_start", lo=fnum, unit="(F-number: the curriculum "
+                "starts no faster than the target fnum)")
         _number(self.sensor_diagonal, "sensor_diagonal", lo=0, lo_open=True, unit="mm")
         aspect = _sequence(self.sensor_aspect, "sensor_aspect", "(height, width)")
         if len(aspect) != 2:

@@ -95,6 +95,7 @@ def distortion_map(
         A :class:`DistortionMap` (differentiable with respect to the lens).
     """
     checks.focal_image(lens, "distortion_map")
+    checks.lens_intact(lens, "distortion_map")
     s = _sensor(lens, sensor)
     grid = checks.grid(grid, "distortion_map", "grid", "points")
     checks.number(newton_iters, "newton_iters", "distortion_map", lo=0, integer=True,
@@ -144,6 +145,7 @@ def inverse_distortion_map(
         ``[gr, gc, 2]`` ideal positions (mm), differentiable with respect to the lens.
     """
     checks.focal_image(lens, "inverse_distortion_map")
+    checks.lens_intact(lens, "inverse_distortion_map")
     where = "inverse_distortion_map"
     resolution = checks.grid(resolution, where, "resolution", "pixels")
     grid = checks.grid(grid, where, "grid", "points")

@@ -386,8 +386,8 @@ def _prepare(lens, field, depth, wavelength, kernel_size, pixel_size, model, cen
     checks.number(newton_iters, "newton_iters", caller, lo=0, integer=True, unit="iterations")
     if center not in CENTERS:
         raise ValueError(f"{caller}: center must be one of {CENTERS}, got {center!r}")
-    checks.number(kernel_size, "kernel_size", caller, lo=1, integer=True, unit="pixels per side")
-    kernel_size = int(kernel_size)  # a static shape: True or 9.0 compiled a wrong kernel
+    kernel_size = checks.number(kernel_size, "kernel_size", caller, lo=1, integer=True,  # static
+                                hi=checks.MAX_KERNEL_SIZE, unit="pixels per side")
     if pixel_size is None:
         if lens.sensor is None:
             raise ValueError(f"{caller}: give pixel_size (mm); the lens has no sensor")

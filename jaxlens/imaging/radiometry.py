@@ -230,6 +230,7 @@ def relative_illumination(
             raise ValueError(f"{where}: wavelength must be one value (µm), got shape "
                              f"{jnp.shape(wavelength)}")
     wl = jnp.asarray(lens.primary_wavelength if wavelength is None else wavelength, dtype)
+    checks.lens_intact(lens, where)
     wl = checks.wavelengths(lens, wl, where)
     depth = sampling.lens_depth(lens, depth, where)
     ri, e, cen = relative_illumination_samples(apertured(lens), f, depth, wl,

@@ -540,10 +540,10 @@ def render(
     checks.prng_key(key, "render")
     if isinstance(method, PSFRender):
         kernel_size = method.kernel_size
-        if checks.number(kernel_size, "kernel_size", "render", lo=1, unit="pixels",
-                         integer=True) % 2 == 0:
+        if checks.number(kernel_size, "kernel_size", "render", lo=1,
+                         hi=checks.MAX_KERNEL_SIZE, unit="pixels", integer=True) % 2 == 0:
             raise ValueError(f"render: kernel_size must be odd (a kernel centred on a pixel), "
-                             f"in [1, inf) pixels, got {kernel_size!r}")
+                             f"in [1, {checks.MAX_KERNEL_SIZE}] pixels, got {kernel_size!r}")
     else:
         checks.number(method.footprint_grid, "footprint_grid", "render", lo=2,
                       unit="points per side", integer=True)

@@ -44,14 +44,15 @@ SCENES = ("astronaut", "chelsea", "coffee", "rocket", "camera", "immunohistochem
 
 
 def srgb_to_linear(v):
-    """Decode sRGB values in [0, 1] to linear light (IEC 61966-2-1)."""
-    v = np.asarray(v, np.float64)
+    """Decode sRGB values in [0, 1] to linear light (IEC 61966-2-1). Integer images
+    (uint8, uint16 codes) are refused: decode them with :func:`to_linear`."""
+    v = checks.float_image(v, "srgb_to_linear", "v", lo=0, hi=1, unit="sRGB-encoded")
     return np.where(v <= 0.04045, v / 12.92, ((v + 0.055) / 1.055) ** 2.4)
 
 
 def linear_to_srgb(v):
-    """Encode linear light in [0, 1] with the sRGB curve (values are clipped first)."""
-    v = np.clip(np.asarray(v, np.float64), 0.0, 1.0)
+    """Encode linear light in [0, 1] with the sRGB curve (finite values, clipped first)."""
+    v = np.clip(checks.float_image(v, "linear_to_srgb", "v", unit="linear light"), 0.0, 1.0)
     return np.where(v <= 0.0031308, 12.92 * v, 1.055 * v ** (1 / 2.4) - 0.055)
 
 
@@ -66,7 +67,11 @@ def to_linear(img) -> np.ndarray:
     if np.issubdtype(a.dtype, np.integer):
         a = a.astype(np.float64) / np.iinfo(a.dtype).max
         return srgb_to_linear(a).astype(np.float32)
-    return np.asarray(a, np.float32)
+    # A float image of 0…255 values passed through as radiance 255 (and NaN, complex or
+    # bool pixels without a word).
+    return checks.float_image(a, "to_linear", "img", lo=0, hi=1, unit="linear light",
+                              hint="; a float image of 0…255 codes: divide it by 255 "
+                                   "first").astype(np.float32)
 
 
 def _check_readable(path, caller):
@@ -132,7 +137,7 @@ def write_exr(path, img, *, channels=None) -> None:
             C0, C1, ...).
     """
     path = _output_file(path, "write_exr", ".exr")
-    a = np.asarray(img, np.float32)
+    a = checks.float_image(img, "write_exr", "img", unit="linear values").astype(np.float32)
     if a.ndim == 2:
         a = a[..., None]
     if a.ndim != 3:
@@ -218,13 +223,13 @@ def write_png(path, img, *, linear: bool = True, bits: int = 8) -> None:
     path = _output_file(path, "write_png", ".png")
     if bits not in (8, 16):
         raise ValueError(f"write_png: bits must be 8 or 16, got {bits}")
-    a = np.asarray(img, np.float64)
+    # An integer image (uint8 codes) was clipped to 1: a white file; NaN would be cast to
+    # an arbitrary integer (0 on most machines): a silent black pixel.
+    a = checks.float_image(img, "write_png", "img", unit="values in [0, 1], clipped")
     if a.ndim == 3 and a.shape[-1] == 1:
         a = a[..., 0]
     if a.ndim not in (2, 3) or (a.ndim == 3 and a.shape[-1] > 4):
         raise ValueError(f"write_png: image must be [H, W] or [H, W, C<=4], got {a.shape}")
-    # NaN would be cast to an arbitrary integer (0 on most machines): a silent black pixel.
-    checks.finite_array(a, "img", "write_png")
     v = linear_to_srgb(a) if linear else np.clip(a, 0.0, 1.0)
     top = 2**bits - 1
     q = np.round(v * top).astype(">u2" if bits == 16 else np.uint8)

@@ -205,6 +205,12 @@ def zernike_basis(n_terms: int, ordering: str) -> np.ndarray:
     """W [P+1, 2M+2, n_terms]: Σ_j A_j Z_j = Σ_(p,t) (W A)_(p,t) ρ^(2p) T_t, with
     T = (Re (u + iv)^0, …, Re (u + iv)^M, Im (u + iv)^0, …, Im (u + iv)^M) and M the largest
     |m| of the first ``n_terms`` terms (R_n^m(ρ)/ρ^m is a polynomial in ρ²)."""
+    if ordering not in ZERNIKE_ORDERINGS:
+        raise ValueError(f"zernike_basis: ordering must be one of {ZERNIKE_ORDERINGS}, got "
+                         f"{ordering!r}")
+    # 0 gave "max() arg is an empty sequence", 2.5 a TypeError from range.
+    n_terms = checks.number(n_terms, "n_terms", "zernike_basis", lo=1,
+                            hi=MAX_ZERNIKE_TERMS[ordering], integer=True, unit="terms")
     to_nm = noll_to_nm if ordering == "standard" else fringe_to_nm
     nms = [to_nm(j) for j in range(1, n_terms + 1)]
     top = max(abs(m) for _, m in nms)

@@ -211,6 +211,7 @@ def _trace_ray(lens: Lens, y, nu, n, wl):
 def _wavelength(lens: Lens, wavelength, where: str):
     """The wavelength (µm) to use: the primary one, or the given one checked against the
     lens's materials (an error_if under jit, so these stay usable in jitted losses)."""
+    checks.lens_intact(lens, where)  # edited with eqx.tree_at: a NaN curvature gave NaN
     if wavelength is None:
         return lens.primary_wavelength
     return checks.wavelengths(lens, wavelength, where)

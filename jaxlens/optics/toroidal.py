@@ -27,8 +27,10 @@ Conventions:
 from __future__ import annotations
 
 import jax.numpy as jnp
+import numpy as np
 from jaxtyping import Array, Float
 
+from . import checks
 from .surfaces import AbstractSurface, guarded_sqrt, number_field
 
 
@@ -55,6 +57,30 @@ class Toroidal(AbstractSurface):
         if self.coeffs.ndim != 1:
             raise ValueError(f"Toroidal: coeffs must be a 1-D array of a_1, a_2, … (on y², "
                              f"y⁴, …), got shape {self.coeffs.shape}")
+        # Before: no value was checked; a NaN c or cx, an infinite conic or a semi-diameter of
+        # -1 mm built a surface whose every ray was lost (or NaN) without a word.
+        if not checks.is_traced(self.cx):
+            checks.values(self.cx, "cx", "Toroidal", unit="1/mm")
+        self._check_numbers()
+
+    def _check_domain(self, where: str):
+        """The profile must exist out to the semi-diameter in y (the conic's domain), and the
+        sweep out to it in x: on the x axis (z_y = 0, w = 1) that needs |cx|·sd <= 1, the
+        radius of rotation at least the semi-diameter."""
+        super()._check_domain(where)
+        if checks.is_traced(self.cx):
+            return
+        sd = np.asarray(self.semi_diameter, float)
+        cx = np.abs(np.asarray(self.cx, float))
+        with np.errstate(invalid="ignore", over="ignore"):
+            bad = np.isfinite(sd) & (cx * sd > 1.0 + 1e-6)
+        if np.any(bad):
+            r_max = float(np.min(1.0 / np.where(bad, cx, np.inf)))
+            raise ValueError(
+                f"{where}: the sweep about the rotation axis (cx = {float(np.max(cx)):g} 1/mm, "
+                f"radius of rotation {r_max:g} mm) is defined only out to |x| = 1/|cx| = "
+                f"{r_max:g} mm, but the semi_diameter is {float(np.max(sd)):g} mm; use a "
+                f"semi_diameter <= {r_max:g} mm (or a smaller cx)")
 
     # The even series is in y only: it is not the rotationally symmetric ``even_coeffs``
     # (which code such as ``uniform_surfaces`` and tolerancing reads as a series in r²).

@@ -82,6 +82,9 @@ def xy_term_powers(i: int) -> tuple[int, int]:
 
 def xy_term_count(degree: int) -> int:
     """The number of terms up to total degree ``degree``: (d + 1)(d + 2)/2 − 1."""
+    # -1 gave -1 terms, 2.5 gave 6.0 and 25 gave 350 (beyond the 230 a surface holds).
+    degree = checks.number(degree, "degree", "xy_term_count", lo=0, hi=MAX_XY_DEGREE,
+                           integer=True, unit="(total degree)")
     return (degree + 1) * (degree + 2) // 2 - 1
 
 
