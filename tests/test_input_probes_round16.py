@@ -98,6 +98,13 @@ def test_design_spec_curriculum_starts_no_faster_than_the_target():
     assert DesignSpec(fnum=2.0, fnum_start=2.0).fnum_start == 2.0  # no curriculum in F#
     stages = paper_stages(DesignSpec())
     assert [round(s.fnum, 2) for s in stages[:4]] == [2.8, 2.4, 2.11, 2.0]
+    # Left out, the starts are the paper's (47.5°, F/2.8) eased to an easier target: an F/4,
+    # 40° spec starts at its own F-number and field (before: refused, as the paper's F/2.8
+    # and 47.5° starts are faster and wider than it), as the classical CLI always did.
+    assert (DesignSpec().fov_start, DesignSpec().fnum_start) == (47.5, 2.8)
+    easy = DesignSpec(fov=40.0, fnum=4.0)
+    assert (easy.fov_start, easy.fnum_start) == (40.0, 4.0)
+    assert (DesignSpec(fov=60.0).fov_start, DesignSpec(fnum=1.8).fnum_start) == (47.5, 2.8)
 
 
 @pytest.mark.parametrize(("kw", "match"), [

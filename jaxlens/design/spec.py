@@ -100,6 +100,10 @@ def aperture_field_limits(n_elements: int) -> tuple[float, float]:
     return max(0.5, 4.0 / n_elements), 0.12 * n_elements
 
 
+FOV_START, FNUM_START = 47.5, 2.8
+"""The paper's curriculum start: full diagonal FoV (deg) and F-number."""
+
+
 @dataclasses.dataclass(frozen=True)
 class DesignSpec:
     """What to design: field, aperture, sensor, element count, materials and packaging.
@@ -118,10 +122,12 @@ class DesignSpec:
         wavelengths: design wavelengths in µm (F, d, C by default).
         primary: index of the primary wavelength.
         asphere_terms: even aspheric terms per surface beyond the curvature (r⁴, r⁶, …).
-        fov_start: full diagonal FoV (deg) where the curriculum starts (<= ``fov``).
+        fov_start: full diagonal FoV (deg) where the curriculum starts (<= ``fov``; None:
+            the paper's ``FOV_START``, 47.5°, or ``fov`` where that is narrower).
         fnum_start: F-number where the curriculum starts (>= ``fnum``: the curriculum goes
             from the easier slow lens to the target, as the FoV goes from ``fov_start`` up
-            to ``fov``).
+            to ``fov``; None: the paper's ``FNUM_START``, F/2.8, or ``fnum`` where that is
+            slower).
         name: a label for files and plots.
         efl: paraxial EFL target in mm, or None (free, the paper's convention). When set,
             the design loss holds the paraxial EFL there (``design.losses.Objective``) while
@@ -142,12 +148,22 @@ class DesignSpec:
     wavelengths: tuple[float, ...] = (LAMBDA_F, LAMBDA_D, LAMBDA_C)
     primary: int = 1
     asphere_terms: int = 6
-    fov_start: float = 47.5
-    fnum_start: float = 2.8
+    fov_start: float | None = None
+    fnum_start: float | None = None
     name: str = "classical6p"
     efl: float | None = None
 
     def __post_init__(self):
+        # The paper's start, eased to the target where the target is easier (a frozen
+        # dataclass: set once, here, before the checks see the values).
+        for name, target, eased in (("fov_start", "fov", min), ("fnum_start", "fnum", max)):
+            if getattr(self, name) is None:
+                paper = FOV_START if name == "fov_start" else FNUM_START
+                try:  # a bad target is named by validate()
+                    start = eased(paper, float(getattr(self, target)))
+                except (TypeError, ValueError):
+                    start = paper
+                object.__setattr__(self, name, start)
         self.validate()
 
     # --- derived quantities ---------------------------------------------------------

@@ -48,6 +48,7 @@ import shlex
 import sys
 import time
 
+from jaxlens.design.spec import FNUM_START, FOV_START
 from jaxlens.experiments.runfolder import (
     OneLineParser,
     RunFolder,
@@ -75,7 +76,6 @@ ABLATION_COLUMNS = (
 # Columns whose designs are exported (designs folder under --ablation-out).
 EXPORTED_COLUMNS = {"+both+mask": "designs_paper_method", "+recipe": "designs"}
 
-FOV_START, FNUM_START = 47.5, 2.8  # the paper's curriculum start (deg, F#)
 
 PAPER_TABLE1_FULL = {"valid_percent": 100.0, "rms_mean_um": 15.74, "rms_min_um": 12.50}
 
@@ -304,9 +304,7 @@ def spec_from_args(args):
 
     kw = dict(fov=args.fov, fnum=args.fnum, sensor_diagonal=args.sensor_diagonal,
               n_elements=args.elements, total_track=args.track, bfl=args.bfl, stop=args.stop,
-              fov_start=min(FOV_START, args.fov) if args.fov_start is None else args.fov_start,
-              fnum_start=(max(FNUM_START, args.fnum) if args.fnum_start is None
-                          else args.fnum_start),
+              fov_start=args.fov_start, fnum_start=args.fnum_start,  # None: DesignSpec's rule
               asphere_terms=args.asphere_terms)
     if args.materials:
         kw["materials"] = tuple(m.strip() for m in args.materials.split(",") if m.strip())
