@@ -327,3 +327,16 @@ def test_zernike_fit_refuses_a_nan_coordinate_at_a_fitted_point():
     # A point without a value (NaN) weighs nothing: its coordinates are not read.
     fit = zernike_fit(x, y, jnp.array([1.0, 1.0, jnp.nan, 1.0]), terms=1)
     assert float(fit.coefficients[0]) == pytest.approx(1.0)
+
+
+def test_marechal_strehl_refuses_a_negative_or_non_numeric_rms():
+    """Before: a negative RMS was squared like a positive one (−1 wave gave 7.2e-18)."""
+    from jaxlens.analysis.wavefront_error import marechal_strehl
+
+    with pytest.raises(ValueError, match=r"marechal_strehl: rms_waves must be an RMS "
+                                         r"wavefront error, >= 0 waves, got -1 waves"):
+        marechal_strehl(-1.0)
+    with pytest.raises(TypeError, match="marechal_strehl: rms_waves must be a real number"):
+        marechal_strehl("0.1")
+    assert float(marechal_strehl(0.0)) == 1.0
+    assert np.isnan(float(marechal_strehl(float("nan"))))  # no rays, no Strehl ratio

@@ -283,6 +283,12 @@ def marechal_strehl(rms_waves: Float[ArrayLike, "*b"]) -> Float[Array, "*b"]:
         >>> round(float(marechal_strehl(0.0745)), 3)   # the λ/14 "diffraction limit"
         0.803
     """
+    checks.real_values(rms_waves, "rms_waves", "marechal_strehl", "waves")
+    if not checks.is_traced(rms_waves) and np.any(np.asarray(rms_waves, float) < 0):
+        # A negative RMS squared like a positive one: −1 wave gave 7e-18, not an error. NaN
+        # passes (a field without rays has no wavefront, and no Strehl ratio).
+        raise ValueError(f"marechal_strehl: rms_waves must be an RMS wavefront error, >= 0 "
+                         f"waves, got {np.min(np.asarray(rms_waves, float)):g} waves")
     s = jnp.asarray(rms_waves)
     return jnp.exp(-((2.0 * jnp.pi * s) ** 2))
 
