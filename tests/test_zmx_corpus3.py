@@ -148,8 +148,12 @@ def test_no_type_no_catalog_no_wavelength_reads_as_zemax_defaults():
 
 def test_file_without_an_aperture_is_refused_by_name():
     # The vendor file as quoted (its header cut to NAME/NOTE/UNIT) has no aperture line.
-    with pytest.raises(ValueError, match=r"no aperture \(ENPD, FNUM, FLOA or OBNA line\)"):
+    with pytest.raises(ValueError, match=r"no aperture \(ENPD, FNUM, FLOA or OBNA line\)"
+                                         r".*Add one after the UNIT line: 'ENPD d'"):
         zmx.loads(EO65438.replace("ENPD 10\n", ""))
+    # What the message proposes opens it (FLOA: the stop's DIAM 12 sets the pupil).
+    text = EO65438.replace("ENPD 10\n", "FLOA\n")
+    assert jaxlens.paraxial_data(zmx.loads(text)).entrance_pupil_diameter == pytest.approx(24.0)
 
 
 def test_evenasph_r2_term_adds_to_the_paraxial_power():

@@ -594,7 +594,11 @@ def _lens(f: ZmxFile, text: str, path: str, strict: bool, unknown_glass: str) ->
     if f.aperture is None and f.pupd is not None:
         raise f.pupd.error("this aperture type is not supported; use ENPD, FNUM, FLOA or OBNA")
     if f.aperture is None:
-        raise ValueError(f"{path}: no aperture (ENPD, FNUM, FLOA or OBNA line)")
+        raise ValueError(
+            f"{path}: no aperture (ENPD, FNUM, FLOA or OBNA line); OpticStudio writes one in "
+            f"every file's header, so a file without one was written by hand or another tool. "
+            f"Add one after the UNIT line: 'ENPD d' (entrance-pupil diameter in lens units), "
+            f"'FNUM N' (image-space F-number) or 'FLOA' (the stop surface's semi-diameter)")
     kind, value, ln = f.aperture
     try:
         if kind in ("obna", "cone", "wfno"):
