@@ -174,3 +174,65 @@ def test_missing_curv_names_the_cut_and_not_the_thickness():
     with pytest.raises(ValueError, match=r"surface 2 has no DISZ line \(every surface needs "
                                          r"its thickness"):
         zmx.loads(text)
+
+
+# After the "LensVa3Style" test of a StarOpt C# project (find_string id 58575561119), itself
+# modelled on an OpticStudio 2024 file (VERS 241210): FCOM field comments (UTF-8 text),
+# merit rows with text, and a two-configuration MCE of CRVT and THIC rows (active: 2). Field
+# type 0 (angles) here; the original's FTYP 3 asks for a 4.5 mm image height that no real
+# ray reaches through this toy lens (refused, rightly, by name).
+LENS_VA3 = """VERS 241210 1439 20120530 20120530
+MODE SEQ
+NAME
+FNUM 2.7 0
+GCAT CDGM
+FTYP 0 0 2 3 0 0 0 2
+XFLN 0 0
+YFLN 0 4.5
+FWGN 1 1
+FCOM 1 轴上视场
+FCOM 2 最大Y视场
+WAVM 1 0.42 1
+WAVM 2 0.44 1
+WAVM 3 0.46 1
+PWAV 2
+SURF 0
+  TYPE STANDARD
+  CURV 0
+  DISZ 2500
+SURF 1
+  TYPE STANDARD
+  CURV 0.025
+  DISZ 3
+  GLAS H-K9L 0 0 1.5 40
+  STOP
+  DIAM 1000
+SURF 2
+  TYPE STANDARD
+  CURV 0
+  DISZ 0
+EFFL 0 2 0 0 0 0 10.7 1 0 0
+DMFS 0 0 0 0 0 0 0 0 0 0
+BLNK 对比度于185 lp/MM
+MECS 0 1 1 185 0.33571068701972878 0 0 0.058177641733144006 0 0
+MNUM 2 2
+CRVT 1 1 0.02 0 0 0 1 1 1 0 0 "" 0
+CRVT 1 2 0.025 0 0 0 1 1 1 0 0 "" 0
+THIC 0 1 500 0 0 0 1 1 1 0 0 "" 0
+THIC 0 2 2500 0 0 0 1 1 1 0 0 "" 0
+"""
+
+
+def test_field_comments_are_read_past_in_strict_mode():
+    lens = zmx.loads(LENS_VA3, strict=True)  # FCOM was an unknown keyword: refused
+    assert len(lens.fields) == 2
+
+
+def test_two_configurations_of_curvature_read_as_one_refracting_surface():
+    # The image lies in the glass: one surface of radius R, n′/Φ = n′R/(n′-1), 1/Φ = R/(n′-1).
+    for config, radius in ((1, 50.0), (2, 40.0)):
+        lens = zmx.loads(LENS_VA3, config=config)
+        n = float(lens.materials[-1].index(0.44))
+        p = jaxlens.paraxial_data(lens)
+        assert float(p.efl_image_space) == pytest.approx(n * radius / (n - 1), rel=1e-12)
+        assert float(p.efl) == pytest.approx(radius / (n - 1), rel=1e-12)
