@@ -121,12 +121,23 @@ def check_file(path: str, strict: bool = False) -> dict:
             if load_zemax_file is not None:
                 rec.update(_optiland_written(lens, out))
     if load_zemax_file is not None:
-        efl, _, err = optiland_efl(path)
+        efl, optic, err = optiland_efl(path)
         rec["optiland_efl"], rec["optiland_error"] = efl, err
         if efl is not None and "efl" in rec:
             sign = -1.0 if rec["odd_mirrors"] else 1.0
+            efl *= _image_index_ratio(lens, optic)
             rec["rel_diff"] = abs(sign * efl - rec["efl"]) / abs(rec["efl"])
     return rec
+
+
+def _image_index_ratio(lens, optic) -> float:
+    """|n′ jaxlens| / |n′ optiland| at the primary wavelength, to put optiland's f2 on jaxlens's
+    n′/Φ: optiland takes the image medium from the image surface's own GLAS (air when it has
+    none), where Zemax and jaxlens take the medium after the last lens surface, so for a file
+    whose image lies in glass (an eye model, a test lens) optiland's f2 is 1/Φ, not n′/Φ."""
+    wl = float(lens.wavelengths[lens.primary])
+    n_ours = abs(float(np.asarray(lens.materials[-1].index(wl))))
+    return n_ours / abs(optiland_image_index(optic, wl))
 
 
 def _optiland_written(lens, out: str) -> dict:
@@ -146,9 +157,10 @@ def _optiland_written(lens, out: str) -> dict:
     n_theirs = optiland_image_index(optic, wl)
     ours_efl = float(jl.paraxial_data(lens).efl_image_space)
     sign = -1.0 if len(lens.mirrors) % 2 else 1.0  # optiland's n′/Φ has n′ < 0 (odd mirrors)
+    scaled = efl * _image_index_ratio(lens, optic)
     return {
         "written_optiland_efl": efl,
-        "written_rel_diff": abs(sign * efl - ours_efl) / abs(ours_efl),
+        "written_rel_diff": abs(sign * scaled - ours_efl) / abs(ours_efl),
         "written_clipping_same": clip_ok,
         "written_image_index_same": math.isclose(n_ours, n_theirs, rel_tol=1e-9),
     }

@@ -17,7 +17,7 @@ SETTINGS = frozenset("""
     COAT FIMP CTHK EDGE THSO TRAC VARI VDSZ WAVL XFLN YFLN PPAR BLKS BLNK CAMA GLCZ HIDX
     TCEX MAZH MIND MXWL MNWL OPTI NSCS NSOA NSOD NSOO NSOP NSOQ NSOS NSOU NSOV NSOW GCAT
     OMMA SCBD TCED XDVA MOD2 RWRE TOLP CSUM DBDT AUTH LUID SSID RCMF XAIM YAIM ZAIM TCMM
-    IWDP STUD EERA
+    IWDP STUD EERA FCOM
     """.split())
 """Lens-data settings the reader ignores (``OMMA``: the optimisation method; ``SCBD``: a
 surface's coordinate-break-after-surface data written as all zeros by OpticStudio; ``CSUM``:
@@ -25,7 +25,8 @@ a checksum; ``TCMM``: a tolerance operand's comment; ``DBDT``: the stock-lens da
 of a vendor's file; ``AUTH``, ``LUID``, ``SSID``, ``RCMF``: OpticStudio's author, lens and
 surface ids and a file flag; ``XAIM``, ``YAIM``, ``ZAIM``: ray-aiming pupil shifts, a
 starting point of OpticStudio's aiming that jaxlens's Newton aiming (``RAIM``, ``Lens.aim``)
-does not need). ``IWDP``, ``STUD``, ``EERA``: header lines of OpticStudio
+does not need; ``FCOM n text``: the comment of field n, a column of OpticStudio's Field
+Data Editor, text only). ``IWDP``, ``STUD``, ``EERA``: header lines of OpticStudio
 2024 files (beside ``AUTH`` and ``LUID``) that no public format note explains; they are
 ignored only with the values seen in real files (``KNOWN_VALUES``)."""
 

@@ -364,10 +364,15 @@ def _check_structure(f: ZmxFile, text: str, strict: bool) -> None:
         missing = [k for k in need if k not in s.keys]
         if missing:
             what = "the image surface" if s is img else f"surface {s.number}"
+            why = []
+            if "DISZ" in missing:
+                why.append("every surface needs its thickness")
+            if f.zemax:
+                why.append("Zemax writes CURV and DISZ in every block, so a file with a VERS "
+                           "line that lacks one was cut off")
             raise s.line.error(
-                f"{what} has no {' or '.join(missing)} line (every surface needs its "
-                f"thickness{'; Zemax writes CURV and DISZ in every block' if f.zemax else ''}"
-                f"); the file may be truncated")
+                f"{what} has no {' or '.join(missing)} line ({'; '.join(why)}); the file "
+                f"may be truncated")
     if img.disz_line is not None and img.disz != 0:
         raise img.disz_line.error(
             f"the last surface, which a .zmx file makes the image, has thickness {img.disz:g}; "
@@ -589,7 +594,11 @@ def _lens(f: ZmxFile, text: str, path: str, strict: bool, unknown_glass: str) ->
     if f.aperture is None and f.pupd is not None:
         raise f.pupd.error("this aperture type is not supported; use ENPD, FNUM, FLOA or OBNA")
     if f.aperture is None:
-        raise ValueError(f"{path}: no aperture (ENPD, FNUM, FLOA or OBNA line)")
+        raise ValueError(
+            f"{path}: no aperture (ENPD, FNUM, FLOA or OBNA line); OpticStudio writes one in "
+            f"every file's header, so a file without one was written by hand or another tool. "
+            f"Add one after the UNIT line: 'ENPD d' (entrance-pupil diameter in lens units), "
+            f"'FNUM N' (image-space F-number) or 'FLOA' (the stop surface's semi-diameter)")
     kind, value, ln = f.aperture
     try:
         if kind in ("obna", "cone", "wfno"):
