@@ -12,6 +12,7 @@ optical glass model is meant for outside. Field angles are in degrees and must l
 
 from __future__ import annotations
 
+import dataclasses
 import math
 import re
 
@@ -403,11 +404,13 @@ def lens_intact(lens, where: str) -> None:
         part = getattr(lens, arg, None)
         parts += [(part, f"{arg}: ")] if part is not None else []
     for part, label in parts:
-        check = getattr(part, "__check_init__", None)
-        if not callable(check):
+        if not dataclasses.is_dataclass(part):
             continue
         try:
-            check()
+            # A copy through the constructor: its converters first (an edit may hold a Python
+            # float where the checks expect an array, as ``tree_at(..., object_distance,
+            # 300.0)`` does), then its checks.
+            dataclasses.replace(part)
         except (ValueError, TypeError) as e:
             raise type(e)(f"{where}: the lens fails its own checks, {label}{e} (a lens edited "
                           f"with eqx.tree_at skips them: build it with Lens(...) or "

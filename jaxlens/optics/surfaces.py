@@ -96,8 +96,8 @@ class AbstractSurface(eqx.Module):
         beyond 3 mm; every ray there was lost without a word."""
         c, k, sd = (np.asarray(v, float) for v in (self.c, self.k, self.semi_diameter))
         c, k, sd = np.broadcast_arrays(c, k, sd)
-        q = (1.0 + k) * c * c
-        with np.errstate(invalid="ignore", over="ignore"):
+        with np.errstate(invalid="ignore", over="ignore"):  # c = 1e308: q = inf, no warning
+            q = (1.0 + k) * c * c
             bad = np.isfinite(sd) & (q > 0) & (q * sd * sd > 1.0 + 1e-6)
         if np.any(bad):
             i = np.argwhere(bad)[0] if bad.ndim else ()
