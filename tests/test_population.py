@@ -48,6 +48,7 @@ def test_history_select_keeps_columns_and_relabels_failures():
     assert s.failed == {4: "non-finite"}  # start 10 was not chosen, so its failure goes
 
 
+@pytest.mark.slow  # 21 s (CI time; the polish test below runs the same four starts in CI)
 def test_population_design_continues_the_best_start():
     """Two starts per design: each design carries on from its start with the lower RMS
     after fine-tuning, the same as designing that start alone."""

@@ -66,6 +66,7 @@ def test_off_by_default_leaves_the_coaxial_model_unchanged():
     assert m.lens_at(m.zero).num_surfaces == 6
 
 
+@pytest.mark.slow  # 25 s (CI time; the breaks' placement and a decentered singlet run in CI)
 def test_zero_motion_traces_as_the_nominal_lens(triplet_full):
     """Zero decenter and tilt: two zero breaks per element and unchanged thicknesses; every
     ray lands where it lands on the nominal lens (to rounding: a break re-expresses the rays
