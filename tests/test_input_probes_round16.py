@@ -340,3 +340,14 @@ def test_marechal_strehl_refuses_a_negative_or_non_numeric_rms():
         marechal_strehl("0.1")
     assert float(marechal_strehl(0.0)) == 1.0
     assert np.isnan(float(marechal_strehl(float("nan"))))  # no rays, no Strehl ratio
+
+
+def test_report_of_a_missing_file_names_the_file_without_errno(tmp_path, capsys):
+    """Before: "jaxlens report: error: [Errno 2] No such file or directory: '…'"."""
+    from jaxlens.__main__ import main
+
+    missing = tmp_path / "missing.zmx"
+    assert main(["report", str(missing)]) == 2
+    err = capsys.readouterr().err
+    assert f"jaxlens report: error: {missing}: no such file or directory" in err
+    assert "Errno" not in err

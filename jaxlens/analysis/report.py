@@ -707,6 +707,8 @@ def run(args: argparse.Namespace) -> int:
     except (ValueError, OSError) as e:
         hint = "" if args.lenient or "(strict mode)" not in str(e) else (
             " (--lenient reads the file anyway, with a warning)")
+        if isinstance(e, OSError) and e.filename is not None:  # not "[Errno 2] …"
+            e = f"{e.filename}: {e.strerror.lower() if e.strerror else e}"
         print(f"jaxlens report: error: {e}{hint}", file=sys.stderr)
         return 2
     data["file"] = args.lens
