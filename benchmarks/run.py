@@ -239,6 +239,9 @@ STANDALONE = {
     "render_memory": "peak memory and rate of the checkpointed render gradient "
                      "(`benchmarks/render_memory.py`)",
     "gpu": "raw log of a run on a lent GPU; the commands are its `==` lines",
+    "reversible_probe": "a reversible backward pass (incident rays rebuilt in reverse) against "
+                        "the reverse rule; its script left the tree after the measurement "
+                        "(`benchmarks/SPEED.md`, \"A reversible backward pass\", names the commit)",
 }
 
 
