@@ -231,7 +231,9 @@ def test_grad_levers_smoke():
     rows = grad_levers.main(["--rays", "2000", "--flag=--xla_cpu_no_such_flag=1",
                              "--chunks", "1024"])
     assert len(rows) == 1 and rows[0]["chunk"] == 1024
-    assert math.isfinite(rows[0]["ratio"]) and 0 < rows[0]["ratio"] < 2
+    # A timing ratio on a shared machine: only its being measured is checked here; the
+    # figures are the benchmark's (benchmarks/SPEED.md), never a unit test's.
+    assert math.isfinite(rows[0]["ratio"]) and rows[0]["ratio"] > 0
 
 
 def test_vjp_probe_smoke(tmp_path):
@@ -250,7 +252,9 @@ def test_vjp_probe_smoke(tmp_path):
     assert len(out["programs"]) == 3
     assert all(math.isfinite(r["ms"]) and r["ms"] > 0 for r in out["programs"].values())
     row = out["chunks"]["512"]
-    assert row["rule_grad_rel"] < 1e-10 and 0 < row["forward_over_fg_rule"] < 5
+    assert row["rule_grad_rel"] < 1e-10
+    # A timing ratio: measured, not bounded (a loaded CI machine gave 5.8 once).
+    assert math.isfinite(row["forward_over_fg_rule"]) and row["forward_over_fg_rule"] > 0
 
 
 @pytest.mark.parametrize("args, match", [
