@@ -47,7 +47,7 @@ r¹⁶, lens units^(1−2i)), PARM 0 the extrapolate flag (0: Zernike terms only
 normalisation radius, 1: everywhere; a missing PARM 0 reads as 0, as in Zemax), PARM 9 and 10
 the decenter x, y of the Zernike terms (lens units), XDAT 1 the number of terms N (whole,
 0…231 Standard, 0…37 Fringe), XDAT 2 the normalisation radius (lens units, > 0), XDAT 3 …
-XDAT N+2 the coefficients of Z_1 … Z_N (lens units; a missing line reads as 0). A nonzero
+XDAT N+2 the coefficients of Z_1 … Z_N (lens units). A nonzero
 XDAT beyond N+2, or PARM 11 and beyond, is refused.
 
 XPOLYNOM (Zemax's Extended Polynomial), read as an ``XYPolynomial`` unless it carries
@@ -65,8 +65,10 @@ ray). The rays do not depend on the mode. jaxlens's optical path is mode 2's; th
 give the same path where the beam reaching the surface is collimated (object at infinity
 and no net power before the surface, in the y–z and the x–z section, at every wavelength),
 and are refused elsewhere. The writer writes mode 2.
-Extra data are read through ``ExtraData``: a missing line names the surface's line and the
-XDAT index (a value that is not a number is refused with its line by ``zmx_parse``).
+Extra data are read through ``ExtraData``, one rule for every kind: every XDAT line from 1 to
+the last the data use (header, then all N terms) must be present, as OpticStudio writes
+them; a missing one is refused naming the surface's line and the XDAT index (a value that
+is not a number is refused with its line by ``zmx_parse``).
 """
 
 from __future__ import annotations
@@ -116,8 +118,18 @@ def _no_extra_data(s, message: str) -> None:
 
 class ExtraData:
     """Checked access to a surface block's extra data (``s.xdat``: index -> (value, line)),
-    whose ``header`` names XDAT 1, 2, … before the terms. Nonzero data below XDAT 1 are
-    refused; every error names the file and the line (a missing one: the TYPE line)."""
+    whose ``header`` names XDAT 1, 2, … before the terms.
+
+    One rule for every kind that reads extra data (BINARY_2, QED_TYPE, SZERNSAG, FZERNSAG,
+    XASPHERE, XOSPHERE, XPOLYNOM and jaxlens's hybrid): every line from XDAT 1 to the last the
+    data use must be present, the header lines and then all N terms the count announces,
+    zeros included. OpticStudio writes them all so (a TOROIDAL with no Zernike terms still
+    writes XDAT 1 = 0 and XDAT 2 = 100, its default normalisation radius; a QED_TYPE writes
+    every term), so a missing line is a file that was cut or edited, whose value is not
+    known: it is not read as 0 but refused, naming the TYPE line (a header line) or the
+    count line (a term) and the missing index. Values beyond the N terms may be absent or
+    zero (a nonzero one is refused), and nonzero data below XDAT 1 are refused. Every error
+    names the file and the line."""
 
     def __init__(self, s, header: tuple[str, ...], kind: str | None = None):
         self.s, self.header, self.kind = s, header, kind or s.type
@@ -127,61 +139,59 @@ class ExtraData:
             if i < 1 and v != 0:
                 raise ln.error(f"{self.kind} extra data start at XDAT 1 ({header[0]})")
 
-    def get(self, i: int, default: float | None = None):
-        """XDAT i's (value, line); missing: (``default``, TYPE line), refused if None."""
+    def get(self, i: int):
+        """XDAT i's (value, line); a missing line is refused, naming the TYPE line."""
         if i in self.s.xdat:
             return self.s.xdat[i]
-        if default is None:
-            names = [f"XDAT {j} ({h})" for j, h in enumerate(self.header, start=1)]
-            listed = names[0] if len(names) == 1 else ", ".join(names[:-1]) + " and " + names[-1]
-            raise self.where.error(f"{self.kind} needs {listed}; XDAT {i} is missing")
-        return default, self.where
+        names = [f"XDAT {j} ({h})" for j, h in enumerate(self.header, start=1)]
+        listed = names[0] if len(names) == 1 else ", ".join(names[:-1]) + " and " + names[-1]
+        raise self.where.error(f"{self.kind} needs {listed}; XDAT {i} is missing (OpticStudio "
+                               f"writes every extra-data line, so its value is not known)")
 
     def required(self) -> list:
         """The header lines' (value, line), each refused where missing."""
         return [self.get(j) for j in range(1, len(self.header) + 1)]
 
-    def count(self, i: int, terms: str, most: int, note: str = "", default=None) -> int:
+    def count(self, i: int, terms: str, most: int, note: str = "") -> int:
         """XDAT i as a number of ``terms``: a whole number in 0..``most``."""
-        v, ln = self.get(i, default)
+        v, ln = self.get(i)
         if v != int(v) or not 0 <= v <= most:
             raise ln.error(f"XDAT {i} (the number of {terms}) must be a whole number in "
                            f"0..{most}{note}, got {v:g}")
         self.counted = (i, int(v), terms, ln)
         return int(v)
 
-    def radius(self, i: int, what: str = "the normalisation radius, lens units",
-               default=None) -> float:
+    def radius(self, i: int, what: str = "the normalisation radius, lens units") -> float:
         """XDAT i as a length (lens units): finite and > 0."""
-        v, ln = self.get(i, default)
+        v, ln = self.get(i)
         if not (v > 0 and math.isfinite(v)):
             raise ln.error(f"XDAT {i} ({what}) must be > 0, got {v:g}")
         return v
 
-    def terms(self, first: int, missing: float | None = None) -> list[float]:
-        """The counted terms from XDAT ``first``; missing: ``missing``, refused if None."""
+    def terms(self, first: int) -> list[float]:
+        """The counted terms from XDAT ``first``, each line required."""
         ci, n, terms, count_line = self.counted
         last = first + n - 1
         span = f"XDAT {first} … XDAT {last}" if n else "none"
         gone = [j for j in range(first, last + 1) if j not in self.s.xdat]
-        if gone and missing is None:
+        if gone:
             raise count_line.error(f"XDAT {ci} gives {n} {terms}, so {span} are needed, but "
-                                   f"XDAT {gone[0]} is missing")
+                                   f"XDAT {gone[0]} is missing (OpticStudio writes every term, "
+                                   f"zeros included, so its value is not known)")
         for i, (v, ln) in sorted(self.s.xdat.items()):
             if i > last and v != 0:
                 raise ln.error(f"coefficient beyond the {n} {terms} of XDAT {ci} ({span})")
-        return [self.s.xdat.get(j, (missing, None))[0] for j in range(first, last + 1)]
+        return [self.s.xdat[j][0] for j in range(first, last + 1)]
 
 
-def normalised_terms(s, terms: str, most: int, note: str = "",
-                     missing: float | None = None) -> tuple[int, float, list]:
-    """(N, R, [A_1 … A_N]) of the XDAT layout XDAT 1 = N (required, 0..``most``), XDAT 2 =
-    the normalisation radius R (required, > 0, lens units), XDAT 3 … XDAT N+2 the terms
-    (a missing one is ``missing``, or refused where None): XPOLYNOM, XASPHERE, XOSPHERE."""
+def normalised_terms(s, terms: str, most: int, note: str = "") -> tuple[int, float, list]:
+    """(N, R, [A_1 … A_N]) of the XDAT layout XDAT 1 = N (0..``most``), XDAT 2 = the
+    normalisation radius R (> 0, lens units), XDAT 3 … XDAT N+2 the terms, every line
+    required (``ExtraData``): XPOLYNOM, XASPHERE, XOSPHERE."""
     xd = ExtraData(s, ("the number of terms", "the normalisation radius, lens units"))
     xd.required()
     n = xd.count(1, terms, most, note)
-    return n, xd.radius(2), xd.terms(3, missing)
+    return n, xd.radius(2), xd.terms(3)
 
 
 def odd_asphere(s, unit: float, sd: float) -> OddAsphere:
@@ -220,8 +230,9 @@ def binary2(s, unit: float, sd: float) -> Binary2:
     if s.glas is not None and s.glas.tokens[1].upper() == "MIRROR":
         raise s.glas.error("a BINARY_2 (diffractive) surface cannot be a mirror in jaxlens")
     xd = ExtraData(s, ("the number of terms", "the normalisation radius, lens units"))
-    n = xd.count(1, "phase terms", MAX_BINARY2_TERMS, default=0.0)
-    norm, norm_line = xd.get(2, 1.0 if n == 0 else None)
+    xd.required()
+    n = xd.count(1, "phase terms", MAX_BINARY2_TERMS)
+    norm, norm_line = xd.get(2)
     a_phase = xd.terms(3)
     if n and not norm > 0:
         raise norm_line.error("the normalisation radius (XDAT 2) must be > 0")
@@ -292,9 +303,10 @@ def zernike_sag(s, unit: float, sd: float) -> ZernikeSag:
         raise ext_line.error(f"PARM 0 (the extrapolate flag) must be 0 (Zernike terms within "
                              f"the normalisation radius only) or 1 (everywhere), got {ext:g}")
     xd = ExtraData(s, ("the number of terms", "the Zernike normalisation radius, lens units"))
-    n = xd.count(1, "Zernike terms", MAX_ZERNIKE_TERMS[ordering], f" for {s.type}", 0.0)
-    zern = [v * unit for v in xd.terms(3, missing=0.0)]  # a missing line reads as 0
-    norm = xd.radius(2, xd.header[1], 1.0 if n == 0 else None)
+    xd.required()
+    n = xd.count(1, "Zernike terms", MAX_ZERNIKE_TERMS[ordering], f" for {s.type}")
+    zern = [v * unit for v in xd.terms(3)]
+    norm = xd.radius(2, xd.header[1])
     m = max([i for i in s.parm if 1 <= i <= 8], default=0)
     a = [s.parm.get(i, (0.0, None))[0] * unit ** (1 - 2 * i) for i in range(1, m + 1)]
     dx, dy = (s.parm.get(i, (0.0, None))[0] * unit for i in (9, 10))
