@@ -1,17 +1,19 @@
 """The extra data (XDAT) of BINARY_2, SZERNSAG, FZERNSAG, QED_TYPE, XPOLYNOM (and jaxlens's
 hybrid, an XPOLYNOM with its comment), XASPHERE and XOSPHERE surfaces, read through one checked
-accessor (``zmx_surfaces.ExtraData``) under one rule: every line from XDAT 1 to the last the
-data use (the header, then all N terms, zeros included) must be present, as OpticStudio writes
-them (tests/data/zmx/optiland_thorlabs_lj1598l1.zmx: a TOROIDAL with no Zernike terms still
-writes XDAT 1 = 0 and XDAT 2 = 100; rayoptics_ASL5040-UV.zmx: a QED_TYPE writes every term).
-A missing header line is refused naming the TYPE line and the index, a missing term line
-naming the count line and the index; a value that is not a number names its line, nonzero
-data before XDAT 1 or beyond the N terms are refused."""
+accessor (``zmx_surfaces.ExtraData``) under one rule, from what OpticStudio writes: every line
+from XDAT 1 to the last the surface uses, zeros included (tests/data/zmx/
+optiland_thorlabs_lj1598l1.zmx: a TOROIDAL with no Zernike terms writes XDAT 1 = 0 and
+XDAT 2 = 100, its default radius; rayoptics_ASL5040-UV.zmx: a QED_TYPE writes every term).
+A missing header line (count, radius, QED type) is refused naming the TYPE line and the
+index, since its default is the surface type's own; a missing term line reads as 0, as a
+missing PARM does; a value that is not a number names its line; nonzero data before XDAT 1
+or beyond the N terms are refused."""
 
 from __future__ import annotations
 
 import re
 
+import jax
 import numpy as np
 import pytest
 
@@ -93,18 +95,22 @@ def test_a_block_without_extra_data_is_refused(tmp_path, kind):
 
 @pytest.mark.parametrize("kind", sorted(KINDS))
 @pytest.mark.parametrize("which", ["first", "last"])
-def test_a_missing_term_line_is_refused_at_the_count_line(tmp_path, kind, which):
-    """The first or the last of the two terms left out: refused at the count line for every
-    kind, naming the span and the missing index; the same text with a zero there loads."""
+def test_a_missing_term_line_reads_as_0(tmp_path, kind, which):
+    """The first or the last of the two terms left out: the surface is the one with a zero
+    there, leaf for leaf, for every kind (strict reading says nothing)."""
     _, data, first = KINDS[kind]
     gone = first if which == "first" else first + 1
     short = {j: v for j, v in data.items() if j != gone}
-    text = _text(kind, short)
-    ci = first - 2 if kind == "QED_TYPE" else 1
-    _refused(tmp_path, text, _line_of(text, f"XDAT {ci} "),
-             rf"XDAT {ci} gives 2 .*terms, so XDAT {first} … XDAT {first + 1} are needed, but "
-             rf"XDAT {gone} is missing")
-    _load(tmp_path, _text(kind, {**short, gone: "0"}), strict=True)
+    _, lens = _load(tmp_path, _text(kind, short), strict=True)
+    _, full = _load(tmp_path, _text(kind, {**short, gone: "0"}), strict=True)
+    _, orig = _load(tmp_path, _text(kind))
+    for a, b in zip(jax.tree_util.tree_leaves(lens.surfaces[0]),
+                    jax.tree_util.tree_leaves(full.surfaces[0]), strict=True):
+        np.testing.assert_array_equal(np.asarray(a), np.asarray(b))
+    # and the term is really there: the whole file's surface differs
+    assert any(not np.array_equal(np.asarray(a), np.asarray(b)) for a, b in zip(
+        jax.tree_util.tree_leaves(lens.surfaces[0]), jax.tree_util.tree_leaves(orig.surfaces[0]),
+        strict=True))
 
 
 def test_zero_terms_need_no_term_lines(tmp_path):
@@ -115,16 +121,21 @@ def test_zero_terms_need_no_term_lines(tmp_path):
         _load(tmp_path, _text(kind, head), strict=True)
 
 
-def test_a_hybrid_missing_a_term_line_is_refused(tmp_path):
+def test_a_hybrid_reads_a_missing_term_line_as_0(tmp_path):
     """jaxlens's hybrid (an XPOLYNOM with its comment; terms x, y, x², xy, y²) follows the same
-    rule: its x² line left out is refused at the count line, not read as 0."""
+    rule: its zero x and y lines may be left out; its x² line left out reads as 0, which no
+    longer fits the hybrid's r² term (x² and y² equal), so the file is refused saying so."""
     hybrid = "  COMM jaxlens hybrid even=1 odd=0\n"
     data = {1: "5", 2: "1", 3: "0", 4: "0", 5: "1e-3", 6: "0", 7: "1e-3"}
     _, lens = _load(tmp_path, _text("XPOLYNOM", data, extra=hybrid), strict=True)
     assert type(lens.surfaces[0]).__name__ == "Hybrid"
+    sparse = {j: v for j, v in data.items() if v != "0"}
+    _, again = _load(tmp_path, _text("XPOLYNOM", sparse, extra=hybrid), strict=True)
+    np.testing.assert_array_equal(np.asarray(again.surfaces[0].coeffs),
+                                  np.asarray(lens.surfaces[0].coeffs))
     text = _text("XPOLYNOM", {j: v for j, v in data.items() if j != 5}, extra=hybrid)
-    _refused(tmp_path, text, _line_of(text, "XDAT 1 "),
-             r"XDAT 1 gives 5 .*terms, so XDAT 3 … XDAT 7 are needed, but XDAT 5 is missing")
+    _refused(tmp_path, text, _line_of(text, "XDAT 7 "),
+             r"XPOLYNOM term x\^0 y\^2 = 0\.001 does not fit the hybrid surface .*expected 0\.0")
 
 
 @pytest.mark.parametrize("kind", sorted(KINDS))

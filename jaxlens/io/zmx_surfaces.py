@@ -20,15 +20,15 @@ BINARY_2: an even asphere (CURV, CONI, PARM 1…8 on r², r⁴, …, lens units^
 diffractive phase Φ = M Σ A_i ρ^{2i}, ρ = r/R (``jaxlens.optics.diffractive``): PARM 0 is the
 diffraction order M, XDAT 1 the number of terms N (a whole number >= 0), XDAT 2 the
 normalisation radius R (lens units, > 0 when N > 0), XDAT 3 … XDAT N+2 the A_i (radians, no
-unit conversion). Every XDAT up to N+2 must be present (Zemax writes them all), none beyond
-it may be nonzero, and PARM 0 must be given when the phase is not zero (a missing order
+unit conversion). XDAT 1 and 2 must be present, a missing term reads as 0, none beyond it
+may be nonzero, and PARM 0 must be given when the phase is not zero (a missing order
 reads as 0 in Zemax, which would switch the phase off). It cannot be a mirror.
 
 QED_TYPE: a Forbes Q-type asphere (``jaxlens.optics.qtype``): CURV and CONI the base conic,
 XDAT 1 the polynomial type (0: Q-bfs, 1: Q-con), XDAT 2 the number of terms N (a whole number
 >= 0), XDAT 3 the normalisation radius (lens units, > 0), XDAT 4 … XDAT N+3 the
-coefficients a_0 … a_(N−1) (lens units). Every XDAT up to N+3 must be present, none beyond
-it may be nonzero, and it has no PARM.
+coefficients a_0 … a_(N−1) (lens units). XDAT 1, 2 and 3 must be present, a missing term
+reads as 0, none beyond it may be nonzero, and it has no PARM.
 DGRATING: a conic (CURV, CONI) ruled with lines parallel to the local x axis
 (``jaxlens.optics.diffractive.Grating``): PARM 1 the line density T in lines per µm (whatever
 the lens units: no unit conversion; >= 0, equally spaced in the projection on the x–y plane),
@@ -47,7 +47,7 @@ r¹⁶, lens units^(1−2i)), PARM 0 the extrapolate flag (0: Zernike terms only
 normalisation radius, 1: everywhere; a missing PARM 0 reads as 0, as in Zemax), PARM 9 and 10
 the decenter x, y of the Zernike terms (lens units), XDAT 1 the number of terms N (whole,
 0…231 Standard, 0…37 Fringe), XDAT 2 the normalisation radius (lens units, > 0), XDAT 3 …
-XDAT N+2 the coefficients of Z_1 … Z_N (lens units). A nonzero
+XDAT N+2 the coefficients of Z_1 … Z_N (lens units; a missing one reads as 0). A nonzero
 XDAT beyond N+2, or PARM 11 and beyond, is refused.
 
 XPOLYNOM (Zemax's Extended Polynomial), read as an ``XYPolynomial`` unless it carries
@@ -55,9 +55,9 @@ jaxlens's hybrid comment (``jaxlens hybrid even=M odd=P``: a ``Hybrid`` written 
 read by ``zmx_read``): CURV and CONI the base conic, XDAT 1 the number of terms N (a whole
 number in 0…230), XDAT 2 the normalisation radius R (lens units, > 0), XDAT 3 … XDAT N+2 the
 coefficients A_1 … A_N of x, y, x², xy, y², x³, … of the normalised coordinates (lens
-units, converted to mm; the term order: ``jaxlens.optics.xypolynomial``). XDAT 1, XDAT 2 and
-every XDAT up to N+2 must be present (Zemax writes them all), none beyond it may be nonzero,
-and it has no PARM. The writer writes R and each A_i exactly (shortest round-trip digits).
+units, converted to mm; the term order: ``jaxlens.optics.xypolynomial``). XDAT 1 and XDAT 2
+must be present, a missing term reads as 0, none beyond it may be nonzero, and it has no
+PARM. The writer writes R and each A_i exactly (shortest round-trip digits).
 
 PARAXIAL: PARM 1 is the focal length, PARM 2 the OPD mode (0: conjugates from a real
 parabasal ray, 1: integrated phase, 2: infinite conjugates, 3: conjugates from a paraxial
@@ -65,10 +65,10 @@ ray). The rays do not depend on the mode. jaxlens's optical path is mode 2's; th
 give the same path where the beam reaching the surface is collimated (object at infinity
 and no net power before the surface, in the y–z and the x–z section, at every wavelength),
 and are refused elsewhere. The writer writes mode 2.
-Extra data are read through ``ExtraData``, one rule for every kind: every XDAT line from 1 to
-the last the data use (header, then all N terms) must be present, as OpticStudio writes
-them; a missing one is refused naming the surface's line and the XDAT index (a value that
-is not a number is refused with its line by ``zmx_parse``).
+Extra data are read through ``ExtraData``, one rule for every kind: the header lines (count,
+normalisation radius, QED_TYPE's type) must be present (a missing one is refused naming the
+surface's line and the XDAT index); a missing term line reads as 0, as a missing PARM does
+(a value that is not a number is refused with its line by ``zmx_parse``).
 """
 
 from __future__ import annotations
@@ -121,15 +121,20 @@ class ExtraData:
     whose ``header`` names XDAT 1, 2, … before the terms.
 
     One rule for every kind that reads extra data (BINARY_2, QED_TYPE, SZERNSAG, FZERNSAG,
-    XASPHERE, XOSPHERE, XPOLYNOM and jaxlens's hybrid): every line from XDAT 1 to the last the
-    data use must be present, the header lines and then all N terms the count announces,
-    zeros included. OpticStudio writes them all so (a TOROIDAL with no Zernike terms still
-    writes XDAT 1 = 0 and XDAT 2 = 100, its default normalisation radius; a QED_TYPE writes
-    every term), so a missing line is a file that was cut or edited, whose value is not
-    known: it is not read as 0 but refused, naming the TYPE line (a header line) or the
-    count line (a term) and the missing index. Values beyond the N terms may be absent or
-    zero (a nonzero one is refused), and nonzero data below XDAT 1 are refused. Every error
-    names the file and the line."""
+    XASPHERE, XOSPHERE, XPOLYNOM and jaxlens's hybrid), from what OpticStudio writes and
+    holds: it writes every line from XDAT 1 to the last the surface uses, zeros included
+    (the header, then all N terms), and an XDAT line sets one value of data whose terms
+    start at 0, as a PARM line does. So
+
+    * a missing term line (XDAT beyond the header, up to the N the count gives) reads as 0,
+      the value OpticStudio holds there (a hand-written file may leave zero terms out);
+    * a missing header line (the count, the normalisation radius, QED_TYPE's polynomial
+      type) is refused, naming the TYPE line and the index: OpticStudio fills it with the
+      surface type's own default (a TOROIDAL with no Zernike terms is written with XDAT 2 =
+      100, its default radius), which the file does not state;
+    * a nonzero value beyond the N terms, or below XDAT 1, is refused, naming its line.
+
+    Every error names the file and the line."""
 
     def __init__(self, s, header: tuple[str, ...], kind: str | None = None):
         self.s, self.header, self.kind = s, header, kind or s.type
@@ -146,7 +151,7 @@ class ExtraData:
         names = [f"XDAT {j} ({h})" for j, h in enumerate(self.header, start=1)]
         listed = names[0] if len(names) == 1 else ", ".join(names[:-1]) + " and " + names[-1]
         raise self.where.error(f"{self.kind} needs {listed}; XDAT {i} is missing (OpticStudio "
-                               f"writes every extra-data line, so its value is not known)")
+                               f"writes it, and its default is the surface type's own)")
 
     def required(self) -> list:
         """The header lines' (value, line), each refused where missing."""
@@ -169,25 +174,20 @@ class ExtraData:
         return v
 
     def terms(self, first: int) -> list[float]:
-        """The counted terms from XDAT ``first``, each line required."""
-        ci, n, terms, count_line = self.counted
+        """The counted terms from XDAT ``first``; a missing term line reads as 0."""
+        ci, n, terms, _ = self.counted
         last = first + n - 1
         span = f"XDAT {first} … XDAT {last}" if n else "none"
-        gone = [j for j in range(first, last + 1) if j not in self.s.xdat]
-        if gone:
-            raise count_line.error(f"XDAT {ci} gives {n} {terms}, so {span} are needed, but "
-                                   f"XDAT {gone[0]} is missing (OpticStudio writes every term, "
-                                   f"zeros included, so its value is not known)")
         for i, (v, ln) in sorted(self.s.xdat.items()):
             if i > last and v != 0:
                 raise ln.error(f"coefficient beyond the {n} {terms} of XDAT {ci} ({span})")
-        return [self.s.xdat[j][0] for j in range(first, last + 1)]
+        return [self.s.xdat.get(j, (0.0, None))[0] for j in range(first, last + 1)]
 
 
 def normalised_terms(s, terms: str, most: int, note: str = "") -> tuple[int, float, list]:
     """(N, R, [A_1 … A_N]) of the XDAT layout XDAT 1 = N (0..``most``), XDAT 2 = the
-    normalisation radius R (> 0, lens units), XDAT 3 … XDAT N+2 the terms, every line
-    required (``ExtraData``): XPOLYNOM, XASPHERE, XOSPHERE."""
+    normalisation radius R (> 0, lens units), XDAT 3 … XDAT N+2 the terms (the header
+    required, a missing term 0: ``ExtraData``): XPOLYNOM, XASPHERE, XOSPHERE."""
     xd = ExtraData(s, ("the number of terms", "the normalisation radius, lens units"))
     xd.required()
     n = xd.count(1, terms, most, note)
