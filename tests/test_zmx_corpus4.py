@@ -6,8 +6,9 @@ sources are in its SOURCES4.txt) showed, as minimal hand-written files.
   the fields and wavelengths are ``XFLN``/``YFLN``/``WAVM``'s, as many as ``FTYP`` says.
 * A ``GLAS`` line whose glass is a substitution solve (second value 3) carries another
   glass's nd and Vd from an earlier optimisation (Kraken's 400mmLensV1k: ``N-SF66 3 0
-  1.5168 64.17``): the glass is the named catalog glass (the stale numbers warned about); with it that file's EFL is its
-  design target, 400 mm (399.99999694, optiland 0.6.3 on the same glasses: 399.99999694).
+  1.5168 64.17``): the glass is the named catalog glass (the stale numbers warned about);
+  with it that file's EFL is its design target, 400 mm (399.99999694; optiland 0.6.3 on
+  the same glasses: 399.99999694, tools/check_corpus.py).
 * ``GLAS AIR`` is air of index 1, the unit of every index (as a surface without GLAS);
   optiland 0.6.3 reads it as air of index 1.000277, so its EFL of such a file differs by
   ~2e-4 (tools/check_corpus.py gives optiland a copy without those lines).

@@ -304,7 +304,7 @@ def zernike_sag(s, unit: float, sd: float) -> ZernikeSag:
                              f"the normalisation radius only) or 1 (everywhere), got {ext:g}")
     xd = ExtraData(s, ("the number of terms", "the Zernike normalisation radius, lens units"))
     xd.required()
-    n = xd.count(1, "Zernike terms", MAX_ZERNIKE_TERMS[ordering], f" for {s.type}")
+    xd.count(1, "Zernike terms", MAX_ZERNIKE_TERMS[ordering], f" for {s.type}")
     zern = [v * unit for v in xd.terms(3)]
     norm = xd.radius(2, xd.header[1])
     m = max([i for i in s.parm if 1 <= i <= 8], default=0)
