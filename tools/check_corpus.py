@@ -6,7 +6,9 @@ file's UNIT line; n′/Φ is negative after an odd number of mirrors, and the co
 that sign into account), whether ``load → save → load`` is exact, and, with
 optiland installed: optiland's EFL of the original file and of the file jaxlens wrote, the
 relative EFL difference, and whether optiland reads the written file with jaxlens's clipping
-(CLAP radii) and image-space medium.
+(CLAP radii) and image-space medium. Where a file has Zemax 2006 single-value header lines
+(which optiland 0.6.3 fails on) or ``GLAS AIR`` lines (optiland's AIR has index 1.000277,
+Zemax's and jaxlens's 1), optiland reads a copy without them, and the table says so.
 
     python tools/check_corpus.py /tmp/corpus            # a table
     python tools/check_corpus.py /tmp/corpus --json     # one JSON record a file
@@ -59,16 +61,52 @@ def lens_unit_mm(path: str) -> float:
     return 1.0
 
 
+OLD_LINES = ("XFLD", "YFLD", "FWGT", "ZVDX", "ZVDY", "ZVCX", "ZVCY", "ZVAN", "WAVL", "WAVN",
+             "WWGT", "WWGN")
+"""Zemax 2006 header lines (one value a field or wavelength, beside the XFLN/YFLN/WAVM lines
+that hold the same data) that optiland 0.6.3 fails on (IndexError)."""
+
+
+def optiland_copy(path: str) -> tuple[str, list[str]]:
+    """The text optiland reads for a file, and what was changed: the ``OLD_LINES`` dropped
+    where the file has the newer lines (XFLN/WAVM), and ``GLAS AIR`` lines dropped (optiland
+    takes AIR as air of index 1.000277 relative to vacuum, where Zemax's and jaxlens's AIR is
+    1, the index unit; a surface without GLAS is air in all three)."""
+    with open(path, "rb") as fh:
+        lines = decode(fh.read(), path).splitlines()
+    keys = {ln.split()[0] for ln in lines if ln.split()}
+    newer = "XFLN" in keys and "WAVM" in keys
+    out, changed = [], []
+    for ln in lines:
+        tok = ln.split()
+        if newer and tok and tok[0] in OLD_LINES:
+            changed.append("Zemax 2006 single-value lines dropped")
+            continue
+        if tok[:2] == ["GLAS", "AIR"] and len(tok) == 2:
+            changed.append("GLAS AIR dropped")
+            continue
+        out.append(ln)
+    return "\n".join(out) + "\n", sorted(set(changed))
+
+
 def optiland_efl(path: str):
-    """optiland's EFL (f2) of a .zmx file in mm and the optic, or (None, None, error text).
+    """optiland's EFL (f2) of a .zmx file in mm, the optic and a note (an error text, or what
+    the copy it read changed: ``optiland_copy``), or (None, None, error text).
 
     optiland keeps a file's lens units (a file in inches gives its EFL in inches); jaxlens
     works in mm, so the EFL is converted with the file's UNIT line before the comparison."""
+    text, changed = optiland_copy(path)
     try:
-        with warnings.catch_warnings(), contextlib.redirect_stdout(io.StringIO()):
+        with warnings.catch_warnings(), contextlib.redirect_stdout(io.StringIO()), \
+                tempfile.TemporaryDirectory() as d:
             warnings.simplefilter("ignore")
-            optic = load_zemax_file(path)
-            return float(np.asarray(optic.paraxial.f2())) * lens_unit_mm(path), optic, ""
+            if changed:
+                p = os.path.join(d, "copy.zmx")
+                with open(p, "w", encoding="utf-8") as fh:
+                    fh.write(text)
+            optic = load_zemax_file(p if changed else path)
+            note = f"optiland read a copy ({', '.join(changed)})" if changed else ""
+            return float(np.asarray(optic.paraxial.f2())) * lens_unit_mm(path), optic, note
     except Exception as e:  # noqa: BLE001  (report whatever optiland raises)
         return None, None, f"{type(e).__name__}: {str(e)[:120]}"
 

@@ -2,7 +2,10 @@
 
 Format, as OpticStudio writes it (and as ``xzos/PyZDDE`` issue #61 and the corpus files show):
 ``MNUM n [active]`` gives the number of configurations and the one active when the file was
-saved (1 when absent); after it, one line per operand and configuration::
+saved. Older files (Zemax 2006, ``VERS 60801``) write ``MNUM n`` alone, with the surfaces
+holding whichever configuration was active: there the active one is the configuration whose
+``THIC``, ``CRVT`` and ``CONN`` rows all equal what the surfaces hold (1 where it does, or
+where no single configuration does, as before). After it, one line per operand and configuration::
 
     THIC   5   2 42.97 0 0 0 1 1 1 0 0        # operand, param, configuration, value, …
 
@@ -65,11 +68,43 @@ def counts(f: ZmxFile) -> tuple[int, int]:
     if f.mnum is None:
         return 1, 1
     n = f.mnum.int(1, "number of configurations (MNUM)", lo=1)
-    active = f.mnum.int(2, "active configuration (MNUM's second value)") if len(
-        f.mnum.tokens) > 2 else 1
+    if len(f.mnum.tokens) <= 2:
+        return n, _held_configuration(f, n)
+    active = f.mnum.int(2, "active configuration (MNUM's second value)")
     if not 1 <= active <= n:
         raise f.mnum.error(f"the active configuration must be 1..{n}, got {active}")
     return n, active
+
+
+def _held_configuration(f: ZmxFile, n: int) -> int:
+    """The configuration the surfaces hold, for an ``MNUM n`` that names none: 1 where its
+    THIC, CRVT and CONN rows match the surfaces (or no configuration's do, or the table is
+    malformed: ``select`` then reports it), else the one configuration whose rows all do."""
+    if n == 1:
+        return 1
+    try:
+        ops = [op for op in operands(f, n) if op.name in _HELD]
+        held = [c for c in range(1, n + 1) if all(_holds(f, op, c) for op in ops)]
+    except ValueError:
+        return 1
+    return held[0] if len(held) == 1 and ops else 1
+
+
+_HELD = ("THIC", "CRVT", "CONN")
+
+
+def _holds(f: ZmxFile, op: Operand, c: int) -> bool:
+    """Whether the surfaces hold configuration c's value of a THIC, CRVT or CONN row (a
+    configuration without a row for it holds whatever the surfaces do)."""
+    if c not in op.values:
+        return True
+    value, ln = op.values[c]
+    v = _number(value, ln)
+    s = _surface(f, op, ln)
+    have = {"THIC": s.disz, "CRVT": s.curv, "CONN": s.coni}[op.name]
+    if op.name == "THIC" and op.param == 0 and v >= _OBJECT_INFINITY and math.isinf(have):
+        return True
+    return math.isclose(v, have, rel_tol=1e-9, abs_tol=1e-12)
 
 
 def operands(f: ZmxFile, n: int) -> list[Operand]:
@@ -335,11 +370,9 @@ def _check_active(f: ZmxFile, ops: list[Operand], active: int, strict: bool) -> 
                                f"{key} gives field {op.param} {have:g}; jaxlens reads {key}")
                 return
             continue
-        s = _surface(f, op, ln)
-        have = {"THIC": s.disz, "CRVT": s.curv, "CONN": s.coni}[op.name]
-        if op.name == "THIC" and op.param == 0 and v >= _OBJECT_INFINITY and math.isinf(have):
-            continue
-        if not math.isclose(v, have, rel_tol=1e-9, abs_tol=1e-12):
+        if not _holds(f, op, active):
+            have = {"THIC": "disz", "CRVT": "curv", "CONN": "coni"}[op.name]
+            have = getattr(_surface(f, op, ln), have)
             report(strict, f"{ln.path}:{ln.number}: {op.name} {op.param} of configuration "
                            f"{active}, the active one (MNUM), is {value}, but surface "
                            f"{op.param} holds {have:g}; jaxlens reads the surfaces")

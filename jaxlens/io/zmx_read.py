@@ -104,7 +104,7 @@ def _surface_of(s: ZmxSurface, unit: float) -> AbstractSurface:
             c=_arr(c), k=_arr(s.coni), coeffs=_arr(np.array(a, np.float64)), semi_diameter=_arr(sd)
         )
     if s.type == "XASPHERE":
-        n, norm, vals = zmx_surfaces.normalised_terms(s, "terms", _MAX_XDAT_TERMS, missing=0.0)
+        n, norm, vals = zmx_surfaces.normalised_terms(s, "terms", _MAX_XDAT_TERMS)
         a = [v / norm ** (2 * i) * unit ** (1 - 2 * i) for i, v in enumerate(vals, start=1)]
         return EvenAsphere(
             c=_arr(c), k=_arr(s.coni), coeffs=_arr(np.array(a, np.float64)), semi_diameter=_arr(sd)
@@ -117,7 +117,7 @@ def _surface_of(s: ZmxSurface, unit: float) -> AbstractSurface:
                 raise ln.error("XOSPHERE has no parameters (PARM); its terms are extra data "
                                "(XDAT 1 = number of terms, 2 = normalisation radius, 3… = A_i)")
         n, norm, vals = zmx_surfaces.normalised_terms(
-            s, "terms", zmx_surfaces.MAX_XOSPHERE_TERMS, missing=0.0)
+            s, "terms", zmx_surfaces.MAX_XOSPHERE_TERMS)
         b = [v / norm**i * unit ** (1 - i) for i, v in enumerate(vals, start=1)]
         return OddAsphere(c=_arr(c), k=_arr(s.coni), coeffs=_arr(np.array(b, np.float64)),
                           semi_diameter=_arr(sd))
@@ -197,7 +197,7 @@ def _keeps_medium(s: ZmxSurface) -> bool:
 
 def _hybrid_from_xpoly(s: ZmxSurface, unit: float, c: float, sd: float) -> Hybrid:
     n, norm, vals = zmx_surfaces.normalised_terms(s, "extended-polynomial terms",
-                                                  _MAX_XDAT_TERMS, missing=0.0)
+                                                  _MAX_XDAT_TERMS)
     terms = {}
     for j, v in enumerate(vals, start=1):
         mx, ny = term_powers(j)

@@ -20,15 +20,15 @@ BINARY_2: an even asphere (CURV, CONI, PARM 1…8 on r², r⁴, …, lens units^
 diffractive phase Φ = M Σ A_i ρ^{2i}, ρ = r/R (``jaxlens.optics.diffractive``): PARM 0 is the
 diffraction order M, XDAT 1 the number of terms N (a whole number >= 0), XDAT 2 the
 normalisation radius R (lens units, > 0 when N > 0), XDAT 3 … XDAT N+2 the A_i (radians, no
-unit conversion). Every XDAT up to N+2 must be present (Zemax writes them all), none beyond
-it may be nonzero, and PARM 0 must be given when the phase is not zero (a missing order
+unit conversion). XDAT 1 and 2 must be present, a missing term reads as 0, none beyond it
+may be nonzero, and PARM 0 must be given when the phase is not zero (a missing order
 reads as 0 in Zemax, which would switch the phase off). It cannot be a mirror.
 
 QED_TYPE: a Forbes Q-type asphere (``jaxlens.optics.qtype``): CURV and CONI the base conic,
 XDAT 1 the polynomial type (0: Q-bfs, 1: Q-con), XDAT 2 the number of terms N (a whole number
 >= 0), XDAT 3 the normalisation radius (lens units, > 0), XDAT 4 … XDAT N+3 the
-coefficients a_0 … a_(N−1) (lens units). Every XDAT up to N+3 must be present, none beyond
-it may be nonzero, and it has no PARM.
+coefficients a_0 … a_(N−1) (lens units). XDAT 1, 2 and 3 must be present, a missing term
+reads as 0, none beyond it may be nonzero, and it has no PARM.
 DGRATING: a conic (CURV, CONI) ruled with lines parallel to the local x axis
 (``jaxlens.optics.diffractive.Grating``): PARM 1 the line density T in lines per µm (whatever
 the lens units: no unit conversion; >= 0, equally spaced in the projection on the x–y plane),
@@ -47,7 +47,7 @@ r¹⁶, lens units^(1−2i)), PARM 0 the extrapolate flag (0: Zernike terms only
 normalisation radius, 1: everywhere; a missing PARM 0 reads as 0, as in Zemax), PARM 9 and 10
 the decenter x, y of the Zernike terms (lens units), XDAT 1 the number of terms N (whole,
 0…231 Standard, 0…37 Fringe), XDAT 2 the normalisation radius (lens units, > 0), XDAT 3 …
-XDAT N+2 the coefficients of Z_1 … Z_N (lens units; a missing line reads as 0). A nonzero
+XDAT N+2 the coefficients of Z_1 … Z_N (lens units; a missing one reads as 0). A nonzero
 XDAT beyond N+2, or PARM 11 and beyond, is refused.
 
 XPOLYNOM (Zemax's Extended Polynomial), read as an ``XYPolynomial`` unless it carries
@@ -55,9 +55,9 @@ jaxlens's hybrid comment (``jaxlens hybrid even=M odd=P``: a ``Hybrid`` written 
 read by ``zmx_read``): CURV and CONI the base conic, XDAT 1 the number of terms N (a whole
 number in 0…230), XDAT 2 the normalisation radius R (lens units, > 0), XDAT 3 … XDAT N+2 the
 coefficients A_1 … A_N of x, y, x², xy, y², x³, … of the normalised coordinates (lens
-units, converted to mm; the term order: ``jaxlens.optics.xypolynomial``). XDAT 1, XDAT 2 and
-every XDAT up to N+2 must be present (Zemax writes them all), none beyond it may be nonzero,
-and it has no PARM. The writer writes R and each A_i exactly (shortest round-trip digits).
+units, converted to mm; the term order: ``jaxlens.optics.xypolynomial``). XDAT 1 and XDAT 2
+must be present, a missing term reads as 0, none beyond it may be nonzero, and it has no
+PARM. The writer writes R and each A_i exactly (shortest round-trip digits).
 
 PARAXIAL: PARM 1 is the focal length, PARM 2 the OPD mode (0: conjugates from a real
 parabasal ray, 1: integrated phase, 2: infinite conjugates, 3: conjugates from a paraxial
@@ -65,8 +65,10 @@ ray). The rays do not depend on the mode. jaxlens's optical path is mode 2's; th
 give the same path where the beam reaching the surface is collimated (object at infinity
 and no net power before the surface, in the y–z and the x–z section, at every wavelength),
 and are refused elsewhere. The writer writes mode 2.
-Extra data are read through ``ExtraData``: a missing line names the surface's line and the
-XDAT index (a value that is not a number is refused with its line by ``zmx_parse``).
+Extra data are read through ``ExtraData``, one rule for every kind: the header lines (count,
+normalisation radius, QED_TYPE's type) must be present (a missing one is refused naming the
+surface's line and the XDAT index); a missing term line reads as 0, as a missing PARM does
+(a value that is not a number is refused with its line by ``zmx_parse``).
 """
 
 from __future__ import annotations
@@ -116,8 +118,23 @@ def _no_extra_data(s, message: str) -> None:
 
 class ExtraData:
     """Checked access to a surface block's extra data (``s.xdat``: index -> (value, line)),
-    whose ``header`` names XDAT 1, 2, … before the terms. Nonzero data below XDAT 1 are
-    refused; every error names the file and the line (a missing one: the TYPE line)."""
+    whose ``header`` names XDAT 1, 2, … before the terms.
+
+    One rule for every kind that reads extra data (BINARY_2, QED_TYPE, SZERNSAG, FZERNSAG,
+    XASPHERE, XOSPHERE, XPOLYNOM and jaxlens's hybrid), from what OpticStudio writes and
+    holds: it writes every line from XDAT 1 to the last the surface uses, zeros included
+    (the header, then all N terms), and an XDAT line sets one value of data whose terms
+    start at 0, as a PARM line does. So
+
+    * a missing term line (XDAT beyond the header, up to the N the count gives) reads as 0,
+      the value OpticStudio holds there (a hand-written file may leave zero terms out);
+    * a missing header line (the count, the normalisation radius, QED_TYPE's polynomial
+      type) is refused, naming the TYPE line and the index: OpticStudio fills it with the
+      surface type's own default (a TOROIDAL with no Zernike terms is written with XDAT 2 =
+      100, its default radius), which the file does not state;
+    * a nonzero value beyond the N terms, or below XDAT 1, is refused, naming its line.
+
+    Every error names the file and the line."""
 
     def __init__(self, s, header: tuple[str, ...], kind: str | None = None):
         self.s, self.header, self.kind = s, header, kind or s.type
@@ -127,61 +144,54 @@ class ExtraData:
             if i < 1 and v != 0:
                 raise ln.error(f"{self.kind} extra data start at XDAT 1 ({header[0]})")
 
-    def get(self, i: int, default: float | None = None):
-        """XDAT i's (value, line); missing: (``default``, TYPE line), refused if None."""
+    def get(self, i: int):
+        """XDAT i's (value, line); a missing line is refused, naming the TYPE line."""
         if i in self.s.xdat:
             return self.s.xdat[i]
-        if default is None:
-            names = [f"XDAT {j} ({h})" for j, h in enumerate(self.header, start=1)]
-            listed = names[0] if len(names) == 1 else ", ".join(names[:-1]) + " and " + names[-1]
-            raise self.where.error(f"{self.kind} needs {listed}; XDAT {i} is missing")
-        return default, self.where
+        names = [f"XDAT {j} ({h})" for j, h in enumerate(self.header, start=1)]
+        listed = names[0] if len(names) == 1 else ", ".join(names[:-1]) + " and " + names[-1]
+        raise self.where.error(f"{self.kind} needs {listed}; XDAT {i} is missing (OpticStudio "
+                               f"writes it, and its default is the surface type's own)")
 
     def required(self) -> list:
         """The header lines' (value, line), each refused where missing."""
         return [self.get(j) for j in range(1, len(self.header) + 1)]
 
-    def count(self, i: int, terms: str, most: int, note: str = "", default=None) -> int:
+    def count(self, i: int, terms: str, most: int, note: str = "") -> int:
         """XDAT i as a number of ``terms``: a whole number in 0..``most``."""
-        v, ln = self.get(i, default)
+        v, ln = self.get(i)
         if v != int(v) or not 0 <= v <= most:
             raise ln.error(f"XDAT {i} (the number of {terms}) must be a whole number in "
                            f"0..{most}{note}, got {v:g}")
         self.counted = (i, int(v), terms, ln)
         return int(v)
 
-    def radius(self, i: int, what: str = "the normalisation radius, lens units",
-               default=None) -> float:
+    def radius(self, i: int, what: str = "the normalisation radius, lens units") -> float:
         """XDAT i as a length (lens units): finite and > 0."""
-        v, ln = self.get(i, default)
+        v, ln = self.get(i)
         if not (v > 0 and math.isfinite(v)):
             raise ln.error(f"XDAT {i} ({what}) must be > 0, got {v:g}")
         return v
 
-    def terms(self, first: int, missing: float | None = None) -> list[float]:
-        """The counted terms from XDAT ``first``; missing: ``missing``, refused if None."""
-        ci, n, terms, count_line = self.counted
+    def terms(self, first: int) -> list[float]:
+        """The counted terms from XDAT ``first``; a missing term line reads as 0."""
+        ci, n, terms, _ = self.counted
         last = first + n - 1
         span = f"XDAT {first} … XDAT {last}" if n else "none"
-        gone = [j for j in range(first, last + 1) if j not in self.s.xdat]
-        if gone and missing is None:
-            raise count_line.error(f"XDAT {ci} gives {n} {terms}, so {span} are needed, but "
-                                   f"XDAT {gone[0]} is missing")
         for i, (v, ln) in sorted(self.s.xdat.items()):
             if i > last and v != 0:
                 raise ln.error(f"coefficient beyond the {n} {terms} of XDAT {ci} ({span})")
-        return [self.s.xdat.get(j, (missing, None))[0] for j in range(first, last + 1)]
+        return [self.s.xdat.get(j, (0.0, None))[0] for j in range(first, last + 1)]
 
 
-def normalised_terms(s, terms: str, most: int, note: str = "",
-                     missing: float | None = None) -> tuple[int, float, list]:
-    """(N, R, [A_1 … A_N]) of the XDAT layout XDAT 1 = N (required, 0..``most``), XDAT 2 =
-    the normalisation radius R (required, > 0, lens units), XDAT 3 … XDAT N+2 the terms
-    (a missing one is ``missing``, or refused where None): XPOLYNOM, XASPHERE, XOSPHERE."""
+def normalised_terms(s, terms: str, most: int, note: str = "") -> tuple[int, float, list]:
+    """(N, R, [A_1 … A_N]) of the XDAT layout XDAT 1 = N (0..``most``), XDAT 2 = the
+    normalisation radius R (> 0, lens units), XDAT 3 … XDAT N+2 the terms (the header
+    required, a missing term 0: ``ExtraData``): XPOLYNOM, XASPHERE, XOSPHERE."""
     xd = ExtraData(s, ("the number of terms", "the normalisation radius, lens units"))
     xd.required()
     n = xd.count(1, terms, most, note)
-    return n, xd.radius(2), xd.terms(3, missing)
+    return n, xd.radius(2), xd.terms(3)
 
 
 def odd_asphere(s, unit: float, sd: float) -> OddAsphere:
@@ -220,8 +230,9 @@ def binary2(s, unit: float, sd: float) -> Binary2:
     if s.glas is not None and s.glas.tokens[1].upper() == "MIRROR":
         raise s.glas.error("a BINARY_2 (diffractive) surface cannot be a mirror in jaxlens")
     xd = ExtraData(s, ("the number of terms", "the normalisation radius, lens units"))
-    n = xd.count(1, "phase terms", MAX_BINARY2_TERMS, default=0.0)
-    norm, norm_line = xd.get(2, 1.0 if n == 0 else None)
+    xd.required()
+    n = xd.count(1, "phase terms", MAX_BINARY2_TERMS)
+    norm, norm_line = xd.get(2)
     a_phase = xd.terms(3)
     if n and not norm > 0:
         raise norm_line.error("the normalisation radius (XDAT 2) must be > 0")
@@ -292,9 +303,10 @@ def zernike_sag(s, unit: float, sd: float) -> ZernikeSag:
         raise ext_line.error(f"PARM 0 (the extrapolate flag) must be 0 (Zernike terms within "
                              f"the normalisation radius only) or 1 (everywhere), got {ext:g}")
     xd = ExtraData(s, ("the number of terms", "the Zernike normalisation radius, lens units"))
-    n = xd.count(1, "Zernike terms", MAX_ZERNIKE_TERMS[ordering], f" for {s.type}", 0.0)
-    zern = [v * unit for v in xd.terms(3, missing=0.0)]  # a missing line reads as 0
-    norm = xd.radius(2, xd.header[1], 1.0 if n == 0 else None)
+    xd.required()
+    xd.count(1, "Zernike terms", MAX_ZERNIKE_TERMS[ordering], f" for {s.type}")
+    zern = [v * unit for v in xd.terms(3)]
+    norm = xd.radius(2, xd.header[1])
     m = max([i for i in s.parm if 1 <= i <= 8], default=0)
     a = [s.parm.get(i, (0.0, None))[0] * unit ** (1 - 2 * i) for i in range(1, m + 1)]
     dx, dy = (s.parm.get(i, (0.0, None))[0] * unit for i in (9, 10))
