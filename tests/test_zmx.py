@@ -393,13 +393,6 @@ BAD = [
         11,
         r"x\^1 y\^1 .* does not fit the hybrid surface",
     ),
-    (  # without it, an XYPolynomial: every coefficient line up to XDAT N+2 must be there
-        "  TYPE XPOLYNOM\n  XDAT 1 4\n  XDAT 2 1\n  XDAT 6 1e-3\n",
-        "",
-        8,
-        r"XDAT 1 gives 4 extended-polynomial terms, so XDAT 3 … XDAT 6 are needed, but "
-        r"XDAT 3 is missing",
-    ),
 ]
 
 
