@@ -194,8 +194,14 @@ class PerturbedMaterial(AbstractMaterial):
     name: str = eqx.field(static=True, default="")
 
     def index(self, wavelength):
-        n = self.base.index(wavelength)
-        nd = self.base.index(jnp.asarray(LAMBDA_D, jnp.result_type(n)))
+        return self._perturbed(self.base.index(wavelength))
+
+    def extrapolated_index(self, wavelength):
+        return self._perturbed(self.base.extrapolated_index(wavelength))
+
+    def _perturbed(self, n):
+        # nd at the d line even where the base's data do not cover it (infrared glasses)
+        nd = self.base.extrapolated_index(jnp.asarray(LAMBDA_D, jnp.result_type(n)))
         s = (nd + self.delta_nd - 1.0) / ((nd - 1.0) * (1.0 + self.abbe_rel))
         return n + self.delta_nd + (s - 1.0) * (n - nd)
 
@@ -602,7 +608,7 @@ class ToleranceModel:
         dtype = np.float64
         c = np.asarray([float(s.c) for s in lens.surfaces], dtype)
         radius = np.where(c != 0, 1.0 / np.where(c != 0, c, 1.0), np.inf)
-        nd = [float(m.index(jnp.asarray(LAMBDA_D))) for m in lens.materials]
+        nd = [float(m.extrapolated_index(jnp.asarray(LAMBDA_D))) for m in lens.materials]
         vd = [float(abbe_number(m)) if not isinstance(m, Air) else np.inf
               for m in lens.materials]
         p = Perturbation(
