@@ -516,7 +516,7 @@ def test_an_out_folder_the_file_system_refuses_is_one_line(tmp_path, capsys, mon
     (["--lr-net", "inf"], r"--lr-net must be a finite number in \(0, inf\)"),
     (["--lenses", "zoom"], r"--lenses takes distinct names from"),
     (["--binning", "3"], r"--binning must divide"),
-    (["--hybrid-floor", "-1"], r"--hybrid-floor must be a finite number in \[0, inf\)"),
+    (["--hybrid-floor", "-1"], r"--hybrid-floor must be a finite number in \[0, 1\]"),
     (["--live-front-end", "--decoder", "nafnet"], r"--live-front-end needs a Wiener"),
 ])
 def test_edof_cli_refuses_bad_options_fast(args, match, tmp_path, monkeypatch, capsys):
