@@ -139,6 +139,11 @@ class AbstractPSFModel(eqx.Module):
     pupil: eqx.AbstractVar[int]
     overfill: eqx.AbstractVar[float]
 
+    def __check_init__(self):
+        # At construction too: GeometricPSF(pupil=0) was built without a word (psf refused it).
+        if not checks.is_traced(self.overfill):
+            self.check(type(self).__name__)
+
     def check(self, caller: str) -> None:
         """Refuse a pupil or overfill outside their range, naming the caller."""
         if not isinstance(self.pupil, int) or self.pupil < 2:
@@ -642,6 +647,11 @@ def working_fnum(lens: Lens, depth) -> Array:
     as ``sampling.lens_depth`` gives it; None for infinity), whatever the lens's own object:
     ``mtf(lens, depth=...)`` took the lens's own, so a lens made for infinity imaged at 1:1
     had its diffraction MTF (and default cut-off) at half the working F-number."""
+    if depth is not None and not checks.is_traced(depth):
+        # A depth of 0 or -5 mm was refused as "a lens edited with eqx.tree_at".
+        checks.real_values(depth, "depth", "working_fnum", "mm")
+        checks.values(depth, "depth", "working_fnum", lo=0, lo_open=True, inf_ok=True,
+                      unit="mm (None or inf: an object at infinity)")
     at = eqx.tree_at(lambda m: m.object_distance, lens, depth, is_leaf=lambda x: x is None)
     return paraxial.paraxial_data(at).working_fnum
 

@@ -259,6 +259,10 @@ def image_height(lens: Lens, field_deg, wavelength=None) -> Array:
 
 def paraxial_data(lens: Lens, wavelength=None) -> ParaxialData:
     """All first-order data at one wavelength (default: primary)."""
+    if wavelength is not None and jnp.ndim(wavelength) != 0:
+        # Its fields are scalars: a list of wavelengths failed in np.stack deep inside.
+        raise ValueError(f"paraxial_data: wavelength must be one value (µm), got shape "
+                         f"{jnp.shape(wavelength)}; call it once per wavelength")
     wl = _wavelength(lens, wavelength, "paraxial_data")
     n = signed_indices(lens, wl)
     n0, n_img = n[0], n[-1]
