@@ -190,9 +190,13 @@ def _surface(d: dict, where: str, kind: str | None) -> AbstractSurface:
         return Standard(c=_arr(c), k=_arr(k), semi_diameter=_arr(sd))
     names = ("standard", "evenasph", "oddasph", "hybrid", "qbfs", "qcon", "biconic",
              "zernike_standard", "zernike_fringe", *surface_json.KINDS)
-    close = difflib.get_close_matches(raw.lower(), names, n=3, cutoff=0.6)
+    spelled = {re.sub(r"[^a-z0-9]", "", n): n for n in names}
+    spelled |= {a: "standard" for a in _STANDARD_TYPES} | {a: "evenasph" for a in
+                                                          _EVEN_ASPHERE_TYPES}
+    spelled |= {a: "oddasph" for a in _ODD_ASPHERE_TYPES} | {a: "hybrid" for a in _HYBRID_TYPES}
+    close = difflib.get_close_matches(kind, list(spelled), n=1, cutoff=0.75)
     raise ValueError(f"{where}: unknown surface type {raw!r}"
-                     f"{f' (did you mean {close[0]!r}?)' if close else ''}; use "
+                     f"{f' (did you mean {spelled[close[0]]!r}?)' if close else ''}; use "
                      f"{', '.join(names)}")
 
 
