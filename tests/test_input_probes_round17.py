@@ -15,9 +15,10 @@ import pytest
 import jaxlens as jl
 from jaxlens.analysis.tolerance import MAX_THICKNESS, ToleranceModel, Tolerances
 from jaxlens.analysis.wavefront_error import marechal_strehl
-from jaxlens.imaging.psf import CoherentPSF, GeometricPSF, working_fnum
+from jaxlens.imaging.psf import CoherentPSF, GeometricPSF
 from jaxlens.io import images, lensfile
 from jaxlens.optics.materials import abbe_number
+from jaxlens.optics.paraxial import working_fnum
 
 # ------------------------------------------------------------- biconic domain (regression)
 
