@@ -260,7 +260,8 @@ def test_psf_no_ray_is_not_truncation_and_overfill_is_checked():
                                    model=GeometricPSF(pupil=8))
     assert np.isnan(float(info.truncated))
     for bad in (0.0, -1.0, float("nan")):
-        with pytest.raises(ValueError, match=r"psf: overfill must be a finite number in "
+        with pytest.raises(ValueError, match=r"(psf|GeometricPSF): overfill must be a finite "
+                                             r"number in "
                                              r"\(0, inf\)"):
             jl.psf(lens, 0.0, pixel_size=0.01, model=GeometricPSF(overfill=bad))
 
