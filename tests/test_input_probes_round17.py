@@ -89,6 +89,15 @@ def test_a_thickness_tolerance_above_the_thinnest_glass_is_refused_by_the_model(
         model.with_tolerances(Tolerances(thickness=3.0))
 
 
+def test_a_decenter_tolerance_above_the_smallest_clear_radius_is_refused():
+    """Before: ±1e6 mm was accepted (every perturbed element left the beam)."""
+    lens = jl.zoo.cooke_triplet()
+    with pytest.raises(ValueError, match=r"^ToleranceModel: Tolerances\.decenter ±1e\+06 mm "
+                                         r"must be below the lens's smallest clear "
+                                         r"semi-diameter, 4\.0595\d* mm at surface 3"):
+        ToleranceModel(lens, tolerances=Tolerances(decenter=1e6))
+
+
 # ----------------------------------------------------------- EDoF floors
 
 

@@ -199,10 +199,10 @@ def zero_perturbation(lens: Lens, *, elements: bool = False) -> Perturbation:
                         z, z, z, g, g, g, g)
 
 
-def _check_thickness_tolerance(lens: Lens, tol: Tolerances, where: str) -> None:
-    """The thickness tolerance must be below every glass thickness of the lens: an element
-    thinner than zero has its surfaces crossed, which the trace does not see (its spots
-    are numbers, not a refusal)."""
+def _check_against_lens(lens: Lens, tol: Tolerances, clear_radius, where: str) -> None:
+    """The thickness tolerance must be below every glass thickness of the lens (an element
+    thinner than zero has its surfaces crossed, which the trace does not see: its spots are
+    numbers, not a refusal), and the decenter below every clear semi-diameter (mm)."""
     t = np.abs(np.asarray(lens.thickness, float))
     glass = [i for i, m in enumerate(lens.materials) if not isinstance(m, Air)]
     if glass and tol.thickness >= float(np.min(t[glass])):
@@ -211,6 +211,14 @@ def _check_thickness_tolerance(lens: Lens, tol: Tolerances, where: str) -> None:
             f"{where}: Tolerances.thickness ±{tol.thickness:g} mm must be below the lens's "
             f"thinnest glass thickness, {float(t[i]):g} mm after surface {i} (0-based): the "
             f"perturbed element would be {float(t[i]) - tol.thickness:g} mm thick")
+    h = np.asarray(clear_radius, float)
+    ref = [i for i, r in enumerate(refracting(lens)) if r and np.isfinite(h[i]) and h[i] > 0]
+    if ref and tol.decenter >= float(np.min(h[ref])):
+        # An element moved by its own clear radius puts its edge on the axis: 1e6 mm passed.
+        i = ref[int(np.argmin(h[ref]))]
+        raise ValueError(
+            f"{where}: Tolerances.decenter ±{tol.decenter:g} mm must be below the lens's "
+            f"smallest clear semi-diameter, {float(h[i]):g} mm at surface {i} (0-based)")
 
 
 def refracting(lens: Lens) -> list[bool]:
@@ -371,7 +379,7 @@ class ToleranceModel:
                 for i, s in enumerate(self.lens.surfaces)))
         self.apertures = apertures
         tol = self.tolerances
-        _check_thickness_tolerance(self.lens, tol, "ToleranceModel")
+        _check_against_lens(self.lens, tol, self.clear_radius, "ToleranceModel")
         # Static: elements move (two coordinate breaks each) only when toleranced.
         self.elements = bool(tol.decenter > 0 or tol.tilt > 0)
         zero = zero_perturbation(self.lens, elements=self.elements)
@@ -393,7 +401,7 @@ class ToleranceModel:
         if not isinstance(tolerances, Tolerances):
             raise ValueError(f"with_tolerances: expected Tolerances, got "
                              f"{type(tolerances).__name__}")
-        _check_thickness_tolerance(self.lens, tolerances, "with_tolerances")
+        _check_against_lens(self.lens, tolerances, self.clear_radius, "with_tolerances")
         needs = any(tolerances.irregularity > 0 and ref and s.even_coeffs().shape[0] < 2
                     and not add for s, ref, add in zip(self.lens.surfaces, self.refracting,
                                                         self.add_r4, strict=True))

@@ -58,7 +58,8 @@ class Tolerances:
         asphere_sag: mm; each asphere coefficient a_i gets the tolerance asphere_sag / h^(2i),
             the change that moves the sag at the clear semi-diameter h by that much
             (sensitivity table only).
-        decenter: mm, each element's decenter in x and in y (0: off; see the module docstring).
+        decenter: mm, each element's decenter in x and in y (0: off; see the module docstring);
+            in a ``ToleranceModel`` below the lens's smallest clear semi-diameter.
         tilt: degrees, each element's tilt about x and about y (0: off; below 90).
         distribution: Monte-Carlo law: "uniform" over ±tolerance, or "normal" with σ =
             tolerance/2 truncated at ±tolerance.
