@@ -110,6 +110,15 @@ def known_gaps():
     probe("Tolerances(thickness=10)", lambda: Tolerances(thickness=10.0), "thickness", "mm")
     probe("ToleranceModel thickness 3 > glass 1 mm", lambda: ToleranceModel(cooke, tolerances=Tolerances(thickness=3.0)), "thickness", "mm")
     probe("Tolerances(thickness=0.05) (control)", lambda: Tolerances(thickness=0.05), good=True)
+    probe("ToleranceModel decenter 1e6", lambda: ToleranceModel(cooke, tolerances=Tolerances(decenter=1e6)), "decenter", "mm")
+    from jaxlens.imaging.psf import CoherentPSF, GeometricPSF
+    from jaxlens.optics.paraxial import working_fnum
+    probe("GeometricPSF(pupil=0)", lambda: GeometricPSF(pupil=0), "pupil")
+    probe("CoherentPSF(pupil=-4)", lambda: CoherentPSF(pupil=-4), "pupil")
+    probe("GeometricPSF(overfill=0)", lambda: GeometricPSF(overfill=0.0), "overfill")
+    probe("paraxial_data wavelength [0.5, 0.6]", lambda: jl.paraxial_data(cooke, [0.5, 0.6]), "one value")
+    probe("working_fnum depth 0", lambda: working_fnum(cooke, 0.0), "working_fnum: depth")
+    probe("default_fields count 0", lambda: jl.analysis.aberrations.default_fields(cooke, 0), "count")
     from jaxlens.experiments.edof import cli as edof_cli
     for v in ("2", "1.5", "-0.1", "nan"):
         probe(f"edof --cubic-floor {v}", lambda: edof_cli.config_from_args(edof_cli.build_parser().parse_args(["--cubic-floor", v])), "--cubic-floor", "[0, 1]")
@@ -144,12 +153,12 @@ def aiming():
     probe("rms_spot wavelengths 0-d", lambda: rms_spot(cooke, wavelengths=0.5876).polychromatic, good=True)
     probe("rms_spot wavelengths 587.6", lambda: rms_spot(cooke, wavelengths=[587.6]).polychromatic, "µm")
     probe("rms_spot pupil shape (0,2)", lambda: rms_spot(cooke, pupil=jnp.zeros((0, 2))).polychromatic, "pupil")
-    probe("rms_spot pupil [[2,0]]", lambda: rms_spot(cooke, pupil=jnp.array([[2.0, 0.0]])).polychromatic, "pupil")
-    probe("rms_spot pupil int [[0,1]]", lambda: rms_spot(cooke, pupil=jnp.array([[0, 1]])).polychromatic, good=True)
+    probe("rms_spot pupil [[2,0]] (documented: overfilled points allowed; none passes: NaN, valid_fraction 0)", lambda: rms_spot(cooke, pupil=jnp.array([[2.0, 0.0]])).valid_fraction, good=True)
+    probe("rms_spot pupil int [[0,1]] (control)", lambda: rms_spot(cooke, pupil=jnp.array([[0, 1]])).polychromatic, good=True)
     probe("rms_spot fields [91]", lambda: rms_spot(cooke, [91.0]).polychromatic, "field", "90")
     probe("rms_spot depth -10", lambda: rms_spot(cooke, depth=-10.0).polychromatic, "depth", "mm")
     probe("rms_spot reference 'Chief'", lambda: rms_spot(cooke, reference="Chief").polychromatic, "reference")
-    probe("rms_spot newton_iters 0", lambda: rms_spot(cooke, newton_iters=0).polychromatic, "newton_iters")
+    probe("rms_spot newton_iters 0 (documented: >= 0, the base-conic start)", lambda: rms_spot(cooke, newton_iters=0).polychromatic, good=True)
     probe("rms_spot newton_iters 2.5", lambda: rms_spot(cooke, newton_iters=2.5).polychromatic, "newton_iters")
 
 
@@ -167,20 +176,23 @@ def design():
                dict(steps=-1), dict(lr_c=-1.0), dict(lr_c=np.nan), dict(epoch=0), dict(log_every=0),
                dict(float64="yes"), dict(irls=1), dict(image_pixels=0), dict(image_spp=0),
                dict(tolerance_trials=-1), dict(pin=-1.0), dict(efl_weight=np.inf), dict(lr_m=0.0),
-               dict(steps=True), dict(steps=np.int64(5)), dict(reference="Ideal"), dict(lr_k=-0.1)]:
+               dict(steps=True), dict(reference="Ideal"), dict(lr_k=-0.1)]:
         probe(f"DesignConfig({kw})", lambda: DesignConfig(**kw), *[k for k in kw][:1])
+    probe("DesignConfig(steps=np.int64(5)) (control)", lambda: DesignConfig(steps=np.int64(5)).steps, good=True)
+    probe("DesignConfig(lr_m=0.0) (documented: a rate of 0 freezes the group)", lambda: DesignConfig(lr_m=0.0).lr_m, good=True)
 
 
 # ----------------------------------------------------------------------------- wavefront
 def wavefront():
     from jaxlens.analysis import marechal_strehl
-    for v in (-0.1, "0.1", True, [0.1, -1], jnp.array([1, 2]), None, 1 + 0j):
+    probe("marechal_strehl(jnp int [1, 2]) (control: 1 and 2 waves)", lambda: marechal_strehl(jnp.array([1, 2])), good=True)
+    for v in (-0.1, "0.1", True, [0.1, -1], None, 1 + 0j):
         probe(f"marechal_strehl({v!r})", lambda: marechal_strehl(v), "rms_waves")
     probe("marechal_strehl(0.05) (control)", lambda: marechal_strehl(0.05), good=True)
     probe("marechal_strehl(int 0) (control)", lambda: marechal_strehl(0), good=True)
     probe("marechal_strehl(nan) (documented: NaN passes)", lambda: marechal_strehl(np.nan), good=True)
     probe("marechal_strehl(inf)", lambda: marechal_strehl(np.inf), "rms_waves")
-    probe("marechal_strehl(5.0) (beyond Maréchal's range)", lambda: marechal_strehl(5.0), "rms_waves")
+    probe("marechal_strehl(5.0) (documented: poor above 0.1 wave, MARECHAL_MAX_RMS)", lambda: marechal_strehl(5.0), good=True)
     from jaxlens.analysis import wavefront as wf
     probe("wavefront field 95", lambda: wf(cooke, 95.0).rms, "field", "90")
     probe("wavefront wavelength 587.6", lambda: wf(cooke, 0.0, wavelength=587.6).rms, "µm")
@@ -208,7 +220,7 @@ def json_reader():
         return lensfile.load_json(p)
 
     cases = {
-        "epd string '10'": (lambda d: d["aperture"].update(epd="10"), "epd"),
+        "epd string '10' (documented: numeric strings read)": (lambda d: d["aperture"].update(epd="10"), "epd"),
         "epd bool": (lambda d: d["aperture"].update(epd=True), "epd"),
         "epd NaN": (lambda d: d["aperture"].update(epd=float("nan")), "epd"),
         "epd list": (lambda d: d["aperture"].update(epd=[10.0]), "epd"),
@@ -224,28 +236,28 @@ def json_reader():
         "fields type unknown": (lambda d: d["fields"].update(type="height"), "type"),
         "wavelengths nm": (lambda d: d.update(wavelengths_um=[486.1, 587.6, 656.3]), "µm"),
         "wavelengths nested": (lambda d: d.update(wavelengths_um=[[0.5876]]), "wavelength"),
-        "wavelengths strings": (lambda d: d.update(wavelengths_um=["0.5876"]), "wavelength"),
+        "wavelengths strings (documented: numeric strings read)": (lambda d: d.update(wavelengths_um=["0.4861", "0.5876", "0.6563"]), "wavelength"),
         "wavelengths empty": (lambda d: d.update(wavelengths_um=[]), "wavelength"),
         "primary 3": (lambda d: d.update(primary=3), "primary"),
         "primary 1.0": (lambda d: d.update(primary=1.0), "primary"),
         "primary true": (lambda d: d.update(primary=True), "primary"),
         "primary -1": (lambda d: d.update(primary=-1), "primary"),
-        "extra top-level key": (lambda d: d.update(colour="red"), "colour"),
-        "extra surface key": (lambda d: d["surfaces"][1].update(radius_of_gyration=3.0), "radius_of_gyration"),
-        "curvature string": (lambda d: d["surfaces"][1].update(curvature="0.05"), "curvature"),
+        "extra top-level key (documented: unknown keys ignored, near misses refused)": (lambda d: d.update(colour="red"), "colour"),
+        "extra surface key (documented: unknown keys ignored)": (lambda d: d["surfaces"][1].update(radius_of_gyration=3.0), "radius_of_gyration"),
+        "curvature string (documented: numeric strings read)": (lambda d: d["surfaces"][1].update(curvature="0.05"), "curvature"),
         "curvature bool": (lambda d: d["surfaces"][1].update(curvature=False), "curvature"),
         "curvature inf": (lambda d: d["surfaces"][1].update(curvature="inf"), "curvature"),
         "curvature list": (lambda d: d["surfaces"][1].update(curvature=[0.05]), "curvature"),
         "conic nan string": (lambda d: d["surfaces"][1].update(conic="nan"), "conic"),
         "thickness missing": (lambda d: d["surfaces"][1].pop("thickness"), "thickness"),
-        "thickness string": (lambda d: d["surfaces"][1].update(thickness="3"), "thickness"),
+        "thickness string (documented: numeric strings read)": (lambda d: d["surfaces"][1].update(thickness="3"), "thickness"),
         "thickness null": (lambda d: d["surfaces"][1].update(thickness=None), "thickness"),
         "semi_diameter -1": (lambda d: d["surfaces"][1].update(semi_diameter=-1.0), "semi_diameter"),
-        "semi_diameter '8'": (lambda d: d["surfaces"][1].update(semi_diameter="8"), "semi_diameter"),
+        "semi_diameter '8' (documented: numeric strings read)": (lambda d: d["surfaces"][1].update(semi_diameter="8"), "semi_diameter"),
         "material number": (lambda d: d["surfaces"][1].update(material=1.5), "material"),
         "material unknown glass": (lambda d: d["surfaces"][1].update(material="N-BK77"), "N-BK7"),
         "material table nm": (lambda d: d["surfaces"][1]["material"].update(wavelengths_um=[486.1, 587.6, 656.3]), "µm"),
-        "material table indices str": (lambda d: d["surfaces"][1]["material"].update(indices=["1.6", "1.6", "1.6"]), "indices"),
+        "material table indices str (documented: numeric strings read)": (lambda d: d["surfaces"][1]["material"].update(indices=["1.6", "1.6", "1.6"]), "indices"),
         "material table short": (lambda d: d["surfaces"][1]["material"].update(indices=[1.6, 1.6]), "equal-length"),
         "type unknown": (lambda d: d["surfaces"][1].update(type="asphere9"), "type"),
         "type number": (lambda d: d["surfaces"][1].update(type=3), "type"),
@@ -256,13 +268,17 @@ def json_reader():
         "units inch": (lambda d: d.update(units={"length": "in", "wavelength": "um", "angle": "deg"}), "units"),
         "units wavelength nm": (lambda d: d.update(units={"length": "mm", "wavelength": "nm", "angle": "deg"}), "wavelength"),
         "even_asphere_coeffs nested": (lambda d: d["surfaces"][1].update(type="even_asphere", even_asphere_coeffs=[[1e-5]]), "coeffs"),
-        "even_asphere_coeffs strings": (lambda d: d["surfaces"][1].update(type="even_asphere", even_asphere_coeffs=["1e-5"]), "coeffs"),
+        "even_asphere_coeffs strings (documented: numeric strings read)": (lambda d: d["surfaces"][1].update(type="even_asphere", even_asphere_coeffs=["1e-5"]), "coeffs"),
         "aim 'Real'": (lambda d: d.update(aim="Real"), "aim"),
-        "ray_aiming 'real' (control?)": (lambda d: d.update(ray_aiming="real"), "aim"),
+        "ray_aiming 'Real'": (lambda d: d.update(ray_aiming="Real"), "aim"),
+        "type asphere9": (lambda d: d["surfaces"][1].update(type="asphere9"), "evenasph"),
+        "type extended asphere": (lambda d: d["surfaces"][1].update(type="extended asphere", even_asphere_coeffs=[1e-6]), "unknown surface type"),
+        "ray_aiming 'real' (control)": (lambda d: d.update(ray_aiming="real"), "aim"),
         "name number": (lambda d: d.update(name=3), "name"),
     }
     for name, (f, word) in cases.items():
-        probe(f"JSON {name}", lambda: load(edit(f)), word)
+        good = "(documented" in name or "(control" in name
+        probe(f"JSON {name}", lambda: load(edit(f)).name, *(() if good else (word,)), good=good)
     probe("JSON unchanged (control)", lambda: load(edit(lambda d: None)).name, good=True)
     probe("JSON text NaN literal", lambda: loads_text(lensfile.dumps(cooke).replace('"epd": 10.0', '"epd": NaN')), "epd")
     probe("JSON text Infinity literal", lambda: loads_text(lensfile.dumps(cooke).replace('"epd": 10.0', '"epd": Infinity')), "epd")
@@ -288,13 +304,13 @@ def clis():
     rep = cli(lambda *a: cli_main.main(["report", *a]))
     probe("report --fields 95", cli(lambda: rep(lens_path, "--fields", "95")), "--fields", "90")
     probe("report --fields nan", cli(lambda: rep(lens_path, "--fields", "nan")), "--fields")
-    probe("report --wavelengths 587.6", cli(lambda: rep(lens_path, "--wavelengths", "587.6")), "µm")
+    probe("report --wavelengths 587.6 (documented: values above 100 are nm)", cli(lambda: rep(lens_path, "--wavelengths", "587.6")), good=True)
     probe("report --wavelengths 0", cli(lambda: rep(lens_path, "--wavelengths", "0")), "µm")
-    probe("report --config 0", cli(lambda: rep(lens_path, "--config", "0")), "--config")
+    probe("report --config 0", cli(lambda: rep(lens_path, "--config", "0")), "config", "from 1")
     probe("report --config 1.5", cli(lambda: rep(lens_path, "--config", "1.5")), "--config")
     probe("report --unknown-glass foo", cli(lambda: rep(lens_path, "--unknown-glass", "foo")), "--unknown-glass")
     probe("report missing file", cli(lambda: rep(os.path.join(tmp, "nope.json"))), "nope.json")
-    probe("report directory", cli(lambda: rep(tmp)), "directory")
+    probe("report directory", cli(lambda: rep(tmp)), "extension")
     probe("report .txt file", cli(lambda: rep(__file__)), "audit17_probe.py")
     probe("report --overwrite without --plot", cli(lambda: rep(lens_path, "--overwrite")), "--plot")
     t = cli(lambda *a: tol_cli.main([lens_path, "--out", os.path.join(tmp, "t"), *a]))
@@ -322,13 +338,13 @@ def images():
     from jaxlens.io import images as im
     tmp = tempfile.mkdtemp()
     probe("to_linear float image 0..255", lambda: im.to_linear(np.full((4, 4, 3), 200.0)), "255")
-    probe("to_linear int64", lambda: im.to_linear(np.ones((4, 4, 3), np.int64)), "dtype")
+    probe("to_linear int64", lambda: im.to_linear(np.ones((4, 4, 3), np.int64)), "int64")
     probe("to_linear uint8 (control)", lambda: im.to_linear(np.full((4, 4, 3), 255, np.uint8)).max(), good=True)
     probe("write_png 5 channels", lambda: im.write_png(os.path.join(tmp, "a.png"), np.zeros((4, 4, 5))), "C<=4")
     probe("write_png bits 8.0", lambda: im.write_png(os.path.join(tmp, "a.png"), np.zeros((4, 4, 3)), bits=8.0), "bits")
     probe("read_png linear 'no'", lambda: im.read_png(os.path.join(tmp, "a.png"), linear="no"), "linear")
-    probe("write_png 1-D", lambda: im.write_png(os.path.join(tmp, "a.png"), np.zeros(16)), "shape")
-    probe("write_png 4-D", lambda: im.write_png(os.path.join(tmp, "a.png"), np.zeros((1, 4, 4, 3))), "shape")
+    probe("write_png 1-D", lambda: im.write_png(os.path.join(tmp, "a.png"), np.zeros(16)), "[H, W]")
+    probe("write_png 4-D", lambda: im.write_png(os.path.join(tmp, "a.png"), np.zeros((1, 4, 4, 3))), "[H, W]")
     probe("write_png uint8 image", lambda: im.write_png(os.path.join(tmp, "a.png"), np.full((4, 4, 3), 200, np.uint8)), "uint8")
     probe("write_png NaN", lambda: im.write_png(os.path.join(tmp, "a.png"), np.full((4, 4, 3), np.nan)), "nan")
     probe("write_png bits 12", lambda: im.write_png(os.path.join(tmp, "a.png"), np.zeros((4, 4, 3)), bits=12), "bits")
@@ -347,7 +363,7 @@ def images():
     probe("scene size 64 (int)", lambda: im.scene("astronaut", 64), "size")
     probe("scene unknown name", lambda: im.scene("astronot"), "astronaut")
     sensor = jl.Sensor(resolution=(8, 8), pixel_size=0.01)
-    probe("render int image", lambda: jl.render(cooke, np.zeros((8, 8, 3), np.int32), sensor=sensor, spp=1, key=jax.random.key(0)), "integer")
+    probe("render int image", lambda: jl.render(cooke, np.zeros((8, 8, 3), np.int32), sensor=sensor, spp=1, key=jax.random.key(0)), "int32")
     probe("render 2 channels", lambda: jl.render(cooke, np.zeros((8, 8, 2)), sensor=sensor, spp=1, key=jax.random.key(0)), "channel")
 
 
@@ -366,7 +382,7 @@ def units_and_shapes():
     probe("mtf frequencies negative", lambda: jl.imaging.psf.mtf(cooke, 0.0, frequencies=[-10.0]), "frequencies")
     probe("field_rays wavelength 587.6", lambda: sampling.field_rays(cooke, 0.0, pts, 587.6), "µm")
     probe("field_rays field 120", lambda: sampling.field_rays(cooke, 120.0, pts, 0.5876), "field", "90")
-    probe("field_rays pupil shape (2,)", lambda: sampling.field_rays(cooke, 0.0, jnp.zeros(2), 0.5876), "pupil")
+    probe("field_rays pupil shape (2,) (one point, one ray)", lambda: sampling.field_rays(cooke, 0.0, jnp.zeros(2), 0.5876).origin.shape, good=True)
     probe("field_rays pupil (0,2) (empty)", lambda: sampling.field_rays(cooke, 0.0, jnp.zeros((0, 2)), 0.5876).origin.shape, "pupil")
     probe("field_rays field int 0 (control)", lambda: sampling.field_rays(cooke, jnp.array(0), pts, 0.5876).origin, good=True)
     probe("collimated wavelength 587.6", lambda: sampling.collimated(cooke, 0.0, pts, 587.6), "µm")
@@ -385,7 +401,9 @@ def units_and_shapes():
     probe("paraxial_data wavelength 587.6", lambda: jl.paraxial_data(cooke, 587.6), "µm")
     probe("encircled_energy radii negative", lambda: encircled_energy(cooke, 0.0, [-0.01, 0.01]), "radii")
     probe("encircled_energy wavelength nm", lambda: encircled_energy(cooke, 0.0, [0.01], wavelength=587.6), "µm")
-    probe("Lens wavelengths jnp int [1]", lambda: jl.Lens(cooke.surfaces, cooke.thickness, cooke.materials, wavelengths=jnp.array([1])), "wavelength")
+    probe("Lens wavelengths jnp int [1] (valid µm; materials checked by analyses)", lambda: jl.Lens(cooke.surfaces, cooke.thickness, cooke.materials, wavelengths=jnp.array([1])).wavelengths.dtype, good=True)
+    from jaxlens.analysis import rms_spot
+    probe("rms_spot of that lens (1 µm outside its tables)", lambda: rms_spot(jl.Lens(cooke.surfaces, cooke.thickness, cooke.materials, wavelengths=jnp.array([1]))).polychromatic, "µm")
     probe("Lens fields jnp int (control)", lambda: jl.Lens(cooke.surfaces, cooke.thickness, cooke.materials, stop=cooke.stop, epd=10, fields=jnp.array([0, 10, 20]), wavelengths=cooke.wavelengths, primary=1).fields.dtype, good=True)
     probe("Lens fields [0, 90]", lambda: jl.Lens(cooke.surfaces, cooke.thickness, cooke.materials, fields=[0.0, 90.0], wavelengths=cooke.wavelengths), "fields", "90")
     probe("Lens epd 0-d vs [1]", lambda: jl.Lens(cooke.surfaces, cooke.thickness, cooke.materials, epd=[10.0], wavelengths=cooke.wavelengths), "epd")
