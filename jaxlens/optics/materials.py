@@ -58,8 +58,9 @@ class AbstractMaterial(eqx.Module):
     def __init_subclass__(cls, **kwargs):
         # Every ``index`` refuses a concrete wavelength that cannot be in µm (e.g. 587.6, in
         # nm), which every formula would otherwise turn into a plausible wrong index. Traced
-        # wavelengths are checked where they enter (``checks.wavelengths``), and in-µm values
-        # outside a material's data range stay allowed here (nd/Vd of infrared materials).
+        # wavelengths are checked where they enter (``checks.wavelengths``). In-µm values
+        # outside a material's data range are refused by ``CatalogMaterial.index`` (the
+        # catalog's range); ``extrapolated_index`` gives nd/Vd of infrared glasses.
         super().__init_subclass__(**kwargs)
         if "index" in cls.__dict__:
             cls.index = _unit_checked(cls.__dict__["index"])
