@@ -145,7 +145,7 @@ def plot_layout(lens, fields: Sequence[float] | None = None, *, n_rays: int = 9,
                     ls="-" if valid[j] else ":")
         ax.plot([], [], color=color, lw=1, label=_field_label(f))
     # Surfaces and element edges (coordinate breaks are not drawn).
-    n_air = [float(np.asarray(m.index(0.5875618))) for m in lens.materials]
+    n_air = [float(np.asarray(m.extrapolated_index(0.5875618))) for m in lens.materials]
 
     def edge_z(i):
         return zs[i] + float(_profile(lens.surfaces[i], jnp.asarray([sd[i]]))[0])

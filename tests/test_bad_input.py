@@ -260,7 +260,8 @@ def test_psf_no_ray_is_not_truncation_and_overfill_is_checked():
                                    model=GeometricPSF(pupil=8))
     assert np.isnan(float(info.truncated))
     for bad in (0.0, -1.0, float("nan")):
-        with pytest.raises(ValueError, match=r"psf: overfill must be a finite number in "
+        with pytest.raises(ValueError, match=r"(psf|GeometricPSF): overfill must be a finite "
+                                             r"number in "
                                              r"\(0, inf\)"):
             jl.psf(lens, 0.0, pixel_size=0.01, model=GeometricPSF(overfill=bad))
 
@@ -516,7 +517,7 @@ def test_an_out_folder_the_file_system_refuses_is_one_line(tmp_path, capsys, mon
     (["--lr-net", "inf"], r"--lr-net must be a finite number in \(0, inf\)"),
     (["--lenses", "zoom"], r"--lenses takes distinct names from"),
     (["--binning", "3"], r"--binning must divide"),
-    (["--hybrid-floor", "-1"], r"--hybrid-floor must be a finite number in \[0, inf\)"),
+    (["--hybrid-floor", "-1"], r"--hybrid-floor must be a finite number in \[0, 1\]"),
     (["--live-front-end", "--decoder", "nafnet"], r"--live-front-end needs a Wiener"),
 ])
 def test_edof_cli_refuses_bad_options_fast(args, match, tmp_path, monkeypatch, capsys):

@@ -189,7 +189,7 @@ def test_imaging_helpers_check_before_the_jitted_work(cooke):
     with pytest.raises(ValueError, match=r"stop_chief_ray: iters must be a whole number in "
                                          r"\[0, inf\) aiming iterations, got -1"):
         aiming.stop_chief_ray(cooke, 5.0, iters=-1)
-    with pytest.raises(ValueError, match=r"psf: order must be 1 \(tent\) or 2"):
+    with pytest.raises(ValueError, match=r"(psf|GeometricPSF): order must be 1 \(tent\) or 2"):
         jl.psf(cooke, 0.0, kernel_size=9, pixel_size=0.005, model=psf.GeometricPSF(order=5))
 
 

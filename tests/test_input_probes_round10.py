@@ -47,7 +47,8 @@ def test_psf_models_take_numpy_integers(cooke):
     ref = P.psf(cooke, 5.0, model=P.GeometricPSF(pupil=8, order=2), kernel_size=8)
     np.testing.assert_array_equal(k, ref)
     for bad in (2.5, True, "64", 1):  # still refused
-        with pytest.raises(ValueError, match=r"psf: pupil \(rays per side\) must be an int >= 2"):
+        with pytest.raises(ValueError, match=r"(psf|GeometricPSF): pupil \(rays per side\) "
+                                             r"must be an int >= 2"):
             P.psf(cooke, 5.0, model=P.GeometricPSF(pupil=bad), kernel_size=8)
 
 

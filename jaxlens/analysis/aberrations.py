@@ -162,6 +162,7 @@ def _ray_fan(lens, field, wl, *, n, depth, aim) -> RayFan:
 def default_fields(lens: Lens, count: int = CURVE_FIELDS) -> Array:
     """``count`` θy angles from 0 to the lens's largest field (deg): for ``[F, 2]`` fields
     (θx, θy) the largest radial angle, tan²θ = tan²θx + tan²θy."""
+    checks.number(count, "count", "default_fields", lo=1, integer=True, unit="fields")
     f = jnp.asarray(lens.fields)
     t = jnp.tan(jnp.deg2rad(f))
     tmax = jnp.max(jnp.abs(t)) if f.ndim <= 1 else jnp.max(jnp.sqrt(jnp.sum(t * t, -1)))

@@ -58,7 +58,6 @@ MTF:
 from __future__ import annotations
 
 import copy
-import dataclasses
 import math
 
 import equinox as eqx
@@ -88,101 +87,14 @@ from .tolerance_metric import (  # noqa: F401  (re-exported: the metric's public
     normalised_weights,
     spot_data,
 )
-
-DECENTER_TILT = ("element decenter x, y (mm) and tilt about x, y (degrees, about the element's "
-                 "front vertex) of every air-bounded element (a cemented group moves as one) "
-                 "between two coordinate breaks, as Zemax's TEDX/TEDY/TETX/TETY; toleranced "
-                 "when Tolerances.decenter or tilt > 0 (default 0: off)")
-
-DISTRIBUTIONS = ("uniform", "normal")
-
-MAX_TILT = 90.0
-"""Tolerances.tilt must be below this (degrees): an element tilted by 90° faces sideways."""
-
-MAX_TRIALS = 1_000_000
-"""Most Monte-Carlo trials (about a day of tracing; their perturbations take trials·P·8 bytes)."""
-
-
-def _nonneg(value, name: str, unit: str) -> float:
-    try:  # float("0.02") would read a string as a number
-        v = float("nan") if isinstance(value, (str, bytes, bool)) else float(value)
-    except (TypeError, ValueError):
-        v = float("nan")
-    if not math.isfinite(v) or v < 0:
-        raise ValueError(f"Tolerances: {name} must be a finite number >= 0{unit}, got "
-                         f"{value!r}")
-    return v
-
-
-@dataclasses.dataclass(frozen=True)
-class Tolerances:
-    """Tolerance half-ranges (± each value). See the module docstring for their meaning.
-
-    Attributes:
-        radius_rel: relative radius tolerance (0.005 = ±0.5 % of R); flat surfaces get none.
-        thickness: mm, every thickness including the image distance.
-        index: absolute nd.
-        abbe_rel: relative Abbe-number tolerance (0.005 = ±0.5 % of Vd).
-        irregularity: mm, peak sag of an r⁴ form error at the clear semi-diameter.
-        conic: absolute conic constant (sensitivity table only).
-        asphere_sag: mm; each asphere coefficient a_i gets the tolerance asphere_sag / h^(2i),
-            the change that moves the sag at the clear semi-diameter h by that much
-            (sensitivity table only).
-        decenter: mm, each element's decenter in x and in y (0: off; see the module docstring).
-        tilt: degrees, each element's tilt about x and about y (0: off; below 90).
-        distribution: Monte-Carlo law: "uniform" over ±tolerance, or "normal" with σ =
-            tolerance/2 truncated at ±tolerance.
-    """
-
-    radius_rel: float = 0.005
-    thickness: float = 0.02
-    index: float = 0.0005
-    abbe_rel: float = 0.005
-    irregularity: float = 0.5e-3
-    conic: float = 0.01
-    asphere_sag: float = 0.5e-3
-    decenter: float = 0.0
-    tilt: float = 0.0
-    distribution: str = "uniform"
-
-    def __post_init__(self):
-        units = {"radius_rel": " (relative)", "thickness": " mm", "index": "",
-                 "abbe_rel": " (relative)", "irregularity": " mm", "conic": "",
-                 "asphere_sag": " mm", "decenter": " mm", "tilt": " degrees"}
-        for name, unit in units.items():
-            object.__setattr__(self, name, _nonneg(getattr(self, name), name, unit))
-        if self.tilt >= MAX_TILT:
-            # A tilt of 90° turns an element sideways, and one of 360° is no tilt at all: the
-            # sensitivity table showed a ±360° tilt as harmless.
-            raise ValueError(f"Tolerances: tilt must be below {MAX_TILT:g} degrees (each "
-                             f"element's tilt about x and about y), got {self.tilt!r}")
-        if self.radius_rel >= 0.5 or self.abbe_rel >= 0.5:
-            raise ValueError(f"Tolerances: radius_rel and abbe_rel must be below 0.5 "
-                             f"(relative), got {self.radius_rel!r} and {self.abbe_rel!r}")
-        if self.distribution not in DISTRIBUTIONS:
-            raise ValueError(f"Tolerances: distribution must be one of {DISTRIBUTIONS}, got "
-                             f"{self.distribution!r}")
-
-    def describe(self) -> dict:
-        """The tolerances with their units, for reports."""
-        return {
-            "radius": {"value": self.radius_rel, "unit": "relative (dR/R)"},
-            "thickness": {"value": self.thickness, "unit": "mm"},
-            "index": {"value": self.index, "unit": "nd"},
-            "abbe": {"value": self.abbe_rel, "unit": "relative (dVd/Vd)"},
-            "irregularity": {"value": self.irregularity,
-                             "unit": "mm peak sag of r^4 at the clear semi-diameter"},
-            "conic": {"value": self.conic, "unit": "absolute k (sensitivity only)"},
-            "asphere": {"value": self.asphere_sag,
-                        "unit": "mm sag at the clear semi-diameter (sensitivity only)"},
-            "decenter": {"value": self.decenter, "unit": "mm, each element in x and in y"},
-            "tilt": {"value": self.tilt,
-                     "unit": "degrees, each element about x and about y (front vertex)"},
-            "decenter_tilt": DECENTER_TILT,
-            "distribution": (self.distribution + (" over +-tolerance" if self.distribution
-                                                  == "uniform" else
-                                                  ", sigma = tolerance/2, truncated")),
-        }
+from .tolerance_spec import (  # noqa: F401  (re-exported: the tolerances' public names)
+    DECENTER_TILT,
+    DISTRIBUTIONS,
+    MAX_THICKNESS,
+    MAX_TILT,
+    MAX_TRIALS,
+    Tolerances,
+)
 
 
 class PerturbedMaterial(AbstractMaterial):
@@ -194,8 +106,14 @@ class PerturbedMaterial(AbstractMaterial):
     name: str = eqx.field(static=True, default="")
 
     def index(self, wavelength):
-        n = self.base.index(wavelength)
-        nd = self.base.index(jnp.asarray(LAMBDA_D, jnp.result_type(n)))
+        return self._perturbed(self.base.index(wavelength))
+
+    def extrapolated_index(self, wavelength):
+        return self._perturbed(self.base.extrapolated_index(wavelength))
+
+    def _perturbed(self, n):
+        # nd at the d line even where the base's data do not cover it (infrared glasses)
+        nd = self.base.extrapolated_index(jnp.asarray(LAMBDA_D, jnp.result_type(n)))
         s = (nd + self.delta_nd - 1.0) / ((nd - 1.0) * (1.0 + self.abbe_rel))
         return n + self.delta_nd + (s - 1.0) * (n - nd)
 
@@ -279,6 +197,28 @@ def zero_perturbation(lens: Lens, *, elements: bool = False) -> Perturbation:
     g = jnp.zeros(len(rigid.element_groups(lens)) if elements else 0, lens.thickness.dtype)
     return Perturbation(z, z, z, tuple(jnp.zeros_like(s.even_coeffs()) for s in lens.surfaces),
                         z, z, z, g, g, g, g)
+
+
+def _check_against_lens(lens: Lens, tol: Tolerances, clear_radius, where: str) -> None:
+    """The thickness tolerance must be below every glass thickness of the lens (an element
+    thinner than zero has its surfaces crossed, which the trace does not see: its spots are
+    numbers, not a refusal), and the decenter below every clear semi-diameter (mm)."""
+    t = np.abs(np.asarray(lens.thickness, float))
+    glass = [i for i, m in enumerate(lens.materials) if not isinstance(m, Air)]
+    if glass and tol.thickness >= float(np.min(t[glass])):
+        i = glass[int(np.argmin(t[glass]))]
+        raise ValueError(
+            f"{where}: Tolerances.thickness ±{tol.thickness:g} mm must be below the lens's "
+            f"thinnest glass thickness, {float(t[i]):g} mm after surface {i} (0-based): the "
+            f"perturbed element would be {float(t[i]) - tol.thickness:g} mm thick")
+    h = np.asarray(clear_radius, float)
+    ref = [i for i, r in enumerate(refracting(lens)) if r and np.isfinite(h[i]) and h[i] > 0]
+    if ref and tol.decenter >= float(np.min(h[ref])):
+        # An element moved by its own clear radius puts its edge on the axis: 1e6 mm passed.
+        i = ref[int(np.argmin(h[ref]))]
+        raise ValueError(
+            f"{where}: Tolerances.decenter ±{tol.decenter:g} mm must be below the lens's "
+            f"smallest clear semi-diameter, {float(h[i]):g} mm at surface {i} (0-based)")
 
 
 def refracting(lens: Lens) -> list[bool]:
@@ -439,6 +379,7 @@ class ToleranceModel:
                 for i, s in enumerate(self.lens.surfaces)))
         self.apertures = apertures
         tol = self.tolerances
+        _check_against_lens(self.lens, tol, self.clear_radius, "ToleranceModel")
         # Static: elements move (two coordinate breaks each) only when toleranced.
         self.elements = bool(tol.decenter > 0 or tol.tilt > 0)
         zero = zero_perturbation(self.lens, elements=self.elements)
@@ -460,6 +401,7 @@ class ToleranceModel:
         if not isinstance(tolerances, Tolerances):
             raise ValueError(f"with_tolerances: expected Tolerances, got "
                              f"{type(tolerances).__name__}")
+        _check_against_lens(self.lens, tolerances, self.clear_radius, "with_tolerances")
         needs = any(tolerances.irregularity > 0 and ref and s.even_coeffs().shape[0] < 2
                     and not add for s, ref, add in zip(self.lens.surfaces, self.refracting,
                                                         self.add_r4, strict=True))
@@ -602,7 +544,7 @@ class ToleranceModel:
         dtype = np.float64
         c = np.asarray([float(s.c) for s in lens.surfaces], dtype)
         radius = np.where(c != 0, 1.0 / np.where(c != 0, c, 1.0), np.inf)
-        nd = [float(m.index(jnp.asarray(LAMBDA_D))) for m in lens.materials]
+        nd = [float(m.extrapolated_index(jnp.asarray(LAMBDA_D))) for m in lens.materials]
         vd = [float(abbe_number(m)) if not isinstance(m, Air) else np.inf
               for m in lens.materials]
         p = Perturbation(

@@ -284,11 +284,14 @@ def marechal_strehl(rms_waves: Float[ArrayLike, "*b"]) -> Float[Array, "*b"]:
         0.803
     """
     checks.real_values(rms_waves, "rms_waves", "marechal_strehl", "waves")
-    if not checks.is_traced(rms_waves) and np.any(np.asarray(rms_waves, float) < 0):
-        # A negative RMS squared like a positive one: −1 wave gave 7e-18, not an error. NaN
-        # passes (a field without rays has no wavefront, and no Strehl ratio).
+    a = None if checks.is_traced(rms_waves) else np.asarray(rms_waves, float)
+    if a is not None and np.any((a < 0) | np.isinf(a)):
+        # A negative RMS squared like a positive one: −1 wave gave 7e-18, not an error, and
+        # an infinite one a Strehl ratio of 0. NaN passes (a field without rays has no
+        # wavefront, and no Strehl ratio).
         raise ValueError(f"marechal_strehl: rms_waves must be an RMS wavefront error, >= 0 "
-                         f"waves, got {np.min(np.asarray(rms_waves, float)):g} waves")
+                         f"waves, got {checks.fmt(a[(a < 0) | np.isinf(a)])} waves (finite, "
+                         f"or NaN for a field without rays)")
     s = jnp.asarray(rms_waves)
     return jnp.exp(-((2.0 * jnp.pi * s) ** 2))
 

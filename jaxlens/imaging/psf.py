@@ -66,9 +66,10 @@ import jax.numpy as jnp
 import numpy as np
 from jaxtyping import Array, ArrayLike, Float
 
-from ..optics import checks, paraxial
+from ..optics import checks
 from ..optics.lens import Lens, Sensor
 from ..optics.materials import LAMBDA_C, LAMBDA_D, LAMBDA_F
+from ..optics.paraxial import working_fnum
 from ..optics.rays import Rays
 from ..tracing.forward import DEFAULT_NEWTON_ITERS, trace
 from . import sampling
@@ -138,6 +139,11 @@ class AbstractPSFModel(eqx.Module):
 
     pupil: eqx.AbstractVar[int]
     overfill: eqx.AbstractVar[float]
+
+    def __check_init__(self):
+        # At construction too: GeometricPSF(pupil=0) was built without a word (psf refused it).
+        if not checks.is_traced(self.overfill):
+            self.check(type(self).__name__)
 
     def check(self, caller: str) -> None:
         """Refuse a pupil or overfill outside their range, naming the caller."""
@@ -635,15 +641,6 @@ def _diffraction_mtf(nu, lam_mm, fnum):
     s = jnp.clip(nu * lam_mm * fnum, 0.0, 1.0)
     root = jnp.sqrt(jnp.where(s < 1, 1.0 - s * s, 1.0))
     return jnp.where(s < 1, (2 / jnp.pi) * (jnp.arccos(s) - s * root), 0.0)
-
-
-def working_fnum(lens: Lens, depth) -> Array:
-    """The paraxial working F-number 1/(2n′u′) for an object at ``depth`` (mm from surface 1,
-    as ``sampling.lens_depth`` gives it; None for infinity), whatever the lens's own object:
-    ``mtf(lens, depth=...)`` took the lens's own, so a lens made for infinity imaged at 1:1
-    had its diffraction MTF (and default cut-off) at half the working F-number."""
-    at = eqx.tree_at(lambda m: m.object_distance, lens, depth, is_leaf=lambda x: x is None)
-    return paraxial.paraxial_data(at).working_fnum
 
 
 def _directions(field):

@@ -191,6 +191,7 @@ def read_png(path, *, linear: bool = True) -> np.ndarray:
     """
     from skimage import io
 
+    checks.switch(linear, "linear", "read_png")  # "no" is truthy: it decoded sRGB
     p = _check_readable(path, "read_png")
     with open(p, "rb") as f:
         if f.read(8) != b"\x89PNG\r\n\x1a\n":
@@ -220,9 +221,12 @@ def write_png(path, img, *, linear: bool = True, bits: int = 8) -> None:
             them as they are.
         bits: 8 or 16.
     """
+    # Both checked before the file is touched: linear="no" is truthy (the sRGB curve was
+    # applied), and bits=8.0 passed ``in (8, 16)`` and failed in struct.pack.
+    checks.switch(linear, "linear", "write_png")
+    if isinstance(bits, bool) or not isinstance(bits, (int, np.integer)) or bits not in (8, 16):
+        raise ValueError(f"write_png: bits must be 8 or 16 (bits per channel), got {bits!r}")
     path = _output_file(path, "write_png", ".png")
-    if bits not in (8, 16):
-        raise ValueError(f"write_png: bits must be 8 or 16, got {bits}")
     # An integer image (uint8 codes) was clipped to 1: a white file; NaN would be cast to
     # an arbitrary integer (0 on most machines): a silent black pixel.
     a = checks.float_image(img, "write_png", "img", unit="values in [0, 1], clipped")

@@ -30,6 +30,7 @@ surface and material types and the same system data.
 
 from __future__ import annotations
 
+import difflib
 import json
 import math
 import os
@@ -87,6 +88,12 @@ _STANDARD_TYPES = (
     "aperture",
     "aperturestop",
 )
+# The other base types, without case and punctuation. Exact names, not substrings: any type
+# holding "asph" was read as an even asphere ("extended asphere", whose Zemax polynomial is
+# normalised differently, or a typo such as "asphere9"), and any holding "hybrid" as a hybrid.
+_EVEN_ASPHERE_TYPES = ("evenasph", "evenasphere", "evenaspheric", "asph", "asphere", "aspheric")
+_ODD_ASPHERE_TYPES = ("oddasph", "oddasphe", "oddasphere", "oddaspheric")
+_HYBRID_TYPES = ("hybrid", "hybridasphere")
 
 
 # --------------------------------------------------------------------------------------
@@ -151,7 +158,7 @@ def _surface(d: dict, where: str, kind: str | None) -> AbstractSurface:
     if qtype is not None or "q_coeffs" in d or "norm_radius" in d:
         return _qtype_surface(d, where, raw, qtype, c, k, sd, coeffs.size or has_odd)
     # "oddasph", "Odd Asphere", "ODDASPHE"
-    radial = "odd" in kind and "asph" in kind and "hybrid" not in kind
+    radial = kind in _ODD_ASPHERE_TYPES
     if radial and (has_odd or coeffs.size):
         raise ValueError(f"{where}: an odd asphere takes its terms as odd_asphere_coeffs "
                          f"(on r, r², r³, …), not even_asphere_coeffs or odd_x/odd_y")
@@ -163,7 +170,7 @@ def _surface(d: dict, where: str, kind: str | None) -> AbstractSurface:
         if b.ndim != 1:
             raise ValueError(f"{where}: odd_asphere_coeffs must be a flat list")
         return OddAsphere(c=_arr(c), k=_arr(k), coeffs=_arr(b), semi_diameter=_arr(sd))
-    if "hybrid" in kind or has_odd:
+    if kind in _HYBRID_TYPES or (has_odd and kind in _STANDARD_TYPES + _EVEN_ASPHERE_TYPES):
         ox = _nums(d.get("odd_x", []), f"{where}: odd_x")
         oy = _nums(d.get("odd_y", []), f"{where}: odd_y")
         p = max(ox.size, oy.size)
@@ -177,13 +184,20 @@ def _surface(d: dict, where: str, kind: str | None) -> AbstractSurface:
             odd_y=_arr(oy),
             semi_diameter=_arr(sd),
         )
-    if "asph" in kind or (kind in _STANDARD_TYPES and coeffs.size):
+    if kind in _EVEN_ASPHERE_TYPES or (kind in _STANDARD_TYPES and coeffs.size):
         return EvenAsphere(c=_arr(c), k=_arr(k), coeffs=_arr(coeffs), semi_diameter=_arr(sd))
     if kind in _STANDARD_TYPES:
         return Standard(c=_arr(c), k=_arr(k), semi_diameter=_arr(sd))
-    raise ValueError(f"{where}: unknown surface type {raw!r}; use standard, evenasph, oddasph, "
-                     f"hybrid, qbfs, qcon, biconic, zernike_standard, zernike_fringe, "
-                     f"{', '.join(surface_json.KINDS)}")
+    names = ("standard", "evenasph", "oddasph", "hybrid", "qbfs", "qcon", "biconic",
+             "zernike_standard", "zernike_fringe", *surface_json.KINDS)
+    spelled = {re.sub(r"[^a-z0-9]", "", n): n for n in names}
+    spelled |= {a: "standard" for a in _STANDARD_TYPES} | {a: "evenasph" for a in
+                                                          _EVEN_ASPHERE_TYPES}
+    spelled |= {a: "oddasph" for a in _ODD_ASPHERE_TYPES} | {a: "hybrid" for a in _HYBRID_TYPES}
+    close = difflib.get_close_matches(kind, list(spelled), n=1, cutoff=0.75)
+    raise ValueError(f"{where}: unknown surface type {raw!r}"
+                     f"{f' (did you mean {spelled[close[0]]!r}?)' if close else ''}; use "
+                     f"{', '.join(names)}")
 
 
 _Q_TYPES = {"qbfs": "bfs", "qcon": "con"}  # the type key without case and punctuation

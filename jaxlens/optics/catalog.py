@@ -200,7 +200,7 @@ class GlassRecord:
         wrong formula number or garbled coefficients made a plausible index of another
         glass (the shipped catalogs agree to 4e-5)."""
         with jax.ensure_compile_time_eval():
-            n = float(m.index(jnp.asarray(LAMBDA_D)))
+            n = float(m.extrapolated_index(jnp.asarray(LAMBDA_D)))
         if not abs(n - self.nd) <= ND_TOLERANCE:
             at = f"{self.source}: " if self.source else ""
             raise ValueError(
@@ -237,6 +237,18 @@ class CatalogMaterial(AbstractMaterial):
     wavelength_range: tuple[float, float] | None = eqx.field(static=True, default=None)
 
     def index(self, wavelength):
+        """The index at wavelengths in µm; a concrete wavelength outside
+        ``wavelength_range`` raises ``ValueError`` naming the range (the formula is fitted
+        there only, and a lens refuses such wavelengths too). ``extrapolated_index`` gives
+        the formula's value anywhere."""
+        if self.wavelength_range is not None:
+            checks.material_wavelengths(
+                self, wavelength, f"CatalogMaterial.index ({self.name})",
+                hint="; extrapolated_index gives the formula's value outside it")
+        return self.model.index(wavelength)
+
+    def extrapolated_index(self, wavelength):
+        """The formula's index at any wavelength in µm, outside ``wavelength_range`` too."""
         return self.model.index(wavelength)
 
 
@@ -705,7 +717,8 @@ def _nd_vd(entry: GlassRecord | AbstractMaterial) -> tuple[float, float]:
         return entry.nd, entry.vd
     if isinstance(entry, CatalogMaterial) and entry.catalog_nd is not None:
         return entry.catalog_nd, entry.catalog_vd
-    n = np.asarray(entry.index(jnp.asarray([LAMBDA_D, LAMBDA_F, LAMBDA_C])), dtype=float)
+    n = np.asarray(entry.extrapolated_index(jnp.asarray([LAMBDA_D, LAMBDA_F, LAMBDA_C])),
+                   dtype=float)
     return float(n[0]), float((n[0] - 1.0) / (n[1] - n[2]))
 
 

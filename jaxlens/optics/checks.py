@@ -383,6 +383,21 @@ def wavelengths(lens, wl, where: str, arg: str = "wavelength"):
     return wl
 
 
+def material_wavelengths(m, wl, where: str, arg: str = "wavelength", hint: str = "") -> None:
+    """Refuse concrete wavelengths (µm) outside one material's data range
+    (:func:`material_range`), as :func:`wavelengths` does for a lens's materials. Traced
+    values pass (the entry points check them before tracing)."""
+    if is_traced(wl) or is_traced(m):
+        return
+    lo, hi = material_range(m)
+    a = np.asarray(wl, dtype=float)
+    bad = ~np.isfinite(a) | (a < lo * (1 - _REL)) | (a > hi * (1 + _REL))
+    if np.any(bad):
+        raise ValueError(
+            f"{where}: {arg} {fmt(a[bad])} µm is outside {lo:g}–{hi:g} µm, the data range of "
+            f"{_label(m, '').strip()}{_nm_hint(a[bad])}{hint}")
+
+
 def lens_intact(lens, where: str) -> None:
     """Re-run a concrete lens's own constructor checks, and those of its surfaces.
 

@@ -45,11 +45,22 @@ class AbstractMaterial(eqx.Module):
     def index(self, wavelength: Float[ArrayLike, "*b"]) -> Float[Array, "*b"]:
         raise NotImplementedError
 
+    def extrapolated_index(self, wavelength: Float[ArrayLike, "*b"]) -> Float[Array, "*b"]:
+        """The index at any wavelength in µm, outside the material's data range too.
+
+        ``index`` is this for every material but a catalog glass (``CatalogMaterial``),
+        whose ``index`` refuses a concrete wavelength outside the catalog's range; here its
+        formula is extrapolated. For the d, F and C line indices (nd, Vd) of materials whose
+        data do not cover those lines (infrared glasses), as catalogs and Zemax quote them.
+        """
+        return self.index(wavelength)
+
     def __init_subclass__(cls, **kwargs):
         # Every ``index`` refuses a concrete wavelength that cannot be in µm (e.g. 587.6, in
         # nm), which every formula would otherwise turn into a plausible wrong index. Traced
-        # wavelengths are checked where they enter (``checks.wavelengths``), and in-µm values
-        # outside a material's data range stay allowed here (nd/Vd of infrared materials).
+        # wavelengths are checked where they enter (``checks.wavelengths``). In-µm values
+        # outside a material's data range are refused by ``CatalogMaterial.index`` (the
+        # catalog's range); ``extrapolated_index`` gives nd/Vd of infrared glasses.
         super().__init_subclass__(**kwargs)
         if "index" in cls.__dict__:
             cls.index = _unit_checked(cls.__dict__["index"])
@@ -222,8 +233,8 @@ class Tabulated(AbstractMaterial):
 
 
 def abbe_number(material: AbstractMaterial) -> Array:
-    """Vd = (nd − 1)/(nF − nC)."""
-    n = material.index(jnp.asarray([LAMBDA_D, LAMBDA_F, LAMBDA_C]))
+    """Vd = (nd − 1)/(nF − nC) (``extrapolated_index``: defined for infrared glasses too)."""
+    n = material.extrapolated_index(jnp.asarray([LAMBDA_D, LAMBDA_F, LAMBDA_C]))
     return (n[0] - 1.0) / (n[1] - n[2])
 
 

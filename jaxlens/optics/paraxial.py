@@ -259,6 +259,10 @@ def image_height(lens: Lens, field_deg, wavelength=None) -> Array:
 
 def paraxial_data(lens: Lens, wavelength=None) -> ParaxialData:
     """All first-order data at one wavelength (default: primary)."""
+    if wavelength is not None and jnp.ndim(wavelength) != 0:
+        # Its fields are scalars: a list of wavelengths failed in np.stack deep inside.
+        raise ValueError(f"paraxial_data: wavelength must be one value (µm), got shape "
+                         f"{jnp.shape(wavelength)}; call it once per wavelength")
     wl = _wavelength(lens, wavelength, "paraxial_data")
     n = signed_indices(lens, wl)
     n0, n_img = n[0], n[-1]
@@ -307,3 +311,17 @@ def paraxial_data(lens: Lens, wavelength=None) -> ParaxialData:
         total_track=lens.total_track(),
         stop_semi_diameter=stop_sd,
     )
+
+
+def working_fnum(lens: Lens, depth) -> Array:
+    """The paraxial working F-number 1/(2n′u′) for an object at ``depth`` (mm from surface 1,
+    as ``sampling.lens_depth`` gives it; None for infinity), whatever the lens's own object:
+    ``mtf(lens, depth=...)`` took the lens's own, so a lens made for infinity imaged at 1:1
+    had its diffraction MTF (and default cut-off) at half the working F-number."""
+    if depth is not None and not checks.is_traced(depth):
+        # A depth of 0 or -5 mm was refused as "a lens edited with eqx.tree_at".
+        checks.real_values(depth, "depth", "working_fnum", "mm")
+        checks.values(depth, "depth", "working_fnum", lo=0, lo_open=True, inf_ok=True,
+                      unit="mm (None or inf: an object at infinity)")
+    at = eqx.tree_at(lambda m: m.object_distance, lens, depth, is_leaf=lambda x: x is None)
+    return paraxial_data(at).working_fnum

@@ -140,10 +140,11 @@ def build_parser() -> argparse.ArgumentParser:
     g.add_argument("--n-odd", type=input_checks.cli_int,
                    help="odd terms per axis of the hybrid surface (3)")
     g.add_argument("--cubic-floor", type=input_checks.cli_float,
-                   help="lower bound of the cubic strength, fraction of its start (1)")
+                   help="lower bound of the cubic strength, fraction of its start in [0, 1] "
+                   "(1)")
     g.add_argument("--hybrid-floor", type=input_checks.cli_float,
                    help="lower bound of the hybrid's x³ and y³ terms, fraction of their "
-                   "start (none)")
+                   "start in [0, 1] (none)")
     g.add_argument("--live-front-end", action=argparse.BooleanOptionalAction,
                    help="lens-update steps differentiate the Wiener front end's PSFs too "
                    "(all 8 depths traced; off)")
@@ -215,12 +216,14 @@ def config_from_args(a):
     n(cfg.lr_net, "--lr-net", w, lo=0, lo_open=True)
     n(cfg.lr_lens, "--lr-lens", w, lo=0, lo_open=True)
     n(cfg.photons, "--photons", w, lo=0, lo_open=True, unit="electrons")
-    n(cfg.cubic_floor, "--cubic-floor", w, lo=0, unit="(fraction of the start strength)")
+    # A floor is a fraction of the start strength in [0, 1]: above 1 the first projection
+    # (lenses.project) raised the strength past its start, which --cubic-floor 2 did silently.
+    n(cfg.cubic_floor, "--cubic-floor", w, lo=0, hi=1, unit="(fraction of the start strength)")
     if cfg.live_front_end and cfg.decoder == "nafnet":
         raise ValueError("edof: --live-front-end needs a Wiener front end (--decoder wiener "
                          "or multiwiener), got --decoder nafnet")
     if cfg.hybrid_floor is not None:
-        n(cfg.hybrid_floor, "--hybrid-floor", w, lo=0,
+        n(cfg.hybrid_floor, "--hybrid-floor", w, lo=0, hi=1,
           unit="(fraction of the start strength)")
     for opt, v in (("--w-sim", cfg.w_sim), ("--w-raw", cfg.w_raw),
                    ("--read-noise", cfg.read_noise)):
