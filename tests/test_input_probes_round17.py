@@ -224,3 +224,23 @@ def test_lens_aim_is_one_of_two_names():
     for bad in ("Real", "off", None, True):
         with pytest.raises(ValueError, match=r"^Lens: aim \(ray aiming\) must be one of"):
             dataclasses.replace(lens, aim=bad)
+
+
+def test_a_lens_in_a_user_infrared_glass_is_written_to_zmx_with_its_extrapolated_nd_vd():
+    """The ``.zmx`` writer gives a glass it does not find in Zemax's catalogs its nd and Vd
+    (d, F, C lines); for a user's infrared glass those lie outside the data range, where
+    ``index`` now refuses, so the writer takes ``extrapolated_index`` (a regression of this
+    round, caught at the merge)."""
+    from jaxlens.io import zmx_write
+    from jaxlens.optics.catalog import CatalogMaterial
+
+    ir = CatalogMaterial(model=jl.ModelGlass(1.5, 50.0), name="MY_IR", catalog="MYCAT",
+                         wavelength_range=(1.0, 5.0))
+    with pytest.raises(ValueError, match="outside 1–5 µm"):
+        ir.index(0.5876)
+    lens = jl.Lens(surfaces=(jl.Sphere(0.02), jl.Sphere(-0.02)), thickness=jnp.array([5.0, 45.0]),
+                   materials=(ir, jl.Air()), epd=10.0, wavelengths=jnp.array([3.0]))
+    text, *_ = zmx_write.dumps(lens)
+    nd = float(ir.extrapolated_index(0.5875618))
+    glas = next(ln for ln in text.splitlines() if ln.strip().startswith("GLAS"))
+    assert f"{nd!r}"[:6] in glas, glas

@@ -124,7 +124,8 @@ def _schott_fit(wl: np.ndarray, n: np.ndarray) -> list[float]:
 
 def _nd_vd(m: AbstractMaterial) -> tuple[float, float]:
     n = np.asarray(
-        m.index(np.array([_materials.LAMBDA_D, _materials.LAMBDA_F, _materials.LAMBDA_C])),
+        m.extrapolated_index(np.array([_materials.LAMBDA_D, _materials.LAMBDA_F,
+                                       _materials.LAMBDA_C])),
         np.float64,
     )
     dn = n[1] - n[2]
