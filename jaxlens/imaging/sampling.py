@@ -35,6 +35,7 @@ from jaxtyping import Array, Float
 from ..optics import checks, paraxial
 from ..optics.lens import INFINITE_OBJECT_MM, RAY_AIMING, Lens, unclipped
 from ..optics.rays import Rays
+from .newton import newton_2d
 
 
 def pupil_grid(n: int = 21, dtype=None) -> Float[Array, "m 2"]:
@@ -478,21 +479,17 @@ def aim_at_stop(
         v = p - source_point
         return p, v / jnp.linalg.norm(v)
 
-    def at_stop(uv, d, w):
+    def at_stop(uv, d, w, lens_=free):
         o2, d2 = launch(uv, d)
-        r = trace_path(free, Rays(o2[None], d2[None], w), upto=lens.stop)[-1]
+        r = trace_path(lens_, Rays(o2[None], d2[None], w), upto=lens.stop)[-1]
         return r.origin[0, :2]
 
     def solve(uv0, d, tgt, w):
-        def body(_, uv):
-            f = at_stop(uv, d, w) - tgt
-            jac = jax.jacfwd(at_stop)(uv, d, w)
-            det = jac[0, 0] * jac[1, 1] - jac[0, 1] * jac[1, 0]
-            det = jnp.where(det == 0, 1.0, det)
-            inv = jnp.array([[jac[1, 1], -jac[0, 1]], [-jac[1, 0], jac[0, 0]]]) / det
-            return uv - inv @ f
+        def residual(uv, params):
+            lens_, d_, tgt_, w_ = params
+            return at_stop(uv, d_, w_, lens_) - tgt_
 
-        return jax.lax.fori_loop(0, iters, body, uv0)
+        return newton_2d(residual, uv0, (free, d, tgt, w), iters)
 
     # Start from each ray's crossing of the entrance-pupil plane.
     start = rays.propagate_to_z(zep).origin[..., :2]
