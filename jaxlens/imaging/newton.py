@@ -43,7 +43,8 @@ def newton_2d(fn, x0, params, iters: int, *, implicit_gradient: bool = True, tol
             is shortened to it, keeping its direction. None: no limit.
         halvings: backtracking: a step that does not reduce ``|fn|`` (or, with
             ``has_valid``, lands on an invalid point) is halved, up to this many times; the
-            last, shortest one is taken anyway. 0: every step is the full (or limited) one.
+            last, shortest one is taken anyway, except from an invalid point, where the
+            full step is. 0: every step is the full (or limited) one.
         has_valid: see ``fn``.
 
     Returns:
@@ -64,13 +65,17 @@ def newton_2d(fn, x0, params, iters: int, *, implicit_gradient: bool = True, tol
     p_s = jax.lax.stop_gradient(params)
 
     def inv_step(x, p):
-        # One forward-mode pass gives the residual (as aux) and its Jacobian.
-        jac, f = jax.jacfwd(lambda y: (ev(y, p)[0],) * 2, has_aux=True)(x)
-        return f, _inverse(jac)
+        # One forward-mode pass gives the residual and validity (as aux) and the Jacobian.
+        def f_aux(y):
+            f, ok = ev(y, p)
+            return f, (f, ok)
+
+        jac, (f, ok) = jax.jacfwd(f_aux, has_aux=True)(x)
+        return f, ok, _inverse(jac)
 
     def body(state):
-        i, x, f_cur, ok_cur = state
-        f, inv = inv_step(x, p_s)
+        i, x, _, _ = state
+        f, ok, inv = inv_step(x, p_s)
         dx = -(inv @ f)
         if max_step is not None:
             n = norm(dx)
@@ -78,41 +83,45 @@ def newton_2d(fn, x0, params, iters: int, *, implicit_gradient: bool = True, tol
         if not search:
             x_new = x + dx
             if tol is None:
-                return i + 1, x_new, f_cur, ok_cur
+                return i + 1, x_new, f, ok
             f_new, ok_new = ev(x_new, p_s)
             return i + 1, x_new, f_new, ok_new
-        merit = jnp.where(ok_cur, norm(f_cur), jnp.inf)
-
-        def worse(s):
-            _, _, ft, okt = s
-            return ~okt | ~(norm(ft) < merit)
-
-        def halve(s):
-            k, t, _, _ = s
-            t = 0.5 * t
-            ft, okt = ev(x + t * dx, p_s)
-            return k + 1, t, ft, okt
-
-        f1, ok1 = ev(x + dx, p_s)
+        merit = jnp.where(ok, norm(f), jnp.inf)
         one = jnp.ones((), x.dtype)
-        _, t, f_new, ok_new = jax.lax.while_loop(
-            lambda s: (s[0] < halvings) & worse(s), halve, (0, one, f1, ok1))
-        return i + 1, x + t * dx, f_new, ok_new
+
+        def trying(s):
+            k, _, ft, okt, _, _ = s
+            return (k == 0) | ((k <= halvings) & (~okt | ~(norm(ft) < merit)))
+
+        def trial(s):
+            k, t, _, _, f1, ok1 = s
+            t = jnp.where(k == 0, one, 0.5 * t)
+            ft, okt = ev(x + t * dx, p_s)
+            # The full step's residual, kept for a step from an invalid point.
+            return (k + 1, t, ft, okt, jnp.where(k == 0, ft, f1), jnp.where(k == 0, okt, ok1))
+
+        _, t, f_new, ok_new, f1, ok1 = jax.lax.while_loop(
+            trying, trial, (0, one, f, jnp.bool_(False), f, jnp.bool_(False)))
+        # From an invalid point (no merit to compare with) no shorter step was valid
+        # either: take the full one (creeping on by the shortest step never got out).
+        lost = ~ok & ~ok_new
+        t = jnp.where(lost, one, t)
+        return i + 1, x + t * dx, jnp.where(lost, f1, f_new), jnp.where(lost, ok1, ok_new)
 
     x0 = jax.lax.stop_gradient(jnp.asarray(x0))
     if tol is None and not search:
-        x = jax.lax.fori_loop(0, iters, lambda _, x: body((0, x, x, True))[1], x0)
+        x = jax.lax.fori_loop(0, iters, lambda _, x: body((0, x, None, None))[1], x0)
     else:
-        f0, ok0 = ev(x0, p_s)
-
         def going(state):
             i, _, f, ok = state
             done = ok & (jnp.max(jnp.abs(f)) <= tol) if tol is not None else False
             return (i < iters) & ~done
 
-        x = jax.lax.while_loop(going, body, (0, x0, f0, ok0))[1]
+        # Not known yet: the first iteration evaluates it (every call runs at least one).
+        f0 = jnp.full(x0.shape, jnp.inf, x0.dtype)
+        x = jax.lax.while_loop(going, body, (0, x0, f0, jnp.bool_(False)))[1]
     if not implicit_gradient:
         return jax.lax.stop_gradient(x)
     x = jax.lax.stop_gradient(x)
-    _, inv = jax.lax.stop_gradient(inv_step(x, p_s))
+    inv = jax.lax.stop_gradient(inv_step(x, p_s)[2])
     return x - inv @ ev(x, params)[0]
