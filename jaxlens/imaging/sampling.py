@@ -7,19 +7,21 @@ Conventions:
     Rays are aimed at the paraxial entrance pupil: the ray through pupil point
     (Px, Py) passes through (Px·EPD/2, Py·EPD/2, z_EP). With ``aim="real"`` the launch
     points are corrected by Newton's method so that the rays cross the real stop at
-    (Px, Py)·(stop semi-diameter).
+    (Px, Py)·(stop radius): the paraxial marginal ray's height at the stop, or with
+    ``aim="real_marginal"`` the real marginal ray's (``stop_radius``; the table of Zemax's
+    ray-aiming modes is in ``optics.lens``).
 
 Vignetting factors:
     A lens's ``vignetting`` (Zemax VDX, VDY, VCX, VCY, VAN, one row per field) reshapes the
     pupil of each of its fields: ``field_rays`` maps the normalised pupil point (Px, Py) to
     ``vignetting_map`` (Px', Py') and launches the ray there (aimed there too with
-    ``aim="real"``). The factors belong to the lens's defined fields: they apply to a field
-    equal to one of ``lens.fields`` (within ``FIELD_MATCH_DEG``), and to no other field
-    (no interpolation between fields: a PSF at a field between the defined fields samples
-    the whole pupil, and ``render`` drops the factors). For a field with nonzero factors,
-    pupil points outside the unit disc (an overfilled beam) launch invalid rays: the
-    vignetted pupil is the image of the unit disc. ``collimated`` and ``point_source`` take
-    the pupil points as given and never apply them.
+    ``aim="real"`` or ``"real_marginal"``). The factors belong to the lens's defined fields:
+    they apply to a field equal to one of ``lens.fields`` (within ``FIELD_MATCH_DEG``), and
+    to no other field (no interpolation between fields: a PSF at a field between the defined
+    fields samples the whole pupil, and ``render`` drops the factors). For a field with
+    nonzero factors, pupil points outside the unit disc (an overfilled beam) launch invalid
+    rays: the vignetted pupil is the image of the unit disc. ``collimated`` and
+    ``point_source`` take the pupil points as given and never apply them.
 """
 
 from __future__ import annotations
@@ -196,8 +198,9 @@ def collimated(
         field: field angle in degrees, θy or (θx, θy).
         pupil: ``[m, 2]`` normalised pupil points.
         wavelength: µm (default: the lens's primary wavelength).
-        aim: "paraxial" or "real" (aim at the real stop); None (the default): the lens's
-            own, ``lens.aim``.
+        aim: "paraxial", "real" (aim at the real stop, sized by the paraxial marginal ray)
+            or "real_marginal" (sized by the real marginal ray; ``Lens.aim``); None (the
+            default): the lens's own, ``lens.aim``.
 
     Returns:
         ``[m]`` rays launched on the entrance-pupil plane.
@@ -215,8 +218,9 @@ def collimated(
     origin = jnp.concatenate([xy, jnp.broadcast_to(zep, xy.shape[:-1])[..., None]], -1)
     direction = jnp.broadcast_to(d, origin.shape).astype(origin.dtype)
     rays = Rays(origin, direction, wl)
-    if lens_aim(lens, aim, "collimated") == "real":
-        rays = aim_at_stop(lens, rays, pupil)
+    aim = lens_aim(lens, aim, "collimated")
+    if aim != "paraxial":
+        rays = aim_at_stop(lens, rays, pupil, stop_size=AIM_STOP_SIZE[aim])
     return rays
 
 
@@ -268,14 +272,19 @@ def point_source(
     # distant object); the optical path starts at the object point.
     n_obj = lens.object_material.index(wl)
     rays = Rays(target, v / dist, wl, opl=n_obj * dist[..., 0])
-    if lens_aim(lens, aim, "point_source") == "real":
-        rays = aim_at_stop(lens, rays, pupil, source_point=point)
+    aim = lens_aim(lens, aim, "point_source")
+    if aim != "paraxial":
+        rays = aim_at_stop(lens, rays, pupil, source_point=point, stop_size=AIM_STOP_SIZE[aim])
     return rays
 
 
+AIM_STOP_SIZE = {"real": "paraxial", "real_marginal": "real"}
+"""The ``stop_size`` of ``aim_at_stop`` for each aimed ``Lens.aim``."""
+
+
 def lens_aim(lens: Lens, aim: str | None, where: str) -> str:
-    """The ray aiming a sampler or an analysis uses: ``aim`` if given ("paraxial" or
-    "real"), else the lens's own (``Lens.aim``). Anything else is refused, naming ``where``
+    """The ray aiming a sampler or an analysis uses: ``aim`` if given (one of
+    ``RAY_AIMING``), else the lens's own (``Lens.aim``). Anything else is refused, naming ``where``
     (a typo such as "Real" aimed paraxially without a word)."""
     if aim is None:
         return lens.aim
@@ -392,8 +401,9 @@ def field_rays(lens: Lens, field, pupil, wavelength=None, *, depth=None, aim=Non
     1e10 mm and more, as for ``Lens.object_distance``) or from a finite depth (mm).
 
     The chief ray of a finite-depth field point makes the angle θ with the axis at the
-    entrance pupil, as for an object at infinity. ``aim``: "paraxial", "real" or None (the
-    default: the lens's own, ``lens.aim``), as for :func:`collimated`.
+    entrance pupil, as for an object at infinity. ``aim``: "paraxial", "real",
+    "real_marginal" or None (the default: the lens's own, ``lens.aim``), as for
+    :func:`collimated`.
 
     Where the lens has vignetting factors and ``field`` is one of its fields (within
     ``FIELD_MATCH_DEG``), the ray of pupil point (Px, Py) is the ray of
