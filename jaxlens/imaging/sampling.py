@@ -446,8 +446,10 @@ point and stay valid, in float64 (True) and float32 (False)."""
 
 AIM_ITERS = 20
 """``aim_at_stop``'s most Newton iterations per ray. Each ray stops as soon as it crosses
-the stop within ``AIM_CONVERGED`` of its point (3 to 5 iterations on the double Gauss at
-14°), so the limit costs only where a ray needs it."""
+the stop within ``AIM_CONVERGED`` of its point, so the limit costs only where a ray needs
+it. Measured with a 6-ring hexapolar pupil (127 rays), counting the rays within
+``AIM_TOLERANCE``: the double Gauss at 14° needs 1 iteration (and the implicit step),
+Laikin's wide-angle lens at 50° 5 (47 rays after 3, 126 after 4)."""
 
 AIM_CONVERGED = {True: 1e-12, False: 1e-5}
 """The Newton iterations of ``aim_at_stop`` stop at a ray that crosses the stop this close
