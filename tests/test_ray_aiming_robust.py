@@ -98,6 +98,13 @@ def test_the_real_stop_radius_is_the_real_marginal_rays_height():
     assert got == pytest.approx(_by_hand((0.0, 0.0, -100.0), v / np.linalg.norm(v)), abs=1e-12)
     # Spherical aberration of the pupil: the real height is not the paraxial one.
     assert abs(got - float(sampling.stop_radius(near, "paraxial"))) > 1e-3
+    rays = sampling.collimated(lens, 0.0, PUPIL, aim="paraxial")
+    with pytest.raises(ValueError, match=r"aim_at_stop: stop_size must be one of "
+                                         r"\('paraxial', 'real'\), got str 'marginal'"):
+        sampling.aim_at_stop(lens, rays, PUPIL, stop_size="marginal")
+    for arg, bad in (("iters", -1), ("halvings", 1.5)):
+        with pytest.raises(ValueError, match=rf"newton_2d: {arg} must be a whole number"):
+            newton_2d(lambda x, p: x, jnp.zeros(2), None, **{"iters": 3, arg: bad})
     with pytest.raises(ValueError, match=r"stop_radius: stop_size must be one of "
                                          r"\('paraxial', 'real'\), got str 'Real'"):
         sampling.stop_radius(lens, "Real")

@@ -11,6 +11,8 @@ from __future__ import annotations
 import jax
 import jax.numpy as jnp
 
+from ..optics import checks
+
 
 def _inverse(jac):
     """The inverse of a 2×2 Jacobian (a singular one is divided by 1, not by 0)."""
@@ -52,7 +54,10 @@ def newton_2d(fn, x0, params, iters: int, *, implicit_gradient: bool = True, tol
         Newton: ``iters`` undamped steps and the implicit step. Whether the root was found
         is for the caller to check (evaluate ``fn`` at the result).
     """
-    halvings = int(halvings)
+    iters = checks.number(iters, "iters", "newton_2d", lo=0, integer=True,
+                          unit="Newton iterations")
+    halvings = checks.number(halvings, "halvings", "newton_2d", lo=0, integer=True,
+                             unit="step halvings")
     search = halvings > 0
 
     def ev(x, p):
