@@ -1,7 +1,8 @@
 """Ray aiming as a property of the lens (``Lens.aim``): "paraxial" (rays through the paraxial
-entrance pupil, Zemax's aiming "Off") or "real" (aimed at the real stop, Zemax's "Paraxial"
-ray aiming). The samplers and the analyses use the lens's own where their ``aim`` is None;
-``.zmx`` RAIM and the JSON key ``"ray_aiming"`` carry it.
+entrance pupil, Zemax's aiming "Off"), "real" (aimed at the real stop, Zemax's "Paraxial"
+ray aiming) or "real_marginal" (the stop sized by the real marginal ray, Zemax's "Real";
+more in tests/test_ray_aiming_robust.py). The samplers and the analyses use the lens's own
+where their ``aim`` is None; ``.zmx`` RAIM and the JSON key ``"ray_aiming"`` carry it.
 
 The lens: the double Gauss of ``tests/refcases/double_gauss.json`` at its full field (14°),
 whose entrance pupil is aberrated: paraxially aimed rim rays cross the stop at 1.037 and
@@ -31,8 +32,8 @@ PUPIL = jnp.array(((0.0, 0.0), (0.0, 1.0), (0.0, -1.0), (1.0, 0.0), (0.6, 0.6), 
 # optiland 0.6.3, tools/ray_aiming_reference.py (run with /work/optiland_venv/bin/python):
 # its iterative ray aiming on the same double Gauss, 14°, primary wavelength, the rays of
 # PUPIL; (x, y) mm at the stop and on the image surface. optiland sizes the stop with a
-# real marginal ray (Zemax's "Real" aiming, RAIM 2): its stop radius is OPTILAND_STOP_R,
-# not the paraxial 6.3412410 mm that jaxlens aims at.
+# real marginal ray (Zemax's "Real" aiming, RAIM 2, jaxlens's "real_marginal"): its stop
+# radius is OPTILAND_STOP_R, not the paraxial 6.3412410 mm that aim="real" aims at.
 OPTILAND_STOP_R = 6.335001683687201
 OPTILAND_IMAGE = [[0.0, 24.671377951752156], [0.0, 24.626093365780314],
                   [0.0, 24.714497681191762], [-0.060834585781464945, 24.669259778836533],
@@ -81,6 +82,14 @@ def test_real_aiming_agrees_with_optiland(lenses):
     np.testing.assert_allclose(np.asarray(out.origin[:, :2]), OPTILAND_IMAGE, rtol=0, atol=1e-9)
     chief = spots.chief_ray(real, 14.0)  # the lens's own aiming: through the stop centre
     assert float(chief.origin[1]) == pytest.approx(OPTILAND_IMAGE[0][1], abs=1e-9)
+    # Zemax's "Real" aiming (aim="real_marginal") sizes the stop as optiland does: its rays
+    # at the pupil points as given are optiland's.
+    marginal = dataclasses.replace(lens, aim="real_marginal")
+    assert float(sampling.stop_radius(marginal, "real")) == pytest.approx(OPTILAND_STOP_R,
+                                                                          abs=1e-12)
+    out = trace(marginal, sampling.field_rays(marginal, 14.0, PUPIL))
+    assert bool(jnp.all(out.valid))
+    np.testing.assert_allclose(np.asarray(out.origin[:, :2]), OPTILAND_IMAGE, rtol=0, atol=1e-9)
     # Paraxially aimed, the chief ray lands 1.6 µm lower (refcase: 24.669769973 mm).
     assert float(spots.chief_ray(lens, 14.0).origin[1]) == pytest.approx(24.66976997301721,
                                                                           abs=1e-9)
@@ -106,10 +115,10 @@ def test_bad_aiming_values_are_refused(lenses, tmp_path):
     lens, _ = lenses
     for bad in ("Real", "off", 1, None):
         with pytest.raises(ValueError, match=r"aim \(ray aiming\) must be one of "
-                                             r"\('paraxial', 'real'\)"):
+                                             r"\('paraxial', 'real', 'real_marginal'\)"):
             dataclasses.replace(lens, aim=bad)
     with pytest.raises(ValueError, match=r"field_rays: aim must be one of \('paraxial', "
-                                         r"'real'\) or None"):
+                                         r"'real', 'real_marginal'\) or None"):
         sampling.field_rays(lens, 0.0, PUPIL, aim="stop")
     with pytest.raises(ValueError, match=r"rms_spot: aim must be one of"):
         spots.rms_spot(lens, aim="REAL")
@@ -121,7 +130,8 @@ def test_bad_aiming_values_are_refused(lenses, tmp_path):
     for bad in ("Real", True, 1, "stop"):
         d["ray_aiming"] = bad
         p.write_text(json.dumps(d))
-        with pytest.raises(ValueError, match=r"ray_aiming must be one of \['paraxial', 'real'\]"):
+        with pytest.raises(ValueError, match=r"ray_aiming must be one of \['paraxial', 'real', "
+                                             r"'real_marginal'\]"):
             jl.load(p)
     d.pop("ray_aiming")
     d["aiming"] = "real"  # a synonym is refused, naming the key
@@ -132,14 +142,17 @@ def test_bad_aiming_values_are_refused(lenses, tmp_path):
 
 def test_json_and_zmx_round_trips_keep_the_aiming(lenses, tmp_path):
     lens, real = lenses
+    marginal = dataclasses.replace(lens, aim="real_marginal")
     for ext in ("json", "zmx"):
-        for lz in (lens, real):
+        for lz in (lens, real, marginal):
             p = tmp_path / f"r_{lz.aim}.{ext}"
             jl.save(lz, p)
             with warnings.catch_warnings():
-                warnings.simplefilter("error", ZmxWarning)  # RAIM 1 is read silently
+                warnings.simplefilter("error", ZmxWarning)  # RAIM 1 and 2 are read silently
                 assert jl.load(p).aim == lz.aim
     assert "RAIM 0 1 " in (tmp_path / "r_real.zmx").read_text()
+    assert "RAIM 0 2 " in (tmp_path / "r_real_marginal.zmx").read_text()
+    assert "RAIM" not in (tmp_path / "r_paraxial.zmx").read_text()
 
 
 def _singlet(raim: str) -> str:
@@ -157,9 +170,9 @@ def test_zmx_raim_types(tmp_path):
             warnings.simplefilter("error", ZmxWarning)
             assert jl.load(p, strict=True).aim == aim
     p.write_text(_singlet("RAIM 0 2 1 1 0 0 0 0 0\n"))
-    with pytest.warns(ZmxWarning, match=r"s\.zmx:3: the file aims rays at the stop sized by "
-                                        r"real rays .RAIM type 2"):
-        assert jl.load(p).aim == "real"
+    with warnings.catch_warnings():
+        warnings.simplefilter("error", ZmxWarning)  # Zemax's "Real": exactly real_marginal
+        assert jl.load(p, strict=True).aim == "real_marginal"
     p.write_text(_singlet("RAIM 0 3 1 1 0 0 0 0 0\n"))
     with pytest.raises(ValueError, match=r"s\.zmx:3.*ray aiming type 3 .RAIM's second value. "
                                          r"is not one of 0"):
@@ -174,10 +187,11 @@ def test_the_report_says_which_aiming_it_used():
 
 @pytest.mark.slow  # 10 s
 def test_a_ray_the_aiming_does_not_bring_to_its_stop_point_is_invalid():
-    """A singlet 10 mm before its stop at 25°: Newton's 4 steps bring the upper rim ray to
-    the stop's rim but not the chief ray, the lower rim ray or the sagittal one. Those were
-    launched valid, crossing the stop at 0.27, −3.85 and (0.66, 2.12) of its radius; now
-    they are invalid (``sampling.AIM_TOLERANCE``)."""
+    """A singlet 10 mm before its stop at 25°: no ray of the beam reaches the stop's centre,
+    its lower rim or the sagittal point (in the meridian the stop height has a minimum,
+    about 0.5 mm above the axis: the pupil folds). Those rays were launched valid, crossing
+    the stop at 0.27, −3.85 and (0.66, 2.12) of its radius; they are invalid
+    (``sampling.AIM_TOLERANCE``), whatever the iterations. The upper rim ray is aimed."""
     lens = jl.Lens(surfaces=(jl.Standard(c=1 / 30.0), jl.Standard(c=-1 / 80.0), jl.Standard()),
                    thickness=jnp.array([6.0, 10.0, 40.0]),
                    materials=(jl.get_material("N-BK7"), jl.Air(), jl.Air()),
@@ -189,15 +203,18 @@ def test_a_ray_the_aiming_does_not_bring_to_its_stop_point_is_invalid():
     np.testing.assert_allclose(_at_stop(lens, rays)[1], [0.0, r_stop], rtol=0, atol=1e-9)
 
 
-@pytest.mark.slow  # 30 s: the aimed spot differentiated through the Newton aiming
-def test_gradient_of_a_real_aimed_spot_matches_central_differences():
+@pytest.mark.slow  # 30 s each: the aimed spot differentiated through the Newton aiming
+@pytest.mark.parametrize("aim", ["real", "real_marginal"])
+def test_gradient_of_a_real_aimed_spot_matches_central_differences(aim):
     """d(RMS about the chief ray)/dc of the Cooke triplet's third surface, 15°, the rays
-    aimed at the real stop: automatic differentiation (through ``aim_at_stop``'s Newton
-    steps) against central differences (h = 1e-6 1/mm)."""
+    aimed at the real stop (sized by the paraxial or the real marginal ray): automatic
+    differentiation (the implicit-function gradient of ``aim_at_stop``'s Newton solve, and
+    for "real_marginal" the marginal ray's trace) against central differences
+    (h = 1e-6 1/mm)."""
     import equinox as eqx
     import jax
 
-    lens = dataclasses.replace(jl.zoo.cooke_triplet(), aim="real")
+    lens = dataclasses.replace(jl.zoo.cooke_triplet(), aim=aim)
     f, w = jnp.array([15.0]), jnp.array([lens.primary_wavelength])
 
     def loss(c):

@@ -1,8 +1,9 @@
 """Chief-ray aiming and the ideal (distortion-free) image mapping.
 
-``stop_chief_ray`` aims the real chief ray at the centre of the stop with one 2-D Newton solver
-(``newton_2d``, implicit gradient); ``image_scale``/``field_to_ideal``/``ideal_to_field`` map
-field angles (degrees) to distortion-free sensor points ``K·tanθ`` (mm) and back.
+``stop_chief_ray`` aims the real chief ray at the centre of the stop with the library's one
+2-D Newton solver (``newton.newton_2d``, implicit gradient; re-exported here as
+``newton_2d``); ``image_scale``/``field_to_ideal``/``ideal_to_field`` map field angles
+(degrees) to distortion-free sensor points ``K·tanθ`` (mm) and back.
 """
 
 from __future__ import annotations
@@ -18,6 +19,7 @@ from ..optics.lens import Lens, unclipped
 from ..optics.rays import Rays
 from ..tracing.forward import DEFAULT_NEWTON_ITERS, trace
 from . import sampling
+from .newton import newton_2d as newton_2d
 
 
 # --------------------------------------------------------------------------------------
@@ -105,38 +107,6 @@ def stop_chief_ray(lens: Lens, field, depth=None, wavelength=None, *,
 
     uv = newton_2d(at_stop, jnp.zeros(2, lens.epd.dtype), aim_lens, iters)
     return launch(uv)
-
-
-def newton_2d(fn, x0, params, iters: int, *, implicit_gradient: bool = True):
-    """Solve fn(x, params) = 0 for x in R² by Newton's method with an implicit gradient.
-
-    The iterations run without gradients; one last step with the Jacobian held fixed gives
-    the implicit-function derivative dx/dparams = −J⁻¹·∂fn/∂params, so reverse mode never
-    unrolls the loop. Without ``implicit_gradient`` that step is left out and the result
-    has no gradient (the zmx FTYP 3 solve, never differentiated, compiles in less than half
-    the time).
-    """
-
-    def inv_step(x, p):
-        # One forward-mode pass gives the residual (as aux) and its Jacobian.
-        jac, f = jax.jacfwd(lambda y: (fn(y, p),) * 2, has_aux=True)(x)
-        det = jac[0, 0] * jac[1, 1] - jac[0, 1] * jac[1, 0]
-        det = jnp.where(det == 0, 1.0, det)
-        inv = jnp.array([[jac[1, 1], -jac[0, 1]], [-jac[1, 0], jac[0, 0]]]) / det
-        return f, inv
-
-    p_s = jax.lax.stop_gradient(params)
-
-    def body(_, x):
-        f, inv = inv_step(x, p_s)
-        return x - inv @ f
-
-    x = jax.lax.fori_loop(0, iters, body, jax.lax.stop_gradient(x0))
-    if not implicit_gradient:
-        return jax.lax.stop_gradient(x)
-    x = jax.lax.stop_gradient(x)
-    _, inv = jax.lax.stop_gradient(inv_step(x, p_s))
-    return x - inv @ fn(x, params)
 
 
 def chief_point(lens, field, depth, newton_iters, *, with_valid: bool = False):

@@ -355,26 +355,20 @@ entrance pupil), 1 "Paraxial" (real rays aimed at the stop, its size from the pa
 marginal ray), 2 "Real" (the same, the stop's size from a real marginal ray)."""
 
 
+RAIM_AIM = {0: "paraxial", 1: "real", 2: "real_marginal"}
+"""``Lens.aim`` for each RAIM ray-aiming type (and the type ``save_zmx`` writes for each)."""
+
+
 def ray_aiming(ln, path: str) -> str:
-    """``Lens.aim`` from RAIM's ray-aiming type: 0 (Zemax's "Off", or no RAIM line) is
-    ``"paraxial"``; 1 (Zemax's "Paraxial" ray aiming: real rays aimed at the stop, whose size
-    the paraxial marginal ray sets) is ``"real"``, which is exactly that. 2 (Zemax's "Real"
-    ray aiming, the stop's size from a real marginal ray) is read as ``"real"`` with a
-    warning: jaxlens sizes the stop paraxially, so the rim rays can differ by the stop's
-    spherical aberration. Other types are refused."""
+    """``Lens.aim`` from RAIM's ray-aiming type (``RAIM_AIM``): 0 (Zemax's "Off", or no RAIM
+    line) is ``"paraxial"``; 1 (Zemax's "Paraxial" ray aiming: real rays aimed at the stop,
+    whose size the paraxial marginal ray sets) ``"real"``; 2 (Zemax's "Real" ray aiming, the
+    stop's size from the real on-axis marginal ray) ``"real_marginal"``. Other types are
+    refused."""
     if ln is None or len(ln.tokens) < 3:
         return "paraxial"
     kind = ln.int(2, "ray aiming type")
     if kind not in RAY_AIMING_TYPES:
         raise ln.error(f"ray aiming type {kind} (RAIM's second value) is not one of 0 (off), "
                        f"1 (paraxial) or 2 (real)")
-    if kind == 2:
-        warnings.warn(
-            f"{path}:{ln.number}: the file aims rays at the stop sized by real rays (RAIM "
-            f"type 2, Zemax's \"Real\" ray aiming); jaxlens aims them at the stop sized by the "
-            f"paraxial marginal ray (RAIM type 1, Lens.aim='real'), so the rim rays can differ "
-            f"by the stop's spherical aberration",
-            ZmxWarning,
-            stacklevel=4,
-        )
-    return "paraxial" if kind == 0 else "real"
+    return RAIM_AIM[kind]

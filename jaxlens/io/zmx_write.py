@@ -501,8 +501,9 @@ def dumps(lens: Lens, path: str = "lens.zmx", *, model_glass: str = "blank"):
         "YFLN " + " ".join(_z(v) for v in ys),
         "FWGN " + " ".join("1" for _ in ys),
     ]
-    if lens.aim == "real":  # RAIM type 1, Zemax's "Paraxial" ray aiming (the stop sized
-        head.append("RAIM 0 1 1 1 0 0 0 0 0")  # paraxially); no line: aiming off
+    if lens.aim != "paraxial":  # RAIM type 1 (Zemax's "Paraxial" ray aiming) or 2 ("Real");
+        raim = {v: k for k, v in zmx_system.RAIM_AIM.items()}[lens.aim]  # no line: aiming off
+        head.append(f"RAIM 0 {raim} 1 1 0 0 0 0 0")
     if lens.vignetting is not None:  # one line per factor, one value per field
         v = np.asarray(lens.vignetting, np.float64).reshape(len(ys), 5)
         head += [f"{key} " + " ".join(_z(x) for x in v[:, j])

@@ -46,10 +46,22 @@ Conventions:
     ``analysis.angular_magnification`` give its angular data, ``analysis.wavefront``
     references its wavefront to a plane, and the report is the afocal one.
     ``aim`` is the lens's ray aiming (``RAY_AIMING``): ``"paraxial"`` (the default) launches
-    the ray of pupil point (Px, Py) through (Px, Py)·EPD/2 on the paraxial entrance pupil
-    (Zemax's ray aiming "Off", RAIM type 0); ``"real"`` aims it by Newton's method so that
-    it crosses the real stop at (Px, Py)·(paraxial stop semi-diameter) (Zemax's "Paraxial"
-    ray aiming, RAIM type 1). The samplers (``imaging.sampling.field_rays``, ``collimated``,
+    the ray of pupil point (Px, Py) through (Px, Py)·EPD/2 on the paraxial entrance pupil;
+    ``"real"`` aims it by Newton's method so that it crosses the real stop at
+    (Px, Py)·(paraxial marginal ray's height at the stop); ``"real_marginal"`` aims it at
+    (Px, Py)·(real marginal ray's height at the stop: the real on-axis ray through the rim
+    of the paraxial entrance pupil, primary wavelength; ``imaging.sampling.stop_radius``).
+    Zemax's modes (System Explorer, Ray Aiming; ``.zmx`` RAIM's second value) map as:
+
+    ==================  ===========  =====================
+    Zemax ray aiming    RAIM type    ``Lens.aim``
+    ==================  ===========  =====================
+    Off                 0            ``"paraxial"``
+    Paraxial            1            ``"real"``
+    Real                2            ``"real_marginal"``
+    ==================  ===========  =====================
+
+    The samplers (``imaging.sampling.field_rays``, ``collimated``,
     ``point_source``) and the analyses built on them use it where their ``aim`` is None;
     ``render``, the relative illumination and the design losses launch their own rays at
     the paraxial pupil whatever it is (speed).
@@ -125,9 +137,10 @@ def _flag(arg: str):
     return convert
 
 
-RAY_AIMING = ("paraxial", "real")
-"""The values of ``Lens.aim``: rays through the paraxial entrance pupil, or aimed at the real
-stop (see the module doc)."""
+RAY_AIMING = ("paraxial", "real", "real_marginal")
+"""The values of ``Lens.aim``: rays through the paraxial entrance pupil (Zemax's ray aiming
+"Off"), or aimed at the real stop sized by the paraxial marginal ray (Zemax's "Paraxial") or
+by the real one (Zemax's "Real"); see the module doc."""
 
 
 def _aim(v):
@@ -232,7 +245,7 @@ class Lens(eqx.Module):
     vignetting: Float[Array, "f 5"] | None = eqx.field(converter=_vignetting, default=None)
     # An afocal image space (the image at infinity): see the module doc.
     afocal_image: bool = eqx.field(static=True, default=False, converter=_flag("afocal_image"))
-    # Ray aiming, "paraxial" or "real": see the module doc.
+    # Ray aiming, "paraxial", "real" or "real_marginal": see the module doc.
     aim: str = eqx.field(static=True, default="paraxial", converter=_aim)
 
     def __check_init__(self):
