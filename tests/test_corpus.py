@@ -47,9 +47,8 @@ EXPECTED_WARNINGS = {
     # real files (zmx_keywords.KNOWN_VALUES; test_zmx_keywords_more: other values are reported).
     # Its RAIM 1 (line 18) is read into Lens.aim "real" without a word.
     "optiland_lens_floa.zmx": [r":6: FTYP announces 3 fields, YFLN gives 1"],
-    "rayoptics_HoO-V2C18Ex66.zmx": [r":11: the file aims rays at the stop"],
-    # Its vignetting factors (line 22) are read into Lens.vignetting (test_vignetting).
-    "rayoptics_US00583336-2-scaled.zmx": [r":12: the file aims rays at the stop"],
+    # HoO-V2C18Ex66 and US00583336 (RAIM 2) are read into Lens.aim "real_marginal" without a
+    # word; US00583336's vignetting factors (line 22) into Lens.vignetting (test_vignetting).
 }
 
 # Files jaxlens cannot represent: the line and the reason.

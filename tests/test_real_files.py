@@ -369,14 +369,12 @@ def test_ray_aiming_and_image_medium_are_reported(tmp_path):
     from jaxlens.io.zmx import ZmxWarning
 
     _load_text(tmp_path, _file("ENPD 10\nRAIM 0 0 1 1 0 0 0 0 0\n"))  # aiming off: silent
-    # Type 2 (Zemax's "Real" aiming) is read as Lens.aim "real", the stop sized paraxially
-    # (tests/test_ray_aiming.py: the other types).
-    with pytest.warns(
-        ZmxWarning,
-        match=r"f\.zmx:3: the file aims rays at the stop sized by real rays .RAIM type 2"
-        r".*Lens\.aim='real'",
-    ):
-        _load_text(tmp_path, _file("ENPD 10\nRAIM 0 2 1 1 0 0 0 0 0\n"))
+    # Type 2 (Zemax's "Real" aiming) is Lens.aim "real_marginal", without a word
+    # (tests/test_ray_aiming*.py: the other types and what each does).
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")
+        _, lens = _load_text(tmp_path, _file("ENPD 10\nRAIM 0 2 1 1 0 0 0 0 0\n"))
+    assert lens.aim == "real_marginal"
     with pytest.warns(
         ZmxWarning,
         match=r"the image surface names N-BK7 but image space .* "

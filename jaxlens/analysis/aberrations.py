@@ -123,7 +123,8 @@ def ray_fan(lens: Lens, field, wavelengths=None, *, n: int = FAN_POINTS, depth=N
         wavelengths: µm, one value or ``[W]``; default the lens's wavelengths.
         n: pupil points per fan, evenly spaced over −1 … 1.
         depth: object distance (mm) for a finite object; default the lens's object.
-        aim: ``"paraxial"`` (the paraxial entrance pupil) or ``"real"`` (the real stop);
+        aim: ``"paraxial"`` (the paraxial entrance pupil), ``"real"`` or
+            ``"real_marginal"`` (the real stop, as ``sampling.field_rays``);
             None (the default): the lens's own ray aiming, ``lens.aim``.
 
     Returns:
@@ -180,8 +181,9 @@ def field_curvature(lens: Lens, fields=None, wavelengths=None, *, depth=None,
             the largest field in 11 steps).
         wavelengths: µm, one value or ``[W]``; default the lens's wavelengths.
         depth: object distance (mm) for a finite object; default the lens's object.
-        aim: ``"paraxial"`` or ``"real"`` (chief ray through the paraxial entrance pupil's
-            centre or the real stop's); None (the default): the lens's own, ``lens.aim``.
+        aim: ``"paraxial"``, ``"real"`` or ``"real_marginal"`` (chief ray through the
+            paraxial entrance pupil's centre or the real stop's); None (the default): the
+            lens's own, ``lens.aim``.
 
     Returns:
         A ``FieldCurvature`` (mm from the image surface, along z; ``astigmatism`` is their

@@ -30,7 +30,9 @@ def cell(v: float | None, width: int = 12, prec: int = 6, missing: str = "failed
 
 
 AIMING_TEXT = {"paraxial": "paraxial (rays through the paraxial entrance pupil)",
-               "real": "real (rays aimed at the real stop)"}
+               "real": "real (rays aimed at the real stop)",
+               "real_marginal": "real marginal (rays aimed at the real stop, sized by the "
+                                "real marginal ray)"}
 """The report's words for each ``Lens.aim``."""
 
 

@@ -4,7 +4,8 @@ Conventions:
     Lengths in mm (RMS spot radii too), field angles in degrees, wavelengths in µm.
     Unless a pupil is given, spots use the 21×21 square grid over the unit pupil kept
     inside the disc (317 rays), with rays aimed as the lens says (``Lens.aim``: at the
-    paraxial entrance pupil by default, at the real stop for ``"real"``; an ``aim``
+    paraxial entrance pupil by default, at the real stop for ``"real"`` and
+    ``"real_marginal"``; an ``aim``
     argument overrides it). The chief ray is the pupil-centre ray of the same aiming. RMS
     radius = sqrt(mean(|p − ref|²)) over the valid rays on the image surface, with ref
     the centroid of the same ray set or the primary-wavelength chief ray (pupil centre).
@@ -89,7 +90,8 @@ def spot_rays(
     newton_iters: int = DEFAULT_NEWTON_ITERS,
 ) -> Rays:
     """Rays of one field and wavelength on the image surface (a spot diagram as data).
-    ``aim``: "paraxial", "real" or None (the lens's own ray aiming, ``lens.aim``)."""
+    ``aim``: "paraxial", "real", "real_marginal" or None (the lens's own ray aiming,
+    ``lens.aim``)."""
     check_inputs(lens, "spot_rays", fields=field, wavelengths=wavelength, arg_f="field",
                      arg_w="wavelength", pupil=pupil)
     field, wavelength = _as_arrays(lens, field, wavelength)
@@ -176,8 +178,9 @@ def rms_spot(
         reference: "centroid" or "chief" (primary-wavelength chief ray).
         depth: object distance in mm (``inf`` for infinity), or None for the lens's own
             object (``lens.object_distance``; infinity where it has none).
-        aim: "paraxial" (rays through the paraxial entrance pupil) or "real" (aimed at the
-            real stop; the chief ray through its centre); None (the default): the lens's
+        aim: "paraxial" (rays through the paraxial entrance pupil), "real" or
+            "real_marginal" (aimed at the real stop, sized by the paraxial or the real
+            marginal ray; the chief ray through its centre); None (the default): the lens's
             own ray aiming, ``lens.aim``.
 
     Returns:

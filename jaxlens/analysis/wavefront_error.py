@@ -7,7 +7,8 @@ Conventions (optiland's "chief_ray" reference, Zemax's definition of the referen
     waves at the wavelength traced. Pupil points (Px, Py) are normalised to the paraxial
     entrance pupil (the unit disc), launched as ``jaxlens.imaging.sampling.field_rays``
     launches them (``aim="paraxial"``: through (Px, Py)·EPD/2 on the paraxial
-    entrance-pupil plane; ``aim="real"``: through (Px, Py)·(stop radius) on the real stop).
+    entrance-pupil plane; ``aim="real"``/``"real_marginal"``: through (Px, Py)·(stop
+    radius) on the real stop, sized by the paraxial/real marginal ray).
 
     Each ray's optical path starts on the incoming wavefront: for an object at infinity the
     plane wave through the origin (the trace's path plus n₀ d·o for the launch point o and
@@ -241,8 +242,9 @@ def opd(
             for the lens's own object.
         reference: "sphere" (exit-pupil reference sphere) or "plane" (afocal image space);
             None (the default): the lens's own, "plane" where ``lens.afocal_image``.
-        aim: "paraxial" or "real" (as ``jaxlens.imaging.sampling.field_rays``); None (the
-            default): the lens's own ray aiming, ``lens.aim``.
+        aim: "paraxial", "real" or "real_marginal" (as
+            ``jaxlens.imaging.sampling.field_rays``); None (the default): the lens's own ray
+            aiming, ``lens.aim``.
         newton_iters: Newton iterations for aspheric surfaces.
 
     Returns:

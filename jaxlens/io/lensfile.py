@@ -21,7 +21,9 @@ field: ``{"vdx": [...], "vdy": [...], "vcx": [...], "vcy": [...], "van_deg": [..
 radii; ``van_deg`` in degrees; a missing list is 0). ``"afocal_image_space": true`` marks
 an afocal image space (``Lens.afocal_image``; written only when true). ``"ray_aiming"``
 is the lens's ray aiming (``Lens.aim``): ``"paraxial"`` (the default: rays through the
-paraxial entrance pupil) or ``"real"`` (aimed at the real stop); written only when real.
+paraxial entrance pupil), ``"real"`` (aimed at the real stop, sized paraxially) or
+``"real_marginal"`` (the stop sized by the real marginal ray); written only when not
+paraxial.
 
 Saving writes every number with Python's shortest round-trip representation, so
 ``load(save(lens))`` gives the same numbers to the last bit (as float64), the same

@@ -104,9 +104,8 @@ What is read and written:
       (``jaxlens.imaging.sampling.field_rays``). ``PUPD`` beside another aperture line
       (older Zemax) is ignored; alone it is refused. ``RAIM``'s ray-aiming type is
       ``Lens.aim``: 0 (off) ``"paraxial"``, 1 (Zemax's "Paraxial": rays aimed at the stop,
-      sized paraxially) ``"real"``, 2 (Zemax's "Real": the stop sized by a real ray)
-      ``"real"`` with a warning (jaxlens sizes the stop paraxially); ``"real"`` is written
-      back as type 1. ``WAVM`` (or the
+      sized paraxially) ``"real"``, 2 (Zemax's "Real": the stop sized by the real
+      on-axis marginal ray) ``"real_marginal"``; each is written back as its type. ``WAVM`` (or the
       older ``WAVL``) and ``PWAV``, ``UNIT``, ``NAME``. ``ENVD``: indices adjusted to an
       environment other than 20 °C and 1 atm are refused; not adjusted, a warning. A finite
       object must be a plane normal to the axis (a curved or tilted one is refused).
