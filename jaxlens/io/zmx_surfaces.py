@@ -63,8 +63,12 @@ PARAXIAL: PARM 1 is the focal length, PARM 2 the OPD mode (0: conjugates from a 
 parabasal ray, 1: integrated phase, 2: infinite conjugates, 3: conjugates from a paraxial
 ray). The rays do not depend on the mode. jaxlens's optical path is mode 2's; the others
 give the same path where the beam reaching the surface is collimated (object at infinity
-and no net power before the surface, in the y–z and the x–z section, at every wavelength),
-and are refused elsewhere. The writer writes mode 2.
+and no net power before the surface, in the y–z and the x–z section, at every wavelength).
+Elsewhere modes 0 and 3 (and none) are read where the difference of the two paths
+(``opd_mode_error``, peak to valley over the surface) is at most
+``OPD_MODE_TOLERANCE_WAVES`` (0.01 waves), with a warning (an error under ``strict``);
+above it, where it cannot be bounded, and for mode 1, they are refused. The writer writes
+mode 2.
 Extra data are read through ``ExtraData``, one rule for every kind: the header lines (count,
 normalisation radius, QED_TYPE's type) must be present (a missing one is refused naming the
 surface's line and the XDAT index); a missing term line reads as 0, as a missing PARM does
@@ -89,7 +93,7 @@ from ..optics.qtype import QTypeAsphere
 from ..optics.surfaces import OddAsphere, TiltedPlane
 from ..optics.toroidal import Toroidal
 from ..optics.xypolynomial import MAX_XY_TERMS, XYPolynomial
-from .zmx_common import SENSOR_COMMENT
+from .zmx_common import SENSOR_COMMENT, report
 
 OPD_MODES = {0: "real parabasal conjugates", 1: "integrated phase", 2: "infinite conjugates",
              3: "paraxial conjugates"}
@@ -372,25 +376,132 @@ def paraxial_surface(s, unit: float, sd: float) -> tuple[ParaxialSurface, int | 
     return ParaxialSurface(focal_length=_arr(s.parm[1][0] * unit), semi_diameter=_arr(sd)), mode
 
 
-def check_opd_modes(lens: Lens, modes: dict) -> None:
-    """Refuse a PARAXIAL surface whose OPD mode gives another optical path than jaxlens's.
+OPD_MODE_TOLERANCE_WAVES = 0.01
+"""Largest optical-path error (peak to valley over the surface, in waves at each of the
+file's wavelengths) accepted, with a warning, where a PARAXIAL surface in OPD mode 0 or 3
+(or none) meets a beam that is not collimated (``check_opd_modes``)."""
+
+
+def check_opd_modes(lens: Lens, modes: dict, *, strict: bool = False) -> None:
+    """Check each PARAXIAL surface's OPD mode against jaxlens's optical path (mode 2's).
+
+    Mode 2, and any mode where the beam reaching the surface is collimated, give jaxlens's
+    path. Modes 0 and 3 (no PARM 2 is mode 0) make the lens perfect between the conjugates
+    of the beam that reaches it; where that beam is not collimated, the difference to
+    jaxlens's path (``opd_mode_error``) is accepted when it is at most
+    ``OPD_MODE_TOLERANCE_WAVES`` at every wavelength (a warning; an error under
+    ``strict``) and refused above it, or where it cannot be bounded. Mode 1 (integrated
+    phase) is refused for a beam that is not collimated.
 
     Args:
         lens: the lens read from the file.
-        modes: surface index (0-based) -> (OPD mode or None, the line to name).
+        modes: surface index (0-based) -> (OPD mode or None, the line to name) or (mode,
+            line, the surface's DIAM in mm): the beam's radius where the surface does not
+            clip (OpticStudio's automatic DIAM is the file's beam footprint there).
+        strict: an error instead of a warning for an accepted difference.
     """
-    for i, (mode, ln) in modes.items():
+    for i, (mode, ln, *diam) in modes.items():
         if mode == 2:
             continue
         why = _not_collimated(lens, i)
-        if why:
-            named = "no OPD mode (Zemax's default)" if mode is None else \
-                f"OPD mode {mode} ({OPD_MODES[mode]})"
-            raise ln.error(
-                f"this PARAXIAL surface has {named}, which computes the optical path from the "
+        if not why:
+            continue
+        named = "no OPD mode (Zemax's default, mode 0)" if mode is None else \
+            f"OPD mode {mode} ({OPD_MODES[mode]})"
+        error, cannot = (None, "the mode integrates the surface's phase") if mode == 1 else \
+            opd_mode_error(lens, i, beam_radius=diam[0] if diam else math.inf)
+        head = (f"this PARAXIAL surface has {named}, which computes the optical path from the "
                 f"conjugates it is used at, and {why}; jaxlens computes the path of a perfect "
-                f"lens at infinite conjugates (OPD mode 2, PARM 2 2) only. Set PARM 2 to 2 to "
-                f"accept that path (the rays are the same in every mode)")
+                f"lens at infinite conjugates (OPD mode 2, PARM 2 2)")
+        if error is not None and error <= OPD_MODE_TOLERANCE_WAVES:
+            report(strict, f"{ln.path}:{ln.number}: {head}: the two paths differ by at most "
+                           f"{error:.2g} waves (peak to valley over the surface's "
+                           f"semi-diameter, below the {OPD_MODE_TOLERANCE_WAVES:g} waves "
+                           f"accepted); the rays are the same in every mode: "
+                           f"{ln.text.strip()!r}")
+            continue
+        size = (f"the two paths differ by {error:.3g} waves (peak to valley over the "
+                f"surface's semi-diameter; {OPD_MODE_TOLERANCE_WAVES:g} waves are accepted)"
+                if error is not None else f"the difference cannot be bounded ({cannot})")
+        raise ln.error(f"{head}, and {size}. Set PARM 2 to 2 to accept jaxlens's path (the "
+                       f"rays are the same in every mode)")
+
+
+def opd_mode_error(lens: Lens, i: int, *, beam_radius: float = math.inf
+                   ) -> tuple[float | None, str]:
+    """(The largest difference, in waves, between jaxlens's optical path at PARAXIAL surface
+    i and the path of OPD modes 0 and 3, or None; why it is None).
+
+    Modes 0 and 3 add the path φ₀(Q) = C + sgn(z_O)·n·|Q − O| − sgn(z_I)·n′·|I − Q| at the
+    point of incidence Q, which makes every ray from the conjugate object point O meet the
+    paraxial image point I with the same optical path (z_O, z_I from the surface, + after
+    it; a real object lies before it). jaxlens adds the infinite-conjugate path φ(Q, d̂) of
+    ``tracing.step.paraxial_bend`` for the ray's own direction d̂. O is found paraxially:
+    for an object at infinity and the system matrix (A, B; C, D) up to the surface,
+    z_O = −n·A/C and, for a field of reduced slope nu₀, height (B + z_O·D/n)·nu₀. The
+    difference, less its value at the vertex, is taken over a grid on the disc of the
+    surface's semi-diameter (where it is infinite: ``beam_radius``, mm), for the axis and
+    every field of the lens (angles), in the y–z and the x–z section and at every
+    wavelength; its peak to valley, in waves, is returned.
+    None where the object is at a finite distance, a mirror precedes the surface, or the
+    surface has no finite semi-diameter and no finite ``beam_radius``.
+    """
+    if not lens.object_at_infinity:
+        return None, "the object is at a finite distance"
+    if any(m < i for m in lens.mirrors):
+        return None, "a mirror precedes the surface"
+    surf = lens.surfaces[i]
+    r = float(surf.semi_diameter)
+    r = r if math.isfinite(r) else float(beam_radius)
+    if not (math.isfinite(r) and r > 0):
+        return None, "no finite semi-diameter bounds the beam on the surface"
+    f = float(surf.focal_length)
+    g = np.linspace(-r, r, 41)
+    qx, qy = (a.ravel() for a in np.meshgrid(g, g))
+    keep = qx * qx + qy * qy <= r * r
+    qx, qy = qx[keep], qy[keep]
+    fields = np.tan(np.deg2rad(np.asarray(lens.fields, np.float64)))
+    tans = np.append(np.hypot(*fields.T) if fields.ndim == 2 else np.abs(fields), 0.0)
+    worst = 0.0
+    for section in (lens, paraxial.x_section(lens)):
+        for wl in np.atleast_1d(np.asarray(lens.wavelengths, np.float64)):
+            n = paraxial.signed_indices(section, wl)
+            n0, n1, n2 = float(n[0]), float(n[i]), float(n[i + 1])
+            a, b, c, d = (float(v) for v in paraxial.system_matrix(section, wl, 0, i - 1))
+            if c == 0.0:
+                continue  # collimated in this section: the same path
+            t = float(section.thickness[i - 1]) / n1
+            a, b = a + t * c, b + t * d
+            if a == 0.0:
+                return None, "the beam's conjugate point lies on the surface"
+            z_o = -n1 * a / c
+            for tan in tans:
+                h_o = (b + z_o * d / n1) * n0 * tan
+                pv = _path_difference(qx, qy, f, n1, n2, z_o, h_o)
+                worst = max(worst, pv / (wl * 1e-3))
+    return worst, ""
+
+
+def _path_difference(qx, qy, f, n1, n2, z_o, h_o) -> float:
+    """Peak to valley (mm) of jaxlens's path minus the conjugate path φ₀ over the points
+    (qx, qy) of the surface, for the object point (0, h_o, z_o) (``opd_mode_error``)."""
+    from ..tracing.step import paraxial_bend  # the ideal lens's path, as traced
+
+    vz = z_o if z_o != 0 else 1.0
+    # The image of O: n′/z_I = n/z_O + 1/f (reduced vergences), at height z_I·n·h_O/(z_O·n′).
+    z_i = n2 / (n1 / z_o + 1.0 / f)
+    h_i = z_i * n1 * h_o / (vz * n2)
+    pts = np.stack([qx, qy, np.zeros_like(qx)])
+    obj = np.array([0.0, h_o, z_o])[:, None]
+    img = np.array([0.0, h_i, z_i])[:, None]
+    to_q = (pts - obj) * -np.sign(z_o)  # along the ray, toward +z
+    d = to_q / np.linalg.norm(to_q, axis=0)
+    _, _, path = paraxial_bend(tuple(d), qx, qy, f, n1, n2)
+    conj = (np.sign(z_o) * n1 * np.linalg.norm(pts - obj, axis=0)
+            - np.sign(z_i) * n2 * np.linalg.norm(img - pts, axis=0))
+    conj_0 = np.sign(z_o) * n1 * np.linalg.norm(obj) - np.sign(z_i) * n2 * np.linalg.norm(img)
+    diff = np.asarray(path) - (conj - conj_0)
+    return float(diff.max() - diff.min())
 
 
 def _not_collimated(lens: Lens, i: int) -> str:

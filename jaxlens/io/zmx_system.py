@@ -84,8 +84,12 @@ def angles_from_paraxial_image_heights(lens: Lens, heights: np.ndarray) -> Lens:
     (x, y), at the primary wavelength) as field angles in degrees.
 
     The paraxial chief ray at field (θx, θy) meets the image surface at K·(tan θx, tan θy),
-    K the height per unit tangent (linear), so θ = atan(h / K) exactly.
+    K the height per unit tangent (linear), so θ = atan(h / K) exactly. With an afocal
+    image space only zero heights are read (``afocal_zero_heights``).
     """
+    on_axis = afocal_zero_heights(lens, heights, 2)
+    if on_axis is not None:
+        return on_axis
     k = float(paraxial.image_height(lens, 45.0) / jnp.tan(jnp.deg2rad(45.0)))
     if not (math.isfinite(k) and k != 0.0):
         raise ValueError(
@@ -132,6 +136,9 @@ def angles_from_real_image_heights(lens: Lens, heights: np.ndarray) -> Lens:
         ValueError: when no valid real chief ray reaches a height (to
             ``REAL_HEIGHT_TOLERANCE``), naming the height.
     """
+    on_axis = afocal_zero_heights(lens, heights, 3)
+    if on_axis is not None:
+        return on_axis
     h = np.asarray(heights, np.float64)
     xy = np.stack([np.zeros_like(h), h], -1) if h.ndim == 1 else h
     k = float(aiming.image_scale(lens))
@@ -242,11 +249,30 @@ def field_type(ln) -> int:
             f"image heights")
     if len(ln.tokens) > 2 and ln.int(2, "object-space telecentric flag") != 0:
         raise ln.error("object-space telecentric systems (FTYP's second value 1) are not supported")
-    if afocal_image_space(ln) and kind in (2, 3):
-        raise ln.error(f"field type {kind} ({FIELD_TYPES[kind]}) with an afocal image space "
-                       f"(FTYP's seventh value 1): an image at infinity has no heights; use "
-                       f"angles (FTYP 0) or object heights (FTYP 1)")
+    # Image heights with an afocal image space (FTYP's seventh value 1) are read only where
+    # every one is 0, the axis whatever the field type (``afocal_zero_heights``).
     return kind
+
+
+def afocal_zero_heights(lens: Lens, heights: np.ndarray, kind: int) -> Lens | None:
+    """Image heights (FTYP 2 or 3, ``kind``) of a lens with an afocal image space
+    (``Lens.afocal_image``): all 0 mm reads as on axis (field angle 0°, the same field
+    whatever the field type), returned as the lens with zero fields; ``None`` when the image
+    space is not afocal (convert the heights as usual).
+
+    Raises:
+        ValueError: for a nonzero height: an image at infinity has no heights.
+    """
+    if not lens.afocal_image:
+        return None
+    h = np.asarray(heights, np.float64)
+    if np.any(h != 0.0):
+        raise ValueError(
+            f"field type {kind} ({FIELD_TYPES[kind]}) with an afocal image space (FTYP's "
+            f"seventh value 1): an image at infinity has no heights, and the file gives "
+            f"{float(np.max(np.abs(h))):g} mm (only 0, the axis, is read); use angles "
+            f"(FTYP 0) or object heights (FTYP 1)")
+    return eqx.tree_at(lambda m: m.fields, lens, jnp.zeros_like(jnp.asarray(h)))
 
 
 def afocal_image_space(ln) -> bool:
