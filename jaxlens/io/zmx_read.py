@@ -579,9 +579,6 @@ def _lens(f: ZmxFile, text: str, path: str, strict: bool, unknown_glass: str) ->
             checks.wavelengths(lens, np.array([w]), ln.tokens[0] if ln else f"{path}: WAVM",
                                "wavelength")
     checks.material_indices(lens, wl, path)
-    zmx_surfaces.check_opd_modes(lens, {
-        i: (zmx_surfaces.paraxial_surface(s, u, math.inf)[1], s.type_line or s.line)
-        for i, s in enumerate(body) if s.type == "PARAXIAL"})
     if field_type in (1, 2, 3):
         to_angles = {1: zmx_system.angles_from_object_heights,
                      2: zmx_system.angles_from_paraxial_image_heights,
@@ -591,6 +588,12 @@ def _lens(f: ZmxFile, text: str, path: str, strict: bool, unknown_glass: str) ->
         except ValueError as e:
             raise f.ftyp.error(str(e)) from None
     checks.field_angles(np.asarray(lens.fields), f"{path}: XFLN/YFLN", "field angles")
+    # After the fields are angles (image-height fields were on axis before); the beam's
+    # radius on a PARAXIAL surface is its DIAM (OpticStudio's automatic one is the beam's).
+    zmx_surfaces.check_opd_modes(lens, {
+        i: (zmx_surfaces.paraxial_surface(s, u, math.inf)[1], s.type_line or s.line,
+            s.diam[0] * u if s.diam and s.diam[0] > 0 else math.inf)
+        for i, s in enumerate(body) if s.type == "PARAXIAL"}, strict=strict)
     if f.aperture is None and f.pupd is not None:
         raise f.pupd.error("this aperture type is not supported; use ENPD, FNUM, FLOA or OBNA")
     if f.aperture is None:
