@@ -141,8 +141,11 @@ def test_a_large_difference_mode_1_or_no_bound_is_refused(tmp_path):
         _load(tmp_path, big)
     with pytest.raises(ValueError, match=r"OPD mode 1 .*cannot be bounded \(the mode integrates"):
         _load(tmp_path, _text(f1=-20000.0, sd=2.0, epd=4.0, opd="PARM 2 1"))
+    # Neither an aperture nor a DIAM bounds the beam.
+    no_diam = _text(f1=-20000.0, sd=2.0, epd=4.0, clipped=False).replace(
+        '  DIAM 2.0 1 0 0 1 ""\n', "")
     with pytest.raises(ValueError, match=r"cannot be bounded \(no finite semi-diameter"):
-        _load(tmp_path, _text(f1=-20000.0, sd=2.0, epd=4.0, clipped=False))
+        _load(tmp_path, no_diam)
 
 
 def test_an_unclipped_surface_is_bounded_by_the_diam_passed_by_the_reader(tmp_path):
@@ -156,6 +159,12 @@ def test_an_unclipped_surface_is_bounded_by_the_diam_passed_by_the_reader(tmp_pa
     assert bound == zmx_surfaces.opd_mode_error(clipped, 1)[0]
     with pytest.warns(ZmxWarning, match="differ by at most"):
         zmx_surfaces.check_opd_modes(lens, {1: (0, _Line(tmp_path), 2.0)})
+    # The reader passes the surface's DIAM (2 mm) and its strict switch.
+    mode0 = text.replace("PARM 2 2", "PARM 2 0")
+    with pytest.warns(ZmxWarning, match=r"two\.zmx:\d+: this PARAXIAL surface .*differ by at most"):
+        _load(tmp_path, mode0)
+    with pytest.raises(ValueError, match=r"differ by at most .*\(strict mode\)"):
+        _load(tmp_path, mode0, strict=True)
 
 
 class _Line:
