@@ -359,6 +359,13 @@ def wavelength_unit(wl, where: str, arg: str = "wavelength") -> None:
                          f"100 µm){_nm_hint(a[bad])}")
 
 
+def _outside(wl, lo: float, hi: float):
+    """Concrete wavelengths as a float array, and where they are not finite or fall outside
+    [lo, hi] µm (with the relative slack of catalog ranges)."""
+    a = np.asarray(wl, dtype=float)
+    return a, ~np.isfinite(a) | (a < lo * (1 - _REL)) | (a > hi * (1 + _REL))
+
+
 def wavelengths(lens, wl, where: str, arg: str = "wavelength"):
     """Check wavelengths (µm) against the lens's materials; returns ``wl``.
 
@@ -374,8 +381,7 @@ def wavelengths(lens, wl, where: str, arg: str = "wavelength"):
             wl, jnp.any(bad),
             f"{where}: {arg} outside {lo:g}–{hi:g} µm, {why}; wavelengths are in µm "
             f"(587.6 nm is 0.5876 µm)")
-    a = np.asarray(wl, dtype=float)
-    bad = ~np.isfinite(a) | (a < lo * (1 - _REL)) | (a > hi * (1 + _REL))
+    a, bad = _outside(wl, lo, hi)
     if np.any(bad):
         raise ValueError(
             f"{where}: {arg} {fmt(a[bad])} µm is outside {lo:g}–{hi:g} µm, {why}"
@@ -390,8 +396,7 @@ def material_wavelengths(m, wl, where: str, arg: str = "wavelength", hint: str =
     if is_traced(wl) or is_traced(m):
         return
     lo, hi = material_range(m)
-    a = np.asarray(wl, dtype=float)
-    bad = ~np.isfinite(a) | (a < lo * (1 - _REL)) | (a > hi * (1 + _REL))
+    a, bad = _outside(wl, lo, hi)
     if np.any(bad):
         raise ValueError(
             f"{where}: {arg} {fmt(a[bad])} µm is outside {lo:g}–{hi:g} µm, the data range of "
