@@ -287,6 +287,7 @@ def test_jit_vmap_grad_consistency():
     np.testing.assert_allclose(np.asarray(a.origin[:7]), np.asarray(c.origin), atol=1e-12)
 
 
+@pytest.mark.slow  # 8 s (CI time): test_ray_aiming checks the stop points in CI
 def test_real_aiming_hits_stop():
     lens = _asphere_lens()
     pupil = jnp.array([[0.0, 1.0], [0.0, -1.0], [1.0, 0.0], [0.0, 0.0]])
