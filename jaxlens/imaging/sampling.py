@@ -483,9 +483,8 @@ def stop_radius(lens: Lens, stop_size: str = "paraxial", *, object_z=None) -> Fl
     if stop_size not in STOP_SIZES:
         raise ValueError(f"stop_radius: stop_size must be one of {STOP_SIZES}, got "
                          f"{type(stop_size).__name__} {stop_size!r}")
-    par = paraxial.paraxial_data(lens).stop_semi_diameter
     if stop_size == "paraxial":
-        return par
+        return paraxial.paraxial_data(lens).stop_semi_diameter
     dt = lens.epd.dtype
     zep = paraxial.entrance_pupil_z(lens, lens.primary_wavelength)
     rim = jnp.stack([jnp.zeros((), dt), 0.5 * lens.epd, zep.astype(dt)])
@@ -549,9 +548,10 @@ def aim_at_stop(
                          f"{rays.shape} need pupil of shape {rays.shape + (2,)}, got "
                          f"{pupil.shape}")
     object_z = None if source_point is None else jnp.asarray(source_point)[..., 2]
-    stop_r = stop_radius(lens, stop_size, object_z=object_z)
+    par = paraxial.paraxial_data(lens).stop_semi_diameter
+    stop_r = par if stop_size == "paraxial" else stop_radius(lens, stop_size, object_z=object_z)
     sized = jnp.isfinite(stop_r)
-    stop_r = jnp.where(sized, stop_r, paraxial.paraxial_data(lens).stop_semi_diameter)
+    stop_r = jnp.where(sized, stop_r, par)
     target = pupil * stop_r
     zep = paraxial.entrance_pupil_z(lens)
     n_obj = lens.object_material.index(rays.wavelength)

@@ -547,7 +547,7 @@ def _lens(f: ZmxFile, text: str, path: str, strict: bool, unknown_glass: str) ->
     zmx_surfaces.check_object_plane(obj, dist)
     wl, primary, wl_lines = _wavelengths(f)
     _check_image_medium(f, body)
-    aim = zmx_system.ray_aiming(f.raim, f.path)
+    aim = zmx_system.ray_aiming(f.raim)
     field_type = zmx_system.field_type(f.ftyp)
     fields, vignetting = _fields(f, strict)
     if field_type == 0:  # angles (deg); heights are converted to angles later

@@ -385,7 +385,7 @@ RAIM_AIM = {0: "paraxial", 1: "real", 2: "real_marginal"}
 """``Lens.aim`` for each RAIM ray-aiming type (and the type ``save_zmx`` writes for each)."""
 
 
-def ray_aiming(ln, path: str) -> str:
+def ray_aiming(ln) -> str:
     """``Lens.aim`` from RAIM's ray-aiming type (``RAIM_AIM``): 0 (Zemax's "Off", or no RAIM
     line) is ``"paraxial"``; 1 (Zemax's "Paraxial" ray aiming: real rays aimed at the stop,
     whose size the paraxial marginal ray sets) ``"real"``; 2 (Zemax's "Real" ray aiming, the
