@@ -90,6 +90,9 @@ from .tolerance_metric import (  # noqa: F401  (re-exported: the metric's public
 from .tolerance_spec import (  # noqa: F401  (re-exported: the tolerances' public names)
     DECENTER_TILT,
     DISTRIBUTIONS,
+    MAX_CONIC,
+    MAX_FORM_SAG,
+    MAX_INDEX,
     MAX_THICKNESS,
     MAX_TILT,
     MAX_TRIALS,
