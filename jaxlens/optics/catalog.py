@@ -178,15 +178,19 @@ class GlassRecord:
         Raises:
             ValueError: If the formula gives no finite index >= 1 inside the glass's range.
         """
-        m = CatalogMaterial(
-            model=_dispersion_model(self.formula, self.coefficients, self.name),
-            name=self.name,
-            catalog=self.catalog,
-            catalog_nd=self.nd,
-            catalog_vd=self.vd,
-            formula=self.formula,
-            wavelength_range=self.wavelength_range,
-        )
+        # Concrete even inside a jit trace (get_material in a jitted function): there the
+        # coefficient arrays were tracers, the checks below skipped them and the nd check
+        # failed with a ConcretizationTypeError.
+        with jax.ensure_compile_time_eval():
+            m = CatalogMaterial(
+                model=_dispersion_model(self.formula, self.coefficients, self.name),
+                name=self.name,
+                catalog=self.catalog,
+                catalog_nd=self.nd,
+                catalog_vd=self.vd,
+                formula=self.formula,
+                wavelength_range=self.wavelength_range,
+            )
         lo, hi = self.wavelength_range or (LAMBDA_D, LAMBDA_D)
         probe = LAMBDA_D if lo <= LAMBDA_D <= hi else 0.5 * (lo + hi)
         where = f"glass {self.name} of catalog {self.catalog or '?'}"
