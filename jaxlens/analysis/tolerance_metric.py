@@ -12,6 +12,7 @@ import jax.numpy as jnp
 from jaxtyping import Array, Float
 
 from ..imaging.sampling import field_xy
+from ..optics import checks
 from ..optics.lens import Lens
 from .spots import spot_rays, weighted_rms
 
@@ -51,7 +52,15 @@ def field_rms(data: SpotData, dz=0.0) -> Float[Array, " F"]:
 
 
 def normalised_weights(weights):
-    return weights / jnp.sum(weights)
+    """Weights scaled to sum to 1; concrete ones must be finite, >= 0 and not all 0."""
+    w = jnp.asarray(weights)
+    if not checks.is_traced(w):
+        # Before: a list was a TypeError from jnp.sum, and [0, 0] gave NaN weights.
+        checks.values(w, "weights", "normalised_weights", lo=0, unit="(relative)")
+        if w.size == 0 or not float(jnp.sum(w)) > 0:
+            raise ValueError(f"normalised_weights: weights must hold a positive value "
+                             f"(relative), got {checks.fmt(w) if w.size else '[]'}")
+    return w / jnp.sum(w)
 
 
 def mean_rms_um(data: SpotData, weights, dz=0.0) -> Float[Array, ""]:

@@ -272,8 +272,25 @@ class Tabulated(AbstractMaterial):
         return jnp.interp(w**-2, x[order], self.indices[order])
 
 
-def abbe_number(material: AbstractMaterial) -> Array:
-    """Vd = (nd − 1)/(nF − nC) (``extrapolated_index``: defined for infrared glasses too)."""
+def abbe_number(material: AbstractMaterial, *, held_ends: bool = False) -> Array:
+    """Vd = (nd − 1)/(nF − nC) (``extrapolated_index``: defined for infrared glasses too).
+
+    A ``Tabulated`` material whose table does not hold the F and C lines (0.4861–0.6563 µm)
+    is refused (``ValueError``): beyond its ends its index is held constant, so its Vd was a
+    number of the held values (168 for a table from 0.6 µm, inf for an infrared one). With
+    ``held_ends=True`` that number is returned (the tolerance model's anchor of its Abbe
+    perturbation, where a constant end gives a non-dispersive material).
+    """
+    checks.switch(held_ends, "held_ends", "abbe_number")
+    if not held_ends and isinstance(material, Tabulated):
+        rng = material.table_range()
+        if rng is not None and not (rng[0] <= LAMBDA_F and LAMBDA_C <= rng[1]):
+            name = f" {material.name!r}" if material.name else ""
+            raise ValueError(
+                f"abbe_number: the table of Tabulated{name} spans {rng[0]:g}–{rng[1]:g} µm, "
+                f"which does not hold the F and C lines ({LAMBDA_F}–{LAMBDA_C} µm): its index "
+                f"is held constant beyond its ends, which gives no Abbe number (pass "
+                f"held_ends=True for the number of the held values)")
     n = material.extrapolated_index(jnp.asarray([LAMBDA_D, LAMBDA_F, LAMBDA_C]))
     return (n[0] - 1.0) / (n[1] - n[2])
 
