@@ -12,8 +12,14 @@ import numpy as np
 import pytest
 
 import jaxlens as jl
-from jaxlens.analysis import encircled_energy, rms_spot, self_intersection, wavefront, zernike_fit
-from jaxlens.analysis import tolerance
+from jaxlens.analysis import (
+    encircled_energy,
+    rms_spot,
+    self_intersection,
+    tolerance,
+    wavefront,
+    zernike_fit,
+)
 from jaxlens.analysis.tolerance import Tolerances, normalised_weights
 from jaxlens.design import DesignSpec
 from jaxlens.optics import catalog
