@@ -9,6 +9,7 @@ from __future__ import annotations
 import equinox as eqx
 import jax
 import jax.numpy as jnp
+import numpy as np
 from jaxtyping import Array, Float
 
 from ..imaging.sampling import field_xy
@@ -53,13 +54,15 @@ def field_rms(data: SpotData, dz=0.0) -> Float[Array, " F"]:
 
 def normalised_weights(weights):
     """Weights scaled to sum to 1; concrete ones must be finite, >= 0 and not all 0."""
-    w = jnp.asarray(weights)
-    if not checks.is_traced(w):
-        # Before: a list was a TypeError from jnp.sum, and [0, 0] gave NaN weights.
-        checks.values(w, "weights", "normalised_weights", lo=0, unit="(relative)")
-        if w.size == 0 or not float(jnp.sum(w)) > 0:
+    if not checks.is_traced(weights):
+        # Before: a list was a TypeError from jnp.sum, and [0, 0] gave NaN weights. NumPy:
+        # a jnp.sum of constants is a tracer inside the jitted metric.
+        a = np.asarray(weights, dtype=float)
+        checks.values(a, "weights", "normalised_weights", lo=0, unit="(relative)")
+        if a.size == 0 or not float(np.sum(a)) > 0:
             raise ValueError(f"normalised_weights: weights must hold a positive value "
-                             f"(relative), got {checks.fmt(w) if w.size else '[]'}")
+                             f"(relative), got {checks.fmt(a) if a.size else '[]'}")
+    w = jnp.asarray(weights)
     return w / jnp.sum(w)
 
 
