@@ -336,7 +336,7 @@ def analyses_more():
     A = jl.analysis
     probe("ray_fan n 0", lambda: ray_fan(cooke, 0.0, n=0).tangential, "n")
     probe("ray_fan n 2.5", lambda: ray_fan(cooke, 0.0, n=2.5).tangential, "n")
-    probe("ray_fan field [0, 10] (several)", lambda: ray_fan(cooke, [0.0, 10.0]).tangential, "field")
+    probe("ray_fan field [0, 10] (documented: one (θx, θy) pair)", lambda: ray_fan(cooke, [0.0, 10.0]).tangential, good=True)
     probe("ray_fan aim 'Real'", lambda: ray_fan(cooke, 0.0, aim="Real").tangential, "aim")
     probe("field_curvature fields []", lambda: field_curvature(cooke, fields=[]).sagittal, "fields")
     probe("field_curvature fields [95]", lambda: field_curvature(cooke, fields=[95.0]).sagittal, "field", "90")
@@ -350,7 +350,7 @@ def analyses_more():
     probe("wavefront field [0,1,2]", lambda: wavefront(cooke, [0.0, 1.0, 2.0], grid=9).rms, "field")
     probe("encircled_energy pupil_side 1", lambda: A.encircled_energy(cooke, 0.0, [0.01], pupil_side=1).energy, "pupil_side")
     probe("encircled_energy subsamples 0", lambda: A.encircled_energy(cooke, 0.0, [0.01], subsamples=0).energy, "subsamples")
-    probe("encircled_energy radii 2-D", lambda: A.encircled_energy(cooke, 0.0, [[0.01]]).energy, "radii")
+    probe("encircled_energy radii 2-D (documented: any shape, returned flattened)", lambda: A.encircled_energy(cooke, 0.0, [[0.01]]).energy, good=True)
     probe("distortion fields complex", lambda: A.distortion(cooke, [5j]).percent_ftan, "fields")
     probe("chief_ray depth nan", lambda: A.chief_ray(cooke, 0.0, depth=np.nan).origin, "depth")
     probe("spot_rays pupil 3-D (documented: a batch of pupil points)", lambda: A.spot_rays(cooke, 0.0, pupil=jnp.zeros((2, 2, 2))).origin.shape, good=True)
