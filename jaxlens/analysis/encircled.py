@@ -148,6 +148,13 @@ def _diffraction_samples(lens, field, wls, *, reference, shape, depth, pixel_siz
 def _samples(lens, field, radii_or_fraction, where, *, wavelength, method, reference, shape,
              pupil, depth, pixel_size, kernel_size, pupil_side, subsamples):
     field, wls = _check_common(lens, where, field, wavelength, method, reference, shape)
+    # The diffraction settings are checked whatever the method (before: pupil_side=1 or
+    # subsamples=0 passed without a word when the method was geometric).
+    checks.number(kernel_size, "kernel_size", where, lo=1, hi=checks.MAX_KERNEL_SIZE,
+                  integer=True, unit="pixels per side")
+    checks.number(pupil_side, "pupil_side", where, lo=2, integer=True, unit="rays per side")
+    checks.number(subsamples, "subsamples", where, lo=1, integer=True,
+                  unit="sub-samples per pixel side")
     if method == "geometric":
         if pupil is not None:
             pupil = pupil_points(pupil, where, unit_disc=True)
@@ -160,11 +167,6 @@ def _samples(lens, field, radii_or_fraction, where, *, wavelength, method, refer
         raise ValueError(f"{where}: method='diffraction' needs pixel_size (mm), the PSF grid "
                          f"pitch: a few per Airy radius 1.22·λ·F#")
     checks.number(pixel_size, "pixel_size", where, lo=0, lo_open=True, unit="mm")
-    checks.number(kernel_size, "kernel_size", where, lo=1, hi=checks.MAX_KERNEL_SIZE,
-                  integer=True, unit="pixels per side")
-    checks.number(pupil_side, "pupil_side", where, lo=2, integer=True, unit="rays per side")
-    checks.number(subsamples, "subsamples", where, lo=1, integer=True,
-                  unit="sub-samples per pixel side")
     return _diffraction_samples(lens, field, wls, reference=reference, shape=shape, depth=depth,
                                 pixel_size=pixel_size, kernel_size=int(kernel_size),
                                 pupil_side=int(pupil_side), subsamples=int(subsamples))

@@ -94,6 +94,7 @@ def spot_rays(
     ``lens.aim``)."""
     check_inputs(lens, "spot_rays", fields=field, wavelengths=wavelength, arg_f="field",
                      arg_w="wavelength", pupil=pupil)
+    checks.newton_iters(newton_iters, "spot_rays")
     field, wavelength = _as_arrays(lens, field, wavelength)
     return _spot_rays(lens, field, wavelength, pupil=pupil,
                       depth=lens_depth(lens, depth, "spot_rays"),
@@ -189,6 +190,7 @@ def rms_spot(
         with ``valid_fraction`` 0; its gradient is 0, never NaN.
     """
     checks.focal_image(lens, "rms_spot")
+    checks.newton_iters(newton_iters, "rms_spot")
     check_inputs(lens, "rms_spot", fields=fields, wavelengths=wavelengths, pupil=pupil,
                      own="all")
     fields, wavelengths = _as_arrays(lens, _own_fields(lens, fields), wavelengths)
@@ -446,7 +448,9 @@ def self_intersection(
     checks.number(n_radial, "n_radial", where, lo=2, integer=True, unit="radii")
     checks.number(n_angle, "n_angle", where, lo=1, integer=True, unit="azimuths")
     if not checks.is_traced(min_gap):
-        checks.number(min_gap, "min_gap", where, unit="mm")
+        # A negative clearance passed surfaces that cross by up to |min_gap| (ok True).
+        checks.number(min_gap, "min_gap", where, lo=0, unit="mm (the smallest clearance "
+                      "allowed between neighbouring surfaces)")
     n = lens.num_surfaces
     if semi_diameters is None:
         sd = clear_semi_diameters(lens, reaching=True)

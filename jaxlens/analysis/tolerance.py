@@ -90,6 +90,9 @@ from .tolerance_metric import (  # noqa: F401  (re-exported: the metric's public
 from .tolerance_spec import (  # noqa: F401  (re-exported: the tolerances' public names)
     DECENTER_TILT,
     DISTRIBUTIONS,
+    MAX_CONIC,
+    MAX_FORM_SAG,
+    MAX_INDEX,
     MAX_THICKNESS,
     MAX_TILT,
     MAX_TRIALS,
@@ -472,7 +475,7 @@ class ToleranceModel:
         curved = [ref and float(s.c) != 0.0 for s, ref in zip(lens.surfaces, self.refracting,
                                                                 strict=True)]
         glass = [not isinstance(m, Air) for m in lens.materials]
-        dispersive = [g and math.isfinite(float(abbe_number(m)))
+        dispersive = [g and math.isfinite(float(abbe_number(m, held_ends=True)))
                       for g, m in zip(glass, lens.materials, strict=True)]
         h = np.asarray(self.clear_radius, float)
         f = lambda flags, v: np.where(flags, v, 0.0)  # noqa: E731
@@ -545,7 +548,7 @@ class ToleranceModel:
         c = np.asarray([float(s.c) for s in lens.surfaces], dtype)
         radius = np.where(c != 0, 1.0 / np.where(c != 0, c, 1.0), np.inf)
         nd = [float(m.extrapolated_index(jnp.asarray(LAMBDA_D))) for m in lens.materials]
-        vd = [float(abbe_number(m)) if not isinstance(m, Air) else np.inf
+        vd = [float(abbe_number(m, held_ends=True)) if not isinstance(m, Air) else np.inf
               for m in lens.materials]
         p = Perturbation(
             radius_rel=radius, thickness=np.asarray(lens.thickness, dtype),

@@ -9,9 +9,11 @@ from __future__ import annotations
 import equinox as eqx
 import jax
 import jax.numpy as jnp
+import numpy as np
 from jaxtyping import Array, Float
 
 from ..imaging.sampling import field_xy
+from ..optics import checks
 from ..optics.lens import Lens
 from .spots import spot_rays, weighted_rms
 
@@ -51,7 +53,17 @@ def field_rms(data: SpotData, dz=0.0) -> Float[Array, " F"]:
 
 
 def normalised_weights(weights):
-    return weights / jnp.sum(weights)
+    """Weights scaled to sum to 1; concrete ones must be finite, >= 0 and not all 0."""
+    if not checks.is_traced(weights):
+        # Before: a list was a TypeError from jnp.sum, and [0, 0] gave NaN weights. NumPy:
+        # a jnp.sum of constants is a tracer inside the jitted metric.
+        a = np.asarray(weights, dtype=float)
+        checks.values(a, "weights", "normalised_weights", lo=0, unit="(relative)")
+        if a.size == 0 or not float(np.sum(a)) > 0:
+            raise ValueError(f"normalised_weights: weights must hold a positive value "
+                             f"(relative), got {checks.fmt(a) if a.size else '[]'}")
+    w = jnp.asarray(weights)
+    return w / jnp.sum(w)
 
 
 def mean_rms_um(data: SpotData, weights, dz=0.0) -> Float[Array, ""]:

@@ -27,6 +27,20 @@ a focus or zoom position, which belongs in the lens, not its tolerances. A Toler
 also needs it below the thinnest glass thickness of its lens (a thinner element would be
 traced with its surfaces crossed)."""
 
+MAX_FORM_SAG = 0.1
+"""Tolerances.irregularity and asphere_sag must be below this (mm of sag at the clear
+semi-diameter): optical drawings give surface form in fringes, a few at most (one fringe is
+λ/2, about 0.3 µm), so 0.1 mm is some 300 fringes; a sag error that large is another surface,
+or a value given in µm where mm are meant."""
+
+MAX_INDEX = 0.1
+"""Tolerances.index must be below this (absolute nd): melt tolerance classes are ±0.0002 to
+±0.001, and ±0.1 is another glass (±1 would put the index below that of air)."""
+
+MAX_CONIC = 1.0
+"""Tolerances.conic must be below this (absolute): ±1 turns a sphere into a paraboloid or a
+flat-vertex ellipsoid; conic tolerances of figured aspheres are ~0.001–0.05."""
+
 MAX_TRIALS = 1_000_000
 """Most Monte-Carlo trials (about a day of tracing; their perturbations take trials·P·8 bytes)."""
 
@@ -51,13 +65,14 @@ class Tolerances:
         thickness: mm, every thickness including the image distance; below
             ``MAX_THICKNESS`` (10 mm) and, in a ``ToleranceModel``, below the lens's thinnest
             glass thickness.
-        index: absolute nd.
+        index: absolute nd, below ``MAX_INDEX`` (0.1).
         abbe_rel: relative Abbe-number tolerance (0.005 = ±0.5 % of Vd).
-        irregularity: mm, peak sag of an r⁴ form error at the clear semi-diameter.
-        conic: absolute conic constant (sensitivity table only).
+        irregularity: mm, peak sag of an r⁴ form error at the clear semi-diameter; below
+            ``MAX_FORM_SAG`` (0.1 mm).
+        conic: absolute conic constant (sensitivity table only), below ``MAX_CONIC`` (1).
         asphere_sag: mm; each asphere coefficient a_i gets the tolerance asphere_sag / h^(2i),
             the change that moves the sag at the clear semi-diameter h by that much
-            (sensitivity table only).
+            (sensitivity table only); below ``MAX_FORM_SAG`` (0.1 mm).
         decenter: mm, each element's decenter in x and in y (0: off; see the module docstring);
             in a ``ToleranceModel`` below the lens's smallest clear semi-diameter.
         tilt: degrees, each element's tilt about x and about y (0: off; below 90).
@@ -92,6 +107,17 @@ class Tolerances:
             raise ValueError(f"Tolerances: thickness must be below {MAX_THICKNESS:g} mm (a "
                              f"fabrication or assembly tolerance, each thickness ± it), got "
                              f"{self.thickness!r}")
+        for name, limit, what in (
+                ("irregularity", MAX_FORM_SAG, "mm (peak sag of an r^4 form error at the "
+                 "clear semi-diameter; 1 fringe is about 0.0003 mm)"),
+                ("asphere_sag", MAX_FORM_SAG, "mm (sag change at the clear semi-diameter)"),
+                ("index", MAX_INDEX, "(absolute nd; melt tolerances are 0.0002-0.001)"),
+                ("conic", MAX_CONIC, "(absolute conic constant)")):
+            if getattr(self, name) >= limit:
+                # Before: any value; irregularity=1 (mm, meant as µm or fringes) gave a
+                # Monte-Carlo of surfaces bent by a millimetre.
+                raise ValueError(f"Tolerances: {name} must be below {limit:g} {what}, got "
+                                 f"{getattr(self, name)!r}")
         if self.radius_rel >= 0.5 or self.abbe_rel >= 0.5:
             raise ValueError(f"Tolerances: radius_rel and abbe_rel must be below 0.5 "
                              f"(relative), got {self.radius_rel!r} and {self.abbe_rel!r}")

@@ -261,7 +261,7 @@ def opd(
     """
     lens, dtype = _precise(lens)
     f, wl, depth, reference, aim = _common(lens, field, wavelength, depth, reference, aim, "opd")
-    checks.number(newton_iters, "newton_iters", "opd", lo=0, integer=True, unit="iterations")
+    checks.newton_iters(newton_iters, "opd")
     p = pupil_points(pupil, "opd", unit_disc=True)
     shape = p.shape[:-1]
     w, _ = _opd_impl(lens, f, p.reshape(-1, 2).astype(lens.epd.dtype), wl, depth,
@@ -410,10 +410,10 @@ def wavefront(
     lens, dtype = _precise(lens)
     f, wl, depth, reference, aim = _common(lens, field, wavelength, depth, reference, aim,
                                       "wavefront")
-    grid = checks.number(grid, "grid", "wavefront", lo=3, integer=True,
-                         unit="pupil samples per side")
-    checks.number(newton_iters, "newton_iters", "wavefront", lo=0, integer=True,
-                  unit="iterations")
+    # Bounded as a PSF grid is: grid=100000 asked for 80 GB after the lens was traced.
+    grid = checks.number(grid, "grid", "wavefront", lo=3, hi=checks.MAX_KERNEL_SIZE,
+                         integer=True, unit="pupil samples per side")
+    checks.newton_iters(newton_iters, "wavefront")
     return _cast(_wavefront_impl(lens, f, wl, depth, grid=int(grid), reference=reference,
                                  aim=aim, newton_iters=int(newton_iters)), dtype)
 
@@ -485,7 +485,6 @@ def opd_fan(
     wls = checks.wavelengths(lens, wls, "opd_fan", "wavelengths")
     checks.material_indices(lens, wls, "opd_fan", "wavelengths")
     n = checks.number(n, "n", "opd_fan", lo=2, integer=True, unit="pupil points")
-    checks.number(newton_iters, "newton_iters", "opd_fan", lo=0, integer=True,
-                  unit="iterations")
+    checks.newton_iters(newton_iters, "opd_fan")
     return _cast(_opd_fan_impl(lens, f, wls, depth, n=int(n), reference=reference, aim=aim,
                                newton_iters=int(newton_iters)), dtype)

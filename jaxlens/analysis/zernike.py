@@ -243,7 +243,28 @@ def zernike_fit(x: Float[ArrayLike, "*p"], y: Float[ArrayLike, "*p"],
         if not checks.is_traced(ok) and int(np.sum(sel)) < terms:
             raise ValueError(f"{where}: {int(np.sum(sel))} valid points cannot determine "
                              f"{terms} terms; give more points or fewer terms")
+        if not checks.is_traced(ok):
+            _check_rank(np.asarray(x, float)[sel], np.asarray(y, float)[sel], terms, indexing,
+                        where)
     return _fit(x, y, v, ok, terms=terms, indexing=indexing)
+
+
+MIN_CONDITION = 1e-14
+"""Smallest accepted ratio of the least and greatest eigenvalues of a fit's normal matrix
+AᵀA (the square of the design matrix's condition): below it the points cannot tell the terms
+apart (all at one spot, on a line or a ring) and the solve gave NaN or noise."""
+
+
+def _check_rank(x, y, terms, indexing, where) -> None:
+    a = np.asarray(zernike_terms(jnp.asarray(x), jnp.asarray(y), terms=terms,
+                                 indexing=indexing), float)
+    e = np.linalg.eigvalsh(a.T @ a)
+    if not e[-1] > 0 or e[0] < MIN_CONDITION * e[-1]:
+        raise ValueError(
+            f"{where}: the {x.size} fitted points cannot determine {terms} terms (eigenvalue "
+            f"ratio {max(e[0], 0.0) / e[-1] if e[-1] > 0 else 0.0:.3g} of the normal matrix, "
+            f"below {MIN_CONDITION:g}): points at one spot, on a line or a ring, or a patch "
+            f"too small for the order; spread them over the unit disc or fit fewer terms")
 
 
 def _fit(x, y, v, ok, *, terms, indexing) -> ZernikeFit:

@@ -21,6 +21,7 @@ import math
 import numbers
 import types
 
+import jax
 import numpy as np
 
 from ..optics import checks
@@ -154,6 +155,16 @@ class DesignSpec:
     efl: float | None = None
 
     def __post_init__(self):
+        # A 0-d NumPy or JAX array, or a NumPy scalar, is the number it holds (before: a
+        # TypeError for fov_start=jnp.asarray(40.0)); a 1-d array in a scalar field is
+        # refused by validate(), and one in a sequence field is that sequence.
+        for f in dataclasses.fields(self):
+            v = getattr(self, f.name)
+            if f.name in _SEQUENCES and _is_array(v) and np.ndim(v) == 1:
+                v = tuple(np.asarray(v).tolist())
+            if f.name in _SEQUENCES and isinstance(v, (tuple, list)):
+                v = tuple(_plain(x) for x in v)
+            object.__setattr__(self, f.name, _plain(v))
         # The paper's start, eased to the target where the target is easier (a frozen
         # dataclass: set once, here, before the checks see the values).
         for name, target, eased in (("fov_start", "fov", min), ("fnum_start", "fnum", max)):
@@ -314,6 +325,23 @@ class DesignSpec:
                 f"(≤ {max_product:.3f}); use more elements, a smaller field or a slower lens")
 
 
+_SEQUENCES = ("sensor_aspect", "materials", "wavelengths")
+
+
+def _is_array(value) -> bool:
+    """A concrete NumPy or JAX array, or a NumPy scalar."""
+    return (isinstance(value, (np.ndarray, np.generic, jax.Array))
+            and not checks.is_traced(value))
+
+
+def _plain(value):
+    """A 0-d NumPy or JAX array of booleans, ints or floats (or such a NumPy scalar) as the
+    Python value it holds; anything else as it is."""
+    if _is_array(value) and np.ndim(value) == 0 and np.asarray(value).dtype.kind in "biuf":
+        return np.asarray(value).item()
+    return value
+
+
 def _number(value, arg: str, *, lo=None, hi=None, lo_open=False, hi_open=False, unit="",
             integer=False):
     """``checks.number`` for a DesignSpec field, after its type check (TypeError): a number,
@@ -321,9 +349,11 @@ def _number(value, arg: str, *, lo=None, hi=None, lo_open=False, hi_open=False, 
     if isinstance(value, bool) or not isinstance(value, numbers.Integral if integer
                                                  else numbers.Real):
         span = checks.interval(lo, hi, lo_open, hi_open)
+        got = (f"one value, got an array of shape {np.shape(value)}"
+               if _is_array(value) and np.ndim(value) else
+               f"got {type(value).__name__} {value!r}")
         raise TypeError(f"DesignSpec: {arg} must be {'an int' if integer else 'a number'} in "
-                        f"{span}{f' {unit}' if unit else ''}, got {type(value).__name__} "
-                        f"{value!r}")
+                        f"{span}{f' {unit}' if unit else ''}, {got}")
     return checks.number(value, arg, "DesignSpec", lo=lo, hi=hi, lo_open=lo_open,
                          hi_open=hi_open, unit=unit, integer=integer)
 

@@ -62,9 +62,7 @@ from .materials import (
     EXTENDED2_POWERS,
     EXTENDED3_POWERS,
     EXTENDED_POWERS,
-    LAMBDA_C,
     LAMBDA_D,
-    LAMBDA_F,
     MAX_ND,
     AbstractMaterial,
     Air,
@@ -77,6 +75,7 @@ from .materials import (
     Sellmeier,
     Sellmeier2,
     Sellmeier4,
+    abbe_number,
 )
 
 __all__ = [
@@ -178,15 +177,19 @@ class GlassRecord:
         Raises:
             ValueError: If the formula gives no finite index >= 1 inside the glass's range.
         """
-        m = CatalogMaterial(
-            model=_dispersion_model(self.formula, self.coefficients, self.name),
-            name=self.name,
-            catalog=self.catalog,
-            catalog_nd=self.nd,
-            catalog_vd=self.vd,
-            formula=self.formula,
-            wavelength_range=self.wavelength_range,
-        )
+        # Concrete even inside a jit trace (get_material in a jitted function): there the
+        # coefficient arrays were tracers, the checks below skipped them and the nd check
+        # failed with a ConcretizationTypeError.
+        with jax.ensure_compile_time_eval():
+            m = CatalogMaterial(
+                model=_dispersion_model(self.formula, self.coefficients, self.name),
+                name=self.name,
+                catalog=self.catalog,
+                catalog_nd=self.nd,
+                catalog_vd=self.vd,
+                formula=self.formula,
+                wavelength_range=self.wavelength_range,
+            )
         lo, hi = self.wavelength_range or (LAMBDA_D, LAMBDA_D)
         probe = LAMBDA_D if lo <= LAMBDA_D <= hi else 0.5 * (lo + hi)
         where = f"glass {self.name} of catalog {self.catalog or '?'}"
@@ -553,7 +556,14 @@ def _search_order(catalogs: str | Iterable[str] | None):
     everything = list(_user_catalogs) + list(_shipped())
     if catalogs is None:
         return everything
-    wanted = [catalogs.upper()] if isinstance(catalogs, str) else [c.upper() for c in catalogs]
+    named = [catalogs] if isinstance(catalogs, str) else (
+        list(catalogs) if isinstance(catalogs, Iterable) else None)
+    if named is None or not all(isinstance(c, str) for c in named):
+        # Before: catalog_names(3) was "'int' object is not iterable".
+        raise TypeError(f"catalogs must be a catalog name (str) or a list of them, e.g. "
+                        f"'SCHOTT' or ['SCHOTT', 'CDGM'], got {type(catalogs).__name__} "
+                        f"{catalogs!r}")
+    wanted = [c.upper() for c in named]
     by_name = {}
     for cat, entries in everything:
         by_name.setdefault(cat, entries)
@@ -711,15 +721,21 @@ def catalog_names(catalog: str | None = None,
     return [name for name, old in seen.values() if obsolete or not old]
 
 
-def _nd_vd(entry: GlassRecord | AbstractMaterial) -> tuple[float, float]:
-    """Catalog nd and Vd, or values computed from the index for plain materials."""
+def _nd_vd(entry: GlassRecord | AbstractMaterial, strict: bool = False) -> tuple[float, float]:
+    """Catalog nd and Vd, or values computed from the index for plain materials. A table
+    without data at the F and C lines has no Vd: refused where ``strict``, else Vd 0 (off
+    the glass map, as Zemax's IR materials)."""
     if isinstance(entry, GlassRecord):
         return entry.nd, entry.vd
     if isinstance(entry, CatalogMaterial) and entry.catalog_nd is not None:
         return entry.catalog_nd, entry.catalog_vd
-    n = np.asarray(entry.extrapolated_index(jnp.asarray([LAMBDA_D, LAMBDA_F, LAMBDA_C])),
-                   dtype=float)
-    return float(n[0]), float((n[0] - 1.0) / (n[1] - n[2]))
+    nd = float(entry.extrapolated_index(jnp.asarray(LAMBDA_D)))
+    try:
+        return nd, float(abbe_number(entry))
+    except ValueError:
+        if strict:
+            raise
+        return nd, 0.0
 
 
 def glass_info(name: str, catalogs: str | Iterable[str] | None = None) -> tuple[str, float, float]:
@@ -742,5 +758,5 @@ def glass_info(name: str, catalogs: str | Iterable[str] | None = None) -> tuple[
     found = _find(name, catalogs)
     if found is None:
         raise _unknown(name, catalogs)
-    nd, vd = _nd_vd(found[1])
+    nd, vd = _nd_vd(found[1], strict=True)
     return found[0], nd, vd

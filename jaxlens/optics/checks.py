@@ -32,6 +32,10 @@ MAX_KERNEL_SIZE = 4096
 4096² float64 values are 128 MiB per wavelength; a kernel_size of 100001 overflowed int32
 pixel indices (an ``OverflowError`` from numpy) after the lens had been checked."""
 
+MAX_NEWTON_ITERS = 1000
+"""Most Newton iterations per ray–surface intersection: Newton's method converges in a few
+(the default is 6); 10**9 ran a ``fori_loop`` of that length on every aspheric surface."""
+
 _REL = 1e-6  # wavelength bounds are compared with this relative slack (float32 rounding)
 
 
@@ -149,6 +153,12 @@ def number(value, arg: str, where: str, *, lo=None, hi=None, lo_open=False, hi_o
     if bad:
         raise ValueError(msg)
     return int(v) if integer else v
+
+
+def newton_iters(value, where: str) -> int:
+    """The ``newton_iters`` of an entry point: a whole number in [0, ``MAX_NEWTON_ITERS``]."""
+    return number(value, "newton_iters", where, lo=0, hi=MAX_NEWTON_ITERS, integer=True,
+                  unit="iterations")
 
 
 def values(x, arg: str, where: str, *, lo=None, hi=None, lo_open=False, hi_open=False,

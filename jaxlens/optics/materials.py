@@ -13,6 +13,7 @@ arrays, so a model glass's (nd, Vd) can be optimised.
 from __future__ import annotations
 
 import equinox as eqx
+import jax
 import jax.numpy as jnp
 import numpy as np
 from jaxtyping import Array, ArrayLike, Float
@@ -45,6 +46,17 @@ class AbstractMaterial(eqx.Module):
     def index(self, wavelength: Float[ArrayLike, "*b"]) -> Float[Array, "*b"]:
         raise NotImplementedError
 
+    def __hash__(self) -> int:
+        """A hash of the material's values, consistent with ``==`` (``eqx.tree_equal``).
+
+        ``jax.jit(material.index)`` hashes the bound method, and with it the material:
+        equinox hashes a module's fields, and a JAX array is unhashable, so every material
+        with coefficients raised "unhashable type". Here concrete arrays hash by shape, dtype
+        and values; a traced one (a material built inside a transform) by identity.
+        """
+        leaves, treedef = jax.tree_util.tree_flatten(self)
+        return hash((treedef, tuple(_leaf_key(x) for x in leaves)))
+
     def extrapolated_index(self, wavelength: Float[ArrayLike, "*b"]) -> Float[Array, "*b"]:
         """The index at any wavelength in µm, outside the material's data range too.
 
@@ -64,6 +76,17 @@ class AbstractMaterial(eqx.Module):
         super().__init_subclass__(**kwargs)
         if "index" in cls.__dict__:
             cls.index = _unit_checked(cls.__dict__["index"])
+
+
+def _leaf_key(x):
+    if checks.is_traced(x):
+        return ("traced", id(x))
+    if isinstance(x, (jax.Array, np.ndarray, np.generic)):
+        a = np.asarray(x)
+        if a.dtype.kind == "f":
+            a = a + 0.0  # -0.0 == 0.0
+        return a.shape, a.dtype.str, a.tobytes()
+    return x
 
 
 def _unit_checked(index):
@@ -173,10 +196,11 @@ F or C line (0.4861 for 0.4861327 µm) is accepted; the index error there is bel
 class Tabulated(AbstractMaterial):
     """Indices given at a list of wavelengths.
 
-    The index is interpolated piecewise-linearly in 1/λ² (exact at the nodes). Beyond the
-    first and last node it is held constant, so the table's span (plus ``TABLE_SLACK``) is
-    its ``wavelength_range``: traces, PSFs and renders refuse wavelengths outside it. A table
-    of one node is a non-dispersive material, valid at any wavelength.
+    The index is interpolated piecewise-linearly in 1/λ² (exact at the nodes). The table's
+    span (plus ``TABLE_SLACK``) is its ``wavelength_range``: ``index`` refuses a concrete
+    wavelength outside it, as traces, PSFs and renders do; ``extrapolated_index`` (and a
+    traced wavelength, checked where it enters) holds the end value beyond the first and last
+    node. A table of one node is a non-dispersive material, valid at any wavelength.
     """
 
     wavelengths: Float[Array, " k"] = checks.float_field("wavelengths", "Tabulated")
@@ -224,6 +248,22 @@ class Tabulated(AbstractMaterial):
                              f"wavelength), got {checks.fmt(w)} µm")
 
     def index(self, wavelength):
+        """The interpolated index at wavelengths in µm; a concrete wavelength outside the
+        table (``wavelength_range``) raises ``ValueError`` naming the range (before, the end
+        value was returned: a plausible index where the table has no data).
+        ``extrapolated_index`` holds the end values beyond the table."""
+        if self.wavelengths.shape[0] > 1:
+            checks.material_wavelengths(
+                self, wavelength, f"Tabulated.index{f' ({self.name})' if self.name else ''}",
+                hint="; extrapolated_index holds the table's end values beyond it")
+        return self._interpolated(wavelength)
+
+    def extrapolated_index(self, wavelength):
+        """The index at any wavelength in µm: the table's end values beyond its range."""
+        checks.wavelength_unit(wavelength, "Tabulated.extrapolated_index")
+        return self._interpolated(wavelength)
+
+    def _interpolated(self, wavelength):
         w = jnp.asarray(wavelength)
         x = self.wavelengths**-2
         order = jnp.argsort(x)
@@ -232,8 +272,25 @@ class Tabulated(AbstractMaterial):
         return jnp.interp(w**-2, x[order], self.indices[order])
 
 
-def abbe_number(material: AbstractMaterial) -> Array:
-    """Vd = (nd − 1)/(nF − nC) (``extrapolated_index``: defined for infrared glasses too)."""
+def abbe_number(material: AbstractMaterial, *, held_ends: bool = False) -> Array:
+    """Vd = (nd − 1)/(nF − nC) (``extrapolated_index``: defined for infrared glasses too).
+
+    A ``Tabulated`` material whose table does not hold the F and C lines (0.4861–0.6563 µm)
+    is refused (``ValueError``): beyond its ends its index is held constant, so its Vd was a
+    number of the held values (168 for a table from 0.6 µm, inf for an infrared one). With
+    ``held_ends=True`` that number is returned (the tolerance model's anchor of its Abbe
+    perturbation, where a constant end gives a non-dispersive material).
+    """
+    checks.switch(held_ends, "held_ends", "abbe_number")
+    if not held_ends and isinstance(material, Tabulated):
+        rng = material.table_range()
+        if rng is not None and not (rng[0] <= LAMBDA_F and LAMBDA_C <= rng[1]):
+            name = f" {material.name!r}" if material.name else ""
+            raise ValueError(
+                f"abbe_number: the table of Tabulated{name} spans {rng[0]:g}–{rng[1]:g} µm, "
+                f"which does not hold the F and C lines ({LAMBDA_F}–{LAMBDA_C} µm): its index "
+                f"is held constant beyond its ends, which gives no Abbe number (pass "
+                f"held_ends=True for the number of the held values)")
     n = material.extrapolated_index(jnp.asarray([LAMBDA_D, LAMBDA_F, LAMBDA_C]))
     return (n[0] - 1.0) / (n[1] - n[2])
 
