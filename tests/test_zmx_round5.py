@@ -265,3 +265,16 @@ def test_tool_finds_r2_terms(tmp_path):
     without = _efl(zmx.loads(TOROID.replace("PARM 1 1.0E-6", "PARM 1 0")
                              .replace("PARM 2 0.001", "PARM 2 0")))
     assert not np.isclose(with_y2, without, rtol=1e-3)
+
+
+def test_tool_reads_unknown_glasses_as_model_glasses_when_asked(tmp_path, capsys):
+    """``--unknown-glass model`` (the Canon RF70-200 patent file's OHARA S-LAL7Q): the tool
+    passes jaxlens.load's unknown_glass; by default such a file is refused."""
+    cc = _check_corpus()
+    p = tmp_path / "canon_like.zmx"
+    p.write_text(_singlet(glas="GLAS S-LAL7Q 0 0 1.6516 58.54 0 0 0 0 0 0"))
+    assert cc.check_file(str(p))["status"] == "refused"
+    rec = cc.check_file(str(p), unknown_glass="model")
+    assert rec["status"] == "loaded" and rec["round_trip_exact"]
+    assert cc.main([str(tmp_path), "--json", "--unknown-glass", "model"]) == 0
+    assert '"status": "loaded"' in capsys.readouterr().out

@@ -20,6 +20,8 @@ TOROIDAL PARM 2 ≠ 0): Zemax and jaxlens count it in the paraxial power (c + 2a
     python tools/check_corpus.py /tmp/corpus            # a table
     python tools/check_corpus.py /tmp/corpus --json     # one JSON record a file
     python tools/check_corpus.py /tmp/corpus --strict   # read as `jaxlens report` does
+    python tools/check_corpus.py /tmp/corpus --unknown-glass model   # model glasses (nd, Vd)
+                                                # for glasses no catalog holds
 
 optiland is optional (it is not a jaxlens dependency); without it its columns are skipped.
 """
@@ -183,12 +185,12 @@ def _same_lens(a, b) -> bool:
                for x, y in zip(la, lb, strict=True))
 
 
-def check_file(path: str, strict: bool = False) -> dict:
+def check_file(path: str, strict: bool = False, unknown_glass: str = "error") -> dict:
     rec: dict = {"file": os.path.basename(path)}
     try:
         with warnings.catch_warnings(record=True) as caught:
             warnings.simplefilter("always")
-            lens = jl.load(path, strict=strict)
+            lens = jl.load(path, strict=strict, unknown_glass=unknown_glass)
         rec["warnings"] = [str(w.message) for w in caught]
     except ValueError as e:
         rec.update(status="refused", message=str(e))
@@ -341,11 +343,19 @@ def run_folder(argv, check_file, table, description: str) -> int:
     ap.add_argument("--strict", action="store_true",
                     help="read as `python -m jaxlens report` does: strict=True (settings "
                          "jaxlens does not use are refused, not warned about)")
+    ap.add_argument("--unknown-glass", choices=("error", "model"), default="error",
+                    help="jaxlens.load's unknown_glass: 'model' reads a glass no catalog holds "
+                         "as a model glass of its GLAS line's nd and Vd")
     args = ap.parse_args(argv)
+    params = inspect.signature(check_file).parameters
     if args.strict:
-        if "strict" not in inspect.signature(check_file).parameters:
+        if "strict" not in params:
             ap.error("--strict: this tool's check takes no strict option")
         check_file = functools.partial(check_file, strict=True)
+    if args.unknown_glass != "error":
+        if "unknown_glass" not in params:
+            ap.error("--unknown-glass: this tool's check takes no unknown_glass option")
+        check_file = functools.partial(check_file, unknown_glass=args.unknown_glass)
     files = sorted(os.path.join(args.folder, f) for f in os.listdir(args.folder)
                    if f.lower().endswith(".zmx"))
     if not files:
