@@ -23,6 +23,11 @@ TOROIDAL PARM 2 ≠ 0): Zemax and jaxlens count it in the paraxial power (c + 2a
     python tools/check_corpus.py /tmp/corpus --unknown-glass model   # model glasses (nd, Vd)
                                                 # for glasses no catalog holds
 
+The ``same n`` column gives optiland's EFL again with jaxlens's index in every medium (at
+the primary wavelength), so a difference there is geometry, not glass data: the catalogs
+differ (an old SCHOTT glass's index by 1e-6 to 3e-5 between the two), and optiland 0.6.3
+takes a substitution-solved glass (``GLAS name 3 …``) from the line's stale nd and Vd.
+
 optiland is optional (it is not a jaxlens dependency); without it its columns are skipped.
 """
 
@@ -218,7 +223,34 @@ def check_file(path: str, strict: bool = False, unknown_glass: str = "error") ->
             sign = -1.0 if rec["odd_mirrors"] else 1.0
             efl *= _image_index_ratio(lens, optic)
             rec["rel_diff"] = efl_rel_diff(rec["efl"], sign * efl)
+            same = _efl_with_our_media(optic, lens, path)
+            if same is not None:
+                rec["rel_diff_same_n"] = efl_rel_diff(rec["efl"], sign * same)
     return rec
+
+
+def _efl_with_our_media(optic, lens, path: str):
+    """optiland's EFL (mm) with jaxlens's index in every medium at the primary wavelength
+    (optiland folds coordinate breaks into the next surface; its last medium is image
+    space's); None where optiland does not take the media or fails."""
+    from optiland.materials import IdealMaterial
+
+    wl = float(lens.wavelengths[lens.primary])
+    idx = [abs(float(n)) for n in lens.indices(wl)]
+    after = [idx[0]] + [idx[i + 1] for i, s in enumerate(lens.surfaces)
+                        if type(s).__name__ != "CoordinateBreak"]
+    after.append(after[-1])
+    surfaces = optic.surfaces.surfaces
+    if len(surfaces) != len(after):
+        return None
+    try:
+        with warnings.catch_warnings(), contextlib.redirect_stdout(io.StringIO()):
+            warnings.simplefilter("ignore")
+            for srf, n in zip(surfaces, after, strict=True):
+                srf.material_post = IdealMaterial(n=n)
+            return float(np.asarray(optic.paraxial.f2())) * lens_unit_mm(path)
+    except Exception:  # noqa: BLE001  (optiland's failure is a missing value here)
+        return None
 
 
 def efl_rel_diff(ours: float, theirs: float) -> float:
@@ -293,7 +325,8 @@ def table(records: list[dict]) -> str:
     have_optiland = load_zemax_file is not None
     head = f"{'file':42s} {'jaxlens':8s} {'EFL |n′|/Φ':>16s} {'rt':3s}"
     if have_optiland:
-        head += f" {'optiland EFL':>16s} {'rel diff':>9s} {'written: EFL/clip/n′':>22s}"
+        head += (f" {'optiland EFL':>16s} {'rel diff':>9s} {'same n':>8s} "
+                 f"{'written: EFL/clip/n′':>22s}")
     rows = [head, "-" * len(head)]
     for r in records:
         line = (f"{r['file'][:42]:42s} {r['status']:8s} {_fmt(r.get('efl')):>16s} "
@@ -306,7 +339,9 @@ def table(records: list[dict]) -> str:
                  f"{'ok' if r['written_image_index_same'] else 'NO'}")
             if "written_optiland_error" in r:
                 w = "optiland failed"
-            line += f" {_fmt(r.get('optiland_efl')):>16s} {_fmt(rd, '.1e'):>9s}{flag:2s} {w:>20s}"
+            sn = r.get("rel_diff_same_n")
+            line += (f" {_fmt(r.get('optiland_efl')):>16s} {_fmt(rd, '.1e'):>9s}{flag:2s}"
+                     f"{_fmt(sn, '.1e'):>8s} {w:>20s}")
         rows.append(line)
         if r["status"] != "loaded":
             rows.append(f"    {r['message'][:300]}")
@@ -327,8 +362,10 @@ def table(records: list[dict]) -> str:
         both = [r for r in records if r.get("rel_diff") is not None]
         focal = [r for r in both if _compared(r)]
         agree = sum(r["rel_diff"] <= EFL_RTOL for r in focal)
+        same = sum(r.get("rel_diff_same_n", math.inf) <= EFL_RTOL for r in focal)
         rows.append(f"both load {len(both)} ({len(both) - len(focal)} not compared: afocal, or "
-                    f"r² terms); EFL agrees to {EFL_RTOL:g} relative in {agree} of {len(focal)}")
+                    f"r² terms); EFL agrees to {EFL_RTOL:g} relative in {agree} of {len(focal)}, "
+                    f"with jaxlens's indices in optiland (same n) in {same}")
     else:
         rows.append("optiland not installed: its columns are skipped")
     return "\n".join(rows)
