@@ -39,6 +39,8 @@ OPTILAND_EFL = {
     "rayoptics_HoO-V2C18Ex66.zmx": (90.05187904998931, None),
     "rayoptics_US00583336-2-scaled.zmx": (49.38897584676335, None),
     "rayoptics_US05331467-1.zmx": (999.6369653778445, None),  # mirrors and an OBSC
+    # Three off-axis mirrors with OBDC-decentered SQAP apertures (tests/test_zmx_round5.py).
+    "rayoptics_US08011793-1_trimmed.zmx": (499.9996204043674, None),
 }
 
 # What each file that loads is reported for (a ZmxWarning naming the line), if anything.
@@ -60,7 +62,9 @@ REFUSED = {
 # Files that load but optiland's EFL was not recorded for: the known answer instead. The
 # off-axis parabola of zmax_37992 (R = 190.6 mm, its aperture decentered by OBDC 0 190.6,
 # once refused) has f = R/2 = 95.3 mm.
-KNOWN_EFL = {"rayoptics_zmax_37992.zmx": 1 / (2 * 5.246589716684155885E-03)}
+KNOWN_EFL = {"rayoptics_zmax_37992.zmx": 1 / (2 * 5.246589716684155885E-03),
+             # One curved surface and no glass: no power (tests/test_zmx_round5.py).
+             "optiland_lens_offset_aperture.zmx": math.inf}
 
 # Files checked in a test of their own (optiland 0.6.3 does not read their surface type).
 CHECKED_ELSEWHERE = {"rayoptics_ASL5040-UV.zmx": "tests/test_qtype.py (QED_TYPE, Q-bfs)"}
