@@ -417,7 +417,8 @@ def check_opd_modes(lens: Lens, modes: dict, *, strict: bool = False) -> None:
             report(strict, f"{ln.path}:{ln.number}: {head}: the two paths differ by at most "
                            f"{error:.2g} waves (peak to valley over the surface's "
                            f"semi-diameter, below the {OPD_MODE_TOLERANCE_WAVES:g} waves "
-                           f"accepted); the rays are the same in every mode: "
+                           f"that a lenient read accepts); the rays are the same in every "
+                           f"mode: "
                            f"{ln.text.strip()!r}")
             continue
         size = (f"the two paths differ by {error:.3g} waves (peak to valley over the "
