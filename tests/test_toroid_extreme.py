@@ -93,8 +93,6 @@ def test_enough_newton_steps_find_every_root(fan):
     np.testing.assert_array_equal(ok, np.isfinite(roots))
 
 
-@pytest.mark.xfail(strict=True, reason="needs the tracing.step change (iterate the rays not "
-                                       "yet converged past newton_iters): see the report")
 def test_the_default_newton_steps_find_every_root(fan):
     """With the tracer's default iteration count, a ray is a miss only where no root exists."""
     surface, o, d, roots = fan
@@ -103,8 +101,6 @@ def test_the_default_newton_steps_find_every_root(fan):
     np.testing.assert_allclose(t[ok], roots[ok], rtol=0, atol=1e-9)
 
 
-@pytest.mark.xfail(strict=True, reason="needs the tracing.step change (iterate the rays not "
-                                       "yet converged past newton_iters): see the report")
 def test_the_root_of_a_slow_ray_has_the_implicit_gradient(fan):
     """dt/da_1 and dt/dy0 at the root of a ray that needs more than six Newton steps, against
     central differences of the brute-force root."""

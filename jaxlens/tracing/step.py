@@ -62,6 +62,11 @@ from ..optics.surfaces import AbstractSurface
 
 DEFAULT_NEWTON_ITERS = 6
 
+# Past the fixed steps, a ray whose iterate is not yet accepted (``converged``) takes up to this
+# many more (``continue_newton``); the tolerance on |F| is NEWTON_TOL·sqrt(eps)·(1 + |t|) mm.
+NEWTON_EXTRA_ITERS = 40
+NEWTON_TOL = 64.0
+
 
 # No lens needs a ray parameter beyond this (mm); larger roots are treated as misses, which
 # also keeps every division below bounded, so gradients stay finite.
@@ -172,6 +177,59 @@ def _conic_root_jvp(bounded_below, primals, tangents):
     return t_marked, jnp.where(good, -df / jnp.where(good, f_t, 1.0), 0.0)
 
 
+def converged(f, df, t):
+    """Whether the Newton iterate ``t`` (mm) is accepted as a root of F: |F(t)| ≤ 64·sqrt(eps)
+    ·(1 + |t|) mm (``NEWTON_TOL``), F finite and F'(t) ≠ 0. The accepted iterate then takes one
+    more (differentiable) Newton step, which squares its error."""
+    eps = jnp.finfo(jnp.result_type(f)).eps
+    return (jnp.abs(f) <= NEWTON_TOL * jnp.sqrt(eps) * (1.0 + jnp.abs(t))) & jnp.isfinite(f) & (
+        df != 0)
+
+
+def continue_newton(residual, t, project=lambda t: t, max_iters: int = NEWTON_EXTRA_ITERS):
+    """Newton steps past the fixed ones, only on the rays not yet ``converged``.
+
+    A ``jax.lax.while_loop`` that runs while some ray is still iterating: where every ray is
+    accepted at ``t`` its body never runs, so the common case costs one residual pass and a
+    reduction (the result is then ``t`` itself, bit for bit). A ray stops iterating once it is
+    accepted, or gives up (it is then a miss) when its step does not shrink (Newton from a good
+    start shrinks it, by at least half per step even at a double root; with no root F has no
+    zero to approach and the steps jump about), is zero (held at ``project``'s bound with F of
+    the wrong sign) or cannot be taken (F' too small to divide, F not finite); at most
+    ``max_iters`` more steps. It carries no gradient (stop the gradients of its inputs): the
+    caller differentiates the root by the implicit function theorem.
+
+    Args:
+        residual: t -> (F(t), F'(t)), elementwise on ``t``.
+        t: the iterates ``[*batch]`` after the fixed steps.
+        project: t -> the admissible t (projected Newton), elementwise.
+        max_iters: the most extra steps (static).
+
+    Returns:
+        The iterates ``[*batch]``: unchanged where already accepted or given up.
+    """
+    f, df = residual(t)
+    # Per ray, one array: the length of its last step while it iterates (inf before the
+    # first), −1 once it has stopped; carrying a flag and a length would be two arrays.
+    last = jnp.where(converged(f, df, t), -1.0, jnp.inf).astype(t.dtype)
+
+    def going(state):
+        k, _, last = state
+        return (k < max_iters) & jnp.any(last >= 0)
+
+    def body(state):
+        k, t, last = state
+        f, df = residual(t)
+        dt, ok = bounded_div(f, df)
+        t_new = project(t - dt)
+        size = jnp.abs(t_new - t)
+        go = (last >= 0) & ~converged(f, df, t) & ok & jnp.isfinite(f) & (size < last) & (
+            size > 0)
+        return k + 1, jnp.where(go, t_new, t), jnp.where(go, size, -1.0)
+
+    return jax.lax.while_loop(going, body, (0, t, last))[1]
+
+
 def _residual(surface: AbstractSurface, o, d, t):
     px, py, pz = (oi + t * di for oi, di in zip(o, d, strict=True))
     z, gx, gy, inside = surface.sag_and_grad(px, py)
@@ -253,9 +311,10 @@ def intersect(
         return newton_step(t, f, df)[0]
 
     t0 = jax.lax.fori_loop(0, max(newton_iters - 1, 0), step, t0)
+    if newton_iters > 0:
+        t0 = continue_newton(lambda t: _residual(surf_s, o_s, d_s, t)[:2], t0, project)
     f0, df0, _ = _residual(surf_s, o_s, d_s, t0)
-    scale = 1.0 + jnp.abs(t0)
-    ok = (jnp.abs(f0) <= 64 * jnp.sqrt(eps) * scale) & jnp.isfinite(f0) & (df0 != 0)
+    ok = converged(f0, df0, t0)
     if t_min is not None:
         ok = ok & (t0 >= t_min)
     # Flagged rays take the last step at a harmless point, so their gradient stays finite.
