@@ -24,7 +24,11 @@ Intersections:
     both work and neither differentiates the root selection). Surfaces
     with polynomial terms take ``newton_iters`` Newton steps on F(t) = z(t) − sag(x(t),
     y(t)), from the base conic's root or the vertex plane, whichever gives the shorter
-    first step, kept at t ≥ t_min (projected Newton). Those iterations carry no gradient. One last
+    first step, kept at t ≥ t_min (projected Newton); a ray whose iterate is then not yet
+    ``settled`` (|F| ≤ 64·sqrt(eps)·(1 + |t|) mm, ``converged``, and a next step of at most
+    eps^(3/4)·(1 + |t|) mm) goes on, alone, until it is, or gives up (``continue_newton``: a
+    ``while_loop`` whose body does not run when every ray is settled, the common case). A ray
+    is a hit where its last iterate is ``converged``. Those iterations carry no gradient. One last
     Newton step is taken with gradients switched on and the derivative F'(t) held
     fixed; at the converged root its derivative is exactly the implicit-function
     theorem result dt/dθ = −(∂F/∂θ)/(∂F/∂t), so the backward pass never unrolls the
@@ -62,8 +66,8 @@ from ..optics.surfaces import AbstractSurface
 
 DEFAULT_NEWTON_ITERS = 6
 
-# Past the fixed steps, a ray whose iterate is not yet accepted (``converged``) takes up to this
-# many more (``continue_newton``); the tolerance on |F| is NEWTON_TOL·sqrt(eps)·(1 + |t|) mm.
+# Past the fixed steps, a ray whose iterate is not yet ``settled`` takes up to this many more
+# (``continue_newton``); a hit needs |F| ≤ NEWTON_TOL·sqrt(eps)·(1 + |t|) mm (``converged``).
 NEWTON_EXTRA_ITERS = 40
 NEWTON_TOL = 64.0
 
@@ -186,18 +190,30 @@ def converged(f, df, t):
         df != 0)
 
 
+def settled(f, df, t):
+    """Whether the iterate ``t`` is ``converged`` and its next Newton step, |F/F'|, is at most
+    eps^(3/4)·(1 + |t|) mm: then it lies at rounding from the root (up to the square of that,
+    times the curvature), and the implicit derivative that the last step takes there is the
+    root's (``surface_adjoint``'s reverse rule takes it at the root), to about eps^(3/4)."""
+    eps = jnp.finfo(jnp.result_type(f)).eps
+    small = jnp.abs(f) <= eps**0.75 * (1.0 + jnp.abs(t)) * jnp.abs(df)
+    return converged(f, df, t) & small
+
+
 def continue_newton(residual, t, project=lambda t: t, max_iters: int = NEWTON_EXTRA_ITERS):
-    """Newton steps past the fixed ones, only on the rays not yet ``converged``.
+    """Newton steps past the fixed ones, only on the rays not yet ``settled``.
 
     A ``jax.lax.while_loop`` that runs while some ray is still iterating: where every ray is
-    accepted at ``t`` its body never runs, so the common case costs one residual pass and a
-    reduction (the result is then ``t`` itself, bit for bit). A ray stops iterating once it is
-    accepted, or gives up (it is then a miss) when its step does not shrink (Newton from a good
-    start shrinks it, by at least half per step even at a double root; with no root F has no
-    zero to approach and the steps jump about), is zero (held at ``project``'s bound with F of
-    the wrong sign) or cannot be taken (F' too small to divide, F not finite); at most
-    ``max_iters`` more steps. It carries no gradient (stop the gradients of its inputs): the
-    caller differentiates the root by the implicit function theorem.
+    settled at ``t`` (after six steps on an ordinary asphere, every ray is: the next step is
+    at rounding) its body never runs, so the common case costs one residual pass and a
+    reduction, and the result is ``t`` itself, bit for bit. A ray iterates until it is
+    ``settled``. It gives up (it is then a miss, unless already ``converged``) when its step
+    does not shrink (Newton from a good start shrinks it, by at least half per step even at a
+    double root; with no root F has no zero to approach and the steps jump about), is zero
+    (held at ``project``'s bound with F of the wrong sign, or at rounding) or cannot be taken
+    (F' too small to divide, F not finite); at most ``max_iters`` more steps. It carries no
+    gradient (stop the gradients of its inputs): the caller differentiates the root by the
+    implicit function theorem.
 
     Args:
         residual: t -> (F(t), F'(t)), elementwise on ``t``.
@@ -206,12 +222,12 @@ def continue_newton(residual, t, project=lambda t: t, max_iters: int = NEWTON_EX
         max_iters: the most extra steps (static).
 
     Returns:
-        The iterates ``[*batch]``: unchanged where already accepted or given up.
+        The iterates ``[*batch]``: unchanged where already settled.
     """
     f, df = residual(t)
-    # Per ray, one array: the length of its last step while it iterates (inf before the
-    # first), −1 once it has stopped; carrying a flag and a length would be two arrays.
-    last = jnp.where(converged(f, df, t), -1.0, jnp.inf).astype(t.dtype)
+    # Per ray, one array: the length of the step that reached its iterate while it iterates
+    # (inf before the first), −1 once it has stopped; a flag and a length would be two arrays.
+    last = jnp.where(settled(f, df, t), -1.0, jnp.inf).astype(t.dtype)
 
     def going(state):
         k, _, last = state
@@ -223,7 +239,7 @@ def continue_newton(residual, t, project=lambda t: t, max_iters: int = NEWTON_EX
         dt, ok = bounded_div(f, df)
         t_new = project(t - dt)
         size = jnp.abs(t_new - t)
-        go = (last >= 0) & ~converged(f, df, t) & ok & jnp.isfinite(f) & (size < last) & (
+        go = (last >= 0) & ~settled(f, df, t) & ok & jnp.isfinite(f) & (size < last) & (
             size > 0)
         return k + 1, jnp.where(go, t_new, t), jnp.where(go, size, -1.0)
 
@@ -253,7 +269,9 @@ def intersect(
     Args:
         surface: the surface.
         o, d: (x, y, z) tuples of ``[*batch]`` arrays: ray points and unit directions.
-        newton_iters: Newton iterations for surfaces with polynomial terms.
+        newton_iters: Newton iterations that every ray takes on a surface with polynomial
+            terms; a ray not yet ``settled`` then takes up to ``NEWTON_EXTRA_ITERS`` more.
+            0: none at all, the last step is taken from the start.
         first: whether this is the first surface (object space).
         backward: bool array, True where the gap to this surface is negative (its vertex
             lies before the previous one, as Zemax files allow): there the ray may travel
