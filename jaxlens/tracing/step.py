@@ -225,25 +225,28 @@ def continue_newton(residual, t, project=lambda t: t, max_iters: int = NEWTON_EX
         The iterates ``[*batch]``: unchanged where already settled.
     """
     f, df = residual(t)
-    # Per ray, one array: the length of the step that reached its iterate while it iterates
-    # (inf before the first), −1 once it has stopped; a flag and a length would be two arrays.
-    last = jnp.where(settled(f, df, t), -1.0, jnp.inf).astype(t.dtype)
+    # The loop's test is a scalar: whether any ray iterates. Per ray, one array: the length
+    # of the step that reached its iterate (inf before the first), −1 once it has stopped;
+    # a settled ray stops in the first pass (a flag and a length would be two arrays, and
+    # one computed from the residual here would be a second pass over the rays).
+    last = jnp.full_like(t, jnp.inf)
+    going0 = jnp.any(~settled(f, df, t))
 
     def going(state):
-        k, _, last = state
-        return (k < max_iters) & jnp.any(last >= 0)
+        k, _, _, more = state
+        return (k < max_iters) & more
 
     def body(state):
-        k, t, last = state
+        k, t, last, _ = state
         f, df = residual(t)
         dt, ok = bounded_div(f, df)
         t_new = project(t - dt)
         size = jnp.abs(t_new - t)
         go = (last >= 0) & ~settled(f, df, t) & ok & jnp.isfinite(f) & (size < last) & (
             size > 0)
-        return k + 1, jnp.where(go, t_new, t), jnp.where(go, size, -1.0)
+        return k + 1, jnp.where(go, t_new, t), jnp.where(go, size, -1.0), jnp.any(go)
 
-    return jax.lax.while_loop(going, body, (0, t, last))[1]
+    return jax.lax.while_loop(going, body, (0, t, last, going0))[1]
 
 
 def _residual(surface: AbstractSurface, o, d, t):
