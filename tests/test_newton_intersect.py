@@ -90,7 +90,7 @@ def test_without_a_root_the_iteration_gives_up_early_and_is_not_accepted():
 
 def test_an_ordinary_asphere_is_intersected_as_without_the_extra_steps(monkeypatch):
     """cellphone6's aspheres (conics −224 … 147, terms to A12), every ray of a wide fan: every
-    iterate is accepted after the fixed steps, so the result is the one without the extra
+    iterate is settled after the fixed steps, so the result is the one without the extra
     steps, bit for bit."""
     lens = jl.zoo.cellphone6()
     rng = np.random.default_rng(1)
@@ -102,6 +102,7 @@ def test_an_ordinary_asphere_is_intersected_as_without_the_extra_steps(monkeypat
     d = tuple(jnp.asarray(x) for x in v)
     surfaces = [s for s in lens.surfaces if s.has_polynomial]
     assert len(surfaces) == 12
+    surfaces = surfaces[::3]  # four of them (op by op, each costs a second)
     with_extra = [np.asarray(intersect(s, o, d)) for s in surfaces]
     bare = continue_newton
     monkeypatch.setattr(step, "continue_newton",
@@ -112,7 +113,8 @@ def test_an_ordinary_asphere_is_intersected_as_without_the_extra_steps(monkeypat
         assert unmark(jnp.asarray(t))[1].sum() > m // 2  # mostly hits: not a vacuous check
 
 
-@pytest.mark.parametrize("dtype", [jnp.float32, jnp.float64])
+@pytest.mark.parametrize("dtype", [pytest.param(jnp.float32, marks=pytest.mark.slow),
+                                   jnp.float64])
 def test_the_extra_steps_work_under_jit_vmap_and_forward_and_reverse_mode(dtype):
     """A ray that the fixed steps leave short of the root (``test_toroid_extreme``'s y0 = 3.5 mm,
     toward the axis, on a cylinder of 80 /mm): jit, vmap over the coefficient, grad and
