@@ -63,7 +63,8 @@ def ideal_to_field(lens: Lens, xy, wavelength=None) -> Float[Array, "*b 2"]:
 
 
 def stop_chief_ray(lens: Lens, field, depth=None, wavelength=None, *,
-              newton_iters: int = DEFAULT_NEWTON_ITERS, iters: int = 5) -> Rays:
+                   newton_iters: int = DEFAULT_NEWTON_ITERS,
+                   iters: int = sampling.AIM_ITERS) -> Rays:
     """The real chief ray of a field: aimed by Newton's method at the centre of the stop.
 
     Args:
@@ -72,41 +73,58 @@ def stop_chief_ray(lens: Lens, field, depth=None, wavelength=None, *,
         depth: None for infinity, else the object distance in mm.
         wavelength: µm (default primary).
         newton_iters: Newton iterations for aspheric surfaces.
-        iters: aiming iterations.
+        iters: the most aiming iterations.
 
     Returns:
         One ray (shape ``[1]``) in object space, launched from the entrance-pupil plane
         (infinity) or from the object point.
 
-    The lens's vignetting factors do not move it: it passes through the centre of the stop
-    whatever they are. The ray that ``sampling.field_rays`` launches at pupil point (0, 0)
-    of a vignetted field is the centre of the vignetted pupil, (VDX, VDY) rotated by VAN.
+    The aiming is ``sampling.aim_at_stop``'s (``newton.newton_2d``): from the paraxial
+    entrance pupil's centre, it iterates until the ray crosses the stop within
+    ``sampling.AIM_CONVERGED`` (relative to max(paraxial stop radius, 1 mm)) of its centre, at
+    most ``iters`` times, with steps at most the EPD long and halved (up to
+    ``sampling.AIM_HALVINGS`` times) where they do not bring the ray closer or lose it; then one
+    more Newton step, which carries the implicit-function gradient (with respect to the lens,
+    the field, the object distance and the wavelength: the iterations carry none). Whether it
+    converged is for the caller to check (``chief_point(..., with_valid=True)`` checks only
+    that the ray passes). The lens's vignetting factors do not move it: it passes through the
+    centre of the stop whatever they are. The ray that ``sampling.field_rays`` launches at
+    pupil point (0, 0) of a vignetted field is the centre of the vignetted pupil, (VDX, VDY)
+    rotated by VAN.
     """
     checks.number(iters, "iters", "stop_chief_ray", lo=0, integer=True,
                   unit="aiming iterations")  # -1 ran no iteration without a word
     wl = lens.primary_wavelength if wavelength is None else jnp.asarray(wavelength)
     zep = paraxial.entrance_pupil_z(lens)
     if depth is None:
-        d0 = sampling.field_direction(field).astype(lens.epd.dtype)
-        p0 = None
+        start = sampling.field_direction(field).astype(lens.epd.dtype)
     else:
-        p0 = sampling.object_point(lens, field, depth)
+        start = sampling.object_point(lens, field, depth)
+    collimated = depth is None
 
-    def launch(uv):
+    def launch(uv, zep, start, wl):
+        # ``start``: the beam's direction (infinity) or the object point.
         q = jnp.concatenate([uv, zep[None]])
-        if p0 is None:
-            return Rays(q[None], d0[None], wl)
-        v = q - p0
-        return Rays(p0[None], (v / jnp.linalg.norm(v))[None], wl)
+        if collimated:
+            return Rays(q[None], start[None], wl)
+        v = q - start
+        return Rays(start[None], (v / jnp.linalg.norm(v))[None], wl)
 
-    aim_lens = unclipped(lens)
+    def at_stop(uv, params):
+        aim_lens, zep, start, wl = params
+        out = trace(aim_lens, launch(uv, zep, start, wl), newton_iters=newton_iters,
+                    upto=lens.stop, uniform=True)
+        return out.origin[0, :2], out.valid[0]
 
-    def at_stop(uv, aim_lens):
-        return trace(aim_lens, launch(uv), newton_iters=newton_iters, upto=lens.stop,
-                     uniform=True).origin[0, :2]
-
-    uv = newton_2d(at_stop, jnp.zeros(2, lens.epd.dtype), aim_lens, iters)
-    return launch(uv)
+    f64 = jnp.dtype(lens.epd.dtype).itemsize >= 8
+    stop_r = jax.lax.stop_gradient(paraxial.paraxial_data(lens).stop_semi_diameter)
+    scale = jnp.where(jnp.isfinite(stop_r), jnp.maximum(stop_r, 1.0), 1.0)
+    # Everything the ray depends on is a parameter, so the gradient is the implicit one.
+    params = (unclipped(lens), zep, start, wl)
+    uv = newton_2d(at_stop, jnp.zeros(2, lens.epd.dtype), params, iters, has_valid=True,
+                   tol=sampling.AIM_CONVERGED[f64] * scale, max_step=lens.epd,
+                   halvings=sampling.AIM_HALVINGS)
+    return launch(uv, zep, start, wl)
 
 
 def chief_point(lens, field, depth, newton_iters, *, with_valid: bool = False):

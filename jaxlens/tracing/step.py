@@ -24,7 +24,11 @@ Intersections:
     both work and neither differentiates the root selection). Surfaces
     with polynomial terms take ``newton_iters`` Newton steps on F(t) = z(t) − sag(x(t),
     y(t)), from the base conic's root or the vertex plane, whichever gives the shorter
-    first step, kept at t ≥ t_min (projected Newton). Those iterations carry no gradient. One last
+    first step, kept at t ≥ t_min (projected Newton); a ray whose iterate is then not yet
+    ``settled`` (|F| ≤ 64·sqrt(eps)·(1 + |t|) mm, ``converged``, and a next step of at most
+    eps^(3/4)·(1 + |t|) mm) goes on, alone, until it is, or gives up (``continue_newton``: a
+    ``while_loop`` whose body does not run when every ray is settled, the common case). A ray
+    is a hit where its last iterate is ``converged``. Those iterations carry no gradient. One last
     Newton step is taken with gradients switched on and the derivative F'(t) held
     fixed; at the converged root its derivative is exactly the implicit-function
     theorem result dt/dθ = −(∂F/∂θ)/(∂F/∂t), so the backward pass never unrolls the
@@ -61,6 +65,11 @@ from ..optics.rays import Rays
 from ..optics.surfaces import AbstractSurface
 
 DEFAULT_NEWTON_ITERS = 6
+
+# Past the fixed steps, a ray whose iterate is not yet ``settled`` takes up to this many more
+# (``continue_newton``); a hit needs |F| ≤ NEWTON_TOL·sqrt(eps)·(1 + |t|) mm (``converged``).
+NEWTON_EXTRA_ITERS = 40
+NEWTON_TOL = 64.0
 
 
 # No lens needs a ray parameter beyond this (mm); larger roots are treated as misses, which
@@ -172,6 +181,74 @@ def _conic_root_jvp(bounded_below, primals, tangents):
     return t_marked, jnp.where(good, -df / jnp.where(good, f_t, 1.0), 0.0)
 
 
+def converged(f, df, t):
+    """Whether the Newton iterate ``t`` (mm) is accepted as a root of F: |F(t)| ≤ 64·sqrt(eps)
+    ·(1 + |t|) mm (``NEWTON_TOL``), F finite and F'(t) ≠ 0. The accepted iterate then takes one
+    more (differentiable) Newton step, which squares its error."""
+    eps = jnp.finfo(jnp.result_type(f)).eps
+    return (jnp.abs(f) <= NEWTON_TOL * jnp.sqrt(eps) * (1.0 + jnp.abs(t))) & jnp.isfinite(f) & (
+        df != 0)
+
+
+def settled(f, df, t):
+    """Whether the iterate ``t`` is ``converged`` and its next Newton step, |F/F'|, is at most
+    eps^(3/4)·(1 + |t|) mm: then it lies at rounding from the root (up to the square of that,
+    times the curvature), and the implicit derivative that the last step takes there is the
+    root's (``surface_adjoint``'s reverse rule takes it at the root), to about eps^(3/4)."""
+    eps = jnp.finfo(jnp.result_type(f)).eps
+    small = jnp.abs(f) <= eps**0.75 * (1.0 + jnp.abs(t)) * jnp.abs(df)
+    return converged(f, df, t) & small
+
+
+def continue_newton(residual, t, project=lambda t: t, max_iters: int = NEWTON_EXTRA_ITERS):
+    """Newton steps past the fixed ones, only on the rays not yet ``settled``.
+
+    A ``jax.lax.while_loop`` that runs while some ray is still iterating: where every ray is
+    settled at ``t`` (after six steps on an ordinary asphere, every ray is: the next step is
+    at rounding) its body never runs, so the common case costs one residual pass and a
+    reduction, and the result is ``t`` itself, bit for bit. A ray iterates until it is
+    ``settled``. It gives up (it is then a miss, unless already ``converged``) when its step
+    does not shrink (Newton from a good start shrinks it, by at least half per step even at a
+    double root; with no root F has no zero to approach and the steps jump about), is zero
+    (held at ``project``'s bound with F of the wrong sign, or at rounding) or cannot be taken
+    (F' too small to divide, F not finite); at most ``max_iters`` more steps. It carries no
+    gradient (stop the gradients of its inputs): the caller differentiates the root by the
+    implicit function theorem.
+
+    Args:
+        residual: t -> (F(t), F'(t)), elementwise on ``t``.
+        t: the iterates ``[*batch]`` after the fixed steps.
+        project: t -> the admissible t (projected Newton), elementwise.
+        max_iters: the most extra steps (static).
+
+    Returns:
+        The iterates ``[*batch]``: unchanged where already settled.
+    """
+    f, df = residual(t)
+    # The loop's test is a scalar: whether any ray iterates. Per ray, one array: the length
+    # of the step that reached its iterate (inf before the first), −1 once it has stopped;
+    # a settled ray stops in the first pass (a flag and a length would be two arrays, and
+    # one computed from the residual here would be a second pass over the rays).
+    last = jnp.full_like(t, jnp.inf)
+    going0 = jnp.any(~settled(f, df, t))
+
+    def going(state):
+        k, _, _, more = state
+        return (k < max_iters) & more
+
+    def body(state):
+        k, t, last, _ = state
+        f, df = residual(t)
+        dt, ok = bounded_div(f, df)
+        t_new = project(t - dt)
+        size = jnp.abs(t_new - t)
+        go = (last >= 0) & ~settled(f, df, t) & ok & jnp.isfinite(f) & (size < last) & (
+            size > 0)
+        return k + 1, jnp.where(go, t_new, t), jnp.where(go, size, -1.0), jnp.any(go)
+
+    return jax.lax.while_loop(going, body, (0, t, last, going0))[1]
+
+
 def _residual(surface: AbstractSurface, o, d, t):
     px, py, pz = (oi + t * di for oi, di in zip(o, d, strict=True))
     z, gx, gy, inside = surface.sag_and_grad(px, py)
@@ -195,7 +272,9 @@ def intersect(
     Args:
         surface: the surface.
         o, d: (x, y, z) tuples of ``[*batch]`` arrays: ray points and unit directions.
-        newton_iters: Newton iterations for surfaces with polynomial terms.
+        newton_iters: Newton iterations that every ray takes on a surface with polynomial
+            terms; a ray not yet ``settled`` then takes up to ``NEWTON_EXTRA_ITERS`` more.
+            0: none at all, the last step is taken from the start.
         first: whether this is the first surface (object space).
         backward: bool array, True where the gap to this surface is negative (its vertex
             lies before the previous one, as Zemax files allow): there the ray may travel
@@ -253,9 +332,10 @@ def intersect(
         return newton_step(t, f, df)[0]
 
     t0 = jax.lax.fori_loop(0, max(newton_iters - 1, 0), step, t0)
+    if newton_iters > 0:
+        t0 = continue_newton(lambda t: _residual(surf_s, o_s, d_s, t)[:2], t0, project)
     f0, df0, _ = _residual(surf_s, o_s, d_s, t0)
-    scale = 1.0 + jnp.abs(t0)
-    ok = (jnp.abs(f0) <= 64 * jnp.sqrt(eps) * scale) & jnp.isfinite(f0) & (df0 != 0)
+    ok = converged(f0, df0, t0)
     if t_min is not None:
         ok = ok & (t0 >= t_min)
     # Flagged rays take the last step at a harmless point, so their gradient stays finite.

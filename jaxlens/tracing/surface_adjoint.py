@@ -14,8 +14,9 @@ benchmarks/vjp_probe.py) are written out by hand from the saved root ``t`` and r
           (N the step's unnormalised normal), so dt = (F_c dc + F_k dk − 2N·(do + t dd))/(2 d·N).
           Polynomial: F = z − sag(x, y; θ), ∇F = N = (−s_x, −s_y, 1), so
           dt = (sag_θ·dθ − N·(do + t dd))/(d·N) at the returned root (``step.intersect``'s
-          last, differentiable Newton step gives it at the iterate before, a converged step
-          away), without re-running the Newton iterations
+          last, differentiable Newton step gives it at the iterate before, a ``step.settled``
+          step away: the two agree to about eps^(3/4)), without re-running the Newton
+          iterations
     g     refraction gain, g·nn = R − mu·dn with R = ±sqrt(nn − mu²(nn − dn²)); R is rebuilt
           as g·nn + mu·dn (no square root), dR = d(R²)/(2R)
     d'    mu·d + g·N,  p' = o + t d (+ z_vertex),  opl' = opl + n1·t
