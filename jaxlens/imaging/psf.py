@@ -74,7 +74,7 @@ from ..optics.rays import Rays
 from ..tracing.forward import DEFAULT_NEWTON_ITERS, trace
 from . import sampling
 from .aiming import apertured, chief_point, field_to_ideal, ideal_to_field
-from .grid import pupil_cells, sensor_grid, splat
+from .grid import pixel_pitch, pupil_cells, sensor_grid, splat
 
 __all__ = [
     "AbstractPSFModel",
@@ -389,7 +389,7 @@ def _prepare(lens, field, depth, wavelength, kernel_size, pixel_size, model, cen
              newton_iters=DEFAULT_NEWTON_ITERS):
     checks.focal_image(lens, caller)
     _model(model, caller)
-    checks.number(newton_iters, "newton_iters", caller, lo=0, integer=True, unit="iterations")
+    checks.newton_iters(newton_iters, caller)
     if center not in CENTERS:
         raise ValueError(f"{caller}: center must be one of {CENTERS}, got {center!r}")
     kernel_size = checks.number(kernel_size, "kernel_size", caller, lo=1, integer=True,  # static
@@ -400,7 +400,7 @@ def _prepare(lens, field, depth, wavelength, kernel_size, pixel_size, model, cen
         pixel_size = lens.sensor.pixel_size
     dtype = jnp.result_type(float)
     # Before jnp.asarray (it traces constants under jit); a traced one gets an error_if.
-    pixel_size = checks.number(pixel_size, "pixel_size", caller, lo=0, lo_open=True, unit="mm")
+    pixel_size = pixel_pitch(pixel_size, caller)
     pixel_size = jnp.asarray(pixel_size, dtype)
     wl = lens.primary_wavelength if wavelength is None else wavelength
     checks.real_values(wl, "wavelength", caller, "µm")  # jnp.asarray reads "0.55" as 0.55
@@ -595,10 +595,12 @@ def psf_map(
     sensor = lens.sensor if sensor is None else sensor
     if sensor is None:
         raise ValueError("psf_map: the lens has no sensor; pass sensor=Sensor(...)")
-    pixel_size = sensor.pixel_size if pixel_size is None else pixel_size
     if not isinstance(sensor, Sensor):
         raise TypeError(f"psf_map: sensor must be a jaxlens.Sensor, got "
                         f"{type(sensor).__name__} {sensor!r}")
+    if not checks.is_traced(sensor.pixel_size):  # the map's extent and default pitch
+        pixel_pitch(sensor.pixel_size, "psf_map", "sensor.pixel_size")
+    pixel_size = sensor.pixel_size if pixel_size is None else pixel_size
     grid = checks.grid(grid, "psf_map", "grid", "PSFs")
     _, depth, wl, pixel_size, kernel_size = _prepare(
         lens, 0.0, depth, wavelength, kernel_size, pixel_size, model, center, "psf_map",
