@@ -47,7 +47,7 @@ from jaxtyping import Array, Float
 from . import checks
 from .diffractive import Binary2
 from .freeform import Biconic, ZernikeSag
-from .lens import Lens
+from .lens import INFINITE_OBJECT_MM, Lens
 from .paraxial_surface import ParaxialSurface
 from .surfaces import AbstractSurface, Standard
 from .toroidal import Toroidal
@@ -220,7 +220,9 @@ def entrance_pupil_magnification(lens: Lens, wavelength=None) -> Array:
 
 
 def marginal_ray(lens: Lens, wavelength=None):
-    """Paraxial marginal ray (y, nu) after every surface, for the lens's EPD and object."""
+    """Paraxial marginal ray (y, nu) after every surface, for the lens's EPD and object.
+
+    Each is ``[num_surfaces]`` for one wavelength (µm), ``[num_surfaces, W]`` for ``[W]``."""
     wl = _given(lens, wavelength, "marginal_ray")
     n = signed_indices(lens, wl)
     zep = entrance_pupil_z(lens, wl)
@@ -363,5 +365,7 @@ def working_fnum(lens: Lens, depth) -> Array:
         checks.real_values(depth, "depth", "working_fnum", "mm")
         checks.values(depth, "depth", "working_fnum", lo=0, lo_open=True, inf_ok=True,
                       unit="mm (None or inf: an object at infinity)")
+        if np.all(np.asarray(depth, dtype=float) >= INFINITE_OBJECT_MM):
+            depth = None  # as a Lens's object_distance: inf gave a working F-number of NaN
     at = eqx.tree_at(lambda m: m.object_distance, lens, depth, is_leaf=lambda x: x is None)
     return paraxial_data(at).working_fnum
