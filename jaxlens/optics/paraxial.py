@@ -137,7 +137,8 @@ def _given(lens: Lens, wavelength, where: str):
 
 def signed_indices(lens: Lens, wavelength) -> list[Array]:
     """``lens.indices`` with the sign flipped after every mirror (the y–nu trace's indices)."""
-    n = lens.indices(_given(lens, wavelength, "signed_indices"))
+    wl = _given(lens, wavelength, "signed_indices")  # before lens.indices: lens checked
+    n = lens.indices(wl)
     if not lens.mirrors:
         return n
     flips = [sum(1 for m in lens.mirrors if m < i) % 2 for i in range(len(n))]
