@@ -62,8 +62,6 @@ def _sensor(lens: Lens, sensor, where: str):
     if not isinstance(sensor, Sensor):
         raise TypeError(f"{where}: sensor must be a jaxlens.Sensor, got "
                         f"{type(sensor).__name__} {sensor!r}")
-    if not checks.is_traced(sensor.pixel_size):  # 5 (µm given as mm) spanned 1000x the field
-        pixel_pitch(sensor.pixel_size, where, "sensor.pixel_size")
     return sensor
 
 
@@ -100,6 +98,8 @@ def distortion_map(
     checks.lens_intact(lens, "distortion_map")
     s = _sensor(lens, sensor, "distortion_map")
     grid = checks.grid(grid, "distortion_map", "grid", "points")
+    checks.number(newton_iters, "newton_iters", "distortion_map", lo=0, integer=True,
+                  unit="iterations")
     checks.newton_iters(newton_iters, "distortion_map")
     depth = sampling.lens_depth(lens, depth, "distortion_map")
     lens = apertured(lens)
@@ -151,7 +151,9 @@ def inverse_distortion_map(
     resolution = checks.grid(resolution, where, "resolution", "pixels")
     grid = checks.grid(grid, where, "grid", "points")
     pixel_size = pixel_pitch(pixel_size, where)
+    checks.number(newton_iters, "newton_iters", where, lo=0, integer=True, unit="iterations")
     checks.newton_iters(newton_iters, where)
+    checks.number(iters, "iters", where, lo=0, integer=True, unit="aiming iterations")
     checks.number(iters, "iters", where, lo=0, hi=checks.MAX_NEWTON_ITERS, integer=True,
                   unit="aiming iterations")
     depth = sampling.lens_depth(lens, depth, where)

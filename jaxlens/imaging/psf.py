@@ -389,6 +389,7 @@ def _prepare(lens, field, depth, wavelength, kernel_size, pixel_size, model, cen
              newton_iters=DEFAULT_NEWTON_ITERS):
     checks.focal_image(lens, caller)
     _model(model, caller)
+    checks.number(newton_iters, "newton_iters", caller, lo=0, integer=True, unit="iterations")
     checks.newton_iters(newton_iters, caller)
     if center not in CENTERS:
         raise ValueError(f"{caller}: center must be one of {CENTERS}, got {center!r}")
@@ -598,8 +599,6 @@ def psf_map(
     if not isinstance(sensor, Sensor):
         raise TypeError(f"psf_map: sensor must be a jaxlens.Sensor, got "
                         f"{type(sensor).__name__} {sensor!r}")
-    if not checks.is_traced(sensor.pixel_size):  # the map's extent and default pitch
-        pixel_pitch(sensor.pixel_size, "psf_map", "sensor.pixel_size")
     pixel_size = sensor.pixel_size if pixel_size is None else pixel_size
     grid = checks.grid(grid, "psf_map", "grid", "PSFs")
     _, depth, wl, pixel_size, kernel_size = _prepare(

@@ -561,6 +561,7 @@ def render(
     else:
         checks.number(method.footprint_grid, "footprint_grid", "render", lo=2,
                       unit="points per side", integer=True)
+    checks.number(newton_iters, "newton_iters", "render", lo=0, integer=True)
     checks.newton_iters(newton_iters, "render")
     sensor = lens.sensor if sensor is None else sensor
     if sensor is None:
