@@ -69,9 +69,6 @@ PITCH = r"must be a finite number in \(0, 1\) mm \(a pixel pitch: 5 µm is 0\.00
     ("mtf", "pixel_size", lambda: jl.imaging.psf.mtf(COOKE, 0.0, pixel_size=5.0)),
     ("psf_map", "pixel_size", lambda: jl.imaging.psf.psf_map(
         COOKE, grid=(1, 1), sensor=SENSOR_5, kernel_size=9, pixel_size=5.0)),
-    ("render", "sensor.pixel_size", lambda: jl.render(
-        COOKE, np.ones((8, 8, 3)), sensor=SENSOR_5, spp=1, key=jax.random.key(0))),
-    ("footprints", "sensor.pixel_size", lambda: render.footprints(COOKE, sensor=SENSOR_5)),
     ("inverse_distortion_map", "pixel_size", lambda: distortion.inverse_distortion_map(
         COOKE, resolution=(8, 8), pixel_size=5.0, grid=(2, 2))),
     ("psf_points", "pixel_size", lambda: tiled.psf_points(
@@ -79,13 +76,17 @@ PITCH = r"must be a finite number in \(0, 1\) mm \(a pixel pitch: 5 µm is 0\.00
     ("tile_centers", "pixel_size", lambda: tiled.tile_centers((8, 8), 5.0, 4)),
 ])
 def test_pixel_pitches_are_below_a_millimetre(where, arg, call):
-    """Before: a pitch of 5 (µm given as mm) made a PSF of one lit pixel, a render of a
-    sensor 40 mm wide, without a word. (A Sensor's pitch sets only the extent of a
-    ``psf_map`` or ``distortion_map``: a large one is a large sensor there.)"""
+    """Before: a pitch of 5 (µm given as mm) made a PSF of one lit pixel without a word. A
+    ``Sensor``'s own pitch is not bounded (the Sensor checks it; renders of 2 mm pixels are
+    in use), nor is the default pitch that a PSF takes from it."""
     with pytest.raises(ValueError, match=rf"^{where}: {arg} {PITCH}"):
         call()
     assert MAX_PIXEL_SIZE_MM == 1.0
     assert tiled.tile_centers((8, 8), 0.005, 4).shape == (2, 2, 2)
+    if where == "psf":  # the default pitch, a Sensor's own: not bounded
+        big = jl.Lens(COOKE.surfaces, COOKE.thickness, COOKE.materials, epd=COOKE.epd,
+                      sensor=jl.Sensor(resolution=(8, 8), pixel_size=2.0))
+        assert jl.psf(big, 0.0, kernel_size=3).shape == (3, 3)
 
 
 # ------------------------------------------------------------------ newton_iters

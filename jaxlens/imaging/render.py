@@ -96,7 +96,6 @@ from .grid import (
     bilinear,
     grid_coords,
     interp_grid,
-    pixel_pitch,
     pixel_positions,
     scene_coords,
     sensor_grid,
@@ -234,8 +233,6 @@ def footprints(
     if not isinstance(sensor, Sensor):
         raise TypeError(f"footprints: sensor must be a jaxlens.Sensor, got "
                         f"{type(sensor).__name__} {sensor!r}")
-    if not checks.is_traced(sensor.pixel_size):
-        pixel_pitch(sensor.pixel_size, "footprints", "sensor.pixel_size")
     checks.newton_iters(newton_iters, "footprints")
     dtype = jnp.result_type(float) if dtype is None else checks.float_dtype(dtype, "footprints")
     # int() took 0 or 2.5 silently; wavelengths are checked here, not inside the jitted trace.
@@ -569,8 +566,6 @@ def render(
     if not isinstance(sensor, Sensor):
         raise TypeError(f"render: sensor must be a jaxlens.Sensor, got {type(sensor).__name__} "
                         f"{sensor!r}")
-    if not checks.is_traced(sensor.pixel_size):  # 5 (µm given as mm): one pixel per scene
-        pixel_pitch(sensor.pixel_size, "render", "sensor.pixel_size")
     checks.real_values(wavelengths, "wavelengths", "render", "µm")  # before jnp.asarray
     scene = jnp.asarray(scene)
     wls = jnp.atleast_1d(jnp.asarray(wavelengths, jnp.result_type(float)))
