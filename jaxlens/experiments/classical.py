@@ -44,6 +44,7 @@ import dataclasses
 import functools
 import json
 import os
+import re
 import shlex
 import sys
 import time
@@ -299,6 +300,22 @@ def _no_ignored_options(args, w: str, given=None) -> None:
                              f"{'it' if len(ignored) == 1 else 'them'} out")
 
 
+SPEC_WORDS = {r"^DesignSpec: ": "", r"\btotal_track\b": "--track",
+              r"\bsensor_diagonal\b": "--sensor-diagonal", r"(?<![-\w])(fov|fnum|bfl)\b": r"--\1",
+              r"^(\d+) elements need (\d+) materials": r"--elements \1 needs \2 --materials",
+              r"^materials\[(\d+)\]": lambda m: f"--materials entry {int(m[1]) + 1}",
+              r"(\d+) element\(s\)": r"\1 element(s) (--elements)", "° field": "° field (--fov)",
+              r"(F/[\d.]+)(?= is| \(tan)": r"\1 (--fnum)"}
+
+
+def spec_message(text: str) -> str:
+    """A ``DesignSpec`` refusal in the command line's words: the flags the user typed, not
+    the spec's fields (``total_track`` → ``--track``, ``F/2`` → ``F/2 (--fnum)``)."""
+    for pattern, new in SPEC_WORDS.items():
+        text = re.sub(pattern, new, text)
+    return text
+
+
 def spec_from_args(args):
     from jaxlens.design.spec import DesignSpec
 
@@ -310,7 +327,10 @@ def spec_from_args(args):
         kw["materials"] = tuple(m.strip() for m in args.materials.split(",") if m.strip())
     elif args.elements != 6:
         kw["materials"] = tuple(("E48R", "OKP4")[i % 2] for i in range(args.elements))
-    return DesignSpec(**kw)
+    try:
+        return DesignSpec(**kw)
+    except (ValueError, TypeError) as e:  # quoted total_track where the user typed --track
+        raise ValueError(f"design: {spec_message(str(e))}") from e
 
 
 def _catalogs(args) -> tuple[str, ...]:
@@ -434,14 +454,6 @@ def write_design_outputs(lens, ev, spec, out, *, history=None, plots=True, rende
     return files
 
 
-def _mean_or_none(x):
-    return float(sum(x) / len(x)) if x else None
-
-
-def _min_or_none(x):
-    return float(min(x)) if x else None
-
-
 def _on_axis_rms_um(lens, spec) -> float:
     """Polychromatic RMS spot radius on axis (µm), the evaluation's definition (the 16 × 16
     grid has no on-axis field)."""
@@ -527,15 +539,14 @@ def _design_into(args, argv, spec, config, seeds, folder, out, t_start) -> dict:
     loss_first = [float(np.nanmean(h[0])) for h in result.history.loss if len(h)]
     rms_hist = [h for h in result.history.spot_rms if len(h)]
     ev = evals[best]
+    v_rms = [e.rms_mean_um for e in evals if e.valid]
     summary = {
         "command": "python -m jaxlens.experiments.classical " + shlex.join(argv),
         "convention": CONVENTION,
         "spec": dataclasses.asdict(spec),
-        "nominal_focal_length_mm": spec.focal_length,
-        "epd_mm": spec.epd,
+        "nominal_focal_length_mm": spec.focal_length, "epd_mm": spec.epd,
         "config": dataclasses.asdict(config),
-        "seeds": seeds,
-        "best_seed": seeds[best],
+        "seeds": seeds, "best_seed": seeds[best],
         "best": {**ev.summary(), "rms_min_um": float(np.min(ev.rms_um)),
                  "rms_on_axis_um": on_axis_um,
                  "rms_median_um": float(np.median(ev.rms_um)), "n_fields": int(ev.rms_um.size)},
@@ -547,21 +558,19 @@ def _design_into(args, argv, spec, config, seeds, folder, out, t_start) -> dict:
                                  np.asarray(result.continuous_materials).tolist()),
         },
         "per_seed": [{"seed": s, "start": result.starts[i], "solver_status": result.status[i],
-                      **e.summary(),
-                      "rms_min_um": float(np.min(e.rms_um)),
+                      **e.summary(), "rms_min_um": float(np.min(e.rms_um)),
                       "materials": list(result.material_names(i))}
                      for i, (s, e) in enumerate(zip(seeds, evals, strict=True))],
         "valid_designs": int(sum(e.valid for e in evals)),
-        "valid_designs_rms_mean_um": _mean_or_none([e.rms_mean_um for e in evals if e.valid]),
-        "valid_designs_rms_min_um": _min_or_none([e.rms_mean_um for e in evals if e.valid]),
+        "valid_designs_rms_mean_um": float(sum(v_rms) / len(v_rms)) if v_rms else None,
+        "valid_designs_rms_min_um": float(min(v_rms)) if v_rms else None,
         "loss_first_step": loss_first[0] if loss_first else None,
         "spot_rms_first_um": float(np.min(rms_hist[0][0]) * 1e3) if rms_hist else None,
         "spot_rms_last_um": float(np.min(rms_hist[-1][-1]) * 1e3) if rms_hist else None,
         "tolerance": tolerance,
         "stage_seconds": dict(zip(result.history.stages, result.history.seconds, strict=True)),
         "seconds": {"design": t_design, "evaluation": t_eval, "tolerance": t_tol,
-                    "total": time.perf_counter() - t_start},
-        "devices": len(jax.devices()),
+                    "total": time.perf_counter() - t_start}, "devices": len(jax.devices()),
         "files": {k: (folder.final_path(v) if isinstance(v, str)
                       else [folder.final_path(x) for x in v]) for k, v in files.items()},
     }
@@ -692,16 +701,11 @@ def _fmt(x, nd=2):
 
 def _write_table_md(table: dict, path: str) -> None:
     cols = [c for c, _ in ABLATION_COLUMNS if c in table["columns"]]
-    lines = [
-        "# Table 1 (jaxlens): ablation of the curriculum design",
-        "",
-        "Commands: " + "; ".join(f"`{c}`" for c in table["commands"]),
-        "",
-        f"Convention: {table['convention']}.",
-        "",
-        "| | " + " | ".join(cols) + " | paper (+both+mask) |",
-        "|---|" + "---|" * (len(cols) + 1),
-    ]
+    lines = ["# Table 1 (jaxlens): ablation of the curriculum design", "",
+             "Commands: " + "; ".join(f"`{c}`" for c in table["commands"]), "",
+             f"Convention: {table['convention']}.", "",
+             "| | " + " | ".join(cols) + " | paper (+both+mask) |",
+             "|---|" + "---|" * (len(cols) + 1)]
     c = table["columns"]
     p = table["paper_full_method"]
     lines.append("| random starts (seeds) | " + " | ".join(

@@ -26,6 +26,7 @@ import argparse
 import json
 import math
 import os
+import re
 import shlex
 import sys
 import time
@@ -59,13 +60,11 @@ def check_design(lens, spec) -> None:
             f"lens with its own fields")
 
 
-def analyse_design(lens, spec, *, trials: int = DEFAULT_TRIALS,
-                   threshold_um: float = DEFAULT_THRESHOLD_UM, seed: int = 0,
-                   grid: int = 16, small_step_check: bool = False, fd_check: int | None = None,
-                   tolerances=None, log=print) -> dict:
-    """The tolerance report of one design as a JSON-ready dict (see module docstring)."""
+def design_model(lens, spec, grid: int = 16, tolerances=None):
+    """The ``ToleranceModel`` of a design at the classical spec's pupil (``check_design``
+    first): a ``ValueError`` here (a decenter beyond the lens's clear radius) comes before
+    any analysis."""
     import equinox as eqx
-    import jax
     import jax.numpy as jnp
     import numpy as np
 
@@ -73,7 +72,6 @@ def analyse_design(lens, spec, *, trials: int = DEFAULT_TRIALS,
     from jaxlens.design.evaluate import sensor_field_grid
 
     check_design(lens, spec)
-    t0 = time.perf_counter()
     lens = lens.astype(jnp.float64)
     lens = eqx.tree_at(lambda x: x.epd, lens, jnp.asarray(spec.epd, jnp.float64))
     ang, _ = sensor_field_grid(spec, grid)
@@ -81,8 +79,24 @@ def analyse_design(lens, spec, *, trials: int = DEFAULT_TRIALS,
     # Folding by symmetry is exact only for a rotationally symmetric lens: not with moved
     # elements (their metric is the mean over the full grid).
     fields, weights = (np.asarray(ang), None) if moved else tol_mod.symmetric_fields(ang)
-    model = tol_mod.ToleranceModel(lens, fields=fields, field_weights=weights,
-                                   wavelengths=spec.wavelengths, tolerances=tolerances)
+    return tol_mod.ToleranceModel(lens, fields=fields, field_weights=weights,
+                                  wavelengths=spec.wavelengths, tolerances=tolerances)
+
+
+def analyse_design(lens, spec, *, trials: int = DEFAULT_TRIALS,
+                   threshold_um: float = DEFAULT_THRESHOLD_UM, seed: int = 0,
+                   grid: int = 16, small_step_check: bool = False, fd_check: int | None = None,
+                   tolerances=None, log=print, model=None) -> dict:
+    """The tolerance report of one design as a JSON-ready dict (see module docstring).
+    ``model``: its ``design_model`` (built here if None)."""
+    import jax
+    import numpy as np
+
+    from jaxlens.analysis import tolerance as tol_mod
+
+    t0 = time.perf_counter()
+    model = design_model(lens, spec, grid, tolerances) if model is None else model
+    lens, fields, moved = model.lens, model.fields, model.elements
     pitch = spec.sensor_size[0] / spec.sensor_pixels
     nyquist = 0.5 / pitch
     sens = tol_mod.sensitivity(model, check=fd_check)
@@ -287,17 +301,25 @@ def main(argv: list[str] | None = None) -> int:
     try:  # before any work: a file that does not open, or a lens of another kind
         lens = jaxlens.load(args.design)
         check_design(lens, DesignSpec())
-    except ValueError as e:
-        return fail(prog, ValueError(f"{args.design}: {e}"))
+    except ValueError as e:  # the reader's messages may start with the path already
+        text = str(e) if str(e).startswith(args.design) else f"{args.design}: {e}"
+        return fail(prog, ValueError(text))
     tolerances = None
-    if args.decenter > 0 or args.tilt > 0:  # default: the coaxial model, as recorded
-        from jaxlens.analysis.tolerance import Tolerances
+    try:  # a decenter beyond the lens's clear radius was a traceback (mm, not µm?)
+        if args.decenter > 0 or args.tilt > 0:  # default: the coaxial model, as recorded
+            from jaxlens.analysis.tolerance import Tolerances
 
-        tolerances = Tolerances(decenter=args.decenter, tilt=args.tilt)
+            tolerances = Tolerances(decenter=args.decenter, tilt=args.tilt)
+        model = design_model(lens, DesignSpec(), tolerances=tolerances)
+    except ValueError as e:
+        text = str(e).replace("ToleranceModel: ", "").replace("Tolerances: ", "")
+        for name in ("decenter", "tilt"):
+            text = re.sub(rf"(Tolerances\.)?\b{name}\b ?±?", f"--{name} ", text, count=1)
+        return fail(prog, ValueError(f"{args.design}: {text}"))
     report = analyse_design(lens, DesignSpec(), trials=args.trials,
                             threshold_um=args.threshold, seed=args.seed,
                             small_step_check=not args.no_small_step_check,
-                            tolerances=tolerances)
+                            tolerances=tolerances, model=model)
     report = {"command": prog + " " + shlex.join(argv), "design": args.design, **report}
     files = write_report(report, args.out)
     print("wrote " + ", ".join(files.values()))

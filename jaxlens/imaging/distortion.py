@@ -37,7 +37,7 @@ from ..tracing.backward import trace_backward
 from ..tracing.forward import DEFAULT_NEWTON_ITERS
 from . import sampling
 from .aiming import apertured, chief_point, ideal_to_field, image_scale, newton_2d
-from .grid import bilinear, grid_coords, sensor_grid
+from .grid import bilinear, grid_coords, pixel_pitch, sensor_grid
 
 __all__ = [
     "DistortionMap",
@@ -55,12 +55,12 @@ class DistortionMap(eqx.Module):
     real: Float[Array, "gr gc 2"]
 
 
-def _sensor(lens: Lens, sensor):
+def _sensor(lens: Lens, sensor, where: str):
     sensor = lens.sensor if sensor is None else sensor
     if sensor is None:
-        raise ValueError("distortion_relax: the lens has no sensor; pass sensor=Sensor(...)")
+        raise ValueError(f"{where}: the lens has no sensor; pass sensor=Sensor(...)")
     if not isinstance(sensor, Sensor):
-        raise TypeError(f"distortion_relax: sensor must be a jaxlens.Sensor, got "
+        raise TypeError(f"{where}: sensor must be a jaxlens.Sensor, got "
                         f"{type(sensor).__name__} {sensor!r}")
     return sensor
 
@@ -96,10 +96,11 @@ def distortion_map(
     """
     checks.focal_image(lens, "distortion_map")
     checks.lens_intact(lens, "distortion_map")
-    s = _sensor(lens, sensor)
+    s = _sensor(lens, sensor, "distortion_map")
     grid = checks.grid(grid, "distortion_map", "grid", "points")
     checks.number(newton_iters, "newton_iters", "distortion_map", lo=0, integer=True,
                   unit="iterations")
+    checks.newton_iters(newton_iters, "distortion_map")
     depth = sampling.lens_depth(lens, depth, "distortion_map")
     lens = apertured(lens)
     ideal = sensor_grid(s.resolution, s.pixel_size, grid).astype(lens.epd.dtype)
@@ -149,9 +150,12 @@ def inverse_distortion_map(
     where = "inverse_distortion_map"
     resolution = checks.grid(resolution, where, "resolution", "pixels")
     grid = checks.grid(grid, where, "grid", "points")
-    pixel_size = checks.number(pixel_size, "pixel_size", where, lo=0, lo_open=True, unit="mm")
+    pixel_size = pixel_pitch(pixel_size, where)
     checks.number(newton_iters, "newton_iters", where, lo=0, integer=True, unit="iterations")
+    checks.newton_iters(newton_iters, where)
     checks.number(iters, "iters", where, lo=0, integer=True, unit="aiming iterations")
+    checks.number(iters, "iters", where, lo=0, hi=checks.MAX_NEWTON_ITERS, integer=True,
+                  unit="aiming iterations")
     depth = sampling.lens_depth(lens, depth, where)
     return _inverse_map(lens, jnp.asarray(pixel_size), depth, resolution=resolution,
                         grid=grid, newton_iters=newton_iters, iters=iters)
@@ -241,7 +245,7 @@ def prewarp(
     Returns:
         The pre-warped scene, same shape.
     """
-    s = _sensor(lens, sensor)
+    s = _sensor(lens, sensor, "prewarp")
     scene = jnp.asarray(scene)
     if scene.ndim != 3:
         raise ValueError(f"prewarp: scene must be [H, W, C], got {scene.shape}")
@@ -295,7 +299,7 @@ def alignment_penalty(
     """
     # A negative weight would reward distortion (a traced one gets an error_if).
     alpha = checks.number(alpha, "alpha", "alignment_penalty", lo=0, unit="(weight)")
-    s = _sensor(lens, sensor)
+    s = _sensor(lens, sensor, "alignment_penalty")
     d = distortion_map(lens, grid=grid, depth=depth, sensor=s, newton_iters=newton_iters)
     err = jnp.sum((d.real - d.ideal) ** 2, -1) / s.pixel_size**2
     return jnp.asarray(alpha) * jnp.mean(err)

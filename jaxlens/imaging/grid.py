@@ -12,6 +12,25 @@ import jax.numpy as jnp
 import numpy as np
 from jaxtyping import Array, Float
 
+from ..optics import checks
+
+MAX_PIXEL_SIZE_MM = 1.0
+"""Pixel pitches (mm) of a PSF grid or a rendered sensor must be below this: image sensors'
+pixels are 0.5 to about 100 µm, and a pitch of 5 given for 5 µm (a unit mix-up) made a PSF
+1000 times too coarse (one lit pixel) without a word."""
+
+
+def pixel_pitch(value, where: str, arg: str = "pixel_size", bounded: bool = True):
+    """A pixel pitch in (0, ``MAX_PIXEL_SIZE_MM``) mm: ``checks.number`` (a traced value gets
+    its ``eqx.error_if`` of (0, inf) mm), then, for a concrete value, the upper bound (not
+    with ``bounded=False``: a ``Sensor``'s own pitch, which it checks, may be any mm).
+    Returns the value as ``checks.number`` does."""
+    value = checks.number(value, arg, where, lo=0, lo_open=True, unit="mm")
+    if bounded and not checks.is_traced(value):
+        checks.number(value, arg, where, lo=0, lo_open=True, hi=MAX_PIXEL_SIZE_MM,
+                      hi_open=True, unit="mm (a pixel pitch: 5 µm is 0.005 mm)")
+    return value
+
 
 def sensor_grid(resolution, pixel_size, grid) -> Float[Array, "gr gc 2"]:
     """Sensor points (x, y) in mm of a ``grid = (rows, cols)`` in rendered orientation.

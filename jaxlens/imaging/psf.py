@@ -74,7 +74,7 @@ from ..optics.rays import Rays
 from ..tracing.forward import DEFAULT_NEWTON_ITERS, trace
 from . import sampling
 from .aiming import apertured, chief_point, field_to_ideal, ideal_to_field
-from .grid import pupil_cells, sensor_grid, splat
+from .grid import pixel_pitch, pupil_cells, sensor_grid, splat
 
 __all__ = [
     "AbstractPSFModel",
@@ -386,22 +386,23 @@ def _psf_impl(lens, field, depth, wls, pixel_size, key, *, kernel_size, model, c
 
 
 def _prepare(lens, field, depth, wavelength, kernel_size, pixel_size, model, center, caller,
-             newton_iters=DEFAULT_NEWTON_ITERS):
+             newton_iters=DEFAULT_NEWTON_ITERS, given=True):
     checks.focal_image(lens, caller)
     _model(model, caller)
     checks.number(newton_iters, "newton_iters", caller, lo=0, integer=True, unit="iterations")
+    checks.newton_iters(newton_iters, caller)
     if center not in CENTERS:
         raise ValueError(f"{caller}: center must be one of {CENTERS}, got {center!r}")
     kernel_size = checks.number(kernel_size, "kernel_size", caller, lo=1, integer=True,  # static
                                 hi=checks.MAX_KERNEL_SIZE, unit="pixels per side")
+    given = given and pixel_size is not None  # a Sensor's own pitch: any mm (Sensor checks it)
     if pixel_size is None:
         if lens.sensor is None:
             raise ValueError(f"{caller}: give pixel_size (mm); the lens has no sensor")
         pixel_size = lens.sensor.pixel_size
     dtype = jnp.result_type(float)
     # Before jnp.asarray (it traces constants under jit); a traced one gets an error_if.
-    pixel_size = checks.number(pixel_size, "pixel_size", caller, lo=0, lo_open=True, unit="mm")
-    pixel_size = jnp.asarray(pixel_size, dtype)
+    pixel_size = jnp.asarray(pixel_pitch(pixel_size, caller, bounded=given), dtype)
     wl = lens.primary_wavelength if wavelength is None else wavelength
     checks.real_values(wl, "wavelength", caller, "µm")  # jnp.asarray reads "0.55" as 0.55
     wl = checks.wavelengths(lens, jnp.asarray(wl, dtype), caller, "wavelength")
@@ -595,14 +596,15 @@ def psf_map(
     sensor = lens.sensor if sensor is None else sensor
     if sensor is None:
         raise ValueError("psf_map: the lens has no sensor; pass sensor=Sensor(...)")
-    pixel_size = sensor.pixel_size if pixel_size is None else pixel_size
     if not isinstance(sensor, Sensor):
         raise TypeError(f"psf_map: sensor must be a jaxlens.Sensor, got "
                         f"{type(sensor).__name__} {sensor!r}")
+    given = pixel_size is not None  # else the sensor's own pitch (any mm)
+    pixel_size = sensor.pixel_size if pixel_size is None else pixel_size
     grid = checks.grid(grid, "psf_map", "grid", "PSFs")
     _, depth, wl, pixel_size, kernel_size = _prepare(
         lens, 0.0, depth, wavelength, kernel_size, pixel_size, model, center, "psf_map",
-        newton_iters)
+        newton_iters, given)
     xy = sensor_grid(sensor.resolution, sensor.pixel_size, grid)
     fields = ideal_to_field(lens, xy)
     wls = jnp.atleast_1d(wl)

@@ -215,6 +215,10 @@ def relative_illumination(
     where = "relative_illumination"
     checks.focal_image(lens, where)
     checks.number(pupil, "pupil", where, lo=1, integer=True, unit="cells per side")
+    # Bounded as a PSF grid: pupil=100000 asked for 1e10 rays per field after the checks.
+    checks.number(pupil, "pupil", where, lo=1, hi=checks.MAX_KERNEL_SIZE, integer=True,
+                  unit="cells per side")
+    checks.newton_iters(newton_iters, where)
     dtype = jnp.result_type(float)
     f = jnp.asarray(checks.field_angles(fields, where, "fields"), dtype)
     if f.ndim == 0:

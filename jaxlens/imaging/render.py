@@ -92,7 +92,14 @@ from ..tracing.forward import DEFAULT_NEWTON_ITERS
 from . import sampling
 from .aiming import apertured, ideal_to_field, image_scale
 from .distortion import alignment_penalty, inverse_distortion_map, prewarp
-from .grid import bilinear, grid_coords, interp_grid, pixel_positions, scene_coords, sensor_grid
+from .grid import (
+    bilinear,
+    grid_coords,
+    interp_grid,
+    pixel_positions,
+    scene_coords,
+    sensor_grid,
+)
 from .psf import RGB_WAVELENGTHS, GeometricPSF
 from .radiometry import relative_illumination_samples, star_region
 
@@ -223,6 +230,10 @@ def footprints(
     sensor = lens.sensor if sensor is None else sensor
     if sensor is None:
         raise ValueError("footprints: the lens has no sensor; pass sensor=jaxlens.Sensor(...)")
+    if not isinstance(sensor, Sensor):
+        raise TypeError(f"footprints: sensor must be a jaxlens.Sensor, got "
+                        f"{type(sensor).__name__} {sensor!r}")
+    checks.newton_iters(newton_iters, "footprints")
     dtype = jnp.result_type(float) if dtype is None else checks.float_dtype(dtype, "footprints")
     # int() took 0 or 2.5 silently; wavelengths are checked here, not inside the jitted trace.
     checks.number(grid, "grid", "footprints", lo=2, integer=True, unit="points per side")
@@ -548,6 +559,7 @@ def render(
         checks.number(method.footprint_grid, "footprint_grid", "render", lo=2,
                       unit="points per side", integer=True)
     checks.number(newton_iters, "newton_iters", "render", lo=0, integer=True)
+    checks.newton_iters(newton_iters, "render")
     sensor = lens.sensor if sensor is None else sensor
     if sensor is None:
         raise ValueError("render: the lens has no sensor; pass sensor=jaxlens.Sensor(...)")

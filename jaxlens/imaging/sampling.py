@@ -183,6 +183,19 @@ def field_direction(field) -> Float[Array, "*b 3"]:
     return v / jnp.linalg.norm(v, axis=-1, keepdims=True)
 
 
+def _checked_wavelength(lens: Lens, wavelength, where: str):
+    """The rays' wavelength (µm; None: the lens's primary one), a concrete one checked
+    against the lens's materials as the analyses check theirs: a table glass's lens at 1 µm
+    gave rays that ``trace`` then refused from inside its jit (an EquinoxRuntimeError).
+    Traced values pass unchecked (the entry points check theirs before tracing)."""
+    if wavelength is not None:
+        checks.real_values(wavelength, "wavelength", where, "µm")  # before jnp.asarray
+    wl = lens.primary_wavelength if wavelength is None else jnp.asarray(wavelength)
+    if not checks.is_traced(wl):
+        checks.wavelengths(lens, wl, where)
+    return wl
+
+
 def collimated(
     lens: Lens,
     field,
@@ -208,7 +221,7 @@ def collimated(
     The pupil points are used as given: the lens's vignetting factors are not applied here
     (``field_rays`` applies them for the lens's own fields).
     """
-    wl = lens.primary_wavelength if wavelength is None else jnp.asarray(wavelength)
+    wl = _checked_wavelength(lens, wavelength, "collimated")
     pupil = pupil_points(pupil, "collimated")
     checks.one_field(field, "collimated", "trace several fields one at a time, or vmap")
     d = field_direction(field)
@@ -240,7 +253,7 @@ def point_source(
     The pupil points are used as given: the lens's vignetting factors are not applied here
     (``field_rays`` applies them for the lens's own fields).
     """
-    wl = lens.primary_wavelength if wavelength is None else jnp.asarray(wavelength)
+    wl = _checked_wavelength(lens, wavelength, "point_source")
     pupil = pupil_points(pupil, "point_source")
     checks.real_values(point, "point", "point_source", "mm")
     # Checked before jnp.asarray, which makes a tracer of a constant under jit.
@@ -419,6 +432,7 @@ def field_rays(lens: Lens, field, pupil, wavelength=None, *, depth=None, aim=Non
     if depth is not None:
         checks.real_values(depth, "depth", "field_rays", "mm")
     aim = lens_aim(lens, aim, "field_rays")
+    wavelength = _checked_wavelength(lens, wavelength, "field_rays")
     beyond = None
     if lens.vignetting is not None:
         pupil = pupil_points(pupil, "field_rays")

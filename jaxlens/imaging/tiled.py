@@ -26,7 +26,7 @@ from ..optics import checks
 from ..optics.lens import Lens
 from ..tracing.forward import DEFAULT_NEWTON_ITERS
 from .aiming import apertured, ideal_to_field
-from .grid import pixel_positions
+from .grid import pixel_pitch, pixel_positions
 from .psf import DEFAULT_MODEL, AbstractPSFModel
 
 __all__ = ["tile_counts", "tile_centers", "psf_points", "convolve_tiles", "wiener_tiles",
@@ -50,6 +50,8 @@ def tile_counts(resolution, tile: int) -> tuple[int, int]:
 def tile_centers(resolution, pixel_size, tile: int) -> Float[Array, "ty tx 2"]:
     """Sensor (x, y) in mm of the centres of the ``tile × tile`` tiles of a frame."""
     n_ty, n_tx = tile_counts(resolution, tile)
+    if not checks.is_traced(pixel_size):
+        pixel_pitch(pixel_size, "tile_centers")
     rows = jnp.arange(n_ty) * tile + 0.5 * (tile - 1)
     cols = jnp.arange(n_tx) * tile + 0.5 * (tile - 1)
     rr, cc = jnp.meshgrid(rows, cols, indexing="ij")
@@ -86,8 +88,13 @@ def psf_points(
     model.check("psf_points")
     checks.focal_image(lens, "psf_points")
     kernel_size = checks.static_int(kernel_size)  # a static size: never a numpy scalar
-    if isinstance(kernel_size, bool) or not isinstance(kernel_size, int) or kernel_size < 1:
-        raise ValueError(f"psf_points: kernel_size must be a positive int, got {kernel_size!r}")
+    if (isinstance(kernel_size, bool) or not isinstance(kernel_size, int) or kernel_size < 1
+            or kernel_size > checks.MAX_KERNEL_SIZE):
+        raise ValueError(f"psf_points: kernel_size must be a whole number in [1, "
+                         f"{checks.MAX_KERNEL_SIZE}] pixels per side, got {kernel_size!r}")
+    checks.newton_iters(newton_iters, "psf_points")  # static, as kernel_size
+    if not checks.is_traced(pixel_size):  # a traced pitch is not checked (see above)
+        pixel_pitch(pixel_size, "psf_points")
     lens = apertured(lens)
     dtype = lens.epd.dtype
     xy = jnp.asarray(xy, dtype)

@@ -121,12 +121,21 @@ def frame_of(lens, index: int | None = None):
     """The frame that ``trace`` reports rays in after ``lens.surfaces[index]`` (``None``:
     the image surface), in global coordinates.
 
+    ``index`` is 0-based, in [0, num_surfaces − 1] as ``trace``'s ``upto``; a negative index
+    is refused (−1 gave the frame before surface 1, not after the last surface, and the
+    image surface is ``None``), and so is anything but a whole number (``2.0``, a bool).
+
     Returns:
         (R, t): a ``[3, 3]`` rotation and a ``[3]`` offset such that a point ``p`` reported by
         the tracer is ``R @ p + t`` in global coordinates (surface 1's frame) and a direction
         ``d`` is ``R @ d``. The identity and zero without coordinate breaks.
     """
-    n = lens.num_surfaces if index is None else index + 1
+    last = lens.num_surfaces - 1
+    if index is not None and (isinstance(index, bool) or not isinstance(index, (int, np.integer))
+                              or not 0 <= index <= last):
+        raise ValueError(f"frame_of: index must be a surface index in [0, {last}] (0-based; "
+                         f"None for the image surface), got {type(index).__name__} {index!r}")
+    n = lens.num_surfaces if index is None else int(index) + 1
     zs = lens.vertex_z()
     dtype = jnp.result_type(lens.thickness)
     rot = jnp.eye(3, dtype=dtype)

@@ -47,9 +47,9 @@ from jaxtyping import Array, Float
 from . import checks
 from .diffractive import Binary2
 from .freeform import Biconic, ZernikeSag
-from .lens import Lens
+from .lens import INFINITE_OBJECT_MM, Lens
 from .paraxial_surface import ParaxialSurface
-from .surfaces import Standard
+from .surfaces import AbstractSurface, Standard
 from .toroidal import Toroidal
 from .xypolynomial import XYPolynomial
 
@@ -64,7 +64,29 @@ def _refract(y, nu, power):
 
 def surface_power(surface, n1, n2, wavelength=None):
     """Paraxial power (1/mm) of a surface between indices n1 and n2 (y–z section); a
-    ``Binary2`` adds its phase's power at ``wavelength`` (µm), which it then needs."""
+    ``Binary2`` adds its phase's power at ``wavelength`` (µm), which it then needs.
+
+    n1 and n2 are refractive indices, |n| >= 1, negative after a mirror (as
+    ``signed_indices`` gives them); concrete values are checked (0 or NaN gave a plausible
+    power), and so is a concrete wavelength (587.6, in nm, was taken as µm)."""
+    if not isinstance(surface, AbstractSurface):
+        raise TypeError(f"surface_power: surface must be a jaxlens surface, got "
+                        f"{type(surface).__name__} {surface!r}")
+    for arg, n in (("n1", n1), ("n2", n2)):
+        if checks.is_traced(n):
+            continue
+        checks.real_values(n, arg, "surface_power", "refractive index")
+        a = np.asarray(n, dtype=float)
+        if np.any(~np.isfinite(a) | (np.abs(a) < 1.0 - 1e-9)):
+            raise ValueError(f"surface_power: {arg} must be finite refractive indices with "
+                             f"|n| >= 1 (negative after a mirror, as signed_indices gives "
+                             f"them), got {checks.fmt(a)}")
+    if wavelength is not None and not checks.is_traced(wavelength):
+        checks.wavelengths(checks.NoMaterials, wavelength, "surface_power")
+    return _surface_power(surface, n1, n2, wavelength)
+
+
+def _surface_power(surface, n1, n2, wavelength):
     if isinstance(surface, ParaxialSurface):
         return surface.power
     if isinstance(surface, Binary2):
@@ -80,6 +102,7 @@ def x_section(lens: Lens) -> Lens:
     ``ZernikeSag`` or ``XYPolynomial`` surface becomes the sphere of its x–z vertex curvature (same
     semi-diameter). Surfaces with
     the same vertex curvature in x and y are unchanged. Not for real-ray tracing."""
+    _lens_and_size(lens, None, "x_section")
     surfaces = tuple(
         Standard(c=s.paraxial_curvature_x, k=0.0, semi_diameter=s.semi_diameter)
         if isinstance(s, Toroidal | Biconic | ZernikeSag | XYPolynomial) else s
@@ -87,11 +110,24 @@ def x_section(lens: Lens) -> Lens:
     return eqx.tree_at(lambda m: m.surfaces, lens, surfaces)
 
 
+def _lens_and_size(lens, wavelength, where: str) -> None:
+    """A string for the lens was an AttributeError deep inside; no wavelength (``[]``)
+    gave empty results. Several wavelengths broadcast (one result per wavelength)."""
+    if not isinstance(lens, Lens):
+        raise TypeError(f"{where}: lens must be a jaxlens.Lens, got {type(lens).__name__}")
+    if wavelength is not None and not checks.is_traced(wavelength):
+        checks.real_values(wavelength, "wavelength", where, "µm")
+        if np.size(wavelength) == 0:
+            raise ValueError(f"{where}: wavelength must hold at least one value (µm), got "
+                             f"shape {np.shape(wavelength)}")
+
+
 def _given(lens: Lens, wavelength, where: str):
     """The wavelength (µm) for the helpers that internal (often traced) code calls with the
     primary one: the primary one for None, a given concrete one checked against the lens's
     materials (587.6 in nm gave a plausible but wrong pupil), a traced one as it is (no
     ``error_if`` on the traced hot path: ``paraxial_data`` and ``efl`` check theirs)."""
+    _lens_and_size(lens, wavelength, where)
     if wavelength is None:
         return lens.primary_wavelength
     if checks.is_traced(wavelength):
@@ -101,7 +137,8 @@ def _given(lens: Lens, wavelength, where: str):
 
 def signed_indices(lens: Lens, wavelength) -> list[Array]:
     """``lens.indices`` with the sign flipped after every mirror (the y–nu trace's indices)."""
-    n = lens.indices(_given(lens, wavelength, "signed_indices"))
+    wl = _given(lens, wavelength, "signed_indices")  # before lens.indices: lens checked
+    n = lens.indices(wl)
     if not lens.mirrors:
         return n
     flips = [sum(1 for m in lens.mirrors if m < i) % 2 for i in range(len(n))]
@@ -127,7 +164,7 @@ def system_matrix(lens: Lens, wavelength=None, start: int = 0, end: int | None =
         if i > start:
             t = lens.thickness[i - 1] / n[i]
             a, b = a + t * c, b + t * d
-        p = surface_power(lens.surfaces[i], n[i], n[i + 1], wl)
+        p = _surface_power(lens.surfaces[i], n[i], n[i + 1], wl)
         c, d = c - p * a, d - p * b
     return a, b, c, d
 
@@ -184,7 +221,9 @@ def entrance_pupil_magnification(lens: Lens, wavelength=None) -> Array:
 
 
 def marginal_ray(lens: Lens, wavelength=None):
-    """Paraxial marginal ray (y, nu) after every surface, for the lens's EPD and object."""
+    """Paraxial marginal ray (y, nu) after every surface, for the lens's EPD and object.
+
+    Each is ``[num_surfaces]`` for one wavelength (µm), ``[num_surfaces, W]`` for ``[W]``."""
     wl = _given(lens, wavelength, "marginal_ray")
     n = signed_indices(lens, wl)
     zep = entrance_pupil_z(lens, wl)
@@ -202,15 +241,18 @@ def _trace_ray(lens: Lens, y, nu, n, wl):
     for i, s in enumerate(lens.surfaces):
         if i > 0:
             y, nu = _transfer(y, nu, lens.thickness[i - 1], n[i])
-        y, nu = _refract(y, nu, surface_power(s, n[i], n[i + 1], wl))
+        y, nu = _refract(y, nu, _surface_power(s, n[i], n[i + 1], wl))
         ys.append(y)
         nus.append(nu)
-    return jnp.stack(ys), jnp.stack(nus)
+    # Broadcast: with several wavelengths the first heights of a marginal ray from infinity
+    # are one value and the later ones one per wavelength ("Cannot stack arrays").
+    return jnp.stack(jnp.broadcast_arrays(*ys)), jnp.stack(jnp.broadcast_arrays(*nus))
 
 
 def _wavelength(lens: Lens, wavelength, where: str):
     """The wavelength (µm) to use: the primary one, or the given one checked against the
     lens's materials (an error_if under jit, so these stay usable in jitted losses)."""
+    _lens_and_size(lens, wavelength, where)
     checks.lens_intact(lens, where)  # edited with eqx.tree_at: a NaN curvature gave NaN
     if wavelength is None:
         return lens.primary_wavelength
@@ -318,10 +360,13 @@ def working_fnum(lens: Lens, depth) -> Array:
     as ``sampling.lens_depth`` gives it; None for infinity), whatever the lens's own object:
     ``mtf(lens, depth=...)`` took the lens's own, so a lens made for infinity imaged at 1:1
     had its diffraction MTF (and default cut-off) at half the working F-number."""
+    _lens_and_size(lens, None, "working_fnum")
     if depth is not None and not checks.is_traced(depth):
         # A depth of 0 or -5 mm was refused as "a lens edited with eqx.tree_at".
         checks.real_values(depth, "depth", "working_fnum", "mm")
         checks.values(depth, "depth", "working_fnum", lo=0, lo_open=True, inf_ok=True,
                       unit="mm (None or inf: an object at infinity)")
+        if np.all(np.asarray(depth, dtype=float) >= INFINITE_OBJECT_MM):
+            depth = None  # as a Lens's object_distance: inf gave a working F-number of NaN
     at = eqx.tree_at(lambda m: m.object_distance, lens, depth, is_leaf=lambda x: x is None)
     return paraxial_data(at).working_fnum

@@ -273,6 +273,7 @@ def _check_upto(lens: Lens, rays: Rays, upto: int | None, newton_iters: int) -> 
             raise TypeError(f"trace: {arg} must be a jaxlens.{cls.__name__}, got "
                             f"{type(v).__name__}")
     checks.number(newton_iters, "newton_iters", "trace", lo=0, integer=True, unit="iterations")
+    checks.newton_iters(newton_iters, "trace")
     if upto is not None and (isinstance(upto, bool) or not isinstance(upto, (int, np.integer))
                              or not 0 <= upto < lens.num_surfaces):
         raise ValueError(f"trace: upto must be a surface index in [0, {lens.num_surfaces - 1}] "
