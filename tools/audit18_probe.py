@@ -18,11 +18,8 @@ mis-shaped arrays, degree/radian and mm/m mix-ups, lens consistency, unknown nam
 Run: PYTHONPATH=$PWD python tools/audit18_probe.py [filter]
 """
 
-import io
 import os
-import sys
 import tempfile
-from contextlib import redirect_stderr, redirect_stdout
 
 import jax
 import jax.numpy as jnp
@@ -30,51 +27,13 @@ import numpy as np
 
 jax.config.update("jax_enable_x64", True)
 
+from probe_table import probe, run  # noqa: E402
+
 import jaxlens as jl  # noqa: E402
 from jaxlens import zoo  # noqa: E402
 
 ROOT = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
-ROWS = []
-FILTER = sys.argv[1] if len(sys.argv) > 1 else ""
 cooke = zoo.cooke_triplet()
-
-
-def probe(name, fn, *words, good=False):
-    """Run fn; classify. ``words``: what a clear message must hold (case-insensitive)."""
-    if FILTER and FILTER not in name:
-        return
-    try:
-        out, err = io.StringIO(), io.StringIO()
-        with redirect_stdout(out), redirect_stderr(err):
-            r = fn()
-    except SystemExit as e:  # argparse / a CLI's refusal
-        msg = err.getvalue().strip().splitlines()
-        text = msg[-1] if msg else f"exit {e.code}"
-        ok = e.code == 2 and all(w.lower() in text.lower() for w in words)
-        outcome = "ok" if good and e.code == 0 else ("clear error" if ok else "vague error")
-        ROWS.append((name, outcome, text[:160]))
-        return
-    except (ValueError, TypeError) as e:
-        text = str(e).split("\n")[0]
-        ok = all(w.lower() in str(e).lower() for w in words)
-        outcome = "crash" if good else ("clear error" if ok else "vague error")
-        ROWS.append((name, outcome, f"{type(e).__name__}: {text[:150]}"))
-        return
-    except Exception as e:  # noqa: BLE001
-        ROWS.append((name, "crash", f"{type(e).__name__}: {str(e).splitlines()[0][:150] if str(e) else ''}"))
-        return
-    if isinstance(r, int) and not isinstance(r, bool) and r != 0 and getattr(fn, "cli", False):
-        msg = err.getvalue().strip().splitlines()
-        text = msg[-1] if msg else f"exit {r}"
-        ok = r == 2 and all(w.lower() in text.lower() for w in words)
-        ROWS.append((name, "clear error" if ok else "vague error", text[:160]))
-        return
-    try:
-        s = np.array2string(np.asarray(r), precision=5)[:100] if not isinstance(
-            r, (str, dict, list, tuple)) else repr(r)[:100]
-    except Exception:  # noqa: BLE001
-        s = type(r).__name__
-    ROWS.append((name, "ok" if good else "silent wrong", s.replace("\n", " ")))
 
 
 # ----------------------------------------------------------------------------- known gaps
@@ -412,19 +371,5 @@ def paraxial_api():
     probe("surface_power n1 0", lambda: P.surface_power(cooke.surfaces[0], 0.0, 1.5), "n1")
 
 
-for area in (known_gaps, dtypes_and_shapes, tracing, lens_consistency, names, clis, analyses_more,
-             tolerance_api, paraxial_api):
-    try:
-        area()
-    except Exception as e:  # noqa: BLE001  (a probe area that fails to set up)
-        ROWS.append((f"[{area.__name__} setup]", "crash", f"{type(e).__name__}: {e}"[:160]))
-
-w = max(len(r[0]) for r in ROWS) if ROWS else 10
-print(f"{'probe':<{w}} | {'outcome':<12} | detail")
-print("-" * (w + 60))
-for name, outcome, detail in ROWS:
-    print(f"{name:<{w}} | {outcome:<12} | {detail}")
-counts = {}
-for _, o, _ in ROWS:
-    counts[o] = counts.get(o, 0) + 1
-print("\n" + ", ".join(f"{k}: {v}" for k, v in sorted(counts.items())))
+run((known_gaps, dtypes_and_shapes, tracing, lens_consistency, names, clis, analyses_more,
+     tolerance_api, paraxial_api))
