@@ -69,8 +69,6 @@ PITCH = r"must be a finite number in \(0, 1\) mm \(a pixel pitch: 5 µm is 0\.00
     ("mtf", "pixel_size", lambda: jl.imaging.psf.mtf(COOKE, 0.0, pixel_size=5.0)),
     ("psf_map", "pixel_size", lambda: jl.imaging.psf.psf_map(
         COOKE, grid=(1, 1), sensor=SENSOR_5, kernel_size=9, pixel_size=5.0)),
-    ("inverse_distortion_map", "pixel_size", lambda: distortion.inverse_distortion_map(
-        COOKE, resolution=(8, 8), pixel_size=5.0, grid=(2, 2))),
     ("psf_points", "pixel_size", lambda: tiled.psf_points(
         COOKE, jnp.zeros((1, 2)), None, wavelengths=[0.55], kernel_size=9, pixel_size=5.0)),
     ("tile_centers", "pixel_size", lambda: tiled.tile_centers((8, 8), 5.0, 4)),

@@ -150,7 +150,9 @@ def inverse_distortion_map(
     where = "inverse_distortion_map"
     resolution = checks.grid(resolution, where, "resolution", "pixels")
     grid = checks.grid(grid, where, "grid", "points")
-    pixel_size = pixel_pitch(pixel_size, where)
+    # A sensor's pitch, as in distortion_map (render's PSF method passes its Sensor's): not
+    # bounded above, as a Sensor's own pitch is not.
+    pixel_size = pixel_pitch(pixel_size, where, bounded=False)
     checks.number(newton_iters, "newton_iters", where, lo=0, integer=True, unit="iterations")
     checks.newton_iters(newton_iters, where)
     checks.number(iters, "iters", where, lo=0, integer=True, unit="aiming iterations")
