@@ -2,8 +2,10 @@
 
 from __future__ import annotations
 
+import importlib.util
 import json
 import pathlib
+import sys
 
 import jax.numpy as jnp
 import numpy as np
@@ -121,3 +123,14 @@ def json_round_trip(lens: jl.Lens, folder) -> jl.Lens:
                     strict=True):
         np.testing.assert_array_equal(np.asarray(a, np.float64), np.asarray(b, np.float64))
     return again
+
+
+def check_corpus_tool():
+    """tools/check_corpus.py (not part of the package), loaded once from the repository."""
+    if "check_corpus" not in sys.modules:
+        path = pathlib.Path(__file__).resolve().parents[1] / "tools" / "check_corpus.py"
+        spec = importlib.util.spec_from_file_location("check_corpus", path)
+        module = importlib.util.module_from_spec(spec)
+        sys.modules["check_corpus"] = module
+        spec.loader.exec_module(module)
+    return sys.modules["check_corpus"]

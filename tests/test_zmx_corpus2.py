@@ -4,14 +4,12 @@ the old 2006-era format, vendors' stock lenses, patent lenses), each checked aga
 known answer: optiland's EFL of the same file, an analytic value, or the pupil that Zemax
 itself computed and wrote into the file (PUPD)."""
 
-import importlib.util
 import os
-import pathlib
-import sys
 import warnings
 
 import numpy as np
 import pytest
+from helpers import check_corpus_tool
 
 import jaxlens as jl
 from jaxlens.optics import paraxial
@@ -21,16 +19,6 @@ INCH_FILE = os.path.join(DATA, "optiland_circular_aperture_example_with_aperture
 OPTILAND_F2_INCHES = 0.7300916303992044  # optiland 0.6.3 optic.paraxial.f2() of INCH_FILE
 
 
-def _check_corpus():
-    """tools/check_corpus.py (not part of the package), loaded from the repository."""
-    path = pathlib.Path(__file__).resolve().parents[1] / "tools" / "check_corpus.py"
-    spec = importlib.util.spec_from_file_location("check_corpus", path)
-    module = importlib.util.module_from_spec(spec)
-    sys.modules.setdefault("check_corpus", module)
-    spec.loader.exec_module(sys.modules["check_corpus"])
-    return sys.modules["check_corpus"]
-
-
 # ------------------------------------------------------------- lens units in the corpus tool
 
 
@@ -38,7 +26,7 @@ def test_corpus_tool_reads_the_lens_unit(tmp_path):
     """optiland reports a file's EFL in its lens units, jaxlens in mm: the corpus tool
     converts with the file's UNIT line (it compared 18.54 mm with 0.730 in and flagged a
     Laikin wide-angle lens in inches as a 96 % EFL difference)."""
-    tool = _check_corpus()
+    tool = check_corpus_tool()
     assert tool.lens_unit_mm(INCH_FILE) == 25.4  # UTF-16, UNIT IN X W X CM MR CPMM
     for unit, mm in (("MM", 1.0), ("CM", 10.0), ("METER", 1000.0), ("IN", 25.4)):
         p = tmp_path / f"{unit}.zmx"
@@ -60,7 +48,7 @@ def test_inch_file_efl_is_optilands_in_mm():
 
 def test_corpus_tool_agrees_with_optiland_on_the_inch_file():
     pytest.importorskip("optiland")
-    rec = _check_corpus().check_file(INCH_FILE)
+    rec = check_corpus_tool().check_file(INCH_FILE)
     assert rec["status"] == "loaded"
     assert rec["optiland_efl"] == pytest.approx(OPTILAND_F2_INCHES * 25.4, rel=1e-12)
     assert rec["rel_diff"] < 1e-12

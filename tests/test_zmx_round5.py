@@ -12,30 +12,18 @@ and two kinds of file have no comparable EFL (afocal image space; an r² term, w
 optiland's paraxial trace leaves out).
 """
 
-import importlib.util
 import math
 import os
-import pathlib
-import sys
 import warnings
 
 import numpy as np
 import pytest
+from helpers import check_corpus_tool
 
 import jaxlens as jl
 from jaxlens.io import zmx
 
 DATA = os.path.join(os.path.dirname(__file__), "data", "zmx")
-
-
-def _check_corpus():
-    """tools/check_corpus.py (not part of the package), loaded from the repository."""
-    path = pathlib.Path(__file__).resolve().parents[1] / "tools" / "check_corpus.py"
-    spec = importlib.util.spec_from_file_location("check_corpus", path)
-    module = importlib.util.module_from_spec(spec)
-    sys.modules.setdefault("check_corpus", module)
-    spec.loader.exec_module(sys.modules["check_corpus"])
-    return sys.modules["check_corpus"]
 
 
 def _efl(lens):
@@ -184,7 +172,7 @@ def test_decentered_annular_clear_aperture():
                               (0, jl.Aperture("circle", 1.5, 1.5, 2.25, -3.5, True)))
     assert lens.obscurations == ()
     assert math.isinf(_efl(lens))
-    cc = _check_corpus()
+    cc = check_corpus_tool()
     assert cc.clipping_radii(lens) == [12.5]  # what optiland reads from the CLAP
     assert cc.efl_rel_diff(_efl(lens), -math.inf) == 0.0
 
@@ -207,7 +195,7 @@ def test_off_axis_three_mirror_telescope(tmp_path):
 
 
 def test_tool_efl_difference_with_infinite_efls():
-    cc = _check_corpus()
+    cc = check_corpus_tool()
     assert cc.efl_rel_diff(math.inf, -math.inf) == 0.0
     assert cc.efl_rel_diff(math.inf, 120.0) == math.inf
     assert cc.efl_rel_diff(120.0, -math.inf) == math.inf
@@ -245,7 +233,7 @@ def test_tool_moves_toroidal_parms_for_optiland(tmp_path):
     toroid's block only (Vendetta's optiland-0.5.8 reference file has a toroid)."""
     p = tmp_path / "t.zmx"
     p.write_text(TOROID)
-    text, changed = _check_corpus().optiland_copy(str(p))
+    text, changed = check_corpus_tool().optiland_copy(str(p))
     assert changed == ["TOROIDAL PARM n written as PARM n+1"]
     lines = text.splitlines()
     assert lines[lines.index("  TYPE EVENASPH") + 2:][:2] == ["  PARM 1 1.0E-6", "  PARM 2 -2.0E-8"]
@@ -257,9 +245,9 @@ def test_tool_finds_r2_terms(tmp_path):
     power by Zemax and jaxlens and left out by optiland: the tool does not compare such EFLs."""
     p = tmp_path / "t.zmx"
     p.write_text(TOROID)
-    assert _check_corpus().r2_term_surfaces(str(p)) == [1, 2]
+    assert check_corpus_tool().r2_term_surfaces(str(p)) == [1, 2]
     p.write_text(TOROID.replace("PARM 1 1.0E-6", "PARM 1 0").replace("PARM 2 0.001", "PARM 3 1"))
-    assert _check_corpus().r2_term_surfaces(str(p)) == []
+    assert check_corpus_tool().r2_term_surfaces(str(p)) == []
     # The y² term is in jaxlens's paraxial power: dropping it changes the EFL.
     with_y2 = _efl(zmx.loads(TOROID.replace("PARM 1 1.0E-6", "PARM 1 0")))
     without = _efl(zmx.loads(TOROID.replace("PARM 1 1.0E-6", "PARM 1 0")
@@ -270,7 +258,7 @@ def test_tool_finds_r2_terms(tmp_path):
 def test_tool_reads_unknown_glasses_as_model_glasses_when_asked(tmp_path, capsys):
     """``--unknown-glass model`` (the Canon RF70-200 patent file's OHARA S-LAL7Q): the tool
     passes jaxlens.load's unknown_glass; by default such a file is refused."""
-    cc = _check_corpus()
+    cc = check_corpus_tool()
     p = tmp_path / "canon_like.zmx"
     p.write_text(_singlet(glas="GLAS S-LAL7Q 0 0 1.6516 58.54 0 0 0 0 0 0"))
     assert cc.check_file(str(p))["status"] == "refused"
@@ -286,6 +274,6 @@ def test_tool_compares_geometry_with_the_same_indices():
     glass data: catalog indices 1e-6 to 3e-5 apart, and a substitution-solved glass that
     optiland takes from its GLAS line's stale nd and Vd). Runs where optiland is installed."""
     pytest.importorskip("optiland")
-    cc = _check_corpus()
+    cc = check_corpus_tool()
     rec = cc.check_file(os.path.join(DATA, "rayoptics_US08011793-1_trimmed.zmx"))
     assert rec["rel_diff_same_n"] < 1e-12 and rec["rel_diff"] < 1e-12
