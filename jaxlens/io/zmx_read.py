@@ -381,6 +381,10 @@ def _check_structure(f: ZmxFile, text: str, strict: bool) -> None:
     if not text.endswith(("\n", "\r")) and (lines[-1].split() or [""])[0] not in IGNORED_KEYWORDS:
         report(strict, f"{path}:{len(lines)}: the file does not end with a line break; it "
                         f"may be truncated: {lines[-1].strip()!r}")
+    for ln in f.comments:
+        report(strict, f"{path}:{ln.number}: a comment line ('!', as in a Zemax macro) "
+                        f"skipped; OpticStudio writes none in a .zmx file, so the file was "
+                        f"written by hand or by another program: {ln.text.strip()!r}")
     for ln in f.unknown:
         if ln.tokens[0] in KNOWN_VALUES:
             report(strict, f"{path}:{ln.number}: {ln.tokens[0]} with a value jaxlens has not "
