@@ -147,7 +147,8 @@ def test_a_comment_line_is_no_keyword():
 def test_glass_with_only_zemax_defaults_is_refused_and_a_real_one_can_be_modelled():
     """A glass no catalog has whose GLAS line holds Zemax's defaults (``1.5 40``: no data of
     the glass) is refused (PyZDDE's Fiber Coupling named N15 so: round 6 found N15 in
-    Zemax's MISC catalog, a constant index 1.5, now shipped, tests/test_zmx_round6.py). The Canon RF70-200 patent file names OHARA S-LAL7Q with its real
+    Zemax's MISC catalog, a constant index 1.5, now shipped, tests/test_zmx_round6.py).
+    The Canon RF70-200 patent file names OHARA S-LAL7Q with its real
     nd 1.6516, Vd 58.54: refused by default, read as a model glass with
     ``unknown_glass='model'`` (its EFL then agrees with optiland's, 71.996437, to 1.4e-8)."""
     with pytest.raises(ValueError, match=r"^<zmx>:18: glass 'N16'.*Zemax's defaults"):
