@@ -614,7 +614,9 @@ def _lens(f: ZmxFile, text: str, path: str, strict: bool, unknown_glass: str) ->
             return apply_aperture(lens, epd=epd)
         if kind == "epd":
             if not value > 0:
-                raise ln.error("entrance pupil diameter must be > 0")
+                raise ln.error("entrance pupil diameter must be > 0 (OpticStudio's new, empty "
+                               "lens has ENPD 0: it opens, but no ray passes a pupil of size "
+                               "0); give the pupil's diameter in lens units, or FNUM or FLOA")
             return apply_aperture(lens, epd=value * u)
         if kind == "fnum":
             if not value > 0:
@@ -626,7 +628,9 @@ def _lens(f: ZmxFile, text: str, path: str, strict: bool, unknown_glass: str) ->
                            "elliptical one. Give the pupil with ENPD, FNUM or OBNA")
         sd = body[stop].clap if body[stop].clap else (body[stop].diam or (0.0,))[0]
         if not sd > 0:
-            raise ln.error("FLOA needs a DIAM or CLAP (stop semi-diameter) on the STOP surface")
+            raise ln.error("FLOA needs a DIAM or CLAP (stop semi-diameter) on the STOP surface "
+                           "(its semi-diameter sets the pupil, and the file gives none); add "
+                           "'DIAM r 1 0 0 1' to the STOP surface, or give ENPD or FNUM")
         return apply_aperture(lens, stop_semi_diameter=sd * u)
     except ValueError as e:
         if str(e).startswith(path):
