@@ -475,9 +475,9 @@ def loads(text: str, path: str = "<zmx>", *, strict: bool = False,
     Args:
         text: The file's text.
         path: The file name, for messages and side AGF catalogs.
-        strict: Refuse unknown keywords and a last line without a line break (a truncated
-            file); by default they give a ``ZmxWarning``. Incomplete surface blocks are
-            always refused.
+        strict: Refuse unknown keywords, ``!`` comment lines (which OpticStudio never
+            writes) and a last line without a line break (a truncated file); by default
+            they give a ``ZmxWarning``. Incomplete surface blocks are always refused.
         unknown_glass: ``"error"`` refuses a glass in no catalog; ``"model"`` uses a
             ``ModelGlass`` of its GLAS line's nd and Vd instead (a ``ZmxWarning``).
         config: For a multi-configuration file (``MNUM``), the configuration to read,
