@@ -41,6 +41,10 @@ OPTILAND_EFL = {
     "rayoptics_US05331467-1.zmx": (999.6369653778445, None),  # mirrors and an OBSC
     # Three off-axis mirrors with OBDC-decentered SQAP apertures (tests/test_zmx_round5.py).
     "rayoptics_US08011793-1_trimmed.zmx": (499.9996204043674, None),
+    # Round 6 (tests/test_zmx_round6.py): an OHARA even asphere whose GLAS line names the
+    # glass only, and Ex66 as OpticStudio 16 wrote it (PPAR pickups, GLCB lines, MEMA).
+    "optiland_lens2.zmx": (22.499368205385874, None),
+    "rayoptics_HoO-V2C18Ex66NEW.zmx": (90.05187904998931, None),
 }
 
 # What each file that loads is reported for (a ZmxWarning naming the line), if anything.
@@ -64,7 +68,9 @@ REFUSED = {
 # once refused) has f = R/2 = 95.3 mm.
 KNOWN_EFL = {"rayoptics_zmax_37992.zmx": 1 / (2 * 5.246589716684155885E-03),
              # One curved surface and no glass: no power (tests/test_zmx_round5.py).
-             "optiland_lens_offset_aperture.zmx": math.inf}
+             "optiland_lens_offset_aperture.zmx": math.inf,
+             # Two flat surfaces in air (round 6: FTYP makes 1 of its 5 WAVM lines active).
+             "optiland_inactive_wavelengths.zmx": math.inf}
 
 # Files checked in a test of their own (optiland 0.6.3 does not read their surface type).
 CHECKED_ELSEWHERE = {"rayoptics_ASL5040-UV.zmx": "tests/test_qtype.py (QED_TYPE, Q-bfs)"}

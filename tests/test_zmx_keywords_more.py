@@ -45,15 +45,17 @@ def test_a_truly_unknown_keyword_is_still_reported():
 
 
 def test_placeholder_nd_vd_is_not_offered_as_a_model_glass():
-    """pyzdde's Fiber_Coupling: GLAS N15 0 0 1.5 4.0E+1 … — 1.5 and 40 are Zemax's defaults."""
-    text = _lens(glass="N15 0 0 1.5 4.0E+1 0 0 0 0 0 0")
-    with pytest.raises(ValueError, match=r"<zmx>:\d+: glass 'N15': .*nd 1\.5, Vd 40, Zemax's "
+    """GLAS N16 0 0 1.5 4.0E+1 … (a glass in no catalog) — 1.5 and 40 are Zemax's defaults.
+    (pyzdde's Fiber_Coupling names N15 so, which round 6 found in Zemax's MISC catalog:
+    tests/test_zmx_round6.py.)"""
+    text = _lens(glass="N16 0 0 1.5 4.0E+1 0 0 0 0 0 0")
+    with pytest.raises(ValueError, match=r"<zmx>:\d+: glass 'N16': .*nd 1\.5, Vd 40, Zemax's "
                                          r"defaults .*not this glass's data"):
         zmx.loads(text)
     with pytest.raises(ValueError, match=r"no model glass can stand in"):
         zmx.loads(text, unknown_glass="model")  # the placeholders are never used
     # With a real nd/Vd on the line the model glass is offered, as before.
-    real = _lens(glass="N15 0 0 1.62 45 0 0 0 0 0 0")
+    real = _lens(glass="N16 0 0 1.62 45 0 0 0 0 0 0")
     with pytest.raises(ValueError, match=r"load it with unknown_glass='model'"):
         zmx.loads(real)
 

@@ -135,18 +135,24 @@ def test_an_empty_new_lens_is_refused():
 
 def test_a_comment_line_is_no_keyword():
     """A hand-written sample (zemax-lens-analyzer's tests) starts with '! Minimal sequential
-    lens': no Zemax file has comment lines, and the reader says which line it could not read."""
-    with pytest.raises(ValueError, match=r"^<zmx>:1: not a Zemax keyword line: '! Minimal"):
-        zmx.loads("! Minimal sequential lens\n" + _singlet())
+    lens': OpticStudio writes no comment lines, so the reader names the line (round 6: a
+    '!' line, ZPL's comment, is skipped with a warning and refused under strict; any other
+    line that is no keyword is still refused)."""
+    with pytest.raises(ValueError, match=r"^<zmx>:1: a comment line .*'! Minimal"):
+        zmx.loads("! Minimal sequential lens\n" + _singlet(), strict=True)
+    with pytest.raises(ValueError, match=r"^<zmx>:1: not a Zemax keyword line: '# Minimal"):
+        zmx.loads("# Minimal sequential lens\n" + _singlet())
 
 
 def test_glass_with_only_zemax_defaults_is_refused_and_a_real_one_can_be_modelled():
-    """PyZDDE's Fiber Coupling names N15 (``GLAS N15 0 0 1.5 40``: Zemax's defaults, not the
-    glass's data): refused. The Canon RF70-200 patent file names OHARA S-LAL7Q with its real
+    """A glass no catalog has whose GLAS line holds Zemax's defaults (``1.5 40``: no data of
+    the glass) is refused (PyZDDE's Fiber Coupling named N15 so: round 6 found N15 in
+    Zemax's MISC catalog, a constant index 1.5, now shipped, tests/test_zmx_round6.py).
+    The Canon RF70-200 patent file names OHARA S-LAL7Q with its real
     nd 1.6516, Vd 58.54: refused by default, read as a model glass with
     ``unknown_glass='model'`` (its EFL then agrees with optiland's, 71.996437, to 1.4e-8)."""
-    with pytest.raises(ValueError, match=r"^<zmx>:18: glass 'N15'.*Zemax's defaults"):
-        zmx.loads(_singlet(glas="GLAS N15 0 0 1.5 4.0E+1 0 0 0 0 0 0"))
+    with pytest.raises(ValueError, match=r"^<zmx>:18: glass 'N16'.*Zemax's defaults"):
+        zmx.loads(_singlet(glas="GLAS N16 0 0 1.5 4.0E+1 0 0 0 0 0 0"))
     text = _singlet(glas="GLAS S-LAL7Q 0 0 1.6516 58.54 0 0 0 0 0 0")
     with pytest.raises(ValueError, match=r"^<zmx>:18: glass 'S-LAL7Q'.*unknown_glass='model'"):
         zmx.loads(text)

@@ -128,6 +128,7 @@ class ZmxFile:
     raim: ZmxLine | None = None
     surfs: list = field(default_factory=list)
     unknown: list = field(default_factory=list)  # lines with a keyword nobody knows
+    comments: list = field(default_factory=list)  # lines starting with '!' (hand-written)
     mnum: ZmxLine | None = None  # the number of configurations (and the active one)
     config_lines: list = field(default_factory=list)  # operand lines after MNUM, in order
     zemax: bool = False  # written by Zemax (a VERS line): every block is complete
@@ -159,6 +160,11 @@ def parse(text: str, path: str) -> ZmxFile:
         if not ln.tokens:
             continue
         key = ln.tokens[0]
+        if key.startswith("!"):
+            # '!' opens a comment in Zemax's macro (ZPL) files; OpticStudio writes none in a
+            # lens file, but hand-written files carry them. Skipped, and reported (_check).
+            f.comments.append(ln)
+            continue
         if not KEYWORD.match(key):
             raise ln.error("not a Zemax keyword line")
         if key == "SURF":

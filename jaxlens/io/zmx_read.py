@@ -381,6 +381,10 @@ def _check_structure(f: ZmxFile, text: str, strict: bool) -> None:
     if not text.endswith(("\n", "\r")) and (lines[-1].split() or [""])[0] not in IGNORED_KEYWORDS:
         report(strict, f"{path}:{len(lines)}: the file does not end with a line break; it "
                         f"may be truncated: {lines[-1].strip()!r}")
+    for ln in f.comments:
+        report(strict, f"{path}:{ln.number}: a comment line ('!', as in a Zemax macro) "
+                        f"skipped; OpticStudio writes none in a .zmx file, so the file was "
+                        f"written by hand or by another program: {ln.text.strip()!r}")
     for ln in f.unknown:
         if ln.tokens[0] in KNOWN_VALUES:
             report(strict, f"{path}:{ln.number}: {ln.tokens[0]} with a value jaxlens has not "
@@ -471,9 +475,9 @@ def loads(text: str, path: str = "<zmx>", *, strict: bool = False,
     Args:
         text: The file's text.
         path: The file name, for messages and side AGF catalogs.
-        strict: Refuse unknown keywords and a last line without a line break (a truncated
-            file); by default they give a ``ZmxWarning``. Incomplete surface blocks are
-            always refused.
+        strict: Refuse unknown keywords, ``!`` comment lines (which OpticStudio never
+            writes) and a last line without a line break (a truncated file); by default
+            they give a ``ZmxWarning``. Incomplete surface blocks are always refused.
         unknown_glass: ``"error"`` refuses a glass in no catalog; ``"model"`` uses a
             ``ModelGlass`` of its GLAS line's nd and Vd instead (a ``ZmxWarning``).
         config: For a multi-configuration file (``MNUM``), the configuration to read,
@@ -610,7 +614,9 @@ def _lens(f: ZmxFile, text: str, path: str, strict: bool, unknown_glass: str) ->
             return apply_aperture(lens, epd=epd)
         if kind == "epd":
             if not value > 0:
-                raise ln.error("entrance pupil diameter must be > 0")
+                raise ln.error("entrance pupil diameter must be > 0 (OpticStudio's new, empty "
+                               "lens has ENPD 0: it opens, but no ray passes a pupil of size "
+                               "0); give the pupil's diameter in lens units, or FNUM or FLOA")
             return apply_aperture(lens, epd=value * u)
         if kind == "fnum":
             if not value > 0:
@@ -622,7 +628,9 @@ def _lens(f: ZmxFile, text: str, path: str, strict: bool, unknown_glass: str) ->
                            "elliptical one. Give the pupil with ENPD, FNUM or OBNA")
         sd = body[stop].clap if body[stop].clap else (body[stop].diam or (0.0,))[0]
         if not sd > 0:
-            raise ln.error("FLOA needs a DIAM or CLAP (stop semi-diameter) on the STOP surface")
+            raise ln.error("FLOA needs a DIAM or CLAP (stop semi-diameter) on the STOP surface "
+                           "(its semi-diameter sets the pupil, and the file gives none); add "
+                           "'DIAM r 1 0 0 1' to the STOP surface, or give ENPD or FNUM")
         return apply_aperture(lens, stop_semi_diameter=sd * u)
     except ValueError as e:
         if str(e).startswith(path):
