@@ -249,7 +249,9 @@ def _cross_checked(m: AbstractMaterial, ln) -> AbstractMaterial:
         warnings.warn(
             f"{ln.path}:{ln.number}: GLAS {m.name} gives nd {nd:g}, Vd {vd:g}, but catalog "
             f"{getattr(m, 'catalog', '')} has nd {cat_nd:g}, Vd {cat_vd:g}; using the "
-            f"catalog's glass (a different glass of the same name?)", ZmxWarning, stacklevel=5)
+            f"catalog's glass (a different glass of the same name, or numbers the line kept "
+            f"from the glass it held before, as after a substitution solve?)", ZmxWarning,
+            stacklevel=5)
     return m
 
 
