@@ -31,9 +31,9 @@ Intersections:
     ``converged``: |F| ≤ τ and a next step |F/F'| ≤ τ, τ = 64·sqrt(eps)·(1 + |t|) mm, so the
     point returned lies within about τ of a root along the ray (1e-6 mm in float64), also
     for a grazing ray (near a double root), and a ray with no root is a miss unless it
-    touches the surface to about |F''|·τ²/2 (see ``converged``). Those iterations carry no gradient. One last
-    Newton step is taken with gradients switched on and the derivative F'(t) held
-    fixed; at the converged root its derivative is exactly the implicit-function
+    touches the surface to about |F''|·τ²/2 (see ``converged``). Those iterations carry no
+    gradient. One last Newton step is taken with gradients switched on and the derivative
+    F'(t) held fixed; at the converged root its derivative is exactly the implicit-function
     theorem result dt/dθ = −(∂F/∂θ)/(∂F/∂t), so the backward pass never unrolls the
     iterations.
 
