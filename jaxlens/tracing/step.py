@@ -201,7 +201,14 @@ def converged(f, df, t):
     float64 for |F''| ~ 0.1 /mm), i.e. touches it at rounding. Implied by ``settled``."""
     eps = jnp.finfo(jnp.result_type(f)).eps
     tol = NEWTON_TOL * jnp.sqrt(eps) * (1.0 + jnp.abs(t))
-    return (jnp.abs(f) <= tol) & (jnp.abs(f) <= tol * jnp.abs(df)) & jnp.isfinite(f) & (
+    return (jnp.abs(f) <= tol * jnp.minimum(1.0, jnp.abs(df))) & jnp.isfinite(f) & (df != 0)
+
+
+def _small_residual(f, df, t):
+    """|F| ≤ τ (``converged`` without its bound on the step, which ``settled`` implies), F
+    finite and F' ≠ 0: the test inside ``continue_newton``, kept as lean as it was."""
+    eps = jnp.finfo(jnp.result_type(f)).eps
+    return (jnp.abs(f) <= NEWTON_TOL * jnp.sqrt(eps) * (1.0 + jnp.abs(t))) & jnp.isfinite(f) & (
         df != 0)
 
 
@@ -212,7 +219,7 @@ def settled(f, df, t):
     root's (``surface_adjoint``'s reverse rule takes it at the root), to about eps^(3/4)."""
     eps = jnp.finfo(jnp.result_type(f)).eps
     small = jnp.abs(f) <= eps**0.75 * (1.0 + jnp.abs(t)) * jnp.abs(df)
-    return converged(f, df, t) & small
+    return _small_residual(f, df, t) & small  # = converged & small (small bounds the step)
 
 
 def continue_newton(residual, t, project=lambda t: t, max_iters: int = NEWTON_EXTRA_ITERS):
