@@ -77,7 +77,13 @@ def stop_chief_ray(lens: Lens, field, depth=None, wavelength=None, *,
 
     Returns:
         One ray (shape ``[1]``) in object space, launched from the entrance-pupil plane
-        (infinity) or from the object point.
+        (infinity) or from the object point. Its ``valid`` reports the aim: False where the
+        iterations did not bring the ray to the stop centre, i.e. where the aimed ray misses a
+        surface before the stop or crosses the stop more than ``sampling.AIM_TOLERANCE``
+        (relative to max(paraxial stop radius, 1 mm); 1e-6 in float64, 1e-3 in float32) from
+        its centre, as ``sampling.aim_at_stop`` marks its rays. The ray is still the last
+        aim (a trace of it as invalid stops at once; ``chief_point`` traces it through and
+        reports the aim in its validity).
 
     The aiming is ``sampling.aim_at_stop``'s (``newton.newton_2d``): from the paraxial
     entrance pupil's centre, it iterates until the ray crosses the stop within
@@ -86,8 +92,9 @@ def stop_chief_ray(lens: Lens, field, depth=None, wavelength=None, *,
     ``sampling.AIM_HALVINGS`` times) where they do not bring the ray closer or lose it; then one
     more Newton step, which carries the implicit-function gradient (with respect to the lens,
     the field, the object distance and the wavelength: the iterations carry none). Whether it
-    converged is for the caller to check (``chief_point(..., with_valid=True)`` checks only
-    that the ray passes). The lens's vignetting factors do not move it: it passes through the
+    converged is then checked by one more trace to the stop (no gradient) and reported in the
+    ray's ``valid`` (see Returns). The lens's vignetting factors do not move it: it passes
+    through the
     centre of the stop whatever they are. The ray that ``sampling.field_rays`` launches at
     pupil point (0, 0) of a vignetted field is the centre of the vignetted pupil, (VDX, VDY)
     rotated by VAN.
@@ -124,7 +131,12 @@ def stop_chief_ray(lens: Lens, field, depth=None, wavelength=None, *,
     uv = newton_2d(at_stop, jnp.zeros(2, lens.epd.dtype), params, iters, has_valid=True,
                    tol=sampling.AIM_CONVERGED[f64] * scale, max_step=lens.epd,
                    halvings=sampling.AIM_HALVINGS)
-    return launch(uv, zep, start, wl)
+    # An aim that the iterations did not bring to the stop centre is reported, not returned
+    # as valid (the check carries no gradient: validity has none).
+    xy, passes = at_stop(jax.lax.stop_gradient(uv), jax.lax.stop_gradient(params))
+    aimed = passes & jnp.all(jnp.abs(xy) <= sampling.AIM_TOLERANCE[f64] * scale)
+    rays = launch(uv, zep, start, wl)
+    return eqx.tree_at(lambda r: r.valid, rays, rays.valid & aimed)
 
 
 def chief_point(lens, field, depth, newton_iters, *, with_valid: bool = False):
@@ -133,7 +145,11 @@ def chief_point(lens, field, depth, newton_iters, *, with_valid: bool = False):
     A reference point, so it is traced without clipping or obscurations: a blocked chief
     ray (a Cassegrain's, behind its secondary) would otherwise stop where it was blocked.
     With ``with_valid``, ``(xy, valid)``: a chief ray that misses a surface or is totally
-    reflected stops where it failed, and ``valid`` is False."""
+    reflected stops where it failed, and ``valid`` is False; so is it where the aim at the
+    stop centre did not converge (``stop_chief_ray``; the point is then that of the last aim,
+    traced through)."""
     rays = stop_chief_ray(lens, field, depth, newton_iters=newton_iters)
+    aimed = rays.valid[0]
+    rays = eqx.tree_at(lambda r: r.valid, rays, jnp.ones_like(rays.valid))
     out = trace(unclipped(lens), rays, newton_iters=newton_iters, uniform=True)
-    return (out.origin[0, :2], out.valid[0]) if with_valid else out.origin[0, :2]
+    return (out.origin[0, :2], out.valid[0] & aimed) if with_valid else out.origin[0, :2]

@@ -346,9 +346,18 @@ def vignetting_map(factors, pupil) -> Float[Array, "*m 2"]:
     ``Py' = VDY + Py·(1 − VCY)`` (VDX, VDY, VCX, VCY in pupil radii; OpticStudio's
     definition), then a rotation of (Px', Py') about the pupil centre by VAN degrees,
     counter-clockwise (from +x toward +y): ``Px'' = Px'·cos VAN − Py'·sin VAN``,
-    ``Py'' = Px'·sin VAN + Py'·cos VAN``. The order and sign of the rotation are this
-    library's reading (no reference file with VAN ≠ 0 was at hand to check them against
-    OpticStudio); zeros map every point to itself.
+    ``Py'' = Px'·sin VAN + Py'·cos VAN``; zeros map every point to itself.
+
+    The direction of the rotation (and that it follows the compression and decenter) is this
+    library's convention, not a verified one: OpticStudio's own pages at hand (the help's
+    "Vignetting", the knowledge-base "How to use vignetting factors", Zemax staff answers on
+    its forum) say only that VAN ("TAN", the tangential angle, in newer versions) rotates
+    the vignetted pupil's axes relative to object-space x, y, and give no formula or sign;
+    optiland 0.6.3 reads VANN but ignores it (it applies VCX, VCY only), and no other open
+    tracer found applies it against OpticStudio. So a file with VAN ≠ 0 is read with the
+    counter-clockwise rotation stated here (tests/test_conventions_signs.py pins it: VCX =
+    0.5 with VAN = 30° puts the pupil's short axis at +30°); check such a file's spot
+    diagrams against OpticStudio before relying on them.
 
     >>> import jax.numpy as jnp
     >>> vignetting_map(jnp.array([0.0, 0.25, 0.0, 0.5, 0.0]), jnp.array([[0.0, 1.0]])).tolist()

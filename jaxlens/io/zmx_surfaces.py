@@ -45,7 +45,8 @@ SZERNSAG, FZERNSAG: a ``ZernikeSag`` (Zemax Zernike Standard Sag, Noll order and
 normalisation; Zernike Fringe Sag): CURV, CONI and PARM 1…8 the even asphere (A2…A16 on r²…
 r¹⁶, lens units^(1−2i)), PARM 0 the extrapolate flag (0: Zernike terms only within the
 normalisation radius, 1: everywhere; a missing PARM 0 reads as 0, as in Zemax), PARM 9 and 10
-the decenter x, y of the Zernike terms (lens units), XDAT 1 the number of terms N (whole,
+the decenter x, y of the Zernike terms (lens units; the terms are centred at (PARM 9,
+PARM 10), ``jaxlens.optics.freeform``), XDAT 1 the number of terms N (whole,
 0…231 Standard, 0…37 Fringe), XDAT 2 the normalisation radius (lens units, > 0), XDAT 3 …
 XDAT N+2 the coefficients of Z_1 … Z_N (lens units; a missing one reads as 0). A nonzero
 XDAT beyond N+2, or PARM 11 and beyond, is refused.

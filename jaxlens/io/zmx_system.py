@@ -203,13 +203,19 @@ def _chief_ray_paths(lens: Lens, field):
     """The real chief ray's path through the lens as it is and without any clipping (one
     compiled program: op by op, the aiming and the two traces took about 9 s)."""
     rays = aiming.stop_chief_ray(lens, field, lens.object_distance)
-    return tuple(forward.trace_path(m, rays, uniform=True) for m in (lens, _geometry_only(lens)))
+    aimed = rays.valid[0]  # False: the aim at the stop centre did not converge
+    rays = eqx.tree_at(lambda r: r.valid, rays, jnp.ones_like(rays.valid))
+    paths = tuple(forward.trace_path(m, rays, uniform=True) for m in (lens, _geometry_only(lens)))
+    return paths + (aimed,)
 
 
 def _where_it_stops(lens: Lens, field) -> str:
     """Where the chief ray of ``field`` becomes invalid, in words (Zemax surface numbers):
     clipped by a semi-diameter, or lost (a miss or total internal reflection)."""
-    path, free_path = _chief_ray_paths(lens, field)
+    path, free_path, aimed = _chief_ray_paths(lens, field)
+    if not bool(aimed):
+        return ("its aim at the centre of the stop did not converge (no launch point found "
+                "whose ray crosses the stop at its centre)")
     valid = np.asarray(path.valid).reshape(len(path.valid), -1)[:, 0]
     i = int(np.argmin(valid))  # the first invalid entry: surface i (the last: the image)
     surface = lens.surfaces[i] if i < lens.num_surfaces else lens.image
@@ -317,7 +323,9 @@ def vignetting(lines, count: int, *, defined: int | None = None) -> np.ndarray |
     ``defined`` ones (default ``count``: those the y field line gives; the reader reports
     the others). A line with fewer values than the ``defined`` fields, a line given twice,
     a value that is not finite, or a compression (VCXN, VCYN) of 1 or more is refused,
-    naming the line. Paraxial data and the EFL do not depend on them.
+    naming the line. Paraxial data and the EFL do not depend on them. VANN's direction
+    (counter-clockwise, from +x toward +y, after the compression and decenter) is jaxlens's
+    documented convention, which no OpticStudio text at hand confirms (``vignetting_map``).
     """
     defined = count if defined is None else defined
     out = np.zeros((count, len(VIGNETTING_KEYS)))

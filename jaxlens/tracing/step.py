@@ -25,12 +25,15 @@ Intersections:
     with polynomial terms take ``newton_iters`` Newton steps on F(t) = z(t) − sag(x(t),
     y(t)), from the base conic's root or the vertex plane, whichever gives the shorter
     first step, kept at t ≥ t_min (projected Newton); a ray whose iterate is then not yet
-    ``settled`` (|F| ≤ 64·sqrt(eps)·(1 + |t|) mm, ``converged``, and a next step of at most
-    eps^(3/4)·(1 + |t|) mm) goes on, alone, until it is, or gives up (``continue_newton``: a
-    ``while_loop`` whose body does not run when every ray is settled, the common case). A ray
-    is a hit where its last iterate is ``converged``. Those iterations carry no gradient. One last
-    Newton step is taken with gradients switched on and the derivative F'(t) held
-    fixed; at the converged root its derivative is exactly the implicit-function
+    ``settled`` (``converged`` and a next step of at most eps^(3/4)·(1 + |t|) mm) goes on,
+    alone, until it is, or gives up (``continue_newton``: a ``while_loop`` whose body does not
+    run when every ray is settled, the common case). A ray is a hit where its last iterate is
+    ``converged``: |F| ≤ τ and a next step |F/F'| ≤ τ, τ = 64·sqrt(eps)·(1 + |t|) mm, so the
+    point returned lies within about τ of a root along the ray (1e-6 mm in float64), also
+    for a grazing ray (near a double root), and a ray with no root is a miss unless it
+    touches the surface to about |F''|·τ²/2 (see ``converged``). Those iterations carry no
+    gradient. One last Newton step is taken with gradients switched on and the derivative
+    F'(t) held fixed; at the converged root its derivative is exactly the implicit-function
     theorem result dt/dθ = −(∂F/∂θ)/(∂F/∂t), so the backward pass never unrolls the
     iterations.
 
@@ -67,7 +70,8 @@ from ..optics.surfaces import AbstractSurface
 DEFAULT_NEWTON_ITERS = 6
 
 # Past the fixed steps, a ray whose iterate is not yet ``settled`` takes up to this many more
-# (``continue_newton``); a hit needs |F| ≤ NEWTON_TOL·sqrt(eps)·(1 + |t|) mm (``converged``).
+# (``continue_newton``); a hit needs |F| and the next step |F/F'| both at most
+# NEWTON_TOL·sqrt(eps)·(1 + |t|) mm (``converged``).
 NEWTON_EXTRA_ITERS = 40
 NEWTON_TOL = 64.0
 
@@ -182,9 +186,27 @@ def _conic_root_jvp(bounded_below, primals, tangents):
 
 
 def converged(f, df, t):
-    """Whether the Newton iterate ``t`` (mm) is accepted as a root of F: |F(t)| ≤ 64·sqrt(eps)
-    ·(1 + |t|) mm (``NEWTON_TOL``), F finite and F'(t) ≠ 0. The accepted iterate then takes one
-    more (differentiable) Newton step, which squares its error."""
+    """Whether the Newton iterate ``t`` (mm) is accepted as a root of F (a hit): with
+    τ = 64·sqrt(eps)·(1 + |t|) mm (``NEWTON_TOL``), |F(t)| ≤ τ and the next Newton step
+    |F/F'| ≤ τ, F finite and F'(t) ≠ 0. The accepted iterate then takes one more
+    (differentiable) Newton step, of at most τ, which squares its error at a simple root.
+
+    The bound on the step is what makes the test honest near a double root (a ray grazing
+    the surface, F' small): |F| ≤ τ alone accepted iterates up to sqrt(2τ/|F''|), about
+    1e-3 mm in float64, from the root, and rays that miss the surface by up to τ (1e-6 mm)
+    as hits, whose last step, divided by the small F', then landed anywhere. With it an
+    accepted iterate is within about τ of a root along the ray (a rounding-limited
+    near-double root is found to its rounding), and a ray that has no root is accepted only
+    where it passes within about |F''|·τ²/2 of the surface (F's minimum; 1e-12 mm in
+    float64 for |F''| ~ 0.1 /mm), i.e. touches it at rounding. Implied by ``settled``."""
+    eps = jnp.finfo(jnp.result_type(f)).eps
+    tol = NEWTON_TOL * jnp.sqrt(eps) * (1.0 + jnp.abs(t))
+    return (jnp.abs(f) <= tol * jnp.minimum(1.0, jnp.abs(df))) & jnp.isfinite(f) & (df != 0)
+
+
+def _small_residual(f, df, t):
+    """|F| ≤ τ (``converged`` without its bound on the step, which ``settled`` implies), F
+    finite and F' ≠ 0: the test inside ``continue_newton``, kept as lean as it was."""
     eps = jnp.finfo(jnp.result_type(f)).eps
     return (jnp.abs(f) <= NEWTON_TOL * jnp.sqrt(eps) * (1.0 + jnp.abs(t))) & jnp.isfinite(f) & (
         df != 0)
@@ -197,7 +219,7 @@ def settled(f, df, t):
     root's (``surface_adjoint``'s reverse rule takes it at the root), to about eps^(3/4)."""
     eps = jnp.finfo(jnp.result_type(f)).eps
     small = jnp.abs(f) <= eps**0.75 * (1.0 + jnp.abs(t)) * jnp.abs(df)
-    return converged(f, df, t) & small
+    return _small_residual(f, df, t) & small  # = converged & small (small bounds the step)
 
 
 def continue_newton(residual, t, project=lambda t: t, max_iters: int = NEWTON_EXTRA_ITERS):
