@@ -2,7 +2,8 @@
 (``continue_newton``): where they stop, when a ray gives up, and that the common case is left
 as it was.
 
-A ray's iterate is accepted once |F(t)| ≤ NEWTON_TOL·sqrt(eps)·(1 + |t|) (``converged``); the
+A ray's iterate is accepted once |F(t)| and the next step |F/F'| are both at most
+NEWTON_TOL·sqrt(eps)·(1 + |t|) (``converged``); the
 extra steps run only on the rays not yet accepted, each stopping at the first accepted
 iterate, and give up (a miss) where the step does not shrink. References: Newton's iteration
 written out step by step here, on functions whose roots are known.
