@@ -55,7 +55,7 @@ def cooke():
     (lambda: paper_stages(DesignSpec(), steps=-1), r"paper_stages: steps must be a whole"),
     (lambda: paper_stages(DesignSpec(), pin=float("nan")), r"paper_stages: pin must be"),
     (lambda: DesignConfig(n_fields=0), r"DesignConfig: n_fields must be a whole number in "
-                                       r"\[1, inf\), got 0"),
+                                       r"\[1, 257\], got 0"),
     (lambda: DesignConfig(steps=-1), r"DesignConfig: steps must be a whole number"),
     (lambda: DesignConfig(rings=2.5), r"DesignConfig: rings must be a whole number"),
     (lambda: DesignConfig(curriculum="no"), r"DesignConfig: curriculum must be True or False"),

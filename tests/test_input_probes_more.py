@@ -404,7 +404,7 @@ def test_json_numbers_the_reader_used_to_let_through(cooke_json, tmp_path):
 @pytest.mark.parametrize("args, match", [
     (["--lenses", "cook_triplet"], r"--lenses: unknown zoo lens 'cook_triplet' .*closest: "
                                    r"cooke_triplet"),
-    (["--counts", "0"], r"--counts must be whole numbers in \[1, inf\) rays, got 0"),
+    (["--counts", "0"], r"--counts must be whole numbers in \[1, 100000000\] rays, got 0"),
 ])
 def test_benchmarks_cli_refuses_bad_lenses_and_counts(args, match, capsys):
     from benchmarks.run import main
