@@ -37,7 +37,6 @@ from .robust import RobustObjective, draw_perturbations
 from .solvers import LBFGSB, Adam, DampedLeastSquares, LevenbergMarquardt
 from .spec import DesignSpec
 
-
 MAX_RINGS = 64
 """Most hexapolar pupil rings of the ray loss (``rings``, ``polish_rings``): 64 rings are
 12 481 rays per field and wavelength, and the loss holds every one of them per step."""

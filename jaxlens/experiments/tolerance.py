@@ -12,8 +12,9 @@ jaxlens.experiments.classical`` calls :func:`analyse_design` for its best design
 The metric is Table 1's: the mean over the 16 × 16 sensor grid of the polychromatic RMS spot
 radius (``jaxlens.design.evaluate``), computed on the grid's 36 distinct fields. ``--decenter
 MM`` and ``--tilt DEG`` (default 0: off; at most 0.1 mm and 1°, ``FLAG_RANGES``) add element
-decenter and tilt tolerances (``jaxlens.analysis.tolerance_rigid``); a moved element breaks the rotational symmetry, so
-the metric is then computed on all 256 fields (about 7× the tracing).
+decenter and tilt tolerances (``jaxlens.analysis.tolerance_rigid``); a moved element breaks
+the rotational symmetry, so the metric is then computed on all 256 fields (about 7× the
+tracing).
 
 Example (the recorded ``experiments/classical/tolerance.json``):
     python -m jaxlens.experiments.tolerance experiments/classical/designs/seed_13.zmx \\
