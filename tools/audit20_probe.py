@@ -17,13 +17,15 @@ NaN, zero and negative values in the design helpers and ``optics.rebase``, and t
 benchmarks and classical CLIs' counts. Every "huge" probe stands for a value that exhausted
 memory or ran for hours after the checks; the script refuses them, so it runs in a minute.
 
-Before (main at 882d8e6) and after (branch round20), ``PYTHONPATH=$PWD python
-tools/audit20_probe.py`` on one 2-core machine:
-    before: clear error 29, crash 22, ok 8, silent wrong 22, vague error 5
-    after:  clear error 76, ok 8, vague error 2
-(the two vague errors left: ``rebase_conic`` of a Sphere names the surface's type, not the
-word "surface"; ``half_pupil`` rings 10**6 is refused by ``pupil_hexapolar`` in
-imaging/sampling.py, owned by another helper, as a crash today: see the round-20 report).
+Before (main at aa40afe, ``AUDIT20_BEFORE=1``: 67 probes) and after (branch round20: 70),
+``PYTHONPATH=$PWD python tools/audit20_probe.py`` under ``ulimit -v 16000000`` (so that the
+huge allocations before the fixes fail fast), one 2-core machine:
+    before: clear error 2, crash 21, ok 8, silent wrong 25, vague error 11
+    after:  clear error 60, crash 1, ok 8, vague error 1
+(before, the five tolerance-flag probes reached the file check: given a design they were
+analysed. Left after: ``rebase_conic`` of a Sphere names the type, not the word "surface";
+``half_pupil(rings=10**6)`` is a MemoryError in ``pupil_hexapolar``, imaging/sampling.py,
+owned by another helper: see the round-20 report.)
 
 Run: PYTHONPATH=$PWD python tools/audit20_probe.py [filter]
 """
