@@ -68,9 +68,11 @@ def main(argv: list[str] | None = None) -> dict:
     if args.full and (args.smoke or args.counts):
         p.error("--full adds 1e7 rays to the default ray counts; it does not go with "
                 + ("--smoke" if args.smoke else "--counts (list 10000000 there instead)"))
+    from .throughput import MAX_RAYS
+
     for n in args.counts or ():
-        if n < 1:
-            p.error(f"--counts must be whole numbers in [1, inf) rays, got {n}")
+        if not 1 <= n <= MAX_RAYS:  # 10**12 aborted in XLA after the lens was built
+            p.error(f"--counts must be whole numbers in [1, {MAX_RAYS}] rays, got {n}")
     if args.out is not None and args.out.exists() and not args.out.is_dir():
         p.error(f"--out {args.out} is a file, not a folder")  # before the first benchmark
     if (args.lenses or args.counts) and args.only and "throughput" not in args.only:

@@ -82,6 +82,12 @@ def chosen_lenses(smoke: bool, lenses=None) -> tuple[str, ...]:
     return LENSES[:1] if smoke else LENSES
 
 
+MAX_RAYS = 100_000_000
+"""Most rays per count (``--counts``): ``--full``'s largest is 10**7, which fits because the
+trace goes through checkpointed chunks; the rays themselves (origin, direction, wavelength
+and validity, float64) are about 60 bytes each, 6 GB at 10**8, and 10**12 aborted in XLA."""
+
+
 def run(
     smoke: bool = False,
     full: bool = False,

@@ -35,6 +35,10 @@ from .optics import checks
 
 _DIMS = ("NHWC", "HWIO", "NHWC")
 
+MAX_WIDTH = 1024
+"""Most channels of NAFNet's first level (its widths are 16 to 64; the deepest level has
+width · 2**levels channels and weights growing as their square)."""
+
 
 def _generator(key) -> np.random.Generator:
     """A NumPy generator seeded from a JAX PRNG key (or the generator itself).
@@ -54,6 +58,14 @@ def _generator(key) -> np.random.Generator:
         np.uint32,
     )
     return np.random.default_rng(data.ravel().tolist())
+
+
+def _sizes(where: str, **sizes) -> None:
+    """Channel counts and kernel sizes of a layer: whole numbers in [1, ``MAX_SAMPLES``]
+    (before: a kernel of 0 was a ZeroDivisionError in the init's bound, a channel count of
+    -4 a numpy error, and 10**6 channels a weight matrix of 8 TB)."""
+    for arg, v in sizes.items():
+        checks.number(v, arg, where, lo=1, hi=checks.MAX_SAMPLES, integer=True)
 
 
 def _uniform(gen: np.random.Generator, shape, fan_in, dtype):
@@ -77,6 +89,10 @@ class Conv(eqx.Module):
     stride: int = eqx.field(static=True)
 
     def __init__(self, c_in: int, c_out: int, kernel: int, *, stride: int = 1, key, dtype=None):
+        _sizes("Conv", c_in=c_in, c_out=c_out, kernel=kernel)
+        if isinstance(stride, bool) or stride not in (1, kernel):  # 0 ran a 0-stride conv
+            raise ValueError(f"Conv: stride must be 1 or the kernel size {kernel} (pixels), got "
+                             f"{stride!r}")
         dtype = dtype or jnp.result_type(float)
         gen = _generator(key)
         fan_in = c_in * kernel * kernel
@@ -100,6 +116,7 @@ class Pointwise(eqx.Module):
     bias: Float[Array, " co"]
 
     def __init__(self, c_in: int, c_out: int, *, key, dtype=None):
+        _sizes("Pointwise", c_in=c_in, c_out=c_out)
         dtype = dtype or jnp.result_type(float)
         gen = _generator(key)
         self.weight = _uniform(gen, (c_in, c_out), c_in, dtype)
@@ -116,6 +133,7 @@ class Depthwise(eqx.Module):
     bias: Float[Array, " c"]
 
     def __init__(self, channels: int, *, key, dtype=None):
+        _sizes("Depthwise", channels=channels)
         dtype = dtype or jnp.result_type(float)
         gen = _generator(key)
         self.weight = _uniform(gen, (3, 3, channels), 9, dtype)
@@ -140,6 +158,9 @@ class LayerNorm2d(eqx.Module):
     eps: float = eqx.field(static=True)
 
     def __init__(self, channels: int, *, eps: float = 1e-6, dtype=None):
+        _sizes("LayerNorm2d", channels=channels)
+        # A negative eps made rsqrt(var + eps) NaN for near-constant pixels.
+        eps = checks.number(eps, "eps", "LayerNorm2d", lo=0, lo_open=True, hi=1.0)
         dtype = dtype or jnp.result_type(float)
         self.weight = jnp.ones((channels,), dtype)
         self.bias = jnp.zeros((channels,), dtype)
@@ -296,9 +317,13 @@ class NAFNet(eqx.Module):
             raise ValueError(f"NAFNet: width must be >= 1 and block counts >= 0, got {width}")
         # width 2.5 failed as "'float' object cannot be interpreted as an integer", 0
         # channels as a ZeroDivisionError, and an integer dtype made integer weights.
-        for arg, v, lo in (("in_channels", in_channels, 1), ("out_channels", out_channels, 1),
-                           ("width", width, 1), ("middle_blocks", middle_blocks, 0)):
-            checks.number(v, arg, "NAFNet", lo=lo, integer=True)
+        # width 10**6 asked for terabytes of weights: NAFNet's widths are 16 to 64, and the
+        # deepest level has width · 2**levels channels.
+        for arg, v, lo, hi in (("in_channels", in_channels, 1, checks.MAX_SAMPLES),
+                               ("out_channels", out_channels, 1, checks.MAX_SAMPLES),
+                               ("width", width, 1, MAX_WIDTH),
+                               ("middle_blocks", middle_blocks, 0, None)):
+            checks.number(v, arg, "NAFNet", lo=lo, hi=hi, integer=True)
         for arg, v in (("enc_blocks", enc_blocks), ("dec_blocks", dec_blocks)):
             for n in v:
                 checks.number(n, arg, "NAFNet", lo=0, integer=True, unit="blocks per level")

@@ -309,7 +309,8 @@ def test_render_arguments_are_checked(cooke):
                                          r"\(0, inf\) mm, got"):
         jl.Sensor((8, 8), 0.0)
     with pytest.raises(ValueError, match=r"Sensor: resolution must be \(rows, columns\), whole "
-                                         r"numbers >= 1 pixels, got \(0, 0\)"):
+                                         r"numbers >= 1 pixels \(at most 16384 per side\), "
+                                         r"got \(0, 0\)"):
         jl.Sensor((0, 0), 0.01)
 
 

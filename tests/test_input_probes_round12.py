@@ -24,11 +24,13 @@ def test_tolerances_refuse_a_tilt_of_90_degrees_or_more(tilt):
 
 
 def test_cli_refuses_a_tilt_of_90_degrees_before_any_work(tmp_path, capsys):
-    """Refused before the design file is even looked for (a missing file is named later)."""
+    """Refused before the design file is even looked for (a missing file is named later).
+    (Round 20: the CLI's --tilt range is [0, 1] deg, FLAG_RANGES; it was below 90.)"""
     rc = cli.main([str(tmp_path / "none.json"), "--out", str(tmp_path / "o"), "--tilt", "90"])
     assert rc == 2
     err = capsys.readouterr().err
-    assert "--tilt must be below 90 deg, got 90.0" in err
+    assert "--tilt must be a finite number >= 0 and <= 1 deg (" in err
+    assert err.rstrip().endswith("got 90")
     assert "not found" not in err
 
 

@@ -224,6 +224,7 @@ def test_tolerance_cli_refuses_a_decenter_beyond_the_clear_radius(tmp_path, caps
     design = os.path.join(ROOT, "experiments/classical/designs/seed_0.zmx")
     assert tolerance_cli.main([design, "--decenter", "5", "--out", str(tmp_path)]) == 2
     err = capsys.readouterr().err
-    assert "seed_0.zmx: --decenter 5 mm must be below the lens's smallest clear " \
-           "semi-diameter" in err
+    # Round 20: refused by the CLI's --decenter range, [0, 0.1] mm, before the file is read.
+    assert "--decenter must be a finite number >= 0 and <= 0.1 mm (" in err
+    assert err.rstrip().endswith("got 5")
     assert not os.listdir(tmp_path)

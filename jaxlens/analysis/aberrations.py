@@ -136,7 +136,8 @@ def ray_fan(lens: Lens, field, wavelengths=None, *, n: int = FAN_POINTS, depth=N
     shape = np.shape(field)
     f, wl = _inputs(lens, "ray_fan", jnp.reshape(jnp.asarray(field, float), (-1,)),
                     wavelengths)
-    n = checks.number(n, "n", "ray_fan", lo=2, integer=True, unit="pupil points")
+    n = checks.number(n, "n", "ray_fan", lo=2, hi=checks.MAX_SAMPLES, integer=True,
+                      unit="pupil points")
     return _ray_fan(lens, f if shape == (2,) else f[0], wl, n=int(n),
                     depth=lens_depth(lens, depth, "ray_fan"), aim=lens_aim(lens, aim, "ray_fan"))
 
@@ -163,7 +164,8 @@ def _ray_fan(lens, field, wl, *, n, depth, aim) -> RayFan:
 def default_fields(lens: Lens, count: int = CURVE_FIELDS) -> Array:
     """``count`` θy angles from 0 to the lens's largest field (deg): for ``[F, 2]`` fields
     (θx, θy) the largest radial angle, tan²θ = tan²θx + tan²θy."""
-    checks.number(count, "count", "default_fields", lo=1, integer=True, unit="fields")
+    checks.number(count, "count", "default_fields", lo=1, hi=checks.MAX_SAMPLES, integer=True,
+                  unit="fields")
     f = jnp.asarray(lens.fields)
     t = jnp.tan(jnp.deg2rad(f))
     tmax = jnp.max(jnp.abs(t)) if f.ndim <= 1 else jnp.max(jnp.sqrt(jnp.sum(t * t, -1)))

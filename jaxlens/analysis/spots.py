@@ -386,7 +386,7 @@ def clear_semi_diameters(lens: Lens, fields=None, n_rim: int = 64, *,
 
 @eqx.filter_jit
 def _clear_semi_diameters(lens, fields, n_rim, *, reaching, pupil) -> Float[Array, " n"]:
-    checks.number(n_rim, "n_rim", "clear_semi_diameters", lo=4, integer=True,
+    checks.number(n_rim, "n_rim", "clear_semi_diameters", lo=4, hi=checks.MAX_SAMPLES, integer=True,
                   unit="rim rays per beam (fewer miss the rim in x or y)")
     fields = fields_array(fields, "clear_semi_diameters")
     a = np.linspace(0, 2 * np.pi, n_rim, endpoint=False)
@@ -445,8 +445,10 @@ def self_intersection(
     any design regularizer.
     """
     where = "self_intersection"
-    checks.number(n_radial, "n_radial", where, lo=2, integer=True, unit="radii")
-    checks.number(n_angle, "n_angle", where, lo=1, integer=True, unit="azimuths")
+    checks.number(n_radial, "n_radial", where, lo=2, hi=checks.MAX_SAMPLES, integer=True,
+                  unit="radii")
+    checks.number(n_angle, "n_angle", where, lo=1, hi=checks.MAX_SAMPLES, integer=True,
+                  unit="azimuths")
     if not checks.is_traced(min_gap):
         # A negative clearance passed surfaces that cross by up to |min_gap| (ok True).
         checks.number(min_gap, "min_gap", where, lo=0, unit="mm (the smallest clearance "

@@ -484,7 +484,8 @@ def opd_fan(
     f, _, depth, reference, aim = _common(lens, field, wls[0], depth, reference, aim, "opd_fan")
     wls = checks.wavelengths(lens, wls, "opd_fan", "wavelengths")
     checks.material_indices(lens, wls, "opd_fan", "wavelengths")
-    n = checks.number(n, "n", "opd_fan", lo=2, integer=True, unit="pupil points")
+    n = checks.number(n, "n", "opd_fan", lo=2, hi=checks.MAX_SAMPLES, integer=True,
+                      unit="pupil points")
     checks.newton_iters(newton_iters, "opd_fan")
     return _cast(_opd_fan_impl(lens, f, wls, depth, n=int(n), reference=reference, aim=aim,
                                newton_iters=int(newton_iters)), dtype)

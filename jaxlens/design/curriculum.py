@@ -46,7 +46,8 @@ STAGE_LOSSES = ("ray", "image", "polish")
 def sine_path(start: float, end: float, n: int) -> np.ndarray:
     """The paper's schedule t_i = start + (end − start)·sin(i/(2n)·π), i = 0 … n."""
     # n = 0 is one stage at the end; a negative or fractional n was taken as 0 or truncated.
-    n = checks.number(n, "n", "sine_path", lo=0, integer=True, unit="steps")
+    n = checks.number(n, "n", "sine_path", lo=0, hi=checks.MAX_SAMPLES, integer=True,
+                      unit="steps")
     start = checks.number(start, "start", "sine_path")
     end = checks.number(end, "end", "sine_path")
     if n < 1:
@@ -144,7 +145,7 @@ def paper_stages(
             image point, as the paper's code) or ``"centroid"`` (with the image-height pin).
     """
     w = "paper_stages"
-    checks.number(n, "n", w, lo=0, integer=True, unit="curriculum steps")
+    checks.number(n, "n", w, lo=0, hi=checks.MAX_SAMPLES, integer=True, unit="curriculum steps")
     for arg, v in (("steps", steps), ("final_steps", final_steps),
                    ("polish_steps", polish_steps)):
         checks.number(v, arg, w, lo=0, integer=True, unit="solver steps")

@@ -37,7 +37,8 @@ MIN_VALID_FRACTION = 0.99
 def sensor_field_grid(spec: DesignSpec, n: int = 16) -> tuple[np.ndarray, np.ndarray]:
     """The n × n evaluation fields: ``(angles [n², 2] deg (θx, θy), sensor points [n², 2] mm)``."""
     # n = 0 gave no fields at all and n = 2.5 a TypeError deep in numpy.
-    checks.number(n, "n", "sensor_field_grid", lo=1, integer=True, unit="fields per side")
+    checks.number(n, "n", "sensor_field_grid", lo=1, hi=checks.MAX_MAP_GRID, integer=True,
+                  unit="fields per side")
     if not isinstance(spec, DesignSpec):
         raise TypeError(f"sensor_field_grid: spec must be a DesignSpec, got "
                         f"{type(spec).__name__}")
@@ -86,7 +87,8 @@ def evaluate(lens: Lens, spec: DesignSpec, *, n: int = 16,
         raise TypeError(f"evaluate: lens must be a jaxlens Lens, got {type(lens).__name__}")
     # min_valid above 1 would call every design invalid, below 0 every one valid.
     checks.number(min_valid, "min_valid", "evaluate", lo=0, hi=1, unit="(fraction of rays)")
-    checks.number(n, "n", "evaluate", lo=1, integer=True, unit="fields per side")
+    checks.number(n, "n", "evaluate", lo=1, hi=checks.MAX_MAP_GRID, integer=True,
+                  unit="fields per side")
     lens = lens.astype(jnp.float64)
     lens = eqx.tree_at(lambda l: l.epd, lens, jnp.asarray(spec.epd, jnp.float64))
     ang, _ = sensor_field_grid(spec, n)

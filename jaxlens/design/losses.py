@@ -45,7 +45,7 @@ import numpy as np
 from jaxtyping import Array, Float
 
 from ..imaging.sampling import pupil_hexapolar
-from ..optics import paraxial
+from ..optics import checks, paraxial
 from ..optics.lens import Lens
 from ..optics.rays import Rays
 from ..tracing.forward import stacked_surfaces, trace_path
@@ -97,7 +97,14 @@ def radial_area_weights(fracs, sensor_size, n: int = 16) -> np.ndarray:
         ``[K]`` weights.
     """
     fracs = np.asarray(fracs, float)
-    h, w = sensor_size
+    # Before: n = 0 gave NaN weights and a negative sensor side plausible ones.
+    checks.number(n, "n", "radial_area_weights", lo=1, hi=checks.MAX_MAP_GRID, integer=True,
+                  unit="fields per side")
+    if np.shape(sensor_size) != (2,):
+        raise ValueError(f"radial_area_weights: sensor_size must be (height, width) in mm, got "
+                         f"{sensor_size!r}")
+    h, w = (checks.number(v, "sensor_size", "radial_area_weights", lo=0, lo_open=True,
+                          unit="mm (height, width)") for v in sensor_size)
     y, x = np.meshgrid(np.linspace(-1, 1, n) * h / 2, np.linspace(-1, 1, n) * w / 2)
     r = np.hypot(x, y).ravel() / math.hypot(h / 2, w / 2)
     edges = np.concatenate([[-np.inf], 0.5 * (fracs[1:] + fracs[:-1]), [np.inf]])

@@ -59,6 +59,8 @@ def field_weights(
     ``floor``, mm), so that Σ w_k·MS_k approximates the area-weighted mean RMS (the
     evaluation metric) rather than the mean square. The result is normalised to sum 1.
     """
+    if not checks.is_traced(floor):  # a floor <= 0 divided by a field's RMS of 0
+        checks.number(floor, "floor", "field_weights", lo=0, lo_open=True, unit="mm")
     w = jnp.broadcast_to(area, rms.shape)
     if mask:
         w = w * reweighting_mask(rms, area)

@@ -37,6 +37,15 @@ from .robust import RobustObjective, draw_perturbations
 from .solvers import LBFGSB, Adam, DampedLeastSquares, LevenbergMarquardt
 from .spec import DesignSpec
 
+MAX_RINGS = 64
+"""Most hexapolar pupil rings of the ray loss (``rings``, ``polish_rings``): 64 rings are
+12 481 rays per field and wavelength, and the loss holds every one of them per step."""
+
+MAX_ROBUST_DRAWS = 64
+"""Most perturbation draws of tolerance-aware design (``tolerance_trials``, the classical
+CLI's ``--tolerance-aware K``): each is one more ray loss per step (the README's run uses 4),
+and 10**6 asked XLA for 9 TB."""
+
 
 @dataclasses.dataclass(frozen=True)
 class DesignConfig:
@@ -124,11 +133,17 @@ class DesignConfig:
         # A count of 0 fields or rings fails deep inside the jitted loss, a negative step
         # count silently skips a stage, and "no" for a switch would read as True.
         w = "DesignConfig"
-        for arg, lo in (("n_fields", 1), ("rings", 1), ("curriculum_n", 0), ("steps", 0),
-                        ("final_steps", 0), ("polish_steps", 0), ("epoch", 1),
-                        ("log_every", 1), ("image_pixels", 1), ("image_spp", 1),
-                        ("tolerance_trials", 0), ("polish_rings", 0)):
-            checks.number(getattr(self, arg), arg, w, lo=lo, integer=True)
+        # Sizes of the arrays a step holds are bounded above (before: tolerance_trials=10**6
+        # asked XLA for 9 TB after the spec had been built); step counts are not.
+        for arg, lo, hi in (("n_fields", 1, checks.MAX_MAP_GRID), ("rings", 1, MAX_RINGS),
+                            ("curriculum_n", 0, checks.MAX_SAMPLES), ("steps", 0, None),
+                            ("final_steps", 0, None), ("polish_steps", 0, None),
+                            ("epoch", 1, None), ("log_every", 1, None),
+                            ("image_pixels", 1, checks.MAX_IMAGE_SIDE),
+                            ("image_spp", 1, checks.MAX_SAMPLES),
+                            ("tolerance_trials", 0, MAX_ROBUST_DRAWS),
+                            ("polish_rings", 0, MAX_RINGS)):
+            checks.number(getattr(self, arg), arg, w, lo=lo, hi=hi, integer=True)
         if not (self.steps or self.final_steps or self.polish_steps):
             # design() then returned the random starts as designs, marked "successful".
             raise ValueError(f"{w}: steps, final_steps and polish_steps are all 0: no solver "

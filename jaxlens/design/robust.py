@@ -24,6 +24,7 @@ import jax.numpy as jnp
 import numpy as np
 from jaxtyping import Array, Float
 
+from ..optics import checks
 from .losses import Aux, StageArgs
 
 
@@ -41,8 +42,14 @@ def draw_perturbations(n_surfaces: int, n_gaps: int, trials: int, *, radius_rel:
     Raises:
         ValueError: a count below 1 or a negative tolerance.
     """
-    if trials < 1:
-        raise ValueError(f"draw_perturbations: trials must be ≥ 1, got {trials}")
+    from ..analysis.tolerance_spec import MAX_TRIALS
+    from .init import MAX_SEED
+
+    # Before: no upper bound (10**10 trials asked numpy for 298 GiB) and a seed of -1 was
+    # numpy's "expected non-negative integer".
+    checks.number(trials, "trials", "draw_perturbations", lo=1, hi=MAX_TRIALS, integer=True,
+                  unit="draws")
+    checks.number(seed, "seed", "draw_perturbations", lo=0, hi=MAX_SEED, integer=True)
     if not (radius_rel >= 0 and thickness >= 0) or radius_rel >= 0.5:
         raise ValueError(f"draw_perturbations: need 0 ≤ radius_rel < 0.5 (relative) and "
                          f"thickness ≥ 0 mm, got {radius_rel!r} and {thickness!r}")

@@ -49,7 +49,8 @@ import shlex
 import sys
 import time
 
-from jaxlens.design.spec import FNUM_START, FOV_START
+from jaxlens.analysis.tolerance_spec import MAX_TRIALS
+from jaxlens.design.spec import FNUM_START, FOV_START, MAX_ASPHERE_TERMS
 from jaxlens.experiments.runfolder import (
     OneLineParser,
     RunFolder,
@@ -213,7 +214,7 @@ def build_parser() -> argparse.ArgumentParser:
 def check_args(args, given=None) -> None:
     """Refuse any option outside its range (ValueError naming option, value, range, unit)."""
     from jaxlens.design.materials import CatalogRegion
-    from jaxlens.design.spec import MAX_ASPHERE_TERMS
+    from jaxlens.design.multistart import MAX_ROBUST_DRAWS
 
     w = "design"
     n = checks.number
@@ -243,8 +244,9 @@ def check_args(args, given=None) -> None:
         raise ValueError(f"{w}: --devices must be a whole number in [1, {MAX_DEVICES}] host "
                          f"devices, got {args.devices}")
     n(args.ablation_seeds, "--ablation-seeds", w, lo=1, integer=True)
-    n(args.tolerance_trials, "--tolerance-trials", w, lo=0, integer=True)
-    n(args.tolerance_aware, "--tolerance-aware", w, lo=0, integer=True)
+    # Before: 10**7 trials were refused after the designs, and 10**6 draws ran out of memory.
+    n(args.tolerance_trials, "--tolerance-trials", w, lo=0, hi=MAX_TRIALS, integer=True)
+    n(args.tolerance_aware, "--tolerance-aware", w, lo=0, hi=MAX_ROBUST_DRAWS, integer=True)
     n(args.population, "--population", w, lo=1, hi=64, integer=True, unit="starts per design")
     n(args.tolerance_threshold, "--tolerance-threshold", w, lo=0, lo_open=True, unit="µm")
     for flag, text in (("--materials", args.materials),

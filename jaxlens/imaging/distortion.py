@@ -148,7 +148,8 @@ def inverse_distortion_map(
     checks.focal_image(lens, "inverse_distortion_map")
     checks.lens_intact(lens, "inverse_distortion_map")
     where = "inverse_distortion_map"
-    resolution = checks.grid(resolution, where, "resolution", "pixels")
+    resolution = checks.grid(resolution, where, "resolution", "pixels",
+                             hi=checks.MAX_IMAGE_SIDE)
     grid = checks.grid(grid, where, "grid", "points")
     # A sensor's pitch, as in distortion_map (render's PSF method passes its Sensor's): not
     # bounded above, as a Sensor's own pitch is not.

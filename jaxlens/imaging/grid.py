@@ -23,7 +23,8 @@ pixels are 0.5 to about 100 µm, and a pitch of 5 given for 5 µm (a unit mix-up
 def pixel_pitch(value, where: str, arg: str = "pixel_size", bounded: bool = True):
     """A pixel pitch in (0, ``MAX_PIXEL_SIZE_MM``) mm: ``checks.number`` (a traced value gets
     its ``eqx.error_if`` of (0, inf) mm), then, for a concrete value, the upper bound (not
-    with ``bounded=False``: a ``Sensor``'s own pitch, which it checks, may be any mm).
+    with ``bounded=False``: a ``Sensor``'s own pitch, which the Sensor bounds by its
+    size, ``checks.MAX_SENSOR_SIZE_MM``).
     Returns the value as ``checks.number`` does."""
     value = checks.number(value, arg, where, lo=0, lo_open=True, unit="mm")
     if bounded and not checks.is_traced(value):

@@ -236,7 +236,8 @@ def footprints(
     checks.newton_iters(newton_iters, "footprints")
     dtype = jnp.result_type(float) if dtype is None else checks.float_dtype(dtype, "footprints")
     # int() took 0 or 2.5 silently; wavelengths are checked here, not inside the jitted trace.
-    checks.number(grid, "grid", "footprints", lo=2, integer=True, unit="points per side")
+    checks.number(grid, "grid", "footprints", lo=2, hi=checks.MAX_MAP_GRID, integer=True,
+                  unit="points per side")
     checks.wavelengths(lens, wavelengths, "footprints", "wavelengths")
     g = int(grid) + 1 - int(grid) % 2
     pts = sensor_grid(sensor.resolution, jnp.asarray(sensor.pixel_size), (g, g)).astype(dtype)
@@ -539,8 +540,12 @@ def render(
     if not isinstance(method, RayRender | PSFRender):
         raise TypeError(f"render: method must be RayRender(...) or PSFRender(...), got "
                         f"{type(method).__name__}")
-    if not isinstance(spp, (int, np.integer)) or isinstance(spp, bool) or spp <= 0:
-        raise ValueError(f"render: spp must be a positive int, got {spp!r}")
+    if (not isinstance(spp, (int, np.integer)) or isinstance(spp, bool) or spp <= 0
+            or spp > checks.MAX_SAMPLES):
+        # Before: no upper bound; spp=10**9 asked XLA for 1.4 PB after the checks.
+        raise ValueError(f"render: spp must be a positive int, at most {checks.MAX_SAMPLES} "
+                         f"rays per pixel (noise falls as 1/sqrt(spp): 0.4 % there), got "
+                         f"{spp!r}")
     if isinstance(patch, bool) or not isinstance(patch, (int, np.integer)) or patch < 1:
         raise ValueError(f"render: patch must be a positive int, got {patch!r}")
     if mesh is not None and not isinstance(mesh, Mesh):

@@ -39,7 +39,9 @@ def tile_counts(resolution, tile: int) -> tuple[int, int]:
     Raises:
         ValueError: unless ``tile`` is a positive int that divides both sides.
     """
-    h, w = (int(v) for v in resolution)
+    # Before: int() truncated 2.5 pixels and 10**9 per side passed.
+    h, w = checks.grid(tuple(resolution) if isinstance(resolution, np.ndarray) else resolution,
+                       "tile_counts", "resolution", "pixels", hi=checks.MAX_IMAGE_SIDE)
     tile = checks.static_int(tile)  # a numpy integer is a whole number too
     if isinstance(tile, bool) or not isinstance(tile, int) or tile < 1 or h % tile or w % tile:
         raise ValueError(f"tile_counts: tile must be a positive int dividing the frame "

@@ -336,7 +336,7 @@ def scene(name: str = "astronaut", size: tuple[int, int] | None = None) -> np.nd
     a = a[..., :3]
     lin = to_linear(a)
     if size is not None:
-        size = checks.grid(size, "scene", "size", "pixels")
+        size = checks.grid(size, "scene", "size", "pixels", hi=checks.MAX_IMAGE_SIDE)
         lin = skimage.transform.resize(lin, tuple(size), order=1, anti_aliasing=True,
                                        preserve_range=True).astype(np.float32)
     return lin

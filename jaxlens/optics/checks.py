@@ -36,6 +36,28 @@ MAX_NEWTON_ITERS = 1000
 """Most Newton iterations per ray–surface intersection: Newton's method converges in a few
 (the default is 6); 10**9 ran a ``fori_loop`` of that length on every aspheric surface."""
 
+MAX_MAP_GRID = 257
+"""Most points per side of a map traced at a grid of sensor points (``footprints``,
+``distortion_map``, ``prewarp``, ``inverse_distortion_map``, ``psf_map``): the maps are smooth
+and interpolated between their points (the defaults are 9 to 17 per side); 129 per side took
+23 s on one CPU core, and 10**5 per side asked for 80 GB after the lens had been checked."""
+
+MAX_SAMPLES = 65536
+"""Most samples along one line (ray-fan pupil points, rim rays, radii or sag points per
+surface, fields, points of a path): 10**9 ray-fan points asked for 24 GB after the checks."""
+
+MAX_IMAGE_SIDE = 16384
+"""Most pixels per side of a sensor, a scene or a rendered frame: the largest single image
+sensors (about 150 megapixels) are some 14 200 pixels wide, and a frame of rows × cols × 3
+float64 values is 6 GiB at 16384²; 10**6 per side asked for terabytes."""
+
+MAX_SENSOR_SIZE_MM = 1000.0
+"""A ``Sensor``'s longer side (resolution × pixel_size) must be at most this (mm): the largest
+focal planes built (survey-telescope mosaics) are about 0.64 m across. It bounds a Sensor's own
+pixel pitch to 1000 mm / its longer resolution, which refuses a pitch given in µm where mm are
+meant (4000 pixels of "5" are 20 m) and leaves coarse preview grids of few large pixels (24 ×
+36 mm in 2 mm pixels) alone; ``imaging.grid.pixel_pitch`` bounds PSF grids tighter (1 mm)."""
+
 _REL = 1e-6  # wavelength bounds are compared with this relative slack (float32 rounding)
 
 
@@ -241,14 +263,17 @@ def float_dtype(dtype, where: str, arg: str = "dtype"):
     return dtype
 
 
-def grid(value, where: str, arg: str = "grid", what: str = "points") -> tuple[int, int]:
-    """A ``(rows, cols)`` pair of whole numbers >= 1 (numpy ints allowed, bools and floats
-    refused: ``linspace`` would take 2.5 as 2 and a 0 as one centre point)."""
+def grid(value, where: str, arg: str = "grid", what: str = "points",
+         hi: int = MAX_MAP_GRID) -> tuple[int, int]:
+    """A ``(rows, cols)`` pair of whole numbers in [1, ``hi``] (numpy ints allowed, bools and
+    floats refused: ``linspace`` would take 2.5 as 2 and a 0 as one centre point; a huge one
+    exhausted memory). ``hi``: ``MAX_MAP_GRID`` for traced maps, ``MAX_IMAGE_SIDE`` for pixels."""
     ok = (isinstance(value, (tuple, list)) and len(value) == 2 and all(
-        isinstance(g, (int, np.integer)) and not isinstance(g, bool) and g >= 1 for g in value))
+        isinstance(g, (int, np.integer)) and not isinstance(g, bool) and 1 <= g <= hi
+        for g in value))
     if not ok:
-        raise ValueError(f"{where}: {arg} must be (rows, cols), whole numbers >= 1 {what}, "
-                         f"got {value!r}")
+        raise ValueError(f"{where}: {arg} must be (rows, cols), whole numbers >= 1 {what} "
+                         f"(at most {hi} per side), got {value!r}")
     return int(value[0]), int(value[1])
 
 

@@ -187,8 +187,9 @@ class Sensor(eqx.Module):
     """A rectangular pixel sensor centred on the axis at the image surface.
 
     Args:
-        resolution: (rows, columns), static.
-        pixel_size: pixel pitch in mm (square pixels).
+        resolution: (rows, columns), static; each at most ``checks.MAX_IMAGE_SIDE`` (16384).
+        pixel_size: pixel pitch in mm (square pixels); the longer side, ``max(resolution) ×
+            pixel_size``, at most ``checks.MAX_SENSOR_SIZE_MM`` (1000 mm).
     """
 
     resolution: tuple[int, int] = eqx.field(static=True)
@@ -197,13 +198,19 @@ class Sensor(eqx.Module):
     def __check_init__(self):
         res = tuple(self.resolution) if isinstance(self.resolution, (tuple, list)) else ()
         if len(res) != 2 or not all(
-                isinstance(n, (int, np.integer)) and not isinstance(n, bool) and n >= 1
-                for n in res):
+                isinstance(n, (int, np.integer)) and not isinstance(n, bool)
+                and 1 <= n <= checks.MAX_IMAGE_SIDE for n in res):
             raise ValueError(f"Sensor: resolution must be (rows, columns), whole numbers >= 1 "
-                             f"pixels, got {self.resolution!r}")
+                             f"pixels (at most {checks.MAX_IMAGE_SIDE} per side), got "
+                             f"{self.resolution!r}")
         if not checks.is_traced(self.pixel_size):
             checks.number(self.pixel_size, "pixel_size", "Sensor", lo=0, lo_open=True,
                           unit="mm")
+            # Before: no upper bound; a pitch of 5 (µm meant) on 4000 pixels was a 20 m sensor.
+            hi = checks.MAX_SENSOR_SIZE_MM / max(res)
+            checks.number(self.pixel_size, "pixel_size", "Sensor", lo=0, lo_open=True, hi=hi,
+                          unit=f"mm (the longer side, {max(res)} pixels, at most "
+                               f"{checks.MAX_SENSOR_SIZE_MM:g} mm; 5 µm is 0.005 mm)")
 
     @property
     def size(self) -> tuple[Array, Array]:

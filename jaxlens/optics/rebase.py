@@ -24,6 +24,7 @@ import jax
 import jax.numpy as jnp
 import numpy as np
 
+from . import checks
 from .lens import Lens
 from .surfaces import EvenAsphere, Standard
 
@@ -66,6 +67,13 @@ def rebase_conic(surface: EvenAsphere, semi_diameter: float | None = None,
     if not isinstance(surface, EvenAsphere):
         raise ValueError(f"rebase_conic: only an EvenAsphere can be rebased, got a "
                          f"{type(surface).__name__}")
+    # Before: n = 0 or 10**9 and a negative or NaN semi_diameter returned the surface as it
+    # was (or tried 10**9 samples), as if it had been checked and kept.
+    n = checks.number(n, "n", "rebase_conic", lo=16, hi=checks.MAX_SAMPLES, integer=True,
+                      unit="radial samples")
+    if semi_diameter is not None:
+        semi_diameter = checks.number(semi_diameter, "semi_diameter", "rebase_conic", lo=0,
+                                      lo_open=True, unit="mm")
     r_max = float(surface.semi_diameter if semi_diameter is None else semi_diameter)
     a = np.asarray(surface.coeffs, float)
     if not np.isfinite(r_max) or r_max <= 0 or a.shape[0] < 2:
