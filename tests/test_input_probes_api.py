@@ -80,7 +80,7 @@ def test_pupil_samplers_want_float_dtypes_and_whole_counts():
             make()
     assert sampling.pupil_polar(np.int64(3)).shape == (9, 2)  # was refused: not an int
     with pytest.raises(ValueError, match=r"pupil_polar: n_side must be a whole number in "
-                                         r"\[1, inf\) cells per side, got True"):
+                                         r"\[1, 4096\] cells per side \(n² ≤ 16777216\), got True"):
         sampling.pupil_polar(True)
     with pytest.raises(ValueError, match=r"pupil_polar: radius must be a finite number in "
                                          r"\(0, 1\] \(pupil radii\), got nan"):

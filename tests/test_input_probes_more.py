@@ -190,15 +190,15 @@ def test_catalog_materials_still_build_and_get_material_wants_a_name():
 
 
 @pytest.mark.parametrize("make, match", [
-    (lambda: jl.sampling.pupil_grid(0), r"pupil_grid: n must be a whole number in \[1, inf\) "
-                                        r"points per side, got 0"),
+    (lambda: jl.sampling.pupil_grid(0), r"pupil_grid: n must be a whole number in \[1, 4096\] "
+                                        r"points per side \(n² ≤ 16777216 points\), got 0"),
     (lambda: jl.sampling.pupil_grid(2.5), r"pupil_grid: n must be a whole number"),
     (lambda: jl.sampling.pupil_hexapolar(-1), r"pupil_hexapolar: rings must be a whole number "
-                                              r"in \[0, inf\) rings"),
+                                              r"in \[0, 2364\] rings"),
     (lambda: jl.sampling.pupil_random(jax.random.PRNGKey(0), -5),
-     r"pupil_random: n must be a whole number in \[1, inf\) points"),
+     r"pupil_random: n must be a whole number in \[1, 16777216\] points"),
     (lambda: jl.sampling.pupil_stratified(jax.random.PRNGKey(0), 0),
-     r"pupil_stratified: n_side must be a whole number in \[1, inf\)"),
+     r"pupil_stratified: n_side must be a whole number in \[1, 4096\]"),
     (lambda: jl.sampling.pupil_samples("grid", -1), r"pupil_grid: n must be"),
 ])
 def test_pupil_sample_counts_are_checked(make, match):

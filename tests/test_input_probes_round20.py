@@ -167,7 +167,7 @@ def test_design_sizes_and_numbers_are_checked():
                                              r"\(0, inf\) mm"):
             mask.field_weights(jnp.zeros(4), jnp.ones(4), mask=False, irls=True, floor=floor)
     with pytest.raises(ValueError, match=r"draw_perturbations: trials must be a whole number "
-                                         r"in \[1, 1e\+06\] draws"):
+                                         r"in \[1, 1000000\] draws"):
         robust.draw_perturbations(4, 3, 10**10, radius_rel=0.005, thickness=0.02)
     with pytest.raises(ValueError, match=r"draw_perturbations: seed must be a whole number"):
         robust.draw_perturbations(4, 3, 2, radius_rel=0.005, thickness=0.02, seed=-1)
@@ -218,8 +218,42 @@ def test_cli_counts_are_bounded_before_any_work(tmp_path, capsys):
     assert "--counts must be whole numbers in [1, 100000000] rays, got 1000000000000" in \
         capsys.readouterr().err
     for flag, value, hi in (("--tolerance-aware", "1000000", "64"),
-                            ("--tolerance-trials", "10000000", "1e+06")):
+                            ("--tolerance-trials", "10000000", "1000000")):
         assert classical.main([flag, value, "--out", str(tmp_path / "c"), "--quiet"]) == 2
         err = capsys.readouterr().err
         assert f"design: {flag} must be a whole number in [0, {hi}], got {value}" in err
     assert not (tmp_path / "c").exists() and not (tmp_path / "b").exists()
+
+
+@pytest.mark.parametrize("make, match", [
+    (lambda: jl.sampling.pupil_hexapolar(10**6), r"rings must be a whole number in \[0, 2364\]"),
+    (lambda: jl.sampling.pupil_grid(5000), r"n must be a whole number in \[1, 4096\]"),
+    (lambda: jl.sampling.pupil_random(jax.random.PRNGKey(0), 2**24 + 1),
+     r"n must be a whole number in \[1, 16777216\] points"),
+    (lambda: jl.sampling.pupil_stratified(jax.random.PRNGKey(0), 4097), r"\[1, 4096\]"),
+    (lambda: jl.sampling.pupil_polar(4097), r"\[1, 4096\]"),
+    (lambda: jl.sampling.pupil_samples("hexapolar", 10**6), r"pupil_hexapolar: rings"),
+])
+def test_pupil_samplers_are_bounded(make, match):
+    """Every pupil sampler returns at most checks.MAX_PUPIL_POINTS points (before:
+    ``half_pupil(rings=10**6)``, i.e. pupil_hexapolar, was a MemoryError after minutes of a
+    Python loop)."""
+    with pytest.raises(ValueError, match=match):
+        make()
+
+
+def test_hexapolar_points_and_bounds():
+    """The largest allowed hexapolar pattern fits the bound and the next does not; the
+    vectorised pattern is the ring definition: ring i has 6i points at radius i/rings, the
+    first on +y, spaced 2π/(6i) towards +x."""
+    r = 2364
+    assert 3 * r * (r + 1) + 1 <= checks.MAX_PUPIL_POINTS < 3 * (r + 1) * (r + 2) + 1
+    pts = np.asarray(jl.sampling.pupil_hexapolar(3))
+    assert pts.shape == (1 + 6 + 12 + 18, 2)
+    np.testing.assert_array_equal(pts[0], [0.0, 0.0])
+    ring3 = pts[19:]
+    np.testing.assert_allclose(np.hypot(*ring3.T), 1.0, rtol=0, atol=1e-15)
+    ang = np.arctan2(ring3[:, 0], ring3[:, 1])  # from +y towards +x
+    np.testing.assert_allclose(np.mod(ang, 2 * np.pi), 2 * np.pi * np.arange(18) / 18,
+                               rtol=0, atol=1e-14)
+    np.testing.assert_allclose(np.hypot(*pts[1:7].T), 1 / 3, rtol=0, atol=1e-15)

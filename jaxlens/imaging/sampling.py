@@ -39,10 +39,14 @@ from ..optics.lens import INFINITE_OBJECT_MM, RAY_AIMING, Lens, unclipped
 from ..optics.rays import Rays
 from .newton import newton_2d
 
+_MAX_SIDE = math.isqrt(checks.MAX_PUPIL_POINTS)  # 4096 points or cells per side
+_MAX_RINGS = 2364  # the most hexapolar rings with 3r(r+1) + 1 ≤ MAX_PUPIL_POINTS
+
 
 def pupil_grid(n: int = 21, dtype=None) -> Float[Array, "m 2"]:
     """Square grid of n×n points over [−1, 1]², kept inside the unit disc (r² ≤ 1 + 1e-12)."""
-    n = checks.number(n, "n", "pupil_grid", lo=1, integer=True, unit="points per side")
+    n = checks.number(n, "n", "pupil_grid", lo=1, hi=_MAX_SIDE, integer=True,
+                      unit=f"points per side (n² ≤ {checks.MAX_PUPIL_POINTS} points)")
     checks.float_dtype(dtype, "pupil_grid")
     u = np.linspace(-1.0, 1.0, n) if n > 1 else np.zeros(1)
     px, py = np.meshgrid(u, u, indexing="xy")
@@ -53,20 +57,21 @@ def pupil_grid(n: int = 21, dtype=None) -> Float[Array, "m 2"]:
 
 def pupil_hexapolar(rings: int = 6, dtype=None) -> Float[Array, "m 2"]:
     """Hexapolar pattern: the centre plus ring i (1..rings) of 6·i equally spaced points."""
-    rings = checks.number(rings, "rings", "pupil_hexapolar", lo=0, integer=True, unit="rings")
+    rings = checks.number(rings, "rings", "pupil_hexapolar", lo=0, hi=_MAX_RINGS, integer=True,
+                          unit=f"rings (3r(r+1) + 1 ≤ {checks.MAX_PUPIL_POINTS} points)")
     checks.float_dtype(dtype, "pupil_hexapolar")
-    pts = [(0.0, 0.0)]
-    for i in range(1, rings + 1):
-        r = i / rings
-        for j in range(6 * i):
-            a = 2 * math.pi * j / (6 * i)
-            pts.append((r * math.sin(a), r * math.cos(a)))
-    return jnp.asarray(np.array(pts), dtype=dtype)
+    ring = np.repeat(np.arange(1, rings + 1), 6 * np.arange(1, rings + 1))  # ring i, 6i times
+    first = 3 * ring * (ring - 1)  # index of ring i's first point among the ring points
+    a = 2 * np.pi * (np.arange(ring.size) - first) / (6 * ring)
+    r = ring / max(rings, 1)
+    pts = np.concatenate([np.zeros((1, 2)), np.stack([r * np.sin(a), r * np.cos(a)], -1)])
+    return jnp.asarray(pts, dtype=dtype)
 
 
 def pupil_random(key, n: int, dtype=None) -> Float[Array, "n 2"]:
     """n points uniform over the unit disc."""
-    n = checks.number(n, "n", "pupil_random", lo=1, integer=True, unit="points")
+    n = checks.number(n, "n", "pupil_random", lo=1, hi=checks.MAX_PUPIL_POINTS, integer=True,
+                      unit="points")
     checks.prng_key(key, "pupil_random")
     checks.float_dtype(dtype, "pupil_random")
     k1, k2 = jax.random.split(key)
@@ -78,8 +83,8 @@ def pupil_random(key, n: int, dtype=None) -> Float[Array, "n 2"]:
 
 def pupil_stratified(key, n_side: int, dtype=None) -> Float[Array, "m 2"]:
     """Jittered (stratified) samples: one random point per cell of an n_side² polar grid."""
-    n_side = checks.number(n_side, "n_side", "pupil_stratified", lo=1, integer=True,
-                           unit="cells per side")
+    n_side = checks.number(n_side, "n_side", "pupil_stratified", lo=1, hi=_MAX_SIDE,
+                           integer=True, unit=f"cells per side (n² ≤ {checks.MAX_PUPIL_POINTS})")
     checks.prng_key(key, "pupil_stratified")
     dt = checks.float_dtype(dtype, "pupil_stratified") or jnp.result_type(float)
     i, j = jnp.meshgrid(jnp.arange(n_side), jnp.arange(n_side), indexing="ij")
@@ -99,8 +104,8 @@ def pupil_polar(n_side: int, key=None, dtype=None, *, radius: float = 1.0 - 1e-4
     ``radius < 1`` loses no ray at the stop: no ray is carried invalid through the lens, and
     no stale ray can make a gradient NaN.
     """
-    n_side = checks.number(n_side, "n_side", "pupil_polar", lo=1, integer=True,
-                           unit="cells per side")
+    n_side = checks.number(n_side, "n_side", "pupil_polar", lo=1, hi=_MAX_SIDE, integer=True,
+                           unit=f"cells per side (n² ≤ {checks.MAX_PUPIL_POINTS})")
     checks.number(radius, "radius", "pupil_polar", lo=0, hi=1, lo_open=True,
                   unit="(pupil radii)")
     checks.prng_key(key, "pupil_polar", optional=True)

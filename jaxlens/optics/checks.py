@@ -46,6 +46,11 @@ MAX_SAMPLES = 65536
 """Most samples along one line (ray-fan pupil points, rim rays, radii or sag points per
 surface, fields, points of a path): 10**9 ray-fan points asked for 24 GB after the checks."""
 
+MAX_PUPIL_POINTS = 2**24
+"""Most points one pupil sampler returns (``imaging.sampling``: n² of a grid, 3r(r+1) + 1 of
+r hexapolar rings, n random points): 16.8 M points are 268 MB of float64 pairs, and a trace
+of them many times that; ``pupil_hexapolar(10**6)`` asked for 48 GB."""
+
 MAX_IMAGE_SIDE = 16384
 """Most pixels per side of a sensor, a scene or a rendered frame: the largest single image
 sensors (about 150 megapixels) are some 14 200 pixels wide, and a frame of rows × cols × 3
@@ -79,8 +84,11 @@ def interval(lo, hi, lo_open, hi_open) -> str:
     """The interval in the notation of the messages, e.g. "(0, inf)" or "[1, 12]"."""
     left = "(" if lo_open or lo is None else "["
     right = ")" if hi_open or hi is None else "]"
-    low = "-inf" if lo is None else f"{lo:g}"
-    high = "inf" if hi is None else f"{hi:g}"
+    def text(v):  # whole-number bounds in full (16777216, not 1.67772e+07)
+        return f"{v:d}" if isinstance(v, int) and not isinstance(v, bool) else f"{v:g}"
+
+    low = "-inf" if lo is None else text(lo)
+    high = "inf" if hi is None else text(hi)
     return f"{left}{low}, {high}{right}"
 
 
