@@ -389,7 +389,7 @@ def _cli_in_process(main, args, monkeypatch, capsys):
     (["--asphere-terms", "1000"], r"--asphere-terms must be a whole number in \[0, 12\]"),
     (["--seeds", "0"], r"--seeds must be a whole number in \[1, inf\), got 0"),
     (["--seed-list", "a,b"], r"--seed-list must be comma-separated whole numbers"),
-    (["--devices", "0"], r"--devices must be a whole number in \[1, inf\), got 0"),
+    (["--devices", "0"], r"--devices must be a whole number in \[1, 256\] host devices, got 0"),
     (["--fov", "nan"], r"--fov must be a finite number in \(0, 180\) deg"),
 ])
 def test_design_cli_refuses_bad_options_fast(args, match, tmp_path, monkeypatch, capsys):

@@ -239,10 +239,7 @@ def check_args(args, given=None) -> None:
     n(args.steps, "--steps", w, lo=0, lo_open=True, unit="(scale of every stage's steps)")
     if args.polish_steps is not None:
         n(args.polish_steps, "--polish-steps", w, lo=0, integer=True)
-    n(args.devices, "--devices", w, lo=1, integer=True)
-    if args.devices > MAX_DEVICES:
-        raise ValueError(f"{w}: --devices must be a whole number in [1, {MAX_DEVICES}] host "
-                         f"devices, got {args.devices}")
+    n(args.devices, "--devices", w, lo=1, hi=MAX_DEVICES, integer=True, unit="host devices")
     n(args.ablation_seeds, "--ablation-seeds", w, lo=1, integer=True)
     # Before: 10**7 trials were refused after the designs, and 10**6 draws ran out of memory.
     n(args.tolerance_trials, "--tolerance-trials", w, lo=0, hi=MAX_TRIALS, integer=True)
