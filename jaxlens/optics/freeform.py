@@ -28,15 +28,6 @@ Conventions:
     XDAT 2), ``decenter_x``/``decenter_y`` dx, dy (mm, PARM 9, 10). ``ordering`` chooses the
     polynomials:
 
-    The decenter's sign: the terms are evaluated at (x − dx, y − dy), so the Zernike pattern
-    (only it, not the base asphere) moves to (dx, dy); a defocus term's vertex lies at
-    (dx, dy) (tests/test_conventions_signs.py). OpticStudio's help defines the decenter as
-    that "of the Zernike terms relative to the base asphere", with ρ and φ the decentered
-    coordinates (its Zernike Surface object, parameters 5–6; the sequential Zernike sag
-    page was not at hand); a decenter moves what it decenters toward +dx, as a surface
-    decenter does. Not checked against a sag OpticStudio computed for a decentered surface
-    (optiland 0.6.3's Zernike geometry has no decenter, and its .zmx reader no SZERNSAG).
-
     * ``"standard"`` (Zemax Standard): Noll's order and normalisation, Z_j = N R_n^|m|(ρ) ×
       (cos mφ for even j, sin mφ for odd j; 1 for m = 0), N = sqrt(2(n+1)) (m ≠ 0) or
       sqrt(n+1) (m = 0): Z1 = 1, Z2 = 2ρ cos φ, Z3 = 2ρ sin φ, Z4 = √3(2ρ² − 1),
@@ -45,6 +36,15 @@ Conventions:
       Z2 = ρ cos φ, Z3 = ρ sin φ, Z4 = 2ρ² − 1, Z5 = ρ² cos 2φ, Z6 = ρ² sin 2φ, …, the
       term (n, m) at j = (1 + (n+|m|)/2)² − 2|m| (+1 for sin |m|φ) up to Z36 = R_10^0, and
       Z37 = R_12^0 (the 12th-order spherical term, as in Zemax), 37 terms at most.
+
+    The decenter's sign: the terms are evaluated at (x − dx, y − dy), so the Zernike pattern
+    (only it, not the base asphere) moves to (dx, dy); a defocus term's vertex lies at
+    (dx, dy) (tests/test_conventions_signs.py). OpticStudio's help defines the decenter as
+    that "of the Zernike terms relative to the base asphere", with ρ and φ the decentered
+    coordinates (its Zernike Surface object, parameters 5–6; the sequential Zernike sag
+    page was not at hand); a decenter moves what it decenters toward +dx, as a surface
+    decenter does. Not checked against a sag OpticStudio computed for a decentered surface
+    (optiland 0.6.3's Zernike geometry has no decenter, and its .zmx reader no SZERNSAG).
 
     With ``extrapolate=False`` (Zemax PARM 0 = 0) the Zernike part is zero where ρ > 1, as
     in Zemax (a step in the surface at ρ = 1); ``True`` (PARM 0 = 1) evaluates it everywhere.
