@@ -40,6 +40,7 @@ Conventions:
 from __future__ import annotations
 
 import equinox as eqx
+import jax
 import jax.numpy as jnp
 import numpy as np
 from jaxtyping import Array, Float
@@ -329,9 +330,18 @@ def paraxial_data(lens: Lens, wavelength=None) -> ParaxialData:
         a2, b2 = a2, b2 + t * a2
         d2 = d2 + t * c2
         # Ray from stop centre, nu=1: y=b2, nu=d2 after the last surface; crosses axis at:
-        xp_z = z_last - b2 * n_img / d2
+        # (d2 = 0: telecentric in image space, the exit pupil at infinity. Its infinite value
+        # carries no gradient: 0·inf in the backward pass was NaN wherever the caller's
+        # double where gave it a zero cotangent; LLVM's optimiser had hidden that.)
+        tele = d2 == 0
+        d2_safe = jnp.where(tele, 1.0, d2)
+
+        def over_d2(x):
+            return jnp.where(tele, jax.lax.stop_gradient(x / d2), x / d2_safe)
+
+        xp_z = z_last - over_d2(b2 * n_img)
         # Magnification stop -> exit pupil: ray from stop edge parallel to chief ray.
-        xp_mag = a2 - c2 * b2 / d2
+        xp_mag = a2 - over_d2(c2 * b2)
     xpd = 2.0 * stop_sd * jnp.abs(xp_mag)
     fnum = f / epd
     working = 1.0 / (2.0 * jnp.abs(num[-1]))
