@@ -132,7 +132,8 @@ def own_surfaces(text: str) -> tuple[str, dict]:
         t = ln.split()
         key = t[0] if t else ""
         if key == "UNIT" and t[1] != "MM":
-            raise ValueError(f"own_surfaces: the file's unit is {t[1]}, not MM")
+            raise ValueError(f"the file's UNIT is {t[1]}; optiland 0.6.3 reads every length as "
+                             f"mm, so its numbers for this file are not comparable")
         if key == "SURF":
             n = int(t[1])
         elif key == "TYPE" and t[1] in OWN_TYPES:
@@ -187,8 +188,10 @@ def optiland_numbers(path: str, wavelengths, primary, fields, lens=None) -> dict
 
     with warnings.catch_warnings(), contextlib.redirect_stdout(io.StringIO()):
         warnings.simplefilter("ignore")
-        with open(path, encoding="utf-8", errors="replace") as fh:
-            text, own = own_surfaces(fh.read())
+        with open(path, "rb") as fh:
+            raw = fh.read()
+        utf16 = raw[:2] in (b"\xff\xfe", b"\xfe\xff")
+        text, own = own_surfaces(raw.decode("utf-16" if utf16 else "latin-1"))
         if own:  # a copy beside nothing: optiland reads no AGF file
             with tempfile.TemporaryDirectory() as tmp:
                 copy = os.path.join(tmp, "own.zmx")
@@ -281,10 +284,12 @@ def resaved(path: str, lens, j: dict, o: dict | None, tmp: str) -> dict:
             np.array_equal(np.asarray(x, np.float64), np.asarray(y, np.float64), equal_nan=True)
             for x, y in zip(tu.tree_leaves(back), tu.tree_leaves(lens), strict=True))
         out[f"reloads_identical{ext}"] = bool(same)
-        if ext == ".zmx" and o is not None:
+        if ext == ".zmx":
             try:
                 o3 = optiland_numbers(saved, j["wavelengths"], j["primary"], j["fields"])
-                out["diff_saved_vs_original"] = compare_optiland(o, o3)
+                out["diff_saved_vs_jaxlens"] = compare(j, o3)
+                if o is not None:
+                    out["diff_saved_vs_original"] = compare_optiland(o, o3)
             except Exception as e:  # noqa: BLE001
                 out["optiland_saved_error"] = f"{type(e).__name__}: {e}"
     return out
@@ -392,8 +397,9 @@ def main(argv=None) -> int:
                 print("  saved again: " + " ".join(
                     f"{k}={v:.2e}" if isinstance(v, float) else f"{k}={v}"
                     for k, v in r["resaved"].items() if not isinstance(v, dict))
-                    + "".join(" vs original: " + " ".join(f"{k}={v:.2e}" for k, v in d.items())
-                              for d in [r["resaved"].get("diff_saved_vs_original")] if d))
+                    + "".join(f" {w}: " + " ".join(f"{k}={v:.2e}" for k, v in d.items())
+                              for w in ("diff_saved_vs_jaxlens", "diff_saved_vs_original")
+                              for d in [r["resaved"].get(w)] if d))
     out = {"computed_by": "optiland 0.6.3 via tools/export_reevaluation.py", "files": recs}
     if a.summary:
         out["summary"] = summary_check(a.summary, recs)
