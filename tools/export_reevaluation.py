@@ -244,7 +244,8 @@ def optiland_numbers(path: str, wavelengths, primary, fields, lens=None) -> dict
 def compare(j: dict, o: dict) -> dict:
     """Largest differences: relative for the scalars, absolute for heights (mm), distortion
     (percentage points) and RMS (µm, and relative)."""
-    d = {k: abs(j[k] - o[OPTILAND_NAME[k]]) / abs(o[OPTILAND_NAME[k]]) for k in SCALARS}
+    d = {k: None if j[k] is None else abs(j[k] - o[OPTILAND_NAME[k]]) / abs(o[OPTILAND_NAME[k]])
+         for k in SCALARS}  # None: jaxlens reports no value (a lens without power)
     d["chief_y_mm"] = max(abs(a - b) for a, b in zip(j["chief_y"], o["chief_y"], strict=True))
     d["distortion_pp"] = max(abs(a - b) for a, b in
                              zip(j["distortion"], o["distortion"], strict=True))
@@ -256,7 +257,8 @@ def compare(j: dict, o: dict) -> dict:
 
 def compare_optiland(a: dict, b: dict) -> dict:
     """Largest differences of optiland's numbers for two files (:func:`compare`'s units)."""
-    d = {k: abs(a[k] - b[k]) / abs(a[k]) for k in OPTILAND_NAME.values()}
+    d = {k: abs(a[k] - b[k]) / abs(a[k]) if a[k] else abs(a[k] - b[k])
+         for k in OPTILAND_NAME.values()}
     d["chief_y_mm"] = max(abs(x - y) for x, y in zip(a["chief_y"], b["chief_y"], strict=True))
     ra, rb = np.asarray(a["rms_um"]), np.asarray(b["rms_um"])
     d["rms_um"] = float(np.max(np.abs(ra - rb)))
@@ -318,7 +320,7 @@ def evaluate(path: str, tmp: str, resave: bool = False) -> dict:
     if "jaxlens_twin" in rec:
         jt = rec["jaxlens_twin"]
         rec["twin_max_rel"] = max(
-            [abs(j[k] - jt[k]) / abs(jt[k]) for k in SCALARS]
+            [abs(j[k] - jt[k]) / abs(jt[k]) for k in SCALARS if jt[k] is not None]
             + [float(np.max(np.abs(np.asarray(j["rms_um"]) - jt["rms_um"])))])
     try:
         o = optiland_numbers(zmx, j["wavelengths"], j["primary"], j["fields"])
@@ -360,6 +362,10 @@ def summary_check(summary: str, recs: list[dict]) -> dict:
     return out
 
 
+def _e(v) -> str:
+    return "None" if v is None else f"{v:.2e}" if isinstance(v, float) else str(v)
+
+
 def main(argv=None) -> int:
     p = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     p.add_argument("paths", nargs="+", help=".zmx / .json files or folders of them")
@@ -387,17 +393,17 @@ def main(argv=None) -> int:
             recs.append(r)
             if "diff" in r:
                 d = r["diff"]
-                print(f"{f}: " + " ".join(f"{k}={v:.2e}" for k, v in d.items())
+                print(f"{f}: " + " ".join(f"{k}={_e(v)}" for k, v in d.items())
                       + (f" twin={r['twin_max_rel']:.1e}" if "twin_max_rel" in r else ""))
                 print("  with jaxlens's indices: " + " ".join(
-                    f"{k}={v:.2e}" for k, v in r["diff_jaxlens_media"].items()))
+                    f"{k}={_e(v)}" for k, v in r["diff_jaxlens_media"].items()))
             else:
                 print(f"{f}: {r.get('optiland_error') or r.get('jaxlens_error')}")
             if "resaved" in r:
                 print("  saved again: " + " ".join(
-                    f"{k}={v:.2e}" if isinstance(v, float) else f"{k}={v}"
+                    f"{k}={_e(v)}" if isinstance(v, float) else f"{k}={v}"
                     for k, v in r["resaved"].items() if not isinstance(v, dict))
-                    + "".join(f" {w}: " + " ".join(f"{k}={v:.2e}" for k, v in d.items())
+                    + "".join(f" {w}: " + " ".join(f"{k}={_e(v)}" for k, v in d.items())
                               for w in ("diff_saved_vs_jaxlens", "diff_saved_vs_original")
                               for d in [r["resaved"].get(w)] if d))
     out = {"computed_by": "optiland 0.6.3 via tools/export_reevaluation.py", "files": recs}
