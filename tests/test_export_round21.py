@@ -142,6 +142,7 @@ def _tool():
     return mod
 
 
+@pytest.mark.slow  # 6-8 s (the tool's import, a JSON load and a Hybrid sag compiled)
 def test_reevaluation_tool_reads_a_hybrid_surface_by_zemax_definitions(tmp_path):
     tool = _tool()
     # Zemax's Extended Polynomial order: x, y, x², xy, y², x³, x²y, xy², y³, …

@@ -18,6 +18,17 @@ jaxlens's numbers of both must agree too. Compared, with the same definitions on
   normalised pupil points with ``trace_generic``), each code aiming its own rays (paraxial
   pupil aiming).
 
+Surface types optiland 0.6.3's reader lacks (XPOLYNOM, jaxlens's Hybrid among them; XASPHERE,
+XOSPHERE, TILTSURF, BICONICX) are read here from the file's text by Zemax's definitions
+(``own_surfaces``, ``own_geometry``) and given to optiland as its geometries. optiland reads
+every length as mm: a file in other units (UNIT IN) is reported, not compared. optiland's
+paraxial quantities use a surface's base radius only (an XY polynomial's x², y² terms add
+power that jaxlens's paraxial trace includes): compare real rays there.
+
+``--resave`` saves each ``.zmx`` input again with ``jaxlens.save`` (``.zmx`` and JSON), checks
+that both read back in jaxlens as the same lens (pytree and numbers), and gives optiland the
+saved ``.zmx`` too (against jaxlens, and against optiland's numbers for the original).
+
 ``--summary RUN/summary.json`` also checks the numbers the classical experiment itself wrote for
 its best design (efl, fnum, bfl, total_track, chief_height_full_field, distortion_percent)
 against jaxlens's report and optiland on ``RUN/lens.zmx``.
