@@ -197,6 +197,9 @@ def optiland_numbers(path: str, wavelengths, primary, fields, lens=None) -> dict
     set aside."""
     from optiland.fileio import load_zemax_file
 
+    if any(isinstance(f, list | tuple) for f in fields):
+        raise ValueError("fields with an x component (angle_deg_xy) are not compared by this "
+                         "script (it traces y fields, Hx = 0)")
     with warnings.catch_warnings(), contextlib.redirect_stdout(io.StringIO()):
         warnings.simplefilter("ignore")
         with open(path, "rb") as fh:
