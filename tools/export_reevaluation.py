@@ -18,6 +18,17 @@ jaxlens's numbers of both must agree too. Compared, with the same definitions on
   normalised pupil points with ``trace_generic``), each code aiming its own rays (paraxial
   pupil aiming).
 
+Surface types optiland 0.6.3's reader lacks (XPOLYNOM, jaxlens's Hybrid among them; XASPHERE,
+XOSPHERE, TILTSURF, BICONICX) are read here from the file's text by Zemax's definitions
+(``own_surfaces``, ``own_geometry``) and given to optiland as its geometries. optiland reads
+every length as mm: a file in other units (UNIT IN) is reported, not compared. optiland's
+paraxial quantities use a surface's base radius only (an XY polynomial's x², y² terms add
+power that jaxlens's paraxial trace includes): compare real rays there.
+
+``--resave`` saves each ``.zmx`` input again with ``jaxlens.save`` (``.zmx`` and JSON), checks
+that both read back in jaxlens as the same lens (pytree and numbers), and gives optiland the
+saved ``.zmx`` too (against jaxlens, and against optiland's numbers for the original).
+
 ``--summary RUN/summary.json`` also checks the numbers the classical experiment itself wrote for
 its best design (efl, fnum, bfl, total_track, chief_height_full_field, distortion_percent)
 against jaxlens's report and optiland on ``RUN/lens.zmx``.
@@ -107,6 +118,78 @@ def set_media(op, lens) -> None:
         s.material_post = Jaxlens(m)
 
 
+# Zemax surface types that optiland 0.6.3's reader lacks: read here from the file's own text,
+# by Zemax's definitions (not jaxlens's reader), and given to optiland as its geometries.
+# Each is written as a STANDARD surface (CURV, CONI) to a copy of the file that optiland opens;
+# its geometry is then replaced. Units: the file must be in mm (UNIT MM).
+OWN_TYPES = ("XPOLYNOM", "XASPHERE", "XOSPHERE", "TILTSURF", "BICONICX")
+
+
+def xpoly_powers(j: int) -> tuple[int, int]:
+    """Zemax's Extended Polynomial term j (1-based): (power of x, power of y); the terms run
+    x, y, x², xy, y², x³, x²y, …, by degree, the power of x falling within a degree."""
+    d = 1
+    while j > d + 1:
+        j -= d + 1
+        d += 1
+    return d - (j - 1), j - 1
+
+
+def own_surfaces(text: str) -> tuple[str, dict]:
+    """The file's text with OWN_TYPES surfaces written as STANDARD, and for each such
+    surface number its type, CURV, CONI, PARM and XDAT values."""
+    out, own, n = [], {}, None
+    for ln in text.splitlines():
+        t = ln.split()
+        key = t[0] if t else ""
+        if key == "UNIT" and t[1] != "MM":
+            raise ValueError(f"the file's UNIT is {t[1]}; optiland 0.6.3 reads every length as "
+                             f"mm, so its numbers for this file are not comparable")
+        if key == "SURF":
+            n = int(t[1])
+        elif key == "TYPE" and t[1] in OWN_TYPES:
+            own[n] = {"type": t[1], "c": 0.0, "k": 0.0, "parm": {}, "xdat": {}}
+            out.append(ln.replace(t[1], "STANDARD"))
+            continue
+        elif n in own and key in ("CURV", "CONI"):
+            own[n]["c" if key == "CURV" else "k"] = float(t[1])
+        elif n in own and key in ("PARM", "XDAT"):
+            own[n][key.lower()][int(t[1])] = float(t[2])
+            continue
+        out.append(ln)
+    return "\n".join(out) + "\n", own
+
+
+def own_geometry(old, d: dict):
+    """The optiland geometry of one OWN_TYPES surface (``old``: the standard one in its place,
+    whose coordinate system it keeps)."""
+    from optiland.geometries import BiconicGeometry, EvenAsphere, OddAsphere, PolynomialGeometry
+
+    cs, c, k, x = old.cs, d["c"], d["k"], d["xdat"]
+    radius = math.inf if c == 0 else 1.0 / c
+    kind = d["type"]
+    if kind == "BICONICX":
+        rx = d["parm"].get(1, 0.0)
+        return BiconicGeometry(cs, rx if rx != 0 else math.inf, radius, d["parm"].get(2, 0.0), k)
+    if kind == "TILTSURF":
+        coeffs = [[0.0, d["parm"].get(2, 0.0)], [d["parm"].get(1, 0.0), 0.0]]
+        return PolynomialGeometry(cs, math.inf, 0.0, coefficients=coeffs)
+    n, r = int(x.get(1, 0)), x.get(2, 1.0)
+    a = [x.get(j + 2, 0.0) for j in range(1, n + 1)]
+    if kind == "XASPHERE":  # Σ α_i ρ^(2i), ρ = r/R
+        return EvenAsphere(cs, radius, k, coefficients=[v / r ** (2 * i)
+                                                        for i, v in enumerate(a, start=1)])
+    if kind == "XOSPHERE":  # Σ β_i ρ^i
+        return OddAsphere(cs, radius, k, coefficients=[v / r ** i
+                                                       for i, v in enumerate(a, start=1)])
+    deg = max((sum(xpoly_powers(j)) for j in range(1, n + 1)), default=0)
+    coeffs = np.zeros((deg + 1, deg + 1))
+    for j, v in enumerate(a, start=1):  # Σ A_j (x/R)^p (y/R)^q
+        p, q = xpoly_powers(j)
+        coeffs[p, q] += v / r ** (p + q)
+    return PolynomialGeometry(cs, radius, k, coefficients=coeffs)
+
+
 def optiland_numbers(path: str, wavelengths, primary, fields, lens=None) -> dict:
     """optiland's numbers for the same file, with the definitions of :func:`jaxlens_numbers`.
 
@@ -114,9 +197,26 @@ def optiland_numbers(path: str, wavelengths, primary, fields, lens=None) -> dict
     set aside."""
     from optiland.fileio import load_zemax_file
 
+    if any(isinstance(f, list | tuple) for f in fields):
+        raise ValueError("fields with an x component (angle_deg_xy) are not compared by this "
+                         "script (it traces y fields, Hx = 0)")
     with warnings.catch_warnings(), contextlib.redirect_stdout(io.StringIO()):
         warnings.simplefilter("ignore")
-        op = load_zemax_file(path)
+        with open(path, "rb") as fh:
+            raw = fh.read()
+        utf16 = raw[:2] in (b"\xff\xfe", b"\xfe\xff")
+        text, own = own_surfaces(raw.decode("utf-16" if utf16 else "latin-1"))
+        if own:  # a copy beside nothing: optiland reads no AGF file
+            with tempfile.TemporaryDirectory() as tmp:
+                copy = os.path.join(tmp, "own.zmx")
+                with open(copy, "w", encoding="utf-8") as fh:
+                    fh.write(text)
+                op = load_zemax_file(copy)
+            for n, d in own.items():
+                s = op.surfaces.surfaces[n]
+                s.geometry = own_geometry(s.geometry, d)
+        else:
+            op = load_zemax_file(path)
         index_d = [float(np.asarray(s.material_post.n(primary)).ravel()[0])
                    for s in op.surfaces.surfaces[1:-1]]
         if lens is not None:
@@ -158,7 +258,8 @@ def optiland_numbers(path: str, wavelengths, primary, fields, lens=None) -> dict
 def compare(j: dict, o: dict) -> dict:
     """Largest differences: relative for the scalars, absolute for heights (mm), distortion
     (percentage points) and RMS (µm, and relative)."""
-    d = {k: abs(j[k] - o[OPTILAND_NAME[k]]) / abs(o[OPTILAND_NAME[k]]) for k in SCALARS}
+    d = {k: None if j[k] is None else abs(j[k] - o[OPTILAND_NAME[k]]) / abs(o[OPTILAND_NAME[k]])
+         for k in SCALARS}  # None: jaxlens reports no value (a lens without power)
     d["chief_y_mm"] = max(abs(a - b) for a, b in zip(j["chief_y"], o["chief_y"], strict=True))
     d["distortion_pp"] = max(abs(a - b) for a, b in
                              zip(j["distortion"], o["distortion"], strict=True))
@@ -168,8 +269,51 @@ def compare(j: dict, o: dict) -> dict:
     return d
 
 
-def evaluate(path: str, tmp: str) -> dict:
-    """One file: jaxlens's and optiland's numbers and their differences."""
+def compare_optiland(a: dict, b: dict) -> dict:
+    """Largest differences of optiland's numbers for two files (:func:`compare`'s units)."""
+    d = {k: abs(a[k] - b[k]) / abs(a[k]) if a[k] else abs(a[k] - b[k])
+         for k in OPTILAND_NAME.values()}
+    d["chief_y_mm"] = max(abs(x - y) for x, y in zip(a["chief_y"], b["chief_y"], strict=True))
+    ra, rb = np.asarray(a["rms_um"]), np.asarray(b["rms_um"])
+    d["rms_um"] = float(np.max(np.abs(ra - rb)))
+    d["index_d"] = max((abs(x - y) for x, y in zip(a["index_d"], b["index_d"], strict=True)),
+                       default=0.0)
+    return d
+
+
+def resaved(path: str, lens, j: dict, o: dict | None, tmp: str) -> dict:
+    """``lens`` (opened from ``path``) saved by ``jaxlens.save`` as ``.zmx`` and as JSON in a
+    folder of its own: each must read back in jaxlens as the same lens (pytree structure and
+    every number equal), and optiland must give the saved ``.zmx`` the numbers it gives the
+    original ``.zmx`` (``o``; with optiland's own glass data on both)."""
+    import jax.tree_util as tu
+
+    folder = tempfile.mkdtemp(dir=tmp)
+    out: dict = {}
+    for ext in (".zmx", ".json"):
+        saved = os.path.join(folder, pathlib.Path(path).stem + "_saved" + ext)
+        jl.save(lens, saved)
+        with warnings.catch_warnings():
+            warnings.simplefilter("ignore")
+            back = jl.load(saved)
+        same = tu.tree_structure(back) == tu.tree_structure(lens) and all(
+            np.array_equal(np.asarray(x, np.float64), np.asarray(y, np.float64), equal_nan=True)
+            for x, y in zip(tu.tree_leaves(back), tu.tree_leaves(lens), strict=True))
+        out[f"reloads_identical{ext}"] = bool(same)
+        if ext == ".zmx":
+            try:
+                o3 = optiland_numbers(saved, j["wavelengths"], j["primary"], j["fields"])
+                out["diff_saved_vs_jaxlens"] = compare(j, o3)
+                if o is not None:
+                    out["diff_saved_vs_original"] = compare_optiland(o, o3)
+            except Exception as e:  # noqa: BLE001
+                out["optiland_saved_error"] = f"{type(e).__name__}: {e}"
+    return out
+
+
+def evaluate(path: str, tmp: str, resave: bool = False) -> dict:
+    """One file: jaxlens's and optiland's numbers and their differences (with ``resave``,
+    and a ``.zmx`` file: :func:`resaved` too)."""
     with warnings.catch_warnings():
         warnings.simplefilter("ignore")
         lens = jl.load(path)
@@ -190,12 +334,16 @@ def evaluate(path: str, tmp: str) -> dict:
     if "jaxlens_twin" in rec:
         jt = rec["jaxlens_twin"]
         rec["twin_max_rel"] = max(
-            [abs(j[k] - jt[k]) / abs(jt[k]) for k in SCALARS]
+            [abs(j[k] - jt[k]) / abs(jt[k]) for k in SCALARS if jt[k] is not None]
             + [float(np.max(np.abs(np.asarray(j["rms_um"]) - jt["rms_um"])))])
     try:
         o = optiland_numbers(zmx, j["wavelengths"], j["primary"], j["fields"])
     except Exception as e:  # noqa: BLE001  (report whatever optiland raises)
         rec["optiland_error"] = f"{type(e).__name__}: {e}"
+        o = None
+    if resave and path.lower().endswith(".zmx"):
+        rec["resaved"] = resaved(path, lens, j, o, tmp)
+    if o is None:
         return rec
     rec["optiland"] = o
     rec["diff"] = compare(j, o)
@@ -228,11 +376,19 @@ def summary_check(summary: str, recs: list[dict]) -> dict:
     return out
 
 
+def _e(v) -> str:
+    return "None" if v is None else f"{v:.2e}" if isinstance(v, float) else str(v)
+
+
 def main(argv=None) -> int:
     p = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     p.add_argument("paths", nargs="+", help=".zmx / .json files or folders of them")
     p.add_argument("--summary", help="an experiment's summary.json (its lens.zmx among paths)")
     p.add_argument("--json", help="write every record to this file")
+    p.add_argument("--resave", action="store_true",
+                   help="save each .zmx file again with jaxlens.save (.zmx and JSON), check "
+                        "that both reload as the same lens and that optiland gives the saved "
+                        ".zmx the original's numbers")
     a = p.parse_args(argv)
     files = []
     for q in a.paths:
@@ -245,18 +401,25 @@ def main(argv=None) -> int:
     with tempfile.TemporaryDirectory() as tmp:
         for f in files:
             try:
-                r = evaluate(f, tmp)
+                r = evaluate(f, tmp, a.resave)
             except Exception as e:  # noqa: BLE001
                 r = {"file": f, "jaxlens_error": f"{type(e).__name__}: {e}"}
             recs.append(r)
             if "diff" in r:
                 d = r["diff"]
-                print(f"{f}: " + " ".join(f"{k}={v:.2e}" for k, v in d.items())
+                print(f"{f}: " + " ".join(f"{k}={_e(v)}" for k, v in d.items())
                       + (f" twin={r['twin_max_rel']:.1e}" if "twin_max_rel" in r else ""))
                 print("  with jaxlens's indices: " + " ".join(
-                    f"{k}={v:.2e}" for k, v in r["diff_jaxlens_media"].items()))
+                    f"{k}={_e(v)}" for k, v in r["diff_jaxlens_media"].items()))
             else:
                 print(f"{f}: {r.get('optiland_error') or r.get('jaxlens_error')}")
+            if "resaved" in r:
+                print("  saved again: " + " ".join(
+                    f"{k}={_e(v)}" if isinstance(v, float) else f"{k}={v}"
+                    for k, v in r["resaved"].items() if not isinstance(v, dict))
+                    + "".join(f" {w}: " + " ".join(f"{k}={_e(v)}" for k, v in d.items())
+                              for w in ("diff_saved_vs_jaxlens", "diff_saved_vs_original")
+                              for d in [r["resaved"].get(w)] if d))
     out = {"computed_by": "optiland 0.6.3 via tools/export_reevaluation.py", "files": recs}
     if a.summary:
         out["summary"] = summary_check(a.summary, recs)

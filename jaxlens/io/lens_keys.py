@@ -44,6 +44,7 @@ SURFACE = {
     "semi_diameter": ("diameter", "diam", "aperture_radius", "sd", "clear_aperture",
                       "clear_semi_diameter"),
     "is_stop": ("stop", "aperture_stop"), "material": ("glass", "glas", "medium"), "n": (),
+    "index_at_wavelengths": ("indices_at_wavelengths", "n_at_wavelengths", "index_record"),
     "shape": (),
     # surface_json's kinds and per-surface data
     "y_coeffs": (), "focal_length": ("f", "efl", "focal"),

@@ -62,7 +62,10 @@ from .json_values import nums as _nums
 from .json_values import text as _text
 from .json_values import whole as _whole
 from .material_spec import (  # noqa: F401  (re-exported: the .zmx modules read them here)
+    INDEX_RECORD,
     catalog_material,
+    check_index_record,
+    index_record,
     is_catalog_glass,
     material_from_spec,
     material_to_spec,
@@ -548,6 +551,8 @@ def lens_from_dict(d: dict, *, source: str = "<lens>") -> Lens:
         apertures += [(j, a) for a in aps]
 
     wl, primary = _wavelengths_of(d, source)
+    for j, (s, m) in enumerate(zip([obj, *body], [obj_mat, *mats], strict=True)):
+        check_index_record(s, m, wl, f"{source}: surface {j + first - 1}")
     fields = _fields_of(d, source)
     sensor = None
     if d.get("sensor") is not None:
@@ -637,11 +642,16 @@ def lens_to_dict(lens: Lens) -> dict:
         "thickness": _out(dist),
         "material": material_to_spec(lens.object_material),
     }
+    wl = np.atleast_1d(np.asarray(lens.wavelengths, np.float64))
+    if (n := index_record(lens.object_material, wl)) is not None:
+        obj[INDEX_RECORD] = n
     surfs = [obj]
     for i, s in enumerate(lens.surfaces):
         e = surface_to_dict(s)
         e["thickness"] = _out(lens.thickness[i])
         e["material"] = material_to_spec(lens.materials[i])
+        if (n := index_record(lens.materials[i], wl)) is not None:
+            e[INDEX_RECORD] = n  # the medium whatever a reader's catalog holds
         if i == lens.stop:
             e["is_stop"] = True
         e.update(surface_json.surface_data_to_json(lens, i))

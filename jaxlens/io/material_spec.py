@@ -230,3 +230,51 @@ def material_from_spec(spec: Any, where: str, *, n_table: Any = None) -> Abstrac
         f"{where}: cannot read material {spec!r}; give a catalog name, {{'nd','vd'}}, "
         "{'n': {nm: index}} or {'wavelengths_um', 'indices'}"
     )
+
+
+INDEX_RECORD = "index_at_wavelengths"
+"""The surface key of a JSON lens file that records its medium's refractive index at each of
+the file's wavelengths (``wavelengths_um``, in that order), as ``jaxlens.save`` computed it.
+
+A catalog glass is written by name, and a name alone can mean other data to another tool or
+to another version of a catalog (optiland's E48R has nd 1.53055; jaxlens's, from Zemax's ZEON
+catalog, 1.53117).
+The record makes the file say which medium it describes whatever the reader's catalog; the
+reader checks it (``check_index_record``)."""
+
+INDEX_RECORD_TOLERANCE = 1e-6
+"""How far the reader's indices may be from a file's ``index_at_wavelengths``: above float32
+rounding of a lens saved at float32 (about 1e-7), below any two glass data sets that differ
+(catalogs quote nd to 1e-5)."""
+
+
+def index_record(m: AbstractMaterial, wavelengths) -> list[float] | None:
+    """The medium's index at each wavelength (µm), for ``INDEX_RECORD``; None for air."""
+    if isinstance(m, Air):
+        return None
+    w = np.atleast_1d(np.asarray(wavelengths, np.float64))
+    return [float(v) for v in np.asarray(m.index(_arr(w)), np.float64)]
+
+
+def check_index_record(entry: Any, m: AbstractMaterial, wavelengths, where: str) -> None:
+    """Refuse a surface whose medium ``m`` (as this jaxlens reads the file's material) is not
+    the medium the file records in ``INDEX_RECORD`` (if it records one)."""
+    if not isinstance(entry, dict) or entry.get(INDEX_RECORD) is None:
+        return
+    w = np.atleast_1d(np.asarray(wavelengths, np.float64))
+    rec = _nums(entry[INDEX_RECORD], f"{where}: {INDEX_RECORD}")
+    if rec.shape != w.shape:
+        raise ValueError(f"{where}: {INDEX_RECORD} must hold one index per wavelength "
+                         f"({w.size}: {[float(v) for v in w]} µm), got {rec.size}")
+    n = np.asarray(m.index(_arr(w)), np.float64)
+    worst = float(np.max(np.abs(n - rec)))
+    if not worst <= INDEX_RECORD_TOLERANCE:
+        name = getattr(m, "name", "") or type(m).__name__
+        raise ValueError(
+            f"{where}: material {name!r} has n = {[float(v) for v in n]} at "
+            f"{[float(v) for v in w]} µm here, "
+            f"but the file records n = {[float(v) for v in rec]} ({INDEX_RECORD}; off by "
+            f"{worst:.3g}, more than {INDEX_RECORD_TOLERANCE:g}): this jaxlens's data for that "
+            f"material are not those the file was written with. Give the material by its "
+            f"formula ({{\"class\": ...}}) or an index table, or delete {INDEX_RECORD} to use "
+            f"this jaxlens's data")

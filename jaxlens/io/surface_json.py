@@ -97,7 +97,7 @@ SURFACE_DATA = ("mirror", "obscuration", "apertures")
 _APERTURE_KEYS = ("shape", "half_x", "half_y", "decenter_x", "decenter_y", "blocks")
 # The keys every surface object may hold besides its kind's own.
 _COMMON = frozenset({"type", "shape", "thickness", "material", "n", "is_stop", "comment",
-                     *SURFACE_DATA})
+                     "index_at_wavelengths", *SURFACE_DATA})
 
 
 def kind_of(raw: str) -> str | None:

@@ -415,6 +415,28 @@ def aperture_lines(i: int, aps: list, obscured: bool) -> list[str]:
     return out
 
 
+def notes(lens: Lens, wl: np.ndarray) -> list[str]:
+    """``NOTE 0`` lines (file notes, which Zemax, optiland and jaxlens's reader do not
+    interpret) that make the file say what it describes to a reader that resolves names its
+    own way: the units and conventions, the stop, and each medium's refractive index at the
+    file's wavelengths (WAVM 1, 2, …) as jaxlens computes it, so a glass that another tool's
+    catalog holds with other data (optiland's E48R: nd 1.53055; jaxlens's, from Zemax's ZEON
+    catalog: 1.53117) shows up. The lens's description follows, one note per line."""
+    out = [f"NOTE 0 jaxlens: lengths mm, wavelengths um, fields are angles in degrees in object "
+           f"space (XFLN, YFLN), the stop is SURF {lens.stop + 1}, ENPD is the entrance pupil "
+           f"diameter"]
+    media = [lens.object_material, *lens.materials]
+    for k, m in enumerate(media):
+        if isinstance(m, Air):
+            continue
+        n = np.asarray(m.index(np.asarray(wl, np.float64)), np.float64)
+        name = getattr(m, "name", "") or type(m).__name__
+        out.append(f"NOTE 0 jaxlens: the medium after SURF {k} ({name}) has n = "
+                   f"{' '.join(repr(float(v)) for v in n)} at WAVM 1..{len(wl)}")
+    out += [f"NOTE 0 {ln}".rstrip() for ln in lens.description.splitlines()]
+    return out
+
+
 def dumps(lens: Lens, path: str = "lens.zmx", *, model_glass: str = "blank"):
     """Text of a ``.zmx`` file and the glass writer holding its side AGF catalogs."""
     if model_glass not in ("blank", "agf"):
@@ -491,6 +513,7 @@ def dumps(lens: Lens, path: str = "lens.zmx", *, model_glass: str = "blank"):
         "MODE SEQ",
         # One line; the reader strips the ends but keeps inner spacing (a round trip is exact).
         f"NAME {' '.join(lens.name.splitlines()).strip()}".rstrip(),
+        *notes(lens, wl),
         "UNIT MM X W X CM MR CPMM",
         f"ENPD {_z(lens.epd)}",
         "ENVD 2.0E+1 1 0",
