@@ -551,8 +551,6 @@ def lens_from_dict(d: dict, *, source: str = "<lens>") -> Lens:
         apertures += [(j, a) for a in aps]
 
     wl, primary = _wavelengths_of(d, source)
-    for j, (s, m) in enumerate(zip([obj, *body], [obj_mat, *mats], strict=True)):
-        check_index_record(s, m, wl, f"{source}: surface {j + first - 1}")
     fields = _fields_of(d, source)
     sensor = None
     if d.get("sensor") is not None:
@@ -613,6 +611,9 @@ def lens_from_dict(d: dict, *, source: str = "<lens>") -> Lens:
     checks.wavelengths(lens, wl, f"{source}: {key}", "wavelength")
     checks.material_indices(lens, wl, source)
     checks.field_angles(fields, f"{source}: fields", "field angles")
+    # After the wavelength checks: a wavelength outside a glass's data is named as such.
+    for j, (s, m) in enumerate(zip([obj, *body], [obj_mat, *mats], strict=True)):
+        check_index_record(s, m, wl, f"{source}: surface {j + first - 1}")
     if img is not None and (img.get("material") is not None or img.get("n") is not None):
         _warn_image_medium(img, mats[-1], wl, primary, source)
     try:
