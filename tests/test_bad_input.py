@@ -513,7 +513,7 @@ def test_an_out_folder_the_file_system_refuses_is_one_line(tmp_path, capsys, mon
 
 
 @pytest.mark.parametrize("args, match", [
-    (["--steps", "0"], r"--steps must be a whole number in \[1, inf\), got 0"),
+    (["--steps", "0"], r"--steps must be a whole number in \[1, 100000\] steps, got 0"),
     (["--kernel", "8"], r"--kernel must be an odd whole number"),
     (["--lr-net", "inf"], r"--lr-net must be a finite number in \(0, inf\)"),
     (["--lenses", "zoom"], r"--lenses takes distinct names from"),
