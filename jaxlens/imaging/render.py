@@ -485,18 +485,15 @@ RAY = RayRender()
 """The default render method."""
 
 
-def _check_working_memory(lens, method, spp, patch, resolution, channels, itemsize,
-                          checkpoint):
-    """Refuse a render whose tiles would not fit (``checks.working_memory``): a tile traces
+def _check_working_memory(lens, method, spp, patch, channels, itemsize):
+    """Refuse a render whose tile would not fit (``checks.working_memory``): a tile traces
     patch² × spp rays per channel ("ray"), or a PSF of about spp × kernel_size² rays per
-    channel ("psf"); without ``checkpoint`` a gradient keeps every tile's rays."""
-    rows, cols = resolution
-    tiles = 1 if checkpoint else -(-rows // patch) * -(-cols // patch)
+    channel ("psf"). A gradient without ``checkpoint`` keeps every tile's rays, which is not
+    bounded here (a forward render with it needs one tile at a time)."""
     if isinstance(method, PSFRender):
         k = int(method.kernel_size)
         rays = max(2, math.isqrt(spp * k * k)) ** 2 * channels
-        what = f"spp × kernel_size² × {channels} channels"
-        fix = "lower spp or kernel_size"
+        what, fix = f"spp × kernel_size² × {channels} channels", "lower spp or kernel_size"
     else:
         rays = patch * patch * spp * channels
         what = f"patch² × spp × {channels} channels"
@@ -504,10 +501,7 @@ def _check_working_memory(lens, method, spp, patch, resolution, channels, itemsi
         best = math.isqrt(checks.MAX_WORKING_BYTES // per_ray // (spp * channels))
         fix = (f"lower patch (the tile side, {patch} pixels) to at most {best}" if best
                else "lower spp")
-    if not checkpoint:
-        what += f" × {tiles} tiles (checkpoint=False: a gradient keeps every tile's rays)"
-        fix = "pass checkpoint=True (one tile at a time) or lower spp"
-    checks.working_memory(rays * tiles, len(lens.surfaces), itemsize, "render", what, fix)
+    checks.working_memory(rays, len(lens.surfaces), itemsize, "render", what, fix)
 
 
 def render(
@@ -629,8 +623,8 @@ def render(
             f"render: scene of {hs}x{ws} pixels does not match the {rows}x{cols} sensor "
             "(the aspect ratios differ; resize or crop the scene)"
         )
-    _check_working_memory(lens, method, int(spp), int(patch), sensor.resolution,
-                          scene.shape[-1], scene.dtype.itemsize, bool(checkpoint))
+    _check_working_memory(lens, method, int(spp), int(patch), scene.shape[-1],
+                          scene.dtype.itemsize)
     depth = sampling.lens_depth(lens, depth, "render")
     lens = eqx.tree_at(lambda m: m.vignetting, apertured(lens), None,  # "Vignetting factors"
                        is_leaf=lambda x: x is None)
