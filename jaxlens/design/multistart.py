@@ -22,7 +22,7 @@ from jax.sharding import Mesh, NamedSharding, PartitionSpec
 from ..optics import catalog, checks
 from .curriculum import STAGE_SOLVERS, History, Stage, paper_stages, run, stage_args
 from .init import MAX_SEED, check_seeds, gap_bounds, parameterization, random_starts
-from .losses import ImageObjective, Objective, RayLoss, reverse_mode
+from .losses import MAX_RINGS, ImageObjective, Objective, RayLoss, reverse_mode
 from .materials import (
     DEFAULT_CATALOGS,
     CatalogRegion,
@@ -36,10 +36,6 @@ from .params import LensParams
 from .robust import RobustObjective, draw_perturbations
 from .solvers import LBFGSB, Adam, DampedLeastSquares, LevenbergMarquardt
 from .spec import DesignSpec
-
-MAX_RINGS = 64
-"""Most hexapolar pupil rings of the ray loss (``rings``, ``polish_rings``): 64 rings are
-12 481 rays per field and wavelength, and the loss holds every one of them per step."""
 
 MAX_ROBUST_DRAWS = 64
 """Most perturbation draws of tolerance-aware design (``tolerance_trials``, the classical
