@@ -2,7 +2,6 @@
 what the bad value did before; all are refusals before any tracing or long work, so the file
 is fast."""
 
-import dataclasses
 import re
 import sys
 
@@ -16,23 +15,6 @@ from jaxlens.optics import checks
 
 COOKE = jl.zoo.cooke_triplet()
 BIG = 10**12
-
-
-# ------------------------------------------------------- Lens: the primary wavelength
-def test_lens_refuses_a_primary_wavelength_outside_its_glasses_data():
-    """Before: Lens(...) took a primary wavelength outside its glasses' data (SK16's table
-    spans 0.486–0.657 µm); every analysis then refused the lens, far from the cause."""
-    with pytest.raises(ValueError, match=r"^Lens: the primary wavelength \(wavelengths\[1\]\) "
-                                         r"2\.5 µm is outside 0\.48\d*–0\.65\d* µm, the data "
-                                         r"range of SK16"):
-        dataclasses.replace(COOKE, wavelengths=(0.4861, 2.5, 0.6563))
-    # Another wavelength outside the data is the analyses' to refuse where they use it.
-    lens = dataclasses.replace(COOKE, wavelengths=(0.4861, 0.5876, 1.2))
-    assert float(lens.primary_wavelength) == pytest.approx(0.5876)
-    # Traced wavelengths are not checked (jit and grad paths unchanged).
-    w = jax.jit(lambda w: dataclasses.replace(COOKE, wavelengths=w).primary_wavelength)(
-        jnp.array([0.4861, 2.5, 0.6563]))
-    assert float(w) == 2.5
 
 
 # ------------------------------------------------------- render: working memory of a tile

@@ -269,7 +269,6 @@ class Lens(eqx.Module):
             raise ValueError(f"Lens: stop index {self.stop} outside 0..{n - 1}")
         if not 0 <= self.primary < self.wavelengths.shape[-1]:
             raise ValueError(f"Lens: primary index {self.primary} outside the wavelengths")
-        self._check_primary_wavelength()
         self._check_mirrors_and_breaks()
         n = len(self.surfaces)
         seen = [o[0] for o in self.obscurations]
@@ -346,17 +345,6 @@ class Lens(eqx.Module):
         if d is not None and not checks.is_traced(d):
             checks.values(d, "object_distance", "Lens", lo=0, lo_open=True,
                           unit="mm (inf or None: an object at infinity)")
-
-    def _check_primary_wavelength(self):
-        """The primary wavelength within every material's data range (``checks.wavelengths``:
-        a catalog glass's LD record, a table's span): the chief ray, the paraxial data and
-        the aiming use it, so no analysis could run. The other wavelengths may lie outside
-        (a lens read for its primary alone); the analyses refuse them where they use them."""
-        w = self.wavelengths
-        if checks.is_traced(w) or checks.is_traced((self.object_material, self.materials)):
-            return
-        checks.wavelengths(self, np.asarray(w)[self.primary], "Lens",
-                           f"the primary wavelength (wavelengths[{self.primary}])")
 
     def _check_mirrors_and_breaks(self):
         """Mirrors and coordinate breaks keep the medium: materials[i] repeats the one before."""
