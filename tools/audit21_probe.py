@@ -14,11 +14,11 @@ would take the line from their messages), then what no round had probed: the des
 report CLI's field and wavelength counts and ``--config``, the EDoF CLI's sizes and counts,
 and the benchmark CLIs' counts (rays, chunks, repeats, seeds, sizes, spp).
 
-Before (main at 4218c6b, ``AUDIT21_BEFORE=1``: 39 probes) and after (branch audit21: 75),
+Before (main at 4218c6b, ``AUDIT21_BEFORE=1``: 37 probes) and after (branch audit21: 73),
 ``PYTHONPATH=$PWD python tools/audit21_probe.py`` under ``ulimit -v 16000000`` (so that
 a huge allocation fails fast), one 2-core machine:
-    before: clear error 1, crash 6, ok 5, silent wrong 21, vague error 6
-    after:  clear error 68, ok 5, vague error 2   (the same 39 probes: clear 32, ok 5, vague 2)
+    before: clear error 1, crash 6, ok 4, silent wrong 20, vague error 6
+    after:  clear error 67, ok 4, vague error 2   (the same 37 probes: clear 31, ok 4, vague 2)
 (``AUDIT21_BEFORE=1`` leaves out the 36 probes that on main start hours of work, exhaust
 memory after the work has begun, or abort the process: a design, training or benchmark run
 that the bad count reaches, render tiles of hundreds of GiB, ``zernike_nm(10**30)``, 100 000
