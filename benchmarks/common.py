@@ -227,10 +227,15 @@ def md_table(header: list[str], rows: list[list]) -> str:
     return "\n".join(lines)
 
 
-def whole(lo: int = 1, unit: str = ""):
-    """An argparse ``type=`` for a whole-number option of at least ``lo``: a bad value is one
-    line naming the range and the unit (with ``OneLineParser``), exit status 2, before any
-    benchmark runs."""
+MAX_REPEATS = 1000
+"""Most timed repeats of one benchmark (``--repeats``): 20 is the most a default asks for."""
+
+
+def whole(lo: int = 1, unit: str = "", hi: int | None = None):
+    """An argparse ``type=`` for a whole-number option in [lo, hi] (``hi`` None: no upper
+    bound): a bad value is one line naming the range and the unit (with ``OneLineParser``),
+    exit status 2, before any benchmark runs. Counts of rays, pixels or repeats take an upper
+    bound (before: ``--rays 10**12`` aborted in XLA, ``--repeats 10**9`` ran for ever)."""
     import argparse
 
     def parse(text: str) -> int:
@@ -238,9 +243,10 @@ def whole(lo: int = 1, unit: str = ""):
             v = checks.cli_int(text)  # ASCII digits: int() also took "1_0" as 10
         except ValueError:
             v = None
-        if v is None or v < lo:
+        if v is None or v < lo or (hi is not None and v > hi):
             u = f" {unit}" if unit else ""
-            raise argparse.ArgumentTypeError(f"must be a whole number in [{lo}, inf){u}, got "
+            top = "inf)" if hi is None else f"{hi}]"
+            raise argparse.ArgumentTypeError(f"must be a whole number in [{lo}, {top}{u}, got "
                                              f"{text!r}")
         return v
 

@@ -140,14 +140,16 @@ def compile_all(fns: dict) -> tuple[dict, list]:
 
 def main(argv=None) -> dict:
     from jaxlens.experiments.runfolder import OneLineParser
+    from jaxlens.optics.checks import MAX_DESIGNS
 
-    from .common import out_path, whole
+    from .common import MAX_REPEATS, out_path, whole
+    from .throughput import MAX_RAYS
 
     p = OneLineParser(description=__doc__.split("\n\n")[0])
     p.add_argument("--baseline", default="cf2efb6", help="git revision to compare against")
-    p.add_argument("--seeds", type=whole(1, "seeds"), default=4)
-    p.add_argument("--repeats", type=whole(1, "repeats"), default=20)
-    p.add_argument("--rays", type=whole(1, "rays"), default=1_000_000,
+    p.add_argument("--seeds", type=whole(1, "seeds", MAX_DESIGNS), default=4)
+    p.add_argument("--repeats", type=whole(1, "repeats", MAX_REPEATS), default=20)
+    p.add_argument("--rays", type=whole(1, "rays", MAX_RAYS), default=1_000_000,
                    help="rays of the bare-trace timing")
     p.add_argument("--tag", default="", help="suffix of the result file name")
     p.add_argument("--out-dir", type=out_path("folder"), default=None,

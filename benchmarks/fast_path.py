@@ -26,12 +26,13 @@ def main(argv=None) -> dict:
     import jaxlens
     from jaxlens.experiments.runfolder import OneLineParser
 
-    from .common import whole
+    from .common import MAX_REPEATS, whole
+    from .throughput import MAX_RAYS
 
     p = OneLineParser(description=__doc__.splitlines()[0])
     p.add_argument("--baseline", default="04deecd", help="git revision to compare against")
-    p.add_argument("--rays", type=whole(1, "rays"), default=2**19)
-    p.add_argument("--repeats", type=whole(1, "repeats"), default=15)
+    p.add_argument("--rays", type=whole(1, "rays", MAX_RAYS), default=2**19)
+    p.add_argument("--repeats", type=whole(1, "repeats", MAX_REPEATS), default=15)
     a = p.parse_args(argv)
     versions = {"new": jaxlens, "baseline": import_baseline(a.baseline)}
     fns = {k: trace_fns(v, a.rays) for k, v in versions.items()}

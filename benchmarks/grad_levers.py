@@ -70,12 +70,14 @@ def main(argv=None) -> list[dict]:
     from jaxlens.experiments.runfolder import OneLineParser
 
     from .common import whole
+    from .throughput import MAX_RAYS
 
     p = OneLineParser(description=__doc__.splitlines()[0])
-    p.add_argument("--rays", type=whole(1, "rays"), default=1_000_000)
+    p.add_argument("--rays", type=whole(1, "rays", MAX_RAYS), default=1_000_000)
     p.add_argument("--flag", action="append", dest="flags",
                    help="an XLA_FLAGS setting (repeatable; --flag= for none); default: FLAGS")
-    p.add_argument("--chunks", nargs="*", type=whole(1, "rays per chunk"), default=list(CHUNKS))
+    p.add_argument("--chunks", nargs="*", type=whole(1, "rays per chunk", MAX_RAYS),
+                   default=list(CHUNKS))
     p.add_argument("--child", action="store_true", help=argparse.SUPPRESS)
     a = p.parse_args(argv)
     if a.child:  # one flag setting: default chunk only, JSON on the last line

@@ -232,15 +232,19 @@ def main(argv=None) -> None:
     from jaxlens.experiments.runfolder import OneLineParser
     from jaxlens.optics import checks
 
-    from .common import out_path
+    from .common import out_path, whole
+    from .throughput import MAX_RAYS
 
+    # Bounded above as render and the trace bound them (before: --size 10**6 and --spp 10**9
+    # failed in the worker after it had started, --trace-rays 10**12 aborted in XLA), and
+    # --checkpoint is 0 or 1 (5 read as on). 0: the worker ignores the render sizes.
     ap = OneLineParser(description=__doc__.splitlines()[0])
     ap.add_argument("--worker", action="store_true", help="run one configuration here")
-    ap.add_argument("--size", type=checks.cli_int, default=1024)
-    ap.add_argument("--spp", type=checks.cli_int, default=16)
-    ap.add_argument("--patch", type=checks.cli_int, default=64)
-    ap.add_argument("--checkpoint", type=checks.cli_int, default=1)
-    ap.add_argument("--trace-rays", type=checks.cli_int, default=0,
+    ap.add_argument("--size", type=whole(0, "pixels", checks.MAX_IMAGE_SIDE), default=1024)
+    ap.add_argument("--spp", type=whole(0, "rays per pixel", checks.MAX_SAMPLES), default=16)
+    ap.add_argument("--patch", type=whole(0, "pixels", checks.MAX_IMAGE_SIDE), default=64)
+    ap.add_argument("--checkpoint", type=whole(0, "(0: off, 1: on)", 1), default=1)
+    ap.add_argument("--trace-rays", type=whole(0, "rays", MAX_RAYS), default=0,
                     help="worker: time the bare trace's gradient on this many rays instead")
     ap.add_argument("--cap-gib", type=checks.cli_float, default=8.0)
     ap.add_argument("--lens", default="cellphone6", choices=("cooke_triplet", "double_gauss",

@@ -30,14 +30,15 @@ RESULTS = ROOT / "benchmarks" / "results"
 
 def main(argv=None) -> None:
     from jaxlens.experiments.runfolder import OneLineParser
+    from jaxlens.optics.checks import MAX_IMAGE_SIDE, MAX_SAMPLES
 
-    from .common import out_path, whole
+    from .common import MAX_REPEATS, out_path, whole
 
     ap = OneLineParser(description=__doc__.splitlines()[0])
-    ap.add_argument("--size", type=whole(1, "pixels"), default=512)
-    ap.add_argument("--spp", type=whole(1, "samples per pixel"), default=16)
-    ap.add_argument("--patch", type=whole(1, "pixels"), default=64)
-    ap.add_argument("--repeats", type=whole(1, "repeats"), default=3)
+    ap.add_argument("--size", type=whole(1, "pixels", MAX_IMAGE_SIDE), default=512)
+    ap.add_argument("--spp", type=whole(1, "samples per pixel", MAX_SAMPLES), default=16)
+    ap.add_argument("--patch", type=whole(1, "pixels", MAX_IMAGE_SIDE), default=64)
+    ap.add_argument("--repeats", type=whole(1, "repeats", MAX_REPEATS), default=3)
     ap.add_argument("--out", type=out_path(), default=RESULTS / "render_speed.json")
     args = ap.parse_args(argv)
     sys.path.insert(0, str(ROOT))

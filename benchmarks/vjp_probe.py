@@ -179,16 +179,17 @@ def count_fusions(n=1_000_000, chunk=CHUNK):
 def main(argv=None):
     from jaxlens.experiments.runfolder import OneLineParser
 
-    from .common import out_path, whole
+    from .common import MAX_REPEATS, out_path, whole
 
     ap = OneLineParser(description=__doc__.splitlines()[0])
     ap.add_argument("--check", action="store_true", help="values, gradients and FD (float64)")
     ap.add_argument("--fusions", action="store_true", help="count fusions per loop body")
-    ap.add_argument("--rays", type=whole(1, "rays"), default=1_000_000)
+    ap.add_argument("--rays", type=whole(1, "rays", throughput.MAX_RAYS), default=1_000_000)
     ap.add_argument("--lens", choices=tuple(zoo.ZOO), default="cooke_triplet",
                     help="zoo lens of --check and the timing")
-    ap.add_argument("--repeats", type=whole(1, "repeats"), default=7)
-    ap.add_argument("--chunk", nargs="+", type=whole(1, "rays per chunk"), default=[CHUNK],
+    ap.add_argument("--repeats", type=whole(1, "repeats", MAX_REPEATS), default=7)
+    ap.add_argument("--chunk", nargs="+", type=whole(1, "rays per chunk", throughput.MAX_RAYS),
+                    default=[CHUNK],
                     help=f"chunk sizes to time (rays; the CPU default is {CHUNK})")
     ap.add_argument("--dtype", choices=("float32", "float64"), default="float32",
                     help="the rays' dtype (the lens is cast to it)")

@@ -136,6 +136,10 @@ def _compute(lens: Lens) -> _Result:
     )
 
 
+MAX_REPORT_ENTRIES = 64
+"""Most fields, and most wavelengths, a report takes (``--fields``, ``--wavelengths``)."""
+
+
 def with_fields_and_wavelengths(lens: Lens, fields=None, wavelengths=None) -> Lens:
     """The lens with other field angles (deg) and wavelengths (µm; values > 100 are nm).
 
@@ -149,6 +153,12 @@ def with_fields_and_wavelengths(lens: Lens, fields=None, wavelengths=None) -> Le
         checks.real_values(fields, "--fields", "report", "deg")
     if wavelengths is not None:
         checks.real_values(wavelengths, "--wavelengths", "report", "µm")
+    for arg, v in (("--fields", fields), ("--wavelengths", wavelengths)):
+        # Before: 10**5 fields were analysed one by one for hours (Zemax takes 12 fields, 24
+        # wavelengths).
+        if v is not None and np.shape(v)[:1] and np.shape(v)[0] > MAX_REPORT_ENTRIES:
+            raise ValueError(f"report: {arg} holds {np.shape(v)[0]} values; a report takes at "
+                             f"most {MAX_REPORT_ENTRIES} (each is analysed in turn)")
     if fields is not None:
         shape = np.shape(fields)
         if len(shape) > 2 or (len(shape) == 2 and shape[1] != 2) or np.size(fields) == 0:
@@ -694,6 +704,9 @@ def run(args: argparse.Namespace) -> int:
                                  f"{', '.join(ignored)} would be ignored: leave "
                                  f"{'it' if len(ignored) == 1 else 'them'} out")
             return _list_configs(args.lens)
+        if args.config is not None:  # before the file is read (a .json file named "config=0")
+            checks.number(args.config, "--config", "report", lo=1, integer=True,
+                          unit="(Zemax's 1-based configuration number)")
         paths = figure_paths(args.lens, args.plot, args.overwrite) if args.plot else None
         # strict by default: a report must not describe a truncated file, nor rays that a
         # setting jaxlens does not use would have changed, without being asked

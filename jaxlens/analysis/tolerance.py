@@ -144,6 +144,8 @@ def _refuse_surfaces(lens: Lens, where: str) -> None:
     paraxial surfaces, which have no shape to perturb (perturbing them failed deep in JAX). And
     tilted planes (on the image too): they break the rotational symmetry that the field
     folding and the back-focus compensator assume, and their c and k are fixed."""
+    if not isinstance(lens, Lens):  # before: an AttributeError on .surfaces
+        raise TypeError(f"{where}: lens must be a jaxlens.Lens, got {type(lens).__name__}")
     for i, s in enumerate((*lens.surfaces, lens.image)):
         name = f"surface {i + 1}" if i < lens.num_surfaces else "the image surface"
         if isinstance(s, ParaxialSurface):
@@ -246,6 +248,9 @@ def perturb(lens: Lens, p: Perturbation, clear_radius, *, add_r4: tuple[bool, ..
     are then moved between coordinate breaks (``tolerance_rigid.displace``).
     """
     _refuse_surfaces(lens, "perturb")
+    if not isinstance(p, Perturbation):  # before: an AttributeError on .radius_rel
+        raise TypeError(f"perturb: p must be a Perturbation (zero_perturbation(lens) or a "
+                        f"draw of monte_carlo), got {type(p).__name__}")
     add_r4 = add_r4 or (False,) * lens.num_surfaces
     surfaces = []
     for i, s in enumerate(lens.surfaces):

@@ -103,9 +103,11 @@ def zernike_nm(j: int, *, indexing: str = "noll") -> tuple[int, int]:
     """
     first = 0 if indexing == "ansi" else 1
     _check(indexing, 1, "zernike_nm")
+    # Bounded (before: j = 10**30 built a table of that many terms, for ever): term 65536 is
+    # of radial order about 360, beyond any wavefront fit.
     j = checks.number(j, "j", "zernike_nm", lo=first,
-                      hi=FRINGE_TERMS if indexing == "fringe" else None, integer=True,
-                      unit=f"term number ({indexing})")
+                      hi=FRINGE_TERMS if indexing == "fringe" else checks.MAX_SAMPLES,
+                      integer=True, unit=f"term number ({indexing})")
     return _table(indexing, j - first + 1)[-1]
 
 

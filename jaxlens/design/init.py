@@ -118,8 +118,18 @@ def template_lens(spec: DesignSpec, dtype=None) -> Lens:
     )
 
 
+def _spec_and_dtype(spec, dtype, where: str) -> None:
+    """A ``DesignSpec`` and None or a float dtype (before: None failed as an AttributeError
+    deep inside, int32 as an OverflowError from an infinite bound)."""
+    if not isinstance(spec, DesignSpec):
+        raise TypeError(f"{where}: spec must be a jaxlens.design.DesignSpec, got "
+                        f"{type(spec).__name__} {spec!r}")
+    checks.float_dtype(dtype, where)
+
+
 def parameterization(spec: DesignSpec, dtype=None) -> Parameterization:
     """The order-1 parameterisation of the spec's lens structure."""
+    _spec_and_dtype(spec, dtype, "parameterization")
     lens = template_lens(spec, dtype)
     optical = tuple(i for i in range(spec.num_surfaces) if i != spec.stop_index)
     return Parameterization(
@@ -132,6 +142,8 @@ def parameterization(spec: DesignSpec, dtype=None) -> Parameterization:
 
 def random_params(spec: DesignSpec, key, dtype=None) -> LensParams:
     """One random start (jittable and vmappable over ``key``)."""
+    _spec_and_dtype(spec, dtype, "random_params")
+    checks.prng_key(key, "random_params")  # shape and dtype: known under jit and vmap too
     dtype = dtype or jnp.result_type(float)
     kinds = gap_kinds(spec)[:-1]
     lo = np.array([{"glass": _ELEMENT, "air": _AIR, "stop": _STOP_GAP}[k][0] for k in kinds])

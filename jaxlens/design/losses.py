@@ -122,6 +122,12 @@ def half_pupil(rings: int) -> tuple[np.ndarray, np.ndarray]:
     return p, np.where(on_axis, 1.0, 2.0)
 
 
+MAX_RINGS = 64
+"""Most hexapolar pupil rings of the ray loss (``RayLoss.make``, ``DesignConfig.rings``,
+``polish_rings``): 64 rings are 12 481 rays per field and wavelength, and the loss holds every
+one of them per step."""
+
+
 class RayLoss(eqx.Module):
     """Sampling of the ray-based spot loss (static sizes, array values).
 
@@ -142,6 +148,15 @@ class RayLoss(eqx.Module):
     @staticmethod
     def make(n_fields: int, rings: int, wavelengths, sensor_size, dtype=None) -> RayLoss:
         """K fields from 0 to 1 (equal steps), a ``rings``-ring hexapolar half pupil."""
+        # Before: n_fields 0 gave an empty loss, 10**9 ran for minutes in linspace, rings 0
+        # one ray per field, and wavelengths in nm a loss no trace could compute.
+        checks.number(n_fields, "n_fields", "RayLoss.make", lo=1, hi=checks.MAX_MAP_GRID,
+                      integer=True, unit="fields")
+        checks.number(rings, "rings", "RayLoss.make", lo=1, hi=MAX_RINGS, integer=True,
+                      unit="pupil rings")
+        checks.real_values(wavelengths, "wavelengths", "RayLoss.make", "µm")
+        checks.wavelengths(checks.NoMaterials, wavelengths, "RayLoss.make", "wavelengths")
+        checks.float_dtype(dtype, "RayLoss.make")
         dtype = dtype or jnp.result_type(float)
         fracs = np.linspace(0.0, 1.0, n_fields)
         p, pw = half_pupil(rings)

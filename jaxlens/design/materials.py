@@ -79,6 +79,20 @@ class HullMaterials(eqx.Module):
     corners: Float[Array, "V 2"] = eqx.field(converter=jnp.asarray)
     names: tuple[str, ...] = eqx.field(static=True, default=())
 
+    def __check_init__(self):
+        # Before: a NaN corner, an nd below 1 or a flat [V] array built a hull whose glasses
+        # were NaN or not glasses at all, seen only as a NaN loss after the set-up.
+        c = self.corners
+        if c.ndim != 2 or c.shape[1] != 2 or c.shape[0] < 3:
+            raise ValueError(f"HullMaterials: corners must be [V, 2] (nd, Vd) pairs of a hull "
+                             f"with V >= 3 corners, got shape {c.shape}")
+        if not checks.is_traced(c):
+            checks.real_values(c, "corners", "HullMaterials", "(nd, Vd)")
+            checks.values(c[:, 0], "corners nd", "HullMaterials", lo=1.0, hi=MAX_ND,
+                          unit="(refractive index)")
+            checks.values(c[:, 1], "corners Vd", "HullMaterials", lo=0, lo_open=True,
+                          unit="(Abbe number)")
+
     def nd_vd(self, m: Float[Array, "*b E V"]) -> Float[Array, "*b E 2"]:
         """(nd, Vd) of each element: the softmax-weighted mean of the corners."""
         w = jax.nn.softmax(m, axis=-1)
@@ -124,6 +138,15 @@ class TableMaterials(eqx.Module):
     """
 
     wavelengths: Float[Array, " W"] = eqx.field(converter=jnp.asarray)
+
+    def __check_init__(self):  # before: nm (587.6) or NaN made tables no trace could use
+        w = self.wavelengths
+        if w.ndim != 1 or w.shape[0] == 0:
+            raise ValueError(f"TableMaterials: wavelengths must be a 1-D array [W] (µm), got "
+                             f"shape {w.shape}")
+        if not checks.is_traced(w):
+            checks.real_values(w, "wavelengths", "TableMaterials", "µm")
+            checks.wavelengths(checks.NoMaterials, w, "TableMaterials", "wavelengths")
 
     def materials(self, m: Float[Array, "E W"]) -> tuple[Tabulated, ...]:
         """One tabulated material per element (unbatched ``m``: indices at the wavelengths)."""

@@ -22,7 +22,7 @@ from jax.sharding import Mesh, NamedSharding, PartitionSpec
 from ..optics import catalog, checks
 from .curriculum import STAGE_SOLVERS, History, Stage, paper_stages, run, stage_args
 from .init import MAX_SEED, check_seeds, gap_bounds, parameterization, random_starts
-from .losses import ImageObjective, Objective, RayLoss, reverse_mode
+from .losses import MAX_RINGS, ImageObjective, Objective, RayLoss, reverse_mode
 from .materials import (
     DEFAULT_CATALOGS,
     CatalogRegion,
@@ -37,14 +37,15 @@ from .robust import RobustObjective, draw_perturbations
 from .solvers import LBFGSB, Adam, DampedLeastSquares, LevenbergMarquardt
 from .spec import DesignSpec
 
-MAX_RINGS = 64
-"""Most hexapolar pupil rings of the ray loss (``rings``, ``polish_rings``): 64 rings are
-12 481 rays per field and wavelength, and the loss holds every one of them per step."""
-
 MAX_ROBUST_DRAWS = 64
 """Most perturbation draws of tolerance-aware design (``tolerance_trials``, the classical
 CLI's ``--tolerance-aware K``): each is one more ray loss per step (the README's run uses 4),
 and 10**6 asked XLA for 9 TB."""
+
+MAX_STEP_SCALE = 50.0
+"""Largest scale of the default recipe's step counts (the classical CLI's ``--steps``): 50 ×
+the 1200 fine-tuning steps are 60 000, within ``checks.MAX_STEPS``; ``--steps 1e12`` asked for
+10**15 steps."""
 
 
 @dataclasses.dataclass(frozen=True)
@@ -134,10 +135,12 @@ class DesignConfig:
         # count silently skips a stage, and "no" for a switch would read as True.
         w = "DesignConfig"
         # Sizes of the arrays a step holds are bounded above (before: tolerance_trials=10**6
-        # asked XLA for 9 TB after the spec had been built); step counts are not.
+        # asked XLA for 9 TB after the spec had been built), and so are step counts (10**12
+        # steps would never end).
         for arg, lo, hi in (("n_fields", 1, checks.MAX_MAP_GRID), ("rings", 1, MAX_RINGS),
-                            ("curriculum_n", 0, checks.MAX_SAMPLES), ("steps", 0, None),
-                            ("final_steps", 0, None), ("polish_steps", 0, None),
+                            ("curriculum_n", 0, checks.MAX_SAMPLES),
+                            ("steps", 0, checks.MAX_STEPS), ("final_steps", 0, checks.MAX_STEPS),
+                            ("polish_steps", 0, checks.MAX_STEPS),
                             ("epoch", 1, None), ("log_every", 1, None),
                             ("image_pixels", 1, checks.MAX_IMAGE_SIDE),
                             ("image_spp", 1, checks.MAX_SAMPLES),
@@ -186,6 +189,9 @@ class DesignConfig:
 
     def scaled(self, factor: float) -> DesignConfig:
         """The same recipe with every step count scaled by ``factor`` (at least 1 step)."""
+        # Before: inf raised OverflowError from round(), NaN a ValueError naming nothing.
+        checks.number(factor, "factor", "DesignConfig.scaled", lo=0, lo_open=True,
+                      unit="(scale of every stage's steps)")
         def sc(n):
             return max(1, round(n * factor)) if n else 0
 

@@ -36,6 +36,7 @@ import numpy as np
 import optax
 import optimistix as optx
 
+from ..optics import checks
 from .params import LensParams
 
 with warnings.catch_warnings():
@@ -94,10 +95,44 @@ def _merge(free, fixed):
     return eqx.combine(free, fixed)
 
 
+MAX_HISTORY = 1000
+"""Most L-BFGS memory pairs (``LBFGSB.history``): each holds two copies of the variables."""
+
+
+def _check_params(p, arg: str, where: str, *, lo=None, inf_ok=False, unit="") -> None:
+    """A ``LensParams`` whose concrete leaves are real numbers in range (traced ones pass)."""
+    if not isinstance(p, LensParams):
+        raise TypeError(f"{where}: {arg} must be a LensParams (one value or array per group "
+                        f"c, a, k, d, m), got {type(p).__name__} {p!r}")
+    for name in ("c", "a", "k", "d", "m"):
+        v = getattr(p, name)
+        if v is not None and not checks.is_traced(v):
+            checks.real_values(v, f"{arg}.{name}", where, unit)
+            checks.values(v, f"{arg}.{name}", where, lo=lo, inf_ok=inf_ok, unit=unit)
+
+
 class AbstractSolver(eqx.Module):
-    """A design solver: ``init`` and a jittable ``step`` (see module docstring)."""
+    """A design solver: ``init`` and a jittable ``step`` (see module docstring).
+
+    Every solver refuses, when built, options outside their range (a negative learning rate
+    climbs the loss, ``inner=10**9`` ran a scan of that length per step) and a residual
+    function that is not callable (before: a ``TypeError`` from inside the first jitted step).
+    """
 
     residual_fn: eqx.AbstractVar[Callable]
+
+    def __check_init__(self):
+        where = type(self).__name__
+        if not callable(self.residual_fn):
+            raise TypeError(f"{where}: residual_fn must be a callable residual_fn(params, "
+                            f"args) -> (residuals, aux), got {type(self.residual_fn).__name__}")
+        free = getattr(self, "free", ALL_FREE)
+        if not isinstance(free, LensParams):
+            raise TypeError(f"{where}: free must be a LensParams of bools (which groups move), "
+                            f"got {type(free).__name__} {free!r}")
+        if hasattr(self, "inner"):  # the iterations of one step (a scan of that length)
+            checks.number(self.inner, "inner", where, lo=1, hi=checks.MAX_STEPS, integer=True,
+                          unit="iterations per step")
 
     def loss_fn(self, params, args):
         res, aux = self.residual_fn(params, args)
@@ -127,6 +162,13 @@ class Adam(AbstractSolver):
     b1: float = eqx.field(static=True, default=0.9)
     b2: float = eqx.field(static=True, default=0.999)
     eps: float = eqx.field(static=True, default=1e-12)
+
+    def __check_init__(self):
+        _check_params(self.lrs, "lrs", "Adam", lo=0, unit="(learning rate per step)")
+        for arg in ("b1", "b2"):  # b = 1 never forgets (the moments never decay): NaN steps
+            checks.number(getattr(self, arg), arg, "Adam", lo=0, hi=1, hi_open=True,
+                          unit="(moment decay per step)")
+        checks.number(self.eps, "eps", "Adam", lo=0, lo_open=True, unit="(added to sqrt(v))")
 
     @property
     def _tx(self):
@@ -165,6 +207,11 @@ class LevenbergMarquardt(AbstractSolver):
     inner: int = eqx.field(static=True, default=4)
     rtol: float = eqx.field(static=True, default=1e-6)
     atol: float = eqx.field(static=True, default=1e-12)
+
+    def __check_init__(self):
+        for arg in ("rtol", "atol"):
+            checks.number(getattr(self, arg), arg, "LevenbergMarquardt", lo=0,
+                          unit="(convergence tolerance)")
 
     def _split(self, params):
         mask = jax.tree.map(lambda f, x: f, self.free, params,
@@ -220,6 +267,10 @@ class DampedLeastSquares(AbstractSolver):
     free: LensParams = eqx.field(static=True, default=ALL_FREE)
     inner: int = eqx.field(static=True, default=1)
     lam0: float = eqx.field(static=True, default=1e-2)
+
+    def __check_init__(self):  # the damping is clipped to this range at every iteration
+        checks.number(self.lam0, "lam0", "DampedLeastSquares", lo=DAMPING_MIN, hi=DAMPING_MAX,
+                      unit="(initial damping λ, times diag(JᵀJ))")
 
     def _split(self, params):
         mask = jax.tree.map(lambda f, x: f, self.free, params,
@@ -296,6 +347,12 @@ class LBFGSB(AbstractSolver):
     upper: LensParams
     free: LensParams = eqx.field(static=True, default=ALL_FREE)
     history: int = eqx.field(static=True, default=10)
+
+    def __check_init__(self):
+        checks.number(self.history, "history", "LBFGSB", lo=1, hi=MAX_HISTORY, integer=True,
+                      unit="(L-BFGS memory pairs)")
+        for arg in ("lower", "upper"):  # ±inf: an unbounded group
+            _check_params(getattr(self, arg), arg, "LBFGSB", inf_ok=True, unit="bound")
 
     def _solver(self):
         return jaxopt.LBFGSB(fun=self.loss_fn, has_aux=True, maxiter=1, history_size=self.history)

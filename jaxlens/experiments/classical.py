@@ -214,10 +214,9 @@ def build_parser() -> argparse.ArgumentParser:
 def check_args(args, given=None) -> None:
     """Refuse any option outside its range (ValueError naming option, value, range, unit)."""
     from jaxlens.design.materials import CatalogRegion
-    from jaxlens.design.multistart import MAX_ROBUST_DRAWS
+    from jaxlens.design.multistart import MAX_ROBUST_DRAWS, MAX_STEP_SCALE
 
-    w = "design"
-    n = checks.number
+    w, n = "design", checks.number
     n(args.fov, "--fov", w, lo=0, hi=180, lo_open=True, hi_open=True, unit="deg")
     n(args.fnum, "--fnum", w, lo=0, lo_open=True)
     # The curriculum starts at an easier spec: an explicit start beyond the target is refused
@@ -234,13 +233,16 @@ def check_args(args, given=None) -> None:
     n(args.stop, "--stop", w, lo=0, hi=args.elements, integer=True, unit="elements")
     n(args.asphere_terms, "--asphere-terms", w, lo=0, hi=MAX_ASPHERE_TERMS, integer=True,
       unit="terms per surface")
-    n(args.seeds, "--seeds", w, lo=1, integer=True)
+    n(args.seeds, "--seeds", w, lo=1, hi=checks.MAX_DESIGNS, integer=True, unit="designs")
     n(args.first_seed, "--first-seed", w, lo=0, integer=True)
-    n(args.steps, "--steps", w, lo=0, lo_open=True, unit="(scale of every stage's steps)")
+    n(args.steps, "--steps", w, lo=0, lo_open=True, hi=MAX_STEP_SCALE, unit="(scale of every "
+      f"stage's steps, at most {checks.MAX_STEPS} steps a stage)")
     if args.polish_steps is not None:
-        n(args.polish_steps, "--polish-steps", w, lo=0, integer=True)
+        n(args.polish_steps, "--polish-steps", w, lo=0, hi=checks.MAX_STEPS, integer=True,
+          unit="steps")
     n(args.devices, "--devices", w, lo=1, hi=MAX_DEVICES, integer=True, unit="host devices")
-    n(args.ablation_seeds, "--ablation-seeds", w, lo=1, integer=True)
+    n(args.ablation_seeds, "--ablation-seeds", w, lo=1, hi=checks.MAX_DESIGNS, integer=True,
+      unit="designs per column")
     # Before: 10**7 trials were refused after the designs, and 10**6 draws ran out of memory.
     n(args.tolerance_trials, "--tolerance-trials", w, lo=0, hi=MAX_TRIALS, integer=True)
     n(args.tolerance_aware, "--tolerance-aware", w, lo=0, hi=MAX_ROBUST_DRAWS, integer=True)

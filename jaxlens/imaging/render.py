@@ -485,6 +485,25 @@ RAY = RayRender()
 """The default render method."""
 
 
+def _check_working_memory(lens, method, spp, patch, channels, itemsize):
+    """Refuse a render whose tile would not fit (``checks.working_memory``): a tile traces
+    patch² × spp rays per channel ("ray"), or a PSF of about spp × kernel_size² rays per
+    channel ("psf"). A gradient without ``checkpoint`` keeps every tile's rays, which is not
+    bounded here (a forward render with it needs one tile at a time)."""
+    if isinstance(method, PSFRender):
+        k = int(method.kernel_size)
+        rays = max(2, math.isqrt(spp * k * k)) ** 2 * channels
+        what, fix = f"spp × kernel_size² × {channels} channels", "lower spp or kernel_size"
+    else:
+        rays = patch * patch * spp * channels
+        what = f"patch² × spp × {channels} channels"
+        per_ray = checks.working_memory(1, len(lens.surfaces), itemsize, "render", "", "")
+        best = math.isqrt(checks.MAX_WORKING_BYTES // per_ray // (spp * channels))
+        fix = (f"lower patch (the tile side, {patch} pixels) to at most {best}" if best
+               else "lower spp")
+    checks.working_memory(rays, len(lens.surfaces), itemsize, "render", what, fix)
+
+
 def render(
     lens: Lens,
     scene: Float[Array, "H W 3"],
@@ -604,6 +623,8 @@ def render(
             f"render: scene of {hs}x{ws} pixels does not match the {rows}x{cols} sensor "
             "(the aspect ratios differ; resize or crop the scene)"
         )
+    _check_working_memory(lens, method, int(spp), int(patch), scene.shape[-1],
+                          scene.dtype.itemsize)
     depth = sampling.lens_depth(lens, depth, "render")
     lens = eqx.tree_at(lambda m: m.vignetting, apertured(lens), None,  # "Vignetting factors"
                        is_leaf=lambda x: x is None)

@@ -17,6 +17,8 @@ Conventions:
 
 from __future__ import annotations
 
+import math
+
 import jax
 import jax.numpy as jnp
 import numpy as np
@@ -97,6 +99,11 @@ def psf_points(
     checks.newton_iters(newton_iters, "psf_points")  # static, as kernel_size
     if not checks.is_traced(pixel_size):  # a traced pitch is not checked (see above)
         pixel_pitch(pixel_size, "psf_points")
+    # Shapes only (known under jit too): every position's PSF is traced at once (vmap).
+    points = math.prod(np.shape(xy)[:-1]) * np.size(wavelengths) * model.pupil ** 2
+    checks.working_memory(points, len(lens.surfaces), jnp.dtype(lens.epd.dtype).itemsize,
+                          "psf_points", "positions × wavelengths × pupil²",
+                          "pass fewer positions per call (xy), or a smaller model pupil")
     lens = apertured(lens)
     dtype = lens.epd.dtype
     xy = jnp.asarray(xy, dtype)

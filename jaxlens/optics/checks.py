@@ -63,6 +63,34 @@ pixel pitch to 1000 mm / its longer resolution, which refuses a pitch given in �
 meant (4000 pixels of "5" are 20 m) and leaves coarse preview grids of few large pixels (24 ×
 36 mm in 2 mm pixels) alone; ``imaging.grid.pixel_pitch`` bounds PSF grids tighter (1 mm)."""
 
+MAX_STEPS = 100_000
+"""Most solver steps of one design stage (``DesignConfig.steps``, ``final_steps``,
+``polish_steps``; the classical CLI's ``--polish-steps``): the defaults are 450, 1200 and 80;
+10**5 fine-tuning steps of the default recipe take about a day on one CPU core, and
+``--steps 1e12`` scaled every stage to 10**12 steps, which would never end."""
+
+MAX_DESIGNS = 1024
+"""Most designs (random starts) of one run of the classical CLI (``--seeds``,
+``--ablation-seeds``): each is a full design, minutes of work; ``--seeds 10**12`` built a list
+of 10**12 seeds (memory) before any check could see it."""
+
+MAX_WORKING_BYTES = 16 * 2**30
+"""Most estimated working memory (bytes) of one tile of a render (``render``,
+``tiled.psf_points``): the rays a tile traces at once, and, for a gradient, what the backward
+pass keeps of them (:func:`working_memory`). A tile of patch² × spp × 3 samples grows without
+bound in patch and spp (patch 512 at spp 1024 asked for some 500 GiB); a smaller patch (or
+spp) always fits."""
+
+VALUES_PER_RAY_SURFACE = 9
+"""Working memory of a traced ray's gradient, in float values per surface of the lens, on top
+of ``VALUES_PER_RAY_BASE`` values. Measured with XLA's memory analysis (``temp_size_in_bytes``)
+of the gradient of a render tile of 16² pixels × 16 rays × 3 colours on the CPU, float64:
+657 bytes a ray for the Cooke triplet (6 surfaces), 903 for the double Gauss (11), 1132 for
+the cellphone lens (13), where this model gives 688, 1048 and 1192; float32 about half."""
+
+VALUES_PER_RAY_BASE = 32
+"""See ``VALUES_PER_RAY_SURFACE``: the float values per ray that do not grow with the surfaces."""
+
 _REL = 1e-6  # wavelength bounds are compared with this relative slack (float32 rounding)
 
 
@@ -183,6 +211,28 @@ def number(value, arg: str, where: str, *, lo=None, hi=None, lo_open=False, hi_o
     if bad:
         raise ValueError(msg)
     return int(v) if integer else v
+
+
+def working_memory(rays: int, surfaces: int, itemsize: int, where: str, what: str,
+                   fix: str) -> int:
+    """Refuse a request whose estimated working memory exceeds ``MAX_WORKING_BYTES``.
+
+    The estimate is ``rays × itemsize × (VALUES_PER_RAY_BASE + VALUES_PER_RAY_SURFACE ×
+    surfaces)`` bytes: what a gradient through the trace of ``rays`` rays at once keeps (a
+    forward pass needs about a fifth of it). Static sizes only (Python ints), so it adds
+    nothing to traced code. ``what`` says what the rays are (``"patch² × spp × 3 channels"``)
+    and ``fix`` how to make fewer; raises ``ValueError`` naming both, the estimate and the bound
+    in GiB. Returns the estimate in bytes.
+    """
+    per_ray = int(itemsize) * (VALUES_PER_RAY_BASE + VALUES_PER_RAY_SURFACE * int(surfaces))
+    need = int(rays) * per_ray
+    if need > MAX_WORKING_BYTES:
+        raise ValueError(
+            f"{where}: {what} = {int(rays):,} rays traced at once need about "
+            f"{need / 2**30:.1f} GiB of working memory ({per_ray} bytes a ray for "
+            f"{int(surfaces)} surfaces, {8 * int(itemsize)}-bit floats), more than the "
+            f"{MAX_WORKING_BYTES / 2**30:g} GiB bound (checks.MAX_WORKING_BYTES); {fix}")
+    return need
 
 
 def newton_iters(value, where: str) -> int:

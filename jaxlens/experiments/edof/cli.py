@@ -69,6 +69,10 @@ from jaxlens.experiments.runfolder import (
 from jaxlens.optics import checks as input_checks
 
 LENS_NAMES = ("classical", "cubic", "hybrid")
+MAX_BATCH = 1024  # patches per batch (8 by default): each holds the tile's PSFs and features
+MAX_BLOCKS = 64  # NAFNet blocks per level or in the middle (the paper's deepest level has 28)
+MAX_LEVELS = 6  # NAFNet levels (the paper's 4); each doubles the channels
+MAX_ODD_TERMS = 10  # the hybrid surface's odd terms per axis: x³, x⁵, …, x²¹
 OUT_OF_TIME = 3
 """Exit status of a run stopped by ``--time-limit`` at a checkpoint."""
 COMPILE_CACHE = "compile_cache"
@@ -169,6 +173,7 @@ def build_parser() -> argparse.ArgumentParser:
 
 def config_from_args(a):
     from jaxlens.experiments.edof.train import Config
+    from jaxlens.nets import MAX_WIDTH
 
     if a.paper:
         cfg = Config(binning=1, tile=128, kernel_size=81, batch=8, pupil=64, eval_pupil=96,
@@ -195,13 +200,25 @@ def config_from_args(a):
     }
     cfg = dataclasses.replace(cfg, **{k: v for k, v in over.items() if v is not None})
     n, w = input_checks.number, "edof"
-    for opt, v in (("--steps", cfg.steps), ("--batch", cfg.batch), ("--tile", cfg.tile),
-                   ("--kernel", cfg.kernel_size), ("--binning", cfg.binning),
-                   ("--width", cfg.width), ("--lens-every", cfg.lens_every)):
-        n(v, opt, w, lo=1, integer=True)
-    for opt, v in (("--steps2", cfg.steps2), ("--middle", cfg.middle_blocks),
-                   ("--n-odd", cfg.n_odd), ("--context", cfg.context)):
-        n(v, opt, w, lo=0, integer=True)
+    # Upper bounds too (before: --steps 10**12 ran for ever, --pupil 10**5 and --batch 10**9
+    # ran out of memory after the lens work, and --n-odd 0 dropped the cubic term silently).
+    steps, side, pupil = input_checks.MAX_STEPS, input_checks.MAX_IMAGE_SIDE, math.isqrt(
+        input_checks.MAX_PUPIL_POINTS)
+    for opt, v, lo, hi, unit in (
+            ("--steps", cfg.steps, 1, steps, "steps"), ("--steps2", cfg.steps2, 0, steps, "steps"),
+            ("--lens-every", cfg.lens_every, 1, steps, "steps"),
+            ("--batch", cfg.batch, 1, MAX_BATCH, "patches"),
+            ("--tile", cfg.tile, 1, side, "pixels"),
+            ("--kernel", cfg.kernel_size, 1, input_checks.MAX_KERNEL_SIZE, "pixels"),
+            ("--binning", cfg.binning, 1, 1024, "sensor pixels per side of a binned pixel"),
+            ("--width", cfg.width, 1, MAX_WIDTH, "channels"),
+            ("--middle", cfg.middle_blocks, 0, MAX_BLOCKS, "blocks"),
+            ("--n-odd", cfg.n_odd, 1, MAX_ODD_TERMS, "odd terms per axis, x³ to x²¹"),
+            ("--context", cfg.context, 0, side, "pixels"),
+            ("--pupil", cfg.pupil, 2, pupil, "rays per side"),
+            ("--eval-pupil", cfg.eval_pupil, 2, pupil, "rays per side"),
+            ("--seeds count", len(a.seeds), 1, input_checks.MAX_DESIGNS, "training runs")):
+        n(v, opt, w, lo=lo, hi=hi, integer=True, unit=unit)
     from jaxlens.design.init import MAX_SEED  # the design package, for its limit only
 
     for s in a.seeds:
@@ -211,8 +228,6 @@ def config_from_args(a):
                              f"of JAX's PRNG), got {s}")
     if not a.seeds or len(set(a.seeds)) < len(a.seeds):  # a repeat would count twice
         raise ValueError(f"edof: --seeds needs distinct seeds, got {a.seeds}")
-    n(cfg.pupil, "--pupil", w, lo=2, integer=True, unit="rays per side")
-    n(cfg.eval_pupil, "--eval-pupil", w, lo=2, integer=True, unit="rays per side")
     n(cfg.lr_net, "--lr-net", w, lo=0, lo_open=True)
     n(cfg.lr_lens, "--lr-lens", w, lo=0, lo_open=True)
     n(cfg.photons, "--photons", w, lo=0, lo_open=True, unit="electrons")
@@ -229,9 +244,11 @@ def config_from_args(a):
                    ("--read-noise", cfg.read_noise)):
         n(v, opt, w, lo=0)
     for opt, blocks in (("--enc", cfg.enc_blocks), ("--dec", cfg.dec_blocks)):
-        if not blocks or any(b < 0 for b in blocks):
-            raise ValueError(f"edof: {opt} must be comma-separated whole numbers >= 0 (blocks "
-                             f"per level), got {blocks!r}")
+        # Each level doubles the channels: 20 levels asked for 4 GiB weights of one layer.
+        if (not blocks or len(blocks) > MAX_LEVELS
+                or any(not 0 <= b <= MAX_BLOCKS for b in blocks)):
+            raise ValueError(f"edof: {opt} must be 1 to {MAX_LEVELS} comma-separated whole "
+                             f"numbers in [0, {MAX_BLOCKS}] (blocks per level), got {blocks!r}")
     if 1024 % cfg.binning:
         raise ValueError(f"edof: --binning must divide the 1024-pixel sensor side, got "
                          f"{cfg.binning}")
