@@ -594,6 +594,7 @@ def _lens(f: ZmxFile, text: str, path: str, strict: bool, unknown_glass: str) ->
     checks.field_angles(np.asarray(lens.fields), f"{path}: XFLN/YFLN", "field angles")
     # After the fields are angles (image-height fields were on axis before); the beam's
     # radius on a PARAXIAL surface is its DIAM (OpticStudio's automatic one is the beam's).
+    zmx_surfaces.check_crossings(lens, [*body, img], u, strict)
     zmx_surfaces.check_opd_modes(lens, {
         i: (zmx_surfaces.paraxial_surface(s, u, math.inf)[1], s.type_line or s.line,
             s.diam[0] * u if s.diam and s.diam[0] > 0 else math.inf)
