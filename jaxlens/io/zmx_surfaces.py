@@ -735,8 +735,5 @@ def _dummy(lens: Lens, k: int) -> bool:
 
 def _sags(surface, h: float) -> list[float]:
     """The surface's sag (mm) at height h along y and along x; NaN where h is beyond it."""
-    out = []
-    for x, y in ((0.0, h), (h, 0.0)):
-        z, inside = surface.sag(jnp.float64(x), jnp.float64(y))
-        out.append(float(z) if bool(inside) else math.nan)
-    return out
+    z, inside = surface.sag(jnp.asarray([0.0, h]), jnp.asarray([h, 0.0]))
+    return np.where(np.asarray(inside), np.asarray(z, np.float64), np.nan).tolist()
