@@ -297,7 +297,8 @@ def mil_number(name: str) -> tuple[float, float] | None:
     hit = MIL_NUMBER.fullmatch(name)
     if hit is None or int(hit.group(2)) == 0:
         return None
-    return 1.0 + int(hit.group(1)) / 1000.0, int(hit.group(2)) / 10.0
+    vd = hit.group(2)
+    return float(f"1.{hit.group(1)}"), float(f"{vd[:2]}.{vd[2]}")  # the decimals, rounded once
 
 
 def _glas_nd_vd(ln) -> tuple[float | None, float | None]:

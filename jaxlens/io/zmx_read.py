@@ -592,9 +592,9 @@ def _lens(f: ZmxFile, text: str, path: str, strict: bool, unknown_glass: str) ->
         except ValueError as e:
             raise f.ftyp.error(str(e)) from None
     checks.field_angles(np.asarray(lens.fields), f"{path}: XFLN/YFLN", "field angles")
+    zmx_surfaces.check_crossings(lens, [*body, img], u, strict)
     # After the fields are angles (image-height fields were on axis before); the beam's
     # radius on a PARAXIAL surface is its DIAM (OpticStudio's automatic one is the beam's).
-    zmx_surfaces.check_crossings(lens, [*body, img], u, strict)
     zmx_surfaces.check_opd_modes(lens, {
         i: (zmx_surfaces.paraxial_surface(s, u, math.inf)[1], s.type_line or s.line,
             s.diam[0] * u if s.diam and s.diam[0] > 0 else math.inf)
