@@ -155,6 +155,11 @@ class GlassResolver:
                 except ValueError:
                     continue
                 return _cross_checked(m, ln)
+        code = mil_number(name)
+        if code is not None:
+            # Zemax reads a six-digit MIL number in the glass column as a glass of that nd
+            # and Vd ("Using MIL number glasses"); the line's own nd and Vd are not used.
+            return ModelGlass(_arr(code[0]), _arr(code[1]))
         successor = self._successor(ln, name)
         if successor is not None:
             return successor
@@ -276,6 +281,24 @@ def _molded_note(name: str) -> str:
     return (f". {name} is {base} as a molded lens (a molding catalog's entry); jaxlens has "
             f"{getattr(m, 'catalog', '')} {m.name}, but a molded glass's index differs from "
             f"the catalog glass's by the molding, so it is not taken in its place")
+
+
+MIL_NUMBER = re.compile(r"([0-9]{3})([0-9]{3})")
+"""A six-digit MIL number (MIL-G-174 glass code): 847238 is nd 1.847, Vd 23.8."""
+
+
+def mil_number(name: str) -> tuple[float, float] | None:
+    """(nd, Vd) of a glass named by a six-digit MIL number (``847238`` → (1.847, 23.8)), else
+    None. Zemax takes such a name in the glass column as a glass of that nd and Vd (its
+    "MIL number glass", computed from the number, not from a catalog); jaxlens reads it as a
+    ``ModelGlass`` of that nd and Vd, exact at the d line like a ``___BLANK`` model glass
+    (whose dispersion away from the d line is jaxlens's, linear in 1/λ²). A Vd of 0
+    (``517000``) is no glass."""
+    hit = MIL_NUMBER.fullmatch(name)
+    if hit is None or int(hit.group(2)) == 0:
+        return None
+    vd = hit.group(2)
+    return float(f"1.{hit.group(1)}"), float(f"{vd[:2]}.{vd[2]}")  # the decimals, rounded once
 
 
 def _glas_nd_vd(ln) -> tuple[float | None, float | None]:

@@ -592,6 +592,7 @@ def _lens(f: ZmxFile, text: str, path: str, strict: bool, unknown_glass: str) ->
         except ValueError as e:
             raise f.ftyp.error(str(e)) from None
     checks.field_angles(np.asarray(lens.fields), f"{path}: XFLN/YFLN", "field angles")
+    zmx_surfaces.check_crossings(lens, [*body, img], u, strict)
     # After the fields are angles (image-height fields were on axis before); the beam's
     # radius on a PARAXIAL surface is its DIAM (OpticStudio's automatic one is the beam's).
     zmx_surfaces.check_opd_modes(lens, {

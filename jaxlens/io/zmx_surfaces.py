@@ -656,3 +656,84 @@ def check_object_plane(obj, distance: float) -> None:
         raise at.error(
             f"the object surface at a finite distance must be a plane normal to the axis "
             f"(CURV 0, no tilt or terms); it has {what}, which jaxlens cannot represent")
+
+
+CROSSING_TOL_MM = 1e-9
+"""How far (mm) a surface may reach past the next one within the beam before it is reported:
+float rounding of sags and thicknesses, not a design."""
+
+UNFOLDED_TYPES = ("STANDARD", "EVENASPH", "ODDASPHE", "XASPHERE", "XOSPHERE", "QED_TYPE",
+                  "BINARY_2", "SZERNSAG", "FZERNSAG")
+"""Surface types checked for crossings: shapes centred on the axis, in an untilted frame."""
+
+
+def check_crossings(lens: Lens, blocks: list, unit: float, strict: bool) -> None:
+    """Report consecutive surfaces that cross within the semi-diameters the file gives.
+
+    ``blocks`` are the lens surfaces' SURF blocks followed by the image's. Zemax's DIAM is
+    the height of the file's outermost ray on each surface (automatic) or a height the
+    designer fixed; where, at the smaller of two neighbours' DIAMs, the first surface's sag
+    reaches past the second (a deep concave surface and a stop closer than its sag, a patent
+    lens's edges), the outer rays meet the second surface before the first. Zemax traces
+    such a ray on, back to the second surface (a negative distance); jaxlens stops it, so
+    the beam's rim is vignetted in jaxlens where Zemax passes it. That is reported (an error
+    under ``strict``), naming the surfaces and the height. Pairs after a mirror or a
+    coordinate break, tilted or decentred surfaces and surfaces without a DIAM are not
+    checked."""
+    zs = [*lens.surfaces, lens.image]
+    thick = np.asarray(lens.thickness, np.float64)
+    for i in range(len(blocks) - 1):
+        a, b = blocks[i], blocks[i + 1]
+        if a.type == "COORDBRK" or a.glas is not None and a.glas.tokens[1].upper() == "MIRROR":
+            return  # the frames after a fold or a break are not the axis's
+        if (a.type not in UNFOLDED_TYPES or b.type not in UNFOLDED_TYPES or not a.diam
+                or not b.diam or a.diam[0] <= 0 or b.diam[0] <= 0):
+            continue
+        gap = float(thick[i])
+        if gap < 0 or gap == 0 and _dummy(lens, i + 1):
+            continue  # jaxlens's tracer goes back along the ray there, as Zemax does
+        h_min = min(a.diam[0], b.diam[0]) * unit
+        # An automatic DIAM (flag 0) is a height the beam reaches; a fixed one may be a
+        # mount's, larger than the beam. Across a zero gap any ray off the axis crosses
+        # where the surfaces part at once, so a small height is tried there too.
+        auto = {0, None}  # a DIAM without its flag is automatic, Zemax's default
+        heights = ([h_min] if a.diam[1] in auto or b.diam[1] in auto else []) + (
+            [1e-3 * h_min] if gap == 0 else [])
+        hit = None
+        for h in heights:
+            za, zb = _sags(zs[i], h), _sags(zs[i + 1], h)
+            past = [p - (gap + q) for p, q in zip(za, zb, strict=True)]
+            if all(math.isfinite(v) for v in past) and max(past) > CROSSING_TOL_MM:
+                hit = h, za, zb, past
+                break
+        if hit is None:
+            continue
+        h, za, zb, past = hit
+        k = int(np.argmax(past))
+        names = ("surface " + str(i + 1), "the image" if i + 2 == len(blocks)
+                 else "surface " + str(i + 2))
+        report(strict, f"{a.line.path}:{a.line.number}: {names[0]} reaches past {names[1]} "
+               f"within the semi-diameters the file gives (DIAM {a.diam[0]:g} and "
+               f"{b.diam[0]:g}): at a height of {h:.6g} mm its sag is {za[k]:.6g} mm, beyond "
+               f"{names[1]}'s {gap:.6g} mm + {zb[k]:.6g} mm, so rays there meet {names[1]} "
+               f"first. Zemax traces them back to it (a negative distance); jaxlens stops "
+               f"them, so rays that pass in Zemax are lost in jaxlens (widen the gap, or "
+               f"check the rays with jaxlens.trace)")
+
+
+def _dummy(lens: Lens, k: int) -> bool:
+    """Surface k (0-based; ``num_surfaces`` for the image) has the same index on both sides
+    at every wavelength and does not reflect: the tracer's dummy surface."""
+    if k >= len(lens.surfaces):
+        return True
+    if k in lens.mirrors:
+        return False
+    before = lens.materials[k - 1] if k > 0 else lens.object_material
+    wl = lens.wavelengths
+    return bool(np.all(np.asarray(before.index(wl)) == np.asarray(lens.materials[k].index(wl))))
+
+
+def _sags(surface, h: float) -> list[float]:
+    """The surface's sag (mm) at height h along y and along x; NaN where h is beyond it."""
+    z, inside = surface.sag(jnp.asarray([0.0, h]), jnp.asarray([h, 0.0]))
+    return np.where(np.asarray(inside), np.asarray(z, np.float64), np.nan).tolist()
