@@ -11,6 +11,7 @@ import numpy as np
 import pytest
 
 import jaxlens as jl
+from jaxlens.imaging import psf as psf_models
 from jaxlens.optics import checks
 
 COOKE = jl.zoo.cooke_triplet()
@@ -252,3 +253,13 @@ def test_benchmark_clis_bound_their_counts(module, args, text, capsys):
     assert e.value.code == 2
     err = capsys.readouterr().err.strip().splitlines()
     assert len(err) == 1 and re.search(text, err[0]), err
+
+
+@pytest.mark.parametrize("model", [psf_models.GeometricPSF, psf_models.CoherentPSF])
+def test_a_psf_model_pupil_is_bounded_above(model):
+    """A PSF traces pupil² rays at once: GeometricPSF(pupil=10**6) was built, and a psf with it
+    asked for 10**12 rays."""
+    with pytest.raises(ValueError, match=rf"^{model.__name__}: pupil \(rays per side\) must be "
+                                         r"an int >= 2, got 4097 \(at most 4096: pupil² rays"):
+        model(pupil=4097)
+    assert model(pupil=4096).pupil == 4096

@@ -147,9 +147,10 @@ class AbstractPSFModel(eqx.Module):
 
     def check(self, caller: str) -> None:
         """Refuse a pupil or overfill outside their range, naming the caller."""
-        if not isinstance(self.pupil, int) or self.pupil < 2:
+        side = math.isqrt(checks.MAX_PUPIL_POINTS)  # pupil² rays are traced at once
+        if not isinstance(self.pupil, int) or not 2 <= self.pupil <= side:
             raise ValueError(f"{caller}: pupil (rays per side) must be an int >= 2, got "
-                             f"{self.pupil!r}")
+                             f"{self.pupil!r} (at most {side}: pupil² rays are traced at once)")
         checks.number(self.overfill, "overfill", caller, lo=0, lo_open=True,
                       unit="(beam radius over the entrance-pupil radius)")
         largest = self.largest_overfill()
