@@ -39,6 +39,14 @@ MAX_WIDTH = 1024
 """Most channels of NAFNet's first level (its widths are 16 to 64; the deepest level has
 width · 2**levels channels and weights growing as their square)."""
 
+MAX_LEVELS = 8
+"""Most levels of NAFNet's UNet (``len(enc_blocks)``; the paper's has 4). Each level halves the
+image and doubles the channels, so 20 levels of width 16 asked for 16·2**20 channels (a
+MemoryError); an image needs a side of 2**levels pixels."""
+
+MAX_BLOCKS = 256
+"""Most NAFBlocks at one level or at the bottleneck (the paper's deepest level has 28)."""
+
 
 def _generator(key) -> np.random.Generator:
     """A NumPy generator seeded from a JAX PRNG key (or the generator itself).
@@ -322,11 +330,13 @@ class NAFNet(eqx.Module):
         for arg, v, lo, hi in (("in_channels", in_channels, 1, checks.MAX_SAMPLES),
                                ("out_channels", out_channels, 1, checks.MAX_SAMPLES),
                                ("width", width, 1, MAX_WIDTH),
-                               ("middle_blocks", middle_blocks, 0, None)):
+                               ("middle_blocks", middle_blocks, 0, MAX_BLOCKS),
+                               ("levels (len(enc_blocks))", len(enc_blocks), 0, MAX_LEVELS)):
             checks.number(v, arg, "NAFNet", lo=lo, hi=hi, integer=True)
         for arg, v in (("enc_blocks", enc_blocks), ("dec_blocks", dec_blocks)):
             for n in v:
-                checks.number(n, arg, "NAFNet", lo=0, integer=True, unit="blocks per level")
+                checks.number(n, arg, "NAFNet", lo=0, hi=MAX_BLOCKS, integer=True,
+                              unit="blocks per level")
         checks.float_dtype(dtype, "NAFNet")
         dtype = dtype or jnp.result_type(float)
         gen = _generator(key)

@@ -263,3 +263,18 @@ def test_a_psf_model_pupil_is_bounded_above(model):
                                          r"an int >= 2, got 4097 \(at most 4096: pupil² rays"):
         model(pupil=4097)
     assert model(pupil=4096).pupil == 4096
+
+
+@pytest.mark.parametrize("kw, match", [
+    (dict(enc_blocks=(1,) * 20, dec_blocks=(1,) * 20),
+     r"levels \(len\(enc_blocks\)\) must be .*\[0, 8\]"),
+    (dict(middle_blocks=10**6), r"middle_blocks must be .*\[0, 256\]"),
+    (dict(enc_blocks=(1, 10**6), dec_blocks=(1, 1)), r"enc_blocks must be .*\[0, 256\] blocks"),
+])
+def test_nafnet_depth_is_bounded(kw, match):
+    """20 levels of width 16 asked for 16·2**20 channels (a MemoryError); a million blocks
+    built for hours."""
+    from jaxlens.nets import NAFNet
+
+    with pytest.raises(ValueError, match=r"^NAFNet: " + match):
+        NAFNet(key=np.random.default_rng(0), **kw)
