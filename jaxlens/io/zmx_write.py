@@ -427,12 +427,12 @@ def notes(lens: Lens, wl: np.ndarray) -> list[str]:
            f"diameter"]
     media = [lens.object_material, *lens.materials]
     for k, m in enumerate(media):
-        if isinstance(m, Air):
+        n = lensfile.index_record(m, wl)  # the JSON file's record of the same medium
+        if n is None:  # air
             continue
-        n = np.asarray(m.index(np.asarray(wl, np.float64)), np.float64)
         name = getattr(m, "name", "") or type(m).__name__
         out.append(f"NOTE 0 jaxlens: the medium after SURF {k} ({name}) has n = "
-                   f"{' '.join(repr(float(v)) for v in n)} at WAVM 1..{len(wl)}")
+                   f"{' '.join(repr(v) for v in n)} at WAVM 1..{len(wl)}")
     out += [f"NOTE 0 {ln}".rstrip() for ln in lens.description.splitlines()]
     return out
 
