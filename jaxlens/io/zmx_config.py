@@ -19,7 +19,10 @@ Applied (lengths in the file's lens units, as on the surfaces): ``THIC`` (surfac
 ``DISZ``), ``CRVT`` (curvature), ``CONN`` (conic), ``GLSS`` (glass by name; ``""`` is air),
 ``SDIA`` (semi-diameter, where it clips: a fixed ``DIAM``), ``APER`` (the system aperture
 value, in the meaning of the file's ``ENPD``/``FNUM``/``OBNA`` line), ``WAVE`` (wavelength n,
-µm), ``XFIE``/``YFIE`` (field n), ``STPS`` (the stop surface). Ignored: ``MOFF`` (an unused
+µm), ``XFIE``/``YFIE`` (field n), ``STPS`` (the stop surface), Zemax 2006's ``PARn``
+(``PARM n`` of the surface; ``zmx_keywords.PARAMETER_OPERAND``), after which the parameter
+pickups (``PPAR``) of the configuration's surfaces are solved again, in surface order, as
+Zemax solves them. Ignored: ``MOFF`` (an unused
 row), ``LTTL`` and ``MCOM`` (titles, comments), and the weights ``FLWT``/``WLWT`` (a ``Lens``
 holds none; a warning where they change). The vignetting factors ``FVDX``, ``FVDY``,
 ``FVCX``, ``FVCY``, ``FVAN`` of field n replace that field's value on the file's ``VDXN`` …
@@ -37,6 +40,7 @@ import warnings
 import numpy as np
 
 from .zmx_common import ZmxWarning, report
+from .zmx_keywords import PARAMETER_OPERAND
 from .zmx_parse import ZmxFile, ZmxLine
 
 NO_OPTICS = frozenset({"MOFF", "LTTL", "MCOM"})
@@ -83,7 +87,7 @@ def _held_configuration(f: ZmxFile, n: int) -> int:
     if n == 1:
         return 1
     try:
-        ops = [op for op in operands(f, n) if op.name in _HELD]
+        ops = [op for op in operands(f, n) if _held(op.name)]
         held = [c for c in range(1, n + 1) if all(_holds(f, op, c) for op in ops)]
     except ValueError:
         return 1
@@ -91,6 +95,10 @@ def _held_configuration(f: ZmxFile, n: int) -> int:
 
 
 _HELD = ("THIC", "CRVT", "CONN")
+
+
+def _held(name: str) -> bool:
+    return name in _HELD or PARAMETER_OPERAND.fullmatch(name) is not None
 
 
 def _holds(f: ZmxFile, op: Operand, c: int) -> bool:
@@ -101,6 +109,10 @@ def _holds(f: ZmxFile, op: Operand, c: int) -> bool:
     value, ln = op.values[c]
     v = _number(value, ln)
     s = _surface(f, op, ln)
+    m = PARAMETER_OPERAND.fullmatch(op.name)
+    if m:
+        have = s.parm.get(int(m.group(1)), (0.0, None))[0]
+        return math.isclose(v, have, rel_tol=1e-9, abs_tol=1e-12)
     have = {"THIC": s.disz, "CRVT": s.curv, "CONN": s.coni}[op.name]
     if op.name == "THIC" and op.param == 0 and v >= _OBJECT_INFINITY and math.isinf(have):
         return True
@@ -181,6 +193,7 @@ def select(f: ZmxFile, config: int | None, strict: bool) -> int:
     if chosen == active:  # the surfaces hold it; with one configuration its rows repeat them
         _check_active(f, ops, active, strict)
         return chosen
+    changed: set = set()  # surfaces whose parameters this configuration sets
     for op in ops:
         if op.name in NO_OPTICS:
             continue
@@ -190,6 +203,10 @@ def select(f: ZmxFile, config: int | None, strict: bool) -> int:
         value, ln = op.values[chosen]
         if op.name in _APPLY:
             _APPLY[op.name](f, op, value, ln, active)
+            continue
+        if PARAMETER_OPERAND.fullmatch(op.name):
+            _parameter(f, op, value, ln)
+            changed.add(op.param)
             continue
         before = op.values.get(active, (None, None))[0]
         if before is not None and _same(value, before):
@@ -204,7 +221,40 @@ def select(f: ZmxFile, config: int | None, strict: bool) -> int:
         raise ln.error(f"configuration {chosen} sets {op.name} {op.param} to {value} "
                        f"(configuration {active}, the surfaces': {before}); {op.name} is "
                        f"{what}, so jaxlens cannot read configuration {chosen}")
+    _parameter_pickups(f, changed)
     return chosen
+
+
+def _parameter(f, op, value, ln):
+    """``PARn s c value``: surface s's ``PARM n`` in this configuration."""
+    s = _surface(f, op, ln)
+    n = int(PARAMETER_OPERAND.fullmatch(op.name).group(1))
+    s.parm[n] = (_number(value, ln), ZmxLine(ln.path, ln.number, f"PARM {n} {value}"))
+
+
+def _parameter_pickups(f: ZmxFile, changed: set) -> None:
+    """Solve the parameter pickups (``PPAR n src scale offset column``: ``PARM n`` = scale ×
+    surface src's ``PARM n`` + offset) again after a configuration set parameters of the
+    surfaces in ``changed``, in surface order (a pickup of a pickup follows its source). The
+    file's values hold the saved configuration's solution; a pickup whose source nothing
+    changed keeps it. A pickup from another column (last value ≠ 0) of a changed surface is
+    refused: which parameter it reads is not known."""
+    for s in f.surfs:
+        for n, ln in sorted(s.ppar.items()):
+            src = ln.int(2, "PPAR source surface", lo=0)
+            if src not in changed:
+                continue
+            if not 0 <= src < len(f.surfs):
+                raise ln.error(f"PPAR picks up surface {src}; the file has surfaces "
+                               f"0..{len(f.surfs) - 1}")
+            if len(ln.tokens) > 5 and ln.float(5, "PPAR column") != 0:
+                raise ln.error(f"a parameter pickup from another column ({ln.tokens[5]}) of a "
+                               f"surface this configuration changes; jaxlens cannot tell "
+                               f"which parameter it reads")
+            base = f.surfs[src].parm.get(n, (0.0, None))[0]
+            v = ln.float(3, "PPAR scale factor") * base + ln.float(4, "PPAR offset")
+            s.parm[n] = (v, ZmxLine(ln.path, ln.number, f"PARM {n} {v!r}"))
+            changed.add(s.number)
 
 
 def _same(a: str, b: str) -> bool:
@@ -353,7 +403,7 @@ def _check_active(f: ZmxFile, ops: list[Operand], active: int, strict: bool) -> 
     a vignetting row, FVDX … FVAN, against the file's VDXN … VANN lines) says otherwise,
     the active number (MNUM's second value) is not what it seems."""
     for op in ops:
-        if op.name not in ("THIC", "CRVT", "CONN", *VIGNETTING) or active not in op.values:
+        if (not _held(op.name) and op.name not in VIGNETTING) or active not in op.values:
             continue
         value, ln = op.values[active]
         v = _number(value, ln)
@@ -371,8 +421,10 @@ def _check_active(f: ZmxFile, ops: list[Operand], active: int, strict: bool) -> 
                 return
             continue
         if not _holds(f, op, active):
-            have = {"THIC": "disz", "CRVT": "curv", "CONN": "coni"}[op.name]
-            have = getattr(_surface(f, op, ln), have)
+            m = PARAMETER_OPERAND.fullmatch(op.name)
+            sf = _surface(f, op, ln)
+            have = sf.parm.get(int(m.group(1)), (0.0, None))[0] if m else getattr(
+                sf, {"THIC": "disz", "CRVT": "curv", "CONN": "coni"}[op.name])
             report(strict, f"{ln.path}:{ln.number}: {op.name} {op.param} of configuration "
                            f"{active}, the active one (MNUM), is {value}, but surface "
                            f"{op.param} holds {have:g}; jaxlens reads the surfaces")
