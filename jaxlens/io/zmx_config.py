@@ -21,8 +21,9 @@ Applied (lengths in the file's lens units, as on the surfaces): ``THIC`` (surfac
 value, in the meaning of the file's ``ENPD``/``FNUM``/``OBNA`` line), ``WAVE`` (wavelength n,
 µm), ``XFIE``/``YFIE`` (field n), ``STPS`` (the stop surface), Zemax 2006's ``PARn``
 (``PARM n`` of the surface; ``zmx_keywords.PARAMETER_OPERAND``), after which the parameter
-pickups (``PPAR``) of the configuration's surfaces are solved again, in surface order, as
-Zemax solves them. Ignored: ``MOFF`` (an unused
+pickups (``PPAR``) and curvature pickups (``CURV c 4 src scale``) whose source the
+configuration changed are solved again, in surface order (the surfaces hold the solution for
+the saved configuration only). Ignored: ``MOFF`` (an unused
 row), ``LTTL`` and ``MCOM`` (titles, comments), and the weights ``FLWT``/``WLWT`` (a ``Lens``
 holds none; a warning where they change). The vignetting factors ``FVDX``, ``FVDY``,
 ``FVCX``, ``FVCY``, ``FVAN`` of field n replace that field's value on the file's ``VDXN`` …
@@ -194,6 +195,7 @@ def select(f: ZmxFile, config: int | None, strict: bool) -> int:
         _check_active(f, ops, active, strict)
         return chosen
     changed: set = set()  # surfaces whose parameters this configuration sets
+    curved: set = set()  # surfaces whose curvature it sets (CRVT)
     for op in ops:
         if op.name in NO_OPTICS:
             continue
@@ -203,6 +205,8 @@ def select(f: ZmxFile, config: int | None, strict: bool) -> int:
         value, ln = op.values[chosen]
         if op.name in _APPLY:
             _APPLY[op.name](f, op, value, ln, active)
+            if op.name == "CRVT":
+                curved.add(op.param)
             continue
         if PARAMETER_OPERAND.fullmatch(op.name):
             _parameter(f, op, value, ln)
@@ -222,7 +226,40 @@ def select(f: ZmxFile, config: int | None, strict: bool) -> int:
                        f"(configuration {active}, the surfaces': {before}); {op.name} is "
                        f"{what}, so jaxlens cannot read configuration {chosen}")
     _parameter_pickups(f, changed)
+    _curvature_pickups(f, curved)
     return chosen
+
+
+def _curvature_pickups(f: ZmxFile, curved: set) -> None:
+    """Solve the curvature pickups (``CURV c 4 src scale …``: solve type 4) of surfaces whose
+    source surface this configuration gave another curvature (``CRVT``), in surface order.
+    With a scale of ±1 the picked-up curvature is scale × the source's (a radius pickup and a
+    curvature pickup agree then; the files seen use -1, a lens's two faces kept symmetric).
+    Another scale is refused: whether Zemax scales the radius or the curvature is not known
+    here, and the two differ."""
+    for s in f.surfs:
+        ln = s.curv_line
+        if ln is None or len(ln.tokens) < 5 or s.number in curved:
+            continue
+        try:
+            solve = float(ln.tokens[2])
+        except ValueError:
+            continue
+        if solve != 4:
+            continue
+        src = ln.int(3, "curvature pickup's source surface", lo=0)
+        if src not in curved:
+            continue
+        if not src < len(f.surfs):
+            raise ln.error(f"the curvature pickup names surface {src}; the file has surfaces "
+                           f"0..{len(f.surfs) - 1}")
+        scale = ln.float(4, "curvature pickup's scale factor")
+        if abs(scale) != 1:
+            raise ln.error(f"a curvature pickup of scale {ln.tokens[4]} from surface {src}, "
+                           f"whose curvature this configuration changes (CRVT); jaxlens "
+                           f"cannot tell whether Zemax scales the radius or the curvature")
+        s.curv = scale * f.surfs[src].curv
+        curved.add(s.number)
 
 
 def _parameter(f, op, value, ln):

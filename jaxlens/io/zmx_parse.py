@@ -92,7 +92,7 @@ class ZmxSurface:
     disz_line: ZmxLine | None = None
     coni: float = 0.0
     parm: dict = field(default_factory=dict)  # index -> (value, line)
-    ppar: dict = field(default_factory=dict)  # index -> its pickup line (PPAR n from scale offset col)
+    ppar: dict = field(default_factory=dict)  # index -> its pickup line (PPAR)
     xdat: dict = field(default_factory=dict)
     glas: ZmxLine | None = None
     stop: bool = False
