@@ -241,3 +241,27 @@ def test_the_stock_lens_zoom_meets_its_design_focal_lengths(config, target):
     # gives them to 3e-7. optiland 0.6.3's B270 (nd 1.5229977) gives 750.126 mm.
     lens = zmx.loads(_zoom4(), "zoom.zmx", config=config)
     assert _efl(lens) == pytest.approx(target, rel=1e-6)
+
+
+def test_check_corpus_gives_each_configurations_efl(tmp_path):
+    from helpers import check_corpus_tool
+
+    tool = check_corpus_tool()
+    path = tmp_path / "zoom.zmx"
+    path.write_text(_zoom4())
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")
+        rec = tool.check_file(str(path))
+    assert rec["active_config"] == 1
+    assert [c for c, _, _ in rec["configs"]] == [1, 2, 3, 4]
+    assert [e for _, e, _ in rec["configs"]] == pytest.approx([750, 1000, 1500, 2000], rel=1e-6)
+    assert "configurations (the surfaces hold 1), EFL: 1: 750.0" in tool.table([rec])
+    scan = tmp_path / "scan.zmx"
+    scan.write_text(_scanner().replace("PAR3   3 ", "PRAM   3 "))
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")
+        rec = tool.check_file(str(scan))
+    # PRAM rows are not applied: configuration 1 (taken for the surfaces') opens, the others
+    # are refused, each naming its row.
+    refused = [m for _, e, m in rec["configs"] if e is None]
+    assert len(refused) == 3 and all("sets PRAM 3" in m for m in refused)
