@@ -265,3 +265,32 @@ def test_check_corpus_gives_each_configurations_efl(tmp_path):
     # are refused, each naming its row.
     refused = [m for _, e, m in rec["configs"] if e is None]
     assert len(refused) == 3 and all("sets PRAM 3" in m for m in refused)
+
+
+# ------------------------------------------------------------ thickness pickups (PZUP)
+
+def _pair_of_plates(pzup="2 1 0 0", rows=("10", "14")):
+    # Two BK7 plates; the second's thickness picks up the gap before it (PZUP, as in the Nikon
+    # 105 mm file of round 7: "PZUP 6.0 1 0 0"), a THIC row changes the gap in configuration 2.
+    g = "  GLAS N-BK7 0 0 0 0 0 0 0 0 0 0 \n"
+    t = _HEAD + "SURF 0\n  TYPE STANDARD\n  DISZ INFINITY\n"
+    t += "SURF 1\n  STOP\n  TYPE STANDARD\n  CURV 2.0E-2\n  DISZ 3\n" + g
+    t += "SURF 2\n  TYPE STANDARD\n  DISZ 10\n"
+    t += "SURF 3\n  TYPE STANDARD\n  DISZ 10\n" + g + f"  PZUP {pzup}\n"
+    t += "SURF 4\n  TYPE STANDARD\n  DISZ 40\n"
+    t += "SURF 5\n  TYPE STANDARD\n  DISZ 0\n"
+    t += "MNUM 2 1\n" + "".join(f"THIC   2 {c:>3} {v} 0 0 0 1 1 1 0 0\n"
+                                for c, v in enumerate(rows, 1))
+    return _curved(t)
+
+
+@pytest.mark.parametrize("config, gap", [(1, 10.0), (2, 14.0)])
+def test_a_thickness_pickup_follows_its_source_in_another_configuration(config, gap):
+    lens = zmx.loads(_pair_of_plates(), "plates.zmx", config=config, strict=True)
+    assert [float(t) for t in lens.thickness[1:3]] == [gap, gap]
+
+
+def test_a_thickness_pickup_other_than_a_copy_is_refused_where_it_must_be_solved():
+    with pytest.raises(ValueError, match=r"plates\.zmx:\d+: a thickness pickup from surface 2"):
+        zmx.loads(_pair_of_plates(pzup="2 2 0 0"), "plates.zmx", config=2)
+    zmx.loads(_pair_of_plates(pzup="2 2 0 0"), "plates.zmx", config=1)

@@ -18,18 +18,18 @@ surfaces with its operands' values put in their place.
 Applied (lengths in the file's lens units, as on the surfaces): ``THIC`` (surface thickness,
 ``DISZ``), ``CRVT`` (curvature), ``CONN`` (conic), ``GLSS`` (glass by name; ``""`` is air),
 ``SDIA`` (semi-diameter, where it clips: a fixed ``DIAM``), ``APER`` (the system aperture
-value, in the meaning of the file's ``ENPD``/``FNUM``/``OBNA`` line), ``WAVE`` (wavelength n,
-µm), ``XFIE``/``YFIE`` (field n), ``STPS`` (the stop surface), Zemax 2006's ``PARn``
+value, in the meaning of the file's ``ENPD``/``FNUM``/``OBNA`` line), ``WAVE`` (wavelength
+n, µm), ``XFIE``/``YFIE`` (field n), ``STPS`` (the stop surface), Zemax 2006's ``PARn``
 (``PARM n`` of the surface; ``zmx_keywords.PARAMETER_OPERAND``), after which the parameter
-pickups (``PPAR``) and curvature pickups (``CURV c 4 src scale``) whose source the
-configuration changed are solved again, in surface order (the surfaces hold the solution for
-the saved configuration only). Ignored: ``MOFF`` (an unused
-row), ``LTTL`` and ``MCOM`` (titles, comments), and the weights ``FLWT``/``WLWT`` (a ``Lens``
-holds none; a warning where they change). The vignetting factors ``FVDX``, ``FVDY``,
-``FVCX``, ``FVCY``, ``FVAN`` of field n replace that field's value on the file's ``VDXN`` …
-``VANN`` lines (``Lens.vignetting``). Any other operand whose value in the chosen configuration
-differs from the active one's (``PRAM``, ``TEMP``, …) is refused, naming the line: the lens
-would silently be another one.
+pickups (``PPAR``), curvature pickups (``CURV c 4 src scale``) and thickness pickups
+(``PZUP``) whose source the configuration changed are solved again, in surface order (the
+surfaces hold the solution for the saved configuration only). Ignored: ``MOFF`` (an unused
+row), ``LTTL`` and ``MCOM`` (titles, comments), and the weights ``FLWT``/``WLWT`` (a
+``Lens`` holds none; a warning where they change). The vignetting factors ``FVDX``,
+``FVDY``, ``FVCX``, ``FVCY``, ``FVAN`` of field n replace that field's value on the file's
+``VDXN`` … ``VANN`` lines (``Lens.vignetting``). Any other operand whose value in the chosen
+configuration differs from the active one's (``PRAM``, ``TEMP``, …) is refused, naming the
+line: the lens would silently be another one.
 """
 
 from __future__ import annotations
@@ -196,6 +196,7 @@ def select(f: ZmxFile, config: int | None, strict: bool) -> int:
         return chosen
     changed: set = set()  # surfaces whose parameters this configuration sets
     curved: set = set()  # surfaces whose curvature it sets (CRVT)
+    thick: set = set()  # surfaces whose thickness it sets (THIC)
     for op in ops:
         if op.name in NO_OPTICS:
             continue
@@ -207,6 +208,8 @@ def select(f: ZmxFile, config: int | None, strict: bool) -> int:
             _APPLY[op.name](f, op, value, ln, active)
             if op.name == "CRVT":
                 curved.add(op.param)
+            elif op.name == "THIC":
+                thick.add(op.param)
             continue
         if PARAMETER_OPERAND.fullmatch(op.name):
             _parameter(f, op, value, ln)
@@ -227,7 +230,34 @@ def select(f: ZmxFile, config: int | None, strict: bool) -> int:
                        f"{what}, so jaxlens cannot read configuration {chosen}")
     _parameter_pickups(f, changed)
     _curvature_pickups(f, curved)
+    _thickness_pickups(f, thick)
     return chosen
+
+
+def _thickness_pickups(f: ZmxFile, thick: set) -> None:
+    """Re-solve the thickness pickups (``PZUP src scale offset …``) of surfaces whose source
+    this configuration gave another thickness (``THIC``), in surface order. Only the plain
+    copy (scale 1, offset 0, the one layout seen in a real file) is applied: for others the
+    order of scale and offset on the line is not known here, and the pickup is refused with
+    its line where it must be solved."""
+    for s in f.surfs:
+        ln = s.pzup
+        if ln is None or s.number in thick:
+            continue
+        src = ln.int(1, "PZUP source surface", lo=0)
+        if src not in thick:
+            continue
+        if not src < len(f.surfs):
+            raise ln.error(f"the thickness pickup names surface {src}; the file has surfaces "
+                           f"0..{len(f.surfs) - 1}")
+        rest = [ln.float(i, "PZUP value") for i in range(2, min(len(ln.tokens), 5))]
+        if rest[:3] != [1.0, 0.0, 0.0][:len(rest)]:
+            raise ln.error(f"a thickness pickup from surface {src} other than a plain copy "
+                           f"(scale 1, offset 0), whose thickness this configuration changes "
+                           f"(THIC); jaxlens cannot tell how Zemax applies its values")
+        s.disz = f.surfs[src].disz
+        s.disz_line = ZmxLine(ln.path, ln.number, f"DISZ {s.disz!r}")
+        thick.add(s.number)
 
 
 def _curvature_pickups(f: ZmxFile, curved: set) -> None:

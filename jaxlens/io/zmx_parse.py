@@ -32,6 +32,7 @@ SURFACE_KEYS = {
     "SQOB",
     "ELOB",
     "PPAR",
+    "PZUP",
 }
 SHAPES = {"SQAP": ("rect", False), "ELAP": ("ellipse", False), "SQOB": ("rect", True),
           "ELOB": ("ellipse", True)}  # keyword -> (Aperture shape, blocks)
@@ -93,6 +94,7 @@ class ZmxSurface:
     coni: float = 0.0
     parm: dict = field(default_factory=dict)  # index -> (value, line)
     ppar: dict = field(default_factory=dict)  # index -> its pickup line (PPAR)
+    pzup: ZmxLine | None = None  # a thickness pickup (PZUP src scale offset column)
     xdat: dict = field(default_factory=dict)
     glas: ZmxLine | None = None
     stop: bool = False
@@ -232,6 +234,12 @@ def surface_line(s: ZmxSurface, key: str, ln: ZmxLine) -> None:
         ln.float(3, "PPAR scale factor")
         ln.float(4, "PPAR offset")
         s.ppar[i] = ln
+    elif key == "PZUP":
+        # PZUP s scale offset column: the thickness picked up from surface s (Zemax 2009's
+        # Nikon 105 mm: "PZUP 6.0 1 0 0" on a surface whose DISZ equals surface 6's). The
+        # file's DISZ holds the solved value; only a configuration changing s re-solves it.
+        ln.int(1, "PZUP source surface", lo=0)
+        s.pzup = ln
     elif key == "GLAS":
         if len(ln.tokens) < 2:
             raise ln.error("GLAS needs a glass name")
