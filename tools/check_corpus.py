@@ -1,21 +1,23 @@
 """Run a folder of Zemax ``.zmx`` files through jaxlens (and optiland, where installed).
 
-For each file: does jaxlens load it (or refuse it, with the message), its image-space EFL
-in mm (|n′|/Φ; optiland reports n′/Φ in the file's lens units, converted here to mm with the
+For each file: does jaxlens load it (or refuse it, with the message), its image-space EFL in
+mm (|n′|/Φ; optiland reports n′/Φ in the file's lens units, converted here to mm with the
 file's UNIT line; n′/Φ is negative after an odd number of mirrors, and the comparison takes
-that sign into account), whether ``load → save → load`` is exact, and, with
-optiland installed: optiland's EFL of the original file and of the file jaxlens wrote, the
-relative EFL difference, and whether optiland reads the written file with jaxlens's clipping
-(CLAP radii) and image-space medium. Where a file has Zemax 2006 single-value header lines
-(which optiland 0.6.3 fails on) or ``GLAS AIR`` lines (optiland's AIR has index 1.000277,
-Zemax's and jaxlens's 1), optiland reads a copy without them, and the table says so; a
-``TOROIDAL`` surface's PARM lines move one up in that copy (optiland 0.6.3 reads Zemax's
-PARM n from PARM n+1). Two infinite EFLs (no power: a window, a flat mirror) agree. A file
-with an afocal image space (FTYP's seventh value 1, ``Lens.afocal_image``) has an EFL that
-is the inverse of a residual power, not a design value: its difference is shown but not
-counted among the agreements. Nor is the EFL of a file with an r² term (EVENASPH PARM 1,
-TOROIDAL PARM 2 ≠ 0): Zemax and jaxlens count it in the paraxial power (c + 2a₁), optiland
-0.6.3's paraxial trace leaves it out (tests/test_paraxial_asphere.py).
+that sign into account), whether ``load → save → load`` is exact, and, with optiland
+installed: optiland's EFL of the original file and of the file jaxlens wrote, the relative
+EFL difference, and whether optiland reads the written file with jaxlens's clipping (CLAP
+radii) and image-space medium. A multi-configuration file's EFL is also given in each
+configuration (jaxlens alone; optiland reads no configuration rows). Where a file has Zemax
+2006 single-value header lines (which optiland 0.6.3 fails on) or ``GLAS AIR`` lines
+(optiland's AIR has index 1.000277, Zemax's and jaxlens's 1), optiland reads a copy without
+them, and the table says so; a ``TOROIDAL`` surface's PARM lines move one up in that copy
+(optiland 0.6.3 reads Zemax's PARM n from PARM n+1). Two infinite EFLs (no power: a window,
+a flat mirror) agree. A file with an afocal image space (FTYP's seventh value 1,
+``Lens.afocal_image``) has an EFL that is the inverse of a residual power, not a design
+value: its difference is shown but not counted among the agreements. Nor is the EFL of a
+file with an r² term (EVENASPH PARM 1, TOROIDAL PARM 2 ≠ 0): Zemax and jaxlens count it in
+the paraxial power (c + 2a₁), optiland 0.6.3's paraxial trace leaves it out
+(tests/test_paraxial_asphere.py).
 
     python tools/check_corpus.py /tmp/corpus            # a table
     python tools/check_corpus.py /tmp/corpus --json     # one JSON record a file
@@ -52,7 +54,7 @@ jax.config.update("jax_enable_x64", True)
 import numpy as np  # noqa: E402
 
 import jaxlens as jl  # noqa: E402
-from jaxlens.io.zmx import decode  # noqa: E402
+from jaxlens.io.zmx import configurations, decode, load_zmx  # noqa: E402
 from jaxlens.io.zmx_parse import UNITS  # noqa: E402
 
 try:  # optional
@@ -208,6 +210,7 @@ def check_file(path: str, strict: bool = False, unknown_glass: str = "error") ->
         rec["odd_mirrors"] = len(lens.mirrors) % 2 == 1
         rec["afocal"] = bool(getattr(lens, "afocal_image", False))
         rec["r2_terms"] = r2_term_surfaces(path)
+        rec.update(_configurations(path, strict, unknown_glass))
         with tempfile.TemporaryDirectory() as d:
             out = os.path.join(d, "written.zmx")
             with warnings.catch_warnings():
@@ -227,6 +230,27 @@ def check_file(path: str, strict: bool = False, unknown_glass: str = "error") ->
             if same is not None:
                 rec["rel_diff_same_n"] = efl_rel_diff(rec["efl"], sign * same)
     return rec
+
+
+def _configurations(path: str, strict: bool, unknown_glass: str) -> dict:
+    """A multi-configuration file's EFL in each configuration (jaxlens alone: optiland reads
+    no configuration rows), or the refusal; {} for a file of one configuration."""
+    try:
+        info = configurations(path)
+    except ValueError as e:
+        return {"active_config": None, "configs": [(None, None, str(e))]}
+    if info["count"] < 2:
+        return {}
+    out = []
+    for c in range(1, info["count"] + 1):
+        try:
+            with warnings.catch_warnings():
+                warnings.simplefilter("ignore")
+                lens = load_zmx(path, strict=strict, unknown_glass=unknown_glass, config=c)
+            out.append((c, float(jl.paraxial_data(lens).efl_image_space), None))
+        except ValueError as e:
+            out.append((c, None, str(e)))
+    return {"active_config": info["active"], "configs": out}
 
 
 def _efl_with_our_media(optic, lens, path: str):
@@ -350,6 +374,10 @@ def table(records: list[dict]) -> str:
         if r.get("afocal"):
             rows.append("    afocal image space (FTYP): the EFL is a residual power's inverse, "
                         "not compared")
+        if r.get("configs"):
+            each = "; ".join(f"{c}: {_fmt(e)}" if e is not None else f"{c}: refused ({m[:80]})"
+                             for c, e, m in r["configs"])
+            rows.append(f"    configurations (the surfaces hold {r['active_config']}), EFL: {each}")
         if r.get("r2_terms") and have_optiland:
             rows.append(f"    r² terms on surface {', '.join(map(str, r['r2_terms']))}: optiland's "
                         "paraxial trace leaves them out, EFL not compared")

@@ -18,14 +18,18 @@ surfaces with its operands' values put in their place.
 Applied (lengths in the file's lens units, as on the surfaces): ``THIC`` (surface thickness,
 ``DISZ``), ``CRVT`` (curvature), ``CONN`` (conic), ``GLSS`` (glass by name; ``""`` is air),
 ``SDIA`` (semi-diameter, where it clips: a fixed ``DIAM``), ``APER`` (the system aperture
-value, in the meaning of the file's ``ENPD``/``FNUM``/``OBNA`` line), ``WAVE`` (wavelength n,
-µm), ``XFIE``/``YFIE`` (field n), ``STPS`` (the stop surface). Ignored: ``MOFF`` (an unused
-row), ``LTTL`` and ``MCOM`` (titles, comments), and the weights ``FLWT``/``WLWT`` (a ``Lens``
-holds none; a warning where they change). The vignetting factors ``FVDX``, ``FVDY``,
-``FVCX``, ``FVCY``, ``FVAN`` of field n replace that field's value on the file's ``VDXN`` …
-``VANN`` lines (``Lens.vignetting``). Any other operand whose value in the chosen configuration
-differs from the active one's (``PRAM``, ``TEMP``, …) is refused, naming the line: the lens
-would silently be another one.
+value, in the meaning of the file's ``ENPD``/``FNUM``/``OBNA`` line), ``WAVE`` (wavelength
+n, µm), ``XFIE``/``YFIE`` (field n), ``STPS`` (the stop surface), Zemax 2006's ``PARn``
+(``PARM n`` of the surface; ``zmx_keywords.PARAMETER_OPERAND``), after which the parameter
+pickups (``PPAR``), curvature pickups (``CURV c 4 src scale``) and thickness pickups
+(``PZUP``) whose source the configuration changed are solved again, in surface order (the
+surfaces hold the solution for the saved configuration only). Ignored: ``MOFF`` (an unused
+row), ``LTTL`` and ``MCOM`` (titles, comments), and the weights ``FLWT``/``WLWT`` (a
+``Lens`` holds none; a warning where they change). The vignetting factors ``FVDX``,
+``FVDY``, ``FVCX``, ``FVCY``, ``FVAN`` of field n replace that field's value on the file's
+``VDXN`` … ``VANN`` lines (``Lens.vignetting``). Any other operand whose value in the chosen
+configuration differs from the active one's (``PRAM``, ``TEMP``, …) is refused, naming the
+line: the lens would silently be another one.
 """
 
 from __future__ import annotations
@@ -37,6 +41,7 @@ import warnings
 import numpy as np
 
 from .zmx_common import ZmxWarning, report
+from .zmx_keywords import PARAMETER_OPERAND
 from .zmx_parse import ZmxFile, ZmxLine
 
 NO_OPTICS = frozenset({"MOFF", "LTTL", "MCOM"})
@@ -83,7 +88,7 @@ def _held_configuration(f: ZmxFile, n: int) -> int:
     if n == 1:
         return 1
     try:
-        ops = [op for op in operands(f, n) if op.name in _HELD]
+        ops = [op for op in operands(f, n) if _held(op.name)]
         held = [c for c in range(1, n + 1) if all(_holds(f, op, c) for op in ops)]
     except ValueError:
         return 1
@@ -91,6 +96,10 @@ def _held_configuration(f: ZmxFile, n: int) -> int:
 
 
 _HELD = ("THIC", "CRVT", "CONN")
+
+
+def _held(name: str) -> bool:
+    return name in _HELD or PARAMETER_OPERAND.fullmatch(name) is not None
 
 
 def _holds(f: ZmxFile, op: Operand, c: int) -> bool:
@@ -101,6 +110,10 @@ def _holds(f: ZmxFile, op: Operand, c: int) -> bool:
     value, ln = op.values[c]
     v = _number(value, ln)
     s = _surface(f, op, ln)
+    m = PARAMETER_OPERAND.fullmatch(op.name)
+    if m:
+        have = s.parm.get(int(m.group(1)), (0.0, None))[0]
+        return math.isclose(v, have, rel_tol=1e-9, abs_tol=1e-12)
     have = {"THIC": s.disz, "CRVT": s.curv, "CONN": s.coni}[op.name]
     if op.name == "THIC" and op.param == 0 and v >= _OBJECT_INFINITY and math.isinf(have):
         return True
@@ -181,6 +194,9 @@ def select(f: ZmxFile, config: int | None, strict: bool) -> int:
     if chosen == active:  # the surfaces hold it; with one configuration its rows repeat them
         _check_active(f, ops, active, strict)
         return chosen
+    changed: set = set()  # surfaces whose parameters this configuration sets
+    curved: set = set()  # surfaces whose curvature it sets (CRVT)
+    thick: set = set()  # surfaces whose thickness it sets (THIC)
     for op in ops:
         if op.name in NO_OPTICS:
             continue
@@ -190,6 +206,14 @@ def select(f: ZmxFile, config: int | None, strict: bool) -> int:
         value, ln = op.values[chosen]
         if op.name in _APPLY:
             _APPLY[op.name](f, op, value, ln, active)
+            if op.name == "CRVT":
+                curved.add(op.param)
+            elif op.name == "THIC":
+                thick.add(op.param)
+            continue
+        if PARAMETER_OPERAND.fullmatch(op.name):
+            _parameter(f, op, value, ln)
+            changed.add(op.param)
             continue
         before = op.values.get(active, (None, None))[0]
         if before is not None and _same(value, before):
@@ -204,7 +228,100 @@ def select(f: ZmxFile, config: int | None, strict: bool) -> int:
         raise ln.error(f"configuration {chosen} sets {op.name} {op.param} to {value} "
                        f"(configuration {active}, the surfaces': {before}); {op.name} is "
                        f"{what}, so jaxlens cannot read configuration {chosen}")
+    _parameter_pickups(f, changed)
+    _curvature_pickups(f, curved)
+    _thickness_pickups(f, thick)
     return chosen
+
+
+def _thickness_pickups(f: ZmxFile, thick: set) -> None:
+    """Re-solve the thickness pickups (``PZUP src scale offset …``) of surfaces whose source
+    this configuration gave another thickness (``THIC``), in surface order. Only the plain
+    copy (scale 1, offset 0, the one layout seen in a real file) is applied: for others the
+    order of scale and offset on the line is not known here, and the pickup is refused with
+    its line where it must be solved."""
+    for s in f.surfs:
+        ln = s.pzup
+        if ln is None or s.number in thick:
+            continue
+        src = ln.int(1, "PZUP source surface", lo=0)
+        if src not in thick:
+            continue
+        if not src < len(f.surfs):
+            raise ln.error(f"the thickness pickup names surface {src}; the file has surfaces "
+                           f"0..{len(f.surfs) - 1}")
+        rest = [ln.float(i, "PZUP value") for i in range(2, min(len(ln.tokens), 5))]
+        if rest[:3] != [1.0, 0.0, 0.0][:len(rest)]:
+            raise ln.error(f"a thickness pickup from surface {src} other than a plain copy "
+                           f"(scale 1, offset 0), whose thickness this configuration changes "
+                           f"(THIC); jaxlens cannot tell how Zemax applies its values")
+        s.disz = f.surfs[src].disz
+        s.disz_line = ZmxLine(ln.path, ln.number, f"DISZ {s.disz!r}")
+        thick.add(s.number)
+
+
+def _curvature_pickups(f: ZmxFile, curved: set) -> None:
+    """Solve the curvature pickups (``CURV c 4 src scale …``: solve type 4) of surfaces whose
+    source surface this configuration gave another curvature (``CRVT``), in surface order.
+    With a scale of ±1 the picked-up curvature is scale × the source's (a radius pickup and a
+    curvature pickup agree then; the files seen use -1, a lens's two faces kept symmetric).
+    Another scale is refused: whether Zemax scales the radius or the curvature is not known
+    here, and the two differ."""
+    for s in f.surfs:
+        ln = s.curv_line
+        if ln is None or len(ln.tokens) < 5 or s.number in curved:
+            continue
+        try:
+            solve = float(ln.tokens[2])
+        except ValueError:
+            continue
+        if solve != 4:
+            continue
+        src = ln.int(3, "curvature pickup's source surface", lo=0)
+        if src not in curved:
+            continue
+        if not src < len(f.surfs):
+            raise ln.error(f"the curvature pickup names surface {src}; the file has surfaces "
+                           f"0..{len(f.surfs) - 1}")
+        scale = ln.float(4, "curvature pickup's scale factor")
+        if abs(scale) != 1:
+            raise ln.error(f"a curvature pickup of scale {ln.tokens[4]} from surface {src}, "
+                           f"whose curvature this configuration changes (CRVT); jaxlens "
+                           f"cannot tell whether Zemax scales the radius or the curvature")
+        s.curv = scale * f.surfs[src].curv
+        curved.add(s.number)
+
+
+def _parameter(f, op, value, ln):
+    """``PARn s c value``: surface s's ``PARM n`` in this configuration."""
+    s = _surface(f, op, ln)
+    n = int(PARAMETER_OPERAND.fullmatch(op.name).group(1))
+    s.parm[n] = (_number(value, ln), ZmxLine(ln.path, ln.number, f"PARM {n} {value}"))
+
+
+def _parameter_pickups(f: ZmxFile, changed: set) -> None:
+    """Solve the parameter pickups (``PPAR n src scale offset column``: ``PARM n`` = scale ×
+    surface src's ``PARM n`` + offset) again after a configuration set parameters of the
+    surfaces in ``changed``, in surface order (a pickup of a pickup follows its source). The
+    file's values hold the saved configuration's solution; a pickup whose source nothing
+    changed keeps it. A pickup from another column (last value ≠ 0) of a changed surface is
+    refused: which parameter it reads is not known."""
+    for s in f.surfs:
+        for n, ln in sorted(s.ppar.items()):
+            src = ln.int(2, "PPAR source surface", lo=0)
+            if src not in changed:
+                continue
+            if not 0 <= src < len(f.surfs):
+                raise ln.error(f"PPAR picks up surface {src}; the file has surfaces "
+                               f"0..{len(f.surfs) - 1}")
+            if len(ln.tokens) > 5 and ln.float(5, "PPAR column") != 0:
+                raise ln.error(f"a parameter pickup from another column ({ln.tokens[5]}) of a "
+                               f"surface this configuration changes; jaxlens cannot tell "
+                               f"which parameter it reads")
+            base = f.surfs[src].parm.get(n, (0.0, None))[0]
+            v = ln.float(3, "PPAR scale factor") * base + ln.float(4, "PPAR offset")
+            s.parm[n] = (v, ZmxLine(ln.path, ln.number, f"PARM {n} {v!r}"))
+            changed.add(s.number)
 
 
 def _same(a: str, b: str) -> bool:
@@ -353,7 +470,7 @@ def _check_active(f: ZmxFile, ops: list[Operand], active: int, strict: bool) -> 
     a vignetting row, FVDX … FVAN, against the file's VDXN … VANN lines) says otherwise,
     the active number (MNUM's second value) is not what it seems."""
     for op in ops:
-        if op.name not in ("THIC", "CRVT", "CONN", *VIGNETTING) or active not in op.values:
+        if (not _held(op.name) and op.name not in VIGNETTING) or active not in op.values:
             continue
         value, ln = op.values[active]
         v = _number(value, ln)
@@ -371,8 +488,10 @@ def _check_active(f: ZmxFile, ops: list[Operand], active: int, strict: bool) -> 
                 return
             continue
         if not _holds(f, op, active):
-            have = {"THIC": "disz", "CRVT": "curv", "CONN": "coni"}[op.name]
-            have = getattr(_surface(f, op, ln), have)
+            m = PARAMETER_OPERAND.fullmatch(op.name)
+            sf = _surface(f, op, ln)
+            have = sf.parm.get(int(m.group(1)), (0.0, None))[0] if m else getattr(
+                sf, {"THIC": "disz", "CRVT": "curv", "CONN": "coni"}[op.name])
             report(strict, f"{ln.path}:{ln.number}: {op.name} {op.param} of configuration "
                            f"{active}, the active one (MNUM), is {value}, but surface "
                            f"{op.param} holds {have:g}; jaxlens reads the surfaces")

@@ -8,6 +8,8 @@ a truncated file).
 
 from __future__ import annotations
 
+import re
+
 SETTINGS = frozenset("""
     VERS NOTE PFIL LANG ENVD GFAC SDMA PUSH ROPD PICB HYPR POLS GLRS GSTD NSCD COFN COFJ
     ZVDX ZVDY ZVCX ZVCY ZVAN WAVN
@@ -86,5 +88,19 @@ MERIT_OPERANDS = frozenset("""
     ISFN IMAE MSWA POPD POPI SPLO TOTR CMFV DMVA USYM ZTHI BLNK
     """.split())
 """Zemax merit-function operand names: the operand lines that follow a lens's surfaces."""
+
+PARAMETER_OPERAND = re.compile(r"PAR(\d{1,2})")
+"""Zemax 2006's configuration operand of a surface parameter: ``PARn s c value …`` sets
+``PARM n`` of surface ``s`` in configuration ``c`` (the parameter number in the name; later
+versions write ``PRAM``, whose line jaxlens cannot place the parameter number on). Read so
+from the files themselves: in a Zemax 2006 course file (round 8's ``kraken_F-Theta_j.ZMX``,
+a scan mirror's tilt in 4 configurations) ``PAR3 3 4 -5`` is the value surface 3's
+``PARM 3`` holds, and no other configuration's row matches any surface's parameter."""
+
+
+def is_config_operand(key: str) -> bool:
+    """Whether ``key`` names a multi-configuration operand (``CONFIG_OPERANDS`` or ``PARn``)."""
+    return key in CONFIG_OPERANDS or PARAMETER_OPERAND.fullmatch(key) is not None
+
 
 IGNORED_KEYWORDS = SETTINGS | MERIT_OPERANDS | CONFIG_OPERANDS

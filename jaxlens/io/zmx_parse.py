@@ -9,7 +9,7 @@ import re
 from dataclasses import dataclass, field
 
 from ..optics.checks import number_text
-from .zmx_keywords import CONFIG_OPERANDS, IGNORED_KEYWORDS, KNOWN_VALUES
+from .zmx_keywords import IGNORED_KEYWORDS, KNOWN_VALUES, is_config_operand
 
 UNITS = {"MM": 1.0, "CM": 10.0, "IN": 25.4, "METER": 1000.0, "M": 1000.0}
 SURFACE_KEYS = {
@@ -31,6 +31,8 @@ SURFACE_KEYS = {
     "ELAP",
     "SQOB",
     "ELOB",
+    "PPAR",
+    "PZUP",
 }
 SHAPES = {"SQAP": ("rect", False), "ELAP": ("ellipse", False), "SQOB": ("rect", True),
           "ELOB": ("ellipse", True)}  # keyword -> (Aperture shape, blocks)
@@ -91,6 +93,8 @@ class ZmxSurface:
     disz_line: ZmxLine | None = None
     coni: float = 0.0
     parm: dict = field(default_factory=dict)  # index -> (value, line)
+    ppar: dict = field(default_factory=dict)  # index -> its pickup line (PPAR)
+    pzup: ZmxLine | None = None  # a thickness pickup (PZUP src scale offset column)
     xdat: dict = field(default_factory=dict)
     glas: ZmxLine | None = None
     stop: bool = False
@@ -192,7 +196,7 @@ def parse(text: str, path: str) -> ZmxFile:
                 _once(seen_top, f"WAVM {ln.tokens[1]}", ln, "")
         elif key == "MNUM":
             f.mnum = ln
-        elif key in CONFIG_OPERANDS and f.mnum is not None:
+        elif is_config_operand(key) and f.mnum is not None:
             f.config_lines.append(ln)
         elif key in KNOWN_VALUES and not KNOWN_VALUES[key](ln.tokens[1:]):
             f.unknown.append(ln)  # a keyword known only with the values seen in real files
@@ -221,6 +225,21 @@ def surface_line(s: ZmxSurface, key: str, ln: ZmxLine) -> None:
     elif key in ("PARM", "XDAT"):
         i = ln.int(1, f"{key} index")
         (s.parm if key == "PARM" else s.xdat)[i] = (ln.float(2, f"{key} {i} value"), ln)
+    elif key == "PPAR":
+        # PPAR n s scale offset column: PARM n = scale * (surface s's PARM n) + offset (a
+        # pickup solve; OpticStudio files and Zemax 2006 ones alike). The file's PARM n holds
+        # the solved value, so only a configuration that changes surface s re-solves it.
+        i = ln.int(1, "PPAR parameter index")
+        ln.int(2, "PPAR source surface", lo=0)
+        ln.float(3, "PPAR scale factor")
+        ln.float(4, "PPAR offset")
+        s.ppar[i] = ln
+    elif key == "PZUP":
+        # PZUP s scale offset column: the thickness picked up from surface s (Zemax 2009's
+        # Nikon 105 mm: "PZUP 6.0 1 0 0" on a surface whose DISZ equals surface 6's). The
+        # file's DISZ holds the solved value; only a configuration changing s re-solves it.
+        ln.int(1, "PZUP source surface", lo=0)
+        s.pzup = ln
     elif key == "GLAS":
         if len(ln.tokens) < 2:
             raise ln.error("GLAS needs a glass name")
