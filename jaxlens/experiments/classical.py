@@ -220,8 +220,7 @@ def check_args(args, given=None) -> None:
     w, n = "design", checks.number
     n(args.fov, "--fov", w, lo=0, hi=180, lo_open=True, hi_open=True, unit="deg")
     n(args.fnum, "--fnum", w, lo=0, lo_open=True)
-    # The curriculum starts at an easier spec: an explicit start beyond the target is refused
-    # (only the defaults follow --fov and --fnum).
+    # An explicit curriculum start beyond the target is refused (defaults follow --fov/--fnum).
     if args.fov_start is not None:
         n(args.fov_start, "--fov-start", w, lo=0, hi=args.fov, lo_open=True,
           unit="deg (at most --fov)")
