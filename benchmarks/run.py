@@ -51,7 +51,7 @@ def main(argv: list[str] | None = None) -> dict:
     p.add_argument("--smoke", action="store_true", help="tiny sizes; checks the suite works")
     p.add_argument("--full", action="store_true", help="include 1e7 rays in the throughput run")
     p.add_argument("--only", nargs="+", choices=CORE + OPTIONAL, help="run only these")
-    p.add_argument("--out", type=pathlib.Path, default=None, help="output folder")
+    p.add_argument("--out", type=common.out_path("folder"), default=None, help="output folder")
     p.add_argument("--no-plots", action="store_true", help="skip the matplotlib figures")
     p.add_argument("--lenses", nargs="+", help="throughput: only these zoo lenses")
     p.add_argument("--counts", nargs="+", type=common.checks.cli_int,
