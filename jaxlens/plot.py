@@ -35,6 +35,11 @@ def _figure(w: float, h: float) -> Figure:
 def save(fig: Figure, path: str | os.PathLike) -> str:
     """Write a figure (format from the extension) and return the path."""
     path = os.fspath(path)
+    if not isinstance(fig, Figure):
+        raise TypeError(f"save: fig must be a matplotlib Figure, got {type(fig).__name__}")
+    if not path.strip() or os.path.isdir(path):  # '' wrote nothing and returned ''
+        raise ValueError(f"save: path must be a file name (its extension gives the format, "
+                         f".png), got {path!r}")
     fig.savefig(path, bbox_inches="tight")
     return path
 

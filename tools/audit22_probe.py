@@ -40,7 +40,7 @@ def tolerance_cli():
     from jaxlens.experiments import classical
     from jaxlens.experiments import tolerance as tol
     design = os.path.join(os.path.dirname(__file__), "..", "experiments", "classical", "designs", "seed_13.zmx")
-    t = lambda *a, out=None: cli(lambda: tol.main([design, "--out", out or os.path.join(TMP, "t"), *a]))
+    t = lambda *a, out=None: cli(lambda: tol.main([design, "--out", os.path.join(TMP, "t") if out is None else out, *a]))
     probe("tolerance --threshold 1e300", t("--threshold", "1e300"), "--threshold", "µm")
     probe("tolerance --threshold 1e6 (a metre of RMS)", t("--threshold", "1e6"), "--threshold", "µm")
     probe("tolerance --threshold 0.006 (mm given for µm)", t("--threshold", "0.006"), "--threshold", "µm")
@@ -63,8 +63,10 @@ def tolerance_cli():
     from jaxlens.design.spec import DesignSpec
     probe("check_design(None)", lambda: tol.check_design(None, DesignSpec()), "lens")
     probe("check_design(lens, None)", lambda: tol.check_design(cooke, None), "spec")
-    probe("design_model grid 10**6", lambda: tol.design_model(cooke, DesignSpec(), grid=10**6), "grid")
-    probe("analyse_design trials 0", lambda: tol.analyse_design(cooke, DesignSpec(), trials=0), "trials")
+    seed = jl.load(design)
+    probe("design_model grid 10**6", lambda: tol.design_model(seed, DesignSpec(), grid=10**6), "grid", "257")
+    probe("design_model(cooke) (another spec)", lambda: tol.design_model(cooke, DesignSpec()), "entrance pupil", "mm")
+    probe("analyse_design trials 0", lambda: tol.analyse_design(seed, DesignSpec(), trials=0), "trials")
     probe("write_report(out='')", lambda: tol.write_report({"a": 1}, ""), "out")
 
 
@@ -97,7 +99,7 @@ def glass_ranges():
 def afocal_plot():
     from jaxlens import plot as P
     from jaxlens.analysis import afocal as A
-    probe("angular_magnification(cooke) (a focal lens)", lambda: A.angular_magnification(cooke), "afocal")
+    probe("angular_magnification(cooke) (documented: defined for any lens)", lambda: float(A.angular_magnification(cooke)), good=True)
     probe("angular_spot(cooke, reference='x')", lambda: A.angular_spot(cooke, reference="x"), "reference")
     probe("plot_layout n_rays 10**9", lambda: P.plot_layout(cooke, n_rays=10**9), "n_rays")
     probe("plot_layout n_rays 0", lambda: P.plot_layout(cooke, n_rays=0), "n_rays")
@@ -107,7 +109,9 @@ def afocal_plot():
     probe("plot_wavefront grid 10**5", lambda: P.plot_wavefront(cooke, grid=10**5), "grid")
     probe("plot_rms_map nan", lambda: P.plot_rms_map(np.full((4, 4), np.nan), (4.0, 3.0)), "rms")
     probe("plot_rms_map sensor_size (-1, 1)", lambda: P.plot_rms_map(np.ones((4, 4)), (-1.0, 1.0)), "sensor_size", "mm")
-    probe("plot_rms_map 1-D", lambda: P.plot_rms_map(np.ones(4), (4.0, 3.0)), "rms")
+    probe("plot_rms_map 5 values (not n²)", lambda: P.plot_rms_map(np.ones(5), (4.0, 3.0)), "rms_um", "[n, n]")
+    probe("plot_image uint8 (sRGB codes)", lambda: P.plot_image(np.full((4, 4, 3), 200, np.uint8)), "img", "integer")
+    probe("plot_image [4, 4, 4]", lambda: P.plot_image(np.zeros((4, 4, 4))), "img", "[H, W, 3]")
     probe("plot_tolerance_histogram({})", lambda: P.plot_tolerance_histogram({}), "mc")
     probe("plot_progress([])", lambda: P.plot_progress([]), "history")
     probe("plot_image(empty)", lambda: P.plot_image(np.zeros((0, 0, 3))), "img")
@@ -116,6 +120,7 @@ def afocal_plot():
     probe("plot_encircled_energy max_radius -1", lambda: P.plot_encircled_energy(cooke, max_radius=-1.0), "max_radius")
     probe("plot_layout fields [95]", lambda: P.plot_layout(cooke, [95.0]), "field")
     probe("save(fig, '')", lambda: P.save(P.plot_image(np.zeros((4, 4, 3))), ""), "path")
+    probe("save(None, 'x.png')", lambda: P.save(None, os.path.join(TMP, "x.png")), "fig", "Figure")
 
 
 # ----------------------------------------------------------------------------- design, nets, zoo
@@ -133,6 +138,7 @@ def design_nets_zoo():
     probe("ImageObjective spp 0", lambda: ImageObjective(None, jnp.ones((8, 8, 3)), jl.Sensor((8, 8), 0.01), spp=0), "spp")
     probe("nets.simple_gate odd channels", lambda: N.simple_gate(jnp.ones((2, 3))), "channels")
     probe("nets.num_parameters(None)", lambda: N.num_parameters(None), "model")
+    probe("Stage steps 10**5 (control)", lambda: Stage("a", fov=60.0, fnum=2.0, steps=10**5).steps, good=True)
     probe("zoo.cooke_triplet(clip='no')", lambda: zoo.cooke_triplet(clip="no"), "clip")
 
 
@@ -147,6 +153,10 @@ def report_cli():
     probe("report --fields 90", r("--fields", "90"), "--fields")
     probe("report --fields nan", r("--fields", "nan"), "--fields")
     probe("report --plot ''", r("--plot", ""), "--plot")
+    import benchmarks.render_speed as RS
+    import benchmarks.run as BR
+    probe("python -m benchmarks --out '' (Path('') is the cwd)", cli(lambda: BR.main(["--out", "", "--smoke"])), "--out", "empty")
+    probe("benchmarks.render_speed --out ''", cli(lambda: RS.main(["--out", ""])), "--out", "empty")
     probe("report lens ''", cli(lambda: MM.main(["report", ""])), "lens")
 
 

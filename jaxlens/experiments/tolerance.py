@@ -71,8 +71,14 @@ the classical spec (a 7.66 mm-diagonal sensor)."""
 def check_design(lens, spec) -> None:
     """Refuse a lens this analysis would misdescribe: it is run at the classical spec's
     entrance pupil, and the 16 × 16 grid is folded onto 36 fields by rotational symmetry."""
+    from jaxlens.design.spec import DesignSpec
+    from jaxlens.optics.lens import Lens
     from jaxlens.optics.surfaces import EvenAsphere, Standard
 
+    for arg, v, kind in (("lens", lens, Lens), ("spec", spec, DesignSpec)):
+        if not isinstance(v, kind):  # before: AttributeError 'NoneType' ... 'epd'
+            raise TypeError(f"check_design: {arg} must be a {kind.__module__}.{kind.__name__}, "
+                            f"got {type(v).__name__}")
     epd = float(lens.epd)
     if not math.isclose(epd, spec.epd, rel_tol=1e-6):
         raise ValueError(
@@ -255,6 +261,8 @@ def write_report(report: dict, out: str, *, plots: bool = True) -> dict:
     return the paths."""
     from jaxlens import plot
 
+    if not isinstance(out, str | os.PathLike) or not os.fspath(out).strip():
+        raise ValueError(f"write_report: out must be a folder name, got {out!r}")
     os.makedirs(out, exist_ok=True)
     mc = report.get("_mc")
     data = {k: v for k, v in report.items() if k != "_mc"}

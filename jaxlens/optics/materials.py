@@ -349,6 +349,13 @@ def abbe_number(material: AbstractMaterial, *, held_ends: bool = False) -> Array
                 f"is held constant beyond its ends, which gives no Abbe number (pass "
                 f"held_ends=True for the number of the held values)")
     n = material.extrapolated_index(jnp.asarray([LAMBDA_D, LAMBDA_F, LAMBDA_C]))
+    if not (held_ends or checks.is_traced(n) or np.all(np.isfinite(np.asarray(n)))):
+        # Before: NaN (a formula with a resonance between the F and C lines, or n² < 0).
+        raise ValueError(f"abbe_number: {type(material).__name__}"
+                         f"{f' {material.name!r}' if getattr(material, 'name', '') else ''} "
+                         f"gives no finite index at the d, F and C lines ({LAMBDA_D}, "
+                         f"{LAMBDA_F}, {LAMBDA_C} µm): got {checks.fmt(np.asarray(n))}, so it "
+                         f"has no Abbe number")
     return (n[0] - 1.0) / (n[1] - n[2])
 
 
