@@ -164,3 +164,115 @@ def test_pole_window_skips_traced_materials():
         return m.index(jnp.asarray(0.5876))
 
     assert float(jax.jit(f)(raw.B)) == pytest.approx(float(raw.index(0.5876)), rel=1e-14)
+
+
+def test_abbe_number_refuses_a_nan_index():
+    """Before: NaN, for a formula with a resonance between the F and C lines."""
+    m = M.Sellmeier(np.array([1.0]), np.array([0.25]), name="x")  # pole at 0.5 µm
+    with pytest.raises(ValueError, match=r"abbe_number: Sellmeier 'x' gives no finite index at "
+                       r"the d, F and C lines .* so it has no Abbe number"):
+        M.abbe_number(m)
+    assert float(M.abbe_number(M.ModelGlass(1.5, 60.0))) == pytest.approx(60.0, rel=1e-12)
+
+
+# ------------------------------------------------------- plot, design, nets, helpers
+def test_plot_bounds_and_checks_its_inputs(tmp_path):
+    """Before: plot_layout(n_rays=10**9) asked for 8 GB of pupil points; plot_image clipped a
+    uint8 image to white and drew NaN as nothing; save(fig, '') wrote nothing and returned ''."""
+    from jaxlens import plot
+
+    with pytest.raises(ValueError, match=r"plot_layout: n_rays must be a whole number in "
+                       r"\[1, 1024\] rays per fan, got 1000000000"):
+        plot.plot_layout(COOKE, n_rays=10**9)
+    with pytest.raises(ValueError, match=r"plot_image: img must be a float image, got an "
+                       r"integer image of dtype uint8"):
+        plot.plot_image(np.full((4, 4, 3), 200, np.uint8))
+    with pytest.raises(ValueError, match=r"plot_image: img must be finite values, got nan"):
+        plot.plot_image(np.full((4, 4, 3), np.nan))
+    for shape in ((0, 0, 3), (4, 4, 4), (4,)):
+        with pytest.raises(ValueError, match=r"img must be an \[H, W, 3\] or \[H, W\] image"):
+            plot.plot_image(np.zeros(shape))
+    fig = plot.plot_image(np.full((4, 4), 0.5))
+    with pytest.raises(ValueError, match=r"save: path must be a file name .*got ''"):
+        plot.save(fig, "")
+    with pytest.raises(ValueError, match=r"save: path must be a file name"):
+        plot.save(fig, tmp_path)
+    with pytest.raises(TypeError, match=r"save: fig must be a matplotlib Figure, got NoneType"):
+        plot.save(None, tmp_path / "x.png")
+    assert os.path.getsize(plot.save(fig, tmp_path / "x.png")) > 0
+
+
+def test_design_stage_and_image_objective_check_their_counts():
+    """Before: Stage(steps=10**12) was built (a run that never ends), and ImageObjective took
+    spp=0 (renders of no rays: a zero image) or a NaN scene (a NaN loss at the first step)."""
+    from jaxlens.design import DesignSpec, ImageObjective, RayLoss, Stage, parameterization
+    from jaxlens.design.losses import Objective
+
+    with pytest.raises(ValueError, match=r"Stage 'a': steps must be a whole number in "
+                       r"\[0, 100000\] solver steps, got 1000000000000"):
+        Stage("a", fov=60.0, fnum=2.0, steps=10**12)
+    assert Stage("a", fov=60.0, fnum=2.0, steps=checks.MAX_STEPS).steps == checks.MAX_STEPS
+    spec = DesignSpec()
+    pm = parameterization(spec)
+    ray = Objective(pm, RayLoss.make(3, 2, [0.5876], spec.sensor_size), jnp.ones((12, 2)))
+    sensor = jl.Sensor((8, 8), 0.01)
+    scene = jnp.ones((8, 8, 3))
+    for kw, text in ((dict(spp=0), r"spp must be a whole number in \[1, 65536\] rays per pixel"),
+                     (dict(weight=0.0), r"weight must be a finite number in \(0, inf\)"),
+                     (dict(alpha=float("nan")), r"alpha must be a finite number in \[0, inf\)")):
+        with pytest.raises(ValueError, match=rf"ImageObjective: {text}"):
+            ImageObjective(ray, scene, sensor, **kw)
+    with pytest.raises(ValueError, match=r"ImageObjective: scene must be finite values, got nan"):
+        ImageObjective(ray, scene.at[0, 0, 0].set(jnp.nan), sensor)
+    with pytest.raises(ValueError, match=r"scene must be an \[H, W, 3\] linear image, got shape "
+                       r"\(8, 8\)"):
+        ImageObjective(ray, jnp.ones((8, 8)), sensor)
+    with pytest.raises(TypeError, match=r"ImageObjective: ray must be a ray Objective .*NoneType"):
+        ImageObjective(None, scene, sensor)
+    assert ImageObjective(ray, scene, sensor, spp=2).spp == 2
+
+
+def test_nets_helpers_refuse_bad_input():
+    """Before: simple_gate of 3 channels failed in numpy's split ("does not result in an equal
+    division"), and num_parameters(None) was 0."""
+    from jaxlens import nets
+
+    with pytest.raises(ValueError, match=r"simple_gate: x must have an even, non-zero number of "
+                       r"channels \(last axis\), got shape \(2, 3\)"):
+        nets.simple_gate(jnp.ones((2, 3)))
+    np.testing.assert_array_equal(nets.simple_gate(jnp.arange(4.0)), [0.0, 3.0])
+    with pytest.raises(TypeError, match=r"num_parameters: model must be an equinox Module, got "
+                       r"NoneType"):
+        nets.num_parameters(None)
+
+
+def test_tolerance_helpers_refuse_none_and_an_empty_folder():
+    """Before: AttributeError ('NoneType' object has no attribute 'epd'), and os.makedirs('')
+    (FileNotFoundError) after the analysis."""
+    from jaxlens.design.spec import DesignSpec
+    from jaxlens.experiments import tolerance
+
+    with pytest.raises(TypeError, match=r"check_design: lens must be a "
+                       r"jaxlens\.optics\.lens\.Lens, got NoneType"):
+        tolerance.check_design(None, DesignSpec())
+    with pytest.raises(TypeError, match=r"check_design: spec must be a .*DesignSpec, got "
+                       r"NoneType"):
+        tolerance.check_design(COOKE, None)
+    with pytest.raises(ValueError, match=r"write_report: out must be a folder name, got ''"):
+        tolerance.write_report({"a": 1}, "")
+
+
+@pytest.mark.parametrize(("module", "argv", "kind"), [
+    ("benchmarks.run", ["--out", "", "--smoke"], "folder"),
+    ("benchmarks.render_speed", ["--out", ""], "file"),
+])
+def test_benchmark_clis_refuse_an_empty_out(module, argv, kind, capsys):
+    """Before: pathlib.Path('') is '.', so `python -m benchmarks --out ''` wrote into the
+    current folder."""
+    import importlib
+
+    with pytest.raises(SystemExit) as e:
+        importlib.import_module(module).main(argv)
+    assert e.value.code == 2
+    assert re.search(rf"argument --out: needs a {kind}'s path, got an empty one$",
+                     one_line(capsys))
