@@ -112,8 +112,11 @@ def plot_layout(lens, fields: Sequence[float] | None = None, *, n_rays: int = 9,
     lens = lens.astype(jnp.float64)
     fields = _default_fields(lens, (0.0, 0.7, 1.0)) if fields is None else list(fields)
     checks.field_angles(fields, "plot_layout", "fields")  # here, not deep in the program
-    checks.number(n_rays, "n_rays", "plot_layout", lo=1, hi=MAX_LAYOUT_RAYS, integer=True,
-                  unit="rays per fan")
+    checks.number(n_rays, "n_rays", "plot_layout", lo=1, integer=True, unit="rays per fan")
+    if n_rays > MAX_LAYOUT_RAYS:
+        raise ValueError(f"plot_layout: n_rays must be at most {MAX_LAYOUT_RAYS} rays per fan "
+                         f"(plot.MAX_LAYOUT_RAYS: beyond a few hundred a fan is a "
+                         f"filled area), got {n_rays}")
     sd = np.asarray(analysis.clear_semi_diameters(lens)) if semi_diameters is None else \
         np.asarray(semi_diameters)
     zs = np.asarray(lens.vertex_z())
@@ -277,8 +280,13 @@ def plot_rms_map(rms_um, sensor_size, *, title: str | None = None) -> Figure:
     fig.colorbar(im, ax=ax, label="RMS spot radius (µm)")
     ax.set_xlabel("x on sensor (mm)")
     ax.set_ylabel("y on sensor (mm)")
-    ax.set_title(title or f"RMS over {v.size} fields: mean {v.mean():.2f} µm, "
-                 f"max {v.max():.2f} µm", fontsize=9)
+    ok = np.isfinite(v)
+    if not ok.any():  # before: a blank map titled "mean nan µm, max nan µm"
+        raise ValueError(f"plot_rms_map: rms_um has no finite value (all {v.size} fields "
+                         f"without an RMS: every ray lost?), got {checks.fmt(v.ravel()[:1])}")
+    lost = f"; {int((~ok).sum())} fields without an RMS (blank)" if not ok.all() else ""
+    ax.set_title(title or f"RMS over {v.size} fields: mean {v[ok].mean():.2f} µm, "
+                 f"max {v[ok].max():.2f} µm{lost}", fontsize=9)
     return fig
 
 

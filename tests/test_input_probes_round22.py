@@ -181,8 +181,8 @@ def test_plot_bounds_and_checks_its_inputs(tmp_path):
     uint8 image to white and drew NaN as nothing; save(fig, '') wrote nothing and returned ''."""
     from jaxlens import plot
 
-    with pytest.raises(ValueError, match=r"plot_layout: n_rays must be a whole number in "
-                       r"\[1, 1024\] rays per fan, got 1000000000"):
+    with pytest.raises(ValueError, match=r"plot_layout: n_rays must be at most 1024 rays per "
+                       r"fan \(plot\.MAX_LAYOUT_RAYS: .*\), got 1000000000$"):
         plot.plot_layout(COOKE, n_rays=10**9)
     with pytest.raises(ValueError, match=r"plot_image: img must be a float image, got an "
                        r"integer image of dtype uint8"):
@@ -200,6 +200,12 @@ def test_plot_bounds_and_checks_its_inputs(tmp_path):
     with pytest.raises(TypeError, match=r"save: fig must be a matplotlib Figure, got NoneType"):
         plot.save(None, tmp_path / "x.png")
     assert os.path.getsize(plot.save(fig, tmp_path / "x.png")) > 0
+    # An RMS map of lost fields: before, a blank map titled "mean nan µm, max nan µm".
+    with pytest.raises(ValueError, match=r"plot_rms_map: rms_um has no finite value \(all 4 "
+                       r"fields without an RMS"):
+        plot.plot_rms_map(np.full((2, 2), np.nan), (4.0, 3.0))
+    title = plot.plot_rms_map(np.array([np.nan, 1.0, 2.0, 3.0]), (4.0, 3.0)).axes[0].get_title()
+    assert title == "RMS over 4 fields: mean 2.00 µm, max 3.00 µm; 1 fields without an RMS (blank)"
 
 
 def test_design_stage_and_image_objective_check_their_counts():

@@ -56,7 +56,7 @@ def tolerance_cli():
     probe("tolerance --out under a file", t(out=os.path.join(f, "sub")), "--out")
     probe("tolerance design '' (empty)", cli(lambda: tol.main(["", "--out", os.path.join(TMP, "t")])), "design")
     probe("tolerance design a folder", cli(lambda: tol.main([TMP, "--out", os.path.join(TMP, "t")])), "design")
-    probe("tolerance design .txt", cli(lambda: tol.main([f, "--out", os.path.join(TMP, "t")])), "design")
+    probe("tolerance design (no extension)", cli(lambda: tol.main([f, "--out", os.path.join(TMP, "t2")])), "extension", ".zmx")
     c = lambda *a: cli(lambda: classical.main([*a, "--out", os.path.join(TMP, "c"), "--quiet"]))
     probe("classical --tolerance-threshold 1e300", c("--tolerance-threshold", "1e300"), "--tolerance-threshold", "µm")
     probe("classical --tolerance-threshold 0.006", c("--tolerance-threshold", "0.006"), "--tolerance-threshold", "µm")
@@ -92,7 +92,7 @@ def glass_ranges():
     probe("efl(Lens(N-BK7) at 2.6 µm)", lambda: jl.efl(dataclasses.replace(lens_cat, wavelengths=(2.6,), primary=0)), "2.6", "0.3", "2.5")
     probe("ModelGlass(1.5, 60).index(25 µm) (generic range)", lambda: float(M.ModelGlass(1.5, 60.0).index(25.0)), good=True)
     probe("jit(raw.index)(11.0) (control: traced, unchecked)", lambda: float(jax.jit(raw.index)(jnp.asarray(11.0))), good=True)
-    probe("abbe_number(Sellmeier with an IR pole at 0.5 µm)", lambda: M.abbe_number(M.Sellmeier(np.array([1.0]), np.array([0.25]))), "pole")
+    probe("abbe_number(Sellmeier with an IR pole at 0.5 µm)", lambda: M.abbe_number(M.Sellmeier(np.array([1.0]), np.array([0.25]))), "no finite index", "Abbe")
 
 
 # ----------------------------------------------------------------------------- afocal, plot
@@ -107,7 +107,8 @@ def afocal_plot():
     probe("plot_ray_fans n 10**9", lambda: P.plot_ray_fans(cooke, n=10**9), "n")
     probe("plot_opd_fans n 1", lambda: P.plot_opd_fans(cooke, n=1), "n")
     probe("plot_wavefront grid 10**5", lambda: P.plot_wavefront(cooke, grid=10**5), "grid")
-    probe("plot_rms_map nan", lambda: P.plot_rms_map(np.full((4, 4), np.nan), (4.0, 3.0)), "rms")
+    probe("plot_rms_map all nan", lambda: P.plot_rms_map(np.full((4, 4), np.nan), (4.0, 3.0)), "rms_um", "no finite")
+    probe("plot_rms_map one nan (control: drawn, counted)", lambda: P.plot_rms_map(np.r_[np.nan, np.ones(3)], (4.0, 3.0)).axes[0].get_title(), good=True)
     probe("plot_rms_map sensor_size (-1, 1)", lambda: P.plot_rms_map(np.ones((4, 4)), (-1.0, 1.0)), "sensor_size", "mm")
     probe("plot_rms_map 5 values (not n²)", lambda: P.plot_rms_map(np.ones(5), (4.0, 3.0)), "rms_um", "[n, n]")
     probe("plot_image uint8 (sRGB codes)", lambda: P.plot_image(np.full((4, 4, 3), 200, np.uint8)), "img", "integer")
@@ -135,7 +136,13 @@ def design_nets_zoo():
     probe("Stage lr nan", lambda: Stage("a", fov=60.0, fnum=2.0, steps=10, lr=float("nan")), "lr")
     probe("Stage beta -1", lambda: Stage("a", fov=60.0, fnum=2.0, steps=10, beta=-1.0), "beta")
     probe("sensor_field_grid(spec, 10**6)", lambda: sensor_field_grid(DesignSpec(), 10**6), "257")
-    probe("ImageObjective spp 0", lambda: ImageObjective(None, jnp.ones((8, 8, 3)), jl.Sensor((8, 8), 0.01), spp=0), "spp")
+    from jaxlens.design import RayLoss, parameterization
+    from jaxlens.design.losses import Objective
+    spec = DesignSpec()
+    ray = Objective(parameterization(spec), RayLoss.make(3, 2, [0.5876], spec.sensor_size), jnp.ones((12, 2)))
+    probe("ImageObjective spp 0", lambda: ImageObjective(ray, jnp.ones((8, 8, 3)), jl.Sensor((8, 8), 0.01), spp=0), "spp", "65536")
+    probe("ImageObjective ray None", lambda: ImageObjective(None, jnp.ones((8, 8, 3)), jl.Sensor((8, 8), 0.01)), "ray", "Objective")
+    probe("ImageObjective scene nan", lambda: ImageObjective(ray, jnp.full((8, 8, 3), jnp.nan), jl.Sensor((8, 8), 0.01)), "scene", "finite")
     probe("nets.simple_gate odd channels", lambda: N.simple_gate(jnp.ones((2, 3))), "channels")
     probe("nets.num_parameters(None)", lambda: N.num_parameters(None), "model")
     probe("Stage steps 10**5 (control)", lambda: Stage("a", fov=60.0, fnum=2.0, steps=10**5).steps, good=True)
