@@ -260,6 +260,8 @@ def out_path(kind: str = "file", *, make_parents: bool = True):
     import argparse
 
     def parse(text: str) -> pathlib.Path:
+        if not text.strip():  # pathlib.Path("") is ".": a folder run wrote into the cwd
+            raise argparse.ArgumentTypeError(f"needs a {kind}'s path, got an empty one")
         p = pathlib.Path(text)
         if kind == "file" and p.is_dir():
             raise argparse.ArgumentTypeError(f"{text} is a folder; give a file's path")

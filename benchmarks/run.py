@@ -44,6 +44,15 @@ CORE = ("throughput", "pareto", "skipping", "imaging")
 OPTIONAL = ("render_speed", "render_memory")
 
 
+def _folder(text: str) -> pathlib.Path:
+    """``--out``: a folder's path, not empty (``pathlib.Path("")`` is the current folder)."""
+    import argparse
+
+    if not text.strip():
+        raise argparse.ArgumentTypeError("needs a folder's path, got an empty one")
+    return pathlib.Path(text)
+
+
 def main(argv: list[str] | None = None) -> dict:
     from jaxlens.experiments.runfolder import OneLineParser
 
@@ -51,7 +60,7 @@ def main(argv: list[str] | None = None) -> dict:
     p.add_argument("--smoke", action="store_true", help="tiny sizes; checks the suite works")
     p.add_argument("--full", action="store_true", help="include 1e7 rays in the throughput run")
     p.add_argument("--only", nargs="+", choices=CORE + OPTIONAL, help="run only these")
-    p.add_argument("--out", type=pathlib.Path, default=None, help="output folder")
+    p.add_argument("--out", type=_folder, default=None, help="output folder")
     p.add_argument("--no-plots", action="store_true", help="skip the matplotlib figures")
     p.add_argument("--lenses", nargs="+", help="throughput: only these zoo lenses")
     p.add_argument("--counts", nargs="+", type=common.checks.cli_int,

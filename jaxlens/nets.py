@@ -183,6 +183,10 @@ class LayerNorm2d(eqx.Module):
 
 def simple_gate(x: Float[Array, "*s c2"]) -> Float[Array, "*s c"]:
     """SimpleGate: split the channels into two halves and multiply them."""
+    c = jnp.shape(x)[-1] if jnp.ndim(x) else 0
+    if c % 2 or c == 0:  # before: numpy's "array split does not result in an equal division"
+        raise ValueError(f"simple_gate: x must have an even, non-zero number of channels (last "
+                         f"axis), got shape {jnp.shape(x)}")
     a, b = jnp.split(x, 2, axis=-1)
     return a * b
 
@@ -401,6 +405,9 @@ class NAFNet(eqx.Module):
 def num_parameters(model: eqx.Module) -> int:
     """Number of scalar parameters (floating-point array leaves) of a model, or of its
     ``eqx.filter_eval_shape`` skeleton."""
+    if not isinstance(model, eqx.Module):  # before: None, a list or a number counted 0
+        raise TypeError(f"num_parameters: model must be an equinox Module, got "
+                        f"{type(model).__name__}")
     leaves = jax.tree_util.tree_leaves(model)
     return int(
         sum(x.size for x in leaves if hasattr(x, "dtype") and jnp.issubdtype(x.dtype, jnp.inexact))

@@ -21,6 +21,9 @@ from matplotlib.figure import Figure
 
 _WL_COLORS = {0.4861327: "tab:blue", 0.5875618: "tab:green", 0.6562725: "tab:red"}
 _FIELD_COLORS = ("tab:blue", "tab:green", "tab:red", "tab:purple", "tab:orange", "tab:brown")
+MAX_LAYOUT_RAYS = 1024
+"""Most rays per fan that ``plot_layout`` draws: beyond a few hundred a fan is a filled area;
+``n_rays=10**9`` asked for 8 GB of pupil coordinates before tracing a billion rays."""
 
 
 def _figure(w: float, h: float) -> Figure:
@@ -32,6 +35,11 @@ def _figure(w: float, h: float) -> Figure:
 def save(fig: Figure, path: str | os.PathLike) -> str:
     """Write a figure (format from the extension) and return the path."""
     path = os.fspath(path)
+    if not isinstance(fig, Figure):
+        raise TypeError(f"save: fig must be a matplotlib Figure, got {type(fig).__name__}")
+    if not path.strip() or os.path.isdir(path):  # '' wrote nothing and returned ''
+        raise ValueError(f"save: path must be a file name (its extension gives the format, "
+                         f".png), got {path!r}")
     fig.savefig(path, bbox_inches="tight")
     return path
 
@@ -105,6 +113,10 @@ def plot_layout(lens, fields: Sequence[float] | None = None, *, n_rays: int = 9,
     fields = _default_fields(lens, (0.0, 0.7, 1.0)) if fields is None else list(fields)
     checks.field_angles(fields, "plot_layout", "fields")  # here, not deep in the program
     checks.number(n_rays, "n_rays", "plot_layout", lo=1, integer=True, unit="rays per fan")
+    if n_rays > MAX_LAYOUT_RAYS:
+        raise ValueError(f"plot_layout: n_rays must be at most {MAX_LAYOUT_RAYS} rays per fan "
+                         f"(plot.MAX_LAYOUT_RAYS: beyond a few hundred a fan is a "
+                         f"filled area), got {n_rays}")
     sd = np.asarray(analysis.clear_semi_diameters(lens)) if semi_diameters is None else \
         np.asarray(semi_diameters)
     zs = np.asarray(lens.vertex_z())
@@ -268,8 +280,13 @@ def plot_rms_map(rms_um, sensor_size, *, title: str | None = None) -> Figure:
     fig.colorbar(im, ax=ax, label="RMS spot radius (µm)")
     ax.set_xlabel("x on sensor (mm)")
     ax.set_ylabel("y on sensor (mm)")
-    ax.set_title(title or f"RMS over {v.size} fields: mean {v.mean():.2f} µm, "
-                 f"max {v.max():.2f} µm", fontsize=9)
+    ok = np.isfinite(v)
+    if not ok.any():  # before: a blank map titled "mean nan µm, max nan µm"
+        raise ValueError(f"plot_rms_map: rms_um has no finite value (all {v.size} fields "
+                         f"without an RMS: every ray lost?), got {checks.fmt(v.ravel()[:1])}")
+    lost = f"; {int((~ok).sum())} fields without an RMS (blank)" if not ok.all() else ""
+    ax.set_title(title or f"RMS over {v.size} fields: mean {v[ok].mean():.2f} µm, "
+                 f"max {v[ok].max():.2f} µm{lost}", fontsize=9)
     return fig
 
 
@@ -431,10 +448,19 @@ def plot_progress(history, *, title: str | None = None) -> Figure:
 
 
 def plot_image(img, *, title: str | None = None) -> Figure:
-    """Show an ``[H, W, 3]`` image in [0, 1]."""
+    """Show an ``[H, W, 3]`` (or ``[H, W]`` grey) float image in [0, 1] (values beyond are
+    clipped). An integer image (sRGB codes), NaN or ±inf, or another shape is refused
+    (``ValueError``): before, a uint8 image was clipped to white and black, and NaN drew
+    nothing."""
+    from .optics import checks
+
+    a = checks.float_image(img, "plot_image", hint=" (a rendered or decoded image)")
+    if a.ndim not in (2, 3) or (a.ndim == 3 and a.shape[-1] != 3) or a.size == 0:
+        raise ValueError(f"plot_image: img must be an [H, W, 3] or [H, W] image of at least "
+                         f"one pixel, got shape {a.shape}")
     fig = _figure(5, 5)
     ax = fig.add_subplot(1, 1, 1)
-    ax.imshow(np.clip(np.asarray(img, float), 0, 1))
+    ax.imshow(np.clip(a, 0, 1), cmap="gray" if a.ndim == 2 else None)
     ax.set_axis_off()
     if title:
         ax.set_title(title, fontsize=9)

@@ -93,7 +93,8 @@ class Stage:
         checks.number(self.fov, "fov", w, lo=0, hi=180, lo_open=True, hi_open=True,
                       unit="deg (full diagonal)")
         checks.number(self.fnum, "fnum", w, lo=0, lo_open=True)
-        checks.number(self.steps, "steps", w, lo=0, integer=True)
+        checks.number(self.steps, "steps", w, lo=0, hi=checks.MAX_STEPS, integer=True,
+                      unit="solver steps")  # 10**12 was accepted: a run that never ends
         checks.number(self.beta, "beta", w, lo=0, hi=1)
         checks.number(self.pin, "pin", w, lo=0)
         checks.number(self.lr, "lr", w, lo=0, lo_open=True, unit="(multiplier)")

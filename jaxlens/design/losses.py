@@ -362,6 +362,23 @@ class ImageObjective(eqx.Module):
     alpha: float = eqx.field(static=True, default=1e-4)
     weight: float = eqx.field(static=True, default=1e3)
 
+    def __check_init__(self):
+        # Before: spp=0 built an objective whose renders had no rays (a zero image, a loss
+        # of the scene's mean square), and a NaN scene a NaN loss at the first step.
+        w = "ImageObjective"
+        if not all(hasattr(self.ray, a) for a in ("pmap", "sampling", "field_rms")):
+            raise TypeError(f"{w}: ray must be a ray Objective (jaxlens.design.Objective), got "
+                            f"{type(self.ray).__name__}")
+        checks.number(self.spp, "spp", w, lo=1, hi=checks.MAX_SAMPLES, integer=True,
+                      unit="rays per pixel and wavelength")
+        checks.number(self.alpha, "alpha", w, lo=0, unit="(alignment penalty weight)")
+        checks.number(self.weight, "weight", w, lo=0, lo_open=True, unit="(pixel error weight)")
+        if self.scene.ndim != 3 or self.scene.shape[-1] != 3 or self.scene.size == 0:
+            raise ValueError(f"{w}: scene must be an [H, W, 3] linear image, got shape "
+                             f"{self.scene.shape}")
+        if not checks.is_traced(self.scene):
+            checks.float_image(self.scene, w, "scene")
+
     @property
     def sampling(self) -> RayLoss:
         return self.ray.sampling

@@ -215,12 +215,12 @@ def check_args(args, given=None) -> None:
     """Refuse any option outside its range (ValueError naming option, value, range, unit)."""
     from jaxlens.design.materials import CatalogRegion
     from jaxlens.design.multistart import MAX_ROBUST_DRAWS, MAX_STEP_SCALE
+    from jaxlens.experiments.tolerance import check_threshold
 
     w, n = "design", checks.number
     n(args.fov, "--fov", w, lo=0, hi=180, lo_open=True, hi_open=True, unit="deg")
     n(args.fnum, "--fnum", w, lo=0, lo_open=True)
-    # The curriculum starts at an easier spec: an explicit start beyond the target is refused
-    # (only the defaults follow --fov and --fnum).
+    # An explicit curriculum start beyond the target is refused (defaults follow --fov/--fnum).
     if args.fov_start is not None:
         n(args.fov_start, "--fov-start", w, lo=0, hi=args.fov, lo_open=True,
           unit="deg (at most --fov)")
@@ -247,7 +247,8 @@ def check_args(args, given=None) -> None:
     n(args.tolerance_trials, "--tolerance-trials", w, lo=0, hi=MAX_TRIALS, integer=True)
     n(args.tolerance_aware, "--tolerance-aware", w, lo=0, hi=MAX_ROBUST_DRAWS, integer=True)
     n(args.population, "--population", w, lo=1, hi=64, integer=True, unit="starts per design")
-    n(args.tolerance_threshold, "--tolerance-threshold", w, lo=0, lo_open=True, unit="µm")
+    if (bad := check_threshold(args.tolerance_threshold, "--tolerance-threshold")) is not None:
+        raise ValueError(f"{w}: {bad}")  # before: > 0 only (1e300 µm: every trial passed)
     for flag, text in (("--materials", args.materials),
                        ("--material-catalogs", args.material_catalogs)):
         # An empty entry was dropped: "E48R,,OKP4" gave 2 materials for 3 elements.

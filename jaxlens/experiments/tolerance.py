@@ -32,11 +32,29 @@ import shlex
 import sys
 import time
 
-from jaxlens.experiments.runfolder import OneLineParser, fail
+from jaxlens.experiments.runfolder import OneLineParser, check_writable, fail
 from jaxlens.optics import checks
 
 DEFAULT_TRIALS = 200
 DEFAULT_THRESHOLD_UM = 6.0
+THRESHOLD_RANGE_UM = (0.01, 1000.0)
+"""Accepted yield thresholds (µm of mean RMS spot radius after refocusing) of this CLI and of
+the classical CLI's ``--tolerance-threshold``: a designed lens of these specs has a few µm;
+below 0.01 µm no trial passes (0.006 is a threshold given in mm), and above 1000 µm (1 mm, a
+blur across an eighth of a 7.66 mm sensor) every trial passes: the yield then says nothing
+(``--threshold 1e300`` was analysed)."""
+
+
+def check_threshold(value: float, option: str) -> ValueError | None:
+    """The refusal of a yield threshold (µm) outside ``THRESHOLD_RANGE_UM``, or None."""
+    lo, hi = THRESHOLD_RANGE_UM
+    if math.isfinite(value) and lo <= value <= hi:
+        return None
+    hint = (f" (was it given in mm? {value:g} mm is {value * 1e3:g} µm)"
+            if math.isfinite(value) and 0 < value < lo else "")
+    return ValueError(f"{option} must be a finite number in [{lo:g}, {hi:g}] µm (the mean RMS "
+                      f"spot radius after refocusing a trial must meet; the designs have a few "
+                      f"µm), got {value:g}{hint}")
 
 FLAG_RANGES = {
     "decenter": (0.1, "mm", "an element decenter tolerance: a lens of this spec, a few mm "
@@ -53,8 +71,14 @@ the classical spec (a 7.66 mm-diagonal sensor)."""
 def check_design(lens, spec) -> None:
     """Refuse a lens this analysis would misdescribe: it is run at the classical spec's
     entrance pupil, and the 16 × 16 grid is folded onto 36 fields by rotational symmetry."""
+    from jaxlens.design.spec import DesignSpec
+    from jaxlens.optics.lens import Lens
     from jaxlens.optics.surfaces import EvenAsphere, Standard
 
+    for arg, v, kind in (("lens", lens, Lens), ("spec", spec, DesignSpec)):
+        if not isinstance(v, kind):  # before: AttributeError 'NoneType' ... 'epd'
+            raise TypeError(f"check_design: {arg} must be a {kind.__module__}.{kind.__name__}, "
+                            f"got {type(v).__name__}")
     epd = float(lens.epd)
     if not math.isclose(epd, spec.epd, rel_tol=1e-6):
         raise ValueError(
@@ -237,6 +261,8 @@ def write_report(report: dict, out: str, *, plots: bool = True) -> dict:
     return the paths."""
     from jaxlens import plot
 
+    if not isinstance(out, str | os.PathLike) or not os.fspath(out).strip():
+        raise ValueError(f"write_report: out must be a folder name, got {out!r}")
     os.makedirs(out, exist_ok=True)
     mc = report.get("_mc")
     data = {k: v for k, v in report.items() if k != "_mc"}
@@ -282,9 +308,9 @@ def main(argv: list[str] | None = None) -> int:
     if not 1 <= args.trials <= MAX_TRIALS:
         return fail(prog, ValueError(f"--trials must be a whole number >= 1 and <= "
                                      f"{MAX_TRIALS}, got {args.trials}"))
-    if not (math.isfinite(args.threshold) and args.threshold > 0):
-        return fail(prog, ValueError(f"--threshold must be a finite number > 0 µm, got "
-                                     f"{args.threshold}"))
+    bad = check_threshold(args.threshold, "--threshold")
+    if bad is not None:  # before: no upper bound (1e300 µm was analysed, every trial passed)
+        return fail(prog, bad)
     from jaxlens.design.init import MAX_SEED  # the design package, for its limit only
 
     if not 0 <= args.seed <= MAX_SEED:  # PRNGKey overflowed after the sensitivity pass
@@ -297,9 +323,17 @@ def main(argv: list[str] | None = None) -> int:
             return fail(prog, ValueError(f"{flag} must be a finite number >= 0 and <= {hi:g} "
                                          f"{unit} ({what}), got {v:g}"))
     if not os.path.isfile(args.design):
-        return fail(prog, ValueError(f"design file {args.design!r} not found"))
+        what = "is a folder" if os.path.isdir(args.design) else "not found"
+        return fail(prog, ValueError(f"design file {args.design!r} {what} (a .zmx or jaxlens "
+                                     f".json file)"))
+    if not args.out.strip():  # os.makedirs('') failed after the analysis
+        return fail(prog, ValueError("--out needs a folder name, got an empty one"))
     if os.path.exists(args.out) and not os.path.isdir(args.out):  # found only when writing
         return fail(prog, ValueError(f"--out {args.out} is a file, not a folder"))
+    try:  # a folder under a file, or an unwritable place, was found only when writing
+        check_writable(args.out, "--out")
+    except ValueError as e:
+        return fail(prog, e)
     earlier = [f for f in OUTPUT_FILES if os.path.exists(os.path.join(args.out, f))]
     if earlier and not args.overwrite:
         return fail(prog, ValueError(f"--out {args.out} already holds {', '.join(earlier)} of an "

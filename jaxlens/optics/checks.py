@@ -388,14 +388,45 @@ class NoMaterials:
     materials = ()
 
 
-def material_range(material) -> tuple[float, float]:
-    """Wavelength range (µm) over which a material's data holds."""
+def _stated_range(material) -> tuple[float, float] | None:
     live = getattr(material, "table_range", None)  # a table's own span, if concrete
     rng = live() if callable(live) else None
-    rng = rng if rng is not None else getattr(material, "wavelength_range", None)
+    return rng if rng is not None else getattr(material, "wavelength_range", None)
+
+
+def _pole_window(material) -> tuple[float, float] | None:
+    """A formula's window between its resonances (``AbstractMaterial.pole_window``) where
+    it narrows ``GENERIC_RANGE_UM``; None otherwise."""
+    window = getattr(material, "pole_window", None)
+    w = window() if callable(window) and not is_traced(material) else None
+    lo, hi = GENERIC_RANGE_UM
+    return w if w is not None and (w[0] > lo or w[1] < hi) else None
+
+
+def material_range(material) -> tuple[float, float]:
+    """Wavelength range (µm) over which a material's data holds: a catalog's or a table's
+    stated range; for a formula without one (a ``Sellmeier`` built from coefficients),
+    ``GENERIC_RANGE_UM`` narrowed to the window between its poles that holds the d line
+    (beyond a resonance its index is finite but not the material's)."""
+    rng = _stated_range(material)
     if rng is not None:
         return float(rng[0]), float(rng[1])
-    return GENERIC_RANGE_UM
+    lo, hi = GENERIC_RANGE_UM
+    w = _pole_window(material)
+    return (max(lo, w[0]), min(hi, w[1])) if w is not None else (lo, hi)
+
+
+def range_reason(material, what: str) -> str:
+    """Why :func:`material_range` is what it is, naming the material."""
+    label = _label(material, what).strip()
+    if _stated_range(material) is None and _pole_window(material) is not None:
+        lo, hi = _pole_window(material)
+        ends = " and ".join(f"{v:.4g} µm" for v in (lo, hi) if 0 < v < math.inf)
+        return (f"the range of {label} between the resonances (poles) of its "
+                f"{type(material).__name__} formula at {ends}, beyond which the formula gives "
+                f"no index of the material (a CatalogMaterial with a wavelength_range states "
+                f"another)")
+    return f"the data range of {label}"
 
 
 def _label(material, what: str) -> str:
@@ -419,9 +450,9 @@ def wavelength_range(lens) -> tuple[float, float, str]:
             continue
         a, b = material_range(m)
         if a > lo:
-            lo, why_lo = a, f"the data range of {_label(m, what)}"
+            lo, why_lo = a, range_reason(m, what)
         if b < hi:
-            hi, why_hi = b, f"the data range of {_label(m, what)}"
+            hi, why_hi = b, range_reason(m, what)
     reason = why_lo if why_lo == why_hi else f"{why_lo}; {why_hi}"
     return lo, hi, reason
 
@@ -492,8 +523,8 @@ def material_wavelengths(m, wl, where: str, arg: str = "wavelength", hint: str =
     a, bad = _outside(wl, lo, hi)
     if np.any(bad):
         raise ValueError(
-            f"{where}: {arg} {fmt(a[bad])} µm is outside {lo:g}–{hi:g} µm, the data range of "
-            f"{_label(m, '').strip()}{_nm_hint(a[bad])}{hint}")
+            f"{where}: {arg} {fmt(a[bad])} µm is outside {lo:g}–{hi:g} µm, "
+            f"{range_reason(m, '')}{_nm_hint(a[bad])}{hint}")
 
 
 def lens_intact(lens, where: str) -> None:

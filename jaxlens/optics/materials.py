@@ -12,6 +12,8 @@ arrays, so a model glass's (nd, Vd) can be optimised.
 
 from __future__ import annotations
 
+import math
+
 import equinox as eqx
 import jax
 import jax.numpy as jnp
@@ -67,6 +69,39 @@ class AbstractMaterial(eqx.Module):
         """
         return self.index(wavelength)
 
+    def poles(self) -> np.ndarray | None:
+        """Wavelengths (µm) where the dispersion formula diverges (its resonances), concrete
+        values only; None for a formula without poles or a traced material."""
+        return None
+
+    def pole_window(self) -> tuple[float, float] | None:
+        """The wavelengths (µm) between the formula's poles that hold the d line: a formula
+        without a stated data range (a ``Sellmeier`` built from coefficients, not a catalog
+        glass) describes its material there only. Beyond a resonance its index is finite and
+        plausible but no longer that of the material (N-BK7's Sellmeier gives n = 3.0 at 11
+        µm, past its 10.2 µm resonance). None: no poles, a traced material, or a formula
+        whose index at the d line is not a valid index (an infrared material whose formula
+        has a resonance above the d line: no window is assumed). A lens's wavelengths must lie
+        in it (``checks.material_range``); a ``CatalogMaterial`` (``wavelength_range``)
+        states its own range instead, as the shipped SILICON does (1.36–11 µm, beyond its
+        formula's 1.13 µm resonance).
+        """
+        p = self.poles()
+        if p is None or p.size == 0:
+            return None
+        leaves, treedef = jax.tree_util.tree_flatten(self)
+        key = (treedef, tuple(_leaf_key(x) for x in leaves))
+        if key not in _WINDOWS:  # a lens's checks ask for it at every analysis call
+            with jax.ensure_compile_time_eval():
+                n = float(np.asarray(type(self).index.__wrapped__(self, jnp.asarray(LAMBDA_D))))
+            below, above = p[p < LAMBDA_D], p[p > LAMBDA_D]
+            window = (float(below.max()) if below.size else 0.0,
+                      float(above.min()) if above.size else math.inf)
+            if len(_WINDOWS) > 4096:
+                _WINDOWS.clear()
+            _WINDOWS[key] = window if np.isfinite(n) and n >= 1.0 else None
+        return _WINDOWS[key]
+
     def __init_subclass__(cls, **kwargs):
         # Every ``index`` refuses a concrete wavelength that cannot be in µm (e.g. 587.6, in
         # nm), which every formula would otherwise turn into a plausible wrong index. Traced
@@ -76,6 +111,23 @@ class AbstractMaterial(eqx.Module):
         super().__init_subclass__(**kwargs)
         if "index" in cls.__dict__:
             cls.index = _unit_checked(cls.__dict__["index"])
+
+
+_WINDOWS: dict = {}
+"""``pole_window`` by material values (the d-line index is a JAX evaluation, about 0.5 ms)."""
+
+
+def _concrete(a) -> np.ndarray | None:
+    """A coefficient array as float64 numpy, or None when traced."""
+    return None if checks.is_traced(a) else np.asarray(a, float)
+
+
+def _pole_wavelengths(squares, strengths) -> np.ndarray:
+    """The poles (µm) λ = √c of terms s/(λ² − c) with c > 0 and s ≠ 0."""
+    c = np.asarray(squares, float).reshape(-1)
+    b = np.broadcast_to(np.asarray(strengths, float).reshape(-1), c.shape)
+    keep = np.isfinite(c) & (c > 0) & (b != 0)
+    return np.sqrt(c[keep])
 
 
 def _leaf_key(x):
@@ -170,6 +222,11 @@ class Sellmeier(AbstractMaterial):
     def index(self, wavelength):
         w2 = jnp.asarray(wavelength)[..., None] ** 2
         return jnp.sqrt(1.0 + jnp.sum(self.B * w2 / (w2 - self.C), axis=-1))
+
+    def poles(self):
+        """√C_i (µm) of the terms with B_i ≠ 0."""
+        c, b = _concrete(self.C), _concrete(self.B)
+        return None if c is None or b is None else _pole_wavelengths(c, b)
 
 
 class Schott(AbstractMaterial):
@@ -292,6 +349,13 @@ def abbe_number(material: AbstractMaterial, *, held_ends: bool = False) -> Array
                 f"is held constant beyond its ends, which gives no Abbe number (pass "
                 f"held_ends=True for the number of the held values)")
     n = material.extrapolated_index(jnp.asarray([LAMBDA_D, LAMBDA_F, LAMBDA_C]))
+    if not (held_ends or checks.is_traced(n) or np.all(np.isfinite(np.asarray(n)))):
+        # Before: NaN (a formula with a resonance between the F and C lines, or n² < 0).
+        raise ValueError(f"abbe_number: {type(material).__name__}"
+                         f"{f' {material.name!r}' if getattr(material, 'name', '') else ''} "
+                         f"gives no finite index at the d, F and C lines ({LAMBDA_D}, "
+                         f"{LAMBDA_F}, {LAMBDA_C} µm): got {checks.fmt(np.asarray(n))}, so it "
+                         f"has no Abbe number")
     return (n[0] - 1.0) / (n[1] - n[2])
 
 
@@ -319,6 +383,11 @@ class Herzberger(AbstractMaterial):
         big_l = 1.0 / (w2 - 0.028)
         return a[0] + a[1] * big_l + a[2] * big_l**2 + a[3] * w2 + a[4] * w2**2 + a[5] * w2**3
 
+    def poles(self):
+        """√0.028 µm (0.167 µm), where L diverges, unless B and C are 0."""
+        c = _concrete(self.coeffs)
+        return None if c is None else _pole_wavelengths(0.028, abs(c[1]) + abs(c[2]))
+
 
 class Sellmeier2(AbstractMaterial):
     """Sellmeier 2 formula (Zemax formula 4).
@@ -337,6 +406,11 @@ class Sellmeier2(AbstractMaterial):
         w2 = jnp.asarray(wavelength) ** 2
         a, b1, l1, b2, l2 = (self.coeffs[i] for i in range(5))
         return jnp.sqrt(1.0 + a + b1 * w2 / (w2 - l1**2) + b2 / (w2 - l2**2))
+
+    def poles(self):
+        """|λ1| and |λ2| (µm) of the terms with B1, B2 ≠ 0."""
+        c = _concrete(self.coeffs)
+        return None if c is None else _pole_wavelengths(c[[2, 4]] ** 2, c[[1, 3]])
 
 
 class Conrady(AbstractMaterial):
@@ -371,6 +445,11 @@ class Handbook1(AbstractMaterial):
         a = self.coeffs
         return jnp.sqrt(a[0] + a[1] / (w2 - a[2]) - a[3] * w2)
 
+    def poles(self):
+        """√C (µm) unless B is 0."""
+        c = _concrete(self.coeffs)
+        return None if c is None else _pole_wavelengths(c[2], c[1])
+
 
 class Handbook2(AbstractMaterial):
     """Handbook of Optics 2 formula (Zemax formula 8).
@@ -389,6 +468,11 @@ class Handbook2(AbstractMaterial):
         a = self.coeffs
         return jnp.sqrt(a[0] + a[1] * w2 / (w2 - a[2]) - a[3] * w2)
 
+    def poles(self):
+        """√C (µm) unless B is 0."""
+        c = _concrete(self.coeffs)
+        return None if c is None else _pole_wavelengths(c[2], c[1])
+
 
 class Sellmeier4(AbstractMaterial):
     """Sellmeier 4 formula (Zemax formula 9).
@@ -406,6 +490,11 @@ class Sellmeier4(AbstractMaterial):
         w2 = jnp.asarray(wavelength) ** 2
         a = self.coeffs
         return jnp.sqrt(a[0] + a[1] * w2 / (w2 - a[2]) + a[3] * w2 / (w2 - a[4]))
+
+    def poles(self):
+        """√C and √E (µm) of the terms with B, D ≠ 0."""
+        c = _concrete(self.coeffs)
+        return None if c is None else _pole_wavelengths(c[[2, 4]], c[[1, 3]])
 
 
 EXTENDED_POWERS = (0, 2, -2, -4, -6, -8, -10, -12)
