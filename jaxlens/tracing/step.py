@@ -15,7 +15,11 @@ Conventions:
     negative gap (a surface whose vertex lies before the previous one, legal in Zemax
     files) or to a dummy surface (same index on both sides) on the previous vertex plane,
     such as a reference plane at a mirror: there the ray goes back along its line to the
-    surface where it must, as in a sequential trace.
+    surface where it must, as in a sequential trace. With ``go_back`` (a lens's
+    ``negative_propagation``, set for lenses read from Zemax files) every surface after the
+    first is reached the way Zemax reaches it: the first root ahead of the ray if there is
+    one, else the first along the line behind it (t < 0), on the surface's sheet through its
+    vertex; a ray the default rule traces is traced identically (``either_root``).
 
 Intersections:
     Planes, spheres and conics are intersected in closed form (the numerically stable
@@ -185,6 +189,13 @@ def _conic_root_jvp(bounded_below, primals, tangents):
     return t_marked, jnp.where(good, -df / jnp.where(good, f_t, 1.0), 0.0)
 
 
+def either_root(ahead, behind):
+    """The root ahead of the ray where there is one, else the one behind it (both marked
+    ``MISS`` where none): the ``go_back`` rule of ``intersect``, shared with
+    ``surface_adjoint`` so that both take the same values."""
+    return jnp.where(jnp.abs(ahead) < MISS_BELOW, ahead, behind)
+
+
 def converged(f, df, t):
     """Whether the Newton iterate ``t`` (mm) is accepted as a root of F (a hit): with
     τ = 64·sqrt(eps)·(1 + |t|) mm (``NEWTON_TOL``), |F(t)| ≤ τ and the next Newton step
@@ -279,7 +290,7 @@ def _residual(surface: AbstractSurface, o, d, t):
 
 def intersect(
     surface: AbstractSurface, o, d, newton_iters: int = DEFAULT_NEWTON_ITERS, *, first=False,
-    backward=None,
+    backward=None, go_back: bool = False,
 ):
     """Intersect rays with a surface in its local frame (vertex at the origin).
 
@@ -302,11 +313,20 @@ def intersect(
             lies before the previous one, as Zemax files allow): there the ray may travel
             back along its line to reach the surface (t < 0 counts, the first root along
             the line is taken). ``None``: no negative gaps.
+        go_back: (static; ignored on the first surface) the ray may go back along its
+            line to the surface anywhere (Zemax's negative propagation): the root found
+            with the rules above where there is one (so such rays are unchanged), else the
+            first root along the line behind the ray (t ≥ −``T_MAX``, the vertex sheet);
+            two intersections are computed (``either_root``).
 
     Returns:
         The ray parameter t of the intersection (from ``o``), ``[*batch]``, holding the
         ``MISS`` marker where no valid intersection was found (see ``unmark``).
     """
+    if go_back and not first:  # static: Zemax's rule (see above)
+        ahead = intersect(surface, o, d, newton_iters, backward=backward)
+        behind = intersect(surface, o, d, newton_iters, backward=True)
+        return either_root(ahead, behind)
     eps = jnp.finfo(o[2].dtype).eps
     if first:
         t_min = None
@@ -552,7 +572,7 @@ class RayState(eqx.Module):
 
 def surface_step(surface, z_vertex, st: RayState, n_before, n_after, *, first, refracts,
                  newton_iters, gap=None, reflects=False, obscured=None, apertures=(),
-                 wavelength=None):
+                 wavelength=None, go_back=False):
     """Move rays to one surface (vertex at global ``z_vertex``) and refract them there.
 
     ``n_before``/``n_after`` are the refractive indices on either side; ``first`` applies the
@@ -569,6 +589,9 @@ def surface_step(surface, z_vertex, st: RayState, n_before, n_after, *, first, r
     ``wavelength`` (µm, shaped like the indices) is needed by a diffractive (``Binary2``,
     ``Grating``) surface only, which adds (λ/2π)Φ to ``opl``; other surfaces ignore it. A
     ``Grating`` may be a mirror (it then reflects the diffracted order); a ``Binary2`` may not.
+    ``go_back`` (static, ``Lens.negative_propagation``): wherever the surface lies nowhere
+    ahead of the ray, the ray goes back along its line to it, as in Zemax (``intersect``);
+    ignored on the first surface.
     """
     if isinstance(surface, DIFFRACTIVE) and (refracts or reflects):  # static, refused early
         kind = type(surface).__name__
@@ -586,8 +609,8 @@ def surface_step(surface, z_vertex, st: RayState, n_before, n_after, *, first, r
         dummy = jnp.all(n_before == n_after) & (not reflects)  # a scalar, as gap is
         backward = (gap < 0) | ((gap == 0) & dummy)
     t, ok = unmark(intersect(surface, o_local, st.d, newton_iters, first=first,
-                             backward=backward))
-    if not first:
+                             backward=backward, go_back=go_back))
+    if not first and not go_back:
         forward = t >= -1e3 * jnp.finfo(t.dtype).eps * (1 + jnp.abs(o_local[2]))
         ok = ok & (forward if backward is None else forward | backward)
     x, y, z = (oi + t * di for oi, di in zip(o_local, st.d, strict=True))
