@@ -19,7 +19,7 @@ Conventions:
     ``negative_propagation``, set for lenses read from Zemax files) every surface after the
     first is reached the way Zemax reaches it: the first root ahead of the ray if there is
     one, else the first along the line behind it (t < 0), on the surface's sheet through its
-    vertex; a ray the default rule traces is traced identically (``either_root``).
+    vertex; a ray the default rule traces takes the same root (``either_root``).
 
 Intersections:
     Planes, spheres and conics are intersected in closed form (the numerically stable
