@@ -225,8 +225,8 @@ def test_a_zmx_file_sets_the_flag_and_zmx_write_round_trips_it(tmp_path):
 @pytest.mark.slow
 @pytest.mark.skipif(not os.path.exists(NIKON), reason="the corpus7 files are not committed")
 def test_nikon_105_full_pupil_rays_pass_and_match_optiland():
-    from jaxlens.optics.lens import unclipped
     from jaxlens.io.zmx import ZmxWarning
+    from jaxlens.optics.lens import unclipped
     ref = _reference()["nikon105"]
     with pytest.warns(ZmxWarning, match="weighs its 2 fields"):  # the file's field weights
         lens = jl.load(NIKON)

@@ -75,10 +75,12 @@ Conventions:
     it (a negative propagation distance, t < 0), on every surface after the first and the
     image surface: the root taken is the first ahead of the ray, else the first along the
     line behind it, on the sheet of the surface through its vertex; a ray that the default
-    traces takes the same root (its values agree to rounding: the compiled program differs). The ``.zmx`` reader sets it (a patent lens's edges, or a
-    deep concave surface whose rim reaches past the stop, cross within the beam and Zemax
-    traces through); the design parameterisation refuses it. Surface 1 (object space)
-    follows the same rule either way (the whole line counts).
+    traces takes the same root (its values agree to rounding: the compiled program
+    differs). The ``.zmx`` reader sets it (a patent lens's edges, or a deep concave surface
+    whose rim reaches past the stop, cross within the beam and Zemax traces through); the
+    design parameterisation refuses it. Surface 1 (object space) follows the same rule
+    either way (the whole line counts). ``dataclasses.replace(lens,
+    negative_propagation=...)`` switches it; JSON files carry it (``negative_propagation``).
 
 The structure (surface kinds, counts, polynomial orders, stop index, mirrors) is static;
 every number is an array so ``jax.grad`` reaches it.
