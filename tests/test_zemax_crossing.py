@@ -48,9 +48,12 @@ C1, C2, GAP = 0.1, -0.05, 1.0  # front and back curvatures (1/mm), centre thickn
 HEIGHTS = (2.0, 6.0, 7.0)  # ray heights (mm): 2 mm traced forward, 6 and 7 mm go back
 
 
-def two_surface(go_back: bool, c2=C2) -> jl.Lens:
+def two_surface(go_back: bool, c2=C2, newton=False) -> jl.Lens:
+    """The hand-built lens; ``newton``: its back surface an ``EvenAsphere`` with zero
+    coefficients (the same sphere, intersected by Newton's method)."""
+    back = (jl.EvenAsphere(c=c2, coeffs=jnp.zeros(2)) if newton else jl.Standard(c=c2))
     return jl.Lens(
-        surfaces=(jl.Standard(c=C1), jl.Standard(c=c2)),
+        surfaces=(jl.Standard(c=C1), back),
         thickness=jnp.asarray([GAP, 30.0]),
         materials=(ModelGlass(1.5, 60.0), Air()),
         epd=jnp.asarray(16.0), wavelengths=jnp.asarray([WL]),
@@ -100,10 +103,11 @@ def _reference():
 # --------------------------------------------------------------- the hand-built lens
 
 @pytest.mark.parametrize("reverse_rule", [False, True])
-def test_default_rule_loses_the_ray_and_the_flag_traces_it_like_zemax(reverse_rule):
+@pytest.mark.parametrize("newton", [False, True])
+def test_default_rule_loses_the_ray_and_the_flag_traces_it_like_zemax(reverse_rule, newton):
     rays = two_surface_rays()
-    old = jl.trace_path(two_surface(False), rays, reverse_rule=reverse_rule)
-    new = jl.trace_path(two_surface(True), rays, reverse_rule=reverse_rule)
+    old = jl.trace_path(two_surface(False, newton=newton), rays, reverse_rule=reverse_rule)
+    new = jl.trace_path(two_surface(True, newton=newton), rays, reverse_rule=reverse_rule)
     # Default: the 2 mm ray passes; the 6 and 7 mm rays are lost at the back surface.
     assert np.asarray(old.valid[1]).tolist() == [True, False, False]
     assert np.asarray(new.valid).all()
@@ -132,12 +136,14 @@ def test_two_surface_lens_matches_optiland_per_surface():
     assert np.asarray(ref["valid"]).all()
 
 
-@pytest.mark.parametrize("reverse_rule", [False, True])
-def test_gradient_of_a_backward_ray_matches_finite_differences(reverse_rule):
+@pytest.mark.parametrize("reverse_rule, newton", [
+    (False, False), (True, False), (False, True),
+    pytest.param(True, True, marks=pytest.mark.slow)])
+def test_gradient_of_a_backward_ray_matches_finite_differences(reverse_rule, newton):
     rays = two_surface_rays()
 
     def image_y(c2):
-        out = jl.trace(two_surface(True, c2), rays, reverse_rule=reverse_rule)
+        out = jl.trace(two_surface(True, c2, newton), rays, reverse_rule=reverse_rule)
         return out.origin[:, 1], out.valid
 
     y, valid = image_y(jnp.asarray(C2))
@@ -177,6 +183,27 @@ def test_the_flag_is_a_checked_static_bool():
     # The backward (sensor to object) trace's mirrored lens keeps it.
     from jaxlens.tracing.backward import reversed_lens
     assert reversed_lens(lens).negative_propagation is True
+
+
+def test_backward_trace_retraces_a_ray_that_went_back():
+    # The 6 and 7 mm rays, reversed at the image, go back through the mirrored lens to
+    # where they met surface 1 (the backward trace honours the flag); by the default rule
+    # the mirrored lens loses them too.
+    from jaxlens.tracing.backward import trace_backward
+    rays = two_surface_rays()
+    for go_back in (True, False):
+        lens = two_surface(go_back)
+        path = jl.trace_path(two_surface(True), rays)
+        img = jl.Rays(path.origin[-1], -path.direction[-1], WL)
+        back = trace_backward(lens, img)
+        if go_back:
+            assert np.asarray(back.valid).all()
+            np.testing.assert_allclose(np.asarray(back.origin), np.asarray(path.origin[0]),
+                                       rtol=0, atol=1e-11)
+            np.testing.assert_allclose(np.asarray(back.direction), -np.asarray(rays.direction),
+                                       rtol=0, atol=1e-12)
+        else:
+            assert np.asarray(back.valid).tolist() == [True, False, False]
 
 
 # ----------------------------------------------------------------- design and files
