@@ -107,8 +107,15 @@ def bounded_div(num, den):
     return jnp.where(ok, num / jnp.where(ok, den, 1.0), 0.0), ok
 
 
-def _conic_root(surface: AbstractSurface, o, d, t_min):
+# ``conic_root_arrays``'s mode for ``intersect``'s ``go_back``: the first root at or past
+# t_min, else the first root along the whole line (``either_root`` of the two, in one pass).
+AHEAD_ELSE_BEHIND = "ahead_else_behind"
+
+
+def _conic_root(surface: AbstractSurface, o, d, t_min, go_back=False):
     """The first intersection with the base conic: ``conic_root_arrays`` on a surface."""
+    if go_back:
+        return conic_root_arrays(AHEAD_ELSE_BEHIND, surface.c, surface.k, *o, *d, t_min)
     if t_min is None:
         return conic_root_arrays(False, surface.c, surface.k, *o, *d, jnp.zeros_like(o[2]))
     return conic_root_arrays(True, surface.c, surface.k, *o, *d, t_min)
@@ -128,6 +135,9 @@ def conic_root_arrays(bounded_below, c, k, ox, oy, oz, dx, dy, dz, t_min):
     root along the line would pick. The roots are the stable pair t1 = cc/q (finite as c -> 0) and
     t2 = q/a; which one is chosen is decided on numerators and denominators, so the
     result is a single division (one fused pass over the rays, see the module notes).
+    With ``bounded_below=AHEAD_ELSE_BEHIND`` (``intersect``'s ``go_back``) the root is the
+    first past t_min if there is one, else the first along the whole line: the result of
+    ``either_root`` on the two calls with t_min and with −``T_MAX``, from one quadratic.
     """
     ck = c * (1 + k)
     a = c * (dx * dx + dy * dy) + ck * dz * dz
@@ -139,17 +149,25 @@ def conic_root_arrays(bounded_below, c, k, ox, oy, oz, dx, dy, dz, t_min):
     root = jnp.where(pos, jnp.sqrt(jnp.where(pos, disc, 1.0)), 0.0)
     q = -b + jnp.where(b <= 0, root, -root)
 
-    def usable(num, den):
-        """Whether the root num/den is bounded, on the vertex sheet and past t_min."""
+    def usable(num, den, past_t_min=bool(bounded_below)):
+        """Whether the root num/den is bounded, on the vertex sheet and (if asked) past t_min."""
         sign, size = jnp.sign(den), jnp.abs(den)
         ok = real & (jnp.abs(num) < T_MAX * size)
         ok = ok & (ck * (oz * den + num * dz) * sign <= size)
-        if bounded_below:
+        if past_t_min:
             ok = ok & (num * sign >= t_min * size)
         return ok
 
     u1, u2 = usable(cc, q), usable(q, a)
-    if bounded_below:  # the first root along the ray
+    if bounded_below == AHEAD_ELSE_BEHIND:  # static: ahead of t_min, else anywhere on the line
+        sign = jnp.sign(q) * jnp.sign(a)
+        t1_first = cc * a * sign <= q * q * sign
+        # The roots anywhere on the line: on the sheet and bounded (|t| < T_MAX).
+        w1, w2 = usable(cc, q, False), usable(q, a, False)
+        ahead = u1 | u2
+        first_is_t1 = jnp.where(ahead, u1 & (~u2 | t1_first), w1 & (~w2 | t1_first))
+        u1, u2 = u1 | w1, u2 | w2
+    elif bounded_below:  # the first root along the ray
         # t1 <= t2  <=>  cc·a <= q² when q·a > 0 (the inequality flips when q·a < 0).
         sign = jnp.sign(q) * jnp.sign(a)
         first_is_t1 = u1 & (~u2 | (cc * a * sign <= q * q * sign))
@@ -316,14 +334,20 @@ def intersect(
         go_back: (static; ignored on the first surface) the ray may go back along its
             line to the surface anywhere (Zemax's negative propagation): the root found
             with the rules above where there is one (so such rays are unchanged), else the
-            first root along the line behind the ray (t ≥ −``T_MAX``, the vertex sheet);
-            two intersections are computed (``either_root``).
+            first root along the line behind the ray (t ≥ −``T_MAX``, the vertex sheet):
+            for a conic both from one quadratic (``AHEAD_ELSE_BEHIND``), for a polynomial
+            surface two Newton intersections (``either_root``).
 
     Returns:
         The ray parameter t of the intersection (from ``o``), ``[*batch]``, holding the
         ``MISS`` marker where no valid intersection was found (see ``unmark``).
     """
     if go_back and not first:  # static: Zemax's rule (see above)
+        if not surface.has_polynomial:  # both roots from one quadratic
+            t_min = -1e3 * jax.lax.stop_gradient(jnp.finfo(o[2].dtype).eps * (1 + jnp.abs(o[2])))
+            if backward is not None:
+                t_min = jnp.where(backward, -T_MAX, t_min)
+            return _conic_root(surface, o, d, t_min, go_back=True)
         ahead = intersect(surface, o, d, newton_iters, backward=backward)
         behind = intersect(surface, o, d, newton_iters, backward=True)
         return either_root(ahead, behind)

@@ -34,7 +34,8 @@ their cotangents through unchanged, as in ``surface_step``; a ray grazing the su
 below eps·|N|₁) gets no root derivative, as in ``step.conic_root_arrays``.
 
 ``go_back`` (static, ``Lens.negative_propagation``) takes the root as ``step.intersect`` does
-with it (``step.either_root``: ahead of the ray, else behind it); the reverse rules need no
+with it (ahead of the ray, else behind it: ``step.AHEAD_ELSE_BEHIND``, and for polynomial
+surfaces ``step.either_root`` of two Newton intersections); the reverse rules need no
 change, since they start from the root taken, wherever it lies on the line.
 """
 
@@ -51,11 +52,11 @@ from ..optics.surfaces import EvenAsphere, Hybrid, OddAsphere, Standard, TiltedP
 from ..optics.toroidal import Toroidal
 from ..optics.xypolynomial import XYPolynomial
 from .step import (
+    AHEAD_ELSE_BEHIND,
     T_MAX,
     RayState,
     bounded_div,
     conic_root_arrays,
-    either_root,
     intersect,
     refraction_gain,
     surface_normal,
@@ -90,10 +91,9 @@ def _advance(first, refracts, params, p, d, valid, opl, go_back=False):
     else:
         t_min = -1e3 * (eps * (1 + jnp.abs(o[2])))
         t_min = jnp.where(bk, -T_MAX, t_min)
-        t_m = conic_root_arrays(True, c, k, *o, *d, t_min)
-        if go_back:  # static: as step.intersect's go_back
-            behind = jnp.where(True, -T_MAX, -1e3 * (eps * (1 + jnp.abs(o[2]))))
-            t_m = either_root(t_m, conic_root_arrays(True, c, k, *o, *d, behind))
+        # Static: as step.intersect's go_back (ahead of t_min, else behind, in one pass).
+        mode = AHEAD_ELSE_BEHIND if go_back else True
+        t_m = conic_root_arrays(mode, c, k, *o, *d, t_min)
     t, ok = unmark(t_m)
     if not first and not go_back:
         ok = ok & ((t >= -1e3 * eps * (1 + jnp.abs(o[2]))) | bk)
