@@ -78,6 +78,13 @@ class Parameterization(AbstractParameterization):
 
     def __check_init__(self):
         _even_aspheres(self.template, self.optical, "Parameterization: template")
+        if self.template.negative_propagation:  # static
+            # A design whose surfaces cross must be penalised (the spacing regulariser), not
+            # traced through as Zemax traces a file's crossed surfaces.
+            raise ValueError("Parameterization: the template has negative_propagation=True "
+                             "(rays go back along their line to crossed surfaces, as for a "
+                             "lens read from .zmx); design traces by the default rule: use "
+                             "dataclasses.replace(lens, negative_propagation=False)")
 
     @property
     def n_terms(self) -> int:

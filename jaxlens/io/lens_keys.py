@@ -26,6 +26,8 @@ TOP = {
     "object": ("object_distance", "object_dist", "obj_distance", "object_thickness"),
     "sensor": (), "afocal_image_space": ("afocal", "afocal_image", "afocal_mode"),
     "ray_aiming": ("aim", "aiming", "raim", "ray_aim"),
+    "negative_propagation": ("go_back", "negative_distance", "negative_propagation_distance",
+                             "backward_propagation"),
 }
 SURFACE = {
     "type": ("surface_type",), "curvature": ("c", "cv", "curv", "curvature_y"),

@@ -23,7 +23,9 @@ an afocal image space (``Lens.afocal_image``; written only when true). ``"ray_ai
 is the lens's ray aiming (``Lens.aim``): ``"paraxial"`` (the default: rays through the
 paraxial entrance pupil), ``"real"`` (aimed at the real stop, sized paraxially) or
 ``"real_marginal"`` (the stop sized by the real marginal ray); written only when not
-paraxial.
+paraxial. ``"negative_propagation": true`` lets rays go back along their line to any
+surface after the first, as Zemax does (``Lens.negative_propagation``, set for lenses read
+from ``.zmx`` files); written only when true (a file without it traces by the default rule).
 
 Saving writes every number with Python's shortest round-trip representation, so
 ``load(save(lens))`` gives the same numbers to the last bit (as float64), the same
@@ -585,6 +587,9 @@ def lens_from_dict(d: dict, *, source: str = "<lens>") -> Lens:
         raise ValueError(f"{source}: ray_aiming must be one of {list(RAY_AIMING)} (rays "
                          f"through the paraxial entrance pupil, or aimed at the real stop), "
                          f"got {aim!r}")
+    back = d.get("negative_propagation", False)
+    if not isinstance(back, bool):  # "false" or 0 would be read as a flag silently
+        raise ValueError(f"{source}: negative_propagation must be true or false, got {back!r}")
     lens = Lens(
         surfaces=tuple(surfaces),
         thickness=_arr(np.array(thick)),
@@ -606,6 +611,7 @@ def lens_from_dict(d: dict, *, source: str = "<lens>") -> Lens:
         apertures=tuple(apertures),
         afocal_image=afocal,
         aim=aim,
+        negative_propagation=back,
     )
     # Before the paraxial work of the aperture: values the lens cannot be traced with.
     checks.wavelengths(lens, wl, f"{source}: {key}", "wavelength")
@@ -679,6 +685,8 @@ def lens_to_dict(lens: Lens) -> dict:
         out["afocal_image_space"] = True
     if lens.aim != "paraxial":
         out["ray_aiming"] = lens.aim
+    if lens.negative_propagation:
+        out["negative_propagation"] = True
     if lens.vignetting is not None:
         v = np.asarray(lens.vignetting, np.float64)
         out["fields"]["vignetting"] = {k: _out(v[:, j])

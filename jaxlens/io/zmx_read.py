@@ -576,6 +576,9 @@ def _lens(f: ZmxFile, text: str, path: str, strict: bool, unknown_glass: str) ->
         vignetting=None if vignetting is None else _arr(vignetting),
         afocal_image=zmx_system.afocal_image_space(f.ftyp),
         aim=aim,
+        # Zemax reaches every surface after the first along the ray's line, going back where
+        # it must (surfaces that cross within the beam, a stop inside a deep concave surface).
+        negative_propagation=True,
     )
     # Before the paraxial work of the aperture: values the lens cannot be traced with.
     for w, ln in zip(wl, wl_lines, strict=True):
@@ -592,7 +595,6 @@ def _lens(f: ZmxFile, text: str, path: str, strict: bool, unknown_glass: str) ->
         except ValueError as e:
             raise f.ftyp.error(str(e)) from None
     checks.field_angles(np.asarray(lens.fields), f"{path}: XFLN/YFLN", "field angles")
-    zmx_surfaces.check_crossings(lens, [*body, img], u, strict)
     # After the fields are angles (image-height fields were on axis before); the beam's
     # radius on a PARAXIAL surface is its DIAM (OpticStudio's automatic one is the beam's).
     zmx_surfaces.check_opd_modes(lens, {

@@ -438,7 +438,12 @@ def notes(lens: Lens, wl: np.ndarray) -> list[str]:
 
 
 def dumps(lens: Lens, path: str = "lens.zmx", *, model_glass: str = "blank"):
-    """Text of a ``.zmx`` file and the glass writer holding its side AGF catalogs."""
+    """Text of a ``.zmx`` file and the glass writer holding its side AGF catalogs.
+
+    ``Lens.negative_propagation`` is not written: Zemax always lets a ray go back along its
+    line to a surface (a negative distance), and the reader sets the flag on every lens it
+    reads. A lens traced by the default rule (the flag off) whose surfaces cross within the
+    beam is therefore read back with rays passing there that it lost."""
     if model_glass not in ("blank", "agf"):
         raise ValueError(f"save_zmx: model_glass must be 'blank' or 'agf', got {model_glass!r}")
     stem = os.path.splitext(os.path.basename(os.fspath(path)))[0]

@@ -65,6 +65,22 @@ Conventions:
     ``point_source``) and the analyses built on them use it where their ``aim`` is None;
     ``render``, the relative illumination and the design losses launch their own rays at
     the paraxial pupil whatever it is (speed).
+    ``negative_propagation`` (static) chooses how a ray reaches each surface after the first.
+    False (the default): forward along its direction (a ray parameter t ≥ 0), except across a
+    negative gap (a vertex before the previous one) or to a dummy surface (same medium on
+    both sides) on the previous vertex plane, where it may go back along its line; a ray
+    that would have to go back elsewhere is lost (the surfaces cross within the beam; the
+    design losses penalise such shapes). True: as in Zemax's sequential trace (and
+    optiland's), a ray that meets a surface nowhere ahead of it goes back along its line to
+    it (a negative propagation distance, t < 0), on every surface after the first and the
+    image surface: the root taken is the first ahead of the ray, else the first along the
+    line behind it, on the sheet of the surface through its vertex; a ray that the default
+    traces takes the same root (its values agree to rounding: the compiled program
+    differs). The ``.zmx`` reader sets it (a patent lens's edges, or a deep concave surface
+    whose rim reaches past the stop, cross within the beam and Zemax traces through); the
+    design parameterisation refuses it. Surface 1 (object space) follows the same rule
+    either way (the whole line counts). ``dataclasses.replace(lens,
+    negative_propagation=...)`` switches it; JSON files carry it (``negative_propagation``).
 
 The structure (surface kinds, counts, polynomial orders, stop index, mirrors) is static;
 every number is an array so ``jax.grad`` reaches it.
@@ -254,6 +270,10 @@ class Lens(eqx.Module):
     afocal_image: bool = eqx.field(static=True, default=False, converter=_flag("afocal_image"))
     # Ray aiming, "paraxial", "real" or "real_marginal": see the module doc.
     aim: str = eqx.field(static=True, default="paraxial", converter=_aim)
+    # Whether rays may go back along their line to any surface after the first (Zemax's
+    # negative propagation): see the module doc.
+    negative_propagation: bool = eqx.field(static=True, default=False,
+                                           converter=_flag("negative_propagation"))
 
     def __check_init__(self):
         n = len(self.surfaces)

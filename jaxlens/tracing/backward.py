@@ -139,7 +139,8 @@ def reversed_lens(lens: Lens, *, image_distance=None) -> Lens:
     Returns:
         A ``Lens`` whose surface 1 is the original last surface, with the stop index and media
         mirrored, a flat image surface and no sensor. Field, wavelength and pupil data are
-        copied unchanged (they do not describe the mirrored system).
+        copied unchanged (they do not describe the mirrored system), and so is
+        ``negative_propagation`` (a ray's line is the same either way).
     """
     if lens.mirrors or lens.obscurations or lens.apertures or any(
             isinstance(s, CoordinateBreak) for s in lens.surfaces):
@@ -167,6 +168,7 @@ def reversed_lens(lens: Lens, *, image_distance=None) -> Lens:
         image=Standard(),
         sensor=None,
         name=f"{lens.name}:reversed" if lens.name else "reversed",
+        negative_propagation=lens.negative_propagation,
     )
 
 

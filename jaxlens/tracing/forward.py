@@ -9,6 +9,10 @@ Runs of surfaces of the same kind and shape are traced with one ``lax.scan``; wi
 (``uniform_surfaces``, coefficients zero-padded, the sag unchanged), so the whole lens is one
 scan and compile time does not grow with the surface count. Conventions: see ``step``.
 
+A lens with ``negative_propagation`` (static; set by the ``.zmx`` reader) lets rays go back
+along their line to every surface after the first, as Zemax does (``step.intersect``'s
+``go_back``); without it the operations are those of the default rule.
+
 Mirrors (``Lens.mirrors``) and coordinate breaks (``optics.coordinates``) are static
 structure: each is traced on its own, outside the scans, and a lens without them is traced by
 exactly the same operations as before they existed. After a coordinate break the rays are in
@@ -164,6 +168,8 @@ def _trace_states(lens: Lens, rays: Rays, newton_iters: int, upto: int | None, *
     surfaces, zs, idx, lens = _prepare(lens, rays, uniform) if prepared is None else prepared
     shape = jnp.shape(rays.wavelength)  # indices are per wavelength, not per ray
     st = state_from_rays(rays)
+    # Static: Zemax's rule, a ray may go back along its line to any surface after the first.
+    back = {"go_back": True} if lens.negative_propagation else {}
 
     def step(surface, z, st, n1, n2, *, first, refracts=True, gap=None, reflects=False,
              obscured=None, apertures=()):
@@ -171,11 +177,12 @@ def _trace_states(lens: Lens, rays: Rays, newton_iters: int, upto: int | None, *
                                                       obscured=obscured, apertures=apertures):
             return surface_adjoint.rule_step(surface, z, st, n1, n2, first=first,
                                              refracts=refracts, newton_iters=newton_iters,
-                                             gap=gap)
+                                             gap=gap, **back)
         # The wavelength is read by a diffractive (Binary2) surface only.
         return surface_step(surface, z, st, n1, n2, first=first, refracts=refracts,
                             newton_iters=newton_iters, gap=gap, reflects=reflects,
-                            obscured=obscured, apertures=apertures, wavelength=rays.wavelength)
+                            obscured=obscured, apertures=apertures, wavelength=rays.wavelength,
+                            **back)
 
     last = len(surfaces) - 1 if upto is None else upto
     breaks = frozenset(i for i, s in enumerate(surfaces) if isinstance(s, CoordinateBreak))

@@ -15,7 +15,11 @@ Conventions:
     negative gap (a surface whose vertex lies before the previous one, legal in Zemax
     files) or to a dummy surface (same index on both sides) on the previous vertex plane,
     such as a reference plane at a mirror: there the ray goes back along its line to the
-    surface where it must, as in a sequential trace.
+    surface where it must, as in a sequential trace. With ``go_back`` (a lens's
+    ``negative_propagation``, set for lenses read from Zemax files) every surface after the
+    first is reached the way Zemax reaches it: the first root ahead of the ray if there is
+    one, else the first along the line behind it (t < 0), on the surface's sheet through its
+    vertex; a ray the default rule traces takes the same root (``either_root``).
 
 Intersections:
     Planes, spheres and conics are intersected in closed form (the numerically stable
@@ -103,8 +107,15 @@ def bounded_div(num, den):
     return jnp.where(ok, num / jnp.where(ok, den, 1.0), 0.0), ok
 
 
-def _conic_root(surface: AbstractSurface, o, d, t_min):
+# ``conic_root_arrays``'s mode for ``intersect``'s ``go_back``: the first root at or past
+# t_min, else the first root along the whole line (``either_root`` of the two, in one pass).
+AHEAD_ELSE_BEHIND = "ahead_else_behind"
+
+
+def _conic_root(surface: AbstractSurface, o, d, t_min, go_back=False):
     """The first intersection with the base conic: ``conic_root_arrays`` on a surface."""
+    if go_back:
+        return conic_root_arrays(AHEAD_ELSE_BEHIND, surface.c, surface.k, *o, *d, t_min)
     if t_min is None:
         return conic_root_arrays(False, surface.c, surface.k, *o, *d, jnp.zeros_like(o[2]))
     return conic_root_arrays(True, surface.c, surface.k, *o, *d, t_min)
@@ -124,6 +135,9 @@ def conic_root_arrays(bounded_below, c, k, ox, oy, oz, dx, dy, dz, t_min):
     root along the line would pick. The roots are the stable pair t1 = cc/q (finite as c -> 0) and
     t2 = q/a; which one is chosen is decided on numerators and denominators, so the
     result is a single division (one fused pass over the rays, see the module notes).
+    With ``bounded_below=AHEAD_ELSE_BEHIND`` (``intersect``'s ``go_back``) the root is the
+    first past t_min if there is one, else the first along the whole line: the result of
+    ``either_root`` on the two calls with t_min and with −``T_MAX``, from one quadratic.
     """
     ck = c * (1 + k)
     a = c * (dx * dx + dy * dy) + ck * dz * dz
@@ -135,17 +149,25 @@ def conic_root_arrays(bounded_below, c, k, ox, oy, oz, dx, dy, dz, t_min):
     root = jnp.where(pos, jnp.sqrt(jnp.where(pos, disc, 1.0)), 0.0)
     q = -b + jnp.where(b <= 0, root, -root)
 
-    def usable(num, den):
-        """Whether the root num/den is bounded, on the vertex sheet and past t_min."""
+    def usable(num, den, past_t_min=bool(bounded_below)):
+        """Whether the root num/den is bounded, on the vertex sheet and (if asked) past t_min."""
         sign, size = jnp.sign(den), jnp.abs(den)
         ok = real & (jnp.abs(num) < T_MAX * size)
         ok = ok & (ck * (oz * den + num * dz) * sign <= size)
-        if bounded_below:
+        if past_t_min:
             ok = ok & (num * sign >= t_min * size)
         return ok
 
     u1, u2 = usable(cc, q), usable(q, a)
-    if bounded_below:  # the first root along the ray
+    if bounded_below == AHEAD_ELSE_BEHIND:  # static: ahead of t_min, else anywhere on the line
+        sign = jnp.sign(q) * jnp.sign(a)
+        t1_first = cc * a * sign <= q * q * sign
+        # The roots anywhere on the line: on the sheet and bounded (|t| < T_MAX).
+        w1, w2 = usable(cc, q, False), usable(q, a, False)
+        ahead = u1 | u2
+        first_is_t1 = jnp.where(ahead, u1 & (~u2 | t1_first), w1 & (~w2 | t1_first))
+        u1, u2 = u1 | w1, u2 | w2
+    elif bounded_below:  # the first root along the ray
         # t1 <= t2  <=>  cc·a <= q² when q·a > 0 (the inequality flips when q·a < 0).
         sign = jnp.sign(q) * jnp.sign(a)
         first_is_t1 = u1 & (~u2 | (cc * a * sign <= q * q * sign))
@@ -183,6 +205,13 @@ def _conic_root_jvp(bounded_below, primals, tangents):
     eps = jnp.finfo(f_t.dtype).eps
     good = hit & (jnp.abs(f_t) > eps * (jnp.abs(fx) + jnp.abs(fy) + jnp.abs(fz)))
     return t_marked, jnp.where(good, -df / jnp.where(good, f_t, 1.0), 0.0)
+
+
+def either_root(ahead, behind):
+    """The root ahead of the ray where there is one, else the one behind it (both marked
+    ``MISS`` where none): the ``go_back`` rule of ``intersect``, shared with
+    ``surface_adjoint`` so that both take the same values."""
+    return jnp.where(jnp.abs(ahead) < MISS_BELOW, ahead, behind)
 
 
 def converged(f, df, t):
@@ -279,7 +308,7 @@ def _residual(surface: AbstractSurface, o, d, t):
 
 def intersect(
     surface: AbstractSurface, o, d, newton_iters: int = DEFAULT_NEWTON_ITERS, *, first=False,
-    backward=None,
+    backward=None, go_back: bool = False,
 ):
     """Intersect rays with a surface in its local frame (vertex at the origin).
 
@@ -302,11 +331,26 @@ def intersect(
             lies before the previous one, as Zemax files allow): there the ray may travel
             back along its line to reach the surface (t < 0 counts, the first root along
             the line is taken). ``None``: no negative gaps.
+        go_back: (static; ignored on the first surface) the ray may go back along its
+            line to the surface anywhere (Zemax's negative propagation): the root found
+            with the rules above where there is one (so such rays are unchanged), else the
+            first root along the line behind the ray (t ≥ −``T_MAX``, the vertex sheet):
+            for a conic both from one quadratic (``AHEAD_ELSE_BEHIND``), for a polynomial
+            surface two Newton intersections (``either_root``).
 
     Returns:
         The ray parameter t of the intersection (from ``o``), ``[*batch]``, holding the
         ``MISS`` marker where no valid intersection was found (see ``unmark``).
     """
+    if go_back and not first:  # static: Zemax's rule (see above)
+        if not surface.has_polynomial:  # both roots from one quadratic
+            t_min = -1e3 * jax.lax.stop_gradient(jnp.finfo(o[2].dtype).eps * (1 + jnp.abs(o[2])))
+            if backward is not None:
+                t_min = jnp.where(backward, -T_MAX, t_min)
+            return _conic_root(surface, o, d, t_min, go_back=True)
+        ahead = intersect(surface, o, d, newton_iters, backward=backward)
+        behind = intersect(surface, o, d, newton_iters, backward=True)
+        return either_root(ahead, behind)
     eps = jnp.finfo(o[2].dtype).eps
     if first:
         t_min = None
@@ -552,7 +596,7 @@ class RayState(eqx.Module):
 
 def surface_step(surface, z_vertex, st: RayState, n_before, n_after, *, first, refracts,
                  newton_iters, gap=None, reflects=False, obscured=None, apertures=(),
-                 wavelength=None):
+                 wavelength=None, go_back=False):
     """Move rays to one surface (vertex at global ``z_vertex``) and refract them there.
 
     ``n_before``/``n_after`` are the refractive indices on either side; ``first`` applies the
@@ -569,6 +613,9 @@ def surface_step(surface, z_vertex, st: RayState, n_before, n_after, *, first, r
     ``wavelength`` (µm, shaped like the indices) is needed by a diffractive (``Binary2``,
     ``Grating``) surface only, which adds (λ/2π)Φ to ``opl``; other surfaces ignore it. A
     ``Grating`` may be a mirror (it then reflects the diffracted order); a ``Binary2`` may not.
+    ``go_back`` (static, ``Lens.negative_propagation``): wherever the surface lies nowhere
+    ahead of the ray, the ray goes back along its line to it, as in Zemax (``intersect``);
+    ignored on the first surface.
     """
     if isinstance(surface, DIFFRACTIVE) and (refracts or reflects):  # static, refused early
         kind = type(surface).__name__
@@ -586,8 +633,8 @@ def surface_step(surface, z_vertex, st: RayState, n_before, n_after, *, first, r
         dummy = jnp.all(n_before == n_after) & (not reflects)  # a scalar, as gap is
         backward = (gap < 0) | ((gap == 0) & dummy)
     t, ok = unmark(intersect(surface, o_local, st.d, newton_iters, first=first,
-                             backward=backward))
-    if not first:
+                             backward=backward, go_back=go_back))
+    if not first and not go_back:
         forward = t >= -1e3 * jnp.finfo(t.dtype).eps * (1 + jnp.abs(o_local[2]))
         ok = ok & (forward if backward is None else forward | backward)
     x, y, z = (oi + t * di for oi, di in zip(o_local, st.d, strict=True))

@@ -32,6 +32,11 @@ keeps forward mode) measured 5-34 % slower than this rule, and not faster than J
 derivative of ``surface_step`` on a quiet machine. Rays invalid on entry or lost here pass
 their cotangents through unchanged, as in ``surface_step``; a ray grazing the surface (|d·N|
 below eps·|N|₁) gets no root derivative, as in ``step.conic_root_arrays``.
+
+``go_back`` (static, ``Lens.negative_propagation``) takes the root as ``step.intersect`` does
+with it (ahead of the ray, else behind it: ``step.AHEAD_ELSE_BEHIND``, and for polynomial
+surfaces ``step.either_root`` of two Newton intersections); the reverse rules need no
+change, since they start from the root taken, wherever it lies on the line.
 """
 
 from __future__ import annotations
@@ -47,6 +52,7 @@ from ..optics.surfaces import EvenAsphere, Hybrid, OddAsphere, Standard, TiltedP
 from ..optics.toroidal import Toroidal
 from ..optics.xypolynomial import XYPolynomial
 from .step import (
+    AHEAD_ELSE_BEHIND,
     T_MAX,
     RayState,
     bounded_div,
@@ -73,7 +79,7 @@ def supported(surface, *, reflects=False, obscured=None, apertures=()) -> bool:
     return type(surface) is Standard or (type(surface) in SAG_KINDS and surface.has_polynomial)
 
 
-def _advance(first, refracts, params, p, d, valid, opl):
+def _advance(first, refracts, params, p, d, valid, opl, go_back=False):
     """((new p, new d, new valid, new opl), t, g): ``surface_step``'s operations, in order."""
     c, k, sd, zv, n1, n2, bk = params
     o = (p[0], p[1], p[2] - zv)
@@ -85,9 +91,11 @@ def _advance(first, refracts, params, p, d, valid, opl):
     else:
         t_min = -1e3 * (eps * (1 + jnp.abs(o[2])))
         t_min = jnp.where(bk, -T_MAX, t_min)
-        t_m = conic_root_arrays(True, c, k, *o, *d, t_min)
+        # Static: as step.intersect's go_back (ahead of t_min, else behind, in one pass).
+        mode = AHEAD_ELSE_BEHIND if go_back else True
+        t_m = conic_root_arrays(mode, c, k, *o, *d, t_min)
     t, ok = unmark(t_m)
-    if not first:
+    if not first and not go_back:
         ok = ok & ((t >= -1e3 * eps * (1 + jnp.abs(o[2]))) | bk)
     x, y, z = (oi + t * di for oi, di in zip(o, d, strict=True))
     rim = sd**2 * (1 + 64 * eps)
@@ -207,20 +215,21 @@ def _backward(refracts, params, p, d, v, t, g, cts):
     return (s_c, s_k, jnp.zeros_like(sd), s_zv, g_n1, g_n2, None), out_p, out_d, None, L
 
 
-@functools.partial(jax.custom_vjp, nondiff_argnums=(0, 1))
-def reverse_step(first, refracts, params, p, d, valid, opl):
+@functools.partial(jax.custom_vjp, nondiff_argnums=(0, 1, 2))
+def reverse_step(first, refracts, go_back, params, p, d, valid, opl):
     """(p, d, valid, opl) after the surface; ``params`` = (c, k, semi_diameter, z_vertex,
-    n_before, n_after, backward), ``backward`` where the ray may go back along its line.
+    n_before, n_after, backward), ``backward`` where the ray may go back along its line
+    (everywhere, ahead first, with the static ``go_back``).
     Reverse mode only (``jvp``/``jacfwd`` raise a TypeError)."""
-    return _advance(first, refracts, params, p, d, valid, opl)[0]
+    return _advance(first, refracts, params, p, d, valid, opl, go_back)[0]
 
 
-def _reverse_fwd(first, refracts, params, p, d, valid, opl):
-    out, t, g = _advance(first, refracts, params, p, d, valid, opl)
+def _reverse_fwd(first, refracts, go_back, params, p, d, valid, opl):
+    out, t, g = _advance(first, refracts, params, p, d, valid, opl, go_back)
     return out, (params, p, d, out[2], t, g)
 
 
-def _reverse_bwd(first, refracts, res, cts):
+def _reverse_bwd(first, refracts, _go_back, res, cts):
     params, p, d, v, t, g = res
     return _backward(refracts, params, p, d, v, t, g, cts)
 
@@ -229,22 +238,24 @@ reverse_step.defvjp(_reverse_fwd, _reverse_bwd)
 
 
 def conic_step(surface, z_vertex, st: RayState, n_before, n_after, *, first, refracts,
-               gap=None) -> RayState:
+               gap=None, go_back=False) -> RayState:
     """``surface_step`` on a ``supported`` surface (same arguments, same values), with the
     hand-written reverse rule ``reverse_step`` (no forward mode)."""
     params = (surface.c, surface.k, surface.semi_diameter, z_vertex, n_before, n_after,
               _backward_flag(gap, first, n_before, n_after))
-    p, d, v, opl = reverse_step(first, refracts, params, st.p, st.d, st.valid, st.opl)
+    p, d, v, opl = reverse_step(first, refracts, bool(go_back) and not first, params, st.p,
+                                st.d, st.valid, st.opl)
     return RayState(p, d, v, opl)
 
 
-def _advance_sag(first, refracts, iters, params, p, d, valid, opl):
+def _advance_sag(first, refracts, iters, params, p, d, valid, opl, go_back=False):
     """((new p, new d, new valid, new opl), t, g): ``surface_step``'s operations, in order,
     on a surface with polynomial terms (Newton intersection, normal from ``sag_and_grad``)."""
     surface, zv, n1, n2, bk = params
     o = (p[0], p[1], p[2] - zv)
-    t, ok = unmark(intersect(surface, o, d, iters, first=first, backward=None if first else bk))
-    if not first:
+    t, ok = unmark(intersect(surface, o, d, iters, first=first, backward=None if first else bk,
+                             go_back=go_back))
+    if not first and not go_back:
         ok = ok & ((t >= -1e3 * jnp.finfo(t.dtype).eps * (1 + jnp.abs(o[2]))) | bk)
     x, y, z = (oi + t * di for oi, di in zip(o, d, strict=True))
     rim = surface.semi_diameter**2 * (1 + 64 * jnp.finfo(x.dtype).eps)
@@ -297,19 +308,19 @@ def _backward_sag(refracts, params, p, d, v, t, g, cts):
     return (b_surface, s_zv, g_n1, g_n2, None), out_p, out_d, None, L
 
 
-@functools.partial(jax.custom_vjp, nondiff_argnums=(0, 1, 2))
-def reverse_sag_step(first, refracts, iters, params, p, d, valid, opl):
+@functools.partial(jax.custom_vjp, nondiff_argnums=(0, 1, 2, 3))
+def reverse_sag_step(first, refracts, iters, go_back, params, p, d, valid, opl):
     """``reverse_step`` for a surface with polynomial terms; ``params`` = (surface,
     z_vertex, n_before, n_after, backward), ``iters`` Newton iterations."""
-    return _advance_sag(first, refracts, iters, params, p, d, valid, opl)[0]
+    return _advance_sag(first, refracts, iters, params, p, d, valid, opl, go_back)[0]
 
 
-def _sag_fwd(first, refracts, iters, params, p, d, valid, opl):
-    out, t, g = _advance_sag(first, refracts, iters, params, p, d, valid, opl)
+def _sag_fwd(first, refracts, iters, go_back, params, p, d, valid, opl):
+    out, t, g = _advance_sag(first, refracts, iters, params, p, d, valid, opl, go_back)
     return out, (params, p, d, out[2], t, g)
 
 
-def _sag_bwd(first, refracts, iters, res, cts):
+def _sag_bwd(first, refracts, iters, _go_back, res, cts):
     params, p, d, v, t, g = res
     return _backward_sag(refracts, params, p, d, v, t, g, cts)
 
@@ -325,21 +336,23 @@ def _backward_flag(gap, first, n_before, n_after):
 
 
 def sag_step(surface, z_vertex, st: RayState, n_before, n_after, *, first, refracts,
-             newton_iters, gap=None) -> RayState:
+             newton_iters, gap=None, go_back=False) -> RayState:
     """``surface_step`` on a ``supported`` surface with polynomial terms (same arguments,
     same values), with the hand-written reverse rule ``reverse_sag_step``."""
     params = (surface, z_vertex, n_before, n_after,
               _backward_flag(gap, first, n_before, n_after))
-    p, d, v, opl = reverse_sag_step(first, refracts, newton_iters, params, st.p, st.d,
+    p, d, v, opl = reverse_sag_step(first, refracts, newton_iters,
+                                    bool(go_back) and not first, params, st.p, st.d,
                                     st.valid, st.opl)
     return RayState(p, d, v, opl)
 
 
 def rule_step(surface, z_vertex, st: RayState, n_before, n_after, *, first, refracts,
-              newton_iters, gap=None) -> RayState:
-    """``conic_step`` or ``sag_step``, whichever takes this ``supported`` surface."""
+              newton_iters, gap=None, go_back=False) -> RayState:
+    """``conic_step`` or ``sag_step``, whichever takes this ``supported`` surface;
+    ``go_back`` (static) as in ``step.surface_step``."""
     if type(surface) is Standard:
         return conic_step(surface, z_vertex, st, n_before, n_after, first=first,
-                          refracts=refracts, gap=gap)
+                          refracts=refracts, gap=gap, go_back=go_back)
     return sag_step(surface, z_vertex, st, n_before, n_after, first=first, refracts=refracts,
-                    newton_iters=newton_iters, gap=gap)
+                    newton_iters=newton_iters, gap=gap, go_back=go_back)
