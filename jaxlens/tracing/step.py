@@ -300,6 +300,67 @@ def continue_newton(residual, t, project=lambda t: t, max_iters: int = NEWTON_EX
     return jax.lax.while_loop(going, body, (0, t, last, going0))[1]
 
 
+def first_of_a_pair(residual, t, f, df, ok):
+    """The first root ahead of each ray where Newton found a later one (roots ``t``, with
+    F(t) = ``f`` and F'(t) = ``df``; ``ok`` where ``t`` is a hit that must be the first
+    root with t > 0). Returns (t, F(t), F'(t)).
+
+    A ray that starts close to a near-double root (it grazes the surface, entering and
+    leaving it a short way apart) can converge to the second root of the pair. F keeps the
+    sign of F(0) (the start) up to the first root, so at the first root F' has the other
+    sign; a root whose F' has F(0)'s sign had a root before it, and F changes sign between
+    the start and just before it: bisection finds that root there. The test needs F(0),
+    two more residual passes, taken only where some hit has F' < 0 (the sign of every first
+    root from a start before the surface, F(0) < 0; always after a mirror, where rays
+    travel toward −z); bisection runs only where some ray needs it. Forward values only
+    (no gradient): the caller's last step takes the implicit derivative at the root."""
+    eps = jnp.finfo(jnp.result_type(t)).eps
+    steps = BISECTION_STEPS[jnp.result_type(t) == jnp.float32]
+    suspect = ok & (df < 0)
+
+    def check(args):
+        t, f, df = args
+        f_start = residual(jnp.zeros_like(t))[0]
+        tol = NEWTON_TOL * jnp.sqrt(eps)
+        # Just before t, F has the sign of −F'(t): the bracket's end, a few tolerances back.
+        hi = t - 16 * tol * (1 + jnp.abs(t))
+        skipped = (suspect & (jnp.sign(f_start) == jnp.sign(df)) & (jnp.abs(f_start) > tol)
+                   & (hi > 0) & (jnp.sign(residual(hi)[0]) == -jnp.sign(f_start)))
+
+        def bisect(_, bracket):
+            lo, up = bracket
+            mid = 0.5 * (lo + up)
+            same = jnp.sign(residual(mid)[0]) == jnp.sign(f_start)
+            return jnp.where(same, mid, lo), jnp.where(same, up, mid)
+
+        def search(args):
+            t, f, df = args
+            lo, up = jax.lax.fori_loop(0, steps, bisect, (jnp.zeros_like(t), hi))
+            t_new = continue_newton(residual, jnp.where(skipped, 0.5 * (lo + up), t))
+            f_new, df_new = residual(t_new)
+            return tuple(jnp.where(skipped, a, b) for a, b in
+                         zip((t_new, f_new, df_new), (t, f, df), strict=True))
+
+        return run_if_any(skipped, search, (t, f, df))
+
+    return run_if_any(suspect, check, (t, f, df))
+
+
+# Bisection steps that take a bracket of up to 1e4 mm to rounding (float64, float32).
+BISECTION_STEPS = (80, 40)
+
+
+def run_if_any(flags, fn, x):
+    """``fn(x)`` where any of ``flags`` is set, else ``x``: a ``while_loop`` of at most one
+    pass, because under ``vmap`` a ``lax.cond`` on a batched predicate becomes a select that
+    always runs ``fn``, while a batched ``while_loop`` runs only while some member needs
+    it. Forward values only (``while_loop`` has no reverse-mode derivative)."""
+    def body(state):
+        return jnp.zeros((), bool), fn(state[1])
+
+    return jax.lax.while_loop(lambda state: state[0], body, (jnp.any(flags), x))[1]
+
+
 def _residual(surface: AbstractSurface, o, d, t):
     px, py, pz = (oi + t * di for oi, di in zip(o, d, strict=True))
     z, gx, gy, inside = surface.sag_and_grad(px, py)
@@ -404,6 +465,10 @@ def intersect(
     ok = converged(f0, df0, t0)
     if t_min is not None:
         ok = ok & (t0 >= t_min)
+        ahead_only = True if backward is None else ~backward
+        t0, f0, df0 = first_of_a_pair(lambda t: _residual(surf_s, o_s, d_s, t)[:2], t0, f0,
+                                      df0, ok & ahead_only)
+        ok = converged(f0, df0, t0) & (t0 >= t_min)
     # Flagged rays take the last step at a harmless point, so their gradient stays finite.
     t0 = jnp.where(ok, t0, 0.0)
     df0 = jax.lax.stop_gradient(jnp.where(ok, df0, 1.0))
