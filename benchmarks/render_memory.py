@@ -199,6 +199,10 @@ def run_isolated(size: int, spp: int, checkpoint: bool, patch: int, cap: int,
     return res
 
 
+# The worker's RSS cap (GiB): a Python process with JAX loaded already holds about 0.3 GiB.
+MIN_CAP_GIB, MAX_CAP_GIB = 0.5, 4096.0
+
+
 def _outcome(run: dict, cap_gib: float) -> str:
     if "peak_rss_bytes" in run:
         return "completed"
@@ -259,8 +263,10 @@ def main(argv=None) -> None:
         if getattr(args, name) < lo:
             ap.error(f"--{name.replace('_', '-')} must be a whole number >= {lo}, "
                      f"got {getattr(args, name)}")
-    if not 0 < args.cap_gib < float("inf"):
-        ap.error(f"--cap-gib must be a positive number of GiB, got {args.cap_gib}")
+    if not MIN_CAP_GIB <= args.cap_gib <= MAX_CAP_GIB:  # also NaN and inf
+        ap.error(f"--cap-gib must be a positive number of GiB, in {MIN_CAP_GIB:g}–"
+                 f"{MAX_CAP_GIB:g} GiB (below, the cap stops any worker at once), got "
+                 f"{args.cap_gib}")
     if args.worker:
         print(json.dumps(worker(args.size, args.spp, bool(args.checkpoint), args.patch,
                                 args.lens)))

@@ -282,3 +282,12 @@ def test_benchmark_clis_refuse_an_empty_out(module, argv, kind, capsys):
     assert e.value.code == 2
     assert re.search(rf"argument --out: needs a {kind}'s path, got an empty one$",
                      one_line(capsys))
+
+
+@pytest.mark.parametrize("cap", ["1e-12", "0.1", "1e6"])
+def test_render_memory_cap_outside_its_range_is_refused(cap):
+    """--cap-gib 1e-12 was rounded to a 0-byte cap, which stops every worker at once."""
+    from benchmarks import render_memory
+    with pytest.raises(SystemExit) as e:
+        render_memory.main(["--cap-gib", cap])
+    assert e.value.code == 2
