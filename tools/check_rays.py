@@ -237,9 +237,10 @@ def set_media(optic, lens, wl, own) -> float:
 def optiland_image(optic, o, d, wl, scale, shift):
     """Global image intercepts (mm), validity, the position (1-based in optiland's surfaces)
     where each ray stopped (0: it did not) and where it first went backward (optiland takes
-    negative distances; jaxlens stops such a ray unless the surface is a dummy on the
-    previous vertex plane or the gap is negative). ``shift``: optiland's global frame minus
-    jaxlens's (mm)."""
+    negative distances, as jaxlens does for a lens read from ``.zmx``, which sets
+    ``Lens.negative_propagation``; a lens without it stops such a ray unless the surface is a
+    dummy on the previous vertex plane or the gap is negative). ``shift``: optiland's global
+    frame minus jaxlens's (mm)."""
     m = o.shape[0]
     rays = RealRays(*((o + shift) / scale).T.copy(), *d.T.copy(), np.ones(m), np.full(m, wl))
     sg = optic.surfaces
@@ -338,7 +339,7 @@ def check_file(path: str) -> dict:
                     why = "the ray runs in the image plane (no single intercept)"
                 elif geometric and not vj[k] and back[k] and numbers[back[k] - 1] == sj[k]:
                     why = ("optiland goes backward (a negative distance) to the surface where "
-                           "jaxlens stops the ray")
+                           "jaxlens stops the ray (a lens without negative_propagation)")
                 elif not geometric and not vjc[k] and vo[k]:
                     key = apertures_optiland_ignores(blocks.get(int(sjc[k]), []))
                     why = f"optiland ignores {key}" if key else ""
