@@ -53,6 +53,8 @@ def _on_sphere(surface):
                        semi_diameter=surface.semi_diameter)
 
 
+@pytest.mark.slow  # 19 s (CI time); rebase_conic and rebase_conics are checked in CI by the
+# two other tests, the design evaluation by test_evaluate and the classical smoke run
 def test_design_written_on_spheres_is_rebased_with_its_sag_paraxial_data_and_evaluation():
     """Table 1's best design, written on its base spheres as designed, is rebased: several
     conics change, while the sag, EFL, BFL and the Table 1 evaluation stay."""
