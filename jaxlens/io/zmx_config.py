@@ -247,9 +247,6 @@ def _thickness_pickups(f: ZmxFile, thick: set) -> None:
         src = ln.int(1, "PZUP source surface", lo=0)
         if src not in thick:
             continue
-        if not src < len(f.surfs):
-            raise ln.error(f"the thickness pickup names surface {src}; the file has surfaces "
-                           f"0..{len(f.surfs) - 1}")
         rest = [ln.float(i, "PZUP value") for i in range(2, min(len(ln.tokens), 5))]
         if rest[:3] != [1.0, 0.0, 0.0][:len(rest)]:
             raise ln.error(f"a thickness pickup from surface {src} other than a plain copy "
@@ -280,9 +277,6 @@ def _curvature_pickups(f: ZmxFile, curved: set) -> None:
         src = ln.int(3, "curvature pickup's source surface", lo=0)
         if src not in curved:
             continue
-        if not src < len(f.surfs):
-            raise ln.error(f"the curvature pickup names surface {src}; the file has surfaces "
-                           f"0..{len(f.surfs) - 1}")
         scale = ln.float(4, "curvature pickup's scale factor")
         if abs(scale) != 1:
             raise ln.error(f"a curvature pickup of scale {ln.tokens[4]} from surface {src}, "
@@ -311,9 +305,6 @@ def _parameter_pickups(f: ZmxFile, changed: set) -> None:
             src = ln.int(2, "PPAR source surface", lo=0)
             if src not in changed:
                 continue
-            if not 0 <= src < len(f.surfs):
-                raise ln.error(f"PPAR picks up surface {src}; the file has surfaces "
-                               f"0..{len(f.surfs) - 1}")
             if len(ln.tokens) > 5 and ln.float(5, "PPAR column") != 0:
                 raise ln.error(f"a parameter pickup from another column ({ln.tokens[5]}) of a "
                                f"surface this configuration changes; jaxlens cannot tell "
