@@ -419,7 +419,7 @@ def intersect(
     o_s, d_s = jax.lax.stop_gradient((o, d))
     surf_s = jax.lax.stop_gradient(surface)
     ahead_only = None if first else (True if backward is None else ~backward)
-    if go_back and not first:  # static: the search ahead, then behind where it found nothing
+    if go_back:  # static, not first: the search ahead, then behind where it found nothing
         def more(state):
             k, _, _, _, ok = state
             return (k == 0) | ((k == 1) & jnp.any(~ok))
