@@ -403,15 +403,6 @@ def intersect(
         The ray parameter t of the intersection (from ``o``), ``[*batch]``, holding the
         ``MISS`` marker where no valid intersection was found (see ``unmark``).
     """
-    if go_back and not first:  # static: Zemax's rule (see above)
-        if not surface.has_polynomial:  # both roots from one quadratic
-            t_min = -1e3 * jax.lax.stop_gradient(jnp.finfo(o[2].dtype).eps * (1 + jnp.abs(o[2])))
-            if backward is not None:
-                t_min = jnp.where(backward, -T_MAX, t_min)
-            return _conic_root(surface, o, d, t_min, go_back=True)
-        ahead = intersect(surface, o, d, newton_iters, backward=backward)
-        behind = intersect(surface, o, d, newton_iters, backward=True)
-        return either_root(ahead, behind)
     eps = jnp.finfo(o[2].dtype).eps
     if first:
         t_min = None
@@ -422,6 +413,12 @@ def intersect(
         if backward is not None:
             t_min = jnp.where(backward, -T_MAX, t_min)
         t_plane = 0.0
+    if go_back and not first:  # static: Zemax's rule (see above)
+        if not surface.has_polynomial:  # both roots from one quadratic
+            return _conic_root(surface, o, d, t_min, go_back=True)
+        ahead = intersect(surface, o, d, newton_iters, backward=backward)
+        behind = intersect(surface, o, d, newton_iters, backward=True)
+        return either_root(ahead, behind)
     if not surface.has_polynomial:
         # Conics: the closed form is exact (its derivative: ``_conic_root_jvp``).
         return _conic_root(surface, o, d, t_min) + t_plane
