@@ -19,7 +19,7 @@ Conventions:
     ``negative_propagation``, set for lenses read from Zemax files) every surface after the
     first is reached the way Zemax reaches it: the first root ahead of the ray if there is
     one, else the first along the line behind it (t < 0), on the surface's sheet through its
-    vertex; a ray the default rule traces takes the same root (``either_root``).
+    vertex; a ray the default rule traces takes the same root.
 
 Intersections:
     Planes, spheres and conics are intersected in closed form (the numerically stable
@@ -108,7 +108,7 @@ def bounded_div(num, den):
 
 
 # ``conic_root_arrays``'s mode for ``intersect``'s ``go_back``: the first root at or past
-# t_min, else the first root along the whole line (``either_root`` of the two, in one pass).
+# t_min, else the first root along the whole line (both from one quadratic).
 AHEAD_ELSE_BEHIND = "ahead_else_behind"
 
 
@@ -136,8 +136,8 @@ def conic_root_arrays(bounded_below, c, k, ox, oy, oz, dx, dy, dz, t_min):
     t2 = q/a; which one is chosen is decided on numerators and denominators, so the
     result is a single division (one fused pass over the rays, see the module notes).
     With ``bounded_below=AHEAD_ELSE_BEHIND`` (``intersect``'s ``go_back``) the root is the
-    first past t_min if there is one, else the first along the whole line: the result of
-    ``either_root`` on the two calls with t_min and with −``T_MAX``, from one quadratic.
+    first past t_min if there is one, else the first along the whole line (as the two
+    calls with t_min and with −``T_MAX`` would give), from one quadratic.
     """
     ck = c * (1 + k)
     a = c * (dx * dx + dy * dy) + ck * dz * dz
@@ -205,13 +205,6 @@ def _conic_root_jvp(bounded_below, primals, tangents):
     eps = jnp.finfo(f_t.dtype).eps
     good = hit & (jnp.abs(f_t) > eps * (jnp.abs(fx) + jnp.abs(fy) + jnp.abs(fz)))
     return t_marked, jnp.where(good, -df / jnp.where(good, f_t, 1.0), 0.0)
-
-
-def either_root(ahead, behind):
-    """The root ahead of the ray where there is one, else the one behind it (both marked
-    ``MISS`` where none): the ``go_back`` rule of ``intersect``, shared with
-    ``surface_adjoint`` so that both take the same values."""
-    return jnp.where(jnp.abs(ahead) < MISS_BELOW, ahead, behind)
 
 
 def converged(f, df, t):
@@ -396,8 +389,9 @@ def intersect(
             line to the surface anywhere (Zemax's negative propagation): the root found
             with the rules above where there is one (so such rays are unchanged), else the
             first root along the line behind the ray (t ≥ −``T_MAX``, the vertex sheet):
-            for a conic both from one quadratic (``AHEAD_ELSE_BEHIND``), for a polynomial
-            surface two Newton intersections (``either_root``).
+            for a conic both from one quadratic (``AHEAD_ELSE_BEHIND``); on a polynomial
+            surface the Newton search (one compiled program) runs a second time, with
+            t ≥ −``T_MAX``, only where some ray found no root ahead.
 
     Returns:
         The ray parameter t of the intersection (from ``o``), ``[*batch]``, holding the
@@ -416,14 +410,47 @@ def intersect(
     if go_back and not first:  # static: Zemax's rule (see above)
         if not surface.has_polynomial:  # both roots from one quadratic
             return _conic_root(surface, o, d, t_min, go_back=True)
-        ahead = intersect(surface, o, d, newton_iters, backward=backward)
-        behind = intersect(surface, o, d, newton_iters, backward=True)
-        return either_root(ahead, behind)
     if not surface.has_polynomial:
         # Conics: the closed form is exact (its derivative: ``_conic_root_jvp``).
         return _conic_root(surface, o, d, t_min) + t_plane
     o_s, d_s = jax.lax.stop_gradient((o, d))
     surf_s = jax.lax.stop_gradient(surface)
+    ahead_only = None if first else (True if backward is None else ~backward)
+    if go_back and not first:  # static: the search ahead, then behind where it found nothing
+        def more(state):
+            k, _, _, _, ok = state
+            return (k == 0) | ((k == 1) & jnp.any(~ok))
+
+        def search(state):  # one compiled search, run once or twice
+            k, t, f, df, ok = state
+            behind = k == 1
+            found = _polynomial_root(surf_s, o_s, d_s, jnp.where(behind, -T_MAX, t_min),
+                                     newton_iters, False, ahead_only & ~behind)
+            take = ~ok  # pass 0: every ray; pass 1: the rays without a root ahead
+            return (k + 1, *(jnp.where(take, a, b) for a, b in
+                             zip(found, (t, f, df, ok), strict=True)))
+
+        zeros = jnp.zeros_like(o_s[2])
+        _, t0, f0, df0, ok = jax.lax.while_loop(
+            more, search, (0, zeros, zeros, zeros, jnp.zeros(zeros.shape, bool)))
+    else:
+        t0, f0, df0, ok = _polynomial_root(surf_s, o_s, d_s, t_min, newton_iters, first,
+                                           ahead_only)
+    # Flagged rays take the last step at a harmless point, so their gradient stays finite.
+    t0 = jnp.where(ok, t0, 0.0)
+    df0 = jax.lax.stop_gradient(jnp.where(ok, df0, 1.0))
+    # One differentiable step with F' held fixed: the implicit-function gradient.
+    f, _, inside = _residual(surface, o, d, t0)
+    ok = ok & inside
+    # t0 + t_plane − f/df0, written as one division (one fused pass, see the module notes).
+    return jnp.where(ok, (t0 + t_plane) * df0 - f, MISS) / jnp.where(ok, df0, 1.0)
+
+
+def _polynomial_root(surf_s, o_s, d_s, t_min, newton_iters, first, ahead_only):
+    """(t, F(t), F'(t), hit) of the Newton search on a surface with polynomial terms
+    (``intersect``; forward values only): the first root with t ≥ ``t_min`` (None: on the
+    first surface, the root nearest the vertex plane), the first of a near-double pair where
+    ``ahead_only``."""
     # Two starts: the base conic's root and the vertex plane (t = 0 on surface 1, where the
     # rays already are). Newton begins at the one whose first step is shorter: where the
     # polynomial terms move the surface far from its base conic, the ray can graze the
@@ -462,18 +489,10 @@ def intersect(
     ok = converged(f0, df0, t0)
     if t_min is not None:
         ok = ok & (t0 >= t_min)
-        ahead_only = True if backward is None else ~backward
         t0, f0, df0 = first_of_a_pair(lambda t: _residual(surf_s, o_s, d_s, t)[:2], t0, f0,
                                       df0, ok & ahead_only)
         ok = converged(f0, df0, t0) & (t0 >= t_min)
-    # Flagged rays take the last step at a harmless point, so their gradient stays finite.
-    t0 = jnp.where(ok, t0, 0.0)
-    df0 = jax.lax.stop_gradient(jnp.where(ok, df0, 1.0))
-    # One differentiable step with F' held fixed: the implicit-function gradient.
-    f, _, inside = _residual(surface, o, d, t0)
-    ok = ok & inside
-    # t0 + t_plane − f/df0, written as one division (one fused pass, see the module notes).
-    return jnp.where(ok, (t0 + t_plane) * df0 - f, MISS) / jnp.where(ok, df0, 1.0)
+    return t0, f0, df0, ok
 
 
 def refraction_gain(d, normal, mu):

@@ -35,7 +35,7 @@ below eps·|N|₁) gets no root derivative, as in ``step.conic_root_arrays``.
 
 ``go_back`` (static, ``Lens.negative_propagation``) takes the root as ``step.intersect`` does
 with it (ahead of the ray, else behind it: ``step.AHEAD_ELSE_BEHIND``, and for polynomial
-surfaces ``step.either_root`` of two Newton intersections); the reverse rules need no
+surfaces a second Newton search where the first found nothing ahead); the reverse rules need no
 change, since they start from the root taken, wherever it lies on the line.
 """
 
