@@ -415,7 +415,6 @@ def intersect(
         return _conic_root(surface, o, d, t_min) + t_plane
     o_s, d_s = jax.lax.stop_gradient((o, d))
     surf_s = jax.lax.stop_gradient(surface)
-    ahead_only = None if first else (True if backward is None else ~backward)
     if go_back and not first:  # static: the search ahead, then behind where it found nothing
         def more(state):
             k, _, _, _, ok = state
@@ -425,7 +424,7 @@ def intersect(
             k, t, f, df, ok = state
             behind = k == 1
             found = _polynomial_root(surf_s, o_s, d_s, jnp.where(behind, -T_MAX, t_min),
-                                     newton_iters, False, ahead_only & ~behind)
+                                     newton_iters, False, backward, behind)
             take = ~ok  # pass 0: every ray; pass 1: the rays without a root ahead
             return (k + 1, *(jnp.where(take, a, b) for a, b in
                              zip(found, (t, f, df, ok), strict=True)))
@@ -435,7 +434,7 @@ def intersect(
             more, search, (0, zeros, zeros, zeros, jnp.zeros(zeros.shape, bool)))
     else:
         t0, f0, df0, ok = _polynomial_root(surf_s, o_s, d_s, t_min, newton_iters, first,
-                                           ahead_only)
+                                           backward)
     # Flagged rays take the last step at a harmless point, so their gradient stays finite.
     t0 = jnp.where(ok, t0, 0.0)
     df0 = jax.lax.stop_gradient(jnp.where(ok, df0, 1.0))
@@ -446,11 +445,11 @@ def intersect(
     return jnp.where(ok, (t0 + t_plane) * df0 - f, MISS) / jnp.where(ok, df0, 1.0)
 
 
-def _polynomial_root(surf_s, o_s, d_s, t_min, newton_iters, first, ahead_only):
+def _polynomial_root(surf_s, o_s, d_s, t_min, newton_iters, first, backward, behind=None):
     """(t, F(t), F'(t), hit) of the Newton search on a surface with polynomial terms
     (``intersect``; forward values only): the first root with t ≥ ``t_min`` (None: on the
-    first surface, the root nearest the vertex plane), the first of a near-double pair where
-    ``ahead_only``."""
+    first surface, the root nearest the vertex plane); for rays searching ahead (not
+    ``backward``, not ``behind``) the first of a near-double pair."""
     # Two starts: the base conic's root and the vertex plane (t = 0 on surface 1, where the
     # rays already are). Newton begins at the one whose first step is shorter: where the
     # polynomial terms move the surface far from its base conic, the ray can graze the
@@ -489,6 +488,9 @@ def _polynomial_root(surf_s, o_s, d_s, t_min, newton_iters, first, ahead_only):
     ok = converged(f0, df0, t0)
     if t_min is not None:
         ok = ok & (t0 >= t_min)
+        ahead_only = True if backward is None else ~backward
+        if behind is not None:
+            ahead_only = ahead_only & ~behind
         t0, f0, df0 = first_of_a_pair(lambda t: _residual(surf_s, o_s, d_s, t)[:2], t0, f0,
                                       df0, ok & ahead_only)
         ok = converged(f0, df0, t0) & (t0 >= t_min)
