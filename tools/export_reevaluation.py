@@ -9,14 +9,20 @@ jaxlens's numbers of both must agree too. Compared, with the same definitions on
 
 * EFL (image space, n′/Φ; optiland ``paraxial.f2()``), F/# (``paraxial.FNO()``), BFL (from the
   last vertex to the paraxial focus: the last gap + optiland's ``paraxial.F2()``), total track
-  (surface 1 to the image surface; optiland ``total_track``), mm;
-* per field, the real chief-ray height on the image surface (primary wavelength, pupil centre;
-  optiland ``trace_generic(0, Hy, 0, 0)``), mm, and the f-tanθ distortion made of it,
-  100 (y − EFL tanθ)/(EFL tanθ) %;
+  (surface 1 to the image surface; optiland ``total_track``), mm; the FoV (2 × the largest
+  radial field, deg) and the fields each code read from the file as (θx, θy) (compared as
+  sets: optiland's reader reorders them);
+* per field (θy, or (θx, θy) from XFLN/YFLN: optiland's angle field (Hx, Hy)·F along
+  (tan θx, tan θy, 1), F its largest radial field, is jaxlens's (θx, θy)), the real chief
+  ray on the image surface (primary wavelength, pupil centre; optiland
+  ``trace_generic(Hx, Hy, 0, 0)``): its x and y, mm, its height along the field's azimuth
+  (``analysis.spots.field_heights``: y for a θy field), and the f-tanθ distortion made of
+  it, 100 (h − EFL tanθ)/(EFL tanθ) %, tan²θ = tan²θx + tan²θy;
 * per field and wavelength, the RMS spot radius about the centroid, µm, on the 21 × 21 square
   grid over the unit entrance pupil kept inside the disc (317 rays; optiland traces the same
   normalised pupil points with ``trace_generic``), each code aiming its own rays (paraxial
-  pupil aiming).
+  pupil aiming); and per field the RMS radius of all wavelengths' rays pooled about their
+  common centroid (the report's ``rms_spot_polychromatic``, the classical run's RMS).
 
 Surface types optiland 0.6.3's reader lacks (XPOLYNOM, jaxlens's Hybrid among them; XASPHERE,
 XOSPHERE, TILTSURF, BICONICX) are read here from the file's text by Zemax's definitions
@@ -29,9 +35,15 @@ power that jaxlens's paraxial trace includes): compare real rays there.
 that both read back in jaxlens as the same lens (pytree and numbers), and gives optiland the
 saved ``.zmx`` too (against jaxlens, and against optiland's numbers for the original).
 
-``--summary RUN/summary.json`` also checks the numbers the classical experiment itself wrote for
-its best design (efl, fnum, bfl, total_track, chief_height_full_field, distortion_percent)
-against jaxlens's report and optiland on ``RUN/lens.zmx``.
+``--summary RUN/summary.json`` re-evaluates every number a classical run
+(``python -m jaxlens.experiments.classical``) wrote for its best design: EFL, F/#, BFL, total
+track, the chief-ray height and distortion at half the diagonal FoV, and the mean, largest,
+smallest and median of the pooled (F, d, C) RMS over its n × n sensor grid of (θx, θy) fields
+and the on-axis RMS. ``RUN/lens.zmx`` is re-read by jaxlens (``jaxlens.design.evaluate``, the
+run's own code and definitions) and by optiland (with its glass data, and with jaxlens's
+media), each at the same fields, rebuilt from the spec in summary.json; every number's
+relative difference from the summary's, and the grid's largest per-field RMS difference
+between jaxlens's re-read and optiland, are printed.
 
 Run it with an interpreter that has optiland 0.6.3 and this checkout's jaxlens:
 
@@ -39,7 +51,8 @@ Run it with an interpreter that has optiland 0.6.3 and this checkout's jaxlens:
         /tmp/a14_smoke/lens.zmx /tmp/a14_smoke/lens.json jaxlens/data/lenses \
         experiments/classical/designs --summary /tmp/a14_smoke/summary.json --json out.json
 
-tests/test_input_probes_round14.py stores numbers this script printed.
+tests/test_input_probes_round14.py stores numbers this script printed;
+tools/export_fields_reference.py uses its functions for tests/test_export_fields.py.
 """
 
 from __future__ import annotations
@@ -248,16 +261,19 @@ def optiland_optic(path: str, primary: float, lens=None):
 
 
 def optiland_system(op) -> dict:
-    """optiland's EFL (image space), F/#, BFL, total track and FoV (2 × its largest radial
-    field), and its fields as (θx, θy) pairs (deg)."""
+    """optiland's EFL (image space), F/#, BFL, total track, and the fields it read as (θx, θy)
+    pairs (deg). ``fov``: twice the largest angle between a field's direction (tan θx,
+    tan θy, 1) and the axis, jaxlens's report's definition; ``max_field``: optiland's own
+    largest radial field, max √(θx² + θy²), its normalisation of (Hx, Hy) (the same for
+    y fields, 20° against 19.64° for (−12°, 16°))."""
     par = op.paraxial
     last_gap = float(op.surfaces.positions[-1, 0] - op.surfaces.positions[-2, 0])
+    fields = [[float(x), float(y)] for x, y in
+              zip(np.ravel(op.fields.x_fields), np.ravel(op.fields.y_fields), strict=True)]
     return {"efl": float(par.f2()), "fnum": float(par.FNO()),
             "bfl": last_gap + float(par.F2()), "total_track": float(op.total_track),
-            "fov": 2.0 * float(op.fields.max_field),
-            "file_fields": [[float(x), float(y)] for x, y in
-                            zip(np.ravel(op.fields.x_fields), np.ravel(op.fields.y_fields),
-                                strict=True)]}
+            "fov": 2.0 * max(math.degrees(math.atan(field_direction(f)[0])) for f in fields),
+            "max_field": float(op.fields.max_field), "file_fields": fields}
 
 
 def optiland_numbers(path: str, wavelengths, primary, fields, lens=None) -> dict:
@@ -332,10 +348,12 @@ def compare(j: dict, o: dict) -> dict:
          for k in SCALARS}  # None: jaxlens reports no value (a lens without power)
     d["fov_deg"] = abs(j["fov"] - o["fov"])
     if "file_fields" in o:
-        jf = [field_pair(f) for f in j["fields"]]
-        d["fields_deg"] = None if len(jf) != len(o["file_fields"]) else max(
+        # optiland's reader keeps the fields in another order (sorted): compared as sets
+        jf = sorted(field_pair(f) for f in j["fields"])
+        of = sorted(tuple(f) for f in o["file_fields"])
+        d["fields_deg"] = None if len(jf) != len(of) else max(
             max(abs(a - b) for a, b in zip(p, q, strict=True))
-            for p, q in zip(jf, o["file_fields"], strict=True))
+            for p, q in zip(jf, of, strict=True))
     d["chief_y_mm"] = max(abs(a - b) for a, b in zip(j["chief_y"], o["chief_y"], strict=True))
     d["chief_xy_mm"] = float(np.max(np.abs(np.asarray(j["chief_xy"], float)
                                            - np.asarray(o["chief_xy"], float))))
