@@ -18,9 +18,9 @@ import numpy as np
 import pytest
 
 import jaxlens as jl
+from jaxlens.analysis.report import report_data
 
 pytestmark = pytest.mark.slow  # jl.load of the file 6 s, the report's trace 20 s
-from jaxlens.analysis.report import report_data
 
 DATA = pathlib.Path(__file__).parent / "data"
 REF = json.loads((DATA / "export_fields_optiland.json").read_text())
