@@ -502,15 +502,18 @@ def optiland_grid_numbers(zmx: str, spec, angles, lens=None) -> tuple[dict, np.n
         warnings.simplefilter("ignore")
         system = optiland_system(op)
         grid = field_numbers(op, [list(a) for a in angles], wl, primary, system["efl"])
-        extra = field_numbers(op, [[0.0, 0.0], [0.0, spec.half_fov]], wl, primary,
-                              system["efl"])
+        axis = field_numbers(op, [[0.0, 0.0]], wl, primary, system["efl"])
+        # the run's chief height: y at θy = half the diagonal FoV (beyond the sensor's
+        # y edge, a field whose rim rays the clear apertures may clip: its chief ray only)
+        hx, hy = normalised_field(op, [0.0, spec.half_fov])
+        r = op.trace_generic(hx, hy, 0.0, 0.0, primary)
     ftan = system["efl"] * math.tan(math.radians(spec.half_fov))
-    h = extra["chief_xy"][1][1]  # the run's chief height: y at θy = half the diagonal FoV
+    h = float(np.asarray(r.y).ravel()[0])
     out = {k: system[k] for k in ("efl", "fnum", "bfl", "total_track")}
     out["chief_height_full_field"] = h
     out["distortion_percent"] = 100.0 * (h - ftan) / ftan
-    out.update(grid_numbers(grid["rms_poly_um"], extra["rms_poly_um"][0]))
-    out["rays_lost"] = grid["rays_lost"] + extra["rays_lost"]
+    out.update(grid_numbers(grid["rms_poly_um"], axis["rms_poly_um"][0]))
+    out["rays_lost"] = grid["rays_lost"] + axis["rays_lost"]  # of the grid and the axis
     return out, np.asarray(grid["rms_poly_um"], float)
 
 
