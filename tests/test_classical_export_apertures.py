@@ -8,6 +8,7 @@ fields (optiland 0.6.3 loses the same rays: tests/test_classical_grid.py), so it
 fraction is 0.9968 against Table 1's 1.0 and its largest RMS 8.3096 against 8.3053 µm.
 """
 
+import pathlib
 import warnings
 
 import equinox as eqx
@@ -22,7 +23,8 @@ from jaxlens.experiments import classical
 from jaxlens.optics import rebase
 from jaxlens.optics.surfaces import EvenAsphere
 
-DESIGN = "experiments/classical/designs/seed_1.zmx"
+DESIGN = str(pathlib.Path(__file__).parent.parent / "experiments" / "classical" / "designs"
+             / "seed_1.zmx")
 TABLE1_RMS_MAX_UM = 8.305294342440286  # experiments/classical/table1.json, +recipe seed 1
 
 
