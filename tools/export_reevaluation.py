@@ -9,14 +9,20 @@ jaxlens's numbers of both must agree too. Compared, with the same definitions on
 
 * EFL (image space, n′/Φ; optiland ``paraxial.f2()``), F/# (``paraxial.FNO()``), BFL (from the
   last vertex to the paraxial focus: the last gap + optiland's ``paraxial.F2()``), total track
-  (surface 1 to the image surface; optiland ``total_track``), mm;
-* per field, the real chief-ray height on the image surface (primary wavelength, pupil centre;
-  optiland ``trace_generic(0, Hy, 0, 0)``), mm, and the f-tanθ distortion made of it,
-  100 (y − EFL tanθ)/(EFL tanθ) %;
+  (surface 1 to the image surface; optiland ``total_track``), mm; the FoV (2 × the largest
+  radial field, deg) and the fields each code read from the file as (θx, θy) (compared as
+  sets: optiland's reader reorders them);
+* per field (θy, or (θx, θy) from XFLN/YFLN: optiland's angle field (Hx, Hy)·F along
+  (tan θx, tan θy, 1), F its largest radial field, is jaxlens's (θx, θy)), the real chief
+  ray on the image surface (primary wavelength, pupil centre; optiland
+  ``trace_generic(Hx, Hy, 0, 0)``): its x and y, mm, its height along the field's azimuth
+  (``analysis.spots.field_heights``: y for a θy field), and the f-tanθ distortion made of
+  it, 100 (h − EFL tanθ)/(EFL tanθ) %, tan²θ = tan²θx + tan²θy;
 * per field and wavelength, the RMS spot radius about the centroid, µm, on the 21 × 21 square
   grid over the unit entrance pupil kept inside the disc (317 rays; optiland traces the same
   normalised pupil points with ``trace_generic``), each code aiming its own rays (paraxial
-  pupil aiming).
+  pupil aiming); and per field the RMS radius of all wavelengths' rays pooled about their
+  common centroid (the report's ``rms_spot_polychromatic``, the classical run's RMS).
 
 Surface types optiland 0.6.3's reader lacks (XPOLYNOM, jaxlens's Hybrid among them; XASPHERE,
 XOSPHERE, TILTSURF, BICONICX) are read here from the file's text by Zemax's definitions
@@ -29,9 +35,15 @@ power that jaxlens's paraxial trace includes): compare real rays there.
 that both read back in jaxlens as the same lens (pytree and numbers), and gives optiland the
 saved ``.zmx`` too (against jaxlens, and against optiland's numbers for the original).
 
-``--summary RUN/summary.json`` also checks the numbers the classical experiment itself wrote for
-its best design (efl, fnum, bfl, total_track, chief_height_full_field, distortion_percent)
-against jaxlens's report and optiland on ``RUN/lens.zmx``.
+``--summary RUN/summary.json`` re-evaluates every number a classical run
+(``python -m jaxlens.experiments.classical``) wrote for its best design: EFL, F/#, BFL, total
+track, the chief-ray height and distortion at half the diagonal FoV, and the mean, largest,
+smallest and median of the pooled (F, d, C) RMS over its n × n sensor grid of (θx, θy) fields
+and the on-axis RMS. ``RUN/lens.zmx`` is re-read by jaxlens (``jaxlens.design.evaluate``, the
+run's own code and definitions) and by optiland (with its glass data, and with jaxlens's
+media), each at the same fields, rebuilt from the spec in summary.json; every number's
+relative difference from the summary's, and the grid's largest per-field RMS difference
+between jaxlens's re-read and optiland, are printed.
 
 Run it with an interpreter that has optiland 0.6.3 and this checkout's jaxlens:
 
@@ -39,7 +51,8 @@ Run it with an interpreter that has optiland 0.6.3 and this checkout's jaxlens:
         /tmp/a14_smoke/lens.zmx /tmp/a14_smoke/lens.json jaxlens/data/lenses \
         experiments/classical/designs --summary /tmp/a14_smoke/summary.json --json out.json
 
-tests/test_input_probes_round14.py stores numbers this script printed.
+tests/test_input_probes_round14.py stores numbers this script printed;
+tools/export_fields_reference.py uses its functions for tests/test_export_fields.py.
 """
 
 from __future__ import annotations
@@ -76,13 +89,36 @@ def jaxlens_numbers(lens) -> dict:
     """jaxlens's report numbers, in the units of this script (mm, %, µm)."""
     d = report_data(lens)
     out = {k: d[k] for k in SCALARS}
+    out["efl_air"] = d["efl"]
+    out["fov"] = d["fov"]
     out["fields"] = [f["angle"] for f in d["fields"]]
-    out["chief_y"] = [f["chief_ray_height"] for f in d["fields"]]
+    out["chief_y"] = [f["chief_ray_height"] for f in d["fields"]]  # along the field's azimuth
+    out["chief_xy"] = [f["chief_ray_xy"] for f in d["fields"]]
     out["distortion"] = [f["distortion"] for f in d["fields"]]
     out["rms_um"] = [f["rms_spot"] for f in d["fields"]]
+    out["rms_poly_um"] = [f["rms_spot_polychromatic"] for f in d["fields"]]
     out["wavelengths"] = d["wavelengths"]
     out["primary"] = d["primary_wavelength"]
     return out
+
+
+def field_pair(f) -> tuple[float, float]:
+    """A field (deg, θy or (θx, θy)) as (θx, θy)."""
+    if isinstance(f, list | tuple | np.ndarray):
+        return float(f[0]), float(f[1])
+    return 0.0, float(f)
+
+
+def field_direction(f) -> tuple[float, tuple[float, float]]:
+    """(tan θ, unit (ux, uy)) of a field: tan²θ = tan²θx + tan²θy and the image-plane
+    direction (tan θx, tan θy)/tan θ along which its chief-ray height is measured (+y on
+    axis), as ``jaxlens.analysis.spots.field_heights``; a y field's is its signed tan θy
+    along +y."""
+    tx, ty = (math.tan(math.radians(a)) for a in field_pair(f))
+    if not isinstance(f, list | tuple | np.ndarray):
+        return ty, (0.0, 1.0)
+    t = math.hypot(tx, ty)
+    return t, ((tx / t, ty / t) if t > 0 else (0.0, 1.0))
 
 
 def set_media(op, lens) -> None:
@@ -190,16 +226,12 @@ def own_geometry(old, d: dict):
     return PolynomialGeometry(cs, radius, k, coefficients=coeffs)
 
 
-def optiland_numbers(path: str, wavelengths, primary, fields, lens=None) -> dict:
-    """optiland's numbers for the same file, with the definitions of :func:`jaxlens_numbers`.
-
-    With ``lens``, optiland's media are replaced by jaxlens's (:func:`set_media`): glass data
-    set aside."""
+def optiland_optic(path: str, primary: float, lens=None):
+    """optiland's optic of a ``.zmx`` file (:data:`OWN_TYPES` surfaces read here) and the
+    indices of its media at ``primary``; with ``lens``, its media replaced by jaxlens's
+    (:func:`set_media`: glass data set aside). Newton tolerance 1e-13, 200 iterations."""
     from optiland.fileio import load_zemax_file
 
-    if any(isinstance(f, list | tuple) for f in fields):
-        raise ValueError("fields with an x component (angle_deg_xy) are not compared by this "
-                         "script (it traces y fields, Hx = 0)")
     with warnings.catch_warnings(), contextlib.redirect_stdout(io.StringIO()):
         warnings.simplefilter("ignore")
         with open(path, "rb") as fh:
@@ -225,47 +257,113 @@ def optiland_numbers(path: str, wavelengths, primary, fields, lens=None) -> dict
             g = s.geometry
             if hasattr(g, "tol") and hasattr(g, "max_iter"):
                 g.tol, g.max_iter = 1e-13, 200
-        par = op.paraxial
-        efl = float(par.f2())
-        last_gap = float(op.surfaces.positions[-1, 0] - op.surfaces.positions[-2, 0])
-        out = {"efl": efl, "fnum": float(par.FNO()), "bfl": last_gap + float(par.F2()),
-               "total_track": float(op.total_track)}
-        fmax = max(abs(float(f)) for f in fields) or 1.0
-        chief, dist = [], []
-        for f in fields:
-            hy = float(f) / fmax
-            r = op.trace_generic(0.0, hy, 0.0, 0.0, primary)
-            y = float(np.asarray(r.y).ravel()[0])
-            chief.append(y)
-            ref = efl * math.tan(math.radians(float(f)))
-            dist.append(0.0 if ref == 0 else 100.0 * (y - ref) / ref)
-        rms = [[0.0] * len(wavelengths) for _ in fields]
-        lost = 0  # rays of the grid optiland loses (all fields and wavelengths)
-        for k, w in enumerate(wavelengths):
-            for i, f in enumerate(fields):
-                hy = float(f) / fmax
-                r = op.trace_generic(0.0, hy, PUPIL[:, 0], PUPIL[:, 1], w)
-                x, yy = np.asarray(r.x).ravel(), np.asarray(r.y).ravel()
-                ok = (np.asarray(r.i).ravel() > 0) & np.isfinite(x) & np.isfinite(yy)
-                lost += int(len(PUPIL) - ok.sum())
-                cx, cy = x[ok].mean(), yy[ok].mean()
-                rms[i][k] = 1e3 * math.sqrt(np.mean((x[ok] - cx) ** 2 + (yy[ok] - cy) ** 2))
-        out.update(chief_y=chief, distortion=dist, rms_um=rms, index_d=index_d,
-                   rays_lost=lost)
+    return op, index_d
+
+
+def optiland_system(op) -> dict:
+    """optiland's EFL (image space), F/#, BFL, total track, and the fields it read as (θx, θy)
+    pairs (deg). ``fov``: twice the largest angle between a field's direction (tan θx,
+    tan θy, 1) and the axis, jaxlens's report's definition; ``max_field``: optiland's own
+    largest radial field, max √(θx² + θy²), its normalisation of (Hx, Hy) (the same for
+    y fields, 20° against 19.64° for (−12°, 16°))."""
+    par = op.paraxial
+    last_gap = float(op.surfaces.positions[-1, 0] - op.surfaces.positions[-2, 0])
+    fields = [[float(x), float(y)] for x, y in
+              zip(np.ravel(op.fields.x_fields), np.ravel(op.fields.y_fields), strict=True)]
+    return {"efl": float(par.f2()), "fnum": float(par.FNO()),
+            "bfl": last_gap + float(par.F2()), "total_track": float(op.total_track),
+            "fov": 2.0 * max(math.degrees(math.atan(field_direction(f)[0])) for f in fields),
+            "max_field": float(op.fields.max_field), "file_fields": fields}
+
+
+def optiland_numbers(path: str, wavelengths, primary, fields, lens=None) -> dict:
+    """optiland's numbers for the same file, with the definitions of :func:`jaxlens_numbers`
+    (``fields``: deg, θy or (θx, θy) each).
+
+    With ``lens``, optiland's media are replaced by jaxlens's (:func:`set_media`): glass data
+    set aside."""
+    op, index_d = optiland_optic(path, primary, lens)
+    with warnings.catch_warnings(), contextlib.redirect_stdout(io.StringIO()):
+        warnings.simplefilter("ignore")
+        out = optiland_system(op)
+        out["index_d"] = index_d
+        out.update(field_numbers(op, fields, wavelengths, primary, out["efl"]))
     return out
 
 
+def normalised_field(op, f) -> tuple[float, float]:
+    """optiland's (Hx, Hy) of a field (deg): its angle fields are Hx·F, Hy·F degrees along
+    (tan, tan, 1) with F its largest radial field (``fields.max_field``), the direction
+    jaxlens gives (θx, θy)."""
+    tx, ty = field_pair(f)
+    fmax = float(op.fields.max_field) or 1.0
+    return tx / fmax, ty / fmax
+
+
+def field_numbers(op, fields, wavelengths, primary, efl: float) -> dict:
+    """optiland's chief rays, distortions and RMS spots of ``fields`` (deg, θy or (θx, θy),
+    any angles, not only the file's), traced by ``op``: the definitions of
+    :func:`jaxlens_numbers` (the chief ray through the pupil centre at the primary wavelength,
+    its height along the field's azimuth, f-tanθ distortion against ``efl``; per field and
+    wavelength the RMS radius about the centroid, and pooled over the wavelengths about their
+    common centroid, of the 317-point grid)."""
+    chief, chief_xy, dist = [], [], []
+    for f in fields:
+        hx, hy = normalised_field(op, f)
+        r = op.trace_generic(hx, hy, 0.0, 0.0, primary)
+        x, y = float(np.asarray(r.x).ravel()[0]), float(np.asarray(r.y).ravel()[0])
+        t, (ux, uy) = field_direction(f)
+        h = x * ux + y * uy
+        chief.append(h)
+        chief_xy.append([x, y])
+        ref = efl * t
+        dist.append(0.0 if ref == 0 else 100.0 * (h - ref) / ref)
+    rms = [[0.0] * len(wavelengths) for _ in fields]
+    poly = [0.0] * len(fields)
+    lost = 0  # rays of the grid optiland loses (all fields and wavelengths)
+    for i, f in enumerate(fields):
+        hx, hy = normalised_field(op, f)
+        pooled = []
+        for k, w in enumerate(wavelengths):
+            r = op.trace_generic(hx, hy, PUPIL[:, 0], PUPIL[:, 1], w)
+            x, yy = np.asarray(r.x).ravel(), np.asarray(r.y).ravel()
+            ok = (np.asarray(r.i).ravel() > 0) & np.isfinite(x) & np.isfinite(yy)
+            lost += int(len(PUPIL) - ok.sum())
+            cx, cy = x[ok].mean(), yy[ok].mean()
+            rms[i][k] = 1e3 * math.sqrt(np.mean((x[ok] - cx) ** 2 + (yy[ok] - cy) ** 2))
+            pooled.append(np.stack([x[ok], yy[ok]], -1))
+        p = np.concatenate(pooled)
+        poly[i] = 1e3 * math.sqrt(np.mean(np.sum((p - p.mean(0)) ** 2, -1)))
+    return {"chief_y": chief, "chief_xy": chief_xy, "distortion": dist, "rms_um": rms,
+            "rms_poly_um": poly, "rays_lost": lost}
+
+
 def compare(j: dict, o: dict) -> dict:
-    """Largest differences: relative for the scalars, absolute for heights (mm), distortion
-    (percentage points) and RMS (µm, and relative)."""
+    """Largest differences: relative for the scalars, absolute for the FoV (deg), heights (mm:
+    along the field's azimuth, and x and y apart), distortion (percentage points) and RMS (µm,
+    and relative; per field and wavelength, and pooled over the wavelengths). ``fields_deg``:
+    the largest difference between jaxlens's fields and those optiland read from the file
+    (deg; None where the counts differ)."""
     d = {k: None if j[k] is None else abs(j[k] - o[OPTILAND_NAME[k]]) / abs(o[OPTILAND_NAME[k]])
          for k in SCALARS}  # None: jaxlens reports no value (a lens without power)
+    d["fov_deg"] = abs(j["fov"] - o["fov"])
+    if "file_fields" in o:
+        # optiland's reader keeps the fields in another order (sorted): compared as sets
+        jf = sorted(field_pair(f) for f in j["fields"])
+        of = sorted(tuple(f) for f in o["file_fields"])
+        d["fields_deg"] = None if len(jf) != len(of) else max(
+            max(abs(a - b) for a, b in zip(p, q, strict=True))
+            for p, q in zip(jf, of, strict=True))
     d["chief_y_mm"] = max(abs(a - b) for a, b in zip(j["chief_y"], o["chief_y"], strict=True))
+    d["chief_xy_mm"] = float(np.max(np.abs(np.asarray(j["chief_xy"], float)
+                                           - np.asarray(o["chief_xy"], float))))
     d["distortion_pp"] = max(abs(a - b) for a, b in
                              zip(j["distortion"], o["distortion"], strict=True))
-    rj, ro = np.asarray(j["rms_um"]), np.asarray(o["rms_um"])
+    rj, ro = np.asarray(j["rms_um"], float), np.asarray(o["rms_um"], float)
     d["rms_um"] = float(np.max(np.abs(rj - ro)))
     d["rms_rel"] = float(np.max(np.abs(rj - ro) / ro))
+    pj, po = np.asarray(j["rms_poly_um"], float), np.asarray(o["rms_poly_um"], float)
+    d["rms_poly_um"] = float(np.max(np.abs(pj - po)))
     return d
 
 
@@ -273,9 +371,12 @@ def compare_optiland(a: dict, b: dict) -> dict:
     """Largest differences of optiland's numbers for two files (:func:`compare`'s units)."""
     d = {k: abs(a[k] - b[k]) / abs(a[k]) if a[k] else abs(a[k] - b[k])
          for k in OPTILAND_NAME.values()}
+    d["fov_deg"] = abs(a["fov"] - b["fov"])
     d["chief_y_mm"] = max(abs(x - y) for x, y in zip(a["chief_y"], b["chief_y"], strict=True))
+    d["chief_xy_mm"] = float(np.max(np.abs(np.asarray(a["chief_xy"]) - b["chief_xy"])))
     ra, rb = np.asarray(a["rms_um"]), np.asarray(b["rms_um"])
     d["rms_um"] = float(np.max(np.abs(ra - rb)))
+    d["rms_poly_um"] = float(np.max(np.abs(np.asarray(a["rms_poly_um"]) - b["rms_poly_um"])))
     d["index_d"] = max((abs(x - y) for x, y in zip(a["index_d"], b["index_d"], strict=True)),
                        default=0.0)
     return d
@@ -354,25 +455,106 @@ def evaluate(path: str, tmp: str, resave: bool = False) -> dict:
     return rec
 
 
-def summary_check(summary: str, recs: list[dict]) -> dict:
-    """The experiment's own numbers for its best design against jaxlens's report of RUN/lens.zmx
-    and optiland's (the full field is the largest field of the written file)."""
-    s = json.loads(pathlib.Path(summary).read_text())["best"]
+SUMMARY_NUMBERS = ("efl", "fnum", "bfl", "total_track", "chief_height_full_field",
+                   "distortion_percent", "rms_mean_um", "rms_max_um", "rms_min_um",
+                   "rms_median_um", "rms_on_axis_um")
+"""The numbers of summary.json's ``best`` that :func:`summary_check` re-evaluates."""
+
+
+def grid_numbers(rms_um, on_axis_um: float) -> dict:
+    """The classical run's RMS statistics of a field grid's pooled RMS radii (µm)."""
+    r = np.asarray(rms_um, float)
+    return {"rms_mean_um": float(np.mean(r)), "rms_max_um": float(np.max(r)),
+            "rms_min_um": float(np.min(r)), "rms_median_um": float(np.median(r)),
+            "rms_on_axis_um": float(on_axis_um)}
+
+
+def reread_numbers(zmx: str, spec, n: int) -> tuple[dict, np.ndarray]:
+    """The classical run's numbers of its exported ``lens.zmx`` re-read by ``jaxlens.load``:
+    ``jaxlens.design.evaluate.evaluate`` (the run's own definitions: the n × n sensor grid of
+    (θx, θy) fields, pooled F, d, C RMS; paraxial EFL, F/#, BFL, track; the chief ray at
+    half the diagonal FoV) and the on-axis pooled RMS (``spots.rms_spot`` at (0, 0))."""
+    import equinox as eqx
+    import jax.numpy as jnp
+
+    from jaxlens.analysis import spots
+    from jaxlens.design.evaluate import evaluate as evaluate_design
+
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")
+        lens = jl.load(zmx)
+    ev = evaluate_design(lens, spec, n=n)
+    lens = eqx.tree_at(lambda x: x.epd, lens.astype(jnp.float64), jnp.asarray(spec.epd))
+    axis = spots.rms_spot(lens, jnp.zeros((1, 2)), jnp.asarray(spec.wavelengths))
+    out = {k: getattr(ev, k) for k in SUMMARY_NUMBERS[:6]}
+    out.update(grid_numbers(ev.rms_um, float(axis.polychromatic[0]) * 1e3))
+    return out, np.asarray(ev.rms_um, float)
+
+
+def optiland_grid_numbers(zmx: str, spec, angles, lens=None) -> tuple[dict, np.ndarray]:
+    """optiland's numbers of the same file at the same fields and definitions as
+    :func:`reread_numbers` (with ``lens``: jaxlens's media, :func:`set_media`). The EFL of
+    the distortion is optiland's (image space; the run's is 1/Φ: the same in air)."""
+    wl = [float(w) for w in spec.wavelengths]
+    primary = wl[spec.primary]
+    op, _ = optiland_optic(zmx, primary, lens)
+    with warnings.catch_warnings(), contextlib.redirect_stdout(io.StringIO()):
+        warnings.simplefilter("ignore")
+        system = optiland_system(op)
+        grid = field_numbers(op, [list(a) for a in angles], wl, primary, system["efl"])
+        axis = field_numbers(op, [[0.0, 0.0]], wl, primary, system["efl"])
+        # the run's chief height: y at θy = half the diagonal FoV (beyond the sensor's
+        # y edge, a field whose rim rays the clear apertures may clip: its chief ray only)
+        hx, hy = normalised_field(op, [0.0, spec.half_fov])
+        r = op.trace_generic(hx, hy, 0.0, 0.0, primary)
+    ftan = system["efl"] * math.tan(math.radians(spec.half_fov))
+    h = float(np.asarray(r.y).ravel()[0])
+    out = {k: system[k] for k in ("efl", "fnum", "bfl", "total_track")}
+    out["chief_height_full_field"] = h
+    out["distortion_percent"] = 100.0 * (h - ftan) / ftan
+    out.update(grid_numbers(grid["rms_poly_um"], axis["rms_poly_um"][0]))
+    out["rays_lost"] = grid["rays_lost"] + axis["rays_lost"]  # of the grid and the axis
+    return out, np.asarray(grid["rms_poly_um"], float)
+
+
+def summary_check(summary: str) -> dict:
+    """The classical run's own numbers for its best design (RUN/summary.json's ``best``)
+    against its exported RUN/lens.zmx re-read by jaxlens (:func:`reread_numbers`) and by
+    optiland (:func:`optiland_grid_numbers`, with optiland's glass data and with jaxlens's
+    media), at the run's own field definitions (the spec in summary.json: its n × n sensor
+    grid of (θx, θy) fields, n² = ``best.n_fields``). ``diff``: per number, the largest
+    relative difference of the three from the summary's value, and ``rms_per_field_um``
+    the largest per-field difference of the grid's pooled RMS between jaxlens's re-read
+    and optiland (µm)."""
+    from jaxlens.design.evaluate import sensor_field_grid
+    from jaxlens.design.spec import DesignSpec
+
+    data = json.loads(pathlib.Path(summary).read_text())
+    s, spec = data["best"], DesignSpec(**data["spec"])
+    n = math.isqrt(int(s["n_fields"]))
+    if n * n != int(s["n_fields"]):
+        raise ValueError(f"{summary}: best.n_fields = {s['n_fields']} is not a square grid")
     zmx = str(pathlib.Path(summary).parent / "lens.zmx")
-    rec = next(r for r in recs if r["file"] == zmx)
-    j, o = rec["jaxlens"], rec.get("optiland", {})
-    pairs = {"efl": ("efl_image_space", "efl"), "fnum": ("fnum", "fnum"), "bfl": ("bfl", "bfl"),
-             "total_track": ("total_track", "total_track")}
-    out = {}
-    for k, (jk, ok) in pairs.items():
-        out[k] = {"summary": s[k], "jaxlens_report": j[jk], "optiland": o.get(ok)}
-    i = int(np.argmax(np.abs(j["fields"])))
-    out["chief_height_full_field"] = {"summary": s["chief_height_full_field"],
-                                      "jaxlens_report": j["chief_y"][i],
-                                      "optiland": o.get("chief_y", [None] * (i + 1))[i]}
-    out["distortion_percent"] = {"summary": s["distortion_percent"],
-                                 "jaxlens_report": j["distortion"][i],
-                                 "optiland": o.get("distortion", [None] * (i + 1))[i]}
+    angles, _ = sensor_field_grid(spec, n)
+    j, j_grid = reread_numbers(zmx, spec, n)
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")
+        lens = jl.load(zmx)
+    o, o_grid = optiland_grid_numbers(zmx, spec, angles)
+    m, m_grid = optiland_grid_numbers(zmx, spec, angles, lens=lens)
+    out: dict = {"file": zmx, "n_fields": n * n, "numbers": {}, "diff": {}}
+    for k in SUMMARY_NUMBERS:
+        row = {"summary": s.get(k),
+               "jaxlens_reread": j[k], "optiland": o[k], "optiland_jaxlens_media": m[k]}
+        out["numbers"][k] = row
+        ref = row["summary"]
+        out["diff"][k] = None if ref is None else {
+            w: abs(row[w] - ref) / max(abs(ref), 1e-300)
+            for w in ("jaxlens_reread", "optiland", "optiland_jaxlens_media")}
+    out["diff"]["rms_per_field_um"] = {
+        "optiland": float(np.max(np.abs(j_grid - o_grid))),
+        "optiland_jaxlens_media": float(np.max(np.abs(j_grid - m_grid)))}
+    out["rays_lost"] = {"optiland": o["rays_lost"], "optiland_jaxlens_media": m["rays_lost"]}
     return out
 
 
@@ -383,7 +565,8 @@ def _e(v) -> str:
 def main(argv=None) -> int:
     p = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     p.add_argument("paths", nargs="+", help=".zmx / .json files or folders of them")
-    p.add_argument("--summary", help="an experiment's summary.json (its lens.zmx among paths)")
+    p.add_argument("--summary", help="a classical run's summary.json: its numbers re-evaluated "
+                                     "on RUN/lens.zmx at the run's own fields")
     p.add_argument("--json", help="write every record to this file")
     p.add_argument("--resave", action="store_true",
                    help="save each .zmx file again with jaxlens.save (.zmx and JSON), check "
@@ -422,7 +605,7 @@ def main(argv=None) -> int:
                               for d in [r["resaved"].get(w)] if d))
     out = {"computed_by": "optiland 0.6.3 via tools/export_reevaluation.py", "files": recs}
     if a.summary:
-        out["summary"] = summary_check(a.summary, recs)
+        out["summary"] = summary_check(a.summary)
         print(json.dumps(out["summary"], indent=1))
     if a.json:
         pathlib.Path(a.json).write_text(json.dumps(out, indent=1))

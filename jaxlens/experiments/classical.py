@@ -369,12 +369,12 @@ def _seeds(args) -> list[int]:
 
 
 def finished_lens(result, i: int, spec):
-    """Design i as a float64 lens for export: clear semi-diameters set, and each asphere
-    written on its closest conic (``optics.rebase``: the same sag, traceable by tools that
-    start Newton at the base conic)."""
+    """Design i as a float64 lens for export: each asphere on its closest conic (``optics.
+    rebase``: the sag to 1e-8 mm, for tools that start Newton at the base conic), then that
+    lens's clear semi-diameters (set only before it, they clipped rim rays the refit moved)."""
     from jaxlens.optics.rebase import rebase_conics
 
-    return rebase_conics(with_clear_apertures(result.lens(i), spec))
+    return with_clear_apertures(rebase_conics(with_clear_apertures(result.lens(i), spec)), spec)
 
 
 def with_clear_apertures(lens, spec):

@@ -43,8 +43,9 @@ Conventions:
     that "of the Zernike terms relative to the base asphere", with ρ and φ the decentered
     coordinates (its Zernike Surface object, parameters 5–6; the sequential Zernike sag
     page was not at hand); a decenter moves what it decenters toward +dx, as a surface
-    decenter does. Not checked against a sag OpticStudio computed for a decentered surface
-    (optiland 0.6.3's Zernike geometry has no decenter, and its .zmx reader no SZERNSAG).
+    decenter does. Checked against optiland 0.6.3 (its Zernike sum shifted by hand, and a
+    flat-base surface moved by its own surface decenter; tests/test_zernike_decenter.py), not
+    against a sag OpticStudio computed for a decentered surface (none at hand).
 
     With ``extrapolate=False`` (Zemax PARM 0 = 0) the Zernike part is zero where ρ > 1, as
     in Zemax (a step in the surface at ρ = 1); ``True`` (PARM 0 = 1) evaluates it everywhere.
