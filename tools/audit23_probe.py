@@ -60,8 +60,8 @@ def round22_items():
     raw = bk7.model
     probe("Sellmeier(N-BK7).index(12 µm) (past its 10.2 µm pole, again)", lambda: raw.index(12.0), "12", "µm", "pole")
     probe("Sellmeier(N-BK7).index([0.5, 11]) (one past the pole)", lambda: raw.index(np.array([0.5, 11.0])), "11", "µm", "pole")
-    probe("Sellmeier2 index(6 µm) past its 5 µm pole", lambda: M.Sellmeier2(np.array([0.0, 1.0, 0.1, 0.0, 5.0])).index(6.0), "6", "µm", "pole")
-    probe("Handbook2 index past its pole", lambda: M.Handbook2(np.array([2.3, 0.01, 0.05, 0.01])).index(0.3), "µm", "pole")
+    probe("Sellmeier2 index(6 µm) past its 5 µm pole", lambda: M.Sellmeier2(np.array([0.0, 1.0, 0.1, 0.5, 5.0])).index(6.0), "6", "µm", "pole")
+    probe("Handbook2 index(0.2 µm) below its 0.224 µm pole", lambda: M.Handbook2(np.array([2.3, 0.01, 0.05, 0.01])).index(0.2), "µm", "pole")
     probe("Sellmeier(N-BK7).extrapolated_index(11 µm) (documented: the formula anywhere)", lambda: float(raw.extrapolated_index(11.0)), good=True)
     probe("SILICON.index(5 µm) (control: catalog range beyond the formula's pole)", lambda: float(jl.get_material("SILICON").index(5.0)), good=True)
     lens_bk7 = dataclasses.replace(cooke, materials=[bk7 if isinstance(m, M.Tabulated) else m for m in cooke.materials])
@@ -133,7 +133,8 @@ def materials_rays():
 def analysis():
     from jaxlens import analysis as A
     probe("encircled_energy radii negative", lambda: A.encircled_energy(cooke, 0.0, jnp.array([-0.01, 0.01])), "radii", "mm")
-    probe("encircled_energy radii 2-D", lambda: A.encircled_energy(cooke, 0.0, jnp.ones((2, 2)) * 0.01), "radii")
+    probe("encircled_energy radii 2-D (documented: any shape)", lambda: A.encircled_energy(cooke, 0.0, jnp.ones((2, 2)) * 0.01).energy, good=True)
+    probe("encircled_energy subsamples 10**6", lambda: A.encircled_energy(cooke, 0.0, jnp.array([0.01]), method="diffraction", pixel_size=0.002, subsamples=10**6), "subsamples")
     probe("encircled_energy method 'FFT'", lambda: A.encircled_energy(cooke, 0.0, jnp.array([0.01]), method="FFT"), "method")
     probe("encircled_energy shape 'Square'", lambda: A.encircled_energy(cooke, 0.0, jnp.array([0.01]), shape="Square"), "shape")
     probe("encircled_energy subsamples 0", lambda: A.encircled_energy(cooke, 0.0, jnp.array([0.01]), subsamples=0), "subsamples")
@@ -187,7 +188,7 @@ def tolerancing_design():
     probe("yield_fraction rms_um empty", lambda: T.yield_fraction(np.zeros(0), 5.0), "rms_um")
     probe("yield_fraction min_valid 99 (percent?)", lambda: T.yield_fraction(np.ones(4), 5.0, min_valid=99.0), "min_valid")
     probe("DesignSpec fov -80", lambda: D.DesignSpec(fov=-80.0), "fov", "deg")
-    probe("DesignSpec fov 1.41 (radians?)", lambda: D.DesignSpec(fov=1.41), "total_track", "fov")
+    probe("DesignSpec fov 1.41 (radians?)", lambda: D.DesignSpec(fov=1.41), "total_track", "fov in degrees")
     probe("DesignSpec sensor_diagonal 7660 (µm)", lambda: D.DesignSpec(sensor_diagonal=7660.0), "sensor_diagonal", "mm")
     probe("DesignSpec n_elements 0", lambda: D.DesignSpec(n_elements=0, materials=()), "n_elements")
     probe("DesignSpec materials one short", lambda: D.DesignSpec(materials=("E48R",) * 5), "materials")

@@ -83,6 +83,12 @@ from .surfaces import AbstractSurface, number_field
 _UM_TO_MM = 1e-3
 
 
+
+MAX_LINES_PER_UM = 20.0
+"""Most lines per µm of a ``Grating``: at 20 lines/µm (a 50 nm period) every order but 0
+is evanescent for wavelengths above 0.1 µm (|M|·λ·T > 2); ruled and holographic gratings
+have at most about 6 lines/µm. A density in lines per mm (600) was taken as 600 lines/µm."""
+
 class Binary2(AbstractSurface):
     """An even asphere with a rotationally symmetric diffractive phase (Zemax BINARY_2).
 
@@ -171,8 +177,15 @@ class Grating(AbstractSurface):
 
     def __check_init__(self):
         if not checks.is_traced(self.lines_per_um):
-            checks.values(self.lines_per_um, "lines_per_um", "Grating", lo=0,
-                          unit="lines per µm")
+            try:
+                checks.values(self.lines_per_um, "lines_per_um", "Grating", lo=0,
+                              hi=MAX_LINES_PER_UM, unit="lines per µm")
+            except ValueError as e:
+                t = np.asarray(self.lines_per_um, float)
+                big = t[np.isfinite(t) & (t > MAX_LINES_PER_UM)]
+                hint = (f" (was it given in lines per mm? {big[0]:g} lines/mm is "
+                        f"{big[0] / 1000:g} lines/µm)" if big.size else "")
+                raise ValueError(f"{e}{hint}") from None
         if not checks.is_traced(self.order):
             checks.values(self.order, "order", "Grating", unit="a whole number")
             o = np.asarray(self.order, float)
