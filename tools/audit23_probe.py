@@ -211,6 +211,7 @@ def tolerancing_design():
 # ----------------------------------------------------------------------------- tools and CLIs
 def tools_cli():
     import check_corpus
+
     from jaxlens.experiments import classical
     f = os.path.join(TMP, "afile.txt")
     open(f, "w").close()
@@ -224,4 +225,112 @@ def tools_cli():
     probe("classical --elements 10**6", cli(lambda: classical.main(["--elements", "1000000", "--out", os.path.join(TMP, "ce2"), "--quiet"])), "--elements")
 
 
-run((round22_items, surfaces, materials_rays, analysis, images, tolerancing_design, tools_cli))
+def argv_main(main, argv):
+    """Run a ``main()`` that reads sys.argv (the EDoF CLI)."""
+    def call():
+        old = sys.argv
+        sys.argv = ["edof", *argv]
+        try:
+            return main()
+        finally:
+            sys.argv = old
+    return cli(call)
+
+
+# ----------------------------------------------------------------------------- second runs
+def second_runs():
+    """A second run into the folder of a first (finished) run, or into a folder of the
+    user's own files: refused before any work, and the folder left as it was."""
+    from jaxlens.experiments import classical
+    from jaxlens.experiments import tolerance as tol
+    from jaxlens.experiments.edof import cli as edof
+    from jaxlens.experiments.runfolder import FINISHED
+    run_dir = os.path.join(TMP, "first_run")
+    os.makedirs(run_dir, exist_ok=True)
+    for name, text in ((FINISHED, "finished\n"), ("summary.json", "{}")):
+        with open(os.path.join(run_dir, name), "w") as fh:
+            fh.write(text)
+    mine = os.path.join(TMP, "my_files")
+    os.makedirs(mine, exist_ok=True)
+    with open(os.path.join(mine, "thesis.tex"), "w") as fh:
+        fh.write("keep me")
+    design = os.path.join(os.path.dirname(__file__), "..", "experiments", "classical", "designs", "seed_13.zmx")
+    kept = lambda f: cli(lambda: (f(), sorted(os.listdir(run_dir)), sorted(os.listdir(mine)))[0])
+    probe("classical --out <a finished run> (no --overwrite)", kept(lambda: classical.main(["--smoke", "--out", run_dir, "--quiet"])), "--out", "earlier run")
+    probe("classical --out <my files> --overwrite", kept(lambda: classical.main(["--smoke", "--out", mine, "--overwrite", "--quiet"])), "--out", "not empty")
+    probe("classical --ablation --ablation-out <a file>", cli(lambda: classical.main(["--ablation", "--ablation-out", os.path.join(mine, "thesis.tex"), "--out", os.path.join(TMP, "ab"), "--quiet"])), "--ablation-out", "file")
+    # The tolerance CLI writes tolerance.json beside a classical run by design (its example:
+    # --out experiments/classical); what it must not replace is its own earlier report.
+    tol_dir = os.path.join(TMP, "tol_run")
+    os.makedirs(tol_dir, exist_ok=True)
+    with open(os.path.join(tol_dir, "tolerance.json"), "w") as fh:
+        fh.write("{}")
+    probe("tolerance --out <its earlier report> (no --overwrite)", cli(lambda: tol.main([design, "--out", tol_dir])), "--out", "earlier run")
+    probe("edof --out <a finished run> (no --overwrite)", argv_main(lambda: kept(edof.main)(), ["--smoke", "--out", run_dir, "--quiet"]), "--out", "earlier run")
+    probe("edof --out <my files> --overwrite", argv_main(lambda: kept(edof.main)(), ["--smoke", "--out", mine, "--overwrite", "--quiet"]), "--out", "not empty")
+    probe("first run and my files still there (control)", lambda: (sorted(os.listdir(run_dir)), sorted(os.listdir(mine))), good=True)
+
+
+# ----------------------------------------------------------------------------- JSON files
+def json_files():
+    import copy
+    import json
+    base = os.path.join(TMP, "cooke.json")
+    jl.save(cooke, base)
+    with open(base) as fh:
+        good = json.load(fh)
+
+    def edited(name, edit):
+        d = copy.deepcopy(good)
+        edit(d)
+        path = os.path.join(TMP, f"{name}.json")
+        with open(path, "w") as fh:
+            json.dump(d, fh)
+        return lambda: jl.load(path)
+
+    def surf(i, **kw):
+        return lambda d: d["surfaces"][i].update(kw)
+
+    def top(**kw):
+        return lambda d: d.update(kw)
+
+    probe("JSON units length 'inch'", edited("inch", lambda d: d["units"].update(length="inch")), "length", "mm")
+    probe("JSON units wavelength 'nm' with µm values", edited("unm", lambda d: d["units"].update(wavelength="nm")), "wavelength")
+    probe("JSON wavelengths_nm holding µm values", edited("wlnm", lambda d: d.update(wavelengths_nm=d.pop("wavelengths_um"))), "wavelengths_nm", "nm")
+    probe("JSON primary 3 of 3 wavelengths", edited("prim", top(primary=3)), "primary")
+    probe("JSON primary 1.5", edited("prim15", top(primary=1.5)), "primary")
+    probe("JSON fields type 'angle_rad_y'", edited("frad", lambda d: d["fields"].update(type="angle_rad_y")), "type", "angle_deg_y")
+    probe("JSON fields values [0, 95]", edited("f95", lambda d: d["fields"].update(values=[0.0, 95.0])), "95", "deg")
+    probe("JSON aperture epd -10", edited("epdneg", top(aperture={"epd": -10.0})), "epd")
+    probe("JSON aperture epd and fnum both", edited("epdf", top(aperture={"epd": 10.0, "fnum": 4.0})), "aperture")
+    probe("JSON aperture {} (none)", edited("apnone", top(aperture={})), "aperture")
+    probe("JSON surfaces [] (none)", edited("nosurf", top(surfaces=[])), "surfaces")
+    probe("JSON curvature '0.05' (documented: a number's text is read as it)", lambda: float(edited("cstr", surf(1, curvature="0.05"))().surfaces[0].c), good=True)
+    probe("JSON curvature true", edited("cbool", surf(1, curvature=True)), "curvature")
+    probe("JSON surface type 'Standard ' (documented: case and punctuation ignored)", lambda: type(edited("tsp", surf(1, type="Standard "))().surfaces[0]).__name__, good=True)
+    probe("JSON material 'N-BK77' (close: N-BK7)", edited("mat", surf(1, material="N-BK77")), "N-BK7")
+    probe("JSON format 'jaxlens.lens/2'", edited("fmt2", top(format="jaxlens.lens/2")), "format")
+    probe("JSON semi_diameter -1", edited("sdneg", surf(1, semi_diameter=-1.0)), "semi_diameter")
+    probe("JSON thickness nan (string 'nan')", edited("tnan", surf(2, thickness="nan")), "thickness")
+    probe("JSON unknown key 'curvatur'", edited("typo", surf(1, curvatur=0.05)), "curvatur")
+
+
+# ----------------------------------------------------------------------------- sampling
+def sampling():
+    S = jl.sampling
+    from jaxlens import tolerance as T
+    key = jax.random.PRNGKey(0)
+    probe("pupil_random n 0", lambda: S.pupil_random(key, 0), "n")
+    probe("pupil_random n 10**12", lambda: S.pupil_random(key, HUGE), "n")
+    probe("pupil_random key 0 (int)", lambda: S.pupil_random(0, 16), "key")
+    probe("pupil_random dtype int32", lambda: S.pupil_random(key, 16, dtype=jnp.int32), "dtype")
+    probe("pupil_stratified n_side 0", lambda: S.pupil_stratified(key, 0), "n_side")
+    probe("pupil_stratified n_side 10**6", lambda: S.pupil_stratified(key, 10**6), "n_side")
+    probe("vignetting_map factors shape (4,)", lambda: S.vignetting_map(jnp.zeros(4), jnp.zeros((3, 2))), "factors")
+    probe("vignetting_map factors nan", lambda: S.vignetting_map(jnp.full(5, jnp.nan), jnp.zeros((3, 2))), "factors")
+    model = T.ToleranceModel(cooke) if hasattr(T, "ToleranceModel") else None
+    probe("sample_perturbations trials 10**12", lambda: T.sample_perturbations(model, HUGE, key), "trials")
+    probe("sample_perturbations key 'x'", lambda: T.sample_perturbations(model, 4, "x"), "key")
+
+
+run((round22_items, surfaces, materials_rays, analysis, images, tolerancing_design, tools_cli, second_runs, json_files, sampling))
