@@ -11,9 +11,28 @@ data), the surfaces no round had probed (``QTypeAsphere``, ``ZernikeSag``, ``XYP
 ``random_starts``, ``evaluate``) and the tools a user runs on a folder
 (``tools/check_corpus.py``).
 
-Before (main at 2aa9a1a, ``AUDIT23_BEFORE=1``) and after (branch audit23),
-``PYTHONPATH=<tree> python tools/audit23_probe.py`` under ``ulimit -v 16000000``, one 2-core
-machine: see the table in the branch's report (the module's RESULTS below).
+Before (main at 2aa9a1a) and after (branch audit23), 160 probes, ``PYTHONPATH=<tree> python
+tools/audit23_probe.py`` under ``ulimit -v 16000000``, one 2-core machine (42 s; no probe
+starts long work on main, so there is no before-mode):
+    before: clear error 128, crash 4, ok 12, silent wrong 11, vague error 5
+    after:  clear error 141, ok 12, silent wrong 7
+    after, branch audit23-poles (audit23 + the pole check): clear error 145, ok 12, silent 3
+Fixed: a Grating's lines_per_um in lines per mm (600 was built: every order evanescent), a
+Tabulated's hand-given wavelength_range reversed or not finite, ``load_agf`` of a folder and
+``tools/check_corpus.py`` on a missing folder or a file (tracebacks), ``reweighting_mask`` of
+a NaN RMS (every weight 1), ``vignetting_map`` of a NaN factor (every ray NaN),
+``encircled_energy``'s ``pupil_side`` (refused as CoherentPSF's "pupil") and ``subsamples``
+(no bound: a 28 PiB allocation), ``sample_perturbations``' key (JAX's error), a JSON file's
+field type (the message named no supported type), and a ``DesignSpec``/``--fov`` of a few
+degrees, likely radians (the message asked about mm only).
+
+Left (the 7 "silent wrong" rows): a bare formula's ``index`` past its poles (the 4
+``Sellmeier``/``Sellmeier2``/``Handbook2`` rows; fixed on branch audit23-poles, which needs
+one line of tests/test_input_probes_round22.py changed: its line 131 reads the formula's value
+at 11 µm through ``index``), and ``Lens(...)`` keeping wavelengths outside its glasses' data
+(3 rows; every analysis refuses them): the .zmx reader builds the Lens before its per-WAVM-line
+check, and the JSON reader and tests of rounds 17-22 build such lenses to test the analyses'
+refusals (see the round's report).
 
 Run: PYTHONPATH=$PWD python tools/audit23_probe.py [filter]
 """
@@ -38,16 +57,6 @@ from jaxlens import zoo  # noqa: E402
 cooke = zoo.cooke_triplet()
 HUGE = 10**12
 TMP = tempfile.mkdtemp()
-BEFORE = os.environ.get("AUDIT23_BEFORE") == "1"
-
-
-def long(name, fn, *words, **kw):
-    """A probe that, on main, starts minutes to hours of work or a huge allocation: left
-    out before."""
-    if not BEFORE:
-        probe(name, fn, *words, **kw)
-
-
 def cli(f):
     f.cli = True
     return f
@@ -330,7 +339,7 @@ def sampling():
     probe("vignetting_map factors nan", lambda: S.vignetting_map(jnp.full(5, jnp.nan), jnp.zeros((3, 2))), "factors")
     model = T.ToleranceModel(cooke) if hasattr(T, "ToleranceModel") else None
     probe("sample_perturbations trials 10**12", lambda: T.sample_perturbations(model, HUGE, key), "trials")
-    probe("sample_perturbations key 'x'", lambda: T.sample_perturbations(model, 4, "x"), "key")
+    probe("sample_perturbations key 'x'", lambda: T.sample_perturbations(model, 4, "x"), "sample_perturbations", "key")
 
 
 run((round22_items, surfaces, materials_rays, analysis, images, tolerancing_design, tools_cli, second_runs, json_files, sampling))
