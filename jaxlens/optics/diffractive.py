@@ -177,15 +177,16 @@ class Grating(AbstractSurface):
 
     def __check_init__(self):
         if not checks.is_traced(self.lines_per_um):
-            try:
-                checks.values(self.lines_per_um, "lines_per_um", "Grating", lo=0,
-                              hi=MAX_LINES_PER_UM, unit="lines per µm")
-            except ValueError as e:
-                t = np.asarray(self.lines_per_um, float)
-                big = t[np.isfinite(t) & (t > MAX_LINES_PER_UM)]
-                hint = (f" (was it given in lines per mm? {big[0]:g} lines/mm is "
-                        f"{big[0] / 1000:g} lines/µm)" if big.size else "")
-                raise ValueError(f"{e}{hint}") from None
+            checks.values(self.lines_per_um, "lines_per_um", "Grating", lo=0,
+                          unit="lines per µm")
+            t = np.asarray(self.lines_per_um, float)
+            if np.any(t > MAX_LINES_PER_UM):
+                big = float(t[t > MAX_LINES_PER_UM].reshape(-1)[0])
+                raise ValueError(
+                    f"Grating: lines_per_um must be at most {MAX_LINES_PER_UM:g} lines per µm "
+                    f"(a {1000 / MAX_LINES_PER_UM:g} nm period: beyond it every order but 0 is "
+                    f"evanescent), got {big:g} (was it given in lines per mm? {big:g} lines/mm "
+                    f"is {big / 1000:g} lines/µm)")
         if not checks.is_traced(self.order):
             checks.values(self.order, "order", "Grating", unit="a whole number")
             o = np.asarray(self.order, float)
