@@ -6,6 +6,7 @@ import json
 import math
 import re
 
+import jax
 import jax.numpy as jnp
 import numpy as np
 import pytest
@@ -158,3 +159,32 @@ def test_sample_perturbations_checks_its_key():
         with pytest.raises(ValueError, match=r"sample_perturbations: key must be one PRNG key "
                            r"\(jax\.random\.key\(0\) or jax\.random\.PRNGKey\(0\)\), got "):
             T.sample_perturbations(None, 4, key)
+
+
+# ------------------------------------------------------------------ a formula past its poles
+def test_a_formula_refuses_a_wavelength_past_its_poles():
+    """Before: N-BK7's bare Sellmeier gave n = 3.05 at 11 µm and 2.42 at 12 µm, past its
+    10.18 µm resonance (a lens refused such wavelengths, the formula's own index did not)."""
+    from jaxlens.optics import materials as M
+
+    raw = jl.get_material("N-BK7").model
+    with pytest.raises(ValueError, match=r"^Sellmeier\.index: wavelength 11 µm is outside "
+                       r"0\.15–10\.1765 µm, the range of N-BK7 between the resonances \(poles\) "
+                       r"of its Sellmeier formula at 0\.1415 µm and 10\.18 µm, .*; "
+                       r"extrapolated_index gives the formula's value anywhere$"):
+        raw.index(np.array([0.5, 11.0]))
+    with pytest.raises(ValueError, match=r"^Handbook2\.index: wavelength 0\.2 µm is outside "
+                       r"0\.223607–30 µm"):
+        M.Handbook2(np.array([2.3, 0.01, 0.05, 0.01])).index(0.2)
+    # The formula itself, inside its window and through extrapolated_index, is unchanged.
+    n = float(raw.index(0.5875618))
+    assert n == pytest.approx(1.5168, abs=1e-4)
+    assert 3.0 < float(raw.extrapolated_index(11.0)) < 3.1
+    # A catalog range beyond the formula's pole still holds (SILICON: 1.36-11 µm, pole 1.13).
+    si = jl.get_material("SILICON")
+    assert float(si.index(5.0)) == pytest.approx(float(si.model.extrapolated_index(5.0)),
+                                                 rel=1e-15)
+    with pytest.raises(ValueError, match=r"Sellmeier\.index: wavelength 5 µm is outside"):
+        si.model.index(5.0)
+    # Traced wavelengths are not checked (jit/grad programs unchanged).
+    assert 3.0 < float(jax.jit(raw.index)(jnp.asarray(11.0))) < 3.1
