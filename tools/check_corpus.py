@@ -421,6 +421,9 @@ def run_folder(argv, check_file, table, description: str) -> int:
         if "unknown_glass" not in params:
             ap.error("--unknown-glass: this tool's check takes no unknown_glass option")
         check_file = functools.partial(check_file, unknown_glass=args.unknown_glass)
+    if not os.path.isdir(args.folder):  # os.listdir raised with a traceback
+        what = "a file" if os.path.exists(args.folder) else "missing"
+        ap.error(f"folder {args.folder!r} is {what}; give a folder of .zmx files")
     files = sorted(os.path.join(args.folder, f) for f in os.listdir(args.folder)
                    if f.lower().endswith(".zmx"))
     if not files:

@@ -44,6 +44,8 @@ kernel cannot hold (above 1 − truncated) gives NaN; a field no ray reaches giv
 
 from __future__ import annotations
 
+import math
+
 import equinox as eqx
 import jax
 import jax.numpy as jnp
@@ -59,6 +61,10 @@ from .spots import chief_ray, spot_rays, weighted_centroid
 METHODS = ("geometric", "diffraction")
 REFERENCES = ("centroid", "chief")
 SHAPES = ("circle", "square")
+MAX_SUBSAMPLES = 64
+"""Most sub-samples per pixel side of the diffraction method: the curve of a pixel's energy
+spread uniformly over s² points converges long before (the default is 8); 10**6 asked for
+(kernel_size·10**6)² points."""
 PUPIL_SIDE = 64  # default geometric pupil: pupil_polar(64), 4096 equal-area cells
 
 
@@ -152,8 +158,11 @@ def _samples(lens, field, radii_or_fraction, where, *, wavelength, method, refer
     # subsamples=0 passed without a word when the method was geometric).
     checks.number(kernel_size, "kernel_size", where, lo=1, hi=checks.MAX_KERNEL_SIZE,
                   integer=True, unit="pixels per side")
-    checks.number(pupil_side, "pupil_side", where, lo=2, integer=True, unit="rays per side")
-    checks.number(subsamples, "subsamples", where, lo=1, integer=True,
+    # Upper bounds: pupil_side² rays are traced at once (CoherentPSF's bound, which named
+    # its own "pupil" for pupil_side), and (kernel_size·subsamples)² sub-pixel points kept.
+    checks.number(pupil_side, "pupil_side", where, lo=2, hi=math.isqrt(checks.MAX_PUPIL_POINTS),
+                  integer=True, unit="rays per side")
+    checks.number(subsamples, "subsamples", where, lo=1, hi=MAX_SUBSAMPLES, integer=True,
                   unit="sub-samples per pixel side")
     if method == "geometric":
         if pupil is not None:

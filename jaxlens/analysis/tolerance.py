@@ -663,6 +663,7 @@ def sample_perturbations(model: ToleranceModel, trials: int, key) -> np.ndarray:
             1 <= trials <= MAX_TRIALS):  # 1e10 failed allocating [trials, P] perturbations
         raise ValueError(f"monte_carlo: trials must be a whole number >= 1 and <= "
                          f"{MAX_TRIALS}, got {trials!r}")
+    checks.prng_key(key, "sample_perturbations")  # JAX's own error named no argument
     tol = model.tolerance_vector(sensitivity=False)
     shape = (int(trials), tol.size)
     if model.tolerances.distribution == "uniform":

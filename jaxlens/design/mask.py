@@ -37,6 +37,8 @@ def reweighting_mask(
     checks.number(threshold, "threshold", "reweighting_mask", lo=0, hi=1,
                   unit="(fraction of the mean RMS)")
     checks.real_values(rms, "rms", "reweighting_mask")
+    if not checks.is_traced(rms):  # a NaN made the mean NaN, and every weight 1
+        checks.values(rms, "rms", "reweighting_mask", lo=0, unit="(RMS spot error per field)")
     rms = jnp.asarray(rms)
     if area is not None and not checks.is_traced(area) and \
             jnp.shape(area) != jnp.shape(rms)[-1:]:

@@ -309,10 +309,14 @@ class DesignSpec:
         for arg, f, what in (("focal length", self.focal_length,
                               "sensor_diagonal / (2·tan(fov/2))"), ("efl", self.efl, "target")):
             if f is not None and not lo <= track / f <= hi:
+                # A full FoV of a few degrees is more likely radians (1.41 rad is 80.8°).
+                rad = (f" and fov in degrees ({self.fov:g} rad would be "
+                       f"{math.degrees(self.fov):.4g}°)" if arg == "focal length"
+                       and self.fov <= 2 * math.pi and track / f < lo else "")
                 raise ValueError(
                     f"{where}: total_track {track:g} mm is {track / f:.3g} times the {arg} "
                     f"{f:.4g} mm ({what}); it must be {lo:g} to {hi:g} times it (mm): are all "
-                    f"lengths in mm (sensor_diagonal {self.sensor_diagonal:g} mm)?")
+                    f"lengths in mm (sensor_diagonal {self.sensor_diagonal:g} mm){rad}?")
         min_fnum, max_product = aperture_field_limits(n)
         if self.fnum < min_fnum:
             raise ValueError(f"{where}: F/{self.fnum} is faster than {n} element(s) "

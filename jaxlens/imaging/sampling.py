@@ -373,6 +373,10 @@ def vignetting_map(factors, pupil) -> Float[Array, "*m 2"]:
     if v.shape != (5,):
         raise ValueError(f"vignetting_map: factors must be (VDX, VDY, VCX, VCY, VAN) of shape "
                          f"[5] (pupil radii, VAN in deg), got shape {v.shape}")
+    if not checks.is_traced(v) and not np.all(np.isfinite(np.asarray(v, float))):
+        # a NaN factor mapped every pupil point to NaN (every ray of the field lost)
+        raise ValueError(f"vignetting_map: factors (VDX, VDY, VCX, VCY in pupil radii, VAN in "
+                         f"deg) must be finite, got {checks.fmt(v)}")
     x = v[0] + pupil[..., 0] * (1.0 - v[2])
     y = v[1] + pupil[..., 1] * (1.0 - v[3])
     a = jnp.deg2rad(v[4])

@@ -395,8 +395,11 @@ def _fields_of(d: dict, where: str) -> np.ndarray:
     f = d.get("fields", [0.0])
     if isinstance(f, dict):
         ftype = _text(f.get("type", "angle_deg_y"), f"{where}: fields.type")
-        if ftype not in ("angle_deg_y", "angle_deg", "angle", "angle_deg_xy"):
-            raise ValueError(f"{where}: field type {ftype!r} is not supported (angles in deg)")
+        known = ("angle_deg_y", "angle_deg", "angle", "angle_deg_xy")
+        if ftype not in known:
+            raise ValueError(f"{where}: field type {ftype!r} is not supported; fields.type must "
+                             f"be one of {', '.join(known)} (angles in deg: convert radians or "
+                             f"heights to degrees)")
         f = f.get("values", [0.0])
     out = np.atleast_1d(_nums(f, f"{where}: fields"))
     if out.size == 0:

@@ -248,11 +248,16 @@ class CatalogMaterial(AbstractMaterial):
             checks.material_wavelengths(
                 self, wavelength, f"CatalogMaterial.index ({self.name})",
                 hint="; extrapolated_index gives the formula's value outside it")
-        return self.model.index(wavelength)
+        # The model's formula unchecked against its poles: the catalog's range is the one
+        # that holds (the shipped SILICON's, 1.36–11 µm, lies beyond its formula's 1.13 µm
+        # resonance); without a stated range, the formula's own (``model.index``).
+        if self.wavelength_range is None:
+            return self.model.index(wavelength)
+        return self.model.extrapolated_index(wavelength)
 
     def extrapolated_index(self, wavelength):
         """The formula's index at any wavelength in µm, outside ``wavelength_range`` too."""
-        return self.model.index(wavelength)
+        return self.model.extrapolated_index(wavelength)
 
 
 # ---------------------------------------------------------------------------- dispersion
@@ -449,6 +454,8 @@ def _read_records(path: str | os.PathLike, catalog: str | None = None) -> list[G
     """Records of an AGF file; the catalog name defaults to the upper-case file stem."""
     path = os.fspath(path)
     name = catalog or os.path.splitext(os.path.basename(path))[0].upper()
+    if os.path.isdir(path):  # open() raised IsADirectoryError (a traceback, not a message)
+        raise ValueError(f"{path} is a folder; give a Zemax .agf glass catalog file")
     with open(path, "rb") as f:
         records = parse_agf(decode_zemax_text(f.read(), path), source=path, catalog=name)
     if not records:  # an empty or wrong file would register a catalog without glasses

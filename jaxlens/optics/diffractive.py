@@ -83,6 +83,12 @@ from .surfaces import AbstractSurface, number_field
 _UM_TO_MM = 1e-3
 
 
+
+MAX_LINES_PER_UM = 20.0
+"""Most lines per µm of a ``Grating``: at 20 lines/µm (a 50 nm period) every order but 0
+is evanescent for wavelengths above 0.1 µm (|M|·λ·T > 2); ruled and holographic gratings
+have at most about 6 lines/µm. A density in lines per mm (600) was taken as 600 lines/µm."""
+
 class Binary2(AbstractSurface):
     """An even asphere with a rotationally symmetric diffractive phase (Zemax BINARY_2).
 
@@ -173,6 +179,14 @@ class Grating(AbstractSurface):
         if not checks.is_traced(self.lines_per_um):
             checks.values(self.lines_per_um, "lines_per_um", "Grating", lo=0,
                           unit="lines per µm")
+            t = np.asarray(self.lines_per_um, float)
+            if np.any(t > MAX_LINES_PER_UM):
+                big = float(t[t > MAX_LINES_PER_UM].reshape(-1)[0])
+                raise ValueError(
+                    f"Grating: lines_per_um must be at most {MAX_LINES_PER_UM:g} lines per µm "
+                    f"(a {1000 / MAX_LINES_PER_UM:g} nm period: beyond it every order but 0 is "
+                    f"evanescent), got {big:g} (was it given in lines per mm? {big:g} lines/mm "
+                    f"is {big / 1000:g} lines/µm)")
         if not checks.is_traced(self.order):
             checks.values(self.order, "order", "Grating", unit="a whole number")
             o = np.asarray(self.order, float)

@@ -64,10 +64,14 @@ class AbstractMaterial(eqx.Module):
 
         ``index`` is this for every material but a catalog glass (``CatalogMaterial``),
         whose ``index`` refuses a concrete wavelength outside the catalog's range; here its
-        formula is extrapolated. For the d, F and C line indices (nd, Vd) of materials whose
-        data do not cover those lines (infrared glasses), as catalogs and Zemax quote them.
+        formula is extrapolated, and a formula's beyond its poles (where its ``index``
+        refuses a concrete wavelength, ``pole_window``). For the d, F and C line indices
+        (nd, Vd) of materials whose data do not cover those lines (infrared glasses), as
+        catalogs and Zemax quote them.
         """
-        return self.index(wavelength)
+        checks.wavelength_unit(wavelength, f"{type(self).__name__}.extrapolated_index")
+        index = type(self).index
+        return getattr(index, "__wrapped__", index)(self, wavelength)
 
     def poles(self) -> np.ndarray | None:
         """Wavelengths (µm) where the dispersion formula diverges (its resonances), concrete
@@ -143,7 +147,17 @@ def _leaf_key(x):
 
 def _unit_checked(index):
     def checked(self, wavelength):
-        checks.wavelength_unit(wavelength, f"{type(self).__name__}.index")
+        where = f"{type(self).__name__}.index"
+        checks.wavelength_unit(wavelength, where)
+        # A formula without a stated range (a Sellmeier from coefficients) holds between its
+        # poles around the d line only (``pole_window``); past a resonance it gave a finite,
+        # meaningless index (N-BK7's Sellmeier: 3.05 at 11 µm). A lens refuses such
+        # wavelengths too (``checks.material_range``). Concrete values only.
+        if (type(self).poles is not AbstractMaterial.poles and not checks.is_traced(wavelength)
+                and self.pole_window() is not None):
+            checks.material_wavelengths(
+                self, wavelength, where,
+                hint="; extrapolated_index gives the formula's value anywhere")
         return index(self, wavelength)
 
     checked.__name__, checked.__qualname__, checked.__doc__ = (
@@ -303,6 +317,15 @@ class Tabulated(AbstractMaterial):
         if np.unique(np.asarray(w)).size != w.shape[0]:
             raise ValueError(f"{where}: wavelengths must be distinct (one index per "
                              f"wavelength), got {checks.fmt(w)} µm")
+        r = self.wavelength_range
+        if r is not None:  # one given by hand: (0.7, 0.4) made every wavelength "outside"
+            try:
+                lo_r, hi_r = (float(v) for v in r)
+            except (TypeError, ValueError):
+                lo_r = hi_r = math.nan
+            if not (0 < lo_r < hi_r < math.inf):
+                raise ValueError(f"{where}: wavelength_range must be (shortest, longest) "
+                                 f"wavelength in µm with 0 < shortest < longest, got {r!r}")
 
     def index(self, wavelength):
         """The interpolated index at wavelengths in µm; a concrete wavelength outside the
