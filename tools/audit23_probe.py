@@ -11,12 +11,11 @@ data), the surfaces no round had probed (``QTypeAsphere``, ``ZernikeSag``, ``XYP
 ``random_starts``, ``evaluate``) and the tools a user runs on a folder
 (``tools/check_corpus.py``).
 
-Before (main at 2aa9a1a) and after (branch audit23), 160 probes, ``PYTHONPATH=<tree> python
+Before (main at 2aa9a1a) and after (merged, with the formula pole check), 160 probes, ``PYTHONPATH=<tree> python
 tools/audit23_probe.py`` under ``ulimit -v 16000000``, one 2-core machine (42 s; no probe
 starts long work on main, so there is no before-mode):
     before: clear error 128, crash 4, ok 12, silent wrong 11, vague error 5
-    after:  clear error 141, ok 12, silent wrong 7
-    after, branch audit23-poles (audit23 + the pole check): clear error 145, ok 12, silent 3
+    after:  clear error 145, ok 12, silent wrong 3 (the formula pole check: 4 of the 11)
 Fixed: a Grating's lines_per_um in lines per mm (600 was built: every order evanescent), a
 Tabulated's hand-given wavelength_range reversed or not finite, ``load_agf`` of a folder and
 ``tools/check_corpus.py`` on a missing folder or a file (tracebacks), ``reweighting_mask`` of
@@ -26,10 +25,7 @@ a NaN RMS (every weight 1), ``vignetting_map`` of a NaN factor (every ray NaN),
 field type (the message named no supported type), and a ``DesignSpec``/``--fov`` of a few
 degrees, likely radians (the message asked about mm only).
 
-Left (the 7 "silent wrong" rows): a bare formula's ``index`` past its poles (the 4
-``Sellmeier``/``Sellmeier2``/``Handbook2`` rows; fixed on branch audit23-poles, which needs
-one line of tests/test_input_probes_round22.py changed: its line 131 reads the formula's value
-at 11 µm through ``index``), and ``Lens(...)`` keeping wavelengths outside its glasses' data
+Left (the 3 "silent wrong" rows): ``Lens(...)`` keeping wavelengths outside its glasses' data
 (3 rows; every analysis refuses them): the .zmx reader builds the Lens before its per-WAVM-line
 check, and the JSON reader and tests of rounds 17-22 build such lenses to test the analyses'
 refusals (see the round's report).
