@@ -268,8 +268,8 @@ def _environment(f: ZmxFile, op: Operand, value: str, ln: ZmxLine, chosen: int) 
     where = (f"the file's ENVD gives {nominal:g} {unit}" if f.envd is not None else
              f"the file has no ENVD line: {nominal:g} {unit}, Zemax's default")
     what = "temperature" if op.name == "TEMP" else "air pressure"
-    raise ln.error(f"configuration {chosen} sets the {what} ({op.name}) to {value} {unit}, but "
-                   f"{where}; another {what} changes every index (the glasses' and the "
+    raise ln.error(f"configuration {chosen} sets {op.name} {op.param} to {value} (the {what}, "
+                   f"{unit}), but {where}; another {what} changes every index (the glasses' and the "
                    f"air's), which jaxlens does not model, so it cannot read "
                    f"configuration {chosen} (configurations at the file's {what} read)")
 

@@ -340,7 +340,7 @@ def vignetting(lines, count: int, *, defined: int | None = None) -> np.ndarray |
         seen[key] = ln
         j = VIGNETTING_KEYS.index(key)
         vals = [ln.float(i, f"{key} value") for i in range(1, len(ln.tokens))]
-        if len(vals) < defined and all(v == 0.0 for v in vals):
+        if 0 < len(vals) < defined and all(v == 0.0 for v in vals):
             # Quadoa's export writes 'VDXN 0' whatever the number of fields: the factor for
             # every field, or those it lacks at Zemax's default (0), read the same.
             continue
