@@ -9,7 +9,8 @@ export (hausenshi/DeepLens). Two classes of problem, both refusals of a readable
 
 * The generator joins its lines without a final line break, so every one of its files was
   refused under ``strict`` ("may be truncated") although its last line, the image
-  surface's ``DISZ 0``, cannot change the lens however it is cut.
+  surface's ``DISZ 0``, cannot change the lens however it is cut. (Likewise the DeepLens
+  fork's last line of spaces after the final break.)
 * Quadoa writes ``VDXN 0`` (one value) whatever the number of fields; jaxlens refused the
   line as cut short. All-zero short lines now read (no vignetting either way); a short
   line with a nonzero value stays refused.
@@ -90,6 +91,17 @@ def test_a_file_cut_elsewhere_is_still_reported():
         zmx.loads(ends_on_diam, strict=True)
     with pytest.warns(zmx.ZmxWarning, match="may be truncated"):
         zmx.loads(ends_on_diam)
+
+
+def test_spaces_after_the_last_line_break_end_the_file_at_a_line_boundary():
+    # A DeepLens fork writes its last line as '    ' (indentation, no break): the file
+    # ends at a line boundary, as one ending on the break does. Before: "may be truncated:
+    # ''", refused under strict.
+    text = _form("  DISZ 0.00000000E+00\n  DIAM 1.2 1 0 0 1 \"\"") + "\n    "
+    with warnings.catch_warnings():
+        warnings.simplefilter("error", zmx.ZmxWarning)
+        lens = zmx.loads(text, strict=True)
+    assert _efl(lens) == _efl(zmx.loads(_form(), strict=True))
 
 
 # ------------------------------------------------------ Quadoa's one-value vignetting lines

@@ -383,7 +383,9 @@ def _check_structure(f: ZmxFile, text: str, strict: bool) -> None:
     # crosses it), where writers that join lines without a final break end (VERS 240000
     # files of a lens-form generator, tangericm/optical-design).
     last_is_image_disz = img.disz_line is not None and img.disz_line.number == len(lines)
-    if (not text.endswith(("\n", "\r")) and not last_is_image_disz
+    # Spaces after the last line break (a writer's indentation, '    ' in a DeepLens fork's
+    # files) end the file at a line boundary as surely as the break itself.
+    if (not text.rstrip(" \t").endswith(("\n", "\r")) and not last_is_image_disz
             and (lines[-1].split() or [""])[0] not in IGNORED_KEYWORDS):
         report(strict, f"{path}:{len(lines)}: the file does not end with a line break; it "
                         f"may be truncated: {lines[-1].strip()!r}")
