@@ -269,8 +269,8 @@ def _environment(f: ZmxFile, op: Operand, value: str, ln: ZmxLine, chosen: int) 
              f"the file has no ENVD line: {nominal:g} {unit}, Zemax's default")
     what = "temperature" if op.name == "TEMP" else "air pressure"
     raise ln.error(f"configuration {chosen} sets {op.name} {op.param} to {value} (the {what}, "
-                   f"{unit}), but {where}; another {what} changes every index (the glasses' and the "
-                   f"air's), which jaxlens does not model, so it cannot read "
+                   f"{unit}), but {where}; another {what} changes every index (the "
+                   f"glasses' and the air's), which jaxlens does not model, so it cannot read "
                    f"configuration {chosen} (configurations at the file's {what} read)")
 
 
