@@ -15,7 +15,15 @@ export (hausenshi/DeepLens). Two classes of problem, both refusals of a readable
   line as cut short. All-zero short lines now read (no vignetting either way); a short
   line with a nonzero value stays refused.
 
-And one silent wrong answer found while ranking the reader's refusals (the brief's
+With the vignetting lines read, the Porro-prism binocular showed a silent wrong answer:
+Quadoa writes each 45° fold as a -45° coordinate break, the mirror, a +135° break and
+positive thicknesses after it. Real rays find every surface, but jaxlens's paraxial trace
+takes the light's direction from the number of mirrors (toward -z after an odd number, as
+Zemax's negative thicknesses after a mirror write it), so its EFL was 412.6 mm where the
+unfolded system (by hand, and optiland) gives 803.6 mm. Such a frame is now refused with the
+surface's line.
+
+And one more silent wrong answer found while ranking the reader's refusals (the brief's
 ``TEMP``/``PRES`` rows): an active configuration whose ``TEMP`` row differs from the file's
 ``ENVD`` was read at ENVD's temperature without a word. ``TEMP``/``PRES`` rows are now
 compared with the file's environment: equal, read (whatever other configurations hold);
@@ -215,3 +223,38 @@ def test_environment_rows_without_an_envd_line_take_zemaxs_default(op, value, un
     nominal = zmx.loads(_pair(_temp(default, default, op), envd=""), config=2, strict=True)
     assert _efl(nominal) == pytest.approx(_pair_efl(30.0), rel=1e-12)
     assert float(paraxial.bfl(nominal)) > 0
+
+
+# ------------------------------------------------- folds whose frame turns against the light
+def _cb(n, dy, tilt):
+    return (f"SURF {n}\n  TYPE COORDBRK\n  CURV 0\n  PARM 1 0\n  PARM 2 {dy}\n"
+            f"  PARM 3 {tilt}\n  PARM 4 0\n  PARM 5 0\n  DISZ 0\n")
+
+
+def _fold(quadoa):
+    """A 45° fold mirror 10 mm after the stop, then a biconvex lens (nd 1.5, c = ±0.02,
+    4 mm): written as Quadoa's export writes a prism's fold (a -45 break, the mirror 10 mm
+    back along the turned axis, a +135 break with the decenter, positive thicknesses) or as
+    Zemax does (+45, the mirror, +45, negative thicknesses after it)."""
+    t = ("UNIT MM\nENPD 10\nWAVM 1 0.55 1\nSURF 0\n  CURV 0\n  DISZ INFINITY\n"
+         "SURF 1\n  STOP\n  CURV 0\n  DISZ 10\n")
+    mirror = "  GLAS MIRROR 0 0 0 0 0 0 0 0 0 0\n"
+    if quadoa:
+        t += _cb(2, 0, -45) + f"SURF 3\n  CURV 0\n  DISZ -10\n{mirror}" + _cb(4, -10, 135)
+        sign = 1
+    else:
+        t += _cb(2, 0, 45) + f"SURF 3\n  CURV 0\n  DISZ 0\n{mirror}" + _cb(4, 0, 45)
+        sign = -1
+    return t + (f"SURF 5\n  CURV {0.02 * sign}\n  DISZ {4 * sign}\n"
+                f"  GLAS ___BLANK 1 0 1.5 0 0 0 0 0 0 0\n"
+                f"SURF 6\n  CURV {-0.02 * sign}\n  DISZ {50 * sign}\nSURF 7\n  CURV 0\n"
+                f"  DISZ 0\n")
+
+
+def test_a_fold_whose_frame_turns_against_the_light_is_refused():
+    # Before: read, EFL -50.68 mm (the lens's +50.68 with the wrong sign); real rays +50.68.
+    with pytest.raises(ValueError, match=r"<zmx>:33: light meets this surface travelling "
+                                         r"toward \+z in its frame after 1 mirror.*takes -z"):
+        zmx.loads(_fold(quadoa=True))
+    lens = zmx.loads(_fold(quadoa=False), strict=True)
+    assert _efl(lens) == pytest.approx(_thick_lens_efl(1.5, 0.02, -0.02, 4.0), rel=1e-12)
