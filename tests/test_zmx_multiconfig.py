@@ -145,14 +145,16 @@ def test_a_single_configuration_file_has_only_configuration_1():
         zmx.loads(text, config=2)
 
 
-@pytest.mark.parametrize("row, msg", [
+@pytest.mark.parametrize("row, msg, active", [
     ("PRAM 1 2 0.5 0 0 0 1 1 1 0 0",
-     r"<zmx>:\d+: configuration 2 sets PRAM 1 to 0\.5 .*a surface parameter"),
-    ("TEMP 0 2 35 0 0 0 1 1 1 0 0", r"sets TEMP 0 to 35 .*the temperature"),
-    ("ZPHS 1 2 3 0 0 0 1 1 1 0 0", r"ZPHS is an operand jaxlens does not apply"),
+     r"<zmx>:\d+: configuration 2 sets PRAM 1 to 0\.5 .*a surface parameter", "0"),
+    # The active configuration's TEMP row at Zemax's default 20 °C (the file has no ENVD):
+    # a row at another temperature is refused for the active configuration too.
+    ("TEMP 0 2 35 0 0 0 1 1 1 0 0", r"sets TEMP 0 to 35 .*the temperature", "20"),
+    ("ZPHS 1 2 3 0 0 0 1 1 1 0 0", r"ZPHS is an operand jaxlens does not apply", "0"),
 ])
-def test_an_operand_that_cannot_be_applied_is_refused_with_its_line(row, msg):
-    same = row.split()[0] + " " + row.split()[1] + " 1 0 0 0 0 1 1 1 0 0"
+def test_an_operand_that_cannot_be_applied_is_refused_with_its_line(row, msg, active):
+    same = row.split()[0] + " " + row.split()[1] + f" 1 {active} 0 0 0 1 1 1 0 0"
     rows = "THIC 2 1 10 0 0 0 1 1 1 0 0\nTHIC 2 2 30 0 0 0 1 1 1 0 0\n"
     text = _pair(rows=rows + same + "\n" + row + "\n")
     with pytest.raises(ValueError, match=msg):
@@ -160,7 +162,7 @@ def test_an_operand_that_cannot_be_applied_is_refused_with_its_line(row, msg):
     assert float(zmx.loads(text, strict=True).thickness[1]) == 10.0  # the active one reads
     # The same operand with equal values in both configurations changes nothing.
     equal = text.replace(row, row.split()[0] + " " + row.split()[1] + " 2"
-                         + " 0 0 0 0 1 1 1 0 0")
+                         + f" {active} 0 0 0 1 1 1 0 0")
     assert float(zmx.loads(equal, config=2).thickness[1]) == 30.0
 
 

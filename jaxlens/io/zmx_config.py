@@ -27,9 +27,13 @@ surfaces hold the solution for the saved configuration only). Ignored: ``MOFF`` 
 row), ``LTTL`` and ``MCOM`` (titles, comments), and the weights ``FLWT``/``WLWT`` (a
 ``Lens`` holds none; a warning where they change). The vignetting factors ``FVDX``,
 ``FVDY``, ``FVCX``, ``FVCY``, ``FVAN`` of field n replace that field's value on the file's
-``VDXN`` … ``VANN`` lines (``Lens.vignetting``). Any other operand whose value in the chosen
-configuration differs from the active one's (``PRAM``, ``TEMP``, …) is refused, naming the
-line: the lens would silently be another one.
+``VDXN`` … ``VANN`` lines (``Lens.vignetting``). The environment rows ``TEMP`` (°C) and
+``PRES`` (atm) read where they equal the file's environment (``ENVD``; without it Zemax's
+20 °C and 1 atm) and are refused, naming the line, where they differ (for the active
+configuration too): another temperature changes every index (the glasses' and the air's;
+the geometry of thermal pickups is in the configuration's own THIC and CRVT rows). Any
+other operand whose value in the chosen configuration differs from the active one's
+(``PRAM``, …) is refused, naming the line: the lens would silently be another one.
 """
 
 from __future__ import annotations
@@ -52,9 +56,10 @@ VIGNETTING = {"FVDX": "VDXN", "FVDY": "VDYN", "FVCX": "VCXN", "FVCY": "VCYN", "F
 REASONS = {
     "PRAM": "a surface parameter (PARM); jaxlens does not know where its line gives the "
             "parameter number",
-    "TEMP": "the temperature; jaxlens takes catalog indices at 20 °C",
-    "PRES": "the air pressure; jaxlens takes catalog indices at 1 atm",
 }
+ENVIRONMENT = {"TEMP": (1, "°C", 20.0), "PRES": (2, "atm", 1.0)}
+"""Environment operand -> (its value's place on the ENVD line, unit, Zemax's default where the
+file has no ENVD line)."""
 _OBJECT_INFINITY = 1e10  # lens units; Zemax writes an infinite object distance so in THIC
 
 
@@ -215,6 +220,9 @@ def select(f: ZmxFile, config: int | None, strict: bool) -> int:
             _parameter(f, op, value, ln)
             changed.add(op.param)
             continue
+        if op.name in ENVIRONMENT:
+            _environment(f, op, value, ln, chosen)
+            continue
         before = op.values.get(active, (None, None))[0]
         if before is not None and _same(value, before):
             continue
@@ -232,6 +240,38 @@ def select(f: ZmxFile, config: int | None, strict: bool) -> int:
     _curvature_pickups(f, curved)
     _thickness_pickups(f, thick)
     return chosen
+
+
+def nominal_environment(f: ZmxFile, name: str) -> float:
+    """The file's temperature (°C, ``name`` ``"TEMP"``) or pressure (atm, ``"PRES"``): its
+    ENVD line's, else Zemax's default (20 °C, 1 atm)."""
+    place, _, default = ENVIRONMENT[name]
+    ln = f.envd
+    if ln is None or len(ln.tokens) <= place:
+        return default
+    return ln.float(place, "temperature (°C)" if name == "TEMP" else "pressure (atm)")
+
+
+def _environment(f: ZmxFile, op: Operand, value: str, ln: ZmxLine, chosen: int) -> None:
+    """A ``TEMP`` or ``PRES`` row of configuration ``chosen``: the configuration's
+    temperature (°C) or air pressure (atm). Equal to the file's environment (``ENVD``, whose
+    indices ``zmx_system.environment`` checks) it is that lens and reads so, whatever other
+    configurations hold; another value would change every index (dn/dT, the air's index),
+    which jaxlens does not model: refused with
+    the line (also for the active configuration, which the surfaces hold, where the row
+    and ENVD disagree)."""
+    v = _number(value, ln)
+    nominal = nominal_environment(f, op.name)
+    if math.isclose(v, nominal, rel_tol=1e-12, abs_tol=1e-12):
+        return
+    _, unit, _ = ENVIRONMENT[op.name]
+    where = (f"the file's ENVD gives {nominal:g} {unit}" if f.envd is not None else
+             f"the file has no ENVD line: {nominal:g} {unit}, Zemax's default")
+    what = "temperature" if op.name == "TEMP" else "air pressure"
+    raise ln.error(f"configuration {chosen} sets {op.name} {op.param} to {value} (the {what}, "
+                   f"{unit}), but {where}; another {what} changes every index (the "
+                   f"glasses' and the air's), which jaxlens does not model, so it cannot read "
+                   f"configuration {chosen} (configurations at the file's {what} read)")
 
 
 def _thickness_pickups(f: ZmxFile, thick: set) -> None:
@@ -461,6 +501,9 @@ def _check_active(f: ZmxFile, ops: list[Operand], active: int, strict: bool) -> 
     a vignetting row, FVDX … FVAN, against the file's VDXN … VANN lines) says otherwise,
     the active number (MNUM's second value) is not what it seems."""
     for op in ops:
+        if op.name in ENVIRONMENT and active in op.values:
+            _environment(f, op, *op.values[active], active)
+            continue
         if (not _held(op.name) and op.name not in VIGNETTING) or active not in op.values:
             continue
         value, ln = op.values[active]

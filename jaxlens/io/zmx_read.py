@@ -378,7 +378,15 @@ def _check_structure(f: ZmxFile, text: str, strict: bool) -> None:
             f"the last surface, which a .zmx file makes the image, has thickness {img.disz:g}; "
             f"the image surface's is 0. The file may be truncated after surface {img.number}")
     lines = text.splitlines() or [""]
-    if not text.endswith(("\n", "\r")) and (lines[-1].split() or [""])[0] not in IGNORED_KEYWORDS:
+    # A last line jaxlens ignores cannot change the lens if cut; nor can the image surface's
+    # DISZ (0 or refused above; every prefix of its number that parses is 0 too, and no ray
+    # crosses it), where writers that join lines without a final break end (VERS 240000
+    # files of a lens-form generator, tangericm/optical-design).
+    last_is_image_disz = img.disz_line is not None and img.disz_line.number == len(lines)
+    # Spaces after the last line break (a writer's indentation, '    ' in a DeepLens fork's
+    # files) end the file at a line boundary as surely as the break itself.
+    if (not text.rstrip(" \t").endswith(("\n", "\r")) and not last_is_image_disz
+            and (lines[-1].split() or [""])[0] not in IGNORED_KEYWORDS):
         report(strict, f"{path}:{len(lines)}: the file does not end with a line break; it "
                         f"may be truncated: {lines[-1].strip()!r}")
     for ln in f.comments:
@@ -580,6 +588,7 @@ def _lens(f: ZmxFile, text: str, path: str, strict: bool, unknown_glass: str) ->
         # it must (surfaces that cross within the beam, a stop inside a deep concave surface).
         negative_propagation=True,
     )
+    _check_axis_sense(lens, body, img)
     # Before the paraxial work of the aperture: values the lens cannot be traced with.
     for w, ln in zip(wl, wl_lines, strict=True):
         with _at_line(ln):
@@ -639,6 +648,50 @@ def _lens(f: ZmxFile, text: str, path: str, strict: bool, unknown_glass: str) ->
         if str(e).startswith(path):
             raise
         raise ln.error(str(e)) from None
+
+
+def _check_axis_sense(lens: Lens, body: list, img) -> None:
+    """Refuse coordinate breaks that turn a surface's frame against the light.
+
+    The paraxial trace (``jaxlens.optics.paraxial``) follows each surface's local axis with
+    the index's sign flipped after every mirror: light travels toward +z after an even
+    number of mirrors and toward −z after an odd one, as Zemax's negative thicknesses
+    after a mirror write it. A coordinate break can turn the frame past 90° instead (a
+    fold written as a −45° break, the mirror, then a +135° break and positive thicknesses,
+    as Quadoa's export writes a prism): the real rays still find every surface, but the
+    paraxial data (EFL, BFL, image heights, F/#) would come out silently wrong (a 45°
+    fold before a +50 mm lens gave −50 mm). The axis ray (down the object's axis,
+    reflected about each mirror's vertex normal) must meet every surface from the side the
+    mirror count says; otherwise the file is refused naming the surface."""
+    tilted = [s for s in lens.surfaces if isinstance(s, CoordinateBreak)
+              and any(float(a) != 0.0 for a in (s.tilt_x, s.tilt_y, s.tilt_z))]
+    if not tilted:
+        return
+    rot = np.eye(3)
+    d = np.array([0.0, 0.0, 1.0])
+    flips = 0
+    for i, s in enumerate([*lens.surfaces, lens.image]):
+        if isinstance(s, CoordinateBreak):
+            rot = rot @ np.asarray(s.rotation(), np.float64)
+            continue
+        z = rot[:, 2]
+        sense = float(d @ z)
+        if not sense * (-1) ** flips > 1e-9:
+            zs = body[i] if i < len(body) else img
+            have = "across its axis" if abs(sense) <= 1e-9 else (
+                "toward +z" if sense > 0 else "toward -z")
+            raise zs.line.error(
+                f"light meets this surface travelling {have} in its frame after {flips} "
+                f"mirror{'s' * (flips != 1)}, where jaxlens's paraxial trace (the index's "
+                f"sign flipped at each mirror, as Zemax's negative thicknesses after a "
+                f"mirror write it) takes {'+z' if flips % 2 == 0 else '-z'}: a coordinate "
+                f"break before it turns the frame past 90 degrees (as a -45 break, the "
+                f"mirror, a +135 break), and the paraxial data (EFL, image heights, F/#) "
+                f"would be wrong. Write the fold as Zemax does: a +45 break, the mirror, a "
+                f"+45 break, negative thicknesses after it")
+        if i in lens.mirrors:
+            d = d - 2.0 * sense * z
+            flips += 1
 
 
 def load_zmx(path: str | os.PathLike, *, strict: bool = False,

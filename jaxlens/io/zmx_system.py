@@ -321,7 +321,10 @@ def vignetting(lines, count: int, *, defined: int | None = None) -> np.ndarray |
     apertures (``jaxlens.imaging.sampling.vignetting_map``); a line the file does not
     give is 0 (Zemax's default: no vignetting factor), and so are the fields beyond the
     ``defined`` ones (default ``count``: those the y field line gives; the reader reports
-    the others). A line with fewer values than the ``defined`` fields, a line given twice,
+    the others). A line with fewer values than the ``defined`` fields is read where all
+    it gives is 0 (``VDXN 0``, as Quadoa's export writes for any number of fields: no
+    vignetting whether the value is meant for every field or the rest take the default 0)
+    and refused otherwise; a line given twice,
     a value that is not finite, or a compression (VCXN, VCYN) of 1 or more is refused,
     naming the line. Paraxial data and the EFL do not depend on them. VANN's direction
     (counter-clockwise, from +x toward +y, after the compression and decenter) is jaxlens's
@@ -337,6 +340,10 @@ def vignetting(lines, count: int, *, defined: int | None = None) -> np.ndarray |
         seen[key] = ln
         j = VIGNETTING_KEYS.index(key)
         vals = [ln.float(i, f"{key} value") for i in range(1, len(ln.tokens))]
+        if 0 < len(vals) < defined and all(v == 0.0 for v in vals):
+            # Quadoa's export writes 'VDXN 0' whatever the number of fields: the factor for
+            # every field, or those it lacks at Zemax's default (0), read the same.
+            continue
         values_for_fields(ln, len(vals), defined, "vignetting factors")
         vals = vals[:count]
         for i, v in enumerate(vals):
