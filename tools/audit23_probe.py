@@ -25,10 +25,11 @@ a NaN RMS (every weight 1), ``vignetting_map`` of a NaN factor (every ray NaN),
 field type (the message named no supported type), and a ``DesignSpec``/``--fov`` of a few
 degrees, likely radians (the message asked about mm only).
 
-Left (the 3 "silent wrong" rows): ``Lens(...)`` keeping wavelengths outside its glasses' data
-(3 rows; every analysis refuses them): the .zmx reader builds the Lens before its per-WAVM-line
-check, and the JSON reader and tests of rounds 17-22 build such lenses to test the analyses'
-refusals (see the round's report).
+Left (the 3 "silent wrong" rows): ``Lens(...)`` keeping wavelengths outside its glasses'
+data. By design, not a silent answer: every analysis refuses a wavelength it uses outside the
+data, and an analysis of the primary wavelength alone still runs when another wavelength is
+out of range (tests/test_input_probes_round9.py). Refusing them in ``Lens`` was tried and
+broke that, and the .zmx reader's per-WAVM-line messages (it builds the Lens first).
 
 Run: PYTHONPATH=$PWD python tools/audit23_probe.py [filter]
 """
