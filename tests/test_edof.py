@@ -151,32 +151,39 @@ def test_decoders_start_from_the_raw_image_or_its_wiener_estimate():
     kw = dict(nsr=0.05, key=jax.random.PRNGKey(0), width=4, enc_blocks=(1,), middle_blocks=1,
               dec_blocks=(1,))
     plain = make_decoder("nafnet", **kw)
-    np.testing.assert_array_equal(np.asarray(plain(raw, jnp.asarray(kern))), np.asarray(raw))
     wien = make_decoder("wiener", **kw)
-    want = tiled.wiener_tiles(raw, jnp.asarray(kern), 0.05, prior="gradient")
-    np.testing.assert_allclose(np.asarray(wien(raw, jnp.asarray(kern)[None])),
-                               np.asarray(want), atol=1e-6)
-    assert float(jnp.max(jnp.abs(want - raw))) > 0.05
+    multi = make_decoder("multiwiener", **kw)
     # The multi-Wiener decoder weights each depth's estimate by the tile's depth posterior
     # and starts as that weighted estimate; it also sees the mean and per-depth estimates.
     by_depth = np.stack([np.roll(kern, s, axis=-1) for s in (-1, 0, 0, 0, 0, 0, 0, 1)])
-    multi = make_decoder("multiwiener", **kw)
-    stack = multi.front_kernels(by_depth)
+
+    # Everything in one compiled program (op by op, about 280 small ones).
+    @eqx.filter_jit
+    def run(plain, wien, multi, raw, kern, by_depth):
+        stack = multi.front_kernels(by_depth)
+        front = multi.front(raw, stack)
+        est = [tiled.wiener_tiles(raw, k, 0.05, prior="gradient") for k in by_depth]
+        return (plain(raw, kern), wien(raw, kern[None]),
+                tiled.wiener_tiles(raw, kern, 0.05, prior="gradient"), stack,
+                wien.front_kernels(by_depth), front, est, multi(raw, stack))
+
+    out = run(plain, wien, multi, raw, jnp.asarray(kern), jnp.asarray(by_depth))
+    got_plain, got_wien, want, stack, wien_stack, front, est, got_multi = out
+    np.testing.assert_array_equal(np.asarray(got_plain), np.asarray(raw))
+    np.testing.assert_allclose(np.asarray(got_wien), np.asarray(want), atol=1e-6)
+    assert float(jnp.max(jnp.abs(want - raw))) > 0.05
     assert stack.shape == (9,) + kern.shape
     np.testing.assert_allclose(np.asarray(stack[0]), by_depth.mean(0), atol=1e-7)
     np.testing.assert_array_equal(np.asarray(stack[1:]), by_depth)
-    assert wien.front_kernels(by_depth).shape == (1,) + kern.shape
-    front = multi.front(raw, stack)
+    assert wien_stack.shape == (1,) + kern.shape
     assert front.shape == (16, 16, 38)
-    est = [tiled.wiener_tiles(raw, jnp.asarray(k), 0.05, prior="gradient") for k in by_depth]
     np.testing.assert_allclose(np.asarray(front[..., 9:12]), np.asarray(est[1]), atol=1e-6)
     post = np.asarray(front[..., 30:])
     np.testing.assert_allclose(post.sum(-1), 1.0, atol=1e-5)
     np.testing.assert_array_equal(post[:8, :8], np.broadcast_to(post[0, 0], (8, 8, 8)))
     chosen = sum(post[..., d:d + 1] * np.asarray(est[d]) for d in range(8))
     np.testing.assert_allclose(np.asarray(front[..., :3]), chosen, atol=1e-5)
-    np.testing.assert_allclose(np.asarray(multi(raw, stack)), np.asarray(front[..., :3]),
-                               atol=1e-6)
+    np.testing.assert_allclose(np.asarray(got_multi), np.asarray(front[..., :3]), atol=1e-6)
     with pytest.raises(ValueError, match="kind must be one of"):
         make_decoder("unet", **kw)
 
@@ -204,11 +211,12 @@ def test_training_patch_context_is_read_and_the_loss_sees_the_tile(kind, real_ha
     kern = jnp.asarray(np.broadcast_to(k, (2, 2, 3, 5, 5)))
     dec = make_decoder(kind, nsr=1e-9, key=jax.random.PRNGKey(0), width=4, enc_blocks=(1,),
                        middle_blocks=1, dec_blocks=(1,))
-    _, parts = _sim_loss(dec, kern, windows, kern[:1], jax.random.PRNGKey(1),
-                         cfg.step_config)
+    # Compiled (op by op, the loss compiled about 190 small programs).
+    _, parts = eqx.filter_jit(_sim_loss)(dec, kern, windows, kern[:1], jax.random.PRNGKey(1),
+                                         cfg.step_config)
     gt = windows[:, cfg.window // 2 - 8: cfg.window // 2 + 8, cfg.window // 2 - 8:
                  cfg.window // 2 + 8]
-    sims = O.simulate(windows, kern)
+    sims = jax.jit(O.simulate)(windows, kern)
     m = (cfg.patch - 16) // 2
     np.testing.assert_allclose(float(parts["raw"]),
                                float(jnp.mean(jnp.abs(sims[:, :, m:m + 16, m:m + 16] - gt))),

@@ -48,7 +48,7 @@ def test_history_select_keeps_columns_and_relabels_failures():
     assert s.failed == {4: "non-finite"}  # start 10 was not chosen, so its failure goes
 
 
-@pytest.mark.slow  # 21 s (CI time; the polish test below runs the same four starts in CI)
+@pytest.mark.slow  # 21 s (CI time; the polish test below runs the same four starts)
 def test_population_design_continues_the_best_start():
     """Two starts per design: each design carries on from its start with the lower RMS
     after fine-tuning, the same as designing that start alone."""
@@ -66,6 +66,7 @@ def test_population_design_continues_the_best_start():
     assert pop.history.spot_rms[-1].shape[1] == 2
 
 
+@pytest.mark.slow  # 23 s (CI time); CI keeps population_starts, best_starts and History.select
 def test_population_design_polishes_only_the_survivors():
     # Four starts (two per design) run the curriculum, as in the test above, so its compiled
     # stages are reused; only the two survivors are polished.

@@ -16,6 +16,7 @@ import json
 import warnings
 from pathlib import Path
 
+import jax
 import jax.numpy as jnp
 import numpy as np
 import pytest
@@ -51,22 +52,38 @@ def _at_stop(lens, rays):
     return np.asarray(trace_path(lens, rays, upto=lens.stop)[-1].origin[:, :2])
 
 
-# In CI (about 10 s: the Newton aiming compiled twice): the physics of the setting.
+# In CI: the physics of the setting, in one compiled program (op by op, each call of the
+# aiming compiled its Newton loop and each trace its scan again: 23 s of CPU).
 def test_real_aiming_puts_the_rays_on_the_stop_and_the_lens_setting_chooses_it(lenses):
     lens, real = lenses
     assert lens.aim == "paraxial" and real.aim == "real"
-    r_stop = float(jl.paraxial_data(lens).stop_semi_diameter)
+
+    @jax.jit
+    def stop_points(lens, real):
+        def at_stop(rays):
+            return trace_path(lens, rays, upto=lens.stop)[-1].origin[:, :2]
+
+        return (jl.paraxial_data(lens).stop_semi_diameter,
+                at_stop(sampling.field_rays(real, 14.0, PUPIL)),  # the lens's own: real
+                at_stop(sampling.field_rays(lens, 14.0, PUPIL)))  # the lens's own: paraxial
+
+    r_stop, aimed, par = (np.asarray(x) for x in stop_points(lens, real))
+    r_stop = float(r_stop)
     want = np.asarray(PUPIL) * r_stop
-    aimed = _at_stop(lens, sampling.field_rays(real, 14.0, PUPIL))  # the lens's own: real
     np.testing.assert_allclose(aimed, want, rtol=0, atol=1e-9)
-    # An explicit aim overrides the lens's: the same rays either way.
-    np.testing.assert_array_equal(
-        aimed, _at_stop(lens, sampling.field_rays(lens, 14.0, PUPIL, aim="real")))
     # Paraxial aiming misses the stop points by the pupil aberration (4 % of the radius).
-    par = _at_stop(lens, sampling.field_rays(lens, 14.0, PUPIL)) / r_stop
+    par = par / r_stop
     np.testing.assert_allclose(par[:3, 1], [0.0440189, 1.0372948, -0.9840120], atol=1e-6)
-    np.testing.assert_array_equal(
-        par, _at_stop(lens, sampling.field_rays(real, 14.0, PUPIL, aim="paraxial")) / r_stop)
+
+    # An explicit aim overrides the lens's: the same program (so the same rays) either way,
+    # and not the other aim's. Compared as traced programs, which compile nothing.
+    def program(lens, aim):
+        return str(jax.make_jaxpr(lambda L: sampling.field_rays(L, 14.0, PUPIL, aim=aim))(lens))
+
+    own_real, own_paraxial = program(real, None), program(lens, None)
+    assert own_real != own_paraxial
+    assert program(lens, "real") == own_real
+    assert program(real, "paraxial") == own_paraxial
 
 
 @pytest.mark.slow  # 10 s

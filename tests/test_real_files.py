@@ -28,6 +28,7 @@ def _clip_front(lens, radius, count):
     return eqx.tree_at(lambda m: m.surfaces, lens, surfaces)
 
 
+@pytest.mark.slow  # 27 s (CI time; test_ray_aiming checks the real aim's stop points in CI)
 def test_real_aiming_through_clipping_apertures():
     """Aimed rays cross the stop at pupil·(stop radius) even where the front apertures clip
     the paraxial launch points; the apertures then decide which rays pass.

@@ -272,6 +272,8 @@ def test_report_prescription_names_each_surface_kind(capsys):
     assert kinds["10"] == "COORDBRK" and rows[10][-1] == "dy=24.07"
 
 
+@pytest.mark.slow  # 27 s (CI time): the nine real figures; CI draws the --plot set with
+# stand-in figures (the test below) and checks the refusals (test_report_plot_refusals)
 def test_report_plot_writes_the_figures_and_keeps_existing_ones(cooke, tmp_path, capsys):
     """--plot DIR writes the layout, spot diagrams and MTF; a second run keeps them unless
     --overwrite, and bad --plot/--overwrite options are refused before any work."""
@@ -294,6 +296,27 @@ def test_report_plot_writes_the_figures_and_keeps_existing_ones(cooke, tmp_path,
     assert code == 2 and "is a file, not a folder" in err
     code, out, err = _run(capsys, path, "--plot", "")  # was read as no --plot at all
     assert code == 2 and out == "" and "--plot needs a folder name" in err
+
+
+def test_report_plot_refusals_come_before_any_work(tmp_path, capsys):
+    """The --plot/--overwrite refusals of the test above, without drawing: an existing figure
+    (made here by hand) is kept without --overwrite, and bad options exit 2 before the lens
+    file is read (it does not exist)."""
+    lens = tmp_path / "cooke_triplet.json"  # never read: every case is refused first
+    out = tmp_path / "figs"
+    out.mkdir()
+    (out / "cooke_triplet_layout.png").write_bytes(b"x")
+    stamp = (out / "cooke_triplet_layout.png").stat().st_mtime_ns
+    code, _, err = _run(capsys, lens, "--plot", out)
+    assert code == 2 and "cooke_triplet_layout.png exists; give --overwrite" in err
+    assert (out / "cooke_triplet_layout.png").stat().st_mtime_ns == stamp
+    code, _, err = _run(capsys, lens, "--overwrite")
+    assert code == 2 and "it needs --plot DIR" in err
+    (tmp_path / "file").write_text("")
+    code, _, err = _run(capsys, lens, "--plot", tmp_path / "file")
+    assert code == 2 and "is a file, not a folder" in err
+    code, printed, err = _run(capsys, lens, "--plot", "")  # was read as no --plot at all
+    assert code == 2 and printed == "" and "--plot needs a folder name" in err
 
 
 def test_report_plot_skips_a_figure_its_analysis_refuses(cooke, tmp_path, capsys,
