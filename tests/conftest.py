@@ -73,7 +73,6 @@ HEAVIEST_FIRST = (
     "test_bad_input.py",  # 109
     "test_toroid_paraxial.py",  # 93
     "test_nets.py",  # 91
-    "test_population.py",  # 67
 )
 
 
