@@ -82,12 +82,11 @@ from .surfaces import AbstractSurface, number_field
 
 _UM_TO_MM = 1e-3
 
-
-
 MAX_LINES_PER_UM = 20.0
 """Most lines per µm of a ``Grating``: at 20 lines/µm (a 50 nm period) every order but 0
 is evanescent for wavelengths above 0.1 µm (|M|·λ·T > 2); ruled and holographic gratings
 have at most about 6 lines/µm. A density in lines per mm (600) was taken as 600 lines/µm."""
+
 
 class Binary2(AbstractSurface):
     """An even asphere with a rotationally symmetric diffractive phase (Zemax BINARY_2).
