@@ -42,7 +42,7 @@ from optiland.coordinate_system import CoordinateSystem
 from optiland.geometries import EvenAsphere, ZernikePolynomialGeometry
 from optiland.materials import IdealMaterial
 from optiland.optic import Optic
-from optiland.rays import RealRays
+from xypolynomial_reference import launch, trace  # this folder's: the same rays and tracer
 
 WAVELENGTH = 0.5875618
 rng = np.random.default_rng(20261130)
@@ -61,8 +61,6 @@ SHIFTED = [
 # The ``moved`` lens: a flat-base Noll surface decentered by (dx, dy), then a sphere.
 MOVED = dict(zernike=NOLL[:10], norm_radius=8.0, dx=-0.9, dy=1.4, thickness=4.0, n=1.55,
              radius2=-50.0, thickness2=40.0)
-LAUNCH_FIELDS = [(0.0, 0.0), (0.0, 4.0), (3.0, 0.0), (2.5, -3.5)]  # (θx, θy) degrees
-LAUNCH_PUPIL = [(0.0, 0.0), (0.7, 0.0), (0.0, -0.7), (0.5, 0.6), (-0.9, -0.3)]  # × 4 mm
 
 
 class ShiftedZernike(EvenAsphere):
@@ -102,29 +100,6 @@ def sag_table(geom):
         out.append([float(geom.sag(be.array(x), be.array(y))),
                     float(-nx), float(-ny), float(-nz)])
     return out
-
-
-def launch():
-    o, d = [], []
-    for tx, ty in LAUNCH_FIELDS:
-        v = np.array([np.tan(np.radians(tx)), np.tan(np.radians(ty)), 1.0])
-        v /= np.linalg.norm(v)
-        for px, py in LAUNCH_PUPIL:
-            p = np.array([4 * px, 4 * py, 0.0])
-            o.append(p - 5.0 / v[2] * v)
-            d.append(v)
-    return np.array(o), np.array(d)
-
-
-def trace(optic, o, d):
-    rays = RealRays(*o.T.copy(), *d.T.copy(), np.ones(len(o)), np.full(len(o), WAVELENGTH))
-    for s in optic.surfaces.surfaces:
-        s.aperture = None
-        g = s.geometry
-        if hasattr(g, "tol"):
-            g.tol, g.max_iter = 1e-13, 200
-    optic.surfaces.trace(rays, skip=1)
-    return np.stack([np.asarray(rays.x), np.asarray(rays.y), np.asarray(rays.z)], -1).tolist()
 
 
 def new_optic():
