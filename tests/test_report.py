@@ -285,17 +285,23 @@ def test_report_plot_writes_the_figures_and_keeps_existing_ones(cooke, tmp_path,
     assert names == [f"cooke_triplet_{k}.png" for k in sorted(
         ("ee", "fans", "field", "layout", "mtf", "opd", "seidel", "spots", "wavefront"))]
     assert all((out / n).read_bytes()[:8] == b"\x89PNG\r\n\x1a\n" for n in names)
-    stamp = (out / names[0]).stat().st_mtime_ns
+    _check_plot_refusals(capsys, path, out, out / names[0], tmp_path)
+
+
+def _check_plot_refusals(capsys, path, out, kept, tmp_path):
+    """The --plot/--overwrite refusals (exit 2): figures in ``out`` (``kept`` among them)
+    are kept without --overwrite, and bad options are named."""
+    stamp = kept.stat().st_mtime_ns
     code, _, err = _run(capsys, path, "--plot", out)
     assert code == 2 and "cooke_triplet_layout.png exists; give --overwrite" in err
-    assert (out / names[0]).stat().st_mtime_ns == stamp
+    assert kept.stat().st_mtime_ns == stamp
     code, _, err = _run(capsys, path, "--overwrite")
     assert code == 2 and "it needs --plot DIR" in err
     (tmp_path / "file").write_text("")
     code, _, err = _run(capsys, path, "--plot", tmp_path / "file")
     assert code == 2 and "is a file, not a folder" in err
-    code, out, err = _run(capsys, path, "--plot", "")  # was read as no --plot at all
-    assert code == 2 and out == "" and "--plot needs a folder name" in err
+    code, printed, err = _run(capsys, path, "--plot", "")  # was read as no --plot at all
+    assert code == 2 and printed == "" and "--plot needs a folder name" in err
 
 
 def test_report_plot_refusals_come_before_any_work(tmp_path, capsys):
@@ -306,17 +312,7 @@ def test_report_plot_refusals_come_before_any_work(tmp_path, capsys):
     out = tmp_path / "figs"
     out.mkdir()
     (out / "cooke_triplet_layout.png").write_bytes(b"x")
-    stamp = (out / "cooke_triplet_layout.png").stat().st_mtime_ns
-    code, _, err = _run(capsys, lens, "--plot", out)
-    assert code == 2 and "cooke_triplet_layout.png exists; give --overwrite" in err
-    assert (out / "cooke_triplet_layout.png").stat().st_mtime_ns == stamp
-    code, _, err = _run(capsys, lens, "--overwrite")
-    assert code == 2 and "it needs --plot DIR" in err
-    (tmp_path / "file").write_text("")
-    code, _, err = _run(capsys, lens, "--plot", tmp_path / "file")
-    assert code == 2 and "is a file, not a folder" in err
-    code, printed, err = _run(capsys, lens, "--plot", "")  # was read as no --plot at all
-    assert code == 2 and printed == "" and "--plot needs a folder name" in err
+    _check_plot_refusals(capsys, lens, out, out / "cooke_triplet_layout.png", tmp_path)
 
 
 def test_report_plot_skips_a_figure_its_analysis_refuses(cooke, tmp_path, capsys,
