@@ -154,3 +154,119 @@ def frame_of(lens, index: int | None = None):
         off = rot @ (v - r @ ez) + off
         rot = rot @ r
     return rot, off
+
+
+AXIS_ACROSS_TOL = 1e-9
+"""|cos| of the axis ray's angle to a frame's z axis below which it travels across the axis."""
+
+
+def _tilted(lens) -> list[CoordinateBreak]:
+    return [s for s in lens.surfaces if isinstance(s, CoordinateBreak)
+            and any(checks.is_traced(a) or float(a) != 0.0
+                    for a in (s.tilt_x, s.tilt_y, s.tilt_z))]
+
+
+def travel_senses(lens):
+    """The direction of travel along the local z axis in each medium: +1 toward +z, −1
+    toward −z; object space first, then the medium after each surface (``num_surfaces + 1``
+    entries, as ``Lens.indices``).
+
+    The light is followed along the axis ray: down the object's axis, reflected about each
+    mirror's vertex normal (its frame's z), each medium's sense taken in the frame its
+    thickness is measured in (the surface's; a break's after its rotation). Without tilted
+    breaks this is Zemax's rule, −1 after an odd number of mirrors (the negative thicknesses
+    after a mirror). A break may also turn the frame past 90°: a fold written as a −45°
+    break, the mirror and a +135° break, with positive thicknesses after it (as Quadoa's
+    export writes a prism), travels toward +z after its mirror.
+
+    Returns a tuple of Python ints where every tilt is concrete, or where the lens has no
+    mirror (a traced tilt of a lens without mirrors is taken as a small one, as the
+    tolerancing's breaks are); a ``[num_surfaces + 1]`` array of ±1 where a lens with mirrors
+    has traced tilts. Raises ``ValueError`` naming the surface (0-based) where the axis ray
+    travels across its frame's z axis (no paraxial trace along that frame exists).
+    """
+    tilted = _tilted(lens)
+    traced = any(checks.is_traced(a) for s in tilted for a in (s.tilt_x, s.tilt_y, s.tilt_z))
+    if not tilted or (traced and not lens.mirrors):
+        return _parity(lens)
+    if traced:
+        cos = _follow_axis(lens, traced=True)[0]
+        return jnp.stack([jnp.ones_like(cos[1]), *(jnp.sign(c) for c in cos[1:])])
+    cos = axis_cosines(lens)
+    for i, c in enumerate(cos[1:]):
+        if abs(c) <= AXIS_ACROSS_TOL:
+            raise ValueError(f"the axis ray travels across surface {i}'s local z axis (a "
+                             f"coordinate break before it turns the frame by 90 degrees to "
+                             f"the light), so no paraxial trace follows that frame")
+    return tuple(1 if c > 0 else -1 for c in cos)
+
+
+def axis_cosines(lens) -> list[float]:
+    """cos of the angle between the axis ray and the local z axis in each medium (object
+    space first, as ``travel_senses``), for concrete tilts; 1 without tilted breaks."""
+    return [float(c) for c in _follow_axis(lens, traced=False)[0]]
+
+
+def _parity(lens) -> tuple[int, ...]:
+    flips = [sum(1 for m in lens.mirrors if m < i) % 2 for i in range(lens.num_surfaces + 1)]
+    return tuple(-1 if f else 1 for f in flips)
+
+
+def axial_thicknesses(lens):
+    """The thicknesses a paraxial trace transfers by.
+
+    ``lens.thickness`` wherever the light travels along each frame as the mirror count says
+    (Zemax's rule: ``travel_senses`` is −1 after an odd number of mirrors): the trace then
+    follows each surface's local axis, as Zemax's does, tilts and decenters ignored. Where a
+    break turns a frame round with the light instead (Quadoa's fold: −45°, the mirror with
+    its thickness along its own 45° axis, +135° with a decenter), local axes no longer make
+    a path: each gap is then the axis ray's advance from one vertex to the next (the step
+    projected on the ray's direction), signed as its medium's ``travel_senses``. Quadoa's
+    mirror gap of −7.07 mm along the mirror's axis and the decenter after it make the
+    prism's 10 mm path."""
+    senses = travel_senses(lens)
+    parity = _parity(lens)
+    if isinstance(senses, tuple) and senses == parity:
+        return lens.thickness
+    traced = not isinstance(senses, tuple)
+    _, advance = _follow_axis(lens, traced=traced)
+    if not traced:
+        return jnp.asarray([a * sg for a, sg in zip(advance, senses[1:], strict=True)],
+                           jnp.result_type(lens.thickness))
+    axial = (jnp.stack(advance) * senses[1:]).astype(lens.thickness.dtype)
+    zemax_rule = jnp.all(senses == jnp.asarray(parity, senses.dtype))
+    return jnp.where(zemax_rule, lens.thickness, axial)
+
+
+def _follow_axis(lens, *, traced: bool):
+    """(cosines, advances) of the axis ray: cos to each medium's local z (object space first)
+    and each gap's vertex-to-vertex step projected on the ray's direction (mm)."""
+    if traced:
+        xp, val = jnp, (lambda v: v)
+    else:
+        xp, val = np, float
+    t = [val(v) for v in lens.thickness]
+    zs = [xp.asarray(0.0)]
+    for v in t:
+        zs.append(zs[-1] + v)
+    rot, off = xp.eye(3), xp.zeros(3)
+    d = xp.asarray([0.0, 0.0, 1.0])
+    cos, dirs, pos = [xp.asarray(1.0)], [], []
+    for i, s in enumerate(lens.surfaces):
+        ez = xp.stack([xp.asarray(0.0), xp.asarray(0.0), xp.asarray(zs[i])])
+        pos.append(rot @ ez + off)
+        if isinstance(s, CoordinateBreak):
+            r = xp.stack([xp.stack([xp.asarray(val(v)) for v in row]) for row in s.rotation()])
+            dec = xp.stack([xp.asarray(val(s.decenter_x)), xp.asarray(val(s.decenter_y)),
+                            xp.asarray(0.0)])
+            v = ez + (dec if s.order == 0 else r @ dec)
+            off = rot @ (v - r @ ez) + off
+            rot = rot @ r
+        z = rot[:, 2]
+        if i in lens.mirrors:
+            d = d - 2.0 * (d @ z) * z
+        cos.append(d @ z)
+        dirs.append(d)
+    pos.append(rot @ xp.stack([xp.asarray(0.0), xp.asarray(0.0), xp.asarray(zs[-1])]) + off)
+    advance = [(pos[j + 1] - pos[j]) @ dirs[j] for j in range(len(dirs))]
+    return cos, advance
