@@ -5,7 +5,7 @@ Six files: an OpticStudio 17 save of an Edmund UV singlet, a Thorlabs plano-conv
 Edmund achromat twice (once with catalog-qualified glass names, ``GLAS SCHOTT-BK|N-BK7``), a
 Zemax 2003 full-frame zoom (MNUM 3 with the object distance and five gaps in THIC rows, FLOA,
 paraxial-image-height fields) and an OpTaliX export of an aspheric singlet. jaxlens read all
-six to the lens optiland traces (real rays to 1e-13 mm; the zoom in each configuration, the
+six to the lens optiland traces (real rays to 3e-13 mm; the zoom in each configuration, the
 OpTaliX and Zemax 2003 files from copies mended in form for optiland). One class of problem:
 
 * OpTaliX writes the fields' vignetting factors only as configuration rows (``MNUM 1`` and
