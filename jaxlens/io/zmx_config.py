@@ -499,7 +499,14 @@ _APPLY = {"THIC": _thic, "CRVT": _crvt, "CONN": _conn, "GLSS": _glss, "SDIA": _s
 def _check_active(f: ZmxFile, ops: list[Operand], active: int, strict: bool) -> None:
     """The surfaces hold the active configuration: where a THIC, CRVT or CONN row of it (or
     a vignetting row, FVDX … FVAN, against the file's VDXN … VANN lines) says otherwise,
-    the active number (MNUM's second value) is not what it seems."""
+    the active number (MNUM's second value) is not what it seems.
+
+    A vignetting row whose factor the file has no line for at all (no VCXN line beside
+    FVCX rows: OpTaliX's export writes the factors in its operand rows only) gives the
+    active configuration's factor, as it does for any other configuration: nothing else in
+    the file states it, and the default 0 would widen a vignetted pupil without a word."""
+    absent = {key for key in VIGNETTING.values()
+              if not any(x.tokens[0].upper() == key for x in f.vignetting)}
     for op in ops:
         if op.name in ENVIRONMENT and active in op.values:
             _environment(f, op, *op.values[active], active)
@@ -512,6 +519,9 @@ def _check_active(f: ZmxFile, ops: list[Operand], active: int, strict: bool) -> 
             if op.param < 1:
                 continue
             key = VIGNETTING[op.name]
+            if key in absent:
+                _vignetting(f, op, value, ln, active)
+                continue
             line = next((x for x in f.vignetting if x.tokens[0].upper() == key), None)
             have = line.float(op.param, f"{key} value") if (
                 line is not None and op.param < len(line.tokens)) else 0.0
