@@ -1,7 +1,9 @@
 """Eager analysis calls reuse their compiled programs: a second call on a lens of the same
 structure (other values) compiles nothing.
 
-The count is of XLA backend compilations (a ``jax.monitoring`` listener). Before the
+The count is of XLA backend compilations (a ``jax.monitoring`` listener), and of the
+primitives dispatched one by one from Python (``Primitive.bind`` counted while the block
+runs: a call of a compiled program that is cached binds none). Before the
 compiled cores, ``aiming.stop_chief_ray`` (and ``chief_point``) built the aiming loop's body
 as a new closure at every call and compiled it again each time (2.3 s a call on the Cooke
 triplet); ``seidel``, ``zernike_fit`` (``Wavefront.zernike``) and ``self_intersection``
@@ -18,6 +20,7 @@ import jax
 import jax.numpy as jnp
 import numpy as np
 import pytest
+from jax.extend.core import Primitive
 
 import jaxlens as jl
 from jaxlens.analysis import seidel, self_intersection, zernike_fit
@@ -44,6 +47,24 @@ def compilations():
         yield out
     finally:
         out[0] = _count[0] - start
+
+
+@contextlib.contextmanager
+def dispatches():
+    """Yields a one-element list that holds, on exit, the primitives bound from Python in
+    the block (an op-by-op computation binds each of its operations)."""
+    out = [0]
+    bind = Primitive.bind
+
+    def counted(self, *args, **params):
+        out[0] += 1
+        return bind(self, *args, **params)
+
+    Primitive.bind = counted
+    try:
+        yield out
+    finally:
+        Primitive.bind = bind
 
 
 def scaled(lens, factor):
@@ -75,11 +96,12 @@ def test_the_counter_sees_a_compilation():
 def test_stop_chief_ray_compiles_once_per_lens_structure(singlets):
     a, b = singlets
     ra = aiming.stop_chief_ray(a, 10.0)  # may compile (the first call of this structure)
-    with compilations() as n:
+    with compilations() as n, dispatches() as d:
         rb = aiming.stop_chief_ray(b, 10.0)  # other values
         rc = aiming.stop_chief_ray(b, 7.0)  # another field, a Python number too
         jax.block_until_ready((rb, rc))
     assert n[0] == 0  # main: 1 compilation (2.3 s) a call
+    assert d[0] <= 8
     assert bool(rb.valid[0]) and bool(rc.valid[0])
     # b's own chief ray, not a's: the 1 % stronger lens is aimed elsewhere.
     assert abs(float(rb.origin[0, 1] - ra.origin[0, 1])) > 1e-4
@@ -101,11 +123,12 @@ def test_seidel_and_zernike_fit_reuse_their_programs(singlets):
     x, y = jnp.asarray(gx[disc]), jnp.asarray(gy[disc])
     zernike_fit(x, y, x * x + y * y, terms=15)
     other = x * x + 0.5 * y * y * y
-    with compilations() as n:
+    with compilations() as n, dispatches() as d:
         sb = seidel(b)
         fit = zernike_fit(x, y, other, terms=15)
         jax.block_until_ready((sb, fit))
     assert n[0] == 0
+    assert d[0] <= 8  # main: 700 operations dispatched one by one (60-120 ms)
     np.testing.assert_array_equal(np.asarray(sb.per_surface), np.asarray(sa.per_surface))
     assert abs(float(fit.coefficients[0])) > 0.1  # the fit of the other values
     # ρ² = (Z1 + Z4/√3)/2 in Noll's order: the fit is the polynomial's.
@@ -118,10 +141,11 @@ def test_self_intersection_reuses_its_program(singlets):
     a, b = singlets
     sd = jnp.full(a.num_surfaces, 4.5)
     self_intersection(a, sd)
-    with compilations() as n:
+    with compilations() as n, dispatches() as d:
         gb = self_intersection(b, sd)
         g2 = self_intersection(b, sd, min_gap=0.1)  # another clearance: the same program
         jax.block_until_ready((gb, g2))
     assert n[0] == 0
+    assert d[0] <= 8  # main: about 200 operations a call, one by one
     assert bool(gb.ok) and np.all(np.asarray(gb.min_gap) > 0)
     np.testing.assert_array_equal(np.asarray(gb.min_gap), np.asarray(g2.min_gap))
