@@ -464,6 +464,14 @@ def self_intersection(
         if sd.shape != (n,):
             raise ValueError(f"{where}: semi_diameters must hold one value per surface, shape "
                              f"({n},) (mm), got shape {sd.shape}")
+    min_gap = min_gap if checks.is_traced(min_gap) else jnp.asarray(min_gap)
+    return _self_intersection(lens, sd, min_gap, n_radial=n_radial, n_angle=n_angle)
+
+
+@eqx.filter_jit
+def _self_intersection(lens, sd, min_gap, *, n_radial, n_angle) -> GeometryCheck:
+    """``self_intersection``'s compiled core (op-by-op it took 30-120 ms a call)."""
+    n = lens.num_surfaces
     surfs = list(lens.surfaces) + [lens.image]
     zs = jnp.concatenate([lens.vertex_z(), lens.image_z()[None]])
     sd_all = jnp.concatenate([sd, sd[-1:]])

@@ -15,7 +15,7 @@ import numpy as np
 from jaxtyping import Array, Float
 
 from ..optics import checks, paraxial
-from ..optics.lens import Lens, unclipped
+from ..optics.lens import INFINITE_OBJECT_MM, Lens, unclipped
 from ..optics.rays import Rays
 from ..tracing.forward import DEFAULT_NEWTON_ITERS, trace
 from . import sampling
@@ -101,6 +101,50 @@ def stop_chief_ray(lens: Lens, field, depth=None, wavelength=None, *,
     """
     checks.number(iters, "iters", "stop_chief_ray", lo=0, integer=True,
                   unit="aiming iterations")  # -1 ran no iteration without a word
+    _check_chief_args(lens, field, depth, wavelength, newton_iters)
+    field, depth, wavelength = (_array(v) for v in (field, depth, wavelength))
+    return _stop_chief_ray(lens, field, depth, wavelength, newton_iters=newton_iters,
+                           iters=iters)
+
+
+def _array(v):
+    """A Python number or list as an array (None, arrays and tracers as they are): the
+    compiled cores below keep a Python number static, one program per value."""
+    if v is None or isinstance(v, (jax.Array, np.ndarray)) or checks.is_traced(v):
+        return v
+    return jnp.asarray(v)
+
+
+def _check_chief_args(lens, field, depth, wavelength, newton_iters) -> None:
+    """The arguments of ``stop_chief_ray``/``chief_point``, concrete ones checked before the
+    compiled core (inside it they are traced, and the checks would be skipped or become
+    ``EquinoxRuntimeError``s after the trace): the lens (type and its own checks), the field
+    (deg), the object distance (mm), the wavelength (µm) against the lens's materials and
+    ``newton_iters``."""
+    where = "stop_chief_ray"
+    if not isinstance(lens, Lens):
+        raise TypeError(f"{where}: lens must be a jaxlens.Lens, got {type(lens).__name__}")
+    checks.newton_iters(newton_iters, where)
+    checks.lens_intact(lens, where)
+    if not checks.is_traced(field):
+        checks.real_values(field, "field", where, "deg")  # before np.asarray
+        checks.field_angles(np.asarray(field), where, "field")
+        if depth is not None:
+            checks.one_field(field, where, "aim several fields one at a time, or vmap")
+    if depth is not None and not checks.is_traced(depth):
+        checks.values(depth, "depth", where, lo=0, lo_open=True,
+                      hi=INFINITE_OBJECT_MM, hi_open=True,
+                      unit="mm (object to surface 1; farther is an object at infinity)")
+    wl = lens.primary_wavelength if wavelength is None else wavelength
+    if not checks.is_traced(wl):
+        checks.real_values(wl, "wavelength", where, "µm")
+        checks.wavelengths(lens, np.asarray(wl), where)
+
+
+@eqx.filter_jit
+def _stop_chief_ray(lens, field, depth, wavelength, *, newton_iters, iters) -> Rays:
+    """``stop_chief_ray``'s compiled core: a module-level function of the lens and arrays
+    (the sizes static), so that eager calls on lenses of one structure share one program."""
     wl = lens.primary_wavelength if wavelength is None else jnp.asarray(wavelength)
     zep = paraxial.entrance_pupil_z(lens)
     if depth is None:
@@ -148,7 +192,15 @@ def chief_point(lens, field, depth, newton_iters, *, with_valid: bool = False):
     reflected stops where it failed, and ``valid`` is False; so is it where the aim at the
     stop centre did not converge (``stop_chief_ray``; the point is then that of the last aim,
     traced through)."""
-    rays = stop_chief_ray(lens, field, depth, newton_iters=newton_iters)
+    _check_chief_args(lens, field, depth, None, newton_iters)
+    return _chief_point(lens, _array(field), _array(depth), newton_iters=newton_iters,
+                        with_valid=with_valid)
+
+
+@eqx.filter_jit
+def _chief_point(lens, field, depth, *, newton_iters, with_valid):
+    rays = _stop_chief_ray(lens, field, depth, None, newton_iters=newton_iters,
+                           iters=sampling.AIM_ITERS)
     aimed = rays.valid[0]
     rays = eqx.tree_at(lambda r: r.valid, rays, jnp.ones_like(rays.valid))
     out = trace(unclipped(lens), rays, newton_iters=newton_iters, uniform=True)
