@@ -35,8 +35,14 @@ def lens():
     return L.classical_lens()
 
 
+def _fields():
+    """The 9 field angles of the spot tests, 0 … HALF_FOV (deg): one shape, so every spot
+    test of this file runs one compiled program."""
+    return jnp.asarray(np.linspace(0.0, HALF_FOV, 9))
+
+
 def _mean_rms(lens, depth, fields=None):
-    fields = np.linspace(0.0, HALF_FOV, 7) if fields is None else fields
+    fields = _fields() if fields is None else fields
     # The depth as an array: a traced argument, so every depth and sensor shift of a test
     # runs one compiled program (a Python float is static: one compile per depth).
     r = rms_spot(lens, jnp.asarray(fields), RGB, depth=jnp.asarray(depth, jnp.float64))
@@ -77,8 +83,7 @@ def test_focused_at_20cm(lens):
 
 
 def test_good_spots_and_every_ray_through(lens):
-    fields = jnp.linspace(0.0, HALF_FOV, 9)
-    r = rms_spot(lens, fields, RGB, depth=L.FOCUS_DEPTH)
+    r = rms_spot(lens, _fields(), RGB, depth=L.FOCUS_DEPTH)
     # At 20 cm a few rim rays of the outer fields miss (3 % at worst; at infinity none).
     assert float(jnp.min(r.valid_fraction)) >= 0.95
     rms_um = 1e3 * np.asarray(r.polychromatic)

@@ -164,11 +164,15 @@ def test_public_entry_points_and_forward_mode():
         jl.trace(lens, rays, reverse_rule="yes")
 
 
-def test_gradient_matches_central_differences():
+def test_gradient_matches_central_differences(compiled):
     lens = _folded()
     rays = _rays(lens, 300, 1.2)
-    fn = jax.jit(lambda L: _loss(_trace(L, rays, True)))
-    g = jax.grad(fn)(lens)
+    # The loss and its gradient from the one compiled value-and-gradient program (a jitted
+    # loss and jax.grad of it compiled three programs).
+    g = compiled["grad", True](lens, rays)[1]
+
+    def fn(L):
+        return compiled["grad", True](L, rays)[0]
     for get, j, h in ((lambda L: L.surfaces[0].c, None, 1e-7),
                       (lambda L: L.surfaces[1].c, None, 1e-7),
                       (lambda L: L.thickness, 0, 1e-6),
@@ -208,14 +212,16 @@ def test_one_step_equals_surface_step(first, refracts):
         b = surface_step(s, z, st, n1, n2, newton_iters=6, **kw)
         return a, b
 
+    # One compiled Jacobian for both gaps (the gap an argument, not a constant of a new
+    # function per gap: that compiled it twice).
+    jac = jax.jit(jax.jacrev(lambda c, z, gap: (_floats(both(c, z, gap)[0]),
+                                                _floats(both(c, z, gap)[1])), argnums=(0, 1)))
     for gap in (jnp.asarray(-4.0), jnp.asarray(2.0)):
         a, b = both(surface.c, jnp.asarray(1.0), gap)
         assert isinstance(a, RayState)
         for x, y in zip(jax.tree.leaves(a), jax.tree.leaves(b), strict=True):
             np.testing.assert_array_equal(x, y)
-        ja, jb = jax.jit(jax.jacrev(lambda c, z, gap=gap: (_floats(both(c, z, gap)[0]),
-                                                           _floats(both(c, z, gap)[1])),
-                                    argnums=(0, 1)))(surface.c, jnp.asarray(1.0))
+        ja, jb = jac(surface.c, jnp.asarray(1.0), gap)
         for x, y in zip(jax.tree.leaves(ja), jax.tree.leaves(jb), strict=True):
             np.testing.assert_allclose(x, y, rtol=1e-12, atol=1e-13)
 
@@ -251,12 +257,15 @@ def test_a_ray_at_the_critical_angle_has_finite_equal_gradients():
         np.testing.assert_allclose(a, b, rtol=1e-12, atol=1e-13)
 
 
-def test_polynomial_gradient_matches_central_differences():
+def test_polynomial_gradient_matches_central_differences(compiled):
     """The sag rule's gradient in coefficients of every kind against central differences."""
     lens = _freeform()
     rays = _rays(lens, 300, 1.1)
-    fn = jax.jit(lambda L: _loss(_trace(L, rays, True)))
-    g = jax.grad(fn)(lens)
+    # One compiled program for the loss and its gradient, as in the test above.
+    g = compiled["grad", True](lens, rays)[1]
+
+    def fn(L):
+        return compiled["grad", True](L, rays)[0]
     for get, j, h in ((lambda L: L.surfaces[1].coeffs, 0, 1e-7),
                       (lambda L: L.surfaces[1].c, None, 1e-7),
                       (lambda L: L.surfaces[2].odd_y, 0, 1e-7),
@@ -294,12 +303,11 @@ def test_qtype_aspheres_take_the_rule_with_equal_values_and_gradients(compiled):
     (_, gn), (_, go) = compiled["grad", True](lens, rays), compiled["grad", False](lens, rays)
     for a, b in zip(jax.tree.leaves(gn), jax.tree.leaves(go), strict=True):
         np.testing.assert_allclose(np.asarray(a), np.asarray(b), rtol=1e-10, atol=1e-14)
-    fn = jax.jit(lambda L: _loss(_trace(L, rays, True)))
     for i, j, h in ((0, 0, 1e-7), (0, 2, 1e-7), (1, 1, 1e-7)):
         def at(dx, i=i, j=j):
             L = eqx.tree_at(lambda t: t.surfaces[i].coeffs, lens,
                             lens.surfaces[i].coeffs.at[j].add(dx))
-            return float(fn(L))
+            return float(compiled["grad", True](L, rays)[0])  # the loss of the program above
 
         fd = (at(h) - at(-h)) / (2 * h)
         ad = float(gn.surfaces[i].coeffs[j])
@@ -328,15 +336,19 @@ def test_one_sag_step_equals_surface_step(first, refracts):
         return (surface_adjoint.sag_step(s, z, st, n1, n2, **kw),
                 surface_step(s, z, st, n1, n2, **kw))
 
+    # Values and Jacobians each one compiled program for both gaps (op by op, the Newton
+    # loops of the two steps compiled anew at every call; a new function per gap compiled
+    # the Jacobian twice).
+    value = jax.jit(both)
+    jac = jax.jit(jax.jacrev(lambda c, z, gap: (_floats(both(c, z, gap)[0]),
+                                                _floats(both(c, z, gap)[1])), argnums=(0, 1)))
     for gap in (jnp.asarray(-4.0), jnp.asarray(2.0)):
-        a, b = both(surface.coeffs, jnp.asarray(1.0), gap)
+        a, b = value(surface.coeffs, jnp.asarray(1.0), gap)
         for x, y in zip(jax.tree.leaves(a), jax.tree.leaves(b), strict=True):
             np.testing.assert_array_equal(x, y)
         if refracts and not first:
             assert not bool(a.valid[3])  # TIR leaving the glass
-        ja, jb = jax.jit(jax.jacrev(lambda c, z, gap=gap: (_floats(both(c, z, gap)[0]),
-                                                           _floats(both(c, z, gap)[1])),
-                                    argnums=(0, 1)))(surface.coeffs, jnp.asarray(1.0))
+        ja, jb = jac(surface.coeffs, jnp.asarray(1.0), gap)
         for x, y in zip(jax.tree.leaves(ja), jax.tree.leaves(jb), strict=True):
             assert np.all(np.isfinite(x))
             np.testing.assert_allclose(x, y, rtol=1e-12, atol=1e-13)
