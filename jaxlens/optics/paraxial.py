@@ -22,10 +22,9 @@ Conventions:
     ``efl`` is 1/Φ and ``efl_image_space`` |n′|/Φ. Coordinate breaks are dummy surfaces
     here: the trace follows each surface's local axis and ignores decenters and tilts,
     except that each medium's index takes the sign of the light's travel along its frame's
-    z axis (``coordinates.travel_senses``), and a lens whose breaks turn a frame round with
-    the light (a fold written as −45°, the mirror, +135° with a decenter, positive
-    thicknesses after it) transfers by the axis ray's path from vertex to vertex
-    (``coordinates.axial_thicknesses``; its z values are along that path). So
+    z axis (``coordinates.travel_senses``), so a fold written with a break that turns the
+    frame past 90° (−45°, the mirror, +135°, positive thicknesses after it) traces as the
+    same fold written Zemax's way. So
     is a ``TiltedPlane`` (Zemax TILTSURF): c = 0, no paraxial power, and its tilt, which
     deviates rays as a prism face does, is seen by real rays only.
 
