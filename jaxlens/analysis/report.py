@@ -310,9 +310,8 @@ def _notes(lens: Lens) -> list[str]:
         notes.append(f"coordinate breaks decenter or tilt the system at surface(s) "
                      f"{', '.join(map(str, breaks))}: the paraxial data (EFL, BFL, F/#, pupils, "
                      f"paraxial image height and distortion) follow each surface's local axis "
-                     f"(where a break turns a frame round with the light, the axis ray's path "
-                     f"from vertex to vertex) and otherwise ignore those decenters and tilts; "
-                     f"the real-ray chief heights and RMS spots are exact")
+                     f"and ignore those decenters and tilts; the real-ray chief heights and RMS "
+                     f"spots are exact")
     tilted = numbered(TiltedPlane, lambda s: (s.tan_x, s.tan_y))
     if tilted:
         notes.append(f"tilted plane(s) (TILTSURF) at surface(s) {', '.join(map(str, tilted))} "
