@@ -72,19 +72,18 @@ class CoordinateBreak(AbstractSurface):
                 unit = "mm" if name.startswith("decenter") else "degrees"
                 checks.number(v, name, "CoordinateBreak", unit=unit)
 
-    def rotation(self, xp=jnp) -> tuple:
-        """R as a row-major 3×3 tuple of tuples: the new axes are its columns (``xp=np``:
-        numpy floats of concrete tilts, computed outside any trace)."""
-        rx, ry, rz = (_rot(a if xp is jnp else float(a), axis, xp) for a, axis in
+    def rotation(self) -> tuple:
+        """R as a row-major 3×3 tuple of tuples: the new axes are its columns."""
+        rx, ry, rz = (_rot(a, axis) for a, axis in
                       ((self.tilt_x, 0), (self.tilt_y, 1), (self.tilt_z, 2)))
         return _matmul(_matmul(rx, ry), rz) if self.order == 0 else _matmul(_matmul(rz, ry), rx)
 
 
-def _rot(deg, axis: int, xp=jnp):
+def _rot(deg, axis: int):
     """Right-handed rotation by ``deg`` degrees about coordinate axis ``axis``."""
-    a = xp.deg2rad(deg)
-    c, s = xp.cos(a), xp.sin(a)
-    one, zero = xp.ones_like(c), xp.zeros_like(c)
+    a = jnp.deg2rad(deg)
+    c, s = jnp.cos(a), jnp.sin(a)
+    one, zero = jnp.ones_like(c), jnp.zeros_like(c)
     if axis == 0:
         return ((one, zero, zero), (zero, c, -s), (zero, s, c))
     if axis == 1:
@@ -229,51 +228,45 @@ def axial_thicknesses(lens):
     parity = _parity(lens)
     if isinstance(senses, tuple) and senses == parity:
         return lens.thickness
-    breaks = [b for b in lens.surfaces if isinstance(b, CoordinateBreak)]
-    traced = not isinstance(senses, tuple) or checks.is_traced(lens.thickness) or any(
-        checks.is_traced(v) for b in breaks for v in (b.decenter_x, b.decenter_y))
-    _, advance = _follow_axis(lens, traced=traced, advances=True)
+    traced = not isinstance(senses, tuple)
+    _, advance = _follow_axis(lens, traced=traced)
     if not traced:
         return jnp.asarray([a * sg for a, sg in zip(advance, senses[1:], strict=True)],
                            jnp.result_type(lens.thickness))
-    axial = (jnp.stack(advance) * jnp.asarray(senses[1:])).astype(lens.thickness.dtype)
-    if isinstance(senses, tuple):
-        return axial
+    axial = (jnp.stack(advance) * senses[1:]).astype(lens.thickness.dtype)
     zemax_rule = jnp.all(senses == jnp.asarray(parity, senses.dtype))
     return jnp.where(zemax_rule, lens.thickness, axial)
 
 
-def _follow_axis(lens, *, traced: bool, advances: bool = False):
-    """Cosines of the axis ray to each medium's local z (object space first) and, with
-    ``advances``, each gap's vertex-to-vertex step projected on the ray's direction (mm).
-    ``traced``: jnp (traced tilts, thicknesses or decenters) instead of numpy floats."""
-    xp, val = (jnp, (lambda v: v)) if traced else (np, float)
+def _follow_axis(lens, *, traced: bool):
+    """(cosines, advances) of the axis ray: cos to each medium's local z (object space first)
+    and each gap's vertex-to-vertex step projected on the ray's direction (mm)."""
+    if traced:
+        xp, val = jnp, (lambda v: v)
+    else:
+        xp, val = np, float
+    t = [val(v) for v in lens.thickness]
+    zs = [xp.asarray(0.0)]
+    for v in t:
+        zs.append(zs[-1] + v)
     rot, off = xp.eye(3), xp.zeros(3)
     d = xp.asarray([0.0, 0.0, 1.0])
-    zs = [xp.asarray(0.0)]
-    if advances:
-        for v in lens.thickness:
-            zs.append(zs[-1] + val(v))
     cos, dirs, pos = [xp.asarray(1.0)], [], []
     for i, s in enumerate(lens.surfaces):
-        ez = xp.stack([xp.asarray(0.0), xp.asarray(0.0), xp.asarray(zs[i])]) if advances \
-            else None
-        if advances:
-            pos.append(rot @ ez + off)
+        ez = xp.stack([xp.asarray(0.0), xp.asarray(0.0), xp.asarray(zs[i])])
+        pos.append(rot @ ez + off)
         if isinstance(s, CoordinateBreak):
-            r = xp.stack([xp.stack([xp.asarray(v) for v in row]) for row in s.rotation(xp)])
-            if advances:
-                dec = xp.stack([xp.asarray(val(s.decenter_x)), xp.asarray(val(s.decenter_y)),
-                                xp.asarray(0.0)])
-                v = ez + (dec if s.order == 0 else r @ dec)
-                off = rot @ (v - r @ ez) + off
+            r = xp.stack([xp.stack([xp.asarray(val(v)) for v in row]) for row in s.rotation()])
+            dec = xp.stack([xp.asarray(val(s.decenter_x)), xp.asarray(val(s.decenter_y)),
+                            xp.asarray(0.0)])
+            v = ez + (dec if s.order == 0 else r @ dec)
+            off = rot @ (v - r @ ez) + off
             rot = rot @ r
         z = rot[:, 2]
         if i in lens.mirrors:
             d = d - 2.0 * (d @ z) * z
         cos.append(d @ z)
         dirs.append(d)
-    if not advances:
-        return cos, None
     pos.append(rot @ xp.stack([xp.asarray(0.0), xp.asarray(0.0), xp.asarray(zs[-1])]) + off)
-    return cos, [(pos[j + 1] - pos[j]) @ dirs[j] for j in range(len(dirs))]
+    advance = [(pos[j + 1] - pos[j]) @ dirs[j] for j in range(len(dirs))]
+    return cos, advance
