@@ -34,7 +34,6 @@ from jaxtyping import Array, Float
 
 from ..imaging.sampling import field_rays, lens_depth, pupil_grid
 from ..optics import checks, paraxial
-from ..optics.coordinates import travel_senses
 from ..optics.lens import Lens
 from ..tracing.forward import trace
 from .spots import PUPIL_GRID, check_inputs, fields_array, weighted_centroid, weighted_rms
@@ -58,11 +57,9 @@ class AngularSpot(eqx.Module):
     magnification: Float[Array, " F"]
 
 
-def image_axis_sign(lens: Lens):
-    """+1 where light leaves along the image space's +z, −1 where toward −z (after an odd
-    number of mirrors, unless a coordinate break turns the frame round:
-    ``coordinates.travel_senses``)."""
-    return travel_senses(lens)[-1]
+def image_axis_sign(lens: Lens) -> int:
+    """+1 where image space looks along +z, −1 after an odd number of mirrors."""
+    return -1 if len(lens.mirrors) % 2 else 1
 
 
 def angular_magnification(lens: Lens, wavelength=None) -> Array:

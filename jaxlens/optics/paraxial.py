@@ -20,11 +20,7 @@ Conventions:
     with the negative thicknesses after it. ``bfl``, ``rear_focal_length`` and the image
     and exit-pupil positions are then z values (negative where light leaves toward −z);
     ``efl`` is 1/Φ and ``efl_image_space`` |n′|/Φ. Coordinate breaks are dummy surfaces
-    here: the trace follows each surface's local axis and ignores decenters and tilts,
-    except that each medium's index takes the sign of the light's travel along its frame's
-    z axis (``coordinates.travel_senses``), so a fold written with a break that turns the
-    frame past 90° (−45°, the mirror, +135°, positive thicknesses after it) traces as the
-    same fold written Zemax's way. So
+    here: the trace follows each surface's local axis and ignores decenters and tilts. So
     is a ``TiltedPlane`` (Zemax TILTSURF): c = 0, no paraxial power, and its tilt, which
     deviates rays as a prism face does, is seen by real rays only.
 
@@ -50,7 +46,6 @@ import numpy as np
 from jaxtyping import Array, Float
 
 from . import checks
-from .coordinates import CoordinateBreak, axial_thicknesses, travel_senses
 from .diffractive import Binary2
 from .freeform import Biconic, ZernikeSag
 from .lens import INFINITE_OBJECT_MM, Lens
@@ -142,25 +137,13 @@ def _given(lens: Lens, wavelength, where: str):
 
 
 def signed_indices(lens: Lens, wavelength) -> list[Array]:
-    """``lens.indices`` signed by the direction of travel along each medium's local z axis
-    (``coordinates.travel_senses``: negative after an odd number of mirrors, unless a
-    coordinate break turns the frame round with the light): the y–nu trace's indices."""
+    """``lens.indices`` with the sign flipped after every mirror (the y–nu trace's indices)."""
     wl = _given(lens, wavelength, "signed_indices")  # before lens.indices: lens checked
     n = lens.indices(wl)
-    if not lens.mirrors and not any(isinstance(s, CoordinateBreak) for s in lens.surfaces):
+    if not lens.mirrors:
         return n
-    senses = travel_senses(lens)
-    if not isinstance(senses, tuple):  # traced tilts in a lens with mirrors
-        return [x * senses[i] for i, x in enumerate(n)]
-    return [-x if s < 0 else x for x, s in zip(n, senses, strict=True)]
-
-
-def _thickness(lens: Lens):
-    """The thicknesses the y–nu trace transfers by (``coordinates.axial_thicknesses``:
-    ``lens.thickness`` itself unless a coordinate break tilts the frame)."""
-    if not any(isinstance(s, CoordinateBreak) for s in lens.surfaces):
-        return lens.thickness
-    return axial_thicknesses(lens)
+    flips = [sum(1 for m in lens.mirrors if m < i) % 2 for i in range(len(n))]
+    return [-x if f else x for x, f in zip(n, flips, strict=True)]
 
 
 def system_matrix(lens: Lens, wavelength=None, start: int = 0, end: int | None = None):
@@ -176,12 +159,11 @@ def system_matrix(lens: Lens, wavelength=None, start: int = 0, end: int | None =
         if isinstance(v, bool) or not isinstance(v, (int, np.integer)) or not lo <= v <= last:
             raise ValueError(f"system_matrix: {arg} must be a surface index in [{lo}, {last}] "
                              f"(0-based; start <= end), got {v!r}")
-    thickness = _thickness(lens)
     one = jnp.ones_like(lens.thickness[0])
     a, b, c, d = one, 0 * one, 0 * one, one
     for i in range(start, end + 1):
         if i > start:
-            t = thickness[i - 1] / n[i]
+            t = lens.thickness[i - 1] / n[i]
             a, b = a + t * c, b + t * d
         p = _surface_power(lens.surfaces[i], n[i], n[i + 1], wl)
         c, d = c - p * a, d - p * b
@@ -222,7 +204,7 @@ def entrance_pupil_z(lens: Lens, wavelength=None) -> Array:
     # Matrix from surface 1 to just before the stop: after surfaces[stop-1], then transfer.
     a, b, c, d = system_matrix(lens, wl, 0, lens.stop - 1)
     ns = signed_indices(lens, wl)[lens.stop]
-    t = _thickness(lens)[lens.stop - 1] / ns
+    t = lens.thickness[lens.stop - 1] / ns
     a, b = a + t * c, b + t * d
     # Chief ray reaches the stop centre: a*y0 + b*nu0 = 0 with y0 = -z_ep*u0, nu0 = n0*u0.
     return b * n0 / a
@@ -234,7 +216,7 @@ def entrance_pupil_magnification(lens: Lens, wavelength=None) -> Array:
     if lens.stop == 0:
         return jnp.ones_like(lens.thickness[0])
     a, _, c, _ = system_matrix(lens, wl, 0, lens.stop - 1)
-    t = _thickness(lens)[lens.stop - 1] / signed_indices(lens, wl)[lens.stop]
+    t = lens.thickness[lens.stop - 1] / signed_indices(lens, wl)[lens.stop]
     # Imaging EP -> stop has B = 0, so the magnification is the A entry.
     return a + t * c
 
@@ -257,10 +239,9 @@ def marginal_ray(lens: Lens, wavelength=None):
 
 def _trace_ray(lens: Lens, y, nu, n, wl):
     ys, nus = [], []
-    thickness = _thickness(lens)
     for i, s in enumerate(lens.surfaces):
         if i > 0:
-            y, nu = _transfer(y, nu, thickness[i - 1], n[i])
+            y, nu = _transfer(y, nu, lens.thickness[i - 1], n[i])
         y, nu = _refract(y, nu, _surface_power(s, n[i], n[i + 1], wl))
         ys.append(y)
         nus.append(nu)
@@ -316,7 +297,7 @@ def image_height(lens: Lens, field_deg, wavelength=None) -> Array:
     field_deg = checks.field_angles(field_deg, "image_height", "field_deg")
     y, nu = paraxial_chief_ray(lens, field_deg, wl)
     n_img = signed_indices(lens, wl)[-1]
-    return y[-1] + _thickness(lens)[-1] * nu[-1] / n_img
+    return y[-1] + lens.thickness[-1] * nu[-1] / n_img
 
 
 def paraxial_data(lens: Lens, wavelength=None) -> ParaxialData:
@@ -331,8 +312,7 @@ def paraxial_data(lens: Lens, wavelength=None) -> ParaxialData:
     a, b, c, d = system_matrix(lens, wl)
     f = 1.0 / _power(c)
     back = -a * n_img / c
-    t_axial = _thickness(lens)
-    zs = jnp.concatenate([jnp.zeros_like(t_axial[:1]), jnp.cumsum(t_axial[:-1])])
+    zs = lens.vertex_z()
     z_last = zs[-1]
     zep = entrance_pupil_z(lens, wl)
     epd = lens.epd
@@ -345,7 +325,7 @@ def paraxial_data(lens: Lens, wavelength=None) -> ParaxialData:
         xp_mag = jnp.ones_like(f)
     else:
         a2, b2, c2, d2 = system_matrix(lens, wl, lens.stop + 1, lens.num_surfaces - 1)
-        t = _thickness(lens)[lens.stop] / n[lens.stop + 1]
+        t = lens.thickness[lens.stop] / n[lens.stop + 1]
         # From the stop plane (after refraction at the stop surface) to after the last surface.
         a2, b2 = a2, b2 + t * a2
         d2 = d2 + t * c2

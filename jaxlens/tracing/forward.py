@@ -29,7 +29,7 @@ import jax.numpy as jnp
 import numpy as np
 
 from ..optics import checks
-from ..optics.coordinates import CoordinateBreak, transform, travel_senses
+from ..optics.coordinates import CoordinateBreak, transform
 from ..optics.lens import Lens
 from ..optics.rays import Rays
 from ..optics.surfaces import AbstractSurface, EvenAsphere, Hybrid, Standard
@@ -254,20 +254,15 @@ def _travel_gaps(lens: Lens):
     """``gaps(key)``: ``thickness[key]`` (an index or a slice) along the direction of travel.
 
     After an odd number of mirrors light travels toward −z and a Zemax thickness is
-    negative (unless a coordinate break turns the frame round with the light:
-    ``coordinates.travel_senses``); the surface step needs the gap along the travel
-    direction (a negative one means the next surface lies behind the rays). Without mirrors
-    this is the thickness slice itself, so a lens without mirrors is traced by the same
-    operations.
+    negative; the surface step needs the gap along the travel direction (a negative one
+    means the next surface lies behind the rays). Without mirrors this is the thickness
+    slice itself, so a lens without mirrors is traced by the same operations.
     """
     t = lens.thickness
     if not lens.mirrors:
         return lambda key: t[key]
-    senses = travel_senses(lens)[1:]  # the medium after each surface
-    if isinstance(senses, tuple):
-        sign = jnp.asarray([float(s) for s in senses], t.dtype)
-    else:  # traced tilts
-        sign = senses.astype(t.dtype)
+    flips = [sum(1 for m in lens.mirrors if m <= i) % 2 for i in range(len(lens.surfaces))]
+    sign = jnp.asarray([-1.0 if f else 1.0 for f in flips], t.dtype)
     return lambda key: (t * sign)[key]
 
 
