@@ -53,11 +53,10 @@ import numpy as np
 from jaxtyping import Array, Float
 
 from ..imaging.psf import CoherentPSF, psf_info
-from ..imaging.sampling import field_rays, lens_aim, lens_depth, pupil_points, pupil_polar
+from ..imaging.sampling import pupil_points, pupil_polar
 from ..optics import checks
 from ..optics.lens import Lens
-from ..tracing.forward import DEFAULT_NEWTON_ITERS, trace
-from .spots import weighted_centroid
+from .spots import chief_ray, spot_rays, weighted_centroid
 
 METHODS = ("geometric", "diffraction")
 REFERENCES = ("centroid", "chief")
@@ -114,34 +113,21 @@ def _metric(dxy, shape):
     return jnp.where(pos, jnp.sqrt(jnp.where(pos, d2, 1.0)), 0.0)  # double where: grad at 0
 
 
-def _geometric_samples(lens, field, wls, *, reference, shape, pupil, depth, where):
-    """Distances (mm), weights and the reference point of the traced rays, pooled over wls.
-    The field, wavelengths and pupil are checked by the caller; the object distance and the
-    aiming are resolved here, before the compiled core."""
+def _geometric_samples(lens, field, wls, *, reference, shape, pupil, depth):
+    """Distances (mm), weights and the reference point of the traced rays, pooled over wls."""
     pts = pupil_polar(PUPIL_SIDE, dtype=lens.epd.dtype) if pupil is None else pupil
-    return _geometric_core(lens, field, wls, pts, lens_depth(lens, depth, where),
-                           reference=reference, shape=shape, aim=lens_aim(lens, None, where))
-
-
-@eqx.filter_jit
-def _geometric_core(lens, field, wls, pts, depth, *, reference, shape, aim):
-    """The rays of every wavelength (and the chief ray) traced in one compiled program, so
-    an eager call on a lens of the same structure reuses it."""
     ps, ws = [], []
     for w in wls:
-        r = trace(lens, field_rays(lens, field, pts, w, depth=depth, aim=aim),
-                  newton_iters=DEFAULT_NEWTON_ITERS)
+        r = spot_rays(lens, field, w, pupil=pts, depth=depth)
         ps.append(r.origin[..., :2])
         ws.append(r.valid.astype(r.origin.dtype))
     p, wt = jnp.concatenate(ps), jnp.concatenate(ws)
     if reference == "centroid":
         ref = weighted_centroid(p, wt)
         ok = jnp.sum(wt) > 0
-    else:  # the primary wavelength's ray through the pupil centre, as ``chief_ray``'s
-        centre = jnp.zeros((1, 2), lens.epd.dtype)
-        cr = trace(lens, field_rays(lens, field, centre, lens.primary_wavelength, depth=depth,
-                                    aim=aim), newton_iters=DEFAULT_NEWTON_ITERS)
-        ref, ok = cr.origin[0, :2], cr.valid[0] & (jnp.sum(wt) > 0)
+    else:
+        cr = chief_ray(lens, field, depth=depth)
+        ref, ok = cr.origin[:2], cr.valid & (jnp.sum(wt) > 0)
     d = _metric(p - ref, shape)
     total = jnp.sum(wt)
     return d, wt, jnp.maximum(total, 1.0), jnp.where(ok, ref, jnp.nan), jnp.zeros(())
@@ -185,7 +171,7 @@ def _samples(lens, field, radii_or_fraction, where, *, wavelength, method, refer
                 raise ValueError(f"{where}: pupil must be [M, 2] normalised pupil points with "
                                  f"M >= 1, got shape {pupil.shape}")
         return _geometric_samples(lens, field, wls, reference=reference, shape=shape,
-                                  pupil=pupil, depth=depth, where=where)
+                                  pupil=pupil, depth=depth)
     if pixel_size is None:
         raise ValueError(f"{where}: method='diffraction' needs pixel_size (mm), the PSF grid "
                          f"pitch: a few per Airy radius 1.22·λ·F#")
