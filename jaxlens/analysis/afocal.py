@@ -35,6 +35,7 @@ from jaxtyping import Array, Float
 from ..imaging.sampling import field_rays, lens_depth, pupil_grid
 from ..optics import checks, paraxial
 from ..optics.lens import Lens
+from ..optics.travel import travel_senses
 from ..tracing.forward import trace
 from .spots import PUPIL_GRID, check_inputs, fields_array, weighted_centroid, weighted_rms
 
@@ -58,8 +59,9 @@ class AngularSpot(eqx.Module):
 
 
 def image_axis_sign(lens: Lens) -> int:
-    """+1 where image space looks along +z, −1 after an odd number of mirrors."""
-    return -1 if len(lens.mirrors) % 2 else 1
+    """+1 where light leaves along the image space's +z, −1 where toward −z (after an odd
+    number of mirrors, unless coordinate breaks turn the frame round: ``travel_senses``)."""
+    return travel_senses(lens)[-1]
 
 
 def angular_magnification(lens: Lens, wavelength=None) -> Array:

@@ -46,7 +46,7 @@ import equinox as eqx
 import jax.numpy as jnp
 import numpy as np
 
-from ..optics import checks, paraxial
+from ..optics import checks, paraxial, travel
 from ..optics import materials as _materials
 from ..optics.lens import INFINITE_OBJECT_MM, RAY_AIMING, Lens, Sensor, check_vignetting
 from ..optics.materials import Air
@@ -593,6 +593,10 @@ def lens_from_dict(d: dict, *, source: str = "<lens>") -> Lens:
     back = d.get("negative_propagation", False)
     if not isinstance(back, bool):  # "false" or 0 would be read as a flag silently
         raise ValueError(f"{source}: negative_propagation must be true or false, got {back!r}")
+    try:  # the light's direction along frames that coordinate breaks turn (optics.travel)
+        senses = travel.turned_senses(surfaces, mirrors)
+    except ValueError as e:
+        raise ValueError(f"{source}: {e}") from None
     lens = Lens(
         surfaces=tuple(surfaces),
         thickness=_arr(np.array(thick)),
@@ -615,6 +619,7 @@ def lens_from_dict(d: dict, *, source: str = "<lens>") -> Lens:
         afocal_image=afocal,
         aim=aim,
         negative_propagation=back,
+        travel_senses=senses,
     )
     # Before the paraxial work of the aperture: values the lens cannot be traced with.
     checks.wavelengths(lens, wl, f"{source}: {key}", "wavelength")

@@ -10,7 +10,7 @@ import warnings
 import jax.numpy as jnp
 import numpy as np
 
-from ..optics import checks
+from ..optics import checks, travel
 from ..optics.apertures import Aperture
 from ..optics.catalog import decode_zemax_text as decode
 from ..optics.coordinates import CoordinateBreak
@@ -587,8 +587,8 @@ def _lens(f: ZmxFile, text: str, path: str, strict: bool, unknown_glass: str) ->
         # Zemax reaches every surface after the first along the ray's line, going back where
         # it must (surfaces that cross within the beam, a stop inside a deep concave surface).
         negative_propagation=True,
+        travel_senses=_travel_senses(surfaces, mirrors, body),
     )
-    _check_axis_sense(lens, body, img)
     # Before the paraxial work of the aperture: values the lens cannot be traced with.
     for w, ln in zip(wl, wl_lines, strict=True):
         with _at_line(ln):
@@ -650,48 +650,22 @@ def _lens(f: ZmxFile, text: str, path: str, strict: bool, unknown_glass: str) ->
         raise ln.error(str(e)) from None
 
 
-def _check_axis_sense(lens: Lens, body: list, img) -> None:
-    """Refuse coordinate breaks that turn a surface's frame against the light.
-
-    The paraxial trace (``jaxlens.optics.paraxial``) follows each surface's local axis with
-    the index's sign flipped after every mirror: light travels toward +z after an even
-    number of mirrors and toward −z after an odd one, as Zemax's negative thicknesses
-    after a mirror write it. A coordinate break can turn the frame past 90° instead (a
-    fold written as a −45° break, the mirror, then a +135° break and positive thicknesses,
-    as Quadoa's export writes a prism): the real rays still find every surface, but the
-    paraxial data (EFL, BFL, image heights, F/#) would come out silently wrong (a 45°
-    fold before a +50 mm lens gave −50 mm). The axis ray (down the object's axis,
-    reflected about each mirror's vertex normal) must meet every surface from the side the
-    mirror count says; otherwise the file is refused naming the surface."""
-    tilted = [s for s in lens.surfaces if isinstance(s, CoordinateBreak)
-              and any(float(a) != 0.0 for a in (s.tilt_x, s.tilt_y, s.tilt_z))]
-    if not tilted:
-        return
-    rot = np.eye(3)
-    d = np.array([0.0, 0.0, 1.0])
-    flips = 0
-    for i, s in enumerate([*lens.surfaces, lens.image]):
-        if isinstance(s, CoordinateBreak):
-            rot = rot @ np.asarray(s.rotation(), np.float64)
-            continue
-        z = rot[:, 2]
-        sense = float(d @ z)
-        if not sense * (-1) ** flips > 1e-9:
-            zs = body[i] if i < len(body) else img
-            have = "across its axis" if abs(sense) <= 1e-9 else (
-                "toward +z" if sense > 0 else "toward -z")
-            raise zs.line.error(
-                f"light meets this surface travelling {have} in its frame after {flips} "
-                f"mirror{'s' * (flips != 1)}, where jaxlens's paraxial trace (the index's "
-                f"sign flipped at each mirror, as Zemax's negative thicknesses after a "
-                f"mirror write it) takes {'+z' if flips % 2 == 0 else '-z'}: a coordinate "
-                f"break before it turns the frame past 90 degrees (as a -45 break, the "
-                f"mirror, a +135 break), and the paraxial data (EFL, image heights, F/#) "
-                f"would be wrong. Write the fold as Zemax does: a +45 break, the mirror, a "
-                f"+45 break, negative thicknesses after it")
-        if i in lens.mirrors:
-            d = d - 2.0 * sense * z
-            flips += 1
+def _travel_senses(surfaces: list, mirrors: list, body: list):
+    """``Lens.travel_senses`` from the frames (``optics.travel``): None where they follow the
+    mirror count, as Zemax writes a fold (+45°, the mirror, +45°, negative thicknesses
+    after it); the senses where breaks turn a frame round with the light (Quadoa's export
+    of a prism: −45°, the mirror with its thickness along its own axis, +135° with a
+    decenter, positive thicknesses after it). Where the axis ray (down the object's axis,
+    reflected about each mirror's vertex normal) travels across a surface's frame, no
+    paraxial trace follows it and the file is refused naming that surface's line."""
+    for i, c in enumerate(travel.axis_cosines(surfaces, mirrors)[1:]):
+        if abs(c) <= travel.AXIS_ACROSS_TOL:
+            raise body[i].line.error(
+                "light leaves this surface travelling across its axis: a coordinate break "
+                "turns the frame by 90 degrees to the light, so EFL, image heights and F/# "
+                "have no paraxial axis to follow (turn the frame with the light: for a "
+                "45-degree fold, a 45-degree break on each side of the mirror)")
+    return travel.turned_senses(surfaces, mirrors)
 
 
 def load_zmx(path: str | os.PathLike, *, strict: bool = False,

@@ -72,18 +72,19 @@ class CoordinateBreak(AbstractSurface):
                 unit = "mm" if name.startswith("decenter") else "degrees"
                 checks.number(v, name, "CoordinateBreak", unit=unit)
 
-    def rotation(self) -> tuple:
-        """R as a row-major 3×3 tuple of tuples: the new axes are its columns."""
-        rx, ry, rz = (_rot(a, axis) for a, axis in
+    def rotation(self, xp=jnp) -> tuple:
+        """R as a row-major 3×3 tuple of tuples: the new axes are its columns (``xp=np``:
+        numpy floats of concrete tilts, computed outside any trace)."""
+        rx, ry, rz = (_rot(a if xp is jnp else float(a), axis, xp) for a, axis in
                       ((self.tilt_x, 0), (self.tilt_y, 1), (self.tilt_z, 2)))
         return _matmul(_matmul(rx, ry), rz) if self.order == 0 else _matmul(_matmul(rz, ry), rx)
 
 
-def _rot(deg, axis: int):
+def _rot(deg, axis: int, xp=jnp):
     """Right-handed rotation by ``deg`` degrees about coordinate axis ``axis``."""
-    a = jnp.deg2rad(deg)
-    c, s = jnp.cos(a), jnp.sin(a)
-    one, zero = jnp.ones_like(c), jnp.zeros_like(c)
+    a = xp.deg2rad(deg)
+    c, s = xp.cos(a), xp.sin(a)
+    one, zero = xp.ones_like(c), xp.zeros_like(c)
     if axis == 0:
         return ((one, zero, zero), (zero, c, -s), (zero, s, c))
     if axis == 1:
@@ -136,21 +137,30 @@ def frame_of(lens, index: int | None = None):
         raise ValueError(f"frame_of: index must be a surface index in [0, {last}] (0-based; "
                          f"None for the image surface), got {type(index).__name__} {index!r}")
     n = lens.num_surfaces if index is None else int(index) + 1
+    return frames_after(lens, n)[-1]
+
+
+def frames_after(lens, n: int | None = None) -> list:
+    """``[(R, t)]``: the tracer's frame (as ``frame_of``) before surface 1, then after each
+    of the first ``n`` surfaces (all of them by default)."""
+    n = lens.num_surfaces if n is None else n
     zs = lens.vertex_z()
     dtype = jnp.result_type(lens.thickness)
     rot = jnp.eye(3, dtype=dtype)
     off = jnp.zeros(3, dtype)
+    out = [(rot, off)]
     for i in range(n):
         s = lens.surfaces[i]
-        if not isinstance(s, CoordinateBreak):
-            continue
-        # Tracer frame after the break: p_new = Rᵀ(p_old − v) + (0, 0, z) with v the break's
-        # vertex (plus the decenter), so p_old = R p_new + v − R (0, 0, z).
-        r = jnp.stack([jnp.stack(row) for row in s.rotation()]).astype(dtype)
-        ez = jnp.asarray([0.0, 0.0, 1.0], dtype) * zs[i]
-        dec = jnp.stack([s.decenter_x, s.decenter_y, jnp.zeros_like(s.decenter_x)]).astype(dtype)
-        v = ez + (dec if s.order == 0 else r @ dec)
-        # Compose with the frame so far: global = rot @ p_old + off.
-        off = rot @ (v - r @ ez) + off
-        rot = rot @ r
-    return rot, off
+        if isinstance(s, CoordinateBreak):
+            # Tracer frame after the break: p_new = Rᵀ(p_old − v) + (0, 0, z) with v the
+            # break's vertex (plus the decenter), so p_old = R p_new + v − R (0, 0, z).
+            r = jnp.stack([jnp.stack(row) for row in s.rotation()]).astype(dtype)
+            ez = jnp.asarray([0.0, 0.0, 1.0], dtype) * zs[i]
+            dec = jnp.stack([s.decenter_x, s.decenter_y,
+                             jnp.zeros_like(s.decenter_x)]).astype(dtype)
+            v = ez + (dec if s.order == 0 else r @ dec)
+            # Compose with the frame so far: global = rot @ p_old + off.
+            off = rot @ (v - r @ ez) + off
+            rot = rot @ r
+        out.append((rot, off))
+    return out

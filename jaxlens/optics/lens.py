@@ -14,7 +14,12 @@ Conventions:
     ``mirrors`` lists the (0-based) indices of reflecting surfaces (Zemax ``GLAS MIRROR``);
     the medium after a mirror, like the medium after a ``CoordinateBreak``, is the medium
     before it (``materials[i]`` must repeat it). After an odd number of mirrors light travels
-    toward −z and the thicknesses are negative, as in Zemax.
+    toward −z and the thicknesses are negative, as in Zemax. ``travel_senses`` (static) is
+    None for such a lens; where coordinate breaks turn a frame round with the light instead
+    (Quadoa's fold: a −45° break, the mirror, a +135° break, positive thicknesses after it),
+    it holds ±1 per medium (object space first): the direction light travels along that
+    medium's local z (``optics.travel``). The readers set it from the frames; ``Lens``
+    refuses a value that disagrees with the frames when the tilts are concrete.
     ``obscurations`` lists ``(i, r_min, r_max)``: surface ``i`` blocks the rays that meet it
     at a height r_min ≤ r ≤ r_max (mm; Zemax ``OBSC``, r_min = 0 for a central
     obscuration such as a Cassegrain's secondary mirror).
@@ -96,7 +101,7 @@ import jax.numpy as jnp
 import numpy as np
 from jaxtyping import Array, Float
 
-from . import checks
+from . import checks, travel
 from .apertures import Aperture
 from .coordinates import CoordinateBreak
 from .materials import AbstractMaterial, Air
@@ -141,6 +146,18 @@ def _sequence(arg: str, what: str):
                             f"{type(x).__name__} {x!r}")
         return tuple(x)
     return convert
+
+
+def _senses(x):
+    """A converter for ``travel_senses``: None, or a tuple of ±1 ints."""
+    if x is None:
+        return None
+    if isinstance(x, (str, bytes)) or not hasattr(x, "__iter__") or any(
+            isinstance(v, bool) or not isinstance(v, (int, np.integer)) or v not in (-1, 1)
+            for v in x):
+        raise TypeError(f"Lens: travel_senses must be None or a tuple of +1 and -1 (one per "
+                        f"medium, object space first), got {x!r}")
+    return tuple(int(v) for v in x)
 
 
 def _flag(arg: str):
@@ -274,6 +291,10 @@ class Lens(eqx.Module):
     # negative propagation): see the module doc.
     negative_propagation: bool = eqx.field(static=True, default=False,
                                            converter=_flag("negative_propagation"))
+    # Light's direction along each medium's local z where breaks turn frames round with it:
+    # see the module doc and optics.travel.
+    travel_senses: tuple[int, ...] | None = eqx.field(static=True, default=None,
+                                                      converter=_senses)
 
     def __check_init__(self):
         n = len(self.surfaces)
@@ -378,6 +399,7 @@ class Lens(eqx.Module):
         for i in m:
             if i in breaks:
                 raise ValueError(f"Lens: surface {i} is a coordinate break and cannot be a mirror")
+        self._check_travel_senses()
         for i in sorted(set(m) | set(breaks)):
             before = self.object_material if i == 0 else self.materials[i - 1]
             after = self.materials[i]
@@ -391,6 +413,29 @@ class Lens(eqx.Module):
                     f"it, so materials[{i}] must be the same material as "
                     f"{'object_material' if i == 0 else f'materials[{i - 1}]'} "
                     f"({name(before)}), got {name(after)}")
+
+    def _check_travel_senses(self):
+        """``travel_senses`` must be what the frames give (checked where the tilts are
+        concrete): a stale or missing value would make the paraxial data silently wrong."""
+        n = len(self.surfaces)
+        given = self.travel_senses
+        if given is not None and len(given) != n + 1:
+            raise ValueError(f"Lens: travel_senses needs {n + 1} entries (object space, then "
+                             f"the medium after each surface), got {len(given)}")
+        if given is None and not any(isinstance(s, CoordinateBreak) for s in self.surfaces):
+            return
+        try:
+            need = travel.turned_senses(self.surfaces, self.mirrors)
+        except ValueError as e:
+            raise ValueError(f"Lens: {e}") from None
+        if need is None and given is not None and travel.axis_cosines(
+                self.surfaces, self.mirrors) is None:
+            return  # traced tilts: nothing to check against
+        if given != need:
+            raise ValueError(
+                f"Lens: travel_senses must be {need!r} for these mirrors and coordinate "
+                f"breaks (the light's direction along each medium's local z, object space "
+                f"first; None where it follows the mirror count), got {given!r}")
 
     @property
     def num_surfaces(self) -> int:

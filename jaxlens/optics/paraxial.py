@@ -20,7 +20,12 @@ Conventions:
     with the negative thicknesses after it. ``bfl``, ``rear_focal_length`` and the image
     and exit-pupil positions are then z values (negative where light leaves toward −z);
     ``efl`` is 1/Φ and ``efl_image_space`` |n′|/Φ. Coordinate breaks are dummy surfaces
-    here: the trace follows each surface's local axis and ignores decenters and tilts. So
+    here: the trace follows each surface's local axis and ignores decenters and tilts,
+    except in a lens whose breaks turn a frame round with the light (``Lens.travel_senses``:
+    a fold written as −45°, the mirror, +135° with a decenter, positive thicknesses after
+    it): each medium's index is then signed by the light's direction along its frame's z,
+    and the trace transfers by the axis ray's path from vertex to vertex
+    (``travel.axial_thicknesses``; its z values are along that path). So
     is a ``TiltedPlane`` (Zemax TILTSURF): c = 0, no paraxial power, and its tilt, which
     deviates rays as a prism face does, is seen by real rays only.
 
@@ -52,6 +57,7 @@ from .lens import INFINITE_OBJECT_MM, Lens
 from .paraxial_surface import ParaxialSurface
 from .surfaces import AbstractSurface, Standard
 from .toroidal import Toroidal
+from .travel import axial_thicknesses, travel_senses
 from .xypolynomial import XYPolynomial
 
 
@@ -137,13 +143,14 @@ def _given(lens: Lens, wavelength, where: str):
 
 
 def signed_indices(lens: Lens, wavelength) -> list[Array]:
-    """``lens.indices`` with the sign flipped after every mirror (the y–nu trace's indices)."""
+    """``lens.indices`` signed by the light's direction along each medium's local z
+    (``travel.travel_senses``: negative after an odd number of mirrors, unless coordinate
+    breaks turn the frame round with the light): the y–nu trace's indices."""
     wl = _given(lens, wavelength, "signed_indices")  # before lens.indices: lens checked
     n = lens.indices(wl)
-    if not lens.mirrors:
+    if not lens.mirrors and lens.travel_senses is None:
         return n
-    flips = [sum(1 for m in lens.mirrors if m < i) % 2 for i in range(len(n))]
-    return [-x if f else x for x, f in zip(n, flips, strict=True)]
+    return [-x if s < 0 else x for x, s in zip(n, travel_senses(lens), strict=True)]
 
 
 def system_matrix(lens: Lens, wavelength=None, start: int = 0, end: int | None = None):
@@ -159,11 +166,12 @@ def system_matrix(lens: Lens, wavelength=None, start: int = 0, end: int | None =
         if isinstance(v, bool) or not isinstance(v, (int, np.integer)) or not lo <= v <= last:
             raise ValueError(f"system_matrix: {arg} must be a surface index in [{lo}, {last}] "
                              f"(0-based; start <= end), got {v!r}")
+    thickness = axial_thicknesses(lens)
     one = jnp.ones_like(lens.thickness[0])
     a, b, c, d = one, 0 * one, 0 * one, one
     for i in range(start, end + 1):
         if i > start:
-            t = lens.thickness[i - 1] / n[i]
+            t = thickness[i - 1] / n[i]
             a, b = a + t * c, b + t * d
         p = _surface_power(lens.surfaces[i], n[i], n[i + 1], wl)
         c, d = c - p * a, d - p * b
@@ -204,7 +212,7 @@ def entrance_pupil_z(lens: Lens, wavelength=None) -> Array:
     # Matrix from surface 1 to just before the stop: after surfaces[stop-1], then transfer.
     a, b, c, d = system_matrix(lens, wl, 0, lens.stop - 1)
     ns = signed_indices(lens, wl)[lens.stop]
-    t = lens.thickness[lens.stop - 1] / ns
+    t = axial_thicknesses(lens)[lens.stop - 1] / ns
     a, b = a + t * c, b + t * d
     # Chief ray reaches the stop centre: a*y0 + b*nu0 = 0 with y0 = -z_ep*u0, nu0 = n0*u0.
     return b * n0 / a
@@ -216,7 +224,7 @@ def entrance_pupil_magnification(lens: Lens, wavelength=None) -> Array:
     if lens.stop == 0:
         return jnp.ones_like(lens.thickness[0])
     a, _, c, _ = system_matrix(lens, wl, 0, lens.stop - 1)
-    t = lens.thickness[lens.stop - 1] / signed_indices(lens, wl)[lens.stop]
+    t = axial_thicknesses(lens)[lens.stop - 1] / signed_indices(lens, wl)[lens.stop]
     # Imaging EP -> stop has B = 0, so the magnification is the A entry.
     return a + t * c
 
@@ -239,9 +247,10 @@ def marginal_ray(lens: Lens, wavelength=None):
 
 def _trace_ray(lens: Lens, y, nu, n, wl):
     ys, nus = [], []
+    thickness = axial_thicknesses(lens)
     for i, s in enumerate(lens.surfaces):
         if i > 0:
-            y, nu = _transfer(y, nu, lens.thickness[i - 1], n[i])
+            y, nu = _transfer(y, nu, thickness[i - 1], n[i])
         y, nu = _refract(y, nu, _surface_power(s, n[i], n[i + 1], wl))
         ys.append(y)
         nus.append(nu)
@@ -297,7 +306,7 @@ def image_height(lens: Lens, field_deg, wavelength=None) -> Array:
     field_deg = checks.field_angles(field_deg, "image_height", "field_deg")
     y, nu = paraxial_chief_ray(lens, field_deg, wl)
     n_img = signed_indices(lens, wl)[-1]
-    return y[-1] + lens.thickness[-1] * nu[-1] / n_img
+    return y[-1] + axial_thicknesses(lens)[-1] * nu[-1] / n_img
 
 
 def paraxial_data(lens: Lens, wavelength=None) -> ParaxialData:
@@ -312,7 +321,9 @@ def paraxial_data(lens: Lens, wavelength=None) -> ParaxialData:
     a, b, c, d = system_matrix(lens, wl)
     f = 1.0 / _power(c)
     back = -a * n_img / c
-    zs = lens.vertex_z()
+    t_axial = axial_thicknesses(lens)
+    zs = lens.vertex_z() if lens.travel_senses is None else jnp.concatenate(
+        [jnp.zeros_like(t_axial[:1]), jnp.cumsum(t_axial[:-1])])
     z_last = zs[-1]
     zep = entrance_pupil_z(lens, wl)
     epd = lens.epd
@@ -325,7 +336,7 @@ def paraxial_data(lens: Lens, wavelength=None) -> ParaxialData:
         xp_mag = jnp.ones_like(f)
     else:
         a2, b2, c2, d2 = system_matrix(lens, wl, lens.stop + 1, lens.num_surfaces - 1)
-        t = lens.thickness[lens.stop] / n[lens.stop + 1]
+        t = t_axial[lens.stop] / n[lens.stop + 1]
         # From the stop plane (after refraction at the stop surface) to after the last surface.
         a2, b2 = a2, b2 + t * a2
         d2 = d2 + t * c2

@@ -33,6 +33,7 @@ from ..optics.coordinates import CoordinateBreak, transform
 from ..optics.lens import Lens
 from ..optics.rays import Rays
 from ..optics.surfaces import AbstractSurface, EvenAsphere, Hybrid, Standard
+from ..optics.travel import travel_senses
 from . import surface_adjoint
 from .step import (
     DEFAULT_NEWTON_ITERS,
@@ -254,15 +255,16 @@ def _travel_gaps(lens: Lens):
     """``gaps(key)``: ``thickness[key]`` (an index or a slice) along the direction of travel.
 
     After an odd number of mirrors light travels toward −z and a Zemax thickness is
-    negative; the surface step needs the gap along the travel direction (a negative one
-    means the next surface lies behind the rays). Without mirrors this is the thickness
-    slice itself, so a lens without mirrors is traced by the same operations.
+    negative (unless coordinate breaks turn the frame round with the light:
+    ``Lens.travel_senses``); the surface step needs the gap along the travel direction (a
+    negative one means the next surface lies behind the rays). Without mirrors or turned
+    frames this is the thickness slice itself, so such a lens is traced by the same
+    operations.
     """
     t = lens.thickness
-    if not lens.mirrors:
+    if not lens.mirrors and lens.travel_senses is None:
         return lambda key: t[key]
-    flips = [sum(1 for m in lens.mirrors if m <= i) % 2 for i in range(len(lens.surfaces))]
-    sign = jnp.asarray([-1.0 if f else 1.0 for f in flips], t.dtype)
+    sign = jnp.asarray([float(s) for s in travel_senses(lens)[1:]], t.dtype)
     return lambda key: (t * sign)[key]
 
 
