@@ -640,9 +640,13 @@ def _lens(f: ZmxFile, text: str, path: str, strict: bool, unknown_glass: str) ->
                            "elliptical one. Give the pupil with ENPD, FNUM or OBNA")
         sd = body[stop].clap if body[stop].clap else (body[stop].diam or (0.0,))[0]
         if not sd > 0:
-            raise ln.error("FLOA needs a DIAM or CLAP (stop semi-diameter) on the STOP surface "
-                           "(its semi-diameter sets the pupil, and the file gives none); add "
-                           "'DIAM r 1 0 0 1' to the STOP surface, or give ENPD or FNUM")
+            raise ln.error(
+                f"FLOA needs a DIAM or CLAP (stop semi-diameter) on the STOP surface "
+                f"(surface {stop + 1}, line {body[stop].line.number}): its semi-diameter sets "
+                f"the pupil, and the file gives none, so the pupil's size is not in the file "
+                f"(DeepLens's .zmx writer, for one, writes its aperture stop so; the size is in "
+                f"the lens file it was written from); add 'DIAM r 1 0 0 1' (r in lens units) "
+                f"to the STOP surface, or give ENPD or FNUM")
         return apply_aperture(lens, stop_semi_diameter=sd * u)
     except ValueError as e:
         if str(e).startswith(path):

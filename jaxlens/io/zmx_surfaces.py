@@ -655,4 +655,8 @@ def check_object_plane(obj, distance: float) -> None:
         at = obj.curv_line if obj.curv != 0 else terms[0] if terms else where
         raise at.error(
             f"the object surface at a finite distance must be a plane normal to the axis "
-            f"(CURV 0, no tilt or terms); it has {what}, which jaxlens cannot represent")
+            f"(CURV 0, no tilt or terms); it has {what}, which jaxlens cannot represent: its "
+            f"points off the axis lie off the vertex plane (for a TILTSURF z = tan θx·x + "
+            f"tan θy·y, PARM 1 and 2), while a jaxlens Lens puts every object point on one "
+            f"plane normal to the axis, object_distance before surface 1, so each off-axis "
+            f"field would be imaged from the wrong distance")

@@ -254,7 +254,13 @@ def field_type(ln) -> int:
             f"angles (FTYP 0), object heights (FTYP 1), paraxial (FTYP 2) or real (FTYP 3) "
             f"image heights")
     if len(ln.tokens) > 2 and ln.int(2, "object-space telecentric flag") != 0:
-        raise ln.error("object-space telecentric systems (FTYP's second value 1) are not supported")
+        raise ln.error(
+            "object-space telecentric systems (FTYP's second value 1) are not supported: "
+            "OpticStudio launches every field's chief ray parallel to the axis (the entrance "
+            "pupil at infinity, the pupil sampled in object-space directions), but a jaxlens "
+            "Lens holds its fields as chief-ray angles toward an entrance pupil at a finite "
+            "distance, so it cannot hold this system; setting the flag to 0 would aim the "
+            "chief rays at the paraxial entrance pupil instead, another lens")
     # Image heights with an afocal image space (FTYP's seventh value 1) are read only where
     # every one is 0, the axis whatever the field type (``afocal_zero_heights``).
     return kind
