@@ -72,10 +72,11 @@ What is read and written:
       about x, y, z in degrees; PARM 6 the order flag (0 or 1); CURV 0; no GLAS (the
       medium continues). ``GLAS MIRROR`` makes a surface a mirror (``Lens.mirrors``); the
       medium after it is the one before, and the thicknesses after an odd number of
-      mirrors are negative, as Zemax writes them. Coordinate breaks that turn a surface's
-      frame against that direction (a fold written as -45°, the mirror, +135°, positive
-      thicknesses) are refused with the surface's line: the paraxial trace takes the
-      light's direction from the mirror count.
+      mirrors are negative, as Zemax writes them. A fold whose breaks turn the frame round
+      with the light (Quadoa's -45°, the mirror, +135° with a decenter, positive
+      thicknesses) reads too: each medium's direction of travel comes from the frames
+      (``Lens.travel_senses``, ``optics.travel``). A break that turns a frame across the
+      light is refused with its line.
     * Image space is the last lens surface's GLAS; it is also written on the image
       surface (optiland reads image space there). An image-surface GLAS that differs
       gives a warning.
