@@ -128,14 +128,14 @@ FIELD_BLOCK = 9
 
 
 def _mean_rms(lens: Lens, depth_mm: float, fields) -> float:
-    """RMS over ``fields`` (deg, [F]) of the RGB polychromatic RMS spot radius (mm) at
+    """RMS over ``fields`` (deg, [F] or [F, 2]) of the RGB polychromatic RMS spot radius (mm) at
     ``depth_mm``. Fields are independent in ``rms_spot``, so the padding (copies of the last
     field) changes no value of the first F."""
     from ...analysis.spots import rms_spot
 
-    f = np.asarray(fields, np.float64).reshape(-1)
+    f = np.atleast_1d(np.asarray(fields, np.float64))  # [F] (θy) or [F, 2] (θx, θy)
     pad = -len(f) % FIELD_BLOCK
-    padded = np.concatenate([f, np.full(pad, f[-1])]) if len(f) else f
+    padded = np.concatenate([f, np.repeat(f[-1:], pad, axis=0)]) if len(f) else f
     r = rms_spot(lens, jnp.asarray(padded), jnp.asarray(WAVELENGTHS_RGB), depth=depth_mm)
     return float(jnp.sqrt(jnp.mean(r.polychromatic[: len(f)] ** 2)))
 
