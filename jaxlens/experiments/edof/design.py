@@ -176,9 +176,7 @@ def finish(lens: Lens, name: str = "edof_classical", *, refocus_points: int = 61
         thickness=lens.thickness,
         materials=lens.materials,
         stop=lens.stop,
-        # float64, not a Python float: a weak-typed EPD made the analyses of the finished
-        # lens compile programs of their own beside those of the design's evaluation.
-        epd=jnp.asarray(SPEC["epd_mm"], jnp.float64),
+        epd=SPEC["epd_mm"],
         fields=jnp.asarray([0.0, 12.0, 24.0, 0.5 * SPEC["fov_deg"]]),
         wavelengths=jnp.asarray(sorted(WAVELENGTHS_RGB)),
         primary=1,
