@@ -456,16 +456,16 @@ def write_design_outputs(lens, ev, spec, out, *, history=None, plots=True, rende
     return files
 
 
-def _on_axis_rms_um(lens, spec) -> float:
-    """Polychromatic RMS spot radius on axis (µm), the evaluation's definition (the 16 × 16
-    grid has no on-axis field)."""
+def _on_axis_rms_um(lens, spec, n_fields: int = 1) -> float:
+    """On-axis polychromatic RMS spot radius (µm) as ``evaluate`` defines it, from n_fields
+    copies of the field and a float64 EPD: the evaluation's compiled ``rms_spot`` serves."""
     import equinox as eqx
     import jax.numpy as jnp
 
     from jaxlens.analysis import spots
 
-    lens = eqx.tree_at(lambda x: x.epd, lens.astype(jnp.float64), jnp.asarray(spec.epd))
-    r = spots.rms_spot(lens, jnp.zeros((1, 2)), jnp.asarray(spec.wavelengths))
+    lens = eqx.tree_at(lambda x: x.epd, lens.astype(jnp.float64), jnp.float64(spec.epd))
+    r = spots.rms_spot(lens, jnp.zeros((n_fields, 2)), jnp.asarray(spec.wavelengths))
     return float(r.polychromatic[0]) * 1e3
 
 
@@ -537,7 +537,7 @@ def _design_into(args, argv, spec, config, seeds, folder, out, t_start) -> dict:
             "trials", "rms_p50_um", "rms_p90_um", "yield", "threshold_um", "mtf_p50",
             "mtf_frequency_cycles_per_mm")}, "worst_parameter": rep["sensitivity"][0]["parameter"],
             "nominal_refocus_mm": rep["compensator"]["nominal_refocus_mm"]}
-    on_axis_um = _on_axis_rms_um(lens, spec)
+    on_axis_um = _on_axis_rms_um(lens, spec, evals[best].rms_um.size)
     loss_first = [float(np.nanmean(h[0])) for h in result.history.loss if len(h)]
     rms_hist = [h for h in result.history.spot_rms if len(h)]
     ev = evals[best]

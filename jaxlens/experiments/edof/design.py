@@ -121,11 +121,23 @@ def design_config(scale: float = 1.0, *, smoke: bool = False):
     return DesignConfig(reference="centroid").scaled(scale)
 
 
+# Field lists of ``_mean_rms`` are padded to a multiple of this (the radial profile's 9
+# angles), so the refocus (7 fields), the seeds' 20 cm scores and the record's radial profile
+# and focus check share one compiled ``rms_spot`` instead of one program per length.
+FIELD_BLOCK = 9
+
+
 def _mean_rms(lens: Lens, depth_mm: float, fields) -> float:
+    """RMS over ``fields`` (deg, [F] or [F, 2]) of the RGB polychromatic RMS spot radius (mm) at
+    ``depth_mm``. Fields are independent in ``rms_spot``, so the padding (copies of the last
+    field) changes no value of the first F."""
     from ...analysis.spots import rms_spot
 
-    r = rms_spot(lens, jnp.asarray(fields), jnp.asarray(WAVELENGTHS_RGB), depth=depth_mm)
-    return float(jnp.sqrt(jnp.mean(r.polychromatic**2)))
+    f = np.atleast_1d(np.asarray(fields, np.float64))  # [F] (θy) or [F, 2] (θx, θy)
+    pad = -len(f) % FIELD_BLOCK
+    padded = np.concatenate([f, np.repeat(f[-1:], pad, axis=0)]) if len(f) else f
+    r = rms_spot(lens, jnp.asarray(padded), jnp.asarray(WAVELENGTHS_RGB), depth=depth_mm)
+    return float(jnp.sqrt(jnp.mean(r.polychromatic[: len(f)] ** 2)))
 
 
 def with_back_gap(lens: Lens, dt: float) -> Lens:
