@@ -131,6 +131,8 @@ def mirrors():
     fold = lensfile.lens_from_dict(FOLD)
     # Lens indices count from the first surface after the object: 0 stop, 1 break, 2 mirror, 3 break.
     probe("obscuration on a coordinate break (surface 1)", lambda: dataclasses.replace(fold, obscurations=((1, 0.0, 1.0),)), "obscuration", "coordinate break")
+    probe("spot of the fold with an obscuration r_max 1e9 on a coordinate break", lambda: int(jl.analysis.spot_rays(dataclasses.replace(fold, obscurations=((1, 0.0, 1e9),)), 0.0).valid.sum()), "obscuration", "coordinate break")
+    probe("JSON obscuration on a coordinate break", lambda: load(fold_dict(surfaces__2__obscuration=[0.0, 1e9])), "obscuration", "coordinate break")
     probe("obscuration r_min > r_max on the mirror", lambda: dataclasses.replace(fold, obscurations=((2, 2.0, 1.0),)), "r_min")
     probe("obscuration r nan on the mirror", lambda: dataclasses.replace(fold, obscurations=((2, 0.0, np.nan),)), "obscuration")
     probe("spot of the fold with an obscuration r_max 1e9 on the mirror (blocks all)", lambda: int(jl.analysis.spot_rays(dataclasses.replace(fold, obscurations=((2, 0.0, 1e9),)), 0.0).valid.sum()), good=True)
