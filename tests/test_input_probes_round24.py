@@ -5,7 +5,6 @@ argument. All checks run where concrete inputs enter, before any tracing.
 
 import copy
 import importlib.util
-import json
 import pathlib
 import sys
 
@@ -125,9 +124,3 @@ def test_make_agf_names_a_missing_folder_before_reading(tmp_path, capsys):
         assert e.value.code == 2
         assert f"{arg}: no such folder" in capsys.readouterr().err
 
-
-def test_the_probe_fold_file_round_trips(tmp_path):
-    # Control: the fold of these tests loads through jl.load with its senses.
-    p = tmp_path / "fold.json"
-    p.write_text(json.dumps(FOLD))
-    assert jl.load(str(p)).travel_senses == tuple(QUADOA)

@@ -239,6 +239,9 @@ def footprints(
     checks.number(grid, "grid", "footprints", lo=2, hi=checks.MAX_MAP_GRID, integer=True,
                   unit="points per side")
     checks.wavelengths(lens, wavelengths, "footprints", "wavelengths")
+    if np.size(wavelengths) == 0:  # "zero-size array to reduction operation max" otherwise
+        raise ValueError("footprints: wavelengths is empty; give at least one wavelength (µm), "
+                         "one per channel")
     g = int(grid) + 1 - int(grid) % 2
     pts = sensor_grid(sensor.resolution, jnp.asarray(sensor.pixel_size), (g, g)).astype(dtype)
     wls = jnp.atleast_1d(jnp.asarray(wavelengths, dtype))

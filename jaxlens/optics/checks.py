@@ -497,8 +497,6 @@ def wavelengths(lens, wl, where: str, arg: str = "wavelength"):
     ``eqx.error_if`` that fires when the computation runs.
     """
     real_values(wl, arg, where, "µm")
-    if not is_traced(wl) and np.size(wl) == 0:  # "zero-size array to reduction" otherwise
-        raise ValueError(f"{where}: {arg} is empty; give at least one wavelength (µm)")
     lo, hi, why = wavelength_range(lens)
     if is_traced(wl):
         w = jnp.asarray(wl)
