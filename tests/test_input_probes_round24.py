@@ -106,11 +106,13 @@ def test_tolerance_batch_and_threshold_are_refused_before_the_trials():
     with pytest.raises(ValueError, match=r"ToleranceModel: batch × fields × wavelengths × "
                                          r"pupil points = .* rays.*lower batch"):
         T.ToleranceModel(lens, batch=10**9)
-    # main: the trials ran and every one failed the 10 nm requirement: yield 0. (The check
-    # comes first, so no model needs building to reach it.)
-    with pytest.raises(ValueError, match=r"threshold_um 0.01 µm is below 0.1 µm.*0.01 mm is "
-                                         r"10 µm"):
-        T.monte_carlo(None, trials=2, threshold_um=0.01, mtf_frequency=30.0)
+    # main: the trials ran and every one failed the 6 nm requirement: yield 0. (The check
+    # comes first, so no model needs building to reach it; the bound is the CLIs'.)
+    from jaxlens.experiments.tolerance import THRESHOLD_RANGE_UM
+    assert T.MIN_THRESHOLD_UM == THRESHOLD_RANGE_UM[0]
+    with pytest.raises(ValueError, match=r"threshold_um 0.006 µm is below 0.01 µm.*0.006 mm "
+                                         r"is 6 µm"):
+        T.monte_carlo(None, trials=2, threshold_um=0.006, mtf_frequency=30.0)
 
 
 def test_make_agf_names_a_missing_folder_before_reading(tmp_path, capsys):
