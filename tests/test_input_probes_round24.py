@@ -126,3 +126,19 @@ def test_make_agf_names_a_missing_folder_before_reading(tmp_path, capsys):
         assert e.value.code == 2
         assert f"{arg}: no such folder" in capsys.readouterr().err
 
+
+
+def test_export_reevaluation_names_a_missing_path_before_evaluating(tmp_path, capsys):
+    tool = _tool("export_reevaluation")
+    lens = str(pathlib.Path(jl.__file__).parent / "data" / "lenses" / "cooke_triplet.json")
+    # main: a missing path was one line of the report (exit 0); a missing --json folder or
+    # --summary file a traceback after every file had been evaluated.
+    for argv, words in (([str(tmp_path / "none.zmx")], "paths: no such file or folder"),
+                        ([lens, "--json", str(tmp_path / "no" / "out.json")],
+                         "--json: no such folder"),
+                        ([lens, "--summary", str(tmp_path / "none.json")],
+                         "--summary: no such file")):
+        with pytest.raises(SystemExit) as e:
+            tool.main(argv)
+        assert e.value.code == 2
+        assert words in capsys.readouterr().err

@@ -304,6 +304,11 @@ def tools():
                 sys.argv = old
         f.cli = True
         return f
+    import export_reevaluation as ER
+    lens_json = os.path.join(here, "..", "jaxlens", "data", "lenses", "cooke_triplet.json")
+    probe("tools/export_reevaluation.py a missing path", cli([os.path.join(TMP, "none.zmx")], ER), "paths", "no such file")
+    probe("tools/export_reevaluation.py --json into a missing folder", cli([lens_json, "--json", os.path.join(TMP, "no", "out.json")], ER), "--json", "no such folder")
+    probe("tools/export_reevaluation.py --summary a missing file", cli([lens_json, "--summary", os.path.join(TMP, "none.json")], ER), "--summary", "no such file")
     probe("tools/make_agf.py no args", cli([], make_agf), "required", "database")
     probe("tools/make_agf.py a missing database folder", cli([os.path.join(TMP, "no", "such")], make_agf), "database", "no such folder")
     probe("tools/make_agf.py --out a missing folder", cli([TMP, "--out", os.path.join(TMP, "no", "out")], make_agf), "--out", "no such folder")
