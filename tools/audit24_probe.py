@@ -6,21 +6,23 @@ happened) for what rounds 15-23 did not reach: ``Lens(travel_senses=...)`` and
 obscurations and apertures, JSON lens files with folds and wrong types per key, the imaging
 strategies (``RayRender``/``PSFRender``, ``psf_map``, ``footprints``), afocal analyses and
 the tolerancing entry points (``Tolerances``, ``ToleranceModel``, ``monte_carlo``,
-``sensitivity``).
+``sensitivity``) and the tools a user runs (``make_agf.py``, ``export_reevaluation.py``).
 
-Before (main at 97c30a3) and after (this branch), 144 probes, ``PYTHONPATH=<tree> python
+Before (main at 97c30a3) and after (this branch), 147 probes, ``PYTHONPATH=<tree> python
 tools/audit24_probe.py`` under ``ulimit -v 16000000``, one 2-core machine shared (50 s; no
 probe starts long work on main):
-    before: clear error 103, crash 2, ok 21, silent wrong 13, vague error 5
-    after:  clear error 113, crash 1, ok 21, silent wrong 8, vague error 1
+    before: clear error 103, crash 4, ok 21, silent wrong 14, vague error 5
+    after:  clear error 116, crash 1, ok 21, silent wrong 8, vague error 1
 Fixed: a JSON file's ``travel_senses`` key that disagrees with the frames (it was not read, so
 a stale one loaded silently), a JSON ``obscuration`` on a coordinate break (the tracer ignored
 it: every ray of a 1e9 mm obscuration got through), ``render``'s ``RayRender(footprints=...)``
 of another type (AttributeError) and ``footprint_grid`` past 257 (refused by ``footprints`` as
 "grid"), ``footprints(wavelengths=())`` (numpy's zero-size message), ``ToleranceModel``'s
 ``batch`` (10**9 was kept; each chunk was padded to it), ``monte_carlo``'s ``threshold_um``
-given in mm (below the CLIs' 0.01 µm floor: every trial failed), and ``tools/make_agf.py``'s
-missing database or ``--out`` folder (exit 1 / a traceback after reading the first maker).
+given in mm (below the CLIs' 0.01 µm floor: every trial failed), ``tools/make_agf.py``'s
+missing database or ``--out`` folder (exit 1 / a traceback after reading the first maker),
+and ``tools/export_reevaluation.py``'s missing path (a report line, exit 0), ``--summary``
+file or ``--json`` folder (a traceback after every file was evaluated).
 
 Left (files of the lead's today: lens.py, travel.py, coordinates.py): ``Lens`` keeps an
 obscuration on a coordinate break (it refuses an aperture there), the public helpers of
