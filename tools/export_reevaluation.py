@@ -573,6 +573,15 @@ def main(argv=None) -> int:
                         "that both reload as the same lens and that optiland gives the saved "
                         ".zmx the original's numbers")
     a = p.parse_args(argv)
+    # Checked before the files are evaluated (minutes): a missing --json folder or --summary
+    # failed with a traceback after all of them, a missing path was one line of the report.
+    for q in a.paths:
+        if not os.path.exists(q):
+            p.error(f"paths: no such file or folder {q!r}")
+    if a.summary is not None and not os.path.isfile(a.summary):
+        p.error(f"--summary: no such file {a.summary!r} (a classical run's summary.json)")
+    if a.json is not None and not os.path.isdir(os.path.dirname(os.path.abspath(a.json))):
+        p.error(f"--json: no such folder for {a.json!r}")
     files = []
     for q in a.paths:
         if os.path.isdir(q):

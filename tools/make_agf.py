@@ -306,6 +306,10 @@ def main(argv: list[str] | None = None) -> int:
     parser.add_argument("database", help="local copy of the refractiveindex.info database")
     parser.add_argument("--out", default=os.path.join("jaxlens", "data", "glass"))
     args = parser.parse_args(argv)
+    # Checked before reading: a missing --out failed with a traceback after the first maker.
+    for arg, folder in (("database", args.database), ("--out", args.out)):
+        if not os.path.isdir(folder):
+            parser.error(f"{arg}: no such folder {folder!r}")
     for maker, (catalog, whole) in MAKERS.items():
         glasses, skipped = read_maker(maker_folder(args.database, maker))
         path = os.path.join(args.out, f"{catalog}.agf")

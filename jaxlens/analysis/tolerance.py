@@ -99,6 +99,11 @@ from .tolerance_spec import (  # noqa: F401  (re-exported: the tolerances' publi
     Tolerances,
 )
 
+MIN_THRESHOLD_UM = 0.01
+"""The smallest RMS threshold (µm) ``monte_carlo`` takes, the lower end of the tolerance
+CLIs' ``THRESHOLD_RANGE_UM``: a requirement below it is far inside any diffraction spot (an
+Airy radius is 1.22·λ·F/#, 0.4 µm at λ 0.4 µm, F/0.8) and is most likely one given in mm."""
+
 
 class PerturbedMaterial(AbstractMaterial):
     """A material with its nd shifted and its Abbe number scaled (see module docstring)."""
@@ -375,6 +380,11 @@ class ToleranceModel:
                              f"M >= 1, got shape {np.shape(pupil)}")
         checks.values(self.pupil, "pupil", "ToleranceModel", lo=-1, hi=1,
                       unit="(normalised pupil)")
+        # batch=10**9 padded every chunk to a billion lenses (hours, or memory exhausted).
+        checks.working_memory(batch * self.fields.shape[0] * self.wavelengths.size
+                              * self.pupil.shape[0], len(lens.surfaces) + 4,
+                              jnp.dtype(dtype).itemsize, "ToleranceModel",
+                              "batch × fields × wavelengths × pupil points", "lower batch")
         self.batch = batch
         if apertures not in ("open", "lens"):
             raise ValueError(f"ToleranceModel: apertures must be 'open' or 'lens', got "
@@ -693,6 +703,11 @@ def monte_carlo(model: ToleranceModel, *, trials: int = 200, key=None,
         ``mtf_p50``/``mtf_p10`` after refocusing, ``yield``, ``threshold_um``).
     """
     threshold_um = _positive(threshold_um, "threshold_um", "µm")
+    if threshold_um < MIN_THRESHOLD_UM:  # 0.006 (mm) meant 6 µm: every trial would fail
+        raise ValueError(f"monte_carlo: threshold_um {threshold_um:g} µm is below "
+                         f"{MIN_THRESHOLD_UM:g} µm, far inside any diffraction spot; it is in "
+                         f"µm (was it given in mm? {threshold_um:g} mm is "
+                         f"{threshold_um * 1e3:g} µm)")
     # Checked before the trials: yield_fraction refused a bad min_valid after all of them.
     checks.number(min_valid, "min_valid", "monte_carlo", lo=0, hi=1,
                   unit="(fraction of a field's rays)")

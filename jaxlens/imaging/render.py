@@ -239,6 +239,9 @@ def footprints(
     checks.number(grid, "grid", "footprints", lo=2, hi=checks.MAX_MAP_GRID, integer=True,
                   unit="points per side")
     checks.wavelengths(lens, wavelengths, "footprints", "wavelengths")
+    if np.size(wavelengths) == 0:  # "zero-size array to reduction operation max" otherwise
+        raise ValueError("footprints: wavelengths is empty; give at least one wavelength (µm), "
+                         "one per channel")
     g = int(grid) + 1 - int(grid) % 2
     pts = sensor_grid(sensor.resolution, jnp.asarray(sensor.pixel_size), (g, g)).astype(dtype)
     wls = jnp.atleast_1d(jnp.asarray(wavelengths, dtype))
@@ -581,7 +584,11 @@ def render(
                              f"in [1, {checks.MAX_KERNEL_SIZE}] pixels, got {kernel_size!r}")
     else:
         checks.number(method.footprint_grid, "footprint_grid", "render", lo=2,
-                      unit="points per side", integer=True)
+                      hi=checks.MAX_MAP_GRID, unit="points per side", integer=True)
+        if method.footprints is not None and not isinstance(method.footprints, Footprints):
+            raise TypeError(f"render: RayRender's footprints must be None or the result of "
+                            f"jaxlens.imaging.render.footprints(...), got "
+                            f"{type(method.footprints).__name__} {method.footprints!r}")
     checks.number(newton_iters, "newton_iters", "render", lo=0, integer=True)
     checks.newton_iters(newton_iters, "render")
     sensor = lens.sensor if sensor is None else sensor

@@ -597,6 +597,12 @@ def lens_from_dict(d: dict, *, source: str = "<lens>") -> Lens:
         senses = travel.turned_senses(surfaces, mirrors)
     except ValueError as e:
         raise ValueError(f"{source}: {e}") from None
+    given = d.get("travel_senses")  # not read (the frames give it), so a stale one is refused
+    need = list(senses or travel.mirror_count_senses(len(surfaces), mirrors))
+    if "travel_senses" in d and given != need:
+        raise ValueError(f"{source}: travel_senses {given!r} disagrees with the frames: these "
+                         f"mirrors and coordinate breaks give {need} (the light's direction "
+                         f"along each medium's local z, object space first); leave it out")
     lens = Lens(
         surfaces=tuple(surfaces),
         thickness=_arr(np.array(thick)),

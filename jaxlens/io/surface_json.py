@@ -177,6 +177,10 @@ def surface_data_from_json(d: dict, where: str) -> tuple[bool, tuple | None, tup
             raise ValueError(f"{where}: obscuration must be [r_min, r_max] (mm), got "
                              f"{d['obscuration']!r}")
         obsc = (float(o[0]), float(o[1]))
+        if str(d.get("type", "")).lower() == "coordinate_break":  # the tracer ignored it
+            raise ValueError(f"{where}: a coordinate break has no aperture, so its "
+                             f"obscuration {d['obscuration']!r} would block nothing; put it on "
+                             f"the surface it blocks")
     raw = d.get("apertures", [])
     if not isinstance(raw, list):
         raise ValueError(f"{where}: apertures must be a list of aperture objects, got {raw!r}")
