@@ -83,3 +83,25 @@ def test_the_tracer_gaps_follow_the_senses(quadoa):
     hits = [np.asarray(jl.trace(x, jl.sampling.field_rays(x, np.array([0.0, 1.0]), grid,
                                                           0.55)).origin) for x in (quadoa, flat)]
     np.testing.assert_allclose(np.abs(hits[0][:, :2]), np.abs(hits[1][:, :2]), atol=1e-9)
+
+
+def test_an_obscuration_on_a_coordinate_break_is_refused(quadoa):
+    # The tracer gives a break no aperture: a 1e9 mm obscuration there let every ray through.
+    with pytest.raises(ValueError, match="surface 1 is a coordinate break; it has no aperture"):
+        dataclasses.replace(quadoa, obscurations=((1, 0.0, 1e9),))
+    text = _fold(quadoa=False).replace("SURF 2\n  TYPE COORDBRK\n",
+                                       "SURF 2\n  TYPE COORDBRK\n  OBSC 0 3\n")
+    assert "OBSC" in text
+    with pytest.raises(ValueError, match=r"<zmx>:\d+: a coordinate break has no aperture"):
+        zmx.loads(text)
+
+
+def test_the_travel_helpers_refuse_what_is_not_a_lens_or_its_mirrors():
+    with pytest.raises(ValueError, match="number of surfaces must be a whole number >= 1"):
+        travel.mirror_count_senses(-1, ())
+    with pytest.raises(ValueError, match=r"mirrors must be surface indices in \[0, 2\]"):
+        travel.mirror_count_senses(3, (7,))
+    with pytest.raises(TypeError, match="surfaces must be a sequence"):
+        travel.frame_senses(None, ())
+    with pytest.raises(TypeError, match="expected a Lens, got dict"):
+        travel.axial_thicknesses({})

@@ -594,11 +594,13 @@ def lens_from_dict(d: dict, *, source: str = "<lens>") -> Lens:
     if not isinstance(back, bool):  # "false" or 0 would be read as a flag silently
         raise ValueError(f"{source}: negative_propagation must be true or false, got {back!r}")
     try:  # the light's direction along frames that coordinate breaks turn (optics.travel)
-        senses = travel.turned_senses(surfaces, mirrors)
+        # (an image-surface mirror is refused by Lens, with its own message)
+        senses = travel.turned_senses(surfaces, [m for m in mirrors if m < len(surfaces)])
     except ValueError as e:
         raise ValueError(f"{source}: {e}") from None
     given = d.get("travel_senses")  # not read (the frames give it), so a stale one is refused
-    need = list(senses or travel.mirror_count_senses(len(surfaces), mirrors))
+    need = list(senses or travel.mirror_count_senses(
+        len(surfaces), [m for m in mirrors if m < len(surfaces)]))
     if "travel_senses" in d and given != need:
         raise ValueError(f"{source}: travel_senses {given!r} disagrees with the frames: these "
                          f"mirrors and coordinate breaks give {need} (the light's direction "

@@ -412,6 +412,10 @@ def _obscurations(body, u) -> tuple:
         if s.obsc is not None and s.clap_min is not None:
             raise s.clap_min.error("an annular aperture (CLAP) and an obscuration (OBSC) on one "
                                    "surface are not supported (one blocked zone per surface)")
+        if s.type == "COORDBRK" and (s.obsc is not None or s.clap_min is not None):
+            raise (s.obsc or s.clap_min).error(
+                "a coordinate break has no aperture, so this obscuration would block nothing "
+                "(jaxlens traces no aperture on a COORDBRK); put it on the surface it blocks")
         if s.obdc is not None:  # decentered: Lens.apertures (_apertures)
             continue
         if s.obsc is not None:

@@ -318,6 +318,10 @@ class Lens(eqx.Module):
                 raise ValueError(
                     f"Lens: obscuration ({i}, {r_min}, {r_max}) must name one surface in "
                     f"[0, {n - 1}] (0-based) once with 0 ≤ r_min < r_max (mm)")
+            if isinstance(self.surfaces[i], CoordinateBreak):  # the tracer would ignore it
+                raise ValueError(f"Lens: surface {i} is a coordinate break; it has no aperture, "
+                                 f"so its obscuration ({r_min}, {r_max}) mm would block nothing: "
+                                 f"put it on the surface it blocks")
         self._check_apertures()
 
     def _check_apertures(self):

@@ -29,8 +29,21 @@ AXIS_ACROSS_TOL = 1e-9
 """|cos| of the axis ray's angle to a frame's z axis below which it travels across it."""
 
 
+def _check_mirrors(num_surfaces, mirrors, where: str) -> None:
+    if isinstance(num_surfaces, bool) or not isinstance(num_surfaces, (int, np.integer)) \
+            or num_surfaces < 1:
+        raise ValueError(f"{where}: the number of surfaces must be a whole number >= 1, got "
+                         f"{num_surfaces!r}")
+    if isinstance(mirrors, (str, bytes)) or not hasattr(mirrors, "__iter__") or any(
+            isinstance(m, bool) or not isinstance(m, (int, np.integer))
+            or not 0 <= m < num_surfaces for m in mirrors):
+        raise ValueError(f"{where}: mirrors must be surface indices in [0, {num_surfaces - 1}] "
+                         f"(0-based), got {mirrors!r}")
+
+
 def mirror_count_senses(num_surfaces: int, mirrors) -> tuple[int, ...]:
     """Zemax's rule: +1 (toward +z) in object space, −1 after an odd number of mirrors."""
+    _check_mirrors(num_surfaces, mirrors, "mirror_count_senses")
     return tuple(-1 if sum(1 for m in mirrors if m < i) % 2 else 1
                  for i in range(num_surfaces + 1))
 
@@ -42,6 +55,10 @@ def axis_cosines(surfaces, mirrors) -> list[float] | None:
     The axis ray runs down the object's axis and reflects about each mirror's vertex normal
     (its frame's z); each medium's cosine is taken in the frame its thickness is measured in
     (the surface's; a break's after its rotation)."""
+    if isinstance(surfaces, (str, bytes)) or not hasattr(surfaces, "__len__"):
+        raise TypeError(f"axis_cosines: surfaces must be a sequence of surfaces (a Lens's "
+                        f"surfaces), got {type(surfaces).__name__}")
+    _check_mirrors(len(surfaces), mirrors, "axis_cosines")
     rot = np.eye(3)
     d = np.array([0.0, 0.0, 1.0])
     cos = [1.0]
@@ -99,6 +116,8 @@ def axial_thicknesses(lens):
     path: each gap is the axis ray's advance from one vertex to the next (the step
     projected on the ray's direction). Quadoa's mirror gap of −7.07 mm along the mirror's
     axis and the decenter after it make a prism's 10 mm path."""
+    if not hasattr(lens, "travel_senses"):
+        raise TypeError(f"axial_thicknesses: expected a Lens, got {type(lens).__name__}")
     senses = lens.travel_senses
     if senses is None:
         return lens.thickness
