@@ -2,16 +2,43 @@
 
 import os
 
-# Four host devices (the sharded paths run on CPU), and LLVM optimisation level 0: the suite is
-# compile-bound, and level 0 compiles about 40 % faster (the classical and benchmark smoke
-# files: 428 s against 693 s, one worker, same load). XLA's graph passes are unchanged; the
-# optimised build rounds differently (fused multiply-adds: ≤ 4e-14 mm on the zoo lenses' image
-# points), and test_optimised_build checks the reference cases with it. XLA_FLAGS already set win.
+# Four host devices (the sharded paths run on CPU), and XLA:CPU options that compile faster: the
+# suite is compile-bound. LLVM optimisation level 0 (the classical and benchmark smoke files:
+# 428 s against 693 s, one worker, same load) and LLVM's expensive passes off
+# (test_toroid_paraxial 71 → 52 s of CPU, one process, same sitting). XLA's graph passes are
+# unchanged; the optimised build rounds differently (fused multiply-adds: ≤ 4e-14 mm on the zoo
+# lenses' image points), and test_optimised_build checks the reference cases without these
+# options. (The legacy loop emitters, --xla_cpu_use_fusion_emitters=false, compiled faster
+# still, 30 s, but gave a NaN where the default build gives a number: not taken.)
+# XLA_FLAGS already set win.
+COMPILE_SPEED_FLAGS = (
+    "--xla_backend_optimization_level=0",
+    "--xla_llvm_disable_expensive_passes=true",
+)
+
+
+def _accepted(flags):
+    """The flags this jaxlib's XLA accepts: an unknown flag aborts XLA at start-up, and XLA
+    renames its options between releases. Probed in a subprocess, once (pytest-xdist's workers
+    inherit the result through the environment)."""
+    import subprocess
+    import sys
+
+    def starts(fl):
+        env = {**os.environ, "XLA_FLAGS": " ".join(fl), "JAX_PLATFORMS": "cpu"}
+        code = "import jax.numpy as jnp; jnp.zeros(1).block_until_ready()"
+        run = subprocess.run([sys.executable, "-c", code], env=env, capture_output=True)
+        return run.returncode == 0
+
+    if not flags or starts(flags):
+        return flags
+    return [f for f in flags if starts([f])]
+
+
 _flags = os.environ.get("XLA_FLAGS", "")
-for _flag in ("--xla_force_host_platform_device_count=4", "--xla_backend_optimization_level=0"):
-    if _flag.split("=")[0] not in _flags:
-        _flags = f"{_flags} {_flag}".strip()
-os.environ["XLA_FLAGS"] = _flags
+_missing = [f for f in ("--xla_force_host_platform_device_count=4", *COMPILE_SPEED_FLAGS)
+            if f.split("=")[0] not in _flags]
+os.environ["XLA_FLAGS"] = " ".join([_flags, *_accepted(_missing)]).strip()
 
 import jax  # noqa: E402
 
@@ -55,24 +82,26 @@ def _release_compiled_programs():
     gc.collect()
 
 
-# The test files that take longest (seconds of one worker on 2 cores, from
-# `pytest --junitxml`), heaviest first. The two workers take whole files from the front of the
-# queue, so starting with these keeps one worker from finishing a long file alone at the end
-# (pytest-xdist otherwise orders files by their number of tests: see --no-loadscope-reorder in
+# The test files that take longest (seconds of CPU in one process, per file, measured
+# 2026-11-30 by helper citime4 under load; test_afocal and the smaller files not measured),
+# heaviest first. The two workers take whole files from the front of the queue, so starting
+# with these keeps one worker from finishing a long file alone at the end (pytest-xdist
+# otherwise orders files by their number of tests: see --no-loadscope-reorder in
 # pyproject.toml). The order changes no result.
 HEAVIEST_FIRST = (
-    "test_classical_smoke.py",  # 247 s
-    "test_edof.py",  # 240
-    "test_benchmarks_smoke.py",  # 216
-    "test_trace.py",  # 178
-    "test_render.py",  # 148
-    "test_tiled.py",  # 141
-    "test_edof_base_lens.py",  # 134
-    "test_surface_adjoint.py",  # 133
-    "test_stress.py",  # 116
-    "test_bad_input.py",  # 109
-    "test_toroid_paraxial.py",  # 93
-    "test_nets.py",  # 91
+    "test_classical_smoke.py",  # 194 s
+    "test_surface_adjoint.py",  # 96
+    "test_trace.py",  # 95
+    "test_benchmarks_smoke.py",  # 94
+    "test_edof_base_lens.py",  # 93
+    "test_edof.py",  # 79
+    "test_stress.py",  # 62
+    "test_tiled.py",  # 58
+    "test_render.py",  # 58
+    "test_aberrations.py",  # 53
+    "test_toroid_paraxial.py",  # 50
+    "test_bad_input.py",  # 47
+    "test_nets.py",  # 28
 )
 
 
