@@ -4,16 +4,15 @@ import os
 
 # Four host devices (the sharded paths run on CPU), and XLA:CPU options that compile faster: the
 # suite is compile-bound. LLVM optimisation level 0 (the classical and benchmark smoke files:
-# 428 s against 693 s, one worker, same load) and LLVM's expensive passes off
-# (test_toroid_paraxial 71 → 52 s of CPU, one process, same sitting). XLA's graph passes are
-# unchanged; the optimised build rounds differently (fused multiply-adds: ≤ 4e-14 mm on the zoo
-# lenses' image points), and test_optimised_build checks the reference cases without these
-# options. (The legacy loop emitters, --xla_cpu_use_fusion_emitters=false, compiled faster
-# still, 30 s, but gave a NaN where the default build gives a number: not taken.)
+# 428 s against 693 s, one worker, same load). XLA's graph passes are unchanged; the optimised
+# build rounds differently (fused multiply-adds: ≤ 4e-14 mm on the zoo lenses' image points),
+# and test_optimised_build checks the reference cases without these options. Measured and not
+# taken (2026-11-30): LLVM's expensive passes off (test_classical_smoke 164 → 189 s of CPU,
+# test_trace 93 → 105 s, one process, same sitting: the slower code costs more than the
+# compile saves) and the legacy loop emitters (a NaN where the default build gives a number).
 # XLA_FLAGS already set win.
 COMPILE_SPEED_FLAGS = (
     "--xla_backend_optimization_level=0",
-    "--xla_llvm_disable_expensive_passes=true",
 )
 
 
