@@ -105,3 +105,21 @@ def test_the_travel_helpers_refuse_what_is_not_a_lens_or_its_mirrors():
         travel.frame_senses(None, ())
     with pytest.raises(TypeError, match="expected a Lens, got dict"):
         travel.axial_thicknesses({})
+
+
+def test_the_axial_path_gradient_matches_finite_differences(quadoa):
+    # The exit pupil's place depends on the stop-to-lens path, which runs through the mirror's
+    # gap along its own axis; the derivative through axial_thicknesses against central
+    # differences, per thickness.
+    def exit_pupil(t):
+        return jl.paraxial_data(eqx.tree_at(lambda x: x.thickness, quadoa, t)).exit_pupil_z
+
+    t0 = quadoa.thickness
+    grad = np.asarray(jax.grad(exit_pupil)(t0))
+    h = 1e-5
+    for i in range(t0.shape[0]):
+        step = np.zeros(t0.shape[0])
+        step[i] = h
+        fd = (float(exit_pupil(t0 + step)) - float(exit_pupil(t0 - step))) / (2 * h)
+        assert grad[i] == pytest.approx(fd, rel=1e-6, abs=1e-8), i
+    assert abs(grad[2]) > 1e-3  # the mirror's gap moves the exit pupil
