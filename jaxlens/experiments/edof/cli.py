@@ -162,6 +162,10 @@ def build_parser() -> argparse.ArgumentParser:
     d = p.add_argument_group("data")
     d.add_argument("--train-dir", default=None,
                    help="folder of training images (default: skimage.data; see edof.scenes)")
+    d.add_argument("--train-source", choices=("images", "dead-leaves", "mixed"), default=None,
+                   help="training scenes: the photographs (images), procedural dead-leaves "
+                   "images in their place, or both, half the windows from each (images; see "
+                   "edof.dead_leaves)")
     d.add_argument("--test-dir", default=None, help="folder of held-out test images")
     d.add_argument("--validation", action="store_true",
                    help="score the validation images instead of the test images")
@@ -197,6 +201,7 @@ def config_from_args(a):
         "dec_blocks": a.dec, "n_odd": a.n_odd, "cubic_floor": a.cubic_floor,
         "hybrid_floor": a.hybrid_floor, "live_front_end": a.live_front_end,
         "lens_accept": a.lens_accept, "real_halo": a.real_halo, "context": a.context,
+        "train_source": a.train_source,
     }
     cfg = dataclasses.replace(cfg, **{k: v for k, v in over.items() if v is not None})
     n, w = input_checks.number, "edof"
@@ -358,8 +363,10 @@ def run(argv=None, *, compile_cache: bool = False) -> dict:
 def _scenes(a, cfg):
     from jaxlens.experiments.edof import scenes as S
 
-    train_imgs = S.load_images(None if a.train_dir else S.TRAIN_IMAGES, folder=a.train_dir,
-                               max_side=None)
+    photos = S.load_images(None if a.train_dir else S.TRAIN_IMAGES, folder=a.train_dir,
+                           max_side=None)
+    small = {"count": 2, "side": 64} if a.smoke else {}
+    train_imgs, weights = S.training_images(cfg.train_source, photos, **small)
     if a.test_dir:
         paths = S.folder_images(a.test_dir)
         names = [p.stem for p in paths]
@@ -374,7 +381,7 @@ def _scenes(a, cfg):
     most = a.max_crops or (8 if a.smoke else None)
     if most:
         windows, info = windows[:most], info[:most]
-    return train_imgs, windows, info, names, source
+    return (train_imgs, weights), windows, info, names, source
 
 
 def _run_into(a, argv, cfg, names, folder, out, compile_cache=False) -> dict:
@@ -414,9 +421,10 @@ def _run_into(a, argv, cfg, names, folder, out, compile_cache=False) -> dict:
     n_tiles = tile_counts(base.sensor.resolution, cfg.tile)
 
     t0 = time.perf_counter()
-    train_imgs, windows, crop_info, test_names, source = _scenes(a, cfg)
+    (train_imgs, weights), windows, crop_info, test_names, source = _scenes(a, cfg)
     # Base-size windows: --real-halo and --context leave the Wiener NSR as it is.
-    base_windows = S.PatchSampler(train_imgs, cfg.tile + cfg.kernel_size - 1, seed=12345)
+    base_windows = S.PatchSampler(train_imgs, cfg.tile + cfg.kernel_size - 1, seed=12345,
+                                  weights=weights)
     nsr = E.wiener_nsr(base_windows.sample(64), photons=cfg.photons, read=cfg.read_noise)
     timings["scenes_s"] = time.perf_counter() - t0
 
@@ -438,7 +446,7 @@ def _run_into(a, argv, cfg, names, folder, out, compile_cache=False) -> dict:
             dec = make_decoder(cfg.decoder, nsr=nsr, key=k_net, width=cfg.width,
                                enc_blocks=cfg.enc_blocks, middle_blocks=cfg.middle_blocks,
                                dec_blocks=cfg.dec_blocks, dtype=dtype)
-            sampler = S.PatchSampler(train_imgs, cfg.window, seed=seed + 17)
+            sampler = S.PatchSampler(train_imgs, cfg.window, seed=seed + 17, weights=weights)
             src = T.BatchSource(sampler, n_tiles, cfg, seed=seed + 29)
             trainer = T.Trainer(name, pmap, params, dec, src, cfg,
                                 jax.random.fold_in(k_train, i), floor=floor, folder=ck,
@@ -508,7 +516,9 @@ def _run_into(a, argv, cfg, names, folder, out, compile_cache=False) -> dict:
     summary = {
         "command": command,
         "config": dataclasses.asdict(cfg),
-        "train_images": list(S.TRAIN_IMAGES) if a.train_dir is None else a.train_dir,
+        "train_images": (None if cfg.train_source == "dead-leaves" else
+                         list(S.TRAIN_IMAGES) if a.train_dir is None else a.train_dir),
+        "train_source": cfg.train_source,
         "sensor": {"resolution": list(base.sensor.resolution), "pixel_size_mm": pix,
                    "tiles": list(n_tiles)},
         "cubic_start_strength_per_mm2": cubic0,

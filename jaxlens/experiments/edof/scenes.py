@@ -12,6 +12,9 @@ package. The three sets share no image.
 
 Pixel values are 8-bit sRGB and are decoded to linear light (``jaxlens.io.images.to_linear``)
 before any simulation; grey images are repeated on the three channels.
+
+``training_images`` can add, or put in their place, procedural dead-leaves images
+(``dead_leaves``; ``TRAIN_SOURCES``).
 """
 
 from __future__ import annotations
@@ -34,6 +37,11 @@ TRAIN_IMAGES = (
 VAL_IMAGES = ("cell", "hubble_deep_field")
 TEST_IMAGES = ("retina", "camera", "moon", "brick", "gravel", "coffee", "rocket",
                "motorcycle_right", "chelsea", "coins")
+TRAIN_SOURCES = ("images", "dead-leaves", "mixed")
+"""Training sets: the photographs (``TRAIN_IMAGES`` or a folder), ``DEAD_LEAVES_COUNT``
+dead-leaves images in their place, or both with half the training windows from each."""
+DEAD_LEAVES_COUNT, DEAD_LEAVES_SIDE = 16, 512
+"""The dead-leaves training set: images and their side (pixels)."""
 _EXTS = (".png", ".jpg", ".jpeg", ".tif", ".tiff", ".bmp")
 MIN_MEAN, MIN_STD = 0.02, 0.01
 """A test crop is kept when its linear mean and standard deviation reach these (a rule fixed
@@ -102,6 +110,31 @@ def load_images(
     return [_downscale(skimage_image(n), max_side) for n in names]
 
 
+def training_images(source: str, photos: list[np.ndarray], *, count: int = DEAD_LEAVES_COUNT,
+                    side: int = DEAD_LEAVES_SIDE, seed: int = 0):
+    """The training images of ``source`` (one of ``TRAIN_SOURCES``) and the share of
+    training windows each gets (``PatchSampler``'s ``weights``; None: by area).
+
+    Args:
+        source: "images" (``photos``), "dead-leaves" (``count`` dead-leaves images of
+            ``side²`` pixels from ``seed``) or "mixed" (both, half the windows from each).
+        photos: the photographs (``load_images``).
+    """
+    from .dead_leaves import dead_leaves_images
+
+    if source not in TRAIN_SOURCES:
+        raise ValueError(f"scenes: training source must be one of {TRAIN_SOURCES}, got "
+                         f"{source!r}")
+    if source == "images":
+        return list(photos), None
+    leaves = dead_leaves_images(count, side, seed)
+    if source == "dead-leaves":
+        return leaves, None
+    area = np.array([a.shape[0] * a.shape[1] for a in photos], np.float64)
+    weights = np.concatenate([0.5 * area / area.sum(), np.full(len(leaves), 0.5 / len(leaves))])
+    return list(photos) + leaves, weights
+
+
 def test_crops(images, names, *, size: int, margin: int):
     """Disjoint ``size × size`` crops at native resolution, each with a margin of scene around it.
 
@@ -138,9 +171,11 @@ class PatchSampler:
             after padding; smaller ones are reflect-padded).
         window: window side (patch + kernel − 1).
         seed: NumPy seed.
+        weights: the share of windows drawn from each image (summing to 1); None: in
+            proportion to the images' areas.
     """
 
-    def __init__(self, images, window: int, seed: int = 0):
+    def __init__(self, images, window: int, seed: int = 0, weights=None):
         self.window = window
         self.images = []
         for a in images:
@@ -148,8 +183,14 @@ class PatchSampler:
             if ph or pw:
                 a = np.pad(a, ((0, ph), (0, pw), (0, 0)), mode="reflect")
             self.images.append(a)
-        area = np.array([a.shape[0] * a.shape[1] for a in self.images], np.float64)
-        self.p = area / area.sum()
+        if weights is None:
+            area = np.array([a.shape[0] * a.shape[1] for a in self.images], np.float64)
+            weights = area / area.sum()
+        self.p = np.asarray(weights, np.float64)
+        if self.p.shape != (len(self.images),) or not (
+                np.all(self.p >= 0) and abs(self.p.sum() - 1.0) < 1e-9):
+            raise ValueError(f"PatchSampler: weights must be {len(self.images)} shares >= 0 "
+                             f"summing to 1, got {weights!r}")
         self.rng = np.random.default_rng(seed)
 
     def sample(self, n: int) -> np.ndarray:

@@ -136,6 +136,8 @@ class Config:
         context: pixels of simulated scene that the decoder also sees on each side of a
             training patch (the loss reads the patch only), as the network sees the rest of
             a test image beyond a tile.
+        train_source: the training scenes, one of ``scenes.TRAIN_SOURCES``: "images" (the
+            photographs), "dead-leaves" (procedural, ``dead_leaves``) or "mixed".
         crop: side of the test crops (pixels, native resolution).
         seed: random seed.
         log_every: host sync / progress-bar refresh interval (steps).
@@ -172,6 +174,7 @@ class Config:
     lens_accept: bool = False
     real_halo: bool = False
     context: int = 0
+    train_source: str = "images"
     crop: int = 256
     seed: int = 0
     log_every: int = 10
@@ -556,8 +559,8 @@ class Trainer:
         cfg = self.cfg
         dt = self.pmap.template.epd.dtype
         rng = np.random.default_rng(seed)
-        windows = PatchSampler(self.source.sampler.images, cfg.window, seed=seed).sample(
-            cfg.batch)
+        windows = PatchSampler(self.source.sampler.images, cfg.window, seed=seed,
+                               weights=self.source.sampler.p).sample(cfg.batch)
         tiles = np.stack([rng.integers(0, n, cfg.batch) for n in self.xy.shape[:2]], -1)
         return (jnp.asarray(windows, dt), tiles,
                 jnp.asarray(self.xy[tiles[:, 0], tiles[:, 1]], dt))
