@@ -24,6 +24,10 @@ Frames in the tracer:
 
 from __future__ import annotations
 
+import fractions
+import math
+import warnings
+
 import equinox as eqx
 import jax.numpy as jnp
 import numpy as np
@@ -71,6 +75,14 @@ class CoordinateBreak(AbstractSurface):
             if not checks.is_traced(v):
                 unit = "mm" if name.startswith("decenter") else "degrees"
                 checks.number(v, name, "CoordinateBreak", unit=unit)
+                if unit == "degrees":
+                    _warn_if_radians(name, float(np.asarray(v)))
+        sd = self.semi_diameter
+        if not checks.is_traced(sd) and np.any(np.isfinite(np.asarray(sd))):
+            raise ValueError(f"CoordinateBreak: a coordinate break clips no ray, so a "
+                             f"semi_diameter of {np.asarray(sd)!r} mm would pass every ray "
+                             f"unseen; leave it inf and put the aperture on the surface it "
+                             f"belongs to")
 
     def rotation(self, xp=jnp) -> tuple:
         """R as a row-major 3×3 tuple of tuples: the new axes are its columns (``xp=np``:
@@ -78,6 +90,23 @@ class CoordinateBreak(AbstractSurface):
         rx, ry, rz = (_rot(a if xp is jnp else float(a), axis, xp) for a, axis in
                       ((self.tilt_x, 0), (self.tilt_y, 1), (self.tilt_z, 2)))
         return _matmul(_matmul(rx, ry), rz) if self.order == 0 else _matmul(_matmul(rz, ry), rx)
+
+
+RADIAN_LOOKALIKE_TOL = 1e-4
+"""A tilt (degrees) within this of a nonzero multiple of π/4 up to 2π (0.7854, 1.5708, 3.1416,
+…) is warned about as a value given in radians."""
+
+
+def _warn_if_radians(name: str, deg: float) -> None:
+    """Warn when a tilt in degrees is a common angle written in radians (π/4 typed as
+    0.7854 is a 0.79° tilt, not 45°): a fold that silently does not fold."""
+    m = round(deg / (math.pi / 4))
+    if 1 <= abs(m) <= 8 and abs(deg - m * math.pi / 4) < RADIAN_LOOKALIKE_TOL:
+        q = fractions.Fraction(abs(m), 4)
+        angle = ("-" if m < 0 else "") + (f"{q.numerator}" if q.numerator > 1 else "") + "π" + (
+            f"/{q.denominator}" if q.denominator > 1 else "")
+        warnings.warn(f"CoordinateBreak: {name} = {deg:g} degrees is {angle} in radians; "
+                      f"tilts are in degrees ({m * 45} for {angle})", stacklevel=4)
 
 
 def _rot(deg, axis: int, xp=jnp):
