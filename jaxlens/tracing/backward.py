@@ -23,6 +23,7 @@ from __future__ import annotations
 
 import jax.numpy as jnp
 
+from ..optics import checks
 from ..optics.coordinates import CoordinateBreak
 from ..optics.diffractive import Binary2, Grating
 from ..optics.freeform import Biconic, ZernikeSag
@@ -147,6 +148,9 @@ def reversed_lens(lens: Lens, *, image_distance=None) -> Lens:
         raise ValueError("reversed_lens: lenses with mirrors, obscurations, apertures "
                          "(Lens.apertures) or coordinate breaks cannot be "
                          "traced backward (nor rendered) yet; trace them forward with trace")
+    if image_distance is not None and not checks.is_traced(image_distance):
+        # NaN was refused by the mirrored Lens as its "thickness", an argument not given here.
+        checks.number(image_distance, "image_distance", "reversed_lens", unit="mm")
     n = lens.num_surfaces
     t = lens.thickness
     last = jnp.zeros_like(t[-1]) if image_distance is None else jnp.asarray(image_distance, t.dtype)
