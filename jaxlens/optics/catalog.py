@@ -181,8 +181,9 @@ class GlassRecord:
         # coefficient arrays were tracers, the checks below skipped them and the nd check
         # failed with a ConcretizationTypeError.
         with jax.ensure_compile_time_eval():
+            model = _dispersion_model(self.formula, self.coefficients, self.name, self.source)
             m = CatalogMaterial(
-                model=_dispersion_model(self.formula, self.coefficients, self.name),
+                model=model,
                 name=self.name,
                 catalog=self.catalog,
                 catalog_nd=self.nd,
@@ -242,9 +243,8 @@ class CatalogMaterial(AbstractMaterial):
     wavelength_range: tuple[float, float] | None = eqx.field(static=True, default=None)
 
     def __check_init__(self):
-        # Metadata given by hand: a range in nm (400, 700) refused every wavelength in µm
-        # later, a non-material model failed at the first index, and a catalog nd of 0.5 or
-        # formula -3 were written to .zmx GLAS lines as they were.
+        # By hand: a range in nm (400, 700) refused every µm wavelength later, a non-material
+        # model failed at the first index, catalog nd 0.5 or formula -3 went to GLAS lines.
         where, real = f"CatalogMaterial {self.name!r}", (int, float, np.integer, np.floating)
         num = lambda v: isinstance(v, real) and not isinstance(v, bool) and math.isfinite(v)  # noqa: E731
         if not isinstance(self.model, AbstractMaterial):
@@ -322,9 +322,12 @@ _BUILDERS = {
 }
 
 
-def _dispersion_model(formula: int, coefficients: tuple[float, ...], name: str):
-    """The material for a Zemax formula number and its CD coefficients."""
-    return _BUILDERS[formula](coefficients, name)
+def _dispersion_model(formula: int, coefficients: tuple[float, ...], name: str, source=""):
+    """The material of a formula number and CD coefficients; a refusal names ``source``."""
+    try:
+        return _BUILDERS[formula](coefficients, name)
+    except ValueError as e:
+        raise ValueError(f"{source}: {e}" if source else str(e)) from None
 
 
 # ---------------------------------------------------------------------------- AGF reader

@@ -45,6 +45,13 @@ class AbstractMaterial(eqx.Module):
     Every subclass has a static ``name`` field (declared last, with a default).
     """
 
+    def __check_init__(self):
+        # Every subclass's static name (a number was kept, and written to files as one).
+        name = getattr(self, "name", "")
+        if not isinstance(name, str):
+            raise TypeError(f"{type(self).__name__}: name must be a str, got "
+                            f"{type(name).__name__} {name!r}")
+
     def index(self, wavelength: Float[ArrayLike, "*b"]) -> Float[Array, "*b"]:
         raise NotImplementedError
 
@@ -361,6 +368,11 @@ class Tabulated(AbstractMaterial):
             if not (0 < lo_r < hi_r < math.inf):
                 raise ValueError(f"{where}: wavelength_range must be (shortest, longest) "
                                  f"wavelength in µm with 0 < shortest < longest, got {r!r}")
+            if not checks.is_traced(w) and (lo_r > float(np.max(w)) or hi_r < float(np.min(w))):
+                # (400, 700) in nm for a table in µm: every wavelength of the table "outside".
+                raise ValueError(f"{where}: wavelength_range {r!r} µm holds none of the "
+                                 f"table's wavelengths ({checks.fmt(np.min(w))}–"
+                                 f"{checks.fmt(np.max(w))} µm); give it in µm (0.4, not 400 nm)")
 
     def index(self, wavelength):
         """The interpolated index at wavelengths in µm; a concrete wavelength outside the
@@ -576,6 +588,11 @@ class Laurent(AbstractMaterial):
     name: str = eqx.field(static=True, default="")
 
     def __check_init__(self):
+        if not isinstance(self.powers, tuple) or not all(
+                isinstance(p, (int, np.integer)) and not isinstance(p, bool) for p in self.powers):
+            # A string "ab" passed the count check and failed at the first index.
+            raise ValueError(f"Laurent: powers must be a tuple of whole numbers (the exponents "
+                             f"of λ), got {self.powers!r}")
         if self.coeffs.shape != (len(self.powers),):
             raise ValueError(
                 f"Laurent needs one coefficient per power: {len(self.powers)} powers, "

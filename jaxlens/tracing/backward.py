@@ -206,6 +206,9 @@ def trace_backward(
         still travelling toward −z (into object space). ``valid`` flags rays that passed
         every surface and aperture; ``opl`` is the optical path accumulated along the way.
     """
+    if upto is not None:  # 99 was refused as the mirrored lens's index -94, not given here
+        checks.number(upto, "upto", "trace_backward", lo=0, hi=lens.num_surfaces - 1,
+                      integer=True, unit="(0-based index of an original surface)")
     rev = reversed_lens(lens)
     o, d = to_mirror_frame(lens, rays.origin, rays.direction)
     out = trace(
