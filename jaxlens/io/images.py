@@ -408,7 +408,7 @@ def _data_range(a, b, data_range, where):
                              f"peak-to-peak range of pixel values, 1 for [0, 1] images), got "
                              f"{data_range!r}")
         peak = float(max(np.max(np.abs(a)), np.max(np.abs(b))))
-        if data_range > 2 and peak <= 1:  # 255 for [0, 1] images: 48 dB too good
+        if data_range >= 255 and peak <= 1:  # 255 for [0, 1] images: 48 dB too good
             raise ValueError(f"{where}: data_range {data_range:g} for images whose values lie "
                              f"in [-1, 1] (largest |value| {peak:g}): the range of 0…255 codes "
                              f"given for float images? Use 1 for [0, 1] images")

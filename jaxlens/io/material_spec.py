@@ -220,7 +220,10 @@ def material_from_spec(spec: Any, where: str, *, n_table: Any = None) -> Abstrac
         if nd < 1 or vd <= 0:
             raise ValueError(f"{where}: model glass needs nd >= 1 and vd > 0 (inf: no "
                              f"dispersion), got nd {nd}, vd {vd}")
-        return ModelGlass(_arr(nd), _arr(vd), name=name)
+        try:  # ModelGlass's own refusals (vd 0.6417 for 64.17) without the surface
+            return ModelGlass(_arr(nd), _arr(vd), name=name)
+        except ValueError as e:
+            raise ValueError(f"{where}: {e}") from None
     if "n" in spec:
         wl, n = _table_from_nm(spec["n"], f"{where}: n")
         return _tabulated(wl, n, name, where)
