@@ -1,9 +1,158 @@
 # ruff: noqa: E501, B023, E731
-"""Round-25 bad-input probes (table of ``tools/audit22_probe.py``).
+"""Round-25 bad-input probes: the table of ``tools/audit22_probe.py`` (probe | outcome | what
+happened) for what rounds 15-24 reached least: hand-given dispersion formulas and their units
+(Sellmeier C in nm², Abbe numbers as fractions, ``CatalogMaterial``'s metadata, ``Laurent``'s
+powers, a table's ``wavelength_range`` in nm), JSON material classes, ``.agf`` records whose
+formula describes no material, ``.zmx`` glass names with typos and ``unknown_glass``, image
+I/O (grey+alpha, palette and 1-bit PNGs, EXR channel lists, missing folders, empty images,
+codes given as floats, PSF stacks, PSNR/SSIM on a code range or complex images), backward
+tracing's arguments, ``NAFNet``'s key and ``zernike``'s inputs. The CLIs
+(``experiments.tolerance``, ``benchmarks``, ``tools/check_corpus.py``) were probed too and
+every option tried was already refused clearly (rounds 17-24): those probes are not kept.
 
-RESULTS
+Before (main at 3881bed) and after (branch audit25), the same 126 probes,
+``PYTHONPATH=<tree> python tools/audit25_probe.py`` under ``ulimit -v 16000000``, one 2-core
+machine shared (13 s each; no probe starts long work on main):
+    before: clear error 52, crash 6, ok 25, silent wrong 31, vague error 12
+    after:  clear error 96, ok 28, silent wrong 2
+
+Probe (before -> after):
+    Sellmeier N-BK7 (control)                                                ok           -> ok
+    Sellmeier C in nm² (6000.7, 20017.9, 1.0356e8)                           silent wrong -> clear error
+    Sellmeier B and C swapped                                                silent wrong -> silent wrong
+    Sellmeier 2 B, 3 C                                                       clear error  -> clear error
+    Sellmeier B empty ()                                                     silent wrong -> clear error
+    Sellmeier B complex                                                      clear error  -> clear error
+    Sellmeier B a 2-D array                                                  silent wrong -> clear error
+    Sellmeier B strings                                                      clear error  -> clear error
+    Tabulated unsorted wavelengths                                           ok           -> ok
+    Tabulated one node                                                       ok           -> ok
+    Tabulated indices bool                                                   clear error  -> clear error
+    ModelGlass vd 0.6417 (a fraction of 64.17?)                              silent wrong -> clear error
+    ModelGlass nd 151.68                                                     clear error  -> clear error
+    get_material 'N-BK 7' typo (close matches)                               clear error  -> clear error
+    get_material nd '1.5' string                                             clear error  -> clear error
+    glass_info 'N-BK77'                                                      clear error  -> clear error
+    CatalogMaterial wavelength_range (400, 700) nm                           silent wrong -> clear error
+    CatalogMaterial formula -3                                               silent wrong -> clear error
+    CatalogMaterial catalog_nd 0.5                                           silent wrong -> clear error
+    CatalogMaterial model not a material                                     silent wrong -> clear error
+    JSON class Sellmeier C in nm²                                            clear error  -> clear error
+    JSON class Sellmeier 2 B, 3 C                                            clear error  -> clear error
+    JSON class Sellmeier no C                                                clear error  -> clear error
+    JSON class Sellmeier 'coefficients' (misspelt field)                     silent wrong -> clear error
+    JSON class 'sellmeier' lower case                                        clear error  -> clear error
+    JSON class Laurent powers 'abc'                                          vague error  -> clear error
+    JSON wavelengths_nm in µm (0.486, ...)                                   clear error  -> clear error
+    JSON 'n' table keyed by µm ('0.5876')                                    clear error  -> clear error
+    JSON nd/vd with vd 0.6417                                                silent wrong -> clear error
+    JSON material 'N-BK 7' typo (close matches)                              clear error  -> clear error
+    JSON material {'name': 'N-BK7', 'nd': 1.6, 'vd': 40} (which wins?)       ok           -> ok
+    JSON index_at_wavelengths of 2 entries for 3 wavelengths                 clear error  -> clear error
+    agf good (control)                                                       ok           -> ok
+    agf Sellmeier C in nm² (names the line)                                  vague error  -> clear error
+    agf CD with 4 numbers for Sellmeier (names the line)                     clear error  -> clear error
+    agf formula 99 (names the line)                                          clear error  -> clear error
+    agf NM with no nd/vd (names the line)                                    clear error  -> clear error
+    agf glass given twice (documented: the later record wins)                ok           -> ok
+    agf CD before NM (names the line)                                        clear error  -> clear error
+    agf IT line with 'x' (documented: IT records are skipped)                ok           -> ok
+    agf TD with 'nan' (documented: TD records are skipped)                   ok           -> ok
+    agf LD in nm 300 2500 (names the line)                                   clear error  -> clear error
+    agf binary garbage                                                       clear error  -> clear error
+    agf NM name empty field count                                            clear error  -> clear error
+    register_catalog name '' empty                                           clear error  -> clear error
+    register_catalog name 5                                                  clear error  -> clear error
+    register_catalog mapping of a non-material                               clear error  -> clear error
+    zmx GLAS 'N-BK7' (control)                                               ok           -> ok
+    zmx GLAS 'N-BK8' typo (names line, close matches)                        clear error  -> clear error
+    zmx GLAS 'n-bk7' lower case                                              ok           -> ok
+    zmx GCAT 'SHOTT' typo (N-BK7 found in the shipped SCHOTT)                ok           -> ok
+    zmx GLAS typo unknown_glass='model' keeps GLAS nd/Vd (documented)        ok           -> ok
+    zmx GLAS nd 0.5 with unknown_glass='model' (names line)                  vague error  -> clear error
+    read_png grey+alpha 8-bit 4x4 (documented: alpha dropped)                silent wrong -> ok
+    read_png grey+alpha 16-bit 4x4 (documented: alpha dropped)               silent wrong -> ok
+    read_png RGBA 16-bit (control)                                           ok           -> ok
+    read_exr channels 'RGB' one string                                       silent wrong -> clear error
+    read_exr channels [] empty                                               vague error  -> clear error
+    read_exr channels ['R','R'] repeated                                     silent wrong -> clear error
+    read_exr channels 'r' lower case                                         clear error  -> clear error
+    write_exr complex                                                        clear error  -> clear error
+    write_exr bool                                                           clear error  -> clear error
+    write_exr (4,4,3,2) 4-D                                                  clear error  -> clear error
+    write_exr (0,4,3) empty                                                  crash        -> clear error
+    write_exr 1-D                                                            clear error  -> clear error
+    write_exr into a missing folder                                          crash        -> clear error
+    write_png into a missing folder                                          crash        -> clear error
+    write_png (0,4,3) empty                                                  vague error  -> clear error
+    write_png (4,4,5)                                                        clear error  -> clear error
+    write_png 0…255 floats (codes given as floats)                           silent wrong -> clear error
+    read_psf_stack of an RGB exr (not a stack)                               silent wrong -> clear error
+    write_psf_stack NaN psf                                                  silent wrong -> clear error
+    write_psf_stack 2-D (one psf)                                            clear error  -> clear error
+    psnr data_range 255 for [0,1] images                                     silent wrong -> clear error
+    ssim complex images                                                      silent wrong -> clear error
+    Conrady 4 coefficients                                                   clear error  -> clear error
+    Herzberger 5 coefficients                                                clear error  -> clear error
+    Sellmeier2 nan coefficient                                               clear error  -> clear error
+    Laurent 3 coeffs for 8 powers                                            clear error  -> clear error
+    Tabulated wavelength_range (400, 700) nm                                 silent wrong -> clear error
+    Tabulated indices 0.5                                                    clear error  -> clear error
+    Tabulated repeated wavelength                                            clear error  -> clear error
+    Tabulated 2 wavelengths, 3 indices                                       clear error  -> clear error
+    Air().index(587.6) nm                                                    clear error  -> clear error
+    ModelGlass.extrapolated_index(587.6) nm                                  clear error  -> clear error
+    get_material('NOPE', nd=1.5168, vd=0.6417) (a fraction for vd)           clear error  -> clear error
+    get_material('N-BK7', catalogs='schott') lower case                      ok           -> ok
+    get_material '' (documented: air)                                        ok           -> ok
+    Sellmeier name 5 (int)                                                   silent wrong -> clear error
+    ModelGlass name None                                                     silent wrong -> clear error
+    register_catalog of an .agf with C in nm², then get_material (names the line) vague error  -> clear error
+    JSON class ModelGlass vd 0.6                                             silent wrong -> clear error
+    JSON class CatalogMaterial wavelength_range [400, 700]                   vague error  -> clear error
+    JSON class CatalogMaterial formula 42                                    silent wrong -> clear error
+    JSON class Tabulated 'wavelength' (misspelt)                             clear error  -> clear error
+    JSON class Sellmeier B [] C []                                           silent wrong -> clear error
+    JSON class Sellmeier name 5                                              clear error  -> clear error
+    JSON nd only (documented: vd inf, no dispersion)                         ok           -> ok
+    read_png 1-bit PNG (white is 1)                                          ok           -> ok
+    read_png palette PNG (RGB values)                                        ok           -> ok
+    read_png palette PNG with transparency (alpha dropped)                   ok           -> ok
+    read_png grey+alpha 4x6 written by Pillow                                silent wrong -> ok
+    read_png linear None                                                     clear error  -> clear error
+    write_png bits 12                                                        clear error  -> clear error
+    write_png grey (4,4,1), read back (documented: grey)                     ok           -> ok
+    write_exr channels ('R', 'G') for 3 channels                             clear error  -> clear error
+    write_psf_stack int psfs                                                 silent wrong -> clear error
+    write_psf_stack into a missing folder                                    crash        -> clear error
+    to_linear float16 0.5 (control)                                          ok           -> ok
+    to_linear bool image                                                     clear error  -> clear error
+    srgb_to_linear -0.1                                                      clear error  -> clear error
+    psnr data_range 65535 for [0,1] images                                   silent wrong -> clear error
+    psnr complex images                                                      silent wrong -> clear error
+    psnr data_range 1 for [0,1] images (control)                             ok           -> ok
+    trace_backward upto 99 (names the value given)                           vague error  -> clear error
+    trace_backward upto -1                                                   vague error  -> clear error
+    reversed_lens image_distance nan                                         vague error  -> clear error
+    reversed_lens image_distance inf                                         vague error  -> clear error
+    NAFNet key an int 0                                                      crash        -> clear error
+    NAFNet key None                                                          crash        -> clear error
+    NAFNet middle_blocks -1 (names it)                                       vague error  -> clear error
+    zernike_terms terms 37.0 (a whole float)                                 ok           -> ok
+    zernike_terms x 5 (mm, not the unit disc)                                silent wrong -> silent wrong
+    zernike_fit values all nan                                               clear error  -> clear error
+    distortion_map grid (1, 17) (one row)                                    ok           -> ok
+    Binary2 order 0.5 (Zemax's order is a real parameter)                    ok           -> ok
+
+Left (the 2 "silent wrong" rows): ``Sellmeier`` with B and C swapped gives NaN from
+``index`` at 0.5876 µm (between the swapped formula's poles; a NaN, not a plausible index,
+and a lens refuses it with the wavelength); checking every concrete ``index`` result would
+cost a device-to-host copy on each call. ``zernike_terms`` evaluates the polynomials at
+|r| > 1 (coordinates in mm, not normalised): they are defined there and the fits' callers
+may extrapolate, so a refusal needs the lead's decision on a tolerance.
 
 Run: PYTHONPATH=$PWD python tools/audit25_probe.py [filter]
+(``AUDIT25_AREAS=materials,agf_cases`` runs some areas only.)
 """
 
 import os
