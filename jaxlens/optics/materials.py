@@ -238,8 +238,9 @@ SELLMEIER_PROBE_UM = np.geomspace(0.15, 30.0, 241)
 
 def _check_sellmeier_units(m, where: str) -> None:
     """A Sellmeier formula of strengths B >= 0 that gives no finite index >= 1 at any
-    wavelength in 0.15–30 µm describes no material: C given in nm² (N-BK7's 0.006 µm² as 6000 nm²) made n < 1 at
-    every wavelength, read by ``index`` as a plausible 0.99997. Concrete values only."""
+    wavelength in 0.15–30 µm describes no material: C given in nm² (N-BK7's 0.006 µm² as
+    6000 nm²) made n < 1 at every wavelength, read by ``index`` as a plausible 0.99997.
+    Concrete values only."""
     b, c = _concrete(m.B), _concrete(m.C)
     if b is None or c is None or np.any(b < 0):  # a negative B: the index checks say why
         return
