@@ -61,6 +61,10 @@ def _generator(key) -> np.random.Generator:
             "NAFNet: parameters are drawn on the host; build the network "
             "outside jit/eval_shape (it takes well under a second)"
         )
+    if not isinstance(key, (jax.Array, np.ndarray)):  # an int 0 failed on key.dtype
+        raise TypeError(f"NAFNet: key must be a JAX PRNG key (jax.random.PRNGKey(0) or "
+                        f"jax.random.key(0)) or a numpy Generator, got {type(key).__name__} "
+                        f"{key!r}")
     data = np.asarray(
         jax.random.key_data(key) if jax.dtypes.issubdtype(key.dtype, jax.dtypes.prng_key) else key,
         np.uint32,
@@ -326,7 +330,10 @@ class NAFNet(eqx.Module):
                 f" and {tuple(dec_blocks)}"
             )
         if width < 1 or any(n < 0 for n in (*enc_blocks, *dec_blocks, middle_blocks)):
-            raise ValueError(f"NAFNet: width must be >= 1 and block counts >= 0, got {width}")
+            # The message gave the width only, whichever count was wrong.
+            raise ValueError(f"NAFNet: width must be >= 1 and block counts >= 0, got width "
+                             f"{width}, enc_blocks {tuple(enc_blocks)}, middle_blocks "
+                             f"{middle_blocks}, dec_blocks {tuple(dec_blocks)}")
         # width 2.5 failed as "'float' object cannot be interpreted as an integer", 0
         # channels as a ZeroDivisionError, and an integer dtype made integer weights.
         # width 10**6 asked for terabytes of weights: NAFNet's widths are 16 to 64, and the

@@ -108,6 +108,12 @@ def read_exr(path, *, channels=None) -> np.ndarray:
         raise ValueError(f"read_exr: {p} is not a readable OpenEXR file ({e})") from None
     if channels is None:
         channels = [c for c in ("R", "G", "B") if c in chans] or sorted(chans)
+    elif isinstance(channels, str):  # "RGB" was read letter by letter, "R1" as R and 1
+        channels = [channels]
+    channels = list(channels)
+    if not channels or len(set(channels)) != len(channels):  # [] failed in np.stack
+        raise ValueError(f"read_exr: channels must be distinct channel names, at least one, "
+                         f"got {channels!r}; {p} has {sorted(chans)}")
     missing = [c for c in channels if c not in chans]
     if missing:
         raise ValueError(f"read_exr: {p} has no channel(s) {missing}; it has {sorted(chans)}")
@@ -124,6 +130,8 @@ def _output_file(path, where: str, suffix: str) -> pathlib.Path:
                          f"{suffix}, got {str(p)!r}")
     if p.is_dir():
         raise ValueError(f"{where}: {str(p)!r} is a folder, not a file")
+    if not p.parent.is_dir():  # OpenEXR's RuntimeError or open()'s traceback, after the work
+        raise ValueError(f"{where}: no such folder {str(p.parent)!r} to write {p.name!r} in")
     return p
 
 
@@ -138,6 +146,7 @@ def write_exr(path, img, *, channels=None) -> None:
     """
     path = _output_file(path, "write_exr", ".exr")
     a = checks.float_image(img, "write_exr", "img", unit="linear values").astype(np.float32)
+    _non_empty(a, "write_exr")
     if a.ndim == 2:
         a = a[..., None]
     if a.ndim != 3:
@@ -149,6 +158,14 @@ def write_exr(path, img, *, channels=None) -> None:
     channels = _layer_names(channels, c, "write_exr", "channels", "channels")
     data = {name: np.ascontiguousarray(a[..., i]) for i, name in enumerate(channels)}
     _write_channels(path, data)
+
+
+def _non_empty(a, where: str) -> None:
+    """An image with pixels (OpenEXR raised RuntimeError on an empty one, write_png a
+    reshape error)."""
+    if a.size == 0:
+        raise ValueError(f"{where}: img is empty (shape {a.shape}); an image needs at least "
+                         f"one pixel")
 
 
 def _layer_names(names, n: int, where: str, arg: str, what: str) -> list[str]:
@@ -189,8 +206,6 @@ def read_png(path, *, linear: bool = True) -> np.ndarray:
     Raises:
         FileNotFoundError, ValueError: missing or unreadable file.
     """
-    from skimage import io
-
     checks.switch(linear, "linear", "read_png")  # "no" is truthy: it decoded sRGB
     p = _check_readable(path, "read_png")
     with open(p, "rb") as f:
@@ -199,11 +214,13 @@ def read_png(path, *, linear: bool = True) -> np.ndarray:
     try:
         a = _read_png16(p)
         if a is None:
-            a = io.imread(str(p))
+            a = _read_png_pil(p)
     except Exception as e:
         raise ValueError(f"read_png: {p} is not a readable image ({e})") from None
-    if a.ndim == 3 and a.shape[-1] == 4:
-        a = a[..., :3]
+    if a.ndim == 3 and a.shape[-1] in (2, 4):  # grey+alpha kept its alpha as a 2nd channel
+        a = a[..., :-1]
+    if a.ndim == 3 and a.shape[-1] == 1:
+        a = a[..., 0]
     if np.issubdtype(a.dtype, np.integer):
         v = a.astype(np.float64) / np.iinfo(a.dtype).max
     else:
@@ -230,6 +247,11 @@ def write_png(path, img, *, linear: bool = True, bits: int = 8) -> None:
     # An integer image (uint8 codes) was clipped to 1: a white file; NaN would be cast to
     # an arbitrary integer (0 on most machines): a silent black pixel.
     a = checks.float_image(img, "write_png", "img", unit="values in [0, 1], clipped")
+    _non_empty(a, "write_png")
+    if a.max() > 1.0 and np.all(a == np.round(a)):  # 0…255 codes as floats: a white file
+        raise ValueError(f"write_png: img must be values in [0, 1] (clipped), got whole "
+                         f"numbers up to {a.max():g}: 0…255 or 0…65535 codes given as "
+                         f"floats? Divide by 255 (or 65535) first")
     if a.ndim == 3 and a.shape[-1] == 1:
         a = a[..., 0]
     if a.ndim not in (2, 3) or (a.ndim == 3 and a.shape[-1] > 4):
@@ -286,6 +308,21 @@ def _unfilter(raw: bytes, h: int, stride: int, bpp: int) -> np.ndarray:
         out[y] = cur
         prior = cur.astype(np.int32)
     return out
+
+
+def _read_png_pil(p: pathlib.Path) -> np.ndarray:
+    """An 8-bit (or interlaced 16-bit) PNG's codes, ``[H, W]`` or ``[H, W, C]`` (C = 2…4).
+    skimage's reader gave a grey+alpha PNG of 4x4 pixels the shape (4, 2, 4)."""
+    from PIL import Image
+
+    with Image.open(p) as im:
+        if im.mode in ("P", "PA", "1"):  # palette and 1-bit: their colours, 8 bits
+            alpha = im.mode == "PA" or "transparency" in im.info
+            im = im.convert("L" if im.mode == "1" else "RGBA" if alpha else "RGB")
+        a = np.asarray(im)
+        if im.mode.startswith("I"):  # 16-bit grey as int32 codes 0…65535
+            a = a.astype(np.uint16)
+    return a
 
 
 def _read_png16(p: pathlib.Path):
@@ -346,6 +383,9 @@ def _images(reference, test, where):
     """Two float64 images of one shape, non-empty and finite: NaN pixels made the score NaN
     and two empty images scored inf (identical)."""
     kinds = [np.asarray(x).dtype.kind for x in (reference, test)]
+    if any(k not in "iubf" for k in kinds):  # complex pixels lost their imaginary part
+        raise ValueError(f"{where}: reference and test must be real images, got dtypes "
+                         f"{np.asarray(reference).dtype} and {np.asarray(test).dtype}")
     if len(set(k in "iub" for k in kinds)) > 1:  # a [0, 1] float image against 0…255 scored
         raise ValueError(f"{where}: reference and test must be on one scale, got dtypes "
                          f"{np.asarray(reference).dtype} and {np.asarray(test).dtype} (an "
@@ -367,6 +407,11 @@ def _data_range(a, b, data_range, where):
             raise ValueError(f"{where}: data_range must be a finite number > 0 (the "
                              f"peak-to-peak range of pixel values, 1 for [0, 1] images), got "
                              f"{data_range!r}")
+        peak = float(max(np.max(np.abs(a)), np.max(np.abs(b))))
+        if data_range >= 255 and peak <= 1:  # 255 for [0, 1] images: 48 dB too good
+            raise ValueError(f"{where}: data_range {data_range:g} for images whose values lie "
+                             f"in [-1, 1] (largest |value| {peak:g}): the range of 0…255 codes "
+                             f"given for float images? Use 1 for [0, 1] images")
         return float(data_range)
     return float(max(np.max(a), np.max(b)) - min(np.min(a), np.min(b), 0.0)) or 1.0
 
@@ -409,7 +454,8 @@ def write_psf_stack(path, psfs, *, names=None) -> None:
         names: layer names (default ``psf000``, ``psf001``, ...).
     """
     path = _output_file(path, "write_psf_stack", ".exr")
-    a = np.asarray(psfs, np.float32)
+    # NaN PSFs were written as they were (and complex or integer ones cast).
+    a = checks.float_image(psfs, "write_psf_stack", "psfs", unit="PSF values").astype(np.float32)
     if a.ndim == 3:
         a = a[:, None]
     if a.ndim != 4 or 0 in a.shape:
@@ -437,6 +483,10 @@ def read_psf_stack(path) -> tuple[np.ndarray, list[str]]:
     layers: dict[str, dict[str, np.ndarray]] = {}
     for key, val in chans.items():
         layer, _, ch = key.rpartition(".")
+        if not layer:  # an RGB image read as one PSF named ''
+            raise ValueError(f"read_psf_stack: {p} is not a PSF stack written by "
+                             f"write_psf_stack: channel {key!r} has no layer name (layer.channel)"
+                             f"; read an image with read_exr")
         layers.setdefault(layer, {})[ch] = val
     names = sorted(layers)
     order = lambda chs: [c for c in ("R", "G", "B") if c in chs] or sorted(chs)  # noqa: E731

@@ -5,6 +5,7 @@ material class with its fields; and back."""
 from __future__ import annotations
 
 import dataclasses
+import difflib
 import math
 from typing import Any
 
@@ -191,6 +192,13 @@ def material_from_spec(spec: Any, where: str, *, n_table: Any = None) -> Abstrac
             raise ValueError(
                 f"{where}: unknown material class {spec['class']!r}; known: {sorted(classes)}"
             )
+        known = {"class", "name"} | {f.name for f in dataclasses.fields(cls)}
+        extra = sorted(set(spec) - known)
+        if extra:  # a misspelt field was dropped and the class's default used without a word
+            close = difflib.get_close_matches(extra[0], sorted(known), n=1)
+            raise ValueError(f"{where}: material class {spec['class']} has no field "
+                             f"{extra[0]!r}{f' (did you mean {close[0]!r}?)' if close else ''}"
+                             f"; its fields: {sorted(known - {'class'})}")
         kwargs = {}
         for f in dataclasses.fields(cls):
             if f.name == "name" or f.name not in spec:
@@ -212,7 +220,10 @@ def material_from_spec(spec: Any, where: str, *, n_table: Any = None) -> Abstrac
         if nd < 1 or vd <= 0:
             raise ValueError(f"{where}: model glass needs nd >= 1 and vd > 0 (inf: no "
                              f"dispersion), got nd {nd}, vd {vd}")
-        return ModelGlass(_arr(nd), _arr(vd), name=name)
+        try:  # ModelGlass's own refusals (vd 0.6417 for 64.17) without the surface
+            return ModelGlass(_arr(nd), _arr(vd), name=name)
+        except ValueError as e:
+            raise ValueError(f"{where}: {e}") from None
     if "n" in spec:
         wl, n = _table_from_nm(spec["n"], f"{where}: n")
         return _tabulated(wl, n, name, where)

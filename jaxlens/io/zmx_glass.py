@@ -191,6 +191,10 @@ class GlassResolver:
                      f"it has not looked up, not this glass's data, so no model glass can "
                      f"stand in for it (a model glass needs the line's real nd and Vd); "
                      f"supply the glass's catalog (.AGF) beside the file")
+            elif self.unknown_glass == "model" and len(ln.tokens) > 5:
+                # The option was given, and the message said nothing of why it was not used.
+                e = (f"{e}. unknown_glass='model' needs the line's nd > 1 and Vd > 0 (its 5th "
+                     f"and 6th fields), got nd {ln.tokens[4]}, Vd {ln.tokens[5]}")
             e = f"{e}{_molded_note(name)}"
             raise ln.error(f"glass {name!r}: {e}") from None
         if self.gcat and getattr(m, "catalog", None) is not None:

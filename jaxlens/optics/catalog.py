@@ -181,8 +181,9 @@ class GlassRecord:
         # coefficient arrays were tracers, the checks below skipped them and the nd check
         # failed with a ConcretizationTypeError.
         with jax.ensure_compile_time_eval():
+            model = _dispersion_model(self.formula, self.coefficients, self.name, self.source)
             m = CatalogMaterial(
-                model=_dispersion_model(self.formula, self.coefficients, self.name),
+                model=model,
                 name=self.name,
                 catalog=self.catalog,
                 catalog_nd=self.nd,
@@ -193,7 +194,9 @@ class GlassRecord:
         lo, hi = self.wavelength_range or (LAMBDA_D, LAMBDA_D)
         probe = LAMBDA_D if lo <= LAMBDA_D <= hi else 0.5 * (lo + hi)
         where = f"glass {self.name} of catalog {self.catalog or '?'}"
-        checks.material(m, probe, where)
+        # The file's line, as every other refusal of a record names it (C given in nm² made
+        # n < 1 and the message named the glass only).
+        checks.material(m, probe, f"{self.source}: {where}" if self.source else where)
         if probe == LAMBDA_D and (self.nd, self.vd) not in NO_D_LINE_DATA:
             self._check_nd(m, where)
         return m
@@ -238,6 +241,31 @@ class CatalogMaterial(AbstractMaterial):
     catalog_vd: float | None = eqx.field(static=True, default=None)
     formula: int = eqx.field(static=True, default=0)
     wavelength_range: tuple[float, float] | None = eqx.field(static=True, default=None)
+
+    def __check_init__(self):
+        # By hand: a range in nm (400, 700) refused every µm wavelength later, a non-material
+        # model failed at the first index, catalog nd 0.5 or formula -3 went to GLAS lines.
+        where, real = f"CatalogMaterial {self.name!r}", (int, float, np.integer, np.floating)
+        num = lambda v: isinstance(v, real) and not isinstance(v, bool) and math.isfinite(v)  # noqa: E731
+        if not isinstance(self.model, AbstractMaterial):
+            raise TypeError(f"{where}: model must be a material (jaxlens.AbstractMaterial), "
+                            f"got {type(self.model).__name__}")
+        if self.formula != 0 and self.formula not in FORMULA_NAMES or isinstance(
+                self.formula, bool) or not isinstance(self.formula, (int, np.integer)):
+            raise ValueError(f"{where}: formula must be a Zemax dispersion formula number "
+                             f"({', '.join(map(str, FORMULA_NAMES))}; 0: none), got "
+                             f"{self.formula!r}")
+        nd, vd = self.catalog_nd, self.catalog_vd
+        if not all(v is None or num(v) for v in (nd, vd)) or (vd is not None and vd < 0) or (
+                nd is not None and (nd, vd or 0.0) not in NO_D_LINE_DATA and not 1 <= nd <= MAX_ND):
+            raise ValueError(f"{where}: catalog_nd must be None or a d-line index in [1, "
+                             f"{MAX_ND:g}] and catalog_vd None or an Abbe number >= 0 (nd 1 or "
+                             f"0 with Vd 0: no d-line data), got {nd!r}, {vd!r}")
+        r = self.wavelength_range
+        if r is not None and not (isinstance(r, tuple) and len(r) == 2 and all(map(num, r))
+                                  and 0 < r[0] < r[1] and r[0] < 100):
+            raise ValueError(f"{where}: wavelength_range must be (min, max) in µm with 0 < min "
+                             f"< max and min < 100 µm (0.4 µm, not 400 nm), got {r!r}")
 
     def index(self, wavelength):
         """The index at wavelengths in µm; a concrete wavelength outside
@@ -294,9 +322,12 @@ _BUILDERS = {
 }
 
 
-def _dispersion_model(formula: int, coefficients: tuple[float, ...], name: str):
-    """The material for a Zemax formula number and its CD coefficients."""
-    return _BUILDERS[formula](coefficients, name)
+def _dispersion_model(formula: int, coefficients: tuple[float, ...], name: str, source=""):
+    """The material of a formula number and CD coefficients; a refusal names ``source``."""
+    try:
+        return _BUILDERS[formula](coefficients, name)
+    except ValueError as e:
+        raise ValueError(f"{source}: {e}" if source else str(e)) from None
 
 
 # ---------------------------------------------------------------------------- AGF reader

@@ -45,6 +45,13 @@ class AbstractMaterial(eqx.Module):
     Every subclass has a static ``name`` field (declared last, with a default).
     """
 
+    def __check_init__(self):
+        # Every subclass's static name (a number was kept, and written to files as one).
+        name = getattr(self, "name", "")
+        if not isinstance(name, str):
+            raise TypeError(f"{type(self).__name__}: name must be a str, got "
+                            f"{type(name).__name__} {name!r}")
+
     def index(self, wavelength: Float[ArrayLike, "*b"]) -> Float[Array, "*b"]:
         raise NotImplementedError
 
@@ -180,6 +187,10 @@ MAX_ND = 4.5
 """Largest d-line index a model glass may have (no optical material reaches 3; an nd of 60
 is an Abbe number given in its place)."""
 
+MIN_VD = 5.0
+"""Smallest Abbe number a model glass may have (the shipped catalogs' span 12.7–106; a vd
+below 5 is a fraction given for the number, 0.6417 for 64.17)."""
+
 
 class ModelGlass(AbstractMaterial):
     """A model glass from its d-line index and Abbe number.
@@ -207,6 +218,10 @@ class ModelGlass(AbstractMaterial):
         if np.any(np.isnan(vd) | (vd <= 0.0)):
             raise ValueError(f"ModelGlass{self._of()}: vd must be an Abbe number > 0 (inf for "
                              f"no dispersion), got {checks.fmt(vd)}")
+        if np.any(vd < MIN_VD):  # 0.6417 for 64.17: a 100 times too strong dispersion
+            raise ValueError(f"ModelGlass{self._of()}: vd must be an Abbe number >= {MIN_VD:g} "
+                             f"(inf for no dispersion; the shipped catalogs' glasses lie in "
+                             f"12.7–106), got {checks.fmt(vd)} (was 64.17 given as 0.6417?)")
 
     def _of(self) -> str:
         return f" {self.name!r}" if self.name else ""
@@ -215,6 +230,29 @@ class ModelGlass(AbstractMaterial):
         w = jnp.asarray(wavelength)
         slope = (self.nd - 1.0) / self.vd / (LAMBDA_F**-2 - LAMBDA_C**-2)
         return self.nd + slope * (w**-2 - LAMBDA_D**-2)
+
+
+SELLMEIER_PROBE_UM = np.geomspace(0.15, 30.0, 241)
+"""Wavelengths (µm) where a hand-given Sellmeier formula must give an index somewhere."""
+
+
+def _check_sellmeier_units(m, where: str) -> None:
+    """A Sellmeier formula of strengths B >= 0 that gives no finite index >= 1 at any
+    wavelength in 0.15–30 µm describes no material: C given in nm² (N-BK7's 0.006 µm² as
+    6000 nm²) made n < 1 at every wavelength, read by ``index`` as a plausible 0.99997.
+    Concrete values only."""
+    b, c = _concrete(m.B), _concrete(m.C)
+    if b is None or c is None or np.any(b < 0):  # a negative B: the index checks say why
+        return
+    w2 = SELLMEIER_PROBE_UM[:, None] ** 2
+    with np.errstate(all="ignore"):
+        n2 = 1.0 + np.sum(b * w2 / (w2 - c), axis=-1)
+    if not np.any(np.isfinite(n2) & (n2 >= 1.0)):
+        raise ValueError(
+            f"{where}: the formula gives no finite index >= 1 at any wavelength in "
+            f"0.15–30 µm, so it describes no material; B is dimensionless and C in µm² "
+            f"(N-BK7: B 1.04, 0.232, 1.01, C 0.00600, 0.0200, 103.6 µm²; C in nm² is "
+            f"10**6 times too large), got B {checks.fmt(b)}, C {checks.fmt(c)}")
 
 
 class Sellmeier(AbstractMaterial):
@@ -230,8 +268,13 @@ class Sellmeier(AbstractMaterial):
                 f"Sellmeier{f' {self.name!r}' if self.name else ''}: B and C need one "
                 f"coefficient per term (the same length), got shapes {self.B.shape} and "
                 f"{self.C.shape}")
+        where = f"Sellmeier{f' {self.name!r}' if self.name else ''}"
+        if self.B.ndim != 1 or self.B.size == 0:  # no term: n = 1 (air) without a word
+            raise ValueError(f"{where}: B and C must be 1-D arrays of at least one term's "
+                             f"coefficient, got shape {self.B.shape}")
         _check_coeffs(self, None, "B")
         _check_coeffs(self, None, "C")
+        _check_sellmeier_units(self, where)
 
     def index(self, wavelength):
         w2 = jnp.asarray(wavelength)[..., None] ** 2
@@ -326,6 +369,11 @@ class Tabulated(AbstractMaterial):
             if not (0 < lo_r < hi_r < math.inf):
                 raise ValueError(f"{where}: wavelength_range must be (shortest, longest) "
                                  f"wavelength in µm with 0 < shortest < longest, got {r!r}")
+            if not checks.is_traced(w) and (lo_r > float(np.max(w)) or hi_r < float(np.min(w))):
+                # (400, 700) in nm for a table in µm: every wavelength of the table "outside".
+                raise ValueError(f"{where}: wavelength_range {r!r} µm holds none of the "
+                                 f"table's wavelengths ({checks.fmt(np.min(w))}–"
+                                 f"{checks.fmt(np.max(w))} µm); give it in µm (0.4, not 400 nm)")
 
     def index(self, wavelength):
         """The interpolated index at wavelengths in µm; a concrete wavelength outside the
@@ -541,6 +589,11 @@ class Laurent(AbstractMaterial):
     name: str = eqx.field(static=True, default="")
 
     def __check_init__(self):
+        if not isinstance(self.powers, tuple) or not all(
+                isinstance(p, (int, np.integer)) and not isinstance(p, bool) for p in self.powers):
+            # A string "ab" passed the count check and failed at the first index.
+            raise ValueError(f"Laurent: powers must be a tuple of whole numbers (the exponents "
+                             f"of λ), got {self.powers!r}")
         if self.coeffs.shape != (len(self.powers),):
             raise ValueError(
                 f"Laurent needs one coefficient per power: {len(self.powers)} powers, "

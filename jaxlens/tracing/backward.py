@@ -23,6 +23,7 @@ from __future__ import annotations
 
 import jax.numpy as jnp
 
+from ..optics import checks
 from ..optics.coordinates import CoordinateBreak
 from ..optics.diffractive import Binary2, Grating
 from ..optics.freeform import Biconic, ZernikeSag
@@ -147,6 +148,9 @@ def reversed_lens(lens: Lens, *, image_distance=None) -> Lens:
         raise ValueError("reversed_lens: lenses with mirrors, obscurations, apertures "
                          "(Lens.apertures) or coordinate breaks cannot be "
                          "traced backward (nor rendered) yet; trace them forward with trace")
+    if image_distance is not None and not checks.is_traced(image_distance):
+        # NaN was refused by the mirrored Lens as its "thickness", an argument not given here.
+        checks.number(image_distance, "image_distance", "reversed_lens", unit="mm")
     n = lens.num_surfaces
     t = lens.thickness
     last = jnp.zeros_like(t[-1]) if image_distance is None else jnp.asarray(image_distance, t.dtype)
@@ -202,6 +206,9 @@ def trace_backward(
         still travelling toward −z (into object space). ``valid`` flags rays that passed
         every surface and aperture; ``opl`` is the optical path accumulated along the way.
     """
+    if upto is not None:  # 99 was refused as the mirrored lens's index -94, not given here
+        checks.number(upto, "upto", "trace_backward", lo=0, hi=lens.num_surfaces - 1,
+                      integer=True, unit="(0-based index of an original surface)")
     rev = reversed_lens(lens)
     o, d = to_mirror_frame(lens, rays.origin, rays.direction)
     out = trace(
