@@ -11,7 +11,8 @@ neural networks", SSVM 2021). The EDoF experiment uses them because the eight ph
 of ``skimage.data`` that it trains on are few and unlike its test images (``NOTES.md``).
 
 This generator's choices: radii from ``R_MIN_PX`` (its docstring says why) to a quarter of
-the image side; colours uniform in the sRGB cube, decoded to linear light; flat
+the image side; colours uniform in a cube of sRGB values about mid-grey (``contrast``: 1 is
+the whole cube), decoded to linear light; flat
 discs (no texture inside one); the discs drawn front to back, each covering only what the
 ones in front left visible, until every pixel is covered to within ``1e-3`` of its light
 (the exact model, not a fixed count); edges anti-aliased by the pixel area a disc covers,
@@ -48,7 +49,7 @@ def _radii(rng: np.random.Generator, n: int, r_min: float, r_max: float) -> np.n
 
 
 def dead_leaves(size: int, seed: int = 0, *, r_min: float = R_MIN_PX,
-                r_max: float | None = None) -> np.ndarray:
+                r_max: float | None = None, contrast: float = 1.0) -> np.ndarray:
     """One dead-leaves image.
 
     Args:
@@ -56,6 +57,9 @@ def dead_leaves(size: int, seed: int = 0, *, r_min: float = R_MIN_PX,
         seed: NumPy seed; the same seed gives the same image.
         r_min, r_max: smallest and largest disc radius (pixels); ``r_max`` defaults to
             ``size / 4``, so a few discs span much of the image.
+        contrast: sRGB colour values are 0.5 + contrast·(u − 0.5), u uniform in [0, 1]
+            per channel; 1 spans the whole cube, smaller values give smaller steps between
+            discs (0 to 1).
 
     Returns:
         float32 ``[size, size, 3]`` linear RGB in [0, 1].
@@ -67,6 +71,8 @@ def dead_leaves(size: int, seed: int = 0, *, r_min: float = R_MIN_PX,
     if not (math.isfinite(r_min) and math.isfinite(r_max) and 0.5 <= r_min <= r_max):
         raise ValueError(f"dead_leaves: need 0.5 <= r_min <= r_max (pixels, finite), got "
                          f"r_min={r_min}, r_max={r_max}")
+    if not (isinstance(contrast, (int, float)) and 0.0 <= contrast <= 1.0):
+        raise ValueError(f"dead_leaves: contrast must be a number in [0, 1], got {contrast!r}")
     rng = np.random.default_rng(seed)
     light = np.zeros((size, size, 3))
     left = np.ones((size, size))  # area of each pixel that no disc has covered yet
@@ -78,7 +84,7 @@ def dead_leaves(size: int, seed: int = 0, *, r_min: float = R_MIN_PX,
         # as inside ones (a stationary image).
         r = _radii(rng, block, r_min, r_max)
         c = rng.uniform(-r_max, size + r_max, (block, 2))
-        colour = srgb_to_linear(rng.random((block, 3)))
+        colour = srgb_to_linear(0.5 + contrast * (rng.random((block, 3)) - 0.5))
         for (cy, cx), ri, col in zip(c, r, colour, strict=True):
             y0, y1 = max(0, int(cy - ri - 1)), min(size, int(cy + ri + 2))
             x0, x1 = max(0, int(cx - ri - 1)), min(size, int(cx + ri + 2))
@@ -94,11 +100,13 @@ def dead_leaves(size: int, seed: int = 0, *, r_min: float = R_MIN_PX,
     return np.clip(light, 0.0, 1.0).astype(np.float32)
 
 
-def dead_leaves_images(count: int, size: int, seed: int = 0) -> list[np.ndarray]:
-    """``count`` dead-leaves images of ``size²`` pixels, image ``i`` from seed
-    ``(seed, i)``, so a set is reproducible and its images differ."""
+def dead_leaves_images(count: int, size: int, seed: int = 0, *,
+                       contrast: float = 1.0) -> list[np.ndarray]:
+    """``count`` dead-leaves images of ``size²`` pixels (``contrast`` as for
+    ``dead_leaves``), image ``i`` from seed ``(seed, i)``, so a set is reproducible and its
+    images differ."""
     if not isinstance(count, (int, np.integer)) or not 1 <= count <= 1024:
         raise ValueError(f"dead_leaves_images: count must be a whole number in [1, 1024], "
                          f"got {count!r}")
-    return [dead_leaves(size, int(np.random.SeedSequence([seed, i]).generate_state(1)[0]))
-            for i in range(count)]
+    return [dead_leaves(size, int(np.random.SeedSequence([seed, i]).generate_state(1)[0]),
+                        contrast=contrast) for i in range(count)]
