@@ -53,8 +53,8 @@ def test_disc_colours_are_uniform_srgb_decoded_to_linear():
 def test_the_spectrum_slope_follows_the_smallest_disc():
     """Smaller discs put more detail at the pixel scale (a flatter spectrum); the default
     smallest disc lands near the training photographs' median slope (−2.75)."""
-    default = np.median([_spectral_slope(dead_leaves(256, s)) for s in range(2)])
-    fine = np.median([_spectral_slope(dead_leaves(256, s, r_min=0.75)) for s in range(2)])
+    default = _spectral_slope(dead_leaves(256, 0))
+    fine = _spectral_slope(dead_leaves(256, 0, r_min=0.75))
     assert -3.0 < default < -2.45, default
     assert fine > default + 0.2, (fine, default)
 
@@ -107,3 +107,18 @@ def test_the_command_line_option_reaches_the_config_and_a_resume_sees_it():
     older = json.loads(json.dumps(old))
     del older["train_source"]  # written before the option existed: the photographs
     assert training_config(older, "hybrid") == training_config(old, "hybrid")
+
+
+def test_contrast_scales_the_steps_between_discs():
+    """Same seed, same discs: only the colours move toward mid-grey, so neighbouring pixel
+    differences shrink (in sRGB exactly by the contrast; in linear light about so), and the
+    training set's contrast keeps its pixel differences near the photographs' (0.0046)."""
+    full, half = dead_leaves(128, 5), dead_leaves(128, 5, contrast=0.5)
+    grey = dead_leaves(128, 5, contrast=0.0)
+    d = lambda a: float(np.mean(np.diff(a, axis=1) ** 2))  # noqa: E731
+    assert d(grey) < 1e-12 and 0.1 < d(half) / d(full) < 0.45
+    imgs, _ = S.training_images("dead-leaves", [], count=2, side=256)
+    assert 0.002 < np.mean([d(a) for a in imgs]) < 0.008
+    for bad in (-0.1, 1.5, np.nan, "1"):
+        with pytest.raises(ValueError, match="contrast"):
+            dead_leaves(32, contrast=bad)
