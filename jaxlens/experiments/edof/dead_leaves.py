@@ -12,11 +12,11 @@ of ``skimage.data`` that it trains on are few and unlike its test images (``NOTE
 
 This generator's choices: radii from ``R_MIN_PX`` (its docstring says why) to a quarter of
 the image side; colours uniform in a cube of sRGB values about mid-grey (``contrast``: 1 is
-the whole cube), decoded to linear light; flat
-discs (no texture inside one); the discs drawn front to back, each covering only what the
-ones in front left visible, until every pixel is covered to within ``1e-3`` of its light
-(the exact model, not a fixed count); edges anti-aliased by the pixel area a disc covers,
-approximated by a one-pixel ramp across its rim.
+the whole cube), decoded to linear light; flat discs (no texture inside one); the discs
+drawn front to back, each covering only what the ones in front left visible, until every
+pixel is covered to within ``1e-3`` of its light (the exact model, not a fixed count); edges
+anti-aliased by the pixel area a disc covers, approximated by a one-pixel ramp across its
+rim.
 """
 
 from __future__ import annotations
