@@ -14,6 +14,7 @@ Modules:
     decoder: the NAFNet decoder, optionally behind a tiled Wiener front end.
     losses: L_sim, L_raw, L_rec and their weighted sum.
     scenes: training, validation and test images from ``skimage.data`` or a folder.
+    dead_leaves: procedural dead-leaves training images (``--train-source``).
     train: the two training stages, with checkpoints.
     evaluate: per-crop Table 2 metrics, the Wiener reference, bootstrap gains.
 """
