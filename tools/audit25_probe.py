@@ -178,6 +178,18 @@ HERE = os.path.dirname(os.path.abspath(__file__))
 ROOT = os.path.dirname(HERE)
 TMP = tempfile.mkdtemp()
 cooke = zoo.cooke_triplet()
+
+
+def with_mat(spec, i=1):
+    """A loader of the Cooke triplet's JSON with surface ``i``'s material replaced by ``spec``."""
+    import copy
+
+    d = copy.deepcopy(lensfile.lens_to_dict(cooke))
+    d["surfaces"][i]["material"] = spec
+    d["surfaces"][i].pop("index_at_wavelengths", None)
+    return lambda: lensfile.lens_from_dict(d)
+
+
 KEPLER = open(os.path.join(ROOT, "tests", "data", "afocal_kepler.zmx")).read()
 
 
@@ -224,13 +236,7 @@ def materials():
 
 # ----------------------------------------------------------------------------- JSON materials
 def json_materials():
-    import copy
     base = lensfile.lens_to_dict(cooke)
-    def with_mat(spec, i=1):
-        d = copy.deepcopy(base)
-        d["surfaces"][i]["material"] = spec
-        d["surfaces"][i].pop("index_at_wavelengths", None)
-        return lambda: lensfile.lens_from_dict(d)
     probe("JSON class Sellmeier C in nm²", with_mat({"class": "Sellmeier", "B": [1.04, 0.23, 1.01], "C": [6000.7, 20017.9, 1.0356e8]}), "C", "µm")
     probe("JSON class Sellmeier 2 B, 3 C", with_mat({"class": "Sellmeier", "B": [1.04, 0.23], "C": [0.006, 0.02, 103.56]}), "B", "C")
     probe("JSON class Sellmeier no C", with_mat({"class": "Sellmeier", "B": [1.04, 0.23, 1.01]}), "C")
@@ -353,13 +359,6 @@ def formulas():
     probe("ModelGlass name None", lambda: jl.ModelGlass(1.5, 60.0, name=None), "name")
     nm_agf = write("NMCAT.agf", AGF_HEAD + AGF_GOOD.replace("0.00600069867 0.231792344 0.0200179144 1.01046945 103.560653", "6000.69867 0.231792344 20017.9144 1.01046945 103560653"))
     probe("register_catalog of an .agf with C in nm², then get_material (names the line)", lambda: jl.register_catalog(nm_agf) and jl.get_material("GA", catalogs="NMCAT"), "NMCAT.agf:2")
-    import copy
-    base = lensfile.lens_to_dict(cooke)
-    def with_mat(spec, i=1):
-        d = copy.deepcopy(base)
-        d["surfaces"][i]["material"] = spec
-        d["surfaces"][i].pop("index_at_wavelengths", None)
-        return lambda: lensfile.lens_from_dict(d)
     probe("JSON class ModelGlass vd 0.6", with_mat({"class": "ModelGlass", "nd": 1.5, "vd": 0.6}), "vd")
     probe("JSON class CatalogMaterial wavelength_range [400, 700]", with_mat({"class": "CatalogMaterial", "model": {"nd": 1.5, "vd": 60.0}, "name": "X", "wavelength_range": [400.0, 700.0]}), "wavelength_range")
     probe("JSON class CatalogMaterial formula 42", with_mat({"class": "CatalogMaterial", "model": {"nd": 1.5, "vd": 60.0}, "name": "X", "formula": 42}), "formula")
