@@ -191,11 +191,13 @@ def wiener_nsr(windows: np.ndarray, *, photons: float, read: float) -> float:
     read = checks.number(read, "read", where, lo=0, unit="(linear units)")
     checks.real_values(windows, "windows", where, "linear values in [0, 1]")
     w = np.asarray(windows, np.float64)
-    if w.ndim < 2 or min(w.shape[-3:-1], default=0) < 2 or not np.all(np.isfinite(w)) or \
-            w.min() < 0.0 or w.max() > 1.0:
-        raise ValueError(f"{where}: windows must be [..., H, W, 3] linear values in [0, 1], "
-                         f"H, W >= 2, got shape {w.shape}"
-                         + (f", values {w.min():g} to {w.max():g}" if w.size else ""))
+    fin = w[np.isfinite(w)]
+    if w.ndim < 3 or min(w.shape[-3:-1]) < 2 or fin.size < w.size or \
+            fin.min() < 0.0 or fin.max() > 1.0:
+        raise ValueError(f"{where}: windows must be [..., H, W, 3] finite linear values in "
+                         f"[0, 1], H, W >= 2, got shape {w.shape}, "
+                         f"{w.size - fin.size} NaN or infinite value(s)"
+                         + (f", values {fin.min():g} to {fin.max():g}" if fin.size else ""))
     noise = np.mean(np.maximum(w, 0.0) / photons + read * read)
     dx = np.diff(w, axis=-2)
     dy = np.diff(w, axis=-3)
