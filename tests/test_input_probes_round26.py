@@ -137,3 +137,36 @@ def test_edof_statistics_and_noise_refuse_what_gave_nan_or_a_traceback():
         EO.add_noise(jnp.ones(4), jax.random.PRNGKey(0), photons=-1.0, read=0.0)
     with pytest.raises(ValueError, match="placements: n"):
         EV.placements(-1, (4, 4), 2)
+
+
+def test_frames_refuse_counts_off_the_lens_and_non_lenses():
+    """Main: frames_after(lens, -1) gave the frame before surface 1 alone, 99 an IndexError,
+    frame_of("lens") an AttributeError; a numpy order (np.int64(1), as a file reader gives)
+    was kept static as a numpy scalar, with equinox's warning about a static array."""
+    from jaxlens import zoo
+    from jaxlens.optics import coordinates as C
+
+    cooke = zoo.cooke_triplet()
+    for n in (-1, 99, 2.0):
+        with pytest.raises(ValueError, match=r"frames_after: n must be a surface count in \[0"):
+            C.frames_after(cooke, n)
+    with pytest.raises(TypeError, match="frame_of: lens must be a jaxlens.Lens, got str"):
+        C.frame_of("lens")
+    assert type(C.CoordinateBreak(order=np.int64(1)).order) is int
+
+
+def test_nets_layers_refuse_what_failed_at_the_first_call():
+    """Main: NAFBlock took an int32 dtype (integer weights), an odd expanded width and a
+    wrong channel count failed inside simple_gate or a broadcast; Upsample with an odd c_in
+    failed in the pixel shuffle's reshape."""
+    from jaxlens import nets
+
+    key = jax.random.PRNGKey(0)
+    with pytest.raises(ValueError, match="NAFBlock: dtype"):
+        nets.NAFBlock(4, key=key, dtype=jnp.int32)
+    with pytest.raises(ValueError, match=r"NAFBlock: channels · dw_expand must be even"):
+        nets.NAFBlock(3, dw_expand=3, key=key)
+    with pytest.raises(ValueError, match=r"NAFBlock: expected an \[H, W, 4\] input"):
+        nets.NAFBlock(4, key=key)(jnp.ones((8, 8, 3)))
+    with pytest.raises(ValueError, match="Upsample: c_in must be even"):
+        nets.Upsample(3, key=key)

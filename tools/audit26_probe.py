@@ -214,7 +214,35 @@ def edof_numbers():
     probe("placements crop larger than the frame", lambda: EV.placements(3, (4, 4), 5), "crop")
 
 
-AREAS = [leftovers, dead_leaves, edof_scenes, edof_cli, edof_numbers]
+# ----------------------------------------------------------------------------- frames and network layers
+def frames_and_layers():
+    from jaxlens import nets, zoo
+    from jaxlens.optics import coordinates as C
+    cooke = zoo.cooke_triplet()
+    key = jax.random.PRNGKey(0)
+    probe("frames_after n -1", lambda: len(C.frames_after(cooke, -1)), "n")
+    probe("frames_after n 99", lambda: len(C.frames_after(cooke, 99)), "n")
+    probe("frames_after n 2.0", lambda: len(C.frames_after(cooke, 2.0)), "n")
+    probe("frame_of a string for the lens", lambda: C.frame_of("lens"), "lens")
+    probe("frame_of np.int64(2) (control)", lambda: shape(C.frame_of(cooke, np.int64(2))[0]), good=True)
+    kept = type(C.CoordinateBreak(order=np.int64(1)).order).__name__  # a static numpy scalar warned
+    probe("CoordinateBreak order np.int64(1) (kept as int)", lambda: kept, good=kept == "int")
+    probe("CoordinateBreak order '1'", lambda: C.CoordinateBreak(order="1"), "order")
+    probe("CoordinateBreak tilt_x [45, 0]", lambda: C.CoordinateBreak(tilt_x=jnp.array([45.0, 0.0])), "tilt_x")
+    probe("NAFBlock channels 0", lambda: nets.NAFBlock(0, key=key), "channels")
+    probe("NAFBlock dw_expand 0", lambda: nets.NAFBlock(4, dw_expand=0, key=key), "dw_expand")
+    probe("NAFBlock ffn_expand -1", lambda: nets.NAFBlock(4, ffn_expand=-1, key=key), "ffn_expand")
+    probe("NAFBlock 3 channels, dw_expand 3 (odd width)", lambda: shape(nets.NAFBlock(3, dw_expand=3, key=key)(jnp.ones((8, 8, 3)))), "even")
+    probe("NAFBlock dtype int32", lambda: nets.NAFBlock(4, key=key, dtype=jnp.int32), "dtype")
+    probe("NAFBlock key 0", lambda: nets.NAFBlock(4, key=0), "key")
+    probe("NAFBlock called with 3 channels for 4", lambda: nets.NAFBlock(4, key=key)(jnp.ones((8, 8, 3))), "[H, W, 4]")
+    probe("NAFBlock called [C, H, W]", lambda: nets.NAFBlock(4, key=key)(jnp.ones((4, 8, 8))), "[H, W, 4]")
+    probe("Upsample c_in 3 (odd)", lambda: shape(nets.Upsample(3, key=key)(jnp.ones((4, 4, 3)))), "c_in", "even")
+    probe("Upsample c_in 0", lambda: nets.Upsample(0, key=key), "c_in")
+    probe("Upsample c_in 4 (control)", lambda: shape(nets.Upsample(4, key=key)(jnp.ones((4, 4, 4)))), good=True)
+
+
+AREAS = [leftovers, dead_leaves, edof_scenes, edof_cli, edof_numbers, frames_and_layers]
 if os.environ.get("AUDIT26_AREAS"):
     AREAS = [a for a in AREAS if a.__name__ in os.environ["AUDIT26_AREAS"].split(",")]
 run(AREAS)
