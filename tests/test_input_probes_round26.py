@@ -170,3 +170,23 @@ def test_nets_layers_refuse_what_failed_at_the_first_call():
         nets.NAFBlock(4, key=key)(jnp.ones((8, 8, 3)))
     with pytest.raises(ValueError, match="Upsample: c_in must be even"):
         nets.Upsample(3, key=key)
+
+
+def test_edof_cli_names_an_unreadable_image_before_the_run(tmp_path):
+    """Main: a truncated PNG in --train-dir passed the option checks and failed after the
+    lens set-up as Pillow's "image file is truncated", without the file's name."""
+    from PIL import Image
+
+    from jaxlens.experiments.edof import cli
+    from jaxlens.experiments.runfolder import UsageError
+
+    (tmp_path / "imgs").mkdir()
+    Image.fromarray(np.full((32, 32, 3), 100, np.uint8)).save(tmp_path / "a.png")
+    whole = (tmp_path / "a.png").read_bytes()
+    (tmp_path / "imgs" / "b.png").write_bytes(whole[: len(whole) // 2])
+    a = cli.build_parser().parse_args(["--smoke", "--train-dir", str(tmp_path / "imgs"),
+                                       "--out", str(tmp_path / "o")])
+    with pytest.raises(UsageError, match=r"--train-dir: scenes: cannot read the image .*b\.png"):
+        cli.check_args(a)
+    with pytest.raises(ValueError, match=r"cannot read the image .*b\.png"):
+        S.load_images(folder=tmp_path / "imgs")

@@ -178,6 +178,16 @@ def edof_cli():
         return go
     probe("edof --train-dir X --train-source dead-leaves (X unused)", check("--train-dir", imgs, "--train-source", "dead-leaves"), "--train-dir", "dead-leaves")
     probe("edof --train-dir X --train-source mixed (control)", check("--train-dir", imgs, "--train-source", "mixed"), good=True)
+    bad = os.path.join(TMP, "bad_imgs")
+    os.makedirs(bad, exist_ok=True)
+    whole = open(os.path.join(imgs, "a.png"), "rb").read()
+    open(os.path.join(bad, "b.png"), "wb").write(whole[: len(whole) // 2])
+    other = os.path.join(TMP, "text_imgs")
+    os.makedirs(other, exist_ok=True)
+    open(os.path.join(other, "c.jpg"), "w").write("not an image")
+    probe("edof --train-dir with a truncated PNG (names the file)", check("--train-dir", bad), "b.png")
+    probe("edof --test-dir with a text file named .jpg (names the file)", check("--test-dir", other), "c.jpg")
+    probe("scenes.load_images of a truncated PNG (names the file)", lambda: S.load_images(folder=bad), "b.png")
     probe("edof --train-source Dead-Leaves (case)", check("--train-source", "Dead-Leaves"), "train-source")
     probe("edof --train-source '' (empty)", check("--train-source", ""), "train-source")
 

@@ -302,7 +302,7 @@ def check_args(a):
                 from jaxlens.experiments.edof import scenes
 
                 try:
-                    scenes.folder_images(d)
+                    scenes.folder_images(d, verify=True)
                 except ValueError as e:
                     raise ValueError(f"edof: {opt}: {e}") from None
         # A file there would fail only when the first checkpoint or the record is written.

@@ -94,11 +94,23 @@ def skimage_image(name: str) -> np.ndarray:
     return _to_float_rgb(fn())
 
 
-def folder_images(folder: str | os.PathLike) -> list[pathlib.Path]:
-    """The image files of a folder, sorted by name."""
+def folder_images(folder: str | os.PathLike, *, verify: bool = False) -> list[pathlib.Path]:
+    """The image files of a folder, sorted by name; ``verify``: each file's structure is
+    checked too (Pillow's ``verify``, without decoding), so that a truncated or mislabelled
+    file is named before a run's work, not after its lens set-up."""
     paths = sorted(p for p in pathlib.Path(folder).iterdir() if p.suffix.lower() in _EXTS)
     if not paths:
         raise ValueError(f"scenes: no image files ({', '.join(_EXTS)}) in {folder}")
+    if verify:
+        from PIL import Image
+
+        for p in paths:
+            try:
+                with Image.open(p) as im:
+                    im.verify()
+            except Exception as e:  # noqa: BLE001  (Pillow raises many kinds)
+                raise ValueError(f"scenes: cannot read the image {p}: {e}".splitlines()[0]
+                                 ) from None
     return paths
 
 
@@ -113,8 +125,15 @@ def load_images(
     if folder is not None:
         from skimage.io import imread
 
-        paths = folder_images(folder)
-        return [_downscale(_to_float_rgb(imread(p)), max_side) for p in paths]
+        out = []
+        for p in folder_images(folder):
+            try:
+                a = imread(p)
+            except (OSError, ValueError, SyntaxError) as e:  # truncated, not an image, …
+                raise ValueError(f"scenes: cannot read the image {p}: {e}".splitlines()[0]
+                                 ) from None
+            out.append(_downscale(_to_float_rgb(a), max_side))
+        return out
     return [_downscale(skimage_image(n), max_side) for n in names]
 
 
