@@ -190,3 +190,26 @@ def test_edof_cli_names_an_unreadable_image_before_the_run(tmp_path):
         cli.check_args(a)
     with pytest.raises(ValueError, match=r"cannot read the image .*b\.png"):
         S.load_images(folder=tmp_path / "imgs")
+
+
+def test_edof_lens_helpers_refuse_depths_indices_and_counts():
+    """Main: dioptric_weights of one depth was an IndexError and of a 0 m depth NaN weights;
+    cubic_strength_guess took a negative ratio (a negative strength); to_hybrid(index=-1)
+    put the hybrid surface in front of every surface (a lens of 2N surfaces) and n_odd=0
+    failed inside JAX; with_binning(True) was binning 1."""
+    from jaxlens.experiments.edof import lenses as L
+
+    lens = L.classical_lens(binning=8)
+    with pytest.raises(ValueError, match=r"dioptric_weights: depths_m must be at least 2"):
+        L.dioptric_weights((0.1,))
+    with pytest.raises(ValueError, match=r"dioptric_weights: depths_m .*> 0 \(m"):
+        L.dioptric_weights((0.0, 1.0))
+    with pytest.raises(ValueError, match="cubic_strength_guess: ratio"):
+        L.cubic_strength_guess(lens, ratio=-1.0)
+    with pytest.raises(ValueError, match=r"to_hybrid: index must be a surface index in \[0, "):
+        L.to_hybrid(lens, index=-1)
+    with pytest.raises(ValueError, match="to_hybrid: n_odd"):
+        L.to_hybrid(lens, n_odd=0)
+    with pytest.raises(ValueError, match="with_binning: binning must be a whole number"):
+        L.with_binning(lens, True)
+    assert L.dioptric_weights((1.0, 0.1, 3.0)).sum() == pytest.approx(1.0)  # any order

@@ -376,7 +376,30 @@ def frames_and_layers():
     probe("Upsample c_in 4 (control)", lambda: shape(nets.Upsample(4, key=key)(jnp.ones((4, 4, 4)))), good=True)
 
 
-AREAS = [leftovers, dead_leaves, edof_scenes, edof_cli, edof_numbers, frames_and_layers]
+# ----------------------------------------------------------------------------- EDoF lens helpers
+def edof_lenses():
+    from jaxlens.experiments.edof import lenses as L
+    lens = L.classical_lens(binning=8)
+    probe("dioptric_weights () (no depth)", lambda: L.dioptric_weights(()), "depths_m")
+    probe("dioptric_weights (0.1,) (one depth)", lambda: L.dioptric_weights((0.1,)), "depths_m")
+    probe("dioptric_weights (0, 1) m", lambda: L.dioptric_weights((0.0, 1.0)), "depths_m")
+    probe("dioptric_weights (-1, 1) m", lambda: L.dioptric_weights((-1.0, 1.0)), "depths_m")
+    probe("dioptric_weights (1, 1, 3) repeated", lambda: L.dioptric_weights((1.0, 1.0, 3.0)), "depths_m")
+    probe("dioptric_weights (1, 0.1, 3) unsorted (control: any order)", lambda: float(L.dioptric_weights((1.0, 0.1, 3.0)).sum()), good=True)
+    probe("cubic_strength_guess ratio -1", lambda: L.cubic_strength_guess(lens, ratio=-1.0), "ratio")
+    probe("cubic_strength_guess depths ()", lambda: L.cubic_strength_guess(lens, depths_m=()), "depths_m")
+    probe("cubic_strength_guess depth 0 m", lambda: L.cubic_strength_guess(lens, depths_m=(0.0,)), "depths_m")
+    probe("to_hybrid n_odd 0", lambda: L.to_hybrid(lens, n_odd=0), "n_odd")
+    probe("to_hybrid n_odd -1", lambda: L.to_hybrid(lens, n_odd=-1), "n_odd")
+    probe("to_hybrid index 99", lambda: L.to_hybrid(lens, index=99), "index")
+    probe("to_hybrid index -1 (2N surfaces)", lambda: L.to_hybrid(lens, index=-1).num_surfaces, "index")
+    probe("with_binning True", lambda: L.with_binning(lens, True).sensor.resolution, "binning")
+    probe("with_binning 2.0", lambda: L.with_binning(lens, 2.0).sensor.resolution, "binning", "whole")
+    probe("odd_profile n 0", lambda: L.odd_profile(L.to_hybrid(lens), n=0), "n")
+    probe("odd_profile n 10**9 (7 EiB)", lambda: L.odd_profile(L.to_hybrid(lens), n=10**9), "n")
+
+
+AREAS = [leftovers, dead_leaves, edof_scenes, edof_cli, edof_numbers, frames_and_layers, edof_lenses]
 if os.environ.get("AUDIT26_AREAS"):
     AREAS = [a for a in AREAS if a.__name__ in os.environ["AUDIT26_AREAS"].split(",")]
 run(AREAS)
