@@ -4,16 +4,17 @@ happened) for what rounds 15-25 reached least. Counting each public name's menti
 tools/audit*_probe.py and tests/test_input_probes*.py, test_bad_input.py and
 test_silent_answers*.py put the EDoF experiment's modules last (none of
 ``jaxlens.experiments.edof``'s public functions was named once): the newest code
-(``dead_leaves``, ``scenes.training_images``, ``PatchSampler(weights=)``, ``--train-source``)
-and the statistics and noise helpers. Round 25's two leftovers are settled here too: a
+(``dead_leaves``, ``scenes.training_images``, ``PatchSampler(weights=)``, ``--train-source``),
+the statistics, noise and lens helpers, and image folders given to the CLI; then the next
+least named: ``coordinates.frames_after``/``frame_of`` and ``nets.NAFBlock``/``Upsample``. Round 25's two leftovers are settled here too: a
 ``Sellmeier`` with B and C swapped, and ``zernike_terms`` given coordinates in mm.
 
-Before (main at 48cf77a, an archive) and after (branch audit26), the same 110 probes,
+Before (main at 48cf77a, an archive) and after (branch audit26), the same 127 probes,
 ``PYTHONPATH=<tree> python tools/audit26_probe.py``, one 2-core machine shared (a probe that
 could run for ever is stopped after 20 s and counted "silent wrong": it took the input and
 started work that does not end; about 60 s a run on main, 15 s on the branch):
-    before: clear error: 28, crash: 10, ok: 14, silent wrong: 36, vague error: 22
-    after:  clear error: 93, ok: 17
+    before: clear error: 28, crash: 16, ok: 15, silent wrong: 43, vague error: 25
+    after:  clear error: 109, ok: 18
 
 A CLI probe runs the option checks only (``cli.check_args``): "silent wrong" there means the
 options were accepted, so the run would ignore what was given or fail after its set-up.
@@ -129,6 +130,23 @@ Probe (before -> after):
     Upsample c_in 3 (odd)                                        vague error  -> clear error
     Upsample c_in 0                                              clear error  -> clear error
     Upsample c_in 4 (control)                                    ok           -> ok
+    dioptric_weights () (no depth)                               crash        -> clear error
+    dioptric_weights (0.1,) (one depth)                          crash        -> clear error
+    dioptric_weights (0, 1) m                                    silent wrong -> clear error
+    dioptric_weights (-1, 1) m                                   silent wrong -> clear error
+    dioptric_weights (1, 1, 3) repeated                          silent wrong -> clear error
+    dioptric_weights (1, 0.1, 3) unsorted (control: any order)   ok           -> ok
+    cubic_strength_guess ratio -1                                silent wrong -> clear error
+    cubic_strength_guess depths ()                               vague error  -> clear error
+    cubic_strength_guess depth 0 m                               crash        -> clear error
+    to_hybrid n_odd 0                                            crash        -> clear error
+    to_hybrid n_odd -1                                           vague error  -> clear error
+    to_hybrid index 99                                           crash        -> clear error
+    to_hybrid index -1 (2N surfaces)                             silent wrong -> clear error
+    with_binning True                                            silent wrong -> clear error
+    with_binning 2.0                                             vague error  -> clear error
+    odd_profile n 0                                              silent wrong -> clear error
+    odd_profile n 10**9 (7 EiB)                                  crash        -> clear error
 
 Decisions on round 25's leftovers: ``zernike_terms`` keeps evaluating past the unit disc (a
 square grid's corners reach ρ = √2, a Zernike sag may hold a little past its normalisation
