@@ -213,3 +213,17 @@ def test_edof_lens_helpers_refuse_depths_indices_and_counts():
     with pytest.raises(ValueError, match="with_binning: binning must be a whole number"):
         L.with_binning(lens, True)
     assert L.dioptric_weights((1.0, 0.1, 3.0)).sum() == pytest.approx(1.0)  # any order
+
+
+def test_merge_refuses_an_out_folder_that_is_one_of_its_runs(tmp_path):
+    """Main: ``merge runA runB --out runA --overwrite`` was accepted (runA holds a finished
+    run), so the merge would replace one of the runs it read."""
+    from jaxlens.experiments.edof import merge
+    from jaxlens.experiments.runfolder import FINISHED, UsageError
+
+    for name in ("a", "b"):
+        (tmp_path / name).mkdir()
+        (tmp_path / name / FINISHED).write_text("")
+    runs = [str(tmp_path / "a"), str(tmp_path / "b")]
+    with pytest.raises(UsageError, match=r"--out .* one of the runs to merge"):
+        merge.run([*runs, "--out", str(tmp_path / "a"), "--overwrite"])
