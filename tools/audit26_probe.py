@@ -9,15 +9,17 @@ the statistics, noise and lens helpers, and image folders given to the CLI; then
 least named: ``coordinates.frames_after``/``frame_of`` and ``nets.NAFBlock``/``Upsample``. Round 25's two leftovers are settled here too: a
 ``Sellmeier`` with B and C swapped, and ``zernike_terms`` given coordinates in mm.
 
-Before (main at 48cf77a, an archive) and after (branch audit26), the same 127 probes,
+Before (main at 48cf77a, an archive) and after (branch audit26), the same 129 probes,
 ``PYTHONPATH=<tree> python tools/audit26_probe.py``, one 2-core machine shared (a probe that
 could run for ever is stopped after 20 s and counted "silent wrong": it took the input and
 started work that does not end; about 60 s a run on main, 15 s on the branch):
-    before: clear error: 28, crash: 16, ok: 15, silent wrong: 43, vague error: 25
-    after:  clear error: 109, ok: 18
+    before: clear error: 28, crash: 16, ok: 15, silent wrong: 43, vague error: 27
+    after:  clear error: 111, ok: 18
 
 A CLI probe runs the option checks only (``cli.check_args``): "silent wrong" there means the
 options were accepted, so the run would ignore what was given or fail after its set-up.
+The two ``edof.merge`` probes use run folders without their tables: main refused them for
+that ("vague error"); given real runs, ``--out`` = a run with ``--overwrite`` replaced it.
 
 Probe (before -> after):
     Sellmeier N-BK7 (control)                                    ok           -> ok
@@ -84,6 +86,8 @@ Probe (before -> after):
     edof --train-dir with a truncated PNG (names the file)       silent wrong -> clear error
     edof --test-dir with a text file named .jpg (names the file) silent wrong -> clear error
     scenes.load_images of a truncated PNG (names the file)       crash        -> clear error
+    edof.merge --out = one of the runs, --overwrite              vague error  -> clear error
+    edof.merge --out inside one of the runs                      vague error  -> clear error
     edof --train-source Dead-Leaves (case)                       clear error  -> clear error
     edof --train-source '' (empty)                               clear error  -> clear error
     bootstrap_gain 1-D diff (one seed as [crops])                vague error  -> clear error
@@ -330,6 +334,23 @@ def edof_cli():
     probe("edof --train-dir with a truncated PNG (names the file)", check("--train-dir", bad), "b.png")
     probe("edof --test-dir with a text file named .jpg (names the file)", check("--test-dir", other), "c.jpg")
     probe("scenes.load_images of a truncated PNG (names the file)", lambda: S.load_images(folder=bad), "b.png")
+    from jaxlens.experiments.edof import merge
+    from jaxlens.experiments.runfolder import FINISHED
+    runs = []
+    for name in ("run_a", "run_b"):
+        os.makedirs(os.path.join(TMP, name), exist_ok=True)
+        open(os.path.join(TMP, name, FINISHED), "w").close()
+        runs.append(os.path.join(TMP, name))
+
+    def merged(out):
+        def go():
+            try:
+                merge.run([*runs, "--out", out, "--overwrite"])
+            except UsageError as e:
+                raise ValueError(str(e)) from None
+        return go
+    probe("edof.merge --out = one of the runs, --overwrite", merged(runs[0]), "one of the runs")
+    probe("edof.merge --out inside one of the runs", merged(os.path.join(runs[1], "m")), "one of the runs")
     probe("edof --train-source Dead-Leaves (case)", check("--train-source", "Dead-Leaves"), "train-source")
     probe("edof --train-source '' (empty)", check("--train-source", ""), "train-source")
 
