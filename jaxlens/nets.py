@@ -80,6 +80,13 @@ def _sizes(where: str, **sizes) -> None:
         checks.number(v, arg, where, lo=1, hi=checks.MAX_SAMPLES, integer=True)
 
 
+def _channels_in(x, channels: int, where: str) -> None:
+    """An ``[H, W, C]`` input with the layer's C (a static shape: also under jit)."""
+    if jnp.ndim(x) != 3 or jnp.shape(x)[-1] != channels:
+        raise ValueError(f"{where}: expected an [H, W, {channels}] input (channels last), got "
+                         f"shape {jnp.shape(x)}")
+
+
 def _uniform(gen: np.random.Generator, shape, fan_in, dtype):
     """Uniform init with bound 1/sqrt(fan_in), as PyTorch's default for convolutions."""
     bound = 1.0 / math.sqrt(fan_in)
@@ -211,6 +218,14 @@ class NAFBlock(eqx.Module):
     gamma: Float[Array, " c"]
 
     def __init__(self, channels: int, *, dw_expand: int = 2, ffn_expand: int = 2, key, dtype=None):
+        # An int32 dtype made integer weights; an odd expanded width failed in simple_gate
+        # at the first call.
+        checks.float_dtype(dtype, "NAFBlock")
+        _sizes("NAFBlock", channels=channels, dw_expand=dw_expand, ffn_expand=ffn_expand)
+        for arg, v in (("dw_expand", dw_expand), ("ffn_expand", ffn_expand)):
+            if channels * v % 2:
+                raise ValueError(f"NAFBlock: channels · {arg} must be even (SimpleGate halves "
+                                 f"it), got {channels} · {v}")
         dtype = dtype or jnp.result_type(float)
         g = _generator(key)  # one stream, drawn layer by layer in this order
         c, dw_c, ffn_c = channels, channels * dw_expand, channels * ffn_expand
@@ -226,6 +241,7 @@ class NAFBlock(eqx.Module):
         self.gamma = jnp.zeros((c,), dtype)
 
     def __call__(self, x: Float[Array, "H W c"]) -> Float[Array, "H W c"]:
+        _channels_in(x, self.beta.shape[0], "NAFBlock")
         y = self.dw(self.expand(self.norm1(x)))
         y = simple_gate(y)
         y = y * self.sca(jnp.mean(y, axis=(0, 1)))  # simplified channel attention
@@ -246,9 +262,15 @@ class Upsample(eqx.Module):
     conv: Pointwise
 
     def __init__(self, c_in: int, *, key, dtype=None):
+        checks.float_dtype(dtype, "Upsample")
+        _sizes("Upsample", c_in=c_in)
+        if c_in % 2:  # the ×2 shuffle takes 4 of the 2·c_in channels at a time
+            raise ValueError(f"Upsample: c_in must be even (the pixel shuffle makes c_in / 2 "
+                             f"channels), got {c_in}")
         self.conv = Pointwise(c_in, 2 * c_in, key=key, dtype=dtype)
 
     def __call__(self, x):
+        _channels_in(x, self.conv.weight.shape[0], "Upsample")
         return _pixel_shuffle(self.conv(x), 2)
 
 

@@ -134,7 +134,8 @@ def zernike_terms(x: Float[ArrayLike, "*p"], y: Float[ArrayLike, "*p"], *, terms
                   indexing: str = "noll") -> Float[Array, "*p J"]:
     """The first ``terms`` Zernike polynomials at the points (x, y) (see the module notes).
 
-    Points outside the unit disc are evaluated as the polynomials continue there.
+    Points outside the unit disc are evaluated as the polynomials continue there, up to
+    ``MAX_RADIUS`` (2; beyond it the coordinates are not normalised, e.g. in mm: refused).
 
     Example:
         >>> import jax.numpy as jnp
@@ -143,7 +144,17 @@ def zernike_terms(x: Float[ArrayLike, "*p"], y: Float[ArrayLike, "*p"], *, terms
         [1.0, 0.0, 2.0, 1.732051]
     """
     terms = _check(indexing, terms, "zernike_terms")
+    for arg, v in (("x", x), ("y", y)):
+        checks.real_values(v, arg, "zernike_terms", "normalised pupil coordinate")
+    if jnp.shape(x) != jnp.shape(y):
+        try:
+            jnp.broadcast_shapes(jnp.shape(x), jnp.shape(y))
+        except ValueError:
+            raise ValueError(f"zernike_terms: x and y must have the same (or broadcastable) "
+                             f"shapes, got {jnp.shape(x)} and {jnp.shape(y)}") from None
     x, y = jnp.broadcast_arrays(jnp.asarray(x), jnp.asarray(y))
+    if not checks.is_traced((x, y)):
+        _check_radius(x, y, "zernike_terms")
     if not jnp.issubdtype(x.dtype, jnp.floating):
         x, y = x.astype(float), y.astype(float)
     r2 = x * x + y * y
@@ -161,6 +172,25 @@ def zernike_terms(x: Float[ArrayLike, "*p"], y: Float[ArrayLike, "*p"], *, terms
         ang = re[abs(m)] if m >= 0 else im[abs(m)]
         out.append(_norm(n, m, indexing) * radial * ang)
     return jnp.stack(out, -1)
+
+
+MAX_RADIUS = 2.0
+"""Largest ρ that ``zernike_terms`` evaluates. The polynomials continue beyond the unit
+disc (a square grid over it reaches ρ = √2, and a Zernike sag may hold a little past its
+normalisation radius), but at twice that radius a term of order n is ~2ⁿ times its edge
+value (4096 for Z37): points so far out are coordinates in mm or pixels, not normalised."""
+
+
+def _check_radius(x, y, where: str) -> None:
+    with np.errstate(invalid="ignore"):
+        r2 = np.asarray(x, float) ** 2 + np.asarray(y, float) ** 2
+    if r2.size and np.nanmax(r2, initial=0.0) > MAX_RADIUS**2:
+        i = int(np.nanargmax(r2))
+        raise ValueError(
+            f"{where}: points must be normalised to the unit disc (divide by the pupil or "
+            f"normalisation radius, e.g. in mm); got radius {float(np.sqrt(r2.flat[i])):.6g} "
+            f"at ({float(np.asarray(x).flat[i]):g}, {float(np.asarray(y).flat[i]):g}), "
+            f"beyond the {MAX_RADIUS:g} where the polynomials are evaluated")
 
 
 class ZernikeFit(eqx.Module):

@@ -59,7 +59,7 @@ class CoordinateBreak(AbstractSurface):
     tilt_z: Float[Array, ""] = number_field("tilt_z", default=0.0)
     semi_diameter: Float[Array, ""] = number_field(
         "semi_diameter", default_factory=lambda: jnp.asarray(jnp.inf))
-    order: int = eqx.field(static=True, default=0)
+    order: int = eqx.field(static=True, default=0, converter=checks.static_int)
 
     def __check_init__(self):
         if self.order not in (0, 1) or isinstance(self.order, bool):
@@ -147,6 +147,12 @@ def transform(cb: CoordinateBreak, z_vertex, p, d):
     return (q[0], q[1], q[2] + z_vertex), d
 
 
+def _check_lens(lens, where: str) -> None:
+    # Duck-typed: the Lens module imports this one. A string was an AttributeError.
+    if not (hasattr(lens, "num_surfaces") and hasattr(lens, "vertex_z")):
+        raise TypeError(f"{where}: lens must be a jaxlens.Lens, got {type(lens).__name__}")
+
+
 def frame_of(lens, index: int | None = None):
     """The frame that ``trace`` reports rays in after ``lens.surfaces[index]`` (``None``:
     the image surface), in global coordinates.
@@ -160,6 +166,7 @@ def frame_of(lens, index: int | None = None):
         the tracer is ``R @ p + t`` in global coordinates (surface 1's frame) and a direction
         ``d`` is ``R @ d``. The identity and zero without coordinate breaks.
     """
+    _check_lens(lens, "frame_of")
     last = lens.num_surfaces - 1
     if index is not None and (isinstance(index, bool) or not isinstance(index, (int, np.integer))
                               or not 0 <= index <= last):
@@ -172,7 +179,13 @@ def frame_of(lens, index: int | None = None):
 def frames_after(lens, n: int | None = None) -> list:
     """``[(R, t)]``: the tracer's frame (as ``frame_of``) before surface 1, then after each
     of the first ``n`` surfaces (all of them by default)."""
-    n = lens.num_surfaces if n is None else n
+    _check_lens(lens, "frames_after")
+    if n is not None and (isinstance(n, bool) or not isinstance(n, (int, np.integer))
+                          or not 0 <= n <= lens.num_surfaces):
+        # -1 gave the frame before surface 1 alone, past the end an IndexError.
+        raise ValueError(f"frames_after: n must be a surface count in [0, "
+                         f"{lens.num_surfaces}] (None: all), got {type(n).__name__} {n!r}")
+    n = lens.num_surfaces if n is None else int(n)
     zs = lens.vertex_z()
     dtype = jnp.result_type(lens.thickness)
     rot = jnp.eye(3, dtype=dtype)

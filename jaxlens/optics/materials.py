@@ -253,6 +253,38 @@ def _check_sellmeier_units(m, where: str) -> None:
             f"0.15–30 µm, so it describes no material; B is dimensionless and C in µm² "
             f"(N-BK7: B 1.04, 0.232, 1.01, C 0.00600, 0.0200, 103.6 µm²; C in nm² is "
             f"10**6 times too large), got B {checks.fmt(b)}, C {checks.fmt(c)}")
+    _check_sellmeier_swap(b, c, where)
+
+
+SWAP_PLAUSIBLE_ND = (1.0, 3.0)
+"""d-line indices of the glasses and crystals a Sellmeier formula is written for in the
+visible: a formula with no real index at the d line whose B and C exchanged give one in this
+range is read as B and C swapped."""
+
+
+def _sellmeier_nd_squared(b, c) -> float:
+    with np.errstate(all="ignore"):
+        return float(1.0 + np.sum(b * LAMBDA_D**2 / (LAMBDA_D**2 - c)))
+
+
+def _check_sellmeier_swap(b, c, where: str) -> None:
+    """B and C swapped (C the strengths, B the resonances, in µm²): N-BK7's puts poles at
+    0.48, 1.00 and 1.02 µm, and between them the index at the d line is the square root of a
+    negative number (NaN), while beyond 1.02 µm it is a finite 10. A formula meant for the
+    infrared only (germanium, a pole at 0.66 µm) also has no real index at the d line, but
+    exchanging its B and C gives none in ``SWAP_PLAUSIBLE_ND`` either, so it is kept."""
+    n2 = _sellmeier_nd_squared(b, c)
+    if np.isfinite(n2) and n2 >= 1.0 or np.any(c < 0):
+        return
+    swapped = _sellmeier_nd_squared(c, b)
+    lo, hi = SWAP_PLAUSIBLE_ND
+    if np.isfinite(swapped) and lo**2 <= swapped <= hi**2:
+        raise ValueError(
+            f"{where}: B and C look swapped: the formula has no real index at the d line "
+            f"(n² = {n2:.4g} at {LAMBDA_D} µm), and with B and C exchanged it gives "
+            f"{math.sqrt(swapped):.5f}; B holds the dimensionless strengths (N-BK7: 1.04, "
+            f"0.232, 1.01) and C the resonance wavelengths squared in µm² (N-BK7: 0.00600, "
+            f"0.0200, 103.6), got B {checks.fmt(b)}, C {checks.fmt(c)}")
 
 
 class Sellmeier(AbstractMaterial):

@@ -290,6 +290,11 @@ def check_args(a):
         if (a.resume or a.time_limit is not None) and a.checkpoint is None:
             raise ValueError("edof: --resume and --time-limit need --checkpoint (the folder "
                              "to resume from, or to save to before the time is up)")
+        if a.train_dir is not None and cfg.train_source == "dead-leaves":
+            # The photographs of the folder were loaded and then not used, without a word.
+            raise ValueError(f"edof: --train-dir {a.train_dir} gives photographs, but "
+                             f"--train-source dead-leaves trains on dead-leaves images only; "
+                             f"drop one, or use --train-source mixed for both")
         for opt, d in (("--train-dir", a.train_dir), ("--test-dir", a.test_dir)):
             if d is not None and not os.path.isdir(d):
                 raise ValueError(f"edof: {opt} {d} is not a folder")
@@ -297,7 +302,7 @@ def check_args(a):
                 from jaxlens.experiments.edof import scenes
 
                 try:
-                    scenes.folder_images(d)
+                    scenes.folder_images(d, verify=True)
                 except ValueError as e:
                     raise ValueError(f"edof: {opt}: {e}") from None
         # A file there would fail only when the first checkpoint or the record is written.

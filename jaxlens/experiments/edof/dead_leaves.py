@@ -21,11 +21,10 @@ rim.
 
 from __future__ import annotations
 
-import math
-
 import numpy as np
 
 from ...io.images import srgb_to_linear
+from ...optics import checks
 
 R_MIN_PX = 2.0
 """Smallest disc radius (pixels). It sets how much detail there is at the pixel scale, i.e.
@@ -38,8 +37,22 @@ images were not looked at for this choice."""
 MAX_SIDE = 4096
 """Largest image side (pixels) this generator takes (512² takes about 1 s on one core)."""
 
+MAX_PIXELS = 2**28
+"""Most pixels ``dead_leaves_images`` makes in one call (1024 images of 512², 16 of 4096²:
+3 GiB of float32 RGB and about 1 s per 512² image)."""
+
 _LEFT_OVER = 1e-3
 """Stop when no pixel has more than this fraction of its area left uncovered."""
+
+
+def _seed(seed, where: str, allow_none: bool = False) -> int | None:
+    """A NumPy seed: a whole number >= 0 (None: fresh entropy, where allowed)."""
+    if seed is None and allow_none:
+        return None
+    if isinstance(seed, bool) or not isinstance(seed, (int, np.integer)) or seed < 0:
+        raise ValueError(f"{where}: seed must be a whole number >= 0 (a NumPy seed), got "
+                         f"{seed!r}")
+    return int(seed)
 
 
 def _radii(rng: np.random.Generator, n: int, r_min: float, r_max: float) -> np.ndarray:
@@ -54,9 +67,10 @@ def dead_leaves(size: int, seed: int = 0, *, r_min: float = R_MIN_PX,
 
     Args:
         size: side of the square image (pixels), 8 to ``MAX_SIDE``.
-        seed: NumPy seed; the same seed gives the same image.
-        r_min, r_max: smallest and largest disc radius (pixels); ``r_max`` defaults to
-            ``size / 4``, so a few discs span much of the image.
+        seed: NumPy seed (a whole number >= 0, or None for fresh entropy); the same seed
+            gives the same image.
+        r_min, r_max: smallest and largest disc radius (pixels, 0.5 <= r_min <= r_max <=
+            size); ``r_max`` defaults to ``size / 4``, so a few discs span much of the image.
         contrast: sRGB colour values are 0.5 + contrast·(u − 0.5), u uniform in [0, 1]
             per channel; 1 spans the whole cube, smaller values give smaller steps between
             discs (0 to 1).
@@ -68,12 +82,18 @@ def dead_leaves(size: int, seed: int = 0, *, r_min: float = R_MIN_PX,
         raise ValueError(f"dead_leaves: size must be a whole number of pixels in [8, "
                          f"{MAX_SIDE}], got {size!r}")
     r_max = size / 4 if r_max is None else r_max
-    if not (math.isfinite(r_min) and math.isfinite(r_max) and 0.5 <= r_min <= r_max):
+    where = "dead_leaves"
+    # Up to the image side: disc centres are drawn over the image grown by r_max on each
+    # side, so with r_max = 10**6 on a 16-pixel image almost no disc met it (it ran for ever).
+    r_min = checks.number(r_min, "r_min", where, lo=0.5, hi=size, unit="pixels")
+    r_max = checks.number(r_max, "r_max", where, lo=0.5, hi=size,
+                          unit="pixels (r_min <= r_max <= size)")
+    if r_min > r_max:
         raise ValueError(f"dead_leaves: need 0.5 <= r_min <= r_max (pixels, finite), got "
                          f"r_min={r_min}, r_max={r_max}")
-    if not (isinstance(contrast, (int, float)) and 0.0 <= contrast <= 1.0):
-        raise ValueError(f"dead_leaves: contrast must be a number in [0, 1], got {contrast!r}")
-    rng = np.random.default_rng(seed)
+    contrast = checks.number(contrast, "contrast", where, lo=0.0, hi=1.0,
+                             unit="(a fraction: 1 spans the whole sRGB cube)")
+    rng = np.random.default_rng(_seed(seed, where, allow_none=True))
     light = np.zeros((size, size, 3))
     left = np.ones((size, size))  # area of each pixel that no disc has covered yet
     yy = np.arange(size, dtype=np.float64)[:, None] + 0.5  # pixel centres
@@ -104,9 +124,17 @@ def dead_leaves_images(count: int, size: int, seed: int = 0, *,
                        contrast: float = 1.0) -> list[np.ndarray]:
     """``count`` dead-leaves images of ``size²`` pixels (``contrast`` as for
     ``dead_leaves``), image ``i`` from seed ``(seed, i)``, so a set is reproducible and its
-    images differ."""
-    if not isinstance(count, (int, np.integer)) or not 1 <= count <= 1024:
+    images differ; at most ``MAX_PIXELS`` pixels in all."""
+    if not isinstance(count, (int, np.integer)) or isinstance(count, bool) or \
+            not 1 <= count <= 1024:
         raise ValueError(f"dead_leaves_images: count must be a whole number in [1, 1024], "
                          f"got {count!r}")
+    seed = _seed(seed, "dead_leaves_images")
+    if isinstance(size, (int, np.integer)) and count * size * size > MAX_PIXELS:
+        pixels = count * size * size
+        raise ValueError(f"dead_leaves_images: {count} images of {size}² pixels are "
+                         f"{pixels / 2**20:.0f} Mpixels ({pixels * 12 / 2**30:.0f} GiB), more "
+                         f"than the {MAX_PIXELS / 2**20:.0f} Mpixels made in one call; give "
+                         f"fewer or smaller images")
     return [dead_leaves(size, int(np.random.SeedSequence([seed, i]).generate_state(1)[0]),
                         contrast=contrast) for i in range(count)]

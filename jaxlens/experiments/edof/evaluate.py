@@ -24,6 +24,7 @@ import jax.numpy as jnp
 import numpy as np
 
 from ...imaging.tiled import convolve_tiles, wiener_tiles
+from ...optics import checks
 from .lenses import DEPTHS_M
 from .optics import add_noise
 
@@ -39,6 +40,7 @@ def _one(dec, window, kern, front_kern, mean_kern, key, nsr, photons, read):
 
 def placements(n: int, frame_tiles: tuple[int, int], crop_tiles: int) -> list[tuple[int, int]]:
     """Top-left tile of crop i: the frame's disjoint blocks of ``crop_tiles`` tiles in turn."""
+    n = checks.number(n, "n", "placements", lo=0, integer=True, unit="crops")
     br, bc = frame_tiles[0] // crop_tiles, frame_tiles[1] // crop_tiles
     if br < 1 or bc < 1:
         raise ValueError(f"placements: a crop of {crop_tiles} tiles does not fit the frame of "
@@ -106,13 +108,35 @@ def depth_key(d) -> str:
     return f"{float(d):g}"
 
 
+MAX_REPLICATES = 10**6
+"""Most bootstrap replicates (4000 give the 95 % interval's ends to about 1 %)."""
+
+
+def _paired_differences(diff, n, seed, where: str) -> np.ndarray:
+    """``diff [seeds, crops]`` as finite float64, with ``n`` replicates and ``seed`` checked
+    (before: a 1-D diff failed to unpack, ``n=0`` raised IndexError, NaN gave a NaN interval)."""
+    checks.real_values(diff, "diff", where, "dB")
+    d = np.asarray(diff, np.float64)
+    if d.ndim != 2 or 0 in d.shape:
+        raise ValueError(f"{where}: diff must be [seeds, crops] with at least one of each (a "
+                         f"single seed as [1, crops]), got shape {d.shape}")
+    if not np.all(np.isfinite(d)):
+        raise ValueError(f"{where}: diff must be finite, got {int(np.sum(~np.isfinite(d)))} "
+                         f"NaN or infinite value(s)")
+    checks.number(n, "n", where, lo=1, hi=MAX_REPLICATES, integer=True, unit="replicates")
+    if isinstance(seed, bool) or not isinstance(seed, (int, np.integer)) or seed < 0:
+        raise ValueError(f"{where}: seed must be a whole number >= 0 (a NumPy seed), got "
+                         f"{seed!r}")
+    return d
+
+
 def bootstrap_gain(diff: np.ndarray, *, n: int = 4000, seed: int = 0) -> dict:
     """Mean and two-level bootstrap 95 % interval of paired differences ``diff [seeds, crops]``.
 
     Each replicate draws the seeds and then the crops with replacement and averages; with
     one seed only the crops are resampled.
     """
-    diff = np.asarray(diff, np.float64)
+    diff = _paired_differences(diff, n, seed, "bootstrap_gain")
     s, c = diff.shape
     rng = np.random.default_rng(seed)
     si = rng.integers(0, s, (n, s)) if s > 1 else np.zeros((n, 1), int)
@@ -130,7 +154,7 @@ def bootstrap_gain_by_image(diff: np.ndarray, images, *, n: int = 4000, seed: in
     all with replacement. A test set with most crops from one large image (``scenes``:
     24 of 48 from retina) is then not summarised by that image alone.
     """
-    diff = np.asarray(diff, np.float64)
+    diff = _paired_differences(diff, n, seed, "bootstrap_gain_by_image")
     images = np.asarray(images)
     if images.shape != (diff.shape[1],):
         raise ValueError(f"bootstrap_gain_by_image: {diff.shape[1]} crops but "
@@ -161,7 +185,19 @@ def wiener_nsr(windows: np.ndarray, *, photons: float, read: float) -> float:
     """The noise-to-signal ratio of a gradient-prior Wiener filter from the noise model and
     training windows: ``NSR_SCALE`` times the mean noise variance over the mean square of the
     scene's pixel differences (horizontal and vertical, averaged)."""
+    where = "wiener_nsr"
+    photons = checks.number(photons, "photons", where, lo=0, lo_open=True,
+                            unit="electrons at the linear value 1")
+    read = checks.number(read, "read", where, lo=0, unit="(linear units)")
+    checks.real_values(windows, "windows", where, "linear values in [0, 1]")
     w = np.asarray(windows, np.float64)
+    fin = w[np.isfinite(w)]
+    if w.ndim < 3 or min(w.shape[-3:-1]) < 2 or fin.size < w.size or \
+            fin.min() < 0.0 or fin.max() > 1.0:
+        raise ValueError(f"{where}: windows must be [..., H, W, 3] finite linear values in "
+                         f"[0, 1], H, W >= 2, got shape {w.shape}, "
+                         f"{w.size - fin.size} NaN or infinite value(s)"
+                         + (f", values {fin.min():g} to {fin.max():g}" if fin.size else ""))
     noise = np.mean(np.maximum(w, 0.0) / photons + read * read)
     dx = np.diff(w, axis=-2)
     dy = np.diff(w, axis=-3)

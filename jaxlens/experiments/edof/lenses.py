@@ -39,6 +39,7 @@ import numpy as np
 from jaxtyping import Array, Float
 
 from ...design.params import AbstractParameterization
+from ...optics import checks
 from ...optics.lens import Lens, Sensor
 from ...optics.surfaces import EvenAsphere, Hybrid
 
@@ -47,6 +48,17 @@ CLASSICAL_FILE = "edof_classical.json"
 
 DEPTHS_M = (0.1, 0.15, 0.2, 0.3, 0.5, 1.0, 3.0, 10.0)
 """The paper's 8 training depths (m, from the aperture stop)."""
+
+
+def _depths(depths_m, where: str, least: int = 1) -> np.ndarray:
+    """Object depths (m): finite, > 0, distinct, at least ``least`` of them (before: one
+    depth was an IndexError, a 0 m depth NaN weights, -1 m a weight of its own)."""
+    checks.real_values(depths_m, "depths_m", where, "m")
+    d = np.asarray(depths_m, float).reshape(-1)
+    if d.size < least or not np.all(np.isfinite(d) & (d > 0)) or np.unique(d).size < d.size:
+        raise ValueError(f"{where}: depths_m must be at least {least} distinct finite depths "
+                         f"> 0 (m, from the stop), got {checks.fmt(d) if d.size else '()'}")
+    return d
 
 
 def dioptric_weights(depths_m=DEPTHS_M) -> np.ndarray:
@@ -58,7 +70,7 @@ def dioptric_weights(depths_m=DEPTHS_M) -> np.ndarray:
     dioptric mean is 5.7 D (18 cm), near the 20 cm focus; drawing the 8 depths uniformly
     has a mean of 3.6 D (28 cm), which pulls a trainable focus away from the near depths.
     """
-    dioptres = 1.0 / np.asarray(depths_m, float)
+    dioptres = 1.0 / _depths(depths_m, "dioptric_weights", least=2)
     near_first = np.argsort(-dioptres)
     d = dioptres[near_first]
     edges = np.concatenate([[2 * d[0] - d[1]], d, [2 * d[-1] - d[-2]]])
@@ -118,8 +130,10 @@ def classical_lens(*, binning: int = 1) -> Lens:
 
 def with_binning(lens: Lens, binning: int) -> Lens:
     """The lens with the paper's 7.20 mm-diagonal sensor binned ``binning`` × ``binning``."""
-    if binning < 1 or SPEC["sensor_pixels"][0] % binning:
-        raise ValueError(f"with_binning: binning must divide 1024, got {binning}")
+    if isinstance(binning, bool) or not isinstance(binning, (int, np.integer)) or \
+            binning < 1 or SPEC["sensor_pixels"][0] % binning:
+        raise ValueError(f"with_binning: binning must be a whole number that divides 1024 "
+                         f"(sensor pixels per side of a binned pixel), got {binning!r}")
     n = SPEC["sensor_pixels"][0] // binning
     sensor = Sensor((n, n), jnp.asarray(SPEC["pixel_size_mm"] * binning, lens.epd.dtype))
     return eqx.tree_at(lambda m: m.sensor, lens, sensor, is_leaf=lambda x: x is None)
@@ -140,6 +154,19 @@ def first_lens_surface(lens: Lens) -> int:
     return lens.stop + 1
 
 
+def _surface_index(lens: Lens, index, where: str) -> int:
+    """A surface index in [0, num_surfaces − 1] (default: the first after the stop): -1 put
+    the hybrid surface in front of every surface, a lens of twice the surfaces."""
+    if index is None:
+        return first_lens_surface(lens)
+    last = lens.num_surfaces - 1
+    if isinstance(index, bool) or not isinstance(index, (int, np.integer)) or \
+            not 0 <= index <= last:
+        raise ValueError(f"{where}: index must be a surface index in [0, {last}] (0-based; "
+                         f"None for the first surface after the stop), got {index!r}")
+    return int(index)
+
+
 def to_hybrid(lens: Lens, *, n_odd: int = 3, cubic: float = 0.0, index: int | None = None) -> Lens:
     """Replace a surface (default: the first after the stop) by a ``Hybrid`` surface.
 
@@ -147,7 +174,9 @@ def to_hybrid(lens: Lens, *, n_odd: int = 3, cubic: float = 0.0, index: int | No
     ``n_odd`` terms per axis (x³, x⁵, …), all zero except the cubic terms, set to ``cubic``
     (mm⁻²) on both axes.
     """
-    i = first_lens_surface(lens) if index is None else index
+    i = _surface_index(lens, index, "to_hybrid")
+    checks.number(n_odd, "n_odd", "to_hybrid", lo=1, hi=64, integer=True,
+                  unit="odd terms per axis (x³, x⁵, …)")
     s = lens.surfaces[i]
     coeffs = s.even_coeffs()
     dtype = jnp.result_type(s.c)
@@ -166,6 +195,9 @@ def cubic_strength_guess(lens: Lens, *, depths_m=DEPTHS_M, ratio: float = 1.5) -
     the first lens element, is set to ``ratio`` times the largest |W| over the depths (the
     Dowski–Cathey rule of thumb: the cubic term must dominate the defocus it hides).
     """
+    depths_m = _depths(depths_m, "cubic_strength_guess")
+    checks.number(ratio, "ratio", "cubic_strength_guess", lo=0, lo_open=True,
+                  unit="(cubic path over the largest defocus)")
     r = 0.5 * float(lens.epd)
     w = max(abs(0.5 * (1.0 / (1e3 * d) - 1.0 / FOCUS_DEPTH) * r * r) for d in depths_m)
     n = float(lens.materials[first_lens_surface(lens)].index(0.5876))
@@ -396,7 +428,9 @@ def odd_profile(lens: Lens, *, index: int | None = None, n: int = 101, radius=No
         ``(x [n] mm, height [n, n] mm)`` with ``height[i, j]`` at (x[j], y[i]); NaN outside
         the disc of ``radius`` (default the entrance-pupil radius).
     """
-    i = first_lens_surface(lens) if index is None else index
+    i = _surface_index(lens, index, "odd_profile")
+    n = checks.number(n, "n", "odd_profile", lo=2, hi=checks.MAX_IMAGE_SIDE, integer=True,
+                      unit="points per side")
     s = lens.surfaces[i]
     if not isinstance(s, Hybrid):
         raise ValueError(f"odd_profile: surface {i} is not a Hybrid surface")

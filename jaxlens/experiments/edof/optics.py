@@ -28,6 +28,7 @@ from jaxtyping import Array, Float
 
 from ...imaging import tiled
 from ...imaging.psf import GeometricPSF
+from ...optics import checks
 from ...optics.lens import Lens
 from .lenses import DEPTHS_M, WAVELENGTHS_RGB, object_depth
 
@@ -121,6 +122,10 @@ def add_noise(x, key, *, photons: float, read: float):
     in the same units as x. The same key gives the same normal draws for every lens, so
     comparisons between lenses are paired.
     """
+    if not checks.is_traced((photons, read)):  # photons 0 gave NaN, a negative one less noise
+        checks.number(photons, "photons", "add_noise", lo=0, lo_open=True,
+                      unit="electrons at the linear value 1")
+        checks.number(read, "read", "add_noise", lo=0, unit="(linear units)")
     var = jnp.maximum(x, 0.0) / photons + read * read
     return x + jnp.sqrt(var) * jax.random.normal(key, x.shape, x.dtype)
 

@@ -24,6 +24,8 @@ import pathlib
 
 import numpy as np
 
+from ...optics import checks
+
 TRAIN_IMAGES = (
     "astronaut",
     "immunohistochemistry",
@@ -92,11 +94,23 @@ def skimage_image(name: str) -> np.ndarray:
     return _to_float_rgb(fn())
 
 
-def folder_images(folder: str | os.PathLike) -> list[pathlib.Path]:
-    """The image files of a folder, sorted by name."""
+def folder_images(folder: str | os.PathLike, *, verify: bool = False) -> list[pathlib.Path]:
+    """The image files of a folder, sorted by name; ``verify``: each file's structure is
+    checked too (Pillow's ``verify``, without decoding), so that a truncated or mislabelled
+    file is named before a run's work, not after its lens set-up."""
     paths = sorted(p for p in pathlib.Path(folder).iterdir() if p.suffix.lower() in _EXTS)
     if not paths:
         raise ValueError(f"scenes: no image files ({', '.join(_EXTS)}) in {folder}")
+    if verify:
+        from PIL import Image
+
+        for p in paths:
+            try:
+                with Image.open(p) as im:
+                    im.verify()
+            except Exception as e:  # noqa: BLE001  (Pillow raises many kinds)
+                raise ValueError(f"scenes: cannot read the image {p}: {e}".splitlines()[0]
+                                 ) from None
     return paths
 
 
@@ -111,8 +125,15 @@ def load_images(
     if folder is not None:
         from skimage.io import imread
 
-        paths = folder_images(folder)
-        return [_downscale(_to_float_rgb(imread(p)), max_side) for p in paths]
+        out = []
+        for p in folder_images(folder):
+            try:
+                a = imread(p)
+            except (OSError, ValueError, SyntaxError) as e:  # truncated, not an image, …
+                raise ValueError(f"scenes: cannot read the image {p}: {e}".splitlines()[0]
+                                 ) from None
+            out.append(_downscale(_to_float_rgb(a), max_side))
+        return out
     return [_downscale(skimage_image(n), max_side) for n in names]
 
 
@@ -131,6 +152,10 @@ def training_images(source: str, photos: list[np.ndarray], *, count: int = DEAD_
     if source not in TRAIN_SOURCES:
         raise ValueError(f"scenes: training source must be one of {TRAIN_SOURCES}, got "
                          f"{source!r}")
+    if source != "dead-leaves" and not any(np.size(a) for a in photos):
+        raise ValueError(f"scenes: training source {source!r} needs photographs, got "
+                         f"{len(photos)} image(s) with no pixels; give images or use "
+                         f"'dead-leaves'")
     if source == "images":
         return list(photos), None
     leaves = dead_leaves_images(count, side, seed, contrast=DEAD_LEAVES_CONTRAST)
@@ -169,6 +194,20 @@ def test_crops(images, names, *, size: int, margin: int):
     return np.stack(wins).astype(np.float32), info
 
 
+def _check_image(a, where: str) -> None:
+    """A training image: real ``[H, W, 3]`` linear values in [0, 1] (8-bit codes 0…255 made
+    windows of 200, a grey or RGBA image failed deep in ``sample``)."""
+    checks.real_values(a, "the image", where.split(":")[0], "linear RGB in [0, 1]")
+    a = np.asarray(a)
+    if a.ndim != 3 or a.shape[-1] != 3 or 0 in a.shape:
+        raise ValueError(f"{where} must be an [H, W, 3] RGB image (scenes.load_images gives "
+                         f"them), got shape {a.shape}")
+    lo, hi = float(np.min(a)), float(np.max(a))
+    if not (0.0 <= lo and hi <= 1.0):
+        raise ValueError(f"{where} must hold finite linear values in [0, 1], got "
+                         f"{lo:g} to {hi:g} (8-bit codes? decode with io.images.to_linear)")
+
+
 class PatchSampler:
     """Random training windows with flips and 90° rotations, from a list of images.
 
@@ -182,7 +221,15 @@ class PatchSampler:
     """
 
     def __init__(self, images, window: int, seed: int = 0, weights=None):
-        self.window = window
+        where = "PatchSampler"
+        self.window = checks.number(window, "window", where, lo=1, hi=checks.MAX_IMAGE_SIDE,
+                                    integer=True, unit="pixels")
+        window = self.window
+        images = list(images)
+        if not images:
+            raise ValueError(f"{where}: images must hold at least one [H, W, 3] image, got none")
+        for i, a in enumerate(images):
+            _check_image(a, f"{where}: images[{i}]")
         self.images = []
         for a in images:
             ph, pw = max(0, window - a.shape[0]), max(0, window - a.shape[1])
@@ -192,15 +239,22 @@ class PatchSampler:
         if weights is None:
             area = np.array([a.shape[0] * a.shape[1] for a in self.images], np.float64)
             weights = area / area.sum()
+        checks.real_values(weights, "weights", where, "shares summing to 1")
         self.p = np.asarray(weights, np.float64)
         if self.p.shape != (len(self.images),) or not (
                 np.all(self.p >= 0) and abs(self.p.sum() - 1.0) < 1e-9):
             raise ValueError(f"PatchSampler: weights must be {len(self.images)} shares >= 0 "
                              f"summing to 1, got {weights!r}")
+        if isinstance(seed, bool) or not isinstance(seed, (int, np.integer)) or seed < 0:
+            raise ValueError(f"{where}: seed must be a whole number >= 0 (a NumPy seed), got "
+                             f"{seed!r}")
         self.rng = np.random.default_rng(seed)
 
     def sample(self, n: int) -> np.ndarray:
-        """``[n, window, window, 3]`` float32 windows."""
+        """``[n, window, window, 3]`` float32 windows (at most ``checks.MAX_WORKING_BYTES``)."""
+        most = max(1, checks.MAX_WORKING_BYTES // (12 * self.window**2))
+        n = checks.number(n, "n", "PatchSampler.sample", lo=0, hi=most, integer=True,
+                          unit=f"windows of {self.window}² pixels (memory)")
         out = np.empty((n, self.window, self.window, 3), np.float32)
         for b in range(n):
             a = self.images[self.rng.choice(len(self.images), p=self.p)]
