@@ -307,6 +307,17 @@ def static_int(value):
     return int(value) if isinstance(value, np.integer) else value
 
 
+def numpy_seed(seed, where: str, *, allow_none: bool = False) -> int | None:
+    """A NumPy seed: a whole number >= 0 (None, fresh entropy, where ``allow_none``). NumPy's
+    own refusal names no argument, and it takes a bool as 0 or 1."""
+    if seed is None and allow_none:
+        return None
+    if isinstance(seed, bool) or not isinstance(seed, (int, np.integer)) or seed < 0:
+        raise ValueError(f"{where}: seed must be a whole number >= 0 (a NumPy seed), got "
+                         f"{seed!r}")
+    return int(seed)
+
+
 def float_dtype(dtype, where: str, arg: str = "dtype"):
     """None or a floating dtype (float32, float64): an integer dtype would truncate
     coordinates to whole numbers; returns the dtype."""

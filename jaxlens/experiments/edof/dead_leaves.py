@@ -45,16 +45,6 @@ _LEFT_OVER = 1e-3
 """Stop when no pixel has more than this fraction of its area left uncovered."""
 
 
-def _seed(seed, where: str, allow_none: bool = False) -> int | None:
-    """A NumPy seed: a whole number >= 0 (None: fresh entropy, where allowed)."""
-    if seed is None and allow_none:
-        return None
-    if isinstance(seed, bool) or not isinstance(seed, (int, np.integer)) or seed < 0:
-        raise ValueError(f"{where}: seed must be a whole number >= 0 (a NumPy seed), got "
-                         f"{seed!r}")
-    return int(seed)
-
-
 def _radii(rng: np.random.Generator, n: int, r_min: float, r_max: float) -> np.ndarray:
     """Radii from p(r) ∝ r⁻³ on [r_min, r_max] (inverse of the CDF)."""
     u = rng.random(n)
@@ -93,7 +83,7 @@ def dead_leaves(size: int, seed: int = 0, *, r_min: float = R_MIN_PX,
                          f"r_min={r_min}, r_max={r_max}")
     contrast = checks.number(contrast, "contrast", where, lo=0.0, hi=1.0,
                              unit="(a fraction: 1 spans the whole sRGB cube)")
-    rng = np.random.default_rng(_seed(seed, where, allow_none=True))
+    rng = np.random.default_rng(checks.numpy_seed(seed, where, allow_none=True))
     light = np.zeros((size, size, 3))
     left = np.ones((size, size))  # area of each pixel that no disc has covered yet
     yy = np.arange(size, dtype=np.float64)[:, None] + 0.5  # pixel centres
@@ -129,7 +119,7 @@ def dead_leaves_images(count: int, size: int, seed: int = 0, *,
             not 1 <= count <= 1024:
         raise ValueError(f"dead_leaves_images: count must be a whole number in [1, 1024], "
                          f"got {count!r}")
-    seed = _seed(seed, "dead_leaves_images")
+    seed = checks.numpy_seed(seed, "dead_leaves_images")
     if isinstance(size, (int, np.integer)) and count * size * size > MAX_PIXELS:
         pixels = count * size * size
         raise ValueError(f"dead_leaves_images: {count} images of {size}² pixels are "

@@ -124,9 +124,7 @@ def _paired_differences(diff, n, seed, where: str) -> np.ndarray:
         raise ValueError(f"{where}: diff must be finite, got {int(np.sum(~np.isfinite(d)))} "
                          f"NaN or infinite value(s)")
     checks.number(n, "n", where, lo=1, hi=MAX_REPLICATES, integer=True, unit="replicates")
-    if isinstance(seed, bool) or not isinstance(seed, (int, np.integer)) or seed < 0:
-        raise ValueError(f"{where}: seed must be a whole number >= 0 (a NumPy seed), got "
-                         f"{seed!r}")
+    checks.numpy_seed(seed, where)
     return d
 
 

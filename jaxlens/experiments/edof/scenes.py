@@ -245,10 +245,7 @@ class PatchSampler:
                 np.all(self.p >= 0) and abs(self.p.sum() - 1.0) < 1e-9):
             raise ValueError(f"PatchSampler: weights must be {len(self.images)} shares >= 0 "
                              f"summing to 1, got {weights!r}")
-        if isinstance(seed, bool) or not isinstance(seed, (int, np.integer)) or seed < 0:
-            raise ValueError(f"{where}: seed must be a whole number >= 0 (a NumPy seed), got "
-                             f"{seed!r}")
-        self.rng = np.random.default_rng(seed)
+        self.rng = np.random.default_rng(checks.numpy_seed(seed, where))
 
     def sample(self, n: int) -> np.ndarray:
         """``[n, window, window, 3]`` float32 windows (at most ``checks.MAX_WORKING_BYTES``)."""
