@@ -15,6 +15,7 @@ from __future__ import annotations
 import dataclasses
 import math
 import re
+import warnings
 
 import equinox as eqx
 import jax
@@ -616,6 +617,30 @@ def field_angles(field, where: str, arg: str = "field"):
         raise ValueError(f"{msg}, got {fmt(a[bad])} deg (tan θ wraps at 90°: 120° would "
                          f"be traced as -60°)")
     return field
+
+
+RADIAN_FIELD_TOL = 1e-4
+"""A set of field angles (degrees) whose nonzero values all lie within this (in radians) of
+whole degrees written in radians, the largest at least ``RADIAN_FIELD_MIN_DEG``, is warned
+about as fields given in radians (``np.radians([0, 10, 20])`` traced as 0.17° and 0.35°)."""
+RADIAN_FIELD_MIN_DEG = 5
+
+
+def warn_if_radian_fields(fields, where: str, arg: str = "fields") -> None:
+    """Warn when concrete field angles look like radians (see ``RADIAN_FIELD_TOL``): a
+    warning, not a refusal, since 0.1745° may be meant."""
+    a = np.abs(np.asarray(fields, dtype=float)).ravel()
+    a = a[a > 0]
+    if a.size == 0 or a.max() >= math.pi / 2:
+        return
+    whole = np.round(np.degrees(a))
+    if whole.max() < RADIAN_FIELD_MIN_DEG or np.any(whole < 1) or \
+            np.any(np.abs(a - np.radians(whole)) >= RADIAN_FIELD_TOL):
+        return
+    meant = np.round(np.degrees(np.asarray(fields, dtype=float)), 2)
+    warnings.warn(f"{where}: {arg} {fmt(np.asarray(fields))} look like angles in radians "
+                  f"({fmt(meant)} deg); field angles are in degrees, so these trace as "
+                  f"fields of at most {a.max():.4g} deg", stacklevel=2)
 
 
 def one_field(field, where: str, hint: str = "analyse several fields one at a time"):

@@ -381,6 +381,7 @@ class Lens(eqx.Module):
                           unit="mm")
         if not checks.is_traced(self.fields):
             checks.field_angles(self.fields, "Lens", "fields")
+            checks.warn_if_radian_fields(self.fields, "Lens")
         if not checks.is_traced(self.wavelengths):
             checks.wavelengths(checks.NoMaterials, self.wavelengths, "Lens", "wavelengths")
         v = self.vignetting
