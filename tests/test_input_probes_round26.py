@@ -31,6 +31,22 @@ def test_sellmeier_with_b_and_c_swapped_is_refused_naming_both():
     assert float(ge.extrapolated_index(10.0)) == pytest.approx(4.00, abs=0.01)
 
 
+def test_sellmeier_with_c_as_resonance_wavelengths_is_refused():
+    """C typed as the resonance wavelengths in µm (√C) instead of µm²: N-BK7 became a glass
+    of nd 1.642 and Vd 4.1 without a word. Every shipped Sellmeier glass as given passes, and
+    so do infrared crystals (silicon, germanium, ZnSe) and rutile-like strong UV poles."""
+    with pytest.raises(ValueError, match=r"resonance wavelengths in µm.*Vd 4\.06.*1\.51680"):
+        jl.Sellmeier(BK7_B, tuple(np.sqrt(BK7_C)))
+    jl.Sellmeier((10.6684293, 0.0030434748, 1.54133408),
+                 (0.301516485**2, 1.13475115**2, 1104.0**2))  # silicon
+    jl.Sellmeier((4.45813734, 0.467216334, 2.89566290),
+                 (0.200859853**2, 0.391371166**2, 47.1362108**2))  # ZnSe
+    # Rutile (ordinary ray, Devore 1951: n² = 5.913 + 0.2441/(λ² − 0.0803)) as Sellmeier
+    # terms: nd 2.62 and Vd 9.9, the strongest dispersion of a transparent crystal.
+    rutile = jl.Sellmeier((5.913 - 1 - 0.2441 / 0.0803, 0.2441 / 0.0803), (0.0, 0.0803))
+    assert float(rutile.index(0.5875618)) == pytest.approx(2.62, abs=0.01)
+
+
 def test_zernike_terms_refuses_coordinates_that_are_not_normalised():
     """Main: points 7 mm out were evaluated (Z37 ~ 7¹² there) without a word; complex points
     lost their imaginary part's meaning (ρ² < 0)."""

