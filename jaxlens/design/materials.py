@@ -92,6 +92,18 @@ class HullMaterials(eqx.Module):
                           unit="(refractive index)")
             checks.values(c[:, 1], "corners Vd", "HullMaterials", lo=0, lo_open=True,
                           unit="(Abbe number)")
+            # Corners on one line (or repeated) made logits() fail on a singular matrix.
+            v = np.asarray(c, float) / np.array([catalog.ND_PER_VD, 1.0])
+            w = np.roll(v, -1, axis=0)
+            area = 0.5 * abs(np.sum(v[:, 0] * w[:, 1] - w[:, 0] * v[:, 1]))
+            if not area > 1e-9 * max(1.0, float(np.ptp(v, 0).max()) ** 2):
+                raise ValueError(f"HullMaterials: corners must span an area on the glass map "
+                                 f"(nd, Vd), got {len(v)} corners on one line or repeated: "
+                                 f"{np.asarray(c, float).round(5).tolist()}")
+        if not (isinstance(self.names, tuple) and all(isinstance(n, str) for n in self.names)
+                and len(self.names) in (0, c.shape[0])):  # names label the corners in messages
+            raise ValueError(f"HullMaterials: names must be () or a tuple of {c.shape[0]} str, "
+                             f"one per corner, got {self.names!r}")
 
     def nd_vd(self, m: Float[Array, "*b E V"]) -> Float[Array, "*b E 2"]:
         """(nd, Vd) of each element: the softmax-weighted mean of the corners."""
@@ -147,6 +159,9 @@ class TableMaterials(eqx.Module):
         if not checks.is_traced(w):
             checks.real_values(w, "wavelengths", "TableMaterials", "µm")
             checks.wavelengths(checks.NoMaterials, w, "TableMaterials", "wavelengths")
+            if len(np.unique(np.asarray(w))) < w.shape[0]:  # Tabulated refused it only later
+                raise ValueError(f"TableMaterials: wavelengths must be distinct (one index per "
+                                 f"wavelength), got {np.asarray(w).tolist()} µm")
 
     def materials(self, m: Float[Array, "E W"]) -> tuple[Tabulated, ...]:
         """One tabulated material per element (unbatched ``m``: indices at the wavelengths)."""
