@@ -131,6 +131,24 @@ def test_material_models_refuse_degenerate_hulls_names_and_repeated_wavelengths(
         D.TableMaterials([0.5876, 0.5876, 0.6563])
 
 
+def test_glass_map_points_and_the_efl_weight_are_checked():
+    """Main: ``HullMaterials.logits(nan, 50)`` failed as "cannot unpack non-iterable
+    NoneType", (Vd, nd) swapped gave a boundary point; a ``CatalogRegion`` with a NaN point
+    or one name for two points was built; ``Objective(efl_weight=-1)`` rewarded missing
+    the EFL target."""
+    hull = D.HullMaterials([[1.5, 60.0], [1.7, 30.0], [1.7, 55.0]])
+    for nd, vd in ((np.nan, 50.0), (50.0, 1.6)):
+        with pytest.raises(ValueError, match="HullMaterials.logits: nd must be"):
+            hull.logits(nd, vd)
+    with pytest.raises(ValueError, match="CatalogRegion: vd"):
+        D.CatalogRegion(("SCHOTT",), ("A", "B"), np.array([[1.5, np.nan], [1.6, 40.0]]))
+    with pytest.raises(ValueError, match=r"CatalogRegion: .*points \[1, 2\]"):
+        D.CatalogRegion(("SCHOTT",), ("A",), np.array([[1.5, 60.0], [1.6, 40.0]]))
+    assert len(D.CatalogRegion.of(("PLASTICS",)).names) >= 3
+    with pytest.raises(ValueError, match=r"Objective: efl_weight must be .* \[0, inf\)"):
+        D.Objective(None, None, jnp.zeros(2), efl=5.0, efl_weight=-1.0)
+
+
 def test_glass_info_of_air_says_it_is_air():
     """Main: "Unknown material 'AIR'. Closest catalog matches: GASIR2, …" although
     ``get_material("AIR")`` gives Air."""

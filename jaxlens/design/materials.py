@@ -122,6 +122,7 @@ class HullMaterials(eqx.Module):
         the corners' mean; the centre's share is spread over every corner, so every weight
         is positive when the point is inside the hull (exact then, up to the 1e-6 floor).
         """
+        _check_point(nd, vd, "HullMaterials.logits")  # NaN failed as "cannot unpack None"
         v = np.asarray(self.corners, float) / np.array([catalog.ND_PER_VD, 1.0])
         q = np.array([nd / catalog.ND_PER_VD, vd])
         g = v.mean(0)
@@ -183,6 +184,17 @@ class CatalogRegion:
     catalogs: tuple[str, ...]
     names: tuple[str, ...]
     points: np.ndarray
+
+    def __post_init__(self):  # before: NaN points or a name short were taken as given
+        pts = np.asarray(self.points, float)
+        if not (isinstance(self.catalogs, tuple) and isinstance(self.names, tuple)) or \
+                pts.shape != (len(self.names), 2):
+            raise ValueError(f"CatalogRegion: catalogs and names must be tuples and points "
+                             f"[{len(self.names)}, 2] (nd, Vd) of the names, got "
+                             f"{type(self.catalogs).__name__}, {type(self.names).__name__} and "
+                             f"points of shape {pts.shape}")
+        if len(pts):
+            _check_point(pts[:, 0], pts[:, 1], "CatalogRegion")
 
     @staticmethod
     def of(catalogs: Sequence[str] = DEFAULT_CATALOGS) -> CatalogRegion:
