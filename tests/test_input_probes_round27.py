@@ -87,7 +87,8 @@ def test_merge_and_design_and_tolerance_refuse_to_write_over_their_inputs(tmp_pa
 
 def test_object_depth_refuses_a_depth_behind_the_stop():
     """Main: -200 mm gave an object distance of -200 mm (a virtual object behind the
-    stop), 0 and NaN passed; traced depths stay unchecked."""
+    stop), 0 and NaN passed, and a stop behind surface 1 was added instead of subtracted;
+    traced depths stay unchecked."""
     from jaxlens.experiments.edof import lenses as L
 
     lens = L.classical_lens(binning=8)
@@ -97,6 +98,12 @@ def test_object_depth_refuses_a_depth_behind_the_stop():
     with pytest.raises(TypeError, match="object_depth: depth"):
         L.object_depth(lens, "200")
     assert float(L.object_depth(lens, np.inf)) == np.inf
+    # Main added stop_z: 100 mm in front of the Cooke triplet's stop (10.27 mm behind its
+    # surface 1) came out 110.27 mm from surface 1, not 89.73 mm.
+    cooke = jl.zoo.cooke_triplet()
+    stop_z = float(cooke.vertex_z()[cooke.stop])
+    assert stop_z == pytest.approx(10.26648, abs=1e-4)
+    assert float(L.object_depth(cooke, 100.0)) == pytest.approx(100.0 - stop_z)
     assert float(jax.jit(lambda d: L.object_depth(lens, d))(-1.0)) == pytest.approx(-1.0)
 
 

@@ -28,13 +28,15 @@ tolerance CLI's ``--out`` (written over by the report), and ``edof.design --out`
 record's ``base_lens.json`` in ``--record-dir`` (written over by the record).
 ``python -m jaxlens.experiments.classical`` reads no file or folder (materials are names;
 ``--ablation-out`` holds only its own columns): nothing there to destroy.
-``object_depth`` took a negative depth; ``get_material`` given nd and vd swapped listed no
+``object_depth`` took a negative depth (and added the stop's distance behind surface 1
+instead of subtracting it: 110.27 mm for 100 mm before the Cooke triplet's stop, not
+89.73 mm; the EDoF lenses are stop-first, stop_z = 0, so no result changes); ``get_material`` given nd and vd swapped listed no
 glass and did not say why.
 
 Before (main at c417ba1, an archive) and after (branch audit27), the same probes,
-``PYTHONPATH=<tree> python tools/audit27_probe.py``, 67 probes, about 5 s each way:
-    before: clear error: 23, crash: 2, ok: 12, silent wrong: 22, vague error: 8
-    after:  clear error: 55, ok: 12
+``PYTHONPATH=<tree> python tools/audit27_probe.py``, 68 probes, about 5 s each way:
+    before: clear error: 23, crash: 2, ok: 12, silent wrong: 23, vague error: 8
+    after:  clear error: 55, ok: 13
 The two "crash" rows on main are the work starting (the design, the tolerance analysis; the
 probe stops it there): the run would then have written over the file named.
 
@@ -56,6 +58,7 @@ Probe (before -> after):
     object_depth (200, -5) array                                             silent wrong -> clear error
     object_depth inf (control: at infinity)                                  ok           -> ok
     object_depth 200 (control)                                               ok           -> ok
+    object_depth 100 mm, Cooke triplet (stop 10.27 mm behind surface 1)      silent wrong -> ok
     object_depth traced -1 under jit (not checked)                           ok           -> ok
     get_material nd/vd swapped (64.17, 1.5168)                               vague error  -> clear error
     get_material nd/vd (1.5168, 64.17) (control: lists N-BK7)                clear error  -> clear error
@@ -257,6 +260,10 @@ def leftovers():
     probe("object_depth (200, -5) array", lambda: L.object_depth(lens, jnp.array([200.0, -5.0])), "depth")
     probe("object_depth inf (control: at infinity)", lambda: float(L.object_depth(lens, np.inf)), good=True)
     probe("object_depth 200 (control)", lambda: float(L.object_depth(lens, 200.0)), good=True)
+    cooke = zoo.cooke_triplet()
+    got = float(L.object_depth(cooke, 100.0))
+    want = 100.0 - float(cooke.vertex_z()[cooke.stop])
+    probe("object_depth 100 mm, Cooke triplet (stop 10.27 mm behind surface 1)", lambda: got, good=abs(got - want) < 1e-9)
     probe("object_depth traced -1 under jit (not checked)", lambda: float(jax.jit(lambda d: L.object_depth(lens, d))(-1.0)), good=True)
 
     def unknown(**k):
