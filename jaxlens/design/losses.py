@@ -305,6 +305,12 @@ class Objective(eqx.Module):
     efl_weight: float = eqx.field(static=True, default=1.0)
     reverse_rule: bool = eqx.field(static=True, default=False)
 
+    def __check_init__(self):  # before: a negative weight rewarded missing the EFL target
+        checks.number(self.efl_weight, "efl_weight", "Objective", lo=0,
+                      unit="(weight of the EFL residual)")
+        if self.efl is not None:
+            checks.number(self.efl, "efl", "Objective", unit="mm (None for a free EFL)")
+
     def __call__(self, params, args: StageArgs):
         res, aux = design_residuals(params, self.pmap, self.sampling, args, self.gap_bounds,
                                     reverse_rule=self.reverse_rule)

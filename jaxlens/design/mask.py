@@ -10,6 +10,7 @@ each in proportion to its error.
 from __future__ import annotations
 
 import jax.numpy as jnp
+import numpy as np
 from jaxtyping import Array, Float
 
 from ..optics import checks
@@ -44,6 +45,12 @@ def reweighting_mask(
             jnp.shape(area) != jnp.shape(rms)[-1:]:
         raise ValueError(f"reweighting_mask: area must be [K] = {jnp.shape(rms)[-1:]} (one "
                          f"share per field of rms), got shape {jnp.shape(area)}")
+    if area is not None and not checks.is_traced(area):
+        # NaN, negative or all-zero shares made the mean NaN or meaningless: every weight 1.
+        checks.values(area, "area", "reweighting_mask", lo=0, unit="(share of the sensor area)")
+        if not float(np.sum(area)) > 0:
+            raise ValueError(f"reweighting_mask: area must have a share > 0 for at least one "
+                             f"field (the weights of the mean), got all zeros {jnp.shape(area)}")
     w = jnp.ones_like(rms) if area is None else jnp.broadcast_to(area, rms.shape)
     mean = jnp.sum(w * rms, -1, keepdims=True) / jnp.sum(w, -1, keepdims=True)
     ok = mean > 0

@@ -92,6 +92,18 @@ class HullMaterials(eqx.Module):
                           unit="(refractive index)")
             checks.values(c[:, 1], "corners Vd", "HullMaterials", lo=0, lo_open=True,
                           unit="(Abbe number)")
+            # Corners on one line (or repeated) made logits() fail on a singular matrix.
+            v = np.asarray(c, float) / np.array([catalog.ND_PER_VD, 1.0])
+            w = np.roll(v, -1, axis=0)
+            area = 0.5 * abs(np.sum(v[:, 0] * w[:, 1] - w[:, 0] * v[:, 1]))
+            if not area > 1e-9 * max(1.0, float(np.ptp(v, 0).max()) ** 2):
+                raise ValueError(f"HullMaterials: corners must span an area on the glass map "
+                                 f"(nd, Vd), got {len(v)} corners on one line or repeated: "
+                                 f"{np.asarray(c, float).round(5).tolist()}")
+        if not (isinstance(self.names, tuple) and all(isinstance(n, str) for n in self.names)
+                and len(self.names) in (0, c.shape[0])):  # names label the corners in messages
+            raise ValueError(f"HullMaterials: names must be () or a tuple of {c.shape[0]} str, "
+                             f"one per corner, got {self.names!r}")
 
     def nd_vd(self, m: Float[Array, "*b E V"]) -> Float[Array, "*b E 2"]:
         """(nd, Vd) of each element: the softmax-weighted mean of the corners."""
@@ -110,6 +122,7 @@ class HullMaterials(eqx.Module):
         the corners' mean; the centre's share is spread over every corner, so every weight
         is positive when the point is inside the hull (exact then, up to the 1e-6 floor).
         """
+        _check_point(nd, vd, "HullMaterials.logits")  # NaN failed as "cannot unpack None"
         v = np.asarray(self.corners, float) / np.array([catalog.ND_PER_VD, 1.0])
         q = np.array([nd / catalog.ND_PER_VD, vd])
         g = v.mean(0)
@@ -147,6 +160,9 @@ class TableMaterials(eqx.Module):
         if not checks.is_traced(w):
             checks.real_values(w, "wavelengths", "TableMaterials", "µm")
             checks.wavelengths(checks.NoMaterials, w, "TableMaterials", "wavelengths")
+            if len(np.unique(np.asarray(w))) < w.shape[0]:  # Tabulated refused it only later
+                raise ValueError(f"TableMaterials: wavelengths must be distinct (one index per "
+                                 f"wavelength), got {np.asarray(w).tolist()} µm")
 
     def materials(self, m: Float[Array, "E W"]) -> tuple[Tabulated, ...]:
         """One tabulated material per element (unbatched ``m``: indices at the wavelengths)."""
@@ -168,6 +184,17 @@ class CatalogRegion:
     catalogs: tuple[str, ...]
     names: tuple[str, ...]
     points: np.ndarray
+
+    def __post_init__(self):  # before: NaN points or a name short were taken as given
+        pts = np.asarray(self.points, float)
+        if not (isinstance(self.catalogs, tuple) and isinstance(self.names, tuple)) or \
+                pts.shape != (len(self.names), 2):
+            raise ValueError(f"CatalogRegion: catalogs and names must be tuples and points "
+                             f"[{len(self.names)}, 2] (nd, Vd) of the names, got "
+                             f"{type(self.catalogs).__name__}, {type(self.names).__name__} and "
+                             f"points of shape {pts.shape}")
+        if len(pts):
+            _check_point(pts[:, 0], pts[:, 1], "CatalogRegion")
 
     @staticmethod
     def of(catalogs: Sequence[str] = DEFAULT_CATALOGS) -> CatalogRegion:

@@ -80,6 +80,31 @@ def check_writable(path: str, option: str) -> None:
                          f"writable folder)")
 
 
+def within(path: str, folder: str) -> bool:
+    """Whether ``path`` is ``folder`` or lies inside it (links resolved)."""
+    path, folder = os.path.realpath(path), os.path.realpath(folder)
+    return path == folder or path.startswith(folder.rstrip(os.sep) + os.sep)
+
+
+def refuse_inside_out(out: str, paths, prog: str) -> None:
+    """Refuse (UsageError) an input or side folder that is ``--out`` or lies inside it.
+
+    ``--out`` is written through a temporary folder and swapped into place at the end, so
+    whatever was in it (or is put there during the run) goes: with ``--overwrite`` when the
+    earlier run is replaced, and without it the run ends refused by its own files.
+
+    Args:
+        out: The ``--out`` folder.
+        paths: ``(option, path)`` pairs; a ``None`` path is skipped.
+        prog: The command's name for the message.
+    """
+    for option, path in paths:
+        if path is not None and within(path, out):
+            raise UsageError(f"{prog}: {option} {path} lies in --out {out} (or is it), which "
+                             f"the run replaces when it ends (and --overwrite clears): it "
+                             f"would be deleted; keep it outside --out")
+
+
 class RunFolder:
     """The output folder of one run, written through a temporary folder beside it.
 

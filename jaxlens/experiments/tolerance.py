@@ -334,6 +334,11 @@ def main(argv: list[str] | None = None) -> int:
         check_writable(args.out, "--out")
     except ValueError as e:
         return fail(prog, e)
+    for f in OUTPUT_FILES:  # the report was written over the design it analysed
+        if os.path.realpath(args.design) == os.path.realpath(os.path.join(args.out, f)):
+            return fail(prog, ValueError(f"design file {args.design} is the {f} that the "
+                                         f"report writes in --out {args.out}; choose another "
+                                         f"--out"))
     earlier = [f for f in OUTPUT_FILES if os.path.exists(os.path.join(args.out, f))]
     if earlier and not args.overwrite:
         return fail(prog, ValueError(f"--out {args.out} already holds {', '.join(earlier)} of an "

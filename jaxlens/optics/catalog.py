@@ -78,18 +78,8 @@ from .materials import (
     abbe_number,
 )
 
-__all__ = [
-    "CatalogMaterial",
-    "GlassRecord",
-    "SHIPPED_CATALOGS",
-    "catalog_names",
-    "get_material",
-    "glass_info",
-    "load_agf",
-    "nearest_glasses",
-    "parse_agf",
-    "register_catalog",
-]
+__all__ = ["CatalogMaterial", "GlassRecord", "SHIPPED_CATALOGS", "catalog_names", "get_material",
+           "glass_info", "load_agf", "nearest_glasses", "parse_agf", "register_catalog"]
 
 SHIPPED_CATALOGS = ("SCHOTT", "CDGM", "PLASTICS", "MISC", "OHARA", "HOYA", "HIKARI", "SUMITA",
                     "CORNING", "INFRARED", "LIGHTPATH", "HERAEUS", "UMICORE", "TOPAS", "ARCHER",
@@ -630,8 +620,8 @@ def _unknown(name: str, catalogs, nd: float | None = None,
              vd: float | None = None) -> ValueError:
     upper = {n.upper(): n for n in catalog_names(catalogs=catalogs)}
     close = difflib.get_close_matches(name.strip().upper(), list(upper), n=5, cutoff=0.0)
-    hint = ", ".join(upper[c] for c in close) if close else "none"
-    message = f"Unknown material {name!r}. Closest catalog matches: {hint}"
+    message = f"Unknown material {name!r}. Closest catalog matches: " + \
+        (", ".join(upper[c] for c in close) or "none")
     cat, _, glass = name.strip().partition(":")
     if glass and cat.strip().upper() in {c for c, _ in _search_order(None)}:
         # "SCHOTT:N-BK7" matched no name and listed other glasses than the one meant.
@@ -639,9 +629,13 @@ def _unknown(name: str, catalogs, nd: float | None = None,
                     f"{cat.strip().upper()!r})")
     elif catalogs is not None and (elsewhere := _find(name, None)) is not None:
         message += f". {name.strip()!r} is in catalog {elsewhere[0]}, not searched here"
+    if nd is not None and vd is not None and nd > MAX_ND and 1.0 < vd <= MAX_ND:
+        message += (f". nd {nd:g} and Vd {vd:g} look swapped (nd, the d-line index, is about "
+                    f"1.2–2.6; Vd, the Abbe number, 5–120)")  # the map then listed none
+        nd, vd = vd, nd
     if nd is not None and vd is not None and 1.0 < nd <= MAX_ND and 0.0 < vd < np.inf:
-        near = nearest_glasses(nd, vd, catalogs=catalogs)
-        listed = "; ".join(f"{c} {n} (nd {d:.5f}, Vd {v:.2f})" for c, n, d, v in near)
+        listed = "; ".join(f"{c} {n} (nd {d:.5f}, Vd {v:.2f})"
+                           for c, n, d, v in nearest_glasses(nd, vd, catalogs=catalogs))
         message += f". Optically closest to nd {nd:.5f}, Vd {vd:.2f}: {listed or 'none'}"
     return ValueError(message)
 
@@ -793,6 +787,9 @@ def glass_info(name: str, catalogs: str | Iterable[str] | None = None) -> tuple[
     if not isinstance(name, str):
         raise TypeError(f"glass_info: name must be a glass name (str), got "
                         f"{type(name).__name__} {name!r}")
+    if name.strip().upper() in ("", "AIR"):  # was "Unknown material 'AIR'" (GASIR2, …)
+        raise ValueError(f"glass_info: {name!r} is air (get_material gives Air), not a catalog "
+                         f"glass; it has no catalog nd and Vd")
     found = _find(name, catalogs)
     if found is None:
         raise _unknown(name, catalogs)

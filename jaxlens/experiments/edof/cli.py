@@ -65,6 +65,7 @@ from jaxlens.experiments.runfolder import (
     UsageError,
     check_writable,
     fail,
+    refuse_inside_out,
 )
 from jaxlens.optics import checks as input_checks
 
@@ -305,6 +306,10 @@ def check_args(a):
                     scenes.folder_images(d, verify=True)
                 except ValueError as e:
                     raise ValueError(f"edof: {opt}: {e}") from None
+        # A checkpoint or photographs inside --out were deleted when the run replaced it.
+        refuse_inside_out(a.out, (("--checkpoint", a.checkpoint), ("--record", a.record),
+                                  ("--train-dir", a.train_dir), ("--test-dir", a.test_dir)),
+                          "edof")
         # A file there would fail only when the first checkpoint or the record is written.
         for opt, d in (("--checkpoint", a.checkpoint), ("--record", a.record)):
             if d is not None and os.path.exists(d) and not os.path.isdir(d):

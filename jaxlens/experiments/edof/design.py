@@ -422,6 +422,12 @@ def _check_cli(p, a) -> list[int]:
         if os.path.exists(a.record_dir) and not os.path.isdir(a.record_dir):
             raise ValueError(f"--record-dir {a.record_dir} is a file, not a folder")
         check_writable(os.path.join(a.record_dir, "x"), "--record-dir")
+        clash = [n for n in record_files
+                 if os.path.realpath(a.out) == os.path.realpath(os.path.join(a.record_dir, n))]
+        if clash:  # the record was written over the lens just saved there
+            raise ValueError(f"--out {a.out} is the record's {clash[0]} in --record-dir "
+                             f"{a.record_dir}, which the record writes over; choose another "
+                             f"--out or --record-dir")
         there = [x for x in (a.out, *(os.path.join(a.record_dir, n) for n in record_files))
                  if os.path.exists(x)]
         if there and not a.overwrite:

@@ -145,8 +145,18 @@ def stop_z(lens: Lens) -> Array:
 
 
 def object_depth(lens: Lens, depth) -> Array:
-    """Object distance from surface 1 (mm) of an object ``depth`` mm in front of the stop."""
-    return jnp.asarray(depth) + stop_z(lens)
+    """Object distance from surface 1 (mm) of an object ``depth`` mm in front of the stop:
+    ``depth − stop_z`` (the stop lies ``stop_z`` behind surface 1; 0 for a stop-first lens).
+
+    Raises:
+        ValueError: For a concrete depth that is not > 0 mm (NaN, zero or behind the stop;
+            +inf, an object at infinity, is taken). Traced depths are not checked.
+    """
+    if not checks.is_traced(depth):  # -200 gave a virtual object 200 mm behind the stop
+        checks.real_values(depth, "depth", "object_depth", "mm")
+        checks.values(depth, "depth", "object_depth", lo=0, lo_open=True, unit="mm",
+                      inf_ok=True)
+    return jnp.asarray(depth) - stop_z(lens)  # was + : 2·stop_z too far behind a front group
 
 
 def first_lens_surface(lens: Lens) -> int:

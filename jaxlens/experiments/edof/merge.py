@@ -24,7 +24,13 @@ import sys
 import types
 
 from jaxlens.experiments.edof.report import checks, table2, table2_markdown
-from jaxlens.experiments.runfolder import OneLineParser, RunFolder, UsageError, fail
+from jaxlens.experiments.runfolder import (
+    OneLineParser,
+    RunFolder,
+    UsageError,
+    fail,
+    refuse_inside_out,
+)
 
 RUN_FILES = ("table2_per_image.json", "table2.json", "summary.json")
 NSR_RTOL = 1e-4
@@ -192,6 +198,8 @@ def run(argv=None) -> dict:
         if out_path == run_path or out_path.startswith(run_path + os.sep):
             raise UsageError(f"--out {a.out} is the run folder {r} (or inside it), one of the "
                              f"runs to merge; choose another folder for the merged table")
+    # A run inside --out went when --overwrite replaced --out by the merge.
+    refuse_inside_out(a.out, (("run", r) for r in a.runs), "edof.merge")
     folder = RunFolder(a.out, overwrite=a.overwrite)
     runs = [read_run(r) for r in a.runs]
     table, per_image, summary = merge_runs(runs, a.runs)
