@@ -7,6 +7,7 @@ file's text.
 """
 
 import math
+import warnings
 
 import equinox as eqx
 import jax
@@ -233,3 +234,15 @@ def test_every_other_consumer_handles_or_refuses_it(tmp_path):
     table = "\n".join(report._surface_table(block(image=jl.TiltedPlane(tan_y=0.3))))
     assert table.count("TILTSURF") == 2
     assert "tan_x=0.1 tan_y=-0.25" in table and "tan_y=0.3" in table
+
+
+@pytest.mark.parametrize("slope, meant", [(45.0, "tan_y = tan\\(45°\\) = 1\\b"),
+                                          (-30.0, "tan\\(-30°\\) = -0.57735"), (90.0, "89.36°")])
+def test_a_slope_that_is_a_whole_angle_in_degrees_is_warned_about(slope, meant):
+    """``tan_y = 45`` is an 88.7° tilt that rays barely meet, not the 45° it looks like."""
+    with pytest.warns(UserWarning, match=f"is a slope \\(tan θ\\).*{meant}"):
+        jl.TiltedPlane(tan_y=slope)
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")
+        for fine in (0.3, 1.0, 5.5, 7.0, -2.0):
+            jl.TiltedPlane(tan_x=fine, tan_y=fine)

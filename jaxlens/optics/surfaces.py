@@ -27,6 +27,7 @@ odd terms evaluates none.
 from __future__ import annotations
 
 import math
+import warnings
 from typing import ClassVar
 
 import equinox as eqx
@@ -253,6 +254,23 @@ class OddAsphere(AbstractSurface):
         return self.coeffs
 
 
+STEEP_SLOPE = 5.0
+"""A ``TiltedPlane`` slope at least this steep (a tilt of 78.7° or more) that is a whole
+multiple of 5 is warned about as an angle in degrees given for its tangent."""
+
+
+def _warn_if_degrees(name: str, slope: float) -> None:
+    """``tan_x = 45`` is an 88.7° tilt that rays barely meet, not 45°."""
+    if not (STEEP_SLOPE <= abs(slope) <= 90 and slope == round(slope) and slope % 5 == 0):
+        return
+    msg = (f"TiltedPlane: {name} = {slope:g} is a slope (tan θ), a tilt of "
+           f"{math.degrees(math.atan(slope)):.2f}°")
+    if abs(slope) < 90:
+        msg += (f"; for {slope:g}° give {name} = tan({slope:g}°) = "
+                f"{math.tan(math.radians(slope)):.6g}")
+    warnings.warn(msg, stacklevel=2)
+
+
 class TiltedPlane(AbstractSurface):
     """A plane through the vertex tilted against the x and y axes (Zemax TILTSURF).
 
@@ -282,6 +300,7 @@ class TiltedPlane(AbstractSurface):
             v = getattr(self, name)
             if not checks.is_traced(v):
                 checks.values(v, name, "TiltedPlane")
+                _warn_if_degrees(name, float(np.asarray(v)))
         self._check_numbers()
 
     @property
