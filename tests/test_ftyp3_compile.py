@@ -62,3 +62,24 @@ def test_an_unreachable_height_is_still_refused():
     with pytest.raises(ValueError, match=r"no real chief ray reaches the image height "
                                          r"\[0\.0, 3000\.0\] mm"):
         zmx_system.angles_from_real_image_heights(_singlet(), np.array([3000.0]))
+
+
+def test_newton_aux_is_taken_at_the_returned_root_and_the_steps_are_unchanged():
+    """``newton_2d(has_aux=True)``: the same iterate as without aux, bit for bit, and the
+    aux evaluated there (not at the iterate before the last step)."""
+    from jaxlens.imaging.newton import newton_2d
+
+    def miss(x, p):
+        return jnp.array([x[0] ** 3 + x[1] - p, x[1] ** 3 - x[0] + 0.5])
+
+    def miss_aux(x, p):
+        return miss(x, p), x  # the aux: the point it was evaluated at
+
+    for iters in (0, 1, 3, 12):
+        plain = newton_2d(miss, jnp.array([0.3, 0.2]), 1.5, iters, implicit_gradient=False)
+        x, at = newton_2d(miss_aux, jnp.array([0.3, 0.2]), 1.5, iters,
+                          implicit_gradient=False, has_aux=True)
+        assert np.array_equal(np.asarray(x), np.asarray(plain))
+        assert np.array_equal(np.asarray(at), np.asarray(x))
+    with pytest.raises(ValueError, match=r"has_aux=True needs plain Newton"):
+        newton_2d(miss_aux, jnp.zeros(2), 1.5, 3, has_aux=True)
