@@ -183,7 +183,8 @@ def _stop_chief_ray(lens, field, depth, wavelength, *, newton_iters, iters) -> R
     return eqx.tree_at(lambda r: r.valid, rays, rays.valid & aimed)
 
 
-def chief_point(lens, field, depth, newton_iters, *, with_valid: bool = False):
+def chief_point(lens, field, depth, newton_iters, *, with_valid: bool = False,
+                with_ray: bool = False):
     """Image-surface (x, y) of the real chief ray (through the stop centre), primary λ.
 
     A reference point, so it is traced without clipping or obscurations: a blocked chief
@@ -191,17 +192,21 @@ def chief_point(lens, field, depth, newton_iters, *, with_valid: bool = False):
     With ``with_valid``, ``(xy, valid)``: a chief ray that misses a surface or is totally
     reflected stops where it failed, and ``valid`` is False; so is it where the aim at the
     stop centre did not converge (``stop_chief_ray``; the point is then that of the last aim,
-    traced through)."""
+    traced through). With ``with_ray``, the aimed ray (``stop_chief_ray``'s) comes last as
+    well, so that a caller can trace it through another lens (the clipped one) without
+    aiming it again."""
     _check_chief_args(lens, field, depth, None, newton_iters)
     return _chief_point(lens, _array(field), _array(depth), newton_iters=newton_iters,
-                        with_valid=with_valid)
+                        with_valid=with_valid, with_ray=with_ray)
 
 
 @eqx.filter_jit
-def _chief_point(lens, field, depth, *, newton_iters, with_valid):
+def _chief_point(lens, field, depth, *, newton_iters, with_valid, with_ray=False):
     rays = _stop_chief_ray(lens, field, depth, None, newton_iters=newton_iters,
                            iters=sampling.AIM_ITERS)
     aimed = rays.valid[0]
-    rays = eqx.tree_at(lambda r: r.valid, rays, jnp.ones_like(rays.valid))
-    out = trace(unclipped(lens), rays, newton_iters=newton_iters, uniform=True)
-    return (out.origin[0, :2], out.valid[0] & aimed) if with_valid else out.origin[0, :2]
+    through = eqx.tree_at(lambda r: r.valid, rays, jnp.ones_like(rays.valid))
+    out = trace(unclipped(lens), through, newton_iters=newton_iters, uniform=True)
+    point = (out.origin[0, :2], out.valid[0] & aimed) if with_valid else (out.origin[0, :2],)
+    point = point + ((rays,) if with_ray else ())
+    return point if len(point) > 1 else point[0]

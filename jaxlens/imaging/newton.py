@@ -22,7 +22,7 @@ def _inverse(jac):
 
 
 def newton_2d(fn, x0, params, iters: int, *, implicit_gradient: bool = True, tol=None,
-              max_step=None, halvings: int = 0, has_valid: bool = False):
+              max_step=None, halvings: int = 0, has_valid: bool = False, has_aux: bool = False):
     """Solve fn(x, params) = 0 for x in R² by Newton's method with an implicit gradient.
 
     The iterations run without gradients; one last step with the Jacobian held fixed gives
@@ -48,43 +48,63 @@ def newton_2d(fn, x0, params, iters: int, *, implicit_gradient: bool = True, tol
             last, shortest one is taken anyway, except from an invalid point, where the
             full step is. 0: every step is the full (or limited) one.
         has_valid: see ``fn``.
+        has_aux: ``fn`` returns ``(out, aux)`` (``out`` as above); the result is then ``(x,
+            aux at x)``, aux from one more evaluation inside the loop (so a caller that
+            needs something computed at the root, such as the aimed ray, gets it without a
+            second copy of ``fn`` in its program). Only for plain Newton without the implicit
+            step (no ``tol``, ``halvings`` or ``implicit_gradient``).
 
     Returns:
-        x ``[2]``. With the defaults (no ``tol``, ``max_step`` or ``halvings``), plain
-        Newton: ``iters`` undamped steps and the implicit step. Whether the root was found
-        is for the caller to check (evaluate ``fn`` at the result).
+        x ``[2]`` (with ``has_aux``, ``(x, aux)``). With the defaults (no ``tol``,
+        ``max_step`` or ``halvings``), plain Newton: ``iters`` undamped steps and the
+        implicit step. Whether the root was found is for the caller to check (evaluate
+        ``fn`` at the result).
     """
     iters = checks.number(iters, "iters", "newton_2d", lo=0, integer=True,
                           unit="Newton iterations")
     halvings = checks.number(halvings, "halvings", "newton_2d", lo=0, integer=True,
                              unit="step halvings")
     search = halvings > 0
+    if has_aux and (tol is not None or search or implicit_gradient):
+        raise ValueError("newton_2d: has_aux=True needs plain Newton without the implicit "
+                         f"step (tol=None, halvings=0, implicit_gradient=False); got tol={tol}, "
+                         f"halvings={halvings}, implicit_gradient={implicit_gradient}")
+
+    def ev_aux(x, p):
+        out, aux = fn(x, p) if has_aux else (fn(x, p), None)
+        return (out if has_valid else (out, jnp.bool_(True))), aux
 
     def ev(x, p):
-        out = fn(x, p)
-        return out if has_valid else (out, jnp.bool_(True))
+        return ev_aux(x, p)[0]
 
     def norm(f):
         return jnp.sqrt(jnp.sum(f * f))
 
     p_s = jax.lax.stop_gradient(params)
 
-    def inv_step(x, p):
+    def inv_step_aux(x, p):
         # One forward-mode pass gives the residual and validity (as aux) and the Jacobian.
         def f_aux(y):
-            f, ok = ev(y, p)
-            return f, (f, ok)
+            (f, ok), aux = ev_aux(y, p)
+            return f, (f, ok, aux)
 
-        jac, (f, ok) = jax.jacfwd(f_aux, has_aux=True)(x)
-        return f, ok, _inverse(jac)
+        jac, (f, ok, aux) = jax.jacfwd(f_aux, has_aux=True)(x)
+        return f, ok, _inverse(jac), aux
 
-    def body(state):
-        i, x, _, _ = state
-        f, ok, inv = inv_step(x, p_s)
+    def inv_step(x, p):
+        return inv_step_aux(x, p)[:3]
+
+    def newton_dx(inv, f):
         dx = -(inv @ f)
         if max_step is not None:
             n = norm(dx)
             dx = dx * jnp.minimum(1.0, max_step / jnp.where(n > 0, n, 1.0))
+        return dx
+
+    def body(state):
+        i, x, _, _ = state
+        f, ok, inv = inv_step(x, p_s)
+        dx = newton_dx(inv, f)
         if not search:
             x_new = x + dx
             if tol is None:
@@ -114,6 +134,17 @@ def newton_2d(fn, x0, params, iters: int, *, implicit_gradient: bool = True, tol
         return i + 1, x + t * dx, jnp.where(lost, f1, f_new), jnp.where(lost, ok1, ok_new)
 
     x0 = jax.lax.stop_gradient(jnp.asarray(x0))
+    if has_aux:
+        # iters steps, then one more pass whose step is not taken: its aux is the root's.
+        def aux_body(i, carry):
+            x, _ = carry
+            f, _, inv, aux = inv_step_aux(x, p_s)
+            return jnp.where(i < iters, x + newton_dx(inv, f), x), aux
+
+        aux0 = jax.tree.map(lambda s: jnp.zeros(s.shape, s.dtype),
+                            jax.eval_shape(lambda x: ev_aux(x, p_s)[1], x0))
+        x, aux = jax.lax.fori_loop(0, iters + 1, aux_body, (x0, aux0))
+        return jax.lax.stop_gradient(x), aux
     if tol is None and not search:
         x = jax.lax.fori_loop(0, iters, lambda _, x: body((0, x, None, None))[1], x0)
     else:

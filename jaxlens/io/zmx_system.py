@@ -148,8 +148,8 @@ def angles_from_real_image_heights(lens: Lens, heights: np.ndarray) -> Lens:
     angles = []
     for target in xy:
         t = jnp.asarray(target)
-        field = _real_height_field(lens, t, jnp.asarray(k))
-        point, valid = _chief_ray_landing(lens, field)
+        field, ray = _real_height_field(lens, t, jnp.asarray(k))
+        point, valid = _chief_ray_landing(lens, ray)
         err = float(jnp.max(jnp.abs(point - t)))
         tol = max(REAL_HEIGHT_TOLERANCE, 64 * float(jnp.finfo(point.dtype).eps))
         if not (bool(valid) and err <= tol * (1 + abs(target).max())):
@@ -170,24 +170,30 @@ def _tangent_field(tan_xy):
 
 @eqx.filter_jit
 def _real_height_field(lens: Lens, target, k):
-    """The field (deg) whose real chief ray meets the image surface at ``target`` (mm)."""
+    """The field (deg) whose real chief ray meets the image surface at ``target`` (mm), and
+    that chief ray (aimed at the stop centre, ``aiming.stop_chief_ray``) in object space.
+
+    The ray comes from the solve's own last evaluation: aiming it again for the final check
+    compiled a second copy of the aiming and its traces (with a polynomial surface, the
+    Q-type asphere of rayoptics_ASL5040-UV.zmx, 3-4 s of its 10 s load)."""
     free = _geometry_only(lens)  # a clipped iterate would stop short of the image
 
     def miss(tan_xy, target):
-        point = aiming.chief_point(free, _tangent_field(tan_xy), lens.object_distance,
-                                   forward.DEFAULT_NEWTON_ITERS)
-        return point - target
+        point, ray = aiming.chief_point(free, _tangent_field(tan_xy), lens.object_distance,
+                                        forward.DEFAULT_NEWTON_ITERS, with_ray=True)
+        return point - target, ray
 
-    return _tangent_field(aiming.newton_2d(miss, target / k, target, 12,
-                                           implicit_gradient=False))
+    tan_xy, ray = aiming.newton_2d(miss, target / k, target, 12, implicit_gradient=False,
+                                   has_aux=True)
+    return _tangent_field(tan_xy), ray
 
 
 @eqx.filter_jit
-def _chief_ray_landing(lens: Lens, field):
-    """(x, y) on the image surface of the real chief ray of ``field`` (deg), and its validity
-    through the lens as it is (clipping apertures included)."""
-    out = forward.trace(lens, aiming.stop_chief_ray(lens, field, lens.object_distance),
-                        uniform=True)
+def _chief_ray_landing(lens: Lens, ray):
+    """(x, y) on the image surface of the aimed chief ``ray`` (``_real_height_field``'s), and
+    its validity through the lens as it is (clipping apertures included; False also where
+    the aim did not converge)."""
+    out = forward.trace(lens, ray, uniform=True)
     return out.origin[0, :2], out.valid[0]
 
 
