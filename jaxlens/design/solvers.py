@@ -133,7 +133,7 @@ class AbstractSolver(eqx.Module):
         for name in ("c", "a", "k", "d", "m"):  # 'no' is truthy (moved); Adam scaled by 0.5
             flag = getattr(free, name)
             is_bool = isinstance(flag, (bool, np.bool_)) or (
-                np.ndim(flag) == 0 and getattr(flag, "dtype", None) == bool)
+                np.ndim(flag) == 0 and getattr(getattr(flag, "dtype", None), "kind", "") == "b")
             if not is_bool and not (name == "m" and flag is None):
                 raise TypeError(f"{where}: free.{name} must be True or False (whether the "
                                 f"group moves), got {type(flag).__name__} {flag!r}")
