@@ -29,8 +29,8 @@ Round 27's leftovers:
    for 12 surfaces (JAX clamps the index: surfaces 3-12 took the second curvature), one
    aspheric term for six (broadcast over all six orders, each scaled by its own r_s power),
    a gap too many or too few (the lens's thickness list changed length), and an integer
-   ``c`` (``r_norm`` cast to int: 6.2 mm read as 6). All refused now, at trace time
-   (shapes and dtypes are static, so under jit/vmap too).
+   ``c`` (``r_norm`` cast to int: 1.17 mm read as 1, curvature 1.0/mm for 0.856/mm). All
+   refused now, at trace time (shapes and dtypes are static, so under jit/vmap too).
 
 Before (main at 4cda67e, an archive) and after (branch audit28), the same probes,
 ``PYTHONPATH=<tree> python tools/audit28_probe.py``, 47 probes, about 10 s each way:
