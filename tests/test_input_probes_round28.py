@@ -76,10 +76,10 @@ def test_formula_materials_refuse_2d_coefficients():
     """Main: ``Schott([[6 numbers]])`` indexed rows (``a[0]`` of a 2-D array) and gave six
     "indices", two of them NaN; Conrady three. Sellmeier already refused it."""
     schott = [2.27, -0.0101, 0.0108, 2e-4, -8e-6, 1e-6]
-    with pytest.raises(ValueError, match=r"Schott: coeffs must hold 6 coefficients \(a 1-D "
-                                         r"array\), got shape \(1, 6\)"):
+    with pytest.raises(ValueError, match=r"Schott: coeffs must hold 6 coefficients, got shape "
+                                         r"\(1, 6\) \(one 1-D array\)"):
         jl.Schott([schott])
-    with pytest.raises(ValueError, match=r"Conrady: coeffs must hold 3 coefficients \(a 1-D"):
+    with pytest.raises(ValueError, match=r"Conrady: coeffs must hold 3 .*\(one 1-D array\)"):
         Conrady([[1.5, 0.01, 1e-4]])
     assert abs(float(jl.Schott(schott).index(0.55)) - 1.51811) < 1e-5
 

@@ -156,7 +156,7 @@ def least_named():
     probe("LBFGSB ±inf (control)", lambda: D.LBFGSB(lambda q, a: q, lower=P(c=-np.inf, a=-np.inf, k=-np.inf, d=0.1), upper=inf), good=True)
 
     schott = [2.27, -0.0101, 0.0108, 2e-4, -8e-6, 1e-6]
-    probe("Schott coeffs [[6]] (six 'indices', two NaN)", lambda: jl.Schott([schott]).index(0.55), "coeffs", "1-D")
+    probe("Schott coeffs [[6]] (six 'indices', two NaN)", lambda: jl.Schott([schott]).index(0.55), "coeffs", "1-D array")
     probe("Conrady coeffs [[3]]", lambda: Conrady([[1.5, 0.01, 1e-4]]).index(0.55), "coeffs", "1-D")
     probe("Schott coeffs 6 (control)", lambda: float(jl.Schott(schott).index(0.55)), good=True)
     probe("Sellmeier 2-D B, C (control)", lambda: jl.Sellmeier([[1.0, 0.2]], [[0.006, 0.02]]), "B and C", "1-D")

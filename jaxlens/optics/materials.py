@@ -34,9 +34,9 @@ def _check_coeffs(m, count: int | None = None, field: str = "coeffs") -> None:
     a = getattr(m, field)
     where = f"{type(m).__name__}{f' {m.name!r}' if m.name else ''}"
     if a.ndim != 1 or (count is not None and a.shape[-1] != count):
-        want = (f"{count} coefficients (a 1-D array)" if count is not None
-                else "a 1-D array of coefficients")
-        raise ValueError(f"{where}: {field} must hold {want}, got shape {a.shape}")
+        want = f"{count} coefficients" if count is not None else "a 1-D array of coefficients"
+        one = " (one 1-D array)" if a.ndim != 1 and count is not None else ""
+        raise ValueError(f"{where}: {field} must hold {want}, got shape {a.shape}{one}")
     if not checks.is_traced(a):
         checks.values(a, field, where)
 
