@@ -79,6 +79,25 @@ class StageArgs(eqx.Module):
     reg_weights: Float[Array, " 3"]
     distortion_k: Float[Array, ""] = 0.0
 
+    def __check_init__(self):
+        # Built by ``curriculum.stage_args`` with a leading batch axis; checked where concrete.
+        # Before: beta 2 (a blend past the centroid), NaN, negative weights and two
+        # regulariser weights all ran. tan_max has no upper bound (fov < 180°).
+        where = "StageArgs"
+        if np.shape(self.reg_weights)[-1:] != (3,):
+            raise ValueError(f"{where}: reg_weights must end in 3 (obliquity, spacing, slope "
+                             f"weights), got shape {np.shape(self.reg_weights)}")
+        for arg, lo, hi, unit in (
+                ("tan_max", 0, None, "(tan of the half diagonal field, not degrees)"),
+                ("epd", 0, None, "mm"), ("focal", None, None, "mm"), ("beta", 0, 1, ""),
+                ("pin", 0, None, ""), ("spot_scale", 0, None, "1/mm²"),
+                ("field_weights", 0, None, ""), ("reg_weights", 0, None, ""),
+                ("distortion_k", None, None, "")):
+            v = getattr(self, arg)
+            if not checks.is_traced(v):
+                checks.real_values(v, arg, where, unit)
+                checks.values(v, arg, where, lo=lo, hi=hi, lo_open=arg == "epd", unit=unit)
+
 
 def radial_area_weights(fracs, sensor_size, n: int = 16) -> np.ndarray:
     """Share of the evaluation fields nearest to each radial field fraction (sums to 1).
@@ -167,6 +186,35 @@ class RayLoss(eqx.Module):
             pupil_weights=jnp.asarray(pw, dtype),
             wavelengths=jnp.asarray(wavelengths, dtype),
         )
+
+    def __check_init__(self):
+        # Built directly (not by ``make``), nothing was checked: fractions past the corner,
+        # wavelengths in nm, pupil points outside the pupil, and a weight list of another
+        # length (broadcast, or clamped by indexing) all ran.
+        where = "RayLoss"
+        k, p = np.shape(self.fracs), np.shape(self.pupil)
+        for arg, want in (("fracs", k[:1]), ("area", k[:1]), ("pupil", (p[:1] + (2,))),
+                          ("pupil_weights", p[:1]), ("wavelengths", None)):
+            shape = np.shape(getattr(self, arg))
+            if len(shape) != (2 if arg == "pupil" else 1) or (want is not None and shape != want):
+                n_k, n_p = (k[0] if k else "?"), (p[0] if p else "?")
+                raise ValueError(f"{where}: {arg} must have shape "
+                                 f"{want if want is not None else '(W,)'} (K = {n_k} fields, "
+                                 f"P = {n_p} pupil points), got {shape}")
+        for arg, lo, hi, unit in (("fracs", 0, 1, "(fraction of the half diagonal)"),
+                                  ("area", 0, None, ""), ("pupil", -1, 1, "(unit pupil)"),
+                                  ("pupil_weights", 0, None, "")):
+            v = getattr(self, arg)
+            if not checks.is_traced(v):
+                checks.real_values(v, arg, where, unit)
+                checks.values(v, arg, where, lo=lo, hi=hi, unit=unit)
+        if not checks.is_traced(self.pupil):
+            r = np.hypot(*np.asarray(self.pupil, float).T)
+            if np.any(r > 1 + 1e-9):
+                raise ValueError(f"{where}: pupil points must lie in the unit disc (normalised "
+                                 f"to the entrance pupil), got radius {checks.fmt(r.max())}")
+        if not checks.is_traced(self.wavelengths):
+            checks.wavelengths(checks.NoMaterials, self.wavelengths, where, "wavelengths")
 
     @property
     def n_fields(self) -> int:

@@ -92,6 +92,7 @@ class Parameterization(AbstractParameterization):
 
     def to_lens(self, p: LensParams) -> Lens:
         """The lens for one set of parameters (unbatched)."""
+        self._check_shapes(p)
         surfaces = list(self.template.surfaces)
         r = self.r_norm.astype(p.c.dtype)
         powers = 2 * jnp.arange(self.n_terms, dtype=p.c.dtype) + 3  # r_s^(2j+3)
@@ -113,6 +114,28 @@ class Parameterization(AbstractParameterization):
             self.template,
             (tuple(surfaces), thickness, materials),
         )
+
+    def _check_shapes(self, p) -> None:
+        """Shapes and dtypes are static, so this holds under jit, vmap and grad. A short group
+        was read past its end (JAX clamps the index: ``c[:2]`` gave every later surface the
+        second curvature), one aspheric term was broadcast over every order, a gap too many
+        or too few changed the lens, and an integer dtype truncated ``r_norm``."""
+        if not isinstance(p, LensParams):
+            raise TypeError(f"Parameterization.to_lens: params must be a LensParams, got "
+                            f"{type(p).__name__}")
+        s, g = len(self.optical), self.template.thickness.shape[-1] - 1
+        want = {"c": (s,), "a": (s, self.n_terms), "k": (s,), "d": (g,)}
+        for name, shape in want.items():
+            v = getattr(p, name)
+            dtype = getattr(v, "dtype", None)
+            if dtype is None or not jnp.issubdtype(dtype, jnp.floating):
+                what = f"{type(v).__name__} {v!r}" if dtype is None else f"dtype {dtype}"
+                raise TypeError(f"Parameterization.to_lens: params.{name} must be a float "
+                                f"array of shape {shape}, got {what}")
+            if tuple(v.shape) != shape:
+                raise ValueError(f"Parameterization.to_lens: params.{name} must have shape "
+                                 f"{shape} ({s} optical surfaces, {self.n_terms} aspheric "
+                                 f"terms, {g} free gaps), got {tuple(v.shape)}")
 
     @property
     def glass(self) -> tuple[int, ...]:

@@ -130,6 +130,13 @@ class AbstractSolver(eqx.Module):
         if not isinstance(free, LensParams):
             raise TypeError(f"{where}: free must be a LensParams of bools (which groups move), "
                             f"got {type(free).__name__} {free!r}")
+        for name in ("c", "a", "k", "d", "m"):  # 'no' is truthy (moved); Adam scaled by 0.5
+            flag = getattr(free, name)
+            is_bool = isinstance(flag, (bool, np.bool_)) or (
+                np.ndim(flag) == 0 and getattr(getattr(flag, "dtype", None), "kind", "") == "b")
+            if not is_bool and not (name == "m" and flag is None):
+                raise TypeError(f"{where}: free.{name} must be True or False (whether the "
+                                f"group moves), got {type(flag).__name__} {flag!r}")
         if hasattr(self, "inner"):  # the iterations of one step (a scan of that length)
             checks.number(self.inner, "inner", where, lo=1, hi=checks.MAX_STEPS, integer=True,
                           unit="iterations per step")
@@ -353,6 +360,22 @@ class LBFGSB(AbstractSolver):
                       unit="(L-BFGS memory pairs)")
         for arg in ("lower", "upper"):  # ±inf: an unbounded group
             _check_params(getattr(self, arg), arg, "LBFGSB", inf_ok=True, unit="bound")
+        for name in ("c", "a", "k", "d", "m"):  # swapped bounds: every step clipped to upper
+            lo, hi = getattr(self.lower, name), getattr(self.upper, name)
+            if lo is None or hi is None or checks.is_traced(lo) or checks.is_traced(hi):
+                continue
+            try:
+                lo, hi = np.broadcast_arrays(np.asarray(lo, float), np.asarray(hi, float))
+            except ValueError:
+                raise ValueError(f"LBFGSB: lower.{name} {np.shape(lo)} and upper.{name} "
+                                 f"{np.shape(hi)} do not broadcast together") from None
+            above = lo > hi
+            if above.any():
+                i = tuple(int(j) for j in np.unravel_index(np.argmax(above), above.shape))
+                lo_i, hi_i = lo[i], hi[i]
+                raise ValueError(f"LBFGSB: lower.{name} must be <= upper.{name} (are they "
+                                 f"swapped?), got lower {checks.fmt(lo_i)} > upper "
+                                 f"{checks.fmt(hi_i)}" + (f" at index {i}" if i else ""))
 
     def _solver(self):
         return jaxopt.LBFGSB(fun=self.loss_fn, has_aux=True, maxiter=1, history_size=self.history)

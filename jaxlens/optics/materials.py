@@ -28,13 +28,15 @@ LAMBDA_C = 0.6562725
 
 
 def _check_coeffs(m, count: int | None = None, field: str = "coeffs") -> None:
-    """A formula's coefficients: ``count`` of them (JAX would clamp a missing one's index and
-    read another coefficient in its place), and finite where concrete."""
+    """A formula's coefficients: one 1-D array of ``count`` (JAX would clamp a missing one's
+    index and read another coefficient in its place, and ``a[0]`` of a 2-D array is a row:
+    Schott ``[[…6…]]`` gave six "indices", two NaN), and finite where concrete."""
     a = getattr(m, field)
     where = f"{type(m).__name__}{f' {m.name!r}' if m.name else ''}"
-    if a.ndim < 1 or (count is not None and a.shape[-1] != count):
+    if a.ndim != 1 or (count is not None and a.shape[-1] != count):
         want = f"{count} coefficients" if count is not None else "a 1-D array of coefficients"
-        raise ValueError(f"{where}: {field} must hold {want}, got shape {a.shape}")
+        one = " (one 1-D array)" if a.ndim != 1 and count is not None else ""
+        raise ValueError(f"{where}: {field} must hold {want}, got shape {a.shape}{one}")
     if not checks.is_traced(a):
         checks.values(a, field, where)
 
