@@ -100,7 +100,8 @@ def test_training_images_need_photographs_for_images_and_mixed():
 def test_patch_sampler_refuses_images_it_cannot_sample():
     """Main: 8-bit codes gave windows of 200, a grey or RGBA image failed inside ``sample``,
     window 0 gave empty windows, no images a message about weights."""
-    with pytest.raises(ValueError, match=r"images\[0\] must hold finite linear values"):
+    with pytest.raises(ValueError,
+                       match=r"images\[0\] must be finite values in \[0, 1\] \(linear RGB\)"):
         S.PatchSampler([np.full((40, 40, 3), 200.0, np.float32)], 16)
     with pytest.raises(ValueError, match=r"images\[1\] must be an \[H, W, 3\]"):
         S.PatchSampler([PHOTO, PHOTO[..., 0]], 16)

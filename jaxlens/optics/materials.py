@@ -238,6 +238,14 @@ SELLMEIER_PROBE_UM = np.geomspace(0.15, 30.0, 241)
 """Wavelengths (µm) where a hand-given Sellmeier formula must give an index somewhere."""
 
 
+def _sellmeier_n2(b, c, wavelengths) -> np.ndarray:
+    """n² of the Sellmeier formula (numpy, concrete B and C) at ``wavelengths`` (µm); poles
+    and negative values are left as they come (the checks below read them)."""
+    w2 = np.asarray(wavelengths, float)[..., None] ** 2
+    with np.errstate(all="ignore"):
+        return 1.0 + np.sum(b * w2 / (w2 - c), axis=-1)
+
+
 def _check_sellmeier_units(m, where: str) -> None:
     """A Sellmeier formula of strengths B >= 0 that gives no finite index >= 1 at any
     wavelength in 0.15–30 µm describes no material: C given in nm² (N-BK7's 0.006 µm² as
@@ -246,9 +254,7 @@ def _check_sellmeier_units(m, where: str) -> None:
     b, c = _concrete(m.B), _concrete(m.C)
     if b is None or c is None or np.any(b < 0):  # a negative B: the index checks say why
         return
-    w2 = SELLMEIER_PROBE_UM[:, None] ** 2
-    with np.errstate(all="ignore"):
-        n2 = 1.0 + np.sum(b * w2 / (w2 - c), axis=-1)
+    n2 = _sellmeier_n2(b, c, SELLMEIER_PROBE_UM)
     if not np.any(np.isfinite(n2) & (n2 >= 1.0)):
         raise ValueError(
             f"{where}: the formula gives no finite index >= 1 at any wavelength in "
@@ -265,21 +271,16 @@ visible: a formula with no real index at the d line whose B and C exchanged give
 range is read as B and C swapped."""
 
 
-def _sellmeier_nd_squared(b, c) -> float:
-    with np.errstate(all="ignore"):
-        return float(1.0 + np.sum(b * LAMBDA_D**2 / (LAMBDA_D**2 - c)))
-
-
 def _check_sellmeier_swap(b, c, where: str) -> None:
     """B and C swapped (C the strengths, B the resonances, in µm²): N-BK7's puts poles at
     0.48, 1.00 and 1.02 µm, and between them the index at the d line is the square root of a
     negative number (NaN), while beyond 1.02 µm it is a finite 10. A formula meant for the
     infrared only (germanium, a pole at 0.66 µm) also has no real index at the d line, but
     exchanging its B and C gives none in ``SWAP_PLAUSIBLE_ND`` either, so it is kept."""
-    n2 = _sellmeier_nd_squared(b, c)
+    n2 = float(_sellmeier_n2(b, c, LAMBDA_D))
     if np.isfinite(n2) and n2 >= 1.0 or np.any(c < 0):
         return
-    swapped = _sellmeier_nd_squared(c, b)
+    swapped = float(_sellmeier_n2(c, b, LAMBDA_D))
     lo, hi = SWAP_PLAUSIBLE_ND
     if np.isfinite(swapped) and lo**2 <= swapped <= hi**2:
         raise ValueError(
@@ -297,9 +298,7 @@ written for."""
 
 def _sellmeier_nd_vd(b, c) -> tuple[float, float]:
     with np.errstate(all="ignore"):
-        n = np.sqrt(1.0 + np.sum(b * np.array([[LAMBDA_D], [LAMBDA_F], [LAMBDA_C]]) ** 2
-                                 / (np.array([[LAMBDA_D], [LAMBDA_F], [LAMBDA_C]]) ** 2 - c),
-                                 axis=-1))
+        n = np.sqrt(_sellmeier_n2(b, c, [LAMBDA_D, LAMBDA_F, LAMBDA_C]))
         return float(n[0]), float((n[0] - 1.0) / (n[1] - n[2]))
 
 

@@ -187,15 +187,10 @@ def wiener_nsr(windows: np.ndarray, *, photons: float, read: float) -> float:
     photons = checks.number(photons, "photons", where, lo=0, lo_open=True,
                             unit="electrons at the linear value 1")
     read = checks.number(read, "read", where, lo=0, unit="(linear units)")
-    checks.real_values(windows, "windows", where, "linear values in [0, 1]")
-    w = np.asarray(windows, np.float64)
-    fin = w[np.isfinite(w)]
-    if w.ndim < 3 or min(w.shape[-3:-1]) < 2 or fin.size < w.size or \
-            fin.min() < 0.0 or fin.max() > 1.0:
-        raise ValueError(f"{where}: windows must be [..., H, W, 3] finite linear values in "
-                         f"[0, 1], H, W >= 2, got shape {w.shape}, "
-                         f"{w.size - fin.size} NaN or infinite value(s)"
-                         + (f", values {fin.min():g} to {fin.max():g}" if fin.size else ""))
+    if np.ndim(windows) < 3 or min(np.shape(windows)[-3:-1]) < 2:
+        raise ValueError(f"{where}: windows must be [..., H, W, 3] with H, W >= 2, got shape "
+                         f"{np.shape(windows)}")
+    w = checks.float_image(windows, where, "windows", lo=0.0, hi=1.0, unit="linear values")
     noise = np.mean(np.maximum(w, 0.0) / photons + read * read)
     dx = np.diff(w, axis=-2)
     dy = np.diff(w, axis=-3)

@@ -30,6 +30,7 @@ from jaxlens.experiments.runfolder import (
     UsageError,
     fail,
     refuse_inside_out,
+    within,
 )
 
 RUN_FILES = ("table2_per_image.json", "table2.json", "summary.json")
@@ -191,11 +192,9 @@ def run(argv=None) -> dict:
     """Merge the runs named in ``argv``; returns the merged summary."""
     argv = list(sys.argv[1:] if argv is None else argv)
     a = build_parser().parse_args(argv)
-    out_path = os.path.realpath(a.out)
     for r in a.runs:
         # With --overwrite, --out naming an input run replaced that run by the merge.
-        run_path = os.path.realpath(r)
-        if out_path == run_path or out_path.startswith(run_path + os.sep):
+        if within(a.out, r):
             raise UsageError(f"--out {a.out} is the run folder {r} (or inside it), one of the "
                              f"runs to merge; choose another folder for the merged table")
     # A run inside --out went when --overwrite replaced --out by the merge.

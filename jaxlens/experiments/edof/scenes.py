@@ -194,18 +194,15 @@ def test_crops(images, names, *, size: int, margin: int):
     return np.stack(wins).astype(np.float32), info
 
 
-def _check_image(a, where: str) -> None:
+def _check_image(a, where: str, arg: str) -> None:
     """A training image: real ``[H, W, 3]`` linear values in [0, 1] (8-bit codes 0…255 made
     windows of 200, a grey or RGBA image failed deep in ``sample``)."""
-    checks.real_values(a, "the image", where.split(":")[0], "linear RGB in [0, 1]")
-    a = np.asarray(a)
-    if a.ndim != 3 or a.shape[-1] != 3 or 0 in a.shape:
-        raise ValueError(f"{where} must be an [H, W, 3] RGB image (scenes.load_images gives "
-                         f"them), got shape {a.shape}")
-    lo, hi = float(np.min(a)), float(np.max(a))
-    if not (0.0 <= lo and hi <= 1.0):
-        raise ValueError(f"{where} must hold finite linear values in [0, 1], got "
-                         f"{lo:g} to {hi:g} (8-bit codes? decode with io.images.to_linear)")
+    shape = np.shape(a)
+    if len(shape) != 3 or shape[-1] != 3 or 0 in shape:
+        raise ValueError(f"{where}: {arg} must be an [H, W, 3] RGB image (scenes.load_images "
+                         f"gives them), got shape {shape}")
+    checks.float_image(a, where, arg, lo=0.0, hi=1.0, unit="linear RGB",
+                       hint=" (8-bit codes? decode with io.images.to_linear)")
 
 
 class PatchSampler:
@@ -229,7 +226,7 @@ class PatchSampler:
         if not images:
             raise ValueError(f"{where}: images must hold at least one [H, W, 3] image, got none")
         for i, a in enumerate(images):
-            _check_image(a, f"{where}: images[{i}]")
+            _check_image(a, where, f"images[{i}]")
         self.images = []
         for a in images:
             ph, pw = max(0, window - a.shape[0]), max(0, window - a.shape[1])
