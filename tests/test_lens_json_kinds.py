@@ -22,9 +22,7 @@ import jaxlens as jl
 from jaxlens.io import zmx
 
 DATA = os.path.join(os.path.dirname(__file__), "data", "zmx")
-# ASL5040-UV's real-height fields take 15 s to solve: slow (CI time).
-FILES = [pytest.param(p, marks=pytest.mark.slow) if "ASL5040" in p else p
-         for p in sorted(glob.glob(os.path.join(DATA, "**", "*"), recursive=True))
+FILES = [p for p in sorted(glob.glob(os.path.join(DATA, "**", "*"), recursive=True))
          if p.lower().endswith(".zmx")]
 
 

@@ -12,8 +12,8 @@ import equinox as eqx
 import jax.numpy as jnp
 import numpy as np
 
-from ..imaging import aiming
-from ..optics import paraxial
+from ..imaging import aiming, sampling
+from ..optics import paraxial, symmetry
 from ..optics.lens import Lens, unclipped
 from ..optics.materials import Air
 from ..tracing import forward
@@ -145,10 +145,17 @@ def angles_from_real_image_heights(lens: Lens, heights: np.ndarray) -> Lens:
     if not (math.isfinite(k) and k != 0.0):
         raise ValueError(f"real image heights cannot be converted to angles: the paraxial "
                          f"image height per unit field tangent is {k:g} mm")
+    # A zero height on a rotationally symmetric lens is field 0 (its chief ray is the axis):
+    # no solve, whose compile was most of such a file's load (ASL5040-UV, a Q-type asphere:
+    # 9 s of 10).
+    round_lens = symmetry.rotationally_symmetric(lens)
     angles = []
     for target in xy:
         t = jnp.asarray(target)
-        field, ray = _real_height_field(lens, t, jnp.asarray(k))
+        if round_lens and not np.any(target):
+            field, ray = jnp.zeros(2, t.dtype), _axial_ray(lens)
+        else:
+            field, ray = _real_height_field(lens, t, jnp.asarray(k))
         point, valid = _chief_ray_landing(lens, ray)
         err = float(jnp.max(jnp.abs(point - t)))
         tol = max(REAL_HEIGHT_TOLERANCE, 64 * float(jnp.finfo(point.dtype).eps))
@@ -159,6 +166,16 @@ def angles_from_real_image_heights(lens: Lens, heights: np.ndarray) -> Lens:
         angles.append(np.asarray(field, np.float64))
     a = np.array(angles)
     return eqx.tree_at(lambda m: m.fields, lens, jnp.asarray(a[:, 1] if h.ndim == 1 else a))
+
+
+def _axial_ray(lens: Lens):
+    """The ray along the axis from the object (from the paraxial entrance pupil's centre for
+    an object at infinity): the chief ray of field 0 of a rotationally symmetric lens."""
+    pupil = jnp.zeros((1, 2))
+    if lens.object_at_infinity:
+        return sampling.collimated(lens, 0.0, pupil, aim="paraxial")
+    point = sampling.object_point(lens, 0.0, lens.object_distance)
+    return sampling.point_source(lens, point, pupil, aim="paraxial")
 
 
 def _tangent_field(tan_xy):
