@@ -2,6 +2,7 @@
 what main did with the input: a silent answer, or work that started on a slip of units."""
 
 import pathlib
+import warnings
 
 import jax
 import jax.numpy as jnp
@@ -22,17 +23,21 @@ def cooke():
 
 def test_analyses_warn_about_fields_in_radians(cooke):
     """Main: ``field_curvature``, ``ray_fan`` and ``rms_spot`` traced radians as 0.24° and
-    0.35° without a word (``Lens`` already warned). The checks skip traced fields."""
-    with pytest.warns(UserWarning, match=r"field_curvature: fields .* look like angles in "
-                                         r"radians \(\[ 0\., 14\., 20\.\] deg\)"):
-        A.field_curvature(cooke, RADIANS)
-    with pytest.warns(UserWarning, match=r"ray_fan: field 0\.3491 look like angles in radians"):
-        A.ray_fan(cooke, 0.3491, n=3)
-    with pytest.warns(UserWarning, match=r"rms_spot: fields .* radians"):
-        A.rms_spot(cooke, RADIANS)
-    # Controls: degrees, small fields in degrees, and traced fields (not checked), silent.
-    A.field_curvature(cooke, [0.0, 0.1, 0.5])
-    jax.jit(lambda f: A.field_curvature(cooke, f).tangential)(jnp.array(RADIANS))
+    0.35° without a word (``Lens`` already warned). The warning comes before any tracing
+    (raised here as an error); traced fields are not checked."""
+    with warnings.catch_warnings():
+        warnings.simplefilter("error", UserWarning)
+        with pytest.raises(UserWarning, match=r"field_curvature: fields .* look like angles "
+                                              r"in radians \(\[ 0\., 14\., 20\.\] deg\)"):
+            A.field_curvature(cooke, RADIANS)
+        with pytest.raises(UserWarning, match=r"ray_fan: field 0\.3491 look like angles in "
+                                              r"radians"):
+            A.ray_fan(cooke, 0.3491, n=3)
+        with pytest.raises(UserWarning, match=r"rms_spot: fields .* radians"):
+            A.rms_spot(cooke, RADIANS)
+        # Controls: small fields in degrees, and traced fields (not checked), silent.
+        jax.jit(lambda f: A.field_curvature(cooke, f).tangential)(jnp.array(RADIANS))
+        A.field_curvature(cooke, [0.0, 0.1, 0.5])
 
 
 def test_edof_depths_given_in_mm_are_refused():
@@ -83,3 +88,20 @@ def test_benchmarks_refuse_a_foreign_readme_and_repeated_names(tmp_path, monkeyp
     (tmp_path / "README.md").write_text("# jaxlens benchmark results\n")  # an earlier run's
     with pytest.raises(Started):
         BR.main(["--smoke", "--only", "skipping", "--out", str(tmp_path)])
+
+
+def test_edof_cli_refuses_read_noise_in_electrons_and_a_kernel_wider_than_the_frame(tmp_path):
+    """Main: ``--read-noise 4`` (electrons) trained on noise four times the full signal, and
+    ``--kernel 1001`` with a 512-pixel frame was taken."""
+    from jaxlens.experiments.edof import cli
+    from jaxlens.experiments.runfolder import UsageError
+
+    def check(*argv):
+        cli.check_args(cli.build_parser().parse_args(["--out", str(tmp_path / "o"), *argv]))
+
+    with pytest.raises(UsageError, match=r"--read-noise must be at most 0\.5 .*\(was it in "
+                                         r"electrons\? 4 e⁻ at --photons 2000 is 0\.002"):
+        check("--read-noise", "4")
+    with pytest.raises(UsageError, match=r"--kernel must be at most the 512-pixel frame side"):
+        check("--kernel", "1001")
+    check("--read-noise", "0.01", "--kernel", "255", "--binning", "4")  # a 256-pixel frame

@@ -34,6 +34,11 @@ Gaps found and fixed:
    ray count two table rows: refused.
 4. ``DesignSpec(bfl=0.0005)`` (0.5 mm written in m; the classical CLI's ``--bfl 0.0005``)
    designed a lens 0.5 µm off the sensor: a clearance below 0.01 mm is refused, naming m.
+5. ``python -m jaxlens.experiments.edof --read-noise 4`` (read noise in electrons; the option
+   is a standard deviation in linear values, 0.002 = 4 e⁻ at 2000 photo-electrons) trained on
+   noise twice the full signal: above 0.5 it is refused, with the value in linear units.
+   ``--kernel 1001`` (binning 2: a 512-pixel frame) went on to PSF kernels wider than the
+   frame: a kernel wider than the frame is refused.
 
 Controls of note: the JSON lens format already named a misspelled key (with the close
 match), a duplicate key, nm in ``wavelengths_um`` and µm in ``wavelengths_nm``, a field past
@@ -282,7 +287,34 @@ def command_lines():
         C.run_design, TOL.analyse_design, BC.machine_info = real
 
 
+def edof_cli():
+    from jaxlens.experiments.edof import cli
+    from jaxlens.experiments.runfolder import UsageError
+
+    def check(*argv):
+        def go():
+            try:
+                cli.check_args(cli.build_parser().parse_args(["--out", os.path.join(TMP, "edof"), *argv]))
+            except UsageError as e:
+                raise ValueError(str(e)) from None
+            return "accepted"
+        return go
+    probe("edof --read-noise 4 (electrons)", check("--read-noise", "4"), "--read-noise", "electrons")
+    probe("edof --read-noise 2", check("--read-noise", "2"), "--read-noise")
+    probe("edof --read-noise 0.002 (control)", check("--read-noise", "0.002"), good=True)
+    probe("edof --kernel 1001 (the frame is 512 pixels)", check("--kernel", "1001"), "--kernel", "512")
+    probe("edof --kernel 255 --binning 4 (256-pixel frame; control)", check("--kernel", "255", "--binning", "4"), good=True)
+    probe("edof --kernel 100001", check("--kernel", "100001"), "--kernel")
+    probe("edof --kernel 30", check("--kernel", "30"), "--kernel", "odd")
+    probe("edof --photons 0", check("--photons", "0"), "--photons")
+    probe("edof --cubic-floor 50 (percent)", check("--cubic-floor", "50"), "--cubic-floor")
+    probe("edof --time-limit -5", check("--time-limit", "-5"), "--time-limit")
+    probe("edof --seeds 0,0", check("--seeds", "0,0"), "--seeds")
+    probe("edof --lenses hybird", check("--lenses", "hybird"), "--lenses")
+    probe("edof --decoder nafnet --live-front-end", check("--decoder", "nafnet", "--live-front-end"), "--live-front-end")
+
+
 if os.environ.get("AUDIT29_COUNT"):
     count_mentions()
 else:
-    run([leftovers, least_named, lens_files, command_lines])
+    run([leftovers, least_named, lens_files, command_lines, edof_cli])
