@@ -105,3 +105,23 @@ def test_edof_cli_refuses_read_noise_in_electrons_and_a_kernel_wider_than_the_fr
     with pytest.raises(UsageError, match=r"--kernel must be at most the 512-pixel frame side"):
         check("--kernel", "1001")
     check("--read-noise", "0.01", "--kernel", "255", "--binning", "4")  # a 256-pixel frame
+
+
+def test_lens_file_refuses_repeated_wavelengths_and_two_wavelength_keys(tmp_path):
+    """Main: a repeated wavelength was read (it weighs twice in every polychromatic figure),
+    and with both ``wavelengths_um`` and ``wavelengths_nm`` the second was ignored."""
+    import json
+
+    import jaxlens as jl
+
+    src = pathlib.Path(jl.__file__).parent / "data" / "lenses" / "cooke_triplet.json"
+    base = json.loads(src.read_text())
+    repeated = dict(base, wavelengths_nm=[587.5618, 587.5618, 656.2725])
+    both = {k: v for k, v in base.items() if k != "primary_wavelength_nm"}
+    both["wavelengths_um"] = [0.5876]
+    for d, msg in ((repeated, r"wavelengths must be distinct, got \[0\.587562, 0\.587562, "),
+                   (both, r"give only one of wavelengths_um and wavelengths_nm")):
+        path = tmp_path / "lens.json"
+        path.write_text(json.dumps(d))
+        with pytest.raises(ValueError, match=msg):
+            jl.load(path)

@@ -39,6 +39,9 @@ Gaps found and fixed:
    noise twice the full signal: above 0.5 it is refused, with the value in linear units.
    ``--kernel 1001`` (binning 2: a 512-pixel frame) went on to PSF kernels wider than the
    frame: a kernel wider than the frame is refused.
+6. A JSON lens file with a wavelength repeated (a copy-paste slip: it weighs twice in every
+   polychromatic figure) was read, and one with both ``wavelengths_um`` and
+   ``wavelengths_nm`` read the first and ignored the other: both refused, naming the file.
 
 Controls of note: the JSON lens format already named a misspelled key (with the close
 match), a duplicate key, nm in ``wavelengths_um`` and µm in ``wavelengths_nm``, a field past
@@ -236,6 +239,16 @@ def lens_files():
     probe("lens file sensor 10**6 × 10**6 pixels", lf(lambda d: d.update(sensor={"resolution": [10**6, 10**6], "pixel_size": 0.005})), "resolution")
     probe("lens file fields.type 'angle_rad'", lf(lambda d: d["fields"].update(type="angle_rad")), "fields.type")
     probe("lens file cut short", lf(raw=json.dumps(base)[:-40]), ":1:")
+    probe("lens file a wavelength repeated", lf(lambda d: d.update(wavelengths_nm=[587.5618, 587.5618, 656.2725])), "distinct")
+    probe("lens file wavelengths_um and wavelengths_nm", lf(lambda d: (d.pop("primary_wavelength_nm"), d.update(wavelengths_um=[0.5876]))), "wavelengths_um", "wavelengths_nm")
+    probe("lens file model glass nd/vd swapped", lf(lambda d: s1(d).update(material={"nd": 64.17, "vd": 1.5168})), "swapped")
+    probe("lens file n table keys in µm", lf(lambda d: s1(d).update(material={"n": {"0.4861": 1.52, "0.5876": 1.517, "0.6563": 1.514}})), "µm")
+    probe("lens file obscuration [3, 1] (swapped)", lf(lambda d: s1(d).update(obscuration=[3.0, 1.0])), "obscuration", "r_min < r_max")
+    probe("lens file primary 3 of 3", lf(lambda d: (d.pop("primary_wavelength_nm"), d.update(primary=3))), "primary", "0..2")
+    probe("lens file units 'm'", lf(lambda d: d.update(units="m")), "units.length")
+    probe("lens file coordinate_break 'tilt_x' (no _deg)", lf(lambda d: d["surfaces"].insert(2, {"type": "coordinate_break", "tilt_x": 5.0, "thickness": 0})), "tilt_x_deg")
+    probe("lens file vignetting 2 vdy for 3 fields", lf(lambda d: d["fields"].update(vignetting={"vdy": [0.0, 0.1]})), "vdy")
+    probe("lens file semi_diameter past the sphere", lf(lambda d: s1(d).update(semi_diameter=30.0)), "defined only out to")
     probe("lens file as written (control)", lf(lambda d: None), good=True)
 
 
