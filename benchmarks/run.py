@@ -84,6 +84,17 @@ def main(argv: list[str] | None = None) -> dict:
             p.error(f"--counts must be whole numbers in [1, {MAX_RAYS}] rays, got {n}")
     if args.out is not None and args.out.exists() and not args.out.is_dir():
         p.error(f"--out {args.out} is a file, not a folder")  # before the first benchmark
+    readme = (args.out or common.RESULTS) / "README.md"
+    if readme.is_file() and not readme.read_text(errors="replace").startswith(README_TITLE):
+        # Before: the summary was written over it at the end (--out . replaced the project's).
+        p.error(f"--out {readme.parent}: its README.md is not a benchmark summary (it does not "
+                f"start with {README_TITLE!r}), and the run ends by writing one there; choose "
+                f"another folder")
+    for flag, values in (("--only", args.only), ("--lenses", args.lenses),
+                         ("--counts", args.counts)):
+        repeated = sorted({v for v in values or () if list(values).count(v) > 1}, key=str)
+        if repeated:  # the benchmark ran twice, or a ray count or lens got two table rows
+            p.error(f"{flag} names {', '.join(map(str, repeated))} more than once")
     if (args.lenses or args.counts) and args.only and "throughput" not in args.only:
         p.error("--lenses and --counts apply to the throughput benchmark only; add throughput "
                 "to --only")
@@ -203,6 +214,10 @@ def _replaces_fuller_run(path: pathlib.Path, out: pathlib.Path, args) -> str | N
             f"another --out")
 
 
+README_TITLE = "# jaxlens benchmark results"
+"""The first line of the ``README.md`` that ``write_readme`` writes (and may replace)."""
+
+
 def write_readme(out: pathlib.Path) -> None:
     """(Re)write ``out/README.md`` from every benchmark JSON in ``out``.
 
@@ -212,7 +227,7 @@ def write_readme(out: pathlib.Path) -> None:
     """
     from . import summary
 
-    parts = ["# jaxlens benchmark results", ""]
+    parts = [README_TITLE, ""]
     head = summary.headline(out)
     if head:
         parts += ["## Headline", "", head]

@@ -83,7 +83,7 @@ class FieldCurvature(eqx.Module):
         return self.tangential - self.sagittal
 
 
-def _inputs(lens, where: str, fields, wavelengths, *, pairs: bool = False):
+def _inputs(lens, where: str, fields, wavelengths, *, pairs: bool = False, arg: str = "fields"):
     """Checked fields (θy, deg, ``[F]``; with ``pairs`` also (θx, θy), ``[F, 2]``) and
     wavelengths (µm, ``[W]``) as lens-dtype arrays."""
     if not isinstance(lens, Lens):
@@ -99,6 +99,8 @@ def _inputs(lens, where: str, fields, wavelengths, *, pairs: bool = False):
         raise ValueError(f"{where}: fields must be θy angles in degrees, one value or [F]"
                          f"{also}, got shape {f.shape}")
     checks.field_angles(f, where, "field")
+    if not checks.is_traced(f):  # as Lens does: np.radians([0, 14, 20]) traced as 0.35° at most
+        checks.warn_if_radian_fields(f, where, arg)
     wl = lens.wavelengths if wavelengths is None else jnp.asarray(wavelengths, dtype)
     if wl.ndim > 1 or wl.size == 0:
         raise ValueError(f"{where}: wavelengths must be µm, one value or [W], got shape "
@@ -135,7 +137,7 @@ def ray_fan(lens: Lens, field, wavelengths=None, *, n: int = FAN_POINTS, depth=N
     checks.one_field(field, "ray_fan")
     shape = np.shape(field)
     f, wl = _inputs(lens, "ray_fan", jnp.reshape(jnp.asarray(field, float), (-1,)),
-                    wavelengths)
+                    wavelengths, arg="field")
     n = checks.number(n, "n", "ray_fan", lo=2, hi=checks.MAX_SAMPLES, integer=True,
                       unit="pupil points")
     return _ray_fan(lens, f if shape == (2,) else f[0], wl, n=int(n),

@@ -54,6 +54,7 @@ def check_inputs(lens: Lens, where: str, *, fields=None, wavelengths=None,
         raise TypeError(f"{where}: lens must be a jaxlens.Lens, got {type(lens).__name__}")
     if fields is not None and not checks.is_traced(fields):
         checks.field_angles(fields, where, arg_f)
+        checks.warn_if_radian_fields(fields, where, arg_f)  # as Lens does
     if wavelengths is None and not checks.is_traced(lens.wavelengths):
         wavelengths = lens.wavelengths if own == "all" else lens.primary_wavelength
         arg_w = f"the lens's {'wavelengths' if own == 'all' else 'primary wavelength'}"

@@ -50,6 +50,8 @@ _PLASTICS = {
 # edge thickness) and between neighbouring elements (air gaps).
 ELEMENT_MIN_THICKNESS = 0.4
 AIR_MIN_GAP = 0.2
+MIN_BFL = 0.01
+"""Smallest back clearance (mm) a ``DesignSpec`` takes: below 10 µm it is a length in m."""
 
 TRACK_PER_FOCAL = (0.1, 100.0)
 """Accepted range of total_track over the focal length (and over ``efl`` when set): refractive
@@ -270,6 +272,10 @@ class DesignSpec:
             raise ValueError(f"{where}: {n} elements need {n} materials, got "
                              f"{len(names)}: {self.materials}")
         bfl = _number(self.bfl, "bfl", lo=0, lo_open=True, unit="mm")
+        if bfl < MIN_BFL:  # before: 0.0005 (0.5 mm in m) designed a lens 0.5 µm off the sensor
+            raise ValueError(f"{where}: bfl must be at least {MIN_BFL:g} mm (the clearance from "
+                             f"the last lens surface to the sensor), got {bfl:g} mm (was it "
+                             f"given in m? {bfl:g} m is {bfl * 1e3:g} mm)")
         track = _number(self.total_track, "total_track", lo=0, lo_open=True, unit="mm")
         _number(self.stop, "stop", lo=0, hi=n, integer=True, unit="elements in front of it")
         wl = _sequence(self.wavelengths, "wavelengths", "µm")

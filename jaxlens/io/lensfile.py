@@ -364,6 +364,8 @@ def _one_aperture(lens: Lens, given: dict, where: str) -> Lens:
 
 
 def _wavelengths_of(d: dict, where: str) -> tuple[np.ndarray, int]:
+    if len(keys := [k for k in ("wavelengths_um", "wavelengths_nm", "wavelengths") if k in d]) > 1:
+        raise ValueError(f"{where}: give only one of {' and '.join(keys)} (they may disagree)")
     if "wavelengths_um" in d:
         wl = _nums(d["wavelengths_um"], f"{where}: wavelengths_um")
     elif "wavelengths_nm" in d:
@@ -375,6 +377,8 @@ def _wavelengths_of(d: dict, where: str) -> tuple[np.ndarray, int]:
     wl = np.atleast_1d(wl)
     if wl.ndim != 1 or wl.size == 0 or np.any(wl <= 0):
         raise ValueError(f"{where}: wavelengths must be a non-empty list of positive numbers")
+    if np.unique(wl).size < wl.size:  # it would weigh twice in every polychromatic figure
+        raise ValueError(f"{where}: wavelengths must be distinct, got {checks.fmt(wl)} µm")
     if "primary" in d:
         p = d["primary"]
         if isinstance(p, bool) or not isinstance(p, int) or not 0 <= p < wl.size:

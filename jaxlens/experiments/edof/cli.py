@@ -74,6 +74,7 @@ MAX_BATCH = 1024  # patches per batch (8 by default): each holds the tile's PSFs
 MAX_BLOCKS = 64  # NAFNet blocks per level or in the middle (the paper's deepest level has 28)
 MAX_LEVELS = 6  # NAFNet levels (the paper's 4); each doubles the channels
 MAX_ODD_TERMS = 10  # the hybrid surface's odd terms per axis: x³, x⁵, …, x²¹
+MAX_READ_NOISE = 0.5  # linear values (1 = full signal): above it the scene is mostly noise
 OUT_OF_TIME = 3
 """Exit status of a run stopped by ``--time-limit`` at a checkpoint."""
 COMPILE_CACHE = "compile_cache"
@@ -249,6 +250,11 @@ def config_from_args(a):
     for opt, v in (("--w-sim", cfg.w_sim), ("--w-raw", cfg.w_raw),
                    ("--read-noise", cfg.read_noise)):
         n(v, opt, w, lo=0)
+    if cfg.read_noise > MAX_READ_NOISE:  # before: --read-noise 4 (electrons) trained on noise
+        raise ValueError(f"edof: --read-noise must be at most {MAX_READ_NOISE:g} (a standard "
+                         f"deviation in linear values, 1 = full signal), got "
+                         f"{cfg.read_noise:g} (was it in electrons? {cfg.read_noise:g} e⁻ at "
+                         f"--photons {cfg.photons:g} is {cfg.read_noise / cfg.photons:.3g})")
     for opt, blocks in (("--enc", cfg.enc_blocks), ("--dec", cfg.dec_blocks)):
         # Each level doubles the channels: 20 levels asked for 4 GiB weights of one layer.
         if (not blocks or len(blocks) > MAX_LEVELS
@@ -265,6 +271,9 @@ def config_from_args(a):
     if cfg.kernel_size % 2 == 0:
         raise ValueError(f"edof: --kernel must be an odd whole number >= 1 pixels, got "
                          f"{cfg.kernel_size}")
+    if cfg.kernel_size > side:  # before: 1001 (binning 2) went on to PSF banks of 1001² each
+        raise ValueError(f"edof: --kernel must be at most the {side}-pixel frame side "
+                         f"(1024 / --binning {cfg.binning}), got {cfg.kernel_size}")
     if len(cfg.enc_blocks) != len(cfg.dec_blocks):
         raise ValueError("edof: --enc and --dec need the same number of levels")
     return cfg

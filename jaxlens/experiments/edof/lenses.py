@@ -50,6 +50,11 @@ DEPTHS_M = (0.1, 0.15, 0.2, 0.3, 0.5, 1.0, 3.0, 10.0)
 """The paper's 8 training depths (m, from the aperture stop)."""
 
 
+FARTHEST_NEAR_DEPTH_M = 50.0
+"""The nearest of a set of object depths must be at most this (m): depths (0.15, 0.3) m given
+in mm set a cubic plate 3× too strong (a = 0.00543 mm⁻² for 0.00181) without a word."""
+
+
 def _depths(depths_m, where: str, least: int = 1) -> np.ndarray:
     """Object depths (m): finite, > 0, distinct, at least ``least`` of them (before: one
     depth was an IndexError, a 0 m depth NaN weights, -1 m a weight of its own)."""
@@ -58,6 +63,12 @@ def _depths(depths_m, where: str, least: int = 1) -> np.ndarray:
     if d.size < least or not np.all(np.isfinite(d) & (d > 0)) or np.unique(d).size < d.size:
         raise ValueError(f"{where}: depths_m must be at least {least} distinct finite depths "
                          f"> 0 (m, from the stop), got {checks.fmt(d) if d.size else '()'}")
+    if d.min() > FARTHEST_NEAR_DEPTH_M:
+        raise ValueError(f"{where}: depths_m are in metres, and the nearest, {d.min():g} m, is "
+                         f"beyond {FARTHEST_NEAR_DEPTH_M:g} m, where every depth is in focus as "
+                         f"at infinity (< 0.02 D apart) for a lens focused at "
+                         f"{FOCUS_DEPTH / 1e3:g} m; were they given in mm? {d.min():g} mm is "
+                         f"{d.min() / 1e3:g} m")
     return d
 
 
