@@ -107,9 +107,11 @@ def test_edof_cli_refuses_read_noise_in_electrons_and_a_kernel_wider_than_the_fr
     check("--read-noise", "0.01", "--kernel", "255", "--binning", "4")  # a 256-pixel frame
 
 
-def test_lens_file_refuses_repeated_wavelengths_and_two_wavelength_keys(tmp_path):
-    """Main: a repeated wavelength was read (it weighs twice in every polychromatic figure),
-    and with both ``wavelengths_um`` and ``wavelengths_nm`` the second was ignored."""
+def test_lens_file_warns_of_a_repeated_wavelength_and_refuses_two_wavelength_keys(tmp_path):
+    """Main: a repeated wavelength was read without a word (it weighs twice in every
+    polychromatic figure; a warning, as Zemax takes it and a .zmx with one must round-trip
+    through JSON), and with both ``wavelengths_um`` and ``wavelengths_nm`` the second was
+    ignored."""
     import json
 
     import jaxlens as jl
@@ -119,9 +121,29 @@ def test_lens_file_refuses_repeated_wavelengths_and_two_wavelength_keys(tmp_path
     repeated = dict(base, wavelengths_nm=[587.5618, 587.5618, 656.2725])
     both = {k: v for k, v in base.items() if k != "primary_wavelength_nm"}
     both["wavelengths_um"] = [0.5876]
-    for d, msg in ((repeated, r"wavelengths must be distinct, got \[0\.587562, 0\.587562, "),
-                   (both, r"give only one of wavelengths_um and wavelengths_nm")):
-        path = tmp_path / "lens.json"
-        path.write_text(json.dumps(d))
-        with pytest.raises(ValueError, match=msg):
-            jl.load(path)
+    path = tmp_path / "lens.json"
+    path.write_text(json.dumps(repeated))
+    with pytest.warns(UserWarning, match=r"a wavelength is given twice \(\[0\.587562, 0\.587562"):
+        lens = jl.load(path)
+    assert lens.wavelengths.shape == (3,)
+    path.write_text(json.dumps(both))
+    with pytest.raises(ValueError, match=r"give only one of wavelengths_um and wavelengths_nm"):
+        jl.load(path)
+
+
+def test_a_lens_with_a_repeated_wavelength_round_trips_through_json(tmp_path):
+    """A .zmx may list one wavelength twice (Zemax takes it): its JSON must load again."""
+    import dataclasses
+
+    import jax.numpy as jnp
+    import numpy as np
+
+    import jaxlens as jl
+    from jaxlens import zoo
+
+    lens = dataclasses.replace(zoo.cooke_triplet(),
+                               wavelengths=jnp.array([0.5875618, 0.5875618, 0.6562725]))
+    jl.save(lens, tmp_path / "twice.json")
+    with pytest.warns(UserWarning, match="a wavelength is given twice"):
+        back = jl.load(tmp_path / "twice.json")
+    assert np.asarray(back.wavelengths).tolist() == np.asarray(lens.wavelengths).tolist()

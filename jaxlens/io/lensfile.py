@@ -377,8 +377,12 @@ def _wavelengths_of(d: dict, where: str) -> tuple[np.ndarray, int]:
     wl = np.atleast_1d(wl)
     if wl.ndim != 1 or wl.size == 0 or np.any(wl <= 0):
         raise ValueError(f"{where}: wavelengths must be a non-empty list of positive numbers")
-    if np.unique(wl).size < wl.size:  # it would weigh twice in every polychromatic figure
-        raise ValueError(f"{where}: wavelengths must be distinct, got {checks.fmt(wl)} µm")
+    if np.unique(wl).size < wl.size:
+        # A warning, not a refusal: Zemax takes a repeated wavelength (a .zmx read with one
+        # saves to a JSON that must load), but a typo weighs it twice in every polychromatic
+        # figure.
+        warnings.warn(f"{where}: a wavelength is given twice ({checks.fmt(wl)} µm); it weighs "
+                      f"twice in every polychromatic figure", stacklevel=3)
     if "primary" in d:
         p = d["primary"]
         if isinstance(p, bool) or not isinstance(p, int) or not 0 <= p < wl.size:
