@@ -64,6 +64,7 @@ import functools
 import equinox as eqx
 import jax
 import jax.numpy as jnp
+from jax.custom_derivatives import SymbolicZero
 
 from ..optics.apertures import passes_all
 from ..optics.diffractive import DIFFRACTIVE, Grating
@@ -248,12 +249,12 @@ def continue_newton(residual, t, project=lambda t: t, max_iters: int = NEWTON_EX
     """Newton steps past the fixed ones, only on the rays not yet ``settled``.
 
     A ``jax.lax.while_loop`` that runs while some ray is still iterating: where every ray is
-    settled at ``t`` (after six steps on an ordinary asphere, every ray is: the next step is
-    at rounding) its body never runs, so the common case costs one residual pass and a
-    reduction, and the result is ``t`` itself, bit for bit, with the F and F' of that pass. A ray iterates until it is
-    ``settled``. It gives up (it is then a miss, unless already ``converged``) when its step
-    does not shrink (Newton from a good start shrinks it, by at least half per step even at a
-    double root; with no root F has no zero to approach and the steps jump about), is zero
+    settled at ``t`` (after six steps on an ordinary asphere, every ray is: the next step is at
+    rounding) its body never runs, so the common case costs one residual pass and a reduction,
+    and the result is ``t`` itself, bit for bit, with that pass's F and F'. A ray iterates until
+    it is ``settled``. It gives up (it is then a miss, unless already ``converged``) when its
+    step does not shrink (Newton from a good start shrinks it, by at least half per step even at
+    a double root; with no root F has no zero to approach and the steps jump about), is zero
     (held at ``project``'s bound with F of the wrong sign, or at rounding) or cannot be taken
     (F' too small to divide, F not finite); at most ``max_iters`` more steps. It carries no
     gradient (stop the gradients of its inputs): the caller differentiates the root by the
@@ -440,11 +441,42 @@ def intersect(
     # Flagged rays take the last step at a harmless point, so their gradient stays finite.
     t0 = jnp.where(ok, t0, 0.0)
     df0 = jax.lax.stop_gradient(jnp.where(ok, df0, 1.0))
-    # One differentiable step with F' held fixed: the implicit-function gradient.
-    f, _, inside = _residual(surface, o, d, t0)
-    ok = ok & inside
+    # One differentiable step with F' held fixed: the implicit-function gradient. F(t0) is
+    # f0 already (where ok; elsewhere the result is MISS): only its derivative is computed
+    # here, and of the sag only the domain test ``inside`` (the rest is dead code).
+    f = _known_residual(surface, o, d, t0, f0)
+    ok = ok & jax.lax.stop_gradient(_residual(surface, o, d, t0)[2])
     # t0 + t_plane − f/df0, written as one division (one fused pass, see the module notes).
     return jnp.where(ok, (t0 + t_plane) * df0 - f, MISS) / jnp.where(ok, df0, 1.0)
+
+
+@jax.custom_jvp
+def _known_residual(surface, o, d, t, f):
+    """``f``, given as F(t) = ``_residual(surface, o, d, t)[0]``, with F's derivative with
+    respect to the surface and the ray (``t`` and ``f`` carry none), so a forward pass does
+    not evaluate the sag again."""
+    return f
+
+
+@functools.partial(_known_residual.defjvp, symbolic_zeros=True)
+def _known_residual_jvp(primals, tangents):
+    """The derivative of ``_residual``'s F, taken on the inputs that have a tangent only, as
+    plain differentiation of F would (no zero tangent enters the sums)."""
+    surface, o, d, t, f = primals
+    leaves, tree = jax.tree.flatten((surface, o, d))
+    dots = jax.tree.leaves(tangents[:3], is_leaf=lambda x: isinstance(x, SymbolicZero))
+    live = [i for i, dot in enumerate(dots) if not isinstance(dot, SymbolicZero)]
+
+    def residual_of_live(*xs):
+        full = list(leaves)
+        for i, x in zip(live, xs, strict=True):
+            full[i] = x
+        return _residual(*jax.tree.unflatten(tree, full), t)[0]
+
+    if not live:
+        return f, jnp.zeros_like(f)
+    _, f_dot = jax.jvp(residual_of_live, [leaves[i] for i in live], [dots[i] for i in live])
+    return f, f_dot
 
 
 def _polynomial_root(surf_s, o_s, d_s, t_min, newton_iters, first, backward, behind=None):
