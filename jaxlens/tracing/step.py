@@ -441,9 +441,8 @@ def intersect(
     # Flagged rays take the last step at a harmless point, so their gradient stays finite.
     t0 = jnp.where(ok, t0, 0.0)
     df0 = jax.lax.stop_gradient(jnp.where(ok, df0, 1.0))
-    # One differentiable step with F' held fixed: the implicit-function gradient. F(t0) is
-    # f0 already (where ok; elsewhere the result is MISS): only its derivative is computed
-    # here, and of the sag only the domain test ``inside`` (the rest is dead code).
+    # One differentiable step with F' held fixed: the implicit-function gradient. F(t0) is f0
+    # (where ok; else MISS): not differentiated, only the sag's domain test runs again.
     f = _known_residual(surface, o, d, t0, f0)
     ok = ok & jax.lax.stop_gradient(_residual(surface, o, d, t0)[2])
     # t0 + t_plane − f/df0, written as one division (one fused pass, see the module notes).
@@ -452,16 +451,18 @@ def intersect(
 
 @jax.custom_jvp
 def _known_residual(surface, o, d, t, f):
-    """``f``, given as F(t) = ``_residual(surface, o, d, t)[0]``, with F's derivative with
-    respect to the surface and the ray (``t`` and ``f`` carry none), so a forward pass does
-    not evaluate the sag again."""
+    """``f``, given as F(t) = ``_residual(surface, o, d, t)[0]``, so a pass that is not
+    differentiated does not evaluate the sag again; differentiated, F(t) itself and its
+    derivative with respect to the surface and the ray (``t`` and ``f`` carry none)."""
     return f
 
 
 @functools.partial(_known_residual.defjvp, symbolic_zeros=True)
 def _known_residual_jvp(primals, tangents):
-    """The derivative of ``_residual``'s F, taken on the inputs that have a tangent only, as
-    plain differentiation of F would (no zero tangent enters the sums)."""
+    """``_residual``'s F and its derivative, taken on the inputs that have a tangent only: the
+    operations of plain differentiation of F, so gradients stay bit for bit (F recomputed,
+    not ``f``: with ``f`` reused, XLA groups the work otherwise and a Hybrid lens's gradient
+    moved by an ulp)."""
     surface, o, d, t, f = primals
     leaves, tree = jax.tree.flatten((surface, o, d))
     dots = jax.tree.leaves(tangents[:3], is_leaf=lambda x: isinstance(x, SymbolicZero))
@@ -475,8 +476,7 @@ def _known_residual_jvp(primals, tangents):
 
     if not live:
         return f, jnp.zeros_like(f)
-    _, f_dot = jax.jvp(residual_of_live, [leaves[i] for i in live], [dots[i] for i in live])
-    return f, f_dot
+    return jax.jvp(residual_of_live, [leaves[i] for i in live], [dots[i] for i in live])
 
 
 def _polynomial_root(surf_s, o_s, d_s, t_min, newton_iters, first, backward, behind=None):
