@@ -64,7 +64,6 @@ import functools
 import equinox as eqx
 import jax
 import jax.numpy as jnp
-from jax.custom_derivatives import SymbolicZero
 
 from ..optics.apertures import passes_all
 from ..optics.diffractive import DIFFRACTIVE, Grating
@@ -441,42 +440,11 @@ def intersect(
     # Flagged rays take the last step at a harmless point, so their gradient stays finite.
     t0 = jnp.where(ok, t0, 0.0)
     df0 = jax.lax.stop_gradient(jnp.where(ok, df0, 1.0))
-    # One differentiable step with F' held fixed: the implicit-function gradient. F(t0) is f0
-    # (where ok; else MISS): not differentiated, only the sag's domain test runs again.
-    f = _known_residual(surface, o, d, t0, f0)
-    ok = ok & jax.lax.stop_gradient(_residual(surface, o, d, t0)[2])
+    # One differentiable step with F' held fixed: the implicit-function gradient.
+    f, _, inside = _residual(surface, o, d, t0)
+    ok = ok & inside
     # t0 + t_plane − f/df0, written as one division (one fused pass, see the module notes).
     return jnp.where(ok, (t0 + t_plane) * df0 - f, MISS) / jnp.where(ok, df0, 1.0)
-
-
-@jax.custom_jvp
-def _known_residual(surface, o, d, t, f):
-    """``f``, given as F(t) = ``_residual(surface, o, d, t)[0]``, so a pass that is not
-    differentiated does not evaluate the sag again; differentiated, F(t) itself and its
-    derivative with respect to the surface and the ray (``t`` and ``f`` carry none)."""
-    return f
-
-
-@functools.partial(_known_residual.defjvp, symbolic_zeros=True)
-def _known_residual_jvp(primals, tangents):
-    """``_residual``'s F and its derivative, taken on the inputs that have a tangent only: the
-    operations of plain differentiation of F, so gradients stay bit for bit (F recomputed,
-    not ``f``: with ``f`` reused, XLA groups the work otherwise and a Hybrid lens's gradient
-    moved by an ulp)."""
-    surface, o, d, t, f = primals
-    leaves, tree = jax.tree.flatten((surface, o, d))
-    dots = jax.tree.leaves(tangents[:3], is_leaf=lambda x: isinstance(x, SymbolicZero))
-    live = [i for i, dot in enumerate(dots) if not isinstance(dot, SymbolicZero)]
-
-    def residual_of_live(*xs):
-        full = list(leaves)
-        for i, x in zip(live, xs, strict=True):
-            full[i] = x
-        return _residual(*jax.tree.unflatten(tree, full), t)[0]
-
-    if not live:
-        return f, jnp.zeros_like(f)
-    return jax.jvp(residual_of_live, [leaves[i] for i in live], [dots[i] for i in live])
 
 
 def _polynomial_root(surf_s, o_s, d_s, t_min, newton_iters, first, backward, behind=None):
