@@ -3,6 +3,7 @@ with polynomial terms (``tracing.step._polynomial_root`` and ``continue_newton``
 
     python tools/bench_newton_passes.py [--baseline REV] [--repeats N] [--compiles N]
                                         [--only CASE ...]
+    python tools/bench_newton_passes.py --bit-for-bit [--baseline REV]
 
 Imports the ``jaxlens`` of git revision REV (default: ``main``) side by side with the working
 tree's (``benchmarks.design_step.import_baseline``) and, for each case,
@@ -24,6 +25,13 @@ Cases (float32):
   (``benchmarks.design_step.step_fn``).
 
 Prints one JSON object (and writes it to ``--out`` if given).
+
+``--bit-for-bit`` (float64 enabled, no timing) instead compares, leaf for leaf: cellphone6's
+image points, validity and optical path at 0/20/40° (3000 rays each) and the gradient of its
+summed squared image radius at 40°, with and without ``reverse_rule``; the classical design's
+loss and gradient (4 seeds) at every curriculum stage; the EDoF lens (its ``Hybrid``
+surface with a cubic term) at 0 and 15°, points, validity and gradient; each in float32 and
+float64. Takes about 7 minutes on 2 cores.
 """
 
 from __future__ import annotations
@@ -157,6 +165,80 @@ def run_case(name, make, old, repeats, compiles):
     return res
 
 
+def _cellphone6_checked(pkg, dtype, reverse_rule, n=3000):
+    lens = pkg.zoo.cellphone6().astype(dtype)
+    rng = np.random.default_rng(0)
+    r, a = np.sqrt(rng.uniform(0, 1, n)), rng.uniform(0, 2 * np.pi, n)
+    pupil = jnp.asarray(np.stack([r * np.cos(a), r * np.sin(a)], -1), dtype)
+    points = []
+    for field in (0.0, 20.0, 40.0):
+        rays = pkg.sampling.collimated(lens, field, pupil)
+        out = jax.jit(lambda lens, rays: pkg.trace(lens, rays))(lens, rays)
+        points.append((out.origin, out.valid, out.opl))
+
+    def loss(lens, rays):
+        out = pkg.trace(lens, rays, reverse_rule=reverse_rule)
+        return jnp.sum(jnp.where(out.valid, out.origin[:, 0] ** 2 + out.origin[:, 1] ** 2, 0.0))
+
+    return points, jax.jit(jax.value_and_grad(loss))(lens, rays)
+
+
+def _design_checked(pkg, dtype, seeds=4):
+    import importlib
+
+    mod = lambda name: importlib.import_module(f"{pkg.__name__}.design{name}")  # noqa: E731
+    design, ms, cur = mod(""), mod(".multistart"), mod(".curriculum")
+    losses, init = mod(".losses"), mod(".init")
+    spec, config = design.DesignSpec(), ms.DesignConfig()
+    sampling = losses.RayLoss.make(config.n_fields, config.rings, spec.wavelengths,
+                                   spec.sensor_size, dtype)
+    objective = losses.Objective(init.parameterization(spec, dtype), sampling,
+                                 jnp.asarray(init.gap_bounds(spec), dtype))
+    objective = ms.make_solver_factory(config, spec, dtype)("adam", 1.0, objective).residual_fn
+    params = init.random_starts(spec, list(range(seeds)), dtype)
+
+    def loss(p, a):
+        return jnp.sum(objective(p, a)[0] ** 2)
+
+    step = jax.jit(jax.vmap(jax.value_and_grad(loss)))
+    weights = jnp.ones((seeds, config.n_fields), dtype)
+    return [step(params, cur.stage_args(spec, stage, weights, config.reg_weights, dtype))
+            for stage in config.stages(spec)]
+
+
+def _edof_checked(pkg, dtype):
+    import importlib
+
+    lenses = importlib.import_module(pkg.__name__ + ".experiments.edof.lenses")
+    lens = lenses.to_hybrid(lenses.classical_lens(), cubic=2e-4).astype(dtype)
+    pupil = jnp.asarray(np.random.default_rng(1).uniform(-0.7, 0.7, (2000, 2)), dtype)
+
+    def loss(lens, rays):
+        out = pkg.trace(lens, rays)
+        return jnp.sum(jnp.where(out.valid, out.origin[:, 1] ** 2, 0.0))
+
+    outs = []
+    for field in (0.0, 15.0):
+        rays = pkg.sampling.collimated(lens, field, pupil)
+        out = jax.jit(lambda lens, rays: pkg.trace(lens, rays))(lens, rays)
+        outs.append(((out.origin, out.valid), jax.jit(jax.grad(loss))(lens, rays)))
+    return outs
+
+
+def bit_for_bit(old) -> dict:
+    """{check: whether old and new agree leaf for leaf} (see the module notes)."""
+    jax.config.update("jax_enable_x64", True)
+    res = {}
+    for dtype in (jnp.float32, jnp.float64):
+        tag = jnp.dtype(dtype).name
+        for rr in (False, True):
+            res[f"cellphone6_{tag}_reverse_rule_{rr}"] = _same(
+                _cellphone6_checked(old, dtype, rr), _cellphone6_checked(jaxlens, dtype, rr))
+        res[f"design_{tag}"] = _same(_design_checked(old, dtype), _design_checked(jaxlens, dtype))
+        res[f"edof_{tag}"] = _same(_edof_checked(old, dtype), _edof_checked(jaxlens, dtype))
+    return res
+
+
 def main(argv=None):
     ap = argparse.ArgumentParser()
     ap.add_argument("--baseline", default="main")
@@ -164,8 +246,13 @@ def main(argv=None):
     ap.add_argument("--compiles", type=int, default=3)
     ap.add_argument("--only", nargs="*", choices=sorted(CASES), default=None)
     ap.add_argument("--out", default=None)
+    ap.add_argument("--bit-for-bit", action="store_true")
     a = ap.parse_args(argv)
     old = import_baseline(a.baseline)
+    if a.bit_for_bit:
+        out = {"baseline": a.baseline, "bit_for_bit": bit_for_bit(old)}
+        print(json.dumps(out, indent=1))
+        return out
     out = {"baseline": a.baseline, "cpu_count": os.cpu_count(),
            "load_start": os.getloadavg()[0], "cases": {}}
     for name in a.only or CASES:
