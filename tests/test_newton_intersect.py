@@ -63,7 +63,7 @@ def test_the_iteration_stops_at_the_tolerance():
     want = [_newton_reference(near_double, s) for s in starts]
     steps = [k for _, k, _ in want]
     assert steps[0] > 10 and steps[1] > 5 and steps[-1] == 0  # slow rays and a converged one
-    got = np.asarray(jax.jit(lambda t: continue_newton(near_double, t))(jnp.asarray(starts)))
+    got = np.asarray(jax.jit(lambda t: continue_newton(near_double, t)[0])(jnp.asarray(starts)))
     np.testing.assert_allclose(got, [t for t, _, _ in want], rtol=1e-15, atol=0)
     assert got[-1] == starts[-1]  # a settled start is returned bit for bit
     # The first accepted iterate (|F| ≤ 64·sqrt(eps)·(1 + |t|), about 2e-6 here) is still
@@ -72,7 +72,7 @@ def test_the_iteration_stops_at_the_tolerance():
         assert k > first
     np.testing.assert_allclose(got[:3], 1.0 - 1e-4, rtol=0, atol=1e-14)
     # One step fewer than the slowest ray needs leaves it unsettled; the others are settled.
-    short = continue_newton(near_double, jnp.asarray(starts), max_iters=steps[0] - 1)
+    short = continue_newton(near_double, jnp.asarray(starts), max_iters=steps[0] - 1)[0]
     assert np.all(np.asarray(short)[1:] == got[1:]) and np.asarray(short)[0] != got[0]
     f_s, df_s = near_double(short)
     assert not bool(settled(f_s, df_s, short)[0])
@@ -80,11 +80,11 @@ def test_the_iteration_stops_at_the_tolerance():
 
 def test_without_a_root_the_iteration_gives_up_early_and_is_not_accepted():
     starts = jnp.array([-3.0, 0.2, 7.0, 40.0])
-    out = continue_newton(no_root, starts)
+    out = continue_newton(no_root, starts)[0]
     f, df = no_root(out)
     assert not bool(jnp.any(converged(f, df, out)))
     # It gave up long before the cap: eight allowed steps end where forty do.
-    np.testing.assert_array_equal(np.asarray(continue_newton(no_root, starts, max_iters=8)),
+    np.testing.assert_array_equal(np.asarray(continue_newton(no_root, starts, max_iters=8)[0]),
                                   np.asarray(out))
     assert NEWTON_EXTRA_ITERS >= 32
 

@@ -248,12 +248,12 @@ def continue_newton(residual, t, project=lambda t: t, max_iters: int = NEWTON_EX
     """Newton steps past the fixed ones, only on the rays not yet ``settled``.
 
     A ``jax.lax.while_loop`` that runs while some ray is still iterating: where every ray is
-    settled at ``t`` (after six steps on an ordinary asphere, every ray is: the next step is
-    at rounding) its body never runs, so the common case costs one residual pass and a
-    reduction, and the result is ``t`` itself, bit for bit. A ray iterates until it is
-    ``settled``. It gives up (it is then a miss, unless already ``converged``) when its step
-    does not shrink (Newton from a good start shrinks it, by at least half per step even at a
-    double root; with no root F has no zero to approach and the steps jump about), is zero
+    settled at ``t`` (after six steps on an ordinary asphere, every ray is: the next step is at
+    rounding) its body never runs, so the common case costs one residual pass and a reduction,
+    and the result is ``t`` itself, bit for bit, with that pass's F and F'. A ray iterates until
+    it is ``settled``. It gives up (it is then a miss, unless already ``converged``) when its
+    step does not shrink (Newton from a good start shrinks it, by at least half per step even at
+    a double root; with no root F has no zero to approach and the steps jump about), is zero
     (held at ``project``'s bound with F of the wrong sign, or at rounding) or cannot be taken
     (F' too small to divide, F not finite); at most ``max_iters`` more steps. It carries no
     gradient (stop the gradients of its inputs): the caller differentiates the root by the
@@ -266,7 +266,8 @@ def continue_newton(residual, t, project=lambda t: t, max_iters: int = NEWTON_EX
         max_iters: the most extra steps (static).
 
     Returns:
-        The iterates ``[*batch]``: unchanged where already settled.
+        (t, F(t), F'(t)) of the final iterates ``[*batch]``: t unchanged where already
+        settled.
     """
     f, df = residual(t)
     # The loop's test is a scalar: whether any ray iterates. Per ray, one array: the length
@@ -277,20 +278,22 @@ def continue_newton(residual, t, project=lambda t: t, max_iters: int = NEWTON_EX
     going0 = jnp.any(~settled(f, df, t))
 
     def going(state):
-        k, _, _, more = state
+        k, _, _, _, _, more = state
         return (k < max_iters) & more
 
     def body(state):
-        k, t, last, _ = state
-        f, df = residual(t)
+        # F and F' at t come in with it (evaluated where t was set), so the caller gets
+        # them for the final iterates without another residual pass.
+        k, t, f, df, last, _ = state
         dt, ok = bounded_div(f, df)
         t_new = project(t - dt)
         size = jnp.abs(t_new - t)
         go = (last >= 0) & ~settled(f, df, t) & ok & jnp.isfinite(f) & (size < last) & (
             size > 0)
-        return k + 1, jnp.where(go, t_new, t), jnp.where(go, size, -1.0), jnp.any(go)
+        t = jnp.where(go, t_new, t)
+        return k + 1, t, *residual(t), jnp.where(go, size, -1.0), jnp.any(go)
 
-    return jax.lax.while_loop(going, body, (0, t, last, going0))[1]
+    return jax.lax.while_loop(going, body, (0, t, f, df, last, going0))[1:4]
 
 
 def first_of_a_pair(residual, t, f, df, ok):
@@ -329,10 +332,9 @@ def first_of_a_pair(residual, t, f, df, ok):
         def search(args):
             t, f, df = args
             lo, up = jax.lax.fori_loop(0, steps, bisect, (jnp.zeros_like(t), hi))
-            t_new = continue_newton(residual, jnp.where(skipped, 0.5 * (lo + up), t))
-            f_new, df_new = residual(t_new)
+            found = continue_newton(residual, jnp.where(skipped, 0.5 * (lo + up), t))
             return tuple(jnp.where(skipped, a, b) for a, b in
-                         zip((t_new, f_new, df_new), (t, f, df), strict=True))
+                         zip(found, (t, f, df), strict=True))
 
         return run_if_any(skipped, search, (t, f, df))
 
@@ -483,8 +485,10 @@ def _polynomial_root(surf_s, o_s, d_s, t_min, newton_iters, first, backward, beh
 
     t0 = jax.lax.fori_loop(0, max(newton_iters - 1, 0), step, t0)
     if newton_iters > 0:
-        t0 = continue_newton(lambda t: _residual(surf_s, o_s, d_s, t)[:2], t0, project)
-    f0, df0, _ = _residual(surf_s, o_s, d_s, t0)
+        t0, f0, df0 = continue_newton(lambda t: _residual(surf_s, o_s, d_s, t)[:2], t0,
+                                      project)
+    else:
+        f0, df0, _ = _residual(surf_s, o_s, d_s, t0)
     ok = converged(f0, df0, t0)
     if t_min is not None:
         ok = ok & (t0 >= t_min)
