@@ -171,7 +171,7 @@ def angles_from_real_image_heights(lens: Lens, heights: np.ndarray) -> Lens:
 def _axial_ray(lens: Lens):
     """The ray along the axis from the object (from the paraxial entrance pupil's centre for
     an object at infinity): the chief ray of field 0 of a rotationally symmetric lens."""
-    pupil = jnp.zeros((1, 2))
+    pupil = jnp.zeros((1, 2), lens.epd.dtype)
     if lens.object_at_infinity:
         return sampling.collimated(lens, 0.0, pupil, aim="paraxial")
     point = sampling.object_point(lens, 0.0, lens.object_distance)
