@@ -110,3 +110,25 @@ def test_the_implicit_gradient_is_unchanged():
     fd = np.stack([(np.asarray(root(p + h * e)) - np.asarray(root(p - h * e))) / (2 * h)
                    for e in np.eye(2)], -1)
     np.testing.assert_allclose(jac, fd, rtol=0, atol=1e-8)
+
+
+def test_plain_newton_with_the_implicit_step_traces_the_residual_twice():
+    """The undamped path (the distortion maps' aiming): its iterations, then one more
+    evaluation whose Jacobian the implicit step takes, instead of a separate Jacobian pass at
+    the root (before: three copies of ``fn``). Same result as the iterations and the
+    implicit step written out."""
+    calls = []
+
+    def fn(x, p):
+        calls.append(1)
+        return jnp.arctan(x - p) + 0.1 * jnp.sin(3.0 * x[::-1])
+
+    p = jnp.array([0.5, -1.0])
+    x0 = p + 0.3
+    jax.jit(lambda q: newton_2d(fn, x0, q, 6)).lower(p)
+    assert len(calls) == 2
+    got = newton_2d(fn, x0, p, 6)
+    x = x0
+    for _ in range(7):  # six steps and the implicit one
+        x = x - jnp.linalg.solve(jax.jacfwd(fn)(x, p), fn(x, p))
+    np.testing.assert_allclose(np.asarray(got), np.asarray(x), rtol=0, atol=1e-14)

@@ -117,17 +117,22 @@ def newton_2d(fn, x0, params, iters: int, *, implicit_gradient: bool = True, tol
             return jax.lax.stop_gradient(x)
         x, inv = jax.lax.stop_gradient((x, inv))
         return x - inv @ ev(x, params)[0]
-    if has_aux:
-        # iters steps, then one more pass whose step is not taken: its aux is the root's.
-        def aux_body(i, carry):
-            x, _ = carry
+    if tol is None and (has_aux or implicit_gradient):
+        # iters steps, then one more pass whose step is not taken: its aux and its Jacobian
+        # are the root's (the implicit step needs no second copy of fn's forward-mode pass).
+        def last_body(i, carry):
+            x, _, _ = carry
             f, _, inv, aux = inv_step_aux(x, p_s)
-            return jnp.where(i < iters, x + newton_dx(inv, f), x), aux
+            return jnp.where(i < iters, x + newton_dx(inv, f), x), inv, aux
 
         aux0 = jax.tree.map(lambda s: jnp.zeros(s.shape, s.dtype),
-                            jax.eval_shape(lambda x: ev_aux(x, p_s)[1], x0))
-        x, aux = jax.lax.fori_loop(0, iters + 1, aux_body, (x0, aux0))
-        return jax.lax.stop_gradient(x), aux
+                            jax.eval_shape(lambda x: ev_aux(x, p_s)[1], x0)) if has_aux else None
+        inv0 = jnp.zeros((2, 2), x0.dtype)
+        x, inv, aux = jax.lax.fori_loop(0, iters + 1, last_body, (x0, inv0, aux0))
+        if has_aux:
+            return jax.lax.stop_gradient(x), aux
+        x, inv = jax.lax.stop_gradient((x, inv))
+        return x - inv @ ev(x, params)[0]
     if tol is None:
         x = jax.lax.fori_loop(0, iters, lambda _, x: body((0, x, None, None))[1], x0)
     else:
