@@ -117,10 +117,7 @@ Run: PYTHONPATH=$PWD python tools/audit27_probe.py [filter]
 (``AUDIT27_COUNT=1`` prints the count instead.)
 """
 
-import glob
-import inspect
 import os
-import re
 import sys
 import tempfile
 
@@ -131,7 +128,7 @@ import numpy as np
 jax.config.update("jax_enable_x64", True)
 
 sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
-from probe_table import probe, run  # noqa: E402
+from probe_table import mention_counts, probe, run  # noqa: E402
 
 import jaxlens as jl  # noqa: E402
 import jaxlens.analysis as A  # noqa: E402
@@ -142,32 +139,9 @@ TMP = tempfile.mkdtemp()
 
 
 def count_mentions(top=40):
-    """The exported names named least in the probe and test files, with their parameters'
-    counts (``name=``); printed with ``AUDIT27_COUNT=1``."""
-    root = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
-    files = (glob.glob(f"{root}/tools/audit*_probe.py") + glob.glob(f"{root}/tests/test_input_probes*.py")
-             + [f"{root}/tests/test_bad_input.py"] + glob.glob(f"{root}/tests/test_silent_answers*.py"))
-    text = "\n".join(open(f).read() for f in files if not f.endswith("audit27_probe.py")
-                     and not f.endswith("round27.py"))
-    import importlib
-    seen = {}
-    for pk in ("jaxlens", "jaxlens.analysis", "jaxlens.design", "jaxlens.imaging", "jaxlens.io",
-               "jaxlens.optics", "jaxlens.tracing", "jaxlens.experiments.edof"):
-        m = importlib.import_module(pk)
-        for n in getattr(m, "__all__", [n for n in dir(m) if not n.startswith("_")]):
-            obj = getattr(m, n, None)
-            if obj is not None and not inspect.ismodule(obj):
-                seen.setdefault(n, (pk, obj))
-    rows = []
-    for n, (pk, obj) in seen.items():
-        try:
-            params = [q for q in inspect.signature(obj).parameters if q != "self"]
-        except (TypeError, ValueError):
-            params = []
-        rows.append((len(re.findall(rf"\b{n}\b", text)), pk, n,
-                     {q: len(re.findall(rf"\b{q}\s*=", text)) for q in params}))
-    for r in sorted(rows, key=lambda r: r[0])[:top]:
-        print(*r)
+    """The exported names named least in the probe and test files (this round's own left
+    out), with their parameters' counts; printed with ``AUDIT27_COUNT=1``."""
+    mention_counts(lambda f: f in ("audit27_probe.py", "test_input_probes_round27.py"), top)
 
 
 # ----------------------------------------------------------------------------- round 26's leftovers: CLIs

@@ -180,7 +180,7 @@ import numpy as np
 jax.config.update("jax_enable_x64", True)
 
 sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
-from probe_table import probe, run  # noqa: E402
+from probe_table import mention_counts, probe, run  # noqa: E402
 
 import jaxlens as jl  # noqa: E402
 import jaxlens.analysis as A  # noqa: E402
@@ -228,31 +228,7 @@ def until_started(fn):
 def count_mentions(top=60):
     """The exported names named least in every probe and test file (rounds 27 and 28
     included), with their parameters' counts (``name=``)."""
-    import glob
-    import importlib
-    import inspect
-    import re
-    files = (glob.glob(f"{ROOT}/tools/audit*_probe.py") + glob.glob(f"{ROOT}/tests/test_input_probes*.py")
-             + [f"{ROOT}/tests/test_bad_input.py"] + glob.glob(f"{ROOT}/tests/test_silent_answers*.py"))
-    text = "\n".join(pathlib.Path(f).read_text() for f in files if "29" not in os.path.basename(f))
-    seen = {}
-    for pk in ("jaxlens", "jaxlens.analysis", "jaxlens.design", "jaxlens.imaging", "jaxlens.io",
-               "jaxlens.optics", "jaxlens.tracing", "jaxlens.experiments.edof"):
-        m = importlib.import_module(pk)
-        for n in getattr(m, "__all__", [n for n in dir(m) if not n.startswith("_")]):
-            obj = getattr(m, n, None)
-            if obj is not None and not inspect.ismodule(obj):
-                seen.setdefault(n, obj)
-    rows = []
-    for n, obj in seen.items():
-        try:
-            params = [q for q in inspect.signature(obj).parameters if q != "self"]
-        except (TypeError, ValueError):
-            params = []
-        rows.append((len(re.findall(rf"\b{n}\b", text)), n,
-                     {q: len(re.findall(rf"\b{q}\s*=", text)) for q in params}))
-    for r in sorted(rows, key=lambda r: r[0])[:top]:
-        print(*r)
+    mention_counts(lambda f: "29" in f, top)
 
 
 # ----------------------------------------------------------------------------- leftovers

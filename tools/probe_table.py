@@ -6,7 +6,12 @@ areas, which prints one row per probe (probe | outcome | what happened) and the 
 A filter word given as the script's first argument keeps the probes whose names hold it.
 """
 
+import glob
+import importlib
+import inspect
 import io
+import os
+import re
 import sys
 from contextlib import redirect_stderr, redirect_stdout
 
@@ -70,3 +75,36 @@ def run(areas):
     for _, o, _ in ROWS:
         counts[o] = counts.get(o, 0) + 1
     print("\n" + ", ".join(f"{k}: {v}" for k, v in sorted(counts.items())))
+
+
+PACKAGES = ("jaxlens", "jaxlens.analysis", "jaxlens.design", "jaxlens.imaging", "jaxlens.io",
+            "jaxlens.optics", "jaxlens.tracing", "jaxlens.experiments.edof")
+"""The packages whose exported names ``mention_counts`` counts."""
+
+
+def mention_counts(skip, top):
+    """Print the ``top`` exported names of ``PACKAGES`` named least in the probe scripts and
+    bad-input tests (files for which ``skip(basename)`` is true left out: a round's own), each
+    with its package and its parameters' counts (``name=``): how later rounds choose what to
+    probe next."""
+    root = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
+    files = (glob.glob(f"{root}/tools/audit*_probe.py") + glob.glob(f"{root}/tests/test_input_probes*.py")
+             + [f"{root}/tests/test_bad_input.py"] + glob.glob(f"{root}/tests/test_silent_answers*.py"))
+    text = "\n".join(open(f).read() for f in files if not skip(os.path.basename(f)))
+    seen = {}
+    for pk in PACKAGES:
+        m = importlib.import_module(pk)
+        for n in getattr(m, "__all__", [n for n in dir(m) if not n.startswith("_")]):
+            obj = getattr(m, n, None)
+            if obj is not None and not inspect.ismodule(obj):
+                seen.setdefault(n, (pk, obj))
+    rows = []
+    for n, (pk, obj) in seen.items():
+        try:
+            params = [q for q in inspect.signature(obj).parameters if q != "self"]
+        except (TypeError, ValueError):
+            params = []
+        rows.append((len(re.findall(rf"\b{n}\b", text)), pk, n,
+                     {q: len(re.findall(rf"\b{q}\s*=", text)) for q in params}))
+    for r in sorted(rows, key=lambda r: r[0])[:top]:
+        print(*r)
