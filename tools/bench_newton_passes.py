@@ -53,23 +53,16 @@ sys.path.insert(0, os.path.join(os.path.dirname(__file__), ".."))
 import jaxlens  # noqa: E402
 from benchmarks.design_step import import_baseline, step_fn  # noqa: E402
 
-
-def _cellphone6_rays(pkg, n=262_144):
-    lens = pkg.zoo.cellphone6().astype(jnp.float32)
-    rng = np.random.default_rng(0)
-    r = np.sqrt(rng.uniform(0, 1, n))
-    a = rng.uniform(0, 2 * np.pi, n)
-    pupil = jnp.asarray(np.stack([r * np.cos(a), r * np.sin(a)], -1), jnp.float32)
-    third = n // 3
-    rays = [pkg.sampling.collimated(lens, float(f), pupil[i * third:(i + 1) * third])
-            for i, f in enumerate((0.0, 20.0, 40.0))]
-    origin = jnp.concatenate([q.origin for q in rays])
-    direction = jnp.concatenate([q.direction for q in rays])
-    return lens, pkg.Rays(origin, direction, lens.primary_wavelength)
+sys.path.insert(0, os.path.dirname(__file__))
+from bench_newton_acceptance import (  # noqa: E402
+    cellphone6_rays,
+    same_leaves,
+    time_call,
+)
 
 
 def forward_case(pkg, chunk=65_536):
-    lens, rays = _cellphone6_rays(pkg)
+    lens, rays = cellphone6_rays(pkg)
 
     def fn(lens, rays):
         out = pkg.trace(lens, rays, chunk=chunk)
@@ -79,7 +72,7 @@ def forward_case(pkg, chunk=65_536):
 
 
 def grad_case(pkg, chunk=65_536):
-    lens, rays = _cellphone6_rays(pkg)
+    lens, rays = cellphone6_rays(pkg)
 
     def loss(lens, rays):
         out = pkg.trace(lens, rays, chunk=chunk, reverse_rule=True)
@@ -115,19 +108,6 @@ def compile_fresh(fn, x, y):
     return exe, time.perf_counter() - t0
 
 
-def _time(fn, x, y):
-    c0, t0 = time.process_time(), time.perf_counter()
-    jax.block_until_ready(fn(x, y))
-    return time.perf_counter() - t0, time.process_time() - c0
-
-
-def _same(a, b):
-    la, lb = jax.tree.leaves(a), jax.tree.leaves(b)
-    return len(la) == len(lb) and all(
-        np.array_equal(np.asarray(x), np.asarray(y), equal_nan=True)
-        for x, y in zip(la, lb, strict=True))
-
-
 def _summary(old, new, scale=1.0):
     """Medians (times ``scale``), their ratio new/old and the median of paired ratios."""
     mo, mn = statistics.median(old), statistics.median(new)
@@ -148,12 +128,12 @@ def run_case(name, make, old, repeats, compiles):
     args = {tag: versions[tag][1:] for tag in versions}
     outs = {tag: exes[tag](*args[tag]) for tag in exes}
     jax.block_until_ready(outs)
-    res = {"bit_for_bit": _same(outs["old"], outs["new"]), "hlo": counts,
+    res = {"bit_for_bit": same_leaves(outs["old"], outs["new"]), "hlo": counts,
            "compile_s": _summary(compile_s["old"], compile_s["new"]) | {"all": compile_s}}
     wall, cpu = {"old": [], "new": []}, {"old": [], "new": []}
     for k in range(repeats):
         for tag in (("old", "new") if k % 2 == 0 else ("new", "old")):
-            w, c = _time(exes[tag], *args[tag])
+            w, c = time_call(exes[tag], *args[tag])
             wall[tag].append(w)
             cpu[tag].append(c)
     if repeats:
@@ -232,10 +212,11 @@ def bit_for_bit(old) -> dict:
     for dtype in (jnp.float32, jnp.float64):
         tag = jnp.dtype(dtype).name
         for rr in (False, True):
-            res[f"cellphone6_{tag}_reverse_rule_{rr}"] = _same(
+            res[f"cellphone6_{tag}_reverse_rule_{rr}"] = same_leaves(
                 _cellphone6_checked(old, dtype, rr), _cellphone6_checked(jaxlens, dtype, rr))
-        res[f"design_{tag}"] = _same(_design_checked(old, dtype), _design_checked(jaxlens, dtype))
-        res[f"edof_{tag}"] = _same(_edof_checked(old, dtype), _edof_checked(jaxlens, dtype))
+        res[f"design_{tag}"] = same_leaves(_design_checked(old, dtype),
+                                           _design_checked(jaxlens, dtype))
+        res[f"edof_{tag}"] = same_leaves(_edof_checked(old, dtype), _edof_checked(jaxlens, dtype))
     return res
 
 
