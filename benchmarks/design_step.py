@@ -19,6 +19,7 @@ import io
 import json
 import os
 import pathlib
+import re
 import subprocess
 import sys
 import tarfile
@@ -157,6 +158,8 @@ def main(argv=None) -> dict:
     a = p.parse_args(argv)
     if a.seeds < 1 or a.repeats < 1:
         p.error("--seeds and --repeats must be at least 1")
+    if a.tag and not re.fullmatch(r"[A-Za-z0-9_-]+", a.tag):  # "../x" wrote outside --out-dir
+        p.error(f"--tag: letters, digits, '_' and '-' only (a file name's suffix), got {a.tag!r}")
     import jaxlens
 
     versions = {"new": jaxlens, "baseline": import_baseline(a.baseline)}

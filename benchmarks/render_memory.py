@@ -263,6 +263,11 @@ def main(argv=None) -> None:
         if getattr(args, name) < lo:
             ap.error(f"--{name.replace('_', '-')} must be a whole number >= {lo}, "
                      f"got {getattr(args, name)}")
+    smallest = args.size if args.worker else min(args.size, 128)  # the runs' frame sides
+    if args.patch > smallest:  # one patch² tile of rays for a smaller frame
+        ap.error(f"--patch {args.patch} must be at most the smallest frame side, {smallest} "
+                 f"pixels (--size, and the 256- and 128-pixel runs): a larger tile traces rays for "
+                 f"pixels outside the frame")
     if not MIN_CAP_GIB <= args.cap_gib <= MAX_CAP_GIB:  # also NaN and inf
         ap.error(f"--cap-gib must be a positive number of GiB, in {MIN_CAP_GIB:g}–"
                  f"{MAX_CAP_GIB:g} GiB (below, the cap stops any worker at once), got "

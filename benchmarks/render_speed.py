@@ -41,6 +41,9 @@ def main(argv=None) -> None:
     ap.add_argument("--repeats", type=whole(1, "repeats", MAX_REPEATS), default=3)
     ap.add_argument("--out", type=out_path(), default=RESULTS / "render_speed.json")
     args = ap.parse_args(argv)
+    if args.patch > args.size:  # one patch² tile of rays for a size² frame, recorded as --patch
+        ap.error(f"--patch {args.patch} must be at most --size {args.size} pixels (a larger "
+                 f"tile traces rays for pixels outside the frame)")
     sys.path.insert(0, str(ROOT))
     import jax
     import jax.numpy as jnp

@@ -116,7 +116,7 @@ def main(argv: list[str] | None = None) -> dict:
     for name in (args.only or CORE) if target is not None else ():
         if name in CORE:
             stem = f"{name}_{args.tag}" if args.tag else name
-            clash = _replaces_fuller_run(target / f"{stem}.json", target, args)
+            clash = _replaces_fuller_run(target / f"{stem}.json", target, args, name)
             if clash:
                 p.error(clash)
 
@@ -195,17 +195,31 @@ def run_kind(command: str) -> str:
     return "partial" if {"--lenses", "--counts"} & set(words) else "full"
 
 
-def _replaces_fuller_run(path: pathlib.Path, out: pathlib.Path, args) -> str | None:
-    """The refusal message when writing ``path`` would replace a result file of a fuller run
-    (a smoke run over a full one, a partial rerun over the full study), else None.
+def _replaces_fuller_run(path: pathlib.Path, out: pathlib.Path, args,
+                         name: str) -> str | None:
+    """The refusal message when writing ``path`` would replace a file that is not a result
+    of the benchmark ``name``, or a result file of a fuller run (a smoke run over a full one,
+    a partial rerun over the full study), else None.
 
     Before: ``--smoke --out benchmarks/results`` replaced every committed result with the
     smoke sizes, and ``--only throughput --counts 1000`` the full throughput table, each
-    without a word (``--tag`` is the documented way to write beside them)."""
+    without a word (``--tag`` is the documented way to write beside them); a file of the
+    same name that was no benchmark result (not JSON, or other JSON) was written over, or
+    refused as "a full run's results"."""
+    if not path.exists():
+        return None
     try:
-        old = run_kind(str(json.loads(path.read_text()).get("command", "")))
-    except (OSError, ValueError, AttributeError):
-        return None  # no file, or not one of ours: nothing to protect
+        data = json.loads(path.read_text())
+    except (OSError, ValueError):  # UnicodeDecodeError is a ValueError
+        data = None
+    if not isinstance(data, dict) or data.get("benchmark") != name:
+        what = ("is not JSON" if data is None else f"holds a JSON {type(data).__name__}"
+                if not isinstance(data, dict) else "has no \"benchmark\" entry"
+                if "benchmark" not in data else f"is a result of {data['benchmark']!r}")
+        return (f"--out {out}: {path.name} is not a {name} benchmark result (it {what}), and "
+                f"this run would write its {name} results over it; move it away or choose "
+                f"another --out")
+    old = run_kind(str(data.get("command", "")))
     new = "smoke" if args.smoke else "partial" if (args.lenses or args.counts) else "full"
     if RUN_KINDS.index(new) >= RUN_KINDS.index(old):
         return None

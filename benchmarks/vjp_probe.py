@@ -184,18 +184,33 @@ def main(argv=None):
     ap = OneLineParser(description=__doc__.splitlines()[0])
     ap.add_argument("--check", action="store_true", help="values, gradients and FD (float64)")
     ap.add_argument("--fusions", action="store_true", help="count fusions per loop body")
-    ap.add_argument("--rays", type=whole(1, "rays", throughput.MAX_RAYS), default=1_000_000)
-    ap.add_argument("--lens", choices=tuple(zoo.ZOO), default="cooke_triplet",
-                    help="zoo lens of --check and the timing")
-    ap.add_argument("--repeats", type=whole(1, "repeats", MAX_REPEATS), default=7)
+    # Defaults filled in below, so that an option the chosen mode does not read is refused.
+    defaults = {"rays": 1_000_000, "lens": "cooke_triplet", "repeats": 7, "chunk": [CHUNK],
+                "dtype": "float32", "json": None}
+    ap.add_argument("--rays", type=whole(1, "rays", throughput.MAX_RAYS),
+                    help="rays (default 1000000)")
+    ap.add_argument("--lens", choices=tuple(zoo.ZOO),
+                    help="zoo lens of --check and the timing (default cooke_triplet)")
+    ap.add_argument("--repeats", type=whole(1, "repeats", MAX_REPEATS), help="(default 7)")
     ap.add_argument("--chunk", nargs="+", type=whole(1, "rays per chunk", throughput.MAX_RAYS),
-                    default=[CHUNK],
                     help=f"chunk sizes to time (rays; the CPU default is {CHUNK})")
-    ap.add_argument("--dtype", choices=("float32", "float64"), default="float32",
-                    help="the rays' dtype (the lens is cast to it)")
+    ap.add_argument("--dtype", choices=("float32", "float64"),
+                    help="the rays' dtype (the lens is cast to it; default float32)")
     ap.add_argument("--json", type=out_path(make_parents=False),
                     help="also write the timings to this JSON file")
     a = ap.parse_args(argv)
+    if a.check and a.fusions:
+        ap.error("--check and --fusions are two runs; give one")
+    mode, reads = (("--check", {"lens"}) if a.check else ("--fusions", {"rays", "chunk"})
+                   if a.fusions else (None, set(defaults)))
+    unread = [f"--{k}" for k in defaults if getattr(a, k) is not None and k not in reads]
+    if unread:  # before: --check --json out.json ran the check and wrote no file
+        ap.error(f"{mode} does not read {', '.join(unread)} (those set the timing run)")
+    if a.chunk is not None and len(set(a.chunk)) < len(a.chunk):
+        ap.error(f"--chunk names a chunk size more than once: {a.chunk}")
+    for k, v in defaults.items():
+        if getattr(a, k) is None:
+            setattr(a, k, v)
     if a.check:
         check(lens_name=a.lens)
     elif a.fusions:

@@ -376,6 +376,26 @@ def run(
     if len(seeds) != b:
         raise ValueError(f"run: seeds must label the {b} designs of params, got {len(seeds)} "
                          f"labels: {seeds!r}")
+    # The schedule and switches, before the first stage (DesignConfig checks its own, but
+    # run() is public): warmup=5 (5 %) ramped the rate over the whole stage and never reached
+    # the peak, end_lr=5 raised it fivefold, irls="no" read as True, epoch=0 divided by 0.
+    w = "run"
+    checks.number(warmup, "warmup", w, lo=0, hi=1, unit="(a fraction of each stage's steps, "
+                  "not a percent)")
+    checks.number(end_lr, "end_lr", w, lo=0, hi=1, unit="(a fraction of the peak rate, not "
+                  "a percent)")
+    for arg, v in (("epoch", epoch), ("log_every", log_every)):
+        checks.number(v, arg, w, lo=1, integer=True, unit="steps")
+    checks.switch(irls, "irls", w)
+    checks.switch(progress, "progress", w)
+    if isinstance(reg_weights, str) or np.shape(reg_weights) != (3,):
+        raise ValueError(f"{w}: reg_weights must be three weights >= 0 (obliquity, spacing, "
+                         f"slope), got {reg_weights!r}")
+    for name, v in zip(("obliquity", "spacing", "slope"), np.asarray(reg_weights), strict=True):
+        checks.number(float(v), f"reg_weights ({name})", w, lo=0, unit="(weight)")
+    if callback is not None and not callable(callback):
+        raise TypeError(f"{w}: callback must be callable (stage_index, stage, params) or "
+                        f"None, got {callback!r}")
     objective = objectives["ray"]
     area = objective.sampling.area
     total = sum(s.steps for s in stages)

@@ -40,7 +40,7 @@ def load(path: str | os.PathLike, *, dtype=None, strict: bool = False,
             (default: a warning); see ``jaxlens.io.zmx.loads``.
         unknown_glass: for ``.zmx``, ``"model"`` opens a file whose glass is in no catalog
             with a model glass of the nd and Vd its GLAS line gives (a ``ZmxWarning``); the
-            default ``"error"`` refuses it.
+            default ``"error"`` refuses it. ``"model"`` is refused for ``.json``.
         config: for a multi-configuration ``.zmx`` (zoom or focus positions), the
             configuration to read, 1-based as in Zemax; default the active one, which the
             file's surfaces hold (see ``jaxlens.io.zmx.loads``). Refused for ``.json``.
@@ -57,6 +57,8 @@ def load(path: str | os.PathLike, *, dtype=None, strict: bool = False,
         raise TypeError(f"load: path must be a file name (str or os.PathLike), got "
                         f"{type(path).__name__} {path!r}")
     path = os.fspath(path)
+    if os.path.isdir(path):  # before: "has extension ''", which did not say what was wrong
+        raise ValueError(f"load: {path!r} is a folder; give a lens file (.json or .zmx) in it")
     ext = _ext(path, "load")
     if dtype is not None:
         dtype = _float_dtype(dtype)
@@ -70,6 +72,11 @@ def load(path: str | os.PathLike, *, dtype=None, strict: bool = False,
             raise ValueError(f"load: config selects a configuration of a multi-configuration "
                              f".zmx file; a .json lens has one, got config={config!r} for "
                              f"{path}")
+        if unknown_glass == "model":  # before: ignored, as report --unknown-glass model was
+            raise ValueError(f"load: unknown_glass='model' opens a .zmx whose GLAS line names "
+                             f"a glass in no catalog; a .json material is a catalog name, a "
+                             f"model glass {{\"nd\", \"vd\"}} or an index table, so it does "
+                             f"not apply to {path}")
         lens = load_json(path)
     else:
         lens = load_zmx(path, strict=strict, unknown_glass=unknown_glass, config=config)

@@ -63,12 +63,26 @@ class ZmxLine:
         try:
             v = number_text(tok)
         except ValueError:
-            raise self.error(f"{what} is not a number ({tok!r})") from None
+            hint = ""
+            try:  # a hand edit in a locale that writes decimal commas
+                number_text(tok.replace(",", ".", 1))
+                hint = f"; a decimal comma? .zmx numbers take a point: {tok.replace(',', '.', 1)}"
+            except ValueError:
+                pass
+            raise self.error(f"{what} is not a number ({tok!r}{hint})") from None
         if not math.isfinite(v):
             raise self.error(f"{what} must be finite")
         if lo is not None and v < lo:
             raise self.error(f"{what} must be >= {lo}, got {tok}")
         return v
+
+    def single(self, what: str) -> None:
+        """Refuses a line with more than one value where Zemax writes one (DISZ, CONI,
+        ENPD): a hand edit's second number was ignored ("DISZ 0.8 0.06" read as 0.8)."""
+        if len(self.tokens) > 2:
+            raise self.error(f"{self.tokens[0]} takes one value ({what}), got "
+                             f"{len(self.tokens) - 1}: a value in the wrong column, or a "
+                             f"number split by a space?")
 
     def int(self, i: int, what: str, *, lo=None, hi: int = MAX_COUNT) -> int:
         v = self.float(i, what, lo=lo)
@@ -218,10 +232,12 @@ def surface_line(s: ZmxSurface, key: str, ln: ZmxLine) -> None:
         s.curv, s.curv_line = ln.float(1, "curvature"), ln
     elif key == "DISZ":
         s.disz, s.disz_line = ln.float(1, "thickness", allow_inf=True), ln
+        ln.single("the thickness")
         if math.isinf(s.disz) and s.number > 0:
             raise ln.error("only the object surface may have an infinite thickness")
     elif key == "CONI":
         s.coni = ln.float(1, "conic constant")
+        ln.single("the conic constant")
     elif key in ("PARM", "XDAT"):
         i = ln.int(1, f"{key} index")
         (s.parm if key == "PARM" else s.xdat)[i] = (ln.float(2, f"{key} {i} value"), ln)
@@ -298,6 +314,7 @@ def top_line(f: ZmxFile, key: str, ln: ZmxLine, raw: str) -> None:
         f.unit = UNITS[u]
     elif key == "ENPD":
         f.aperture = ("epd", ln.float(1, "entrance pupil diameter"), ln)
+        ln.single("the entrance pupil diameter")
     elif key == "FNUM":  # FNUM x 0: image-space F/#; FNUM x 1: paraxial working F/#
         kind = ln.int(2, "F/# type") if len(ln.tokens) > 2 else 0
         if kind not in (0, 1):

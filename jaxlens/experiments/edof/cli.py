@@ -74,7 +74,6 @@ MAX_BATCH = 1024  # patches per batch (8 by default): each holds the tile's PSFs
 MAX_BLOCKS = 64  # NAFNet blocks per level or in the middle (the paper's deepest level has 28)
 MAX_LEVELS = 6  # NAFNet levels (the paper's 4); each doubles the channels
 MAX_ODD_TERMS = 10  # the hybrid surface's odd terms per axis: x³, x⁵, …, x²¹
-MAX_READ_NOISE = 0.5  # linear values (1 = full signal): above it the scene is mostly noise
 OUT_OF_TIME = 3
 """Exit status of a run stopped by ``--time-limit`` at a checkpoint."""
 COMPILE_CACHE = "compile_cache"
@@ -178,7 +177,7 @@ def build_parser() -> argparse.ArgumentParser:
 
 
 def config_from_args(a):
-    from jaxlens.experiments.edof.train import Config
+    from jaxlens.experiments.edof.train import Config, check_noise
     from jaxlens.nets import MAX_WIDTH
 
     if a.paper:
@@ -205,6 +204,10 @@ def config_from_args(a):
         "lens_accept": a.lens_accept, "real_halo": a.real_halo, "context": a.context,
         "train_source": a.train_source,
     }
+    # The noise is checked first, in the options' names (Config checks it again, in its own).
+    check_noise(cfg.read_noise if a.read_noise is None else a.read_noise,
+                cfg.photons if a.photons is None else a.photons, where="edof",
+                names=("--read-noise", "--photons"))
     cfg = dataclasses.replace(cfg, **{k: v for k, v in over.items() if v is not None})
     n, w = input_checks.number, "edof"
     # Upper bounds too (before: --steps 10**12 ran for ever, --pupil 10**5 and --batch 10**9
@@ -237,7 +240,6 @@ def config_from_args(a):
         raise ValueError(f"edof: --seeds needs distinct seeds, got {a.seeds}")
     n(cfg.lr_net, "--lr-net", w, lo=0, lo_open=True)
     n(cfg.lr_lens, "--lr-lens", w, lo=0, lo_open=True)
-    n(cfg.photons, "--photons", w, lo=0, lo_open=True, unit="electrons")
     # A floor is a fraction of the start strength in [0, 1]: above 1 the first projection
     # (lenses.project) raised the strength past its start, which --cubic-floor 2 did silently.
     n(cfg.cubic_floor, "--cubic-floor", w, lo=0, hi=1, unit="(fraction of the start strength)")
@@ -247,14 +249,8 @@ def config_from_args(a):
     if cfg.hybrid_floor is not None:
         n(cfg.hybrid_floor, "--hybrid-floor", w, lo=0, hi=1,
           unit="(fraction of the start strength)")
-    for opt, v in (("--w-sim", cfg.w_sim), ("--w-raw", cfg.w_raw),
-                   ("--read-noise", cfg.read_noise)):
+    for opt, v in (("--w-sim", cfg.w_sim), ("--w-raw", cfg.w_raw)):
         n(v, opt, w, lo=0)
-    if cfg.read_noise > MAX_READ_NOISE:  # before: --read-noise 4 (electrons) trained on noise
-        raise ValueError(f"edof: --read-noise must be at most {MAX_READ_NOISE:g} (a standard "
-                         f"deviation in linear values, 1 = full signal), got "
-                         f"{cfg.read_noise:g} (was it in electrons? {cfg.read_noise:g} e⁻ at "
-                         f"--photons {cfg.photons:g} is {cfg.read_noise / cfg.photons:.3g})")
     for opt, blocks in (("--enc", cfg.enc_blocks), ("--dec", cfg.dec_blocks)):
         # Each level doubles the channels: 20 levels asked for 4 GiB weights of one layer.
         if (not blocks or len(blocks) > MAX_LEVELS

@@ -40,6 +40,7 @@ import jax.numpy as jnp
 import numpy as np
 import optax
 
+from ...optics import checks as input_checks
 from ...optics.lens import Lens
 from .decoder import Decoder
 from .lenses import (
@@ -74,6 +75,27 @@ refused."""
 
 LENS_ONLY = {"cubic_floor": "cubic", "hybrid_floor": "hybrid", "hold_focus": "hybrid"}
 """Config fields that only one lens's training reads: the others resume across them."""
+
+
+MAX_READ_NOISE = 0.5
+"""Largest read noise (a standard deviation in linear values, 1 = full signal): above it
+the scene is mostly noise (an option written in electrons lands there)."""
+
+
+def check_noise(read_noise, photons, *, where: str = "edof Config",
+                names: tuple[str, str] = ("read_noise", "photons")) -> None:
+    """Refuses a noise model that is not physical or not in its units: ``photons`` (photo-
+    electrons at the linear value 1) must be positive and ``read_noise`` (a standard
+    deviation in linear values) in [0, ``MAX_READ_NOISE``]. ``names``: the two as the caller
+    writes them (``Config`` fields, or the command line's ``--read-noise``/``--photons``)."""
+    read, phot = names
+    input_checks.number(photons, phot, where, lo=0, lo_open=True, unit="electrons")
+    input_checks.number(read_noise, read, where, lo=0)
+    if read_noise > MAX_READ_NOISE:  # before: read noise 4 (electrons) trained on noise
+        raise ValueError(f"{where}: {read} must be at most {MAX_READ_NOISE:g} (a standard "
+                         f"deviation in linear values, 1 = full signal), got "
+                         f"{read_noise:g} (was it in electrons? {read_noise:g} e⁻ at "
+                         f"{phot} {photons:g} is {read_noise / photons:.3g})")
 
 
 def config_data(cfg: Config) -> dict:
@@ -179,6 +201,10 @@ class Config:
     seed: int = 0
     log_every: int = 10
     tolerances: Tolerances = dataclasses.field(default_factory=Tolerances)
+
+    def __post_init__(self):
+        # Before: only the command line checked the noise; Config(read_noise=4) trained on it.
+        check_noise(self.read_noise, self.photons)
 
     @property
     def front_pad(self) -> str:
