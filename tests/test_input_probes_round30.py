@@ -4,6 +4,7 @@ what main did with the input: a silent answer, a file written over, or an option
 import json
 import pathlib
 
+import numpy as np
 import pytest
 
 import jaxlens as jl
@@ -124,6 +125,17 @@ def test_zmx_refuses_a_second_value_and_names_a_decimal_comma(tmp_path):
              r"comma\? \.zmx numbers take a point: 2\.971822823221517E-001\)")):
         with pytest.raises(ValueError, match=msg):
             jl.load(_zmx(tmp_path, old, new))
+
+
+def test_zmx_takes_trailing_zeros_after_a_single_value(tmp_path):
+    """Zeros after the one value (another writer's padding, as CURV's solve columns) change
+    nothing and are read; only a nonzero or non-numeric second value is refused."""
+    plain = jl.load(SEED0)
+    for old, new in (("DISZ 8.059597441026024E-001", "DISZ 8.059597441026024E-001 0 0"),
+                     ("CONI -4.849999999999994E+000", "CONI -4.849999999999994E+000 0")):
+        padded = jl.load(_zmx(tmp_path, old, new))
+        assert np.array_equal(padded.thickness, plain.thickness)
+        assert padded.surfaces[2].k == plain.surfaces[2].k
 
 
 def test_load_refuses_a_zmx_option_for_json_and_names_a_folder(tmp_path):

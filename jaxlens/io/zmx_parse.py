@@ -78,8 +78,11 @@ class ZmxLine:
 
     def single(self, what: str) -> None:
         """Refuses a line with more than one value where Zemax writes one (DISZ, CONI,
-        ENPD): a hand edit's second number was ignored ("DISZ 0.8 0.06" read as 0.8)."""
-        if len(self.tokens) > 2:
+        ENPD): a hand edit's second number was ignored ("DISZ 0.8 0.06" read as 0.8).
+        Trailing zeros pass, as another writer's padding (the solve columns of CURV, say)
+        would: they cannot be a split number or a value in the wrong column."""
+        extra = self.tokens[2:]
+        if any(_nonzero(tok) for tok in extra):
             raise self.error(f"{self.tokens[0]} takes one value ({what}), got "
                              f"{len(self.tokens) - 1}: a value in the wrong column, or a "
                              f"number split by a space?")
@@ -157,6 +160,14 @@ SINGLE_SURFACE_KEYS = frozenset("TYPE CURV DISZ CONI GLAS DIAM CLAP FLAP OBSC OB
 a second line (an edit or a merge gone wrong) replaced the first without a word."""
 APERTURE_KEYS = frozenset(("ENPD", "FNUM", "FLOA", "OBNA"))
 SINGLE_TOP_KEYS = frozenset("UNIT FTYP XFLN YFLN XFLD YFLD WAVL PWAV".split())
+
+
+def _nonzero(tok: str) -> bool:
+    """Whether a token is anything but the number 0 (text, a nonzero value)."""
+    try:
+        return number_text(tok) != 0
+    except ValueError:
+        return True
 
 
 def _once(seen: dict, what: str, ln: ZmxLine, where: str) -> None:
