@@ -382,12 +382,13 @@ def plot_field_curvature(lens, *, wavelengths=None, title: str | None = None) ->
     the largest field (``jaxlens.analysis.aberrations.field_curvature``, ``spots.distortion``)."""
     import jax.numpy as jnp
 
-    from .analysis.aberrations import default_fields, field_curvature
+    from .analysis.aberrations import default_fields
+    from .analysis.report_cells import bucketed_field_curvature
     from .analysis.spots import distortion
 
     lens = lens.astype(jnp.float64)
     fields = default_fields(lens, 21)
-    fc = field_curvature(lens, fields, wavelengths)
+    fc = bucketed_field_curvature(lens, fields, wavelengths)  # the report's program
     dist = distortion(lens, fields)
     th = np.asarray(fields)
     fig = _figure(7, 4)

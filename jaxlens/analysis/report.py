@@ -59,9 +59,8 @@ from ..optics.surfaces import EvenAsphere, Hybrid, OddAsphere, Standard, TiltedP
 from ..optics.toroidal import Toroidal
 from ..optics.xypolynomial import XYPolynomial, xy_term_powers
 from . import spots as analysis
-from .aberrations import field_curvature
 from .report_afocal import afocal_report_data, format_afocal_report
-from .report_cells import aiming_line, wavefront_lines
+from .report_cells import aiming_line, bucketed_field_curvature, wavefront_lines
 from .report_cells import cell as _num
 from .report_cells import json_number as _f
 from .report_cells import wavefront_summary as _wavefront_summary
@@ -237,8 +236,9 @@ def report_data(lens: Lens, *, fields=None, wavelengths=None, wavefront: bool = 
                 "valid_fraction": [float(v) for v in frac],
             }
         )
-    fc = field_curvature(lens, lens.fields, lens.primary_wavelength)
-    foci = (np.asarray(fc.tangential[0]), np.asarray(fc.sagittal[0]))
+    # Every wavelength, the primary's row taken: the program of the --plot figure's call.
+    fc = bucketed_field_curvature(lens, lens.fields, lens.wavelengths)
+    foci = (np.asarray(fc.tangential[lens.primary]), np.asarray(fc.sagittal[lens.primary]))
     for i, entry in enumerate(out_fields):
         entry["focus_tangential"] = _f(foci[0][i])
         entry["focus_sagittal"] = _f(foci[1][i])
