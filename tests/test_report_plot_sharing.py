@@ -39,3 +39,17 @@ def test_bucketed_field_curvature_is_the_unpadded_one_bit_for_bit():
     for a, b in ((got.tangential, want.tangential), (got.sagittal, want.sagittal),
                  (got.fields, want.fields), (got.wavelengths, want.wavelengths)):
         np.testing.assert_array_equal(np.asarray(a), np.asarray(b))
+
+
+def test_layout_semi_diameters_and_fans_from_one_program_are_the_separate_ones():
+    from jaxlens.analysis.spots import clear_semi_diameters, semi_diameters_and_fans
+
+    lens = jaxlens.zoo.cooke_triplet().astype(jnp.float64)
+    fields = jnp.asarray([0.0, 14.0, 20.0])
+    u = np.linspace(-1.0, 1.0, 5)
+    pupil = jnp.asarray(np.stack([np.zeros_like(u), u], -1))
+    sd, starts, dirs, path = semi_diameters_and_fans(lens, fields, pupil)
+    want = [clear_semi_diameters(lens), *plot._fans(lens, fields, pupil)]
+    for a, b in zip(jax.tree.leaves([sd, starts, dirs, path]), jax.tree.leaves(want),
+                    strict=True):
+        np.testing.assert_array_equal(np.asarray(a), np.asarray(b))  # bit for bit

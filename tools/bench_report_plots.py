@@ -107,14 +107,17 @@ def main() -> None:
         print(f"\n{path}: --json output identical in every run: {same}")
         print(f"{'step':<10}{'old s':>8}{'new s':>8}   (s, compiles, compile s per run)")
         for key in ["command", *runs["old"][0]["steps"]]:
-            def cell(rs, key=key):
-                if key == "command":
-                    return [x["command"] for x in rs]
-                return [x["steps"][key] for x in rs]
-            o, n = cell(runs["old"]), cell(runs["new"])
-            mean = lambda v: sum(x if key == "command" else x[0] for x in v) / len(v)  # noqa: E731
-            print(f"{key:<10}{mean(o):8.1f}{mean(n):8.1f}   old {o}  new {n}")
+            o, n = (_column(runs[name], key) for name in ("old", "new"))
+            print(f"{key:<10}{_mean(o):8.1f}{_mean(n):8.1f}   old {o}  new {n}")
 
+
+def _column(rs: list[dict], key: str) -> list:
+    """Each run's seconds of the whole command, or [s, compiles, compile s] of a step."""
+    return [x["command"] if key == "command" else x["steps"][key] for x in rs]
+
+
+def _mean(col: list) -> float:
+    return sum(x if isinstance(x, float) else x[0] for x in col) / len(col)
 
 if __name__ == "__main__":
     main()
