@@ -667,23 +667,32 @@ def figure_paths(lens_path: str, folder: str, overwrite: bool) -> dict[str, str]
     return paths
 
 
-def _write_figures(lens: Lens, paths: dict[str, str]) -> None:
+def _write_figures(lens: Lens, paths: dict[str, str], progress: bool = False) -> None:
+    """Draw and save the figures; ``progress``: a bar on stderr (each figure takes seconds
+    to tens of seconds, mostly compiling its program of traced rays)."""
+    from tqdm.auto import tqdm
+
     from .. import plot
 
     makers = {"layout": plot.plot_layout, "spots": plot.plot_spots, "fans": plot.plot_ray_fans,
               "field": plot.plot_field_curvature, "mtf": plot.plot_mtf,
               "wavefront": plot.plot_wavefront, "opd": plot.plot_opd_fans,
               "seidel": plot.plot_seidel, "ee": plot.plot_encircled_energy}
-    for key, path in paths.items():
-        try:
-            fig = makers[key](lens)
-        except ValueError as e:
-            if key not in ANALYSIS_FIGURES and not lens.afocal_image:  # afocal: angles only
-                raise
-            print(f"jaxlens report: --plot: {os.path.basename(path)} not drawn: {e}",
-                  file=sys.stderr)
-            continue
-        plot.save(fig, path)
+    with tqdm(total=len(paths), desc="figures", unit="figure", file=sys.stderr,
+              disable=not progress, leave=False, dynamic_ncols=True) as bar:
+        for key, path in paths.items():
+            bar.set_postfix_str(key)
+            try:
+                fig = makers[key](lens)
+            except ValueError as e:
+                if key not in ANALYSIS_FIGURES and not lens.afocal_image:  # afocal: angles
+                    raise
+                bar.write(f"jaxlens report: --plot: {os.path.basename(path)} not drawn: {e}",
+                          file=sys.stderr)
+                bar.update()
+                continue
+            plot.save(fig, path)
+            bar.update()
 
 
 def run(args: argparse.Namespace) -> int:
@@ -731,7 +740,8 @@ def run(args: argparse.Namespace) -> int:
         print(format_report(data, shown), end="")
     if paths:  # after the report, so that a figure that cannot be made does not lose it
         try:
-            _write_figures(shown, paths)
+            # A bar where someone watches: not with --json, nor into a file or pipe.
+            _write_figures(shown, paths, progress=not args.json and sys.stderr.isatty())
         except (ValueError, OSError) as e:
             print(f"jaxlens report: error: --plot: {e}", file=sys.stderr)
             return 2
