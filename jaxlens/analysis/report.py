@@ -31,6 +31,7 @@ Conventions (also written into the JSON output under ``units``):
 from __future__ import annotations
 
 import argparse
+import contextvars
 import dataclasses
 import json
 import math
@@ -667,9 +668,13 @@ def figure_paths(lens_path: str, folder: str, overwrite: bool) -> dict[str, str]
     return paths
 
 
-def _write_figures(lens: Lens, paths: dict[str, str], progress: bool = False) -> None:
-    """Draw and save the figures; ``progress``: a bar on stderr (each figure takes seconds
-    to tens of seconds, mostly compiling its program of traced rays)."""
+_FIGURE_BAR = contextvars.ContextVar("figure_bar", default=False)
+"""Whether ``_write_figures`` shows a progress bar on stderr (``run`` sets it)."""
+
+
+def _write_figures(lens: Lens, paths: dict[str, str]) -> None:
+    """Draw and save the figures, with a bar on stderr where ``_FIGURE_BAR`` says (each
+    figure takes seconds to tens of seconds, mostly compiling its program of traced rays)."""
     from tqdm.auto import tqdm
 
     from .. import plot
@@ -679,7 +684,7 @@ def _write_figures(lens: Lens, paths: dict[str, str], progress: bool = False) ->
               "wavefront": plot.plot_wavefront, "opd": plot.plot_opd_fans,
               "seidel": plot.plot_seidel, "ee": plot.plot_encircled_energy}
     with tqdm(total=len(paths), desc="figures", unit="figure", file=sys.stderr,
-              disable=not progress, leave=False, dynamic_ncols=True) as bar:
+              disable=not _FIGURE_BAR.get(), leave=False, dynamic_ncols=True) as bar:
         for key, path in paths.items():
             bar.set_postfix_str(key)
             try:
@@ -741,7 +746,11 @@ def run(args: argparse.Namespace) -> int:
     if paths:  # after the report, so that a figure that cannot be made does not lose it
         try:
             # A bar where someone watches: not with --json, nor into a file or pipe.
-            _write_figures(shown, paths, progress=not args.json and sys.stderr.isatty())
+            bar = _FIGURE_BAR.set(not args.json and sys.stderr.isatty())
+            try:
+                _write_figures(shown, paths)
+            finally:
+                _FIGURE_BAR.reset(bar)
         except (ValueError, OSError) as e:
             print(f"jaxlens report: error: --plot: {e}", file=sys.stderr)
             return 2
