@@ -7,6 +7,7 @@ import logging
 import jax
 import jax.numpy as jnp
 import numpy as np
+import pytest
 
 import jaxlens
 from jaxlens import plot
@@ -41,10 +42,16 @@ def test_bucketed_field_curvature_is_the_unpadded_one_bit_for_bit():
         np.testing.assert_array_equal(np.asarray(a), np.asarray(b))
 
 
-def test_layout_semi_diameters_and_fans_from_one_program_are_the_separate_ones():
-    from jaxlens.analysis.spots import clear_semi_diameters, semi_diameters_and_fans
+def test_layout_semi_diameters_and_fans_from_one_program_are_the_separate_ones(monkeypatch):
+    from jaxlens.analysis import spots
 
     lens = jaxlens.zoo.cooke_triplet().astype(jnp.float64)
+    with monkeypatch.context() as m:  # plot_layout traces its rays in one program
+        for where, name in ((spots, "clear_semi_diameters"), (plot, "_fans")):
+            m.setattr(where, name, lambda *a, name=name, **k: pytest.fail(f"{name} called"))
+        plot.plot_layout(lens, [0.0, 14.0, 20.0], n_rays=5)
+    from jaxlens.analysis.spots import clear_semi_diameters, semi_diameters_and_fans
+
     fields = jnp.asarray([0.0, 14.0, 20.0])
     u = np.linspace(-1.0, 1.0, 5)
     pupil = jnp.asarray(np.stack([np.zeros_like(u), u], -1))
