@@ -55,7 +55,9 @@ def child(path: str) -> None:
         out[key] = [round(time.perf_counter() - t, 2), len(compiled), round(sum(compiled), 2)]
         return r
 
-    args = argparse.Namespace(lens=path, lenient=False, unknown_glass=None, config=None)
+    from jaxlens.__main__ import build_parser
+
+    args = build_parser().parse_args(["report", path])  # the command's defaults
     lens = timed("load", lambda: report._load_lens(args))
     lens = report.with_fields_and_wavelengths(lens)
     timed("report", lambda: report.report_data(lens))
@@ -101,8 +103,8 @@ def main() -> None:
         for r in range(a.rounds):
             for name in (("old", "new") if r % 2 == 0 else ("new", "old")):
                 runs[name].append(run_tree(trees[name], path))
-                print(f"{path} round {r + 1} {name}: command {runs[name][-1]['command']} s",
-                      file=sys.stderr, flush=True)
+                print(f"{path} round {r + 1} {name}: command {runs[name][-1]['command']} s, "
+                      f"steps {runs[name][-1]['steps']}", file=sys.stderr, flush=True)
         same = all(x["json"] == runs["old"][0]["json"] for x in runs["old"] + runs["new"])
         print(f"\n{path}: --json output identical in every run: {same}")
         print(f"{'step':<10}{'old s':>8}{'new s':>8}   (s, compiles, compile s per run)")
