@@ -117,8 +117,16 @@ def plot_layout(lens, fields: Sequence[float] | None = None, *, n_rays: int = 9,
         raise ValueError(f"plot_layout: n_rays must be at most {MAX_LAYOUT_RAYS} rays per fan "
                          f"(plot.MAX_LAYOUT_RAYS: beyond a few hundred a fan is a "
                          f"filled area), got {n_rays}")
-    sd = np.asarray(analysis.clear_semi_diameters(lens)) if semi_diameters is None else \
-        np.asarray(semi_diameters)
+    u = np.linspace(-1.0, 1.0, n_rays)
+    pupil = jnp.asarray(np.stack([np.zeros_like(u), u], -1))
+    fan_fields = jnp.asarray(fields, lens.epd.dtype)
+    if semi_diameters is None and fan_fields.ndim == np.ndim(lens.fields):
+        # One compiled program for both (with ray aiming, 13 s of compiling become 8).
+        sd, starts, dirs, paths = analysis.semi_diameters_and_fans(lens, fan_fields, pupil)
+    else:
+        sd = analysis.clear_semi_diameters(lens) if semi_diameters is None else semi_diameters
+        starts, dirs, paths = _fans(lens, fan_fields, pupil)
+    sd = np.asarray(sd)
     zs = np.asarray(lens.vertex_z())
     n = lens.num_surfaces
     # Each surface's tracer frame in global coordinates (identity without coordinate breaks):
@@ -139,9 +147,6 @@ def plot_layout(lens, fields: Sequence[float] | None = None, *, n_rays: int = 9,
     fig = _figure(8, 4.5)
     ax = fig.add_subplot(1, 1, 1)
     # Rays.
-    u = np.linspace(-1.0, 1.0, n_rays)
-    pupil = jnp.asarray(np.stack([np.zeros_like(u), u], -1))
-    starts, dirs, paths = _fans(lens, jnp.asarray(fields, lens.epd.dtype), pupil)
     for i, f in enumerate(fields):
         start, d0 = np.asarray(starts[i]), np.asarray(dirs[i])
         path = np.asarray(paths.origin[i])
@@ -382,12 +387,13 @@ def plot_field_curvature(lens, *, wavelengths=None, title: str | None = None) ->
     the largest field (``jaxlens.analysis.aberrations.field_curvature``, ``spots.distortion``)."""
     import jax.numpy as jnp
 
-    from .analysis.aberrations import default_fields, field_curvature
+    from .analysis.aberrations import default_fields
+    from .analysis.report_cells import bucketed_field_curvature
     from .analysis.spots import distortion
 
     lens = lens.astype(jnp.float64)
     fields = default_fields(lens, 21)
-    fc = field_curvature(lens, fields, wavelengths)
+    fc = bucketed_field_curvature(lens, fields, wavelengths)  # the report's program
     dist = distortion(lens, fields)
     th = np.asarray(fields)
     fig = _figure(7, 4)

@@ -31,6 +31,7 @@ Conventions (also written into the JSON output under ``units``):
 from __future__ import annotations
 
 import argparse
+import contextvars
 import dataclasses
 import json
 import math
@@ -59,9 +60,8 @@ from ..optics.surfaces import EvenAsphere, Hybrid, OddAsphere, Standard, TiltedP
 from ..optics.toroidal import Toroidal
 from ..optics.xypolynomial import XYPolynomial, xy_term_powers
 from . import spots as analysis
-from .aberrations import field_curvature
 from .report_afocal import afocal_report_data, format_afocal_report
-from .report_cells import aiming_line, wavefront_lines
+from .report_cells import aiming_line, bucketed_field_curvature, wavefront_lines
 from .report_cells import cell as _num
 from .report_cells import json_number as _f
 from .report_cells import wavefront_summary as _wavefront_summary
@@ -237,8 +237,9 @@ def report_data(lens: Lens, *, fields=None, wavelengths=None, wavefront: bool = 
                 "valid_fraction": [float(v) for v in frac],
             }
         )
-    fc = field_curvature(lens, lens.fields, lens.primary_wavelength)
-    foci = (np.asarray(fc.tangential[0]), np.asarray(fc.sagittal[0]))
+    # Every wavelength, the primary's row taken: the program of the --plot figure's call.
+    fc = bucketed_field_curvature(lens, lens.fields, lens.wavelengths)
+    foci = (np.asarray(fc.tangential[lens.primary]), np.asarray(fc.sagittal[lens.primary]))
     for i, entry in enumerate(out_fields):
         entry["focus_tangential"] = _f(foci[0][i])
         entry["focus_sagittal"] = _f(foci[1][i])
@@ -667,23 +668,36 @@ def figure_paths(lens_path: str, folder: str, overwrite: bool) -> dict[str, str]
     return paths
 
 
+_FIGURE_BAR = contextvars.ContextVar("figure_bar", default=False)
+"""Whether ``_write_figures`` shows a progress bar on stderr (``run`` sets it)."""
+
+
 def _write_figures(lens: Lens, paths: dict[str, str]) -> None:
+    """Draw and save the figures, with a bar on stderr where ``_FIGURE_BAR`` says (each
+    figure takes seconds to tens of seconds, mostly compiling its program of traced rays)."""
+    from tqdm.auto import tqdm
+
     from .. import plot
 
     makers = {"layout": plot.plot_layout, "spots": plot.plot_spots, "fans": plot.plot_ray_fans,
               "field": plot.plot_field_curvature, "mtf": plot.plot_mtf,
               "wavefront": plot.plot_wavefront, "opd": plot.plot_opd_fans,
               "seidel": plot.plot_seidel, "ee": plot.plot_encircled_energy}
-    for key, path in paths.items():
-        try:
-            fig = makers[key](lens)
-        except ValueError as e:
-            if key not in ANALYSIS_FIGURES and not lens.afocal_image:  # afocal: angles only
-                raise
-            print(f"jaxlens report: --plot: {os.path.basename(path)} not drawn: {e}",
-                  file=sys.stderr)
-            continue
-        plot.save(fig, path)
+    with tqdm(total=len(paths), desc="figures", unit="figure", file=sys.stderr,
+              disable=not _FIGURE_BAR.get(), leave=False, dynamic_ncols=True) as bar:
+        for key, path in paths.items():
+            bar.set_postfix_str(key)
+            try:
+                fig = makers[key](lens)
+            except ValueError as e:
+                if key not in ANALYSIS_FIGURES and not lens.afocal_image:  # afocal: angles
+                    raise
+                bar.write(f"jaxlens report: --plot: {os.path.basename(path)} not drawn: {e}",
+                          file=sys.stderr)
+                bar.update()
+                continue
+            plot.save(fig, path)
+            bar.update()
 
 
 def run(args: argparse.Namespace) -> int:
@@ -731,7 +745,12 @@ def run(args: argparse.Namespace) -> int:
         print(format_report(data, shown), end="")
     if paths:  # after the report, so that a figure that cannot be made does not lose it
         try:
-            _write_figures(shown, paths)
+            # A bar where someone watches: not with --json, nor into a file or pipe.
+            bar = _FIGURE_BAR.set(not args.json and sys.stderr.isatty())
+            try:
+                _write_figures(shown, paths)
+            finally:
+                _FIGURE_BAR.reset(bar)
         except (ValueError, OSError) as e:
             print(f"jaxlens report: error: --plot: {e}", file=sys.stderr)
             return 2

@@ -390,9 +390,7 @@ def _clear_semi_diameters(lens, fields, n_rim, *, reaching, pupil) -> Float[Arra
     checks.number(n_rim, "n_rim", "clear_semi_diameters", lo=4, hi=checks.MAX_SAMPLES, integer=True,
                   unit="rim rays per beam (fewer miss the rim in x or y)")
     fields = fields_array(fields, "clear_semi_diameters")
-    a = np.linspace(0, 2 * np.pi, n_rim, endpoint=False)
-    rim = jnp.asarray(np.concatenate([[[0.0, 0.0]], np.stack([np.cos(a), np.sin(a)], -1)]),
-                      lens.epd.dtype)
+    rim = rim_pupil(n_rim, lens.epd.dtype)
     pupil = rim if pupil is None else jnp.concatenate([rim, jnp.asarray(pupil, rim.dtype)])
     depth = None if lens.object_at_infinity else lens.object_distance
 
@@ -407,6 +405,74 @@ def _clear_semi_diameters(lens, fields, n_rim, *, reaching, pupil) -> Float[Arra
     traced = jnp.max(h, axis=(0, 1))
     given = jnp.stack([s.semi_diameter for s in lens.surfaces])
     return jnp.where(jnp.isfinite(given), given, traced)
+
+
+def rim_pupil(n_rim: int, dtype) -> Float[Array, "m 2"]:
+    """``clear_semi_diameters``' pupil: the centre and ``n_rim`` points on the unit circle."""
+    a = np.linspace(0, 2 * np.pi, n_rim, endpoint=False)
+    return jnp.asarray(np.concatenate([[[0.0, 0.0]], np.stack([np.cos(a), np.sin(a)], -1)]),
+                       dtype)
+
+
+def semi_diameters_and_fans(lens: Lens, fan_fields, fan_pupil, n_rim: int = 64):
+    """``clear_semi_diameters(lens)`` and the rays of ``fan_fields`` (as the lens's fields:
+    ``[F]`` θy or ``[F, 2]`` (θx, θy), deg) through ``fan_pupil`` (``[M, 2]``) at the
+    primary wavelength, from one compiled program: the rim rays of every field and
+    wavelength and the fans are aimed in one batch. With ray aiming each program of aimed
+    rays takes seconds to compile (rayoptics_US00583336: 8 s for the semi-diameters, 5 s
+    for the layout's fans); each ray is aimed and traced alone (vmap), so the numbers are
+    those of the two separate calls.
+
+    Returns:
+        (semi-diameters ``[n]`` mm, launch points ``[F, M, 3]``, launch directions ``[F, M,
+        3]``, the fans' ``trace_path`` ``[F, n + 1, M]``).
+    """
+    check_inputs(lens, "clear_semi_diameters", own="all")
+    checks.number(n_rim, "n_rim", "clear_semi_diameters", lo=4, hi=checks.MAX_SAMPLES,
+                  integer=True, unit="rim rays per beam (fewer miss the rim in x or y)")
+    (fields,) = _as_arrays(lens, _own_fields(lens, None))
+    fan_fields = jnp.asarray(fan_fields, lens.epd.dtype)
+    if fan_fields.ndim != jnp.ndim(fields):
+        raise ValueError(f"semi_diameters_and_fans: fan_fields must have the shape of the "
+                         f"lens's fields ([F] or [F, 2]), got {fan_fields.shape} against "
+                         f"{jnp.shape(fields)}")
+    starts, dirs, path, traced = _semi_diameters_and_fans(
+        lens, fields, fan_fields, jnp.asarray(fan_pupil, lens.epd.dtype), n_rim)
+    return traced, starts, dirs, path
+
+
+@eqx.filter_jit
+def _semi_diameters_and_fans(lens, fields, fan_fields, fan_pupil, n_rim):
+    n, dt = lens.num_surfaces, lens.epd.dtype
+    rim = rim_pupil(n_rim, dt)
+    m = max(rim.shape[0], fan_pupil.shape[0])
+
+    def padded(p):  # the centre ray fills up: it changes no height and no fan ray
+        return jnp.concatenate([p, jnp.zeros((m - p.shape[0], 2), dt)])
+
+    W, F, Ff = lens.wavelengths.shape[0], fields.shape[0], fan_fields.shape[0]
+    # One (field, wavelength, pupil) per beam: every field at every wavelength (rim), then
+    # the fans (primary wavelength).
+    beam_f = jnp.concatenate([jnp.repeat(fields, W, axis=0), fan_fields])
+    beam_w = jnp.concatenate([jnp.tile(lens.wavelengths, F),
+                              jnp.full((Ff,), lens.primary_wavelength)])
+    beam_p = jnp.concatenate([jnp.broadcast_to(padded(rim), (F * W, m, 2)),
+                              jnp.broadcast_to(padded(fan_pupil), (Ff, m, 2))])
+    depth = lens_depth(lens, None, "plot_layout")
+
+    def beam(f, w, p):
+        rays = field_rays(lens, f, p, w, depth=depth)
+        return rays.origin, rays.direction, trace_path(lens, rays)
+
+    starts, dirs, path = jax.vmap(beam)(beam_f, beam_w, beam_p)
+    r = jnp.hypot(path.origin[:F * W, :n, :, 0], path.origin[:F * W, :n, :, 1])  # [FW, n, m]
+    # As clear_semi_diameters: the rays that pass the last surface (reaching=False).
+    h = jnp.max(jnp.where(path.valid[:F * W, n - 1][:, None], r, 0.0), axis=-1)
+    given = jnp.stack([s.semi_diameter for s in lens.surfaces])
+    traced = jnp.where(jnp.isfinite(given), given, jnp.max(h, axis=0))
+    k = fan_pupil.shape[0]
+    fans = jax.tree.map(lambda a: a[F * W:, :, :k] if a.ndim >= 3 else a, path)
+    return starts[F * W:, :k], dirs[F * W:, :k], fans, traced
 
 
 class GeometryCheck(eqx.Module):
