@@ -195,3 +195,15 @@ def test_benchmark_modules_refuse_a_path_in_a_tag_and_a_patch_past_the_frame(
         DS.main(["--tag", "new_rule"])
     with pytest.raises(Started):
         RS.main(["--out", str(tmp_path / "r.json")])
+
+
+def test_report_refuses_lenient_for_json_and_a_repeated_field(capsys):
+    """Main: ``report x.json --lenient`` did nothing without a word (strict is a .zmx
+    reading), and ``--fields 0 0`` reported the same field twice."""
+    from jaxlens.__main__ import main
+
+    cooke = str(ROOT / "jaxlens" / "data" / "lenses" / "cooke_triplet.json")
+    for argv, msg in (([cooke, "--lenient"], "--lenient reads a .zmx file"),
+                      ([cooke, "--fields", "0", "0"], "--fields gives a field more than once")):
+        assert main(["report", *argv]) == 2
+        assert msg in capsys.readouterr().err

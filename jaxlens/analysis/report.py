@@ -31,7 +31,6 @@ Conventions (also written into the JSON output under ``units``):
 from __future__ import annotations
 
 import argparse
-import contextvars
 import dataclasses
 import json
 import math
@@ -166,6 +165,10 @@ def with_fields_and_wavelengths(lens: Lens, fields=None, wavelengths=None) -> Le
                              f"[F], or (θx, θy) pairs [F, 2], with F >= 1, got shape {shape}")
         checks.field_angles(np.asarray(fields, np.float64), "report", "--fields")
         f = jnp.asarray(np.atleast_1d(np.asarray(fields, np.float64)), dtype)
+        rows = np.asarray(f).reshape(f.shape[0], -1)
+        if np.unique(rows, axis=0).shape[0] < rows.shape[0]:  # a row reported twice
+            raise ValueError(f"report: --fields gives a field more than once, got "
+                             f"{checks.fmt(fields)}")
         # The factors of the fields that stay (none for new fields), or none at all.
         lens = dataclasses.replace(lens, fields=f,
                                    vignetting=sampling.vignetting_for_fields(lens, f))
@@ -668,13 +671,10 @@ def figure_paths(lens_path: str, folder: str, overwrite: bool) -> dict[str, str]
     return paths
 
 
-_FIGURE_BAR = contextvars.ContextVar("figure_bar", default=False)
-"""Whether ``_write_figures`` shows a progress bar on stderr (``run`` sets it)."""
-
-
 def _write_figures(lens: Lens, paths: dict[str, str]) -> None:
-    """Draw and save the figures, with a bar on stderr where ``_FIGURE_BAR`` says (each
-    figure takes seconds to tens of seconds, mostly compiling its program of traced rays)."""
+    """Draw and save the figures, with a bar on stderr where someone watches it (not into a
+    file or pipe): each figure takes seconds to tens of seconds, mostly compiling its program
+    of traced rays."""
     from tqdm.auto import tqdm
 
     from .. import plot
@@ -684,7 +684,7 @@ def _write_figures(lens: Lens, paths: dict[str, str]) -> None:
               "wavefront": plot.plot_wavefront, "opd": plot.plot_opd_fans,
               "seidel": plot.plot_seidel, "ee": plot.plot_encircled_energy}
     with tqdm(total=len(paths), desc="figures", unit="figure", file=sys.stderr,
-              disable=not _FIGURE_BAR.get(), leave=False, dynamic_ncols=True) as bar:
+              disable=not sys.stderr.isatty(), leave=False, dynamic_ncols=True) as bar:
         for key, path in paths.items():
             bar.set_postfix_str(key)
             try:
@@ -721,6 +721,9 @@ def run(args: argparse.Namespace) -> int:
         if args.config is not None:  # before the file is read (a .json file named "config=0")
             checks.number(args.config, "--config", "report", lo=1, integer=True,
                           unit="(Zemax's 1-based configuration number)")
+        if args.lenient and not args.lens.lower().endswith(".zmx"):  # it did nothing there
+            raise ValueError(f"--lenient reads a .zmx file past what jaxlens does not model; "
+                             f"{args.lens} is no .zmx file: leave it out")
         paths = figure_paths(args.lens, args.plot, args.overwrite) if args.plot else None
         # strict by default: a report must not describe a truncated file, nor rays that a
         # setting jaxlens does not use would have changed, without being asked
@@ -745,12 +748,7 @@ def run(args: argparse.Namespace) -> int:
         print(format_report(data, shown), end="")
     if paths:  # after the report, so that a figure that cannot be made does not lose it
         try:
-            # A bar where someone watches: not with --json, nor into a file or pipe.
-            bar = _FIGURE_BAR.set(not args.json and sys.stderr.isatty())
-            try:
-                _write_figures(shown, paths)
-            finally:
-                _FIGURE_BAR.reset(bar)
+            _write_figures(shown, paths)
         except (ValueError, OSError) as e:
             print(f"jaxlens report: error: --plot: {e}", file=sys.stderr)
             return 2
