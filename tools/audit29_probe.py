@@ -171,7 +171,6 @@ import os
 import pathlib
 import sys
 import tempfile
-import warnings
 
 import jax
 import jax.numpy as jnp
@@ -180,7 +179,7 @@ import numpy as np
 jax.config.update("jax_enable_x64", True)
 
 sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
-from probe_table import mention_counts, probe, run  # noqa: E402
+from probe_table import mention_counts, probe, run, started, until_started, warned  # noqa: E402
 
 import jaxlens as jl  # noqa: E402
 import jaxlens.analysis as A  # noqa: E402
@@ -191,38 +190,6 @@ ROOT = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
 TMP = tempfile.mkdtemp()
 COOKE = os.path.join(ROOT, "jaxlens", "data", "lenses", "cooke_triplet.json")
 SEED0 = os.path.join(ROOT, "experiments", "classical", "designs", "seed_0.zmx")
-
-
-def warned(fn):
-    """A warning counts as the answer (raised as a ValueError holding its message)."""
-    def go():
-        with warnings.catch_warnings(record=True) as w:
-            warnings.simplefilter("always")
-            r = fn()
-        w = [x for x in w if issubclass(x.category, UserWarning)]
-        if w:
-            raise ValueError(f"warned: {w[0].message}")
-        return r
-    return go
-
-
-class Started(Exception):
-    """Raised where a command's work would begin: its checks have passed."""
-
-
-def started(*a, **k):
-    raise Started
-
-
-def until_started(fn):
-    """``fn`` (a command) run up to its work: "started" when every check passed."""
-    def go():
-        try:
-            return fn()
-        except Started:
-            return "started"
-    go.cli = getattr(fn, "cli", False)
-    return go
 
 
 def count_mentions(top=60):

@@ -13,6 +13,7 @@ import io
 import os
 import re
 import sys
+import warnings
 from contextlib import redirect_stderr, redirect_stdout
 
 import numpy as np
@@ -57,6 +58,39 @@ def probe(name, fn, *words, good=False):
     except Exception:  # noqa: BLE001
         s = type(r).__name__
     ROWS.append((name, "ok" if good else "silent wrong", s.replace("\n", " ")))
+
+
+def warned(fn):
+    """A warning counts as the answer (raised as a ValueError holding its message)."""
+    def go():
+        with warnings.catch_warnings(record=True) as w:
+            warnings.simplefilter("always")
+            r = fn()
+        w = [x for x in w if issubclass(x.category, UserWarning)]
+        if w:
+            raise ValueError(f"warned: {w[0].message}")
+        return r
+    go.cli = getattr(fn, "cli", False)
+    return go
+
+
+class Started(Exception):
+    """Raised where a command's work would begin: its checks have passed."""
+
+
+def started(*a, **k):
+    raise Started
+
+
+def until_started(fn):
+    """``fn`` (a command) run up to its work: "started" when every check passed."""
+    def go():
+        try:
+            return fn()
+        except Started:
+            return "started"
+    go.cli = getattr(fn, "cli", False)
+    return go
 
 
 def run(areas):
