@@ -175,13 +175,13 @@ Probe (before -> after):
     zmx as written (control)                                         ok           -> ok
     report --config 2 on a .json lens                                clear error  -> clear error
     report --list-configs on a .json lens                            clear error  -> clear error
-    report --lenient on a .json lens                                 silent wrong -> clear error 
+    report --lenient on a .json lens                                 silent wrong -> clear error
     report --unknown-glass model on a .json lens                     silent wrong -> clear error
     report --config 0 on a .zmx                                      clear error  -> clear error
     report --overwrite without --plot                                clear error  -> clear error
     report a folder as the lens                                      vague error  -> clear error
     report --wavelengths 0.5876 0.5876                               clear error  -> clear error
-    report --fields 0 0                                 silent wrong -> clear error 
+    report --fields 0 0                                              silent wrong -> clear error
     report --fields nan                                              clear error  -> clear error
     classical --track 7000 (µm)                                      clear error  -> clear error
     classical --track 0.007 (m)                                      clear error  -> clear error
