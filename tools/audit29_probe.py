@@ -41,7 +41,9 @@ Gaps found and fixed:
    frame: a kernel wider than the frame is refused.
 6. A JSON lens file with a wavelength repeated (a copy-paste slip: it weighs twice in every
    polychromatic figure) was read, and one with both ``wavelengths_um`` and
-   ``wavelengths_nm`` read the first and ignored the other: both refused, naming the file.
+   ``wavelengths_nm`` read the first and ignored the other: both named with the file, the
+   repeat as a warning (changed in review: Zemax takes a repeat, and such a lens must load
+   back from its own JSON), the two keys refused.
 
 Controls of note: the JSON lens format already named a misspelled key (with the close
 match), a duplicate key, nm in ``wavelengths_um`` and µm in ``wavelengths_nm``, a field past
@@ -119,7 +121,7 @@ Probe (before -> after):
     lens file sensor 10**6 × 10**6 pixels                          clear error  -> clear error
     lens file fields.type 'angle_rad'                              clear error  -> clear error
     lens file cut short                                            clear error  -> clear error
-    lens file a wavelength repeated                                silent wrong -> clear error
+    lens file a wavelength repeated (warns)                        silent wrong -> clear error
     lens file wavelengths_um and wavelengths_nm                    silent wrong -> clear error
     lens file model glass nd/vd swapped                            clear error  -> clear error
     lens file n table keys in µm                                   clear error  -> clear error
@@ -292,7 +294,7 @@ def lens_files():
     probe("lens file sensor 10**6 × 10**6 pixels", lf(lambda d: d.update(sensor={"resolution": [10**6, 10**6], "pixel_size": 0.005})), "resolution")
     probe("lens file fields.type 'angle_rad'", lf(lambda d: d["fields"].update(type="angle_rad")), "fields.type")
     probe("lens file cut short", lf(raw=json.dumps(base)[:-40]), ":1:")
-    probe("lens file a wavelength repeated", lf(lambda d: d.update(wavelengths_nm=[587.5618, 587.5618, 656.2725])), "distinct")
+    probe("lens file a wavelength repeated (warns)", warned(lf(lambda d: d.update(wavelengths_nm=[587.5618, 587.5618, 656.2725]))), "twice")
     probe("lens file wavelengths_um and wavelengths_nm", lf(lambda d: (d.pop("primary_wavelength_nm"), d.update(wavelengths_um=[0.5876]))), "wavelengths_um", "wavelengths_nm")
     probe("lens file model glass nd/vd swapped", lf(lambda d: s1(d).update(material={"nd": 64.17, "vd": 1.5168})), "swapped")
     probe("lens file n table keys in µm", lf(lambda d: s1(d).update(material={"n": {"0.4861": 1.52, "0.5876": 1.517, "0.6563": 1.514}})), "µm")
