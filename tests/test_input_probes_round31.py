@@ -76,6 +76,40 @@ def test_benchmarks_refuse_to_write_over_a_foreign_plot(tmp_path, monkeypatch, c
         BR.main(["--only", "throughput", "--out", str(tmp_path)])
 
 
+def test_benchmark_modules_refuse_to_write_over_a_file_that_is_not_their_result(
+        tmp_path, monkeypatch, capsys):
+    """Main: ``render_speed --out my_lens.json`` (or ``render_memory --out``, ``vjp_probe
+    --json``) wrote its timings over whatever file was there: a lens, notes, another
+    benchmark's result."""
+    import shutil
+
+    import benchmarks.common as BC
+    import benchmarks.render_memory as RM
+    import benchmarks.render_speed as RS
+    import benchmarks.vjp_probe as VJ
+
+    monkeypatch.setattr(BC, "machine_info", started)
+    monkeypatch.setattr(RM, "run_isolated", started)
+    monkeypatch.setattr(VJ, "timing", started)
+    lens = tmp_path / "my_lens.json"
+    shutil.copy(COOKE, lens)
+    speed = tmp_path / "speed.json"
+    shutil.copy(ROOT / "benchmarks" / "results" / "render_speed.json", speed)
+    for main, argv, msg in (
+            (RS.main, ["--out", str(lens)], 'my_lens.json is not a render_speed result (it has '
+                                            'no "command" entry), and this run would write '
+                                            'over it'),
+            (RM.main, ["--out", str(lens)], "my_lens.json is not a render_memory result"),
+            (VJ.main, ["--json", str(speed)], "speed.json is not a vjp_probe result (it is a "
+                                              "result of 'python -m benchmarks.render_speed')")):
+        with pytest.raises(SystemExit):
+            main(argv)
+        assert msg in capsys.readouterr().err
+    assert lens.read_text() == COOKE.read_text()
+    with pytest.raises(Started):  # control: its own earlier result is replaced
+        RS.main(["--out", str(speed)])
+
+
 def test_baseline_revision_git_does_not_know_is_one_line(monkeypatch, capsys):
     """Main: ``design_step``/``fast_path --baseline nosuchrev`` ended in git archive's
     CalledProcessError traceback."""

@@ -383,7 +383,29 @@ def tools_cli():
     probe("make_agf a missing database", tool("make_agf.py", os.path.join(TMP, "nope")), "database")
 
 
+def bench_outputs():
+    import shutil
+
+    import benchmarks.common as BC
+    import benchmarks.render_memory as RM
+    import benchmarks.render_speed as RS
+    import benchmarks.vjp_probe as VJ
+
+    lens_copy = os.path.join(TMP, "my_lens.json")
+    shutil.copy(COOKE, lens_copy)
+    notes = os.path.join(TMP, "notes.txt")
+    pathlib.Path(notes).write_text("my notes\n")
+    speed = os.path.join(TMP, "speed.json")
+    shutil.copy(os.path.join(ROOT, "benchmarks", "results", "render_speed.json"), speed)
+    rs = lambda out: patched(BC, ["machine_info"], lambda: RS.main(["--out", out]))
+    probe("render_speed --out a lens file", rs(lens_copy), "not a render_speed result")
+    probe("render_speed --out notes (not JSON)", rs(notes), "not JSON")
+    probe("render_speed --out its own result (control: starts)", rs(speed), good=True)
+    probe("render_memory --out a lens file", patched(RM, ["run_isolated"], lambda: RM.main(["--out", lens_copy])), "not a render_memory result")
+    probe("vjp_probe --json a render_speed result", patched(VJ, ["check", "count_fusions", "timing"], lambda: VJ.main(["--json", speed])), "render_speed")
+
+
 if os.environ.get("AUDIT31_COUNT"):
     count_mentions()
 else:
-    run([leftovers, least_named, lens_files, zmx_files, command_lines, edof_cli, tools_cli])
+    run([leftovers, least_named, lens_files, zmx_files, command_lines, edof_cli, tools_cli, bench_outputs])
