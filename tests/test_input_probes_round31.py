@@ -159,6 +159,30 @@ def test_design_refuses_switches_that_are_not_bools(monkeypatch):
             multistart.design(spec, [0], progress=False, **kw)
 
 
+def test_curriculum_run_checks_its_solver_factory_objective_and_mesh():
+    """Main: ``run(..., make_solver="adam")`` failed as "'str' object is not callable",
+    ``objective=None`` as an AttributeError, and ``mesh="cpu"`` reached the first stage."""
+    import types
+
+    import jaxlens.design as D
+
+    stage = D.Stage("x", fov=40.0, fnum=4.0, steps=10)
+    params = types.SimpleNamespace(c=jnp.zeros((1, 3)))  # read for its dtype and batch only
+    obj = types.SimpleNamespace(sampling=types.SimpleNamespace(area=jnp.ones(3)))
+
+    def run(*args, **kw):
+        D.run(D.DesignSpec(), [stage], params, *args, progress=False, **kw)
+
+    for args, kw, msg in (((obj, "adam"), {}, r"run: make_solver must be callable"),
+                          ((None, started), {}, r"run: objective must be an Objective"),
+                          ((obj, started), dict(mesh="cpu"), r"run: mesh must be a "
+                                                             r"jax\.sharding\.Mesh")):
+        with pytest.raises(TypeError, match=msg):
+            run(*args, **kw)
+    with pytest.raises(Started):  # control: reaches the first stage's solver
+        run(obj, started)
+
+
 def test_save_names_a_folder(tmp_path):
     """Main: ``save(lens, "x.json/")`` said "has extension ''", and ``save(lens, "x.json")``
     with x.json a folder raised IsADirectoryError after the checks."""

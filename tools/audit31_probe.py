@@ -226,6 +226,15 @@ def least_named():
     probe("design shard 'no'", patched(D.multistart if hasattr(D, "multistart") else D, ["run"], lambda: D.design(spec, [0], shard="no", progress=False)), "shard")
     probe("design image_loss 5", patched(D.multistart if hasattr(D, "multistart") else D, ["run"], lambda: D.design(spec, [0], image_loss=5, progress=False)), "image_loss")
     probe("design devices 0", patched(D.multistart if hasattr(D, "multistart") else D, ["run"], lambda: D.design(spec, [0], devices=0, progress=False)), "devices")
+    import types
+    stage = D.Stage("x", fov=40.0, fnum=4.0, steps=10)
+    params = types.SimpleNamespace(c=jnp.zeros((1, 3)))  # read for its dtype and batch only
+    obj = types.SimpleNamespace(sampling=types.SimpleNamespace(area=jnp.ones(3)))
+    drun = lambda *a, **k: until_started(lambda: D.run(D.DesignSpec(), [stage], params, *a, progress=False, **k))
+    probe("run make_solver 'adam'", drun(obj, "adam"), "make_solver")
+    probe("run objective None", drun(None, started), "objective")
+    probe("run mesh 'cpu'", drun(obj, started, mesh="cpu"), "mesh")
+    probe("run objective and make_solver (control: starts)", drun(obj, started), good=True)
     probe("Lens afocal_image 'no'", lambda: dataclasses.replace(lens, afocal_image="no").afocal_image, "afocal_image")
     probe("Lens negative_propagation 'no'", lambda: dataclasses.replace(lens, negative_propagation="no").negative_propagation, "negative_propagation")
     probe("Lens description 5", lambda: dataclasses.replace(lens, description=5).description, "description")
