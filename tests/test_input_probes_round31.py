@@ -145,6 +145,21 @@ def test_lens_file_warns_of_a_repeated_field_and_an_inside_out_element():
     lensfile.lens_from_dict(d, source="x.json")
 
 
+def test_lens_file_reads_a_material_catalog():
+    """Main: ``{"name": "N-SK16", "catalog": "CDGM"}`` (or ``"SCHOT"``) loaded SCHOTT's
+    N-SK16 without a word: the catalog was not read (a key far from every known one passes
+    as a comment)."""
+    d = json.loads(COOKE.read_text())
+    for cat, msg in (("SCHOT", r"surface 1: Unknown catalog\(s\) \['SCHOT'\]"),
+                     ("CDGM", r"surface 1: Unknown material 'N-SK16'.*in catalog SCHOTT, not "
+                              r"searched here")):
+        d["surfaces"][1]["material"] = {"name": "N-SK16", "catalog": cat}
+        with pytest.raises(ValueError, match=msg):
+            lensfile.lens_from_dict(d, source="x.json")
+    d["surfaces"][1]["material"] = {"name": "N-SK16", "catalog": "schott"}  # control
+    assert lensfile.lens_from_dict(d, source="x.json").materials[0].catalog == "SCHOTT"
+
+
 def test_design_refuses_switches_that_are_not_bools(monkeypatch):
     """Main: ``design(shard="no")`` sharded (bool("no") is True) and ``image_loss=5``
     fine-tuned on rendered images, both found only after the set-up."""

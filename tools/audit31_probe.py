@@ -274,6 +274,11 @@ def lens_files():
     probe("lens file a BOM (utf-8-sig; control)", lambda: (pathlib.Path(TMP, "bom.json").write_text(json.dumps(base), encoding="utf-8-sig"), jl.load(os.path.join(TMP, "bom.json")).epd)[1], good=True)
     probe("lens file key 'thickness' twice", lf(lambda d: None, json.dumps(base).replace('"thickness": ', '"thickness": 3.0, "thickness": ', 1)), "twice")
     probe("lens file fields {} (no values)", lf(lambda d: d.update(fields={"type": "angle_deg_y"})), "fields")
+    mat = lambda m: lf(lambda d: d["surfaces"][1].update(material=m))
+    probe("lens file material catalog 'SCHOT'", mat({"name": "N-SK16", "catalog": "SCHOT"}), "SCHOT", "SCHOTT")
+    probe("lens file material N-SK16 catalog 'CDGM' (not there)", mat({"name": "N-SK16", "catalog": "CDGM"}), "N-SK16", "CDGM")
+    probe("lens file material catalog without a name", mat({"catalog": "SCHOTT"}), "name")
+    probe("lens file material N-SK16 catalog 'schott' (control)", mat({"name": "N-SK16", "catalog": "schott"}), good=True)
     probe("lens file as read (control)", lf(lambda d: None), good=True)
 
 
@@ -307,6 +312,19 @@ def zmx_files():
     probe("zmx DISZ 'INFINITY' on a middle surface", z(disz, disz.replace(disz.split()[1], "INFINITY")), "DISZ")
     probe("zmx CURV in the DISZ column (DISZ 0.05 CURV 8)", z(disz, disz.replace("DISZ", "CURV")), "CURV")
     probe("zmx WAVM weight 0 on the primary (warns)", warned(z("WAVM 2 5.875618E-001 1", "WAVM 2 5.875618E-001 0")), "weigh")
+    def raw(data):
+        p = os.path.join(TMP, f"z{len(os.listdir(TMP))}.zmx")
+        pathlib.Path(p).write_bytes(data)
+        return lambda: jl.load(p).thickness
+    import io
+    import zipfile
+    buf = io.BytesIO()
+    with zipfile.ZipFile(buf, "w") as zf:
+        zf.writestr("lens.zmx", text)
+    probe("zmx a .zar/zip archive named .zmx", raw(buf.getvalue()), "binary")
+    probe("zmx empty", raw(b""), "no SURF")
+    probe("zmx UTF-16 LE without a BOM (control)", raw(text.encode("utf-16-le")), good=True)
+    probe("zmx tabs between keyword and value (control)", write_load(text.replace("  DISZ ", "\tDISZ\t")), good=True)
     probe("zmx as read (control)", write_load(text), good=True)
 
 

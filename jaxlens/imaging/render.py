@@ -551,7 +551,8 @@ def render(
             or ``PSFRender(kernel_size)`` (patch-wise PSF convolution).
         wavelengths: one wavelength (µm) per channel, default the C, d, F lines for R, G, B.
         sensor: the sensor; default ``lens.sensor``.
-        patch: tile side in pixels (memory of a gradient grows with patch²·spp).
+        patch: tile side in pixels (memory of a gradient grows with patch²·spp); a tile
+            stops at the image's side where one tile spans it.
         checkpoint: recompute each tile in the backward pass (``jax.checkpoint``).
         mesh: a ``jax.sharding.Mesh`` to spread the tiles over its devices.
         relative_illumination: include vignetting and the cos⁴ falloff (see Radiometry).
