@@ -150,9 +150,10 @@ def test_lens_file_reads_a_material_catalog():
     N-SK16 without a word: the catalog was not read (a key far from every known one passes
     as a comment)."""
     d = json.loads(COOKE.read_text())
-    for cat, msg in (("SCHOT", r"surface 1: Unknown catalog\(s\) \['SCHOT'\]"),
-                     ("CDGM", r"surface 1: Unknown material 'N-SK16'.*in catalog SCHOTT, not "
-                              r"searched here")):
+    for cat, msg in (("SCHOT", r"surface 1: catalog 'SCHOT': Unknown catalog\(s\) "
+                               r"\['SCHOT'\]"),
+                     ("CDGM", r"surface 1: catalog 'CDGM': Unknown material 'N-SK16'.*in "
+                              r"catalog SCHOTT, not searched here")):
         d["surfaces"][1]["material"] = {"name": "N-SK16", "catalog": cat}
         with pytest.raises(ValueError, match=msg):
             lensfile.lens_from_dict(d, source="x.json")

@@ -170,6 +170,8 @@ def least_named():
     probe("register_catalog a text file (not AGF)", lambda: jl.register_catalog(notes), "notes.agf")
     probe("register_catalog name '' ", lambda: jl.register_catalog({"G1": jl.ModelGlass(1.5, 60.0)}, name=""), "name")
     probe("register_catalog name 'SCHOTT' (control: a newer schott.agf goes ahead of the shipped one)", lambda: jl.register_catalog({"G1": jl.ModelGlass(1.5, 60.0)}, name="SCHOTT"), good=True)
+    import jaxlens.optics.catalog as CAT
+    CAT._user_catalogs[:] = [c for c in CAT._user_catalogs if c[0] != "SCHOTT"]  # it hides the shipped SCHOTT from catalogs=["SCHOTT"]
     probe("register_catalog a dict holding a number", lambda: jl.register_catalog({"G1": 1.5}, name="MINE1"), "G1")
     lrs = D.LensParams(c=0.01, a=0.01, k=0.0, d=0.01)
     probe("Adam b1 1.0", lambda: D.Adam(lambda p: p, lrs, b1=1.0), "b1")

@@ -244,7 +244,7 @@ def material_from_spec(spec: Any, where: str, *, n_table: Any = None) -> Abstrac
         try:
             return catalog.get_material(name, catalogs=[cat.upper()])
         except ValueError as e:
-            raise ValueError(f"{where}: {e}") from None
+            raise ValueError(f"{where}: catalog {cat!r}: {e}") from None
     if name:
         return catalog_material(name, where)
     raise ValueError(
