@@ -253,10 +253,26 @@ def whole(lo: int = 1, unit: str = "", hi: int | None = None):
     return parse
 
 
-def out_path(kind: str = "file", *, make_parents: bool = True):
+def foreign_result(path: pathlib.Path, module: str) -> str | None:
+    """Why the existing file ``path`` is not a result of ``benchmarks.<module>`` (its JSON
+    ``command`` names the module), else None: a run would write over it."""
+    try:
+        data = json.loads(path.read_text())
+    except (OSError, ValueError):  # UnicodeDecodeError is a ValueError
+        return "it is not JSON"
+    command = data.get("command") if isinstance(data, dict) else None
+    if not isinstance(command, str):
+        return "it has no \"command\" entry"
+    if command.split()[:3] != ["python", "-m", f"benchmarks.{module}"]:
+        return f"it is a result of {command[:60]!r}"
+    return None
+
+
+def out_path(kind: str = "file", *, make_parents: bool = True, result_of: str | None = None):
     """An argparse ``type=`` for an output ``kind`` ("file" or "folder"): refuses, before any
-    benchmark runs, a folder given for a file, a file given for a folder, and a path whose
-    folder could not be created (``make_parents``) or does not exist."""
+    benchmark runs, a folder given for a file, a file given for a folder, a path whose
+    folder could not be created (``make_parents``) or does not exist, and an existing file
+    that is no result of the benchmark module ``result_of``."""
     import argparse
 
     def parse(text: str) -> pathlib.Path:
@@ -265,6 +281,11 @@ def out_path(kind: str = "file", *, make_parents: bool = True):
         p = pathlib.Path(text)
         if kind == "file" and p.is_dir():
             raise argparse.ArgumentTypeError(f"{text} is a folder; give a file's path")
+        why = foreign_result(p, result_of) if result_of and p.is_file() else None
+        if why:  # before: written over (a lens file, notes, another benchmark's result)
+            raise argparse.ArgumentTypeError(
+                f"{text} is not a {result_of} result ({why}), and this run would write over "
+                f"it; move it away or give another path")
         if kind == "folder" and p.exists() and not p.is_dir():
             raise argparse.ArgumentTypeError(f"{text} is a file, not a folder")
         parent = p.absolute().parent

@@ -33,6 +33,30 @@ from .common import write_json
 NAME = "jaxlens_baseline"
 
 
+def baseline_problem(ref: str) -> str | None:
+    """Why ``import_baseline(ref)`` cannot work, in one line (``--baseline``), else None.
+
+    Before: a revision git does not know ended in ``git archive``'s traceback."""
+    def git(*args):
+        return subprocess.run(["git", *args], capture_output=True, text=True)
+
+    try:
+        top = git("rev-parse", "--show-toplevel")
+    except OSError as e:  # git is not installed
+        return f"--baseline {ref}: git is needed to read an earlier revision ({e})"
+    if top.returncode:
+        return (f"--baseline {ref}: the current folder is not in a git checkout of jaxlens "
+                f"(run from the repository)")
+    root = top.stdout.strip()
+    if not ref or ref.startswith("-") or git("-C", root, "rev-parse", "--verify", "--quiet",
+                                             f"{ref}^{{commit}}").returncode:
+        return (f"--baseline {ref!r}: git does not know this revision in {root} (a commit, "
+                f"tag or branch: see git log --oneline)")
+    if git("-C", root, "cat-file", "-e", f"{ref}:jaxlens").returncode:
+        return f"--baseline {ref}: that revision has no jaxlens package to compare against"
+    return None
+
+
 def import_baseline(ref: str):
     """Import the ``jaxlens`` package of git revision ``ref`` as ``jaxlens_baseline``."""
     top = subprocess.check_output(["git", "rev-parse", "--show-toplevel"], text=True).strip()
@@ -160,6 +184,9 @@ def main(argv=None) -> dict:
         p.error("--seeds and --repeats must be at least 1")
     if a.tag and not re.fullmatch(r"[A-Za-z0-9_-]+", a.tag):  # "../x" wrote outside --out-dir
         p.error(f"--tag: letters, digits, '_' and '-' only (a file name's suffix), got {a.tag!r}")
+    problem = baseline_problem(a.baseline)
+    if problem:
+        p.error(problem)
     import jaxlens
 
     versions = {"new": jaxlens, "baseline": import_baseline(a.baseline)}

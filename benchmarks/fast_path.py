@@ -17,7 +17,7 @@ import time
 import numpy as np
 
 from . import common
-from .design_step import import_baseline, trace_fns
+from .design_step import baseline_problem, import_baseline, trace_fns
 
 
 def main(argv=None) -> dict:
@@ -34,6 +34,9 @@ def main(argv=None) -> dict:
     p.add_argument("--rays", type=whole(1, "rays", MAX_RAYS), default=2**19)
     p.add_argument("--repeats", type=whole(1, "repeats", MAX_REPEATS), default=15)
     a = p.parse_args(argv)
+    problem = baseline_problem(a.baseline)
+    if problem:
+        p.error(problem)
     versions = {"new": jaxlens, "baseline": import_baseline(a.baseline)}
     fns = {k: trace_fns(v, a.rays) for k, v in versions.items()}
 

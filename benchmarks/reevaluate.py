@@ -165,6 +165,11 @@ def main(argv=None):
     dest = a.out or a.folder.parent / "reevaluation.json"
     if dest.is_dir() or not dest.parent.is_dir():
         p.error(f"--out {dest} must be a file in an existing folder")
+    from .common import foreign_result
+
+    if dest.is_file() and (why := foreign_result(dest, "reevaluate")):  # was written over
+        p.error(f"--out {dest} is not a reevaluate result ({why}), and this run would write "
+                f"over it; move it away or give another path")
     jax.config.update("jax_enable_x64", True)
     from jaxlens.design.spec import DesignSpec
 

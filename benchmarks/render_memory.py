@@ -254,7 +254,8 @@ def main(argv=None) -> None:
     ap.add_argument("--lens", default="cellphone6", choices=("cooke_triplet", "double_gauss",
                                                              "cellphone6"),
                     help="zoo lens (the smoke test uses the smallest)")
-    ap.add_argument("--out", type=out_path(), default=RESULTS / "render_memory.json")
+    ap.add_argument("--out", type=out_path(result_of="render_memory"),
+                    default=RESULTS / "render_memory.json")
     args = ap.parse_args(argv)
     if args.worker and args.trace_rays > 0:  # the bare-trace worker ignores the render sizes
         print(json.dumps(trace_worker(args.trace_rays, args.lens)))

@@ -39,7 +39,8 @@ def main(argv=None) -> None:
     ap.add_argument("--spp", type=whole(1, "samples per pixel", MAX_SAMPLES), default=16)
     ap.add_argument("--patch", type=whole(1, "pixels", MAX_IMAGE_SIDE), default=64)
     ap.add_argument("--repeats", type=whole(1, "repeats", MAX_REPEATS), default=3)
-    ap.add_argument("--out", type=out_path(), default=RESULTS / "render_speed.json")
+    ap.add_argument("--out", type=out_path(result_of="render_speed"),
+                    default=RESULTS / "render_speed.json")
     args = ap.parse_args(argv)
     if args.patch > args.size:  # one patch² tile of rays for a size² frame, recorded as --patch
         ap.error(f"--patch {args.patch} must be at most --size {args.size} pixels (a larger "

@@ -119,6 +119,12 @@ def main(argv: list[str] | None = None) -> dict:
             clash = _replaces_fuller_run(target / f"{stem}.json", target, args, name)
             if clash:
                 p.error(clash)
+            png = target / f"{stem}.png"
+            if not args.no_plots and png.exists() and not (target / f"{stem}.json").exists():
+                # Before: written over; a plot of ours has its result file beside it.
+                p.error(f"--out {target}: {png.name} is not a {name} benchmark plot (no "
+                        f"{stem}.json beside it), and this run would write its {name} plot "
+                        f"over it; move it away, choose another --out or give --no-plots")
 
     jax.config.update("jax_enable_x64", True)  # float64 runs next to float32
     out = args.out

@@ -196,7 +196,7 @@ def main(argv=None):
                     help=f"chunk sizes to time (rays; the CPU default is {CHUNK})")
     ap.add_argument("--dtype", choices=("float32", "float64"),
                     help="the rays' dtype (the lens is cast to it; default float32)")
-    ap.add_argument("--json", type=out_path(make_parents=False),
+    ap.add_argument("--json", type=out_path(make_parents=False, result_of="vjp_probe"),
                     help="also write the timings to this JSON file")
     a = ap.parse_args(argv)
     if a.check and a.fusions:

@@ -556,11 +556,27 @@ CONVENTIONS = {
 
 
 def main(argv):
+    import argparse
+    import difflib
     import pathlib
 
-    out = pathlib.Path(argv[0])
+    p = argparse.ArgumentParser(prog="make_refcase.py", description=__doc__.splitlines()[0])
+    p.add_argument("out", help="folder of the NAME.json files (created)")
+    p.add_argument("names", nargs="*", default=[],
+                   help=f"cases (default: all): {', '.join(CASES)}")
+    args = p.parse_args(argv)
+    # Checked before the first case is built (minutes each): was a KeyError or
+    # FileExistsError traceback, after the cases before it were written.
+    for name in args.names:
+        if name not in CASES:
+            close = difflib.get_close_matches(name, list(CASES), n=3, cutoff=0.5)
+            p.error(f"unknown case {name!r}" + (f" (did you mean {', '.join(close)}?)"
+                                                if close else "") + f"; cases: {', '.join(CASES)}")
+    out = pathlib.Path(args.out)
+    if out.exists() and not out.is_dir():
+        p.error(f"OUT {out} is a file, not a folder")
     out.mkdir(parents=True, exist_ok=True)
-    names = argv[1:] or list(CASES)
+    names = args.names or list(CASES)
     for name in names:
         case = build(name, CASES[name])
         (out / f"{name}.json").write_text(json.dumps(case, indent=1) + "\n")

@@ -396,6 +396,18 @@ def run(
     if callback is not None and not callable(callback):
         raise TypeError(f"{w}: callback must be callable (stage_index, stage, params) or "
                         f"None, got {callback!r}")
+    # Before: make_solver="adam" failed as "'str' object is not callable", objective=None
+    # as an AttributeError, and mesh="cpu" passed to the first sharded stage.
+    if not callable(make_solver):
+        raise TypeError(f"{w}: make_solver must be callable (solver_name, stage_lr, "
+                        f"objective) -> solver, e.g. multistart.make_solver_factory(config, "
+                        f"spec, dtype), got {make_solver!r}")
+    if "ray" not in objectives or not hasattr(objectives["ray"], "sampling"):
+        raise TypeError(f"{w}: objective must be an Objective (or a dict of them by "
+                        f"Stage.loss, with \"ray\"), got {objective!r}")
+    if mesh is not None and not isinstance(mesh, jax.sharding.Mesh):
+        raise TypeError(f"{w}: mesh must be a jax.sharding.Mesh (one axis, \"seeds\") or None, "
+                        f"got {mesh!r}")
     objective = objectives["ray"]
     area = objective.sampling.area
     total = sum(s.steps for s in stages)

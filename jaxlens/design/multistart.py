@@ -358,6 +358,9 @@ def design(
     """
     # [int(s) for s in seeds] read "12" as seeds 1 and 2 and a seed of 1.5 as 1.
     seeds = check_seeds(seeds, "design", distinct=True)
+    # bool("no") is True: shard="no" sharded, image_loss=5 rendered (after the set-up).
+    checks.switch(shard, "shard", "design")
+    checks.switch(image_loss, "image_loss", "design")
     if config.population < 1:
         raise ValueError(f"design: population must be at least 1 start per design, got "
                          f"{config.population}")

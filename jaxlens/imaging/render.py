@@ -277,10 +277,18 @@ def _run_tiles(tile_fn, n_tiles, args, *, checkpoint, mesh):
     return out[:n_tiles]
 
 
-def _assemble(tiles, n_ty, n_tx, patch, resolution):
-    t = tiles.reshape(n_ty, n_tx, patch, patch, tiles.shape[-1])
-    img = t.transpose(0, 2, 1, 3, 4).reshape(n_ty * patch, n_tx * patch, tiles.shape[-1])
+def _assemble(tiles, n_ty, n_tx, tile, resolution):
+    th, tw = tile
+    t = tiles.reshape(n_ty, n_tx, th, tw, tiles.shape[-1])
+    img = t.transpose(0, 2, 1, 3, 4).reshape(n_ty * th, n_tx * tw, tiles.shape[-1])
     return img[: resolution[0], : resolution[1]]
+
+
+def _tile_shape(resolution, patch):
+    """The rows and columns a tile computes: ``patch``, or the image's side where one tile
+    spans it (a patch past the image traced patch² pixels for the image's few)."""
+    h, w = resolution
+    return (h if patch >= h else patch), (w if patch >= w else patch)
 
 
 def _unit_disc(key, shape, spp, dtype):
@@ -316,7 +324,7 @@ def _render_ray(lens, scene, key, depth, wls, pixel_size, footprints, *, resolut
     grid = fp_cen.shape[:2]
     h, w = resolution
     n_ty, n_tx = -(-h // patch), -(-w // patch)
-    local_r = jnp.arange(patch, dtype=dtype)
+    th, tw = _tile_shape(resolution, patch)
     nc = scene.shape[-1]
     params, static = eqx.partition(lens, eqx.is_array)
 
@@ -326,11 +334,12 @@ def _render_ray(lens, scene, key, depth, wls, pixel_size, footprints, *, resolut
         ty, tx = t // n_tx, t % n_tx
         tkey = jax.random.fold_in(key, t)
         k1, k2 = jax.random.split(tkey)
-        rows = (ty * patch).astype(dtype) + local_r
-        cols = (tx * patch).astype(dtype) + local_r
+        rows = (ty * patch).astype(dtype) + jnp.arange(th, dtype=dtype)
+        cols = (tx * patch).astype(dtype) + jnp.arange(tw, dtype=dtype)
         rr, cc = jnp.meshgrid(rows, cols, indexing="ij")  # [P, P]
-        # Samples: a position inside the pixel and a direction over its footprint disc.
-        jit = jax.random.uniform(k1, (patch, patch, spp, 2), dtype) - 0.5
+        # Samples: a position inside the pixel and a direction over its footprint disc,
+        # drawn for the whole patch so that a tile cut to the image keeps its pixels' draws.
+        jit = jax.random.uniform(k1, (patch, patch, spp, 2), dtype)[:th, :tw] - 0.5
         sr, sc = rr[..., None] + jit[..., 0], cc[..., None] + jit[..., 1]  # [P, P, S]
         x, y = pixel_positions(resolution, pixel_size, sr, sc)
         # Footprint disc at each sample point: bilinear in the grid, grown by the margin
@@ -338,7 +347,7 @@ def _render_ray(lens, scene, key, depth, wls, pixel_size, footprints, *, resolut
         gy, gx = grid_coords(resolution, grid, sr, sc)
         cen = interp_grid(fp_cen, gy, gx)  # [P, P, S, 2]
         rad = jnp.minimum(interp_grid(fp_rad, gy, gx) + fp_margin, 0.999)
-        disc = _unit_disc(k2, (patch, patch), spp, dtype)
+        disc = _unit_disc(k2, (patch, patch), spp, dtype)[:th, :tw]
         lm = cen + rad[..., None] * disc  # [P, P, S, 2]
         inside = jnp.sum(lm * lm, -1) < 1.0
         nz = jnp.sqrt(jnp.where(inside, 1.0 - jnp.sum(lm * lm, -1), 1.0))
@@ -372,7 +381,7 @@ def _render_ray(lens, scene, key, depth, wls, pixel_size, footprints, *, resolut
 
     args = (params, scene, key, fp_cen, fp_rad, fp_margin, e0, k_scale, zep, wls, depth)
     tiles = _run_tiles(tile_fn, n_ty * n_tx, args, checkpoint=checkpoint, mesh=mesh)
-    return _assemble(tiles, n_ty, n_tx, patch, resolution)[..., :nc]
+    return _assemble(tiles, n_ty, n_tx, (th, tw), resolution)[..., :nc]
 
 
 # --------------------------------------------------------------------------------------
@@ -426,8 +435,9 @@ def _render_psf(lens, scene, key, depth, wls, pixel_size, inv, ri_map, *, resolu
         warped = warped * interp_grid(ri_map.astype(dtype), gy9, gx9)[..., None]
     # 3. Tiles with a halo of half a kernel.
     n_ty, n_tx = -(-h // patch), -(-w // patch)
+    th, tw = _tile_shape(resolution, patch)
     half = kernel_size // 2
-    ph, pw = n_ty * patch - h, n_tx * patch - w
+    ph, pw = (n_ty - 1) * patch + th - h, (n_tx - 1) * patch + tw - w
     padded = jnp.pad(warped, ((half, half + ph), (half, half + pw), (0, 0)), mode="edge")
     pupil = max(2, math.isqrt(spp * kernel_size * kernel_size))
     nc = scene.shape[-1]
@@ -438,7 +448,7 @@ def _render_psf(lens, scene, key, depth, wls, pixel_size, inv, ri_map, *, resolu
         ty, tx = t // n_tx, t % n_tx
         r0, c0 = ty * patch, tx * patch
         win = jax.lax.dynamic_slice(padded, (r0, c0, jnp.zeros((), r0.dtype)),
-                                    (patch + 2 * half, patch + 2 * half, nc))
+                                    (th + 2 * half, tw + 2 * half, nc))
         # The tile centre (kept on the sensor) and the field whose chief ray lands there.
         rc = jnp.minimum((r0 + 0.5 * (patch - 1)).astype(dtype), h - 1.0)
         ccen = jnp.minimum((c0 + 0.5 * (patch - 1)).astype(dtype), w - 1.0)
@@ -455,7 +465,7 @@ def _render_psf(lens, scene, key, depth, wls, pixel_size, inv, ri_map, *, resolu
 
     args = (params, padded, key, wls, depth, inv)
     tiles = _run_tiles(tile_fn, n_ty * n_tx, args, checkpoint=checkpoint, mesh=mesh)
-    return _assemble(tiles, n_ty, n_tx, patch, resolution)
+    return _assemble(tiles, n_ty, n_tx, (th, tw), resolution)
 
 
 # --------------------------------------------------------------------------------------
@@ -488,7 +498,7 @@ RAY = RayRender()
 """The default render method."""
 
 
-def _check_working_memory(lens, method, spp, patch, channels, itemsize):
+def _check_working_memory(lens, method, spp, patch, tile, channels, itemsize):
     """Refuse a render whose tile would not fit (``checks.working_memory``): a tile traces
     patch² × spp rays per channel ("ray"), or a PSF of about spp × kernel_size² rays per
     channel ("psf"). A gradient without ``checkpoint`` keeps every tile's rays, which is not
@@ -498,7 +508,7 @@ def _check_working_memory(lens, method, spp, patch, channels, itemsize):
         rays = max(2, math.isqrt(spp * k * k)) ** 2 * channels
         what, fix = f"spp × kernel_size² × {channels} channels", "lower spp or kernel_size"
     else:
-        rays = patch * patch * spp * channels
+        rays = tile[0] * tile[1] * spp * channels
         what = f"patch² × spp × {channels} channels"
         per_ray = checks.working_memory(1, len(lens.surfaces), itemsize, "render", "", "")
         best = math.isqrt(checks.MAX_WORKING_BYTES // per_ray // (spp * channels))
@@ -541,7 +551,8 @@ def render(
             or ``PSFRender(kernel_size)`` (patch-wise PSF convolution).
         wavelengths: one wavelength (µm) per channel, default the C, d, F lines for R, G, B.
         sensor: the sensor; default ``lens.sensor``.
-        patch: tile side in pixels (memory of a gradient grows with patch²·spp).
+        patch: tile side in pixels (memory of a gradient grows with patch²·spp); a tile
+            stops at the image's side where one tile spans it.
         checkpoint: recompute each tile in the backward pass (``jax.checkpoint``).
         mesh: a ``jax.sharding.Mesh`` to spread the tiles over its devices.
         relative_illumination: include vignetting and the cos⁴ falloff (see Radiometry).
@@ -630,7 +641,8 @@ def render(
             f"render: scene of {hs}x{ws} pixels does not match the {rows}x{cols} sensor "
             "(the aspect ratios differ; resize or crop the scene)"
         )
-    _check_working_memory(lens, method, int(spp), int(patch), scene.shape[-1],
+    _check_working_memory(lens, method, int(spp), int(patch),
+                          _tile_shape(sensor.resolution, int(patch)), scene.shape[-1],
                           scene.dtype.itemsize)
     depth = sampling.lens_depth(lens, depth, "render")
     lens = eqx.tree_at(lambda m: m.vignetting, apertured(lens), None,  # "Vignetting factors"

@@ -130,6 +130,9 @@ def save(lens: Lens, path: str | os.PathLike, **options) -> list[str]:
     if not isinstance(lens, Lens):  # else an AttributeError from deep in the writer
         raise TypeError(f"save: lens must be a jaxlens Lens, got {type(lens).__name__}")
     path = os.fspath(path)
+    if os.path.isdir(path):  # was "has extension ''", or an IsADirectoryError after the checks
+        raise ValueError(f"save: {path!r} is a folder; give a file name ending in .json or "
+                         f".zmx")
     ext = _ext(path, "save")
     _loadable(lens)
     folder = os.path.dirname(os.path.abspath(path))

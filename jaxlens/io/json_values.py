@@ -1,11 +1,13 @@
 """Numbers and strings of a JSON lens file: what ``json`` gives, read strictly.
 
 JSON has no infinity, so the strings "inf", "-inf" and "infinity" stand for it; a bool, a
-null or a string that is not a number is refused, naming where in the file it is.
+null or a string that is not a number is refused, naming where in the file it is. Also the
+reader's refusal of a key given twice (``unique_keys``) and the writer's layout (``pretty``).
 """
 
 from __future__ import annotations
 
+import json
 import math
 from decimal import Decimal
 from typing import Any
@@ -126,3 +128,37 @@ def curvature(d: dict, where: str, suffix: str = "") -> float:
             raise ValueError(f"{where}: {rk} 0 is not a surface; use {ck} 0 for flat")
         return 0.0 if math.isinf(rv) else 1.0 / rv
     return 0.0
+
+
+class RepeatedKey(ValueError):
+    """A key given twice in one JSON object (``unique_keys``)."""
+
+
+def unique_keys(pairs: list) -> dict:
+    """An object's pairs as a dict; a repeated key is refused (``json`` keeps the last
+    value without a word, so ``"thickness": 3, "thickness": 30`` read as 30)."""
+    d: dict = {}
+    for k, v in pairs:
+        if k in d:
+            raise RepeatedKey(f"key {k!r} appears twice in one object ({d[k]!r} and {v!r}); "
+                              f"keep one")
+        d[k] = v
+    return d
+
+
+def pretty(o: Any, level: int = 0) -> str:
+    """JSON text with short objects and number lists on one line."""
+    flat = json.dumps(o, ensure_ascii=False, allow_nan=False)
+    if not isinstance(o, dict | list) or len(flat) + 2 * level <= 96:
+        return flat
+    if isinstance(o, list) and not any(isinstance(x, dict | list) for x in o):
+        return flat
+    pad, inner = "  " * level, "  " * (level + 1)
+    if isinstance(o, dict):
+        body = [
+            f"{inner}{json.dumps(k, ensure_ascii=False)}: {pretty(v, level + 1)}"
+            for k, v in o.items()
+        ]
+        return "{\n" + ",\n".join(body) + "\n" + pad + "}"
+    body = [f"{inner}{pretty(v, level + 1)}" for v in o]
+    return "[\n" + ",\n".join(body) + "\n" + pad + "]"

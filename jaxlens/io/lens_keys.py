@@ -72,7 +72,8 @@ OBJECT = {"distance": ("dist", "d", "thickness", "object_distance", "z")}
 # A material object: a misspelled "vd" would leave a model glass without dispersion.
 MATERIAL = {"name": ("glass",), "class": ("type", "kind"), "nd": ("n_d",),
             "vd": ("v_d", "abbe", "abbe_number"), "n": (), "indices": ("index_table",),
-            "wavelengths_um": ("wavelengths", "wavelength_um"), "wavelengths_nm": ()}
+            "wavelengths_um": ("wavelengths", "wavelength_um"), "wavelengths_nm": (),
+            "catalog": ("catalogue",)}
 REQUIRED = {"fields": "values", "object": "distance"}
 """Sections that are read only for one key: without it the section would be ignored."""
 

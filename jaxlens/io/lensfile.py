@@ -48,12 +48,14 @@ import numpy as np
 
 from ..optics import checks, paraxial, travel
 from ..optics import materials as _materials
+from ..optics.coordinates import CoordinateBreak
 from ..optics.lens import INFINITE_OBJECT_MM, RAY_AIMING, Lens, Sensor, check_vignetting
 from ..optics.materials import Air
 from ..optics.qtype import QTypeAsphere
 from ..optics.surfaces import AbstractSurface, EvenAsphere, Hybrid, OddAsphere, Standard
 from . import lens_keys, surface_json
 from .json_values import (
+    RepeatedKey,
     curvature,
     nm_to_um,  # noqa: F401  (re-exported: analysis.report reads it here)
 )
@@ -61,7 +63,9 @@ from .json_values import float64_array as _arr
 from .json_values import json_number as _out
 from .json_values import num as _num
 from .json_values import nums as _nums
+from .json_values import pretty as _pretty
 from .json_values import text as _text
+from .json_values import unique_keys as _unique_keys
 from .json_values import whole as _whole
 from .material_spec import (  # noqa: F401  (re-exported: the .zmx modules read them here)
     INDEX_RECORD,
@@ -399,6 +403,20 @@ def _wavelengths_of(d: dict, where: str) -> tuple[np.ndarray, int]:
     return wl, 0
 
 
+def _warn_inside_out(thick: list, mats: list, source: str, first: int) -> None:
+    """A negative thickness in glass where light travels toward +z (no mirror, no break):
+    the element's back lies in front of its face, e.g. a sign typed wrong (the Cooke
+    triplet's 3.26 as -3: 0.58 mm RMS spots, without a word)."""
+    for j, (t, m) in enumerate(zip(thick, mats, strict=True)):
+        if t < 0 and not isinstance(m, Air):
+            warnings.warn(f"{source}: surface {j + first}: thickness {t:g} mm inside "
+                          f"{getattr(m, 'name', '') or type(m).__name__}, with no mirror "
+                          f"before it: the next surface lies in front of this one (an element "
+                          f"inside out); a negative thickness belongs in air or after a mirror",
+                          stacklevel=3)
+            return
+
+
 def _fields_of(d: dict, where: str) -> np.ndarray:
     f = d.get("fields", [0.0])
     if isinstance(f, dict):
@@ -415,6 +433,11 @@ def _fields_of(d: dict, where: str) -> np.ndarray:
     if out.ndim > 2 or (out.ndim == 2 and out.shape[1] != 2):
         raise ValueError(f"{where}: fields must be a list of angles θy or of [θx, θy] pairs "
                          f"(deg), got an array of shape {out.shape}")
+    if np.unique(out, axis=0).shape[0] < out.shape[0]:
+        # A warning, as for a repeated wavelength (Zemax takes it; a .zmx read with one
+        # saves to a JSON that must load), but a typo weighs the field twice.
+        warnings.warn(f"{where}: a field is given twice ({checks.fmt(out)} deg); it "
+                      f"weighs twice in every figure averaged over the fields", stacklevel=3)
     return out
 
 
@@ -537,6 +560,8 @@ def lens_from_dict(d: dict, *, source: str = "<lens>") -> Lens:
         raise ValueError(
             f"{source}: more than one surface has is_stop: {[i + first for i in stops]}"
         )
+    if not mirrors and not any(isinstance(s, CoordinateBreak) for s in surfaces):
+        _warn_inside_out(thick, mats, source, first)
     stop = stops[0] if stops else None
     if "stop_surface_index" in d:
         idx = d["stop_surface_index"]
@@ -723,29 +748,13 @@ def lens_to_dict(lens: Lens) -> dict:
     return out
 
 
-def _unique_keys(pairs: list) -> dict:
-    """An object's pairs as a dict; a repeated key is refused (``json`` keeps the last
-    value without a word, so ``"thickness": 3, "thickness": 30`` read as 30)."""
-    d: dict = {}
-    for k, v in pairs:
-        if k in d:
-            raise _RepeatedKey(f"key {k!r} appears twice in one object ({d[k]!r} and {v!r}); "
-                               f"keep one")
-        d[k] = v
-    return d
-
-
-class _RepeatedKey(ValueError):
-    pass
-
-
 def load_json(path: str | os.PathLike) -> Lens:
     """Read a JSON lens file."""
     path = os.fspath(path)
     try:
         with open(path, encoding="utf-8-sig") as f:
             d = json.load(f, object_pairs_hook=_unique_keys)
-    except _RepeatedKey as e:
+    except RepeatedKey as e:
         raise ValueError(f"{path}: {e}") from None
     except json.JSONDecodeError as e:
         raise ValueError(f"{path}:{e.lineno}: not valid JSON: {e.msg}") from None
@@ -766,24 +775,6 @@ def load_json(path: str | os.PathLike) -> Lens:
         raise ValueError(f"{path}: {e}") from None
     except ArithmeticError as e:  # a value that overflows once converted
         raise ValueError(f"{path}: a value out of range ({e})") from None
-
-
-def _pretty(o: Any, level: int = 0) -> str:
-    """JSON text with short objects and number lists on one line."""
-    flat = json.dumps(o, ensure_ascii=False, allow_nan=False)
-    if not isinstance(o, dict | list) or len(flat) + 2 * level <= 96:
-        return flat
-    if isinstance(o, list) and not any(isinstance(x, dict | list) for x in o):
-        return flat
-    pad, inner = "  " * level, "  " * (level + 1)
-    if isinstance(o, dict):
-        body = [
-            f"{inner}{json.dumps(k, ensure_ascii=False)}: {_pretty(v, level + 1)}"
-            for k, v in o.items()
-        ]
-        return "{\n" + ",\n".join(body) + "\n" + pad + "}"
-    body = [f"{inner}{_pretty(v, level + 1)}" for v in o]
-    return "[\n" + ",\n".join(body) + "\n" + pad + "]"
 
 
 def dumps(lens: Lens) -> str:

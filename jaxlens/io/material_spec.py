@@ -235,6 +235,16 @@ def material_from_spec(spec: Any, where: str, *, n_table: Any = None) -> Abstrac
         else:
             raise ValueError(f"{where}: an index table needs wavelengths_um or wavelengths_nm")
         return _tabulated(wl, _nums(spec["indices"], f"{where}: indices"), name, where)
+    if "catalog" in spec:  # was not read: the glass of the first catalog holding the name
+        cat = spec["catalog"]
+        if not name or not isinstance(cat, str):
+            raise ValueError(f"{where}: material catalog needs a glass name and a catalog "
+                             f"name, as in {{\"name\": \"N-BK7\", \"catalog\": "
+                             f"\"SCHOTT\"}}, got {spec!r}")
+        try:
+            return catalog.get_material(name, catalogs=[cat.upper()])
+        except ValueError as e:
+            raise ValueError(f"{where}: catalog {cat!r}: {e}") from None
     if name:
         return catalog_material(name, where)
     raise ValueError(
