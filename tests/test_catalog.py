@@ -450,6 +450,22 @@ def test_register_catalog_file_and_mapping(tmp_path, fresh_registry):
     assert nd == pytest.approx(1.6, abs=1e-12) and vd == pytest.approx(40.0, abs=1e-9)
 
 
+def test_a_user_catalog_named_as_a_shipped_one_adds_to_it(fresh_registry):
+    """A registered SCHOTT (a newer SCHOTT.AGF) comes first under that name and the shipped
+    SCHOTT still answers for the rest, with or without ``catalogs``. Before, naming the
+    catalog hid the shipped one: "'N-SF6' is in catalog SCHOTT, not searched here"."""
+    mine = ModelGlass(1.6, 40.0, name="N-BK7")
+    assert register_catalog({"N-BK7": mine}, name="schott") == "SCHOTT"
+    for catalogs in (None, "SCHOTT", ["SCHOTT"]):
+        assert get_material("N-BK7", catalogs) is mine
+        assert get_material("N-SF6", catalogs).catalog == "SCHOTT"
+    names = catalog_names(catalog="SCHOTT")
+    assert names.count("N-BK7") == 1 and "N-SF6" in names
+    with pytest.raises(ValueError, match="Unknown material 'N-SF66X'") as e:
+        get_material("N-SF66X", "SCHOTT")
+    assert "not searched here" not in str(e.value)
+
+
 # ---------------------------------------------------------------------------- formulas
 
 

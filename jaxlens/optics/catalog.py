@@ -536,7 +536,9 @@ def register_catalog(source: str | os.PathLike | Mapping[str, AbstractMaterial],
     Args:
         source: An AGF file, or a mapping glass name → material.
         name: Catalog name; defaults to the file stem for a file and ``"USER"`` for a
-            mapping. Registering a name again replaces that catalog.
+            mapping. Registering a name again replaces that catalog; a shipped
+            catalog's name (a newer ``SCHOTT.AGF``) is searched ahead of the shipped one,
+            which still answers for glasses the user's lacks.
 
     Returns:
         The catalog name (upper case) under which it was registered.
@@ -592,13 +594,16 @@ def _search_order(catalogs: str | Iterable[str] | None):
                         f"'SCHOTT' or ['SCHOTT', 'CDGM'], got {type(catalogs).__name__} "
                         f"{catalogs!r}")
     wanted = [c.upper() for c in named]
-    by_name = {}
+    # A user catalog may share a shipped one's name (a newer SCHOTT.AGF): both are searched
+    # under it, the user's first, as without ``catalogs`` (before, the shipped one was
+    # hidden and an error said its glass was "in catalog SCHOTT, not searched here").
+    by_name: dict[str, list] = {}
     for cat, entries in everything:
-        by_name.setdefault(cat, entries)
+        by_name.setdefault(cat, []).append(entries)
     unknown = [c for c in wanted if c not in by_name]
     if unknown:
         raise ValueError(f"Unknown catalog(s) {unknown}; available: {sorted(by_name)}")
-    return [(c, by_name[c]) for c in wanted]
+    return [(c, entries) for c in wanted for entries in by_name[c]]
 
 
 def _find(name: str, catalogs) -> tuple[str, GlassRecord | AbstractMaterial] | None:
