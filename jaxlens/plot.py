@@ -126,7 +126,8 @@ def plot_layout(lens, fields: Sequence[float] | None = None, *, n_rays: int = 9,
     else:
         sd = analysis.clear_semi_diameters(lens) if semi_diameters is None else semi_diameters
         starts, dirs, paths = _fans(lens, fan_fields, pupil)
-    sd = np.asarray(sd)
+    # On the host once: indexing the device arrays below compiled a program per slice shape.
+    sd, starts, dirs, paths = jax.tree.map(np.asarray, (sd, starts, dirs, paths))
     zs = np.asarray(lens.vertex_z())
     n = lens.num_surfaces
     # Each surface's tracer frame in global coordinates (identity without coordinate breaks):

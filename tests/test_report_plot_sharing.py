@@ -60,3 +60,42 @@ def test_layout_semi_diameters_and_fans_from_one_program_are_the_separate_ones(m
     for a, b in zip(jax.tree.leaves([sd, starts, dirs, path]), jax.tree.leaves(want),
                     strict=True):
         np.testing.assert_array_equal(np.asarray(a), np.asarray(b))  # bit for bit
+
+
+def test_layout_indexes_its_traced_rays_on_the_host(caplog):
+    """``plot_layout`` takes its rays to NumPy once: indexing the device arrays field by field
+    compiled a slicing program per shape (10 of a double Gauss layout's 50 compilations)."""
+    import re
+
+    lens = jaxlens.zoo.cooke_triplet().astype(jnp.float64)
+    plot.plot_layout(lens, n_rays=11)  # the rays' program, compiled and kept
+    jax.clear_caches()  # the eager programs, left by earlier calls, compiled anew
+    with jax.log_compiles(True), caplog.at_level(logging.WARNING):
+        plot.plot_layout(lens, n_rays=11)
+    compiled = [r.getMessage() for r in caplog.records if "Compiling" in r.getMessage()]
+    # A program of an array [fields, (surfaces,) 11 rays, …]: the rays, sliced on the device.
+    on_rays = [m for m in compiled if any(len(d) >= 3 and "11" in d for d in
+                                          (s.split(",") for s in re.findall(r"\[([\d,]+)\]", m)))]
+    assert compiled and not on_rays, on_rays
+
+
+def test_report_table_is_made_on_the_host(caplog):
+    """``report_data`` takes the traced results to NumPy once: its per-field table (slices,
+    percentages against f·tanθ) compiled a one-operation program per operation and shape,
+    8 of the Cooke triplet report's 27 compilations; the numbers are the same IEEE ones."""
+    import re
+
+    lens = jaxlens.zoo.cooke_triplet().astype(jnp.float64)  # 3 fields, 3 wavelengths
+    want = report_data(lens)  # the report's programs, compiled and kept
+    jax.clear_caches()  # the eager programs, left by earlier calls, compiled anew
+    with jax.log_compiles(True), caplog.at_level(logging.WARNING):
+        got = report_data(lens)
+    compiled = [r.getMessage() for r in caplog.records if "Compiling" in r.getMessage()]
+    # The percentages' operations on [3] fields, the rows sliced from [3, 2] and [3, 3].
+    table = [m for m in compiled
+             if re.match(r"Compiling jit\((not_equal|_where|subtract|multiply)\)", m)
+             and "float64[3]" in m
+             or re.match(r"Compiling jit\((dynamic_slice|squeeze)\)", m)
+             and re.search(r"float64\[(3,2|3,3|1,2|1,3)\]", m)]
+    assert compiled and not table, table
+    assert got == want

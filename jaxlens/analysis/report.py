@@ -80,7 +80,7 @@ UNITS = {
 
 def _pct(a, b):
     nz = b != 0
-    return jnp.where(nz, 100.0 * (a - b) / jnp.where(nz, b, 1.0), 0.0)
+    return np.where(nz, 100.0 * (a - b) / np.where(nz, b, 1.0), 0.0)
 
 
 class _Result(eqx.Module):
@@ -207,7 +207,9 @@ def report_data(lens: Lens, *, fields=None, wavelengths=None, wavefront: bool = 
         checks.material_indices(lens, lens.wavelengths, "report", "the lens's wavelengths")
     if lens.afocal_image:  # an image at infinity: angles, not heights
         return afocal_report_data(lens, wavefront=wavefront, notes=_notes(lens))
-    res = _compute(lens)
+    # On the host once: op by op on the device, the table below compiled a program per
+    # operation and slice shape (the same IEEE operations, the same numbers).
+    res = jax.tree.map(np.asarray, _compute(lens))
     pd = res.paraxial
     wl = np.atleast_1d(np.asarray(lens.wavelengths, np.float64))
     angles = np.asarray(lens.fields, np.float64)
@@ -242,7 +244,7 @@ def report_data(lens: Lens, *, fields=None, wavelengths=None, wavefront: bool = 
         )
     # Every wavelength, the primary's row taken: the program of the --plot figure's call.
     fc = bucketed_field_curvature(lens, lens.fields, lens.wavelengths)
-    foci = (np.asarray(fc.tangential[lens.primary]), np.asarray(fc.sagittal[lens.primary]))
+    foci = (np.asarray(fc.tangential)[lens.primary], np.asarray(fc.sagittal)[lens.primary])
     for i, entry in enumerate(out_fields):
         entry["focus_tangential"] = _f(foci[0][i])
         entry["focus_sagittal"] = _f(foci[1][i])
