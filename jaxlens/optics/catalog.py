@@ -536,9 +536,8 @@ def register_catalog(source: str | os.PathLike | Mapping[str, AbstractMaterial],
     Args:
         source: An AGF file, or a mapping glass name → material.
         name: Catalog name; defaults to the file stem for a file and ``"USER"`` for a
-            mapping. Registering a name again replaces that catalog; a shipped
-            catalog's name (a newer ``SCHOTT.AGF``) is searched ahead of the shipped one,
-            which still answers for glasses the user's lacks.
+            mapping. Registering a name again replaces that catalog; one named as a
+            shipped catalog is searched ahead of it (which answers for the rest).
 
     Returns:
         The catalog name (upper case) under which it was registered.
@@ -594,9 +593,7 @@ def _search_order(catalogs: str | Iterable[str] | None):
                         f"'SCHOTT' or ['SCHOTT', 'CDGM'], got {type(catalogs).__name__} "
                         f"{catalogs!r}")
     wanted = [c.upper() for c in named]
-    # A user catalog may share a shipped one's name (a newer SCHOTT.AGF): both are searched
-    # under it, the user's first, as without ``catalogs`` (before, the shipped one was
-    # hidden and an error said its glass was "in catalog SCHOTT, not searched here").
+    # A user catalog named as a shipped one (a newer SCHOTT.AGF) goes first, not instead.
     by_name: dict[str, list] = {}
     for cat, entries in everything:
         by_name.setdefault(cat, []).append(entries)
