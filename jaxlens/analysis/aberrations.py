@@ -50,7 +50,7 @@ from jaxtyping import Array, Bool, Float
 from ..imaging.sampling import field_rays, lens_aim, lens_depth
 from ..optics import checks
 from ..optics.lens import Lens
-from ..tracing.forward import DEFAULT_NEWTON_ITERS, forward_mode_jit, trace
+from ..tracing.forward import DEFAULT_NEWTON_ITERS, aimed_jit, forward_mode_jit, trace
 
 # Default number of points across the pupil in a fan, and of fields in a curvature curve.
 FAN_POINTS = 21
@@ -144,7 +144,7 @@ def ray_fan(lens: Lens, field, wavelengths=None, *, n: int = FAN_POINTS, depth=N
                     depth=lens_depth(lens, depth, "ray_fan"), aim=lens_aim(lens, aim, "ray_fan"))
 
 
-@eqx.filter_jit
+@aimed_jit
 def _ray_fan(lens, field, wl, *, n, depth, aim) -> RayFan:
     t = jnp.linspace(-1.0, 1.0, n, dtype=wl.dtype)
     zero = jnp.zeros_like(t)

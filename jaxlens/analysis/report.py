@@ -58,6 +58,7 @@ from ..optics.qtype import QTypeAsphere
 from ..optics.surfaces import EvenAsphere, Hybrid, OddAsphere, Standard, TiltedPlane
 from ..optics.toroidal import Toroidal
 from ..optics.xypolynomial import XYPolynomial, xy_term_powers
+from ..tracing.forward import aimed_jit
 from . import spots as analysis
 from .report_afocal import afocal_report_data, format_afocal_report
 from .report_cells import aiming_line, bucketed_field_curvature, wavefront_lines
@@ -96,7 +97,7 @@ class _Result(eqx.Module):
     valid_fraction: jax.Array  # [F, W]
 
 
-@eqx.filter_jit
+@aimed_jit
 def _compute(lens: Lens) -> _Result:
     """Everything the report needs from one traced ray set.
 

@@ -27,7 +27,7 @@ from ..imaging.sampling import field_rays, lens_aim, lens_depth, pupil_grid
 from ..optics import checks, paraxial
 from ..optics.lens import Lens
 from ..optics.rays import Rays
-from ..tracing.forward import DEFAULT_NEWTON_ITERS, trace, trace_path
+from ..tracing.forward import DEFAULT_NEWTON_ITERS, aimed_jit, trace, trace_path
 
 # The default pupil sampling of spot analyses: a 21 × 21 grid clipped to the disc (317 rays).
 PUPIL_GRID = 21
@@ -103,7 +103,7 @@ def spot_rays(
                       newton_iters=newton_iters)
 
 
-@eqx.filter_jit
+@aimed_jit
 def _spot_rays(lens, field, wavelength, *, pupil, depth, aim, newton_iters) -> Rays:
     pupil = pupil_grid(PUPIL_GRID, lens.epd.dtype) if pupil is None else pupil
     rays = field_rays(lens, field, pupil, wavelength, depth=depth, aim=aim)
@@ -200,7 +200,7 @@ def rms_spot(
                      aim=lens_aim(lens, aim, "rms_spot"), newton_iters=newton_iters)
 
 
-@eqx.filter_jit
+@aimed_jit
 def _rms_spot(lens, fields, wavelengths, *, pupil, reference, depth, aim,
               newton_iters) -> RmsSpot:
     if reference not in ("centroid", "chief"):
@@ -331,7 +331,7 @@ def distortion(lens: Lens, fields=None, wavelength=None, *, aim=None) -> Distort
                        aim=lens_aim(lens, aim, "distortion"))
 
 
-@eqx.filter_jit
+@aimed_jit
 def _distortion(lens, fields, wavelength, depth, *, aim) -> Distortion:
     fields = fields_array(fields, "distortion")
     wl = lens.primary_wavelength if wavelength is None else wavelength
@@ -385,7 +385,7 @@ def clear_semi_diameters(lens: Lens, fields=None, n_rim: int = 64, *,
                                  pupil=pupil)
 
 
-@eqx.filter_jit
+@aimed_jit
 def _clear_semi_diameters(lens, fields, n_rim, *, reaching, pupil) -> Float[Array, " n"]:
     checks.number(n_rim, "n_rim", "clear_semi_diameters", lo=4, hi=checks.MAX_SAMPLES, integer=True,
                   unit="rim rays per beam (fewer miss the rim in x or y)")
@@ -441,7 +441,7 @@ def semi_diameters_and_fans(lens: Lens, fan_fields, fan_pupil, n_rim: int = 64):
     return traced, starts, dirs, path
 
 
-@eqx.filter_jit
+@aimed_jit
 def _semi_diameters_and_fans(lens, fields, fan_fields, fan_pupil, n_rim):
     n, dt = lens.num_surfaces, lens.epd.dtype
     rim = rim_pupil(n_rim, dt)

@@ -83,7 +83,7 @@ from ..imaging.sampling import field_rays, lens_aim, lens_depth, pupil_points
 from ..optics import checks, paraxial
 from ..optics.coordinates import CoordinateBreak
 from ..optics.lens import RAY_AIMING, Lens, unclipped
-from ..tracing.forward import DEFAULT_NEWTON_ITERS, trace
+from ..tracing.forward import DEFAULT_NEWTON_ITERS, aimed_jit, trace
 from .zernike import ZernikeFit, zernike_fit
 
 __all__ = ["REFERENCES", "Wavefront", "OPDFan", "opd", "wavefront", "opd_fan",
@@ -212,7 +212,7 @@ def _path_to_reference(lens, field, pts, wl, depth, reference, aim, newton_iters
     return jnp.where(valid, waves, jnp.nan), valid
 
 
-@eqx.filter_jit
+@aimed_jit
 def _opd_impl(lens, field, pts, wl, depth, *, reference, aim, newton_iters):
     return _path_to_reference(lens, field, pts, wl, depth, reference, aim, newton_iters)
 
@@ -357,7 +357,7 @@ def _statistics(w, valid, px, py):
     return rms + nan, pv, rms_t + nan, pv_t + nan, plane
 
 
-@eqx.filter_jit
+@aimed_jit
 def _wavefront_impl(lens, field, wl, depth, *, grid, reference, aim, newton_iters):
     dtype = lens.epd.dtype
     g = jnp.linspace(-1.0, 1.0, grid, dtype=dtype)
@@ -432,7 +432,7 @@ class OPDFan(eqx.Module):
     sagittal: Float[Array, "W n"]
 
 
-@eqx.filter_jit
+@aimed_jit
 def _opd_fan_impl(lens, field, wls, depth, *, n, reference, aim, newton_iters):
     t = jnp.linspace(-1.0, 1.0, n, dtype=wls.dtype)
     zero = jnp.zeros_like(t)

@@ -17,7 +17,7 @@ from jaxtyping import Array, Float
 from ..optics import checks, paraxial
 from ..optics.lens import INFINITE_OBJECT_MM, Lens, unclipped
 from ..optics.rays import Rays
-from ..tracing.forward import DEFAULT_NEWTON_ITERS, trace
+from ..tracing.forward import DEFAULT_NEWTON_ITERS, forward_mode_jit, trace
 from . import sampling
 from .newton import newton_2d as newton_2d
 
@@ -141,7 +141,7 @@ def _check_chief_args(lens, field, depth, wavelength, newton_iters) -> None:
         checks.wavelengths(lens, np.asarray(wl), where)
 
 
-@eqx.filter_jit
+@forward_mode_jit
 def _stop_chief_ray(lens, field, depth, wavelength, *, newton_iters, iters) -> Rays:
     """``stop_chief_ray``'s compiled core: a module-level function of the lens and arrays
     (the sizes static), so that eager calls on lenses of one structure share one program."""
@@ -200,7 +200,7 @@ def chief_point(lens, field, depth, newton_iters, *, with_valid: bool = False,
                         with_valid=with_valid, with_ray=with_ray)
 
 
-@eqx.filter_jit
+@forward_mode_jit
 def _chief_point(lens, field, depth, *, newton_iters, with_valid, with_ray=False):
     rays = _stop_chief_ray(lens, field, depth, None, newton_iters=newton_iters,
                            iters=sampling.AIM_ITERS)
