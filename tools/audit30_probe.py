@@ -244,7 +244,7 @@ import numpy as np
 jax.config.update("jax_enable_x64", True)
 
 sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
-from probe_table import mention_counts, probe, run, started, until_started, warned  # noqa: E402
+from probe_table import mention_counts, patched, probe, run, started, until_started, warned  # noqa: E402
 
 import jaxlens as jl  # noqa: E402
 import jaxlens.analysis as A  # noqa: E402
@@ -255,20 +255,6 @@ ROOT = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
 TMP = tempfile.mkdtemp()
 COOKE = os.path.join(ROOT, "jaxlens", "data", "lenses", "cooke_triplet.json")
 SEED0 = os.path.join(ROOT, "experiments", "classical", "designs", "seed_0.zmx")
-
-
-def patched(module, names, fn):
-    """``fn`` run with ``module``'s functions ``names`` replaced by ``started``."""
-    def go():
-        real = {n: getattr(module, n) for n in names}
-        for n in names:
-            setattr(module, n, started)
-        try:
-            return fn()
-        finally:
-            for n, f in real.items():
-                setattr(module, n, f)
-    return until_started(go)
 
 
 def count_mentions(top=120):
