@@ -220,10 +220,10 @@ def test_zemax_default_model_values_on_a_catalog_glass_are_no_claim(tmp_path):
 
 @pytest.mark.parametrize("aim", [
     "paraxial",
-    # The file's own aiming (RAIM 2, "real_marginal"): Newton through nine coordinate breaks,
-    # 21 s with jaxlens's default build, but 5 to 10 minutes at the tests' LLVM -O0 (the
-    # aimed program's execution, measured 2026-12-01); the trace under test is the same.
-    pytest.param(None, marks=pytest.mark.slow),
+    # The file's own aiming (RAIM 2, "real_marginal"): Newton through nine coordinate breaks.
+    # 5 to 10 minutes at the tests' -O0 on XLA's fusion emitters, 7 s on the loop emitters
+    # (forward.aimed_jit); a test of them too.
+    None,
 ])
 def test_a_mirror_system_with_zero_gap_breaks_traces_its_whole_beam(aim):
     """Ex66 folds with mirrors between coordinate breaks at zero gaps: every ray of every

@@ -140,8 +140,7 @@ def test_report_lenient_reads_what_strict_refuses(capsys):
     assert got["efl"] == want["efl"] and got["fields"] == json.loads(json.dumps(want["fields"]))
 
 
-@pytest.mark.slow  # 54 s on CI before RAIM was read; aimed (real_marginal), 40 min at the
-# tests' -O0 (2026-12-01, shared cores): rms_spot of 21² points, 3 s at the default build
+@pytest.mark.slow  # 31 s at the tests' -O0 (aimed, real_marginal: 40 min before aimed_jit)
 def test_report_of_x_y_fields_agrees_with_the_analysis_functions(capsys):
     """A tilted, decentered system with (θx, θy) fields: each field's RMS spots, chief-ray
     landing point and radial distortion are those of rms_spot, chief_ray and distortion."""
