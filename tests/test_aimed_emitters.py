@@ -16,7 +16,7 @@ import pytest
 
 import jaxlens
 from jaxlens.analysis import aberrations, spots, wavefront_error
-from jaxlens.imaging import aiming
+from jaxlens.imaging import aiming, psf
 from jaxlens.tracing.forward import loop_emitters_wanted
 
 ROOT = pathlib.Path(__file__).resolve().parents[1]
@@ -54,5 +54,6 @@ def test_the_aimed_programs_follow_the_rule():
              aberrations._ray_fan, wavefront_error._opd_impl, wavefront_error._wavefront_impl,
              wavefront_error._opd_fan_impl)
     assert [getattr(f, "loop_emitters", None) for f in aimed] == ["aimed"] * len(aimed)
-    always = (aiming._stop_chief_ray, aiming._chief_point)  # they aim whatever Lens.aim is
-    assert [getattr(f, "loop_emitters", None) for f in always] == ["unscanned"] * 2
+    # They aim whatever Lens.aim is (the PSF and MTF at the real chief ray).
+    always = (aiming._stop_chief_ray, aiming._chief_point, psf._psf_impl, psf._mtf_impl)
+    assert [getattr(f, "loop_emitters", None) for f in always] == ["unscanned"] * len(always)

@@ -71,7 +71,7 @@ from ..optics.lens import Lens, Sensor
 from ..optics.materials import LAMBDA_C, LAMBDA_D, LAMBDA_F
 from ..optics.paraxial import working_fnum
 from ..optics.rays import Rays
-from ..tracing.forward import DEFAULT_NEWTON_ITERS, trace
+from ..tracing.forward import DEFAULT_NEWTON_ITERS, forward_mode_jit, trace
 from . import sampling
 from .aiming import apertured, chief_point, field_to_ideal, ideal_to_field
 from .grid import pixel_pitch, pupil_cells, sensor_grid, splat
@@ -376,7 +376,7 @@ class PSFResult(eqx.Module):
     aliased: Array
 
 
-@eqx.filter_jit
+@forward_mode_jit
 def _psf_impl(lens, field, depth, wls, pixel_size, key, *, kernel_size, model, center,
               newton_iters):
     dtype = jnp.result_type(pixel_size)
@@ -656,7 +656,7 @@ def _directions(field):
     return e_t, e_s
 
 
-@eqx.filter_jit
+@forward_mode_jit
 def _mtf_impl(lens, field, depth, wls, freqs, pixel_size, *, model, kernel_size, diffraction,
               newton_iters):
     dtype = freqs.dtype
