@@ -25,7 +25,9 @@ BIG = 10**12
                       r"surfaces, 64-bit floats\), more than the 16 GiB bound "
                       r"\(checks\.MAX_WORKING_BYTES\); lower patch \(the tile side, 64 "
                       r"pixels\) to at most 11$"),
-    (dict(spp=16, patch=4096), r"render: patch² × spp × 3 channels .* to at most 721$"),
+    # A patch within the image (a larger one is cut to the image, round 31).
+    (dict(spp=16, patch=1024, side=1024),
+     r"render: patch² × spp × 3 channels .* to at most 721$"),
     (dict(spp=256, method="psf"), r"render: spp × kernel_size² × 3 channels .*GiB.*lower spp "
                                   r"or kernel_size$"),
 ])
@@ -36,9 +38,11 @@ def test_render_refuses_a_tile_that_would_not_fit(kwargs, text):
 
     if kwargs.get("method") == "psf":
         kwargs = dict(kwargs, method=PSFRender(kernel_size=4095))
+    side = kwargs.pop("side", 64)
     with pytest.raises(ValueError, match=text):
-        jl.render(COOKE, np.ones((64, 64, 3)), sensor=jl.Sensor((64, 64), 0.005),
-                  key=jax.random.key(0), **kwargs)
+        jl.render(COOKE, np.ones((side, side, 3)),
+                  sensor=jl.Sensor((side, side), 0.005 * 64 / side), key=jax.random.key(0),
+                  **kwargs)
     # The estimate: rays × itemsize × (32 + 9 per surface) bytes.
     assert checks.working_memory(1, 6, 8, "x", "", "") == 688
     assert checks.working_memory(1, 13, 4, "x", "", "") == 596

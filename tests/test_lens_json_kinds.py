@@ -41,7 +41,12 @@ def test_every_real_file_round_trips_through_json(path, tmp_path):
             lens = jl.load(path)
         except ValueError:
             pytest.skip("not opened by jaxlens (refused content)")
-    json_round_trip(lens, tmp_path)
+    fields = np.asarray(lens.fields).reshape(len(lens.fields), -1)
+    if len(np.unique(fields, axis=0)) < len(fields):  # optiland_lens_floa: three 0° fields
+        with pytest.warns(UserWarning, match="a field is given twice"):
+            json_round_trip(lens, tmp_path)
+    else:
+        json_round_trip(lens, tmp_path)
 
 
 ZMX = """MODE SEQ
