@@ -172,7 +172,6 @@ import json
 import os
 import pathlib
 import sys
-import tempfile
 
 import jax
 import jax.numpy as jnp
@@ -181,17 +180,23 @@ import numpy as np
 jax.config.update("jax_enable_x64", True)
 
 sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
-from probe_table import mention_counts, probe, run, started, until_started, warned  # noqa: E402
+from probe_table import (  # noqa: E402
+    COOKE,
+    ROOT,
+    SEED0,
+    TMP,
+    mention_counts,
+    probe,
+    run,
+    started,
+    until_started,
+    warned,
+)
 
 import jaxlens as jl  # noqa: E402
 import jaxlens.analysis as A  # noqa: E402
 import jaxlens.design as D  # noqa: E402
 from jaxlens import zoo  # noqa: E402
-
-ROOT = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
-TMP = tempfile.mkdtemp()
-COOKE = os.path.join(ROOT, "jaxlens", "data", "lenses", "cooke_triplet.json")
-SEED0 = os.path.join(ROOT, "experiments", "classical", "designs", "seed_0.zmx")
 
 
 def count_mentions(top=60):

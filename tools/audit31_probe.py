@@ -262,7 +262,6 @@ import os
 import pathlib
 import subprocess
 import sys
-import tempfile
 
 import jax
 import jax.numpy as jnp
@@ -271,17 +270,26 @@ import numpy as np
 jax.config.update("jax_enable_x64", True)
 
 sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
-from probe_table import ROWS, mention_counts, patched, probe, run, started, until_started, warned  # noqa: E402
+from probe_table import (  # noqa: E402
+    COOKE,
+    ROOT,
+    ROWS,
+    SEED0,
+    TMP,
+    mention_counts,
+    patched,
+    probe,
+    run,
+    started,
+    until_started,
+    warned,
+)
 
 import jaxlens as jl  # noqa: E402
 import jaxlens.analysis as A  # noqa: E402
 import jaxlens.design as D  # noqa: E402
 from jaxlens import zoo  # noqa: E402
 
-ROOT = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
-TMP = tempfile.mkdtemp()
-COOKE = os.path.join(ROOT, "jaxlens", "data", "lenses", "cooke_triplet.json")
-SEED0 = os.path.join(ROOT, "experiments", "classical", "designs", "seed_0.zmx")
 OPTILAND_PYTHON = "/work/optiland_venv/bin/python"
 
 

@@ -13,12 +13,18 @@ import io
 import os
 import re
 import sys
+import tempfile
 import warnings
 from contextlib import redirect_stderr, redirect_stdout
 
 import numpy as np
 
 ROWS = []
+# The paths the probe scripts (round 29 and later) share; TMP is a fresh folder a process.
+ROOT = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
+TMP = tempfile.mkdtemp()
+COOKE = os.path.join(ROOT, "jaxlens", "data", "lenses", "cooke_triplet.json")
+SEED0 = os.path.join(ROOT, "experiments", "classical", "designs", "seed_0.zmx")
 FILTER = sys.argv[1] if len(sys.argv) > 1 else ""
 
 
