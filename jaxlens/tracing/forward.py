@@ -119,7 +119,7 @@ def _runs(surfaces, start: int, stop: int, alone=frozenset()) -> list[tuple[int,
 # their number: to surface 6 / 8 / 10 / 11 of the folded rayoptics_HoO-V2C18Ex66.zmx, 2 rays
 # took 0.003 / 0.1 / 4.8 / 14 s, to its image over 10 minutes; the older loop emitters take
 # 1 ms. They trace the Cooke triplet 1.6x slower (benchmarks/SPEED.md), so only such lenses
-# get them, and only in forward-mode analyses (``forward_mode_jit``).
+# get them, and only in forward-mode analyses (``forward_mode_jit``; ``aimed_jit`` where they aim).
 LOOP_EMITTERS = {"xla_cpu_use_fusion_emitters": False}
 
 
