@@ -33,8 +33,14 @@ def build_parser() -> argparse.ArgumentParser:
 
 
 def main(argv: list[str] | None = None) -> int:
-    """Parse ``argv`` (default ``sys.argv[1:]``), run the command, return its exit status."""
+    """Parse ``argv`` (default ``sys.argv[1:]``), run the command, return its exit status.
+    From the command line (``argv`` None) compiled programs are kept for the next run
+    (``jaxlens.compile_cache``)."""
     args = build_parser().parse_args(argv)
+    if argv is None:
+        from jaxlens import compile_cache
+
+        compile_cache.enable()
     if not args.float32:
         import jax
 

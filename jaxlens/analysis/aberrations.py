@@ -140,11 +140,12 @@ def ray_fan(lens: Lens, field, wavelengths=None, *, n: int = FAN_POINTS, depth=N
                     wavelengths, arg="field")
     n = checks.number(n, "n", "ray_fan", lo=2, hi=checks.MAX_SAMPLES, integer=True,
                       unit="pupil points")
+    checks.primary_wavelength(lens, "ray_fan", "the chief ray's")
     return _ray_fan(lens, f if shape == (2,) else f[0], wl, n=int(n),
                     depth=lens_depth(lens, depth, "ray_fan"), aim=lens_aim(lens, aim, "ray_fan"))
 
 
-@aimed_jit
+@checks.checked_core(aimed_jit)
 def _ray_fan(lens, field, wl, *, n, depth, aim) -> RayFan:
     t = jnp.linspace(-1.0, 1.0, n, dtype=wl.dtype)
     zero = jnp.zeros_like(t)
@@ -217,7 +218,7 @@ def _azimuth(field):
     return jnp.where(on_axis, jnp.array([0.0, 1.0], t.dtype), t / jnp.where(on_axis, 1.0, r))
 
 
-@forward_mode_jit
+@checks.checked_core(forward_mode_jit)
 def _field_curvature(lens, fields, wl, *, depth, aim) -> FieldCurvature:
     # Two copies of the chief ray; the first is differentiated along the field's azimuth a
     # (tangential), the second along a⊥ (sagittal): along Py and Px for a θy field.

@@ -97,7 +97,7 @@ class _Result(eqx.Module):
     valid_fraction: jax.Array  # [F, W]
 
 
-@aimed_jit
+@checks.checked_core(aimed_jit)
 def _compute(lens: Lens) -> _Result:
     """Everything the report needs from one traced ray set.
 
@@ -206,6 +206,8 @@ def report_data(lens: Lens, *, fields=None, wavelengths=None, wavefront: bool = 
         # Checked here, not as an EquinoxRuntimeError from inside the compiled trace.
         checks.wavelengths(lens, lens.wavelengths, "report", "the lens's wavelengths")
         checks.material_indices(lens, lens.wavelengths, "report", "the lens's wavelengths")
+    if not checks.is_traced(lens.fields):  # its compiled core trusts them
+        checks.field_angles(lens.fields, "report", "the lens's fields")
     if lens.afocal_image:  # an image at infinity: angles, not heights
         return afocal_report_data(lens, wavefront=wavefront, notes=_notes(lens))
     # On the host once: op by op on the device, the table below compiled a program per

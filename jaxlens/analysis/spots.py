@@ -103,7 +103,7 @@ def spot_rays(
                       newton_iters=newton_iters)
 
 
-@aimed_jit
+@checks.checked_core(aimed_jit)
 def _spot_rays(lens, field, wavelength, *, pupil, depth, aim, newton_iters) -> Rays:
     pupil = pupil_grid(PUPIL_GRID, lens.epd.dtype) if pupil is None else pupil
     rays = field_rays(lens, field, pupil, wavelength, depth=depth, aim=aim)
@@ -194,13 +194,14 @@ def rms_spot(
     checks.newton_iters(newton_iters, "rms_spot")
     check_inputs(lens, "rms_spot", fields=fields, wavelengths=wavelengths, pupil=pupil,
                      own="all")
+    checks.primary_wavelength(lens, "rms_spot", "the chief ray's")
     fields, wavelengths = _as_arrays(lens, _own_fields(lens, fields), wavelengths)
     return _rms_spot(lens, fields, wavelengths, pupil=pupil, reference=reference,
                      depth=lens_depth(lens, depth, "rms_spot"),
                      aim=lens_aim(lens, aim, "rms_spot"), newton_iters=newton_iters)
 
 
-@aimed_jit
+@checks.checked_core(aimed_jit)
 def _rms_spot(lens, fields, wavelengths, *, pupil, reference, depth, aim,
               newton_iters) -> RmsSpot:
     if reference not in ("centroid", "chief"):
@@ -331,7 +332,7 @@ def distortion(lens: Lens, fields=None, wavelength=None, *, aim=None) -> Distort
                        aim=lens_aim(lens, aim, "distortion"))
 
 
-@aimed_jit
+@checks.checked_core(aimed_jit)
 def _distortion(lens, fields, wavelength, depth, *, aim) -> Distortion:
     fields = fields_array(fields, "distortion")
     wl = lens.primary_wavelength if wavelength is None else wavelength
@@ -385,7 +386,7 @@ def clear_semi_diameters(lens: Lens, fields=None, n_rim: int = 64, *,
                                  pupil=pupil)
 
 
-@aimed_jit
+@checks.checked_core(aimed_jit)
 def _clear_semi_diameters(lens, fields, n_rim, *, reaching, pupil) -> Float[Array, " n"]:
     checks.number(n_rim, "n_rim", "clear_semi_diameters", lo=4, hi=checks.MAX_SAMPLES, integer=True,
                   unit="rim rays per beam (fewer miss the rim in x or y)")
@@ -428,6 +429,9 @@ def semi_diameters_and_fans(lens: Lens, fan_fields, fan_pupil, n_rim: int = 64):
         3]``, the fans' ``trace_path`` ``[F, n + 1, M]``).
     """
     check_inputs(lens, "clear_semi_diameters", own="all")
+    # The fans as the lens's fields are (their core trusts what its caller checked).
+    check_inputs(lens, "semi_diameters_and_fans", fields=fan_fields, arg_f="fan_fields",
+                 pupil=fan_pupil)
     checks.number(n_rim, "n_rim", "clear_semi_diameters", lo=4, hi=checks.MAX_SAMPLES,
                   integer=True, unit="rim rays per beam (fewer miss the rim in x or y)")
     (fields,) = _as_arrays(lens, _own_fields(lens, None))
@@ -441,7 +445,7 @@ def semi_diameters_and_fans(lens: Lens, fan_fields, fan_pupil, n_rim: int = 64):
     return traced, starts, dirs, path
 
 
-@aimed_jit
+@checks.checked_core(aimed_jit)
 def _semi_diameters_and_fans(lens, fields, fan_fields, fan_pupil, n_rim):
     n, dt = lens.num_surfaces, lens.epd.dtype
     rim = rim_pupil(n_rim, dt)

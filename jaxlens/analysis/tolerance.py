@@ -375,6 +375,7 @@ class ToleranceModel:
         self.pupil = pupil_grid(21, dtype) if pupil is None else jnp.asarray(pupil, dtype)
         # Checked here: monte_carlo and sensitivity would fail only after compiling the trials.
         checks.wavelengths(self.lens, self.wavelengths, "ToleranceModel", "wavelengths")
+        checks.primary_wavelength(self.lens, "ToleranceModel", "the paraxial data's")
         if self.pupil.ndim != 2 or self.pupil.shape[0] == 0 or self.pupil.shape[1] != 2:
             raise ValueError(f"ToleranceModel: pupil must be [M, 2] unit-pupil points with "
                              f"M >= 1, got shape {np.shape(pupil)}")
@@ -407,8 +408,10 @@ class ToleranceModel:
         self.add_r4 = tuple(bool(tol.irregularity > 0 and ref and s.even_coeffs().shape[0] < 2)
                             for s, ref in zip(self.lens.surfaces, self.refracting, strict=True))
         self.names, self.units, self.kinds = self._labels()
-        self._chunk = eqx.filter_jit(jax.vmap(self._one, in_axes=(0, None)))
-        self._grad = eqx.filter_jit(jax.value_and_grad(self._metric_at))
+        # Fields, wavelengths and pupil were checked above: the traced re-checks go.
+        trusting = checks.checked_core(eqx.filter_jit)
+        self._chunk = trusting(jax.vmap(self._one, in_axes=(0, None)))
+        self._grad = trusting(jax.value_and_grad(self._metric_at))
 
     def with_tolerances(self, tolerances: Tolerances) -> ToleranceModel:
         """The same model (its compiled functions too) under other tolerances.

@@ -148,6 +148,7 @@ def _common(lens, field, wavelength, depth, reference, aim, where: str):
         checks.number(wl, "wavelength", where, lo=0, lo_open=True, unit="µm")
     wl = checks.wavelengths(lens, jnp.asarray(wl, dtype), where, "wavelength")
     checks.material_indices(lens, wl, where)
+    checks.primary_wavelength(lens, where, "the chief ray's and exit pupil's")
     return f, wl, lens_depth(lens, depth, where), reference, aim
 
 
@@ -212,7 +213,7 @@ def _path_to_reference(lens, field, pts, wl, depth, reference, aim, newton_iters
     return jnp.where(valid, waves, jnp.nan), valid
 
 
-@aimed_jit
+@checks.checked_core(aimed_jit)
 def _opd_impl(lens, field, pts, wl, depth, *, reference, aim, newton_iters):
     return _path_to_reference(lens, field, pts, wl, depth, reference, aim, newton_iters)
 
@@ -357,7 +358,7 @@ def _statistics(w, valid, px, py):
     return rms + nan, pv, rms_t + nan, pv_t + nan, plane
 
 
-@aimed_jit
+@checks.checked_core(aimed_jit)
 def _wavefront_impl(lens, field, wl, depth, *, grid, reference, aim, newton_iters):
     dtype = lens.epd.dtype
     g = jnp.linspace(-1.0, 1.0, grid, dtype=dtype)
@@ -432,7 +433,7 @@ class OPDFan(eqx.Module):
     sagittal: Float[Array, "W n"]
 
 
-@aimed_jit
+@checks.checked_core(aimed_jit)
 def _opd_fan_impl(lens, field, wls, depth, *, n, reference, aim, newton_iters):
     t = jnp.linspace(-1.0, 1.0, n, dtype=wls.dtype)
     zero = jnp.zeros_like(t)

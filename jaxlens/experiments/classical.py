@@ -49,6 +49,7 @@ import shlex
 import sys
 import time
 
+from jaxlens import compile_cache
 from jaxlens.analysis.tolerance_spec import MAX_TRIALS
 from jaxlens.design.spec import FNUM_START, FOV_START, MAX_ASPHERE_TERMS
 from jaxlens.experiments.runfolder import (
@@ -768,7 +769,7 @@ def check_ablation_out(args) -> None:
 
 
 def main(argv: list[str] | None = None) -> int:
-    argv = sys.argv[1:] if argv is None else list(argv)
+    argv, command_line = (sys.argv[1:], True) if argv is None else (list(argv), False)
     parser = build_parser()
     args = parser.parse_args(argv)
     # Validate every option, the spec and the output folder before anything heavy. The
@@ -777,15 +778,14 @@ def main(argv: list[str] | None = None) -> int:
         check_args(args, given_options(build_parser, argv))
         _ensure_devices(args.devices)
         spec_from_args(args)
-        if args.ablation:
-            check_ablation_out(args)
-        else:
-            RunFolder(args.out, overwrite=args.overwrite)
+        check_ablation_out(args) if args.ablation else RunFolder(args.out, overwrite=args.overwrite)
     except ValueError as e:
         return fail(parser.prog, e)
     import jax
 
     jax.config.update("jax_enable_x64", True)
+    if command_line:  # keep compiled programs for the next run (jaxlens.compile_cache)
+        compile_cache.enable()
     try:
         if args.ablation:
             run_ablation(args, argv)

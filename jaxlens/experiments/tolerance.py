@@ -300,6 +300,9 @@ def build_parser() -> argparse.ArgumentParser:
 
 
 def main(argv: list[str] | None = None) -> int:
+    """The command line (``argv`` None: ``sys.argv``, with the persistent compile cache of
+    ``jaxlens.compile_cache``; a list: a call from Python, without it)."""
+    command_line = argv is None
     argv = sys.argv[1:] if argv is None else argv
     args = build_parser().parse_args(argv)
     prog = "python -m jaxlens.experiments.tolerance"
@@ -346,6 +349,10 @@ def main(argv: list[str] | None = None) -> int:
                                      f"another folder"))
     import jax
 
+    if command_line:
+        from jaxlens import compile_cache
+
+        compile_cache.enable()
     jax.config.update("jax_enable_x64", True)
     import jaxlens
     from jaxlens.design.spec import DesignSpec

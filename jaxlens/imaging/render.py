@@ -142,7 +142,7 @@ def _footprint(lens, origin, wl, lm0, half, newton_iters):
     return jnp.where(anyv, cen, lm0), rad, area
 
 
-@eqx.filter_jit
+@checks.checked_core(eqx.filter_jit)
 def _footprints(lens, wls, pts, *, newton_iters):
     """Footprint discs at a grid of sensor points ``pts [g, g, 2]`` (union over wavelengths),
     the margin for interpolating them, and the on-axis projected solid angle per wavelength.
@@ -239,6 +239,7 @@ def footprints(
     checks.number(grid, "grid", "footprints", lo=2, hi=checks.MAX_MAP_GRID, integer=True,
                   unit="points per side")
     checks.wavelengths(lens, wavelengths, "footprints", "wavelengths")
+    checks.primary_wavelength(lens, "footprints", "the paraxial pupils'")
     if np.size(wavelengths) == 0:  # "zero-size array to reduction operation max" otherwise
         raise ValueError("footprints: wavelengths is empty; give at least one wavelength (µm), "
                          "one per channel")
@@ -309,7 +310,7 @@ def _unit_disc(key, shape, spp, dtype):
 # --------------------------------------------------------------------------------------
 # Backward ray tracing
 # --------------------------------------------------------------------------------------
-@eqx.filter_jit
+@checks.checked_core(eqx.filter_jit)
 def _render_ray(lens, scene, key, depth, wls, pixel_size, footprints, *, resolution, spp, patch,
                 checkpoint, mesh, ri, newton_iters):
     dtype = scene.dtype
@@ -634,6 +635,7 @@ def render(
     scene = checks.values(scene, "scene", "render", lo=0.0, unit="(linear radiance)")
     wls = checks.wavelengths(lens, wls, "render", "wavelengths")
     checks.material_indices(lens, wls, "render", "wavelengths")
+    checks.primary_wavelength(lens, "render", "the paraxial pupils'")
     rows, cols = sensor.resolution
     hs, ws = scene.shape[:2]
     if abs(hs * cols - ws * rows) >= max(rows, cols):

@@ -654,6 +654,8 @@ def static_depth(depth, where: str = "sampling"):
         # Traced (a depth that a jitted function passes on): its value is unknown here, so
         # it cannot pick the collimated beam of an object at infinity; an infinite depth made
         # every ray NaN, and a negative one traced an object behind the lens, silently.
+        if checks.checked_by_caller(depth):
+            return depth
         return eqx.error_if(
             depth, ~(jnp.isfinite(depth) & (depth > 0) & (depth < INFINITE_OBJECT_MM)),
             f"{where}: a traced depth must be finite and in (0, inf) mm from the object to "

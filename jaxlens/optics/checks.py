@@ -22,6 +22,8 @@ import jax
 import jax.numpy as jnp
 import numpy as np
 
+from .checked_inputs import checked_by_caller, checked_core  # noqa: F401 (re-exported)
+
 GENERIC_RANGE_UM = (0.15, 30.0)
 """Wavelengths (µm) accepted for materials without catalog data (model glasses, formulas)."""
 
@@ -511,6 +513,8 @@ def wavelengths(lens, wl, where: str, arg: str = "wavelength"):
     real_values(wl, arg, where, "µm")
     lo, hi, why = wavelength_range(lens)
     if is_traced(wl):
+        if checked_by_caller(wl):
+            return wl
         w = jnp.asarray(wl)
         bad = ~jnp.isfinite(w) | (w < lo * (1 - _REL)) | (w > hi * (1 + _REL))
         return eqx.error_if(
@@ -523,6 +527,15 @@ def wavelengths(lens, wl, where: str, arg: str = "wavelength"):
             f"{where}: {arg} {fmt(a[bad])} µm is outside {lo:g}–{hi:g} µm, {why}"
             f"{_nm_hint(a[bad])}")
     return wl
+
+
+def primary_wavelength(lens, where: str, role: str = "") -> None:
+    """Check a concrete lens's primary wavelength (µm) against its materials, for an entry
+    point given other wavelengths whose compiled core also traces the primary one (the chief
+    ray); ``role`` says what for (``"the chief ray's"``)."""
+    if not is_traced(lens.wavelengths):
+        wavelengths(lens, lens.primary_wavelength, where,
+                    f"the lens's primary wavelength{f' ({role})' if role else ''}")
 
 
 def material_wavelengths(m, wl, where: str, arg: str = "wavelength", hint: str = "") -> None:
@@ -609,6 +622,8 @@ def field_angles(field, where: str, arg: str = "field"):
     msg = f"{where}: {arg} must be finite angles in (-90, 90) deg"
     real_values(field, arg, where, "deg")
     if is_traced(field):
+        if checked_by_caller(field):
+            return field
         f = jnp.asarray(field)
         return eqx.error_if(field, jnp.any(~(jnp.abs(f) < 90.0)), msg)
     a = np.asarray(field, dtype=float)
@@ -678,6 +693,8 @@ def finite_array(x, arg: str, where: str, unit: str = ""):
     """Refuse NaN or infinite entries (ValueError, or ``eqx.error_if`` under jit)."""
     u = f" ({unit})" if unit else ""
     if is_traced(x):
+        if checked_by_caller(x):
+            return x
         return eqx.error_if(x, jnp.any(~jnp.isfinite(x)), f"{where}: {arg}{u} holds NaN or inf")
     a = np.asarray(x)
     bad = ~np.isfinite(a)

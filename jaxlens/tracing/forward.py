@@ -392,7 +392,7 @@ def _chunking(n: int, chunk: int, lanes: int = 16) -> tuple[int, int]:
     return m0, -(-size // lanes) * lanes
 
 
-@eqx.filter_jit
+@checks.checked_core(eqx.filter_jit, concrete_checked=False)
 def trace(
     lens: Lens,
     rays: Rays,

@@ -345,14 +345,9 @@ def use_compile_cache(checkpoint: str) -> str:
     the folder used. Every piece of a resumed run compiles the same programs (over 3 minutes
     at the paper's scale on an H100), so the next piece loads them instead. A process-wide
     setting: the command line uses it, ``run`` called from Python does not by default."""
-    import jax
+    from jaxlens import compile_cache
 
-    if os.environ.get("JAX_COMPILATION_CACHE_DIR"):
-        return os.environ["JAX_COMPILATION_CACHE_DIR"]
-    path = os.path.abspath(os.path.join(checkpoint, COMPILE_CACHE))
-    jax.config.update("jax_compilation_cache_dir", path)
-    jax.config.update("jax_persistent_cache_min_compile_time_secs", 1.0)
-    return path
+    return compile_cache.enable(os.path.join(checkpoint, COMPILE_CACHE))
 
 
 def run(argv=None, *, compile_cache: bool = False) -> dict:

@@ -1,0 +1,96 @@
+"""Inputs checked once, at the entry point: what lets a compiled core skip its re-checks.
+
+An entry point (``rms_spot``, ``psf``, the design loss) checks its inputs: a concrete bad
+value raises at once, a traced one (the caller's own ``jit``) gets an ``eqx.error_if`` in
+the caller's program. The private core it then calls runs the same helpers (sampling,
+tracing) on traced copies of those inputs, and each would attach another ``error_if``.
+Those add nothing, and each is a host callback: JAX's persistent compilation cache keeps no
+program that has one, so every run compiled the core again. A core compiled with
+:func:`checked_core` skips them; result checks (a PSF with no light) stay.
+"""
+
+from __future__ import annotations
+
+import contextvars
+import functools
+import inspect
+
+import jax
+
+# The jit-level traces of the bodies being traced now whose inputs their callers checked.
+_CHECKED_BODIES: contextvars.ContextVar[tuple] = contextvars.ContextVar(
+    "jaxlens_checked_bodies", default=())
+
+
+def _jit_trace(x):
+    """The jit-level trace (JAX's ``DynamicJaxprTrace``) of the first tracer in ``x``,
+    through the vmap and JVP traces above it; None for concrete values or an unknown JAX."""
+    for leaf in jax.tree_util.tree_leaves(x):
+        if isinstance(leaf, jax.core.Tracer):
+            t = getattr(leaf, "_trace", None)
+            while t is not None and type(t).__name__ != "DynamicJaxprTrace":
+                t = getattr(t, "parent_trace", None)
+            return t
+    return None
+
+
+def checked_by_caller(x) -> bool:
+    """True for a value traced in the body of an :func:`inputs_checked` function (under its
+    vmap, grad or JVP, not inside a jit, scan or loop nested in it): its entry point checked
+    it, so a re-check would only add an ``eqx.error_if``."""
+    bodies = _CHECKED_BODIES.get()
+    if not bodies:
+        return False
+    t = _jit_trace(x)
+    return t is not None and any(t is b for b in bodies)
+
+
+def _traced(x) -> bool:
+    return any(isinstance(leaf, jax.core.Tracer) for leaf in jax.tree_util.tree_leaves(x))
+
+
+def checked_core(jit, *, concrete_checked: bool = True):
+    """Decorator: ``jit(fn)`` for a private core whose callers check its inputs, compiled so
+    that the input checks inside it are skipped where those inputs were checked already.
+
+    That is where every argument is concrete (the caller checked them at once; with
+    ``concrete_checked=False``, for a function that checks inside its own jit, never), or
+    where they are traced in the body of another such core (:func:`checked_by_caller`).
+    Traced by a user's own ``jit`` they are not known to be checked: the body keeps its
+    checks. Each case has its own compiled function, so a program cached from one never
+    serves the other.
+
+    The checks skipped add nothing, and each is an ``eqx.error_if``, a host callback: JAX's
+    persistent compilation cache keeps no program that has one, so every run compiled the
+    core again. Result checks (a PSF with no light) stay. The body's own trace is the one
+    trusted (and the vmap, grad and JVP traces under it): a jit, scan or loop nested in it
+    is traced apart and keeps its checks.
+    """
+    def decorate(fn):
+        def trusting(*args, **kwargs):
+            trace = _jit_trace((args, kwargs))
+            if trace is None:
+                return fn(*args, **kwargs)
+            token = _CHECKED_BODIES.set(_CHECKED_BODIES.get() + (trace,))
+            try:
+                return fn(*args, **kwargs)
+            finally:
+                _CHECKED_BODIES.reset(token)
+
+        # Named as ``fn`` (compile logs), not wrapping it: jit binds fn's signature from it.
+        trusting.__name__, trusting.__qualname__ = fn.__name__, fn.__qualname__
+        trusting.__signature__ = inspect.signature(fn)
+        checked, plain = jit(trusting), jit(fn)
+
+        @functools.wraps(fn)
+        def call(*args, **kwargs):
+            trusted = checked_by_caller((args, kwargs)) or (
+                concrete_checked and not _traced((args, kwargs)))
+            return (checked if trusted else plain)(*args, **kwargs)
+
+        for name in ("loop_emitters",):  # what the jit decorator tells the tests
+            if hasattr(plain, name):
+                setattr(call, name, getattr(plain, name))
+        return call
+
+    return decorate

@@ -1,0 +1,132 @@
+"""Compiled cores whose entry points checked their inputs skip the re-checks
+(``jaxlens.optics.checked_inputs``): no ``eqx.error_if`` (a host callback, which JAX's
+persistent cache refuses) in a program called with concrete inputs, and every check still
+fires where a user's own ``jit`` traces the inputs, whichever program was compiled first.
+
+Each call below uses shapes no other test compiles (odd pupil sizes), so that it is traced
+here and the ``error_if`` calls made while tracing can be counted."""
+
+import equinox as eqx
+import jax
+import jax.numpy as jnp
+import numpy as np
+import pytest
+
+import jaxlens as jl
+from jaxlens.analysis import spots
+from jaxlens.optics import checks
+from jaxlens.optics.checked_inputs import checked_by_caller, checked_core
+
+
+@pytest.fixture(scope="module")
+def lens():
+    return jl.load("jaxlens/data/lenses/cooke_triplet.json")
+
+
+@pytest.fixture
+def error_ifs(monkeypatch):
+    """The messages of the ``eqx.error_if`` calls made from now on."""
+    seen, real = [], eqx.error_if
+
+    def record(x, pred, msg):
+        seen.append(msg)
+        return real(x, pred, msg)
+
+    monkeypatch.setattr(eqx, "error_if", record)
+    return seen
+
+
+def _pupil(n, seed):
+    r = np.sqrt(np.random.default_rng(seed).uniform(0, 1, n))
+    a = np.linspace(0, 2 * np.pi, n, endpoint=False)
+    return jnp.asarray(np.stack([r * np.cos(a), r * np.sin(a)], -1))
+
+
+def test_concrete_calls_trace_no_input_check(lens, error_ifs):
+    spots.rms_spot(lens, jnp.array([0.0, 5.0, 10.0]), pupil=_pupil(13, 0))
+    spots.spot_rays(lens, jnp.asarray(7.0), pupil=_pupil(11, 1))
+    spots.distortion(lens, jnp.array([1.0, 2.0, 3.0, 4.0, 5.0]))
+    spots.clear_semi_diameters(lens, n_rim=37)
+    spots.semi_diameters_and_fans(lens, jnp.array([0.0, 4.0, 14.0]), _pupil(9, 2), n_rim=39)
+    assert error_ifs == []
+
+
+def test_traced_inputs_are_checked_after_the_concrete_program_is_cached(lens, error_ifs):
+    pupil = _pupil(15, 3)
+    good = spots.rms_spot(lens, jnp.array([0.0, 10.0]), pupil=pupil)  # the trusting program
+    assert np.all(np.isfinite(np.asarray(good.polychromatic))) and error_ifs == []
+    run = jax.jit(lambda f: spots.rms_spot(lens, f, pupil=pupil).polychromatic)
+    with pytest.raises(Exception, match="finite angles"):
+        run(jnp.array([0.0, jnp.nan])).block_until_ready()
+    assert error_ifs
+    run_w = jax.jit(lambda w: spots.rms_spot(lens, wavelengths=w, pupil=pupil).polychromatic)
+    with pytest.raises(Exception, match="µm"):
+        run_w(jnp.array([587.6])).block_until_ready()  # nm for µm
+
+
+def test_concrete_bad_inputs_still_raise_at_once(lens):
+    with pytest.raises(ValueError, match="finite angles"):
+        spots.rms_spot(lens, [0.0, np.nan])
+    with pytest.raises(ValueError, match="fan_fields"):  # before: only the core's error_if
+        spots.semi_diameters_and_fans(lens, jnp.array([0.0, 120.0]), jnp.zeros((2, 2)))
+    with pytest.raises(ValueError, match="pupil"):
+        spots.semi_diameters_and_fans(lens, jnp.array([0.0, 10.0]),
+                                      jnp.array([[0.0, np.nan], [0.0, 0.5]]))
+
+
+def test_trace_checks_its_wavelengths_whatever_was_compiled_before(lens):
+    pupil = _pupil(17, 4)
+    spots.rms_spot(lens, jnp.array([10.0]), pupil=pupil)  # traces ``trace`` trusted inside
+    rays = jl.sampling.field_rays(lens, 10.0, pupil)
+    bad = eqx.tree_at(lambda r: r.wavelength, rays, jnp.asarray(587.6, rays.origin.dtype))
+    with pytest.raises(Exception, match="µm"):
+        jax.block_until_ready(jl.trace(lens, bad))
+
+
+SEEN = []  # (where, checked_by_caller) while the toy core below is traced
+
+
+def _angle(x):
+    return checks.field_angles(x, "probe")
+
+
+@jax.jit
+def _nested(x):
+    return _angle(x) * 2.0
+
+
+@checked_core(jax.jit)
+def _core(x):
+    SEEN.append(("body", checked_by_caller(x)))
+    jax.vmap(lambda v: SEEN.append(("vmap", checked_by_caller(v))) or v)(x)
+    return _angle(x) + 0.0 * jnp.sum(jax.vmap(_angle)(x))
+
+
+@checked_core(jax.jit)
+def _core_with_nested_jit(x):
+    return _nested(x)
+
+
+def test_only_the_body_of_a_core_called_with_checked_inputs_is_trusted(error_ifs):
+    x = jnp.array([1.0, 2.0])
+    SEEN.clear()
+    np.testing.assert_allclose(_core(x), x)
+    assert SEEN == [("body", True), ("vmap", True)] and error_ifs == []
+    # A jit nested in a trusting body is traced apart and keeps its check ...
+    np.testing.assert_allclose(_core_with_nested_jit(x), 2 * x)
+    assert len(error_ifs) == 1
+    # ... so the program cached there still checks where it is called on its own.
+    with pytest.raises(Exception, match="finite angles"):
+        _nested(jnp.array([jnp.nan, 1.0])).block_until_ready()
+    # Traced by the caller's own jit, the core keeps every check.
+    SEEN.clear()
+    with pytest.raises(Exception, match="finite angles"):
+        jax.jit(_core)(jnp.array([95.0, 1.0])).block_until_ready()
+    assert SEEN == [("body", False), ("vmap", False)]
+
+
+def test_checked_by_caller_is_false_outside_any_core():
+    assert not checked_by_caller(jnp.ones(2))
+    flags = []
+    jax.jit(lambda v: flags.append(checked_by_caller(v)) or v)(jnp.ones(2))
+    assert flags == [False]
