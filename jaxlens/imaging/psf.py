@@ -376,7 +376,7 @@ class PSFResult(eqx.Module):
     aliased: Array
 
 
-@forward_mode_jit
+@checks.checked_core(forward_mode_jit)
 def _psf_impl(lens, field, depth, wls, pixel_size, key, *, kernel_size, model, center,
               newton_iters):
     dtype = jnp.result_type(pixel_size)
@@ -408,6 +408,7 @@ def _prepare(lens, field, depth, wavelength, kernel_size, pixel_size, model, cen
     checks.real_values(wl, "wavelength", caller, "µm")  # jnp.asarray reads "0.55" as 0.55
     wl = checks.wavelengths(lens, jnp.asarray(wl, dtype), caller, "wavelength")
     checks.material_indices(lens, wl, caller)
+    checks.primary_wavelength(lens, caller, "the chief ray's and paraxial pupils'")
     field = checks.field_angles(field, caller, "field")
     if wl.ndim > 1 or wl.size == 0:
         raise ValueError(f"{caller}: wavelength must be a scalar or 1-D (µm) with at least one "
@@ -460,9 +461,8 @@ def psf_info(
 
 
 def _refuse_bad_kernels(kern, trunc, aliased, max_truncation, kernel_size, pixel_size, wls):
-    """Refuse a PSF that is not one: no light, energy lost outside the kernel or over-counted,
-    or an aliased coherent kernel. Concrete results raise ValueError with the measured value
-    at the worst wavelength; under a trace ``eqx.error_if`` raises at run time."""
+    """Refuse a PSF that is not one (no light, energy lost outside the kernel or over-counted,
+    an aliased coherent kernel): a ValueError at the worst wavelength, or an error_if."""
     conditions = [
         (jnp.isnan(trunc), "psf: no ray of the beam reaches the image surface (the field is "
          "vignetted or beyond the lens's coverage), so there is no PSF", None),
@@ -656,7 +656,7 @@ def _directions(field):
     return e_t, e_s
 
 
-@forward_mode_jit
+@checks.checked_core(forward_mode_jit)
 def _mtf_impl(lens, field, depth, wls, freqs, pixel_size, *, model, kernel_size, diffraction,
               newton_iters):
     dtype = freqs.dtype
