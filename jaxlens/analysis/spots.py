@@ -44,12 +44,13 @@ def fields_array(fields, where: str) -> Array:
 
 def check_inputs(lens: Lens, where: str, *, fields=None, wavelengths=None,
                  arg_f: str = "fields", arg_w: str = "wavelengths", pupil=None,
-                 own: str = "primary") -> None:
+                 own: str = "primary"):
     """Check the field angles (deg), wavelengths (µm) and pupil points the caller gave,
     before the jitted body: inside it a constant array is a tracer, and the same checks
     became an ``EquinoxRuntimeError`` raised after the whole trace had run (a NaN pupil
     point was not refused at all: its ray counted as vignetted). Without ``wavelengths``
-    the lens's own are checked: its primary one, or with ``own="all"`` all of them."""
+    the lens's own are checked: its primary one, or with ``own="all"`` all of them.
+    Returns ``pupil`` (traced: with the unit-disc check attached; use it)."""
     if not isinstance(lens, Lens):
         raise TypeError(f"{where}: lens must be a jaxlens.Lens, got {type(lens).__name__}")
     if fields is not None and not checks.is_traced(fields):
@@ -64,6 +65,28 @@ def check_inputs(lens: Lens, where: str, *, fields=None, wavelengths=None,
     if pupil is not None and not checks.is_traced(pupil):
         checks.real_values(pupil, "pupil", where, "normalised pupil coordinates")
         checks.finite_array(pupil, "pupil", where, "normalised pupil coordinates")
+    return None if pupil is None else unit_pupil(pupil, where)
+
+
+def unit_pupil(pupil, where: str):
+    """``pupil`` (normalised points ``[..., 2]``), refused outside the unit disc: the pupil of
+    a spot is the beam itself, and a point at radius 1.5 traced a ray 0.75 EPD off axis
+    into the spot (a larger spot, or a vignetted ray counted in ``valid_fraction``). The
+    slack is a few ulps of the points' dtype (``pupil_hexapolar``'s float32 rim points lie
+    at radius 1 + 2.3e-8). A traced pupil is returned with an ``eqx.error_if``."""
+    p = jnp.asarray(pupil)
+    dt = p.dtype if jnp.issubdtype(p.dtype, jnp.floating) else jnp.result_type(float)
+    limit = 1.0 + max(1e-9, 4 * float(jnp.finfo(dt).eps))
+    msg = (f"{where}: pupil points must lie in the unit disc (Px² + Py² <= 1, normalised "
+           f"to the entrance pupil)")
+    if p.ndim < 1 or p.shape[-1] != 2:
+        return pupil  # the shape is the ray sources' to refuse, as before
+    if checks.is_traced(pupil):
+        return eqx.error_if(pupil, jnp.any(jnp.sum(p * p, -1) > limit * limit), msg)
+    r = np.sqrt(np.sum(np.asarray(pupil, float) ** 2, -1))
+    if r.size and float(r.max()) > limit:
+        raise ValueError(f"{msg}, got radius {float(r.max()):.6g}")
+    return pupil
 
 
 def _as_arrays(lens: Lens, *values):
@@ -93,8 +116,8 @@ def spot_rays(
     """Rays of one field and wavelength on the image surface (a spot diagram as data).
     ``aim``: "paraxial", "real", "real_marginal" or None (the lens's own ray aiming,
     ``lens.aim``)."""
-    check_inputs(lens, "spot_rays", fields=field, wavelengths=wavelength, arg_f="field",
-                     arg_w="wavelength", pupil=pupil)
+    pupil = check_inputs(lens, "spot_rays", fields=field, wavelengths=wavelength,
+                         arg_f="field", arg_w="wavelength", pupil=pupil)
     checks.newton_iters(newton_iters, "spot_rays")
     field, wavelength = _as_arrays(lens, field, wavelength)
     return _spot_rays(lens, field, wavelength, pupil=pupil,
@@ -192,8 +215,8 @@ def rms_spot(
     """
     checks.focal_image(lens, "rms_spot")
     checks.newton_iters(newton_iters, "rms_spot")
-    check_inputs(lens, "rms_spot", fields=fields, wavelengths=wavelengths, pupil=pupil,
-                     own="all")
+    pupil = check_inputs(lens, "rms_spot", fields=fields, wavelengths=wavelengths,
+                         pupil=pupil, own="all")
     fields, wavelengths = _as_arrays(lens, _own_fields(lens, fields), wavelengths)
     return _rms_spot(lens, fields, wavelengths, pupil=pupil, reference=reference,
                      depth=lens_depth(lens, depth, "rms_spot"),
@@ -373,7 +396,7 @@ def clear_semi_diameters(lens: Lens, fields=None, n_rim: int = 64, *,
     interior rays: where rim rays fail, a ray inside the pupil can pass higher than any
     rim ray that passes, and an aperture sized from the rim alone would clip it.
     """
-    check_inputs(lens, "clear_semi_diameters", fields=fields, pupil=pupil, own="all")
+    pupil = check_inputs(lens, "clear_semi_diameters", fields=fields, pupil=pupil, own="all")
     if pupil is not None and (jnp.ndim(pupil) != 2 or jnp.shape(pupil)[-1] != 2):
         raise ValueError(f"clear_semi_diameters: pupil must be [M, 2] normalised pupil points "
                          f"(Px, Py), got shape {jnp.shape(pupil)}")
