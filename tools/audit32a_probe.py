@@ -46,6 +46,18 @@ def jitted(fn, *args):
     return go
 
 
+def expect(name, fn, want):
+    """A row: "silent wrong" where ``fn()`` (text) does not start with ``want`` (the true answer)."""
+    if FILTER and FILTER not in name:
+        return
+    try:
+        got = str(fn())
+    except Exception as e:  # noqa: BLE001
+        ROWS.append((name, "crash", f"{type(e).__name__}: {e}"[:150]))
+        return
+    ROWS.append((name, "ok" if got.startswith(want) else "silent wrong", got[:100]))
+
+
 def same_answer(name, fn, reference):
     """A row: "silent wrong" where ``fn()`` differs from ``reference()`` (the same input in
     the form the call expects), "ok" where they agree."""
@@ -242,6 +254,40 @@ def tracing_lenses():
     probe("Lens primary True", lambda: mk(wavelengths=(0.4861, 0.5876), primary=True).primary, "primary")
 
 
+# ----------------------------------------------------------------------------- unusual lenses
+def unusual_lenses():
+    from jaxlens.optics.coordinates import CoordinateBreak
+
+    def mirror(t=-100.0, **k):
+        return jl.Lens(surfaces=(jl.Conic(-1 / 200.0, -1.0),), thickness=jnp.array([t]), materials=(jl.Air(),),
+                       epd=20.0, fields=jnp.array([0.0, 0.5]), mirrors=(0,), **k)
+    m = mirror()
+    geometry = lambda lens: (lambda g: f"ok {bool(g.ok)}, min_gap {[round(float(x), 3) for x in g.min_gap]}")(A.self_intersection(lens))
+    expect("self_intersection a concave mirror, image 100 mm before it (true: no crossing)", lambda: geometry(m), "ok True")
+    expect("self_intersection a mirror whose image plane cuts its rim (true: crossing; control)", lambda: geometry(mirror(-0.01)), "ok False")
+    cass = jl.Lens(surfaces=(jl.Conic(-1 / 200.0, -1.0), jl.Sphere(-1 / 80.0)), thickness=jnp.array([-60.0, 90.0]),
+                   materials=(jl.Air(), jl.Air()), epd=20.0, fields=jnp.array([0.0, 0.2]), mirrors=(0, 1))
+    expect("self_intersection a Cassegrain, secondary 60 mm before the primary (true: no crossing)", lambda: geometry(cass), "ok True")
+    probe("efl of a concave mirror R -200 (control: 100)", lambda: float(jl.efl(m)), good=True)
+    probe("rms_spot of a paraboloid on axis (control: 0)", lambda: A.rms_spot(m).polychromatic, good=True)
+    probe("render a mirror lens", lambda: jl.render(dataclasses.replace(m, sensor=jl.Sensor((8, 8), 0.01)), jnp.ones((8, 8, 3)), spp=1, key=KEY), "mirrors")
+    tilt = jl.Lens(surfaces=(jl.Sphere(1 / 30.0), CoordinateBreak(tilt_x=5.0), jl.Sphere(-1 / 45.0)), thickness=jnp.array([6.0, 0.0, 33.4]),
+                   materials=(jl.get_material("N-BK7"), jl.get_material("N-BK7"), jl.Air()), epd=10.0, fields=jnp.array([0.0, 5.0]))
+    probe("seidel of a lens with a 5° coordinate break", lambda: A.seidel(tilt).wavefront(), "coordinate")
+    probe("rms_spot of a lens with a 5° coordinate break (control)", lambda: A.rms_spot(tilt).polychromatic, good=True)
+    cooke = zoo.cooke_triplet()
+    probe("rms_spot fields and wavelengths swapped", lambda: A.rms_spot(cooke, fields=cooke.wavelengths, wavelengths=cooke.fields).polychromatic, "wavelength")
+    probe("psf pixel_size 5 (µm)", lambda: jl.psf(cooke, 0.0, pixel_size=5.0, kernel_size=9), "pixel_size")
+    probe("psf field 0.349 (20° in radians)", warned(lambda: jl.psf(cooke, 0.3490658503988659, pixel_size=0.002, kernel_size=9)), "radian")
+    probe("wavefront field and wavelength swapped (0.5876, 14; wavelength is keyword-only)", lambda: A.wavefront(cooke, 0.5876, 14.0).rms, "positional")
+    probe("wavefront field 0.349 (20° in radians)", warned(lambda: A.wavefront(cooke, 0.3490658503988659, grid=9).rms), "radians")
+    probe("opd field 0.349 (20° in radians)", warned(lambda: A.opd(cooke, 0.3490658503988659, jnp.zeros(2))), "radians")
+    probe("opd_fan field 0.349 (20° in radians)", warned(lambda: A.opd_fan(cooke, 0.3490658503988659, n=5).tangential), "radians")
+    probe("wavefront field 0.1745 (10° in radians)", warned(lambda: A.wavefront(cooke, 0.17453292519943295, grid=9).rms), "radians")
+    probe("wavefront field 14 (control)", warned(lambda: A.wavefront(cooke, 14.0, grid=9).rms), good=True)
+    probe("encircled_energy method 'geometric' with pupil_side 1 (a diffraction setting; refused whatever the method)", lambda: A.encircled_energy(cooke, 0.0, [0.01], pupil_side=1).energy, "pupil_side")
+
+
 # ----------------------------------------------------------------------------- design
 def design():
     spec = D.DesignSpec()
@@ -300,4 +346,4 @@ def design():
 if os.environ.get("AUDIT32A_COUNT"):
     count_mentions()
 else:
-    run([zoo_nets, analysis, tracing_lenses, design])
+    run([zoo_nets, analysis, tracing_lenses, unusual_lenses, design])

@@ -24,7 +24,7 @@ import numpy as np
 from jaxtyping import Array, Bool, Float
 
 from ..imaging.sampling import field_rays, lens_aim, lens_depth, pupil_grid
-from ..optics import checks, paraxial
+from ..optics import checks, paraxial, travel
 from ..optics.lens import Lens
 from ..optics.rays import Rays
 from ..tracing.forward import DEFAULT_NEWTON_ITERS, aimed_jit, trace, trace_path
@@ -525,7 +525,8 @@ def self_intersection(
 ) -> GeometryCheck:
     """Check every pair of neighbouring surfaces for overlap over the whole clear aperture.
 
-    The axial gap z_{i+1} + sag_{i+1}(x, y) − z_i − sag_i(x, y) is sampled on a polar grid
+    The axial gap z_{i+1} + sag_{i+1}(x, y) − z_i − sag_i(x, y) (negated where light
+    travels toward −z, after a mirror: ``Lens.travel_senses``) is sampled on a polar grid
     out to the larger of the two clear semi-diameters (the element's outer edge), so
     aspheres that cross away from the centre are caught. The default semi-diameters are the
     beam footprints (``clear_semi_diameters(..., reaching=True)``): rays lost where two
@@ -562,6 +563,7 @@ def self_intersection(
 def _self_intersection(lens, sd, min_gap, *, n_radial, n_angle) -> GeometryCheck:
     """``self_intersection``'s compiled core (op-by-op it took 30-120 ms a call)."""
     n = lens.num_surfaces
+    senses = travel.travel_senses(lens)  # static: a lens without mirrors compiles as before
     surfs = list(lens.surfaces) + [lens.image]
     zs = jnp.concatenate([lens.vertex_z(), lens.image_z()[None]])
     sd_all = jnp.concatenate([sd, sd[-1:]])
@@ -576,6 +578,8 @@ def _self_intersection(lens, sd, min_gap, *, n_radial, n_angle) -> GeometryCheck
         z1, in1 = surfs[i].sag(x, y)
         z2, in2 = surfs[i + 1].sag(x, y)
         g = zs[i + 1] + z2 - zs[i] - z1
+        if senses[i + 1] < 0:  # light travels toward -z (after a mirror): the gap is -Δz
+            g = -g
         # Each surface must be defined over its own clear aperture.
         own1 = jnp.hypot(x, y) <= sd_all[i] * (1 + 1e-9)
         own2 = jnp.hypot(x, y) <= sd_all[i + 1] * (1 + 1e-9)
