@@ -1,5 +1,310 @@
 # ruff: noqa: E501, B023, E731
-"""Round-32a bad-input probes (the Python API): DOCSTRING_PLACEHOLDER
+"""Round-32a bad-input probes: the table of ``tools/audit22_probe.py`` (probe | outcome | what
+happened) for the Python API (jaxlens, optics, tracing, imaging, analysis, design, zoo, nets)
+past what rounds 26-31 reached. Round 32b probes the command lines and the file formats.
+
+The count (``probe_table.mention_counts``, rerun on main at f920cd8 with round 31 counted;
+``AUDIT32A_COUNT=1`` here prints it; ``jaxlens.zoo`` and ``jaxlens.nets``, which
+``PACKAGES`` leaves out, counted by hand): after the result containers (``EncircledEnergy``,
+``Seidel``, ``SolverResult``…, 0-4) the least named were the networks and the zoo —
+``double_gauss`` (1), ``Depthwise``/``Pointwise`` (4; ``c_in``/``c_out`` 0),
+``num_parameters`` (6), ``LayerNorm2d``/``simple_gate`` (7), ``cellphone6`` (8), ``Conv``
+(12; ``kernel`` 1), ``Upsample`` (13), ``NAFBlock`` (32; ``ffn_expand`` 1), ``NAFNet`` (37;
+``identity_init`` 0) — then the parameters named 0-2 times: ``radius_for_fraction``'s
+``fraction`` (0), ``zernike_nm``'s ``j`` (0), ``Seidel.wavefront``'s ``per_surface`` (0),
+``DampedLeastSquares``'s ``lam0``, ``catalog_names``'
+``obsolete``/``catalog`` (2), ``reversed_lens``' ``image_distance``, ``trace_path``'s
+``uniform``, ``Hybrid``'s ``odd_x``/``odd_y``, ``Biconic``'s ``kx``, ``paper_stages``'
+``final_loss`` (1), ``CatalogMaterial``'s ``catalog_vd`` (1), ``DesignConfig``'s
+``lr_d``/``lr_k``/``lr_m``/``population``/``polish_rings`` (1-2), ``Aperture``'s
+``half_x``/``blocks``, and the lenses the brief names: mirrors, coordinate breaks, a stop on
+the last surface, an object 1 µm away, a zero-thickness glass; and slips under ``jax.jit``.
+
+Gaps found and fixed:
+1. ``nets``: ``Conv``/``Pointwise``/``Depthwise``/``LayerNorm2d(dtype=jnp.int32)`` made
+   integer weights (a Conv's all 0; NAFBlock and NAFNet refused it already): refused.
+2. ``nets``: a ``Depthwise`` or ``LayerNorm2d`` built for 3 channels broadcast a 1-channel
+   image to 3 channels without a word; ``Conv`` and ``Depthwise`` given ``[H, W]`` failed
+   inside lax / on unpacking: each layer checks its input's channels (static shapes, so
+   under jit too).
+3. ``nets``: the layers cast their weights to the input's dtype, so an integer image
+   (0 … 191) ran with integer weights: NAFNet's answer differed from the float image's by
+   108, a Conv's by 178, a trained NAFBlock's by 0.32. An integer input is computed in the
+   weights' float dtype (max difference 0 now).
+4. ``nets``: ``Conv(kernel=4)`` with stride 1 ('SAME' padding of an even kernel: the image
+   shifted half a pixel) refused; ``NAFNet(identity_init="no")`` (truthy) and ``0`` are not
+   booleans; ``enc_blocks=2`` was "object of type 'int' has no len()".
+5. ``spot_rays``/``rms_spot``/``clear_semi_diameters``/``angular_spot``: a pupil point at
+   radius 1.5 traced a ray 0.75 EPD off axis into the spot (a larger spot, or a vignetted
+   ray counted in ``valid_fraction``), where ``opd`` and ``encircled_energy`` refused it.
+   Refused now (``spots.unit_pupil``; under jit an ``eqx.error_if``), with a slack of a few
+   ulps of the points' dtype: ``pupil_hexapolar``'s float32 rim lies at 1 + 2.3e-8.
+6. ``Seidel.wavefront(per_surface="no")`` gave the ``[7, n]`` per-surface table where the
+   ``[7]`` sums were meant; ``0`` gave the sums. Must be True or False (and ``transverse``).
+7. ``paper_stages(final_loss="imag")`` was refused as the fine-tune Stage's ``loss``.
+8. ``self_intersection`` measured each gap as Δz whichever way the light went, so every
+   mirror lens read as crossed: a concave mirror with its focus 100 mm before it had gap
+   -100 mm and ok False, a Cassegrain's -60.4 mm. The gap is negated where light travels
+   toward −z (``travel.travel_senses``, static: a lens without mirrors compiles as before);
+   an image plane that cuts the mirror's rim is still caught.
+9. ``wavefront``/``opd``/``opd_fan`` took 20° typed as 0.349 (radians) without a word,
+   where ``rms_spot``, ``chief_ray`` and ``ray_fan`` warn: they warn now.
+10. ``catalog_names(catalogs=[])`` listed no glass, silently (and ``get_material(...,
+    catalogs=())`` said the glass "is in catalog SCHOTT, not searched here"): refused.
+
+Controls of note: ``sine_path(n=0)`` (one stage, documented), ``random_starts`` with a seed
+twice (``design`` pads a device batch with repeats), ``reversed_lens(image_distance=-5)``,
+``trace_path(upto=0)`` (0-based), ``DesignConfig(polish_rings=0)`` (the stages' rings), a
+stop on the last surface, an object 1 µm away, a zero-thickness glass, integer fields, a
+traced NaN EPD under jit (NaN spots: traced lenses are not re-checked, as documented).
+
+Not fixed (files outside this round, with the fix):
+- ``trace_path(uniform="no")`` traces as True (jaxlens/tracing/forward.py, the lead's):
+  ``checks.switch(uniform, "uniform", "trace_path")``.
+- ``psf``/``mtf`` of a field 0.349 (20° in radians) do not warn (jaxlens/imaging/psf.py is
+  at 800 lines; its field goes through ``checks.field_angles``): warning in
+  ``checks.one_field``/``field_angles`` for concrete values would cover psf, mtf and the
+  wavefront analyses at once (then drop the two lines added to ``wavefront_error._common``).
+- ``opd(lens, f, pupil_hexapolar(8, jnp.float32))`` is refused ("radius 1"): the rim points
+  lie at 1 + 2.3e-8 in float32, past ``sampling.UNIT_DISC_TOLERANCE`` = 1e-9 (sampling.py,
+  the lead's): a slack of a few ulps of the points' dtype, as ``spots.unit_pupil`` uses.
+
+Before (main at f920cd8, an archive) and after (branch audit32a), the same probes,
+``PYTHONPATH=<tree> python tools/audit32a_probe.py`` from the repository, 225 probes,
+about 75 s each way:
+    before: clear error: 167, ok: 29, silent wrong: 25, vague error: 4
+    after:  clear error: 189, ok: 34, silent wrong: 2
+
+A row marked "(warns)" or naming radians counts a warning as the answer ("clear error" when
+it names the slip). A row "against floats" or "(true: …)" compares with the right answer:
+"silent wrong" where it differs.
+
+Probe (before -> after):
+    double_gauss clip 'no'                                                                                     clear error  -> clear error
+    cellphone6 clip 0                                                                                          clear error  -> clear error
+    double_gauss clip False (control)                                                                          ok           -> ok
+    Conv c_in 0                                                                                                clear error  -> clear error
+    Conv kernel 2.5                                                                                            clear error  -> clear error
+    Conv stride 2 with kernel 3                                                                                clear error  -> clear error
+    Conv key 0 (an int)                                                                                        clear error  -> clear error
+    Conv dtype int32                                                                                           silent wrong -> clear error
+    Conv called on 2 channels (built for 3)                                                                    clear error  -> clear error
+    Conv called on [8, 8] (no channel axis)                                                                    vague error  -> clear error
+    Conv kernel 4 stride 1 (even 'SAME')                                                                       silent wrong -> clear error
+    Conv 3x3 (control)                                                                                         ok           -> ok
+    Pointwise c_out 10**9                                                                                      clear error  -> clear error
+    Pointwise c_in -4                                                                                          clear error  -> clear error
+    Pointwise dtype int32                                                                                      silent wrong -> clear error
+    Pointwise called on 2 channels (built for 3)                                                               clear error  -> clear error
+    Depthwise channels 0                                                                                       clear error  -> clear error
+    Depthwise called on 1 channel (built for 3)                                                                silent wrong -> clear error
+    Depthwise called on [8, 8]                                                                                 vague error  -> clear error
+    LayerNorm2d eps 0                                                                                          clear error  -> clear error
+    LayerNorm2d eps NaN                                                                                        clear error  -> clear error
+    LayerNorm2d called on 1 channel (built for 3)                                                              silent wrong -> clear error
+    LayerNorm2d dtype int32                                                                                    silent wrong -> clear error
+    simple_gate 3 channels                                                                                     clear error  -> clear error
+    simple_gate a scalar                                                                                       clear error  -> clear error
+    NAFBlock channels 0                                                                                        clear error  -> clear error
+    NAFBlock ffn_expand 0                                                                                      clear error  -> clear error
+    NAFBlock dw_expand 2.5                                                                                     clear error  -> clear error
+    NAFBlock dw_expand 10**6                                                                                   clear error  -> clear error
+    NAFBlock called on 3 channels (built for 4)                                                                clear error  -> clear error
+    NAFBlock dtype int32                                                                                       clear error  -> clear error
+    Upsample c_in 3 (odd)                                                                                      clear error  -> clear error
+    Upsample called on 2 channels (built for 4)                                                                clear error  -> clear error
+    NAFNet identity_init 'no'                                                                                  silent wrong -> clear error
+    NAFNet identity_init 0                                                                                     silent wrong -> clear error
+    NAFNet in_channels 0                                                                                       clear error  -> clear error
+    NAFNet in_channels 1, out_channels 3                                                                       clear error  -> clear error
+    NAFNet enc_blocks (1, 1), dec_blocks (1, 1, 1)                                                             clear error  -> clear error
+    NAFNet enc_blocks () dec_blocks () (control: no levels)                                                    ok           -> ok
+    NAFNet enc_blocks 2 (an int)                                                                               vague error  -> clear error
+    NAFNet width 2.5                                                                                           clear error  -> clear error
+    NAFNet dtype int32                                                                                         clear error  -> clear error
+    NAFNet image [8, 8] (no channel axis)                                                                      clear error  -> clear error
+    NAFNet image [2, 8, 8, 3] (a batch)                                                                        clear error  -> clear error
+    NAFNet image int 0..191 (against the same image as floats)                                                 silent wrong -> ok
+    Conv called on an int image (against floats)                                                               silent wrong -> ok
+    NAFBlock (trained scales) called on an int image (against floats)                                          silent wrong -> ok
+    NAFNet image bool                                                                                          clear error  -> clear error
+    NAFNet image complex                                                                                       clear error  -> clear error
+    NAFNet image NaN                                                                                           clear error  -> clear error
+    NAFNet image NaN under jit                                                                                 clear error  -> clear error
+    NAFNet image 1x1 (control: padded by repeating it)                                                         ok           -> ok
+    NAFNet image 8x8 (control)                                                                                 ok           -> ok
+    num_parameters None                                                                                        clear error  -> clear error
+    num_parameters a NAFNet (control)                                                                          ok           -> ok
+    radius_for_fraction fraction 80 (percent)                                                                  clear error  -> clear error
+    radius_for_fraction fraction 1.0                                                                           clear error  -> clear error
+    radius_for_fraction fraction 80 under jit                                                                  clear error  -> clear error
+    radius_for_fraction fraction [0.5, 0.8] (control)                                                          ok           -> ok
+    zernike_nm j 0 (Noll starts at 1)                                                                          clear error  -> clear error
+    zernike_nm j -1                                                                                            clear error  -> clear error
+    zernike_nm j 2.5                                                                                           clear error  -> clear error
+    zernike_nm j True                                                                                          clear error  -> clear error
+    zernike_nm j 10**12                                                                                        clear error  -> clear error
+    zernike_nm j 0 indexing 'ansi' (control: piston)                                                           ok           -> ok
+    zernike_nm indexing 'nol'                                                                                  clear error  -> clear error
+    Seidel.wavefront per_surface 'no'                                                                          silent wrong -> clear error
+    Seidel.wavefront per_surface 0                                                                             silent wrong -> clear error
+    Wavefront.zernike terms 0                                                                                  clear error  -> clear error
+    Wavefront.zernike terms 10**6                                                                              clear error  -> clear error
+    Wavefront.zernike terms 2.5                                                                                clear error  -> clear error
+    Wavefront.zernike indexing 'nol'                                                                           clear error  -> clear error
+    Wavefront.zernike terms 11 (control)                                                                       ok           -> ok
+    angular_magnification wavelength 587.6 (nm)                                                                clear error  -> clear error
+    angular_magnification wavelength NaN                                                                       clear error  -> clear error
+    chief_ray field 100 (deg)                                                                                  clear error  -> clear error
+    chief_ray field NaN                                                                                        clear error  -> clear error
+    chief_ray field [0, 5, 10] (several)                                                                       clear error  -> clear error
+    chief_ray field NaN under jit                                                                              clear error  -> clear error
+    chief_ray field 100 under jit                                                                              clear error  -> clear error
+    chief_ray depth 0                                                                                          clear error  -> clear error
+    chief_ray aim 'reel'                                                                                       clear error  -> clear error
+    spot_rays pupil [5, 3] (3 coordinates)                                                                     clear error  -> clear error
+    spot_rays pupil [] (no points)                                                                             clear error  -> clear error
+    spot_rays pupil (1.5, 0) (outside the unit pupil)                                                          silent wrong -> clear error
+    spot_rays pupil complex                                                                                    clear error  -> clear error
+    spot_rays pupil NaN under jit                                                                              clear error  -> clear error
+    opd pupil shape (3,)                                                                                       clear error  -> clear error
+    opd pupil (2, 0) (outside the unit pupil)                                                                  clear error  -> clear error
+    opd pupil NaN                                                                                              clear error  -> clear error
+    opd reference 'spherical'                                                                                  clear error  -> clear error
+    opd pupil (0.3, 0.4) (control)                                                                             ok           -> ok
+    opd_fan n 0                                                                                                clear error  -> clear error
+    opd_fan n 10**8                                                                                            clear error  -> clear error
+    opd_fan n 1                                                                                                clear error  -> clear error
+    opd_fan wavelengths () (empty)                                                                             clear error  -> clear error
+    ray_fan n 2.5                                                                                              clear error  -> clear error
+    ray_fan wavelengths [] (empty)                                                                             clear error  -> clear error
+    ray_fan field (0, 5, 10)                                                                                   clear error  -> clear error
+    ray_fan wavelengths [486.1, 587.6] (nm)                                                                    clear error  -> clear error
+    field_curvature fields () (empty)                                                                          clear error  -> clear error
+    distortion fields [] (empty)                                                                               clear error  -> clear error
+    rms_spot fields () (empty)                                                                                 clear error  -> clear error
+    rms_spot wavelengths () (empty)                                                                            clear error  -> clear error
+    angular_spot fields () (empty)                                                                             clear error  -> clear error
+    clear_semi_diameters fields () (empty)                                                                     clear error  -> clear error
+    clear_semi_diameters n_rim 0                                                                               clear error  -> clear error
+    clear_semi_diameters reaching 'yes'                                                                        clear error  -> clear error
+    rms_spot pupil (1.5, 0) (outside the unit pupil)                                                           silent wrong -> clear error
+    spot_rays pupil (1.5, 0) under jit                                                                         silent wrong -> clear error
+    spot_rays pupil hexapolar (control)                                                                        ok           -> ok
+    trace_path uniform 'no'                                                                                    silent wrong -> silent wrong
+    trace_path upto 0 (control: surface 1, 0-based)                                                            ok           -> ok
+    trace_path upto 99                                                                                         clear error  -> clear error
+    trace_backward upto 99                                                                                     clear error  -> clear error
+    reversed_lens image_distance NaN                                                                           clear error  -> clear error
+    reversed_lens image_distance -5 (control: an image before the last surface)                                ok           -> ok
+    reversed_lens image_distance '10'                                                                          clear error  -> clear error
+    reversed_lens (control)                                                                                    ok           -> ok
+    Hybrid odd_x NaN                                                                                           clear error  -> clear error
+    Hybrid odd_y 2-D                                                                                           clear error  -> clear error
+    Biconic kx NaN                                                                                             clear error  -> clear error
+    Biconic cx inf                                                                                             clear error  -> clear error
+    Aperture shape 'rectangle'                                                                                 clear error  -> clear error
+    Aperture half_x -1                                                                                         clear error  -> clear error
+    Aperture half_y 0                                                                                          clear error  -> clear error
+    Aperture blocks 'no'                                                                                       clear error  -> clear error
+    Aperture decenter_x NaN                                                                                    clear error  -> clear error
+    TiltedPlane tan_x 45 (degrees)                                                                             clear error  -> clear error
+    Stop semi_diameter -1                                                                                      clear error  -> clear error
+    Plane semi_diameter NaN                                                                                    clear error  -> clear error
+    QTypeAsphere qtype 'bfs2'                                                                                  clear error  -> clear error
+    QTypeAsphere norm_radius 0                                                                                 clear error  -> clear error
+    Binary2 norm_radius 0                                                                                      clear error  -> clear error
+    Binary2 order NaN                                                                                          clear error  -> clear error
+    ZernikeSag norm_radius -1                                                                                  clear error  -> clear error
+    ZernikeSag ordering 'fringe2'                                                                              clear error  -> clear error
+    ZernikeSag extrapolate 'no'                                                                                clear error  -> clear error
+    CoordinateBreak order 2                                                                                    clear error  -> clear error
+    CoordinateBreak tilt_x NaN                                                                                 clear error  -> clear error
+    Lens stop on the last surface (control)                                                                    ok           -> ok
+    Lens stop 2 of 2 surfaces                                                                                  clear error  -> clear error
+    Lens object_distance 1e-3 (control: a finite object 1 µm away)                                             ok           -> ok
+    Lens object_distance 0                                                                                     clear error  -> clear error
+    Lens object_distance -10                                                                                   clear error  -> clear error
+    Lens thickness [0, 33.4] (zero-thickness glass; control)                                                   ok           -> ok
+    Lens mirrors (5,) (out of range)                                                                           clear error  -> clear error
+    Lens mirrors (0, 0) (twice)                                                                                clear error  -> clear error
+    Lens obscurations {0: 20} (larger than the EPD)                                                            clear error  -> clear error
+    Lens fields [0, 10] rad-looking (0.1745)                                                                   clear error  -> clear error
+    Lens epd NaN in a traced lens (control: NaN spots, not re-checked under jit as documented)                 ok           -> ok
+    Lens fields as ints [0, 10] (control)                                                                      ok           -> ok
+    Lens wavelengths [0.5876] as a tuple (control)                                                             ok           -> ok
+    Lens wavelengths () (empty)                                                                                clear error  -> clear error
+    Lens fields () (empty)                                                                                     clear error  -> clear error
+    Lens fields [[0, 5, 1]] (3 per field)                                                                      clear error  -> clear error
+    Lens fields complex                                                                                        clear error  -> clear error
+    Lens primary 1.0 (float)                                                                                   clear error  -> clear error
+    Lens primary True                                                                                          clear error  -> clear error
+    self_intersection a concave mirror, image 100 mm before it (true: no crossing)                             silent wrong -> ok
+    self_intersection a mirror whose image plane cuts its rim (true: crossing; control)                        ok           -> ok
+    self_intersection a Cassegrain, secondary 60 mm before the primary (true: no crossing)                     silent wrong -> ok
+    efl of a concave mirror R -200 (control: 100)                                                              ok           -> ok
+    rms_spot of a paraboloid on axis (control: 0)                                                              ok           -> ok
+    render a mirror lens                                                                                       clear error  -> clear error
+    seidel of a lens with a 5° coordinate break                                                                clear error  -> clear error
+    rms_spot of a lens with a 5° coordinate break (control)                                                    ok           -> ok
+    rms_spot fields and wavelengths swapped                                                                    clear error  -> clear error
+    psf pixel_size 5 (µm)                                                                                      clear error  -> clear error
+    psf field 0.349 (20° in radians)                                                                           silent wrong -> silent wrong
+    wavefront field and wavelength swapped (0.5876, 14; wavelength is keyword-only)                            clear error  -> clear error
+    wavefront field 0.349 (20° in radians)                                                                     silent wrong -> clear error
+    opd field 0.349 (20° in radians)                                                                           silent wrong -> clear error
+    opd_fan field 0.349 (20° in radians)                                                                       silent wrong -> clear error
+    wavefront field 0.1745 (10° in radians)                                                                    silent wrong -> clear error
+    wavefront field 14 (control)                                                                               ok           -> ok
+    encircled_energy method 'geometric' with pupil_side 1 (a diffraction setting; refused whatever the method) clear error  -> clear error
+    paper_stages final_loss 'imag'                                                                             vague error  -> clear error
+    paper_stages n -1                                                                                          clear error  -> clear error
+    paper_stages polish 'LM' (polish_steps 10)                                                                 clear error  -> clear error
+    paper_stages solver 'Adam'                                                                                 clear error  -> clear error
+    paper_stages polish 'lm' polish_steps 10 (control)                                                         ok           -> ok
+    paper_stages pin -1                                                                                        clear error  -> clear error
+    sensor_field_grid n 0                                                                                      clear error  -> clear error
+    sensor_field_grid n 10**6                                                                                  clear error  -> clear error
+    sine_path n 0 (control: one stage at the end, documented)                                                  ok           -> ok
+    sine_path start NaN                                                                                        clear error  -> clear error
+    sine_path n 10**10                                                                                         clear error  -> clear error
+    random_params key 0 (an int)                                                                               clear error  -> clear error
+    random_params dtype int32                                                                                  clear error  -> clear error
+    random_starts seeds [] (none)                                                                              clear error  -> clear error
+    random_starts seeds [1, 1] (control: design pads a device batch with repeats)                              ok           -> ok
+    random_starts seeds -1                                                                                     clear error  -> clear error
+    random_starts seeds 10**6 (a count?)                                                                       clear error  -> clear error
+    evaluate_design min_valid 99 (percent)                                                                     clear error  -> clear error
+    evaluate_design min_valid NaN                                                                              clear error  -> clear error
+    evaluate_design n 0                                                                                        clear error  -> clear error
+    DampedLeastSquares lam0 0                                                                                  clear error  -> clear error
+    DampedLeastSquares lam0 NaN                                                                                clear error  -> clear error
+    DampedLeastSquares inner 0                                                                                 clear error  -> clear error
+    DampedLeastSquares residual_fn None                                                                        clear error  -> clear error
+    LevenbergMarquardt rtol -1                                                                                 clear error  -> clear error
+    LevenbergMarquardt atol NaN                                                                                clear error  -> clear error
+    LevenbergMarquardt free 'all'                                                                              clear error  -> clear error
+    catalog_names obsolete 'no'                                                                                clear error  -> clear error
+    catalog_names catalog 'schot'                                                                              clear error  -> clear error
+    catalog_names catalogs [] (none)                                                                           silent wrong -> clear error
+    catalog_names catalog and catalogs both                                                                    clear error  -> clear error
+    CatalogMaterial catalog_vd NaN                                                                             clear error  -> clear error
+    CatalogMaterial catalog_nd 60, catalog_vd 1.5 (swapped)                                                    clear error  -> clear error
+    CatalogMaterial formula 99                                                                                 clear error  -> clear error
+    CatalogMaterial name 5                                                                                     clear error  -> clear error
+    CatalogMaterial model None                                                                                 clear error  -> clear error
+    CatalogMaterial wavelength_range (365, 2325) (nm)                                                          clear error  -> clear error
+    TableMaterials wavelengths in nm                                                                           clear error  -> clear error
+    TableMaterials wavelengths () (empty)                                                                      clear error  -> clear error
+    DesignConfig lr_d -1                                                                                       clear error  -> clear error
+    DesignConfig lr_k NaN                                                                                      clear error  -> clear error
+    DesignConfig lr_m -1                                                                                       clear error  -> clear error
+    DesignConfig population 0                                                                                  clear error  -> clear error
+    DesignConfig polish_rings 0 (control: the rings of the stages)                                             ok           -> ok
+    DesignConfig polish_rings -1                                                                               clear error  -> clear error
+    DesignConfig tolerance_nominal_weight 2                                                                    clear error  -> clear error
+    DesignConfig image_spp 0                                                                                   clear error  -> clear error
+    design on_nonfinite 'warnn'                                                                                clear error  -> clear error
 
 Run: PYTHONPATH=$PWD python tools/audit32a_probe.py [filter]
 """
@@ -340,7 +645,7 @@ def design():
     probe("DesignConfig polish_rings -1", lambda: D.DesignConfig(polish_rings=-1), "polish_rings")
     probe("DesignConfig tolerance_nominal_weight 2", lambda: D.DesignConfig(tolerance_nominal_weight=2.0), "tolerance_nominal_weight")
     probe("DesignConfig image_spp 0", lambda: D.DesignConfig(image_spp=0), "image_spp")
-    probe("design on_nonfinite 'warn'", lambda: D.design(spec, [0], on_nonfinite="warnn", progress=False), "on_nonfinite")
+    probe("design on_nonfinite 'warnn'", lambda: D.design(spec, [0], on_nonfinite="warnn", progress=False), "on_nonfinite")
 
 
 if os.environ.get("AUDIT32A_COUNT"):
