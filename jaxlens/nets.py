@@ -379,7 +379,7 @@ class NAFNet(eqx.Module):
                 f"{in_channels} and {out_channels}"
             )
         for arg, v in (("enc_blocks", enc_blocks), ("dec_blocks", dec_blocks)):
-            if not isinstance(v, Sequence) or isinstance(v, str):  # 2 failed on len()
+            if not isinstance(v, Sequence | np.ndarray) or isinstance(v, str):  # 2: len()
                 raise ValueError(f"NAFNet: {arg} must be a sequence of block counts per "
                                  f"level, e.g. (1, 1, 1), got {v!r}")
         checks.switch(identity_init, "identity_init", "NAFNet")  # "no" is truthy
