@@ -80,11 +80,26 @@ def _sizes(where: str, **sizes) -> None:
         checks.number(v, arg, where, lo=1, hi=checks.MAX_SAMPLES, integer=True)
 
 
+def _channels_last(x, channels: int, where: str) -> None:
+    """An input ``[..., C]`` with the layer's C (a static shape: also under jit)."""
+    if jnp.ndim(x) < 1 or jnp.shape(x)[-1] != channels:
+        raise ValueError(f"{where}: expected an input with {channels} channels on its last "
+                         f"axis, got shape {jnp.shape(x)}")
+
+
 def _channels_in(x, channels: int, where: str) -> None:
     """An ``[H, W, C]`` input with the layer's C (a static shape: also under jit)."""
     if jnp.ndim(x) != 3 or jnp.shape(x)[-1] != channels:
         raise ValueError(f"{where}: expected an [H, W, {channels}] input (channels last), got "
                          f"shape {jnp.shape(x)}")
+
+
+def _as_float(x, like):
+    """``x`` as an array of a floating dtype (``like``'s where it has none): the layers cast
+    their weights to the input's dtype, so an integer image (0 … 255) truncated them to
+    integers and gave another answer than the same image as floats."""
+    x = jnp.asarray(x)
+    return x if jnp.issubdtype(x.dtype, jnp.inexact) else x.astype(like.dtype)
 
 
 def _uniform(gen: np.random.Generator, shape, fan_in, dtype):
@@ -108,10 +123,15 @@ class Conv(eqx.Module):
     stride: int = eqx.field(static=True)
 
     def __init__(self, c_in: int, c_out: int, kernel: int, *, stride: int = 1, key, dtype=None):
+        checks.float_dtype(dtype, "Conv")  # int32 made integer weights (all 0)
         _sizes("Conv", c_in=c_in, c_out=c_out, kernel=kernel)
         if isinstance(stride, bool) or stride not in (1, kernel):  # 0 ran a 0-stride conv
             raise ValueError(f"Conv: stride must be 1 or the kernel size {kernel} (pixels), got "
                              f"{stride!r}")
+        if stride == 1 and kernel % 2 == 0:  # 'SAME' padding of an even kernel shifts the
+            raise ValueError(f"Conv: kernel must be odd with stride 1 ('SAME' padding of an "
+                             f"even kernel shifts the image by half a pixel), or equal to "
+                             f"the stride; got kernel {kernel}")
         dtype = dtype or jnp.result_type(float)
         gen = _generator(key)
         fan_in = c_in * kernel * kernel
@@ -120,6 +140,8 @@ class Conv(eqx.Module):
         self.stride = stride
 
     def __call__(self, x: Float[Array, "H W ci"]) -> Float[Array, "h w co"]:
+        _channels_in(x, self.weight.shape[-2], "Conv")
+        x = _as_float(x, self.weight)
         w = self.weight.astype(x.dtype)
         pad = "VALID" if self.stride > 1 else "SAME"
         y = jax.lax.conv_general_dilated(
@@ -135,6 +157,7 @@ class Pointwise(eqx.Module):
     bias: Float[Array, " co"]
 
     def __init__(self, c_in: int, c_out: int, *, key, dtype=None):
+        checks.float_dtype(dtype, "Pointwise")
         _sizes("Pointwise", c_in=c_in, c_out=c_out)
         dtype = dtype or jnp.result_type(float)
         gen = _generator(key)
@@ -142,6 +165,8 @@ class Pointwise(eqx.Module):
         self.bias = _uniform(gen, (c_out,), c_in, dtype)
 
     def __call__(self, x: Float[Array, "*s ci"]) -> Float[Array, "*s co"]:
+        _channels_last(x, self.weight.shape[0], "Pointwise")
+        x = _as_float(x, self.weight)
         return x @ self.weight.astype(x.dtype) + self.bias.astype(x.dtype)
 
 
@@ -152,6 +177,7 @@ class Depthwise(eqx.Module):
     bias: Float[Array, " c"]
 
     def __init__(self, channels: int, *, key, dtype=None):
+        checks.float_dtype(dtype, "Depthwise")
         _sizes("Depthwise", channels=channels)
         dtype = dtype or jnp.result_type(float)
         gen = _generator(key)
@@ -159,6 +185,8 @@ class Depthwise(eqx.Module):
         self.bias = _uniform(gen, (channels,), 9, dtype)
 
     def __call__(self, x: Float[Array, "H W c"]) -> Float[Array, "H W c"]:
+        _channels_in(x, self.weight.shape[-1], "Depthwise")  # 1 channel broadcast to c
+        x = _as_float(x, self.weight)
         h, w, _ = x.shape
         xp = jnp.pad(x, ((1, 1), (1, 1), (0, 0)))
         k = self.weight.astype(x.dtype)
@@ -177,6 +205,7 @@ class LayerNorm2d(eqx.Module):
     eps: float = eqx.field(static=True)
 
     def __init__(self, channels: int, *, eps: float = 1e-6, dtype=None):
+        checks.float_dtype(dtype, "LayerNorm2d")  # int32 made integer weights
         _sizes("LayerNorm2d", channels=channels)
         # A negative eps made rsqrt(var + eps) NaN for near-constant pixels.
         eps = checks.number(eps, "eps", "LayerNorm2d", lo=0, lo_open=True, hi=1.0)
@@ -186,6 +215,8 @@ class LayerNorm2d(eqx.Module):
         self.eps = eps
 
     def __call__(self, x: Float[Array, "*s c"]) -> Float[Array, "*s c"]:
+        _channels_last(x, self.weight.shape[0], "LayerNorm2d")  # 1 channel broadcast to c
+        x = _as_float(x, self.weight)
         mu = jnp.mean(x, axis=-1, keepdims=True)
         var = jnp.mean(jnp.square(x - mu), axis=-1, keepdims=True)
         y = (x - mu) * jax.lax.rsqrt(var + self.eps)
@@ -242,6 +273,7 @@ class NAFBlock(eqx.Module):
 
     def __call__(self, x: Float[Array, "H W c"]) -> Float[Array, "H W c"]:
         _channels_in(x, self.beta.shape[0], "NAFBlock")
+        x = _as_float(x, self.beta)
         y = self.dw(self.expand(self.norm1(x)))
         y = simple_gate(y)
         y = y * self.sca(jnp.mean(y, axis=(0, 1)))  # simplified channel attention
@@ -346,6 +378,11 @@ class NAFNet(eqx.Module):
                 f"NAFNet: the global residual needs in_channels >= out_channels, got "
                 f"{in_channels} and {out_channels}"
             )
+        for arg, v in (("enc_blocks", enc_blocks), ("dec_blocks", dec_blocks)):
+            if not isinstance(v, Sequence | np.ndarray) or isinstance(v, str):  # 2: len()
+                raise ValueError(f"NAFNet: {arg} must be a sequence of block counts per "
+                                 f"level, e.g. (1, 1, 1), got {v!r}")
+        checks.switch(identity_init, "identity_init", "NAFNet")  # "no" is truthy
         if len(enc_blocks) != len(dec_blocks):
             raise ValueError(
                 f"NAFNet: enc_blocks and dec_blocks need the same length, got {tuple(enc_blocks)}"
@@ -403,7 +440,7 @@ class NAFNet(eqx.Module):
     def __call__(self, x: Float[Array, "H W Cin"]) -> Float[Array, "H W Cout"]:
         """Restore one image ``[H, W, in_channels]``; returns ``[H, W, out_channels]``."""
         checks.real_values(x, "image", "NAFNet")  # a complex image ran, a list had no .ndim
-        x = jnp.asarray(x)
+        x = _as_float(x, self.intro.weight)
         if x.ndim != 3 or x.shape[0] == 0 or x.shape[1] == 0:
             raise ValueError(f"NAFNet: expected one [H, W, C] image with H, W >= 1, got shape "
                              f"{x.shape}")

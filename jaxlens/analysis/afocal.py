@@ -102,7 +102,8 @@ def angular_spot(
         depth: object distance in mm (``inf`` for infinity), or None for the lens's own.
     """
     where = "angular_spot"
-    check_inputs(lens, where, fields=fields, wavelengths=wavelengths, pupil=pupil, own="all")
+    pupil = check_inputs(lens, where, fields=fields, wavelengths=wavelengths, pupil=pupil,
+                         own="all")
     if reference not in REFERENCES:
         raise ValueError(f"{where}: reference must be one of {REFERENCES}, got {reference!r}")
     fields = lens.fields if fields is None else fields

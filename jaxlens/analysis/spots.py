@@ -23,8 +23,8 @@ import jax.numpy as jnp
 import numpy as np
 from jaxtyping import Array, Bool, Float
 
-from ..imaging.sampling import field_rays, lens_aim, lens_depth, pupil_grid
-from ..optics import checks, paraxial
+from ..imaging.sampling import field_rays, lens_aim, lens_depth, pupil_grid, unit_disc_limit
+from ..optics import checks, paraxial, travel
 from ..optics.lens import Lens
 from ..optics.rays import Rays
 from ..tracing.forward import DEFAULT_NEWTON_ITERS, aimed_jit, trace, trace_path
@@ -44,12 +44,13 @@ def fields_array(fields, where: str) -> Array:
 
 def check_inputs(lens: Lens, where: str, *, fields=None, wavelengths=None,
                  arg_f: str = "fields", arg_w: str = "wavelengths", pupil=None,
-                 own: str = "primary") -> None:
+                 own: str = "primary"):
     """Check the field angles (deg), wavelengths (µm) and pupil points the caller gave,
     before the jitted body: inside it a constant array is a tracer, and the same checks
     became an ``EquinoxRuntimeError`` raised after the whole trace had run (a NaN pupil
     point was not refused at all: its ray counted as vignetted). Without ``wavelengths``
-    the lens's own are checked: its primary one, or with ``own="all"`` all of them."""
+    the lens's own are checked: its primary one, or with ``own="all"`` all of them.
+    Returns ``pupil`` (traced: with the unit-disc check attached; use it)."""
     if not isinstance(lens, Lens):
         raise TypeError(f"{where}: lens must be a jaxlens.Lens, got {type(lens).__name__}")
     if fields is not None and not checks.is_traced(fields):
@@ -64,6 +65,27 @@ def check_inputs(lens: Lens, where: str, *, fields=None, wavelengths=None,
     if pupil is not None and not checks.is_traced(pupil):
         checks.real_values(pupil, "pupil", where, "normalised pupil coordinates")
         checks.finite_array(pupil, "pupil", where, "normalised pupil coordinates")
+    return None if pupil is None else unit_pupil(pupil, where)
+
+
+def unit_pupil(pupil, where: str):
+    """``pupil`` (normalised points ``[..., 2]``), refused outside the unit disc: the pupil of
+    a spot is the beam itself, and a point at radius 1.5 traced a ray 0.75 EPD off axis
+    into the spot (a larger spot, or a vignetted ray counted in ``valid_fraction``). The
+    slack is a few ulps of the points' dtype (``pupil_hexapolar``'s float32 rim points lie
+    at radius 1 + 2.3e-8). A traced pupil is returned with an ``eqx.error_if``."""
+    p = jnp.asarray(pupil)
+    limit = unit_disc_limit(p.dtype)
+    msg = (f"{where}: pupil points must lie in the unit disc (Px² + Py² <= 1, normalised "
+           f"to the entrance pupil)")
+    if p.ndim < 1 or p.shape[-1] != 2:
+        return pupil  # the shape is the ray sources' to refuse, as before
+    if checks.is_traced(pupil):
+        return eqx.error_if(pupil, jnp.any(jnp.sum(p * p, -1) > limit * limit), msg)
+    r = np.sqrt(np.sum(np.asarray(pupil, float) ** 2, -1))
+    if r.size and float(r.max()) > limit:
+        raise ValueError(f"{msg}, got radius {float(r.max()):.6g}")
+    return pupil
 
 
 def _as_arrays(lens: Lens, *values):
@@ -93,8 +115,8 @@ def spot_rays(
     """Rays of one field and wavelength on the image surface (a spot diagram as data).
     ``aim``: "paraxial", "real", "real_marginal" or None (the lens's own ray aiming,
     ``lens.aim``)."""
-    check_inputs(lens, "spot_rays", fields=field, wavelengths=wavelength, arg_f="field",
-                     arg_w="wavelength", pupil=pupil)
+    pupil = check_inputs(lens, "spot_rays", fields=field, wavelengths=wavelength,
+                         arg_f="field", arg_w="wavelength", pupil=pupil)
     checks.newton_iters(newton_iters, "spot_rays")
     field, wavelength = _as_arrays(lens, field, wavelength)
     return _spot_rays(lens, field, wavelength, pupil=pupil,
@@ -192,8 +214,8 @@ def rms_spot(
     """
     checks.focal_image(lens, "rms_spot")
     checks.newton_iters(newton_iters, "rms_spot")
-    check_inputs(lens, "rms_spot", fields=fields, wavelengths=wavelengths, pupil=pupil,
-                     own="all")
+    pupil = check_inputs(lens, "rms_spot", fields=fields, wavelengths=wavelengths,
+                         pupil=pupil, own="all")
     checks.primary_wavelength(lens, "rms_spot", "the chief ray's")
     fields, wavelengths = _as_arrays(lens, _own_fields(lens, fields), wavelengths)
     return _rms_spot(lens, fields, wavelengths, pupil=pupil, reference=reference,
@@ -374,7 +396,7 @@ def clear_semi_diameters(lens: Lens, fields=None, n_rim: int = 64, *,
     interior rays: where rim rays fail, a ray inside the pupil can pass higher than any
     rim ray that passes, and an aperture sized from the rim alone would clip it.
     """
-    check_inputs(lens, "clear_semi_diameters", fields=fields, pupil=pupil, own="all")
+    pupil = check_inputs(lens, "clear_semi_diameters", fields=fields, pupil=pupil, own="all")
     if pupil is not None and (jnp.ndim(pupil) != 2 or jnp.shape(pupil)[-1] != 2):
         raise ValueError(f"clear_semi_diameters: pupil must be [M, 2] normalised pupil points "
                          f"(Px, Py), got shape {jnp.shape(pupil)}")
@@ -429,9 +451,12 @@ def semi_diameters_and_fans(lens: Lens, fan_fields, fan_pupil, n_rim: int = 64):
         3]``, the fans' ``trace_path`` ``[F, n + 1, M]``).
     """
     check_inputs(lens, "clear_semi_diameters", own="all")
-    # The fans as the lens's fields are (their core trusts what its caller checked).
-    check_inputs(lens, "semi_diameters_and_fans", fields=fan_fields, arg_f="fan_fields",
-                 pupil=fan_pupil)
+    # The fans as the lens's fields are (their core trusts what its caller checked); their
+    # pupil may be overfilled, so it is not held to the unit disc.
+    if not checks.is_traced((fan_fields, fan_pupil)):
+        checks.field_angles(fan_fields, "semi_diameters_and_fans", "fan_fields")
+        checks.finite_array(fan_pupil, "fan_pupil", "semi_diameters_and_fans",
+                            "normalised pupil coordinates")
     checks.number(n_rim, "n_rim", "clear_semi_diameters", lo=4, hi=checks.MAX_SAMPLES,
                   integer=True, unit="rim rays per beam (fewer miss the rim in x or y)")
     (fields,) = _as_arrays(lens, _own_fields(lens, None))
@@ -506,7 +531,8 @@ def self_intersection(
 ) -> GeometryCheck:
     """Check every pair of neighbouring surfaces for overlap over the whole clear aperture.
 
-    The axial gap z_{i+1} + sag_{i+1}(x, y) − z_i − sag_i(x, y) is sampled on a polar grid
+    The axial gap z_{i+1} + sag_{i+1}(x, y) − z_i − sag_i(x, y) (negated where light
+    travels toward −z, after a mirror: ``Lens.travel_senses``) is sampled on a polar grid
     out to the larger of the two clear semi-diameters (the element's outer edge), so
     aspheres that cross away from the centre are caught. The default semi-diameters are the
     beam footprints (``clear_semi_diameters(..., reaching=True)``): rays lost where two
@@ -543,6 +569,7 @@ def self_intersection(
 def _self_intersection(lens, sd, min_gap, *, n_radial, n_angle) -> GeometryCheck:
     """``self_intersection``'s compiled core (op-by-op it took 30-120 ms a call)."""
     n = lens.num_surfaces
+    senses = travel.travel_senses(lens)  # static: a lens without mirrors compiles as before
     surfs = list(lens.surfaces) + [lens.image]
     zs = jnp.concatenate([lens.vertex_z(), lens.image_z()[None]])
     sd_all = jnp.concatenate([sd, sd[-1:]])
@@ -557,6 +584,8 @@ def _self_intersection(lens, sd, min_gap, *, n_radial, n_angle) -> GeometryCheck
         z1, in1 = surfs[i].sag(x, y)
         z2, in2 = surfs[i + 1].sag(x, y)
         g = zs[i + 1] + z2 - zs[i] - z1
+        if senses[i + 1] < 0:  # light travels toward -z (after a mirror): the gap is -Δz
+            g = -g
         # Each surface must be defined over its own clear aperture.
         own1 = jnp.hypot(x, y) <= sd_all[i] * (1 + 1e-9)
         own2 = jnp.hypot(x, y) <= sd_all[i + 1] * (1 + 1e-9)

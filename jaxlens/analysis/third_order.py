@@ -126,6 +126,8 @@ class Seidel(eqx.Module):
         return jnp.sum(self.per_surface, axis=-1)
 
     def _pick(self, per_surface: bool) -> Array:
+        # "no" is truthy: it gave the [7, n] table where the sums were asked for.
+        checks.switch(per_surface, "per_surface", "Seidel")
         return self.per_surface if per_surface else self.sums
 
     def wavefront(self, *, per_surface: bool = False) -> Array:

@@ -139,6 +139,8 @@ def _common(lens, field, wavelength, depth, reference, aim, where: str):
     aim = lens_aim(lens, aim, where)
     dtype = lens.epd.dtype
     f = jnp.asarray(checks.one_field(field, where), dtype)
+    if not checks.is_traced(field):  # 20° typed as 0.349 rad: as rms_spot and chief_ray do
+        checks.warn_if_radian_fields(field, where, "field")
     wl = lens.primary_wavelength if wavelength is None else wavelength
     checks.real_values(wl, "wavelength", where, "µm")
     if jnp.shape(wl) != ():

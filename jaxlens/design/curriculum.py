@@ -161,6 +161,9 @@ def paper_stages(
     if reference not in ("ideal", "centroid"):
         raise ValueError(f"paper_stages: reference must be 'ideal' or 'centroid', got "
                          f"{reference!r}")
+    if final_loss not in ("ray", "image"):  # was refused as the fine-tune Stage's "loss"
+        raise ValueError(f"paper_stages: final_loss must be 'ray' or 'image', got "
+                         f"{final_loss!r}")
     beta = 0.0 if reference == "ideal" else 1.0
     stages = [
         Stage(f"stage{i} {fov:.1f}°/F{fnum:.2f}", float(fov), float(fnum), steps, solver,

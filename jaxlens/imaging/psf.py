@@ -410,6 +410,7 @@ def _prepare(lens, field, depth, wavelength, kernel_size, pixel_size, model, cen
     checks.material_indices(lens, wl, caller)
     checks.primary_wavelength(lens, caller, "the chief ray's and paraxial pupils'")
     field = checks.field_angles(field, caller, "field")
+    checks.warn_if_radian_fields(field, caller, "field")  # psf(lens, 0.349) for 20°
     if wl.ndim > 1 or wl.size == 0:
         raise ValueError(f"{caller}: wavelength must be a scalar or 1-D (µm) with at least one "
                          f"value, got shape {wl.shape}")
@@ -437,8 +438,7 @@ def psf_info(
 
     Args: as :func:`psf`.
 
-    Returns:
-        A :class:`PSFResult`.
+    Returns: a :class:`PSFResult`.
     """
     field, depth, wl, pixel_size, kernel_size = _prepare(
         lens, field, depth, wavelength, kernel_size, pixel_size, model, center, "psf",

@@ -137,7 +137,16 @@ def pupil_samples(scheme: str, n: int, key=None, dtype=None) -> Float[Array, "m 
 
 
 UNIT_DISC_TOLERANCE = 1e-9
-"""Pupil points may lie this far outside the unit disc (rounding) where it is required."""
+"""Pupil points may lie this far outside the unit disc (rounding) where it is required; more
+in float32 (``unit_disc_limit``)."""
+
+
+def unit_disc_limit(dtype) -> float:
+    """The largest radius accepted for unit-pupil points of ``dtype``: 1 plus
+    ``UNIT_DISC_TOLERANCE`` or a few ulps (``pupil_hexapolar``'s float32 rim points lie at
+    1 + 2.3e-8)."""
+    dt = dtype if jnp.issubdtype(dtype, jnp.floating) else jnp.result_type(float)
+    return 1.0 + max(UNIT_DISC_TOLERANCE, 4 * float(jnp.finfo(dt).eps))
 
 
 def pupil_points(pupil, where: str, *, unit_disc: bool = False) -> Array:
@@ -153,13 +162,13 @@ def pupil_points(pupil, where: str, *, unit_disc: bool = False) -> Array:
         pupil = checks.finite_array(pupil, "pupil", where, "normalised pupil coordinates")
         if unit_disc:
             r2 = jnp.sum(pupil * pupil, -1)
-            pupil = eqx.error_if(pupil, jnp.any(r2 > (1.0 + UNIT_DISC_TOLERANCE) ** 2),
+            pupil = eqx.error_if(pupil, jnp.any(r2 > unit_disc_limit(pupil.dtype) ** 2),
                                  f"{where}: pupil points must lie in the unit disc (Px² + Py² "
                                  f"<= 1, normalised to the entrance pupil)")
     else:
         checks.finite_array(pupil, "pupil", where, "normalised pupil coordinates")
         r = np.sqrt(np.sum(np.asarray(pupil, float) ** 2, -1)) if unit_disc else 0.0
-        if np.any(r > 1.0 + UNIT_DISC_TOLERANCE):
+        if np.any(r > unit_disc_limit(pupil.dtype)):
             # A point outside the disc is no part of the beam.
             raise ValueError(f"{where}: pupil points must lie in the unit disc "
                              f"(Px² + Py² <= 1, normalised to the entrance pupil), got "

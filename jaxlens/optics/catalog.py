@@ -587,10 +587,10 @@ def _search_order(catalogs: str | Iterable[str] | None):
         return everything
     named = [catalogs] if isinstance(catalogs, str) else (
         list(catalogs) if isinstance(catalogs, Iterable) else None)
-    if named is None or not all(isinstance(c, str) for c in named):
+    if not named or not all(isinstance(c, str) for c in named):  # [] listed no glass
         # Before: catalog_names(3) was "'int' object is not iterable".
         raise TypeError(f"catalogs must be a catalog name (str) or a list of them, e.g. "
-                        f"'SCHOTT' or ['SCHOTT', 'CDGM'], got {type(catalogs).__name__} "
+                        f"'SCHOTT' or ['SCHOTT', 'CDGM'] (not []), got {type(catalogs).__name__} "
                         f"{catalogs!r}")
     wanted = [c.upper() for c in named]
     # A user catalog named as a shipped one (a newer SCHOTT.AGF) goes first, not instead.

@@ -643,7 +643,9 @@ RADIAN_FIELD_MIN_DEG = 5
 
 def warn_if_radian_fields(fields, where: str, arg: str = "fields") -> None:
     """Warn when concrete field angles look like radians (see ``RADIAN_FIELD_TOL``): a
-    warning, not a refusal, since 0.1745° may be meant."""
+    warning, not a refusal, since 0.1745° may be meant. Traced angles pass."""
+    if is_traced(fields):
+        return
     a = np.abs(np.asarray(fields, dtype=float)).ravel()
     a = a[a > 0]
     if a.size == 0 or a.max() >= math.pi / 2:

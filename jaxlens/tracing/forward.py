@@ -316,10 +316,12 @@ def _check_upto(lens: Lens, rays: Rays, upto: int | None, newton_iters: int) -> 
                          f"(0-based), got {upto!r}")
 
 
-def _check_switch(reverse_rule, where: str) -> None:
-    """``reverse_rule`` is a static switch: a traced or non-boolean value is refused."""
-    if not isinstance(reverse_rule, (bool, np.bool_)):
-        raise TypeError(f"{where}: reverse_rule must be True or False, got {reverse_rule!r}")
+def _check_switches(where: str, **switches) -> None:
+    """``reverse_rule`` and ``uniform`` are static switches: a traced or non-boolean value is
+    refused (``uniform="no"`` traced as True)."""
+    for arg, v in switches.items():
+        if not isinstance(v, (bool, np.bool_)):
+            raise TypeError(f"{where}: {arg} must be True or False, got {v!r}")
 
 
 def trace_path(
@@ -350,7 +352,7 @@ def trace_path(
         (``optics.coordinates.frame_of(lens, i)``); at a break the rays have not moved.
     """
     _check_upto(lens, rays, upto, newton_iters)
-    _check_switch(reverse_rule, "trace_path")
+    _check_switches("trace_path", reverse_rule=reverse_rule, uniform=uniform)
     rays = _checked(lens, rays, "trace_path")
     states = _trace_states(lens, rays, newton_iters, upto, keep_path=True, uniform=uniform,
                            reverse_rule=reverse_rule)
@@ -442,7 +444,7 @@ def trace(
     """
 
     _check_upto(lens, rays, upto, newton_iters)
-    _check_switch(reverse_rule, "trace")
+    _check_switches("trace", reverse_rule=reverse_rule, uniform=uniform)
     if isinstance(chunk, str) and chunk == "auto":
         chunk = default_chunk()
     if chunk is not None:
