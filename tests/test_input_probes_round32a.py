@@ -147,3 +147,34 @@ def test_an_empty_catalog_list_is_refused():
         jl.catalog_names(catalogs=[])
     with pytest.raises(TypeError, match=r"\(not \[\]\)"):
         jl.get_material("N-BK7", catalogs=())
+
+
+# Round 32a's leftovers in the lead's files (tracing.forward, imaging.psf, imaging.sampling).
+def test_trace_switches_refuse_non_booleans():
+    """Main: ``uniform="no"`` traced as True (a string is truthy)."""
+    lens = zoo.cooke_triplet()
+    rays = jl.sampling.field_rays(lens, 5.0, jl.sampling.pupil_grid(3))
+    for fn in (jl.trace, jl.trace_path):
+        with pytest.raises(TypeError, match="uniform must be True or False"):
+            fn(lens, rays, uniform="no")
+    assert bool(jnp.all(jl.trace_path(lens, rays, uniform=True).valid[-1]))  # control
+
+
+def test_psf_warns_on_a_field_in_radians():
+    """Main: psf(lens, 0.349) (20° in radians) traced a 0.35° PSF without a word, where
+    rms_spot and the wavefront analyses warn."""
+    lens = zoo.cooke_triplet()
+    with pytest.warns(UserWarning, match="look like angles in radians"):
+        jl.psf(lens, float(np.radians(20.0)), pixel_size=0.005, kernel_size=15)
+
+
+def test_opd_takes_float32_rim_points():
+    """Main: pupil_hexapolar's float32 rim points (radius 1 + 2.3e-8) were refused as outside
+    the unit disc ("radius 1")."""
+    lens = zoo.cooke_triplet()
+    p = jl.sampling.pupil_hexapolar(8, jnp.float32)
+    assert float(np.max(np.sum(np.asarray(p, np.float64) ** 2, -1))) > 1.0
+    w = A.opd(lens, 5.0, p)
+    assert w.shape == p.shape[:1] and bool(jnp.isfinite(w).any())
+    with pytest.raises(ValueError, match="unit disc"):  # control: a point well outside
+        A.opd(lens, 5.0, jnp.array([[0.0, 1.001]], jnp.float32))
