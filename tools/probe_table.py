@@ -132,7 +132,8 @@ def run(areas):
 
 
 PACKAGES = ("jaxlens", "jaxlens.analysis", "jaxlens.design", "jaxlens.imaging", "jaxlens.io",
-            "jaxlens.optics", "jaxlens.tracing", "jaxlens.experiments.edof")
+            "jaxlens.optics", "jaxlens.tracing", "jaxlens.zoo", "jaxlens.nets",
+            "jaxlens.experiments.edof")
 """The packages whose exported names ``mention_counts`` counts."""
 
 
