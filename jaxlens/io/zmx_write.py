@@ -25,6 +25,7 @@ from ..optics.surfaces import (
     TiltedPlane,
 )
 from . import lensfile, zmx_surfaces, zmx_system
+from .json_values import write_whole
 from .zmx_common import (
     MARKER,
     MAX_XPOLY_DEGREE,
@@ -560,6 +561,5 @@ def save_zmx(lens: Lens, path: str | os.PathLike, *, model_glass: str = "blank")
     text, gw = dumps(lens, path, model_glass=model_glass)
     folder = os.path.dirname(os.path.abspath(path))
     agfs = gw.write_agf(folder, np.atleast_1d(np.asarray(lens.wavelengths, np.float64)))
-    with open(path, "w", encoding="utf-8", newline="\r\n") as fh:
-        fh.write(text)
+    write_whole(path, text, newline="\r\n")
     return agfs
