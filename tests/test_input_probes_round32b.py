@@ -1,0 +1,252 @@
+"""Bad input, round 32b (tools/audit32b_probe.py): what a user types or hands over. One test
+per class of gap fixed; each names what main did with the input: an option dropped without
+a word, a table that mixed specs, a file cut by an interrupted write, a late failure."""
+
+import builtins
+import importlib.util
+import json
+import pathlib
+import shutil
+
+import numpy as np
+import pytest
+
+import jaxlens as jl
+
+ROOT = pathlib.Path(__file__).resolve().parents[1]
+COOKE = ROOT / "jaxlens" / "data" / "lenses" / "cooke_triplet.json"
+SEED0 = ROOT / "experiments" / "classical" / "designs" / "seed_0.zmx"
+
+
+class Started(Exception):
+    """Raised where a command's work would begin: its checks have passed."""
+
+
+def started(*a, **k):
+    raise Started
+
+
+@pytest.fixture
+def classical(monkeypatch, capsys):
+    """``classical.main`` up to its work: (exit code, last stderr line), or "started"."""
+    from jaxlens.experiments import classical as C
+
+    monkeypatch.setattr(C, "run_design", started)
+    monkeypatch.setattr(C, "run_ablation", started)
+
+    def go(*argv):
+        try:
+            code = C.main(list(argv))
+        except Started:
+            return "started"
+        return code, capsys.readouterr().err.strip().splitlines()[-1]
+    return go
+
+
+@pytest.mark.parametrize("extra, ignored", [
+    (["--seeds", "20"], "--seeds"), (["--seed-list", "3,4"], "--seed-list"),
+    (["--recipe", "strong"], "--recipe"), (["--no-mask"], "--no-mask"),
+    (["--loss", "image"], "--loss"), (["--tolerance-trials", "50"], "--tolerance-trials")])
+def test_classical_ablation_refuses_the_options_its_columns_override(classical, tmp_path,
+                                                                     extra, ignored):
+    """Main: ``--ablation --seeds 20`` designed --ablation-seeds' 20 starts per column (the
+    default, not the 20 asked for: the same here, but ``--seeds 5`` also gave 20), and the
+    recipe, mask, loss and tolerancing options were dropped; the columns fix them."""
+    code, err = classical("--ablation", "--ablation-out", str(tmp_path / "ab"), *extra)
+    assert code == 2 and f"{ignored} would be ignored with --ablation" in err, err
+    assert classical("--ablation", "--ablation-out", str(tmp_path / "ab2"),
+                     "--ablation-seeds", "3") == "started"
+
+
+def test_classical_no_curriculum_refuses_a_curriculum_start(classical, tmp_path):
+    """Main: ``--no-curriculum --fov-start 40`` designed at the full spec; the start, which
+    only the sine path reads, was dropped."""
+    code, err = classical("--out", str(tmp_path / "r"), "--no-curriculum", "--fov-start", "40")
+    assert code == 2 and "--fov-start would be ignored with --no-curriculum" in err, err
+    assert classical("--out", str(tmp_path / "r2"), "--no-curriculum") == "started"
+
+
+def test_classical_ablation_refuses_a_column_of_another_spec_or_cut_short(classical, tmp_path):
+    """Main: a column designed at ``--fov 60`` went into this run's (80.8°) table beside its
+    own, and a column cut by an interrupted write failed the table after this run's designs
+    (a JSONDecodeError). Both are refused before the designs; the shipped folder passes."""
+    from jaxlens.experiments.classical import ABLATION_COLUMNS
+
+    shipped = json.loads((ROOT / "experiments" / "classical" / "table1.json").read_text())
+    other = tmp_path / "other"
+    (other / "columns").mkdir(parents=True)
+    (other / "table1.json").write_text(json.dumps({"spec": dict(shipped["spec"], fov=60.0)}))
+    (other / "columns" / "baseline.json").write_text(json.dumps(
+        {"command": "x", "switches": dict(ABLATION_COLUMNS)["baseline"], "seeds": [0]}))
+    code, err = classical("--ablation", "--ablation-out", str(other), "--columns", "+curriculum")
+    assert code == 2 and "baseline.json is a column of another spec (fov 60.0, this run 80.8" \
+        in err, err
+    cut = tmp_path / "cut"
+    (cut / "columns").mkdir(parents=True)
+    (cut / "columns" / "baseline.json").write_text('{"command": "python -m jaxlens.exp')
+    code, err = classical("--ablation", "--ablation-out", str(cut), "--columns", "+curriculum")
+    assert code == 2 and "baseline.json is not a readable ablation column" in err, err
+    copy = tmp_path / "shipped"
+    shutil.copytree(ROOT / "experiments" / "classical" / "columns", copy / "columns")
+    shutil.copy(ROOT / "experiments" / "classical" / "table1.json", copy)
+    assert classical("--ablation", "--ablation-out", str(copy), "--columns", "+recipe",
+                     "--overwrite") == "started"
+
+
+def test_ablation_column_is_written_whole(tmp_path, monkeypatch):
+    """A column interrupted mid-write leaves no column file (the table reads only whole
+    ones)."""
+    from jaxlens.experiments import ablation_table as T
+
+    (tmp_path / "columns").mkdir()
+
+    def cut(*a, **k):
+        raise KeyboardInterrupt
+    monkeypatch.setattr(T.os, "replace", cut)
+    with pytest.raises(KeyboardInterrupt):
+        T.write_column(str(tmp_path), "+both", {"command": "c", "switches": {}})
+    assert not (tmp_path / "columns" / "plus_both.json").exists()
+
+
+def _edof_check(tmp_path, *argv):
+    from jaxlens.experiments.edof import cli
+
+    return cli.check_args(cli.build_parser().parse_args(["--out", str(tmp_path / "run"),
+                                                         *argv]))
+
+
+@pytest.mark.parametrize("argv, match", [
+    (["--hold-focus", "--lenses", "cubic"], r"--hold-focus \(the hybrid lens's\) would be "
+                                            r"ignored: --lenses 'cubic'"),
+    (["--cubic-floor", "0.5", "--lenses", "classical,hybrid"], r"--cubic-floor \(the cubic "
+                                                               r"lens's\) would be ignored"),
+])
+def test_edof_refuses_an_option_of_a_lens_it_does_not_train(tmp_path, argv, match):
+    """Main: the option was dropped (``LENS_ONLY``: only its lens's training reads it)."""
+    from jaxlens.experiments.runfolder import UsageError
+
+    with pytest.raises(UsageError, match=match):
+        _edof_check(tmp_path, *argv)
+    _edof_check(tmp_path, "--hold-focus", "--lenses", "hybrid")
+
+
+def test_edof_test_images_validation_and_sizes(tmp_path):
+    """Main: ``--validation --test-dir D`` scored D's images (the flag dropped), and a test
+    image smaller than one crop gave no crop, unnamed; a grey+alpha image failed with its
+    shape and no file name."""
+    from PIL import Image
+
+    from jaxlens.experiments.edof import scenes
+    from jaxlens.experiments.runfolder import UsageError
+
+    tiny = tmp_path / "tiny"
+    tiny.mkdir()
+    Image.fromarray(np.zeros((1, 1, 3), np.uint8)).save(tiny / "one.png")
+    with pytest.raises(UsageError, match=r"--validation scores skimage's validation images "
+                                         r"and --test-dir"):
+        _edof_check(tmp_path, "--validation", "--test-dir", str(tiny))
+    with pytest.raises(UsageError, match=r"--test-dir: scenes: the image .*one\.png is 1x1 "
+                                         r"pixels, smaller than one 256x256 test crop"):
+        _edof_check(tmp_path, "--test-dir", str(tiny))
+    la = tmp_path / "la"
+    la.mkdir()
+    grey = np.arange(64, dtype=np.uint8).reshape(8, 8)
+    Image.fromarray(np.dstack([grey, np.full_like(grey, 128)]), "LA").save(la / "a.png")
+    (img,) = scenes.load_images(folder=la)
+    assert img.shape == (8, 8, 3) and np.array_equal(img[..., 0], img[..., 2])
+
+
+def test_edof_design_names_the_total_track_option(tmp_path, capsys, monkeypatch):
+    """Main: "DesignSpec: total_track 7000 mm is 1.37e+03 times the focal length" named no
+    option (the track typed in µm)."""
+    from jaxlens.experiments.edof import design
+
+    monkeypatch.setattr(design, "design_classical", started)
+    with pytest.raises(SystemExit) as e:
+        design.main(["--total-track", "7000", "--out", str(tmp_path / "l.json"),
+                     "--record-dir", str(tmp_path / "rec")])
+    err = capsys.readouterr().err.strip().splitlines()[-1]
+    assert e.value.code == 2 and "error: --total-track 7000 mm is" in err, err
+
+
+def test_grad_levers_refuses_a_flag_that_is_no_xla_flag(capsys, monkeypatch):
+    """Main: ``--flag nosuch`` ran every other setting first and then failed in its child
+    process."""
+    import benchmarks.grad_levers as GL
+
+    monkeypatch.setattr(GL, "measure", started)
+    monkeypatch.setattr(GL.subprocess, "run", started)
+    with pytest.raises(SystemExit) as e:
+        GL.main(["--flag", "nosuch"])
+    assert e.value.code == 2
+    assert "'nosuch' is not an XLA flag" in capsys.readouterr().err
+    with pytest.raises(Started):
+        GL.main(["--flag=--xla_cpu_use_fusion_emitters=false"])
+
+
+def test_zmx_config_reference_refuses_before_optiland(capsys):
+    """Main: ``--expand`` of a file without an MNUM section ended in StopIteration, and a
+    missing file in optiland's import or its reader."""
+    spec = importlib.util.spec_from_file_location("zcr", ROOT / "tools" / "zmx_config_reference.py")
+    zcr = importlib.util.module_from_spec(spec)
+    spec.loader.exec_module(zcr)
+    for argv, words in ((["--expand", str(SEED0)], "MNUM"), ([str(COOKE)], "not a .zmx"),
+                        (["nope.zmx"], "no such file")):
+        with pytest.raises(SystemExit) as e:
+            zcr.main(argv)
+        assert e.value.code == 2 and words in capsys.readouterr().err
+
+
+class _CutWriter:
+    """A file that takes half of what is written, then is interrupted (Ctrl-C)."""
+
+    def __init__(self, f):
+        self.f = f
+
+    def write(self, text):
+        self.f.write(text[: len(text) // 2])
+        self.f.flush()
+        raise KeyboardInterrupt
+
+    def __enter__(self):
+        return self
+
+    def __exit__(self, *a):
+        self.f.close()
+
+
+def _cut_open(path, mode="r", *a, **k):
+    f = builtins.open(path, mode, *a, **k)
+    return _CutWriter(f) if "w" in mode else f
+
+
+@pytest.mark.parametrize("src, name", [(COOKE, "lens.json"), (SEED0, "lens.zmx")])
+def test_an_interrupted_save_keeps_the_lens_it_would_replace(tmp_path, monkeypatch, src, name):
+    """Main: ``save`` wrote over the file in place; Ctrl-C mid-write left half a lens (the
+    old one lost; a ``.zmx`` cut at a surface's end read as a shorter lens)."""
+    from jaxlens.io import json_values, lensfile, zmx_write
+
+    path = tmp_path / name
+    shutil.copy(src, path)
+    before = path.read_bytes()
+    lens = jl.load(COOKE)
+    for mod in (lensfile, zmx_write, json_values):
+        monkeypatch.setattr(mod, "open", _cut_open, raising=False)
+    with pytest.raises(KeyboardInterrupt):
+        jl.save(lens, path)
+    monkeypatch.undo()
+    assert path.read_bytes() == before
+    assert [p.name for p in tmp_path.iterdir()] == [name]  # no partial file left
+
+
+def test_a_json_lens_cut_short_or_empty_says_so(tmp_path):
+    """Main: "not valid JSON: Unterminated string starting at" for a file cut by an
+    interrupted write, "Expecting value" for an empty one."""
+    text = COOKE.read_text()
+    (tmp_path / "cut.json").write_text(text[: len(text) // 2])
+    with pytest.raises(ValueError, match=r"cut\.json:\d+: not valid JSON: .*; the file does "
+                                         r"not end in '\}' \(cut short\?\)"):
+        jl.load(tmp_path / "cut.json")
+    (tmp_path / "empty.json").write_text("")
+    with pytest.raises(ValueError, match=r"empty\.json:1: not valid JSON: .*; the file is empty"):
+        jl.load(tmp_path / "empty.json")
