@@ -7,6 +7,7 @@ import importlib.util
 import json
 import pathlib
 import shutil
+import sys
 
 import numpy as np
 import pytest
@@ -250,3 +251,29 @@ def test_a_json_lens_cut_short_or_empty_says_so(tmp_path):
     (tmp_path / "empty.json").write_text("")
     with pytest.raises(ValueError, match=r"empty\.json:1: not valid JSON: .*; the file is empty"):
         jl.load(tmp_path / "empty.json")
+
+
+def test_make_agf_refuses_an_out_without_the_hand_kept_catalogs(tmp_path, capsys, monkeypatch):
+    """Main: ``make_agf.py DB --out EMPTY`` rewrote the OHARA, HOYA, HIKARI and SUMITA
+    catalogs, then stopped at SCHOTT with a FileNotFoundError (its glasses are added to the
+    hand-kept SCHOTT.agf); a maker missing from the database stopped it likewise."""
+    spec = importlib.util.spec_from_file_location("make_agf", ROOT / "tools" / "make_agf.py")
+    make_agf = importlib.util.module_from_spec(spec)
+    monkeypatch.setitem(sys.modules, "make_agf", make_agf)  # its dataclass looks itself up
+    spec.loader.exec_module(make_agf)
+    db = tmp_path / "db"
+    for maker in make_agf.MAKERS:
+        (db / "data-nk" / "glass" / maker).mkdir(parents=True)
+    out = tmp_path / "out"
+    out.mkdir()
+    with pytest.raises(SystemExit) as e:
+        make_agf.main([str(db), "--out", str(out)])
+    assert e.value.code == 2 and "has no SCHOTT.agf" in capsys.readouterr().err
+    assert list(out.iterdir()) == []  # nothing written
+    for kept in ("SCHOTT.agf", "CDGM.agf"):
+        (out / kept).write_text("CC hand-kept\n")
+    shutil.rmtree(db / "data-nk" / "glass" / "cdgm")
+    with pytest.raises(SystemExit) as e:
+        make_agf.main([str(db), "--out", str(out)])
+    assert e.value.code == 2 and "no folder for 'cdgm'" in capsys.readouterr().err
+    assert sorted(p.name for p in out.iterdir()) == ["CDGM.agf", "SCHOTT.agf"]
