@@ -277,3 +277,24 @@ def test_make_agf_refuses_an_out_without_the_hand_kept_catalogs(tmp_path, capsys
         make_agf.main([str(db), "--out", str(out)])
     assert e.value.code == 2 and "no folder for 'cdgm'" in capsys.readouterr().err
     assert sorted(p.name for p in out.iterdir()) == ["CDGM.agf", "SCHOTT.agf"]
+
+
+def test_export_reevaluation_refuses_a_json_it_would_write_over(tmp_path, capsys):
+    """Main: ``--json my_lens.json`` (or one of the inputs) replaced the lens by the records,
+    ``--json FOLDER`` failed with IsADirectoryError after every file, and a folder without
+    lenses wrote an empty record without a word."""
+    spec = importlib.util.spec_from_file_location("export_reevaluation",
+                                                  ROOT / "tools" / "export_reevaluation.py")
+    er = importlib.util.module_from_spec(spec)
+    spec.loader.exec_module(er)
+    lens = tmp_path / "my_lens.json"
+    shutil.copy(COOKE, lens)
+    (tmp_path / "empty").mkdir()
+    for argv, words in (([str(SEED0), "--json", str(lens)], "not an export_reevaluation record"),
+                        ([str(lens), "--json", str(lens)], "one of the files to evaluate"),
+                        ([str(SEED0), "--json", str(tmp_path)], "is a folder"),
+                        ([str(tmp_path / "empty")], "no .zmx or .json file")):
+        with pytest.raises(SystemExit) as e:
+            er.main(argv)
+        assert e.value.code == 2 and words in capsys.readouterr().err, argv
+    assert lens.read_bytes() == COOKE.read_bytes()

@@ -222,6 +222,24 @@ def bench_tools():
     probe("aim_compile_size --aims 0", tool("aim_compile_size.py", SEED0, "--aims", "0"), "--aims")
     probe("make_agf --out over a lens file", tool("make_agf.py", os.path.join(TMP, "nozmx"), "--out", COOKE), "--out")
     probe("export_reevaluation a missing path", tool("export_reevaluation.py", os.path.join(TMP, "nope")), "nope")
+    import shutil
+    lens_copy = os.path.join(TMP, "my lens.json")
+    shutil.copy(COOKE, lens_copy)
+    before = pathlib.Path(lens_copy).read_text()
+
+    def er(*a):
+        def go():
+            try:
+                return tool("export_reevaluation.py", *a, python=OPTILAND_PYTHON if os.path.exists(OPTILAND_PYTHON) else None)()
+            finally:
+                if pathlib.Path(lens_copy).read_text() != before:
+                    print("the lens file was written over", file=sys.stderr)
+                    shutil.copy(COOKE, lens_copy)
+        return go
+    probe("export_reevaluation --json a lens file (written over)", er(SEED0, "--json", lens_copy), "--json", "not an export_reevaluation record")
+    probe("export_reevaluation --json one of its inputs", er(lens_copy, "--json", lens_copy), "--json", "one of the files")
+    probe("export_reevaluation --json a folder", er(SEED0, "--json", TMP), "--json", "folder")
+    probe("export_reevaluation a folder without lenses", er(os.path.join(TMP, "nozmx")), "no .zmx or .json")
 
 
 # ----------------------------------------------------------------------------- .zmx files
