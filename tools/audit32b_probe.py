@@ -1,7 +1,226 @@
 # ruff: noqa: E501, B023, E731
-"""Round-32b bad-input probes: what a user types or hands over (not the Python API).
+"""Round-32b bad-input probes: what a user types or hands over, not the Python API (round
+32a probes that): the table of ``tools/audit22_probe.py`` (probe | outcome | what happened)
+for every command line (``python -m jaxlens report``, ``jaxlens.experiments.classical``,
+``.tolerance``, ``.edof`` and ``.edof.design``/``.merge`` up to their work, ``python -m
+benchmarks`` and its modules, the ``tools/*.py`` a user runs), for the options rounds 29-31
+named least (``--recipe``, ``--no-curriculum``, ``--no-mask``, ``--loss``, ``--hold-focus``,
+``--validation``, ``--depth-sampling``, ``--no-small-step-check``, ``--flag``, ``--dtype``,
+``--expand``, ``--resave``/``--json``: 0-1 mentions each in the probe and test files), for
+files (the JSON lens format, hand-edited ``.zmx`` lines, AGF catalogs, scene images) and
+for writes interrupted by Ctrl-C.
 
-DOCSTRING_PLACEHOLDER
+Gaps found and fixed:
+1. ``classical --ablation`` dropped without a word the options its columns override:
+   ``--seeds 20`` (the columns ran --ablation-seeds' starts), ``--seed-list``, ``--recipe``,
+   ``--no-mask``/``--no-curriculum``/``--no-regularize``, ``--loss image``, ``--out``,
+   ``--no-plots``/``--no-render`` and ``--tolerance-trials``/``-threshold``; and
+   ``--no-curriculum`` dropped ``--fov-start``/``--fnum-start`` (only the sine path reads
+   them). Refused, naming the option (``_no_ignored_options``).
+2. ``classical --ablation`` into an ``--ablation-out`` holding a column of another spec
+   (``--fov 60``) put it into this run's 80.8° table, and a column cut by an interrupted
+   write failed the table after this run's designs (JSONDecodeError). Both refused before
+   the designs, naming the file (and the differing spec fields); each column now records
+   its spec and is written whole (a temporary file renamed). The table code moved to
+   ``jaxlens/experiments/ablation_table.py`` (classical.py was at 800 lines; now 744).
+3. ``jaxlens.save`` wrote over a ``.json``/``.zmx`` lens in place: a Ctrl-C mid-write lost
+   the lens it replaced (a half file; a ``.zmx`` cut at a block's end reads as a shorter
+   lens). Now written whole or not at all (``json_values.write_whole``). A JSON lens cut
+   short or empty says so ("the file does not end in '}' (cut short?)", "the file is
+   empty"; before: "Unterminated string starting at", "Expecting value").
+4. ``edof``: ``--hold-focus``/``--cubic-floor``/``--hybrid-floor`` without their lens in
+   ``--lenses`` (dropped: ``LENS_ONLY``), ``--validation`` with ``--test-dir`` (the folder
+   won), a ``--test-dir`` image smaller than one test crop (no crop, unnamed): refused
+   before the run. A grey+alpha image is read as grey (before: "expected a grey or RGB
+   image, got shape (8, 8, 2)", no file named).
+5. ``edof.design --total-track 7000`` (µm) named ``total_track`` (the spec's field): now
+   ``--total-track``.
+6. ``benchmarks.grad_levers --flag nosuch`` ran the other settings, then failed in its
+   child: refused (an XLA flag reads ``--xla_<name>=<value>``).
+7. ``tools/export_reevaluation.py --json F`` wrote over a lens file or one of its own inputs
+   (the records replaced the lens), ``--json FOLDER`` failed with IsADirectoryError after
+   every file, and a folder without lenses wrote an empty record: refused before the work.
+8. ``tools/zmx_config_reference.py``: a missing or ``.json`` file, and ``--expand`` of a file
+   without an MNUM section (StopIteration), refused before optiland runs.
+9. ``tools/make_agf.py DB --out EMPTY`` rewrote four catalogs, then stopped at SCHOTT with a
+   FileNotFoundError (SCHOTT's glasses are added to the hand-kept SCHOTT.agf); a maker
+   missing from the database likewise. Refused before any write; catalogs written whole.
+
+Controls of note: ``UNIT IN`` (converted to mm), ``FTYP`` announcing 4 fields with 5 YFLN
+values (Zemax shows 4), ``VERS`` twice, UTF-16 BE without a BOM; a JSON material
+``{"nd": 1.62}`` (documented: no dispersion), ``"n-sk16"``; an AGF ``LD 0.3 2500`` (a far-
+infrared maximum is allowed), a glass given twice in one AGF (documented: the later
+wins); ``render`` of a 1x1 scene (a uniform scene); ``--no-plots --no-render`` (the same
+run); ``--fov -0`` is refused, ``--tilt -0`` is off.
+
+Not fixed (not this round's modules, or left as is): an EDoF checkpoint is two files
+replaced one after the other (``train.Trainer.save``): a stop between the two renames
+leaves a new ``.eqx`` beside the old ``.json``, which ``--resume`` trusts (the training
+code; a digest of the ``.eqx`` in the ``.json``, checked on load, would refuse it);
+``load_agf`` keeps the later of two records of one name (documented; no shipped catalog
+has one; jaxlens/optics/catalog.py is at 799 lines).
+
+Before (main at f920cd8, an archive) and after (branch audit32b), the same probes,
+``PYTHONPATH=<tree> python tools/audit32b_probe.py`` from the repository, 148 probes, about
+a minute each way (the .zmx_config_reference and export_reevaluation rows use
+/work/optiland_venv's Python where it exists):
+    before: clear error: 81, crash: 8, ok: 38, silent wrong: 18, vague error: 3
+    after:  clear error: 107, ok: 41
+
+A row marked "(warns)" counts a warning as the answer; a command-line row "silent wrong"
+with "started" or "accepted" passed every check and began its work (the probe stops it
+there). A "Ctrl-C mid-write" row interrupts ``save`` halfway through its write and loads
+the file again.
+
+Probe (before -> after):
+    classical --ablation --seeds 20 (ablation takes --ablation-seeds)                   silent wrong -> clear error
+    classical --ablation --seed-list 3,4                                                silent wrong -> clear error
+    classical --ablation --recipe strong (columns fix the recipe)                       silent wrong -> clear error
+    classical --ablation --no-mask (columns set the mask)                               silent wrong -> clear error
+    classical --ablation --no-curriculum                                                silent wrong -> clear error
+    classical --ablation --out DIR (designs go to --ablation-out)                       silent wrong -> clear error
+    classical --ablation --tolerance-trials 50 (no tolerancing)                         silent wrong -> clear error
+    classical --ablation --ablation-seeds 3 (control)                                   ok           -> ok
+    classical --no-curriculum --fov-start 40                                            silent wrong -> clear error
+    classical --no-curriculum --fnum-start 4                                            silent wrong -> clear error
+    classical --no-curriculum (control)                                                 ok           -> ok
+    classical --no-plots --no-render (control: redundant, the same run)                 ok           -> ok
+    classical --fov -0 (negative zero)                                                  clear error  -> clear error
+    classical --fnum inf                                                                clear error  -> clear error
+    classical --columns '' (empty list)                                                 clear error  -> clear error
+    classical --out 'a folder with spaces' (control)                                    ok           -> ok
+    classical --ablation --columns +curriculum beside a --fov 60 column                 silent wrong -> clear error
+    classical --ablation --columns +recipe --overwrite over the shipped table (control) ok           -> ok
+    classical --ablation beside a column cut mid-write (Ctrl-C)                         silent wrong -> clear error
+    tolerance --tilt -0 (negative zero: off; control)                                   ok           -> ok
+    tolerance --decenter inf                                                            clear error  -> clear error
+    tolerance --no-small-step-check (control)                                           ok           -> ok
+    tolerance an empty design file                                                      clear error  -> clear error
+    report --wavelengths 587.6 (nm, read as nm; control)                                ok           -> ok
+    report --wavelengths 0                                                              clear error  -> clear error
+    report --fields -0 (control)                                                        ok           -> ok
+    report --fields 1.2 rad? 95 deg                                                     clear error  -> clear error
+    report a lens path with spaces (control)                                            ok           -> ok
+    report a .ZMX (upper case; control)                                                 ok           -> ok
+    report a lens named .txt                                                            clear error  -> clear error
+    report --float32 after the command                                                  clear error  -> clear error
+    report --plot DIR holding another lens's figures (control: kept)                    ok           -> ok
+    edof.design --elements 0                                                            clear error  -> clear error
+    edof.design --total-track 7000 (µm)                                                 vague error  -> clear error
+    edof.design --scale 0                                                               clear error  -> clear error
+    edof.design --seeds 0,0                                                             clear error  -> clear error
+    edof.design --seeds ''                                                              clear error  -> clear error
+    edof.merge one run given twice                                                      clear error  -> clear error
+    edof --depth-sampling dioptric (control)                                            ok           -> ok
+    edof --hold-focus --lenses cubic (no hybrid to hold)                                silent wrong -> clear error
+    edof --validation --test-dir DIR (which images?)                                    silent wrong -> clear error
+    edof --test-dir DIR of a 300x300 image (control)                                    ok           -> ok
+    edof --max-crops 10**9                                                              ok           -> ok
+    edof --tile 10**5 (memory)                                                          clear error  -> clear error
+    edof --batch 10**6 (memory)                                                         clear error  -> clear error
+    edof --steps 10**9 (hours)                                                          clear error  -> clear error
+    edof --time-limit nan                                                               clear error  -> clear error
+    edof --photons inf                                                                  clear error  -> clear error
+    edof --read-noise 2 (percent)                                                       clear error  -> clear error
+    benchmarks --smoke --full                                                           clear error  -> clear error
+    benchmarks --only nosuch                                                            clear error  -> clear error
+    benchmarks --counts 0                                                               clear error  -> clear error
+    benchmarks --lenses nosuch                                                          clear error  -> clear error
+    render_speed --spp 10**7                                                            clear error  -> clear error
+    render_speed --repeats 0                                                            clear error  -> clear error
+    render_speed --size 1e4 (not whole)                                                 clear error  -> clear error
+    vjp_probe --dtype float16                                                           clear error  -> clear error
+    grad_levers --flag nosuch                                                           silent wrong -> clear error
+    grad_levers --chunks 0                                                              clear error  -> clear error
+    grad_levers --rays 0                                                                clear error  -> clear error
+    check_corpus --strict a folder without .zmx                                         clear error  -> clear error
+    zmx_config_reference a missing file                                                 crash        -> clear error
+    zmx_config_reference a .json lens                                                   crash        -> clear error
+    zmx_config_reference --expand a single-configuration file                           crash        -> clear error
+    aim_compile_size --aims 0                                                           clear error  -> clear error
+    make_agf --out over a lens file                                                     clear error  -> clear error
+    export_reevaluation a missing path                                                  clear error  -> clear error
+    export_reevaluation --json a lens file (written over)                               silent wrong -> clear error
+    export_reevaluation --json one of its inputs                                        silent wrong -> clear error
+    export_reevaluation --json a folder                                                 crash        -> clear error
+    export_reevaluation a folder without lenses                                         silent wrong -> clear error
+    zmx SURF 3 given twice (SURF 4 renumbered 3)                                        clear error  -> clear error
+    zmx SURF numbers out of order (3 and 4 swapped)                                     clear error  -> clear error
+    zmx SURF 5 missing (4 then 6)                                                       clear error  -> clear error
+    zmx CURV with a trailing unit (0.1mm)                                               clear error  -> clear error
+    zmx DISZ 2,5 (decimal comma)                                                        clear error  -> clear error
+    zmx DISZ nan                                                                        clear error  -> clear error
+    zmx DISZ -0 (control)                                                               ok           -> ok
+    zmx a SURF line with no number                                                      clear error  -> clear error
+    zmx a binary file (PNG bytes)                                                       clear error  -> clear error
+    zmx cut mid-line (last line 'CURV 1.2')                                             clear error  -> clear error
+    zmx UNIT MM X (control)                                                             ok           -> ok
+    zmx UNIT IN (control: inches converted to mm)                                       ok           -> ok
+    zmx UNIT mm (lower case)                                                            ok           -> ok
+    zmx WAVM 2 587.6 (nm, in µm column)                                                 clear error  -> clear error
+    zmx STOP on two surfaces                                                            clear error  -> clear error
+    zmx PWAV 4 of 3 wavelengths                                                         clear error  -> clear error
+    zmx ENPD 0                                                                          clear error  -> clear error
+    zmx ENPD -2.25                                                                      clear error  -> clear error
+    zmx FTYP 6 fields, YFLN lists 5 (warns)                                             clear error  -> clear error
+    zmx FTYP 4 fields, YFLN lists 5 (control: Zemax shows FTYP's 4)                     ok           -> ok
+    zmx YFLN given twice                                                                clear error  -> clear error
+    zmx WAVM 2 given twice                                                              clear error  -> clear error
+    zmx FWGN 1 1 (2 weights for 5 fields)                                               clear error  -> clear error
+    zmx TYPE EVENASP (misspelt)                                                         clear error  -> clear error
+    zmx PARM 0 on an asphere                                                            clear error  -> clear error
+    zmx PARM 99 on an asphere                                                           clear error  -> clear error
+    zmx GCAT NOTACAT (warns)                                                            clear error  -> clear error
+    zmx UTF-16 BE without a BOM (control)                                               ok           -> ok
+    zmx VERS given twice (control: harmless)                                            ok           -> ok
+    zmx a .zmx file that is JSON                                                        clear error  -> clear error
+    json lens file that is a .zmx                                                       clear error  -> clear error
+    lens file NaN thickness (JSON NaN literal)                                          clear error  -> clear error
+    lens file Infinity radius on a middle surface (control: flat)                       ok           -> ok
+    lens file -0 thickness (control)                                                    ok           -> ok
+    lens file cut mid-write (Ctrl-C)                                                    vague error  -> clear error
+    lens file empty                                                                     vague error  -> clear error
+    lens file a list, not an object                                                     clear error  -> clear error
+    lens file surfaces []                                                               clear error  -> clear error
+    lens file thickness '5 mm' (a unit)                                                 clear error  -> clear error
+    lens file thickness '5,0' (decimal comma)                                           clear error  -> clear error
+    lens file wavelengths [] (empty)                                                    clear error  -> clear error
+    lens file is_stop on two surfaces                                                   clear error  -> clear error
+    lens file aperture epd and fnum both                                                clear error  -> clear error
+    lens file primary_wavelength_nm 550 (not listed)                                    clear error  -> clear error
+    lens file primary_wavelength_nm 0.5876 (µm in the nm key)                           clear error  -> clear error
+    lens file format jaxlens.lens/2 (a newer format)                                    clear error  -> clear error
+    lens file radius 0                                                                  clear error  -> clear error
+    lens file the object surface second                                                 clear error  -> clear error
+    lens file material {nd: 1.62} without vd (control: documented, no dispersion)       ok           -> ok
+    lens file material 'n-sk16' (lower case; control)                                   ok           -> ok
+    lens file fields values []                                                          clear error  -> clear error
+    lens file fields 95 deg                                                             clear error  -> clear error
+    lens file semi_diameter -1                                                          clear error  -> clear error
+    agf a glass without its CD line                                                     clear error  -> clear error
+    agf formula 14 (Zemax defines none)                                                 clear error  -> clear error
+    agf LD in nm (300 2500)                                                             clear error  -> clear error
+    agf LD 0.3 2500 (max in nm; control: a far-infrared maximum is allowed)             ok           -> ok
+    agf a glass given twice (control: documented, the later wins)                       ok           -> ok
+    agf CD with a comma decimal                                                         clear error  -> clear error
+    agf CD cut short (2 of 6 Sellmeier terms)                                           clear error  -> clear error
+    agf nd 0 Vd 0 (control: Zemax allows)                                               ok           -> ok
+    agf as written (control)                                                            ok           -> ok
+    agf UTF-16 without BOM (control)                                                    ok           -> ok
+    read_png 16-bit grey (control)                                                      ok           -> ok
+    read_png palette (control)                                                          ok           -> ok
+    read_png RGBA half transparent (control: alpha dropped, documented)                 ok           -> ok
+    read_png 1x1 (control)                                                              ok           -> ok
+    edof load_images a grey+alpha PNG                                                   crash        -> ok
+    render a grey PNG as read ([H, W])                                                  clear error  -> clear error
+    render a PNG's 8-bit codes (not to_linear)                                          clear error  -> clear error
+    render a 1x1 scene on an 8x8 sensor (control: a uniform scene)                      ok           -> ok
+    edof --test-dir holding a 1x1 image                                                 silent wrong -> clear error
+    edof load_images a 16-bit grey PNG (control)                                        ok           -> ok
+    edof load_images a CMYK JPEG                                                        ok           -> ok
+    jl.save over a .json lens, Ctrl-C mid-write (then load)                             crash        -> ok
+    jl.save over a .zmx lens, Ctrl-C mid-write (then load)                              crash        -> ok
+    make_agf --out without the hand-kept SCHOTT.agf                                     crash        -> clear error
 """
 
 import json
@@ -348,6 +567,9 @@ def agf_files():
     probe("agf a glass without its CD line", agf(AGF_OK.replace(AGF_OK.splitlines()[3] + "\n", ""), "nocd.agf"), "CD")
     probe("agf formula 14 (Zemax defines none)", agf(AGF_OK.replace("NM G1 2", "NM G1 14"), "f14.agf"), "14")
     probe("agf LD in nm (300 2500)", agf(AGF_OK.replace("LD 0.3 2.5", "LD 300 2500"), "ldnm.agf"), "LD")
+    probe("agf LD 0.3 2500 (max in nm; control: a far-infrared maximum is allowed)", agf(AGF_OK.replace("LD 0.3 2.5", "LD 0.3 2500"), "ldmax.agf"), good=True)
+    second = AGF_OK.replace("CC test catalog\n", "").replace("LD 0.3 2.5", "LD 0.5 1.0")
+    probe("agf a glass given twice (control: documented, the later wins)", lambda: (pathlib.Path(TMP, "dup.agf").write_text(AGF_OK + second), CAT.load_agf(os.path.join(TMP, "dup.agf"))["G1"].wavelength_range)[1], good=True)
     probe("agf CD with a comma decimal", agf(AGF_OK.replace("1.03961212", "1,03961212"), "comma.agf"), "CD")
     probe("agf CD cut short (2 of 6 Sellmeier terms)", agf(AGF_OK.replace(AGF_OK.splitlines()[3], "CD 1.03961212 0.00600069867"), "short.agf"), "CD")
     probe("agf nd 0 Vd 0 (control: Zemax allows)", agf(AGF_OK.replace("1.5168 64.17", "0 0"), "nd0.agf"), good=True)
