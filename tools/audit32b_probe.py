@@ -62,7 +62,7 @@ has one; jaxlens/optics/catalog.py is at 799 lines).
 
 Before (main at f920cd8, an archive) and after (branch audit32b), the same probes,
 ``PYTHONPATH=<tree> python tools/audit32b_probe.py`` from the repository, 148 probes, about
-a minute each way (the .zmx_config_reference and export_reevaluation rows use
+a minute each way (the zmx_config_reference and export_reevaluation rows use
 /work/optiland_venv's Python where it exists):
     before: clear error: 81, crash: 8, ok: 38, silent wrong: 18, vague error: 3
     after:  clear error: 107, ok: 41
