@@ -298,3 +298,16 @@ def test_export_reevaluation_refuses_a_json_it_would_write_over(tmp_path, capsys
             er.main(argv)
         assert e.value.code == 2 and words in capsys.readouterr().err, argv
     assert lens.read_bytes() == COOKE.read_bytes()
+
+
+def test_edof_seeds_refuse_an_empty_entry(capsys):
+    """Main: ``--seeds 0,,1`` ran seeds 0 and 1 (an empty entry dropped: a seed typed
+    between them lost), as ``classical --materials E48R,,OKP4`` once did."""
+    from jaxlens.experiments.edof import cli
+
+    with pytest.raises(SystemExit) as e:
+        cli.build_parser().parse_args(["--seeds", "0,,1"])
+    assert e.value.code == 2
+    assert "--seeds: must be comma-separated whole numbers without an empty one, got '0,,1'" \
+        in capsys.readouterr().err
+    assert cli.build_parser().parse_args(["--seeds", "0, 1,2"]).seeds == (0, 1, 2)

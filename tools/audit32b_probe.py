@@ -391,6 +391,7 @@ def edof_cli():
     probe("edof.design --seeds 0,0", ed("--seeds", "0,0"), "--seeds")
     probe("edof.design --seeds ''", ed("--seeds", ""), "--seeds")
     probe("edof.merge one run given twice", lambda: EM.run([os.path.join(TMP, "r1"), os.path.join(TMP, "r1"), "--out", new("m")]), "r1")
+    probe("edof --seeds 0,,1 (an empty entry)", lambda: E.build_parser().parse_args(["--seeds", "0,,1"]).seeds, "--seeds", "empty")
     probe("edof --depth-sampling dioptric (control)", check("--depth-sampling", "dioptric"), good=True)
     probe("edof --hold-focus --lenses cubic (no hybrid to hold)", check("--hold-focus", "--lenses", "cubic"), "--hold-focus")
     import numpy as np
