@@ -311,3 +311,31 @@ def test_edof_seeds_refuse_an_empty_entry(capsys):
     assert "--seeds: must be comma-separated whole numbers without an empty one, got '0,,1'" \
         in capsys.readouterr().err
     assert cli.build_parser().parse_args(["--seeds", "0, 1,2"]).seeds == (0, 1, 2)
+
+
+def test_zmx_parm_takes_one_value(tmp_path):
+    """Main: ``PARM 3 -1.2E-004 5`` (a value in the wrong column, or a number split by a
+    space) was read as -1.2E-004, as DISZ once was; every PARM line of the 439 corpus files
+    holds an index and one value."""
+    text = SEED0.read_text(encoding="utf-8")
+    parm = next(line for line in text.splitlines() if line.strip().startswith("PARM 3"))
+    (tmp_path / "p.zmx").write_text(text.replace(parm, parm + " 5", 1))
+    with pytest.raises(ValueError, match=r"p\.zmx:\d+: PARM takes an index and one value "
+                                         r"\(PARM 3's value\), got 3"):
+        jl.load(tmp_path / "p.zmx")
+    (tmp_path / "z.zmx").write_text(text.replace(parm, parm + " 0", 1))  # padding passes
+    assert jl.load(tmp_path / "z.zmx").name == jl.load(SEED0).name
+
+
+def test_json_lens_weights_warn_as_the_zmx_reader_does(tmp_path):
+    """Main: ``"fields": {"values": [0, 14, 20], "weights": [1, 2, 1]}`` passed as a comment
+    (a key far from every known key); the .zmx reader warns about FWGN's unequal weights."""
+    d = json.loads(COOKE.read_text())
+    d["fields"]["weights"] = [1, 2, 1]
+    (tmp_path / "w.json").write_text(json.dumps(d))
+    with pytest.warns(UserWarning, match=r"w\.json: fields\.weights \[1, 2, 1\] is not read: "
+                                         r"a jaxlens Lens holds no weights"):
+        jl.load(tmp_path / "w.json")
+    d["fields"]["weights"] = [1, 1, 1]  # equal weights change nothing
+    (tmp_path / "e.json").write_text(json.dumps(d))
+    jl.load(tmp_path / "e.json")

@@ -493,6 +493,9 @@ def zmx_files():
         probe("zmx UNIT IN (control: inches converted to mm)", z(unit, unit.replace("MM", "IN")), good=True)
         probe("zmx UNIT mm (lower case)", z(unit, unit.replace("MM", "mm")), good=True)
     probe("zmx WAVM 2 587.6 (nm, in µm column)", z("WAVM 2 5.875618E-001", "WAVM 2 587.5618"), "WAVM")
+    parm = next(line for line in lines if line.strip().startswith("PARM 3"))
+    probe("zmx PARM 3 with a second value", z(parm, parm + " 5"), "PARM", "one value")
+    probe("zmx PARM 3 padded with a 0 (control)", z(parm, parm + " 0"), good=True)
     probe("zmx STOP on two surfaces", z("SURF 3\n", "SURF 3\n  STOP\n"), "STOP")
     probe("zmx PWAV 4 of 3 wavelengths", z("PWAV 2", "PWAV 4"), "PWAV")
     probe("zmx ENPD 0", z(next(x for x in lines if x.startswith("ENPD ")), "ENPD 0"), "ENPD")
@@ -546,6 +549,9 @@ def lens_files():
     probe("lens file material 'n-sk16' (lower case; control)", lf(lambda d: d["surfaces"][1].update(material="n-sk16")), good=True)
     probe("lens file fields values [] ", lf(lambda d: d["fields"].update(values=[])), "fields")
     probe("lens file fields 95 deg", lf(lambda d: d["fields"].update(values=[0.0, 95.0])), "95")
+    probe("lens file fields weights [1, 2, 1] (warns)", warned(lf(lambda d: d["fields"].update(weights=[1, 2, 1]))), "weights", "not read")
+    probe("lens file wavelength_weights [1, 2, 1] (warns)", warned(lf(lambda d: d.update(wavelength_weights=[1, 2, 1]))), "weights", "not read")
+    probe("lens file fields weights [1, 1, 1] (control: equal)", warned(lf(lambda d: d["fields"].update(weights=[1, 1, 1]))), good=True)
     probe("lens file semi_diameter -1", lf(lambda d: d["surfaces"][1].update(semi_diameter=-1.0)), "semi")
 
 
