@@ -339,3 +339,31 @@ def test_json_lens_weights_warn_as_the_zmx_reader_does(tmp_path):
     d["fields"]["weights"] = [1, 1, 1]  # equal weights change nothing
     (tmp_path / "e.json").write_text(json.dumps(d))
     jl.load(tmp_path / "e.json")
+
+
+# runpy warns that a module imported before (by another test) runs again as __main__
+@pytest.mark.filterwarnings("ignore:'benchmarks.*' found in sys.modules:RuntimeWarning")
+@pytest.mark.parametrize("module", ["pareto", "imaging", "skipping", "throughput"])
+def test_python_m_a_benchmark_module_runs_that_benchmark(module, monkeypatch):
+    """Main: ``python -m benchmarks.pareto --smoke`` ran nothing and exited 0 without a
+    word (the module has no ``__main__`` block): now ``python -m benchmarks --only pareto
+    --smoke``."""
+    import runpy
+
+    import benchmarks.run
+
+    calls = []
+    monkeypatch.setattr(benchmarks.run, "main", lambda argv: calls.append(argv))
+    monkeypatch.setattr(sys, "argv", ["x", "--smoke"])
+    runpy.run_module(f"benchmarks.{module}", run_name="__main__")
+    assert calls == [["--only", module, "--smoke"]]
+
+
+@pytest.mark.filterwarnings("ignore:'benchmarks.*' found in sys.modules:RuntimeWarning")
+def test_python_m_a_benchmark_helper_says_so():
+    """Main: ``python -m benchmarks.summary`` ran nothing and exited 0."""
+    import runpy
+
+    with pytest.raises(SystemExit, match=r"benchmarks\.summary is a helper of the "
+                                         r"benchmarks, not one: run python -m benchmarks"):
+        runpy.run_module("benchmarks.summary", run_name="__main__")

@@ -428,6 +428,18 @@ def bench_tools():
     probe("render_speed --spp 10**7", rs("--spp", str(10**7)), "--spp")
     probe("render_speed --repeats 0", rs("--repeats", "0"), "--repeats")
     probe("render_speed --size 1e4 (not whole)", rs("--size", "1e4"), "--size")
+    def python_m(module, *a):
+        def go():
+            p = subprocess.run([sys.executable, "-m", f"benchmarks.{module}", *a], capture_output=True, text=True,
+                               cwd=ROOT, timeout=120, env=dict(os.environ, PYTHONPATH=ROOT))
+            last = (p.stderr.strip().splitlines() or [""])[-1]
+            if p.returncode == 0:
+                return f"exit 0, stdout {p.stdout.strip()[-60:]!r}" if p.stdout.strip() else "exit 0, nothing run"
+            print(last, file=sys.stderr)
+            raise SystemExit(2)
+        return go
+    probe("python -m benchmarks.pareto --bogus (runs nothing?)", python_m("pareto", "--bogus"), "--bogus")
+    probe("python -m benchmarks.summary (a helper)", python_m("summary"), "helper")
     probe("vjp_probe --dtype float16", patched(VJ, ["check", "count_fusions", "timing"], lambda: VJ.main(["--dtype", "float16"])), "--dtype")
     probe("grad_levers --flag nosuch", patched(GL, ["measure", "run_child"] if hasattr(GL, "run_child") else ["measure"], lambda: GL.main(["--flag", "nosuch"])), "nosuch")
     probe("grad_levers --chunks 0", patched(GL, ["measure"], lambda: GL.main(["--chunks", "0"])), "--chunks")
