@@ -45,6 +45,18 @@ Gaps found and fixed:
 9. ``tools/make_agf.py DB --out EMPTY`` rewrote four catalogs, then stopped at SCHOTT with a
    FileNotFoundError (SCHOTT's glasses are added to the hand-kept SCHOTT.agf); a maker
    missing from the database likewise. Refused before any write; catalogs written whole.
+10. ``.zmx``: ``PARM 3 -1.2E-004 5`` (a value in the wrong column, or a number split by a
+    space) was read as -1.2E-004, as DISZ was before round 30: refused, naming the line
+    (every one of the 21846 PARM lines of the 439 .zmx files here holds an index and one
+    value; trailing zeros pass as padding).
+11. JSON lens: ``"fields": {"weights": [1, 2, 1]}`` (or ``wavelength_weights``) passed as a
+    comment: unequal weights warn, as the ``.zmx`` reader warns about FWGN (a ``Lens``
+    holds no weights).
+12. ``edof --seeds 0,,1`` ran seeds 0 and 1 (an empty entry dropped; also ``--enc``/
+    ``--dec``): refused in argparse's one line.
+13. ``python -m benchmarks.pareto`` (imaging, skipping, throughput) ran nothing and exited
+    0: each runs ``python -m benchmarks --only NAME`` with its arguments; ``summary``,
+    ``optiland_ref`` and ``common`` say they are helpers.
 
 Controls of note: ``UNIT IN`` (converted to mm), ``FTYP`` announcing 4 fields with 5 YFLN
 values (Zemax shows 4), ``VERS`` twice, UTF-16 BE without a BOM; a JSON material
@@ -61,11 +73,11 @@ code; a digest of the ``.eqx`` in the ``.json``, checked on load, would refuse i
 has one; jaxlens/optics/catalog.py is at 799 lines).
 
 Before (main at f920cd8, an archive) and after (branch audit32b), the same probes,
-``PYTHONPATH=<tree> python tools/audit32b_probe.py`` from the repository, 148 probes, about
-a minute each way (the zmx_config_reference and export_reevaluation rows use
+``PYTHONPATH=<tree> python tools/audit32b_probe.py`` from the repository, 156 probes, about
+two minutes each way (the zmx_config_reference and export_reevaluation rows use
 /work/optiland_venv's Python where it exists):
-    before: clear error: 81, crash: 8, ok: 38, silent wrong: 18, vague error: 3
-    after:  clear error: 107, ok: 41
+    before: clear error: 81, crash: 8, ok: 40, silent wrong: 24, vague error: 3
+    after:  clear error: 113, ok: 43
 
 A row marked "(warns)" counts a warning as the answer; a command-line row "silent wrong"
 with "started" or "accepted" passed every check and began its work (the probe stops it
@@ -111,6 +123,7 @@ Probe (before -> after):
     edof.design --seeds 0,0                                                             clear error  -> clear error
     edof.design --seeds ''                                                              clear error  -> clear error
     edof.merge one run given twice                                                      clear error  -> clear error
+    edof --seeds 0,,1 (an empty entry)                                                  silent wrong -> clear error
     edof --depth-sampling dioptric (control)                                            ok           -> ok
     edof --hold-focus --lenses cubic (no hybrid to hold)                                silent wrong -> clear error
     edof --validation --test-dir DIR (which images?)                                    silent wrong -> clear error
@@ -129,6 +142,8 @@ Probe (before -> after):
     render_speed --spp 10**7                                                            clear error  -> clear error
     render_speed --repeats 0                                                            clear error  -> clear error
     render_speed --size 1e4 (not whole)                                                 clear error  -> clear error
+    python -m benchmarks.pareto --bogus (runs nothing?)                                 silent wrong -> clear error
+    python -m benchmarks.summary (a helper)                                             silent wrong -> clear error
     vjp_probe --dtype float16                                                           clear error  -> clear error
     grad_levers --flag nosuch                                                           silent wrong -> clear error
     grad_levers --chunks 0                                                              clear error  -> clear error
@@ -158,6 +173,8 @@ Probe (before -> after):
     zmx UNIT IN (control: inches converted to mm)                                       ok           -> ok
     zmx UNIT mm (lower case)                                                            ok           -> ok
     zmx WAVM 2 587.6 (nm, in µm column)                                                 clear error  -> clear error
+    zmx PARM 3 with a second value                                                      silent wrong -> clear error
+    zmx PARM 3 padded with a 0 (control)                                                ok           -> ok
     zmx STOP on two surfaces                                                            clear error  -> clear error
     zmx PWAV 4 of 3 wavelengths                                                         clear error  -> clear error
     zmx ENPD 0                                                                          clear error  -> clear error
@@ -196,6 +213,9 @@ Probe (before -> after):
     lens file material 'n-sk16' (lower case; control)                                   ok           -> ok
     lens file fields values []                                                          clear error  -> clear error
     lens file fields 95 deg                                                             clear error  -> clear error
+    lens file fields weights [1, 2, 1] (warns)                                          silent wrong -> clear error
+    lens file wavelength_weights [1, 2, 1] (warns)                                      silent wrong -> clear error
+    lens file fields weights [1, 1, 1] (control: equal)                                 ok           -> ok
     lens file semi_diameter -1                                                          clear error  -> clear error
     agf a glass without its CD line                                                     clear error  -> clear error
     agf formula 14 (Zemax defines none)                                                 clear error  -> clear error
