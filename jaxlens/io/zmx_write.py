@@ -263,8 +263,7 @@ class _GlassWriter:
             path = os.path.join(folder, f"{cat}.AGF")
             texts.append((path, _merged(path, lines, shared=cat != self.own)))
         for path, lines in texts:  # every catalog checked before any is written
-            with open(path, "w", encoding="utf-8", newline="\r\n") as fh:
-                fh.write("\n".join(lines) + "\n")
+            write_whole(path, "\n".join(lines) + "\n", newline="\r\n")
             written.append(path)
         return written
 
