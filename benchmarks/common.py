@@ -296,3 +296,8 @@ def out_path(kind: str = "file", *, make_parents: bool = True, result_of: str | 
         return p
 
     return parse
+
+
+if __name__ == "__main__":  # ran nothing, without a word
+    raise SystemExit("benchmarks.common is a helper of the benchmarks, not one: run "
+                     "python -m benchmarks (--only NAME for one benchmark)")

@@ -80,6 +80,11 @@ def main(argv=None) -> list[dict]:
                    default=list(CHUNKS))
     p.add_argument("--child", action="store_true", help=argparse.SUPPRESS)
     a = p.parse_args(argv)
+    for flags in a.flags or ():  # a typo failed in its child process, minutes in
+        bad = [t for t in flags.split() if not t.startswith("--xla_")]
+        if bad:
+            p.error(f"--flag {flags!r}: {bad[0]!r} is not an XLA flag (XLA_FLAGS settings "
+                    f"read --xla_<name>=<value>, e.g. {FLAGS[1]!r}; --flag= for none)")
     if a.child:  # one flag setting: default chunk only, JSON on the last line
         print(json.dumps(measure(a.rays, [None])[0]))
         return []

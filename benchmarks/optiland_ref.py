@@ -101,3 +101,8 @@ def trace(op, origin: np.ndarray, direction: np.ndarray, wavelength: float):
 def intercepts(rays) -> np.ndarray:
     """``[N, 3]`` image-surface intercepts of optiland rays."""
     return np.stack([np.asarray(rays.x), np.asarray(rays.y), np.asarray(rays.z)], -1)
+
+
+if __name__ == "__main__":  # ran nothing, without a word
+    raise SystemExit("benchmarks.optiland_ref is a helper of the benchmarks, not one: run "
+                     "python -m benchmarks (--only NAME for one benchmark)")

@@ -301,3 +301,8 @@ def headline(out: pathlib.Path) -> str:
             "",
         ]
     return "\n".join(parts)
+
+
+if __name__ == "__main__":  # ran nothing, without a word
+    raise SystemExit("benchmarks.summary is a helper of the benchmarks, not one: run "
+                     "python -m benchmarks (--only NAME for one benchmark)")

@@ -562,6 +562,27 @@ def _e(v) -> str:
     return "None" if v is None else f"{v:.2e}" if isinstance(v, float) else str(v)
 
 
+def check_json_out(p, path: str, files: list[str]) -> None:
+    """Refuse a ``--json`` that this run would write over and is not its to replace: a
+    folder (found at the end, after the files), an input (a lens given as ``--json`` was
+    replaced by the records), or a file that is not an earlier record of this tool."""
+    if os.path.isdir(path):
+        p.error(f"--json {path} is a folder; give the file to write the records to")
+    if any(os.path.realpath(path) == os.path.realpath(f) for f in files):
+        p.error(f"--json {path} is one of the files to evaluate; choose another file")
+    if os.path.isfile(path):
+        try:
+            with open(path, encoding="utf-8") as fh:
+                old = json.load(fh)
+            ours = "export_reevaluation" in str(old.get("computed_by", ""))
+        except (OSError, ValueError, AttributeError):
+            ours = False
+        if not ours:
+            p.error(f"--json {path} exists and is not an export_reevaluation record (no "
+                    f"'computed_by' naming it); this run would write over it: choose "
+                    f"another file")
+
+
 def main(argv=None) -> int:
     p = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     p.add_argument("paths", nargs="+", help=".zmx / .json files or folders of them")
@@ -589,6 +610,10 @@ def main(argv=None) -> int:
                             if f.suffix in (".zmx", ".json"))
         else:
             files.append(q)
+    if not files:  # the report was empty, and --json an empty record, without a word
+        p.error(f"paths: no .zmx or .json file in {', '.join(a.paths)}")
+    if a.json is not None:
+        check_json_out(p, a.json, files)
     recs = []
     with tempfile.TemporaryDirectory() as tmp:
         for f in files:

@@ -278,13 +278,21 @@ def header(catalog: str, glasses: list[Glass]) -> list[str]:
     return lines
 
 
+def _write_lines(path: str, lines: list[str]) -> None:
+    """Write a catalog whole or not at all (a temporary file renamed): a run interrupted
+    mid-write left a catalog cut at a glass's end, which reads as a smaller catalog."""
+    tmp = path + ".partial"
+    with open(tmp, "w", encoding="utf-8", newline="\n") as f:
+        f.write("\n".join(lines) + "\n")
+    os.replace(tmp, path)
+
+
 def write_whole(path: str, catalog: str, glasses: list[Glass]) -> None:
     lines = header(catalog, glasses) + [f"CC {catalog} catalog from the refractiveindex.info "
                                         "database"]
     for g in glasses:
         lines += agf_records(g)
-    with open(path, "w", encoding="utf-8", newline="\n") as f:
-        f.write("\n".join(lines) + "\n")
+    _write_lines(path, lines)
 
 
 def write_added(path: str, catalog: str, glasses: list[Glass]) -> list[Glass]:
@@ -296,8 +304,7 @@ def write_added(path: str, catalog: str, glasses: list[Glass]) -> list[Glass]:
     lines = kept + ["", ADDED_MARKER] + header(catalog, added)[1:]
     for g in added:
         lines += agf_records(g)
-    with open(path, "w", encoding="utf-8", newline="\n") as f:
-        f.write("\n".join(lines) + "\n")
+    _write_lines(path, lines)
     return added
 
 
@@ -310,6 +317,17 @@ def main(argv: list[str] | None = None) -> int:
     for arg, folder in (("database", args.database), ("--out", args.out)):
         if not os.path.isdir(folder):
             parser.error(f"{arg}: no such folder {folder!r}")
+    # Also before the first catalog is written: a maker missing from the database, or a
+    # hand-kept catalog missing from --out, stopped the run with some catalogs rewritten.
+    for maker, (catalog, whole) in MAKERS.items():
+        try:
+            maker_folder(args.database, maker)
+        except SystemExit as e:
+            parser.error(f"database: {e}")
+        kept = os.path.join(args.out, f"{catalog}.agf")
+        if not whole and not os.path.isfile(kept):
+            parser.error(f"--out {args.out} has no {catalog}.agf: its {catalog} glasses are "
+                         f"added to the hand-kept catalog there (give jaxlens/data/glass)")
     for maker, (catalog, whole) in MAKERS.items():
         glasses, skipped = read_maker(maker_folder(args.database, maker))
         path = os.path.join(args.out, f"{catalog}.agf")

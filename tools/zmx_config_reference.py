@@ -28,7 +28,8 @@ UNITS = {"MM": 1.0, "CM": 10.0, "IN": 25.4, "METER": 1000.0, "M": 1000.0}
 
 
 def _text(path: str) -> str:
-    raw = open(path, "rb").read()
+    with open(path, "rb") as fh:
+        raw = fh.read()
     if raw[:2] in (b"\xff\xfe", b"\xfe\xff"):
         return raw.decode("utf-16")
     try:
@@ -110,6 +111,14 @@ def main(argv=None) -> int:
     ap.add_argument("--expand", action="store_true",
                     help="measure every configuration of a THIC-only multi-config file")
     args = ap.parse_args(argv)
+    for f in args.files:  # before optiland's import and the first file's work
+        if not os.path.isfile(f):
+            ap.error(f"{f}: no such file")
+        if os.path.splitext(f)[1].lower() != ".zmx":
+            ap.error(f"{f}: not a .zmx file (optiland reads Zemax files)")
+        if args.expand and not any(ln.split()[:1] == ["MNUM"] for ln in _text(f).splitlines()):
+            ap.error(f"{f}: --expand needs a multi-configuration file (an MNUM section); "
+                     f"measure a single-configuration file without --expand")
     for f in args.files:
         if args.expand:
             with tempfile.TemporaryDirectory() as d:

@@ -52,6 +52,14 @@ import time
 from jaxlens import compile_cache
 from jaxlens.analysis.tolerance_spec import MAX_TRIALS
 from jaxlens.design.spec import FNUM_START, FOV_START, MAX_ASPHERE_TERMS
+from jaxlens.experiments.ablation_table import (
+    build_table,
+    check_columns,
+    column_file,
+    fmt,
+    spec_data,
+    write_column,
+)
 from jaxlens.experiments.runfolder import (
     OneLineParser,
     RunFolder,
@@ -288,7 +296,12 @@ def _no_ignored_options(args, w: str, given=None) -> None:
     it, those whose values differ from the defaults (an option given at its default value,
     ``--seeds 3``, then passes)."""
     default = vars(build_parser().parse_args([]))
-    rules = (
+    rules = (  # --ablation: its columns set the recipe and switches, --ablation-seeds the seeds
+        (args.ablation, "--ablation", ("seeds", "seed_list", "recipe", "no_curriculum",
+                                       "no_regularize", "no_mask", "loss", "out", "no_plots",
+                                       "no_render", "tolerance_trials", "tolerance_threshold")),
+        (args.no_curriculum and not args.ablation, "--no-curriculum (no sine path)",
+         ("fov_start", "fnum_start")),
         (args.seed_list is not None, "--seed-list", ("seeds", "first_seed")),
         (args.smoke and not args.ablation, "--smoke", ("seeds", "steps", "polish_steps")),
         (args.polish == "none", "--polish none", ("polish_steps",)),
@@ -590,8 +603,8 @@ def _design_into(args, argv, spec, config, seeds, folder, out, t_start) -> dict:
     log(f"paraxial EFL {ev.efl:.4f} mm (nominal f {spec.focal_length:.4f}), paraxial F/"
         f"{ev.fnum:.3f} (nominal F/{spec.fnum}), BFL {ev.bfl:.3f} mm, track "
         f"{ev.total_track:.3f} mm, distortion at {spec.half_fov}° {ev.distortion_percent:.1f} %")
-    avg = _fmt(summary["valid_designs_rms_mean_um"])
-    low = _fmt(summary["valid_designs_rms_min_um"])
+    avg = fmt(summary["valid_designs_rms_mean_um"])
+    low = fmt(summary["valid_designs_rms_min_um"])
     log(f"{summary['valid_designs']}/{len(seeds)} seeds valid (their average RMS {avg} µm, "
         f"best {low} µm); per seed mean RMS (µm): " +
         ", ".join(f"{s}:{e.rms_mean_um:.2f}{'' if e.valid else '(invalid)'}"
@@ -645,7 +658,8 @@ def run_ablation(args, argv) -> dict:
         valid = [e.valid for e in evs]
         rms = [e.rms_mean_um for e, v in zip(evs, valid, strict=True) if v]
         col = {
-            "command": command, "switches": switches, "config": dataclasses.asdict(cfg),
+            "command": command, "switches": switches, "spec": spec_data(spec),
+            "config": dataclasses.asdict(cfg),
             "seeds": seeds, "devices": len(jax.devices()),
             "no_self_intersection_percent": 100.0 * float(np.mean(no_si)),
             "valid_percent": 100.0 * float(np.mean(valid)),
@@ -667,77 +681,9 @@ def run_ablation(args, argv) -> dict:
         print(f"{name}: no self-intersection {col['no_self_intersection_percent']:.0f} %, valid "
               f"{col['valid_percent']:.0f} %, RMS mean {col['rms_mean_um']} µm, min "
               f"{col['rms_min_um']} µm, {col['seconds_per_design']:.1f} s/design", flush=True)
-        with open(column_file(out, name), "w") as f:
-            json.dump(col, f, indent=2, default=float)
-        build_table(out, spec)
-    return build_table(out, spec)
-
-
-def build_table(out: str, spec) -> dict:
-    """Collect ``columns/*.json`` into ``table1.json``, ``table1.md`` and ``command.txt``.
-
-    Columns may come from separate processes (``--columns`` subsets run side by side).
-    """
-    cols = {}
-    folder = os.path.join(out, "columns")
-    for fn in sorted(os.listdir(folder)) if os.path.isdir(folder) else []:
-        if fn.endswith(".json"):
-            with open(os.path.join(folder, fn)) as f:
-                col = json.load(f)
-            name = next((n for n, sw in ABLATION_COLUMNS if sw == col["switches"]), fn[:-5])
-            cols[name] = col
-    commands = sorted({c["command"] for c in cols.values()})
-    table = {"commands": commands, "convention": CONVENTION, "spec": dataclasses.asdict(spec),
-             "paper_full_method": PAPER_TABLE1_FULL,
-             "columns": {n: cols[n] for n, _ in ABLATION_COLUMNS if n in cols}}
-    with open(os.path.join(out, "table1.json"), "w") as f:
-        json.dump(table, f, indent=2, default=float)
-    _write_table_md(table, os.path.join(out, "table1.md"))
-    with open(os.path.join(out, "command.txt"), "w") as f:
-        f.write("\n".join(commands) + "\n")
-    return table
-
-
-def _fmt(x, nd=2):
-    return "–" if x is None else f"{x:.{nd}f}"
-
-
-def _write_table_md(table: dict, path: str) -> None:
-    cols = [c for c, _ in ABLATION_COLUMNS if c in table["columns"]]
-    lines = ["# Table 1 (jaxlens): ablation of the curriculum design", "",
-             "Commands: " + "; ".join(f"`{c}`" for c in table["commands"]), "",
-             f"Convention: {table['convention']}.", "",
-             "| | " + " | ".join(cols) + " | paper (+both+mask) |",
-             "|---|" + "---|" * (len(cols) + 1)]
-    c = table["columns"]
-    p = table["paper_full_method"]
-    lines.append("| random starts (seeds) | " + " | ".join(
-        f"{len(c[k]['seeds'])} ({min(c[k]['seeds'])}–{max(c[k]['seeds'])})" for k in cols) +
-        " | 20 |")
-    rows = [
-        ("designs without self-intersection (%)", "no_self_intersection_percent", 0,
-         _fmt(p["valid_percent"], 0)),
-        ("valid designs (%) (no self-intersection, ≥ 99 % rays reach the sensor)",
-         "valid_percent", 0, "–"),
-        ("average RMS spot of valid designs, 256 fields (µm)", "rms_mean_um", 2,
-         _fmt(p["rms_mean_um"])),
-        ("minimum RMS spot of valid designs, 256 fields (µm)", "rms_min_um", 2,
-         _fmt(p["rms_min_um"])),
-        ("worst RMS spot of valid designs, 256 fields (µm)", "rms_max_um", 2, "–"),
-        ("wall time per design (s)", "seconds_per_design", 1, "–"),
-    ]
-    for label, key, nd, paper in rows:
-        lines.append(f"| {label} | " + " | ".join(_fmt(c[k].get(key), nd) for k in cols) +
-                     f" | {paper} |")
-    devices = sorted({c[k].get("devices", 1) for k in cols})
-    loads = [c[k]["load_average"] for k in cols if c[k].get("load_average") is not None]
-    load = (f" The 1-minute load average at the end of each column: "
-            f"{', '.join(f'{x:.1f}' for x in loads)} (other jobs shared the cores)."
-            if loads else "")
-    lines += ["", f"{'/'.join(map(str, devices))} XLA CPU device(s). Wall time per design = the "
-              f"column's wall time (all its seeds designed together) / seeds.{load}", ""]
-    with open(path, "w") as f:
-        f.write("\n".join(lines))
+        write_column(out, name, col)
+        build_table(out, spec, ABLATION_COLUMNS, CONVENTION, PAPER_TABLE1_FULL)
+    return build_table(out, spec, ABLATION_COLUMNS, CONVENTION, PAPER_TABLE1_FULL)
 
 
 def wanted_columns(args) -> list[str]:
@@ -747,16 +693,10 @@ def wanted_columns(args) -> list[str]:
     return [c.strip() for c in args.columns.split(",")]
 
 
-def column_file(out: str, name: str) -> str:
-    """The JSON file of ablation column ``name`` in the ablation folder ``out``."""
-    stem = name.replace("+", "plus_").strip("_") or "baseline"
-    return os.path.join(out, "columns", f"{stem}.json")
-
-
-def check_ablation_out(args) -> None:
+def check_ablation_out(args, spec) -> None:
     """Refuse an unusable ``--ablation-out``, or one that holds a column this run would
     replace (unless ``--overwrite``): columns run separately share the folder and its table,
-    so a column already there is kept unless asked."""
+    so a column already there is kept unless asked; it must be readable and of ``spec``."""
     out = args.ablation_out
     if os.path.exists(out) and not os.path.isdir(out):
         raise UsageError(f"--ablation-out {out} is a file, not a folder")
@@ -766,10 +706,15 @@ def check_ablation_out(args) -> None:
         raise UsageError(f"--ablation-out {args.ablation_out} holds the column(s) "
                          f"{', '.join(there)} of an earlier run; give --overwrite to replace "
                          f"them, or choose another folder")
+    try:
+        check_columns(out, spec, [os.path.abspath(column_file(out, c)) for c in there])
+    except ValueError as e:
+        raise UsageError(f"--ablation-out: {e}") from None
 
 
 def main(argv: list[str] | None = None) -> int:
-    argv, command_line = (sys.argv[1:], True) if argv is None else (list(argv), False)
+    command_line = argv is None  # then compiled programs are kept (jaxlens.compile_cache)
+    argv = sys.argv[1:] if argv is None else list(argv)
     parser = build_parser()
     args = parser.parse_args(argv)
     # Validate every option, the spec and the output folder before anything heavy. The
@@ -777,14 +722,17 @@ def main(argv: list[str] | None = None) -> int:
     try:
         check_args(args, given_options(build_parser, argv))
         _ensure_devices(args.devices)
-        spec_from_args(args)
-        check_ablation_out(args) if args.ablation else RunFolder(args.out, overwrite=args.overwrite)
+        spec = spec_from_args(args)
+        if args.ablation:
+            check_ablation_out(args, spec)
+        else:
+            RunFolder(args.out, overwrite=args.overwrite)
     except ValueError as e:
         return fail(parser.prog, e)
     import jax
 
     jax.config.update("jax_enable_x64", True)
-    if command_line:  # keep compiled programs for the next run (jaxlens.compile_cache)
+    if command_line:
         compile_cache.enable()
     try:
         if args.ablation:

@@ -2,13 +2,15 @@
 
 JSON has no infinity, so the strings "inf", "-inf" and "infinity" stand for it; a bool, a
 null or a string that is not a number is refused, naming where in the file it is. Also the
-reader's refusal of a key given twice (``unique_keys``) and the writer's layout (``pretty``).
+reader's refusal of a key given twice (``unique_keys``), the writer's layout (``pretty``)
+and its whole-file write (``write_whole``, also the ``.zmx`` writer's).
 """
 
 from __future__ import annotations
 
 import json
 import math
+import os
 from decimal import Decimal
 from typing import Any
 
@@ -162,3 +164,20 @@ def pretty(o: Any, level: int = 0) -> str:
         return "{\n" + ",\n".join(body) + "\n" + pad + "}"
     body = [f"{inner}{pretty(v, level + 1)}" for v in o]
     return "[\n" + ",\n".join(body) + "\n" + pad + "]"
+
+
+def write_whole(path: str, text: str, *, newline: str | None = None) -> None:
+    """Write ``text`` to ``path`` whole or not at all: into a temporary file beside it,
+    renamed over ``path`` when complete. A save interrupted mid-write (Ctrl-C) left a file
+    cut short, which destroyed the lens it replaced, and a ``.zmx`` cut at a surface's end
+    read as a shorter lens."""
+    folder, name = os.path.split(os.path.abspath(path))
+    tmp = os.path.join(folder, f".{name}.{os.getpid()}.partial")
+    try:
+        with open(tmp, "w", encoding="utf-8", newline=newline) as f:
+            f.write(text)
+        os.replace(tmp, path)
+    except BaseException:
+        if os.path.exists(tmp):
+            os.remove(tmp)
+        raise

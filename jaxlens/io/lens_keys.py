@@ -12,6 +12,7 @@ one level of the file to their synonyms (lower case).
 from __future__ import annotations
 
 import re
+import warnings
 from typing import Any
 
 TOP = {
@@ -152,6 +153,30 @@ def check_keys(d: dict, source: str) -> None:
     if "units" in d:
         _units(d["units"], source)
         _wavelength_unit(d, source)
+    _weights(d, source)
+
+
+WEIGHTS = (("fields", "weights", "fields"), (None, "field_weights", "fields"),
+           ("wavelengths", "weights", "wavelengths"), (None, "wavelength_weights", "wavelengths"))
+"""Where a file may weigh its fields or wavelengths (as Zemax's FWGN and WAVM do): read by
+no one, as a key far from every known key, though the figures would differ with them."""
+
+
+def _weights(d: dict, source: str) -> None:
+    """Warn about unequal field or wavelength weights, as the ``.zmx`` reader does: a
+    ``Lens`` holds no weights, so its figures over several fields or wavelengths weigh each
+    equally (before: the key passed as a comment)."""
+    for section, key, what in WEIGHTS:
+        holder = d if section is None else d.get(section)
+        if not isinstance(holder, dict) or key not in holder:
+            continue
+        w = holder[key]
+        if isinstance(w, list) and len({repr(x) for x in w}) < 2:
+            continue
+        name = key if section is None else f"{section}.{key}"
+        warnings.warn(f"{source}: {name} {w!r} is not read: a jaxlens Lens holds no weights, "
+                      f"so its figures over several {what} weigh each equally (Zemax's "
+                      f"weighted figures differ)", stacklevel=6)
 
 
 def _wavelength_unit(d: dict, source: str) -> None:

@@ -58,6 +58,7 @@ from .json_values import (
     RepeatedKey,
     curvature,
     nm_to_um,  # noqa: F401  (re-exported: analysis.report reads it here)
+    write_whole,
 )
 from .json_values import float64_array as _arr
 from .json_values import json_number as _out
@@ -757,7 +758,9 @@ def load_json(path: str | os.PathLike) -> Lens:
     except RepeatedKey as e:
         raise ValueError(f"{path}: {e}") from None
     except json.JSONDecodeError as e:
-        raise ValueError(f"{path}:{e.lineno}: not valid JSON: {e.msg}") from None
+        end = ("; the file is empty" if not e.doc.strip() else "; the file does not end in "
+               "'}' (cut short?)" if not e.doc.rstrip().endswith("}") else "")  # interrupted
+        raise ValueError(f"{path}:{e.lineno}: not valid JSON: {e.msg}{end}") from None
     except UnicodeDecodeError as e:
         raise ValueError(f"{path}: not UTF-8 text ({e.reason} at byte {e.start}); save the "
                          f"lens file as UTF-8") from None
@@ -784,6 +787,4 @@ def dumps(lens: Lens) -> str:
 
 def save_json(lens: Lens, path: str | os.PathLike) -> None:
     """Write a JSON lens file."""
-    text = dumps(lens)
-    with open(os.fspath(path), "w", encoding="utf-8") as f:
-        f.write(text)
+    write_whole(os.fspath(path), dumps(lens))

@@ -76,16 +76,17 @@ class ZmxLine:
             raise self.error(f"{what} must be >= {lo}, got {tok}")
         return v
 
-    def single(self, what: str) -> None:
+    def single(self, what: str, *, indexed: bool = False) -> None:
         """Refuses a line with more than one value where Zemax writes one (DISZ, CONI,
-        ENPD): a hand edit's second number was ignored ("DISZ 0.8 0.06" read as 0.8).
-        Trailing zeros pass, as another writer's padding (the solve columns of CURV, say)
-        would: they cannot be a split number or a value in the wrong column."""
-        extra = self.tokens[2:]
+        ENPD; ``indexed``: after an index, PARM): a hand edit's second number was ignored
+        ("DISZ 0.8 0.06" read as 0.8). Trailing zeros pass, as another writer's padding
+        (the solve columns of CURV, say) would: they cannot be a split number or a value in
+        the wrong column."""
+        extra = self.tokens[3 if indexed else 2:]
         if any(_nonzero(tok) for tok in extra):
-            raise self.error(f"{self.tokens[0]} takes one value ({what}), got "
-                             f"{len(self.tokens) - 1}: a value in the wrong column, or a "
-                             f"number split by a space?")
+            raise self.error(f"{self.tokens[0]} takes {'an index and ' if indexed else ''}one "
+                             f"value ({what}), got {len(self.tokens) - 1}: a value in the "
+                             f"wrong column, or a number split by a space?")
 
     def int(self, i: int, what: str, *, lo=None, hi: int = MAX_COUNT) -> int:
         v = self.float(i, what, lo=lo)
@@ -252,6 +253,8 @@ def surface_line(s: ZmxSurface, key: str, ln: ZmxLine) -> None:
     elif key in ("PARM", "XDAT"):
         i = ln.int(1, f"{key} index")
         (s.parm if key == "PARM" else s.xdat)[i] = (ln.float(2, f"{key} {i} value"), ln)
+        if key == "PARM":  # Zemax writes "PARM i value" (XDAT lines carry solve columns)
+            ln.single(f"PARM {i}'s value", indexed=True)
     elif key == "PPAR":
         # PPAR n s scale offset column: PARM n = scale * (surface s's PARM n) + offset (a
         # pickup solve; OpticStudio files and Zemax 2006 ones alike). The file's PARM n holds

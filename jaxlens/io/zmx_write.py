@@ -25,6 +25,7 @@ from ..optics.surfaces import (
     TiltedPlane,
 )
 from . import lensfile, zmx_surfaces, zmx_system
+from .json_values import write_whole
 from .zmx_common import (
     MARKER,
     MAX_XPOLY_DEGREE,
@@ -262,8 +263,7 @@ class _GlassWriter:
             path = os.path.join(folder, f"{cat}.AGF")
             texts.append((path, _merged(path, lines, shared=cat != self.own)))
         for path, lines in texts:  # every catalog checked before any is written
-            with open(path, "w", encoding="utf-8", newline="\r\n") as fh:
-                fh.write("\n".join(lines) + "\n")
+            write_whole(path, "\n".join(lines) + "\n", newline="\r\n")
             written.append(path)
         return written
 
@@ -560,6 +560,5 @@ def save_zmx(lens: Lens, path: str | os.PathLike, *, model_glass: str = "blank")
     text, gw = dumps(lens, path, model_glass=model_glass)
     folder = os.path.dirname(os.path.abspath(path))
     agfs = gw.write_agf(folder, np.atleast_1d(np.asarray(lens.wavelengths, np.float64)))
-    with open(path, "w", encoding="utf-8", newline="\r\n") as fh:
-        fh.write(text)
+    write_whole(path, text, newline="\r\n")
     return agfs

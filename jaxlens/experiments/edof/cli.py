@@ -81,7 +81,13 @@ COMPILE_CACHE = "compile_cache"
 
 
 def _ints(text: str) -> tuple[int, ...]:
-    return tuple(int(v) for v in text.split(",") if v.strip())
+    """``--seeds``: comma-separated whole numbers (an empty entry was dropped: "0,,1" ran
+    seeds 0 and 1, a seed typed between them lost)."""
+    parts = [v.strip() for v in text.split(",")]
+    if not all(v.lstrip("-").isdigit() for v in parts):
+        raise argparse.ArgumentTypeError(f"must be comma-separated whole numbers without an "
+                                         f"empty one, got {text!r}")
+    return tuple(int(v) for v in parts)
 
 
 def build_parser() -> argparse.ArgumentParser:
@@ -289,6 +295,17 @@ def check_args(a):
         if bad or not names or len(set(names)) < len(names):
             raise ValueError(f"edof: --lenses takes distinct names from {LENS_NAMES}, got "
                              f"{a.lenses!r}")
+        # An option of a lens not trained was dropped without a word (LENS_ONLY's rule).
+        unused = [f"{opt} (the {lens} lens's)" for opt, lens, v in (
+            ("--cubic-floor", "cubic", a.cubic_floor), ("--hybrid-floor", "hybrid",
+            a.hybrid_floor), ("--hold-focus", "hybrid", a.hold_focus or None))
+            if v is not None and lens not in names]
+        if unused:
+            raise ValueError(f"edof: {', '.join(unused)} would be ignored: --lenses "
+                             f"{a.lenses!r} trains no such lens; leave it out or add the lens")
+        if a.validation and a.test_dir is not None:  # --test-dir won: --validation was dropped
+            raise ValueError(f"edof: --validation scores skimage's validation images and "
+                             f"--test-dir {a.test_dir} the folder's images; give one of them")
         if a.max_crops is not None:
             input_checks.number(a.max_crops, "--max-crops", "edof", lo=1, integer=True)
         if a.time_limit is not None:
@@ -308,7 +325,8 @@ def check_args(a):
                 from jaxlens.experiments.edof import scenes
 
                 try:
-                    scenes.folder_images(d, verify=True)
+                    scenes.folder_images(d, verify=True,
+                                         min_side=cfg.crop if opt == "--test-dir" else 1)
                 except ValueError as e:
                     raise ValueError(f"edof: {opt}: {e}") from None
         # A checkpoint or photographs inside --out were deleted when the run replaced it.

@@ -497,8 +497,9 @@ def main(argv=None) -> None:
     seeds = _check_cli(p, a)
     try:
         spec = classical_spec(n_elements=a.elements, total_track=a.total_track)
-    except ValueError as e:
-        p.error(" ".join(str(e).split()))
+    except ValueError as e:  # in the options' words: "total_track 7000 mm" named no option
+        text = " ".join(str(e).split()).replace("DesignSpec: ", "")
+        p.error(text.replace("total_track", "--total-track").replace("n_elements", "--elements"))
     config = design_config(a.scale, smoke=a.smoke)
     if a.polish_steps is not None:
         config = dataclasses.replace(config, polish_steps=a.polish_steps)

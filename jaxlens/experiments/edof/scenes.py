@@ -64,6 +64,8 @@ def _to_float_rgb(a: np.ndarray) -> np.ndarray:
         a = a.astype(np.uint8) * 255
     if a.ndim == 3 and a.shape[-1] == 4:
         a = a[..., :3]
+    if a.ndim == 3 and a.shape[-1] == 2:  # grey and alpha: the grey image
+        a = a[..., 0]
     a = to_linear(a)
     if a.ndim == 2:
         a = np.repeat(a[..., None], 3, axis=-1)
@@ -94,10 +96,12 @@ def skimage_image(name: str) -> np.ndarray:
     return _to_float_rgb(fn())
 
 
-def folder_images(folder: str | os.PathLike, *, verify: bool = False) -> list[pathlib.Path]:
+def folder_images(folder: str | os.PathLike, *, verify: bool = False,
+                  min_side: int = 1) -> list[pathlib.Path]:
     """The image files of a folder, sorted by name; ``verify``: each file's structure is
     checked too (Pillow's ``verify``, without decoding), so that a truncated or mislabelled
-    file is named before a run's work, not after its lens set-up."""
+    file is named before a run's work, not after its lens set-up; and each must be at least
+    ``min_side`` pixels on a side (a test image smaller than one crop gives no crop)."""
     paths = sorted(p for p in pathlib.Path(folder).iterdir() if p.suffix.lower() in _EXTS)
     if not paths:
         raise ValueError(f"scenes: no image files ({', '.join(_EXTS)}) in {folder}")
@@ -107,10 +111,14 @@ def folder_images(folder: str | os.PathLike, *, verify: bool = False) -> list[pa
         for p in paths:
             try:
                 with Image.open(p) as im:
+                    size = im.size
                     im.verify()
             except Exception as e:  # noqa: BLE001  (Pillow raises many kinds)
                 raise ValueError(f"scenes: cannot read the image {p}: {e}".splitlines()[0]
                                  ) from None
+            if min(size) < min_side:
+                raise ValueError(f"scenes: the image {p} is {size[0]}x{size[1]} pixels, "
+                                 f"smaller than one {min_side}x{min_side} test crop")
     return paths
 
 
