@@ -272,7 +272,7 @@ def seidel(lens: Lens, *, field=None, wavelength=None) -> Seidel:
     return out
 
 
-@eqx.filter_jit
+@checks.checked_core(eqx.filter_jit)
 def _seidel(lens: Lens, fld, wl) -> Seidel:
     """``seidel``'s compiled core (its arguments checked before it): a second call on a lens
     of the same structure reuses the program, where op-by-op dispatch took 60-90 ms."""

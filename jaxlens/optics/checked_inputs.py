@@ -22,15 +22,20 @@ _CHECKED_BODIES: contextvars.ContextVar[tuple] = contextvars.ContextVar(
     "jaxlens_checked_bodies", default=())
 
 
+def _jaxpr_trace(t):
+    """``t`` or the first trace above it that is JAX's ``DynamicJaxprTrace`` (a jit's, a
+    loop body's), through vmap and JVP traces; None if there is none."""
+    while t is not None and type(t).__name__ != "DynamicJaxprTrace":
+        t = getattr(t, "parent_trace", None)
+    return t
+
+
 def _jit_trace(x):
     """The jit-level trace (JAX's ``DynamicJaxprTrace``) of the first tracer in ``x``,
     through the vmap and JVP traces above it; None for concrete values or an unknown JAX."""
     for leaf in jax.tree_util.tree_leaves(x):
         if isinstance(leaf, jax.core.Tracer):
-            t = getattr(leaf, "_trace", None)
-            while t is not None and type(t).__name__ != "DynamicJaxprTrace":
-                t = getattr(t, "parent_trace", None)
-            return t
+            return _jaxpr_trace(getattr(leaf, "_trace", None))
     return None
 
 
