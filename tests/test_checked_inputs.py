@@ -130,3 +130,41 @@ def test_checked_by_caller_is_false_outside_any_core():
     flags = []
     jax.jit(lambda v: flags.append(checked_by_caller(v)) or v)(jnp.ones(2))
     assert flags == [False]
+
+
+def test_a_design_with_the_ray_loss_compiles_its_steps_without_input_checks(error_ifs):
+    """The design steps skip the trace's re-check of the loss's wavelengths, which ``run``
+    checks concretely against the fixed materials first."""
+    from jaxlens import design as D
+
+    cfg = D.DesignConfig(n_fields=3, rings=1, steps=3, final_steps=3, polish_steps=0,
+                         epoch=3, log_every=3)
+    res = D.design(D.DesignSpec(), [0], cfg, progress=False, shard=False)
+    assert not any("wavelength" in m for m in error_ifs), error_ifs
+    assert np.all(np.isfinite(np.asarray(res.history.loss[-1])))
+
+
+def test_the_design_checks_the_loss_wavelengths_before_any_step(monkeypatch):
+    from jaxlens.design import curriculum, multistart
+    from jaxlens.design import design as run_design
+    from jaxlens.design.spec import DesignSpec
+
+    seen = {}
+
+    def capture(spec, stages, params, objectives, *a, **k):
+        seen.update(objectives)
+        raise KeyboardInterrupt  # stop before any step
+
+    monkeypatch.setattr(multistart, "run", capture)
+    cfg = multistart.DesignConfig(n_fields=3, rings=1, steps=3, final_steps=3, polish_steps=0)
+    with pytest.raises(KeyboardInterrupt):
+        run_design(DesignSpec(), [0], cfg, progress=False, shard=False)
+    ray = seen["ray"]
+    assert curriculum._loss_inputs_checked(seen)
+    # The plastics' data end at 0.4 µm: a loss at 0.38 µm is refused before the steps (it
+    # was an error from inside the first compiled step).
+    bad = eqx.tree_at(lambda o: o.sampling.wavelengths, ray, jnp.array([0.38, 0.55]))
+    with pytest.raises(ValueError, match="run: the loss's wavelengths"):
+        curriculum._loss_inputs_checked({"ray": bad})
+    # Any other objective keeps the checks inside the compiled steps.
+    assert not curriculum._loss_inputs_checked({"ray": ray, "polish": (ray,)})

@@ -32,7 +32,7 @@ import numpy as np
 import optax
 
 from ..optics import checks
-from .losses import StageArgs
+from .losses import Objective, StageArgs
 from .mask import field_weights
 from .solvers import SolverResult, result_names
 from .spec import DesignSpec
@@ -217,11 +217,13 @@ def _over_seeds(fn, mesh, n_batched: int, n_replicated: int):
         return fn
     from jax.sharding import PartitionSpec as P
 
+    fn = checks.inherit(fn)  # made on each call: in a checked step its body is trusted too
+
     specs = (P("seeds"),) * n_batched + (P(),) * n_replicated
     return jax.shard_map(fn, mesh=mesh, in_specs=specs, out_specs=P("seeds"), check_vma=False)
 
 
-@eqx.filter_jit
+@checks.checked_core(eqx.filter_jit, concrete_checked=False)
 def _vinit(solver, params, args, mesh=None):
     dyn, static = eqx.partition(solver, eqx.is_array)
 
@@ -231,7 +233,7 @@ def _vinit(solver, params, args, mesh=None):
     return _over_seeds(local, mesh, 2, 1)(params, args, dyn)
 
 
-@eqx.filter_jit
+@checks.checked_core(eqx.filter_jit, concrete_checked=False)
 def _vstep(solver, params, state, args, lr_scale, alive, mesh=None):
     dyn, static = eqx.partition(solver, eqx.is_array)
 
@@ -259,7 +261,7 @@ def _vstep(solver, params, state, args, lr_scale, alive, mesh=None):
     return _over_seeds(local, mesh, 4, 2)(params, state, args, alive, dyn, lr_scale)
 
 
-@eqx.filter_jit
+@checks.checked_core(eqx.filter_jit, concrete_checked=False)
 def _vrms(objective, params, args, mesh=None):
     dyn, static = eqx.partition(objective, eqx.is_array)
 
@@ -274,6 +276,23 @@ def _reweight(rms, area, mask, irls):
     w = field_weights(rms, area, mask=mask, irls=irls)
     ms = jnp.sum(w * rms**2, -1)
     return w, 1.0 / jnp.maximum(ms, 1e-12)
+
+
+def _loss_inputs_checked(objectives: dict) -> bool:
+    """Whether the compiled steps may skip the trace's re-check of the loss's wavelengths
+    (``optics.checked_inputs``): only for the ray loss (``Objective``) on fixed materials,
+    whose wavelengths are then checked here, concretely, against them (a stage that traced
+    out of their range raised at its first step). Other objectives keep the checks."""
+    for o in objectives.values():
+        lens = getattr(o.pmap, "template", None) if type(o) is Objective else None
+        if lens is None or getattr(o.pmap, "materials", None) is not None \
+                or checks.is_traced((lens, o.sampling.wavelengths)):
+            return False
+    for o in objectives.values():
+        lens = o.pmap.template
+        checks.wavelengths(lens, o.sampling.wavelengths, "run", "the loss's wavelengths")
+        checks.primary_wavelength(lens, "run", "the EFL's")
+    return True
 
 
 @dataclasses.dataclass
@@ -412,6 +431,8 @@ def run(
         raise TypeError(f"{w}: mesh must be a jax.sharding.Mesh (one axis, \"seeds\") or None, "
                         f"got {mesh!r}")
     objective = objectives["ray"]
+    checked = _loss_inputs_checked(objectives)
+    vinit, vstep, vrms = ((f.inputs_checked if checked else f) for f in (_vinit, _vstep, _vrms))
     area = objective.sampling.area
     total = sum(s.steps for s in stages)
     bar = tqdm(total=total, disable=not progress, dynamic_ncols=True, leave=True)
@@ -443,13 +464,13 @@ def run(
         done = 0
         for step in range(stage.steps):
             if step % epoch == 0:
-                rms = _vrms(objective, params, args, smesh)
+                rms = vrms(objective, params, args, smesh)
                 w, scale = _reweight(rms, area, stage.mask, irls)
                 args = eqx.tree_at(lambda a: (a.field_weights, a.spot_scale), args, (w, scale))
                 if state is None or stage.solver not in ("adam", "lm"):
-                    state = _vinit(solver, params, args, smesh)
+                    state = vinit(solver, params, args, smesh)
             lr = jnp.asarray(float(sched(step)), dtype)
-            params, state, aux, alive = _vstep(solver, params, state, args, lr, alive, smesh)
+            params, state, aux, alive = vstep(solver, params, state, args, lr, alive, smesh)
             losses.append(aux.loss)
             rmss.append(jnp.sqrt(aux.spot))
             oks.append(alive)

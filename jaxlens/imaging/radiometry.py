@@ -72,6 +72,7 @@ def star_region(valid_fn, center, half, *, n_coarse: int = 24, n_dirs: int = 128
     """
     center = jax.lax.stop_gradient(center)
     half = jax.lax.stop_gradient(half)
+    valid_fn = checks.inherit(valid_fn)  # its bisection loop's body is made on each call
     dtype = center.dtype
     coarse = center + half * pupil_cells(n_coarse, 1.0, dtype)[0]
     v = jax.lax.stop_gradient(valid_fn(coarse))

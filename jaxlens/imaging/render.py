@@ -259,10 +259,12 @@ _compute_footprints = footprints  # render's argument of the same name shadows i
 # --------------------------------------------------------------------------------------
 def _run_tiles(tile_fn, n_tiles, args, *, checkpoint, mesh):
     """Map ``tile_fn(index, *args)`` over tile indices, checkpointed and optionally sharded."""
+    # The tile loop's bodies are made on each call: in a checked core they are trusted too.
+    tile_fn = checks.inherit(tile_fn)
     body = jax.checkpoint(tile_fn) if checkpoint else tile_fn
 
     def local(idx, *a):
-        return jax.lax.map(lambda i: body(i, *a), idx)
+        return jax.lax.map(checks.inherit(lambda i: body(i, *a)), idx)
 
     idx = jnp.arange(n_tiles, dtype=jnp.int32)
     if mesh is None:

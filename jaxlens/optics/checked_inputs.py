@@ -50,6 +50,29 @@ def checked_by_caller(x) -> bool:
     return t is not None and any(t is b for b in bodies)
 
 
+def inherit(fn):
+    """``fn``, trusted as the body it is called from: where its arguments are traced in a
+    loop body (``fori_loop``, ``while_loop``, ``scan``, ``lax.map``) traced directly inside a
+    checked core's body, that loop body is trusted too while ``fn`` runs. Only for loops
+    whose body function is made anew on each call (a closure, as ``radiometry.star_region``'s
+    and ``render``'s tile loop are): JAX caches a loop body's trace by its function, and a
+    trace made here must not serve a call from elsewhere."""
+    @functools.wraps(fn)
+    def run(*args, **kwargs):
+        inner = _jit_trace((args, kwargs))
+        outer = _jaxpr_trace(getattr(inner, "parent_trace", None))
+        bodies = _CHECKED_BODIES.get()
+        if inner is None or not any(outer is b for b in bodies):
+            return fn(*args, **kwargs)
+        token = _CHECKED_BODIES.set(bodies + (inner,))
+        try:
+            return fn(*args, **kwargs)
+        finally:
+            _CHECKED_BODIES.reset(token)
+
+    return run
+
+
 def _traced(x) -> bool:
     return any(isinstance(leaf, jax.core.Tracer) for leaf in jax.tree_util.tree_leaves(x))
 
@@ -96,6 +119,7 @@ def checked_core(jit, *, concrete_checked: bool = True):
         for name in ("loop_emitters",):  # what the jit decorator tells the tests
             if hasattr(plain, name):
                 setattr(call, name, getattr(plain, name))
+        call.inputs_checked = checked  # for a caller that checked them itself
         return call
 
     return decorate

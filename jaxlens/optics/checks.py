@@ -22,7 +22,7 @@ import jax
 import jax.numpy as jnp
 import numpy as np
 
-from .checked_inputs import checked_by_caller, checked_core  # noqa: F401 (re-exported)
+from .checked_inputs import checked_by_caller, checked_core, inherit  # noqa: F401 (re-exported)
 
 GENERIC_RANGE_UM = (0.15, 30.0)
 """Wavelengths (µm) accepted for materials without catalog data (model glasses, formulas)."""
