@@ -1,12 +1,14 @@
 """Inputs checked once, at the entry point: what lets a compiled core skip its re-checks.
 
-An entry point (``rms_spot``, ``psf``, the design loss) checks its inputs: a concrete bad
-value raises at once, a traced one (the caller's own ``jit``) gets an ``eqx.error_if`` in
-the caller's program. The private core it then calls runs the same helpers (sampling,
-tracing) on traced copies of those inputs, and each would attach another ``error_if``.
-Those add nothing, and each is a host callback: JAX's persistent compilation cache keeps no
-program that has one, so every run compiled the core again. A core compiled with
-:func:`checked_core` skips them; result checks (a PSF with no light) stay.
+An entry point (``rms_spot``, ``psf``, ``curriculum.run``) checks its concrete inputs at
+once, then calls its compiled core, which runs the same helpers (sampling, tracing) on
+traced copies of them: each helper attached an ``eqx.error_if`` that could no longer fire.
+Each is a host callback, and JAX's persistent compilation cache keeps no program that has
+one, so every run compiled the core again. A core compiled with :func:`checked_core` skips
+those re-checks where its arguments were concrete (so checked) or come from another such
+core's body; traced by a user's own ``jit`` it keeps them. Result checks (a PSF with no
+light) stay. ``checks.wavelengths``, ``field_angles``, ``finite_array`` and
+``sampling.static_depth`` consult :func:`checked_by_caller`.
 """
 
 from __future__ import annotations

@@ -358,11 +358,12 @@ def check_args(a):
 
 
 def use_compile_cache(checkpoint: str) -> str:
-    """Keep JAX's compiled programs in ``checkpoint/compile_cache`` (programs that took 1 s or
-    more to compile), unless ``JAX_COMPILATION_CACHE_DIR`` names a cache already; returns
-    the folder used. Every piece of a resumed run compiles the same programs (over 3 minutes
-    at the paper's scale on an H100), so the next piece loads them instead. A process-wide
-    setting: the command line uses it, ``run`` called from Python does not by default."""
+    """Keep JAX's compiled programs in ``checkpoint/compile_cache`` (``jaxlens.compile_cache``),
+    unless ``JAX_COMPILATION_CACHE_DIR`` names a cache already; returns the folder used
+    (None where ``JAXLENS_COMPILE_CACHE=0`` turns it off). Every piece of a resumed run
+    compiles the same programs (over 3 minutes at the paper's scale on an H100), so the next
+    piece loads them instead. A process-wide setting: the command line uses it, ``run``
+    called from Python does not by default."""
     from jaxlens import compile_cache
 
     return compile_cache.enable(os.path.join(checkpoint, COMPILE_CACHE))
