@@ -42,9 +42,10 @@ def _jit_trace(x):
 
 
 def checked_by_caller(x) -> bool:
-    """True for a value traced in the body of an :func:`inputs_checked` function (under its
-    vmap, grad or JVP, not inside a jit, scan or loop nested in it): its entry point checked
-    it, so a re-check would only add an ``eqx.error_if``."""
+    """True for a value traced in the body of a :func:`checked_core` called with checked
+    inputs (under its vmap, grad or JVP; not inside a jit, scan or loop nested in it, except
+    a loop body given to :func:`inherit`): its entry point checked it, so a re-check would
+    only add an ``eqx.error_if``."""
     bodies = _CHECKED_BODIES.get()
     if not bodies:
         return False
@@ -63,16 +64,22 @@ def inherit(fn):
     def run(*args, **kwargs):
         inner = _jit_trace((args, kwargs))
         outer = _jaxpr_trace(getattr(inner, "parent_trace", None))
-        bodies = _CHECKED_BODIES.get()
-        if inner is None or not any(outer is b for b in bodies):
-            return fn(*args, **kwargs)
-        token = _CHECKED_BODIES.set(bodies + (inner,))
-        try:
-            return fn(*args, **kwargs)
-        finally:
-            _CHECKED_BODIES.reset(token)
+        if not any(outer is b for b in _CHECKED_BODIES.get()):
+            inner = None
+        return _trusting(inner, fn, args, kwargs)
 
     return run
+
+
+def _trusting(trace, fn, args, kwargs):
+    """``fn(*args, **kwargs)`` with ``trace`` (None: no trace) trusted while it runs."""
+    if trace is None:
+        return fn(*args, **kwargs)
+    token = _CHECKED_BODIES.set(_CHECKED_BODIES.get() + (trace,))
+    try:
+        return fn(*args, **kwargs)
+    finally:
+        _CHECKED_BODIES.reset(token)
 
 
 def _traced(x) -> bool:
@@ -98,14 +105,7 @@ def checked_core(jit, *, concrete_checked: bool = True):
     """
     def decorate(fn):
         def trusting(*args, **kwargs):
-            trace = _jit_trace((args, kwargs))
-            if trace is None:
-                return fn(*args, **kwargs)
-            token = _CHECKED_BODIES.set(_CHECKED_BODIES.get() + (trace,))
-            try:
-                return fn(*args, **kwargs)
-            finally:
-                _CHECKED_BODIES.reset(token)
+            return _trusting(_jit_trace((args, kwargs)), fn, args, kwargs)
 
         # Named as ``fn`` (compile logs), not wrapping it: jit binds fn's signature from it.
         trusting.__name__, trusting.__qualname__ = fn.__name__, fn.__qualname__
