@@ -258,6 +258,7 @@ from probe_table import (  # noqa: E402
     ROOT,
     SEED0,
     TMP,
+    edof_check,
     patched,
     probe,
     run,
@@ -391,16 +392,8 @@ def tolerance_report():
 # ----------------------------------------------------------------------------- edof
 def edof_cli():
     from jaxlens.experiments.edof import cli as E
-    from jaxlens.experiments.runfolder import UsageError
 
-    def check(*argv):
-        def go():
-            try:
-                E.check_args(E.build_parser().parse_args(["--out", os.path.join(TMP, "edof"), *argv]))
-            except UsageError as e:
-                raise ValueError(str(e)) from None
-            return "accepted"
-        return go
+    check = edof_check
     from jaxlens.experiments.edof import design as ED
     from jaxlens.experiments.edof import merge as EM
 

@@ -113,6 +113,22 @@ def patched(module, names, fn):
     return until_started(go)
 
 
+def edof_check(*argv):
+    """A probe of ``python -m jaxlens.experiments.edof``'s argument checks with ``argv`` (and
+    ``--out`` under ``TMP``): "accepted", or the command's refusal as a ValueError."""
+    from jaxlens.experiments.edof import cli
+    from jaxlens.experiments.runfolder import UsageError
+
+    def go():
+        try:
+            cli.check_args(cli.build_parser().parse_args(["--out", os.path.join(TMP, "edof"),
+                                                          *argv]))
+        except UsageError as e:
+            raise ValueError(str(e)) from None
+        return "accepted"
+    return go
+
+
 def run(areas):
     """Run each probe area (a function of ``probe`` calls), then print the table."""
     for area in areas:
