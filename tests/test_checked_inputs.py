@@ -160,11 +160,18 @@ def test_the_design_checks_the_loss_wavelengths_before_any_step(monkeypatch):
     with pytest.raises(KeyboardInterrupt):
         run_design(DesignSpec(), [0], cfg, progress=False, shard=False)
     ray = seen["ray"]
-    assert curriculum._loss_inputs_checked(seen)
+    assert curriculum._loss_inputs_checked(ray)
     # The plastics' data end at 0.4 µm: a loss at 0.38 µm is refused before the steps (it
     # was an error from inside the first compiled step).
     bad = eqx.tree_at(lambda o: o.sampling.wavelengths, ray, jnp.array([0.38, 0.55]))
     with pytest.raises(ValueError, match="run: the loss's wavelengths"):
-        curriculum._loss_inputs_checked({"ray": bad})
-    # Any other objective keeps the checks inside the compiled steps.
-    assert not curriculum._loss_inputs_checked({"ray": ray, "polish": (ray,)})
+        curriculum._loss_inputs_checked(bad)
+    # Any other objective, or a solver that is not the library's, keeps the checks.
+    assert not curriculum._loss_inputs_checked((ray,))
+    adam = multistart.make_solver_factory(cfg, DesignSpec(), jnp.float64)("adam", 1.0, ray)
+    assert curriculum._solver_inputs_checked(adam)
+
+    class Mine(eqx.Module):
+        residual_fn: object
+
+    assert not curriculum._solver_inputs_checked(Mine(ray))

@@ -34,7 +34,14 @@ import optax
 from ..optics import checks
 from .losses import Objective, StageArgs
 from .mask import field_weights
-from .solvers import SolverResult, result_names
+from .solvers import (
+    LBFGSB,
+    Adam,
+    DampedLeastSquares,
+    LevenbergMarquardt,
+    SolverResult,
+    result_names,
+)
 from .spec import DesignSpec
 
 STAGE_SOLVERS = ("adam", "lm", "lm-optx", "lbfgsb")
@@ -278,21 +285,25 @@ def _reweight(rms, area, mask, irls):
     return w, 1.0 / jnp.maximum(ms, 1e-12)
 
 
-def _loss_inputs_checked(objectives: dict) -> bool:
-    """Whether the compiled steps may skip the trace's re-check of the loss's wavelengths
+def _loss_inputs_checked(objective) -> bool:
+    """Whether compiled steps may skip the trace's re-check of ``objective``'s wavelengths
     (``optics.checked_inputs``): only for the ray loss (``Objective``) on fixed materials,
-    whose wavelengths are then checked here, concretely, against them (a stage that traced
-    out of their range raised at its first step). Other objectives keep the checks."""
-    for o in objectives.values():
-        lens = getattr(o.pmap, "template", None) if type(o) is Objective else None
-        if lens is None or getattr(o.pmap, "materials", None) is not None \
-                or checks.is_traced((lens, o.sampling.wavelengths)):
-            return False
-    for o in objectives.values():
-        lens = o.pmap.template
-        checks.wavelengths(lens, o.sampling.wavelengths, "run", "the loss's wavelengths")
-        checks.primary_wavelength(lens, "run", "the EFL's")
+    whose wavelengths are then checked here, concretely, against them (out of their range
+    they raised from inside the first step). Other objectives keep the checks."""
+    lens = getattr(objective.pmap, "template", None) if type(objective) is Objective else None
+    if lens is None or getattr(objective.pmap, "materials", None) is not None \
+            or checks.is_traced((lens, objective.sampling.wavelengths)):
+        return False
+    checks.wavelengths(lens, objective.sampling.wavelengths, "run", "the loss's wavelengths")
+    checks.primary_wavelength(lens, "run", "the EFL's")
     return True
+
+
+def _solver_inputs_checked(solver) -> bool:
+    """``_loss_inputs_checked`` for a library solver's objective; any other solver (its
+    ``step`` may trace anything) keeps the checks."""
+    return (type(solver) in (Adam, LevenbergMarquardt, DampedLeastSquares, LBFGSB)
+            and _loss_inputs_checked(solver.residual_fn))
 
 
 @dataclasses.dataclass
@@ -431,8 +442,7 @@ def run(
         raise TypeError(f"{w}: mesh must be a jax.sharding.Mesh (one axis, \"seeds\") or None, "
                         f"got {mesh!r}")
     objective = objectives["ray"]
-    checked = _loss_inputs_checked(objectives)
-    vinit, vstep, vrms = ((f.inputs_checked if checked else f) for f in (_vinit, _vstep, _vrms))
+    vrms = _vrms.inputs_checked if _loss_inputs_checked(objective) else _vrms
     area = objective.sampling.area
     total = sum(s.steps for s in stages)
     bar = tqdm(total=total, disable=not progress, dynamic_ncols=True, leave=True)
@@ -447,6 +457,8 @@ def run(
         if stage.loss not in objectives:
             raise ValueError(f"run: stage {stage.name!r} needs a {stage.loss!r} objective")
         solver = make_solver(stage.solver, stage.lr, objectives[stage.loss])
+        checked = _solver_inputs_checked(solver)
+        vinit, vstep = (f.inputs_checked if checked else f for f in (_vinit, _vstep))
         # Least-squares and quasi-Newton stages run on one device: their dense linear algebra
         # can deadlock XLA's CPU runtime when several host devices run it at once.
         smesh = mesh if stage.solver == "adam" else None
