@@ -260,7 +260,6 @@ Run: PYTHONPATH=$PWD python tools/audit31_probe.py [filter]
 import json
 import os
 import pathlib
-import subprocess
 import sys
 
 import jax
@@ -272,6 +271,7 @@ jax.config.update("jax_enable_x64", True)
 sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
 from probe_table import (  # noqa: E402
     COOKE,
+    OPTILAND_PYTHON,
     ROOT,
     ROWS,
     SEED0,
@@ -282,6 +282,7 @@ from probe_table import (  # noqa: E402
     probe,
     run,
     started,
+    tool,
     until_started,
     warned,
 )
@@ -290,8 +291,6 @@ import jaxlens as jl  # noqa: E402
 import jaxlens.analysis as A  # noqa: E402
 import jaxlens.design as D  # noqa: E402
 from jaxlens import zoo  # noqa: E402
-
-OPTILAND_PYTHON = "/work/optiland_venv/bin/python"
 
 
 def count_mentions(top=200):
@@ -334,19 +333,6 @@ def tile_row(name, lens, patch, **kw):
                  f"tiles of {th}x{tw} pixels for a {rows}x{cols} image"))
 
 
-def tool(script, *args, python=None):
-    """A tools/ script run as a user runs it: its exit code and last line of stderr."""
-    def go():
-        p = subprocess.run([python or sys.executable, os.path.join(os.path.dirname(os.path.dirname(jl.__file__)), "tools", script), *args],
-                           capture_output=True, text=True, cwd=TMP, timeout=300)
-        last = (p.stderr.strip().splitlines() or [""])[-1]
-        if p.returncode == 2:
-            print(last, file=sys.stderr)
-            raise SystemExit(2)
-        if p.returncode:
-            raise RuntimeError(f"exit {p.returncode}: {last}")
-        return p.stdout.strip()[-100:]
-    return go
 
 
 # ----------------------------------------------------------------------------- leftovers

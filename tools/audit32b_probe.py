@@ -255,6 +255,7 @@ warnings.simplefilter("ignore", DeprecationWarning)
 
 from probe_table import (  # noqa: E402
     COOKE,
+    OPTILAND_PYTHON,
     ROOT,
     SEED0,
     TMP,
@@ -263,6 +264,7 @@ from probe_table import (  # noqa: E402
     probe,
     run,
     started,
+    tool,
     until_started,
     warned,
 )
@@ -275,23 +277,8 @@ def cli(fn):
     return fn
 
 
-OPTILAND_PYTHON = "/work/optiland_venv/bin/python"
 
 
-def tool(script, *args, python=None):
-    """A tools/ script run as a user runs it: its exit code and last line of stderr."""
-    def go():
-        p = subprocess.run([python or sys.executable, os.path.join(ROOT, "tools", script), *args],
-                           capture_output=True, text=True, cwd=TMP, timeout=300,
-                           env=dict(os.environ, PYTHONPATH=ROOT))
-        last = (p.stderr.strip().splitlines() or [""])[-1]
-        if p.returncode == 2:
-            print(last, file=sys.stderr)
-            raise SystemExit(2)
-        if p.returncode:
-            raise RuntimeError(f"exit {p.returncode}: {last}")
-        return p.stdout.strip()[-100:]
-    return go
 
 
 def new(name):

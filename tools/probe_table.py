@@ -12,6 +12,7 @@ import inspect
 import io
 import os
 import re
+import subprocess
 import sys
 import tempfile
 import warnings
@@ -111,6 +112,27 @@ def patched(module, names, fn):
             for n, f in real.items():
                 setattr(module, n, f)
     return until_started(go)
+
+
+OPTILAND_PYTHON = "/work/optiland_venv/bin/python"
+"""The interpreter of the optiland venv the probes of optiland-backed tools run in."""
+
+
+def tool(script, *args, python=None):
+    """A ``tools/`` script run as a user runs it (this tree's jaxlens first on the path):
+    its stdout's tail, or its exit code and the last line of its stderr."""
+    def go():
+        p = subprocess.run([python or sys.executable, os.path.join(ROOT, "tools", script), *args],
+                           capture_output=True, text=True, cwd=TMP, timeout=300,
+                           env=dict(os.environ, PYTHONPATH=ROOT))
+        last = (p.stderr.strip().splitlines() or [""])[-1]
+        if p.returncode == 2:
+            print(last, file=sys.stderr)
+            raise SystemExit(2)
+        if p.returncode:
+            raise RuntimeError(f"exit {p.returncode}: {last}")
+        return p.stdout.strip()[-100:]
+    return go
 
 
 def edof_check(*argv):

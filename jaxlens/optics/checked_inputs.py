@@ -82,7 +82,8 @@ def _trusting(trace, fn, args, kwargs):
         _CHECKED_BODIES.reset(token)
 
 
-def _traced(x) -> bool:
+def is_traced(x) -> bool:
+    """True for a JAX tracer (inside jit, grad or vmap): its value is not known."""
     return any(isinstance(leaf, jax.core.Tracer) for leaf in jax.tree_util.tree_leaves(x))
 
 
@@ -115,7 +116,7 @@ def checked_core(jit, *, concrete_checked: bool = True):
         @functools.wraps(fn)
         def call(*args, **kwargs):
             trusted = checked_by_caller((args, kwargs)) or (
-                concrete_checked and not _traced((args, kwargs)))
+                concrete_checked and not is_traced((args, kwargs)))
             return (checked if trusted else plain)(*args, **kwargs)
 
         for name in ("loop_emitters",):  # what the jit decorator tells the tests

@@ -22,7 +22,12 @@ import jax
 import jax.numpy as jnp
 import numpy as np
 
-from .checked_inputs import checked_by_caller, checked_core, inherit  # noqa: F401 (re-exported)
+from .checked_inputs import (  # noqa: F401 (re-exported)
+    checked_by_caller,
+    checked_core,
+    inherit,
+    is_traced,
+)
 
 GENERIC_RANGE_UM = (0.15, 30.0)
 """Wavelengths (µm) accepted for materials without catalog data (model glasses, formulas)."""
@@ -95,11 +100,6 @@ VALUES_PER_RAY_BASE = 32
 """See ``VALUES_PER_RAY_SURFACE``: the float values per ray that do not grow with the surfaces."""
 
 _REL = 1e-6  # wavelength bounds are compared with this relative slack (float32 rounding)
-
-
-def is_traced(x) -> bool:
-    """True for a JAX tracer (inside jit, grad or vmap): its value is not known."""
-    return any(isinstance(leaf, jax.core.Tracer) for leaf in jax.tree_util.tree_leaves(x))
 
 
 def fmt(v) -> str:
