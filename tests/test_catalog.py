@@ -7,6 +7,7 @@ import numpy as np
 import pytest
 
 from jaxlens import catalog
+from jaxlens.optics import agf
 from jaxlens.optics.catalog import (
     CatalogMaterial,
     catalog_names,
@@ -149,7 +150,7 @@ def test_every_shipped_glass_reproduces_its_catalog_nd_and_vd():
             if (r.nd, r.vd) == (1.0, 0.0):
                 no_data.add((cat, r.name))
                 continue
-            n = np.asarray(index_dfc(catalog._dispersion_model(r.formula, r.coefficients, "")))
+            n = np.asarray(index_dfc(agf._dispersion_model(r.formula, r.coefficients, "")))
             if r.vd == 0.0:  # no dispersion (Zemax MISC's N15): nd at every wavelength
                 assert np.all(n == r.nd), (cat, r.name, n)
                 continue
@@ -173,7 +174,7 @@ def test_no_d_line_data_materials_have_a_real_index_over_their_range():
     for cat, names in NO_D_LINE_DATA.items():
         for name in names:
             r = catalog._shipped()[catalog.SHIPPED_CATALOGS.index(cat)][1][name]
-            n = np.asarray(index(catalog._dispersion_model(r.formula, r.coefficients, ""),
+            n = np.asarray(index(agf._dispersion_model(r.formula, r.coefficients, ""),
                                  jnp.geomspace(*r.wavelength_range, 16)))
             assert np.all((n > 1.3) & (n < 4.2)), (cat, name, n)
 
@@ -618,3 +619,18 @@ def test_make_agf_skips_what_agf_cannot_hold(tmp_path):
     (tmp_path / "odd.yml").write_text(odd, encoding="utf-8")
     with pytest.raises(ValueError, match="powers"):
         tool.convert(str(tmp_path / "odd.yml"))
+
+
+def test_agf_glass_named_twice_warns_and_the_later_record_wins(tmp_path):
+    # Lookups ignore case, so "n-bk7" replaced "N-BK7" without a word before.
+    rec = ("NM {} 2 517642 1.5168 64.17 0 0 0\nCD 1.03961212 0.00600069867 0.231792344 "
+           "0.0200179144 1.01046945 103.560653\n")
+    first, second = rec.format("N-BK7"), rec.format("n-bk7")
+    path = tmp_path / "DUP.agf"
+    path.write_text(first + second)
+    with pytest.warns(UserWarning, match=r"DUP.agf:3: glass n-bk7 is given again \(first on "
+                                         r"line 1"):
+        glasses = load_agf(path)
+    assert list(glasses) == ["n-bk7"]
+    with pytest.warns(UserWarning, match="given again"):
+        assert len(agf.parse_agf(first + second, "x.agf")) == 2
