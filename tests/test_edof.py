@@ -842,3 +842,62 @@ def test_the_command_line_keeps_compiled_programs_beside_the_checkpoints(tmp_pat
     out = subprocess.run([sys.executable, "-c", code, str(tmp_path / "ck")], env=env,
                          capture_output=True, text=True, check=True).stdout.split()
     assert out == [str(tmp_path / "mine")] * 2
+
+
+def test_a_checkpoint_save_stopped_before_its_commit_resumes_the_previous_one(
+        classical, tmp_path, monkeypatch):
+    """The .json names the .eqx it belongs to and is replaced last: a save stopped after the
+    arrays were written (Ctrl-C) leaves the previous checkpoint whole, where before the new
+    arrays were resumed at the old step. A checkpoint of the old layout (<name>.eqx, no name
+    in the .json) still resumes."""
+    import dataclasses
+
+    from jaxlens.experiments.edof import scenes as S
+    from jaxlens.experiments.edof import train as T
+    from jaxlens.experiments.edof.decoder import make_decoder
+
+    cfg = dataclasses.replace(T.Config(), tile=8, kernel_size=5, batch=2, width=4,
+                              enc_blocks=(1,), middle_blocks=0, dec_blocks=(1,),
+                              decoder="nafnet")
+    lens = L.to_hybrid(classical, n_odd=2).astype(jnp.float32)
+    pmap = L.HybridParameterization.of(lens)
+    images = [np.random.default_rng(3).random((24, 24, 3)).astype(np.float32)]
+    folder = tmp_path / "ck"
+
+    def trainer():
+        dec = make_decoder("nafnet", nsr=0.05, key=jax.random.PRNGKey(0), width=4,
+                           enc_blocks=(1,), middle_blocks=0, dec_blocks=(1,))
+        src = T.BatchSource(S.PatchSampler(images, cfg.window, seed=1), (2, 2), cfg, seed=2)
+        return T.Trainer("classical", pmap, pmap.from_lens(lens), dec, src, cfg,
+                         jax.random.PRNGKey(4), folder=str(folder))
+
+    first = trainer()
+    first.step = 7
+    first.save()
+    saved_focus = float(first.params.focus)
+    second = trainer()
+    second.step = 9
+    second.params = eqx.tree_at(lambda p: p.focus, second.params, second.params.focus + 1)
+
+    def stopped(path, text, **kw):
+        raise KeyboardInterrupt
+
+    monkeypatch.setattr(T, "write_whole", stopped)
+    with pytest.raises(KeyboardInterrupt):
+        second.save()
+    monkeypatch.undo()
+    resumed = trainer()
+    assert resumed.load()
+    assert resumed.step == 7 and float(resumed.params.focus) == saved_focus
+    # The next save removes the arrays of the stopped one and of the one it replaces.
+    resumed.save()
+    assert len(list(folder.glob("*.eqx"))) == 1
+    # The layout before: <name>.eqx beside a .json that names no file.
+    info = json.loads((folder / "classical.json").read_text())
+    (folder / info.pop("tree")).rename(folder / "classical.eqx")
+    (folder / "classical.json").write_text(json.dumps(info))
+    old = trainer()
+    assert old.load() and old.step == 7
+    (folder / "classical.eqx").unlink()
+    with pytest.raises(ValueError, match="names its arrays classical.eqx, which is not in"):
+        trainer().load()

@@ -67,6 +67,7 @@ from jaxlens.experiments.runfolder import (
     fail,
     refuse_inside_out,
 )
+from jaxlens.io.json_values import write_whole
 from jaxlens.optics import checks as input_checks
 
 LENS_NAMES = ("classical", "cubic", "hybrid")
@@ -576,13 +577,17 @@ def _save_eval(ck, name, bank, vals, examples, settings: dict) -> None:
     if ck is None:
         return
     os.makedirs(ck, exist_ok=True)
+    # The settings file commits the others: gone while they are written, so a write stopped
+    # half way is never read as this evaluation.
+    marker = os.path.join(ck, f"eval_{name}_settings.json")
+    if os.path.exists(marker):
+        os.remove(marker)
     np.save(os.path.join(ck, f"eval_{name}_bank.npy"), bank)
     ex = {f"{d}|{i}": x for d, xs in examples.items() for i, x in enumerate(xs)}
     np.savez(os.path.join(ck, f"eval_{name}_examples.npz"), **ex)
     with open(os.path.join(ck, f"eval_{name}.json"), "w") as f:
         json.dump(vals, f)
-    with open(os.path.join(ck, f"eval_{name}_settings.json"), "w") as f:
-        json.dump(settings, f)
+    write_whole(marker, json.dumps(settings))
 
 
 def _load_eval(ck, name, settings: dict):

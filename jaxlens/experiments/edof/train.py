@@ -31,6 +31,8 @@ import functools
 import json
 import math
 import os
+import re
+import secrets
 import time
 from collections.abc import Callable
 
@@ -40,6 +42,7 @@ import jax.numpy as jnp
 import numpy as np
 import optax
 
+from ...io.json_values import write_whole
 from ...optics import checks as input_checks
 from ...optics.lens import Lens
 from .decoder import Decoder
@@ -486,36 +489,50 @@ class Trainer:
         self._check = None  # the fixed check batch of ``check_loss``, made on first use
 
     # -- checkpoints ---------------------------------------------------------------------
-    def _paths(self):
-        return (os.path.join(self.folder, f"{self.name}.eqx"),
-                os.path.join(self.folder, f"{self.name}.json"))
+    def _meta_path(self) -> str:
+        return os.path.join(self.folder, f"{self.name}.json")
 
     def save(self) -> None:
-        """Write the state (a finished lens, or one in progress) to ``folder``."""
+        """Write the state (a finished lens, or one in progress) to ``folder``.
+
+        The arrays go to a new ``<name>.<token>.eqx`` first; replacing ``<name>.json``, which
+        names that file, is the one step that commits the checkpoint. (Two renames, the
+        ``.eqx`` and then the ``.json``, left a new ``.eqx`` beside the old ``.json`` when
+        stopped between them, and ``--resume`` took the new weights at the old step.)
+        """
         if self.folder is None:
             return
         os.makedirs(self.folder, exist_ok=True)
-        tree, meta = self._paths()
-        eqx.tree_serialise_leaves(tree + ".tmp", (self.dec, self.params, self.net_state,
-                                                  self.lens_state, self.key))
+        tree_name = f"{self.name}.{secrets.token_hex(4)}.eqx"
+        eqx.tree_serialise_leaves(os.path.join(self.folder, tree_name),
+                                  (self.dec, self.params, self.net_state, self.lens_state,
+                                   self.key))
         info = {"stage": self.stage, "step": self.step, "hist": self.hist,
                 "rng": self.source.state(), "seconds": self.seconds,
                 "config": dataclasses.asdict(self.cfg), "params_version": PARAMS_VERSION,
-                "state_layout": STATE_LAYOUT}
-        with open(meta + ".tmp", "w") as f:
-            json.dump(info, f)
-        os.replace(tree + ".tmp", tree)
-        os.replace(meta + ".tmp", meta)
+                "state_layout": STATE_LAYOUT, "tree": tree_name}
+        write_whole(self._meta_path(), json.dumps(info))
+        # Earlier checkpoints' arrays (and those of a save stopped before its commit).
+        stale = re.compile(rf"{re.escape(self.name)}(\.[0-9a-f]{{8}})?\.eqx")
+        for f in os.listdir(self.folder):
+            if f != tree_name and stale.fullmatch(f):
+                os.remove(os.path.join(self.folder, f))
 
     def load(self) -> bool:
         """Resume from ``folder`` if it holds this lens; returns whether it did."""
         if self.folder is None:
             return False
-        tree, meta = self._paths()
-        if not (os.path.isfile(tree) and os.path.isfile(meta)):
+        meta = self._meta_path()
+        if not os.path.isfile(meta):
             return False
         with open(meta) as f:
             info = json.load(f)
+        # Checkpoints written before the .json named its arrays kept them in <name>.eqx.
+        tree = os.path.join(self.folder, info.get("tree", f"{self.name}.eqx"))
+        if not os.path.isfile(tree):
+            raise ValueError(f"resume: the checkpoint {meta} names its arrays "
+                             f"{os.path.basename(tree)}, which is not in {self.folder}; use "
+                             f"another --checkpoint")
         version = info.get("params_version", 1)
         # Version 1 wrote c as c·R; a lens that never trains c converts exactly.
         convertible = version == 1 and float(jnp.sum(jnp.abs(self.gate.c))) == 0
