@@ -175,3 +175,46 @@ def test_the_design_checks_the_loss_wavelengths_before_any_step(monkeypatch):
         residual_fn: object
 
     assert not curriculum._solver_inputs_checked(Mine(ray))
+
+
+@pytest.fixture
+def traced_error_ifs(monkeypatch):
+    """The messages of the ``eqx.error_if`` calls traced into a compiled program from now on
+    (eager ones run at once and are no callback in a program)."""
+    seen, real = [], eqx.error_if
+
+    def record(x, pred, msg):
+        if checks.is_traced((x, pred)):
+            seen.append(msg)
+        return real(x, pred, msg)
+
+    monkeypatch.setattr(eqx, "error_if", record)
+    return seen
+
+
+def test_imaging_cores_called_with_checked_inputs_trace_no_input_check(lens, traced_error_ifs):
+    """psf (its chief-ray aiming, a jit of its own), psf_map (vmapped eagerly before),
+    relative_illumination, the distortion maps and the PSF render method kept re-checks of
+    the fields and wavelengths in their compiled programs, which the cache then refused."""
+    from jaxlens.imaging import distortion, psf, radiometry, render
+
+    sensor = jl.Sensor((26, 38), 0.6)
+    lens_s = eqx.tree_at(lambda m: m.sensor, lens, sensor, is_leaf=lambda x: x is None)
+    psf.psf(lens, 7.5, kernel_size=13, pixel_size=0.0047)
+    psf.psf_map(lens, grid=(2, 3), kernel_size=11, sensor=sensor)
+    radiometry.relative_illumination(lens, jnp.array([3.0, 6.0, 9.0, 12.0, 15.0]), pupil=41)
+    distortion.distortion_map(lens, grid=(3, 5), sensor=sensor)
+    distortion.inverse_distortion_map(lens, resolution=(26, 38), pixel_size=0.6, grid=(3, 4))
+    scene = jnp.asarray(np.random.default_rng(0).random((26, 38, 3)), jnp.float32)
+    render.render(lens_s, scene, method=render.PSFRender(kernel_size=7), spp=1,
+                  key=jax.random.PRNGKey(0))
+    assert traced_error_ifs == []
+
+
+def test_the_chief_ray_core_keeps_its_checks_under_a_users_jit(lens):
+    from jaxlens.imaging.aiming import stop_chief_ray
+
+    stop_chief_ray(lens, 6.25)  # the trusting program first
+    run = jax.jit(lambda f: stop_chief_ray(lens, f).origin)
+    with pytest.raises(Exception, match="finite angles"):
+        jax.block_until_ready(run(jnp.asarray(jnp.nan)))

@@ -141,7 +141,7 @@ def _check_chief_args(lens, field, depth, wavelength, newton_iters) -> None:
         checks.wavelengths(lens, np.asarray(wl), where)
 
 
-@forward_mode_jit
+@checks.checked_core(forward_mode_jit)
 def _stop_chief_ray(lens, field, depth, wavelength, *, newton_iters, iters) -> Rays:
     """``stop_chief_ray``'s compiled core: a module-level function of the lens and arrays
     (the sizes static), so that eager calls on lenses of one structure share one program."""
@@ -161,6 +161,7 @@ def _stop_chief_ray(lens, field, depth, wavelength, *, newton_iters, iters) -> R
         v = q - start
         return Rays(start[None], (v / jnp.linalg.norm(v))[None], wl)
 
+    @checks.inherit  # newton_2d's loop bodies are made on each call
     def at_stop(uv, params):
         aim_lens, zep, start, wl = params
         out = trace(aim_lens, launch(uv, zep, start, wl), newton_iters=newton_iters,
@@ -200,7 +201,7 @@ def chief_point(lens, field, depth, newton_iters, *, with_valid: bool = False,
                         with_valid=with_valid, with_ray=with_ray)
 
 
-@forward_mode_jit
+@checks.checked_core(forward_mode_jit)
 def _chief_point(lens, field, depth, *, newton_iters, with_valid, with_ray=False):
     rays = _stop_chief_ray(lens, field, depth, None, newton_iters=newton_iters,
                            iters=sampling.AIM_ITERS)

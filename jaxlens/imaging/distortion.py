@@ -65,7 +65,7 @@ def _sensor(lens: Lens, sensor, where: str):
     return sensor
 
 
-@eqx.filter_jit
+@checks.checked_core(eqx.filter_jit)
 def _forward_map(lens, ideal, depth, newton_iters):
     fields = ideal_to_field(lens, ideal.reshape(-1, 2))
     real, valid = jax.vmap(lambda f: chief_point(lens, f, depth, newton_iters,
@@ -102,6 +102,7 @@ def distortion_map(
                   unit="iterations")
     checks.newton_iters(newton_iters, "distortion_map")
     depth = sampling.lens_depth(lens, depth, "distortion_map")
+    checks.primary_wavelength(lens, "distortion_map", "the chief rays'")
     lens = apertured(lens)
     ideal = sensor_grid(s.resolution, s.pixel_size, grid).astype(lens.epd.dtype)
     real, valid = _forward_map(lens, ideal, depth, newton_iters)
@@ -160,11 +161,12 @@ def inverse_distortion_map(
     checks.number(iters, "iters", where, lo=0, hi=checks.MAX_NEWTON_ITERS, integer=True,
                   unit="aiming iterations")
     depth = sampling.lens_depth(lens, depth, where)
+    checks.primary_wavelength(lens, where, "the chief rays'")
     return _inverse_map(lens, jnp.asarray(pixel_size), depth, resolution=resolution,
                         grid=grid, newton_iters=newton_iters, iters=iters)
 
 
-@eqx.filter_jit
+@checks.checked_core(eqx.filter_jit)
 def _inverse_map(lens, pixel_size, depth, *, resolution, grid, newton_iters, iters):
     dtype = lens.epd.dtype
     pts = sensor_grid(resolution, pixel_size, grid).astype(dtype)
@@ -191,6 +193,7 @@ def _inverse_map(lens, pixel_size, depth, *, resolution, grid, newton_iters, ite
         to_xp = jnp.stack([-o[0], -o[1], xp - o[2]]) * sgn
         lm0 = jax.lax.stop_gradient(to_xp[:2] / jnp.linalg.norm(to_xp))
 
+        @checks.inherit  # newton_2d's loop bodies are made on each call
         def at_stop(lm, aim_lens):
             out = trace_backward(aim_lens, ray(lm, o), newton_iters=newton_iters,
                                  upto=lens.stop)

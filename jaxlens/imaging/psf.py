@@ -76,19 +76,8 @@ from . import sampling
 from .aiming import apertured, chief_point, field_to_ideal, ideal_to_field
 from .grid import pixel_pitch, pupil_cells, sensor_grid, splat
 
-__all__ = [
-    "AbstractPSFModel",
-    "CoherentPSF",
-    "GeometricPSF",
-    "RGB_WAVELENGTHS",
-    "PSFResult",
-    "PSFMap",
-    "psf",
-    "psf_info",
-    "psf_rgb",
-    "psf_map",
-    "mtf",
-]
+__all__ = ["AbstractPSFModel", "CoherentPSF", "GeometricPSF", "RGB_WAVELENGTHS", "PSFResult",
+           "PSFMap", "psf", "psf_info", "psf_rgb", "psf_map", "mtf"]
 
 RGB_WAVELENGTHS = (LAMBDA_C, LAMBDA_D, LAMBDA_F)
 """Default (R, G, B) wavelengths in µm: the C, d and F lines."""
@@ -567,6 +556,13 @@ class PSFMap(eqx.Module):
     center: Array
 
 
+# _psf_impl over fields [n, 2] in one compiled body: vmapped eagerly, the core saw batch
+# tracers, kept its input checks and so never entered the compile cache.
+@checks.checked_core(forward_mode_jit)
+def _psf_grid(lens, fields, depth, wls, pixel_size, **kw):
+    return jax.vmap(lambda f: _psf_impl(lens, f, depth, wls, pixel_size, None, **kw))(fields)
+
+
 def psf_map(
     lens: Lens,
     *,
@@ -611,12 +607,9 @@ def psf_map(
     wls = jnp.atleast_1d(wl)
     lens = apertured(lens)
 
-    def one(f):
-        return _psf_impl(lens, f, depth, wls, pixel_size, None, kernel_size=kernel_size,
-                         model=model, center=center,
-                         newton_iters=newton_iters)
-
-    kern, trunc, ref, _, _ = jax.vmap(one)(fields.reshape(-1, 2))
+    kern, trunc, ref, _, _ = _psf_grid(lens, fields.reshape(-1, 2), depth, wls, pixel_size,
+                                       kernel_size=kernel_size, model=model, center=center,
+                                       newton_iters=newton_iters)
     g = tuple(grid)
     # A field without light has an all-zero kernel (truncated NaN): refuse it, as psf does.
     dark = jnp.any(jnp.isnan(trunc), axis=-1)

@@ -167,7 +167,9 @@ def _irradiance(lens: Lens, t, depth, wl, n_coarse, n_fine, newton_iters):
     return e, cen
 
 
-@forward_mode_jit  # a folded lens compiles with XLA's loop emitters (forward.LOOP_EMITTERS)
+# A folded lens compiles with XLA's loop emitters (forward.LOOP_EMITTERS). Its callers check
+# the fields, depth and wavelength.
+@checks.checked_core(forward_mode_jit)
 def relative_illumination_samples(lens, fields, depth, wl, *, n_coarse, n_fine, newton_iters):
     """Relative illumination at ``fields`` (degrees) of an apertured lens, jitted core of
     ``relative_illumination``: (ri, irradiance, footprint centre) per field."""

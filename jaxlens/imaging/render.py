@@ -416,7 +416,7 @@ def _psf_setup(lens, depth, pixel_size, *, resolution, ri, newton_iters):
     return inv, ri_vals.reshape(RI_GRID)
 
 
-@eqx.filter_jit
+@checks.checked_core(eqx.filter_jit)
 def _render_psf(lens, scene, key, depth, wls, pixel_size, inv, ri_map, *, resolution, spp,
                 patch, checkpoint, mesh, kernel_size, newton_iters):
     dtype = scene.dtype
