@@ -420,12 +420,20 @@ def _clear_semi_diameters(lens, fields, n_rim, *, reaching, pupil) -> Float[Arra
     def heights(field, wl):
         rays = field_rays(lens, field, pupil, wl, depth=depth)
         path = trace_path(lens, rays, upto=lens.num_surfaces - 1)
-        r = jnp.hypot(path.origin[..., 0], path.origin[..., 1])  # [n, M]
-        valid = jnp.where(reaching, path.valid, path[-1].valid[None])
-        return jnp.max(jnp.where(valid, r, 0.0), axis=-1)
+        return _ray_heights(path.origin, jnp.where(reaching, path.valid, path[-1].valid[None]))
 
     h = jax.vmap(lambda f: jax.vmap(lambda w: heights(f, w))(lens.wavelengths))(fields)
-    traced = jnp.max(h, axis=(0, 1))
+    return _given_or_traced(lens, jnp.max(h, axis=(0, 1)))
+
+
+def _ray_heights(origin, valid):
+    """The largest radial height of the ``valid`` rays (last axis), 0 where none is."""
+    r = jnp.hypot(origin[..., 0], origin[..., 1])
+    return jnp.max(jnp.where(valid, r, 0.0), axis=-1)
+
+
+def _given_or_traced(lens, traced):
+    """Each surface's finite ``semi_diameter`` as given, else the traced height."""
     given = jnp.stack([s.semi_diameter for s in lens.surfaces])
     return jnp.where(jnp.isfinite(given), given, traced)
 
@@ -494,11 +502,9 @@ def _semi_diameters_and_fans(lens, fields, fan_fields, fan_pupil, n_rim):
         return rays.origin, rays.direction, trace_path(lens, rays)
 
     starts, dirs, path = jax.vmap(beam)(beam_f, beam_w, beam_p)
-    r = jnp.hypot(path.origin[:F * W, :n, :, 0], path.origin[:F * W, :n, :, 1])  # [FW, n, m]
     # As clear_semi_diameters: the rays that pass the last surface (reaching=False).
-    h = jnp.max(jnp.where(path.valid[:F * W, n - 1][:, None], r, 0.0), axis=-1)
-    given = jnp.stack([s.semi_diameter for s in lens.surfaces])
-    traced = jnp.where(jnp.isfinite(given), given, jnp.max(h, axis=0))
+    h = _ray_heights(path.origin[:F * W, :n], path.valid[:F * W, n - 1][:, None])  # [FW, n]
+    traced = _given_or_traced(lens, jnp.max(h, axis=0))
     k = fan_pupil.shape[0]
     fans = jax.tree.map(lambda a: a[F * W:, :, :k] if a.ndim >= 3 else a, path)
     return starts[F * W:, :k], dirs[F * W:, :k], fans, traced
