@@ -8,7 +8,8 @@ compared (``max_abs_diff``; ``same_answer`` is True when it is within ``toleranc
   answer compared is the RMS spot of the collimated beam against that of the 1e9 mm point
   source (equal to ~2e-5 relative: the point source focuses f²/depth farther).
 * ``single_wavelength``: ``rms_spot`` at one wavelength against three (the three set equal to
-  it, so the per-wavelength answers must agree exactly).
+  it, so the per-wavelength answers must agree to rounding: XLA may vectorise a batch of one
+  and of three differently, and one ulp of a ray's image height is ~1e-15 mm).
 * ``one_field_radius``: a rotationally symmetric lens's RMS spot over an n×n grid of (θx, θy)
   field points against n field angles along one radius, mapped to the grid by |θ| (the
   answer compared: the grid values against the radial values at the same |θ|, exact).
@@ -124,6 +125,8 @@ def single_wavelength(lens, pupil):
     a = fn(lens, one).per_wavelength[:, 0]
     b = fn(lens, three).per_wavelength
     diff = float(jnp.max(jnp.abs(b - a[:, None])))
+    # 1e-12 mm, as for the other rows: a 1e-15 bound was one ulp of the image heights and failed
+    # on a CI CPU whose XLA build vectorised the two batch sizes differently.
     return _row(
         "single_wavelength",
         full,
@@ -131,7 +134,7 @@ def single_wavelength(lens, pupil):
         "rms_spot at 3 wavelengths",
         "rms_spot at 1 wavelength",
         diff,
-        1e-15,
+        1e-12,
     )
 
 
