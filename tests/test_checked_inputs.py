@@ -218,3 +218,52 @@ def test_the_chief_ray_core_keeps_its_checks_under_a_users_jit(lens):
     run = jax.jit(lambda f: stop_chief_ray(lens, f).origin)
     with pytest.raises(Exception, match="finite angles"):
         jax.block_until_ready(run(jnp.asarray(jnp.nan)))
+
+
+@pytest.mark.parametrize(
+    "polish",
+    ["lm", pytest.param("lm-optx", marks=pytest.mark.slow),
+     pytest.param("lbfgsb", marks=pytest.mark.slow)],
+)
+def test_the_polish_step_traces_no_input_check(polish, traced_error_ifs):
+    """The polish solvers make their objective inside the step (optimistix's and jaxopt's
+    loops nest it, the damped least squares scans it): each is trusted as the step, so the
+    polish program has no host callback and the persistent cache keeps it."""
+    from jaxlens import design as D
+
+    cfg = D.DesignConfig(n_fields=3, rings=1, steps=2, final_steps=0, polish_steps=2,
+                         polish=polish, epoch=2, log_every=2)
+    res = D.design(D.DesignSpec(), [0], cfg, progress=False, shard=False)
+    assert not any("wavelength" in m for m in traced_error_ifs), traced_error_ifs
+    assert np.all(np.isfinite(np.asarray(res.history.loss[-1])))
+
+
+def test_trusted_within_trusts_only_inside_a_checked_core(error_ifs):
+    def angle(x):
+        return checks.field_angles(x, "probe")
+
+    assert checks.trusted_within(angle, jnp.ones(2)) is angle  # concrete: nothing to trust
+    seen = []
+
+    def looped(f, x):  # loops and branches nest f's traces below the core's body
+        return jax.lax.fori_loop(0, 2, lambda i, y: jax.lax.cond(i > 0, f, f, y), x)
+
+    @checked_core(jax.jit)
+    def core(x):
+        f = checks.trusted_within(angle, x)
+        seen.append(f is angle)
+        return looped(f, x)
+
+    @checked_core(jax.jit)
+    def core_untrusting(x):
+        return looped(angle, x)
+
+    x = jnp.array([1.0, 2.0])
+    np.testing.assert_allclose(core(x), x)
+    assert seen == [False] and error_ifs == []
+    np.testing.assert_allclose(core_untrusting(x), x)  # the nested traces kept their checks
+    assert error_ifs
+    # Under a user's jit the core is not trusted: the wrapper is the function itself.
+    with pytest.raises(Exception, match="finite angles"):
+        jax.block_until_ready(jax.jit(core)(jnp.array([1.0, jnp.nan])))
+    assert seen[-1] is True

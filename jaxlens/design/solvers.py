@@ -234,6 +234,8 @@ class LevenbergMarquardt(AbstractSolver):
         def fn(yy, a):
             return self.residual_fn(_merge(yy, fixed), a)
 
+        fn = checks.trusted_within(fn, y)  # optimistix's loops nest: inherit reaches one
+
         _, aux = fn(y, args)
         # optimistix builds its damping in the default float type; match it (float64 under
         # jax_enable_x64) so its operator and vector structures agree.
@@ -299,6 +301,7 @@ class DampedLeastSquares(AbstractSolver):
             r, aux = self.residual_fn(_merge(unravel(x), fixed), args)
             return r, aux
 
+        @checks.inherit  # made on each call: trusted as the design step it runs in
         def one(carry, _):
             x, lam, _ = carry
             # The residuals and aux come with the Jacobian's primal pass (no second
@@ -377,8 +380,11 @@ class LBFGSB(AbstractSolver):
                                  f"swapped?), got lower {checks.fmt(lo_i)} > upper "
                                  f"{checks.fmt(hi_i)}" + (f" at index {i}" if i else ""))
 
-    def _solver(self):
-        return jaxopt.LBFGSB(fun=self.loss_fn, has_aux=True, maxiter=1, history_size=self.history)
+    def _solver(self, params):
+        # A new objective each call, trusted as the design step it runs in where that is
+        # (jaxopt's line search nests its loops and branches).
+        fun = checks.trusted_within(lambda p, a: self.loss_fn(p, a), params)
+        return jaxopt.LBFGSB(fun=fun, has_aux=True, maxiter=1, history_size=self.history)
 
     def _bounds(self, params):
         def pick(f, x, b):
@@ -393,11 +399,11 @@ class LBFGSB(AbstractSolver):
 
     def init(self, params, args):
         bounds = self._bounds(params)
-        return LBFGSBState(bounds, self._solver().init_state(params, bounds, args),
+        return LBFGSBState(bounds, self._solver(params).init_state(params, bounds, args),
                            SolverResult.successful)
 
     def step(self, params, state, args, lr_scale):
-        params, st = self._solver().update(params, state.inner, state.bounds, args)
+        params, st = self._solver(params).update(params, state.inner, state.bounds, args)
         result = SolverResult.where(st.failed_linesearch, SolverResult.solver_error,
                                     SolverResult.successful)
         return params, LBFGSBState(state.bounds, st, result), st.aux

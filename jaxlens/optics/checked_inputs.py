@@ -6,9 +6,11 @@ traced copies of them: each helper attached an ``eqx.error_if`` that could no lo
 Each is a host callback, and JAX's persistent compilation cache keeps no program that has
 one, so every run compiled the core again. A core compiled with :func:`checked_core` skips
 those re-checks where its arguments were concrete (so checked) or come from another such
-core's body; traced by a user's own ``jit`` it keeps them. Result checks (a PSF with no
-light) stay. ``checks.wavelengths``, ``field_angles``, ``finite_array`` and
-``sampling.static_depth`` consult :func:`checked_by_caller`.
+core's body; traced by a user's own ``jit`` it keeps them. Loop and branch bodies are
+traced apart: :func:`inherit` trusts one level of them, :func:`trusted_within` every level of
+a function handed to a solver library. Result checks (a PSF with no light) stay.
+``checks.wavelengths``, ``field_angles``, ``finite_array`` and ``sampling.static_depth``
+consult :func:`checked_by_caller`.
 """
 
 from __future__ import annotations
@@ -67,6 +69,23 @@ def inherit(fn):
         if not any(outer is b for b in _CHECKED_BODIES.get()):
             inner = None
         return _trusting(inner, fn, args, kwargs)
+
+    return run
+
+
+def trusted_within(fn, like):
+    """``fn`` trusted in every trace it runs in, where ``like`` (a value of the body that
+    makes ``fn``) is traced in a checked core's trusted body; else ``fn`` itself. For an
+    objective made anew in such a body and handed to a solver library (optimistix, jaxopt)
+    whose loops and branches nest, where :func:`inherit` (one loop level) does not reach.
+    The wrapper is a new function on each call, and JAX caches traces by the function, so
+    its traces serve that body's program only."""
+    if not checked_by_caller(like):
+        return fn
+
+    @functools.wraps(fn)
+    def run(*args, **kwargs):
+        return _trusting(_jit_trace((args, kwargs)), fn, args, kwargs)
 
     return run
 

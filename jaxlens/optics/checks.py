@@ -27,6 +27,7 @@ from .checked_inputs import (  # noqa: F401 (re-exported)
     checked_core,
     inherit,
     is_traced,
+    trusted_within,
 )
 
 GENERIC_RANGE_UM = (0.15, 30.0)
