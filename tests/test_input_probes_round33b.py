@@ -84,7 +84,7 @@ def test_zmx_surface_pickup_given_twice_is_refused(tmp_path, src, old, new, key)
      r"thickness pickup \(PZUP\) of surface 7 reads its own surface"),
     (PZUP_FILE, "PZUP 6.0 1 0 0", "PZUP 8 1 0 0",
      r"thickness pickup \(PZUP\) of surface 7 reads surface 8, whose thickness is itself a "
-     r"pickup solved after surface 7's \(line \d+\)"),
+     r"pickup solved after surface 7's \(line \d+; pickups are solved in surface order\)"),
     (PZUP_FILE, "4 6.0 -1. 0", "4 9.0 -1. 0",
      r"curvature pickup \(CURV solve 4\) of surface 8 reads surface 9, whose curvature is "
      r"itself a pickup"),
