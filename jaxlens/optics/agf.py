@@ -258,9 +258,13 @@ def _dispersion_model(formula: int, coefficients: tuple[float, ...], name: str, 
 
 
 def decode_zemax_text(raw: bytes, path: str = "<file>") -> str:
-    """Text of a Zemax file (.zmx, .agf): UTF-16 (BOM or NUL-interleaved), UTF-8 (BOM or
-    not), else latin-1; other binary data is a ValueError naming ``path``."""
+    """Text of a Zemax file (.zmx, .agf): UTF-32 (BOM), UTF-16 (BOM or NUL-interleaved),
+    UTF-8 (BOM or not), else latin-1; other binary data is a ValueError naming ``path``.
+    The BOMs are tried longest first: UTF-32 LE's (FF FE 00 00) begins with UTF-16 LE's,
+    which read it as UTF-16 with a NUL after every character."""
     try:
+        if raw.startswith((b"\xff\xfe\x00\x00", b"\x00\x00\xfe\xff")):
+            return raw.decode("utf-32")
         if raw.startswith((b"\xff\xfe", b"\xfe\xff")):
             return raw.decode("utf-16")
         if raw.startswith(b"\xef\xbb\xbf"):
@@ -269,7 +273,8 @@ def decode_zemax_text(raw: bytes, path: str = "<file>") -> str:
         if head and head.count(b"\x00") > len(head) // 4:
             return raw.decode("utf-16-le" if head[1:2] == b"\x00" else "utf-16-be")
     except UnicodeDecodeError as e:
-        raise ValueError(f"{path}: not a readable UTF-16 text file ({e.reason})") from None
+        raise ValueError(f"{path}: not a readable {e.encoding.upper()} text file "
+                         f"({e.reason})") from None
     if b"\x00" in raw:
         raise ValueError(f"{path}: binary data, not a Zemax text file")
     try:
@@ -430,7 +435,7 @@ def read_records(path: str | os.PathLike, catalog: str | None = None) -> list[Gl
 def load_agf(path: str | os.PathLike) -> dict[str, CatalogMaterial]:
     """Materials of a Zemax AGF glass catalog.
 
-    The encoding is detected: UTF-16 (with or without BOM), UTF-8 or latin-1. When a name
+    The encoding is detected: UTF-16 (with or without BOM), UTF-32 (BOM), UTF-8 or latin-1. When a name
     occurs twice (case ignored), a warning names both lines and the later record wins.
 
     Args:
