@@ -435,8 +435,9 @@ def read_records(path: str | os.PathLike, catalog: str | None = None) -> list[Gl
 def load_agf(path: str | os.PathLike) -> dict[str, CatalogMaterial]:
     """Materials of a Zemax AGF glass catalog.
 
-    The encoding is detected: UTF-16 (with or without BOM), UTF-32 (BOM), UTF-8 or latin-1. When a name
-    occurs twice (case ignored), a warning names both lines and the later record wins.
+    The encoding is detected: UTF-16 (with or without BOM), UTF-32 (BOM), UTF-8 or latin-1.
+    When a name occurs twice (case ignored), a warning names both lines and the later record
+    wins.
 
     Args:
         path: The ``.agf`` file.
