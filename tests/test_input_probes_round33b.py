@@ -205,7 +205,8 @@ def test_report_refuses_zmx_options_with_a_json_lens(capsys, argv, option):
 
     code = main(["report", str(COOKE), *argv])
     err = capsys.readouterr().err.strip().splitlines()[-1]
-    assert code == 2 and f"{option} applies to a .zmx lens only" in err, err
+    assert code == 2 and err.startswith(f"jaxlens report: error: {option} ") and (
+        "so it applies to a .zmx lens only; " in err), err
 
 
 def test_report_list_configs_refuses_unknown_glass(capsys, tmp_path):
