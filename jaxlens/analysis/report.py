@@ -745,10 +745,10 @@ def run(args: argparse.Namespace) -> int:
                                  f"{', '.join(ignored)} would be ignored: leave "
                                  f"{'it' if len(ignored) == 1 else 'them'} out")
             return _list_configs(args.lens)
-        _zmx_options_only_with_zmx(args)
         if args.config is not None:  # before the file is read (a .json file named "config=0")
             checks.number(args.config, "--config", "report", lo=1, integer=True,
                           unit="(Zemax's 1-based configuration number)")
+        _zmx_options_only_with_zmx(args)
         paths = figure_paths(args.lens, args.plot, args.overwrite) if args.plot else None
         # strict by default: a report must not describe a truncated file, nor rays that a
         # setting jaxlens does not use would have changed, without being asked
