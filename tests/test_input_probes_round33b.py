@@ -101,8 +101,8 @@ def test_zmx_surface_pickup_given_twice_is_refused(tmp_path, src, old, new, key)
 def test_zmx_pickup_of_a_missing_own_or_unsolved_surface_is_refused(tmp_path, src, old, new,
                                                                     match):
     """Main: a pickup of surface 40 (of its own surface, of a later surface's pickup) read
-    without a word: the file's solved value was taken, and a configuration that re-solves
-    it failed with an IndexError or read a value of the previous configuration (stale)."""
+    without a word: the file's solved value was taken, and a configuration changing the
+    source kept it (surface 40, its own) or read a value not yet re-solved (stale)."""
     text = src.read_text()
     assert old in text
     p = tmp_path / "d.zmx"

@@ -311,8 +311,8 @@ def check_pickups(f: ZmxFile) -> None:
     source is a surface the file lacks, its own surface, or a later surface whose same value
     is itself a pickup: pickups are solved in surface order, so that one would read the
     value before its own solve (a stale one, the previous configuration's). Before, the
-    file's solved value was read without a word, and a configuration re-solving the pickup
-    failed with an IndexError or read the stale value."""
+    file's solved value was read without a word, and a configuration changing the source
+    kept the file's value (surface 40, its own) or read the stale one."""
     last = len(f.surfs) - 1
     picked = {(what, number): ln for what, number, _, ln in _pickups(f)}
     for what, number, src, ln in _pickups(f):
