@@ -23,6 +23,7 @@ from typing import Any
 import jax
 import numpy as np
 
+from jaxlens.io.json_values import write_whole
 from jaxlens.optics import checks
 
 RESULTS = pathlib.Path(__file__).resolve().parent / "results"
@@ -178,10 +179,12 @@ def time_python(
 
 
 def write_json(name: str, payload: dict, out: pathlib.Path = RESULTS) -> pathlib.Path:
-    """Write ``payload`` to ``out/name.json`` (numbers made JSON-safe)."""
+    """Write ``payload`` to ``out/name.json`` (numbers made JSON-safe), whole or not at all
+    (``json_values.write_whole``): a run stopped mid-write left a cut file that the summary
+    read later."""
     out.mkdir(parents=True, exist_ok=True)
     path = out / f"{name}.json"
-    path.write_text(json.dumps(_jsonable(payload), indent=1) + "\n")
+    write_whole(path, json.dumps(_jsonable(payload), indent=1) + "\n")
     return path
 
 

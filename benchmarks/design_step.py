@@ -72,7 +72,7 @@ def import_baseline(ref: str):
                 path = os.path.join(root, n)
                 with open(path) as f:
                     text = f.read()
-                with open(path, "w") as f:
+                with open(path, "w") as f:  # temporary: an extracted copy
                     f.write(text.replace('sys.modules["jaxlens.', f'sys.modules["{NAME}.'))
     sys.path.insert(0, tmp)
     return importlib.import_module(NAME)

@@ -177,7 +177,9 @@ def main(argv=None):
     out = reevaluate(a.folder, DesignSpec())
     out["seconds"] = time.perf_counter() - t0
     out["command"] = "python -m benchmarks.reevaluate " + str(a.folder)
-    dest.write_text(json.dumps(out, indent=1) + "\n")
+    from jaxlens.io.json_values import write_whole
+
+    write_whole(dest, json.dumps(out, indent=1) + "\n")
     print(f"{out['valid_both']}/{out['designs']} valid in both; optiland mean "
           f"{out['optiland_rms_mean_um']:.3f} µm, min {out['optiland_rms_min_um']:.3f}, max "
           f"{out['optiland_rms_max_um']:.3f}; jaxlens mean {out['jaxlens_rms_mean_um']:.3f}; "

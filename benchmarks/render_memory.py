@@ -327,7 +327,9 @@ def main(argv=None) -> None:
         "machine": machine_info(),
     }
     args.out.parent.mkdir(parents=True, exist_ok=True)
-    args.out.write_text(json.dumps(result, indent=2) + "\n")
+    from jaxlens.io.json_values import write_whole
+
+    write_whole(args.out, json.dumps(result, indent=2) + "\n")
     print(f"wrote {args.out}")
 
 

@@ -108,7 +108,9 @@ def main(argv=None) -> None:
         "machine": info,
     }
     args.out.parent.mkdir(parents=True, exist_ok=True)
-    args.out.write_text(json.dumps(result, indent=2) + "\n")
+    from jaxlens.io.json_values import write_whole
+
+    write_whole(args.out, json.dumps(result, indent=2) + "\n")
     print(json.dumps({k: v for k, v in result.items() if k != "machine"}, indent=2))
 
 

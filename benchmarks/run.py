@@ -269,7 +269,9 @@ def write_readme(out: pathlib.Path) -> None:
                 continue
             parts += _section(name, path)
     parts += _other_files(out)
-    (out / "README.md").write_text("\n".join(parts) + "\n")
+    from jaxlens.io.json_values import write_whole
+
+    write_whole(out / "README.md", "\n".join(parts) + "\n")
 
 
 # Result files that the studies above do not make: what each holds (benchmarks/SPEED.md

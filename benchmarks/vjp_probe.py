@@ -35,6 +35,7 @@ import numpy as np  # noqa: E402
 
 import jaxlens  # noqa: E402
 from jaxlens import zoo  # noqa: E402
+from jaxlens.io.json_values import write_whole  # noqa: E402
 from jaxlens.tracing.forward import CHUNK  # noqa: E402
 
 from . import throughput  # noqa: E402
@@ -219,9 +220,8 @@ def main(argv=None):
     else:
         out = timing(a.rays, a.repeats, tuple(a.chunk), jnp.dtype(a.dtype), a.lens)
         if a.json:
-            with open(a.json, "w") as fh:
-                json.dump(dict(out, command="python -m benchmarks.vjp_probe "
-                               + " ".join(sys.argv[1:] if argv is None else argv)), fh, indent=1)
+            write_whole(a.json, json.dumps(dict(out, command="python -m benchmarks.vjp_probe "
+                        + " ".join(sys.argv[1:] if argv is None else argv)), indent=1))
 
 
 if __name__ == "__main__":

@@ -68,8 +68,9 @@ def main(argv=None) -> None:
                        "fan_points": FAN_POINTS, "fans_mm": fans}
     out = {"computed_by": f"optiland {version('optiland')} via tools/aberrations_reference.py",
            "conventions": __doc__.split("\n\n")[1].replace("\n", " "), "cases": cases}
-    with open(a.out, "w") as f:
-        json.dump(out, f, indent=1)
+    from jaxlens.io.json_values import write_whole
+
+    write_whole(a.out, json.dumps(out, indent=1))
     print(f"wrote {a.out}")
 
 

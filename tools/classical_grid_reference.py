@@ -36,6 +36,7 @@ import export_reevaluation as ex  # noqa: E402
 import jaxlens as jl  # noqa: E402
 from jaxlens.design.evaluate import sensor_field_grid  # noqa: E402
 from jaxlens.design.spec import DesignSpec  # noqa: E402
+from jaxlens.io.json_values import write_whole  # noqa: E402
 
 
 def main(argv):
@@ -52,7 +53,7 @@ def main(argv):
     for key, media in (("jaxlens_media", lens), ("glass", None)):
         numbers, grid = ex.optiland_grid_numbers(zmx, spec, angles, lens=media)
         ref[key] = {**numbers, "rms_per_field_um": grid.tolist()}
-    pathlib.Path(out).write_text(json.dumps(ref, indent=1) + "\n")
+    write_whole(out, json.dumps(ref, indent=1) + "\n")
 
 
 if __name__ == "__main__":

@@ -28,5 +28,5 @@ texts = {
 with tempfile.TemporaryDirectory() as d:
     for name in SNIPPETS:
         p = pathlib.Path(d) / f"{name}.zmx"
-        p.write_text(texts[name])
+        p.write_text(texts[name])  # temporary folder
         print(name, repr(float(load_zemax_file(str(p)).paraxial.f2())))

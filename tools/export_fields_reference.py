@@ -39,6 +39,7 @@ sys.path.insert(0, str(pathlib.Path(__file__).resolve().parent))
 import export_reevaluation as ex  # noqa: E402
 
 import jaxlens as jl  # noqa: E402
+from jaxlens.io.json_values import write_whole  # noqa: E402
 
 FIELDS = [[0.0, 0.0], [9.0, 0.0], [0.0, -14.0], [6.0, 8.0], [-12.0, 16.0], [10.0, -5.0]]
 
@@ -62,7 +63,7 @@ def main(argv):
            "primary": primary,
            "glass": ex.optiland_numbers(zmx, wl, primary, FIELDS),
            "jaxlens_media": ex.optiland_numbers(zmx, wl, primary, FIELDS, lens=reread)}
-    pathlib.Path(out).write_text(json.dumps(ref, indent=1) + "\n")
+    write_whole(out, json.dumps(ref, indent=1) + "\n")
 
 
 if __name__ == "__main__":

@@ -76,6 +76,7 @@ import numpy as np  # noqa: E402
 
 import jaxlens as jl  # noqa: E402
 from jaxlens.analysis.report import report_data  # noqa: E402
+from jaxlens.io.json_values import write_whole  # noqa: E402
 
 # jaxlens's 21 × 21 grid inside the unit disc (317 points; optiland's own "uniform" grid drops
 # the 4 points on the rim at (0, ±1), (±1, 0) in floating point, so its points are not used).
@@ -241,7 +242,7 @@ def optiland_optic(path: str, primary: float, lens=None):
         if own:  # a copy beside nothing: optiland reads no AGF file
             with tempfile.TemporaryDirectory() as tmp:
                 copy = os.path.join(tmp, "own.zmx")
-                with open(copy, "w", encoding="utf-8") as fh:
+                with open(copy, "w", encoding="utf-8") as fh:  # temporary folder
                     fh.write(text)
                 op = load_zemax_file(copy)
             for n, d in own.items():
@@ -642,7 +643,7 @@ def main(argv=None) -> int:
         out["summary"] = summary_check(a.summary)
         print(json.dumps(out["summary"], indent=1))
     if a.json:
-        pathlib.Path(a.json).write_text(json.dumps(out, indent=1))
+        write_whole(a.json, json.dumps(out, indent=1))
     return 0
 
 

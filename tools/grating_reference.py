@@ -37,6 +37,7 @@ sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
 import check_rays as cr  # noqa: E402
 
 import jaxlens as jl  # noqa: E402
+from jaxlens.io.json_values import write_whole  # noqa: E402
 from jaxlens.optics.lens import unclipped  # noqa: E402
 
 ROOT = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
@@ -125,9 +126,7 @@ def main() -> int:
                   {key: float(np.max(np.abs(pj - v))) for key, v in hits.items()})
         optic = build(name, lens)
         out["files"][name] = {"optiland_f2": float(optic.paraxial.f2()), "rays": rays}
-    with open(os.path.join(DATA, "reference.json"), "w") as f:
-        json.dump(out, f, indent=1)
-        f.write("\n")
+    write_whole(os.path.join(DATA, "reference.json"), json.dumps(out, indent=1) + "\n")
     return 0
 
 

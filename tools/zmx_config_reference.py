@@ -99,7 +99,7 @@ def expand(path: str, folder: str) -> list[str]:
                 continue  # optiland 0.6.3 fails on a one-value WAVL beside WAVM lines
             body.append(ln)
         p = os.path.join(folder, f"config{c}.zmx")
-        with open(p, "w", encoding="utf-8") as fh:
+        with open(p, "w", encoding="utf-8") as fh:  # temporary folder (main's)
             fh.write("\n".join(body) + "\n")
         out.append(p)
     return out

@@ -575,9 +575,8 @@ def register(subparsers) -> None:
     p.add_argument(
         "--unknown-glass",
         choices=("error", "model"),
-        default="error",
-        help=".zmx glasses in no catalog: refuse (default) or use a model glass of the nd "
-        "and Vd on their GLAS line (with a warning)",
+        help=".zmx glasses in no catalog: refuse (error, the default) or use a model glass of "
+        "the nd and Vd on their GLAS line (with a warning)",
     )
     p.add_argument(
         "--plot",
@@ -620,7 +619,7 @@ def register(subparsers) -> None:
 
 def _load_lens(args: argparse.Namespace) -> Lens:
     """The lens of ``args.lens`` (``--config``: that configuration of a .zmx file)."""
-    return load(args.lens, strict=not args.lenient, unknown_glass=args.unknown_glass,
+    return load(args.lens, strict=not args.lenient, unknown_glass=args.unknown_glass or "error",
                 config=args.config)
 
 
@@ -705,6 +704,27 @@ def _write_figures(lens: Lens, paths: dict[str, str]) -> None:
             bar.update()
 
 
+ZMX_OPTIONS = (("--lenient", "lenient", "reads a .zmx file past what jaxlens does not model"),
+               ("--unknown-glass", "unknown_glass", "chooses what a .zmx GLAS line naming a "
+                "glass in no catalog becomes"),
+               ("--config", "config", "selects a configuration of a multi-configuration .zmx "
+                "file"))
+"""The options that only a .zmx lens reads: (option, argument, what it does)."""
+
+
+def _zmx_options_only_with_zmx(args: argparse.Namespace) -> None:
+    """Refuse an option of ``ZMX_OPTIONS`` given with a lens that is no .zmx file: it did
+    nothing there (``--unknown-glass error``, ``--lenient``), or the error named the load
+    function's argument (``unknown_glass='model'``, ``config=1``), not the option."""
+    if args.lens.lower().endswith(".zmx"):
+        return
+    for option, name, what in ZMX_OPTIONS:
+        value = getattr(args, name)
+        if value is not None and value is not False:
+            raise ValueError(f"{option} {what}, so it applies to a .zmx lens only; "
+                             f"{args.lens} is no .zmx file: leave it out")
+
+
 def run(args: argparse.Namespace) -> int:
     """Run the ``report`` subcommand; returns the exit status."""
     try:
@@ -716,7 +736,9 @@ def run(args: argparse.Namespace) -> int:
             ignored = [o for o, v in (("--json", args.json), ("--fields", args.fields),
                                       ("--wavelengths", args.wavelengths),
                                       ("--wavefront", args.wavefront), ("--plot", args.plot),
-                                      ("--config", args.config))
+                                      ("--config", args.config),
+                                      ("--unknown-glass", args.unknown_glass),
+                                      ("--lenient", args.lenient))
                        if v is not None and v is not False]  # --config 0 too
             if ignored:  # the listing is text about every configuration: they would do nothing
                 raise ValueError(f"--list-configs lists the configurations and stops; "
@@ -726,9 +748,7 @@ def run(args: argparse.Namespace) -> int:
         if args.config is not None:  # before the file is read (a .json file named "config=0")
             checks.number(args.config, "--config", "report", lo=1, integer=True,
                           unit="(Zemax's 1-based configuration number)")
-        if args.lenient and not args.lens.lower().endswith(".zmx"):  # it did nothing there
-            raise ValueError(f"--lenient reads a .zmx file past what jaxlens does not model; "
-                             f"{args.lens} is no .zmx file: leave it out")
+        _zmx_options_only_with_zmx(args)
         paths = figure_paths(args.lens, args.plot, args.overwrite) if args.plot else None
         # strict by default: a report must not describe a truncated file, nor rays that a
         # setting jaxlens does not use would have changed, without being asked

@@ -166,16 +166,22 @@ def pretty(o: Any, level: int = 0) -> str:
     return "[\n" + ",\n".join(body) + "\n" + pad + "]"
 
 
-def write_whole(path: str, text: str, *, newline: str | None = None) -> None:
-    """Write ``text`` to ``path`` whole or not at all: into a temporary file beside it,
-    renamed over ``path`` when complete. A save interrupted mid-write (Ctrl-C) left a file
-    cut short, which destroyed the lens it replaced, and a ``.zmx`` cut at a surface's end
-    read as a shorter lens."""
-    folder, name = os.path.split(os.path.abspath(path))
+def write_whole(path: str | os.PathLike, text: str | bytes, *,
+                newline: str | None = None) -> None:
+    """Write ``text`` (UTF-8; ``bytes`` as they are, an ``.npz`` say) to ``path`` whole or
+    not at all: into a temporary file beside it, renamed over ``path`` when complete. A save
+    interrupted mid-write (Ctrl-C) left a file cut short, which destroyed the lens it
+    replaced, and a ``.zmx`` cut at a surface's end read as a shorter lens; a results file
+    (a benchmark's, a reference tool's) cut short failed the run or test reading it."""
+    folder, name = os.path.split(os.path.abspath(os.fspath(path)))
     tmp = os.path.join(folder, f".{name}.{os.getpid()}.partial")
     try:
-        with open(tmp, "w", encoding="utf-8", newline=newline) as f:
-            f.write(text)
+        if isinstance(text, bytes):
+            with open(tmp, "wb") as f:
+                f.write(text)
+        else:
+            with open(tmp, "w", encoding="utf-8", newline=newline) as f:
+                f.write(text)
         os.replace(tmp, path)
     except BaseException:
         if os.path.exists(tmp):

@@ -115,8 +115,8 @@ What is read and written:
       object must be a plane normal to the axis (a curved or tilted one is refused).
     * The sensor (``Lens.sensor``) is kept in the image surface's comment,
       ``COMM jaxlens sensor rows=480 cols=640 pixel=0.005``, which Zemax ignores.
-    * Files are read as UTF-16 (with BOM, Zemax's default), UTF-8 (with or without BOM)
-      or latin-1, and written as UTF-8.
+    * Files are read as UTF-16 (with BOM, Zemax's default), UTF-32 (with BOM), UTF-8 (with
+      or without BOM) or latin-1, and written as UTF-8.
 
     * Multi-configuration files (``MNUM`` and the operand rows after it): the surfaces are
       the active configuration, which is read by default; ``config=N`` reads configuration

@@ -274,6 +274,62 @@ def _environment(f: ZmxFile, op: Operand, value: str, ln: ZmxLine, chosen: int) 
                    f"configuration {chosen} (configurations at the file's {what} read)")
 
 
+def _curvature_source(ln: ZmxLine | None) -> int | None:
+    """The source surface of a curvature pickup (``CURV c 4 src scale …``: solve type 4),
+    else ``None``."""
+    if ln is None or len(ln.tokens) < 5:
+        return None
+    try:
+        solve = float(ln.tokens[2])
+    except ValueError:
+        return None
+    return ln.int(3, "curvature pickup's source surface", lo=0) if solve == 4 else None
+
+
+def _pickups(f: ZmxFile) -> list[tuple[str, int, int, ZmxLine]]:
+    """Every pickup of the file: (what it sets, its surface, the source surface, its line);
+    ``what`` names the quantity ("thickness", "curvature", "PARM n")."""
+    out = []
+    for s in f.surfs:
+        if s.pzup is not None:
+            out.append(("thickness", s.number, s.pzup.int(1, "PZUP source surface", lo=0),
+                        s.pzup))
+        src = _curvature_source(s.curv_line)
+        if src is not None:
+            out.append(("curvature", s.number, src, s.curv_line))
+        for n, ln in sorted(s.ppar.items()):
+            out.append((f"PARM {n}", s.number, ln.int(2, "PPAR source surface", lo=0), ln))
+    return out
+
+
+_PICKUP_NAMES = {"thickness": "thickness pickup (PZUP)", "curvature": "curvature pickup (CURV "
+                 "solve 4)"}
+
+
+def check_pickups(f: ZmxFile) -> None:
+    """Refuse, naming the line, a pickup (``PZUP``, ``PPAR``, a ``CURV`` pickup solve) whose
+    source is a surface the file lacks, its own surface, or a later surface whose same value
+    is itself a pickup: pickups are solved in surface order, so that one would read the
+    value before its own solve (a stale one, the previous configuration's). Before, the
+    file's solved value was read without a word, and a configuration changing the source
+    kept the file's value (surface 40, its own) or read the stale one."""
+    last = len(f.surfs) - 1
+    picked = {(what, number): ln for what, number, _, ln in _pickups(f)}
+    for what, number, src, ln in _pickups(f):
+        name = _PICKUP_NAMES.get(what, f"parameter pickup (PPAR {what.split()[-1]})")
+        if src > last:
+            raise ln.error(f"{name} of surface {number} reads surface {src}, which the file "
+                           f"does not have (surfaces 0..{last})")
+        if src == number:
+            raise ln.error(f"{name} of surface {number} reads its own surface; a pickup "
+                           f"copies another surface's value")
+        if src > number and (what, src) in picked:
+            raise ln.error(f"{name} of surface {number} reads surface {src}, whose {what} "
+                           f"is itself a pickup solved after surface {number}'s (line "
+                           f"{picked[what, src].number}; pickups are solved in surface order): "
+                           f"it would read a value not yet solved")
+
+
 def _thickness_pickups(f: ZmxFile, thick: set) -> None:
     """Re-solve the thickness pickups (``PZUP src scale offset …``) of surfaces whose source
     this configuration gave another thickness (``THIC``), in surface order. Only the plain
@@ -306,16 +362,8 @@ def _curvature_pickups(f: ZmxFile, curved: set) -> None:
     here, and the two differ."""
     for s in f.surfs:
         ln = s.curv_line
-        if ln is None or len(ln.tokens) < 5 or s.number in curved:
-            continue
-        try:
-            solve = float(ln.tokens[2])
-        except ValueError:
-            continue
-        if solve != 4:
-            continue
-        src = ln.int(3, "curvature pickup's source surface", lo=0)
-        if src not in curved:
+        src = _curvature_source(ln)
+        if src is None or s.number in curved or src not in curved:
             continue
         scale = ln.float(4, "curvature pickup's scale factor")
         if abs(scale) != 1:

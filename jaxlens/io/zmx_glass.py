@@ -7,7 +7,8 @@ successor of a discontinued SCHOTT glass that it still lacks (its lead-free N- g
 N-LAF21, or else its "A" version, SSK4 → SSK4A), then in every shipped catalog. The last two
 are reported (a ``ZmxWarning``; an error under ``strict``): a glass of the same name from
 another maker may be another glass. The nd and Vd that a ``GLAS`` line carries are
-cross-checked against the catalog's.
+cross-checked against the catalog's. A side catalog holding the name a line uses in two
+cases (N-BK7 and n-bk7: two records to a lookup that ignores case) is refused with both.
 """
 
 from __future__ import annotations
@@ -22,6 +23,7 @@ import jax.numpy as jnp
 import numpy as np
 
 from ..optics import catalog
+from ..optics.agf import read_records
 from ..optics.catalog import decode_zemax_text as decode
 from ..optics.checks import number_text
 from ..optics.materials import AbstractMaterial, Air, ModelGlass
@@ -94,6 +96,9 @@ class GlassResolver:
         self.strict = strict
         self.unknown_glass = unknown_glass
         self.side: dict[str, tuple[dict, dict, str]] = {}
+        # catalog -> upper-case name -> its records, where a side catalog names a glass in
+        # two cases (N-BK7 and n-bk7)
+        self.cases: dict[str, dict[str, list]] = {}
         try:
             listing = {n.upper(): n for n in os.listdir(self.dir)}
         except OSError:
@@ -102,7 +107,13 @@ class GlassResolver:
             fname = listing.get(f"{cat}.AGF")
             if fname is not None:
                 p = os.path.join(self.dir, fname)
-                mats = {k.upper(): v for k, v in catalog.load_agf(p).items()}
+                latest: dict = {}
+                for r in read_records(p):
+                    up = r.name.upper()
+                    if up in latest and latest[up].name != r.name:
+                        self.cases.setdefault(cat, {}).setdefault(up, [latest[up]]).append(r)
+                    latest[up] = r
+                mats = {up: r.to_material() for up, r in latest.items()}
                 self.side[cat] = (mats, read_agf_markers(p), p)
 
     def get(self, ln) -> AbstractMaterial:
@@ -140,6 +151,14 @@ class GlassResolver:
         for cat in self.gcat:
             if cat in self.side:
                 mats, markers, p = self.side[cat]
+                if up in self.cases.get(cat, {}):
+                    # The lookup ignores case (as Zemax's): the later record was used without
+                    # a word (the AGF reader's warning aside), whichever the line names.
+                    a, b = self.cases[cat][up][:2]
+                    raise ln.error(f"glass {name!r}: the side catalog {p} has two glasses of "
+                                   f"this name in two cases, {a.name} ({a.source}) and {b.name} "
+                                   f"({b.source}); glass names ignore case, so which one the "
+                                   f"file means is not known: rename or remove one")
                 if up in markers:
                     try:
                         spec = json.loads(markers[up])

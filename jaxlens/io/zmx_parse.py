@@ -156,11 +156,16 @@ class ZmxFile:
     zemax: bool = False  # written by Zemax (a VERS line): every block is complete
 
 
-SINGLE_SURFACE_KEYS = frozenset("TYPE CURV DISZ CONI GLAS DIAM CLAP FLAP OBSC OBDC".split())
-"""Keywords a SURF block holds once (PARM and XDAT: once per index). Zemax writes each once;
-a second line (an edit or a merge gone wrong) replaced the first without a word."""
+SINGLE_SURFACE_KEYS = frozenset("TYPE CURV DISZ CONI GLAS DIAM CLAP FLAP OBSC OBDC PZUP".split())
+"""Keywords a SURF block holds once (PARM, XDAT and PPAR: once per index). Zemax writes each
+once; a second line (an edit or a merge gone wrong) replaced the first without a word."""
+INDEXED_SURFACE_KEYS = frozenset(("PARM", "XDAT", "PPAR"))
 APERTURE_KEYS = frozenset(("ENPD", "FNUM", "FLOA", "OBNA"))
-SINGLE_TOP_KEYS = frozenset("UNIT FTYP XFLN YFLN XFLD YFLD WAVL PWAV".split())
+SINGLE_TOP_KEYS = frozenset("UNIT FTYP XFLN YFLN XFLD YFLD WAVL PWAV GCAT ENVD RAIM MNUM FWGN "
+                            "FWGT WWGT WWGN".split())
+"""Header keywords a file holds once: the later of two lines replaced the earlier without a
+word (which catalogs, environment, aiming, configurations or weights the file meant was a
+guess). FWGT beside FWGN (WWGT beside WWGN), as Zemax 2006 writes them, is not a repeat."""
 
 
 def _nonzero(tok: str) -> bool:
@@ -169,6 +174,24 @@ def _nonzero(tok: str) -> bool:
         return number_text(tok) != 0
     except ValueError:
         return True
+
+
+def _repeat(seen_top: dict, seen_surf: dict, key: str, ln: ZmxLine,
+            cur: ZmxSurface | None) -> None:
+    """The one rule of lines given twice: a header keyword of ``SINGLE_TOP_KEYS`` (the system
+    aperture, a WAVM n) in the file, a surface keyword of ``SINGLE_SURFACE_KEYS`` (a PARM,
+    XDAT or PPAR index) in its SURF block."""
+    if key in SURFACE_KEYS and cur is not None:
+        if key in SINGLE_SURFACE_KEYS:
+            _once(seen_surf, key, ln, f" in surface {cur.number}")
+        elif key in INDEXED_SURFACE_KEYS:
+            _once(seen_surf, f"{key} {ln.tokens[1]}", ln, f" in surface {cur.number}")
+    elif key in APERTURE_KEYS:  # one system aperture: ENPD, FNUM, FLOA or OBNA
+        _once(seen_top, "the system aperture (ENPD, FNUM, FLOA or OBNA)", ln, "")
+    elif key in SINGLE_TOP_KEYS:
+        _once(seen_top, key, ln, "")
+    elif key == "WAVM":
+        _once(seen_top, f"WAVM {ln.tokens[1]}", ln, "")
 
 
 def _once(seen: dict, what: str, ln: ZmxLine, where: str) -> None:
@@ -208,18 +231,8 @@ def parse(text: str, path: str) -> ZmxFile:
             if cur is None:
                 raise ln.error(f"{key} before the first SURF")
             surface_line(cur, key, ln)  # a bad value is named before a repeat
-            if key in SINGLE_SURFACE_KEYS:
-                _once(seen_surf, key, ln, f" in surface {cur.number}")
-            elif key in ("PARM", "XDAT"):
-                _once(seen_surf, f"{key} {ln.tokens[1]}", ln, f" in surface {cur.number}")
         elif key in TOP_KEYS:
             top_line(f, key, ln, raw)
-            if key in APERTURE_KEYS:  # one system aperture: ENPD, FNUM, FLOA or OBNA
-                _once(seen_top, "the system aperture (ENPD, FNUM, FLOA or OBNA)", ln, "")
-            elif key in SINGLE_TOP_KEYS:
-                _once(seen_top, key, ln, "")
-            elif key == "WAVM":
-                _once(seen_top, f"WAVM {ln.tokens[1]}", ln, "")
         elif key == "MNUM":
             f.mnum = ln
         elif is_config_operand(key) and f.mnum is not None:
@@ -228,6 +241,7 @@ def parse(text: str, path: str) -> ZmxFile:
             f.unknown.append(ln)  # a keyword known only with the values seen in real files
         elif key not in IGNORED_KEYWORDS:
             f.unknown.append(ln)
+        _repeat(seen_top, seen_surf, key, ln, cur)
         if key in SURFACE_KEYS and cur is not None:
             cur.keys.add(key)
     if not f.surfs:

@@ -504,6 +504,7 @@ def loads(text: str, path: str = "<zmx>", *, strict: bool = False,
     """
     f = parse(text, path)
     try:
+        zmx_config.check_pickups(f)
         zmx_config.select(f, config, strict)
         return _lens(f, text, path, strict, unknown_glass)
     except ValueError as e:

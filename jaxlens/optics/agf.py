@@ -258,9 +258,13 @@ def _dispersion_model(formula: int, coefficients: tuple[float, ...], name: str, 
 
 
 def decode_zemax_text(raw: bytes, path: str = "<file>") -> str:
-    """Text of a Zemax file (.zmx, .agf): UTF-16 (BOM or NUL-interleaved), UTF-8 (BOM or
-    not), else latin-1; other binary data is a ValueError naming ``path``."""
+    """Text of a Zemax file (.zmx, .agf): UTF-32 (BOM), UTF-16 (BOM or NUL-interleaved),
+    UTF-8 (BOM or not), else latin-1; other binary data is a ValueError naming ``path``.
+    The BOMs are tried longest first: UTF-32 LE's (FF FE 00 00) begins with UTF-16 LE's,
+    which read it as UTF-16 with a NUL after every character."""
     try:
+        if raw.startswith((b"\xff\xfe\x00\x00", b"\x00\x00\xfe\xff")):
+            return raw.decode("utf-32")
         if raw.startswith((b"\xff\xfe", b"\xfe\xff")):
             return raw.decode("utf-16")
         if raw.startswith(b"\xef\xbb\xbf"):
@@ -269,7 +273,8 @@ def decode_zemax_text(raw: bytes, path: str = "<file>") -> str:
         if head and head.count(b"\x00") > len(head) // 4:
             return raw.decode("utf-16-le" if head[1:2] == b"\x00" else "utf-16-be")
     except UnicodeDecodeError as e:
-        raise ValueError(f"{path}: not a readable UTF-16 text file ({e.reason})") from None
+        raise ValueError(f"{path}: not a readable {e.encoding.upper()} text file "
+                         f"({e.reason})") from None
     if b"\x00" in raw:
         raise ValueError(f"{path}: binary data, not a Zemax text file")
     try:
@@ -345,8 +350,9 @@ def _finish(pending: _Pending | None, source: str, catalog: str) -> list[GlassRe
 def parse_agf(text: str, source: str = "<string>", catalog: str = "") -> list[GlassRecord]:
     """Glass records of AGF text.
 
-    Reads NM, CD and LD records; CC, GC, ED, TD, OD, MD, IT, ``!`` comments and other
-    records are skipped. A glass named twice (case ignored) warns; the later record wins.
+    Reads NM, CD and LD records; the numbers of ED, TD and IT records are checked (text in
+    one was skipped without a word), then these records, CC, GC, OD, MD, ``!`` comments and
+    other records are skipped. A glass named twice (case ignored) warns; the later record wins.
 
     Args:
         text: AGF file contents.
@@ -359,9 +365,10 @@ def parse_agf(text: str, source: str = "<string>", catalog: str = "") -> list[Gl
     Raises:
         ValueError: On a malformed NM, CD or LD record (a number that is not a plain finite
             decimal, a formula number that is not whole, nd outside [1, 4.5] or a negative
-            Vd), a CD/LD record before any NM or given twice for one glass, an unsupported
-            formula or a glass without CD record; the message names ``source`` and the line
-            number. ``GlassRecord.to_material`` (so ``load_agf``) also refuses a record whose
+            Vd), an ED, TD or IT record holding anything but numbers, a CD/LD record before
+            any NM or given twice for one glass, an unsupported formula or a glass without
+            CD record; the message names ``source`` and the line number.
+            ``GlassRecord.to_material`` (so ``load_agf``) also refuses a record whose
             formula does not give its NM nd at the d line (within ``ND_TOLERANCE``; nd 1
             with Vd 0 marks a material without d-line data).
     """
@@ -410,7 +417,16 @@ def parse_agf(text: str, source: str = "<string>", catalog: str = "") -> list[Gl
                 raise ValueError(f"{where}: LD needs 0 < min < max with min < 100 µm "
                                  f"(wavelengths in µm), got {bounds[0]:g} {bounds[1]:g}")
             pending.wavelength_range = (bounds[0], bounds[1])
+        elif key in NUMERIC_RECORDS:
+            _floats(tokens[1:], where, f"{key} values ({NUMERIC_RECORDS[key]})")
     return records + _finish(pending, source, catalog)
+
+
+NUMERIC_RECORDS = {"TD": "thermal data: D0 D1 D2 E0 E1 λtk Tref",
+                   "ED": "extra data: TCE, density, ΔPgF, …",
+                   "IT": "internal transmission: λ, τ, thickness"}
+"""AGF records that jaxlens does not use but whose values are numbers: one of text (a hand
+edit gone wrong, a comma decimal) is refused with its line rather than skipped."""
 
 
 def read_records(path: str | os.PathLike, catalog: str | None = None) -> list[GlassRecord]:
@@ -430,8 +446,9 @@ def read_records(path: str | os.PathLike, catalog: str | None = None) -> list[Gl
 def load_agf(path: str | os.PathLike) -> dict[str, CatalogMaterial]:
     """Materials of a Zemax AGF glass catalog.
 
-    The encoding is detected: UTF-16 (with or without BOM), UTF-8 or latin-1. When a name
-    occurs twice (case ignored), a warning names both lines and the later record wins.
+    The encoding is detected: UTF-16 (with or without BOM), UTF-32 (BOM), UTF-8 or latin-1.
+    When a name occurs twice (case ignored), a warning names both lines and the later record
+    wins.
 
     Args:
         path: The ``.agf`` file.
