@@ -55,7 +55,6 @@ import json
 import math
 import os
 import re
-import sys
 import warnings
 from importlib.metadata import version
 
@@ -237,10 +236,8 @@ def main(argv=None) -> None:
            "hexapolar": {"rings": RINGS, "x": np.asarray(hexa.x).tolist(),
                          "y": np.asarray(hexa.y).tolist()},
            "cases": cases}
-    sys.path.insert(0, os.path.dirname(os.path.dirname(os.path.abspath(__file__))))
-    from jaxlens.io.json_values import write_whole  # a stop mid-write keeps the old file
-
-    write_whole(a.out, json.dumps(out, indent=None, separators=(",", ":")))
+    with open(a.out, "w") as f:
+        json.dump(out, f, indent=None, separators=(",", ":"))
     print(f"wrote {a.out}")
 
 

@@ -577,12 +577,9 @@ def main(argv):
         p.error(f"OUT {out} is a file, not a folder")
     out.mkdir(parents=True, exist_ok=True)
     names = args.names or list(CASES)
-    sys.path.insert(0, str(pathlib.Path(__file__).resolve().parents[1]))  # the repository
-    from jaxlens.io.json_values import write_whole  # a stop mid-write keeps the old case
-
     for name in names:
         case = build(name, CASES[name])
-        write_whole(out / f"{name}.json", json.dumps(case, indent=1) + "\n")
+        (out / f"{name}.json").write_text(json.dumps(case, indent=1) + "\n")
         cc = case["cross_check"]["rayoptics_real_rays"]
         print(f"{name}: EFL {case['paraxial']['EFL']:.6f} BFL {case['paraxial']['BFL']:.6f} "
               f"zEP {case['paraxial']['entrance_pupil_z']:.6f} rayoptics dpos "

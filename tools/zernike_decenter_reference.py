@@ -152,10 +152,7 @@ def main(argv):
         "sag": [sag_table(ShiftedZernike(CoordinateSystem(), s)) for s in SHIFTED],
         "rays": {"shifted": trace(shifted_lens(), o, d), "moved": trace(moved_lens(), o, d)},
     }
-    sys.path.insert(0, str(pathlib.Path(__file__).resolve().parents[1]))  # the repository
-    from jaxlens.io.json_values import write_whole  # a stop mid-write keeps the old file
-
-    write_whole(argv[0], json.dumps(ref, indent=1) + "\n")
+    pathlib.Path(argv[0]).write_text(json.dumps(ref, indent=1) + "\n")
 
 
 if __name__ == "__main__":
