@@ -357,6 +357,12 @@ def test_negative_gap_is_traced_not_lost():
 # ---------------------------------------------------------------- 10. the CLIs
 
 
+REFUSAL_BOUND_S = 30
+"""Seconds a refusal may take: it comes before any compile or training (each run takes
+minutes), but a fresh interpreter imports JAX first: about 4 s alone, over 10 s (the bound
+this replaced, which failed) with two other jobs on the 2 cores; one CI run ran 3x slower."""
+
+
 def _cli(module, *args, cwd=None):
     t0 = time.perf_counter()
     r = subprocess.run([sys.executable, "-m", module, *args], capture_output=True, text=True,
@@ -402,7 +408,7 @@ def test_design_cli_refuses_bad_options_fast(args, match, tmp_path, monkeypatch,
     lines = err.strip().splitlines()
     assert len(lines) == 1, err
     assert re.search(match, lines[0]), lines[0]
-    assert dt < 10, dt
+    assert dt < REFUSAL_BOUND_S, dt
     assert not out.exists()
 
 
@@ -414,7 +420,7 @@ def test_design_cli_refusal_is_one_line_from_a_fresh_interpreter(tmp_path):
     assert r.returncode == 2, r.stderr
     lines = r.stderr.strip().splitlines()
     assert len(lines) == 1 and re.search(r"--fov must be a finite number", lines[0]), r.stderr
-    assert dt < 10, dt
+    assert dt < REFUSAL_BOUND_S, dt
     assert not out.exists()
 
 
@@ -457,7 +463,7 @@ def test_unwritable_out_is_found_first(tmp_path):
         for module in ("jaxlens.experiments.classical", "jaxlens.experiments.edof"):
             r, dt = _cli(module, "--smoke", "--out", str(locked / "run"))
             assert r.returncode == 2 and "cannot create or write there" in r.stderr, r.stderr
-            assert dt < 10
+            assert dt < REFUSAL_BOUND_S, dt
     finally:
         locked.chmod(0o700)
 
@@ -529,7 +535,7 @@ def test_edof_cli_refuses_bad_options_fast(args, match, tmp_path, monkeypatch, c
     assert code == 2, err
     lines = err.strip().splitlines()
     assert len(lines) == 1 and re.search(match, lines[0]), err
-    assert dt < 10
+    assert dt < REFUSAL_BOUND_S, dt
     assert not (tmp_path / "run").exists()
 
 
@@ -539,7 +545,7 @@ def test_edof_cli_refusal_is_one_line_from_a_fresh_interpreter(tmp_path):
     lines = r.stderr.strip().splitlines()
     assert len(lines) == 1 and re.search(r"--kernel must be an odd whole number", lines[0]), \
         r.stderr
-    assert dt < 10
+    assert dt < REFUSAL_BOUND_S, dt
     assert not (tmp_path / "run").exists()
 
 
