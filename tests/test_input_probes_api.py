@@ -231,7 +231,7 @@ def test_self_intersection_checks_its_sampling(cooke):
 
 @pytest.mark.parametrize("call, match", [
     (lambda L: dist.distortion_map(L, grid=(0, 3)), r"distortion_map: grid must be \(rows, "
-                                                    r"cols\), whole numbers >= 1 points"),
+                                                    r"cols\), whole numbers >= 2 points"),
     (lambda L: dist.distortion_map(L, grid=(2.5, 3)), r"distortion_map: grid must be"),
     (lambda L: dist.distortion_map(L, sensor="x"), r"sensor must be a jaxlens\.Sensor"),
     (lambda L: dist.prewarp(L, jnp.ones((4, 6, 3)), grid=(0, 3)), r"prewarp: grid must be"),
@@ -242,7 +242,8 @@ def test_self_intersection_checks_its_sampling(cooke):
     (lambda L: dist.inverse_distortion_map(L, resolution=(8, 8), pixel_size=0.01, grid=(0, 3)),
      r"inverse_distortion_map: grid must be"),
     (lambda L: dist.inverse_distortion_map(L, resolution=(8, 8), pixel_size=0.01, iters=-1),
-     r"inverse_distortion_map: iters must be a whole number in \[0, inf\)"),
+     r"inverse_distortion_map: iters must be a whole number in \[1, 1000\] aiming "
+     r"iterations"),
     (lambda L: dist.inverse_distortion_map(L, resolution=(8, 8), pixel_size=0.01, depth=-5.0),
      r"depth must be finite numbers in \(0, inf\) mm"),
     (lambda L: psf_map(L, grid=(2, 2), sensor="x", pixel_size=0.005),

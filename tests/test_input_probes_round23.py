@@ -142,8 +142,8 @@ def test_vignetting_map_refuses_nonfinite_factors():
     """Before: a NaN factor mapped every pupil point to NaN (every ray of the field lost)."""
     pupil = jnp.array([[0.0, 1.0], [0.5, 0.0]])
     for bad in (jnp.array([0.0, np.nan, 0.0, 0.5, 0.0]), jnp.array([0.0, 0.0, 0.0, 0.0, np.inf])):
-        with pytest.raises(ValueError, match=r"vignetting_map: factors \(VDX, VDY, VCX, VCY in "
-                           r"pupil radii, VAN in deg\) must be finite, got \[.*(nan|inf)"):
+        with pytest.raises(ValueError, match=r"vignetting_map: factors (VDY|VAN) must be "
+                           r"finite numbers \((pupil radii|deg)\), got (nan|inf)"):
             jl.sampling.vignetting_map(bad, pupil)
     out = jl.sampling.vignetting_map(jnp.array([0.0, 0.25, 0.0, 0.5, 0.0]), pupil)
     np.testing.assert_allclose(out, [[0.0, 0.75], [0.5, 0.25]], atol=1e-15)

@@ -54,7 +54,7 @@ from jaxtyping import Array, Float
 
 from ..imaging.psf import CoherentPSF, psf_info
 from ..imaging.sampling import pupil_points, pupil_polar
-from ..optics import checks
+from ..optics import checks, paraxial
 from ..optics.lens import Lens
 from .spots import chief_ray, spot_rays, weighted_centroid
 
@@ -83,6 +83,30 @@ class EncircledEnergy(eqx.Module):
     energy: Float[Array, " R"]
     center: Float[Array, " 2"]
     truncated: Float[Array, ""]
+
+
+RADII_IMAGE_FACTOR = 2.0
+"""``encircled_energy`` refuses radii that all exceed this many image diagonals (mm): every
+one encircles the whole image with room to spare, so the answer is 1 at every radius; such
+radii are µm given as mm (100 µm typed as 100 on a 43 mm diagonal)."""
+
+
+def _radii_unit(lens, r, where: str) -> None:
+    """Refuse concrete radii (mm) that all exceed ``RADII_IMAGE_FACTOR`` image diagonals:
+    the sensor's, else twice the paraxial image height of the lens's largest field."""
+    if lens.sensor is not None:
+        diag, what = 2.0 * float(lens.sensor.half_diagonal), "the sensor's diagonal"
+    else:
+        f = np.abs(np.asarray(lens.fields, float))
+        t = np.hypot(*np.tan(np.radians(f)).T) if f.ndim == 2 else np.tan(np.radians(f))
+        theta = float(np.degrees(np.arctan(np.max(t, initial=0.0))))
+        diag = 2.0 * abs(float(paraxial.image_height(lens, theta)))
+        what = "the image diagonal (twice the paraxial image height of the largest field)"
+    if math.isfinite(diag) and diag > 0 and float(np.min(r)) > RADII_IMAGE_FACTOR * diag:
+        raise ValueError(f"{where}: radii are in mm, and every one given (smallest "
+                         f"{float(np.min(r)):g} mm) exceeds {RADII_IMAGE_FACTOR:g} times "
+                         f"{what}, {diag:.4g} mm: each encircles the whole image. Radii in "
+                         f"µm? 20 µm is 0.02 mm")
 
 
 def _check_common(lens, where, field, wavelength, method, reference, shape):
@@ -218,6 +242,8 @@ def encircled_energy(lens: Lens, field, radii, *, wavelength=None, method: str =
     if r.size == 0:
         raise ValueError(f"{where}: radii must hold at least one radius (mm)")
     r = checks.values(r, "radii", where, lo=0, unit="mm")  # an error_if where traced
+    if not checks.is_traced(r) and not checks.is_traced(lens.epd):
+        _radii_unit(lens, np.asarray(r), where)
     d, w, total, center, trunc = _samples(
         lens, field, radii, where, wavelength=wavelength, method=method, reference=reference,
         shape=shape, pupil=pupil, depth=depth, pixel_size=pixel_size, kernel_size=kernel_size,

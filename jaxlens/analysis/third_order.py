@@ -219,7 +219,9 @@ def _field(lens: Lens, field, where: str) -> Array:
     if jnp.ndim(field) != 0:
         raise ValueError(f"{where}: field must be one angle θy in degrees (a scalar), got "
                          f"shape {np.shape(field)}")
-    return jnp.asarray(checks.field_angles(field, where, "field"), lens.epd.dtype)
+    field = checks.field_angles(field, where, "field")
+    checks.warn_if_radian_fields(field, where, "field")  # 20° typed as 0.349
+    return jnp.asarray(field, lens.epd.dtype)
 
 
 def _incoming(lens: Lens, y, nu, n, wl) -> Array:

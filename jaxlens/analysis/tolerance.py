@@ -59,6 +59,7 @@ from __future__ import annotations
 
 import copy
 import math
+import warnings
 
 import equinox as eqx
 import jax
@@ -200,7 +201,7 @@ def zero_perturbation(lens: Lens, *, elements: bool = False) -> Perturbation:
     """The perturbation that changes nothing (float64 when x64 is on); with ``elements``,
     with a decenter and tilt entry per element (otherwise those arrays are empty)."""
     _refuse_surfaces(lens, "zero_perturbation")
-    if elements:
+    if checks.switch(elements, "elements", "zero_perturbation"):  # "no" was truthy
         rigid.check_lens(lens, "zero_perturbation")
     n = lens.num_surfaces
     z = jnp.zeros(n, lens.thickness.dtype)
@@ -318,6 +319,7 @@ def _check_fields(fields, weights, where):
         raise ValueError(f"{where}: fields must be finite [F] or [F, 2] degrees with F >= 1, "
                          f"got shape {f.shape}")
     checks.field_angles(f, where, "fields")  # 95° would wrap, found only after the trials
+    checks.warn_if_radian_fields(f, where, "fields")  # np.radians([0, 10, 20])
     w = np.ones(f.shape[0]) if weights is None else np.asarray(weights, float)
     if w.shape != (f.shape[0],) or not np.all(np.isfinite(w)) or np.any(w < 0) or w.sum() <= 0:
         raise ValueError(f"{where}: field_weights must be [{f.shape[0]}] finite numbers >= 0 "
@@ -331,6 +333,7 @@ class ToleranceModel:
     Args:
         lens: the nominal lens (analysed in float64 when x64 is on).
         fields: field angles (deg), ``[F]`` (y) or ``[F, 2]``; default ``lens.fields``.
+            Stored as ``[F, 2]`` (θx, θy) pairs (``self.fields``).
         field_weights: ``[F]`` weights of the field mean (default equal).
         wavelengths: µm (default ``lens.wavelengths``).
         pupil: ``[M, 2]`` unit-pupil points (default the 21 × 21 grid).
@@ -367,7 +370,10 @@ class ToleranceModel:
             raise ValueError(f"ToleranceModel: wavelengths must be µm, one value or [W] with "
                              f"W >= 1, got shape {np.shape(wavelengths)}")
         self.lens = lens.astype(dtype)
-        self.fields = jnp.asarray(f, dtype)
+        # Stored as (θx, θy) pairs [F, 2]: a [2] array of θy was read as one (θx, θy) field
+        # where the fields are turned into directions (field_xy: the MTF's T and S axes).
+        self.fields = jnp.asarray(f if f.ndim == 2 else np.stack([np.zeros_like(f), f], -1),
+                                  dtype)
         self.weights = jnp.asarray(w, dtype)
         self.wavelengths = jnp.asarray(
             self.lens.wavelengths if wavelengths is None else jnp.atleast_1d(
@@ -581,13 +587,18 @@ class ToleranceModel:
 # ------------------------------------------------------------------------- analyses
 def percentile(values, q: float) -> float:
     """The q-th percentile (0–100) with linear interpolation between order statistics
-    (numpy's default); NaN counts as +inf (a failed trial is the worst trial)."""
+    (numpy's default); NaN counts as +inf (a failed trial is the worst trial). A q in
+    (0, 1) is warned about: a fraction (0.95 for the 95th) reads as the 0.95th percentile."""
+    checks.real_values(q, "q", "percentile", "percent")  # "95" compared as a string
+    q = checks.number(q, "q", "percentile", lo=0, hi=100, unit="percent")
+    if 0 < q < 1:
+        warnings.warn(f"percentile: q = {q:g} is the {q:g}th percentile (q is in percent, "
+                      f"0–100); for a fraction, pass {q * 100:g}", stacklevel=2)
+    checks.real_values(values, "values", "percentile")
     v = np.sort(np.where(np.isnan(np.asarray(values, float)), np.inf,
                          np.asarray(values, float)).ravel())
     if v.size == 0:
         raise ValueError("percentile: values must hold at least one number")
-    if not 0 <= q <= 100:
-        raise ValueError(f"percentile: q must be in [0, 100], got {q!r}")
     x = q / 100 * (v.size - 1)
     lo, hi = int(math.floor(x)), int(math.ceil(x))
     frac = x - lo
@@ -603,12 +614,22 @@ def yield_fraction(rms_um, threshold_um: float, valid_fraction=None,
     checks.number(threshold_um, "threshold_um", "yield_fraction", lo=0, lo_open=True, unit="µm")
     checks.number(min_valid, "min_valid", "yield_fraction", lo=0, hi=1,
                   unit="(fraction of a field's rays)")
+    checks.real_values(rms_um, "rms_um", "yield_fraction", "µm")  # "1" read as 1
     r = np.asarray(rms_um, float)
     if r.size == 0:  # np.mean of nothing: NaN and a RuntimeWarning
         raise ValueError("yield_fraction: rms_um must hold at least one trial's RMS (µm)")
     ok = np.isfinite(r) & (r <= threshold_um)
     if valid_fraction is not None:
-        ok &= np.asarray(valid_fraction, float) >= min_valid
+        # 99 (percent) passed every trial; a [3] for 2 trials broadcast or failed in numpy.
+        checks.real_values(valid_fraction, "valid_fraction", "yield_fraction",
+                           "fraction of a field's rays")
+        vf = np.asarray(valid_fraction, float)
+        if vf.shape != r.shape:
+            raise ValueError(f"yield_fraction: valid_fraction must have rms_um's shape "
+                             f"{r.shape} (one fraction a trial), got shape {vf.shape}")
+        checks.values(vf, "valid_fraction", "yield_fraction", lo=0, hi=1,
+                      unit="(fraction of a field's rays)")
+        ok &= vf >= min_valid
     return float(np.mean(ok))
 
 

@@ -27,12 +27,18 @@ class SpotData(eqx.Module):
 
 
 def spot_data(lens: Lens, fields, wavelengths, pupil) -> SpotData:
-    """Trace every field and wavelength (jittable, vmappable over lenses)."""
+    """Trace every field and wavelength (jittable, vmappable over lenses).
+
+    The slopes are dx/dz, dy/dz whichever way along z the light travels: after an odd
+    number of mirrors it reaches the image toward −z (dz < 0), and the image plane moved
+    by Δz (mm, along z, as the last thickness changes) meets the ray at p + Δz · slope.
+    Before, only rays with dz > 0 had slopes: every ray of a mirror lens had slope 0, so
+    ``best_focus`` could not refocus it (Δz = 0, the defocused RMS kept)."""
 
     def one(field, wl):
         r = spot_rays(lens, field, wl, pupil=pupil)
         dz = r.direction[..., 2:3]
-        ok = dz > 1e-12  # rays that reach the image surface travel forward
+        ok = jnp.abs(dz) > 1e-12  # a ray along the image plane has no slope
         slope = r.direction[..., :2] / jnp.where(ok, dz, 1.0)
         return r.origin[..., :2], jnp.where(ok, slope, 0.0), r.valid.astype(r.origin.dtype)
 

@@ -115,7 +115,18 @@ def radial_area_weights(fracs, sensor_size, n: int = 16) -> np.ndarray:
     Returns:
         ``[K]`` weights.
     """
+    where = "radial_area_weights"
+    checks.real_values(fracs, "fracs", where, "fraction of the half diagonal")
     fracs = np.asarray(fracs, float)
+    # Before: [] gave NaN weights, 1.5 a field no grid point reached (weight 0, silently),
+    # decreasing fracs weights in the wrong order, NaN all weight on one field.
+    if fracs.ndim != 1 or fracs.size == 0:
+        raise ValueError(f"{where}: fracs must be [K] field fractions with K >= 1, got shape "
+                         f"{fracs.shape}")
+    checks.values(fracs, "fracs", where, lo=0, hi=1, unit="(fraction of the half diagonal)")
+    if np.any(np.diff(fracs) <= 0):
+        raise ValueError(f"{where}: fracs must increase strictly (fractions of the half "
+                         f"diagonal in [0, 1]), got {checks.fmt(fracs)}")
     # Before: n = 0 gave NaN weights and a negative sensor side plausible ones.
     checks.number(n, "n", "radial_area_weights", lo=1, hi=checks.MAX_MAP_GRID, integer=True,
                   unit="fields per side")
@@ -133,6 +144,8 @@ def radial_area_weights(fracs, sensor_size, n: int = 16) -> np.ndarray:
 
 def half_pupil(rings: int) -> tuple[np.ndarray, np.ndarray]:
     """Hexapolar points of the half pupil x ≥ 0 and their weights (1 on x = 0, else 2)."""
+    checks.number(rings, "rings", "half_pupil", lo=1, hi=MAX_RINGS, integer=True,
+                  unit="pupil rings")
     p = np.asarray(pupil_hexapolar(rings))
     keep = p[:, 0] >= -1e-9
     p = p[keep]

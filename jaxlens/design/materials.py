@@ -50,7 +50,13 @@ def convex_hull(points) -> np.ndarray:
     metric (nd / ``ND_PER_VD``, Vd) first so that the collinearity test is well conditioned;
     the hull itself does not depend on that scale.
     """
-    p = np.asarray(points, float) / np.array([catalog.ND_PER_VD, 1.0])
+    checks.real_values(points, "points", "convex_hull", "(nd, Vd)")
+    p = np.asarray(points, float)
+    if p.ndim != 2 or p.shape[1] != 2 or p.shape[0] < 3:  # 2 points: a "hull" of 1 corner
+        raise ValueError(f"convex_hull: points must be [N, 2] (nd, Vd) pairs with N >= 3, got "
+                         f"shape {p.shape}")
+    checks.values(p, "points", "convex_hull", unit="(nd, Vd)")  # NaN sorted anywhere
+    p = p / np.array([catalog.ND_PER_VD, 1.0])
     order = sorted(range(len(p)), key=lambda i: (p[i, 0], p[i, 1]))
 
     def cross(o, a, b):

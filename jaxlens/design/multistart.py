@@ -186,6 +186,12 @@ class DesignConfig:
                 or not all(isinstance(c, str) and c.strip() for c in cats)):
             raise ValueError(f"{w}: material_catalogs must be a non-empty tuple of catalog "
                              f"names (e.g. ('SCHOTT', 'CDGM')), got {cats!r}")
+        try:  # 'SCHOT' was found only when the design reached its materials
+            catalog.catalog_names(catalogs=list(cats))
+        except ValueError as e:
+            raise ValueError(f"{w}: material_catalogs {list(cats)!r} names a catalog that is "
+                             f"not known: {e} (jaxlens.catalog.register_catalog adds "
+                             f"one)") from None
 
     def scaled(self, factor: float) -> DesignConfig:
         """The same recipe with every step count scaled by ``factor`` (at least 1 step)."""
@@ -356,6 +362,16 @@ def design(
     Returns:
         A :class:`DesignResult`.
     """
+    # A dict for the spec or the config failed on an attribute deep in the set-up; a
+    # callback of 5 only when the first stage reported, progress="no" showed the bar.
+    for arg, v, kind in (("spec", spec, DesignSpec), ("config", config, DesignConfig)):
+        if not isinstance(v, kind):
+            raise TypeError(f"design: {arg} must be a jaxlens.design.{kind.__name__}, got "
+                            f"{type(v).__name__} {v!r}"[:200])
+    if callback is not None and not callable(callback):
+        raise TypeError(f"design: callback must be None or a function, got "
+                        f"{type(callback).__name__} {callback!r}")
+    checks.switch(progress, "progress", "design")
     # [int(s) for s in seeds] read "12" as seeds 1 and 2 and a seed of 1.5 as 1.
     seeds = check_seeds(seeds, "design", distinct=True)
     # bool("no") is True: shard="no" sharded, image_loss=5 rendered (after the set-up).
@@ -472,6 +488,13 @@ def population_starts(seeds: Sequence[int], population: int) -> list[int]:
     Design ``s`` draws starts ``s·P … s·P + P − 1``: disjoint across designs, and with
     ``P = 1`` each design's start is its own seed.
     """
+    checks.number(population, "population", "population_starts", lo=1, integer=True,
+                  unit="starts per design")  # 0 gave no start, 2.5 a float range error
+    if isinstance(seeds, (str, bytes)) or not isinstance(seeds, Sequence | np.ndarray):
+        raise ValueError(f"population_starts: seeds must be a sequence of whole numbers >= 0 "
+                         f"(one per design), got {type(seeds).__name__} {seeds!r}")
+    for s in seeds:  # -1 gave starts -2, -1 (numpy refuses a negative seed later)
+        checks.number(s, "seeds", "population_starts", lo=0, hi=MAX_SEED, integer=True)
     return [s * population + j for s in seeds for j in range(population)]
 
 

@@ -50,9 +50,14 @@ def draw_perturbations(n_surfaces: int, n_gaps: int, trials: int, *, radius_rel:
     checks.number(trials, "trials", "draw_perturbations", lo=1, hi=MAX_TRIALS, integer=True,
                   unit="draws")
     checks.number(seed, "seed", "draw_perturbations", lo=0, hi=MAX_SEED, integer=True)
-    if not (radius_rel >= 0 and thickness >= 0) or radius_rel >= 0.5:
-        raise ValueError(f"draw_perturbations: need 0 ≤ radius_rel < 0.5 (relative) and "
-                         f"thickness ≥ 0 mm, got {radius_rel!r} and {thickness!r}")
+    # n_surfaces 0 drew [K, 0] (no radius perturbed, silently), 2.5 was numpy's "cannot be
+    # interpreted as an integer", and thickness=inf numpy's OverflowError.
+    for arg, v in (("n_surfaces", n_surfaces), ("n_gaps", n_gaps)):
+        checks.number(v, arg, "draw_perturbations", lo=1, hi=MAX_TRIALS, integer=True,
+                      unit="(count)")
+    checks.number(radius_rel, "radius_rel", "draw_perturbations", lo=0, hi=0.5, hi_open=True,
+                  unit="(relative radius error)")
+    checks.number(thickness, "thickness", "draw_perturbations", lo=0, unit="mm")
     rng = np.random.default_rng(seed)
     r = rng.uniform(-radius_rel, radius_rel, (trials, n_surfaces))
     g = rng.uniform(-thickness, thickness, (trials, n_gaps))

@@ -97,7 +97,7 @@ def distortion_map(
     checks.focal_image(lens, "distortion_map")
     checks.lens_intact(lens, "distortion_map")
     s = _sensor(lens, sensor, "distortion_map")
-    grid = checks.grid(grid, "distortion_map", "grid", "points")
+    grid = checks.grid(grid, "distortion_map", "grid", "points", lo=2)  # interpolated
     checks.number(newton_iters, "newton_iters", "distortion_map", lo=0, integer=True,
                   unit="iterations")
     checks.newton_iters(newton_iters, "distortion_map")
@@ -151,14 +151,22 @@ def inverse_distortion_map(
     where = "inverse_distortion_map"
     resolution = checks.grid(resolution, where, "resolution", "pixels",
                              hi=checks.MAX_IMAGE_SIDE)
-    grid = checks.grid(grid, where, "grid", "points")
+    grid = checks.grid(grid, where, "grid", "points", lo=2)  # interpolated
     # A sensor's pitch, as in distortion_map (render's PSF method passes its Sensor's): not
     # bounded above, as a Sensor's own pitch is not.
     pixel_size = pixel_pitch(pixel_size, where, bounded=False)
+    if not checks.is_traced(pixel_size):  # bounded as a Sensor's: its longer side at most
+        side = float(pixel_size) * max(resolution)  # MAX_SENSOR_SIZE_MM (5 for 5 µm: 2.6 m)
+        if side > checks.MAX_SENSOR_SIZE_MM:
+            raise ValueError(
+                f"{where}: pixel_size must be a pitch in mm with pixel_size × max(resolution) "
+                f"<= {checks.MAX_SENSOR_SIZE_MM:g} mm (a sensor's longest side, as Sensor "
+                f"bounds it), got {checks.fmt(pixel_size)} mm × {max(resolution)} = "
+                f"{side:g} mm (a pitch in µm? 5 µm is 0.005 mm)")
     checks.number(newton_iters, "newton_iters", where, lo=0, integer=True, unit="iterations")
     checks.newton_iters(newton_iters, where)
-    checks.number(iters, "iters", where, lo=0, integer=True, unit="aiming iterations")
-    checks.number(iters, "iters", where, lo=0, hi=checks.MAX_NEWTON_ITERS, integer=True,
+    # At least one: with 0 every sensor point kept the first guess (no ray was aimed at all).
+    checks.number(iters, "iters", where, lo=1, hi=checks.MAX_NEWTON_ITERS, integer=True,
                   unit="aiming iterations")
     depth = sampling.lens_depth(lens, depth, where)
     checks.primary_wavelength(lens, where, "the chief rays'")
@@ -252,6 +260,8 @@ def prewarp(
         The pre-warped scene, same shape.
     """
     s = _sensor(lens, sensor, "prewarp")
+    # An int scene warped in its own dtype: the map's positions were truncated to whole mm.
+    checks.image_dtype(scene, "prewarp", "scene", "linear pixel values")
     scene = jnp.asarray(scene)
     if scene.ndim != 3:
         raise ValueError(f"prewarp: scene must be [H, W, C], got {scene.shape}")
@@ -261,7 +271,7 @@ def prewarp(
     if abs(hs * cols - ws * rows) >= max(rows, cols):  # as render: the warp would misalign it
         raise ValueError(f"prewarp: scene of {hs}x{ws} pixels does not match the {rows}x{cols} "
                          f"sensor (the aspect ratios differ; resize or crop the scene)")
-    grid = checks.grid(grid, "prewarp", "grid", "points")
+    grid = checks.grid(grid, "prewarp", "grid", "points", lo=2)
     dmap = distortion_map(lens, grid=grid, depth=depth, sensor=s, newton_iters=newton_iters)
     return _prewarp(scene, dmap.real.astype(scene.dtype), jnp.asarray(s.pixel_size),
                     resolution=tuple(s.resolution), grid=tuple(grid))

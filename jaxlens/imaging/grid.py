@@ -33,6 +33,21 @@ def pixel_pitch(value, where: str, arg: str = "pixel_size", bounded: bool = True
     return value
 
 
+def kernel_side(value, where: str, odd: bool = True) -> int:
+    """A PSF kernel's side: a whole number in [1, ``checks.MAX_KERNEL_SIZE``] pixels, odd
+    where the kernel is centred on its reference (``odd``; ``mtf``'s FFT grid may be even):
+    an even kernel has no centre pixel, its reference fell on a pixel corner and the PSF
+    sat half a pixel off the point it was drawn for (``render`` refuses it already)."""
+    k = checks.number(checks.static_int(value), "kernel_size", where, lo=1,
+                      hi=checks.MAX_KERNEL_SIZE, integer=True, unit="pixels per side")
+    if odd and k % 2 == 0:
+        raise ValueError(f"{where}: kernel_size must be odd (a kernel centred on a pixel: an "
+                         f"even one has no centre pixel, so the PSF would sit half a pixel "
+                         f"off its reference point), in [1, {checks.MAX_KERNEL_SIZE}] pixels "
+                         f"per side, got {value!r}; use {k + 1}")
+    return k
+
+
 def sensor_grid(resolution, pixel_size, grid) -> Float[Array, "gr gc 2"]:
     """Sensor points (x, y) in mm of a ``grid = (rows, cols)`` in rendered orientation.
 
@@ -63,8 +78,18 @@ def pixel_positions(resolution, pixel_size, rows, cols):
 def bilinear(img: Float[Array, "H W *C"], row, col) -> Array:
     """Bilinear lookup of ``img`` at fractional (row, col); edge pixels extend outward.
 
-    Differentiable with respect to the image and the coordinates.
+    Differentiable with respect to the image and the coordinates. Shapes are checked (they
+    are static): an image of other than 2 or 3 axes, or coordinates that do not broadcast.
     """
+    if jnp.ndim(img) not in (2, 3):  # a [W] row indexed its pixels as rows of nothing
+        raise ValueError(f"bilinear: img must be [H, W] or [H, W, C], got shape "
+                         f"{jnp.shape(img)}")
+    try:
+        np.broadcast_shapes(jnp.shape(row), jnp.shape(col))
+    except ValueError:
+        raise ValueError(f"bilinear: row and col (fractional pixel coordinates) must have "
+                         f"broadcastable shapes, got {jnp.shape(row)} and {jnp.shape(col)}"
+                         ) from None
     h, w = img.shape[0], img.shape[1]
     r = jnp.clip(row, 0.0, h - 1.0)
     c = jnp.clip(col, 0.0, w - 1.0)
@@ -108,6 +133,11 @@ def pupil_cells(n: int, overfill: float, dtype, key=None):
     Returns the points ``[n*n, 2]``, a mask ``[n*n]`` (inside the disc) and the cell side.
     With a key, each point is jittered uniformly inside its cell (stratified sampling).
     """
+    # n = 0 divided by zero (NaN points), 2.5 made 3 cells of side 0.8: a grid of nothing.
+    n = checks.number(checks.static_int(n), "n", "pupil_cells", lo=1,
+                      hi=checks.MAX_KERNEL_SIZE, integer=True, unit="cells per side")
+    overfill = checks.number(overfill, "overfill", "pupil_cells", lo=0, lo_open=True,
+                             unit="(pupil radii)")
     g = (np.arange(n) + 0.5) / n * 2.0 - 1.0
     px, py = np.meshgrid(g, g, indexing="xy")
     pts = jnp.asarray(np.stack([px.ravel(), py.ravel()], -1), dtype)
@@ -125,9 +155,16 @@ def splat(pos, weight, kernel_size: int, pixel_size, order: int = 1) -> Float[Ar
     reference; points outside it are dropped. ``order=1`` splats bilinearly (a tent of one
     pixel); ``order=2`` with the quadratic B-spline (a tent convolved with a one-pixel box),
     which also integrates the PSF over the pixel's area as ``render`` does. Both are
-    piecewise polynomial in the positions, hence differentiable.
+    piecewise polynomial in the positions, hence differentiable. Shapes and the kernel size
+    are checked (static): ``pos`` ``[..., 2]`` (mm), ``weight`` of ``pos``'s leading shape.
     """
-    k = kernel_size
+    k = kernel_side(kernel_size, "splat", odd=False)
+    if jnp.ndim(pos) < 1 or jnp.shape(pos)[-1] != 2:  # [5, 3] splatted x, y and dropped z
+        raise ValueError(f"splat: pos must be sensor offsets [..., 2] (x, y) in mm, got shape "
+                         f"{jnp.shape(pos)}")
+    if jnp.shape(weight) != jnp.shape(pos)[:-1]:  # a [4] weight broadcast or failed in .at
+        raise ValueError(f"splat: weight must have pos's leading shape {jnp.shape(pos)[:-1]} "
+                         f"(one weight a point), got shape {jnp.shape(weight)}")
     c = 0.5 * (k - 1)
     col = c - pos[..., 0] / pixel_size
     row = c + pos[..., 1] / pixel_size

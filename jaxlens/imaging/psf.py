@@ -74,7 +74,7 @@ from ..optics.rays import Rays
 from ..tracing.forward import DEFAULT_NEWTON_ITERS, forward_mode_jit, trace
 from . import sampling
 from .aiming import apertured, chief_point, field_to_ideal, ideal_to_field
-from .grid import pixel_pitch, pupil_cells, sensor_grid, splat
+from .grid import kernel_side, pixel_pitch, pupil_cells, sensor_grid, splat
 
 __all__ = ["AbstractPSFModel", "CoherentPSF", "GeometricPSF", "RGB_WAVELENGTHS", "PSFResult",
            "PSFMap", "psf", "psf_info", "psf_rgb", "psf_map", "mtf"]
@@ -383,8 +383,7 @@ def _prepare(lens, field, depth, wavelength, kernel_size, pixel_size, model, cen
     checks.newton_iters(newton_iters, caller)
     if center not in CENTERS:
         raise ValueError(f"{caller}: center must be one of {CENTERS}, got {center!r}")
-    kernel_size = checks.number(kernel_size, "kernel_size", caller, lo=1, integer=True,  # static
-                                hi=checks.MAX_KERNEL_SIZE, unit="pixels per side")
+    kernel_size = kernel_side(kernel_size, caller, odd=caller != "mtf")  # static
     given = given and pixel_size is not None  # a Sensor's own pitch: any mm (Sensor checks it)
     if pixel_size is None:
         if lens.sensor is None:
@@ -535,6 +534,10 @@ def psf(
 
 def psf_rgb(lens: Lens, field, *, wavelengths=RGB_WAVELENGTHS, **kwargs) -> Float[Array, "3 k k"]:
     """RGB PSF: ``psf`` at three wavelengths (default the C, d, F lines), ``[3, k, k]``."""
+    checks.real_values(wavelengths, "wavelengths", "psf_rgb", "µm")  # two gave a [2, k, k]
+    if np.shape(wavelengths) != (3,):
+        raise ValueError(f"psf_rgb: wavelengths must be 3 values (R, G, B) in µm, got shape "
+                         f"{np.shape(wavelengths)}; use psf(wavelength=...) for other counts")
     return psf(lens, field, wavelength=jnp.asarray(wavelengths), **kwargs)
 
 

@@ -224,6 +224,7 @@ def relative_illumination(
     checks.newton_iters(newton_iters, where)
     dtype = jnp.result_type(float)
     f = jnp.asarray(checks.field_angles(fields, where, "fields"), dtype)
+    checks.warn_if_radian_fields(fields, where, "fields")  # np.radians([0, 10, 20])
     if f.ndim == 0:
         f = f[None]
     if f.ndim == 1:

@@ -700,6 +700,7 @@ def relaxed_render(
         grid: grid of the distortion map.
     """
     checks.focal_image(lens, "relaxed_render")
+    grid = checks.grid(grid, "relaxed_render", "grid", "points", lo=2)  # interpolated
     sensor = render_kwargs.get("sensor")
     warped = prewarp(lens, scene, depth=depth, sensor=sensor, grid=grid)
     img = render(lens, warped, spp=spp, key=key, depth=depth, **render_kwargs)

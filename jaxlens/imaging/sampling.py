@@ -35,7 +35,7 @@ import numpy as np
 from jaxtyping import Array, Float
 
 from ..optics import checks, paraxial
-from ..optics.lens import INFINITE_OBJECT_MM, RAY_AIMING, Lens, unclipped
+from ..optics.lens import INFINITE_OBJECT_MM, RAY_AIMING, Lens, check_vignetting, unclipped
 from ..optics.rays import Rays
 from .newton import newton_2d
 
@@ -191,7 +191,15 @@ def field_xy(field) -> Array:
 
 
 def field_direction(field) -> Float[Array, "*b 3"]:
-    """Unit direction of a collimated beam at field (θx, θy) or θy (degrees)."""
+    """Unit direction of a collimated beam at field (θx, θy) or θy (degrees); concrete
+    angles that look like radians are warned about (``checks.warn_if_radian_fields``)."""
+    checks.real_values(field, "field", "field_direction", "deg")
+    checks.warn_if_radian_fields(field, "field_direction", "field")
+    return _direction(field)
+
+
+def _direction(field) -> Float[Array, "*b 3"]:
+    """``field_direction`` without the radians warning (its callers warned)."""
     th = field_xy(field)
     v = jnp.concatenate([jnp.tan(th), jnp.ones_like(th[..., :1])], -1)
     return v / jnp.linalg.norm(v, axis=-1, keepdims=True)
@@ -233,12 +241,19 @@ def collimated(
         ``[m]`` rays launched on the entrance-pupil plane.
 
     The pupil points are used as given: the lens's vignetting factors are not applied here
-    (``field_rays`` applies them for the lens's own fields).
+    (``field_rays`` applies them for the lens's own fields). A concrete field that looks
+    like radians (0.349 for 20°) is warned about, as by ``field_rays`` and the analyses.
     """
+    checks.one_field(field, "collimated", "trace several fields one at a time, or vmap")
+    checks.warn_if_radian_fields(field, "collimated", "field")
+    return _collimated(lens, field, pupil, wavelength, aim=aim)
+
+
+def _collimated(lens: Lens, field, pupil, wavelength=None, *, aim=None) -> Rays:
+    """``collimated`` without the field's checks and radians warning (its callers made them)."""
     wl = _checked_wavelength(lens, wavelength, "collimated")
     pupil = pupil_points(pupil, "collimated")
-    checks.one_field(field, "collimated", "trace several fields one at a time, or vmap")
-    d = field_direction(field)
+    d = _direction(field)
     zep = paraxial.entrance_pupil_z(lens, lens.primary_wavelength)
     h = 0.5 * lens.epd
     xy = pupil * h
@@ -382,10 +397,13 @@ def vignetting_map(factors, pupil) -> Float[Array, "*m 2"]:
     if v.shape != (5,):
         raise ValueError(f"vignetting_map: factors must be (VDX, VDY, VCX, VCY, VAN) of shape "
                          f"[5] (pupil radii, VAN in deg), got shape {v.shape}")
-    if not checks.is_traced(v) and not np.all(np.isfinite(np.asarray(v, float))):
-        # a NaN factor mapped every pupil point to NaN (every ray of the field lost)
-        raise ValueError(f"vignetting_map: factors (VDX, VDY, VCX, VCY in pupil radii, VAN in "
-                         f"deg) must be finite, got {checks.fmt(v)}")
+    if pupil.ndim < 1 or pupil.shape[-1] != 2:  # a [3] pupil was read as 1.5 points
+        raise ValueError(f"vignetting_map: pupil must be normalised pupil points [..., 2] "
+                         f"(Px, Py), got shape {pupil.shape}")
+    if not checks.is_traced(v):
+        # The Lens's own rule: a NaN factor mapped every pupil point to NaN (every ray of
+        # the field lost); VCX = 1.5 turned the pupil over.
+        check_vignetting(v, "vignetting_map", "factors")
     x = v[0] + pupil[..., 0] * (1.0 - v[2])
     y = v[1] + pupil[..., 1] * (1.0 - v[3])
     a = jnp.deg2rad(v[4])
@@ -458,12 +476,13 @@ def field_rays(lens: Lens, field, pupil, wavelength=None, *, depth=None, aim=Non
     """
     if depth is not None:
         checks.real_values(depth, "depth", "field_rays", "mm")
+    field = checks.one_field(field, "field_rays", "trace several fields one at a time, or vmap")
+    checks.warn_if_radian_fields(field, "field_rays", "field")  # 20° typed as 0.349
     aim = lens_aim(lens, aim, "field_rays")
     wavelength = _checked_wavelength(lens, wavelength, "field_rays")
     beyond = None
     if lens.vignetting is not None:
         pupil = pupil_points(pupil, "field_rays")
-        field = checks.one_field(field, "field_rays", "trace several fields one at a time, or vmap")
         factors = field_vignetting(lens, field)
         # The vignetted pupil is the image of the unit disc: a point of an overfilled beam
         # (a PSF's 1.25) mapped inside it passed the stop, light OpticStudio never traces
@@ -473,7 +492,7 @@ def field_rays(lens: Lens, field, pupil, wavelength=None, *, depth=None, aim=Non
         pupil = vignetting_map(factors, pupil)
     if depth is None or (not isinstance(depth, jax.core.Tracer)
                          and np.all(np.asarray(depth) >= INFINITE_OBJECT_MM)):
-        rays = collimated(lens, field, pupil, wavelength, aim=aim)
+        rays = _collimated(lens, field, pupil, wavelength, aim=aim)
     else:
         rays = point_source(lens, object_point(lens, field, depth), pupil, wavelength, aim=aim)
     if beyond is not None:

@@ -28,8 +28,8 @@ from ..optics import checks
 from ..optics.lens import Lens
 from ..tracing.forward import DEFAULT_NEWTON_ITERS
 from .aiming import apertured, ideal_to_field
-from .grid import pixel_pitch, pixel_positions
-from .psf import DEFAULT_MODEL, AbstractPSFModel
+from .grid import kernel_side, pixel_pitch, pixel_positions
+from .psf import CENTERS, DEFAULT_MODEL, AbstractPSFModel
 
 __all__ = ["tile_counts", "tile_centers", "psf_points", "convolve_tiles", "wiener_tiles",
            "tile_evidence"]
@@ -82,8 +82,10 @@ def psf_points(
     stop is its entrance pupil).
 
     Pure and traceable (``jit``, ``vmap``, ``grad`` with respect to the lens): unlike
-    :func:`psf`, no value is checked on the host, so the lens, the positions and the depth
-    may be traced. ``model`` is checked (it is static). Each position's field is
+    :func:`psf`, traced values are not checked on the host, so the lens, the positions and
+    the depth may be traced; concrete positions (finite mm) and wavelengths (µm, inside the
+    materials' range) are. ``model``, ``center`` and ``kernel_size`` (odd) are checked (they
+    are static). Each position's field is
     ``ideal_to_field(lens, xy)``; with ``key`` every position gets its own jitter.
     """
     if not isinstance(model, AbstractPSFModel):
@@ -91,11 +93,19 @@ def psf_points(
                         f"{type(model).__name__}")
     model.check("psf_points")
     checks.focal_image(lens, "psf_points")
-    kernel_size = checks.static_int(kernel_size)  # a static size: never a numpy scalar
-    if (isinstance(kernel_size, bool) or not isinstance(kernel_size, int) or kernel_size < 1
-            or kernel_size > checks.MAX_KERNEL_SIZE):
-        raise ValueError(f"psf_points: kernel_size must be a whole number in [1, "
-                         f"{checks.MAX_KERNEL_SIZE}] pixels per side, got {kernel_size!r}")
+    kernel_size = kernel_side(kernel_size, "psf_points")  # static: a Python int, odd
+    if center not in CENTERS:  # "chef" reached the model's kernels, a KeyError or worse
+        raise ValueError(f"psf_points: center must be one of {CENTERS}, got {center!r}")
+    if np.ndim(xy) < 1 or np.shape(xy)[-1] != 2:
+        raise ValueError(f"psf_points: xy must be sensor positions [..., 2] (x, y) in mm, got "
+                         f"shape {np.shape(xy)}")
+    checks.real_values(xy, "xy", "psf_points", "mm")
+    checks.real_values(wavelengths, "wavelengths", "psf_points", "µm")
+    if not checks.is_traced(xy):  # host checks of concrete values only (see above)
+        checks.finite_array(xy, "xy", "psf_points", "mm")
+    if not checks.is_traced(wavelengths):  # 550 for 0.55 µm: the nm hint
+        checks.wavelengths(lens, jnp.atleast_1d(jnp.asarray(wavelengths)), "psf_points",
+                           "wavelengths")
     checks.newton_iters(newton_iters, "psf_points")  # static, as kernel_size
     if not checks.is_traced(pixel_size):  # a traced pitch is not checked (see above)
         pixel_pitch(pixel_size, "psf_points")
@@ -158,12 +168,22 @@ def _assemble(tiles, n_ty, n_tx):
 
 
 def _check_bank(image, kernels, caller):
+    """The image and the kernel bank as arrays, checked: shapes, a float image (an integer
+    one was blurred in integer arithmetic: the kernels truncated to 0), and finite values
+    (one NaN kernel pixel made its whole tile NaN; a traced one gets an ``eqx.error_if``).
+    Use the returned arrays."""
+    checks.image_dtype(image, caller, "image", "linear pixel values")
+    image, kernels = jnp.asarray(image), jnp.asarray(kernels)
+    if not jnp.issubdtype(kernels.dtype, jnp.floating):
+        kernels = kernels.astype(image.dtype)  # integer weights are exact as floats
     if image.ndim != 3:
         raise ValueError(f"{caller}: image must be [H, W, C], got shape {image.shape}")
     if kernels.ndim != 5 or kernels.shape[2] != image.shape[-1] or \
             kernels.shape[-1] != kernels.shape[-2] or kernels.shape[-1] % 2 == 0:
         raise ValueError(f"{caller}: kernels must be [tiles_y, tiles_x, C, k, k] with C = "
                          f"{image.shape[-1]} channels and k odd, got {kernels.shape}")
+    image = checks.finite_array(image, "image", caller, "linear pixel values")
+    return image, checks.finite_array(kernels, "kernels", caller, "PSF weights")
 
 
 def convolve_tiles(
@@ -182,9 +202,7 @@ def convolve_tiles(
     Returns:
         ``[ty·P, tx·P, C]``, differentiable with respect to the image and the kernels.
     """
-    image = jnp.asarray(image)
-    kernels = jnp.asarray(kernels)
-    _check_bank(image, kernels, "convolve_tiles")
+    image, kernels = _check_bank(image, kernels, "convolve_tiles")
     n_ty, n_tx, _, k, _ = kernels.shape
     h = k // 2
     if pad == "edge":
@@ -205,11 +223,15 @@ def _spectra(image, kernels, nsr, halo, prior, caller, pad, taper=False):
     """Each tile window's spectra for a Wiener filter: ``(K, Y, R, tile, halo)``, K and Y
     ``[T, C, win, win//2 + 1]`` (rfft2), R = nsr·P the filter's regulariser (see
     ``wiener_tiles``)."""
-    image = jnp.asarray(image)
-    kernels = jnp.asarray(kernels)
-    _check_bank(image, kernels, caller)
+    image, kernels = _check_bank(image, kernels, caller)
     n_ty, n_tx, nc, k, _ = kernels.shape
-    halo = k if halo is None else int(halo)
+    # int(2.5) was 2 and int(True) 1; a ratio of 0 divided 0 by 0 where |K| = 0 (NaN tiles),
+    # a negative one flipped the filter's sign there, NaN or inf made every tile NaN or 0.
+    halo = k if halo is None else checks.number(halo, "halo", caller, lo=0, integer=True,
+                                                unit="pixels")
+    checks.real_values(nsr, "nsr", caller, "noise-to-signal power ratio")
+    nsr = checks.values(nsr, "nsr", caller, lo=0, lo_open=True,
+                        unit="(noise-to-signal power ratio)")
     if halo < k // 2:
         raise ValueError(f"{caller}: halo must be at least k // 2 = {k // 2} pixels, got "
                          f"{halo}")

@@ -337,16 +337,19 @@ def float_dtype(dtype, where: str, arg: str = "dtype"):
 
 
 def grid(value, where: str, arg: str = "grid", what: str = "points",
-         hi: int = MAX_MAP_GRID) -> tuple[int, int]:
-    """A ``(rows, cols)`` pair of whole numbers in [1, ``hi``] (numpy ints allowed, bools and
-    floats refused: ``linspace`` would take 2.5 as 2 and a 0 as one centre point; a huge one
-    exhausted memory). ``hi``: ``MAX_MAP_GRID`` for traced maps, ``MAX_IMAGE_SIDE`` for pixels."""
+         hi: int = MAX_MAP_GRID, lo: int = 1) -> tuple[int, int]:
+    """A ``(rows, cols)`` pair of whole numbers in [``lo``, ``hi``] (numpy ints allowed, bools
+    and floats refused: ``linspace`` would take 2.5 as 2 and a 0 as one centre point; a huge
+    one exhausted memory). ``hi``: ``MAX_MAP_GRID`` for traced maps, ``MAX_IMAGE_SIDE`` for
+    pixels; ``lo=2`` for a grid that is interpolated (one point per side has nothing to
+    interpolate between: it held the centre's value over the whole side)."""
     ok = (isinstance(value, (tuple, list)) and len(value) == 2 and all(
-        isinstance(g, (int, np.integer)) and not isinstance(g, bool) and 1 <= g <= hi
+        isinstance(g, (int, np.integer)) and not isinstance(g, bool) and lo <= g <= hi
         for g in value))
     if not ok:
-        raise ValueError(f"{where}: {arg} must be (rows, cols), whole numbers >= 1 {what} "
-                         f"(at most {hi} per side), got {value!r}")
+        why = " (an interpolated grid needs 2 points per side)" if lo == 2 else ""
+        raise ValueError(f"{where}: {arg} must be (rows, cols), whole numbers >= {lo} {what} "
+                         f"(at most {hi} per side){why}, got {value!r}")
     return int(value[0]), int(value[1])
 
 
@@ -708,6 +711,27 @@ def finite_array(x, arg: str, where: str, unit: str = ""):
     return x
 
 
+def image_dtype(img, where: str, arg: str = "img", unit: str = "") -> None:
+    """Refuse an image array of integer dtype (uint8, uint16: sRGB codes, which as linear
+    values were clipped to white or truncated the answer to whole numbers) with a hint to
+    ``jaxlens.io.images.to_linear``, and a bool, complex, string or object one; Python
+    numbers and lists of them pass. Static (the dtype only), so traced images too."""
+    what = f" ({unit})" if unit else ""
+    dt = getattr(img, "dtype", None)
+    try:
+        kind = np.dtype(dt).kind if dt is not None else np.asarray(img).dtype.kind
+    except (TypeError, ValueError):
+        kind = "O"
+    if dt is not None and kind in "iu":
+        raise ValueError(f"{where}: {arg} must be a float image{what}, got an integer image "
+                         f"of dtype {np.dtype(dt)} (sRGB codes 0…{np.iinfo(np.dtype(dt)).max}"
+                         f"?); decode it with jaxlens.io.images.to_linear, or divide by "
+                         f"{np.iinfo(np.dtype(dt)).max} for the encoded values")
+    if kind not in "iuf" and not (dt is not None and jnp.issubdtype(dt, jnp.floating)):
+        raise ValueError(f"{where}: {arg} must be a float image{what}, got dtype "
+                         f"{np.dtype(dt) if dt is not None else type(img).__name__}")
+
+
 def float_image(img, where: str, arg: str = "img", *, lo=None, hi=None,
                 unit: str = "", hint: str = "") -> np.ndarray:
     """An image of real float values as a float64 numpy array; raises ``ValueError``.
@@ -720,19 +744,7 @@ def float_image(img, where: str, arg: str = "img", *, lo=None, hi=None,
     numbers and lists of them are read as floats. ``hint`` ends the message of a bad value.
     """
     what = f" ({unit})" if unit else ""
-    dt = getattr(img, "dtype", None)
-    try:
-        kind = np.dtype(dt).kind if dt is not None else np.asarray(img).dtype.kind
-    except (TypeError, ValueError):
-        kind = "O"
-    if dt is not None and kind in "iu":
-        raise ValueError(f"{where}: {arg} must be a float image{what}, got an integer image "
-                         f"of dtype {np.dtype(dt)} (sRGB codes 0…{np.iinfo(np.dtype(dt)).max}"
-                         f"?); decode it with jaxlens.io.images.to_linear, or divide by "
-                         f"{np.iinfo(np.dtype(dt)).max} for the encoded values")
-    if kind not in "iuf":
-        raise ValueError(f"{where}: {arg} must be a float image{what}, got dtype "
-                         f"{np.dtype(dt) if dt is not None else type(img).__name__}")
+    image_dtype(img, where, arg, unit)
     a = np.asarray(img, np.float64)
     bad = ~np.isfinite(a)
     bad |= (a < lo) if lo is not None else False
