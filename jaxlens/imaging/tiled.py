@@ -170,7 +170,7 @@ def _assemble(tiles, n_ty, n_tx):
 def _check_bank(image, kernels, caller):
     """The image and the kernel bank as arrays, checked: shapes, a float image (an integer
     one was blurred in integer arithmetic: the kernels truncated to 0), and finite values
-    (one NaN kernel pixel made its whole tile NaN; a traced one gets an ``eqx.error_if``).
+    (one NaN kernel pixel made its whole tile NaN; concrete values only).
     Use the returned arrays."""
     checks.image_dtype(image, caller, "image", "linear pixel values")
     image, kernels = jnp.asarray(image), jnp.asarray(kernels)
@@ -182,8 +182,13 @@ def _check_bank(image, kernels, caller):
             kernels.shape[-1] != kernels.shape[-2] or kernels.shape[-1] % 2 == 0:
         raise ValueError(f"{caller}: kernels must be [tiles_y, tiles_x, C, k, k] with C = "
                          f"{image.shape[-1]} channels and k odd, got {kernels.shape}")
-    image = checks.finite_array(image, "image", caller, "linear pixel values")
-    return image, checks.finite_array(kernels, "kernels", caller, "PSF weights")
+    # Concrete values only: a traced bank (a training step's) would carry host callbacks
+    # into every step, where a NaN shows in the loss anyway.
+    if not checks.is_traced(image):
+        checks.finite_array(image, "image", caller, "linear pixel values")
+    if not checks.is_traced(kernels):
+        checks.finite_array(kernels, "kernels", caller, "PSF weights")
+    return image, kernels
 
 
 def convolve_tiles(
@@ -230,8 +235,9 @@ def _spectra(image, kernels, nsr, halo, prior, caller, pad, taper=False):
     halo = k if halo is None else checks.number(halo, "halo", caller, lo=0, integer=True,
                                                 unit="pixels")
     checks.real_values(nsr, "nsr", caller, "noise-to-signal power ratio")
-    nsr = checks.values(nsr, "nsr", caller, lo=0, lo_open=True,
-                        unit="(noise-to-signal power ratio)")
+    if not checks.is_traced(nsr):  # a learned ratio (the EDoF decoder's) is its own param.
+        checks.values(nsr, "nsr", caller, lo=0, lo_open=True,
+                      unit="(noise-to-signal power ratio)")
     if halo < k // 2:
         raise ValueError(f"{caller}: halo must be at least k // 2 = {k // 2} pixels, got "
                          f"{halo}")
