@@ -242,7 +242,7 @@ def encircled_energy(lens: Lens, field, radii, *, wavelength=None, method: str =
     if r.size == 0:
         raise ValueError(f"{where}: radii must hold at least one radius (mm)")
     r = checks.values(r, "radii", where, lo=0, unit="mm")  # an error_if where traced
-    if not checks.is_traced(r) and not checks.is_traced(lens.epd):
+    if not checks.is_traced((r, lens)):  # a traced lens has no concrete image size
         _radii_unit(lens, np.asarray(r), where)
     d, w, total, center, trunc = _samples(
         lens, field, radii, where, wavelength=wavelength, method=method, reference=reference,
