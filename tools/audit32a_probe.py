@@ -321,7 +321,7 @@ import numpy as np
 jax.config.update("jax_enable_x64", True)
 
 sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
-from probe_table import FILTER, ROWS, mention_counts, probe, run, warned  # noqa: E402
+from probe_table import FILTER, ROWS, jitted, mention_counts, probe, run, warned  # noqa: E402
 
 import jaxlens as jl  # noqa: E402
 import jaxlens.analysis as A  # noqa: E402
@@ -335,20 +335,6 @@ KEY = jax.random.PRNGKey(0)
 def count_mentions(top=200):
     """The exported names named least in every probe and test file (round 31 included)."""
     mention_counts(lambda f: "32a" in f, top)
-
-
-def jitted(fn, *args):
-    """``fn(*args)`` under ``jax.jit`` with every argument traced (a bad value must not pass):
-    an ``eqx.error_if`` (a runtime error holding its message) counts as a ValueError."""
-    def go():
-        try:
-            return jax.block_until_ready(jax.jit(fn)(*args))
-        except RuntimeError as e:
-            said = [line.split("Error: ", 1)[1] for line in str(e).splitlines() if "EquinoxRuntimeError: " in line]
-            if said:
-                raise ValueError(f"error_if under jit: {said[-1]}") from None
-            raise
-    return go
 
 
 def expect(name, fn, want):

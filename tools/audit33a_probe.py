@@ -36,6 +36,8 @@ Before (main at 72310e1, an archive) and after (branch audit33a), the same 120 p
 ``PYTHONPATH=<tree> python tools/audit33a_probe.py`` from the repository, about 4 min each:
     before: clear error: 15, crash: 7, ok: 22, silent wrong: 65, vague error: 11
     after:  clear error: 94, ok: 26
+In review the row of a traced nsr under jit was dropped (119 probes): a traced nsr is a
+learned ratio, and its check added a host callback to every EDoF training step.
 
 Run: PYTHONPATH=$PWD python tools/audit33a_probe.py [filter]
 """
@@ -89,20 +91,6 @@ def warned_once(fn):
         if len(w) > 1:
             raise ValueError(f"{len(w)} warnings, first: {str(w[0].message)[:60]}")
         return r
-    return go
-
-
-def jitted(fn, *args):
-    """``fn(*args)`` under ``jax.jit`` with every argument traced: an ``eqx.error_if`` (a
-    runtime error holding its message) counts as a ValueError."""
-    def go():
-        try:
-            return jax.block_until_ready(jax.jit(fn)(*args))
-        except RuntimeError as e:
-            said = [line.split("Error: ", 1)[1] for line in str(e).splitlines() if "EquinoxRuntimeError: " in line]
-            if said:
-                raise ValueError(f"error_if under jit: {said[-1]}") from None
-            raise
     return go
 
 
@@ -200,7 +188,8 @@ def imaging():
     probe("wiener_tiles nsr -0.01", lambda: TI.wiener_tiles(img, kern, -0.01), "nsr")
     probe("wiener_tiles nsr NaN", lambda: TI.wiener_tiles(img, kern, np.nan), "nsr")
     probe("wiener_tiles nsr inf", lambda: TI.wiener_tiles(img, kern, np.inf), "nsr")
-    probe("wiener_tiles nsr -0.01 under jit", jitted(lambda n: TI.wiener_tiles(img, kern, n), -0.01), "nsr")
+    # Not probed under jit: a traced nsr (a learned ratio) is not checked, as a check would
+    # add a host callback to every training step.
     probe("tile_evidence nsr 0", lambda: TI.tile_evidence(img, kern, 0.0), "nsr")
     probe("wiener_tiles halo 2.5", lambda: TI.wiener_tiles(img, kern, 0.01, halo=2.5), "halo")
     probe("wiener_tiles halo -1", lambda: TI.wiener_tiles(img, kern, 0.01, halo=-1), "halo")

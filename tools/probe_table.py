@@ -81,6 +81,23 @@ def warned(fn):
     return go
 
 
+def jitted(fn, *args):
+    """``fn(*args)`` under ``jax.jit`` with every argument traced (a bad value must not pass):
+    an ``eqx.error_if`` (a runtime error holding its message) counts as a ValueError."""
+    def go():
+        import jax
+
+        try:
+            return jax.block_until_ready(jax.jit(fn)(*args))
+        except RuntimeError as e:
+            said = [line.split("Error: ", 1)[1] for line in str(e).splitlines()
+                    if "EquinoxRuntimeError: " in line]
+            if said:
+                raise ValueError(f"error_if under jit: {said[-1]}") from None
+            raise
+    return go
+
+
 class Started(Exception):
     """Raised where a command's work would begin: its checks have passed."""
 
