@@ -6,7 +6,9 @@ The reader ignores unknown keys, so that informational data (``paraxial``,
 (``"wavelength_nm"``, ``"radus"``, ``"Thickness"``) or a synonym of one from another program
 (``"glass"``, ``"R"``, ``"k"``, ``"stop"``) would then silently fall back to its default, so
 such a key is refused instead, naming the key this format uses. Each table maps the keys of
-one level of the file to their synonyms (lower case).
+one level of the file to their synonyms (lower case). The sections read whole (``units``,
+``sensor``, ``object``, ``fields``: ``CLOSED``) take no informational keys: any other key
+there is refused.
 """
 
 from __future__ import annotations
