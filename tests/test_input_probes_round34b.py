@@ -254,3 +254,13 @@ def test_classical_refuses_material_catalogs_with_fixed_materials(monkeypatch, c
     with pytest.raises(Started):  # control
         C.main(["--out", str(tmp_path / "run"), "--material-catalogs", "CDGM",
                 "--select-materials", "continuous"])
+
+
+def test_benchmark_figures_are_written_whole():
+    """Main: the benchmarks' figures (imaging, pareto, throughput, skipping) were written in
+    place with ``fig.savefig(path)``: a run stopped mid-write left a cut PNG where the earlier
+    run's was. Each now goes through ``common.save_figure`` (a temporary file renamed)."""
+    files = [p for p in sorted((ROOT / "benchmarks").glob("*.py")) if p.name != "common.py"]
+    bad = [f"{p.name}:{k}" for p in files
+           for k, ln in enumerate(p.read_text().splitlines(), 1) if ".savefig(" in ln]
+    assert not bad, bad
