@@ -31,7 +31,7 @@ APERTURE_KEYS = {
 }
 """The aperture keys of ``aperture`` by kind (``epd`` and ``EPD`` also at the top level)."""
 
-FIELD_TYPES = {"angle_deg_y": 1, "angle_deg_xy": 2, "angle_deg": None, "angle": None}
+FIELD_TYPES = {"angle_deg_y": 1, "angle_deg": None, "angle": None, "angle_deg_xy": 2}
 """``fields.type``: the number of angles per field it declares (None: either)."""
 
 
