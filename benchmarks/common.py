@@ -23,7 +23,7 @@ from typing import Any
 import jax
 import numpy as np
 
-from jaxlens.io.json_values import write_whole
+from jaxlens.io.json_values import whole_path, write_whole
 from jaxlens.optics import checks
 
 RESULTS = pathlib.Path(__file__).resolve().parent / "results"
@@ -186,6 +186,13 @@ def write_json(name: str, payload: dict, out: pathlib.Path = RESULTS) -> pathlib
     path = out / f"{name}.json"
     write_whole(path, json.dumps(_jsonable(payload), indent=1) + "\n")
     return path
+
+
+def save_figure(fig, path) -> None:
+    """Write a benchmark's figure (110 dpi) whole or not at all (``json_values.whole_path``):
+    ``savefig`` in place left a cut PNG where the earlier run's was when stopped mid-write."""
+    with whole_path(path) as tmp:
+        fig.savefig(tmp, dpi=110)
 
 
 def _jsonable(x):

@@ -491,7 +491,7 @@ def plot(res: dict, path) -> None:
     ax.set_ylabel("max image intercept error (mm)")
     ax.legend(fontsize=7)
     fig.tight_layout()
-    fig.savefig(path, dpi=110)
+    common.save_figure(fig, path)
     plt.close(fig)
 
 

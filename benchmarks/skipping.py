@@ -330,7 +330,7 @@ def plot(res: dict, path) -> None:
         + (" (every shortcut gives the same answer)" if same else " (red: answer differs)")
     )
     fig.tight_layout()
-    fig.savefig(path, dpi=110)
+    common.save_figure(fig, path)
     plt.close(fig)
 
 

@@ -320,7 +320,7 @@ def plot(res: dict, path) -> None:
         ax.set_ylabel("ray·surfaces/s")
         ax.legend(fontsize=6)
     fig.tight_layout()
-    fig.savefig(path, dpi=110)
+    common.save_figure(fig, path)
     plt.close(fig)
 
 

@@ -19,6 +19,8 @@ import numpy as np
 from matplotlib.backends.backend_agg import FigureCanvasAgg
 from matplotlib.figure import Figure
 
+from .io.json_values import whole_path
+
 _WL_COLORS = {0.4861327: "tab:blue", 0.5875618: "tab:green", 0.6562725: "tab:red"}
 _FIELD_COLORS = ("tab:blue", "tab:green", "tab:red", "tab:purple", "tab:orange", "tab:brown")
 MAX_LAYOUT_RAYS = 1024
@@ -40,7 +42,8 @@ def save(fig: Figure, path: str | os.PathLike) -> str:
     if not path.strip() or os.path.isdir(path):  # '' wrote nothing and returned ''
         raise ValueError(f"save: path must be a file name (its extension gives the format, "
                          f".png), got {path!r}")
-    fig.savefig(path, bbox_inches="tight")
+    with whole_path(path) as tmp:  # written whole or not at all (the extension kept)
+        fig.savefig(tmp, bbox_inches="tight")
     return path
 
 

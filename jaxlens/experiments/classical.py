@@ -305,6 +305,8 @@ def _no_ignored_options(args, w: str, given=None) -> None:
         (args.seed_list is not None, "--seed-list", ("seeds", "first_seed")),
         (args.smoke and not args.ablation, "--smoke", ("seeds", "steps", "polish_steps")),
         (args.polish == "none", "--polish none", ("polish_steps",)),
+        # the catalogs are read only when materials are chosen (continuous or search)
+        (args.select_materials == "fixed", "--select-materials fixed", ("material_catalogs",)),
         (args.loss == "image", "--loss image", ("polish_steps",)),
         (not args.ablation, "no --ablation", ("columns", "ablation_seeds", "ablation_out")),
     )

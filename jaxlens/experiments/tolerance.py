@@ -260,6 +260,7 @@ def write_report(report: dict, out: str, *, plots: bool = True) -> dict:
     """Write ``tolerance.json`` and (with ``plots``) ``tolerance_rms.png`` into ``out``;
     return the paths."""
     from jaxlens import plot
+    from jaxlens.io.json_values import write_whole
 
     if not isinstance(out, str | os.PathLike) or not os.fspath(out).strip():
         raise ValueError(f"write_report: out must be a folder name, got {out!r}")
@@ -267,8 +268,8 @@ def write_report(report: dict, out: str, *, plots: bool = True) -> dict:
     mc = report.get("_mc")
     data = {k: v for k, v in report.items() if k != "_mc"}
     path = os.path.join(out, OUTPUT_FILES[0])
-    with open(path, "w") as f:
-        json.dump(data, f, indent=2, default=float)
+    # whole or not at all: with --overwrite a stop mid-write cut the earlier run's file
+    write_whole(path, json.dumps(data, indent=2, default=float))
     files = {"tolerance_json": path}
     if mc is not None and plots:
         files["tolerance_rms"] = plot.save(plot.plot_tolerance_histogram(mc),

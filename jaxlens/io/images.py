@@ -21,6 +21,7 @@ import zlib
 import numpy as np
 
 from ..optics import checks
+from .json_values import whole_path, write_whole
 
 __all__ = [
     "read_exr",
@@ -88,8 +89,9 @@ def read_exr(path, *, channels=None) -> np.ndarray:
 
     Args:
         path: the file.
-        channels: channel names to read in order (default: R, G, B if present, else every
-            channel in sorted order).
+        channels: channel names to read in order (default: R, G, B if present, else Y,
+            else every channel in sorted order; an alpha channel A is left out, as
+            ``read_png`` drops alpha).
 
     Returns:
         ``[H, W, C]`` float32 (``[H, W]`` for a single channel).
@@ -107,7 +109,9 @@ def read_exr(path, *, channels=None) -> np.ndarray:
     except Exception as e:  # OpenEXR raises RuntimeError with a terse message
         raise ValueError(f"read_exr: {p} is not a readable OpenEXR file ({e})") from None
     if channels is None:
-        channels = [c for c in ("R", "G", "B") if c in chans] or sorted(chans)
+        # A grey+alpha file (Y, A) was read as [A, Y]: alpha first, as the image's grey.
+        channels = ([c for c in ("R", "G", "B") if c in chans] or [c for c in ("Y",) if c in chans]
+                    or sorted(set(chans) - {"A"}) or sorted(chans))
     elif isinstance(channels, str):  # "RGB" was read letter by letter, "R1" as R and 1
         channels = [channels]
     channels = list(channels)
@@ -145,7 +149,7 @@ def write_exr(path, img, *, channels=None) -> None:
             C0, C1, ...).
     """
     path = _output_file(path, "write_exr", ".exr")
-    a = checks.float_image(img, "write_exr", "img", unit="linear values").astype(np.float32)
+    a = _float32(img, "write_exr", "img", "linear values")
     _non_empty(a, "write_exr")
     if a.ndim == 2:
         a = a[..., None]
@@ -158,6 +162,18 @@ def write_exr(path, img, *, channels=None) -> None:
     channels = _layer_names(channels, c, "write_exr", "channels", "channels")
     data = {name: np.ascontiguousarray(a[..., i]) for i, name in enumerate(channels)}
     _write_channels(path, data)
+
+
+def _float32(img, where: str, arg: str, unit: str) -> np.ndarray:
+    """A finite float image as the float32 an EXR file holds: a value beyond float32's range
+    (3.4e38) was written as inf without a word."""
+    a = checks.float_image(img, where, arg, unit=unit)
+    top = float(np.finfo(np.float32).max)
+    if a.size and np.max(np.abs(a)) > top:
+        raise ValueError(f"{where}: {arg} must be finite values within float32's range "
+                         f"(|v| <= {top:.4g}), which an EXR file holds; got "
+                         f"{checks.fmt(a[np.abs(a) > top][:1])} ({unit}); scale the image")
+    return a.astype(np.float32)
 
 
 def _non_empty(a, where: str) -> None:
@@ -188,8 +204,8 @@ def _write_channels(path, data):
     import OpenEXR
 
     header = {"compression": OpenEXR.ZIP_COMPRESSION, "type": OpenEXR.scanlineimage}
-    with OpenEXR.File(header, data) as f:
-        f.write(str(os.fspath(path)))
+    with OpenEXR.File(header, data) as f, whole_path(path) as tmp:  # whole or not at all
+        f.write(tmp)
 
 
 def read_png(path, *, linear: bool = True) -> np.ndarray:
@@ -235,7 +251,8 @@ def write_png(path, img, *, linear: bool = True, bits: int = 8) -> None:
         path: the file.
         img: ``[H, W]`` or ``[H, W, C]`` (C = 1…4) values in [0, 1] (clipped).
         linear: the values are linear light and get the sRGB curve (default); False writes
-            them as they are.
+            them as they are. An alpha channel (C = 2 or 4, the last) is coverage, written
+            as it is either way.
         bits: 8 or 16.
     """
     # Both checked before the file is touched: linear="no" is truthy (the sRGB curve was
@@ -256,7 +273,10 @@ def write_png(path, img, *, linear: bool = True, bits: int = 8) -> None:
         a = a[..., 0]
     if a.ndim not in (2, 3) or (a.ndim == 3 and a.shape[-1] > 4):
         raise ValueError(f"write_png: image must be [H, W] or [H, W, C<=4], got {a.shape}")
-    v = linear_to_srgb(a) if linear else np.clip(a, 0.0, 1.0)
+    v = np.clip(a, 0.0, 1.0)
+    if linear:  # the colour channels only: alpha 0.5 was written as 0.735 (code 188)
+        colour = slice(None, -1) if a.ndim == 3 and a.shape[-1] in (2, 4) else slice(None)
+        v[..., colour] = linear_to_srgb(v[..., colour])
     top = 2**bits - 1
     q = np.round(v * top).astype(">u2" if bits == 16 else np.uint8)
     h, w = q.shape[:2]
@@ -272,7 +292,7 @@ def write_png(path, img, *, linear: bool = True, bits: int = 8) -> None:
     ihdr = struct.pack(">IIBBBBB", w, h, bits, color_type, 0, 0, 0)
     png = (b"\x89PNG\r\n\x1a\n" + chunk(b"IHDR", ihdr) + chunk(b"IDAT", zlib.compress(data, 6))
            + chunk(b"IEND", b""))
-    path.write_bytes(png)
+    write_whole(path, png)  # whole or not at all: a stop mid-write left a cut file
 
 
 def _unfilter(raw: bytes, h: int, stride: int, bpp: int) -> np.ndarray:
@@ -455,7 +475,7 @@ def write_psf_stack(path, psfs, *, names=None) -> None:
     """
     path = _output_file(path, "write_psf_stack", ".exr")
     # NaN PSFs were written as they were (and complex or integer ones cast).
-    a = checks.float_image(psfs, "write_psf_stack", "psfs", unit="PSF values").astype(np.float32)
+    a = _float32(psfs, "write_psf_stack", "psfs", "PSF values")
     if a.ndim == 3:
         a = a[:, None]
     if a.ndim != 4 or 0 in a.shape:

@@ -8,6 +8,7 @@ and its whole-file write (``write_whole``, also the ``.zmx`` writer's).
 
 from __future__ import annotations
 
+import contextlib
 import json
 import math
 import os
@@ -182,6 +183,24 @@ def write_whole(path: str | os.PathLike, text: str | bytes, *,
         else:
             with open(tmp, "w", encoding="utf-8", newline=newline) as f:
                 f.write(text)
+        os.replace(tmp, path)
+    except BaseException:
+        if os.path.exists(tmp):
+            os.remove(tmp)
+        raise
+
+
+@contextlib.contextmanager
+def whole_path(path: str | os.PathLike):
+    """A temporary path beside ``path`` (same extension) for a writer that takes a path (a
+    figure's ``savefig``, OpenEXR), renamed over ``path`` when the block ends without an
+    error, removed when it does not: the file is written whole or not at all, as
+    ``write_whole`` writes text (in place, a stop mid-write left a cut file where the
+    earlier one was)."""
+    folder, name = os.path.split(os.path.abspath(os.fspath(path)))
+    tmp = os.path.join(folder, f".{name}.{os.getpid()}.partial{os.path.splitext(name)[1]}")
+    try:
+        yield tmp
         os.replace(tmp, path)
     except BaseException:
         if os.path.exists(tmp):

@@ -6,7 +6,9 @@ The reader ignores unknown keys, so that informational data (``paraxial``,
 (``"wavelength_nm"``, ``"radus"``, ``"Thickness"``) or a synonym of one from another program
 (``"glass"``, ``"R"``, ``"k"``, ``"stop"``) would then silently fall back to its default, so
 such a key is refused instead, naming the key this format uses. Each table maps the keys of
-one level of the file to their synonyms (lower case).
+one level of the file to their synonyms (lower case). The sections read whole (``units``,
+``sensor``, ``object``, ``fields``: ``CLOSED``) take no informational keys: any other key
+there is refused.
 """
 
 from __future__ import annotations
@@ -144,6 +146,7 @@ def check_keys(d: dict, source: str) -> None:
     for section, known in (("aperture", APERTURE), ("sensor", SENSOR), ("fields", FIELDS),
                            ("object", OBJECT)):
         no_misspelled(d.get(section), known, f"{source}: {section}")
+    closed(d, source)
     for section, key in REQUIRED.items():
         v = d.get(section)
         if (section == "object" and section in d and not isinstance(v, dict)) or (
@@ -154,6 +157,31 @@ def check_keys(d: dict, source: str) -> None:
         _units(d["units"], source)
         _wavelength_unit(d, source)
     _weights(d, source)
+
+
+UNITS = {"length": (), "wavelength": (), "angle": ()}
+"""The keys of a ``units`` object."""
+
+CLOSED = {"units": UNITS, "sensor": SENSOR, "object": OBJECT,
+          "fields": {**FIELDS, "weights": ()}}
+"""Sections read whole: every key of theirs is read (``fields.weights`` warned about), so
+another key is a unit, a size or a field setting this reader would ignore (``"units":
+{"lengths": "in"}`` read inches as mm, ``"fields": {"unit": "rad"}`` radians as degrees)."""
+
+
+def closed(d: dict, source: str) -> None:
+    """Refuse a key of a section in ``CLOSED`` that the section does not hold (the top level,
+    the surfaces and ``aperture`` take informational keys; these sections do not)."""
+    for section, known in CLOSED.items():
+        v = d.get(section)
+        if not isinstance(v, dict):
+            continue
+        no_misspelled(v, known, f"{source}: {section}")
+        other = [k for k in v if k not in known]
+        if other:
+            raise ValueError(f"{source}: {section}: unknown key {other[0]!r}; {section} holds "
+                             f"only {', '.join(known)} (a key not read would be ignored and "
+                             f"its default used)")
 
 
 WEIGHTS = (("fields", "weights", "fields"), (None, "field_weights", "fields"),

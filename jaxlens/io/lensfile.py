@@ -47,13 +47,12 @@ import jax.numpy as jnp
 import numpy as np
 
 from ..optics import checks, paraxial, travel
-from ..optics import materials as _materials
 from ..optics.coordinates import CoordinateBreak
-from ..optics.lens import INFINITE_OBJECT_MM, RAY_AIMING, Lens, Sensor, check_vignetting
+from ..optics.lens import INFINITE_OBJECT_MM, RAY_AIMING, Lens, Sensor
 from ..optics.materials import Air
 from ..optics.qtype import QTypeAsphere
 from ..optics.surfaces import AbstractSurface, EvenAsphere, Hybrid, OddAsphere, Standard
-from . import lens_keys, surface_json
+from . import lens_keys, lens_system, surface_json
 from .json_values import (
     RepeatedKey,
     curvature,
@@ -320,38 +319,6 @@ def _check_traceable(lens: Lens) -> None:
                          f"a curvature, thickness or index too large?)")
 
 
-def _aperture_of(d: dict, where: str) -> dict:
-    ap = d.get("aperture", {})
-    if isinstance(ap, int | float) and not isinstance(ap, bool):
-        ap = {"epd": ap}
-    if not isinstance(ap, dict):
-        raise ValueError(f"{where}: aperture must be an object, got {ap!r}")
-    keys = {
-        "epd": ("epd", "EPD"),
-        "fnum": ("fnum", "FNUM", "f_number"),
-        "stop_semi_diameter": ("stop_semi_diameter",),
-    }
-    given = {}
-    for top in ("epd", "EPD"):
-        if top in d:
-            v = _num(d[top], f"{where}: {top}")
-            if not v > 0:
-                raise ValueError(f"{where}: {top} (entrance pupil diameter) must be > 0 mm, "
-                                 f"got {v}")
-            given.setdefault("epd", (top, v))
-    for key, names in keys.items():  # EPD first: the reference cases give it besides others
-        for n in names:
-            if n in ap:
-                v = _num(ap[n], f"{where}: aperture.{n}")
-                if not v > 0:
-                    raise ValueError(f"{where}: aperture.{n} must be > 0, got {v}")
-                given.setdefault(key, (f"aperture.{n}", v))
-    if not given:
-        raise ValueError(f"{where}: no aperture; give aperture.epd, aperture.fnum or "
-                         f"aperture.stop_semi_diameter")
-    return given
-
-
 def _one_aperture(lens: Lens, given: dict, where: str) -> Lens:
     """The lens with the first of ``given`` (epd, then fnum, then stop_semi_diameter) as its
     aperture; any other given must agree with it (to 1e-6), or one of them would be ignored
@@ -368,42 +335,6 @@ def _one_aperture(lens: Lens, given: dict, where: str) -> Lens:
     return lens
 
 
-def _wavelengths_of(d: dict, where: str) -> tuple[np.ndarray, int]:
-    if len(keys := [k for k in ("wavelengths_um", "wavelengths_nm", "wavelengths") if k in d]) > 1:
-        raise ValueError(f"{where}: give only one of {' and '.join(keys)} (they may disagree)")
-    if "wavelengths_um" in d:
-        wl = _nums(d["wavelengths_um"], f"{where}: wavelengths_um")
-    elif "wavelengths_nm" in d:
-        wl = nm_to_um(_nums(d["wavelengths_nm"], f"{where}: wavelengths_nm"))
-    elif "wavelengths" in d:
-        wl = _nums(d["wavelengths"], f"{where}: wavelengths")
-    else:
-        wl = np.array([_materials.LAMBDA_D])
-    wl = np.atleast_1d(wl)
-    if wl.ndim != 1 or wl.size == 0 or np.any(wl <= 0):
-        raise ValueError(f"{where}: wavelengths must be a non-empty list of positive numbers")
-    if np.unique(wl).size < wl.size:
-        # A warning, not a refusal: Zemax takes a repeated wavelength (a .zmx read with one
-        # saves to a JSON that must load), but a typo weighs it twice in every polychromatic
-        # figure.
-        warnings.warn(f"{where}: a wavelength is given twice ({checks.fmt(wl)} µm); it weighs "
-                      f"twice in every polychromatic figure", stacklevel=3)
-    if "primary" in d:
-        p = d["primary"]
-        if isinstance(p, bool) or not isinstance(p, int) or not 0 <= p < wl.size:
-            raise ValueError(f"{where}: primary must be an index 0..{wl.size - 1}, got {p!r}")
-        return wl, p
-    for key in ("primary_wavelength_um", "primary_wavelength_nm", "primary_wavelength"):
-        if key in d:
-            target = _num(d[key], f"{where}: {key}")
-            target = float(nm_to_um(target)) if key.endswith("_nm") else target
-            i = int(np.argmin(np.abs(wl - target)))
-            if not math.isclose(wl[i], target, rel_tol=1e-9):
-                raise ValueError(f"{where}: {key} {d[key]!r} is not one of the wavelengths")
-            return wl, i
-    return wl, 0
-
-
 def _warn_inside_out(thick: list, mats: list, source: str, first: int) -> None:
     """A negative thickness in glass where light travels toward +z (no mirror, no break):
     the element's back lies in front of its face, e.g. a sign typed wrong (the Cooke
@@ -416,58 +347,6 @@ def _warn_inside_out(thick: list, mats: list, source: str, first: int) -> None:
                           f"inside out); a negative thickness belongs in air or after a mirror",
                           stacklevel=3)
             return
-
-
-def _fields_of(d: dict, where: str) -> np.ndarray:
-    f = d.get("fields", [0.0])
-    if isinstance(f, dict):
-        ftype = _text(f.get("type", "angle_deg_y"), f"{where}: fields.type")
-        known = ("angle_deg_y", "angle_deg", "angle", "angle_deg_xy")
-        if ftype not in known:
-            raise ValueError(f"{where}: field type {ftype!r} is not supported; fields.type must "
-                             f"be one of {', '.join(known)} (angles in deg: convert radians or "
-                             f"heights to degrees)")
-        f = f.get("values", [0.0])
-    out = np.atleast_1d(_nums(f, f"{where}: fields"))
-    if out.size == 0:
-        raise ValueError(f"{where}: no fields")
-    if out.ndim > 2 or (out.ndim == 2 and out.shape[1] != 2):
-        raise ValueError(f"{where}: fields must be a list of angles θy or of [θx, θy] pairs "
-                         f"(deg), got an array of shape {out.shape}")
-    if np.unique(out, axis=0).shape[0] < out.shape[0]:
-        # A warning, as for a repeated wavelength (Zemax takes it; a .zmx read with one
-        # saves to a JSON that must load), but a typo weighs the field twice.
-        warnings.warn(f"{where}: a field is given twice ({checks.fmt(out)} deg); it "
-                      f"weighs twice in every figure averaged over the fields", stacklevel=3)
-    return out
-
-
-def _vignetting_of(d: dict, where: str, n_fields: int) -> np.ndarray | None:
-    """``fields.vignetting``: ``{"vdx": [...], "vdy": [...], "vcx": [...], "vcy": [...],
-    "van_deg": [...]}``, one value per field each (pupil radii; ``van_deg`` in degrees), a
-    missing list 0; None without it. Checked as ``Lens.vignetting``, naming the file."""
-    f = d.get("fields")
-    if not isinstance(f, dict) or f.get("vignetting") is None:
-        return None
-    v, at = f["vignetting"], f"{where}: fields.vignetting"
-    form = '{"vdx": [...], "vdy": [...], "vcx": [...], "vcy": [...], "van_deg": [...]}'
-    if not isinstance(v, dict):
-        raise ValueError(f"{at} must be an object {form}, one value per field each (pupil "
-                         f"radii, van_deg in degrees), got {v!r}")
-    lens_keys.no_misspelled(v, lens_keys.VIGNETTING, at)
-    unknown = [k for k in v if k not in lens_keys.VIGNETTING]
-    if unknown:
-        raise ValueError(f"{at}: unknown key {unknown[0]!r}; the keys are "
-                         f"{', '.join(lens_keys.VIGNETTING)}")
-    out = np.zeros((n_fields, 5))
-    for j, key in enumerate(lens_keys.VIGNETTING):
-        if key in v:
-            col = np.atleast_1d(_nums(v[key], f"{at}.{key}"))
-            if col.shape != (n_fields,):
-                raise ValueError(f"{at}.{key} must hold one value per field ({n_fields}), got "
-                                 f"shape {col.shape}")
-            out[:, j] = col
-    return check_vignetting(out, at, "factors")
 
 
 def _is_kind(s: Any, kind: str) -> bool:
@@ -589,8 +468,9 @@ def lens_from_dict(d: dict, *, source: str = "<lens>") -> Lens:
         obscurations += [(j, *obsc)] if obsc is not None else []
         apertures += [(j, a) for a in aps]
 
-    wl, primary = _wavelengths_of(d, source)
-    fields = _fields_of(d, source)
+    wl, primary = lens_system.wavelengths_of(d, source)
+    fields = lens_system.fields_of(d, source)
+    lens_system.check_weights(d, source, fields.shape[0], wl.size)
     sensor = None
     if d.get("sensor") is not None:
         sd = d["sensor"]
@@ -608,13 +488,13 @@ def lens_from_dict(d: dict, *, source: str = "<lens>") -> Lens:
     for key, text in (("name", name), ("description", description)):
         if not isinstance(text, str):
             raise ValueError(f"{source}: {key} must be a string, got {type(text).__name__}")
-    aperture = _aperture_of(d, source)
+    aperture = lens_system.aperture_of(d, source)
     key = next((k for k in ("wavelengths_um", "wavelengths_nm", "wavelengths") if k in d),
                "wavelengths")
     # The Lens checks these too, but here the message names the file and the key.
     checks.wavelengths(checks.NoMaterials, wl, f"{source}: {key}", "wavelength")
     checks.field_angles(fields, f"{source}: fields", "field angles")
-    vignetting = _vignetting_of(d, source, fields.shape[0])
+    vignetting = lens_system.vignetting_of(d, source, fields.shape[0])
     afocal = d.get("afocal_image_space", False)
     if not isinstance(afocal, bool):  # "false" or 0 would be read as a flag silently
         raise ValueError(f"{source}: afocal_image_space must be true or false, got "
