@@ -12,7 +12,7 @@ import jax.numpy as jnp
 import numpy as np
 from jaxtyping import Array, Float
 
-from ..imaging.sampling import field_xy
+from ..imaging.otf import diffraction_mtf, mtf_directions
 from ..optics import checks
 from ..optics.lens import Lens
 from .spots import spot_rays, weighted_rms
@@ -111,15 +111,6 @@ def best_focus(data: SpotData, weights, *, iters: int = 8) -> Float[Array, ""]:
     return jax.lax.fori_loop(0, iters, step, z0)
 
 
-def directions(fields):
-    """Unit tangential (radial) and sagittal directions in the image plane per field."""
-    t = jnp.tan(field_xy(fields))  # [F, 2]
-    r = jnp.sqrt(jnp.sum(t * t, -1, keepdims=True))
-    on_axis = r == 0
-    e_t = jnp.where(on_axis, jnp.asarray([0.0, 1.0], t.dtype), t / jnp.where(on_axis, 1.0, r))
-    return e_t, jnp.stack([e_t[:, 1], -e_t[:, 0]], -1)
-
-
 def field_mtf(data: SpotData, fields, wavelengths, frequency, fnum, dz=0.0
               ) -> Float[Array, " F"]:
     """Geometric × diffraction MTF at ``frequency`` (cycles/mm), mean of T and S, per field."""
@@ -130,10 +121,8 @@ def field_mtf(data: SpotData, fields, wavelengths, frequency, fnum, dz=0.0
     rel = q - ref[:, None, None, :]
     wn = w / tot_w
     lam = wavelengths * 1e-3
-    s = jnp.clip(frequency * lam * fnum, 0.0, 1.0)
-    root = jnp.sqrt(jnp.where(s < 1, 1.0 - s * s, 1.0))
-    diff = jnp.where(s < 1, (2 / jnp.pi) * (jnp.arccos(s) - s * root), 0.0)  # [W]
-    e_t, e_s = directions(fields)
+    diff = diffraction_mtf(frequency, lam, fnum)  # [W]
+    e_t, e_s = mtf_directions(fields)
 
     def along(e):
         proj = jnp.sum(rel * e[:, None, None, :], -1)  # [F, W, M]

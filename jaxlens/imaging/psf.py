@@ -75,6 +75,7 @@ from ..tracing.forward import DEFAULT_NEWTON_ITERS, forward_mode_jit, trace
 from . import sampling
 from .aiming import apertured, chief_point, field_to_ideal, ideal_to_field
 from .grid import kernel_side, pixel_pitch, pupil_cells, sensor_grid, splat
+from .otf import diffraction_mtf, mtf_directions
 
 __all__ = ["AbstractPSFModel", "CoherentPSF", "GeometricPSF", "RGB_WAVELENGTHS", "PSFResult",
            "PSFMap", "psf", "psf_info", "psf_rgb", "psf_map", "mtf"]
@@ -636,28 +637,12 @@ def psf_map(
 # --------------------------------------------------------------------------------------
 # MTF
 # --------------------------------------------------------------------------------------
-def _diffraction_mtf(nu, lam_mm, fnum):
-    s = jnp.clip(nu * lam_mm * fnum, 0.0, 1.0)
-    root = jnp.sqrt(jnp.where(s < 1, 1.0 - s * s, 1.0))
-    return jnp.where(s < 1, (2 / jnp.pi) * (jnp.arccos(s) - s * root), 0.0)
-
-
-def _directions(field):
-    """Unit tangential (radial) and sagittal directions in the sensor plane."""
-    t = jnp.tan(sampling.field_xy(field))
-    r = jnp.sqrt(jnp.sum(t * t))
-    on_axis = r == 0
-    e_t = jnp.where(on_axis, jnp.array([0.0, 1.0], t.dtype), t / jnp.where(on_axis, 1.0, r))
-    e_s = jnp.stack([e_t[1], -e_t[0]])
-    return e_t, e_s
-
-
 @checks.checked_core(forward_mode_jit)
 def _mtf_impl(lens, field, depth, wls, freqs, pixel_size, *, model, kernel_size, diffraction,
               newton_iters):
     dtype = freqs.dtype
     lens = lens.astype(dtype)
-    e_t, e_s = _directions(field)
+    e_t, e_s = mtf_directions(field)
     fnum = working_fnum(lens, depth)
     nw = wls.shape[0]
     if isinstance(model, GeometricPSF):
@@ -678,7 +663,7 @@ def _mtf_impl(lens, field, depth, wls, freqs, pixel_size, *, model, kernel_size,
             ph = -2 * jnp.pi * freqs[None, :, None] * proj[:, None, :]  # [W, F, M]
             o = jnp.sum(wn[:, None, :] * jnp.exp(1j * ph), -1)  # [W, F]
             if diffraction:
-                o = o * jax.vmap(lambda wl: _diffraction_mtf(freqs, wl * 1e-3, fnum))(wls)
+                o = o * jax.vmap(lambda wl: diffraction_mtf(freqs, wl * 1e-3, fnum))(wls)
             return jnp.abs(jnp.sum(o, 0) / nw)
 
         return along(e_t), along(e_s), jnp.sum(w, -1) > 0
