@@ -259,6 +259,8 @@ from probe_table import (  # noqa: E402
     ROOT,
     SEED0,
     TMP,
+    CutWriter,
+    cli,
     edof_check,
     patched,
     probe,
@@ -270,15 +272,6 @@ from probe_table import (  # noqa: E402
 )
 
 import jaxlens as jl  # noqa: E402
-
-
-def cli(fn):
-    fn.cli = True
-    return fn
-
-
-
-
 
 
 def new(name):
@@ -657,24 +650,6 @@ def images():
 
 
 # ----------------------------------------------------------------------------- interrupted writes
-class _CutWriter:
-    """A file that takes half of what is written, then is interrupted (Ctrl-C)."""
-
-    def __init__(self, f):
-        self.f = f
-
-    def write(self, text):
-        self.f.write(text[: len(text) // 2])
-        self.f.flush()
-        raise KeyboardInterrupt
-
-    def __enter__(self):
-        return self
-
-    def __exit__(self, *a):
-        self.f.close()
-
-
 def interrupted():
     import builtins
     import importlib
@@ -682,7 +657,7 @@ def interrupted():
 
     def cut_open(path, mode="r", *a, **k):
         f = builtins.open(path, mode, *a, **k)
-        return _CutWriter(f) if "w" in mode else f
+        return CutWriter(f) if "w" in mode else f
 
     def save_cut(src, name):
         def go():

@@ -103,7 +103,7 @@ sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
 warnings.simplefilter("ignore")
 
 import numpy as np  # noqa: E402
-from probe_table import COOKE, ROOT, SEED0, TMP, probe, run  # noqa: E402
+from probe_table import COOKE, ROOT, SEED0, cli, fresh, probe, run  # noqa: E402
 
 import jaxlens as jl  # noqa: E402
 
@@ -114,15 +114,6 @@ PIVOTED = os.path.join(DATA, "zemax2006", "kraken_pivoted_lens.ZMX")
 PLASTICS = os.path.join(ROOT, "experiments", "classical", "designs", "PLASTICS.AGF")
 
 
-def cli(fn):
-    fn.cli = True
-    return fn
-
-
-def fresh(name):
-    d = os.path.join(TMP, f"{name}{len(os.listdir(TMP))}")
-    os.makedirs(d)
-    return d
 
 
 def edited(src, old, new, *more, **load):

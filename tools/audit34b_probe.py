@@ -116,20 +116,9 @@ sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
 warnings.simplefilter("ignore")
 
 import numpy as np  # noqa: E402
-from probe_table import COOKE, FILTER, ROOT, ROWS, TMP, patched, probe, run  # noqa: E402
+from probe_table import COOKE, FILTER, ROOT, ROWS, TMP, CutWriter, cli, fresh, patched, probe, run  # noqa: E402
 
 import jaxlens as jl  # noqa: E402
-
-
-def cli(fn):
-    fn.cli = True
-    return fn
-
-
-def fresh(name):
-    d = os.path.join(TMP, f"{name}{len(os.listdir(TMP))}")
-    os.makedirs(d)
-    return d
 
 
 # ----------------------------------------------------------------------------- JSON lens files
@@ -352,21 +341,7 @@ def whole_writes():
         import builtins
         real_open = builtins.open
 
-        class Half:
-            def __init__(self, f):
-                self.f = f
-
-            def write(self, text):
-                self.f.write(text[: len(text) // 2])
-                self.f.flush()
-                raise KeyboardInterrupt
-
-            def __enter__(self):
-                return self
-
-            def __exit__(self, *a):
-                self.f.close()
-        TOL.open = lambda p, mode="r", *a, **k: Half(real_open(p, mode, *a, **k)) if "w" in mode else real_open(p, mode, *a, **k)
+        TOL.open = lambda p, mode="r", *a, **k: CutWriter(real_open(p, mode, *a, **k)) if "w" in mode else real_open(p, mode, *a, **k)
         try:
             TOL.write_report({"command": "x", "trials": list(range(1000))}, os.path.dirname(path), plots=False)
         finally:

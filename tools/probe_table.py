@@ -98,6 +98,37 @@ def jitted(fn, *args):
     return go
 
 
+def cli(fn):
+    """Mark ``fn`` as a command line's run (the table groups it apart)."""
+    fn.cli = True
+    return fn
+
+
+def fresh(name):
+    """A new empty folder under ``TMP`` named after ``name``."""
+    d = os.path.join(TMP, f"{name}{len(os.listdir(TMP))}")
+    os.makedirs(d)
+    return d
+
+
+class CutWriter:
+    """A file that takes half of what is written, then is interrupted (Ctrl-C)."""
+
+    def __init__(self, f):
+        self.f = f
+
+    def write(self, text):
+        self.f.write(text[: len(text) // 2])
+        self.f.flush()
+        raise KeyboardInterrupt
+
+    def __enter__(self):
+        return self
+
+    def __exit__(self, *a):
+        self.f.close()
+
+
 class Started(Exception):
     """Raised where a command's work would begin: its checks have passed."""
 
