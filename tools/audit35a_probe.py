@@ -9,6 +9,99 @@ checks (``cli.check_args``) and then the run's first step that reads user files 
 loading, ``cli._scenes``; or ``cli.run`` up to the first lens's training), so a refusal
 that came only there is a "crash" (a traceback after the run folder was started).
 
+Gaps found and fixed:
+1. edof ``--test-dir``/``--train-dir``: the option checks read each file's structure only
+   (Pillow's ``verify``), so a float32 TIFF of HDR values, an int32 TIFF, a multi-page TIFF
+   or a test image of which no crop is kept (all black) failed with a traceback in the run,
+   after its folder was started (and without the file's name). Now decoded in the checks
+   (``scenes.check_folder``), the file named; the no-crop message says why crops are dropped.
+2. edof ``--resume`` over a checkpoint of other training options (or one with more stage-2
+   steps done than ``--steps2``, or a .json that is not JSON) was refused at that lens's
+   start, as a traceback saying "another configuration"; for seed 1's checkpoint, after seed
+   0's whole training. Now every checkpoint the run would continue is checked first, and the
+   message names each option that differs with both values (``train.check_resumable``).
+3. edof ``--binning`` that leaves a frame smaller than a test crop was refused as "--tile
+   must divide the 1-pixel frame"; ``--lens-every`` above ``--steps`` trained the lens once
+   (step 0); ``--real-halo`` with the NAFNet decoder (the ``--smoke`` default) was dropped.
+4. ``python -m benchmarks --only render_speed --out DIR`` wrote the render result to
+   benchmarks/results/ (over the committed one) and never checked DIR's file; now into DIR
+   (``--tag`` names it as the others), checked before the first benchmark. ``--smoke --only
+   render_speed`` ran nothing: refused.
+5. ``benchmarks.render_memory --trace-rays N`` or ``--checkpoint 0`` without ``--worker``
+   ran the full study with the option dropped: refused.
+6. ``classical --tolerance-aware K --loss image``: the image fine-tuning (the last stage: no
+   polish follows it) is nominal, undoing the tolerance-aware stages: refused.
+
+Before (base fd24690, an archive) and after (branch audit35a), the same 62 probes,
+``PYTHONPATH=<tree> python tools/audit35a_probe.py`` from this tree's root, about 2 minutes
+each way on 2 busy cores:
+    before: clear error: 16, crash: 10, ok: 22, silent wrong: 11, vague error: 3
+    after:  clear error: 39, ok: 23
+
+Probe (before -> after):
+    edof --smoke --binning 1024 (a 1-pixel frame)                                                vague error  -> clear error
+    edof --smoke --binning 64 (a 16-pixel frame, crop 32)                                        vague error  -> clear error
+    edof --smoke --binning 32 (control)                                                          ok           -> ok
+    edof --smoke --lens-every 100 (--steps 60: one lens update)                                  silent wrong -> clear error
+    edof --smoke --lens-every 60 (control)                                                       ok           -> ok
+    edof --steps 100 --lens-every 100 (control)                                                  ok           -> ok
+    edof --smoke --real-halo (decoder nafnet: no front end)                                      silent wrong -> clear error
+    edof --real-halo --decoder nafnet                                                            silent wrong -> clear error
+    edof --smoke --real-halo --decoder wiener (control)                                          ok           -> ok
+    edof --seeds 0,1,0                                                                           clear error  -> clear error
+    edof --seeds 0,-1                                                                            clear error  -> clear error
+    edof --out a file                                                                            clear error  -> clear error
+    edof --steps nan                                                                             clear error  -> clear error
+    edof --time-limit nan                                                                        clear error  -> clear error
+    edof --read-noise 0 (control: no read noise)                                                 ok           -> ok
+    edof --photons inf                                                                           clear error  -> clear error
+    edof --paper --binning 8 (a 128-pixel frame, crop 256)                                       vague error  -> clear error
+    edof --test-dir a grey 8-bit PNG (control)                                                   ok           -> ok
+    edof --test-dir an RGB 16-bit PNG (control)                                                  ok           -> ok
+    edof --test-dir a grey 16-bit PNG (control)                                                  ok           -> ok
+    edof --test-dir an RGBA PNG (control)                                                        ok           -> ok
+    edof --test-dir a grey+alpha PNG (control)                                                   ok           -> ok
+    edof --test-dir a palette PNG (control)                                                      ok           -> ok
+    edof --test-dir a 1-bit PNG (control)                                                        ok           -> ok
+    edof --test-dir a CMYK JPEG (control)                                                        ok           -> ok
+    edof --test-dir a float32 TIFF in [0, 1] (control)                                           ok           -> ok
+    edof --test-dir a float32 HDR TIFF (values to 5)                                             crash        -> clear error
+    edof --test-dir an int32 TIFF                                                                crash        -> clear error
+    edof --test-dir a 2-page TIFF                                                                crash        -> clear error
+    edof --test-dir an all-black image (no crop kept)                                            crash        -> clear error
+    edof --test-dir a 20x20 image (smaller than the 32-pixel crop)                               clear error  -> clear error
+    edof --test-dir an empty folder                                                              clear error  -> clear error
+    edof --train-dir a float32 HDR TIFF                                                          crash        -> clear error
+    edof --train-dir a 2-page TIFF                                                               crash        -> clear error
+    edof --train-dir a 16-bit RGB PNG (control)                                                  ok           -> ok
+    edof --resume --steps 80 over a --steps 60 checkpoint                                        crash        -> clear error
+    edof --resume over a checkpoint of another --lr-net                                          crash        -> clear error
+    edof --resume --steps2 2 over a lens with 4 stage-2 steps done                               crash        -> clear error
+    edof --resume --seeds 0,1, seed 1's checkpoint of another --steps (after seed 0's training?) silent wrong -> clear error
+    edof --resume over a checkpoint .json that is not JSON                                       crash        -> clear error
+    edof --resume, no checkpoint of the lens (control: starts, with a note)                      ok           -> ok
+    render_memory --trace-rays 1000 without --worker (ignored?)                                  silent wrong -> clear error
+    render_memory --checkpoint 0 without --worker (ignored?)                                     silent wrong -> clear error
+    render_memory --size 256 (control: starts)                                                   ok           -> ok
+    benchmarks --smoke --only render_speed (runs nothing?)                                       silent wrong -> clear error
+    benchmarks --smoke --only render_memory skipping                                             silent wrong -> clear error
+    benchmarks --only render_speed --out DIR (written to DIR?)                                   silent wrong -> ok
+    benchmarks --only render_speed --out DIR holding a foreign render_speed.json                 silent wrong -> clear error
+    benchmarks --only nosuch_bench                                                               clear error  -> clear error
+    tolerance the Cooke triplet (not the classical spec)                                         clear error  -> clear error
+    tolerance --trials 1e3 (not whole?)                                                          clear error  -> clear error
+    tolerance --seed 2**40                                                                       clear error  -> clear error
+    tolerance a design path that is a folder                                                     clear error  -> clear error
+    jaxlens report --wavelengths -0.5876                                                         clear error  -> clear error
+    jaxlens report --fields 10 --json (control)                                                  ok           -> ok
+    jaxlens report --wavefront --plot FILE                                                       clear error  -> clear error
+    jaxlens --float32 report --wavefront (control)                                               ok           -> ok
+    classical --tolerance-aware 2 --loss image (image fine-tuning nominal)                       silent wrong -> clear error
+    classical --tolerance-aware 2 (control)                                                      ok           -> ok
+    classical --loss image --solver lm (control)                                                 ok           -> ok
+    classical --solver lbfgsb --float32 --no-regularize (control)                                ok           -> ok
+    classical --solver newton                                                                    clear error  -> clear error
+
 Run from the tree's root: ``PYTHONPATH=. python tools/audit35a_probe.py [filter]``.
 """
 

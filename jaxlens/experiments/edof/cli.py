@@ -334,6 +334,11 @@ def check_args(a):
         for opt, d in (("--train-dir", a.train_dir), ("--test-dir", a.test_dir)):
             if d is not None and not os.path.isdir(d):
                 raise ValueError(f"edof: {opt} {d} is not a folder")
+        # A checkpoint or photographs inside --out were deleted when the run replaced it.
+        refuse_inside_out(a.out, (("--checkpoint", a.checkpoint), ("--record", a.record),
+                                  ("--train-dir", a.train_dir), ("--test-dir", a.test_dir)),
+                          "edof")
+        for opt, d in (("--train-dir", a.train_dir), ("--test-dir", a.test_dir)):
             if d is not None:  # a folder without images fails here, not after the lens work
                 from jaxlens.experiments.edof import scenes
 
@@ -344,10 +349,6 @@ def check_args(a):
                     raise ValueError(f"edof: {opt}: {e}") from None
         if a.resume:  # before: refused at the lens's start, after the scenes and set-up
             _check_resumable(a, cfg, names)
-        # A checkpoint or photographs inside --out were deleted when the run replaced it.
-        refuse_inside_out(a.out, (("--checkpoint", a.checkpoint), ("--record", a.record),
-                                  ("--train-dir", a.train_dir), ("--test-dir", a.test_dir)),
-                          "edof")
         # A file there would fail only when the first checkpoint or the record is written.
         for opt, d in (("--checkpoint", a.checkpoint), ("--record", a.record)):
             if d is not None and os.path.exists(d) and not os.path.isdir(d):
