@@ -247,7 +247,9 @@ def main(argv=None) -> None:
     ap.add_argument("--size", type=whole(0, "pixels", checks.MAX_IMAGE_SIDE), default=1024)
     ap.add_argument("--spp", type=whole(0, "rays per pixel", checks.MAX_SAMPLES), default=16)
     ap.add_argument("--patch", type=whole(0, "pixels", checks.MAX_IMAGE_SIDE), default=64)
-    ap.add_argument("--checkpoint", type=whole(0, "(0: off, 1: on)", 1), default=1)
+    ap.add_argument("--checkpoint", type=whole(0, "(0: off, 1: on)", 1), default=None,
+                    help="worker: render with checkpointing (1, the default) or without (0); "
+                         "the full run measures both")
     ap.add_argument("--trace-rays", type=whole(0, "rays", MAX_RAYS), default=0,
                     help="worker: time the bare trace's gradient on this many rays instead")
     ap.add_argument("--cap-gib", type=checks.cli_float, default=8.0)
@@ -257,6 +259,14 @@ def main(argv=None) -> None:
     ap.add_argument("--out", type=out_path(result_of="render_memory"),
                     default=RESULTS / "render_memory.json")
     args = ap.parse_args(argv)
+    if args.trace_rays > 0 and not args.worker:  # before: ignored without a word
+        ap.error(f"--trace-rays {args.trace_rays} sets what one --worker times (the bare "
+                 f"trace); the full run times its own 10**6-ray reference: give --worker, or "
+                 f"leave --trace-rays out")
+    if args.checkpoint is not None and not args.worker:  # before: ignored without a word
+        ap.error(f"--checkpoint {args.checkpoint} sets one --worker's render; the full run "
+                 f"measures it with and without checkpointing: give --worker, or leave "
+                 f"--checkpoint out")
     if args.worker and args.trace_rays > 0:  # the bare-trace worker ignores the render sizes
         print(json.dumps(trace_worker(args.trace_rays, args.lens)))
         return
@@ -274,7 +284,7 @@ def main(argv=None) -> None:
                  f"{MAX_CAP_GIB:g} GiB (below, the cap stops any worker at once), got "
                  f"{args.cap_gib}")
     if args.worker:
-        print(json.dumps(worker(args.size, args.spp, bool(args.checkpoint), args.patch,
+        print(json.dumps(worker(args.size, args.spp, args.checkpoint != 0, args.patch,
                                 args.lens)))
         return
     sys.path.insert(0, str(ROOT))

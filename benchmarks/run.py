@@ -21,7 +21,8 @@ numbers; the rows also carry the load at the time of each measurement.
 The render benchmarks (``benchmarks/render_speed.py``, ``benchmarks/render_memory.py``) belong
 to the render module. They run here too (not in ``--smoke``), by default or under ``--only
 render_speed render_memory``: through ``run(smoke) -> dict`` where they define it, else through
-their ``main([])``, which writes their own result files.
+their ``main``, which writes their own result files (``<benchmark>.json`` in ``--out``, named by
+``--tag`` as the others).
 """
 
 from __future__ import annotations
@@ -110,10 +111,22 @@ def main(argv: list[str] | None = None) -> dict:
                 p.error(f"--lenses: unknown zoo lens {name!r} (known: "
                         f"{', '.join(sorted(zoo.ZOO))}){hint}")
 
+    render = [n for n in args.only or () if n in OPTIONAL]
+    if args.smoke and render:  # before: --smoke skipped them, and the run did nothing else
+        p.error(f"--only {' '.join(render)}: --smoke does not run the render benchmarks "
+                f"(each takes minutes); leave --smoke out, or choose from {', '.join(CORE)}")
     # Before the first benchmark: the folder written is --out, else the committed results
     # (a smoke run without --out writes to a new temporary folder).
     target = args.out if args.out is not None else None if args.smoke else common.RESULTS
-    for name in (args.only or CORE) if target is not None else ():
+    for name in (args.only or CORE + OPTIONAL) if target is not None else ():
+        if name in OPTIONAL and not args.smoke:  # its result file (before: checked late)
+            import argparse
+
+            stem = f"{name}_{args.tag}" if args.tag else name
+            try:
+                common.out_path(result_of=name)(str(target / f"{stem}.json"))
+            except argparse.ArgumentTypeError as e:
+                p.error(f"--out {target}: {e}")
         if name in CORE:
             stem = f"{name}_{args.tag}" if args.tag else name
             clash = _replaces_fuller_run(target / f"{stem}.json", target, args, name)
@@ -154,8 +167,10 @@ def main(argv: list[str] | None = None) -> dict:
         if not hasattr(mod, "run"):
             # The render benchmarks expose main(argv) and write their own result files.
             if name in OPTIONAL and hasattr(mod, "main") and not args.smoke:
+                # Into --out, named by --tag (before: always benchmarks/results/<name>.json).
+                stem = f"{name}_{args.tag}" if args.tag else name
                 print(f"[{name}] (writes its own results)")
-                mod.main([])
+                mod.main(["--out", str(out / f"{stem}.json")])
             continue
         print(f"[{name}]")
         t0 = time.perf_counter()

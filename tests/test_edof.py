@@ -566,7 +566,7 @@ def test_merge_extension_and_evaluation_options_of_the_smoke_run(tmp_path, capsy
     settings = json.loads((ck / "seed0" / "eval_hybrid_settings.json").read_text())
     assert settings["eval_pupil"] == 12 and settings["crops"] == 4
     assert settings["training"]["steps2"] == 2
-    with pytest.raises(ValueError, match="another configuration"):
+    with pytest.raises(ValueError, match=r"other training options \(--steps 60 there, 61 here\)"):
         edof.run(common + ["--out", str(tmp_path / "edof5"), "--checkpoint", str(ck),
                            "--resume", "--steps", "61"])
     # A longer stage 2 extends the finished lenses and evaluates them anew (its cached

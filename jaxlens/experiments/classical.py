@@ -283,6 +283,13 @@ def check_args(args, given=None) -> None:
     except ValueError as e:
         raise ValueError(f"{w}: --material-catalogs {args.material_catalogs!r}: {e}") from e
     _no_ignored_options(args, w, given)
+    if args.tolerance_aware and args.loss == "image":
+        # Before: the image fine-tuning (the last stage: no polish with it) was nominal, so
+        # the design ended at the nominal optimum without a word.
+        raise ValueError(f"{w}: --tolerance-aware {args.tolerance_aware} averages the ray loss "
+                         f"over manufacturing errors, but --loss image fine-tunes on the "
+                         f"nominal image loss (the last stage: no polish follows), undoing it; "
+                         f"give one of them")
     if args.columns is not None:
         names = [c for c, _ in ABLATION_COLUMNS]
         bad = [c.strip() for c in args.columns.split(",") if c.strip() not in names]

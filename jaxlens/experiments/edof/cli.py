@@ -253,6 +253,10 @@ def config_from_args(a):
     if cfg.live_front_end and cfg.decoder == "nafnet":
         raise ValueError("edof: --live-front-end needs a Wiener front end (--decoder wiener "
                          "or multiwiener), got --decoder nafnet")
+    if cfg.real_halo and cfg.decoder == "nafnet":  # before: dropped (Config.front_pad)
+        raise ValueError("edof: --real-halo gives the Wiener front end its halo of real scene; "
+                         "it needs a front end (--decoder wiener or multiwiener), got --decoder "
+                         "nafnet" + (" (the --smoke default)" if a.decoder is None else ""))
     if cfg.hybrid_floor is not None:
         n(cfg.hybrid_floor, "--hybrid-floor", w, lo=0, hi=1,
           unit="(fraction of the start strength)")
@@ -268,6 +272,14 @@ def config_from_args(a):
         raise ValueError(f"edof: --binning must divide the 1024-pixel sensor side, got "
                          f"{cfg.binning}")
     side = 1024 // cfg.binning
+    if cfg.crop > side:  # before: blamed --tile ("must divide the 1-pixel frame")
+        raise ValueError(f"edof: --binning must leave a frame of at least one "
+                         f"{cfg.crop}-pixel test crop (1024 / --binning >= {cfg.crop}, so "
+                         f"--binning <= {1024 // cfg.crop}), got {cfg.binning}")
+    if cfg.lens_every > cfg.steps:  # before: one lens update (step 0), without a word
+        raise ValueError(f"edof: --lens-every must be at most --steps {cfg.steps} steps (a "
+                         f"lens update every N stage-1 steps; more leaves one update, at "
+                         f"step 0), got {cfg.lens_every}")
     if side % cfg.tile or cfg.crop % cfg.tile or cfg.crop > side:
         raise ValueError(f"edof: --tile must divide the {side}-pixel frame and the "
                          f"{cfg.crop}-pixel test crops, got {cfg.tile}")
@@ -322,18 +334,21 @@ def check_args(a):
         for opt, d in (("--train-dir", a.train_dir), ("--test-dir", a.test_dir)):
             if d is not None and not os.path.isdir(d):
                 raise ValueError(f"edof: {opt} {d} is not a folder")
-            if d is not None:  # a folder without images fails here, not after the lens work
-                from jaxlens.experiments.edof import scenes
-
-                try:
-                    scenes.folder_images(d, verify=True,
-                                         min_side=cfg.crop if opt == "--test-dir" else 1)
-                except ValueError as e:
-                    raise ValueError(f"edof: {opt}: {e}") from None
         # A checkpoint or photographs inside --out were deleted when the run replaced it.
         refuse_inside_out(a.out, (("--checkpoint", a.checkpoint), ("--record", a.record),
                                   ("--train-dir", a.train_dir), ("--test-dir", a.test_dir)),
                           "edof")
+        for opt, d in (("--train-dir", a.train_dir), ("--test-dir", a.test_dir)):
+            if d is not None:  # a folder without images fails here, not after the lens work
+                from jaxlens.experiments.edof import scenes
+
+                try:  # decoded too: a float HDR, int32 or multi-page image failed at run time
+                    scenes.check_folder(d, min_side=cfg.crop if opt == "--test-dir" else 1,
+                                        crop=cfg.crop if opt == "--test-dir" else None)
+                except ValueError as e:
+                    raise ValueError(f"edof: {opt}: {e}") from None
+        if a.resume:  # before: refused at the lens's start, after the scenes and set-up
+            _check_resumable(a, cfg, names)
         # A file there would fail only when the first checkpoint or the record is written.
         for opt, d in (("--checkpoint", a.checkpoint), ("--record", a.record)):
             if d is not None and os.path.exists(d) and not os.path.isdir(d):
@@ -356,6 +371,31 @@ def check_args(a):
     except ValueError as e:
         raise UsageError(str(e)) from None
     return cfg, names, folder
+
+
+def _check_resumable(a, cfg, names) -> None:
+    """``--resume``: every checkpoint of ``--checkpoint`` that this run would continue was
+    written with its training options (``train.check_resumable``), checked before any work."""
+    from jaxlens.experiments.edof.train import check_resumable
+
+    for seed in a.seeds:
+        for name in names:
+            meta = os.path.join(a.checkpoint, f"seed{seed}", f"{name}.json")
+            if not os.path.isfile(meta):
+                continue
+            try:
+                with open(meta) as f:
+                    info = json.load(f)
+                if not isinstance(info, dict) or not isinstance(info.get("config"), dict):
+                    raise ValueError("not a checkpoint's data")
+                info["stage"], info["step"]  # noqa: B018  (both must be there)
+            except (OSError, ValueError, KeyError) as e:
+                raise ValueError(f"edof: --resume: {meta} is not a readable checkpoint "
+                                 f"({e}); use another --checkpoint") from None
+            try:
+                check_resumable(meta, info, cfg, name)
+            except ValueError as e:
+                raise ValueError(f"edof: --{e}") from None
 
 
 def use_compile_cache(checkpoint: str) -> str:

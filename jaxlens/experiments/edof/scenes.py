@@ -122,6 +122,17 @@ def folder_images(folder: str | os.PathLike, *, verify: bool = False,
     return paths
 
 
+def check_folder(folder: str | os.PathLike, *, min_side: int = 1,
+                 crop: int | None = None) -> None:
+    """Refuses, before a run's work, a folder of images that ``load_images`` or, with
+    ``crop``, ``test_crops`` (``crop``-pixel crops) would refuse: each file's structure and
+    size (``folder_images`` with ``verify``), then its pixels decoded."""
+    folder_images(folder, verify=True, min_side=min_side)
+    images = load_images(folder=folder, max_side=None)
+    if crop is not None:
+        test_crops(images, [str(p) for p in folder_images(folder)], size=crop, margin=0)
+
+
 def load_images(
     names=None, *, folder: str | os.PathLike | None = None, max_side: int | None = 512
 ) -> list[np.ndarray]:
@@ -140,7 +151,11 @@ def load_images(
             except (OSError, ValueError, SyntaxError) as e:  # truncated, not an image, …
                 raise ValueError(f"scenes: cannot read the image {p}: {e}".splitlines()[0]
                                  ) from None
-            out.append(_downscale(_to_float_rgb(a), max_side))
+            try:  # a float HDR, int32 or multi-page image: the message names the file
+                out.append(_downscale(_to_float_rgb(a), max_side))
+            except ValueError as e:
+                raise ValueError(f"scenes: the image {p}: {str(e).removeprefix('scenes: ')}"
+                                 ) from None
         return out
     return [_downscale(skimage_image(n), max_side) for n in names]
 
@@ -198,7 +213,9 @@ def test_crops(images, names, *, size: int, margin: int):
                 wins.append(pad[y:y + size + 2 * margin, x:x + size + 2 * margin])
                 info.append({"image": name, "row": y, "col": x})
     if not wins:
-        raise ValueError(f"scenes: no {size}x{size} test crop in {list(names)}")
+        raise ValueError(f"scenes: no {size}x{size} test crop in {list(names)}: every crop "
+                         f"is darker than a linear mean of {MIN_MEAN} or flatter than a "
+                         f"standard deviation of {MIN_STD} (empty background is dropped)")
     return np.stack(wins).astype(np.float32), info
 
 

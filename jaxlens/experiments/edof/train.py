@@ -439,6 +439,42 @@ class BatchSource:
         self.sampler.rng.bit_generator.state = s["sampler"]
 
 
+def _option(field: str) -> str:
+    """A ``Config`` field as the command line writes it (the scale's fields: its flag)."""
+    named = {"kernel_size": "--kernel", "enc_blocks": "--enc", "dec_blocks": "--dec",
+             "middle_blocks": "--middle"}
+    if field in named:
+        return named[field]
+    if field in ("crop", "refresh_every", "log_every", "cubic_ratio", "seed", "tolerances"):
+        return f"{field} (set by --smoke or --paper)"
+    return "--" + field.replace("_", "-")
+
+
+def check_resumable(meta: str, info: dict, cfg: Config, name: str) -> int:
+    """Refuses a checkpoint (``meta``, its data ``info``) that ``cfg`` cannot continue: a
+    training option that differs (each named, with the checkpoint's value and this run's)
+    or fewer ``steps2`` than the checkpoint has done. Returns the stage-2 steps done.
+    Called by ``Trainer.load`` and, before any work, by the command line's ``--resume``."""
+    saved = training_config(info["config"], name)
+    current = dict(training_config(config_data(cfg), name), steps2=saved["steps2"])
+    if saved != current:
+        # Before: "written with another configuration", after the scenes and the lens set-up.
+        diff = "; ".join(f"{_option(k)} {json.dumps(saved.get(k))} there, "
+                         f"{json.dumps(current.get(k))} here"
+                         for k in sorted(set(saved) | set(current))
+                         if saved.get(k) != current.get(k))
+        raise ValueError(f"resume: the checkpoint {meta} of the {name} lens was written with "
+                         f"other training options ({diff}); use the same options, or another "
+                         f"--checkpoint")
+    stage, step = info["stage"], info["step"]
+    done2 = saved["steps2"] if stage == 3 else step if stage == 2 else 0
+    if done2 > cfg.steps2:
+        raise ValueError(f"resume: the checkpoint {meta} has {done2} stage-2 steps, "
+                         f"more than --steps2 {cfg.steps2}; use --steps2 "
+                         f">= {done2}, or another --checkpoint")
+    return done2
+
+
 class OutOfTime(Exception):
     """Raised when a time limit stops training at a checkpoint."""
 
@@ -546,19 +582,10 @@ class Trainer:
                              f"layout {layout} (one per parameter leaf), this code reads "
                              f"layout {STATE_LAYOUT} (raveled parameters); use another "
                              f"--checkpoint")
-        current = config_data(self.cfg)
-        saved = training_config(info["config"], self.name)
-        if saved != dict(training_config(current, self.name), steps2=saved["steps2"]):
-            raise ValueError(f"resume: the checkpoint {meta} was written with another "
-                             f"configuration; use the same options, or another --checkpoint")
+        done2 = check_resumable(meta, info, self.cfg, self.name)
         self.stage, self.step = info["stage"], info["step"]
         # A longer stage 2 extends a lens exactly (its schedule does not depend on steps2);
         # a finished lens goes back into stage 2 where it stopped.
-        done2 = saved["steps2"] if self.stage == 3 else self.step if self.stage == 2 else 0
-        if done2 > self.cfg.steps2:
-            raise ValueError(f"resume: the checkpoint {meta} has {done2} stage-2 steps, "
-                             f"more than --steps2 {self.cfg.steps2}; use --steps2 "
-                             f">= {done2}, or another --checkpoint")
         if self.stage == 3 and done2 < self.cfg.steps2:
             self.stage, self.step = 2, done2
             info["hist"].get("probe", {}).pop("after", None)
