@@ -27,6 +27,7 @@ their ``main``, which writes their own result files (``<benchmark>.json`` in ``-
 
 from __future__ import annotations
 
+import argparse
 import importlib
 import json
 import os
@@ -120,8 +121,6 @@ def main(argv: list[str] | None = None) -> dict:
     target = args.out if args.out is not None else None if args.smoke else common.RESULTS
     for name in (args.only or CORE + OPTIONAL) if target is not None else ():
         if name in OPTIONAL and not args.smoke:  # its result file (before: checked late)
-            import argparse
-
             stem = f"{name}_{args.tag}" if args.tag else name
             try:
                 common.out_path(result_of=name)(str(target / f"{stem}.json"))
