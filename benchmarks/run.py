@@ -48,8 +48,6 @@ OPTIONAL = ("render_speed", "render_memory")
 
 def _folder(text: str) -> pathlib.Path:
     """``--out``: a folder's path, not empty (``pathlib.Path("")`` is the current folder)."""
-    import argparse
-
     if not text.strip():
         raise argparse.ArgumentTypeError("needs a folder's path, got an empty one")
     return pathlib.Path(text)
