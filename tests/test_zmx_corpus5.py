@@ -1,4 +1,4 @@
-"""What the fifth round of real .zmx files of 2026-12-02 (/work/zmx_probe/corpus5, 29 files,
+"""What the fifth round of real .zmx files of 2026-12-02 (/work/zmx_probe/corpus5, 31 files,
 not committed: their sources are in its SOURCES5.txt) showed.
 
 The files: Thorlabs stock lenses saved by Zemax 2012 (wagenadl/octave-wagenaarlab and
@@ -13,16 +13,16 @@ decentred stop mirror and 10 fields in x and y, a doublet with a marginal-ray-an
 Double Gauss in inches, OpticStudio's empty lens with ENPD 0) and a hand-written test file
 that is not Zemax's format (piack97/zemax-lens-analyzer: two XFLN lines, refused so).
 
-jaxlens opened 27 of 29, lenient and strict, and refused two with the line and the reason
+jaxlens opened 29 of 31, lenient and strict, and refused two with the line and the reason
 (ENPD 0; XFLN given twice). Where the file or its design holds a value, jaxlens gives it:
 PUPD's entrance pupil position and diameter in all seven files that have one (91.79893538 mm
 for the Cooke triplet), the EFFL targets of the zoom (750, 1000, 1500, 2000 mm in
 configurations 1-4: 749.997, 999.994, 1499.99, 1999.98), the Cooke's 150 mm (150.0001), the
 doublet's marginal-ray-angle solve (10 mm / 0.100000001 = 99.999999 mm) and the Double
 Gauss's 4 in (101.59995 mm). optiland 0.6.3 gives the same EFL with jaxlens's indices (to
-5e-12, tools/check_corpus.py) and the same real rays (to 6e-13 mm, tools/check_rays.py) in
-every file it reads; its own catalogs differ for old SCHOTT glasses (B270, SF10: EFL 1e-4
-apart) and it takes a substitution-solved glass from its stale nd.
+3e-16 in the 26 focal files it reads, tools/check_corpus.py) and the same real rays (to
+6e-13 mm in all 29, tools/check_rays.py); its own catalogs differ for old SCHOTT glasses
+(B270, SF10: EFL 1e-4 apart) and it takes a substitution-solved glass from its stale nd.
 
 One difference was the comparison tool's: optiland 0.6.3 reads a coordinate break's order
 flag (``PARM 6 1``: tilt first, about z, y then x, then decenter along the tilted axes) as 0.
