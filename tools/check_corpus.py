@@ -77,8 +77,20 @@ def lens_unit_mm(path: str) -> float:
     return 1.0
 
 
-OLD_LINES = ("XFLD", "YFLD", "FWGT", "ZVDX", "ZVDY", "ZVCX", "ZVCY", "ZVAN", "WAVL", "WAVN",
-             "WWGT", "WWGN")
+OLD_LINES = (
+    "XFLD",
+    "YFLD",
+    "FWGT",
+    "ZVDX",
+    "ZVDY",
+    "ZVCX",
+    "ZVCY",
+    "ZVAN",
+    "WAVL",
+    "WAVN",
+    "WWGT",
+    "WWGN",
+)
 """Zemax 2006 header lines (one value a field or wavelength, beside the XFLN/YFLN/WAVM lines
 that hold the same data) that optiland 0.6.3 fails on (IndexError)."""
 
@@ -89,9 +101,12 @@ def optiland_copy(path: str) -> tuple[str, list[str]]:
     takes AIR as air of index 1.000277 relative to vacuum, where Zemax's and jaxlens's AIR is
     1, the index unit; a surface without GLAS is air in all three), and a TOROIDAL surface's
     ``PARM n`` written as ``PARM n+1`` (optiland 0.6.3 reads the radius of rotation, Zemax's
-    PARM 1, from PARM 2 and the y coefficients, Zemax's PARM 2..9, from PARM 3..10)."""
+    PARM 1, from PARM 2 and the y coefficients, Zemax's PARM 2..9, from PARM 3..10), and a
+    coordinate break with an order flag written as breaks without one
+    (``split_order_flag_breaks``)."""
     with open(path, "rb") as fh:
         lines = decode(fh.read(), path).splitlines()
+    lines, split = split_order_flag_breaks(lines)
     keys = {ln.split()[0] for ln in lines if ln.split()}
     newer = "XFLN" in keys and "WAVM" in keys
     toroids = _toroidal_surfaces(lines)
@@ -110,7 +125,64 @@ def optiland_copy(path: str) -> tuple[str, list[str]]:
             ln = f"  PARM {int(tok[1]) + 1} {' '.join(tok[2:])}"
             changed.append("TOROIDAL PARM n written as PARM n+1")
         out.append(ln)
-    return "\n".join(out) + "\n", sorted(set(changed))
+    return "\n".join(out) + "\n", sorted(set(changed + ([SPLIT_NOTE] if split else [])))
+
+
+SPLIT_NOTE = "coordinate breaks with PARM 6 ≠ 0 written as order-0 breaks"
+
+
+def split_order_flag_breaks(lines: list[str]) -> tuple[list[str], bool]:
+    """The lines of a .zmx file with every coordinate break whose order flag (``PARM 6``) is
+    not 0 written as order-0 breaks that move the axes the same way, and whether any was.
+
+    optiland 0.6.3 reads a ``COORDBRK`` as decenters, then tilts about x, y and z, whatever its
+    ``PARM 6`` says. Zemax's order flag 1 tilts first, about z, then the new y, then the new
+    x, and then decenters along the tilted axes (``jaxlens.optics.coordinates``): Kraken's
+    off-axis laser telescope (round 5 of 2026-12-02) ends each fold mirror so, and optiland's
+    reading of it sent the output beam 1° off with 1.2 mrad of angular spread where jaxlens's
+    (and Zemax's design) is afocal to 3e-12 rad. Each such break becomes one break per
+    nonzero tilt (z, then y, then x; order 0, thickness 0) and a last one with the decenters
+    and the thickness; the ``SURF`` numbers after it are renumbered (references to surface
+    numbers elsewhere, pickups and operands, are not: optiland reads none of them)."""
+    out: list[str] = []
+    changed = False
+    shift = 0
+    i = 0
+    while i < len(lines):
+        tok = lines[i].split()
+        if not (tok[:1] == ["SURF"] and len(tok) > 1 and tok[1].isdigit()):
+            out.append(lines[i])
+            i += 1
+            continue
+        j = i + 1  # the block: indented lines up to the next SURF or unindented line
+        while j < len(lines) and lines[j][:1].isspace() and lines[j].split()[:1] != ["SURF"]:
+            j += 1
+        block = lines[i + 1 : j]
+        parm, disz, kind = {}, "0", None
+        for ln in block:
+            t = ln.split()
+            if t[:1] == ["TYPE"] and len(t) > 1:
+                kind = t[1]
+            elif t[:1] == ["PARM"] and len(t) > 2 and t[1].isdigit():
+                parm[int(t[1])] = float(t[2])
+            elif t[:1] == ["DISZ"] and len(t) > 1:
+                disz = t[1]
+        number = int(tok[1]) + shift
+        if kind != "COORDBRK" or parm.get(6, 0.0) == 0:
+            out.append(f"SURF {number}")
+            out += block
+            i = j
+            continue
+        changed = True
+        steps = [(p, parm.get(p, 0.0)) for p in (5, 4, 3) if parm.get(p, 0.0) != 0]
+        parts = [{p: v} for p, v in steps] + [{1: parm.get(1, 0.0), 2: parm.get(2, 0.0)}]
+        for k, part in enumerate(parts):
+            out += [f"SURF {number + k}", "  TYPE COORDBRK", "  CURV 0"]
+            out += [f"  PARM {p} {part.get(p, 0.0)!r}" for p in range(1, 7)]
+            out.append(f"  DISZ {disz if k == len(parts) - 1 else '0'}")
+        shift += len(parts) - 1
+        i = j
+    return out, changed
 
 
 R2_PARM = {"EVENASPH": 1, "TOROIDAL": 2}
@@ -129,8 +201,14 @@ def r2_term_surfaces(path: str) -> list[int]:
             surf, kind = tok[1], None
         elif tok[:1] == ["TYPE"] and len(tok) > 1:
             kind = tok[1]
-        elif (tok[:1] == ["PARM"] and len(tok) > 2 and kind in R2_PARM
-              and tok[1] == str(R2_PARM[kind]) and float(tok[2]) != 0 and surf.isdigit()):
+        elif (
+            tok[:1] == ["PARM"]
+            and len(tok) > 2
+            and kind in R2_PARM
+            and tok[1] == str(R2_PARM[kind])
+            and float(tok[2]) != 0
+            and surf.isdigit()
+        ):
             out.append(int(surf))
     return sorted(set(out))
 
@@ -155,8 +233,11 @@ def optiland_efl(path: str):
     works in mm, so the EFL is converted with the file's UNIT line before the comparison."""
     text, changed = optiland_copy(path)
     try:
-        with warnings.catch_warnings(), contextlib.redirect_stdout(io.StringIO()), \
-                tempfile.TemporaryDirectory() as d:
+        with (
+            warnings.catch_warnings(),
+            contextlib.redirect_stdout(io.StringIO()),
+            tempfile.TemporaryDirectory() as d,
+        ):
             warnings.simplefilter("ignore")
             if changed:
                 p = os.path.join(d, "copy.zmx")
@@ -188,8 +269,10 @@ def _same_lens(a, b) -> bool:
     la, lb = jax.tree_util.tree_leaves(a), jax.tree_util.tree_leaves(b)
     if len(la) != len(lb) or jax.tree_util.tree_structure(a) != jax.tree_util.tree_structure(b):
         return False
-    return all(np.array_equal(np.asarray(x), np.asarray(y), equal_nan=True)
-               for x, y in zip(la, lb, strict=True))
+    return all(
+        np.array_equal(np.asarray(x), np.asarray(y), equal_nan=True)
+        for x, y in zip(la, lb, strict=True)
+    )
 
 
 def check_file(path: str, strict: bool = False, unknown_glass: str = "error") -> dict:
@@ -261,8 +344,9 @@ def _efl_with_our_media(optic, lens, path: str):
 
     wl = float(lens.wavelengths[lens.primary])
     idx = [abs(float(n)) for n in lens.indices(wl)]
-    after = [idx[0]] + [idx[i + 1] for i, s in enumerate(lens.surfaces)
-                        if type(s).__name__ != "CoordinateBreak"]
+    after = [idx[0]] + [
+        idx[i + 1] for i, s in enumerate(lens.surfaces) if type(s).__name__ != "CoordinateBreak"
+    ]
     after.append(after[-1])
     surfaces = optic.surfaces.surfaces
     if len(surfaces) != len(after):
@@ -306,7 +390,8 @@ def _optiland_written(lens, out: str) -> dict:
     ours = [r for r in clipping_radii(lens) if math.isfinite(r)]
     theirs = [r for r in optiland_apertures(optic) if math.isfinite(r)]
     clip_ok = len(ours) == len(theirs) and all(
-        math.isclose(a, b, rel_tol=1e-12) for a, b in zip(ours, theirs, strict=True))
+        math.isclose(a, b, rel_tol=1e-12) for a, b in zip(ours, theirs, strict=True)
+    )
     wl = float(lens.wavelengths[lens.primary])
     n_ours = float(np.asarray(lens.materials[-1].index(wl)))
     n_theirs = optiland_image_index(optic, wl)
@@ -349,51 +434,68 @@ def table(records: list[dict]) -> str:
     have_optiland = load_zemax_file is not None
     head = f"{'file':42s} {'jaxlens':8s} {'EFL |n′|/Φ':>16s} {'rt':3s}"
     if have_optiland:
-        head += (f" {'optiland EFL':>16s} {'rel diff':>9s} {'same n':>8s} "
-                 f"{'written: EFL/clip/n′':>22s}")
+        head += (
+            f" {'optiland EFL':>16s} {'rel diff':>9s} {'same n':>8s} {'written: EFL/clip/n′':>22s}"
+        )
     rows = [head, "-" * len(head)]
     for r in records:
-        line = (f"{r['file'][:42]:42s} {r['status']:8s} {_fmt(r.get('efl')):>16s} "
-                f"{('yes' if r.get('round_trip_exact') else 'NO') if 'efl' in r else '-':3s}")
+        line = (
+            f"{r['file'][:42]:42s} {r['status']:8s} {_fmt(r.get('efl')):>16s} "
+            f"{('yes' if r.get('round_trip_exact') else 'NO') if 'efl' in r else '-':3s}"
+        )
         if have_optiland:
             rd = r.get("rel_diff")
             flag = "" if rd is None or rd <= EFL_RTOL or not _compared(r) else " !"
-            w = ("-" if "written_rel_diff" not in r else
-                 f"{r['written_rel_diff']:.1e}/{'ok' if r['written_clipping_same'] else 'NO'}/"
-                 f"{'ok' if r['written_image_index_same'] else 'NO'}")
+            w = (
+                "-"
+                if "written_rel_diff" not in r
+                else f"{r['written_rel_diff']:.1e}/{'ok' if r['written_clipping_same'] else 'NO'}/"
+                f"{'ok' if r['written_image_index_same'] else 'NO'}"
+            )
             if "written_optiland_error" in r:
                 w = "optiland failed"
             sn = r.get("rel_diff_same_n")
-            line += (f" {_fmt(r.get('optiland_efl')):>16s} {_fmt(rd, '.1e'):>9s}{flag:2s}"
-                     f"{_fmt(sn, '.1e'):>8s} {w:>20s}")
+            line += (
+                f" {_fmt(r.get('optiland_efl')):>16s} {_fmt(rd, '.1e'):>9s}{flag:2s}"
+                f"{_fmt(sn, '.1e'):>8s} {w:>20s}"
+            )
         rows.append(line)
         if r["status"] != "loaded":
             rows.append(f"    {r['message'][:300]}")
         if have_optiland and r.get("optiland_error"):
             rows.append(f"    optiland: {r['optiland_error']}")
         if r.get("afocal"):
-            rows.append("    afocal image space (FTYP): the EFL is a residual power's inverse, "
-                        "not compared")
+            rows.append(
+                "    afocal image space (FTYP): the EFL is a residual power's inverse, not compared"
+            )
         if r.get("configs"):
-            each = "; ".join(f"{c}: {_fmt(e)}" if e is not None else f"{c}: refused ({m[:80]})"
-                             for c, e, m in r["configs"])
+            each = "; ".join(
+                f"{c}: {_fmt(e)}" if e is not None else f"{c}: refused ({m[:80]})"
+                for c, e, m in r["configs"]
+            )
             rows.append(f"    configurations (the surfaces hold {r['active_config']}), EFL: {each}")
         if r.get("r2_terms") and have_optiland:
-            rows.append(f"    r² terms on surface {', '.join(map(str, r['r2_terms']))}: optiland's "
-                        "paraxial trace leaves them out, EFL not compared")
+            rows.append(
+                f"    r² terms on surface {', '.join(map(str, r['r2_terms']))}: optiland's "
+                "paraxial trace leaves them out, EFL not compared"
+            )
     n = len(records)
     loaded = sum(r["status"] == "loaded" for r in records)
-    rows.append(f"\njaxlens loads {loaded}/{n}; refused "
-                f"{sum(r['status'] == 'refused' for r in records)}; crashed "
-                f"{sum(r['status'] == 'crash' for r in records)}")
+    rows.append(
+        f"\njaxlens loads {loaded}/{n}; refused "
+        f"{sum(r['status'] == 'refused' for r in records)}; crashed "
+        f"{sum(r['status'] == 'crash' for r in records)}"
+    )
     if have_optiland:
         both = [r for r in records if r.get("rel_diff") is not None]
         focal = [r for r in both if _compared(r)]
         agree = sum(r["rel_diff"] <= EFL_RTOL for r in focal)
         same = sum(r.get("rel_diff_same_n", math.inf) <= EFL_RTOL for r in focal)
-        rows.append(f"both load {len(both)} ({len(both) - len(focal)} not compared: afocal, or "
-                    f"r² terms); EFL agrees to {EFL_RTOL:g} relative in {agree} of {len(focal)}, "
-                    f"with jaxlens's indices in optiland (same n) in {same}")
+        rows.append(
+            f"both load {len(both)} ({len(both) - len(focal)} not compared: afocal, or "
+            f"r² terms); EFL agrees to {EFL_RTOL:g} relative in {agree} of {len(focal)}, "
+            f"with jaxlens's indices in optiland (same n) in {same}"
+        )
     else:
         rows.append("optiland not installed: its columns are skipped")
     return "\n".join(rows)
@@ -405,12 +507,19 @@ def run_folder(argv, check_file, table, description: str) -> int:
     ap = argparse.ArgumentParser(description=description)
     ap.add_argument("folder")
     ap.add_argument("--json", action="store_true", help="one JSON record a file")
-    ap.add_argument("--strict", action="store_true",
-                    help="read as `python -m jaxlens report` does: strict=True (settings "
-                         "jaxlens does not use are refused, not warned about)")
-    ap.add_argument("--unknown-glass", choices=("error", "model"), default="error",
-                    help="jaxlens.load's unknown_glass: 'model' reads a glass no catalog holds "
-                         "as a model glass of its GLAS line's nd and Vd")
+    ap.add_argument(
+        "--strict",
+        action="store_true",
+        help="read as `python -m jaxlens report` does: strict=True (settings "
+        "jaxlens does not use are refused, not warned about)",
+    )
+    ap.add_argument(
+        "--unknown-glass",
+        choices=("error", "model"),
+        default="error",
+        help="jaxlens.load's unknown_glass: 'model' reads a glass no catalog holds "
+        "as a model glass of its GLAS line's nd and Vd",
+    )
     args = ap.parse_args(argv)
     params = inspect.signature(check_file).parameters
     if args.strict:
@@ -424,8 +533,9 @@ def run_folder(argv, check_file, table, description: str) -> int:
     if not os.path.isdir(args.folder):  # os.listdir raised with a traceback
         what = "a file" if os.path.exists(args.folder) else "missing"
         ap.error(f"folder {args.folder!r} is {what}; give a folder of .zmx files")
-    files = sorted(os.path.join(args.folder, f) for f in os.listdir(args.folder)
-                   if f.lower().endswith(".zmx"))
+    files = sorted(
+        os.path.join(args.folder, f) for f in os.listdir(args.folder) if f.lower().endswith(".zmx")
+    )
     if not files:
         print(f"{args.folder}: no .zmx files", file=sys.stderr)
         return 2

@@ -27,7 +27,8 @@ optiland ignores ``UNIT`` (it reads lengths as mm), so its rays are scaled by th
 optiland's Newton tolerance on aspheres is tightened to 1e-13. optiland 0.6.3 reads TOROIDAL
 PARM n as PARM n+1; the tool sets its toroids from the file's lines. Where optiland cannot
 open a file (an old one-value WAVL line, a surface without CURV, no PWAV) it reads a copy
-mended for it (the note says how).
+mended for it (the note says how); so it does where a coordinate break has an order flag
+(PARM 6 ≠ 0), which optiland 0.6.3 reads as 0 (``check_corpus.split_order_flag_breaks``).
 
     python tools/check_rays.py FOLDER            # a table
     python tools/check_rays.py FOLDER --json     # one JSON record a file
@@ -59,7 +60,7 @@ from jaxlens.optics.lens import unclipped  # noqa: E402
 from jaxlens.tracing.forward import trace_path  # noqa: E402
 
 sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
-from check_corpus import run_folder  # noqa: E402
+from check_corpus import SPLIT_NOTE, run_folder, split_order_flag_breaks  # noqa: E402
 
 try:  # optional
     from optiland.fileio import load_zemax_file
@@ -81,17 +82,25 @@ def optiland_optic(path: str):
     """optiland's optic of a file, and a note. optiland 0.6.3 fails on an old one-value
     ``WAVL`` line, on a surface without ``CURV`` and without ``PWAV``; it then reads a copy
     without WAVL lines (where the file has WAVM lines), with ``CURV 0`` on such surfaces and
-    ``PWAV 1`` (Zemax's default)."""
+    ``PWAV 1`` (Zemax's default). It reads a coordinate break's order flag as 0: a file with
+    one is read from a copy without (``check_corpus.split_order_flag_breaks``)."""
+
     def load(p):
         with warnings.catch_warnings(), contextlib.redirect_stdout(io.StringIO()):
             warnings.simplefilter("ignore")
             return load_zemax_file(p)
 
+    lines, split = split_order_flag_breaks(file_text(path).splitlines())
     try:
-        return load(path), ""
+        if not split:
+            return load(path), ""
+        with tempfile.TemporaryDirectory() as d:
+            p = os.path.join(d, "copy.zmx")
+            with open(p, "w", encoding="utf-8") as f:
+                f.write("\n".join(lines) + "\n")
+            return load(p), f"optiland read a copy ({SPLIT_NOTE})"
     except Exception as e:  # noqa: BLE001  (report whatever optiland raises)
         err = f"{type(e).__name__}: {str(e)[:120]}"
-    lines = file_text(path).splitlines()
     keys = {ln.split()[0] for ln in lines if ln.split()}
     wavm = "WAVM" in keys
     out, has_curv, changed = ([], True, []) if "PWAV" in keys else (["PWAV 1"], True, ["PWAV 1"])
@@ -109,6 +118,7 @@ def optiland_optic(path: str):
         out.append(ln)
     if not changed:
         return None, err
+    changed += [SPLIT_NOTE] if split else []
     with tempfile.TemporaryDirectory() as d:
         p = os.path.join(d, "copy.zmx")
         with open(p, "w", encoding="utf-8") as f:
@@ -175,8 +185,9 @@ def launch(lens, field, wl):
     normalised pupil points (the last ray is the real chief ray)."""
     grid = jl.sampling.pupil_grid(7) * (1 - 1e-9)  # a rim ray is not a tie at a rim aperture
     rays = jl.sampling.field_rays(lens, field, grid, wl, depth=lens.object_distance)
-    chief = jl.sampling.field_rays(lens, field, jnp.zeros((1, 2)), wl,
-                                   depth=lens.object_distance, aim="real")
+    chief = jl.sampling.field_rays(
+        lens, field, jnp.zeros((1, 2)), wl, depth=lens.object_distance, aim="real"
+    )
     o = np.concatenate([np.asarray(rays.origin), np.asarray(chief.origin)])
     d = np.concatenate([np.asarray(rays.direction), np.asarray(chief.direction)])
     pupil = np.concatenate([np.asarray(grid), np.zeros((1, 2))])
@@ -223,8 +234,9 @@ def set_media(optic, lens, wl, own) -> float:
     """Give optiland jaxlens's index in every medium at ``wl``; returns the largest
     difference from ``own``, optiland's own materials (surface by surface)."""
     idx = [abs(float(n)) for n in lens.indices(wl)]
-    after = [idx[0]] + [idx[i + 1] for i, s in enumerate(lens.surfaces)
-                        if not isinstance(s, CoordinateBreak)]
+    after = [idx[0]] + [
+        idx[i + 1] for i, s in enumerate(lens.surfaces) if not isinstance(s, CoordinateBreak)
+    ]
     after.append(after[-1])  # image space
     dn = 0.0
     for s, n, mine in zip(optic.surfaces.surfaces, after, own, strict=True):
@@ -290,15 +302,20 @@ def check_file(path: str) -> dict:
     _strip_apertures(free)
     numbers = zemax_numbers(lens)
     if clipped.surfaces.num_surfaces != len(numbers) + 1:
-        return rec | {"status": "surfaces differ", "message":
-                      f"optiland has {clipped.surfaces.num_surfaces - 1} surfaces after "
-                      f"the object, jaxlens {len(numbers)} besides coordinate breaks"}
+        return rec | {
+            "status": "surfaces differ",
+            "message": f"optiland has {clipped.surfaces.num_surfaces - 1} surfaces after "
+            f"the object, jaxlens {len(numbers)} besides coordinate breaks",
+        }
     blocks = surface_lines(path)
     for op in (clipped, free):
         _tighten_newton(op)
         fix = correct_optiland_toroids(op, blocks, numbers)
-    rec.update(status="compared", note="; ".join(x for x in (note, fix) if x),
-               surfaces=len(lens.surfaces) + 1)
+    rec.update(
+        status="compared",
+        note="; ".join(x for x in (note, fix) if x),
+        surfaces=len(lens.surfaces) + 1,
+    )
     own = [s.material_post for s in clipped.surfaces.surfaces]
     flat_image = float(lens.image.c) == 0 and not lens.image.has_polynomial
     scale = unit_of(path)
@@ -334,12 +351,19 @@ def check_file(path: str) -> dict:
             for k in np.flatnonzero((vj != vo) | (vjc != voc)):
                 geometric = bool(vj[k] != vo[k])
                 why = ""
-                if (geometric and not vj[k] and sj[k] == len(lens.surfaces) + 1
-                        and flat_image and abs(dz[k]) < 1e-12):
+                if (
+                    geometric
+                    and not vj[k]
+                    and sj[k] == len(lens.surfaces) + 1
+                    and flat_image
+                    and abs(dz[k]) < 1e-12
+                ):
                     why = "the ray runs in the image plane (no single intercept)"
                 elif geometric and not vj[k] and back[k] and numbers[back[k] - 1] == sj[k]:
-                    why = ("optiland goes backward (a negative distance) to the surface where "
-                           "jaxlens stops the ray (a lens without negative_propagation)")
+                    why = (
+                        "optiland goes backward (a negative distance) to the surface where "
+                        "jaxlens stops the ray (a lens without negative_propagation)"
+                    )
                 elif not geometric and not vjc[k] and vo[k]:
                     key = apertures_optiland_ignores(blocks.get(int(sjc[k]), []))
                     why = f"optiland ignores {key}" if key else ""
@@ -349,31 +373,49 @@ def check_file(path: str) -> dict:
                 miss_bad += geometric
                 clip_bad += not geometric
                 if len(examples) < 6:
-                    examples.append({
-                        "field": np.atleast_1d(field).tolist(), "wavelength": float(wl),
-                        "pupil": pupil[k].round(4).tolist(),
-                        "jaxlens_stops_at": int(sjc[k]) or None,
-                        "optiland_stops_at": numbers[soc[k] - 1] if soc[k] else None,
-                        "without_apertures": [int(sj[k]) or None,
-                                              numbers[so[k] - 1] if so[k] else None]})
-    rec.update(rays=n_rays, compared=n_cmp, max_abs_diff_mm=worst, clip_mismatch=clip_bad,
-               miss_mismatch=miss_bad, explained=explained, max_index_diff=dn,
-               examples=examples, agree=worst <= TOL_MM and clip_bad == 0 and miss_bad == 0)
+                    examples.append(
+                        {
+                            "field": np.atleast_1d(field).tolist(),
+                            "wavelength": float(wl),
+                            "pupil": pupil[k].round(4).tolist(),
+                            "jaxlens_stops_at": int(sjc[k]) or None,
+                            "optiland_stops_at": numbers[soc[k] - 1] if soc[k] else None,
+                            "without_apertures": [
+                                int(sj[k]) or None,
+                                numbers[so[k] - 1] if so[k] else None,
+                            ],
+                        }
+                    )
+    rec.update(
+        rays=n_rays,
+        compared=n_cmp,
+        max_abs_diff_mm=worst,
+        clip_mismatch=clip_bad,
+        miss_mismatch=miss_bad,
+        explained=explained,
+        max_index_diff=dn,
+        examples=examples,
+        agree=worst <= TOL_MM and clip_bad == 0 and miss_bad == 0,
+    )
     return rec
 
 
 def table(records: list[dict]) -> str:
-    head = (f"{'file':44s} {'surf':>4s} {'rays':>5s} {'cmp':>5s} {'max |Δ| mm':>10s} "
-            f"{'clip≠':>5s} {'miss≠':>5s} {'Δn':>8s}  verdict")
+    head = (
+        f"{'file':44s} {'surf':>4s} {'rays':>5s} {'cmp':>5s} {'max |Δ| mm':>10s} "
+        f"{'clip≠':>5s} {'miss≠':>5s} {'Δn':>8s}  verdict"
+    )
     rows = [head, "-" * len(head)]
     for r in records:
         if r["status"] != "compared":
             rows.append(f"{r['file'][:44]:44s} {r['status']}: {r['message'][:200]}")
             continue
         verdict = "agree" if r["agree"] else "DIFFER"
-        rows.append(f"{r['file'][:44]:44s} {r['surfaces']:4d} {r['rays']:5d} {r['compared']:5d} "
-                    f"{r['max_abs_diff_mm']:10.1e} {r['clip_mismatch']:5d} "
-                    f"{r['miss_mismatch']:5d} {r['max_index_diff']:8.1e}  {verdict}")
+        rows.append(
+            f"{r['file'][:44]:44s} {r['surfaces']:4d} {r['rays']:5d} {r['compared']:5d} "
+            f"{r['max_abs_diff_mm']:10.1e} {r['clip_mismatch']:5d} "
+            f"{r['miss_mismatch']:5d} {r['max_index_diff']:8.1e}  {verdict}"
+        )
         for why, n in r["explained"].items():
             rows.append(f"    {n} ray(s) set apart: {why}")
         if r["note"]:
@@ -381,8 +423,10 @@ def table(records: list[dict]) -> str:
         for e in r["examples"] if not r["agree"] else ():
             rows.append(f"    {e}")
     done = [r for r in records if r["status"] == "compared"]
-    rows.append(f"\ncompared {len(done)}/{len(records)} files; agree to {TOL_MM:g} mm with "
-                f"the same validity: {sum(r['agree'] for r in done)}")
+    rows.append(
+        f"\ncompared {len(done)}/{len(records)} files; agree to {TOL_MM:g} mm with "
+        f"the same validity: {sum(r['agree'] for r in done)}"
+    )
     return "\n".join(rows)
 
 
