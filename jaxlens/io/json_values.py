@@ -21,7 +21,6 @@ import numpy as np
 
 from ..optics import checks
 
-
 INFINITY_TEXT = {"inf": math.inf, "+inf": math.inf, "infinity": math.inf,
                  "+infinity": math.inf, "-inf": -math.inf, "-infinity": -math.inf}
 """The strings that stand for an infinity (case and surrounding spaces ignored): the only

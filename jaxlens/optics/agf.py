@@ -352,7 +352,8 @@ def parse_agf(text: str, source: str = "<string>", catalog: str = "") -> list[Gl
 
     Reads NM, CD and LD records; the numbers of ED, TD, IT and OD records are checked (text
     in one was skipped without a word; an OD record holds at most 6), then these records,
-    CC, GC, MD, ``!`` comments and other records are skipped. A glass named twice (case ignored) warns; the later record wins.
+    CC, GC, MD, ``!`` comments and other records are skipped. A glass named twice (case
+    ignored) warns; the later record wins.
 
     Args:
         text: AGF file contents.
@@ -367,7 +368,8 @@ def parse_agf(text: str, source: str = "<string>", catalog: str = "") -> list[Gl
             decimal, a formula number that is not whole, nd outside [1, 4.5] or a negative
             Vd), an ED, TD, IT or OD record holding anything but numbers (or an OD record
             more than 6), a CD/LD record before any NM or given twice for one glass, an
-            unsupported formula or a glass without CD record; the message names ``source`` and the line number.
+            unsupported formula or a glass without CD record; the message names ``source``
+            and the line number.
             ``GlassRecord.to_material`` (so ``load_agf``) also refuses a record whose
             formula does not give its NM nd at the d line (within ``ND_TOLERANCE``; nd 1
             with Vd 0 marks a material without d-line data).
