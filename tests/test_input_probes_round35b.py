@@ -227,3 +227,26 @@ def test_diffraction_mtf_slope_at_zero_frequency():
     g = jax.grad(lambda v: otf.diffraction_mtf(v, lam, fnum))(0.0)
     assert float(g) == pytest.approx(-4.0 / (math.pi * cut), rel=1e-6)
     assert float(jax.grad(lambda v: otf.diffraction_mtf(v, lam, fnum))(-1.0)) == 0.0
+
+
+def test_trace_path_and_trace_backward_refuse_under_their_own_names(cooke):
+    """Before: their upto, newton_iters, lens and rays were refused as trace's."""
+    rays = jl.sampling.collimated(cooke, 0.0, jl.sampling.pupil_grid(3))
+    with pytest.raises(
+        ValueError,
+        match=r"^trace_path: upto must be a surface index in "
+        r"\[0, 5\] \(0-based\), got 99",
+    ):
+        jl.trace_path(cooke, rays, upto=99)
+    with pytest.raises(
+        ValueError,
+        match=r"^trace_backward: newton_iters must be a whole "
+        r"number in \[0, inf\) iterations, got -1",
+    ):
+        jl.trace_backward(cooke, rays, newton_iters=-1)
+    with pytest.raises(
+        TypeError,
+        match=r"^trace_backward: lens must be a jaxlens\.Lens, "
+        r"got str",
+    ):
+        jl.trace_backward("cooke", rays)

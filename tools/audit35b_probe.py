@@ -369,6 +369,7 @@ def least_named():
     probe(
         "trace_backward newton_iters -1",
         lambda: jl.trace_backward(lens, out, newton_iters=-1).origin,
+        "trace_backward:",
         "newton_iters",
     )
     probe(
@@ -509,6 +510,107 @@ def least_named():
         "field",
         "shape",
     )
+
+
+# ------------------------------------------------------- more of the least named, mixed types
+def more():
+    lens = jl.zoo.cooke_triplet()
+    rays = jl.sampling.collimated(lens, 0.0, jl.sampling.pupil_grid(5))
+    probe(
+        "trace_path upto 99",
+        lambda: jl.trace_path(lens, rays, upto=99).origin,
+        "trace_path:",
+        "upto",
+    )
+    probe(
+        "trace_path upto 2.5",
+        lambda: jl.trace_path(lens, rays, upto=2.5).origin,
+        "trace_path:",
+        "upto",
+    )
+    probe(
+        "trace_backward lens 'cooke'",
+        lambda: jl.trace_backward("cooke", rays),
+        "trace_backward:",
+        "lens",
+    )
+    probe(
+        "trace_path uniform 'yes'",
+        lambda: jl.trace_path(lens, rays, uniform="yes").origin,
+        "uniform",
+    )
+    none = jax.tree_util.tree_map(lambda a: a[:0] if jnp.ndim(a) else a, rays)
+    probe(
+        "trace_path [0] rays (control: empty)",
+        lambda: jl.trace_path(lens, none).origin.shape,
+        good=True,
+    )
+    probe("Aperture half_x 0", lambda: jl.Aperture("rect", 0.0, 1.0), "half_x")
+    probe("Aperture shape 'square'", lambda: jl.Aperture("square", 1.0, 1.0), "shape")
+    probe("Aperture half_y NaN", lambda: jl.Aperture("ellipse", 1.0, float("nan")), "half_y")
+    probe("Aperture blocks 1 (int)", lambda: jl.Aperture("circle", 1.0, 1.0, blocks=1), "blocks")
+    probe("TiltedPlane tan_x inf", lambda: jl.TiltedPlane(tan_x=float("inf")), "tan_x")
+    probe("TiltedPlane tan_x 45 (degrees?)", warned(lambda: jl.TiltedPlane(tan_x=45.0)), "tan_x")
+    probe("Biconic kx NaN", lambda: jl.Biconic(c=0.01, cx=0.02, kx=float("nan")), "kx")
+    probe("Biconic cx '0.02'", lambda: jl.Biconic(c=0.01, cx="0.02"), "cx")
+    probe(
+        "OddAsphere coeffs [[1, 2]]", lambda: jl.OddAsphere(c=0.01, coeffs=[[1e-4, 2e-6]]), "coeffs"
+    )
+    probe(
+        "XYPolynomial norm_radius 0",
+        lambda: jl.XYPolynomial(c=0.01, coeffs=(1e-3,), norm_radius=0.0),
+        "norm_radius",
+    )
+    probe("Stop semi_diameter -1", lambda: jl.Stop(-1.0), "semi_diameter")
+    probe("Plane semi_diameter 0", lambda: jl.Plane(0.0), "semi_diameter")
+    probe("Sensor resolution (0, 10)", lambda: jl.Sensor((0, 10), 0.005), "resolution")
+    probe("Sensor resolution (10.5, 10)", lambda: jl.Sensor((10.5, 10), 0.005), "resolution")
+    probe(
+        "Tabulated wavelengths in nm",
+        lambda: jl.Tabulated(jnp.array([486.0, 587.0, 656.0]), jnp.array([1.52, 1.517, 1.515])),
+        "µm",
+    )
+    probe(
+        "Tabulated decreasing wavelengths (control: sorted, same index)",
+        lambda: float(
+            jl.Tabulated(jnp.array([0.656, 0.587, 0.486]), jnp.array([1.515, 1.517, 1.52])).index(
+                0.5
+            )
+        ),
+        good=True,
+    )
+    probe(
+        "Tabulated indices [1.5] for 3 wavelengths",
+        lambda: jl.Tabulated(jnp.array([0.486, 0.587, 0.656]), jnp.array([1.5])),
+        "indices",
+    )
+    probe(
+        "field_xy [[1, 2, 3]] (control: a [1, 3] batch of θy)",
+        lambda: jl.sampling.field_xy(jnp.array([[1.0, 2.0, 3.0]])).shape,
+        good=True,
+    )
+    probe("efl wavelength [] (empty)", lambda: jl.efl(lens, jnp.zeros((0,))), "wavelength")
+    probe("rms_spot fields [] (empty)", lambda: A.rms_spot(lens, fields=jnp.zeros((0,))), "fields")
+    probe(
+        "rms_spot fields float32 on a float64 lens (control)",
+        lambda: (
+            A.rms_spot(
+                lens.astype(jnp.float64), fields=jnp.array([0.0, 10.0], jnp.float32)
+            ).polychromatic.dtype
+        ),
+        good=True,
+    )
+    probe(
+        "rms_spot fields int [0, 10] (control)",
+        lambda: A.rms_spot(lens, fields=jnp.array([0, 10])).polychromatic,
+        good=True,
+    )
+    probe(
+        "efl jit wavelength 587.56 (nm)",
+        jitted(lambda w: jl.efl(lens, w), jnp.asarray(587.56)),
+        "wavelength",
+    )
+    probe("bfl wavelength -0.5", lambda: jl.bfl(lens, -0.5), "wavelength")
 
 
 # -------------------------------------------------------- numerically hard but valid cases
@@ -666,4 +768,4 @@ def numerics():
 if __name__ == "__main__":
     if os.environ.get("AUDIT35B_COUNT"):
         count_mentions()
-    run([leftovers, least_named, numerics])
+    run([leftovers, least_named, more, numerics])
