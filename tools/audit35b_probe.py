@@ -6,7 +6,186 @@ and numerically hard but valid cases checked against closed forms or central dif
 with round 34b's leftovers. The table of ``tools/probe_table.py`` (probe | outcome | what
 happened).
 
-RESULTS
+The count (``probe_table.mention_counts``, which now also reads ``test_numerics_*.py``;
+``AUDIT35B_COUNT=1`` prints it): past the result containers (``FieldCurvature``,
+``GeometryCheck``, ``OPDFan``…, 0-4 mentions) the least named functions were
+``trace_backward`` (18), ``parameterization``/``StageArgs``/``ImageObjective`` (19),
+``Objective``, the surface constructors (16-25), ``random_params``/``CatalogRegion`` (27),
+``evaluate_design``, ``paraxial_data``, ``sensor_field_grid`` (28-29),
+``angular_magnification``, ``reversed_lens``, ``TableMaterials`` (30); parameters never
+named: ``marechal_strehl``'s ``rms_waves``, ``zernike_nm``'s ``j``, ``encircled_energy``'s
+``radii``, ``radius_for_fraction``'s ``fraction``; and in ``jaxlens.imaging`` (which exports
+modules only) ``otf.diffraction_mtf``, ``sampling.field_vignetting``/``field_xy``.
+
+Gaps found and fixed:
+1. ``encircled_energy``/``radius_for_fraction`` (and ``plot_encircled_energy``): a field that
+   looks like radians warned under ``spot_rays``, ``chief_ray`` or ``psf`` (the inner
+   analyses), once per wavelength; now once, under the function called.
+2. ``plot_encircled_energy`` traced each field twice (``radius_for_fraction``, then
+   ``encircled_energy``): now once (``encircled.energy_samples``, ``energy_within``,
+   ``radius_holding``). Cooke triplet, default 3 fields: 6 -> 3 traces a figure; the first
+   figure is compile-bound (9.6 and 9.7 s before, 8.6 and 9.5 s after, load 9 on 2 cores)
+   and a warm one takes 0.2 s either way, so the saving is small.
+3. ``write_exr``/``write_psf_stack``: an image whose every nonzero value is below float32's
+   least magnitude (1.4e-45) was written as all 0: refused. Otherwise the values are rounded
+   to float32 as any float32 store does (1e-50 beside 1 becomes 0; subnormals such as 1e-40
+   are kept, no flush to zero): documented.
+4. JSON lens files: numbers in quotes ("thickness": "5", fields ["0"], aperture.epd "10",
+   ``{"nd": "1.62"}``) were read as numbers; the format documents only "inf" strings (and the
+   ``n`` table's keys). Refused with the key path.
+5. AGF ``OD`` records were skipped whatever they held: text, a comma decimal or more than 6
+   values are refused with the line.
+6. ``paraxial_data(...).entrance_pupil_diameter`` was the lens's weakly typed epd: it alone
+   took bfloat16 from a bfloat16 operand. Now of the lens's dtype, strongly typed.
+7. ``angular_magnification`` under jit: 550 (nm) gave -6.8 for the 4x telescope's -4.
+8. ``marechal_strehl`` under jit: -0.1 wave gave 0.674. (``Wavefront.strehl`` stays
+   unchecked: its RMS is one.)
+9. ``sampling.field_vignetting``: 100°, '5' or three fields gave zeros.
+10. ``otf.diffraction_mtf``: its slope at ν = 0 was half of −4/(π ν_c) (``jnp.maximum``'s tie
+    rule); now the slope on ν ≥ 0.
+11. ``trace_path``'s and ``trace_backward``'s ``upto``, ``newton_iters``, lens and rays were
+    refused as ``trace``'s (``trace_backward("cooke", …)``: an AttributeError).
+
+Before (branch base fd24690, an archive) and after (branch audit35b), the same probes,
+``PYTHONPATH=<tree> python tools/audit35b_probe.py`` from the tree's root, 133 probes, about
+2 minutes each way (2 shared cores):
+    before: clear error: 70, crash: 1, ok: 34, silent wrong: 20, vague error: 8
+    after:  clear error: 97, ok: 36
+
+Probe (before -> after):
+    encircled_energy field 10° in radians: warning names                   vague error  -> clear error
+    radius_for_fraction field 10° in radians: warning names                vague error  -> clear error
+    radius_for_fraction reference chief, radians                           vague error  -> clear error
+    encircled_energy diffraction, radians                                  vague error  -> clear error
+    encircled_energy field 10° (control: no warning)                       ok           -> ok
+    plot_encircled_energy fields in radians: warning names                 vague error  -> clear error
+    write_exr all 1e-50 (below float32's least)                            silent wrong -> clear error
+    write_exr [1, 1e-50] (control: float32 rounding)                       ok           -> ok
+    write_exr 1e-40 (control: float32 subnormal kept)                      ok           -> ok
+    write_psf_stack all 1e-50                                              silent wrong -> clear error
+    json "thickness": "5"                                                  silent wrong -> clear error
+    json "radius": "22.01359"                                              silent wrong -> clear error
+    json "conic": "-1"                                                     silent wrong -> clear error
+    json fields values ["0", "14", "20"]                                   silent wrong -> clear error
+    json wavelengths_nm as strings                                         silent wrong -> clear error
+    json aperture.epd "10"                                                 silent wrong -> clear error
+    json material {"nd": "1.62", "vd": 60}                                 silent wrong -> clear error
+    json primary_wavelength_nm "587.5618"                                  silent wrong -> clear error
+    json semi_diameter "inf" (control: documented)                         ok           -> ok
+    json refcase file with n tables (control)                              ok           -> ok
+    agf OD with text (OD 1.0 x 0 1 1 1)                                    silent wrong -> clear error
+    agf OD with a comma decimal                                            silent wrong -> clear error
+    agf OD with 8 values (LD's merged in)                                  silent wrong -> clear error
+    agf OD -1 ×6 (control)                                                 ok           -> ok
+    paraxial_data fields promote alike (bfloat16 × EPD)                    silent wrong -> ok
+    angular_magnification wavelength 550 (nm)                              clear error  -> clear error
+    angular_magnification of a focal lens (control: defined for any lens)  ok           -> ok
+    angular_magnification wavelength NaN                                   clear error  -> clear error
+    angular_magnification wavelength [0.5, 0.6] (each as alone?)           ok           -> ok
+    angular_magnification wavelength '0.55'                                clear error  -> clear error
+    angular_magnification jit wavelength 550                               silent wrong -> clear error
+    angular_magnification integer wavelength 1 (control)                   ok           -> ok
+    reversed_lens image_distance NaN                                       clear error  -> clear error
+    reversed_lens image_distance -1e9 (control: any real mm)               ok           -> ok
+    reversed_lens image_distance '5'                                       clear error  -> clear error
+    paraxial_data wavelength 587.56 (nm)                                   clear error  -> clear error
+    paraxial_data wavelength [0.5, 0.6]                                    clear error  -> clear error
+    paraxial_data wavelength 0 (empty-ish)                                 clear error  -> clear error
+    paraxial_data jit wavelength 587.56                                    clear error  -> clear error
+    paraxial_data integer wavelength 1 (control: N-BK7 singlet)            ok           -> ok
+    entrance_pupil_magnification wavelength 550                            clear error  -> clear error
+    x_section of a non-lens                                                clear error  -> clear error
+    sensor_field_grid n=0                                                  clear error  -> clear error
+    sensor_field_grid n=2.5                                                clear error  -> clear error
+    sensor_field_grid n=True                                               clear error  -> clear error
+    sensor_field_grid n=10**6                                              clear error  -> clear error
+    evaluate_design n=0                                                    clear error  -> clear error
+    evaluate_design min_valid 1.5                                          clear error  -> clear error
+    evaluate_design min_valid NaN                                          clear error  -> clear error
+    random_params dtype int32                                              clear error  -> clear error
+    random_params key 0 (an int)                                           clear error  -> clear error
+    trace_backward upto 99                                                 clear error  -> clear error
+    trace_backward upto -1                                                 clear error  -> clear error
+    trace_backward newton_iters -1                                         vague error  -> clear error
+    trace_backward rays of another dtype (float64 on float32 lens)         ok           -> ok
+    marechal_strehl -0.1                                                   clear error  -> clear error
+    marechal_strehl NaN (control: documented, no rays)                     ok           -> ok
+    marechal_strehl '0.1'                                                  clear error  -> clear error
+    marechal_strehl jit -0.1                                               silent wrong -> clear error
+    marechal_strehl [] (control: empty)                                    ok           -> ok
+    zernike_nm 0 (noll)                                                    clear error  -> clear error
+    zernike_nm 2.5                                                         clear error  -> clear error
+    zernike_nm True                                                        clear error  -> clear error
+    zernike_terms terms 0                                                  clear error  -> clear error
+    zernike_terms x [3] y [4]                                              clear error  -> clear error
+    zernike_terms x NaN (control: NaN propagates)                          ok           -> ok
+    encircled_energy radii []                                              clear error  -> clear error
+    encircled_energy radii [-0.01]                                         clear error  -> clear error
+    encircled_energy radii 20 (control: under 2 diagonals, a radius)       ok           -> ok
+    encircled_energy radii 100 (µm as mm)                                  clear error  -> clear error
+    encircled_energy jit radii [-0.01]                                     clear error  -> clear error
+    encircled_energy integer radii [0, 1] (control)                        ok           -> ok
+    radius_for_fraction 0                                                  clear error  -> clear error
+    radius_for_fraction 1                                                  clear error  -> clear error
+    radius_for_fraction 80 (percent)                                       clear error  -> clear error
+    radius_for_fraction jit 1.5                                            clear error  -> clear error
+    radius_for_fraction fields [0, 10] (several)                           clear error  -> clear error
+    self_intersection n_radial 0                                           clear error  -> clear error
+    self_intersection semi_diameters of 2 for 6                            clear error  -> clear error
+    self_intersection min_gap NaN                                          clear error  -> clear error
+    sine_path n 0 (control: one stage at the end)                          ok           -> ok
+    sine_path start NaN                                                    clear error  -> clear error
+    reweighting_mask threshold 1.5                                         clear error  -> clear error
+    reweighting_mask rms NaN                                               clear error  -> clear error
+    field_vignetting field 100°                                            silent wrong -> clear error
+    linear_to_srgb NaN                                                     clear error  -> clear error
+    read_psf_stack a PNG                                                   clear error  -> clear error
+    read_psf_stack a folder                                                clear error  -> clear error
+    write_psf_stack [3, 3] (no stack axis)                                 clear error  -> clear error
+    srgb_to_linear 1.5 (control: refused, encoded values are in [0, 1])    clear error  -> clear error
+    field_vignetting field '5'                                             silent wrong -> clear error
+    field_vignetting fields [0, 10, 20] (three)                            silent wrong -> clear error
+    trace_path upto 99                                                     vague error  -> clear error
+    trace_path upto 2.5                                                    vague error  -> clear error
+    trace_backward lens 'cooke'                                            crash        -> clear error
+    trace_path uniform 'yes'                                               clear error  -> clear error
+    trace_path [0] rays (control: empty)                                   ok           -> ok
+    Aperture half_x 0                                                      clear error  -> clear error
+    Aperture shape 'square'                                                clear error  -> clear error
+    Aperture half_y NaN                                                    clear error  -> clear error
+    Aperture blocks 1 (int)                                                clear error  -> clear error
+    TiltedPlane tan_x inf                                                  clear error  -> clear error
+    TiltedPlane tan_x 45 (degrees?)                                        clear error  -> clear error
+    Biconic kx NaN                                                         clear error  -> clear error
+    Biconic cx '0.02'                                                      clear error  -> clear error
+    OddAsphere coeffs [[1, 2]]                                             clear error  -> clear error
+    XYPolynomial norm_radius 0                                             clear error  -> clear error
+    Stop semi_diameter -1                                                  clear error  -> clear error
+    Plane semi_diameter 0                                                  clear error  -> clear error
+    Sensor resolution (0, 10)                                              clear error  -> clear error
+    Sensor resolution (10.5, 10)                                           clear error  -> clear error
+    Tabulated wavelengths in nm                                            clear error  -> clear error
+    Tabulated decreasing wavelengths (control: sorted, same index)         ok           -> ok
+    Tabulated indices [1.5] for 3 wavelengths                              clear error  -> clear error
+    field_xy [[1, 2, 3]] (control: a [1, 3] batch of θy)                   ok           -> ok
+    efl wavelength [] (empty)                                              clear error  -> clear error
+    rms_spot fields [] (empty)                                             clear error  -> clear error
+    rms_spot fields float32 on a float64 lens (control)                    ok           -> ok
+    rms_spot fields int [0, 10] (control)                                  ok           -> ok
+    efl jit wavelength 587.56 (nm)                                         clear error  -> clear error
+    bfl wavelength -0.5                                                    clear error  -> clear error
+    efl thick singlet vs lensmaker (float64, n 1.5 Vd 1e9)                 ok           -> ok
+    grad efl at a flat surface (c = 0) vs FD                               ok           -> ok
+    grad efl wrt EPD is 0                                                  ok           -> ok
+    grad rms_spot wrt field on axis                                        ok           -> ok
+    marechal_strehl value and gradient vs closed form                      ok           -> ok
+    zernike_terms d/dx at the origin (closed form)                         ok           -> ok
+    zernike_terms d/dx at the rim (closed form)                            ok           -> ok
+    diffraction_mtf at νc/2 and gradients at 0, νc                         silent wrong -> ok
+    sRGB curve continuous at the knee, round trip                          ok           -> ok
+    angular_magnification of the 4× Kepler                                 ok           -> ok
+    encircled energy at radius 0, D50 gradient finite                      ok           -> ok
+    grad rms_spot wrt EPD vs FD (rim rays)                                 ok           -> ok
 """
 
 import json
