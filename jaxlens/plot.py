@@ -671,7 +671,7 @@ def plot_encircled_energy(lens, fields: Sequence[float] | None = None, *,
     """
     import jax.numpy as jnp
 
-    from .analysis.encircled import encircled_energy, radius_for_fraction
+    from .analysis.encircled import energy_samples, energy_within, radius_holding
     from .optics import checks
 
     where = "plot_encircled_energy"
@@ -680,19 +680,20 @@ def plot_encircled_energy(lens, fields: Sequence[float] | None = None, *,
     if max_radius is not None:
         max_radius = checks.number(max_radius, "max_radius", where, lo=0, lo_open=True,
                                    unit="µm")
-    opts = dict(method=method, wavelength=wavelength, pixel_size=pixel_size)
-    r80, r99 = np.asarray([radius_for_fraction(lens, np.asarray(f), jnp.asarray([0.8, 0.99]),
-                                               **opts) for f in fields]).T  # mm
+    # Each field traced once: its curve and its 80 and 99 % radii from the same samples
+    # (before: radius_for_fraction, then encircled_energy, traced each field twice).
+    samples = [energy_samples(lens, np.asarray(f), method=method, wavelength=wavelength,
+                              pixel_size=pixel_size, where=where) for f in fields]
+    r80, r99 = np.asarray([radius_holding(s, jnp.asarray([0.8, 0.99])) for s in samples]).T
     if max_radius is None:
         top = r99[np.isfinite(r99)] if np.isfinite(r99).any() else 3 * r80[np.isfinite(r80)]
         max_radius = 1.5e3 * float(np.max(top)) if top.size else 1.0
     radii = np.linspace(0.0, max_radius, 201) * 1e-3  # mm
     fig = _figure(6, 4.2)
     ax = fig.add_subplot(1, 1, 1)
-    for i, (f, r) in enumerate(zip(fields, r80, strict=True)):
+    for i, (f, r, s) in enumerate(zip(fields, r80, samples, strict=True)):
         c = _FIELD_COLORS[i % len(_FIELD_COLORS)]
-        ee = np.asarray(encircled_energy(lens, np.asarray(f), jnp.asarray(radii),
-                                         **opts).energy)
+        ee = np.asarray(energy_within(s, jnp.asarray(radii)).energy)
         d80 = f"D80 {2e3 * r:.2f} µm" if np.isfinite(r) else "no light"
         ax.plot(radii * 1e3, ee, color=c, lw=1, label=f"{_field_label(f)}: {d80}")
         ax.plot([r * 1e3, r * 1e3], [0.0, 0.8], color=c, ls=":", lw=1)

@@ -340,7 +340,7 @@ def test_trace_names_a_lens_or_rays_of_the_wrong_type():
     rays = jl.Rays(jnp.array([[0.0, 1.0, -1.0]]), jnp.array([[0.0, 0.0, 1.0]]), 0.5876)
     with pytest.raises(TypeError, match="trace: lens must be a jaxlens.Lens, got Rays"):
         jl.trace(rays, lens)
-    with pytest.raises(TypeError, match="trace: rays must be a jaxlens.Rays, got ndarray"):
+    with pytest.raises(TypeError, match="trace_path: rays must be a jaxlens.Rays, got ndarray"):
         jl.trace_path(lens, np.zeros((1, 3)))
 
 

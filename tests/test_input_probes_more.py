@@ -255,7 +255,7 @@ def test_iteration_counts_and_psf_options_are_checked(cooke):
     with pytest.raises(ValueError, match=r"trace: newton_iters must be a whole number in "
                                          r"\[0, inf\) iterations, got -1"):
         jl.trace(cooke, rays, newton_iters=-1)
-    with pytest.raises(ValueError, match=r"trace: newton_iters"):
+    with pytest.raises(ValueError, match=r"trace_path: newton_iters"):  # round 35b: its name
         jl.trace_path(cooke, rays, newton_iters=-1)
     kw = dict(pixel_size=0.005, kernel_size=9, model=GeometricPSF(pupil=8))
     with pytest.raises(ValueError, match=r"psf: newton_iters must be a whole number"):

@@ -109,7 +109,7 @@ SENSOR = jl.Sensor(resolution=(8, 8), pixel_size=0.01)
                                               wavelengths=[0.55], kernel_size=9,
                                               pixel_size=0.005, newton_iters=n)),
     ("trace", lambda n: jl.trace(COOKE, RAYS, newton_iters=n)),
-    ("trace", lambda n: jl.trace_path(COOKE, RAYS, newton_iters=n)),
+    ("trace_path", lambda n: jl.trace_path(COOKE, RAYS, newton_iters=n)),  # its name (35b)
 ])
 def test_newton_iters_are_bounded(where, call):
     """Before: 10**6 ran a loop of that length on every aspheric surface (relative

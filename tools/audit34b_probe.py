@@ -116,7 +116,7 @@ sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
 warnings.simplefilter("ignore")
 
 import numpy as np  # noqa: E402
-from probe_table import COOKE, FILTER, ROOT, ROWS, TMP, CutWriter, cli, fresh, patched, probe, run  # noqa: E402
+from probe_table import COOKE, ROOT, TMP, CutWriter, checked, cli, fresh, patched, probe, run  # noqa: E402
 
 import jaxlens as jl  # noqa: E402
 
@@ -195,19 +195,6 @@ def lens_files():
 
 
 # ----------------------------------------------------------------------------- images
-def checked(name, fn):
-    """A row for an answer ``fn`` judges itself: ``fn`` returns (right, text); a wrong
-    answer is "silent wrong", an exception a crash (as ``probe`` counts one)."""
-    if FILTER and FILTER not in name:
-        return
-    try:
-        right, text = fn()
-    except Exception as e:  # noqa: BLE001
-        ROWS.append((name, "crash", f"{type(e).__name__}: {str(e)[:150]}"))
-        return
-    ROWS.append((name, "ok" if right else "silent wrong", text[:160]))
-
-
 def images():
     import struct
     import zlib

@@ -81,6 +81,19 @@ def warned(fn):
     return go
 
 
+def checked(name, fn):
+    """A row for an answer ``fn`` judges itself: ``fn`` returns (right, text); a wrong
+    answer is "silent wrong", an exception a crash (as ``probe`` counts one)."""
+    if FILTER and FILTER not in name:
+        return
+    try:
+        right, text = fn()
+    except Exception as e:  # noqa: BLE001
+        ROWS.append((name, "crash", f"{type(e).__name__}: {str(e)[:150]}"))
+        return
+    ROWS.append((name, "ok" if right else "silent wrong", text[:160]))
+
+
 def jitted(fn, *args):
     """``fn(*args)`` under ``jax.jit`` with every argument traced (a bad value must not pass):
     an ``eqx.error_if`` (a runtime error holding its message) counts as a ValueError."""
@@ -230,7 +243,8 @@ def mention_counts(skip, top):
     probe next."""
     root = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
     files = (glob.glob(f"{root}/tools/audit*_probe.py") + glob.glob(f"{root}/tests/test_input_probes*.py")
-             + [f"{root}/tests/test_bad_input.py"] + glob.glob(f"{root}/tests/test_silent_answers*.py"))
+             + [f"{root}/tests/test_bad_input.py"] + glob.glob(f"{root}/tests/test_silent_answers*.py")
+             + glob.glob(f"{root}/tests/test_numerics_*.py"))
     text = "\n".join(open(f).read() for f in files if not skip(os.path.basename(f)))
     seen = {}
     for pk in PACKAGES:

@@ -44,7 +44,10 @@ kernel cannot hold (above 1 − truncated) gives NaN; a field no ray reaches giv
 
 from __future__ import annotations
 
+import contextlib
 import math
+import warnings
+from typing import NamedTuple
 
 import equinox as eqx
 import jax
@@ -117,6 +120,7 @@ def _check_common(lens, where, field, wavelength, method, reference, shape):
         if value not in allowed:
             raise ValueError(f"{where}: {arg} must be one of {allowed}, got {value!r}")
     field = checks.one_field(field, where)
+    checks.warn_if_radian_fields(field, where, "field")  # here: the inner traces are quiet
     wl = lens.primary_wavelength if wavelength is None else wavelength
     if jnp.ndim(wl) > 1 or jnp.size(wl) == 0:
         raise ValueError(f"{where}: wavelength must be a scalar or [W] µm with W >= 1, got "
@@ -126,6 +130,20 @@ def _check_common(lens, where, field, wavelength, method, reference, shape):
         checks.material_indices(lens, wl, where)
     dtype = lens.epd.dtype
     return jnp.asarray(field, dtype), jnp.atleast_1d(jnp.asarray(wl, dtype))
+
+
+INNER_ANALYSES = ("spot_rays", "chief_ray", "psf")
+"""The analyses the samples come from: each re-checks the field, and its warning about
+radian-looking angles named it rather than the function the user called."""
+
+
+@contextlib.contextmanager
+def _inner_field_warnings_quiet():
+    """Silence the inner analyses' radian-field warnings: the caller has warned already."""
+    with warnings.catch_warnings():
+        warnings.filterwarnings("ignore", category=UserWarning,
+                                message=rf"({'|'.join(INNER_ANALYSES)}): field ")
+        yield
 
 
 def _metric(dxy, shape):
@@ -175,7 +193,7 @@ def _diffraction_samples(lens, field, wls, *, reference, shape, depth, pixel_siz
             res.center, jnp.mean(jnp.atleast_1d(res.truncated)))
 
 
-def _samples(lens, field, radii_or_fraction, where, *, wavelength, method, reference, shape,
+def _samples(lens, field, where, *, wavelength, method, reference, shape,
              pupil, depth, pixel_size, kernel_size, pupil_side, subsamples):
     field, wls = _check_common(lens, where, field, wavelength, method, reference, shape)
     # The diffraction settings are checked whatever the method (before: pupil_side=1 or
@@ -194,15 +212,18 @@ def _samples(lens, field, radii_or_fraction, where, *, wavelength, method, refer
             if pupil.ndim != 2:
                 raise ValueError(f"{where}: pupil must be [M, 2] normalised pupil points with "
                                  f"M >= 1, got shape {pupil.shape}")
-        return _geometric_samples(lens, field, wls, reference=reference, shape=shape,
-                                  pupil=pupil, depth=depth)
+        with _inner_field_warnings_quiet():
+            return _geometric_samples(lens, field, wls, reference=reference, shape=shape,
+                                      pupil=pupil, depth=depth)
     if pixel_size is None:
         raise ValueError(f"{where}: method='diffraction' needs pixel_size (mm), the PSF grid "
                          f"pitch: a few per Airy radius 1.22·λ·F#")
     checks.number(pixel_size, "pixel_size", where, lo=0, lo_open=True, unit="mm")
-    return _diffraction_samples(lens, field, wls, reference=reference, shape=shape, depth=depth,
-                                pixel_size=pixel_size, kernel_size=int(kernel_size),
-                                pupil_side=int(pupil_side), subsamples=int(subsamples))
+    with _inner_field_warnings_quiet():
+        return _diffraction_samples(lens, field, wls, reference=reference, shape=shape,
+                                    depth=depth, pixel_size=pixel_size,
+                                    kernel_size=int(kernel_size), pupil_side=int(pupil_side),
+                                    subsamples=int(subsamples))
 
 
 def encircled_energy(lens: Lens, field, radii, *, wavelength=None, method: str = "geometric",
@@ -244,14 +265,11 @@ def encircled_energy(lens: Lens, field, radii, *, wavelength=None, method: str =
     r = checks.values(r, "radii", where, lo=0, unit="mm")  # an error_if where traced
     if not checks.is_traced((r, lens)):  # a traced lens has no concrete image size
         _radii_unit(lens, np.asarray(r), where)
-    d, w, total, center, trunc = _samples(
-        lens, field, radii, where, wavelength=wavelength, method=method, reference=reference,
+    samples = EnergySamples(*_samples(
+        lens, field, where, wavelength=wavelength, method=method, reference=reference,
         shape=shape, pupil=pupil, depth=depth, pixel_size=pixel_size, kernel_size=kernel_size,
-        pupil_side=pupil_side, subsamples=subsamples)
-    inside = (d[None, :] <= r[:, None]).astype(w.dtype)
-    energy = jnp.sum(inside * w[None, :], axis=-1) / total
-    energy = jnp.where(jnp.all(jnp.isfinite(center)), energy, jnp.nan)
-    return EncircledEnergy(r, energy, center, trunc)
+        pupil_side=pupil_side, subsamples=subsamples))
+    return energy_within(samples, r)
 
 
 def radius_for_fraction(lens: Lens, field, fraction, *, wavelength=None,
@@ -276,10 +294,63 @@ def radius_for_fraction(lens: Lens, field, fraction, *, wavelength=None,
     # Traced (jit, grad), 1.5 gave NaN and -0.5 a radius: an error_if there.
     f = checks.values(f, "fraction", where, lo=0, hi=1, lo_open=True, hi_open=True,
                       unit="(fraction of the energy)")
-    d, w, total, center, _ = _samples(
-        lens, field, fraction, where, wavelength=wavelength, method=method,
+    samples = EnergySamples(*_samples(
+        lens, field, where, wavelength=wavelength, method=method,
         reference=reference, shape=shape, pupil=pupil, depth=depth, pixel_size=pixel_size,
-        kernel_size=kernel_size, pupil_side=pupil_side, subsamples=subsamples)
+        kernel_size=kernel_size, pupil_side=pupil_side, subsamples=subsamples))
+    return radius_holding(samples, f)
+
+
+class EnergySamples(NamedTuple):
+    """The points one field's energy is counted over (:func:`energy_samples`).
+
+    Attributes:
+        distance: ``[N]`` distances from the reference point (mm; the larger of |dx|, |dy|
+            for ``shape="square"``).
+        weight: ``[N]`` the energy of each (0 for a ray that does not arrive).
+        total: the energy the fractions are of (the arriving rays', or 1: the beam's).
+        center: ``[2]`` the reference point (mm); NaN where no ray reaches the image.
+        truncated: the beam's energy outside the PSF kernel (diffraction; else 0).
+    """
+
+    distance: Array
+    weight: Array
+    total: Array
+    center: Array
+    truncated: Array
+
+
+def energy_samples(lens: Lens, field, *, wavelength=None, method: str = "geometric",
+                   reference: str = "centroid", shape: str = "circle", pupil=None,
+                   depth=None, pixel_size=None, kernel_size: int = 63, pupil_side: int = 64,
+                   subsamples: int = 8, where: str = "energy_samples") -> EnergySamples:
+    """One field's samples, checked and traced once, for both :func:`energy_within` (the
+    encircled-energy curve) and :func:`radius_holding` (D80 and the like): what a caller
+    that wants both uses (``plot_encircled_energy`` traced each field twice before).
+    Arguments as :func:`encircled_energy`; ``where`` names the caller in messages."""
+    checks.focal_image(lens, where)
+    return EnergySamples(*_samples(
+        lens, field, where, wavelength=wavelength, method=method, reference=reference,
+        shape=shape, pupil=pupil, depth=depth, pixel_size=pixel_size, kernel_size=kernel_size,
+        pupil_side=pupil_side, subsamples=subsamples))
+
+
+def energy_within(samples: EnergySamples, radii) -> EncircledEnergy:
+    """The fraction of ``samples``' energy within each of ``radii`` (mm, ``[R]``, checked by
+    the caller: finite, >= 0)."""
+    d, w, total, center, trunc = samples
+    r = jnp.reshape(jnp.asarray(radii), (-1,))
+    inside = (d[None, :] <= r[:, None]).astype(w.dtype)
+    energy = jnp.sum(inside * w[None, :], axis=-1) / total
+    energy = jnp.where(jnp.all(jnp.isfinite(center)), energy, jnp.nan)
+    return EncircledEnergy(r, energy, center, trunc)
+
+
+def radius_holding(samples: EnergySamples, fraction) -> Array:
+    """The radius (mm) holding each ``fraction`` (in (0, 1), checked by the caller) of
+    ``samples``' energy; the shape of ``fraction`` (see :func:`radius_for_fraction`)."""
+    d, w, total, center, _ = samples
+    f = jnp.asarray(fraction)
     # Sort by distance; samples without energy sit at the far end and add nothing.
     key = jnp.where(w > 0, d, jnp.inf)
     order = jnp.argsort(jax.lax.stop_gradient(key))

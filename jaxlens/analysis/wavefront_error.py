@@ -298,7 +298,16 @@ def marechal_strehl(rms_waves: Float[ArrayLike, "*b"]) -> Float[Array, "*b"]:
                          f"waves, got {checks.fmt(a[(a < 0) | np.isinf(a)])} waves (finite, "
                          f"or NaN for a field without rays)")
     s = jnp.asarray(rms_waves)
-    return jnp.exp(-((2.0 * jnp.pi * s) ** 2))
+    if a is None:  # traced (a user's jit): -0.1 gave 0.674, as 0.1 does
+        s = eqx.error_if(s, jnp.any((s < 0) | jnp.isinf(s)),
+                         "marechal_strehl: rms_waves must be an RMS wavefront error, >= 0 "
+                         "waves (finite, or NaN for a field without rays)")
+    return _strehl(s)
+
+
+def _strehl(rms_waves):
+    """exp(−(2π σ)²) unchecked: ``Wavefront.strehl``'s RMS is one (no error_if there)."""
+    return jnp.exp(-((2.0 * jnp.pi * rms_waves) ** 2))
 
 
 class Wavefront(eqx.Module):
@@ -330,7 +339,7 @@ class Wavefront(eqx.Module):
     @property
     def strehl(self) -> Float[Array, ""]:
         """Maréchal's Strehl ratio from ``rms_tilt_removed``."""
-        return marechal_strehl(self.rms_tilt_removed)
+        return _strehl(self.rms_tilt_removed)
 
     def zernike(self, *, terms: int = 37, indexing: str = "noll") -> ZernikeFit:
         """Zernike coefficients (waves) of the map, fitted over its valid points in (Px, Py)

@@ -19,8 +19,10 @@ def diffraction_mtf(nu, lam_mm, fnum) -> Array:
     """MTF of an aberration-free circular pupil at ``nu`` cycles/mm, wavelength ``lam_mm``
     (mm) and working F-number ``fnum``: (2/π)(arccos s − s√(1 − s²)) with s = ν·λ·F#, and 0
     from the cut-off (s ≥ 1) on. Its gradient is 0 there (it was NaN: the unused branch's
-    arccos and square root at s = 1 have infinite slopes)."""
-    s = jnp.maximum(nu * lam_mm * fnum, 0.0)
+    arccos and square root at s = 1 have infinite slopes). At ν = 0 it is the slope on
+    ν ≥ 0, −4/(π ν_c) (``jnp.maximum``'s tie rule had given half of it)."""
+    s = nu * lam_mm * fnum
+    s = jnp.where(s < 0, 0.0, s)
     inside = s < 1
     s = jnp.where(inside, s, 0.0)
     value = (2 / jnp.pi) * (jnp.arccos(s) - s * jnp.sqrt(1.0 - s * s))

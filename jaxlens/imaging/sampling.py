@@ -417,6 +417,8 @@ def field_vignetting(lens: Lens, field) -> Float[Array, " 5"]:
     ``FIELD_MATCH_DEG`` in θx and θy), else zeros (a field between the defined fields gets
     none: OpticStudio's rule for such fields was not verified, so none is guessed). Jittable:
     the field and the lens may be traced."""
+    if not checks.is_traced(field):  # 100° or 3 angles matched no field: zeros, no word
+        checks.one_field(field, "field_vignetting", "one field's factors at a time")
     v = lens.vignetting
     if v is None:
         return jnp.zeros(5, lens.epd.dtype)

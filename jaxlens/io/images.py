@@ -147,6 +147,10 @@ def write_exr(path, img, *, channels=None) -> None:
         img: ``[H, W]`` or ``[H, W, C]`` linear values.
         channels: channel names (default Y for one channel, R, G, B for three, else
             C0, C1, ...).
+
+    Values are rounded to the nearest float32: magnitudes below 1.4e-45 become 0 (float32's
+    subnormals are kept); an image that would become all 0, or that holds a value beyond
+    3.4e38, is refused.
     """
     path = _output_file(path, "write_exr", ".exr")
     a = _float32(img, "write_exr", "img", "linear values")
@@ -166,14 +170,25 @@ def write_exr(path, img, *, channels=None) -> None:
 
 def _float32(img, where: str, arg: str, unit: str) -> np.ndarray:
     """A finite float image as the float32 an EXR file holds: a value beyond float32's range
-    (3.4e38) was written as inf without a word."""
+    (3.4e38) was written as inf without a word. Values are rounded to the nearest float32,
+    as any float32 store rounds them: float32's subnormals (down to 1.4e-45) are kept, and a
+    smaller magnitude becomes 0 beside larger values (1e-50 beside 1 is 1e-50 of it). An
+    image whose every nonzero value would become 0 (all 1e-50: data in another unit) is
+    refused, as it would be written as a black image."""
     a = checks.float_image(img, where, arg, unit=unit)
     top = float(np.finfo(np.float32).max)
     if a.size and np.max(np.abs(a)) > top:
         raise ValueError(f"{where}: {arg} must be finite values within float32's range "
                          f"(|v| <= {top:.4g}), which an EXR file holds; got "
                          f"{checks.fmt(a[np.abs(a) > top][:1])} ({unit}); scale the image")
-    return a.astype(np.float32)
+    out = a.astype(np.float32)
+    if a.size and np.any(a != 0) and not np.any(out != 0):
+        least = float(np.finfo(np.float32).smallest_subnormal)
+        raise ValueError(f"{where}: every nonzero value of {arg} is below float32's least "
+                         f"magnitude ({least:.2g}), which an EXR file holds, so the file "
+                         f"would be all 0; got at most {float(np.max(np.abs(a))):.4g} "
+                         f"({unit}); scale the image")
+    return out
 
 
 def _non_empty(a, where: str) -> None:

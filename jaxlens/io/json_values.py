@@ -1,7 +1,8 @@
 """Numbers and strings of a JSON lens file: what ``json`` gives, read strictly.
 
 JSON has no infinity, so the strings "inf", "-inf" and "infinity" stand for it; a bool, a
-null or a string that is not a number is refused, naming where in the file it is. Also the
+null or any other string (a number in quotes, "5", included) is refused, naming where in
+the file it is. Also the
 reader's refusal of a key given twice (``unique_keys``), the writer's layout (``pretty``)
 and its whole-file write (``write_whole``, also the ``.zmx`` writer's).
 """
@@ -20,22 +21,33 @@ import numpy as np
 
 from ..optics import checks
 
+INFINITY_TEXT = {"inf": math.inf, "+inf": math.inf, "infinity": math.inf,
+                 "+infinity": math.inf, "-inf": -math.inf, "-infinity": -math.inf}
+"""The strings that stand for an infinity (case and surrounding spaces ignored): the only
+numbers a JSON lens file may give as strings (docs/lens-format.md)."""
 
-def num(value: Any, where: str, *, finite: bool = True) -> float:
-    """A float from a JSON number or the strings "inf"/"-inf"/"infinity"."""
+
+def num(value: Any, where: str, *, finite: bool = True, text_ok: bool = False) -> float:
+    """A float from a JSON number or the strings "inf"/"-inf"/"infinity". A number written
+    as a string ("5") is refused: the format documents none (a quoted number is a file
+    written by hand or by another program, and "5" beside a number 5 was read alike without
+    a word). ``text_ok``: a decimal string is the value (an object's keys, which JSON
+    makes strings: the ``n`` table's wavelengths)."""
     if isinstance(value, bool) or value is None:
         raise ValueError(f"{where}: expected a number, got {value!r}")
     if isinstance(value, str):
         s = value.strip().lower()
-        if s in ("inf", "+inf", "infinity", "+infinity"):
-            v = math.inf
-        elif s in ("-inf", "-infinity"):
-            v = -math.inf
+        if s in INFINITY_TEXT:
+            v = INFINITY_TEXT[s]
         else:
             try:  # not float(): "1_0" would be 10, "٣" 3
                 v = checks.number_text(s)
             except ValueError:
                 raise ValueError(f"{where}: expected a number, got {value!r}") from None
+            if not text_ok and not math.isnan(v):  # "nan": refused below as not finite
+                raise ValueError(f"{where}: expected a number, got the string {value!r}; "
+                                 f"write numbers without quotes (only \"inf\", \"-inf\" "
+                                 f"and \"infinity\" are strings)")
     elif isinstance(value, int | float):
         try:
             v = float(value)

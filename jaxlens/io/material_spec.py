@@ -139,7 +139,7 @@ def material_to_spec(m: AbstractMaterial, *, by_name: bool = True) -> Any:
 def _table_from_nm(table: dict, where: str) -> tuple[np.ndarray, np.ndarray]:
     if not isinstance(table, dict) or not table:
         raise ValueError(f"{where}: 'n' must be a non-empty {{wavelength_nm: index}} object")
-    wl = nm_to_um([_num(k, f"{where} key") for k in table])
+    wl = nm_to_um([_num(k, f"{where} key", text_ok=True) for k in table])
     n = np.array([_num(v, f"{where}[{k!r}]") for k, v in table.items()], np.float64)
     return wl, n
 

@@ -350,9 +350,10 @@ def _finish(pending: _Pending | None, source: str, catalog: str) -> list[GlassRe
 def parse_agf(text: str, source: str = "<string>", catalog: str = "") -> list[GlassRecord]:
     """Glass records of AGF text.
 
-    Reads NM, CD and LD records; the numbers of ED, TD and IT records are checked (text in
-    one was skipped without a word), then these records, CC, GC, OD, MD, ``!`` comments and
-    other records are skipped. A glass named twice (case ignored) warns; the later record wins.
+    Reads NM, CD and LD records; the numbers of ED, TD, IT and OD records are checked (text
+    in one was skipped without a word; an OD record holds at most 6), then these records,
+    CC, GC, MD, ``!`` comments and other records are skipped. A glass named twice (case
+    ignored) warns; the later record wins.
 
     Args:
         text: AGF file contents.
@@ -365,9 +366,10 @@ def parse_agf(text: str, source: str = "<string>", catalog: str = "") -> list[Gl
     Raises:
         ValueError: On a malformed NM, CD or LD record (a number that is not a plain finite
             decimal, a formula number that is not whole, nd outside [1, 4.5] or a negative
-            Vd), an ED, TD or IT record holding anything but numbers, a CD/LD record before
-            any NM or given twice for one glass, an unsupported formula or a glass without
-            CD record; the message names ``source`` and the line number.
+            Vd), an ED, TD, IT or OD record holding anything but numbers (or an OD record
+            more than 6), a CD/LD record before any NM or given twice for one glass, an
+            unsupported formula or a glass without CD record; the message names ``source``
+            and the line number.
             ``GlassRecord.to_material`` (so ``load_agf``) also refuses a record whose
             formula does not give its NM nd at the d line (within ``ND_TOLERANCE``; nd 1
             with Vd 0 marks a material without d-line data).
@@ -418,15 +420,23 @@ def parse_agf(text: str, source: str = "<string>", catalog: str = "") -> list[Gl
                                  f"(wavelengths in µm), got {bounds[0]:g} {bounds[1]:g}")
             pending.wavelength_range = (bounds[0], bounds[1])
         elif key in NUMERIC_RECORDS:
-            _floats(tokens[1:], where, f"{key} values ({NUMERIC_RECORDS[key]})")
+            values = _floats(tokens[1:], where, f"{key} values ({NUMERIC_RECORDS[key]})")
+            if key in MAX_VALUES and len(values) > MAX_VALUES[key]:
+                raise ValueError(f"{where}: {key} holds at most {MAX_VALUES[key]} values "
+                                 f"({NUMERIC_RECORDS[key]}), got {len(values)}: "
+                                 f"{' '.join(tokens[1:])!r} (two records on one line?)")
     return records + _finish(pending, source, catalog)
 
 
 NUMERIC_RECORDS = {"TD": "thermal data: D0 D1 D2 E0 E1 λtk Tref",
                    "ED": "extra data: TCE, density, ΔPgF, …",
-                   "IT": "internal transmission: λ, τ, thickness"}
+                   "IT": "internal transmission: λ, τ, thickness",
+                   "OD": "other data: relative cost, CR, FR, SR, AR, PR; -1 where unknown"}
 """AGF records that jaxlens does not use but whose values are numbers: one of text (a hand
 edit gone wrong, a comma decimal) is refused with its line rather than skipped."""
+MAX_VALUES = {"OD": 6}
+"""The most values of a record of fixed length (Zemax writes all six of OD, -1 where
+unknown; fewer, as other readers take them, are read): more is two records run together."""
 
 
 def read_records(path: str | os.PathLike, catalog: str | None = None) -> list[GlassRecord]:

@@ -326,7 +326,10 @@ def paraxial_data(lens: Lens, wavelength=None) -> ParaxialData:
         [jnp.zeros_like(t_axial[:1]), jnp.cumsum(t_axial[:-1])])
     z_last = zs[-1]
     zep = entrance_pupil_z(lens, wl)
-    epd = lens.epd
+    # Strongly typed, as the other fields are: a lens's scalars are weakly typed (a Python
+    # float given to Lens), and this field alone followed the other operand's dtype
+    # (bfloat16 × entrance_pupil_diameter was bfloat16, × efl float32).
+    epd = jnp.asarray(lens.epd, f.dtype)
     # Stop semi-diameter from the marginal ray height at the stop.
     ym, num = marginal_ray(lens, wl)
     stop_sd = jnp.abs(ym[lens.stop])

@@ -41,7 +41,7 @@ from ..optics.surfaces import (
 )
 from ..optics.toroidal import Toroidal
 from ..optics.xypolynomial import XYPolynomial
-from .forward import DEFAULT_NEWTON_ITERS, trace
+from .forward import DEFAULT_NEWTON_ITERS, check_upto, trace
 
 __all__ = [
     "mirror_surface",
@@ -206,6 +206,8 @@ def trace_backward(
         still travelling toward −z (into object space). ``valid`` flags rays that passed
         every surface and aperture; ``opl`` is the optical path accumulated along the way.
     """
+    # Named here: a bad newton_iters (or a non-Lens) was refused as trace's.
+    check_upto(lens, rays, None, newton_iters, "trace_backward")
     if upto is not None:  # 99 was refused as the mirrored lens's index -94, not given here
         checks.number(upto, "upto", "trace_backward", lo=0, hi=lens.num_surfaces - 1,
                       integer=True, unit="(0-based index of an original surface)")

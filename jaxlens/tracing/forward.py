@@ -301,19 +301,21 @@ def _checked(lens: Lens, rays: Rays, where: str) -> Rays:
     return Rays(rays.origin, rays.direction, wl, rays.valid, rays.opl)
 
 
-def _check_upto(lens: Lens, rays: Rays, upto: int | None, newton_iters: int) -> None:
+def check_upto(lens: Lens, rays: Rays, upto: int | None, newton_iters: int,
+               where: str = "trace") -> None:
     """The arguments every trace shares, checked before tracing (a string for the lens was an
-    AttributeError deep inside, ``upto=True`` traced to surface 1)."""
+    AttributeError deep inside, ``upto=True`` traced to surface 1); ``where``: the function
+    called (``trace_path``'s were refused as ``trace``'s)."""
     for arg, v, cls in (("lens", lens, Lens), ("rays", rays, Rays)):
         if not isinstance(v, cls):
-            raise TypeError(f"trace: {arg} must be a jaxlens.{cls.__name__}, got "
+            raise TypeError(f"{where}: {arg} must be a jaxlens.{cls.__name__}, got "
                             f"{type(v).__name__}")
-    checks.number(newton_iters, "newton_iters", "trace", lo=0, integer=True, unit="iterations")
-    checks.newton_iters(newton_iters, "trace")
+    checks.number(newton_iters, "newton_iters", where, lo=0, integer=True, unit="iterations")
+    checks.newton_iters(newton_iters, where)
     if upto is not None and (isinstance(upto, bool) or not isinstance(upto, (int, np.integer))
                              or not 0 <= upto < lens.num_surfaces):
-        raise ValueError(f"trace: upto must be a surface index in [0, {lens.num_surfaces - 1}] "
-                         f"(0-based), got {upto!r}")
+        raise ValueError(f"{where}: upto must be a surface index in [0, "
+                         f"{lens.num_surfaces - 1}] (0-based), got {upto!r}")
 
 
 def _check_switches(where: str, **switches) -> None:
@@ -351,7 +353,7 @@ def trace_path(
         to the full shape. After a coordinate break each entry is in its surface's frame
         (``optics.coordinates.frame_of(lens, i)``); at a break the rays have not moved.
     """
-    _check_upto(lens, rays, upto, newton_iters)
+    check_upto(lens, rays, upto, newton_iters, "trace_path")
     _check_switches("trace_path", reverse_rule=reverse_rule, uniform=uniform)
     rays = _checked(lens, rays, "trace_path")
     states = _trace_states(lens, rays, newton_iters, upto, keep_path=True, uniform=uniform,
@@ -443,7 +445,7 @@ def trace(
         True
     """
 
-    _check_upto(lens, rays, upto, newton_iters)
+    check_upto(lens, rays, upto, newton_iters)
     _check_switches("trace", reverse_rule=reverse_rule, uniform=uniform)
     if isinstance(chunk, str) and chunk == "auto":
         chunk = default_chunk()
