@@ -39,6 +39,21 @@ _missing = [f for f in ("--xla_force_host_platform_device_count=4", *COMPILE_SPE
             if f.split("=")[0] not in _flags]
 os.environ["XLA_FLAGS"] = " ".join([_flags, *_accepted(_missing)]).strip()
 
+# JAX's persistent compilation cache, one folder for the run, shared by the worker processes
+# (they inherit the environment) and the command lines the tests start: each test file's
+# programs are dropped after it (below), and many files compile the same programs again (the
+# same lenses, pupils and analyses). A program found there is loaded instead of compiled; it is
+# the same executable, so no result changes. Measured 2026-12-02, 34 of the test files in one
+# process: 354 -> 283 s of CPU. A folder the user names in JAX_COMPILATION_CACHE_DIR is used
+# as it is; the run's own folder is removed at its end.
+_OWN_CACHE = None
+if not os.environ.get("JAX_COMPILATION_CACHE_DIR"):
+    import tempfile
+
+    _OWN_CACHE = tempfile.mkdtemp(prefix="jaxlens-tests-compiled-")
+    os.environ["JAX_COMPILATION_CACHE_DIR"] = _OWN_CACHE
+    os.environ.setdefault("JAX_PERSISTENT_CACHE_MIN_COMPILE_TIME_SECS", "0")
+
 import jax  # noqa: E402
 
 jax.config.update("jax_enable_x64", True)
@@ -108,3 +123,11 @@ def pytest_collection_modifyitems(config, items):
     rank = {name: i for i, name in enumerate(HEAVIEST_FIRST)}
     items.sort(key=lambda item: rank.get(item.path.name, len(rank)))  # stable: files keep
     # their own order of tests, and the other files their order after these
+
+
+def pytest_unconfigure(config):
+    """Remove the run's compile cache (only the process that made it: the workers share it)."""
+    if _OWN_CACHE is not None:
+        import shutil
+
+        shutil.rmtree(_OWN_CACHE, ignore_errors=True)
