@@ -129,26 +129,22 @@ def _distance(x):
 def _index(arg: str):
     """A converter for the static indices ``stop`` and ``primary``: an int (a float or a bool
     would pass ``0 <= i < n`` and fail later as an unrelated indexing error)."""
-
     def convert(i):
         if isinstance(i, bool) or not isinstance(i, (int, np.integer)):
-            raise TypeError(
-                f"Lens: {arg} must be an int (a 0-based index), got {type(i).__name__} {i!r}"
-            )
+            raise TypeError(f"Lens: {arg} must be an int (a 0-based index), got "
+                            f"{type(i).__name__} {i!r}")
         return int(i)
-
     return convert
 
 
 def _sequence(arg: str, what: str):
     """A converter to a tuple for a static list (``mirrors=1`` was "'int' object is not
     iterable" from deep inside equinox)."""
-
     def convert(x):
         if isinstance(x, (str, bytes)) or not hasattr(x, "__iter__"):
-            raise TypeError(f"Lens: {arg} must be a tuple of {what}, got {type(x).__name__} {x!r}")
+            raise TypeError(f"Lens: {arg} must be a tuple of {what}, got "
+                            f"{type(x).__name__} {x!r}")
         return tuple(x)
-
     return convert
 
 
@@ -156,30 +152,21 @@ def _senses(x):
     """A converter for ``travel_senses``: None, or a tuple of ±1 ints."""
     if x is None:
         return None
-    if (
-        isinstance(x, (str, bytes))
-        or not hasattr(x, "__iter__")
-        or any(
+    if isinstance(x, (str, bytes)) or not hasattr(x, "__iter__") or any(
             isinstance(v, bool) or not isinstance(v, (int, np.integer)) or v not in (-1, 1)
-            for v in x
-        )
-    ):
-        raise TypeError(
-            f"Lens: travel_senses must be None or a tuple of +1 and -1 (one per "
-            f"medium, object space first), got {x!r}"
-        )
+            for v in x):
+        raise TypeError(f"Lens: travel_senses must be None or a tuple of +1 and -1 (one per "
+                        f"medium, object space first), got {x!r}")
     return tuple(int(v) for v in x)
 
 
 def _flag(arg: str):
     """A converter for a static flag: a bool (a 0/1, a string or an array would pass as
     truthy or not and change the analyses silently)."""
-
     def convert(v):
         if not isinstance(v, (bool, np.bool_)):
             raise TypeError(f"Lens: {arg} must be True or False, got {type(v).__name__} {v!r}")
         return bool(v)
-
     return convert
 
 
@@ -192,9 +179,8 @@ by the real one (Zemax's "Real"); see the module doc."""
 def _aim(v):
     """A converter for ``Lens.aim``: one of ``RAY_AIMING`` (a typo would aim paraxially)."""
     if not isinstance(v, str) or v not in RAY_AIMING:
-        raise ValueError(
-            f"Lens: aim (ray aiming) must be one of {RAY_AIMING}, got {type(v).__name__} {v!r}"
-        )
+        raise ValueError(f"Lens: aim (ray aiming) must be one of {RAY_AIMING}, got "
+                         f"{type(v).__name__} {v!r}")
     return v
 
 
@@ -208,16 +194,13 @@ def _obscurations(o):
                 raise TypeError
             out.append((int(i), float(a), float(b)))
         except (TypeError, ValueError):
-            raise ValueError(
-                f"Lens: obscurations must be (i, r_min, r_max) triples: a surface "
-                f"index (int, 0-based) and two radii in mm, got {e!r}"
-            ) from None
+            raise ValueError(f"Lens: obscurations must be (i, r_min, r_max) triples: a surface "
+                             f"index (int, 0-based) and two radii in mm, got {e!r}") from None
     return tuple(out)
 
 
-_as_factors = checks.float_array(
-    "vignetting", "Lens", "(VDX, VDY, VCX, VCY: pupil radii; VAN: deg)"
-)
+_as_factors = checks.float_array("vignetting", "Lens",
+                                 "(VDX, VDY, VCX, VCY: pupil radii; VAN: deg)")
 
 VIGNETTING_COLUMNS = ("VDX", "VDY", "VCX", "VCY", "VAN")
 """The columns of ``Lens.vignetting``: pupil decenter x, y and compression x, y (fractions of
@@ -248,30 +231,19 @@ class Sensor(eqx.Module):
     def __check_init__(self):
         res = tuple(self.resolution) if isinstance(self.resolution, (tuple, list)) else ()
         if len(res) != 2 or not all(
-            isinstance(n, (int, np.integer))
-            and not isinstance(n, bool)
-            and 1 <= n <= checks.MAX_IMAGE_SIDE
-            for n in res
-        ):
-            raise ValueError(
-                f"Sensor: resolution must be (rows, columns), whole numbers >= 1 "
-                f"pixels (at most {checks.MAX_IMAGE_SIDE} per side), got "
-                f"{self.resolution!r}"
-            )
+                isinstance(n, (int, np.integer)) and not isinstance(n, bool)
+                and 1 <= n <= checks.MAX_IMAGE_SIDE for n in res):
+            raise ValueError(f"Sensor: resolution must be (rows, columns), whole numbers >= 1 "
+                             f"pixels (at most {checks.MAX_IMAGE_SIDE} per side), got "
+                             f"{self.resolution!r}")
         if not checks.is_traced(self.pixel_size):
-            checks.number(self.pixel_size, "pixel_size", "Sensor", lo=0, lo_open=True, unit="mm")
+            checks.number(self.pixel_size, "pixel_size", "Sensor", lo=0, lo_open=True,
+                          unit="mm")
             # Before: no upper bound; a pitch of 5 (µm meant) on 4000 pixels was a 20 m sensor.
             hi = checks.MAX_SENSOR_SIZE_MM / max(res)
-            checks.number(
-                self.pixel_size,
-                "pixel_size",
-                "Sensor",
-                lo=0,
-                lo_open=True,
-                hi=hi,
-                unit=f"mm (the longer side, {max(res)} pixels, at most "
-                f"{checks.MAX_SENSOR_SIZE_MM:g} mm; 5 µm is 0.005 mm)",
-            )
+            checks.number(self.pixel_size, "pixel_size", "Sensor", lo=0, lo_open=True, hi=hi,
+                          unit=f"mm (the longer side, {max(res)} pixels, at most "
+                               f"{checks.MAX_SENSOR_SIZE_MM:g} mm; 5 µm is 0.005 mm)")
 
     @property
     def size(self) -> tuple[Array, Array]:
@@ -300,17 +272,13 @@ class Lens(eqx.Module):
     image: AbstractSurface = eqx.field(default_factory=Standard)
     sensor: Sensor | None = None
     name: str = eqx.field(static=True, default="")
-    mirrors: tuple[int, ...] = eqx.field(
-        static=True, default=(), converter=_sequence("mirrors", "surface indices")
-    )
+    mirrors: tuple[int, ...] = eqx.field(static=True, default=(),
+                                         converter=_sequence("mirrors", "surface indices"))
     obscurations: tuple[tuple[int, float, float], ...] = eqx.field(
-        static=True, default=(), converter=_obscurations
-    )
+        static=True, default=(), converter=_obscurations)
     apertures: tuple[tuple[int, Aperture], ...] = eqx.field(
-        static=True,
-        default=(),
-        converter=lambda a: tuple(tuple(e) if isinstance(e, (list, tuple)) else e for e in a),
-    )
+        static=True, default=(), converter=lambda a: tuple(
+            tuple(e) if isinstance(e, (list, tuple)) else e for e in a))
     # Free text (provenance, source of the prescription): kept by JSON load and save.
     description: str = eqx.field(static=True, default="")
     # Zemax vignetting factors [F, 5] (VDX, VDY, VCX, VCY, VAN), or None: see the module doc.
@@ -321,20 +289,19 @@ class Lens(eqx.Module):
     aim: str = eqx.field(static=True, default="paraxial", converter=_aim)
     # Whether rays may go back along their line to any surface after the first (Zemax's
     # negative propagation): see the module doc.
-    negative_propagation: bool = eqx.field(
-        static=True, default=False, converter=_flag("negative_propagation")
-    )
+    negative_propagation: bool = eqx.field(static=True, default=False,
+                                           converter=_flag("negative_propagation"))
     # Light's direction along each medium's local z where breaks turn frames round with it:
     # see the module doc and optics.travel.
-    travel_senses: tuple[int, ...] | None = eqx.field(static=True, default=None, converter=_senses)
+    travel_senses: tuple[int, ...] | None = eqx.field(static=True, default=None,
+                                                      converter=_senses)
 
     def __check_init__(self):
         n = len(self.surfaces)
         self._check_types()
         if self.thickness.ndim == 0 or self.thickness.shape[-1] != n:
-            raise ValueError(
-                f"Lens: {n} surfaces need {n} thicknesses (mm), got shape {self.thickness.shape}"
-            )
+            raise ValueError(f"Lens: {n} surfaces need {n} thicknesses (mm), got shape "
+                             f"{self.thickness.shape}")
         if len(self.materials) != n:
             raise ValueError(f"Lens: {n} surfaces need {n} materials, got {len(self.materials)}")
         self._check_shapes()
@@ -350,49 +317,33 @@ class Lens(eqx.Module):
             if not 0 <= i < n or seen.count(i) > 1 or not 0.0 <= r_min < r_max:
                 raise ValueError(
                     f"Lens: obscuration ({i}, {r_min}, {r_max}) must name one surface in "
-                    f"[0, {n - 1}] (0-based) once with 0 ≤ r_min < r_max (mm)"
-                )
+                    f"[0, {n - 1}] (0-based) once with 0 ≤ r_min < r_max (mm)")
             if isinstance(self.surfaces[i], CoordinateBreak):  # the tracer would ignore it
-                raise ValueError(
-                    f"Lens: surface {i} is a coordinate break; it has no aperture, "
-                    f"so its obscuration ({r_min}, {r_max}) mm would block nothing: "
-                    f"put it on the surface it blocks"
-                )
+                raise ValueError(f"Lens: surface {i} is a coordinate break; it has no aperture, "
+                                 f"so its obscuration ({r_min}, {r_max}) mm would block nothing: "
+                                 f"put it on the surface it blocks")
         self._check_apertures()
 
     def _check_apertures(self):
         n = len(self.surfaces)
         for entry in self.apertures:
             i, a = entry if isinstance(entry, tuple) and len(entry) == 2 else (None, None)
-            if (
-                isinstance(i, bool)
-                or not isinstance(i, (int, np.integer))
-                or not 0 <= i <= n
-                or not isinstance(a, Aperture)
-            ):
+            if (isinstance(i, bool) or not isinstance(i, (int, np.integer))
+                    or not 0 <= i <= n or not isinstance(a, Aperture)):
                 raise ValueError(
                     f"Lens: apertures must be (i, Aperture) pairs with i a surface index in "
-                    f"[0, {n}] (0-based; {n} is the image surface), got {entry!r}"
-                )
+                    f"[0, {n}] (0-based; {n} is the image surface), got {entry!r}")
             if i < n and isinstance(self.surfaces[i], CoordinateBreak):
                 raise ValueError(f"Lens: surface {i} is a coordinate break; it has no aperture")
 
     def _check_types(self):
         """Surfaces and materials of the right kind (a bare number or a glass name is not)."""
-        parts = [
-            (
-                f"surfaces[{i}]",
-                s,
-                AbstractSurface,
-                "a surface (jaxlens.Sphere, Standard, EvenAsphere, …)",
-            )
-            for i, s in enumerate(self.surfaces)
-        ]
+        parts = [(f"surfaces[{i}]", s, AbstractSurface, "a surface (jaxlens.Sphere, Standard, "
+                  "EvenAsphere, …)") for i, s in enumerate(self.surfaces)]
         parts.append(("image", self.image, AbstractSurface, "a surface"))
         mat = "a material (jaxlens.get_material('N-BK7'), jaxlens.Air(), …)"
-        parts += [
-            (f"materials[{i}]", m, AbstractMaterial, mat) for i, m in enumerate(self.materials)
-        ]
+        parts += [(f"materials[{i}]", m, AbstractMaterial, mat)
+                  for i, m in enumerate(self.materials)]
         parts.append(("object_material", self.object_material, AbstractMaterial, mat))
         parts.append(("description", self.description, str, "a string"))
         parts.append(("name", self.name, str, "a string"))
@@ -406,15 +357,11 @@ class Lens(eqx.Module):
         """Shapes are known even under jit; a wrong one would be reshaped into wrong data."""
         f = self.fields
         if f.size == 0 or f.ndim > 2 or (f.ndim == 2 and f.shape[1] != 2):
-            raise ValueError(
-                f"Lens: fields must be angles θy of shape [F] or [θx, θy] pairs "
-                f"of shape [F, 2] (deg), got shape {f.shape}"
-            )
+            raise ValueError(f"Lens: fields must be angles θy of shape [F] or [θx, θy] pairs "
+                             f"of shape [F, 2] (deg), got shape {f.shape}")
         if self.wavelengths.ndim != 1 or self.wavelengths.size == 0:
-            raise ValueError(
-                f"Lens: wavelengths must be a 1-D array [W] (µm), got shape "
-                f"{self.wavelengths.shape}"
-            )
+            raise ValueError(f"Lens: wavelengths must be a 1-D array [W] (µm), got shape "
+                             f"{self.wavelengths.shape}")
         for arg, v in (("epd", self.epd), ("object_distance", self.object_distance)):
             if v is not None and v.ndim != 0:
                 raise ValueError(f"Lens: {arg} must be a scalar (mm), got shape {v.shape}")
@@ -423,17 +370,15 @@ class Lens(eqx.Module):
             raise ValueError(
                 f"Lens: vignetting must hold one row (VDX, VDY, VCX, VCY, VAN) per field: shape "
                 f"[{f.shape[0]}, 5] for {f.shape[0]} field(s) (VDX, VDY, VCX, VCY in pupil "
-                f"radii, VAN in deg), got shape {v.shape}"
-            )
+                f"radii, VAN in deg), got shape {v.shape}")
 
     def _check_values(self):
         """Concrete numbers only (a traced lens, inside jit or vmap, is not known here)."""
         if not checks.is_traced(self.thickness):
             checks.values(self.thickness, "thickness", "Lens", unit="mm")
         if not checks.is_traced(self.epd):
-            checks.values(
-                self.epd, "epd (entrance pupil diameter)", "Lens", lo=0, lo_open=True, unit="mm"
-            )
+            checks.values(self.epd, "epd (entrance pupil diameter)", "Lens", lo=0, lo_open=True,
+                          unit="mm")
         if not checks.is_traced(self.fields):
             checks.field_angles(self.fields, "Lens", "fields")
             checks.warn_if_radian_fields(self.fields, "Lens")
@@ -444,28 +389,17 @@ class Lens(eqx.Module):
             check_vignetting(v, "Lens", "vignetting")
         d = self.object_distance
         if d is not None and not checks.is_traced(d):
-            checks.values(
-                d,
-                "object_distance",
-                "Lens",
-                lo=0,
-                lo_open=True,
-                unit="mm (inf or None: an object at infinity)",
-            )
+            checks.values(d, "object_distance", "Lens", lo=0, lo_open=True,
+                          unit="mm (inf or None: an object at infinity)")
 
     def _check_mirrors_and_breaks(self):
         """Mirrors and coordinate breaks keep the medium: materials[i] repeats the one before."""
         n = len(self.surfaces)
         m = self.mirrors
-        if (
-            any(isinstance(i, bool) or not isinstance(i, (int, np.integer)) for i in m)
-            or list(m) != sorted(set(m))
-            or (m and not 0 <= m[0] <= m[-1] < n)
-        ):
-            raise ValueError(
-                f"Lens: mirrors must be increasing surface indices in [0, {n - 1}] "
-                f"(0-based), got {m!r}"
-            )
+        if (any(isinstance(i, bool) or not isinstance(i, (int, np.integer)) for i in m)
+                or list(m) != sorted(set(m)) or (m and not 0 <= m[0] <= m[-1] < n)):
+            raise ValueError(f"Lens: mirrors must be increasing surface indices in [0, {n - 1}] "
+                             f"(0-based), got {m!r}")
         breaks = [i for i, s in enumerate(self.surfaces) if isinstance(s, CoordinateBreak)]
         for i in m:
             if i in breaks:
@@ -483,8 +417,7 @@ class Lens(eqx.Module):
                     f"Lens: surface {i} is a {what}; the medium after it is the medium before "
                     f"it, so materials[{i}] must be the same material as "
                     f"{'object_material' if i == 0 else f'materials[{i - 1}]'} "
-                    f"({name(before)}), got {name(after)}"
-                )
+                    f"({name(before)}), got {name(after)}")
 
     def _check_travel_senses(self):
         """``travel_senses`` must be what the frames give (checked where the tilts are
@@ -492,28 +425,22 @@ class Lens(eqx.Module):
         n = len(self.surfaces)
         given = self.travel_senses
         if given is not None and len(given) != n + 1:
-            raise ValueError(
-                f"Lens: travel_senses needs {n + 1} entries (object space, then "
-                f"the medium after each surface), got {len(given)}"
-            )
+            raise ValueError(f"Lens: travel_senses needs {n + 1} entries (object space, then "
+                             f"the medium after each surface), got {len(given)}")
         if given is None and not any(isinstance(s, CoordinateBreak) for s in self.surfaces):
             return
         try:
             need = travel.turned_senses(self.surfaces, self.mirrors)
         except ValueError as e:
             raise ValueError(f"Lens: {e}") from None
-        if (
-            need is None
-            and given is not None
-            and travel.axis_cosines(self.surfaces, self.mirrors) is None
-        ):
+        if need is None and given is not None and travel.axis_cosines(
+                self.surfaces, self.mirrors) is None:
             return  # traced tilts: nothing to check against
         if given != need:
             raise ValueError(
                 f"Lens: travel_senses must be {need!r} for these mirrors and coordinate "
                 f"breaks (the light's direction along each medium's local z, object space "
-                f"first; None where it follows the mirror count), got {given!r}"
-            )
+                f"first; None where it follows the mirror count), got {given!r}")
 
     @property
     def num_surfaces(self) -> int:
@@ -571,12 +498,9 @@ def check_castable(lens: Lens, dtype, where: str) -> None:
         return
     big = float(jnp.finfo(dtype).max)
     for path, x in jax.tree_util.tree_flatten_with_path(lens)[0]:
-        if (
-            not eqx.is_array(x)
-            or isinstance(x, jax.core.Tracer)
-            or not jnp.issubdtype(x.dtype, jnp.floating)
-            or jnp.finfo(x.dtype).bits <= jnp.finfo(dtype).bits
-        ):
+        if (not eqx.is_array(x) or isinstance(x, jax.core.Tracer)
+                or not jnp.issubdtype(x.dtype, jnp.floating)
+                or jnp.finfo(x.dtype).bits <= jnp.finfo(dtype).bits):
             continue
         a = np.asarray(x)
         bad = np.isfinite(a) & (np.abs(a) > big)
@@ -586,8 +510,7 @@ def check_castable(lens: Lens, dtype, where: str) -> None:
                 f"{where}: the lens's {name} holds {a[bad].ravel()[0]:.6g}, beyond "
                 f"{jnp.dtype(dtype).name}'s range (|x| <= {big:.4g}): every ray would miss "
                 f"that surface; keep the lens and its rays in float64, or give it in units "
-                f"where its coefficients are smaller"
-            )
+                f"where its coefficients are smaller")
 
 
 def check_vignetting(v, where: str, arg: str = "vignetting"):
