@@ -601,6 +601,51 @@ def area_float32_limits():
     row("float32 negative edge thickness 4e-6 mm", thin)
 
 
+def area_mirror_analyses():
+    # A paraboloid mirror at F/4 (2 m) and F/0.6, and an F/0.6 micro-mirror (20 um): on axis a
+    # point (rms 0, wavefront 0, Strehl 1, S_I = 0); every analysis finite.
+    for D, f in ((2000.0, 8000.0), (2000.0, 1200.0), (0.02, 0.012)):
+        lens = jl.Lens(
+            surfaces=(jl.Conic(-1 / (2 * f), -1.0),),
+            thickness=jnp.array([-f]),
+            materials=(jl.Air(),),
+            mirrors=(0,),
+            epd=D,
+            fields=jnp.array([0.0, 0.1]),
+        )
+
+        def axis(lens=lens, f=f):
+            rms = float(jl.analysis.rms_spot(lens).polychromatic[0])
+            wf = jl.analysis.wavefront(lens, 0.0)
+            s1 = float(jl.analysis.seidel(lens).sums[0])
+            good = rms < 1e-12 * f and float(wf.rms) < 1e-6 and abs(s1) < 1e-12 * f
+            return ("ok" if good else "silent wrong"), (
+                f"rms {rms:.2g} mm, wavefront rms {float(wf.rms):.2g} waves, Strehl "
+                f"{float(wf.strehl):.6g}, S_I {s1:.2g} mm"
+            )
+
+        row(f"paraboloid D={D:g} f={f:g}: on-axis point (rms, wavefront, S_I)", axis)
+
+        def off(lens=lens):
+            leaves = [
+                jl.analysis.rms_spot(lens).polychromatic,
+                jl.analysis.wavefront(lens, 0.1).zernike(terms=11).coefficients,
+                jl.analysis.seidel(lens).sums,
+                jl.analysis.distortion(lens).percent_paraxial,
+                jl.imaging.radiometry.relative_illumination(lens, jnp.array([0.05, 0.1])).ri,
+            ]
+            return ("ok" if finite(*leaves) else "NaN-Inf"), (
+                f"W131 Seidel {float(jl.analysis.seidel(lens).wavefront()[1]):.4g} waves"
+            )
+
+        row(f"paraboloid D={D:g} f={f:g}: 0.1 deg analyses finite", off)
+
+    def below_one():
+        return single([jl.Plane(), jl.Plane()], [1.0, 1.0], [ModelGlass(0.9, 60.0), jl.Air()])
+
+    row("index 0.9 medium", below_one)
+
+
 if __name__ == "__main__":
     jax.config.update("jax_enable_x64", True)
     PT.run(
@@ -616,5 +661,6 @@ if __name__ == "__main__":
             area_batch,
             area_scale_invariance,
             area_float32_limits,
+            area_mirror_analyses,
         ]
     )
