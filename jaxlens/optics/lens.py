@@ -478,6 +478,7 @@ class Lens(eqx.Module):
         """Cast every floating array in the lens to ``dtype`` (float32 or float64)."""
         # int32 truncated every curvature to 0, float16 keeps too few digits to trace a lens.
         checks.float_dtype(dtype, "Lens.astype")
+        check_castable(self, dtype, "Lens.astype")
 
         def cast(x):
             if eqx.is_array(x) and jnp.issubdtype(x.dtype, jnp.floating):
@@ -485,6 +486,32 @@ class Lens(eqx.Module):
             return x
 
         return jax.tree_util.tree_map(cast, self)
+
+
+def check_castable(lens: Lens, dtype, where: str) -> None:
+    """Refuse to cast a concrete float64 lens to float32 (``dtype``) where a finite value
+    would become inf: every ray would then miss that surface, silently (an r^24 coefficient
+    of a 10 µm micro-lens in mm units is about 1e44, beyond float32's 3.4e38). Traced
+    lenses (under ``jit``, so also inside ``trace`` with float32 rays: an ``eqx.error_if``
+    there cost the float32 trace 10-20 µs a call) and casts that do not narrow are not
+    looked at, so no trace pays anything."""
+    if jnp.finfo(dtype).bits >= 64:
+        return
+    big = float(jnp.finfo(dtype).max)
+    for path, x in jax.tree_util.tree_flatten_with_path(lens)[0]:
+        if (not eqx.is_array(x) or isinstance(x, jax.core.Tracer)
+                or not jnp.issubdtype(x.dtype, jnp.floating)
+                or jnp.finfo(x.dtype).bits <= jnp.finfo(dtype).bits):
+            continue
+        a = np.asarray(x)
+        bad = np.isfinite(a) & (np.abs(a) > big)
+        if bad.any():
+            name = jax.tree_util.keystr(path).lstrip(".")
+            raise ValueError(
+                f"{where}: the lens's {name} holds {a[bad].ravel()[0]:.6g}, beyond "
+                f"{jnp.dtype(dtype).name}'s range (|x| <= {big:.4g}): every ray would miss "
+                f"that surface; keep the lens and its rays in float64, or give it in units "
+                f"where its coefficients are smaller")
 
 
 def check_vignetting(v, where: str, arg: str = "vignetting"):

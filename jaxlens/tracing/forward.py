@@ -419,7 +419,7 @@ def trace(
         chunk: a batch ``[N, 3]`` with N above this is traced ``chunk`` rays at a time
             (``jax.lax.map``; the gradient recomputes each chunk instead of storing it).
             ``"auto"``: ``default_chunk()``, 2**16 on a CPU and 2**20 on a GPU.
-            ``None`` traces every batch in one piece. Results do not depend on it.
+            ``None`` traces every batch in one piece. Results agree to a few ulps.
         upto: stop after ``surfaces[upto]`` (0-based); ``None`` traces to the image.
         uniform: trace every surface after the first as one kind (one ``lax.scan``;
             see the module notes). Results agree to rounding.
