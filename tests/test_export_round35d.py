@@ -13,8 +13,9 @@ Classical smoke runs with L-BFGS-B, float32, catalog glasses (SCHOTT, CDGM) and 
 * optiland starts that search at the base conic's intersection: a ray that misses the base
   conic is lost (NaN), though the polynomial terms put the surface in its way. The EDoF
   lens's 34.4° field (surface 11, R = 3.57 mm, the chief ray at 3.25 mm) lost every ray, so
-  that field was never compared. The tool now starts such rays at the vertex plane
-  (``plane_seeded``).
+  that field was never compared. The tool now runs the search again from the vertex plane
+  where it found no root (``plane_seeded``), and where a search went past a root to a
+  later crossing (4 of that field's rays at surface 8) takes the first (``first_root``).
 
 The optiland checks skip cleanly where optiland is not installed (CI).
 """
@@ -101,6 +102,15 @@ def test_missed_surfaces_checks_every_surface_of_an_unmoved_frame():
     assert tool.missed_surfaces(op).tolist() == [False, False]
 
 
+def test_first_root_takes_the_first_crossing():
+    """F(t) = (t − 1)(t − 3) along three rays: a search that found t = 3 gets t = 1 (the
+    first crossing, to rounding); t = 1 stays; a ray without a root (NaN) stays NaN."""
+    tool = _tool()
+    got = tool.first_root(lambda t: (t - 1.0) * (t - 3.0), np.array([3.0, 1.0, np.nan]))
+    assert abs(got[0] - 1.0) < 1e-14 and got[1] == 1.0 and np.isnan(got[2])
+
+
+@pytest.mark.slow  # 10 s where optiland is installed (skipped in CI: it is not)
 def test_optiland_traces_the_edof_lens_edge_field_as_jaxlens(tmp_path):
     """optiland (with jaxlens's media) traces the EDoF lens's 34.4° chief ray to jaxlens's
     height (it lost it: NaN), and the field's 317-ray grid to jaxlens's RMS."""

@@ -227,6 +227,41 @@ def own_geometry(old, d: dict):
     return PolynomialGeometry(cs, radius, k, coefficients=coeffs)
 
 
+FIRST_ROOT_SAMPLES = 128
+
+
+def first_root(residual, t) -> np.ndarray:
+    """The first root along each ray of F (``residual``: t -> F(t), elementwise, mm) in
+    [0, t], where the root ``t`` that a search found is a later one: F sampled at
+    FIRST_ROOT_SAMPLES points of [0, t) changes sign before ``t``, and the first such bracket
+    is bisected to rounding. optiland's Newton search from the base conic can go past a
+    root (the EDoF lens's surface 8 at its 34.4° field: 4 pupil rays cross it twice, and it
+    took the second crossing). ``t`` where no earlier sign change (NaN kept)."""
+    t = np.asarray(t, float)
+    ok = np.isfinite(t) & (t > 0)
+    if not ok.any():
+        return t
+    span = np.where(ok, t, 0.0)
+    k = np.arange(FIRST_ROOT_SAMPLES)[:, None] / FIRST_ROOT_SAMPLES
+    with np.errstate(invalid="ignore"):
+        f = np.asarray(residual(span * k), float)  # [samples, rays] in one pass
+        flip = (np.sign(f[1:]) * np.sign(f[:1]) < 0) & ok
+    has = flip.any(axis=0)
+    if not has.any():
+        return t
+    j = np.argmax(flip, axis=0)  # the first sample of the other sign
+    lo = np.where(has, span * k[j, 0], 0.0)  # k[j] precedes sample j + 1
+    hi = np.where(has, span * k[j + 1, 0], 0.0)
+    f_lo = np.asarray(residual(lo), float)
+    for _ in range(64):  # 2⁻⁶⁴ of a bracket: rounding
+        mid = 0.5 * (lo + hi)
+        f_mid = np.asarray(residual(mid), float)
+        left = np.sign(f_mid) * np.sign(f_lo) <= 0
+        lo, hi, f_lo = np.where(left, lo, mid), np.where(left, mid, hi), np.where(left, f_lo,
+                                                                                  f_mid)
+    return np.where(has, 0.5 * (lo + hi), t)
+
+
 def plane_seeded(cls):
     """optiland's Newton-searched geometry ``cls`` (an asphere, a polynomial) whose search,
     where it found no root from optiland's start (the base conic's intersection: NaN for a
@@ -265,6 +300,10 @@ def plane_seeded(cls):
             return dataclasses.replace(
                 a, t=np.where(take, b.t, a.t), residual=np.where(take, b.residual, a.residual),
                 converged=found | take)
+
+        def distance(self, rays, aperture=None):
+            return first_root(lambda t: self._surface_residual(t, rays),
+                              np.asarray(super().distance(rays, aperture), float))
 
     Seeded.__name__ = "PlaneSeeded" + cls.__name__
     return Seeded
