@@ -39,8 +39,15 @@ TOOL = ROOT / "tools" / "export_reevaluation.py"
 # behind the stop, and the point optiland 0.6.3 recorded on it for pupil ray (−0.4, −0.9) of
 # field (−31.04°, −31.04°), with the ray's start on the stop and its direction.
 C = 1.2183808207202398e-01
-A = (0.0, 2.372582969563406e-02, 5.583722094334608e-03, 5.793102562819191e-04,
-     -4.121311982295295e-04, -1.815179978121936e-04, 3.091880523063159e-04)  # r², r⁴, …
+A = (
+    0.0,
+    2.372582969563406e-02,
+    5.583722094334608e-03,
+    5.793102562819191e-04,
+    -4.121311982295295e-04,
+    -1.815179978121936e-04,
+    3.091880523063159e-04,
+)  # r², r⁴, …
 VERTEX_Z = 1.0962325875982792e-01
 OPTILAND_POINT = (-0.7244307547983115, -1.2869601018144587, 0.4559812867443225)
 RAY_START = np.array([-0.45002348, -1.01255282, 0.0])
@@ -75,8 +82,11 @@ def test_a_point_off_its_surface_is_a_lost_ray():
     tool = _tool()
     x, y, _ = OPTILAND_POINT
     on = VERTEX_Z + _sag(x, y)
-    pts = (np.array([x, x, x, np.nan]), np.array([y, y, y, y]),
-           np.array([on, on + 1e-12, OPTILAND_POINT[2], on]))
+    pts = (
+        np.array([x, x, x, np.nan]),
+        np.array([y, y, y, y]),
+        np.array([on, on + 1e-12, OPTILAND_POINT[2], on]),
+    )
     assert tool.off_surface(pts, VERTEX_Z, _sag).tolist() == [False, False, True, True]
 
 
@@ -88,14 +98,20 @@ def test_missed_surfaces_checks_every_surface_of_an_unmoved_frame():
 
     def surface(zv, sag, xs, ys, zs, rx=0.0):
         cs = types.SimpleNamespace(x=0.0, y=0.0, z=zv, rx=rx, ry=0.0, rz=0.0, reference_cs=None)
-        return types.SimpleNamespace(geometry=types.SimpleNamespace(cs=cs, sag=sag),
-                                     x=np.array(xs), y=np.array(ys), z=np.array(zs))
+        return types.SimpleNamespace(
+            geometry=types.SimpleNamespace(cs=cs, sag=sag),
+            x=np.array(xs),
+            y=np.array(ys),
+            z=np.array(zs),
+        )
 
     flat = lambda u, v: np.zeros_like(np.asarray(u, float))  # noqa: E731
     on = VERTEX_Z + _sag(0.1, 0.2)
-    surfaces = [surface(-5.0, flat, [0, 0], [0, 0], [-5, -5]),
-                surface(0.0, flat, [0.1, -0.45], [0.2, -1.01], [0.0, 0.0]),
-                surface(VERTEX_Z, _sag, [0.1, x], [0.2, y], [on, z])]
+    surfaces = [
+        surface(-5.0, flat, [0, 0], [0, 0], [-5, -5]),
+        surface(0.0, flat, [0.1, -0.45], [0.2, -1.01], [0.0, 0.0]),
+        surface(VERTEX_Z, _sag, [0.1, x], [0.2, y], [on, z]),
+    ]
     op = types.SimpleNamespace(surfaces=types.SimpleNamespace(surfaces=surfaces))
     assert tool.missed_surfaces(op).tolist() == [False, True]
     surfaces[2] = surface(VERTEX_Z, _sag, [0.1, x], [0.2, y], [on, z], rx=1.0)
@@ -116,8 +132,7 @@ def test_optiland_traces_the_edof_lens_edge_field_as_jaxlens(tmp_path):
     height (it lost it: NaN), and the field's 317-ray grid to jaxlens's RMS."""
     pytest.importorskip("optiland")
     tool = _tool()
-    lens = jl.load(ROOT / "jaxlens" / "data" / "lenses" / "edof_classical.json",
-                   dtype="float64")
+    lens = jl.load(ROOT / "jaxlens" / "data" / "lenses" / "edof_classical.json", dtype="float64")
     p = tmp_path / "edof.zmx"
     jl.save(lens, p)
     with warnings.catch_warnings():
