@@ -145,3 +145,14 @@ def test_optiland_traces_the_edof_lens_edge_field_as_jaxlens(tmp_path):
     assert math.isfinite(got["chief_y"][0])
     assert abs(got["chief_y"][0] - mine["chief_y"][-1]) < 1e-9
     np.testing.assert_allclose(got["rms_poly_um"][0], mine["rms_poly_um"][-1], rtol=1e-9)
+
+
+def test_a_run_record_is_refused_as_no_lens_file():
+    """experiments/edof/base_lens.json is the EDoF design's record, not a lens: its refusal
+    said only "sensor: unknown key 'pixels'; did you mean 'resolution'?"."""
+    with pytest.raises(
+        ValueError,
+        match=r"no 'surfaces' key.*not a lens file.*'lens.json'.*"
+        r"unknown key 'pixels'",
+    ):
+        jl.load(ROOT / "experiments" / "edof" / "base_lens.json")
