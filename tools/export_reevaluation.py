@@ -31,6 +31,12 @@ every length as mm: a file in other units (UNIT IN) is reported, not compared. o
 paraxial quantities use a surface's base radius only (an XY polynomial's x², y² terms add
 power that jaxlens's paraxial trace includes): compare real rays there.
 
+optiland 0.6.3's Newton search on an asphere or polynomial surface is mended here: where it
+found no root from its start (the base conic's intersection) it runs again from the vertex
+plane (``plane_seeded``), a later crossing found past an earlier one is replaced by the first
+(``first_root``), and a ray whose recorded point lies off a surface (a search that did not
+converge, which optiland keeps) counts as lost (``missed_surfaces``), as in Zemax and jaxlens.
+
 ``--resave`` saves each ``.zmx`` input again with ``jaxlens.save`` (``.zmx`` and JSON), checks
 that both read back in jaxlens as the same lens (pytree and numbers), and gives optiland the
 saved ``.zmx`` too (against jaxlens, and against optiland's numbers for the original).
