@@ -31,6 +31,12 @@ every length as mm: a file in other units (UNIT IN) is reported, not compared. o
 paraxial quantities use a surface's base radius only (an XY polynomial's x², y² terms add
 power that jaxlens's paraxial trace includes): compare real rays there.
 
+optiland 0.6.3's Newton search on an asphere or polynomial surface is mended here: where it
+found no root from its start (the base conic's intersection) it runs again from the vertex
+plane (``plane_seeded``), a later crossing found past an earlier one is replaced by the first
+(``first_root``), and a ray whose recorded point lies off a surface (a search that did not
+converge, which optiland keeps) counts as lost (``missed_surfaces``), as in Zemax and jaxlens.
+
 ``--resave`` saves each ``.zmx`` input again with ``jaxlens.save`` (``.zmx`` and JSON), checks
 that both read back in jaxlens as the same lens (pytree and numbers), and gives optiland the
 saved ``.zmx`` too (against jaxlens, and against optiland's numbers for the original).
@@ -227,6 +233,88 @@ def own_geometry(old, d: dict):
     return PolynomialGeometry(cs, radius, k, coefficients=coeffs)
 
 
+FIRST_ROOT_SAMPLES = 128
+
+
+def first_root(residual, t) -> np.ndarray:
+    """The first root along each ray of F (``residual``: t -> F(t), elementwise, mm) in
+    [0, t], where the root ``t`` that a search found is a later one: F sampled at
+    FIRST_ROOT_SAMPLES points of [0, t) changes sign before ``t``, and the first such bracket
+    is bisected to rounding. optiland's Newton search from the base conic can go past a
+    root (the EDoF lens's surface 8 at its 34.4° field: 4 pupil rays cross it twice, and it
+    took the second crossing). ``t`` where no earlier sign change (NaN kept)."""
+    t = np.asarray(t, float)
+    ok = np.isfinite(t) & (t > 0)
+    if not ok.any():
+        return t
+    span = np.where(ok, t, 0.0)
+    k = np.arange(FIRST_ROOT_SAMPLES)[:, None] / FIRST_ROOT_SAMPLES
+    with np.errstate(invalid="ignore"):
+        f = np.asarray(residual(span * k), float)  # [samples, rays] in one pass
+        flip = (np.sign(f[1:]) * np.sign(f[:1]) < 0) & ok
+    has = flip.any(axis=0)
+    if not has.any():
+        return t
+    j = np.argmax(flip, axis=0)  # the first sample of the other sign
+    lo = np.where(has, span * k[j, 0], 0.0)  # k[j] precedes sample j + 1
+    hi = np.where(has, span * k[j + 1, 0], 0.0)
+    f_lo = np.asarray(residual(lo), float)
+    for _ in range(64):  # 2⁻⁶⁴ of a bracket: rounding
+        mid = 0.5 * (lo + hi)
+        f_mid = np.asarray(residual(mid), float)
+        left = np.sign(f_mid) * np.sign(f_lo) <= 0
+        lo, hi, f_lo = np.where(left, lo, mid), np.where(left, mid, hi), np.where(left, f_lo,
+                                                                                  f_mid)
+    return np.where(has, 0.5 * (lo + hi), t)
+
+
+def plane_seeded(cls):
+    """optiland's Newton-searched geometry ``cls`` (an asphere, a polynomial) whose search,
+    where it found no root from optiland's start (the base conic's intersection: NaN for a
+    ray that misses the base conic, and far from the root where the polynomial terms move
+    the surface far from it), is run again from the ray's crossing of the vertex plane.
+    optiland keeps the first search's result; the EDoF lens's 34.4° field lost every ray
+    so (surface 11, R 3.57 mm, the chief ray at 3.25 mm), and 8 of them at surface 8.
+    A root is still checked by :func:`missed_surfaces`, like every other."""
+    import dataclasses
+
+    from optiland.geometries.standard import StandardGeometry
+
+    class PlaneSeed(StandardGeometry):
+        from_plane = False
+
+        def distance(self, rays, aperture=None):
+            with np.errstate(divide="ignore", invalid="ignore"):
+                plane = -np.asarray(rays.z, float) / np.asarray(rays.N, float)
+            if self.from_plane:
+                return plane
+            t = np.asarray(StandardGeometry.distance(self, rays, aperture), float)
+            return np.where(np.isfinite(t), t, plane)
+
+    class Seeded(cls, PlaneSeed):
+        def _solve_distance_primal(self, rays, aperture=None):
+            a = super()._solve_distance_primal(rays, aperture)
+            found = np.asarray(a.converged, bool) & np.isfinite(np.asarray(a.t, float))
+            if found.all():
+                return a
+            self.from_plane = True
+            try:
+                b = super()._solve_distance_primal(rays, aperture)
+            finally:
+                self.from_plane = False
+            take = ~found & np.asarray(b.converged, bool)
+            return dataclasses.replace(
+                a, t=np.where(take, b.t, a.t), residual=np.where(take, b.residual, a.residual),
+                converged=found | take)
+
+        def distance(self, rays, aperture=None):
+            return first_root(lambda t: self._surface_residual(t, rays),
+                              np.asarray(super().distance(rays, aperture), float))
+
+    Seeded.__name__ = "PlaneSeeded" + cls.__name__
+    return Seeded
+
+
 def optiland_optic(path: str, primary: float, lens=None):
     """optiland's optic of a ``.zmx`` file (:data:`OWN_TYPES` surfaces read here) and the
     indices of its media at ``primary``; with ``lens``, its media replaced by jaxlens's
@@ -258,6 +346,7 @@ def optiland_optic(path: str, primary: float, lens=None):
             g = s.geometry
             if hasattr(g, "tol") and hasattr(g, "max_iter"):
                 g.tol, g.max_iter = 1e-13, 200
+                g.__class__ = plane_seeded(type(g))
     return op, index_d
 
 
@@ -301,6 +390,41 @@ def normalised_field(op, f) -> tuple[float, float]:
     return tx / fmax, ty / fmax
 
 
+# A ray point recorded on a surface farther than this from it along z (mm) is a ray that
+# missed the surface: optiland 0.6.3's Newton search on an asphere keeps the rays it did not
+# converge for (it warns, and traces them on from the last iterate), where Zemax and jaxlens
+# report a miss.
+OFF_SURFACE_MM = 1e-9
+
+
+def off_surface(points, vertex_z, sag) -> np.ndarray:
+    """Whether each ray's point ``points`` = (x, y, z) (global, mm) on a surface whose frame is
+    only shifted along z to ``vertex_z`` (mm) lies off the surface ``z = vertex_z + sag(x,
+    y)`` by more than :data:`OFF_SURFACE_MM`, or is not finite (bool, one per ray)."""
+    x, y, z = (np.asarray(v, float).ravel() for v in points)
+    with np.errstate(invalid="ignore"):
+        gap = np.abs(z - vertex_z - np.asarray(sag(x, y), float).ravel())
+        return ~(gap <= OFF_SURFACE_MM)
+
+
+def missed_surfaces(op) -> np.ndarray:
+    """Rays of optiland's last trace that some surface after the object did not hold (a
+    point :func:`off_surface` of it: a miss optiland traced on from its last Newton
+    iterate). Surfaces of a tilted or decentered frame are not checked (bool, one per
+    ray)."""
+    surfaces = op.surfaces.surfaces
+    bad = np.zeros(np.asarray(surfaces[-1].y).size, bool)
+    for s in surfaces[1:]:
+        cs = s.geometry.cs
+        moved = [float(getattr(cs, a, 0.0) or 0.0) for a in ("x", "y", "rx", "ry", "rz")]
+        if any(moved) or getattr(cs, "reference_cs", None) is not None:
+            continue
+        x, y = np.asarray(s.x, float).ravel(), np.asarray(s.y, float).ravel()
+        sag = s.geometry.sag
+        bad |= off_surface((x, y, s.z), float(cs.z), lambda u, v, sag=sag: np.asarray(sag(u, v)))
+    return bad
+
+
 def field_numbers(op, fields, wavelengths, primary, efl: float) -> dict:
     """optiland's chief rays, distortions and RMS spots of ``fields`` (deg, θy or (θx, θy),
     any angles, not only the file's), traced by ``op``: the definitions of
@@ -313,6 +437,8 @@ def field_numbers(op, fields, wavelengths, primary, efl: float) -> dict:
         hx, hy = normalised_field(op, f)
         r = op.trace_generic(hx, hy, 0.0, 0.0, primary)
         x, y = float(np.asarray(r.x).ravel()[0]), float(np.asarray(r.y).ravel()[0])
+        if missed_surfaces(op)[0]:
+            x = y = math.nan
         t, (ux, uy) = field_direction(f)
         h = x * ux + y * uy
         chief.append(h)
@@ -329,6 +455,7 @@ def field_numbers(op, fields, wavelengths, primary, efl: float) -> dict:
             r = op.trace_generic(hx, hy, PUPIL[:, 0], PUPIL[:, 1], w)
             x, yy = np.asarray(r.x).ravel(), np.asarray(r.y).ravel()
             ok = (np.asarray(r.i).ravel() > 0) & np.isfinite(x) & np.isfinite(yy)
+            ok &= ~missed_surfaces(op)
             lost += int(len(PUPIL) - ok.sum())
             cx, cy = x[ok].mean(), yy[ok].mean()
             rms[i][k] = 1e3 * math.sqrt(np.mean((x[ok] - cx) ** 2 + (yy[ok] - cy) ** 2))
@@ -508,8 +635,8 @@ def optiland_grid_numbers(zmx: str, spec, angles, lens=None) -> tuple[dict, np.n
         # y edge, a field whose rim rays the clear apertures may clip: its chief ray only)
         hx, hy = normalised_field(op, [0.0, spec.half_fov])
         r = op.trace_generic(hx, hy, 0.0, 0.0, primary)
+        h = math.nan if missed_surfaces(op)[0] else float(np.asarray(r.y).ravel()[0])
     ftan = system["efl"] * math.tan(math.radians(spec.half_fov))
-    h = float(np.asarray(r.y).ravel()[0])
     out = {k: system[k] for k in ("efl", "fnum", "bfl", "total_track")}
     out["chief_height_full_field"] = h
     out["distortion_percent"] = 100.0 * (h - ftan) / ftan

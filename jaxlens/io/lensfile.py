@@ -367,7 +367,16 @@ def lens_from_dict(d: dict, *, source: str = "<lens>") -> Lens:
             f"{source}: unsupported format {fmt!r}; this jaxlens reads "
             f"{', '.join(_SUPPORTED_FORMATS)}"
         )
-    lens_keys.check_keys(d, source)
+    try:
+        lens_keys.check_keys(d, source)
+    except ValueError as e:  # a JSON file of another kind (a run's record): say so first
+        if "surfaces" in d or "surfaces" in str(e):
+            raise
+        named = d.get("lens_file")
+        hint = f"; it names the lens file {named!r}" if isinstance(named, str) else ""
+        raise ValueError(f"{source}: no 'surfaces' key: this JSON file is not a lens file (its "
+                         f"keys: {', '.join(map(str, list(d)[:8]))}){hint}. Reading it as one: "
+                         f"{e}") from e
     surfs = d.get("surfaces")
     if not isinstance(surfs, list) or not surfs:
         raise ValueError(f"{source}: 'surfaces' must be a non-empty list")
