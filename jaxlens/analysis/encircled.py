@@ -44,9 +44,7 @@ kernel cannot hold (above 1 − truncated) gives NaN; a field no ray reaches giv
 
 from __future__ import annotations
 
-import contextlib
 import math
-import warnings
 from typing import NamedTuple
 
 import equinox as eqx
@@ -132,20 +130,6 @@ def _check_common(lens, where, field, wavelength, method, reference, shape):
     return jnp.asarray(field, dtype), jnp.atleast_1d(jnp.asarray(wl, dtype))
 
 
-INNER_ANALYSES = ("spot_rays", "chief_ray", "psf")
-"""The analyses the samples come from: each re-checks the field, and its warning about
-radian-looking angles named it rather than the function the user called."""
-
-
-@contextlib.contextmanager
-def _inner_field_warnings_quiet():
-    """Silence the inner analyses' radian-field warnings: the caller has warned already."""
-    with warnings.catch_warnings():
-        warnings.filterwarnings("ignore", category=UserWarning,
-                                message=rf"({'|'.join(INNER_ANALYSES)}): field ")
-        yield
-
-
 def _metric(dxy, shape):
     """Distance of offsets ``[..., 2]`` from the reference: Euclidean or Chebyshev (square)."""
     if shape == "square":
@@ -212,14 +196,14 @@ def _samples(lens, field, where, *, wavelength, method, reference, shape,
             if pupil.ndim != 2:
                 raise ValueError(f"{where}: pupil must be [M, 2] normalised pupil points with "
                                  f"M >= 1, got shape {pupil.shape}")
-        with _inner_field_warnings_quiet():
+        with checks.fields_warned_by(where):  # spot_rays would warn under its name
             return _geometric_samples(lens, field, wls, reference=reference, shape=shape,
                                       pupil=pupil, depth=depth)
     if pixel_size is None:
         raise ValueError(f"{where}: method='diffraction' needs pixel_size (mm), the PSF grid "
                          f"pitch: a few per Airy radius 1.22·λ·F#")
     checks.number(pixel_size, "pixel_size", where, lo=0, lo_open=True, unit="mm")
-    with _inner_field_warnings_quiet():
+    with checks.fields_warned_by(where):  # psf and chief_ray would too
         return _diffraction_samples(lens, field, wls, reference=reference, shape=shape,
                                     depth=depth, pixel_size=pixel_size,
                                     kernel_size=int(kernel_size), pupil_side=int(pupil_side),

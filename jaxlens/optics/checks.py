@@ -12,6 +12,8 @@ optical glass model is meant for outside. Field angles are in degrees and must l
 
 from __future__ import annotations
 
+import contextlib
+import contextvars
 import dataclasses
 import math
 import re
@@ -645,10 +647,27 @@ about as fields given in radians (``np.radians([0, 10, 20])`` traced as 0.17° a
 RADIAN_FIELD_MIN_DEG = 5
 
 
+_FIELDS_WARNED_BY = contextvars.ContextVar("jaxlens_fields_warned_by", default=None)
+
+
+@contextlib.contextmanager
+def fields_warned_by(where: str):
+    """Within it, :func:`warn_if_radian_fields` is quiet: ``where``, the function the user
+    called, has warned about its fields already, and the analyses it calls with the same
+    fields would each warn again under their own names (``spot_rays`` for
+    ``encircled_energy``)."""
+    token = _FIELDS_WARNED_BY.set(where)
+    try:
+        yield
+    finally:
+        _FIELDS_WARNED_BY.reset(token)
+
+
 def warn_if_radian_fields(fields, where: str, arg: str = "fields") -> None:
     """Warn when concrete field angles look like radians (see ``RADIAN_FIELD_TOL``): a
-    warning, not a refusal, since 0.1745° may be meant. Traced angles pass."""
-    if is_traced(fields):
+    warning, not a refusal, since 0.1745° may be meant. Traced angles pass, and so do
+    fields inside :func:`fields_warned_by` (the caller has warned)."""
+    if is_traced(fields) or _FIELDS_WARNED_BY.get() is not None:
         return
     a = np.abs(np.asarray(fields, dtype=float)).ravel()
     a = a[a > 0]

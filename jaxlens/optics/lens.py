@@ -499,7 +499,7 @@ def check_castable(lens: Lens, dtype, where: str) -> None:
         return
     big = float(jnp.finfo(dtype).max)
     for path, x in jax.tree_util.tree_flatten_with_path(lens)[0]:
-        if (not eqx.is_array(x) or isinstance(x, jax.core.Tracer)
+        if (not eqx.is_array(x) or checks.is_traced(x)
                 or not jnp.issubdtype(x.dtype, jnp.floating)
                 or jnp.finfo(x.dtype).bits <= jnp.finfo(dtype).bits):
             continue
