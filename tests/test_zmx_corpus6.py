@@ -6,8 +6,12 @@ binary); most of the text ones were read in earlier rounds. New here: two Zemax 
 (``VERS 50203``) of a pulse-front-tilt bench for a spatial light modulator
 (krishk97/Zemax-DLA-SLM): a 600 lines/mm grating between coordinate breaks, fold mirrors
 with tilt pickups, toroidal cylinders, an empty grid-phase SLM, four and five configurations
-and a virtual object; and three lens forms of the generator round 9 read (a Cooke triplet,
-two achromats), which opened and agreed with optiland 0.6.3. The bench showed three classes:
+and a virtual object; two Zemax 2006 course files (Kraken-Optical-Simulator: a doublet
+pivoted 5° about a point by breaks with pickups and negative thicknesses, its entrance
+pupil PUPD's 33.86421929753 mm to 2e-13; a Galilean expander in afocal mode) and three lens
+forms of the generator round 9 read. Those five opened, lenient and strict, and trace the
+rays optiland 0.6.3 traces (to 7e-14 mm, tools/check_rays.py). The bench showed three
+classes:
 
 * ``PPAR 3 -1 1 0`` on the break after the grating: a parameter solve whose source is -1, no
   surface, so not a pickup (the reader refused the line: "source surface must be >= 0"). Its
