@@ -232,6 +232,8 @@ def select(f: ZmxFile, config: int | None, strict: bool) -> int:
                           f"({op.name} {op.param}: {value}); a jaxlens Lens holds no weights",
                           ZmxWarning, stacklevel=4)
             continue
+        if op.name == "PRAM" and _grid_phase(f, op.param):
+            continue  # a grid phase's parameters shape only its phase, read only when 0
         what = REASONS.get(op.name, "an operand jaxlens does not apply")
         raise ln.error(f"configuration {chosen} sets {op.name} {op.param} to {value} "
                        f"(configuration {active}, the surfaces': {before}); {op.name} is "
@@ -240,6 +242,16 @@ def select(f: ZmxFile, config: int | None, strict: bool) -> int:
     _curvature_pickups(f, curved)
     _thickness_pickups(f, thick)
     return chosen
+
+
+def _grid_phase(f: ZmxFile, number: int) -> bool:
+    """Whether surface ``number`` is a GRID_PHA. The reader takes one only where its phase
+    grid is all 0 (zmx_surfaces.flat_phase_grid; any other is refused), and a grid phase's
+    parameters (its diffraction order and the like) act on that phase alone, not on the
+    STANDARD shape under it (CURV, CONI), so a ``PRAM`` row of one changes nothing the lens
+    holds, whichever parameter it sets (Zemax 5.2's empty SLM, krishk97/Zemax-DLA-SLM, flips
+    its order between -1 and 0 across configurations)."""
+    return 0 <= number < len(f.surfs) and f.surfs[number].type == "GRID_PHA"
 
 
 def nominal_environment(f: ZmxFile, name: str) -> float:

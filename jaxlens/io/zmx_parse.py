@@ -33,6 +33,8 @@ SURFACE_KEYS = {
     "ELOB",
     "PPAR",
     "PZUP",
+    "GDAT",
+    "GARR",
 }
 SHAPES = {"SQAP": ("rect", False), "ELAP": ("ellipse", False), "SQOB": ("rect", True),
           "ELOB": ("ellipse", True)}  # keyword -> (Aperture shape, blocks)
@@ -112,6 +114,9 @@ class ZmxSurface:
     coni: float = 0.0
     parm: dict = field(default_factory=dict)  # index -> (value, line)
     ppar: dict = field(default_factory=dict)  # index -> its pickup line (PPAR)
+    psolve: dict = field(default_factory=dict)  # index -> a PPAR line reading no surface
+    gdat: ZmxLine | None = None  # a grid surface's size line (GDAT nx ny dx dy …)
+    garr: list = field(default_factory=list)  # its grid points (GARR i value d/dx d/dy d2 …)
     pzup: ZmxLine | None = None  # a thickness pickup (PZUP src scale offset column)
     xdat: dict = field(default_factory=dict)
     glas: ZmxLine | None = None
@@ -156,7 +161,8 @@ class ZmxFile:
     zemax: bool = False  # written by Zemax (a VERS line): every block is complete
 
 
-SINGLE_SURFACE_KEYS = frozenset("TYPE CURV DISZ CONI GLAS DIAM CLAP FLAP OBSC OBDC PZUP".split())
+SINGLE_SURFACE_KEYS = frozenset("TYPE CURV DISZ CONI GLAS DIAM CLAP FLAP OBSC OBDC PZUP "
+                                 "GDAT".split())
 """Keywords a SURF block holds once (PARM, XDAT and PPAR: once per index). Zemax writes each
 once; a second line (an edit or a merge gone wrong) replaced the first without a word."""
 INDEXED_SURFACE_KEYS = frozenset(("PARM", "XDAT", "PPAR"))
@@ -273,11 +279,14 @@ def surface_line(s: ZmxSurface, key: str, ln: ZmxLine) -> None:
         # PPAR n s scale offset column: PARM n = scale * (surface s's PARM n) + offset (a
         # pickup solve; OpticStudio files and Zemax 2006 ones alike). The file's PARM n holds
         # the solved value, so only a configuration that changes surface s re-solves it.
+        # A source below 0 reads no surface (Zemax 5.2's "PPAR 3 -1 1 0" on a coordinate
+        # break after a grating, whose PARM 3 holds a tilt of -3.5e-4°, the chief ray's
+        # diffracted direction: a solve of another kind, kept apart and reported).
         i = ln.int(1, "PPAR parameter index")
-        ln.int(2, "PPAR source surface", lo=0)
+        src = ln.int(2, "PPAR source surface")
         ln.float(3, "PPAR scale factor")
         ln.float(4, "PPAR offset")
-        s.ppar[i] = ln
+        (s.ppar if src >= 0 else s.psolve)[i] = ln
     elif key == "PZUP":
         # PZUP s scale offset column: the thickness picked up from surface s (Zemax 2009's
         # Nikon 105 mm: "PZUP 6.0 1 0 0" on a surface whose DISZ equals surface 6's). The
@@ -321,6 +330,13 @@ def surface_line(s: ZmxSurface, key: str, ln: ZmxLine) -> None:
         s.shaped.append(ln)
     elif key == "COMM":
         s.comment = ln.text.strip()[4:].strip()
+    elif key == "GDAT":
+        for i, what in ((1, "x"), (2, "y")):
+            ln.int(i, f"GDAT grid points along {what}", lo=1)
+        s.gdat = ln
+    elif key == "GARR":
+        ln.int(1, "GARR grid point index", lo=0)
+        s.garr.append(ln)
 
 
 TOP_KEYS = frozenset("VERS MODE NAME UNIT ENPD FNUM FLOA OBNA PUPD ENVD GCAT FTYP XFLN YFLN "

@@ -143,10 +143,13 @@ def _surface_of(s: ZmxSurface, unit: float) -> AbstractSurface:
         return zmx_surfaces.zernike_sag(s, unit, sd)
     if s.type == "COORDBRK":
         return _coordinate_break(s, unit)
+    if s.type == "GRID_PHA":
+        zmx_surfaces.flat_phase_grid(s)
+        return Standard(c=_arr(c), k=_arr(s.coni), semi_diameter=_arr(sd))
     raise where.error(
         f"surface type {s.type} is not supported (STANDARD, EVENASPH, ODDASPHE, XASPHERE, "
         f"XOSPHERE, XPOLYNOM, TOROIDAL, PARAXIAL, TILTSURF, BINARY_2, QED_TYPE, DGRATING, "
-        f"BICONICX, SZERNSAG, FZERNSAG, COORDBRK)"
+        f"BICONICX, SZERNSAG, FZERNSAG, COORDBRK; GRID_PHA whose grid is all 0)"
     )
 
 
@@ -389,6 +392,14 @@ def _check_structure(f: ZmxFile, text: str, strict: bool) -> None:
             and (lines[-1].split() or [""])[0] not in IGNORED_KEYWORDS):
         report(strict, f"{path}:{len(lines)}: the file does not end with a line break; it "
                         f"may be truncated: {lines[-1].strip()!r}")
+    for s in f.surfs:
+        for n, ln in sorted(s.psolve.items()):
+            v = s.parm.get(n, (0.0, None))[0]
+            report(strict, f"{path}:{ln.number}: {ln.text.strip()!r} on surface {s.number} is a "
+                            f"solve of its PARM {n} that reads no surface (source "
+                            f"{ln.tokens[2]}: not a pickup; jaxlens cannot tell which solve): "
+                            f"the file's PARM {n} = {v!r}, solved for the configuration saved, "
+                            f"is kept and not solved again")
     for ln in f.comments:
         report(strict, f"{path}:{ln.number}: a comment line ('!', as in a Zemax macro) "
                         f"skipped; OpticStudio writes none in a .zmx file, so the file was "
@@ -559,6 +570,12 @@ def _lens(f: ZmxFile, text: str, path: str, strict: bool, unknown_glass: str) ->
     if dist >= INFINITE_OBJECT_MM:
         dist = math.inf  # Zemax's convention; a finite 1e20 mm would need ray directions of
         # relative size 1e-20, which no float can aim
+    if dist < 0:  # Zemax 5.2's pulse-front-tilt bench (krishk97/Zemax-DLA-SLM): DISZ -1000
+        raise (obj.disz_line or obj.line).error(
+            f"a virtual object (object thickness {obj.disz:g} < 0: the object point lies "
+            f"{-obj.disz:g} lens units after surface 1, the beam converging on it) is not "
+            f"supported: a jaxlens Lens launches its rays from a real object point before "
+            f"surface 1 (object_distance > 0 mm) or from infinity, and has no virtual object")
     if not dist > 0:
         raise (obj.disz_line or obj.line).error("object distance must be > 0 or INFINITY")
     zmx_surfaces.check_object_plane(obj, dist)

@@ -270,6 +270,33 @@ def grating(s, sd: float, unit: float) -> Grating:
                    order=_arr(order), semi_diameter=_arr(sd))
 
 
+def flat_phase_grid(s) -> None:
+    """Check a GRID_PHA block (Zemax's grid phase: the STANDARD surface of its CURV and
+    CONI plus a phase interpolated on a grid, ``GDAT nx ny dx dy …`` and one ``GARR i phase
+    ∂φ/∂x ∂φ/∂y ∂²φ/∂x∂y …`` line a grid point) whose grid adds nothing: every point's
+    phase and derivatives 0, as an empty spatial light modulator is saved (Zemax 5.2's
+    ``START SLM (EMPTY)``, krishk97/Zemax-DLA-SLM). Its diffraction order and other
+    parameters (PARM) multiply that zero phase, so the surface is its STANDARD one. A grid
+    with any nonzero value, or without its GDAT line or its nx·ny points, is refused,
+    naming the line: jaxlens has no grid phase to hold it."""
+    where = s.type_line or s.line
+    if s.gdat is None:
+        raise where.error("GRID_PHA without its grid size (GDAT nx ny …): the phase grid "
+                          "is not in the file")
+    nx, ny = s.gdat.int(1, "GDAT grid points along x"), s.gdat.int(2, "GDAT grid points along y")
+    seen = sorted(ln.int(1, "GARR grid point index") for ln in s.garr)
+    if seen != list(range(nx * ny)):
+        raise s.gdat.error(f"GRID_PHA's {nx} × {ny} grid needs GARR lines 0..{nx * ny - 1} once "
+                           f"each, got {len(seen)} GARR lines")
+    for ln in s.garr:
+        vals = [ln.float(i, "GARR value") for i in range(2, min(len(ln.tokens), 6))]
+        if any(v != 0 for v in vals):
+            raise ln.error("GRID_PHA with a nonzero phase grid is not supported: jaxlens has "
+                           "no surface whose phase is interpolated on a grid (a grid of "
+                           "zeros, which adds no phase, reads as the STANDARD surface under "
+                           "it)")
+
+
 def toroidal(s, unit: float, sd: float) -> Toroidal:
     """A ``Toroidal`` from a TOROIDAL surface block (the reader's surface record)."""
     _parms(s, range(1, 10), "TOROIDAL")
