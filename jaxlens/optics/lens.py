@@ -331,9 +331,12 @@ class Lens(eqx.Module):
         self._check_shapes()
         self._check_values()
         if not 0 <= self.stop < n:
-            raise ValueError(f"Lens: stop index {self.stop} outside 0..{n - 1}")
-        if not 0 <= self.primary < self.wavelengths.shape[-1]:
-            raise ValueError(f"Lens: primary index {self.primary} outside the wavelengths")
+            raise ValueError(f"Lens: stop must be a surface index in [0, {n - 1}] (0-based), "
+                             f"got {self.stop}")
+        w = self.wavelengths.shape[-1]
+        if not 0 <= self.primary < w:  # before: "outside the wavelengths", no range
+            raise ValueError(f"Lens: primary must be an index into the {w} wavelengths, in "
+                             f"[0, {w - 1}] (0-based), got {self.primary}")
         self._check_mirrors_and_breaks()
         n = len(self.surfaces)
         seen = [o[0] for o in self.obscurations]
