@@ -137,7 +137,8 @@ def test_classical_refuses_a_recipe_it_would_ignore(classical, extra, why):
 
 def test_messages_name_the_range_and_the_argument(cooke, classical):
     """Main: "primary index 5 outside the wavelengths" (no range), "stop index 9 outside
-    0..5", os.fspath's TypeError naming nothing, and a seed overflow naming no option."""
+    0..5", os.fspath's TypeError naming nothing, a seed overflow naming no option, and
+    "Unknown material 'OKP5'" naming neither --materials nor the entry."""
     with pytest.raises(
         ValueError,
         match=r"Lens: primary must be an index into the 3 "
@@ -158,3 +159,5 @@ def test_messages_name_the_range_and_the_argument(cooke, classical):
     assert code == 2 and "--first-seed and --seeds" in err and "4294967295" in err, err
     code, err = classical("--seed-list", "4294967296")
     assert code == 2 and "(--seed-list, largest 4294967296" in err, err
+    code, err = classical("--elements", "4", "--materials", "E48R,OKP5,E48R,OKP4")
+    assert code == 2 and "--materials entry 2 'OKP5': Unknown material" in err, err

@@ -26,8 +26,10 @@ Gaps found and fixed:
 4. classical ``--recipe`` (which sets the polish's step count only) was dropped without a word
    with ``--polish none``, ``--polish-steps``, ``--loss image`` and ``--smoke``.
 5. Vague messages: ``Lens(primary=5)`` ("outside the wavelengths", no range),
-   ``Lens(stop=9)``; classical's seed overflow named no option; ``load_agf(5)``,
-   ``save(lens, 5)`` were os.fspath's TypeError naming nothing.
+   ``Lens(stop=9)``; classical's seed overflow named no option, and an unknown
+   ``--materials`` entry ("Unknown material 'OKP5'") neither the option nor the entry
+   (``DesignSpec``: "materials[1] 'OKP5': …"); ``load_agf(5)``, ``save(lens, 5)`` were
+   os.fspath's TypeError naming nothing.
 
 Before (base e5a4dbd, an archive) and after (branch probe36a), the same probes,
 ``PYTHONPATH=<tree> python tools/audit36a_probe.py`` from the tree's root: see the report
@@ -473,8 +475,16 @@ def classical_cli():
         "4294967295",
     )
     probe(
+        "classical --materials OKP5 (4 elements: a typo)",
+        c("--elements", "4", "--materials", "E48R,OKP5,E48R,OKP4"),
+        "--materials entry 2",
+        "OKP5",
+        "OKP4",
+    )
+    probe(
         "classical --materials MIRROR,… (4 elements)",
         c("--elements", "4", "--materials", "MIRROR,OKP4,E48R,OKP4"),
+        "--materials entry 1",
         "MIRROR",
     )
     probe(
