@@ -227,9 +227,11 @@ def _check_scalar_fields(s, arg: str) -> None:
     accept a leading batch axis (the tracer stacks them), but a lens of them was traced as
     a broadcast of every ray against every batch entry: ``Sphere(semi_diameter=[5, 6])``
     gave "le got incompatible shapes" from inside the tracer, a [2] curvature the same."""
+    own = type(s).__module__.startswith("jaxlens.")  # a user's surface: its base numbers
     for fld in dataclasses.fields(s):
         v = getattr(s, fld.name, None)
-        if fld.metadata.get("static") or not hasattr(v, "ndim"):
+        if (fld.metadata.get("static") or not hasattr(v, "ndim")
+                or not (own or fld.name in ("c", "k", "semi_diameter"))):
             continue
         want = 1 if fld.name in SURFACE_ARRAYS else 0
         if v.ndim != want:
