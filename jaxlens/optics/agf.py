@@ -24,9 +24,7 @@ from .materials import (
     EXTENDED2_POWERS,
     EXTENDED3_POWERS,
     EXTENDED_POWERS,
-    LAMBDA_C,
     LAMBDA_D,
-    LAMBDA_F,
     MAX_ND,
     AbstractMaterial,
     Conrady,
@@ -38,7 +36,6 @@ from .materials import (
     Sellmeier,
     Sellmeier2,
     Sellmeier4,
-    abbe_number,
 )
 
 __all__ = ["FORMULA_NAMES", "ND_TOLERANCE", "NO_D_LINE_DATA", "CatalogMaterial", "GlassRecord",
@@ -67,11 +64,6 @@ NO_D_LINE_DATA = ((1.0, 0.0), (0.0, 0.0))
 ND_TOLERANCE = 1e-3
 """Largest accepted gap between an AGF record's nd and its dispersion formula's index at the
 d line (the shipped catalogs' largest is 3.8e-5)."""
-
-VD_TOLERANCE = 0.02
-"""Largest accepted relative gap between an AGF record's Vd and the Abbe number its
-dispersion formula gives (checked where its LD range holds the F and C lines; the shipped
-catalogs' largest is 0.33%, SUMITA K-LASFN21)."""
 
 
 @dataclasses.dataclass(frozen=True)
@@ -131,24 +123,7 @@ class GlassRecord:
         checks.material(m, probe, f"{self.source}: {where}" if self.source else where)
         if probe == LAMBDA_D and (self.nd, self.vd) not in NO_D_LINE_DATA:
             self._check_nd(m, where)
-            if self.vd > 0 and lo <= LAMBDA_F and LAMBDA_C <= hi:
-                self._check_vd(m, where)
         return m
-
-    def _check_vd(self, m: CatalogMaterial, where: str) -> None:
-        """The NM record's Vd must be the formula's Abbe number (as its nd, the formula's
-        index): a Vd of another glass went unseen into ``glass_info``, the nearest-glass
-        suggestions and the GLAS lines of saved files (``VD_TOLERANCE``)."""
-        with jax.ensure_compile_time_eval():
-            vd = float(abbe_number(m))
-        if not abs(vd - self.vd) <= VD_TOLERANCE * self.vd:
-            at = f"{self.source}: " if self.source else ""
-            raise ValueError(
-                f"{at}{where}: its NM record gives Vd {self.vd:g}, but its CD coefficients "
-                f"with formula {self.formula} ({FORMULA_NAMES.get(self.formula, '?')}) give "
-                f"Vd = {vd:.5g} (from the d, F and C lines, {LAMBDA_D}, {LAMBDA_F} and "
-                f"{LAMBDA_C} µm); the record disagrees with itself by more than "
-                f"{VD_TOLERANCE:.0%} (a Vd of another glass, or garbled coefficients?)")
 
     def _check_nd(self, m: CatalogMaterial, where: str) -> None:
         """The NM record's nd must be what the CD record's formula gives at the d line: a
