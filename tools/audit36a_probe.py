@@ -34,8 +34,20 @@ Gaps found and fixed:
    os.fspath's TypeError naming nothing.
 
 Before (base e5a4dbd, an archive) and after (branch probe36a), the same probes,
-``PYTHONPATH=<tree> python tools/audit36a_probe.py`` from the tree's root: see the report
-(the counts are in the table's last line).
+``PYTHONPATH=<tree> python tools/audit36a_probe.py`` from the tree's root, 98 probes, about
+3 minutes each way on 2 busy cores:
+    before: clear error: 50, ok: 18, silent wrong: 17, vague error: 13
+    after:  clear error: 78, ok: 18, silent wrong: 2 (the AGF Vd records, item 3)
+Four of the 13 vague errors were JAX shape errors from inside the tracer ("le got
+incompatible shapes", item 1), two os.fspath's TypeError (item 5): crashes in all but name
+(``probe_table`` counts any TypeError as an error).
+
+The other 68 probes, clear or ok before and after (each as its own row in the table), are
+new variants of the areas above: Lens values of the wrong type or range, material
+constructors, AGF records (LD, CD, formula numbers), ``.zmx`` lines (non-finite numbers, a
+SURF or WAVM numbering gap, STOP or MIRROR on the image, CR-only and UTF-16 files, unknown
+keywords and short YFLN lines warned with their line), JSON lens files (repeated keys, near
+misses, units, nm given as µm), classical and edof options, and trace/psf/Rays arguments.
 """
 
 import json
