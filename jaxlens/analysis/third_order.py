@@ -265,6 +265,10 @@ def seidel(lens: Lens, *, field=None, wavelength=None) -> Seidel:
         raise ValueError(f"{where}: wavelength must be one value (µm), got shape "
                          f"{jnp.shape(wl)}")
     wl = jnp.asarray(checks.wavelengths(lens, wl, where), lens.epd.dtype)
+    if not checks.is_traced((wl, lens.wavelengths)):  # colour reads the lens's too
+        # A formula material of index 0.71 (or NaN) there gave plausible sums, or NaN.
+        checks.material_indices(lens, np.unique(np.append(wl, lens.wavelengths)), where,
+                                "wavelength (or the lens's wavelengths)", intact=True)
     fld = _field(lens, field, where)
     out = _seidel(lens, fld, wl)
     for i, kind, odd in traced_odd:

@@ -295,7 +295,12 @@ class DesignSpec:
         # Materials are known here: refuse wavelengths outside their data (or given in nm)
         # with the Lens's own check, on the lens's sequence of media (air after the stop
         # and after each element).
-        media = [x for m in names for x in (get_material(m), None)]
+        media = []
+        for i, m in enumerate(names):
+            try:  # before: "Unknown material 'OKP5'" named neither the field nor its entry
+                media += [get_material(m), None]
+            except ValueError as e:
+                raise ValueError(f"{where}: materials[{i}] {m!r}: {e}") from None
         for i, m in enumerate(media[::2]):  # "" and "AIR" name air: an element without power
             if isinstance(m, Air):
                 raise ValueError(f"{where}: materials[{i}] {names[i]!r} is air; each element "

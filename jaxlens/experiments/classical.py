@@ -276,8 +276,12 @@ def check_args(args, given=None) -> None:
     top = args.first_seed + args.ablation_seeds - 1 if args.ablation else max(_seeds(args))
     last = top * args.population + args.population - 1
     if last > MAX_SEED:  # design() refused it once the run folder existed
-        raise ValueError(f"{w}: the seeds (with --population {args.population}) draw random "
-                         f"starts up to {last}; seeds must keep them in [0, {MAX_SEED}]")
+        given_by = ("--seed-list" if args.seed_list is not None and not args.ablation else
+                    "--first-seed and --ablation-seeds" if args.ablation else
+                    "--first-seed and --seeds")
+        raise ValueError(f"{w}: the seeds ({given_by}, largest {top}; with --population "
+                         f"{args.population}) draw random starts up to {last}; seeds must "
+                         f"keep them in [0, {MAX_SEED}] (seed × --population + start)")
     try:  # checked even when unused (--select-materials fixed): a typo must not go unseen
         CatalogRegion.of(_catalogs(args))
     except ValueError as e:
@@ -310,11 +314,16 @@ def _no_ignored_options(args, w: str, given=None) -> None:
         (args.no_curriculum and not args.ablation, "--no-curriculum (no sine path)",
          ("fov_start", "fnum_start")),
         (args.seed_list is not None, "--seed-list", ("seeds", "first_seed")),
-        (args.smoke and not args.ablation, "--smoke", ("seeds", "steps", "polish_steps")),
-        (args.polish == "none", "--polish none", ("polish_steps",)),
+        # --recipe sets the polish's steps only (RECIPES): with no polish, or its steps
+        # given, the recipe asked for was dropped ("--recipe strong --polish none").
+        (args.smoke and not args.ablation, "--smoke", ("seeds", "steps", "polish_steps",
+                                                        "recipe")),
+        (args.polish == "none", "--polish none", ("polish_steps", "recipe")),
+        (args.polish_steps is not None, "--polish-steps (the recipe's only setting)",
+         ("recipe",)),
         # the catalogs are read only when materials are chosen (continuous or search)
         (args.select_materials == "fixed", "--select-materials fixed", ("material_catalogs",)),
-        (args.loss == "image", "--loss image", ("polish_steps",)),
+        (args.loss == "image", "--loss image", ("polish_steps", "recipe")),
         (not args.ablation, "no --ablation", ("columns", "ablation_seeds", "ablation_out")),
     )
     for active, why, names in rules:

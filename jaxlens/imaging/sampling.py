@@ -215,6 +215,8 @@ def _checked_wavelength(lens: Lens, wavelength, where: str):
     wl = lens.primary_wavelength if wavelength is None else jnp.asarray(wavelength)
     if not checks.is_traced(wl):
         checks.wavelengths(lens, wl, where)
+        # A formula material of index 0.71 there launched rays a trace took as valid.
+        checks.material_indices(lens, wl, where)
     return wl
 
 

@@ -129,6 +129,9 @@ def save(lens: Lens, path: str | os.PathLike, **options) -> list[str]:
     """
     if not isinstance(lens, Lens):  # else an AttributeError from deep in the writer
         raise TypeError(f"save: lens must be a jaxlens Lens, got {type(lens).__name__}")
+    if not isinstance(path, str | os.PathLike):  # was os.fspath's TypeError, naming nothing
+        raise TypeError(f"save: path must be a file name (str or os.PathLike), got "
+                        f"{type(path).__name__} {path!r}")
     path = os.fspath(path)
     if os.path.isdir(path):  # was "has extension ''", or an IsADirectoryError after the checks
         raise ValueError(f"save: {path!r} is a folder; give a file name ending in .json or "

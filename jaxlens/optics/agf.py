@@ -441,6 +441,9 @@ unknown; fewer, as other readers take them, are read): more is two records run t
 
 def read_records(path: str | os.PathLike, catalog: str | None = None) -> list[GlassRecord]:
     """Records of an AGF file; the catalog name defaults to the upper-case file stem."""
+    if not isinstance(path, str | os.PathLike):  # was os.fspath's TypeError, naming nothing
+        raise TypeError(f"load_agf: path must be an .agf file name (str or os.PathLike), got "
+                        f"{type(path).__name__} {path!r}")
     path = os.fspath(path)
     name = catalog or os.path.splitext(os.path.basename(path))[0].upper()
     if os.path.isdir(path):  # open() raised IsADirectoryError (a traceback, not a message)

@@ -592,13 +592,16 @@ def lens_intact(lens, where: str) -> None:
                           f"dataclasses.replace to have them run)") from None
 
 
-def material_indices(lens, wl, where: str, arg: str = "wavelength") -> None:
+def material_indices(lens, wl, where: str, arg: str = "wavelength", *,
+                     intact: bool = False) -> None:
     """Refuse materials whose index at the (concrete) wavelengths is not finite or below 1,
     after the lens's own checks (:func:`lens_intact`: an analysis's input checks are the
-    one place a lens edited with ``eqx.tree_at`` is seen before it is traced)."""
+    one place a lens edited with ``eqx.tree_at`` is seen before it is traced; ``intact``:
+    the caller has run them)."""
     if is_traced(wl) or is_traced(lens):
         return
-    lens_intact(lens, where)
+    if not intact:
+        lens_intact(lens, where)
     w = np.atleast_1d(np.asarray(wl, dtype=float))
     for m, what in _lens_materials(lens):
         material(m, w, f"{where}: {_label(m, what)}", arg=arg)

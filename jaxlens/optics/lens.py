@@ -94,6 +94,7 @@ every number is an array so ``jax.grad`` reaches it.
 from __future__ import annotations
 
 import copy
+import dataclasses
 
 import equinox as eqx
 import jax
@@ -216,6 +217,31 @@ def _floats(arg: str, unit: str, where: str = "Lens", **default):
     return checks.float_field(arg, where, unit, **default)
 
 
+SURFACE_ARRAYS = ("coeffs", "odd_x", "odd_y", "zernike", "phase_coeffs")
+"""The surface fields that hold one value per polynomial term (1-D); every other numeric
+field of a surface in a Lens is one number (0-d)."""
+
+
+def _check_scalar_fields(s, arg: str) -> None:
+    """A surface of a Lens holds one surface: scalar parameters, 1-D term arrays. Surfaces
+    accept a leading batch axis (the tracer stacks them), but a lens of them was traced as
+    a broadcast of every ray against every batch entry: ``Sphere(semi_diameter=[5, 6])``
+    gave "le got incompatible shapes" from inside the tracer, a [2] curvature the same."""
+    own = type(s).__module__.startswith("jaxlens.")  # a user's surface: its base numbers
+    for fld in dataclasses.fields(s):
+        v = getattr(s, fld.name, None)
+        if (fld.metadata.get("static") or not hasattr(v, "ndim")
+                or not (own or fld.name in ("c", "k", "semi_diameter"))):
+            continue
+        want = 1 if fld.name in SURFACE_ARRAYS else 0
+        if v.ndim != want:
+            raise ValueError(
+                f"Lens: {arg} ({type(s).__name__}): {fld.name} must be "
+                f"{'a 1-D array of coefficients' if want else 'one number (a 0-d array)'}, "
+                f"got shape {tuple(v.shape)}; a Lens holds one value per surface parameter: "
+                f"build one Lens per set of values (or jax.vmap a function that builds it)")
+
+
 class Sensor(eqx.Module):
     """A rectangular pixel sensor centred on the axis at the image surface.
 
@@ -307,9 +333,12 @@ class Lens(eqx.Module):
         self._check_shapes()
         self._check_values()
         if not 0 <= self.stop < n:
-            raise ValueError(f"Lens: stop index {self.stop} outside 0..{n - 1}")
-        if not 0 <= self.primary < self.wavelengths.shape[-1]:
-            raise ValueError(f"Lens: primary index {self.primary} outside the wavelengths")
+            raise ValueError(f"Lens: stop must be a surface index in [0, {n - 1}] (0-based), "
+                             f"got {self.stop}")
+        w = self.wavelengths.shape[-1]
+        if not 0 <= self.primary < w:  # before: "outside the wavelengths", no range
+            raise ValueError(f"Lens: primary must be an index into the {w} wavelengths, in "
+                             f"[0, {w - 1}] (0-based), got {self.primary}")
         self._check_mirrors_and_breaks()
         n = len(self.surfaces)
         seen = [o[0] for o in self.obscurations]
@@ -355,6 +384,14 @@ class Lens(eqx.Module):
 
     def _check_shapes(self):
         """Shapes are known even under jit; a wrong one would be reshaped into wrong data."""
+        if self.thickness.ndim != 1:  # [2, n] passed: efl gave n numbers, trace a shape error
+            raise ValueError(f"Lens: thickness must be a 1-D array [n] of the gaps after each "
+                             f"surface (mm), got shape {self.thickness.shape}; a Lens is one "
+                             f"lens: build one per set of values (or jax.vmap a function that "
+                             f"builds it)")
+        for arg, s in [(f"surfaces[{i}]", s) for i, s in enumerate(self.surfaces)] + [
+                ("image", self.image)]:
+            _check_scalar_fields(s, arg)
         f = self.fields
         if f.size == 0 or f.ndim > 2 or (f.ndim == 2 and f.shape[1] != 2):
             raise ValueError(f"Lens: fields must be angles θy of shape [F] or [θx, θy] pairs "

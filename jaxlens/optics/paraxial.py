@@ -264,9 +264,13 @@ def _wavelength(lens: Lens, wavelength, where: str):
     lens's materials (an error_if under jit, so these stay usable in jitted losses)."""
     _lens_and_size(lens, wavelength, where)
     checks.lens_intact(lens, where)  # edited with eqx.tree_at: a NaN curvature gave NaN
-    if wavelength is None:
-        return lens.primary_wavelength
-    return checks.wavelengths(lens, wavelength, where)
+    wl = lens.primary_wavelength if wavelength is None else checks.wavelengths(
+        lens, wavelength, where)
+    # A formula material whose index there is below 1 or not finite (Schott coefficients
+    # that give n = 0.71, or n² < 0) gave a plausible focal length, or NaN, without a word.
+    checks.material_indices(lens, wl, where, "wavelength" if wavelength is not None else
+                            "the lens's primary wavelength", intact=True)
+    return wl
 
 
 def paraxial_chief_ray(lens: Lens, field_deg, wavelength=None):
