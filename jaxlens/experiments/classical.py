@@ -398,15 +398,16 @@ def _seeds(args) -> list[int]:
     return list(range(args.first_seed, args.first_seed + n))
 
 
-def finished_lens(result, i: int, spec):
+def finished_lens(result, i: int, spec, grid: int = 16):
     """Design i as a float64 lens for export: each asphere on its closest conic (``optics.
     rebase``: the sag to 1e-8 mm, for tools that start Newton at the base conic), then that
     lens's clear semi-diameters (set only before it, they clipped rim rays the refit moved;
-    ``classical_export``: with a margin), and the notes that say how the run evaluates it."""
+    ``classical_export``: with a margin), and the notes that say how the run evaluates it
+    (on a ``grid`` × ``grid`` field grid)."""
     from jaxlens.optics.rebase import rebase_conics
 
     lens = with_clear_apertures(rebase_conics(with_clear_apertures(result.lens(i), spec)), spec)
-    return dataclasses.replace(lens, description=evaluation_notes(spec))
+    return dataclasses.replace(lens, description=evaluation_notes(spec, grid))
 
 
 def write_design_outputs(lens, ev, spec, out, *, history=None, plots=True, render=True,
@@ -502,25 +503,27 @@ def _design_into(args, argv, spec, config, seeds, folder, out, t_start) -> dict:
                                image_loss=args.loss == "image", on_nonfinite="drop")
     t_design = time.perf_counter() - t0
     t0 = time.perf_counter()
-    evals = [evaluate.evaluate(result.lens(i), spec, n=4 if args.smoke else 16)
+    grid = 4 if args.smoke else 16
+    evals = [evaluate.evaluate(result.lens(i), spec, n=grid)
              for i in range(len(seeds))]
     t_eval = time.perf_counter() - t0
     os.makedirs(os.path.join(out, "seeds"), exist_ok=True)
     import jaxlens
 
     for i, s in enumerate(seeds):
-        jaxlens.save(finished_lens(result, i, spec), os.path.join(out, "seeds", f"seed_{s}.json"))
+        jaxlens.save(finished_lens(result, i, spec, grid),
+                     os.path.join(out, "seeds", f"seed_{s}.json"))
     failed = result.history.failed
     # A start that went non-finite is frozen at its last finite state; it never wins.
     order = sorted(range(len(seeds)), key=lambda i: (seeds[i] in failed, not evals[i].valid,
                                                      evals[i].rms_mean_um))
     best = order[0]
-    lens = finished_lens(result, best, spec)
+    lens = finished_lens(result, best, spec, grid)
     # The summary's numbers are the exported lens's (lens.json, lens.zmx), which the conic
     # rebase moved from the design's by up to 1e-8 mm in sag (the chief ray by 2e-7 mm):
     # every number of "best" is then what a re-read of lens.zmx gives. per_seed keeps the
     # designs' own evaluations, which ranked them.
-    exported = evaluate.evaluate(lens, spec, n=4 if args.smoke else 16)
+    exported = evaluate.evaluate(lens, spec, n=grid)
     files = write_design_outputs(lens, exported, spec, out, history=result.history,
                                  plots=not args.no_plots, render=not args.no_render,
                                  smoke=args.smoke, log=log)
@@ -556,7 +559,11 @@ def _design_into(args, argv, spec, config, seeds, folder, out, t_start) -> dict:
         "seeds": seeds, "best_seed": seeds[best],
         "best": {**ev.summary(), "rms_min_um": float(np.min(ev.rms_um)),
                  "rms_on_axis_um": on_axis_um,
-                 "rms_median_um": float(np.median(ev.rms_um)), "n_fields": int(ev.rms_um.size)},
+                 "rms_median_um": float(np.median(ev.rms_um)), "n_fields": int(ev.rms_um.size),
+                 # per field of the grid, (θx, θy) deg: what a re-evaluation compares field by field
+                 "field_angles_deg": evaluate.sensor_field_grid(spec, grid)[0].tolist(),
+                 "rms_um_per_field": ev.rms_um.tolist(),
+                 "valid_fraction_per_field": ev.valid_fraction.tolist()},
         "material_selection": {
             "mode": config.materials,
             "catalogs": list(config.material_catalogs) if config.materials != "fixed" else None,

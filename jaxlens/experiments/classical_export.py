@@ -4,16 +4,20 @@ run evaluated it (``Lens.description``: NOTE lines of lens.zmx, "description" of
 
 Clear apertures. Every surface but an entrance-pupil stop gets the largest height of the
 evaluation's rays that pass the lens (the n × n sensor grid of fields, the 21 × 21 pupil grid,
-the pupil rim, the spec's three wavelengths), times ``1 + CLEAR_APERTURE_MARGIN``. Measured
-(round 36d, the smoke designs and experiments/classical/designs/seed_1.zmx): an index change
-of 1e-5 on every glass (or with alternating signs) moves a clear semi-diameter by at most
-1.0e-5 of itself (a relative change of about 1 per unit of index), 1e-3 by at most 1.1e-3;
-optiland 0.6.3's own CDGM data (2e-6 from jaxlens's) lost 20 rim rays of a CDGM smoke design
+the pupil rim, the spec's three wavelengths), times ``1 + CLEAR_APERTURE_MARGIN``.
+
+Measured (round 36d, every glass's index moved by ±1e-5, all alike or alternating, and by
+±1e-3): a clear semi-diameter moves by up to 1.0 × the index change (relative) on the
+SCHOTT/CDGM smoke design with the stop in front, and by up to 2.9 × on a smoke design with the
+stop behind one element (1.9 × at 1e-3). optiland 0.6.3's own CDGM data (H-F51 2e-6 from
+jaxlens's) lost 20 rim rays of the former (of its 4 × 4 grid's and the axis's 16 167 rays)
 with the former margin of 1e-9. The margin, 1e-3 (at most 3.3 µm on these lenses), holds
-index differences up to 1e-3 (glass-data versions differ by 1e-6 … 1e-4; E48R's nd in optiland
-and Zemax's ZEON catalog by 6e-4). Ray aiming is not covered: the run aims at the paraxial
-entrance pupil (Zemax's ray aiming "Off", optiland's default "paraxial"), as the notes say;
-with the stop in front (the default spec) real aiming gives the same rays.
+index differences up to 3e-4: glass-data versions differ by 1e-6 … 1e-4 (optiland's plastics
+differ more, E48R's nd by 6e-4 from Zemax's ZEON data, which jaxlens uses: the NOTE lines
+give jaxlens's indices). Ray aiming is not covered: the run aims at the paraxial entrance
+pupil (Zemax's ray aiming "Off", optiland's default "paraxial"), as the notes say. With the
+stop in front (the default spec) real aiming traces the same rays; behind an element it
+moved a clear semi-diameter by 12 %.
 
 The stop in front of every element (``stop == 0``) is the entrance pupil: its semi-diameter
 is EPD/2 (to 1e-9, the rim rays' rounding), which a tool that floats the aperture by stop
@@ -38,19 +42,22 @@ STOP_ROUNDING = 1e-9
 """Relative margin of an entrance-pupil stop's EPD/2 (its rim rays cross at EPD/2 to rounding)."""
 
 
-def evaluation_notes(spec, margin: float = CLEAR_APERTURE_MARGIN) -> str:
+def evaluation_notes(spec, grid: int = 16, margin: float = CLEAR_APERTURE_MARGIN) -> str:
     """The lines that lens.zmx (NOTE) and lens.json ("description") carry: how the run that
-    wrote them evaluated the design, so that another tool's re-evaluation matches."""
+    wrote them evaluated the design (on a ``grid`` × ``grid`` field grid), so that another
+    tool's re-evaluation matches."""
     h, w = spec.sensor_size
     return "\n".join(
         [
             "jaxlens classical run: summary.json's numbers are of this file, evaluated as follows.",
-            f"Fields: a 16 x 16 grid over the {w:.6g} x {h:.6g} mm sensor (linspace(-1, 1, 16) "
-            f"per side), (thetax, thetay) with tan = sensor position / {spec.focal_length:.10g} "
+            f"Fields: a {grid} x {grid} grid over the {w:.6g} x {h:.6g} mm sensor "
+            f"(linspace(-1, 1, {grid}) per side; summary.json best.field_angles_deg), "
+            f"(thetax, thetay) with tan = sensor position / {spec.focal_length:.10g} "
             "mm; the YFLN fields here are the design fields along y (the largest, half the "
             "diagonal FoV, lies beyond the sensor's y edge: its chief ray only is evaluated).",
             "Rays: aimed at the paraxial entrance pupil (ray aiming off); 21 x 21 square pupil "
-            "grid inside the unit circle (317 rays), WAVM 1..3 weighted equally; RMS = radius "
+            f"grid inside the unit circle (317 rays), WAVM 1..{len(spec.wavelengths)} weighted "
+            "equally; RMS = radius "
             "about the centroid of all wavelengths' rays pooled.",
             "Image surface: the sensor, at the last DISZ (no refocus); EFL, F/# = EFL/ENPD and "
             "BFL paraxial at the primary wavelength (PWAV).",
