@@ -49,7 +49,9 @@ and the on-axis RMS. ``RUN/lens.zmx`` is re-read by jaxlens (``jaxlens.design.ev
 run's own code and definitions) and by optiland (with its glass data, and with jaxlens's
 media), each at the same fields, rebuilt from the spec in summary.json; every number's
 relative difference from the summary's, and the grid's largest per-field RMS difference
-between jaxlens's re-read and optiland, are printed.
+between jaxlens's re-read and optiland, are printed, with the grid's and the axis's rays each
+loses (``rays_lost``: jaxlens's re-read, optiland, optiland with jaxlens's media; a ray only
+optiland loses is a clear aperture its glass data or aiming moved a rim ray past).
 
 Run it with an interpreter that has optiland 0.6.3 and this checkout's jaxlens:
 
