@@ -75,7 +75,9 @@ def test_summary_numbers_are_the_exported_lens_numbers(smoke_run):
 
     angles, _ = sensor_field_grid(DesignSpec(**s["spec"]), math.isqrt(b["n_fields"]))
     assert b["field_angles_deg"] == angles.tolist()
-    assert b["rms_um_per_field"] == ev.rms_um.tolist()
+    # (to 1e-12: a field's RMS of the file re-read differed in the last bit, 179.44069685502370
+    # against 179.44069685502373 µm, where the mean, largest and median were equal)
+    np.testing.assert_allclose(b["rms_um_per_field"], ev.rms_um, rtol=1e-12)
     assert b["valid_fraction_per_field"] == ev.valid_fraction.tolist()
     assert "ray aiming off" in s["convention"]
     with open(os.path.join(out, "lens.zmx"), encoding="utf-8") as f:

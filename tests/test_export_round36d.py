@@ -4,8 +4,9 @@ run evaluated the file.
 
 * Every non-stop clear semi-diameter was the largest evaluated ray height × (1 + 1e-9): a
   re-evaluator with other glass data moves the rim rays past it (optiland 0.6.3's CDGM data,
-  2e-6 from jaxlens's, lost 20 rim rays of a CDGM smoke design). The margin is now 1e-3 (the
-  rim heights move by about 1 × the index change, relative).
+  2e-6 from jaxlens's, lost 20 rim rays of a CDGM smoke design; its plastics data, 6e-4 off,
+  16 of experiments/classical/designs/seed_1.zmx's). The margin is now 1e-2 (the rim heights
+  move by up to 10.6 × the index change, relative; classical_export's doc has the figures).
 * A stop behind elements got EPD/2, a size in the entrance pupil's space: behind a negative
   front element the export clipped 20 % of the evaluated rays. It is now sized by its rays;
   the stop in front keeps EPD/2 (the entrance pupil, to 1e-9).
@@ -105,7 +106,7 @@ def test_margin_keeps_the_rim_rays_under_another_tools_index(tmp_path, corners):
     lens = _lens(tmp_path, stop=2)
     out = classical_export.with_clear_apertures(lens, SPEC)
     assert [_lost(out, corners, dn) for dn in (0.0, 1e-5, -1e-5)] == [0, 0, 0]
-    assert classical_export.CLEAR_APERTURE_MARGIN == 1e-3
+    assert classical_export.CLEAR_APERTURE_MARGIN == 1e-2
     exact = classical_export.with_clear_apertures(lens, SPEC, margin=1e-9)
     assert _lost(exact, corners) == 0
     assert max(_lost(exact, corners, dn) for dn in (1e-5, -1e-5)) > 0
@@ -113,7 +114,7 @@ def test_margin_keeps_the_rim_rays_under_another_tools_index(tmp_path, corners):
         float(a.semi_diameter / b.semi_diameter)
         for a, b in zip(out.surfaces, exact.surfaces, strict=True)
     ]
-    np.testing.assert_allclose(ratio, (1 + 1e-3) / (1 + 1e-9), rtol=1e-12)
+    np.testing.assert_allclose(ratio, (1 + 1e-2) / (1 + 1e-9), rtol=1e-12)
 
 
 def test_a_stop_behind_elements_is_sized_by_its_rays(tmp_path, corners):
@@ -157,7 +158,11 @@ def test_a_margin_that_would_cross_surfaces_is_cut(tmp_path, monkeypatch):
         lambda x: x.surfaces,
         exact,
         tuple(
-            eqx.tree_at(lambda s: s.semi_diameter, s, s.semi_diameter * (1 + 1e-3))
+            eqx.tree_at(
+                lambda s: s.semi_diameter,
+                s,
+                s.semi_diameter * (1 + classical_export.CLEAR_APERTURE_MARGIN),
+            )
             for s in exact.surfaces
         ),
     )
@@ -178,7 +183,7 @@ def test_the_export_says_how_the_run_evaluated_it(tmp_path):
         "16 x 16 grid",
         f"{spec.focal_length:.10g} mm",
         f"thetay = {spec.half_fov:.10g} deg",
-        "x (1 + 0.001)",
+        "x (1 + 0.01)",
         "ENPD/2",
         "weighted equally",
         "no refocus",
