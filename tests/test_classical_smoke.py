@@ -70,6 +70,19 @@ def test_summary_numbers_are_the_exported_lens_numbers(smoke_run):
         assert b[k] == getattr(ev, k), k
     assert b["rms_min_um"] == float(np.min(ev.rms_um))
     assert b["rms_median_um"] == float(np.median(ev.rms_um))
+    # Round 36d: per field too, with the fields' angles, and the notes in both files.
+    from jaxlens.design.evaluate import sensor_field_grid
+
+    angles, _ = sensor_field_grid(DesignSpec(**s["spec"]), math.isqrt(b["n_fields"]))
+    assert b["field_angles_deg"] == angles.tolist()
+    # (to 1e-12: a field's RMS of the file re-read differed in the last bit, 179.44069685502370
+    # against 179.44069685502373 µm, where the mean, largest and median were equal)
+    np.testing.assert_allclose(b["rms_um_per_field"], ev.rms_um, rtol=1e-12)
+    assert b["valid_fraction_per_field"] == ev.valid_fraction.tolist()
+    assert "ray aiming off" in s["convention"]
+    with open(os.path.join(out, "lens.zmx"), encoding="utf-8") as f:
+        assert "NOTE 0 Rays: aimed at the paraxial entrance pupil (ray aiming off)" in f.read()
+    assert "ray aiming off" in jaxlens.load(os.path.join(out, "lens.json")).description
 
 
 def test_cli_smoke_selects_catalog_materials(smoke_run):

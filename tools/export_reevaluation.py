@@ -49,7 +49,9 @@ and the on-axis RMS. ``RUN/lens.zmx`` is re-read by jaxlens (``jaxlens.design.ev
 run's own code and definitions) and by optiland (with its glass data, and with jaxlens's
 media), each at the same fields, rebuilt from the spec in summary.json; every number's
 relative difference from the summary's, and the grid's largest per-field RMS difference
-between jaxlens's re-read and optiland, are printed.
+between jaxlens's re-read and optiland, are printed, with the grid's and the axis's rays each
+loses (``rays_lost``: jaxlens's re-read, optiland, optiland with jaxlens's media; a ray only
+optiland loses is a clear aperture its glass data or aiming moved a rim ray past).
 
 Run it with an interpreter that has optiland 0.6.3 and this checkout's jaxlens:
 
@@ -601,12 +603,15 @@ def reread_numbers(zmx: str, spec, n: int) -> tuple[dict, np.ndarray]:
     """The classical run's numbers of its exported ``lens.zmx`` re-read by ``jaxlens.load``:
     ``jaxlens.design.evaluate.evaluate`` (the run's own definitions: the n × n sensor grid of
     (θx, θy) fields, pooled F, d, C RMS; paraxial EFL, F/#, BFL, track; the chief ray at
-    half the diagonal FoV) and the on-axis pooled RMS (``spots.rms_spot`` at (0, 0))."""
+    half the diagonal FoV) and the on-axis pooled RMS (``spots.rms_spot`` at (0, 0));
+    ``rays_lost``: the grid's and the axis's rays (317 a field and wavelength) that jaxlens
+    loses, counted as :func:`optiland_grid_numbers` counts optiland's."""
     import equinox as eqx
     import jax.numpy as jnp
 
     from jaxlens.analysis import spots
     from jaxlens.design.evaluate import evaluate as evaluate_design
+    from jaxlens.design.evaluate import sensor_field_grid
 
     with warnings.catch_warnings():
         warnings.simplefilter("ignore")
@@ -616,6 +621,10 @@ def reread_numbers(zmx: str, spec, n: int) -> tuple[dict, np.ndarray]:
     axis = spots.rms_spot(lens, jnp.zeros((1, 2)), jnp.asarray(spec.wavelengths))
     out = {k: getattr(ev, k) for k in SUMMARY_NUMBERS[:6]}
     out.update(grid_numbers(ev.rms_um, float(axis.polychromatic[0]) * 1e3))
+    angles, _ = sensor_field_grid(spec, n)
+    grid = spots.rms_spot(lens, jnp.asarray(angles), jnp.asarray(spec.wavelengths))
+    vf = np.concatenate([np.asarray(grid.valid_fraction), np.asarray(axis.valid_fraction)])
+    out["rays_lost"] = int(np.sum(np.rint((1.0 - vf) * len(PUPIL))))
     return out, np.asarray(ev.rms_um, float)
 
 
@@ -682,7 +691,8 @@ def summary_check(summary: str) -> dict:
     out["diff"]["rms_per_field_um"] = {
         "optiland": float(np.max(np.abs(j_grid - o_grid))),
         "optiland_jaxlens_media": float(np.max(np.abs(j_grid - m_grid)))}
-    out["rays_lost"] = {"optiland": o["rays_lost"], "optiland_jaxlens_media": m["rays_lost"]}
+    out["rays_lost"] = {"jaxlens_reread": j["rays_lost"], "optiland": o["rays_lost"],
+                        "optiland_jaxlens_media": m["rays_lost"]}
     return out
 
 

@@ -41,7 +41,6 @@ from __future__ import annotations
 
 import argparse
 import dataclasses
-import functools
 import json
 import os
 import re
@@ -59,6 +58,11 @@ from jaxlens.experiments.ablation_table import (
     fmt,
     spec_data,
     write_column,
+)
+from jaxlens.experiments.classical_export import (
+    CLEAR_APERTURE_MARGIN,
+    evaluation_notes,
+    with_clear_apertures,
 )
 from jaxlens.experiments.runfolder import (
     OneLineParser,
@@ -94,8 +98,11 @@ CONVENTION = (
     "f = (sensor half-diagonal)/tan(half FoV); EPD = f/F#; fields: 16x16 grid over the whole "
     "sensor rectangle (linspace(-1, 1, 16) per side, corners included), field angle tan(theta) "
     "= sensor position / f; RMS = polychromatic (F, d, C pooled) RMS radius about the centroid, "
-    "21x21 pupil grid; valid = no self-intersection over the clear apertures and >= 99% of "
-    "the rays of every field reach the sensor")
+    "21x21 pupil grid, rays aimed at the paraxial entrance pupil (ray aiming off); valid = no "
+    "self-intersection over the clear apertures and >= 99% of the rays of every field reach "
+    "the sensor; distortion = 100 (h - EFL tan theta)/(EFL tan theta) % of the real chief ray "
+    "at theta_y = half FoV; exported clear apertures: the largest passing evaluated ray height "
+    f"x (1 + {CLEAR_APERTURE_MARGIN:g}), the stop in front EPD/2")
 
 
 MAX_DEVICES = 256  # XLA takes minutes to start 100 000 host devices
@@ -400,45 +407,16 @@ def _seeds(args) -> list[int]:
     return list(range(args.first_seed, args.first_seed + n))
 
 
-def finished_lens(result, i: int, spec):
+def finished_lens(result, i: int, spec, grid: int = 16):
     """Design i as a float64 lens for export: each asphere on its closest conic (``optics.
     rebase``: the sag to 1e-8 mm, for tools that start Newton at the base conic), then that
-    lens's clear semi-diameters (set only before it, they clipped rim rays the refit moved)."""
+    lens's clear semi-diameters (set only before it, they clipped rim rays the refit moved;
+    ``classical_export``: with a margin), and the notes that say how the run evaluates it
+    (on a ``grid`` × ``grid`` field grid)."""
     from jaxlens.optics.rebase import rebase_conics
 
-    return with_clear_apertures(rebase_conics(with_clear_apertures(result.lens(i), spec)), spec)
-
-
-def with_clear_apertures(lens, spec):
-    """The lens (float64) with every surface's semi-diameter set to its clear aperture.
-
-    The stop gets EPD/2; every other surface the largest height of the rays that pass the
-    lens among the evaluation's own rays (the 256 fields, the 21 × 21 pupil grid, the three
-    wavelengths) and the pupil rim, so the exported design clips none of the rays it was
-    evaluated with.
-    """
-    import equinox as eqx
-    import jax.numpy as jnp
-
-    from jaxlens import analysis
-    from jaxlens.design.evaluate import sensor_field_grid
-    from jaxlens.imaging.sampling import pupil_grid
-
-    lens = lens.astype(jnp.float64)
-    # Leaves of an explicit dtype: weak-typed ones (from Python floats) would make every
-    # jitted analysis of this lens compile a second program.
-    f64 = functools.partial(jnp.asarray, dtype=jnp.float64)
-    free = tuple(eqx.tree_at(lambda x: x.semi_diameter, s, f64(jnp.inf)) for s in lens.surfaces)
-    lens = eqx.tree_at(lambda x: (x.surfaces, x.epd), lens, (free, f64(spec.epd)))
-    lens = eqx.tree_at(lambda x: x.wavelengths, lens, f64(spec.wavelengths))
-    angles, _ = sensor_field_grid(spec)
-    sd = analysis.clear_semi_diameters(lens, jnp.asarray(angles),
-                                       pupil=pupil_grid(21, jnp.float64))
-    surfaces = []
-    for j, s in enumerate(lens.surfaces):
-        r = 0.5 * spec.epd if j == lens.stop else float(sd[j])
-        surfaces.append(eqx.tree_at(lambda x: x.semi_diameter, s, f64(r * (1 + 1e-9))))
-    return eqx.tree_at(lambda x: x.surfaces, lens, tuple(surfaces))
+    lens = with_clear_apertures(rebase_conics(with_clear_apertures(result.lens(i), spec)), spec)
+    return dataclasses.replace(lens, description=evaluation_notes(spec, grid))
 
 
 def write_design_outputs(lens, ev, spec, out, *, history=None, plots=True, render=True,
@@ -534,25 +512,27 @@ def _design_into(args, argv, spec, config, seeds, folder, out, t_start) -> dict:
                                image_loss=args.loss == "image", on_nonfinite="drop")
     t_design = time.perf_counter() - t0
     t0 = time.perf_counter()
-    evals = [evaluate.evaluate(result.lens(i), spec, n=4 if args.smoke else 16)
+    grid = 4 if args.smoke else 16
+    evals = [evaluate.evaluate(result.lens(i), spec, n=grid)
              for i in range(len(seeds))]
     t_eval = time.perf_counter() - t0
     os.makedirs(os.path.join(out, "seeds"), exist_ok=True)
     import jaxlens
 
     for i, s in enumerate(seeds):
-        jaxlens.save(finished_lens(result, i, spec), os.path.join(out, "seeds", f"seed_{s}.json"))
+        jaxlens.save(finished_lens(result, i, spec, grid),
+                     os.path.join(out, "seeds", f"seed_{s}.json"))
     failed = result.history.failed
     # A start that went non-finite is frozen at its last finite state; it never wins.
     order = sorted(range(len(seeds)), key=lambda i: (seeds[i] in failed, not evals[i].valid,
                                                      evals[i].rms_mean_um))
     best = order[0]
-    lens = finished_lens(result, best, spec)
+    lens = finished_lens(result, best, spec, grid)
     # The summary's numbers are the exported lens's (lens.json, lens.zmx), which the conic
     # rebase moved from the design's by up to 1e-8 mm in sag (the chief ray by 2e-7 mm):
     # every number of "best" is then what a re-read of lens.zmx gives. per_seed keeps the
     # designs' own evaluations, which ranked them.
-    exported = evaluate.evaluate(lens, spec, n=4 if args.smoke else 16)
+    exported = evaluate.evaluate(lens, spec, n=grid)
     files = write_design_outputs(lens, exported, spec, out, history=result.history,
                                  plots=not args.no_plots, render=not args.no_render,
                                  smoke=args.smoke, log=log)
@@ -588,7 +568,11 @@ def _design_into(args, argv, spec, config, seeds, folder, out, t_start) -> dict:
         "seeds": seeds, "best_seed": seeds[best],
         "best": {**ev.summary(), "rms_min_um": float(np.min(ev.rms_um)),
                  "rms_on_axis_um": on_axis_um,
-                 "rms_median_um": float(np.median(ev.rms_um)), "n_fields": int(ev.rms_um.size)},
+                 "rms_median_um": float(np.median(ev.rms_um)), "n_fields": int(ev.rms_um.size),
+                 # per field of the grid, (θx, θy) deg: what a re-evaluation compares field by field
+                 "field_angles_deg": evaluate.sensor_field_grid(spec, grid)[0].tolist(),
+                 "rms_um_per_field": ev.rms_um.tolist(),
+                 "valid_fraction_per_field": ev.valid_fraction.tolist()},
         "material_selection": {
             "mode": config.materials,
             "catalogs": list(config.material_catalogs) if config.materials != "fixed" else None,
