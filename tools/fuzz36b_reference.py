@@ -465,8 +465,9 @@ class Case:
             [np.ravel(np.asarray(v)) for v in (rays.x, rays.y, rays.z, rays.L, rays.M, rays.N)], 1
         )
         sg = self.op.surface_group
-        z = np.asarray(sg.z)[1:]
-        r = np.hypot(np.asarray(sg.x), np.asarray(sg.y))[1:]
+        # with skip=1 optiland records the surfaces it traced only (surface 1 .. image)
+        z, r = np.asarray(sg.z), np.hypot(np.asarray(sg.x), np.asarray(sg.y))
+        assert len(z) == len(sg.surfaces) - 1, (z.shape, len(sg.surfaces))
         return out, z, r, newton
 
     def check_rays(self, out, z, newton, what):
