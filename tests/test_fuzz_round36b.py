@@ -21,7 +21,7 @@ from helpers import refcase_lens, refcase_rays
 import jaxlens as jl
 
 FOLDER = pathlib.Path(__file__).parent / "data" / "fuzz36b"
-CASES = sorted(p.stem for p in FOLDER.glob("*.json"))
+CASES = sorted(p.stem for p in FOLDER.glob("fuzz36b_*.json"))
 SLOW = [pytest.param(c, marks=pytest.mark.slow, id=c) for c in CASES]
 
 
