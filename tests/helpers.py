@@ -28,9 +28,10 @@ def refcase_lens(path) -> tuple[jl.Lens, dict]:
     """A Lens from a refcase JSON (tabulated indices), and the raw case.
 
     Every schema field that changes a trace is used: each surface's curvature, conic and
-    even-asphere terms (the image surface's too), the media after each surface, and the
-    object-space medium (surface 0's ``n``) when it is not air. The medium after the image
-    surface is not part of a Lens; ``refcase_rays`` accounts for it."""
+    even-asphere terms (the image surface's too), the media after each surface, the
+    object-space medium (surface 0's ``n``) when it is not air, and a finite object's
+    distance (surface 0's ``thickness``; the analyses trace its fields from there). The
+    medium after the image surface is not part of a Lens; ``refcase_rays`` accounts for it."""
     d = json.loads(pathlib.Path(path).read_text())
     surfs, th, mats, stop = [], [], [], 0
     for s in d["surfaces"][1:-1]:
@@ -43,6 +44,9 @@ def refcase_lens(path) -> tuple[jl.Lens, dict]:
         stop = d["stop_surface_index"] - 1
     obj = d["surfaces"][0].get("n") or {}
     extra = {} if all(v == 1.0 for v in obj.values()) else {"object_material": _table(obj)}
+    dist = _object_distance(d)
+    if dist is not None:
+        extra["object_distance"] = dist
     img = d["surfaces"][-1]
     wls = np.array(d["wavelengths_nm"]) / 1000
     lens = jl.Lens(
@@ -58,6 +62,14 @@ def refcase_lens(path) -> tuple[jl.Lens, dict]:
         **extra,
     )
     return lens, d
+
+
+def _object_distance(d):
+    """A finite object's distance (mm): surface 0's ``thickness``, else ``object.distance``;
+    None for an object at infinity ("inf", "infinity", or 1e10 mm and more, as in a Lens)."""
+    t = d["surfaces"][0].get("thickness", (d.get("object") or {}).get("distance", "inf"))
+    t = float(t)  # "inf" and "infinity" parse
+    return None if t >= jl.optics.lens.INFINITE_OBJECT_MM else t
 
 
 def _image_normal(img, x, y):
@@ -119,8 +131,7 @@ def json_round_trip(lens: jl.Lens, folder) -> jl.Lens:
     jl.save(lens, path)
     again = jl.load(path)
     assert jax.tree_util.tree_structure(again) == jax.tree_util.tree_structure(lens)
-    for a, b in zip(jax.tree_util.tree_leaves(again), jax.tree_util.tree_leaves(lens),
-                    strict=True):
+    for a, b in zip(jax.tree_util.tree_leaves(again), jax.tree_util.tree_leaves(lens), strict=True):
         np.testing.assert_array_equal(np.asarray(a, np.float64), np.asarray(b, np.float64))
     return again
 
