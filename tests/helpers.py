@@ -31,7 +31,10 @@ def refcase_lens(path) -> tuple[jl.Lens, dict]:
     even-asphere terms (the image surface's too), the media after each surface, the
     object-space medium (surface 0's ``n``) when it is not air, and a finite object's
     distance (surface 0's ``thickness``; the analyses trace its fields from there). The
-    medium after the image surface is not part of a Lens; ``refcase_rays`` accounts for it."""
+    medium after the image surface is not part of a Lens; ``refcase_rays`` accounts for it.
+    The lens has ``negative_propagation``: the cases' tracers (optiland, rayoptics, as Zemax)
+    clip no ray, and take a rim ray back along its line to a surface whose sag crosses the one
+    before it (tests/data/fuzz36b/crossing); jaxlens's default flags such a ray."""
     d = json.loads(pathlib.Path(path).read_text())
     surfs, th, mats, stop = [], [], [], 0
     for s in d["surfaces"][1:-1]:
@@ -59,6 +62,7 @@ def refcase_lens(path) -> tuple[jl.Lens, dict]:
         primary=int(np.argmin(np.abs(wls - d["primary_wavelength_nm"] / 1000))),
         fields=jnp.array(d["fields"]["values"]),
         image=_shape(img),
+        negative_propagation=True,
         **extra,
     )
     return lens, d

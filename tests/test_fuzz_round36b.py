@@ -6,7 +6,8 @@ aspheres with conics, plastics, the stop in front, inside, on the last face). Ea
 the refcase schema and names its generator, seed, draw and the optiland version. The checks
 of tests/test_trace.py run over them, imported, not copied: float64 intercepts and the
 paraxial data in CI, the RMS spots and distortion with -m slow (15 to 40 s each). A seventh
-case, tests/data/fuzz36b/crossing, pins a convention difference (see its note)."""
+case, tests/data/fuzz36b/crossing, has surfaces that cross: the references trace its rim
+rays back along their lines, as the refcase loader's lenses do (``negative_propagation``)."""
 
 import dataclasses
 import json
@@ -73,21 +74,21 @@ def test_a_finite_object_is_read():
     assert lens.object_at_infinity
 
 
-@pytest.mark.slow
-def test_surfaces_that_cross_are_a_convention():
+def test_surfaces_that_cross_are_traced_as_the_references_do():
     """A random draw whose flat stop cuts the next surface's sag at the rim (see the file's
-    note): optiland (and rayoptics) trace the rim rays back to that surface; jaxlens flags
-    them invalid by default and agrees with optiland once the lens has
-    ``negative_propagation=True`` (Zemax's rule)."""
+    note): optiland (and rayoptics) trace the rim rays back to that surface. The refcase
+    loader gives its lens ``negative_propagation`` (Zemax's rule), so every ray agrees; a lens
+    with jaxlens's default flags the rim rays and keeps the others."""
     lens, d = refcase_lens(FOLDER / "crossing" / "fuzz36b_040.json")
+    assert lens.negative_propagation
     rays, ref = refcase_rays(d)
-    rim = np.isclose(
-        np.hypot([r["Px"] for r in d["real_rays"]], [r["Py"] for r in d["real_rays"]]), 1.0
-    )
-    out = jl.trace(lens, rays)
-    np.testing.assert_array_equal(np.asarray(out.valid), ~rim)
-    assert np.abs(np.asarray(out.origin)[~rim] - ref[~rim, :3]).max() < 1e-9
-    back = jl.trace(dataclasses.replace(lens, negative_propagation=True), rays)
+    back = jl.trace(lens, rays)
     assert bool(back.valid.all())
     assert np.abs(np.asarray(back.origin) - ref[:, :3]).max() < 1e-9
     assert np.abs(np.asarray(back.direction) - ref[:, 3:]).max() < 1e-12
+    rim = np.isclose(
+        np.hypot([r["Px"] for r in d["real_rays"]], [r["Py"] for r in d["real_rays"]]), 1.0
+    )
+    out = jl.trace(dataclasses.replace(lens, negative_propagation=False), rays)
+    np.testing.assert_array_equal(np.asarray(out.valid), ~rim)
+    assert np.abs(np.asarray(out.origin)[~rim] - ref[~rim, :3]).max() < 1e-9

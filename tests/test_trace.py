@@ -32,7 +32,11 @@ def test_refcase_intercepts_float32(refcase_dir, case):
     rays, ref = refcase_rays(d, jnp.float32)
     out = jl.trace(lens, rays)
     assert out.origin.dtype == jnp.float32
-    assert np.abs(np.asarray(out.origin, np.float64) - ref[:, :3]).max() < 1e-4
+    # float32 rounding grows with the system's size (a direction's few ulps times the path:
+    # 7e-5 mm after a 99 mm glass gap, tests/data/fuzz36b/fuzz36b_036), so the bar is 1e-4 mm
+    # on lenses up to 100 mm and 1e-6 of the span beyond (docs/stability.md).
+    span = max(float(np.sum(lens.thickness)), float(np.abs(ref[:, :3]).max()))
+    assert np.abs(np.asarray(out.origin, np.float64) - ref[:, :3]).max() < max(1e-4, 1e-6 * span)
 
 
 @pytest.mark.parametrize("case", CASES)
