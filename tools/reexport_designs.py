@@ -40,17 +40,22 @@ EXPORT_ONLY_KEYS = ("DIAM", "CLAP", "NOTE")
 
 
 def _prescription_lines(path: pathlib.Path) -> list[str]:
-    return [ln for ln in path.read_text(errors="replace").splitlines()
-            if ln.split()[:1] and ln.split()[0] not in EXPORT_ONLY_KEYS]
+    return [
+        ln
+        for ln in path.read_text(errors="replace").splitlines()
+        if ln.split()[:1] and ln.split()[0] not in EXPORT_ONLY_KEYS
+    ]
 
 
 def reexport(path: pathlib.Path, spec: DesignSpec) -> str:
     lens = jaxlens.load(str(path))
-    new = dataclasses.replace(with_clear_apertures(lens, spec),
-                              description=evaluation_notes(spec, 16))
+    new = dataclasses.replace(
+        with_clear_apertures(lens, spec), description=evaluation_notes(spec, 16)
+    )
     before, after = evaluate.evaluate(lens, spec, n=16), evaluate.evaluate(new, spec, n=16)
-    if before.valid != after.valid or not np.allclose(after.rms_um, before.rms_um,
-                                                      rtol=1e-12, atol=0):
+    if before.valid != after.valid or not np.allclose(
+        after.rms_um, before.rms_um, rtol=1e-12, atol=0
+    ):
         return f"{path}: left as it was (evaluation moved: valid {before.valid} -> {after.valid})"
     with tempfile.TemporaryDirectory() as tmp:
         trial = pathlib.Path(tmp) / path.name
@@ -60,10 +65,14 @@ def reexport(path: pathlib.Path, spec: DesignSpec) -> str:
         if _prescription_lines(trial) != _prescription_lines(path):
             return f"{path}: left as it was (lines other than {EXPORT_ONLY_KEYS} would change)"
         os.replace(trial, path)
-    grew = max(float(b.semi_diameter) / float(a.semi_diameter) - 1
-               for a, b in zip(lens.surfaces, new.surfaces, strict=True))
-    return (f"{path}: rewritten (valid {after.valid}, mean RMS {after.rms_mean_um:.6f} um, "
-            f"largest aperture change {100 * grew:+.3f} %)")
+    grew = max(
+        float(b.semi_diameter) / float(a.semi_diameter) - 1
+        for a, b in zip(lens.surfaces, new.surfaces, strict=True)
+    )
+    return (
+        f"{path}: rewritten (valid {after.valid}, mean RMS {after.rms_mean_um:.6f} um, "
+        f"largest aperture change {100 * grew:+.3f} %)"
+    )
 
 
 def main(argv=None) -> int:
