@@ -27,14 +27,28 @@ def _lens(object_distance=None):
     """Conic and even-asphere triplet with model glasses, a flat surface, a paraboloid and
     the stop on a surface of its own."""
     g1, g2 = jl.ModelGlass(1.62, 60.3), jl.ModelGlass(1.62, 36.4)
-    s = (jl.EvenAsphere(1 / 22.0, -0.3, jnp.array([0.0, 2e-6, -1e-9])), jl.Conic(0.0, 0.0),
-         jl.Stop(), jl.Conic(-1 / 22.2, -1.0), jl.Sphere(1 / 20.3), jl.Conic(1 / 79.7, -2.0),
-         jl.Conic(-1 / 18.4, 1.5))
+    s = (
+        jl.EvenAsphere(1 / 22.0, -0.3, jnp.array([0.0, 2e-6, -1e-9])),
+        jl.Conic(0.0, 0.0),
+        jl.Stop(),
+        jl.Conic(-1 / 22.2, -1.0),
+        jl.Sphere(1 / 20.3),
+        jl.Conic(1 / 79.7, -2.0),
+        jl.Conic(-1 / 18.4, 1.5),
+    )
     t = jnp.array([3.26, 3.0, 3.01, 1.0, 4.75, 2.95, 42.2])
     mats = (g1, jl.Air(), jl.Air(), g2, jl.Air(), g1, jl.Air())
-    return jl.Lens(s, t, mats, stop=2, epd=10.0, fields=jnp.array([0.0, 14.0]),
-                   wavelengths=jnp.array([0.4861327, 0.5875618, 0.6562725]), primary=1,
-                   object_distance=object_distance)
+    return jl.Lens(
+        s,
+        t,
+        mats,
+        stop=2,
+        epd=10.0,
+        fields=jnp.array([0.0, 14.0]),
+        wavelengths=jnp.array([0.4861327, 0.5875618, 0.6562725]),
+        primary=1,
+        object_distance=object_distance,
+    )
 
 
 # name: (getter on (lens, extras), index into the leaf or None, step)
@@ -60,13 +74,17 @@ _FUNCS = {
     "working_fnum": lambda L, e: paraxial.paraxial_data(L, e["wl"]).working_fnum,
     "chief_ray_height": lambda L, e: paraxial.paraxial_chief_ray(L, e["field"], e["wl"])[0][-1],
     "field_to_ideal": lambda L, e: aiming.field_to_ideal(
-        L, jnp.stack([0.0 * e["field"], e["field"]]), e["wl"])[1],
+        L, jnp.stack([0.0 * e["field"], e["field"]]), e["wl"]
+    )[1],
     "diffraction_mtf": lambda L, e: otf.diffraction_mtf(
-        jnp.array([40.0]), e["wl"] * 1e-3, paraxial.paraxial_data(L, e["wl"]).fnum)[0],
+        jnp.array([40.0]), e["wl"] * 1e-3, paraxial.paraxial_data(L, e["wl"]).fnum
+    )[0],
     "seidel_W040": lambda L, e: third_order.seidel(
-        L, field=e["field"], wavelength=e["wl"]).wavefront()[0],
+        L, field=e["field"], wavelength=e["wl"]
+    ).wavefront()[0],
     "seidel_W222": lambda L, e: third_order.seidel(
-        L, field=e["field"], wavelength=e["wl"]).wavefront()[2],
+        L, field=e["field"], wavelength=e["wl"]
+    ).wavefront()[2],
 }
 
 
@@ -89,15 +107,16 @@ def _fd_agrees(fn, P, names, rel=1e-6):
         g = get(jac) if j is None else get(jac)[..., j]
         assert jnp.all(jnp.isfinite(g)), name
 
-        def at(v, get=get, j=j):
-            v = jnp.asarray(v, x.dtype)
+        def at(v, get=get, j=j, dtype=x.dtype):
+            v = jnp.asarray(v, dtype)
             new = eqx.tree_at(get, P, v if j is None else get(P).at[j].set(v))
             return fj(eqx.partition(new, eqx.is_inexact_array)[0])
 
         fd = (at(x + h) - at(x - h)) / (2 * h)
         for k in range(fd.shape[0]):
             assert float(g[k]) == pytest.approx(
-                float(fd[k]), rel=rel, abs=1e-9 * max(1.0, abs(float(value[k])))), (name, k)
+                float(fd[k]), rel=rel, abs=1e-9 * max(1.0, abs(float(value[k])))
+            ), (name, k)
 
 
 def _all(keys):
@@ -113,8 +132,11 @@ def test_untested_parameters_match_central_differences():
 
 def test_finite_object_distance_matches_central_differences():
     P = (_lens(500.0), {"field": jnp.asarray(9.0), "wl": jnp.asarray(0.55)})
-    _fd_agrees(_all(["entrance_pupil_z", "working_fnum", "image_height", "seidel_W040"]), P,
-               ["objd", "c3", "nd0"])
+    _fd_agrees(
+        _all(["entrance_pupil_z", "working_fnum", "image_height", "seidel_W040"]),
+        P,
+        ["objd", "c3", "nd0"],
+    )
 
 
 def test_lens_is_float64():

@@ -47,8 +47,10 @@ def gauss():
 
 def hybrid():
     lens = jl.load("jaxlens/data/lenses/hybrid_singlet.json")
-    s = tuple(dataclasses.replace(x, semi_diameter=jnp.inf) if hasattr(x, "semi_diameter")
-              else x for x in lens.surfaces)
+    s = tuple(
+        dataclasses.replace(x, semi_diameter=jnp.inf) if hasattr(x, "semi_diameter") else x
+        for x in lens.surfaces
+    )
     return dataclasses.replace(lens, surfaces=s)
 
 
@@ -56,28 +58,44 @@ def conic():
     """A conic / even-asphere triplet with model glasses (nd, Vd leaves), a flat surface
     (c = 0), a paraboloid (k = -1) and the stop on a surface of its own."""
     g1, g2 = jl.ModelGlass(1.62, 60.3), jl.ModelGlass(1.62, 36.4)
-    s = (jl.EvenAsphere(1 / 22.0, -0.3, jnp.array([0.0, 2e-6, -1e-9])),
-         jl.Conic(0.0, 0.0),
-         jl.Stop(),
-         jl.Conic(-1 / 22.2, -1.0),
-         jl.Sphere(1 / 20.3),
-         jl.Conic(1 / 79.7, -2.0),
-         jl.Conic(-1 / 18.4, 1.5))
+    s = (
+        jl.EvenAsphere(1 / 22.0, -0.3, jnp.array([0.0, 2e-6, -1e-9])),
+        jl.Conic(0.0, 0.0),
+        jl.Stop(),
+        jl.Conic(-1 / 22.2, -1.0),
+        jl.Sphere(1 / 20.3),
+        jl.Conic(1 / 79.7, -2.0),
+        jl.Conic(-1 / 18.4, 1.5),
+    )
     t = jnp.array([3.26, 3.0, 3.01, 1.0, 4.75, 2.95, 42.2])
     mats = (g1, jl.Air(), jl.Air(), g2, jl.Air(), g1, jl.Air())
-    return jl.Lens(s, t, mats, stop=2, epd=10.0, fields=jnp.array([0.0, 14.0]),
-                   wavelengths=jnp.array([0.4861327, 0.5875618, 0.6562725]), primary=1)
+    return jl.Lens(
+        s,
+        t,
+        mats,
+        stop=2,
+        epd=10.0,
+        fields=jnp.array([0.0, 14.0]),
+        wavelengths=jnp.array([0.4861327, 0.5875618, 0.6562725]),
+        primary=1,
+    )
 
 
 def finite(lens_fn, d):
     def make():
         return dataclasses.replace(lens_fn(), object_distance=d)
+
     make.__name__ = lens_fn.__name__ + f"@{d:g}"
     return make
 
 
-LENSES = {"cooke": cooke, "gauss": gauss, "hybrid": hybrid, "conic": conic,
-          "cooke@500": finite(cooke, 500.0)}
+LENSES = {
+    "cooke": cooke,
+    "gauss": gauss,
+    "hybrid": hybrid,
+    "conic": conic,
+    "cooke@500": finite(cooke, 500.0),
+}
 
 
 # ----------------------------------------------------------------------------- parameters
@@ -148,60 +166,84 @@ FUNCS = {
     "pd.paraxial_image_z": lambda L, e: paraxial.paraxial_data(L, e["wl"]).paraxial_image_z,
     "ep_magnification": lambda L, e: paraxial.entrance_pupil_magnification(L, e["wl"]),
     "paraxial_chief_ray": lambda L, e: jnp.sum(
-        jnp.stack(paraxial.paraxial_chief_ray(L, e["field"], e["wl"])[:2]) ** 2),
+        jnp.stack(paraxial.paraxial_chief_ray(L, e["field"], e["wl"])[:2]) ** 2
+    ),
     # analysis
     "rms_spot": lambda L, e: jl.analysis.rms_spot(
         eqx.tree_at(lambda x: x.fields, L, jnp.stack([e["field"], L.fields[-1]])),
-        wavelengths=e["wl"][None]).polychromatic.sum(),
+        wavelengths=e["wl"][None],
+    ).polychromatic.sum(),
     "rms_spot@0": lambda L, e: jl.analysis.rms_spot(
-        eqx.tree_at(lambda x: x.fields, L, e["field"][None] * 0.0),
-        wavelengths=e["wl"][None]).polychromatic.sum(),
+        eqx.tree_at(lambda x: x.fields, L, e["field"][None] * 0.0), wavelengths=e["wl"][None]
+    ).polychromatic.sum(),
     "chief_ray.y": lambda L, e: jl.analysis.chief_ray(L, e["field"], e["wl"]).origin[..., 1],
     "distortion": lambda L, e: jl.analysis.distortion(
-        L, jnp.stack([e["field"], L.fields[-1]]), e["wl"]).percent_ftan[-1],
+        L, jnp.stack([e["field"], L.fields[-1]]), e["wl"]
+    ).percent_ftan[-1],
     "distortion@0": lambda L, e: jl.analysis.distortion(
-        L, jnp.stack([e["field"] * 0.0, L.fields[-1]]), e["wl"]).percent_ftan.sum(),
-    "ray_fan": lambda L, e: jnp.sum(jl.analysis.ray_fan(L, e["field"], e["wl"][None],
-                                                        n=7).tangential ** 2),
-    "field_curvature": lambda L, e: jnp.sum(jl.analysis.field_curvature(
-        L, jnp.stack([e["field"] * 0.0, e["field"]]), e["wl"][None]).tangential ** 2),
+        L, jnp.stack([e["field"] * 0.0, L.fields[-1]]), e["wl"]
+    ).percent_ftan.sum(),
+    "ray_fan": lambda L, e: jnp.sum(
+        jl.analysis.ray_fan(L, e["field"], e["wl"][None], n=7).tangential ** 2
+    ),
+    "field_curvature": lambda L, e: jnp.sum(
+        jl.analysis.field_curvature(
+            L, jnp.stack([e["field"] * 0.0, e["field"]]), e["wl"][None]
+        ).tangential
+        ** 2
+    ),
     "seidel.W040": lambda L, e: third_order.seidel(
-        L, field=e["field"], wavelength=e["wl"]).wavefront()[0],
-    "seidel.sum": lambda L, e: jnp.sum(third_order.seidel(
-        L, field=e["field"], wavelength=e["wl"]).wavefront() ** 2),
-    "opd": lambda L, e: jnp.sum(wavefront_error.opd(
-        L, e["field"], jnp.array([[0.0, 0.7], [0.5, -0.3], [0.0, 0.0]]),
-        wavelength=e["wl"]) ** 2),
-    "wavefront.rms": lambda L, e: wavefront_error.wavefront(
-        L, e["field"], wavelength=e["wl"], grid=16).rms,
-    "wavefront.rms@0": lambda L, e: wavefront_error.wavefront(
-        L, e["field"] * 0.0, wavelength=e["wl"], grid=16).rms,
-    "wavefront.strehl": lambda L, e: wavefront_error.wavefront(
-        L, e["field"], wavelength=e["wl"], grid=16).strehl,
-    "opd_fan": lambda L, e: jnp.sum(wavefront_error.opd_fan(
-        L, e["field"], e["wl"][None], n=7).tangential ** 2),
+        L, field=e["field"], wavelength=e["wl"]
+    ).wavefront()[0],
+    "seidel.sum": lambda L, e: jnp.sum(
+        third_order.seidel(L, field=e["field"], wavelength=e["wl"]).wavefront() ** 2
+    ),
+    "opd": lambda L, e: jnp.sum(
+        wavefront_error.opd(
+            L, e["field"], jnp.array([[0.0, 0.7], [0.5, -0.3], [0.0, 0.0]]), wavelength=e["wl"]
+        )
+        ** 2
+    ),
+    "wavefront.rms": lambda L, e: (
+        wavefront_error.wavefront(L, e["field"], wavelength=e["wl"], grid=16).rms
+    ),
+    "wavefront.rms@0": lambda L, e: (
+        wavefront_error.wavefront(L, e["field"] * 0.0, wavelength=e["wl"], grid=16).rms
+    ),
+    "wavefront.strehl": lambda L, e: (
+        wavefront_error.wavefront(L, e["field"], wavelength=e["wl"], grid=16).strehl
+    ),
+    "opd_fan": lambda L, e: jnp.sum(
+        wavefront_error.opd_fan(L, e["field"], e["wl"][None], n=7).tangential ** 2
+    ),
     "encircled_energy": lambda L, e: encircled.encircled_energy(
-        L, e["field"], jnp.array([0.01]), wavelength=e["wl"]).energy.sum(),
+        L, e["field"], jnp.array([0.01]), wavelength=e["wl"]
+    ).energy.sum(),
     "radius_for_fraction": lambda L, e: encircled.radius_for_fraction(
-        L, e["field"], 0.8, wavelength=e["wl"]),
-    "clear_semi_diameters": lambda L, e: jnp.sum(spots.clear_semi_diameters(
-        L, jnp.stack([e["field"] * 0.0, e["field"]]), n_rim=16)),
+        L, e["field"], 0.8, wavelength=e["wl"]
+    ),
+    "clear_semi_diameters": lambda L, e: jnp.sum(
+        spots.clear_semi_diameters(L, jnp.stack([e["field"] * 0.0, e["field"]]), n_rim=16)
+    ),
     # imaging
-    "stop_chief_ray": lambda L, e: aiming.stop_chief_ray(L, _f2(e["field"]),
-                                                         wavelength=e["wl"]).origin[..., 1],
+    "stop_chief_ray": lambda L, e: aiming.stop_chief_ray(
+        L, _f2(e["field"]), wavelength=e["wl"]
+    ).origin[..., 1],
     "image_scale": lambda L, e: aiming.image_scale(L, e["wl"]),
     "field_to_ideal": lambda L, e: aiming.field_to_ideal(L, _f2(e["field"]), e["wl"])[1],
-    "psf": lambda L, e: jnp.sum(psf.psf(L, e["field"], wavelength=e["wl"],
-                                        kernel_size=15, key=jax.random.PRNGKey(0)) ** 2),
-    "mtf": lambda L, e: jnp.sum(psf.mtf(L, e["field"], wavelengths=e["wl"][None],
-                                        kernel_size=16)[1]),
+    "psf": lambda L, e: jnp.sum(
+        psf.psf(L, e["field"], wavelength=e["wl"], kernel_size=15, key=jax.random.PRNGKey(0)) ** 2
+    ),
+    "mtf": lambda L, e: jnp.sum(
+        psf.mtf(L, e["field"], wavelengths=e["wl"][None], kernel_size=16)[1]
+    ),
     "diffraction_mtf": lambda L, e: otf_mod.diffraction_mtf(
-        jnp.array([10.0, 40.0]), e["wl"] * 1e-3, paraxial.paraxial_data(L, e["wl"]).fnum).sum(),
+        jnp.array([10.0, 40.0]), e["wl"] * 1e-3, paraxial.paraxial_data(L, e["wl"]).fnum
+    ).sum(),
     "relative_illumination": lambda L, e: radiometry.relative_illumination(
-        L, jnp.stack([e["field"] * 0.0, e["field"]]), wavelength=e["wl"],
-        pupil=32).ri[-1],
-    "distortion_map": lambda L, e: jnp.sum(distortion.distortion_map(
-        L, grid=(3, 3)).real ** 2),
+        L, jnp.stack([e["field"] * 0.0, e["field"]]), wavelength=e["wl"], pupil=32
+    ).ri[-1],
+    "distortion_map": lambda L, e: jnp.sum(distortion.distortion_map(L, grid=(3, 3)).real ** 2),
 }
 
 
@@ -261,10 +303,12 @@ def probe(fname, lname):
             status = "ok" if np.isfinite(rel) else "FDNAN"
         else:
             status = "WRONG?" if rel < 1e-3 else "WRONG"
-        rows.append(f"{status:6s} {fname:22s} {lname:9s} {name:8s} v={v:+.6e} g={gval:+.8e} "
-                    f"fd={fds[np.nanargmin(errs)] if np.isfinite(errs).any() else fds[0]:+.8e} "
-                    f"rel={rel:.1e} spread={np.ptp(fds) / max(abs(fds).max(), 1e-300):.0e} "
-                    f"jvp={jtxt}")
+        rows.append(
+            f"{status:6s} {fname:22s} {lname:9s} {name:8s} v={v:+.6e} g={gval:+.8e} "
+            f"fd={fds[np.nanargmin(errs)] if np.isfinite(errs).any() else fds[0]:+.8e} "
+            f"rel={rel:.1e} spread={np.ptp(fds) / max(abs(fds).max(), 1e-300):.0e} "
+            f"jvp={jtxt}"
+        )
     return rows
 
 
@@ -275,7 +319,7 @@ def main(argv):
     if "--lenses" in args:
         i = args.index("--lenses")
         lenses = args[i + 1].split(",")
-        del args[i:i + 2]
+        del args[i : i + 2]
     for fname in FUNCS:
         if args and fname not in args:
             continue
@@ -283,8 +327,10 @@ def main(argv):
             try:
                 rows = probe(fname, lname)
             except Exception:  # noqa: BLE001
-                rows = [f"ERROR {fname:22s} {lname:9s} probe: "
-                        + traceback.format_exc().strip().splitlines()[-1][:300]]
+                rows = [
+                    f"ERROR {fname:22s} {lname:9s} probe: "
+                    + traceback.format_exc().strip().splitlines()[-1][:300]
+                ]
             for r in rows:
                 print(r, flush=True)
 
