@@ -442,9 +442,17 @@ def intersect(
     df0 = jax.lax.stop_gradient(jnp.where(ok, df0, 1.0))
     # One differentiable step with F' held fixed: the implicit-function gradient.
     f, _, inside = _residual(surface, o, d, t0)
+    # That step's root t1 has exact first derivatives only (t0 and F' are constants to it).
+    # A second step from t1 with F' live makes the second derivatives exact too (Newton's
+    # map has zero slope at a root): a gradient of a derivative of the trace (such as
+    # ``field_curvature``'s differential rays) was wrong on every surface with polynomial
+    # terms without it (round 36e).
+    t1 = t0 - f / df0
+    f1, df1, inside = _residual(surface, o, d, t1)
+    df1 = jnp.where(ok, df1, 1.0)
     ok = ok & inside
-    # t0 + t_plane − f/df0, written as one division (one fused pass, see the module notes).
-    return jnp.where(ok, (t0 + t_plane) * df0 - f, MISS) / jnp.where(ok, df0, 1.0)
+    # t1 + t_plane − f1/df1, written as one division (one fused pass, see the module notes).
+    return jnp.where(ok, (t1 + t_plane) * df1 - f1, MISS) / jnp.where(ok, df1, 1.0)
 
 
 def _polynomial_root(surf_s, o_s, d_s, t_min, newton_iters, first, backward, behind=None):
