@@ -67,9 +67,11 @@ def test_summary_numbers_are_the_exported_lens_numbers(smoke_run):
     ev = evaluate(lens, DesignSpec(**s["spec"]), n=math.isqrt(b["n_fields"]))
     for k in ("efl", "fnum", "bfl", "total_track", "chief_height_full_field",
               "distortion_percent", "rms_mean_um", "rms_max_um"):
-        assert b[k] == getattr(ev, k), k
-    assert b["rms_min_um"] == float(np.min(ev.rms_um))
-    assert b["rms_median_um"] == float(np.median(ev.rms_um))
+        assert b[k] == pytest.approx(float(getattr(ev, k)), rel=1e-12), k
+    # To 1e-12, not exactly: the re-read lens's numbers can differ from the run's in the
+    # last bit (179.44063473300673 against ...670 µm in one CI run).
+    assert b["rms_min_um"] == pytest.approx(float(np.min(ev.rms_um)), rel=1e-12)
+    assert b["rms_median_um"] == pytest.approx(float(np.median(ev.rms_um)), rel=1e-12)
     # Round 36d: per field too, with the fields' angles, and the notes in both files.
     from jaxlens.design.evaluate import sensor_field_grid
 

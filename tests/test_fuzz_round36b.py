@@ -24,6 +24,10 @@ import jaxlens as jl
 FOLDER = pathlib.Path(__file__).parent / "data" / "fuzz36b"
 CASES = sorted(p.stem for p in FOLDER.glob("fuzz36b_*.json"))
 SLOW = [pytest.param(c, marks=pytest.mark.slow, id=c) for c in CASES]
+# CI traces two of them (a finite object with glass image space; strong A2..A12 aspheres on a
+# fast beam): each case compiles its own programs (3 s a case); -m slow runs all six.
+IN_CI = ("fuzz36b_036", "fuzz36b_hard_007")
+SOME = [pytest.param(c, id=c, marks=() if c in IN_CI else pytest.mark.slow) for c in CASES]
 
 
 def test_cases_present():
@@ -33,12 +37,12 @@ def test_cases_present():
         assert gen["script"] == "tools/fuzz36b_reference.py" and gen["optiland"], gen
 
 
-@pytest.mark.parametrize("case", CASES)
+@pytest.mark.parametrize("case", SOME)
 def test_fuzz_intercepts_float64(case):
     test_trace.test_refcase_intercepts_float64(FOLDER, case)
 
 
-@pytest.mark.parametrize("case", CASES)
+@pytest.mark.parametrize("case", SOME)
 def test_fuzz_paraxial(case):
     test_trace.test_refcase_paraxial(FOLDER, case)
     lens, d = refcase_lens(FOLDER / f"{case}.json")

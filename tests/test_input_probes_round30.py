@@ -115,13 +115,13 @@ def test_zmx_refuses_a_second_value_and_names_a_decimal_comma(tmp_path):
     ``CONI``/``ENPD`` likewise; a decimal comma was "not a number" without the reason."""
     for old, new, msg in (
             ("DISZ 8.059597441026024E-001", "DISZ 0.8 0.06",
-             r"lens\.zmx:48: DISZ takes one value \(the thickness\), got 2"),
+             r"lens\.zmx:54: DISZ takes one value \(the thickness\), got 2"),
             ("CONI -4.849999999999994E+000", "CONI -4.85 0.5",
-             r"lens\.zmx:40: CONI takes one value \(the conic constant\), got 2"),
+             r"lens\.zmx:46: CONI takes one value \(the conic constant\), got 2"),
             ("ENPD 2.2501173880645875E+000", "ENPD 2 25",
-             r"lens\.zmx:12: ENPD takes one value \(the entrance pupil diameter\)"),
+             r"lens\.zmx:18: ENPD takes one value \(the entrance pupil diameter\)"),
             ("CURV 2.971822823221517E-001", "CURV 2,971822823221517E-001",
-             r"lens\.zmx:39: curvature is not a number \('2,971822823221517E-001'; a decimal "
+             r"lens\.zmx:45: curvature is not a number \('2,971822823221517E-001'; a decimal "
              r"comma\? \.zmx numbers take a point: 2\.971822823221517E-001\)")):
         with pytest.raises(ValueError, match=msg):
             jl.load(_zmx(tmp_path, old, new))

@@ -283,6 +283,7 @@ def test_polynomial_gradient_matches_central_differences(compiled):
         assert ad == pytest.approx(fd, rel=2e-6, abs=1e-9)
 
 
+@pytest.mark.slow  # 16 s of compilation; the rule is checked on the other surface kinds in CI
 def test_qtype_aspheres_take_the_rule_with_equal_values_and_gradients(compiled):
     """Forbes Q-bfs (on a conic) and Q-con surfaces go through ``sag_step``: values
     identical to ``surface_step``'s, gradients equal to rounding and, in a coefficient of

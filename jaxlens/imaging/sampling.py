@@ -216,7 +216,7 @@ def _checked_wavelength(lens: Lens, wavelength, where: str):
     if not checks.is_traced(wl):
         checks.wavelengths(lens, wl, where)
         # A formula material of index 0.71 there launched rays a trace took as valid.
-        checks.material_indices(lens, wl, where)
+        checks.material_indices(lens, wl, where, intact=True)  # the callers check the lens
     return wl
 
 

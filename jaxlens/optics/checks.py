@@ -612,6 +612,11 @@ def material(m, wl, where: str, arg: str = "wavelength") -> None:
     if is_traced(m) or is_traced(wl):
         return
     w = np.atleast_1d(np.asarray(wl, dtype=float))
+    # Only where the material has data: a wavelength outside its range is the range checks'
+    # to refuse (``wavelengths``: they name the surface), and its formula may raise there.
+    w = w[~_outside(w, *material_range(m))[1]]
+    if not w.size:
+        return
     # Evaluated now even inside a jit trace (a concrete lens closed over by a jitted function):
     # there m.index gave a tracer, and np.asarray a TracerArrayConversionError.
     with jax.ensure_compile_time_eval():
