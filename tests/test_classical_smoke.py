@@ -174,6 +174,7 @@ def test_recipes_of_the_design_run_and_the_ablation():
         curriculum=True, regularize=True, mask=True, polish_steps=240)
 
 
+@pytest.mark.slow  # 19 s; round 36d's tests check the export's apertures in CI
 def test_exported_apertures_clip_none_of_the_evaluated_rays():
     """Table 1's +recipe seed 19 loses rim rays at the corner fields. Apertures sized from
     the rim rays that pass (the old export) clipped interior rays that pass higher: 97 % of

@@ -355,6 +355,7 @@ def test_one_sag_step_equals_surface_step(first, refracts):
             np.testing.assert_allclose(x, y, rtol=1e-12, atol=1e-13)
 
 
+@pytest.mark.slow  # 17 s: the design loss compiled twice; the rule itself is checked in CI
 def test_design_loss_gradient_with_and_without_the_rule():
     """The design loss (uniform trace of the stacked even aspheres) with the rule: the same
     value and gradient; the solver factory gives it to Adam and L-BFGS-B, not to LM."""
