@@ -52,6 +52,8 @@ import numpy as np
 
 warnings.filterwarnings("ignore")
 
+# tools/ is on the path when this script runs: make_refcase.py shares the schema.
+from make_refcase import CONVENTIONS as REFCASE_CONVENTIONS  # noqa: E402
 from optiland.materials.base import BaseMaterial  # noqa: E402
 from optiland.optic import Optic  # noqa: E402
 from optiland.rays import RealRays  # noqa: E402
@@ -860,34 +862,25 @@ def _version(mod):
         return None
 
 
+# make_refcase.py's conventions (the same schema), with what finite objects add.
 CONVENTIONS = {
-    "units": "mm; wavelengths in nm; angles in degrees",
-    "coordinates": "surface 1 vertex at z=0, +z along the axis; 'z' values are global",
-    "sag": "z = c r^2/(1+sqrt(1-(1+k)c^2 r^2)) + sum_i A_{2i} r^{2i}; even_asphere_coeffs = "
-    "[A2, A4, A6, ...] (first multiplies r^2)",
-    "thickness": "distance from this surface vertex to the next surface vertex; surface 0's "
-    "is the object distance ('inf' for an object at infinity)",
-    "material": "medium AFTER the surface; n given at every wavelength; image space is the "
-    "medium after the last lens surface",
-    "field": "angle in the y-z plane. Object at infinity: object-space direction (0, sin th, "
-    "cos th). Finite object at distance d: the chief ray's angle at the paraxial "
-    "entrance pupil, object point (0, -(d + z_EP) tan th, -d); every ray of the field "
-    "starts there",
-    "pupil": "ray through (Px*EPD/2, Py*EPD/2) on the plane z=z_EP (paraxial entrance pupil "
-    "at the primary wavelength, used for all wavelengths); no ray aiming, no "
-    "vignetting, no clipping",
-    "image_intercept": "x, y, z of the ray on the image surface (global z, sag included for "
-    "a curved image), L M N = direction cosines after the last refraction; "
-    "when the image surface's own medium (its material and n) differs from "
-    "image space, that last refraction is at the image surface",
-    "rms_spot": "square grid 21x21 over [-1,1]^2 kept where Px^2+Py^2<=1+1e-12 (317 rays), "
-    "equal weights; RMS radius = sqrt(mean(dx^2+dy^2)) of the x, y intercepts on "
-    "the image surface; 'vs_centroid' about the centroid of the same ray set, "
-    "'vs_chief' about the primary-wavelength chief ray (Px=Py=0)",
-    "distortion": "distortion_pct_ftan = 100*(y_chief_real - EFL*tan(theta))/(EFL*tan(theta)); "
-    "distortion_pct_vs_paraxial_chief_at_image = 100*(y_chief_real - "
-    "y_parax_chief)/y_parax_chief, y_parax_chief the paraxial chief ray (through "
-    "the EP centre at angle theta) height at the image surface vertex plane",
+    **REFCASE_CONVENTIONS,
+    "thickness": (
+        "distance from this surface vertex to the next surface vertex; surface 0's is the"
+        " object distance ('inf' for an object at infinity)"
+    ),
+    "field": (
+        "angle in the y-z plane. Object at infinity: object-space direction (0, sin th, "
+        "cos th). Finite object at distance d: the chief ray's angle at the paraxial "
+        "entrance pupil, object point (0, -(d + z_EP) tan th, -d); every ray of the field"
+        " starts there"
+    ),
+    "distortion": (
+        "distortion_pct_ftan = 100*(y_chief_real - EFL*tan(theta))/(EFL*tan(theta)); "
+        "distortion_pct_vs_paraxial_chief_at_image = 100*(y_chief_real - "
+        "y_parax_chief)/y_parax_chief, y_parax_chief the paraxial chief ray (through the "
+        "EP centre at angle theta) height at the image surface vertex plane"
+    ),
 }
 
 
