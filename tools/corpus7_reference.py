@@ -32,6 +32,12 @@ def main():
     out = {"optiland": version("optiland"), "hy": HY, "pupil": PUPIL, "files": {}}
     for name in FILES:
         op = load_zemax_file(str(FOLDER / name))
+        # optiland 0.6.3 does not read RAIM: the aimed file (RAIM type 1, Zemax's
+        # "Paraxial" aiming at the real stop) gets its iterative aiming by hand.
+        aimed = any(ln.split()[:2] == ["RAIM", "0"] and ln.split()[2] == "1"
+                    for ln in (FOLDER / name).read_text().splitlines() if ln.startswith("RAIM"))
+        if aimed:
+            op.ray_tracer.set_aiming("iterative", max_iter=50, tol=1e-13)
         wl = op.primary_wavelength
         rows = []
         for hy in HY:
@@ -40,7 +46,7 @@ def main():
                 r = op.trace_generic(0.0, hy, px, py, wl)
                 row.append([float(r.x[0]), float(r.y[0]), float(r.z[0])])
             rows.append(row)
-        aiming = getattr(op, "ray_aiming_config", None) or getattr(op, "ray_aiming", None)
+        aiming = "iterative" if aimed else "paraxial"
         out["files"][name] = {
             "image_xyz": rows,
             "efl": float(op.paraxial.f2()),
