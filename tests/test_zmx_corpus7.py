@@ -87,6 +87,7 @@ def test_virtual_object_rays_equal_optilands(name):
     assert np.abs(got - np.array(ref["image_xyz"])).max() < 1e-9
 
 
+@pytest.mark.slow
 def test_virtual_object_marginal_ray_converges():
     """The singlet (stop on surface 1, EPD 10 mm, object 100 mm after it): the axial beam
     leaves the pupil rim heading for the virtual point (slope −5/100), which the paraxial
@@ -105,7 +106,14 @@ def test_virtual_object_marginal_ray_converges():
     assert float(ym[0]) == pytest.approx(5.0, rel=1e-12)
 
 
-def test_virtual_object_on_the_pupil_plane_is_refused():
+def test_virtual_point_source_converges_and_the_pupil_plane_is_refused():
+    """The rim ray toward a virtual point 100 mm after the pupil (on surface 1): slope
+    −5/100, toward +z, its optical path to the point still ahead (negative)."""
+    lens = jl.load(DATA / "virtual_singlet_heights.zmx")
+    rays = sampling.point_source(lens, np.array([0.0, 0.0, 100.0]), np.array([[0.0, 1.0]]))
+    d = np.asarray(rays.direction)[0]
+    assert d[2] > 0 and d[1] / d[2] == pytest.approx(-0.05, rel=1e-12)
+    assert float(rays.opl[0]) == pytest.approx(-np.hypot(5.0, 100.0), rel=1e-12)
     lens = jl.load(DATA / "virtual_stop_behind.zmx")
     zep = float(jl.paraxial.entrance_pupil_z(lens, lens.primary_wavelength))
     with pytest.raises(ValueError, match=r"point_source: the point's z must be .*virtual object"):
