@@ -83,7 +83,8 @@ def test_virtual_object_rays_equal_optilands(name):
     assert lens.aim == ("real" if ref["ray_aiming"] == "iterative" else "paraxial")
     assert float(jl.efl(lens)) == pytest.approx(ref["efl"], rel=1e-12)
     assert float(jl.paraxial_data(lens).entrance_pupil_z) == pytest.approx(
-        ref["entrance_pupil_z"], abs=1e-9)
+        ref["entrance_pupil_z"], abs=1e-9
+    )
     assert np.abs(got - np.array(ref["image_xyz"])).max() < 1e-9
 
 
@@ -94,14 +95,16 @@ def test_virtual_object_marginal_ray_converges():
     marginal ray gives; the image intercept is optiland's."""
     lens = jl.load(DATA / "virtual_singlet_heights.zmx")
     with jax.disable_jit():  # one ray through a singlet: faster than compiling
-        rays = sampling.field_rays(lens, 0.0, np.array([[0.0, 1.0]]),
-                                   depth=sampling.lens_depth(lens, None, "test"))
+        rays = sampling.field_rays(
+            lens, 0.0, np.array([[0.0, 1.0]]), depth=sampling.lens_depth(lens, None, "test")
+        )
         y = float(trace_path(unclipped(lens), rays).origin[-1][0, 1])
     d = np.asarray(rays.direction)[0]
     assert d[1] / d[2] == pytest.approx(-0.05, rel=1e-12)
     assert float(rays.opl[0]) == pytest.approx(-np.hypot(5.0, 100.0), rel=1e-12)
-    assert y == pytest.approx(REF["files"]["virtual_singlet_heights.zmx"]["image_xyz"][0][1][1],
-                              abs=1e-9)
+    assert y == pytest.approx(
+        REF["files"]["virtual_singlet_heights.zmx"]["image_xyz"][0][1][1], abs=1e-9
+    )
     ym, _ = jl.paraxial.marginal_ray(lens)
     assert float(ym[0]) == pytest.approx(5.0, rel=1e-12)
 
@@ -138,6 +141,9 @@ def test_virtual_object_saves_and_loads(tmp_path):
 
 
 def test_deeplens_export_without_a_stop_size_is_refused_naming_the_lines():
-    with pytest.raises(ValueError, match=r"ef35mm_f2\.0\.zmx:7: FLOA needs a DIAM or CLAP .*"
-                                         r"surface 6, line 59"):
+    with pytest.raises(
+        ValueError,
+        match=r"ef35mm_f2\.0\.zmx:7: FLOA needs a DIAM or CLAP .*"
+        r"surface 6, line 59",
+    ):
         jl.load(DATA / "deeplens_ef35mm_f2.0.zmx")

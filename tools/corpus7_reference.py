@@ -9,7 +9,9 @@ image-surface intercept (x, y, z) in mm. Also optiland's paraxial EFL, entrance 
 position and its ray-aiming setting. Run with optiland's interpreter (jaxlens is not
 imported; OPTILAND_ONLY in tests/test_input_probes_round33b.py):
 
-    /work/optenv/bin/python tools/corpus7_reference.py   # writes tests/data/zmx_corpus7/reference.json
+    /work/optenv/bin/python tools/corpus7_reference.py
+
+writes tests/data/zmx_corpus7/reference.json.
 """
 
 import json
@@ -17,8 +19,12 @@ import pathlib
 import warnings
 
 FOLDER = pathlib.Path(__file__).resolve().parent.parent / "tests" / "data" / "zmx_corpus7"
-FILES = ("virtual_singlet_heights.zmx", "virtual_singlet_angles.zmx",
-         "virtual_stop_behind.zmx", "virtual_stop_behind_aimed.zmx")
+FILES = (
+    "virtual_singlet_heights.zmx",
+    "virtual_singlet_angles.zmx",
+    "virtual_stop_behind.zmx",
+    "virtual_stop_behind_aimed.zmx",
+)
 HY = (0.0, 0.5, 1.0)
 PUPIL = ((0.0, 0.0), (0.0, 1.0), (0.0, -1.0), (1.0, 0.0), (-1.0, 0.0), (0.5, 0.5), (0.0, 0.7))
 
@@ -34,8 +40,11 @@ def main():
         op = load_zemax_file(str(FOLDER / name))
         # optiland 0.6.3 does not read RAIM: the aimed file (RAIM type 1, Zemax's
         # "Paraxial" aiming at the real stop) gets its iterative aiming by hand.
-        aimed = any(ln.split()[:2] == ["RAIM", "0"] and ln.split()[2] == "1"
-                    for ln in (FOLDER / name).read_text().splitlines() if ln.startswith("RAIM"))
+        aimed = any(
+            ln.split()[:2] == ["RAIM", "0"] and ln.split()[2] == "1"
+            for ln in (FOLDER / name).read_text().splitlines()
+            if ln.startswith("RAIM")
+        )
         if aimed:
             op.ray_tracer.set_aiming("iterative", max_iter=50, tol=1e-13)
         wl = op.primary_wavelength
