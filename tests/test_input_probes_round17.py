@@ -196,11 +196,11 @@ def test_paraxial_data_refuses_a_list_of_wavelengths():
     assert float(jl.paraxial_data(lens, 0.55).efl) == pytest.approx(float(jl.efl(lens, 0.55)))
 
 
-@pytest.mark.parametrize("depth", [0.0, -5.0])
+@pytest.mark.parametrize("depth", [0.0, -np.inf])  # -5: a virtual object (round 37c)
 def test_working_fnum_names_a_bad_depth(depth):
     """Before: refused as "the lens fails its own checks ... edited with eqx.tree_at"."""
     lens = jl.zoo.cooke_triplet()
-    with pytest.raises(ValueError, match=r"^working_fnum: depth must be .*\(0, inf\] mm"):
+    with pytest.raises(ValueError, match=r"^working_fnum: depth must be finite, nonzero"):
         working_fnum(lens, depth)
     assert float(working_fnum(lens, None)) == pytest.approx(
         float(jl.paraxial_data(lens).working_fnum))

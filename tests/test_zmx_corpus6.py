@@ -25,8 +25,8 @@ classes:
   configurations flip a parameter (``PRAM 22``), which acts on that zero phase only, so
   they open too. A nonzero grid is still refused, naming the GARR line.
 * An object thickness below 0 (``DISZ -1000``: a virtual object, the beam converging on a
-  point after surface 1) was refused as "object distance must be > 0"; it still is, now
-  saying why (a Lens launches its rays from a real object point or from infinity).
+  point after surface 1) was refused as "object distance must be > 0"; it was then refused
+  saying why, and from round 37c it is read (tests/test_zmx_corpus7.py).
 
 Object-space telecentric files stay refused (tests/test_zmx_round11.py): a ``Lens`` holds
 its fields as chief-ray angles (deg) toward an entrance pupil at a finite distance and its
@@ -222,10 +222,8 @@ def test_grid_phase_missing_points_is_refused():
 # ------------------------------------------------------------------ a virtual object
 
 
-def test_virtual_object_refusal_says_why():
-    with pytest.raises(
-        ValueError,
-        match=r"<zmx>:14: a virtual object \(object thickness "
-        r"-1000 < 0: .*no virtual object: 'DISZ -1000'",
-    ):
-        zmx.loads(_bench(ppar=None, obj="-1000", configs=False))
+def test_virtual_object_opens():
+    """Round 37c: a virtual object is read (tests/test_zmx_corpus7.py traces such files
+    against optiland); before, 'DISZ -1000' was refused."""
+    lens = zmx.loads(_bench(ppar=None, obj="-1000", configs=False))
+    assert float(lens.object_distance) == -1000.0

@@ -15,7 +15,7 @@ import numpy as np
 from jaxtyping import Array, Float
 
 from ..optics import checks, paraxial
-from ..optics.lens import INFINITE_OBJECT_MM, Lens, unclipped
+from ..optics.lens import Lens, check_object_distance, unclipped
 from ..optics.rays import Rays
 from ..tracing.forward import DEFAULT_NEWTON_ITERS, forward_mode_jit, trace
 from . import sampling
@@ -132,9 +132,7 @@ def _check_chief_args(lens, field, depth, wavelength, newton_iters) -> None:
         if depth is not None:
             checks.one_field(field, where, "aim several fields one at a time, or vmap")
     if depth is not None and not checks.is_traced(depth):
-        checks.values(depth, "depth", where, lo=0, lo_open=True,
-                      hi=INFINITE_OBJECT_MM, hi_open=True,
-                      unit="mm (object to surface 1; farther is an object at infinity)")
+        check_object_distance(depth, "depth", where)
     wl = lens.primary_wavelength if wavelength is None else wavelength
     if not checks.is_traced(wl):
         checks.real_values(wl, "wavelength", where, "µm")
@@ -158,8 +156,8 @@ def _stop_chief_ray(lens, field, depth, wavelength, *, newton_iters, iters) -> R
         q = jnp.concatenate([uv, zep[None]])
         if collimated:
             return Rays(q[None], start[None], wl)
-        v = q - start
-        return Rays(start[None], (v / jnp.linalg.norm(v))[None], wl)
+        # Toward +z, also for a virtual object point after the pupil.
+        return Rays(start[None], sampling.line_direction(start, q)[None], wl)
 
     @checks.inherit  # newton_2d's loop bodies are made on each call
     def at_stop(uv, params):

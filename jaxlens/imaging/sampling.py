@@ -35,7 +35,14 @@ import numpy as np
 from jaxtyping import Array, Float
 
 from ..optics import checks, paraxial
-from ..optics.lens import INFINITE_OBJECT_MM, RAY_AIMING, Lens, check_vignetting, unclipped
+from ..optics.lens import (
+    INFINITE_OBJECT_MM,
+    RAY_AIMING,
+    Lens,
+    check_object_distance,
+    check_vignetting,
+    unclipped,
+)
 from ..optics.rays import Rays
 from .newton import newton_2d
 
@@ -276,7 +283,12 @@ def point_source(
     *,
     aim: str | None = None,
 ) -> Rays:
-    """Rays from an object point (global mm, z < 0) through the paraxial entrance pupil.
+    """Rays from an object point (global mm, z < 0) through the paraxial entrance pupil, or
+    toward a virtual one (z > 0: after surface 1, where the object-space beam converges).
+
+    Each ray is the line through the point and its pupil point, travelling toward +z; its
+    ``opl`` at the pupil is the path from the point, negative where the pupil comes first
+    (the light has yet to reach the virtual point).
 
     The entrance pupil diameter is the lens's EPD. ``aim`` as for :func:`collimated` (None:
     the lens's own, ``lens.aim``). The rays are launched at their
@@ -296,22 +308,24 @@ def point_source(
     zep = paraxial.entrance_pupil_z(lens, lens.primary_wavelength)
     if concrete:
         checks.values(given, "point", "point_source", unit="mm")
-        # A point behind surface 1 or the entrance pupil would launch its rays backwards
-        # (the pupil's position is known only for a concrete lens).
-        pupil_z = 0.0 if checks.is_traced(zep) else float(np.min(np.asarray(zep)))
-        checks.values(given[..., 2], "the point's z", "point_source",
-                      hi=min(0.0, pupil_z), hi_open=True,
-                      unit="mm (global z: surface 1 at 0 and the entrance pupil, the object "
-                      "in front of both)")
+        # A real point behind the entrance pupil would launch its rays backwards, and a point
+        # on the pupil's plane has no ray direction (the pupil's position is known only for
+        # a concrete lens).
+        if not checks.is_traced(zep) and np.any(_bad_point_z(given[..., 2],
+                                                             np.asarray(zep), np)):
+            raise ValueError(f"point_source: the point's z must be {POINT_Z_RANGE}, got "
+                             f"{checks.fmt(given[..., 2])} mm (global z: surface 1 at 0, the "
+                             f"entrance pupil at {checks.fmt(np.asarray(zep))})")
     else:  # traced: the same checks at run time (a point behind the lens launched rays back)
         point = eqx.error_if(
-            point, ~(jnp.all(jnp.isfinite(point)) & jnp.all(point[..., 2] < jnp.minimum(0.0, zep))),
-            "point_source: point must be finite (mm) with its global z in front of surface 1 "
-            "and the entrance pupil")
+            point, ~jnp.all(jnp.isfinite(point)) | jnp.any(_bad_point_z(point[..., 2], zep, jnp)),
+            f"point_source: point must be finite (mm) with its global z {POINT_Z_RANGE}")
     xy = pupil * (0.5 * lens.epd)
     target = jnp.concatenate([xy, jnp.broadcast_to(zep, xy.shape[:-1])[..., None]], -1)
     v = target - point
-    dist = jnp.linalg.norm(v, axis=-1, keepdims=True)
+    # +1 where the pupil follows the point, -1 for a virtual point after the pupil.
+    sense = jnp.sign(v[..., 2:])
+    dist = sense * jnp.linalg.norm(v, axis=-1, keepdims=True)
     # Launch on the entrance-pupil plane (near the lens, so float32 keeps its digits for a
     # distant object); the optical path starts at the object point.
     n_obj = lens.object_material.index(wl)
@@ -320,6 +334,26 @@ def point_source(
     if aim != "paraxial":
         rays = aim_at_stop(lens, rays, pupil, source_point=point, stop_size=AIM_STOP_SIZE[aim])
     return rays
+
+
+POINT_Z_RANGE = ("in front of surface 1 and the entrance pupil (a real object), or after "
+                 "surface 1 off the pupil's plane (a virtual object, on which the beam "
+                 "converges)")
+"""Where ``point_source``'s object point may be."""
+
+
+def _bad_point_z(z, zep, xp):
+    """True where an object point at global ``z`` (mm) cannot launch rays toward an entrance
+    pupil at ``zep``: on surface 1's plane or the pupil's, or a real point behind the pupil."""
+    return (z == 0) | (z == zep) | ((z < 0) & (z > zep))
+
+
+def line_direction(frm, to):
+    """The unit direction of the line from point ``frm`` to point ``to`` (``[..., 3]``, mm),
+    turned to travel toward +z: rays in object space are whole lines, and a virtual object
+    point lies after the pupil points its rays pass."""
+    v = to - frm
+    return jnp.sign(v[..., 2:]) * v / jnp.linalg.norm(v, axis=-1, keepdims=True)
 
 
 AIM_STOP_SIZE = {"real": "paraxial", "real_marginal": "real"}
@@ -340,21 +374,16 @@ def lens_aim(lens: Lens, aim: str | None, where: str) -> str:
 
 def object_point(lens: Lens, field, depth) -> Array:
     """The object point (global mm) at a field angle (deg) and distance ``depth`` in front of
-    surface 1 (mm, positive)."""
+    surface 1 (mm; negative: a virtual object, that far after surface 1). The chief ray, the
+    line through the point and the entrance pupil's centre, makes the angle θ with the axis:
+    the point is at −tan θ·(z_ep − z) (below the axis for θ > 0 where the pupil follows the
+    point, above it for a virtual object after the pupil)."""
     checks.one_field(field, "object_point", "trace several fields one at a time, or vmap")
     th = field_xy(field)
-    if checks.is_traced(depth):  # -5 traced an object behind the lens without a word
-        depth = checks.values(depth, "depth", "object_point", lo=0, lo_open=True,
-                              hi=INFINITE_OBJECT_MM, hi_open=True,
-                              unit="mm (object to surface 1; farther is an object at infinity)")
-    else:  # before jnp.asarray, which traces a constant under jit
-        # Beyond INFINITE_OBJECT_MM the first surface is more than the tracer's largest ray
-        # parameter away (every ray was lost: a PSF of zeros, an RMS of NaN).
-        checks.values(depth, "depth", "object_point", lo=0, lo_open=True,
-                      unit="mm (object to surface 1)")
-        checks.values(depth, "depth", "object_point", lo=0, lo_open=True, hi=INFINITE_OBJECT_MM,
-                      hi_open=True,
-                      unit="mm (object to surface 1; farther is an object at infinity)")
+    # Checked before jnp.asarray, which traces a constant under jit. Beyond
+    # INFINITE_OBJECT_MM the first surface is more than the tracer's largest ray parameter
+    # away (every ray was lost: a PSF of zeros, an RMS of NaN).
+    depth = check_object_distance(depth, "depth", "object_point")
     depth = jnp.asarray(depth)
     z = -depth
     zep = paraxial.entrance_pupil_z(lens, lens.primary_wavelength)
@@ -555,8 +584,8 @@ def stop_radius(lens: Lens, stop_size: str = "paraxial", *, object_z=None) -> Fl
     if object_z is None:
         d = jnp.array([0.0, 0.0, 1.0], dt)
     else:
-        v = rim - jnp.stack([jnp.zeros((), dt), jnp.zeros((), dt), jnp.asarray(object_z, dt)])
-        d = v / jnp.linalg.norm(v)
+        d = line_direction(jnp.stack([jnp.zeros((), dt), jnp.zeros((), dt),
+                                      jnp.asarray(object_z, dt)]), rim)
     out = trace_path(unclipped(lens), Rays(rim[None], d[None], lens.primary_wavelength),
                      upto=lens.stop, uniform=True)[-1]
     xy = out.origin[0, :2]
@@ -627,8 +656,7 @@ def aim_at_stop(
         p = jnp.stack([uv[0], uv[1], zep])
         if source_point is None:
             return p, d
-        v = p - source_point
-        return p, v / jnp.linalg.norm(v)
+        return p, line_direction(source_point, p)
 
     def at_stop(uv, d, w, lens_=free):
         o2, d2 = launch(uv, d)
@@ -652,7 +680,9 @@ def aim_at_stop(
     o, d = jax.vmap(launch)(uv, rays.direction)
     opl = None
     if source_point is not None:
-        opl = n_obj * jnp.linalg.norm(o - source_point, axis=-1)
+        # Negative where the pupil comes before a virtual point (as point_source's).
+        opl = n_obj * jnp.sign(o[..., 2] - source_point[..., 2]) * jnp.linalg.norm(
+            o - source_point, axis=-1)
     # A ray that Newton's method did not bring to its stop point (a stop point no ray
     # reaches, a pupil too aberrated for the iterations) is invalid: it was launched as
     # valid, crossing the stop far from where it was aimed, without a word.
@@ -669,17 +699,20 @@ def lens_depth(lens: Lens, depth, where: str):
     object (``lens.object_distance``). Checked, with errors naming ``where``. Returns None
     for an object at infinity, else an array of the lens's dtype, so that compiled programs
     take it as an argument (one program serves every depth)."""
-    if depth is None and not lens.object_at_infinity:
-        depth = lens.object_distance
-    given = static_depth(depth, where)
+    own = depth is None and not lens.object_at_infinity
+    if own:
+        depth = lens.object_distance  # negative for a virtual object
+    given = static_depth(depth, where, virtual_ok=own)
     if given is None or isinstance(given, jax.core.Tracer):
         return given
     return given.astype(lens.epd.dtype)
 
 
-def static_depth(depth, where: str = "sampling"):
+def static_depth(depth, where: str = "sampling", *, virtual_ok: bool = False):
     """None for an object at infinity (a concrete inf), else the depth as an array (checked,
-    errors naming ``where``)."""
+    errors naming ``where``). A depth given to an analysis is > 0 (a negative one is far
+    likelier a slip of sign than a virtual object); ``virtual_ok`` also takes a negative one,
+    a virtual object after surface 1, as a Lens's own ``object_distance`` may be."""
     if depth is None:
         return None
     if isinstance(depth, jax.core.Tracer):
@@ -688,6 +721,8 @@ def static_depth(depth, where: str = "sampling"):
         # every ray NaN, and a negative one traced an object behind the lens, silently.
         if checks.checked_by_caller(depth):
             return depth
+        if virtual_ok:
+            return check_object_distance(depth, "depth", where)
         return eqx.error_if(
             depth, ~(jnp.isfinite(depth) & (depth > 0) & (depth < INFINITE_OBJECT_MM)),
             f"{where}: a traced depth must be finite and in (0, inf) mm from the object to "
@@ -700,6 +735,8 @@ def static_depth(depth, where: str = "sampling"):
     # an RMS of NaN at 1e300 mm, and in float32 already at 1e30 mm).
     if given.dtype.kind in "iuf" and np.all(given >= INFINITE_OBJECT_MM):
         return None
+    if virtual_ok:
+        return jnp.asarray(check_object_distance(depth, "depth", where))
     checks.values(depth, "depth", where, lo=0, lo_open=True,
                   unit="mm from the object to surface 1 (inf: an object at infinity)")
     checks.values(depth, "depth", where, lo=0, lo_open=True, hi=INFINITE_OBJECT_MM, hi_open=True,

@@ -409,8 +409,10 @@ def lens_from_dict(d: dict, *, source: str = "<lens>") -> Lens:
                              f"thickness {obj['thickness']!r} (mm); give one of them")
     elif block is not None:
         dist = _num(block, f"{source}: object.distance", finite=False)
-    if dist <= 0:
-        raise ValueError(f"{source}: the object distance must be > 0 or 'inf', got {dist}")
+    if dist == 0 or math.isnan(dist) or dist <= -INFINITE_OBJECT_MM:
+        raise ValueError(f"{source}: the object distance must be nonzero, below "
+                         f"{INFINITE_OBJECT_MM:g} mm in size (negative: a virtual object "
+                         f"after surface 1), or 'inf', got {dist}")
     obj_mat = Air()
     if obj is not None:
         obj_mat = material_from_spec(

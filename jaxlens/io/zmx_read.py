@@ -570,14 +570,13 @@ def _lens(f: ZmxFile, text: str, path: str, strict: bool, unknown_glass: str) ->
     if dist >= INFINITE_OBJECT_MM:
         dist = math.inf  # Zemax's convention; a finite 1e20 mm would need ray directions of
         # relative size 1e-20, which no float can aim
-    if dist < 0:  # Zemax 5.2's pulse-front-tilt bench (krishk97/Zemax-DLA-SLM): DISZ -1000
+    # Below 0: a virtual object, the point that the object-space beam converges on, -dist
+    # after surface 1 (Zemax 5.2's pulse-front-tilt bench, krishk97/Zemax-DLA-SLM: DISZ -1000).
+    if dist != math.inf and not (dist != 0 and abs(dist) < INFINITE_OBJECT_MM):
         raise (obj.disz_line or obj.line).error(
-            f"a virtual object (object thickness {obj.disz:g} < 0: the object point lies "
-            f"{-obj.disz:g} lens units after surface 1, the beam converging on it) is not "
-            f"supported: a jaxlens Lens launches its rays from a real object point before "
-            f"surface 1 (object_distance > 0 mm) or from infinity, and has no virtual object")
-    if not dist > 0:
-        raise (obj.disz_line or obj.line).error("object distance must be > 0 or INFINITY")
+            f"the object thickness must be nonzero and below {INFINITE_OBJECT_MM:g} mm in "
+            f"size, or INFINITY (negative: a virtual object after surface 1), got "
+            f"{obj.disz:g} lens units")
     zmx_surfaces.check_object_plane(obj, dist)
     wl, primary, wl_lines = _wavelengths(f)
     _check_image_medium(f, body)

@@ -112,7 +112,11 @@ def angles_from_object_heights(lens: Lens, heights: np.ndarray) -> Lens:
         raise ValueError("object heights (FTYP 1) need a finite object distance")
     lever = float(lens.object_distance) + float(paraxial.entrance_pupil_z(
         lens, lens.primary_wavelength))
-    if not (math.isfinite(lever) and lever > 0.0):
+    # lever < 0: the pupil lies before the object point (a virtual object after it), and a
+    # positive height is a positive angle. Where a real object lies behind the pupil, its
+    # rays could not reach the pupil; on the pupil's plane no angle gives a height.
+    if not (math.isfinite(lever) and (lever > 0.0 or float(lens.object_distance) < 0.0)
+            and lever != 0.0):
         raise ValueError(f"object heights cannot be converted to angles: the entrance pupil "
                          f"lies {-lever:g} mm before the object")
     angles = np.degrees(np.arctan(-np.asarray(heights, np.float64) / lever))

@@ -7,7 +7,8 @@ Conventions:
     entry is the distance to the image surface. ``materials[i]`` is the medium *after*
     ``surfaces[i]`` (so ``materials[-1]`` is image space). ``stop`` is the 0-based index
     of the aperture stop in ``surfaces``. ``object_distance`` is measured from the
-    object to surface 1's vertex (``inf``, or 1e10 mm and more, for an object at infinity).
+    object to surface 1's vertex (``inf``, or 1e10 mm and more, for an object at infinity;
+    negative for a virtual object after surface 1, on which the object-space beam converges).
     ``epd`` is the entrance pupil diameter, ``fields`` the field angles in degrees (y
     direction), and ``wavelengths`` the system wavelengths with ``primary`` the index of
     the primary one.
@@ -114,6 +115,31 @@ programs write 1e20 for infinity, whose square overflows float32 when rays are a
 
 
 _as_distance = checks.float_array("object_distance", "Lens", "mm")
+
+OBJECT_DISTANCE_RANGE = (
+    f"finite, nonzero and below {INFINITE_OBJECT_MM:g} in size (mm from the object to surface "
+    f"1: > 0 a real object before it, < 0 a virtual object after it, on which the beam "
+    f"converges; inf or None: an object at infinity)")
+"""What an object distance may be (the message of ``check_object_distance``)."""
+
+
+def check_object_distance(d, arg: str, where: str):
+    """An object distance (mm from the object to surface 1, concrete or traced, any shape):
+    finite, nonzero and below ``INFINITE_OBJECT_MM`` in size. Positive is a real object
+    before surface 1; negative a virtual one after it, the point on which the beam in object
+    space converges (Zemax's negative object thickness), whose rays are the lines through it
+    and the entrance pupil, travelling toward +z. Returns ``d`` (``eqx.error_if`` where
+    traced); a bad concrete value raises ``ValueError`` naming ``where``, ``arg`` and it."""
+    msg = f"{where}: {arg} must be {OBJECT_DISTANCE_RANGE}"
+    if checks.is_traced(d):
+        a = jnp.asarray(d)
+        return eqx.error_if(d, jnp.any(~jnp.isfinite(a) | (a == 0)
+                                       | (jnp.abs(a) >= INFINITE_OBJECT_MM)), msg)
+    a = np.asarray(d, dtype=float)
+    bad = ~np.isfinite(a) | (a == 0) | (np.abs(a) >= INFINITE_OBJECT_MM)
+    if np.any(bad):
+        raise ValueError(f"{msg}, got {checks.fmt(a[bad][:1])} mm")
+    return d
 
 
 def _distance(x):
@@ -426,8 +452,7 @@ class Lens(eqx.Module):
             check_vignetting(v, "Lens", "vignetting")
         d = self.object_distance
         if d is not None and not checks.is_traced(d):
-            checks.values(d, "object_distance", "Lens", lo=0, lo_open=True,
-                          unit="mm (inf or None: an object at infinity)")
+            check_object_distance(d, "object_distance", "Lens")
 
     def _check_mirrors_and_breaks(self):
         """Mirrors and coordinate breaks keep the medium: materials[i] repeats the one before."""

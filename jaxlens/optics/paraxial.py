@@ -53,7 +53,7 @@ from jaxtyping import Array, Float
 from . import checks
 from .diffractive import Binary2
 from .freeform import Biconic, ZernikeSag
-from .lens import INFINITE_OBJECT_MM, Lens
+from .lens import INFINITE_OBJECT_MM, Lens, check_object_distance
 from .paraxial_surface import ParaxialSurface
 from .surfaces import AbstractSurface, Standard
 from .toroidal import Toroidal
@@ -390,11 +390,11 @@ def working_fnum(lens: Lens, depth) -> Array:
     had its diffraction MTF (and default cut-off) at half the working F-number."""
     _lens_and_size(lens, None, "working_fnum")
     if depth is not None and not checks.is_traced(depth):
-        # A depth of 0 or -5 mm was refused as "a lens edited with eqx.tree_at".
+        # A depth of 0 mm was refused as "a lens edited with eqx.tree_at".
         checks.real_values(depth, "depth", "working_fnum", "mm")
-        checks.values(depth, "depth", "working_fnum", lo=0, lo_open=True, inf_ok=True,
-                      unit="mm (None or inf: an object at infinity)")
         if np.all(np.asarray(depth, dtype=float) >= INFINITE_OBJECT_MM):
             depth = None  # as a Lens's object_distance: inf gave a working F-number of NaN
+        else:  # negative: a virtual object
+            check_object_distance(depth, "depth", "working_fnum")
     at = eqx.tree_at(lambda m: m.object_distance, lens, depth, is_leaf=lambda x: x is None)
     return paraxial_data(at).working_fnum
