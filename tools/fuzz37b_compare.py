@@ -152,12 +152,19 @@ def compare_glasses(path):
             f"{np.round(r['agf_formula_nd_vd'], 6).tolist()}; rii {r['optiland_formula']} listed"
             f" {r['rii_specs_nd_vd']} computed {np.round(r['rii_formula_nd_vd'], 6).tolist()}"
         )
-    own = max(r["jaxlens_vs_own_agf"] for r in rows), max(r["optiland_vs_own_formula"] for r in rows)
+    own = (
+        max(r["jaxlens_vs_own_agf"] for r in rows),
+        max(r["optiland_vs_own_formula"] for r in rows),
+    )
     print(f"glasses compared: {len(rows)}, not found in jaxlens: {len(missing)}")
-    print("largest |jaxlens - optiland| within both ranges per catalog:",
-          {k: float(f"{v:.2e}") for k, v in worst.items()})
-    print(f"over 1e-6: {len(bad)} ({sorted({r['catalog'] for r in bad})}); each side against "
-          f"its own coefficients evaluated here: jaxlens {own[0]:.1e}, optiland {own[1]:.1e}")
+    print(
+        "largest |jaxlens - optiland| within both ranges per catalog:",
+        {k: float(f"{v:.2e}") for k, v in worst.items()},
+    )
+    print(
+        f"over 1e-6: {len(bad)} ({sorted({r['catalog'] for r in bad})}); each side against "
+        f"its own coefficients evaluated here: jaxlens {own[0]:.1e}, optiland {own[1]:.1e}"
+    )
     out = pathlib.Path(path).with_name("compare_glasses.json")
     out.write_text(json.dumps(dict(worst=worst, over_1e6=bad, missing=missing), indent=1) + "\n")
 
@@ -205,25 +212,35 @@ def compare_lenses(folder, names, rays_only=False):
             print(f"{path.stem}: ERROR {exc!r}"[:300], flush=True)
             rows[path.stem] = {"error": repr(exc)[:300]}
             continue
-        size = max(abs(v) for r in d["real_rays"] for v in (r["image"]["x"], r["image"]["y"],
-                                                           r["image"]["z"]))
+        size = max(
+            abs(v)
+            for r in d["real_rays"]
+            for v in (r["image"]["x"], r["image"]["y"], r["image"]["z"])
+        )
         err["ray_pos_rel"] = err["ray_pos"] / size
         rows[path.stem] = err
         kind = d["generator"].get("kind", "?")
-        bad = [k for k, v in err.items()
-               if (k.startswith("valid") and v > 0) or (k in BAR and not v <= BAR[k])]
+        bad = [
+            k
+            for k, v in err.items()
+            if (k.startswith("valid") and v > 0) or (k in BAR and not v <= BAR[k])
+        ]
         for table in (worst, by_kind.setdefault(kind, {})):
             for k, v in err.items():
                 if math.isnan(v) or v >= table.get(k, (-1, ""))[0]:
                     table[k] = (v, path.stem)
-        print(f"{path.stem}: {time.time() - t0:5.1f}s "
-              + " ".join(f"{k} {v:.1e}" for k, v in err.items())
-              + (f"  OVER {bad}" if bad else ""), flush=True)
+        print(
+            f"{path.stem}: {time.time() - t0:5.1f}s "
+            + " ".join(f"{k} {v:.1e}" for k, v in err.items())
+            + (f"  OVER {bad}" if bad else ""),
+            flush=True,
+        )
     for kind, table in sorted(by_kind.items()):
         print(f"largest ({kind}):", " ".join(f"{k} {v[0]:.2e}" for k, v in table.items()))
     print("largest:", " ".join(f"{k} {v[0]:.2e} ({v[1]})" for k, v in worst.items()))
     (folder / "compare_37b.json").write_text(
-        json.dumps({"rows": rows, "worst": worst, "by_kind": by_kind}, indent=1) + "\n")
+        json.dumps({"rows": rows, "worst": worst, "by_kind": by_kind}, indent=1) + "\n"
+    )
 
 
 def main(argv):
@@ -231,8 +248,11 @@ def main(argv):
     ap.add_argument("what", choices=("lenses", "glasses"))
     ap.add_argument("path", help="lenses: the folder of fuzz37b_*.json; glasses: glasses.json")
     ap.add_argument("names", nargs="*", help="lenses: only these cases")
-    ap.add_argument("--rays-only", action="store_true",
-                    help="lenses: real rays and paraxial data only, no RMS spots or distortion")
+    ap.add_argument(
+        "--rays-only",
+        action="store_true",
+        help="lenses: real rays and paraxial data only, no RMS spots or distortion",
+    )
     args = ap.parse_args(argv)
     if not pathlib.Path(args.path).exists():
         ap.error(f"{args.path} does not exist")

@@ -5,7 +5,7 @@ Run with the optiland venv, never jaxlens's (jaxlens is not imported here)::
 
     /work/optenv/bin/python tools/fuzz37b_reference.py glasses OUT_FOLDER
     /work/optenv/bin/python tools/fuzz37b_reference.py lenses OUT_FOLDER [--n 40] [--seed 37]
-        [--kind wide|scale_small|scale_large|far_wavelengths|high_order|near_tir|all]
+        [--kind wide|scale_small|scale_large|far_wavelengths|high_order|all]
 
 and compare jaxlens with what it writes with ``tools/fuzz37b_compare.py`` (jaxlens's venv).
 
@@ -19,24 +19,23 @@ coefficients and range, so a disagreement can be settled from the published coef
 ``conventions``), drawn and traced as ``tools/fuzz36b_reference.py`` draws and traces them
 (its functions are reused), in classes it did not draw:
 
-* ``wide``: (redrawn with sub-seeds until one passes) an object at infinity with a largest field of 60 to 85 degrees (halved until every
-  stored ray passes, never below 45), a front negative meniscus or a stop in front, and
-  skew rays: every field also gets rays of the x pupil ring and an x-field ray pair
-  (direction (sin th, 0, cos th)) among the real rays (their ``Hx`` is stored);
-* ``scale_small`` / ``scale_large``: the same draws with the length scale 0.5 to 1.5 mm, or
-  800 to 2000 mm;
-* ``far_wavelengths``: wavelengths 365.0, 404.6565, 587.5618, 1013.98 nm (primary d);
-* ``high_order``: even aspheres with A2..A16 (eight terms);
-* ``near_tir``: an F/0.9 to F/1.2 beam on a strongly curved last glass-air face, the field
-  raised (not halved) toward the largest one every ray passes, so the rim rays refract at up
-  to a few tenths of a degree from the critical angle.
+* ``wide``: an object at infinity with half the drawn EPD and a largest field of 60 to 85
+  degrees, lowered by 10 % steps until every stored ray passes (a draw that does not reach
+  45 degrees is redrawn with sub-seeds 1 to 11);
+* ``scale_small`` / ``scale_large``: fuzz36b's draws with every length scaled so that the
+  length scale is 0.5 to 1.5 mm, or 800 to 2000 mm;
+* ``far_wavelengths``: wavelengths 587.5618 (primary), 365.0, 404.6565 and 1013.98 nm;
+* ``high_order``: even aspheres with A2..A14 or A2..A16 on most surfaces.
+
+Every case also stores skew rays: each non-zero field turned into the x-z plane (direction
+(sin th, 0, cos th)) at five pupil points, marked ``field_axis: "x"`` among the real rays,
+traced by optiland and checked against rayoptics like the others.
 """
 
 from __future__ import annotations
 
 import argparse
 import json
-import math
 import pathlib
 import platform
 import sys
@@ -167,12 +166,16 @@ def add_aspheres_high(f36, rng, sys_):
     ip = sys_["wls"].index(sys_["prim"])
     n_after = [r["after"]["n"][ip] if r["after"] is not f36.AIR else 1.0 for r in rows]
     stop = next(i for i, r in enumerate(rows) if r["stop"])
-    p = f36.paraxial([r["c"] for r in rows], [r["gap"] for r in rows[:-1]], n_after, stop,
-                     sys_["dist"])
+    p = f36.paraxial(
+        [r["c"] for r in rows], [r["gap"] for r in rows[:-1]], n_after, stop, sys_["dist"]
+    )
     h = np.abs(np.array(p["heights"])) * sys_["epd"] / 2
     for i, r in enumerate(rows):
-        if r["stop"] and r["c"] == 0.0 and r["after"] is f36.AIR and (
-            i == 0 or rows[i - 1]["after"] is f36.AIR
+        if (
+            r["stop"]
+            and r["c"] == 0.0
+            and r["after"] is f36.AIR
+            and (i == 0 or rows[i - 1]["after"] is f36.AIR)
         ):
             continue
         if rng.random() < 0.3:
@@ -247,7 +250,9 @@ def x_field_rays(f36, case, fields):
                         Px=px,
                         Py=py,
                         wavelength_nm=w,
-                        launch=dict(point_on_EP_plane=o[k].tolist(), direction_cosines=d[k].tolist()),
+                        launch=dict(
+                            point_on_EP_plane=o[k].tolist(), direction_cosines=d[k].tolist()
+                        ),
                         image=dict(zip("x y z L M N".split(), map(float, res[k]), strict=True)),
                     )
                 )
@@ -270,8 +275,9 @@ def build_lens(f36, idx, seed, kind):
 def _build_lens(f36, idx, seed, kind, attempt):
     t0 = time.time()
     rng = np.random.default_rng([seed, idx] + ([attempt] if attempt else []))
-    f36.WAVELENGTH_SETS = (FAR_WLS,) if kind == "far_wavelengths" else (
-        [f36.F, f36.D, f36.C], [450.0, 550.0, 650.0])
+    f36.WAVELENGTH_SETS = (
+        (FAR_WLS,) if kind == "far_wavelengths" else ([f36.F, f36.D, f36.C], [450.0, 550.0, 650.0])
+    )
     f36.PRIMARY = (f36.D,) if kind == "far_wavelengths" else (f36.D, 550.0)
     sys_ = f36.draw_system(rng)
     if kind == "wide":
@@ -332,11 +338,16 @@ def lenses(out, n, seed, kinds, start):
             continue
         (out / f"{js['name']}.json").write_text(json.dumps(js, indent=1) + "\n")
         summary["accepted"].append(js["name"])
-        print(f"{i:3d} ok {js['build_seconds']:5.1f}s fields {js['fields']['values']} "
-              f"{' '.join(js['features'])}", flush=True)
+        print(
+            f"{i:3d} ok {js['build_seconds']:5.1f}s fields {js['fields']['values']} "
+            f"{' '.join(js['features'])}",
+            flush=True,
+        )
     (out / "summary.json").write_text(json.dumps(summary, indent=1) + "\n")
-    print(f"drawn {summary['drawn']}, accepted {len(summary['accepted'])}, refused "
-          + ", ".join(f"{k} {len(v)}" for k, v in summary["refused"].items()))
+    print(
+        f"drawn {summary['drawn']}, accepted {len(summary['accepted'])}, refused "
+        + ", ".join(f"{k} {len(v)}" for k, v in summary["refused"].items())
+    )
 
 
 def main(argv):
@@ -346,8 +357,12 @@ def main(argv):
     ap.add_argument("--n", type=int, default=40, help="lenses to draw (default 40)")
     ap.add_argument("--seed", type=int, default=37, help="seed (default 37)")
     ap.add_argument("--start", type=int, default=0, help="first draw index (default 0)")
-    ap.add_argument("--kind", choices=(*KINDS, "all"), default="all",
-                    help="the class of lenses (default all: draw i gets KINDS[i % 5])")
+    ap.add_argument(
+        "--kind",
+        choices=(*KINDS, "all"),
+        default="all",
+        help="the class of lenses (default all: draw i gets KINDS[i % 5])",
+    )
     args = ap.parse_args(argv)
     if args.n < 1:
         ap.error(f"--n must be >= 1, got {args.n}")
