@@ -73,10 +73,13 @@ def test_catalog_indices_equal_optilands():
             lo, hi = m.wavelength_range
             w = w[(w >= lo) & (w <= hi)]
             want = np.array(g["n"])[np.isin(g["wavelengths_um"], w)]
-            got = np.asarray(m.index(w))
+            got = np.asarray(m.extrapolated_index(w))  # w is inside the range
             if name in CDGM_REVISED and cat == "CDGM":
                 d_line = np.argmin(np.abs(w - 0.5875618))
                 assert abs(got[d_line] - want[d_line]) < 1e-5
                 assert 1e-6 < np.abs(got - want).max() < 1e-3
                 continue
-            np.testing.assert_allclose(got, want, rtol=0, atol=1e-12, err_msg=f"{cat} {name}")
+            # CDGM's other glasses: the 2014 and 2022 files print the same coefficients to
+            # different digits (5e-12 at 0.365 µm on BAF2)
+            tol = 1e-10 if cat == "CDGM" else 1e-12
+            np.testing.assert_allclose(got, want, rtol=0, atol=tol, err_msg=f"{cat} {name}")
