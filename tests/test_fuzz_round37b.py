@@ -7,7 +7,8 @@ wavelengths 365, 404.7, 587.6 and 1014 nm, even aspheres to A14 and A16; every c
 skew rays (the fields turned into the x-z plane). Each file is in the refcase schema and
 names its generator, class, seed and draw. The checks of tests/test_trace.py run over them,
 imported, not copied: the float64 intercepts and paraxial data of two cases in CI, the rest
-and the RMS spots and distortion with -m slow.
+and the RMS spots and distortion with -m slow. A virtual image and near-grazing refraction,
+which the draws leave out, are checked against Snell's law in closed form.
 
 ``glasses_sample.json`` holds optiland's indices (the refractiveindex.info files it ships) of
 a sample of SCHOTT, OHARA, HOYA, CDGM, SUMITA and HIKARI glasses at 0.365 to 1.064 µm (the
