@@ -244,7 +244,8 @@ IN_PLACE = re.compile(r"\.write_text\(|json\.dump\(|open\([^)]*,\s*[\"']w[b]?[\"
 # Run with optiland's interpreter, where jaxlens (and jax) may be missing: they keep their
 # plain writes (each writes a reference file by hand, read back by a person, not a run).
 OPTILAND_ONLY = {"tools/make_refcase.py", "tools/conventions_reference.py",
-                 "tools/zernike_decenter_reference.py", "tools/fuzz36b_reference.py"}
+                 "tools/zernike_decenter_reference.py", "tools/fuzz36b_reference.py",
+                 "tools/rayoptics_reevaluation.py"}
 
 
 @pytest.mark.parametrize("path", sorted(
