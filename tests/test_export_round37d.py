@@ -131,3 +131,60 @@ def test_rayoptics_matches_jaxlens_reread_per_field():
             r["yfln_min_valid_fraction"],
             err_msg=r["design"],
         )
+
+
+def _tabulated_lens(wavelengths):
+    import jax.numpy as jnp
+
+    import jaxlens as jl
+
+    wl = np.array([0.40, 0.45, 0.5, 0.55, 0.6, 0.65, 0.7, 0.8])
+    n = 1.5 + 0.004 / wl**2 + 0.0003 * np.sin(7 * wl)  # a measured-looking table, 8 points
+    tab = jl.Tabulated(jnp.asarray(wl), jnp.asarray(n))
+    lens = jl.Lens(
+        surfaces=(jl.Sphere(1 / 30.0), jl.Sphere(-1 / 45.0)),
+        thickness=jnp.array([6.0, 33.4]),
+        materials=(tab, jl.Air()),
+        epd=10.0,
+        fields=jnp.array([0.0, 10.0]),
+        wavelengths=jnp.asarray(wavelengths),
+    )
+    return lens, tab
+
+
+def _agf_schott_index(folder: pathlib.Path, wl: np.ndarray) -> np.ndarray:
+    """The index Zemax computes from the side AGF's Schott formula (formula 1)."""
+    (agf,) = folder.glob("*.AGF")
+    (nm,) = [ln.split() for ln in agf.read_text().splitlines() if ln.startswith("NM ")]
+    assert nm[2] == "1"
+    (cd,) = [ln.split()[1:] for ln in agf.read_text().splitlines() if ln.startswith("CD ")]
+    a0, a1, a2, a3, a4, a5 = (float(v) for v in cd)
+    return np.sqrt(a0 + a1 * wl**2 + a2 * wl**-2 + a3 * wl**-4 + a4 * wl**-6 + a5 * wl**-8)
+
+
+def test_tabulated_glass_is_exact_for_zemax_at_the_files_wavelengths(tmp_path):
+    """Main: a Tabulated glass of more than 6 points went into the side AGF as a least-squares
+    Schott fit of its table, 2.7e-6 off its own index at the file's F, d, C (jaxlens read it
+    back exactly from the GC record, Zemax traced the fit): now exact at the file's
+    wavelengths."""
+    import jaxlens as jl
+
+    wl = np.array([0.4861327, 0.5875618, 0.6562725])
+    lens, tab = _tabulated_lens(wl)
+    jl.save(lens, tmp_path / "t.zmx")
+    want = np.asarray(tab.index(wl))
+    np.testing.assert_allclose(_agf_schott_index(tmp_path, wl), want, rtol=0, atol=1e-12)
+    back = jl.load(tmp_path / "t.zmx")
+    np.testing.assert_allclose(np.asarray(back.materials[0].index(wl)), want, rtol=0, atol=0)
+
+
+def test_tabulated_glass_at_more_than_6_wavelengths_warns(tmp_path):
+    """Seven wavelengths: no 6-term Schott formula holds the table exactly there; the
+    writer says how far off Zemax's index is."""
+    import jaxlens as jl
+    from jaxlens.io.zmx_common import ZmxWarning
+
+    wl = np.array([0.42, 0.46, 0.5, 0.55, 0.6, 0.66, 0.75])
+    lens, _ = _tabulated_lens(wl)
+    with pytest.warns(ZmxWarning, match=r"glass .* \(Tabulated\) has no Zemax formula.* off"):
+        jl.save(lens, tmp_path / "t.zmx")
