@@ -98,10 +98,13 @@ def test_rayoptics_reproduces_the_claims_of_all_40():
         for k in ("efl", "fnum", "bfl"):
             assert math.isclose(r[k], c[k], rel_tol=1e-9), (r["design"], k, r[k], c[k])
         assert math.isclose(r["fov"], spec.fov, rel_tol=1e-12)
+        # The claims are of the lens the run evaluated before it wrote the file: its chief
+        # ray at 40.4° lands up to 1.3e-7 mm (3.2e-8 relative) from the file's, where
+        # ray-optics and jaxlens's re-read of the file agree to 1e-13.
         assert math.isclose(
-            r["chief_height_full_field"], c["chief_height_full_field"], rel_tol=1e-8
+            r["chief_height_full_field"], c["chief_height_full_field"], rel_tol=1e-7
         ), r["design"]
-        assert abs(r["distortion_percent"] - c["distortion_percent"]) < 1e-6, r["design"]
+        assert abs(r["distortion_percent"] - c["distortion_percent"]) < 1e-5, r["design"]
         if "rms_mean_um" in r:
             assert math.isclose(r["rms_mean_um"], c["rms_mean_um"], rel_tol=1e-5), r["design"]
             assert math.isclose(r["rms_max_um"], c["rms_max_um"], rel_tol=1e-5), r["design"]
@@ -112,7 +115,8 @@ def test_rayoptics_reproduces_the_claims_of_all_40():
 @pytest.mark.slow
 def test_rayoptics_matches_jaxlens_reread_per_field():
     """Per file field (YFLN), ray-optics's pooled RMS and vignetting equal jaxlens's re-read
-    of the same file (``analysis.rms_spot``), all 40 designs."""
+    of the same file (``analysis.rms_spot``), and the full-field chief ray
+    (``spots.chief_ray``) to 1e-9 mm, all 40 designs."""
     import jax
 
     jax.config.update("jax_enable_x64", True)
@@ -122,6 +126,8 @@ def test_rayoptics_matches_jaxlens_reread_per_field():
 
     for r in _rayoptics():
         lens = jl.load(ROOT / "experiments" / "classical" / r["design"]).astype(jnp.float64)
+        chief = jl.analysis.spots.chief_ray(lens, r["yfln_deg"][-1])
+        assert abs(float(chief.origin[1]) - r["chief_height_full_field"]) < 1e-9, r["design"]
         res = jl.analysis.rms_spot(lens, jnp.asarray(r["yfln_deg"]))
         np.testing.assert_allclose(
             np.asarray(res.polychromatic) * 1e3, r["yfln_rms_um"], rtol=1e-5, err_msg=r["design"]

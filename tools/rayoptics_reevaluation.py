@@ -303,6 +303,7 @@ def main(argv=None) -> int:
         text = json.dumps({"tool": "rayoptics 0.9.8", "designs": out}, indent=1)
         with tempfile.NamedTemporaryFile("w", dir=a.json.parent, delete=False) as f:
             f.write(text)  # temporary
+        os.chmod(f.name, 0o644)
         os.replace(f.name, a.json)
     return 0
 
