@@ -77,9 +77,12 @@ def read_notes(text: str) -> dict:
 def open_file(path: pathlib.Path):
     from rayoptics.environment import open_model
 
-    with warnings.catch_warnings():
+    # From a copy: ray-optics may leave a "<name>_tmpl.smx" beside the file it opens.
+    with tempfile.TemporaryDirectory() as tmp, warnings.catch_warnings():
         warnings.simplefilter("ignore")
-        opm, info = open_model(str(path), info=True)
+        for f in [path, *path.parent.glob("*.AGF")]:
+            (pathlib.Path(tmp) / f.name).write_bytes(f.read_bytes())  # temporary
+        opm, info = open_model(str(pathlib.Path(tmp) / path.name), info=True)
     return opm, info
 
 
