@@ -245,7 +245,8 @@ IN_PLACE = re.compile(r"\.write_text\(|json\.dump\(|open\([^)]*,\s*[\"']w[b]?[\"
 # plain writes (each writes a reference file by hand, read back by a person, not a run).
 OPTILAND_ONLY = {"tools/make_refcase.py", "tools/conventions_reference.py",
                  "tools/zernike_decenter_reference.py", "tools/fuzz36b_reference.py",
-                 "tools/corpus7_reference.py", "tools/fuzz37b_reference.py"}
+                 "tools/corpus7_reference.py", "tools/fuzz37b_reference.py",
+                 "tools/rayoptics_reevaluation.py"}
 
 
 @pytest.mark.parametrize("path", sorted(

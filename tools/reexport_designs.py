@@ -47,6 +47,29 @@ def _prescription_lines(path: pathlib.Path) -> list[str]:
     ]
 
 
+def _keep_rounding(trial: pathlib.Path, path: pathlib.Path) -> None:
+    """Keep the old DIAM and CLAP lines where the new ones differ only by rounding (1e-12,
+    relative: the clear apertures recomputed from the file's own numbers), so that a
+    re-export changes no line it has no reason to."""
+    old, new = path.read_text().splitlines(), trial.read_text().splitlines()
+    if len(old) != len(new):
+        return
+    for k, (a, b) in enumerate(zip(old, new, strict=True)):
+        ka, kb = a.split()[:1], b.split()[:1]
+        if ka == kb and ka and ka[0] in ("DIAM", "CLAP") and a != b:
+            na, nb = a.split()[1:3], b.split()[1:3]
+            try:
+                close = all(
+                    np.isclose(float(x.strip('"')), float(y.strip('"')), rtol=1e-12, atol=0)
+                    for x, y in zip(na, nb, strict=True)
+                )
+            except ValueError:
+                close = False
+            if close:
+                new[k] = a
+    trial.write_text("\n".join(new) + "\n", newline="\r\n")  # temporary
+
+
 def reexport(path: pathlib.Path, spec: DesignSpec) -> str:
     lens = jaxlens.load(str(path))
     new = dataclasses.replace(
@@ -62,6 +85,7 @@ def reexport(path: pathlib.Path, spec: DesignSpec) -> str:
         for agf in path.parent.glob("*.AGF"):  # the side catalog the file names
             (pathlib.Path(tmp) / agf.name).write_bytes(agf.read_bytes())
         jaxlens.save(new, str(trial))
+        _keep_rounding(trial, path)
         if _prescription_lines(trial) != _prescription_lines(path):
             return f"{path}: left as it was (lines other than {EXPORT_ONLY_KEYS} would change)"
         os.replace(trial, path)

@@ -54,7 +54,7 @@ def evaluation_notes(spec, grid: int = 16, margin: float = CLEAR_APERTURE_MARGIN
     return "\n".join(
         [
             "jaxlens classical run: summary.json's numbers are of this file, evaluated as follows.",
-            f"Fields: a {grid} x {grid} grid over the {w:.6g} x {h:.6g} mm sensor "
+            f"Fields: a {grid} x {grid} grid over the {w:.10g} x {h:.10g} mm sensor "
             f"(linspace(-1, 1, {grid}) per side; summary.json best.field_angles_deg), "
             f"(thetax, thetay) with tan = sensor position / {spec.focal_length:.10g} "
             "mm; the YFLN fields here are the design fields along y (the largest, half the "
@@ -69,7 +69,8 @@ def evaluation_notes(spec, grid: int = 16, margin: float = CLEAR_APERTURE_MARGIN
             f"thetay = {spec.half_fov:.10g} deg.",
             f"Apertures: CLAP = largest passing evaluated ray height x (1 + {margin:g}) (the stop "
             f"in front: ENPD/2); valid = no surface overlap over them and >= 99 % of each "
-            f"field's rays reach the sensor.",
+            f"field's rays reach the sensor at every WAVM (vignetting: the smallest fraction "
+            f"over the wavelengths).",
         ]
     )
 

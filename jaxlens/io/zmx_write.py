@@ -7,6 +7,7 @@ import json
 import math
 import os
 import re
+import warnings
 from dataclasses import dataclass
 
 import numpy as np
@@ -31,6 +32,7 @@ from .zmx_common import (
     MAX_XPOLY_DEGREE,
     PLASTIC_CATALOG,
     ZEMAX_CATALOGS,
+    ZmxWarning,
     term_powers,
     xpoly_terms,
 )
@@ -110,17 +112,38 @@ def _formula(m: AbstractMaterial):
 _SCHOTT_POWERS = (0, -2, -4, 2, -6, -8)  # order in which the fit adds Schott terms
 
 
-def _schott_fit(wl: np.ndarray, n: np.ndarray) -> list[float]:
-    """Schott-formula coefficients through (wl, n): exact for ≤ 6 points, else least squares."""
-    k = min(len(wl), 6)
+def _schott_fit(wl: np.ndarray, n: np.ndarray, exact_wl=(), exact_n=()) -> list[float]:
+    """Schott-formula coefficients through (wl, n): exact for ≤ 6 points, else least squares;
+    through (exact_wl, exact_n) (the file's wavelengths) exactly where there are at most 6
+    of those (the least squares then over the others, in the rest of the formula's freedom)."""
+    ew, en = np.asarray(exact_wl, np.float64), np.asarray(exact_n, np.float64)
+    k = min(len(wl) + len(ew), 6)
     powers = _SCHOTT_POWERS[:k]
-    A = np.stack([wl**p for p in powers], axis=-1)
-    sol, *_ = np.linalg.lstsq(A, n**2, rcond=None)
     order = {0: 0, 2: 1, -2: 2, -4: 3, -6: 4, -8: 5}
+
+    def rows(w):
+        return np.stack([w**p for p in powers], axis=-1)
+
+    A, b = rows(np.asarray(wl, np.float64)), np.asarray(n, np.float64) ** 2
+    if 0 < len(ew) <= k:
+        C, d = rows(ew), en**2
+        x0 = np.linalg.lstsq(C, d, rcond=None)[0]
+        _, sv, vt = np.linalg.svd(C)
+        null = vt[int(np.sum(sv > sv[0] * 1e-13)):].T
+        z = np.linalg.lstsq(A @ null, b - A @ x0, rcond=None)[0] if null.size else 0.0
+        sol = x0 + (null @ z if null.size else 0.0)
+    else:
+        A, b = (np.concatenate([A, rows(ew)]), np.concatenate([b, en**2])) if len(ew) else (A, b)
+        sol, *_ = np.linalg.lstsq(A, b, rcond=None)
     out = [0.0] * 6
     for p, v in zip(powers, sol, strict=True):
         out[order[p]] = float(v)
     return out
+
+
+def _schott_index(coeffs: list[float], wl: np.ndarray) -> np.ndarray:
+    a0, a1, a2, a3, a4, a5 = coeffs
+    return np.sqrt(a0 + a1 * wl**2 + a2 * wl**-2 + a3 * wl**-4 + a4 * wl**-6 + a5 * wl**-8)
 
 
 def _nd_vd(m: AbstractMaterial) -> tuple[float, float]:
@@ -241,14 +264,26 @@ class _GlassWriter:
                 exact = _formula(m)
                 if exact is not None:
                     form, coeffs = exact
-                elif isinstance(m, Tabulated):
-                    form = 1
-                    coeffs = _schott_fit(
-                        np.asarray(m.wavelengths, np.float64), np.asarray(m.indices, np.float64)
-                    )
-                else:
-                    w = np.unique(np.concatenate([np.linspace(0.38, 1.0, 32), wavelengths]))
-                    form, coeffs = 1, _schott_fit(w, np.asarray(m.index(w), np.float64))
+                else:  # a Schott formula through the indices at the file's wavelengths
+                    if isinstance(m, Tabulated):
+                        w = np.asarray(m.wavelengths, np.float64)
+                        n = np.asarray(m.indices, np.float64)
+                    else:
+                        w = np.linspace(0.38, 1.0, 32)
+                        n = np.asarray(m.index(w), np.float64)
+                    at = np.asarray(m.index(wavelengths), np.float64)
+                    form, coeffs = 1, _schott_fit(w, n, wavelengths, at)
+                    off = float(np.max(np.abs(_schott_index(coeffs, wavelengths) - at)))
+                    if not off <= 1e-9:
+                        warnings.warn(
+                            f"save_zmx: glass {e.name} ({type(m).__name__}) has no Zemax "
+                            f"formula; the Schott formula written to {cat}.AGF for Zemax "
+                            f"is {off:.2g} off its index at the file's {len(wavelengths)} "
+                            f"wavelengths (exact at up to 6). jaxlens reads it back exactly "
+                            f"(the GC record)",
+                            ZmxWarning,
+                            stacklevel=3,
+                        )
                 code = f"{round((nd - 1) * 1000):03d}{round(vd * 10) % 1000:03d}"
                 lines.append(f"NM {e.name} {form} {code} {nd!r} {vd!r} 0 0 0")
                 if e.marker:
