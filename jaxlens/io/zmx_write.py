@@ -148,7 +148,8 @@ def _sanitize(name: str) -> str:
 class _GlassWriter:
     """Decides how each material is written and collects the side AGF catalogs."""
 
-    def __init__(self, stem: str, model_glass: str):
+    def __init__(self, stem: str, model_glass: str, wavelengths: np.ndarray):
+        self.wavelengths = wavelengths
         base = _sanitize(stem).replace(".", "_").replace("-", "_")
         self.own = base if base not in ZEMAX_CATALOGS else base + "_JL"
         self.model_glass = model_glass
@@ -218,11 +219,29 @@ class _GlassWriter:
         nd, vd = self._nd_vd_of(m)
         return f"GLAS {name} 0 0 {nd!r} {_z(vd)} 0 0 0 0 0 0"
 
-    @staticmethod
-    def _nd_vd_of(m):
+    def _cd(self, m) -> tuple[int, list[float], bool]:
+        """The CD record of ``m``: (formula, coefficients, exact); a material no Zemax
+        formula holds gets a Schott fit (to a table's entries, else at the lens's
+        wavelengths and 0.38-1 µm)."""
+        exact = _formula(m)
+        if exact is not None:
+            return exact[0], exact[1], True
+        if isinstance(m, Tabulated):
+            wl, n = np.asarray(m.wavelengths, np.float64), np.asarray(m.indices, np.float64)
+        else:
+            wl = np.unique(np.concatenate([np.linspace(0.38, 1.0, 32), self.wavelengths]))
+            n = np.asarray(m.index(wl), np.float64)
+        return 1, _schott_fit(wl, n), False
+
+    def _nd_vd_of(self, m):
         """The catalog's nd and Vd while the model still gives that nd; a model whose
         coefficients were changed (optimised) gets its own, which ``load_agf`` checks the
-        CD record against."""
+        CD record against. A fitted CD record gets the fit's nd and Vd: a table's own Vd
+        (linear in 1/λ² between its entries) differed from its fit's by 2.7 %, and the NM
+        record then disagreed with its formula."""
+        form, coeffs, exact = self._cd(m)
+        if not exact:
+            return _nd_vd(_materials.Schott(np.asarray(coeffs, np.float64)))
         nd, vd = _nd_vd(m)
         if (type(m).__name__ == "CatalogMaterial" and m.catalog_nd is not None
                 and math.isfinite(m.catalog_nd) and abs(nd - m.catalog_nd) <= ND_TOLERANCE):
@@ -238,17 +257,7 @@ class _GlassWriter:
             for e in entries:
                 m = e.material
                 nd, vd = self._nd_vd_of(m)
-                exact = _formula(m)
-                if exact is not None:
-                    form, coeffs = exact
-                elif isinstance(m, Tabulated):
-                    form = 1
-                    coeffs = _schott_fit(
-                        np.asarray(m.wavelengths, np.float64), np.asarray(m.indices, np.float64)
-                    )
-                else:
-                    w = np.unique(np.concatenate([np.linspace(0.38, 1.0, 32), wavelengths]))
-                    form, coeffs = 1, _schott_fit(w, np.asarray(m.index(w), np.float64))
+                form, coeffs, _ = self._cd(m)
                 code = f"{round((nd - 1) * 1000):03d}{round(vd * 10) % 1000:03d}"
                 lines.append(f"NM {e.name} {form} {code} {nd!r} {vd!r} 0 0 0")
                 if e.marker:
@@ -447,7 +456,7 @@ def dumps(lens: Lens, path: str = "lens.zmx", *, model_glass: str = "blank"):
     if model_glass not in ("blank", "agf"):
         raise ValueError(f"save_zmx: model_glass must be 'blank' or 'agf', got {model_glass!r}")
     stem = os.path.splitext(os.path.basename(os.fspath(path)))[0]
-    gw = _GlassWriter(stem, model_glass)
+    gw = _GlassWriter(stem, model_glass, np.atleast_1d(np.asarray(lens.wavelengths, np.float64)))
     gw.reserve((lens.object_material,) + tuple(lens.materials))
     fields = np.asarray(lens.fields, np.float64)
     fields = fields.reshape(-1, 2) if fields.ndim == 2 else fields.reshape(-1)
