@@ -19,8 +19,9 @@ warnings.simplefilter("ignore")
 
 import dataclasses  # noqa: E402
 
+import jax  # noqa: E402
 import numpy as np  # noqa: E402
-from probe_table import COOKE, cli, edof_check, fresh, patched, probe, run, warned  # noqa: E402
+from probe_table import COOKE, cli, edof_check, fresh, patched, probe, run  # noqa: E402
 
 import jaxlens as jl  # noqa: E402
 from jaxlens import analysis as A  # noqa: E402
@@ -87,7 +88,7 @@ def apertures_sensor():
     probe("Aperture half_x NaN", lambda: jl.Aperture("rect", float("nan"), 1.0), "half_x", "finite")
     probe("Aperture decenter_x inf", lambda: jl.Aperture("rect", 1.0, 1.0, decenter_x=float("inf")), "decenter_x", "finite")
     probe("Aperture blocks 'yes'", lambda: jl.Aperture("rect", 1.0, 1.0, blocks="yes"), "blocks")
-    probe("Aperture half_x '2'", lambda: jl.Aperture("rect", "2", 1.0), "half_x")
+    probe("Aperture half_x '2' (a string)", lambda: jl.Aperture("rect", "2", 1.0), "half_x", "(mm)", "'2'")
     probe("Sensor resolution (0, 64)", lambda: jl.Sensor((0, 64), 0.005), "resolution")
     probe("Sensor resolution (64.5, 64)", lambda: jl.Sensor((64.5, 64), 0.005), "resolution", "whole numbers")
     probe("Sensor resolution 64 (not a pair)", lambda: jl.Sensor(64, 0.005), "resolution")
@@ -106,12 +107,12 @@ def materials():
     probe("Schott A0 -1 (n² < 0)", lambda: jl.efl(L(materials=(jl.Schott(coeffs=(-1.0, 0, 0, 0, 0, 0)),) + cooke.materials[1:])), "Schott", "index")
     probe("Tabulated wavelengths decreasing (control: sorted, 1.51716 at 0.55)", lambda: jl.Tabulated(wavelengths=(0.7, 0.6, 0.5), indices=(1.51, 1.515, 1.52)).index(0.55), good=True)
     probe("Tabulated wavelengths unsorted (control: sorted with their indices)", lambda: jl.Tabulated(wavelengths=(0.5, 0.7, 0.6), indices=(1.52, 1.51, 1.515)).index(0.65), good=True)
-    probe("Tabulated one entry, index at 0.6", lambda: jl.Tabulated(wavelengths=(0.55,), indices=(1.5,)).index(0.6), "0.6", "0.55")
+    probe("Tabulated one entry, index at 0.6 (control: documented non-dispersive)", lambda: jl.Tabulated(wavelengths=(0.55,), indices=(1.5,)).index(0.6), good=True)
     probe("Tabulated indices 0.9", lambda: jl.Tabulated(wavelengths=(0.5, 0.6), indices=(0.9, 0.95)), "indices", "1")
     probe("Tabulated lengths differ", lambda: jl.Tabulated(wavelengths=(0.5, 0.6, 0.7), indices=(1.5, 1.49)), "wavelengths", "indices")
     probe("Tabulated wavelengths in nm", lambda: jl.Tabulated(wavelengths=(500.0, 600.0), indices=(1.52, 1.51)), "wavelengths", "µm")
     probe("Tabulated index outside data (0.8 µm of 0.5-0.6)", lambda: jl.Tabulated(wavelengths=(0.5, 0.6), indices=(1.52, 1.51)).index(0.8), "0.8", "0.4995")
-    probe("Tabulated wavelength_range beyond its table", lambda: jl.Tabulated(wavelengths=(0.5, 0.6), indices=(1.52, 1.51), wavelength_range=(0.3, 2.0)), "wavelength_range")
+    probe("Tabulated wavelength_range beyond its table (control: the user's claim, end values held)", lambda: jl.Tabulated(wavelengths=(0.5, 0.6), indices=(1.52, 1.51), wavelength_range=(0.3, 2.0)).index(1.0), good=True)
     probe("ModelGlass nd 15", lambda: jl.ModelGlass(nd=15.0, vd=40.0), "nd")
     probe("ModelGlass vd -5", lambda: jl.ModelGlass(nd=1.5, vd=-5.0), "vd")
     probe("ModelGlass vd 0.5 (n below 1 in the blue)", lambda: jl.efl(L(materials=(jl.ModelGlass(nd=1.5, vd=0.5),) + cooke.materials[1:])), "vd")
@@ -179,20 +180,21 @@ def json_file(mut=None, raw=None):
 
 def lens_json():
     S = lambda i, **k: lambda d: d["surfaces"][i].update(**k)
+    SR = lambda i, **k: lambda d: (d["surfaces"][i].pop("radius"), d["surfaces"][i].update(**k))  # curvature for radius
     with open(COOKE) as f:
         d0 = json.load(f)
     probe("json surface type 'toroid' (unknown kind)", json_file(S(1, type="toroid")), "toroid", "toroidal")
     probe("json surfaces a dict", json_file(lambda d: d.update(surfaces={"a": 1})), "surfaces", "list")
     probe("json top level a list", json_file(raw="[1, 2]"), "object")
     probe("json surface a number", json_file(lambda d: d["surfaces"].__setitem__(1, 5)), "surface 1", "object")
-    probe("json biconic without curvature_x (control)", json_file(S(1, type="biconic", curvature=0.045)), good=True)
-    probe("json zernike_coeffs a string", json_file(S(1, type="zernike_standard", curvature=0.045, zernike_coeffs="0 0 1e-3", norm_radius=5.0)), "zernike_coeffs")
-    probe("json xy_polynomial coeffs nested", json_file(S(1, type="xy_polynomial", curvature=0.045, polynomial_coeffs=[[1e-3]], norm_radius=5.0)), "polynomial_coeffs")
-    probe("json binary2 diffraction_order 0.5", json_file(S(1, type="binary2", curvature=0.045, diffraction_order=0.5, phase_coeffs=[10.0], norm_radius=5.0)), "order")
-    probe("json grating lines_per_um 600 (per mm)", json_file(S(1, type="grating", lines_per_um=600.0)), "lines_per_um")
-    probe("json coordinate_break tilt_x_deg 'NaN'", json_file(S(1, type="coordinate_break", tilt_x_deg="NaN")), "tilt_x")
+    probe("json biconic without curvature_x (control)", json_file(SR(1, type="biconic", curvature=0.045)), good=True)
+    probe("json zernike_coeffs a string", json_file(SR(1, type="zernike_standard", curvature=0.045, zernike_coeffs="0 0 1e-3", norm_radius=5.0)), "zernike_coeffs")
+    probe("json xy_polynomial coeffs nested", json_file(SR(1, type="xy_polynomial", curvature=0.045, polynomial_coeffs=[[1e-3]], norm_radius=5.0)), "polynomial_coeffs")
+    probe("json binary2 diffraction_order 0.5 (control: as Binary2)", json_file(SR(1, type="binary2", curvature=0.045, diffraction_order=0.5, phase_coeffs=[10.0], norm_radius=5.0)), good=True)
+    probe("json grating lines_per_um 600 (per mm)", json_file(SR(1, type="grating", lines_per_um=600.0)), "lines_per_um")
+    probe("json coordinate_break tilt_x_deg 'NaN'", json_file(SR(1, type="coordinate_break", tilt_x_deg="NaN")), "tilt_x")
     probe("json wavelengths_nm empty", json_file(lambda d: d.update(wavelengths_nm=[])), "wavelengths")
-    probe("json primary_wavelength_nm not among them", json_file(lambda d: d.update(primary_wavelength_nm=550.0)), "primary_wavelength_nm", "587")
+    probe("json primary_wavelength_nm not among them", json_file(lambda d: d.update(primary_wavelength_nm=550.0)), "primary_wavelength_nm", "587.5618")
     probe("json material table wavelengths_um in nm", json_file(S(1, material={"wavelengths_um": [500, 600, 700], "indices": [1.52, 1.515, 1.51]})), "µm")
     probe("json format jaxlens.lens/99", json_file(lambda d: d.update(format="jaxlens.lens/99")), "format")
     probe("json truncated", json_file(raw=json.dumps(d0)[:-20]), "t.json:1", "cut short")
@@ -231,7 +233,8 @@ def analyses():
     probe("psf kernel_size 0", lambda: jl.psf(cooke, 0.0, kernel_size=0, pixel_size=0.005), "kernel_size")
     probe("psf pixel_size 5 (µm for mm)", lambda: jl.psf(cooke, 0.0, pixel_size=5.0), "pixel_size", "mm")
     probe("psf wavelength [0.5, 587]", lambda: jl.psf(cooke, 0.0, wavelength=[0.5, 587.0], pixel_size=0.005), "wavelength", "µm")
-    from jaxlens.imaging import distortion as dist, radiometry
+    from jaxlens.imaging import distortion as dist
+    from jaxlens.imaging import radiometry
 
     probe("relative_illumination pupil 0", lambda: radiometry.relative_illumination(cooke, [0.0], pupil=0), "pupil")
     probe("relative_illumination fields [30] (control: beyond 20°)", lambda: radiometry.relative_illumination(cooke, [30.0]).ri, good=True)
@@ -267,6 +270,40 @@ def design_spec():
     probe("sensor_field_grid n 1 (the corner alone; left)", lambda: D.sensor_field_grid(D.DesignSpec(), n=1)[0], "n")
 
 
+def more():
+    s2 = cooke.surfaces[2]
+    bic = with_surface(2, jl.Biconic(c=float(s2.c), cx=float(s2.c) * 0.5, semi_diameter=float(s2.semi_diameter)))
+    probe("seidel on a biconic lens (not rotationally symmetric)", lambda: A.seidel(bic).per_surface, "seidel", "Biconic", "not handled")
+    probe("field_curvature on a biconic lens (control: y section)", lambda: A.field_curvature(bic).tangential, good=True)
+    q = with_surface(2, jl.QTypeAsphere(c=float(s2.c), coeffs=(1e-3, 1e-4), norm_radius=2.0, semi_diameter=float(s2.semi_diameter)))
+    probe("QTypeAsphere norm_radius 2 < semi_diameter, then rms_spot (control: documented, polynomials beyond u = 1)", lambda: A.rms_spot(q).polychromatic, good=True)
+    x = np.linspace(-0.5, 0.5, 10)
+    probe("zernike_fit 10 points, 37 terms", lambda: A.zernike_fit(x, x * 0, x**2, terms=37).coefficients, "terms", "points")
+    probe("zernike_fit mask all False", lambda: A.zernike_fit(x, x * 0, x**2, terms=4, mask=np.zeros(10, bool)).coefficients, "0 valid points", "4 terms")
+    g = np.linspace(-2, 2, 9)
+    X, Y = np.meshgrid(g, g)
+    probe("zernike_fit points outside the unit disc (x up to 2)", lambda: A.zernike_fit(X, Y, X**2 + Y**2, terms=4).coefficients, "unit disc")
+    probe("yield_fraction rms NaN (a failed trial)", lambda: jl.tolerance.yield_fraction(np.array([float("nan"), 1.0]), 5.0), good=True)
+    probe("rms_spot wavelengths [2.6] (beyond N-SK16's data)", lambda: A.rms_spot(cooke, wavelengths=[2.6]).polychromatic, "2.6", "N-SK16")
+    probe("wavefront reference 'spherical'", lambda: A.wavefront(cooke, 0.0, reference="spherical").rms, "reference", "sphere")
+    probe("encircled_energy diffraction pixel_size -0.001", lambda: A.encircled_energy(cooke, 0.0, [0.01], method="diffraction", pixel_size=-0.001).energy, "pixel_size")
+    probe("encircled_energy kernel_size 64 (even)", lambda: A.encircled_energy(cooke, 0.0, [0.01], method="diffraction", kernel_size=64, pixel_size=0.001).energy, "kernel_size")
+    probe("psf center 'centroid2'", lambda: jl.psf(cooke, 0.0, center="centroid2", pixel_size=0.005), "center", "chief")
+    probe("psf field 100 (beyond 90°)", lambda: jl.psf(cooke, 100.0, pixel_size=0.005), "field", "(-90, 90) deg")
+    probe("render spp 0", lambda: jl.render(cooke, np.zeros((8, 8, 3), np.float32), spp=0, key=None), "spp")
+    probe("render scene 2-D", lambda: jl.render(cooke, np.zeros((8, 8), np.float32), spp=1, key=jax.random.key(0), sensor=jl.Sensor((8, 8), 0.005)), "scene")
+    probe("save to .txt", lambda: jl.save(cooke, os.path.join(fresh("save"), "lens.txt")), ".txt", ".json")
+    probe("load config 3 of a one-configuration .json", lambda: jl.load(COOKE, config=3), "config")
+    probe("load unknown_glass 'guess'", lambda: jl.load(COOKE, unknown_glass="guess"), "unknown_glass", "model")
+    probe("DesignSpec name '../x' (control: a label, no file is named after it)", lambda: D.DesignSpec(name="../x").name, good=True)
+    probe("DesignSpec asphere_terms 40", lambda: D.DesignSpec(asphere_terms=40), "asphere_terms")
+    probe("DesignSpec sensor_pixels 0", lambda: D.DesignSpec(sensor_pixels=0), "sensor_pixels")
+    probe("DesignConfig material_catalogs ('NOPE',)", lambda: D.DesignConfig(materials="search", material_catalogs=("NOPE",)), "NOPE")
+    probe("DesignConfig tolerance_trials -1", lambda: D.DesignConfig(tolerance_trials=-1), "tolerance_trials")
+    probe("DesignConfig image_pixels 1 (control: in its documented [1, …])", lambda: D.DesignConfig(image_pixels=1).image_pixels, good=True)
+    probe("evaluate_design min_valid 99 (percent)", lambda: D.evaluate_design(cooke, D.DesignSpec(), min_valid=99.0), "min_valid")
+
+
 def clis():
     from jaxlens.experiments import classical as C
 
@@ -286,4 +323,4 @@ def clis():
 
 
 if __name__ == "__main__":
-    run([surfaces, apertures_sensor, materials, agf, lens_json, analyses, design_spec, clis])
+    run([surfaces, apertures_sensor, materials, agf, lens_json, analyses, design_spec, more, clis])
