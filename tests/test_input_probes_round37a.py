@@ -3,6 +3,7 @@ its dispersion formula, the side catalogs ``save_zmx`` writes agree with that ch
 ``glass_info`` checks a registered AGF record before answering."""
 
 import dataclasses
+import json
 import os
 
 import numpy as np
@@ -79,3 +80,30 @@ def test_glass_info_checks_a_registered_agf_record(tmp_path, monkeypatch):
     cat = jl.register_catalog(path)
     with pytest.raises(ValueError, match=r"R37T\.agf:2: .*Vd 40"):
         jl.glass_info("TESTG", cat)
+
+
+@pytest.mark.parametrize("arg", ["half_x", "half_y", "decenter_x", "decenter_y"])
+def test_aperture_refuses_a_number_given_as_a_string(arg):
+    """Aperture("rect", "2", 1.0) was read as 2 mm, where every surface refuses a string."""
+    values = {"half_x": 2.0, "half_y": 1.0, "decenter_x": 0.0, "decenter_y": 0.0, arg: "2"}
+    with pytest.raises(
+        ValueError,
+        match=rf"Aperture: {arg} must be a finite number.*\(mm\), "
+        r"got '2'",
+    ):
+        jl.Aperture("rect", **values)
+
+
+def test_json_primary_wavelength_not_among_the_wavelengths_lists_them(tmp_path):
+    cooke = os.path.join(os.path.dirname(jl.__file__), "data", "lenses", "cooke_triplet.json")
+    with open(cooke) as f:
+        d = json.load(f)
+    d["primary_wavelength_nm"] = 550.0
+    path = tmp_path / "t.json"
+    path.write_text(json.dumps(d))
+    with pytest.raises(
+        ValueError,
+        match=r"primary_wavelength_nm 550\.0 is not one of the "
+        r"wavelengths \(\[486\.1327, 587\.5618, 656\.2725\] nm\)",
+    ):
+        jl.load(path)

@@ -112,7 +112,7 @@ def materials():
     probe("Tabulated lengths differ", lambda: jl.Tabulated(wavelengths=(0.5, 0.6, 0.7), indices=(1.5, 1.49)), "wavelengths", "indices")
     probe("Tabulated wavelengths in nm", lambda: jl.Tabulated(wavelengths=(500.0, 600.0), indices=(1.52, 1.51)), "wavelengths", "µm")
     probe("Tabulated index outside data (0.8 µm of 0.5-0.6)", lambda: jl.Tabulated(wavelengths=(0.5, 0.6), indices=(1.52, 1.51)).index(0.8), "0.8", "0.4995")
-    probe("Tabulated wavelength_range beyond its table (control: the user's claim, end values held)", lambda: jl.Tabulated(wavelengths=(0.5, 0.6), indices=(1.52, 1.51), wavelength_range=(0.3, 2.0)).index(1.0), good=True)
+    probe("Tabulated wavelength_range (0.3, 2) beyond its table, index at 1 µm", lambda: jl.Tabulated(wavelengths=(0.5, 0.6), indices=(1.52, 1.51), wavelength_range=(0.3, 2.0)).index(1.0), "1 µm", "0.4995")
     probe("ModelGlass nd 15", lambda: jl.ModelGlass(nd=15.0, vd=40.0), "nd")
     probe("ModelGlass vd -5", lambda: jl.ModelGlass(nd=1.5, vd=-5.0), "vd")
     probe("ModelGlass vd 0.5 (n below 1 in the blue)", lambda: jl.efl(L(materials=(jl.ModelGlass(nd=1.5, vd=0.5),) + cooke.materials[1:])), "vd")
