@@ -802,7 +802,7 @@ def test_user_catalog_glasses_share_their_catalog_and_unnamed_glasses_get_a_name
         "NM ONE 2 517642 1.5168 64.17 0 1\n"
         "CD 1.03961212 0.00600069867 0.231792344 0.0200179144 1.01046945 103.560653\n"
         "LD 0.3 3.2\n"
-        "NM TWO 2 523600 1.52299 60.0 0 1\n"  # nd: the CD record's index at the d line
+        "NM TWO 2 523648 1.52299 64.8 0 1\n"  # nd, Vd: the CD record's at the d, F, C lines
         "CD 1.06 0.006 0.23 0.02 1.01 103.5\n"
         "LD 0.3 3.2\n"
     )
@@ -810,7 +810,7 @@ def test_user_catalog_glasses_share_their_catalog_and_unnamed_glasses_get_a_name
     other = tmp_path / "other"
     other.mkdir()
     (other / "MYCAT.agf").write_text(
-        "NM ONE 2 569500 1.56907 50.0 0 1\nCD 1.2 0.006 0.23 0.02 1.01 103.5\nLD 0.3 3.2\n")
+        "NM ONE 2 569680 1.56907 68.03 0 1\nCD 1.2 0.006 0.23 0.02 1.01 103.5\nLD 0.3 3.2\n")
     clash = load_agf(other / "MYCAT.agf")["ONE"]  # same catalog and name, other data
     mats = (cat["ONE"], Air(), cat["TWO"], Air(), cat["ONE"], Air(), clash, Air(),
             Sellmeier([1.04, 0.23], [0.006, 0.02]), Air(), Air())

@@ -6,7 +6,37 @@ AGF records whose Vd disagrees with their formula; JSON lens files; the analyses
 wavelength and sampling arguments; ``DesignSpec``/``DesignConfig``; and a few command-line
 options. The table of ``tools/probe_table.py`` (probe | outcome | what happened).
 
-FINDINGS (filled in after the run).
+Gaps found and fixed:
+1. AGF: an NM record's Vd was kept whatever its CD formula gave (round 36a's item 3): Vd 54.17
+   or 65.5 on N-BK7's coefficients (64.17) went to ``glass_info``, the nearest-glass
+   suggestions and GLAS lines. Now refused beyond 1 % with the file's line
+   (``agf.VD_TOLERANCE``; the shipped catalogs' largest gap is 0.33 %, SUMITA K-LaSFn21);
+   Vd 0 (unknown) and records whose LD range leaves out the F or C line are not checked.
+2. First the writer: ``save_zmx`` wrote a glass no Zemax formula holds (a ``Tabulated``
+   table, …) as a Schott fit whose NM record carried the material's own nd and Vd (a table
+   of N-BK7 at 0.45/0.55/0.65 µm: Vd 65.78, linear in 1/λ² between its entries, beside the
+   fit's 64.00, 2.7 %); the record and the GLAS lines now carry the fit's nd and Vd
+   (``_GlassWriter._cd``).
+3. ``glass_info`` of a glass of a registered AGF catalog (records are read lazily) gave the
+   NM record's Vd unchecked: it now checks the record first.
+4. ``Aperture("rect", "2", 1.0)`` read the string as 2 mm (every surface refuses a string).
+5. Vague: a JSON ``primary_wavelength_nm`` that is not one of the wavelengths now lists them.
+
+Found and left: ``design.sensor_field_grid(spec, n=1)`` (and ``evaluate_design(n=1)``) gives
+the sensor's corner alone (the grid runs corner to corner), where a 1 × 1 "grid" reads as
+the centre; a refusal would change round-audit's documented range [1, 257]. The
+nearest-glass suggestions still read unconverted records' nd and Vd unchecked.
+
+The controls (``good=True``) are behaviours judged right: a fractional Binary2 order (a
+phase scale, as Zemax takes it), a one-node ``Tabulated`` (documented non-dispersive),
+unsorted table wavelengths (sorted with their indices), a negative Sellmeier C (a fit term),
+fields beyond the lens's (rays flagged invalid), Q-type polynomials beyond ρ_n (documented).
+
+Before (base de57757, an archive) and after (branch probe37a), the same probes,
+``PYTHONPATH=<tree> python tools/audit37a_probe.py`` from the tree's root, 190 probes,
+about 5 minutes each way on 2 shared cores:
+    before: BEFORE
+    after:  AFTER
 """
 
 import json
