@@ -540,7 +540,7 @@ def _make_agf():
     return sys.modules["make_agf"]
 
 
-def _rii_file(kind, coefficients, layout="SPECS", nd=1.5):
+def _rii_file(kind, coefficients, layout="SPECS", nd=1.5, vd=60.0):
     return "\n".join([
         "# refractiveindex.info test record",
         'REFERENCES: "<a href=\\"x\\">TEST Zemax catalog</a>"',
@@ -555,7 +555,7 @@ def _rii_file(kind, coefficients, layout="SPECS", nd=1.5):
         "        0.4 1e-8",
         f"{layout}:",
         f"    nd: {nd}",
-        "    Vd: 60.0",
+        f"    Vd: {vd}",
         "    glass_code: 500600",
         "",
     ])
@@ -590,8 +590,11 @@ def test_make_agf_formula_mapping(tmp_path, kind, coefficients, formula, layout)
     folder = tmp_path / "data-nk" / "glass" / "test"
     folder.mkdir(parents=True)
     # The record's nd is its formula's index at the d line (load_agf checks that they agree).
+    # Its Vd too (checked to 1 %).
     nd = round(float(_rii_index(kind, coefficients, 0.5875618)), 5)
-    (folder / "G-1.yml").write_text(_rii_file(kind, coefficients, layout, nd),
+    nf, nc = _rii_index(kind, coefficients, [0.4861327, 0.6562725])
+    vd = round(float((nd - 1) / (nf - nc)), 2)
+    (folder / "G-1.yml").write_text(_rii_file(kind, coefficients, layout, nd, vd),
                                     encoding="utf-8")
     (folder / "about.yml").write_text("NAME: test maker\n", encoding="utf-8")
     glasses, skipped = tool.read_maker(tool.maker_folder(str(tmp_path), "test"))
@@ -600,7 +603,7 @@ def test_make_agf_formula_mapping(tmp_path, kind, coefficients, formula, layout)
     text = (tmp_path / "TEST.agf").read_text(encoding="utf-8")
     assert "refractiveindex.info" in text and "CC0" in text and "TEST Zemax catalog" in text
     material = load_agf(tmp_path / "TEST.agf")["G-1"]
-    assert (material.formula, material.catalog_nd, material.catalog_vd) == (formula, nd, 60.0)
+    assert (material.formula, material.catalog_nd, material.catalog_vd) == (formula, nd, vd)
     assert material.wavelength_range == (0.35, 2.0)
     w = np.linspace(0.4, 1.6, 9)
     np.testing.assert_allclose(np.asarray(material.index(w)), _rii_index(kind, coefficients, w),

@@ -107,7 +107,10 @@ def wavelengths_of(d: dict, where: str) -> tuple[np.ndarray, int]:
             target = float(nm_to_um(target)) if key.endswith("_nm") else target
             i = int(np.argmin(np.abs(wl - target)))
             if not math.isclose(wl[i], target, rel_tol=1e-9):
-                raise ValueError(f"{where}: {key} {d[key]!r} is not one of the wavelengths")
+                unit = "nm" if key.endswith("_nm") else "µm"  # (the message listed none)
+                given = wl * 1000.0 if key.endswith("_nm") else wl
+                raise ValueError(f"{where}: {key} {d[key]!r} is not one of the wavelengths "
+                                 f"({checks.fmt(given)} {unit}); give one of them")
             named.append((key, i))
     if len({i for _, i in named}) > 1:
         (a, i), (b, j) = next((x, y) for x in named for y in named if x[1] != y[1])

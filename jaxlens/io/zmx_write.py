@@ -117,7 +117,9 @@ def _schott_fit(wl: np.ndarray, n: np.ndarray, exact_wl=(), exact_n=()) -> list[
     through (exact_wl, exact_n) (the file's wavelengths) exactly where there are at most 6
     of those (the least squares then over the others, in the rest of the formula's freedom)."""
     ew, en = np.asarray(exact_wl, np.float64), np.asarray(exact_n, np.float64)
-    k = min(len(wl) + len(ew), 6)
+    # No more terms than the larger set needs: 3 table entries beside 3 file wavelengths
+    # took all 6 terms, and the fit through 6 close points put Vd at 18.7 for N-BK7's 64.
+    k = min(max(len(wl), len(ew)), 6)
     powers = _SCHOTT_POWERS[:k]
     order = {0: 0, 2: 1, -2: 2, -4: 3, -6: 4, -8: 5}
 
@@ -171,7 +173,8 @@ def _sanitize(name: str) -> str:
 class _GlassWriter:
     """Decides how each material is written and collects the side AGF catalogs."""
 
-    def __init__(self, stem: str, model_glass: str):
+    def __init__(self, stem: str, model_glass: str, wavelengths: np.ndarray):
+        self.wavelengths = wavelengths
         base = _sanitize(stem).replace(".", "_").replace("-", "_")
         self.own = base if base not in ZEMAX_CATALOGS else base + "_JL"
         self.model_glass = model_glass
@@ -241,11 +244,32 @@ class _GlassWriter:
         nd, vd = self._nd_vd_of(m)
         return f"GLAS {name} 0 0 {nd!r} {_z(vd)} 0 0 0 0 0 0"
 
-    @staticmethod
-    def _nd_vd_of(m):
+    def _cd(self, m) -> tuple[int, list[float], bool]:
+        """The CD record of ``m``: (formula, coefficients, exact); a material no Zemax
+        formula holds gets a Schott fit, exact at the lens's wavelengths (up to 6) and
+        fitted to a table's entries, else to 0.38-1 µm."""
+        exact = _formula(m)
+        if exact is not None:
+            return exact[0], exact[1], True
+        if isinstance(m, Tabulated):
+            wl, n = np.asarray(m.wavelengths, np.float64), np.asarray(m.indices, np.float64)
+        else:
+            wl = np.linspace(0.38, 1.0, 32)
+            n = np.asarray(m.index(wl), np.float64)
+        # Exact at the file's wavelengths (Zemax traces those), the data fitted in what
+        # freedom is left.
+        at = np.asarray(m.index(self.wavelengths), np.float64)
+        return 1, _schott_fit(wl, n, self.wavelengths, at), False
+
+    def _nd_vd_of(self, m):
         """The catalog's nd and Vd while the model still gives that nd; a model whose
         coefficients were changed (optimised) gets its own, which ``load_agf`` checks the
-        CD record against."""
+        CD record against. A fitted CD record gets the fit's nd and Vd: a table's own Vd
+        (linear in 1/λ² between its entries) differed from its fit's by 2.7 %, and the NM
+        record then disagreed with its formula."""
+        form, coeffs, exact = self._cd(m)
+        if not exact:
+            return _nd_vd(_materials.Schott(np.asarray(coeffs, np.float64)))
         nd, vd = _nd_vd(m)
         if (type(m).__name__ == "CatalogMaterial" and m.catalog_nd is not None
                 and math.isfinite(m.catalog_nd) and abs(nd - m.catalog_nd) <= ND_TOLERANCE):
@@ -261,18 +285,9 @@ class _GlassWriter:
             for e in entries:
                 m = e.material
                 nd, vd = self._nd_vd_of(m)
-                exact = _formula(m)
-                if exact is not None:
-                    form, coeffs = exact
-                else:  # a Schott formula through the indices at the file's wavelengths
-                    if isinstance(m, Tabulated):
-                        w = np.asarray(m.wavelengths, np.float64)
-                        n = np.asarray(m.indices, np.float64)
-                    else:
-                        w = np.linspace(0.38, 1.0, 32)
-                        n = np.asarray(m.index(w), np.float64)
+                form, coeffs, exact = self._cd(m)
+                if not exact:
                     at = np.asarray(m.index(wavelengths), np.float64)
-                    form, coeffs = 1, _schott_fit(w, n, wavelengths, at)
                     off = float(np.max(np.abs(_schott_index(coeffs, wavelengths) - at)))
                     if not off <= 1e-9:
                         warnings.warn(
@@ -482,7 +497,7 @@ def dumps(lens: Lens, path: str = "lens.zmx", *, model_glass: str = "blank"):
     if model_glass not in ("blank", "agf"):
         raise ValueError(f"save_zmx: model_glass must be 'blank' or 'agf', got {model_glass!r}")
     stem = os.path.splitext(os.path.basename(os.fspath(path)))[0]
-    gw = _GlassWriter(stem, model_glass)
+    gw = _GlassWriter(stem, model_glass, np.atleast_1d(np.asarray(lens.wavelengths, np.float64)))
     gw.reserve((lens.object_material,) + tuple(lens.materials))
     fields = np.asarray(lens.fields, np.float64)
     fields = fields.reshape(-1, 2) if fields.ndim == 2 else fields.reshape(-1)

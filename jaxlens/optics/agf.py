@@ -24,7 +24,9 @@ from .materials import (
     EXTENDED2_POWERS,
     EXTENDED3_POWERS,
     EXTENDED_POWERS,
+    LAMBDA_C,
     LAMBDA_D,
+    LAMBDA_F,
     MAX_ND,
     AbstractMaterial,
     Conrady,
@@ -64,6 +66,10 @@ NO_D_LINE_DATA = ((1.0, 0.0), (0.0, 0.0))
 ND_TOLERANCE = 1e-3
 """Largest accepted gap between an AGF record's nd and its dispersion formula's index at the
 d line (the shipped catalogs' largest is 3.8e-5)."""
+
+VD_TOLERANCE = 0.01
+"""Largest accepted relative gap between an AGF record's Vd and its dispersion formula's
+(nd - 1)/(nF - nC): the shipped catalogs' largest is 0.33 % (a Vd written to 0.1)."""
 
 
 @dataclasses.dataclass(frozen=True)
@@ -131,14 +137,29 @@ class GlassRecord:
         glass (the shipped catalogs agree to 4e-5)."""
         with jax.ensure_compile_time_eval():
             n = float(m.extrapolated_index(jnp.asarray(LAMBDA_D)))
+        at = f"{self.source}: " if self.source else ""
+        formula = f"formula {self.formula} ({FORMULA_NAMES.get(self.formula, '?')})"
         if not abs(n - self.nd) <= ND_TOLERANCE:
-            at = f"{self.source}: " if self.source else ""
             raise ValueError(
                 f"{at}{where}: its NM record gives nd {self.nd:g}, but its CD coefficients "
-                f"with formula {self.formula} ({FORMULA_NAMES.get(self.formula, '?')}) give "
-                f"n = {n:.6g} at the d line ({LAMBDA_D} µm); the record disagrees with "
-                f"itself by more than {ND_TOLERANCE:g} (a wrong formula number or "
-                f"coefficients?)")
+                f"with {formula} give n = {n:.6g} at the d line ({LAMBDA_D} µm); the record "
+                f"disagrees with itself by more than {ND_TOLERANCE:g} (a wrong formula number "
+                f"or coefficients?)")
+        # Vd too (it went to glass_info, the nearest-glass suggestions and GLAS lines
+        # whatever the formula gave); 0 is "unknown", and F or C outside the record's range
+        # (LD) leaves the formula's Vd unknown.
+        lo, hi = self.wavelength_range or (0.0, math.inf)
+        if self.vd == 0 or not (lo <= LAMBDA_F and LAMBDA_C <= hi):
+            return
+        with jax.ensure_compile_time_eval():
+            nf, nc = (float(v) for v in m.extrapolated_index(jnp.asarray([LAMBDA_F, LAMBDA_C])))
+        vd = (n - 1.0) / (nf - nc) if nf != nc else math.inf
+        if not abs(vd - self.vd) <= VD_TOLERANCE * self.vd:
+            raise ValueError(
+                f"{at}{where}: its NM record gives Vd {self.vd:g}, but its CD coefficients "
+                f"with {formula} give Vd = (nd - 1)/(nF - nC) = {vd:.6g} (F, C lines "
+                f"{LAMBDA_F}, {LAMBDA_C} µm); the record disagrees with itself by more than "
+                f"{VD_TOLERANCE:.0%} (a wrong Vd, formula number or coefficients?)")
 
 
 class CatalogMaterial(AbstractMaterial):

@@ -47,7 +47,9 @@ class Aperture:
                 f = float(v)
             except (TypeError, ValueError):
                 f = math.nan
-            if isinstance(v, bool) or not math.isfinite(f) or (lo is not None and not f > lo):
+            # A string was read as its number ('2' as 2 mm), where every surface refuses it.
+            if isinstance(v, bool | str | bytes) or not math.isfinite(f) or (
+                    lo is not None and not f > lo):
                 rng = "a finite number > 0" if lo is not None else "a finite number"
                 raise ValueError(f"Aperture: {arg} must be {rng} (mm), got {v!r}")
             object.__setattr__(self, arg, f)

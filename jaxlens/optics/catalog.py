@@ -393,5 +393,7 @@ def glass_info(name: str, catalogs: str | Iterable[str] | None = None) -> tuple[
     found = _find(name, catalogs)
     if found is None:
         raise _unknown(name, catalogs)
+    if isinstance(found[1], GlassRecord):  # its nd and Vd checked against its formula
+        found[1].to_material()  # (a registered record's Vd 40 on N-BK7's formula was given)
     nd, vd = _nd_vd(found[1], strict=True)
     return found[0], nd, vd
