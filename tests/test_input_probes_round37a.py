@@ -9,6 +9,8 @@ import numpy as np
 import pytest
 
 import jaxlens as jl
+from jaxlens.design import DesignSpec
+from jaxlens.design.evaluate import sensor_field_grid
 from jaxlens.io import zmx
 from jaxlens.optics import catalog
 
@@ -108,3 +110,13 @@ def test_json_primary_wavelength_not_among_the_wavelengths_lists_them(tmp_path):
         r"wavelengths \(\[486\.1327, 587\.5618, 656\.2725\] nm\)",
     ):
         jl.load(path)
+
+
+def test_a_one_field_grid_is_the_sensor_centre():
+    """n = 1 evaluated the sensor's corner alone (linspace(-1, 1, 1) is [-1])."""
+    ang, pts = sensor_field_grid(DesignSpec(), 1)
+    np.testing.assert_array_equal(pts, [[0.0, 0.0]])
+    np.testing.assert_array_equal(ang, [[0.0, 0.0]])
+    ang, pts = sensor_field_grid(DesignSpec(), 3)  # corner to corner, centre in the middle
+    np.testing.assert_array_equal(pts[4], [0.0, 0.0])
+    assert pts[0, 0] < 0 and pts[8, 0] == -pts[0, 0]

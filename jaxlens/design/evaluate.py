@@ -44,8 +44,9 @@ def sensor_field_grid(spec: DesignSpec, n: int = 16) -> tuple[np.ndarray, np.nda
                         f"{type(spec).__name__}")
     h, w = spec.sensor_size
     f = spec.focal_length
-    xs = np.linspace(-1.0, 1.0, n) * w / 2
-    ys = np.linspace(-1.0, 1.0, n) * h / 2
+    # Corner to corner; one field is the centre (linspace(-1, 1, 1) was the corner alone).
+    u = np.linspace(-1.0, 1.0, n) if n > 1 else np.zeros(1)
+    xs, ys = u * w / 2, u * h / 2
     x, y = np.meshgrid(xs, ys)
     pts = np.stack([x.ravel(), y.ravel()], -1)
     ang = np.degrees(np.arctan(pts / f))
