@@ -11,6 +11,7 @@ import pytest
 import jaxlens as jl
 from jaxlens.design import DesignSpec
 from jaxlens.design.evaluate import sensor_field_grid
+from jaxlens.design.losses import radial_area_weights
 from jaxlens.io import zmx
 from jaxlens.optics import catalog
 
@@ -120,3 +121,10 @@ def test_a_one_field_grid_is_the_sensor_centre():
     ang, pts = sensor_field_grid(DesignSpec(), 3)  # corner to corner, centre in the middle
     np.testing.assert_array_equal(pts[4], [0.0, 0.0])
     assert pts[0, 0] < 0 and pts[8, 0] == -pts[0, 0]
+
+
+def test_one_field_area_weights_match_the_one_field_grid():
+    """radial_area_weights counts the evaluation grid's fields per radial bin: for n = 1 its
+    one field is the centre, as sensor_field_grid's."""
+    w = radial_area_weights(np.array([0.0, 0.5, 1.0]), (4.0, 6.0), 1)
+    np.testing.assert_array_equal(w, [1.0, 0.0, 0.0])

@@ -27,6 +27,7 @@ import jax.numpy as jnp
 import numpy as np
 
 from ..analysis import spots as analysis
+from ..imaging import sampling
 from ..optics import checks, paraxial
 from ..optics.lens import Lens
 from .spec import DesignSpec
@@ -44,8 +45,7 @@ def sensor_field_grid(spec: DesignSpec, n: int = 16) -> tuple[np.ndarray, np.nda
                         f"{type(spec).__name__}")
     h, w = spec.sensor_size
     f = spec.focal_length
-    # Corner to corner; one field is the centre (linspace(-1, 1, 1) was the corner alone).
-    u = np.linspace(-1.0, 1.0, n) if n > 1 else np.zeros(1)
+    u = sampling.grid_axis(n)  # corner to corner; n = 1 evaluated the corner alone
     xs, ys = u * w / 2, u * h / 2
     x, y = np.meshgrid(xs, ys)
     pts = np.stack([x.ravel(), y.ravel()], -1)

@@ -44,7 +44,7 @@ import jax.numpy as jnp
 import numpy as np
 from jaxtyping import Array, Float
 
-from ..imaging.sampling import pupil_hexapolar
+from ..imaging.sampling import grid_axis, pupil_hexapolar
 from ..optics import checks, paraxial
 from ..optics.lens import Lens
 from ..optics.rays import Rays
@@ -135,7 +135,7 @@ def radial_area_weights(fracs, sensor_size, n: int = 16) -> np.ndarray:
                          f"{sensor_size!r}")
     h, w = (checks.number(v, "sensor_size", "radial_area_weights", lo=0, lo_open=True,
                           unit="mm (height, width)") for v in sensor_size)
-    y, x = np.meshgrid(np.linspace(-1, 1, n) * h / 2, np.linspace(-1, 1, n) * w / 2)
+    y, x = np.meshgrid(grid_axis(n) * h / 2, grid_axis(n) * w / 2)  # evaluate's grid
     r = np.hypot(x, y).ravel() / math.hypot(h / 2, w / 2)
     edges = np.concatenate([[-np.inf], 0.5 * (fracs[1:] + fracs[:-1]), [np.inf]])
     counts = np.histogram(r, bins=edges)[0].astype(float)

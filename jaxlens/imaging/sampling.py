@@ -50,12 +50,18 @@ _MAX_SIDE = math.isqrt(checks.MAX_PUPIL_POINTS)  # 4096 points or cells per side
 _MAX_RINGS = 2364  # the most hexapolar rings with 3r(r+1) + 1 ≤ MAX_PUPIL_POINTS
 
 
+def grid_axis(n: int) -> np.ndarray:
+    """``n`` points over [−1, 1] end to end; one point is the centre (``linspace(-1, 1, 1)``
+    is the edge alone). The axis of every square grid of pupil points or fields."""
+    return np.linspace(-1.0, 1.0, n) if n > 1 else np.zeros(1)
+
+
 def pupil_grid(n: int = 21, dtype=None) -> Float[Array, "m 2"]:
     """Square grid of n×n points over [−1, 1]², kept inside the unit disc (r² ≤ 1 + 1e-12)."""
     n = checks.number(n, "n", "pupil_grid", lo=1, hi=_MAX_SIDE, integer=True,
                       unit=f"points per side (n² ≤ {checks.MAX_PUPIL_POINTS} points)")
     checks.float_dtype(dtype, "pupil_grid")
-    u = np.linspace(-1.0, 1.0, n) if n > 1 else np.zeros(1)
+    u = grid_axis(n)
     px, py = np.meshgrid(u, u, indexing="xy")
     keep = px**2 + py**2 <= 1.0 + 1e-12
     pts = np.stack([px[keep], py[keep]], axis=-1)

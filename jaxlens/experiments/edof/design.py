@@ -38,6 +38,7 @@ import jax
 import jax.numpy as jnp
 import numpy as np
 
+from ...imaging.sampling import grid_axis
 from ...optics import checks
 from ...optics.lens import Lens, Sensor
 from .lenses import FOCUS_DEPTH, SPEC, WAVELENGTHS_RGB
@@ -324,7 +325,7 @@ def spot_record(lens: Lens, *, n: int = 16, depths=RECORD_DEPTHS) -> dict:
     pd = paraxial.paraxial_data(lens)
     f = nominal_focal_length()
     side = SPEC["sensor_pixels"][0] * SPEC["pixel_size_mm"]
-    xs = np.linspace(-1.0, 1.0, n) * side / 2
+    xs = grid_axis(n) * side / 2
     x, y = np.meshgrid(xs, xs)
     angles = np.degrees(np.arctan(np.stack([x.ravel(), y.ravel()], -1) / f))
     radial = np.linspace(0.0, 0.5 * SPEC["fov_deg"], 9)
