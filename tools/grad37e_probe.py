@@ -378,7 +378,7 @@ def section_materials(only):
 # ------------------------------------------------------------------------------ precision
 def _grads(fn, P):
     dyn, static = eqx.partition(P, eqx.is_inexact_array)
-    g = jax.jit(jax.grad(lambda d: fn(eqx.combine(d, static))))(dyn)
+    g = jax.jit(jax.grad(lambda d: fn(*eqx.combine(d, static))))(dyn)
     return np.concatenate([np.ravel(np.asarray(x, np.float64)) for x in jax.tree.leaves(g)])
 
 
