@@ -48,7 +48,7 @@ def reweighting_mask(
     if area is not None and not checks.is_traced(area):
         # NaN, negative or all-zero shares made the mean NaN or meaningless: every weight 1.
         checks.values(area, "area", "reweighting_mask", lo=0, unit="(share of the sensor area)")
-        if not float(np.sum(area)) > 0:
+        if not float(np.sum(np.asarray(area))) > 0:  # np.sum of a jax array is traced under jit
             raise ValueError(f"reweighting_mask: area must have a share > 0 for at least one "
                              f"field (the weights of the mean), got all zeros {jnp.shape(area)}")
     w = jnp.ones_like(rms) if area is None else jnp.broadcast_to(area, rms.shape)
