@@ -154,7 +154,7 @@ class GlassRecord:
         with jax.ensure_compile_time_eval():
             nf, nc = (float(v) for v in m.extrapolated_index(jnp.asarray([LAMBDA_F, LAMBDA_C])))
         vd = (n - 1.0) / (nf - nc) if nf != nc else math.inf
-        if not abs(vd - self.vd) <= VD_TOLERANCE * self.vd:
+        if not abs(vd - self.vd) <= VD_TOLERANCE * abs(self.vd):
             raise ValueError(
                 f"{at}{where}: its NM record gives Vd {self.vd:g}, but its CD coefficients "
                 f"with {formula} give Vd = (nd - 1)/(nF - nC) = {vd:.6g} (F, C lines "
