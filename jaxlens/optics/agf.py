@@ -135,8 +135,9 @@ class GlassRecord:
         """The NM record's nd must be what the CD record's formula gives at the d line: a
         wrong formula number or garbled coefficients made a plausible index of another
         glass (the shipped catalogs agree to 4e-5)."""
-        with jax.ensure_compile_time_eval():
-            n = float(m.extrapolated_index(jnp.asarray(LAMBDA_D)))
+        with jax.ensure_compile_time_eval():  # one evaluation: a catalog makes thousands
+            n, nf, nc = (float(v) for v in m.extrapolated_index(
+                jnp.asarray([LAMBDA_D, LAMBDA_F, LAMBDA_C])))
         at = f"{self.source}: " if self.source else ""
         formula = f"formula {self.formula} ({FORMULA_NAMES.get(self.formula, '?')})"
         if not abs(n - self.nd) <= ND_TOLERANCE:
@@ -151,8 +152,6 @@ class GlassRecord:
         lo, hi = self.wavelength_range or (0.0, math.inf)
         if self.vd == 0 or not (lo <= LAMBDA_F and LAMBDA_C <= hi):
             return
-        with jax.ensure_compile_time_eval():
-            nf, nc = (float(v) for v in m.extrapolated_index(jnp.asarray([LAMBDA_F, LAMBDA_C])))
         vd = (n - 1.0) / (nf - nc) if nf != nc else math.inf
         if not abs(vd - self.vd) <= VD_TOLERANCE * abs(self.vd):
             raise ValueError(
