@@ -143,11 +143,6 @@ def _schott_fit(wl: np.ndarray, n: np.ndarray, exact_wl=(), exact_n=()) -> list[
     return out
 
 
-def _schott_index(coeffs: list[float], wl: np.ndarray) -> np.ndarray:
-    a0, a1, a2, a3, a4, a5 = coeffs
-    return np.sqrt(a0 + a1 * wl**2 + a2 * wl**-2 + a3 * wl**-4 + a4 * wl**-6 + a5 * wl**-8)
-
-
 def _nd_vd(m: AbstractMaterial) -> tuple[float, float]:
     n = np.asarray(
         m.extrapolated_index(np.array([_materials.LAMBDA_D, _materials.LAMBDA_F,
@@ -276,7 +271,8 @@ class _GlassWriter:
             return float(m.catalog_nd), float(m.catalog_vd)
         return nd, vd
 
-    def write_agf(self, folder: str, wavelengths: np.ndarray) -> list[str]:
+    def write_agf(self, folder: str) -> list[str]:
+        wavelengths = self.wavelengths
         written, texts = [], []
         lo = min(0.3, float(np.min(wavelengths)))
         hi = max(2.5, float(np.max(wavelengths)))
@@ -287,8 +283,9 @@ class _GlassWriter:
                 nd, vd = self._nd_vd_of(m)
                 form, coeffs, exact = self._cd(m)
                 if not exact:
-                    at = np.asarray(m.index(wavelengths), np.float64)
-                    off = float(np.max(np.abs(_schott_index(coeffs, wavelengths) - at)))
+                    fit = _materials.Schott(np.asarray(coeffs, np.float64)).index(wavelengths)
+                    off = float(np.max(np.abs(np.asarray(fit, np.float64)
+                                              - np.asarray(m.index(wavelengths), np.float64))))
                     if not off <= 1e-9:
                         warnings.warn(
                             f"save_zmx: glass {e.name} ({type(m).__name__}) has no Zemax "
@@ -609,6 +606,6 @@ def save_zmx(lens: Lens, path: str | os.PathLike, *, model_glass: str = "blank")
     path = os.fspath(path)
     text, gw = dumps(lens, path, model_glass=model_glass)
     folder = os.path.dirname(os.path.abspath(path))
-    agfs = gw.write_agf(folder, np.atleast_1d(np.asarray(lens.wavelengths, np.float64)))
+    agfs = gw.write_agf(folder)
     write_whole(path, text, newline="\r\n")
     return agfs
