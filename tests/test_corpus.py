@@ -59,7 +59,6 @@ EXPECTED_WARNINGS = {
 
 # Files jaxlens cannot represent: the line and the reason.
 REFUSED = {
-    "rayoptics_US05831776-1.zmx": (38, "object-space telecentric systems"),
     "rayoptics_US08427765-1.ZMX": (93, "glass 'L-TIM28_MOLD': Unknown material"),
 }
 

@@ -27,8 +27,9 @@ paraxial. ``"object_space_telecentric": true`` marks an object-space telecentric
 (``Lens.object_na``; written only when true): its aperture is ``aperture.object_na`` (or
 ``aperture.stop_semi_diameter``) and its fields are object heights in mm (``fields.type``
 ``"object_height_mm_y"`` or ``"object_height_mm_xy"``), both required; an EPD or F/#
-aperture, field angles or an object at infinity are refused. ``"negative_propagation": true`` lets rays go back along their line to any
-surface after the first, as Zemax does (``Lens.negative_propagation``, set for lenses read
+aperture, field angles or an object at infinity are refused.
+``"negative_propagation": true`` lets rays go back along their line to any surface after the
+first, as Zemax does (``Lens.negative_propagation``, set for lenses read
 from ``.zmx`` files); written only when true (a file without it traces by the default rule).
 
 Saving writes every number with Python's shortest round-trip representation, so

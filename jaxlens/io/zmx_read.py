@@ -621,9 +621,10 @@ def _lens(f: ZmxFile, text: str, path: str, strict: bool, unknown_glass: str) ->
             checks.wavelengths(lens, np.array([w]), ln.tokens[0] if ln else f"{path}: WAVM",
                                "wavelength")
     checks.material_indices(lens, wl, path)
-    if telecentric and field_type == 2:
+    if telecentric and field_type in (2, 3):
         try:
-            lens = zmx_system.heights_from_paraxial_image_heights(lens, fields * u)
+            lens = (zmx_system.heights_from_paraxial_image_heights if field_type == 2 else
+                    zmx_system.heights_from_real_image_heights)(lens, fields * u)
         except ValueError as e:
             raise f.ftyp.error(str(e)) from None
     elif field_type in (1, 2, 3) and not telecentric:

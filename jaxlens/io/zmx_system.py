@@ -321,10 +321,6 @@ def check_telecentric(ftyp, kind: int, aperture, dist: float, aim: str) -> str:
                          f"every chief ray parallel to the axis, so its fields cannot be "
                          f"{FIELD_TYPES[kind]} (FTYP {kind}); OpticStudio requires object "
                          f"heights (FTYP 1) or image heights")
-    if kind == 3:
-        raise ftyp.error("real image heights (FTYP 3) of an object-space telecentric system "
-                         "are not supported; give object heights (FTYP 1) or paraxial image "
-                         "heights (FTYP 2)")
     if aperture is not None and aperture[0] not in TELECENTRIC_APERTURES:
         what = {"epd": "entrance pupil diameter (ENPD)", "fnum": "image-space F/# (FNUM)",
                 "wfno": "paraxial working F/# (FNUM x 1)"}.get(aperture[0], aperture[0])
@@ -354,6 +350,51 @@ def heights_from_paraxial_image_heights(lens: Lens, heights: np.ndarray) -> Lens
                          f"paraxial magnification is {m:g}")
     h = np.asarray(heights, np.float64) / m
     return eqx.tree_at(lambda l: l.fields, lens, jnp.asarray(h))
+
+
+def heights_from_real_image_heights(lens: Lens, heights: np.ndarray) -> Lens:
+    """An object-space telecentric lens with ``heights`` (real image heights in mm, y or
+    (x, y), primary wavelength) as object heights: for each, the object point whose real
+    chief ray (parallel to the axis) meets the image surface there, by Newton's method with a
+    central-difference Jacobian from the paraxial guess h / m.
+
+    Raises:
+        ValueError: where no valid chief ray reaches a height (to ``REAL_HEIGHT_TOLERANCE``).
+    """
+    m = float(paraxial.image_height(lens, 1.0))
+    if not (math.isfinite(m) and m != 0.0):
+        raise ValueError(f"real image heights cannot be converted to object heights: the "
+                         f"paraxial magnification is {m:g}")
+    h = np.asarray(heights, np.float64)
+    xy = np.stack([np.zeros_like(h), h], -1) if h.ndim == 1 else h
+    free = _geometry_only(lens)
+    centre = jnp.zeros((1, 2))
+
+    def land(p):
+        rays = sampling.field_rays(free, jnp.asarray(p), centre, depth=lens.object_distance)
+        out = forward.trace(free, rays)
+        return np.asarray(out.origin[0, :2]), bool(out.valid[0])
+
+    found = []
+    for target in xy:
+        p = target / m
+        for _ in range(12):
+            at, _ = land(p)
+            miss = at - target
+            if np.max(np.abs(miss)) <= 1e-13 * (1 + np.max(np.abs(target))):
+                break
+            step = 1e-6 * (1.0 + np.max(np.abs(p)))
+            jac = np.stack([(land(p + e)[0] - land(p - e)[0]) / (2 * step)
+                            for e in np.eye(2) * step], -1)
+            p = p - np.linalg.solve(jac, miss)
+        at, valid = land(p)
+        err = float(np.max(np.abs(at - target)))
+        if not (valid and err <= REAL_HEIGHT_TOLERANCE * (1 + np.max(np.abs(target)))):
+            raise ValueError(f"no real chief ray reaches the image height {target.tolist()} mm "
+                             f"(closest: {err:.3g} mm away, valid: {valid})")
+        found.append(p)
+    f = np.array(found)
+    return eqx.tree_at(lambda m_: m_.fields, lens, jnp.asarray(f[:, 1] if h.ndim == 1 else f))
 
 
 def afocal_zero_heights(lens: Lens, heights: np.ndarray, kind: int) -> Lens | None:

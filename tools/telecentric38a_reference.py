@@ -2,7 +2,7 @@
 
 Run with the optiland environment's interpreter, from the repository root:
 
-    /work/optenv/bin/python tools/telecentric_references_round38a.py
+    /work/optenv/bin/python tools/telecentric38a_reference.py
 
 It writes three hand-made object-space telecentric lens files (FTYP's second value 1) to
 tests/data/zmx38a/ and, for each, optiland's real rays at the image surface (several object
@@ -62,7 +62,7 @@ def zmx_text(name: str, s: dict) -> str:
     ap = s["aperture"]
     n = len(s["fields"])
     lines = ["VERS 190513 80 123457 L123457", "MODE SEQ", f"NAME {name}",
-             "NOTE 0 Written by tools/telecentric_references_round38a.py: an object-space "
+             "NOTE 0 Written by tools/telecentric38a_reference.py: an object-space "
              "telecentric test lens", "UNIT MM X W X CM MR CPMM",
              "FLOA" if ap[0] == "FLOA" else f"OBNA {ap[1]!r} {ap[2]}",
              "ENVD 2.0E+1 1 0", "GFAC 0 0", "GCAT SCHOTT",
@@ -71,12 +71,13 @@ def zmx_text(name: str, s: dict) -> str:
              "YFLN " + " ".join(repr(f[1]) for f in s["fields"]),
              "FWGN " + " ".join("1" for _ in s["fields"])]
     lines += [f"WAVM {i + 1} {w!r} 1" for i, w in enumerate(WAVELENGTHS)]
-    lines += ["PWAV 2", "SURF 0", "  TYPE STANDARD", "  CURV 0.0", f"  DISZ {s['object_distance']!r}"]
+    lines += ["PWAV 2", "SURF 0", "  TYPE STANDARD", "  CURV 0.0",
+              f"  DISZ {s['object_distance']!r}"]
     for i, (c, t, glass, stop, sd) in enumerate(s["surfaces"]):
         lines += [f"SURF {i + 1}"] + (["  STOP"] if stop else [])
         lines += ["  TYPE STANDARD", f"  CURV {c!r}", f"  DISZ {t!r}"]
         if glass:
-            lines.append(f"  GLAS {glass} 0 0 1.5 50 0 0 0 0 0 0")
+            lines.append(f"  GLAS {glass}")
         lines.append(f"  DIAM {sd!r} 1 0 0 1 \"\"")
     lines += [f"SURF {len(s['surfaces']) + 1}", "  TYPE STANDARD", "  CURV 0.0", "  DISZ 0"]
     return "\n".join(lines) + "\n"
@@ -118,7 +119,7 @@ def telecentric_magnification(op, s) -> float:
 
 def main() -> None:
     OUT_DIR.mkdir(parents=True, exist_ok=True)
-    out = {"source": "optiland 0.6.3 (tools/telecentric_references_round38a.py)",
+    out = {"source": "optiland 0.6.3 (tools/telecentric38a_reference.py)",
            "wavelengths_um": list(WAVELENGTHS), "pupil": [list(p) for p in PUPIL],
            "systems": {}}
     for name, s in SYSTEMS.items():
