@@ -17,7 +17,8 @@ import numpy as np
 import pytest
 
 from jaxlens import analysis
-from jaxlens.imaging import sampling
+from jaxlens.analysis import report
+from jaxlens.imaging import psf, radiometry, sampling
 from jaxlens.io import lensfile, zmx
 from jaxlens.optics import paraxial
 from jaxlens.tracing import forward
@@ -94,8 +95,11 @@ def test_analyses_work_or_refuse_clearly():
     chief = analysis.chief_ray(lens, 8.0)
     assert abs(float(chief.origin[1]) - 8.0 * REF["systems"]["tele_doublet_obna"][
         "paraxial_magnification"]) < 0.5
+    kern = psf.psf(lens, 4.0, pixel_size=0.03, kernel_size=31)  # centred on the chief ray
+    assert abs(float(np.sum(kern)) - 1.0) < 0.05
     for f in (lambda: analysis.distortion(lens), lambda: analysis.seidel(lens),
-              lambda: analysis.field_curvature(lens)):
+              lambda: analysis.field_curvature(lens), lambda: report.report_data(lens),
+              lambda: radiometry.relative_illumination(lens, np.array([4.0]))):
         with pytest.raises(ValueError, match="object-space telecentric"):
             f()
     with pytest.raises(ValueError, match="ray aiming does not apply"):
@@ -111,7 +115,7 @@ def _edited(name, old, new):
 
 @pytest.mark.parametrize("old,new,match", [
     ("FTYP 1 1", "FTYP 0 1", "cannot be angles"),
-    ("FTYP 1 1", "FTYP 3 1", "real image heights"),
+    ("FTYP 1 1", "FTYP 4 1", "theodolite angles"),
     ("FTYP 1 1", "FTYP 1 2", "must be 0 or 1"),
     ("OBNA 0.08 0", "ENPD 10", "entrance pupil diameter"),
     ("OBNA 0.08 0", "FNUM 4 0", "F/#"),

@@ -40,20 +40,26 @@ SYSTEMS = {
         fields=[(0.0, 0.0), (0.0, 4.0), (0.0, 8.0)],
         surfaces=[(1 / 40, 8.0, "N-SK16", False, 16), (-1 / 30, 3.0, "F2", False, 16),
                   (-1 / 120, 44.41333, None, False, 16), (0.0, 15.0, None, True, 6),
-                  (1 / 50, 6.0, "N-BK7", False, 16), (-1 / 50, 45.0, None, False, 16)]),
+                  (1 / 50, 6.0, "N-BK7", False, 16), (-1 / 50, 37.0301, None, False, 16)]),
     "tele_triplet_floa": dict(
         object_distance=40.0, aperture=("FLOA",), stop_sd=2.5, ftyp=1,
         fields=[(0.0, 0.0), (3.0, 0.0), (2.0, -4.0)],
         surfaces=[(1 / 60, 5.0, "N-BK7", False, 14), (-1 / 60, 57.21356, None, False, 14),
                   (0.0, 12.0, None, True, 2.5), (1 / 40, 6.0, "N-BK7", False, 12),
                   (-1 / 40, 2.0, None, False, 12), (-1 / 45, 3.0, "F2", False, 12),
-                  (1 / 100, 40.0, None, False, 12)]),
+                  (1 / 100, 391.776, None, False, 12)]),
     "tele_doublet_cone_parimage": dict(
         object_distance=80.0, aperture=("OBNA", 4.0, 1), ftyp=2,
         fields=[(0.0, 0.0), (0.0, -2.0), (0.0, -4.0)],
         surfaces=[(1 / 40, 8.0, "N-SK16", False, 16), (-1 / 30, 3.0, "F2", False, 16),
                   (-1 / 120, 44.41333, None, False, 16), (0.0, 15.0, None, True, 6),
-                  (1 / 50, 6.0, "N-BK7", False, 16), (-1 / 50, 60.0, None, False, 16)]),
+                  (1 / 50, 6.0, "N-BK7", False, 16), (-1 / 50, 25.0168, None, False, 16)]),
+    "tele_doublet_realimage": dict(
+        object_distance=70.0, aperture=("OBNA", 0.1, 0), ftyp=3,
+        fields=[(0.0, 0.0), (0.0, -3.0), (0.0, -7.5)],
+        surfaces=[(1 / 40, 8.0, "N-SK16", False, 16), (-1 / 30, 3.0, "F2", False, 16),
+                  (-1 / 120, 44.41333, None, False, 16), (0.0, 15.0, None, True, 6),
+                  (1 / 50, 6.0, "N-BK7", False, 16), (-1 / 50, 30.0, None, False, 16)]),
 }
 
 
@@ -117,6 +123,28 @@ def telecentric_magnification(op, s) -> float:
     return float(np.ravel(y[-1])[0])
 
 
+def chief_landing(s, na, h) -> float:
+    """y on the image surface of the real chief ray from object height h (mm), primary λ."""
+    if h == 0.0:
+        return 0.0
+    op = build(s, na, [(0.0, h)])
+    r = op.trace_generic(0.0, 1.0 if h > 0 else -1.0, np.array([0.0]), np.array([0.0]),
+                         WAVELENGTHS[1])
+    return float(np.ravel(r.y)[0])
+
+
+def real_height_object(s, na, target, h) -> float:
+    """The object height whose real chief ray meets the image surface at ``target`` (mm)."""
+    for _ in range(30):
+        miss = chief_landing(s, na, h) - target
+        if abs(miss) <= 1e-14 * (1 + abs(target)):
+            break
+        d = 1e-6 * (1 + abs(h))
+        slope = (chief_landing(s, na, h + d) - chief_landing(s, na, h - d)) / (2 * d)
+        h -= miss / slope
+    return h
+
+
 def main() -> None:
     OUT_DIR.mkdir(parents=True, exist_ok=True)
     out = {"source": "optiland 0.6.3 (tools/telecentric38a_reference.py)",
@@ -138,6 +166,10 @@ def main() -> None:
         if s["ftyp"] == 2:  # paraxial image heights -> object heights: h / magnification
             m = telecentric_magnification(build(s, na, [(0.0, 0.0), (0.0, 1.0)]), s)
             heights = [(x / m, yy / m) for x, yy in heights]
+        if s["ftyp"] == 3:  # real image heights -> object heights: Newton on the real
+            # chief ray (parallel to the axis), from the paraxial guess
+            m = telecentric_magnification(build(s, na, [(0.0, 0.0), (0.0, 1.0)]), s)
+            heights = [(0.0, real_height_object(s, na, yy, yy / m)) for _, yy in heights]
         op = build(s, na, heights)
         rmax = max(math.hypot(*h) for h in heights)
         rays = []

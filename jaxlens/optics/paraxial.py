@@ -213,7 +213,8 @@ def finite_pupil(lens: Lens, where: str) -> None:
             f"entrance pupil lies at infinity and its fields are object heights (mm), so "
             f"{where}, which needs an entrance pupil at a finite distance and field angles, "
             f"does not apply; paraxial_data gives its first-order data, sampling.field_rays "
-            f"its rays")
+            f"its rays, and rms_spot, spot_rays, chief_ray, ray_fan, opd_fan, wavefront, "
+            f"encircled_energy, psf and mtf take its object heights")
 
 
 def object_slope(lens: Lens) -> Array:
