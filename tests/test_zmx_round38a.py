@@ -27,7 +27,9 @@ jax.config.update("jax_enable_x64", True)
 
 DATA = pathlib.Path(__file__).resolve().parent / "data"
 REF = json.loads((DATA / "zmx38a_optiland.json").read_text())
-NAMES = sorted(REF["systems"])
+# One file in the fast suite; the others compile their own traces (3-6 s each): slow.
+NAMES = [pytest.param(n, marks=() if n == "tele_doublet_obna" else pytest.mark.slow)
+         for n in sorted(REF["systems"])]
 
 
 def _load(name):
@@ -88,15 +90,10 @@ def test_pupil_position_refused_and_paraxial_data_say_infinity():
     assert np.isnan(float(pd.fnum))
 
 
-def test_analyses_work_or_refuse_clearly():
+def test_analyses_that_need_field_angles_refuse_clearly():
+    """Distortion, Seidel sums, field curvature, the report and the relative illumination
+    are for field angles toward a finite entrance pupil: each refuses, before tracing."""
     lens = _load("tele_doublet_obna")
-    spot = analysis.rms_spot(lens, 8.0)
-    assert np.all(np.isfinite(np.asarray(spot.polychromatic)))
-    chief = analysis.chief_ray(lens, 8.0)
-    assert abs(float(chief.origin[1]) - 8.0 * REF["systems"]["tele_doublet_obna"][
-        "paraxial_magnification"]) < 0.5
-    kern = psf.psf(lens, 4.0, pixel_size=0.03, kernel_size=31)  # centred on the chief ray
-    assert abs(float(np.sum(kern)) - 1.0) < 0.05
     for f in (lambda: analysis.distortion(lens), lambda: analysis.seidel(lens),
               lambda: analysis.field_curvature(lens), lambda: report.report_data(lens),
               lambda: radiometry.relative_illumination(lens, np.array([4.0]))):
@@ -105,6 +102,19 @@ def test_analyses_work_or_refuse_clearly():
     with pytest.raises(ValueError, match="ray aiming does not apply"):
         sampling.field_rays(lens, 4.0, np.zeros((1, 2)), depth=lens.object_distance,
                             aim="real")
+
+
+@pytest.mark.slow
+def test_analyses_on_object_heights_work():
+    """RMS spot, chief ray (parallel to the axis: not aimed) and a PSF centred on it."""
+    lens = _load("tele_doublet_obna")
+    spot = analysis.rms_spot(lens, 8.0)
+    assert np.all(np.isfinite(np.asarray(spot.polychromatic)))
+    chief = analysis.chief_ray(lens, 8.0)
+    assert abs(float(chief.origin[1]) - 8.0 * REF["systems"]["tele_doublet_obna"][
+        "paraxial_magnification"]) < 0.5
+    kern = psf.psf(lens, 4.0, pixel_size=0.03, kernel_size=31)  # centred on the chief ray
+    assert abs(float(np.sum(kern)) - 1.0) < 0.05
 
 
 def _edited(name, old, new):
