@@ -1,7 +1,9 @@
 """System data of a ``.zmx`` file beyond surfaces: the object-space NA and paraxial working
 F/# apertures (``OBNA``, ``FNUM x 1``), field types (``FTYP``; paraxial and real image heights
-converted to angles), vignetting factors (read into ``Lens.vignetting``), ray aiming
-(``RAIM``) and the environment (``ENVD``). The format: ``jaxlens.io.zmx``."""
+converted to angles), object-space telecentric systems (FTYP's second value 1: object
+heights, or image heights converted to them, and ``Lens.object_na``), vignetting factors
+(read into ``Lens.vignetting``), ray aiming (``RAIM``) and the environment (``ENVD``). The
+format: ``jaxlens.io.zmx``."""
 
 from __future__ import annotations
 

@@ -183,7 +183,9 @@ class ParaxialData(eqx.Module):
 
     ``efl`` = 1/Φ (in air) and ``efl_image_space`` = n′/Φ (in image space, Zemax's and
     optiland's EFL); ``front_focal_length`` = n·efl and ``rear_focal_length`` = n′·efl
-    with n, n′ the object- and image-space indices.
+    with n, n′ the object- and image-space indices. For an object-space telecentric lens
+    (``Lens.object_na``) ``entrance_pupil_z`` is −inf, ``entrance_pupil_diameter`` +inf and
+    ``fnum`` (EFL/EPD) NaN; ``working_fnum`` and the rest follow its NA.
     """
 
     efl: Float[Array, ""]
