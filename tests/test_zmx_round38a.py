@@ -137,6 +137,19 @@ def test_what_a_telecentric_file_cannot_have_is_refused(old, new, match):
         zmx.loads(text, "t.zmx")
 
 
+def test_ray_aiming_is_ignored_with_a_warning():
+    text = _edited("tele_doublet_obna", "PWAV 2", "PWAV 2\nRAIM 0 1 1 1 0 0 0 0 0")
+    with pytest.warns(UserWarning, match="ray aiming \\(RAIM\\) is ignored"):
+        lens = zmx.loads(text, "t.zmx")
+    assert lens.aim == "paraxial" and lens.telecentric_object
+
+
+def test_virtual_object_refused():
+    text = _edited("tele_doublet_obna", "DISZ 60.0", "DISZ -60.0")
+    with pytest.raises(ValueError, match="virtual object is not supported"):
+        zmx.loads(text, "t.zmx")
+
+
 def test_zmx_and_json_round_trips_keep_it():
     lens = _load("tele_triplet_floa")
     with warnings.catch_warnings():

@@ -492,6 +492,11 @@ class Lens(eqx.Module):
             raise ValueError("Lens: an object-space telecentric lens (object_na given) needs "
                              "a finite object_distance (mm): with the object at infinity its "
                              "image lies at the stop")
+        d = self.object_distance
+        if not checks.is_traced(d) and float(d) < 0:
+            raise ValueError(f"Lens: an object-space telecentric lens (object_na given) needs a "
+                             f"real object before surface 1 (object_distance > 0 mm), got "
+                             f"{float(d):g} mm (a virtual object is not supported for it)")
         if self.aim != "paraxial":
             raise ValueError(f"Lens: an object-space telecentric lens (object_na given) "
                              f"launches its chief rays parallel to the axis; ray aiming does "
