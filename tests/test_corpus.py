@@ -59,7 +59,6 @@ EXPECTED_WARNINGS = {
 
 # Files jaxlens cannot represent: the line and the reason.
 REFUSED = {
-    "rayoptics_US05831776-1.zmx": (38, "object-space telecentric systems"),
     "rayoptics_US08427765-1.ZMX": (93, "glass 'L-TIM28_MOLD': Unknown material"),
 }
 
@@ -73,7 +72,10 @@ KNOWN_EFL = {"rayoptics_zmax_37992.zmx": 1 / (2 * 5.246589716684155885E-03),
              "optiland_inactive_wavelengths.zmx": math.inf}
 
 # Files checked in a test of their own (optiland 0.6.3 does not read their surface type).
-CHECKED_ELSEWHERE = {"rayoptics_ASL5040-UV.zmx": "tests/test_qtype.py (QED_TYPE, Q-bfs)"}
+CHECKED_ELSEWHERE = {"rayoptics_ASL5040-UV.zmx": "tests/test_qtype.py (QED_TYPE, Q-bfs)",
+                     # Object-space telecentric, real image heights (round 38a): loads; its
+                     # EFL has no independent reference yet.
+                     "rayoptics_US05831776-1.zmx": "tests/test_zmx_round38a.py"}
 
 
 def _load(name, **kw):

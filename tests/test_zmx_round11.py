@@ -60,13 +60,11 @@ SURF 3
 """
 
 
-def test_object_space_telecentric_refusal_says_why():
-    """US05831776's header: object heights would do, the telecentric flag cannot. The
-    refusal names the FTYP line and says what the file means and what a Lens holds."""
-    text = _lens(ftyp="1 1", aperture="OBNA 1.5E-1 0")
-    with pytest.raises(ValueError, match=r"<zmx>:6: object-space telecentric .*chief ray "
-                                         r"parallel to the axis.*cannot hold this system"):
-        zmx_read.loads(text)
+def test_object_space_telecentric_header_loads():
+    """US05831776's header (round 38a: refused before): an object-space telecentric lens
+    (Lens.object_na), its fields object heights, its aperture the object-space NA."""
+    lens = zmx_read.loads(_lens(ftyp="1 1", aperture="OBNA 1.5E-1 0"))
+    assert lens.telecentric_object and float(lens.object_na) == 0.15
 
 
 def test_object_heights_without_the_telecentric_flag_load():

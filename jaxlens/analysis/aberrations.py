@@ -48,7 +48,7 @@ import numpy as np
 from jaxtyping import Array, Bool, Float
 
 from ..imaging.sampling import field_rays, lens_aim, lens_depth
-from ..optics import checks
+from ..optics import checks, paraxial
 from ..optics.lens import Lens
 from ..tracing.forward import DEFAULT_NEWTON_ITERS, aimed_jit, forward_mode_jit, trace
 
@@ -98,8 +98,10 @@ def _inputs(lens, where: str, fields, wavelengths, *, pairs: bool = False, arg: 
         also = ", or (θx, θy) pairs [F, 2]" if pairs else " (these curves are for fields along y)"
         raise ValueError(f"{where}: fields must be θy angles in degrees, one value or [F]"
                          f"{also}, got shape {f.shape}")
-    checks.field_angles(f, where, "field")
-    if not checks.is_traced(f):  # as Lens does: np.radians([0, 14, 20]) traced as 0.35° at most
+    if not lens.telecentric_object:  # else object heights (mm), checked by field_rays
+        checks.field_angles(f, where, "field")
+    # As Lens does: np.radians([0, 14, 20]) traced as 0.35° at most.
+    if not checks.is_traced(f) and not lens.telecentric_object:
         checks.warn_if_radian_fields(f, where, arg)
     wl = lens.wavelengths if wavelengths is None else jnp.asarray(wavelengths, dtype)
     if wl.ndim > 1 or wl.size == 0:
@@ -195,6 +197,9 @@ def field_curvature(lens: Lens, fields=None, wavelengths=None, *, depth=None,
         difference).
     """
     checks.focal_image(lens, "field_curvature")
+    # Its fields and azimuths are angles (tan θ); an object-space telecentric lens's are
+    # object heights.
+    paraxial.finite_pupil(lens, "field_curvature")
     f, wl = _inputs(lens, "field_curvature",
                     default_fields(lens) if fields is None else fields, wavelengths, pairs=True)
     return _field_curvature(lens, f, wl, depth=lens_depth(lens, depth, "field_curvature"),

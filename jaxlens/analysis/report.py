@@ -201,6 +201,9 @@ def report_data(lens: Lens, *, fields=None, wavelengths=None, wavefront: bool = 
         wavefront: also give each field's wavefront error (``analysis.wavefront`` at the
             primary wavelength): RMS and P-V in waves, and Maréchal's Strehl ratio.
     """
+    # Distortion, field curvature and the Seidel sums are for field angles toward an
+    # entrance pupil at a finite distance.
+    paraxial.finite_pupil(lens, "report")
     lens = with_fields_and_wavelengths(lens, fields, wavelengths)
     if wavelengths is None and not checks.is_traced(lens.wavelengths):
         # Checked here, not as an EquinoxRuntimeError from inside the compiled trace.

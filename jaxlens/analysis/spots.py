@@ -53,7 +53,10 @@ def check_inputs(lens: Lens, where: str, *, fields=None, wavelengths=None,
     Returns ``pupil`` (traced: with the unit-disc check attached; use it)."""
     if not isinstance(lens, Lens):
         raise TypeError(f"{where}: lens must be a jaxlens.Lens, got {type(lens).__name__}")
-    if fields is not None and not checks.is_traced(fields):
+    if fields is not None and not checks.is_traced(fields) and lens.telecentric_object:
+        checks.values(fields, f"{arg_f} (object heights of an object-space telecentric "
+                      f"lens)", where, unit="mm")
+    elif fields is not None and not checks.is_traced(fields):
         checks.field_angles(fields, where, arg_f)
         checks.warn_if_radian_fields(fields, where, arg_f)  # as Lens does
     if wavelengths is None and not checks.is_traced(lens.wavelengths):
@@ -347,6 +350,7 @@ def distortion(lens: Lens, fields=None, wavelength=None, *, aim=None) -> Distort
     real stop's (``"real"``); None (the default): the lens's own ray aiming, ``lens.aim``.
     """
     checks.focal_image(lens, "distortion")
+    paraxial.finite_pupil(lens, "distortion")  # its ideal heights are n·EFL·tanθ
     check_inputs(lens, "distortion", fields=fields, wavelengths=wavelength,
                      arg_w="wavelength")
     fields, wavelength = _as_arrays(lens, _own_fields(lens, fields), wavelength)

@@ -210,7 +210,9 @@ def _r4_coefficient(surface) -> Array:
 
 
 def _field(lens: Lens, field, where: str) -> Array:
-    """The chief ray's field angle (deg): given, or the lens's largest (radial for pairs)."""
+    """The chief ray's field angle (deg): given, or the lens's largest (radial for pairs).
+    An object-space telecentric lens (fields are object heights) is refused."""
+    paraxial.finite_pupil(lens, where)
     if field is None:
         f = jnp.asarray(lens.fields)
         t = jnp.tan(jnp.deg2rad(f))

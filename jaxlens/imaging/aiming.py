@@ -46,8 +46,10 @@ def image_scale(lens: Lens, wavelength=None) -> Float[Array, ""]:
 
     The distortion-free image of the field (θx, θy) lies at ``K·(tanθx, tanθy)``; for a lens
     focused at infinity K is the focal length. The paraxial chief ray is linear in tanθ, so
-    one ray at 45° gives K.
+    one ray at 45° gives K. An object-space telecentric lens (fields are object heights) is
+    refused.
     """
+    paraxial.finite_pupil(lens, "image_scale")
     return paraxial.image_height(lens, 45.0, wavelength) / jnp.tan(jnp.deg2rad(45.0))
 
 
@@ -65,7 +67,9 @@ def ideal_to_field(lens: Lens, xy, wavelength=None) -> Float[Array, "*b 2"]:
 def stop_chief_ray(lens: Lens, field, depth=None, wavelength=None, *,
                    newton_iters: int = DEFAULT_NEWTON_ITERS,
                    iters: int = sampling.AIM_ITERS) -> Rays:
-    """The real chief ray of a field: aimed by Newton's method at the centre of the stop.
+    """The real chief ray of a field: aimed by Newton's method at the centre of the stop (of
+    an object-space telecentric lens, ``Lens.object_na``: the ray from the object point at
+    height ``field`` (mm) parallel to the axis, not aimed).
 
     Args:
         lens: the lens.
@@ -126,7 +130,10 @@ def _check_chief_args(lens, field, depth, wavelength, newton_iters) -> None:
         raise TypeError(f"{where}: lens must be a jaxlens.Lens, got {type(lens).__name__}")
     checks.newton_iters(newton_iters, where)
     checks.lens_intact(lens, where)
-    if not checks.is_traced(field):
+    if lens.telecentric_object:  # the field is an object height (mm)
+        if not checks.is_traced(field):
+            sampling.telecentric.one_height(field, where)
+    elif not checks.is_traced(field):
         checks.real_values(field, "field", where, "deg")  # before np.asarray
         checks.field_angles(np.asarray(field), where, "field")
         if depth is not None:
@@ -144,6 +151,9 @@ def _stop_chief_ray(lens, field, depth, wavelength, *, newton_iters, iters) -> R
     """``stop_chief_ray``'s compiled core: a module-level function of the lens and arrays
     (the sizes static), so that eager calls on lenses of one structure share one program."""
     wl = lens.primary_wavelength if wavelength is None else jnp.asarray(wavelength)
+    if lens.telecentric_object:  # the ray parallel to the axis: nothing to aim
+        return sampling.telecentric.source(lens, field, jnp.zeros((1, 2), lens.epd.dtype),
+                                           wl, depth)
     zep = paraxial.entrance_pupil_z(lens)
     if depth is None:
         start = sampling.field_direction(field).astype(lens.epd.dtype)

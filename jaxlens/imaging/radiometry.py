@@ -217,6 +217,7 @@ def relative_illumination(
     """
     where = "relative_illumination"
     checks.focal_image(lens, where)
+    paraxial.finite_pupil(lens, where)  # its fields are angles toward a finite pupil
     checks.number(pupil, "pupil", where, lo=1, integer=True, unit="cells per side")
     # Bounded as a PSF grid: pupil=100000 asked for 1e10 rays per field after the checks.
     checks.number(pupil, "pupil", where, lo=1, hi=checks.MAX_KERNEL_SIZE, integer=True,

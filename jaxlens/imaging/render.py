@@ -570,6 +570,7 @@ def render(
             non-positive spp, a missing sensor, an unknown method or a non-positive depth.
     """
     checks.focal_image(lens, "render")
+    paraxial.finite_pupil(lens, "render")  # its pixels are field angles
     if isinstance(method, str):
         raise TypeError(f"render: method is a render method object, not a string: use "
                         f"RayRender(...) or PSFRender(kernel_size=...), got {method!r}")

@@ -44,6 +44,7 @@ from ..optics.lens import (
     unclipped,
 )
 from ..optics.rays import Rays
+from . import telecentric
 from .newton import newton_2d
 
 _MAX_SIDE = math.isqrt(checks.MAX_PUPIL_POINTS)  # 4096 points or cells per side
@@ -266,6 +267,7 @@ def collimated(
 
 def _collimated(lens: Lens, field, pupil, wavelength=None, *, aim=None) -> Rays:
     """``collimated`` without the field's checks and radians warning (its callers made them)."""
+    paraxial.finite_pupil(lens, "collimated")
     wl = _checked_wavelength(lens, wavelength, "collimated")
     pupil = pupil_points(pupil, "collimated")
     d = _direction(field)
@@ -302,6 +304,7 @@ def point_source(
     The pupil points are used as given: the lens's vignetting factors are not applied here
     (``field_rays`` applies them for the lens's own fields).
     """
+    paraxial.finite_pupil(lens, "point_source")
     wl = _checked_wavelength(lens, wavelength, "point_source")
     pupil = pupil_points(pupil, "point_source")
     checks.real_values(point, "point", "point_source", "mm")
@@ -384,6 +387,7 @@ def object_point(lens: Lens, field, depth) -> Array:
     line through the point and the entrance pupil's centre, makes the angle θ with the axis:
     the point is at −tan θ·(z_ep − z) (below the axis for θ > 0 where the pupil follows the
     point, above it for a virtual object after the pupil)."""
+    paraxial.finite_pupil(lens, "object_point")
     checks.one_field(field, "object_point", "trace several fields one at a time, or vmap")
     th = field_xy(field)
     # Checked before jnp.asarray, which traces a constant under jit. Beyond
@@ -454,8 +458,12 @@ def field_vignetting(lens: Lens, field) -> Float[Array, " 5"]:
     ``FIELD_MATCH_DEG`` in θx and θy), else zeros (a field between the defined fields gets
     none: OpticStudio's rule for such fields was not verified, so none is guessed). Jittable:
     the field and the lens may be traced."""
+    tele = lens.telecentric_object  # fields are object heights (mm)
     if not checks.is_traced(field):  # 100° or 3 angles matched no field: zeros, no word
-        checks.one_field(field, "field_vignetting", "one field's factors at a time")
+        if tele:
+            telecentric.one_height(field, "field_vignetting")
+        else:
+            checks.one_field(field, "field_vignetting", "one field's factors at a time")
     v = lens.vignetting
     if v is None:
         return jnp.zeros(5, lens.epd.dtype)
@@ -467,8 +475,9 @@ def field_vignetting(lens: Lens, field) -> Float[Array, " 5"]:
     # Compared in degrees, in the lens's float type: a float64 field against a float32 lens's
     # own field (19.7 against float32(19.7), 7.6e-7 deg apart) matched none, and the
     # radian round trip moved float32 angles by an ulp or two.
-    defined = _field_deg(lens.fields)  # [F, 2]
-    given = _field_deg(field).reshape(1, 2).astype(defined.dtype)
+    pairs = (lambda f: telecentric.height_xy(f, "field_vignetting")) if tele else _field_deg
+    defined = pairs(lens.fields)  # [F, 2]
+    given = pairs(field).reshape(1, 2).astype(defined.dtype)
     ulp = 4 * jnp.finfo(defined.dtype).eps * jnp.abs(defined)
     tol = jnp.maximum(FIELD_MATCH_DEG, ulp)
     match = jnp.all(jnp.abs(defined - given) <= tol, -1)  # [F]
@@ -515,9 +524,17 @@ def field_rays(lens: Lens, field, pupil, wavelength=None, *, depth=None, aim=Non
     """
     if depth is not None:
         checks.real_values(depth, "depth", "field_rays", "mm")
-    field = checks.one_field(field, "field_rays", "trace several fields one at a time, or vmap")
-    checks.warn_if_radian_fields(field, "field_rays", "field")  # 20° typed as 0.349
+    if lens.telecentric_object:  # fields are object heights (mm)
+        field = telecentric.one_height(field, "field_rays")
+    else:
+        field = checks.one_field(field, "field_rays",
+                                 "trace several fields one at a time, or vmap")
+        checks.warn_if_radian_fields(field, "field_rays", "field")  # 20° typed as 0.349
     aim = lens_aim(lens, aim, "field_rays")
+    if lens.telecentric_object and aim != "paraxial":
+        raise ValueError(f"field_rays: the lens is object-space telecentric (its chief rays "
+                         f"leave parallel to the axis): ray aiming does not apply, so aim "
+                         f"must be 'paraxial' or None, got {aim!r}")
     wavelength = _checked_wavelength(lens, wavelength, "field_rays")
     beyond = None
     if lens.vignetting is not None:
@@ -529,8 +546,11 @@ def field_rays(lens: Lens, field, pupil, wavelength=None, *, depth=None, aim=Non
         outside = jnp.sum(pupil * pupil, -1) > (1.0 + UNIT_DISC_TOLERANCE) ** 2
         beyond = outside & jnp.any(factors != 0)
         pupil = vignetting_map(factors, pupil)
-    if depth is None or (not isinstance(depth, jax.core.Tracer)
-                         and np.all(np.asarray(depth) >= INFINITE_OBJECT_MM)):
+    if lens.telecentric_object:
+        pupil = pupil_points(pupil, "field_rays")
+        rays = telecentric.source(lens, field, pupil, wavelength, depth)
+    elif depth is None or (not isinstance(depth, jax.core.Tracer)
+                           and np.all(np.asarray(depth) >= INFINITE_OBJECT_MM)):
         rays = _collimated(lens, field, pupil, wavelength, aim=aim)
     else:
         rays = point_source(lens, object_point(lens, field, depth), pupil, wavelength, aim=aim)

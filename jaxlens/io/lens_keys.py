@@ -28,6 +28,8 @@ TOP = {
     "stop_surface_index": ("stop", "stop_index", "stop_surface"),
     "object": ("object_distance", "object_dist", "obj_distance", "object_thickness"),
     "sensor": (), "afocal_image_space": ("afocal", "afocal_image", "afocal_mode"),
+    "object_space_telecentric": ("telecentric", "telecentric_object", "object_telecentric",
+                                 "telecentric_object_space"),
     "ray_aiming": ("aim", "aiming", "raim", "ray_aim"),
     "negative_propagation": ("go_back", "negative_distance", "negative_propagation_distance",
                              "backward_propagation"),
@@ -61,7 +63,8 @@ SURFACE = {
 }
 APERTURE = {"epd": ("entrance_pupil_diameter", "pupil_diameter", "diameter"), "EPD": (),
             "fnum": ("fno", "f/#"), "FNUM": (), "f_number": (),
-            "stop_semi_diameter": ("stop_radius", "stop_semi_diam")}
+            "stop_semi_diameter": ("stop_radius", "stop_semi_diam"),
+            "object_na": ("na", "obna", "object_space_na", "numerical_aperture")}
 SENSOR = {"resolution": ("pixels", "res", "size_px"), "pixel_size": ("pixel_pitch", "pitch")}
 FIELDS = {"type": ("kind",), "values": ("vals", "angles", "angles_deg", "values_deg",
                                         "field_angles", "fields", "deg", "degrees"),

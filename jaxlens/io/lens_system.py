@@ -28,11 +28,21 @@ APERTURE_KEYS = {
     "epd": ("epd", "EPD"),
     "fnum": ("fnum", "FNUM", "f_number"),
     "stop_semi_diameter": ("stop_semi_diameter",),
+    "object_na": ("object_na",),
 }
 """The aperture keys of ``aperture`` by kind (``epd`` and ``EPD`` also at the top level)."""
 
-FIELD_TYPES = {"angle_deg_y": 1, "angle_deg": None, "angle": None, "angle_deg_xy": 2}
-"""``fields.type``: the number of angles per field it declares (None: either)."""
+FIELD_TYPES = {"angle_deg_y": 1, "angle_deg": None, "angle": None, "angle_deg_xy": 2,
+               "object_height_mm_y": 1, "object_height_mm_xy": 2}
+"""``fields.type``: the number of values per field it declares (None: either). The object
+heights (mm) are the fields of an object-space telecentric lens (``Lens.object_na``), and
+only of one."""
+
+
+def fields_are_heights(d: dict) -> bool:
+    """Whether ``fields.type`` declares object heights (``object_height_mm_*``)."""
+    f = d.get("fields")
+    return isinstance(f, dict) and str(f.get("type", "")).startswith("object_height")
 
 
 def aperture_of(d: dict, where: str) -> dict:
@@ -131,7 +141,8 @@ def fields_of(d: dict, where: str) -> np.ndarray:
         if ftype not in FIELD_TYPES:
             raise ValueError(f"{where}: field type {ftype!r} is not supported; fields.type must "
                              f"be one of {', '.join(FIELD_TYPES)} (angles in deg: convert "
-                             f"radians or heights to degrees)")
+                             f"radians or image heights to degrees; object heights in mm "
+                             f"for an object-space telecentric lens)")
         f = f.get("values", [0.0])
     out = np.atleast_1d(_nums(f, f"{where}: fields"))
     if out.size == 0:
@@ -140,7 +151,7 @@ def fields_of(d: dict, where: str) -> np.ndarray:
         raise ValueError(f"{where}: fields must be a list of angles θy or of [θx, θy] pairs "
                          f"(deg), got an array of shape {out.shape}")
     if ftype is not None and FIELD_TYPES[ftype] not in (None, out.ndim):
-        form = "one angle θy per field" if ftype == "angle_deg_y" else "[θx, θy] pairs"
+        form = "one value y per field" if FIELD_TYPES[ftype] == 1 else "[x, y] pairs"
         raise ValueError(f"{where}: fields.type {ftype!r} declares {form}, but fields.values "
                          f"holds {'pairs' if out.ndim == 2 else 'single angles'} (shape "
                          f"{out.shape}); make them agree (type \"angle_deg_xy\" for pairs)")

@@ -23,8 +23,13 @@ an afocal image space (``Lens.afocal_image``; written only when true). ``"ray_ai
 is the lens's ray aiming (``Lens.aim``): ``"paraxial"`` (the default: rays through the
 paraxial entrance pupil), ``"real"`` (aimed at the real stop, sized paraxially) or
 ``"real_marginal"`` (the stop sized by the real marginal ray); written only when not
-paraxial. ``"negative_propagation": true`` lets rays go back along their line to any
-surface after the first, as Zemax does (``Lens.negative_propagation``, set for lenses read
+paraxial. ``"object_space_telecentric": true`` marks an object-space telecentric lens
+(``Lens.object_na``; written only when true): its aperture is ``aperture.object_na`` (or
+``aperture.stop_semi_diameter``) and its fields are object heights in mm (``fields.type``
+``"object_height_mm_y"`` or ``"object_height_mm_xy"``), both required; an EPD or F/#
+aperture, field angles or an object at infinity are refused.
+``"negative_propagation": true`` lets rays go back along their line to any surface after the
+first, as Zemax does (``Lens.negative_propagation``, set for lenses read
 from ``.zmx`` files); written only when true (a file without it traces by the default rule).
 
 Saving writes every number with Python's shortest round-trip representation, so
@@ -302,6 +307,77 @@ def apply_aperture(lens: Lens, *, epd=None, fnum=None, stop_semi_diameter=None) 
     return lens
 
 
+TELECENTRIC_SEED_NA = 1e-3
+"""The object-space NA a reader builds an object-space telecentric lens with before its
+aperture is applied (``apply_object_na``)."""
+
+
+def telecentric_of(d: dict, aperture: dict, source: str) -> bool:
+    """Whether a JSON lens is object-space telecentric (``object_space_telecentric``), its
+    aperture and field type checked against it."""
+    tele = d.get("object_space_telecentric", False)
+    if not isinstance(tele, bool):  # "false" or 0 would be read as a flag silently
+        raise ValueError(f"{source}: object_space_telecentric must be true or false, got "
+                         f"{tele!r}")
+    heights = lens_system.fields_are_heights(d)
+    if not tele:
+        if "object_na" in aperture:
+            raise ValueError(f"{source}: aperture.object_na is the aperture of an object-space "
+                             f"telecentric lens only (\"object_space_telecentric\": true); "
+                             f"give epd, fnum or stop_semi_diameter")
+        if heights:
+            raise ValueError(f"{source}: object heights (fields.type "
+                             f"{d['fields']['type']!r}) are the fields of an object-space "
+                             f"telecentric lens only; give field angles (angle_deg_y)")
+        return False
+    if set(aperture) - {"object_na", "stop_semi_diameter"} or len(aperture) != 1:
+        raise ValueError(f"{source}: an object-space telecentric lens (entrance pupil at "
+                         f"infinity) takes one aperture, aperture.object_na (n·sin u) or "
+                         f"aperture.stop_semi_diameter (mm), got {sorted(aperture)}")
+    if not heights:
+        raise ValueError(f"{source}: an object-space telecentric lens's fields are object "
+                         f"heights: give fields.type \"object_height_mm_y\" (or _xy) with "
+                         f"the heights in mm")
+    return True
+
+
+def apply_object_na(lens: Lens, *, na=None, cone_deg=None, stop_semi_diameter=None) -> Lens:
+    """Set ``lens.object_na`` of an object-space telecentric lens from one aperture
+    specification: the NA n·sin u itself, the object cone's half-angle u (deg), or the stop's
+    semi-diameter (mm; the paraxial marginal ray from the axial object point reaches the
+    stop at that height, as Zemax's "float by stop size"). n is the object-space index at
+    the primary wavelength."""
+    if not lens.telecentric_object:
+        raise ValueError("aperture: the lens is not object-space telecentric (object_na None)")
+    if sum(x is not None for x in (na, cone_deg, stop_semi_diameter)) != 1:
+        raise ValueError("aperture: give exactly one of na, cone_deg, stop_semi_diameter")
+    n0 = float(lens.object_material.index(lens.primary_wavelength))
+    if na is not None:
+        if not 0.0 < na < n0:
+            raise ValueError(f"object-space NA must be in (0, n) with n = {n0:.6g} the object "
+                             f"space index, got {na:g}")
+        value = na
+    elif cone_deg is not None:
+        if not 0.0 < cone_deg < 90.0:
+            raise ValueError(f"object cone angle must be in (0, 90) deg, got {cone_deg:g}")
+        value = n0 * math.sin(math.radians(cone_deg))
+    else:
+        if not stop_semi_diameter > 0:
+            raise ValueError(f"stop semi-diameter must be > 0 mm, got {stop_semi_diameter:g}")
+        unit = eqx.tree_at(lambda m: m.object_na, lens, jnp.asarray(n0 / math.sqrt(2.0)))
+        per_slope = abs(float(paraxial.marginal_ray(unit)[0][lens.stop]))  # at tan u = 1
+        if not (per_slope > 0 and math.isfinite(per_slope)):
+            raise ValueError(f"the stop's semi-diameter does not set an object-space NA: the "
+                             f"paraxial marginal ray from the axial object point meets the "
+                             f"stop at height {per_slope:g} mm per unit slope (the stop is "
+                             f"imaged onto the object)")
+        t = stop_semi_diameter / per_slope
+        value = n0 * t / math.sqrt(1.0 + t * t)
+    lens = eqx.tree_at(lambda m: m.object_na, lens, jnp.asarray(value, lens.thickness.dtype))
+    _check_traceable(lens)
+    return lens
+
+
 def _check_traceable(lens: Lens) -> None:
     """Refuse a lens whose paraxial data are NaN, or whose marginal ray is not finite: values
     each finite but out of range together (a curvature of 1e308 with no aperture) would
@@ -310,9 +386,11 @@ def _check_traceable(lens: Lens) -> None:
     with np.errstate(all="ignore"):
         pd = paraxial.paraxial_data(lens)
     values = {k: float(v) for k, v in vars(pd).items()}
+    if lens.telecentric_object:  # the entrance pupil at infinity: no F/# from an EPD
+        del values["fnum"], values["entrance_pupil_diameter"]
     bad = [k for k, v in values.items() if math.isnan(v)]
     bad += [k for k in ("entrance_pupil_diameter", "stop_semi_diameter")
-            if math.isinf(values[k])]
+            if k in values and math.isinf(values[k])]
     if bad:
         raise ValueError(f"the lens cannot be traced: its paraxial {', '.join(bad)} come out "
                          f"as {', '.join(str(values[k]) for k in bad)} (values out of range: "
@@ -504,7 +582,9 @@ def lens_from_dict(d: dict, *, source: str = "<lens>") -> Lens:
                "wavelengths")
     # The Lens checks these too, but here the message names the file and the key.
     checks.wavelengths(checks.NoMaterials, wl, f"{source}: {key}", "wavelength")
-    checks.field_angles(fields, f"{source}: fields", "field angles")
+    tele = telecentric_of(d, aperture, source)
+    if not tele:
+        checks.field_angles(fields, f"{source}: fields", "field angles")
     vignetting = lens_system.vignetting_of(d, source, fields.shape[0])
     afocal = d.get("afocal_image_space", False)
     if not isinstance(afocal, bool):  # "false" or 0 would be read as a flag silently
@@ -536,6 +616,7 @@ def lens_from_dict(d: dict, *, source: str = "<lens>") -> Lens:
         materials=tuple(mats),
         stop=stop,
         epd=_arr(aperture["epd"][1] if "epd" in aperture else 1.0),
+        object_na=_arr(TELECENTRIC_SEED_NA) if tele else None,
         fields=_arr(fields),
         wavelengths=_arr(wl),
         primary=primary,
@@ -557,13 +638,17 @@ def lens_from_dict(d: dict, *, source: str = "<lens>") -> Lens:
     # Before the paraxial work of the aperture: values the lens cannot be traced with.
     checks.wavelengths(lens, wl, f"{source}: {key}", "wavelength")
     checks.material_indices(lens, wl, source)
-    checks.field_angles(fields, f"{source}: fields", "field angles")
+    if not tele:
+        checks.field_angles(fields, f"{source}: fields", "field angles")
     # After the wavelength checks: a wavelength outside a glass's data is named as such.
     for j, (s, m) in enumerate(zip([obj, *body], [obj_mat, *mats], strict=True)):
         check_index_record(s, m, wl, f"{source}: surface {j + first - 1}")
     if img is not None and (img.get("material") is not None or img.get("n") is not None):
         _warn_image_medium(img, mats[-1], wl, primary, source)
     try:
+        if tele:
+            (kind, (_, value)), = aperture.items()
+            return apply_object_na(lens, **{"na" if kind == "object_na" else kind: value})
         return _one_aperture(lens, aperture, source)
     except ValueError as e:
         raise ValueError(str(e) if str(e).startswith(source) else f"{source}: {e}") from None
@@ -613,9 +698,11 @@ def lens_to_dict(lens: Lens) -> dict:
         "name": lens.name,
         **({"description": lens.description} if lens.description else {}),
         "units": {"length": "mm", "wavelength": "um", "angle": "deg"},
-        "aperture": {"epd": _out(lens.epd)},
+        "aperture": ({"object_na": _out(lens.object_na)} if lens.telecentric_object
+                     else {"epd": _out(lens.epd)}),
         "fields": {
-            "type": "angle_deg_y" if fields.ndim <= 1 else "angle_deg_xy",
+            "type": ("object_height_mm" if lens.telecentric_object else "angle_deg")
+            + ("_y" if fields.ndim <= 1 else "_xy"),
             "values": _out(np.atleast_1d(fields)),
         },
         "wavelengths_um": _out(np.atleast_1d(lens.wavelengths)),
@@ -624,6 +711,8 @@ def lens_to_dict(lens: Lens) -> dict:
     }
     if lens.afocal_image:
         out["afocal_image_space"] = True
+    if lens.telecentric_object:
+        out["object_space_telecentric"] = True
     if lens.aim != "paraxial":
         out["ray_aiming"] = lens.aim
     if lens.negative_propagation:

@@ -18,7 +18,7 @@ from ..optics.lens import INFINITE_OBJECT_MM, Lens
 from ..optics.materials import Air
 from ..optics.surfaces import AbstractSurface, EvenAsphere, Hybrid, OddAsphere, Standard
 from . import zmx_config, zmx_surfaces, zmx_system
-from .lensfile import apply_aperture, nonfinite_part
+from .lensfile import TELECENTRIC_SEED_NA, apply_aperture, apply_object_na, nonfinite_part
 from .zmx_common import (
     HYBRID_COMMENT,
     MAX_XPOLY_DEGREE,
@@ -582,6 +582,9 @@ def _lens(f: ZmxFile, text: str, path: str, strict: bool, unknown_glass: str) ->
     _check_image_medium(f, body)
     aim = zmx_system.ray_aiming(f.raim)
     field_type = zmx_system.field_type(f.ftyp)
+    telecentric = zmx_system.object_telecentric(f.ftyp)
+    if telecentric:
+        aim = zmx_system.check_telecentric(f.ftyp, field_type, f.aperture, dist, aim)
     fields, vignetting = _fields(f, strict)
     if field_type == 0:  # angles (deg); heights are converted to angles later
         _check_field_angles(f, fields)
@@ -591,7 +594,9 @@ def _lens(f: ZmxFile, text: str, path: str, strict: bool, unknown_glass: str) ->
         materials=tuple(mats),
         stop=stop,
         epd=_arr(1.0),
-        fields=_arr(fields if field_type == 0 else np.zeros_like(fields)),
+        fields=_arr(fields if field_type == 0 else fields * u if telecentric
+                    else np.zeros_like(fields)),
+        object_na=_arr(TELECENTRIC_SEED_NA) if telecentric else None,
         wavelengths=_arr(wl),
         primary=primary,
         object_distance=_arr(dist),
@@ -616,7 +621,13 @@ def _lens(f: ZmxFile, text: str, path: str, strict: bool, unknown_glass: str) ->
             checks.wavelengths(lens, np.array([w]), ln.tokens[0] if ln else f"{path}: WAVM",
                                "wavelength")
     checks.material_indices(lens, wl, path)
-    if field_type in (1, 2, 3):
+    if telecentric and field_type in (2, 3):
+        try:
+            lens = (zmx_system.heights_from_paraxial_image_heights if field_type == 2 else
+                    zmx_system.heights_from_real_image_heights)(lens, fields * u)
+        except ValueError as e:
+            raise f.ftyp.error(str(e)) from None
+    elif field_type in (1, 2, 3) and not telecentric:
         to_angles = {1: zmx_system.angles_from_object_heights,
                      2: zmx_system.angles_from_paraxial_image_heights,
                      3: zmx_system.angles_from_real_image_heights}[field_type]
@@ -624,7 +635,8 @@ def _lens(f: ZmxFile, text: str, path: str, strict: bool, unknown_glass: str) ->
             lens = to_angles(lens, fields * u)
         except ValueError as e:
             raise f.ftyp.error(str(e)) from None
-    checks.field_angles(np.asarray(lens.fields), f"{path}: XFLN/YFLN", "field angles")
+    if not telecentric:
+        checks.field_angles(np.asarray(lens.fields), f"{path}: XFLN/YFLN", "field angles")
     # After the fields are angles (image-height fields were on axis before); the beam's
     # radius on a PARAXIAL surface is its DIAM (OpticStudio's automatic one is the beam's).
     zmx_surfaces.check_opd_modes(lens, {
@@ -641,6 +653,8 @@ def _lens(f: ZmxFile, text: str, path: str, strict: bool, unknown_glass: str) ->
             f"'FNUM N' (image-space F-number) or 'FLOA' (the stop surface's semi-diameter)")
     kind, value, ln = f.aperture
     try:
+        if telecentric and kind != "float":
+            return apply_object_na(lens, **{"na" if kind == "obna" else "cone_deg": value})
         if kind in ("obna", "cone", "wfno"):
             epd = (zmx_system.epd_from_working_fnum(lens, value) if kind == "wfno" else
                    zmx_system.epd_from_object_na(lens, value, kind == "cone"))
@@ -668,6 +682,8 @@ def _lens(f: ZmxFile, text: str, path: str, strict: bool, unknown_glass: str) ->
                 f"(DeepLens's .zmx writer, for one, writes its aperture stop so; the size is in "
                 f"the lens file it was written from); add 'DIAM r 1 0 0 1' (r in lens units) "
                 f"to the STOP surface, or give ENPD or FNUM")
+        if telecentric:
+            return apply_object_na(lens, stop_semi_diameter=sd * u)
         return apply_aperture(lens, stop_semi_diameter=sd * u)
     except ValueError as e:
         if str(e).startswith(path):

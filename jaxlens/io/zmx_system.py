@@ -1,7 +1,9 @@
 """System data of a ``.zmx`` file beyond surfaces: the object-space NA and paraxial working
 F/# apertures (``OBNA``, ``FNUM x 1``), field types (``FTYP``; paraxial and real image heights
-converted to angles), vignetting factors (read into ``Lens.vignetting``), ray aiming
-(``RAIM``) and the environment (``ENVD``). The format: ``jaxlens.io.zmx``."""
+converted to angles), object-space telecentric systems (FTYP's second value 1: object
+heights, or image heights converted to them, and ``Lens.object_na``), vignetting factors
+(read into ``Lens.vignetting``), ray aiming (``RAIM``) and the environment (``ENVD``). The
+format: ``jaxlens.io.zmx``."""
 
 from __future__ import annotations
 
@@ -280,17 +282,121 @@ def field_type(ln) -> int:
             f"field type {kind} ({FIELD_TYPES.get(kind, 'unknown')}) is not supported; use "
             f"angles (FTYP 0), object heights (FTYP 1), paraxial (FTYP 2) or real (FTYP 3) "
             f"image heights")
-    if len(ln.tokens) > 2 and ln.int(2, "object-space telecentric flag") != 0:
-        raise ln.error(
-            "object-space telecentric systems (FTYP's second value 1) are not supported: "
-            "OpticStudio launches every field's chief ray parallel to the axis (the entrance "
-            "pupil at infinity, the pupil sampled in object-space directions), but a jaxlens "
-            "Lens holds its fields as chief-ray angles toward an entrance pupil at a finite "
-            "distance, so it cannot hold this system; setting the flag to 0 would aim the "
-            "chief rays at the paraxial entrance pupil instead, another lens")
     # Image heights with an afocal image space (FTYP's seventh value 1) are read only where
     # every one is 0, the axis whatever the field type (``afocal_zero_heights``).
     return kind
+
+
+def object_telecentric(ln) -> bool:
+    """FTYP's second value: 1 for an object-space telecentric system (``Lens.object_na``),
+    0 (or absent) otherwise; other values refused.
+
+    Args:
+        ln: the file's FTYP line (the reader's line object) or None.
+    """
+    if ln is None or len(ln.tokens) <= 2:
+        return False
+    flag = ln.int(2, "object-space telecentric flag (FTYP's second value)")
+    if flag not in (0, 1):
+        raise ln.error(f"the object-space telecentric flag (FTYP's second value) must be 0 or "
+                       f"1, got {flag}")
+    return flag == 1
+
+
+TELECENTRIC_APERTURES = ("obna", "cone", "float")
+"""The apertures of an object-space telecentric system (``.zmx`` aperture kinds): the
+object-space NA (OBNA x 0), the object cone angle (OBNA x 1) and float by stop size (FLOA).
+OpticStudio allows only these with "Telecentric Object Space" (an entrance pupil at
+infinity has no diameter, and an F/# would not fix the object-space cone); optiland's
+apertures that support telecentric object space are the same (ObjectNA, FloatByStop)."""
+
+
+def check_telecentric(ftyp, kind: int, aperture, dist: float, aim: str) -> str:
+    """Refuse what an object-space telecentric system (FTYP's second value 1) cannot have:
+    field angles (FTYP 0 or 4; object heights, FTYP 1, and paraxial image heights, FTYP 2,
+    are read), real image heights (FTYP 3, not implemented for it), an entrance-pupil
+    diameter or F/# aperture (``TELECENTRIC_APERTURES``), an object at infinity. Ray aiming
+    (RAIM) does not apply: returns the ``Lens.aim`` to use ("paraxial"), warning where the
+    file turns it on."""
+    if kind in (0, 4):
+        raise ftyp.error(f"an object-space telecentric system (FTYP's second value 1) has "
+                         f"every chief ray parallel to the axis, so its fields cannot be "
+                         f"{FIELD_TYPES[kind]} (FTYP {kind}); OpticStudio requires object "
+                         f"heights (FTYP 1) or image heights")
+    if aperture is not None and aperture[0] not in TELECENTRIC_APERTURES:
+        what = {"epd": "entrance pupil diameter (ENPD)", "fnum": "image-space F/# (FNUM)",
+                "wfno": "paraxial working F/# (FNUM x 1)"}.get(aperture[0], aperture[0])
+        raise aperture[2].error(
+            f"an object-space telecentric system (FTYP's second value 1) cannot take an "
+            f"{what} aperture: its entrance pupil lies at infinity; OpticStudio allows the "
+            f"object-space NA (OBNA x 0), the object cone angle (OBNA x 1) or float by stop "
+            f"size (FLOA)")
+    if math.isinf(dist):
+        raise ftyp.error("an object-space telecentric system (FTYP's second value 1) needs "
+                         "an object at a finite distance; the object DISZ is INFINITY")
+    if aim != "paraxial":
+        warnings.warn(f"{ftyp.path}:{ftyp.number}: ray aiming (RAIM) is ignored in an "
+                      f"object-space telecentric system: every chief ray leaves its object "
+                      f"point parallel to the axis", ZmxWarning, stacklevel=4)
+    return "paraxial"
+
+
+def heights_from_paraxial_image_heights(lens: Lens, heights: np.ndarray) -> Lens:
+    """An object-space telecentric lens with ``heights`` (paraxial image heights in mm, y or
+    (x, y), primary wavelength) as object heights: the paraxial chief ray (parallel to the
+    axis) is linear in the object height, so h_obj = h_img / m, m the image height per mm
+    of object height (the paraxial magnification)."""
+    m = float(paraxial.image_height(lens, 1.0))
+    if not (math.isfinite(m) and m != 0.0):
+        raise ValueError(f"paraxial image heights cannot be converted to object heights: the "
+                         f"paraxial magnification is {m:g}")
+    h = np.asarray(heights, np.float64) / m
+    return eqx.tree_at(lambda l: l.fields, lens, jnp.asarray(h))
+
+
+def heights_from_real_image_heights(lens: Lens, heights: np.ndarray) -> Lens:
+    """An object-space telecentric lens with ``heights`` (real image heights in mm, y or
+    (x, y), primary wavelength) as object heights: for each, the object point whose real
+    chief ray (parallel to the axis) meets the image surface there, by Newton's method with a
+    central-difference Jacobian from the paraxial guess h / m.
+
+    Raises:
+        ValueError: where no valid chief ray reaches a height (to ``REAL_HEIGHT_TOLERANCE``).
+    """
+    m = float(paraxial.image_height(lens, 1.0))
+    if not (math.isfinite(m) and m != 0.0):
+        raise ValueError(f"real image heights cannot be converted to object heights: the "
+                         f"paraxial magnification is {m:g}")
+    h = np.asarray(heights, np.float64)
+    xy = np.stack([np.zeros_like(h), h], -1) if h.ndim == 1 else h
+    free = _geometry_only(lens)
+    centre = jnp.zeros((1, 2))
+
+    def land(p):
+        rays = sampling.field_rays(free, jnp.asarray(p), centre, depth=lens.object_distance)
+        out = forward.trace(free, rays)
+        return np.asarray(out.origin[0, :2]), bool(out.valid[0])
+
+    found = []
+    for target in xy:
+        p = target / m
+        for _ in range(12):
+            at, _ = land(p)
+            miss = at - target
+            if np.max(np.abs(miss)) <= 1e-13 * (1 + np.max(np.abs(target))):
+                break
+            step = 1e-6 * (1.0 + np.max(np.abs(p)))
+            jac = np.stack([(land(p + e)[0] - land(p - e)[0]) / (2 * step)
+                            for e in np.eye(2) * step], -1)
+            p = p - np.linalg.solve(jac, miss)
+        at, valid = land(p)
+        err = float(np.max(np.abs(at - target)))
+        if not (valid and err <= REAL_HEIGHT_TOLERANCE * (1 + np.max(np.abs(target)))):
+            raise ValueError(f"no real chief ray reaches the image height {target.tolist()} mm "
+                             f"(closest: {err:.3g} mm away, valid: {valid})")
+        found.append(p)
+    f = np.array(found)
+    return eqx.tree_at(lambda m_: m_.fields, lens, jnp.asarray(f[:, 1] if h.ndim == 1 else f))
 
 
 def afocal_zero_heights(lens: Lens, heights: np.ndarray, kind: int) -> Lens | None:

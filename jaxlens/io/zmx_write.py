@@ -472,6 +472,10 @@ def notes(lens: Lens, wl: np.ndarray) -> list[str]:
     out = [f"NOTE 0 jaxlens: lengths mm, wavelengths um, fields are angles in degrees in object "
            f"space (XFLN, YFLN), the stop is SURF {lens.stop + 1}, ENPD is the entrance pupil "
            f"diameter"]
+    if lens.telecentric_object:
+        out = [f"NOTE 0 jaxlens: lengths mm, wavelengths um, object-space telecentric (FTYP's "
+               f"second value 1), fields are object heights in mm (XFLN, YFLN), the stop is "
+               f"SURF {lens.stop + 1}, OBNA is the object-space NA"]
     media = [lens.object_material, *lens.materials]
     for k, m in enumerate(media):
         n = lensfile.index_record(m, wl)  # the JSON file's record of the same medium
@@ -567,11 +571,14 @@ def dumps(lens: Lens, path: str = "lens.zmx", *, model_glass: str = "blank"):
         f"NAME {' '.join(lens.name.splitlines()).strip()}".rstrip(),
         *notes(lens, wl),
         "UNIT MM X W X CM MR CPMM",
-        f"ENPD {_z(lens.epd)}",
+        # An object-space telecentric lens: its aperture is the object-space NA (OBNA x 0).
+        f"OBNA {_z(lens.object_na)} 0" if lens.telecentric_object else f"ENPD {_z(lens.epd)}",
         "ENVD 2.0E+1 1 0",
         "GFAC 0 0",
         "GCAT " + " ".join(gw.catalogs or ["SCHOTT"]),
-        f"FTYP 0 0 {len(ys)} {len(wl)} 0 0 {int(lens.afocal_image)}",
+        # Field type 1 (object heights) and the telecentric flag, or angles (0 0).
+        f"FTYP {int(lens.telecentric_object)} {int(lens.telecentric_object)} {len(ys)} "
+        f"{len(wl)} 0 0 {int(lens.afocal_image)}",
         "XFLN " + " ".join(_z(v) for v in xs),
         "YFLN " + " ".join(_z(v) for v in ys),
         "FWGN " + " ".join("1" for _ in ys),

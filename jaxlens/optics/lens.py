@@ -87,6 +87,21 @@ Conventions:
     design parameterisation refuses it. Surface 1 (object space) follows the same rule
     either way (the whole line counts). ``dataclasses.replace(lens,
     negative_propagation=...)`` switches it; JSON files carry it (``negative_propagation``).
+    ``object_na`` makes the lens object-space telecentric (Zemax's "Telecentric Object Space",
+    FTYP's second value 1): None (the default) for a lens whose entrance pupil lies at a
+    finite distance (``epd``); a number NA = n·sin(u) (n the object-space index at the
+    primary wavelength, u the cone's half-angle) for an entrance pupil at infinity. Every
+    chief ray then leaves its object point parallel to the axis, the object must be at a
+    finite distance, ``fields`` hold object heights in mm (y, or (x, y): the object point's
+    coordinates) instead of angles, ``epd`` is not used, and the ray of pupil point
+    (Px, Py) leaves the object point with the slopes (Px, Py)·tan u (optiland's
+    convention; ``imaging.sampling.telecentric_source``). Ray aiming does not apply (``aim``
+    must be "paraxial"). The paraxial marginal ray starts on the axis at slope tan u, the
+    chief ray at the object height with slope 0; the entrance pupil's position has no finite
+    value (``paraxial.entrance_pupil_z`` refuses such a lens, ``paraxial_data`` gives
+    −inf, an infinite diameter and an F/# of NaN), and so do the analyses built on a field
+    angle or an entrance pupil at a finite distance (chief-ray aiming, distortion, relative
+    illumination, render): they refuse it. ``telecentric_object`` tells which.
 
 The structure (surface kinds, counts, polynomial orders, stop index, mirrors) is static;
 every number is an array so ``jax.grad`` reaches it.
@@ -151,6 +166,15 @@ def _distance(x):
     if not isinstance(x, jax.core.Tracer) and bool(np.all(np.asarray(x) >= INFINITE_OBJECT_MM)):
         return None
     return x
+
+
+_as_na = checks.float_array("object_na", "Lens", "(n·sin u, object space)")
+
+
+def _object_na(x):
+    """None (an entrance pupil at a finite distance) or the object-space NA of an
+    object-space telecentric lens (checked in the Lens)."""
+    return None if x is None else _as_na(x)
 
 
 def _index(arg: str):
@@ -347,6 +371,8 @@ class Lens(eqx.Module):
     # see the module doc and optics.travel.
     travel_senses: tuple[int, ...] | None = eqx.field(static=True, default=None,
                                                       converter=_senses)
+    # Object-space NA of an object-space telecentric lens, or None: see the module doc.
+    object_na: Float[Array, ""] | None = eqx.field(converter=_object_na, default=None)
 
     def __check_init__(self):
         n = len(self.surfaces)
@@ -442,7 +468,9 @@ class Lens(eqx.Module):
         if not checks.is_traced(self.epd):
             checks.values(self.epd, "epd (entrance pupil diameter)", "Lens", lo=0, lo_open=True,
                           unit="mm")
-        if not checks.is_traced(self.fields):
+        if self.object_na is not None:
+            self._check_telecentric()
+        elif not checks.is_traced(self.fields):
             checks.field_angles(self.fields, "Lens", "fields")
             checks.warn_if_radian_fields(self.fields, "Lens")
         if not checks.is_traced(self.wavelengths):
@@ -453,6 +481,39 @@ class Lens(eqx.Module):
         d = self.object_distance
         if d is not None and not checks.is_traced(d):
             check_object_distance(d, "object_distance", "Lens")
+
+    def _check_telecentric(self):
+        """An object-space telecentric lens (``object_na`` given): a finite object, object
+        heights for fields, paraxial ray aiming and an NA in (0, n)."""
+        if self.object_na.ndim != 0:
+            raise ValueError(f"Lens: object_na must be a scalar (n·sin u), got shape "
+                             f"{self.object_na.shape}")
+        if self.object_distance is None:
+            raise ValueError("Lens: an object-space telecentric lens (object_na given) needs "
+                             "a finite object_distance (mm): with the object at infinity its "
+                             "image lies at the stop")
+        d = self.object_distance
+        if not checks.is_traced(d) and float(d) < 0:
+            raise ValueError(f"Lens: an object-space telecentric lens (object_na given) needs a "
+                             f"real object before surface 1 (object_distance > 0 mm), got "
+                             f"{float(d):g} mm (a virtual object is not supported for it)")
+        if self.aim != "paraxial":
+            raise ValueError(f"Lens: an object-space telecentric lens (object_na given) "
+                             f"launches its chief rays parallel to the axis; ray aiming does "
+                             f"not apply, so aim must be 'paraxial', got {self.aim!r}")
+        if not checks.is_traced(self.fields):
+            checks.values(self.fields, "fields (object heights of an object-space telecentric "
+                          "lens)", "Lens", unit="mm")
+        if not checks.is_traced((self.object_na, self.wavelengths)):
+            n0 = float(self.object_material.index(self.primary_wavelength))
+            checks.values(self.object_na, "object_na (object-space NA n·sin u of an "
+                          "object-space telecentric lens)", "Lens", lo=0, lo_open=True,
+                          hi=n0, hi_open=True, unit=f"(n = {n0:.6g}, the object-space index)")
+
+    @property
+    def telecentric_object(self) -> bool:
+        """True for an object-space telecentric lens (``object_na`` given; static)."""
+        return self.object_na is not None
 
     def _check_mirrors_and_breaks(self):
         """Mirrors and coordinate breaks keep the medium: materials[i] repeats the one before."""

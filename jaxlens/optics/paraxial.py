@@ -183,7 +183,9 @@ class ParaxialData(eqx.Module):
 
     ``efl`` = 1/Φ (in air) and ``efl_image_space`` = n′/Φ (in image space, Zemax's and
     optiland's EFL); ``front_focal_length`` = n·efl and ``rear_focal_length`` = n′·efl
-    with n, n′ the object- and image-space indices.
+    with n, n′ the object- and image-space indices. For an object-space telecentric lens
+    (``Lens.object_na``) ``entrance_pupil_z`` is −inf, ``entrance_pupil_diameter`` +inf and
+    ``fnum`` (EFL/EPD) NaN; ``working_fnum`` and the rest follow its NA.
     """
 
     efl: Float[Array, ""]
@@ -203,8 +205,33 @@ class ParaxialData(eqx.Module):
     stop_semi_diameter: Float[Array, ""]
 
 
+def finite_pupil(lens: Lens, where: str) -> None:
+    """Refuse an object-space telecentric lens (``Lens.object_na``), whose entrance pupil lies
+    at infinity, in ``where``, which needs one at a finite distance (its position, or field
+    angles toward its centre)."""
+    if lens.telecentric_object:
+        raise ValueError(
+            f"{where}: the lens is object-space telecentric (Lens.object_na given): its "
+            f"entrance pupil lies at infinity and its fields are object heights (mm), so "
+            f"{where}, which needs an entrance pupil at a finite distance and field angles, "
+            f"does not apply; paraxial_data gives its first-order data, sampling.field_rays "
+            f"its rays, and rms_spot, spot_rays, chief_ray, ray_fan, opd_fan, wavefront, "
+            f"encircled_energy, psf and mtf take its object heights")
+
+
+def object_slope(lens: Lens) -> Array:
+    """tan u: the object-space slope of the paraxial marginal ray of an object-space
+    telecentric lens, u = asin(NA / n) with n the object-space index at the primary
+    wavelength (``Lens.object_na``)."""
+    s = lens.object_na / lens.object_material.index(lens.primary_wavelength)
+    return s / jnp.sqrt(1.0 - s * s)
+
+
 def entrance_pupil_z(lens: Lens, wavelength=None) -> Array:
-    """Global z of the paraxial entrance pupil (image of the stop in object space)."""
+    """Global z of the paraxial entrance pupil (image of the stop in object space). An
+    object-space telecentric lens (``Lens.object_na``), whose pupil lies at infinity, is
+    refused."""
+    finite_pupil(lens, "entrance_pupil_z")
     wl = _given(lens, wavelength, "entrance_pupil_z")
     n0 = lens.object_material.index(wl)
     if lens.stop == 0:
@@ -220,6 +247,7 @@ def entrance_pupil_z(lens: Lens, wavelength=None) -> Array:
 
 def entrance_pupil_magnification(lens: Lens, wavelength=None) -> Array:
     """Paraxial magnification from the entrance pupil to the stop (stop height / EP height)."""
+    finite_pupil(lens, "entrance_pupil_magnification")
     wl = _given(lens, wavelength, "entrance_pupil_magnification")
     if lens.stop == 0:
         return jnp.ones_like(lens.thickness[0])
@@ -230,11 +258,16 @@ def entrance_pupil_magnification(lens: Lens, wavelength=None) -> Array:
 
 
 def marginal_ray(lens: Lens, wavelength=None):
-    """Paraxial marginal ray (y, nu) after every surface, for the lens's EPD and object.
+    """Paraxial marginal ray (y, nu) after every surface, for the lens's EPD and object (an
+    object-space telecentric lens: from the axial object point at slope tan u, u the
+    cone's half-angle of its ``object_na``).
 
     Each is ``[num_surfaces]`` for one wavelength (µm), ``[num_surfaces, W]`` for ``[W]``."""
     wl = _given(lens, wavelength, "marginal_ray")
     n = signed_indices(lens, wl)
+    if lens.telecentric_object:
+        u = object_slope(lens)
+        return _trace_ray(lens, lens.object_distance * u, n[0] * u, n, wl)
     zep = entrance_pupil_z(lens, wl)
     h = 0.5 * lens.epd
     if lens.object_at_infinity:
@@ -274,8 +307,15 @@ def _wavelength(lens: Lens, wavelength, where: str):
 
 
 def paraxial_chief_ray(lens: Lens, field_deg, wavelength=None):
-    """Paraxial chief ray (y, nu) after every surface for a field angle (degrees)."""
+    """Paraxial chief ray (y, nu) after every surface for a field angle (degrees); for an
+    object-space telecentric lens (``Lens.object_na``) for an object height (mm), the ray
+    parallel to the axis at that height."""
     wl = _wavelength(lens, wavelength, "paraxial_chief_ray")
+    if lens.telecentric_object:
+        h = checks.values(jnp.asarray(field_deg, lens.thickness.dtype), "field (object "
+                          "height)", "paraxial_chief_ray", unit="mm")
+        n = signed_indices(lens, wl)
+        return _trace_ray(lens, h, 0.0 * h, n, wl)
     field_deg = checks.field_angles(field_deg, "paraxial_chief_ray", "field_deg")
     n = signed_indices(lens, wl)
     zep = entrance_pupil_z(lens, wl)
@@ -305,9 +345,11 @@ def bfl(lens: Lens, wavelength=None) -> Array:
 
 
 def image_height(lens: Lens, field_deg, wavelength=None) -> Array:
-    """Paraxial chief-ray height on the image surface (mm)."""
+    """Paraxial chief-ray height on the image surface (mm) of a field angle (deg), or of an
+    object height (mm) for an object-space telecentric lens (``Lens.object_na``)."""
     wl = _wavelength(lens, wavelength, "image_height")
-    field_deg = checks.field_angles(field_deg, "image_height", "field_deg")
+    if not lens.telecentric_object:
+        field_deg = checks.field_angles(field_deg, "image_height", "field_deg")
     y, nu = paraxial_chief_ray(lens, field_deg, wl)
     n_img = signed_indices(lens, wl)[-1]
     return y[-1] + axial_thicknesses(lens)[-1] * nu[-1] / n_img
@@ -329,11 +371,14 @@ def paraxial_data(lens: Lens, wavelength=None) -> ParaxialData:
     zs = lens.vertex_z() if lens.travel_senses is None else jnp.concatenate(
         [jnp.zeros_like(t_axial[:1]), jnp.cumsum(t_axial[:-1])])
     z_last = zs[-1]
-    zep = entrance_pupil_z(lens, wl)
-    # Strongly typed, as the other fields are: a lens's scalars are weakly typed (a Python
-    # float given to Lens), and this field alone followed the other operand's dtype
-    # (bfloat16 × entrance_pupil_diameter was bfloat16, × efl float32).
-    epd = jnp.asarray(lens.epd, f.dtype)
+    if lens.telecentric_object:  # the entrance pupil at infinity
+        zep, epd = jnp.full_like(f, -jnp.inf), jnp.full_like(f, jnp.inf)
+    else:
+        zep = entrance_pupil_z(lens, wl)
+        # Strongly typed, as the other fields are: a lens's scalars are weakly typed (a
+        # Python float given to Lens), and this field alone followed the other operand's
+        # dtype (bfloat16 × entrance_pupil_diameter was bfloat16, × efl float32).
+        epd = jnp.asarray(lens.epd, f.dtype)
     # Stop semi-diameter from the marginal ray height at the stop.
     ym, num = marginal_ray(lens, wl)
     stop_sd = jnp.abs(ym[lens.stop])
@@ -361,7 +406,8 @@ def paraxial_data(lens: Lens, wavelength=None) -> ParaxialData:
         # Magnification stop -> exit pupil: ray from stop edge parallel to chief ray.
         xp_mag = a2 - over_d2(c2 * b2)
     xpd = 2.0 * stop_sd * jnp.abs(xp_mag)
-    fnum = f / epd
+    # An object-space telecentric lens's aperture is an NA: no infinite-conjugate F/#.
+    fnum = jnp.full_like(f, jnp.nan) if lens.telecentric_object else f / epd
     working = 1.0 / (2.0 * jnp.abs(num[-1]))
     paraxial_image_z = z_last - ym[-1] * n_img / num[-1]
     return ParaxialData(

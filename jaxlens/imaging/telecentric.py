@@ -1,0 +1,68 @@
+"""Rays of an object-space telecentric lens (``Lens.object_na``): the entrance pupil at
+infinity, every chief ray leaving its object point parallel to the axis.
+
+A field is an object height (mm): y, or (x, y), the object point's coordinates on the
+object plane ``depth`` mm before surface 1. The ray of normalised pupil point (Px, Py) leaves
+that point with the slopes (Px, Py)·tan u, u = asin(NA / n) the half-angle of the object
+cone (n the object-space index at the primary wavelength): the limit of rays aimed at an
+entrance pupil of diameter 2·L·tan u at a distance L → ∞, as optiland launches them
+(its ``ParaxialRayAimer`` with an object-NA aperture; Zemax requires the object-space NA,
+the object cone angle or float by stop size as the aperture of such a system). The samplers
+of ``jaxlens.imaging.sampling`` call these for such a lens (``sampling.field_rays``).
+"""
+
+from __future__ import annotations
+
+import jax.numpy as jnp
+import numpy as np
+from jaxtyping import Array, Float
+
+from ..optics import checks, paraxial
+from ..optics.lens import Lens, check_object_distance
+from ..optics.rays import Rays
+
+
+def height_xy(field, where: str, arg: str = "field") -> Array:
+    """Object heights (mm, y or (x, y), leading axes batch) as (x, y) pairs, checked finite."""
+    checks.real_values(field, arg, where, "mm")
+    f = jnp.asarray(field)
+    if not checks.is_traced(f):
+        checks.values(f, f"{arg} (object heights of an object-space telecentric lens)", where,
+                      unit="mm")
+    if f.ndim == 0 or f.shape[-1] != 2:
+        f = jnp.stack([jnp.zeros_like(f), f], -1)
+    return f
+
+
+def one_height(field, where: str):
+    """One field of an object-space telecentric lens: an object height y or (x, y) in mm,
+    checked; a ``[1]`` array is y."""
+    checks.real_values(field, "field", where, "mm")
+    shape = np.shape(field)
+    if shape not in ((), (1,), (2,)):
+        raise ValueError(f"{where}: field must be one object height, y or (x, y) in mm (the "
+                         f"lens is object-space telecentric), got shape {shape}")
+    height_xy(field, where)
+    return jnp.reshape(jnp.asarray(field), ()) if shape == (1,) else jnp.asarray(field)
+
+
+def source(lens: Lens, field, pupil: Float[Array, "m 2"], wavelength, depth) -> Rays:
+    """``[m]`` rays of an object-space telecentric ``lens`` from the object point at height
+    ``field`` (mm, y or (x, y)) on the plane ``depth`` mm before surface 1 (negative: a
+    virtual object after it), launched at that point (``opl`` 0) with the slopes
+    (Px, Py)·tan u toward +z. ``pupil`` (normalised points) and ``wavelength`` (µm) are the
+    caller's, checked."""
+    if not lens.telecentric_object:
+        raise ValueError("telecentric.source: the lens is not object-space telecentric "
+                         "(Lens.object_na is None); use sampling.field_rays")
+    if depth is None:
+        raise ValueError("an object-space telecentric lens (Lens.object_na given) needs a "
+                         "finite object distance (mm); got an object at infinity")
+    depth = jnp.asarray(check_object_distance(depth, "depth", "telecentric.source"))
+    xy = height_xy(field, "telecentric.source").astype(pupil.dtype)
+    point = jnp.concatenate([xy, -depth[None].astype(pupil.dtype)])
+    slope = paraxial.object_slope(lens).astype(pupil.dtype)
+    v = jnp.concatenate([pupil * slope, jnp.ones_like(pupil[..., :1])], -1)
+    direction = v / jnp.linalg.norm(v, axis=-1, keepdims=True)
+    origin = jnp.broadcast_to(point, direction.shape)
+    return Rays(origin, direction, wavelength)
