@@ -95,7 +95,7 @@ Conventions:
     finite distance, ``fields`` hold object heights in mm (y, or (x, y): the object point's
     coordinates) instead of angles, ``epd`` is not used, and the ray of pupil point
     (Px, Py) leaves the object point with the slopes (Px, Py)·tan u (optiland's
-    convention; ``imaging.sampling.telecentric_source``). Ray aiming does not apply (``aim``
+    convention; ``imaging.telecentric.source``). Ray aiming does not apply (``aim``
     must be "paraxial"). The paraxial marginal ray starts on the axis at slope tan u, the
     chief ray at the object height with slope 0; the entrance pupil's position has no finite
     value (``paraxial.entrance_pupil_z`` refuses such a lens, ``paraxial_data`` gives
