@@ -94,6 +94,16 @@ def test_half_precision_leaves_are_refused(cooke, make, match):
         make(L, np.asarray(cooke.thickness))
 
 
+def test_half_precision_rays_are_refused():
+    """Main: Rays kept float16 (a wavelength of 0.55 µm as 0.5498) and traced them."""
+    up = np.tile(np.array([0.0, 0.0, 1.0]), (2, 1))
+    with pytest.raises(TypeError, match=r"Rays: origin is float16, .*too few digits"):
+        jl.Rays(origin=np.zeros((2, 3), np.float16), direction=up.astype(np.float16),
+                wavelength=0.55)
+    with pytest.raises(TypeError, match=r"Rays: wavelength is float16"):
+        jl.Rays(origin=np.zeros((2, 3)), direction=up, wavelength=np.float16(0.55))
+
+
 def test_float32_leaves_are_still_taken(cooke):
     lens = dataclasses.replace(cooke, thickness=np.asarray(cooke.thickness, np.float32))
     assert lens.thickness.dtype == np.float32

@@ -25,7 +25,8 @@ Gaps found and fixed (one mechanism each):
    check the folder (naming their caller), the lens writers also their extension.
 4. Half-precision leaves: ``checks.float_array`` (every numeric field of a Lens, surface or
    material) kept float16/bfloat16 (a thickness of 3.25896 as 3.2598: an EFL 1 µm off
-   without a word), where ``Lens.astype(float16)`` is refused. Now a TypeError.
+   without a word), where ``Lens.astype(float16)`` is refused; so did ``Rays`` (a
+   wavelength of 0.55 as 0.5498). Now a TypeError.
 5. ``analysis.tolerance.perturb`` did not check its arguments against the lens: a
    ``clear_radius`` or ``add_r4`` of another length (IndexError), a perturbation of another
    lens ("add got incompatible shapes"), a clear radius of 0, NaN or < 0 (an inf/NaN lens).
@@ -286,6 +287,10 @@ def lens_trees():
     probe("Sellmeier B float16", lambda: jl.Sellmeier(B=np.array([1.04, 0.23, 1.01], np.float16), C=np.array([0.006, 0.02, 103.6])), "B", "float16")
     probe("ModelGlass nd float16", lambda: jl.ModelGlass(nd=np.float16(1.5168), vd=64.17), "nd", "float16")
     probe("Lens epd float16", lambda: L(epd=np.float16(10.0)), "epd", "float16")
+    up = np.tile(np.array([0.0, 0.0, 1.0]), (2, 1))
+    probe("Rays origin and direction float16", lambda: jl.Rays(origin=np.zeros((2, 3), np.float16), direction=up.astype(np.float16), wavelength=0.55), "origin", "float16")
+    probe("Rays wavelength float16 (0.55 -> 0.5498)", lambda: jl.Rays(origin=np.zeros((2, 3)), direction=up, wavelength=np.float16(0.55)), "wavelength", "float16")
+    probe("Rays of Python numbers (control)", lambda: jl.Rays(origin=[0.0, 0.0, 0.0], direction=[0, 0, 1.0], wavelength=0.55).dtype, good=True)
     probe("Lens mixed float32 thickness, float64 rest (control)", lambda: jl.trace(L(thickness=t.astype(np.float32)), S.field_rays(cooke, 0.0, S.pupil_grid(3))).valid.mean(), good=True)
 
 
