@@ -12,7 +12,7 @@ import pytest
 
 import jaxlens as jl
 from jaxlens.analysis import tolerance
-from jaxlens.imaging import otf, tiled
+from jaxlens.imaging import otf, sampling, tiled
 from jaxlens.io import lensfile, zmx
 from jaxlens.io.json_values import write_whole
 
@@ -144,3 +144,11 @@ def test_tile_bank_refusal_names_the_kernels(fn):
     with pytest.raises(ValueError, match=r"3x3 square tiles \(kernels is \[ty, tx, C, k, k\] "
                                          r"= \[3, 3, 3, 3, 3\]"):
         fn(img, np.ones((3, 3, 3, 3, 3), np.float32))
+
+
+@pytest.mark.parametrize("z, match", [(float("nan"), r"object_z must be finite .*got nan"),
+                                      (0.0, r"object_z must be in front of surface 1 .*got 0")])
+def test_stop_radius_checks_a_concrete_object_z(cooke, z, match):
+    """Main: object_z NaN gave 3.80 mm (the collimated beam's radius), 0 gave NaN."""
+    with pytest.raises(ValueError, match="stop_radius: " + match):
+        sampling.stop_radius(cooke, "real", object_z=z)

@@ -31,7 +31,10 @@ Gaps found and fixed (one mechanism each):
    ``clear_radius`` or ``add_r4`` of another length (IndexError), a perturbation of another
    lens ("add got incompatible shapes"), a clear radius of 0, NaN or < 0 (an inf/NaN lens).
    ``tolerance_rigid.check_perturb_args``.
-6. Vague: the tile-bank refusal (``convolve_tiles``, ``wiener_tiles``, ``tile_evidence``)
+6. ``imaging.sampling.stop_radius(stop_size="real", object_z=...)``: NaN gave the
+   collimated beam's radius, 0 (surface 1's vertex) NaN; a concrete ``object_z`` is now
+   checked as ``point_source`` checks its point's z.
+7. Vague: the tile-bank refusal (``convolve_tiles``, ``wiener_tiles``, ``tile_evidence``)
    named a tile count without saying it came from the kernels' shape.
 
 The controls (``good=True``) are behaviours judged right: pupil points beyond the unit disc
@@ -39,10 +42,10 @@ in ``point_source`` (an overfilled beam), a negative object distance or depth (a
 object, documented), ``pupil_samples("random")`` without a key (key 0), a D exponent in a
 ``.zmx`` (Fortran's), a JSON radius of 1e400 (inf: flat), clipping in ``write_png``.
 
-Before (base 9cf432e) and after (branch probe38b), the same 240 probes,
+Before (base 9cf432e) and after (branch probe38b), the same 243 probes,
 ``PYTHONPATH=<tree> python tools/audit38b_probe.py`` from the tree's root, about 30 s:
-    before: clear error: 173, crash: 2, ok: 29, silent wrong: 19, vague error: 17
-    after:  clear error: 211, ok: 29
+    before: clear error: 173, crash: 2, ok: 30, silent wrong: 21, vague error: 17
+    after:  clear error: 213, ok: 30
 """
 
 import json
@@ -166,6 +169,9 @@ def samplers():
     probe("vignetting_map VCX 1.5", lambda: S.vignetting_map(np.array([0, 0, 1.5, 0, 0.0]), np.zeros((3, 2))), "VCX")
     probe("vignetting_map factors NaN", lambda: S.vignetting_map(np.array([0, 0, np.nan, 0, 0.0]), np.zeros((3, 2))), "factor")
     probe("vignetting_map pupil [3, 3]", lambda: S.vignetting_map(np.zeros(5), np.zeros((3, 3))), "pupil")
+    probe("stop_radius 'real' object_z NaN", lambda: S.stop_radius(cooke, "real", object_z=float("nan")), "object_z", "nan")
+    probe("stop_radius 'real' object_z 0 (surface 1's vertex)", lambda: S.stop_radius(cooke, "real", object_z=0.0), "object_z", "surface 1")
+    probe("stop_radius 'real' object_z -100 (control)", lambda: S.stop_radius(cooke, "real", object_z=-100.0), good=True)
     pt = np.array([0.0, 0.0, -100.0])
     probe("point_source point z 0 (at surface 1)", lambda: S.point_source(cooke, np.array([0.0, 0.0, 0.0]), S.pupil_grid(3)).direction, "point")
     probe("point_source point 2 values", lambda: S.point_source(cooke, np.array([0.0, -100.0]), S.pupil_grid(3)).direction, "point")
