@@ -149,6 +149,7 @@ def test_tile_bank_refusal_names_the_kernels(fn):
 @pytest.mark.parametrize("z, match", [(float("nan"), r"object_z must be finite .*got nan"),
                                       (0.0, r"object_z must be in front of surface 1 .*got 0")])
 def test_stop_radius_checks_a_concrete_object_z(cooke, z, match):
-    """Main: object_z NaN gave 3.80 mm (the collimated beam's radius), 0 gave NaN."""
+    """Main: object_z NaN failed in Rays ("direction must hold unit vectors ... length
+    nan"), 0 (surface 1's vertex) gave 3.83 mm."""
     with pytest.raises(ValueError, match="stop_radius: " + match):
         sampling.stop_radius(cooke, "real", object_z=z)

@@ -31,9 +31,9 @@ Gaps found and fixed (one mechanism each):
    ``clear_radius`` or ``add_r4`` of another length (IndexError), a perturbation of another
    lens ("add got incompatible shapes"), a clear radius of 0, NaN or < 0 (an inf/NaN lens).
    ``tolerance_rigid.check_perturb_args``.
-6. ``imaging.sampling.stop_radius(stop_size="real", object_z=...)``: NaN gave the
-   collimated beam's radius, 0 (surface 1's vertex) NaN; a concrete ``object_z`` is now
-   checked as ``point_source`` checks its point's z.
+6. ``imaging.sampling.stop_radius(stop_size="real", object_z=...)``: NaN failed in ``Rays``
+   ("direction must hold unit vectors ... length nan"), 0 (surface 1's vertex) gave 3.83 mm;
+   a concrete ``object_z`` is now checked as ``point_source`` checks its point's z.
 7. Vague: the tile-bank refusal (``convolve_tiles``, ``wiener_tiles``, ``tile_evidence``)
    named a tile count without saying it came from the kernels' shape.
 
@@ -42,10 +42,10 @@ in ``point_source`` (an overfilled beam), a negative object distance or depth (a
 object, documented), ``pupil_samples("random")`` without a key (key 0), a D exponent in a
 ``.zmx`` (Fortran's), a JSON radius of 1e400 (inf: flat), clipping in ``write_png``.
 
-Before (base 9cf432e) and after (branch probe38b), the same 243 probes,
+Before (base 9cf432e) and after (branch probe38b), the same 246 probes,
 ``PYTHONPATH=<tree> python tools/audit38b_probe.py`` from the tree's root, about 30 s:
-    before: clear error: 173, crash: 2, ok: 30, silent wrong: 21, vague error: 17
-    after:  clear error: 213, ok: 30
+    before: clear error: 173, crash: 2, ok: 31, silent wrong: 22, vague error: 18
+    after:  clear error: 215, ok: 31
 """
 
 import json

@@ -587,7 +587,7 @@ def stop_radius(lens: Lens, stop_size: str = "paraxial", *, object_z=None) -> Fl
     dt = lens.epd.dtype
     zep = paraxial.entrance_pupil_z(lens, lens.primary_wavelength)
     if object_z is not None and not checks.is_traced(object_z) and not checks.is_traced(zep):
-        # NaN gave the collimated beam's radius (a NaN direction, then the valid rim ray's)
+        # NaN failed in Rays (a direction of length NaN), 0 gave a radius (3.83 mm)
         z = np.asarray(checks.values(object_z, "object_z", "stop_radius", unit="mm"), float)
         if np.any(_bad_point_z(z, np.asarray(zep), np)):
             raise ValueError(f"stop_radius: object_z must be {POINT_Z_RANGE}, got "
