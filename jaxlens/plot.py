@@ -42,7 +42,7 @@ def save(fig: Figure, path: str | os.PathLike) -> str:
     if not path.strip() or os.path.isdir(path):  # '' wrote nothing and returned ''
         raise ValueError(f"save: path must be a file name (its extension gives the format, "
                          f".png), got {path!r}")
-    with whole_path(path) as tmp:  # written whole or not at all (the extension kept)
+    with whole_path(path, "save") as tmp:  # written whole or not at all (the extension kept)
         fig.savefig(tmp, bbox_inches="tight")
     return path
 

@@ -257,6 +257,7 @@ def perturb(lens: Lens, p: Perturbation, clear_radius, *, add_r4: tuple[bool, ..
     if not isinstance(p, Perturbation):  # before: an AttributeError on .radius_rel
         raise TypeError(f"perturb: p must be a Perturbation (zero_perturbation(lens) or a "
                         f"draw of monte_carlo), got {type(p).__name__}")
+    rigid.check_perturb_args(lens, p, clear_radius, add_r4, "perturb")
     add_r4 = add_r4 or (False,) * lens.num_surfaces
     surfaces = []
     for i, s in enumerate(lens.surfaces):

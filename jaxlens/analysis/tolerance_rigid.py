@@ -35,6 +35,7 @@ import dataclasses
 
 import jax.numpy as jnp
 
+from ..optics import checks
 from ..optics.coordinates import CoordinateBreak
 from ..optics.lens import Lens
 from ..optics.materials import Air
@@ -84,6 +85,38 @@ def check_lens(lens: Lens, where: str) -> None:
             raise ValueError(f"{where}: the element of surfaces {a + 1}-{b + 1} holds coordinate "
                              f"breaks (surfaces {inside}); element decenter and tilt need "
                              f"coaxial elements")
+
+
+PER_SURFACE = ("radius_rel", "thickness", "conic", "asphere", "irregularity", "index",
+               "abbe_rel")
+"""The entries of a ``Perturbation`` that hold one value per surface of its lens."""
+
+
+def check_perturb_args(lens: Lens, p, clear_radius, add_r4, where: str) -> None:
+    """Refuse ``perturb``'s arguments that do not fit ``lens``: a perturbation of another
+    lens (its per-surface entries were indexed to the shorter length, or broadcast to "add got
+    incompatible shapes"), a ``clear_radius`` or ``add_r4`` of another length (an IndexError
+    from the loop) and a concrete clear radius that is not a finite number > 0 mm (0, NaN or
+    a negative one made the irregularity term inf, NaN or of the wrong scale, silently)."""
+    n = lens.num_surfaces
+    for name in PER_SURFACE:
+        got = len(getattr(p, name))
+        if got != n:
+            raise ValueError(f"{where}: p.{name} has {got} entries for a lens of {n} surfaces: "
+                             f"p must be a perturbation of this lens (zero_perturbation(lens) "
+                             f"or a draw of its ToleranceModel)")
+    if len(p.decenter_x) not in (0, len(groups := element_groups(lens))):
+        raise ValueError(f"{where}: p moves {len(p.decenter_x)} elements, the lens has "
+                         f"{len(groups)}: p must be a perturbation of this lens")
+    if jnp.shape(clear_radius) != (n,):
+        raise ValueError(f"{where}: clear_radius must be [{n}] mm (one clear semi-diameter per "
+                         f"surface), got shape {jnp.shape(clear_radius)}")
+    if not checks.is_traced(clear_radius):
+        checks.real_values(clear_radius, "clear_radius", where, "mm")
+        checks.values(clear_radius, "clear_radius", where, lo=0, lo_open=True, unit="mm")
+    if add_r4 is not None and len(add_r4) != n:
+        raise ValueError(f"{where}: add_r4 must hold one True/False per surface ({n}), got "
+                         f"{len(add_r4)}")
 
 
 def labels(lens: Lens) -> list[list[tuple[str, str, str]]]:

@@ -10,9 +10,39 @@ beyond the cut-off and an on-axis field give a finite gradient, not NaN.
 from __future__ import annotations
 
 import jax.numpy as jnp
+import numpy as np
 from jaxtyping import Array, Float
 
+from ..optics import checks
 from .sampling import field_xy
+
+WAVELENGTH_RANGE_MM = tuple(w * 1e-3 for w in checks.GENERIC_RANGE_UM)
+"""The wavelengths (mm) ``diffraction_mtf`` takes: ``checks.GENERIC_RANGE_UM`` in mm."""
+
+
+def _check_mtf_args(nu, lam_mm, fnum) -> None:
+    """Refuse concrete arguments of ``diffraction_mtf`` out of range: a negative or NaN
+    frequency gave 1 or 0, a wavelength in µm or nm (0.55, 550 for 5.5e-4 mm) an MTF of 0 at
+    any frequency, and an F-number of 0 or below an MTF of 1 (its callers pass traced values,
+    checked where they are made)."""
+    where = "diffraction_mtf"
+    if not checks.is_traced(nu):
+        checks.real_values(nu, "nu", where, "cycles/mm")
+        checks.values(nu, "nu", where, lo=0, unit="cycles/mm")
+    if not checks.is_traced(lam_mm):
+        checks.real_values(lam_mm, "lam_mm", where, "mm")
+        a = np.asarray(lam_mm, dtype=float)
+        lo, hi = WAVELENGTH_RANGE_MM
+        bad = ~np.isfinite(a) | (a < lo) | (a > hi)
+        if np.any(bad):
+            v = float(a[bad].reshape(-1)[0])
+            hint = (f" ({v:g} µm is {v * 1e-3:g} mm)" if 0.1 <= v <= 30
+                    else f" ({v:g} nm is {v * 1e-6:g} mm)" if 100 <= v <= 30000 else "")
+            raise ValueError(f"{where}: lam_mm must be a wavelength in mm, in [{lo:g}, {hi:g}] "
+                             f"mm, got {v:g}{hint}")
+    if not checks.is_traced(fnum):
+        checks.real_values(fnum, "fnum", where)
+        checks.values(fnum, "fnum (the working F-number)", where, lo=0, lo_open=True)
 
 
 def diffraction_mtf(nu, lam_mm, fnum) -> Array:
@@ -20,7 +50,10 @@ def diffraction_mtf(nu, lam_mm, fnum) -> Array:
     (mm) and working F-number ``fnum``: (2/π)(arccos s − s√(1 − s²)) with s = ν·λ·F#, and 0
     from the cut-off (s ≥ 1) on. Its gradient is 0 there (it was NaN: the unused branch's
     arccos and square root at s = 1 have infinite slopes). At ν = 0 it is the slope on
-    ν ≥ 0, −4/(π ν_c) (``jnp.maximum``'s tie rule had given half of it)."""
+    ν ≥ 0, −4/(π ν_c) (``jnp.maximum``'s tie rule had given half of it).
+
+    Concrete arguments are checked: ν ≥ 0, λ in ``WAVELENGTH_RANGE_MM`` and F# > 0, finite."""
+    _check_mtf_args(nu, lam_mm, fnum)
     s = nu * lam_mm * fnum
     s = jnp.where(s < 0, 0.0, s)
     inside = s < 1

@@ -606,6 +606,13 @@ def stop_radius(lens: Lens, stop_size: str = "paraxial", *, object_z=None) -> Fl
         return paraxial.paraxial_data(lens).stop_semi_diameter
     dt = lens.epd.dtype
     zep = paraxial.entrance_pupil_z(lens, lens.primary_wavelength)
+    if object_z is not None and not checks.is_traced(object_z) and not checks.is_traced(zep):
+        # NaN failed in Rays (a direction of length NaN), 0 gave a radius (3.83 mm)
+        z = np.asarray(checks.values(object_z, "object_z", "stop_radius", unit="mm"), float)
+        if np.any(_bad_point_z(z, np.asarray(zep), np)):
+            raise ValueError(f"stop_radius: object_z must be {POINT_Z_RANGE}, got "
+                             f"{checks.fmt(z)} mm (the entrance pupil at "
+                             f"{checks.fmt(np.asarray(zep))})")
     rim = jnp.stack([jnp.zeros((), dt), 0.5 * lens.epd, zep.astype(dt)])
     if object_z is None:
         d = jnp.array([0.0, 0.0, 1.0], dt)

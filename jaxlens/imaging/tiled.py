@@ -167,6 +167,13 @@ def _assemble(tiles, n_ty, n_tx):
     return t.transpose(0, 2, 1, 3, 4).reshape(n_ty * t.shape[2], n_tx * t.shape[3], -1)
 
 
+def _bank_shape(kernels) -> str:
+    """What sets the tile count of a tiling refusal: the kernel bank's shape (the message
+    named a tile count without its source)."""
+    return (f" (kernels is [ty, tx, C, k, k] = {list(kernels.shape)}: one kernel per tile; "
+            f"give a bank of as many tiles as the frame holds)")
+
+
 def _check_bank(image, kernels, caller):
     """The image and the kernel bank as arrays, checked: shapes, a float image (an integer
     one was blurred in integer arithmetic: the kernels truncated to 0), and finite values
@@ -217,7 +224,7 @@ def convolve_tiles(
     rows, cols = image.shape[0] - 2 * h, image.shape[1] - 2 * h
     if rows % n_ty or cols % n_tx or rows // n_ty != cols // n_tx:
         raise ValueError(f"convolve_tiles: a {rows}x{cols} frame does not split into "
-                         f"{n_ty}x{n_tx} square tiles")
+                         f"{n_ty}x{n_tx} square tiles{_bank_shape(kernels)}")
     tile = rows // n_ty
     wins = _windows(image, n_ty, n_tx, tile, h)
     out = jax.vmap(_conv_valid)(wins, kernels.reshape((-1,) + kernels.shape[2:]))
@@ -248,7 +255,7 @@ def _spectra(image, kernels, nsr, halo, prior, caller, pad, taper=False):
     if rows <= 0 or rows % n_ty or cols % n_tx or rows // n_ty != cols // n_tx:
         extra = f" inside its {halo}-pixel margin" if margin else ""
         raise ValueError(f"{caller}: a {image.shape[0]}x{image.shape[1]} frame{extra} does "
-                         f"not split into {n_ty}x{n_tx} square tiles")
+                         f"not split into {n_ty}x{n_tx} square tiles{_bank_shape(kernels)}")
     tile = rows // n_ty
     win = tile + 2 * halo
     padded = (image if margin else

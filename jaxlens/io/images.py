@@ -21,7 +21,7 @@ import zlib
 import numpy as np
 
 from ..optics import checks
-from .json_values import whole_path, write_whole
+from .json_values import output_file, whole_path, write_whole
 
 __all__ = [
     "read_exr",
@@ -125,20 +125,6 @@ def read_exr(path, *, channels=None) -> np.ndarray:
     return arr[..., 0] if arr.shape[-1] == 1 else arr
 
 
-def _output_file(path, where: str, suffix: str) -> pathlib.Path:
-    """``path`` as a file to write: its suffix must be ``suffix`` (any case), so that the
-    bytes match the name, and it must not be a folder."""
-    p = pathlib.Path(os.fspath(path))
-    if p.suffix.lower() != suffix:
-        raise ValueError(f"{where}: writes {suffix[1:].upper()} files; the path must end in "
-                         f"{suffix}, got {str(p)!r}")
-    if p.is_dir():
-        raise ValueError(f"{where}: {str(p)!r} is a folder, not a file")
-    if not p.parent.is_dir():  # OpenEXR's RuntimeError or open()'s traceback, after the work
-        raise ValueError(f"{where}: no such folder {str(p.parent)!r} to write {p.name!r} in")
-    return p
-
-
 def write_exr(path, img, *, channels=None) -> None:
     """Write a float image to OpenEXR (32-bit float, ZIP compression).
 
@@ -152,7 +138,7 @@ def write_exr(path, img, *, channels=None) -> None:
     subnormals are kept); an image that would become all 0, or that holds a value beyond
     3.4e38, is refused.
     """
-    path = _output_file(path, "write_exr", ".exr")
+    path = pathlib.Path(output_file(path, "write_exr", ".exr"))
     a = _float32(img, "write_exr", "img", "linear values")
     _non_empty(a, "write_exr")
     if a.ndim == 2:
@@ -275,7 +261,7 @@ def write_png(path, img, *, linear: bool = True, bits: int = 8) -> None:
     checks.switch(linear, "linear", "write_png")
     if isinstance(bits, bool) or not isinstance(bits, (int, np.integer)) or bits not in (8, 16):
         raise ValueError(f"write_png: bits must be 8 or 16 (bits per channel), got {bits!r}")
-    path = _output_file(path, "write_png", ".png")
+    path = pathlib.Path(output_file(path, "write_png", ".png"))
     # An integer image (uint8 codes) was clipped to 1: a white file; NaN would be cast to
     # an arbitrary integer (0 on most machines): a silent black pixel.
     a = checks.float_image(img, "write_png", "img", unit="values in [0, 1], clipped")
@@ -488,7 +474,7 @@ def write_psf_stack(path, psfs, *, names=None) -> None:
             ``[rows, cols, ...]`` can be flattened first.
         names: layer names (default ``psf000``, ``psf001``, ...).
     """
-    path = _output_file(path, "write_psf_stack", ".exr")
+    path = pathlib.Path(output_file(path, "write_psf_stack", ".exr"))
     # NaN PSFs were written as they were (and complex or integer ones cast).
     a = _float32(psfs, "write_psf_stack", "psfs", "PSF values")
     if a.ndim == 3:

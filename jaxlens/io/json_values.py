@@ -179,14 +179,36 @@ def pretty(o: Any, level: int = 0) -> str:
     return "[\n" + ",\n".join(body) + "\n" + pad + "]"
 
 
+def output_file(path: str | os.PathLike, where: str, suffix: str | None = None) -> str:
+    """``path`` as a file to write: not a folder, in a folder that exists, and ending in
+    ``suffix`` (any case) where one is given, so that the bytes match the name (``save_zmx``
+    wrote Zemax text into ``lens.json``, ``save_json`` JSON into ``lens.zmx``). Raises
+    ``ValueError`` naming ``where`` and the path; a writer that writes through a temporary
+    file beside its target failed with ``IsADirectoryError`` or a ``FileNotFoundError`` naming
+    that temporary file (``.lens.json.123.partial``)."""
+    p = os.fspath(path)
+    ext = os.path.splitext(p)[1]
+    if os.path.isdir(p):
+        raise ValueError(f"{where}: {p!r} is a folder, not a file")
+    if suffix is not None and ext.lower() != suffix:
+        raise ValueError(f"{where}: writes {suffix[1:].upper()} files; the path must end in "
+                         f"{suffix}, got {p!r}")
+    folder = os.path.dirname(os.path.abspath(p))
+    if not os.path.isdir(folder):
+        raise ValueError(f"{where}: no such folder {folder!r} to write "
+                         f"{os.path.basename(p)!r} in")
+    return p
+
+
 def write_whole(path: str | os.PathLike, text: str | bytes, *,
-                newline: str | None = None) -> None:
+                newline: str | None = None, where: str = "write") -> None:
     """Write ``text`` (UTF-8; ``bytes`` as they are, an ``.npz`` say) to ``path`` whole or
     not at all: into a temporary file beside it, renamed over ``path`` when complete. A save
     interrupted mid-write (Ctrl-C) left a file cut short, which destroyed the lens it
     replaced, and a ``.zmx`` cut at a surface's end read as a shorter lens; a results file
-    (a benchmark's, a reference tool's) cut short failed the run or test reading it."""
-    folder, name = os.path.split(os.path.abspath(os.fspath(path)))
+    (a benchmark's, a reference tool's) cut short failed the run or test reading it.
+    ``path`` is checked first (``output_file``, any suffix; ``where`` names the caller)."""
+    folder, name = os.path.split(os.path.abspath(output_file(path, where)))
     tmp = os.path.join(folder, f".{name}.{os.getpid()}.partial")
     try:
         if isinstance(text, bytes):
@@ -203,13 +225,13 @@ def write_whole(path: str | os.PathLike, text: str | bytes, *,
 
 
 @contextlib.contextmanager
-def whole_path(path: str | os.PathLike):
+def whole_path(path: str | os.PathLike, where: str = "write"):
     """A temporary path beside ``path`` (same extension) for a writer that takes a path (a
     figure's ``savefig``, OpenEXR), renamed over ``path`` when the block ends without an
     error, removed when it does not: the file is written whole or not at all, as
     ``write_whole`` writes text (in place, a stop mid-write left a cut file where the
-    earlier one was)."""
-    folder, name = os.path.split(os.path.abspath(os.fspath(path)))
+    earlier one was). ``path`` is checked first (``output_file``)."""
+    folder, name = os.path.split(os.path.abspath(output_file(path, where)))
     tmp = os.path.join(folder, f".{name}.{os.getpid()}.partial{os.path.splitext(name)[1]}")
     try:
         yield tmp

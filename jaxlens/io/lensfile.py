@@ -62,6 +62,7 @@ from .json_values import (
     RepeatedKey,
     curvature,
     nm_to_um,  # noqa: F401  (re-exported: analysis.report reads it here)
+    output_file,
     write_whole,
 )
 from .json_values import float64_array as _arr
@@ -289,6 +290,13 @@ def apply_aperture(lens: Lens, *, epd=None, fnum=None, stop_semi_diameter=None) 
     given = [x is not None for x in (epd, fnum, stop_semi_diameter)]
     if sum(given) != 1:
         raise ValueError("aperture: give exactly one of epd, fnum, stop_semi_diameter")
+    # Each by name first: fnum -4 gave the EPD of F/4 (the EPD's sign is dropped for a
+    # negative focal length), a string failed in a division, NaN, 0 or a negative EPD read
+    # "the entrance pupil diameter comes out as ..." without the argument.
+    for arg, v in (("epd", epd), ("fnum", fnum), ("stop_semi_diameter", stop_semi_diameter)):
+        if v is not None:
+            checks.number(v, arg, "apply_aperture", lo=0, lo_open=True,
+                          unit="" if arg == "fnum" else "mm")
     if epd is not None:
         value = jnp.asarray(epd, lens.thickness.dtype)
     elif fnum is not None:
@@ -766,5 +774,6 @@ def dumps(lens: Lens) -> str:
 
 
 def save_json(lens: Lens, path: str | os.PathLike) -> None:
-    """Write a JSON lens file."""
-    write_whole(os.fspath(path), dumps(lens))
+    """Write a JSON lens file (``path`` ends in ``.json``, any case)."""
+    path = output_file(path, "save_json", ".json")
+    write_whole(path, dumps(lens), where="save_json")

@@ -26,7 +26,7 @@ from ..optics.surfaces import (
     TiltedPlane,
 )
 from . import lensfile, zmx_surfaces, zmx_system
-from .json_values import write_whole
+from .json_values import output_file, write_whole
 from .zmx_common import (
     MARKER,
     MAX_XPOLY_DEGREE,
@@ -610,9 +610,10 @@ def save_zmx(lens: Lens, path: str | os.PathLike, *, model_glass: str = "blank")
     Returns:
         The paths of the AGF catalogs written beside the file (possibly none).
     """
-    path = os.fspath(path)
+    # Before any work, and before the side catalogs are written beside it.
+    path = output_file(path, "save_zmx", ".zmx")
     text, gw = dumps(lens, path, model_glass=model_glass)
     folder = os.path.dirname(os.path.abspath(path))
     agfs = gw.write_agf(folder)
-    write_whole(path, text, newline="\r\n")
+    write_whole(path, text, newline="\r\n", where="save_zmx")
     return agfs

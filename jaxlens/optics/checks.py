@@ -359,8 +359,8 @@ def float_array(arg: str, where: str, unit: str = ""):
     """A field converter to a real floating JAX array.
 
     Integers become JAX's default float (an int array would truncate values and block
-    ``jax.grad``); strings, bools, complex numbers and other objects raise ``TypeError``
-    naming ``where``, ``arg`` and the unit.
+    ``jax.grad``); strings, bools, complex numbers, other objects and float16/bfloat16 (3.25896
+    is 3.2598) raise ``TypeError`` naming ``where``, ``arg`` and the unit.
     """
     u = f" ({unit})" if unit else ""
 
@@ -374,6 +374,9 @@ def float_array(arg: str, where: str, unit: str = ""):
             shown = repr(x) if len(repr(x)) <= 60 else repr(x)[:57] + "..."
             raise TypeError(f"{where}: {arg} must be a real number or an array of real "
                             f"numbers{u}, got {type(x).__name__} {shown}")
+        if jnp.issubdtype(a.dtype, jnp.floating) and jnp.finfo(a.dtype).bits < 32:  # 3.2598
+            raise TypeError(f"{where}: {arg}{u} is {a.dtype.name}, which keeps too few digits "
+                            f"to trace a lens; give float32 or float64 values (.astype)")
         return a if jnp.issubdtype(a.dtype, jnp.floating) else a.astype(jnp.result_type(float))
 
     return convert

@@ -69,6 +69,13 @@ class Rays(eqx.Module):
                 checks.real_values(v, arg, "Rays", unit)
         origin = jnp.asarray(origin)
         direction = jnp.asarray(direction)
+        for arg, v in (("origin", origin), ("direction", direction), ("wavelength", wavelength),
+                       ("opl", opl)):
+            dt = jnp.result_type(v) if v is not None else None
+            if dt is not None and jnp.issubdtype(dt, jnp.floating) and jnp.finfo(dt).bits < 32:
+                # float16 keeps 3 digits (0.55 µm is 0.5498), as checks.float_array refuses
+                raise TypeError(f"Rays: {arg} is {jnp.dtype(dt).name}, which keeps too few "
+                                f"digits to trace a lens; give float32 or float64 values")
         if origin.shape[-1:] != (3,) or direction.shape != origin.shape:
             raise ValueError(
                 f"Rays: origin and direction must both be [..., 3] of the same shape, got "
