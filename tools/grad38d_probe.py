@@ -314,8 +314,22 @@ def _a_params(params):
     rows = []
     for name in ("c", "k", "d"):
         for j in range(getattr(params, name).shape[0]):
-            rows.append((f"{name}[{j}]", lambda P, name=name: getattr(P[0], name), j, 1e-6))
+            # k: the conic's gradients are small (1e-8 of a loss of 4): a step of 1e-6 left
+            # the differences at their rounding noise (spread 7e-2); 1e-2 … 1e-4 is smooth
+            h = 1e-2 if name == "k" else 1e-6
+            rows.append((f"{name}[{j}]", lambda P, name=name: getattr(P[0], name), j, h))
     return rows
+
+
+def radii_at(objective, params, args):
+    """The clear radii the objective holds at ``params`` (``regularizers.clear_radii``)."""
+    from jaxlens.design import losses
+    from jaxlens.design import regularizers as reg
+    from jaxlens.tracing.forward import trace_path
+
+    lens = objective.pmap.to_lens(params)
+    path = trace_path(lens, losses.launch(lens, objective.sampling, args), uniform=True)
+    return np.asarray(reg.clear_radii(path))
 
 
 def section_regs(only):
@@ -335,12 +349,7 @@ def _regs_cases(label, finished, only):
         plist = _a_params(params) + [
             (f"a[{j}]", lambda P: P[0].a, j, 1e-6) for j in range(int(np.prod(shape)))]
         _, aux0 = objective(params, args)
-        from jaxlens.design import losses
-        from jaxlens.tracing.forward import trace_path
-        lens0 = objective.pmap.to_lens(params)
-        path0 = trace_path(lens0, losses.launch(lens0, objective.sampling, args), uniform=True)
-        from jaxlens.design import regularizers as reg
-        radii0 = np.asarray(reg.clear_radii(path0))
+        radii0 = radii_at(objective, params, args)
         yield [f"info   regs      {label:18s} loss={float(aux0.loss):.6e} regs(obl,gap,slope)="
                f"{np.asarray(aux0.regs).round(8).tolist()} radii={radii0.round(3).tolist()}"]
         fns = {
@@ -392,8 +401,10 @@ def edof_loss_fn(pmap, kernel_size, pupil, tile=4):
                              pupil=pupil, key=key)
         kern = kern.reshape((2, 2) + kern.shape[1:])
         sims = eo.simulate(windows, kern)
-        m = (n - tile) // 2
-        c = lambda x: x[..., m:m + tile, m:m + tile, :]  # noqa: E731
+        def c(x):  # the central tile × tile pixels (train._centre)
+            m = (x.shape[-2] - tile) // 2
+            return x[..., m:m + tile, m:m + tile, :]
+
         total, _ = elo.edof_loss(c(sims), c(sims), c(windows), w_sim=1.0, w_raw=0.5)
         return total
 
@@ -461,8 +472,9 @@ def section_image(only):
     plist = _a_params(params) + [(f"a[{j}]", lambda P: P[0].a, j, 1e-6)
                                  for j in range(0, int(np.prod(shape)), 3)]
     fn = lambda p, _: jnp.sum(io(unflat(p), args)[0] ** 2)  # noqa: E731
+    radii0 = radii_at(io.ray, params, args)
     if _hit(only, "image_loss:frozen"):
-        with frozen_image_helpers(warped, fp):
+        with frozen_image_helpers(warped, fp), frozen_radii(radii0):
             yield grouped(compare("image", "image_loss:frozen", fn, P, plist, fwd=True))
     if _hit(only, "image_loss:live"):
         rows = compare("image", "image_loss:live", fn, P, plist, fwd=True)
