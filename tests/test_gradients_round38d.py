@@ -181,10 +181,10 @@ def test_design_loss_with_regularizers_gradient_matches_differences(finished, mo
     fj = jax.jit(loss)
     idx = np.arange(0, x0.shape[0], 5)
     for j in idx:
-        h = 1e-3 if is_k[j] else 1e-6
-        fd = (fj(x0.at[j].add(h)) - fj(x0.at[j].add(-h))) / (2 * h)
-        assert abs(g[j] - fd) <= 1e-6 * max(abs(g[j]), abs(float(fd))) + 1e-9 * np.max(
-            np.abs(g)), (j, g[j], fd)
+        steps = (1e-3, 1e-4) if is_k[j] else (1e-6, 1e-7)  # best of two (truncation, noise)
+        err = min(abs(g[j] - float((fj(x0.at[j].add(h)) - fj(x0.at[j].add(-h))) / (2 * h)))
+                  for h in steps)
+        assert err <= 1e-6 * abs(g[j]) + 1e-9 * np.max(np.abs(g)), (j, g[j], err)
     # the three penalties are live at the finished design (so their hinges are exercised)
     regs = np.asarray(objective(params, args)[1].regs)
     active = regs > 0
@@ -226,3 +226,57 @@ def test_edof_psf_loss_gradient_in_odd_coefficients():
     g = jax.jit(jax.grad(loss))(x0)
     fd = _central(jax.jit(loss), x0, np.full(6, 1e-5))
     np.testing.assert_allclose(g, fd, rtol=1e-7, atol=1e-9 * np.max(np.abs(fd)))
+
+
+# --------------------------------------------------------------------------- image objective
+@pytest.mark.slow  # the design objective plus a render and a distortion map (~60 s compile)
+def test_image_objective_gradient_with_held_quantities_frozen(monkeypatch):
+    """``ImageObjective`` (render of the pre-warped scene, alignment penalty, the ray
+    objective's regularizers) at a random start on a 6 × 6 sensor. Three things are held
+    without gradient by design: the pre-warp (distortion relaxation), the render's
+    footprints and the clear radii. Frozen at x, the differences see the function ``grad``
+    differentiates (fixed key, affine scene: bilinear interpolation of it has no kinks)
+    and agree within 1e-7 (the audit: 5e-8 over c, k, d and a); ``jvp`` agrees with
+    ``grad`` to rounding."""
+    from jax.flatten_util import ravel_pytree
+
+    from jaxlens.design import losses, regularizers
+    from jaxlens.imaging import distortion
+    from jaxlens.imaging import render as R
+    from jaxlens.imaging.psf import RGB_WAVELENGTHS
+
+    objective, params, args = _design(False)
+    n = 6
+    spec = jl.design.DesignSpec()
+    sensor = jl.Sensor((n, n), jnp.asarray(spec.sensor_size[0] / n, jnp.float64))
+    yy, xx = np.mgrid[0:n, 0:n] / (n - 1.0)
+    scene = jnp.asarray(np.stack([0.2 + 0.5 * xx, 0.3 + 0.4 * yy, 0.5 + 0.2 * (xx - yy)], -1))
+    io = losses.ImageObjective(objective, scene, sensor, spp=4)
+    lens = objective.pmap.to_lens(params)
+    stop = eqx.tree_at(lambda x: x.semi_diameter, lens.surfaces[lens.stop], 0.5 * args.epd)
+    surfaces = tuple(stop if i == lens.stop else x for i, x in enumerate(lens.surfaces))
+    lens = eqx.tree_at(lambda x: (x.surfaces, x.epd), lens, (surfaces, args.epd))
+    warped = distortion.prewarp(lens, scene, sensor=sensor)
+    fp = R.footprints(lens, sensor=sensor, wavelengths=RGB_WAVELENGTHS)
+    radii = np.asarray(_radii(objective, params, args))
+    monkeypatch.setattr(distortion, "prewarp", lambda *a, **k: warped)
+    monkeypatch.setattr(R, "_compute_footprints", lambda *a, **k: fp)
+    monkeypatch.setattr(regularizers, "clear_radii",
+                        lambda path: jnp.asarray(radii, path.origin.dtype))
+    x0, unravel = ravel_pytree(params)
+
+    def loss(x):
+        return jnp.sum(io(unravel(x), args)[0] ** 2)
+
+    g = np.asarray(jax.jit(jax.grad(loss))(x0))
+    fj = jax.jit(loss)
+    for j in range(0, x0.shape[0], 11):
+        # the best of two steps: the high aspheric orders curve the loss enough that h = 1e-6
+        # leaves a truncation error of 2e-7 (a[65]: 5.8056873 at 1e-6, 5.80568626 at 1e-7,
+        # grad 5.80568627)
+        err = min(abs(g[j] - float((fj(x0.at[j].add(h)) - fj(x0.at[j].add(-h))) / (2 * h)))
+                  for h in (1e-6, 1e-7))
+        assert err <= 1e-7 * abs(g[j]) + 1e-9 * np.max(np.abs(g)), (j, g[j], err)
+    t = jnp.asarray(np.random.default_rng(1).normal(size=x0.shape))
+    jv = jax.jit(lambda t: jax.jvp(loss, (x0,), (t,))[1])(t)
+    np.testing.assert_allclose(jv, g @ np.asarray(t), rtol=1e-10)

@@ -128,6 +128,8 @@ def render_fns(lens, spp=4):
         "psf_noRI": (lambda L, e: jnp.sum(wmap * jl.render(
             L, scene, spp=2, key=key, method=R.PSFRender(kernel_size=5), patch=3,
             relative_illumination=False)), False),
+        "psf_RI": (lambda L, e: jnp.sum(wmap * jl.render(
+            L, scene, spp=2, key=key, method=R.PSFRender(kernel_size=5), patch=3)), False),
     }
 
 
