@@ -15,7 +15,10 @@ Sections (pick with arguments; default all):
             and central differences must agree with ``grad`` to O(h²). Also ``jvp`` against
             ``grad`` (always well-posed), checkpointed against non-checkpointed ``grad``,
             and the default render (footprints recomputed per call, held without gradient:
-            a documented disagreement, shown for its size).
+            a documented disagreement, shown for its size). The PSF method without and
+            with relative illumination (with: the map's vignetted pupil area is found by
+            bisection and held without gradient, ``radiometry.star_region``; its differences
+            are step-like, spread ~1, so that row is DOC).
     glass   dispersion-formula leaves round 37e did not cover (Herzberger, Sellmeier 2,
             Conrady, Handbook 1 and 2, Sellmeier 4, the three Laurent/Extended power sets, a
             five-term Sellmeier, a catalog glass with a stated range (extrapolated_index),
@@ -129,7 +132,7 @@ def render_fns(lens, spp=4):
             L, scene, spp=2, key=key, method=R.PSFRender(kernel_size=5), patch=3,
             relative_illumination=False)), False),
         "psf_RI": (lambda L, e: jnp.sum(wmap * jl.render(
-            L, scene, spp=2, key=key, method=R.PSFRender(kernel_size=5), patch=3)), False),
+            L, scene, spp=2, key=key, method=R.PSFRender(kernel_size=5), patch=3)), True),
     }
 
 
