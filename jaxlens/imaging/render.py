@@ -61,7 +61,10 @@ Gradients:
     follows where each ray lands in the scene. The sampling footprints and the on-axis
     normalisation are held fixed (``footprints`` lets a caller fix them explicitly, as a
     finite-difference check must), and a ray crossing an aperture edge changes the image
-    in a jump that carries no gradient (as in DeepLens).
+    in a jump that carries no gradient (as in DeepLens). With ``PSFRender`` and
+    ``relative_illumination=True`` the vignetted pupil area of the illumination map
+    (``radiometry.star_region``, found by bisection) is held likewise: the map's gradient
+    is that of its cos⁴ and image-scale terms, and its differences are step-like.
 
 Memory and scale-out:
     The sensor is cut into ``patch × patch`` tiles computed one after another by
