@@ -134,7 +134,9 @@ def test_json_field_type_lists_the_supported_ones(tmp_path):
     path.write_text(json.dumps(d))
     with pytest.raises(ValueError, match=r"field type 'angle_rad_y' is not supported; "
                        r"fields\.type must be one of angle_deg_y, angle_deg, angle, "
-                       r"angle_deg_xy \(angles in deg: convert radians or heights to degrees\)$"):
+                       r"angle_deg_xy, object_height_mm_y, object_height_mm_xy \(angles in deg: "
+                       r"convert radians or image heights to degrees; object heights in mm for "
+                       r"an object-space telecentric lens\)$"):
         jl.load(path)
 
 

@@ -171,3 +171,14 @@ def test_json_refuses_mixed_telecentric_data():
     d["aperture"] = {"epd": 5.0}
     with pytest.raises(ValueError, match="takes one aperture"):
         lensfile.lens_from_dict(d)
+
+
+def test_json_height_type_against_pairs_names_heights():
+    """The mismatch message of an object-height field type speaks of heights in mm and names
+    the pairs' height type (it said "one value y" and suggested "angle_deg_xy")."""
+    d = json.loads(lensfile.dumps(_load("tele_doublet_obna")))
+    d["fields"]["values"] = [[0.0, 1.0], [0.0, 2.0]]
+    with pytest.raises(ValueError, match=r"'object_height_mm_y' declares one object height y "
+                       r"\(mm\) per field, but fields\.values holds pairs .*"
+                       r"type \"object_height_mm_xy\" for pairs"):
+        lensfile.lens_from_dict(d)

@@ -151,10 +151,15 @@ def fields_of(d: dict, where: str) -> np.ndarray:
         raise ValueError(f"{where}: fields must be a list of angles θy or of [θx, θy] pairs "
                          f"(deg), got an array of shape {out.shape}")
     if ftype is not None and FIELD_TYPES[ftype] not in (None, out.ndim):
-        form = "one value y per field" if FIELD_TYPES[ftype] == 1 else "[x, y] pairs"
+        heights = ftype.startswith("object_height")
+        one, pair = (("one object height y (mm)", "[x, y] pairs (mm)") if heights
+                     else ("one angle θy", "[θx, θy] pairs"))
+        form = f"{one} per field" if FIELD_TYPES[ftype] == 1 else pair
+        single = "single heights" if heights else "single angles"
+        pairs_type = "object_height_mm_xy" if heights else "angle_deg_xy"
         raise ValueError(f"{where}: fields.type {ftype!r} declares {form}, but fields.values "
-                         f"holds {'pairs' if out.ndim == 2 else 'single angles'} (shape "
-                         f"{out.shape}); make them agree (type \"angle_deg_xy\" for pairs)")
+                         f"holds {'pairs' if out.ndim == 2 else single} (shape "
+                         f"{out.shape}); make them agree (type \"{pairs_type}\" for pairs)")
     if np.unique(out, axis=0).shape[0] < out.shape[0]:
         # A warning, as for a repeated wavelength (Zemax takes it; a .zmx read with one
         # saves to a JSON that must load), but a typo weighs the field twice.

@@ -208,8 +208,8 @@ class ParaxialData(eqx.Module):
 def finite_pupil(lens: Lens, where: str) -> None:
     """Refuse an object-space telecentric lens (``Lens.object_na``), whose entrance pupil lies
     at infinity, in ``where``, which needs one at a finite distance (its position, or field
-    angles toward its centre)."""
-    if lens.telecentric_object:
+    angles toward its centre). Anything but a Lens passes, for its caller's type check."""
+    if isinstance(lens, Lens) and lens.telecentric_object:
         raise ValueError(
             f"{where}: the lens is object-space telecentric (Lens.object_na given): its "
             f"entrance pupil lies at infinity and its fields are object heights (mm), so "
