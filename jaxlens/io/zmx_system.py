@@ -294,12 +294,16 @@ def object_telecentric(ln) -> bool:
     Args:
         ln: the file's FTYP line (the reader's line object) or None.
     """
-    if ln is None or len(ln.tokens) <= 2:
+    return _ftyp_flag(ln, 2, "object-space telecentric flag (FTYP's second value)")
+
+
+def _ftyp_flag(ln, i: int, name: str) -> bool:
+    """FTYP's ``i``-th value as a 0/1 flag (False where the line or the value is absent)."""
+    if ln is None or len(ln.tokens) <= i:
         return False
-    flag = ln.int(2, "object-space telecentric flag (FTYP's second value)")
+    flag = ln.int(i, name)
     if flag not in (0, 1):
-        raise ln.error(f"the object-space telecentric flag (FTYP's second value) must be 0 or "
-                       f"1, got {flag}")
+        raise ln.error(f"the {name} must be 0 or 1, got {flag}")
     return flag == 1
 
 
@@ -427,13 +431,7 @@ def afocal_image_space(ln) -> bool:
     Args:
         ln: the file's FTYP line (the reader's line object) or None.
     """
-    if ln is None or len(ln.tokens) <= 7:
-        return False
-    flag = ln.int(7, "afocal image space flag (FTYP's seventh value)")
-    if flag not in (0, 1):
-        raise ln.error(f"the afocal image space flag (FTYP's seventh value) must be 0 or 1, "
-                       f"got {flag}")
-    return flag == 1
+    return _ftyp_flag(ln, 7, "afocal image space flag (FTYP's seventh value)")
 
 
 VIGNETTING_KEYS = ("VDXN", "VDYN", "VCXN", "VCYN", "VANN")
