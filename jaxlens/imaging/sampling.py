@@ -136,7 +136,9 @@ def pupil_polar(n_side: int, key=None, dtype=None, *, radius: float = 1.0 - 1e-4
 
 def pupil_samples(scheme: str, n: int, key=None, dtype=None) -> Float[Array, "m 2"]:
     """Pupil points by scheme name: "grid" (n per side), "hexapolar" (n rings),
-    "random" (n points) or "stratified" (n per side)."""
+    "random" (n points) or "stratified" (n per side). The last two draw with ``key``
+    (a ``jax.random`` key), ``PRNGKey(0)`` where none is given: the same points on every
+    call, so pass a key per call for independent draws."""
     if scheme == "grid":
         return pupil_grid(n, dtype)
     if scheme == "hexapolar":
