@@ -48,9 +48,10 @@ Two places where optiland's numbers are corrected here, each recorded beside the
   is not air the OPD of another wavelength is computed with that wavelength's index
   (``opd`` is with n(λ); ``opd_optiland_primary_index`` is optiland's own);
 - optiland's paraxial trace leaves the A2 (r²) term out, which moves the paraxial exit pupil
-  of the A2 lens (-5.12 mm from the image vertex instead of -13.57 mm). Its strategy's exit
-  pupil point is replaced by the independent y-nu trace's (``exit_pupil.optiland_xpl`` keeps
-  optiland's).
+  of the A2 lens (global z = -7.428 mm instead of -7.252 mm; this tool's y-nu trace with
+  A2 set to 0 gives optiland's value to 1e-15 mm). Its strategy's exit pupil point is
+  replaced by the independent y-nu trace's (``exit_pupil.optiland_z``, ``optiland_xpl``
+  and ``optiland_xpd`` keep optiland's).
 """
 
 from __future__ import annotations
