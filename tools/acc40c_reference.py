@@ -68,6 +68,8 @@ from optiland import optic as optic_mod
 from optiland.distribution import BaseDistribution, create_distribution
 from optiland.fileio import load_zemax_file
 from optiland.materials import Material
+from optiland.mtf import GeometricMTF
+from optiland.physical_apertures import RadialAperture
 from optiland.wavefront.strategy import create_strategy
 from optiland.zernike import ZernikeFit
 
@@ -76,13 +78,21 @@ sys.path.insert(0, str(ROOT / "tools"))
 import telecentric38a_reference as tele  # noqa: E402
 
 OUT = ROOT / "tests" / "data" / "acc40c_optiland.json"
+ZMX_DIR = ROOT / "tests" / "data" / "acc40c"
+SCALE = 20.0
 FAN = tuple(round(-1.0 + 0.2 * i, 10) for i in range(11))
 SKEW = ((0.6, 0.6), (-0.3, 0.7), (0.5, -0.8), (0.7071, 0.7071))
 POINTS = tuple((0.0, t) for t in FAN) + tuple((t, 0.0) for t in FAN) + SKEW
 GRID = 33
 ZERNIKE_TERMS = 15
-FREQS = (5.0, 10.0, 20.0, 40.0)
-MTF_GRID = 201
+MTF_CELLS = 64
+MTF_FREQS = {"tele_doublet_obna": (1.0, 2.0, 5.0, 10.0),
+             "tele_triplet_floa": (5.0, 10.0, 20.0, 50.0),
+             "virtual_singlet_angles": (0.25, 0.5, 1.0, 2.0),
+             "virtual_stop_behind": (0.1, 0.25, 0.5, 1.0),
+             "tele_doublet_x20": (0.5, 1.0, 2.0, 5.0),
+             "plastic_curved_immersed_image": (10.0, 25.0, 50.0, 100.0)}
+MTF_OVERFILL = 1.25
 NEWTON_TOL = 1e-15
 
 
@@ -109,6 +119,27 @@ def telecentric(name):
     r = ref["systems"][name]
     heights = [tuple(h) for h in r["object_heights"]]
     op = tele.build(s, r["object_na"], heights)
+    rmax = max(math.hypot(*h) for h in heights)
+    fields = [[hx / rmax, hy / rmax] for hx, hy in heights]
+    return op, fields, [list(h) for h in heights], "object heights (x, y), mm"
+
+
+def scaled_telecentric():
+    """tele_doublet_obna with every length times ``SCALE`` and NA 0.01: object heights of
+    100 mm and more, an (x, y) height off both axes. Written to tests/data/acc40c/ as a .zmx
+    file (tools/telecentric38a_reference.py's writer) for jaxlens to read."""
+    base = tele.SYSTEMS["tele_doublet_obna"]
+    s = dict(base, object_distance=base["object_distance"] * SCALE,
+             aperture=("OBNA", 0.01, 0), fields=[(0.0, 0.0), (0.0, 100.0), (60.0, 100.0)],
+             surfaces=[(c / SCALE, t * SCALE, g, stop, sd * SCALE)
+                       for c, t, g, stop, sd in base["surfaces"]])
+    ZMX_DIR.mkdir(parents=True, exist_ok=True)
+    text = tele.zmx_text("tele_doublet_x20", s).replace(
+        "Written by tools/telecentric38a_reference.py",
+        "Written by tools/acc40c_reference.py (tele_doublet_obna x 20, NA 0.01)")
+    (ZMX_DIR / "tele_doublet_x20.zmx").write_text(text, encoding="utf-8")
+    heights = s["fields"]
+    op = tele.build(s, 0.01, heights)
     rmax = max(math.hypot(*h) for h in heights)
     fields = [[hx / rmax, hy / rmax] for hx, hy in heights]
     return op, fields, [list(h) for h in heights], "object heights (x, y), mm"
@@ -245,25 +276,98 @@ def grid_stats(op, field, wl, xp_point):
             "tilt": plane.tolist(), "noll": noll.tolist()}
 
 
-def mtf_of(op, field):
-    from optiland.mtf import GeometricMTF
+class Cells(BaseDistribution):
+    """jaxlens's geometric-PSF pupil grid (``GeometricPSF(pupil=MTF_CELLS, overfill=
+    MTF_OVERFILL)``): cell centres of an n x n grid over [-1, 1]², kept inside the unit
+    disc, scaled by the overfill; the stop clips the overfilled beam."""
 
-    m = GeometricMTF(op, fields=[tuple(field)], wavelength="primary", num_rays=MTF_GRID,
-                     distribution="uniform", num_points=512, max_freq=max(FREQS) * 1.25,
+    def generate_points(self, num_points):
+        g = (np.arange(num_points) + 0.5) / num_points * 2.0 - 1.0
+        px, py = np.meshgrid(g, g, indexing="xy")
+        keep = px * px + py * py <= 1.0
+        self.x = px[keep] * MTF_OVERFILL
+        self.y = py[keep] * MTF_OVERFILL
+
+
+def ray_otf(op, field, heights, wl, freqs, stop, stop_r, finite):
+    """|OTF| of the ray set (no pixel grid, no diffraction): tangential along the field's
+    radial direction in the image (the object height's direction, or y on axis; the image
+    of a radial line is radial in a rotationally symmetric lens), sagittal perpendicular.
+    Each ray weighs cos⁴ of its launch direction for a finite object (a Lambertian point
+    source over the launch plane's equal-area cells), 1 for an object at infinity; rays
+    that miss the stop's circle of radius ``stop_r`` weigh 0."""
+    op.surface_group.surfaces[stop].aperture = RadialAperture(r_max=stop_r)
+    try:
+        dist = Cells()
+        dist.generate_points(MTF_CELLS)
+        rays = op.trace(*field, wl, None, dist)
+        alive = np.asarray(op.surface_group.intensity[-1]) > 0
+        launch = op.ray_tracer.ray_generator.generate_rays(*field, dist.x, dist.y, wl)
+    finally:
+        op.surface_group.surfaces[stop].aperture = None
+    w = np.where(alive, np.asarray(launch.N) ** 4 if finite else 1.0, 0.0)
+    pos = np.stack([np.ravel(rays.x), np.ravel(rays.y)], -1)
+    h = np.asarray(heights, float)
+    e_t = np.array([0.0, 1.0]) if not np.any(h) else h / np.linalg.norm(h)
+    e_s = np.array([e_t[1], -e_t[0]])
+    out = {"rays": int(alive.sum())}
+    for key, e in (("tangential", e_t), ("sagittal", e_s)):
+        proj = pos[alive] @ e
+        ph = np.exp(-2j * np.pi * np.asarray(freqs)[:, None] * proj[None, :])
+        out[key] = np.abs(ph @ w[alive] / w[alive].sum()).tolist()
+    return out
+
+
+def optiland_geometric_mtf(op, field, freqs):
+    """optiland's own GeometricMTF (its beam: the unit pupil on the paraxial entrance pupil,
+    no stop clipping; line spread from a 2048-bin histogram; tangential y, sagittal x),
+    for comparison only."""
+    m = GeometricMTF(op, fields=[tuple(field)], wavelength="primary", num_rays=201,
+                     distribution="uniform", num_points=2048, max_freq=max(freqs),
                      scale=False)
-    f = np.asarray(m.freq)
-    t = np.interp(FREQS, f, np.asarray(m.mtf[0][0]))
-    s = np.interp(FREQS, f, np.asarray(m.mtf[0][1]))
-    return {"tangential": t.tolist(), "sagittal": s.tolist()}
+    sd = m.data[0][0]
+    v = np.asarray(freqs, float)
+    return {"tangential": np.asarray(m._compute_field_data(sd.y, v, 1)).tolist(),
+            "sagittal": np.asarray(m._compute_field_data(sd.x, v, 1)).tolist()}
 
 
-def analyse(op, fields, jl_fields, kind, xp, xp_point, with_mtf):
+def ray_fan(op, field, wl):
+    """Image-surface (x, y) of the fan rays (0, t) and (t, 0), t in ``FAN``, minus the
+    chief ray's (mm, primary wavelength): optiland's ``trace_generic``."""
+    t = np.asarray(FAN)
+    z = np.zeros_like(t)
+    c = op.trace_generic(*field, 0.0, 0.0, wl)
+    c = np.array([float(np.ravel(c.x)[0]), float(np.ravel(c.y)[0])])
+    out = {}
+    for key, (px, py) in (("tangential", (z, t)), ("sagittal", (t, z))):
+        r = op.trace_generic(*field, px, py, wl)
+        out[key] = (np.stack([np.ravel(r.x), np.ravel(r.y)], -1) - c).tolist()
+    return out
+
+
+def working_fnum(op, rows=None):
+    """1/(2 n′u′) of the paraxial marginal ray in image space: optiland's marginal ray (air
+    image space), or for the A2 lens this tool's y-nu trace (n′u′ directly)."""
+    if rows is None:
+        _, u = op.paraxial.marginal_ray()
+        return 1.0 / (2.0 * abs(float(np.ravel(u[-1])[0])))
+    _, trace, _, _ = ynu_exit_pupil(rows, op.primary_wavelength * 1000.0)
+    _, nu, _ = trace(float(op.paraxial.EPD()) / 2, 0.0, 0)
+    return 1.0 / (2.0 * abs(nu))
+
+
+def analyse(op, fields, jl_fields, kind, xp, xp_point, freqs, rows=None):
     wls = [float(w.value) for w in op.wavelengths.wavelengths]
     prim = float(op.primary_wavelength)
     n_img = {w: float(np.ravel(op.surface_group.n(w))[-1]) for w in wls}
+    stop = int(op.surface_group.stop_index)
+    stop_r = abs(float(np.ravel(op.paraxial.marginal_ray()[0][stop])[0]))
+    finite = not op.object_surface.is_infinite
     res = {"field_kind": kind, "optiland_fields": fields, "jaxlens_fields": jl_fields,
            "wavelengths_um": wls, "primary_um": prim, "image_space_index": n_img,
-           "exit_pupil": xp, "fields": []}
+           "exit_pupil": xp, "working_fnum": working_fnum(op, rows),
+           "mtf_freqs_cyc_per_mm": list(freqs), "stop_surface": stop,
+           "stop_semi_diameter": stop_r, "fields": []}
     for f in fields:
         one = {"opd": {}, "opd_optiland_primary_index": {}}
         for w in wls:
@@ -274,9 +378,10 @@ def analyse(op, fields, jl_fields, kind, xp, xp_point, with_mtf):
             if n_img[w] != n_img[prim]:
                 d0 = wave_data(op, f, w, pts, xp_point, None)
                 one["opd_optiland_primary_index"][repr(w)] = np.asarray(d0.opd).tolist()
+        one["ray_fan"] = ray_fan(op, f, prim)
         one["grid"] = grid_stats(op, f, prim, xp_point)
-        if with_mtf:
-            one["mtf"] = mtf_of(op, f)
+        one["mtf"] = ray_otf(op, f, f, prim, freqs, stop, stop_r, finite)
+        one["optiland_geometric_mtf"] = optiland_geometric_mtf(op, f, freqs)
         res["fields"].append(one)
     return res
 
@@ -293,10 +398,16 @@ def main() -> None:
                "grid_note": "uniform grid linspace(-1, 1, GRID)² cut to Px²+Py² <= 1, equal "
                             "weights; rms/pv with the mean removed, *_tilt_removed with the "
                             "least-squares plane in (Px, Py) removed; Noll Zernike fit",
-               "zernike_terms": ZERNIKE_TERMS, "mtf_freqs_cyc_per_mm": list(FREQS),
-               "mtf_grid": MTF_GRID,
-               "mtf_note": "optiland GeometricMTF (spot line spread, uniform grid, no "
-                           "diffraction scaling), primary wavelength",
+               "zernike_terms": ZERNIKE_TERMS, "mtf_cells": MTF_CELLS,
+               "mtf_overfill": MTF_OVERFILL,
+               "mtf_note": "|OTF| of optiland's rays on jaxlens's geometric-PSF pupil grid "
+                           "(mtf_cells² cell centres in the disc, times mtf_overfill), the "
+                           "stop clipping at the paraxial marginal ray's height, cos⁴ "
+                           "launch weights for a finite object, primary wavelength, no "
+                           "diffraction factor; tangential along the field's radial "
+                           "direction. optiland_geometric_mtf: optiland's own "
+                           "GeometricMTF (unit pupil, no stop clipping, histogram), "
+                           "for comparison only",
                "image_index_note": "opd uses the image-space index at the wavelength "
                                    "analysed; opd_optiland_primary_index is optiland's own "
                                    "(primary index), stored where they differ"},
@@ -304,20 +415,23 @@ def main() -> None:
     for name in ("tele_doublet_obna", "tele_triplet_floa"):
         op, fields, jl, kind = telecentric(name)
         xp, pt = exit_pupil_of(op)
-        out["lenses"][name] = analyse(op, fields, jl, kind, xp, pt,
-                                      with_mtf=name == "tele_doublet_obna")
+        out["lenses"][name] = analyse(op, fields, jl, kind, xp, pt, MTF_FREQS[name])
         print(name, "done", flush=True)
+    op, fields, jl, kind = scaled_telecentric()
+    xp, pt = exit_pupil_of(op)
+    out["lenses"]["tele_doublet_x20"] = analyse(op, fields, jl, kind, xp, pt,
+                                                MTF_FREQS["tele_doublet_x20"])
+    print("tele_doublet_x20 done", flush=True)
     for name in ("virtual_singlet_angles", "virtual_stop_behind"):
         op, fields, jl, kind = virtual(name)
         xp, pt = exit_pupil_of(op)
-        out["lenses"][name] = analyse(op, fields, jl, kind, xp, pt,
-                                      with_mtf=name == "virtual_singlet_angles")
+        out["lenses"][name] = analyse(op, fields, jl, kind, xp, pt, MTF_FREQS[name])
         print(name, "done", flush=True)
+    name = "plastic_curved_immersed_image"
     op, fields, jl, kind, rows = immersed()
     xp, pt = exit_pupil_of(op, rows)
-    out["lenses"]["plastic_curved_immersed_image"] = analyse(op, fields, jl, kind, xp, pt,
-                                                             with_mtf=False)
-    print("immersed done", flush=True)
+    out["lenses"][name] = analyse(op, fields, jl, kind, xp, pt, MTF_FREQS[name], rows)
+    print(name, "done", flush=True)
     OUT.write_text(json.dumps(out, indent=1) + "\n")
 
 

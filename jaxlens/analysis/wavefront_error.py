@@ -79,6 +79,7 @@ import jax.numpy as jnp
 import numpy as np
 from jaxtyping import Array, ArrayLike, Bool, Float
 
+from ..imaging import telecentric
 from ..imaging.sampling import field_rays, lens_aim, lens_depth, pupil_points
 from ..optics import checks, paraxial
 from ..optics.coordinates import CoordinateBreak
@@ -138,9 +139,12 @@ def _common(lens, field, wavelength, depth, reference, aim, where: str):
                          f"(or None, the lens's own)")
     aim = lens_aim(lens, aim, where)
     dtype = lens.epd.dtype
-    f = jnp.asarray(checks.one_field(field, where), dtype)
-    if not checks.is_traced(field):  # 20° typed as 0.349 rad: as rms_spot and chief_ray do
-        checks.warn_if_radian_fields(field, where, "field")
+    if lens.telecentric_object:  # object heights (mm): no angle's range, no radians
+        f = jnp.asarray(telecentric.one_height(field, where), dtype)
+    else:
+        f = jnp.asarray(checks.one_field(field, where), dtype)
+        if not checks.is_traced(field):  # 20° typed as 0.349 rad: as rms_spot, chief_ray
+            checks.warn_if_radian_fields(field, where, "field")
     wl = lens.primary_wavelength if wavelength is None else wavelength
     checks.real_values(wl, "wavelength", where, "µm")
     if jnp.shape(wl) != ():
