@@ -318,6 +318,60 @@ def ray_otf(op, field, heights, wl, freqs, stop, stop_r, finite):
     return out
 
 
+def coherent_centre_strehl(op, field, wl, stop, stop_r, finite, h=1e-5):
+    """The coherent PSF's value at the chief ray's image point over the unaberrated peak,
+    by jaxlens's definition (``CoherentPSF``: the ray-based Debye integral) evaluated on
+    optiland's rays: |Σ a_j exp(iψ_j)|² / (Σ a_j)², over jaxlens's pupil grid (``Cells``,
+    the stop clipping at ``stop_r``), ψ_j = k (OPL_j − n′ (L_j, M_j)·((x_j, y_j) − c)), c
+    the chief ray's (x, y) on the image surface (primary wavelength, unclipped), OPL_j from
+    the object point (finite object) or from the plane wave through the origin (object at
+    infinity: optiland's path from the launch point o_j plus n₀ d_j·o_j), a_j =
+    sqrt(w_j |∂(L, M)/∂(Px, Py)|), w_j as in ``ray_otf``, the Jacobian by central
+    differences (step ``h``) of optiland's image-space direction cosines."""
+    dist = Cells()
+    dist.generate_points(MTF_CELLS)
+    px, py = np.asarray(dist.x), np.asarray(dist.y)
+
+    class At(BaseDistribution):
+        def __init__(self, x, y):
+            self.x, self.y = x, y
+
+        def generate_points(self, num_points):
+            pass
+
+    def lm(x, y):
+        r = op.trace(*field, wl, None, At(x, y))
+        return np.ravel(r.L), np.ravel(r.M)
+
+    op.surface_group.surfaces[stop].aperture = RadialAperture(r_max=stop_r)
+    try:
+        rays = op.trace(*field, wl, None, At(px, py))
+        alive = np.asarray(op.surface_group.intensity[-1]) > 0
+    finally:
+        op.surface_group.surfaces[stop].aperture = None
+    launch = op.ray_tracer.ray_generator.generate_rays(*field, px, py, wl)
+    lx1, mx1 = lm(px + h, py)
+    lx0, mx0 = lm(px - h, py)
+    ly1, my1 = lm(px, py + h)
+    ly0, my0 = lm(px, py - h)
+    det = np.abs((lx1 - lx0) * (my1 - my0) - (mx1 - mx0) * (ly1 - ly0)) / (4 * h * h)
+    w = np.where(alive, np.asarray(launch.N) ** 4 if finite else 1.0, 0.0)
+    a = np.sqrt(w * det)
+    opl = np.ravel(rays.opd)
+    if not finite:
+        n0 = float(np.ravel(op.surface_group.surfaces[0].material_post.n(wl))[0])
+        opl = opl + n0 * (np.asarray(launch.L) * np.asarray(launch.x) + np.asarray(launch.M)
+                          * np.asarray(launch.y) + np.asarray(launch.N) * np.asarray(launch.z))
+    c = op.trace_generic(*field, 0.0, 0.0, op.primary_wavelength)
+    cx, cy = float(np.ravel(c.x)[0]), float(np.ravel(c.y)[0])
+    n_img = float(np.ravel(op.surface_group.n(wl))[-1])
+    psi = 2 * np.pi / (wl * 1e-3) * (opl - n_img * (np.ravel(rays.L) * (np.ravel(rays.x) - cx)
+                                                     + np.ravel(rays.M) * (np.ravel(rays.y) - cy)))
+    psi = psi - psi[alive][0]  # a common phase: large paths kept accurate in the exponent
+    u = np.sum(np.where(alive, a * np.exp(1j * psi), 0.0))
+    return float(np.abs(u) ** 2 / np.sum(a) ** 2)
+
+
 def optiland_geometric_mtf(op, field, freqs):
     """optiland's own GeometricMTF (its beam: the unit pupil on the paraxial entrance pupil,
     no stop clipping; line spread from a 2048-bin histogram; tangential y, sagittal x),
@@ -356,7 +410,7 @@ def working_fnum(op, rows=None):
     return 1.0 / (2.0 * abs(nu))
 
 
-def analyse(op, fields, jl_fields, kind, xp, xp_point, freqs, rows=None):
+def analyse(op, fields, jl_fields, kind, xp, xp_point, freqs, rows=None, strehl_fields=None):
     wls = [float(w.value) for w in op.wavelengths.wavelengths]
     prim = float(op.primary_wavelength)
     n_img = {w: float(np.ravel(op.surface_group.n(w))[-1]) for w in wls}
@@ -382,6 +436,9 @@ def analyse(op, fields, jl_fields, kind, xp, xp_point, freqs, rows=None):
         one["grid"] = grid_stats(op, f, prim, xp_point)
         one["mtf"] = ray_otf(op, f, f, prim, freqs, stop, stop_r, finite)
         one["optiland_geometric_mtf"] = optiland_geometric_mtf(op, f, freqs)
+        if strehl_fields is not None and len(res["fields"]) in strehl_fields:
+            one["coherent_centre_strehl"] = coherent_centre_strehl(op, f, prim, stop, stop_r,
+                                                                   finite)
         res["fields"].append(one)
     return res
 
@@ -420,7 +477,8 @@ def main() -> None:
     op, fields, jl, kind = scaled_telecentric()
     xp, pt = exit_pupil_of(op)
     out["lenses"]["tele_doublet_x20"] = analyse(op, fields, jl, kind, xp, pt,
-                                                MTF_FREQS["tele_doublet_x20"])
+                                                MTF_FREQS["tele_doublet_x20"],
+                                                strehl_fields=(0, 1, 2))
     print("tele_doublet_x20 done", flush=True)
     for name in ("virtual_singlet_angles", "virtual_stop_behind"):
         op, fields, jl, kind = virtual(name)
@@ -430,7 +488,8 @@ def main() -> None:
     name = "plastic_curved_immersed_image"
     op, fields, jl, kind, rows = immersed()
     xp, pt = exit_pupil_of(op, rows)
-    out["lenses"][name] = analyse(op, fields, jl, kind, xp, pt, MTF_FREQS[name], rows)
+    out["lenses"][name] = analyse(op, fields, jl, kind, xp, pt, MTF_FREQS[name], rows,
+                                  strehl_fields=(0, 1))
     print(name, "done", flush=True)
     OUT.write_text(json.dumps(out, indent=1) + "\n")
 
