@@ -37,8 +37,8 @@ Definitions checked here, and where optiland is not followed:
   wavelength for every wavelength; the reference file stores OPD with n′(λ) (optiland's
   reference sphere and rays, the index set per wavelength) and optiland's own
   (``opd_optiland_primary_index``): jaxlens equals the first, and the second differs by up
-  to 0.05 wave at the F and C lines here, which the test also asserts (a real difference,
-  not noise).
+  to 1.55 waves at the F line and 0.45 at the C line here (30°), which the test also
+  asserts (a real difference, not noise).
 - A2 (r²) terms: optiland's paraxial trace leaves them out, which puts the immersed lens's
   paraxial exit pupil at z = -7.428 mm instead of -7.252 mm (diameter 3.649 against 3.571
   mm). The reference uses an independent y-nu trace with paraxial curvature c + 2·A2
@@ -180,7 +180,7 @@ def test_non_air_image_space_uses_the_index_at_each_wavelength():
         assert set(fr["opd_optiland_primary_index"]) == set(fr["opd"]) - {prim}
         for w, raw in fr["opd_optiland_primary_index"].items():
             worst = max(worst, float(np.max(np.abs(np.subtract(raw, fr["opd"][w])))))
-    assert worst > 1e-3, worst
+    assert worst > 1.0, worst
 
 
 @pytest.mark.parametrize("name", [pytest.param(

@@ -13,6 +13,9 @@ writes tests/data/acc40c_optiland.json. The lenses:
   files, built through optiland's own telecentric API exactly as
   tools/telecentric38a_reference.py builds them (its ``build``; the NA and object heights
   are that tool's, stored in tests/data/zmx38a_optiland.json);
+- ``tele_doublet_x20``: tele_doublet_obna with every length times 20 and NA 0.01, object
+  heights (0, 0), (0, 100) and (60, 100) mm (heights past 90 mm, one off both axes), written
+  here to tests/data/acc40c/tele_doublet_x20.zmx;
 - ``virtual_singlet_angles``, ``virtual_stop_behind``: tests/data/zmx_corpus7's
   virtual-object files (negative object thickness), read by optiland's .zmx reader as
   tools/corpus7_reference.py reads them;
@@ -35,10 +38,17 @@ wavefront is ahead of the sphere; the chief ray traced at the wavelength analyse
   with the least-squares plane a + b·Px + c·Py removed, the number of points, 15 Noll
   Zernike terms (``optiland.zernike.ZernikeFit``), at the primary wavelength;
 - ``exit_pupil``: the paraxial exit pupil's global z and diameter (optiland's XPL, XPD; for
-  the A2 lens an independent y-nu trace with paraxial curvature c + 2·A2, see below);
-- ``mtf``: optiland's geometric MTF (``GeometricMTF``, its spot diagram's line spread, a
-  uniform grid of ``MTF_GRID`` rays per side) at ``FREQS`` cycles/mm, tangential and
-  sagittal, at the primary wavelength, for the telecentric doublet and the virtual singlet.
+  the A2 lens an independent y-nu trace with paraxial curvature c + 2·A2, see below); the
+  working F/# 1/(2 n′u′) and the paraxial marginal ray's height at the stop;
+- ``ray_fan``: image-surface (x, y) of the fan rays minus the chief ray's (primary);
+- ``mtf``: the |OTF| of optiland's rays (``ray_otf``) on jaxlens's geometric-PSF pupil grid,
+  the stop clipping the overfilled beam at the paraxial marginal ray's height (jaxlens's
+  definition of the beam, ``imaging.aiming.apertured``), at ``MTF_FREQS`` cycles/mm;
+  ``optiland_geometric_mtf`` is optiland's own GeometricMTF (its unit-pupil beam, histogram
+  line spread), for comparison only;
+- ``coherent_centre_strehl`` (x20 doublet, immersed lens): the coherent PSF at the chief
+  ray's image point over the unaberrated peak by jaxlens's ray-based Debye sum on optiland's
+  rays (``coherent_centre_strehl``).
 
 Two places where optiland's numbers are corrected here, each recorded beside the raw one:
 

@@ -3,8 +3,10 @@ wavefront map with its RMS and peak-to-valley, Zernike fits, Maréchal's Strehl 
 OPD fans.
 
 Conventions (optiland's "chief_ray" reference, Zemax's definition of the reference sphere):
-    Lengths in mm, wavelengths in µm, field angles in degrees (θy, or (θx, θy)); OPD in
-    waves at the wavelength traced. Pupil points (Px, Py) are normalised to the paraxial
+    Lengths in mm, wavelengths in µm, field angles in degrees (θy, or (θx, θy)); for an
+    object-space telecentric lens (``Lens.object_na``) a field is an object height in mm,
+    y or (x, y), checked as a height (no angle range). OPD in waves at the wavelength
+    traced. Pupil points (Px, Py) are normalised to the paraxial
     entrance pupil (the unit disc), launched as ``jaxlens.imaging.sampling.field_rays``
     launches them (``aim="paraxial"``: through (Px, Py)·EPD/2 on the paraxial
     entrance-pupil plane; ``aim="real"``/``"real_marginal"``: through (Px, Py)·(stop

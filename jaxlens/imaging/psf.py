@@ -720,7 +720,8 @@ def mtf(
 
     Args:
         lens: the lens.
-        field: field angle in degrees, θy or (θx, θy).
+        field: field angle in degrees, θy or (θx, θy); an object height in mm, y or
+            (x, y), for an object-space telecentric lens (tangential along the height).
         wavelengths: µm, ``[W]``; default ``lens.wavelengths``.
         depth: object distance in mm (``inf`` for infinity); None (default) for the
             lens's own object.
