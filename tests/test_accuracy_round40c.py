@@ -69,6 +69,7 @@ import pytest
 
 import jaxlens as jl
 from jaxlens.analysis.aberrations import ray_fan
+from jaxlens.analysis.encircled import encircled_energy
 from jaxlens.analysis.wavefront_error import marechal_strehl, opd, opd_fan, wavefront
 from jaxlens.imaging.otf import mtf_directions
 from jaxlens.imaging.psf import CoherentPSF, mtf, psf_info
@@ -265,3 +266,14 @@ def test_coherent_psf_strehl_matches(name):
         k = np.asarray(info.psf)
         centre = float(info.strehl) * k[1, 1] / k.max()
         assert abs(centre - fr["coherent_centre_strehl"]) < 1e-8, (f, centre)
+
+
+def test_encircled_energy_on_telecentric_heights():
+    """Geometric encircled energy of the rays through the reference's 26 pupil points (equal
+    energy each) about their centroid, the x20 doublet at heights up to (60, 100) mm (refused
+    as angles before): the fractions at radii half-way between ray distances, exactly."""
+    r = REF["lenses"]["tele_doublet_x20"]
+    lens = _load("tele_doublet_x20")
+    for f, fr in zip(r["jaxlens_fields"], r["fields"], strict=True):
+        ee = encircled_energy(lens, f, fr["encircled"]["radii"], pupil=POINTS)
+        np.testing.assert_array_equal(np.asarray(ee.energy), fr["encircled"]["energy"])

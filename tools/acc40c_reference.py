@@ -48,7 +48,8 @@ wavefront is ahead of the sphere; the chief ray traced at the wavelength analyse
   line spread), for comparison only;
 - ``coherent_centre_strehl`` (x20 doublet, immersed lens): the coherent PSF at the chief
   ray's image point over the unaberrated peak by jaxlens's ray-based Debye sum on optiland's
-  rays (``coherent_centre_strehl``).
+  rays (``coherent_centre_strehl``), and the geometric encircled energy of the rays
+  through ``POINTS`` about their centroid (``encircled``).
 
 Two places where optiland's numbers are corrected here, each recorded beside the raw one:
 
@@ -409,6 +410,22 @@ def ray_fan(op, field, wl):
     return out
 
 
+def encircled(op, field, wl):
+    """Geometric encircled energy of the rays through ``POINTS`` (equal energy each) about
+    their centroid, primary wavelength: radii half-way between consecutive distances, at or
+    after the 6th/7th, 13th/14th and 21st/22nd smallest, where they differ by more than 1e-6
+    of the largest (no ray near a radius), and the fraction within each."""
+    pts = Points()
+    pts.generate_points(0)
+    r = op.trace(*field, wl, None, pts)
+    xy = np.stack([np.ravel(r.x), np.ravel(r.y)], -1)
+    d = np.sort(np.linalg.norm(xy - xy.mean(0), axis=-1))
+    gap = 1e-6 * d[-1]  # distances closer than this (mirror-image rays) are not split
+    ks = [next(j for j in range(k, len(d)) if d[j] - d[j - 1] > gap) for k in (6, 13, 21)]
+    radii = [(d[k - 1] + d[k]) / 2 for k in ks]
+    return {"radii": radii, "energy": [float(np.mean(d <= x)) for x in radii]}
+
+
 def working_fnum(op, rows=None):
     """1/(2 n′u′) of the paraxial marginal ray in image space: optiland's marginal ray (air
     image space), or for the A2 lens this tool's y-nu trace (n′u′ directly)."""
@@ -449,6 +466,7 @@ def analyse(op, fields, jl_fields, kind, xp, xp_point, freqs, rows=None, strehl_
         if strehl_fields is not None and len(res["fields"]) in strehl_fields:
             one["coherent_centre_strehl"] = coherent_centre_strehl(op, f, prim, stop, stop_r,
                                                                    finite)
+            one["encircled"] = encircled(op, f, prim)
         res["fields"].append(one)
     return res
 
