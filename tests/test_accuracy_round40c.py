@@ -52,7 +52,7 @@ Definitions checked here, and where optiland is not followed:
 
 Fixed (an object-space telecentric lens's fields are object heights in mm, and the wavefront
 and PSF entry points checked them as angles): ``opd``, ``wavefront``, ``opd_fan``, ``psf``,
-``psf_info``, ``mtf`` and ``ray_fan`` refused a height of 90 mm or more ("field must be finite
+``psf_info``, ``mtf``, ``ray_fan``, ``encircled_energy`` and ``plot_wavefront`` refused a height of 90 mm or more ("field must be finite
 angles in (-90, 90) deg") and warned of radians for heights such as 0.349 mm; ``mtf`` took
 the tangential direction along (tan x°, tan y°), 0.03° off for a height of (2, -4) mm (its
 MTF off by 5.7e-5) and reversed in x past 90 mm. They now check an object height as
@@ -74,6 +74,7 @@ from jaxlens.analysis.wavefront_error import marechal_strehl, opd, opd_fan, wave
 from jaxlens.imaging.otf import mtf_directions
 from jaxlens.imaging.psf import CoherentPSF, mtf, psf_info
 from jaxlens.optics import paraxial
+from jaxlens.plot import plot_opd_fans, plot_wavefront
 
 jax.config.update("jax_enable_x64", True)
 
@@ -239,6 +240,10 @@ def test_telecentric_heights_are_not_angles():
             assert np.isfinite(np.asarray(opd(lens, h, np.zeros((1, 2))))).all()
             ray_fan(lens, h, n=3)
             psf_info(lens, h, pixel_size=0.05, kernel_size=15)
+        fig = plot_wavefront(lens, [60.0, 100.0], grid=9)
+        assert "(60.0 mm, 100.0 mm)" in fig.axes[0].get_title()  # not degrees
+        fig = plot_opd_fans(lens, [100.0], n=5)
+        assert "100.0 mm" in fig.axes[0].get_title()
     e_t, e_s = mtf_directions(np.array([2.0, -4.0]), object_heights=True)
     np.testing.assert_allclose(np.asarray(e_t), np.array([2.0, -4.0]) / np.sqrt(20.0),
                                rtol=0, atol=1e-15)
