@@ -52,11 +52,13 @@ Definitions checked here, and where optiland is not followed:
 
 Fixed (an object-space telecentric lens's fields are object heights in mm, and the wavefront
 and PSF entry points checked them as angles): ``opd``, ``wavefront``, ``opd_fan``, ``psf``,
-``psf_info``, ``mtf``, ``ray_fan``, ``encircled_energy`` and ``plot_wavefront`` refused a height of 90 mm or more ("field must be finite
-angles in (-90, 90) deg") and warned of radians for heights such as 0.349 mm; ``mtf`` took
-the tangential direction along (tan x°, tan y°), 0.03° off for a height of (2, -4) mm (its
-MTF off by 5.7e-5) and reversed in x past 90 mm. They now check an object height as
-``sampling.field_rays`` does, and the MTF directions follow the height itself.
+``psf_info``, ``mtf``, ``ray_fan``, ``encircled_energy``, ``plot_wavefront`` and
+``plot_opd_fans`` refused a height of 90 mm or more ("field must be finite angles in (-90,
+90) deg") and warned of radians for heights such as 0.349 mm; ``mtf`` took the tangential
+direction along (tan x°, tan y°), 0.03° off for a height of (2, -4) mm (its MTF off by
+5.7e-5) and reversed in x past 90 mm; the plots labelled heights in degrees. They now check
+an object height as ``sampling.field_rays`` does, the MTF directions follow the height
+itself, and the plots label it in mm.
 """
 
 import json
