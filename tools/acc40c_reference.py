@@ -19,6 +19,8 @@ writes tests/data/acc40c_optiland.json. The lenses:
 - ``virtual_singlet_angles``, ``virtual_stop_behind``: tests/data/zmx_corpus7's
   virtual-object files (negative object thickness), read by optiland's .zmx reader as
   tools/corpus7_reference.py reads them;
+- ``virtual_stop_behind_aimed``: the same with real ray aiming (optiland's iterative aiming,
+  jaxlens's ``aim="real_marginal"``): OPD and grid statistics only;
 - ``plastic_curved_immersed_image``: tests/refcases_extra's case (E48R even aspheres with
   conics and A2..A12, an N-SF11 element in contact with an image surface of R = 12 mm), built
   from the case file with optiland's catalogue glasses the file names. The image surface's
@@ -513,6 +515,24 @@ def main() -> None:
         xp, pt = exit_pupil_of(op)
         out["lenses"][name] = analyse(op, fields, jl, kind, xp, pt, MTF_FREQS[name])
         print(name, "done", flush=True)
+    # Real ray aiming with a virtual object: optiland's iterative aiming fills the real
+    # stop with the real marginal ray (jaxlens's aim="real_marginal"; tools/corpus7_reference
+    # aims the same file the same way). OPD and grid statistics only.
+    op, fields, jl, kind = virtual("virtual_stop_behind_aimed")
+    op.ray_tracer.set_aiming("iterative", max_iter=50, tol=1e-13)
+    xp, pt = exit_pupil_of(op)
+    prim = float(op.primary_wavelength)
+    res = {"field_kind": kind, "optiland_fields": fields, "jaxlens_fields": jl,
+           "jaxlens_aim": "real_marginal", "wavelengths_um": [prim], "primary_um": prim,
+           "exit_pupil": xp, "fields": []}
+    for f in fields:
+        pts = Points()
+        pts.generate_points(0)
+        d = wave_data(op, f, prim, pts, pt, None)
+        res["fields"].append({"opd": {repr(prim): np.asarray(d.opd).tolist()},
+                              "grid": grid_stats(op, f, prim, pt)})
+    out["lenses"]["virtual_stop_behind_aimed"] = res
+    print("virtual_stop_behind_aimed done", flush=True)
     name = "plastic_curved_immersed_image"
     op, fields, jl, kind, rows = immersed()
     xp, pt = exit_pupil_of(op, rows)
