@@ -65,8 +65,11 @@ def _default_fields(lens, fractions) -> list:
     return sorted({float(a) * fmax for a in fractions})
 
 
-def _field_label(f) -> str:
-    return f"{f:.1f}°" if np.ndim(f) == 0 else f"({f[0]:.1f}°, {f[1]:.1f}°)"
+def _field_label(f, lens=None) -> str:
+    """A field for a legend: degrees, or mm for an object-space telecentric lens's object
+    heights."""
+    u = " mm" if getattr(lens, "telecentric_object", False) else "°"
+    return f"{f:.1f}{u}" if np.ndim(f) == 0 else f"({f[0]:.1f}{u}, {f[1]:.1f}{u})"
 
 
 def _profile(surface, r):
@@ -164,7 +167,7 @@ def plot_layout(lens, fields: Sequence[float] | None = None, *, n_rays: int = 9,
         for j in range(n_rays):
             ax.plot(zz[:, j], ys[:, j], color=color, lw=0.6, alpha=0.9 if valid[j] else 0.25,
                     ls="-" if valid[j] else ":")
-        ax.plot([], [], color=color, lw=1, label=_field_label(f))
+        ax.plot([], [], color=color, lw=1, label=_field_label(f, lens))
     # Surfaces and element edges (coordinate breaks are not drawn).
     n_air = [float(np.asarray(m.extrapolated_index(0.5875618))) for m in lens.materials]
 
@@ -252,7 +255,7 @@ def plot_spots(lens, fields: Sequence[float] | None = None, *, wavelengths=None,
         ax.set_xlim(-lim, lim)
         ax.set_ylim(-lim, lim)
         ax.set_aspect("equal")
-        ax.set_title(f"{_field_label(f)}  RMS {rms:.2f} µm", fontsize=8)
+        ax.set_title(f"{_field_label(f, lens)}  RMS {rms:.2f} µm", fontsize=8)
         ax.tick_params(labelsize=7)
         if k == 0:
             ax.set_ylabel("µm")
@@ -317,11 +320,11 @@ def plot_mtf(lens, fields: Sequence[float] | None = None, *, frequencies=None,
         try:
             res = mtf(lens, f, frequencies=frequencies)
         except NoLightError:  # a field without light has no MTF (it was drawn as 0)
-            ax.plot([], [], color=c, ls=":", label=f"{_field_label(f)}: no light")
+            ax.plot([], [], color=c, ls=":", label=f"{_field_label(f, lens)}: no light")
             continue
         freq, tan, sag = (np.asarray(x) for x in _mtf_parts(res))
-        ax.plot(freq, tan, color=c, label=f"{_field_label(f)} T")
-        ax.plot(freq, sag, color=c, ls="--", label=f"{_field_label(f)} S")
+        ax.plot(freq, tan, color=c, label=f"{_field_label(f, lens)} T")
+        ax.plot(freq, sag, color=c, ls="--", label=f"{_field_label(f, lens)} S")
     ax.set_ylim(0, 1.02)
     ax.set_xlabel("spatial frequency (cycles/mm)")
     ax.set_ylabel("MTF")
@@ -356,10 +359,10 @@ def plot_ray_fans(lens, fields: Sequence[float] | None = None, *, wavelengths=No
                for r in fans if bool(np.any(r.valid_tangential) or np.any(r.valid_sagittal))]
               + [1e-6]) * 1e3 * 1.05
     return _fan_grid(fields, fans, lim, 1e3, ("e_y (µm)", "e_x (µm)"),
-                     title or "ray fans (transverse error against the primary chief ray)")
+                     title or "ray fans (transverse error against the primary chief ray)", lens)
 
 
-def _fan_grid(fields, fans, lim, scale, ylabels, title) -> Figure:
+def _fan_grid(fields, fans, lim, scale, ylabels, title, lens=None) -> Figure:
     """A row per field, the tangential fan against Py on the left and the sagittal against
     Px on the right, a line per wavelength (``fans[k].tangential``/``.sagittal`` ``[W, n]``
     times ``scale``, on ``fans[k].pupil``); shared by the ray and OPD fan figures."""
@@ -376,7 +379,7 @@ def _fan_grid(fields, fans, lim, scale, ylabels, title) -> Figure:
             ax.axhline(0, color="k", lw=0.4)
             ax.set_ylim(-lim, lim)
             ax.tick_params(labelsize=7)
-            ax.set_title(f"{_field_label(f)} {name}", fontsize=8)
+            ax.set_title(f"{_field_label(f, lens)} {name}", fontsize=8)
             ax.set_ylabel(ylabels[j], fontsize=7)
             if k == len(fields) - 1:
                 ax.set_xlabel("Py" if j == 0 else "Px", fontsize=7)
@@ -534,15 +537,24 @@ def _checked_fields(lens, fields, fractions, where: str) -> list:
     if not fields:
         raise ValueError(f"{where}: fields must hold at least one field (θy or (θx, θy) in "
                          f"degrees), got none")
-    checks.field_angles(fields, where, "fields")  # here, not after some fields are traced
+    if getattr(lens, "telecentric_object", False):  # object heights (mm), no angle range
+        checks.values(np.asarray(fields, float), "fields (object heights of an object-space "
+                      "telecentric lens)", where, unit="mm")
+    else:
+        checks.field_angles(fields, where, "fields")  # here, not after fields are traced
     return fields
 
 
-def _one_field(field, where: str):
-    """One field θy or (θx, θy) in degrees, checked before any tracing, as Python floats."""
+def _one_field(field, where: str, lens=None):
+    """One field θy or (θx, θy) in degrees (an object height y or (x, y) in mm for an
+    object-space telecentric ``lens``), checked before any tracing, as Python floats."""
+    from .imaging import telecentric
     from .optics import checks
 
-    field = np.asarray(checks.one_field(field, where))
+    if getattr(lens, "telecentric_object", False):
+        field = np.asarray(telecentric.one_height(field, where))
+    else:
+        field = np.asarray(checks.one_field(field, where))
     return float(field) if field.ndim == 0 else tuple(map(float, field))
 
 
@@ -557,7 +569,8 @@ def plot_wavefront(lens, field=None, *, wavelength=None, grid: int = 65,
 
     Args:
         lens: the lens.
-        field: θy or (θx, θy) in degrees; default the lens's largest field.
+        field: θy or (θx, θy) in degrees (an object height in mm, y or (x, y), for an
+            object-space telecentric lens); default the lens's largest field.
         wavelength: µm; default the primary wavelength.
         grid: pupil samples per side (odd keeps the chief ray on the grid).
         title: first line of the title (the statistics follow below it).
@@ -567,7 +580,7 @@ def plot_wavefront(lens, field=None, *, wavelength=None, grid: int = 65,
     from .analysis.wavefront_error import MARECHAL_MAX_RMS, wavefront
 
     lens = lens.astype(jnp.float64)
-    field = _largest_field(lens) if field is None else _one_field(field, "plot_wavefront")
+    field = _largest_field(lens) if field is None else _one_field(field, "plot_wavefront", lens)
     # Fields go to the analyses as arrays: a (θx, θy) tuple makes jnp.shape warn there.
     wf = wavefront(lens, np.asarray(field), wavelength=wavelength, grid=grid)
     m, valid, p = np.asarray(wf.map), np.asarray(wf.valid), np.asarray(wf.pupil)
@@ -590,7 +603,7 @@ def plot_wavefront(lens, field=None, *, wavelength=None, grid: int = 65,
         stats += (f"Strehl {float(wf.strehl):.3f} (Maréchal)" if sigma <= MARECHAL_MAX_RMS
                   else f"no Strehl: RMS tilt removed {sigma:.3f} > {MARECHAL_MAX_RMS:g} wave "
                        f"(Maréchal)")
-    ax.set_title(f"{title or f'wavefront map, {_field_label(field)}'}\n{stats}", fontsize=8)
+    ax.set_title(f"{title or f'wavefront map, {_field_label(field, lens)}'}\n{stats}", fontsize=8)
     return fig
 
 
@@ -612,7 +625,7 @@ def plot_opd_fans(lens, fields: Sequence[float] | None = None, *, wavelengths=No
     vals = vals[np.isfinite(vals)]
     lim = max(float(np.max(np.abs(vals))) if vals.size else 0.0, 1e-6) * 1.05
     return _fan_grid(fields, fans, lim, 1.0, ("OPD (waves)", "OPD (waves)"),
-                     title or "OPD fans (waves at each wavelength, against its chief ray)")
+                     title or "OPD fans (waves at each wavelength, against its chief ray)", lens)
 
 
 def plot_seidel(lens, *, title: str | None = None) -> Figure:
@@ -695,7 +708,7 @@ def plot_encircled_energy(lens, fields: Sequence[float] | None = None, *,
         c = _FIELD_COLORS[i % len(_FIELD_COLORS)]
         ee = np.asarray(energy_within(s, jnp.asarray(radii)).energy)
         d80 = f"D80 {2e3 * r:.2f} µm" if np.isfinite(r) else "no light"
-        ax.plot(radii * 1e3, ee, color=c, lw=1, label=f"{_field_label(f)}: {d80}")
+        ax.plot(radii * 1e3, ee, color=c, lw=1, label=f"{_field_label(f, lens)}: {d80}")
         ax.plot([r * 1e3, r * 1e3], [0.0, 0.8], color=c, ls=":", lw=1)
     ax.axhline(0.8, color="k", lw=0.4)
     ax.set_xlim(0, max_radius)

@@ -47,6 +47,7 @@ import jax.numpy as jnp
 import numpy as np
 from jaxtyping import Array, Bool, Float
 
+from ..imaging import telecentric
 from ..imaging.sampling import field_rays, lens_aim, lens_depth
 from ..optics import checks, paraxial
 from ..optics.lens import Lens
@@ -136,7 +137,10 @@ def ray_fan(lens: Lens, field, wavelengths=None, *, n: int = FAN_POINTS, depth=N
         chief ray does not) are NaN, with the validity flags beside them.
     """
     checks.focal_image(lens, "ray_fan")
-    checks.one_field(field, "ray_fan")
+    if isinstance(lens, Lens) and lens.telecentric_object:  # a height (mm), not an angle
+        telecentric.one_height(field, "ray_fan")
+    else:
+        checks.one_field(field, "ray_fan")
     shape = np.shape(field)
     f, wl = _inputs(lens, "ray_fan", jnp.reshape(jnp.asarray(field, float), (-1,)),
                     wavelengths, arg="field")

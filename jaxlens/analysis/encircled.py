@@ -1,8 +1,9 @@
 """Encircled and ensquared energy: the fraction of a point image's energy within a radius.
 
 Conventions:
-    Lengths in mm (radii, the reference point), field angles in degrees (θy or (θx, θy)),
-    wavelengths in µm. ``shape="circle"`` counts the energy within distance r of the
+    Lengths in mm (radii, the reference point), field angles in degrees (θy or (θx, θy);
+    object heights in mm, y or (x, y), for an object-space telecentric lens), wavelengths
+    in µm. ``shape="circle"`` counts the energy within distance r of the
     reference point (encircled energy); ``shape="square"`` within the square of half-width r
     centred on it, sides along x and y (ensquared energy). ``radius_for_fraction`` is the
     inverse: the r that holds a given fraction (0.8 gives the D80 radius; the diameter is
@@ -53,6 +54,7 @@ import jax.numpy as jnp
 import numpy as np
 from jaxtyping import Array, Float
 
+from ..imaging import telecentric
 from ..imaging.psf import CoherentPSF, psf_info
 from ..imaging.sampling import pupil_points, pupil_polar
 from ..optics import checks, paraxial
@@ -117,8 +119,11 @@ def _check_common(lens, where, field, wavelength, method, reference, shape):
                                 ("shape", shape, SHAPES)):
         if value not in allowed:
             raise ValueError(f"{where}: {arg} must be one of {allowed}, got {value!r}")
-    field = checks.one_field(field, where)
-    checks.warn_if_radian_fields(field, where, "field")  # here: the inner traces are quiet
+    if lens.telecentric_object:  # an object height (mm): no angle range, no radians
+        field = telecentric.one_height(field, where)
+    else:
+        field = checks.one_field(field, where)
+        checks.warn_if_radian_fields(field, where, "field")  # here: inner traces are quiet
     wl = lens.primary_wavelength if wavelength is None else wavelength
     if jnp.ndim(wl) > 1 or jnp.size(wl) == 0:
         raise ValueError(f"{where}: wavelength must be a scalar or [W] µm with W >= 1, got "

@@ -3,8 +3,10 @@ wavefront map with its RMS and peak-to-valley, Zernike fits, Maréchal's Strehl 
 OPD fans.
 
 Conventions (optiland's "chief_ray" reference, Zemax's definition of the reference sphere):
-    Lengths in mm, wavelengths in µm, field angles in degrees (θy, or (θx, θy)); OPD in
-    waves at the wavelength traced. Pupil points (Px, Py) are normalised to the paraxial
+    Lengths in mm, wavelengths in µm, field angles in degrees (θy, or (θx, θy)); for an
+    object-space telecentric lens (``Lens.object_na``) a field is an object height in mm,
+    y or (x, y), checked as a height (no angle range). OPD in waves at the wavelength
+    traced. Pupil points (Px, Py) are normalised to the paraxial
     entrance pupil (the unit disc), launched as ``jaxlens.imaging.sampling.field_rays``
     launches them (``aim="paraxial"``: through (Px, Py)·EPD/2 on the paraxial
     entrance-pupil plane; ``aim="real"``/``"real_marginal"``: through (Px, Py)·(stop
@@ -79,6 +81,7 @@ import jax.numpy as jnp
 import numpy as np
 from jaxtyping import Array, ArrayLike, Bool, Float
 
+from ..imaging import telecentric
 from ..imaging.sampling import field_rays, lens_aim, lens_depth, pupil_points
 from ..optics import checks, paraxial
 from ..optics.coordinates import CoordinateBreak
@@ -138,9 +141,12 @@ def _common(lens, field, wavelength, depth, reference, aim, where: str):
                          f"(or None, the lens's own)")
     aim = lens_aim(lens, aim, where)
     dtype = lens.epd.dtype
-    f = jnp.asarray(checks.one_field(field, where), dtype)
-    if not checks.is_traced(field):  # 20° typed as 0.349 rad: as rms_spot and chief_ray do
-        checks.warn_if_radian_fields(field, where, "field")
+    if lens.telecentric_object:  # object heights (mm): no angle's range, no radians
+        f = jnp.asarray(telecentric.one_height(field, where), dtype)
+    else:
+        f = jnp.asarray(checks.one_field(field, where), dtype)
+        if not checks.is_traced(field):  # 20° typed as 0.349 rad: as rms_spot, chief_ray
+            checks.warn_if_radian_fields(field, where, "field")
     wl = lens.primary_wavelength if wavelength is None else wavelength
     checks.real_values(wl, "wavelength", where, "µm")
     if jnp.shape(wl) != ():

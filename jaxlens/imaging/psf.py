@@ -72,7 +72,7 @@ from ..optics.materials import LAMBDA_C, LAMBDA_D, LAMBDA_F
 from ..optics.paraxial import working_fnum
 from ..optics.rays import Rays
 from ..tracing.forward import DEFAULT_NEWTON_ITERS, forward_mode_jit, trace
-from . import sampling
+from . import sampling, telecentric
 from .aiming import apertured, chief_point, field_to_ideal, ideal_to_field
 from .grid import kernel_side, pixel_pitch, pupil_cells, sensor_grid, splat
 from .otf import diffraction_mtf, mtf_directions
@@ -398,8 +398,11 @@ def _prepare(lens, field, depth, wavelength, kernel_size, pixel_size, model, cen
     wl = checks.wavelengths(lens, jnp.asarray(wl, dtype), caller, "wavelength")
     checks.material_indices(lens, wl, caller)
     checks.primary_wavelength(lens, caller, "the chief ray's and paraxial pupils'")
-    field = checks.field_angles(field, caller, "field")
-    checks.warn_if_radian_fields(field, caller, "field")  # psf(lens, 0.349) for 20°
+    if isinstance(lens, Lens) and lens.telecentric_object:  # object heights (mm): no
+        field = telecentric.one_height(field, caller)  # angle's range, no radians warning
+    else:
+        field = checks.field_angles(field, caller, "field")
+        checks.warn_if_radian_fields(field, caller, "field")  # psf(lens, 0.349) for 20°
     if wl.ndim > 1 or wl.size == 0:
         raise ValueError(f"{caller}: wavelength must be a scalar or 1-D (µm) with at least one "
                          f"value, got shape {wl.shape}")
@@ -642,7 +645,7 @@ def _mtf_impl(lens, field, depth, wls, freqs, pixel_size, *, model, kernel_size,
               newton_iters):
     dtype = freqs.dtype
     lens = lens.astype(dtype)
-    e_t, e_s = mtf_directions(field)
+    e_t, e_s = mtf_directions(field, object_heights=lens.telecentric_object)
     fnum = working_fnum(lens, depth)
     nw = wls.shape[0]
     if isinstance(model, GeometricPSF):
@@ -717,7 +720,8 @@ def mtf(
 
     Args:
         lens: the lens.
-        field: field angle in degrees, θy or (θx, θy).
+        field: field angle in degrees, θy or (θx, θy); an object height in mm, y or
+            (x, y), for an object-space telecentric lens (tangential along the height).
         wavelengths: µm, ``[W]``; default ``lens.wavelengths``.
         depth: object distance in mm (``inf`` for infinity); None (default) for the
             lens's own object.
