@@ -313,14 +313,17 @@ def symmetric_fields(fields) -> tuple[np.ndarray, np.ndarray]:
 
 
 # ------------------------------------------------------------------------ the model
-def _check_fields(fields, weights, where):
+def _check_fields(lens, fields, weights, where):
+    heights = lens.telecentric_object  # object heights (mm), no angle range
+    unit = "mm (object heights)" if heights else "degrees"
     f = np.asarray(fields, float)
     if f.ndim not in (1, 2) or f.shape[0] == 0 or (f.ndim == 2 and f.shape[1] != 2) \
             or not np.all(np.isfinite(f)):
-        raise ValueError(f"{where}: fields must be finite [F] or [F, 2] degrees with F >= 1, "
+        raise ValueError(f"{where}: fields must be finite [F] or [F, 2] {unit} with F >= 1, "
                          f"got shape {f.shape}")
-    checks.field_angles(f, where, "fields")  # 95° would wrap, found only after the trials
-    checks.warn_if_radian_fields(f, where, "fields")  # np.radians([0, 10, 20])
+    if not heights:
+        checks.field_angles(f, where, "fields")  # 95° would wrap, found after the trials
+        checks.warn_if_radian_fields(f, where, "fields")  # np.radians([0, 10, 20])
     w = np.ones(f.shape[0]) if weights is None else np.asarray(weights, float)
     if w.shape != (f.shape[0],) or not np.all(np.isfinite(w)) or np.any(w < 0) or w.sum() <= 0:
         raise ValueError(f"{where}: field_weights must be [{f.shape[0]}] finite numbers >= 0 "
@@ -333,8 +336,9 @@ class ToleranceModel:
 
     Args:
         lens: the nominal lens (analysed in float64 when x64 is on).
-        fields: field angles (deg), ``[F]`` (y) or ``[F, 2]``; default ``lens.fields``.
-            Stored as ``[F, 2]`` (θx, θy) pairs (``self.fields``).
+        fields: field angles (deg), ``[F]`` (y) or ``[F, 2]``; default ``lens.fields``
+            (object heights in mm for an object-space telecentric lens). Stored as
+            ``[F, 2]`` (θx, θy) pairs (``self.fields``).
         field_weights: ``[F]`` weights of the field mean (default equal).
         wavelengths: µm (default ``lens.wavelengths``).
         pupil: ``[M, 2]`` unit-pupil points (default the 21 × 21 grid).
@@ -357,7 +361,7 @@ class ToleranceModel:
         if not isinstance(self.tolerances, Tolerances):
             raise ValueError(f"ToleranceModel: tolerances must be a Tolerances, got "
                              f"{type(tolerances).__name__}")
-        f, w = _check_fields(lens.fields if fields is None else fields, field_weights,
+        f, w = _check_fields(lens, lens.fields if fields is None else fields, field_weights,
                              "ToleranceModel")
         if isinstance(batch, bool) or not (isinstance(batch, (int, np.integer)) and batch >= 1):
             raise ValueError(f"ToleranceModel: batch must be a whole number >= 1, got {batch!r}")
@@ -542,9 +546,10 @@ class ToleranceModel:
             "rms_compensated_um": mean_rms_um(data, self.weights, dz),
             "refocus_mm": dz,
             "mtf": jnp.sum(alpha * field_mtf(data, self.fields, self.wavelengths, frequency,
-                                             fnum, 0.0)),
-            "mtf_compensated": jnp.sum(alpha * field_mtf(data, self.fields, self.wavelengths,
-                                                         frequency, fnum, dz)),
+                                             fnum, 0.0, heights=lens.telecentric_object)),
+            "mtf_compensated": jnp.sum(alpha * field_mtf(
+                data, self.fields, self.wavelengths, frequency, fnum, dz,
+                heights=lens.telecentric_object)),
             "min_valid_fraction": jnp.min(jnp.mean(data.weight, -1)),
         }
 
