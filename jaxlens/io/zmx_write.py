@@ -178,7 +178,8 @@ class _GlassWriter:
         # Every glass name the file uses (upper case) and its material: Zemax finds a GLAS
         # name by searching the GCAT catalogs in order, so a name must mean one glass in all.
         self.names: dict[str, AbstractMaterial] = {}
-        self.homes: dict[str, str] = {}  # Zemax catalog glass name (upper) -> its catalog
+        # Zemax catalog glass name (upper) -> (its GCAT catalog, its shipped catalog)
+        self.homes: dict[str, tuple[str, str]] = {}
 
     def reserve(self, materials) -> None:
         """Claim the names of the Zemax catalog glasses first: those cannot be renamed."""
@@ -218,7 +219,7 @@ class _GlassWriter:
         cat = _zemax_catalog(m)
         if cat is not None:
             self._use(cat)
-            self.homes[m.name.upper()] = cat
+            self.homes[m.name.upper()] = (cat, m.catalog)
             return f"GLAS {m.name} 0 0 {float(m.catalog_nd)!r} {_z(m.catalog_vd)} 0 0 0 0 0 0"
         plain = (
             type(m).__name__ == "CatalogMaterial"
@@ -246,22 +247,24 @@ class _GlassWriter:
         that reads every glass written by name from its own catalog. Zemax (and the
         reader) take a GLAS name from the first GCAT catalog that has it, and makers share
         names (SF11 is SCHOTT's and NIKON-HIKARI's): a glass's catalog must come before every
-        other listed catalog holding its name. Among catalogs free to go anywhere, the order
-        is the lens's (first use).
-
-        Raises:
-            ValueError: two glasses each need their catalog before the other's (no order
-                reads both back).
+        other listed catalog holding another glass of its name. Among catalogs free to go
+        anywhere, the order is the lens's (first use). A glass is written by name only where
+        its name finds it first in jaxlens's own search order, so an order always exists;
+        should none, the glasses are named in a ``ValueError``.
         """
         side = [c for c in self.catalogs if c not in ZEMAX_CATALOGS]
         zemax = [c for c in self.catalogs if c in ZEMAX_CATALOGS]
-        held = {c: {n.upper() for sc in zmx_glass.shipped_for(c) for n in catalog_names(catalog=sc)}
-                for c in zemax}
+        names = {c: [{n.upper() for n in catalog_names(catalog=sc)}
+                     for sc in zmx_glass.shipped_for(c)] for c in zemax}
+        shipped = {c: zmx_glass.shipped_for(c) for c in zemax}
         after = {c: set() for c in zemax}  # catalog -> the catalogs that must follow it
         why = {}
-        for name, home in self.homes.items():
+        for name, (home, own) in self.homes.items():
             for c in zemax:
-                if c != home and name in held[c]:
+                # The shipped catalog a lookup in c finds the name in, if any.
+                found = next((sc for sc, held in zip(shipped[c], names[c], strict=True)
+                              if name in held), None)
+                if c != home and found is not None and found != own:
                     after[home].add(c)
                     why[(home, c)] = name
         order, left = [], list(zemax)
