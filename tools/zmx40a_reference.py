@@ -1,4 +1,4 @@
-"""Reference numbers for round 40a's .zmx files (molded glasses of the RPO catalog), from optiland 0.6.3.
+"""Reference numbers for round 40a's .zmx files (RPO molded glasses), from optiland 0.6.3.
 
 Run with the optiland environment's interpreter, from the repository root:
 
@@ -43,7 +43,8 @@ PUPIL = ((0.0, 0.0), (0.0, 0.9), (0.0, -0.9), (0.0, 0.5), (0.9, 0.0), (0.6, 0.6)
 # Each surface: (curvature 1/mm, thickness mm to the next, glass or None, is_stop).
 SYSTEMS = {
     "rpo_molded_cooke.zmx": dict(
-        gcat="RPO", epd=20.0, wavelengths=(0.4861327, 0.5875618, 0.6562725), fields=(0.0, 7.0, 10.0),
+        gcat="RPO", epd=20.0, wavelengths=(0.4861327, 0.5875618, 0.6562725),
+        fields=(0.0, 7.0, 10.0),
         surfaces=[(0.02019665437119806, 14.82389620733, "TAF3_MOLD", False),
                   (-0.009191260009826223, 3.116491119355, None, False),
                   (-0.01868424088622010, 2.999638141061, "L-TIM28_MOLD", False),
