@@ -88,7 +88,8 @@ def test_shipped_catalogs_and_required_glasses():
     assert counts == {"SCHOTT": 358, "CDGM": 324, "PLASTICS": 11, "MISC": 14, "OHARA": 410,
                       "HOYA": 190, "HIKARI": 370, "SUMITA": 176, "CORNING": 1, "INFRARED": 48,
                       "LIGHTPATH": 11, "HERAEUS": 5, "UMICORE": 2, "TOPAS": 3, "ARCHER": 15,
-                      "ISUZU": 1, "LZOS": 54, "RAD_HARD": 7, "RPO": 43}
+                      "ISUZU": 1, "LZOS": 54, "RAD_HARD": 7, "RPO": 43,
+                      "ARTON": 6}
     # The glasses that real .zmx files of issue 12 failed on, each in its maker's catalog.
     for cat, names in {"OHARA": ["S-LAH64", "L-BAL35", "S-FTM16", "S-LAL10", "L-TIM28"],
                        "HOYA": ["TAF3", "TAFD30"], "HIKARI": ["J-LAK14", "J-LAK02", "E-LAFH3"],
@@ -102,7 +103,8 @@ def test_shipped_catalogs_and_required_glasses():
                        "ISUZU": ["IIR-SF1"],
                        "LZOS": ["LZ_K8", "LZ_TF1", "LZ_LK7", "LZ_CTK9", "LZ_OK4"],
                        "RAD_HARD": ["SF8G07"],
-                       "RPO": ["L-TIM28_MOLD", "N-BK7_MOLD", "TAF3_MOLD", "IG4"]}.items():
+                       "RPO": ["L-TIM28_MOLD", "N-BK7_MOLD", "TAF3_MOLD", "IG4"],
+                       "ARTON": ["DX4900", "F5023", "D4531F"]}.items():
         for name in names:
             assert glass_info(name)[0] == cat, name
     schott = set(catalog_names(catalog="SCHOTT"))

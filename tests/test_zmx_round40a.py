@@ -160,3 +160,18 @@ def test_gcat_puts_a_glass_catalog_before_others_holding_its_name(tmp_path):
         [getattr(m, "catalog", "") for m in lens.materials]
     # Where no name is shared, the lens's own order stays (HIKARI first).
     assert "GCAT HIKARI SCHOTT" in zmx.dumps(zmx.loads(_pair("J-LAK14", "N-BK7")))[0]
+
+
+def test_arton_polymers_read_by_name_and_written_back():
+    """Zemax's ARTON catalog (JSR cyclo-olefin polymers of molded lenses) is shipped too: a
+    GCAT ARTON file's DX4900 opens (nd 1.530803 from its Schott formula) and is written by name."""
+    text = _pair("DX4900", "N-BK7").replace("GCAT SCHOTT HIKARI", "GCAT ARTON SCHOTT")
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")  # no report: both glasses are in the file's catalogs
+        lens = zmx.loads(text)
+    m = lens.materials[0]
+    assert (m.catalog, m.name, m.catalog_nd) == ("ARTON", "DX4900", 1.530803)
+    assert float(m.index(0.5875618)) == pytest.approx(1.530803, abs=1e-6)
+    written = zmx.dumps(lens)[0]
+    assert "GCAT ARTON SCHOTT" in written and "GLAS DX4900 0 0 1.530803" in written
+    assert zmx.loads(written).materials[0].catalog == "ARTON"

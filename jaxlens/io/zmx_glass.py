@@ -57,6 +57,7 @@ SHIPPED_FOR_ZEMAX = {
     "LZOS": ("LZOS",),
     "RAD_HARD": ("RAD_HARD",),
     "RPO": ("RPO",),
+    "ARTON": ("ARTON",),
 }
 
 
