@@ -88,7 +88,8 @@ def test_shipped_catalogs_and_required_glasses():
     assert counts == {"SCHOTT": 358, "CDGM": 324, "PLASTICS": 11, "MISC": 14, "OHARA": 410,
                       "HOYA": 190, "HIKARI": 370, "SUMITA": 176, "CORNING": 1, "INFRARED": 48,
                       "LIGHTPATH": 11, "HERAEUS": 5, "UMICORE": 2, "TOPAS": 3, "ARCHER": 15,
-                      "ISUZU": 1, "LZOS": 54, "RAD_HARD": 7}
+                      "ISUZU": 1, "LZOS": 54, "RAD_HARD": 7, "RPO": 43,
+                      "ARTON": 6}
     # The glasses that real .zmx files of issue 12 failed on, each in its maker's catalog.
     for cat, names in {"OHARA": ["S-LAH64", "L-BAL35", "S-FTM16", "S-LAL10", "L-TIM28"],
                        "HOYA": ["TAF3", "TAFD30"], "HIKARI": ["J-LAK14", "J-LAK02", "E-LAFH3"],
@@ -101,7 +102,9 @@ def test_shipped_catalogs_and_required_glasses():
                        "TOPAS": ["5013LS-01"], "ARCHER": ["S-LAH53M"],
                        "ISUZU": ["IIR-SF1"],
                        "LZOS": ["LZ_K8", "LZ_TF1", "LZ_LK7", "LZ_CTK9", "LZ_OK4"],
-                       "RAD_HARD": ["SF8G07"]}.items():
+                       "RAD_HARD": ["SF8G07"],
+                       "RPO": ["L-TIM28_MOLD", "N-BK7_MOLD", "TAF3_MOLD", "IG4"],
+                       "ARTON": ["DX4900", "F5023", "D4531F"]}.items():
         for name in names:
             assert glass_info(name)[0] == cat, name
     schott = set(catalog_names(catalog="SCHOTT"))
@@ -137,6 +140,7 @@ NO_D_LINE_DATA = {
                  "GE_OLD", "IRG100", "KRS5", "NACL", "SILICON", "TI_1173", "ZBLA", "ZBLAN",
                  "ZNSE", "ZNS_IR"},
     "LIGHTPATH": {"BD1", "BD2"}, "UMICORE": {"GASIR1", "GASIR2"}, "ISUZU": {"IIR-SF1"},
+    "RPO": {"IG2", "IG4", "IG5", "IG6"},
 }
 
 
@@ -166,7 +170,7 @@ def test_every_shipped_glass_reproduces_its_catalog_nd_and_vd():
     assert no_data == {(c, n) for c, names in NO_D_LINE_DATA.items() for n in names}
     # Every shipped catalog is checked, the Zemax LZOS and RAD_HARD ones included.
     assert set(checked) == set(catalog.SHIPPED_CATALOGS)
-    assert (checked["LZOS"], checked["RAD_HARD"]) == (54, 7)
+    assert (checked["LZOS"], checked["RAD_HARD"], checked["RPO"]) == (54, 7, 43)
 
 
 def test_no_d_line_data_materials_have_a_real_index_over_their_range():

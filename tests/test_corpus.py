@@ -58,9 +58,7 @@ EXPECTED_WARNINGS = {
 }
 
 # Files jaxlens cannot represent: the line and the reason.
-REFUSED = {
-    "rayoptics_US08427765-1.ZMX": (93, "glass 'L-TIM28_MOLD': Unknown material"),
-}
+REFUSED = {}  # US08427765-1 (GLAS L-TIM28_MOLD, GCAT RPO) opens from round 40a
 
 # Files that load but optiland's EFL was not recorded for: the known answer instead. The
 # off-axis parabola of zmax_37992 (R = 190.6 mm, its aperture decentered by OBDC 0 190.6,
@@ -75,7 +73,10 @@ KNOWN_EFL = {"rayoptics_zmax_37992.zmx": 1 / (2 * 5.246589716684155885E-03),
 CHECKED_ELSEWHERE = {"rayoptics_ASL5040-UV.zmx": "tests/test_qtype.py (QED_TYPE, Q-bfs)",
                      # Object-space telecentric, real image heights (round 38a): loads; its
                      # EFL has no independent reference yet.
-                     "rayoptics_US05831776-1.zmx": "tests/test_zmx_round38a.py"}
+                     "rayoptics_US05831776-1.zmx": "tests/test_zmx_round38a.py",
+                     # RPO's molded L-TIM28 (round 40a): optiland has no RPO glass, so its
+                     # rays are compared with the catalog's indices set in optiland.
+                     "rayoptics_US08427765-1.ZMX": "tests/test_zmx_round40a.py"}
 
 
 def _load(name, **kw):

@@ -446,13 +446,13 @@ def test_unknown_glass_names_unshipped_gcat_and_optically_close_glasses():
         "GLAS N-BK7", "GLAS D-ZK3Q 0 0 1.58913 61.27 0 0 0 0 0 0"
     )
     with pytest.raises(ValueError) as e:
-        zmx.loads("GCAT RPO SCHOTT\n" + text)
+        zmx.loads("GCAT NHG SCHOTT\n" + text)  # NHG: a Zemax catalog jaxlens does not ship
     msg = str(e.value)
     assert msg.startswith("<zmx>:10: glass 'D-ZK3Q'")
     assert "Closest catalog matches: D-ZK3," in msg
     assert "Optically closest to nd 1.58913, Vd 61.27: SCHOTT N-SK5 (nd 1.58913" in msg
-    assert "GCAT names RPO, which jaxlens does not ship" in msg
-    assert "SCHOTT, CDGM" in msg and "OHARA" in msg and "RPO.AGF" in msg
+    assert "GCAT names NHG, which jaxlens does not ship" in msg
+    assert "SCHOTT, CDGM" in msg and "OHARA" in msg and "NHG.AGF" in msg
     with pytest.raises(ValueError) as e:
         zmx.loads("GCAT SCHOTT OHARA\n" + text)
     assert "does not ship" not in str(e.value) and "Optically closest" in str(e.value)

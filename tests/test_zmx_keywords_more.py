@@ -61,10 +61,11 @@ def test_placeholder_nd_vd_is_not_offered_as_a_model_glass():
 
 
 def test_a_molded_glass_is_not_replaced_by_its_catalog_namesake():
-    """rayoptics US08427765-1: GLAS L-TIM28_MOLD (GCAT RPO)."""
-    text = _lens(glass="L-TIM28_MOLD 0 0 1.5 4.0E+1 0 0 0 0 0 0")
-    with pytest.raises(ValueError, match=r"L-TIM28_MOLD is L-TIM28 as a molded lens .*OHARA "
-                                         r"L-TIM28, but a molded glass's index differs"):
+    """A molded glass that no shipped catalog has (rayoptics US08427765-1's L-TIM28_MOLD, GCAT
+    RPO, which this note was written for, reads RPO's from round 40a)."""
+    text = _lens(glass="S-LAH64_MOLD 0 0 1.5 4.0E+1 0 0 0 0 0 0")
+    with pytest.raises(ValueError, match=r"S-LAH64_MOLD is S-LAH64 as a molded lens .*OHARA "
+                                         r"S-LAH64, but a molded glass's index differs"):
         zmx.loads(text)
     with pytest.raises(ValueError, match=r"glass 'NOSUCH_MOLD': Unknown material") as e:
         zmx.loads(_lens(glass="NOSUCH_MOLD 0 0 1.5 4.0E+1 0 0 0 0 0 0"))

@@ -56,6 +56,8 @@ SHIPPED_FOR_ZEMAX = {
     "ISUZU": ("ISUZU",),
     "LZOS": ("LZOS",),
     "RAD_HARD": ("RAD_HARD",),
+    "RPO": ("RPO",),
+    "ARTON": ("ARTON",),
 }
 
 

@@ -13,7 +13,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from ..optics import materials as _materials
-from ..optics.catalog import ND_TOLERANCE
+from ..optics.catalog import ND_TOLERANCE, catalog_names
 from ..optics.coordinates import CoordinateBreak
 from ..optics.lens import Lens
 from ..optics.materials import AbstractMaterial, Air, ModelGlass, Tabulated
@@ -25,7 +25,7 @@ from ..optics.surfaces import (
     Standard,
     TiltedPlane,
 )
-from . import lensfile, zmx_surfaces, zmx_system
+from . import lensfile, zmx_glass, zmx_surfaces, zmx_system
 from .json_values import output_file, write_whole
 from .zmx_common import (
     MARKER,
@@ -178,6 +178,8 @@ class _GlassWriter:
         # Every glass name the file uses (upper case) and its material: Zemax finds a GLAS
         # name by searching the GCAT catalogs in order, so a name must mean one glass in all.
         self.names: dict[str, AbstractMaterial] = {}
+        # Zemax catalog glass name (upper) -> (its GCAT catalog, its shipped catalog)
+        self.homes: dict[str, tuple[str, str]] = {}
 
     def reserve(self, materials) -> None:
         """Claim the names of the Zemax catalog glasses first: those cannot be renamed."""
@@ -217,6 +219,7 @@ class _GlassWriter:
         cat = _zemax_catalog(m)
         if cat is not None:
             self._use(cat)
+            self.homes[m.name.upper()] = (cat, m.catalog)
             return f"GLAS {m.name} 0 0 {float(m.catalog_nd)!r} {_z(m.catalog_vd)} 0 0 0 0 0 0"
         plain = (
             type(m).__name__ == "CatalogMaterial"
@@ -238,6 +241,44 @@ class _GlassWriter:
             self.catalogs.insert(0, cat)  # side catalogs first: Zemax searches in order
         nd, vd = self._nd_vd_of(m)
         return f"GLAS {name} 0 0 {nd!r} {_z(vd)} 0 0 0 0 0 0"
+
+    def gcat(self) -> list[str]:
+        """The GCAT catalogs: the side catalogs first, then the Zemax catalogs in an order
+        that reads every glass written by name from its own catalog. Zemax (and the
+        reader) take a GLAS name from the first GCAT catalog that has it, and makers share
+        names (SF11 is SCHOTT's and NIKON-HIKARI's): a glass's catalog must come before every
+        other listed catalog holding another glass of its name. Among catalogs free to go
+        anywhere, the order is the lens's (first use). A glass is written by name only where
+        its name finds it first in jaxlens's own search order, so an order always exists;
+        should none, the glasses are named in a ``ValueError``.
+        """
+        side = [c for c in self.catalogs if c not in ZEMAX_CATALOGS]
+        zemax = [c for c in self.catalogs if c in ZEMAX_CATALOGS]
+        names = {c: [{n.upper() for n in catalog_names(catalog=sc)}
+                     for sc in zmx_glass.shipped_for(c)] for c in zemax}
+        shipped = {c: zmx_glass.shipped_for(c) for c in zemax}
+        after = {c: set() for c in zemax}  # catalog -> the catalogs that must follow it
+        why = {}
+        for name, (home, own) in self.homes.items():
+            for c in zemax:
+                # The shipped catalog a lookup in c finds the name in, if any.
+                found = next((sc for sc, held in zip(shipped[c], names[c], strict=True)
+                              if name in held), None)
+                if c != home and found is not None and found != own:
+                    after[home].add(c)
+                    why[(home, c)] = name
+        order, left = [], list(zemax)
+        while left:
+            free = [c for c in left if not any(c in after[o] for o in left if o != c)]
+            if not free:
+                pairs = sorted(f"{why[(a, b)]} ({a}, also in {b})" for a in left
+                               for b in after[a] if b in left)
+                raise ValueError(f"save_zmx: no GCAT order reads every glass from its own "
+                                 f"catalog: {'; '.join(pairs)}; Zemax takes a name from the "
+                                 f"first listed catalog that has it")
+            order.append(free[0])
+            left.remove(free[0])
+        return side + order
 
     def _cd(self, m) -> tuple[int, list[float], bool]:
         """The CD record of ``m``: (formula, coefficients, exact); a material no Zemax
@@ -575,7 +616,7 @@ def dumps(lens: Lens, path: str = "lens.zmx", *, model_glass: str = "blank"):
         f"OBNA {_z(lens.object_na)} 0" if lens.telecentric_object else f"ENPD {_z(lens.epd)}",
         "ENVD 2.0E+1 1 0",
         "GFAC 0 0",
-        "GCAT " + " ".join(gw.catalogs or ["SCHOTT"]),
+        "GCAT " + " ".join(gw.gcat() or ["SCHOTT"]),
         # Field type 1 (object heights) and the telecentric flag, or angles (0 0).
         f"FTYP {int(lens.telecentric_object)} {int(lens.telecentric_object)} {len(ys)} "
         f"{len(wl)} 0 0 {int(lens.afocal_image)}",

@@ -27,6 +27,10 @@ source in its ``!`` header lines):
   ``LZ_`` (LZ_K8, LZ_TF1, LZ_LK7, LZ_CTK9…).
 * ``RAD_HARD``: Zemax's catalog of SCHOTT radiation-resistant glasses (BK7G18, F2G12, SF8G07…);
   six of its seven names are also SCHOTT's and stay SCHOTT's.
+* ``RPO``: Zemax's catalog of Rochester Precision Optics molded glasses, ``<glass>_MOLD``
+  (the maker's glass with its index after molding: ``L-TIM28_MOLD``, ``N-BK7_MOLD``,
+  ``TAF3_MOLD``…), and Vitron's IG2, IG4, IG5, IG6 chalcogenides.
+* ``ARTON``: Zemax's catalog of JSR ARTON cyclo-olefin polymers (DX4900, F5023, D4532…).
 
 IR materials whose d line Zemax gives no data for carry the catalog's nd 1 and Vd 0 (a
 "no data" mark, e.g. ZNSE, GERMANIUM, SILICON); their CD and LD records hold the data.
@@ -76,7 +80,7 @@ __all__ = ["FORMULA_NAMES", "ND_TOLERANCE", "NO_D_LINE_DATA", "SHIPPED_CATALOGS"
 
 SHIPPED_CATALOGS = ("SCHOTT", "CDGM", "PLASTICS", "MISC", "OHARA", "HOYA", "HIKARI", "SUMITA",
                     "CORNING", "INFRARED", "LIGHTPATH", "HERAEUS", "UMICORE", "TOPAS", "ARCHER",
-                    "ISUZU", "LZOS", "RAD_HARD")
+                    "ISUZU", "LZOS", "RAD_HARD", "RPO", "ARTON")
 """Shipped catalogs in search order (files ``jaxlens/data/glass/<NAME>.agf``). The catalogs
 from INFRARED on come last, so a name that an earlier catalog already had keeps its meaning
 (``BAF2`` is CDGM's glass; the BaF₂ crystal is ``get_material("BAF2", "INFRARED")``;
