@@ -506,7 +506,9 @@ def vignetting_for_fields(lens: Lens, fields) -> Array | None:
 
 def field_rays(lens: Lens, field, pupil, wavelength=None, *, depth=None, aim=None) -> Rays:
     """Rays for a field angle at infinity (``depth=None``, inf, or ``INFINITE_OBJECT_MM`` =
-    1e10 mm and more, as for ``Lens.object_distance``) or from a finite depth (mm).
+    1e10 mm and more, as for ``Lens.object_distance``) or from a finite depth (one number,
+    mm to surface 1; negative: a virtual object that far after surface 1, as a Lens's own
+    ``object_distance`` may be). The analyses' ``depth`` (spots, PSF, ...) must be > 0.
 
     The chief ray of a finite-depth field point makes the angle θ with the axis at the
     entrance pupil, as for an object at infinity. ``aim``: "paraxial", "real",
@@ -526,6 +528,10 @@ def field_rays(lens: Lens, field, pupil, wavelength=None, *, depth=None, aim=Non
     """
     if depth is not None:
         checks.real_values(depth, "depth", "field_rays", "mm")
+        if jnp.ndim(depth) != 0:  # [2] failed in jnp.concatenate, naming no argument
+            raise ValueError(f"field_rays: depth must be one distance (mm), got shape "
+                             f"{jnp.shape(depth)}; trace several depths one at a time, or "
+                             f"vmap")
     if lens.telecentric_object:  # fields are object heights (mm)
         field = telecentric.one_height(field, "field_rays")
     else:
@@ -597,7 +603,9 @@ def stop_radius(lens: Lens, stop_size: str = "paraxial", *, object_z=None) -> Fl
     plane (parallel to the axis for an object at infinity; from (0, 0, ``object_z``), mm
     global, for a finite one), traced without apertures to the stop: its distance from the
     stop's axis there (Zemax's "Real" ray aiming). A marginal ray that misses a surface or
-    is totally reflected on the way gives NaN.
+    is totally reflected on the way is a ``ValueError`` naming the surface (an object point
+    no real ray leaves through the pupil's rim, such as a virtual one close behind surface
+    1; every ray aimed with it was returned invalid, without a word); traced (jit), NaN.
     """
     from ..tracing.forward import trace_path
 
@@ -621,8 +629,15 @@ def stop_radius(lens: Lens, stop_size: str = "paraxial", *, object_z=None) -> Fl
     else:
         d = line_direction(jnp.stack([jnp.zeros((), dt), jnp.zeros((), dt),
                                       jnp.asarray(object_z, dt)]), rim)
-    out = trace_path(unclipped(lens), Rays(rim[None], d[None], lens.primary_wavelength),
-                     upto=lens.stop, uniform=True)[-1]
+    path = trace_path(unclipped(lens), Rays(rim[None], d[None], lens.primary_wavelength),
+                      upto=lens.stop, uniform=True)
+    out = path[-1]
+    if not checks.is_traced((lens, object_z)) and not bool(out.valid[0]):  # was NaN
+        z = "" if object_z is None else f" from the on-axis point at z = {checks.fmt(np.asarray(object_z))} mm"
+        raise ValueError(f"stop_radius: the real marginal ray{z} through the entrance pupil's "
+                         f"rim misses surface {1 + int(np.argmin(path.valid[:, 0]))} or is "
+                         f"totally reflected there: no real ray sizes the stop for this "
+                         f"object; use stop_size='paraxial' (Lens.aim='real')")
     xy = out.origin[0, :2]
     r2 = jnp.sum(xy * xy)
     r = jnp.sqrt(jnp.where(r2 > 0, r2, 1.0))  # double where: no NaN gradient on the axis
