@@ -1,0 +1,157 @@
+"""Round-40b bad-input fixes (tools/audit40b_probe.py): one missing-folder error for every
+writer, the encircled-energy building blocks' own checks, the real stop size of an object no
+real marginal ray leaves, ``field_rays``' depth, and ``ImageObjective``'s sensor and scene.
+One test per gap; each says what main did with the input."""
+
+import dataclasses
+import pathlib
+
+import jax.numpy as jnp
+import numpy as np
+import pytest
+
+import jaxlens as jl
+from jaxlens import plot
+from jaxlens.analysis import encircled, report
+from jaxlens.imaging import sampling
+from jaxlens.io import MissingFolderError, images, lensfile, zmx
+
+DATA = pathlib.Path(__file__).resolve().parent / "data"
+
+
+@pytest.fixture(scope="module")
+def cooke():
+    return jl.zoo.cooke_triplet()
+
+
+WRITERS = {
+    "save": lambda lens, p: jl.save(lens, p / "a.json"),
+    "save .zmx": lambda lens, p: jl.save(lens, p / "a.zmx"),
+    "save_json": lambda lens, p: lensfile.save_json(lens, p / "a.json"),
+    "save_zmx": lambda lens, p: zmx.save_zmx(lens, p / "a.zmx"),
+    "plot.save": lambda lens, p: plot.save(plot.plot_image(np.zeros((4, 4, 3))), p / "a.png"),
+    "write_png": lambda lens, p: images.write_png(p / "a.png", np.zeros((4, 4, 3), np.float32)),
+}
+
+
+@pytest.mark.parametrize("name", sorted(WRITERS))
+def test_every_writer_refuses_a_missing_folder_with_one_error(cooke, tmp_path, name):
+    """Main: ``save`` raised FileNotFoundError ("the folder … does not exist"), the others
+    ValueError ("no such folder …"). Now one class, both a ValueError and a
+    FileNotFoundError, with one message naming the caller, the folder and the file."""
+    where = name.split(" ")[0].removeprefix("plot.")  # plot.save names itself "save"
+    with pytest.raises(MissingFolderError) as e:
+        WRITERS[name](cooke, tmp_path / "nope")
+    assert isinstance(e.value, ValueError) and isinstance(e.value, FileNotFoundError)
+    msg = str(e.value)
+    assert msg.startswith(f"{where}: no such folder ") and "nope" in msg
+    assert "does not exist" in msg and "creates no folders" in msg
+    assert not list(tmp_path.iterdir())  # nothing written
+
+
+@pytest.fixture(scope="module")
+def samples(cooke):
+    return encircled.energy_samples(cooke, 0.0)
+
+
+@pytest.mark.parametrize("radii, cls, match", [
+    (-0.01, ValueError, r"radii must be finite numbers in \[0, inf\) mm, got -0\.01 mm"),  # 0
+    (float("nan"), ValueError, r"radii must be finite .*got nan"),  # 0
+    ([], ValueError, r"radii must hold at least one radius \(mm\)"),  # an empty curve
+    ("a", TypeError, r"radii must be a real number .*\(mm\), got str 'a'"),
+])
+def test_energy_within_checks_its_radii(samples, radii, cls, match):
+    with pytest.raises(cls, match="energy_within: " + match):
+        encircled.energy_within(samples, radii)
+
+
+@pytest.mark.parametrize("fraction, main", [(1.5, "NaN"), (-0.2, "a radius"), (80.0, "NaN")])
+def test_radius_holding_checks_its_fractions(samples, fraction, main):
+    with pytest.raises(ValueError, match=r"radius_holding: fraction must be finite numbers in "
+                       r"\(0, 1\) \(fraction of the energy\)"):
+        encircled.radius_holding(samples, fraction)
+
+
+def test_energy_within_values_unchanged(cooke, samples):
+    """All the arriving rays lie within 1 mm (1.0), none within 0 (0.0), and the function
+    equals ``encircled_energy`` on the same samples."""
+    ee = encircled.energy_within(samples, [0.0, 1.0])
+    assert np.allclose(np.asarray(ee.energy), [0.0, 1.0])
+    r80 = float(encircled.radius_holding(samples, 0.8))
+    full = jl.analysis.encircled_energy(cooke, 0.0, [r80])
+    assert float(full.energy[0]) == pytest.approx(0.8, abs=0.01)
+
+
+def test_stop_radius_refuses_a_lost_real_marginal_ray(cooke):
+    """A virtual object point 5 mm after the Cooke triplet's surface 1, with the entrance
+    pupil at 11.5 mm: the line through it and the pupil's rim crosses the lens at 37° and
+    misses surface 4 (checked: the same ray, traced by ``trace_path``, is lost there).
+    Main: NaN, and ``field_rays(..., aim="real_marginal")`` returned every ray invalid."""
+    from jaxlens.optics.lens import unclipped
+
+    zep = float(jl.paraxial.entrance_pupil_z(cooke))
+    rim = np.array([0.0, 0.5 * float(cooke.epd), zep])
+    d = (rim - [0.0, 0.0, 5.0]) / np.linalg.norm(rim - [0.0, 0.0, 5.0])
+    path = jl.trace_path(unclipped(cooke), jl.Rays(rim[None], d[None], 0.5876),
+                         upto=cooke.stop, uniform=True)
+    assert list(np.asarray(path.valid[:, 0])) == [True, True, True, False]
+    match = (r"stop_radius: the real marginal ray from the on-axis point at z = 5 mm .*misses "
+             r"surface 4 .*use stop_size='paraxial' \(Lens.aim='real'\)")
+    with pytest.raises(ValueError, match=match):
+        sampling.stop_radius(cooke, "real", object_z=5.0)
+    with pytest.raises(ValueError, match=match):
+        sampling.field_rays(cooke, 10.0, sampling.pupil_polar(2), depth=-5.0,
+                            aim="real_marginal")
+    # A virtual point farther away leaves a real marginal ray: a radius, near the paraxial.
+    r = float(sampling.stop_radius(cooke, "real", object_z=50.0))
+    assert abs(r - float(sampling.stop_radius(cooke, "paraxial"))) < 0.2
+
+
+def test_field_rays_takes_one_depth(cooke):
+    """Main: a TypeError from jnp.concatenate naming no argument."""
+    with pytest.raises(ValueError, match=r"field_rays: depth must be one distance \(mm\), "
+                       r"got shape \(2,\)"):
+        sampling.field_rays(cooke, 5.0, sampling.pupil_polar(2), depth=np.array([-5.0, 5.0]))
+
+
+def test_image_objective_checks_its_sensor_and_scene_size():
+    """Main: built, then failed at the run's first step (a shape error in the render's
+    difference, or a string's missing attribute)."""
+    from jaxlens.design import DesignSpec, ImageObjective, RayLoss, parameterization
+    from jaxlens.design.losses import Objective
+
+    spec = DesignSpec()
+    ray = Objective(parameterization(spec), RayLoss.make(3, 2, [0.5876], spec.sensor_size),
+                    jnp.ones((12, 2)))
+    with pytest.raises(ValueError, match=r"ImageObjective: scene must have the sensor's "
+                       r"resolution \(rows, columns\) \(4, 4\) pixels.*got \(8, 8\)"):
+        ImageObjective(ray, jnp.ones((8, 8, 3)), jl.Sensor((4, 4), 0.01))
+    for bad in ("abc", None):
+        with pytest.raises(TypeError, match=r"ImageObjective: sensor must be a jaxlens.Sensor, "
+                           rf"got {type(bad).__name__}"):
+            ImageObjective(ray, jnp.ones((8, 8, 3)), bad)
+    assert ImageObjective(ray, jnp.ones((8, 6, 3)), jl.Sensor((8, 6), 0.01)).spp == 4
+
+
+def test_report_refusal_of_a_telecentric_lens_names_what_to_use():
+    """The report's refusal (round 38a) names the analyses that take object heights; the
+    first of them, ``rms_spot``, runs on the same lens (the rest: the probe's controls)."""
+    lens = jl.load(DATA / "zmx38a" / "tele_doublet_obna.zmx")
+    with pytest.raises(ValueError, match=r"report: the lens is object-space telecentric .*"
+                       r"paraxial_data gives its first-order data.*rms_spot"):
+        report.report_data(lens)
+    spot = jl.analysis.rms_spot(lens, float(np.max(np.abs(np.asarray(lens.fields)))))
+    assert np.all(np.isfinite(np.asarray(spot.polychromatic)))
+
+
+def test_virtual_object_depth_is_documented_where_it_is_taken(cooke):
+    """``field_rays`` takes a negative depth as a virtual object (documented now); the
+    analyses refuse it as a likely slip of sign."""
+    assert "virtual object" in sampling.field_rays.__doc__
+    rays = sampling.field_rays(cooke, 5.0, sampling.pupil_polar(2), depth=-50.0)
+    # The chief ray (pupil centre) heads for the virtual point 50 mm after surface 1.
+    o, d = np.asarray(rays.origin[0]), np.asarray(rays.direction[0])
+    t = (50.0 - o[2]) / d[2]
+    assert abs(o[1] + t * d[1] - float(sampling.object_point(cooke, 5.0, -50.0)[1])) < 1e-9
+    with pytest.raises(ValueError, match=r"rms_spot: depth must be finite numbers in \(0, inf\)"):
+        jl.analysis.rms_spot(dataclasses.replace(cooke), 5.0, depth=-50.0)
