@@ -507,8 +507,8 @@ def vignetting_for_fields(lens: Lens, fields) -> Array | None:
 def field_rays(lens: Lens, field, pupil, wavelength=None, *, depth=None, aim=None) -> Rays:
     """Rays for a field angle at infinity (``depth=None``, inf, or ``INFINITE_OBJECT_MM`` =
     1e10 mm and more, as for ``Lens.object_distance``) or from a finite depth (one number,
-    mm to surface 1; negative: a virtual object that far after surface 1, as a Lens's own
-    ``object_distance`` may be). The analyses' ``depth`` (spots, PSF, ...) must be > 0.
+    mm to surface 1; < 0: a virtual object that far after surface 1, as a Lens's own
+    ``object_distance`` may be; the analyses' ``depth`` must be > 0).
 
     The chief ray of a finite-depth field point makes the angle θ with the axis at the
     entrance pupil, as for an object at infinity. ``aim``: "paraxial", "real",
@@ -603,9 +603,8 @@ def stop_radius(lens: Lens, stop_size: str = "paraxial", *, object_z=None) -> Fl
     plane (parallel to the axis for an object at infinity; from (0, 0, ``object_z``), mm
     global, for a finite one), traced without apertures to the stop: its distance from the
     stop's axis there (Zemax's "Real" ray aiming). A marginal ray that misses a surface or
-    is totally reflected on the way is a ``ValueError`` naming the surface (an object point
-    no real ray leaves through the pupil's rim, such as a virtual one close behind surface
-    1; every ray aimed with it was returned invalid, without a word); traced (jit), NaN.
+    is totally reflected on the way is a ``ValueError`` naming the surface (was NaN, and
+    every ray aimed with it invalid, without a word); traced (jit), NaN.
     """
     from ..tracing.forward import trace_path
 
@@ -633,7 +632,7 @@ def stop_radius(lens: Lens, stop_size: str = "paraxial", *, object_z=None) -> Fl
                       upto=lens.stop, uniform=True)
     out = path[-1]
     if not checks.is_traced((lens, object_z)) and not bool(out.valid[0]):  # was NaN
-        z = "" if object_z is None else f" from the on-axis point at z = {checks.fmt(np.asarray(object_z))} mm"
+        z = "" if object_z is None else f" from (0, 0, {checks.fmt(np.asarray(object_z))}) mm"
         raise ValueError(f"stop_radius: the real marginal ray{z} through the entrance pupil's "
                          f"rim misses surface {1 + int(np.argmin(path.valid[:, 0]))} or is "
                          f"totally reflected there: no real ray sizes the stop for this "
@@ -752,6 +751,12 @@ def lens_depth(lens: Lens, depth, where: str):
     own = depth is None and not lens.object_at_infinity
     if own:
         depth = lens.object_distance  # negative for a virtual object
+        if not checks.is_traced((lens, depth)) and float(depth) < 0:  # traced: an error_if
+            zep = float(paraxial.entrance_pupil_z(lens, lens.primary_wavelength))
+            if _bad_point_z(-float(depth), zep, np):  # was an error_if after the whole trace
+                raise ValueError(f"{where}: the lens's object must be {POINT_Z_RANGE}; its "
+                                 f"object_distance {float(depth):g} mm puts it on the entrance "
+                                 f"pupil's plane (z = {zep:g} mm)")
     given = static_depth(depth, where, virtual_ok=own)
     if given is None or isinstance(given, jax.core.Tracer):
         return given
