@@ -51,8 +51,8 @@ def source(lens: Lens, field, pupil: Float[Array, "m 2"], wavelength, depth) -> 
     """``[m]`` rays of an object-space telecentric ``lens`` from the object point at height
     ``field`` (mm, y or (x, y)) on the plane ``depth`` mm before surface 1 (> 0: a virtual
     object is refused, as ``Lens`` refuses one for such a lens), launched at that point
-    (``opl`` 0) with the slopes (Px, Py)·tan u toward +z. ``pupil`` (normalised points) and ``wavelength`` (µm) are the
-    caller's, checked."""
+    (``opl`` 0) with the slopes (Px, Py)·tan u toward +z. ``pupil`` (normalised points)
+    and ``wavelength`` (µm) are the caller's, checked."""
     if not lens.telecentric_object:
         raise ValueError("telecentric.source: the lens is not object-space telecentric "
                          "(Lens.object_na is None); use sampling.field_rays")
