@@ -155,3 +155,50 @@ def test_virtual_object_depth_is_documented_where_it_is_taken(cooke):
     assert abs(o[1] + t * d[1] - float(sampling.object_point(cooke, 5.0, -50.0)[1])) < 1e-9
     with pytest.raises(ValueError, match=r"rms_spot: depth must be finite numbers in \(0, inf\)"):
         jl.analysis.rms_spot(dataclasses.replace(cooke), 5.0, depth=-50.0)
+
+
+def test_a_string_is_not_a_number_anywhere_values_are_checked():
+    """``checks.values`` read ``np.asarray("4", float)`` as 4.0: a telecentric lens's field
+    '4' traced the object height 4 mm (main: a chief ray, without a word)."""
+    lens = jl.load(DATA / "zmx38a" / "tele_doublet_obna.zmx")
+    with pytest.raises(TypeError, match=r"chief_ray: field \(object heights of an object-space "
+                       r"telecentric lens\) must be a real number .*\(mm\), got str '4'"):
+        jl.analysis.chief_ray(lens, "4")
+    with pytest.raises(TypeError, match=r"must be a real number .*got str '50'"):
+        sampling.stop_radius(jl.zoo.cooke_triplet(), "real", object_z="50")
+
+
+def test_a_telecentric_source_refuses_a_virtual_object():
+    """``Lens`` refuses a virtual object for a telecentric lens; ``field_rays(depth=-5)``
+    launched its rays at z = +5 mm, after surface 1, which they then skipped (main: four
+    valid rays)."""
+    lens = jl.load(DATA / "zmx38a" / "tele_doublet_obna.zmx")
+    with pytest.raises(ValueError, match=r"telecentric.source: an object-space telecentric lens "
+                       r"\(object_na given\) needs a real object before surface 1 \(depth > 0 "
+                       r"mm\), got -5 mm"):
+        sampling.field_rays(lens, 4.0, sampling.pupil_polar(2), depth=-5.0)
+    rays = sampling.field_rays(lens, 4.0, sampling.pupil_polar(2), depth=50.0)
+    assert np.allclose(np.asarray(rays.origin)[:, 1:], [[4.0, -50.0]] * 4)  # the object point
+
+
+def test_a_malformed_row_of_another_configuration_is_refused(tmp_path):
+    """Main: ``THIC 2 1 abc`` was read only when configuration 1 was chosen, so
+    ``load(config=2)`` opened the file without a word. Now every numeric row is parsed:
+    another configuration is refused naming the line, the active one reads with the
+    warning of an unreadable table (as before for a malformed table)."""
+    text = (DATA / "zmx_config" / "zoom.zmx").read_text().replace("THIC 2 1 20 ", "THIC 2 1 abc ")
+    p = tmp_path / "z.zmx"
+    p.write_text(text)
+    with pytest.raises(ValueError, match=r"z.zmx:\d+: THIC's value must be a number, got 'abc'"):
+        jl.load(p, config=2)
+    with pytest.warns(UserWarning, match=r"operand table jaxlens cannot read .*THIC's value"):
+        jl.load(p, config=1)
+
+
+def test_a_lens_whose_virtual_object_lies_on_its_entrance_pupil_is_refused_before_tracing(cooke):
+    """Main: an EquinoxRuntimeError from inside the compiled trace (rms_spot)."""
+    zep = float(jl.paraxial.entrance_pupil_z(cooke))
+    lens = dataclasses.replace(cooke, object_distance=-zep)
+    with pytest.raises(ValueError, match=r"rms_spot: the lens's object must be in front of "
+                       r"surface 1 .*puts it on the entrance pupil's plane"):
+        jl.analysis.rms_spot(lens, 0.0)
