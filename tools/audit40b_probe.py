@@ -52,7 +52,7 @@ jax.config.update("jax_enable_x64", True)
 
 import jax.numpy as jnp  # noqa: E402
 import numpy as np  # noqa: E402
-from probe_table import COOKE, ROOT, cli, fresh, probe, run  # noqa: E402
+from probe_table import COOKE, ROOT, cli, fresh, patched, probe, run  # noqa: E402
 
 import jaxlens as jl  # noqa: E402
 from jaxlens import analysis as A  # noqa: E402
@@ -355,6 +355,28 @@ def clis():
     probe("cli report a missing file", cmd("report", os.path.join(DATA, "nope.zmx")), "nope.zmx")
 
 
+def classical_cli():
+    from jaxlens.experiments import classical as C
+
+    c = lambda *a: cli(patched(C, ["run_design", "run_ablation"], lambda: C.main(["--out", fresh("c"), *a])))
+    probe("classical --fov 200", c("--fov", "200"), "--fov")
+    probe("classical --fov nan", c("--fov", "nan"), "--fov")
+    probe("classical --fnum 0", c("--fnum", "0"), "--fnum")
+    probe("classical --sensor-diagonal 43000 (µm)", c("--sensor-diagonal", "43000"), "--sensor-diagonal")
+    probe("classical --elements 0", c("--elements", "0"), "--elements")
+    probe("classical --elements 2.5", c("--elements", "2.5"), "--elements")
+    probe("classical --materials NBK7,OKP4,E48R", c("--materials", "NBK7,OKP4,E48R", "--elements", "3"), "NBK7", "N-BK7")
+    probe("classical --material-catalogs NOPE --select-materials continuous", c("--material-catalogs", "NOPE", "--select-materials", "continuous"), "NOPE")
+    probe("classical --tolerance-threshold -1", c("--tolerance-threshold", "-1"), "--tolerance-threshold")
+    probe("classical --seeds 0", c("--seeds", "0"), "--seeds")
+    probe("classical --track -5", c("--track", "-5"), "--track")
+    probe("classical --bfl inf", c("--bfl", "inf"), "--bfl")
+    probe("classical --stop 9 (of 4 elements)", c("--stop", "9"), "--stop")
+    probe("classical --asphere-terms -1", c("--asphere-terms", "-1"), "--asphere-terms")
+    probe("classical --fov-start 90 --fov 60 (start beyond the goal)", c("--fov-start", "90", "--fov", "60"), "--fov-start")
+    probe("classical defaults (control)", c(), good=True)
+
+
 if __name__ == "__main__":
     run([telecentric, telecentric_files, virtual, afocal, folds, configs, writers, encircled,
-         image_objective, general, clis])
+         image_objective, general, clis, classical_cli])
