@@ -52,7 +52,7 @@ jax.config.update("jax_enable_x64", True)
 
 import jax.numpy as jnp  # noqa: E402
 import numpy as np  # noqa: E402
-from probe_table import COOKE, ROOT, cli, fresh, patched, probe, run  # noqa: E402
+from probe_table import COOKE, ROOT, cli, fresh, jitted, patched, probe, run  # noqa: E402
 
 import jaxlens as jl  # noqa: E402
 from jaxlens import analysis as A  # noqa: E402
@@ -128,7 +128,7 @@ def telecentric():
     probe("encircled_energy telecentric radii -1", lambda: A.encircled_energy(tele, 4.0, -1.0), "radii")
     probe("rms_spot telecentric field '4' (a string)", lambda: A.rms_spot(tele, "4"), "field")
     probe("spot_rays telecentric field b'4'", lambda: A.spot_rays(tele, b"4"), "field")
-    probe("field_rays telecentric depth -5 under jit", lambda: jax.jit(lambda d: S.field_rays(tele, 4.0, S.pupil_polar(2), depth=d).origin)(-5.0), "virtual")
+    probe("field_rays telecentric depth -5 under jit", jitted(lambda d: S.field_rays(tele, 4.0, S.pupil_polar(2), depth=d).origin, -5.0), "real object")
     probe("telecentric.source depth -5", lambda: jl.imaging.telecentric.source(tele, 4.0, S.pupil_polar(2), 0.55, -5.0), "virtual")
     probe("entrance_pupil_z telecentric", lambda: jl.paraxial.entrance_pupil_z(tele), "telecentric")
     probe("distortion telecentric", lambda: A.distortion(tele), "telecentric")
