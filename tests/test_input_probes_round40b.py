@@ -203,3 +203,35 @@ def test_a_lens_whose_virtual_object_lies_on_its_entrance_pupil_is_refused_befor
     with pytest.raises(ValueError, match=r"rms_spot: the lens's object must be in front of "
                        r"surface 1 .*puts it on the entrance pupil's plane"):
         jl.analysis.rms_spot(lens, 0.0)
+
+
+@pytest.mark.parametrize("name", ["psf", "mtf", "encircled_energy", "wavefront", "ray_fan",
+                                  "opd_fan"])
+def test_one_field_analyses_check_a_telecentric_lens_field_as_a_height(name):
+    """Main: each checked the field as an angle: NaN was refused as "finite angles in (-90,
+    90) deg", and a height of 95 mm refused as 95°."""
+    from jaxlens.imaging import psf
+
+    lens = jl.load(DATA / "zmx38a" / "tele_doublet_obna.zmx")
+    fn = {"psf": lambda f: psf.psf(lens, f, pixel_size=0.1, kernel_size=31),
+          "mtf": lambda f: psf.mtf(lens, f, kernel_size=32),
+          "encircled_energy": lambda f: jl.analysis.encircled_energy(lens, f, [0.5]),
+          "wavefront": lambda f: jl.analysis.wavefront(lens, f),
+          "ray_fan": lambda f: jl.analysis.ray_fan(lens, f),
+          "opd_fan": lambda f: jl.analysis.opd_fan(lens, f)}[name]
+    with pytest.raises(ValueError, match=rf"{name}: field \(object heights of an object-space "
+                       r"telecentric lens\) must be finite numbers \(mm\), got nan mm"):
+        fn(float("nan"))
+    with pytest.raises(ValueError, match=r"field must be one object height, y or \(x, y\) in "
+                       r"mm .*got shape \(3,\)"):
+        fn(np.array([1.0, 2.0, 3.0]))
+
+
+def test_a_telecentric_height_beyond_90_mm_is_traced_not_refused_as_an_angle():
+    """95 mm is beyond this doublet's coverage: the PSF says no ray reaches the image (main:
+    "field must be finite angles in (-90, 90) deg, got 95 deg")."""
+    from jaxlens.imaging import psf
+
+    lens = jl.load(DATA / "zmx38a" / "tele_doublet_obna.zmx")
+    with pytest.raises(ValueError, match=r"psf: no ray of the beam reaches the image surface"):
+        psf.psf(lens, 95.0, pixel_size=0.1, kernel_size=31)

@@ -55,6 +55,7 @@ from jaxtyping import Array, Float
 
 from ..imaging.psf import CoherentPSF, psf_info
 from ..imaging.sampling import pupil_points, pupil_polar
+from ..imaging.telecentric import lens_field
 from ..optics import checks, paraxial
 from ..optics.lens import Lens
 from .spots import chief_ray, spot_rays, weighted_centroid
@@ -137,8 +138,7 @@ def _check_common(lens, where, field, wavelength, method, reference, shape):
                                 ("shape", shape, SHAPES)):
         if value not in allowed:
             raise ValueError(f"{where}: {arg} must be one of {allowed}, got {value!r}")
-    field = checks.one_field(field, where)
-    checks.warn_if_radian_fields(field, where, "field")  # here: the inner traces are quiet
+    field = lens_field(lens, field, where)  # here: the inner traces are quiet
     wl = lens.primary_wavelength if wavelength is None else wavelength
     if jnp.ndim(wl) > 1 or jnp.size(wl) == 0:
         raise ValueError(f"{where}: wavelength must be a scalar or [W] µm with W >= 1, got "

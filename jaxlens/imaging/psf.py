@@ -72,7 +72,7 @@ from ..optics.materials import LAMBDA_C, LAMBDA_D, LAMBDA_F
 from ..optics.paraxial import working_fnum
 from ..optics.rays import Rays
 from ..tracing.forward import DEFAULT_NEWTON_ITERS, forward_mode_jit, trace
-from . import sampling
+from . import sampling, telecentric
 from .aiming import apertured, chief_point, field_to_ideal, ideal_to_field
 from .grid import kernel_side, pixel_pitch, pupil_cells, sensor_grid, splat
 from .otf import diffraction_mtf, mtf_directions
@@ -398,8 +398,7 @@ def _prepare(lens, field, depth, wavelength, kernel_size, pixel_size, model, cen
     wl = checks.wavelengths(lens, jnp.asarray(wl, dtype), caller, "wavelength")
     checks.material_indices(lens, wl, caller)
     checks.primary_wavelength(lens, caller, "the chief ray's and paraxial pupils'")
-    field = checks.field_angles(field, caller, "field")
-    checks.warn_if_radian_fields(field, caller, "field")  # psf(lens, 0.349) for 20°
+    field = telecentric.lens_field(lens, field, caller)  # heights (mm) or angles (deg)
     if wl.ndim > 1 or wl.size == 0:
         raise ValueError(f"{caller}: wavelength must be a scalar or 1-D (µm) with at least one "
                          f"value, got shape {wl.shape}")
@@ -777,5 +776,6 @@ def mtf(
         t = eqx.error_if(t, ~jnp.all(lit), msg)
     elif not np.all(np.asarray(lit)):
         dark = np.asarray(wls)[~np.asarray(lit)]
-        raise NoLightError(f"{msg} (field {checks.fmt(field)} deg, at {checks.fmt(dark)} µm)")
+        unit = "mm" if lens.telecentric_object else "deg"  # an object height, or an angle
+        raise NoLightError(f"{msg} (field {checks.fmt(field)} {unit}, at {checks.fmt(dark)} µm)")
     return freqs, t, s

@@ -532,12 +532,8 @@ def field_rays(lens: Lens, field, pupil, wavelength=None, *, depth=None, aim=Non
             raise ValueError(f"field_rays: depth must be one distance (mm), got shape "
                              f"{jnp.shape(depth)}; trace several depths one at a time, or "
                              f"vmap")
-    if lens.telecentric_object:  # fields are object heights (mm)
-        field = telecentric.one_height(field, "field_rays")
-    else:
-        field = checks.one_field(field, "field_rays",
-                                 "trace several fields one at a time, or vmap")
-        checks.warn_if_radian_fields(field, "field_rays", "field")  # 20° typed as 0.349
+    field = telecentric.lens_field(lens, field, "field_rays",  # heights (mm) or angles
+                                   "trace several fields one at a time, or vmap")
     aim = lens_aim(lens, aim, "field_rays")
     if lens.telecentric_object and aim != "paraxial":
         raise ValueError(f"field_rays: the lens is object-space telecentric (its chief rays "

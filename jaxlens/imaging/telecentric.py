@@ -47,6 +47,21 @@ def one_height(field, where: str):
     return jnp.reshape(jnp.asarray(field), ()) if shape == (1,) else jnp.asarray(field)
 
 
+def lens_field(lens: Lens, field, where: str,
+               hint: str = "analyse several fields one at a time"):
+    """One field of ``lens``, checked before tracing in the lens's own unit: an object
+    height (mm, y or (x, y); :func:`one_height`) for an object-space telecentric lens, else
+    an angle θy or (θx, θy) in degrees (``checks.one_field``; warned about where the angles
+    look like radians). The one-field analyses (PSF, MTF, encircled energy, wavefront, the
+    fans) checked every field as an angle: a telecentric lens's height of 95 mm was refused
+    as "95 deg" outside (-90, 90)."""
+    if lens.telecentric_object:
+        return one_height(field, where)
+    f = checks.one_field(field, where, hint)
+    checks.warn_if_radian_fields(field, where, "field")  # 20° typed as 0.349
+    return f
+
+
 def source(lens: Lens, field, pupil: Float[Array, "m 2"], wavelength, depth) -> Rays:
     """``[m]`` rays of an object-space telecentric ``lens`` from the object point at height
     ``field`` (mm, y or (x, y)) on the plane ``depth`` mm before surface 1 (> 0: a virtual
