@@ -130,6 +130,12 @@ def telecentric():
     probe("spot_rays telecentric field b'4'", lambda: A.spot_rays(tele, b"4"), "field")
     probe("field_rays telecentric depth -5 under jit", jitted(lambda d: S.field_rays(tele, 4.0, S.pupil_polar(2), depth=d).origin, -5.0), "real object")
     probe("telecentric.source depth -5", lambda: jl.imaging.telecentric.source(tele, 4.0, S.pupil_polar(2), 0.55, -5.0), "virtual")
+    probe("psf telecentric height 95 mm (beyond coverage, not an angle)", lambda: PSF.psf(tele, 95.0, pixel_size=0.1, kernel_size=31), "no ray")
+    probe("mtf telecentric height 95 mm", lambda: PSF.mtf(tele, 95.0, kernel_size=32), "no ray", "95 mm")
+    probe("wavefront telecentric height NaN", lambda: A.wavefront(tele, float("nan")), "field", "mm")
+    probe("ray_fan telecentric heights [1, 2, 3]", lambda: A.ray_fan(tele, np.array([1.0, 2.0, 3.0])), "field", "height")
+    probe("opd_fan telecentric height NaN", lambda: A.opd_fan(tele, float("nan")), "field", "mm")
+    probe("encircled_energy telecentric height NaN", lambda: A.encircled_energy(tele, float("nan"), [0.5]), "field", "mm")
     probe("entrance_pupil_z telecentric", lambda: jl.paraxial.entrance_pupil_z(tele), "telecentric")
     probe("distortion telecentric", lambda: A.distortion(tele), "telecentric")
     probe("render telecentric", lambda: jl.render(tele, np.ones((8, 8, 3)), spp=4, key=jax.random.key(0), sensor=jl.Sensor((8, 8), 0.01)), "telecentric")
@@ -352,6 +358,11 @@ def clis():
 
     probe("cli report telecentric file", cmd("report", TELE), "telecentric", "rms_spot")
     probe("cli report config 0 of the zoom file", cmd("report", ZOOM, "--config", "0"), "config")
+    probe("cli report --config 2 of a .json", cmd("report", COOKE, "--config", "2"), "config")
+    probe("cli report --wavelengths 0.0005876 (mm)", cmd("report", COOKE, "--wavelengths", "0.0005876"), "wavelength")
+    probe("cli report --fields 95", cmd("report", COOKE, "--fields", "95"), "field")
+    probe("cli report a virtual object (control)", cmd("report", VIRT), good=True)
+    probe("cli report --list-configs zoom (control)", cmd("report", ZOOM, "--list-configs"), good=True)
     probe("cli report a missing file", cmd("report", os.path.join(DATA, "nope.zmx")), "nope.zmx")
 
 
