@@ -25,14 +25,37 @@ Gaps found and fixed (one mechanism each):
    docstring now says what a negative depth is (a virtual object; the analyses refuse one).
 5. ``ImageObjective`` took any ``sensor`` (a string, None) and a scene of another size than
    the sensor: both failed at the run's first step, inside the render's difference.
+6. ``checks.values`` (the array check of most arguments) read a string as its number
+   (``np.asarray("4", float)``): a telecentric lens's field '4' (``chief_ray``,
+   ``rms_spot``, ``spot_rays``; b'4' too) and ``stop_radius``'s object_z '50' traced.
+   Refused now as ``checks.number`` refuses one.
+7. Telecentric lenses: ``telecentric.source`` (so ``field_rays``) took a negative depth,
+   a virtual object ``Lens`` refuses for such a lens, and launched the rays after surface 1;
+   and the one-field analyses (``psf``, ``mtf``, ``encircled_energy``, ``wavefront``,
+   ``ray_fan``, ``opd_fan``) checked the field as an angle: NaN was refused as "angles in
+   (-90, 90) deg", a height of 95 mm as 95°. ``telecentric.lens_field`` checks one field in
+   the lens's own unit for all of them (and ``field_rays``).
+8. Multi-configuration ``.zmx``: a malformed numeric row (``THIC 2 1 abc``, a value
+   ``1e999``) of a configuration not read let ``load(config=2)`` open the file without a
+   word. ``zmx_config`` parses every numeric row of every configuration first.
+9. A lens whose own virtual object lies on its entrance pupil's plane: ``rms_spot`` and
+   ``psf`` failed with an ``EquinoxRuntimeError`` from inside the compiled trace; refused by
+   name in ``sampling.lens_depth`` before tracing.
 
-The controls (``good=True``) are behaviours judged right: the analyses the report names for
-a telecentric lens, a virtual object's paraxial data, an afocal lens's angular spot.
+Also (not counted): ``tools/audit36a_probe.py`` expected "2%" in the AGF Vd refusal; the
+tolerance is ``agf.VD_TOLERANCE`` (1 %), which the probe now reads.
 
-Before (base b927019) and after (branch probe40b), the same probes,
-``PYTHONPATH=<tree> python tools/audit40b_probe.py`` from the tree's root:
-    before: see the round's report
-    after:  see the round's report
+The controls (``[control]`` or ``good=True``) are behaviours judged right: the analyses the
+report's refusal names for a telecentric lens (rms_spot, spot_rays, chief_ray, ray_fan,
+opd_fan, wavefront, encircled_energy, psf, mtf) run on one; a virtual object's paraxial
+data, spots and ``field_rays(depth=-50)``; an afocal lens's angular spot, wavefront and
+report; a fold's spots; configuration 2 of the zoom file; the classical command's defaults.
+
+Before (base b927019) and after (branch probe40b), the same 180 probes,
+``PYTHONPATH=<tree> python tools/audit40b_probe.py`` from the tree's root, about 4 minutes
+each on 2 busy cores:
+    before: clear error: 117, crash: 2, ok: 26, silent wrong: 21, vague error: 14
+    after:  clear error: 154, ok: 26
 """
 
 import copy
