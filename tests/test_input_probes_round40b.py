@@ -235,3 +235,20 @@ def test_a_telecentric_height_beyond_90_mm_is_traced_not_refused_as_an_angle():
     lens = jl.load(DATA / "zmx38a" / "tele_doublet_obna.zmx")
     with pytest.raises(ValueError, match=r"psf: no ray of the beam reaches the image surface"):
         psf.psf(lens, 95.0, pixel_size=0.1, kernel_size=31)
+
+
+def test_a_tolerance_model_of_a_telecentric_lens_takes_its_fields_as_heights():
+    """Main: ``ToleranceModel`` checked the fields as angles: a height of 95 mm was refused
+    as 95°, and heights of 0.0873 and 0.1745 mm warned about as radians."""
+    import warnings
+
+    lens = jl.load(DATA / "zmx38a" / "tele_doublet_obna.zmx")
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")
+        model = jl.tolerance.ToleranceModel(lens, fields=np.array([0.0, 0.0873, 0.1745]))
+    assert np.allclose(np.asarray(model.fields)[:, 1], [0.0, 0.0873, 0.1745])
+    model = jl.tolerance.ToleranceModel(lens, fields=np.array([0.0, 95.0]))
+    assert np.allclose(np.asarray(model.fields)[:, 1], [0.0, 95.0])
+    with pytest.raises(ValueError, match=r"ToleranceModel: fields must be finite \[F\] or \[F, 2\] "
+                       r"mm \(object heights of an object-space telecentric lens\)"):
+        jl.tolerance.ToleranceModel(lens, fields=np.array([np.nan]))

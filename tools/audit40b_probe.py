@@ -34,7 +34,8 @@ Gaps found and fixed (one mechanism each):
    and the one-field analyses (``psf``, ``mtf``, ``encircled_energy``, ``wavefront``,
    ``ray_fan``, ``opd_fan``) checked the field as an angle: NaN was refused as "angles in
    (-90, 90) deg", a height of 95 mm as 95°. ``telecentric.lens_field`` checks one field in
-   the lens's own unit for all of them (and ``field_rays``).
+   the lens's own unit for all of them (and ``field_rays``); ``ToleranceModel`` checked
+   its fields as angles too (a 95 mm height refused as 95°).
 8. Multi-configuration ``.zmx``: a malformed numeric row (``THIC 2 1 abc``, a value
    ``1e999``) of a configuration not read let ``load(config=2)`` open the file without a
    word. ``zmx_config`` parses every numeric row of every configuration first.
@@ -159,6 +160,8 @@ def telecentric():
     probe("ray_fan telecentric heights [1, 2, 3]", lambda: A.ray_fan(tele, np.array([1.0, 2.0, 3.0])), "field", "height")
     probe("opd_fan telecentric height NaN", lambda: A.opd_fan(tele, float("nan")), "field", "mm")
     probe("encircled_energy telecentric height NaN", lambda: A.encircled_energy(tele, float("nan"), [0.5]), "field", "mm")
+    probe("ToleranceModel telecentric fields [0, 95] mm (heights, not angles)", lambda: np.asarray(jl.tolerance.ToleranceModel(tele, fields=np.array([0.0, 95.0])).fields).tolist(), good=True)
+    probe("ToleranceModel telecentric fields [NaN]", lambda: jl.tolerance.ToleranceModel(tele, fields=np.array([np.nan])), "fields", "mm")
     probe("entrance_pupil_z telecentric", lambda: jl.paraxial.entrance_pupil_z(tele), "telecentric")
     probe("distortion telecentric", lambda: A.distortion(tele), "telecentric")
     probe("render telecentric", lambda: jl.render(tele, np.ones((8, 8, 3)), spp=4, key=jax.random.key(0), sensor=jl.Sensor((8, 8), 0.01)), "telecentric")
