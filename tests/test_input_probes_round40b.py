@@ -252,3 +252,17 @@ def test_a_tolerance_model_of_a_telecentric_lens_takes_its_fields_as_heights():
     with pytest.raises(ValueError, match=r"ToleranceModel: fields must be finite \[F\] or \[F, 2\] "
                        r"mm \(object heights of an object-space telecentric lens\)"):
         jl.tolerance.ToleranceModel(lens, fields=np.array([np.nan]))
+
+
+def test_field_sets_of_a_telecentric_lens_are_checked_as_heights():
+    """``semi_diameters_and_fans`` (the layout's fans) and ``vignetting_for_fields`` checked
+    the fields as angles: NaN named "angles in (-90, 90) deg" (main), a 95 mm height 95°."""
+    from jaxlens.analysis import spots
+
+    lens = jl.load(DATA / "zmx38a" / "tele_doublet_obna.zmx")
+    with pytest.raises(ValueError, match=r"semi_diameters_and_fans: fan_fields \(object heights "
+                       r"of an object-space telecentric lens\) must be finite numbers \(mm\)"):
+        spots.semi_diameters_and_fans(lens, np.array([0.0, np.nan]), np.zeros((3, 2)))
+    with pytest.raises(ValueError, match=r"vignetting_for_fields: fields \(object heights"):
+        sampling.vignetting_for_fields(dataclasses.replace(lens, vignetting=np.zeros((3, 5))),
+                                       np.array([np.inf]))

@@ -500,7 +500,7 @@ def vignetting_for_fields(lens: Lens, fields) -> Array | None:
         raise ValueError(f"vignetting_for_fields: fields must be [F] angles θy or [F, 2] "
                          f"pairs (θx, θy) in deg, F >= 1, got shape {f.shape}")
     if not checks.is_traced(f):  # a NaN or 95° field failed inside vmap (EquinoxRuntimeError)
-        checks.field_angles(f, "vignetting_for_fields", "fields")
+        telecentric.lens_fields(lens, f, "vignetting_for_fields")  # heights (mm) or angles
     return jax.vmap(lambda g: field_vignetting(lens, g))(f)
 
 

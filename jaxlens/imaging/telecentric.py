@@ -62,6 +62,17 @@ def lens_field(lens: Lens, field, where: str,
     return f
 
 
+def lens_fields(lens: Lens, fields, where: str, arg: str = "fields"):
+    """Fields of ``lens`` (any shape) checked in its own unit: finite object heights (mm) for
+    an object-space telecentric lens, else angles in (-90°, 90°) (``checks.field_angles``).
+    Returns ``fields`` (traced: with the check attached)."""
+    if not lens.telecentric_object:
+        return checks.field_angles(fields, where, arg)
+    checks.real_values(fields, arg, where, "mm")
+    return checks.values(fields, f"{arg} (object heights of an object-space telecentric lens)",
+                         where, unit="mm")
+
+
 def source(lens: Lens, field, pupil: Float[Array, "m 2"], wavelength, depth) -> Rays:
     """``[m]`` rays of an object-space telecentric ``lens`` from the object point at height
     ``field`` (mm, y or (x, y)) on the plane ``depth`` mm before surface 1 (> 0: a virtual
