@@ -35,7 +35,8 @@ Gaps found and fixed (one mechanism each):
    ``ray_fan``, ``opd_fan``) checked the field as an angle: NaN was refused as "angles in
    (-90, 90) deg", a height of 95 mm as 95°. ``telecentric.lens_field`` checks one field in
    the lens's own unit for all of them (and ``field_rays``); ``ToleranceModel`` checked
-   its fields as angles too (a 95 mm height refused as 95°).
+   its fields as angles too (a 95 mm height refused as 95°), and so did the layout's fans
+   (``semi_diameters_and_fans``) and ``vignetting_for_fields``: ``telecentric.lens_fields``.
 8. Multi-configuration ``.zmx``: a malformed numeric row (``THIC 2 1 abc``, a value
    ``1e999``) of a configuration not read let ``load(config=2)`` open the file without a
    word. ``zmx_config`` parses every numeric row of every configuration first.
@@ -162,6 +163,9 @@ def telecentric():
     probe("encircled_energy telecentric height NaN", lambda: A.encircled_energy(tele, float("nan"), [0.5]), "field", "mm")
     probe("ToleranceModel telecentric fields [0, 95] mm (heights, not angles)", lambda: np.asarray(jl.tolerance.ToleranceModel(tele, fields=np.array([0.0, 95.0])).fields).tolist(), good=True)
     probe("ToleranceModel telecentric fields [NaN]", lambda: jl.tolerance.ToleranceModel(tele, fields=np.array([np.nan])), "fields", "mm")
+    probe("semi_diameters_and_fans telecentric fan_fields NaN", lambda: A.spots.semi_diameters_and_fans(tele, np.array([0.0, np.nan]), np.zeros((3, 2))), "fan_fields", "mm")
+    probe("semi_diameters_and_fans telecentric fan_fields [0, 95] mm (control)", lambda: np.asarray(A.spots.semi_diameters_and_fans(tele, np.array([0.0, 95.0]), np.zeros((3, 2)))[0]), good=True)
+    probe("vignetting_for_fields telecentric fields inf", lambda: S.vignetting_for_fields(L(tele, vignetting=np.zeros((3, 5))), np.array([np.inf])), "fields", "mm")
     probe("entrance_pupil_z telecentric", lambda: jl.paraxial.entrance_pupil_z(tele), "telecentric")
     probe("distortion telecentric", lambda: A.distortion(tele), "telecentric")
     probe("render telecentric", lambda: jl.render(tele, np.ones((8, 8, 3)), spp=4, key=jax.random.key(0), sensor=jl.Sensor((8, 8), 0.01)), "telecentric")
