@@ -162,10 +162,10 @@ def test_a_string_is_not_a_number_anywhere_values_are_checked():
     '4' traced the object height 4 mm (main: a chief ray, without a word)."""
     lens = jl.load(DATA / "zmx38a" / "tele_doublet_obna.zmx")
     with pytest.raises(ValueError, match=r"chief_ray: field \(object heights of an object-space "
-                       r"telecentric lens\) must be finite numbers \(mm\), got str '4'"):
+                       r"telecentric lens\) must be finite numbers \(mm\), got '4'"):
         jl.analysis.chief_ray(lens, "4")
     with pytest.raises(ValueError, match=r"stop_radius: object_z must be finite numbers \(mm\), "
-                       r"got str '50'"):
+                       r"got '50'"):
         sampling.stop_radius(jl.zoo.cooke_triplet(), "real", object_z="50")
 
 

@@ -275,9 +275,9 @@ def values(x, arg: str, where: str, *, lo=None, hi=None, lo_open=False, hi_open=
 
     if is_traced(x):
         return eqx.error_if(x, jnp.any(bad_of(jnp.asarray(x), jnp)), msg)
-    if np.asarray(x).dtype.kind in "US":  # np.asarray("4", float) read a string as 4.0
-        raise ValueError(f"{msg}, got {type(x).__name__} {x!r}")  # as number() refuses one
-    try:
+    try:  # a string too, as number() refuses one: np.asarray("4", float) read it as 4.0
+        if np.asarray(x).dtype.kind in "US":
+            raise TypeError(x)
         a = np.asarray(x, dtype=float)
     except (TypeError, ValueError):
         raise ValueError(f"{msg}, got {x!r}") from None
