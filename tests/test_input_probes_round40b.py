@@ -266,3 +266,21 @@ def test_field_sets_of_a_telecentric_lens_are_checked_as_heights():
     with pytest.raises(ValueError, match=r"vignetting_for_fields: fields \(object heights"):
         sampling.vignetting_for_fields(dataclasses.replace(lens, vignetting=np.zeros((3, 5))),
                                        np.array([np.inf]))
+
+
+def test_mtf_directions_of_object_heights():
+    """An object height (x, y) = (3, 4) mm lies along (0.6, 0.8): its tangential direction;
+    as angles (3°, 4°) it gave (tan 3°, tan 4°)/norm = (0.6, 0.8) to 3e-4 only, and a height
+    of 95 mm was refused as 95° (the tolerance model's MTF and ``mtf`` of such a lens)."""
+    from jaxlens.imaging import otf
+
+    e_t, e_s = otf.mtf_directions(np.array([3.0, 4.0]), heights=True)
+    assert np.allclose(np.asarray(e_t), [0.6, 0.8], atol=1e-15)
+    assert np.allclose(np.asarray(e_s), [0.8, -0.6], atol=1e-15)
+    e_t, _ = otf.mtf_directions(np.array([0.0, 95.0]), heights=True)
+    assert np.allclose(np.asarray(e_t), [0.0, 1.0])
+    lens = jl.load(DATA / "zmx38a" / "tele_doublet_obna.zmx")
+    model = jl.tolerance.ToleranceModel(lens, fields=np.array([0.0, 95.0]), batch=2)
+    out = jl.tolerance.monte_carlo(model, trials=2, threshold_um=500.0, mtf_frequency=10.0)
+    # The 95 mm field carries no ray: every trial fails it (main: an angle refused as 95°).
+    assert float(out["yield"]) == 0.0 and np.isfinite(float(out["mtf_p50"]))

@@ -37,6 +37,9 @@ Gaps found and fixed (one mechanism each):
    the lens's own unit for all of them (and ``field_rays``); ``ToleranceModel`` checked
    its fields as angles too (a 95 mm height refused as 95°), and so did the layout's fans
    (``semi_diameters_and_fans``) and ``vignetting_for_fields``: ``telecentric.lens_fields``.
+   The MTF's tangential direction (``otf.mtf_directions``, for ``mtf`` and the tolerance
+   model's MTF) took heights as angles: (3, 4) mm along (0.5997, 0.8002), and 95 mm
+   refused inside the Monte-Carlo trials; ``heights=True`` for such a lens.
 8. Multi-configuration ``.zmx``: a malformed numeric row (``THIC 2 1 abc``, a value
    ``1e999``) of a configuration not read let ``load(config=2)`` open the file without a
    word. ``zmx_config`` parses every numeric row of every configuration first.

@@ -544,9 +544,10 @@ class ToleranceModel:
             "rms_compensated_um": mean_rms_um(data, self.weights, dz),
             "refocus_mm": dz,
             "mtf": jnp.sum(alpha * field_mtf(data, self.fields, self.wavelengths, frequency,
-                                             fnum, 0.0)),
+                                             fnum, 0.0, lens.telecentric_object)),
             "mtf_compensated": jnp.sum(alpha * field_mtf(data, self.fields, self.wavelengths,
-                                                         frequency, fnum, dz)),
+                                                         frequency, fnum, dz,
+                                                         lens.telecentric_object)),
             "min_valid_fraction": jnp.min(jnp.mean(data.weight, -1)),
         }
 

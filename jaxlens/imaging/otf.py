@@ -62,12 +62,19 @@ def diffraction_mtf(nu, lam_mm, fnum) -> Array:
     return jnp.where(inside, value, 0.0)
 
 
-def mtf_directions(field) -> tuple[Float[Array, "*b 2"], Float[Array, "*b 2"]]:
+def mtf_directions(field, heights: bool = False
+                   ) -> tuple[Float[Array, "*b 2"], Float[Array, "*b 2"]]:
     """Unit tangential (radial) and sagittal directions in the image plane of fields θy or
     (θx, θy) in degrees (leading axes batch): the tangential one along (tan θx, tan θy),
     (0, 1) on axis; the sagittal one that turned by −90°. The gradient on axis is finite
-    (the norm's square root of 0 had made it NaN)."""
-    t = jnp.tan(field_xy(field))
+    (the norm's square root of 0 had made it NaN). ``heights``: the fields are object
+    heights y or (x, y) in mm (an object-space telecentric lens's), the tangential direction
+    along (x, y); as angles, a height of 95 mm was refused as 95°."""
+    if heights:
+        f = jnp.asarray(field)
+        t = f if f.ndim and f.shape[-1] == 2 else jnp.stack([jnp.zeros_like(f), f], -1)
+    else:
+        t = jnp.tan(field_xy(field))
     r2 = jnp.sum(t * t, -1, keepdims=True)
     on_axis = r2 == 0
     r = jnp.sqrt(jnp.where(on_axis, 1.0, r2))

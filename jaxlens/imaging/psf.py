@@ -641,7 +641,7 @@ def _mtf_impl(lens, field, depth, wls, freqs, pixel_size, *, model, kernel_size,
               newton_iters):
     dtype = freqs.dtype
     lens = lens.astype(dtype)
-    e_t, e_s = mtf_directions(field)
+    e_t, e_s = mtf_directions(field, lens.telecentric_object)  # heights (mm) or angles
     fnum = working_fnum(lens, depth)
     nw = wls.shape[0]
     if isinstance(model, GeometricPSF):
