@@ -531,17 +531,13 @@ def _largest_field(lens):
 
 def _checked_fields(lens, fields, fractions, where: str) -> list:
     """The fields given (or the default ones), checked before any tracing."""
-    from .optics import checks
+    from .imaging import telecentric
 
     fields = _default_fields(lens, fractions) if fields is None else list(fields)
     if not fields:
         raise ValueError(f"{where}: fields must hold at least one field (θy or (θx, θy) in "
                          f"degrees), got none")
-    if getattr(lens, "telecentric_object", False):  # object heights (mm), no angle range
-        checks.values(np.asarray(fields, float), "fields (object heights of an object-space "
-                      "telecentric lens)", where, unit="mm")
-    else:
-        checks.field_angles(fields, where, "fields")  # here, not after fields are traced
+    telecentric.lens_fields(lens, fields, where)  # heights (mm) or angles (deg), untraced
     return fields
 
 

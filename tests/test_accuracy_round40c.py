@@ -258,7 +258,7 @@ def test_telecentric_heights_are_not_angles():
         assert "(60.0 mm, 100.0 mm)" in fig.axes[0].get_title()  # not degrees
         fig = plot_opd_fans(lens, [100.0], n=5)
         assert "100.0 mm" in fig.axes[0].get_title()
-    e_t, e_s = mtf_directions(np.array([2.0, -4.0]), object_heights=True)
+    e_t, e_s = mtf_directions(np.array([2.0, -4.0]), heights=True)
     np.testing.assert_allclose(np.asarray(e_t), np.array([2.0, -4.0]) / np.sqrt(20.0),
                                rtol=0, atol=1e-15)
     np.testing.assert_allclose(np.asarray(e_s), np.array([-4.0, -2.0]) / np.sqrt(20.0),

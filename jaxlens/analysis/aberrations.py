@@ -47,8 +47,8 @@ import jax.numpy as jnp
 import numpy as np
 from jaxtyping import Array, Bool, Float
 
-from ..imaging import telecentric
 from ..imaging.sampling import field_rays, lens_aim, lens_depth
+from ..imaging.telecentric import lens_field
 from ..optics import checks, paraxial
 from ..optics.lens import Lens
 from ..tracing.forward import DEFAULT_NEWTON_ITERS, aimed_jit, forward_mode_jit, trace
@@ -137,10 +137,7 @@ def ray_fan(lens: Lens, field, wavelengths=None, *, n: int = FAN_POINTS, depth=N
         chief ray does not) are NaN, with the validity flags beside them.
     """
     checks.focal_image(lens, "ray_fan")
-    if isinstance(lens, Lens) and lens.telecentric_object:  # a height (mm), not an angle
-        telecentric.one_height(field, "ray_fan")
-    else:
-        checks.one_field(field, "ray_fan")
+    lens_field(lens, field, "ray_fan")  # an object height (mm) or an angle (deg)
     shape = np.shape(field)
     f, wl = _inputs(lens, "ray_fan", jnp.reshape(jnp.asarray(field, float), (-1,)),
                     wavelengths, arg="field")

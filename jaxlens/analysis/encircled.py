@@ -54,9 +54,9 @@ import jax.numpy as jnp
 import numpy as np
 from jaxtyping import Array, Float
 
-from ..imaging import telecentric
 from ..imaging.psf import CoherentPSF, psf_info
 from ..imaging.sampling import pupil_points, pupil_polar
+from ..imaging.telecentric import lens_field
 from ..optics import checks, paraxial
 from ..optics.lens import Lens
 from .spots import chief_ray, spot_rays, weighted_centroid
@@ -112,6 +112,26 @@ def _radii_unit(lens, r, where: str) -> None:
                          f"µm? 20 µm is 0.02 mm")
 
 
+def _checked_radii(radii, where: str, dtype=None) -> Array:
+    """``radii`` (mm) flattened: real, at least one, each finite and >= 0 (an
+    ``error_if`` where traced). Every entry point of radii checks here: ``energy_within``
+    called directly counted a negative or NaN radius as holding nothing (0)."""
+    checks.real_values(radii, "radii", where, "mm")
+    r = jnp.reshape(jnp.asarray(radii, dtype), (-1,))
+    if r.size == 0:
+        raise ValueError(f"{where}: radii must hold at least one radius (mm)")
+    return checks.values(r, "radii", where, lo=0, unit="mm")
+
+
+def _checked_fractions(fraction, where: str, dtype=None) -> Array:
+    """``fraction`` (of the energy) as an array: real, each in (0, 1) (an ``error_if`` where
+    traced; 1.5 gave NaN and -0.5 a radius)."""
+    checks.real_values(fraction, "fraction", where, "(fraction of the energy)")
+    f = jnp.asarray(fraction, dtype)
+    return checks.values(f, "fraction", where, lo=0, hi=1, lo_open=True, hi_open=True,
+                         unit="(fraction of the energy)")
+
+
 def _check_common(lens, where, field, wavelength, method, reference, shape):
     if not isinstance(lens, Lens):
         raise TypeError(f"{where}: lens must be a jaxlens.Lens, got {type(lens).__name__}")
@@ -119,11 +139,7 @@ def _check_common(lens, where, field, wavelength, method, reference, shape):
                                 ("shape", shape, SHAPES)):
         if value not in allowed:
             raise ValueError(f"{where}: {arg} must be one of {allowed}, got {value!r}")
-    if lens.telecentric_object:  # an object height (mm): no angle range, no radians
-        field = telecentric.one_height(field, where)
-    else:
-        field = checks.one_field(field, where)
-        checks.warn_if_radian_fields(field, where, "field")  # here: inner traces are quiet
+    field = lens_field(lens, field, where)  # here: the inner traces are quiet
     wl = lens.primary_wavelength if wavelength is None else wavelength
     if jnp.ndim(wl) > 1 or jnp.size(wl) == 0:
         raise ValueError(f"{where}: wavelength must be a scalar or [W] µm with W >= 1, got "
@@ -247,11 +263,7 @@ def encircled_energy(lens: Lens, field, radii, *, wavelength=None, method: str =
     """
     checks.focal_image(lens, "encircled_energy")
     where = "encircled_energy"
-    checks.real_values(radii, "radii", where, "mm")
-    r = jnp.reshape(jnp.asarray(radii, lens.epd.dtype), (-1,))
-    if r.size == 0:
-        raise ValueError(f"{where}: radii must hold at least one radius (mm)")
-    r = checks.values(r, "radii", where, lo=0, unit="mm")  # an error_if where traced
+    r = _checked_radii(radii, where, lens.epd.dtype)
     if not checks.is_traced((r, lens)):  # a traced lens has no concrete image size
         _radii_unit(lens, np.asarray(r), where)
     samples = EnergySamples(*_samples(
@@ -278,11 +290,7 @@ def radius_for_fraction(lens: Lens, field, fraction, *, wavelength=None,
     """
     checks.focal_image(lens, "radius_for_fraction")
     where = "radius_for_fraction"
-    checks.real_values(fraction, "fraction", where, "(fraction of the energy)")
-    f = jnp.asarray(fraction, lens.epd.dtype)
-    # Traced (jit, grad), 1.5 gave NaN and -0.5 a radius: an error_if there.
-    f = checks.values(f, "fraction", where, lo=0, hi=1, lo_open=True, hi_open=True,
-                      unit="(fraction of the energy)")
+    f = _checked_fractions(fraction, where, lens.epd.dtype)
     samples = EnergySamples(*_samples(
         lens, field, where, wavelength=wavelength, method=method,
         reference=reference, shape=shape, pupil=pupil, depth=depth, pixel_size=pixel_size,
@@ -325,10 +333,10 @@ def energy_samples(lens: Lens, field, *, wavelength=None, method: str = "geometr
 
 
 def energy_within(samples: EnergySamples, radii) -> EncircledEnergy:
-    """The fraction of ``samples``' energy within each of ``radii`` (mm, ``[R]``, checked by
-    the caller: finite, >= 0)."""
+    """The fraction of ``samples``' energy within each of ``radii`` (mm, flattened to
+    ``[R]``; each finite and >= 0, else a ``ValueError``)."""
     d, w, total, center, trunc = samples
-    r = jnp.reshape(jnp.asarray(radii), (-1,))
+    r = _checked_radii(radii, "energy_within", d.dtype)
     inside = (d[None, :] <= r[:, None]).astype(w.dtype)
     energy = jnp.sum(inside * w[None, :], axis=-1) / total
     energy = jnp.where(jnp.all(jnp.isfinite(center)), energy, jnp.nan)
@@ -336,10 +344,10 @@ def energy_within(samples: EnergySamples, radii) -> EncircledEnergy:
 
 
 def radius_holding(samples: EnergySamples, fraction) -> Array:
-    """The radius (mm) holding each ``fraction`` (in (0, 1), checked by the caller) of
-    ``samples``' energy; the shape of ``fraction`` (see :func:`radius_for_fraction`)."""
+    """The radius (mm) holding each ``fraction`` (each in (0, 1), else a ``ValueError``)
+    of ``samples``' energy; the shape of ``fraction`` (see :func:`radius_for_fraction`)."""
     d, w, total, center, _ = samples
-    f = jnp.asarray(fraction)
+    f = _checked_fractions(fraction, "radius_holding", d.dtype)
     # Sort by distance; samples without energy sit at the far end and add nothing.
     key = jnp.where(w > 0, d, jnp.inf)
     order = jnp.argsort(jax.lax.stop_gradient(key))

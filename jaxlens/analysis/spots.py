@@ -24,6 +24,7 @@ import numpy as np
 from jaxtyping import Array, Bool, Float
 
 from ..imaging.sampling import field_rays, lens_aim, lens_depth, pupil_grid, unit_disc_limit
+from ..imaging.telecentric import lens_fields
 from ..optics import checks, paraxial, travel
 from ..optics.lens import Lens
 from ..optics.rays import Rays
@@ -466,7 +467,7 @@ def semi_diameters_and_fans(lens: Lens, fan_fields, fan_pupil, n_rim: int = 64):
     # The fans as the lens's fields are (their core trusts what its caller checked); their
     # pupil may be overfilled, so it is not held to the unit disc.
     if not checks.is_traced((fan_fields, fan_pupil)):
-        checks.field_angles(fan_fields, "semi_diameters_and_fans", "fan_fields")
+        lens_fields(lens, fan_fields, "semi_diameters_and_fans", "fan_fields")  # mm or deg
         checks.finite_array(fan_pupil, "fan_pupil", "semi_diameters_and_fans",
                             "normalised pupil coordinates")
     checks.number(n_rim, "n_rim", "clear_semi_diameters", lo=4, hi=checks.MAX_SAMPLES,

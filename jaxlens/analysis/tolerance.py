@@ -313,16 +313,15 @@ def symmetric_fields(fields) -> tuple[np.ndarray, np.ndarray]:
 
 
 # ------------------------------------------------------------------------ the model
-def _check_fields(lens, fields, weights, where):
-    heights = lens.telecentric_object  # object heights (mm), no angle range
-    unit = "mm (object heights)" if heights else "degrees"
+def _check_fields(fields, weights, where, heights=False):
+    unit = "mm (object heights of an object-space telecentric lens)" if heights else "degrees"
     f = np.asarray(fields, float)
     if f.ndim not in (1, 2) or f.shape[0] == 0 or (f.ndim == 2 and f.shape[1] != 2) \
             or not np.all(np.isfinite(f)):
         raise ValueError(f"{where}: fields must be finite [F] or [F, 2] {unit} with F >= 1, "
                          f"got shape {f.shape}")
-    if not heights:
-        checks.field_angles(f, where, "fields")  # 95° would wrap, found after the trials
+    if not heights:  # a telecentric lens's 95 mm height was refused as 95°
+        checks.field_angles(f, where, "fields")  # 95° would wrap, found only after the trials
         checks.warn_if_radian_fields(f, where, "fields")  # np.radians([0, 10, 20])
     w = np.ones(f.shape[0]) if weights is None else np.asarray(weights, float)
     if w.shape != (f.shape[0],) or not np.all(np.isfinite(w)) or np.any(w < 0) or w.sum() <= 0:
@@ -361,8 +360,8 @@ class ToleranceModel:
         if not isinstance(self.tolerances, Tolerances):
             raise ValueError(f"ToleranceModel: tolerances must be a Tolerances, got "
                              f"{type(tolerances).__name__}")
-        f, w = _check_fields(lens, lens.fields if fields is None else fields, field_weights,
-                             "ToleranceModel")
+        f, w = _check_fields(lens.fields if fields is None else fields, field_weights,
+                             "ToleranceModel", lens.telecentric_object)
         if isinstance(batch, bool) or not (isinstance(batch, (int, np.integer)) and batch >= 1):
             raise ValueError(f"ToleranceModel: batch must be a whole number >= 1, got {batch!r}")
         batch = int(batch)
@@ -546,10 +545,10 @@ class ToleranceModel:
             "rms_compensated_um": mean_rms_um(data, self.weights, dz),
             "refocus_mm": dz,
             "mtf": jnp.sum(alpha * field_mtf(data, self.fields, self.wavelengths, frequency,
-                                             fnum, 0.0, heights=lens.telecentric_object)),
-            "mtf_compensated": jnp.sum(alpha * field_mtf(
-                data, self.fields, self.wavelengths, frequency, fnum, dz,
-                heights=lens.telecentric_object)),
+                                             fnum, 0.0, lens.telecentric_object)),
+            "mtf_compensated": jnp.sum(alpha * field_mtf(data, self.fields, self.wavelengths,
+                                                         frequency, fnum, dz,
+                                                         lens.telecentric_object)),
             "min_valid_fraction": jnp.min(jnp.mean(data.weight, -1)),
         }
 

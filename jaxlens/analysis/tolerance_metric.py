@@ -111,10 +111,10 @@ def best_focus(data: SpotData, weights, *, iters: int = 8) -> Float[Array, ""]:
     return jax.lax.fori_loop(0, iters, step, z0)
 
 
-def field_mtf(data: SpotData, fields, wavelengths, frequency, fnum, dz=0.0, *,
-              heights: bool = False) -> Float[Array, " F"]:
+def field_mtf(data: SpotData, fields, wavelengths, frequency, fnum, dz=0.0, heights=False
+              ) -> Float[Array, " F"]:
     """Geometric × diffraction MTF at ``frequency`` (cycles/mm), mean of T and S, per field
-    (``heights``: the fields are object heights in mm, ``otf.mtf_directions``)."""
+    (``heights``: the fields are a telecentric lens's object heights in mm, not angles)."""
     q = data.position + dz * data.slope  # [F, W, M, 2]
     w = data.weight
     tot_w = jnp.maximum(jnp.sum(w, -1, keepdims=True), jnp.finfo(q.dtype).tiny)
@@ -123,7 +123,7 @@ def field_mtf(data: SpotData, fields, wavelengths, frequency, fnum, dz=0.0, *,
     wn = w / tot_w
     lam = wavelengths * 1e-3
     diff = diffraction_mtf(frequency, lam, fnum)  # [W]
-    e_t, e_s = mtf_directions(fields, object_heights=heights)
+    e_t, e_s = mtf_directions(fields, heights=heights)
 
     def along(e):
         proj = jnp.sum(rel * e[:, None, None, :], -1)  # [F, W, M]

@@ -81,8 +81,8 @@ import jax.numpy as jnp
 import numpy as np
 from jaxtyping import Array, ArrayLike, Bool, Float
 
-from ..imaging import telecentric
 from ..imaging.sampling import field_rays, lens_aim, lens_depth, pupil_points
+from ..imaging.telecentric import lens_field
 from ..optics import checks, paraxial
 from ..optics.coordinates import CoordinateBreak
 from ..optics.lens import RAY_AIMING, Lens, unclipped
@@ -141,12 +141,7 @@ def _common(lens, field, wavelength, depth, reference, aim, where: str):
                          f"(or None, the lens's own)")
     aim = lens_aim(lens, aim, where)
     dtype = lens.epd.dtype
-    if lens.telecentric_object:  # object heights (mm): no angle's range, no radians
-        f = jnp.asarray(telecentric.one_height(field, where), dtype)
-    else:
-        f = jnp.asarray(checks.one_field(field, where), dtype)
-        if not checks.is_traced(field):  # 20° typed as 0.349 rad: as rms_spot, chief_ray
-            checks.warn_if_radian_fields(field, where, "field")
+    f = jnp.asarray(lens_field(lens, field, where), dtype)  # heights (mm) or angles (deg)
     wl = lens.primary_wavelength if wavelength is None else wavelength
     checks.real_values(wl, "wavelength", where, "µm")
     if jnp.shape(wl) != ():

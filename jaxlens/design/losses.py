@@ -46,7 +46,7 @@ from jaxtyping import Array, Float
 
 from ..imaging.sampling import grid_axis, pupil_hexapolar
 from ..optics import checks, paraxial
-from ..optics.lens import Lens
+from ..optics.lens import Lens, Sensor
 from ..optics.rays import Rays
 from ..tracing.forward import stacked_surfaces, trace_path
 
@@ -400,14 +400,15 @@ def reverse_mode(objective):
 class ImageObjective(eqx.Module):
     """The paper's image-based loss: render a scene through the lens, compare with the scene.
 
-    The scene (linear RGB, the sensor's aspect) is rendered by backward ray tracing
+    The scene (linear RGB, one value per sensor pixel) is rendered by backward ray tracing
     (``jaxlens.imaging.render``, ``relative_illumination=False``) after the distortion relaxation of
     ``jaxlens.imaging.distortion``: the object is pre-warped by the lens's own distortion
     (``prewarp``, held fixed for the gradient), so the loss sees blur and not distortion,
     and the alignment penalty (``alignment_penalty``, weight ``alpha``, in pixels²) keeps
     distortion bounded. (Differentiating through the pre-warp, as
     ``distortion_relax.relaxed_render`` does, gave NaN gradients on a 32 × 32 sensor.) The
-    residuals are the pixel differences scaled by ``sqrt(weight / n_pixels)``, the
+    residuals are the pixel differences scaled by ``sqrt(weight / n)`` (n = H·W·3 values:
+    their squares sum to ``weight`` times the mean squared error), the
     penalty's square root, and the ray objective's regularizer residuals (so the
     regularizers act as with the ray loss). The stop's semi-diameter is set to the stage's
     EPD/2, as rendering needs a real aperture. The mask and the per-epoch field weights
@@ -415,8 +416,9 @@ class ImageObjective(eqx.Module):
 
     Attributes:
         ray: the ray ``Objective`` (parameterisation, sampling, regularizers).
-        scene: ``[H, W, 3]`` linear scene.
-        sensor: the sensor to render on.
+        scene: ``[H, W, 3]`` linear scene, (H, W) the sensor's resolution (the render is
+            compared with it pixel by pixel).
+        sensor: the ``Sensor`` to render on (its pitch in mm; the penalty is in its pixels).
         spp: rays per pixel and wavelength.
         alpha: distortion alignment penalty weight.
         weight: weight of the mean squared pixel error.
@@ -445,6 +447,15 @@ class ImageObjective(eqx.Module):
                              f"{self.scene.shape}")
         if not checks.is_traced(self.scene):
             checks.float_image(self.scene, w, "scene")
+        # Before: any sensor was taken, and a scene of another size than the sensor failed
+        # at the first step of the run, in the difference of the render and the scene.
+        if not isinstance(self.sensor, Sensor):
+            raise TypeError(f"{w}: sensor must be a jaxlens.Sensor, got "
+                            f"{type(self.sensor).__name__}")
+        if tuple(self.scene.shape[:2]) != tuple(self.sensor.resolution):
+            raise ValueError(f"{w}: scene must have the sensor's resolution (rows, columns) "
+                             f"{tuple(self.sensor.resolution)} pixels, the render it is "
+                             f"compared with, got {tuple(self.scene.shape[:2])}")
 
     @property
     def sampling(self) -> RayLoss:

@@ -63,21 +63,21 @@ def diffraction_mtf(nu, lam_mm, fnum) -> Array:
     return jnp.where(inside, value, 0.0)
 
 
-def mtf_directions(field, *, object_heights: bool = False
+def mtf_directions(field, *, heights: bool = False
                    ) -> tuple[Float[Array, "*b 2"], Float[Array, "*b 2"]]:
     """Unit tangential (radial) and sagittal directions in the image plane of fields θy or
     (θx, θy) in degrees (leading axes batch): the tangential one along (tan θx, tan θy),
     (0, 1) on axis; the sagittal one that turned by −90°. The gradient on axis is finite
     (the norm's square root of 0 had made it NaN).
 
-    ``object_heights`` (an object-space telecentric lens, ``Lens.telecentric_object``): the
+    ``heights`` (an object-space telecentric lens, ``Lens.telecentric_object``): the
     fields are object heights in mm, y or (x, y), and the tangential direction is along
     (x, y) itself, the image of a radial line being radial in a rotationally symmetric lens
     (the magnification's sign only reverses it). Read as angles, (2, −4) mm had its
     direction off by 0.03° (tan 2°/tan 4° is not 1/2) and a height of 90 mm or more was
     refused as a field angle outside (−90°, 90°).
     """
-    t = telecentric.height_xy(field, "mtf_directions") if object_heights else jnp.tan(
+    t = telecentric.height_xy(field, "mtf_directions") if heights else jnp.tan(
         field_xy(field))
     r2 = jnp.sum(t * t, -1, keepdims=True)
     on_axis = r2 == 0

@@ -398,11 +398,7 @@ def _prepare(lens, field, depth, wavelength, kernel_size, pixel_size, model, cen
     wl = checks.wavelengths(lens, jnp.asarray(wl, dtype), caller, "wavelength")
     checks.material_indices(lens, wl, caller)
     checks.primary_wavelength(lens, caller, "the chief ray's and paraxial pupils'")
-    if isinstance(lens, Lens) and lens.telecentric_object:  # object heights (mm): no
-        field = telecentric.one_height(field, caller)  # angle's range, no radians warning
-    else:
-        field = checks.field_angles(field, caller, "field")
-        checks.warn_if_radian_fields(field, caller, "field")  # psf(lens, 0.349) for 20°
+    field = telecentric.lens_field(lens, field, caller)  # heights (mm) or angles (deg)
     if wl.ndim > 1 or wl.size == 0:
         raise ValueError(f"{caller}: wavelength must be a scalar or 1-D (µm) with at least one "
                          f"value, got shape {wl.shape}")
@@ -645,7 +641,7 @@ def _mtf_impl(lens, field, depth, wls, freqs, pixel_size, *, model, kernel_size,
               newton_iters):
     dtype = freqs.dtype
     lens = lens.astype(dtype)
-    e_t, e_s = mtf_directions(field, object_heights=lens.telecentric_object)
+    e_t, e_s = mtf_directions(field, heights=lens.telecentric_object)
     fnum = working_fnum(lens, depth)
     nw = wls.shape[0]
     if isinstance(model, GeometricPSF):
@@ -781,5 +777,6 @@ def mtf(
         t = eqx.error_if(t, ~jnp.all(lit), msg)
     elif not np.all(np.asarray(lit)):
         dark = np.asarray(wls)[~np.asarray(lit)]
-        raise NoLightError(f"{msg} (field {checks.fmt(field)} deg, at {checks.fmt(dark)} µm)")
+        unit = "mm" if lens.telecentric_object else "deg"  # an object height, or an angle
+        raise NoLightError(f"{msg} (field {checks.fmt(field)} {unit}, at {checks.fmt(dark)} µm)")
     return freqs, t, s

@@ -500,13 +500,15 @@ def vignetting_for_fields(lens: Lens, fields) -> Array | None:
         raise ValueError(f"vignetting_for_fields: fields must be [F] angles θy or [F, 2] "
                          f"pairs (θx, θy) in deg, F >= 1, got shape {f.shape}")
     if not checks.is_traced(f):  # a NaN or 95° field failed inside vmap (EquinoxRuntimeError)
-        checks.field_angles(f, "vignetting_for_fields", "fields")
+        telecentric.lens_fields(lens, f, "vignetting_for_fields")  # heights (mm) or angles
     return jax.vmap(lambda g: field_vignetting(lens, g))(f)
 
 
 def field_rays(lens: Lens, field, pupil, wavelength=None, *, depth=None, aim=None) -> Rays:
     """Rays for a field angle at infinity (``depth=None``, inf, or ``INFINITE_OBJECT_MM`` =
-    1e10 mm and more, as for ``Lens.object_distance``) or from a finite depth (mm).
+    1e10 mm and more, as for ``Lens.object_distance``) or from a finite depth (one number,
+    mm to surface 1; < 0: a virtual object that far after surface 1, as a Lens's own
+    ``object_distance`` may be; the analyses' ``depth`` must be > 0).
 
     The chief ray of a finite-depth field point makes the angle θ with the axis at the
     entrance pupil, as for an object at infinity. ``aim``: "paraxial", "real",
@@ -526,12 +528,12 @@ def field_rays(lens: Lens, field, pupil, wavelength=None, *, depth=None, aim=Non
     """
     if depth is not None:
         checks.real_values(depth, "depth", "field_rays", "mm")
-    if lens.telecentric_object:  # fields are object heights (mm)
-        field = telecentric.one_height(field, "field_rays")
-    else:
-        field = checks.one_field(field, "field_rays",
-                                 "trace several fields one at a time, or vmap")
-        checks.warn_if_radian_fields(field, "field_rays", "field")  # 20° typed as 0.349
+        if jnp.ndim(depth) != 0:  # [2] failed in jnp.concatenate, naming no argument
+            raise ValueError(f"field_rays: depth must be one distance (mm), got shape "
+                             f"{jnp.shape(depth)}; trace several depths one at a time, or "
+                             f"vmap")
+    field = telecentric.lens_field(lens, field, "field_rays",  # heights (mm) or angles
+                                   "trace several fields one at a time, or vmap")
     aim = lens_aim(lens, aim, "field_rays")
     if lens.telecentric_object and aim != "paraxial":
         raise ValueError(f"field_rays: the lens is object-space telecentric (its chief rays "
@@ -597,7 +599,8 @@ def stop_radius(lens: Lens, stop_size: str = "paraxial", *, object_z=None) -> Fl
     plane (parallel to the axis for an object at infinity; from (0, 0, ``object_z``), mm
     global, for a finite one), traced without apertures to the stop: its distance from the
     stop's axis there (Zemax's "Real" ray aiming). A marginal ray that misses a surface or
-    is totally reflected on the way gives NaN.
+    is totally reflected on the way is a ``ValueError`` naming the surface (was NaN, and
+    every ray aimed with it invalid, without a word); traced (jit), NaN.
     """
     from ..tracing.forward import trace_path
 
@@ -621,8 +624,15 @@ def stop_radius(lens: Lens, stop_size: str = "paraxial", *, object_z=None) -> Fl
     else:
         d = line_direction(jnp.stack([jnp.zeros((), dt), jnp.zeros((), dt),
                                       jnp.asarray(object_z, dt)]), rim)
-    out = trace_path(unclipped(lens), Rays(rim[None], d[None], lens.primary_wavelength),
-                     upto=lens.stop, uniform=True)[-1]
+    path = trace_path(unclipped(lens), Rays(rim[None], d[None], lens.primary_wavelength),
+                      upto=lens.stop, uniform=True)
+    out = path[-1]
+    if not checks.is_traced((lens, object_z)) and not bool(out.valid[0]):  # was NaN
+        z = "" if object_z is None else f" from (0, 0, {checks.fmt(np.asarray(object_z))}) mm"
+        raise ValueError(f"stop_radius: the real marginal ray{z} through the entrance pupil's "
+                         f"rim misses surface {1 + int(np.argmin(path.valid[:, 0]))} or is "
+                         f"totally reflected there: no real ray sizes the stop for this "
+                         f"object; use stop_size='paraxial' (Lens.aim='real')")
     xy = out.origin[0, :2]
     r2 = jnp.sum(xy * xy)
     r = jnp.sqrt(jnp.where(r2 > 0, r2, 1.0))  # double where: no NaN gradient on the axis
@@ -737,6 +747,12 @@ def lens_depth(lens: Lens, depth, where: str):
     own = depth is None and not lens.object_at_infinity
     if own:
         depth = lens.object_distance  # negative for a virtual object
+        if not checks.is_traced((lens, depth)) and float(depth) < 0:  # traced: an error_if
+            zep = float(paraxial.entrance_pupil_z(lens, lens.primary_wavelength))
+            if _bad_point_z(-float(depth), zep, np):  # was an error_if after the whole trace
+                raise ValueError(f"{where}: the lens's object must be {POINT_Z_RANGE}; its "
+                                 f"object_distance {float(depth):g} mm puts it on the entrance "
+                                 f"pupil's plane (z = {zep:g} mm)")
     given = static_depth(depth, where, virtual_ok=own)
     if given is None or isinstance(given, jax.core.Tracer):
         return given

@@ -13,6 +13,7 @@ of ``jaxlens.imaging.sampling`` call these for such a lens (``sampling.field_ray
 
 from __future__ import annotations
 
+import equinox as eqx
 import jax.numpy as jnp
 import numpy as np
 from jaxtyping import Array, Float
@@ -46,19 +47,55 @@ def one_height(field, where: str):
     return jnp.reshape(jnp.asarray(field), ()) if shape == (1,) else jnp.asarray(field)
 
 
+def lens_field(lens: Lens, field, where: str,
+               hint: str = "analyse several fields one at a time"):
+    """One field of ``lens``, checked before tracing in the lens's own unit: an object
+    height (mm, y or (x, y); :func:`one_height`) for an object-space telecentric lens, else
+    an angle θy or (θx, θy) in degrees (``checks.one_field``; warned about where the angles
+    look like radians). The one-field analyses (PSF, MTF, encircled energy, wavefront, the
+    fans) checked every field as an angle: a telecentric lens's height of 95 mm was refused
+    as "95 deg" outside (-90, 90)."""
+    if lens.telecentric_object:
+        return one_height(field, where)
+    f = checks.one_field(field, where, hint)
+    checks.warn_if_radian_fields(field, where, "field")  # 20° typed as 0.349
+    return f
+
+
+def lens_fields(lens: Lens, fields, where: str, arg: str = "fields"):
+    """Fields of ``lens`` (any shape) checked in its own unit: finite object heights (mm) for
+    an object-space telecentric lens, else angles in (-90°, 90°) (``checks.field_angles``).
+    Returns ``fields`` (traced: with the check attached)."""
+    if not lens.telecentric_object:
+        return checks.field_angles(fields, where, arg)
+    checks.real_values(fields, arg, where, "mm")
+    return checks.values(fields, f"{arg} (object heights of an object-space telecentric lens)",
+                         where, unit="mm")
+
+
 def source(lens: Lens, field, pupil: Float[Array, "m 2"], wavelength, depth) -> Rays:
     """``[m]`` rays of an object-space telecentric ``lens`` from the object point at height
-    ``field`` (mm, y or (x, y)) on the plane ``depth`` mm before surface 1 (negative: a
-    virtual object after it), launched at that point (``opl`` 0) with the slopes
-    (Px, Py)·tan u toward +z. ``pupil`` (normalised points) and ``wavelength`` (µm) are the
-    caller's, checked."""
+    ``field`` (mm, y or (x, y)) on the plane ``depth`` mm before surface 1 (> 0: a virtual
+    object is refused, as ``Lens`` refuses one for such a lens), launched at that point
+    (``opl`` 0) with the slopes (Px, Py)·tan u toward +z. ``pupil`` (normalised points)
+    and ``wavelength`` (µm) are the caller's, checked."""
     if not lens.telecentric_object:
         raise ValueError("telecentric.source: the lens is not object-space telecentric "
                          "(Lens.object_na is None); use sampling.field_rays")
     if depth is None:
         raise ValueError("an object-space telecentric lens (Lens.object_na given) needs a "
                          "finite object distance (mm); got an object at infinity")
-    depth = jnp.asarray(check_object_distance(depth, "depth", "telecentric.source"))
+    depth = check_object_distance(depth, "depth", "telecentric.source")
+    # A virtual object (depth < 0) launched its rays after surface 1, which they then missed
+    # (Lens refuses one for a telecentric lens; field_rays(depth=-5) traced it).
+    if checks.is_traced(depth):
+        depth = eqx.error_if(depth, depth < 0, "telecentric.source: an object-space "
+                             "telecentric lens needs a real object (depth > 0 mm)")
+    elif float(depth) < 0:
+        raise ValueError(f"telecentric.source: an object-space telecentric lens (object_na "
+                         f"given) needs a real object before surface 1 (depth > 0 mm), got "
+                         f"{float(depth):g} mm (a virtual object is not supported for it)")
+    depth = jnp.asarray(depth)
     xy = height_xy(field, "telecentric.source").astype(pupil.dtype)
     point = jnp.concatenate([xy, -depth[None].astype(pupil.dtype)])
     slope = paraxial.object_slope(lens).astype(pupil.dtype)

@@ -3,3 +3,4 @@
 from . import images as images
 from .files import load as load
 from .files import save as save
+from .json_values import MissingFolderError as MissingFolderError

@@ -14,6 +14,7 @@ import numpy as np
 
 from ..optics import checks
 from ..optics.lens import Lens
+from .json_values import output_file
 from .lensfile import load_json, save_json
 from .zmx import load_zmx, save_zmx
 
@@ -122,6 +123,9 @@ def save(lens: Lens, path: str | os.PathLike, **options) -> list[str]:
     Raises:
         ValueError: an unknown extension, a bad option, or a lens that ``load`` would
             refuse (fields, wavelengths, primary); nothing is written.
+        MissingFolderError: the path's folder does not exist (no folder is created); both
+            a ``ValueError`` and a ``FileNotFoundError``, as every jaxlens writer raises
+            (``jaxlens.io.json_values.output_file``).
 
     Returns:
         The paths written: the file itself, and for ``.zmx`` any ``.AGF`` glass catalogs
@@ -138,10 +142,7 @@ def save(lens: Lens, path: str | os.PathLike, **options) -> list[str]:
                          f".zmx")
     ext = _ext(path, "save")
     _loadable(lens)
-    folder = os.path.dirname(os.path.abspath(path))
-    if not os.path.isdir(folder):  # before a .zmx's glass catalogs are written beside it
-        raise FileNotFoundError(f"save: the folder {folder!r} of {path!r} does not exist "
-                                f"(save creates no folders)")
+    output_file(path, "save")  # a missing folder: before a .zmx's catalogs are written beside it
     if ext == ".json":
         if options:
             raise ValueError(f"save: .json takes no options, got {sorted(options)}")

@@ -179,11 +179,20 @@ def pretty(o: Any, level: int = 0) -> str:
     return "[\n" + ",\n".join(body) + "\n" + pad + "]"
 
 
+class MissingFolderError(FileNotFoundError, ValueError):
+    """A file to write whose folder does not exist: the one refusal every writer of jaxlens
+    gives (``save``, ``save_json``, ``save_zmx``, ``plot.save``, the image writers; no writer
+    creates folders). It is both a ``FileNotFoundError`` and a ``ValueError``, so either
+    ``except`` catches it: ``save`` raised ``FileNotFoundError`` and the others
+    ``ValueError`` for the same mistake."""
+
+
 def output_file(path: str | os.PathLike, where: str, suffix: str | None = None) -> str:
     """``path`` as a file to write: not a folder, in a folder that exists, and ending in
     ``suffix`` (any case) where one is given, so that the bytes match the name (``save_zmx``
     wrote Zemax text into ``lens.json``, ``save_json`` JSON into ``lens.zmx``). Raises
-    ``ValueError`` naming ``where`` and the path; a writer that writes through a temporary
+    ``ValueError`` naming ``where`` and the path (``MissingFolderError``, also a
+    ``FileNotFoundError``, for a missing folder); a writer that writes through a temporary
     file beside its target failed with ``IsADirectoryError`` or a ``FileNotFoundError`` naming
     that temporary file (``.lens.json.123.partial``)."""
     p = os.fspath(path)
@@ -195,8 +204,9 @@ def output_file(path: str | os.PathLike, where: str, suffix: str | None = None) 
                          f"{suffix}, got {p!r}")
     folder = os.path.dirname(os.path.abspath(p))
     if not os.path.isdir(folder):
-        raise ValueError(f"{where}: no such folder {folder!r} to write "
-                         f"{os.path.basename(p)!r} in")
+        raise MissingFolderError(f"{where}: no such folder {folder!r} to write "
+                                 f"{os.path.basename(p)!r} in (the folder does not exist; "
+                                 f"{where} creates no folders)")
     return p
 
 

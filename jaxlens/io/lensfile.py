@@ -774,6 +774,7 @@ def dumps(lens: Lens) -> str:
 
 
 def save_json(lens: Lens, path: str | os.PathLike) -> None:
-    """Write a JSON lens file (``path`` ends in ``.json``, any case)."""
+    """Write a JSON lens file (``path`` ends in ``.json``, any case; its folder must exist:
+    else ``json_values.MissingFolderError``, a ``ValueError`` and a ``FileNotFoundError``)."""
     path = output_file(path, "save_json", ".json")
     write_whole(path, dumps(lens), where="save_json")

@@ -185,6 +185,7 @@ def select(f: ZmxFile, config: int | None, strict: bool) -> int:
         return chosen
     try:
         ops = operands(f, n)
+        _numbers(ops)
     except ValueError as e:
         if chosen != active:
             raise
@@ -420,6 +421,17 @@ def _same(a: str, b: str) -> bool:
         return float(a) == float(b)
     except ValueError:
         return a.strip('"').upper() == b.strip('"').upper()
+
+
+def _numbers(ops: list[Operand]) -> None:
+    """Every row of the numeric operands jaxlens reads, of every configuration, is a finite
+    number (``ValueError`` naming the line): a row that no reading parsed (``THIC 2 1 abc``
+    read as configuration 2) let the file open without a word."""
+    for op in ops:
+        if op.name in ENVIRONMENT or op.name in WEIGHTS or PARAMETER_OPERAND.fullmatch(
+                op.name) or (op.name in _APPLY and op.name != "GLSS"):
+            for value, ln in op.values.values():
+                _number(value, ln)
 
 
 def _number(value: str, ln: ZmxLine) -> float:

@@ -641,7 +641,8 @@ def save_zmx(lens: Lens, path: str | os.PathLike, *, model_glass: str = "blank")
 
     Args:
         lens: the lens.
-        path: the ``.zmx`` file.
+        path: the ``.zmx`` file; its folder must exist (else ``MissingFolderError``, a
+            ``ValueError`` and a ``FileNotFoundError``, as every writer raises).
         model_glass: ``"blank"`` writes a ``ModelGlass`` as Zemax's own model glass
             (``GLAS ___BLANK 1 0 nd Vd …``, exact nd and Vd; Zemax's model dispersion away
             from the d line differs slightly from jaxlens's); ``"agf"`` writes it into the

@@ -259,8 +259,7 @@ def values(x, arg: str, where: str, *, lo=None, hi=None, lo_open=False, hi_open=
     without the value.
     """
     span = interval(lo, hi, lo_open, hi_open)
-    if inf_ok and hi is None:
-        span = span[:-1] + "]"
+    span = span[:-1] + "]" if inf_ok and hi is None else span
     u = f" {unit}" if unit else ""
     kind = "numbers" if inf_ok else "finite numbers"
     msg = (f"{where}: {arg} must be {kind} in {span}{u}" if lo is not None or hi is not None
@@ -276,7 +275,9 @@ def values(x, arg: str, where: str, *, lo=None, hi=None, lo_open=False, hi_open=
 
     if is_traced(x):
         return eqx.error_if(x, jnp.any(bad_of(jnp.asarray(x), jnp)), msg)
-    try:
+    try:  # a string too, as number() refuses one: np.asarray("4", float) read it as 4.0
+        if np.asarray(x).dtype.kind in "US":
+            raise TypeError(x)
         a = np.asarray(x, dtype=float)
     except (TypeError, ValueError):
         raise ValueError(f"{msg}, got {x!r}") from None
