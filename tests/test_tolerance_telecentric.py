@@ -18,7 +18,7 @@ def test_heights_of_90_mm_and_more_are_taken():
     lens = jl.load(X20)
     model = tolerance.ToleranceModel(lens, batch=2)  # the file's fields: up to 100 mm
     np.testing.assert_allclose(np.asarray(model.fields), [[0, 0], [0, 100], [60, 100]])
-    with pytest.raises(ValueError, match=r"mm \(object heights of an object-space telecentric lens\)"):
+    with pytest.raises(ValueError, match=r"mm \(object heights of an object-space telecentric"):
         tolerance.ToleranceModel(lens, fields=[[0.0, 1.0, 2.0]])
 
 

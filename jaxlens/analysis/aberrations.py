@@ -61,7 +61,7 @@ CURVE_FIELDS = 11
 class RayFan(eqx.Module):
     """Transverse ray errors (mm) of one field for W wavelengths at n pupil coordinates."""
 
-    field: Float[Array, ""] | Float[Array, " 2"]  # θy, or (θx, θy), degrees
+    field: Float[Array, ""] | Float[Array, " 2"]  # θy, or (θx, θy), degrees (mm: telecentric)
     wavelengths: Float[Array, " W"]
     pupil: Float[Array, " n"]
     tangential: Float[Array, "W n"]  # e_y of the rays (0, Py)
@@ -124,7 +124,8 @@ def ray_fan(lens: Lens, field, wavelengths=None, *, n: int = FAN_POINTS, depth=N
 
     Args:
         lens: the lens.
-        field: θy, or (θx, θy), in degrees.
+        field: θy, or (θx, θy), in degrees; an object height in mm, y or (x, y), for an
+            object-space telecentric lens.
         wavelengths: µm, one value or ``[W]``; default the lens's wavelengths.
         n: pupil points per fan, evenly spaced over −1 … 1.
         depth: object distance (mm) for a finite object; default the lens's object.

@@ -239,7 +239,8 @@ def encircled_energy(lens: Lens, field, radii, *, wavelength=None, method: str =
 
     Args:
         lens: the lens.
-        field: θy, or (θx, θy), in degrees.
+        field: θy, or (θx, θy), in degrees; an object height in mm, y or (x, y), for an
+            object-space telecentric lens.
         radii: radii in mm (half-widths for ``shape="square"``), finite and ≥ 0, any shape
             (returned flattened).
         wavelength: µm, a scalar or ``[W]`` (pooled with equal weights); default primary.

@@ -239,7 +239,8 @@ def opd(
 
     Args:
         lens: the lens.
-        field: field angle in degrees, θy or (θx, θy).
+        field: field angle in degrees, θy or (θx, θy); an object height in mm, y or
+            (x, y), for an object-space telecentric lens.
         pupil: ``[..., 2]`` points (Px, Py) in the unit disc (normalised entrance pupil).
         wavelength: µm (default the primary wavelength); one value.
         depth: object distance in mm before surface 1 (inf for infinity); None (default)
@@ -323,7 +324,8 @@ class Wavefront(eqx.Module):
         rms, pv: waves, piston removed, tilt kept.
         rms_tilt_removed, pv_tilt_removed: waves, piston and tilt removed.
         tilt: ``[3]`` the removed plane a + b·Px + c·Py (waves).
-        field: degrees; wavelength: µm.
+        field: degrees (mm: an object-space telecentric lens's object height);
+            wavelength: µm.
     """
 
     map: Float[Array, "g g"]
@@ -402,7 +404,8 @@ def wavefront(
 
     Args:
         lens: the lens.
-        field: field angle in degrees, θy or (θx, θy).
+        field: field angle in degrees, θy or (θx, θy); an object height in mm, y or
+            (x, y), for an object-space telecentric lens.
         wavelength: µm (default the primary wavelength); one value.
         depth: object distance in mm (inf for infinity); None (default) for the lens's own.
         grid: samples per side of the square pupil grid (>= 3; odd keeps the chief ray on
@@ -438,7 +441,7 @@ class OPDFan(eqx.Module):
     """OPD (waves) of one field along the pupil's y axis (tangential: (0, Py)) and x axis
     (sagittal: (Px, 0)), each wavelength against its own chief ray and reference sphere."""
 
-    field: Float[Array, ""] | Float[Array, " 2"]  # θy, or (θx, θy), degrees
+    field: Float[Array, ""] | Float[Array, " 2"]  # θy, or (θx, θy), degrees (mm: telecentric)
     wavelengths: Float[Array, " W"]
     pupil: Float[Array, " n"]
     tangential: Float[Array, "W n"]
@@ -475,7 +478,8 @@ def opd_fan(
 
     Args:
         lens: the lens.
-        field: θy, or (θx, θy), in degrees.
+        field: θy, or (θx, θy), in degrees; an object height in mm, y or (x, y), for an
+            object-space telecentric lens.
         wavelengths: µm, one value or ``[W]``; default the lens's wavelengths.
         n: pupil points per fan, evenly spaced over −1 … 1.
         depth, reference, aim, newton_iters: as :func:`opd`.

@@ -496,7 +496,8 @@ def psf(
 
     Args:
         lens: the lens.
-        field: field angle in degrees, θy or (θx, θy).
+        field: field angle in degrees, θy or (θx, θy); an object height in mm, y or
+            (x, y), for an object-space telecentric lens.
         depth: object distance in mm in front of surface 1; ``inf`` for an object at
             infinity; None (default) for the lens's own object (``lens.object_distance``).
         wavelength: µm, a scalar or ``[W]`` (an RGB PSF is ``RGB_WAVELENGTHS``); default the
