@@ -246,7 +246,9 @@ IN_PLACE = re.compile(r"\.write_text\(|json\.dump\(|open\([^)]*,\s*[\"']w[b]?[\"
 OPTILAND_ONLY = {"tools/make_refcase.py", "tools/conventions_reference.py",
                  "tools/zernike_decenter_reference.py", "tools/fuzz36b_reference.py",
                  "tools/corpus7_reference.py", "tools/fuzz37b_reference.py",
-                 "tools/rayoptics_reevaluation.py", "tools/telecentric38a_reference.py"}
+                 "tools/rayoptics_reevaluation.py", "tools/telecentric38a_reference.py",
+                 "tools/acc40c_reference.py", "tools/zmx40a_reference.py",
+                 "tools/fuzz41c_reference.py"}
 
 
 @pytest.mark.parametrize("path", sorted(
