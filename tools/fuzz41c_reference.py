@@ -49,7 +49,10 @@ wavelength, the image-surface intercept and direction cosines; paraxial data: op
 height (telecentric), the entrance pupil position (virtual), the paraxial angular
 magnification u'/u (afocal, from the in-script y-nu trace of fuzz36b). A draw is refused
 (counted by reason in ``summary.json``) when a stored ray fails in optiland (NaN, total
-internal reflection, backward between surfaces) or the Newton iteration of an asphere does
+internal reflection, backward between surfaces, an intercept off the sheet of the surface
+through its vertex: ``on_vertex_sheet``), when a curvature exceeds 20 / length scale (the
+solved last power can be absurd: a 0.011 mm radius hyperboloid whose far sheet optiland
+met, where jaxlens, with ``negative_propagation``, went back to the vertex sheet) or the Newton iteration of an asphere does
 not converge to 1e-12.
 """
 
@@ -104,7 +107,25 @@ def trace_generic(case, hx, hy, w):
     z = np.asarray(sg.z)[1:]  # surfaces 1 .. image
     if not np.all(np.isfinite(z)) or np.any(np.diff(z, axis=0) <= 0):
         raise f36.Refused("backward", f"field {hx, hy} wl {w}")
+    on_vertex_sheet(case, np.asarray(sg.x)[1:], np.asarray(sg.y)[1:], z, f"field {hx, hy} wl {w}")
     return out
+
+
+def on_vertex_sheet(case, x, y, z, what):
+    """Refuse a draw where a ray meets a surface away from the sheet through its vertex (a
+    hyperboloid's far sheet, or a root the sag formula does not give): the sag formula
+    c r² / (1 + sqrt(1 - (1 + k) c² r²)) + sum A_2j r^2j describes that sheet only."""
+    rows = case.s["rows"]
+    shapes = [(case.curv[i], r["k"], r["co"]) for i, r in enumerate(rows)]
+    shapes.append((case.img["c"], case.img["k"], []))
+    for i, (c, k, co) in enumerate(shapes):
+        r2 = x[i] ** 2 + y[i] ** 2
+        root = 1.0 - (1.0 + k) * c * c * r2
+        if np.any(root < 0):
+            raise f36.Refused("off_vertex_sheet", f"{what}: surface {i + 1} beyond its rim")
+        sag = c * r2 / (1.0 + np.sqrt(root)) + sum(a * r2 ** (j + 1) for j, a in enumerate(co))
+        if not np.all(np.abs(z[i] - case.z_v[i] - sag) <= 1e-7 * max(1.0, case.s["L"])):
+            raise f36.Refused("off_vertex_sheet", f"{what}: surface {i + 1}")
 
 
 def set_fields(op, kind, fields):
@@ -241,6 +262,9 @@ def build(idx, seed, kind):
         raise f36.Refused("optiland_error", repr(e)[:200]) from e
     if kind == "afocal":
         solve_afocal(case)
+    if max(abs(c) for c in case.pcurv) * L > 20.0:  # the solved last power, mostly
+        raise f36.Refused("extreme_curvature", f"|c| {max(abs(c) for c in case.pcurv):.3g}")
+    if kind == "afocal":
         case.thick[-1] = float(rng.uniform(0.3, 2.0) * L)
         case.z_v = np.concatenate([[0.0], np.cumsum(case.thick)])
         case.z_img = float(case.z_v[-1])
