@@ -15,14 +15,16 @@ A2..A12, Cauchy crowns / flints / plastics given as index tables, cemented pairs
 image space, curved image surfaces), then turned into one of the classes:
 
 * ``telecentric``: a finite object (1.5 to 25 length scales away); optiland's optic gets an
-  ``objectNA`` aperture (NA = n0 sin u, the cone
-  filling 0.5 to 1.2 times the drawn EPD's radius on surface 1), ``object_height`` fields (0, 0.6 h, h on y and
-  (0.6 h, -0.8 h)) and ``obj_space_telecentric = True``; h is halved from 0.05 to 0.4 length
-  scales until every stored ray passes. jaxlens: ``Lens(object_na=NA)``, fields (x, y) heights.
+  ``objectNA`` aperture (NA = n0 sin u, the cone filling 0.5 to 1.2 times the drawn EPD's
+  radius on surface 1), ``object_height`` fields (0, 0.6 h, h on y and (0.6 h, -0.8 h)) and
+  ``obj_space_telecentric = True``; h is halved from 0.05 to 0.4 length scales until every
+  stored ray passes. jaxlens: ``Lens(object_na=NA)``, fields (x, y) heights.
 * ``telecentric_immersion``: the same with an object-space medium (an index table of
   n_d 1.33 to 1.52, a water or oil like Cauchy law) set as optiland's object surface
-  ``material_post``; the object distance d in it is drawn so that d / n0 is the air
-  distance the image was solved for (the reduced distance: the paraxial image lies where
+  ``material_post`` (``updater.set_material``, with ``updater.set_thickness`` for its
+  distance: setting ``surfaces[0].thickness`` leaves optiland's object where it was); the
+  object distance d in it is drawn so that d / n0 is the air distance the image was solved
+  for (the reduced distance: the paraxial image lies where
   it would for d / n0 in air). NA = n0 sin u.
 * ``virtual``: a negative object distance (the object point after surface 1, the object
   space beam converging on it), fields as angles at the paraxial entrance pupil, EPD
@@ -52,8 +54,8 @@ magnification u'/u (afocal, from the in-script y-nu trace of fuzz36b). A draw is
 internal reflection, backward between surfaces, an intercept off the sheet of the surface
 through its vertex: ``on_vertex_sheet``), when a curvature exceeds 20 / length scale (the
 solved last power can be absurd: a 0.011 mm radius hyperboloid whose far sheet optiland
-met, where jaxlens, with ``negative_propagation``, went back to the vertex sheet) or the Newton iteration of an asphere does
-not converge to 1e-12.
+met, where jaxlens, with ``negative_propagation``, went back to the vertex sheet) or the
+Newton iteration of an asphere does not converge to 1e-12.
 """
 
 from __future__ import annotations
