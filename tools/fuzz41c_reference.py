@@ -28,8 +28,12 @@ image space, curved image surfaces), then turned into one of the classes:
   it would for d / n0 in air). NA = n0 sin u.
 * ``virtual``: a negative object distance (the object point after surface 1, the object
   space beam converging on it), fields as angles at the paraxial entrance pupil, EPD
-  aperture; the entrance pupil half a length scale or more before or behind the object
-  point (``make_case``).
+  aperture; the object 0.2 to 3 length scales after surface 1, or (40 % of the draws: the
+  stop moved to the last surface, and where the entrance pupil then lies 0.05 length scale
+  or more after surface 1) 0.1 to 0.6 of the way to the pupil, so that the pupil lies
+  before or behind the object point, 0.02 length scale or more from it (``make_case``).
+  tests/data/fuzz41c adds draws 56 to 79 of ``--kind virtual`` (summary_virtual_56_79.json):
+  the default run gave one draw with the pupil behind the object point.
 * ``afocal``: an object at infinity; the last refracting surface's curvature is solved so
   that the paraxial marginal ray leaves parallel to the axis (Zemax's "afocal image space"),
   the image surface a plane 0.3 to 2 length scales behind the last vertex, air after the
@@ -212,7 +216,7 @@ def make_case(sys_, defocus):
     """fuzz36b's ``Case``; for a virtual object (negative distance) without its
     ``object_behind_pupil`` refusal (written for real objects: a virtual object may lie on
     either side of the entrance pupil), which is replaced by one that keeps the entrance
-    pupil half a length scale or more from the object point (the chief ray's angle there
+    pupil 0.02 length scale or more from the object point (the chief ray's angle there
     defines the field)."""
     if sys_["dist"] == f36.INF or sys_["dist"] > 0:
         return f36.Case(sys_, defocus)
@@ -230,7 +234,7 @@ def make_case(sys_, defocus):
     gaps = case.thick[:-1]
     case.p = real(case.pcurv, gaps, case.n_after[case.prim], case.stop, sys_["dist"])
     case.z_ep = case.p["z_ep"]
-    if not abs(sys_["dist"] + case.z_ep) >= 0.5 * sys_["L"]:
+    if not abs(sys_["dist"] + case.z_ep) >= 0.02 * sys_["L"]:
         raise f36.Refused("object_at_pupil", f"d {sys_['dist']:.4g} z_ep {case.z_ep:.4g}")
     return case
 
@@ -245,7 +249,21 @@ def build(idx, seed, kind):
     if kind.startswith("telecentric"):
         sys_["dist"] = float(rng.uniform(1.5, 25.0) * L)
     elif kind == "virtual":
-        sys_["dist"] = -float(rng.uniform(0.2, 3.0) * L)
+        # 40 %: between surface 1 and an entrance pupil inside the lens (where it has one)
+        rows, ip = sys_["rows"], sys_["wls"].index(sys_["prim"])
+        near = rng.random() < 0.4
+        if near:  # the stop on the last surface: an entrance pupil deep in the lens
+            for r in rows:
+                r["stop"] = False
+            rows[-1]["stop"] = True
+        z_ep = f36.paraxial(
+            [r["c"] for r in rows], [r["gap"] for r in rows[:-1]],
+            [r["after"]["n"][ip] if r["after"] is not f36.AIR else 1.0 for r in rows],
+            next(i for i, r in enumerate(rows) if r["stop"]), f36.INF)["z_ep"]
+        if near and z_ep > 0.05 * L:
+            sys_["dist"] = -float(rng.uniform(0.1, 0.6) * z_ep)
+        else:
+            sys_["dist"] = -float(rng.uniform(0.2, 3.0) * L)
     else:
         sys_["dist"] = f36.INF
     if kind == "afocal":
