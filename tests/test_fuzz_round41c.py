@@ -2,13 +2,18 @@
 0.6.3 ray for ray (tools/fuzz41c_reference.py writes them, tools/fuzz41c_compare.py runs
 ``case_errors`` below over a folder and prints the table).
 
-tests/data/fuzz41c holds the accepted draws of seed 41: object-space telecentric lenses
-(``Lens(object_na=...)``, fields as (x, y) object heights in mm), the same with an immersion
-object medium (n_d 1.33 to 1.52), virtual objects (a negative object distance: the object
-point after surface 1) and afocal image space (``Lens(afocal_image=True)``, the last power
-solved so that the paraxial beam of an object at infinity leaves collimated). The
-prescriptions are fuzz36b's (spheres, conics, even aspheres A2..A12, Cauchy index tables,
-cemented pairs, glass image space, curved image surfaces), in its refcase schema.
+tests/data/fuzz41c holds the accepted draws of seed 41 (draws 0 to 55 of all classes, 56
+to 79 of virtual objects; ``summary*.json`` count the refused ones by reason): object-space
+telecentric lenses (``Lens(object_na=...)``, fields as (x, y) object heights in mm), the
+same with an immersion object medium (n_d 1.33 to 1.52), virtual objects (a negative object
+distance: the object point after surface 1, the entrance pupil before it or, in two draws,
+behind it) and afocal image space (``Lens(afocal_image=True)``, the last power solved so
+that the paraxial beam of an object at infinity leaves collimated). The prescriptions are
+fuzz36b's (spheres, conics, even aspheres A4..A12, Cauchy index tables, cemented pairs,
+glass image space, curved image surfaces), in its refcase schema, without A2: optiland's
+paraxial engine leaves A2 out of the power, and aims its EPD rays at that entrance pupil
+(with A2 drawn, 6 of 33 cases differed by that alone; jaxlens's c + 2·A2 is the paraxial
+curvature of the sag c r²/2 + A2 r², checked against optiland on A2-folded copies in round 36b).
 
 jaxlens generates its own rays (``sampling.field_rays`` from the field value and the
 normalised pupil point, the lens's own object distance) and traces them; optiland generated
