@@ -45,8 +45,10 @@ magnification), and its ray generation for an EPD aperture aims at that ``EPL``,
 with A2 before the stop would get rays through a different pupil. jaxlens takes the paraxial
 curvature as c + 2·A2 (the sag's r² coefficient is c/2 + A2), which is right: fuzz36b checks
 its in-script y-nu trace with A2 folded in against optiland on a copy whose curvatures carry
-A2. Drawn with A2, 6 of 33 cases differed by this alone (EFL by up to 8x relative, rays by
-up to 4 mm), each with A2 on a surface before the stop or in the paraxial data.
+A2, and ``fuzz41c_reference.py check-a2`` shows optiland's own real near-axis ray focusing
+where c + 2·A2 puts it (f 48.4913 mm), not at its paraxial f2 (60.3286 mm). Drawn with
+A2, 6 of 33 cases differed by this alone (EFL by up to 8x relative, rays by up to 4 mm),
+each with A2 on a surface before the stop or in the paraxial data.
 
 For each case: optiland's ``trace_generic`` (its own ray generation from the normalised
 field and pupil coordinates) at 8 pupil points (fuzz36b's ``PUPIL``), every field and
@@ -388,6 +390,39 @@ def surfaces(case, obj_medium, object_distance):
     return out
 
 
+def check_a2():
+    """The A2 difference settled without jaxlens: optiland's paraxial ``f2`` of a thick lens
+    whose first surface has A2 = 0.004 /mm, against optiland's own real trace of a ray
+    1e-4 mm from the axis and the thick-lens formula with curvature c or c + 2·A2."""
+    from optiland.rays import RealRays
+
+    a2, r1, r2, t, wl = 0.004, 50.0, -80.0, 5.0, 0.5875618
+    op = f36.Optic()
+    op.add_surface(index=0, radius=f36.INF, thickness=f36.INF)
+    op.add_surface(index=1, radius=r1, thickness=t, material="N-BK7", is_stop=True,
+                   surface_type="even_asphere", conic=0.0, coefficients=[a2, 0.0])
+    op.add_surface(index=2, radius=r2, thickness=60.0, material="air")
+    op.add_surface(index=3)
+    op.set_aperture(aperture_type="EPD", value=2.0)
+    op.set_field_type("angle")
+    op.add_field(y=0.0)
+    op.add_wavelength(value=wl, is_primary=True)
+    h = 1e-4
+    one = np.array([1.0])
+    rays = RealRays(0 * one, h * one, -one, 0 * one, 0 * one, one, one, wl * one)
+    op.surface_group.trace(rays, skip=1)
+    real = h / -(float(np.ravel(rays.M)[0]) / float(np.ravel(rays.N)[0]))
+    n = float(np.ravel(op.surface_group.surfaces[1].material_post.n(wl))[0])
+
+    def thick(c1):
+        p1, p2 = (n - 1) * c1, (1 - n) / r2
+        return 1 / (p1 + p2 - t / n * p1 * p2)
+
+    print(f"optiland paraxial f2 {float(op.paraxial.f2()):.12g}; optiland real ray of height "
+          f"{h} mm: {real:.12g}; thick lens, c + 2 A2: {thick(1 / r1 + 2 * a2):.12g}, c: "
+          f"{thick(1 / r1):.12g}")
+
+
 def lenses(out, n, seed, kinds, start):
     summary = dict(seed=seed, kinds=kinds, drawn=0, accepted=[], refused={})
     for i in range(start, start + n):
@@ -410,13 +445,17 @@ def lenses(out, n, seed, kinds, start):
 
 def main(argv):
     ap = argparse.ArgumentParser(prog="fuzz41c_reference.py", description=__doc__.splitlines()[0])
-    ap.add_argument("out", help="folder for the files (created)")
+    ap.add_argument("out", help="folder for the files (created), or 'check-a2': print the A2 "
+                    "check (check_a2) and stop")
     ap.add_argument("--n", type=int, default=32, help="lenses to draw (default 32)")
     ap.add_argument("--seed", type=int, default=41, help="seed (default 41)")
     ap.add_argument("--start", type=int, default=0, help="first draw index (default 0)")
     ap.add_argument("--kind", choices=(*KINDS, "all"), default="all",
                     help="the class (default all: draw i gets KINDS[i % 4])")
     args = ap.parse_args(argv)
+    if args.out == "check-a2":
+        check_a2()
+        return
     if args.n < 1:
         ap.error(f"--n must be >= 1, got {args.n}")
     out = pathlib.Path(args.out)
