@@ -6,6 +6,7 @@ from . import aiming as aiming
 from . import distortion as distortion
 from . import grid as grid
 from . import newton as newton
+from . import light as light
 from . import psf as psf
 from . import radiometry as radiometry
 from . import render as render

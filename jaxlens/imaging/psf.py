@@ -75,6 +75,7 @@ from ..tracing.forward import DEFAULT_NEWTON_ITERS, forward_mode_jit, trace
 from . import sampling, telecentric
 from .aiming import apertured, chief_point, field_to_ideal, ideal_to_field
 from .grid import kernel_side, pixel_pitch, pupil_cells, sensor_grid, splat
+from .light import NoLightError
 from .otf import diffraction_mtf, mtf_directions
 
 __all__ = ["AbstractPSFModel", "CoherentPSF", "GeometricPSF", "RGB_WAVELENGTHS", "PSFResult",
@@ -469,12 +470,13 @@ def _refuse_bad_kernels(kern, trunc, aliased, max_truncation, kernel_size, pixel
             kern = eqx.error_if(kern, jnp.any(bad), message)
         return kern
     t = np.asarray(trunc, np.float64)
-    for bad, message, detail in conditions:
+    for k, (bad, message, detail) in enumerate(conditions):
         bad = np.asarray(bad)
         if np.any(bad):
             i = int(np.argmax(np.where(bad, np.abs(np.nan_to_num(t, nan=np.inf)), -1.0)))
             where = f"at {float(np.asarray(wls)[i]):g} µm"
-            raise ValueError(f"{message} ({detail(t[i]) + ' ' if detail else ''}{where})")
+            cls = NoLightError if k == 0 else ValueError  # k = 0: no light
+            raise cls(f"{message} ({detail(t[i]) + ' ' if detail else ''}{where})")
     return kern
 
 
@@ -684,10 +686,6 @@ def _mtf_impl(lens, field, depth, wls, freqs, pixel_size, *, model, kernel_size,
         return jnp.abs(jnp.sum(o, 0) / nw)
 
     return along(e_t), along(e_s), ~jnp.isnan(trunc)
-
-
-class NoLightError(ValueError):
-    """``mtf`` of a field whose beam puts no ray on the image surface (it has no MTF)."""
 
 
 def mtf(
