@@ -5,8 +5,8 @@ illumination, distortion maps and the checkpointed renderer (``jaxlens.psf`` and
 from . import aiming as aiming
 from . import distortion as distortion
 from . import grid as grid
-from . import newton as newton
 from . import light as light
+from . import newton as newton
 from . import psf as psf
 from . import radiometry as radiometry
 from . import render as render
