@@ -1,4 +1,4 @@
-# ruff: noqa: E501, E731
+# ruff: noqa: E501, E731, B023
 """Round-41b bad-input probes (second pass): what rounds 38b and 40b left open and the parts
 they did not reach: the command lines' argument parsing and early checks (``python -m
 jaxlens report``, ``jaxlens.experiments.classical``, ``.tolerance``, ``.edof``; each run only
