@@ -57,8 +57,9 @@ def test_one_field_analyses_refuse_a_field_no_ray_reaches(request, name, which, 
 
 
 def test_psf_no_light_is_the_same_error(cooke):
-    """Main: a plain ValueError (mtf's was NoLightError)."""
-    with pytest.raises(light.NoLightError, match=r"psf: no ray of the beam reaches"):
+    """Main: a plain ValueError (mtf's was NoLightError), which named no field."""
+    with pytest.raises(light.NoLightError, match=r"^psf: no ray of the beam reaches the image "
+                       r"surface at field 60 deg \(the field is vignetted"):
         jl.imaging.psf.psf(cooke, 60.0, pixel_size=0.01, kernel_size=15)
 
 
