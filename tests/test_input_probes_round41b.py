@@ -149,3 +149,47 @@ def test_field_rays_names_itself_for_a_bad_depth(cooke, depth):
     """Main: refused as "object_point: depth must be …" (a function the user never called)."""
     with pytest.raises(ValueError, match=r"^field_rays: depth must be finite, nonzero"):
         sampling.field_rays(cooke, 0.0, sampling.pupil_polar(2), depth=depth)
+
+
+def _cooke_json(tmp_path, edit):
+    d = json.loads((pathlib.Path(jl.__file__).parent / "data" / "lenses" /
+                    "cooke_triplet.json").read_text())
+    edit(d)
+    p = tmp_path / "lens.json"
+    p.write_text(json.dumps(d))
+    return p
+
+
+def test_json_stop_smaller_than_the_axial_beam_warns(tmp_path, cooke):
+    """Main: a stop of 1 mm on the Cooke triplet (EPD 10: the paraxial marginal ray is
+    3.805 mm high there, 20 × 0.19) loaded without a word, and traced as a 3.5 mm EPD."""
+    need = float(jl.paraxial.paraxial_data(cooke).stop_semi_diameter)
+    assert 3.7 < need < 3.9
+    p = _cooke_json(tmp_path, lambda d: d["surfaces"][4].update(semi_diameter=1.0))
+    with pytest.warns(UserWarning, match=r"surface 4 \(the stop\): semi_diameter 1 mm is "
+                      r"smaller than the axial beam there, 3\.805 mm .* 10 mm EPD"):
+        jl.load(p)
+    # The beam's own size, and 0.5 % under it (a file's rounding), load quietly.
+    for sd in (need, need * 0.995):
+        p = _cooke_json(tmp_path, lambda d, sd=sd: d["surfaces"][4].update(semi_diameter=sd))
+        jl.load(p)
+
+
+def test_design_helpers_refuse_what_is_not_a_spec():
+    """Main: ``template_lens({...})`` an AttributeError ('dict' has no 'asphere_terms')."""
+    from jaxlens.design import init
+
+    for fn in (init.template_lens, init.gap_kinds, init.gap_bounds, init.normalisation_radii):
+        with pytest.raises(TypeError, match=rf"^{fn.__name__}: spec must be a "
+                                            r"jaxlens.design.DesignSpec, got dict"):
+            fn({"fov": 60.0})
+
+
+@pytest.mark.parametrize("n", [0, -2, 2.5])
+def test_aperture_field_limits_checks_the_element_count(n):
+    """Main: 0 a ZeroDivisionError; -2 gave (0.5, -0.24), a negative aperture-field limit."""
+    from jaxlens.design.spec import aperture_field_limits
+
+    with pytest.raises(ValueError, match=r"aperture_field_limits: n_elements must be a whole "
+                                         r"number in \[1, inf\) lens elements"):
+        aperture_field_limits(n)
