@@ -84,7 +84,7 @@ def test_one_field_analyses_still_answer_a_lit_field(cooke):
 @pytest.mark.parametrize("make, name, words", [
     (lambda: jl.Plane(-1.0), "Plane", r"semi_diameter must be numbers in \(0, inf\] mm"),
     (lambda: jl.Stop(float("nan")), "Stop", r"semi_diameter must be .* got nan mm"),
-    (lambda: jl.Sphere(1 / 3, 5.0), "Sphere", r"defined only out to r = .* 3 mm"),
+    (lambda: jl.Sphere(1 / 3, 5.0), "Sphere", r"the surface .* is defined only out to r = .* 3 mm"),
     (lambda: jl.Conic(0.1, float("inf")), "Conic", r"k must be finite numbers, got inf"),
 ])
 def test_surface_factories_name_themselves(make, name, words):
