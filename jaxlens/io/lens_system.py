@@ -234,9 +234,10 @@ def warn_small_stop(lens, source: str, first: int) -> None:
     except (ValueError, ZeroDivisionError):  # no paraxial beam: other checks say so
         return
     if math.isfinite(need) and sd < (1.0 - STOP_MARGIN) * abs(need):
+        epd = float(np.asarray(lens.epd))
         warnings.warn(f"{source}: surface {lens.stop + first} (the stop): semi_diameter "
                       f"{sd:g} mm is smaller than the axial beam there, {abs(need):.4g} mm "
-                      f"(paraxial, from the aperture {float(np.asarray(lens.epd)):g} mm EPD): the stop clips "
+                      f"(paraxial, from the aperture {epd:g} mm EPD): the stop clips "
                       f"the beam, so the lens works at a smaller aperture than the file says; "
                       f"raise the semi_diameter or leave it out (the beam sets it)",
                       stacklevel=3)
