@@ -128,7 +128,8 @@ def json_files():
     probe("json radius 0", js(edit=surf(1, radius=0)), "radius")
     probe("json radius 'flat'", js(edit=surf(1, radius="flat")), "radius")
     probe("json radius nan (string)", js(edit=surf(1, radius="nan")), "radius")
-    probe("json stop semi_diameter 1 (the EPD 10 beam is 3.8 mm there)", warned(js(edit=surf(4, semi_diameter=1.0))), "semi_diameter")
+    # Left open: a stop smaller than the axial beam (optiland_lens2.zmx has 6.75 mm under a 7.5 mm beam).
+    probe("json stop semi_diameter 1 (the EPD 10 beam is 3.8 mm there; left open)", warned(js(edit=surf(4, semi_diameter=1.0))), "semi_diameter")
     probe("json semi_diameter -2", js(edit=surf(1, semi_diameter=-2.0)), "semi_diameter")
     probe("json material 'NSK16'", js(edit=surf(1, material="NSK16")), "N-SK16")
     probe("json material 5", js(edit=surf(1, material=5)), "material")

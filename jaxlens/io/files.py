@@ -62,8 +62,8 @@ def load(path: str | os.PathLike, *, dtype=None, strict: bool = False,
     path = os.fspath(path)
     if os.path.isdir(path):  # before: "has extension ''", which did not say what was wrong
         raise ValueError(f"load: {path!r} is a folder; give a lens file (.json or .zmx) in it")
+    ext = _ext(path, "load")  # first: a missing lens.txt is named by its extension
     path = input_file(path, "load", "lens file")
-    ext = _ext(path, "load")
     if dtype is not None:
         dtype = _float_dtype(dtype)
     # "yes" would read as True, a misspelt choice as "error": refused rather than guessed.

@@ -15,7 +15,7 @@ import warnings
 
 import numpy as np
 
-from ..optics import checks, paraxial
+from ..optics import checks
 from ..optics import materials as _materials
 from ..optics.lens import check_vignetting
 from . import lens_keys
@@ -210,34 +210,3 @@ def vignetting_of(d: dict, where: str, n_fields: int) -> np.ndarray | None:
                                  f"shape {col.shape}")
             out[:, j] = col
     return check_vignetting(out, at, "factors")
-
-
-STOP_MARGIN = 0.01
-"""How much smaller than the paraxial axial beam a stop's semi-diameter may be (1 %: the
-rounding of a file's numbers, a real-ray stop size a hair below the paraxial one)."""
-
-
-def warn_small_stop(lens, source: str, first: int) -> None:
-    """Warn when the stop's semi-diameter is smaller than the paraxial axial beam the lens's
-    aperture (EPD, F-number, NA) puts there: the stop then clips the on-axis beam, so the
-    lens works at a smaller aperture than its file says (a stop of 1 mm for the Cooke
-    triplet's EPD 10, whose beam is 4.6 mm at the stop, read without a word: spots of a
-    3.5 mm EPD). Only a lens of paraxial ray aiming, without mirrors or coordinate breaks,
-    with an object-space chief ray (not telecentric) is checked."""
-    sd = float(np.asarray(lens.surfaces[lens.stop].semi_diameter))
-    if (not math.isfinite(sd) or lens.aim != "paraxial" or lens.mirrors
-            or lens.telecentric_object or lens.travel_senses is not None
-            or any(type(x).__name__ == "CoordinateBreak" for x in lens.surfaces)):
-        return
-    try:
-        need = float(np.asarray(paraxial.paraxial_data(lens).stop_semi_diameter))
-    except (ValueError, ZeroDivisionError):  # no paraxial beam: other checks say so
-        return
-    if math.isfinite(need) and sd < (1.0 - STOP_MARGIN) * abs(need):
-        epd = float(np.asarray(lens.epd))
-        warnings.warn(f"{source}: surface {lens.stop + first} (the stop): semi_diameter "
-                      f"{sd:g} mm is smaller than the axial beam there, {abs(need):.4g} mm "
-                      f"(paraxial, from the aperture {epd:g} mm EPD): the stop clips "
-                      f"the beam, so the lens works at a smaller aperture than the file says; "
-                      f"raise the semi_diameter or leave it out (the beam sets it)",
-                      stacklevel=3)

@@ -664,11 +664,9 @@ def lens_from_dict(d: dict, *, source: str = "<lens>") -> Lens:
         if tele:
             (kind, (_, value)), = aperture.items()
             return apply_object_na(lens, **{"na" if kind == "object_na" else kind: value})
-        lens = _one_aperture(lens, aperture, source)
+        return _one_aperture(lens, aperture, source)
     except ValueError as e:
         raise ValueError(str(e) if str(e).startswith(source) else f"{source}: {e}") from None
-    lens_system.warn_small_stop(lens, source, first)
-    return lens
 
 
 def _warn_image_medium(img: dict, image_space, wl, primary: int, source: str) -> None:
