@@ -151,15 +151,6 @@ def test_field_rays_names_itself_for_a_bad_depth(cooke, depth):
         sampling.field_rays(cooke, 0.0, sampling.pupil_polar(2), depth=depth)
 
 
-def _cooke_json(tmp_path, edit):
-    d = json.loads((pathlib.Path(jl.__file__).parent / "data" / "lenses" /
-                    "cooke_triplet.json").read_text())
-    edit(d)
-    p = tmp_path / "lens.json"
-    p.write_text(json.dumps(d))
-    return p
-
-
 def test_design_helpers_refuse_what_is_not_a_spec():
     """Main: ``template_lens({...})`` an AttributeError ('dict' has no 'asphere_terms')."""
     from jaxlens.design import init
