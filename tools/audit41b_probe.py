@@ -21,8 +21,29 @@ Gaps found and fixed (one mechanism each):
    now "each +1 or -1".
 5. ``field_rays(depth=0)`` was refused naming ``object_point``; now ``field_rays``.
 
+6. ``design.init.template_lens`` (and ``gap_kinds``, ``gap_bounds``, ``normalisation_radii``)
+   given a dict: an AttributeError; now a TypeError naming the function and DesignSpec.
+7. ``design.spec.aperture_field_limits(0)``: ZeroDivisionError (-2 gave a negative limit);
+   now checked as a whole number >= 1.
+
+Judged right (controls, ``good=True``): ``report --wavelengths 587.6`` (documented: values
+above 100 are nm), ``classical --tolerance-trials 0`` (documented: skips it),
+``get_material("")`` (documented: air), a JSON ``"sphere"`` type (an accepted alias), a JSON
+lens without an image surface (optional: a flat image), ``paper_stages(n=0)`` (n + 1 = 1
+stage), a render scene above 1 (linear radiance, HDR allowed); a negative thickness in glass
+is a warning already (``lensfile._warn_inside_out``).
+
+Left open (the one "silent wrong" after): a JSON stop whose semi_diameter is smaller than the
+paraxial axial beam (1 mm on the Cooke triplet, whose beam is 3.8 mm there) loads without a
+word. A warning was tried and dropped: tests/data's optiland_lens2.zmx has a 6.75 mm stop under
+a 7.5 mm beam, so what a fixed stop smaller than the EPD's beam means (Zemax floats it) needs
+a decision first.
+
 Run from the tree's root: ``PYTHONPATH=. python tools/audit41b_probe.py`` (a filter word as
-the first argument keeps the probes whose names hold it).
+the first argument keeps the probes whose names hold it); 3 to 5 minutes on 2 busy cores.
+The same 208 probes, before (base 090c064) and after (branch probe41b):
+    before: clear error: 164, crash: 2, ok: 13, silent wrong: 9, vague error: 20
+    after:  clear error: 194, ok: 13, silent wrong: 1
 """
 
 import dataclasses
