@@ -591,14 +591,12 @@ def plot_wavefront(lens, field=None, *, wavelength=None, grid: int = 65,
     ax.set_aspect("equal")
     ax.set_xlabel("Px (normalised entrance pupil)")
     ax.set_ylabel("Py")
-    if not valid.any():
-        stats = "no ray reaches the image surface"
-    else:
-        sigma = float(wf.rms_tilt_removed)
-        stats = f"RMS {float(wf.rms):.4f} waves, P-V {float(wf.pv):.4f} waves\n"
-        stats += (f"Strehl {float(wf.strehl):.3f} (Maréchal)" if sigma <= MARECHAL_MAX_RMS
-                  else f"no Strehl: RMS tilt removed {sigma:.3f} > {MARECHAL_MAX_RMS:g} wave "
-                       f"(Maréchal)")
+    # A field no ray reaches was drawn as an empty map; wavefront refuses it (NoLightError).
+    sigma = float(wf.rms_tilt_removed)
+    stats = f"RMS {float(wf.rms):.4f} waves, P-V {float(wf.pv):.4f} waves\n"
+    stats += (f"Strehl {float(wf.strehl):.3f} (Maréchal)" if sigma <= MARECHAL_MAX_RMS
+              else f"no Strehl: RMS tilt removed {sigma:.3f} > {MARECHAL_MAX_RMS:g} wave "
+                   f"(Maréchal)")
     ax.set_title(f"{title or f'wavefront map, {_field_label(field, lens)}'}\n{stats}", fontsize=8)
     return fig
 

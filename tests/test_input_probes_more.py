@@ -122,9 +122,9 @@ def test_lens_checks_do_not_break_jit_grad_or_vmap():
 
 
 @pytest.mark.parametrize("make, match", [
-    (lambda: jl.Sphere(float("nan")), r"Standard: c must be finite numbers \(1/mm\), got nan"),
-    (lambda: jl.Conic(0.1, float("inf")), r"Standard: k must be finite numbers, got inf"),
-    (lambda: jl.Sphere(0.1, -1.0), r"Standard: semi_diameter must be numbers in \(0, inf\] mm "
+    (lambda: jl.Sphere(float("nan")), r"Sphere: c must be finite numbers \(1/mm\), got nan"),
+    (lambda: jl.Conic(0.1, float("inf")), r"Conic: k must be finite numbers, got inf"),
+    (lambda: jl.Sphere(0.1, -1.0), r"Sphere: semi_diameter must be numbers in \(0, inf\] mm "
                                    r"\(inf: no clipping\), got -1 mm"),
     (lambda: jl.Sphere(0.1, 0.0), r"semi_diameter must be numbers in \(0, inf\] mm"),
     (lambda: jl.Stop(float("nan")), r"semi_diameter must be numbers in \(0, inf\]"),

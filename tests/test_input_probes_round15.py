@@ -292,7 +292,7 @@ def _sampling_calls():
                                  r"collimated: pupil \(normalised pupil coordinates\) holds NaN"),
         "field_rays_negative_depth": (
             lambda d: sampling.field_rays(lens, 0.0, grid, depth=d).direction,
-            jnp.asarray(0.0), r"object_point: depth must be finite, nonzero"),  # -5: virtual
+            jnp.asarray(0.0), r"field_rays: depth must be finite, nonzero"),  # -5: virtual
         "point_source_behind": (lambda p: sampling.point_source(lens, p, grid).direction,
                                 jnp.array([0.0, 0.0, 0.0]),  # z = 5: a virtual object
                                 r"point_source: point must be finite \(mm\) with its global z "

@@ -40,7 +40,8 @@ Methods:
     wide enough for the radii asked.
 
 Errors: radii must be finite and ≥ 0 mm; a fraction must lie in (0, 1); a fraction the
-kernel cannot hold (above 1 − truncated) gives NaN; a field no ray reaches gives NaN.
+kernel cannot hold (above 1 − truncated) gives NaN; a field no ray reaches raises
+``NoLightError`` (NaN under ``jax.jit``; see ``jaxlens.imaging.light``).
 """
 
 from __future__ import annotations
@@ -54,6 +55,7 @@ import jax.numpy as jnp
 import numpy as np
 from jaxtyping import Array, Float
 
+from ..imaging.light import refuse_dark
 from ..imaging.psf import CoherentPSF, psf_info
 from ..imaging.sampling import pupil_points, pupil_polar
 from ..imaging.telecentric import lens_field
@@ -254,7 +256,11 @@ def encircled_energy(lens: Lens, field, radii, *, wavelength=None, method: str =
             kernel side (pixels), coherent pupil rays per side, sub-samples per pixel side.
 
     Returns:
-        An :class:`EncircledEnergy`; NaN where no ray reaches the image.
+        An :class:`EncircledEnergy`.
+
+    Raises:
+        NoLightError: (a ValueError) no ray reaches the image surface, with concrete inputs
+            (under ``jax.jit`` the energies are NaN); see ``jaxlens.imaging.light``.
 
     Example:
         >>> import jax.numpy as jnp, jaxlens
@@ -271,6 +277,7 @@ def encircled_energy(lens: Lens, field, radii, *, wavelength=None, method: str =
         lens, field, where, wavelength=wavelength, method=method, reference=reference,
         shape=shape, pupil=pupil, depth=depth, pixel_size=pixel_size, kernel_size=kernel_size,
         pupil_side=pupil_side, subsamples=subsamples))
+    _refuse_dark(samples, where, lens, field)
     return energy_within(samples, r)
 
 
@@ -286,8 +293,8 @@ def radius_for_fraction(lens: Lens, field, fraction, *, wavelength=None,
 
     Returns:
         Radii (mm), the shape of ``fraction``: interpolated between the sorted sample
-        distances (see the module notes); NaN above what the kernel holds (diffraction) or
-        where no ray reaches the image.
+        distances (see the module notes); NaN above what the kernel holds (diffraction).
+        A field no ray reaches raises ``NoLightError`` (concrete inputs; NaN under jit).
     """
     checks.focal_image(lens, "radius_for_fraction")
     where = "radius_for_fraction"
@@ -296,7 +303,13 @@ def radius_for_fraction(lens: Lens, field, fraction, *, wavelength=None,
         lens, field, where, wavelength=wavelength, method=method,
         reference=reference, shape=shape, pupil=pupil, depth=depth, pixel_size=pixel_size,
         kernel_size=kernel_size, pupil_side=pupil_side, subsamples=subsamples))
+    _refuse_dark(samples, where, lens, field)
     return radius_holding(samples, f)
+
+
+def _refuse_dark(samples, where, lens, field):
+    """A field no ray reaches has no energy curve: NoLightError (concrete), NaN (traced)."""
+    refuse_dark(jnp.any(samples.weight > 0), where, lens, field, "encircled energy")
 
 
 class EnergySamples(NamedTuple):

@@ -23,6 +23,7 @@ import jax.numpy as jnp
 import numpy as np
 from jaxtyping import Array, Bool, Float
 
+from ..imaging.light import warn_dark
 from ..imaging.sampling import field_rays, lens_aim, lens_depth, pupil_grid, unit_disc_limit
 from ..imaging.telecentric import lens_fields
 from ..optics import checks, paraxial, travel
@@ -215,6 +216,9 @@ def rms_spot(
         An ``RmsSpot``. Only valid rays count; ``valid_fraction`` says how many those were.
         A field and wavelength that no ray gets through has NaN radius (and centroid),
         with ``valid_fraction`` 0; its gradient is 0, never NaN.
+        A field no ray of any wavelength gets through is a ``NoLightWarning`` naming it
+        (concrete inputs; see ``jaxlens.imaging.light``): this is the many-field (batch)
+        API, so the other fields' radii stay; the one-field analyses raise instead.
     """
     checks.focal_image(lens, "rms_spot")
     checks.newton_iters(newton_iters, "rms_spot")
@@ -222,9 +226,11 @@ def rms_spot(
                          pupil=pupil, own="all")
     checks.primary_wavelength(lens, "rms_spot", "the chief ray's")
     fields, wavelengths = _as_arrays(lens, _own_fields(lens, fields), wavelengths)
-    return _rms_spot(lens, fields, wavelengths, pupil=pupil, reference=reference,
-                     depth=lens_depth(lens, depth, "rms_spot"),
-                     aim=lens_aim(lens, aim, "rms_spot"), newton_iters=newton_iters)
+    r = _rms_spot(lens, fields, wavelengths, pupil=pupil, reference=reference,
+                  depth=lens_depth(lens, depth, "rms_spot"),
+                  aim=lens_aim(lens, aim, "rms_spot"), newton_iters=newton_iters)
+    warn_dark(r.valid_fraction, fields, "rms_spot", lens)
+    return r
 
 
 @checks.checked_core(aimed_jit)

@@ -81,6 +81,7 @@ import jax.numpy as jnp
 import numpy as np
 from jaxtyping import Array, ArrayLike, Bool, Float
 
+from ..imaging.light import refuse_dark
 from ..imaging.sampling import field_rays, lens_aim, lens_depth, pupil_points
 from ..imaging.telecentric import lens_field
 from ..optics import checks, paraxial
@@ -413,8 +414,11 @@ def wavefront(
         reference, aim, newton_iters: as :func:`opd`.
 
     Returns:
-        A :class:`Wavefront` (jittable and differentiable in the lens; statistics NaN when
-        no ray reaches the image surface).
+        A :class:`Wavefront` (jittable and differentiable in the lens).
+
+    Raises:
+        NoLightError: (a ValueError) no ray reaches the image surface, with concrete inputs
+            (under ``jax.jit`` the statistics are NaN); see ``jaxlens.imaging.light``.
 
     Example:
         >>> import jaxlens
@@ -430,8 +434,10 @@ def wavefront(
     grid = checks.number(grid, "grid", "wavefront", lo=3, hi=checks.MAX_KERNEL_SIZE,
                          integer=True, unit="pupil samples per side")
     checks.newton_iters(newton_iters, "wavefront")
-    return _cast(_wavefront_impl(lens, f, wl, depth, grid=int(grid), reference=reference,
-                                 aim=aim, newton_iters=int(newton_iters)), dtype)
+    wf = _wavefront_impl(lens, f, wl, depth, grid=int(grid), reference=reference, aim=aim,
+                         newton_iters=int(newton_iters))
+    refuse_dark(jnp.any(wf.valid), "wavefront", lens, f, "wavefront")  # not a NaN map
+    return _cast(wf, dtype)
 
 
 # --------------------------------------------------------------------------------------

@@ -21,6 +21,7 @@ from __future__ import annotations
 
 import dataclasses
 import math
+import warnings
 
 import equinox as eqx
 import jax.numpy as jnp
@@ -28,6 +29,7 @@ import numpy as np
 
 from ..analysis import spots as analysis
 from ..imaging import sampling
+from ..imaging.light import NoLightWarning
 from ..optics import checks, paraxial
 from ..optics.lens import Lens
 from .spec import DesignSpec
@@ -93,7 +95,9 @@ def evaluate(lens: Lens, spec: DesignSpec, *, n: int = 16,
     lens = lens.astype(jnp.float64)
     lens = eqx.tree_at(lambda l: l.epd, lens, jnp.asarray(spec.epd, jnp.float64))
     ang, _ = sensor_field_grid(spec, n)
-    res = analysis.rms_spot(lens, jnp.asarray(ang), jnp.asarray(spec.wavelengths))
+    with warnings.catch_warnings():  # dark fields are judged below (rays_ok)
+        warnings.simplefilter("ignore", NoLightWarning)
+        res = analysis.rms_spot(lens, jnp.asarray(ang), jnp.asarray(spec.wavelengths))
     rms = np.asarray(res.polychromatic) * 1e3
     frac = np.asarray(jnp.min(res.valid_fraction, axis=-1))
     geo = analysis.self_intersection(lens)

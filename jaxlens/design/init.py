@@ -36,6 +36,7 @@ def gap_kinds(spec: DesignSpec) -> tuple[str, ...]:
     One of ``"glass"`` (within an element), ``"air"`` (between elements), ``"stop"`` (between
     the stop and a neighbouring surface) and ``"back"`` (last surface to the sensor).
     """
+    _spec_and_dtype(spec, None, "gap_kinds")  # a dict was an AttributeError
     kinds = []
     n = spec.num_surfaces
     s = spec.stop_index
@@ -54,6 +55,7 @@ def gap_kinds(spec: DesignSpec) -> tuple[str, ...]:
 def gap_bounds(spec: DesignSpec, stop_gap: float = 0.02) -> np.ndarray:
     """Minimum spacing (mm) of every gap for the spacing regularizer: 0.4 within an element,
     0.2 between elements, ``stop_gap`` next to the stop, ``spec.bfl`` to the sensor."""
+    _spec_and_dtype(spec, None, "gap_bounds")  # a dict was an AttributeError
     table = {"glass": ELEMENT_MIN_THICKNESS, "air": AIR_MIN_GAP, "stop": stop_gap,
              "back": spec.bfl}
     return np.array([table[k] for k in gap_kinds(spec)])
@@ -72,6 +74,7 @@ def normalisation_radii(spec: DesignSpec) -> np.ndarray:
     r_s = EPD/2 + 0.5·tan(half FoV)·|z_s − z_stop| on the nominal layout, capped at the
     sensor half-diagonal.
     """
+    _spec_and_dtype(spec, None, "normalisation_radii")  # a dict was an AttributeError
     z = np.concatenate([[0.0], np.cumsum(_nominal_gaps(spec))])
     s = spec.stop_index
     t = np.tan(np.radians(spec.half_fov))
@@ -82,6 +85,7 @@ def normalisation_radii(spec: DesignSpec) -> np.ndarray:
 
 def template_lens(spec: DesignSpec, dtype=None) -> Lens:
     """The design's lens structure with flat surfaces and nominal gaps (no randomness)."""
+    _spec_and_dtype(spec, dtype, "template_lens")  # a dict was an AttributeError
     dtype = dtype or jnp.result_type(float)
     m = spec.asphere_terms
     surfaces, materials = [], []

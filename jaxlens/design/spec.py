@@ -100,6 +100,9 @@ def aperture_field_limits(n_elements: int) -> tuple[float, float]:
     Returns:
         ``(min_fnum, max_tan_over_fnum)``.
     """
+    # 0 was a ZeroDivisionError, -2 an F/0.5 limit and a negative field product.
+    n_elements = checks.number(n_elements, "n_elements", "aperture_field_limits", lo=1,
+                               integer=True, unit="lens elements")
     return max(0.5, 4.0 / n_elements), 0.12 * n_elements
 
 

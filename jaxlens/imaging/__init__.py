@@ -5,6 +5,7 @@ illumination, distortion maps and the checkpointed renderer (``jaxlens.psf`` and
 from . import aiming as aiming
 from . import distortion as distortion
 from . import grid as grid
+from . import light as light
 from . import newton as newton
 from . import psf as psf
 from . import radiometry as radiometry

@@ -72,9 +72,10 @@ from ..optics.materials import LAMBDA_C, LAMBDA_D, LAMBDA_F
 from ..optics.paraxial import working_fnum
 from ..optics.rays import Rays
 from ..tracing.forward import DEFAULT_NEWTON_ITERS, forward_mode_jit, trace
-from . import sampling, telecentric
+from . import light, sampling, telecentric
 from .aiming import apertured, chief_point, field_to_ideal, ideal_to_field
 from .grid import kernel_side, pixel_pitch, pupil_cells, sensor_grid, splat
+from .light import NoLightError
 from .otf import diffraction_mtf, mtf_directions
 
 __all__ = ["AbstractPSFModel", "CoherentPSF", "GeometricPSF", "RGB_WAVELENGTHS", "PSFResult",
@@ -441,19 +442,23 @@ def psf_info(
         apertured(lens), field, depth, wls, pixel_size, key, kernel_size=kernel_size, model=model,
         center=center, newton_iters=newton_iters)
     if max_truncation is not None:
+        dark = (light.message("psf", lens, field, "PSF") if not checks.is_traced(field) else
+                "psf: no ray of the beam reaches the image surface (the field is vignetted or "
+                "beyond the lens's coverage), so there is no PSF")
         kern = _refuse_bad_kernels(kern, trunc, aliased, max_truncation, kernel_size,
-                                   pixel_size, wls)
+                                   pixel_size, wls, dark)
     if wl.ndim == 0:
         kern, trunc, strehl, aliased = kern[0], trunc[0], strehl[0], aliased[0]
     return PSFResult(kern, trunc, ref, strehl, aliased)
 
 
-def _refuse_bad_kernels(kern, trunc, aliased, max_truncation, kernel_size, pixel_size, wls):
-    """Refuse a PSF that is not one (no light, energy lost outside the kernel or over-counted,
-    an aliased coherent kernel): a ValueError at the worst wavelength, or an error_if."""
+def _refuse_bad_kernels(kern, trunc, aliased, max_truncation, kernel_size, pixel_size, wls,
+                        dark):
+    """Refuse a PSF that is not one (no light: ``dark``, the message; energy lost outside the
+    kernel or over-counted, an aliased coherent kernel): a ValueError (``NoLightError`` for
+    no light) at the worst wavelength, or an error_if."""
     conditions = [
-        (jnp.isnan(trunc), "psf: no ray of the beam reaches the image surface (the field is "
-         "vignetted or beyond the lens's coverage), so there is no PSF", None),
+        (jnp.isnan(trunc), dark, None),
         (trunc < -max_truncation, f"psf: the kernel holds more than 1 + {max_truncation:g} of "
          f"the beam's energy: the coherent sum is too coarse for this pixel pitch; raise pupil "
          f"(rays per side)", lambda t: f"it holds {1 - t:.3g}"),
@@ -469,12 +474,13 @@ def _refuse_bad_kernels(kern, trunc, aliased, max_truncation, kernel_size, pixel
             kern = eqx.error_if(kern, jnp.any(bad), message)
         return kern
     t = np.asarray(trunc, np.float64)
-    for bad, message, detail in conditions:
+    for k, (bad, message, detail) in enumerate(conditions):
         bad = np.asarray(bad)
         if np.any(bad):
             i = int(np.argmax(np.where(bad, np.abs(np.nan_to_num(t, nan=np.inf)), -1.0)))
             where = f"at {float(np.asarray(wls)[i]):g} µm"
-            raise ValueError(f"{message} ({detail(t[i]) + ' ' if detail else ''}{where})")
+            cls = NoLightError if k == 0 else ValueError  # k = 0: no light
+            raise cls(f"{message} ({detail(t[i]) + ' ' if detail else ''}{where})")
     return kern
 
 
@@ -685,10 +691,6 @@ def _mtf_impl(lens, field, depth, wls, freqs, pixel_size, *, model, kernel_size,
         return jnp.abs(jnp.sum(o, 0) / nw)
 
     return along(e_t), along(e_s), ~jnp.isnan(trunc)
-
-
-class NoLightError(ValueError):
-    """``mtf`` of a field whose beam puts no ray on the image surface (it has no MTF)."""
 
 
 def mtf(

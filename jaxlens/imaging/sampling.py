@@ -556,7 +556,8 @@ def field_rays(lens: Lens, field, pupil, wavelength=None, *, depth=None, aim=Non
     elif depth is None or (not isinstance(depth, jax.core.Tracer)
                            and np.all(np.asarray(depth) >= INFINITE_OBJECT_MM)):
         rays = _collimated(lens, field, pupil, wavelength, aim=aim)
-    else:
+    else:  # named here: depth 0 or NaN was refused as object_point's
+        depth = check_object_distance(depth, "depth", "field_rays")
         rays = point_source(lens, object_point(lens, field, depth), pupil, wavelength, aim=aim)
     if beyond is not None:
         rays = eqx.tree_at(lambda r: r.valid, rays, rays.valid & ~beyond)

@@ -13,6 +13,7 @@ import os
 import numpy as np
 
 from ..optics import checks
+from ..optics.input_files import input_file
 from ..optics.lens import Lens
 from .json_values import output_file
 from .lensfile import load_json, save_json
@@ -53,6 +54,7 @@ def load(path: str | os.PathLike, *, dtype=None, strict: bool = False,
         ValueError: an unknown extension, or a malformed file (the message names the
             file and, for ``.zmx`` and JSON syntax errors, the line), or an unknown glass
             (the message lists the closest catalog names).
+        FileNotFoundError: no file at ``path`` (the message names ``load`` and the path).
     """
     if not isinstance(path, str | os.PathLike):
         raise TypeError(f"load: path must be a file name (str or os.PathLike), got "
@@ -60,7 +62,8 @@ def load(path: str | os.PathLike, *, dtype=None, strict: bool = False,
     path = os.fspath(path)
     if os.path.isdir(path):  # before: "has extension ''", which did not say what was wrong
         raise ValueError(f"load: {path!r} is a folder; give a lens file (.json or .zmx) in it")
-    ext = _ext(path, "load")
+    ext = _ext(path, "load")  # first: a missing lens.txt is named by its extension
+    path = input_file(path, "load", "lens file")
     if dtype is not None:
         dtype = _float_dtype(dtype)
     # "yes" would read as True, a misspelt choice as "error": refused rather than guessed.

@@ -53,6 +53,7 @@ import numpy as np
 
 from ..optics import checks, paraxial, travel
 from ..optics.coordinates import CoordinateBreak
+from ..optics.input_files import input_file
 from ..optics.lens import INFINITE_OBJECT_MM, RAY_AIMING, Lens, Sensor
 from ..optics.materials import Air
 from ..optics.qtype import QTypeAsphere
@@ -614,6 +615,12 @@ def lens_from_dict(d: dict, *, source: str = "<lens>") -> Lens:
     given = d.get("travel_senses")  # not read (the frames give it), so a stale one is refused
     need = list(senses or travel.mirror_count_senses(
         len(surfaces), [m for m in mirrors if m < len(surfaces)]))
+    if "travel_senses" in d and (not isinstance(given, list) or len(given) != len(need) or any(
+            type(v) is not int or v not in (1, -1) for v in given)):
+        raise ValueError(f"{source}: travel_senses must be a list of {len(need)} numbers, "
+                         f"each +1 or -1 (the light's direction along each medium's local z, "
+                         f"object space first), got {given!r}; it is optional (the frames "
+                         f"give it)")
     if "travel_senses" in d and given != need:
         raise ValueError(f"{source}: travel_senses {given!r} disagrees with the frames: these "
                          f"mirrors and coordinate breaks give {need} (the light's direction "
@@ -739,7 +746,7 @@ def lens_to_dict(lens: Lens) -> dict:
 
 def load_json(path: str | os.PathLike) -> Lens:
     """Read a JSON lens file."""
-    path = os.fspath(path)
+    path = input_file(path, "load_json", "lens file")
     try:
         with open(path, encoding="utf-8-sig") as f:
             d = json.load(f, object_pairs_hook=_unique_keys)

@@ -14,6 +14,7 @@ from ..optics import checks, travel
 from ..optics.apertures import Aperture
 from ..optics.catalog import decode_zemax_text as decode
 from ..optics.coordinates import CoordinateBreak
+from ..optics.input_files import input_file
 from ..optics.lens import INFINITE_OBJECT_MM, Lens
 from ..optics.materials import Air
 from ..optics.surfaces import AbstractSurface, EvenAsphere, Hybrid, OddAsphere, Standard
@@ -712,7 +713,7 @@ def _travel_senses(surfaces: list, mirrors: list, body: list):
 def load_zmx(path: str | os.PathLike, *, strict: bool = False,
              unknown_glass: str = "error", config: int | None = None) -> Lens:
     """Read a Zemax ``.zmx`` lens file (UTF-16 or UTF-8); options as for :func:`loads`."""
-    path = os.fspath(path)
+    path = input_file(path, "load_zmx", "lens file")
     with open(path, "rb") as fh:
         raw = fh.read()
     return loads(decode(raw, path), path, strict=strict, unknown_glass=unknown_glass,
@@ -724,7 +725,7 @@ def configurations(path: str | os.PathLike) -> dict:
     surfaces hold) and ``operands``, one ``{"operand", "param", "values"}`` per operand with
     its value text in each configuration (see ``jaxlens.io.zmx_config``). A file without
     ``MNUM`` has one configuration and no operands."""
-    path = os.fspath(path)
+    path = input_file(path, "configurations", "lens file")
     with open(path, "rb") as fh:
         raw = fh.read()
     return zmx_config.describe(parse(decode(raw, path), path))

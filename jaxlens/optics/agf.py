@@ -20,6 +20,7 @@ import jax.numpy as jnp
 import numpy as np
 
 from . import checks
+from .input_files import input_file
 from .materials import (
     EXTENDED2_POWERS,
     EXTENDED3_POWERS,
@@ -468,6 +469,7 @@ def read_records(path: str | os.PathLike, catalog: str | None = None) -> list[Gl
     name = catalog or os.path.splitext(os.path.basename(path))[0].upper()
     if os.path.isdir(path):  # open() raised IsADirectoryError (a traceback, not a message)
         raise ValueError(f"{path} is a folder; give a Zemax .agf glass catalog file")
+    input_file(path, "load_agf", ".agf glass catalog")
     with open(path, "rb") as f:
         records = parse_agf(decode_zemax_text(f.read(), path), source=path, catalog=name)
     if not records:  # an empty or wrong file would register a catalog without glasses

@@ -355,21 +355,34 @@ class Hybrid(AbstractSurface):
         return self.odd_x, self.odd_y
 
 
+def _factory(name: str, **fields) -> Standard:
+    """``Standard(**fields)``, its refusals naming the factory the user called (``Plane``,
+    ``Sphere``, ``Conic``, ``Stop``), not the class it builds."""
+    try:
+        return Standard(**fields)
+    except (ValueError, TypeError) as e:
+        msg = str(e)
+        for said in ("Standard:", "surface:"):
+            if msg.startswith(said):
+                raise type(e)(f"{name}:{msg[len(said):]}") from None
+        raise
+
+
 def Plane(semi_diameter=jnp.inf) -> Standard:
     """A flat surface (c = 0)."""
-    return Standard(c=0.0, k=0.0, semi_diameter=semi_diameter)
+    return _factory("Plane", c=0.0, k=0.0, semi_diameter=semi_diameter)
 
 
 def Sphere(c, semi_diameter=jnp.inf) -> Standard:
     """A sphere of curvature c = 1/R (1/mm)."""
-    return Standard(c=c, k=0.0, semi_diameter=semi_diameter)
+    return _factory("Sphere", c=c, k=0.0, semi_diameter=semi_diameter)
 
 
 def Conic(c, k, semi_diameter=jnp.inf) -> Standard:
     """A conic of curvature c and conic constant k."""
-    return Standard(c=c, k=k, semi_diameter=semi_diameter)
+    return _factory("Conic", c=c, k=k, semi_diameter=semi_diameter)
 
 
 def Stop(semi_diameter=jnp.inf) -> Standard:
     """A flat circular aperture stop of the given radius (mark it with ``Lens.stop``)."""
-    return Standard(c=0.0, k=0.0, semi_diameter=semi_diameter)
+    return _factory("Stop", c=0.0, k=0.0, semi_diameter=semi_diameter)
