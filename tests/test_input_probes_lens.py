@@ -114,11 +114,11 @@ def test_save_zmx_names_the_options_it_takes(cooke, tmp_path):
 
 
 @pytest.mark.parametrize("make, match", [
-    (lambda: jl.Sphere("0.1"), r"surface: c must be a real number .*1/mm\), got str '0\.1'"),
+    (lambda: jl.Sphere("0.1"), r"Sphere: c must be a real number .*1/mm\), got str '0\.1'"),
     (lambda: jl.Standard(c=0.01, k=True), r"surface: k must be .* got bool True"),
     (lambda: jl.EvenAsphere(coeffs=["0", 1e-5]), r"surface: coeffs must be"),
     (lambda: jl.Hybrid(odd_x=[1j], odd_y=[0.0]), r"surface: odd_x must be .* got list"),
-    (lambda: jl.Sphere(0.02, semi_diameter="10"), r"surface: semi_diameter must be .*\(mm\)"),
+    (lambda: jl.Sphere(0.02, semi_diameter="10"), r"Sphere: semi_diameter must be .*\(mm\)"),
     (lambda: CoordinateBreak(tilt_x="5"), r"surface: tilt_x must be .*\(deg\), got str"),
     (lambda: Toroidal(cx="0.1"), r"surface: cx must be .*1/mm\), got str"),
     (lambda: ParaxialSurface(focal_length="50"), r"surface: focal_length must be .*\(mm\)"),

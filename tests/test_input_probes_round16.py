@@ -349,5 +349,6 @@ def test_report_of_a_missing_file_names_the_file_without_errno(tmp_path, capsys)
     missing = tmp_path / "missing.zmx"
     assert main(["report", str(missing)]) == 2
     err = capsys.readouterr().err
-    assert f"jaxlens report: error: {missing}: no such file or directory" in err
+    # Round 41b: the reader names itself and the path (optics.input_files).
+    assert f"jaxlens report: error: load: no such lens file: '{missing}'" in err
     assert "Errno" not in err
