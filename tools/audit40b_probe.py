@@ -67,7 +67,6 @@ import copy
 import dataclasses
 import json
 import os
-import subprocess
 import sys
 import warnings
 
@@ -80,7 +79,7 @@ jax.config.update("jax_enable_x64", True)
 
 import jax.numpy as jnp  # noqa: E402
 import numpy as np  # noqa: E402
-from probe_table import COOKE, ROOT, cli, fresh, jitted, patched, probe, run  # noqa: E402
+from probe_table import COOKE, ROOT, cli, fresh, jitted, module_cli, patched, probe, run  # noqa: E402
 
 import jaxlens as jl  # noqa: E402
 from jaxlens import analysis as A  # noqa: E402
@@ -375,19 +374,7 @@ def general():
 
 
 def clis():
-    def cmd(*args, module="jaxlens"):
-        def go():
-            p = subprocess.run([sys.executable, "-m", module, *args], capture_output=True,
-                               text=True, cwd=fresh("cli"), timeout=600,
-                               env=dict(os.environ, PYTHONPATH=ROOT))
-            last = (p.stderr.strip().splitlines() or [""])[-1]
-            if p.returncode == 2:
-                print(last, file=sys.stderr)
-                raise SystemExit(2)
-            if p.returncode:
-                raise RuntimeError(f"exit {p.returncode}: {last}")
-            return p.stdout.strip()[-80:]
-        return cli(go)
+    cmd = module_cli
 
     probe("cli report telecentric file", cmd("report", TELE), "telecentric", "rms_spot")
     probe("cli report config 0 of the zoom file", cmd("report", ZOOM, "--config", "0"), "config")

@@ -49,7 +49,6 @@ The same 208 probes, before (base 090c064) and after (branch probe41b):
 import dataclasses
 import json
 import os
-import subprocess
 import sys
 import warnings
 
@@ -61,7 +60,7 @@ import jax  # noqa: E402
 jax.config.update("jax_enable_x64", True)
 
 import numpy as np  # noqa: E402
-from probe_table import COOKE, ROOT, cli, edof_check, fresh, patched, probe, run, warned  # noqa: E402
+from probe_table import COOKE, ROOT, cli, edof_check, fresh, module_cli, patched, probe, run, warned  # noqa: E402
 
 import jaxlens as jl  # noqa: E402
 import jaxlens.design.curriculum  # noqa: E402, F401
@@ -277,22 +276,8 @@ def glasses():
 
 
 def clis():
-    def cmd(*args, module="jaxlens", timeout=240):
-        def go():
-            try:
-                p = subprocess.run([sys.executable, "-m", module, *args], capture_output=True,
-                                   text=True, cwd=fresh("cli"), timeout=timeout,
-                                   env=dict(os.environ, PYTHONPATH=ROOT))
-            except subprocess.TimeoutExpired:
-                raise RuntimeError(f"hang: no answer in {timeout} s") from None
-            last = (p.stderr.strip().splitlines() or [""])[-1]
-            if p.returncode == 2:
-                print(last, file=sys.stderr)
-                raise SystemExit(2)
-            if p.returncode:
-                raise RuntimeError(f"exit {p.returncode}: {last}")
-            return p.stdout.strip()[-80:]
-        return cli(go)
+    def cmd(*args, module="jaxlens"):
+        return module_cli(*args, module=module, timeout=240)
 
     probe("cli no subcommand", cmd(), "command")
     probe("cli bogus subcommand", cmd("frobnicate"), "frobnicate")

@@ -179,21 +179,36 @@ OPTILAND_PYTHON = "/work/optiland_venv/bin/python"
 """The interpreter of the optiland venv the probes of optiland-backed tools run in."""
 
 
-def tool(script, *args, python=None):
-    """A ``tools/`` script run as a user runs it (this tree's jaxlens first on the path):
-    its stdout's tail, or its exit code and the last line of its stderr."""
-    def go():
-        p = subprocess.run([python or sys.executable, os.path.join(ROOT, "tools", script), *args],
-                           capture_output=True, text=True, cwd=TMP, timeout=300,
+def _run(argv, *, cwd, timeout: float, tail: int):
+    """``argv`` run as a user runs it (this tree's jaxlens first on the path): its stdout's
+    last ``tail`` characters, or its exit code and the last line of its stderr (exit 2, a
+    refusal, is printed and re-raised as ``SystemExit(2)``; no answer in ``timeout`` s is a
+    hang)."""
+    try:
+        p = subprocess.run(argv, capture_output=True, text=True, cwd=cwd, timeout=timeout,
                            env=dict(os.environ, PYTHONPATH=ROOT))
-        last = (p.stderr.strip().splitlines() or [""])[-1]
-        if p.returncode == 2:
-            print(last, file=sys.stderr)
-            raise SystemExit(2)
-        if p.returncode:
-            raise RuntimeError(f"exit {p.returncode}: {last}")
-        return p.stdout.strip()[-100:]
-    return go
+    except subprocess.TimeoutExpired:
+        raise RuntimeError(f"hang: no answer in {timeout} s") from None
+    last = (p.stderr.strip().splitlines() or [""])[-1]
+    if p.returncode == 2:
+        print(last, file=sys.stderr)
+        raise SystemExit(2)
+    if p.returncode:
+        raise RuntimeError(f"exit {p.returncode}: {last}")
+    return p.stdout.strip()[-tail:]
+
+
+def tool(script, *args, python=None):
+    """A ``tools/`` script run as a user runs it (see ``_run``)."""
+    return lambda: _run([python or sys.executable, os.path.join(ROOT, "tools", script), *args],
+                        cwd=TMP, timeout=300, tail=100)
+
+
+def module_cli(*args, module="jaxlens", timeout=600):
+    """``python -m module args`` run as a user runs it, in a fresh folder (see ``_run``);
+    wrapped by ``cli`` so that exit 2 counts as a clear refusal."""
+    return cli(lambda: _run([sys.executable, "-m", module, *args], cwd=fresh("cli"),
+                            timeout=timeout, tail=80))
 
 
 def edof_check(*argv):
