@@ -47,7 +47,7 @@ from ..imaging import sampling
 from ..io.files import load
 from ..io.lensfile import nm_to_um
 from ..io.zmx import configurations
-from ..optics import checks, paraxial
+from ..optics import checks, paraxial, stop_clip
 from ..optics.coordinates import CoordinateBreak
 from ..optics.diffractive import Binary2, Grating
 from ..optics.freeform import Biconic, ZernikeSag
@@ -335,7 +335,7 @@ def _notes(lens: Lens) -> list[str]:
         notes.append(f"grating(s) at surface(s) {', '.join(map(str, gratings))}: the paraxial "
                      f"data are those of the order-0 system (the lines removed); the real rays "
                      f"see the lines")
-    return notes
+    return notes + stop_clip.note(lens)  # a fixed stop smaller than the EPD's beam
 
 
 # ---------------------------------------------------------------------------- text
