@@ -10,7 +10,7 @@ smaller than the beam of the stated entrance pupil diameter.
 * Two of them state an EPD whose beam is wider than the stop's clear aperture (EPD 12.5 mm,
   ``CLAP 0 5.75`` on the stop: a 6.25 mm beam; EPD 25, ``CLAP 0 12``). Zemax keeps the EPD
   and lets the fixed stop vignette; jaxlens does the same, and now says so: the report's
-  notes give the working EPD (``jaxlens.optics.stop_clip``), and so does a JSON lens whose
+  notes give the working EPD (``jaxlens.analysis.stop_clip``), and so does a JSON lens whose
   stop has a fixed semi-diameter (the Cooke triplet with a 1 mm stop under its 3.8 mm beam).
 
 References: tests/data/zmx42d_optiland.json, written by ``tools/zmx42d_reference.py``
@@ -19,6 +19,7 @@ formula in numpy; the paraxial marginal ray's height at the stop).
 """
 
 import copy
+import dataclasses
 import json
 import math
 import os
@@ -30,9 +31,9 @@ import numpy as np
 import pytest
 
 import jaxlens as jl
+from jaxlens.analysis import stop_clip
 from jaxlens.analysis.report import report_data
 from jaxlens.io import lensfile, zmx
-from jaxlens.optics import stop_clip
 from jaxlens.optics.lens import unclipped
 
 jax.config.update("jax_enable_x64", True)
@@ -136,7 +137,7 @@ def test_a_clear_aperture_smaller_than_the_epd_beam_is_said(name, radius):
     assert np.asarray(res.valid).tolist() == [True, False]
     note = stop_clip.note(lens)
     assert note == [f"the stop (surface 1, semi-diameter {radius:g} mm) clips the EPD beam "
-                    f"({beam:g} mm high at the stop, paraxial, 0.5876 um): working EPD "
+                    f"({beam:g} mm high at the stop: real rim ray, 0.5876 um): working EPD "
                     f"{working:g} mm, not the stated {ref['file_epd']:g} mm; every field's "
                     f"beam is clipped there (Zemax keeps the EPD and lets a fixed stop "
                     f"vignette)"]
@@ -167,19 +168,31 @@ def test_a_json_stop_smaller_than_the_beam_keeps_the_epd_and_the_report_says_so(
     assert float(lens.epd) == ref["epd"] == data["epd"]
     c = stop_clip.stop_clipping(lens)
     assert c.stop_surface == ref["stop_surface"] == data["stop_surface"] == 4
-    # optiland's paraxial marginal ray: 3.8046 mm high at the stop for EPD 10.
-    assert c.beam_radius == pytest.approx(ref["marginal_height_at_stop"], rel=1e-12)
-    working = ref["epd"] * 1.0 / ref["marginal_height_at_stop"]  # 2.6284 mm
+    # Paraxial aiming (the default) launches the rim ray through the paraxial entrance
+    # pupil's rim: optiland's real ray meets the stop 3.8611 mm high (paraxially 3.8046).
+    assert (lens.aim, c.beam_ray) == ("paraxial", "real")
+    assert c.beam_radius == pytest.approx(ref["real_rim_ray_height_at_stop"], rel=1e-12)
+    working = ref["epd"] * 1.0 / ref["real_rim_ray_height_at_stop"]  # 2.5899 mm
     assert c.working_epd == pytest.approx(working, rel=1e-12)
-    assert round(working, 4) == 2.6284
+    assert round(working, 4) == 2.5899
     said = [n for n in data["notes"] if n.startswith("the stop (surface 4")]
-    assert said == [f"the stop (surface 4, semi-diameter 1 mm) clips the EPD beam (3.80455 mm "
-                    f"high at the stop, paraxial, 0.587562 um): working EPD {working:.6g} mm, "
-                    f"not the stated 10 mm; every field's beam is clipped there (Zemax keeps "
-                    f"the EPD and lets a fixed stop vignette)"]
+    assert said == [f"the stop (surface 4, semi-diameter 1 mm) clips the EPD beam (3.8611 mm "
+                    f"high at the stop: real rim ray, 0.587562 um): working EPD "
+                    f"{working:.6g} mm, not the stated 10 mm; every field's beam is clipped "
+                    f"there (Zemax keeps the EPD and lets a fixed stop vignette)"]
     # The text report prints it among its notes.
     from jaxlens.analysis.report import format_report
     assert f"Note: {said[0]}" in format_report(data, lens)
+    # Real aiming fills the paraxial stop height: optiland's paraxial marginal ray, 3.8046.
+    aimed = stop_clip.stop_clipping(dataclasses.replace(lens, aim="real"))
+    assert aimed.beam_ray == "paraxial"
+    assert aimed.beam_radius == pytest.approx(ref["marginal_height_at_stop"], rel=1e-12)
+    assert aimed.working_epd == pytest.approx(10.0 / ref["marginal_height_at_stop"], rel=1e-12)
+    # A stop between the two heights clips the paraxially aimed beam only.
+    between = _cooke(3.83)
+    assert stop_clip.stop_clipping(between).working_epd == pytest.approx(
+        10.0 * 3.83 / ref["real_rim_ray_height_at_stop"], rel=1e-12)
+    assert stop_clip.note(dataclasses.replace(between, aim="real")) == []
     # A stop wider than the beam, or none: no note.
     assert stop_clip.note(_cooke(4.0)) == [] and stop_clip.note(_cooke("inf")) == []
 
@@ -191,7 +204,7 @@ def test_a_centred_circular_aperture_on_the_stop_counts_and_a_traced_lens_is_lef
     c = stop_clip.stop_clipping(clipped)
     assert c.stop_radius == 1.9
     assert c.working_epd == pytest.approx(10.0 * 1.9 / REF["cooke_triplet"][
-        "marginal_height_at_stop"], rel=1e-12)
+        "real_rim_ray_height_at_stop"], rel=1e-12)
     # A decentered one passes no centred beam: not compared.
     off = _with_aperture(lens, jl.Aperture("circle", 1.9, 1.9, decenter_y=0.5))
     assert stop_clip.stop_clipping(off) is None

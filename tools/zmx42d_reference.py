@@ -14,10 +14,11 @@ first checks jaxlens's are the same), and writes to tests/data/zmx42d_optiland.j
   surface (a cross of pupil points per field angle, launched 5 mm before surface 1, every
   aperture removed; a ray optiland loses is stored as null), at the F, d and C lines;
 * the paraxial marginal ray's height at the stop for the file's EPD (d line), which the
-  stop-clipping note of ``jaxlens.optics.stop_clip`` compares with the stop's radius;
-* the same height for the Cooke triplet of jaxlens/data/lenses/cooke_triplet.json, built
-  here through optiland's API from that file's radii and thicknesses (round 42d's test
-  gives its stop a fixed 1 mm semi-diameter: working EPD = EPD · 1 / height).
+  stop-clipping note of ``jaxlens.analysis.stop_clip`` compares with the stop's radius;
+* for the Cooke triplet of jaxlens/data/lenses/cooke_triplet.json, built here through
+  optiland's API from that file's radii and thicknesses, that height and the real height at
+  the stop of the on-axis ray through the rim of the entrance pupil (round 42d's test gives
+  its stop a fixed 1 mm semi-diameter: working EPD = EPD · 1 / height).
 """
 
 import json
@@ -30,6 +31,7 @@ import numpy as np
 from optiland import optic as optic_mod
 from optiland.fileio import load_zemax_file
 from optiland.materials import IdealMaterial
+from optiland.rays import RealRays
 
 sys.path.insert(0, str(pathlib.Path(__file__).resolve().parent))
 import zmx40a_reference as z40  # noqa: E402  (agf_records, index, trace, surface_z)
@@ -81,8 +83,19 @@ def cooke_heights(recs) -> dict:
     op.set_field_type(field_type="angle")
     op.fields.add(y=0.0)
     op.wavelengths.add(value=wl, is_primary=True)
+    # The real on-axis ray through the rim of the entrance pupil (parallel to the axis: the
+    # object is at infinity), traced without apertures to the stop.
+    for s in op.surfaces.surfaces:
+        s.aperture = None
+    z1 = z40.surface_z(op, 1)
+    h = 0.5 * spec["aperture"]["epd"]
+    rays = RealRays([0.0], [h], [z1 + z40.LAUNCH], [0.0], [0.0], [1.0], [1.0], [wl])
+    op.surfaces.trace(rays, skip=1)
+    # The trace skipped the object surface: row k holds surface k + 1.
+    real = float(np.ravel(np.asarray(op.surfaces.y))[op.surfaces.stop_index - 1])
     return {"epd": spec["aperture"]["epd"], "stop_surface": op.surfaces.stop_index,
-            "marginal_height_at_stop": marginal_height_at_stop(op), "wavelength": wl}
+            "marginal_height_at_stop": marginal_height_at_stop(op),
+            "real_rim_ray_height_at_stop": real, "wavelength": wl}
 
 
 def main():

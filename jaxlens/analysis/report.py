@@ -47,7 +47,7 @@ from ..imaging import sampling
 from ..io.files import load
 from ..io.lensfile import nm_to_um
 from ..io.zmx import configurations
-from ..optics import checks, paraxial, stop_clip
+from ..optics import checks, paraxial
 from ..optics.coordinates import CoordinateBreak
 from ..optics.diffractive import Binary2, Grating
 from ..optics.freeform import Biconic, ZernikeSag
@@ -60,6 +60,7 @@ from ..optics.toroidal import Toroidal
 from ..optics.xypolynomial import XYPolynomial, xy_term_powers
 from ..tracing.forward import aimed_jit
 from . import spots as analysis
+from . import stop_clip
 from .report_afocal import afocal_report_data, format_afocal_report
 from .report_cells import aiming_line, bucketed_field_curvature, wavefront_lines
 from .report_cells import cell as _num
