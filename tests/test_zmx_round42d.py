@@ -13,7 +13,7 @@ smaller than the beam of the stated entrance pupil diameter.
   notes give the working EPD (``jaxlens.analysis.stop_clip``), and so does a JSON lens whose
   stop has a fixed semi-diameter (the Cooke triplet with a 1 mm stop under its 3.8 mm beam).
 
-References: tests/data/zmx42d_optiland.json, written by ``tools/zmx42d_reference.py``
+References: tests/data/zmx42d/optiland_reference.json, written by ``tools/zmx42d_reference.py``
 (optiland's own .zmx reader, every medium set to the index computed from the catalog's
 formula in numpy; the paraxial marginal ray's height at the stop).
 """
@@ -40,7 +40,7 @@ jax.config.update("jax_enable_x64", True)
 
 HERE = os.path.dirname(__file__)
 DATA = os.path.join(HERE, "data")
-with open(os.path.join(DATA, "zmx42d_optiland.json")) as fh:
+with open(os.path.join(DATA, "zmx42d", "optiland_reference.json")) as fh:
     REF = json.load(fh)
 FILES = sorted(REF["files"])
 COOKE = os.path.join(os.path.dirname(HERE), "jaxlens", "data", "lenses", "cooke_triplet.json")

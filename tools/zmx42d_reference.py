@@ -8,7 +8,7 @@ It reads the three real files of tests/data/zmx42d/ (SOURCES.md names them) with
 own .zmx reader, sets every medium to optiland's ``IdealMaterial`` of the index computed
 here, at each wavelength, from the catalog records jaxlens ships (the numpy formulas of
 ``tools/zmx40a_reference.py``, not jaxlens's code; the indices are stored so that the test
-first checks jaxlens's are the same), and writes to tests/data/zmx42d_optiland.json:
+first checks jaxlens's are the same), and writes to tests/data/zmx42d/optiland_reference.json:
 
 * the paraxial EFL, the image surface's z from surface 1, and real rays at the image
   surface (a cross of pupil points per field angle, launched 5 mm before surface 1, every
@@ -38,7 +38,7 @@ import zmx40a_reference as z40  # noqa: E402  (agf_records, index, trace, surfac
 
 ROOT = pathlib.Path(__file__).resolve().parents[1]
 DATA = ROOT / "tests" / "data" / "zmx42d"
-OUT_JSON = ROOT / "tests" / "data" / "zmx42d_optiland.json"
+OUT_JSON = ROOT / "tests" / "data" / "zmx42d" / "optiland_reference.json"
 COOKE = ROOT / "jaxlens" / "data" / "lenses" / "cooke_triplet.json"
 WAVELENGTHS = (0.4861327, 0.5875618, 0.6562725)
 # file: (field angles in degrees, beam diameter traced, mm; the catalogs searched, in order)
