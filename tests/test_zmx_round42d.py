@@ -33,6 +33,7 @@ import pytest
 import jaxlens as jl
 from jaxlens.analysis import stop_clip
 from jaxlens.analysis.report import report_data
+from jaxlens.imaging import sampling
 from jaxlens.io import lensfile, zmx
 from jaxlens.optics.lens import unclipped
 
@@ -172,9 +173,11 @@ def test_a_json_stop_smaller_than_the_beam_keeps_the_epd_and_the_report_says_so(
     # pupil's rim: optiland's real ray meets the stop 3.8611 mm high (paraxially 3.8046).
     assert (lens.aim, c.beam_ray) == ("paraxial", "real")
     assert c.beam_radius == pytest.approx(ref["real_rim_ray_height_at_stop"], rel=1e-12)
-    working = ref["epd"] * 1.0 / ref["real_rim_ray_height_at_stop"]  # 2.5899 mm
+    # The working EPD: the pupil radius whose real ray meets the stop's rim (optiland's rays,
+    # bisected): 2.6260 mm, between 10 · 1/3.8611 = 2.5899 and 10 · 1/3.8046 = 2.6284.
+    working = ref["working_epd_1mm_stop_real_rays"]
     assert c.working_epd == pytest.approx(working, rel=1e-12)
-    assert round(working, 4) == 2.5899
+    assert round(working, 4) == 2.6260
     said = [n for n in data["notes"] if n.startswith("the stop (surface 4")]
     assert said == [f"the stop (surface 4, semi-diameter 1 mm) clips the EPD beam (3.8611 mm "
                     f"high at the stop: real rim ray, 0.587562 um): working EPD "
@@ -190,8 +193,9 @@ def test_a_json_stop_smaller_than_the_beam_keeps_the_epd_and_the_report_says_so(
     assert aimed.working_epd == pytest.approx(10.0 / ref["marginal_height_at_stop"], rel=1e-12)
     # A stop between the two heights clips the paraxially aimed beam only.
     between = _cooke(3.83)
-    assert stop_clip.stop_clipping(between).working_epd == pytest.approx(
-        10.0 * 3.83 / ref["real_rim_ray_height_at_stop"], rel=1e-12)
+    w = stop_clip.stop_clipping(between).working_epd
+    rim = sampling.stop_radius(dataclasses.replace(between, epd=np.asarray(w)), "real")
+    assert float(rim) == pytest.approx(3.83, rel=1e-12) and 9.9 < w < 10.0
     assert stop_clip.note(dataclasses.replace(between, aim="real")) == []
     # A stop wider than the beam, or none: no note.
     assert stop_clip.note(_cooke(4.0)) == [] and stop_clip.note(_cooke("inf")) == []
@@ -203,8 +207,8 @@ def test_a_centred_circular_aperture_on_the_stop_counts_and_a_traced_lens_is_lef
     clipped = _with_aperture(lens, ap)
     c = stop_clip.stop_clipping(clipped)
     assert c.stop_radius == 1.9
-    assert c.working_epd == pytest.approx(10.0 * 1.9 / REF["cooke_triplet"][
-        "real_rim_ray_height_at_stop"], rel=1e-12)
+    rim = sampling.stop_radius(dataclasses.replace(lens, epd=np.asarray(c.working_epd)), "real")
+    assert float(rim) == pytest.approx(1.9, rel=1e-12)
     # A decentered one passes no centred beam: not compared.
     off = _with_aperture(lens, jl.Aperture("circle", 1.9, 1.9, decenter_y=0.5))
     assert stop_clip.stop_clipping(off) is None

@@ -18,7 +18,8 @@ first checks jaxlens's are the same), and writes to tests/data/zmx42d/optiland_r
 * for the Cooke triplet of jaxlens/data/lenses/cooke_triplet.json, built here through
   optiland's API from that file's radii and thicknesses, that height and the real height at
   the stop of the on-axis ray through the rim of the entrance pupil (round 42d's test gives
-  its stop a fixed 1 mm semi-diameter: working EPD = EPD · 1 / height).
+  its stop a fixed 1 mm semi-diameter), and the working EPD of that stop: twice the pupil
+  radius whose real ray meets the stop 1 mm high (bisection on optiland's real rays).
 """
 
 import json
@@ -88,14 +89,24 @@ def cooke_heights(recs) -> dict:
     for s in op.surfaces.surfaces:
         s.aperture = None
     z1 = z40.surface_z(op, 1)
-    h = 0.5 * spec["aperture"]["epd"]
-    rays = RealRays([0.0], [h], [z1 + z40.LAUNCH], [0.0], [0.0], [1.0], [1.0], [wl])
-    op.surfaces.trace(rays, skip=1)
-    # The trace skipped the object surface: row k holds surface k + 1.
-    real = float(np.ravel(np.asarray(op.surfaces.y))[op.surfaces.stop_index - 1])
-    return {"epd": spec["aperture"]["epd"], "stop_surface": op.surfaces.stop_index,
+
+    def height(h):
+        rays = RealRays([0.0], [h], [z1 + z40.LAUNCH], [0.0], [0.0], [1.0], [1.0], [wl])
+        op.surfaces.trace(rays, skip=1)
+        # The trace skipped the object surface: row k holds surface k + 1.
+        return float(np.ravel(np.asarray(op.surfaces.y))[op.surfaces.stop_index - 1])
+
+    epd = spec["aperture"]["epd"]
+    real = height(0.5 * epd)
+    # The pupil radius whose real ray meets a 1 mm stop's rim: bisection on optiland's rays.
+    lo, hi = 0.0, 0.5 * epd
+    for _ in range(200):
+        mid = 0.5 * (lo + hi)
+        lo, hi = (mid, hi) if height(mid) < 1.0 else (lo, mid)
+    return {"epd": epd, "stop_surface": op.surfaces.stop_index,
             "marginal_height_at_stop": marginal_height_at_stop(op),
-            "real_rim_ray_height_at_stop": real, "wavelength": wl}
+            "real_rim_ray_height_at_stop": real,
+            "working_epd_1mm_stop_real_rays": lo + hi, "wavelength": wl}
 
 
 def main():

@@ -19,10 +19,12 @@ paraxial marginal ray's (``paraxial_data(lens).stop_semi_diameter``). A rim ray 
 before the stop falls back to the paraxial height.
 
 Conventions: lengths in mm; the stop surface is numbered as in Zemax (``lens.stop + 1``). The
-working EPD is EPD × (stop radius / beam height): exact where the stop is surface 1 and the
-object at infinity, first-order elsewhere. Only the stop's semi-diameter and its centred
-circular clipping apertures are compared (an elliptical, rectangular or decentered stop
-aperture passes no circular beam; it is left to the real rays).
+working EPD is the diameter of the on-axis beam that passes the stop: with paraxial aiming,
+twice the pupil radius whose real rim ray meets the stop's rim (found by the secant method,
+to 1e-12 of the radius); with ``"real"``/``"real_marginal"`` aiming, which aim pupil
+fractions at fractions of the stop height, EPD × stop radius / beam height. Only the stop's
+semi-diameter and its centred circular clipping apertures are compared (an elliptical,
+rectangular or decentered stop aperture passes no circular beam; it is left to the real rays).
 """
 
 from __future__ import annotations
@@ -35,6 +37,9 @@ import numpy as np
 from ..imaging import sampling
 from ..optics import checks, paraxial
 from ..optics.lens import Lens
+
+SECANT_STEPS = 12
+"""Most secant steps for the working EPD under paraxial aiming (3 to 5 reach 1e-12)."""
 
 RELATIVE_MARGIN = 1e-9
 """A stop radius within this fraction below the beam's height clips nothing (a file's DIAM
@@ -53,8 +58,8 @@ class StopClip:
         beam_ray: ``"real"`` or ``"paraxial"``: which ray gave ``beam_radius``.
         epd: the lens's entrance pupil diameter, mm (``inf`` for an object-space
             telecentric lens, whose aperture is an NA).
-        working_epd: ``epd · stop_radius / beam_radius``, mm: the diameter of the on-axis
-            beam that the stop passes (``None`` for an object-space telecentric lens).
+        working_epd: the diameter of the on-axis beam that the stop passes, mm (see the
+            module docstring; ``None`` for an object-space telecentric lens).
         wavelength: the primary wavelength, µm.
     """
 
@@ -82,12 +87,39 @@ def _beam(lens: Lens) -> tuple[float, str]:
     par = abs(float(np.asarray(paraxial.paraxial_data(lens).stop_semi_diameter)))
     if lens.telecentric_object or lens.aim == "real":
         return par, "paraxial"
-    object_z = None if lens.object_at_infinity else -float(np.asarray(lens.object_distance))
     try:
-        real = float(np.asarray(sampling.stop_radius(lens, "real", object_z=object_z)))
+        real = float(np.asarray(sampling.stop_radius(lens, "real", object_z=_object_z(lens))))
     except ValueError:  # the rim ray is lost before the stop
         return par, "paraxial"
     return (real, "real") if math.isfinite(real) else (par, "paraxial")
+
+
+def _object_z(lens: Lens):
+    return None if lens.object_at_infinity else -float(np.asarray(lens.object_distance))
+
+
+def _real_working_epd(lens: Lens, radius: float, beam: float) -> float:
+    """Paraxial aiming: the EPD whose real rim ray meets the stop at ``radius`` (secant on
+    the rim ray's height as a function of the pupil radius, from EPD × radius / beam)."""
+    epd = float(np.asarray(lens.epd))
+
+    def height(rho):
+        m = dataclasses.replace(lens, epd=np.asarray(2.0 * rho, np.asarray(lens.epd).dtype))
+        return float(np.asarray(sampling.stop_radius(m, "real", object_z=_object_z(lens))))
+
+    x0, h0 = 0.5 * epd, beam
+    x1 = x0 * radius / beam
+    try:
+        h1 = height(x1)
+        for _ in range(SECANT_STEPS):
+            if abs(h1 - radius) <= 1e-12 * radius or h1 == h0:
+                break
+            x0, h0, x1 = x1, h1, x1 + (radius - h1) * (x1 - x0) / (h1 - h0)
+            h1 = height(x1)
+    except ValueError:  # a rim ray lost on the way: the first-order value
+        return epd * radius / beam
+    return 2.0 * x1 if math.isfinite(x1) and abs(h1 - radius) <= 1e-9 * radius else (
+        epd * radius / beam)
 
 
 def stop_clipping(lens: Lens) -> StopClip | None:
@@ -108,7 +140,12 @@ def stop_clipping(lens: Lens) -> StopClip | None:
     if not math.isfinite(beam) or radius >= beam * (1.0 - RELATIVE_MARGIN):
         return None
     epd = math.inf if lens.telecentric_object else float(np.asarray(lens.epd))
-    working = None if lens.telecentric_object else epd * radius / beam
+    if lens.telecentric_object:
+        working = None
+    elif ray == "real" and lens.aim == "paraxial":  # rays through the paraxial pupil
+        working = _real_working_epd(lens, radius, beam)
+    else:  # aimed at pupil fractions of the stop height: the fraction radius / beam
+        working = epd * radius / beam
     return StopClip(stop_surface=lens.stop + 1, stop_radius=radius, beam_radius=beam,
                     beam_ray=ray, epd=epd, working_epd=working,
                     wavelength=float(np.asarray(lens.primary_wavelength)))
