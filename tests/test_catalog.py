@@ -86,7 +86,7 @@ def fresh_registry(monkeypatch):
 def test_shipped_catalogs_and_required_glasses():
     counts = {c: len(catalog_names(catalog=c)) for c in catalog.SHIPPED_CATALOGS}
     assert counts == {"SCHOTT": 358, "CDGM": 324, "PLASTICS": 11, "MISC": 14, "OHARA": 410,
-                      "HOYA": 190, "HIKARI": 370, "SUMITA": 176, "CORNING": 1, "INFRARED": 48,
+                      "HOYA": 190, "HIKARI": 370, "SUMITA": 176, "CORNING": 1, "INFRARED": 54,
                       "LIGHTPATH": 11, "HERAEUS": 5, "UMICORE": 2, "TOPAS": 3, "ARCHER": 15,
                       "ISUZU": 1, "LZOS": 54, "RAD_HARD": 7, "RPO": 43,
                       "ARTON": 6}
@@ -137,8 +137,8 @@ LOOSE_ND_VD = {
 # materials). Their formula is checked against published indices instead (below).
 NO_D_LINE_DATA = {
     "INFRARED": {"AGCL", "AMTIR1", "AMTIR3", "CDSE", "CDTE", "GAAS", "GERMANIUM", "GE_LONG",
-                 "GE_OLD", "IRG100", "KRS5", "NACL", "SILICON", "TI_1173", "ZBLA", "ZBLAN",
-                 "ZNSE", "ZNS_IR"},
+                 "GE_OLD", "IRG100", "IRG22", "IRG23", "IRG24", "IRG25", "IRG26", "IRG27",
+                 "KRS5", "NACL", "SILICON", "TI_1173", "ZBLA", "ZBLAN", "ZNSE", "ZNS_IR"},
     "LIGHTPATH": {"BD1", "BD2"}, "UMICORE": {"GASIR1", "GASIR2"}, "ISUZU": {"IIR-SF1"},
     "RPO": {"IG2", "IG4", "IG5", "IG6"},
 }
@@ -231,7 +231,7 @@ def test_new_catalogs_keep_old_names_and_reach_their_own():
         get_material("ZNS")
     # Materials without d-line data stay off the glass map.
     near = catalog.nearest_glasses(2.4, 15.0, count=100, catalogs="INFRARED")
-    assert len(near) == 48 - len(NO_D_LINE_DATA["INFRARED"])
+    assert len(near) == 54 - len(NO_D_LINE_DATA["INFRARED"])
     assert near[0][1] == "SRTIO3" and all(vd > 0 for _, _, _, vd in near)
 
 

@@ -1,7 +1,7 @@
 """Real-ray analysis: spots, RMS, distortion, ray fans, field curvature, encircled energy,
 angular spots and magnification (afocal image space),
 third-order (Seidel) aberrations, wavefront error and Zernike fits, clear apertures, geometry
-checks, tolerancing, the report."""
+checks, tolerancing, a fixed stop that clips the EPD's beam, the report."""
 
 from . import tolerance as tolerance
 from .aberrations import FieldCurvature as FieldCurvature
@@ -23,6 +23,8 @@ from .spots import distortion as distortion
 from .spots import rms_spot as rms_spot
 from .spots import self_intersection as self_intersection
 from .spots import spot_rays as spot_rays
+from .stop_clip import StopClip as StopClip
+from .stop_clip import stop_clipping as stop_clipping
 from .third_order import Seidel as Seidel
 from .third_order import seidel as seidel
 from .wavefront_error import OPDFan as OPDFan

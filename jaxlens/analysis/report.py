@@ -60,6 +60,7 @@ from ..optics.toroidal import Toroidal
 from ..optics.xypolynomial import XYPolynomial, xy_term_powers
 from ..tracing.forward import aimed_jit
 from . import spots as analysis
+from . import stop_clip
 from .report_afocal import afocal_report_data, format_afocal_report
 from .report_cells import aiming_line, bucketed_field_curvature, wavefront_lines
 from .report_cells import cell as _num
@@ -335,7 +336,7 @@ def _notes(lens: Lens) -> list[str]:
         notes.append(f"grating(s) at surface(s) {', '.join(map(str, gratings))}: the paraxial "
                      f"data are those of the order-0 system (the lines removed); the real rays "
                      f"see the lines")
-    return notes
+    return notes + stop_clip.note(lens)  # a fixed stop smaller than the EPD's beam
 
 
 # ---------------------------------------------------------------------------- text

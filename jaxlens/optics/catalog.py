@@ -19,7 +19,9 @@ source in its ``!`` header lines):
   also get that database's glasses that their files above lack (and SCHOTT B270).
 * ``CORNING``: HPFS 7980 fused silica (``C79-80``).
 * ``INFRARED``: Zemax's infrared catalog: ZnSe, ZnS, germanium, silicon, GaAs, sapphire, MgF₂,
-  BaF₂, CaF₂, KBr, NaCl, LiF, KRS-5, AMTIR, Cleartran, SCHOTT IRG glasses…
+  BaF₂, CaF₂, KBr, NaCl, LiF, KRS-5, AMTIR, Cleartran, SCHOTT IRG glasses…, and SCHOTT's
+  IRG22–IRG27 chalcogenides (from SCHOTT's flyers as the refractiveindex.info database holds
+  them; no d-line data, their range 0.6–1 to 12 µm).
 * ``LIGHTPATH``, ``HERAEUS``, ``UMICORE``, ``TOPAS``, ``ARCHER``, ``ISUZU``: Zemax's catalogs of
   LightPath molded-lens glasses (ECO550, D-ZK3M, BD1/BD2), Heraeus silica (Suprasil,
   Infrasil…), Umicore GASIR, TOPAS COC grades, Archer molded glasses and Isuzu IIR-SF1.
