@@ -192,3 +192,98 @@ def test_case_lenses_are_of_their_class():
         if d["kind"] == "tilted":
             assert any(float(s.tilt_x) != 0 for s in lens.surfaces
                        if isinstance(s, CoordinateBreak))
+
+
+def _negate_tilts(s):
+    if s["type"] == "coordinate_break":
+        for k in ("tilt_x", "tilt_y", "tilt_z"):
+            s[k] = -s[k]
+
+
+def _toggle_order(s):
+    if s["type"] == "coordinate_break":
+        s["order"] = 1 - s["order"]
+
+
+def _negate_zernike_decenter(s):
+    if s["type"] == "zernike":
+        s["decenter_x"], s["decenter_y"] = -s["decenter_x"], -s["decenter_y"]
+
+
+def _swap_toric_sections(s):
+    if s["type"] == "biconic":
+        s["curvature"], s["curvature_x"] = s["curvature_x"], s["curvature"]
+        s["conic"], s["conic_x"] = s["conic_x"], s["conic"]
+    if s["type"] == "toroidal":
+        s["curvature"], s["curvature_x"] = s["curvature_x"], s["curvature"]
+
+
+def _xy_terms_transposed(s):
+    """x^m y^n read as x^n y^m (the order within a degree reversed)."""
+    if s["type"] == "xy_polynomial":
+        co, out, i = s["coeffs"], [], 0
+        d = 1
+        while i < len(co):
+            out += co[i:i + d + 1][::-1]
+            i += d + 1
+            d += 1
+        s["coeffs"] = out
+
+
+# name: (class, what a case must hold, the edit); each a convention a wrong reading of which
+# the round would have to catch
+FAULTS = {
+    "tilt_sign": ("tilted", lambda s: s["type"] == "coordinate_break" and s["tilt_x"] != 0,
+                  _negate_tilts),
+    "fold_sign": ("folded", lambda s: s.get("mirror", False), _negate_tilts),
+    "break_order": ("tilted", lambda s: s["type"] == "coordinate_break" and s["tilt_z"] != 0,
+                    _toggle_order),
+    "zernike_decenter_sign": ("freeform", lambda s: s["type"] == "zernike",
+                              _negate_zernike_decenter),
+    "xy_term_order": ("freeform", lambda s: s["type"] == "xy_polynomial", _xy_terms_transposed),
+    "toric_sections": ("toric", lambda s: s["type"] in ("biconic", "toroidal"),
+                       _swap_toric_sections),
+}
+
+
+def _case_with(kind, has):
+    for c in CASES:
+        if c.split("_")[1] != kind:
+            continue
+        d = json.loads((FOLDER / f"{c}.json").read_text())
+        if any(has(s) for s in d["surfaces"][1:-1]):
+            return c
+    raise AssertionError(f"no {kind} case with the feature")
+
+
+@pytest.mark.parametrize("fault", [
+    pytest.param(f, marks=() if f in ("tilt_sign", "zernike_decenter_sign") else pytest.mark.slow)
+    for f in FAULTS])
+def test_a_wrong_convention_fails(fault):
+    """The test can fail: the case read with one convention wrong (every break's tilts
+    negated, a break's order toggled, a Zernike decenter's sign, an XY polynomial's x and y
+    powers swapped, a biconic's or toroid's sections swapped) misses optiland's rays by far
+    more than the tolerance (tools/fuzz42c_compare.py's figures in the CHANGELOG)."""
+    kind, has, edit = FAULTS[fault]
+    case = _case_with(kind, has)
+    err, _ = case_errors(FOLDER / f"{case}.json", edit)
+    assert err["valid"] > 0 or err["ray_pos"] > 1e3 * POS_ABS, (case, err)
+
+
+def test_qbfs_beyond_the_normalisation_radius_is_the_polynomial():
+    """The one difference the draws met (0.9 mm on the image, a draw of the first version of
+    the writer): past u = r/ρ_n = 1 optiland 0.6.3 drops the Q-bfs departure (its source:
+    ``S = where(usq > 1, 0, departure)``), jaxlens keeps the polynomial (its docstring). A
+    numpy check of jaxlens's side from Forbes's closed forms Q_0 = 1, Q_1 = (13 − 16x)/√19
+    and the conic obliquity factor φ (jaxlens.optics.qtype's module notes) at u = 0.5 and 1.3."""
+    c, k, rn, a0, a1 = 0.012, -0.4, 8.0, 0.01, -0.006
+    s = jl.QTypeAsphere(c=c, k=k, coeffs=[a0, a1], norm_radius=rn, qtype="bfs")
+    for u in (0.5, 1.3):
+        r = u * rn
+        x = u * u
+        base = c * r * r / (1 + np.sqrt(1 - (1 + k) * c * c * r * r))
+        phi = np.sqrt((1 - k * c * c * r * r) / (1 - (1 + k) * c * c * r * r))
+        want = base + x * (1 - x) * phi * (a0 + a1 * (13 - 16 * x) / np.sqrt(19))
+        got = float(s.sag(jnp.asarray(r * 0.6), jnp.asarray(r * 0.8))[0])
+        assert abs(got - want) < 1e-13, (u, got, want)
+        assert abs(want - base) > 1e-4  # the departure is there, beyond u = 1 too

@@ -31,11 +31,13 @@ class (``--kind``):
   a flat base it is the whole surface moved, optiland's surface decenter, as
   tests/test_zernike_decenter.py established), an XY polynomial by a pair of coordinate
   breaks (decenter (dx, dy), the surface, decenter (−dx, −dy)).
-* ``tilted``: a lens of spheres and even aspheres with one or two elements tilted and
-  decentered between a break (order 0: decenter, then tilt about x, the new y, the new z)
-  and its return break (order 1, every parameter negated), and in half the draws a tilted
-  image plane.
-* ``folded``: a singlet, a fold (a break tilted 45° about x or y, with up to ±3° more, a
+* ``tilted``: a lens of singlets (spheres and even aspheres, or the toric or XY-polynomial
+  surfaces above) with one or two elements tilted (up to 20° about each axis) and
+  decentered (up to 0.3 of the pupil radius) between a break (order 0: decenter, then tilt
+  about x, the new y, the new z; or order 1: tilt about z, the new y, the new x, then
+  decenter) and its return break (order toggled, every parameter negated), and in half the
+  draws an image plane tilted up to 15° about x and y.
+* ``folded``: a singlet, a fold (a break tilted 45° about x or y, with up to ±5° more, a
   mirror: plane, sphere, conic, toroid or biconic, and the same break again, as in Zemax),
   negative thicknesses after it (a singlet in half the draws), and in a third of the draws
   a second fold (a periscope) that turns the light back to +z.
@@ -66,7 +68,8 @@ Rays: no ray generation of either program is used (an entrance pupil of a folded
 system is another question). Each field (θx, θy) in degrees gives the direction
 (tan θx, tan θy, 1)/norm; each pupil point (Px, Py) the point (Px, Py)·EPD/2 of the plane
 z = 0 (surface 1's vertex plane before any break); the ray starts one length scale L back
-along its direction. Four fields (0, 0), (0, θ), (0.8θ, 0), (−0.6θ, 0.7θ) and nine pupil
+along its direction. Four fields (0, 0), (0, θ), (0.8θ, 0), (−0.6θ, 0.7θ), θ 3° to 20°
+(halved where a ray fails, below), and nine pupil
 points (``PUPIL``) at two wavelengths: 72 rays a case. optiland traces them
 (``surface_group.trace(rays, skip=1)``, Newton tolerance 1e-13, 200 iterations, no
 apertures); the image intercept and direction are stored in global coordinates (surface 1's
@@ -156,7 +159,7 @@ def std(rng, L, t, med, asphere=False, a=1.0):
 
 def toric_surface(rng, L, a, t, med):
     if rng.random() < 0.5:  # a toroid
-        cx = float(rng.uniform(-0.6, 0.6) / (2.5 * a))
+        cx = float(rng.uniform(-0.8, 0.8) / (2.0 * a))
         return surf("toroidal", t, med, curvature=curv(rng, L), conic=float(rng.uniform(-1, 1)),
                     coeffs=[float(rng.normal() * 2e-3 / a), float(rng.normal() * 2e-4 / a**3)],
                     curvature_x=cx)
@@ -176,8 +179,8 @@ def toric_surface(rng, L, a, t, med):
 def xy_surface(rng, L, a, t, med):
     deg = int(rng.integers(2, 6))
     n_terms = (deg + 1) * (deg + 2) // 2 - 1
-    co = (rng.normal(size=n_terms) * 3e-3 * a).tolist()
-    co[0], co[1] = float(rng.normal() * 0.01 * a), float(rng.normal() * 0.01 * a)
+    co = (rng.normal(size=n_terms) * 6e-3 * a).tolist()
+    co[0], co[1] = float(rng.normal() * 0.03 * a), float(rng.normal() * 0.03 * a)
     return surf("xy_polynomial", t, med, curvature=curv(rng, L), conic=float(rng.uniform(-1, 1)),
                 coeffs=[float(v) for v in co], norm_radius=float(a * rng.uniform(1.3, 2.0)))
 
@@ -185,9 +188,9 @@ def xy_surface(rng, L, a, t, med):
 def zernike_surface(rng, L, a, t, med):
     ordering = "standard" if rng.random() < 0.5 else "fringe"
     n = int(rng.integers(6, 29 if ordering == "standard" else 37))
-    z = (rng.normal(size=n) * 3e-3 * a).tolist()
-    z[3] = float(rng.uniform(-0.04, 0.04) * a)  # defocus: some power
-    dx, dy = (float(v) for v in rng.uniform(-0.2, 0.2, 2) * a)
+    z = (rng.normal(size=n) * 5e-3 * a).tolist()
+    z[3] = float(rng.uniform(-0.08, 0.08) * a)  # defocus: some power
+    dx, dy = (float(v) for v in rng.uniform(-0.3, 0.3, 2) * a)
     return surf("zernike", t, med, curvature=0.0, conic=0.0, ordering=ordering,
                 zernike=[float(v) for v in z], norm_radius=float(a * rng.uniform(2.2, 3.0)),
                 decenter_x=dx, decenter_y=dy)
@@ -220,7 +223,8 @@ def draw(rng, kind):
         for _ in range(int(rng.integers(1, 3))):
             rows += singlet(rng, L, a, qbfs_surface, gap(), glass(rng))
         if rng.random() < 0.5:
-            cb = cbreak(0.0, AIR, *(rng.uniform(-0.1, 0.1, 2) * a), *rng.uniform(-6, 6, 3))
+            cb = cbreak(0.0, AIR, *(rng.uniform(-0.2, 0.2, 2) * a), *rng.uniform(-12, 12, 3),
+                        order=int(rng.integers(0, 2)))
             rows = [cb] + rows[:2] + [inverse(cb, 0.0, AIR)] + rows[2:]
     elif kind == "freeform":
         makers = [xy_surface, zernike_surface]
@@ -231,7 +235,7 @@ def draw(rng, kind):
             for mk, tt, med in ((first, t, g), (second, gap(), AIR)):
                 s = mk(rng, L, a, tt, med)
                 if s["type"] == "xy_polynomial":  # decentered by a pair of breaks
-                    dx, dy = rng.uniform(-0.15, 0.15, 2) * a
+                    dx, dy = rng.uniform(-0.3, 0.3, 2) * a
                     prev = rows[-1] if rows else AIR  # the medium before the break
                     cb = cbreak(0.0, dict(material=prev["material"], n=prev["n"]), dx, dy)
                     s_t = s["thickness"]
@@ -243,10 +247,11 @@ def draw(rng, kind):
         n_el = int(rng.integers(1, 4))
         tilted = set(rng.choice(n_el, size=int(rng.integers(1, min(2, n_el) + 1)), replace=False))
         for e in range(n_el):
-            el = singlet(rng, L, a, None, gap(), glass(rng))
+            maker = [None, None, toric_surface, xy_surface][int(rng.integers(0, 4))]
+            el = singlet(rng, L, a, maker, gap(), glass(rng))
             if e in tilted:
-                cb = cbreak(0.0, AIR, *(rng.uniform(-0.15, 0.15, 2) * a),
-                            *rng.uniform(-10, 10, 3), order=int(rng.integers(0, 2)))
+                cb = cbreak(0.0, AIR, *(rng.uniform(-0.3, 0.3, 2) * a),
+                            *rng.uniform(-20, 20, 3), order=int(rng.integers(0, 2)))
                 g = el[1]["thickness"]
                 el[1]["thickness"] = 0.0
                 el = [cb] + el + [inverse(cb, g, AIR)]
@@ -257,7 +262,7 @@ def draw(rng, kind):
         for fold in range(1 if rng.random() < 0.67 else 2):
             axis = int(rng.integers(0, 2))
             tilt = [0.0, 0.0, 0.0]
-            tilt[axis] = float(rng.choice([-45.0, 45.0]) + rng.uniform(-3, 3))
+            tilt[axis] = float(rng.choice([-45.0, 45.0]) + rng.uniform(-5, 5))
             cb = cbreak(0.0, AIR, tx=tilt[0], ty=tilt[1])
             m = rng.choice(["plane", "sphere", "conic", "toric"])
             if m == "plane":
@@ -283,10 +288,10 @@ def draw(rng, kind):
     last["thickness"] = float(rng.uniform(0.4, 1.2) * L) * (
         np.sign(last["thickness"]) if last["thickness"] else 1.0)
     if img_tilt:
-        rows.append(cbreak(0.0, AIR, tx=rng.uniform(-8, 8), ty=rng.uniform(-8, 8)))
+        rows.append(cbreak(0.0, AIR, tx=rng.uniform(-15, 15), ty=rng.uniform(-15, 15)))
     stop = next(i for i, r in enumerate(rows) if r["type"] != "coordinate_break")
     rows[stop]["is_stop"] = True
-    theta = float(rng.uniform(2.0, 12.0))
+    theta = float(rng.uniform(3.0, 20.0))
     return dict(L=L, epd=epd, rows=rows, theta=theta)
 
 
