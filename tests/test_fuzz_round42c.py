@@ -50,7 +50,7 @@ jax.config.update("jax_enable_x64", True)
 
 FOLDER = pathlib.Path(__file__).parent / "data" / "fuzz42c"
 CASES = sorted(p.stem for p in FOLDER.glob("fuzz42c_*.json"))
-KINDS = ("toric", "freeform", "tilted", "folded", "qbfs")
+KINDS = ("toric", "freeform", "tilted", "folded", "qbfs", "grating")
 POS_ABS, DIR_ABS = 1e-9, 1e-11
 
 
@@ -89,6 +89,8 @@ def surface_of(s):
         return jl.ZernikeSag(c=c, k=k, zernike=s["zernike"], norm_radius=s["norm_radius"],
                              decenter_x=s["decenter_x"], decenter_y=s["decenter_y"],
                              ordering=s["ordering"], extrapolate=True)
+    if t == "grating":
+        return jl.Grating(c=c, k=k, lines_per_um=s["lines_per_um"], order=s["order"])
     if t == "qbfs":
         return jl.QTypeAsphere(c=c, k=k, coeffs=s["coeffs"], norm_radius=s["norm_radius"],
                                qtype="bfs")
@@ -287,3 +289,33 @@ def test_qbfs_beyond_the_normalisation_radius_is_the_polynomial():
         got = float(s.sag(jnp.asarray(r * 0.6), jnp.asarray(r * 0.8))[0])
         assert abs(got - want) < 1e-13, (u, got, want)
         assert abs(want - base) > 1e-4  # the departure is there, beyond u = 1 too
+
+
+@pytest.mark.parametrize("tilt, order", [(0.0, 1), (30.0, 1), (44.43414198827331, -1),
+                                         (44.43414198827331, 0)])
+def test_reflection_grating_fold_against_the_grating_equation(tilt, order):
+    """Why the draws hold no reflection grating: optiland 0.6.3's flat reflection grating
+    returns the reflected direction negated (the first draws of the ``grating`` class, a
+    reflection grating as a fold mirror, went backward to the image: for the break of 44.43°
+    about x, order −1, T = 0.14755 lines/µm optiland gave (0, −0.99089, 0.13465), the grating
+    equation (0, 0.99089, −0.13465); at order 0, a plain mirror's reflection, negated too).
+    jaxlens's side, checked in numpy: the axial ray on a grating mirror behind a break tilted
+    θ about x; in the grating's frame the ray is (0, sin θ, cos θ), it leaves with the
+    tangential part sin θ + M λ T (n = 1, λ in µm) and the normal part on the side it came
+    from, and the break's rotation Rx(θ) takes it back to global coordinates."""
+    t_lines, wl = 0.14755, 0.5875618
+    lens = jl.Lens(
+        surfaces=(jl.Plane(), CoordinateBreak(tilt_x=tilt),
+                  jl.Grating(c=0.0, k=0.0, lines_per_um=t_lines, order=order),
+                  CoordinateBreak(tilt_x=tilt)),
+        thickness=jnp.array([5.0, 0.0, 0.0, -10.0]), materials=(jl.Air(),) * 4,
+        mirrors=(2,), epd=2.0)
+    rays = jl.Rays(jnp.array([[0.0, 0.0, -1.0]]), jnp.array([[0.0, 0.0, 1.0]]),
+                   jnp.asarray(wl))
+    got, valid = trace_global(lens, rays)
+    assert valid.all()
+    th = np.radians(tilt)
+    s = np.sin(th) + order * wl * t_lines
+    n = -np.sqrt(1 - s * s)
+    want = [0.0, s * np.cos(th) - n * np.sin(th), s * np.sin(th) + n * np.cos(th)]
+    np.testing.assert_allclose(got[0, 3:], want, atol=1e-14)

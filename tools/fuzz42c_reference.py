@@ -5,8 +5,8 @@ mirrors) and Forbes Q-bfs aspheres, traced ray by ray by optiland 0.6.3.
 
 Run with the optiland venv, never jaxlens's (jaxlens is not imported here)::
 
-    /work/optenv/bin/python tools/fuzz42c_reference.py OUT_FOLDER [--n 45] [--seed 42]
-        [--kind toric|freeform|tilted|folded|qbfs|all] [--start 0]
+    /work/optenv/bin/python tools/fuzz42c_reference.py OUT_FOLDER [--n 48] [--seed 42]
+        [--kind toric|freeform|tilted|folded|qbfs|grating|all] [--start 0]
 
 and compare jaxlens with what it writes with ``tools/fuzz42c_compare.py`` (jaxlens's venv).
 
@@ -50,8 +50,23 @@ class (``--kind``):
   surfaces there (0.9 mm on the image), so a draw whose ray meets a Q-bfs surface at
   r >= ρ_n is refused (``beyond_qbfs_norm_radius``).
 
-Not drawn: Binary2 and Grating (optiland's gratings are another round's: tools/
-grating_reference.py), Q-con (above), a general biconic (above).
+* ``grating``: a singlet, then a flat grating (jaxlens ``Grating(c=0)``, Zemax DGRATING: T
+  lines/µm parallel to the local x axis, order M = ±1 or ±2, M·T 0.02 to 0.25 lines/µm;
+  optiland ``grating`` with ``grating_period`` 1/T µm, ``groove_orientation_angle`` 0) on
+  one face of a glass plate tilted (up to 15° about each axis) and decentered between a
+  break and its return break. Only flat gratings: on a curved one optiland takes the local
+  line spacing as Λ/|f_xy| (f the grating vector in the tangent plane), not the spacing of
+  lines equally spaced in the x–y projection as Zemax and jaxlens (tools/
+  grating_reference.py, tests/test_grating.py); on a plane the two are the same. No
+  reflection gratings: optiland 0.6.3's flat reflection grating (``material="mirror"``)
+  returns the reflected direction negated, through the mirror, at every tilt and order
+  (order 0 included: a plain mirror's reflection, negated), which the first draws of this
+  class (a reflection grating as a 45° fold mirror) met as rays going backward to the
+  image; tests/test_fuzz_round42c.py checks jaxlens's reflection grating against the local
+  grating equation in numpy instead.
+
+Not drawn: Binary2 (optiland 0.6.3 has no radial phase surface of Zemax's definition),
+curved gratings and Q-con (above), a general biconic (above).
 
 The frames: optiland places every surface by an absolute position and rotation
 (``x, y, z, rx, ry, rz``; its rotation is R = Rz(rz)·Ry(ry)·Rx(rx), applied as optiland's
@@ -102,7 +117,7 @@ from optiland.coordinate_system import CoordinateSystem  # noqa: E402
 from optiland.optic import Optic  # noqa: E402
 from optiland.rays import RealRays  # noqa: E402
 
-KINDS = ("toric", "freeform", "tilted", "folded", "qbfs")
+KINDS = ("toric", "freeform", "tilted", "folded", "qbfs", "grating")
 WLS = [587.5618, 486.1327]  # nm, the primary first
 PUPIL = [(0.0, 0.0), (1.0, 0.0), (-1.0, 0.0), (0.0, 1.0), (0.0, -1.0), (0.6, 0.6),
          (-0.7, 0.4), (0.3, -0.8), (-0.45, -0.55)]
@@ -203,6 +218,13 @@ def qbfs_surface(rng, L, a, t, med):
                 coeffs=[float(v) for v in co], norm_radius=float(a * rng.uniform(1.8, 2.6)))
 
 
+def grating_surface(rng, t, med):
+    """A flat grating (Zemax DGRATING on a plane): T lines/µm along local y, order ±1 or ±2."""
+    order = int(rng.choice([-2, -1, -1, 1, 1, 2]))
+    return surf("grating", t, med, curvature=0.0, conic=0.0,
+                lines_per_um=float(rng.uniform(0.02, 0.25) / abs(order)), order=order)
+
+
 def singlet(rng, L, a, make, gap, glass_med, after=AIR):
     """Two surfaces made by ``make(rng, L, a, t, med)`` (None: a sphere or even asphere)."""
     t = float(rng.uniform(0.04, 0.12) * L)
@@ -256,6 +278,19 @@ def draw(rng, kind):
                 el[1]["thickness"] = 0.0
                 el = [cb] + el + [inverse(cb, g, AIR)]
             rows += el
+    elif kind == "grating":
+        rows += singlet(rng, L, a, None, gap(), glass(rng))
+        g = glass(rng)  # a tilted, decentered plate with a grating on one face
+        t = float(rng.uniform(0.03, 0.08) * L)
+        plate = [surf("standard", t, g, curvature=0.0, conic=0.0),
+                 surf("standard", gap(), AIR, curvature=0.0, conic=0.0)]
+        side = int(rng.integers(0, 2))
+        plate[side] = grating_surface(rng, plate[side]["thickness"], g if side == 0 else AIR)
+        cb = cbreak(0.0, AIR, *(rng.uniform(-0.3, 0.3, 2) * a), *rng.uniform(-15, 15, 3),
+                    order=int(rng.integers(0, 2)))
+        g_after = plate[1]["thickness"]
+        plate[1]["thickness"] = 0.0
+        rows += [cb, *plate, inverse(cb, g_after, AIR)]
     elif kind == "folded":
         rows += singlet(rng, L, a, None, float(rng.uniform(0.1, 0.3) * L), glass(rng))
         sense = 1.0
@@ -366,6 +401,10 @@ def optic_of(sys_):
             kw.update(surface_type="zernike", radius=be.inf, conic=0.0,
                       coefficients=list(r["zernike"]), norm_radius=r["norm_radius"],
                       zernike_type="noll" if r["ordering"] == "standard" else "fringe", **nr)
+        elif t == "grating":
+            kw.update(surface_type="grating", radius=be.inf, conic=0.0,
+                      grating_period=1.0 / r["lines_per_um"], grating_order=r["order"],
+                      groove_orientation_angle=0.0)
         elif t == "qbfs":
             kw.update(surface_type="forbes_qbfs", radius=radius, conic=r["conic"],
                       radial_terms=dict(enumerate(r["coeffs"])), norm_radius=r["norm_radius"],
@@ -549,11 +588,11 @@ def lenses(out, n, seed, kinds, start):
 def main(argv):
     ap = argparse.ArgumentParser(prog="fuzz42c_reference.py", description=__doc__.splitlines()[0])
     ap.add_argument("out", help="folder for the files (created)")
-    ap.add_argument("--n", type=int, default=45, help="systems to draw (default 45)")
+    ap.add_argument("--n", type=int, default=48, help="systems to draw (default 48)")
     ap.add_argument("--seed", type=int, default=42, help="seed (default 42)")
     ap.add_argument("--start", type=int, default=0, help="first draw index (default 0)")
     ap.add_argument("--kind", choices=(*KINDS, "all"), default="all",
-                    help="the class (default all: draw i gets KINDS[i % 5])")
+                    help="the class (default all: draw i gets KINDS[i % 6])")
     args = ap.parse_args(argv)
     if args.n < 1:
         ap.error(f"--n must be >= 1, got {args.n}")
