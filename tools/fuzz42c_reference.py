@@ -5,8 +5,8 @@ mirrors) and Forbes Q-bfs aspheres, traced ray by ray by optiland 0.6.3.
 
 Run with the optiland venv, never jaxlens's (jaxlens is not imported here)::
 
-    /work/optenv/bin/python tools/fuzz42c_reference.py OUT_FOLDER [--n 48] [--seed 42]
-        [--kind toric|freeform|tilted|folded|qbfs|grating|all] [--start 0]
+    /work/optenv/bin/python tools/fuzz42c_reference.py OUT_FOLDER [--n 49] [--seed 42]
+        [--kind toric|freeform|tilted|folded|qbfs|grating|binary2|all] [--start 0]
 
 and compare jaxlens with what it writes with ``tools/fuzz42c_compare.py`` (jaxlens's venv).
 
@@ -65,8 +65,15 @@ class (``--kind``):
   image; tests/test_fuzz_round42c.py checks jaxlens's reflection grating against the local
   grating equation in numpy instead.
 
-Not drawn: Binary2 (optiland 0.6.3 has no radial phase surface of Zemax's definition),
-curved gratings and Q-con (above), a general biconic (above).
+* ``binary2``: singlets with one Zemax BINARY_2 face (jaxlens ``Binary2``: an even asphere
+  carrying the phase Φ = M Σ A_i (r/R)^(2i), radians; A_1 that of a lens of focal length
+  ±(1 … 5) L, A_2, A_3 5 % and 1 % of it, order −1, 1 or 2), half of them tilted and
+  decentered between a break and its return break. optiland: the even asphere with a
+  ``RadialPhaseProfile`` (``phase_profile``: Φ = Σ a_i r^(2i), r in mm, so
+  a_i = M A_i / R^(2i)), its phase interaction (the tangential part of n·k0·d gains the
+  surface gradient of Φ, k0 = 2π/λ with λ in mm: jaxlens's rule).
+
+Not drawn: curved gratings and Q-con (above), a general biconic (above).
 
 The frames: optiland places every surface by an absolute position and rotation
 (``x, y, z, rx, ry, rz``; its rotation is R = Rz(rz)·Ry(ry)·Rx(rx), applied as optiland's
@@ -115,9 +122,10 @@ import fuzz36b_reference as f36  # noqa: E402  (optiland is imported there)
 import optiland.backend as be  # noqa: E402
 from optiland.coordinate_system import CoordinateSystem  # noqa: E402
 from optiland.optic import Optic  # noqa: E402
+from optiland.phase.radial import RadialPhaseProfile  # noqa: E402
 from optiland.rays import RealRays  # noqa: E402
 
-KINDS = ("toric", "freeform", "tilted", "folded", "qbfs", "grating")
+KINDS = ("toric", "freeform", "tilted", "folded", "qbfs", "grating", "binary2")
 WLS = [587.5618, 486.1327]  # nm, the primary first
 PUPIL = [(0.0, 0.0), (1.0, 0.0), (-1.0, 0.0), (0.0, 1.0), (0.0, -1.0), (0.6, 0.6),
          (-0.7, 0.4), (0.3, -0.8), (-0.45, -0.55)]
@@ -225,6 +233,19 @@ def grating_surface(rng, t, med):
                 lines_per_um=float(rng.uniform(0.02, 0.25) / abs(order)), order=order)
 
 
+def binary2_surface(rng, L, a, t, med):
+    """Zemax BINARY_2: an even asphere with the phase M Σ A_i (r/R)^(2i), A_1 of a lens of
+    focal length ±(1 … 5) L at the primary wavelength."""
+    order = int(rng.choice([-1, 1, 1, 2]))
+    rn = float(a * rng.uniform(1.0, 2.0))
+    f = float(rng.choice([-1, 1]) * rng.uniform(1.0, 5.0) * L)
+    a1 = -math.pi * rn * rn / (WLS[0] * 1e-6 * f) / order
+    co = [a1, float(rng.normal() * 0.05 * abs(a1)), float(rng.normal() * 0.01 * abs(a1))]
+    return surf("binary2", t, med, curvature=curv(rng, L), conic=float(rng.uniform(-1, 0.5)),
+                even_asphere_coeffs=[0.0, float(rng.normal() * 1e-3 / a**3)], order=order,
+                norm_radius=rn, phase_coeffs=co)
+
+
 def singlet(rng, L, a, make, gap, glass_med, after=AIR):
     """Two surfaces made by ``make(rng, L, a, t, med)`` (None: a sphere or even asphere)."""
     t = float(rng.uniform(0.04, 0.12) * L)
@@ -291,6 +312,19 @@ def draw(rng, kind):
         g_after = plate[1]["thickness"]
         plate[1]["thickness"] = 0.0
         rows += [cb, *plate, inverse(cb, g_after, AIR)]
+    elif kind == "binary2":
+        for _ in range(int(rng.integers(1, 3))):
+            el = singlet(rng, L, a, None, gap(), glass(rng))
+            side = int(rng.integers(0, 2))
+            el[side] = binary2_surface(rng, L, a, el[side]["thickness"],
+                                       dict(material=el[side]["material"], n=el[side]["n"]))
+            if rng.random() < 0.5:
+                cb = cbreak(0.0, AIR, *(rng.uniform(-0.3, 0.3, 2) * a),
+                            *rng.uniform(-15, 15, 3), order=int(rng.integers(0, 2)))
+                g_after = el[1]["thickness"]
+                el[1]["thickness"] = 0.0
+                el = [cb, *el, inverse(cb, g_after, AIR)]
+            rows += el
     elif kind == "folded":
         rows += singlet(rng, L, a, None, float(rng.uniform(0.1, 0.3) * L), glass(rng))
         sense = 1.0
@@ -405,6 +439,12 @@ def optic_of(sys_):
             kw.update(surface_type="grating", radius=be.inf, conic=0.0,
                       grating_period=1.0 / r["lines_per_um"], grating_order=r["order"],
                       groove_orientation_angle=0.0)
+        elif t == "binary2":
+            rn, m = r["norm_radius"], r["order"]
+            kw.update(surface_type="even_asphere", radius=radius, conic=r["conic"],
+                      coefficients=list(r["even_asphere_coeffs"]), **nr,
+                      phase_profile=RadialPhaseProfile(
+                          [m * v / rn ** (2 * i) for i, v in enumerate(r["phase_coeffs"], 1)]))
         elif t == "qbfs":
             kw.update(surface_type="forbes_qbfs", radius=radius, conic=r["conic"],
                       radial_terms=dict(enumerate(r["coeffs"])), norm_radius=r["norm_radius"],
@@ -588,11 +628,11 @@ def lenses(out, n, seed, kinds, start):
 def main(argv):
     ap = argparse.ArgumentParser(prog="fuzz42c_reference.py", description=__doc__.splitlines()[0])
     ap.add_argument("out", help="folder for the files (created)")
-    ap.add_argument("--n", type=int, default=48, help="systems to draw (default 48)")
+    ap.add_argument("--n", type=int, default=49, help="systems to draw (default 49)")
     ap.add_argument("--seed", type=int, default=42, help="seed (default 42)")
     ap.add_argument("--start", type=int, default=0, help="first draw index (default 0)")
     ap.add_argument("--kind", choices=(*KINDS, "all"), default="all",
-                    help="the class (default all: draw i gets KINDS[i % 6])")
+                    help="the class (default all: draw i gets KINDS[i % 7])")
     args = ap.parse_args(argv)
     if args.n < 1:
         ap.error(f"--n must be >= 1, got {args.n}")
