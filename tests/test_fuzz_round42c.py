@@ -31,10 +31,12 @@ image-frame results to global coordinates.
 
 Tolerances (float64 on both sides): intercepts 1e-9 mm, directions 1e-11. Both tracers
 solve the same intersections (optiland's Newton tolerance 1e-13 mm, set by the writer;
-jaxlens's Newton iteration to rounding); the systems reach ~100 mm and up to 14 surfaces,
+jaxlens's Newton iteration to rounding); the systems reach ~120 mm and up to 12 surfaces,
 so rounding stays under 1e-11 mm; 1e-9 leaves room for rounding in the frames' sines and
 cosines and nothing for a wrong ray (a tilt's sign, the order of a break's steps, a
 decenter's sign all move rays by millimetres: see ``test_a_wrong_convention_fails``).
+Measured (tools/fuzz42c_compare.py over draws 0 to 139 of seed 42, 20 a class): at most
+5.8e-13 mm and 5.5e-15, no ray lost.
 """
 
 from __future__ import annotations
