@@ -65,7 +65,7 @@ def _tele_edit(lens, x):
 
 
 TELE_X0 = [0.08, 60.0, None, -0.3, 1e-6, None, 5.0]
-TELE_H = [1e-5, 1e-3, 1e-5, 1e-3, 1e-8, 1e-4, 1e-4]
+TELE_H = [1e-5, 1e-3, 1e-6, 1e-3, 1e-8, 1e-4, 1e-4]
 
 
 def _tele_x0(lens):
