@@ -46,7 +46,6 @@ import jax  # noqa: E402
 
 jax.config.update("jax_enable_x64", True)
 
-import equinox as eqx  # noqa: E402
 import jax.numpy as jnp  # noqa: E402
 from grad37e_probe import _hit, compare  # noqa: E402
 from grad38d_probe import grouped  # noqa: E402
@@ -213,7 +212,7 @@ def section_rpo(only):
     for name, fn in fns.items():
         if _hit(only, f"rpo_cooke:{name}"):
             yield grouped(compare("rpo", f"rpo_cooke:{name}", fn, P, params))
-    for i, m in enumerate(lens.materials):
+    for m in lens.materials:
         if not isinstance(m, jl.CatalogMaterial):
             continue
         case = f"dn/dwl:{m.name}"
