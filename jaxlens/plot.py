@@ -273,6 +273,7 @@ def plot_rms_map(rms_um, sensor_size, *, title: str | None = None) -> Figure:
     """
     from .optics import checks
 
+    checks.real_values(rms_um, "rms_um", "plot_rms_map", "µm")  # "5" was read as 5
     v = np.asarray(rms_um, float)
     n = int(round(math.sqrt(v.size)))
     if v.size == 0 or n * n != v.size or v.ndim not in (1, 2):

@@ -26,7 +26,7 @@ jax.config.update("jax_enable_x64", True)
 
 import jax.numpy as jnp  # noqa: E402
 import numpy as np  # noqa: E402
-from probe_table import COOKE, ROOT, SEED0, TMP, fresh, module_cli, probe, run, warned  # noqa: E402
+from probe_table import COOKE, ROOT, SEED0, TMP, cli, fresh, module_cli, patched, probe, run  # noqa: E402
 
 import jaxlens as jl  # noqa: E402
 from jaxlens import analysis as A  # noqa: E402
@@ -48,19 +48,25 @@ def arrays():
     probe("zernike_terms x ['a']", lambda: A.zernike_terms(["a"], [0.0]), "zernike_terms", "x")
     probe("zernike_terms x bool", lambda: A.zernike_terms(np.array([True, False]), np.zeros(2)), "zernike_terms", "x")
     probe("zernike_terms terms '37'", lambda: A.zernike_terms(x, y, terms="37"), "terms")
-    probe("zernike_terms terms 37.0", lambda: A.zernike_terms(x, y, terms=37.0), "terms")
+    probe("zernike_terms terms 37.0 (a whole number, as checks.number takes one; control)", lambda: A.zernike_terms(x, y, terms=37.0).shape, good=True)
     probe("zernike_fit values (4,) for 5 points", lambda: A.zernike_fit(x, y, z[:4], terms=3), "zernike_fit", "values")
     probe("zernike_fit values complex", lambda: A.zernike_fit(x, y, z + 1j, terms=3), "zernike_fit", "values")
     probe("zernike_fit mask (4,) for 5 points", lambda: A.zernike_fit(x, y, z, terms=3, mask=np.ones(4, bool)), "zernike_fit", "mask")
-    probe("zernike_fit mask floats [0.5]*5", lambda: A.zernike_fit(x, y, z, terms=3, mask=np.full(5, 0.5)), "zernike_fit", "mask")
-    probe("zernike_fit mask all False", lambda: A.zernike_fit(x, y, z, terms=3, mask=np.zeros(5, bool)), "zernike_fit", "mask")
-    probe("zernike_fit values inf inside", lambda: A.zernike_fit(x, y, np.array([1, 1, np.inf, 1, 1.0]), terms=3), "zernike_fit", "values")
+    gx, gy = (a.ravel() * 0.6 for a in np.meshgrid(np.linspace(-1, 1, 5), np.linspace(-1, 1, 5)))
+    g1 = np.ones(25)
+    probe("zernike_fit mask floats 0.5 (documented: nonzero = fit; control)", lambda: A.zernike_fit(gx, gy, g1, terms=3, mask=np.full(25, 0.5)).coefficients, good=True)
+    probe("zernike_fit mask all False", lambda: A.zernike_fit(gx, gy, g1, terms=3, mask=np.zeros(25, bool)), "zernike_fit", "0 valid points")
+    probe("zernike_fit values inf (documented: no value there; control)", lambda: A.zernike_fit(gx, gy, np.where(np.arange(25) == 3, np.inf, 1.0), terms=3).coefficients, good=True)
+    probe("zernike_fit x (25,) y (5, 5) (the same points)", lambda: A.zernike_fit(gx, gy.reshape(5, 5), g1, terms=3), "zernike_fit", "x", "y")
     probe("zernike_fit empty arrays", lambda: A.zernike_fit(np.zeros(0), np.zeros(0), np.zeros(0), terms=3), "zernike_fit")
     probe("zernike_nm j True", lambda: A.zernike_nm(True), "zernike_nm", "j")
-    probe("zernike_nm j np.float64(4.0)", lambda: A.zernike_nm(np.float64(4.0)), "zernike_nm", "j")
+    probe("zernike_nm j np.float64(4.0) (a whole number; control)", lambda: A.zernike_nm(np.float64(4.0)), good=True)
+    probe("zernike_nm j np.True_", lambda: A.zernike_nm(np.True_), "zernike_nm", "j")
+    probe("zernike_nm j 4+0j", lambda: A.zernike_nm(4 + 0j), "zernike_nm", "j")
     probe("marechal_strehl complex", lambda: A.marechal_strehl(0.05 + 0.01j), "marechal_strehl", "rms_waves")
     probe("marechal_strehl ['0.05']", lambda: A.marechal_strehl(["0.05"]), "marechal_strehl", "rms_waves")
-    probe("marechal_strehl [0.05, nan]", lambda: A.marechal_strehl(np.array([0.05, np.nan])), "marechal_strehl", "rms_waves")
+    probe("marechal_strehl [0.05, nan] (documented: NaN for a field without rays; control)", lambda: A.marechal_strehl(np.array([0.05, np.nan])), good=True)
+    probe("marechal_strehl np.True_", lambda: A.marechal_strehl(np.True_), "marechal_strehl", "rms_waves")
     probe("reweighting_mask area (3,) for rms (4,)", lambda: D.reweighting_mask(np.ones(4), np.ones(3)), "reweighting_mask", "area")
     probe("reweighting_mask rms with nan", lambda: D.reweighting_mask(np.array([1.0, np.nan, 1, 1])), "reweighting_mask", "rms")
     probe("reweighting_mask rms []", lambda: D.reweighting_mask(np.zeros(0)), "reweighting_mask", "rms")
@@ -92,7 +98,8 @@ def arrays():
     probe("opd pupil (5,) not (5, 2)", lambda: A.opd(cooke, 0.0, np.zeros(5)), "pupil")
     probe("opd pupil complex", lambda: A.opd(cooke, 0.0, np.zeros((2, 2)) + 0j), "pupil")
     probe("angular_magnification wavelength 550 (nm)", lambda: A.angular_magnification(jl.load(os.path.join(DATA, "afocal_kepler.zmx")), 550.0), "wavelength")
-    probe("angular_spot on a focal lens", lambda: A.angular_spot(cooke, 0.0), "afocal")
+    probe("angular_spot on a focal lens (documented: any lens's directions; control)", lambda: A.angular_spot(cooke, 0.0).polychromatic, good=True)
+    probe("angular_spot reference 'ideal'", lambda: A.angular_spot(cooke, 0.0, reference="ideal"), "reference")
     probe("trace rays a tuple", lambda: jl.trace(cooke, (np.zeros(3), np.array([0, 0, 1.0]))), "trace", "rays")
     probe("trace_backward rays a dict", lambda: jl.trace_backward(cooke, {"origin": 0}), "trace_backward", "rays")
     probe("reversed_lens image_distance '42'", lambda: jl.tracing.reversed_lens(cooke, image_distance="42"), "image_distance")
@@ -108,7 +115,7 @@ def counts_and_options():
     probe("ray_fan n 2.5", lambda: A.ray_fan(cooke, 0.0, n=2.5), "ray_fan", "n")
     probe("ray_fan n '21'", lambda: A.ray_fan(cooke, 0.0, n="21"), "ray_fan", "n")
     probe("opd_fan n -3", lambda: A.opd_fan(cooke, 0.0, n=-3), "opd_fan", "n")
-    probe("opd_fan reference 'sphere'", lambda: A.opd_fan(cooke, 0.0, reference="sphere"), "reference")
+    probe("opd_fan reference 'spherical'", lambda: A.opd_fan(cooke, 0.0, reference="spherical"), "reference")
     probe("wavefront grid 64.5", lambda: A.wavefront(cooke, 0.0, grid=64.5), "grid")
     probe("wavefront grid '65'", lambda: A.wavefront(cooke, 0.0, grid="65"), "grid")
     probe("wavefront grid (65, 65)", lambda: A.wavefront(cooke, 0.0, grid=(65, 65)), "grid")
@@ -117,16 +124,18 @@ def counts_and_options():
     probe("rms_spot newton_iters -1", lambda: A.rms_spot(cooke, 0.0, newton_iters=-1), "newton_iters")
     probe("encircled_energy method 'fft'", lambda: A.encircled_energy(cooke, 0.0, [0.01], method="fft"), "method")
     probe("encircled_energy radii '0.01'", lambda: A.encircled_energy(cooke, 0.0, "0.01"), "radii")
-    probe("encircled_energy radii [[0.01]] (2-D)", lambda: A.encircled_energy(cooke, 0.0, [[0.01, 0.02]]), "radii")
+    probe("encircled_energy radii [[0.01, 0.02]] (documented: flattened; control)", lambda: A.encircled_energy(cooke, 0.0, [[0.01, 0.02]]).energy, good=True)
     probe("encircled_energy reference 'peak'", lambda: A.encircled_energy(cooke, 0.0, [0.01], reference="peak"), "reference")
     probe("encircled_energy pupil_side 0 (diffraction)", lambda: A.encircled_energy(cooke, 0.0, [0.01], method="diffraction", pupil_side=0), "pupil_side")
     probe("encircled_energy subsamples 0", lambda: A.encircled_energy(cooke, 0.0, [0.01], subsamples=0), "subsamples")
     probe("radius_for_fraction fraction '0.8'", lambda: A.radius_for_fraction(cooke, 0.0, "0.8"), "fraction")
-    probe("radius_for_fraction fraction [0.5, 0.8]", lambda: A.radius_for_fraction(cooke, 0.0, [0.5, 0.8]), "fraction")
+    probe("radius_for_fraction fraction [0.5, 0.8] (documented: an array; control)", lambda: A.radius_for_fraction(cooke, 0.0, [0.5, 0.8]), good=True)
+    probe("radius_for_fraction fraction np.True_", lambda: A.radius_for_fraction(cooke, 0.0, np.True_), "fraction")
     probe("distortion wavelength 587.6 (nm)", lambda: A.distortion(cooke, [0.0, 10.0], 587.6), "wavelength")
     probe("clear_semi_diameters n_rim 0", lambda: A.clear_semi_diameters(cooke, n_rim=0), "n_rim")
     probe("clear_semi_diameters reaching 'yes'", lambda: A.clear_semi_diameters(cooke, reaching="yes"), "reaching")
-    probe("seidel field -0.5 (normalised)", lambda: A.seidel(cooke, -0.5), "field")
+    probe("seidel field -0.5 (normalised)", lambda: A.seidel(cooke, field=-0.5), "field")
+    probe("seidel field '1'", lambda: A.seidel(cooke, field="1"), "field")
     probe("seidel wavelength 587.6 (nm)", lambda: A.seidel(cooke, wavelength=587.6), "wavelength")
     probe("psf kernel_size 0", lambda: jl.psf(cooke, 0.0, kernel_size=0, pixel_size=0.002), "kernel_size")
     probe("psf pixel_size '0.002'", lambda: jl.psf(cooke, 0.0, pixel_size="0.002"), "pixel_size")
@@ -136,7 +145,8 @@ def counts_and_options():
     probe("diffraction_mtf fnum 0", lambda: jl.imaging.otf.diffraction_mtf(np.array([10.0]), 0.00055, 0.0), "fnum")
     probe("diffraction_mtf lam_mm 550 (nm)", lambda: jl.imaging.otf.diffraction_mtf(np.array([10.0]), 550.0, 4.0), "lam")
     probe("diffraction_mtf nu -10", lambda: jl.imaging.otf.diffraction_mtf(np.array([-10.0]), 0.00055, 4.0), "nu")
-    probe("mtf_directions field (3,)", lambda: jl.imaging.otf.mtf_directions(np.array([0.0, 1.0, 2.0])), "field")
+    probe("mtf_directions field (2, 3)", lambda: jl.imaging.otf.mtf_directions(np.zeros((2, 3))), "field")
+    probe("mtf_directions field ['5']", lambda: jl.imaging.otf.mtf_directions(np.array(["5"])), "field")
     probe("relative_illumination pupil 0", lambda: jl.imaging.radiometry.relative_illumination(cooke, [0.0], pupil=0), "pupil")
     probe("relative_illumination pupil 2.5", lambda: jl.imaging.radiometry.relative_illumination(cooke, [0.0], pupil=2.5), "pupil")
     probe("relative_illumination fields ['0']", lambda: jl.imaging.radiometry.relative_illumination(cooke, ["0"]), "fields")
@@ -168,7 +178,7 @@ def imaging_tiles():
     probe("convolve_tiles pad 'zeros'", lambda: T.convolve_tiles(np.ones((32, 32, 3)), k, pad="zeros"), "pad")
     probe("convolve_tiles kernels with nan", lambda: T.convolve_tiles(np.ones((32, 32, 3)), np.where(k > 0, np.nan, 0)), "kernels")
     probe("convolve_tiles even kernel 4x4", lambda: T.convolve_tiles(np.ones((32, 32, 3)), np.ones((2, 2, 3, 4, 4)) / 16), "kernel")
-    probe("convolve_tiles image 31 rows for 2 tiles", lambda: T.convolve_tiles(np.ones((31, 32, 3)), k), "image")
+    probe("convolve_tiles image 31 rows for 2 tiles", lambda: T.convolve_tiles(np.ones((31, 32, 3)), k), "31x32", "tiles")
     probe("wiener_tiles nsr -0.01", lambda: T.wiener_tiles(np.ones((32, 32, 3)), k, -0.01), "nsr")
     probe("wiener_tiles nsr '0.01'", lambda: T.wiener_tiles(np.ones((32, 32, 3)), k, "0.01"), "nsr")
     probe("wiener_tiles prior 'flat'", lambda: T.wiener_tiles(np.ones((32, 32, 3)), k, 0.01, prior="flat"), "prior")
@@ -198,13 +208,14 @@ def images_io():
     probe("psnr complex", lambda: I.psnr(np.ones((4, 4)) + 0j, np.ones((4, 4))), "psnr")
     probe("ssim image 3x3 (below the window)", lambda: I.ssim(np.ones((3, 3)), np.ones((3, 3))), "ssim")
     probe("ssim uint8 vs float", lambda: I.ssim(np.ones((16, 16), np.uint8), np.ones((16, 16))), "ssim")
-    probe("to_linear float image", lambda: I.to_linear(np.ones((4, 4, 3))), "to_linear")
+    probe("to_linear float image in [0, 1] (documented: already linear; control)", lambda: I.to_linear(np.ones((4, 4, 3))).dtype, good=True)
+    probe("to_linear float image 0…255", lambda: I.to_linear(np.full((4, 4, 3), 200.0)), "to_linear", "255")
     probe("to_linear bool", lambda: I.to_linear(np.ones((4, 4, 3), bool)), "to_linear")
     probe("to_linear int64", lambda: I.to_linear(np.ones((4, 4, 3), np.int64)), "to_linear")
     probe("write_png bits 12", lambda: I.write_png(os.path.join(fresh("png"), "a.png"), np.ones((4, 4, 3)), bits=12), "bits")
     probe("write_png bits '8'", lambda: I.write_png(os.path.join(fresh("png"), "a.png"), np.ones((4, 4, 3)), bits="8"), "bits")
     probe("write_png linear 'no'", lambda: I.write_png(os.path.join(fresh("png"), "a.png"), np.ones((4, 4, 3)), linear="no"), "linear")
-    probe("write_png 5 channels", lambda: I.write_png(os.path.join(fresh("png"), "a.png"), np.ones((4, 4, 5))), "channel")
+    probe("write_png 5 channels", lambda: I.write_png(os.path.join(fresh("png"), "a.png"), np.ones((4, 4, 5))), "C<=4")
     probe("write_png path is a folder", lambda: I.write_png(fresh("png"), np.ones((4, 4, 3))), "write_png")
     probe("write_png into a file's 'folder'", lambda: I.write_png(os.path.join(COOKE, "a.png"), np.ones((4, 4, 3))), "write_png")
     probe("write_exr channels 2 names for 3", lambda: I.write_exr(os.path.join(fresh("exr"), "a.exr"), np.ones((4, 4, 3)), channels=["R", "G"]), "channels")
@@ -215,7 +226,9 @@ def images_io():
     probe("scene size (0, 64)", lambda: I.scene("astronaut", size=(0, 64)), "size")
     probe("scene size 64 (not a pair)", lambda: I.scene("astronaut", size=64), "size")
     probe("scene size (64.5, 64)", lambda: I.scene("astronaut", size=(64.5, 64)), "size")
-    probe("scene name 5", lambda: I.scene(5), "name")
+    probe("scene name 5", lambda: I.scene(5), "scene", "choose from")
+    probe("psnr data_range np.True_", lambda: I.psnr(np.ones((4, 4)), np.zeros((4, 4)), data_range=np.True_), "data_range")
+    probe("ssim data_range None string", lambda: I.ssim(np.ones((16, 16)), np.zeros((16, 16)), data_range="None"), "data_range")
     probe("read_png a .json file", lambda: I.read_png(COOKE), "read_png")
     probe("read_exr a folder", lambda: I.read_exr(fresh("exr")), "read_exr")
     probe("save lens to a path whose folder is a file", lambda: jl.save(cooke, os.path.join(COOKE, "x.json")), "save")
@@ -225,7 +238,11 @@ def images_io():
     probe("save lens path 5", lambda: jl.save(cooke, 5), "save", "path")
     probe("load path None", lambda: jl.load(None), "load", "path")
     probe("load path a folder", lambda: jl.load(fresh("l")), "load")
-    probe("plot.save to a missing folder", lambda: jl.plot.save(__import__("matplotlib.pyplot").pyplot.figure(), os.path.join(TMP, "no", "f.png")), "save")
+    from matplotlib.figure import Figure
+
+    from jaxlens import plot as P
+    probe("plot.save to a missing folder", lambda: P.save(Figure(), os.path.join(TMP, "no", "f.png")), "save")
+    probe("plot.save path None", lambda: P.save(Figure(), None), "save", "path")
 
 
 def runfolders():
@@ -234,7 +251,7 @@ def runfolders():
     def rf(path, **kw):
         def go():
             try:
-                r = RunFolder(path, **kw)
+                RunFolder(path, **kw)
             except UsageError as e:
                 raise ValueError(str(e)) from None
             return "accepted"
@@ -257,7 +274,13 @@ def runfolders():
 
 
 def tolerance_api():
-    from jaxlens.analysis.tolerance import ToleranceModel, monte_carlo, percentile, sensitivity, yield_fraction
+    from jaxlens.analysis.tolerance import (
+        ToleranceModel,
+        monte_carlo,
+        percentile,
+        sensitivity,
+        yield_fraction,
+    )
     from jaxlens.analysis.tolerance_spec import Tolerances
 
     probe("Tolerances radius_rel '0.005'", lambda: Tolerances(radius_rel="0.005"), "radius_rel")
@@ -304,7 +327,8 @@ def design_api():
     probe("DesignConfig rings -1", lambda: C(rings=-1), "rings")
     probe("DesignConfig rings '4'", lambda: C(rings="4"), "rings")
     probe("DesignConfig curriculum_n -1", lambda: C(curriculum_n=-1), "curriculum_n")
-    probe("DesignConfig steps 0", lambda: C(steps=0), "steps")
+    probe("DesignConfig steps 0 (documented: the curriculum skipped; control)", lambda: C(steps=0).steps, good=True)
+    probe("DesignConfig steps np.True_", lambda: C(steps=np.True_), "steps")
     probe("DesignConfig final_steps 1.5", lambda: C(final_steps=1.5), "final_steps")
     probe("DesignConfig polish_steps -1", lambda: C(polish_steps=-1), "polish_steps")
     probe("DesignConfig curriculum 'yes'", lambda: C(curriculum="yes"), "curriculum")
@@ -326,12 +350,13 @@ def design_api():
     probe("DesignConfig image_pixels 0", lambda: C(image_pixels=0), "image_pixels")
     probe("DesignConfig image_spp -1", lambda: C(image_spp=-1), "image_spp")
     probe("DesignConfig materials 'sometimes'", lambda: C(materials="sometimes"), "materials")
-    probe("DesignConfig material_catalogs 'SHOTT'", lambda: C(materials="catalog", material_catalogs=("SHOTT",)), "SCHOTT")
+    probe("DesignConfig material_catalogs 'SHOTT'", lambda: C(materials="continuous", material_catalogs=("SHOTT",)), "SCHOTT")
     probe("DesignConfig lr_m -1", lambda: C(lr_m=-1.0), "lr_m")
     probe("DesignConfig tolerance_trials -1", lambda: C(tolerance_trials=-1), "tolerance_trials")
     probe("DesignConfig tolerance_nominal_weight 2", lambda: C(tolerance_nominal_weight=2.0), "tolerance_nominal_weight")
     probe("DesignConfig population 0", lambda: C(population=0), "population")
-    probe("DesignConfig polish_rings 0", lambda: C(polish_rings=0), "polish_rings")
+    probe("DesignConfig polish_rings 0 (documented: rings; control)", lambda: C(polish_rings=0).polish_rings, good=True)
+    probe("DesignConfig lr_c 0.005+0j", lambda: C(lr_c=0.005 + 0j), "lr_c")
     probe("design seeds [1, 1]", lambda: D.design(spec, [1, 1], C(steps=1, final_steps=1, polish_steps=0)), "seeds")
     probe("design seeds 3 (an int)", lambda: D.design(spec, 3, C(steps=1, final_steps=1, polish_steps=0)), "seeds")
     probe("design config a dict", lambda: D.design(spec, [0], {"steps": 1}), "config")
@@ -349,7 +374,7 @@ def design_api():
     probe("random_starts seeds [True]", lambda: D.random_starts(spec, [True]), "seed")
     r = lambda p: jnp.zeros(3)
     lp = D.random_starts(spec, [0])
-    lp1 = jax.tree_util.tree_map(lambda a: a[0], lp)
+    lp1 = jax.tree_util.tree_map(lambda a: jnp.abs(a[0]) + 0.01, lp)
     probe("Adam lrs a float", lambda: D.Adam(r, 0.01), "lrs")
     probe("Adam b1 1.5", lambda: D.Adam(r, lp1, b1=1.5), "b1")
     probe("Adam eps -1", lambda: D.Adam(r, lp1, eps=-1.0), "eps")
@@ -424,14 +449,14 @@ def json_types():
     probe("json ray_aiming true", js(ray_aiming=True), "ray_aiming")
     probe("json negative_propagation 'no'", js(negative_propagation="no"), "negative_propagation")
     probe("json object_space_telecentric 0", js(object_space_telecentric=0), "object_space_telecentric")
-    probe("json fields 5 (not a list)", js(fields=5), "fields")
-    probe("json fields values '0, 14'", js(fields={"type": "angle_deg_y", "values": "0, 14"}), "values")
-    probe("json fields values [0, '14']", js(fields={"type": "angle_deg_y", "values": [0, "14"]}), "values")
-    probe("json fields values [0, null]", js(fields={"type": "angle_deg_y", "values": [0, None]}), "values")
+    probe("json fields 5 (a plain number: one field; control)", lambda: js(fields=5)().fields, good=True)
+    probe("json fields values '0, 14'", js(fields={"type": "angle_deg_y", "values": "0, 14"}), "fields", "number")
+    probe("json fields values [0, '14']", js(fields={"type": "angle_deg_y", "values": [0, "14"]}), "fields[1]", "number")
+    probe("json fields values [0, null]", js(fields={"type": "angle_deg_y", "values": [0, None]}), "fields[1]", "number")
     probe("json fields type 5", js(fields={"type": 5, "values": [0, 14]}), "type")
     probe("json fields vignetting 'none'", js(fields={"type": "angle_deg_y", "values": [0, 14], "vignetting": "none"}), "vignetting")
     probe("json fields vignetting vdy 1 value for 2 fields", js(fields={"type": "angle_deg_y", "values": [0, 14], "vignetting": {"vdy": [0.1]}}), "vignetting")
-    probe("json aperture 10 (a number)", js(aperture=10), "aperture")
+    probe("json aperture 2.8 (a bare number: EPD or F-number?)", js(aperture=2.8), "aperture", "epd", "fnum")
     probe("json aperture fnum '5'", js(aperture={"fnum": "5"}), "fnum")
     probe("json aperture stop_semi_diameter -2", js(aperture={"stop_semi_diameter": -2.0}), "stop_semi_diameter")
     probe("json aperture object_na 1.5 (no telecentric)", js(aperture={"object_na": 1.5}), "object_na")
@@ -444,7 +469,7 @@ def json_types():
     probe("json surface semi_diameter [5]", js(edit=surf(2, semi_diameter=[5.0])), "semi_diameter")
     probe("json surface material ['N-BK7']", js(edit=surf(1, material=["N-SK16"])), "material")
     probe("json surface material {'nd': '1.5'}", js(edit=surf(1, material={"nd": "1.5", "vd": 60})), "nd")
-    probe("json surface material {'nd': 1.5} no vd", js(edit=surf(1, material={"nd": 1.5})), "vd")
+    probe("json surface material {'nd': 1.5} no vd (documented: vd inf, no dispersion; control)", lambda: js(edit=surf(1, material={"nd": 1.5}))().name, good=True)
     probe("json surface material {'nd': 0.5, 'vd': 60}", js(edit=surf(1, material={"nd": 0.5, "vd": 60.0})), "nd")
     probe("json surface n '1.5'", js(edit=lambda d: (d["surfaces"][1].pop("material"), d["surfaces"][1].update(n="1.5"))), "n")
     probe("json surface n 0.5", js(edit=lambda d: (d["surfaces"][1].pop("material"), d["surfaces"][1].update(n=0.5))), "n")
@@ -452,7 +477,7 @@ def json_types():
     probe("json surface even_asphere_coeffs '1e-5'", js(edit=surf(2, type="even_asphere", even_asphere_coeffs="1e-5")), "even_asphere_coeffs")
     probe("json surface even_asphere_coeffs [[1e-5]]", js(edit=surf(2, type="even_asphere", even_asphere_coeffs=[[1e-5]])), "even_asphere_coeffs")
     probe("json surface even_asphere_coeffs [null]", js(edit=surf(2, type="even_asphere", even_asphere_coeffs=[None])), "even_asphere_coeffs")
-    probe("json surface even_asphere_coeffs on a standard", js(edit=surf(2, even_asphere_coeffs=[0.0, 1e-5])), "even_asphere_coeffs")
+    probe("json surface even_asphere_coeffs on a standard (documented: an even asphere; control)", lambda: type(js(edit=surf(2, even_asphere_coeffs=[0.0, 1e-5]))().surfaces[1]).__name__, good=True)
     probe("json surface is_stop 1", js(edit=surf(4, is_stop=1)), "is_stop")
     probe("json surface mirror 'yes'", js(edit=surf(2, mirror="yes")), "mirror")
     probe("json surface decenter_x '1'", js(edit=surf(2, type="coordinate_break", decenter_x="1")), "decenter_x")
@@ -462,7 +487,7 @@ def json_types():
     probe("json surface thickness true", js(edit=surf(2, thickness=True)), "thickness")
     probe("json surface norm_radius 0", js(edit=surf(2, type="q_asphere", q_coeffs=[1e-4], norm_radius=0.0)), "norm_radius")
     probe("json surface apertures 'circle'", js(edit=surf(2, apertures="circle")), "apertures")
-    probe("json top-level is a list", js(edit=lambda d: None, **{}) if False else (lambda: _top_list()), "lens")
+    probe("json top-level is a list", _top_list, "lens")
 
 
 def _top_list():
@@ -485,24 +510,35 @@ def clis():
     probe("cli report --config -1", cmd("report", COOKE, "--config", "-1"), "config")
     probe("cli report --config 2 on a .json", cmd("report", COOKE, "--config", "2"), "config")
     probe("cli report a folder", cmd("report", DATA), "report")
-    probe("cli report two lens files", cmd("report", COOKE, SEED0), "report")
+    probe("cli report two lens files", cmd("report", COOKE, SEED0), "unrecognized", "seed_0.zmx")
     probe("cli tolerance --trials 1e3", cmd(SEED0, "--trials", "1e3", module=T_), "--trials")
     probe("cli tolerance --decenter abc", cmd(SEED0, "--decenter", "abc", module=T_), "--decenter")
     probe("cli tolerance --tilt nan", cmd(SEED0, "--tilt", "nan", module=T_), "--tilt")
     probe("cli tolerance --threshold inf", cmd(SEED0, "--threshold", "inf", module=T_), "--threshold")
     probe("cli tolerance lens is a folder", cmd(DATA, module=T_), "tolerance")
-    probe("cli tolerance --out a finished run, no --overwrite", cmd(SEED0, "--out", _finished_run(), "--trials", "1", module=T_), "--overwrite")
+    probe("cli tolerance --out ''", cmd(SEED0, "--out", "", module=T_), "--out")
     probe("cli tolerance --out inside the lens file's path", cmd(SEED0, "--out", os.path.join(SEED0, "run"), module=T_), "--out")
     probe("cli classical --help (control)", cmd("--help", module=C), good=True)
-    probe("cli classical --fov -10", cmd("--fov", "-10", "--out", os.path.join(fresh("c"), "o"), module=C), "--fov")
-    probe("cli classical --fnum 0", cmd("--fnum", "0", "--out", os.path.join(fresh("c"), "o"), module=C), "--fnum")
-    probe("cli classical --seeds 0", cmd("--seeds", "0", "--out", os.path.join(fresh("c"), "o"), module=C), "--seeds")
-    probe("cli classical --out a finished run, no --overwrite", cmd("--out", _finished_run(), module=C), "--overwrite")
-    probe("cli classical --out ''", cmd("--out", "", module=C), "--out")
-    probe("cli classical --elements 0", cmd("--elements", "0", "--out", os.path.join(fresh("c"), "o"), module=C), "--elements")
-    probe("cli classical --total-track -1", cmd("--total-track", "-1", "--out", os.path.join(fresh("c"), "o"), module=C), "--total-track")
-    probe("cli classical --efl abc", cmd("--efl", "abc", "--out", os.path.join(fresh("c"), "o"), module=C), "--efl")
+    from jaxlens.experiments import classical as CL
 
+    c = lambda *a: cli(patched(CL, ["run_design", "run_ablation"], lambda: CL.main(["--out", os.path.join(fresh("c"), "o"), *a])))
+    probe("classical --fov -10", c("--fov", "-10"), "--fov")
+    probe("classical --fnum 0", c("--fnum", "0"), "--fnum")
+    probe("classical --seeds 0", c("--seeds", "0"), "--seeds")
+    probe("classical --out a finished run, no --overwrite", cli(patched(CL, ["run_design", "run_ablation"], lambda: CL.main(["--out", _finished_run()]))), "--overwrite")
+    probe("classical --out ''", cli(patched(CL, ["run_design", "run_ablation"], lambda: CL.main(["--out", ""]))), "--out")
+    probe("classical --elements 0", c("--elements", "0"), "--elements")
+    probe("classical --elements 2.5", c("--elements", "2.5"), "--elements")
+    probe("classical --track -1", c("--track", "-1"), "--track")
+    probe("classical --bfl abc", c("--bfl", "abc"), "--bfl")
+    probe("classical --stop -1", c("--stop", "-1"), "--stop")
+    probe("classical --asphere-terms 2.5", c("--asphere-terms", "2.5"), "--asphere-terms")
+    probe("classical --sensor-diagonal 0", c("--sensor-diagonal", "0"), "--sensor-diagonal")
+    probe("classical --material-catalogs SHOTT", c("--select-materials", "continuous", "--material-catalogs", "SHOTT"), "SCHOTT")
+    probe("classical --tolerance-threshold -5", c("--tolerance-threshold", "-5"), "--tolerance-threshold")
+    probe("classical --ablation-seeds 0", c("--ablation", "--ablation-seeds", "0"), "--ablation-seeds")
+    probe("classical --columns bogus", c("--ablation", "--columns", "bogus"), "--columns")
+    probe("classical --ablation-out = --out", cli(patched(CL, ["run_design", "run_ablation"], lambda: (lambda d: CL.main(["--out", d, "--ablation", "--ablation-out", d]))(os.path.join(fresh("c"), "o")))), "--ablation-out")
 
 def _finished_run():
     d = fresh("run")
@@ -510,5 +546,45 @@ def _finished_run():
     return d
 
 
+def types_everywhere():
+    """The same three wrong element types (numbers written as strings, bools, complex
+    numbers) given to each array argument of the public API: a string was read as its
+    number by ``np.asarray(x, float)``, a bool as 0 or 1, a complex number lost its
+    imaginary part."""
+    from jaxlens import plot as P
+    from jaxlens.analysis import tolerance as TL
+    from jaxlens.design import losses as L
+
+    bads = {"str": np.array(["0", "5"]), "bool": np.array([False, True]), "complex": np.array([0.0, 5.0 + 1j])}
+    for kind, b in bads.items():
+        probe(f"types {kind}: spot_rays field", lambda: A.spot_rays(cooke, b[1:]), "field")
+        probe(f"types {kind}: chief_ray field", lambda: A.chief_ray(cooke, b[1:]), "field")
+        probe(f"types {kind}: distortion fields", lambda: A.distortion(cooke, b), "fields")
+        probe(f"types {kind}: ray_fan field", lambda: A.ray_fan(cooke, b[1:]), "field")
+        probe(f"types {kind}: wavefront field", lambda: A.wavefront(cooke, b[1:]), "field")
+        probe(f"types {kind}: clear_semi_diameters fields", lambda: A.clear_semi_diameters(cooke, b), "fields")
+        probe(f"types {kind}: encircled_energy radii", lambda: A.encircled_energy(cooke, 0.0, b), "radii")
+        probe(f"types {kind}: plot_rms_map rms_um", lambda: P.plot_rms_map(np.stack([b, b]).reshape(-1)[:4].reshape(2, 2), (3.0, 4.0)), "rms_um")
+        probe(f"types {kind}: plot_rms_map sensor_size", lambda: P.plot_rms_map(np.ones((2, 2)), b), "sensor_size")
+        probe(f"types {kind}: reweighting_mask rms", lambda: D.reweighting_mask(b), "rms")
+        probe(f"types {kind}: percentile values", lambda: TL.percentile(b, 50), "values")
+        probe(f"types {kind}: ToleranceModel field_weights", lambda: TL.ToleranceModel(cooke, fields=[0.0, 5.0], field_weights=b), "field_weights")
+        probe(f"types {kind}: radial_area_weights fracs", lambda: L.radial_area_weights(b, (3.0, 4.0)), "fracs")
+        probe(f"types {kind}: radial_area_weights sensor_size", lambda: L.radial_area_weights(np.array([0.0, 1.0]), b), "sensor_size")
+        probe(f"types {kind}: HullMaterials corners", lambda: D.HullMaterials(np.array([[b[0], b[1]], [b[1], b[0]], [b[1], b[1]]])), "corners")
+        probe(f"types {kind}: psnr reference", lambda: jl.images.psnr(b, np.zeros(2)), "reference")
+        probe(f"types {kind}: write_png img", lambda: jl.images.write_png(os.path.join(fresh("png"), "a.png"), np.stack([b] * 2)), "img")
+        probe(f"types {kind}: nearest_glasses nd", lambda: jl.catalog.nearest_glasses(b[1:], 60.0), "nd")
+        probe(f"types {kind}: get_material nd", lambda: jl.get_material("X", nd=b[1:], vd=60.0), "nd")
+        probe(f"types {kind}: sine_path end", lambda: D.sine_path(0.0, b[1], 5), "end")
+        probe(f"types {kind}: Sensor pixel_size", lambda: jl.Sensor((8, 8), b[1]), "pixel_size")
+        probe(f"types {kind}: stop_radius object_z", lambda: jl.sampling.stop_radius(cooke, "real", object_z=b[1]), "object_z")
+        probe(f"types {kind}: mtf frequencies", lambda: jl.imaging.psf.mtf(cooke, 0.0, frequencies=b), "frequencies")
+        probe(f"types {kind}: relative_illumination fields", lambda: jl.imaging.radiometry.relative_illumination(cooke, b), "fields")
+        probe(f"types {kind}: diffraction_mtf nu", lambda: jl.imaging.otf.diffraction_mtf(b, 0.00055, 4.0), "nu")
+        probe(f"types {kind}: Tabulated indices", lambda: jl.Tabulated(np.array([0.5, 0.6]), b), "indices")
+        probe(f"types {kind}: ModelGlass nd", lambda: jl.ModelGlass(b[1], 60.0), "nd")
+
+
 if __name__ == "__main__":
-    run([arrays, counts_and_options, imaging_tiles, images_io, runfolders, tolerance_api, design_api, json_types, clis])
+    run([types_everywhere, arrays, counts_and_options, imaging_tiles, images_io, runfolders, tolerance_api, design_api, json_types, clis])

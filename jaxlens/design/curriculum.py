@@ -42,7 +42,7 @@ from .solvers import (
     SolverResult,
     result_names,
 )
-from .spec import DesignSpec
+from .spec import DesignSpec, require_spec
 
 STAGE_SOLVERS = ("adam", "lm", "lm-optx", "lbfgsb")
 """Solver names a stage may use (``multistart.design`` makes the solvers)."""
@@ -153,6 +153,7 @@ def paper_stages(
             image point, as the paper's code) or ``"centroid"`` (with the image-height pin).
     """
     w = "paper_stages"
+    require_spec(spec, w)
     checks.number(n, "n", w, lo=0, hi=checks.MAX_SAMPLES, integer=True, unit="curriculum steps")
     for arg, v in (("steps", steps), ("final_steps", final_steps),
                    ("polish_steps", polish_steps)):
@@ -413,6 +414,7 @@ def run(
     # run() is public): warmup=5 (5 %) ramped the rate over the whole stage and never reached
     # the peak, end_lr=5 raised it fivefold, irls="no" read as True, epoch=0 divided by 0.
     w = "run"
+    require_spec(spec, w)
     checks.number(warmup, "warmup", w, lo=0, hi=1, unit="(a fraction of each stage's steps, "
                   "not a percent)")
     checks.number(end_lr, "end_lr", w, lo=0, hi=1, unit="(a fraction of the peak rate, not "

@@ -21,7 +21,7 @@ from ..optics.lens import Lens, Sensor
 from ..optics.materials import Air
 from ..optics.surfaces import EvenAsphere, Stop
 from .params import LensParams, Parameterization
-from .spec import AIR_MIN_GAP, ELEMENT_MIN_THICKNESS, DesignSpec, get_material
+from .spec import AIR_MIN_GAP, ELEMENT_MIN_THICKNESS, DesignSpec, get_material, require_spec
 
 # Ranges of the random gaps before scaling to the track (mm).
 _ELEMENT = (0.5, 1.0)
@@ -125,9 +125,7 @@ def template_lens(spec: DesignSpec, dtype=None) -> Lens:
 def _spec_and_dtype(spec, dtype, where: str) -> None:
     """A ``DesignSpec`` and None or a float dtype (before: None failed as an AttributeError
     deep inside, int32 as an OverflowError from an infinite bound)."""
-    if not isinstance(spec, DesignSpec):
-        raise TypeError(f"{where}: spec must be a jaxlens.design.DesignSpec, got "
-                        f"{type(spec).__name__} {spec!r}")
+    require_spec(spec, where)
     checks.float_dtype(dtype, where)
 
 
@@ -186,6 +184,7 @@ def check_seeds(seeds, where: str, *, distinct: bool = False) -> list[int]:
 
 def random_starts(spec: DesignSpec, seeds, dtype=None) -> LensParams:
     """Random starts for a list of integer seeds, stacked on a leading axis."""
+    require_spec(spec, "random_starts")
     seeds = check_seeds(seeds, "random_starts")
     checks.float_dtype(dtype, "random_starts")
     keys = jnp.stack([jax.random.PRNGKey(int(s)) for s in seeds])

@@ -119,6 +119,14 @@ class RunFolder:
     """
 
     def __init__(self, path: str, *, overwrite: bool = False, option: str = "--out"):
+        # Before: overwrite="no" (or 1) replaced an earlier run, and "" (the current folder),
+        # None or a number failed late or ran in the working folder.
+        if not isinstance(overwrite, bool):
+            raise UsageError(f"{option}: overwrite must be True or False (--overwrite), got "
+                             f"{overwrite!r}")
+        if not isinstance(path, str | os.PathLike) or not os.fspath(path).strip():
+            raise UsageError(f"{option} needs a folder name, got {path!r}")
+        path = os.fspath(path)
         self.final = os.path.abspath(path)
         self.option = option
         self.overwrite = overwrite
