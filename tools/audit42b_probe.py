@@ -586,5 +586,70 @@ def types_everywhere():
         probe(f"types {kind}: ModelGlass nd", lambda: jl.ModelGlass(b[1], 60.0), "nd")
 
 
+def design_types():
+    """The design API's values of a wrong type: numbers as strings, numpy bools, complex."""
+    Spec = D.DesignSpec
+    St = D.Stage
+    spec = Spec()
+    probe("DesignSpec fov '80.8'", lambda: Spec(fov="80.8"), "fov")
+    probe("DesignSpec fnum np.True_", lambda: Spec(fnum=np.True_), "fnum")
+    probe("DesignSpec fnum 2+0j", lambda: Spec(fnum=2 + 0j), "fnum")
+    probe("DesignSpec n_elements np.True_", lambda: Spec(n_elements=np.True_, materials=("E48R",), stop=0), "n_elements")
+    probe("DesignSpec n_elements '6'", lambda: Spec(n_elements="6"), "n_elements")
+    probe("DesignSpec materials a string 'E48R'", lambda: Spec(n_elements=1, materials="E48R", stop=0), "materials")
+    probe("DesignSpec materials [5, ...]", lambda: Spec(materials=(5,) * 6), "materials")
+    probe("DesignSpec sensor_aspect ('4', '3')", lambda: Spec(sensor_aspect=("4", "3")), "sensor_aspect")
+    probe("DesignSpec sensor_aspect 1.33 (not a pair)", lambda: Spec(sensor_aspect=1.33), "sensor_aspect")
+    probe("DesignSpec wavelengths ['0.55']", lambda: Spec(wavelengths=("0.55",), primary=0), "wavelengths")
+    probe("DesignSpec wavelengths () (none)", lambda: Spec(wavelengths=(), primary=0), "wavelengths")
+    probe("DesignSpec stop True", lambda: Spec(stop=True), "stop")
+    probe("DesignSpec name 5", lambda: Spec(name=5), "name")
+    probe("DesignSpec total_track inf", lambda: Spec(total_track=float("inf")), "total_track")
+    probe("DesignSpec sensor_pixels 2.5", lambda: Spec(sensor_pixels=2.5), "sensor_pixels")
+    probe("Stage name 5", lambda: St(5, 60.0, 2.0, 10), "name")
+    probe("Stage fov '60'", lambda: St("s", "60", 2.0, 10), "fov")
+    probe("Stage steps np.True_", lambda: St("s", 60.0, 2.0, np.True_), "steps")
+    probe("Stage mask 'yes'", lambda: St("s", 60.0, 2.0, 10, mask="yes"), "mask")
+    probe("Stage regularize 1", lambda: St("s", 60.0, 2.0, 10, regularize=1), "regularize")
+    probe("Stage fov 200 (beyond a hemisphere)", lambda: St("s", 200.0, 2.0, 10), "fov")
+    probe("paper_stages curriculum 'no'", lambda: D.paper_stages(spec, curriculum="no"), "curriculum")
+    probe("paper_stages mask 0", lambda: D.paper_stages(spec, mask=0), "mask")
+    probe("paper_stages polish 'bfgs'", lambda: D.paper_stages(spec, polish="bfgs"), "polish")
+    probe("paper_stages final_loss 'l1'", lambda: D.paper_stages(spec, final_loss="l1"), "final_loss")
+    probe("paper_stages spec a dict", lambda: D.paper_stages({"fov": 60}), "paper_stages", "DesignSpec")
+    probe("run spec a dict", lambda: D.run({"fov": 60}, [], None, None, None), "run", "DesignSpec")
+    probe("random_starts spec a dict", lambda: D.random_starts({"fov": 60}, [0]), "random_starts", "DesignSpec")
+    probe("random_starts seeds [0, 2**40] (beyond uint32)", lambda: D.random_starts(spec, [0, 2**40]), "seed")
+    probe("random_starts seeds {0, 1} (a set)", lambda: D.random_starts(spec, {0, 1}), "seeds")
+    probe("design seeds ['0']", lambda: D.design(spec, ["0"]), "seed")
+    probe("design seeds [0, np.True_]", lambda: D.design(spec, [0, np.True_]), "seed")
+    probe("evaluate_design n np.True_", lambda: D.evaluate_design(D.init.template_lens(spec), spec, n=np.True_), "n")
+    probe("sensor_field_grid spec a Lens", lambda: D.sensor_field_grid(cooke), "sensor_field_grid", "DesignSpec")
+
+
+def report_cli():
+    def cmd(*args):
+        return module_cli(*args, module="jaxlens", timeout=300)
+
+    probe("cli report --plot a file", cmd("report", COOKE, "--plot", COOKE), "--plot")
+    probe("cli report --plot ''", cmd("report", COOKE, "--plot", ""), "--plot")
+    probe("cli report --overwrite without --plot", cmd("report", COOKE, "--overwrite"), "--overwrite")
+    probe("cli report --list-configs on a .json", cmd("report", COOKE, "--list-configs"), "--list-configs")
+    probe("cli report --config 0", cmd("report", SEED0, "--config", "0"), "config")
+    probe("cli report --config 99", cmd("report", SEED0, "--config", "99"), "config")
+    probe("cli report --config abc", cmd("report", SEED0, "--config", "abc"), "--config")
+    probe("cli report --fields 1_0", cmd("report", COOKE, "--fields", "1_0"), "--fields")
+    probe("cli report --wavelengths 0.55,inf", cmd("report", COOKE, "--wavelengths", "0.55,inf"), "wavelength")
+    probe("cli report a .zmx missing", cmd("report", os.path.join(DATA, "nope.zmx")), "nope.zmx")
+    probe("cli report an empty .json", cmd("report", _empty_json()), "json")
+    probe("cli report --float32 after the subcommand", cmd("report", COOKE, "--float32"), "--float32")
+
+
+def _empty_json():
+    p = os.path.join(fresh("e"), "empty.json")
+    open(p, "w").close()
+    return p
+
+
 if __name__ == "__main__":
-    run([types_everywhere, arrays, counts_and_options, imaging_tiles, images_io, runfolders, tolerance_api, design_api, json_types, clis])
+    run([types_everywhere, design_types, report_cli, arrays, counts_and_options, imaging_tiles, images_io, runfolders, tolerance_api, design_api, json_types, clis])

@@ -318,7 +318,7 @@ def _check_fields(fields, weights, where, heights=False):
     # Before: np.asarray(["0", "5"], float) read strings as their numbers, bools as 0 and 1.
     checks.real_values(fields, "fields", where, unit)
     if weights is not None:
-        checks.real_values(weights, "field_weights", where, "(relative weights)")
+        checks.real_values(weights, "field_weights", where, "relative weights")
     f = np.asarray(fields, float)
     if f.ndim not in (1, 2) or f.shape[0] == 0 or (f.ndim == 2 and f.shape[1] != 2) \
             or not np.all(np.isfinite(f)):

@@ -97,6 +97,8 @@ class Stage:
     def __post_init__(self):
         # run() would otherwise trace a stage of 200° or F/0 to NaN, or skip -1 steps.
         w = f"Stage {self.name!r}"
+        if not isinstance(self.name, str):  # the label of logs and messages (was taken)
+            raise TypeError(f"{w}: name must be a str, got {type(self.name).__name__}")
         checks.number(self.fov, "fov", w, lo=0, hi=180, lo_open=True, hi_open=True,
                       unit="deg (full diagonal)")
         checks.number(self.fnum, "fnum", w, lo=0, lo_open=True)
@@ -166,6 +168,9 @@ def paper_stages(
     else:
         fovs = np.full(n + 1, spec.fov)
         fnums = np.full(n + 1, spec.fnum)
+    for arg, v in (("solver", solver), ("polish", polish)):  # polish="bfgs" passed unused
+        if v not in STAGE_SOLVERS:  # with polish_steps=0, as DesignConfig refuses it
+            raise ValueError(f"paper_stages: {arg} must be one of {STAGE_SOLVERS}, got {v!r}")
     if reference not in ("ideal", "centroid"):
         raise ValueError(f"paper_stages: reference must be 'ideal' or 'centroid', got "
                          f"{reference!r}")
@@ -391,6 +396,7 @@ def run(
     """
     from tqdm.auto import tqdm
 
+    require_spec(spec, "run")  # before params: a dict was an AttributeError below
     dtype = params.c.dtype
     b = params.c.shape[0]
     seeds = list(range(b)) if seeds is None else list(seeds)
@@ -414,7 +420,6 @@ def run(
     # run() is public): warmup=5 (5 %) ramped the rate over the whole stage and never reached
     # the peak, end_lr=5 raised it fivefold, irls="no" read as True, epoch=0 divided by 0.
     w = "run"
-    require_spec(spec, w)
     checks.number(warmup, "warmup", w, lo=0, hi=1, unit="(a fraction of each stage's steps, "
                   "not a percent)")
     checks.number(end_lr, "end_lr", w, lo=0, hi=1, unit="(a fraction of the peak rate, not "

@@ -169,9 +169,11 @@ def check_seeds(seeds, where: str, *, distinct: bool = False) -> list[int]:
     """A non-empty list of whole-number seeds in [0, ``MAX_SEED``] (``distinct``: no repeat,
     which would design the same lens twice); returns them as ints."""
     # int() would truncate a seed of 1.5 to 1 and read "12" as two seeds 1 and 2.
-    if isinstance(seeds, str | bytes) or not hasattr(seeds, "__len__") or len(seeds) == 0:
+    # A set (or a dict's keys) has no order: seed labels and starts would not pair up.
+    if isinstance(seeds, str | bytes | set | frozenset | dict) or not hasattr(
+            seeds, "__len__") or len(seeds) == 0:
         raise ValueError(f"{where}: seeds must be a non-empty list of whole numbers "
-                         f">= 0, got {seeds!r}")
+                         f">= 0, got {seeds!r} (a list or tuple, in order: not a set)")
     out = [checks.number(s, "seeds", where, lo=0, integer=True) for s in seeds]
     if max(out) > MAX_SEED:
         raise ValueError(f"{where}: seeds must be whole numbers in [0, {MAX_SEED}] (seeds of "
