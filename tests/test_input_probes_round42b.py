@@ -184,3 +184,68 @@ def test_json_aperture_must_be_an_object(tmp_path, aperture):
     with pytest.raises(ValueError, match=r"aperture must be an object, \{\"epd\": mm\}, "
                                          r"\{\"fnum\": F\} or \{\"stop_semi_diameter\": mm\}"):
         jl.load(str(p))
+
+
+def test_paper_stages_checks_the_polish_name_without_a_polish_stage():
+    """Main: polish="bfgs" was taken when polish_steps=0 (DesignConfig refuses it always)."""
+    with pytest.raises(ValueError, match=r"paper_stages: polish must be one of \('adam', "
+                                         r"'lm', 'lm-optx', 'lbfgsb'\), got 'bfgs'"):
+        D.paper_stages(D.DesignSpec(), polish="bfgs")
+
+
+def test_stage_name_must_be_text():
+    """Main: Stage(5, ...) was taken: the label of its logs and messages."""
+    with pytest.raises(TypeError, match=r"Stage 5: name must be a str, got int"):
+        D.Stage(5, 60.0, 2.0, 10)
+
+
+@pytest.mark.parametrize("seeds", [{0, 1}, frozenset({3}), {0: "a"}])
+def test_seeds_must_be_in_order(seeds):
+    """Main: a set of seeds was taken in the set's own order, so the seed labels of the
+    messages and the starts need not pair up."""
+    with pytest.raises(ValueError, match=r"random_starts: seeds must be a non-empty list .*"
+                                         r"\(a list or tuple, in order: not a set\)"):
+        D.random_starts(D.DesignSpec(), seeds)
+
+
+@pytest.mark.parametrize("value", [np.True_, np.array([True, False]), np.array([5 + 1j])])
+def test_array_check_refuses_bools_and_complex(value):
+    """Main: checks.values (the array check of most arguments) read True as 1 and 5+1j as 5
+    (stop_radius(lens, "real", object_z=np.True_) traced from 1 mm)."""
+    with pytest.raises(ValueError, match=r"^where: object_z must be finite numbers \(mm\), "
+                                         r"got "):
+        checks.values(value, "object_z", "where", unit="mm")
+
+
+def test_stop_radius_refuses_a_bool_object_z(cooke):
+    """Main: np.True_ was an object 1 mm from the first vertex."""
+    with pytest.raises(ValueError, match=r"stop_radius: object_z must be finite numbers"):
+        jl.sampling.stop_radius(cooke, "real", object_z=np.True_)
+
+
+def test_zernike_fit_points_must_share_one_shape():
+    """Main: x [25] and y [5, 5] were paired by ravel order, as were values [5, 5] with a
+    mask [25]: a meshgrid's x with another ordering's y fitted without a word."""
+    g = np.linspace(-0.6, 0.6, 5)
+    x, y = np.meshgrid(g, g)
+    with pytest.raises(ValueError, match=r"zernike_fit: x, y and values must have the same "
+                                         r"shape \(one value per point\), got shapes \(25,\), "
+                                         r"\(5, 5\) and \(5, 5\)"):
+        zernike.zernike_fit(x.ravel(), y, np.ones((5, 5)), terms=3)
+    with pytest.raises(ValueError, match=r"zernike_fit: mask must have the points' shape "
+                                         r"\(5, 5\) \(one entry per point\), got shape \(25,\)"):
+        zernike.zernike_fit(x, y, np.ones((5, 5)), terms=3, mask=np.ones(25, bool))
+
+
+@pytest.mark.parametrize("where, write", [
+    ("write_png", lambda p: images.write_png(p, np.ones((4, 4, 3)))),
+    ("write_exr", lambda p: images.write_exr(p, np.ones((4, 4, 3)))),
+    ("save_json", lambda p: jl.io.lensfile.save_json(jl.zoo.cooke_triplet(), p)),
+    ("save", lambda p: plot.save(plot.plot_image(np.zeros((4, 4, 3))), p)),
+])
+def test_writers_name_themselves_for_a_path_that_is_none(where, write):
+    """Main: os.fspath's "expected str, bytes or os.PathLike object, not NoneType", naming
+    neither the writer nor the argument (json_values.output_file checks every writer's)."""
+    with pytest.raises(TypeError, match=rf"^{where}: path must be a file name \(a str or "
+                                        rf"os\.PathLike\), got NoneType None"):
+        write(None)

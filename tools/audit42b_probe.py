@@ -134,7 +134,7 @@ def counts_and_options():
     probe("distortion wavelength 587.6 (nm)", lambda: A.distortion(cooke, [0.0, 10.0], 587.6), "wavelength")
     probe("clear_semi_diameters n_rim 0", lambda: A.clear_semi_diameters(cooke, n_rim=0), "n_rim")
     probe("clear_semi_diameters reaching 'yes'", lambda: A.clear_semi_diameters(cooke, reaching="yes"), "reaching")
-    probe("seidel field -0.5 (normalised)", lambda: A.seidel(cooke, field=-0.5), "field")
+    probe("seidel field -0.5 deg (a field below the axis; control)", lambda: float(A.seidel(cooke, field=-0.5).field), good=True)
     probe("seidel field '1'", lambda: A.seidel(cooke, field="1"), "field")
     probe("seidel wavelength 587.6 (nm)", lambda: A.seidel(cooke, wavelength=587.6), "wavelength")
     probe("psf kernel_size 0", lambda: jl.psf(cooke, 0.0, kernel_size=0, pixel_size=0.002), "kernel_size")
@@ -145,7 +145,7 @@ def counts_and_options():
     probe("diffraction_mtf fnum 0", lambda: jl.imaging.otf.diffraction_mtf(np.array([10.0]), 0.00055, 0.0), "fnum")
     probe("diffraction_mtf lam_mm 550 (nm)", lambda: jl.imaging.otf.diffraction_mtf(np.array([10.0]), 550.0, 4.0), "lam")
     probe("diffraction_mtf nu -10", lambda: jl.imaging.otf.diffraction_mtf(np.array([-10.0]), 0.00055, 4.0), "nu")
-    probe("mtf_directions field (2, 3)", lambda: jl.imaging.otf.mtf_directions(np.zeros((2, 3))), "field")
+    probe("mtf_directions field (2, 3) (documented: a batch of θy; control)", lambda: jl.imaging.otf.mtf_directions(np.zeros((2, 3)))[0].shape, good=True)
     probe("mtf_directions field ['5']", lambda: jl.imaging.otf.mtf_directions(np.array(["5"])), "field")
     probe("relative_illumination pupil 0", lambda: jl.imaging.radiometry.relative_illumination(cooke, [0.0], pupil=0), "pupil")
     probe("relative_illumination pupil 2.5", lambda: jl.imaging.radiometry.relative_illumination(cooke, [0.0], pupil=2.5), "pupil")
@@ -243,6 +243,11 @@ def images_io():
     from jaxlens import plot as P
     probe("plot.save to a missing folder", lambda: P.save(Figure(), os.path.join(TMP, "no", "f.png")), "save")
     probe("plot.save path None", lambda: P.save(Figure(), None), "save", "path")
+    probe("write_png path None", lambda: I.write_png(None, np.ones((4, 4, 3))), "write_png", "path")
+    probe("write_exr path 5", lambda: I.write_exr(5, np.ones((4, 4, 3))), "write_exr", "path")
+    probe("write_psf_stack path None", lambda: I.write_psf_stack(None, np.ones((2, 4, 4))), "write_psf_stack", "path")
+    probe("save_json path None", lambda: jl.io.lensfile.save_json(cooke, None), "save_json", "path")
+    probe("save_zmx path None", lambda: jl.io.zmx.save_zmx(cooke, None), "save_zmx", "path")
 
 
 def runfolders():
@@ -302,7 +307,7 @@ def tolerance_api():
     probe("yield_fraction threshold '10'", lambda: yield_fraction(np.ones(4), "10"), "threshold_um")
     probe("yield_fraction valid_fraction length 3 for 4", lambda: yield_fraction(np.ones(4), 10.0, np.ones(3)), "valid_fraction")
     probe("yield_fraction valid_fraction 1.5", lambda: yield_fraction(np.ones(4), 10.0, np.full(4, 1.5)), "valid_fraction")
-    probe("yield_fraction rms with nan", lambda: yield_fraction(np.array([1.0, np.nan]), 10.0), "rms_um")
+    probe("yield_fraction rms with nan (documented: a failed trial; control)", lambda: yield_fraction(np.array([1.0, np.nan]), 10.0), good=True)
     probe("percentile q 150", lambda: percentile(np.ones(4), 150), "q")
     probe("percentile values []", lambda: percentile(np.zeros(0), 50), "values")
     probe("percentile q '50'", lambda: percentile(np.ones(4), "50"), "q")
@@ -310,7 +315,7 @@ def tolerance_api():
     probe("monte_carlo trials 2.5", lambda: monte_carlo(m, trials=2.5, threshold_um=20.0, mtf_frequency=30.0), "trials")
     probe("monte_carlo trials '10'", lambda: monte_carlo(m, trials="10", threshold_um=20.0, mtf_frequency=30.0), "trials")
     probe("monte_carlo key 0 (an int)", lambda: monte_carlo(m, trials=4, key=0, threshold_um=20.0, mtf_frequency=30.0), "key")
-    probe("monte_carlo mtf_frequency 0", lambda: monte_carlo(m, trials=4, threshold_um=20.0, mtf_frequency=0.0), "mtf_frequency")
+    probe("monte_carlo mtf_frequency 0 (documented: >= 0; control)", lambda: monte_carlo(m, trials=4, threshold_um=20.0, mtf_frequency=0.0)["trials"], good=True)
     probe("monte_carlo threshold_um inf", lambda: monte_carlo(m, trials=4, threshold_um=float("inf"), mtf_frequency=30.0), "threshold_um")
     probe("monte_carlo min_valid -0.5", lambda: monte_carlo(m, trials=4, threshold_um=20.0, mtf_frequency=30.0, min_valid=-0.5), "min_valid")
     probe("sensitivity check 2.5", lambda: sensitivity(m, check=2.5), "check")
@@ -536,9 +541,11 @@ def clis():
     probe("classical --sensor-diagonal 0", c("--sensor-diagonal", "0"), "--sensor-diagonal")
     probe("classical --material-catalogs SHOTT", c("--select-materials", "continuous", "--material-catalogs", "SHOTT"), "SCHOTT")
     probe("classical --tolerance-threshold -5", c("--tolerance-threshold", "-5"), "--tolerance-threshold")
-    probe("classical --ablation-seeds 0", c("--ablation", "--ablation-seeds", "0"), "--ablation-seeds")
-    probe("classical --columns bogus", c("--ablation", "--columns", "bogus"), "--columns")
-    probe("classical --ablation-out = --out", cli(patched(CL, ["run_design", "run_ablation"], lambda: (lambda d: CL.main(["--out", d, "--ablation", "--ablation-out", d]))(os.path.join(fresh("c"), "o")))), "--ablation-out")
+    a = lambda *x: cli(patched(CL, ["run_design", "run_ablation"], lambda: CL.main(["--ablation", "--ablation-out", os.path.join(fresh("c"), "ab"), *x])))
+    probe("classical --ablation-seeds 0", a("--ablation-seeds", "0"), "--ablation-seeds")
+    probe("classical --columns bogus", a("--columns", "bogus"), "--columns")
+    probe("classical --ablation-out ''", cli(patched(CL, ["run_design", "run_ablation"], lambda: CL.main(["--ablation", "--ablation-out", ""]))), "--ablation-out")
+    probe("classical --overwrite 'yes' (a flag given a value)", c("--overwrite", "yes"), "yes")
 
 def _finished_run():
     d = fresh("run")

@@ -744,7 +744,6 @@ def monte_carlo(model: ToleranceModel, *, trials: int = 200, key=None,
         summary (``rms_p50_um``, ``rms_p90_um`` after refocusing, the same without it,
         ``mtf_p50``/``mtf_p10`` after refocusing, ``yield``, ``threshold_um``).
     """
-    _model(model, "monte_carlo")
     threshold_um = _positive(threshold_um, "threshold_um", "µm")
     if threshold_um < MIN_THRESHOLD_UM:  # 0.006 (mm) meant 6 µm: every trial would fail
         raise ValueError(f"monte_carlo: threshold_um {threshold_um:g} µm is below "
@@ -759,6 +758,7 @@ def monte_carlo(model: ToleranceModel, *, trials: int = 200, key=None,
     if not (math.isfinite(float(mtf_frequency)) and float(mtf_frequency) >= 0):
         raise ValueError(f"monte_carlo: mtf_frequency must be a finite number >= 0 cycles/mm, "
                          f"got {mtf_frequency!r}")
+    _model(model, "monte_carlo")  # after the options (their checks need no model)
     key = jax.random.PRNGKey(0) if key is None else key
     x = sample_perturbations(model, trials, key)
     res = model.evaluate(np.concatenate([np.zeros((1, x.shape[1])), x]),

@@ -275,8 +275,8 @@ def values(x, arg: str, where: str, *, lo=None, hi=None, lo_open=False, hi_open=
 
     if is_traced(x):
         return eqx.error_if(x, jnp.any(bad_of(jnp.asarray(x), jnp)), msg)
-    try:  # a string too, as number() refuses one: np.asarray("4", float) read it as 4.0
-        if np.asarray(x).dtype.kind in "US":
+    try:  # strings, bools, complex as number() refuses them: "4" was read as 4.0, True 1
+        if np.asarray(x).dtype.kind in "USbc":
             raise TypeError(x)
         a = np.asarray(x, dtype=float)
     except (TypeError, ValueError):
