@@ -249,3 +249,12 @@ def test_writers_name_themselves_for_a_path_that_is_none(where, write):
     with pytest.raises(TypeError, match=rf"^{where}: path must be a file name \(a str or "
                                         rf"os\.PathLike\), got NoneType None"):
         write(None)
+
+
+def test_classical_refuses_an_empty_ablation_out(tmp_path, capsys, monkeypatch):
+    """Main: ``--ablation --ablation-out ''`` passed every check: the columns would be written
+    into the working folder (runfolder.check_writable now refuses an empty name)."""
+    monkeypatch.chdir(tmp_path)
+    monkeypatch.setattr(classical, "run_ablation", lambda *a, **k: pytest.fail("it ran"))
+    assert classical.main(["--ablation", "--ablation-out", ""]) == 2
+    assert "--ablation-out needs a folder name, got ''" in capsys.readouterr().err

@@ -658,5 +658,59 @@ def _empty_json():
     return p
 
 
+def samplers_nets_lens():
+    """Pupil samplers' counts, the networks' inputs and a Lens's own arrays."""
+    import dataclasses
+
+    S = jl.sampling
+    key = jax.random.key(0)
+    probe("pupil_grid n 0", lambda: S.pupil_grid(0), "pupil_grid", "n")
+    probe("pupil_grid n 2.5", lambda: S.pupil_grid(2.5), "pupil_grid", "n")
+    probe("pupil_grid n np.True_", lambda: S.pupil_grid(np.True_), "pupil_grid", "n")
+    probe("pupil_hexapolar rings -1", lambda: S.pupil_hexapolar(-1), "rings")
+    probe("pupil_hexapolar rings '6'", lambda: S.pupil_hexapolar("6"), "rings")
+    probe("pupil_random n 0", lambda: S.pupil_random(key, 0), "n")
+    probe("pupil_random key 0 (an int)", lambda: S.pupil_random(0, 10), "key")
+    probe("pupil_stratified n_side 2.5", lambda: S.pupil_stratified(key, 2.5), "n_side")
+    probe("pupil_polar radius 1.5", lambda: S.pupil_polar(4, radius=1.5), "radius")
+    probe("pupil_polar radius '1'", lambda: S.pupil_polar(4, radius="1"), "radius")
+    probe("pupil_samples scheme 'hex'", lambda: S.pupil_samples("hex", 4), "scheme")
+    probe("pupil_samples n -4", lambda: S.pupil_samples("grid", -4), "n")
+    probe("pupil_grid dtype int32", lambda: S.pupil_grid(5, dtype=jnp.int32), "dtype")
+    N = jl.nets
+    net = N.NAFNet(3, 3, width=8, enc_blocks=(1,), middle_blocks=1, dec_blocks=(1,), key=key)
+    probe("NAFNet call (8, 8, 4) for 3 channels", lambda: net(jnp.ones((8, 8, 4))), "channel")
+    probe("NAFNet call (8, 8) (no channel axis)", lambda: net(jnp.ones((8, 8))), "NAFNet")
+    probe("NAFNet call (7, 8, 3) (documented: padded to the levels; control)", lambda: net(jnp.ones((7, 8, 3))).shape, good=True)
+    probe("NAFNet call uint8 image (round 26: the same answer as its values as floats; control)", lambda: net(jnp.ones((8, 8, 3), jnp.uint8)).dtype, good=True)
+    probe("NAFNet width 0", lambda: N.NAFNet(3, 3, width=0, key=key), "width")
+    probe("NAFNet enc_blocks (-1,)", lambda: N.NAFNet(3, 3, width=8, enc_blocks=(-1,), dec_blocks=(1,), key=key), "enc_blocks")
+    probe("NAFNet enc/dec lengths differ", lambda: N.NAFNet(3, 3, width=8, enc_blocks=(1, 1), dec_blocks=(1,), key=key), "dec_blocks")
+    probe("NAFNet in_channels 0", lambda: N.NAFNet(0, 3, width=8, key=key), "in_channels")
+    probe("NAFNet key 0 (an int)", lambda: N.NAFNet(3, 3, width=8, key=0), "key")
+    probe("Conv kernel 0", lambda: N.Conv(3, 3, 0, key=key), "kernel")
+    probe("Conv stride 0", lambda: N.Conv(3, 3, 3, stride=0, key=key), "stride")
+    probe("LayerNorm2d eps -1", lambda: N.LayerNorm2d(4, eps=-1.0), "eps")
+    probe("num_parameters model a dict", lambda: N.num_parameters({"a": 1}), "model")
+    R = dataclasses.replace
+    probe("Lens fields (2, 3)", lambda: R(cooke, fields=jnp.zeros((2, 3))), "fields")
+    probe("Lens fields ['0']", lambda: R(cooke, fields=np.array(["0"])), "fields")
+    probe("Lens fields [] (none)", lambda: R(cooke, fields=jnp.zeros(0)), "fields")
+    probe("Lens wavelengths (1, 3)", lambda: R(cooke, wavelengths=jnp.full((1, 3), 0.55)), "wavelengths")
+    probe("Lens wavelengths complex", lambda: R(cooke, wavelengths=np.array([0.55 + 0j])), "wavelengths")
+    probe("Lens primary 3 of 3", lambda: R(cooke, primary=3), "primary")
+    probe("Lens primary 1.0", lambda: R(cooke, primary=1.0), "primary")
+    probe("Lens primary np.True_", lambda: R(cooke, primary=np.True_), "primary")
+    probe("Lens epd '10'", lambda: R(cooke, epd="10"), "epd")
+    probe("Lens epd [10, 10]", lambda: R(cooke, epd=jnp.array([10.0, 10.0])), "epd")
+    probe("Lens stop 99", lambda: R(cooke, stop=99), "stop")
+    probe("Lens stop np.True_", lambda: R(cooke, stop=np.True_), "stop")
+    probe("Lens thickness (5,) for 6 surfaces", lambda: R(cooke, thickness=cooke.thickness[:5]), "thickness")
+    probe("Lens name 5", lambda: R(cooke, name=5), "name")
+    probe("Lens sensor (8, 8)", lambda: R(cooke, sensor=(8, 8)), "sensor")
+    probe("Lens aim 'yes'", lambda: R(cooke, aim="yes"), "aim")
+    probe("Lens afocal_image 'no'", lambda: R(cooke, afocal_image="no"), "afocal_image")
+
+
 if __name__ == "__main__":
-    run([types_everywhere, design_types, report_cli, arrays, counts_and_options, imaging_tiles, images_io, runfolders, tolerance_api, design_api, json_types, clis])
+    run([types_everywhere, design_types, report_cli, samplers_nets_lens, arrays, counts_and_options, imaging_tiles, images_io, runfolders, tolerance_api, design_api, json_types, clis])

@@ -73,7 +73,10 @@ def _nearest_existing(path: str) -> str:
 
 def check_writable(path: str, option: str) -> None:
     """Refuse (UsageError) a folder ``path`` that cannot be created or written: its nearest
-    existing ancestor must be a writable folder."""
+    existing ancestor must be a writable folder. An empty name (the working folder, where
+    ``--ablation-out ''`` wrote its columns) is refused too."""
+    if not os.fspath(path).strip():
+        raise UsageError(f"{option} needs a folder name, got {path!r}")
     base = _nearest_existing(os.path.dirname(os.path.abspath(path)))
     if not os.path.isdir(base) or not os.access(base, os.W_OK | os.X_OK):
         raise UsageError(f"{option} {path}: cannot create or write there ({base} is not a "
