@@ -19,7 +19,7 @@ import numpy as np
 from matplotlib.backends.backend_agg import FigureCanvasAgg
 from matplotlib.figure import Figure
 
-from .io.json_values import whole_path
+from .io.json_values import output_file, whole_path
 
 _WL_COLORS = {0.4861327: "tab:blue", 0.5875618: "tab:green", 0.6562725: "tab:red"}
 _FIELD_COLORS = ("tab:blue", "tab:green", "tab:red", "tab:purple", "tab:orange", "tab:brown")
@@ -36,6 +36,8 @@ def _figure(w: float, h: float) -> Figure:
 
 def save(fig: Figure, path: str | os.PathLike) -> str:
     """Write a figure (format from the extension) and return the path."""
+    if not isinstance(path, str | os.PathLike):
+        output_file(path, "save")  # refuses it, naming save (os.fspath's TypeError did not)
     path = os.fspath(path)
     if not isinstance(fig, Figure):
         raise TypeError(f"save: fig must be a matplotlib Figure, got {type(fig).__name__}")
@@ -273,6 +275,7 @@ def plot_rms_map(rms_um, sensor_size, *, title: str | None = None) -> Figure:
     """
     from .optics import checks
 
+    checks.real_values(rms_um, "rms_um", "plot_rms_map", "µm")  # "5" was read as 5
     v = np.asarray(rms_um, float)
     n = int(round(math.sqrt(v.size)))
     if v.size == 0 or n * n != v.size or v.ndim not in (1, 2):

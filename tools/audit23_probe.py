@@ -154,7 +154,7 @@ def analysis():
     probe("wavefront reference 'sphere'", lambda: A.wavefront(cooke, 0.0, reference="chief sphere"), "reference")
     probe("zernike_fit terms 0", lambda: A.zernike_fit(jnp.zeros(4), jnp.zeros(4), jnp.zeros(4), terms=0), "terms")
     probe("zernike_fit terms 10**7", lambda: A.zernike_fit(jnp.zeros(4), jnp.zeros(4), jnp.zeros(4), terms=10**7), "terms")
-    probe("zernike_fit x, y shapes differ", lambda: A.zernike_fit(jnp.zeros(4), jnp.zeros(5), jnp.zeros(4)), "same number of points")
+    probe("zernike_fit x, y shapes differ", lambda: A.zernike_fit(jnp.zeros(4), jnp.zeros(5), jnp.zeros(4)), "same shape")
     probe("zernike_fit values nan", lambda: A.zernike_fit(jnp.linspace(-0.5, 0.5, 9), jnp.zeros(9), jnp.full(9, jnp.nan), terms=4).coefficients, "0 valid points")
     probe("zernike_fit indexing 'ansi '", lambda: A.zernike_fit(jnp.zeros(4), jnp.zeros(4), jnp.zeros(4), indexing="ansi "), "indexing")
     probe("zernike_terms at (2, 0) (documented: continued outside the disc)", lambda: A.zernike_terms(jnp.array([2.0]), jnp.array([0.0]), terms=4), good=True)

@@ -349,7 +349,8 @@ def json_edge():
     probe("json trailing garbage", jf(s + "xyz"), "t.json")
     probe("json two objects", jf(s + s), "t.json")
     probe("json surfaces null", jf(json.dumps({**d0, "surfaces": None})), "surfaces")
-    probe("json aperture a number (control: the EPD)", jf(mut=lambda d: d.update(aperture=10.0)), good=True)
+    # Round 42b: a bare number (EPD in mm, or an F-number as photographers say "aperture"?) is refused.
+    probe("json aperture a number (refused since round 42b: EPD or F-number?)", jf(mut=lambda d: d.update(aperture=10.0)), "aperture", "epd", "fnum")
     probe("json aperture {}", jf(mut=lambda d: d.update(aperture={})), "aperture")
     probe("json aperture fnum -5", jf(mut=lambda d: d.update(aperture={"fnum": -5.0})), "fnum")
     probe("json aperture stop_semi_diameter 0", jf(mut=lambda d: d.update(aperture={"stop_semi_diameter": 0.0})), "stop_semi_diameter")

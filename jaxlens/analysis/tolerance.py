@@ -315,6 +315,10 @@ def symmetric_fields(fields) -> tuple[np.ndarray, np.ndarray]:
 # ------------------------------------------------------------------------ the model
 def _check_fields(fields, weights, where, heights=False):
     unit = "mm (object heights of an object-space telecentric lens)" if heights else "degrees"
+    # Before: np.asarray(["0", "5"], float) read strings as their numbers, bools as 0 and 1.
+    checks.real_values(fields, "fields", where, unit)
+    if weights is not None:
+        checks.real_values(weights, "field_weights", where, "relative weights")
     f = np.asarray(fields, float)
     if f.ndim not in (1, 2) or f.shape[0] == 0 or (f.ndim == 2 and f.shape[1] != 2) \
             or not np.all(np.isfinite(f)):
@@ -638,6 +642,13 @@ def yield_fraction(rms_um, threshold_um: float, valid_fraction=None,
     return float(np.mean(ok))
 
 
+def _model(model, where: str) -> None:
+    """Refuse anything but a ToleranceModel (a Lens failed as an AttributeError inside)."""
+    if not isinstance(model, ToleranceModel):
+        raise TypeError(f"{where}: model must be a ToleranceModel (ToleranceModel(lens, ...)), "
+                        f"got {type(model).__name__}")
+
+
 def sensitivity(model: ToleranceModel, *, check: int | None = None) -> dict:
     """d(metric)/d(parameter) for every toleranced parameter from one reverse-mode pass,
     with a finite-difference check at ± each tolerance.
@@ -654,6 +665,7 @@ def sensitivity(model: ToleranceModel, *, check: int | None = None) -> dict:
     metric is even in them, so their gradient is 0 and the change is second order
     (``second_order_um``), which a ranking by gradient would never pick.
     """
+    _model(model, "sensitivity")
     if check is not None and (isinstance(check, bool)
                               or not isinstance(check, (int, np.integer)) or check < 0):
         raise ValueError(f"sensitivity: check must be None or a whole number >= 0 of "
@@ -703,6 +715,7 @@ def sample_perturbations(model: ToleranceModel, trials: int, key) -> np.ndarray:
         raise ValueError(f"monte_carlo: trials must be a whole number >= 1 and <= "
                          f"{MAX_TRIALS}, got {trials!r}")
     checks.prng_key(key, "sample_perturbations")  # JAX's own error named no argument
+    _model(model, "sample_perturbations")
     tol = model.tolerance_vector(sensitivity=False)
     shape = (int(trials), tol.size)
     if model.tolerances.distribution == "uniform":
@@ -745,6 +758,7 @@ def monte_carlo(model: ToleranceModel, *, trials: int = 200, key=None,
     if not (math.isfinite(float(mtf_frequency)) and float(mtf_frequency) >= 0):
         raise ValueError(f"monte_carlo: mtf_frequency must be a finite number >= 0 cycles/mm, "
                          f"got {mtf_frequency!r}")
+    _model(model, "monte_carlo")  # after the options (their checks need no model)
     key = jax.random.PRNGKey(0) if key is None else key
     x = sample_perturbations(model, trials, key)
     res = model.evaluate(np.concatenate([np.zeros((1, x.shape[1])), x]),

@@ -248,19 +248,20 @@ def zernike_fit(x: Float[ArrayLike, "*p"], y: Float[ArrayLike, "*p"],
     terms = _check(indexing, terms, where)
     for arg, v in (("x", x), ("y", y), ("values", values)):
         checks.real_values(v, arg, where, "")
+    shapes = [jnp.shape(a) for a in (x, y, values)]
     x, y, v = (jnp.ravel(jnp.asarray(a)) for a in (x, y, values))
-    if not (x.shape == y.shape == v.shape):
-        raise ValueError(f"{where}: x, y and values must have the same number of points, got "
-                         f"{x.size}, {y.size} and {v.size}")
+    if not (shapes[0] == shapes[1] == shapes[2]):  # a [25] x, a [5, 5] y: paired by ravel
+        raise ValueError(f"{where}: x, y and values must have the same shape (one value per "
+                         f"point), got shapes {shapes[0]}, {shapes[1]} and {shapes[2]}")
     if not jnp.issubdtype(v.dtype, jnp.floating):
         v = v.astype(float)
     ok = jnp.isfinite(v)
     if mask is not None:
         # A 0/1 (or any numeric) mask means nonzero = fit; ``ok & 2`` was bitwise (0).
+        if jnp.shape(mask) != shapes[2]:
+            raise ValueError(f"{where}: mask must have the points' shape {shapes[2]} (one entry "
+                             f"per point), got shape {jnp.shape(mask)}")
         mask = jnp.ravel(jnp.asarray(mask)).astype(bool)
-        if mask.shape != v.shape:
-            raise ValueError(f"{where}: mask must have one entry per point ({v.size}), got "
-                             f"{mask.size}")
         ok = ok & mask
     if not checks.is_traced((x, y)):
         r2 = np.asarray(x, float) ** 2 + np.asarray(y, float) ** 2

@@ -42,7 +42,7 @@ from .solvers import (
     SolverResult,
     result_names,
 )
-from .spec import DesignSpec
+from .spec import DesignSpec, require_spec
 
 STAGE_SOLVERS = ("adam", "lm", "lm-optx", "lbfgsb")
 """Solver names a stage may use (``multistart.design`` makes the solvers)."""
@@ -97,6 +97,8 @@ class Stage:
     def __post_init__(self):
         # run() would otherwise trace a stage of 200° or F/0 to NaN, or skip -1 steps.
         w = f"Stage {self.name!r}"
+        if not isinstance(self.name, str):  # the label of logs and messages (was taken)
+            raise TypeError(f"{w}: name must be a str, got {type(self.name).__name__}")
         checks.number(self.fov, "fov", w, lo=0, hi=180, lo_open=True, hi_open=True,
                       unit="deg (full diagonal)")
         checks.number(self.fnum, "fnum", w, lo=0, lo_open=True)
@@ -153,6 +155,7 @@ def paper_stages(
             image point, as the paper's code) or ``"centroid"`` (with the image-height pin).
     """
     w = "paper_stages"
+    require_spec(spec, w)
     checks.number(n, "n", w, lo=0, hi=checks.MAX_SAMPLES, integer=True, unit="curriculum steps")
     for arg, v in (("steps", steps), ("final_steps", final_steps),
                    ("polish_steps", polish_steps)):
@@ -165,6 +168,9 @@ def paper_stages(
     else:
         fovs = np.full(n + 1, spec.fov)
         fnums = np.full(n + 1, spec.fnum)
+    for arg, v in (("solver", solver), ("polish", polish)):  # polish="bfgs" passed unused
+        if v not in STAGE_SOLVERS:  # with polish_steps=0, as DesignConfig refuses it
+            raise ValueError(f"paper_stages: {arg} must be one of {STAGE_SOLVERS}, got {v!r}")
     if reference not in ("ideal", "centroid"):
         raise ValueError(f"paper_stages: reference must be 'ideal' or 'centroid', got "
                          f"{reference!r}")
@@ -390,6 +396,7 @@ def run(
     """
     from tqdm.auto import tqdm
 
+    require_spec(spec, "run")  # before params: a dict was an AttributeError below
     dtype = params.c.dtype
     b = params.c.shape[0]
     seeds = list(range(b)) if seeds is None else list(seeds)

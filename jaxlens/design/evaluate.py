@@ -32,7 +32,7 @@ from ..imaging import sampling
 from ..imaging.light import NoLightWarning
 from ..optics import checks, paraxial
 from ..optics.lens import Lens
-from .spec import DesignSpec
+from .spec import DesignSpec, require_spec
 
 MIN_VALID_FRACTION = 0.99
 
@@ -42,9 +42,7 @@ def sensor_field_grid(spec: DesignSpec, n: int = 16) -> tuple[np.ndarray, np.nda
     # n = 0 gave no fields at all and n = 2.5 a TypeError deep in numpy.
     checks.number(n, "n", "sensor_field_grid", lo=1, hi=checks.MAX_MAP_GRID, integer=True,
                   unit="fields per side")
-    if not isinstance(spec, DesignSpec):
-        raise TypeError(f"sensor_field_grid: spec must be a DesignSpec, got "
-                        f"{type(spec).__name__}")
+    require_spec(spec, "sensor_field_grid")
     h, w = spec.sensor_size
     f = spec.focal_length
     u = sampling.grid_axis(n)  # corner to corner; n = 1 evaluated the corner alone
@@ -88,6 +86,7 @@ def evaluate(lens: Lens, spec: DesignSpec, *, n: int = 16,
     """Evaluate a design on the n × n sensor grid (see module docstring)."""
     if not isinstance(lens, Lens):
         raise TypeError(f"evaluate: lens must be a jaxlens Lens, got {type(lens).__name__}")
+    require_spec(spec, "evaluate")  # a dict failed as an AttributeError (spec.epd)
     # min_valid above 1 would call every design invalid, below 0 every one valid.
     checks.number(min_valid, "min_valid", "evaluate", lo=0, hi=1, unit="(fraction of rays)")
     checks.number(n, "n", "evaluate", lo=1, hi=checks.MAX_MAP_GRID, integer=True,

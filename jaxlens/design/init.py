@@ -21,7 +21,7 @@ from ..optics.lens import Lens, Sensor
 from ..optics.materials import Air
 from ..optics.surfaces import EvenAsphere, Stop
 from .params import LensParams, Parameterization
-from .spec import AIR_MIN_GAP, ELEMENT_MIN_THICKNESS, DesignSpec, get_material
+from .spec import AIR_MIN_GAP, ELEMENT_MIN_THICKNESS, DesignSpec, get_material, require_spec
 
 # Ranges of the random gaps before scaling to the track (mm).
 _ELEMENT = (0.5, 1.0)
@@ -125,9 +125,7 @@ def template_lens(spec: DesignSpec, dtype=None) -> Lens:
 def _spec_and_dtype(spec, dtype, where: str) -> None:
     """A ``DesignSpec`` and None or a float dtype (before: None failed as an AttributeError
     deep inside, int32 as an OverflowError from an infinite bound)."""
-    if not isinstance(spec, DesignSpec):
-        raise TypeError(f"{where}: spec must be a jaxlens.design.DesignSpec, got "
-                        f"{type(spec).__name__} {spec!r}")
+    require_spec(spec, where)
     checks.float_dtype(dtype, where)
 
 
@@ -171,9 +169,11 @@ def check_seeds(seeds, where: str, *, distinct: bool = False) -> list[int]:
     """A non-empty list of whole-number seeds in [0, ``MAX_SEED``] (``distinct``: no repeat,
     which would design the same lens twice); returns them as ints."""
     # int() would truncate a seed of 1.5 to 1 and read "12" as two seeds 1 and 2.
-    if isinstance(seeds, str | bytes) or not hasattr(seeds, "__len__") or len(seeds) == 0:
+    # A set (or a dict's keys) has no order: seed labels and starts would not pair up.
+    if isinstance(seeds, str | bytes | set | frozenset | dict) or not hasattr(
+            seeds, "__len__") or len(seeds) == 0:
         raise ValueError(f"{where}: seeds must be a non-empty list of whole numbers "
-                         f">= 0, got {seeds!r}")
+                         f">= 0, got {seeds!r} (a list or tuple, in order: not a set)")
     out = [checks.number(s, "seeds", where, lo=0, integer=True) for s in seeds]
     if max(out) > MAX_SEED:
         raise ValueError(f"{where}: seeds must be whole numbers in [0, {MAX_SEED}] (seeds of "
@@ -186,6 +186,7 @@ def check_seeds(seeds, where: str, *, distinct: bool = False) -> list[int]:
 
 def random_starts(spec: DesignSpec, seeds, dtype=None) -> LensParams:
     """Random starts for a list of integer seeds, stacked on a leading axis."""
+    require_spec(spec, "random_starts")
     seeds = check_seeds(seeds, "random_starts")
     checks.float_dtype(dtype, "random_starts")
     keys = jnp.stack([jax.random.PRNGKey(int(s)) for s in seeds])

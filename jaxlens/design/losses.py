@@ -370,7 +370,9 @@ class Objective(eqx.Module):
         checks.number(self.efl_weight, "efl_weight", "Objective", lo=0,
                       unit="(weight of the EFL residual)")
         if self.efl is not None:
-            checks.number(self.efl, "efl", "Objective", unit="mm (None for a free EFL)")
+            # As DesignSpec.efl: -50 steered the design toward a negative (diverging) lens.
+            checks.number(self.efl, "efl", "Objective", lo=0, lo_open=True,
+                          unit="mm (None for a free EFL)")
 
     def __call__(self, params, args: StageArgs):
         res, aux = design_residuals(params, self.pmap, self.sampling, args, self.gap_bounds,

@@ -41,6 +41,9 @@ def reweighting_mask(
     if not checks.is_traced(rms):  # a NaN made the mean NaN, and every weight 1
         checks.values(rms, "rms", "reweighting_mask", lo=0, unit="(RMS spot error per field)")
     rms = jnp.asarray(rms)
+    if rms.ndim == 0 or rms.shape[-1] == 0:  # before: [] gave [] and 0.5 gave 1.0, no fields
+        raise ValueError(f"reweighting_mask: rms must be [..., K] with K >= 1 fields (RMS spot "
+                         f"error per field), got shape {rms.shape}")
     if area is not None and not checks.is_traced(area) and \
             jnp.shape(area) != jnp.shape(rms)[-1:]:
         raise ValueError(f"reweighting_mask: area must be [K] = {jnp.shape(rms)[-1:]} (one "

@@ -82,7 +82,8 @@ class HullMaterials(eqx.Module):
         names: the catalog material at each corner (for messages), static.
     """
 
-    corners: Float[Array, "V 2"] = eqx.field(converter=jnp.asarray)
+    # Strings were a JAX TypeError naming no argument; bools and complex numbers numbers.
+    corners: Float[Array, "V 2"] = checks.float_field("corners", "HullMaterials", "(nd, Vd)")
     names: tuple[str, ...] = eqx.field(static=True, default=())
 
     def __check_init__(self):

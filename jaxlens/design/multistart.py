@@ -35,7 +35,7 @@ from .materials import (
 from .params import LensParams
 from .robust import RobustObjective, draw_perturbations
 from .solvers import LBFGSB, Adam, DampedLeastSquares, LevenbergMarquardt
-from .spec import DesignSpec
+from .spec import DesignSpec, require_spec
 
 MAX_ROBUST_DRAWS = 64
 """Most perturbation draws of tolerance-aware design (``tolerance_trials``, the classical
@@ -299,6 +299,7 @@ def make_solver_factory(config: DesignConfig, spec: DesignSpec, dtype, materials
     ``materials``: None when the parameters carry no materials (``LensParams.m`` is None),
     True when they are free (continuous selection), False when they are held.
     """
+    require_spec(spec, "make_solver_factory")
     m = spec.asphere_terms
     lower_d = jnp.asarray(gap_bounds(spec)[:-1], dtype)  # element / air / stop minimums
     free = LensParams(c=True, a=True, k=config.lr_k > 0, d=True, m=materials)

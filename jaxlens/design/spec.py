@@ -382,3 +382,12 @@ def _sequence(value, arg: str, what: str) -> tuple:
         raise TypeError(f"DesignSpec: {arg} must be a tuple of {what}, got "
                         f"{type(value).__name__} {value!r}")
     return tuple(value)
+
+
+def require_spec(spec, where: str) -> DesignSpec:
+    """``spec`` if it is a ``DesignSpec``; raises ``TypeError`` naming ``where`` otherwise (a
+    dict or a Lens failed as an AttributeError deep inside)."""
+    if not isinstance(spec, DesignSpec):
+        raise TypeError(f"{where}: spec must be a jaxlens.design.DesignSpec, got "
+                        f"{type(spec).__name__} {spec!r}"[:300])
+    return spec

@@ -73,7 +73,10 @@ def _nearest_existing(path: str) -> str:
 
 def check_writable(path: str, option: str) -> None:
     """Refuse (UsageError) a folder ``path`` that cannot be created or written: its nearest
-    existing ancestor must be a writable folder."""
+    existing ancestor must be a writable folder. An empty name (the working folder, where
+    ``--ablation-out ''`` wrote its columns) is refused too."""
+    if not os.fspath(path).strip():
+        raise UsageError(f"{option} needs a folder name, got {path!r}")
     base = _nearest_existing(os.path.dirname(os.path.abspath(path)))
     if not os.path.isdir(base) or not os.access(base, os.W_OK | os.X_OK):
         raise UsageError(f"{option} {path}: cannot create or write there ({base} is not a "
@@ -119,6 +122,14 @@ class RunFolder:
     """
 
     def __init__(self, path: str, *, overwrite: bool = False, option: str = "--out"):
+        # Before: overwrite="no" (or 1) replaced an earlier run, and "" (the current folder),
+        # None or a number failed late or ran in the working folder.
+        if not isinstance(overwrite, bool):
+            raise UsageError(f"{option}: overwrite must be True or False (--overwrite), got "
+                             f"{overwrite!r}")
+        if not isinstance(path, str | os.PathLike) or not os.fspath(path).strip():
+            raise UsageError(f"{option} needs a folder name, got {path!r}")
+        path = os.fspath(path)
         self.final = os.path.abspath(path)
         self.option = option
         self.overwrite = overwrite

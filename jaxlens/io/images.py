@@ -423,11 +423,10 @@ def _images(reference, test, where):
 
 
 def _data_range(a, b, data_range, where):
-    if data_range is not None:
-        if not (np.isfinite(data_range) and data_range > 0):
-            raise ValueError(f"{where}: data_range must be a finite number > 0 (the "
-                             f"peak-to-peak range of pixel values, 1 for [0, 1] images), got "
-                             f"{data_range!r}")
+    if data_range is not None:  # before: "1" failed as numpy's TypeError of isfinite
+        data_range = checks.number(data_range, "data_range", where, lo=0, lo_open=True,
+                                   unit="(the peak-to-peak range of pixel values, 1 for "
+                                        "[0, 1] images)")
         peak = float(max(np.max(np.abs(a)), np.max(np.abs(b))))
         if data_range >= 255 and peak <= 1:  # 255 for [0, 1] images: 48 dB too good
             raise ValueError(f"{where}: data_range {data_range:g} for images whose values lie "

@@ -192,9 +192,12 @@ def output_file(path: str | os.PathLike, where: str, suffix: str | None = None) 
     ``suffix`` (any case) where one is given, so that the bytes match the name (``save_zmx``
     wrote Zemax text into ``lens.json``, ``save_json`` JSON into ``lens.zmx``). Raises
     ``ValueError`` naming ``where`` and the path (``MissingFolderError``, also a
-    ``FileNotFoundError``, for a missing folder); a writer that writes through a temporary
-    file beside its target failed with ``IsADirectoryError`` or a ``FileNotFoundError`` naming
-    that temporary file (``.lens.json.123.partial``)."""
+    ``FileNotFoundError``, for a missing folder; ``TypeError`` for None); a writer that
+    writes through a temporary file beside its target failed with ``IsADirectoryError`` or a
+    ``FileNotFoundError`` naming that temporary file (``.lens.json.123.partial``)."""
+    if not isinstance(path, str | bytes | os.PathLike):  # None: os.fspath's bare TypeError
+        raise TypeError(f"{where}: path must be a file name (a str or os.PathLike), got "
+                        f"{type(path).__name__} {path!r}")
     p = os.fspath(path)
     ext = os.path.splitext(p)[1]
     if os.path.isdir(p):

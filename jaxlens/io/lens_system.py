@@ -50,10 +50,10 @@ def aperture_of(d: dict, where: str) -> dict:
     of each kind (the top level's ``epd``/``EPD`` first). A kind given under two keys with
     values that differ (by more than 1e-6) is refused: one of them was ignored."""
     ap = d.get("aperture", {})
-    if isinstance(ap, int | float) and not isinstance(ap, bool):
-        ap = {"epd": ap}
-    if not isinstance(ap, dict):
-        raise ValueError(f"{where}: aperture must be an object, got {ap!r}")
+    if not isinstance(ap, dict):  # a bare 5 was read as an EPD of 5 mm (or F/5 meant?)
+        raise ValueError(f"{where}: aperture must be an object, {{\"epd\": mm}}, {{\"fnum\": F}} "
+                         f"or {{\"stop_semi_diameter\": mm}} (a bare number could be either), "
+                         f"got {ap!r}")
     given: dict = {}
 
     def add(kind, label, v):

@@ -108,6 +108,8 @@ _REL = 1e-6  # wavelength bounds are compared with this relative slack (float32 
 def fmt(v) -> str:
     """A value or the first few values of an array, for messages."""
     a = np.asarray(v)
+    if a.dtype.kind not in "iuf":  # None, np.True_, 5+1j, an object: as written
+        return repr(v) if len(repr(v)) <= 60 else repr(v)[:57] + "..."
     if a.size == 1:
         return f"{float(a.reshape(-1)[0]):g}"
     return np.array2string(a.reshape(-1)[:8], precision=6, separator=", ") + (
@@ -196,15 +198,13 @@ def number(value, arg: str, where: str, *, lo=None, hi=None, lo_open=False, hi_o
                       unit=unit)
     span = interval(lo, hi, lo_open, hi_open)
     kind = "a whole number" if integer else "a finite number"
-    u = f" {unit}" if unit else ""
     shown = repr(value) if isinstance(value, (str, bool, int, float)) else fmt(value)
-    msg = f"{where}: {arg} must be {kind} in {span}{u}, got {shown}"
-    if isinstance(value, bool) or isinstance(value, str):
-        raise ValueError(msg)
-    try:
+    msg = f"{where}: {arg} must be {kind} in {span}{' ' + unit if unit else ''}, got {shown}"
+    if isinstance(value, (bool, np.bool_, str)) or np.iscomplexobj(value):  # np.True_: 1,
+        raise ValueError(msg)  # 5+1j: 5 (numpy dropped the imaginary part)
+    a = np.zeros(0)  # what np.asarray cannot read is refused as not one number
+    with contextlib.suppress(TypeError, ValueError):
         a = np.asarray(value, dtype=float)
-    except (TypeError, ValueError):
-        raise ValueError(msg) from None
     if a.size != 1:
         raise ValueError(msg)
     v = float(a.reshape(-1)[0])
@@ -275,8 +275,8 @@ def values(x, arg: str, where: str, *, lo=None, hi=None, lo_open=False, hi_open=
 
     if is_traced(x):
         return eqx.error_if(x, jnp.any(bad_of(jnp.asarray(x), jnp)), msg)
-    try:  # a string too, as number() refuses one: np.asarray("4", float) read it as 4.0
-        if np.asarray(x).dtype.kind in "US":
+    try:  # strings, bools, complex as number() refuses them: "4" was read as 4.0, True 1
+        if np.asarray(x).dtype.kind in "USbc":
             raise TypeError(x)
         a = np.asarray(x, dtype=float)
     except (TypeError, ValueError):
