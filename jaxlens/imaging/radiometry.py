@@ -28,7 +28,10 @@ Method:
     the field (the cos⁴γ inside Ω_p is the same at every field), and the relative
     illumination is the vignetting (the share of the cone the lens passes, found as above
     in slope space, 3·tan u across) times the change of the local areal magnification
-    |det ∂x/∂X| from the axis (distortion).
+    |det ∂x/∂X| from the axis (distortion). The cone is bounded by the lens's object NA
+    (|s| <= tan u, its system aperture) as well as by the lens's apertures: a stop wider
+    than the NA's beam adds no light, and an unbounded stop stays unbounded (a finite
+    lens's gets the EPD's radius).
 
     The Jacobians come from forward-mode autodiff of the centroid with the valid set held
     fixed. Vignetting, the cos⁴ law, pupil aberrations and distortion all enter. The
@@ -153,8 +156,15 @@ def _irradiance(lens: Lens, t, depth, wl, n_coarse, n_fine, newton_iters):
         d = v / jnp.linalg.norm(v, axis=-1, keepdims=True)
         return Rays(jnp.broadcast_to(p, o_plane.shape), d, wl)
 
+    def passed(pts, out):
+        # A telecentric lens's object NA bounds its cone (its system aperture): a stop wider
+        # than the cone passes no more light than the NA lets in.
+        if not tele:
+            return out.valid
+        return out.valid & (jnp.sum(pts * pts, -1) <= r_ep * r_ep)
+
     def valid_fn(pts):
-        return trace(lens, launch(t, pts), newton_iters=newton_iters, uniform=True).valid
+        return passed(pts, trace(lens, launch(t, pts), newton_iters=newton_iters, uniform=True))
 
     # The part of the entrance-pupil plane whose rays reach the sensor (its area exactly,
     # as a polygon), then a grid over its bounding box for the centroid.
@@ -166,12 +176,13 @@ def _irradiance(lens: Lens, t, depth, wl, n_coarse, n_fine, newton_iters):
     def centroid(s):
         rays = launch(s, fine)
         out = trace(lens, rays, newton_iters=newton_iters, uniform=True)
-        w = out.valid.astype(t.dtype)
+        ok = passed(fine, out)
+        w = ok.astype(t.dtype)
         if depth is not None:
             w = w * rays.direction[..., 2] ** 4
         tot = jnp.maximum(jnp.sum(w), jnp.finfo(t.dtype).tiny)
         cen = jnp.sum(w[:, None] * out.origin[:, :2], 0) / tot
-        mean_cos4 = tot / jnp.maximum(jnp.sum(out.valid), 1)
+        mean_cos4 = tot / jnp.maximum(jnp.sum(ok), 1)
         return cen, (mean_cos4, rays.direction[0, 2])
 
     eye = jnp.eye(2, dtype=t.dtype)
@@ -268,7 +279,10 @@ def relative_illumination(
     checks.lens_intact(lens, where)
     wl = checks.wavelengths(lens, wl, where)
     depth = sampling.lens_depth(lens, depth, where)
-    ri, e, cen = relative_illumination_samples(apertured(lens), f, depth, wl,
+    # A telecentric lens's cone is bounded by its NA (see the module notes), not by a stop
+    # given the paraxial marginal ray's radius, which the real rays of the cone overstep.
+    ri, e, cen = relative_illumination_samples(lens if lens.telecentric_object else
+                                               apertured(lens), f, depth, wl,
                                                n_coarse=max(16, pupil // 3), n_fine=int(pupil),
                                                newton_iters=newton_iters)
     return RelativeIllumination(f, cen, ri, e)
