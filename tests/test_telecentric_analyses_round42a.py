@@ -247,3 +247,36 @@ def test_heights_are_checked_before_tracing():
         aberrations.field_curvature(lens, jnp.array([0.0, jnp.inf]))
     with pytest.raises(ValueError, match=r"object heights \(mm\)"):
         radiometry.relative_illumination(lens, jnp.zeros((2, 3)))
+
+
+def test_report_of_a_telecentric_lens_gives_the_analyses_numbers():
+    """The report (before: refused) gives each object height's chief ray, distortion against
+    m·h, foci and the Seidel sums at the largest height: optiland's numbers."""
+    from jaxlens.analysis import report
+
+    lens, ref = jl.load(DATA / "tele_doublet_exact.zmx"), _ref("tele_doublet_exact")
+    data = report.report_data(lens)
+    json.dumps(data, allow_nan=False)  # the CLI's --json
+    assert data["object_space_telecentric"] and data["units"]["object_height"] == "mm"
+    np.testing.assert_allclose(data["magnification"], ref["paraxial_magnification"],
+                               rtol=1e-13)
+    want = {tuple(r["height"]): r for r in ref["distortion"]}
+    fc = ref["field_curvature"]
+    k = {tuple(h): i for i, h in enumerate(fc["heights"])}
+    for f in data["fields"]:
+        h = (0.0, f["height"]) if np.ndim(f["height"]) == 0 else tuple(f["height"])
+        np.testing.assert_allclose(f["distortion"], want[h]["percent_ftan"], atol=1e-9)
+        np.testing.assert_allclose(f["ideal_image_height"], want[h]["ideal"], atol=1e-13)
+        np.testing.assert_allclose(f["focus_tangential"], fc["tangential"][1][k[h]], atol=2e-9)
+        np.testing.assert_allclose(f["focus_sagittal"], fc["sagittal"][1][k[h]], atol=2e-9)
+    sd = data["seidel"]
+    assert sd["field"] == 8.0
+    np.testing.assert_allclose(-np.array(list(sd["sums"].values())[:5]),
+                               ref["seidel"]["telecentric_rays"]["seidels"], atol=1e-14)
+    text = report.format_report(data, lens)
+    assert "object height 8.0000 mm" in text and "Dist m*h" in text
+    assert "Entrance pupil" not in text and "field of view" not in text
+    other = report.with_fields_and_wavelengths(lens, [[0.0, 2.0], [3.0, -4.0]])
+    np.testing.assert_allclose(np.asarray(other.fields), [[0.0, 2.0], [3.0, -4.0]])
+    with pytest.raises(ValueError, match=r"--fields.*mm"):
+        report.with_fields_and_wavelengths(lens, [0.0, np.inf])
