@@ -280,3 +280,21 @@ def test_report_of_a_telecentric_lens_gives_the_analyses_numbers():
     np.testing.assert_allclose(np.asarray(other.fields), [[0.0, 2.0], [3.0, -4.0]])
     with pytest.raises(ValueError, match=r"--fields.*mm"):
         report.with_fields_and_wavelengths(lens, [0.0, np.inf])
+
+
+def test_magnification_of_finite_and_infinite_conjugates():
+    """``paraxial.magnification`` is n u/(n′ u′) for any finite object: an ideal f = 50 mm
+    lens images 75 mm in front of it at 150 mm behind, m = −2; in water (n = 1.333) the
+    same holds at a reduced distance 75·1.333 mm; an object at infinity gives 0."""
+    air = jl.Air()
+
+    def ideal(d, medium=air):
+        return jl.Lens(surfaces=(Stop(), ParaxialSurface(focal_length=50.0)),
+                       thickness=jnp.array([0.0, 150.0]), materials=(air, air), stop=0,
+                       epd=10.0, object_distance=d, object_material=medium)
+
+    np.testing.assert_allclose(float(paraxial.magnification(ideal(75.0))), -2.0, rtol=1e-14)
+    water = jl.ModelGlass(nd=1.333, vd=55.0)  # nd at the lens's d-line wavelength
+    np.testing.assert_allclose(float(paraxial.magnification(ideal(75.0 * 1.333, water))),
+                               -2.0, rtol=1e-14)
+    assert float(paraxial.magnification(ideal(None))) == 0.0

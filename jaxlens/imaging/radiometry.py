@@ -204,7 +204,8 @@ def _irradiance(lens: Lens, t, depth, wl, n_coarse, n_fine, newton_iters):
 # the fields, depth and wavelength.
 @checks.checked_core(forward_mode_jit)
 def relative_illumination_samples(lens, fields, depth, wl, *, n_coarse, n_fine, newton_iters):
-    """Relative illumination at ``fields`` (degrees) of an apertured lens, jitted core of
+    """Relative illumination at ``fields`` (degrees; object heights in mm for an object-space
+    telecentric lens) of an apertured lens, jitted core of
     ``relative_illumination``: (ri, irradiance, footprint centre) per field."""
     dtype = fields.dtype
     lens = lens.astype(dtype)
