@@ -298,3 +298,18 @@ def test_magnification_of_finite_and_infinite_conjugates():
     np.testing.assert_allclose(float(paraxial.magnification(ideal(75.0 * 1.333, water))),
                                -2.0, rtol=1e-14)
     assert float(paraxial.magnification(ideal(None))) == 0.0
+
+
+def test_plots_label_object_heights():
+    """The field-curvature/distortion figure and the Seidel diagram (the report's --plot) now
+    draw a telecentric lens, labelled in object heights (mm), not degrees."""
+    import matplotlib
+
+    matplotlib.use("Agg")
+    from jaxlens import plot
+
+    lens = jl.load(DATA / "tele_triplet_far.zmx")
+    fig = plot.plot_field_curvature(lens, wavelengths=lens.primary_wavelength)
+    assert fig.axes[0].get_ylabel() == "object height y (mm)"
+    assert fig.axes[1].get_legend().get_texts()[0].get_text() == "against m·h"
+    assert "object height 10.00 mm" in plot.plot_seidel(lens).axes[0].get_title()
