@@ -394,7 +394,9 @@ def _fan_grid(fields, fans, lim, scale, ylabels, title, lens=None) -> Figure:
 def plot_field_curvature(lens, *, wavelengths=None, title: str | None = None) -> Figure:
     """Field curvature (tangential foci dashed, sagittal solid, mm from the image surface,
     per wavelength) and distortion (% against f·tanθ, primary wavelength) over θy from 0 to
-    the largest field (``jaxlens.analysis.aberrations.field_curvature``, ``spots.distortion``)."""
+    the largest field (``jaxlens.analysis.aberrations.field_curvature``, ``spots.distortion``);
+    for an object-space telecentric lens over the object height y (mm), distortion against
+    m·h."""
     import jax.numpy as jnp
 
     from .analysis.aberrations import default_fields
@@ -415,14 +417,16 @@ def plot_field_curvature(lens, *, wavelengths=None, title: str | None = None) ->
         ax.plot(np.asarray(fc.sagittal[i]), th, color=c, lw=1, label=f"{w:.3f} S")
     ax.axvline(0, color="k", lw=0.4)
     ax.set_xlabel("focus from the image surface (mm)")
-    ax.set_ylabel("field θy (deg)")
+    tele = lens.telecentric_object  # object heights (mm), distortion against m·h
+    ax.set_ylabel("object height y (mm)" if tele else "field θy (deg)")
     ax.set_ylim(0, max(float(th[-1]), 1e-9))
     ax.grid(alpha=0.3)
     ax.legend(fontsize=6)
     ax.set_title("field curvature", fontsize=8)
     ax = fig.add_subplot(1, 2, 2)
     # Distortion is 0/0 on axis: drawn from the first field off it.
-    ax.plot(np.asarray(dist.percent_ftan)[1:], th[1:], color="k", lw=1, label="against f·tanθ")
+    ax.plot(np.asarray(dist.percent_ftan)[1:], th[1:], color="k", lw=1,
+            label="against m·h" if tele else "against f·tanθ")
     ax.plot(np.asarray(dist.percent_paraxial)[1:], th[1:], color="k", lw=1, ls="--",
             label="against the paraxial chief ray (OpticStudio's F-Tan)")
     ax.axvline(0, color="k", lw=0.4)
@@ -656,7 +660,9 @@ def plot_seidel(lens, *, title: str | None = None) -> Figure:
     ax.set_ylabel(f"waves at {float(s.wavelength):.4f} µm")
     ax.grid(alpha=0.3, axis="y")
     ax.legend(fontsize=6, ncol=2)
-    ax.set_title(title or f"Seidel diagram, field {float(s.field):.1f}° "
+    where = (f"object height {float(s.field):.2f} mm" if lens.telecentric_object
+             else f"field {float(s.field):.1f}°")
+    ax.set_title(title or f"Seidel diagram, {where} "
                  f"({lens.name or 'lens'})", fontsize=9)
     return fig
 

@@ -134,12 +134,16 @@ def test_image_objective_checks_its_sensor_and_scene_size():
 
 
 def test_report_refusal_of_a_telecentric_lens_names_what_to_use():
-    """The report's refusal (round 38a) names the analyses that take object heights; the
-    first of them, ``rms_spot``, runs on the same lens (the rest: the probe's controls)."""
+    """The report refused a telecentric lens (round 38a), naming the analyses that take
+    object heights; since round 42a it reports it (object heights, distortion against
+    m·h), and what still refuses such a lens (``image_scale``) names what to use."""
     lens = jl.load(DATA / "zmx38a" / "tele_doublet_obna.zmx")
-    with pytest.raises(ValueError, match=r"report: the lens is object-space telecentric .*"
-                       r"paraxial_data gives its first-order data.*rms_spot"):
-        report.report_data(lens)
+    data = report.report_data(lens)
+    assert data["object_space_telecentric"]
+    assert [f["height"] for f in data["fields"]] == [0.0, 4.0, 8.0]
+    with pytest.raises(ValueError, match=r"image_scale: the lens is object-space telecentric "
+                       r".*paraxial.magnification.*rms_spot"):
+        jl.imaging.aiming.image_scale(lens)
     spot = jl.analysis.rms_spot(lens, float(np.max(np.abs(np.asarray(lens.fields)))))
     assert np.all(np.isfinite(np.asarray(spot.polychromatic)))
 

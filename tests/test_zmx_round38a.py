@@ -13,12 +13,12 @@ import pathlib
 import warnings
 
 import jax
+import jax.numpy as jnp
 import numpy as np
 import pytest
 
 from jaxlens import analysis
-from jaxlens.analysis import report
-from jaxlens.imaging import psf, radiometry, sampling
+from jaxlens.imaging import aiming, psf, radiometry, render, sampling
 from jaxlens.io import lensfile, zmx
 from jaxlens.optics import paraxial
 from jaxlens.tracing import forward
@@ -91,14 +91,20 @@ def test_pupil_position_refused_and_paraxial_data_say_infinity():
 
 
 def test_analyses_that_need_field_angles_refuse_clearly():
-    """Distortion, Seidel sums, field curvature, the report and the relative illumination
-    are for field angles toward a finite entrance pupil: each refuses, before tracing."""
+    """The image scale per tan θ and the render (pixels as field angles) need field angles
+    toward a finite entrance pupil: each refuses, before tracing, naming what to use.
+    (Distortion, Seidel sums, field curvature, the report and the relative illumination
+    refused here until round 42a, which gave them object heights:
+    tests/test_telecentric_analyses_round42a.py.)"""
     lens = _load("tele_doublet_obna")
-    for f in (lambda: analysis.distortion(lens), lambda: analysis.seidel(lens),
-              lambda: analysis.field_curvature(lens), lambda: report.report_data(lens),
-              lambda: radiometry.relative_illumination(lens, np.array([4.0]))):
-        with pytest.raises(ValueError, match="object-space telecentric"):
+    for f in (lambda: aiming.image_scale(lens),
+              lambda: render.render(lens, jnp.zeros((4, 4, 1)), spp=1,
+                                    key=jax.random.PRNGKey(0))):
+        with pytest.raises(ValueError, match="object-space telecentric.*paraxial.magnification"):
             f()
+    assert np.isfinite(float(analysis.seidel(lens).sums[0]))
+    assert np.isfinite(np.asarray(radiometry.relative_illumination(lens, np.array([4.0]),
+                                                                   pupil=16).ri)).all()
     with pytest.raises(ValueError, match="ray aiming does not apply"):
         sampling.field_rays(lens, 4.0, np.zeros((1, 2)), depth=lens.object_distance,
                             aim="real")

@@ -55,6 +55,8 @@ report's refusal names for a telecentric lens (rms_spot, spot_rays, chief_ray, r
 opd_fan, wavefront, encircled_energy, psf, mtf) run on one; a virtual object's paraxial
 data, spots and ``field_rays(depth=-50)``; an afocal lens's angular spot, wavefront and
 report; a fold's spots; configuration 2 of the zoom file; the classical command's defaults.
+Since round 42a the distortion and the report of a telecentric lens (which refused it here)
+are controls too: they take its object heights (tests/test_telecentric_analyses_round42a.py).
 
 Before (base b927019) and after (branch probe40b), the same 185 probes,
 ``PYTHONPATH=<tree> python tools/audit40b_probe.py`` from the tree's root, 1 to 4 minutes
@@ -169,9 +171,10 @@ def telecentric():
     probe("semi_diameters_and_fans telecentric fan_fields [0, 95] mm (control)", lambda: np.asarray(A.spots.semi_diameters_and_fans(tele, np.array([0.0, 95.0]), np.zeros((3, 2)))[0]), good=True)
     probe("vignetting_for_fields telecentric fields inf", lambda: S.vignetting_for_fields(L(tele, vignetting=np.zeros((3, 5))), np.array([np.inf])), "fields", "mm")
     probe("entrance_pupil_z telecentric", lambda: jl.paraxial.entrance_pupil_z(tele), "telecentric")
-    probe("distortion telecentric", lambda: A.distortion(tele), "telecentric")
-    probe("render telecentric", lambda: jl.render(tele, np.ones((8, 8, 3)), spp=4, key=jax.random.key(0), sensor=jl.Sensor((8, 8), 0.01)), "telecentric")
-    probe("report telecentric (names what to use)", lambda: REP.report_data(tele), "telecentric", "rms_spot", "psf")
+    # Round 42a: distortion and the report take a telecentric lens's object heights (controls).
+    probe("[control] distortion telecentric", lambda: A.distortion(tele).percent_ftan, good=True)
+    probe("render telecentric", lambda: jl.render(tele, np.ones((8, 8, 3)), spp=4, key=jax.random.key(0), sensor=jl.Sensor((8, 8), 0.01)), "telecentric", "paraxial.magnification")
+    probe("[control] report telecentric", lambda: REP.report_data(tele)["fields"], good=True)
     # What the report's refusal names instead, each run on the telecentric lens (controls).
     f = float(np.max(np.abs(np.asarray(tele.fields))))
     probe("[control] rms_spot telecentric", lambda: A.rms_spot(tele, f).polychromatic, good=True)
@@ -376,7 +379,7 @@ def general():
 def clis():
     cmd = module_cli
 
-    probe("cli report telecentric file", cmd("report", TELE), "telecentric", "rms_spot")
+    probe("cli report telecentric file (control: round 42a)", cmd("report", TELE), good=True)
     probe("cli report config 0 of the zoom file", cmd("report", ZOOM, "--config", "0"), "config")
     probe("cli report --config 2 of a .json", cmd("report", COOKE, "--config", "2"), "config")
     probe("cli report --wavelengths 0.0005876 (mm)", cmd("report", COOKE, "--wavelengths", "0.0005876"), "wavelength")

@@ -30,7 +30,9 @@ Conventions (those of Zemax and optiland):
     plane of e and z, e the plane's unit vector in x, y: u × v = (u·e) v_z − u_z (v·e)), and
     the focus is s·D_z from the image surface. Astigmatism is tangential −
     sagittal. A focus at infinity (image space afocal for that fan) is ±inf; a field whose
-    chief ray does not reach the image is NaN.
+    chief ray does not reach the image is NaN. An object-space telecentric lens's fields
+    are object heights (mm), y or (x, y), its chief rays parallel to the axis (pupil centre,
+    ``sampling.field_rays``) and its azimuth a = (x, y)/|(x, y)|; the foci are found alike.
 
     Against optiland 0.6.3 (``tests/test_conventions_vs_optiland.py``: the Cooke triplet,
     the double Gauss at infinity and at 300 mm, a triplet with even aspheres; F, d and C
@@ -48,8 +50,8 @@ import numpy as np
 from jaxtyping import Array, Bool, Float
 
 from ..imaging.sampling import field_rays, lens_aim, lens_depth
-from ..imaging.telecentric import lens_field
-from ..optics import checks, paraxial
+from ..imaging.telecentric import azimuth, largest_height, lens_field, lens_fields
+from ..optics import checks
 from ..optics.lens import Lens
 from ..tracing.forward import DEFAULT_NEWTON_ITERS, aimed_jit, forward_mode_jit, trace
 
@@ -73,7 +75,7 @@ class RayFan(eqx.Module):
 class FieldCurvature(eqx.Module):
     """Tangential and sagittal foci (mm from the image surface along z) of F fields."""
 
-    fields: Float[Array, " F"] | Float[Array, "F 2"]  # θy, or (θx, θy), degrees
+    fields: Float[Array, " F"] | Float[Array, "F 2"]  # θy, or (θx, θy), deg (mm: telecentric)
     wavelengths: Float[Array, " W"]
     tangential: Float[Array, "W F"]
     sagittal: Float[Array, "W F"]
@@ -170,9 +172,12 @@ def _ray_fan(lens, field, wl, *, n, depth, aim) -> RayFan:
 
 def default_fields(lens: Lens, count: int = CURVE_FIELDS) -> Array:
     """``count`` θy angles from 0 to the lens's largest field (deg): for ``[F, 2]`` fields
-    (θx, θy) the largest radial angle, tan²θ = tan²θx + tan²θy."""
+    (θx, θy) the largest radial angle, tan²θ = tan²θx + tan²θy. For an object-space
+    telecentric lens ``count`` object heights y from 0 to its largest (radial) height (mm)."""
     checks.number(count, "count", "default_fields", lo=1, hi=checks.MAX_SAMPLES, integer=True,
                   unit="fields")
+    if lens.telecentric_object:
+        return jnp.linspace(0.0, largest_height(lens), count)
     f = jnp.asarray(lens.fields)
     t = jnp.tan(jnp.deg2rad(f))
     tmax = jnp.max(jnp.abs(t)) if f.ndim <= 1 else jnp.max(jnp.sqrt(jnp.sum(t * t, -1)))
@@ -187,7 +192,9 @@ def field_curvature(lens: Lens, fields=None, wavelengths=None, *, depth=None,
         lens: the lens.
         fields: θy angles in degrees, ``[F]``, or (θx, θy) pairs, ``[F, 2]`` (tangential
             plane along each field's azimuth); default ``default_fields(lens)`` (θy from 0 to
-            the largest field in 11 steps).
+            the largest field in 11 steps). For an object-space telecentric lens object
+            heights in mm, y ``[F]`` or (x, y) ``[F, 2]`` (tangential plane along (x, y)),
+            their chief rays parallel to the axis; default 0 to its largest height.
         wavelengths: µm, one value or ``[W]``; default the lens's wavelengths.
         depth: object distance (mm) for a finite object; default the lens's object.
         aim: ``"paraxial"``, ``"real"`` or ``"real_marginal"`` (chief ray through the
@@ -199,11 +206,14 @@ def field_curvature(lens: Lens, fields=None, wavelengths=None, *, depth=None,
         difference).
     """
     checks.focal_image(lens, "field_curvature")
-    # Its fields and azimuths are angles (tan θ); an object-space telecentric lens's are
-    # object heights.
-    paraxial.finite_pupil(lens, "field_curvature")
-    f, wl = _inputs(lens, "field_curvature",
-                    default_fields(lens) if fields is None else fields, wavelengths, pairs=True)
+    if not isinstance(lens, Lens):
+        raise TypeError(f"field_curvature: lens must be a jaxlens.Lens, got "
+                        f"{type(lens).__name__}")
+    if fields is None:
+        fields = default_fields(lens)
+    elif lens.telecentric_object:  # object heights (mm): finite, checked before the trace
+        lens_fields(lens, fields, "field_curvature")
+    f, wl = _inputs(lens, "field_curvature", fields, wavelengths, pairs=True)
     return _field_curvature(lens, f, wl, depth=lens_depth(lens, depth, "field_curvature"),
                             aim=lens_aim(lens, aim, "field_curvature"))
 
@@ -232,7 +242,7 @@ def _field_curvature(lens, fields, wl, *, depth, aim) -> FieldCurvature:
     centre = jnp.zeros((2, 2), wl.dtype)
 
     def one(field, w):
-        a = _azimuth(field)
+        a = azimuth(field) if lens.telecentric_object else _azimuth(field)
         planes = (a, jnp.stack([a[1], -a[0]]))
 
         def image_ray(pupil):

@@ -44,6 +44,7 @@ import jax.numpy as jnp
 import numpy as np
 
 from ..imaging import sampling
+from ..imaging.telecentric import lens_fields
 from ..io.files import load
 from ..io.lensfile import nm_to_um
 from ..io.zmx import configurations
@@ -62,11 +63,11 @@ from ..tracing.forward import aimed_jit
 from . import spots as analysis
 from . import stop_clip
 from .report_afocal import afocal_report_data, format_afocal_report
-from .report_cells import aiming_line, bucketed_field_curvature, wavefront_lines
+from .report_cells import aiming_line, bucketed_field_curvature, seidel_summary, wavefront_lines
 from .report_cells import cell as _num
 from .report_cells import json_number as _f
 from .report_cells import wavefront_summary as _wavefront_summary
-from .third_order import SEIDEL_TERMS, WAVEFRONT_TERMS, seidel
+from .report_telecentric import format_telecentric_report, telecentric_report_data
 
 UNITS = {
     "length": "mm",
@@ -151,7 +152,8 @@ def with_fields_and_wavelengths(lens: Lens, fields=None, wavelengths=None) -> Le
     dtype = lens.thickness.dtype
     # Before np.asarray(..., float64), which reads "5" as 5 and True as 1.
     if fields is not None:
-        checks.real_values(fields, "--fields", "report", "deg")
+        checks.real_values(fields, "--fields", "report",
+                           "mm" if lens.telecentric_object else "deg")
     if wavelengths is not None:
         checks.real_values(wavelengths, "--wavelengths", "report", "µm")
     for arg, v in (("--fields", fields), ("--wavelengths", wavelengths)):
@@ -165,7 +167,7 @@ def with_fields_and_wavelengths(lens: Lens, fields=None, wavelengths=None) -> Le
         if len(shape) > 2 or (len(shape) == 2 and shape[1] != 2) or np.size(fields) == 0:
             raise ValueError(f"report: --fields must be θy angles in degrees, one value or "
                              f"[F], or (θx, θy) pairs [F, 2], with F >= 1, got shape {shape}")
-        checks.field_angles(np.asarray(fields, np.float64), "report", "--fields")
+        lens_fields(lens, np.asarray(fields, np.float64), "report", "--fields")  # mm or deg
         f = jnp.asarray(np.atleast_1d(np.asarray(fields, np.float64)), dtype)
         rows = np.asarray(f).reshape(f.shape[0], -1)
         if np.unique(rows, axis=0).shape[0] < rows.shape[0]:  # a row reported twice
@@ -197,21 +199,21 @@ def report_data(lens: Lens, *, fields=None, wavelengths=None, wavefront: bool = 
 
     Args:
         lens: the lens.
-        fields: field angles in degrees (y); default the lens's fields.
+        fields: field angles in degrees (y); default the lens's fields (object heights in
+            mm for an object-space telecentric lens: see ``report_telecentric``).
         wavelengths: µm; default the lens's wavelengths.
         wavefront: also give each field's wavefront error (``analysis.wavefront`` at the
             primary wavelength): RMS and P-V in waves, and Maréchal's Strehl ratio.
     """
-    # Distortion, field curvature and the Seidel sums are for field angles toward an
-    # entrance pupil at a finite distance.
-    paraxial.finite_pupil(lens, "report")
     lens = with_fields_and_wavelengths(lens, fields, wavelengths)
     if wavelengths is None and not checks.is_traced(lens.wavelengths):
         # Checked here, not as an EquinoxRuntimeError from inside the compiled trace.
         checks.wavelengths(lens, lens.wavelengths, "report", "the lens's wavelengths")
         checks.material_indices(lens, lens.wavelengths, "report", "the lens's wavelengths")
-    if not checks.is_traced(lens.fields):  # its compiled core trusts them
-        checks.field_angles(lens.fields, "report", "the lens's fields")
+    if not checks.is_traced(lens.fields):  # its compiled core trusts them (mm or deg)
+        lens_fields(lens, lens.fields, "report", "the lens's fields")
+    if lens.telecentric_object:  # object heights, chief rays parallel to the axis
+        return telecentric_report_data(lens, wavefront=wavefront, notes=_notes(lens))
     if lens.afocal_image:  # an image at infinity: angles, not heights
         return afocal_report_data(lens, wavefront=wavefront, notes=_notes(lens))
     # On the host once: op by op on the device, the table below compiled a program per
@@ -290,22 +292,9 @@ def report_data(lens: Lens, *, fields=None, wavelengths=None, wavefront: bool = 
         "wavelengths": [float(w) for w in wl],
         "primary_wavelength": float(wl[lens.primary]),
         "fields": out_fields,
-        "seidel": _seidel_sums(lens),
+        "seidel": seidel_summary(lens),
         "notes": _notes(lens),
     }
-
-
-def _seidel_sums(lens: Lens) -> dict:
-    """The lens's Seidel sums (mm) and their wavefront terms (waves) at the primary
-    wavelength and largest field, or why third-order theory does not apply."""
-    try:
-        s = seidel(lens)
-    except ValueError as e:
-        return {"refused": str(e)}
-    return {"field": _f(s.field), "wavelength": _f(s.wavelength),
-            "sums": {k: _f(v) for k, v in zip(SEIDEL_TERMS, s.sums, strict=True)},
-            "wavefront": {k: _f(v) for k, v in zip(WAVEFRONT_TERMS, s.wavefront(),
-                                                     strict=True)}}
 
 
 def _notes(lens: Lens) -> list[str]:
@@ -443,6 +432,8 @@ def format_report(data: dict, lens: Lens | None = None) -> str:
     """The human-readable report (Zemax-like prescription and field tables)."""
     if data.get("afocal_image_space"):
         return format_afocal_report(data, None if lens is None else _surface_table(lens))
+    if data.get("object_space_telecentric"):
+        return format_telecentric_report(data, None if lens is None else _surface_table(lens))
     L = []
     title = data.get("name") or "(unnamed lens)"
     L.append(f"jaxlens lens report: {title}")
@@ -567,7 +558,8 @@ def register(subparsers) -> None:
         type=checks.cli_float,
         nargs="+",
         metavar="DEG",
-        help="field angles in degrees (default: the lens's fields)",
+        help="field angles in degrees, object heights in mm for an object-space telecentric "
+        "lens (default: the lens's fields)",
     )
     p.add_argument(
         "--wavelengths",

@@ -1,6 +1,6 @@
 """Pieces that the lens report and the afocal report share: JSON numbers, table cells, and
-each field's wavefront error (summary and table); and the field-curvature call that the
-report and its ``--plot`` figure share (``bucketed_field_curvature``)."""
+each field's wavefront error (summary and table), the Seidel sums; and the field-curvature
+call that the report and its ``--plot`` figure share (``bucketed_field_curvature``)."""
 
 from __future__ import annotations
 
@@ -10,6 +10,7 @@ import jax.numpy as jnp
 
 from ..optics.lens import Lens
 from .aberrations import FieldCurvature, field_curvature
+from .third_order import SEIDEL_TERMS, WAVEFRONT_TERMS, seidel
 from .wavefront_error import MARECHAL_MAX_RMS
 from .wavefront_error import wavefront as wavefront_map
 
@@ -102,3 +103,17 @@ def bucketed_field_curvature(lens: Lens, fields, wavelengths=None) -> FieldCurva
     fc = field_curvature(lens, jnp.concatenate([f, jnp.full((pad,), f[-1], f.dtype)]),
                          wavelengths)
     return FieldCurvature(f, fc.wavelengths, fc.tangential[:, :n], fc.sagittal[:, :n])
+
+
+def seidel_summary(lens: Lens) -> dict:
+    """The lens's Seidel sums (mm) and their wavefront terms (waves) at the primary
+    wavelength and largest field (angle in deg, or object height in mm), or why third-order
+    theory does not apply."""
+    try:
+        s = seidel(lens)
+    except ValueError as e:
+        return {"refused": str(e)}
+    return {"field": json_number(s.field), "wavelength": json_number(s.wavelength),
+            "sums": {k: json_number(v) for k, v in zip(SEIDEL_TERMS, s.sums, strict=True)},
+            "wavefront": {k: json_number(v) for k, v in zip(WAVEFRONT_TERMS, s.wavefront(),
+                                                            strict=True)}}

@@ -12,7 +12,8 @@ Conventions:
     Polychromatic values pool the rays of all wavelengths with equal weights.
     Distortion is given in percent against n·EFL·tanθ (n the object-space index: the front
     focal length, EFL itself in air) and against the paraxial chief ray height on the image
-    surface.
+    surface; for an object-space telecentric lens (fields: object heights h in mm) against
+    m·h, m the paraxial magnification.
 """
 
 from __future__ import annotations
@@ -25,7 +26,7 @@ from jaxtyping import Array, Bool, Float
 
 from ..imaging.light import warn_dark
 from ..imaging.sampling import field_rays, lens_aim, lens_depth, pupil_grid, unit_disc_limit
-from ..imaging.telecentric import lens_fields
+from ..imaging.telecentric import lens_fields, radial_heights
 from ..optics import checks, paraxial, travel
 from ..optics.lens import Lens
 from ..optics.rays import Rays
@@ -308,6 +309,14 @@ class Distortion(eqx.Module):
     general 1 + ``percent_ftan``/100 = (1 + ``percent_paraxial``/100) ·
     ``paraxial_height``/``f_tan`` (the Cooke triplet of the reference cases, its image
     surface 0.23 mm before the paraxial focus: −0.386 % against +0.062 % at 20°).
+
+    An object-space telecentric lens (``Lens.object_na``): ``field`` holds object heights
+    (mm, y or (x, y); the heights radial as above, along (x, y)), the chief ray leaves
+    each object point parallel to the axis, and ``f_tan`` holds the distortion-free height
+    m·h, m the paraxial magnification (``paraxial.magnification``: where the paraxial chief
+    ray meets the paraxial image plane), so ``percent_ftan`` = 100·(y_real − m·h)/(m·h);
+    ``paraxial_height`` is that chief ray's height on the image surface, as above.
+    ``f_theta`` and ``percent_ftheta`` are NaN: there is no field angle.
     """
 
     field: Float[Array, " F"] | Float[Array, "F 2"]
@@ -344,7 +353,9 @@ def distortion(lens: Lens, fields=None, wavelength=None, *, aim=None) -> Distort
     lens's own object (``lens.object_distance``; at a finite distance a field angle is the
     chief ray's angle at the entrance pupil, as in ``sampling.object_point``).
 
-    ``fields`` are degrees, ``[F]`` (θy) or ``[F, 2]`` (θx, θy); default ``lens.fields``.
+    ``fields`` are degrees, ``[F]`` (θy) or ``[F, 2]`` (θx, θy); default ``lens.fields``
+    (object heights in mm, y or (x, y), for an object-space telecentric lens, whose
+    distortion is measured against m·h: see :class:`Distortion`).
     ``percent_ftan`` = 100·(y_real − n·EFL·tanθ)/(n·EFL·tanθ), n the object-space index (1
     in air; an ideal lens behind water had 33 % against EFL·tanθ); ``percent_paraxial`` uses the
     paraxial chief-ray height on the image surface instead (Zemax's "F-Tan(Theta)"
@@ -357,7 +368,6 @@ def distortion(lens: Lens, fields=None, wavelength=None, *, aim=None) -> Distort
     real stop's (``"real"``); None (the default): the lens's own ray aiming, ``lens.aim``.
     """
     checks.focal_image(lens, "distortion")
-    paraxial.finite_pupil(lens, "distortion")  # its ideal heights are n·EFL·tanθ
     check_inputs(lens, "distortion", fields=fields, wavelengths=wavelength,
                      arg_w="wavelength")
     fields, wavelength = _as_arrays(lens, _own_fields(lens, fields), wavelength)
@@ -372,19 +382,26 @@ def _distortion(lens, fields, wavelength, depth, *, aim) -> Distortion:
     if jnp.ndim(wl) != 0:
         raise ValueError(f"distortion: wavelength must be one value (µm), got shape "
                          f"{jnp.shape(wl)}")
-    # The front focal length n·EFL: a field angle is measured in object space.
-    f = lens.object_material.index(wl) * paraxial.efl(lens, wl)
     chief = jax.vmap(lambda th: _spot_rays(
         lens, th, wl, pupil=jnp.zeros((1, 2), lens.epd.dtype), depth=depth, aim=aim,
         newton_iters=DEFAULT_NEWTON_ITERS)[0])(fields)
     p = jnp.where(chief.valid[:, None], chief.origin[:, :2], jnp.nan)
-    tr, radial, y = field_heights(fields, p)
-    ftan = f * tr
-    ypar = jax.vmap(lambda th: paraxial.image_height(lens, th, wl))(radial)
 
     def pct(a, b):
         nz = b != 0
         return jnp.where(nz, 100.0 * (a - b) / jnp.where(nz, b, 1.0), 0.0)
+
+    if lens.telecentric_object:  # object heights h (mm): the ideal image is m·h
+        h, y = radial_heights(fields, p)
+        ideal = paraxial.magnification(lens, wl) * h
+        ypar = jax.vmap(lambda r: paraxial.image_height(lens, r, wl))(h)
+        nan = jnp.full_like(h, jnp.nan)  # no field angle: no f-θ reference
+        return Distortion(fields, y, ideal, ypar, pct(y, ideal), pct(y, ypar), nan, nan)
+    # The front focal length n·EFL: a field angle is measured in object space.
+    f = lens.object_material.index(wl) * paraxial.efl(lens, wl)
+    tr, radial, y = field_heights(fields, p)
+    ftan = f * tr
+    ypar = jax.vmap(lambda th: paraxial.image_height(lens, th, wl))(radial)
 
     # Zemax's F-Theta reference: the near-axis (paraxial) scale per tanθ, times θ (rad).
     nz = tr != 0

@@ -33,7 +33,12 @@ coefficient: EVENASPH PARM 2, ``EvenAsphere.coeffs[1]``, ``OddAsphere`` β_4), a
 higher order and do not enter.
 
 Units: every S and C is a length (mm), for the marginal ray of the full entrance pupil and
-the chief ray of the field ``field`` (default the lens's largest). Welford's sign: S_I > 0
+the chief ray of the field ``field`` (default the lens's largest). An object-space
+telecentric lens (``Lens.object_na``; ``paraxial.marginal_ray`` and
+``paraxial.paraxial_chief_ray`` trace its rays): the marginal ray leaves the axial object
+point at the slope tan u of its NA, the chief ray the object height ``field`` (mm) parallel
+to the axis, so H = n u h (n u from the NA, h the height: the Lagrange invariant of the
+object plane). Welford's sign: S_I > 0
 for a positive singlet (under-corrected spherical aberration). The wavefront aberration
 (Welford's W, the optical path of the reference sphere minus that of the wavefront) is
 
@@ -86,6 +91,7 @@ import jax.numpy as jnp
 import numpy as np
 from jaxtyping import Array, Float
 
+from ..imaging.telecentric import largest_height, lens_fields
 from ..optics import checks, paraxial
 from ..optics.lens import Lens
 from ..optics.surfaces import EvenAsphere, Hybrid, OddAsphere, Standard
@@ -108,7 +114,8 @@ class Seidel(eqx.Module):
     Attributes:
         per_surface: ``[7, n]`` S_I, S_II, S_III, S_IV, S_V, C_L, C_T of each of the n
             surfaces (mm; ``SEIDEL_TERMS``).
-        field: the field angle (deg) of the chief ray.
+        field: the field angle (deg) of the chief ray (an object height in mm for an
+            object-space telecentric lens).
         wavelength: the wavelength (µm) of the monochromatic sums.
         lagrange: the Lagrange invariant H = n(u ȳ − ū y) (mm).
         image_nu: n′u′, the image-space marginal ray's reduced slope.
@@ -210,9 +217,16 @@ def _r4_coefficient(surface) -> Array:
 
 
 def _field(lens: Lens, field, where: str) -> Array:
-    """The chief ray's field angle (deg): given, or the lens's largest (radial for pairs).
-    An object-space telecentric lens (fields are object heights) is refused."""
-    paraxial.finite_pupil(lens, where)
+    """The chief ray's field angle (deg): given, or the lens's largest (radial for pairs);
+    for an object-space telecentric lens its object height (mm), given or the largest."""
+    if lens.telecentric_object:
+        if field is None:
+            return jnp.asarray(largest_height(lens), lens.epd.dtype)
+        if jnp.ndim(field) != 0:
+            raise ValueError(f"{where}: field must be one object height y in mm (a scalar; "
+                             f"the lens is object-space telecentric), got shape "
+                             f"{np.shape(field)}")
+        return jnp.asarray(lens_fields(lens, field, where, "field"), lens.epd.dtype)
     if field is None:
         f = jnp.asarray(lens.fields)
         t = jnp.tan(jnp.deg2rad(f))
@@ -239,7 +253,10 @@ def seidel(lens: Lens, *, field=None, wavelength=None) -> Seidel:
     Args:
         lens: the lens (surfaces of the kinds listed in the module notes).
         field: the chief ray's field angle θy in degrees; default the lens's largest field
-            (for (θx, θy) fields the largest radial angle).
+            (for (θx, θy) fields the largest radial angle). For an object-space telecentric
+            lens (``Lens.object_na``) an object height y in mm, default its largest (radial)
+            height: the paraxial chief ray leaves it parallel to the axis (ū = 0) and the
+            marginal ray leaves the axial object point at tan u, u = asin(NA/n).
         wavelength: µm; default the lens's primary wavelength. Colour uses the lens's
             shortest and longest wavelengths whatever this is.
 

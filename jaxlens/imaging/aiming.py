@@ -47,9 +47,11 @@ def image_scale(lens: Lens, wavelength=None) -> Float[Array, ""]:
     The distortion-free image of the field (θx, θy) lies at ``K·(tanθx, tanθy)``; for a lens
     focused at infinity K is the focal length. The paraxial chief ray is linear in tanθ, so
     one ray at 45° gives K. An object-space telecentric lens (fields are object heights) is
-    refused.
+    refused: its distortion-free image of the object height h is m·h,
+    m = ``paraxial.magnification(lens)``.
     """
-    paraxial.finite_pupil(lens, "image_scale")
+    paraxial.finite_pupil(lens, "image_scale", "its image scale is the paraxial "
+                          "magnification m (image mm per object mm): paraxial.magnification")
     return paraxial.image_height(lens, 45.0, wavelength) / jnp.tan(jnp.deg2rad(45.0))
 
 

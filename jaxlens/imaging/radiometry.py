@@ -1,7 +1,8 @@
 """Relative illumination by forward ray tracing, independently of ``render``.
 
 Conventions:
-    Field angles in degrees (θy, or (θx, θy)); lengths in mm; wavelengths in µm.
+    Field angles in degrees (θy, or (θx, θy)); object heights in mm for an object-space
+    telecentric lens; lengths in mm; wavelengths in µm.
 
 Method:
     The irradiance at the image of a field point is the flux that the lens passes from a
@@ -17,6 +18,20 @@ Method:
     For an object at finite depth, a Lambertian patch dA_o sends L·Ω_p·dA_o through the lens
     (Ω_p the projected solid angle of the valid rays, Σ cos⁴γ·ΔA/z² over the pupil grid) and
     its image has the area |det ∂x/∂X|·dA_o, so E = L·Ω_p / |det ∂x/∂X|.
+
+    An object-space telecentric lens (``Lens.object_na``; fields are object heights in mm):
+    its entrance pupil lies at infinity, so the pupil is a fixed set of ray slopes
+    s = (tan γx, tan γy), the same for every object point (on a plane at unit distance from
+    the point), and Ω_p = Σ cos⁴γ·Δs over the slopes whose rays reach the sensor;
+    E = L·Ω_p / |det ∂x/∂X| as for a finite object. Every object point's cone is the same
+    set of directions, parallel to the axis at its centre: there is no cos⁴ falloff over
+    the field (the cos⁴γ inside Ω_p is the same at every field), and the relative
+    illumination is the vignetting (the share of the cone the lens passes, found as above
+    in slope space, 3·tan u across) times the change of the local areal magnification
+    |det ∂x/∂X| from the axis (distortion). The cone is bounded by the lens's object NA
+    (|s| <= tan u, its system aperture) as well as by the lens's apertures: a stop wider
+    than the NA's beam adds no light, and an unbounded stop stays unbounded (a finite
+    lens's gets the EPD's radius).
 
     The Jacobians come from forward-mode autodiff of the centroid with the valid set held
     fixed. Vignetting, the cos⁴ law, pupil aberrations and distortion all enter. The
@@ -45,7 +60,7 @@ from ..optics import checks, paraxial
 from ..optics.lens import Lens
 from ..optics.rays import Rays
 from ..tracing.forward import DEFAULT_NEWTON_ITERS, forward_mode_jit, trace
-from . import sampling
+from . import sampling, telecentric
 from .aiming import apertured
 from .grid import pupil_cells
 
@@ -102,7 +117,8 @@ class RelativeIllumination(eqx.Module):
     """Relative illumination of a set of fields.
 
     Attributes:
-        field: ``[F, 2]`` (θx, θy) in degrees.
+        field: ``[F, 2]`` (θx, θy) in degrees ((x, y) object heights in mm for an
+            object-space telecentric lens).
         image_xy: ``[F, 2]`` centroid of each field's image on the image surface (mm).
         ri: ``[F]`` irradiance relative to the on-axis irradiance.
         irradiance: ``[F]`` irradiance for unit object radiance (unit area/unit solid angle
@@ -117,11 +133,18 @@ class RelativeIllumination(eqx.Module):
 
 def _irradiance(lens: Lens, t, depth, wl, n_coarse, n_fine, newton_iters):
     """E and the image centroid for one field, given by t = tan(θ) (infinity) or the object
-    point's (X, Y) (finite depth)."""
-    zep = paraxial.entrance_pupil_z(lens)
-    r_ep = 0.5 * lens.epd
+    point's (X, Y) (finite depth; an object height for an object-space telecentric lens)."""
+    tele = lens.telecentric_object
+    # A telecentric lens's "pupil plane" is the plane of ray slopes (its pupil at infinity).
+    zep = 0.0 if tele else paraxial.entrance_pupil_z(lens)
+    r_ep = paraxial.object_slope(lens) if tele else 0.5 * lens.epd
 
     def launch(s, plane_xy):
+        if tele:  # from the object point (s, -depth), the slopes plane_xy: a fixed pupil
+            p = jnp.concatenate([s, -depth[None]])
+            v = jnp.concatenate([plane_xy, jnp.ones_like(plane_xy[..., :1])], -1)
+            d = v / jnp.linalg.norm(v, axis=-1, keepdims=True)
+            return Rays(jnp.broadcast_to(p, d.shape), d, wl)
         o_plane = jnp.concatenate([plane_xy, jnp.broadcast_to(zep, plane_xy.shape[:-1])[..., None]],
                                   -1)
         if depth is None:
@@ -133,8 +156,15 @@ def _irradiance(lens: Lens, t, depth, wl, n_coarse, n_fine, newton_iters):
         d = v / jnp.linalg.norm(v, axis=-1, keepdims=True)
         return Rays(jnp.broadcast_to(p, o_plane.shape), d, wl)
 
+    def passed(pts, out):
+        # A telecentric lens's object NA bounds its cone (its system aperture): a stop wider
+        # than the cone passes no more light than the NA lets in.
+        if not tele:
+            return out.valid
+        return out.valid & (jnp.sum(pts * pts, -1) <= r_ep * r_ep)
+
     def valid_fn(pts):
-        return trace(lens, launch(t, pts), newton_iters=newton_iters, uniform=True).valid
+        return passed(pts, trace(lens, launch(t, pts), newton_iters=newton_iters, uniform=True))
 
     # The part of the entrance-pupil plane whose rays reach the sensor (its area exactly,
     # as a polygon), then a grid over its bounding box for the centroid.
@@ -146,12 +176,13 @@ def _irradiance(lens: Lens, t, depth, wl, n_coarse, n_fine, newton_iters):
     def centroid(s):
         rays = launch(s, fine)
         out = trace(lens, rays, newton_iters=newton_iters, uniform=True)
-        w = out.valid.astype(t.dtype)
+        ok = passed(fine, out)
+        w = ok.astype(t.dtype)
         if depth is not None:
             w = w * rays.direction[..., 2] ** 4
         tot = jnp.maximum(jnp.sum(w), jnp.finfo(t.dtype).tiny)
         cen = jnp.sum(w[:, None] * out.origin[:, :2], 0) / tot
-        mean_cos4 = tot / jnp.maximum(jnp.sum(out.valid), 1)
+        mean_cos4 = tot / jnp.maximum(jnp.sum(ok), 1)
         return cen, (mean_cos4, rays.direction[0, 2])
 
     eye = jnp.eye(2, dtype=t.dtype)
@@ -162,6 +193,8 @@ def _irradiance(lens: Lens, t, depth, wl, n_coarse, n_fine, newton_iters):
     det = jnp.where(det > 0, det, jnp.inf)
     if depth is None:
         e = area * dz**4 / det
+    elif tele:  # slopes on a plane at unit distance
+        e = area * mean_cos4 / det
     else:
         e = area * mean_cos4 / (zep + depth) ** 2 / det
     return e, cen
@@ -171,12 +204,15 @@ def _irradiance(lens: Lens, t, depth, wl, n_coarse, n_fine, newton_iters):
 # the fields, depth and wavelength.
 @checks.checked_core(forward_mode_jit)
 def relative_illumination_samples(lens, fields, depth, wl, *, n_coarse, n_fine, newton_iters):
-    """Relative illumination at ``fields`` (degrees) of an apertured lens, jitted core of
+    """Relative illumination at ``fields`` (degrees; object heights in mm for an object-space
+    telecentric lens) of an apertured lens, jitted core of
     ``relative_illumination``: (ri, irradiance, footprint centre) per field."""
     dtype = fields.dtype
     lens = lens.astype(dtype)
     th = jnp.deg2rad(fields)
-    if depth is None:
+    if lens.telecentric_object:  # object heights (mm)
+        s = fields
+    elif depth is None:
         s = jnp.tan(th)
     else:
         zep = paraxial.entrance_pupil_z(lens)
@@ -203,7 +239,8 @@ def relative_illumination(
 
     Args:
         lens: the lens.
-        fields: ``[F]`` θy or ``[F, 2]`` (θx, θy), degrees.
+        fields: ``[F]`` θy or ``[F, 2]`` (θx, θy), degrees; for an object-space
+            telecentric lens object heights (mm), ``[F]`` y or ``[F, 2]`` (x, y).
         depth: object distance in mm in front of surface 1, ``inf`` for infinity; None
             (default) for the lens's own object (``lens.object_distance``).
         wavelength: µm (default the primary wavelength).
@@ -217,22 +254,23 @@ def relative_illumination(
     """
     where = "relative_illumination"
     checks.focal_image(lens, where)
-    paraxial.finite_pupil(lens, where)  # its fields are angles toward a finite pupil
     checks.number(pupil, "pupil", where, lo=1, integer=True, unit="cells per side")
     # Bounded as a PSF grid: pupil=100000 asked for 1e10 rays per field after the checks.
     checks.number(pupil, "pupil", where, lo=1, hi=checks.MAX_KERNEL_SIZE, integer=True,
                   unit="cells per side")
     checks.newton_iters(newton_iters, where)
     dtype = jnp.result_type(float)
-    f = jnp.asarray(checks.field_angles(fields, where, "fields"), dtype)
-    checks.warn_if_radian_fields(fields, where, "fields")  # np.radians([0, 10, 20])
+    f = jnp.asarray(telecentric.lens_fields(lens, fields, where), dtype)  # mm or deg
+    if not lens.telecentric_object:
+        checks.warn_if_radian_fields(fields, where, "fields")  # np.radians([0, 10, 20])
+    unit = "object heights (mm)" if lens.telecentric_object else "degrees"
     if f.ndim == 0:
         f = f[None]
     if f.ndim == 1:
         f = jnp.stack([jnp.zeros_like(f), f], -1)
     if f.ndim != 2 or f.shape[-1] != 2 or f.shape[0] == 0:
-        raise ValueError(f"{where}: fields must be [F] or [F, 2] degrees with F >= 1, got shape "
-                         f"{jnp.shape(fields)}")
+        raise ValueError(f"{where}: fields must be [F] or [F, 2] {unit} with F >= 1, got "
+                         f"shape {jnp.shape(fields)}")
     if wavelength is not None:
         checks.real_values(wavelength, "wavelength", where, "µm")  # before jnp.asarray
         if jnp.ndim(wavelength) != 0:  # was "Rays: wavelength must be a scalar or one per ray"
@@ -242,7 +280,10 @@ def relative_illumination(
     checks.lens_intact(lens, where)
     wl = checks.wavelengths(lens, wl, where)
     depth = sampling.lens_depth(lens, depth, where)
-    ri, e, cen = relative_illumination_samples(apertured(lens), f, depth, wl,
+    # A telecentric lens's cone is bounded by its NA (see the module notes), not by a stop
+    # given the paraxial marginal ray's radius, which the real rays of the cone overstep.
+    ri, e, cen = relative_illumination_samples(lens if lens.telecentric_object else
+                                               apertured(lens), f, depth, wl,
                                                n_coarse=max(16, pupil // 3), n_fine=int(pupil),
                                                newton_iters=newton_iters)
     return RelativeIllumination(f, cen, ri, e)

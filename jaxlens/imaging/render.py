@@ -573,7 +573,10 @@ def render(
             non-positive spp, a missing sensor, an unknown method or a non-positive depth.
     """
     checks.focal_image(lens, "render")
-    paraxial.finite_pupil(lens, "render")  # its pixels are field angles
+    # Its pixels are field angles (tan θ through image_scale); an object-height scene is
+    # not implemented.
+    paraxial.finite_pupil(lens, "render", "render maps scene pixels to field angles; for an "
+                          "object-height scene convolve with psf at several object heights")
     if isinstance(method, str):
         raise TypeError(f"render: method is a render method object, not a string: use "
                         f"RayRender(...) or PSFRender(kernel_size=...), got {method!r}")

@@ -103,3 +103,37 @@ def source(lens: Lens, field, pupil: Float[Array, "m 2"], wavelength, depth) -> 
     direction = v / jnp.linalg.norm(v, axis=-1, keepdims=True)
     origin = jnp.broadcast_to(point, direction.shape)
     return Rays(origin, direction, wavelength)
+
+
+def radial_heights(fields, xy):
+    """Object and image heights of an object-space telecentric lens's fields along their
+    directions, as ``spots.field_heights`` gives them for angles.
+
+    ``fields`` are ``[F]`` object heights y or ``[F, 2]`` (x, y) (mm), ``xy`` ``[F, 2]``
+    image points (mm). Returns ``(h, xy·a)``: for ``[F]`` fields the signed height y and
+    the points' y; for ``[F, 2]`` the radial height |(x, y)| and the component of each point
+    along its field's direction a = (x, y)/|(x, y)| (+y on axis), so that the ideal image of
+    a distortion-free lens of magnification m lies at m·h."""
+    if fields.ndim == 1:
+        return fields, xy[:, 1]
+    a = azimuth(fields)
+    s = jnp.sum(fields * fields, axis=-1)
+    h = jnp.where(s > 0, jnp.sqrt(jnp.where(s > 0, s, 1.0)), 0.0)  # grad-safe at 0
+    return h, jnp.sum(xy * a, axis=-1)
+
+
+def azimuth(field):
+    """Unit (x, y) direction of object heights ``field`` (``[..., 2]`` mm, or a scalar y):
+    (0, 1) for a y height and on axis, else (x, y)/|(x, y)| (the meridional plane)."""
+    f = jnp.asarray(field)
+    if f.ndim == 0:
+        return jnp.array([0.0, 1.0], f.dtype)
+    r = jnp.sqrt(jnp.sum(f * f, axis=-1, keepdims=True))
+    on_axis = r == 0
+    return jnp.where(on_axis, jnp.array([0.0, 1.0], f.dtype), f / jnp.where(on_axis, 1.0, r))
+
+
+def largest_height(lens: Lens) -> Array:
+    """The lens's largest object height (mm): radial for (x, y) fields."""
+    f = jnp.asarray(lens.fields)
+    return jnp.max(jnp.sqrt(jnp.sum(f * f, -1)) if f.ndim == 2 else jnp.abs(f))

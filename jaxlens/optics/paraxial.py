@@ -205,18 +205,20 @@ class ParaxialData(eqx.Module):
     stop_semi_diameter: Float[Array, ""]
 
 
-def finite_pupil(lens: Lens, where: str) -> None:
+def finite_pupil(lens: Lens, where: str, instead: str = "") -> None:
     """Refuse an object-space telecentric lens (``Lens.object_na``), whose entrance pupil lies
     at infinity, in ``where``, which needs one at a finite distance (its position, or field
-    angles toward its centre). Anything but a Lens passes, for its caller's type check."""
+    angles toward its centre); ``instead`` names what to use for such a lens. Anything but a
+    Lens passes, for its caller's type check."""
     if isinstance(lens, Lens) and lens.telecentric_object:
         raise ValueError(
             f"{where}: the lens is object-space telecentric (Lens.object_na given): its "
             f"entrance pupil lies at infinity and its fields are object heights (mm), so "
             f"{where}, which needs an entrance pupil at a finite distance and field angles, "
-            f"does not apply; paraxial_data gives its first-order data, sampling.field_rays "
-            f"its rays, and rms_spot, spot_rays, chief_ray, ray_fan, opd_fan, wavefront, "
-            f"encircled_energy, psf and mtf take its object heights")
+            f"does not apply{'; ' + instead if instead else ''}; paraxial_data gives its "
+            f"first-order data, paraxial.magnification its image scale, and rms_spot, "
+            f"chief_ray, distortion, field_curvature, seidel, relative_illumination, "
+            f"ray_fan, wavefront, psf, mtf and report take its object heights")
 
 
 def object_slope(lens: Lens) -> Array:
@@ -353,6 +355,23 @@ def image_height(lens: Lens, field_deg, wavelength=None) -> Array:
     y, nu = paraxial_chief_ray(lens, field_deg, wl)
     n_img = signed_indices(lens, wl)[-1]
     return y[-1] + axial_thicknesses(lens)[-1] * nu[-1] / n_img
+
+
+def magnification(lens: Lens, wavelength=None) -> Array:
+    """The paraxial lateral magnification m = n u / (n′ u′) of the lens's finite object (its
+    paraxial image height per unit object height, at the paraxial image plane), from the
+    marginal ray at ``wavelength`` (µm, default primary); 0 for an object at infinity. For
+    an object-space telecentric lens (``Lens.object_na``) the distortion-free image of the
+    object height h (mm) is m·h: the paraxial chief ray, parallel to the axis at h, meets
+    the paraxial image plane there."""
+    wl = _wavelength(lens, wavelength, "magnification")
+    y, nu = marginal_ray(lens, wl)
+    if lens.object_at_infinity:
+        return jnp.zeros_like(nu[-1])
+    n0 = signed_indices(lens, wl)[0]
+    u0 = object_slope(lens) if lens.telecentric_object else (
+        0.5 * lens.epd / (lens.object_distance + entrance_pupil_z(lens, wl)))
+    return n0 * u0 / nu[-1]
 
 
 def paraxial_data(lens: Lens, wavelength=None) -> ParaxialData:
