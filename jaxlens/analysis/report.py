@@ -63,7 +63,13 @@ from ..tracing.forward import aimed_jit
 from . import spots as analysis
 from . import stop_clip
 from .report_afocal import afocal_report_data, format_afocal_report
-from .report_cells import aiming_line, bucketed_field_curvature, seidel_summary, wavefront_lines
+from .report_cells import (
+    aiming_line,
+    bucketed_field_curvature,
+    seidel_summary,
+    system_lines,
+    wavefront_lines,
+)
 from .report_cells import cell as _num
 from .report_cells import json_number as _f
 from .report_cells import wavefront_summary as _wavefront_summary
@@ -434,13 +440,6 @@ def format_report(data: dict, lens: Lens | None = None) -> str:
         return format_afocal_report(data, None if lens is None else _surface_table(lens))
     if data.get("object_space_telecentric"):
         return format_telecentric_report(data, None if lens is None else _surface_table(lens))
-    L = []
-    title = data.get("name") or "(unnamed lens)"
-    L.append(f"jaxlens lens report: {title}")
-    if data.get("file"):
-        L.append(f"File: {data['file']}")
-    L.append("")
-    L.append("SYSTEM DATA")
     ep, xp = data["entrance_pupil"], data["exit_pupil"]
     wl = data["wavelengths"]
     rows = [
@@ -460,20 +459,8 @@ def format_report(data: dict, lens: Lens | None = None) -> str:
         ("Object distance", math.inf if data["object_distance"] is None
          else data["object_distance"], "mm"),
     ]
-    for label, v, unit in rows:
-        L.append(f"  {label:<34}: {_num(v, 14, 6)} {unit}".rstrip())
-    L.append(f"  {'Stop surface':<34}: {data['stop_surface']:>14d}")
-    L.append(aiming_line(data))
-    wtxt = ", ".join(
-        f"{w:.6f}" + (" (primary)" if w == data["primary_wavelength"] else "") for w in wl
-    )
-    L.append(f"  {'Wavelengths (um)':<34}: {wtxt}")
-    for note in data.get("notes", ()):
-        L.append(f"  Note: {note}")
-    if lens is not None:
-        L.append("")
-        L.append("SURFACE DATA (radius, thickness, semi-diameter in mm; glass: name or nd,Vd)")
-        L += _surface_table(lens)
+    L = system_lines(data, "SYSTEM DATA", rows, aiming_line(data),
+                     None if lens is None else _surface_table(lens))
     L.append("")
     L.append(
         "FIELDS (heights in mm, distortion in %, RMS spot radius about the centroid in um,"

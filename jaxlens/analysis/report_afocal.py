@@ -20,7 +20,14 @@ import numpy as np
 from ..optics import paraxial
 from ..optics.lens import Lens
 from .afocal import angular_magnification, angular_spot
-from .report_cells import aiming_line, cell, json_number, wavefront_lines, wavefront_summary
+from .report_cells import (
+    aiming_line,
+    cell,
+    json_number,
+    system_lines,
+    wavefront_lines,
+    wavefront_summary,
+)
 
 UNITS = {
     "length": "mm",
@@ -84,10 +91,6 @@ def afocal_report_data(lens: Lens, *, wavefront: bool = False, notes=()) -> dict
 
 def format_afocal_report(data: dict, surface_table: list[str] | None = None) -> str:
     """The human-readable afocal report; ``surface_table`` the prescription's lines."""
-    L = [f"jaxlens lens report: {data.get('name') or '(unnamed lens)'}"]
-    if data.get("file"):
-        L.append(f"File: {data['file']}")
-    L += ["", "SYSTEM DATA (afocal image space: the image is at infinity)"]
     ep, xp = data["entrance_pupil"], data["exit_pupil"]
     rows = [
         ("Angular magnification (paraxial)", data["angular_magnification"], ""),
@@ -100,18 +103,9 @@ def format_afocal_report(data: dict, surface_table: list[str] | None = None) -> 
         ("Object distance", math.inf if data["object_distance"] is None
          else data["object_distance"], "mm"),
     ]
-    for label, v, unit in rows:
-        L.append(f"  {label:<34}: {cell(v, 14, 6)} {unit}".rstrip())
-    L.append(f"  {'Stop surface':<34}: {data['stop_surface']:>14d}")
-    L.append(aiming_line(data))
+    L = system_lines(data, "SYSTEM DATA (afocal image space: the image is at infinity)", rows,
+                     aiming_line(data), surface_table)
     wl = data["wavelengths"]
-    L.append(f"  {'Wavelengths (um)':<34}: " + ", ".join(
-        f"{w:.6f}" + (" (primary)" if w == data["primary_wavelength"] else "") for w in wl))
-    for note in data.get("notes", ()):
-        L.append(f"  Note: {note}")
-    if surface_table:
-        L += ["", "SURFACE DATA (radius, thickness, semi-diameter in mm; glass: name or nd,Vd)"]
-        L += surface_table
     L += ["", "FIELDS (output angles of the chief ray in deg; RMS angular radius about the "
               "centroid in mrad, 21x21 pupil grid)"]
     heads = "".join(f"{f'RMS {1000 * w:.1f}nm':>15}" for w in wl)

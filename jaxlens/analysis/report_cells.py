@@ -48,6 +48,29 @@ def aiming_line(data: dict) -> str:
     return f"  {'Ray aiming':<34}: {AIMING_TEXT.get(aim, aim)}"
 
 
+
+def system_lines(data: dict, heading: str, rows: list[tuple], launch: str,
+                 surface_table: list[str] | None) -> list[str]:
+    """A report's opening, shared by the three report kinds: title and file, the SYSTEM DATA
+    block (``rows``: label, value, unit), stop surface, the ray-launch line, wavelengths,
+    notes and the prescription's lines."""
+    L = [f"jaxlens lens report: {data.get('name') or '(unnamed lens)'}"]
+    if data.get("file"):
+        L.append(f"File: {data['file']}")
+    L += ["", heading]
+    for label, v, unit in rows:
+        L.append(f"  {label:<34}: {cell(v, 14, 6)} {unit}".rstrip())
+    L.append(f"  {'Stop surface':<34}: {data['stop_surface']:>14d}")
+    L.append(launch)
+    L.append(f"  {'Wavelengths (um)':<34}: " + ", ".join(
+        f"{w:.6f}" + (" (primary)" if w == data["primary_wavelength"] else "")
+        for w in data["wavelengths"]))
+    L += [f"  Note: {note}" for note in data.get("notes", ())]
+    if surface_table:
+        L += ["", "SURFACE DATA (radius, thickness, semi-diameter in mm; glass: name or nd,Vd)"]
+        L += surface_table
+    return L
+
 def wavefront_summary(lens: Lens, field) -> dict:
     """One field's wavefront error (waves, primary wavelength; referenced as the lens's image
     space asks: a sphere, or a plane for an afocal lens), or why there is none."""

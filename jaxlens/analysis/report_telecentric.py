@@ -29,6 +29,7 @@ from .report_cells import (
     cell,
     json_number,
     seidel_summary,
+    system_lines,
     wavefront_lines,
     wavefront_summary,
 )
@@ -121,10 +122,6 @@ def telecentric_report_data(lens: Lens, *, wavefront: bool = False, notes=()) ->
 def format_telecentric_report(data: dict, surface_table: list[str] | None = None) -> str:
     """The human-readable report of an object-space telecentric lens; ``surface_table`` the
     prescription's lines."""
-    L = [f"jaxlens lens report: {data.get('name') or '(unnamed lens)'}"]
-    if data.get("file"):
-        L.append(f"File: {data['file']}")
-    L += ["", "SYSTEM DATA (object-space telecentric: entrance pupil at infinity)"]
     xp = data["exit_pupil"]
     rows = [
         ("Object-space NA", data["object_na"], ""),
@@ -140,19 +137,11 @@ def format_telecentric_report(data: dict, surface_table: list[str] | None = None
         ("Object distance", math.inf if data["object_distance"] is None
          else data["object_distance"], "mm"),
     ]
-    for label, v, unit in rows:
-        L.append(f"  {label:<34}: {cell(v, 14, 6)} {unit}".rstrip())
-    L.append(f"  {'Stop surface':<34}: {data['stop_surface']:>14d}")
-    L.append(f"  {'Ray launch':<34}: from each object point, slopes (Px, Py)*tan u (no "
-             f"aiming)")
+    launch = (f"  {'Ray launch':<34}: from each object point, slopes (Px, Py)*tan u (no "
+              f"aiming)")
+    L = system_lines(data, "SYSTEM DATA (object-space telecentric: entrance pupil at infinity)",
+                     rows, launch, surface_table)
     wl = data["wavelengths"]
-    L.append(f"  {'Wavelengths (um)':<34}: " + ", ".join(
-        f"{w:.6f}" + (" (primary)" if w == data["primary_wavelength"] else "") for w in wl))
-    for note in data.get("notes", ()):
-        L.append(f"  Note: {note}")
-    if surface_table:
-        L += ["", "SURFACE DATA (radius, thickness, semi-diameter in mm; glass: name or nd,Vd)"]
-        L += surface_table
     L += ["", "FIELDS (object heights and image heights in mm along each field's direction, "
               "distortion in % against m*h, RMS spot radius about the centroid in um, 21x21 "
               "pupil grid)"]
