@@ -66,6 +66,7 @@ from .report_afocal import afocal_report_data, format_afocal_report
 from .report_cells import (
     aiming_line,
     bucketed_field_curvature,
+    seidel_lines,
     seidel_summary,
     system_lines,
     wavefront_lines,
@@ -512,18 +513,7 @@ def format_report(data: dict, lens: Lens | None = None) -> str:
             head = f"{f['angle']:>9.3f}"
         L.append(f"  {i + 1:>5}{head}{_num(t, 13, 6)}{_num(s, 13, 6)}{_num(astig, 13, 6)}")
     L += wavefront_lines(data["fields"], "the exit-pupil reference sphere")
-    sd = data.get("seidel")
-    if sd:
-        L.append("")
-        if "refused" in sd:
-            L.append(f"SEIDEL SUMS: not computed ({sd['refused']})")
-        else:
-            L.append(f"SEIDEL SUMS (third order, field {sd['field']:.3f} deg, "
-                     f"{sd['wavelength']:.6f} um; S in mm, W in waves)")
-            L.append("  " + "".join(f"{k:>12}" for k in sd["sums"]))
-            L.append("  " + "".join(_num(v, 12, 6) for v in sd["sums"].values()))
-            L.append("  " + "".join(f"{k:>12}" for k in sd["wavefront"]))
-            L.append("  " + "".join(_num(v, 12, 4) for v in sd["wavefront"].values()))
+    L += seidel_lines(data.get("seidel"), "field {:.3f} deg")
     return "\n".join(L) + "\n"
 
 

@@ -71,6 +71,22 @@ def system_lines(data: dict, heading: str, rows: list[tuple], launch: str,
         L += surface_table
     return L
 
+
+def seidel_lines(sd: dict | None, field: str) -> list[str]:
+    """The report's SEIDEL SUMS block (``sd``: ``seidel_summary``'s dict, or None for no
+    block); ``field`` names the field it was computed at, a template for ``sd["field"]``
+    with its unit (``"field {:.3f} deg"``)."""
+    if not sd:
+        return []
+    if "refused" in sd:
+        return ["", f"SEIDEL SUMS: not computed ({sd['refused']})"]
+    return ["", f"SEIDEL SUMS (third order, {field.format(sd['field'])}, {sd['wavelength']:.6f} um; S in mm, W in "
+                f"waves)",
+            "  " + "".join(f"{k:>12}" for k in sd["sums"]),
+            "  " + "".join(cell(v, 12, 6) for v in sd["sums"].values()),
+            "  " + "".join(f"{k:>12}" for k in sd["wavefront"]),
+            "  " + "".join(cell(v, 12, 4) for v in sd["wavefront"].values())]
+
 def wavefront_summary(lens: Lens, field) -> dict:
     """One field's wavefront error (waves, primary wavelength; referenced as the lens's image
     space asks: a sphere, or a plane for an afocal lens), or why there is none."""

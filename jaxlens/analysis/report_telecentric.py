@@ -28,6 +28,7 @@ from .report_cells import (
     bucketed_field_curvature,
     cell,
     json_number,
+    seidel_lines,
     seidel_summary,
     system_lines,
     wavefront_lines,
@@ -172,16 +173,5 @@ def format_telecentric_report(data: dict, surface_table: list[str] | None = None
         L.append(f"  {i + 1:>5}{h[0]:>9.4f},{h[1]:>9.4f}{cell(t, 13, 6)}{cell(s, 13, 6)}"
                  f"{cell(astig, 13, 6)}")
     L += wavefront_lines(data["fields"], "the exit-pupil reference sphere")
-    sd = data.get("seidel")
-    if sd:
-        L.append("")
-        if "refused" in sd:
-            L.append(f"SEIDEL SUMS: not computed ({sd['refused']})")
-        else:
-            L.append(f"SEIDEL SUMS (third order, object height {sd['field']:.4f} mm, "
-                     f"{sd['wavelength']:.6f} um; S in mm, W in waves)")
-            L.append("  " + "".join(f"{k:>12}" for k in sd["sums"]))
-            L.append("  " + "".join(cell(v, 12, 6) for v in sd["sums"].values()))
-            L.append("  " + "".join(f"{k:>12}" for k in sd["wavefront"]))
-            L.append("  " + "".join(cell(v, 12, 4) for v in sd["wavefront"].values()))
+    L += seidel_lines(data.get("seidel"), "object height {:.4f} mm")
     return "\n".join(L) + "\n"
