@@ -80,8 +80,8 @@ def seidel_lines(sd: dict | None, field: str) -> list[str]:
         return []
     if "refused" in sd:
         return ["", f"SEIDEL SUMS: not computed ({sd['refused']})"]
-    return ["", f"SEIDEL SUMS (third order, {field.format(sd['field'])}, {sd['wavelength']:.6f} um; S in mm, W in "
-                f"waves)",
+    return ["", f"SEIDEL SUMS (third order, {field.format(sd['field'])}, "
+                f"{sd['wavelength']:.6f} um; S in mm, W in waves)",
             "  " + "".join(f"{k:>12}" for k in sd["sums"]),
             "  " + "".join(cell(v, 12, 6) for v in sd["sums"].values()),
             "  " + "".join(f"{k:>12}" for k in sd["wavefront"]),
