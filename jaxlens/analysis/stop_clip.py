@@ -32,6 +32,7 @@ from __future__ import annotations
 import dataclasses
 import math
 
+import equinox as eqx
 import numpy as np
 
 from ..imaging import sampling
@@ -88,10 +89,17 @@ def _beam(lens: Lens) -> tuple[float, str]:
     if lens.telecentric_object or lens.aim == "real":
         return par, "paraxial"
     try:
-        real = float(np.asarray(sampling.stop_radius(lens, "real", object_z=_object_z(lens))))
+        real = float(np.asarray(_rim_height(lens, _object_z(lens))))
     except ValueError:  # the rim ray is lost before the stop
         return par, "paraxial"
     return (real, "real") if math.isfinite(real) else (par, "paraxial")
+
+
+@eqx.filter_jit
+def _rim_height(lens: Lens, object_z) -> float:
+    """The real rim ray's height at the stop (mm; NaN where the ray is lost), as one compiled
+    program: op by op it compiled a program per slice each time the report ran."""
+    return sampling.stop_radius(lens, "real", object_z=object_z)
 
 
 def _object_z(lens: Lens):
@@ -105,7 +113,7 @@ def _real_working_epd(lens: Lens, radius: float, beam: float) -> float:
 
     def height(rho):
         m = dataclasses.replace(lens, epd=np.asarray(2.0 * rho, np.asarray(lens.epd).dtype))
-        return float(np.asarray(sampling.stop_radius(m, "real", object_z=_object_z(lens))))
+        return float(np.asarray(_rim_height(m, _object_z(lens))))
 
     x0, h0 = 0.5 * epd, beam
     x1 = x0 * radius / beam
