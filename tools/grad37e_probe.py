@@ -680,16 +680,19 @@ SECTIONS = {
 }
 
 
-def main(argv):
+def run_sections(sections, argv):
+    """Run the named sections of a probe (default all), ``--only NAME,...`` passed to each,
+    printing one row a line; a section that fails prints one ERROR row and its traceback.
+    Rounds 38d and 42e run their own sections with it."""
     args = argv[1:]
     only = ""
     if "--only" in args:
         i = args.index("--only")
         only = args[i + 1]
         del args[i : i + 2]
-    for sec in args or list(SECTIONS):
+    for sec in args or list(sections):
         try:
-            for rows in SECTIONS[sec](only):
+            for rows in sections[sec](only):
                 for r in rows:
                     print(r, flush=True)
         except Exception:  # noqa: BLE001
@@ -697,6 +700,11 @@ def main(argv):
                 f"ERROR  {sec} probe: " + traceback.format_exc().strip().splitlines()[-1][:300],
                 flush=True,
             )
+            traceback.print_exc()
+
+
+def main(argv):
+    run_sections(SECTIONS, argv)
 
 
 if __name__ == "__main__":

@@ -51,7 +51,6 @@ import dataclasses
 import os
 import re
 import sys
-import traceback
 
 sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
 
@@ -63,7 +62,7 @@ import equinox as eqx  # noqa: E402
 import jax.numpy as jnp  # noqa: E402
 import numpy as np  # noqa: E402
 from grad36e_probe import _leaf, _set  # noqa: E402
-from grad37e_probe import FUNCS, _hit, compare, testbed  # noqa: E402
+from grad37e_probe import FUNCS, _hit, compare, run_sections, testbed  # noqa: E402
 
 import jaxlens as jl  # noqa: E402
 from jaxlens import zoo  # noqa: E402
@@ -500,21 +499,7 @@ SECTIONS = {
 
 
 def main(argv):
-    args = argv[1:]
-    only = ""
-    if "--only" in args:
-        i = args.index("--only")
-        only = args[i + 1]
-        del args[i: i + 2]
-    for sec in args or list(SECTIONS):
-        try:
-            for rows in SECTIONS[sec](only):
-                for r in rows:
-                    print(r, flush=True)
-        except Exception:  # noqa: BLE001
-            print(f"ERROR  {sec} probe: "
-                  + traceback.format_exc().strip().splitlines()[-1][:300], flush=True)
-            traceback.print_exc()
+    run_sections(SECTIONS, argv)
 
 
 if __name__ == "__main__":

@@ -53,7 +53,6 @@ from __future__ import annotations
 import dataclasses
 import os
 import sys
-import traceback
 import warnings
 
 sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
@@ -63,7 +62,7 @@ import jax  # noqa: E402
 jax.config.update("jax_enable_x64", True)
 
 import jax.numpy as jnp  # noqa: E402
-from grad37e_probe import _hit, compare  # noqa: E402
+from grad37e_probe import _hit, compare, run_sections  # noqa: E402
 from grad38d_probe import grouped  # noqa: E402
 
 import jaxlens as jl  # noqa: E402
@@ -293,21 +292,7 @@ SECTIONS = {
 
 
 def main(argv):
-    args = argv[1:]
-    only = ""
-    if "--only" in args:
-        i = args.index("--only")
-        only = args[i + 1]
-        del args[i: i + 2]
-    for sec in args or list(SECTIONS):
-        try:
-            for rows in SECTIONS[sec](only):
-                for r in rows:
-                    print(r, flush=True)
-        except Exception:  # noqa: BLE001
-            print(f"ERROR  {sec} probe: "
-                  + traceback.format_exc().strip().splitlines()[-1][:300], flush=True)
-            traceback.print_exc()
+    run_sections(SECTIONS, argv)
 
 
 if __name__ == "__main__":
