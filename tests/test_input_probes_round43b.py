@@ -137,7 +137,8 @@ def test_image_metrics_compare_images_on_one_scale():
     a = np.full((8, 8, 3), 0.5 * 255)
     b = a + 2.0
     b[0, 0, 0] = 0.0
-    with pytest.raises(ValueError, match="psnr: data_range 1 for images whose values span 129.5, more than twice it"):
+    with pytest.raises(ValueError,
+                       match="psnr: data_range 1 for images whose values span 129.5, more than"):
         images.psnr(a, b, data_range=1.0)
     with pytest.raises(ValueError, match=r"ssim: images must be \[H, W\] or \[H, W, C\]"):
         images.ssim(np.ones((8, 8, 3, 2)), np.ones((8, 8, 3, 2)) * 0.9)

@@ -33,7 +33,20 @@ jax.config.update("jax_enable_x64", True)
 import equinox as eqx  # noqa: E402
 import jax.numpy as jnp  # noqa: E402
 import numpy as np  # noqa: E402
-from probe_table import COOKE, ROOT, SEED0, TMP, checked, cli, edof_check, fresh, jitted, patched, probe, run  # noqa: E402
+from probe_table import (  # noqa: E402
+    COOKE,
+    ROOT,
+    SEED0,
+    TMP,
+    checked,
+    cli,
+    edof_check,
+    fresh,
+    jitted,
+    patched,
+    probe,
+    run,
+)
 
 import jaxlens as jl  # noqa: E402
 from jaxlens import analysis as A  # noqa: E402
@@ -311,8 +324,8 @@ def _empty(name, text=""):
 
 
 def ablation_cli():
-    from jaxlens.experiments import ablation_table as AT
     from jaxlens.design import DesignSpec
+    from jaxlens.experiments import ablation_table as AT
 
     probe("python -m jaxlens.experiments.ablation_table (no command: must say so)", cli(lambda: _module("jaxlens.experiments.ablation_table")), "ablation")
     probe("python -m jaxlens.experiments.ablation_table --help", cli(lambda: _module("jaxlens.experiments.ablation_table", "--help")), "ablation")

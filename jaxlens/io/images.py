@@ -455,9 +455,10 @@ def psnr(reference, test, *, data_range=None) -> float:
     """Peak signal-to-noise ratio (dB), ``skimage.metrics.peak_signal_noise_ratio``.
 
     ``data_range`` defaults to the span of the two images (1 for [0, 1] images); a given
-    one may not be less than half their values' span. The images are float (linear or encoded, in [0, 1]) or
-    both integer codes of one dtype (uint8 against uint8); bool and complex images, and an
-    integer image against a float one or against another integer dtype, are refused.
+    one may not be less than half their values' span. The images are float (linear or
+    encoded, in [0, 1]) or both integer codes of one dtype (uint8 against uint8); bool and
+    complex images, and an integer image against a float one or against another integer
+    dtype, are refused.
     """
     from skimage.metrics import peak_signal_noise_ratio
 

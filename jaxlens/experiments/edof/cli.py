@@ -88,8 +88,8 @@ def _ints(text: str) -> tuple[int, ...]:
     try:  # ASCII digits only (str.isdigit took "١" and int() read it as 1)
         return comma_ints(text)
     except ValueError:
-        raise argparse.ArgumentTypeError(f"must be comma-separated whole numbers (ASCII "
-                                         f"digits) without an empty one, got {text!r}") from None
+        raise argparse.ArgumentTypeError(f"must be comma-separated whole numbers without an "
+                                         f"empty one, got {text!r} (ASCII digits)") from None
 
 
 def build_parser() -> argparse.ArgumentParser:
