@@ -438,7 +438,8 @@ class NAFNet(eqx.Module):
         return len(self.downs)
 
     def __call__(self, x: Float[Array, "H W Cin"]) -> Float[Array, "H W Cout"]:
-        """Restore one image ``[H, W, in_channels]``; returns ``[H, W, out_channels]``."""
+        """Restore one float image ``[H, W, in_channels]``; returns ``[H, W, out_channels]``.
+        An integer image (sRGB codes) is refused: decode it with ``io.images.to_linear``."""
         # One rule with render and io.images: an integer image (uint8 sRGB codes) is refused,
         # to be decoded with to_linear (before: its codes ran as radiance 0…255), and so are
         # bool and complex ones; a list of numbers is read as floats.
