@@ -171,6 +171,13 @@ def main(argv=None):
         p.error(f"--out {dest} is not a reevaluate result ({why}), and this run would write "
                 f"over it; move it away or give another path")
     jax.config.update("jax_enable_x64", True)
+    import jaxlens
+
+    for f in sorted(a.folder.glob("*.zmx")):  # before: a broken file stopped the run midway
+        try:
+            jaxlens.load(f)
+        except (ValueError, OSError) as e:
+            p.error(f"{f}: {e}" if str(f) not in str(e) else str(e))
     from jaxlens.design.spec import DesignSpec
 
     t0 = time.perf_counter()

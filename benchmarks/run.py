@@ -84,6 +84,13 @@ def main(argv: list[str] | None = None) -> dict:
             p.error(f"--counts must be whole numbers in [1, {MAX_RAYS}] rays, got {n}")
     if args.out is not None and args.out.exists() and not args.out.is_dir():
         p.error(f"--out {args.out} is a file, not a folder")  # before the first benchmark
+    if args.out is not None:  # under a file: NotADirectoryError after the checks
+        from jaxlens.experiments.runfolder import UsageError, check_writable
+
+        try:
+            check_writable(str(args.out), "--out")
+        except UsageError as e:
+            p.error(str(e))
     readme = (args.out or common.RESULTS) / "README.md"
     if readme.is_file() and not readme.read_text(errors="replace").startswith(README_TITLE):
         # Before: the summary was written over it at the end (--out . replaced the project's).

@@ -438,8 +438,13 @@ class NAFNet(eqx.Module):
         return len(self.downs)
 
     def __call__(self, x: Float[Array, "H W Cin"]) -> Float[Array, "H W Cout"]:
-        """Restore one image ``[H, W, in_channels]``; returns ``[H, W, out_channels]``."""
-        checks.real_values(x, "image", "NAFNet")  # a complex image ran, a list had no .ndim
+        """Restore one float image ``[H, W, in_channels]``; returns ``[H, W, out_channels]``.
+        An integer image (sRGB codes) is refused: decode it with ``io.images.to_linear``."""
+        # One rule with render and io.images: an integer image (uint8 sRGB codes) is refused,
+        # to be decoded with to_linear (before: its codes ran as radiance 0…255), and so are
+        # bool and complex ones; a list of numbers is read as floats.
+        checks.image_dtype(x, "NAFNet", "image", "linear light")
+        checks.real_values(x, "image", "NAFNet")  # a list had no .ndim
         x = _as_float(x, self.intro.weight)
         if x.ndim != 3 or x.shape[0] == 0 or x.shape[1] == 0:
             raise ValueError(f"NAFNet: expected one [H, W, C] image with H, W >= 1, got shape "

@@ -22,7 +22,7 @@ import math
 
 import numpy as np
 
-from ..optics import paraxial
+from ..optics import checks, paraxial
 from ..optics.lens import Lens
 from .report_cells import (
     bucketed_field_curvature,
@@ -52,9 +52,26 @@ NOTE = ("object-space telecentric (object NA given): the fields are object heigh
         "lies at infinity; distortion is measured against m·h, m the paraxial magnification")
 
 
+def _check_arguments(lens, wavefront, notes) -> None:
+    """Refuse what the report cannot describe: before, a focal lens failed as float(None), an
+    afocal one in the distortion analysis, and ``wavefront="no"`` or ``notes="text"`` (a line
+    a character) were taken."""
+    where = "telecentric_report_data"
+    if not isinstance(lens, Lens):
+        raise TypeError(f"{where}: lens must be a jaxlens.Lens, got {type(lens).__name__}")
+    if not lens.telecentric_object:
+        raise ValueError(f"{where}: the lens is not object-space telecentric (object_na is "
+                         f"None: its entrance pupil is at a finite distance); use "
+                         f"jaxlens.analysis.report.report_data")
+    checks.switch(wavefront, "wavefront", where)
+    if isinstance(notes, str) or not all(isinstance(n, str) for n in notes):
+        raise TypeError(f"{where}: notes must be a list of str (one line each), got {notes!r}")
+
+
 def telecentric_report_data(lens: Lens, *, wavefront: bool = False, notes=()) -> dict:
     """The report of an object-space telecentric lens as a JSON-ready dict (see the module
     docstring for units)."""
+    _check_arguments(lens, wavefront, notes)
     pd = paraxial.paraxial_data(lens)
     d = distortion(lens)
     spot = rms_spot(lens)
@@ -123,6 +140,13 @@ def telecentric_report_data(lens: Lens, *, wavefront: bool = False, notes=()) ->
 def format_telecentric_report(data: dict, surface_table: list[str] | None = None) -> str:
     """The human-readable report of an object-space telecentric lens; ``surface_table`` the
     prescription's lines."""
+    if not isinstance(data, dict) or data.get("object_space_telecentric") is not True:
+        # before: a KeyError ('exit_pupil', 'object_na') or "not subscriptable"
+        raise ValueError("format_telecentric_report: data must be the dict of "
+                         "telecentric_report_data (an object-space telecentric lens's report), "
+                         f"got {type(data).__name__}"
+                         + (" without 'object_space_telecentric': True" if isinstance(data, dict)
+                            else ""))
     xp = data["exit_pupil"]
     rows = [
         ("Object-space NA", data["object_na"], ""),

@@ -137,10 +137,15 @@ def stop_clipping(lens: Lens) -> StopClip | None:
         lens: the lens (concrete values: under ``jax.jit`` nothing is computed and None
             comes back).
     """
+    if not isinstance(lens, Lens):  # before: an AttributeError on .epd
+        raise TypeError(f"stop_clipping: lens must be a jaxlens.Lens, got "
+                        f"{type(lens).__name__}")
     leaves = (lens.epd, lens.surfaces[lens.stop].semi_diameter, lens.thickness,
               lens.wavelengths)
     if any(checks.is_traced(v) for v in leaves):
         return None
+    # A primary wavelength outside a glass's data made the rim ray NaN: "no clipping".
+    checks.primary_wavelength(lens, "stop_clipping", "the rim ray's")
     radius = _stop_radius(lens)
     if not math.isfinite(radius):
         return None

@@ -153,3 +153,13 @@ def write_table_md(table: dict, path: str, order: list[str]) -> None:
               f"column's wall time (all its seeds designed together) / seeds.{load}", ""]
     with open(path, "w") as f:
         f.write("\n".join(lines))
+
+
+if __name__ == "__main__":  # before: it ran as a module, did nothing and exited 0
+    import sys
+
+    print("python -m jaxlens.experiments.ablation_table: error: this module holds the Table 1 "
+          "helpers and is no command; the table is built by python -m "
+          "jaxlens.experiments.classical --ablation (--ablation-out DIR, --columns ...)",
+          file=sys.stderr)
+    sys.exit(2)

@@ -69,6 +69,7 @@ from jaxlens.experiments.runfolder import (
     RunFolder,
     UsageError,
     check_writable,
+    comma_ints,
     fail,
     given_options,
 )
@@ -272,8 +273,11 @@ def check_args(args, given=None) -> None:
             raise ValueError(f"{w}: {flag} must be comma-separated names without an empty "
                              f"one, got {text!r}")
     if args.seed_list is not None:
-        parts = [p.strip() for p in args.seed_list.split(",")]
-        if not parts or not all(p.isdigit() for p in parts):
+        try:  # ASCII digits (str.isdigit took "١", read as 1)
+            parts = [p for p in comma_ints(args.seed_list) if p >= 0]
+        except ValueError:
+            parts = []
+        if len(parts) != len(args.seed_list.split(",")):
             raise ValueError(f"{w}: --seed-list must be comma-separated whole numbers >= 0, got "
                              f"{args.seed_list!r}")
         if len(set(map(int, parts))) < len(parts):  # a repeat is the same design twice
@@ -303,9 +307,12 @@ def check_args(args, given=None) -> None:
                          f"give one of them")
     if args.columns is not None:
         names = [c for c, _ in ABLATION_COLUMNS]
-        bad = [c.strip() for c in args.columns.split(",") if c.strip() not in names]
+        given = [c.strip() for c in args.columns.split(",")]
+        bad = [c for c in given if c not in names]
         if bad or not args.columns.strip():
             raise ValueError(f"{w}: --columns takes names from {names}, got {args.columns!r}")
+        if len(set(given)) < len(given):  # one column designed twice, one table row
+            raise ValueError(f"{w}: --columns names a column more than once: {args.columns!r}")
 
 
 def _no_ignored_options(args, w: str, given=None) -> None:

@@ -50,6 +50,15 @@ def given_options(build_parser, argv) -> frozenset[str]:
     return frozenset(k for k, v in vars(p.parse_args(argv)).items() if v is not unset)
 
 
+def comma_ints(text: str) -> tuple[int, ...]:
+    """A comma-separated list of whole numbers written in ASCII digits, each as
+    ``checks.cli_int`` reads one (``str.isdigit`` took other digit scripts: ``"١"`` ran as
+    seed 1); an empty entry raises ``ValueError`` (``"0,,1"`` lost the seed typed there)."""
+    from jaxlens.optics.checks import cli_int
+
+    return tuple(cli_int(v) for v in text.split(","))
+
+
 def fail(prog: str, error: Exception) -> int:
     """Print one line for a refused option and return exit status 2."""
     print(f"{prog}: error: {' '.join(str(error).split())}", file=sys.stderr)

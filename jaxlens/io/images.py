@@ -403,11 +403,18 @@ def scene(name: str = "astronaut", size: tuple[int, int] | None = None) -> np.nd
 def _images(reference, test, where):
     """Two float64 images of one shape, non-empty and finite: NaN pixels made the score NaN
     and two empty images scored inf (identical)."""
-    kinds = [np.asarray(x).dtype.kind for x in (reference, test)]
-    if any(k not in "iubf" for k in kinds):  # complex pixels lost their imaginary part
+    dts = [np.asarray(x).dtype for x in (reference, test)]
+    kinds = [d.kind for d in dts]
+    if any(k not in "iuf" for k in kinds):  # complex pixels lost their imaginary part, and
+        # bool images scored 0 dB (True - False as numbers)
         raise ValueError(f"{where}: reference and test must be real images, got dtypes "
-                         f"{np.asarray(reference).dtype} and {np.asarray(test).dtype}")
-    if len(set(k in "iub" for k in kinds)) > 1:  # a [0, 1] float image against 0…255 scored
+                         f"{dts[0]} and {dts[1]}")
+    if all(k in "iu" for k in kinds) and dts[0] != dts[1]:  # uint8 against uint16 codes:
+        # 0…255 against 0…65535 scored 0.03 dB
+        raise ValueError(f"{where}: integer images must be of one dtype (one code range), got "
+                         f"{dts[0]} and {dts[1]}; convert both with "
+                         f"jaxlens.io.images.to_linear")
+    if len(set(k in "iu" for k in kinds)) > 1:  # a [0, 1] float image against 0…255 scored
         raise ValueError(f"{where}: reference and test must be on one scale, got dtypes "
                          f"{np.asarray(reference).dtype} and {np.asarray(test).dtype} (an "
                          f"integer image is 0…255 or 0…65535, a float image 0…1); convert "
@@ -415,8 +422,9 @@ def _images(reference, test, where):
     a, b = np.asarray(reference, np.float64), np.asarray(test, np.float64)
     if a.shape != b.shape:
         raise ValueError(f"{where}: shapes differ: {a.shape} and {b.shape}")
-    if a.size == 0:
-        raise ValueError(f"{where}: the images are empty, shape {a.shape}")
+    if a.size == 0 or a.ndim == 0:  # two numbers scored as 1-pixel images
+        raise ValueError(f"{where}: the images are empty or not arrays of pixels, shape "
+                         f"{a.shape}")
     checks.finite_array(a, "reference", where)
     checks.finite_array(b, "test", where)
     return a, b
@@ -432,6 +440,13 @@ def _data_range(a, b, data_range, where):
             raise ValueError(f"{where}: data_range {data_range:g} for images whose values lie "
                              f"in [-1, 1] (largest |value| {peak:g}): the range of 0…255 codes "
                              f"given for float images? Use 1 for [0, 1] images")
+        span = float(max(np.max(a), np.max(b)) - min(np.min(a), np.min(b)))
+        if span > 2 * data_range:  # 0…255 floats with data_range 1 scored -8 dB (a restored
+            # image may overshoot its range a little: up to twice it is taken)
+            raise ValueError(f"{where}: data_range {data_range:g} for images whose values span "
+                             f"{span:g}, more than twice it: the range of [0, 1] images given "
+                             f"for 0…255 values? data_range is the peak-to-peak range of pixel "
+                             f"values (1 for [0, 1] images, 255 for 0…255)")
         return float(data_range)
     return float(max(np.max(a), np.max(b)) - min(np.min(a), np.min(b), 0.0)) or 1.0
 
@@ -439,7 +454,11 @@ def _data_range(a, b, data_range, where):
 def psnr(reference, test, *, data_range=None) -> float:
     """Peak signal-to-noise ratio (dB), ``skimage.metrics.peak_signal_noise_ratio``.
 
-    ``data_range`` defaults to the span of the two images (1 for [0, 1] images).
+    ``data_range`` defaults to the span of the two images (1 for [0, 1] images); a given
+    one may not be less than half their values' span. The images are float (linear or
+    encoded, in [0, 1]) or both integer codes of one dtype (uint8 against uint8); bool and
+    complex images, and an integer image against a float one or against another integer
+    dtype, are refused.
     """
     from skimage.metrics import peak_signal_noise_ratio
 
@@ -454,6 +473,9 @@ def ssim(reference, test, *, data_range=None) -> float:
     from skimage.metrics import structural_similarity
 
     a, b = _images(reference, test, "ssim")
+    if a.ndim > 3:  # skimage spoke of win_size
+        raise ValueError(f"ssim: images must be [H, W] or [H, W, C] (channels last), got shape "
+                         f"{a.shape}")
     kw = {"channel_axis": -1} if a.ndim == 3 else {}
     side = min(a.shape[:2]) if a.ndim >= 2 else a.shape[0]
     if side < 7:  # skimage's own message spoke of win_size and channel_axis, not given here

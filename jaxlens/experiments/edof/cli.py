@@ -64,6 +64,7 @@ from jaxlens.experiments.runfolder import (
     RunFolder,
     UsageError,
     check_writable,
+    comma_ints,
     fail,
     refuse_inside_out,
 )
@@ -84,11 +85,11 @@ COMPILE_CACHE = "compile_cache"
 def _ints(text: str) -> tuple[int, ...]:
     """``--seeds``: comma-separated whole numbers (an empty entry was dropped: "0,,1" ran
     seeds 0 and 1, a seed typed between them lost)."""
-    parts = [v.strip() for v in text.split(",")]
-    if not all(v.lstrip("-").isdigit() for v in parts):
+    try:  # ASCII digits only (str.isdigit took "١" and int() read it as 1)
+        return comma_ints(text)
+    except ValueError:
         raise argparse.ArgumentTypeError(f"must be comma-separated whole numbers without an "
-                                         f"empty one, got {text!r}")
-    return tuple(int(v) for v in parts)
+                                         f"empty one, got {text!r} (ASCII digits)") from None
 
 
 def build_parser() -> argparse.ArgumentParser:
