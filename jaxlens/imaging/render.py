@@ -92,7 +92,7 @@ from ..optics.lens import Lens, Sensor
 from ..optics.rays import Rays
 from ..tracing.backward import trace_backward
 from ..tracing.forward import DEFAULT_NEWTON_ITERS
-from . import sampling
+from . import sampling, telecentric
 from .aiming import apertured, ideal_to_field, image_scale
 from .distortion import alignment_penalty, inverse_distortion_map, prewarp
 from .grid import (
@@ -130,7 +130,10 @@ def _backward_valid(lens, origin, lm, wl, newton_iters):
     d = jnp.concatenate([lm, -n[..., None]], -1)
     o = jnp.broadcast_to(origin, d.shape)
     ok = jnp.sum(lm * lm, -1) < 1.0
-    return trace_backward(lens, Rays(o, d, wl, ok), newton_iters=newton_iters).valid
+    out = trace_backward(lens, Rays(o, d, wl, ok), newton_iters=newton_iters)
+    if lens.telecentric_object:  # the object cone (its NA) is the system aperture
+        return out.valid & telecentric.in_cone(lens, out.direction)
+    return out.valid
 
 
 def _footprint(lens, origin, wl, lm0, half, newton_iters):
@@ -322,8 +325,9 @@ def _render_ray(lens, scene, key, depth, wls, pixel_size, footprints, *, resolut
     pixel_size = pixel_size.astype(dtype)
     lens = lens.astype(dtype)
     wls = wls.astype(dtype)
-    k_scale = image_scale(lens)
-    zep = paraxial.entrance_pupil_z(lens)
+    k_scale = image_scale(lens)  # mm per tanθ, or m (image mm per object mm)
+    tele = lens.telecentric_object
+    zep = jnp.zeros((), dtype) if tele else paraxial.entrance_pupil_z(lens)
     fp_cen, fp_rad, fp_margin, e0 = jax.lax.stop_gradient(
         (footprints.center, footprints.radius, footprints.margin, footprints.e0))
     fp_cen, fp_rad, fp_margin, e0 = (a.astype(dtype) for a in (fp_cen, fp_rad, fp_margin, e0))
@@ -364,6 +368,8 @@ def _render_ray(lens, scene, key, depth, wls, pixel_size, footprints, *, resolut
             out = trace_backward(lens, Rays(o, d, wl, inside), newton_iters=newton_iters)
             bz = out.direction[..., 2]
             ok = out.valid & (bz < 0)
+            if tele:  # only rays inside the object cone carry light
+                ok = ok & telecentric.in_cone(lens, out.direction)
             bz = jnp.where(ok, bz, -1.0)
             if depth is None:
                 tx_, ty_ = out.direction[..., 0] / bz, out.direction[..., 1] / bz
@@ -371,7 +377,9 @@ def _render_ray(lens, scene, key, depth, wls, pixel_size, footprints, *, resolut
                 s = (-depth - out.origin[..., 2]) / bz
                 xo = out.origin[..., 0] + s * out.direction[..., 0]
                 yo = out.origin[..., 1] + s * out.direction[..., 1]
-                tx_, ty_ = -xo / (zep + depth), -yo / (zep + depth)
+                # Field coordinates (aiming.field_coordinates): the object point itself for
+                # a telecentric lens, else tanθ seen from the entrance pupil.
+                tx_, ty_ = (xo, yo) if tele else (-xo / (zep + depth), -yo / (zep + depth))
             r_sc, c_sc = scene_coords(scene.shape[:2], resolution, pixel_size,
                                        k_scale * tx_, k_scale * ty_)
             val = bilinear(img, r_sc, c_sc)
@@ -573,10 +581,6 @@ def render(
             non-positive spp, a missing sensor, an unknown method or a non-positive depth.
     """
     checks.focal_image(lens, "render")
-    # Its pixels are field angles (tan θ through image_scale); an object-height scene is
-    # not implemented.
-    paraxial.finite_pupil(lens, "render", "render maps scene pixels to field angles; for an "
-                          "object-height scene convolve with psf at several object heights")
     if isinstance(method, str):
         raise TypeError(f"render: method is a render method object, not a string: use "
                         f"RayRender(...) or PSFRender(kernel_size=...), got {method!r}")
@@ -656,6 +660,9 @@ def render(
                           _tile_shape(sensor.resolution, int(patch)), scene.shape[-1],
                           scene.dtype.itemsize)
     depth = sampling.lens_depth(lens, depth, "render")
+    telecentric.object_plane(lens, depth, "render")  # its scene: object heights (mm)
+    if lens.telecentric_object:
+        image_scale(lens)  # its m: finite and nonzero, checked before tracing
     lens = eqx.tree_at(lambda m: m.vignetting, apertured(lens), None,  # "Vignetting factors"
                        is_leaf=lambda x: x is None)
     key = jnp.asarray(key) if not isinstance(key, jax.Array) else key
