@@ -100,6 +100,19 @@ def test_a_relay_renders_the_object_inverted_at_half_size():
     np.testing.assert_allclose(np.asarray(img)[..., 0][inner], want[inner], atol=5e-3)
     # Not upright-at-half (m = +0.5) nor full size: the pattern's slopes tell.
     assert np.max(np.abs(want - (a + b * x / 0.5 + c * y / 0.5))) > 0.1
+
+
+@pytest.mark.slow
+def test_the_psf_method_renders_the_relay_the_same():
+    """The PSF method (distortion map, PSFs at object heights, the illumination map) samples
+    the linear pattern at the pixel centres: exact."""
+    lens = _relay()
+    sensor = jl.Sensor(resolution=(8, 12), pixel_size=0.05)
+    X, Y = _object_grid((16, 24), sensor, -0.5)
+    scene = jnp.asarray((1.0 + 0.3 * X - 0.2 * Y)[..., None])
+    x, y = _sensor_points(sensor)
+    want = 1.0 + 0.3 * x / -0.5 - 0.2 * y / -0.5
+    inner = np.s_[1:-1, 1:-1]
     psf = render.render(lens, scene, spp=4, key=KEY, sensor=sensor, wavelengths=WL,
                         method=render.PSFRender(kernel_size=3))
     np.testing.assert_allclose(np.asarray(psf)[..., 0][inner], want[inner], atol=1e-9)
@@ -109,7 +122,8 @@ def test_a_white_object_renders_the_share_of_the_cone_the_first_lens_passes():
     """Round 42a's closed form: the first lens (rim R) keeps the slopes within R/f1 of
     −h/f1 of the cone |s| <= tan u; the irradiance is the cone's projected solid angle there
     (cos⁴γ over the slopes, numpy quadrature) relative to the axis's; no cos⁴ falloff of the
-    field. Monte-Carlo: spp = 256 stratified rays per pixel, about 1e-2."""
+    field. The pixel (1 mm on the object plane) averages it: 8 × 8 points over each pixel.
+    Monte-Carlo: spp = 256 stratified rays per pixel, about 1e-2."""
     f1, na, rim = 50.0, 0.05, 3.5
     lens = _relay(f1=f1, na=na, rim=rim)
     sensor = jl.Sensor(resolution=(5, 5), pixel_size=0.5)  # heights to 2√2 mm
@@ -126,9 +140,16 @@ def test_a_white_object_renders_the_share_of_the_cone_the_first_lens_passes():
     def omega(hh):
         return np.sum(w * (cone & (sx**2 + (sy + hh / f1) ** 2 <= (rim / f1) ** 2)))
 
-    want = np.vectorize(omega)(h) / omega(0.0)
+    q = (np.arange(8) + 0.5) / 8 - 0.5  # pixel-average points (fractions of a pixel)
+    want = np.array([[np.mean([omega(np.hypot(xx + a * 0.5, yy + b * 0.5) / 0.5)
+                               for a in q for b in q]) for xx, yy in zip(xr, yr, strict=True)]
+                     for xr, yr in zip(x, y, strict=True)]) / omega(0.0)
     assert want.min() < 0.6
-    np.testing.assert_allclose(img, want, atol=2e-2)
+    # Per pixel the valid share's Monte-Carlo noise reaches 3.5e-2 (measured); the pixels of
+    # one |x|, |y| pair (the lens is round) average it down.
+    np.testing.assert_allclose(img, want, atol=5e-2)
+    sym = lambda a: (a + a[::-1] + a[:, ::-1] + a[::-1, ::-1]) / 4  # noqa: E731
+    np.testing.assert_allclose(sym(img), sym(want), atol=2e-2)
 
 
 def _open(lens):
@@ -136,15 +157,16 @@ def _open(lens):
                        [jnp.inf for _ in lens.surfaces])
 
 
+@pytest.mark.slow
 def test_blob_centroids_match_optiland():
     """A Gaussian object blob (σ = 0.45 mm) on round 42a's triplet: the first moment of the
     rendered irradiance against optiland's flux-weighted mean landing point of the blob's
     light. The blob's image spans ~2 sensor pixels (σ), so the pixel-sum first moment equals
     the continuous one to e^(−2π²·4); the scene's bilinear lookup adds Δ²/6 to the blob's
     variance (1e-6 mm through the map's curvature). What remains is the Monte-Carlo noise
-    of the ray render, σ_image/sqrt(rays over the blob) ≈ 0.3 mm/sqrt(1e5): a few 1e-4 mm
-    at worst; 5e-4 mm is the tolerance. The chief ray (no blob) lies 5e-3 mm away from the
-    centroid: the test tells them apart."""
+    of the ray render: 1.5e-3 mm measured at spp = 64 (about 800 rays over the blob's
+    core), so 2e-3 mm at spp = 256. The chief ray lies 5e-3 to 8e-3 mm from the centroid
+    and m·X0 up to 1.4e-2 mm: the test tells them apart."""
     ref = json.loads((DATA / "tele43a" / "tele_triplet_far_blobs.json").read_text())
     lens = _open(jl.load(DATA / "tele42a" / "tele_triplet_far.zmx"))
     m = float(paraxial.magnification(lens))
@@ -155,13 +177,13 @@ def test_blob_centroids_match_optiland():
     for blob in ref["blobs"]:
         (x0, y0), s = blob["centre"], blob["sigma"]
         f = np.exp(-((X - x0) ** 2 + (Y - y0) ** 2) / (2 * s * s))
-        img = np.asarray(render.render(lens, jnp.asarray(f[..., None]), spp=64, key=KEY,
+        img = np.asarray(render.render(lens, jnp.asarray(f[..., None]), spp=256, key=KEY,
                                        sensor=sensor, wavelengths=[ref["wavelength_um"]]))
         e = img[..., 0]
         got = np.array([np.sum(e * x), np.sum(e * y)]) / np.sum(e)
-        np.testing.assert_allclose(got, blob["centroid"], rtol=0, atol=5e-4)
+        np.testing.assert_allclose(got, blob["centroid"], rtol=0, atol=2e-3)
         if x0 or y0:
-            assert np.max(np.abs(np.array(blob["chief_xy"]) - blob["centroid"])) > 4e-3
+            assert np.max(np.abs(np.array(blob["chief_xy"]) - blob["centroid"])) > 4.5e-3
 
 
 def test_the_render_gradient_matches_central_differences():
@@ -200,7 +222,7 @@ def test_bad_input_names_the_range_and_unit():
     air = jl.Air()
     single = jl.Lens(surfaces=(Stop(), ParaxialSurface(focal_length=50.0)),
                      thickness=jnp.array([25.0, 50.0]), materials=(air, air), stop=0,
-                     object_distance=50.0 - 25.0 + 25.0, object_na=0.05)
+                     object_distance=25.0, object_na=0.05)  # at its focus
     with pytest.raises(ValueError, match=r"image mm per object mm.*finite and nonzero"):
         aiming.image_scale(single)
     with pytest.raises(ValueError, match=r"finite and nonzero"):
@@ -214,3 +236,29 @@ def test_bad_input_names_the_range_and_unit():
     # Object heights given as NaN to the mapping are refused, naming mm.
     with pytest.raises(ValueError, match="mm"):
         aiming.field_to_ideal(lens, jnp.array([0.0, jnp.nan]))
+
+
+def test_the_distortion_figure_of_a_telecentric_relay_reads_zero():
+    """Before: the ideal relay's distortion (1e-14 %, rounding) was drawn as noise on an
+    axis with an offset "1e−14", and the dashed curve's legend named OpticStudio's F-Tan,
+    which has no meaning without a field angle; a field label of −0.0 printed "-0.0"."""
+    import matplotlib
+
+    matplotlib.use("Agg")
+    from jaxlens import plot
+
+    fig = plot.plot_field_curvature(_relay())
+    fig.canvas.draw()
+    ax = fig.axes[1]
+    labels = [t.get_text() for t in ax.get_legend().get_texts()]
+    assert labels == ["against m·h", "against the paraxial chief ray (parallel to the axis "
+                      "at h)"]
+    assert not any("Tan" in t for t in labels)
+    assert ax.xaxis.get_offset_text().get_text() == ""
+    for line in ax.get_lines()[:2]:
+        x = np.asarray(line.get_xdata())
+        assert np.all(x == 0.0) and not np.any(np.signbit(x))
+    ticks = [t.get_text() for t in ax.get_xticklabels()]
+    assert not any(t.lstrip("−-").strip("0.") == "" and t[0] in "−-" for t in ticks), ticks
+    assert plot._field_label(-0.0, _relay()) == "0.0 mm"
+    assert plot._field_label(np.array([-0.0, 2.0])) == "(0.0°, 2.0°)"
