@@ -26,14 +26,13 @@ import json
 import pathlib
 
 import equinox as eqx
-import jax
 import jax.numpy as jnp
 import numpy as np
 import pytest
 
 import jaxlens as jl
 from jaxlens.analysis import aberrations, spots, third_order
-from jaxlens.imaging import aiming, radiometry, render
+from jaxlens.imaging import radiometry
 from jaxlens.optics import paraxial
 from jaxlens.optics.paraxial_surface import ParaxialSurface
 from jaxlens.optics.surfaces import Standard, Stop

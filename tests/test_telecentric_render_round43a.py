@@ -130,7 +130,6 @@ def test_a_white_object_renders_the_share_of_the_cone_the_first_lens_passes():
     img = np.asarray(render.render(lens, jnp.ones((5, 5, 1)), spp=256, key=KEY,
                                    sensor=sensor, wavelengths=WL))[..., 0]
     x, y = _sensor_points(sensor)
-    h = np.hypot(x, y) / 0.5
     tu = na / np.sqrt(1 - na * na)
     g = np.linspace(-tu, tu, 801)
     sx, sy = np.meshgrid(g, g)
@@ -149,7 +148,7 @@ def test_a_white_object_renders_the_share_of_the_cone_the_first_lens_passes():
     # one |x|, |y| pair (the lens is round) average it down.
     np.testing.assert_allclose(img, want, atol=5e-2)
     sym = lambda a: (a + a[::-1] + a[:, ::-1] + a[::-1, ::-1]) / 4  # noqa: E731
-    np.testing.assert_allclose(sym(img), sym(want), atol=2e-2)
+    np.testing.assert_allclose(sym(img), sym(want), atol=3e-2)
 
 
 def _open(lens):
