@@ -12,8 +12,8 @@ Conventions:
     (distortion-free) image of the field (θx, θy) is ``K·(tanθx, tanθy)`` with
     ``K = aiming.image_scale(lens)`` (of an object-space telecentric lens's object point
     (x, y), in mm, ``m·(x, y)``, m its paraxial magnification). The distortion map D sends
-    an ideal position v to the position where the real chief ray (through the centre of the stop, primary
-    wavelength) of that field lands. Grids span the sensor corner to corner
+    an ideal position v to the position where the real chief ray (through the centre of
+    the stop, primary wavelength) of that field lands. Grids span the sensor corner to corner
     (``grid.sensor_grid``: row 0 / column 0 is the top-left pixel of the rendered image).
 
 Pre-warp:

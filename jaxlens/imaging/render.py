@@ -12,6 +12,21 @@ Conventions:
     the entrance pupil, so the scene spans the same angles. Scene pixels are looked up with
     bilinear interpolation; beyond the scene's border its edge pixels extend.
 
+    An object-space telecentric lens (``Lens.object_na``; fields are object heights in mm):
+    the scene is the object plane ``depth`` mm before surface 1 (finite; default the lens's
+    own), and the scene point shown at sensor position u is the object point X = u / m (mm),
+    m = ``image_scale(lens)`` = ``paraxial.magnification(lens)`` at the lens's own object
+    distance (image mm per object mm, m < 0 inverted). The scene so spans the sensor's
+    half-width and half-height over |m| on the object plane (scene pixel (i, j) of an
+    [Hs, Ws] scene shows X = (x, y)/m with x = −(j − (Ws−1)/2)·p·cols/Ws,
+    y = (i − (Hs−1)/2)·p·rows/Hs), as Zemax's image simulation scales an object-height source
+    bitmap by its field height; for m < 0 (an inverted image) the scene is the object as a
+    picture, row 0 at +Y, and the 180° read-out shows it upright, as for a camera lens.
+    A pixel's rays count where they leave into the object cone (slope at most tan u,
+    u = asin(NA/n): the NA is the system aperture), so the radiometry below gives the
+    relative illumination of ``radiometry.relative_illumination`` for heights: vignetting
+    and the local areal magnification, no cos⁴ law (every chief ray is parallel to the axis).
+
     The output is ``[rows, cols, 3]`` for the sensor (``lens.sensor`` or the ``sensor``
     argument), read out rotated by 180° as a camera does, so that a lens renders its scene
     upright: output pixel (r, c) is centred on the sensor point
