@@ -76,6 +76,17 @@ def test_image_scale_is_the_magnification_and_maps_heights_both_ways():
     np.testing.assert_allclose(aiming.field_to_ideal(lens, 4.0), [0.0, -2.0], rtol=1e-15)
     np.testing.assert_allclose(aiming.ideal_to_field(lens, jnp.array([-0.5, 3.0])),
                                [1.0, -6.0], rtol=1e-15)
+    # The scene spans the sensor's half sides over |m| on the object plane (mm) ...
+    sensor = jl.Sensor(resolution=(8, 12), pixel_size=0.05)
+    np.testing.assert_allclose(aiming.scene_extent(lens, sensor), (0.6, 0.4), rtol=1e-14)
+    # ... as an angle lens's spans atan(half side / K) (deg): an ideal f = 50 mm lens.
+    air = jl.Air()
+    camera = jl.Lens(surfaces=(Stop(), ParaxialSurface(focal_length=50.0)),
+                     thickness=jnp.array([0.0, 50.0]), materials=(air, air), stop=0, epd=10.0)
+    np.testing.assert_allclose(aiming.scene_extent(camera, sensor),
+                               np.rad2deg(np.arctan([0.3 / 50.0, 0.2 / 50.0])), rtol=1e-12)
+    with pytest.raises(ValueError, match=r"Sensor.*mm"):
+        aiming.scene_extent(lens)  # the relay has no sensor
 
 
 def test_a_relay_renders_the_object_inverted_at_half_size():

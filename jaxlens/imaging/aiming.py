@@ -16,7 +16,7 @@ import numpy as np
 from jaxtyping import Array, Float
 
 from ..optics import checks, paraxial
-from ..optics.lens import Lens, check_object_distance, unclipped
+from ..optics.lens import Lens, Sensor, check_object_distance, unclipped
 from ..optics.rays import Rays
 from ..tracing.forward import DEFAULT_NEWTON_ITERS, forward_mode_jit, trace
 from . import sampling
@@ -93,6 +93,34 @@ def ideal_to_field(lens: Lens, xy, wavelength=None) -> Float[Array, "*b 2"]:
     object point (x, y) in mm of an object-space telecentric lens (``xy / m``)."""
     t = jnp.asarray(xy) / image_scale(lens, wavelength)
     return t if lens.telecentric_object else jnp.rad2deg(jnp.arctan(t))
+
+
+def scene_extent(lens: Lens, sensor=None) -> tuple[float, float]:
+    """The half-width and half-height of the scene that ``render`` shows on ``sensor``
+    (default ``lens.sensor``), in the lens's field unit: the fields whose distortion-free
+    images lie at the sensor's edges (half its width and height from the centre).
+
+    For field angles: degrees, atan(half side / K) (the half field of view). For an
+    object-space telecentric lens: mm on the object plane, half side / |m| (the object
+    heights a scene spans; Zemax's image simulation asks for this as the source's field
+    height). The scene fills the sensor so; to show a smaller object, pad the scene.
+
+    Raises:
+        ValueError: for a missing sensor, a lens with an afocal image space, or a
+            telecentric lens whose image lies at infinity (``image_scale``).
+    """
+    sensor = lens.sensor if sensor is None else sensor
+    if not isinstance(sensor, Sensor):
+        raise ValueError(f"scene_extent: sensor must be a jaxlens.Sensor (the lens has none: "
+                         f"pass sensor=jaxlens.Sensor(resolution, pixel_size in mm)), got "
+                         f"{sensor!r}")
+    rows, cols = sensor.resolution
+    half = 0.5 * float(sensor.pixel_size) * np.array([cols, rows], float)  # mm
+    k = abs(float(image_scale(lens)))
+    if lens.telecentric_object:
+        return float(half[0] / k), float(half[1] / k)
+    deg = np.rad2deg(np.arctan(half / k))
+    return float(deg[0]), float(deg[1])
 
 
 def stop_chief_ray(lens: Lens, field, depth=None, wavelength=None, *,
