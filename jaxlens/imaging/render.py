@@ -575,7 +575,8 @@ def render(
             kernel pixel in each patch's PSF (spp·kernel_size² per channel).
         key: PRNG key (``jax.random.PRNGKey``); the same key gives the same image.
         depth: object distance in mm in front of surface 1, ``inf`` for infinity; None
-            (default) for the lens's own object (``lens.object_distance``).
+            (default) for the lens's own object (``lens.object_distance``). Finite for an
+            object-space telecentric lens (its scene is the object plane, in mm).
         method: ``RayRender(footprint_grid, footprints)`` (backward tracing, the default)
             or ``PSFRender(kernel_size)`` (patch-wise PSF convolution).
         wavelengths: one wavelength (µm) per channel, default the C, d, F lines for R, G, B.
@@ -593,7 +594,9 @@ def render(
     Raises:
         ValueError: for a scene that is not ``[H, W, C]`` float, finite and non-negative,
             with C matching the wavelengths, an aspect ratio unlike the sensor's, a
-            non-positive spp, a missing sensor, an unknown method or a non-positive depth.
+            non-positive spp, a missing sensor, an unknown method or a non-positive depth;
+            for an object-space telecentric lens an object at infinity, or a paraxial
+            magnification that is not finite and nonzero (its image at infinity).
     """
     checks.focal_image(lens, "render")
     if isinstance(method, str):
