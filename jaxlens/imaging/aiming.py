@@ -31,15 +31,8 @@ def apertured(lens: Lens) -> Lens:
 
     Overfilled beams rely on the stop to clip them; a stop with ``semi_diameter = inf``
     gets the radius that the entrance pupil diameter implies. A lens whose stop is bounded
-    (a concrete value, checked outside jit) is returned as it is, at no cost. So is an
-    object-space telecentric lens (``Lens.object_na``): its object NA bounds its cones
-    (its system aperture; ``telecentric.in_cone``), and a stop given the paraxial marginal
-    ray's radius would clip the real rays of its off-axis cones, which overstep it (a
-    white render of round 42a's open triplet fell to 0.59 at 10 mm where its relative
-    illumination is 0.71).
+    (a concrete value, checked outside jit) is returned as it is, at no cost.
     """
-    if lens.telecentric_object:
-        return lens
     sd = lens.surfaces[lens.stop].semi_diameter
     if not isinstance(sd, jax.core.Tracer) and bool(np.all(np.isfinite(np.asarray(sd)))):
         return lens

@@ -280,9 +280,10 @@ def relative_illumination(
     checks.lens_intact(lens, where)
     wl = checks.wavelengths(lens, wl, where)
     depth = sampling.lens_depth(lens, depth, where)
-    # A telecentric lens's cone is bounded by its NA (see the module notes): ``apertured``
-    # leaves its stop as it is.
-    ri, e, cen = relative_illumination_samples(apertured(lens), f, depth, wl,
+    # A telecentric lens's cone is bounded by its NA (see the module notes), not by a stop
+    # given the paraxial marginal ray's radius, which the real rays of the cone overstep.
+    ri, e, cen = relative_illumination_samples(lens if lens.telecentric_object else
+                                               apertured(lens), f, depth, wl,
                                                n_coarse=max(16, pupil // 3), n_fine=int(pupil),
                                                newton_iters=newton_iters)
     return RelativeIllumination(f, cen, ri, e)
