@@ -129,6 +129,7 @@ def test_the_psf_method_renders_the_relay_the_same():
     np.testing.assert_allclose(np.asarray(psf)[..., 0][inner], want[inner], atol=1e-9)
 
 
+@pytest.mark.slow  # 15 s; the next test checks the illumination against optiland
 def test_a_white_object_renders_the_share_of_the_cone_the_first_lens_passes():
     """Round 42a's closed form: the first lens (rim R) keeps the slopes within R/f1 of
     −h/f1 of the cone |s| <= tan u; the irradiance is the cone's projected solid angle there
