@@ -71,7 +71,16 @@ def _field_label(f, lens=None) -> str:
     """A field for a legend: degrees, or mm for an object-space telecentric lens's object
     heights."""
     u = " mm" if getattr(lens, "telecentric_object", False) else "°"
+    f = np.asarray(f, float) + 0.0  # −0.0 + 0.0 is 0.0: no "-0.0" label
     return f"{f:.1f}{u}" if np.ndim(f) == 0 else f"({f[0]:.1f}{u}, {f[1]:.1f}{u})"
+
+
+def _denoised(v, floor: float = 1e-9):
+    """Plotted values with rounding noise (|v| below ``floor`` in their unit, e.g. % of
+    distortion) and negative zeros set to 0.0, so that an axis of noise reads 0, not an
+    offset of 1e-14 or "-0.000000"."""
+    v = np.asarray(v, float)
+    return np.where(np.abs(v) < floor, 0.0, v) + 0.0
 
 
 def _profile(surface, r):
@@ -424,11 +433,13 @@ def plot_field_curvature(lens, *, wavelengths=None, title: str | None = None) ->
     ax.legend(fontsize=6)
     ax.set_title("field curvature", fontsize=8)
     ax = fig.add_subplot(1, 2, 2)
-    # Distortion is 0/0 on axis: drawn from the first field off it.
-    ax.plot(np.asarray(dist.percent_ftan)[1:], th[1:], color="k", lw=1,
+    # Distortion is 0/0 on axis: drawn from the first field off it. Rounding noise (an
+    # ideal lens's 1e-14 %) is drawn as the 0 it is: its axis read "1e-14" and "-0.000000".
+    ax.plot(_denoised(dist.percent_ftan)[1:], th[1:], color="k", lw=1,
             label="against m·h" if tele else "against f·tanθ")
-    ax.plot(np.asarray(dist.percent_paraxial)[1:], th[1:], color="k", lw=1, ls="--",
-            label="against the paraxial chief ray (OpticStudio's F-Tan)")
+    ax.plot(_denoised(dist.percent_paraxial)[1:], th[1:], color="k", lw=1, ls="--",
+            label="against the paraxial chief ray (parallel to the axis at h)" if tele else
+            "against the paraxial chief ray (OpticStudio's F-Tan)")
     ax.axvline(0, color="k", lw=0.4)
     ax.legend(fontsize=6)
     ax.set_xlabel("distortion (%)")

@@ -136,14 +136,17 @@ def test_image_objective_checks_its_sensor_and_scene_size():
 def test_report_refusal_of_a_telecentric_lens_names_what_to_use():
     """The report refused a telecentric lens (round 38a), naming the analyses that take
     object heights; since round 42a it reports it (object heights, distortion against
-    m·h), and what still refuses such a lens (``image_scale``) names what to use."""
+    m·h), and what still refuses such a lens (``entrance_pupil_z``; ``image_scale`` until
+    round 43a, now its magnification) names what to use."""
     lens = jl.load(DATA / "zmx38a" / "tele_doublet_obna.zmx")
     data = report.report_data(lens)
     assert data["object_space_telecentric"]
     assert [f["height"] for f in data["fields"]] == [0.0, 4.0, 8.0]
-    with pytest.raises(ValueError, match=r"image_scale: the lens is object-space telecentric "
-                       r".*paraxial.magnification.*rms_spot"):
-        jl.imaging.aiming.image_scale(lens)
+    with pytest.raises(ValueError, match=r"entrance_pupil_z: the lens is object-space "
+                       r"telecentric .*paraxial.magnification.*rms_spot.*render"):
+        jl.optics.paraxial.entrance_pupil_z(lens)
+    assert float(jl.imaging.aiming.image_scale(lens)) == float(
+        jl.optics.paraxial.magnification(lens))
     spot = jl.analysis.rms_spot(lens, float(np.max(np.abs(np.asarray(lens.fields)))))
     assert np.all(np.isfinite(np.asarray(spot.polychromatic)))
 

@@ -13,12 +13,11 @@ import pathlib
 import warnings
 
 import jax
-import jax.numpy as jnp
 import numpy as np
 import pytest
 
 from jaxlens import analysis
-from jaxlens.imaging import aiming, psf, radiometry, render, sampling
+from jaxlens.imaging import aiming, psf, radiometry, sampling
 from jaxlens.io import lensfile, zmx
 from jaxlens.optics import paraxial
 from jaxlens.tracing import forward
@@ -91,17 +90,18 @@ def test_pupil_position_refused_and_paraxial_data_say_infinity():
 
 
 def test_analyses_that_need_field_angles_refuse_clearly():
-    """The image scale per tan θ and the render (pixels as field angles) need field angles
+    """A collimated beam and a point source aimed at the entrance pupil need field angles
     toward a finite entrance pupil: each refuses, before tracing, naming what to use.
     (Distortion, Seidel sums, field curvature, the report and the relative illumination
     refused here until round 42a, which gave them object heights:
-    tests/test_telecentric_analyses_round42a.py.)"""
+    tests/test_telecentric_analyses_round42a.py; the image scale and the render until round
+    43a, which maps the object plane by m: tests/test_telecentric_render_round43a.py.)"""
     lens = _load("tele_doublet_obna")
-    for f in (lambda: aiming.image_scale(lens),
-              lambda: render.render(lens, jnp.zeros((4, 4, 1)), spp=1,
-                                    key=jax.random.PRNGKey(0))):
+    for f in (lambda: sampling.collimated(lens, 0.0, np.zeros((1, 2))),
+              lambda: sampling.point_source(lens, np.array([0.0, 4.0, -50.0]), np.zeros((1, 2)))):
         with pytest.raises(ValueError, match="object-space telecentric.*paraxial.magnification"):
             f()
+    assert float(aiming.image_scale(lens)) == float(paraxial.magnification(lens))
     assert np.isfinite(float(analysis.seidel(lens).sums[0]))
     assert np.isfinite(np.asarray(radiometry.relative_illumination(lens, np.array([4.0]),
                                                                    pupil=16).ri)).all()

@@ -3,7 +3,8 @@
 ``stop_chief_ray`` aims the real chief ray at the centre of the stop with the library's one
 2-D Newton solver (``newton.newton_2d``, implicit gradient; re-exported here as
 ``newton_2d``); ``image_scale``/``field_to_ideal``/``ideal_to_field`` map field angles
-(degrees) to distortion-free sensor points ``K·tanθ`` (mm) and back.
+(degrees) to distortion-free sensor points ``K·tanθ`` (mm) and back, and the object heights
+(mm) of an object-space telecentric lens to ``m·h`` (m its paraxial magnification).
 """
 
 from __future__ import annotations
@@ -15,7 +16,7 @@ import numpy as np
 from jaxtyping import Array, Float
 
 from ..optics import checks, paraxial
-from ..optics.lens import Lens, check_object_distance, unclipped
+from ..optics.lens import Lens, Sensor, check_object_distance, unclipped
 from ..optics.rays import Rays
 from ..tracing.forward import DEFAULT_NEWTON_ITERS, forward_mode_jit, trace
 from . import sampling
@@ -42,28 +43,84 @@ def apertured(lens: Lens) -> Lens:
 
 
 def image_scale(lens: Lens, wavelength=None) -> Float[Array, ""]:
-    """K (mm): the paraxial chief-ray height on the image surface per unit tanθ.
+    """K: the scale of the distortion-free image, ideal image point per unit field coordinate.
 
-    The distortion-free image of the field (θx, θy) lies at ``K·(tanθx, tanθy)``; for a lens
-    focused at infinity K is the focal length. The paraxial chief ray is linear in tanθ, so
-    one ray at 45° gives K. An object-space telecentric lens (fields are object heights) is
-    refused: its distortion-free image of the object height h is m·h,
-    m = ``paraxial.magnification(lens)``.
+    For field angles (degrees) K is in mm per unit tanθ: the distortion-free image of the
+    field (θx, θy) lies at ``K·(tanθx, tanθy)``; for a lens focused at infinity K is the
+    focal length. The paraxial chief ray is linear in tanθ, so one ray at 45° gives K.
+
+    For an object-space telecentric lens (``Lens.object_na``; fields are object heights in
+    mm) K is the paraxial magnification m = ``paraxial.magnification(lens)`` (image mm per
+    object mm, no unit; m < 0 for an inverted image): the distortion-free image of the object
+    point (x, y) lies at ``m·(x, y)``, whatever the object distance a render or analysis
+    traces from (the lens's own conjugates set it, as its focal length does for angles).
+
+    Raises:
+        ValueError: for a lens with an afocal image space (no image surface positions), and
+            for a telecentric lens whose m is not finite and nonzero (its image at infinity).
     """
-    paraxial.finite_pupil(lens, "image_scale", "its image scale is the paraxial "
-                          "magnification m (image mm per object mm): paraxial.magnification")
+    checks.focal_image(lens, "image_scale")
+    if lens.telecentric_object:
+        m = paraxial.magnification(lens, wavelength)
+        if not checks.is_traced(m) and not (np.isfinite(float(m)) and float(m) != 0.0):
+            raise ValueError(
+                f"image_scale: the paraxial magnification of this object-space telecentric "
+                f"lens is {float(m):g} (image mm per object mm; it must be finite and "
+                f"nonzero): its image of the object {float(lens.object_distance):g} mm before "
+                f"surface 1 lies at infinity, so object heights have no image positions")
+        return m
     return paraxial.image_height(lens, 45.0, wavelength) / jnp.tan(jnp.deg2rad(45.0))
 
 
+def field_coordinates(lens: Lens, field) -> Float[Array, "*b 2"]:
+    """The field coordinates that ``image_scale`` multiplies: (tanθx, tanθy) of field angles
+    (degrees, θy or (θx, θy)), or the object point (x, y) in mm of an object-space
+    telecentric lens's object heights (y or (x, y))."""
+    if lens.telecentric_object:
+        return sampling.telecentric.height_xy(field, "field_to_ideal")
+    return jnp.tan(sampling.field_xy(field))
+
+
 def field_to_ideal(lens: Lens, field, wavelength=None) -> Float[Array, "*b 2"]:
-    """Distortion-free image position (mm) of a field (degrees, θy or (θx, θy))."""
-    th = sampling.field_xy(field)
-    return image_scale(lens, wavelength) * jnp.tan(th)
+    """Distortion-free image position (mm) of a field: ``K·tanθ`` for angles (degrees, θy or
+    (θx, θy)), ``m·(x, y)`` for the object heights (mm) of an object-space telecentric lens
+    (``image_scale``)."""
+    return image_scale(lens, wavelength) * field_coordinates(lens, field)
 
 
 def ideal_to_field(lens: Lens, xy, wavelength=None) -> Float[Array, "*b 2"]:
-    """Field (θx, θy) in degrees whose distortion-free image lies at ``xy`` (mm)."""
-    return jnp.rad2deg(jnp.arctan(jnp.asarray(xy) / image_scale(lens, wavelength)))
+    """Field whose distortion-free image lies at ``xy`` (mm): (θx, θy) in degrees, or the
+    object point (x, y) in mm of an object-space telecentric lens (``xy / m``)."""
+    t = jnp.asarray(xy) / image_scale(lens, wavelength)
+    return t if lens.telecentric_object else jnp.rad2deg(jnp.arctan(t))
+
+
+def scene_extent(lens: Lens, sensor=None) -> tuple[float, float]:
+    """The half-width and half-height of the scene that ``render`` shows on ``sensor``
+    (default ``lens.sensor``), in the lens's field unit: the fields whose distortion-free
+    images lie at the sensor's edges (half its width and height from the centre).
+
+    For field angles: degrees, atan(half side / K) (the half field of view). For an
+    object-space telecentric lens: mm on the object plane, half side / |m| (the object
+    heights a scene spans; Zemax's image simulation asks for this as the source's field
+    height). The scene fills the sensor so; to show a smaller object, pad the scene.
+
+    Raises:
+        ValueError: for a missing sensor, a lens with an afocal image space, or a
+            telecentric lens whose image lies at infinity (``image_scale``).
+    """
+    sensor = lens.sensor if sensor is None else sensor
+    if not isinstance(sensor, Sensor):
+        raise ValueError(f"scene_extent: sensor must be a jaxlens.Sensor (the lens has none: "
+                         f"pass sensor=jaxlens.Sensor(resolution, pixel_size in mm)), got "
+                         f"{sensor!r}")
+    rows, cols = sensor.resolution
+    half = 0.5 * float(sensor.pixel_size) * np.array([cols, rows], float)  # mm
+    k = abs(float(image_scale(lens)))
+    if lens.telecentric_object:
+        return float(half[0] / k), float(half[1] / k)
+    deg = np.rad2deg(np.arctan(half / k))
+    return float(deg[0]), float(deg[1])
 
 
 def stop_chief_ray(lens: Lens, field, depth=None, wavelength=None, *,

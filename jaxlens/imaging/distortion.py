@@ -10,9 +10,10 @@ distortion from growing without bound.
 Conventions:
     Sensor positions in mm on the image surface, in the frame of ``render``: the ideal
     (distortion-free) image of the field (θx, θy) is ``K·(tanθx, tanθy)`` with
-    ``K = aiming.image_scale(lens)``. The distortion map D sends an ideal position v to the
-    position where the real chief ray (through the centre of the stop, primary
-    wavelength) of that field lands. Grids span the sensor corner to corner
+    ``K = aiming.image_scale(lens)`` (of an object-space telecentric lens's object point
+    (x, y), in mm, ``m·(x, y)``, m its paraxial magnification). The distortion map D sends
+    an ideal position v to the position where the real chief ray (through the centre of
+    the stop, primary wavelength) of that field lands. Grids span the sensor corner to corner
     (``grid.sensor_grid``: row 0 / column 0 is the top-left pixel of the rendered image).
 
 Pre-warp:
@@ -131,8 +132,10 @@ def inverse_distortion_map(
     """D⁻¹ on a grid of sensor points: the ideal position whose chief ray lands there.
 
     Each sensor point sends a ray backward through the lens, aimed by Newton's method (with
-    a forward-mode Jacobian, apertures ignored) at the centre of the stop; where it leaves
-    into object space gives the field, hence the ideal position.
+    a forward-mode Jacobian, apertures ignored) at the centre of the stop (for an
+    object-space telecentric lens: so that it leaves into object space parallel to the axis,
+    its real chief ray); where it leaves into object space gives the field, hence the ideal
+    position (``aiming.field_to_ideal``: K·tanθ, or m·h for object heights h in mm).
 
     Args:
         lens: the lens.
@@ -169,6 +172,7 @@ def inverse_distortion_map(
     checks.number(iters, "iters", where, lo=1, hi=checks.MAX_NEWTON_ITERS, integer=True,
                   unit="aiming iterations")
     depth = sampling.lens_depth(lens, depth, where)
+    sampling.telecentric.object_plane(lens, depth, where)
     checks.primary_wavelength(lens, where, "the chief rays'")
     return _inverse_map(lens, jnp.asarray(pixel_size), depth, resolution=resolution,
                         grid=grid, newton_iters=newton_iters, iters=iters)
@@ -178,7 +182,8 @@ def inverse_distortion_map(
 def _inverse_map(lens, pixel_size, depth, *, resolution, grid, newton_iters, iters):
     dtype = lens.epd.dtype
     pts = sensor_grid(resolution, pixel_size, grid).astype(dtype)
-    k_scale = image_scale(lens)
+    k_scale = image_scale(lens)  # mm per tanθ, or m (image mm per object mm)
+    tele = lens.telecentric_object
     pd = paraxial.paraxial_data(lens)
     zep = pd.entrance_pupil_z
     z_img = lens.image_z()
@@ -203,6 +208,9 @@ def _inverse_map(lens, pixel_size, depth, *, resolution, grid, newton_iters, ite
 
         @checks.inherit  # newton_2d's loop bodies are made on each call
         def at_stop(lm, aim_lens):
+            if tele:  # the chief ray leaves the object parallel to the axis
+                out = trace_backward(aim_lens, ray(lm, o), newton_iters=newton_iters)
+                return out.direction[0, :2]
             out = trace_backward(aim_lens, ray(lm, o), newton_iters=newton_iters,
                                  upto=lens.stop)
             return out.origin[0, :2]
@@ -216,7 +224,7 @@ def _inverse_map(lens, pixel_size, depth, *, resolution, grid, newton_iters, ite
         else:
             s = (-depth - out.origin[0, 2]) / bz
             p = out.origin[0, :2] + s * d[:2]
-            t = -p / (zep + depth)
+            t = p if tele else -p / (zep + depth)  # aiming.field_coordinates
         return k_scale * t
 
     return jax.vmap(jax.vmap(solve))(pts)

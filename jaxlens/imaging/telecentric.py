@@ -137,3 +137,25 @@ def largest_height(lens: Lens) -> Array:
     """The lens's largest object height (mm): radial for (x, y) fields."""
     f = jnp.asarray(lens.fields)
     return jnp.max(jnp.sqrt(jnp.sum(f * f, -1)) if f.ndim == 2 else jnp.abs(f))
+
+
+def in_cone(lens: Lens, direction: Float[Array, "*b 3"]) -> Array:
+    """Whether object-space ray directions (``[..., 3]``, either sense along z, as a backward
+    trace leaves them) lie in the object cone of an object-space telecentric lens: slope
+    |(dx, dy)/dz| at most tan u, u = asin(NA / n) (``paraxial.object_slope``), the cone that
+    ``source`` launches. The object NA is such a lens's system aperture: a ray from the object
+    outside the cone carries no light into the system, whichever stop it would pass
+    (``radiometry`` bounds the cone the same way)."""
+    t = paraxial.object_slope(lens).astype(direction.dtype)
+    return jnp.sum(direction[..., :2] ** 2, -1) <= (t * direction[..., 2]) ** 2
+
+
+def object_plane(lens: Lens, depth, where: str) -> None:
+    """Refuse an object at infinity (``depth`` None, as ``sampling.lens_depth`` returns it)
+    for an object-space telecentric lens in ``where``, whose scene is the object plane in
+    object heights (mm). Other lenses pass."""
+    if lens.telecentric_object and depth is None:
+        raise ValueError(f"{where}: the lens is object-space telecentric (Lens.object_na): its "
+                         f"object is a plane of object heights (mm), so depth must be a "
+                         f"finite object distance in mm (> 0, before surface 1); got an object "
+                         f"at infinity")

@@ -218,7 +218,8 @@ def finite_pupil(lens: Lens, where: str, instead: str = "") -> None:
             f"does not apply{'; ' + instead if instead else ''}; paraxial_data gives its "
             f"first-order data, paraxial.magnification its image scale, and rms_spot, "
             f"chief_ray, distortion, field_curvature, seidel, relative_illumination, "
-            f"ray_fan, wavefront, psf, mtf and report take its object heights")
+            f"ray_fan, wavefront, psf, mtf, render (an object-plane scene) and report take "
+            f"its object heights")
 
 
 def object_slope(lens: Lens) -> Array:
