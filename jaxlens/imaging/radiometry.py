@@ -64,7 +64,8 @@ from . import sampling, telecentric
 from .aiming import apertured
 from .grid import pupil_cells
 
-__all__ = ["RelativeIllumination", "relative_illumination", "star_region"]
+__all__ = ["RelativeIllumination", "beam_bounded", "pupil_bounded", "relative_illumination",
+           "star_region"]
 
 
 def star_region(valid_fn, center, half, *, n_coarse: int = 24, n_dirs: int = 128,
@@ -152,14 +153,17 @@ def _irradiance(lens: Lens, t, depth, wl, n_coarse, n_fine, newton_iters):
             d = d / jnp.linalg.norm(d)
             return Rays(o_plane, jnp.broadcast_to(d, o_plane.shape), wl)
         p = jnp.concatenate([s, -depth[None]])
-        v = o_plane - p
-        d = v / jnp.linalg.norm(v, axis=-1, keepdims=True)
+        # toward +z: a virtual object (after surface 1) lies after the pupil points
+        d = sampling.line_direction(p, o_plane)
         return Rays(jnp.broadcast_to(p, o_plane.shape), d, wl)
 
     def passed(pts, out):
-        # A telecentric lens's object NA bounds its cone (its system aperture): a stop wider
-        # than the cone passes no more light than the NA lets in.
-        if not tele:
+        # The system aperture bounds the beam as well as the lens's apertures do (a stop wider
+        # than the aperture's beam passes no more light than it lets in): a telecentric lens's
+        # object NA (its cone of slopes) and, under paraxial aiming, the entrance pupil (the
+        # EPD's disc on the paraxial pupil's plane). Aimed lenses are bounded at the stop
+        # (``beam_bounded``).
+        if not pupil_bounded(lens):
             return out.valid
         return out.valid & (jnp.sum(pts * pts, -1) <= r_ep * r_ep)
 
@@ -198,6 +202,32 @@ def _irradiance(lens: Lens, t, depth, wl, n_coarse, n_fine, newton_iters):
     else:
         e = area * mean_cos4 / (zep + depth) ** 2 / det
     return e, cen
+
+
+def pupil_bounded(lens: Lens) -> bool:
+    """Whether the system aperture bounds the beam on the pupil's plane (see "System
+    aperture" in the module notes): an object-space telecentric lens's NA (the cone's
+    slopes) and, under paraxial aiming, the entrance pupil's disc; an aimed lens's beam is
+    bounded at the stop (``beam_bounded``)."""
+    return lens.telecentric_object or lens.aim == "paraxial"
+
+
+def beam_bounded(lens: Lens, depth=None) -> Lens:
+    """The lens whose apertures bound the beam that its aperture admits (see "System
+    aperture" in the module notes): its unbounded stop given the EPD's paraxial stop radius
+    (``aiming.apertured``) and, where ``Lens.aim`` aims rays at the stop, a stop wider than the
+    aimed beam narrowed to it, ``sampling.stop_radius`` of the aim's stop size. An object-space
+    telecentric lens is returned as it is (its NA bounds the cone, in ``_irradiance``).
+    ``depth``: None (infinity) or the object distance, mm, as ``lens_depth`` gives it."""
+    if lens.telecentric_object:
+        return lens
+    lens = apertured(lens)
+    if pupil_bounded(lens):  # bounded on the entrance pupil's plane, in _irradiance
+        return lens
+    beam = jnp.abs(sampling.stop_radius(lens, sampling.AIM_STOP_SIZE[lens.aim],
+                                        object_z=None if depth is None else -depth))
+    sd = lens.surfaces[lens.stop].semi_diameter
+    return eqx.tree_at(lambda m: m.surfaces[m.stop].semi_diameter, lens, jnp.minimum(sd, beam))
 
 
 # A folded lens compiles with XLA's loop emitters (forward.LOOP_EMITTERS). Its callers check
@@ -282,8 +312,7 @@ def relative_illumination(
     depth = sampling.lens_depth(lens, depth, where)
     # A telecentric lens's cone is bounded by its NA (see the module notes), not by a stop
     # given the paraxial marginal ray's radius, which the real rays of the cone overstep.
-    ri, e, cen = relative_illumination_samples(lens if lens.telecentric_object else
-                                               apertured(lens), f, depth, wl,
+    ri, e, cen = relative_illumination_samples(beam_bounded(lens, depth), f, depth, wl,
                                                n_coarse=max(16, pupil // 3), n_fine=int(pupil),
                                                newton_iters=newton_iters)
     return RelativeIllumination(f, cen, ri, e)
