@@ -61,7 +61,6 @@ from ..optics.lens import Lens
 from ..optics.rays import Rays
 from ..tracing.forward import DEFAULT_NEWTON_ITERS, forward_mode_jit, trace
 from . import sampling, telecentric
-from .aiming import apertured
 from .grid import pupil_cells
 
 __all__ = ["RelativeIllumination", "beam_bounded", "pupil_bounded", "relative_illumination",
@@ -213,16 +212,15 @@ def pupil_bounded(lens: Lens) -> bool:
 
 
 def beam_bounded(lens: Lens, depth=None) -> Lens:
-    """The lens whose apertures bound the beam that its aperture admits (see "System
-    aperture" in the module notes): its unbounded stop given the EPD's paraxial stop radius
-    (``aiming.apertured``) and, where ``Lens.aim`` aims rays at the stop, a stop wider than the
-    aimed beam narrowed to it, ``sampling.stop_radius`` of the aim's stop size. An object-space
-    telecentric lens is returned as it is (its NA bounds the cone, in ``_irradiance``).
+    """The lens whose stop bounds the beam that its ray aiming launches (see "System
+    aperture" in the module notes): where ``Lens.aim`` aims rays at the stop, its stop's
+    radius is at most the aimed beam's, ``sampling.stop_radius`` of the aim's stop size (an
+    unbounded stop gets that radius; a smaller one stays and clips every field's beam). A
+    paraxially aimed lens and an object-space telecentric lens are returned as they are:
+    their beams are bounded on the pupil's plane (``pupil_bounded``), and an unbounded stop
+    stays unbounded, as in Zemax, where a stop of automatic semi-diameter clips nothing.
     ``depth``: None (infinity) or the object distance, mm, as ``lens_depth`` gives it."""
-    if lens.telecentric_object:
-        return lens
-    lens = apertured(lens)
-    if pupil_bounded(lens):  # bounded on the entrance pupil's plane, in _irradiance
+    if pupil_bounded(lens):
         return lens
     beam = jnp.abs(sampling.stop_radius(lens, sampling.AIM_STOP_SIZE[lens.aim],
                                         object_z=None if depth is None else -depth))
