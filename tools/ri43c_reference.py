@@ -81,7 +81,7 @@ LAIKIN = os.path.join(ROOT, "tests", "data", "zmx",
                       "optiland_circular_aperture_example_with_aperture.zmx")
 WL = 0.5875618
 K_RINGS, J_SPOKES = 160, 320
-D_PUPIL, D_FIELD = 1e-4, 1e-4
+D_PUPIL, D_FIELD = 1e-4, 1e-3
 BISECT = 20
 FIELD_MARGIN = 1.02
 """The written lens's largest field is this times the largest one evaluated (optiland refuses
@@ -210,59 +210,65 @@ def trace(op, hx, hy, px, py):
                 plane=plane, obj=np.stack([x[0], y[0]], -1))
 
 
-def edge_correction(op, hy, ok, jac):
-    """The pupil measure's correction for a pass/fail edge between two rings of a spoke: the
-    edge found by bisection in u = ρ² (``BISECT`` steps), the ring cells' area moved to it
-    (the cell of sample k covers u in [k/K, (k + 1)/K]; the area element is π·du/J)."""
-    okg, jg = ok.reshape(K_RINGS, J_SPOKES), jac.reshape(K_RINGS, J_SPOKES)
+def beam(op, hx, hy, finite):
+    """One field's beam: its pupil measure (see the module notes) and the measure-weighted
+    centroid of its rays on the image surface, over the rays that pass for this field; where
+    a spoke's rays change from passing to failing between two rings, bisection along the
+    spoke (``BISECT`` steps in u = ρ²) finds the edge and the ring cells' share moves to it
+    (the cell of sample k covers u in [k/K, (k + 1)/K]; the area element is π·du/J), with
+    the landing point of the edge ray."""
+    px, py, dp = pupil_points()
+    key = "lm" if finite else "plane"
+
+    def measure(qx, qy):
+        ax = trace(op, hx, hy, qx + D_PUPIL, qy)[key] - trace(op, hx, hy, qx - D_PUPIL, qy)[key]
+        ay = trace(op, hx, hy, qx, qy + D_PUPIL)[key] - trace(op, hx, hy, qx, qy - D_PUPIL)[key]
+        return np.abs(ax[:, 0] * ay[:, 1] - ax[:, 1] * ay[:, 0]) / (2 * D_PUPIL) ** 2
+
+    c = trace(op, hx, hy, px, py)
+    jac = measure(px, py)
+    w = np.where(c["ok"], jac * dp, 0.0)
+    tot, mom = np.sum(w), np.sum(w[:, None] * np.nan_to_num(c["img"]), 0)
+    okg = c["ok"].reshape(K_RINGS, J_SPOKES)
     kk, jj = np.nonzero(okg[:-1] != okg[1:])
-    if kk.size == 0:
-        return 0.0
-    first = okg[kk, jj]
-    lo, hi = (kk + 0.5) / K_RINGS, (kk + 1.5) / K_RINGS
-    phi = 2 * np.pi * (jj + 0.5) / J_SPOKES
-    for _ in range(BISECT):
-        mid = 0.5 * (lo + hi)
-        rho = np.sqrt(mid)
-        same = trace(op, 0.0, hy, rho * np.cos(phi), rho * np.sin(phi))["ok"] == first
-        lo, hi = np.where(same, mid, lo), np.where(same, hi, mid)
-    edge = (kk + 1) / K_RINGS
-    u = 0.5 * (lo + hi)
-    corr = np.where(first, (u - edge) * jg[kk, jj], (edge - u) * jg[kk + 1, jj])
-    return float(np.sum(corr) * np.pi / J_SPOKES)
+    if kk.size:
+        first = okg[kk, jj]
+        lo, hi = (kk + 0.5) / K_RINGS, (kk + 1.5) / K_RINGS
+        phi = 2 * np.pi * (jj + 0.5) / J_SPOKES
+        for _ in range(BISECT):
+            mid = 0.5 * (lo + hi)
+            rho = np.sqrt(mid)
+            same = trace(op, hx, hy, rho * np.cos(phi), rho * np.sin(phi))["ok"] == first
+            lo, hi = np.where(same, mid, lo), np.where(same, hi, mid)
+        u = np.where(first, lo, hi)  # the last passing point
+        rho = np.sqrt(u)
+        ex, ey = rho * np.cos(phi), rho * np.sin(phi)
+        edge_img = trace(op, hx, hy, ex, ey)["img"]
+        jg = jac.reshape(K_RINGS, J_SPOKES)
+        cell = (kk + 1) / K_RINGS
+        corr = np.where(first, (u - cell) * jg[kk, jj], (cell - u) * jg[kk + 1, jj])
+        corr = corr * np.pi / J_SPOKES
+        tot = tot + np.sum(corr)
+        mom = mom + np.sum(corr[:, None] * edge_img, 0)
+    return float(tot), mom / tot, c
 
 
 def irradiance(op, hy, finite):
-    px, py, dp = pupil_points()
-    c = trace(op, 0.0, hy, px, py)
-    # the pupil measure: |det ∂(x, y)/∂P| (infinite) or |det ∂(L, M)/∂P| (finite)
-    key = "lm" if finite else "plane"
-    ax = trace(op, 0.0, hy, px + D_PUPIL, py)[key] - trace(op, 0.0, hy, px - D_PUPIL, py)[key]
-    ay = trace(op, 0.0, hy, px, py + D_PUPIL)[key] - trace(op, 0.0, hy, px, py - D_PUPIL)[key]
-    jac = np.abs(ax[:, 0] * ay[:, 1] - ax[:, 1] * ay[:, 0]) / (2 * D_PUPIL) ** 2
-    w = np.where(c["ok"], jac * dp, 0.0)
-    measure = float(np.sum(w)) + edge_correction(op, hy, c["ok"], jac)
-    # the image of the field patch: centroid's Jacobian over the field's (L0, M0) or (X, Y)
+    """E for the field (0, hy): the pupil measure over |det ∂x̄/∂(L0, M0)| (infinity) or
+    |det ∂x̄/∂(X, Y)| (finite), x̄ each field's own centroid (its own passing rays), by
+    central differences in the normalised field."""
+    meas, cen, c = beam(op, 0.0, hy, finite)
     fkey = "obj" if finite else "lm"
-    steps = {}
-    ok = c["ok"].copy()
+    one = (np.zeros(1), np.zeros(1))
+    st = {}
     for name, (dx, dy) in {"x+": (D_FIELD, 0), "x-": (-D_FIELD, 0), "y+": (0, D_FIELD),
                            "y-": (0, -D_FIELD)}.items():
-        steps[name] = trace(op, dx, hy + dy, px, py)
-        ok &= steps[name]["ok"]
-    wk = np.where(ok, w, 0.0)
-
-    def cen(t):
-        return np.sum(wk[:, None] * t["img"], 0) / np.sum(wk)
-
-    def src(t):
-        return np.mean(t[fkey][ok], 0)
-
-    di = np.stack([cen(steps["x+"]) - cen(steps["x-"]), cen(steps["y+"]) - cen(steps["y-"])], 1)
-    ds = np.stack([src(steps["x+"]) - src(steps["x-"]), src(steps["y+"]) - src(steps["y-"])], 1)
+        st[name] = (beam(op, dx, hy + dy, finite)[1], trace(op, dx, hy + dy, *one)[fkey][0])
+    di = np.stack([st["x+"][0] - st["x-"][0], st["y+"][0] - st["y-"][0]], 1)
+    ds = np.stack([st["x+"][1] - st["x-"][1], st["y+"][1] - st["y-"][1]], 1)
     det = abs(np.linalg.det(di)) / abs(np.linalg.det(ds))
-    chief = trace(op, 0.0, hy, np.array([0.0]), np.array([0.0]))
-    return measure / det, measure, float(np.mean(ok[c["ok"]])), chief, cen(c)
+    chief = trace(op, 0.0, hy, *one)
+    return meas / det, meas, None, chief, cen
 
 
 def run_lens(name, op, fields, finite, aim, path, fmax):

@@ -104,7 +104,12 @@ from .grid import (
     sensor_grid,
 )
 from .psf import RGB_WAVELENGTHS, GeometricPSF
-from .radiometry import relative_illumination_samples, star_region
+from .radiometry import (
+    beam_bounded,
+    in_entrance_pupil,
+    relative_illumination_samples,
+    star_region,
+)
 
 __all__ = ["render", "relaxed_render", "footprints", "Footprints", "RayRender", "PSFRender",
            "bilinear", "pixel_positions"]
@@ -130,7 +135,8 @@ def _backward_valid(lens, origin, lm, wl, newton_iters):
     d = jnp.concatenate([lm, -n[..., None]], -1)
     o = jnp.broadcast_to(origin, d.shape)
     ok = jnp.sum(lm * lm, -1) < 1.0
-    return trace_backward(lens, Rays(o, d, wl, ok), newton_iters=newton_iters).valid
+    out = trace_backward(lens, Rays(o, d, wl, ok), newton_iters=newton_iters)
+    return out.valid & in_entrance_pupil(lens, out)  # the system aperture (radiometry)
 
 
 def _footprint(lens, origin, wl, lm0, half, newton_iters):
@@ -363,7 +369,7 @@ def _render_ray(lens, scene, key, depth, wls, pixel_size, footprints, *, resolut
         def channel(wl, img):
             out = trace_backward(lens, Rays(o, d, wl, inside), newton_iters=newton_iters)
             bz = out.direction[..., 2]
-            ok = out.valid & (bz < 0)
+            ok = out.valid & (bz < 0) & in_entrance_pupil(lens, out)
             bz = jnp.where(ok, bz, -1.0)
             if depth is None:
                 tx_, ty_ = out.direction[..., 0] / bz, out.direction[..., 1] / bz
@@ -656,7 +662,8 @@ def render(
                           _tile_shape(sensor.resolution, int(patch)), scene.shape[-1],
                           scene.dtype.itemsize)
     depth = sampling.lens_depth(lens, depth, "render")
-    lens = eqx.tree_at(lambda m: m.vignetting, apertured(lens), None,  # "Vignetting factors"
+    # "Vignetting factors"; the beam the system aperture admits, as radiometry bounds it
+    lens = eqx.tree_at(lambda m: m.vignetting, beam_bounded(apertured(lens), depth), None,
                        is_leaf=lambda x: x is None)
     key = jnp.asarray(key) if not isinstance(key, jax.Array) else key
     common = dict(resolution=(int(rows), int(cols)), spp=int(spp), patch=int(patch),
