@@ -178,19 +178,22 @@ def test_aimed_lens_stop_gets_the_aimed_radius():
 REF = json.loads((DATA / "ri43c_optiland.json").read_text())
 
 # name: (pupil cells, tolerance on RI). The reference's own error: the equal-area rings are
-# exact for an unvignetted pupil and bisection puts each vignetting edge within 1e-6 of
-# the pupil radius, leaving O(1/J²) ≈ 1e-5 from the spokes; its central differences (1e-4)
-# add O(1e-8). jaxlens's: the pupil polygon, O(Δφ²) ≈ 6e-5 where a rim cuts the beam, and
-# its centroid grid (pupil² cells), the larger part at pupil = 64. Measured max |ΔRI| (pupil
-# 128 / the pupil below) in the module's report; each tolerance is about 3× the larger.
+# exact for an unvignetted pupil and bisection puts each passing edge within 1e-6 of the
+# pupil radius (its share of the ring cells moved there), leaving O(1/J²) ≈ 1e-5 from the
+# spokes; its central differences (1e-3 of the normalised field) O(1e-6). jaxlens's: the
+# pupil polygon, O(Δφ²) ≈ 6e-5 where a rim cuts the beam, and the passing set's cells in
+# its centroids' pupil × pupil grid. Measured max |ΔRI| at pupil 64 in the round's report
+# (1e-5 to 3e-4); each tolerance is 3 to 5 times it. The three costliest run under -m slow.
 CASES = {
-    "triplet_stopwide": (64, 5e-4),
-    "triplet_stopsmall": (64, 5e-4),
-    "triplet_finite": (64, 5e-4),
-    "converging_virtual": (64, 1.5e-3),
+    "triplet_stopwide": (64, 1e-3),
+    "triplet_stopsmall": (64, 1e-3),
+    "triplet_finite": (64, 1e-3),
+    "converging_virtual": (64, 5e-4),
     "landscape_wide": (64, 5e-4),
+    "laikin_real": (64, 2e-3),
     "laikin_paraxial": (64, 2e-3),
 }
+SLOW = ("triplet_stopsmall", "triplet_finite", "laikin_paraxial")
 
 
 def _jaxlens_ri(name, pupil):
@@ -203,7 +206,12 @@ def _jaxlens_ri(name, pupil):
     return np.asarray(radiometry.relative_illumination(lens, jnp.asarray(f), pupil=pupil).ri)
 
 
-@pytest.mark.parametrize("name", sorted(CASES))
+@pytest.mark.parametrize("name", [pytest.param(n, marks=pytest.mark.slow) if n in SLOW else n
+                                  for n in sorted(CASES)])
 def test_relative_illumination_matches_optiland(name):
+    """Vignetted, finite, virtual, 65° wide and ray-aimed lenses (Laikin's 100° retrofocus
+    lens, its stop's beam moving over the pupil plane with the field): before this round
+    the wide stop let in a wider beam, the virtual object gave NaN, and the centroid's
+    Jacobian with the passing set held fixed was 1.4 % off at 49.5° on ``laikin_real``."""
     pupil, tol = CASES[name]
     np.testing.assert_allclose(_jaxlens_ri(name, pupil), REF[name]["ri"], atol=tol, rtol=0)
