@@ -308,7 +308,8 @@ def main() -> None:
         # the file's fields are 0, 35 and 50°: normalised by 50°
         data[name] = run_lens(name, op, spec["fields"], False, spec["aim"], path, 50.0)
     data["_about"] = ("optiland 0.6.3 rays; see tools/ri43c_reference.py: K rings x J spokes "
-                      f"= {K_RINGS} x {J_SPOKES}, edges bisected, central differences {D_PUPIL} (pupil), "
+                      f"= {K_RINGS} x {J_SPOKES}, edges bisected, central differences "
+                      f"{D_PUPIL} (pupil), "
                       f"{D_FIELD} (normalised field)")
     with open(os.path.join(OUT, "ri43c_optiland.json"), "w") as f:
         json.dump(data, f, indent=1)
