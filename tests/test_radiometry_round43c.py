@@ -182,17 +182,21 @@ REF = json.loads((DATA / "ri43c_optiland.json").read_text())
 # pupil radius (its share of the ring cells moved there), leaving O(1/J²) ≈ 1e-5 from the
 # spokes; its central differences (1e-3 of the normalised field) O(1e-6). jaxlens's: the
 # pupil polygon, O(Δφ²) ≈ 6e-5 where a rim cuts the beam, and the passing set's cells in
-# its centroids' pupil × pupil grid. Measured max |ΔRI| at pupil 64 in the round's report
-# (1e-5 to 3e-4); each tolerance is 3 to 5 times it. Four run under -m slow (the virtual
+# its centroids' pupil × pupil grid. Measured max |ΔRI| (pupil 64): triplet_stopwide 4.9e-4,
+# triplet_stopsmall 4.9e-4, triplet_finite 1.8e-4, converging_virtual 5.8e-6, landscape_wide
+# 2.6e-6, laikin_paraxial 3.1e-4; laikin_real 7.1e-4 at pupil 128 (1.75e-3 at 64, at 49.5°:
+# the error falls with the grid, so it is the grid's). Each tolerance is 2
+# to 3 times the measured error where that is the grid's, 1e-4 where the beam is unvignetted
+# (the centroid's grid then cancels in the ratio). Four run under -m slow (the virtual
 # object has its closed form above).
 CASES = {
     "triplet_stopwide": (64, 1e-3),
     "triplet_stopsmall": (64, 1e-3),
-    "triplet_finite": (64, 1e-3),
-    "converging_virtual": (64, 5e-4),
-    "landscape_wide": (64, 5e-4),
-    "laikin_real": (64, 2e-3),
-    "laikin_paraxial": (64, 2e-3),
+    "triplet_finite": (64, 5e-4),
+    "converging_virtual": (64, 1e-4),
+    "landscape_wide": (64, 1e-4),
+    "laikin_real": (128, 2e-3),
+    "laikin_paraxial": (64, 1e-3),
 }
 SLOW = ("triplet_stopsmall", "triplet_finite", "converging_virtual", "laikin_paraxial")
 
