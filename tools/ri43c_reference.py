@@ -71,7 +71,6 @@ from __future__ import annotations
 import json
 import math
 import os
-import shutil
 
 import numpy as np
 
@@ -302,8 +301,7 @@ def main() -> None:
         data[name] = run_lens(name, op, spec["fields"], spec["obj"] is not None, spec["aim"],
                               path, FIELD_MARGIN * max(spec["fields"]))
     for name, spec in FILE_LENSES.items():
-        path = os.path.join(OUT, "laikin.zmx")
-        shutil.copyfile(spec["file"], path)
+        path = spec["file"]
         op = load(path, spec["aim"])
         # the file's fields are 0, 35 and 50°: normalised by 50°
         data[name] = run_lens(name, op, spec["fields"], False, spec["aim"], path, 50.0)
