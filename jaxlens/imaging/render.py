@@ -119,7 +119,12 @@ from .grid import (
     sensor_grid,
 )
 from .psf import RGB_WAVELENGTHS, GeometricPSF
-from .radiometry import relative_illumination_samples, star_region
+from .radiometry import (
+    beam_bounded,
+    in_entrance_pupil,
+    relative_illumination_samples,
+    star_region,
+)
 
 __all__ = ["render", "relaxed_render", "footprints", "Footprints", "RayRender", "PSFRender",
            "bilinear", "pixel_positions"]
@@ -146,9 +151,10 @@ def _backward_valid(lens, origin, lm, wl, newton_iters):
     o = jnp.broadcast_to(origin, d.shape)
     ok = jnp.sum(lm * lm, -1) < 1.0
     out = trace_backward(lens, Rays(o, d, wl, ok), newton_iters=newton_iters)
+    ok = out.valid & in_entrance_pupil(lens, out)  # the system aperture (radiometry)
     if lens.telecentric_object:  # the object cone (its NA) is the system aperture
-        return out.valid & telecentric.in_cone(lens, out.direction)
-    return out.valid
+        ok = ok & telecentric.in_cone(lens, out.direction)
+    return ok
 
 
 def _bounded(lens: Lens) -> Lens:
@@ -392,7 +398,7 @@ def _render_ray(lens, scene, key, depth, wls, pixel_size, footprints, *, resolut
         def channel(wl, img):
             out = trace_backward(lens, Rays(o, d, wl, inside), newton_iters=newton_iters)
             bz = out.direction[..., 2]
-            ok = out.valid & (bz < 0)
+            ok = out.valid & (bz < 0) & in_entrance_pupil(lens, out)
             if tele:  # only rays inside the object cone carry light
                 ok = ok & telecentric.in_cone(lens, out.direction)
             bz = jnp.where(ok, bz, -1.0)
@@ -691,7 +697,8 @@ def render(
     telecentric.object_plane(lens, depth, "render")  # its scene: object heights (mm)
     if lens.telecentric_object:
         image_scale(lens)  # its m: finite and nonzero, checked before tracing
-    lens = eqx.tree_at(lambda m: m.vignetting, _bounded(lens), None,  # "Vignetting factors"
+    # "Vignetting factors"; the beam the system aperture admits, as radiometry bounds it
+    lens = eqx.tree_at(lambda m: m.vignetting, beam_bounded(_bounded(lens), depth), None,
                        is_leaf=lambda x: x is None)
     key = jnp.asarray(key) if not isinstance(key, jax.Array) else key
     common = dict(resolution=(int(rows), int(cols)), spp=int(spp), patch=int(patch),
