@@ -5,11 +5,11 @@
 
 For every case and ray, after every surface: the largest error of the intercept (mm), of
 the direction cosines, and of the optical path from the ray's origin (mm), each also
-relative to the case's lens scale (mm), and in units of what the precision allows (the
-reference's conditioning floor plus one rounding of the lens scale, or of 1 for
-directions). A ray the reference loses must be flagged invalid
-from that surface on, and a ray it keeps must stay valid. ``measure`` is what
-``tests/test_stress_round43e.py`` checks.
+relative to the case's lens scale L (mm), and in units of what the precision allows (the
+reference's conditioning floor plus one rounding of L; for directions one rounding of 1 and
+the turn of a normal moved by a rounding of L, u·(1 + L·max|c|)). A ray the reference
+loses must be flagged invalid from that surface on, and a ray it keeps must stay valid.
+``measure`` is what ``tests/test_stress_round43e.py`` checks.
 """
 
 from __future__ import annotations
@@ -88,9 +88,12 @@ def measure(case, dtype, newton_iters=jl.tracing.DEFAULT_NEWTON_ITERS):
                      dir=max(_err(dd[i, j, a], ref["d"][a]) for a in range(3)),
                      opl=_err(opl[i, j], ref["opl"]))
             # In units of what the precision allows: the conditioning floor plus one
-            # rounding of the lens scale (positions, path) or of 1 (directions).
+            # rounding of the lens scale L (positions, path), or for directions one rounding
+            # of 1 and the turn of a normal moved by a rounding of L, u·(1 + L·max|c|).
             u = float(jnp.finfo(dtype).eps) / 2
-            allow = dict(pos=u * case["scale"], dir=u, opl=u * case["scale"])
+            c_max = max(abs(s_["c"]) for s_ in case["surfaces"])
+            allow = dict(pos=u * case["scale"], dir=u * (1 + case["scale"] * c_max),
+                         opl=u * case["scale"])
             for q in ("pos", "dir", "opl"):
                 e[q + "_units"] = e[q] / (ref["floor"][q] + allow[q])
             errors.append(e)
