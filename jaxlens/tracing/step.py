@@ -23,7 +23,8 @@ Conventions:
 
 Intersections:
     Planes, spheres and conics are intersected in closed form (the numerically stable
-    roots of the quadratic), which is exact; its derivative is the implicit-function one,
+    roots of the quadratic, solved from the ray's point nearest the vertex after surface 1:
+    ``conic_root_near``), which is exact; its derivative is the implicit-function one,
     dt = −dF/F_t on the implicit conic F (a ``custom_jvp``, so forward and reverse mode
     both work and neither differentiates the root selection). Surfaces
     with polynomial terms take ``newton_iters`` Newton steps on F(t) = z(t) − sag(x(t),
@@ -135,7 +136,9 @@ def conic_root_near(mode, c, k, o, d, t_min):
     """
     t_n = -(o[0] * d[0] + o[1] * d[1] + o[2] * d[2])
     o_n = tuple(oi + t_n * di for oi, di in zip(o, d, strict=True))
-    return conic_root_arrays(mode, c, k, *o_n, *d, t_min - t_n) + t_n
+    # t_min shifted with the start, less the rounding of the shift (a root at t_min stays in).
+    slack = 4 * jnp.finfo(t_n.dtype).eps * jnp.abs(t_n)
+    return conic_root_arrays(mode, c, k, *o_n, *d, t_min - t_n - slack) + t_n
 
 
 @functools.partial(jax.custom_jvp, nondiff_argnums=(0,))
