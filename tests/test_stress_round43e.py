@@ -39,10 +39,12 @@ def test_long_gap_keeps_the_digits_of_the_conic_root():
     """A ray after a 1e5 mm gap meets a singlet of radius 50 mm: the quadratic solved from the
     ray's start held c·L² = 2e8 against the root and lost 1e-8 mm (559 units of rounding) of
     the intercept and 3.6e-11 of the direction in float64 (0.73 mm in float32). Solved from
-    the ray's point nearest the vertex it is within 1e-11 mm (a rounding of 1e5 mm)."""
+    the ray's point nearest the vertex it is within 2e-11 mm (a rounding of 1e5 mm) and the
+    direction within 1e-12 (1.6e-14 in the optimised build, 2.5e-13 in the tests' unoptimised
+    one: a rounding of the global z = 1e5 mm turns the singlet's normal by c times it)."""
     errors = _check("long_refracting", jnp.float64)
     assert max(e["pos"] for e in errors) < 2e-11
-    assert max(e["dir"] for e in errors) < 1e-13
+    assert max(e["dir"] for e in errors) < 1e-12
 
 
 @pytest.mark.parametrize("name", ["near_flat_1e-14", "long_propagation", "paraboloid_2m",
