@@ -23,7 +23,8 @@ Conventions:
 
 Intersections:
     Planes, spheres and conics are intersected in closed form (the numerically stable
-    roots of the quadratic), which is exact; its derivative is the implicit-function one,
+    roots of the quadratic, solved from the ray's point nearest the vertex after surface 1:
+    ``conic_root_near``), which is exact; its derivative is the implicit-function one,
     dt = −dF/F_t on the implicit conic F (a ``custom_jvp``, so forward and reverse mode
     both work and neither differentiates the root selection). Surfaces
     with polynomial terms take ``newton_iters`` Newton steps on F(t) = z(t) − sag(x(t),
@@ -113,12 +114,31 @@ AHEAD_ELSE_BEHIND = "ahead_else_behind"
 
 
 def _conic_root(surface: AbstractSurface, o, d, t_min, go_back=False):
-    """The first intersection with the base conic: ``conic_root_arrays`` on a surface."""
-    if go_back:
-        return conic_root_arrays(AHEAD_ELSE_BEHIND, surface.c, surface.k, *o, *d, t_min)
+    """The first intersection with the base conic: ``conic_root_arrays`` on a surface (after
+    surface 1 from the ray's point nearest the vertex, ``conic_root_near``)."""
     if t_min is None:
         return conic_root_arrays(False, surface.c, surface.k, *o, *d, jnp.zeros_like(o[2]))
-    return conic_root_arrays(True, surface.c, surface.k, *o, *d, t_min)
+    return conic_root_near(AHEAD_ELSE_BEHIND if go_back else True, surface.c, surface.k, o, d,
+                           t_min)
+
+
+def conic_root_near(mode, c, k, o, d, t_min):
+    """``conic_root_arrays(mode, ...)`` solved from the ray's point nearest the vertex: t from
+    ``o`` (marked ``MISS`` on a miss). ``o``, ``d``: (x, y, z) tuples in the surface's frame.
+
+    The quadratic's coefficients hold c·|o|² and |o|, which cancel to the root's size: from a
+    point L mm away the root loses about (1 + |c|·L)² ulps (1e-8 mm at 1e5 mm before a
+    50 mm radius, round 43e). Carried first along its line by t_n = −o·d (no division), the
+    ray starts no farther from the vertex than it was, usually within the surface's own
+    size, and the carry costs one rounding of t_n, which any point o + t·d carries anyway.
+    Surface 1 is solved from the vertex plane instead (``intersect``): its root is the one
+    nearest that plane.
+    """
+    t_n = -(o[0] * d[0] + o[1] * d[1] + o[2] * d[2])
+    o_n = tuple(oi + t_n * di for oi, di in zip(o, d, strict=True))
+    # t_min shifted with the start, less the rounding of the shift (a root at t_min stays in).
+    slack = 4 * jnp.finfo(t_n.dtype).eps * jnp.abs(t_n)
+    return conic_root_arrays(mode, c, k, *o_n, *d, t_min - t_n - slack) + t_n
 
 
 @functools.partial(jax.custom_jvp, nondiff_argnums=(0,))

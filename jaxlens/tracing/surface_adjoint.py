@@ -57,6 +57,7 @@ from .step import (
     RayState,
     bounded_div,
     conic_root_arrays,
+    conic_root_near,
     intersect,
     refraction_gain,
     surface_normal,
@@ -93,7 +94,7 @@ def _advance(first, refracts, params, p, d, valid, opl, go_back=False):
         t_min = jnp.where(bk, -T_MAX, t_min)
         # Static: as step.intersect's go_back (ahead of t_min, else behind, in one pass).
         mode = AHEAD_ELSE_BEHIND if go_back else True
-        t_m = conic_root_arrays(mode, c, k, *o, *d, t_min)
+        t_m = conic_root_near(mode, c, k, o, d, t_min)
     t, ok = unmark(t_m)
     if not first and not go_back:
         ok = ok & ((t >= -1e3 * eps * (1 + jnp.abs(o[2]))) | bk)
