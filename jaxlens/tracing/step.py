@@ -18,8 +18,9 @@ Conventions:
     surface where it must, as in a sequential trace. With ``go_back`` (a lens's
     ``negative_propagation``, set for lenses read from Zemax files) every surface after the
     first is reached the way Zemax reaches it: the first root ahead of the ray if there is
-    one, else the first along the line behind it (t < 0), on the surface's sheet through its
-    vertex; a ray the default rule traces takes the same root.
+    one, else the nearest behind it (t < 0: the first point met going back along its line),
+    on the surface's sheet through its vertex; a ray the default rule traces takes the same
+    root.
 
 Intersections:
     Planes, spheres and conics are intersected in closed form (the numerically stable
@@ -108,7 +109,8 @@ def bounded_div(num, den):
 
 
 # ``conic_root_arrays``'s mode for ``intersect``'s ``go_back``: the first root at or past
-# t_min, else the first root along the whole line (both from one quadratic).
+# t_min, else the nearest root behind it, the first met going back along the line (both
+# from one quadratic).
 AHEAD_ELSE_BEHIND = "ahead_else_behind"
 
 
@@ -136,8 +138,12 @@ def conic_root_arrays(bounded_below, c, k, ox, oy, oz, dx, dy, dz, t_min):
     t2 = q/a; which one is chosen is decided on numerators and denominators, so the
     result is a single division (one fused pass over the rays, see the module notes).
     With ``bounded_below=AHEAD_ELSE_BEHIND`` (``intersect``'s ``go_back``) the root is the
-    first past t_min if there is one, else the first along the whole line (as the two
-    calls with t_min and with −``T_MAX`` would give), from one quadratic.
+    first past t_min if there is one, else the nearest one behind it (the larger t of the
+    roots on the sheet): the point where the ray, going back along its line, first meets
+    the surface. (A steep ray can meet a sphere's vertex sheet twice behind it; the first
+    root along the whole line, taken before round 43d, lay on the far side of the sheet,
+    40 mm back and across the axis on a real patent lens, where optiland and Zemax's
+    vertex-sheet root take the near one.)
     """
     ck = c * (1 + k)
     a = c * (dx * dx + dy * dy) + ck * dz * dz
@@ -165,7 +171,8 @@ def conic_root_arrays(bounded_below, c, k, ox, oy, oz, dx, dy, dz, t_min):
         # The roots anywhere on the line: on the sheet and bounded (|t| < T_MAX).
         w1, w2 = usable(cc, q, False), usable(q, a, False)
         ahead = u1 | u2
-        first_is_t1 = jnp.where(ahead, u1 & (~u2 | t1_first), w1 & (~w2 | t1_first))
+        # Ahead: the first root past t_min; behind: the last root before it (nearest).
+        first_is_t1 = jnp.where(ahead, u1 & (~u2 | t1_first), w1 & (~w2 | ~t1_first))
         u1, u2 = u1 | w1, u2 | w2
     elif bounded_below:  # the first root along the ray
         # t1 <= t2  <=>  cc·a <= q² when q·a > 0 (the inequality flips when q·a < 0).
@@ -390,7 +397,8 @@ def intersect(
         go_back: (static; ignored on the first surface) the ray may go back along its
             line to the surface anywhere (Zemax's negative propagation): the root found
             with the rules above where there is one (so such rays are unchanged), else the
-            first root along the line behind the ray (t ≥ −``T_MAX``, the vertex sheet):
+            nearest root behind the ray (t ≥ −``T_MAX``, the vertex sheet), where the ray
+            going back along its line first meets the surface:
             for a conic both from one quadratic (``AHEAD_ELSE_BEHIND``); on a polynomial
             surface the Newton search (one compiled program) runs a second time, with
             t ≥ −``T_MAX``, only where some ray found no root ahead.
@@ -426,7 +434,7 @@ def intersect(
             k, t, f, df, ok = state
             behind = k == 1
             found = _polynomial_root(surf_s, o_s, d_s, jnp.where(behind, -T_MAX, t_min),
-                                     newton_iters, False, backward, behind)
+                                     newton_iters, False, backward, behind, t_min)
             take = ~ok  # pass 0: every ray; pass 1: the rays without a root ahead
             return (k + 1, *(jnp.where(take, a, b) for a, b in
                              zip(found, (t, f, df, ok), strict=True)))
@@ -455,16 +463,25 @@ def intersect(
     return jnp.where(ok, (t1 + t_plane) * df1 - f1, MISS) / jnp.where(ok, df1, 1.0)
 
 
-def _polynomial_root(surf_s, o_s, d_s, t_min, newton_iters, first, backward, behind=None):
+def _polynomial_root(surf_s, o_s, d_s, t_min, newton_iters, first, backward, behind=None,
+                     ahead_min=None):
     """(t, F(t), F'(t), hit) of the Newton search on a surface with polynomial terms
     (``intersect``; forward values only): the first root with t ≥ ``t_min`` (None: on the
     first surface, the root nearest the vertex plane); for rays searching ahead (not
-    ``backward``, not ``behind``) the first of a near-double pair."""
+    ``backward``, not ``behind``) the first of a near-double pair. Searching ``behind``
+    (``intersect``'s ``go_back``, ``t_min`` then −``T_MAX``), Newton starts from the base
+    conic's root nearest behind ``ahead_min`` (``AHEAD_ELSE_BEHIND``), as a conic's own
+    go-back root is taken."""
     # Two starts: the base conic's root and the vertex plane (t = 0 on surface 1, where the
     # rays already are). Newton begins at the one whose first step is shorter: where the
     # polynomial terms move the surface far from its base conic, the ray can graze the
     # surface at the conic root (F' ≈ 0) and the first step would throw it kilometres away.
-    t_conic, hit = unmark(_conic_root(surf_s, o_s, d_s, t_min))
+    if behind is None:
+        t_conic, hit = unmark(_conic_root(surf_s, o_s, d_s, t_min))
+    else:
+        marked = jnp.where(behind, _conic_root(surf_s, o_s, d_s, ahead_min, go_back=True),
+                           _conic_root(surf_s, o_s, d_s, t_min))
+        t_conic, hit = unmark(marked)
     t_vertex = jnp.zeros_like(t_conic) if first else bounded_div(-o_s[2], d_s[2])[0]
 
     def project(t):
