@@ -130,3 +130,58 @@ def test_design_values_the_files_state():
     cond, _ = _load("rayoptics_ACL3026U.zmx")
     assert cond.stop == 1 and float(cond.surfaces[1].semi_diameter) == 15.0
     assert float(cond.surfaces[0].c) == 0.0 and cond.materials[0].name == "air"
+
+
+# ------------------------------------------- crossing rims: US08427765's surfaces 7 and 8
+
+
+def _crossing_path(lens, f, heights, wl):
+    from jaxlens.tracing.forward import trace_path
+
+    t = math.tan(math.radians(f))
+    d = np.array([0.0, t, 1.0]) / math.sqrt(1 + t * t)
+    h = np.asarray(heights, float)
+    o = np.stack([0 * h, h, np.full_like(h, REF["crossing_us08427765"]
+                                         ["launch_mm_before_surface_1"])], -1)
+    rays = jl.Rays(o, np.tile(d, (len(h), 1)), wl)
+    with jax.disable_jit():
+        return trace_path(unclipped(lens), rays), jl.trace(lens, rays)
+
+
+def test_crossing_rims_go_back_to_the_nearest_root():
+    """US08427765-1 (tests/data/zmx): surfaces 7 (R −53.6, semi-diameter 7.0) and 8 (R −37.5,
+    7.53), 0.22 mm apart, cross 7.325 mm off the axis, between their clear apertures.
+
+    With the file's apertures the crossing never matters: every ray that passes surface 7 is
+    inside 7.0 mm, where surface 8 lies ahead of it, and meets it ahead (t > 0); jaxlens's
+    and optiland's traces pass the same rays. Without apertures (the unclipped lens used to
+    aim rays and trace reference rays), a ray that meets surface 7 beyond the crossing finds
+    surface 8 only behind it, on Zemax's negative propagation; going back along its line it
+    meets surface 8 first at the nearer root. jaxlens took the first root along the whole
+    line, up to 53 mm back and across the axis (y = −36.8 mm for a 20° ray); it now takes
+    the nearer one, as optiland does, except on a ray that leaves surface 7 almost
+    perpendicular to the axis (optiland's fallback then takes the root nearer the vertex
+    plane, 21 mm back; jaxlens the one 1.2 mm back)."""
+    ref = REF["crossing_us08427765"]
+    lens = jl.load(os.path.join(HERE, "data", "zmx", "rayoptics_US08427765-1.ZMX"))
+    went_back = both = 0
+    for wl in ref["wavelengths"]:
+        rows = ref["rays"][repr(float(wl))]
+        for f, want, passes in zip(ref["fields_deg"], rows["free"], rows["clipped_passes"],
+                                   strict=True):
+            path, clipped = _crossing_path(lens, f, ref["heights"], wl)
+            assert np.asarray(clipped.valid).tolist() == passes
+            p, v = np.asarray(path.origin), np.asarray(path.valid)
+            for k, w in enumerate(want):
+                if w is None:
+                    assert not v[-1, k]
+                    continue
+                leave = np.asarray(path.direction)[6, k]
+                if abs(leave[2]) < 0.05:  # the near-perpendicular ray (see the docstring)
+                    continue
+                both += 1
+                # Surface 8 is surface index 7; t < 0 there: the ray went back to it.
+                went_back += float((p[7, k] - p[6, k]) @ leave) < 0
+                np.testing.assert_allclose(p[7, k, 1:], w["surface_8"], rtol=0, atol=1e-9)
+                np.testing.assert_allclose(p[-1, k, :2], w["image"], rtol=0, atol=1e-9)
+    assert both >= 60 and went_back >= 30, (both, went_back)

@@ -16,6 +16,11 @@ jaxlens's are the same), and writes to tests/data/zmx43d/optiland_reference.json
   (from the image surface), the entrance pupil's position ``EPL`` (from surface 1) and
   diameter ``EPD``, the exit pupil's position ``XPL`` (from the image surface) and diameter
   ``XPD``, and ``FNO``;
+* for the shipped patent lens tests/data/zmx/rayoptics_US08427765-1.ZMX (round 40a), whose
+  surfaces 7 and 8 cross 7.325 mm off the axis (between their clear apertures, 7.0 and
+  7.53 mm), a fan of steep rays (``CROSSING``) that meet surface 7 beyond the crossing:
+  optiland's point on surface 8 (reached by going back along the ray) and at the image,
+  every aperture removed, and whether optiland's trace with the file's apertures passes;
 * real rays at the image surface: a pupil pattern (``PUPIL``, fractions of half the traced
   beam, rim points at 0.99 included) per field angle, launched 5 mm before surface 1, every
   aperture removed (a ray optiland loses is stored as null).
@@ -42,6 +47,11 @@ OUT_JSON = DATA / "optiland_reference.json"
 FDC = (0.4861327, 0.5875618, 0.6562725)
 PUPIL = ((0.0, 0.0), (0.0, 0.5), (0.0, -0.5), (0.0, 0.99), (0.0, -0.99), (0.99, 0.0),
          (0.7, 0.7), (-0.5, 0.3), (0.3, -0.8))
+PATENT = ROOT / "tests" / "data" / "zmx" / "rayoptics_US08427765-1.ZMX"
+# Field angles (degrees) and ray heights (mm) on the plane 5 mm before surface 1, x = 0.
+CROSSING = {"fields_deg": (20.0, 24.0), "heights": tuple(round(-6.0 + 0.5 * k, 1)
+                                                          for k in range(31)),
+            "wavelengths": (0.4861327, 0.5875618)}
 # file: (field angles in degrees, beam diameter traced in mm, wavelengths in µm)
 FILES = {
     # Thorlabs 354710-C: a 1.49 mm molded asphere of LightPath's D-ZK3M at 1.55 µm, a BK7
@@ -109,6 +119,63 @@ def first_order(op) -> dict:
             for k in ("f2", "F2", "EPL", "EPD", "XPL", "XPD", "FNO")}
 
 
+def patent_media(op, recs, wl):
+    """optiland's media of the patent lens set to the catalog indices at ``wl``."""
+    gcat, media = file_media(PATENT)
+    ns = []
+    for g in media[:-1]:
+        cat = None if g is None else next(c for c in gcat if (c, g) in recs)
+        ns.append(1.0 if g is None else z40.index(recs[(cat, g)], wl))
+    for k, n in enumerate(ns):
+        op.surfaces.surfaces[k].material_post = IdealMaterial(n=n)
+    op.surfaces.surfaces[len(media) - 1].material_post = IdealMaterial(n=ns[-1])
+    return len(media)
+
+
+def crossing(recs) -> dict:
+    """optiland's rays of ``CROSSING`` through the patent lens (see the module notes)."""
+    out = {**CROSSING, "launch_mm_before_surface_1": z40.LAUNCH, "rays": {}}
+    for wl in CROSSING["wavelengths"]:
+        rows = []
+        for clipped in (False, True):
+            with warnings.catch_warnings():
+                warnings.simplefilter("ignore")
+                op = load_zemax_file(str(PATENT))
+            m = patent_media(op, recs, wl)
+            z1 = z40.surface_z(op, 1)
+            for s in op.surfaces.surfaces:
+                if not clipped:
+                    s.aperture = None
+                g = s.geometry
+                if hasattr(g, "tol") and hasattr(g, "max_iter"):  # the even asphere
+                    g.tol, g.max_iter = 1e-13, 200
+            for f in CROSSING["fields_deg"]:
+                t = math.tan(math.radians(f))
+                d = np.array([0.0, t, 1.0]) / math.sqrt(1 + t * t)
+                hs = np.asarray(CROSSING["heights"], float)
+                n = len(hs)
+                rays = RealRays(np.zeros(n), hs.copy(), np.full(n, z1 + z40.LAUNCH),
+                                np.full(n, d[0]), np.full(n, d[1]), np.full(n, d[2]),
+                                np.ones(n), np.full(n, wl))
+                with warnings.catch_warnings(), np.errstate(all="ignore"):
+                    warnings.simplefilter("ignore")
+                    op.surfaces.trace(rays, skip=1, record=True)
+                i = np.asarray(rays.i)
+                ok = np.isfinite(np.asarray(rays.x)) & np.isfinite(i) & (i > 0)
+                if clipped:
+                    rows.append([bool(v) for v in ok])
+                    continue
+                sy, sz = np.asarray(op.surfaces.y), np.asarray(op.surfaces.z)
+                rows.append([{"image": [float(rays.x[k]), float(rays.y[k])],
+                              # surface 8: row 7 of the record (row 0: surface 1)
+                              "surface_8": [float(sy[7, k]), float(sz[7, k] - z1)]}
+                             if ok[k] else None for k in range(n)])
+        half = len(CROSSING["fields_deg"])
+        out["rays"][repr(wl)] = {"free": rows[:half], "clipped_passes": rows[half:]}
+        assert m == 13  # SURF 0 to 12
+    return out
+
+
 def main():
     recs = z40.agf_records()
     ref = {"launch_mm_before_surface_1": z40.LAUNCH, "pupil": PUPIL, "files": {}}
@@ -138,6 +205,7 @@ def main():
         entry["stop_surface"] = int(op.surfaces.stop_index)
         entry["image_z_from_surface_1"] = z40.surface_z(op, len(media) - 1) - z1
         ref["files"][name] = entry
+    ref["crossing_us08427765"] = crossing(recs)
     # Written whole: a stop mid-write leaves the old file, not a cut one.
     with tempfile.NamedTemporaryFile("w", dir=OUT_JSON.parent, delete=False,
                                      suffix=".tmp") as fh:  # temporary
