@@ -79,8 +79,9 @@ Conventions:
     design losses penalise such shapes). True: as in Zemax's sequential trace (and
     optiland's), a ray that meets a surface nowhere ahead of it goes back along its line to
     it (a negative propagation distance, t < 0), on every surface after the first and the
-    image surface: the root taken is the first ahead of the ray, else the first along the
-    line behind it, on the sheet of the surface through its vertex; a ray that the default
+    image surface: the root taken is the first ahead of the ray, else the nearest behind
+    it (the first met going back along its line), on the sheet of the surface through its
+    vertex; a ray that the default
     traces takes the same root (its values agree to rounding: the compiled program
     differs). The ``.zmx`` reader sets it (a patent lens's edges, or a deep concave surface
     whose rim reaches past the stop, cross within the beam and Zemax traces through); the

@@ -18,8 +18,9 @@ Conventions:
     surface where it must, as in a sequential trace. With ``go_back`` (a lens's
     ``negative_propagation``, set for lenses read from Zemax files) every surface after the
     first is reached the way Zemax reaches it: the first root ahead of the ray if there is
-    one, else the first along the line behind it (t < 0), on the surface's sheet through its
-    vertex; a ray the default rule traces takes the same root.
+    one, else the nearest behind it (t < 0: the first point met going back along its line),
+    on the surface's sheet through its vertex; a ray the default rule traces takes the same
+    root.
 
 Intersections:
     Planes, spheres and conics are intersected in closed form (the numerically stable
@@ -60,8 +61,6 @@ Validity:
 
 from __future__ import annotations
 
-import functools
-
 import equinox as eqx
 import jax
 import jax.numpy as jnp
@@ -71,6 +70,14 @@ from ..optics.diffractive import DIFFRACTIVE, Grating
 from ..optics.paraxial_surface import ParaxialSurface
 from ..optics.rays import Rays
 from ..optics.surfaces import AbstractSurface
+from .conic_root import (
+    AHEAD_ELSE_BEHIND,
+    MISS,
+    T_MAX,
+    conic_root_arrays,
+    conic_root_near,
+    unmark,
+)
 
 DEFAULT_NEWTON_ITERS = 6
 
@@ -79,23 +86,6 @@ DEFAULT_NEWTON_ITERS = 6
 # NEWTON_TOL·sqrt(eps)·(1 + |t|) mm (``converged``).
 NEWTON_EXTRA_ITERS = 40
 NEWTON_TOL = 64.0
-
-
-# No lens needs a ray parameter beyond this (mm); larger roots are treated as misses, which
-# also keeps every division below bounded, so gradients stay finite.
-T_MAX = 1e12
-
-
-# Marker for "no valid result" in a ray parameter or a refraction gain; valid values are
-# far smaller (|t| < 2 T_MAX), so |x| < MISS_BELOW tells them apart in float32 and float64.
-MISS = 1e30
-MISS_BELOW = 1e29
-
-
-def unmark(x):
-    """(x with marked entries set to 0, validity)."""
-    ok = jnp.abs(x) < MISS_BELOW
-    return jnp.where(ok, x, 0.0), ok
 
 
 def bounded_div(num, den):
@@ -108,11 +98,6 @@ def bounded_div(num, den):
     return jnp.where(ok, num / jnp.where(ok, den, 1.0), 0.0), ok
 
 
-# ``conic_root_arrays``'s mode for ``intersect``'s ``go_back``: the first root at or past
-# t_min, else the first root along the whole line (both from one quadratic).
-AHEAD_ELSE_BEHIND = "ahead_else_behind"
-
-
 def _conic_root(surface: AbstractSurface, o, d, t_min, go_back=False):
     """The first intersection with the base conic: ``conic_root_arrays`` on a surface (after
     surface 1 from the ray's point nearest the vertex, ``conic_root_near``)."""
@@ -120,111 +105,6 @@ def _conic_root(surface: AbstractSurface, o, d, t_min, go_back=False):
         return conic_root_arrays(False, surface.c, surface.k, *o, *d, jnp.zeros_like(o[2]))
     return conic_root_near(AHEAD_ELSE_BEHIND if go_back else True, surface.c, surface.k, o, d,
                            t_min)
-
-
-def conic_root_near(mode, c, k, o, d, t_min):
-    """``conic_root_arrays(mode, ...)`` solved from the ray's point nearest the vertex: t from
-    ``o`` (marked ``MISS`` on a miss). ``o``, ``d``: (x, y, z) tuples in the surface's frame.
-
-    The quadratic's coefficients hold c·|o|² and |o|, which cancel to the root's size: from a
-    point L mm away the root loses about (1 + |c|·L)² ulps (1e-8 mm at 1e5 mm before a
-    50 mm radius, round 43e). Carried first along its line by t_n = −o·d (no division), the
-    ray starts no farther from the vertex than it was, usually within the surface's own
-    size, and the carry costs one rounding of t_n, which any point o + t·d carries anyway.
-    Surface 1 is solved from the vertex plane instead (``intersect``): its root is the one
-    nearest that plane.
-    """
-    t_n = -(o[0] * d[0] + o[1] * d[1] + o[2] * d[2])
-    o_n = tuple(oi + t_n * di for oi, di in zip(o, d, strict=True))
-    # t_min shifted with the start, less the rounding of the shift (a root at t_min stays in).
-    slack = 4 * jnp.finfo(t_n.dtype).eps * jnp.abs(t_n)
-    return conic_root_arrays(mode, c, k, *o_n, *d, t_min - t_n - slack) + t_n
-
-
-@functools.partial(jax.custom_jvp, nondiff_argnums=(0,))
-def conic_root_arrays(bounded_below, c, k, ox, oy, oz, dx, dy, dz, t_min):
-    """Closed-form intersection with the base conic; returns t, marked MISS on a miss.
-
-    ``o`` and ``d`` are (x, y, z) tuples of arrays in the surface's local frame, with ``o``
-    near the surface (see ``intersect``). Of the two roots of
-    c(x² + y²) + c(1+k)z² − 2z = 0, only those on the sheet through the vertex
-    (1 − c(1+k)z ≥ 0) and with t_min ≤ t count; the first along the ray is taken. With
-    ``bounded_below=False`` (object space, ``o`` on the vertex plane) any t counts and the
-    root nearer to ``o`` is taken: a paraboloid concave toward the object meets a tilted
-    line a second time far behind its vertex (1° off axis, 6.6e5 mm away), which the first
-    root along the line would pick. The roots are the stable pair t1 = cc/q (finite as c -> 0) and
-    t2 = q/a; which one is chosen is decided on numerators and denominators, so the
-    result is a single division (one fused pass over the rays, see the module notes).
-    With ``bounded_below=AHEAD_ELSE_BEHIND`` (``intersect``'s ``go_back``) the root is the
-    first past t_min if there is one, else the first along the whole line (as the two
-    calls with t_min and with −``T_MAX`` would give), from one quadratic.
-    """
-    ck = c * (1 + k)
-    a = c * (dx * dx + dy * dy) + ck * dz * dz
-    b = c * (ox * dx + oy * dy) + ck * oz * dz - dz
-    cc = c * (ox * ox + oy * oy) + ck * oz * oz - 2 * oz
-    disc = b * b - a * cc
-    real = disc >= 0
-    pos = disc > 0
-    root = jnp.where(pos, jnp.sqrt(jnp.where(pos, disc, 1.0)), 0.0)
-    q = -b + jnp.where(b <= 0, root, -root)
-
-    def usable(num, den, past_t_min=bool(bounded_below)):
-        """Whether the root num/den is bounded, on the vertex sheet and (if asked) past t_min."""
-        sign, size = jnp.sign(den), jnp.abs(den)
-        ok = real & (jnp.abs(num) < T_MAX * size)
-        ok = ok & (ck * (oz * den + num * dz) * sign <= size)
-        if past_t_min:
-            ok = ok & (num * sign >= t_min * size)
-        return ok
-
-    u1, u2 = usable(cc, q), usable(q, a)
-    if bounded_below == AHEAD_ELSE_BEHIND:  # static: ahead of t_min, else anywhere on the line
-        sign = jnp.sign(q) * jnp.sign(a)
-        t1_first = cc * a * sign <= q * q * sign
-        # The roots anywhere on the line: on the sheet and bounded (|t| < T_MAX).
-        w1, w2 = usable(cc, q, False), usable(q, a, False)
-        ahead = u1 | u2
-        first_is_t1 = jnp.where(ahead, u1 & (~u2 | t1_first), w1 & (~w2 | t1_first))
-        u1, u2 = u1 | w1, u2 | w2
-    elif bounded_below:  # the first root along the ray
-        # t1 <= t2  <=>  cc·a <= q² when q·a > 0 (the inequality flips when q·a < 0).
-        sign = jnp.sign(q) * jnp.sign(a)
-        first_is_t1 = u1 & (~u2 | (cc * a * sign <= q * q * sign))
-    else:  # object space, o on the vertex plane: the root nearer to it, |t1| <= |t2|
-        first_is_t1 = u1 & (~u2 | (jnp.abs(cc * a) <= q * q))
-    hit = u1 | u2
-    num = jnp.where(first_is_t1, cc, q)
-    den = jnp.where(first_is_t1, q, a)
-    return jnp.where(hit, num, MISS) / jnp.where(hit, den, 1.0)
-
-
-@conic_root_arrays.defjvp
-def _conic_root_jvp(bounded_below, primals, tangents):
-    """Implicit-function derivative dt = −dF/F_t of F = c(x² + y²) + c(1+k)z² − 2z on the ray.
-
-    It reuses the root, so the gradient costs a few multiplies instead of the derivative
-    of the quadratic formula and its root selection.
-    """
-    c, k, ox, oy, oz, dx, dy, dz, _ = primals
-    tc, tk, tox, toy, toz, tdx, tdy, tdz, _ = tangents
-    t_marked = conic_root_arrays(bounded_below, *primals)
-    t, hit = unmark(t_marked)
-    x, y, z = ox + t * dx, oy + t * dy, oz + t * dz
-    fx, fy, fz = 2 * c * x, 2 * c * y, 2 * c * (1 + k) * z - 2  # ∇F
-    f_t = fx * dx + fy * dy + fz * dz
-    df = (
-        (x * x + y * y + (1 + k) * z * z) * tc
-        + c * z * z * tk
-        + fx * (tox + t * tdx)
-        + fy * (toy + t * tdy)
-        + fz * (toz + t * tdz)
-    )
-    # A ray tangent to the surface (cos of incidence below eps) gets zero derivative; the
-    # guard must not look at the tangents (they enter linearly).
-    eps = jnp.finfo(f_t.dtype).eps
-    good = hit & (jnp.abs(f_t) > eps * (jnp.abs(fx) + jnp.abs(fy) + jnp.abs(fz)))
-    return t_marked, jnp.where(good, -df / jnp.where(good, f_t, 1.0), 0.0)
 
 
 def converged(f, df, t):
@@ -410,7 +290,8 @@ def intersect(
         go_back: (static; ignored on the first surface) the ray may go back along its
             line to the surface anywhere (Zemax's negative propagation): the root found
             with the rules above where there is one (so such rays are unchanged), else the
-            first root along the line behind the ray (t ≥ −``T_MAX``, the vertex sheet):
+            nearest root behind the ray (t ≥ −``T_MAX``, the vertex sheet), where the ray
+            going back along its line first meets the surface:
             for a conic both from one quadratic (``AHEAD_ELSE_BEHIND``); on a polynomial
             surface the Newton search (one compiled program) runs a second time, with
             t ≥ −``T_MAX``, only where some ray found no root ahead.
@@ -446,7 +327,7 @@ def intersect(
             k, t, f, df, ok = state
             behind = k == 1
             found = _polynomial_root(surf_s, o_s, d_s, jnp.where(behind, -T_MAX, t_min),
-                                     newton_iters, False, backward, behind)
+                                     newton_iters, False, backward, behind, t_min)
             take = ~ok  # pass 0: every ray; pass 1: the rays without a root ahead
             return (k + 1, *(jnp.where(take, a, b) for a, b in
                              zip(found, (t, f, df, ok), strict=True)))
@@ -475,16 +356,25 @@ def intersect(
     return jnp.where(ok, (t1 + t_plane) * df1 - f1, MISS) / jnp.where(ok, df1, 1.0)
 
 
-def _polynomial_root(surf_s, o_s, d_s, t_min, newton_iters, first, backward, behind=None):
+def _polynomial_root(surf_s, o_s, d_s, t_min, newton_iters, first, backward, behind=None,
+                     ahead_min=None):
     """(t, F(t), F'(t), hit) of the Newton search on a surface with polynomial terms
     (``intersect``; forward values only): the first root with t ≥ ``t_min`` (None: on the
     first surface, the root nearest the vertex plane); for rays searching ahead (not
-    ``backward``, not ``behind``) the first of a near-double pair."""
+    ``backward``, not ``behind``) the first of a near-double pair. Searching ``behind``
+    (``intersect``'s ``go_back``, ``t_min`` then −``T_MAX``), Newton starts from the base
+    conic's root nearest behind ``ahead_min`` (``AHEAD_ELSE_BEHIND``), as a conic's own
+    go-back root is taken."""
     # Two starts: the base conic's root and the vertex plane (t = 0 on surface 1, where the
     # rays already are). Newton begins at the one whose first step is shorter: where the
     # polynomial terms move the surface far from its base conic, the ray can graze the
     # surface at the conic root (F' ≈ 0) and the first step would throw it kilometres away.
-    t_conic, hit = unmark(_conic_root(surf_s, o_s, d_s, t_min))
+    if behind is None:
+        t_conic, hit = unmark(_conic_root(surf_s, o_s, d_s, t_min))
+    else:
+        marked = jnp.where(behind, _conic_root(surf_s, o_s, d_s, ahead_min, go_back=True),
+                           _conic_root(surf_s, o_s, d_s, t_min))
+        t_conic, hit = unmark(marked)
     t_vertex = jnp.zeros_like(t_conic) if first else bounded_div(-o_s[2], d_s[2])[0]
 
     def project(t):

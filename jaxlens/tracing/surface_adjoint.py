@@ -31,10 +31,10 @@ that only take reverse-mode gradients; a hand-written ``custom_jvp`` of the same
 keeps forward mode) measured 5-34 % slower than this rule, and not faster than JAX's own
 derivative of ``surface_step`` on a quiet machine. Rays invalid on entry or lost here pass
 their cotangents through unchanged, as in ``surface_step``; a ray grazing the surface (|d·N|
-below eps·|N|₁) gets no root derivative, as in ``step.conic_root_arrays``.
+below eps·|N|₁) gets no root derivative, as in ``conic_root.conic_root_arrays``.
 
 ``go_back`` (static, ``Lens.negative_propagation``) takes the root as ``step.intersect`` does
-with it (ahead of the ray, else behind it: ``step.AHEAD_ELSE_BEHIND``, and for polynomial
+with it (ahead of the ray, else behind it: ``conic_root.AHEAD_ELSE_BEHIND``, and for polynomial
 surfaces a second Newton search where the first found nothing ahead); the reverse rules need no
 change, since they start from the root taken, wherever it lies on the line.
 """
@@ -51,17 +51,13 @@ from ..optics.qtype import QTypeAsphere
 from ..optics.surfaces import EvenAsphere, Hybrid, OddAsphere, Standard, TiltedPlane
 from ..optics.toroidal import Toroidal
 from ..optics.xypolynomial import XYPolynomial
+from .conic_root import AHEAD_ELSE_BEHIND, T_MAX, conic_root_arrays, conic_root_near, unmark
 from .step import (
-    AHEAD_ELSE_BEHIND,
-    T_MAX,
     RayState,
     bounded_div,
-    conic_root_arrays,
-    conic_root_near,
     intersect,
     refraction_gain,
     surface_normal,
-    unmark,
 )
 
 # Surfaces that ``sag_step`` takes: ``surface_step`` intersects them by Newton's method and
