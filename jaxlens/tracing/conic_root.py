@@ -50,15 +50,11 @@ def conic_root_near(mode, c, k, o, d, t_min):
     Surface 1 is solved from the vertex plane instead (``intersect``): its root is the one
     nearest that plane.
     """
-    t_n = -(o[0] * d[0] + o[1] * d[1] + o[2] * d[2])
-    o_n = tuple(oi + t_n * di for oi, di in zip(o, d, strict=True))
-    # t_min shifted with the start, less the rounding of the shift (a root at t_min stays in).
-    slack = 4 * jnp.finfo(t_n.dtype).eps * jnp.abs(t_n)
-    return conic_root_arrays(mode, c, k, *o_n, *d, t_min - t_n - slack) + t_n
+    return conic_root_arrays(mode, c, k, *o, *d, t_min, True)
 
 
-@functools.partial(jax.custom_jvp, nondiff_argnums=(0,))
-def conic_root_arrays(bounded_below, c, k, ox, oy, oz, dx, dy, dz, t_min):
+@functools.partial(jax.custom_jvp, nondiff_argnums=(0, 10))
+def conic_root_arrays(bounded_below, c, k, ox, oy, oz, dx, dy, dz, t_min, near=False):
     """Closed-form intersection with the base conic; returns t, marked MISS on a miss.
 
     ``o`` and ``d`` are (x, y, z) tuples of arrays in the surface's local frame, with ``o``
@@ -78,7 +74,14 @@ def conic_root_arrays(bounded_below, c, k, ox, oy, oz, dx, dy, dz, t_min):
     root along the whole line, taken before round 43d, lay on the far side of the sheet,
     40 mm back and across the axis on a real patent lens, where optiland and Zemax's
     vertex-sheet root take the near one.)
+    With ``near`` (static) the quadratic is solved from the ray's point nearest the vertex
+    (``conic_root_near``); t is still measured from ``o``, in the same one division.
     """
+    if near:
+        t_n = -(ox * dx + oy * dy + oz * dz)
+        ox, oy, oz = ox + t_n * dx, oy + t_n * dy, oz + t_n * dz
+        # t_min shifted with the start, less the shift's rounding (a root at t_min stays in).
+        t_min = t_min - t_n - 4 * jnp.finfo(t_n.dtype).eps * jnp.abs(t_n)
     ck = c * (1 + k)
     a = c * (dx * dx + dy * dy) + ck * dz * dz
     b = c * (ox * dx + oy * dy) + ck * oz * dz - dz
@@ -117,11 +120,13 @@ def conic_root_arrays(bounded_below, c, k, ox, oy, oz, dx, dy, dz, t_min):
     hit = u1 | u2
     num = jnp.where(first_is_t1, cc, q)
     den = jnp.where(first_is_t1, q, a)
+    if near:  # t from o: t_n + num/den
+        num = num + t_n * den
     return jnp.where(hit, num, MISS) / jnp.where(hit, den, 1.0)
 
 
 @conic_root_arrays.defjvp
-def _conic_root_jvp(bounded_below, primals, tangents):
+def _conic_root_jvp(bounded_below, near, primals, tangents):
     """Implicit-function derivative dt = −dF/F_t of F = c(x² + y²) + c(1+k)z² − 2z on the ray.
 
     It reuses the root, so the gradient costs a few multiplies instead of the derivative
@@ -129,7 +134,7 @@ def _conic_root_jvp(bounded_below, primals, tangents):
     """
     c, k, ox, oy, oz, dx, dy, dz, _ = primals
     tc, tk, tox, toy, toz, tdx, tdy, tdz, _ = tangents
-    t_marked = conic_root_arrays(bounded_below, *primals)
+    t_marked = conic_root_arrays(bounded_below, *primals, near)
     t, hit = unmark(t_marked)
     x, y, z = ox + t * dx, oy + t * dy, oz + t * dz
     fx, fy, fz = 2 * c * x, 2 * c * y, 2 * c * (1 + k) * z - 2  # ∇F
