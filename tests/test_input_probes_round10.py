@@ -192,10 +192,11 @@ def test_nafnet_refuses_an_image_that_is_not_finite(net, bad):
 
 def test_nafnet_refuses_complex_bool_and_empty_images_and_takes_lists(net):
     """A complex image ran (complex output), a bool one gave float32, an empty one an empty
-    result, and a nested list failed with "'list' object has no attribute 'ndim'"."""
-    for x in (jnp.zeros((8, 8, 3), complex), jnp.zeros((8, 8, 3), bool)):
-        with pytest.raises(TypeError, match=r"NAFNet: image must be a real number or an array "
-                                            r"of real numbers"):
+    result, and a nested list failed with "'list' object has no attribute 'ndim'". (Round
+    43b: one rule for images, ``checks.image_dtype``, names the dtype.)"""
+    for x, dt in ((jnp.zeros((8, 8, 3), complex), "complex"), (jnp.zeros((8, 8, 3), bool), "bool")):
+        with pytest.raises(ValueError, match=rf"NAFNet: image must be a float image \(linear "
+                                             rf"light\), got dtype {dt}"):
             net(x)
     with pytest.raises(ValueError, match=r"NAFNet: expected one \[H, W, C\] image with H, W >= "
                                          r"1, got shape \(0, 8, 3\)"):
