@@ -73,10 +73,11 @@ from ..optics.paraxial import working_fnum
 from ..optics.rays import Rays
 from ..tracing.forward import DEFAULT_NEWTON_ITERS, forward_mode_jit, trace
 from . import light, sampling, telecentric
-from .aiming import apertured, chief_point, field_to_ideal, ideal_to_field
+from .aiming import chief_point, field_to_ideal, ideal_to_field
 from .grid import kernel_side, pixel_pitch, pupil_cells, sensor_grid, splat
 from .light import NoLightError
 from .otf import diffraction_mtf, mtf_directions
+from .radiometry import in_pupil
 
 __all__ = ["AbstractPSFModel", "CoherentPSF", "GeometricPSF", "RGB_WAVELENGTHS", "PSFResult",
            "PSFMap", "psf", "psf_info", "psf_rgb", "psf_map", "mtf"]
@@ -88,7 +89,10 @@ CENTERS = ("chief", "centroid", "ideal", "pupil")
 
 
 def _launch(lens: Lens, field, depth, pupil, wavelength) -> Rays:
-    return sampling.field_rays(lens, field, pupil, wavelength, depth=depth)
+    """The beam's rays: those of pupil points outside the system aperture (the unit disc,
+    ``radiometry.in_pupil``; an overfilled beam's ring) are launched invalid."""
+    rays = sampling.field_rays(lens, field, pupil, wavelength, depth=depth)
+    return eqx.tree_at(lambda r: r.valid, rays, rays.valid & in_pupil(pupil))
 
 
 def _flux(rays: Rays, depth) -> Array:
@@ -439,7 +443,7 @@ def psf_info(
                       unit="(fraction of the PSF energy; None to skip the check)")
     wls = jnp.atleast_1d(wl)
     kern, trunc, ref, strehl, aliased = _psf_impl(
-        apertured(lens), field, depth, wls, pixel_size, key, kernel_size=kernel_size, model=model,
+        lens, field, depth, wls, pixel_size, key, kernel_size=kernel_size, model=model,
         center=center, newton_iters=newton_iters)
     if max_truncation is not None:
         dark = (light.message("psf", lens, field, "PSF") if not checks.is_traced(field) else
@@ -615,8 +619,6 @@ def psf_map(
     xy = sensor_grid(sensor.resolution, sensor.pixel_size, grid)
     fields = ideal_to_field(lens, xy)
     wls = jnp.atleast_1d(wl)
-    lens = apertured(lens)
-
     kern, trunc, ref, _, _ = _psf_grid(lens, fields.reshape(-1, 2), depth, wls, pixel_size,
                                        kernel_size=kernel_size, model=model, center=center,
                                        newton_iters=newton_iters)
@@ -769,7 +771,7 @@ def mtf(
     pix = lam_min * fnum / 4.0 if pixel_size is None else jnp.asarray(pixel_size, dtype)
     field, depth, _, pix, kernel_size = _prepare(lens, field, depth, None, kernel_size, pix,
                                                  model, "centroid", "mtf", newton_iters)
-    t, s, lit = _mtf_impl(apertured(lens), field, depth, wls, freqs, pix, model=model,
+    t, s, lit = _mtf_impl(lens, field, depth, wls, freqs, pix, model=model,
                           kernel_size=kernel_size,
                           diffraction=bool(diffraction), newton_iters=newton_iters)
     # A wavelength without light had an MTF of 0 at every frequency (0 at 0 cycles/mm, and

@@ -79,8 +79,8 @@ from ..tracing.forward import DEFAULT_NEWTON_ITERS, forward_mode_jit, trace
 from . import sampling, telecentric
 from .grid import pupil_cells
 
-__all__ = ["RelativeIllumination", "beam_bounded", "in_entrance_pupil", "pupil_bounded",
-           "relative_illumination", "star_region"]
+__all__ = ["RelativeIllumination", "beam_bounded", "in_entrance_pupil", "in_pupil",
+           "pupil_bounded", "relative_illumination", "star_region"]
 
 
 def star_region(valid_fn, center, half, *, n_coarse: int = 24, n_dirs: int = 128,
@@ -262,6 +262,20 @@ def in_entrance_pupil(lens: Lens, rays: Rays):
     xy = rays.origin[..., :2] + s[..., None] * rays.direction[..., :2]
     r = 0.5 * lens.epd
     return ok & (jnp.sum(xy * xy, -1) <= r * r)
+
+
+def in_pupil(pupil) -> Array:
+    """Where normalised pupil points (``[..., 2]``, as ``sampling.field_rays`` launches them)
+    lie in the system aperture: the unit disc, whatever the lens (see "System aperture" in
+    the module notes). Under paraxial aiming the point (Px, Py) is launched at
+    (Px, Py)·EPD/2 on the paraxial entrance pupil's plane (``in_entrance_pupil``'s disc);
+    under ray aiming it is aimed at (Px, Py)·r on the stop, r the radius ``beam_bounded``
+    gives the stop; an object-space telecentric lens launches it with the slopes
+    (Px, Py)·tan u (``telecentric.in_cone``'s cone). A launched beam wider than the unit
+    disc (a PSF's ``overfill``) carries no light beyond it, and an unbounded stop stays
+    unbounded, as Zemax's and optiland's pupil sampling does (|P| <= 1, no stop clip)."""
+    pupil = jnp.asarray(pupil)
+    return jnp.sum(pupil * pupil, -1) <= 1.0
 
 
 def beam_bounded(lens: Lens, depth=None) -> Lens:
