@@ -312,6 +312,7 @@ def ray_otf(op, field, heights, wl, freqs, stop, stop_r, finite):
     Each ray weighs cos⁴ of its launch direction for a finite object (a Lambertian point
     source over the launch plane's equal-area cells), 1 for an object at infinity; rays
     that miss the stop's circle of radius ``stop_r`` (inf: no clip) weigh 0."""
+    given = op.surface_group.surfaces[stop].aperture  # the lens's own, put back after
     if math.isfinite(stop_r):
         op.surface_group.surfaces[stop].aperture = RadialAperture(r_max=stop_r)
     try:
@@ -321,7 +322,7 @@ def ray_otf(op, field, heights, wl, freqs, stop, stop_r, finite):
         alive = np.asarray(op.surface_group.intensity[-1]) > 0
         launch = op.ray_tracer.ray_generator.generate_rays(*field, dist.x, dist.y, wl)
     finally:
-        op.surface_group.surfaces[stop].aperture = None
+        op.surface_group.surfaces[stop].aperture = given
     w = np.where(alive, np.asarray(launch.N) ** 4 if finite else 1.0, 0.0)
     pos = np.stack([np.ravel(rays.x), np.ravel(rays.y)], -1)
     h = np.asarray(heights, float)
@@ -360,13 +361,14 @@ def coherent_centre_strehl(op, field, wl, stop, stop_r, finite, h=1e-5):
         r = op.trace(*field, wl, None, At(x, y))
         return np.ravel(r.L), np.ravel(r.M)
 
+    given = op.surface_group.surfaces[stop].aperture  # the lens's own, put back after
     if math.isfinite(stop_r):
         op.surface_group.surfaces[stop].aperture = RadialAperture(r_max=stop_r)
     try:
         rays = op.trace(*field, wl, None, At(px, py))
         alive = np.asarray(op.surface_group.intensity[-1]) > 0
     finally:
-        op.surface_group.surfaces[stop].aperture = None
+        op.surface_group.surfaces[stop].aperture = given
     launch = op.ray_tracer.ray_generator.generate_rays(*field, px, py, wl)
     lx1, mx1 = lm(px + h, py)
     lx0, mx0 = lm(px - h, py)

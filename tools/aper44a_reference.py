@@ -20,6 +20,11 @@ pupil), ``ray_otf``; and, for the record, ``stop_clipped``: the same with the st
 paraxial marginal ray's height and the unit pupil's cut left out (the overfilled beam clipped
 at the stop, jaxlens's rule before round 44a, ``aiming.apertured``).
 
+Two more lenses keep their files' apertures (CLAP on every surface, optiland's
+``RadialAperture``s; jaxlens's semi-diameters): tests/data/ri43c/triplet_stopsmall.zmx (the
+stop's 3.4 mm narrower than the EPD's beam: it bounds the beam) and triplet_stopwide.zmx (the
+stop wider than the beam: the unit pupil bounds it).
+
 The lenses: tests/data/ri43c/triplet_stopwide.zmx (a Cooke triplet, EPD 10, f ≈ 50 mm; real
 rim ray at the stop off the paraxial one) and Laikin's 100° retrofocus lens (tests/data/zmx/
 optiland_circular_aperture_example_with_aperture.zmx, inches; strong pupil aberration),
@@ -48,6 +53,15 @@ LENSES = {
                     freqs=[10.0, 20.0, 40.0, 80.0]),
     "laikin": dict(file="tests/data/zmx/optiland_circular_aperture_example_with_aperture.zmx",
                    fields=[0.0, 20.0, 35.0], freqs=[5.0, 10.0, 20.0, 40.0]),
+    # Given stop semi-diameters (the files' CLAP apertures kept, on every surface): a stop
+    # narrower than the EPD's beam (3.4 mm; it bounds the beam, which must not change) and
+    # one wider (the unit pupil bounds the beam, as optiland's).
+    "triplet_stopsmall": dict(file="tests/data/ri43c/triplet_stopsmall.zmx",
+                              fields=[0.0, 14.0, 20.0], freqs=[10.0, 20.0, 40.0, 80.0],
+                              apertures=True),
+    "triplet_stopwide": dict(file="tests/data/ri43c/triplet_stopwide.zmx",
+                             fields=[0.0, 14.0, 20.0], freqs=[10.0, 20.0, 40.0, 80.0],
+                             apertures=True),
 }
 
 
@@ -70,20 +84,24 @@ def main() -> None:
     for name, spec in LENSES.items():
         op = load_zemax_file(str(ROOT / spec["file"]))
         op.ray_tracer.set_aiming("paraxial")
-        for s in op.surface_group.surfaces:
-            s.aperture = None
+        if not spec.get("apertures"):
+            for s in op.surface_group.surfaces:
+                s.aperture = None
         acc.tight(op)
         prim = float(op.primary_wavelength)
         stop = int(op.surface_group.stop_index)
         stop_r = abs(float(np.ravel(op.paraxial.marginal_ray()[0][stop])[0]))
         hmax = float(op.fields.max_field)
-        res = {"file": spec["file"], "primary_um": prim, "stop_surface": stop,
+        res = {"file": spec["file"], "apertures": bool(spec.get("apertures")), "primary_um": prim, "stop_surface": stop,
                "paraxial_stop_radius": stop_r, "freqs": spec["freqs"], "fields": []}
         for f in spec["fields"]:
             field = (0.0, f / hmax)
             one = {"field_deg": f, "unit_pupil": acc.ray_otf(op, field, (0.0, f), prim,
                                                             spec["freqs"], stop, math.inf,
                                                             False)}
+            if spec.get("apertures"):  # the file's stop aperture is the clip
+                res["fields"].append(one)
+                continue
             cells = acc.Cells
             acc.Cells = Overfilled
             try:
