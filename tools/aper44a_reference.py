@@ -92,7 +92,8 @@ def main() -> None:
         stop = int(op.surface_group.stop_index)
         stop_r = abs(float(np.ravel(op.paraxial.marginal_ray()[0][stop])[0]))
         hmax = float(op.fields.max_field)
-        res = {"file": spec["file"], "apertures": bool(spec.get("apertures")), "primary_um": prim, "stop_surface": stop,
+        res = {"file": spec["file"], "apertures": bool(spec.get("apertures")),
+               "primary_um": prim, "stop_surface": stop,
                "paraxial_stop_radius": stop_r, "freqs": spec["freqs"], "fields": []}
         for f in spec["fields"]:
             field = (0.0, f / hmax)

@@ -29,10 +29,11 @@ Conventions:
     every wavelength, so lateral colour shows as a shift between the channels.
 
 Models:
-    geometric: rays from the object point fill an overfilled entrance pupil (the aperture
-    stop clips them), are traced to the image surface and splatted bilinearly onto the
-    pixel grid. Bilinear splatting is piecewise linear in the ray positions, so the PSF is
-    differentiable with respect to the lens.
+    geometric: rays from the object point fill the entrance pupil (the unit pupil, the
+    system aperture of ``radiometry.in_pupil``, as optiland and Zemax sample it: a stop
+    without a semi-diameter clips nothing), are traced to the image surface and splatted
+    bilinearly onto the pixel grid. Bilinear splatting is piecewise linear in the ray
+    positions, so the PSF is differentiable with respect to the lens.
 
     coherent: the field on the sensor is the ray-based Debye (angular-spectrum) integral.
     Each traced ray stands for a plane wave with its image-space direction d_j and the
@@ -128,8 +129,9 @@ class AbstractPSFModel(eqx.Module):
     """How a PSF is computed: a small, final strategy object passed as ``model=``.
 
     ``pupil`` is the number of rays per side of the square pupil grid (about 0.62·pupil²
-    rays are launched after the disc cut) and ``overfill`` the radius of the launched beam
-    over the paraxial entrance-pupil radius (the stop clips it). Both are static.
+    rays are launched after the disc cut) and ``overfill`` the radius of the launched grid
+    over the paraxial entrance-pupil radius; its rays beyond the unit pupil carry no light
+    (``radiometry.in_pupil``), so overfill > 1 only spends rays. Both are static.
     """
 
     pupil: eqx.AbstractVar[int]
@@ -164,7 +166,8 @@ class AbstractPSFModel(eqx.Module):
 
     def kernels(self, lens, field, depth, wls, *, kernel_size, pixel_size, center, key,
                 newton_iters):
-        """PSFs ``[W, k, k]`` of one field at wavelengths ``wls`` of an apertured lens.
+        """PSFs ``[W, k, k]`` of one field at wavelengths ``wls`` (the beam: the unit
+        pupil, ``radiometry.in_pupil``).
 
         Returns (kernels, truncated fraction [W] (NaN where no ray got through), reference
         point [2], Strehl ratio [W] (NaN for ray models), aliased [W]).

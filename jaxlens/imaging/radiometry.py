@@ -56,7 +56,10 @@ System aperture:
     beam before round 43c: a 10 mm stop behind a 6 mm EPD passed a 10 mm beam); a stop
     narrower clips every field's beam (the working EPD of ``analysis.stop_clip``); an
     unbounded stop stays unbounded under paraxial aiming (Zemax's stop of automatic size
-    clips nothing).
+    clips nothing). In normalised pupil coordinates the three are one rule, the unit disc
+    (``in_pupil``), by which ``psf``, ``mtf``, ``psf_points`` and ``render``'s PSFs bound
+    their overfilled grids (round 44a; before it a stop without a semi-diameter was given
+    the paraxial marginal ray's radius and clipped them, ``aiming.apertured``).
 
 Vignetting factors:
     The lens's vignetting factors (``Lens.vignetting``) are not applied, at its own fields
@@ -300,7 +303,7 @@ def beam_bounded(lens: Lens, depth=None) -> Lens:
 @checks.checked_core(forward_mode_jit)
 def relative_illumination_samples(lens, fields, depth, wl, *, n_coarse, n_fine, newton_iters):
     """Relative illumination at ``fields`` (degrees; object heights in mm for an object-space
-    telecentric lens) of an apertured lens, jitted core of
+    telecentric lens) of a lens whose beam ``beam_bounded`` bounds, jitted core of
     ``relative_illumination``: (ri, irradiance, footprint centre) per field."""
     dtype = fields.dtype
     lens = lens.astype(dtype)
