@@ -43,11 +43,12 @@ wavefront is ahead of the sphere; the chief ray traced at the wavelength analyse
   the A2 lens an independent y-nu trace with paraxial curvature c + 2·A2, see below); the
   working F/# 1/(2 n′u′) and the paraxial marginal ray's height at the stop;
 - ``ray_fan``: image-surface (x, y) of the fan rays minus the chief ray's (primary);
-- ``mtf``: the |OTF| of optiland's rays (``ray_otf``) on jaxlens's geometric-PSF pupil grid,
-  the stop clipping the overfilled beam at the paraxial marginal ray's height (jaxlens's
-  definition of the beam, ``imaging.aiming.apertured``), at ``MTF_FREQS`` cycles/mm;
-  ``optiland_geometric_mtf`` is optiland's own GeometricMTF (its unit-pupil beam, histogram
-  line spread), for comparison only;
+- ``mtf``: the |OTF| of optiland's rays (``ray_otf``) on jaxlens's geometric-PSF pupil grid
+  cut to the unit pupil (Px² + Py² <= 1, optiland's and Zemax's beam, no stop clipping: the
+  system aperture bounds the beam, ``imaging.radiometry.in_pupil``, round 44a; before it the
+  stop clipped the overfilled beam at the paraxial marginal ray's height, jaxlens's former
+  ``aiming.apertured``), at ``MTF_FREQS`` cycles/mm; ``optiland_geometric_mtf`` is optiland's
+  own GeometricMTF (the same unit-pupil beam, histogram line spread), for comparison only;
 - ``coherent_centre_strehl`` (x20 doublet, immersed lens): the coherent PSF at the chief
   ray's image point over the unaberrated peak by jaxlens's ray-based Debye sum on optiland's
   rays (``coherent_centre_strehl``), and the geometric encircled energy of the rays
@@ -292,12 +293,14 @@ def grid_stats(op, field, wl, xp_point):
 class Cells(BaseDistribution):
     """jaxlens's geometric-PSF pupil grid (``GeometricPSF(pupil=MTF_CELLS, overfill=
     MTF_OVERFILL)``): cell centres of an n x n grid over [-1, 1]², kept inside the unit
-    disc, scaled by the overfill; the stop clips the overfilled beam."""
+    disc, scaled by the overfill, and of those the points inside the unit pupil (the system
+    aperture: the ring beyond it carries no light)."""
 
     def generate_points(self, num_points):
         g = (np.arange(num_points) + 0.5) / num_points * 2.0 - 1.0
         px, py = np.meshgrid(g, g, indexing="xy")
-        keep = px * px + py * py <= 1.0
+        r2 = px * px + py * py
+        keep = (r2 <= 1.0) & (r2 * MTF_OVERFILL**2 <= 1.0)
         self.x = px[keep] * MTF_OVERFILL
         self.y = py[keep] * MTF_OVERFILL
 
@@ -308,8 +311,10 @@ def ray_otf(op, field, heights, wl, freqs, stop, stop_r, finite):
     of a radial line is radial in a rotationally symmetric lens), sagittal perpendicular.
     Each ray weighs cos⁴ of its launch direction for a finite object (a Lambertian point
     source over the launch plane's equal-area cells), 1 for an object at infinity; rays
-    that miss the stop's circle of radius ``stop_r`` weigh 0."""
-    op.surface_group.surfaces[stop].aperture = RadialAperture(r_max=stop_r)
+    that miss the stop's circle of radius ``stop_r`` (inf: no clip) weigh 0."""
+    given = op.surface_group.surfaces[stop].aperture  # the lens's own, put back after
+    if math.isfinite(stop_r):
+        op.surface_group.surfaces[stop].aperture = RadialAperture(r_max=stop_r)
     try:
         dist = Cells()
         dist.generate_points(MTF_CELLS)
@@ -317,7 +322,7 @@ def ray_otf(op, field, heights, wl, freqs, stop, stop_r, finite):
         alive = np.asarray(op.surface_group.intensity[-1]) > 0
         launch = op.ray_tracer.ray_generator.generate_rays(*field, dist.x, dist.y, wl)
     finally:
-        op.surface_group.surfaces[stop].aperture = None
+        op.surface_group.surfaces[stop].aperture = given
     w = np.where(alive, np.asarray(launch.N) ** 4 if finite else 1.0, 0.0)
     pos = np.stack([np.ravel(rays.x), np.ravel(rays.y)], -1)
     h = np.asarray(heights, float)
@@ -356,12 +361,14 @@ def coherent_centre_strehl(op, field, wl, stop, stop_r, finite, h=1e-5):
         r = op.trace(*field, wl, None, At(x, y))
         return np.ravel(r.L), np.ravel(r.M)
 
-    op.surface_group.surfaces[stop].aperture = RadialAperture(r_max=stop_r)
+    given = op.surface_group.surfaces[stop].aperture  # the lens's own, put back after
+    if math.isfinite(stop_r):
+        op.surface_group.surfaces[stop].aperture = RadialAperture(r_max=stop_r)
     try:
         rays = op.trace(*field, wl, None, At(px, py))
         alive = np.asarray(op.surface_group.intensity[-1]) > 0
     finally:
-        op.surface_group.surfaces[stop].aperture = None
+        op.surface_group.surfaces[stop].aperture = given
     launch = op.ray_tracer.ray_generator.generate_rays(*field, px, py, wl)
     lx1, mx1 = lm(px + h, py)
     lx0, mx0 = lm(px - h, py)
@@ -463,10 +470,10 @@ def analyse(op, fields, jl_fields, kind, xp, xp_point, freqs, rows=None, strehl_
                 one["opd_optiland_primary_index"][repr(w)] = np.asarray(d0.opd).tolist()
         one["ray_fan"] = ray_fan(op, f, prim)
         one["grid"] = grid_stats(op, f, prim, xp_point)
-        one["mtf"] = ray_otf(op, f, f, prim, freqs, stop, stop_r, finite)
+        one["mtf"] = ray_otf(op, f, f, prim, freqs, stop, math.inf, finite)
         one["optiland_geometric_mtf"] = optiland_geometric_mtf(op, f, freqs)
         if strehl_fields is not None and len(res["fields"]) in strehl_fields:
-            one["coherent_centre_strehl"] = coherent_centre_strehl(op, f, prim, stop, stop_r,
+            one["coherent_centre_strehl"] = coherent_centre_strehl(op, f, prim, stop, math.inf,
                                                                    finite)
             one["encircled"] = encircled(op, f, prim)
         res["fields"].append(one)
@@ -488,8 +495,8 @@ def main() -> None:
                "zernike_terms": ZERNIKE_TERMS, "mtf_cells": MTF_CELLS,
                "mtf_overfill": MTF_OVERFILL,
                "mtf_note": "|OTF| of optiland's rays on jaxlens's geometric-PSF pupil grid "
-                           "(mtf_cells² cell centres in the disc, times mtf_overfill), the "
-                           "stop clipping at the paraxial marginal ray's height, cos⁴ "
+                           "(mtf_cells² cell centres in the disc, times mtf_overfill), cut "
+                           "to the unit pupil (no stop clipping; round 44a), cos⁴ "
                            "launch weights for a finite object, primary wavelength, no "
                            "diffraction factor; tangential along the field's radial "
                            "direction. optiland_geometric_mtf: optiland's own "

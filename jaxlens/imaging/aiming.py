@@ -23,25 +23,6 @@ from . import sampling
 from .newton import newton_2d as newton_2d
 
 
-# --------------------------------------------------------------------------------------
-# Geometry shared with render, radiometry and distortion_relax
-# --------------------------------------------------------------------------------------
-def apertured(lens: Lens) -> Lens:
-    """The lens with an unbounded stop given the paraxial stop radius from the EPD.
-
-    Overfilled beams rely on the stop to clip them; a stop with ``semi_diameter = inf``
-    gets the radius that the entrance pupil diameter implies. A lens whose stop is bounded
-    (a concrete value, checked outside jit) is returned as it is, at no cost.
-    """
-    sd = lens.surfaces[lens.stop].semi_diameter
-    if not isinstance(sd, jax.core.Tracer) and bool(np.all(np.isfinite(np.asarray(sd)))):
-        return lens
-    finite = jnp.isfinite(sd)
-    stop_r = paraxial.paraxial_data(lens).stop_semi_diameter
-    new = jnp.where(finite, sd, stop_r)
-    return eqx.tree_at(lambda m: m.surfaces[m.stop].semi_diameter, lens, new)
-
-
 def image_scale(lens: Lens, wavelength=None) -> Float[Array, ""]:
     """K: the scale of the distortion-free image, ideal image point per unit field coordinate.
 

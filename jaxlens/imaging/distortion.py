@@ -37,7 +37,7 @@ from ..optics.rays import Rays
 from ..tracing.backward import trace_backward
 from ..tracing.forward import DEFAULT_NEWTON_ITERS
 from . import sampling
-from .aiming import apertured, chief_point, ideal_to_field, image_scale, newton_2d
+from .aiming import chief_point, ideal_to_field, image_scale, newton_2d
 from .grid import bilinear, grid_coords, pixel_pitch, sensor_grid
 
 __all__ = [
@@ -104,7 +104,6 @@ def distortion_map(
     checks.newton_iters(newton_iters, "distortion_map")
     depth = sampling.lens_depth(lens, depth, "distortion_map")
     checks.primary_wavelength(lens, "distortion_map", "the chief rays'")
-    lens = apertured(lens)
     ideal = sensor_grid(s.resolution, s.pixel_size, grid).astype(lens.epd.dtype)
     real, valid = _forward_map(lens, ideal, depth, newton_iters)
     if not checks.is_traced(valid) and not np.all(np.asarray(valid)):

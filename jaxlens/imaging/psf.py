@@ -29,10 +29,11 @@ Conventions:
     every wavelength, so lateral colour shows as a shift between the channels.
 
 Models:
-    geometric: rays from the object point fill an overfilled entrance pupil (the aperture
-    stop clips them), are traced to the image surface and splatted bilinearly onto the
-    pixel grid. Bilinear splatting is piecewise linear in the ray positions, so the PSF is
-    differentiable with respect to the lens.
+    geometric: rays from the object point fill the entrance pupil (the unit pupil, the
+    system aperture of ``radiometry.in_pupil``, as optiland and Zemax sample it: a stop
+    without a semi-diameter clips nothing), are traced to the image surface and splatted
+    bilinearly onto the pixel grid. Bilinear splatting is piecewise linear in the ray
+    positions, so the PSF is differentiable with respect to the lens.
 
     coherent: the field on the sensor is the ray-based Debye (angular-spectrum) integral.
     Each traced ray stands for a plane wave with its image-space direction d_j and the
@@ -73,10 +74,11 @@ from ..optics.paraxial import working_fnum
 from ..optics.rays import Rays
 from ..tracing.forward import DEFAULT_NEWTON_ITERS, forward_mode_jit, trace
 from . import light, sampling, telecentric
-from .aiming import apertured, chief_point, field_to_ideal, ideal_to_field
+from .aiming import chief_point, field_to_ideal, ideal_to_field
 from .grid import kernel_side, pixel_pitch, pupil_cells, sensor_grid, splat
 from .light import NoLightError
 from .otf import diffraction_mtf, mtf_directions
+from .radiometry import in_pupil
 
 __all__ = ["AbstractPSFModel", "CoherentPSF", "GeometricPSF", "RGB_WAVELENGTHS", "PSFResult",
            "PSFMap", "psf", "psf_info", "psf_rgb", "psf_map", "mtf"]
@@ -88,7 +90,10 @@ CENTERS = ("chief", "centroid", "ideal", "pupil")
 
 
 def _launch(lens: Lens, field, depth, pupil, wavelength) -> Rays:
-    return sampling.field_rays(lens, field, pupil, wavelength, depth=depth)
+    """The beam's rays: those of pupil points outside the system aperture (the unit disc,
+    ``radiometry.in_pupil``; an overfilled beam's ring) are launched invalid."""
+    rays = sampling.field_rays(lens, field, pupil, wavelength, depth=depth)
+    return eqx.tree_at(lambda r: r.valid, rays, rays.valid & in_pupil(pupil))
 
 
 def _flux(rays: Rays, depth) -> Array:
@@ -124,8 +129,9 @@ class AbstractPSFModel(eqx.Module):
     """How a PSF is computed: a small, final strategy object passed as ``model=``.
 
     ``pupil`` is the number of rays per side of the square pupil grid (about 0.62·pupil²
-    rays are launched after the disc cut) and ``overfill`` the radius of the launched beam
-    over the paraxial entrance-pupil radius (the stop clips it). Both are static.
+    rays are launched after the disc cut) and ``overfill`` the radius of the launched grid
+    over the paraxial entrance-pupil radius; its rays beyond the unit pupil carry no light
+    (``radiometry.in_pupil``), so overfill > 1 only spends rays. Both are static.
     """
 
     pupil: eqx.AbstractVar[int]
@@ -160,7 +166,8 @@ class AbstractPSFModel(eqx.Module):
 
     def kernels(self, lens, field, depth, wls, *, kernel_size, pixel_size, center, key,
                 newton_iters):
-        """PSFs ``[W, k, k]`` of one field at wavelengths ``wls`` of an apertured lens.
+        """PSFs ``[W, k, k]`` of one field at wavelengths ``wls`` (the beam: the unit
+        pupil, ``radiometry.in_pupil``).
 
         Returns (kernels, truncated fraction [W] (NaN where no ray got through), reference
         point [2], Strehl ratio [W] (NaN for ray models), aliased [W]).
@@ -439,7 +446,7 @@ def psf_info(
                       unit="(fraction of the PSF energy; None to skip the check)")
     wls = jnp.atleast_1d(wl)
     kern, trunc, ref, strehl, aliased = _psf_impl(
-        apertured(lens), field, depth, wls, pixel_size, key, kernel_size=kernel_size, model=model,
+        lens, field, depth, wls, pixel_size, key, kernel_size=kernel_size, model=model,
         center=center, newton_iters=newton_iters)
     if max_truncation is not None:
         dark = (light.message("psf", lens, field, "PSF") if not checks.is_traced(field) else
@@ -615,8 +622,6 @@ def psf_map(
     xy = sensor_grid(sensor.resolution, sensor.pixel_size, grid)
     fields = ideal_to_field(lens, xy)
     wls = jnp.atleast_1d(wl)
-    lens = apertured(lens)
-
     kern, trunc, ref, _, _ = _psf_grid(lens, fields.reshape(-1, 2), depth, wls, pixel_size,
                                        kernel_size=kernel_size, model=model, center=center,
                                        newton_iters=newton_iters)
@@ -769,7 +774,7 @@ def mtf(
     pix = lam_min * fnum / 4.0 if pixel_size is None else jnp.asarray(pixel_size, dtype)
     field, depth, _, pix, kernel_size = _prepare(lens, field, depth, None, kernel_size, pix,
                                                  model, "centroid", "mtf", newton_iters)
-    t, s, lit = _mtf_impl(apertured(lens), field, depth, wls, freqs, pix, model=model,
+    t, s, lit = _mtf_impl(lens, field, depth, wls, freqs, pix, model=model,
                           kernel_size=kernel_size,
                           diffraction=bool(diffraction), newton_iters=newton_iters)
     # A wavelength without light had an MTF of 0 at every frequency (0 at 0 cycles/mm, and

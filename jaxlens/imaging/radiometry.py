@@ -56,7 +56,10 @@ System aperture:
     beam before round 43c: a 10 mm stop behind a 6 mm EPD passed a 10 mm beam); a stop
     narrower clips every field's beam (the working EPD of ``analysis.stop_clip``); an
     unbounded stop stays unbounded under paraxial aiming (Zemax's stop of automatic size
-    clips nothing).
+    clips nothing). In normalised pupil coordinates the three are one rule, the unit disc
+    (``in_pupil``), by which ``psf``, ``mtf``, ``psf_points`` and ``render``'s PSFs bound
+    their overfilled grids (round 44a; before it a stop without a semi-diameter was given
+    the paraxial marginal ray's radius and clipped them, ``aiming.apertured``).
 
 Vignetting factors:
     The lens's vignetting factors (``Lens.vignetting``) are not applied, at its own fields
@@ -79,8 +82,8 @@ from ..tracing.forward import DEFAULT_NEWTON_ITERS, forward_mode_jit, trace
 from . import sampling, telecentric
 from .grid import pupil_cells
 
-__all__ = ["RelativeIllumination", "beam_bounded", "in_entrance_pupil", "pupil_bounded",
-           "relative_illumination", "star_region"]
+__all__ = ["RelativeIllumination", "beam_bounded", "in_entrance_pupil", "in_pupil",
+           "pupil_bounded", "relative_illumination", "star_region"]
 
 
 def star_region(valid_fn, center, half, *, n_coarse: int = 24, n_dirs: int = 128,
@@ -264,6 +267,20 @@ def in_entrance_pupil(lens: Lens, rays: Rays):
     return ok & (jnp.sum(xy * xy, -1) <= r * r)
 
 
+def in_pupil(pupil) -> Array:
+    """Where normalised pupil points (``[..., 2]``, as ``sampling.field_rays`` launches them)
+    lie in the system aperture: the unit disc, whatever the lens (see "System aperture" in
+    the module notes). Under paraxial aiming the point (Px, Py) is launched at
+    (Px, Py)·EPD/2 on the paraxial entrance pupil's plane (``in_entrance_pupil``'s disc);
+    under ray aiming it is aimed at (Px, Py)·r on the stop, r the radius ``beam_bounded``
+    gives the stop; an object-space telecentric lens launches it with the slopes
+    (Px, Py)·tan u (``telecentric.in_cone``'s cone). A launched beam wider than the unit
+    disc (a PSF's ``overfill``) carries no light beyond it, and an unbounded stop stays
+    unbounded, as Zemax's and optiland's pupil sampling does (|P| <= 1, no stop clip)."""
+    pupil = jnp.asarray(pupil)
+    return jnp.sum(pupil * pupil, -1) <= 1.0
+
+
 def beam_bounded(lens: Lens, depth=None) -> Lens:
     """The lens whose stop bounds the beam that its ray aiming launches (see "System
     aperture" in the module notes): where ``Lens.aim`` aims rays at the stop, its stop's
@@ -286,7 +303,7 @@ def beam_bounded(lens: Lens, depth=None) -> Lens:
 @checks.checked_core(forward_mode_jit)
 def relative_illumination_samples(lens, fields, depth, wl, *, n_coarse, n_fine, newton_iters):
     """Relative illumination at ``fields`` (degrees; object heights in mm for an object-space
-    telecentric lens) of an apertured lens, jitted core of
+    telecentric lens) of a lens whose beam ``beam_bounded`` bounds, jitted core of
     ``relative_illumination``: (ri, irradiance, footprint centre) per field."""
     dtype = fields.dtype
     lens = lens.astype(dtype)

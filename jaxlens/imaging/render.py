@@ -108,7 +108,7 @@ from ..optics.rays import Rays
 from ..tracing.backward import trace_backward
 from ..tracing.forward import DEFAULT_NEWTON_ITERS
 from . import sampling, telecentric
-from .aiming import apertured, ideal_to_field, image_scale
+from .aiming import ideal_to_field, image_scale
 from .distortion import alignment_penalty, inverse_distortion_map, prewarp
 from .grid import (
     bilinear,
@@ -155,16 +155,6 @@ def _backward_valid(lens, origin, lm, wl, newton_iters):
     if lens.telecentric_object:  # the object cone (its NA) is the system aperture
         ok = ok & telecentric.in_cone(lens, out.direction)
     return ok
-
-
-def _bounded(lens: Lens) -> Lens:
-    """The lens whose apertures bound a pixel's rays: ``apertured`` (the stop given the EPD's
-    radius where it is unbounded), but an object-space telecentric lens as it is: its
-    object NA bounds its cones (``telecentric.in_cone``, as ``radiometry`` bounds them), and
-    a stop given the paraxial marginal ray's radius clips the real off-axis cones, which
-    overstep it (a white render of round 42a's triplet without semi-diameters read 0.59 at
-    10 mm, where its irradiance is 0.72)."""
-    return lens if lens.telecentric_object else apertured(lens)
 
 
 def _footprint(lens, origin, wl, lm0, half, newton_iters):
@@ -283,7 +273,7 @@ def footprints(
     g = int(grid) + 1 - int(grid) % 2
     pts = sensor_grid(sensor.resolution, jnp.asarray(sensor.pixel_size), (g, g)).astype(dtype)
     wls = jnp.atleast_1d(jnp.asarray(wavelengths, dtype))
-    cen, rad, margin, e0 = _footprints(_bounded(lens).astype(dtype), wls, pts,
+    cen, rad, margin, e0 = _footprints(beam_bounded(lens).astype(dtype), wls, pts,
                                        newton_iters=newton_iters)
     return Footprints(cen, rad, margin, e0)
 
@@ -698,7 +688,7 @@ def render(
     if lens.telecentric_object:
         image_scale(lens)  # its m: finite and nonzero, checked before tracing
     # "Vignetting factors"; the beam the system aperture admits, as radiometry bounds it
-    lens = eqx.tree_at(lambda m: m.vignetting, beam_bounded(_bounded(lens), depth), None,
+    lens = eqx.tree_at(lambda m: m.vignetting, beam_bounded(lens, depth), None,
                        is_leaf=lambda x: x is None)
     key = jnp.asarray(key) if not isinstance(key, jax.Array) else key
     common = dict(resolution=(int(rows), int(cols)), spp=int(spp), patch=int(patch),
@@ -723,8 +713,8 @@ def render(
     ri = common.pop("ri")
     inv, ri_map = _psf_setup(lens, depth, pixel_size, resolution=common["resolution"], ri=ri,
                              newton_iters=common["newton_iters"])
-    # The PSFs' overfilled pupils are clipped by the stop (as ``psf``'s): apertured.
-    return _render_psf(apertured(lens), scene, key, depth, wls, pixel_size, inv, ri_map,
+    # The PSFs' beams are the system aperture's (``psf``'s, ``radiometry.in_pupil``).
+    return _render_psf(lens, scene, key, depth, wls, pixel_size, inv, ri_map,
                        kernel_size=int(method.kernel_size), **common)
 
 

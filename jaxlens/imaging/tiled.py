@@ -27,7 +27,7 @@ from jaxtyping import Array, Float
 from ..optics import checks
 from ..optics.lens import Lens
 from ..tracing.forward import DEFAULT_NEWTON_ITERS
-from .aiming import apertured, ideal_to_field
+from .aiming import ideal_to_field
 from .grid import kernel_side, pixel_pitch, pixel_positions
 from .psf import CENTERS, DEFAULT_MODEL, AbstractPSFModel
 
@@ -114,7 +114,6 @@ def psf_points(
     checks.working_memory(points, len(lens.surfaces), jnp.dtype(lens.epd.dtype).itemsize,
                           "psf_points", "positions × wavelengths × pupil²",
                           "pass fewer positions per call (xy), or a smaller model pupil")
-    lens = apertured(lens)
     dtype = lens.epd.dtype
     xy = jnp.asarray(xy, dtype)
     wls = jnp.atleast_1d(jnp.asarray(wavelengths, dtype))

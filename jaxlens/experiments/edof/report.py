@@ -106,10 +106,8 @@ def _fov(lens) -> float:
     real chief ray lands on the sensor corner (distortion included)."""
     import jax.numpy as jnp
 
-    from jaxlens.imaging.aiming import apertured
-
     half = 0.5 * math.hypot(*[float(v) for v in lens.sensor.size])
-    lens = apertured(lens.astype(jnp.float64))
+    lens = lens.astype(jnp.float64)
     lo, hi = 0.0, 89.0
     for _ in range(40):  # bisection: the chief-ray height grows with the field angle
         mid = 0.5 * (lo + hi)
