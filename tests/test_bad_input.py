@@ -393,7 +393,8 @@ def _cli_in_process(main, args, monkeypatch, capsys):
 @pytest.mark.parametrize("args, match", [
     (["--steps", "0"], r"--steps must be a finite number in \(0, 50\]"),
     (["--steps", "-1"], r"--steps must be"),
-    (["--fnum", "inf"], r"--fnum must be a finite number in \[0.5, 64\] \(F-number f/EPD\), got inf"),
+    (["--fnum", "inf"], r"--fnum must be a finite number in \[0.5, 64\] \(F-number f/EPD\), "
+                        r"got inf"),
     (["--asphere-terms", "1000"], r"--asphere-terms must be a whole number in \[0, 12\]"),
     (["--seeds", "0"], r"--seeds must be a whole number in \[1, 1024\] designs, got 0"),
     (["--seed-list", "a,b"], r"--seed-list must be comma-separated whole numbers"),

@@ -164,9 +164,9 @@ def test_render_memory_smoke():
 
 
 def test_reevaluate_without_optiland_says_so(monkeypatch, capsys, tmp_path):
-    from benchmarks import optiland_ref, reevaluate
-
     import shutil
+
+    from benchmarks import optiland_ref, reevaluate
 
     monkeypatch.setattr(optiland_ref, "available", lambda: False)
     # Valid arguments (a folder of readable .zmx designs): round 44b checks them first.
