@@ -77,7 +77,8 @@ def test_classical_cli_refuses_flags_it_used_to_change_or_ignore(capsys, tmp_pat
     assert re.search(r"--fov-start must be a finite number in \(0, 80\] deg \(at most --fov\), "
                      r"got 100", _refused(capsys, tmp_path, "--fov", "80", "--fov-start", "100"))
     assert re.search(r"--fnum-start must be a finite number in \[2, 64\] \(F-number, at least "
-                     r"--fnum\), got 1.5", _refused(capsys, tmp_path, "--fnum", "2", "--fnum-start", "1.5"))
+                     r"--fnum\), got 1.5",
+                     _refused(capsys, tmp_path, "--fnum", "2", "--fnum-start", "1.5"))
     assert "--material-catalogs 'FOO'" in _refused(capsys, tmp_path, "--material-catalogs", "FOO")
     # An option that another one overrides is refused, not ignored.
     for args, msg in ((("--seed-list", "1,2", "--seeds", "5"), "--seeds would be ignored with "
