@@ -152,12 +152,8 @@ def main(argv=None):
     p.add_argument("--out", type=pathlib.Path, default=None,
                    help="JSON file for the results (default: <folder>/../reevaluation.json)")
     a = p.parse_args(argv)
-    from . import optiland_ref
-
-    if not optiland_ref.available():
-        print("reevaluate: optiland is not installed (pip install optiland); it is an "
-              "optional, independent reference and not a jaxlens dependency", file=sys.stderr)
-        return 2
+    # The arguments first, then whether optiland is installed (before: without optiland a
+    # missing folder or a broken .zmx was reported only as "optiland is not installed").
     if not a.folder.is_dir():  # refused here, not after the optiland runs
         p.error(f"folder {a.folder} is not a folder")
     if not any(a.folder.glob("*.zmx")):
@@ -178,6 +174,12 @@ def main(argv=None):
             jaxlens.load(f)
         except (ValueError, OSError) as e:
             p.error(f"{f}: {e}" if str(f) not in str(e) else str(e))
+    from . import optiland_ref
+
+    if not optiland_ref.available():
+        print("reevaluate: optiland is not installed (pip install optiland); it is an "
+              "optional, independent reference and not a jaxlens dependency", file=sys.stderr)
+        return 2
     from jaxlens.design.spec import DesignSpec
 
     t0 = time.perf_counter()

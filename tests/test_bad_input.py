@@ -393,7 +393,8 @@ def _cli_in_process(main, args, monkeypatch, capsys):
 @pytest.mark.parametrize("args, match", [
     (["--steps", "0"], r"--steps must be a finite number in \(0, 50\]"),
     (["--steps", "-1"], r"--steps must be"),
-    (["--fnum", "inf"], r"--fnum must be a finite number in \(0, inf\), got inf"),
+    (["--fnum", "inf"], r"--fnum must be a finite number in \[0.5, 64\] \(F-number f/EPD\), "
+                        r"got inf"),
     (["--asphere-terms", "1000"], r"--asphere-terms must be a whole number in \[0, 12\]"),
     (["--seeds", "0"], r"--seeds must be a whole number in \[1, 1024\] designs, got 0"),
     (["--seed-list", "a,b"], r"--seed-list must be comma-separated whole numbers"),
@@ -523,7 +524,7 @@ def test_an_out_folder_the_file_system_refuses_is_one_line(tmp_path, capsys, mon
 @pytest.mark.parametrize("args, match", [
     (["--steps", "0"], r"--steps must be a whole number in \[1, 100000\] steps, got 0"),
     (["--kernel", "8"], r"--kernel must be an odd whole number"),
-    (["--lr-net", "inf"], r"--lr-net must be a finite number in \(0, inf\)"),
+    (["--lr-net", "inf"], r"--lr-net must be a finite number in \(0, 1\] \(Adam step size\)"),
     (["--lenses", "zoom"], r"--lenses takes distinct names from"),
     (["--binning", "3"], r"--binning must divide"),
     (["--hybrid-floor", "-1"], r"--hybrid-floor must be a finite number in \[0, 1\]"),

@@ -164,10 +164,17 @@ def test_render_memory_smoke():
 
 
 def test_reevaluate_without_optiland_says_so(monkeypatch, capsys, tmp_path):
+    import shutil
+
     from benchmarks import optiland_ref, reevaluate
 
     monkeypatch.setattr(optiland_ref, "available", lambda: False)
-    assert reevaluate.main([str(tmp_path)]) == 2
+    # Valid arguments (a folder of readable .zmx designs): round 44b checks them first.
+    designs = tmp_path / "designs"
+    designs.mkdir()
+    shutil.copy(pathlib.Path(__file__).parents[1] / "experiments" / "classical" / "designs"
+                / "seed_0.zmx", designs)
+    assert reevaluate.main([str(designs)]) == 2
     assert "optiland is not installed" in capsys.readouterr().err
 
 

@@ -63,7 +63,7 @@ def test_spec_convention():
         (dict(n_elements=1, materials=("E48R",), fnum=1.0, total_track=5.0), "faster than"),
         (dict(n_elements=2, materials=("E48R", "OKP4"), fov=120.0, fnum=2.0), "more than 2"),
         (dict(fov=180.0), r"fov must be a finite number in \(0, 180\) deg"),
-        (dict(fnum=-1.0), r"fnum must be a finite number in \(0, inf\)"),
+        (dict(fnum=-1.0), r"fnum must be a finite number in \[0.5, 64\]"),
         (dict(materials=("E48R",) * 5), "need 6 materials"),
         (dict(materials=("E48R",) * 5 + ("NOT-A-GLASS",)), "NOT-A-GLASS"),
         (dict(stop=9), r"stop must be a whole number in \[0, 6\]"),

@@ -66,7 +66,8 @@ def test_tiles_take_numpy_integers():
 
 @pytest.mark.parametrize("kwargs, match", [
     (dict(total_track=7000.0), r"total_track 7000 mm is 1.56e\+03 times the focal length 4.5 mm"),
-    (dict(sensor_diagonal=7660.0), r"total_track 7 mm is 0.00156 times the focal length 4500 mm"),
+    # Round 44b: 7660 (µm) is now refused by the diagonal's own range ([0.1, 1000] mm).
+    (dict(sensor_diagonal=766.0), r"total_track 7 mm is 0.0156 times the focal length 450 mm"),
     (dict(efl=5550.0), r"total_track 7 mm is 0.00126 times the efl 5550 mm"),
     (dict(fov=1e-6, fov_start=1e-6),
      r"total_track 7 mm is 1.59e-08 times the focal length 4.389e\+08 mm"),

@@ -36,7 +36,7 @@ def test_edof_config_checks_the_noise_as_the_command_line_does():
                                          r"\[0, inf\), got -0\.01"):
         Config(read_noise=-0.01)
     with pytest.raises(ValueError, match=r"edof Config: photons must be a finite number in "
-                                         r"\(0, inf\) electrons"):
+                                         r"\[1, 1e\+12\] photo-electrons at the linear value 1"):
         Config(photons=0.0)
     assert Config(read_noise=0.01).read_noise == 0.01
 

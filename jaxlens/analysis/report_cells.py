@@ -1,12 +1,19 @@
 """Pieces that the lens report and the afocal report share: JSON numbers, table cells, and
 each field's wavefront error (summary and table), the Seidel sums; and the field-curvature
-call that the report and its ``--plot`` figure share (``bucketed_field_curvature``)."""
+call that the report and its ``--plot`` figure share (``bucketed_field_curvature``).
+
+These are the reports' internal helpers (public names only because several report modules
+import them): they take the reports' own data, and check only that each argument has the
+kind they format (a number, a dict, a str; a TypeError naming the helper otherwise), not
+its meaning."""
 
 from __future__ import annotations
 
 import math
+import numbers
 
 import jax.numpy as jnp
+import numpy as np
 
 from ..optics.lens import Lens
 from .aberrations import FieldCurvature, field_curvature
@@ -15,15 +22,34 @@ from .wavefront_error import MARECHAL_MAX_RMS
 from .wavefront_error import wavefront as wavefront_map
 
 
+def real_number(x, arg: str, where: str) -> float:
+    """``x`` as a float if it is one real number (a Python, NumPy or 0-d JAX int or float);
+    a TypeError naming ``where`` and ``arg`` otherwise (before: ``json_number("1.5")`` was
+    1.5, a bool a 0/1, a complex or a str failed in Python's words)."""
+    kind = np.asarray(x).dtype.kind if hasattr(x, "dtype") and np.ndim(x) == 0 else ""
+    if isinstance(x, bool) or not (isinstance(x, numbers.Real) or kind in ("i", "u", "f")
+                                   and kind):
+        raise TypeError(f"{where}: {arg} must be one real number, got {type(x).__name__} "
+                        f"{x!r}"[:200])
+    return float(x)
+
+
 def json_number(x) -> float | None:
     """A finite float, or None (JSON has no NaN or inf; the text says "failed")."""
-    v = float(x)
+    v = real_number(x, "x", "json_number")
     return v if math.isfinite(v) else None
 
 
 def cell(v: float | None, width: int = 12, prec: int = 6, missing: str = "failed") -> str:
     """A table cell: ``missing`` for None (no valid ray, no paraxial image), "Infinity" for
     an infinite distance, and scientific notation where fixed point would not fit."""
+    for arg, n, lo in (("width", width, 1), ("prec", prec, 0)):
+        if isinstance(n, bool) or not isinstance(n, (int, np.integer)) or n < lo:
+            raise TypeError(f"cell: {arg} must be a whole number >= {lo} (characters), got "
+                            f"{n!r}")
+    if not isinstance(missing, str):
+        raise TypeError(f"cell: missing must be a str, got {missing!r}")
+    v = None if v is None else real_number(v, "v", "cell")
     if v is None or math.isnan(v):
         return f"{missing:>{width}}"
     if math.isinf(v):
@@ -44,6 +70,7 @@ AIMING_TEXT = {"paraxial": "paraxial (rays through the paraxial entrance pupil)"
 def aiming_line(data: dict) -> str:
     """The report line that says which ray aiming its rays used (``data["ray_aiming"]``;
     a report written before the key existed used paraxial aiming)."""
+    _dict(data, "data", "aiming_line")
     aim = data.get("ray_aiming", "paraxial")
     return f"  {'Ray aiming':<34}: {AIMING_TEXT.get(aim, aim)}"
 
@@ -76,6 +103,11 @@ def seidel_lines(sd: dict | None, field: str) -> list[str]:
     """The report's SEIDEL SUMS block (``sd``: ``seidel_summary``'s dict, or None for no
     block); ``field`` names the field it was computed at, a template for ``sd["field"]``
     with its unit (``"field {:.3f} deg"``)."""
+    if sd is not None:
+        _dict(sd, "sd", "seidel_lines")
+    if not isinstance(field, str):
+        raise TypeError(f"seidel_lines: field must be a str (a template such as "
+                        f"'field {{:.3f}} deg'), got {field!r}")
     if not sd:
         return []
     if "refused" in sd:
@@ -102,6 +134,12 @@ def wavefront_summary(lens: Lens, field) -> dict:
 
 def wavefront_lines(fields: list[dict], reference: str) -> list[str]:
     """The WAVEFRONT ERROR table of the fields that have a ``wavefront`` entry (none: [])."""
+    if not isinstance(fields, (list, tuple)) or not all(isinstance(f, dict) for f in fields):
+        raise TypeError(f"wavefront_lines: fields must be a list of the report's field dicts, "
+                        f"got {fields!r}"[:200])
+    if not isinstance(reference, str):
+        raise TypeError(f"wavefront_lines: reference must be a str (what the wavefront is "
+                        f"referenced to, e.g. 'the exit-pupil sphere'), got {reference!r}")
     if not any("wavefront" in f for f in fields):
         return []
     out = ["", f"WAVEFRONT ERROR (primary wavelength, waves, to {reference}; piston removed; "
@@ -118,6 +156,12 @@ def wavefront_lines(fields: list[dict], reference: str) -> list[str]:
                    f"{cell(w['rms_tilt_removed'], 12, 4)}{cell(w['pv_tilt_removed'], 12, 4)}"
                    f"{cell(w['strehl'], 10, 4, '-')}")
     return out
+
+
+def _dict(data, arg: str, where: str) -> None:
+    if not isinstance(data, dict):
+        raise TypeError(f"{where}: {arg} must be the report's data (a dict), got "
+                        f"{type(data).__name__} {data!r}"[:200])
 
 
 FIELD_BUCKET = 32

@@ -59,6 +59,30 @@ lenses lie far inside it (telephotos near 0.6, fisheye retrofocus designs near 2
 outside it has lengths in different units (a sensor diagonal in µm, a track in m) or a field
 near 0° whose focal length no track can hold."""
 
+FNUM_RANGE = (0.5, 64.0)
+"""Accepted F-numbers (``fnum`` and ``fnum_start``; also the CLI's ``--fnum``): F/0.5 is the
+aplanatic limit NA = 1 in air (``aperture_field_limits`` narrows the fast end with the
+element count); beyond F/64 (the slowest stop camera lenses mark) the Airy disk
+2.44·λ·N is over 90 µm at 0.59 µm, many pixels of any sensor, so the image is set by
+diffraction whatever the lens and the geometric losses the design minimizes mean nothing
+(``--fnum 1e300`` designed an EPD of 1e-300 mm without a word)."""
+
+SENSOR_DIAGONAL_RANGE = (0.1, 1000.0)
+"""Accepted sensor diagonals (mm): from a few pixels of the smallest camera module to 1 m
+(8×10-inch film is 325 mm); outside it the diagonal is in another unit (µm, m)."""
+
+MAX_TRACK = 10000.0
+"""Longest total_track a ``DesignSpec`` takes (mm): 10 m, longer than any refractive camera
+lens; a longer one is a length in µm (``TRACK_PER_FOCAL`` then bounds the focal length)."""
+
+MAX_ELEMENTS = 30
+"""Most lens elements a ``DesignSpec`` takes (also the CLI's ``--elements``): more than any
+camera lens holds (zooms reach about 25); each element adds two surfaces to every trace."""
+
+MAX_SENSOR_PIXELS = 8192
+"""Most pixels along the sensor's longer side (``sensor_pixels``, the rendered scene's size):
+an 8192² RGB image in float32 is 0.8 GB."""
+
 MAX_ASPHERE_TERMS = 12
 """Most even aspheric terms per surface (r⁴ … r²⁶), the CLI's ``--asphere-terms`` bound: more
 than lens designs use, and the parameterization's scale r_norm^(2j+3) of term j stays
@@ -252,21 +276,25 @@ class DesignSpec:
         where = "DesignSpec"
         fov = _number(self.fov, "fov", lo=0, hi=180, lo_open=True, hi_open=True, unit="deg")
         _number(self.fov_start, "fov_start", lo=0, hi=fov, lo_open=True, unit="deg")
-        fnum = _number(self.fnum, "fnum", lo=0, lo_open=True)
+        fnum = _number(self.fnum, "fnum", lo=FNUM_RANGE[0], hi=FNUM_RANGE[1],
+                       unit="(F-number f/EPD)")
         # The curriculum eases in: it starts at a field no wider and an F-number no faster
         # than the target's (a start of F/1.2 for an F/2 lens ran the stages from the
         # harder end, through F-numbers the lens was never meant for).
-        _number(self.fnum_start, "fnum_start", lo=fnum, unit="(F-number: the curriculum "
-                "starts no faster than the target fnum)")
-        _number(self.sensor_diagonal, "sensor_diagonal", lo=0, lo_open=True, unit="mm")
+        _number(self.fnum_start, "fnum_start", lo=fnum, hi=FNUM_RANGE[1], unit="(F-number: "
+                "the curriculum starts no faster than the target fnum)")
+        _number(self.sensor_diagonal, "sensor_diagonal", lo=SENSOR_DIAGONAL_RANGE[0],
+                hi=SENSOR_DIAGONAL_RANGE[1], unit="mm")
         aspect = _sequence(self.sensor_aspect, "sensor_aspect", "(height, width)")
         if len(aspect) != 2:
             raise ValueError(f"{where}: sensor_aspect must be two positive numbers (height, "
                              f"width), got {self.sensor_aspect}")
         for a in aspect:
             _number(a, "sensor_aspect", lo=0, lo_open=True)
-        _number(self.sensor_pixels, "sensor_pixels", lo=1, integer=True, unit="pixels")
-        n = _number(self.n_elements, "n_elements", lo=1, integer=True)
+        _number(self.sensor_pixels, "sensor_pixels", lo=1, hi=MAX_SENSOR_PIXELS, integer=True,
+                unit="pixels")
+        n = _number(self.n_elements, "n_elements", lo=1, hi=MAX_ELEMENTS, integer=True,
+                    unit="lens elements")
         names = _sequence(self.materials, "materials", "catalog names, one per element")
         if not all(isinstance(m, str) for m in names):
             raise TypeError(f"{where}: materials must be catalog names (str), got "
@@ -279,7 +307,8 @@ class DesignSpec:
             raise ValueError(f"{where}: bfl must be at least {MIN_BFL:g} mm (the clearance from "
                              f"the last lens surface to the sensor), got {bfl:g} mm (was it "
                              f"given in m? {bfl:g} m is {bfl * 1e3:g} mm)")
-        track = _number(self.total_track, "total_track", lo=0, lo_open=True, unit="mm")
+        track = _number(self.total_track, "total_track", lo=0, hi=MAX_TRACK, lo_open=True,
+                        unit="mm")
         _number(self.stop, "stop", lo=0, hi=n, integer=True, unit="elements in front of it")
         wl = _sequence(self.wavelengths, "wavelengths", "µm")
         for w in wl:

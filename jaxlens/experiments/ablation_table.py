@@ -16,8 +16,13 @@ import os
 
 
 def fmt(x, nd=2) -> str:
-    """A table number: ``nd`` decimals, a dash for a missing one."""
-    return "–" if x is None else f"{x:.{nd}f}"
+    """A table number: ``nd`` decimals, a dash for a missing one (an internal helper of the
+    table: a str, a bool or a complex is refused by ``real_number``'s TypeError)."""
+    from jaxlens.analysis.report_cells import real_number
+
+    if isinstance(nd, bool) or not isinstance(nd, int) or nd < 0:
+        raise TypeError(f"fmt: nd must be a whole number >= 0 (decimals), got {nd!r}")
+    return "–" if x is None else f"{real_number(x, 'x', 'fmt'):.{nd}f}"
 
 
 def column_file(out: str, name: str) -> str:

@@ -50,7 +50,15 @@ import time
 
 from jaxlens import compile_cache
 from jaxlens.analysis.tolerance_spec import MAX_TRIALS
-from jaxlens.design.spec import FNUM_START, FOV_START, MAX_ASPHERE_TERMS
+from jaxlens.design.spec import (
+    FNUM_RANGE,
+    FNUM_START,
+    FOV_START,
+    MAX_ASPHERE_TERMS,
+    MAX_ELEMENTS,
+    MAX_TRACK,
+    SENSOR_DIAGONAL_RANGE,
+)
 from jaxlens.experiments.ablation_table import (
     build_table,
     check_columns,
@@ -236,16 +244,19 @@ def check_args(args, given=None) -> None:
 
     w, n = "design", checks.number
     n(args.fov, "--fov", w, lo=0, hi=180, lo_open=True, hi_open=True, unit="deg")
-    n(args.fnum, "--fnum", w, lo=0, lo_open=True)
+    # The spec's ranges (jaxlens.design.spec says why), named by the flags the user typed.
+    n(args.fnum, "--fnum", w, lo=FNUM_RANGE[0], hi=FNUM_RANGE[1], unit="(F-number f/EPD)")
     # An explicit curriculum start beyond the target is refused (defaults follow --fov/--fnum).
     if args.fov_start is not None:
         n(args.fov_start, "--fov-start", w, lo=0, hi=args.fov, lo_open=True,
           unit="deg (at most --fov)")
     if args.fnum_start is not None:
-        n(args.fnum_start, "--fnum-start", w, lo=args.fnum, unit="(at least --fnum)")
-    n(args.sensor_diagonal, "--sensor-diagonal", w, lo=0, lo_open=True, unit="mm")
-    n(args.elements, "--elements", w, lo=1, hi=30, integer=True)
-    n(args.track, "--track", w, lo=0, lo_open=True, unit="mm")
+        n(args.fnum_start, "--fnum-start", w, lo=args.fnum, hi=FNUM_RANGE[1],
+          unit="(F-number, at least --fnum)")
+    n(args.sensor_diagonal, "--sensor-diagonal", w, lo=SENSOR_DIAGONAL_RANGE[0],
+      hi=SENSOR_DIAGONAL_RANGE[1], unit="mm")
+    n(args.elements, "--elements", w, lo=1, hi=MAX_ELEMENTS, integer=True, unit="lens elements")
+    n(args.track, "--track", w, lo=0, hi=MAX_TRACK, lo_open=True, unit="mm")
     n(args.bfl, "--bfl", w, lo=0, lo_open=True, unit="mm")
     n(args.stop, "--stop", w, lo=0, hi=args.elements, integer=True, unit="elements")
     n(args.asphere_terms, "--asphere-terms", w, lo=0, hi=MAX_ASPHERE_TERMS, integer=True,

@@ -485,6 +485,11 @@ def ssim(reference, test, *, data_range=None) -> float:
                                       **kw))
 
 
+PSF_ROUNDING = 1e-6
+"""Negative PSF values down to this fraction of their PSF's peak are float rounding
+(float32's ε is 1.2·10⁻⁷): ``write_psf_stack`` writes them as 0 and refuses larger ones."""
+
+
 def write_psf_stack(path, psfs, *, names=None) -> None:
     """Save a stack of PSFs to one EXR file, one layer per PSF.
 
@@ -494,6 +499,12 @@ def write_psf_stack(path, psfs, *, names=None) -> None:
             (C = 3 written as ``psfNNN.R/G/B``, else ``psfNNN.C0``...). A PSF map
             ``[rows, cols, ...]`` can be flattened first.
         names: layer names (default ``psf000``, ``psf001``, ...).
+
+    A PSF is an intensity, so it is non-negative: a value below −``PSF_ROUNDING`` (10⁻⁶)
+    times its own PSF's peak (each PSF and channel apart) is refused, naming the PSF; the
+    values between that and 0 (float rounding, e.g. of an FFT or a resampling) are written
+    as 0. A stack with larger negative values (the ringing of an interpolation, or a
+    difference of PSFs) must be clipped or fixed by the caller, who knows which it is.
     """
     path = pathlib.Path(output_file(path, "write_psf_stack", ".exr"))
     # NaN PSFs were written as they were (and complex or integer ones cast).
@@ -504,6 +515,19 @@ def write_psf_stack(path, psfs, *, names=None) -> None:
         raise ValueError(f"write_psf_stack: psfs must be [N, k, k] or [N, C, k, k] with N, C, "
                          f"k >= 1, got {a.shape}")
     n, c = a.shape[:2]
+    peak = np.maximum(a.max(axis=(2, 3), keepdims=True), 0.0)
+    bad = a < -PSF_ROUNDING * peak
+    if bad.any():  # before: written as they were (a PSF with negative intensities)
+        i, j, y, x = np.argwhere(bad)[0]
+        v, top = float(a[i, j, y, x]), float(peak[i, j, 0, 0])
+        raise ValueError(
+            f"write_psf_stack: a PSF is an intensity, non-negative; psfs[{i}]"
+            f"{f' channel {j}' if c > 1 else ''} has {v:.4g} at pixel ({y}, {x}), "
+            f"{f'{-v / top:.3g} of its peak {top:.4g}' if top > 0 else 'and no positive peak'}"
+            f" (values down to -{PSF_ROUNDING:g} of each PSF's peak are float rounding and "
+            f"written as 0); clip the stack (np.clip(psfs, 0, None)) if the negatives are "
+            f"ringing, or fix what made them ({int(bad.sum())} such value(s))")
+    a = np.maximum(a, 0.0)
     names = [f"psf{i:03d}" for i in range(n)] if names is None else names
     names = _layer_names(names, n, "write_psf_stack", "names", "PSFs")
     chans = ("Y",) if c == 1 else ("R", "G", "B") if c == 3 else tuple(f"C{i}" for i in range(c))

@@ -10,7 +10,13 @@ Conventions:
     focal length measured in image space, which Zemax ("in image space") and optiland
     report as the EFL. They differ only when image space is not air. ``bfl`` is
     measured from the last surface vertex to the paraxial focus; pupil positions are
-    global z (surface 1 at 0); ``exit_pupil_z`` is also global. Everything is a pure
+    global z (surface 1 at 0); ``exit_pupil_z`` is also global. A quantity that is
+    mathematically infinite (an afocal lens's focal lengths and F/#, an image or a pupil at
+    infinity, the magnification of an object in the front focal plane) is ±inf, never the
+    huge finite number rounding leaves: a denominator within its rounding bound counts as
+    zero (``_over``: 4·k·ε times the same sum taken in absolute values, k its operations),
+    the result the sign of its numerator over +0 (efl, F/#, working F/# and magnification
+    +inf; a position's sign is not meaningful). Everything is a pure
     jnp function, so it is differentiable and jittable. A given wavelength must lie in the
     materials' range and a field angle in (−90°, 90°) (``checks``: ValueError, or
     ``eqx.error_if`` under jit).
@@ -166,16 +172,43 @@ def system_matrix(lens: Lens, wavelength=None, start: int = 0, end: int | None =
         if isinstance(v, bool) or not isinstance(v, (int, np.integer)) or not lo <= v <= last:
             raise ValueError(f"system_matrix: {arg} must be a surface index in [{lo}, {last}] "
                              f"(0-based; start <= end), got {v!r}")
+    return _product(lens, wl, n, start, end)[0]
+
+
+def _product(lens: Lens, wl, n, start: int, end: int):
+    """The (y, nu) matrix from just before ``surfaces[start]`` to just after ``surfaces[end]``
+    and the same product taken with every entry's absolute value (``_over``'s rounding scale)."""
     thickness = axial_thicknesses(lens)
     one = jnp.ones_like(lens.thickness[0])
     a, b, c, d = one, 0 * one, 0 * one, one
+    aa, ab, ac, ad = one, 0 * one, 0 * one, one
     for i in range(start, end + 1):
         if i > start:
             t = thickness[i - 1] / n[i]
             a, b = a + t * c, b + t * d
+            aa, ab = aa + jnp.abs(t) * ac, ab + jnp.abs(t) * ad
         p = _surface_power(lens.surfaces[i], n[i], n[i + 1], wl)
         c, d = c - p * a, d - p * b
-    return a, b, c, d
+        ac, ad = ac + jnp.abs(p) * aa, ad + jnp.abs(p) * ab
+    return (a, b, c, d), (aa, ab, ac, ad), 2 * (end - start + 1)
+
+
+def _over(num, den, scale, steps: int):
+    """num / den, where a denominator no larger than its rounding bound is zero: the answer
+    is then infinite (the sign of num over +0.0; NaN for num = 0), never the huge finite
+    number that rounding leaves there (an afocal lens's EFL of -5.8e17 mm, a magnification
+    of 3.7e15 for an object in the front focal plane).
+
+    ``scale`` is the same sum taken with absolute values (the trace or matrix product with
+    |t/n|, |power| and |ray|), ``steps`` its number of multiply-adds: the bound is
+    4·steps·ε·scale (ε the dtype's machine epsilon), a few times the worst rounding of such
+    a sum, so that a denominator within it has no significant digit. The infinite branch
+    carries no gradient (as a telecentric exit pupil's)."""
+    den = jnp.asarray(den)
+    eps = jnp.finfo(jnp.result_type(den, float)).eps
+    zero = jnp.abs(den) <= 4 * (steps + 2) * eps * jnp.abs(scale)
+    safe = jnp.where(zero, 1.0, den)
+    return jnp.where(zero, jax.lax.stop_gradient(num / jnp.zeros_like(den)), num / safe)
 
 
 class ParaxialData(eqx.Module):
@@ -240,12 +273,13 @@ def entrance_pupil_z(lens: Lens, wavelength=None) -> Array:
     if lens.stop == 0:
         return jnp.zeros_like(lens.thickness[0])
     # Matrix from surface 1 to just before the stop: after surfaces[stop-1], then transfer.
-    a, b, c, d = system_matrix(lens, wl, 0, lens.stop - 1)
-    ns = signed_indices(lens, wl)[lens.stop]
-    t = axial_thicknesses(lens)[lens.stop - 1] / ns
+    n = signed_indices(lens, wl)
+    (a, b, c, d), (aa, _, ac, _), steps = _product(lens, wl, n, 0, lens.stop - 1)
+    t = axial_thicknesses(lens)[lens.stop - 1] / n[lens.stop]
     a, b = a + t * c, b + t * d
     # Chief ray reaches the stop centre: a*y0 + b*nu0 = 0 with y0 = -z_ep*u0, nu0 = n0*u0.
-    return b * n0 / a
+    # A = 0 (within rounding): the stop at the front group's focus, the pupil at infinity.
+    return _over(b * n0, a, aa + jnp.abs(t) * ac, steps + 1)
 
 
 def entrance_pupil_magnification(lens: Lens, wavelength=None) -> Array:
@@ -268,17 +302,29 @@ def marginal_ray(lens: Lens, wavelength=None):
     Each is ``[num_surfaces]`` for one wavelength (µm), ``[num_surfaces, W]`` for ``[W]``."""
     wl = _given(lens, wavelength, "marginal_ray")
     n = signed_indices(lens, wl)
+    return _trace_ray(lens, *_marginal_start(lens, wl, n), n, wl)
+
+
+def _marginal_start(lens: Lens, wl, n):
+    """The paraxial marginal ray (y, nu) arriving at surface 1 (see ``marginal_ray``)."""
     if lens.telecentric_object:
         u = object_slope(lens)
-        return _trace_ray(lens, lens.object_distance * u, n[0] * u, n, wl)
+        return lens.object_distance * u, n[0] * u
     zep = entrance_pupil_z(lens, wl)
     h = 0.5 * lens.epd
     if lens.object_at_infinity:
-        y, nu = h, 0.0 * h
-    else:
-        u = h / (lens.object_distance + zep)
-        y, nu = lens.object_distance * u, n[0] * u
-    return _trace_ray(lens, y, nu, n, wl)
+        return h, 0.0 * h
+    u = h / (lens.object_distance + zep)
+    return lens.object_distance * u, n[0] * u
+
+
+def _image_slope_scale(lens: Lens, wl, n):
+    """The rounding scale and steps (``_over``) of the marginal ray's image-space nu: a ray
+    leaving parallel to the axis within rounding (the object in the front focal plane, an
+    afocal lens) has its image at infinity."""
+    y0, nu0 = _marginal_start(lens, wl, n)
+    _, (_, _, ac, ad), steps = _product(lens, wl, n, 0, lens.num_surfaces - 1)
+    return ac * jnp.abs(y0) + ad * jnp.abs(nu0), steps
 
 
 def _trace_ray(lens: Lens, y, nu, n, wl):
@@ -328,9 +374,11 @@ def paraxial_chief_ray(lens: Lens, field_deg, wavelength=None):
 
 def efl(lens: Lens, wavelength=None) -> Array:
     """Effective focal length 1/power (mm) at ``wavelength`` (default: primary); +inf for an
-    afocal lens (zero power)."""
-    _, _, c, _ = system_matrix(lens, _wavelength(lens, wavelength, "efl"))
-    return 1.0 / _power(c)
+    afocal lens (zero power, or a power within its rounding bound: ``_over``)."""
+    wl = _wavelength(lens, wavelength, "efl")
+    (_, _, c, _), (_, _, ac, _), steps = _product(lens, wl, signed_indices(lens, wl), 0,
+                                                  lens.num_surfaces - 1)
+    return _over(1.0, _power(c), ac, steps)
 
 
 def _power(c):
@@ -340,11 +388,12 @@ def _power(c):
 
 
 def bfl(lens: Lens, wavelength=None) -> Array:
-    """Back focal length: last vertex to the paraxial focus of an object at infinity (mm)."""
+    """Back focal length: last vertex to the paraxial focus of an object at infinity (mm);
+    infinite for an afocal lens (the sign of −A·n′ over +0: ``_over``)."""
     wl = _wavelength(lens, wavelength, "bfl")
-    a, _, c, _ = system_matrix(lens, wl)
-    n_img = signed_indices(lens, wl)[-1]
-    return -a * n_img / c
+    n = signed_indices(lens, wl)
+    (a, _, c, _), (_, _, ac, _), steps = _product(lens, wl, n, 0, lens.num_surfaces - 1)
+    return _over(-a * n[-1], c, ac, steps)
 
 
 def image_height(lens: Lens, field_deg, wavelength=None) -> Array:
@@ -361,18 +410,19 @@ def image_height(lens: Lens, field_deg, wavelength=None) -> Array:
 def magnification(lens: Lens, wavelength=None) -> Array:
     """The paraxial lateral magnification m = n u / (n′ u′) of the lens's finite object (its
     paraxial image height per unit object height, at the paraxial image plane), from the
-    marginal ray at ``wavelength`` (µm, default primary); 0 for an object at infinity. For
+    marginal ray at ``wavelength`` (µm, default primary); 0 for an object at infinity, and
+    infinite for an image at infinity (the object in the front focal plane: the
+    image-space nu zero within rounding, ``_over``; +inf for a real
+    object: m tends to −inf just outside the focal plane and +inf just inside it). For
     an object-space telecentric lens (``Lens.object_na``) the distortion-free image of the
     object height h (mm) is m·h: the paraxial chief ray, parallel to the axis at h, meets
     the paraxial image plane there."""
     wl = _wavelength(lens, wavelength, "magnification")
-    y, nu = marginal_ray(lens, wl)
+    n = signed_indices(lens, wl)
+    nu = marginal_ray(lens, wl)[1][-1]
     if lens.object_at_infinity:
-        return jnp.zeros_like(nu[-1])
-    n0 = signed_indices(lens, wl)[0]
-    u0 = object_slope(lens) if lens.telecentric_object else (
-        0.5 * lens.epd / (lens.object_distance + entrance_pupil_z(lens, wl)))
-    return n0 * u0 / nu[-1]
+        return jnp.zeros_like(nu)
+    return _over(_marginal_start(lens, wl, n)[1], nu, *_image_slope_scale(lens, wl, n))
 
 
 def paraxial_data(lens: Lens, wavelength=None) -> ParaxialData:
@@ -384,9 +434,9 @@ def paraxial_data(lens: Lens, wavelength=None) -> ParaxialData:
     wl = _wavelength(lens, wavelength, "paraxial_data")
     n = signed_indices(lens, wl)
     n0, n_img = n[0], n[-1]
-    a, b, c, d = system_matrix(lens, wl)
-    f = 1.0 / _power(c)
-    back = -a * n_img / c
+    (a, b, c, d), (_, _, ac, _), steps = _product(lens, wl, n, 0, lens.num_surfaces - 1)
+    f = _over(1.0, _power(c), ac, steps)
+    back = _over(-a * n_img, c, ac, steps)
     t_axial = axial_thicknesses(lens)
     zs = lens.vertex_z() if lens.travel_senses is None else jnp.concatenate(
         [jnp.zeros_like(t_axial[:1]), jnp.cumsum(t_axial[:-1])])
@@ -407,29 +457,25 @@ def paraxial_data(lens: Lens, wavelength=None) -> ParaxialData:
         xp_z = zs[lens.stop]
         xp_mag = jnp.ones_like(f)
     else:
-        a2, b2, c2, d2 = system_matrix(lens, wl, lens.stop + 1, lens.num_surfaces - 1)
+        (a2, b2, c2, d2), (_, _, ac2, ad2), steps2 = _product(
+            lens, wl, n, lens.stop + 1, lens.num_surfaces - 1)
         t = t_axial[lens.stop] / n[lens.stop + 1]
         # From the stop plane (after refraction at the stop surface) to after the last surface.
         a2, b2 = a2, b2 + t * a2
-        d2 = d2 + t * c2
+        d2, ad2 = d2 + t * c2, ad2 + jnp.abs(t) * ac2
         # Ray from stop centre, nu=1: y=b2, nu=d2 after the last surface; crosses axis at:
-        # (d2 = 0: telecentric in image space, the exit pupil at infinity. Its infinite value
-        # carries no gradient: 0·inf in the backward pass was NaN wherever the caller's
-        # double where gave it a zero cotangent; LLVM's optimiser had hidden that.)
-        tele = d2 == 0
-        d2_safe = jnp.where(tele, 1.0, d2)
-
-        def over_d2(x):
-            return jnp.where(tele, jax.lax.stop_gradient(x / d2), x / d2_safe)
-
-        xp_z = z_last - over_d2(b2 * n_img)
+        # (d2 = 0 within rounding: telecentric in image space, the exit pupil at infinity. Its
+        # infinite value carries no gradient: 0·inf in the backward pass was NaN wherever the
+        # caller's double where gave it a zero cotangent; LLVM's optimiser had hidden that.)
+        xp_z = z_last - _over(b2 * n_img, d2, ad2, steps2 + 1)
         # Magnification stop -> exit pupil: ray from stop edge parallel to chief ray.
-        xp_mag = a2 - over_d2(c2 * b2)
+        xp_mag = a2 - _over(c2 * b2, d2, ad2, steps2 + 1)
     xpd = 2.0 * stop_sd * jnp.abs(xp_mag)
     # An object-space telecentric lens's aperture is an NA: no infinite-conjugate F/#.
     fnum = jnp.full_like(f, jnp.nan) if lens.telecentric_object else f / epd
-    working = 1.0 / (2.0 * jnp.abs(num[-1]))
-    paraxial_image_z = z_last - ym[-1] * n_img / num[-1]
+    scale, steps = _image_slope_scale(lens, wl, n)
+    working = _over(1.0, 2.0 * jnp.abs(num[-1]), 2.0 * scale, steps)
+    paraxial_image_z = z_last - _over(ym[-1] * n_img, num[-1], scale, steps)
     return ParaxialData(
         efl=f,
         efl_image_space=jnp.abs(n_img) * f,

@@ -72,6 +72,12 @@ from jaxlens.io.json_values import write_whole
 from jaxlens.optics import checks as input_checks
 
 LENS_NAMES = ("classical", "cubic", "hybrid")
+MAX_LEARNING_RATE = 1.0
+"""Largest ``--lr-net``/``--lr-lens`` (Adam's step size: see ``config_from_args``)."""
+MAX_LOSS_WEIGHT = 1000.0
+"""Largest ``--w-sim``/``--w-raw`` (ω1, ω2; 0.1 by default): above it the auxiliary terms
+outweigh the image loss a thousandfold and the decoder no longer learns to restore images
+(1e300 overflowed the float32 loss to inf)."""
 MAX_BATCH = 1024  # patches per batch (8 by default): each holds the tile's PSFs and features
 MAX_BLOCKS = 64  # NAFNet blocks per level or in the middle (the paper's deepest level has 28)
 MAX_LEVELS = 6  # NAFNet levels (the paper's 4); each doubles the channels
@@ -246,8 +252,13 @@ def config_from_args(a):
                              f"of JAX's PRNG), got {s}")
     if not a.seeds or len(set(a.seeds)) < len(a.seeds):  # a repeat would count twice
         raise ValueError(f"edof: --seeds needs distinct seeds, got {a.seeds}")
-    n(cfg.lr_net, "--lr-net", w, lo=0, lo_open=True)
-    n(cfg.lr_lens, "--lr-lens", w, lo=0, lo_open=True)
+    # Adam moves each parameter by about the learning rate a step: above 1 (the scale of the
+    # NAFNet's weights, and of the lens's sags in lenses.SAG_SCALE units) it diverges
+    # (--lr-net 1e300 gave NaN weights after the lens work).
+    n(cfg.lr_net, "--lr-net", w, lo=0, hi=MAX_LEARNING_RATE, lo_open=True,
+      unit="(Adam step size)")
+    n(cfg.lr_lens, "--lr-lens", w, lo=0, hi=MAX_LEARNING_RATE, lo_open=True,
+      unit="(Adam step size, sags in lenses.SAG_SCALE units)")
     # A floor is a fraction of the start strength in [0, 1]: above 1 the first projection
     # (lenses.project) raised the strength past its start, which --cubic-floor 2 did silently.
     n(cfg.cubic_floor, "--cubic-floor", w, lo=0, hi=1, unit="(fraction of the start strength)")
@@ -262,7 +273,7 @@ def config_from_args(a):
         n(cfg.hybrid_floor, "--hybrid-floor", w, lo=0, hi=1,
           unit="(fraction of the start strength)")
     for opt, v in (("--w-sim", cfg.w_sim), ("--w-raw", cfg.w_raw)):
-        n(v, opt, w, lo=0)
+        n(v, opt, w, lo=0, hi=MAX_LOSS_WEIGHT, unit="(weight relative to the image loss)")
     for opt, blocks in (("--enc", cfg.enc_blocks), ("--dec", cfg.dec_blocks)):
         # Each level doubles the channels: 20 levels asked for 4 GiB weights of one layer.
         if (not blocks or len(blocks) > MAX_LEVELS

@@ -84,15 +84,23 @@ MAX_READ_NOISE = 0.5
 """Largest read noise (a standard deviation in linear values, 1 = full signal): above it
 the scene is mostly noise (an option written in electrons lands there)."""
 
+PHOTONS_RANGE = (1.0, 1e12)
+"""Accepted photo-electrons at the linear value 1 (``photons``): below one electron at full
+signal the shot noise's standard deviation exceeds the signal itself (SNR < 1 at white;
+``--photons 1e-300`` trained on noise alone); 10¹², a million times any sensor's full well,
+is already noise-free (shot noise 10⁻⁶ at white, under float32's resolution of the values)
+and the tests' setting for that; more only risks overflow (1e300 e⁻)."""
+
 
 def check_noise(read_noise, photons, *, where: str = "edof Config",
                 names: tuple[str, str] = ("read_noise", "photons")) -> None:
     """Refuses a noise model that is not physical or not in its units: ``photons`` (photo-
-    electrons at the linear value 1) must be positive and ``read_noise`` (a standard
+    electrons at the linear value 1) must be in ``PHOTONS_RANGE`` and ``read_noise`` (a standard
     deviation in linear values) in [0, ``MAX_READ_NOISE``]. ``names``: the two as the caller
     writes them (``Config`` fields, or the command line's ``--read-noise``/``--photons``)."""
     read, phot = names
-    input_checks.number(photons, phot, where, lo=0, lo_open=True, unit="electrons")
+    input_checks.number(photons, phot, where, lo=PHOTONS_RANGE[0], hi=PHOTONS_RANGE[1],
+                        unit="photo-electrons at the linear value 1")
     input_checks.number(read_noise, read, where, lo=0)
     if read_noise > MAX_READ_NOISE:  # before: read noise 4 (electrons) trained on noise
         raise ValueError(f"{where}: {read} must be at most {MAX_READ_NOISE:g} (a standard "
