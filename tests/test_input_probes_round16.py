@@ -92,7 +92,7 @@ def test_design_spec_curriculum_starts_no_faster_than_the_target():
     """Before: DesignSpec(fnum=2, fnum_start=1.2) was accepted and paper_stages ran
     F/1.2 → 1.6 → 1.88 → 2.0, the hard end first (and F/0.3, faster than any lens)."""
     with pytest.raises(ValueError, match=r"DesignSpec: fnum_start must be a finite number in "
-                                         r"\[2, inf\) \(F-number: the curriculum starts no "
+                                         r"\[2, 64\] \(F-number: the curriculum starts no "
                                          r"faster than the target fnum\), got 1\.2"):
         DesignSpec(fnum=2.0, fnum_start=1.2)
     assert DesignSpec(fnum=2.0, fnum_start=2.0).fnum_start == 2.0  # no curriculum in F#

@@ -129,7 +129,7 @@ def test_lens_refuses_a_wavelength_past_a_formula_resonance():
     n = 3.0, a finite and plausible index that is not the glass's."""
     raw = BK7.model
     assert 2.9 < float(raw.extrapolated_index(11.0)) < 3.1  # what the formula gives there
-    with pytest.raises(ValueError, match=r"system_matrix: wavelength 11 µm is outside "
+    with pytest.raises(ValueError, match=r"signed_indices: wavelength 11 µm is outside "
                        r"0\.15–10\.1765 µm, .*the range of N-BK7 after surface 1 between the "
                        r"resonances \(poles\) of its Sellmeier formula at 0\.1415 µm and 10\.18 "
                        r"µm, beyond which the formula gives no index of the material"):
