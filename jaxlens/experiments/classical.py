@@ -291,7 +291,7 @@ def check_args(args, given=None) -> None:
         if len(parts) != len(args.seed_list.split(",")):
             raise ValueError(f"{w}: --seed-list must be comma-separated whole numbers >= 0, got "
                              f"{args.seed_list!r}")
-        if len(set(map(int, parts))) < len(parts):  # a repeat is the same design twice
+        if len(set(parts)) < len(parts):  # a repeat is the same design twice
             raise ValueError(f"{w}: --seed-list needs distinct seeds, got {args.seed_list!r}")
     from jaxlens.design.init import MAX_SEED  # the design package: imported by the spec check
 
@@ -420,7 +420,7 @@ def config_from_args(args, recipe: str | None = None):
 
 def _seeds(args) -> list[int]:
     if args.seed_list:
-        return [int(s) for s in args.seed_list.split(",") if s.strip()]
+        return list(comma_ints(args.seed_list))  # checked by check_args
     n = 1 if args.smoke else args.seeds
     return list(range(args.first_seed, args.first_seed + n))
 
