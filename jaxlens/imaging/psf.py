@@ -125,6 +125,12 @@ def _trace_beam(lens, field, depth, wl, pupil, mask, newton_iters):
     return rays, out, w
 
 
+# The launched grid's radius over the entrance pupil's: the beam is the unit pupil
+# (``radiometry.in_pupil``), so rays beyond it carry no light; 1.25, the default until
+# 2026-12-03, spent 36 % of the rays there.
+DEFAULT_OVERFILL = 1.0
+
+
 class AbstractPSFModel(eqx.Module):
     """How a PSF is computed: a small, final strategy object passed as ``model=``.
 
@@ -155,8 +161,8 @@ class AbstractPSFModel(eqx.Module):
             raise ValueError(
                 f"{caller}: overfill {self.overfill!r} spreads the {self.pupil}² launched rays "
                 f"so wide that none may fall inside the entrance pupil; use an overfill in "
-                f"(0, {largest:.4g}] (beam radius over the entrance-pupil radius, 1.25 by "
-                f"default) or more rays per side")
+                f"(0, {largest:.4g}] (beam radius over the entrance-pupil radius, "
+                f"{DEFAULT_OVERFILL} by default) or more rays per side")
 
     def largest_overfill(self) -> float:
         """The largest overfill that keeps a ray inside the entrance pupil (radius 1): the
@@ -202,7 +208,7 @@ class GeometricPSF(AbstractPSFModel):
     """
 
     pupil: int = eqx.field(default=64, converter=checks.static_int)
-    overfill: float = 1.25
+    overfill: float = DEFAULT_OVERFILL
     order: int = eqx.field(default=1, converter=checks.static_int)
     grid: str = "square"
     normalize: str = "transmitted"
@@ -235,7 +241,7 @@ class CoherentPSF(AbstractPSFModel):
     module notes); ``pupil`` must resolve the wavefront over the kernel."""
 
     pupil: int = eqx.field(default=64, converter=checks.static_int)
-    overfill: float = 1.25
+    overfill: float = DEFAULT_OVERFILL
 
     def kernels(self, lens, field, depth, wls, *, kernel_size, pixel_size, center, key,
                 newton_iters):
@@ -246,7 +252,7 @@ class CoherentPSF(AbstractPSFModel):
 
 
 DEFAULT_MODEL = GeometricPSF()
-"""The default PSF model: ray splatting, 64 rays per pupil side, beam overfilled 1.25×."""
+"""The default PSF model: ray splatting, 64 rays per pupil side, launched over the unit pupil."""
 
 
 def _geometric(lens, field, depth, wls, *, kernel_size, pixel_size, center, pupil, overfill,

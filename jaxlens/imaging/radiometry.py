@@ -61,6 +61,16 @@ System aperture:
     their overfilled grids (round 44a; before it a stop without a semi-diameter was given
     the paraxial marginal ray's radius and clipped them, ``aiming.apertured``).
 
+Against a render:
+    A white render's pixel is the irradiance at a point: L·Σ 1/|det ∂x/∂X| over the pupil
+    rays that land there, each ray with its own areal magnification. E above is a patch's
+    flux over the area of its beam centroid's image. The two agree where the areal
+    magnification is the same for every ray of the beam (a sharp image) and part where it
+    varies over the pupil (defocus off axis): 0.7 % at 10 mm on round 42a's telecentric
+    triplet, where this module gives 0.7140 as optiland does by the same definition, and a
+    render optiland's point irradiance to its Monte-Carlo noise, 1e-2
+    (``tests/test_telecentric_render_round43a.py``).
+
 Vignetting factors:
     The lens's vignetting factors (``Lens.vignetting``) are not applied, at its own fields
     either: the transmitted beam is whatever passes the semi-diameters, apertures and
