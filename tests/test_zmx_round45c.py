@@ -1,13 +1,16 @@
-"""Round 45c (real lens files): seven more public .zmx files, none in an earlier round's data
+"""Round 45c (real lens files): eight more public .zmx files, none in an earlier round's data
 (tests/data/zmx45c/SOURCES.md names each source repository and path).
 
-* Five Thorlabs stock-lens files of Zemax 12 (``VERS 120928``, ASCII, CRLF) from
+* Six Thorlabs stock-lens files of Zemax 12 (``VERS 120928``, ASCII, CRLF) from
   wagenadl/octave-wagenaarlab: two achromats (AC254-100-A, visible; AC508-075-B, near-IR
   N-LAK22/N-SF6HT at 0.7065–1.015 µm), a negative achromat whose image is virtual
   (ACN127-030-B, ``DISZ -31.96`` to the image), and two even aspheres at 0.78 µm
   (AL1210-A: OHARA's S-LAH64 found in the third ``GCAT`` catalog, eight ``PARM`` terms, a
   parabolic base ``CONI -1``; AL50100-A: N-BK7, ``CONI -0.575``), both with
-  ``ENVD 20 1 1`` (indices adjusted to 20 °C and 1 atm: the catalogs' own conditions).
+  ``ENVD 20 1 1`` (indices adjusted to 20 °C and 1 atm: the catalogs' own conditions);
+  and an aspheric condenser whose stop is its flat back face, behind the lens (ACL108-A:
+  ``ENPD 9.0`` is the stop's image through the B270 asphere; its ``GLAS B270 0 0 1.5 4.0E+1``
+  carries Zemax's placeholder nd and Vd, which claim nothing and draw no warning).
 * The same Thorlabs series from DCC-Lab/RayTracing (AC254-125-A, N-BK7/N-SF5,
   ``VERS 120928 106``, a ``MAZH`` line).
 * A 19-surface microscope-objective form from tangericm/optical-design written by a
@@ -48,6 +51,7 @@ SHA256 = {  # the files as shipped: the index's text, CRLF restored (SOURCES.md)
     "tangericm_microscope-objective-60x.zmx":
         "d989358e150ab97b683943259affecd9acb27badd9ae605cfde795ccfc0b05ac",
     "thorlabs_AC254-100-A.zmx": "2a4949b2a9b59902fd48888084f310286e6dde7a3277e7db52408021477a736e",
+    "thorlabs_ACL108-A.zmx": "58b6a7452c3143872bf495d8cd70df421ef014203f51f7a7e3a640934d27e40f",
     "thorlabs_AC508-075-B.zmx": "0ba7c4a228ef63f9f2e73541e4264d1067088c4cef04dae76d8db0b82b0ec60a",
     "thorlabs_ACN127-030-B.zmx": "bb98879b4636e103d92e1542077d0e4ce236c909037c8da2aaf819037bfc4f57",
     "thorlabs_AL1210-A.zmx": "3a6bc234050d2778afcffd1dcf510f2ab6e8ad898695116c069110863c6ad22d",
@@ -140,7 +144,8 @@ def test_design_values_the_files_state():
     # Each Thorlabs NAME states the focal length (mm) at its design wavelength.
     for name, f in (("thorlabs_AC254-100-A.zmx", 100.0), ("dcclab_AC254-125-A.zmx", 125.0),
                     ("thorlabs_AC508-075-B.zmx", 75.0), ("thorlabs_ACN127-030-B.zmx", -30.0),
-                    ("thorlabs_AL1210-A.zmx", 10.0), ("thorlabs_AL50100-A.zmx", 100.0)):
+                    ("thorlabs_AL1210-A.zmx", 10.0), ("thorlabs_AL50100-A.zmx", 100.0),
+                    ("thorlabs_ACL108-A.zmx", 8.0)):
         lens, _ = _load(name)
         efl = float(jl.paraxial_data(lens).efl_image_space)
         assert abs(efl - f) < 0.3, (name, efl)
@@ -154,6 +159,14 @@ def test_design_values_the_files_state():
     # ACN127-030-B: a virtual image 31.96 mm before the last surface.
     neg, _ = _load("thorlabs_ACN127-030-B.zmx")
     assert float(neg.image_z()) == pytest.approx(1.5 + 2.5 - 31.95775200249, abs=1e-12)
+    # ACL108-A: the stop (surface 3) 5.8 mm behind the asphere; the entrance pupil, its
+    # image, is 9 mm across (ENPD) and lies behind surface 1.
+    cond, _ = _load("thorlabs_ACL108-A.zmx")
+    p = jl.paraxial_data(cond)
+    assert cond.stop == 2 and float(cond.epd) == 9.0
+    assert float(p.entrance_pupil_diameter) == pytest.approx(9.0, rel=1e-12)
+    assert float(p.entrance_pupil_z) > 5.0
+    assert cond.materials[1].name == "B270" and cond.materials[1].catalog == "SCHOTT"
     # The microscope form: FNUM 0.9 0 is EFL/EPD at the primary wavelength.
     mo, _ = _load("tangericm_microscope-objective-60x.zmx")
     p = jl.paraxial_data(mo)

@@ -5,7 +5,7 @@ Run with the optiland environment's interpreter, from the repository root:
 
     /work/optenv/bin/python tools/zmx45c_reference.py
 
-It reads the seven files of tests/data/zmx45c/ (SOURCES.md names them) with optiland's own
+It reads the eight files of tests/data/zmx45c/ (SOURCES.md names them) with optiland's own
 .zmx reader, sets every medium to optiland's ``IdealMaterial`` of the index computed here, at
 each wavelength, from the catalog records jaxlens ships (the numpy formulas of
 ``tools/zmx40a_reference.py``, not jaxlens's code). A glass is looked up in the file's
@@ -55,6 +55,8 @@ FILES = {
     "thorlabs_ACN127-030-B.zmx": ((0.0, 2.0, 5.0), NIR, 0.855),
     "thorlabs_AL1210-A.zmx": ((0.0, 1.0, 3.0), (0.78,), 0.78),
     "thorlabs_AL50100-A.zmx": ((0.0, 1.0, 3.0), (0.78,), 0.78),
+    # The stop behind the lens (its flat back face), the EPD its image through the asphere.
+    "thorlabs_ACL108-A.zmx": ((0.0, 2.0, 5.0), (0.55,), 0.55),
     "tangericm_microscope-objective-60x.zmx": ((0.0, 0.7, 1.0), FDC, 0.5876),
 }
 
