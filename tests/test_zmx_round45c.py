@@ -1,4 +1,4 @@
-"""Round 45c (real lens files): eight more public .zmx files, none in an earlier round's data
+"""Round 45c (real lens files): ten more public .zmx files, none in an earlier round's data
 (tests/data/zmx45c/SOURCES.md names each source repository and path).
 
 * Six Thorlabs stock-lens files of Zemax 12 (``VERS 120928``, ASCII, CRLF) from
@@ -18,6 +18,12 @@
   ``DIAM`` lines, three-value ``XFLN``/``YFLN``, a glass of another catalog than the file's
   (``J-LLF2``, HIKARI, under ``GCAT SCHOTT``: a warning naming it, refused in strict mode),
   and no line end after the last line.
+
+* Two program-written sample files from VendettaMask/opticalsystem (``VERS 190513 42 0``,
+  ``COMM`` on every surface, ``GLAS AIR`` on air spaces and on the image surface, ``DIAM`` on
+  the object): a finite conjugate (``FTYP 1``: object heights 0, 10, 20 mm of an object
+  120 mm before the lens, an internal stop) and real image heights with x and y
+  (``FTYP 3``, (1.5, 2) and (2.5, 4) mm).
 
 All open; the reference numbers are optiland 0.6.3's own .zmx reading of each file with
 every medium set to the catalog index computed in numpy (``tools/zmx45c_reference.py``).
@@ -56,7 +62,12 @@ SHA256 = {  # the files as shipped: the index's text, CRLF restored (SOURCES.md)
     "thorlabs_ACN127-030-B.zmx": "bb98879b4636e103d92e1542077d0e4ce236c909037c8da2aaf819037bfc4f57",
     "thorlabs_AL1210-A.zmx": "3a6bc234050d2778afcffd1dcf510f2ab6e8ad898695116c069110863c6ad22d",
     "thorlabs_AL50100-A.zmx": "a4e251224576acd76344353c03e04362cb94cc56730a6f0e6b9b45f076535842",
+    "vendettamask_finite-conjugate-macro.zmx":
+        "84a88beec6a63e0ecaed479dd7595ba148b0985350ab7f623b31abaeef48de8c",
+    "vendettamask_real-image-height-demo.zmx":
+        "10b2105239d33df43d20fe779b9d43c59c814712b8cb65090dcc3c8f5ded9352",
 }
+CONJUGATES = sorted(REF["conjugates"])
 
 
 def _load(name, **kw):
@@ -83,8 +94,8 @@ def _image_xy(lens, ref, wl):
 
 
 def test_the_files_are_the_sources_text():
-    assert sorted(SHA256) == FILES
-    for name in FILES:
+    assert sorted(SHA256) == sorted(FILES + CONJUGATES)
+    for name in SHA256:
         with open(os.path.join(DATA, name), "rb") as fh:
             raw = fh.read()
         assert hashlib.sha256(raw).hexdigest() == SHA256[name]
@@ -92,8 +103,9 @@ def test_the_files_are_the_sources_text():
         assert text.startswith("VERS ")
         # Zemax 12's files end their lines in CRLF; the program-written form in LF, without
         # one after its last line.
-        if name.startswith("tangericm"):
-            assert "\r" not in text and not text.endswith("\n")
+        if name.startswith(("tangericm", "vendettamask")):
+            assert "\r" not in text
+            assert text.endswith("\n") == name.startswith("vendettamask")
         else:
             assert text.count("\n") == text.count("\r\n") and text.endswith("\r\n")
 
@@ -138,6 +150,58 @@ def test_files_open_and_trace_as_optiland_does(name):
             assert np.array_equal(np.isnan(got[:, 0]), np.isnan(want[:, 0]))
             worst = max(worst, float(np.nanmax(np.abs(got - want))))
     assert worst <= 1e-9, worst  # mm at the image surface
+
+
+@pytest.mark.parametrize("name", CONJUGATES)
+def test_object_and_real_image_heights_as_optiland_traces_them(name):
+    """FTYP 1 (object heights of an object 120 mm before the lens) and FTYP 3 (real image
+    heights, x and y): jaxlens's field angles are those of the reference (the ray from the
+    object point to the paraxial entrance pupil's centre; the real chief ray that lands on the
+    stated image point, solved on optiland's trace), and its real rays land where optiland's
+    do."""
+    ref = REF["conjugates"][name]
+    lens, caught = _load(name, strict=True)
+    assert caught == []
+    assert lens.stop == ref["stop_surface"] - 1
+    assert float(lens.image_z()) == pytest.approx(ref["image_z_from_surface_1"], abs=1e-12)
+    np.testing.assert_allclose(np.asarray(lens.fields), ref["field_angles_deg"], rtol=0,
+                               atol=1e-10)
+    fo = ref["first_order_primary"]
+    p = jl.paraxial_data(lens)
+    assert float(p.efl_image_space) == pytest.approx(fo["f2"], rel=1e-12)
+    assert float(p.entrance_pupil_z) == pytest.approx(fo["EPL"], abs=1e-10)
+    assert float(p.entrance_pupil_diameter) == pytest.approx(fo["EPD"], rel=1e-12)
+    r, launch, pupil = 0.5 * fo["EPD"], REF["launch_mm_before_surface_1"], REF["pupil"]
+    worst = 0.0
+    for wl in ref["wavelengths"]:
+        key = repr(float(wl))
+        n = [abs(float(v)) for v in lens.indices(wl)][1:]
+        np.testing.assert_allclose(n, ref["indices"][key], rtol=2e-15, atol=0)
+        for k, want in enumerate(ref["rays"][key]):
+            if ref["kind"] == "object":
+                z0 = ref["object_z_from_surface_1"]
+                o = np.array([[0.0, ref["fields"][k], z0]] * len(pupil))
+                d = np.array([[px * r, py * r, fo["EPL"]] for px, py in pupil]) - o
+            else:
+                t = np.tan(np.radians(ref["field_angles_deg"][k]))
+                d = np.tile([t[0], t[1], 1.0], (len(pupil), 1))
+                d = d / np.linalg.norm(d, axis=1, keepdims=True)
+                o = np.array([[px * r, py * r, 0.0] for px, py in pupil]) + launch * d
+            d = d / np.linalg.norm(d, axis=1, keepdims=True)
+            with jax.disable_jit():
+                res = jl.trace(unclipped(lens), jl.Rays(o, d, wl))
+            got = np.where(np.asarray(res.valid)[:, None], np.asarray(res.origin)[:, :2], np.nan)
+            want = np.array([[np.nan, np.nan] if w is None else w for w in want])
+            assert np.array_equal(np.isnan(got[:, 0]), np.isnan(want[:, 0]))
+            worst = max(worst, float(np.nanmax(np.abs(got - want))))
+    assert worst <= 1e-9, worst  # mm at the image surface
+    if ref["kind"] == "image":  # the chief rays land on the stated points
+        for f, h in zip(np.asarray(lens.fields), ref["fields"], strict=True):
+            t = np.tan(np.radians(f))
+            d = np.array([[t[0], t[1], 1.0]]) / math.hypot(t[0], t[1], 1.0)
+            with jax.disable_jit():
+                res = jl.trace(unclipped(lens), jl.Rays(launch * d, d, ref["primary"]))
+            np.testing.assert_allclose(np.asarray(res.origin)[0, :2], h, rtol=0, atol=1e-9)
 
 
 def test_design_values_the_files_state():

@@ -5,7 +5,7 @@ Run with the optiland environment's interpreter, from the repository root:
 
     /work/optenv/bin/python tools/zmx45c_reference.py
 
-It reads the eight files of tests/data/zmx45c/ (SOURCES.md names them) with optiland's own
+It reads the ten files of tests/data/zmx45c/ (SOURCES.md names them) with optiland's own
 .zmx reader, sets every medium to optiland's ``IdealMaterial`` of the index computed here, at
 each wavelength, from the catalog records jaxlens ships (the numpy formulas of
 ``tools/zmx40a_reference.py``, not jaxlens's code). A glass is looked up in the file's
@@ -24,6 +24,19 @@ first checks that jaxlens's are the same. Written to tests/data/zmx45c/optiland_
   beam, rim points at 0.99 included) per field angle, launched 5 mm before surface 1, every
   aperture removed (a ray optiland loses is stored as null). The traced beam is the file's
   EPD (``ENPD``), or for ``FNUM`` the EPD optiland finds at the primary wavelength.
+
+Two program-written files state their fields otherwise (``CONJUGATES``), and their rays are
+built here, not by optiland's field handling:
+
+* object heights (``FTYP 1``) of a finite object: each pupil ray goes from the object point
+  (0, h) on the object plane to the point (px, py)·EPD/2 of the paraxial entrance pupil's
+  plane (optiland's ``EPL``); the field angle Zemax gives such a field is that of the ray to
+  the pupil's centre, atan(−h / (object distance + EPL)), stored too;
+* real image heights (``FTYP 3``, x and y): the field (θx, θy) whose real chief ray meets the
+  image surface at (x, y), solved here by Newton's method on optiland's trace (the chief ray
+  through the stop's centre: the stop is surface 1, the entrance pupil's centre its vertex,
+  so no aiming question arises); stored in degrees, direction ∝ (tan θx, tan θy, 1), and its
+  collimated pupil rays traced as for the angle fields.
 """
 
 import json
@@ -36,6 +49,7 @@ import warnings
 import numpy as np
 from optiland.fileio import load_zemax_file
 from optiland.materials import IdealMaterial
+from optiland.rays import RealRays
 
 sys.path.insert(0, str(pathlib.Path(__file__).resolve().parent))
 import zmx40a_reference as z40  # noqa: E402  (agf_records, index, surface_z, LAUNCH)
@@ -46,6 +60,7 @@ DATA = ROOT / "tests" / "data" / "zmx45c"
 OUT_JSON = DATA / "optiland_reference.json"
 FDC = (0.4861, 0.5876, 0.6563)
 NIR = (0.7065, 0.855, 1.015)
+FDC6 = (0.4861327, 0.5875618, 0.6562725)
 # file: (field angles in degrees, wavelengths in µm (the file's active ones, primary first
 # listed as the file's PWAV says in the test), primary wavelength)
 FILES = {
@@ -58,6 +73,14 @@ FILES = {
     # The stop behind the lens (its flat back face), the EPD its image through the asphere.
     "thorlabs_ACL108-A.zmx": ((0.0, 2.0, 5.0), (0.55,), 0.55),
     "tangericm_microscope-objective-60x.zmx": ((0.0, 0.7, 1.0), FDC, 0.5876),
+}
+
+
+# file: (object heights (mm, y) or real image heights (mm, (x, y))), wavelengths, primary
+CONJUGATES = {
+    "vendettamask_finite-conjugate-macro.zmx": ("object", (0.0, 10.0, 20.0), FDC6, 0.5875618),
+    "vendettamask_real-image-height-demo.zmx": ("image", ((0.0, 0.0), (1.5, 2.0), (2.5, 4.0)),
+                                                FDC6, 0.5875618),
 }
 
 
@@ -83,6 +106,92 @@ def load(path):
     with warnings.catch_warnings():
         warnings.simplefilter("ignore")
         return load_zemax_file(str(path))
+
+
+def trace_rays(op, origins, dirs, wl):
+    """Image intercepts (x, y) of rays (origins, unit directions), None where lost; every
+    aperture removed."""
+    for s in op.surfaces.surfaces:
+        s.aperture = None
+        g = s.geometry
+        if hasattr(g, "tol") and hasattr(g, "max_iter"):
+            g.tol, g.max_iter = 1e-13, 200
+    o, d = np.asarray(origins, float), np.asarray(dirs, float)
+    m = len(o)
+    rays = RealRays(o[:, 0].copy(), o[:, 1].copy(), o[:, 2].copy(), d[:, 0].copy(),
+                    d[:, 1].copy(), d[:, 2].copy(), np.ones(m), np.full(m, wl))
+    with warnings.catch_warnings(), np.errstate(all="ignore"):
+        warnings.simplefilter("ignore")
+        op.surfaces.trace(rays, skip=1)
+    x, y, i = np.asarray(rays.x), np.asarray(rays.y), np.asarray(rays.i)
+    return [[float(a), float(b)] if np.isfinite(a) and np.isfinite(b) and c > 0 else None
+            for a, b, c in zip(x, y, i, strict=True)]
+
+
+def unit(v):
+    v = np.asarray(v, float)
+    return v / np.linalg.norm(v, axis=-1, keepdims=True)
+
+
+def solve_real_height(op, target, z1, wl):
+    """(tan θx, tan θy) of the ray through surface 1's vertex that meets the image at
+    ``target`` (Newton's method, central differences)."""
+    def land(t):
+        d = unit([t[0], t[1], 1.0])
+        return np.array(trace_rays(op, [np.array([0.0, 0.0, z1]) + z40.LAUNCH * d], [d],
+                                   wl)[0])
+
+    t = np.zeros(2)
+    for _ in range(30):
+        miss = land(t) - target
+        if np.max(np.abs(miss)) < 1e-13:
+            break
+        h = 1e-6
+        jac = np.stack([(land(t + h * e) - land(t - h * e)) / (2 * h) for e in np.eye(2)], 1)
+        t = t - np.linalg.solve(jac, miss)
+    assert np.max(np.abs(land(t) - target)) < 1e-12, (target, land(t))
+    return t
+
+
+def conjugate_entry(name, kind, fields, wavelengths, primary, recs):
+    path = DATA / name
+    gcat, media = z43.file_media(path)
+    media = [None if g == "AIR" else g for g in media]  # the files' GLAS AIR lines
+    glasses = {g: catalog_of(g, gcat, recs)[0] for g in media if g is not None}
+    op = load(path)
+    set_media(op, media, glasses, recs, primary)
+    fo = z43.first_order(op)
+    z1, z0 = z40.surface_z(op, 1), z40.surface_z(op, 0)
+    entry = {"kind": kind, "fields": fields, "wavelengths": wavelengths, "primary": primary,
+             "glasses": glasses, "first_order_primary": fo, "indices": {}, "rays": {},
+             "stop_surface": int(op.surfaces.stop_index),
+             "image_z_from_surface_1": z40.surface_z(op, len(media) - 1) - z1}
+    r = 0.5 * fo["EPD"]
+    if kind == "object":  # the rays from each object point to the paraxial entrance pupil
+        entry["object_z_from_surface_1"] = z0 - z1
+        entry["field_angles_deg"] = [math.degrees(math.atan(-h / (z1 - z0 + fo["EPL"])))
+                                     for h in fields]
+    else:
+        entry["field_angles_deg"] = [[math.degrees(math.atan(v)) for v in
+                                      solve_real_height(op, np.array(t), z1, primary)]
+                                     for t in fields]
+    for wl in wavelengths:
+        op = load(path)
+        entry["indices"][repr(wl)] = set_media(op, media, glasses, recs, wl)
+        rows = []
+        for k, f in enumerate(fields):
+            if kind == "object":
+                o = np.array([[0.0, f, z0]] * len(z43.PUPIL))
+                p = np.array([[px * r, py * r, z1 + fo["EPL"]] for px, py in z43.PUPIL])
+                d = unit(p - o)
+            else:
+                tx, ty = np.tan(np.radians(entry["field_angles_deg"][k]))
+                d = np.tile(unit([tx, ty, 1.0]), (len(z43.PUPIL), 1))
+                p = np.array([[px * r, py * r, z1] for px, py in z43.PUPIL])
+                o = p + z40.LAUNCH * d
+            rows.append(trace_rays(op, o, d, wl))
+        entry["rays"][repr(wl)] = rows
+    return entry
 
 
 def main():
@@ -114,6 +223,8 @@ def main():
         entry["image_z_from_surface_1"] = z40.surface_z(op, len(media) - 1) - z1
         ref["files"][name] = entry
         assert math.isfinite(beam)
+    ref["conjugates"] = {name: conjugate_entry(name, *spec, recs)
+                         for name, spec in CONJUGATES.items()}
     # Written whole: a stop mid-write leaves the old file, not a cut one.
     with tempfile.NamedTemporaryFile("w", dir=OUT_JSON.parent, delete=False,
                                      suffix=".tmp") as fh:  # temporary
