@@ -1,4 +1,4 @@
-"""Round 45c (real lens files): ten more public .zmx files, none in an earlier round's data
+"""Round 45c (real lens files): eleven more public .zmx files, none in an earlier round's data
 (tests/data/zmx45c/SOURCES.md names each source repository and path).
 
 * Six Thorlabs stock-lens files of Zemax 12 (``VERS 120928``, ASCII, CRLF) from
@@ -17,7 +17,9 @@
   program, not OpticStudio: ``FNUM 0.9 0`` (image-space F/#) as the system aperture, no
   ``DIAM`` lines, three-value ``XFLN``/``YFLN``, a glass of another catalog than the file's
   (``J-LLF2``, HIKARI, under ``GCAT SCHOTT``: a warning naming it, refused in strict mode),
-  and no line end after the last line.
+  and no line end after the last line; and the same program's OCT scan lens (two
+  N-BK7/N-SF5 doublets at 0.8–0.9 µm, the stop 27.6 mm before them) with no ``GCAT`` line at
+  all: its glasses are SCHOTT's, Zemax's default catalog, with no warning.
 
 * Two program-written sample files from VendettaMask/opticalsystem (``VERS 190513 42 0``,
   ``COMM`` on every surface, ``GLAS AIR`` on air spaces and on the image surface, ``DIAM`` on
@@ -56,6 +58,8 @@ SHA256 = {  # the files as shipped: the index's text, CRLF restored (SOURCES.md)
     "dcclab_AC254-125-A.zmx": "c8f77d6df5b8e2b45886238003c7ce0be96b38cdfa53951d4dd3bb88bc018fbf",
     "tangericm_microscope-objective-60x.zmx":
         "d989358e150ab97b683943259affecd9acb27badd9ae605cfde795ccfc0b05ac",
+    "tangericm_oct-semi-plossl-scan-lens.zmx":
+        "1ae8d67f60524340a5c0c2f38ef31d5b0742ca893886997fc4f73eeb9701e541",
     "thorlabs_AC254-100-A.zmx": "2a4949b2a9b59902fd48888084f310286e6dde7a3277e7db52408021477a736e",
     "thorlabs_ACL108-A.zmx": "58b6a7452c3143872bf495d8cd70df421ef014203f51f7a7e3a640934d27e40f",
     "thorlabs_AC508-075-B.zmx": "0ba7c4a228ef63f9f2e73541e4264d1067088c4cef04dae76d8db0b82b0ec60a",

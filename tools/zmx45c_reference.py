@@ -5,11 +5,12 @@ Run with the optiland environment's interpreter, from the repository root:
 
     /work/optenv/bin/python tools/zmx45c_reference.py
 
-It reads the ten files of tests/data/zmx45c/ (SOURCES.md names them) with optiland's own
+It reads the eleven files of tests/data/zmx45c/ (SOURCES.md names them) with optiland's own
 .zmx reader, sets every medium to optiland's ``IdealMaterial`` of the index computed here, at
 each wavelength, from the catalog records jaxlens ships (the numpy formulas of
 ``tools/zmx40a_reference.py``, not jaxlens's code). A glass is looked up in the file's
-``GCAT`` catalogs in their order, as Zemax does; a glass none of them holds (the microscope
+``GCAT`` catalogs in their order, as Zemax does (in SCHOTT, Zemax's default, for a file
+without a GCAT line); a glass none of them holds (the microscope
 form's ``J-LLF2`` under ``GCAT SCHOTT``) is taken from the first shipped catalog that holds
 the name, and the JSON says so (``"foreign"``). The indices are stored so that the test
 first checks that jaxlens's are the same. Written to tests/data/zmx45c/optiland_reference.json:
@@ -73,6 +74,8 @@ FILES = {
     # The stop behind the lens (its flat back face), the EPD its image through the asphere.
     "thorlabs_ACL108-A.zmx": ((0.0, 2.0, 5.0), (0.55,), 0.55),
     "tangericm_microscope-objective-60x.zmx": ((0.0, 0.7, 1.0), FDC, 0.5876),
+    # No GCAT line: Zemax's default catalog (SCHOTT) is searched.
+    "tangericm_oct-semi-plossl-scan-lens.zmx": ((0.0, 4.2, 6.0), (0.8, 0.84, 0.9), 0.84),
 }
 
 
@@ -200,6 +203,7 @@ def main():
     for name, (fields, wavelengths, primary) in FILES.items():
         path = DATA / name
         gcat, media = z43.file_media(path)
+        gcat = gcat or ["SCHOTT"]  # no GCAT line: Zemax's default catalog
         glasses, foreign = {}, []
         for g in media:
             if g is not None and g not in glasses:
