@@ -272,3 +272,35 @@ def test_files_round_trip_through_json_and_zmx(name, tmp_path):
     for a, b in zip(jax.tree_util.tree_leaves(again), jax.tree_util.tree_leaves(lens),
                     strict=True):
         np.testing.assert_array_equal(np.asarray(a, np.float64), np.asarray(b, np.float64))
+
+
+def test_real_image_heights_with_ray_aiming_off_take_zemax_s_chief_ray():
+    """FTYP 3 with ray aiming off (no RAIM line) and the stop between the groups of a double
+    Gauss (tests/data/zmx45c/dg50_ftyp3.zmx, written by the reference tool after
+    VendettaMask's double-gauss-50mm): the field of each real image height is that of the
+    chief ray Zemax traces with aiming off, through the paraxial entrance pupil's centre,
+    as optiland 0.6.3's own real-image-height field takes it. jaxlens aimed that chief ray
+    at the stop's centre: 3.2336° and 6.2991° for 6 and 12 mm where optiland has 3.2361°
+    and 6.3186°, and at jaxlens's own fields (its rays aimed as the file says) the chief
+    ray landed 5 and 40 µm short of the stated heights."""
+    ref = REF["dg50_ftyp3"]
+    lens, caught = _load("dg50_ftyp3.zmx", strict=True)
+    assert caught == [] and lens.aim == "paraxial" and lens.stop == 4
+    p = jl.paraxial_data(lens)
+    assert float(p.entrance_pupil_z) == pytest.approx(ref["EPL"], abs=1e-10)
+    assert float(p.efl_image_space) == pytest.approx(ref["f2"], rel=1e-12)
+    np.testing.assert_allclose(np.asarray(lens.fields), ref["angles_deg"], rtol=0, atol=1e-9)
+    # The chief rays (through the paraxial pupil's centre) land on the stated heights and
+    # cross the stop off its centre where optiland's do (the pupil aberration).
+    from jaxlens.tracing.forward import trace_path
+
+    for f, h, y_stop in zip(np.asarray(lens.fields), ref["heights"], ref["stop_y"],
+                            strict=True):
+        t = math.tan(math.radians(f))
+        d = np.array([[0.0, t, 1.0]]) / math.hypot(t, 1.0)
+        o = np.array([[0.0, 0.0, float(p.entrance_pupil_z)]]) - 30.0 * d
+        with jax.disable_jit():
+            path = trace_path(unclipped(lens), jl.Rays(o, d, 0.5875618))
+        xyz = np.asarray(path.origin)[:, 0]
+        assert abs(xyz[-1, 1] - h) < 1e-9 and abs(xyz[-1, 0]) < 1e-12
+        assert xyz[4, 1] == pytest.approx(y_stop, abs=1e-9)

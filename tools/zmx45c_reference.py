@@ -38,6 +38,13 @@ built here, not by optiland's field handling:
   through the stop's centre: the stop is surface 1, the entrance pupil's centre its vertex,
   so no aiming question arises); stored in degrees, direction ∝ (tan θx, tan θy, 1), and its
   collimated pupil rays traced as for the angle fields.
+
+One file is written here (``dg50_ftyp3.zmx``): VendettaMask's double-gauss-50mm sample
+(``samples/lenses/double-gauss-50mm.zmx`` of the same repository, its stop between the
+groups) with its fields changed to real image heights (``FTYP 3``, 0, 6 and 12 mm) and no
+RAIM line (ray aiming off). optiland 0.6.3 reads FTYP 3 as its own ``real_image_height``
+field, whose chief ray goes through the paraxial entrance pupil's centre, as Zemax's does
+with ray aiming off; its object-space chief-ray angles are stored (``DG50_FTYP3``).
 """
 
 import json
@@ -85,6 +92,58 @@ CONJUGATES = {
     "vendettamask_real-image-height-demo.zmx": ("image", ((0.0, 0.0), (1.5, 2.0), (2.5, 4.0)),
                                                 FDC6, 0.5875618),
 }
+
+
+DG50 = DATA / "dg50_ftyp3.zmx"
+DG50_SURFACES = (  # (comment, curvature 1/mm, thickness mm, glass, semi-diameter mm)
+    ("Front positive 1", "0.0263157894736842", "4", "N-BK7", "11"),
+    ("Front positive 2", "0.00833333333333333", "1", "AIR", "11"),
+    ("Front negative 1", "0.04", "5", "N-SF5", "9"),
+    ("Front negative 2", "-0.04", "4", "AIR", "8"),
+    ("Aperture stop", "0", "4", "AIR", "5"),
+    ("Rear negative 1", "-0.04", "5", "N-SF5", "8"),
+    ("Rear negative 2", "0.04", "1", "AIR", "9"),
+    ("Rear positive 1", "-0.00833333333333333", "4", "N-BK7", "11"),
+    ("Rear positive 2", "-0.0263157894736842", "45", "AIR", "11"),
+)
+
+
+def write_dg50():
+    """The double Gauss with real-image-height fields (see the module notes)."""
+    lines = ["VERS 190513 42 0", "MODE SEQ", "NAME Symmetric Double Gauss 50 mm, FTYP 3",
+             "NOTE 0 Written by tools/zmx45c_reference.py after VendettaMask/opticalsystem "
+             "samples/lenses/double-gauss-50mm.zmx, its fields made real image heights",
+             "GCAT SCHOTT", "ENPD 10", "FTYP 3 0 3 3 0 0 0", "XFLN 0 0 0", "YFLN 0 6 12",
+             "FWGN 1 1 1", "WAVM 1 0.4861327 1", "WAVM 2 0.5875618 1", "WAVM 3 0.6562725 1",
+             "PWAV 2", "SURF 0", "  TYPE STANDARD", "  CURV 0", "  DISZ INFINITY"]
+    for k, (comm, curv, disz, glas, diam) in enumerate(DG50_SURFACES, 1):
+        lines += [f"SURF {k}", "  TYPE STANDARD", f"  COMM {comm}", f"  CURV {curv}",
+                  f"  DISZ {disz}", f"  GLAS {glas}"] + (["  STOP"] if k == 5 else []) + [
+                  f"  DIAM {diam}"]
+    lines += [f"SURF {len(DG50_SURFACES) + 1}", "  TYPE STANDARD", "  CURV 0", "  DISZ 0"]
+    DG50.write_text("\n".join(lines) + "\n")
+
+
+def dg50_reference(recs) -> dict:
+    """optiland's real-image-height chief rays of ``dg50_ftyp3.zmx`` at the primary
+    wavelength: object-space angle (deg), image height, and height at the stop (mm)."""
+    gcat, media = z43.file_media(DG50)
+    media = [None if g == "AIR" else g for g in media]
+    glasses = {g: catalog_of(g, gcat, recs)[0] for g in media if g is not None}
+    op = load(DG50)
+    set_media(op, media, glasses, recs, 0.5875618)
+    fo = z43.first_order(op)
+    out = {"heights": [0.0, 6.0, 12.0], "angles_deg": [], "image_y": [], "stop_y": [],
+           "EPL": fo["EPL"], "f2": fo["f2"]}
+    for hy in (0.0, 0.5, 1.0):
+        with warnings.catch_warnings(), np.errstate(all="ignore"):
+            warnings.simplefilter("ignore")
+            rays = op.trace_generic(0.0, hy, 0.0, 0.0, 0.5875618)
+        m, n = float(np.ravel(op.surfaces.M)[0]), float(np.ravel(op.surfaces.N)[0])
+        out["angles_deg"].append(math.degrees(math.atan2(m, n)))
+        out["image_y"].append(float(np.ravel(rays.y)[0]))
+        out["stop_y"].append(float(np.asarray(op.surfaces.y)[5, 0]))
+    return out
 
 
 def catalog_of(name, gcat, recs):
@@ -229,6 +288,8 @@ def main():
         assert math.isfinite(beam)
     ref["conjugates"] = {name: conjugate_entry(name, *spec, recs)
                          for name, spec in CONJUGATES.items()}
+    write_dg50()
+    ref["dg50_ftyp3"] = dg50_reference(recs)
     # Written whole: a stop mid-write leaves the old file, not a cut one.
     with tempfile.NamedTemporaryFile("w", dir=OUT_JSON.parent, delete=False,
                                      suffix=".tmp") as fh:  # temporary
