@@ -304,3 +304,24 @@ def test_real_image_heights_with_ray_aiming_off_take_zemax_s_chief_ray():
         xyz = np.asarray(path.origin)[:, 0]
         assert abs(xyz[-1, 1] - h) < 1e-9 and abs(xyz[-1, 0]) < 1e-12
         assert xyz[4, 1] == pytest.approx(y_stop, abs=1e-9)
+
+
+def test_real_image_heights_of_a_finite_object_with_ray_aiming_off(tmp_path):
+    """The finite-conjugate file with its fields made real image heights (0, −1.5, −3 mm;
+    no RAIM line): each field's object point, the one whose ray through the paraxial
+    entrance pupil's centre lands on the height, is optiland's (its real-image-height field
+    of the same copy, whose heights +1.5 and +3 mm mirror the file's)."""
+    ref = REF["fc_ftyp3"]
+    with open(os.path.join(DATA, "vendettamask_finite-conjugate-macro.zmx")) as fh:
+        text = fh.read()
+    for old, new in ref["lines"]:
+        text = text.replace(old, new)
+    path = tmp_path / "fc_ftyp3.zmx"
+    path.write_text(text)
+    lens, caught = _load(str(path), strict=True)
+    assert caught == [] and lens.aim == "paraxial"
+    zep = float(jl.paraxial_data(lens).entrance_pupil_z)
+    depth = float(lens.object_distance)
+    # The object point of field θ: −tan θ·(z_ep + depth) (sampling.object_point).
+    heights = -np.tan(np.radians(np.asarray(lens.fields)[1:])) * (zep + depth)
+    np.testing.assert_allclose(heights, -np.asarray(ref["object_y"]), rtol=0, atol=1e-9)

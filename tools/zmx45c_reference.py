@@ -146,6 +146,36 @@ def dg50_reference(recs) -> dict:
     return out
 
 
+FC_FTYP3 = (("FTYP 1 0 3 3 0 0 0", "FTYP 3 0 3 3 0 0 0"), ("YFLN 0 10 20", "YFLN 0 -1.5 -3"))
+"""The finite-conjugate file's lines changed for ``fc_ftyp3_reference``: its fields made
+real image heights (0, −1.5 and −3 mm), ray aiming off."""
+
+
+def fc_ftyp3_reference(recs) -> dict:
+    """optiland's real-image-height chief rays of the finite-conjugate file with FTYP 3
+    fields (``FC_FTYP3``, a copy in a temporary folder): the object height (mm) of each."""
+    text = (DATA / "vendettamask_finite-conjugate-macro.zmx").read_text()
+    for old, new in FC_FTYP3:
+        assert old in text
+        text = text.replace(old, new)
+    with tempfile.TemporaryDirectory() as tmp:
+        path = pathlib.Path(tmp) / "fc_ftyp3.zmx"
+        path.write_text(text)  # temporary
+        gcat, media = z43.file_media(path)
+        media = [None if g == "AIR" else g for g in media]
+        glasses = {g: catalog_of(g, gcat, recs)[0] for g in media if g is not None}
+        op = load(path)
+    set_media(op, media, glasses, recs, 0.5875618)
+    out = {"lines": FC_FTYP3, "image_y": [], "object_y": []}
+    for hy in (0.5, 1.0):  # optiland's max field is 3 mm: +1.5 and +3 (the file's mirror)
+        with warnings.catch_warnings(), np.errstate(all="ignore"):
+            warnings.simplefilter("ignore")
+            rays = op.trace_generic(0.0, hy, 0.0, 0.0, 0.5875618)
+        out["image_y"].append(float(np.ravel(rays.y)[0]))
+        out["object_y"].append(float(np.asarray(op.surfaces.y)[0, 0]))
+    return out
+
+
 def catalog_of(name, gcat, recs):
     """The catalog Zemax would take ``name`` from: the first GCAT catalog holding it, else
     (a foreign glass) the first shipped catalog holding it, alphabetically."""
@@ -290,6 +320,7 @@ def main():
                          for name, spec in CONJUGATES.items()}
     write_dg50()
     ref["dg50_ftyp3"] = dg50_reference(recs)
+    ref["fc_ftyp3"] = fc_ftyp3_reference(recs)
     # Written whole: a stop mid-write leaves the old file, not a cut one.
     with tempfile.NamedTemporaryFile("w", dir=OUT_JSON.parent, delete=False,
                                      suffix=".tmp") as fh:  # temporary
