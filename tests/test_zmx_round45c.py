@@ -29,6 +29,11 @@
 
 All open; the reference numbers are optiland 0.6.3's own .zmx reading of each file with
 every medium set to the catalog index computed in numpy (``tools/zmx45c_reference.py``).
+One class was fixed (``jaxlens.io.zmx_system``): a real-image-height field (``FTYP 3``) with
+ray aiming off is that of the chief ray Zemax traces then, through the paraxial entrance
+pupil's centre (optiland 0.6.3's real-image-height field takes the same ray); jaxlens aimed
+it at the stop's centre, 0.02° off for a double Gauss's 12 mm height (``dg50_ftyp3.zmx``).
+
 A public file that only looks like a .zmx (piack97/zemax-lens-analyzer's
 ``tests/data/sample_lens.zmx``: ``XFLN 1 0``/``XFLN 2 5`` as field rows, no ``SURF 0``) is
 refused naming the line, and kept here as text.
