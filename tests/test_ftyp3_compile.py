@@ -37,14 +37,19 @@ def _singlet(aim: str = "real") -> jl.Lens:
     )
 
 
-def test_the_ftyp3_check_traces_the_solved_ray_without_aiming_it_again(tmp_path):
-    lens = _singlet()
-    jax.config.update("jax_dump_ir_to", str(tmp_path))
+def _solved_with_programs(lens, folder):
+    """The FTYP 3 conversion of heights 0 and 2 mm, and the compiled programs it dumped
+    into ``folder`` (file name -> text)."""
+    jax.config.update("jax_dump_ir_to", str(folder))
     try:
         out = zmx_system.angles_from_real_image_heights(lens, np.array([0.0, 2.0]))
     finally:
         jax.config.update("jax_dump_ir_to", "")
-    modules = {p.name: p.read_text() for p in tmp_path.iterdir()}
+    return out, {p.name: p.read_text() for p in folder.iterdir()}
+
+
+def test_the_ftyp3_check_traces_the_solved_ray_without_aiming_it_again(tmp_path):
+    out, modules = _solved_with_programs(_singlet(), tmp_path)
     check = [t for n, t in modules.items() if "_chief_ray_landing" in n]
     solve = [t for n, t in modules.items() if "_real_height_field" in n]
     assert len(check) == 1 and len(solve) == 1, sorted(modules)
@@ -63,13 +68,7 @@ def test_with_ray_aiming_off_the_ftyp3_solve_aims_nothing(tmp_path):
     """Ray aiming off: the chief ray is the ray through the paraxial entrance pupil's
     centre, so neither the solve nor the check holds the stop aiming. The stop is surface 1
     here: the two chief rays are the same ray, and so is the field."""
-    lens = _singlet("paraxial")
-    jax.config.update("jax_dump_ir_to", str(tmp_path))
-    try:
-        out = zmx_system.angles_from_real_image_heights(lens, np.array([0.0, 2.0]))
-    finally:
-        jax.config.update("jax_dump_ir_to", "")
-    modules = {p.name: p.read_text() for p in tmp_path.iterdir()}
+    out, modules = _solved_with_programs(_singlet("paraxial"), tmp_path)
     solve = [t for n, t in modules.items() if "_real_height_field" in n]
     assert len(solve) == 1 and "@_stop_chief_ray" not in solve[0]
     aimed = zmx_system.angles_from_real_image_heights(_singlet("real"), np.array([0.0, 2.0]))
