@@ -149,3 +149,69 @@ def check_corpus_tool():
         sys.modules["check_corpus"] = module
         spec.loader.exec_module(module)
     return sys.modules["check_corpus"]
+
+
+def load_recording(path, **kw) -> tuple[jl.Lens, list]:
+    """``jl.load(path, **kw)`` with every warning recorded: the lens and the warnings (their
+    ``warnings.WarningMessage`` records, in order)."""
+    import warnings
+
+    with warnings.catch_warnings(record=True) as caught:
+        warnings.simplefilter("always")
+        lens = jl.load(path, **kw)
+    return lens, list(caught)
+
+
+def image_xy(lens: jl.Lens, fields_deg, beam, pupil, launch, wavelength) -> list:
+    """jaxlens's image intercepts (x, y) of collimated rays at each field angle (deg, in y),
+    through the pupil points (fractions of ``beam``/2, mm) on the plane ``launch`` mm from
+    surface 1 (negative: before it), every aperture removed; NaN where a ray is lost. The
+    rays of the round 40a–45c reference tools (tools/zmx43d_reference.py ``trace``)."""
+    import math
+
+    import jax
+
+    from jaxlens.optics.lens import unclipped
+
+    r = 0.5 * beam
+    out = []
+    for f in fields_deg:
+        t = math.tan(math.radians(f))
+        d = np.array([0.0, t, 1.0]) / math.sqrt(1 + t * t)
+        o = np.array([[px * r, py * r - launch * t, launch] for px, py in pupil])
+        with jax.disable_jit():  # a few small traces: faster than compiling
+            res = jl.trace(unclipped(lens), jl.Rays(o, np.tile(d, (len(o), 1)), wavelength))
+        xy = np.asarray(res.origin)[:, :2]
+        out.append(np.where(np.asarray(res.valid)[:, None], xy, np.nan))
+    return out
+
+
+def check_first_order(p, fo: dict, *, sizes: bool = True) -> None:
+    """jaxlens's paraxial data ``p`` (``jl.paraxial_data``) against optiland's first-order
+    record ``fo`` (the reference tools' ``first_order``: f2, F2 and XPL from the image
+    surface, EPL from surface 1, EPD, XPD, FNO). ``sizes`` False leaves out the pupils'
+    diameters and the F/#. optiland's XPD carries the pupil magnification's sign (negative
+    where the exit pupil is inverted); jaxlens's is the diameter."""
+    import pytest
+
+    image_z = float(p.image_z)
+    assert float(p.efl_image_space) == pytest.approx(fo["f2"], rel=1e-12)
+    assert float(p.paraxial_image_z) - image_z == pytest.approx(fo["F2"], abs=1e-10)
+    assert float(p.entrance_pupil_z) == pytest.approx(fo["EPL"], abs=1e-10)
+    assert float(p.exit_pupil_z) - image_z == pytest.approx(fo["XPL"], abs=1e-9)
+    if sizes:
+        assert float(p.entrance_pupil_diameter) == pytest.approx(fo["EPD"], rel=1e-12)
+        assert float(p.exit_pupil_diameter) == pytest.approx(abs(fo["XPD"]), rel=1e-10)
+        assert float(p.fnum) == pytest.approx(fo["FNO"], rel=1e-12)
+
+
+def image_miss(got: list, want: list) -> float:
+    """The largest |jaxlens − reference| (mm) over image intercepts: ``got`` as
+    ``image_xy`` returns them, ``want`` the reference's rows ([x, y] or None where its ray
+    was lost), the same rays lost in both (asserted)."""
+    worst = 0.0
+    for g, w in zip(got, want, strict=True):
+        w = np.array([[np.nan, np.nan] if v is None else v for v in w])
+        assert np.array_equal(np.isnan(g[:, 0]), np.isnan(w[:, 0]))
+        worst = max(worst, float(np.nanmax(np.abs(g - w))))
+    return worst

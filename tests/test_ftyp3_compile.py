@@ -21,8 +21,10 @@ import jaxlens as jl
 from jaxlens.io import zmx_system
 
 
-def _singlet() -> jl.Lens:
-    """A spherical singlet with its stop on surface 1 (cheap to compile)."""
+def _singlet(aim: str = "real") -> jl.Lens:
+    """A spherical singlet with its stop on surface 1 (cheap to compile); ``aim="real"`` (ray
+    aiming on): the FTYP 3 chief ray is aimed at the stop centre (with it off, "paraxial",
+    it is the ray through the paraxial entrance pupil's centre, not aimed: round 45c)."""
     return jl.Lens(
         surfaces=(jl.Sphere(1 / 40.0, 8.0), jl.Sphere(-1 / 40.0, 8.0)),
         thickness=jnp.array([4.0, 38.0]),
@@ -31,17 +33,23 @@ def _singlet() -> jl.Lens:
         epd=8.0,
         fields=jnp.array([0.0]),
         wavelengths=jnp.array([0.5875618]),
+        aim=aim,
     )
 
 
-def test_the_ftyp3_check_traces_the_solved_ray_without_aiming_it_again(tmp_path):
-    lens = _singlet()
-    jax.config.update("jax_dump_ir_to", str(tmp_path))
+def _solved_with_programs(lens, folder):
+    """The FTYP 3 conversion of heights 0 and 2 mm, and the compiled programs it dumped
+    into ``folder`` (file name -> text)."""
+    jax.config.update("jax_dump_ir_to", str(folder))
     try:
         out = zmx_system.angles_from_real_image_heights(lens, np.array([0.0, 2.0]))
     finally:
         jax.config.update("jax_dump_ir_to", "")
-    modules = {p.name: p.read_text() for p in tmp_path.iterdir()}
+    return out, {p.name: p.read_text() for p in folder.iterdir()}
+
+
+def test_the_ftyp3_check_traces_the_solved_ray_without_aiming_it_again(tmp_path):
+    out, modules = _solved_with_programs(_singlet(), tmp_path)
     check = [t for n, t in modules.items() if "_chief_ray_landing" in n]
     solve = [t for n, t in modules.items() if "_real_height_field" in n]
     assert len(check) == 1 and len(solve) == 1, sorted(modules)
@@ -54,6 +62,18 @@ def test_the_ftyp3_check_traces_the_solved_ray_without_aiming_it_again(tmp_path)
     # The solved field lands where asked (the check itself passed: no ValueError).
     field = np.asarray(out.fields)
     assert field[0] == 0.0 and 0.0 < field[1] < 10.0
+
+
+def test_with_ray_aiming_off_the_ftyp3_solve_aims_nothing(tmp_path):
+    """Ray aiming off: the chief ray is the ray through the paraxial entrance pupil's
+    centre, so neither the solve nor the check holds the stop aiming. The stop is surface 1
+    here: the two chief rays are the same ray, and so is the field."""
+    out, modules = _solved_with_programs(_singlet("paraxial"), tmp_path)
+    solve = [t for n, t in modules.items() if "_real_height_field" in n]
+    assert len(solve) == 1 and "@_stop_chief_ray" not in solve[0]
+    aimed = zmx_system.angles_from_real_image_heights(_singlet("real"), np.array([0.0, 2.0]))
+    np.testing.assert_allclose(np.asarray(out.fields), np.asarray(aimed.fields), rtol=0,
+                               atol=1e-10)
 
 
 def test_an_unreachable_height_is_still_refused():

@@ -410,16 +410,19 @@ SURF 4
 
 def test_real_image_height_solve_is_not_stopped_by_a_clipped_first_guess():
     """A lens in front of its stop has pincushion distortion: the paraxial guess for a 9 mm
-    real height sends the chief ray through surface 1 at 2.75 mm, the answer at 2.647 mm.
-    A 2.7 mm aperture there clips the guess, not the answer: the field is found (the solve
-    sees the geometry only; the answer is then checked through the apertures). At 2.6 mm
-    the answer itself is clipped, and the message says where."""
-    lens = zmx.loads(BEHIND_STOP.format(sd=2.7), "t.zmx")
-    assert float(lens.fields[1]) == pytest.approx(-11.341742282662544, abs=1e-9)
+    real height sends the chief ray (ray aiming off: through the paraxial entrance pupil's
+    centre, as Zemax and optiland take it) through surface 1 at 2.667 mm, the answer at
+    2.583 mm. A 2.62 mm aperture there clips the guess, not the answer: the field is found
+    (the solve sees the geometry only; the answer is then checked through the apertures).
+    At 2.55 mm the answer itself is clipped, and the message says where. The angle,
+    −11.387929696133094°, is the same solve done on optiland 0.6.3's trace (round 45c; the
+    ray aimed at the stop's centre instead gave −11.3417°)."""
+    lens = zmx.loads(BEHIND_STOP.format(sd=2.62), "t.zmx")
+    assert float(lens.fields[1]) == pytest.approx(-11.387929696133094, abs=1e-9)
     with pytest.raises(ValueError, match=r"t\.zmx:3: no real chief ray .* it is clipped at "
-                                         r"surface 1, which it meets 2\.647 mm from the axis, "
-                                         r"outside its semi-diameter 2\.6 mm"):
-        zmx.loads(BEHIND_STOP.format(sd=2.6), "t.zmx")
+                                         r"surface 1, which it meets 2\.583 mm from the axis, "
+                                         r"outside its semi-diameter 2\.55 mm"):
+        zmx.loads(BEHIND_STOP.format(sd=2.55), "t.zmx")
 
 
 @pytest.mark.parametrize("surface", [Toroidal(c=0.02, k=0.0, coeffs=jnp.zeros(1), cx=0.01),

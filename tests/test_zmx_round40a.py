@@ -19,18 +19,17 @@ computes from the catalog's dispersion formula in numpy).
 """
 
 import json
-import math
 import os
 import warnings
 
 import jax
 import numpy as np
 import pytest
+from helpers import image_xy, load_recording
 
 import jaxlens as jl
 from jaxlens.io import zmx
 from jaxlens.optics.catalog import get_material, glass_info
-from jaxlens.optics.lens import unclipped
 
 jax.config.update("jax_enable_x64", True)
 
@@ -44,27 +43,14 @@ FILES = {"rpo_molded_cooke.zmx": os.path.join(DATA, "zmx40a", "rpo_molded_cooke.
 
 
 def _load(path, **kw):
-    with warnings.catch_warnings(record=True) as caught:
-        warnings.simplefilter("always")
-        lens = jl.load(path, **kw)
+    lens, caught = load_recording(path, **kw)
     return lens, [str(w.message) for w in caught if issubclass(w.category, zmx.ZmxWarning)]
 
 
 def _image_xy(lens, ref, wl):
     """jaxlens's image intercepts (x, y) of the reference's rays (NaN where lost)."""
-    r = 0.5 * ref["epd"]
-    launch = REF["launch_mm_before_surface_1"]
-    out = []
-    for f in ref["fields_deg"]:
-        t = math.tan(math.radians(f))
-        d = np.array([0.0, t, 1.0]) / math.sqrt(1 + t * t)
-        o = np.array([[px * r, py * r - launch * t, launch] for px, py in REF["pupil"]])
-        rays = jl.Rays(o, np.tile(d, (len(o), 1)), wl)
-        with jax.disable_jit():  # a few small traces: faster than compiling
-            res = jl.trace(unclipped(lens), rays)
-        xy = np.asarray(res.origin)[:, :2]
-        out.append(np.where(np.asarray(res.valid)[:, None], xy, np.nan))
-    return out
+    return image_xy(lens, ref["fields_deg"], ref["epd"], REF["pupil"],
+                    REF["launch_mm_before_surface_1"], wl)
 
 
 @pytest.mark.parametrize("name", sorted(FILES))

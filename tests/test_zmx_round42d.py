@@ -21,7 +21,6 @@ formula in numpy; the paraxial marginal ray's height at the stop).
 import copy
 import dataclasses
 import json
-import math
 import os
 import warnings
 
@@ -29,13 +28,13 @@ import equinox as eqx
 import jax
 import numpy as np
 import pytest
+from helpers import image_xy, load_recording
 
 import jaxlens as jl
 from jaxlens.analysis import stop_clip
 from jaxlens.analysis.report import report_data
 from jaxlens.imaging import sampling
 from jaxlens.io import lensfile, zmx
-from jaxlens.optics.lens import unclipped
 
 jax.config.update("jax_enable_x64", True)
 
@@ -48,9 +47,7 @@ COOKE = os.path.join(os.path.dirname(HERE), "jaxlens", "data", "lenses", "cooke_
 
 
 def _load(name, **kw):
-    with warnings.catch_warnings(record=True) as caught:
-        warnings.simplefilter("always")
-        lens = jl.load(os.path.join(DATA, "zmx42d", name), **kw)
+    lens, caught = load_recording(os.path.join(DATA, "zmx42d", name), **kw)
     return lens, [str(w.message) for w in caught]
 
 
@@ -61,18 +58,8 @@ def _text(name):
 
 def _image_xy(lens, ref, wl):
     """jaxlens's image intercepts (x, y) of the reference's rays (NaN where lost)."""
-    r = 0.5 * ref["epd"]
-    launch = REF["launch_mm_before_surface_1"]
-    out = []
-    for f in ref["fields_deg"]:
-        t = math.tan(math.radians(f))
-        d = np.array([0.0, t, 1.0]) / math.sqrt(1 + t * t)
-        o = np.array([[px * r, py * r - launch * t, launch] for px, py in REF["pupil"]])
-        with jax.disable_jit():  # a few small traces: faster than compiling
-            res = jl.trace(unclipped(lens), jl.Rays(o, np.tile(d, (len(o), 1)), wl))
-        xy = np.asarray(res.origin)[:, :2]
-        out.append(np.where(np.asarray(res.valid)[:, None], xy, np.nan))
-    return out
+    return image_xy(lens, ref["fields_deg"], ref["epd"], REF["pupil"],
+                    REF["launch_mm_before_surface_1"], wl)
 
 
 @pytest.mark.parametrize("name", FILES)

@@ -98,7 +98,10 @@ What is read and written:
       ``OBNA x 1`` (object cone angle, degrees), both read as EPD = 2·d·tan u with d the
       object-to-entrance-pupil distance; ``FTYP 0`` (angle fields), ``FTYP 1`` (object
       heights of a finite object, converted exactly to the angles whose object points lie
-      there), ``FTYP 3`` (real image heights) and ``FTYP 2`` (paraxial image heights,
+      there), ``FTYP 3`` (real image heights: the field whose real chief ray lands there,
+      the chief ray as the file's ray aiming traces it, through the paraxial entrance
+      pupil's centre with ``RAIM`` off, aimed at the stop's centre with it on) and
+      ``FTYP 2`` (paraxial image heights,
       converted exactly to angles: θ = atan(h/K), K the paraxial image height per unit
       tan θ) with ``XFLN``/``YFLN`` (fields FTYP counts but
       ``YFLN`` omits are on axis, with a warning; older files' ``XFLD``/``YFLD``, one value a
