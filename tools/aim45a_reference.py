@@ -34,11 +34,13 @@ For each field:
   surface: their count, their centroid (x, y) and RMS radius about it;
 - ``rays``: for the pupil points ``POINTS`` (chief, the four marginal rays, a skew one) the
   (x, y) on surface 1, on the stop and on the image surface, and the object-space direction
-  cosines (L, M, N);
+  cosines (L, M, N), and on the image surface its global z and the ray's direction cosines
+  there (after the last surface);
 - ``otf``: the |OTF| (tangential along y, sagittal along x; no pixel grid, no diffraction)
   of the rays of jaxlens's geometric-PSF grid (64² cell centres times the overfill 1.25, cut
-  to the unit disc), ``acc40c_reference.ray_otf``; for an aimed lens the grid's points are
-  aimed one by one as the spot's are.
+  to the unit disc), ``acc40c_reference.ray_otf`` (each ray weighed cos⁴ of its launch
+  direction for a finite object, as jaxlens's point source); the grid's points are aimed
+  one by one as the spot's are.
 """
 
 from __future__ import annotations
@@ -82,7 +84,18 @@ CASES = {
     "triplet_real_marginal": dict(file="tests/data/ri43c/triplet_stopwide.zmx",
                                   aim="real_marginal", fields=[0.0, 14.0, 20.0],
                                   freqs=[10.0, 20.0, 40.0, 80.0]),
+    # The triplet's object 400 mm before surface 1: its stop sized by the real ray from the
+    # axial object point (not parallel to the axis); written to tests/data/aim45a/.
+    "triplet_finite_real_marginal": dict(file="tests/data/aim45a/triplet_finite.zmx",
+                                         aim="real_marginal", fields=[0.0, 10.0, 14.0],
+                                         freqs=[10.0, 20.0, 40.0, 80.0]),
+    # The triplet whose stop (3.4 mm, CLAP) is narrower than the aimed beam: it clips every
+    # field's beam (the files' apertures kept).
+    "triplet_stopsmall_real": dict(file="tests/data/ri43c/triplet_stopsmall.zmx", aim="real",
+                                   fields=[0.0, 14.0, 20.0], freqs=[10.0, 20.0, 40.0, 80.0],
+                                   apertures=True),
 }
+FINITE_MM = 400.0
 POINTS = ((0.0, 0.0), (0.0, 1.0), (0.0, -1.0), (1.0, 0.0), (-1.0, 0.0), (0.6, -0.5))
 SPOT_SIDE = 21
 
@@ -108,9 +121,21 @@ def trace(op, hy, px, py, wl):
     return op.surface_group
 
 
+def write_finite() -> None:
+    """tests/data/ri43c/triplet_stopwide.zmx with its object ``FINITE_MM`` before surface 1."""
+    text = (ROOT / "tests" / "data" / "ri43c" / "triplet_stopwide.zmx").read_text()
+    head, sep, rest = text.partition("SURF 0")
+    rest = rest.replace("DISZ INFINITY", f"DISZ {FINITE_MM}", 1)
+    head = head.replace("NOTE 0 Written by tools/ri43c_reference.py (relative illumination, "
+                        "round 43c)", "NOTE 0 tools/aim45a_reference.py: ri43c's "
+                        f"triplet_stopwide, object at {FINITE_MM} mm")
+    (OUT / "triplet_finite.zmx").write_text(head + sep + rest)
+
+
 def main() -> None:
     warnings.filterwarnings("ignore")
     OUT.mkdir(parents=True, exist_ok=True)
+    write_finite()
     out = {"source": "optiland 0.6.3 (tools/aim45a_reference.py)",
            "optiland": version("optiland"), "points": POINTS, "spot_side": SPOT_SIDE,
            "mtf_cells": acc.MTF_CELLS, "mtf_overfill": acc.MTF_OVERFILL, "cases": {}}
@@ -153,9 +178,12 @@ def main() -> None:
                     for key, i in (("surface1", 1), ("stop", stop), ("image", -1))}
             rays["direction"] = np.stack([np.asarray(launch.L), np.asarray(launch.M),
                                           np.asarray(launch.N)], -1).tolist()
+            rays["image_direction"] = np.stack([np.asarray(sg.L[-1]), np.asarray(sg.M[-1]),
+                                                np.asarray(sg.N[-1])], -1).tolist()
+            rays["image_z"] = np.asarray(sg.z[-1]).tolist()
             rays["alive"] = (np.asarray(sg.intensity[-1]) > 0).tolist()
             otf = acc.ray_otf(op, (0.0, hy), (0.0, fdeg), wl, spec["freqs"], stop, math.inf,
-                              False)
+                              not op.object_surface.is_infinite)
             res["fields"].append({"field_deg": fdeg, "hy": hy,
                                   "spot": {"rays": int(alive.sum()), "centroid": cen.tolist(),
                                            "rms": rms},
