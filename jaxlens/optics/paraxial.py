@@ -368,8 +368,33 @@ def paraxial_chief_ray(lens: Lens, field_deg, wavelength=None):
     field_deg = checks.field_angles(field_deg, "paraxial_chief_ray", "field_deg")
     n = signed_indices(lens, wl)
     zep = entrance_pupil_z(lens, wl)
-    u = jnp.tan(jnp.deg2rad(jnp.asarray(field_deg)))
-    return _trace_ray(lens, -zep * u, n[0] * u, n, wl)
+    u = _pupil_reachable(zep, jnp.tan(jnp.deg2rad(jnp.asarray(field_deg))), "paraxial_chief_ray")
+    # The chief ray crosses the axis at the entrance pupil: height −z_ep·u at surface 1
+    # (z = 0). Where the pupil lies at infinity only the axis (u = 0) has one, the axis
+    # itself: −z_ep·u was inf·0 = NaN there.
+    y0 = -jnp.where(jnp.isfinite(zep), zep, 0.0) * u
+    return _trace_ray(lens, y0, n[0] * u, n, wl)
+
+
+PUPIL_AT_INFINITY = (
+    "the lens's entrance pupil lies at infinity (its stop in the focal plane of the surfaces "
+    "before it), so no paraxial chief ray of a nonzero field angle reaches the stop's "
+    "centre: every ray of the field's beam crosses the stop at one point off the axis, "
+    "and only the axis (field 0) has a chief ray. For an object-space telecentric lens give "
+    "object heights (Lens(object_na=...)), or move the stop")
+
+
+def _pupil_reachable(zep, u, where: str):
+    """``u`` (tanθ of field angles), refused where it is nonzero and the entrance pupil lies
+    at infinity (``PUPIL_AT_INFINITY``): a ValueError for concrete values, an error_if where
+    traced."""
+    bad = ~jnp.isfinite(zep) & (u != 0)
+    if not checks.is_traced((zep, u)):
+        if np.any(np.asarray(bad)):
+            raise ValueError(f"{where}: {PUPIL_AT_INFINITY} (got tanθ = "
+                             f"{checks.fmt(np.asarray(u))})")
+        return u
+    return eqx.error_if(u, jnp.any(bad), f"{where}: {PUPIL_AT_INFINITY}")
 
 
 def efl(lens: Lens, wavelength=None) -> Array:
