@@ -9,10 +9,12 @@ imported):
 writes tests/data/aim45a/aim45a_optiland.json.
 
 Ray aiming. optiland's robust aiming (``set_aiming("robust")``: its iterative Newton aim,
-seeded from the chief ray; the plain "iterative" one fails on Laikin's 50° field) moves each ray's launch point (an object at infinity: the beam's
-direction is the field's) until the ray crosses the stop at (Px, Py)·r_stop, the stop's
-centre for (0, 0). optiland sizes r_stop with the real on-axis ray through the paraxial
-entrance pupil's rim (``RealReferenceStrategy``): Zemax's "Real" aiming, jaxlens's
+seeded from the chief ray; the plain "iterative" one fails on Laikin's 50° field) moves
+each ray's launch point (an object at infinity: the beam's direction is the field's; a
+finite object: the ray's direction from the object point) until the ray crosses the stop
+at (Px, Py)·r_stop, the stop's centre for (0, 0). optiland sizes r_stop with the real
+on-axis ray through the paraxial entrance pupil's rim (``RealReferenceStrategy``; from the
+axial object point for a finite object): Zemax's "Real" aiming, jaxlens's
 ``aim="real_marginal"``. jaxlens's ``aim="real"`` (Zemax's "Paraxial" aiming) takes the
 paraxial marginal ray's height at the stop instead; for those cases this tool makes
 optiland's aimer use its own ``ParaxialReferenceStrategy`` (the paraxial marginal ray's
@@ -21,7 +23,9 @@ height at the stop, the same number), the one change made to optiland here.
 Conventions shared with jaxlens (so no conversion is needed): normalised pupil coordinates
 (Px, Py) on the unit disc are fractions of r_stop on the stop; fields are angles θy (deg) of
 the beam's direction (0, sin θ, cos θ) for an object at infinity (optiland's Hy is θ over its
-largest field: Hy = θ/θmax). Laikin's file is in inches: optiland keeps them, jaxlens converts
+largest field: Hy = θ/θmax), and for a finite object the object point −tan θ·(z_EP − z_object)
+on the object plane (optiland's ``AngleField``, jaxlens's ``sampling.object_point``: the
+paraxial chief ray makes the angle θ at the entrance pupil). Laikin's file is in inches: optiland keeps them, jaxlens converts
 to mm (the test multiplies by 25.4). Every lens is traced at its primary wavelength, its
 vignetting factors set to zero (jaxlens's ``vignetting=None``), and, unless the case keeps
 them, with every aperture removed (jaxlens's ``optics.lens.unclipped``): the beam is then
