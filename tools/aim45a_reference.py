@@ -22,14 +22,15 @@ height at the stop, the same number), the one change made to optiland here.
 
 Conventions shared with jaxlens (so no conversion is needed): normalised pupil coordinates
 (Px, Py) on the unit disc are fractions of r_stop on the stop; fields are angles θy (deg) of
-the beam's direction (0, sin θ, cos θ) for an object at infinity (optiland's Hy is θ over its
-largest field: Hy = θ/θmax), and for a finite object the object point −tan θ·(z_EP − z_object)
-on the object plane (optiland's ``AngleField``, jaxlens's ``sampling.object_point``: the
-paraxial chief ray makes the angle θ at the entrance pupil). Laikin's file is in inches:
-optiland keeps them, jaxlens converts to mm (the test multiplies by 25.4). Every lens is traced at its primary wavelength, its
-vignetting factors set to zero (jaxlens's ``vignetting=None``), and, unless the case keeps
-them, with every aperture removed (jaxlens's ``optics.lens.unclipped``): the beam is then
-bounded by the aim alone, the unit disc of pupil points (``radiometry.in_pupil``).
+the beam's direction (0, sin θ, cos θ) for an object at infinity (optiland's Hy is θ over
+its largest field: Hy = θ/θmax), and for a finite object the object point −tan θ·(z_EP −
+z_object) on the object plane (optiland's ``AngleField``, jaxlens's
+``sampling.object_point``: the paraxial chief ray makes the angle θ at the entrance pupil).
+Laikin's file is in inches: optiland keeps them, jaxlens converts to mm (the test multiplies
+by 25.4). Every lens is traced at its primary wavelength, its vignetting factors set to zero
+(jaxlens's ``vignetting=None``), and, unless the case keeps them, with every aperture
+removed (jaxlens's ``optics.lens.unclipped``): the beam is then bounded by the aim alone,
+the unit disc of pupil points (``radiometry.in_pupil``).
 
 For each field:
 
