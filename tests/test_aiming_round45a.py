@@ -60,7 +60,8 @@ def _lens(name):
     with warnings.catch_warnings():
         warnings.simplefilter("ignore")
         lens = jl.load(str(ROOT / r["file"]))
-    lens = dataclasses.replace(lens, aim=r["aim"], vignetting=None)
+    aim = lens.aim if r["aim"] == "file" else r["aim"]  # "file": as the reader sets it
+    lens = dataclasses.replace(lens, aim=aim, vignetting=None)
     return lens if r["apertures"] else unclipped(lens)
 
 
@@ -84,19 +85,24 @@ def test_aimed_spot_and_mtf_are_optilands(name):
     wl = r["primary_um"]
     depth = sampling.lens_depth(lens, None, "test")
     fields = np.array([f["field_deg"] for f in r["fields"]])
-    aim_size = sampling.AIM_STOP_SIZE[r["aim"]]
+    aim_size = sampling.AIM_STOP_SIZE[lens.aim]
     r_stop = sampling.stop_radius(lens, aim_size, object_z=None if depth is None else -depth)
     assert abs(float(r_stop) - r["stop_radius"] * u) <= 1e-9
     spot = jl.analysis.rms_spot(lens, fields=jnp.asarray(fields), wavelengths=jnp.array([wl]))
     for i, f in enumerate(r["fields"]):
         at = f"{name} {f['field_deg']}°"
         ref = f["spot"]
+        if r["rim_on_stop_edge"]:  # the spot grid's rim rays pass the stop's edge or not
+            continue  # by rounding (the FLOA case); its |OTF| grid has no rim point
+
         np.testing.assert_allclose(float(spot.per_wavelength[i, 0]), ref["rms"] * u, rtol=1e-9,
                                    atol=1e-12, err_msg=at)
         np.testing.assert_allclose(np.asarray(spot.centroid[i, 0]),
                                    np.asarray(ref["centroid"]) * u, rtol=0, atol=1e-9,
                                    err_msg=at)
         assert round(float(spot.valid_fraction[i, 0]) * 317) == ref["rays"], at
+    for f in r["fields"]:
+        at = f"{name} {f['field_deg']}°"
         _, t, s = mtf(lens, f["field_deg"], wavelengths=[wl], model=MODEL, diffraction=False,
                       frequencies=np.asarray(r["freqs"]) / u)
         np.testing.assert_allclose(np.asarray(t), f["otf"]["tangential"], rtol=0, atol=1e-8,
@@ -117,8 +123,10 @@ def test_aimed_chief_and_marginal_rays_are_optilands(name, i):
     at = f"{name} {f['field_deg']}°"
     rays = sampling.field_rays(lens, f["field_deg"], jnp.asarray(REF["points"]),
                                r["primary_um"], depth=depth)
-    path = trace_path(lens, rays)
     alive = np.asarray(f["rays"]["alive"])
+    if r["rim_on_stop_edge"]:  # the marginal rays land on the stop's edge: traced through
+        lens, alive = unclipped(lens), np.ones_like(alive)
+    path = trace_path(lens, rays)
     np.testing.assert_array_equal(np.asarray(path[-1].valid), alive, err_msg=at)
     np.testing.assert_allclose(np.asarray(rays.direction), f["rays"]["direction"], rtol=0,
                                atol=1e-12, err_msg=at)
@@ -126,6 +134,25 @@ def test_aimed_chief_and_marginal_rays_are_optilands(name, i):
         got = np.asarray(path[k].origin[:, :2])[alive]
         np.testing.assert_allclose(got, np.asarray(f["rays"][key])[alive] * u, rtol=0,
                                    atol=1e-9, err_msg=f"{at} {key}")
+
+
+def test_float_by_stop_file_fills_its_stop():
+    """A FLOA file's aperture is its stop's semi-diameter: with RAIM's type 2 (Zemax's "Real")
+    it is read as aim "real", which fills that stop (4 mm), as OpticStudio and optiland aim;
+    read as "real_marginal" (before), the real marginal ray sized the stop at 4.06 mm, the
+    stop clipped the aimed beam at pupil radius 0.985 and its |OTF| left optiland's by up to
+    0.019 (0.0025 on axis).
+    A file with another aperture keeps RAIM 2's "real_marginal"."""
+    lens = _lens("triplet_floa_raim2")
+    assert lens.aim == "real"
+    r = REF["cases"]["triplet_floa_raim2"]
+    assert r["stop_radius"] == pytest.approx(4.0, abs=1e-12)
+    assert float(sampling.stop_radius(lens, "paraxial")) == pytest.approx(4.0, abs=1e-9)
+    real = float(sampling.stop_radius(lens, "real"))
+    assert real - 4.0 > 0.05  # the real marginal ray's stop: another beam
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")
+        assert jl.load(str(ROOT / REF["cases"]["dgauss_real"]["file"])).aim == "real_marginal"
 
 
 def test_reference_cases_tell_the_stop_sizes_apart():

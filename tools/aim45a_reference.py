@@ -99,8 +99,16 @@ CASES = {
     "triplet_stopsmall_real": dict(file="tests/data/ri43c/triplet_stopsmall.zmx", aim="real",
                                    fields=[0.0, 14.0, 20.0], freqs=[10.0, 20.0, 40.0, 80.0],
                                    apertures=True),
+    # The triplet with its aperture given by the stop's size (FLOA, stop CLAP 4 mm, the other
+    # surfaces' apertures removed) and Zemax's "Real" aiming (RAIM 0 2): optiland's
+    # FloatByStopStrategy fills the stop's 4 mm whatever its aiming mode; jaxlens aims as
+    # the file says (aim "file": as read). Written to tests/data/aim45a/.
+    "triplet_floa_raim2": dict(file="tests/data/aim45a/triplet_floa_raim2.zmx", aim="file",
+                               fields=[0.0, 14.0, 20.0], freqs=[10.0, 20.0, 40.0, 80.0],
+                               apertures=True),
 }
 FINITE_MM = 400.0
+FLOA_STOP = 4.0
 POINTS = ((0.0, 0.0), (0.0, 1.0), (0.0, -1.0), (1.0, 0.0), (-1.0, 0.0), (0.6, -0.5))
 SPOT_SIDE = 21
 
@@ -137,10 +145,36 @@ def write_finite() -> None:
     (OUT / "triplet_finite.zmx").write_text(head + sep + rest)
 
 
+def write_floa() -> None:
+    """tests/data/ri43c/triplet_stopwide.zmx with FLOA, RAIM 0 2 and a stop CLAP of
+    ``FLOA_STOP`` (its other CLAPs removed)."""
+    lines = (ROOT / "tests" / "data" / "ri43c" / "triplet_stopwide.zmx").read_text().splitlines()
+    out, in_stop = [], False
+    for ln in lines:
+        key = ln.split()[0] if ln.split() else ""
+        if key == "ENPD":
+            out += ["FLOA", "RAIM 0 2 1 1 0 0 0 0 0"]
+            continue
+        if key == "NOTE":
+            ln = "NOTE 0 tools/aim45a_reference.py: ri43c's triplet_stopwide, FLOA, RAIM 2"
+        if key == "SURF":
+            in_stop = False
+        if key == "STOP":
+            in_stop = True
+        if key in ("CLAP", "DIAM") and in_stop:
+            ln = (f"  CLAP 0 {FLOA_STOP} 0" if key == "CLAP"
+                  else f'  DIAM {FLOA_STOP} 1 0 0 1 ""')
+        elif key == "CLAP":
+            continue
+        out.append(ln)
+    (OUT / "triplet_floa_raim2.zmx").write_text("\n".join(out) + "\n")
+
+
 def main() -> None:
     warnings.filterwarnings("ignore")
     OUT.mkdir(parents=True, exist_ok=True)
     write_finite()
+    write_floa()
     out = {"source": "optiland 0.6.3 (tools/aim45a_reference.py)",
            "optiland": version("optiland"), "points": POINTS, "spot_side": SPOT_SIDE,
            "mtf_cells": acc.MTF_CELLS, "mtf_overfill": acc.MTF_OVERFILL, "cases": {}}
@@ -164,7 +198,10 @@ def main() -> None:
         stop = int(op.surface_group.stop_index)
         r_stop = initialization.get_stop_radius_strategy(op, "robust").calculate_stop_radius()
         hmax = float(op.fields.max_field)
+        # Under FLOA the aimed rim lands on the stop's edge (4 mm): which rim rays pass it is
+        # rounding, so the spot grid's rim points are not compared there.
         res = {"file": spec["file"], "aim": spec["aim"], "apertures": bool(spec.get("apertures")),
+               "rim_on_stop_edge": spec["aim"] == "file",
                "primary_um": wl, "stop_surface": stop, "stop_radius": float(r_stop),
                "freqs": spec["freqs"], "fields": []}
         for fdeg in spec["fields"]:
