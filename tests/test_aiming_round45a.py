@@ -289,3 +289,20 @@ def test_chief_ray_near_pupil_at_infinity_is_finite_and_linear():
     assert np.all(np.isfinite(np.asarray(y))) and np.all(np.isfinite(np.asarray(nu)))
     # the chief ray crosses the stop at its centre
     assert abs(float(y[lens.stop])) <= 1e-9 * abs(float(y[0]))
+
+
+def test_rays_through_a_pupil_at_infinity_are_refused_by_name():
+    """The samplers launch rays on the entrance pupil's plane: at infinity that was an
+    origin of inf, refused by ``Rays`` without saying why (field 0 included); now each
+    sampler names the pupil at infinity. The paraxial data stay available."""
+    lens = _pupil_at_infinity()
+    for where, call in (
+            ("collimated", lambda: sampling.field_rays(lens, 0.0, jnp.zeros((1, 2)))),
+            ("object_point", lambda: sampling.field_rays(lens, 0.0, jnp.zeros((1, 2)),
+                                                         depth=500.0)),
+            ("point_source", lambda: sampling.point_source(lens, jnp.array([0.0, 0.0, -500.0]),
+                                                           jnp.zeros((1, 2))))):
+        with pytest.raises(ValueError, match=f"{where}: the lens's entrance pupil lies at "
+                                             f"infinity"):
+            call()
+    assert not np.isfinite(float(jl.paraxial_data(lens).entrance_pupil_z))

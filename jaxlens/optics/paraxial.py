@@ -384,6 +384,27 @@ PUPIL_AT_INFINITY = (
     "object heights (Lens(object_na=...)), or move the stop")
 
 
+def check_pupil_plane(zep, where: str) -> None:
+    """Refuse a concrete entrance-pupil position ``zep`` (global mm) that is not finite: the
+    stop in the focal plane of the surfaces before it puts the pupil at infinity, where no
+    ray can be launched through (Px, Py)·EPD/2 on its plane (the rays' origins were inf,
+    refused by ``Rays`` without naming why). Traced, nothing is checked."""
+    if not checks.is_traced(zep) and not np.all(np.isfinite(np.asarray(zep))):
+        raise ValueError(
+            f"{where}: the lens's entrance pupil lies at infinity (its stop in the focal plane "
+            f"of the surfaces before it, z_EP = {checks.fmt(np.asarray(zep))}), so the "
+            f"EPD's disc on its plane launches no ray; for an object-space telecentric lens "
+            f"give object heights and its NA (Lens(object_na=...)), or move the stop")
+
+
+def entrance_pupil_plane(lens: Lens, where: str) -> Array:
+    """``entrance_pupil_z`` at the primary wavelength, the plane the samplers launch rays on,
+    refused (``check_pupil_plane``, naming ``where``) where it lies at infinity."""
+    zep = entrance_pupil_z(lens, lens.primary_wavelength)
+    check_pupil_plane(zep, where)
+    return zep
+
+
 def _pupil_reachable(zep, u, where: str):
     """``u`` (tanθ of field angles), refused where it is nonzero and the entrance pupil lies
     at infinity (``PUPIL_AT_INFINITY``): a ValueError for concrete values, an error_if where
