@@ -16,12 +16,13 @@ grid (``sampling.pupil_grid(21)``, 317 rays) and the geometric PSF's grid (64² 
 times the overfill 1.25 cut to the unit disc, 2056 rays; the model is given explicitly, so a
 change of the default grid does not move the comparison). Two tracers of the same rays agree
 to rounding and to their aiming's convergence: optiland aims to 1e-13 (lens units) at the
-stop, jaxlens to 1e-12 of the stop radius (``sampling.AIM_CONVERGED``); measured, the image
-points agree to 8e-13 mm, spots to 5e-15 mm, the |OTF| to 4e-12. The tests allow 1e-9 mm for
-intercepts and spot radii and centroids (relative 1e-9 for the radii), and 1e-8 for the
-|OTF|: three orders above the measured agreement, many below any effect of a different
-beam (a stop sized for infinity instead of the 400 mm object moves the aimed rim ray by
-6e-3 mm at the stop; a pupil point dropped of 2056 moves the |OTF| by ~1e-4).
+stop, jaxlens to 1e-12 of the stop radius (``sampling.AIM_CONVERGED``); measured, the
+intercepts agree to 8e-13 mm (at the stop; 1e-13 mm on the image surface), the spots' radii
+and centroids to 5e-15 mm, the |OTF| to 4e-12. The tests allow 1e-9 mm for intercepts and
+spot centroids (relative 1e-9 for the radii), and 1e-8 for the |OTF|: three orders above the
+measured agreement, many below any effect of a different beam (a stop sized for infinity
+instead of the 400 mm object moves the aimed rim ray by 6e-3 mm at the stop; each of the
+2056 rays weighs 4.9e-4 in the |OTF|).
 """
 
 from __future__ import annotations
