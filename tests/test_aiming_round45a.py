@@ -8,8 +8,10 @@ the real on-axis marginal ray's height there (``aim="real_marginal"``, optiland'
 gives optiland its own ``ParaxialReferenceStrategy``, Zemax's "Paraxial"); a field is the
 angle θy of the beam's direction (0, sin θ, cos θ), at a finite object the object point
 −tan θ·(z_EP − z_object) (optiland's ``AngleField`` and ``sampling.object_point``). The
-lenses are traced without their vignetting factors and, but for two cases, without their
-apertures (``optics.lens.unclipped``).
+lenses are traced without their vignetting factors (optiland's iterative aimer sets its
+stop targets at (Px, Py)·r_stop whatever the factors, which move only its paraxial seed;
+jaxlens maps the pupil points by them first, as OpticStudio: ``sampling.field_rays``) and,
+but for three cases, without their apertures (``optics.lens.unclipped``).
 
 Tolerances. Both trace the same pupil points (no Monte-Carlo sampling anywhere here): the spot
 grid (``sampling.pupil_grid(21)``, 317 rays) and the geometric PSF's grid (64² cell centres
