@@ -252,7 +252,8 @@ OPTILAND_ONLY = {"tools/make_refcase.py", "tools/conventions_reference.py",
                  "tools/fuzz42c_reference.py", "tools/tele42a_reference.py",
                  "tools/tele43a_reference.py", "tools/zmx43d_reference.py",
                  "tools/ri43c_reference.py", "tools/stress43e_reference.py",
-                 "tools/aper44a_reference.py", "tools/zmx45c_reference.py"}
+                 "tools/aper44a_reference.py", "tools/zmx45c_reference.py",
+                 "tools/aim45a_reference.py"}
 
 
 @pytest.mark.parametrize("path", sorted(

@@ -59,7 +59,10 @@ System aperture:
     clips nothing). In normalised pupil coordinates the three are one rule, the unit disc
     (``in_pupil``), by which ``psf``, ``mtf``, ``psf_points`` and ``render``'s PSFs bound
     their overfilled grids (round 44a; before it a stop without a semi-diameter was given
-    the paraxial marginal ray's radius and clipped them, ``aiming.apertured``).
+    the paraxial marginal ray's radius and clipped them, ``aiming.apertured``). ``render``'s
+    backward rays and its footprints (``render.footprints``) are bounded by the same beam,
+    for the object distance rendered: a ``"real_marginal"`` aim's stop radius depends on it
+    (before round 45a the footprints took the radius for an object at infinity).
 
 Against a render:
     A white render's pixel is the irradiance at a point: L·Σ 1/|det ∂x/∂X| over the pupil

@@ -239,12 +239,22 @@ def footprints(
     grid: int = 9,
     dtype=None,
     newton_iters: int = DEFAULT_NEWTON_ITERS,
+    depth=None,
 ) -> Footprints:
     """The sampling footprints that ``render(method=RayRender())`` computes for a lens and sensor.
 
     Pass them to ``render(..., footprints=...)`` to reuse them (for example across the steps
     of an optimisation where the lens changes little), or to hold them fixed while
     differentiating. They carry no gradient.
+
+    The footprint is the beam that the render traces: the directions from a sensor point
+    whose backward rays pass the lens's apertures and the system aperture
+    (``radiometry.in_pupil``'s rule: under paraxial aiming the EPD's disc on the paraxial
+    entrance pupil's plane, ``radiometry.in_entrance_pupil``; under ray aiming the stop
+    bounded at the radius the aim fills, ``radiometry.beam_bounded``, which for
+    ``aim="real_marginal"`` depends on the object distance). Before round 45a the stop was
+    sized for an object at infinity whatever the object: the footprints of a lens aimed at
+    a finite object missed part of the beam that ``render`` traces (or spent rays beyond it).
 
     Args:
         lens: the lens.
@@ -253,6 +263,9 @@ def footprints(
         grid: points per side (made odd, so that the sensor centre is one).
         dtype: float dtype (default the default float dtype).
         newton_iters: Newton iterations for aspheric surfaces.
+        depth: the object distance of the render (mm before surface 1, ``inf`` for
+            infinity; None, the default: the lens's own object, as ``render``'s). Footprints
+            made for one depth are those of that depth's beam only.
     """
     sensor = lens.sensor if sensor is None else sensor
     if sensor is None:
@@ -273,7 +286,8 @@ def footprints(
     g = int(grid) + 1 - int(grid) % 2
     pts = sensor_grid(sensor.resolution, jnp.asarray(sensor.pixel_size), (g, g)).astype(dtype)
     wls = jnp.atleast_1d(jnp.asarray(wavelengths, dtype))
-    cen, rad, margin, e0 = _footprints(beam_bounded(lens).astype(dtype), wls, pts,
+    depth = sampling.lens_depth(lens, depth, "footprints")
+    cen, rad, margin, e0 = _footprints(beam_bounded(lens, depth).astype(dtype), wls, pts,
                                        newton_iters=newton_iters)
     return Footprints(cen, rad, margin, e0)
 
@@ -683,6 +697,7 @@ def render(
     _check_working_memory(lens, method, int(spp), int(patch),
                           _tile_shape(sensor.resolution, int(patch)), scene.shape[-1],
                           scene.dtype.itemsize)
+    given_depth = depth  # the footprints' (their beam is the render's)
     depth = sampling.lens_depth(lens, depth, "render")
     telecentric.object_plane(lens, depth, "render")  # its scene: object heights (mm)
     if lens.telecentric_object:
@@ -702,8 +717,7 @@ def render(
         if footprints is None:
             footprints = _compute_footprints(
                 lens, sensor=sensor, wavelengths=wls, grid=method.footprint_grid,
-                dtype=scene.dtype,
-                newton_iters=common["newton_iters"])
+                dtype=scene.dtype, newton_iters=common["newton_iters"], depth=given_depth)
         elif footprints.e0.shape != wls.shape:
             raise ValueError(
                 f"render: footprints for {footprints.e0.shape[0]} wavelengths, the scene has "

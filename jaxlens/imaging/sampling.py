@@ -273,7 +273,7 @@ def _collimated(lens: Lens, field, pupil, wavelength=None, *, aim=None) -> Rays:
     wl = _checked_wavelength(lens, wavelength, "collimated")
     pupil = pupil_points(pupil, "collimated")
     d = _direction(field)
-    zep = paraxial.entrance_pupil_z(lens, lens.primary_wavelength)
+    zep = paraxial.entrance_pupil_plane(lens, "collimated")
     h = 0.5 * lens.epd
     xy = pupil * h
     origin = jnp.concatenate([xy, jnp.broadcast_to(zep, xy.shape[:-1])[..., None]], -1)
@@ -316,7 +316,7 @@ def point_source(
     point = jnp.asarray(point)
     if point.shape[-1:] != (3,):
         raise ValueError(f"point_source: point must be (x, y, z) in mm, got shape {point.shape}")
-    zep = paraxial.entrance_pupil_z(lens, lens.primary_wavelength)
+    zep = paraxial.entrance_pupil_plane(lens, "point_source")
     if concrete:
         checks.values(given, "point", "point_source", unit="mm")
         # A real point behind the entrance pupil would launch its rays backwards, and a point
@@ -398,7 +398,7 @@ def object_point(lens: Lens, field, depth) -> Array:
     depth = check_object_distance(depth, "depth", "object_point")
     depth = jnp.asarray(depth)
     z = -depth
-    zep = paraxial.entrance_pupil_z(lens, lens.primary_wavelength)
+    zep = paraxial.entrance_pupil_plane(lens, "object_point")
     xy = jnp.tan(th) * (zep - z)
     return jnp.concatenate([-xy, z[..., None] * jnp.ones_like(xy[..., :1])], -1)
 

@@ -112,7 +112,10 @@ What is read and written:
       (older Zemax) is ignored; alone it is refused. ``RAIM``'s ray-aiming type is
       ``Lens.aim``: 0 (off) ``"paraxial"``, 1 (Zemax's "Paraxial": rays aimed at the stop,
       sized paraxially) ``"real"``, 2 (Zemax's "Real": the stop sized by the real
-      on-axis marginal ray) ``"real_marginal"``; each is written back as its type. ``WAVM`` (or the
+      on-axis marginal ray) ``"real_marginal"``; each is written back as its type. Under
+      ``FLOA`` both aimed types fill the stop's semi-diameter (it is the aperture, given, as
+      OpticStudio and optiland aim there), so 2 is read as ``"real"`` too
+      (``zmx_system.float_by_stop_aim``). ``WAVM`` (or the
       older ``WAVL``) and ``PWAV``, ``UNIT``, ``NAME``. ``ENVD``: indices adjusted to an
       environment other than 20 °C and 1 atm are refused; not adjusted, a warning. A finite
       object must be a plane normal to the axis (a curved or tilted one is refused).

@@ -582,6 +582,8 @@ def _lens(f: ZmxFile, text: str, path: str, strict: bool, unknown_glass: str) ->
     wl, primary, wl_lines = _wavelengths(f)
     _check_image_medium(f, body)
     aim = zmx_system.ray_aiming(f.raim)
+    if f.aperture is not None and f.aperture[0] == "float":  # the stop's size is the aperture
+        aim = zmx_system.float_by_stop_aim(aim)
     field_type = zmx_system.field_type(f.ftyp)
     telecentric = zmx_system.object_telecentric(f.ftyp)
     if telecentric:

@@ -583,3 +583,17 @@ def ray_aiming(ln) -> str:
         raise ln.error(f"ray aiming type {kind} (RAIM's second value) is not one of 0 (off), "
                        f"1 (paraxial) or 2 (real)")
     return RAIM_AIM[kind]
+
+
+def float_by_stop_aim(aim: str) -> str:
+    """``Lens.aim`` of a file whose aperture is the stop's size (FLOA): the rays fill the
+    stop's semi-diameter whatever RAIM's type, as OpticStudio aims them (the stop's size is
+    given, not found from a marginal ray; optiland 0.6.3's ``FloatByStopStrategy`` does the
+    same for every aiming mode). The reader sets the EPD whose paraxial marginal ray fills
+    that stop, so ``"real"`` (the stop sized by the paraxial marginal ray) is that aim; the
+    real marginal ray of Zemax's "Real" aiming (``"real_marginal"``) lands elsewhere (4.06
+    mm against the 4 mm stop of tests/data/aim45a/triplet_floa_raim2.zmx: the stop clipped
+    the aimed beam at pupil radius 0.985 and the geometric |OTF| left optiland's by up to
+    0.019; where the real ray lands inside the paraxial one, the beam was narrower than the
+    stop). Other aims are returned as they are."""
+    return "real" if aim == "real_marginal" else aim

@@ -368,8 +368,54 @@ def paraxial_chief_ray(lens: Lens, field_deg, wavelength=None):
     field_deg = checks.field_angles(field_deg, "paraxial_chief_ray", "field_deg")
     n = signed_indices(lens, wl)
     zep = entrance_pupil_z(lens, wl)
-    u = jnp.tan(jnp.deg2rad(jnp.asarray(field_deg)))
-    return _trace_ray(lens, -zep * u, n[0] * u, n, wl)
+    u = _pupil_reachable(zep, jnp.tan(jnp.deg2rad(jnp.asarray(field_deg))), "paraxial_chief_ray")
+    # The chief ray crosses the axis at the entrance pupil: height −z_ep·u at surface 1
+    # (z = 0). Where the pupil lies at infinity only the axis (u = 0) has one, the axis
+    # itself: −z_ep·u was inf·0 = NaN there.
+    y0 = -jnp.where(jnp.isfinite(zep), zep, 0.0) * u
+    return _trace_ray(lens, y0, n[0] * u, n, wl)
+
+
+PUPIL_AT_INFINITY = (
+    "the lens's entrance pupil lies at infinity (its stop in the focal plane of the surfaces "
+    "before it), so no paraxial chief ray of a nonzero field angle reaches the stop's "
+    "centre: every ray of the field's beam crosses the stop at one point off the axis, "
+    "and only the axis (field 0) has a chief ray. For an object-space telecentric lens give "
+    "object heights (Lens(object_na=...)), or move the stop")
+
+
+def check_pupil_plane(zep, where: str) -> None:
+    """Refuse a concrete entrance-pupil position ``zep`` (global mm) that is not finite: the
+    stop in the focal plane of the surfaces before it puts the pupil at infinity, where no
+    ray can be launched through (Px, Py)·EPD/2 on its plane (the rays' origins were inf,
+    refused by ``Rays`` without naming why). Traced, nothing is checked."""
+    if not checks.is_traced(zep) and not np.all(np.isfinite(np.asarray(zep))):
+        raise ValueError(
+            f"{where}: the lens's entrance pupil lies at infinity (its stop in the focal plane "
+            f"of the surfaces before it, z_EP = {checks.fmt(np.asarray(zep))}), so the "
+            f"EPD's disc on its plane launches no ray; for an object-space telecentric lens "
+            f"give object heights and its NA (Lens(object_na=...)), or move the stop")
+
+
+def entrance_pupil_plane(lens: Lens, where: str) -> Array:
+    """``entrance_pupil_z`` at the primary wavelength, the plane the samplers launch rays on,
+    refused (``check_pupil_plane``, naming ``where``) where it lies at infinity."""
+    zep = entrance_pupil_z(lens, lens.primary_wavelength)
+    check_pupil_plane(zep, where)
+    return zep
+
+
+def _pupil_reachable(zep, u, where: str):
+    """``u`` (tanθ of field angles), refused where it is nonzero and the entrance pupil lies
+    at infinity (``PUPIL_AT_INFINITY``): a ValueError for concrete values, an error_if where
+    traced."""
+    bad = ~jnp.isfinite(zep) & (u != 0)
+    if not checks.is_traced((zep, u)):
+        if np.any(np.asarray(bad)):
+            raise ValueError(f"{where}: {PUPIL_AT_INFINITY} (got tanθ = "
+                             f"{checks.fmt(np.asarray(u))})")
+        return u
+    return eqx.error_if(u, jnp.any(bad), f"{where}: {PUPIL_AT_INFINITY}")
 
 
 def efl(lens: Lens, wavelength=None) -> Array:
