@@ -69,8 +69,10 @@ Conventions:
 
     The samplers (``imaging.sampling.field_rays``, ``collimated``,
     ``point_source``) and the analyses built on them use it where their ``aim`` is None;
-    ``render``, the relative illumination and the design losses launch their own rays at
-    the paraxial pupil whatever it is (speed).
+    ``render`` and the relative illumination launch their own rays over the paraxial
+    pupil's plane and keep those within the beam the aim fills (its stop bounded at that
+    radius, ``imaging.radiometry.beam_bounded``); the design losses launch theirs at the
+    paraxial pupil whatever it is (speed).
     ``negative_propagation`` (static) chooses how a ray reaches each surface after the first.
     False (the default): forward along its direction (a ray parameter t ≥ 0), except across a
     negative gap (a vertex before the previous one) or to a dummy surface (same medium on
