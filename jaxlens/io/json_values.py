@@ -20,6 +20,7 @@ import jax.numpy as jnp
 import numpy as np
 
 from ..optics import checks
+from ..optics.reciprocal import reciprocal_length
 
 INFINITY_TEXT = {"inf": math.inf, "+inf": math.inf, "infinity": math.inf,
                  "+infinity": math.inf, "-inf": -math.inf, "-infinity": -math.inf}
@@ -132,17 +133,27 @@ def curvature(d: dict, where: str, suffix: str = "") -> float:
     if c is not None:
         cv = num(c, f"{where}: {ck}")
         if r is not None:
-            rv = num(r, f"{where}: {rk}", finite=False)
-            cr = 0.0 if math.isinf(rv) else (math.inf if rv == 0 else 1.0 / rv)
+            rv = _radius(r, rk, where, ck)
+            cr = 0.0 if math.isinf(rv) else 1.0 / rv
             if not math.isclose(cr, cv, rel_tol=1e-9, abs_tol=1e-15):
                 raise ValueError(f"{where}: {rk} {r!r} and {ck} {c!r} disagree")
         return cv
     if r is not None:
-        rv = num(r, f"{where}: {rk}", finite=False)
-        if rv == 0:
-            raise ValueError(f"{where}: {rk} 0 is not a surface; use {ck} 0 for flat")
+        rv = _radius(r, rk, where, ck)
         return 0.0 if math.isinf(rv) else 1.0 / rv
     return 0.0
+
+
+def _radius(r, rk: str, where: str, ck: str) -> float:
+    """A radius of curvature (mm; ±inf flat), refused where it is no surface's: 0 (or -0.0),
+    or below ``reciprocal.MIN_LENGTH_MM`` in size (5e-324 gave a curvature of inf, refused
+    as ``c``, a key the file does not hold; 1e-300 one of 1e300 per mm)."""
+    rv = num(r, f"{where}: {rk}", finite=False)
+    if rv == 0:
+        raise ValueError(f"{where}: {rk} 0 is not a surface; use {ck} 0 for flat")
+    if not math.isinf(rv):
+        reciprocal_length(rv, rk, where)
+    return rv
 
 
 class RepeatedKey(ValueError):

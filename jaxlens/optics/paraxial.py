@@ -142,6 +142,9 @@ def _given(lens: Lens, wavelength, where: str):
     ``error_if`` on the traced hot path: ``paraxial_data`` and ``efl`` check theirs)."""
     _lens_and_size(lens, wavelength, where)
     if wavelength is None:
+        # Checked here, under the name the user called: past a formula's resonance it was
+        # refused by ``signed_indices``, a function the user never called.
+        checks.primary_wavelength(lens, where)
         return lens.primary_wavelength
     if checks.is_traced(wavelength):
         return wavelength
@@ -238,6 +241,16 @@ class ParaxialData(eqx.Module):
     stop_semi_diameter: Float[Array, ""]
 
 
+def telecentric_only(lens: Lens, where: str) -> None:
+    """Refuse anything but an object-space telecentric lens (``Lens.object_na`` given) in
+    ``where``, whose numbers are of its object cone."""
+    _lens_and_size(lens, None, where)
+    if not lens.telecentric_object:
+        raise ValueError(f"{where}: the lens is not object-space telecentric (Lens.object_na "
+                         f"is None): {where} is of an object-space telecentric lens's object "
+                         f"cone; give the lens an object_na (an object at a finite distance)")
+
+
 def finite_pupil(lens: Lens, where: str, instead: str = "") -> None:
     """Refuse an object-space telecentric lens (``Lens.object_na``), whose entrance pupil lies
     at infinity, in ``where``, which needs one at a finite distance (its position, or field
@@ -258,7 +271,9 @@ def finite_pupil(lens: Lens, where: str, instead: str = "") -> None:
 def object_slope(lens: Lens) -> Array:
     """tan u: the object-space slope of the paraxial marginal ray of an object-space
     telecentric lens, u = asin(NA / n) with n the object-space index at the primary
-    wavelength (``Lens.object_na``)."""
+    wavelength (``Lens.object_na``). Any other lens is a ``ValueError`` (a lens without an
+    object NA failed as None divided by an array)."""
+    telecentric_only(lens, "object_slope")
     s = lens.object_na / lens.object_material.index(lens.primary_wavelength)
     return s / jnp.sqrt(1.0 - s * s)
 
@@ -346,6 +361,8 @@ def _wavelength(lens: Lens, wavelength, where: str):
     lens's materials (an error_if under jit, so these stay usable in jitted losses)."""
     _lens_and_size(lens, wavelength, where)
     checks.lens_intact(lens, where)  # edited with eqx.tree_at: a NaN curvature gave NaN
+    if wavelength is None:  # named by the caller (``_given``)
+        checks.primary_wavelength(lens, where)
     wl = lens.primary_wavelength if wavelength is None else checks.wavelengths(
         lens, wavelength, where)
     # A formula material whose index there is below 1 or not finite (Schott coefficients
