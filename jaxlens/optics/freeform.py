@@ -80,7 +80,7 @@ import numpy as np
 from jaxtyping import Array, Float
 
 from . import checks
-from .reciprocal import MIN_LENGTH_MM
+from .reciprocal import MIN_LENGTH_MM, NORMALISING, reciprocal_length
 from .surfaces import MAX_CURVATURE, AbstractSurface, guarded_sqrt, number_field
 
 ZERNIKE_ORDERINGS = ("standard", "fringe")
@@ -365,6 +365,8 @@ class ZernikeSag(AbstractSurface):
             v = getattr(self, name)
             if not checks.is_traced(v):
                 checks.values(v, name, where, lo=lo, lo_open=lo is not None, unit="mm")
+        if not checks.is_traced(self.norm_radius):
+            reciprocal_length(self.norm_radius, "norm_radius", where, why=NORMALISING)
         self._check_numbers()
 
     @property

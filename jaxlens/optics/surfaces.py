@@ -259,7 +259,7 @@ class OddAsphere(AbstractSurface):
         return self.coeffs
 
 
-MAX_CURVATURE = 1.0 / MIN_LENGTH_MM
+MAX_CURVATURE = 1e9  # 1 / MIN_LENGTH_MM, exactly (1/1e-9 is 999999999.9999999)
 """Largest |c| (1/mm) of a surface: a radius of at least ``reciprocal.MIN_LENGTH_MM``."""
 
 STEEP_SLOPE = 5.0
