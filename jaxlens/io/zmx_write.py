@@ -15,6 +15,7 @@ import numpy as np
 from ..optics import materials as _materials
 from ..optics.catalog import ND_TOLERANCE, catalog_names
 from ..optics.coordinates import CoordinateBreak
+from ..optics.input_files import input_file
 from ..optics.lens import Lens
 from ..optics.materials import AbstractMaterial, Air, ModelGlass, Tabulated
 from ..optics.surfaces import (
@@ -375,6 +376,7 @@ def _merged(path: str, lines: list[str], *, shared: bool) -> list[str]:
     other lens files of the folder use; a glass of the same name must hold the same data."""
     if not os.path.exists(path):
         return lines
+    input_file(path, "save_zmx", "glass catalog (.agf) to merge with")  # a FIFO hung here
     with open(path, encoding="utf-8", errors="replace") as fh:
         old = fh.read().splitlines()
     mark = lines[0]  # "CC <catalog>: glasses written by jaxlens"
