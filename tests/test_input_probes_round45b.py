@@ -14,6 +14,7 @@
 """
 
 import copy
+import functools
 import json
 import pathlib
 import re
@@ -195,3 +196,80 @@ def test_object_cone_of_a_lens_without_one():
         telecentric.in_cone(cooke, jnp.array([0.0, 0.0, 1.0]))
     with pytest.raises(TypeError, match=r"object_slope: lens must be a jaxlens\.Lens, got str"):
         PX.object_slope("cooke")
+
+
+@functools.cache
+def _cooke():
+    return jl.load(COOKE)
+
+
+@pytest.mark.parametrize("name", ["XYPolynomial", "ZernikeSag", "QTypeAsphere", "Binary2"])
+def test_norm_radius_floor(name):
+    """1e-300 mm gave a NaN sag and EFL (every ray lost) without a word."""
+    make = {
+        "XYPolynomial": lambda r: jl.XYPolynomial(c=0.02, coeffs=jnp.array([0.0, 0.0, 1e-3]),
+                                                  norm_radius=r, semi_diameter=5.0),
+        "ZernikeSag": lambda r: jl.ZernikeSag(c=0.02, zernike=jnp.array([0.0, 0.0, 0.0, 1e-3]),
+                                              norm_radius=r, semi_diameter=5.0),
+        "QTypeAsphere": lambda r: jl.QTypeAsphere(c=0.02, coeffs=jnp.array([1e-3]),
+                                                  norm_radius=r, semi_diameter=5.0),
+        "Binary2": lambda r: jl.Binary2(c=0.02, phase_coeffs=jnp.array([-10.0]), norm_radius=r,
+                                        semi_diameter=5.0),
+    }[name]
+    for r in (1e-300, 5e-324, 1e-10):
+        with pytest.raises(ValueError, match=rf"^{name}: norm_radius must be finite and at "
+                                             rf"least 1e-09 mm in size .*got {r!r} mm"):
+            make(r)
+    make(1e-9)
+    # 0 and NaN keep their message (the range (0, inf))
+    with pytest.raises(ValueError, match=r"norm_radius must be finite numbers in \(0, inf\)"):
+        make(0.0)
+
+
+def test_epd_and_pixel_floor():
+    """A Lens's epd of 5e-324 mm gave F/# = inf (a lens file's EPD was floored at 1e-9 mm, the
+    Lens's own was not); a Sensor of 5e-324 mm pixels rendered."""
+    c = _cooke()
+    for e in (5e-324, 1e-300, 1e-10):
+        with pytest.raises(ValueError, match=r"^Lens: epd \(entrance pupil diameter\) must be "
+                                             r"finite and at least 1e-09 mm"):
+            jl.Lens(c.surfaces, c.thickness, c.materials, epd=e)
+    for ps in (5e-324, 1e-300):
+        with pytest.raises(ValueError, match=r"^Sensor: pixel_size must be finite and at least "
+                                             r"1e-09 mm"):
+            jl.Sensor(resolution=(32, 32), pixel_size=ps)
+    lens = jl.Lens(c.surfaces, c.thickness, c.materials, epd=1e-9)
+    assert float(jl.paraxial_data(lens).fnum) == pytest.approx(float(jl.efl(c)) / 1e-9,
+                                                              rel=1e-12)
+
+
+@pytest.mark.parametrize("ext", ["zmx", "json", "agf"])
+def test_readers_refuse_fifos_and_devices(ext, tmp_path):
+    """A FIFO under a lens file's name blocked open() for ever; /dev/zero read until the
+    memory ran out. Refused before anything is opened."""
+    import os
+
+    from jaxlens.io import lensfile, zmx
+
+    fifo, zero = tmp_path / f"fifo.{ext}", tmp_path / f"zero.{ext}"
+    os.mkfifo(fifo)
+    zero.symlink_to("/dev/zero")
+    readers = {"zmx": [("load", jl.load), ("load_zmx", zmx.load_zmx),
+                       ("configurations", zmx.configurations)],
+               "json": [("load", jl.load), ("load_json", lensfile.load_json)],
+               "agf": [("load_agf", jl.load_agf)]}[ext]
+    for name, read in readers:
+        for p in (fifo, zero):
+            with pytest.raises(ValueError, match=rf"^{name}: '.*{p.name}' is not a regular file "
+                                                 r"\(a FIFO, socket or device"):
+                read(p)
+
+
+def test_yield_fraction_refuses_a_negative_rms():
+    from jaxlens.analysis import tolerance as TL
+
+    with pytest.raises(ValueError, match=r"yield_fraction: rms_um must be RMS radii >= 0 µm, "
+                                         r"got -1 µm"):
+        TL.yield_fraction([-1.0, 2.0], 1.0)
+    assert TL.yield_fraction([-0.0, 2.0], 1.0) == 0.5
+    assert TL.yield_fraction([np.nan, 2.0], 3.0) == 0.5  # NaN: a failed trial

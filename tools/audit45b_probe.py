@@ -25,8 +25,16 @@ table of ``tools/probe_table.py``. The classes found, each closed by one mechani
    1e-300 accepted; a surface with c = 1e300 and no semi-diameter accepted. Now
    ``optics.reciprocal``: lengths below 1e-9 mm (the smallest EPD a file may give) refused
    on the line or key that gave them; surfaces' |c| at most 1e9 per mm.
+   The same for the other lengths divided by: a freeform's, a Q-type's or a Binary2's
+   ``norm_radius`` of 1e-300 mm gave NaN spots and a NaN EFL; a ``Lens`` epd of 5e-324 mm
+   an F/# of inf (a lens file's EPD was floored at 1e-9 mm, the Lens's not); a ``Sensor``
+   pixel of 5e-324 mm rendered.
 4. ``paraxial.object_slope`` and ``telecentric.in_cone`` of a lens without an object NA
    failed as None divided by an array (TypeError in Python's words).
+5. Files that are not regular files: a FIFO named ``lens.zmx`` or ``lens.json`` blocked
+   ``load`` (and ``load_agf``, ``configurations``) for ever; a link to ``/dev/zero`` read
+   until the memory ran out. ``optics.input_files.input_file`` now refuses them.
+6. ``tolerance.yield_fraction`` took a negative RMS as a passing trial.
 
 Run from the tree's root: ``PYTHONPATH=. python tools/audit45b_probe.py [filter]``.
 """
@@ -212,5 +220,75 @@ def not_telecentric():
     probe("paraxial.object_slope of a str", lambda: PX.object_slope("cooke"), "object_slope", "Lens")
 
 
+def divided_lengths():
+    cooke = jl.load(COOKE)
+    s0 = cooke.surfaces[0]
+    c, sd = float(s0.c), float(s0.semi_diameter)
+    makers = {
+        "XYPolynomial": lambda r: jl.XYPolynomial(c=c, coeffs=jnp.array([0.0, 0.0, 1e-3]), norm_radius=r, semi_diameter=sd),
+        "ZernikeSag": lambda r: jl.ZernikeSag(c=c, zernike=jnp.array([0.0, 0.0, 0.0, 1e-3]), norm_radius=r, semi_diameter=sd),
+        "QTypeAsphere": lambda r: jl.QTypeAsphere(c=c, coeffs=jnp.array([1e-3]), norm_radius=r, semi_diameter=sd),
+        "Binary2": lambda r: jl.Binary2(c=c, phase_coeffs=jnp.array([-10.0]), norm_radius=r, semi_diameter=sd),
+    }
+    for name, make in makers.items():
+        for r in (1e-300, 5e-324, 1e-10):
+            probe(f"{name} norm_radius {r!r}", lambda make=make, r=r: make(r), name, "norm_radius", "1e-09 mm")
+        probe(f"{name} norm_radius 1e-9 (control)", lambda make=make: make(1e-9), good=True)
+    for e in (5e-324, 1e-300, 1e-10):
+        probe(f"Lens epd {e!r}", lambda e=e: jl.Lens(cooke.surfaces, cooke.thickness, cooke.materials, epd=e), "epd", "1e-09 mm")
+    for ps in (5e-324, 1e-300):
+        probe(f"Sensor pixel_size {ps!r}", lambda ps=ps: jl.Sensor(resolution=(32, 32), pixel_size=ps), "pixel_size", "1e-09 mm")
+    probe("Sensor pixel_size 1e-9 (control)", lambda: jl.Sensor(resolution=(32, 32), pixel_size=1e-9), good=True)
+
+
+def not_regular_files():
+    """FIFOs and devices under a lens file's name: each probe in a child with a time limit
+    (a blocked open() cannot be interrupted from the same thread)."""
+    import subprocess
+
+    d = fresh("ff")
+    TREE = os.path.dirname(os.path.dirname(jl.__file__))  # the jaxlens this process probes
+    for ext in ("zmx", "json", "agf"):
+        os.mkfifo(os.path.join(d, f"fifo.{ext}"))
+        os.symlink("/dev/zero", os.path.join(d, f"zero.{ext}"))
+    calls = {"load": ("zmx", "json"), "jaxlens.io.zmx.configurations": ("zmx",),
+             "jaxlens.io.lensfile.load_json": ("json",), "jaxlens.io.zmx.load_zmx": ("zmx",),
+             "load_agf": ("agf",)}
+
+    def child(call, path):
+        def go():
+            code = (f"import jaxlens, jaxlens.io.zmx, jaxlens.io.lensfile\n"
+                    f"try:\n    jaxlens.{call.removeprefix('jaxlens.')}({path!r})\n"
+                    f"except (ValueError, TypeError) as e:\n    print('REFUSED', e)\n")
+            def cap():  # /dev/zero read without end: a MemoryError at 8 GiB, not a full machine
+                import resource
+
+                resource.setrlimit(resource.RLIMIT_AS, (8 << 30, 8 << 30))
+            try:
+                p = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True,
+                                   timeout=30, env=dict(os.environ, PYTHONPATH=TREE), preexec_fn=cap)
+            except subprocess.TimeoutExpired:
+                raise RuntimeError("hang: no answer in 30 s") from None
+            out = p.stdout.strip()
+            if out.startswith("REFUSED"):
+                raise ValueError(out.removeprefix("REFUSED "))
+            raise RuntimeError(f"exit {p.returncode}: {(p.stderr.strip().splitlines() or [''])[-1]}")
+        return go
+    for call, exts in calls.items():
+        for ext in exts:
+            probe(f"{call.split('.')[-1]} of a FIFO named fifo.{ext}", child(call, os.path.join(d, f"fifo.{ext}")), "not a regular file", "fifo")
+        ext = exts[0]
+        probe(f"{call.split('.')[-1]} of a link to /dev/zero named zero.{ext}", child(call, os.path.join(d, f"zero.{ext}")), "not a regular file")
+
+
+def negative_rms():
+    from jaxlens.analysis import tolerance as TL
+
+    probe("yield_fraction rms [-1, 2] threshold 1", lambda: TL.yield_fraction([-1.0, 2.0], 1.0), "rms_um", ">= 0")
+    probe("yield_fraction rms [-0.0, 2] threshold 1 (control: 0.5)", lambda: TL.yield_fraction([-0.0, 2.0], 1.0), good=True)
+    probe("yield_fraction rms [nan, 2] threshold 3 (control: NaN fails, 0.5)", lambda: TL.yield_fraction([np.nan, 2.0], 3.0), good=True)
+
+
 if __name__ == "__main__":
-    run([primary_wavelength_names, afocal_zmx, opd_mode_rounding, reciprocal_lengths, not_telecentric])
+    run([primary_wavelength_names, afocal_zmx, opd_mode_rounding, reciprocal_lengths, not_telecentric,
+         divided_lengths, not_regular_files, negative_rms])
