@@ -273,3 +273,24 @@ def test_yield_fraction_refuses_a_negative_rms():
         TL.yield_fraction([-1.0, 2.0], 1.0)
     assert TL.yield_fraction([-0.0, 2.0], 1.0) == 0.5
     assert TL.yield_fraction([np.nan, 2.0], 3.0) == 0.5  # NaN: a failed trial
+
+
+def test_writers_name_themselves(tmp_path):
+    """A lens past its glass's resonance was refused by ``Sellmeier.index`` (a str lens: an
+    AttributeError) in the writers below ``save``."""
+    from jaxlens.io import lensfile, zmx
+
+    lens = resonant_lens()
+    calls = {"save_zmx": lambda: zmx.save_zmx(lens, tmp_path / "a.zmx"),
+             "save_json": lambda: lensfile.save_json(lens, tmp_path / "a.json"),
+             "dumps": lambda: lensfile.dumps(lens),
+             "lens_to_dict": lambda: lensfile.lens_to_dict(lens)}
+    for name, call in calls.items():
+        with pytest.raises(ValueError, match=rf"^{name}: Lens: wavelengths 3 µm is outside "
+                                             r"0\.15–2 µm.*nothing written"):
+            call()
+    with pytest.raises(ValueError, match=r"^dumps: Lens: wavelengths 3 µm"):
+        zmx.dumps(lens)
+    with pytest.raises(TypeError, match=r"^save_zmx: lens must be a jaxlens Lens, got str"):
+        zmx.save_zmx("lens", tmp_path / "b.zmx")
+    assert not list(tmp_path.iterdir())  # nothing written

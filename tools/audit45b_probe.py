@@ -35,6 +35,10 @@ table of ``tools/probe_table.py``. The classes found, each closed by one mechani
    ``load`` (and ``load_agf``, ``configurations``) for ever; a link to ``/dev/zero`` read
    until the memory ran out. ``optics.input_files.input_file`` now refuses them.
 6. ``tolerance.yield_fraction`` took a negative RMS as a passing trial.
+7. The writers below ``save`` (``io.zmx.save_zmx``/``dumps``, ``io.lensfile.save_json``/
+   ``dumps``/``lens_to_dict``) refused a lens past its glass's resonance as
+   ``Sellmeier.index`` and a str lens with an AttributeError; now ``save``'s check
+   (``json_values.loadable``) runs in each under its own name.
 
 Run from the tree's root: ``PYTHONPATH=. python tools/audit45b_probe.py [filter]``.
 """
@@ -260,10 +264,10 @@ def not_regular_files():
             code = (f"import jaxlens, jaxlens.io.zmx, jaxlens.io.lensfile\n"
                     f"try:\n    jaxlens.{call.removeprefix('jaxlens.')}({path!r})\n"
                     f"except (ValueError, TypeError) as e:\n    print('REFUSED', e)\n")
-            def cap():  # /dev/zero read without end: a MemoryError at 8 GiB, not a full machine
+            def cap():  # /dev/zero read without end: a MemoryError at 3 GiB, not a full machine
                 import resource
 
-                resource.setrlimit(resource.RLIMIT_AS, (8 << 30, 8 << 30))
+                resource.setrlimit(resource.RLIMIT_AS, (3 << 30, 3 << 30))
             try:
                 p = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True,
                                    timeout=30, env=dict(os.environ, PYTHONPATH=TREE), preexec_fn=cap)
@@ -281,6 +285,22 @@ def not_regular_files():
         probe(f"{call.split('.')[-1]} of a link to /dev/zero named zero.{ext}", child(call, os.path.join(d, f"zero.{ext}")), "not a regular file")
 
 
+def writer_names():
+    from jaxlens.io import lensfile, zmx
+
+    L = resonant_lens()
+    d = fresh("wr")
+    calls = {"save_zmx": lambda: zmx.save_zmx(L, os.path.join(d, "a.zmx")),
+             "save_json": lambda: lensfile.save_json(L, os.path.join(d, "a.json")),
+             "dumps": lambda: lensfile.dumps(L), "lens_to_dict": lambda: lensfile.lens_to_dict(L),
+             "zmx dumps": lambda: zmx.dumps(L)}
+    for name, fn in calls.items():
+        probe(f"{name} of a lens whose wavelength 3 µm lies past its glass's resonance", fn, f"{name.split()[-1]}:", "3 µm")
+    probe("save_zmx of a str", lambda: zmx.save_zmx("lens", os.path.join(d, "b.zmx")), "save_zmx", "Lens")
+    probe("lensfile.dumps of None", lambda: lensfile.dumps(None), "dumps", "Lens")
+    probe("save of the same lens (control: named save before)", lambda: jl.save(L, os.path.join(d, "c.json")), "save:", "3 µm")
+
+
 def negative_rms():
     from jaxlens.analysis import tolerance as TL
 
@@ -291,4 +311,4 @@ def negative_rms():
 
 if __name__ == "__main__":
     run([primary_wavelength_names, afocal_zmx, opd_mode_rounding, reciprocal_lengths, not_telecentric,
-         divided_lengths, not_regular_files, negative_rms])
+         divided_lengths, not_regular_files, negative_rms, writer_names])

@@ -20,6 +20,7 @@ import jax.numpy as jnp
 import numpy as np
 
 from ..optics import checks
+from ..optics.lens import Lens
 from ..optics.reciprocal import reciprocal_length
 
 INFINITY_TEXT = {"inf": math.inf, "+inf": math.inf, "infinity": math.inf,
@@ -264,3 +265,21 @@ def whole_path(path: str | os.PathLike, where: str = "write"):
         if os.path.exists(tmp):
             os.remove(tmp)
         raise
+
+
+def loadable(lens, where: str) -> None:
+    """Refuse a lens that ``load`` would refuse (a lens edited with ``eqx.tree_at`` skips
+    ``Lens``'s own checks): a field of 95°, wavelengths beyond a glass's data, a primary
+    index past the wavelengths. Else a writer (``where``: ``save``, ``save_json``,
+    ``save_zmx``, the ``dumps``) would write a file that does not read back, or fail inside
+    (a wavelength past a glass's resonance was refused by ``Sellmeier.index``)."""
+    if not isinstance(lens, Lens):  # else an AttributeError from deep in the writer
+        raise TypeError(f"{where}: lens must be a jaxlens Lens, got {type(lens).__name__}")
+    if checks.is_traced(lens):
+        return
+    try:
+        lens.__check_init__()
+        checks.wavelengths(lens, lens.wavelengths, "Lens", "wavelengths")
+        checks.material_indices(lens, lens.wavelengths, "Lens", "wavelengths")
+    except ValueError as e:
+        raise ValueError(f"{where}: {e}; nothing written (load would refuse the file)") from None

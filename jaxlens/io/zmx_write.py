@@ -27,7 +27,7 @@ from ..optics.surfaces import (
     TiltedPlane,
 )
 from . import lensfile, zmx_glass, zmx_surfaces, zmx_system
-from .json_values import output_file, write_whole
+from .json_values import loadable, output_file, write_whole
 from .zmx_common import (
     MARKER,
     MAX_XPOLY_DEGREE,
@@ -540,6 +540,7 @@ def dumps(lens: Lens, path: str = "lens.zmx", *, model_glass: str = "blank"):
     beam is therefore read back with rays passing there that it lost."""
     if model_glass not in ("blank", "agf"):
         raise ValueError(f"save_zmx: model_glass must be 'blank' or 'agf', got {model_glass!r}")
+    loadable(lens, "dumps")
     stem = os.path.splitext(os.path.basename(os.fspath(path)))[0]
     gw = _GlassWriter(stem, model_glass, np.atleast_1d(np.asarray(lens.wavelengths, np.float64)))
     gw.reserve((lens.object_material,) + tuple(lens.materials))
@@ -655,6 +656,7 @@ def save_zmx(lens: Lens, path: str | os.PathLike, *, model_glass: str = "blank")
         The paths of the AGF catalogs written beside the file (possibly none).
     """
     # Before any work, and before the side catalogs are written beside it.
+    loadable(lens, "save_zmx")
     path = output_file(path, "save_zmx", ".zmx")
     text, gw = dumps(lens, path, model_glass=model_glass)
     folder = os.path.dirname(os.path.abspath(path))
