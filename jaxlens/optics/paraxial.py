@@ -50,6 +50,9 @@ Conventions:
 
 from __future__ import annotations
 
+import contextvars
+import functools
+
 import equinox as eqx
 import jax
 import jax.numpy as jnp
@@ -135,12 +138,33 @@ def _lens_and_size(lens, wavelength, where: str) -> None:
                              f"shape {np.shape(wavelength)}")
 
 
+_DEPTH = contextvars.ContextVar("paraxial_depth", default=0)
+"""How many of this module's entry points (``_entry``) are running: the lens's own checks
+(``checks.lens_intact``) run in the outermost only."""
+
+
+def _entry(fn):
+    """An entry point: nested calls (``paraxial_data`` calls ``marginal_ray``, which calls
+    ``entrance_pupil_z``, ...) know they are nested, so the lens is checked once, by the
+    function the user called."""
+    @functools.wraps(fn)
+    def go(*args, **kwargs):
+        token = _DEPTH.set(_DEPTH.get() + 1)
+        try:
+            return fn(*args, **kwargs)
+        finally:
+            _DEPTH.reset(token)
+    return go
+
+
 def _given(lens: Lens, wavelength, where: str):
     """The wavelength (µm) for the helpers that internal (often traced) code calls with the
     primary one: the primary one for None, a given concrete one checked against the lens's
     materials (587.6 in nm gave a plausible but wrong pupil), a traced one as it is (no
     ``error_if`` on the traced hot path: ``paraxial_data`` and ``efl`` check theirs)."""
     _lens_and_size(lens, wavelength, where)
+    if _DEPTH.get() <= 1:  # a lens edited with eqx.tree_at (a NaN thickness): NaN before
+        checks.lens_intact(lens, where)
     if wavelength is None:
         # Checked here, under the name the user called: past a formula's resonance it was
         # refused by ``signed_indices``, a function the user never called.
@@ -151,6 +175,7 @@ def _given(lens: Lens, wavelength, where: str):
     return checks.wavelengths(lens, wavelength, where)
 
 
+@_entry
 def signed_indices(lens: Lens, wavelength) -> list[Array]:
     """``lens.indices`` signed by the light's direction along each medium's local z
     (``travel.travel_senses``: negative after an odd number of mirrors, unless coordinate
@@ -162,6 +187,7 @@ def signed_indices(lens: Lens, wavelength) -> list[Array]:
     return [-x if s < 0 else x for x, s in zip(n, travel_senses(lens), strict=True)]
 
 
+@_entry
 def system_matrix(lens: Lens, wavelength=None, start: int = 0, end: int | None = None):
     """ABCD matrix in (y, nu) from just before ``surfaces[start]`` to just after ``surfaces[end]``.
 
@@ -268,6 +294,7 @@ def finite_pupil(lens: Lens, where: str, instead: str = "") -> None:
             f"its object heights")
 
 
+@_entry
 def object_slope(lens: Lens) -> Array:
     """tan u: the object-space slope of the paraxial marginal ray of an object-space
     telecentric lens, u = asin(NA / n) with n the object-space index at the primary
@@ -278,6 +305,7 @@ def object_slope(lens: Lens) -> Array:
     return s / jnp.sqrt(1.0 - s * s)
 
 
+@_entry
 def entrance_pupil_z(lens: Lens, wavelength=None) -> Array:
     """Global z of the paraxial entrance pupil (image of the stop in object space). An
     object-space telecentric lens (``Lens.object_na``), whose pupil lies at infinity, is
@@ -297,6 +325,7 @@ def entrance_pupil_z(lens: Lens, wavelength=None) -> Array:
     return _over(b * n0, a, aa + jnp.abs(t) * ac, steps + 1)
 
 
+@_entry
 def entrance_pupil_magnification(lens: Lens, wavelength=None) -> Array:
     """Paraxial magnification from the entrance pupil to the stop (stop height / EP height)."""
     finite_pupil(lens, "entrance_pupil_magnification")
@@ -309,6 +338,7 @@ def entrance_pupil_magnification(lens: Lens, wavelength=None) -> Array:
     return a + t * c
 
 
+@_entry
 def marginal_ray(lens: Lens, wavelength=None):
     """Paraxial marginal ray (y, nu) after every surface, for the lens's EPD and object (an
     object-space telecentric lens: from the axial object point at slope tan u, u the
@@ -372,6 +402,7 @@ def _wavelength(lens: Lens, wavelength, where: str):
     return wl
 
 
+@_entry
 def paraxial_chief_ray(lens: Lens, field_deg, wavelength=None):
     """Paraxial chief ray (y, nu) after every surface for a field angle (degrees); for an
     object-space telecentric lens (``Lens.object_na``) for an object height (mm), the ray
@@ -389,6 +420,7 @@ def paraxial_chief_ray(lens: Lens, field_deg, wavelength=None):
     return _trace_ray(lens, -zep * u, n[0] * u, n, wl)
 
 
+@_entry
 def efl(lens: Lens, wavelength=None) -> Array:
     """Effective focal length 1/power (mm) at ``wavelength`` (default: primary); +inf for an
     afocal lens (zero power, or a power within its rounding bound: ``_over``)."""
@@ -404,6 +436,7 @@ def _power(c):
     return 0.0 - c
 
 
+@_entry
 def bfl(lens: Lens, wavelength=None) -> Array:
     """Back focal length: last vertex to the paraxial focus of an object at infinity (mm);
     infinite for an afocal lens (the sign of −A·n′ over +0: ``_over``)."""
@@ -413,6 +446,7 @@ def bfl(lens: Lens, wavelength=None) -> Array:
     return _over(-a * n[-1], c, ac, steps)
 
 
+@_entry
 def image_height(lens: Lens, field_deg, wavelength=None) -> Array:
     """Paraxial chief-ray height on the image surface (mm) of a field angle (deg), or of an
     object height (mm) for an object-space telecentric lens (``Lens.object_na``)."""
@@ -424,6 +458,7 @@ def image_height(lens: Lens, field_deg, wavelength=None) -> Array:
     return y[-1] + axial_thicknesses(lens)[-1] * nu[-1] / n_img
 
 
+@_entry
 def magnification(lens: Lens, wavelength=None) -> Array:
     """The paraxial lateral magnification m = n u / (n′ u′) of the lens's finite object (its
     paraxial image height per unit object height, at the paraxial image plane), from the
@@ -442,6 +477,7 @@ def magnification(lens: Lens, wavelength=None) -> Array:
     return _over(_marginal_start(lens, wl, n)[1], nu, *_image_slope_scale(lens, wl, n))
 
 
+@_entry
 def paraxial_data(lens: Lens, wavelength=None) -> ParaxialData:
     """All first-order data at one wavelength (default: primary)."""
     if wavelength is not None and jnp.ndim(wavelength) != 0:
@@ -512,6 +548,7 @@ def paraxial_data(lens: Lens, wavelength=None) -> ParaxialData:
     )
 
 
+@_entry
 def working_fnum(lens: Lens, depth) -> Array:
     """The paraxial working F-number 1/(2n′u′) for an object at ``depth`` (mm from surface 1,
     as ``sampling.lens_depth`` gives it; None for infinity), whatever the lens's own object:
