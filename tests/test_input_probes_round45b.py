@@ -20,6 +20,7 @@ import pathlib
 import re
 import warnings
 
+import jax
 import jax.numpy as jnp
 import numpy as np
 import pytest
@@ -294,3 +295,20 @@ def test_writers_name_themselves(tmp_path):
     with pytest.raises(TypeError, match=r"^save_zmx: lens must be a jaxlens Lens, got str"):
         zmx.save_zmx("lens", tmp_path / "b.zmx")
     assert not list(tmp_path.iterdir())  # nothing written
+
+
+@pytest.mark.parametrize("name", ["marginal_ray", "system_matrix", "entrance_pupil_z",
+                                  "entrance_pupil_magnification", "signed_indices"])
+def test_paraxial_entry_points_check_an_edited_lens(name):
+    """A NaN thickness set with eqx.tree_at (which skips Lens's checks) gave NaN here, while
+    efl and paraxial_data refused it."""
+    import equinox as eqx
+
+    c = _cooke()
+    call = {"signed_indices": lambda L: PX.signed_indices(L, 0.55)}.get(
+        name, lambda L: getattr(PX, name)(L))
+    for bad in (eqx.tree_at(lambda m: m.thickness, c, c.thickness.at[2].set(jnp.nan)),
+                eqx.tree_at(lambda m: m.surfaces[2].k, c, jnp.asarray(jnp.inf))):
+        with pytest.raises(ValueError, match=rf"^{name}: the lens fails its own checks"):
+            call(bad)
+    assert np.all(np.isfinite(np.asarray(jax.tree.leaves(call(c))[0])))

@@ -39,6 +39,11 @@ table of ``tools/probe_table.py``. The classes found, each closed by one mechani
    ``dumps``/``lens_to_dict``) refused a lens past its glass's resonance as
    ``Sellmeier.index`` and a str lens with an AttributeError; now ``save``'s check
    (``json_values.loadable``) runs in each under its own name.
+8. ``paraxial.marginal_ray``, ``system_matrix``, ``entrance_pupil_z``,
+   ``entrance_pupil_magnification`` and ``signed_indices`` of a lens edited with
+   ``eqx.tree_at`` (a NaN thickness or curvature, an infinite conic) returned NaN without a
+   word (``efl`` and ``paraxial_data`` checked the lens); now every entry point of
+   ``paraxial`` checks it once, in the outermost call (``paraxial._entry``).
 
 Run from the tree's root: ``PYTHONPATH=. python tools/audit45b_probe.py [filter]``.
 """
@@ -301,6 +306,23 @@ def writer_names():
     probe("save of the same lens (control: named save before)", lambda: jl.save(L, os.path.join(d, "c.json")), "save:", "3 µm")
 
 
+def edited_lens():
+    import equinox as eqx
+
+    cooke = jl.load(COOKE)
+    edits = {"NaN thickness": eqx.tree_at(lambda m: m.thickness, cooke, cooke.thickness.at[2].set(jnp.nan)),
+             "NaN curvature": eqx.tree_at(lambda m: m.surfaces[1].c, cooke, jnp.asarray(jnp.nan)),
+             "inf conic": eqx.tree_at(lambda m: m.surfaces[2].k, cooke, jnp.asarray(jnp.inf))}
+    calls = {"marginal_ray": lambda L: PX.marginal_ray(L), "system_matrix": lambda L: PX.system_matrix(L),
+             "entrance_pupil_z": lambda L: PX.entrance_pupil_z(L),
+             "entrance_pupil_magnification": lambda L: PX.entrance_pupil_magnification(L),
+             "signed_indices": lambda L: PX.signed_indices(L, 0.55)}
+    for name, fn in calls.items():
+        for what, L in edits.items():
+            probe(f"paraxial.{name} of the Cooke triplet edited with eqx.tree_at: {what}", lambda fn=fn, L=L: fn(L), f"{name}:", "fails its own checks")
+    probe("paraxial.marginal_ray of the Cooke triplet (control)", lambda: PX.marginal_ray(cooke), good=True)
+
+
 def negative_rms():
     from jaxlens.analysis import tolerance as TL
 
@@ -311,4 +333,4 @@ def negative_rms():
 
 if __name__ == "__main__":
     run([primary_wavelength_names, afocal_zmx, opd_mode_rounding, reciprocal_lengths, not_telecentric,
-         divided_lengths, not_regular_files, negative_rms, writer_names])
+         divided_lengths, not_regular_files, negative_rms, writer_names, edited_lens])
