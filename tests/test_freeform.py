@@ -720,7 +720,7 @@ def test_zernike_constructor_refuses_bad_values(kw, message):
 def test_biconic_constructor_refuses_bad_values():
     with pytest.raises(ValueError, match=r"Biconic: kx must be finite numbers"):
         Biconic(c=0.02, cx=0.01, kx=jnp.nan)
-    with pytest.raises(ValueError, match=r"Biconic: cx must be finite numbers \(1/mm\)"):
+    with pytest.raises(ValueError, match=r"Biconic: cx must be finite numbers in \[-1e\+09, "):
         Biconic(c=0.02, cx=jnp.inf)
     with pytest.raises(ValueError, match=r"x–z section .* defined only out to r = .* = 10 mm, "
                                          r"but the semi_diameter is 12 mm"):

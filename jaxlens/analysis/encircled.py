@@ -270,6 +270,8 @@ def encircled_energy(lens: Lens, field, radii, *, wavelength=None, method: str =
     """
     checks.focal_image(lens, "encircled_energy")
     where = "encircled_energy"
+    if wavelength is None:  # before the image size (``_radii_unit``) traces it paraxially
+        checks.primary_wavelength(lens, where)
     r = _checked_radii(radii, where, lens.epd.dtype)
     if not checks.is_traced((r, lens)):  # a traced lens has no concrete image size
         _radii_unit(lens, np.asarray(r), where)

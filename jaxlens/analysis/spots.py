@@ -486,14 +486,14 @@ def semi_diameters_and_fans(lens: Lens, fan_fields, fan_pupil, n_rim: int = 64):
         (semi-diameters ``[n]`` mm, launch points ``[F, M, 3]``, launch directions ``[F, M,
         3]``, the fans' ``trace_path`` ``[F, n + 1, M]``).
     """
-    check_inputs(lens, "clear_semi_diameters", own="all")
+    check_inputs(lens, "semi_diameters_and_fans", own="all")
     # The fans as the lens's fields are (their core trusts what its caller checked); their
     # pupil may be overfilled, so it is not held to the unit disc.
     if not checks.is_traced((fan_fields, fan_pupil)):
         lens_fields(lens, fan_fields, "semi_diameters_and_fans", "fan_fields")  # mm or deg
         checks.finite_array(fan_pupil, "fan_pupil", "semi_diameters_and_fans",
                             "normalised pupil coordinates")
-    checks.number(n_rim, "n_rim", "clear_semi_diameters", lo=4, hi=checks.MAX_SAMPLES,
+    checks.number(n_rim, "n_rim", "semi_diameters_and_fans", lo=4, hi=checks.MAX_SAMPLES,
                   integer=True, unit="rim rays per beam (fewer miss the rim in x or y)")
     (fields,) = _as_arrays(lens, _own_fields(lens, None))
     fan_fields = jnp.asarray(fan_fields, lens.epd.dtype)
@@ -586,6 +586,7 @@ def self_intersection(
                       "allowed between neighbouring surfaces)")
     n = lens.num_surfaces
     if semi_diameters is None:
+        check_inputs(lens, where, own="all")  # as the user called it, not clear_semi_diameters
         sd = clear_semi_diameters(lens, reaching=True)
     else:
         if not checks.is_traced(semi_diameters):

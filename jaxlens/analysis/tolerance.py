@@ -627,6 +627,8 @@ def yield_fraction(rms_um, threshold_um: float, valid_fraction=None,
     r = np.asarray(rms_um, float)
     if r.size == 0:  # np.mean of nothing: NaN and a RuntimeWarning
         raise ValueError("yield_fraction: rms_um must hold at least one trial's RMS (µm)")
+    if np.any(r < 0):  # -1 passed every threshold
+        raise ValueError(f"yield_fraction: rms_um must be RMS radii >= 0 µm, got {r.min():g} µm")
     ok = np.isfinite(r) & (r <= threshold_um)
     if valid_fraction is not None:
         # 99 (percent) passed every trial; a [3] for 2 trials broadcast or failed in numpy.

@@ -49,7 +49,10 @@ def write_column(out: str, name: str, col: dict) -> str:
 
 def read_column(path: str) -> dict:
     """One column file, or a ValueError naming it (not JSON, or not a column)."""
+    from jaxlens.optics.input_files import input_file
+
     try:
+        input_file(path, "ablation table", "column file")  # a FIFO column.json hung here
         with open(path) as f:
             col = json.load(f)
     except (OSError, ValueError) as e:

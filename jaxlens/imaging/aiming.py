@@ -40,12 +40,19 @@ def image_scale(lens: Lens, wavelength=None) -> Float[Array, ""]:
         ValueError: for a lens with an afocal image space (no image surface positions), and
             for a telecentric lens whose m is not finite and nonzero (its image at infinity).
     """
-    checks.focal_image(lens, "image_scale")
+    return _image_scale(lens, wavelength, "image_scale")
+
+
+def _image_scale(lens: Lens, wavelength, where: str):
+    """``image_scale`` with the name of the function the user called in its messages."""
+    checks.focal_image(lens, where)
+    if wavelength is None:  # was refused by image_height, a function the user never called
+        checks.primary_wavelength(lens, where)
     if lens.telecentric_object:
         m = paraxial.magnification(lens, wavelength)
         if not checks.is_traced(m) and not (np.isfinite(float(m)) and float(m) != 0.0):
             raise ValueError(
-                f"image_scale: the paraxial magnification of this object-space telecentric "
+                f"{where}: the paraxial magnification of this object-space telecentric "
                 f"lens is {float(m):g} (image mm per object mm; it must be finite and "
                 f"nonzero): its image of the object {float(lens.object_distance):g} mm before "
                 f"surface 1 lies at infinity, so object heights have no image positions")
@@ -66,13 +73,13 @@ def field_to_ideal(lens: Lens, field, wavelength=None) -> Float[Array, "*b 2"]:
     """Distortion-free image position (mm) of a field: ``K·tanθ`` for angles (degrees, θy or
     (θx, θy)), ``m·(x, y)`` for the object heights (mm) of an object-space telecentric lens
     (``image_scale``)."""
-    return image_scale(lens, wavelength) * field_coordinates(lens, field)
+    return _image_scale(lens, wavelength, "field_to_ideal") * field_coordinates(lens, field)
 
 
 def ideal_to_field(lens: Lens, xy, wavelength=None) -> Float[Array, "*b 2"]:
     """Field whose distortion-free image lies at ``xy`` (mm): (θx, θy) in degrees, or the
     object point (x, y) in mm of an object-space telecentric lens (``xy / m``)."""
-    t = jnp.asarray(xy) / image_scale(lens, wavelength)
+    t = jnp.asarray(xy) / _image_scale(lens, wavelength, "ideal_to_field")
     return t if lens.telecentric_object else jnp.rad2deg(jnp.arctan(t))
 
 

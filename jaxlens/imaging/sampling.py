@@ -608,6 +608,7 @@ def stop_radius(lens: Lens, stop_size: str = "paraxial", *, object_z=None) -> Fl
     if stop_size not in STOP_SIZES:
         raise ValueError(f"stop_radius: stop_size must be one of {STOP_SIZES}, got "
                          f"{type(stop_size).__name__} {stop_size!r}")
+    checks.primary_wavelength(lens, "stop_radius")  # was refused by paraxial_data
     if stop_size == "paraxial":
         return paraxial.paraxial_data(lens).stop_semi_diameter
     dt = lens.epd.dtype

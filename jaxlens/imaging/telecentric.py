@@ -146,6 +146,7 @@ def in_cone(lens: Lens, direction: Float[Array, "*b 3"]) -> Array:
     ``source`` launches. The object NA is such a lens's system aperture: a ray from the object
     outside the cone carries no light into the system, whichever stop it would pass
     (``radiometry`` bounds the cone the same way)."""
+    paraxial.telecentric_only(lens, "in_cone")
     t = paraxial.object_slope(lens).astype(direction.dtype)
     return jnp.sum(direction[..., :2] ** 2, -1) <= (t * direction[..., 2]) ** 2
 

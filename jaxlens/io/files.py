@@ -15,7 +15,7 @@ import numpy as np
 from ..optics import checks
 from ..optics.input_files import input_file
 from ..optics.lens import Lens
-from .json_values import output_file
+from .json_values import loadable, output_file
 from .lensfile import load_json, save_json
 from .zmx import load_zmx, save_zmx
 
@@ -100,20 +100,6 @@ def _float_dtype(dtype) -> np.dtype:
     return dt
 
 
-def _loadable(lens: Lens) -> None:
-    """Refuse a lens that ``load`` would refuse (a lens edited with ``eqx.tree_at`` skips
-    ``Lens``'s own checks): a field of 95°, wavelengths beyond a glass's data, a primary
-    index past the wavelengths. Else ``save`` would write a file that does not read back."""
-    if checks.is_traced(lens):
-        return
-    try:
-        lens.__check_init__()
-        checks.wavelengths(lens, lens.wavelengths, "Lens", "wavelengths")
-        checks.material_indices(lens, lens.wavelengths, "Lens", "wavelengths")
-    except ValueError as e:
-        raise ValueError(f"save: {e}; nothing written (load would refuse the file)") from None
-
-
 def save(lens: Lens, path: str | os.PathLike, **options) -> list[str]:
     """Write a lens file (``.json`` or ``.zmx``); ``load(save(...))`` gives the same lens.
 
@@ -144,7 +130,7 @@ def save(lens: Lens, path: str | os.PathLike, **options) -> list[str]:
         raise ValueError(f"save: {path!r} is a folder; give a file name ending in .json or "
                          f".zmx")
     ext = _ext(path, "save")
-    _loadable(lens)
+    loadable(lens, "save")
     output_file(path, "save")  # a missing folder: before a .zmx's catalogs are written beside it
     if ext == ".json":
         if options:

@@ -20,6 +20,8 @@ import jax.numpy as jnp
 import numpy as np
 
 from ..optics import checks
+from ..optics.lens import Lens
+from ..optics.reciprocal import reciprocal_length
 
 INFINITY_TEXT = {"inf": math.inf, "+inf": math.inf, "infinity": math.inf,
                  "+infinity": math.inf, "-inf": -math.inf, "-infinity": -math.inf}
@@ -132,17 +134,27 @@ def curvature(d: dict, where: str, suffix: str = "") -> float:
     if c is not None:
         cv = num(c, f"{where}: {ck}")
         if r is not None:
-            rv = num(r, f"{where}: {rk}", finite=False)
-            cr = 0.0 if math.isinf(rv) else (math.inf if rv == 0 else 1.0 / rv)
+            rv = _radius(r, rk, where, ck)
+            cr = 0.0 if math.isinf(rv) else 1.0 / rv
             if not math.isclose(cr, cv, rel_tol=1e-9, abs_tol=1e-15):
                 raise ValueError(f"{where}: {rk} {r!r} and {ck} {c!r} disagree")
         return cv
     if r is not None:
-        rv = num(r, f"{where}: {rk}", finite=False)
-        if rv == 0:
-            raise ValueError(f"{where}: {rk} 0 is not a surface; use {ck} 0 for flat")
+        rv = _radius(r, rk, where, ck)
         return 0.0 if math.isinf(rv) else 1.0 / rv
     return 0.0
+
+
+def _radius(r, rk: str, where: str, ck: str) -> float:
+    """A radius of curvature (mm; ±inf flat), refused where it is no surface's: 0 (or -0.0),
+    or below ``reciprocal.MIN_LENGTH_MM`` in size (5e-324 gave a curvature of inf, refused
+    as ``c``, a key the file does not hold; 1e-300 one of 1e300 per mm)."""
+    rv = num(r, f"{where}: {rk}", finite=False)
+    if rv == 0:
+        raise ValueError(f"{where}: {rk} 0 is not a surface; use {ck} 0 for flat")
+    if not math.isinf(rv):
+        reciprocal_length(rv, rk, where)
+    return rv
 
 
 class RepeatedKey(ValueError):
@@ -253,3 +265,21 @@ def whole_path(path: str | os.PathLike, where: str = "write"):
         if os.path.exists(tmp):
             os.remove(tmp)
         raise
+
+
+def loadable(lens, where: str) -> None:
+    """Refuse a lens that ``load`` would refuse (a lens edited with ``eqx.tree_at`` skips
+    ``Lens``'s own checks): a field of 95°, wavelengths beyond a glass's data, a primary
+    index past the wavelengths. Else a writer (``where``: ``save``, ``save_json``,
+    ``save_zmx``, the ``dumps``) would write a file that does not read back, or fail inside
+    (a wavelength past a glass's resonance was refused by ``Sellmeier.index``)."""
+    if not isinstance(lens, Lens):  # else an AttributeError from deep in the writer
+        raise TypeError(f"{where}: lens must be a jaxlens Lens, got {type(lens).__name__}")
+    if checks.is_traced(lens):
+        return
+    try:
+        lens.__check_init__()
+        checks.wavelengths(lens, lens.wavelengths, "Lens", "wavelengths")
+        checks.material_indices(lens, lens.wavelengths, "Lens", "wavelengths")
+    except ValueError as e:
+        raise ValueError(f"{where}: {e}; nothing written (load would refuse the file)") from None

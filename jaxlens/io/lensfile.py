@@ -62,6 +62,7 @@ from . import lens_keys, lens_system, surface_json
 from .json_values import (
     RepeatedKey,
     curvature,
+    loadable,
     nm_to_um,  # noqa: F401  (re-exported: analysis.report reads it here)
     output_file,
     write_whole,
@@ -684,6 +685,7 @@ def _warn_image_medium(img: dict, image_space, wl, primary: int, source: str) ->
 
 def lens_to_dict(lens: Lens) -> dict:
     """The JSON object of a lens (format ``jaxlens.lens/1``)."""
+    loadable(lens, "lens_to_dict")
     dist = math.inf if lens.object_distance is None else lens.object_distance
     obj = {
         "type": "object",
@@ -777,11 +779,13 @@ def load_json(path: str | os.PathLike) -> Lens:
 
 def dumps(lens: Lens) -> str:
     """The JSON text of a lens."""
+    loadable(lens, "dumps")
     return _pretty(lens_to_dict(lens)) + "\n"
 
 
 def save_json(lens: Lens, path: str | os.PathLike) -> None:
     """Write a JSON lens file (``path`` ends in ``.json``, any case; its folder must exist:
     else ``json_values.MissingFolderError``, a ``ValueError`` and a ``FileNotFoundError``)."""
+    loadable(lens, "save_json")
     path = output_file(path, "save_json", ".json")
     write_whole(path, dumps(lens), where="save_json")

@@ -91,6 +91,7 @@ from ..optics.freeform import MAX_ZERNIKE_TERMS, Biconic, ZernikeSag
 from ..optics.lens import Lens, Sensor
 from ..optics.paraxial_surface import ParaxialSurface
 from ..optics.qtype import QTypeAsphere
+from ..optics.reciprocal import reciprocal_length
 from ..optics.surfaces import OddAsphere, TiltedPlane
 from ..optics.toroidal import Toroidal
 from ..optics.xypolynomial import MAX_XY_TERMS, XYPolynomial
@@ -304,7 +305,7 @@ def toroidal(s, unit: float, sd: float) -> Toroidal:
         if i >= 3 and v != 0:
             raise ln.error("TOROIDAL Zernike terms (extra data) are not supported; jaxlens's "
                            "toroid is the conic-plus-polynomial profile only")
-    cx = curvature_of_rotation(s.parm[1][1].tokens[2], unit) if 1 in s.parm else 0.0
+    cx = _x_curvature(s, unit, "TOROIDAL radius of rotation (PARM 1)")
     m = max([i - 1 for i in s.parm if 2 <= i <= 9], default=0)
     a = [s.parm.get(i + 1, (0.0, None))[0] * unit ** (1 - 2 * i) for i in range(1, m + 1)]
     return Toroidal(c=_arr(s.curv / unit), k=_arr(s.coni), coeffs=_arr(np.array(a, np.float64)),
@@ -316,7 +317,7 @@ def biconic(s, unit: float, sd: float) -> Biconic:
     _parms(s, range(1, 3), "BICONICX (PARM 1 = x radius, PARM 2 = x conic)")
     _no_extra_data(s, "BICONICX has no extra data (XDAT): jaxlens's biconic is the two "
                       "conics (CURV/CONI in y, PARM 1/PARM 2 in x) only")
-    cx = curvature_of_rotation(s.parm[1][1].tokens[2], unit) if 1 in s.parm else 0.0
+    cx = _x_curvature(s, unit, "BICONICX x radius (PARM 1)")
     return Biconic(c=_arr(s.curv / unit), k=_arr(s.coni), cx=_arr(cx),
                    kx=_arr(s.parm.get(2, (0.0, None))[0]), semi_diameter=_arr(sd))
 
@@ -395,6 +396,10 @@ def paraxial_surface(s, unit: float, sd: float) -> tuple[ParaxialSurface, int | 
     if 1 not in s.parm or s.parm[1][0] == 0:
         raise (s.parm.get(1, (0, where))[1]).error(
             "a PARAXIAL surface needs a nonzero focal length (PARM 1)")
+    try:  # on PARM 1's line (ParaxialSurface named the TYPE line)
+        reciprocal_length(s.parm[1][0] * unit, "the PARAXIAL focal length (PARM 1)", "")
+    except ValueError as e:
+        raise s.parm[1][1].error(str(e)) from None
     mode = None
     if 2 in s.parm:
         v, ln = s.parm[2]
@@ -507,6 +512,9 @@ def opd_mode_error(lens: Lens, i: int, *, beam_radius: float = math.inf
             for tan in tans:
                 h_o = (b + z_o * d / n1) * n0 * tan
                 pv = _path_difference(qx, qy, f, n1, n2, z_o, h_o)
+                if not math.isfinite(pv):  # max(0.0, nan) is 0.0: "at most 0 waves"
+                    return None, (f"the path difference is {pv:g} mm (a conjugate point at "
+                                  f"z = {z_o:.6g} mm from the surface)")
                 worst = max(worst, pv / (wl * 1e-3))
     return worst, ""
 
@@ -526,11 +534,20 @@ def _path_difference(qx, qy, f, n1, n2, z_o, h_o) -> float:
     to_q = (pts - obj) * -np.sign(z_o)  # along the ray, toward +z
     d = to_q / np.linalg.norm(to_q, axis=0)
     _, _, path = paraxial_bend(tuple(d), qx, qy, f, n1, n2)
-    conj = (np.sign(z_o) * n1 * np.linalg.norm(pts - obj, axis=0)
-            - np.sign(z_i) * n2 * np.linalg.norm(img - pts, axis=0))
-    conj_0 = np.sign(z_o) * n1 * np.linalg.norm(obj) - np.sign(z_i) * n2 * np.linalg.norm(img)
-    diff = np.asarray(path) - (conj - conj_0)
+    # φ₀(Q) − φ₀(0) as sgn(z_O)·n·(|Q − O| − |O|) − sgn(z_I)·n′·(|I − Q| − |I|), each
+    # difference of lengths taken as (|Q|² − 2 Q·P)/(|Q − P| + |P|): subtracted as written, a
+    # conjugate 5e10 mm away (a beam collimated to 1e-9) left 0.015 waves of rounding.
+    conj = (np.sign(z_o) * n1 * _length_change(pts, obj)
+            - np.sign(z_i) * n2 * _length_change(pts, img))
+    diff = np.asarray(path) - conj
     return float(diff.max() - diff.min())
+
+
+def _length_change(q, p):
+    """|q − p| − |p| for the points q (``[3, N]``) and the point p (``[3, 1]``), without the
+    cancellation of the two lengths' subtraction."""
+    return (np.sum(q * q, axis=0) - 2.0 * np.sum(q * p, axis=0)) / (
+        np.linalg.norm(q - p, axis=0) + np.linalg.norm(p))
 
 
 def _not_collimated(lens: Lens, i: int) -> str:
@@ -562,6 +579,21 @@ def radius_text(cx: float) -> str:
         ctx.prec = 25
         r = decimal.Decimal(1) / decimal.Decimal(cx)
     return f"{r.normalize():E}"
+
+
+def _x_curvature(s, unit: float, what: str) -> float:
+    """The x curvature (1/mm) of PARM 1's radius: 0 for R = 0 (flat in x, as Zemax reads
+    it); a radius below ``reciprocal.MIN_LENGTH_MM`` refused on its line (1e-300 gave
+    1e300 per mm, 5e-324 an overflow named after the surface's coefficients)."""
+    if 1 not in s.parm:
+        return 0.0
+    v, ln = s.parm[1]
+    if v != 0:
+        try:
+            reciprocal_length(v * unit, what, "")
+        except ValueError as e:
+            raise ln.error(str(e)) from None
+    return curvature_of_rotation(ln.tokens[2], unit)
 
 
 def curvature_of_rotation(token: str, unit: float) -> float:

@@ -73,12 +73,15 @@ def epd_from_working_fnum(lens: Lens, fnum: float) -> float:
     """
     if not fnum > 0:
         raise ValueError(f"paraxial working F/# must be > 0, got {fnum:g}")
-    _, nu = paraxial.marginal_ray(lens, lens.primary_wavelength)
-    per_mm = abs(float(nu[-1])) / float(lens.epd)
-    if not (per_mm > 0 and math.isfinite(per_mm)):
+    # The working F/# at the lens's EPD, +inf where the image-space slope is zero within its
+    # rounding bound (``paraxial._over``): an exact-zero test let an afocal lens's rounding
+    # residue (nu' ~ 1e-17) through, and the EPD came out as 1e14 mm.
+    now = float(paraxial.paraxial_data(lens).working_fnum)
+    if not (math.isfinite(now) and now > 0):
         raise ValueError("the paraxial marginal ray leaves the lens parallel to the axis (an "
-                         "afocal lens): no entrance pupil gives a working F/#; use ENPD")
-    return 1.0 / (2.0 * fnum * per_mm)
+                         "afocal lens, or an image at infinity): no entrance pupil gives a "
+                         "working F/#; use ENPD")
+    return float(lens.epd) * now / fnum
 
 
 def angles_from_paraxial_image_heights(lens: Lens, heights: np.ndarray) -> Lens:

@@ -15,6 +15,7 @@ import numpy as np
 from ..optics import materials as _materials
 from ..optics.catalog import ND_TOLERANCE, catalog_names
 from ..optics.coordinates import CoordinateBreak
+from ..optics.input_files import input_file
 from ..optics.lens import Lens
 from ..optics.materials import AbstractMaterial, Air, ModelGlass, Tabulated
 from ..optics.surfaces import (
@@ -26,7 +27,7 @@ from ..optics.surfaces import (
     TiltedPlane,
 )
 from . import lensfile, zmx_glass, zmx_surfaces, zmx_system
-from .json_values import output_file, write_whole
+from .json_values import loadable, output_file, write_whole
 from .zmx_common import (
     MARKER,
     MAX_XPOLY_DEGREE,
@@ -375,6 +376,7 @@ def _merged(path: str, lines: list[str], *, shared: bool) -> list[str]:
     other lens files of the folder use; a glass of the same name must hold the same data."""
     if not os.path.exists(path):
         return lines
+    input_file(path, "save_zmx", "glass catalog (.agf) to merge with")  # a FIFO hung here
     with open(path, encoding="utf-8", errors="replace") as fh:
         old = fh.read().splitlines()
     mark = lines[0]  # "CC <catalog>: glasses written by jaxlens"
@@ -538,6 +540,7 @@ def dumps(lens: Lens, path: str = "lens.zmx", *, model_glass: str = "blank"):
     beam is therefore read back with rays passing there that it lost."""
     if model_glass not in ("blank", "agf"):
         raise ValueError(f"save_zmx: model_glass must be 'blank' or 'agf', got {model_glass!r}")
+    loadable(lens, "dumps")
     stem = os.path.splitext(os.path.basename(os.fspath(path)))[0]
     gw = _GlassWriter(stem, model_glass, np.atleast_1d(np.asarray(lens.wavelengths, np.float64)))
     gw.reserve((lens.object_material,) + tuple(lens.materials))
@@ -653,6 +656,7 @@ def save_zmx(lens: Lens, path: str | os.PathLike, *, model_glass: str = "blank")
         The paths of the AGF catalogs written beside the file (possibly none).
     """
     # Before any work, and before the side catalogs are written beside it.
+    loadable(lens, "save_zmx")
     path = output_file(path, "save_zmx", ".zmx")
     text, gw = dumps(lens, path, model_glass=model_glass)
     folder = os.path.dirname(os.path.abspath(path))

@@ -78,6 +78,7 @@ import numpy as np
 from jaxtyping import Array, Float
 
 from . import checks
+from .reciprocal import NORMALISING, reciprocal_length
 from .surfaces import AbstractSurface, number_field
 
 _UM_TO_MM = 1e-3
@@ -122,6 +123,8 @@ class Binary2(AbstractSurface):
             v = getattr(self, name)
             if not checks.is_traced(v):
                 checks.values(v, name, "Binary2", lo=lo, lo_open=lo is not None, unit=unit)
+        if not checks.is_traced(self.norm_radius):
+            reciprocal_length(self.norm_radius, "norm_radius", "Binary2", why=NORMALISING)
         self._check_numbers()
 
     def even_coeffs(self):

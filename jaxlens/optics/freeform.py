@@ -80,7 +80,8 @@ import numpy as np
 from jaxtyping import Array, Float
 
 from . import checks
-from .surfaces import AbstractSurface, guarded_sqrt, number_field
+from .reciprocal import MIN_LENGTH_MM, NORMALISING, reciprocal_length
+from .surfaces import MAX_CURVATURE, AbstractSurface, guarded_sqrt, number_field
 
 ZERNIKE_ORDERINGS = ("standard", "fringe")
 """The ``ZernikeSag`` orderings: Zemax Standard (Noll, normalised) and Fringe (unnormalised)."""
@@ -111,10 +112,12 @@ class Biconic(AbstractSurface):
         "semi_diameter", default_factory=lambda: jnp.asarray(jnp.inf))
 
     def __check_init__(self):
-        for name, unit in (("cx", "1/mm"), ("kx", "")):
+        for name, bound, unit in (("cx", MAX_CURVATURE, f"1/mm (|R| >= {MIN_LENGTH_MM:g} mm)"),
+                                  ("kx", None, "")):
             v = getattr(self, name)
             if not checks.is_traced(v):
-                checks.values(v, name, "Biconic", unit=unit)
+                checks.values(v, name, "Biconic", unit=unit, hi=bound,
+                              lo=None if bound is None else -bound)
         self._check_numbers()
 
     def _check_domain(self, where: str):
@@ -362,6 +365,8 @@ class ZernikeSag(AbstractSurface):
             v = getattr(self, name)
             if not checks.is_traced(v):
                 checks.values(v, name, where, lo=lo, lo_open=lo is not None, unit="mm")
+        if not checks.is_traced(self.norm_radius):
+            reciprocal_length(self.norm_radius, "norm_radius", where, why=NORMALISING)
         self._check_numbers()
 
     @property

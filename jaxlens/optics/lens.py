@@ -125,6 +125,7 @@ from . import checks, travel
 from .apertures import Aperture
 from .coordinates import CoordinateBreak
 from .materials import AbstractMaterial, Air
+from .reciprocal import reciprocal_length
 from .surfaces import AbstractSurface, Standard
 
 INFINITE_OBJECT_MM = 1e10
@@ -318,6 +319,8 @@ class Sensor(eqx.Module):
         if not checks.is_traced(self.pixel_size):
             checks.number(self.pixel_size, "pixel_size", "Sensor", lo=0, lo_open=True,
                           unit="mm")
+            reciprocal_length(self.pixel_size, "pixel_size", "Sensor",
+                              why="image positions are divided by it")
             # Before: no upper bound; a pitch of 5 (µm meant) on 4000 pixels was a 20 m sensor.
             hi = checks.MAX_SENSOR_SIZE_MM / max(res)
             checks.number(self.pixel_size, "pixel_size", "Sensor", lo=0, lo_open=True, hi=hi,
@@ -471,6 +474,8 @@ class Lens(eqx.Module):
         if not checks.is_traced(self.epd):
             checks.values(self.epd, "epd (entrance pupil diameter)", "Lens", lo=0, lo_open=True,
                           unit="mm")
+            reciprocal_length(self.epd, "epd (entrance pupil diameter)", "Lens",
+                              why="the pupil is sampled in units of it; F/# = EFL/EPD")
         if self.object_na is not None:
             self._check_telecentric()
         elif not checks.is_traced(self.fields):

@@ -50,6 +50,9 @@ Conventions:
 
 from __future__ import annotations
 
+import contextvars
+import functools
+
 import equinox as eqx
 import jax
 import jax.numpy as jnp
@@ -135,19 +138,44 @@ def _lens_and_size(lens, wavelength, where: str) -> None:
                              f"shape {np.shape(wavelength)}")
 
 
+_DEPTH = contextvars.ContextVar("paraxial_depth", default=0)
+"""How many of this module's entry points (``_entry``) are running: the lens's own checks
+(``checks.lens_intact``) run in the outermost only."""
+
+
+def _entry(fn):
+    """An entry point: nested calls (``paraxial_data`` calls ``marginal_ray``, which calls
+    ``entrance_pupil_z``, ...) know they are nested, so the lens is checked once, by the
+    function the user called."""
+    @functools.wraps(fn)
+    def go(*args, **kwargs):
+        token = _DEPTH.set(_DEPTH.get() + 1)
+        try:
+            return fn(*args, **kwargs)
+        finally:
+            _DEPTH.reset(token)
+    return go
+
+
 def _given(lens: Lens, wavelength, where: str):
     """The wavelength (µm) for the helpers that internal (often traced) code calls with the
     primary one: the primary one for None, a given concrete one checked against the lens's
     materials (587.6 in nm gave a plausible but wrong pupil), a traced one as it is (no
     ``error_if`` on the traced hot path: ``paraxial_data`` and ``efl`` check theirs)."""
     _lens_and_size(lens, wavelength, where)
+    if _DEPTH.get() <= 1:  # a lens edited with eqx.tree_at (a NaN thickness): NaN before
+        checks.lens_intact(lens, where)
     if wavelength is None:
+        # Checked here, under the name the user called: past a formula's resonance it was
+        # refused by ``signed_indices``, a function the user never called.
+        checks.primary_wavelength(lens, where)
         return lens.primary_wavelength
     if checks.is_traced(wavelength):
         return wavelength
     return checks.wavelengths(lens, wavelength, where)
 
 
+@_entry
 def signed_indices(lens: Lens, wavelength) -> list[Array]:
     """``lens.indices`` signed by the light's direction along each medium's local z
     (``travel.travel_senses``: negative after an odd number of mirrors, unless coordinate
@@ -159,6 +187,7 @@ def signed_indices(lens: Lens, wavelength) -> list[Array]:
     return [-x if s < 0 else x for x, s in zip(n, travel_senses(lens), strict=True)]
 
 
+@_entry
 def system_matrix(lens: Lens, wavelength=None, start: int = 0, end: int | None = None):
     """ABCD matrix in (y, nu) from just before ``surfaces[start]`` to just after ``surfaces[end]``.
 
@@ -238,6 +267,16 @@ class ParaxialData(eqx.Module):
     stop_semi_diameter: Float[Array, ""]
 
 
+def telecentric_only(lens: Lens, where: str) -> None:
+    """Refuse anything but an object-space telecentric lens (``Lens.object_na`` given) in
+    ``where``, whose numbers are of its object cone."""
+    _lens_and_size(lens, None, where)
+    if not lens.telecentric_object:
+        raise ValueError(f"{where}: the lens is not object-space telecentric (Lens.object_na "
+                         f"is None): {where} is of an object-space telecentric lens's object "
+                         f"cone; give the lens an object_na (an object at a finite distance)")
+
+
 def finite_pupil(lens: Lens, where: str, instead: str = "") -> None:
     """Refuse an object-space telecentric lens (``Lens.object_na``), whose entrance pupil lies
     at infinity, in ``where``, which needs one at a finite distance (its position, or field
@@ -255,14 +294,18 @@ def finite_pupil(lens: Lens, where: str, instead: str = "") -> None:
             f"its object heights")
 
 
+@_entry
 def object_slope(lens: Lens) -> Array:
     """tan u: the object-space slope of the paraxial marginal ray of an object-space
     telecentric lens, u = asin(NA / n) with n the object-space index at the primary
-    wavelength (``Lens.object_na``)."""
+    wavelength (``Lens.object_na``). Any other lens is a ``ValueError`` (a lens without an
+    object NA failed as None divided by an array)."""
+    telecentric_only(lens, "object_slope")
     s = lens.object_na / lens.object_material.index(lens.primary_wavelength)
     return s / jnp.sqrt(1.0 - s * s)
 
 
+@_entry
 def entrance_pupil_z(lens: Lens, wavelength=None) -> Array:
     """Global z of the paraxial entrance pupil (image of the stop in object space). An
     object-space telecentric lens (``Lens.object_na``), whose pupil lies at infinity, is
@@ -282,6 +325,7 @@ def entrance_pupil_z(lens: Lens, wavelength=None) -> Array:
     return _over(b * n0, a, aa + jnp.abs(t) * ac, steps + 1)
 
 
+@_entry
 def entrance_pupil_magnification(lens: Lens, wavelength=None) -> Array:
     """Paraxial magnification from the entrance pupil to the stop (stop height / EP height)."""
     finite_pupil(lens, "entrance_pupil_magnification")
@@ -294,6 +338,7 @@ def entrance_pupil_magnification(lens: Lens, wavelength=None) -> Array:
     return a + t * c
 
 
+@_entry
 def marginal_ray(lens: Lens, wavelength=None):
     """Paraxial marginal ray (y, nu) after every surface, for the lens's EPD and object (an
     object-space telecentric lens: from the axial object point at slope tan u, u the
@@ -346,6 +391,8 @@ def _wavelength(lens: Lens, wavelength, where: str):
     lens's materials (an error_if under jit, so these stay usable in jitted losses)."""
     _lens_and_size(lens, wavelength, where)
     checks.lens_intact(lens, where)  # edited with eqx.tree_at: a NaN curvature gave NaN
+    if wavelength is None:  # named by the caller (``_given``)
+        checks.primary_wavelength(lens, where)
     wl = lens.primary_wavelength if wavelength is None else checks.wavelengths(
         lens, wavelength, where)
     # A formula material whose index there is below 1 or not finite (Schott coefficients
@@ -355,6 +402,7 @@ def _wavelength(lens: Lens, wavelength, where: str):
     return wl
 
 
+@_entry
 def paraxial_chief_ray(lens: Lens, field_deg, wavelength=None):
     """Paraxial chief ray (y, nu) after every surface for a field angle (degrees); for an
     object-space telecentric lens (``Lens.object_na``) for an object height (mm), the ray
@@ -418,6 +466,7 @@ def _pupil_reachable(zep, u, where: str):
     return eqx.error_if(u, jnp.any(bad), f"{where}: {PUPIL_AT_INFINITY}")
 
 
+@_entry
 def efl(lens: Lens, wavelength=None) -> Array:
     """Effective focal length 1/power (mm) at ``wavelength`` (default: primary); +inf for an
     afocal lens (zero power, or a power within its rounding bound: ``_over``)."""
@@ -433,6 +482,7 @@ def _power(c):
     return 0.0 - c
 
 
+@_entry
 def bfl(lens: Lens, wavelength=None) -> Array:
     """Back focal length: last vertex to the paraxial focus of an object at infinity (mm);
     infinite for an afocal lens (the sign of −A·n′ over +0: ``_over``)."""
@@ -442,6 +492,7 @@ def bfl(lens: Lens, wavelength=None) -> Array:
     return _over(-a * n[-1], c, ac, steps)
 
 
+@_entry
 def image_height(lens: Lens, field_deg, wavelength=None) -> Array:
     """Paraxial chief-ray height on the image surface (mm) of a field angle (deg), or of an
     object height (mm) for an object-space telecentric lens (``Lens.object_na``)."""
@@ -453,6 +504,7 @@ def image_height(lens: Lens, field_deg, wavelength=None) -> Array:
     return y[-1] + axial_thicknesses(lens)[-1] * nu[-1] / n_img
 
 
+@_entry
 def magnification(lens: Lens, wavelength=None) -> Array:
     """The paraxial lateral magnification m = n u / (n′ u′) of the lens's finite object (its
     paraxial image height per unit object height, at the paraxial image plane), from the
@@ -471,6 +523,7 @@ def magnification(lens: Lens, wavelength=None) -> Array:
     return _over(_marginal_start(lens, wl, n)[1], nu, *_image_slope_scale(lens, wl, n))
 
 
+@_entry
 def paraxial_data(lens: Lens, wavelength=None) -> ParaxialData:
     """All first-order data at one wavelength (default: primary)."""
     if wavelength is not None and jnp.ndim(wavelength) != 0:
@@ -541,6 +594,7 @@ def paraxial_data(lens: Lens, wavelength=None) -> ParaxialData:
     )
 
 
+@_entry
 def working_fnum(lens: Lens, depth) -> Array:
     """The paraxial working F-number 1/(2n′u′) for an object at ``depth`` (mm from surface 1,
     as ``sampling.lens_depth`` gives it; None for infinity), whatever the lens's own object:

@@ -33,10 +33,10 @@ from __future__ import annotations
 from typing import ClassVar
 
 import jax.numpy as jnp
-import numpy as np
 from jaxtyping import Array, Float
 
 from . import checks
+from .reciprocal import reciprocal_length
 from .surfaces import AbstractSurface, number_field
 
 
@@ -62,10 +62,8 @@ class ParaxialSurface(AbstractSurface):
 
     def __check_init__(self):
         f = self.focal_length
-        if not checks.is_traced(f) and not (np.isfinite(np.asarray(f)).all()
-                                            and (np.asarray(f) != 0).all()):
-            raise ValueError(f"ParaxialSurface: focal_length must be a finite nonzero length "
-                             f"in mm, got {np.asarray(f)!r}")
+        if not checks.is_traced(f):  # 5e-324 mm: a power of inf, read as an afocal lens
+            reciprocal_length(f, "focal_length", "ParaxialSurface")
 
     @property
     def c(self) -> Array:

@@ -61,6 +61,7 @@ import jax.numpy as jnp
 from jaxtyping import Array, Float
 
 from . import checks
+from .reciprocal import NORMALISING, reciprocal_length
 from .surfaces import AbstractSurface, number_field
 
 QTYPES = ("bfs", "con")
@@ -193,6 +194,7 @@ class QTypeAsphere(AbstractSurface):
         if not checks.is_traced(self.norm_radius):
             checks.values(self.norm_radius, "norm_radius", "QTypeAsphere", lo=0, lo_open=True,
                           unit="mm")
+            reciprocal_length(self.norm_radius, "norm_radius", "QTypeAsphere", why=NORMALISING)
         if not checks.is_traced(self.coeffs):
             checks.values(self.coeffs, "coeffs", "QTypeAsphere", unit="mm")
         self._check_numbers()

@@ -36,6 +36,7 @@ import numpy as np
 from jaxtyping import Array, Float
 
 from . import checks
+from .reciprocal import MIN_LENGTH_MM
 
 
 def guarded_sqrt(x):
@@ -77,10 +78,14 @@ class AbstractSurface(eqx.Module):
             if not 1 <= a.ndim <= jnp.ndim(self.c) + 1:
                 raise ValueError(f"{where}: {name} must be a 1-D array of coefficients (one "
                                  f"per term), got shape {a.shape}")
-        for name, unit in (("c", "1/mm"), ("k", "")):
+        # |c| at most 1/MIN_LENGTH_MM (R >= 1 nm): c = 1e300 passed where no semi-diameter
+        # bounded the surface, a sphere of radius 1e-300 mm that no ray but the axis meets.
+        for name, bound, unit in (("c", MAX_CURVATURE, f"1/mm (|R| >= {MIN_LENGTH_MM:g} mm)"),
+                                  ("k", None, "")):
             v = getattr(self, name)
             if not checks.is_traced(v):
-                checks.values(v, name, where, unit=unit)
+                checks.values(v, name, where, unit=unit, hi=bound,
+                              lo=None if bound is None else -bound)
         for name, a in arrays:
             if not checks.is_traced(a):
                 checks.values(a, name, where)
@@ -253,6 +258,9 @@ class OddAsphere(AbstractSurface):
     def radial_coeffs(self):
         return self.coeffs
 
+
+MAX_CURVATURE = 1e9  # 1 / MIN_LENGTH_MM, exactly (1/1e-9 is 999999999.9999999)
+"""Largest |c| (1/mm) of a surface: a radius of at least ``reciprocal.MIN_LENGTH_MM``."""
 
 STEEP_SLOPE = 5.0
 """A ``TiltedPlane`` slope at least this steep (a tilt of 78.7° or more) that is a whole

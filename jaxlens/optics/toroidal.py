@@ -31,7 +31,8 @@ import numpy as np
 from jaxtyping import Array, Float
 
 from . import checks
-from .surfaces import AbstractSurface, guarded_sqrt, number_field
+from .reciprocal import MIN_LENGTH_MM
+from .surfaces import MAX_CURVATURE, AbstractSurface, guarded_sqrt, number_field
 
 
 class Toroidal(AbstractSurface):
@@ -60,7 +61,8 @@ class Toroidal(AbstractSurface):
         # Before: no value was checked; a NaN c or cx, an infinite conic or a semi-diameter of
         # -1 mm built a surface whose every ray was lost (or NaN) without a word.
         if not checks.is_traced(self.cx):
-            checks.values(self.cx, "cx", "Toroidal", unit="1/mm")
+            checks.values(self.cx, "cx", "Toroidal", lo=-MAX_CURVATURE, hi=MAX_CURVATURE,
+                          unit=f"1/mm (|R| >= {MIN_LENGTH_MM:g} mm)")
         self._check_numbers()
 
     def _check_domain(self, where: str):

@@ -49,6 +49,7 @@ import numpy as np
 from jaxtyping import Array, Float
 
 from . import checks
+from .reciprocal import NORMALISING, reciprocal_length
 from .surfaces import AbstractSurface, number_field
 
 MAX_XY_DEGREE = 20
@@ -158,6 +159,7 @@ class XYPolynomial(AbstractSurface):
         if not checks.is_traced(self.norm_radius):
             checks.values(self.norm_radius, "norm_radius", where, lo=0, lo_open=True,
                           unit="mm")
+            reciprocal_length(self.norm_radius, "norm_radius", where, why=NORMALISING)
         if not checks.is_traced(self.coeffs):
             checks.values(self.coeffs, "coeffs", where, unit="mm")
         self._check_numbers()
