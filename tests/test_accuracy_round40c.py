@@ -288,8 +288,9 @@ def test_coherent_psf_strehl_matches(name):
     for f, fr in zip(r["jaxlens_fields"], r["fields"], strict=True):
         if "coherent_centre_strehl" not in fr:
             continue
-        info = psf_info(lens, f, wavelength=r["primary_um"], model=CoherentPSF(overfill=REF_GRID.overfill),
-                        pixel_size=1e-4, kernel_size=3)
+        info = psf_info(lens, f, wavelength=r["primary_um"],
+                        model=CoherentPSF(overfill=REF_GRID.overfill), pixel_size=1e-4,
+                        kernel_size=3)
         k = np.asarray(info.psf)
         centre = float(info.strehl) * k[1, 1] / k.max()
         assert abs(centre - fr["coherent_centre_strehl"]) < 1e-8, (f, centre)
