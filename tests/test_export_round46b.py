@@ -53,6 +53,9 @@ REF = json.loads((DATA / "export46b_reference.json").read_text())
 FILES = {r["file"]: r for r in REF["files"]}
 SMOKE = "tests/data/export46b/smoke/lens.zmx"
 COMMITTED = [f for f in FILES if f != SMOKE]
+# relative_illumination's pupil cells: its default 128 left 2.2e-4 of sampling error at seed
+# 13's corner field (0.99972; 256: 0.999948, optiland 0.999943; 64: 1.00102)
+RI_PUPIL = 256
 
 
 def _load(rel: str):
@@ -140,7 +143,8 @@ def test_committed_claims_from_the_files_alone():
     for rel, (col, seed, readme) in claims.items():
         ro = FILES[rel]["rayoptics"]
         per = {s["seed"]: s for s in table["columns"][col]["per_seed"]}[seed]
-        np.testing.assert_allclose(per["rms_mean_um"], ro["rms_mean_um"], rtol=1e-8, err_msg=rel)
+        # the table holds the designs before the conic rebase of the export (README: 0.0013 %)
+        np.testing.assert_allclose(per["rms_mean_um"], ro["rms_mean_um"], rtol=1.3e-5, err_msg=rel)
         assert round(ro["rms_mean_um"], 2) == readme
         assert per["valid"] and ro["rays_ok"]
 
@@ -159,7 +163,7 @@ def _per_field(rel):
     mtf = [psf.mtf(lens, (0.0, float(t)), frequencies=REF["mtf_freqs"],
                    model=psf.GeometricPSF(pupil=REF["mtf_cells"], overfill=REF["mtf_overfill"]),
                    diffraction=False)[1:] for t in th]
-    ri = radiometry.relative_illumination(lens, th)
+    ri = radiometry.relative_illumination(lens, th, pupil=RI_PUPIL)
     return r, d, cra, mtf, np.asarray(ri.ri)
 
 
@@ -169,14 +173,14 @@ def _check_per_field(rel):
     for f, df, c, (t, s), e in zip(r["fields"], d["fields"], cra, mtf, ri, strict=True):
         what = f"{rel} at {f['theta_deg']:.3f} deg"
         np.testing.assert_allclose(df["chief_ray_height"], f["chief_y"], atol=1e-12, err_msg=what)
-        np.testing.assert_allclose(df["distortion"], f["distortion_percent"], atol=1e-10,
+        np.testing.assert_allclose(df["distortion"], f["distortion_percent"], atol=1e-11,
                                    err_msg=what)
-        np.testing.assert_allclose(c, f["cra_deg"], atol=1e-10, err_msg=what)
-        np.testing.assert_allclose(df["rms_spot_polychromatic"], f["rms_um"], rtol=1e-8,
+        np.testing.assert_allclose(c, f["cra_deg"], atol=1e-11, err_msg=what)
+        np.testing.assert_allclose(df["rms_spot_polychromatic"], f["rms_um"], rtol=1e-10,
                                    err_msg=what)
-        np.testing.assert_allclose(np.asarray(t), f["mtf"]["tangential"], atol=1e-9, err_msg=what)
-        np.testing.assert_allclose(np.asarray(s), f["mtf"]["sagittal"], atol=1e-9, err_msg=what)
-        np.testing.assert_allclose(e, f["relative_illumination"], atol=1e-4, err_msg=what)
+        np.testing.assert_allclose(np.asarray(t), f["mtf"]["tangential"], atol=1e-10, err_msg=what)
+        np.testing.assert_allclose(np.asarray(s), f["mtf"]["sagittal"], atol=1e-10, err_msg=what)
+        np.testing.assert_allclose(e, f["relative_illumination"], atol=3e-5, err_msg=what)
 
 
 def test_smoke_per_field_against_optiland():
