@@ -28,8 +28,8 @@ What was measured (the tolerances below are these figures with a margin):
   3.6e-13 deg, RMS 7.1e-13 relative; the geometric MTF (no diffraction, 10-100 cycles/mm)
   on jaxlens's default geometric-PSF pupil cells (64, overfill 1) 1.5e-12; the relative
   illumination (two methods: round 43c's ring-spoke irradiance from optiland's rays against
-  jaxlens's pupil polygon) FIGURE_RI at 256 cells (at the default 128: 2.2e-4, seed 13's
-  corner field, a sampling error that 256 cells remove);
+  jaxlens's pupil polygon) 1.5e-5, 4.8e-6, 5.7e-7 (smoke, seed 13, seed 9) at 256 cells
+  (at the default 128: 2.2e-4, seed 13's corner field, a sampling error 256 cells remove);
 * the committed designs' Table 1 RMS (16 x 16 grid, ray-optics): seed 13 4.668217 µm,
   paper seed 9 5.307858 µm, README's 4.67 and 5.31, table1.json's per-seed values within
   1.5e-6 (the export's conic rebase, README: within 0.0013 %).
