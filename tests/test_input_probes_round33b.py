@@ -253,7 +253,7 @@ OPTILAND_ONLY = {"tools/make_refcase.py", "tools/conventions_reference.py",
                  "tools/tele43a_reference.py", "tools/zmx43d_reference.py",
                  "tools/ri43c_reference.py", "tools/stress43e_reference.py",
                  "tools/aper44a_reference.py", "tools/zmx45c_reference.py",
-                 "tools/aim45a_reference.py"}
+                 "tools/aim45a_reference.py", "tools/export46b_reference.py"}
 
 
 @pytest.mark.parametrize("path", sorted(
