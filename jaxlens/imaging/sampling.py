@@ -746,6 +746,10 @@ def lens_depth(lens: Lens, depth, where: str):
     for an object at infinity, else an array of the lens's dtype, so that compiled programs
     take it as an argument (one program serves every depth)."""
     own = depth is None and not lens.object_at_infinity
+    if not lens.telecentric_object and not checks.is_traced(lens):
+        # Every analysis launches its beams on the entrance pupil's plane: at infinity (the
+        # stop in the focal plane of the surfaces before it) they were NaN or empty spots.
+        paraxial.entrance_pupil_plane(lens, where)
     if own:
         depth = lens.object_distance  # negative for a virtual object
         if not checks.is_traced((lens, depth)) and float(depth) < 0:  # traced: an error_if
