@@ -271,6 +271,7 @@ def encircled_energy(lens: Lens, field, radii, *, wavelength=None, method: str =
     """
     checks.focal_image(lens, "encircled_energy")
     where = "encircled_energy"
+    check_launchable(lens, where)  # before the image size from the largest field's chief ray
     r = _checked_radii(radii, where, lens.epd.dtype)
     if not checks.is_traced((r, lens)):  # a traced lens has no concrete image size
         _radii_unit(lens, np.asarray(r), where)
