@@ -57,7 +57,7 @@ from jaxtyping import Array, Float
 
 from ..imaging.light import refuse_dark
 from ..imaging.psf import CoherentPSF, psf_info
-from ..imaging.sampling import check_launchable, pupil_points, pupil_polar
+from ..imaging.sampling import pupil_points, pupil_polar
 from ..imaging.telecentric import lens_field
 from ..optics import checks, paraxial
 from ..optics.lens import Lens
@@ -141,7 +141,7 @@ def _check_common(lens, where, field, wavelength, method, reference, shape):
                                 ("shape", shape, SHAPES)):
         if value not in allowed:
             raise ValueError(f"{where}: {arg} must be one of {allowed}, got {value!r}")
-    check_launchable(lens, where)  # a pupil at infinity: before the field's chief ray
+    paraxial.check_launchable(lens, where)  # a pupil at infinity: before the field's chief ray
     field = lens_field(lens, field, where)  # here: the inner traces are quiet
     wl = lens.primary_wavelength if wavelength is None else wavelength
     if jnp.ndim(wl) > 1 or jnp.size(wl) == 0:
@@ -271,7 +271,7 @@ def encircled_energy(lens: Lens, field, radii, *, wavelength=None, method: str =
     """
     checks.focal_image(lens, "encircled_energy")
     where = "encircled_energy"
-    check_launchable(lens, where)  # before the image size from the largest field's chief ray
+    paraxial.check_launchable(lens, where)  # before the largest field's chief ray (image size)
     r = _checked_radii(radii, where, lens.epd.dtype)
     if not checks.is_traced((r, lens)):  # a traced lens has no concrete image size
         _radii_unit(lens, np.asarray(r), where)

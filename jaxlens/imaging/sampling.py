@@ -738,17 +738,6 @@ def aim_at_stop(
     return Rays(o, d, rays.wavelength, opl=opl, valid=rays.valid & hit)
 
 
-def check_launchable(lens: Lens, where: str) -> None:
-    """Refuse, naming ``where``, a concrete lens whose beams cannot be launched: every
-    analysis launches them on the entrance pupil's plane, which lies at infinity where the
-    stop sits in the focal plane of the surfaces before it (spots, fans and the relative
-    illumination were NaN or empty, a report an EquinoxRuntimeError from inside its
-    compiled trace). An object-space telecentric lens (``Lens.object_na``) launches from its
-    object points instead and passes."""
-    if not lens.telecentric_object and not checks.is_traced(lens):
-        paraxial.entrance_pupil_plane(lens, where)
-
-
 def lens_depth(lens: Lens, depth, where: str):
     """The object distance an imaging or analysis function traces from: ``depth`` (mm from
     the object to surface 1; inf, or 1e10 and more, for an object at infinity, as a Lens's
@@ -757,7 +746,7 @@ def lens_depth(lens: Lens, depth, where: str):
     for an object at infinity, else an array of the lens's dtype, so that compiled programs
     take it as an argument (one program serves every depth)."""
     own = depth is None and not lens.object_at_infinity
-    check_launchable(lens, where)
+    paraxial.check_launchable(lens, where)  # its beams start on the entrance pupil's plane
     if own:
         depth = lens.object_distance  # negative for a virtual object
         if not checks.is_traced((lens, depth)) and float(depth) < 0:  # traced: an error_if

@@ -218,7 +218,10 @@ class ParaxialData(eqx.Module):
     optiland's EFL); ``front_focal_length`` = n·efl and ``rear_focal_length`` = n′·efl
     with n, n′ the object- and image-space indices. For an object-space telecentric lens
     (``Lens.object_na``) ``entrance_pupil_z`` is −inf, ``entrance_pupil_diameter`` +inf and
-    ``fnum`` (EFL/EPD) NaN; ``working_fnum`` and the rest follow its NA.
+    ``fnum`` (EFL/EPD) NaN; ``working_fnum`` and the rest follow its NA. A lens whose EPD
+    sets no marginal ray (its entrance pupil at infinity without ``object_na``, or its object
+    on the pupil's plane) is refused by name (``check_marginal_pupil``): its stop size,
+    working F/# and exit pupil diameter have no value (efl, bfl and ``magnification`` do).
     """
 
     efl: Float[Array, ""]
@@ -297,7 +300,9 @@ def entrance_pupil_magnification(lens: Lens, wavelength=None) -> Array:
 def marginal_ray(lens: Lens, wavelength=None):
     """Paraxial marginal ray (y, nu) after every surface, for the lens's EPD and object (an
     object-space telecentric lens: from the axial object point at slope tan u, u the
-    cone's half-angle of its ``object_na``).
+    cone's half-angle of its ``object_na``). A lens whose EPD sets no marginal ray (its
+    entrance pupil at infinity, or its object on the pupil's plane) is refused
+    (``check_marginal_pupil``).
 
     Each is ``[num_surfaces]`` for one wavelength (µm), ``[num_surfaces, W]`` for ``[W]``."""
     wl = _given(lens, wavelength, "marginal_ray")
@@ -446,6 +451,17 @@ def entrance_pupil_plane(lens: Lens, where: str) -> Array:
     return zep
 
 
+def check_launchable(lens: Lens, where: str) -> None:
+    """Refuse, naming ``where``, a concrete lens whose beams cannot be launched: every
+    analysis launches them on the entrance pupil's plane, which lies at infinity where the
+    stop sits in the focal plane of the surfaces before it (spots, fans and the relative
+    illumination were NaN or empty, a report an EquinoxRuntimeError from inside its
+    compiled trace). An object-space telecentric lens (``Lens.object_na``) launches from its
+    object points instead and passes."""
+    if not lens.telecentric_object and not checks.is_traced(lens):
+        entrance_pupil_plane(lens, where)
+
+
 def _pupil_reachable(zep, u, where: str):
     """``u`` (tanθ of field angles), refused where it is nonzero and the entrance pupil lies
     at infinity (``PUPIL_AT_INFINITY``): a ValueError for concrete values, an error_if where
@@ -503,7 +519,9 @@ def magnification(lens: Lens, wavelength=None) -> Array:
     object: m tends to −inf just outside the focal plane and +inf just inside it). For
     an object-space telecentric lens (``Lens.object_na``) the distortion-free image of the
     object height h (mm) is m·h: the paraxial chief ray, parallel to the axis at h, meets
-    the paraxial image plane there."""
+    the paraxial image plane there. It is traced by an axial ray of slope 1, not the
+    marginal ray, so it does not depend on the aperture (an entrance pupil at infinity
+    without ``object_na`` still has one)."""
     wl = _wavelength(lens, wavelength, "magnification")
     n = signed_indices(lens, wl)
     if lens.object_at_infinity:
