@@ -297,7 +297,7 @@ def test_chief_ray_near_pupil_at_infinity_is_finite_and_linear():
 def test_rays_through_a_pupil_at_infinity_are_refused_by_name():
     """The samplers launch rays on the entrance pupil's plane: at infinity that was an
     origin of inf, refused by ``Rays`` without saying why (field 0 included); now each
-    sampler names the pupil at infinity. The paraxial data stay available."""
+    sampler names the pupil at infinity. Its pupil's position stays available."""
     lens = _pupil_at_infinity()
     for where, call in (
             ("collimated", lambda: sampling.field_rays(lens, 0.0, jnp.zeros((1, 2)))),
@@ -308,4 +308,7 @@ def test_rays_through_a_pupil_at_infinity_are_refused_by_name():
         with pytest.raises(ValueError, match=f"{where}: the lens's entrance pupil lies at "
                                              f"infinity"):
             call()
-    assert not np.isfinite(float(jl.paraxial_data(lens).entrance_pupil_z))
+    assert not np.isfinite(float(paraxial.entrance_pupil_z(lens)))
+    # Round 46a: its EPD sets no marginal ray (the axis), so paraxial_data refuses it by name.
+    with pytest.raises(ValueError, match="^paraxial_data: .*entrance pupil lies at infinity"):
+        jl.paraxial_data(lens)

@@ -141,6 +141,7 @@ def _check_common(lens, where, field, wavelength, method, reference, shape):
                                 ("shape", shape, SHAPES)):
         if value not in allowed:
             raise ValueError(f"{where}: {arg} must be one of {allowed}, got {value!r}")
+    paraxial.check_launchable(lens, where)  # a pupil at infinity: before the field's chief ray
     field = lens_field(lens, field, where)  # here: the inner traces are quiet
     wl = lens.primary_wavelength if wavelength is None else wavelength
     if jnp.ndim(wl) > 1 or jnp.size(wl) == 0:
@@ -272,6 +273,7 @@ def encircled_energy(lens: Lens, field, radii, *, wavelength=None, method: str =
     where = "encircled_energy"
     if wavelength is None:  # before the image size (``_radii_unit``) traces it paraxially
         checks.primary_wavelength(lens, where)
+    paraxial.check_launchable(lens, where)  # before the largest field's chief ray (image size)
     r = _checked_radii(radii, where, lens.epd.dtype)
     if not checks.is_traced((r, lens)):  # a traced lens has no concrete image size
         _radii_unit(lens, np.asarray(r), where)

@@ -89,8 +89,7 @@ UNITS = {
 
 
 def _pct(a, b):
-    nz = b != 0
-    return np.where(nz, 100.0 * (a - b) / np.where(nz, b, 1.0), 0.0)
+    return np.asarray(analysis.distortion_percent(jnp.asarray(a), jnp.asarray(b)))
 
 
 class _Result(eqx.Module):
@@ -137,7 +136,7 @@ def _compute(lens: Lens) -> _Result:
     poly = analysis.weighted_rms(p.reshape(F, -1, 2), w.reshape(F, -1))
     chief_xy = p[:, lens.primary, centre]
     tan_radial, radial, chief = analysis.field_heights(lens.fields, chief_xy)
-    ftan = pd.front_focal_length * tan_radial  # n·EFL·tanθ, as distortion()
+    ftan = analysis.reference_heights(pd.front_focal_length, tan_radial)  # n·EFL·tanθ
     ypar = jax.vmap(lambda th: paraxial.image_height(lens, th))(radial)
     return _Result(
         pd, chief, chief_xy, radial, valid[:, lens.primary, centre], ftan, ypar, rms, poly,
@@ -221,6 +220,7 @@ def report_data(lens: Lens, *, fields=None, wavelengths=None, wavefront: bool = 
         lens_fields(lens, lens.fields, "report", "the lens's fields")
     if lens.telecentric_object:  # object heights, chief rays parallel to the axis
         return telecentric_report_data(lens, wavefront=wavefront, notes=_notes(lens))
+    paraxial.check_launchable(lens, "report")  # not from inside the compiled trace
     if lens.afocal_image:  # an image at infinity: angles, not heights
         return afocal_report_data(lens, wavefront=wavefront, notes=_notes(lens))
     # On the host once: op by op on the device, the table below compiled a program per

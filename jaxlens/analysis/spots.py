@@ -309,6 +309,9 @@ class Distortion(eqx.Module):
     general 1 + ``percent_ftan``/100 = (1 + ``percent_paraxial``/100) ·
     ``paraxial_height``/``f_tan`` (the Cooke triplet of the reference cases, its image
     surface 0.23 mm before the paraxial focus: −0.386 % against +0.062 % at 20°).
+    An afocal lens (EFL infinite) has ``f_tan`` 0 on the axis and ±inf off it, and
+    ``percent_ftan`` −100 there (the limit; ``distortion_percent``): measure it against
+    ``percent_paraxial``.
 
     An object-space telecentric lens (``Lens.object_na``): ``field`` holds object heights
     (mm, y or (x, y); the heights radial as above, along (x, y)), the chief ray leaves
@@ -387,10 +390,7 @@ def _distortion(lens, fields, wavelength, depth, *, aim) -> Distortion:
         newton_iters=DEFAULT_NEWTON_ITERS)[0])(fields)
     p = jnp.where(chief.valid[:, None], chief.origin[:, :2], jnp.nan)
 
-    def pct(a, b):
-        nz = b != 0
-        return jnp.where(nz, 100.0 * (a - b) / jnp.where(nz, b, 1.0), 0.0)
-
+    pct = distortion_percent
     if lens.telecentric_object:  # object heights h (mm): the ideal image is m·h
         h, y = radial_heights(fields, p)
         ideal = paraxial.magnification(lens, wl) * h
@@ -400,7 +400,7 @@ def _distortion(lens, fields, wavelength, depth, *, aim) -> Distortion:
     # The front focal length n·EFL: a field angle is measured in object space.
     f = lens.object_material.index(wl) * paraxial.efl(lens, wl)
     tr, radial, y = field_heights(fields, p)
-    ftan = f * tr
+    ftan = reference_heights(f, tr)
     ypar = jax.vmap(lambda th: paraxial.image_height(lens, th, wl))(radial)
 
     # Zemax's F-Theta reference: the near-axis (paraxial) scale per tanθ, times θ (rad).
@@ -409,6 +409,23 @@ def _distortion(lens, fields, wavelength, depth, *, aim) -> Distortion:
     ftheta = jnp.where(nz, scale * jnp.deg2rad(radial), 0.0)
     return Distortion(fields, y, ftan, ypar, pct(y, ftan), pct(y, ypar), ftheta,
                       pct(y, ftheta))
+
+
+def reference_heights(f, tan):
+    """The distortion-free heights f·tanθ (mm) of a focal length ``f`` (mm; the front focal
+    length n·EFL) and field tangents ``tan``: 0 on the axis whatever f (an afocal lens's
+    infinite f gave inf·0 = NaN there), ±inf off it for an infinite f."""
+    return jnp.where(tan == 0, 0.0 * tan, f * tan)
+
+
+def distortion_percent(a, b):
+    """100·(a − b)/b: the distortion (%) of heights ``a`` against reference heights ``b``;
+    0 where b = 0 (the axis), and −100, the limit, where b is infinite and a finite (an
+    afocal lens's f·tanθ: inf/inf was NaN)."""
+    nz = b != 0
+    inf = jnp.isinf(b) & jnp.isfinite(a)
+    safe = jnp.where(nz & ~inf, b, 1.0)
+    return jnp.where(inf, -100.0, jnp.where(nz, 100.0 * (a - b) / safe, 0.0))
 
 
 def clear_semi_diameters(lens: Lens, fields=None, n_rim: int = 64, *,

@@ -288,6 +288,10 @@ def seidel(lens: Lens, *, field=None, wavelength=None) -> Seidel:
         # A formula material of index 0.71 (or NaN) there gave plausible sums, or NaN.
         checks.material_indices(lens, np.unique(np.append(wl, lens.wavelengths)), where,
                                 "wavelength (or the lens's wavelengths)", intact=True)
+    if not lens.telecentric_object and not checks.is_traced((lens, wl)):
+        # Its marginal ray, traced in the compiled core, was the axis (every sum 0).
+        paraxial.check_marginal_pupil(paraxial.entrance_pupil_z(lens, wl), None if
+                                      lens.object_at_infinity else lens.object_distance, where)
     fld = _field(lens, field, where)
     out = _seidel(lens, fld, wl)
     for i, kind, odd in traced_odd:

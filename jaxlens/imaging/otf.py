@@ -84,3 +84,19 @@ def mtf_directions(field, *, heights: bool = False
     r = jnp.sqrt(jnp.where(on_axis, 1.0, r2))
     e_t = jnp.where(on_axis, jnp.asarray([0.0, 1.0], t.dtype), t / r)
     return e_t, jnp.stack([e_t[..., 1], -e_t[..., 0]], -1)
+
+
+def check_cutoff(fnum, where: str) -> None:
+    """Refuse, naming ``where``, a concrete paraxial working F-number ``fnum`` that is not
+    finite: the image lies at infinity (an afocal lens, or the object in the front focal
+    plane), so the diffraction cut-off 1/(λN) is 0: the diffraction MTF was 0 at every
+    frequency, the default frequencies all 0 and the default pixel size inf."""
+    if checks.is_traced(fnum) or np.all(np.isfinite(np.asarray(fnum, dtype=float))):
+        return
+    raise ValueError(
+        f"{where}: the paraxial working F/# of the object traced is infinite (its image lies "
+        f"at infinity: an afocal lens, or the object in the front focal plane), so there is "
+        f"no diffraction cut-off 1/(λN) to scale the diffraction MTF, the default "
+        f"frequencies or the default pixel_size by; pass diffraction=False, pixel_size (mm) "
+        f"and frequencies (cycles/mm), or for an afocal lens mark its image space "
+        f"(Lens(afocal_image=True)) and use analysis.angular_spot")

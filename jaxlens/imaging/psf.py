@@ -77,7 +77,7 @@ from . import light, sampling, telecentric
 from .aiming import chief_point, field_to_ideal, ideal_to_field
 from .grid import kernel_side, pixel_pitch, pupil_cells, sensor_grid, splat
 from .light import NoLightError
-from .otf import diffraction_mtf, mtf_directions
+from .otf import check_cutoff, diffraction_mtf, mtf_directions
 from .radiometry import in_pupil
 
 __all__ = ["AbstractPSFModel", "CoherentPSF", "GeometricPSF", "RGB_WAVELENGTHS", "PSFResult",
@@ -761,6 +761,8 @@ def mtf(
     wls = checks.wavelengths(lens, wls, "mtf", "wavelengths")
     # The working F-number of the object traced (``depth``), not of the lens's own object.
     fnum = working_fnum(lens.astype(dtype), sampling.lens_depth(lens, depth, "mtf"))
+    if diffraction or pixel_size is None or (frequencies is None and lens.sensor is None):
+        check_cutoff(fnum, "mtf")  # a cut-off 1/(λN) of 0 (every MTF 0), a pixel of inf
     lam_min = jnp.min(wls) * 1e-3
     if frequencies is None:
         if lens.sensor is not None:

@@ -747,6 +747,7 @@ def lens_depth(lens: Lens, depth, where: str):
     for an object at infinity, else an array of the lens's dtype, so that compiled programs
     take it as an argument (one program serves every depth)."""
     own = depth is None and not lens.object_at_infinity
+    paraxial.check_launchable(lens, where)  # its beams start on the entrance pupil's plane
     if own:
         depth = lens.object_distance  # negative for a virtual object
         if not checks.is_traced((lens, depth)) and float(depth) < 0:  # traced: an error_if

@@ -105,6 +105,11 @@ Conventions:
     −inf, an infinite diameter and an F/# of NaN), and so do the analyses built on a field
     angle or an entrance pupil at a finite distance (chief-ray aiming, distortion, relative
     illumination, render): they refuse it. ``telecentric_object`` tells which.
+    A lens without ``object_na`` whose stop lies in the rear focal plane of the surfaces
+    before it has its entrance pupil at infinity too, and an EPD that sets no beam:
+    ``paraxial.entrance_pupil_z`` is ±inf and ``magnification`` finite, while
+    ``paraxial_data``, ``marginal_ray`` and every analysis refuse it by name; give it
+    ``object_na``.
 
 The structure (surface kinds, counts, polynomial orders, stop index, mirrors) is static;
 every number is an array so ``jax.grad`` reaches it.

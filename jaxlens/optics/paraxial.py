@@ -247,7 +247,10 @@ class ParaxialData(eqx.Module):
     optiland's EFL); ``front_focal_length`` = n·efl and ``rear_focal_length`` = n′·efl
     with n, n′ the object- and image-space indices. For an object-space telecentric lens
     (``Lens.object_na``) ``entrance_pupil_z`` is −inf, ``entrance_pupil_diameter`` +inf and
-    ``fnum`` (EFL/EPD) NaN; ``working_fnum`` and the rest follow its NA.
+    ``fnum`` (EFL/EPD) NaN; ``working_fnum`` and the rest follow its NA. A lens whose EPD
+    sets no marginal ray (its entrance pupil at infinity without ``object_na``, or its object
+    on the pupil's plane) is refused by name (``check_marginal_pupil``): its stop size,
+    working F/# and exit pupil diameter have no value (efl, bfl and ``magnification`` do).
     """
 
     efl: Float[Array, ""]
@@ -342,7 +345,9 @@ def entrance_pupil_magnification(lens: Lens, wavelength=None) -> Array:
 def marginal_ray(lens: Lens, wavelength=None):
     """Paraxial marginal ray (y, nu) after every surface, for the lens's EPD and object (an
     object-space telecentric lens: from the axial object point at slope tan u, u the
-    cone's half-angle of its ``object_na``).
+    cone's half-angle of its ``object_na``). A lens whose EPD sets no marginal ray (its
+    entrance pupil at infinity, or its object on the pupil's plane) is refused
+    (``check_marginal_pupil``).
 
     Each is ``[num_surfaces]`` for one wavelength (µm), ``[num_surfaces, W]`` for ``[W]``."""
     wl = _given(lens, wavelength, "marginal_ray")
@@ -350,24 +355,65 @@ def marginal_ray(lens: Lens, wavelength=None):
     return _trace_ray(lens, *_marginal_start(lens, wl, n), n, wl)
 
 
-def _marginal_start(lens: Lens, wl, n):
-    """The paraxial marginal ray (y, nu) arriving at surface 1 (see ``marginal_ray``)."""
+def _axial_start(lens: Lens, n):
+    """A paraxial ray (y, nu) from the finite axial object point arriving at surface 1, at
+    slope 1 whatever the aperture (an object-space telecentric lens's, an EPD whose pupil
+    lies at infinity): the image's position and magnification do not depend on its slope."""
+    one = jnp.ones_like(lens.thickness[0])
+    return lens.object_distance * one, n[0] * one
+
+
+def _marginal_start(lens: Lens, wl, n, where: str = "marginal_ray"):
+    """The paraxial marginal ray (y, nu) arriving at surface 1 (see ``marginal_ray``); a lens
+    whose EPD sets none is refused (``check_marginal_pupil``, naming ``where``)."""
     if lens.telecentric_object:
         u = object_slope(lens)
         return lens.object_distance * u, n[0] * u
     zep = entrance_pupil_z(lens, wl)
     h = 0.5 * lens.epd
     if lens.object_at_infinity:
+        check_marginal_pupil(zep, None, where)
         return h, 0.0 * h
+    check_marginal_pupil(zep, lens.object_distance, where)
     u = h / (lens.object_distance + zep)
     return lens.object_distance * u, n[0] * u
 
 
-def _image_slope_scale(lens: Lens, wl, n):
+def check_marginal_pupil(zep, object_distance, where: str) -> None:
+    """Refuse, naming ``where``, a lens whose EPD sets no paraxial marginal ray: its entrance
+    pupil (``zep``, global mm, concrete) at infinity (the stop in the focal plane of the
+    surfaces before it: the ray from the axial object point to the pupil's rim had slope 0,
+    the axis itself, and a stop semi-diameter, working F/# and exit pupil diameter of 0 or
+    inf followed), or a finite object (``object_distance``, mm, None at infinity) on the
+    pupil's plane (slope ±inf). Traced, nothing is checked (the design losses' hot path)."""
+    if checks.is_traced((zep, object_distance)):
+        return
+    z = np.asarray(zep, dtype=float)
+    if not np.all(np.isfinite(z)):
+        raise ValueError(
+            f"{where}: the lens's entrance pupil lies at infinity (z_EP = {checks.fmt(z)}: its "
+            f"stop in the focal plane of the surfaces before it), so its EPD sets no paraxial "
+            f"marginal ray (the ray from the axial object point to the pupil's rim is the "
+            f"axis), and the stop's paraxial size, the working F/#, the exit pupil's diameter "
+            f"and the image position from it have no value; efl, bfl and "
+            f"paraxial.magnification do not depend on the aperture; for an object-space "
+            f"telecentric lens give object heights and its NA (Lens(object_na=...)), or move "
+            f"the stop")
+    if object_distance is not None:
+        d = float(object_distance)
+        if np.any(np.abs(d + z) <= 1e-12 * np.maximum(np.abs(d), np.abs(z))):
+            raise ValueError(
+                f"{where}: the lens's object (object_distance {d:g} mm) lies on its entrance "
+                f"pupil's plane (z_EP = {checks.fmt(z)}), so the paraxial marginal ray to the "
+                f"pupil's rim has an infinite slope and the EPD sets no beam; move the object "
+                f"or the stop")
+
+
+def _image_slope_scale(lens: Lens, wl, n, start=None):
     """The rounding scale and steps (``_over``) of the marginal ray's image-space nu: a ray
     leaving parallel to the axis within rounding (the object in the front focal plane, an
     afocal lens) has its image at infinity."""
-    y0, nu0 = _marginal_start(lens, wl, n)
+    y0, nu0 = _marginal_start(lens, wl, n) if start is None else start
     _, (_, _, ac, ad), steps = _product(lens, wl, n, 0, lens.num_surfaces - 1)
     return ac * jnp.abs(y0) + ad * jnp.abs(nu0), steps
 
@@ -453,6 +499,17 @@ def entrance_pupil_plane(lens: Lens, where: str) -> Array:
     return zep
 
 
+def check_launchable(lens: Lens, where: str) -> None:
+    """Refuse, naming ``where``, a concrete lens whose beams cannot be launched: every
+    analysis launches them on the entrance pupil's plane, which lies at infinity where the
+    stop sits in the focal plane of the surfaces before it (spots, fans and the relative
+    illumination were NaN or empty, a report an EquinoxRuntimeError from inside its
+    compiled trace). An object-space telecentric lens (``Lens.object_na``) launches from its
+    object points instead and passes."""
+    if not lens.telecentric_object and not checks.is_traced(lens):
+        entrance_pupil_plane(lens, where)
+
+
 def _pupil_reachable(zep, u, where: str):
     """``u`` (tanθ of field angles), refused where it is nonzero and the entrance pupil lies
     at infinity (``PUPIL_AT_INFINITY``): a ValueError for concrete values, an error_if where
@@ -514,13 +571,18 @@ def magnification(lens: Lens, wavelength=None) -> Array:
     object: m tends to −inf just outside the focal plane and +inf just inside it). For
     an object-space telecentric lens (``Lens.object_na``) the distortion-free image of the
     object height h (mm) is m·h: the paraxial chief ray, parallel to the axis at h, meets
-    the paraxial image plane there."""
+    the paraxial image plane there. It is traced by an axial ray of slope 1, not the
+    marginal ray, so it does not depend on the aperture (an entrance pupil at infinity
+    without ``object_na`` still has one)."""
     wl = _wavelength(lens, wavelength, "magnification")
     n = signed_indices(lens, wl)
-    nu = marginal_ray(lens, wl)[1][-1]
     if lens.object_at_infinity:
-        return jnp.zeros_like(nu)
-    return _over(_marginal_start(lens, wl, n)[1], nu, *_image_slope_scale(lens, wl, n))
+        return jnp.zeros_like(lens.thickness[0] * wl)
+    # An axial ray of slope 1, not the marginal ray: m = n u / (n′ u′) does not depend on
+    # the aperture, so an entrance pupil at infinity (the marginal ray the axis) still has one.
+    start = _axial_start(lens, n)
+    nu = _trace_ray(lens, *start, n, wl)[1][-1]
+    return _over(start[1], nu, *_image_slope_scale(lens, wl, n, start))
 
 
 @_entry
@@ -549,7 +611,7 @@ def paraxial_data(lens: Lens, wavelength=None) -> ParaxialData:
         # dtype (bfloat16 × entrance_pupil_diameter was bfloat16, × efl float32).
         epd = jnp.asarray(lens.epd, f.dtype)
     # Stop semi-diameter from the marginal ray height at the stop.
-    ym, num = marginal_ray(lens, wl)
+    ym, num = _trace_ray(lens, *_marginal_start(lens, wl, n, "paraxial_data"), n, wl)
     stop_sd = jnp.abs(ym[lens.stop])
     # Exit pupil: image of the stop through the surfaces after it.
     if lens.stop == lens.num_surfaces - 1:
