@@ -25,7 +25,10 @@ Conventions (also written into the JSON output under ``units``):
     ``--wavefront`` each field also has ``wavefront``: ``analysis.wavefront`` at the primary
     wavelength (``rms``, ``pv``, and both with tilt removed, in waves; ``strehl``, Maréchal's,
     null where the RMS with tilt removed exceeds 0.1 wave and the approximation fails), or
-    ``refused`` with the reason.
+    ``refused`` with the reason. JSON has no infinity: a first-order distance, size or ratio
+    at infinity (an image-space telecentric lens's exit pupil, an F/# of an afocal image) is
+    the string ``"inf"`` or ``"-inf"`` (as in the lens files), printed "Infinity"; a value
+    that could not be computed is null, printed "failed".
 """
 
 from __future__ import annotations
@@ -72,6 +75,7 @@ from .report_cells import (
     wavefront_lines,
 )
 from .report_cells import cell as _num
+from .report_cells import json_extent as _x
 from .report_cells import json_number as _f
 from .report_cells import wavefront_summary as _wavefront_summary
 from .report_telecentric import format_telecentric_report, telecentric_report_data
@@ -271,11 +275,11 @@ def report_data(lens: Lens, *, fields=None, wavelengths=None, wavefront: bool = 
     return {
         "name": lens.name,
         "units": UNITS,
-        "efl": _f(pd.efl),
-        "efl_image_space": _f(pd.efl_image_space),
-        "bfl": _f(pd.bfl),
-        "fnum": _f(pd.fnum),
-        "working_fnum": _f(pd.working_fnum),
+        "efl": _x(pd.efl),
+        "efl_image_space": _x(pd.efl_image_space),
+        "bfl": _x(pd.bfl),
+        "fnum": _x(pd.fnum),
+        "working_fnum": _x(pd.working_fnum),
         "epd": _f(lens.epd),
         "total_track": _f(pd.total_track),
         "fov": 2.0 * fmax,
@@ -283,16 +287,16 @@ def report_data(lens: Lens, *, fields=None, wavelengths=None, wavefront: bool = 
         "image_height": _f(res.paraxial_height[imax]),
         "real_image_height": _f(chief[imax]),
         "entrance_pupil": {
-            "z": _f(pd.entrance_pupil_z),
-            "diameter": _f(pd.entrance_pupil_diameter),
+            "z": _x(pd.entrance_pupil_z),
+            "diameter": _x(pd.entrance_pupil_diameter),
         },
         "exit_pupil": {
-            "z": _f(pd.exit_pupil_z),
-            "diameter": _f(pd.exit_pupil_diameter),
-            "from_image": _f(pd.exit_pupil_z - pd.image_z),
+            "z": _x(pd.exit_pupil_z),
+            "diameter": _x(pd.exit_pupil_diameter),
+            "from_image": _x(pd.exit_pupil_z - pd.image_z),
         },
-        "image_z": _f(pd.image_z),
-        "paraxial_image_z": _f(pd.paraxial_image_z),
+        "image_z": _x(pd.image_z),
+        "paraxial_image_z": _x(pd.paraxial_image_z),
         "stop_surface": lens.stop + 1,
         "ray_aiming": lens.aim,
         "object_distance": None if lens.object_distance is None else _f(lens.object_distance),

@@ -40,9 +40,28 @@ def json_number(x) -> float | None:
     return v if math.isfinite(v) else None
 
 
-def cell(v: float | None, width: int = 12, prec: int = 6, missing: str = "failed") -> str:
+INFINITE = {"inf": math.inf, "-inf": -math.inf}
+"""``json_extent``'s strings for the infinite values JSON cannot hold (the lens files' too)."""
+
+
+def json_extent(x) -> float | str | None:
+    """A first-order distance, size or ratio for the report's JSON: the float, "inf" or
+    "-inf" where the optics puts it at infinity (an exit pupil of an image-space
+    telecentric lens, a BFL of an image at infinity), None where it has no value (NaN).
+    ``json_number`` gave None for both, and the text said "failed" for a pupil at infinity."""
+    v = real_number(x, "x", "json_extent")
+    if math.isinf(v):
+        return "inf" if v > 0 else "-inf"
+    return None if math.isnan(v) else v
+
+
+def cell(v: float | str | None, width: int = 12, prec: int = 6,
+         missing: str = "failed") -> str:
     """A table cell: ``missing`` for None (no valid ray, no paraxial image), "Infinity" for
-    an infinite distance, and scientific notation where fixed point would not fit."""
+    an infinite distance (a float, or ``json_extent``'s "inf"/"-inf"), and scientific
+    notation where fixed point would not fit."""
+    if isinstance(v, str) and v in INFINITE:
+        v = INFINITE[v]
     for arg, n, lo in (("width", width, 1), ("prec", prec, 0)):
         if isinstance(n, bool) or not isinstance(n, (int, np.integer)) or n < lo:
             raise TypeError(f"cell: {arg} must be a whole number >= {lo} (characters), got "

@@ -356,7 +356,9 @@ def relative_illumination(
             (default) for the lens's own object (``lens.object_distance``).
         wavelength: µm (default the primary wavelength).
         pupil: cells per side of the pupil grid for the centroids (the search grid has a
-            third of that, at least 16).
+            third of that, at least 16). The default's sampling error: 2.2e-4 at the 40.4°
+            corner of a six-element phone design (0.99972 against optiland's 0.999943;
+            1.00102 with 64 cells, 0.999948 with 256; round 46b).
         newton_iters: Newton iterations for aspheric surfaces.
 
     Returns:
