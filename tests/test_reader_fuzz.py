@@ -51,10 +51,11 @@ CASES = [
     ("thickness_unit", ".zmx", _sub(_sub(HYBRID_ZMX, "UNIT MM", "UNIT METER"),
                                     "DISZ 3.0E+000", "DISZ 1e306"), 63),
     ("epd_subnormal", ".zmx", _sub(HYBRID_ZMX, "ENPD 5.0E+000", "ENPD 1e-320"), 5),
-    # numbers each finite that trace to NaN together: a curvature of 1e308 with no aperture
-    # to refuse it (the message names the aperture line, where the paraxial work is done)
+    # a curvature of 1e308 with no aperture to refuse it: refused on its CURV line (since
+    # round 45b's |c| <= 1e9 per mm; before, at the aperture line, where the paraxial work
+    # traced it to NaN)
     ("curvature_no_aperture", ".zmx", _sub(OPTILAND_ZMX, "CURV -0.0055170138366520405",
-                                           "CURV 1e308"), 3),
+                                           "CURV 1e308"), 27),
     # a material class's refusal without the line (ModelGlass: nd <= 4.5)
     ("model_glass_nd", ".zmx", _sub(COOKE_ZMX, "GLAS N-SK16 0 0 1.62041 6.032E+001",
                                     "GLAS ___BLANK 1 0 1e308 50"), 27),

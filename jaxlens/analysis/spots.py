@@ -418,14 +418,15 @@ def reference_heights(f, tan):
     return jnp.where(tan == 0, 0.0 * tan, f * tan)
 
 
-def distortion_percent(a, b):
+def distortion_percent(a, b, xp=jnp):
     """100·(a − b)/b: the distortion (%) of heights ``a`` against reference heights ``b``;
     0 where b = 0 (the axis), and −100, the limit, where b is infinite and a finite (an
-    afocal lens's f·tanθ: inf/inf was NaN)."""
+    afocal lens's f·tanθ: inf/inf was NaN). ``xp``: ``jax.numpy``, or ``numpy`` for host
+    arrays (the report's table, made on the host)."""
     nz = b != 0
-    inf = jnp.isinf(b) & jnp.isfinite(a)
-    safe = jnp.where(nz & ~inf, b, 1.0)
-    return jnp.where(inf, -100.0, jnp.where(nz, 100.0 * (a - b) / safe, 0.0))
+    inf = xp.isinf(b) & xp.isfinite(a)
+    safe = xp.where(nz & ~inf, b, 1.0)
+    return xp.where(inf, -100.0, xp.where(nz, 100.0 * (a - b) / safe, 0.0))
 
 
 def clear_semi_diameters(lens: Lens, fields=None, n_rim: int = 64, *,

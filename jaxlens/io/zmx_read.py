@@ -17,7 +17,14 @@ from ..optics.coordinates import CoordinateBreak
 from ..optics.input_files import input_file
 from ..optics.lens import INFINITE_OBJECT_MM, Lens
 from ..optics.materials import Air
-from ..optics.surfaces import AbstractSurface, EvenAsphere, Hybrid, OddAsphere, Standard
+from ..optics.surfaces import (
+    MAX_CURVATURE,
+    AbstractSurface,
+    EvenAsphere,
+    Hybrid,
+    OddAsphere,
+    Standard,
+)
 from . import zmx_config, zmx_surfaces, zmx_system
 from .lensfile import TELECENTRIC_SEED_NA, apply_aperture, apply_object_na, nonfinite_part
 from .zmx_common import (
@@ -72,6 +79,12 @@ def _surface(s: ZmxSurface, unit: float) -> AbstractSurface:
     """The surface of a SURF block; a value its class refuses (a semi-diameter beyond a
     steep sphere's edge, say) is reported with the block's line."""
     where = s.type_line or s.line
+    if s.curv_line is not None and not abs(s.curv / unit) <= MAX_CURVATURE:
+        # On its own line: the surface's class refused it under the block's TYPE line.
+        raise s.curv_line.error(
+            f"curvature {s.curv:g} per lens unit is {s.curv / unit:g} 1/mm, outside "
+            f"[-{MAX_CURVATURE:g}, {MAX_CURVATURE:g}] 1/mm (a radius of at least "
+            f"{1 / MAX_CURVATURE:g} mm)")
     try:
         with np.errstate(all="ignore"):  # a curvature of 1e308 squared: refused below
             surface = _surface_of(s, unit)

@@ -514,6 +514,8 @@ def _pupil_reachable(zep, u, where: str):
     """``u`` (tanθ of field angles), refused where it is nonzero and the entrance pupil lies
     at infinity (``PUPIL_AT_INFINITY``): a ValueError for concrete values, an error_if where
     traced."""
+    if checks.checked_by_caller((zep, u)):  # its entry point refused it (``check_launchable``)
+        return u  # an error_if is a host callback: no persistent cache for the core
     bad = ~jnp.isfinite(zep) & (u != 0)
     if not checks.is_traced((zep, u)):
         if np.any(np.asarray(bad)):
