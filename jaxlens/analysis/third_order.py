@@ -247,12 +247,6 @@ def _incoming(lens: Lens, y, nu, n, wl) -> Array:
     return jnp.concatenate([first[None], nu[:-1]])
 
 
-@checks.checked_core(eqx.filter_jit)
-def _pupil_z(lens: Lens, wl):
-    """``paraxial.entrance_pupil_z`` compiled (one dispatch, not some twenty op by op)."""
-    return paraxial.entrance_pupil_z(lens, wl)
-
-
 def seidel(lens: Lens, *, field=None, wavelength=None) -> Seidel:
     """Seidel aberration sums S_I … S_V and first-order colour C_L, C_T, per surface.
 
@@ -296,7 +290,7 @@ def seidel(lens: Lens, *, field=None, wavelength=None) -> Seidel:
                                 "wavelength (or the lens's wavelengths)", intact=True)
     if not lens.telecentric_object and not checks.is_traced((lens, wl)):
         # Its marginal ray, traced in the compiled core, was the axis (every sum 0).
-        paraxial.check_marginal_pupil(_pupil_z(lens, wl), None if
+        paraxial.check_marginal_pupil(paraxial.compiled_entrance_pupil_z(lens, wl), None if
                                       lens.object_at_infinity else lens.object_distance, where)
     fld = _field(lens, field, where)
     out = _seidel(lens, fld, wl)
